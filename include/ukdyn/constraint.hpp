@@ -1,0 +1,105 @@
+/// @file constraint.hpp
+/// A named constraint of any kind, and the interface its mathematics implements.
+///
+/// Every constraint, whatever its declared form, is reduced to rows of the acceleration form
+/// A q'' = b (eq. 5):
+///  - holonomic     phi(q,t) = 0:      A = dphi/dq,  b = −d²/ds² phi(q + s q', t + s) at s = 0
+///  - nonholonomic  psi(q,q',t) = 0:   A = dpsi/dq', b = −(dpsi/dq · q' + dpsi/dt)
+///  - acceleration  A(q,q',t), b(q,q',t) given directly.
+/// The first two are built from one generic callable by automatic differentiation
+/// (see autodiff.hpp); the third from a plain callable (acceleration_constraint below).
+#pragma once
+
+#include <functional>
+#include <memory>
+#include <string>
+
+#include <Eigen/Core>
+
+#include "ukdyn/types.hpp"
+
+namespace ukdyn {
+
+/// The form in which a constraint was declared.
+enum class ConstraintKind {
+  kHolonomic,     ///< phi(q,t) = 0, differentiated twice
+  kNonholonomic,  ///< psi(q,q',t) = 0, differentiated once; may be nonlinear in q'
+  kAcceleration,  ///< A q'' = b given directly
+};
+
+/// Short name of a kind ("holonomic", "nonholonomic", "acceleration"). Cost O(1).
+const char* to_string(ConstraintKind kind);
+
+/// Scratch memory one constraint needs while it is evaluated (automatic-differentiation
+/// buffers). Made once per workspace by ConstraintModel::make_scratch, so evaluation does not
+/// allocate.
+class ConstraintScratch {
+ public:
+  virtual ~ConstraintScratch() = default;
+};
+
+/// The mathematics of one constraint. Implementations are immutable after construction; all
+/// mutable memory lives in the ConstraintScratch that the workspace owns.
+class ConstraintModel {
+ public:
+  virtual ~ConstraintModel() = default;
+
+  /// Scratch for evaluating this constraint on a system with n coordinates (may be null).
+  /// Called once when a workspace is made; may allocate.
+  virtual std::unique_ptr<ConstraintScratch> make_scratch(Index n) const;
+
+  /// Writes this constraint's rows of A (rows × n) and b (rows) at (q, q', t).
+  /// Must not allocate. Cost: that of the user callable times ceil(n/4) + 1 passes for the
+  /// automatically differentiated kinds.
+  virtual void acceleration_form(const VectorXd& q, const VectorXd& qd, double t,
+                                 ConstraintScratch* scratch, Eigen::Ref<MatrixXd> A,
+                                 Eigen::Ref<VectorXd> b) const = 0;
+
+  /// Writes the violation of the constraint at position level (phi; zero for the nonholonomic
+  /// and acceleration kinds) and velocity level (d phi/dt along the motion = A q' + dphi/dt for
+  /// holonomic, psi for nonholonomic, zero for the acceleration kind). Both have `rows` entries.
+  virtual void violation(const VectorXd& q, const VectorXd& qd, double t,
+                         ConstraintScratch* scratch, Eigen::Ref<VectorXd> position,
+                         Eigen::Ref<VectorXd> velocity) const;
+};
+
+/// A named constraint with any number of rows, optionally active on a time interval only.
+/// Cheap to copy (the model is shared and immutable).
+class Constraint {
+ public:
+  /// @param name unique within a system; @param kind declared form; @param rows number of
+  /// scalar equations (> 0); @param model its mathematics (not null).
+  /// @throws std::invalid_argument on an empty name, rows <= 0 or a null model.
+  Constraint(std::string name, ConstraintKind kind, Index rows,
+             std::shared_ptr<const ConstraintModel> model);
+
+  /// Makes the constraint active on [begin, end] only; outside it its rows of A and b are zero
+  /// (so it exerts no force). @throws std::invalid_argument unless begin <= end.
+  Constraint& active_between(double begin, double end);
+
+  const std::string& name() const { return name_; }            ///< its unique name
+  ConstraintKind kind() const { return kind_; }                ///< declared form
+  Index rows() const { return rows_; }                         ///< number of scalar rows
+  const TimeInterval& active_interval() const { return active_; }  ///< when it acts
+  bool is_active(double t) const { return active_.contains(t); }   ///< acts at time t?
+  const ConstraintModel& model() const { return *model_; }     ///< its mathematics
+
+ private:
+  std::string name_;
+  ConstraintKind kind_;
+  Index rows_;
+  TimeInterval active_;
+  std::shared_ptr<const ConstraintModel> model_;
+};
+
+/// User callable of the acceleration form: writes A (rows × n) and b (rows) at (q, q', t).
+using AccelerationFormFn =
+    std::function<void(const VectorXd& q, const VectorXd& qd, double t, Eigen::Ref<MatrixXd> A,
+                       Eigen::Ref<VectorXd> b)>;
+
+/// A constraint given directly in acceleration form A(q,q',t) q'' = b(q,q',t).
+/// The callable must write every entry of its rows (they are not cleared between calls) and
+/// should not allocate. @throws std::invalid_argument if fn is empty (and as Constraint()).
+Constraint acceleration_constraint(std::string name, Index rows, AccelerationFormFn fn);
+
+}  // namespace ukdyn

@@ -1,0 +1,58 @@
+/// @file forward.hpp
+/// Forward dynamics of a constrained system: the fundamental equation as a pipeline of stages,
+/// each callable on its own and each in its own source file:
+///
+///   1. evaluate_unconstrained   M, Q; Cholesky M = L Lᵀ; a = M⁻¹ Q          stage_unconstrained.cpp
+///   2. assemble_constraints     A, b of the active constraints            stage_constraints.cpp
+///   3. solve_ideal              e = b − A a; q'' = a + L⁻ᵀ W⁺ e; Qc_ideal; lambda   stage_ideal.cpp
+///   4. apply_nonideal           C; Qc_nonideal; q'' += L⁻ᵀ(I − W⁺W)L⁻¹ C     stage_nonideal.cpp
+///   5. check_result             residuals, consistency, finiteness        stage_residuals.cpp
+///
+/// forward_dynamics runs them in order (forward.cpp). No stage allocates with the default
+/// algorithm. Numerical failures set ws.status and stop the pipeline; nothing here throws
+/// except for misuse (tier 1).
+#pragma once
+
+#include <Eigen/Core>
+
+#include "ukdyn/status.hpp"
+#include "ukdyn/system.hpp"
+#include "ukdyn/workspace.hpp"
+
+namespace ukdyn {
+
+/// Evaluates the constrained motion at (q, q', t): fills every result field of ws
+/// (q'', Qc, Qc_ideal, Qc_nonideal, lambda, e, rank, residuals) and returns ws.status.
+/// @throws std::invalid_argument if q or qd does not have n entries or ws belongs to another
+/// system. Cost O(n³/3 + m n² + m² n) for a state-dependent M; O(m n² + m² n) for a constant M.
+Status forward_dynamics(const System& sys, Workspace& ws, const VectorXd& q, const VectorXd& qd,
+                        double t);
+
+/// Stage 1: M(q,t), Q(q,q',t), the Cholesky factor of M (skipped after the first call when M
+/// is constant) and a = M⁻¹ Q. Checks finiteness and symmetry. Cost O(n³/3).
+Status evaluate_unconstrained(const System& sys, Workspace& ws, const VectorXd& q,
+                              const VectorXd& qd, double t);
+
+/// Stage 2: A and b of every constraint active at t (rows of inactive ones are zero).
+/// Cost: the constraints' own evaluation, O(n m) besides.
+Status assemble_constraints(const System& sys, Workspace& ws, const VectorXd& q,
+                            const VectorXd& qd, double t);
+
+/// Stage 3: e = b − A a, the decomposition of A L⁻ᵀ, q'' = a + L⁻ᵀ W⁺ e, Qc_ideal = L W⁺ e and
+/// lambda = G⁺ e (eqs. 9, 11). Needs stages 1–2. Cost O(m n² + m² n).
+Status solve_ideal(const System& sys, Workspace& ws);
+
+/// Fills ws.shares: column k = A_kᵀ lambda_k, constraint k's share of Qc_ideal. Cost O(n m).
+void compute_shares(const System& sys, Workspace& ws);
+
+/// Stage 4: C from the system's non-ideal forces (which may read the ideal force), then
+/// Qc_nonideal, lambda_nonideal, Qc and the non-ideal part of q'' (eqs. 9, 12). Needs stage 3.
+/// Cost O(n² + n m) plus the forces' own.
+Status apply_nonideal(const System& sys, Workspace& ws, const VectorXd& q, const VectorXd& qd,
+                      double t);
+
+/// Stage 5: residuals (see Residuals), the consistency test of A q'' = b and the finiteness of
+/// the results. Cost O(n m), plus O(n² + n m) when options().compute_residuals.
+Status check_result(const System& sys, Workspace& ws);
+
+}  // namespace ukdyn

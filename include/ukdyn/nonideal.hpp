@@ -1,0 +1,104 @@
+/// @file nonideal.hpp
+/// Non-ideal constraints: the work vector C of eq. (7), supplied by the modeller.
+///
+/// C may depend on (q, q', t) and on the ideal constraint force, because Qc_ideal does not
+/// depend on C (eq. 11): friction whose magnitude follows a normal reaction is therefore explicit,
+/// with no iteration. A system may hold several non-ideal forces; their C vectors are summed.
+#pragma once
+
+#include <functional>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "ukdyn/types.hpp"
+
+namespace ukdyn {
+
+class System;
+class Workspace;
+
+/// Read-only view of the ideal constraint force at the current evaluation, handed to each
+/// non-ideal force. Valid only during that call.
+class IdealForceInfo {
+ public:
+  /// @param sys the system; @param ws its workspace after the ideal stage.
+  IdealForceInfo(const System& sys, const Workspace& ws) : sys_(sys), ws_(ws) {}
+
+  /// The ideal constraint force Qc_ideal (n), eq. (11).
+  const VectorXd& Qc_ideal() const;
+  /// The minimum-norm multipliers of the ideal force (m), Qc_ideal = Aᵀ lambda.
+  const VectorXd& lambda() const;
+  /// The multipliers of constraint k (its rows of lambda).
+  Eigen::Ref<const VectorXd> lambda(Index k) const;
+  /// Constraint k's share of the ideal force, A_kᵀ lambda_k (n). The shares sum to Qc_ideal.
+  Eigen::Ref<const VectorXd> share(Index k) const;
+  /// Euclidean norm of share(k): the normal force of a contact constraint written in Cartesian
+  /// coordinates. Cost O(n).
+  double normal_force(Index k) const { return share(k).norm(); }
+
+ private:
+  const System& sys_;
+  const Workspace& ws_;
+};
+
+/// A non-ideal force's C(q, q', t, ideal force): writes C (n), which is zero on entry.
+/// Must not allocate.
+using NonIdealFn = std::function<void(const VectorXd& q, const VectorXd& qd, double t,
+                                      const IdealForceInfo& ideal, Eigen::Ref<VectorXd> C)>;
+
+/// A named contribution to C. It is bound to a system when the system is built, so it may
+/// refer to constraints by name (resolved once, never in the hot path).
+class NonIdealForce {
+ public:
+  /// Makes the callable once the system's constraints are known; may throw
+  /// std::invalid_argument naming what it could not resolve.
+  using Binder = std::function<NonIdealFn(const System& sys)>;
+
+  /// A force given directly by its callable. @throws std::invalid_argument if fn is empty.
+  NonIdealForce(std::string name, NonIdealFn fn);
+  /// A force that needs the system to be bound (see Binder).
+  NonIdealForce(std::string name, Binder bind);
+
+  const std::string& name() const { return name_; }  ///< its name, unique within a system
+  /// The callable for system `sys` (called once by SystemBuilder::build).
+  NonIdealFn bind(const System& sys) const { return bind_(sys); }
+
+ private:
+  std::string name_;
+  Binder bind_;
+};
+
+/// Coulomb sliding friction on a constraint surface:
+///   C_i = −mu N v_i / sqrt(|v|² + eps²)  for i in `coordinates`, zero elsewhere,
+/// where v is q' restricted to `coordinates` (the sliding velocity, which must be Cartesian for
+/// N to be the physical normal force), N = |A_kᵀ lambda_k| the norm of constraint k's share of
+/// the ideal force, and eps = `regularization_velocity`. For |v| >> eps this is exact Coulomb
+/// friction of magnitude mu N opposing v; at |v| = 0 it vanishes (this law models sliding only:
+/// sticking is the simulation layer's business). The relative error of the magnitude is
+/// about eps² / (2 |v|²).
+struct CoulombFriction {
+  std::string constraint;            ///< name of the constraint whose share gives N
+  double mu = 0.0;                   ///< friction coefficient, >= 0
+  std::vector<Index> coordinates;    ///< sliding coordinates (empty: all n)
+  double regularization_velocity = 1e-9;  ///< eps above, > 0, in velocity units
+  std::string name;                  ///< force name (default "coulomb.<constraint>")
+};
+
+/// The non-ideal force of a CoulombFriction law. Binding throws std::invalid_argument if the
+/// constraint does not exist, mu < 0, eps <= 0 or a coordinate is out of range. Cost O(n).
+NonIdealForce coulomb_friction(CoulombFriction spec);
+
+/// Viscous friction C_i = −c_i q'_i on `coordinates` (all when empty).
+struct ViscousFriction {
+  double coefficient = 0.0;          ///< c >= 0, the same for every listed coordinate
+  std::vector<Index> coordinates;    ///< damped coordinates (empty: all n)
+  std::string name = "viscous";      ///< force name
+};
+
+/// The non-ideal force of a ViscousFriction law. Binding throws std::invalid_argument on
+/// c < 0 or a coordinate out of range. Cost O(n).
+NonIdealForce viscous_friction(ViscousFriction spec);
+
+}  // namespace ukdyn

@@ -1,0 +1,51 @@
+/// @file status.hpp
+/// Outcome of an evaluation and the exception that front ends may turn it into.
+///
+/// ukdyn reports errors in three tiers (see ../shared/STYLE.md):
+///  1. misuse at an entry point (wrong sizes, bad options, a workspace of another system)
+///     throws std::invalid_argument whose text names the function, expected and actual value;
+///  2. broken internal invariants fire UKDYN_CHECK (always on), which throws std::logic_error;
+///  3. numerical conditions met during an evaluation (M not positive definite, inconsistent
+///     constraints, NaN) never throw: they set a Status in the workspace; callers who want an
+///     exception call throw_if_failed().
+#pragma once
+
+#include <stdexcept>
+#include <string>
+
+namespace ukdyn {
+
+/// Result of one evaluation of the fundamental equation.
+enum class Status {
+  kOk = 0,                      ///< q'' and all forces are valid
+  kNonFiniteInput,              ///< q, q', t, M, Q, A, b or C holds NaN or Inf (see Workspace::detail)
+  kMassNotSymmetric,            ///< M differs from Mᵀ by more than the symmetry tolerance
+  kMassNotPositiveDefinite,     ///< the Cholesky factorization of M failed
+  kInconsistentConstraints,     ///< A q'' = b has no solution; ‖A q'' − b‖ is in the residuals
+  kNonFiniteResult,             ///< the inputs were finite but a result overflowed
+};
+
+/// Short English name of a status ("ok", "mass matrix not positive definite", …). Cost O(1).
+const char* to_string(Status s);
+
+/// Thrown by throw_if_failed() and by front ends when an evaluation did not succeed.
+class SolveError : public std::runtime_error {
+ public:
+  /// @param status the failing status; @param what the full message.
+  SolveError(Status status, const std::string& what) : std::runtime_error(what), status_(status) {}
+  /// The status that caused the error.
+  Status status() const { return status_; }
+
+ private:
+  Status status_;
+};
+
+namespace detail {
+[[noreturn]] void check_failed(const char* expr, const char* file, int line, const char* msg);
+}  // namespace detail
+
+}  // namespace ukdyn
+
+/// Always-on internal invariant check (tier 2): throws std::logic_error naming the expression.
+#define UKDYN_CHECK(expr, msg) \
+  ((expr) ? (void)0 : ::ukdyn::detail::check_failed(#expr, __FILE__, __LINE__, (msg)))

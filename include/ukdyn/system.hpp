@@ -1,0 +1,116 @@
+/// @file system.hpp
+/// The description of a constrained mechanical system (MuJoCo's mjModel, Pinocchio's Model):
+/// built once by SystemBuilder, then never changed by any algorithm. Everything an evaluation
+/// writes lives in a Workspace (workspace.hpp).
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "ukdyn/constraint.hpp"
+#include "ukdyn/nonideal.hpp"
+#include "ukdyn/types.hpp"
+
+namespace ukdyn {
+
+/// Writes the mass matrix M(q, t) (n × n, symmetric positive definite). Must not allocate.
+using MassMatrixFn = std::function<void(const VectorXd& q, double t, Eigen::Ref<MatrixXd> M)>;
+/// Writes the impressed force Q(q, q', t) (n). Must not allocate.
+using ForceFn =
+    std::function<void(const VectorXd& q, const VectorXd& qd, double t, Eigen::Ref<VectorXd> Q)>;
+
+/// An immutable constrained mechanical system M(q,t) q'' = Q(q,q',t) + Qc with constraints
+/// A q'' = b and non-ideal work vector C. Cheap to copy (callables are shared).
+class System {
+ public:
+  Index dofs() const { return n_; }                         ///< n, number of coordinates
+  Index constraint_rows() const { return m_; }              ///< m, rows of all constraints
+  Index constraint_count() const { return Index(constraints_.size()); }  ///< K constraints
+  const std::vector<std::string>& coordinate_names() const { return names_; }  ///< n names
+  const std::vector<Constraint>& constraints() const { return constraints_; }  ///< K
+  const Constraint& constraint(Index k) const { return constraints_.at(std::size_t(k)); }
+  /// First row of constraint k in A and b (rows k..k+rows−1 belong to it).
+  Index row_offset(Index k) const { return offsets_.at(std::size_t(k)); }
+  /// Index of the constraint called `name`. @throws std::invalid_argument naming it and the
+  /// known names when there is none. Cost O(K).
+  Index constraint_index(std::string_view name) const;
+  /// Index of the coordinate called `name`. @throws std::invalid_argument. Cost O(n).
+  Index coordinate_index(std::string_view name) const;
+
+  /// True when M was given as a constant matrix (the workspace then factorizes it once).
+  bool mass_is_constant() const { return mass_constant_; }
+  /// Writes M(q, t) into M (n × n).
+  void mass_matrix(const VectorXd& q, double t, Eigen::Ref<MatrixXd> M) const { mass_(q, t, M); }
+  /// Writes Q(q, q', t) into Q (n).
+  void forces(const VectorXd& q, const VectorXd& qd, double t, Eigen::Ref<VectorXd> Q) const {
+    forces_(q, qd, t, Q);
+  }
+
+  /// Number of non-ideal forces.
+  Index nonideal_count() const { return Index(nonideal_fns_.size()); }
+  /// Name of non-ideal force i.
+  const std::string& nonideal_name(Index i) const { return nonideal_names_.at(std::size_t(i)); }
+  /// The bound callable of non-ideal force i.
+  const NonIdealFn& nonideal(Index i) const { return nonideal_fns_.at(std::size_t(i)); }
+
+  /// Identity of this description, shared by its copies; a Workspace remembers it so that a
+  /// workspace of another system is refused.
+  std::uint64_t id() const { return id_; }
+
+ private:
+  friend class SystemBuilder;
+  System() = default;
+
+  Index n_ = 0, m_ = 0;
+  std::vector<std::string> names_;
+  MassMatrixFn mass_;
+  bool mass_constant_ = false;
+  ForceFn forces_;
+  std::vector<Constraint> constraints_;
+  std::vector<Index> offsets_;
+  std::vector<std::string> nonideal_names_;
+  std::vector<NonIdealFn> nonideal_fns_;
+  std::uint64_t id_ = 0;
+};
+
+/// Collects the parts of a System, then validates and freezes them in build().
+class SystemBuilder {
+ public:
+  /// A system with n >= 1 coordinates named q0, q1, …
+  explicit SystemBuilder(Index n);
+  /// A system whose coordinates have these (unique, non-empty) names.
+  explicit SystemBuilder(std::vector<std::string> coordinate_names);
+
+  /// M(q, t) as a callable.
+  SystemBuilder& mass_matrix(MassMatrixFn fn);
+  /// A constant mass matrix (n × n); factorized once per workspace.
+  SystemBuilder& mass_matrix(const MatrixXd& M);
+  /// Q(q, q', t) as a callable (default: zero).
+  SystemBuilder& forces(ForceFn fn);
+  /// Adds a constraint (names must be unique).
+  SystemBuilder& add(Constraint c);
+  /// Adds a non-ideal force (its C is summed with the others').
+  SystemBuilder& add(NonIdealForce f);
+
+  /// Validates and returns the system. @throws std::invalid_argument naming the problem: no mass
+  /// matrix, a constant M of the wrong size, duplicate names, a non-ideal force that cannot be
+  /// bound.
+  System build() const;
+
+ private:
+  Index n_;
+  std::vector<std::string> names_;
+  MassMatrixFn mass_;
+  MatrixXd mass_constant_;
+  bool has_constant_mass_ = false;
+  ForceFn forces_;
+  std::vector<Constraint> constraints_;
+  std::vector<NonIdealForce> nonideal_;
+};
+
+}  // namespace ukdyn

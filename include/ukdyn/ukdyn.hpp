@@ -1,0 +1,13 @@
+/// @file ukdyn.hpp
+/// Everything needed to describe a constrained system and evaluate its motion.
+#pragma once
+
+#include "ukdyn/autodiff.hpp"
+#include "ukdyn/constraint.hpp"
+#include "ukdyn/decomposition.hpp"
+#include "ukdyn/forward.hpp"
+#include "ukdyn/nonideal.hpp"
+#include "ukdyn/status.hpp"
+#include "ukdyn/system.hpp"
+#include "ukdyn/types.hpp"
+#include "ukdyn/workspace.hpp"

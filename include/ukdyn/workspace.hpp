@@ -1,0 +1,138 @@
+/// @file workspace.hpp
+/// Everything one evaluation of the fundamental equation writes (MuJoCo's mjData, Pinocchio's
+/// Data). Made once from a System, it owns every buffer, so evaluations never allocate.
+/// One System can drive many workspaces, e.g. one per thread.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "ukdyn/constraint.hpp"
+#include "ukdyn/decomposition.hpp"
+#include "ukdyn/status.hpp"
+#include "ukdyn/types.hpp"
+
+namespace ukdyn {
+
+class System;
+class TextbookDecomposition;
+
+/// Which algorithm evaluates the fundamental equation.
+enum class Algorithm {
+  kDefault,   ///< Cholesky of M + complete orthogonal decomposition of A L⁻ᵀ (no allocation)
+  kTextbook,  ///< eqs. (9)–(12) as printed: M^{±1/2} by eigendecomposition, SVD B⁺ (allocates)
+};
+
+/// Settings of a workspace. All tolerances are relative and documented where they are used.
+struct SolverOptions {
+  Algorithm algorithm = Algorithm::kDefault;  ///< see Algorithm
+  /// Pivot k of the decomposition of A L⁻ᵀ counts as zero when |R_kk| <= rank_threshold · |R_00|
+  /// (see decomposition.hpp). Must lie in (0, 1).
+  double rank_threshold = FundamentalDecomposition::kDefaultThreshold;
+  /// The constraints are reported inconsistent (kInconsistentConstraints) when
+  /// ‖A q'' − b‖ > consistency_tolerance · (‖A‖_F ‖q''‖ + ‖b‖ + ‖A‖_F ‖a‖). Must be > 0.
+  double consistency_tolerance = 1e-8;
+  /// M is reported not symmetric when max|M − Mᵀ| > symmetry_tolerance · max|M|. Must be >= 0.
+  double symmetry_tolerance = 1e-12;
+  /// Compute the Gauss-optimality and virtual-work residuals (O(n² + n m) extra).
+  bool compute_residuals = true;
+};
+
+/// Residuals of the last evaluation (absolute, in the units of the quantity).
+struct Residuals {
+  double constraint = 0.0;    ///< ‖A q'' − b‖: the constraints are met
+  /// ‖M q'' − Q − C − Aᵀ(lambda + lambda_nonideal)‖: stationarity of Gauss's function
+  /// (M x − Q − C)ᵀ M⁻¹ (M x − Q − C) on {x : A x = b}.
+  double gauss = 0.0;
+  /// ‖Qc − C − Aᵀ(lambda + lambda_nonideal)‖: bounds |vᵀ(Qc − C)| / ‖v‖ over A v = 0, i.e. the
+  /// virtual work of the constraint force differs from that prescribed by C by at most this.
+  double virtual_work = 0.0;
+};
+
+/// Counters accumulated over the workspace's life (MuJoCo's warnings).
+struct Counters {
+  std::int64_t evaluations = 0;     ///< calls to forward_dynamics
+  std::int64_t rank_deficient = 0;  ///< evaluations where rank A < active rows (redundancy)
+  std::int64_t failures = 0;        ///< evaluations whose status was not kOk
+};
+
+/// Buffers and results of evaluations of one System. Fields are public, annotated with their
+/// size and the stage that fills them (forward.hpp lists the stages).
+class Workspace {
+ public:
+  /// Sizes every buffer for `sys` and makes each constraint's scratch.
+  /// @throws std::invalid_argument if an option is out of range.
+  explicit Workspace(const System& sys, const SolverOptions& options = {});
+  ~Workspace();
+  Workspace(Workspace&&) noexcept;
+  Workspace& operator=(Workspace&&) noexcept;
+
+  /// Options in force (set at construction).
+  const SolverOptions& options() const { return options_; }
+  /// Identity of the system this workspace was made for.
+  std::uint64_t system_id() const { return system_id_; }
+  /// Index n and m of the system.
+  Index dofs() const { return n_; }
+  Index rows() const { return m_; }
+
+  // --- stage 1, evaluate_unconstrained --------------------------------------------------
+  MatrixXd M;             ///< mass matrix M(q,t) (n × n)
+  VectorXd Q;             ///< impressed force Q(q,q',t) (n)
+  VectorXd a;             ///< unconstrained acceleration a = M⁻¹ Q (n)
+  // --- stage 2, assemble_constraints ----------------------------------------------------
+  MatrixXd A;             ///< constraint matrix (m × n); rows of inactive constraints are zero
+  VectorXd b;             ///< constraint right-hand side (m); zero on inactive rows
+  std::vector<unsigned char> active;  ///< (K) constraint k active at this t?
+  Index active_rows = 0;  ///< rows of the active constraints
+  // --- stage 3, solve_ideal ---------------------------------------------------------------
+  FundamentalDecomposition decomposition;  ///< Cholesky of M, COD of A L⁻ᵀ
+  VectorXd e;             ///< error signal e = b − A a (m)
+  VectorXd lambda;        ///< minimum-norm multipliers of the ideal force, G⁺ e (m)
+  VectorXd Qc_ideal;      ///< ideal constraint force Aᵀ lambda, eq. (11) (n)
+  MatrixXd shares;        ///< (n × K) column k: constraint k's share A_kᵀ lambda_k (filled when
+                          ///< the system has non-ideal forces, or by compute_shares)
+  Index rank = 0;         ///< numerical rank of A
+  // --- stage 4, apply_nonideal ------------------------------------------------------------
+  VectorXd C;             ///< non-ideal work vector, sum of the system's forces (n)
+  VectorXd Qc_nonideal;   ///< non-ideal constraint force, eq. (12) (n)
+  VectorXd lambda_nonideal;  ///< multipliers with Qc_nonideal = C + Aᵀ lambda_nonideal (m)
+  VectorXd Qc;            ///< total constraint force Qc_ideal + Qc_nonideal (n)
+  VectorXd qdd;           ///< constrained acceleration q'' (n), eq. (9)
+  // --- stage 5, check_result ------------------------------------------------------------
+  Residuals residuals;    ///< see Residuals
+  Status status = Status::kOk;  ///< outcome of the last evaluation
+  const char* failed_quantity = "";  ///< with a failing status: which quantity ("M", "A", …)
+  Index failed_index = -1;           ///< …and which constraint / entry, or −1
+  double failed_time = 0.0;          ///< t of the failing evaluation
+  Counters counters;      ///< accumulated over the workspace's life
+
+  /// The multipliers of constraint k (its rows of lambda).
+  Eigen::Ref<const VectorXd> lambda_of(const System& sys, Index k) const;
+
+  // --- scratch (owned here so that nothing allocates during an evaluation) ---------------
+  VectorXd dqdd;          ///< (n) increment of q'' from one stage
+  VectorXd C_term;        ///< (n) one non-ideal force's C
+  VectorXd tmp_n;         ///< (n)
+  VectorXd tmp_m;         ///< (m)
+  std::vector<std::unique_ptr<ConstraintScratch>> scratch;  ///< (K) per-constraint buffers
+  std::unique_ptr<TextbookDecomposition> textbook;  ///< only with Algorithm::kTextbook
+  bool mass_factorized = false;  ///< constant M already factorized
+
+ private:
+  SolverOptions options_;
+  std::uint64_t system_id_ = 0;
+  Index n_ = 0, m_ = 0;
+};
+
+/// A one-line description of ws.status: what failed, where and when, with the residual for
+/// inconsistent constraints. Allocates (meant for error paths).
+std::string describe_status(const System& sys, const Workspace& ws);
+
+/// Throws SolveError with describe_status() unless ws.status is kOk.
+void throw_if_failed(const System& sys, const Workspace& ws);
+
+}  // namespace ukdyn

@@ -1,0 +1,101 @@
+// Constraint: a named, typed, possibly time-limited group of rows; the acceleration form; the
+// small helpers of the automatically differentiated kinds (autodiff.hpp).
+#include "ukdyn/constraint.hpp"
+
+#include <stdexcept>
+#include <utility>
+
+#include "ukdyn/autodiff.hpp"
+
+namespace ukdyn {
+
+const char* to_string(ConstraintKind kind) {
+  switch (kind) {
+    case ConstraintKind::kHolonomic: return "holonomic";
+    case ConstraintKind::kNonholonomic: return "nonholonomic";
+    case ConstraintKind::kAcceleration: return "acceleration";
+  }
+  return "unknown";
+}
+
+std::unique_ptr<ConstraintScratch> ConstraintModel::make_scratch(Index) const { return nullptr; }
+
+void ConstraintModel::violation(const VectorXd&, const VectorXd&, double, ConstraintScratch*,
+                                Eigen::Ref<VectorXd> position,
+                                Eigen::Ref<VectorXd> velocity) const {
+  position.setZero();
+  velocity.setZero();
+}
+
+Constraint::Constraint(std::string name, ConstraintKind kind, Index rows,
+                       std::shared_ptr<const ConstraintModel> model)
+    : name_(std::move(name)), kind_(kind), rows_(rows), model_(std::move(model)) {
+  if (name_.empty()) throw std::invalid_argument("ukdyn::Constraint: the name must not be empty");
+  if (rows_ <= 0) {
+    throw std::invalid_argument("ukdyn::Constraint '" + name_ +
+                                "': rows must be positive, got " + std::to_string(rows_));
+  }
+  if (!model_) throw std::invalid_argument("ukdyn::Constraint '" + name_ + "': null model");
+}
+
+Constraint& Constraint::active_between(double begin, double end) {
+  if (!(begin <= end)) {
+    throw std::invalid_argument("ukdyn::Constraint::active_between('" + name_ +
+                                "'): need begin <= end, got [" + std::to_string(begin) + ", " +
+                                std::to_string(end) + "]");
+  }
+  active_ = TimeInterval{begin, end};
+  return *this;
+}
+
+namespace {
+// acceleration form: the user's callable writes A and b itself
+class AccelerationModel final : public ConstraintModel {
+ public:
+  explicit AccelerationModel(AccelerationFormFn fn) : fn_(std::move(fn)) {}
+  void acceleration_form(const VectorXd& q, const VectorXd& qd, double t, ConstraintScratch*,
+                         Eigen::Ref<MatrixXd> A, Eigen::Ref<VectorXd> b) const override {
+    fn_(q, qd, t, A, b);
+  }
+
+ private:
+  AccelerationFormFn fn_;
+};
+}  // namespace
+
+Constraint acceleration_constraint(std::string name, Index rows, AccelerationFormFn fn) {
+  if (!fn) {
+    throw std::invalid_argument("ukdyn::acceleration_constraint('" + name +
+                                "'): the callable is empty");
+  }
+  return Constraint(std::move(name), ConstraintKind::kAcceleration, rows,
+                    std::make_shared<AccelerationModel>(std::move(fn)));
+}
+
+namespace ad {
+
+void set_constant(Vec<Jet>& x, const VectorXd& v) {
+  for (Index i = 0; i < v.size(); ++i) {
+    x[i].value() = v[i];
+    x[i].derivatives().setZero();
+  }
+}
+
+void seed_second_order(Vec<Dual2>& x, const VectorXd& q, const VectorXd& qd) {
+  // x_i(s) = q_i + s q'_i: value q_i, first derivative q'_i, second derivative 0
+  for (Index i = 0; i < q.size(); ++i) {
+    x[i].value() = Dual(q[i], Dual::DerType::Constant(qd[i]));
+    x[i].derivatives()[0] = Dual(qd[i], Dual::DerType::Zero());
+  }
+}
+
+Dual2 seed_time_second_order(double t) {
+  // t(s) = t + s
+  Dual2 t2;
+  t2.value() = Dual(t, Dual::DerType::Constant(1.0));
+  t2.derivatives()[0] = Dual(1.0, Dual::DerType::Zero());
+  return t2;
+}
+
+}  // namespace ad
+}  // namespace ukdyn

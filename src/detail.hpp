@@ -1,0 +1,39 @@
+// Internal helpers shared by the stages (not installed).
+#pragma once
+
+#include <stdexcept>
+#include <string>
+
+#include "ukdyn/reference.hpp"
+#include "ukdyn/system.hpp"
+#include "ukdyn/workspace.hpp"
+
+namespace ukdyn::detail {
+
+// Records a failing status in the workspace (tier 3) and returns it.
+inline Status fail(Workspace& ws, Status s, const char* quantity, Index index, double t) {
+  ws.status = s;
+  ws.failed_quantity = quantity;
+  ws.failed_index = index;
+  ws.failed_time = t;
+  ++ws.counters.failures;
+  return s;
+}
+
+// Tier 1: refuses a workspace made for another system.
+inline void require_same_system(const System& sys, const Workspace& ws, const char* who) {
+  if (sys.id() != ws.system_id()) {
+    throw std::invalid_argument(std::string(who) +
+                                ": the workspace was made for another system (make one with "
+                                "Workspace(sys))");
+  }
+}
+
+// Calls f with the decomposition the workspace's algorithm uses.
+template <class F>
+decltype(auto) with_decomposition(Workspace& ws, F&& f) {
+  if (ws.textbook) return f(*ws.textbook);
+  return f(ws.decomposition);
+}
+
+}  // namespace ukdyn::detail

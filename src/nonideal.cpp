@@ -1,0 +1,89 @@
+// Non-ideal forces: the view of the ideal force they read, and the ready-made friction laws.
+#include "ukdyn/nonideal.hpp"
+
+#include <cmath>
+#include <stdexcept>
+#include <utility>
+
+#include "ukdyn/system.hpp"
+#include "ukdyn/workspace.hpp"
+
+namespace ukdyn {
+
+const VectorXd& IdealForceInfo::Qc_ideal() const { return ws_.Qc_ideal; }
+const VectorXd& IdealForceInfo::lambda() const { return ws_.lambda; }
+Eigen::Ref<const VectorXd> IdealForceInfo::lambda(Index k) const { return ws_.lambda_of(sys_, k); }
+Eigen::Ref<const VectorXd> IdealForceInfo::share(Index k) const { return ws_.shares.col(k); }
+
+NonIdealForce::NonIdealForce(std::string name, NonIdealFn fn) : name_(std::move(name)) {
+  if (!fn) throw std::invalid_argument("ukdyn::NonIdealForce '" + name_ + "': empty callable");
+  bind_ = [fn = std::move(fn)](const System&) { return fn; };
+}
+
+NonIdealForce::NonIdealForce(std::string name, Binder bind)
+    : name_(std::move(name)), bind_(std::move(bind)) {
+  if (!bind_) throw std::invalid_argument("ukdyn::NonIdealForce '" + name_ + "': empty binder");
+}
+
+namespace {
+// the listed coordinates, all of them when the list is empty; checks the range
+std::vector<Index> resolve_coordinates(const std::vector<Index>& listed, Index n,
+                                       const std::string& who) {
+  if (listed.empty()) {
+    std::vector<Index> all(static_cast<std::size_t>(n));
+    for (Index i = 0; i < n; ++i) all[std::size_t(i)] = i;
+    return all;
+  }
+  for (Index i : listed) {
+    if (i < 0 || i >= n) {
+      throw std::invalid_argument(who + ": coordinate index " + std::to_string(i) +
+                                  " is out of range [0, " + std::to_string(n) + ")");
+    }
+  }
+  return listed;
+}
+}  // namespace
+
+NonIdealForce coulomb_friction(CoulombFriction spec) {
+  std::string name = spec.name.empty() ? "coulomb." + spec.constraint : spec.name;
+  return NonIdealForce(name, NonIdealForce::Binder([spec, name](const System& sys) -> NonIdealFn {
+    const std::string who = "ukdyn::coulomb_friction '" + name + "'";
+    if (!(spec.mu >= 0.0)) {
+      throw std::invalid_argument(who + ": mu must be >= 0, got " + std::to_string(spec.mu));
+    }
+    if (!(spec.regularization_velocity > 0.0)) {
+      throw std::invalid_argument(who + ": regularization_velocity must be > 0, got " +
+                                  std::to_string(spec.regularization_velocity));
+    }
+    const Index k = sys.constraint_index(spec.constraint);
+    const std::vector<Index> coords = resolve_coordinates(spec.coordinates, sys.dofs(), who);
+    const double mu = spec.mu, eps2 = spec.regularization_velocity * spec.regularization_velocity;
+    // C_i = −mu N v_i / sqrt(|v|² + eps²)
+    return [k, coords, mu, eps2](const VectorXd&, const VectorXd& qd, double,
+                                 const IdealForceInfo& ideal, Eigen::Ref<VectorXd> C) {
+      double v2 = 0.0;
+      for (Index i : coords) v2 += qd[i] * qd[i];
+      const double scale = -mu * ideal.normal_force(k) / std::sqrt(v2 + eps2);
+      for (Index i : coords) C[i] = scale * qd[i];
+    };
+  }));
+}
+
+NonIdealForce viscous_friction(ViscousFriction spec) {
+  return NonIdealForce(spec.name, NonIdealForce::Binder([spec](const System& sys) -> NonIdealFn {
+    const std::string who = "ukdyn::viscous_friction '" + spec.name + "'";
+    if (!(spec.coefficient >= 0.0)) {
+      throw std::invalid_argument(who + ": coefficient must be >= 0, got " +
+                                  std::to_string(spec.coefficient));
+    }
+    const std::vector<Index> coords = resolve_coordinates(spec.coordinates, sys.dofs(), who);
+    const double c = spec.coefficient;
+    // C_i = −c q'_i
+    return [coords, c](const VectorXd&, const VectorXd& qd, double, const IdealForceInfo&,
+                       Eigen::Ref<VectorXd> C) {
+      for (Index i : coords) C[i] = -c * qd[i];
+    };
+  }));
+}
+
+}  // namespace ukdyn

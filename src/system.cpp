@@ -1,0 +1,133 @@
+// System and SystemBuilder: validation and freezing of a description.
+#include "ukdyn/system.hpp"
+
+#include <atomic>
+#include <set>
+#include <stdexcept>
+#include <utility>
+
+namespace ukdyn {
+
+namespace {
+std::uint64_t next_system_id() {
+  static std::atomic<std::uint64_t> counter{0};
+  return ++counter;
+}
+
+std::string join_names(const std::vector<std::string>& names) {
+  std::string out;
+  for (const auto& s : names) out += (out.empty() ? "'" : ", '") + s + "'";
+  return out.empty() ? "(none)" : out;
+}
+}  // namespace
+
+Index System::constraint_index(std::string_view name) const {
+  for (std::size_t k = 0; k < constraints_.size(); ++k) {
+    if (constraints_[k].name() == name) return Index(k);
+  }
+  std::vector<std::string> names;
+  for (const auto& c : constraints_) names.push_back(c.name());
+  throw std::invalid_argument("ukdyn::System: no constraint named '" + std::string(name) +
+                              "'; the constraints are " + join_names(names));
+}
+
+Index System::coordinate_index(std::string_view name) const {
+  for (std::size_t i = 0; i < names_.size(); ++i) {
+    if (names_[i] == name) return Index(i);
+  }
+  throw std::invalid_argument("ukdyn::System: no coordinate named '" + std::string(name) +
+                              "'; the coordinates are " + join_names(names_));
+}
+
+SystemBuilder::SystemBuilder(Index n) : n_(n) {
+  if (n <= 0) {
+    throw std::invalid_argument("ukdyn::SystemBuilder: the number of coordinates must be "
+                                "positive, got " + std::to_string(n));
+  }
+  for (Index i = 0; i < n; ++i) names_.push_back(std::string("q").append(std::to_string(i)));
+}
+
+SystemBuilder::SystemBuilder(std::vector<std::string> coordinate_names)
+    : n_(Index(coordinate_names.size())), names_(std::move(coordinate_names)) {
+  if (n_ == 0) throw std::invalid_argument("ukdyn::SystemBuilder: no coordinates given");
+  std::set<std::string> seen;
+  for (const auto& s : names_) {
+    if (s.empty()) throw std::invalid_argument("ukdyn::SystemBuilder: empty coordinate name");
+    if (!seen.insert(s).second) {
+      throw std::invalid_argument("ukdyn::SystemBuilder: coordinate '" + s + "' named twice");
+    }
+  }
+}
+
+SystemBuilder& SystemBuilder::mass_matrix(MassMatrixFn fn) {
+  mass_ = std::move(fn);
+  has_constant_mass_ = false;
+  return *this;
+}
+
+SystemBuilder& SystemBuilder::mass_matrix(const MatrixXd& M) {
+  if (M.rows() != n_ || M.cols() != n_) {
+    throw std::invalid_argument("ukdyn::SystemBuilder::mass_matrix: expected a " +
+                                std::to_string(n_) + "x" + std::to_string(n_) +
+                                " matrix, got " + std::to_string(M.rows()) + "x" +
+                                std::to_string(M.cols()));
+  }
+  mass_constant_ = M;
+  has_constant_mass_ = true;
+  mass_ = [M](const VectorXd&, double, Eigen::Ref<MatrixXd> out) { out = M; };
+  return *this;
+}
+
+SystemBuilder& SystemBuilder::forces(ForceFn fn) {
+  forces_ = std::move(fn);
+  return *this;
+}
+
+SystemBuilder& SystemBuilder::add(Constraint c) {
+  constraints_.push_back(std::move(c));
+  return *this;
+}
+
+SystemBuilder& SystemBuilder::add(NonIdealForce f) {
+  nonideal_.push_back(std::move(f));
+  return *this;
+}
+
+System SystemBuilder::build() const {
+  if (!mass_) {
+    throw std::invalid_argument("ukdyn::SystemBuilder::build: no mass matrix was given "
+                                "(call mass_matrix(fn) or mass_matrix(M))");
+  }
+  System s;
+  s.n_ = n_;
+  s.names_ = names_;
+  s.mass_ = mass_;
+  s.mass_constant_ = has_constant_mass_;
+  s.forces_ = forces_ ? forces_
+                      : ForceFn([](const VectorXd&, const VectorXd&, double,
+                                   Eigen::Ref<VectorXd> Q) { Q.setZero(); });
+  std::set<std::string> seen;
+  for (const auto& c : constraints_) {
+    if (!seen.insert(c.name()).second) {
+      throw std::invalid_argument("ukdyn::SystemBuilder::build: constraint '" + c.name() +
+                                  "' is declared twice");
+    }
+    s.offsets_.push_back(s.m_);
+    s.m_ += c.rows();
+  }
+  s.constraints_ = constraints_;
+  s.id_ = next_system_id();
+  // bind the non-ideal forces last: they may look up constraints and coordinates by name
+  std::set<std::string> seen_forces;
+  for (const auto& f : nonideal_) {
+    if (!seen_forces.insert(f.name()).second) {
+      throw std::invalid_argument("ukdyn::SystemBuilder::build: non-ideal force '" + f.name() +
+                                  "' is declared twice");
+    }
+    s.nonideal_names_.push_back(f.name());
+    s.nonideal_fns_.push_back(f.bind(s));
+  }
+  return s;
+}
+
+}  // namespace ukdyn

@@ -1,0 +1,106 @@
+// No heap allocation per evaluation once the workspace exists, for every kind of constraint,
+// non-ideal forces, rank-deficient and large systems.
+#include <cmath>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include <ukdyn/ukdyn.hpp>
+
+#include "support/alloc_counter.hpp"
+#include "support/random_problem.hpp"
+
+namespace ukdyn {
+namespace {
+
+using testing::start_counting_allocations;
+using testing::stop_counting_allocations;
+
+// allocations made by `calls` evaluations on a fresh workspace (none before them)
+long allocations_of(const System& sys, const VectorXd& q, const VectorXd& qd, int calls,
+                    const SolverOptions& options = {}) {
+  Workspace ws(sys, options);
+  start_counting_allocations();
+  for (int i = 0; i < calls; ++i) forward_dynamics(sys, ws, q, qd, 0.01 * i);
+  const long count = stop_counting_allocations();
+  EXPECT_EQ(ws.status, Status::kOk) << describe_status(sys, ws);
+  return count;
+}
+
+TEST(NoAllocation, CounterSeesAllocations) {
+  start_counting_allocations();
+  VectorXd v = VectorXd::Constant(100, 1.0);
+  asm volatile("" : : "r"(v.data()) : "memory");  // keep the allocation
+  const long count = stop_counting_allocations();
+  EXPECT_EQ(count, 1);  // Eigen's buffer, through malloc
+  EXPECT_DOUBLE_EQ(v.sum(), 100.0);
+}
+
+TEST(NoAllocation, TextbookAlgorithmAllocatesSoTheCounterSeesEigen) {
+  const auto p = testing::random_problem(6, 3, 3, 1u, true);
+  const System sys = make_system(p);
+  const VectorXd z = VectorXd::Zero(6);
+  EXPECT_GT(allocations_of(sys, z, z, 3, SolverOptions{.algorithm = Algorithm::kTextbook}), 3);
+}
+
+TEST(NoAllocation, AutomaticallyDifferentiatedConstraintsAndFriction) {
+  // a sleigh-like system (x, y, th, z) with a holonomic, a time-dependent holonomic, a knife
+  // edge and a velocity-quadratic constraint, Coulomb and viscous friction, state-dependent M
+  const System sys =
+      SystemBuilder({"x", "y", "th", "z", "w"})
+          .mass_matrix([](const VectorXd& q, double, Eigen::Ref<MatrixXd> M) {
+            M.setIdentity();
+            M(2, 2) = 1.0 + 0.1 * q[0] * q[0];
+          })
+          .forces([](const VectorXd& q, const VectorXd& qd, double t, Eigen::Ref<VectorXd> Q) {
+            Q = -0.1 * qd;
+            Q[3] -= 9.81;
+            Q[0] += std::sin(t) * q[1];
+          })
+          .add(holonomic("floor", 1, [](const auto& q, const auto&, auto& phi) {
+            phi[0] = q[3] - 0.1 * q[0] * q[0];
+          }))
+          .add(holonomic("clock", 1, [](const auto& q, const auto& t, auto& phi) {
+            using std::sin;
+            phi[0] = q[4] - sin(t) * q[1];
+          }))
+          .add(nonholonomic("knife", 1, [](const auto& q, const auto& qd, const auto&, auto& psi) {
+            using std::cos;
+            using std::sin;
+            psi[0] = qd[0] * sin(q[2]) - qd[1] * cos(q[2]);
+          }))
+          .add(coulomb_friction({.constraint = "floor", .mu = 0.2, .coordinates = {0, 1}}))
+          .add(viscous_friction({.coefficient = 0.3, .coordinates = {2}}))
+          .build();
+  VectorXd q(5), qd(5);
+  q << 0.3, -0.2, 0.4, 0.009, 0.0;
+  qd << 0.5, 0.2, -0.1, 0.03, 0.0;
+  EXPECT_EQ(allocations_of(sys, q, qd, 10), 0);
+}
+
+struct Case {
+  Index n, m, r;
+};
+void PrintTo(const Case& c, std::ostream* os) { *os << "(n, m, rank) = (" << c.n << ", " << c.m << ", " << c.r << ")"; }
+class NoAllocationRandom : public ::testing::TestWithParam<Case> {};
+
+TEST_P(NoAllocationRandom, DefaultAlgorithm) {
+  const auto [n, m, r] = GetParam();
+  const auto p = testing::random_problem(n, m, r, 42u, true);
+  const System sys = make_system(p);
+  const VectorXd z = VectorXd::Zero(n);
+  EXPECT_EQ(allocations_of(sys, z, z, 5), 0);
+}
+
+INSTANTIATE_TEST_SUITE_P(Sizes, NoAllocationRandom,
+                         ::testing::Values(Case{6, 3, 3}, Case{6, 3, 2}, Case{30, 20, 20},
+                                           Case{30, 20, 12}, Case{120, 80, 80},
+                                           Case{120, 80, 40}, Case{10, 15, 8}),
+                         [](const auto& info) {
+                           return "n" + std::to_string(info.param.n) + "_m" +
+                                  std::to_string(info.param.m) + "_r" +
+                                  std::to_string(info.param.r);
+                         });
+
+}  // namespace
+}  // namespace ukdyn
