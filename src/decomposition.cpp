@@ -12,10 +12,102 @@
 
 namespace ukdyn {
 
+namespace {
+// Small dense kernels on column-major storage (ld = leading dimension), written as plain loops
+// so that the compiler vectorizes them without the per-call set-up of Eigen's expression and
+// blocking machinery, which dominates at the sizes of most mechanical systems. Every inner loop
+// runs down a column: contiguous memory.
+
+// dot product of n entries, with four independent partial sums so that the additions pipeline
+// (one running sum is bound by the latency of the floating-point add)
+inline double dot(const double* __restrict x, const double* __restrict y, Index n) {
+  double s0 = 0.0, s1 = 0.0, s2 = 0.0, s3 = 0.0;
+  Index i = 0;
+  for (; i + 4 <= n; i += 4) {
+    s0 += x[i] * y[i];
+    s1 += x[i + 1] * y[i + 1];
+    s2 += x[i + 2] * y[i + 2];
+    s3 += x[i + 3] * y[i + 3];
+  }
+  for (; i < n; ++i) s0 += x[i] * y[i];
+  return (s0 + s1) + (s2 + s3);
+}
+
+// y ← y + a x over n entries
+inline void axpy(double a, const double* __restrict x, double* __restrict y, Index n) {
+  for (Index i = 0; i < n; ++i) y[i] += a * x[i];
+}
+
+// The triangular solves multiply by the reciprocals of the diagonal (`inv`, kept when the factor
+// is made): a division's latency is four times a multiplication's, and each solve is a chain.
+
+// x ← L⁻¹ x, L lower triangular (n × n)
+inline void lower_solve(const double* L, Index ld, const double* inv, double* x, Index n) {
+  for (Index k = 0; k < n; ++k) {
+    x[k] *= inv[k];
+    axpy(-x[k], L + k * ld + k + 1, x + k + 1, n - k - 1);
+  }
+}
+
+// x ← L⁻ᵀ x, L lower triangular
+inline void lower_transpose_solve(const double* L, Index ld, const double* inv, double* x,
+                                  Index n) {
+  for (Index k = n - 1; k >= 0; --k) {
+    x[k] = (x[k] - dot(L + k * ld + k + 1, x + k + 1, n - k - 1)) * inv[k];
+  }
+}
+
+// y ← L x, L lower triangular
+inline void lower_multiply(const double* L, Index ld, const double* x, double* y, Index n) {
+  for (Index i = 0; i < n; ++i) y[i] = 0.0;
+  for (Index k = 0; k < n; ++k) axpy(x[k], L + k * ld + k, y + k, n - k);
+}
+
+// x ← T⁻¹ x, T upper triangular (r × r)
+inline void upper_solve(const double* T, Index ld, const double* inv, double* x, Index r) {
+  for (Index k = r - 1; k >= 0; --k) {
+    x[k] *= inv[k];
+    axpy(-x[k], T + k * ld, x, k);
+  }
+}
+
+// x ← T⁻ᵀ x, T upper triangular
+inline void upper_transpose_solve(const double* T, Index ld, const double* inv, double* x,
+                                  Index r) {
+  for (Index k = 0; k < r; ++k) x[k] = (x[k] - dot(T + k * ld, x, k)) * inv[k];
+}
+
+// up to this n the plain loops (Cholesky, and L X = Aᵀ one column at a time) take fewer
+// instructions than Eigen's blocked LLT and triangular solve; above it Eigen's win (callgrind
+// counts per evaluation, n = 6 … 120: see bench/RESULTS.md)
+constexpr Index kSmall = 20;
+
+// A = L Lᵀ in place on the lower triangle of A (n × n), right-looking; false unless every pivot
+// is positive
+inline bool cholesky_in_place(double* A, Index ld, Index n) {
+  for (Index k = 0; k < n; ++k) {
+    double* Ak = A + k * ld;
+    if (!(Ak[k] > 0.0)) return false;
+    const double d = std::sqrt(Ak[k]), inv = 1.0 / d;
+    Ak[k] = d;
+    for (Index i = k + 1; i < n; ++i) Ak[i] *= inv;
+    // trailing columns: A(j:n, j) −= L(j, k) L(j:n, k)
+    for (Index j = k + 1; j < n; ++j) axpy(-Ak[j], Ak + j, A + j * ld + j, n - j);
+  }
+  return true;
+}
+}  // namespace
+
 void FundamentalDecomposition::resize(Index n, Index m) {
   n_ = n;
   m_ = m;
-  llt_ = Eigen::LLT<MatrixXd>(n);
+  if (n <= kSmall) {
+    L_.resize(n, n);
+    llt_ = Eigen::LLT<MatrixXd>();
+  } else {
+    L_.resize(0, 0);
+    llt_ = Eigen::LLT<MatrixXd>(n);
+  }
   X_.resize(n, m);
   tau_.resize(m);
   ztau_.resize(m);
@@ -24,9 +116,15 @@ void FundamentalDecomposition::resize(Index n, Index m) {
   norm_ref_.resize(m);
   wm_.resize(m);
   wn_.resize(n);
+  inv_ldiag_.resize(n);
+  inv_tdiag_.resize(m);
   rank_ = 0;
   max_pivot_ = 0.0;
   info_ = Eigen::InvalidInput;
+}
+
+const MatrixXd& FundamentalDecomposition::matrix_llt() const {
+  return n_ <= kSmall ? L_ : llt_.matrixLLT();
 }
 
 FundamentalDecomposition& FundamentalDecomposition::set_threshold(double threshold) {
@@ -43,8 +141,15 @@ FundamentalDecomposition& FundamentalDecomposition::compute_mass(
     const Eigen::Ref<const MatrixXd>& M) {
   UKDYN_CHECK(M.rows() == n_ && M.cols() == n_, "compute_mass: M has the wrong size");
   // M = L Lᵀ
-  llt_.compute(M);
-  info_ = llt_.info();
+  if (n_ <= kSmall) {
+    L_ = M;
+    info_ = cholesky_in_place(L_.data(), n_, n_) ? Eigen::Success : Eigen::NumericalIssue;
+  } else {
+    llt_.compute(M);
+    info_ = llt_.info();
+  }
+  // 1 / L_kk for the solves
+  if (info_ == Eigen::Success) inv_ldiag_ = matrix_llt().diagonal().cwiseInverse();
   return *this;
 }
 
@@ -54,10 +159,18 @@ FundamentalDecomposition& FundamentalDecomposition::compute_constraints(
   UKDYN_CHECK(info_ == Eigen::Success, "compute_constraints: M is not factorized");
   // Wᵀ = L⁻¹ Aᵀ
   X_ = A.transpose();
-  llt_.matrixL().solveInPlace(X_);
+  if (n_ <= kSmall) {
+    for (Index j = 0; j < m_; ++j) {
+      lower_solve(L_.data(), n_, inv_ldiag_.data(), X_.col(j).data(), n_);
+    }
+  } else {
+    llt_.matrixL().solveInPlace(X_);
+  }
   // Wᵀ Π = Q [R11 R12; 0 0], then [R11 R12] = [T 0] Z when rank-deficient
   factor_qr();
   if (rank_ < m_) factor_rz();
+  // 1 / T_kk for the solves
+  for (Index k = 0; k < rank_; ++k) inv_tdiag_[k] = 1.0 / X_(k, k);
   return *this;
 }
 
@@ -102,11 +215,12 @@ void FundamentalDecomposition::factor_qr() {
     tau_[k] = tau;
     // X(k:n, j) −= tau v (vᵀ X(k:n, j)) for the trailing columns
     if (tau != 0.0) {
+      const double* vk = v.data();
       for (Index j = k + 1; j < m; ++j) {
-        auto xj = X_.col(j).segment(k + 1, n - k - 1);
-        const double s = tau * (X_(k, j) + v.dot(xj));
-        X_(k, j) -= s;
-        xj -= s * v;
+        double* xj = X_.col(j).data() + k;
+        const double s = tau * (xj[0] + dot(vk, xj + 1, n - k - 1));
+        xj[0] -= s;
+        axpy(-s, vk, xj + 1, n - k - 1);
       }
     }
     // downdate the partial norms of the trailing columns
@@ -116,7 +230,8 @@ void FundamentalDecomposition::factor_qr() {
       const double temp = std::max(0.0, 1.0 - ratio * ratio);
       const double rel = norm_[j] / norm_ref_[j];
       if (temp * rel * rel <= tol3z) {
-        norm_[j] = X_.col(j).segment(k + 1, n - k - 1).norm();
+        const double* xj = X_.col(j).data() + k + 1;
+        norm_[j] = std::sqrt(dot(xj, xj, n - k - 1));
         norm_ref_[j] = norm_[j];
       } else {
         norm_[j] *= std::sqrt(temp);
@@ -159,11 +274,11 @@ void FundamentalDecomposition::apply_q(Eigen::Ref<VectorXd> x, bool transpose) c
   for (Index i = 0; i < r; ++i) {
     const Index k = transpose ? i : r - 1 - i;
     if (tau_[k] == 0.0) continue;
-    const auto v = X_.col(k).segment(k + 1, n - k - 1);
-    auto xt = x.segment(k + 1, n - k - 1);
-    const double s = tau_[k] * (x[k] + v.dot(xt));
-    x[k] -= s;
-    xt -= s * v;
+    const double* v = X_.col(k).data() + k + 1;
+    double* xk = x.data() + k;
+    const double s = tau_[k] * (xk[0] + dot(v, xk + 1, n - k - 1));
+    xk[0] -= s;
+    axpy(-s, v, xk + 1, n - k - 1);
   }
 }
 
@@ -187,7 +302,9 @@ void FundamentalDecomposition::solve_mass(const Eigen::Ref<const VectorXd>& f,
   UKDYN_CHECK(f.size() == n_ && x.size() == n_, "solve_mass: wrong sizes");
   // x = L⁻ᵀ L⁻¹ f
   x = f;
-  llt_.solveInPlace(x);
+  const MatrixXd& L = matrix_llt();
+  lower_solve(L.data(), n_, inv_ldiag_.data(), x.data(), n_);
+  lower_transpose_solve(L.data(), n_, inv_ldiag_.data(), x.data(), n_);
 }
 
 void FundamentalDecomposition::apply_pinv(const Eigen::Ref<const VectorXd>& e,
@@ -198,7 +315,7 @@ void FundamentalDecomposition::apply_pinv(const Eigen::Ref<const VectorXd>& e,
   for (Index k = 0; k < m_; ++k) wm_[k] = e[perm_[k]];
   apply_z(wm_, false);
   // u = T⁻ᵀ w_{1:r}
-  X_.topLeftCorner(r, r).transpose().triangularView<Eigen::Lower>().solveInPlace(wm_.head(r));
+  upper_transpose_solve(X_.data(), n_, inv_tdiag_.data(), wm_.data(), r);
   // y = Q [u; 0]
   y.head(r) = wm_.head(r);
   y.tail(n_ - r).setZero();
@@ -214,11 +331,12 @@ void FundamentalDecomposition::solve_ideal(const Eigen::Ref<const VectorXd>& e,
   // y = W⁺ e (leaves u = T⁻ᵀ w_{1:r} in wm_)
   apply_pinv(e, wn_);
   // Qc_ideal = L y;  q'' − a = L⁻ᵀ y
-  Qc.noalias() = llt_.matrixL() * wn_;
+  const MatrixXd& L = matrix_llt();
+  lower_multiply(L.data(), n_, wn_.data(), Qc.data(), n_);
   dqdd = wn_;
-  llt_.matrixU().solveInPlace(dqdd);
+  lower_transpose_solve(L.data(), n_, inv_ldiag_.data(), dqdd.data(), n_);
   // lambda = Π Zᵀ [T⁻¹ u; 0]
-  X_.topLeftCorner(r, r).triangularView<Eigen::Upper>().solveInPlace(wm_.head(r));
+  upper_solve(X_.data(), n_, inv_tdiag_.data(), wm_.data(), r);
   wm_.tail(m_ - r).setZero();
   apply_z(wm_, true);
   for (Index k = 0; k < m_; ++k) lambda[perm_[k]] = wm_[k];
@@ -233,11 +351,12 @@ void FundamentalDecomposition::project_nonideal(const Eigen::Ref<const VectorXd>
   const Index r = rank_;
   // v = Qᵀ L⁻¹ C
   wn_ = C;
-  llt_.matrixL().solveInPlace(wn_);
+  const MatrixXd& L = matrix_llt();
+  lower_solve(L.data(), n_, inv_ldiag_.data(), wn_.data(), n_);
   apply_q(wn_, true);
   // lambda = −G⁺ A M⁻¹ C = −Π Zᵀ [T⁻¹ v_{1:r}; 0]
   wm_.head(r) = wn_.head(r);
-  X_.topLeftCorner(r, r).triangularView<Eigen::Upper>().solveInPlace(wm_.head(r));
+  upper_solve(X_.data(), n_, inv_tdiag_.data(), wm_.data(), r);
   wm_.tail(m_ - r).setZero();
   apply_z(wm_, true);
   for (Index k = 0; k < m_; ++k) lambda[perm_[k]] = -wm_[k];
@@ -245,9 +364,9 @@ void FundamentalDecomposition::project_nonideal(const Eigen::Ref<const VectorXd>
   wn_.head(r).setZero();
   apply_q(wn_, false);
   // Qc_nonideal = L c⊥;  q''_nonideal = L⁻ᵀ c⊥
-  Qc.noalias() = llt_.matrixL() * wn_;
+  lower_multiply(L.data(), n_, wn_.data(), Qc.data(), n_);
   dqdd = wn_;
-  llt_.matrixU().solveInPlace(dqdd);
+  lower_transpose_solve(L.data(), n_, inv_ldiag_.data(), dqdd.data(), n_);
 }
 
 }  // namespace ukdyn

@@ -99,9 +99,9 @@ INSTANTIATE_TEST_SUITE_P(
                       Case{6, 9, 6}, Case{6, 9, 4}, Case{12, 6, 1}, Case{30, 20, 20},
                       Case{30, 20, 13}, Case{60, 40, 25}, Case{120, 80, 80},
                       Case{120, 80, 57}),
-    [](const auto& info) {
-      return "n" + std::to_string(info.param.n) + "_m" + std::to_string(info.param.m) + "_r" +
-             std::to_string(info.param.r);
+    [](const auto& tp) {
+      return "n" + std::to_string(tp.param.n) + "_m" + std::to_string(tp.param.m) + "_r" +
+             std::to_string(tp.param.r);
     });
 
 TEST(Decomposition, ZeroConstraintMatrixHasRankZeroAndZeroForce) {

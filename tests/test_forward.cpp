@@ -188,10 +188,10 @@ INSTANTIATE_TEST_SUITE_P(Sizes, DefaultVsTextbook,
                                            Case{60, 40, 40}, Case{60, 40, 33},
                                            Case{120, 80, 80}, Case{120, 80, 61},
                                            Case{20, 30, 18}),
-                         [](const auto& info) {
-                           return "n" + std::to_string(info.param.n) + "_m" +
-                                  std::to_string(info.param.m) + "_r" +
-                                  std::to_string(info.param.r);
+                         [](const auto& tp) {
+                           return "n" + std::to_string(tp.param.n) + "_m" +
+                                  std::to_string(tp.param.m) + "_r" +
+                                  std::to_string(tp.param.r);
                          });
 
 // ---------------------------------------------------------------------------------------------
@@ -265,10 +265,10 @@ INSTANTIATE_TEST_SUITE_P(Sizes, Properties,
                          ::testing::Values(Case{4, 2, 2}, Case{6, 3, 3}, Case{6, 3, 1},
                                            Case{10, 7, 5}, Case{30, 20, 20}, Case{30, 20, 9},
                                            Case{8, 8, 8}, Case{8, 12, 6}),
-                         [](const auto& info) {
-                           return "n" + std::to_string(info.param.n) + "_m" +
-                                  std::to_string(info.param.m) + "_r" +
-                                  std::to_string(info.param.r);
+                         [](const auto& tp) {
+                           return "n" + std::to_string(tp.param.n) + "_m" +
+                                  std::to_string(tp.param.m) + "_r" +
+                                  std::to_string(tp.param.r);
                          });
 
 // ---------------------------------------------------------------------------------------------

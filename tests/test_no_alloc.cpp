@@ -96,10 +96,10 @@ INSTANTIATE_TEST_SUITE_P(Sizes, NoAllocationRandom,
                          ::testing::Values(Case{6, 3, 3}, Case{6, 3, 2}, Case{30, 20, 20},
                                            Case{30, 20, 12}, Case{120, 80, 80},
                                            Case{120, 80, 40}, Case{10, 15, 8}),
-                         [](const auto& info) {
-                           return "n" + std::to_string(info.param.n) + "_m" +
-                                  std::to_string(info.param.m) + "_r" +
-                                  std::to_string(info.param.r);
+                         [](const auto& tp) {
+                           return "n" + std::to_string(tp.param.n) + "_m" +
+                                  std::to_string(tp.param.m) + "_r" +
+                                  std::to_string(tp.param.r);
                          });
 
 }  // namespace

@@ -72,8 +72,8 @@ class FundamentalDecomposition {
   /// Number of coordinates n and constraint rows m this object was sized for.
   Index dofs() const { return n_; }
   Index rows() const { return m_; }
-  /// The Cholesky factor L (lower triangle of the returned matrix).
-  const MatrixXd& matrix_llt() const { return llt_.matrixLLT(); }
+  /// The Cholesky factor L (lower triangle of the returned matrix; the upper is unspecified).
+  const MatrixXd& matrix_llt() const;
 
   /// x = M⁻¹ f. Cost O(n²).
   void solve_mass(const Eigen::Ref<const VectorXd>& f, Eigen::Ref<VectorXd> x) const;
@@ -103,12 +103,15 @@ class FundamentalDecomposition {
   void factor_rz();
 
   Index n_ = 0, m_ = 0;
-  Eigen::LLT<MatrixXd> llt_;
+  Eigen::LLT<MatrixXd> llt_;  // Cholesky for n > 20 (Eigen's blocked LLT)
+  MatrixXd L_;                // (n × n) Cholesky factor for n <= 20 (plain loops)
   MatrixXd X_;              // (n × m) Wᵀ, then R/T above the diagonal, reflectors below / right
   VectorXd tau_;            // (m) QR reflector coefficients
   VectorXd ztau_;           // (m) RZ reflector coefficients
   Eigen::VectorXi perm_;    // (m) column permutation: column k of Wᵀ Π is column perm_[k] of Wᵀ
   VectorXd norm_, norm_ref_;  // (m) partial column norms for pivoting
+  VectorXd inv_ldiag_;      // (n) 1 / L_kk
+  VectorXd inv_tdiag_;      // (m) 1 / T_kk, first rank_ entries
   VectorXd wm_;             // (m) scratch
   VectorXd wn_;             // (n) scratch
   Index rank_ = 0;

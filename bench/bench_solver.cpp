@@ -1,0 +1,168 @@
+// Nanoseconds per evaluation of the fundamental equation: the default algorithm, the textbook
+// formula and a dense KKT solve with LDLT, on random full-rank and rank-deficient problems.
+//
+// "core" benchmarks give every algorithm the same inputs (M, Q, A, b) and time everything it
+// needs to produce q'' and the multipliers, including factorizing M. "pipeline" times the whole
+// forward_dynamics call (callables for M, Q and A, b; non-finite checks; residuals).
+// Counters: allocs_per_eval (after the workspace exists) and, on the rank-deficient problems,
+// err = ‖q'' − q''_textbook‖ / ‖q''_textbook‖.
+#include <benchmark/benchmark.h>
+
+#include <ukdyn/reference.hpp>
+#include <ukdyn/ukdyn.hpp>
+
+#include "support/alloc_counter.hpp"
+#include "support/random_problem.hpp"
+
+namespace {
+
+using namespace ukdyn;
+
+// the rank used for the rank-deficient variant of an m-row problem
+Index deficient_rank(Index m) { return std::max<Index>(1, m - std::max<Index>(1, m / 3)); }
+
+testing::RandomProblem problem(const benchmark::State& state) {
+  const Index n = state.range(0), m = state.range(1);
+  const Index r = state.range(2) ? deficient_rank(m) : m;
+  return testing::random_problem(n, m, r, 1234u + unsigned(n), false);
+}
+
+// q'' by the textbook formula, the reference for the error counter
+VectorXd textbook_qdd(const testing::RandomProblem& p) {
+  const Index n = p.M.rows(), m = p.A.rows();
+  TextbookDecomposition t(n, m);
+  t.compute_mass(p.M).compute_constraints(p.A);
+  VectorXd a(n), dq(n), Qc(n), lambda(m);
+  t.solve_mass(p.Q, a);
+  t.solve_ideal(p.b - p.A * a, dq, Qc, lambda);
+  return a + dq;
+}
+
+template <class F>
+double allocations_per_eval(F&& f) {
+  testing::start_counting_allocations();
+  for (int i = 0; i < 10; ++i) f();
+  return double(testing::stop_counting_allocations()) / 10.0;
+}
+
+void set_counters(benchmark::State& state, const testing::RandomProblem& p, const VectorXd& qdd,
+                  double allocs) {
+  state.counters["allocs_per_eval"] = allocs;
+  const VectorXd ref = textbook_qdd(p);
+  state.counters["err"] = (qdd - ref).norm() / ref.norm();
+  state.SetLabel(state.range(2) ? "rank-deficient" : "full-rank");
+}
+
+void BM_Default(benchmark::State& state) {
+  const auto p = problem(state);
+  const Index n = p.M.rows(), m = p.A.rows();
+  FundamentalDecomposition d(n, m);
+  VectorXd a(n), e(m), dq(n), Qc(n), lambda(m), qdd(n);
+  auto eval = [&] {
+    // M = L Lᵀ; a = M⁻¹ Q; e = b − A a; COD of A L⁻ᵀ; q'' = a + L⁻ᵀ W⁺ e
+    d.compute_mass(p.M);
+    d.solve_mass(p.Q, a);
+    e = p.b;
+    e.noalias() -= p.A * a;
+    d.compute_constraints(p.A);
+    d.solve_ideal(e, dq, Qc, lambda);
+    qdd = a + dq;
+  };
+  eval();
+  const double allocs = allocations_per_eval(eval);
+  for (auto _ : state) {
+    eval();
+    benchmark::DoNotOptimize(qdd.data());
+    benchmark::ClobberMemory();
+  }
+  set_counters(state, p, qdd, allocs);
+}
+
+void BM_Textbook(benchmark::State& state) {
+  const auto p = problem(state);
+  const Index n = p.M.rows(), m = p.A.rows();
+  TextbookDecomposition t(n, m);
+  VectorXd a(n), e(m), dq(n), Qc(n), lambda(m), qdd(n);
+  auto eval = [&] {
+    t.compute_mass(p.M);
+    t.solve_mass(p.Q, a);
+    e = p.b - p.A * a;
+    t.compute_constraints(p.A);
+    t.solve_ideal(e, dq, Qc, lambda);
+    qdd = a + dq;
+  };
+  eval();
+  const double allocs = allocations_per_eval(eval);
+  for (auto _ : state) {
+    eval();
+    benchmark::DoNotOptimize(qdd.data());
+    benchmark::ClobberMemory();
+  }
+  set_counters(state, p, qdd, allocs);
+}
+
+void BM_KKT(benchmark::State& state) {
+  const auto p = problem(state);
+  const Index n = p.M.rows(), m = p.A.rows();
+  KktSolver kkt(n, m);
+  VectorXd qdd(n), lambda(m);
+  auto eval = [&] { kkt.solve(p.M, p.Q, p.A, p.b, qdd, lambda); };
+  eval();
+  const double allocs = allocations_per_eval(eval);
+  for (auto _ : state) {
+    eval();
+    benchmark::DoNotOptimize(qdd.data());
+    benchmark::ClobberMemory();
+  }
+  set_counters(state, p, qdd, allocs);
+}
+
+// the whole forward_dynamics call; M through a callable so that it is factorized every time
+void BM_Pipeline(benchmark::State& state, bool residuals) {
+  const auto p = problem(state);
+  const Index n = p.M.rows();
+  SystemBuilder builder(n);
+  builder.mass_matrix([M = p.M](const VectorXd&, double, Eigen::Ref<MatrixXd> out) { out = M; })
+      .forces([Q = p.Q](const VectorXd&, const VectorXd&, double, Eigen::Ref<VectorXd> out) {
+        out = Q;
+      })
+      .add(acceleration_constraint(
+          "A", p.A.rows(),
+          [A = p.A, b = p.b](const VectorXd&, const VectorXd&, double, Eigen::Ref<MatrixXd> Ao,
+                             Eigen::Ref<VectorXd> bo) {
+            Ao = A;
+            bo = b;
+          }));
+  const System sys = builder.build();
+  Workspace ws(sys, SolverOptions{.compute_residuals = residuals});
+  const VectorXd z = VectorXd::Zero(n);
+  auto eval = [&] { forward_dynamics(sys, ws, z, z, 0.0); };
+  eval();
+  const double allocs = allocations_per_eval(eval);
+  for (auto _ : state) {
+    eval();
+    benchmark::DoNotOptimize(ws.qdd.data());
+    benchmark::ClobberMemory();
+  }
+  if (ws.status != Status::kOk) state.SkipWithError(describe_status(sys, ws).c_str());
+  set_counters(state, p, ws.qdd, allocs);
+}
+
+void sizes(benchmark::internal::Benchmark* b) {
+  for (int deficient : {0, 1}) {
+    for (auto [n, m] : {std::pair{6, 3}, {12, 6}, {30, 20}, {60, 40}, {120, 80}}) {
+      b->Args({n, m, deficient});
+    }
+  }
+  b->ArgNames({"n", "m", "deficient"});
+}
+
+BENCHMARK(BM_Default)->Apply(sizes);
+BENCHMARK(BM_KKT)->Apply(sizes);
+BENCHMARK(BM_Textbook)->Apply(sizes);
+BENCHMARK_CAPTURE(BM_Pipeline, with_residuals, true)->Apply(sizes);
+BENCHMARK_CAPTURE(BM_Pipeline, no_residuals, false)->Apply(sizes);
+
+}  // namespace
+
+BENCHMARK_MAIN();
