@@ -4,8 +4,11 @@
 // "core" benchmarks give every algorithm the same inputs (M, Q, A, b) and time everything it
 // needs to produce q'' and the multipliers, including factorizing M. "pipeline" times the whole
 // forward_dynamics call (callables for M, Q and A, b; non-finite checks; residuals).
-// Counters: allocs_per_eval (after the workspace exists) and, on the rank-deficient problems,
-// err = ‖q'' − q''_textbook‖ / ‖q''_textbook‖.
+// Counters: allocs_per_eval (after the workspace exists); err = ‖q'' − q''_ref‖ / ‖q''_ref‖ and
+// err_lambda = ‖λ − λ_ref‖ / ‖λ_ref‖ against the textbook formula (λ_ref = (B Bᵀ)⁺ e, the
+// minimum-norm multipliers). Problems: full rank (deficient = 0), random rank-deficient A = U V
+// (deficient = 1), and a full-rank A with a third of its rows duplicated exactly
+// (deficient = 2), as redundant joints produce.
 #include <benchmark/benchmark.h>
 
 #include <ukdyn/reference.hpp>
@@ -22,20 +25,33 @@ using namespace ukdyn;
 Index deficient_rank(Index m) { return std::max<Index>(1, m - std::max<Index>(1, m / 3)); }
 
 testing::RandomProblem problem(const benchmark::State& state) {
-  const Index n = state.range(0), m = state.range(1);
-  const Index r = state.range(2) ? deficient_rank(m) : m;
-  return testing::random_problem(n, m, r, 1234u + unsigned(n), false);
+  const Index n = state.range(0), m = state.range(1), kind = state.range(2);
+  if (kind != 2) {
+    const Index r = kind == 1 ? deficient_rank(m) : m;
+    return testing::random_problem(n, m, r, 1234u + unsigned(n), false);
+  }
+  // rows m − d … m−1 repeat rows 0 … d−1 exactly
+  const Index d = m - deficient_rank(m);
+  auto p = testing::random_problem(n, m - d, m - d, 1234u + unsigned(n), false);
+  MatrixXd A(m, n);
+  VectorXd b(m);
+  A << p.A, p.A.topRows(d);
+  b << p.b, p.b.head(d);
+  p.A = A;
+  p.b = b;
+  p.rank = m - d;
+  return p;
 }
 
-// q'' by the textbook formula, the reference for the error counter
-VectorXd textbook_qdd(const testing::RandomProblem& p) {
+// q'' and λ by the textbook formula, the reference for the error counters
+std::pair<VectorXd, VectorXd> textbook(const testing::RandomProblem& p) {
   const Index n = p.M.rows(), m = p.A.rows();
   TextbookDecomposition t(n, m);
   t.compute_mass(p.M).compute_constraints(p.A);
   VectorXd a(n), dq(n), Qc(n), lambda(m);
   t.solve_mass(p.Q, a);
   t.solve_ideal(p.b - p.A * a, dq, Qc, lambda);
-  return a + dq;
+  return {a + dq, lambda};
 }
 
 template <class F>
@@ -46,11 +62,13 @@ double allocations_per_eval(F&& f) {
 }
 
 void set_counters(benchmark::State& state, const testing::RandomProblem& p, const VectorXd& qdd,
-                  double allocs) {
+                  const VectorXd& lambda, double allocs) {
   state.counters["allocs_per_eval"] = allocs;
-  const VectorXd ref = textbook_qdd(p);
-  state.counters["err"] = (qdd - ref).norm() / ref.norm();
-  state.SetLabel(state.range(2) ? "rank-deficient" : "full-rank");
+  const auto [qdd_ref, lambda_ref] = textbook(p);
+  state.counters["err"] = (qdd - qdd_ref).norm() / qdd_ref.norm();
+  state.counters["err_lambda"] = (lambda - lambda_ref).norm() / lambda_ref.norm();
+  const char* labels[] = {"full-rank", "rank-deficient", "duplicated-rows"};
+  state.SetLabel(labels[state.range(2)]);
 }
 
 void BM_Default(benchmark::State& state) {
@@ -75,7 +93,7 @@ void BM_Default(benchmark::State& state) {
     benchmark::DoNotOptimize(qdd.data());
     benchmark::ClobberMemory();
   }
-  set_counters(state, p, qdd, allocs);
+  set_counters(state, p, qdd, lambda, allocs);
 }
 
 void BM_Textbook(benchmark::State& state) {
@@ -98,7 +116,7 @@ void BM_Textbook(benchmark::State& state) {
     benchmark::DoNotOptimize(qdd.data());
     benchmark::ClobberMemory();
   }
-  set_counters(state, p, qdd, allocs);
+  set_counters(state, p, qdd, lambda, allocs);
 }
 
 void BM_KKT(benchmark::State& state) {
@@ -114,7 +132,7 @@ void BM_KKT(benchmark::State& state) {
     benchmark::DoNotOptimize(qdd.data());
     benchmark::ClobberMemory();
   }
-  set_counters(state, p, qdd, allocs);
+  set_counters(state, p, qdd, lambda, allocs);
 }
 
 // the whole forward_dynamics call; M through a callable so that it is factorized every time
@@ -145,11 +163,11 @@ void BM_Pipeline(benchmark::State& state, bool residuals) {
     benchmark::ClobberMemory();
   }
   if (ws.status != Status::kOk) state.SkipWithError(describe_status(sys, ws).c_str());
-  set_counters(state, p, ws.qdd, allocs);
+  set_counters(state, p, ws.qdd, ws.lambda, allocs);
 }
 
 void sizes(benchmark::internal::Benchmark* b) {
-  for (int deficient : {0, 1}) {
+  for (int deficient : {0, 1, 2}) {
     for (auto [n, m] : {std::pair{6, 3}, {12, 6}, {30, 20}, {60, 40}, {120, 80}}) {
       b->Args({n, m, deficient});
     }

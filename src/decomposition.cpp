@@ -78,7 +78,7 @@ inline void upper_transpose_solve(const double* T, Index ld, const double* inv, 
 }
 
 // up to this n the plain loops (Cholesky, and L X = Aᵀ one column at a time) take fewer
-// instructions than Eigen's blocked LLT and triangular solve; above it Eigen's win (callgrind
+// instructions than Eigen's blocked Cholesky and triangular solve; above it Eigen's win (callgrind
 // counts per evaluation, n = 6 … 120: see bench/RESULTS.md)
 constexpr Index kSmall = 20;
 
@@ -101,13 +101,7 @@ inline bool cholesky_in_place(double* A, Index ld, Index n) {
 void FundamentalDecomposition::resize(Index n, Index m) {
   n_ = n;
   m_ = m;
-  if (n <= kSmall) {
-    L_.resize(n, n);
-    llt_ = Eigen::LLT<MatrixXd>();
-  } else {
-    L_.resize(0, 0);
-    llt_ = Eigen::LLT<MatrixXd>(n);
-  }
+  L_.resize(n, n);
   X_.resize(n, m);
   tau_.resize(m);
   ztau_.resize(m);
@@ -123,10 +117,6 @@ void FundamentalDecomposition::resize(Index n, Index m) {
   info_ = Eigen::InvalidInput;
 }
 
-const MatrixXd& FundamentalDecomposition::matrix_llt() const {
-  return n_ <= kSmall ? L_ : llt_.matrixLLT();
-}
-
 FundamentalDecomposition& FundamentalDecomposition::set_threshold(double threshold) {
   if (!(threshold > 0.0 && threshold < 1.0)) {
     throw std::invalid_argument(
@@ -140,16 +130,17 @@ FundamentalDecomposition& FundamentalDecomposition::set_threshold(double thresho
 FundamentalDecomposition& FundamentalDecomposition::compute_mass(
     const Eigen::Ref<const MatrixXd>& M) {
   UKDYN_CHECK(M.rows() == n_ && M.cols() == n_, "compute_mass: M has the wrong size");
-  // M = L Lᵀ
-  if (n_ <= kSmall) {
-    L_ = M;
-    info_ = cholesky_in_place(L_.data(), n_, n_) ? Eigen::Success : Eigen::NumericalIssue;
-  } else {
-    llt_.compute(M);
-    info_ = llt_.info();
-  }
+  // M = L Lᵀ, in place on the lower triangle of L_. Large n: Eigen's blocked kernel (the one
+  // behind Eigen::LLT, called directly: an LLT object leaves its info member uninitialized until
+  // compute(), so moving an unused one is undefined behaviour, and it also computes a norm we do
+  // not need)
+  L_ = M;
+  const bool ok = n_ <= kSmall
+                      ? cholesky_in_place(L_.data(), n_, n_)
+                      : Eigen::internal::llt_inplace<double, Eigen::Lower>::blocked(L_) == -1;
+  info_ = ok ? Eigen::Success : Eigen::NumericalIssue;
   // 1 / L_kk for the solves
-  if (info_ == Eigen::Success) inv_ldiag_ = matrix_llt().diagonal().cwiseInverse();
+  if (ok) inv_ldiag_ = L_.diagonal().cwiseInverse();
   return *this;
 }
 
@@ -164,7 +155,7 @@ FundamentalDecomposition& FundamentalDecomposition::compute_constraints(
       lower_solve(L_.data(), n_, inv_ldiag_.data(), X_.col(j).data(), n_);
     }
   } else {
-    llt_.matrixL().solveInPlace(X_);
+    L_.triangularView<Eigen::Lower>().solveInPlace(X_);
   }
   // Wᵀ Π = Q [R11 R12; 0 0], then [R11 R12] = [T 0] Z when rank-deficient
   factor_qr();
@@ -302,7 +293,7 @@ void FundamentalDecomposition::solve_mass(const Eigen::Ref<const VectorXd>& f,
   UKDYN_CHECK(f.size() == n_ && x.size() == n_, "solve_mass: wrong sizes");
   // x = L⁻ᵀ L⁻¹ f
   x = f;
-  const MatrixXd& L = matrix_llt();
+  const MatrixXd& L = L_;
   lower_solve(L.data(), n_, inv_ldiag_.data(), x.data(), n_);
   lower_transpose_solve(L.data(), n_, inv_ldiag_.data(), x.data(), n_);
 }
@@ -331,7 +322,7 @@ void FundamentalDecomposition::solve_ideal(const Eigen::Ref<const VectorXd>& e,
   // y = W⁺ e (leaves u = T⁻ᵀ w_{1:r} in wm_)
   apply_pinv(e, wn_);
   // Qc_ideal = L y;  q'' − a = L⁻ᵀ y
-  const MatrixXd& L = matrix_llt();
+  const MatrixXd& L = L_;
   lower_multiply(L.data(), n_, wn_.data(), Qc.data(), n_);
   dqdd = wn_;
   lower_transpose_solve(L.data(), n_, inv_ldiag_.data(), dqdd.data(), n_);
@@ -351,7 +342,7 @@ void FundamentalDecomposition::project_nonideal(const Eigen::Ref<const VectorXd>
   const Index r = rank_;
   // v = Qᵀ L⁻¹ C
   wn_ = C;
-  const MatrixXd& L = matrix_llt();
+  const MatrixXd& L = L_;
   lower_solve(L.data(), n_, inv_ldiag_.data(), wn_.data(), n_);
   apply_q(wn_, true);
   // lambda = −G⁺ A M⁻¹ C = −Π Zᵀ [T⁻¹ v_{1:r}; 0]

@@ -73,7 +73,7 @@ class FundamentalDecomposition {
   Index dofs() const { return n_; }
   Index rows() const { return m_; }
   /// The Cholesky factor L (lower triangle of the returned matrix; the upper is unspecified).
-  const MatrixXd& matrix_llt() const;
+  const MatrixXd& matrix_llt() const { return L_; }
 
   /// x = M⁻¹ f. Cost O(n²).
   void solve_mass(const Eigen::Ref<const VectorXd>& f, Eigen::Ref<VectorXd> x) const;
@@ -103,8 +103,7 @@ class FundamentalDecomposition {
   void factor_rz();
 
   Index n_ = 0, m_ = 0;
-  Eigen::LLT<MatrixXd> llt_;  // Cholesky for n > 20 (Eigen's blocked LLT)
-  MatrixXd L_;                // (n × n) Cholesky factor for n <= 20 (plain loops)
+  MatrixXd L_;              // (n × n) Cholesky factor M = L Lᵀ in the lower triangle
   MatrixXd X_;              // (n × m) Wᵀ, then R/T above the diagonal, reflectors below / right
   VectorXd tau_;            // (m) QR reflector coefficients
   VectorXd ztau_;           // (m) RZ reflector coefficients

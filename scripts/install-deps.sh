@@ -1,0 +1,26 @@
+#!/usr/bin/env bash
+# Installs the Debian packages that ukdyn needs to build, test and benchmark. Idempotent: when
+# everything is installed already it does not touch apt at all.
+set -euo pipefail
+
+packages=(
+  build-essential cmake ninja-build    # compiler and build system
+  libeigen3-dev                        # linear algebra and AutoDiff
+  libboost-dev                         # (Boost.Odeint, for the integrators)
+  libgtest-dev libgmock-dev            # tests
+  libbenchmark-dev                     # benchmarks
+)
+
+missing=()
+for p in "${packages[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if ((${#missing[@]} == 0)); then
+  exit 0
+fi
+
+sudo=""
+if [ "$(id -u)" -ne 0 ]; then sudo="sudo"; fi
+echo "install-deps: installing ${missing[*]}"
+$sudo apt-get update -qq
+DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq --no-install-recommends "${missing[@]}"
