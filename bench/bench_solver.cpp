@@ -54,15 +54,21 @@ std::pair<VectorXd, VectorXd> textbook(const testing::RandomProblem& p) {
   return {a + dq, lambda};
 }
 
+// Times eval(): one warm-up call, allocations counted over ten calls, then the timed loop;
+// reports allocs_per_eval and the errors of qdd and lambda (which eval() fills) against the
+// textbook formula.
 template <class F>
-double allocations_per_eval(F&& f) {
+void measure(benchmark::State& state, const testing::RandomProblem& p, F&& eval,
+             const VectorXd& qdd, const VectorXd& lambda) {
+  eval();
   testing::start_counting_allocations();
-  for (int i = 0; i < 10; ++i) f();
-  return double(testing::stop_counting_allocations()) / 10.0;
-}
-
-void set_counters(benchmark::State& state, const testing::RandomProblem& p, const VectorXd& qdd,
-                  const VectorXd& lambda, double allocs) {
+  for (int i = 0; i < 10; ++i) eval();
+  const double allocs = double(testing::stop_counting_allocations()) / 10.0;
+  for (auto _ : state) {
+    eval();
+    benchmark::DoNotOptimize(qdd.data());
+    benchmark::ClobberMemory();
+  }
   state.counters["allocs_per_eval"] = allocs;
   const auto [qdd_ref, lambda_ref] = textbook(p);
   state.counters["err"] = (qdd - qdd_ref).norm() / qdd_ref.norm();
@@ -71,68 +77,37 @@ void set_counters(benchmark::State& state, const testing::RandomProblem& p, cons
   state.SetLabel(labels[state.range(2)]);
 }
 
-void BM_Default(benchmark::State& state) {
+// default and textbook share the stages: M = L Lᵀ (or M^{±1/2}); a = M⁻¹ Q; e = b − A a;
+// decomposition of the constraints; q'' = a + (ideal part)
+template <class Decomposition>
+void BM_Decomposition(benchmark::State& state) {
   const auto p = problem(state);
   const Index n = p.M.rows(), m = p.A.rows();
-  FundamentalDecomposition d(n, m);
+  Decomposition d(n, m);
   VectorXd a(n), e(m), dq(n), Qc(n), lambda(m), qdd(n);
-  auto eval = [&] {
-    // M = L Lᵀ; a = M⁻¹ Q; e = b − A a; COD of A L⁻ᵀ; q'' = a + L⁻ᵀ W⁺ e
-    d.compute_mass(p.M);
-    d.solve_mass(p.Q, a);
-    e = p.b;
-    e.noalias() -= p.A * a;
-    d.compute_constraints(p.A);
-    d.solve_ideal(e, dq, Qc, lambda);
-    qdd = a + dq;
-  };
-  eval();
-  const double allocs = allocations_per_eval(eval);
-  for (auto _ : state) {
-    eval();
-    benchmark::DoNotOptimize(qdd.data());
-    benchmark::ClobberMemory();
-  }
-  set_counters(state, p, qdd, lambda, allocs);
+  measure(
+      state, p,
+      [&] {
+        d.compute_mass(p.M);
+        d.solve_mass(p.Q, a);
+        e = p.b;
+        e.noalias() -= p.A * a;
+        d.compute_constraints(p.A);
+        d.solve_ideal(e, dq, Qc, lambda);
+        qdd = a + dq;
+      },
+      qdd, lambda);
 }
 
-void BM_Textbook(benchmark::State& state) {
-  const auto p = problem(state);
-  const Index n = p.M.rows(), m = p.A.rows();
-  TextbookDecomposition t(n, m);
-  VectorXd a(n), e(m), dq(n), Qc(n), lambda(m), qdd(n);
-  auto eval = [&] {
-    t.compute_mass(p.M);
-    t.solve_mass(p.Q, a);
-    e = p.b - p.A * a;
-    t.compute_constraints(p.A);
-    t.solve_ideal(e, dq, Qc, lambda);
-    qdd = a + dq;
-  };
-  eval();
-  const double allocs = allocations_per_eval(eval);
-  for (auto _ : state) {
-    eval();
-    benchmark::DoNotOptimize(qdd.data());
-    benchmark::ClobberMemory();
-  }
-  set_counters(state, p, qdd, lambda, allocs);
-}
+void BM_Default(benchmark::State& state) { BM_Decomposition<FundamentalDecomposition>(state); }
+void BM_Textbook(benchmark::State& state) { BM_Decomposition<TextbookDecomposition>(state); }
 
 void BM_KKT(benchmark::State& state) {
   const auto p = problem(state);
   const Index n = p.M.rows(), m = p.A.rows();
   KktSolver kkt(n, m);
   VectorXd qdd(n), lambda(m);
-  auto eval = [&] { kkt.solve(p.M, p.Q, p.A, p.b, qdd, lambda); };
-  eval();
-  const double allocs = allocations_per_eval(eval);
-  for (auto _ : state) {
-    eval();
-    benchmark::DoNotOptimize(qdd.data());
-    benchmark::ClobberMemory();
-  }
-  set_counters(state, p, qdd, lambda, allocs);
+  measure(state, p, [&] { kkt.solve(p.M, p.Q, p.A, p.b, qdd, lambda); }, qdd, lambda);
 }
 
 // the whole forward_dynamics call; M through a callable so that it is factorized every time
@@ -154,16 +129,8 @@ void BM_Pipeline(benchmark::State& state, bool residuals) {
   const System sys = builder.build();
   Workspace ws(sys, SolverOptions{.compute_residuals = residuals});
   const VectorXd z = VectorXd::Zero(n);
-  auto eval = [&] { forward_dynamics(sys, ws, z, z, 0.0); };
-  eval();
-  const double allocs = allocations_per_eval(eval);
-  for (auto _ : state) {
-    eval();
-    benchmark::DoNotOptimize(ws.qdd.data());
-    benchmark::ClobberMemory();
-  }
+  measure(state, p, [&] { forward_dynamics(sys, ws, z, z, 0.0); }, ws.qdd, ws.lambda);
   if (ws.status != Status::kOk) state.SkipWithError(describe_status(sys, ws).c_str());
-  set_counters(state, p, ws.qdd, ws.lambda, allocs);
 }
 
 void sizes(benchmark::internal::Benchmark* b) {

@@ -14,6 +14,9 @@ const VectorXd& IdealForceInfo::Qc_ideal() const { return ws_.Qc_ideal; }
 const VectorXd& IdealForceInfo::lambda() const { return ws_.lambda; }
 Eigen::Ref<const VectorXd> IdealForceInfo::lambda(Index k) const { return ws_.lambda_of(sys_, k); }
 Eigen::Ref<const VectorXd> IdealForceInfo::share(Index k) const { return ws_.shares.col(k); }
+Index IdealForceInfo::constraint_index(std::string_view name) const {
+  return sys_.constraint_index(name);
+}
 
 NonIdealForce::NonIdealForce(std::string name, NonIdealFn fn) : name_(std::move(name)) {
   if (!fn) throw std::invalid_argument("ukdyn::NonIdealForce '" + name_ + "': empty callable");

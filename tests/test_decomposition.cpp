@@ -14,10 +14,7 @@ namespace {
 using testing::random_problem;
 using testing::rel_diff;
 
-struct Case {
-  Index n, m, r;
-};
-void PrintTo(const Case& c, std::ostream* os) { *os << "(n, m, rank) = (" << c.n << ", " << c.m << ", " << c.r << ")"; }
+using testing::Case;
 
 class DecompositionCase : public ::testing::TestWithParam<Case> {};
 
@@ -99,10 +96,7 @@ INSTANTIATE_TEST_SUITE_P(
                       Case{6, 9, 6}, Case{6, 9, 4}, Case{12, 6, 1}, Case{30, 20, 20},
                       Case{30, 20, 13}, Case{60, 40, 25}, Case{120, 80, 80},
                       Case{120, 80, 57}),
-    [](const auto& tp) {
-      return "n" + std::to_string(tp.param.n) + "_m" + std::to_string(tp.param.m) + "_r" +
-             std::to_string(tp.param.r);
-    });
+    testing::CaseName());
 
 TEST(Decomposition, ZeroConstraintMatrixHasRankZeroAndZeroForce) {
   const Index n = 4, m = 2;

@@ -78,10 +78,7 @@ TEST(NoAllocation, AutomaticallyDifferentiatedConstraintsAndFriction) {
   EXPECT_EQ(allocations_of(sys, q, qd, 10), 0);
 }
 
-struct Case {
-  Index n, m, r;
-};
-void PrintTo(const Case& c, std::ostream* os) { *os << "(n, m, rank) = (" << c.n << ", " << c.m << ", " << c.r << ")"; }
+using testing::Case;
 class NoAllocationRandom : public ::testing::TestWithParam<Case> {};
 
 TEST_P(NoAllocationRandom, DefaultAlgorithm) {
@@ -96,11 +93,7 @@ INSTANTIATE_TEST_SUITE_P(Sizes, NoAllocationRandom,
                          ::testing::Values(Case{6, 3, 3}, Case{6, 3, 2}, Case{30, 20, 20},
                                            Case{30, 20, 12}, Case{120, 80, 80},
                                            Case{120, 80, 40}, Case{10, 15, 8}),
-                         [](const auto& tp) {
-                           return "n" + std::to_string(tp.param.n) + "_m" +
-                                  std::to_string(tp.param.m) + "_r" +
-                                  std::to_string(tp.param.r);
-                         });
+                         testing::CaseName());
 
 }  // namespace
 }  // namespace ukdyn

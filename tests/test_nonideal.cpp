@@ -91,7 +91,7 @@ TEST(CustomC, MayReadTheIdealForceAndChangeSignOnIntervals) {
       particle_on_floor(m)
           .add(NonIdealForce("boost", [k](const VectorXd&, const VectorXd&, double t,
                                           const IdealForceInfo& ideal, Eigen::Ref<VectorXd> C) {
-            if (t >= 1.0) C[0] = k * ideal.normal_force(0);
+            if (t >= 1.0) C[0] = k * ideal.normal_force(ideal.constraint_index("floor"));
           }))
           .build();
   Workspace ws(sys);

@@ -8,6 +8,7 @@
 
 #include <functional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include <Eigen/Core>
@@ -34,6 +35,9 @@ class IdealForceInfo {
   Eigen::Ref<const VectorXd> lambda(Index k) const;
   /// Constraint k's share of the ideal force, A_kᵀ lambda_k (n). The shares sum to Qc_ideal.
   Eigen::Ref<const VectorXd> share(Index k) const;
+  /// Index of the constraint called `name` (O(K) string comparisons: to stay fast, resolve it
+  /// once, in a NonIdealForce::Binder). @throws std::invalid_argument when there is none.
+  Index constraint_index(std::string_view name) const;
   /// Euclidean norm of share(k): the normal force of a contact constraint written in Cartesian
   /// coordinates. Cost O(n).
   double normal_force(Index k) const { return share(k).norm(); }

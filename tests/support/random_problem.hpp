@@ -1,7 +1,9 @@
 // Reproducible random constrained problems for tests and benchmarks.
 #pragma once
 
+#include <ostream>
 #include <random>
+#include <string>
 
 #include <Eigen/Core>
 #include <Eigen/SVD>
@@ -76,6 +78,22 @@ inline MatrixXd null_space(const MatrixXd& A, double rel_tol = 1e-10) {
   while (r < s.size() && s[r] > rel_tol * s[0]) ++r;
   return svd.matrixV().rightCols(A.cols() - r);
 }
+
+/// Sizes of a random problem: n coordinates, m rows of rank r (parameter of sized tests).
+struct Case {
+  Index n, m, r;
+};
+inline void PrintTo(const Case& c, std::ostream* os) {
+  *os << "(n, m, rank) = (" << c.n << ", " << c.m << ", " << c.r << ")";
+}
+/// Test-name generator for INSTANTIATE_TEST_SUITE_P over Case: "n6_m3_r2".
+struct CaseName {
+  template <class Info>
+  std::string operator()(const Info& info) const {
+    return "n" + std::to_string(info.param.n) + "_m" + std::to_string(info.param.m) + "_r" +
+           std::to_string(info.param.r);
+  }
+};
 
 /// ‖X − Y‖_F / max(‖Y‖_F, floor): the relative difference of two matrices.
 inline double rel_diff(const MatrixXd& X, const MatrixXd& Y, double floor = 1e-300) {
