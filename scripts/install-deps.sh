@@ -6,7 +6,10 @@ set -euo pipefail
 packages=(
   build-essential cmake ninja-build    # compiler and build system
   libeigen3-dev                        # linear algebra and AutoDiff
-  libboost-dev                         # (Boost.Odeint, for the integrators)
+  libboost-dev                         # Boost.Odeint: RK4, Dormand-Prince, Fehlberg
+  libsundials-dev                      # SUNDIALS CVODE: BDF for stiff problems
+  libhdf5-dev                          # HDF5 trajectories
+  nlohmann-json3-dev                   # JSON run summaries
   libgtest-dev libgmock-dev            # tests
   libbenchmark-dev                     # benchmarks
 )

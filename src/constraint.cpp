@@ -48,6 +48,16 @@ Constraint& Constraint::active_between(double begin, double end) {
   return *this;
 }
 
+Constraint& Constraint::stabilize(double alpha, double beta) {
+  if (!(alpha >= 0.0 && beta >= 0.0)) {
+    throw std::invalid_argument("ukdyn::Constraint::stabilize('" + name_ +
+                                "'): gains must be >= 0, got alpha = " + std::to_string(alpha) +
+                                ", beta = " + std::to_string(beta));
+  }
+  stabilization_ = Stabilization{alpha, beta};
+  return *this;
+}
+
 namespace {
 // acceleration form: the user's callable writes A and b itself
 class AccelerationModel final : public ConstraintModel {

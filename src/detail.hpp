@@ -29,6 +29,16 @@ inline void require_same_system(const System& sys, const Workspace& ws, const ch
   }
 }
 
+// M(q,t), its checks and its factorization into the workspace's decomposition (stage 1 without
+// Q; shared with the projections).
+Status evaluate_mass(const System& sys, Workspace& ws, const VectorXd& q, double t);
+
+// Whether constraint k acts at t, honouring ws.activity_override.
+inline bool is_active(const System& sys, const Workspace& ws, Index k, double t) {
+  const signed char forced = ws.activity_override[std::size_t(k)];
+  return forced < 0 ? sys.constraint(k).is_active(t) : forced > 0;
+}
+
 // Calls f with the decomposition the workspace's algorithm uses.
 template <class F>
 decltype(auto) with_decomposition(Workspace& ws, F&& f) {

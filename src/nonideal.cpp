@@ -14,6 +14,9 @@ const VectorXd& IdealForceInfo::Qc_ideal() const { return ws_.Qc_ideal; }
 const VectorXd& IdealForceInfo::lambda() const { return ws_.lambda; }
 Eigen::Ref<const VectorXd> IdealForceInfo::lambda(Index k) const { return ws_.lambda_of(sys_, k); }
 Eigen::Ref<const VectorXd> IdealForceInfo::share(Index k) const { return ws_.shares.col(k); }
+Eigen::Ref<const VectorXd> IdealForceInfo::slip_hint(Index i) const {
+  return ws_.slip_hint.col(i);
+}
 Index IdealForceInfo::constraint_index(std::string_view name) const {
   return sys_.constraint_index(name);
 }
@@ -49,7 +52,8 @@ std::vector<Index> resolve_coordinates(const std::vector<Index>& listed, Index n
 
 NonIdealForce coulomb_friction(CoulombFriction spec) {
   std::string name = spec.name.empty() ? "coulomb." + spec.constraint : spec.name;
-  return NonIdealForce(name, NonIdealForce::Binder([spec, name](const System& sys) -> NonIdealFn {
+  spec.name = name;
+  NonIdealForce force(name, NonIdealForce::Binder([spec, name](const System& sys) -> NonIdealFn {
     const std::string who = "ukdyn::coulomb_friction '" + name + "'";
     if (!(spec.mu >= 0.0)) {
       throw std::invalid_argument(who + ": mu must be >= 0, got " + std::to_string(spec.mu));
@@ -61,15 +65,30 @@ NonIdealForce coulomb_friction(CoulombFriction spec) {
     const Index k = sys.constraint_index(spec.constraint);
     const std::vector<Index> coords = resolve_coordinates(spec.coordinates, sys.dofs(), who);
     const double mu = spec.mu, eps2 = spec.regularization_velocity * spec.regularization_velocity;
-    // C_i = −mu N v_i / sqrt(|v|² + eps²)
-    return [k, coords, mu, eps2](const VectorXd&, const VectorXd& qd, double,
-                                 const IdealForceInfo& ideal, Eigen::Ref<VectorXd> C) {
+    const Index self = sys.nonideal_count();  // this force's index once bound
+    return [k, coords, mu, eps2, self](const VectorXd&, const VectorXd& qd, double,
+                                       const IdealForceInfo& ideal, Eigen::Ref<VectorXd> C) {
       double v2 = 0.0;
       for (Index i : coords) v2 += qd[i] * qd[i];
-      const double scale = -mu * ideal.normal_force(k) / std::sqrt(v2 + eps2);
+      const double N = ideal.normal_force(k);
+      const auto hint = ideal.slip_hint(self);
+      if (hint.squaredNorm() > 0.0) {
+        // slipping from rest: mu N along the hint, then exactly −mu N v/|v|
+        if (v2 <= eps2) {
+          for (Index i : coords) C[i] = mu * N * hint[i];
+        } else {
+          const double scale = -mu * N / std::sqrt(v2);
+          for (Index i : coords) C[i] = scale * qd[i];
+        }
+        return;
+      }
+      // C_i = −mu N v_i / sqrt(|v|² + eps²)
+      const double scale = -mu * N / std::sqrt(v2 + eps2);
       for (Index i : coords) C[i] = scale * qd[i];
     };
   }));
+  force.coulomb_ = std::make_shared<const CoulombFriction>(spec);
+  return force;
 }
 
 NonIdealForce viscous_friction(ViscousFriction spec) {

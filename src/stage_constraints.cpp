@@ -1,5 +1,6 @@
 // Stage 2: the constraints in acceleration form, A q'' = b (eq. 5). Rows of constraints that are
 // inactive at t are zero, so they exert no force and cost no special case downstream.
+// Stabilized constraints (Baumgarte) get b ← b − 2α phi' − β² phi, resp. b ← b − α psi.
 #include "detail.hpp"
 #include "ukdyn/forward.hpp"
 
@@ -13,7 +14,7 @@ Status assemble_constraints(const System& sys, Workspace& ws, const VectorXd& q,
     const Constraint& c = sys.constraint(k);
     auto Ak = ws.A.middleRows(sys.row_offset(k), c.rows());
     auto bk = ws.b.segment(sys.row_offset(k), c.rows());
-    if (!c.is_active(t)) {
+    if (!detail::is_active(sys, ws, k, t)) {
       // inactive: zero rows
       Ak.setZero();
       bk.setZero();
@@ -26,6 +27,19 @@ Status assemble_constraints(const System& sys, Workspace& ws, const VectorXd& q,
     c.model().acceleration_form(q, qd, t, ws.scratch[std::size_t(k)].get(), Ak, bk);
     if (!Ak.allFinite()) return detail::fail(ws, Status::kNonFiniteInput, "A", k, t);
     if (!bk.allFinite()) return detail::fail(ws, Status::kNonFiniteInput, "b", k, t);
+    // Baumgarte: phi'' + 2α phi' + β² phi = 0, psi' + α psi = 0
+    const Stabilization& st = ws.stabilization[std::size_t(k)];
+    if (st.enabled() && c.kind() != ConstraintKind::kAcceleration) {
+      auto pk = ws.phi.segment(sys.row_offset(k), c.rows());
+      auto vk = ws.phi_dot.segment(sys.row_offset(k), c.rows());
+      c.model().violation(q, qd, t, ws.scratch[std::size_t(k)].get(), pk, vk);
+      if (c.kind() == ConstraintKind::kHolonomic) {
+        bk -= 2.0 * st.alpha * vk + st.beta * st.beta * pk;
+      } else {
+        bk -= st.alpha * vk;
+      }
+      if (!bk.allFinite()) return detail::fail(ws, Status::kNonFiniteInput, "b", k, t);
+    }
   }
   return Status::kOk;
 }

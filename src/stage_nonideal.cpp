@@ -21,6 +21,7 @@ Status apply_nonideal(const System& sys, Workspace& ws, const VectorXd& q, const
   // C = Σ C_i(q, q', t, ideal force)
   const IdealForceInfo ideal(sys, ws);
   for (Index i = 0; i < sys.nonideal_count(); ++i) {
+    if (!ws.nonideal_enabled[std::size_t(i)]) continue;
     ws.C_term.setZero();
     sys.nonideal(i)(q, qd, t, ideal, ws.C_term);
     if (!ws.C_term.allFinite()) return detail::fail(ws, Status::kNonFiniteInput, "C", i, t);

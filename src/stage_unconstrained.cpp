@@ -18,9 +18,8 @@ double asymmetry(const MatrixXd& M) {
 }
 }  // namespace
 
-Status evaluate_unconstrained(const System& sys, Workspace& ws, const VectorXd& q,
-                              const VectorXd& qd, double t) {
-  detail::require_same_system(sys, ws, "ukdyn::evaluate_unconstrained");
+namespace detail {
+Status evaluate_mass(const System& sys, Workspace& ws, const VectorXd& q, double t) {
   // M(q,t) and M = L Lᵀ; a constant M is evaluated and factorized once
   if (!(sys.mass_is_constant() && ws.mass_factorized)) {
     ws.mass_factorized = false;
@@ -37,6 +36,14 @@ Status evaluate_unconstrained(const System& sys, Workspace& ws, const VectorXd& 
     }
     ws.mass_factorized = true;
   }
+  return Status::kOk;
+}
+}  // namespace detail
+
+Status evaluate_unconstrained(const System& sys, Workspace& ws, const VectorXd& q,
+                              const VectorXd& qd, double t) {
+  detail::require_same_system(sys, ws, "ukdyn::evaluate_unconstrained");
+  if (const Status s = detail::evaluate_mass(sys, ws, q, t); s != Status::kOk) return s;
   // Q(q,q',t)
   sys.forces(q, qd, t, ws.Q);
   if (!ws.Q.allFinite()) return detail::fail(ws, Status::kNonFiniteInput, "Q", -1, t);

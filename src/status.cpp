@@ -13,6 +13,8 @@ const char* to_string(Status s) {
     case Status::kMassNotPositiveDefinite: return "mass matrix not positive definite";
     case Status::kInconsistentConstraints: return "inconsistent constraints";
     case Status::kNonFiniteResult: return "non-finite result";
+    case Status::kProjectionFailed: return "projection onto the constraints failed";
+    case Status::kIntegratorFailure: return "integrator failure";
   }
   return "unknown status";
 }

@@ -1,6 +1,10 @@
 // System and SystemBuilder: validation and freezing of a description.
 #include "ukdyn/system.hpp"
 
+#include <limits>
+
+#include "ukdyn/autodiff.hpp"
+
 #include <atomic>
 #include <set>
 #include <stdexcept>
@@ -83,6 +87,11 @@ SystemBuilder& SystemBuilder::forces(ForceFn fn) {
   return *this;
 }
 
+SystemBuilder& SystemBuilder::potential_energy(PotentialFn fn) {
+  potential_ = std::move(fn);
+  return *this;
+}
+
 SystemBuilder& SystemBuilder::add(Constraint c) {
   constraints_.push_back(std::move(c));
   return *this;
@@ -106,8 +115,33 @@ System SystemBuilder::build() const {
   s.forces_ = forces_ ? forces_
                       : ForceFn([](const VectorXd&, const VectorXd&, double,
                                    Eigen::Ref<VectorXd> Q) { Q.setZero(); });
+  // each Coulomb contact brings its stick constraint v = 0, inactive unless switched on
+  std::vector<Constraint> all = constraints_;
+  for (const auto& f : nonideal_) {
+    const CoulombFriction* spec = f.coulomb();
+    if (spec == nullptr) continue;
+    std::vector<Index> coords = spec->coordinates;
+    if (coords.empty()) {
+      for (Index i = 0; i < n_; ++i) coords.push_back(i);
+    }
+    for (Index i : coords) {
+      if (i < 0 || i >= n_) {
+        throw std::invalid_argument("ukdyn::coulomb_friction '" + f.name() +
+                                    "': coordinate index " + std::to_string(i) +
+                                    " is out of range [0, " + std::to_string(n_) + ")");
+      }
+    }
+    Constraint stick = nonholonomic(
+        "stick." + f.name(), Index(coords.size()),
+        [coords](const auto&, const auto& qd, const auto&, auto& psi) {
+          for (std::size_t r = 0; r < coords.size(); ++r) psi[Index(r)] = qd[coords[r]];
+        });
+    const double never = std::numeric_limits<double>::infinity();
+    stick.active_between(never, never);
+    all.push_back(stick);
+  }
   std::set<std::string> seen;
-  for (const auto& c : constraints_) {
+  for (const auto& c : all) {
     if (!seen.insert(c.name()).second) {
       throw std::invalid_argument("ukdyn::SystemBuilder::build: constraint '" + c.name() +
                                   "' is declared twice");
@@ -115,7 +149,8 @@ System SystemBuilder::build() const {
     s.offsets_.push_back(s.m_);
     s.m_ += c.rows();
   }
-  s.constraints_ = constraints_;
+  s.potential_ = potential_;
+  s.constraints_ = all;
   s.id_ = next_system_id();
   // bind the non-ideal forces last: they may look up constraints and coordinates by name
   std::set<std::string> seen_forces;
@@ -126,6 +161,22 @@ System SystemBuilder::build() const {
     }
     s.nonideal_names_.push_back(f.name());
     s.nonideal_fns_.push_back(f.bind(s));
+    if (const CoulombFriction* spec = f.coulomb()) {
+      FrictionContact contact;
+      contact.force = Index(s.nonideal_fns_.size()) - 1;
+      contact.normal_constraint = s.constraint_index(spec->constraint);
+      contact.stick_constraint = s.constraint_index("stick." + f.name());
+      contact.coordinates = s.constraint(contact.stick_constraint).rows() == n_ &&
+                                    spec->coordinates.empty()
+                                ? std::vector<Index>()
+                                : spec->coordinates;
+      if (contact.coordinates.empty()) {
+        for (Index i = 0; i < n_; ++i) contact.coordinates.push_back(i);
+      }
+      contact.mu = spec->mu;
+      contact.eps = spec->regularization_velocity;
+      s.contacts_.push_back(contact);
+    }
   }
   return s;
 }

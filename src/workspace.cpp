@@ -31,6 +31,14 @@ Workspace::Workspace(const System& sys, const SolverOptions& options)
   A.setZero(m, n);
   b.setZero(m);
   active.assign(std::size_t(K), 0);
+  activity_override.assign(std::size_t(K), -1);
+  nonideal_enabled.assign(std::size_t(sys.nonideal_count()), 1);
+  slip_hint.setZero(n, sys.nonideal_count());
+  for (const auto& c : sys.constraints()) stabilization.push_back(c.stabilization());
+  phi.setZero(m);
+  phi_dot.setZero(m);
+  zero_n.setZero(n);
+  lambda_tmp.setZero(m);
   decomposition.resize(n, m);
   decomposition.set_threshold(options.rank_threshold);
   e.setZero(m);

@@ -5,6 +5,8 @@
 
 #include <ukdyn/autodiff.hpp>
 
+#include "support/random_problem.hpp"
+
 namespace ukdyn {
 namespace {
 
@@ -23,12 +25,7 @@ Derived derive(const Constraint& c, const VectorXd& q, const VectorXd& qd, doubl
   return d;
 }
 
-VectorXd vec(std::initializer_list<double> v) {
-  VectorXd x(Index(v.size()));
-  Index i = 0;
-  for (double s : v) x[i++] = s;
-  return x;
-}
+using testing::vec;
 
 constexpr double kTol = 1e-13;
 

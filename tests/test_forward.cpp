@@ -21,12 +21,7 @@ using testing::rel_diff;
 
 constexpr double kG = 9.81;
 
-VectorXd vec(std::initializer_list<double> v) {
-  VectorXd x(Index(v.size()));
-  Index i = 0;
-  for (double s : v) x[i++] = s;
-  return x;
-}
+using testing::vec;
 
 // a particle of mass m in d dimensions under gravity −g along the last axis
 SystemBuilder particle(Index d, double m) {

@@ -27,6 +27,14 @@ enum class ConstraintKind {
   kAcceleration,  ///< A q'' = b given directly
 };
 
+/// Baumgarte gains of a constraint (see Constraint::stabilize). Zero gains: none.
+struct Stabilization {
+  double alpha = 0.0;  ///< damping gain: 2 alpha phi' (holonomic), alpha psi (nonholonomic)
+  double beta = 0.0;   ///< stiffness gain: beta² phi (holonomic only)
+  /// True when any gain is non-zero.
+  bool enabled() const { return alpha != 0.0 || beta != 0.0; }
+};
+
 /// Short name of a kind ("holonomic", "nonholonomic", "acceleration"). Cost O(1).
 const char* to_string(ConstraintKind kind);
 
@@ -77,6 +85,15 @@ class Constraint {
   /// (so it exerts no force). @throws std::invalid_argument unless begin <= end.
   Constraint& active_between(double begin, double end);
 
+  /// Baumgarte stabilization: the constraint is imposed as phi'' + 2 alpha phi' + beta² phi = 0
+  /// (holonomic) or psi' + alpha psi = 0 (nonholonomic; beta unused), i.e.
+  /// b ← b − 2 alpha phi' − beta² phi, resp. b ← b − alpha psi. A drifting constraint then
+  /// returns to zero with these error dynamics. Ignored for the acceleration kind.
+  /// @throws std::invalid_argument unless alpha >= 0 and beta >= 0.
+  Constraint& stabilize(double alpha, double beta);
+  /// The Baumgarte gains (zero: no stabilization).
+  const Stabilization& stabilization() const { return stabilization_; }
+
   const std::string& name() const { return name_; }            ///< its unique name
   ConstraintKind kind() const { return kind_; }                ///< declared form
   Index rows() const { return rows_; }                         ///< number of scalar rows
@@ -89,6 +106,7 @@ class Constraint {
   ConstraintKind kind_;
   Index rows_;
   TimeInterval active_;
+  Stabilization stabilization_;
   std::shared_ptr<const ConstraintModel> model_;
 };
 

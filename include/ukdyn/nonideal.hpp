@@ -7,6 +7,7 @@
 #pragma once
 
 #include <functional>
+#include <memory>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -19,6 +20,7 @@ namespace ukdyn {
 
 class System;
 class Workspace;
+struct CoulombFriction;
 
 /// Read-only view of the ideal constraint force at the current evaluation, handed to each
 /// non-ideal force. Valid only during that call.
@@ -38,6 +40,9 @@ class IdealForceInfo {
   /// Index of the constraint called `name` (O(K) string comparisons: to stay fast, resolve it
   /// once, in a NonIdealForce::Binder). @throws std::invalid_argument when there is none.
   Index constraint_index(std::string_view name) const;
+  /// The slip hint of non-ideal force i (see Workspace::slip_hint): zero unless the force is a
+  /// Coulomb friction that has just started to slip from rest.
+  Eigen::Ref<const VectorXd> slip_hint(Index i) const;
   /// Euclidean norm of share(k): the normal force of a contact constraint written in Cartesian
   /// coordinates. Cost O(n).
   double normal_force(Index k) const { return share(k).norm(); }
@@ -68,20 +73,33 @@ class NonIdealForce {
   const std::string& name() const { return name_; }  ///< its name, unique within a system
   /// The callable for system `sys` (called once by SystemBuilder::build).
   NonIdealFn bind(const System& sys) const { return bind_(sys); }
+  /// The Coulomb law behind this force, when it was made by coulomb_friction() (the
+  /// simulation then handles sticking), or null.
+  const CoulombFriction* coulomb() const { return coulomb_.get(); }
 
  private:
+  friend NonIdealForce coulomb_friction(CoulombFriction spec);
   std::string name_;
   Binder bind_;
+  std::shared_ptr<const CoulombFriction> coulomb_;
 };
 
-/// Coulomb sliding friction on a constraint surface:
+/// Coulomb friction on a constraint surface. While sliding:
 ///   C_i = −mu N v_i / sqrt(|v|² + eps²)  for i in `coordinates`, zero elsewhere,
 /// where v is q' restricted to `coordinates` (the sliding velocity, which must be Cartesian for
 /// N to be the physical normal force), N = |A_kᵀ lambda_k| the norm of constraint k's share of
 /// the ideal force, and eps = `regularization_velocity`. For |v| >> eps this is exact Coulomb
-/// friction of magnitude mu N opposing v; at |v| = 0 it vanishes (this law models sliding only:
-/// sticking is the simulation layer's business). The relative error of the magnitude is
-/// about eps² / (2 |v|²).
+/// friction of magnitude mu N opposing v (relative error about eps² / (2 |v|²)). When the
+/// simulation has just released a sticking contact (v = 0), friction starts at its full
+/// magnitude mu N opposing the impending motion, i.e. along the force that held the contact,
+/// and follows −mu N v/|v| exactly once |v| > eps (no regularization while slipping from rest).
+/// Sticking: the system also gets a nonholonomic constraint "stick.<name>" (v = 0 on
+/// `coordinates`), inactive unless the simulation switches it on. simulate() locates the instant
+/// the sliding velocity reverses (an event, found on the integrator's dense output) and sticks
+/// there: the friction force is switched off and the stick constraint on, so the block is held
+/// by an ideal constraint force; it slips again when that force exceeds mu N (a second event).
+/// No regularization enters the stick phase. A single forward_dynamics call always sees the
+/// sliding law.
 struct CoulombFriction {
   std::string constraint;            ///< name of the constraint whose share gives N
   double mu = 0.0;                   ///< friction coefficient, >= 0

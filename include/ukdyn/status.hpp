@@ -23,6 +23,9 @@ enum class Status {
   kMassNotPositiveDefinite,     ///< the Cholesky factorization of M failed
   kInconsistentConstraints,     ///< A q'' = b has no solution; ‖A q'' − b‖ is in the residuals
   kNonFiniteResult,             ///< the inputs were finite but a result overflowed
+  kProjectionFailed,            ///< drift control could not bring the state back onto the
+                                ///< constraints (no consistent state near)
+  kIntegratorFailure,           ///< the integrator gave up (step size underflow, step limit)
 };
 
 /// Short English name of a status ("ok", "mass matrix not positive definite", …). Cost O(1).

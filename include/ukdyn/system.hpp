@@ -20,9 +20,22 @@ namespace ukdyn {
 
 /// Writes the mass matrix M(q, t) (n × n, symmetric positive definite). Must not allocate.
 using MassMatrixFn = std::function<void(const VectorXd& q, double t, Eigen::Ref<MatrixXd> M)>;
+/// Potential energy V(q, t) of the forces in Q that derive from one (for energy reports only:
+/// Q must already contain −dV/dq).
+using PotentialFn = std::function<double(const VectorXd& q, double t)>;
 /// Writes the impressed force Q(q, q', t) (n). Must not allocate.
 using ForceFn =
     std::function<void(const VectorXd& q, const VectorXd& qd, double t, Eigen::Ref<VectorXd> Q)>;
+
+/// A Coulomb friction contact, for the simulation's stick/slip switching (see CoulombFriction).
+struct FrictionContact {
+  Index force = -1;              ///< index of the friction's non-ideal force
+  Index normal_constraint = -1;  ///< index of the constraint whose share gives N
+  Index stick_constraint = -1;   ///< index of the (normally inactive) stick constraint
+  std::vector<Index> coordinates;  ///< the sliding coordinates
+  double mu = 0.0;               ///< friction coefficient
+  double eps = 0.0;              ///< regularization velocity: below it the contact is at rest
+};
 
 /// An immutable constrained mechanical system M(q,t) q'' = Q(q,q',t) + Qc with constraints
 /// A q'' = b and non-ideal work vector C. Cheap to copy (callables are shared).
@@ -51,12 +64,22 @@ class System {
     forces_(q, qd, t, Q);
   }
 
+  /// True when a potential energy was given.
+  bool has_potential() const { return bool(potential_); }
+  /// V(q, t), or 0 when none was given.
+  double potential_energy(const VectorXd& q, double t) const {
+    return potential_ ? potential_(q, t) : 0.0;
+  }
+
   /// Number of non-ideal forces.
   Index nonideal_count() const { return Index(nonideal_fns_.size()); }
   /// Name of non-ideal force i.
   const std::string& nonideal_name(Index i) const { return nonideal_names_.at(std::size_t(i)); }
   /// The bound callable of non-ideal force i.
   const NonIdealFn& nonideal(Index i) const { return nonideal_fns_.at(std::size_t(i)); }
+
+  /// The Coulomb friction contacts (one per coulomb_friction force).
+  const std::vector<FrictionContact>& friction_contacts() const { return contacts_; }
 
   /// Identity of this description, shared by its copies; a Workspace remembers it so that a
   /// workspace of another system is refused.
@@ -71,10 +94,12 @@ class System {
   MassMatrixFn mass_;
   bool mass_constant_ = false;
   ForceFn forces_;
+  PotentialFn potential_;
   std::vector<Constraint> constraints_;
   std::vector<Index> offsets_;
   std::vector<std::string> nonideal_names_;
   std::vector<NonIdealFn> nonideal_fns_;
+  std::vector<FrictionContact> contacts_;
   std::uint64_t id_ = 0;
 };
 
@@ -92,6 +117,8 @@ class SystemBuilder {
   SystemBuilder& mass_matrix(const MatrixXd& M);
   /// Q(q, q', t) as a callable (default: zero).
   SystemBuilder& forces(ForceFn fn);
+  /// V(q, t) for energy reports (default: none, V = 0). Q must contain −dV/dq itself.
+  SystemBuilder& potential_energy(PotentialFn fn);
   /// Adds a constraint (names must be unique).
   SystemBuilder& add(Constraint c);
   /// Adds a non-ideal force (its C is summed with the others').
@@ -109,6 +136,7 @@ class SystemBuilder {
   MatrixXd mass_constant_;
   bool has_constant_mass_ = false;
   ForceFn forces_;
+  PotentialFn potential_;
   std::vector<Constraint> constraints_;
   std::vector<NonIdealForce> nonideal_;
 };

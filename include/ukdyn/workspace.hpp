@@ -88,6 +88,16 @@ class Workspace {
   VectorXd b;             ///< constraint right-hand side (m); zero on inactive rows
   std::vector<unsigned char> active;  ///< (K) constraint k active at this t?
   Index active_rows = 0;  ///< rows of the active constraints
+  /// (K) per constraint: −1 follow its time interval (default), 0 force inactive, 1 force
+  /// active. The simulation sets it for each segment between breakpoints, so that evaluations
+  /// at a segment's ends see the segment's own set of constraints.
+  std::vector<signed char> activity_override;
+  /// (K) Baumgarte gains in force, initialized from Constraint::stabilization(); the
+  /// simulation may change them (DriftControl::kBaumgarte).
+  std::vector<Stabilization> stabilization;
+  // --- violations, evaluate_violations (projection.hpp) and stabilized assembly ----------
+  VectorXd phi;           ///< position-level violation per row (m)
+  VectorXd phi_dot;       ///< velocity-level violation per row (m)
   // --- stage 3, solve_ideal ---------------------------------------------------------------
   FundamentalDecomposition decomposition;  ///< Cholesky of M, COD of A L⁻ᵀ
   VectorXd e;             ///< error signal e = b − A a (m)
@@ -97,6 +107,13 @@ class Workspace {
                           ///< the system has non-ideal forces, or by compute_shares)
   Index rank = 0;         ///< numerical rank of A
   // --- stage 4, apply_nonideal ------------------------------------------------------------
+  /// (number of non-ideal forces) force i takes part (default 1); the simulation switches a
+  /// Coulomb friction off while its contact sticks
+  std::vector<unsigned char> nonideal_enabled;
+  /// (n × number of non-ideal forces) for a Coulomb force that has just started to slip from
+  /// rest, the unit direction of the friction at |v| <= eps (opposing the impending motion:
+  /// along the force that held it); zero columns when unset. Set by the simulation.
+  MatrixXd slip_hint;
   VectorXd C;             ///< non-ideal work vector, sum of the system's forces (n)
   VectorXd Qc_nonideal;   ///< non-ideal constraint force, eq. (12) (n)
   VectorXd lambda_nonideal;  ///< multipliers with Qc_nonideal = C + Aᵀ lambda_nonideal (m)
@@ -118,6 +135,8 @@ class Workspace {
   VectorXd C_term;        ///< (n) one non-ideal force's C
   VectorXd tmp_n;         ///< (n)
   VectorXd tmp_m;         ///< (m)
+  VectorXd zero_n;        ///< (n) zeros (the velocity of a position-only evaluation)
+  VectorXd lambda_tmp;    ///< (m) multipliers of a projection (discarded)
   std::vector<std::unique_ptr<ConstraintScratch>> scratch;  ///< (K) per-constraint buffers
   std::unique_ptr<TextbookDecomposition> textbook;  ///< only with Algorithm::kTextbook
   bool mass_factorized = false;  ///< constant M already factorized

@@ -1,6 +1,7 @@
 // Reproducible random constrained problems for tests and benchmarks.
 #pragma once
 
+#include <initializer_list>
 #include <ostream>
 #include <random>
 #include <string>
@@ -20,6 +21,14 @@ struct RandomProblem {
   VectorXd Q, b, C;
   Index rank = 0;
 };
+
+/// A vector from a list: vec({1.0, 2.0}).
+inline VectorXd vec(std::initializer_list<double> values) {
+  VectorXd x(Index(values.size()));
+  Index i = 0;
+  for (double v : values) x[i++] = v;
+  return x;
+}
 
 /// Standard-normal matrix from a seeded generator.
 inline MatrixXd gaussian(Index rows, Index cols, std::mt19937& gen) {

@@ -1,0 +1,45 @@
+/// @file io.hpp
+/// Writers of trajectories: CSV (one row per sample), a JSON run summary, and HDF5 for long runs.
+///
+/// CSV columns, in this order: `t`; each coordinate `x`; `x_dot`; `x_ddot`; `Qc_ideal.x`;
+/// `Qc_nonideal.x`; `lambda.<constraint>` (`lambda.<constraint>.<row>` for several rows);
+/// `violation.<constraint>` (position level for holonomic constraints, velocity level for
+/// nonholonomic ones, 0 for the acceleration kind); `violation_velocity.<constraint>` for the
+/// holonomic ones; `kinetic_energy`, `potential_energy`, `energy`; `work_nonideal`. Numbers are
+/// written by std::to_chars in the shortest form that reads back bit for bit (`0.1`, `1e-300`,
+/// `-2.5e+17`; independent of the locale); NaN as `nan`, infinities as `inf` and `-inf`.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "ukdyn/simulate.hpp"
+
+namespace ukdyn {
+
+/// The CSV header names of a trajectory, in column order.
+std::vector<std::string> csv_columns(const Trajectory& traj);
+
+/// Writes the trajectory as CSV. @throws std::runtime_error naming the path if it cannot be
+/// written.
+void write_csv(const Trajectory& traj, const std::string& path);
+
+/// Writes a JSON summary: the run statistics (steps, rejected steps, evaluations, wall time,
+/// largest violations, energy drift, status, message), t_start, t_reached, the final state by
+/// coordinate name, and the options given. @throws std::runtime_error naming the path.
+void write_summary_json(const Trajectory& traj, const SimulationOptions& options,
+                        const std::string& path);
+
+/// Writes the trajectory to an HDF5 file: one dataset per field (`t`, `q`, `q_dot`, `q_ddot`,
+/// `Qc_ideal`, `Qc_nonideal`, `lambda`, `position_violation`, `velocity_violation`,
+/// `kinetic_energy`, `potential_energy`, `energy`, `work_nonideal`; matrices N × width,
+/// chunked and compressed), the names as string attributes (`coordinate_names`,
+/// `constraint_names`) and the statistics as attributes of the root group.
+/// @throws std::runtime_error naming the path.
+void write_hdf5(const Trajectory& traj, const std::string& path);
+
+/// Reads back the sample times and one N × width field of an HDF5 trajectory (for tests and
+/// tools). @throws std::runtime_error naming the path or the dataset.
+std::vector<double> read_hdf5_field(const std::string& path, const std::string& dataset);
+
+}  // namespace ukdyn

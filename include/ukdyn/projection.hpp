@@ -1,0 +1,66 @@
+/// @file projection.hpp
+/// Constraint violations and their removal (drift control), as stages on a Workspace.
+///
+/// Integrating A q'' = b from a consistent state lets phi and psi drift. project_positions and
+/// project_velocities move the state back onto the constraints with the correction of least
+/// M-norm (section 5 of ../shared/reference/fundamental-equation.md),
+///     dq = −M⁻¹ Aᵀ (A M⁻¹ Aᵀ)⁺ phi = −L⁻ᵀ W⁺ phi,
+/// iterated (a Gauss–Newton iteration; quadratic when the rows are independent). The same
+/// FundamentalDecomposition does the work, so redundant constraints are projected exactly.
+/// Each stage overwrites the workspace's evaluation buffers (M, A, b, decomposition): call
+/// forward_dynamics again before reading results.
+#pragma once
+
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "ukdyn/status.hpp"
+#include "ukdyn/system.hpp"
+#include "ukdyn/workspace.hpp"
+
+namespace ukdyn {
+
+/// Fills ws.phi (position level: phi for holonomic rows, 0 otherwise) and ws.phi_dot (velocity
+/// level: d phi/dt = A q' + phi_t for holonomic rows, psi for nonholonomic rows) at (q, q', t).
+/// Rows of inactive and of acceleration-form constraints are zero. Cost: one second-order pass
+/// per holonomic constraint, one first-order pass per nonholonomic one.
+void evaluate_violations(const System& sys, Workspace& ws, const VectorXd& q, const VectorXd& qd,
+                         double t);
+
+/// Largest |phi| (holonomic) and |psi| or |phi'| (velocity level) of constraint k in ws.phi,
+/// ws.phi_dot (after evaluate_violations). Cost O(rows).
+double position_violation(const System& sys, const Workspace& ws, Index k);
+double velocity_violation(const System& sys, const Workspace& ws, Index k);
+
+/// Settings of a projection.
+struct ProjectionOptions {
+  /// Converged when every projected row satisfies |phi_i| <= tolerance (position) or
+  /// |phi'_i| <= tolerance (velocity), in the constraint's own units. Must be > 0.
+  double tolerance = 1e-12;
+  /// Gauss–Newton iterations at most (each one evaluation of M and the constraints).
+  int max_iterations = 20;
+  /// (K) constraints to project (non-zero entries), or empty for every constraint.
+  std::vector<unsigned char> mask;
+};
+
+/// Outcome of a projection.
+struct ProjectionResult {
+  bool converged = false;    ///< the tolerance was met
+  int iterations = 0;        ///< corrections applied
+  double violation = 0.0;    ///< max |row| after the last correction (0 if nothing to project)
+  Status status = Status::kOk;  ///< kOk, or why an evaluation failed (M, NaN, …)
+};
+
+/// q ← q − M⁻¹ Aᵀ (A M⁻¹ Aᵀ)⁺ phi(q, t) over the holonomic constraints (active at t and in the
+/// mask), iterated until converged. Cost per iteration O(n³/3 + m n² + m² n) and the constraints'.
+ProjectionResult project_positions(const System& sys, Workspace& ws, VectorXd& q, double t,
+                                   const ProjectionOptions& options = {});
+
+/// q' ← q' − M⁻¹ Aᵀ (A M⁻¹ Aᵀ)⁺ phi'(q, q', t) over the holonomic and nonholonomic
+/// constraints (active at t and in the mask), q fixed; iterated, since psi may be nonlinear in
+/// q'. Cost as project_positions.
+ProjectionResult project_velocities(const System& sys, Workspace& ws, const VectorXd& q,
+                                    VectorXd& qd, double t, const ProjectionOptions& options = {});
+
+}  // namespace ukdyn

@@ -1,0 +1,163 @@
+/// @file simulate.hpp
+/// Simulation over time: integrate the fundamental equation from an initial state, with drift
+/// control, switching at constraint intervals, and a trajectory of everything a user needs to
+/// trust the result.
+///
+/// The integrated state is x = [q; q'; W] (2n + 1), W the work done by the non-ideal constraint
+/// forces (dW/dt = q'ᵀ Qc_nonideal). Integrators come from Boost.Odeint (RK4, Dormand–Prince 5(4),
+/// Runge–Kutta–Fehlberg 7(8)) and SUNDIALS CVODE (BDF); ukdyn writes no step-size control of its
+/// own. Output times are reached by dense output (Dormand–Prince, BDF), by landing on them
+/// exactly (Fehlberg), or by cubic Hermite interpolation between fixed steps (RK4); a sample is
+/// then projected onto the constraints (with projection drift control) and evaluated, so its
+/// forces, violations and energy are those of a consistent state.
+#pragma once
+
+#include <map>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "ukdyn/projection.hpp"
+#include "ukdyn/status.hpp"
+#include "ukdyn/system.hpp"
+#include "ukdyn/workspace.hpp"
+
+namespace ukdyn {
+
+/// The integration method.
+enum class Integrator {
+  kRK4,    ///< classical Runge–Kutta, fixed step SimulationOptions::step
+  kDopri5, ///< Dormand–Prince 5(4), adaptive, dense output (the default)
+  kRKF78,  ///< Runge–Kutta–Fehlberg 7(8), adaptive, for reference accuracy
+  kBDF,    ///< SUNDIALS CVODE, variable-order BDF with Newton iteration, for stiff problems
+};
+
+/// Short name ("rk4", "dopri5", "rkf78", "bdf"). Cost O(1).
+const char* to_string(Integrator integrator);
+/// The integrator of that short name. @throws std::invalid_argument listing the names.
+Integrator integrator_from_string(const std::string& name);
+
+/// How constraint drift is controlled.
+enum class DriftControl {
+  kNone,        ///< integrate A q'' = b as it is
+  kBaumgarte,   ///< impose phi'' + 2 alpha phi' + beta² phi = 0 (see Constraint::stabilize)
+  kProjection,  ///< project q and q' onto the constraints after every accepted step (default)
+};
+
+/// Short name ("none", "baumgarte", "projection"). Cost O(1).
+const char* to_string(DriftControl drift);
+/// The drift control of that short name. @throws std::invalid_argument listing the names.
+DriftControl drift_from_string(const std::string& name);
+
+/// Per-constraint drift control (overrides SimulationOptions::drift for that constraint).
+struct ConstraintDrift {
+  DriftControl method = DriftControl::kProjection;  ///< the method
+  double alpha = 0.0, beta = 0.0;  ///< Baumgarte gains when method is kBaumgarte (0: defaults)
+};
+
+/// Settings of a simulation. Defaults give constraint violations below 1e-10 on the test
+/// problems without the user touching anything.
+struct SimulationOptions {
+  double t_start = 0.0;             ///< initial time
+  double t_end = 1.0;               ///< final time (> t_start)
+  Integrator integrator = Integrator::kDopri5;  ///< method
+  double step = 1e-3;               ///< RK4: the step; dopri5, rkf78: the first step tried
+                                    ///< (BDF estimates its own)
+  /// Relative and absolute tolerances of the adaptive methods. The defaults stop short of the
+  /// tightest possible: near a singular configuration (a mechanism whose constraints lose rank,
+  /// like the double four-bar with its cranks horizontal) the accelerations carry a roundoff of
+  /// order eps/σ_min, and an error control tighter than that noise shrinks the step onto the
+  /// singular point, where the branch can switch (observed for dopri5 at rtol 1e-10, not at 1e-9).
+  double rtol = 1e-9;
+  double atol = 1e-11;
+  double max_step = 0.0;            ///< largest step of adaptive methods (0: unlimited)
+  long max_steps = 10'000'000;      ///< give up after this many accepted steps
+
+  double output_every = 0.01;       ///< sample spacing (0: only t_start and t_end)
+  std::vector<double> output_at;    ///< further sample times (merged, sorted)
+  std::vector<double> breakpoints;  ///< times where the dynamics jumps (C switching, …); the
+                                    ///< ends of constraint intervals are added automatically
+
+  DriftControl drift = DriftControl::kProjection;  ///< for every constraint, unless overridden
+  std::map<std::string, ConstraintDrift> drift_per_constraint;  ///< overrides, by name
+  double baumgarte_alpha = 10.0;    ///< default gains of kBaumgarte (1/s)
+  double baumgarte_beta = 10.0;
+  ProjectionOptions projection;     ///< tolerance and iterations of kProjection
+
+  /// Initial state: checked against every constraint (position and velocity level, tolerance
+  /// initial_tolerance); when inconsistent, projected if project_initial, else an error naming
+  /// the constraints.
+  bool project_initial = false;
+  double initial_tolerance = 1e-10;
+
+  SolverOptions solver;             ///< settings of the fundamental-equation solver
+};
+
+/// Statistics of a run.
+struct RunStatistics {
+  long steps = 0;                   ///< accepted steps
+  long rejected_steps = 0;          ///< steps rejected by the error control
+  long evaluations = 0;             ///< evaluations of the fundamental equation
+  long projections = 0;             ///< projections that moved the state (with BDF, CVODE
+                                    ///< projects before its error test, so rejected attempts count)
+  long events = 0;                  ///< stick/slip transitions of Coulomb contacts
+  double wall_time = 0.0;           ///< seconds
+  double max_position_violation = 0.0;  ///< largest |phi| seen after a step or at a sample
+  double max_velocity_violation = 0.0;  ///< largest |phi'|, |psi| likewise
+  /// max |E(t) − E(0) − W(t)| over the samples, relative to max(|E(0)|, largest kinetic energy)
+  double energy_drift = 0.0;
+  double t_reached = 0.0;           ///< last time integrated to
+  Status status = Status::kOk;      ///< kOk, or why the run stopped early
+  std::string message;              ///< describe_status() of a failure, or "" when ok
+};
+
+/// Everything recorded at the sample times, stored sample after sample (column i of each
+/// field's matrix is sample i). The names and sizes of the system come along so that writers
+/// need nothing else.
+struct Trajectory {
+  std::vector<std::string> coordinate_names;  ///< n
+  std::vector<std::string> constraint_names;  ///< K
+  std::vector<Index> constraint_rows;         ///< K, rows of each constraint
+  std::vector<ConstraintKind> constraint_kinds;  ///< K
+  Index n = 0, m = 0;
+
+  std::vector<double> t;            ///< sample times (N)
+  std::vector<double> q, qd, qdd;   ///< N × n each
+  std::vector<double> Qc_ideal, Qc_nonideal;  ///< N × n each
+  std::vector<double> lambda;       ///< N × m: minimum-norm multipliers of the ideal force
+  std::vector<double> position_violation;  ///< N × K: max |phi| of each constraint (0 if none)
+  std::vector<double> velocity_violation;  ///< N × K: max |phi'| or |psi| of each constraint
+  std::vector<double> kinetic_energy, potential_energy, energy;  ///< N each
+  std::vector<double> work_nonideal;  ///< N: work done by Qc_nonideal since t_start
+  RunStatistics stats;              ///< of the whole run
+
+  /// Number of samples N.
+  Index samples() const { return Index(t.size()); }
+  /// Checks that the names and every field agree with n, m, K and N (a trajectory from
+  /// simulate() always does; a hand-made one may not). @throws std::invalid_argument naming
+  /// `who` and the offending field. Cost O(K).
+  void check_consistent(const char* who) const;
+  /// Field f (stored N × width) as a width × N matrix view, column i = sample i.
+  static Eigen::Map<const MatrixXd> view(const std::vector<double>& f, Index width) {
+    return {f.data(), width, width == 0 ? 0 : Index(f.size()) / width};
+  }
+};
+
+/// Integrates sys from (q0, qd0) at options.t_start to options.t_end and returns the samples.
+/// A numerical failure (inconsistent constraints, NaN, a projection that does not converge, the
+/// step limit) stops the run: the samples recorded so far are kept and stats.status /
+/// stats.message say what happened, where and when.
+/// @throws std::invalid_argument on misuse: sizes, t_end <= t_start, bad tolerances, an unknown
+/// constraint in drift_per_constraint, or initial conditions that violate the constraints when
+/// project_initial is false (the message names each violated constraint and by how much).
+Trajectory simulate(const System& sys, const VectorXd& q0, const VectorXd& qd0,
+                    const SimulationOptions& options = {});
+
+/// Consistency of a state with each constraint: one line per violated constraint, naming it
+/// and giving the position and velocity violation; empty when every |row| <= tolerance.
+std::vector<std::string> check_initial_conditions(const System& sys, const VectorXd& q,
+                                                  const VectorXd& qd, double t,
+                                                  double tolerance);
+
+}  // namespace ukdyn

@@ -1,0 +1,312 @@
+// The explicit integrators, from Boost.Odeint: classical RK4 (fixed step, cubic Hermite output),
+// Dormand–Prince 5(4) (adaptive, its own dense output) and Runge–Kutta–Fehlberg 7(8) (adaptive,
+// landing exactly on output times). Step-size control is Odeint's; this file only walks the
+// steps so that the driver can project after each accepted one and count what happened.
+#include <algorithm>
+#include <cmath>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <boost/numeric/odeint.hpp>
+
+#include "integrator.hpp"
+
+namespace ukdyn::detail {
+
+namespace {
+namespace odeint = boost::numeric::odeint;
+using State = std::vector<double>;
+
+// Odeint's view of the ODE
+struct OdeFn {
+  ConstrainedOde* ode;
+  void operator()(const State& x, State& dxdt, double t) const { (*ode)(x.data(), dxdt.data(), t); }
+};
+
+// after a failed evaluation: the result that reports it
+SegmentResult failed(const ConstrainedOde& ode, SegmentResult r, double t) {
+  r.status = ode.failure();
+  r.message = ode.failure_message();
+  r.t_reached = t;
+  return r;
+}
+
+// When hooks.find_event reports a switch inside the step just taken: emit the samples up to it,
+// leave the state there in x and return true (the integrator then returns r with r.event).
+bool stop_at_event(SegmentHooks& hooks, double t0, const State& x0, double t1, const State& x1,
+                   const SegmentHooks::Dense& dense, const std::vector<double>& outputs,
+                   std::size_t& next, State& x, SegmentResult& r) {
+  if (!hooks.find_event) return false;
+  const double te = hooks.find_event(t0, x0.data(), t1, x1.data(), dense);
+  if (std::isnan(te)) return false;
+  State out(x0.size());
+  for (; next < outputs.size() && outputs[next] <= te; ++next) {
+    dense(outputs[next], out.data());
+    if (const Status s = hooks.output(outputs[next], out.data()); s != Status::kOk) {
+      r.status = s;
+      r.t_reached = outputs[next];
+      return true;
+    }
+  }
+  dense(te, x.data());
+  r.t_reached = te;
+  r.event = true;
+  return true;
+}
+
+// ends a segment at t with status s
+SegmentResult& stop(SegmentResult& r, Status s, double t, std::string message = {}) {
+  r.status = s;
+  r.t_reached = t;
+  r.message = std::move(message);
+  return r;
+}
+
+// Odeint's controlled stepper with the run's tolerances (and largest step, when given)
+template <class Stepper>
+auto controlled(const SimulationOptions& o, Stepper stepper) {
+  using Controlled = decltype(odeint::make_controlled(o.atol, o.rtol, stepper));
+  return o.max_step > 0 ? Controlled(odeint::make_controlled(o.atol, o.rtol, o.max_step, stepper))
+                        : odeint::make_controlled(o.atol, o.rtol, stepper);
+}
+
+// consecutive rejected steps after which an adaptive method gives up
+constexpr int kMaxRejections = 200;
+
+// x(s) on [t0, t1] from the values and derivatives at both ends (cubic Hermite)
+void hermite(double s, double t0, double t1, const State& x0, const State& d0, const State& x1,
+             const State& d1, State& out) {
+  const double h = t1 - t0, u = (s - t0) / h, u2 = u * u, u3 = u2 * u;
+  const double h00 = 2 * u3 - 3 * u2 + 1, h10 = u3 - 2 * u2 + u, h01 = -2 * u3 + 3 * u2,
+               h11 = u3 - u2;
+  for (std::size_t i = 0; i < out.size(); ++i) {
+    out[i] = h00 * x0[i] + h10 * h * d0[i] + h01 * x1[i] + h11 * h * d1[i];
+  }
+}
+
+// classical RK4 with the step (t1 − t0) / N closest to `step` from below
+SegmentResult rk4(ConstrainedOde& ode, State& x, double t0, double t1,
+                  const std::vector<double>& outputs, SegmentHooks& hooks, double step) {
+  SegmentResult r;
+  const OdeFn fn{&ode};
+  odeint::runge_kutta4<State> stepper;
+  const long N = std::max(1L, long(std::ceil((t1 - t0) / step * (1.0 - 1e-12))));
+  const double h = (t1 - t0) / double(N);
+  State dxdt(x.size()), x_new(x.size()), dxdt_new(x.size()), out(x.size());
+  // k1 of the first step
+  fn(x, dxdt, t0);
+  if (ode.failed()) return failed(ode, r, t0);
+  std::size_t next = 0;
+  double t = t0;
+  for (long k = 1; k <= N; ++k) {
+    // one step; t_k from k, not by accumulation
+    const double t_new = k == N ? t1 : t0 + double(k) * h;
+    x_new = x;
+    stepper.do_step(fn, x_new, dxdt, t, t_new - t);
+    if (ode.failed()) return failed(ode, r, t);
+    ++r.steps;
+    // drift control, then the derivative at the new state (k1 of the next step)
+    bool changed = false;
+    if (hooks.after_step) {
+      const Status s = hooks.after_step(t_new, x_new.data(), changed);
+      if (s != Status::kOk) {
+        r.status = s;
+        r.t_reached = t_new;
+        x = x_new;
+        return r;
+      }
+    }
+    fn(x_new, dxdt_new, t_new);
+    if (ode.failed()) return failed(ode, r, t_new);
+    // a switch of the dynamics inside the step: stop there
+    const SegmentHooks::Dense dense = [&](double s, double* xs) {
+      State tmp(x.size());
+      hermite(s, t, t_new, x, dxdt, x_new, dxdt_new, tmp);
+      std::copy(tmp.begin(), tmp.end(), xs);
+    };
+    if (stop_at_event(hooks, t, x, t_new, x_new, dense, outputs, next, x, r)) return r;
+    // samples inside (t, t_new] by cubic Hermite interpolation
+    for (; next < outputs.size() && outputs[next] <= t_new; ++next) {
+      hermite(outputs[next], t, t_new, x, dxdt, x_new, dxdt_new, out);
+      if (const Status s = hooks.output(outputs[next], out.data()); s != Status::kOk) {
+        return stop(r, s, outputs[next]);
+      }
+    }
+    std::swap(x, x_new);
+    std::swap(dxdt, dxdt_new);
+    t = t_new;
+  }
+  r.t_reached = t1;
+  r.last_step = h;
+  return r;
+}
+
+// Dormand–Prince 5(4): Odeint's controller, its dense output between accepted steps
+SegmentResult dopri5(ConstrainedOde& ode, State& x, double t0, double t1,
+                     const std::vector<double>& outputs, const SimulationOptions& o,
+                     SegmentHooks& hooks, double dt, long max_steps) {
+  SegmentResult r;
+  const OdeFn fn{&ode};
+  auto stepper = controlled(o, odeint::runge_kutta_dopri5<State>());
+  State dxdt(x.size()), x_old(x.size()), dxdt_old(x.size()), out(x.size());
+  fn(x, dxdt, t0);
+  if (ode.failed()) return failed(ode, r, t0);
+  std::size_t next = 0;
+  double t = t0;
+  int rejections = 0;
+  while (t < t1) {
+    // land on the segment's end
+    if (t + dt >= t1 || t1 - (t + dt) < 1e-12 * std::max(1.0, std::abs(t1))) dt = t1 - t;
+    x_old = x;
+    dxdt_old = dxdt;
+    const double t_old = t;
+    const auto result = stepper.try_step(fn, x, dxdt, t, dt);
+    if (ode.failed()) return failed(ode, r, t_old);
+    if (result == odeint::fail) {
+      ++r.rejected;
+      if (++rejections > kMaxRejections || t + dt == t) {
+        return stop(r, Status::kIntegratorFailure, t,
+                    "dopri5: step size underflow at t = " + std::to_string(t));
+      }
+      continue;
+    }
+    rejections = 0;
+    if (t1 - t < 1e-14 * std::max(1.0, std::abs(t1))) t = t1;
+    ++r.steps;
+    r.last_step = t - t_old;
+    // a switch of the dynamics inside the step: stop there
+    {
+      const State x_new = x, dxdt_new = dxdt;
+      const double t_new = t;
+      const SegmentHooks::Dense dense = [&](double s, double* xs) {
+        State tmp(x.size());
+        stepper.stepper().calc_state(s, tmp, x_old, dxdt_old, t_old, x_new, dxdt_new, t_new);
+        std::copy(tmp.begin(), tmp.end(), xs);
+      };
+      if (hooks.find_event &&
+          stop_at_event(hooks, t_old, x_old, t_new, x_new, dense, outputs, next, x, r)) {
+        return r;
+      }
+    }
+    // samples inside (t_old, t] from the method's dense output
+    for (; next < outputs.size() && outputs[next] <= t; ++next) {
+      stepper.stepper().calc_state(outputs[next], out, x_old, dxdt_old, t_old, x, dxdt, t);
+      if (const Status s = hooks.output(outputs[next], out.data()); s != Status::kOk) {
+        return stop(r, s, outputs[next]);
+      }
+    }
+    // drift control; a corrected state needs its derivative again (first stage of the next)
+    if (hooks.after_step) {
+      bool changed = false;
+      const Status s = hooks.after_step(t, x.data(), changed);
+      if (s != Status::kOk) {
+        return stop(r, s, t);
+      }
+      if (changed) {
+        fn(x, dxdt, t);
+        if (ode.failed()) return failed(ode, r, t);
+      }
+    }
+    if (r.steps >= max_steps) {
+      return stop(r, Status::kIntegratorFailure, t,
+                  "dopri5: step limit reached at t = " + std::to_string(t));
+    }
+  }
+  r.t_reached = t1;
+  return r;
+}
+
+// Runge–Kutta–Fehlberg 7(8): Odeint's controller, steps shortened to land on output times
+SegmentResult rkf78(ConstrainedOde& ode, State& x, double t0, double t1,
+                    const std::vector<double>& outputs, const SimulationOptions& o,
+                    SegmentHooks& hooks, double dt, long max_steps) {
+  SegmentResult r;
+  const OdeFn fn{&ode};
+  auto stepper = controlled(o, odeint::runge_kutta_fehlberg78<State>());
+  std::size_t next = 0;
+  double t = t0;
+  int rejections = 0;
+  State x_old(x.size()), d_old(x.size()), d_new(x.size());
+  while (t < t1) {
+    // the next stop: an output time or the segment's end
+    const double target = next < outputs.size() ? std::min(outputs[next], t1) : t1;
+    const bool landing =
+        t + dt >= target || target - (t + dt) < 1e-12 * std::max(1.0, std::abs(target));
+    double step = landing ? target - t : dt;
+    const double t_old = t;
+    if (hooks.find_event) x_old = x;
+    const auto result = stepper.try_step(fn, x, t, step);
+    if (ode.failed()) return failed(ode, r, t_old);
+    if (result == odeint::fail) {
+      ++r.rejected;
+      dt = step;
+      if (++rejections > kMaxRejections || t + dt == t) {
+        return stop(r, Status::kIntegratorFailure, t,
+                    "rkf78: step size underflow at t = " + std::to_string(t));
+      }
+      continue;
+    }
+    rejections = 0;
+    ++r.steps;
+    r.last_step = t - t_old;
+    // a shortened step leaves the suggestion for the full one
+    if (!landing) dt = step;
+    if (landing) t = target;
+    // a switch of the dynamics inside the step: stop there (cubic Hermite between the ends)
+    if (hooks.find_event) {
+      fn(x_old, d_old, t_old);
+      fn(x, d_new, t);
+      if (ode.failed()) return failed(ode, r, t_old);
+      const State x_new = x;
+      const double t_new = t;
+      const SegmentHooks::Dense dense = [&](double s, double* xs) {
+        State tmp(x.size());
+        hermite(s, t_old, t_new, x_old, d_old, x_new, d_new, tmp);
+        std::copy(tmp.begin(), tmp.end(), xs);
+      };
+      if (stop_at_event(hooks, t_old, x_old, t_new, x_new, dense, outputs, next, x, r)) return r;
+    }
+    if (next < outputs.size() && t == outputs[next]) {
+      if (const Status s = hooks.output(t, x.data()); s != Status::kOk) {
+        return stop(r, s, t);
+      }
+      ++next;
+    }
+    if (hooks.after_step) {
+      bool changed = false;
+      if (const Status s = hooks.after_step(t, x.data(), changed); s != Status::kOk) {
+        return stop(r, s, t);
+      }
+    }
+    if (r.steps >= max_steps) {
+      return stop(r, Status::kIntegratorFailure, t,
+                  "rkf78: step limit reached at t = " + std::to_string(t));
+    }
+  }
+  r.t_reached = t1;
+  return r;
+}
+}  // namespace
+
+SegmentResult integrate_explicit(Integrator method, ConstrainedOde& ode, std::vector<double>& x,
+                                 double t0, double t1, const std::vector<double>& outputs,
+                                 const SimulationOptions& options, SegmentHooks& hooks,
+                                 double first_step) {
+  switch (method) {
+    case Integrator::kRK4:
+      return rk4(ode, x, t0, t1, outputs, hooks, first_step);
+    case Integrator::kDopri5:
+      return dopri5(ode, x, t0, t1, outputs, options, hooks, first_step, options.max_steps);
+    case Integrator::kRKF78:
+      return rkf78(ode, x, t0, t1, outputs, options, hooks, first_step, options.max_steps);
+    case Integrator::kBDF:
+      break;
+  }
+  SegmentResult r;
+  r.status = Status::kIntegratorFailure;
+  r.message = "integrate_explicit: not an explicit method";
+  return r;
+}
+
+}  // namespace ukdyn::detail

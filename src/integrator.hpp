@@ -1,0 +1,93 @@
+// Internal: the interface between the simulation driver (simulate.cpp) and the integrators
+// (integrate_explicit.cpp: Boost.Odeint; integrate_bdf.cpp: SUNDIALS CVODE). Not installed.
+#pragma once
+
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "ukdyn/simulate.hpp"
+#include "ukdyn/status.hpp"
+#include "ukdyn/system.hpp"
+#include "ukdyn/workspace.hpp"
+
+namespace ukdyn::detail {
+
+// The first-order system x' = f(t, x) of a constrained mechanical system, x = [q; q'; W]
+// (2n + 1), W the work of the non-ideal constraint forces:
+//   f = [q'; q''; q'ᵀ Qc_nonideal],  q'' from forward_dynamics.
+// A failed evaluation (status not kOk) fills dxdt with NaN, is remembered, and makes
+// operator() return false; integrators must stop at once when it does.
+class ConstrainedOde {
+ public:
+  ConstrainedOde(const System& sys, Workspace& ws);
+
+  // dxdt = f(t, x) for x, dxdt of size(); false when the evaluation failed
+  bool operator()(const double* x, double* dxdt, double t);
+
+  Index size() const { return 2 * n_ + 1; }
+  Index dofs() const { return n_; }
+  long evaluations() const { return evaluations_; }
+  bool failed() const { return failure_ != Status::kOk; }
+  Status failure() const { return failure_; }
+  // describe_status() of the first failure, with its time
+  const std::string& failure_message() const { return failure_message_; }
+  void clear_failure();
+
+  const System& system() const { return sys_; }
+  Workspace& workspace() { return ws_; }
+
+ private:
+  const System& sys_;
+  Workspace& ws_;
+  Index n_;
+  VectorXd q_, qd_;  // (n) scratch
+  long evaluations_ = 0;
+  Status failure_ = Status::kOk;
+  std::string failure_message_;
+};
+
+// What the driver asks of an integrator for one segment [t0, t1] (no breakpoint inside).
+struct SegmentHooks {
+  // after every accepted step, with the state at t: may correct x in place (projection) and
+  // then sets `changed`; returns kOk to go on, anything else to stop with that status
+  std::function<Status(double t, double* x, bool& changed)> after_step;
+  // at every output time, ascending, with the state there (dense output / landing / Hermite);
+  // returns kOk to go on
+  std::function<Status(double t, const double* x)> output;
+  // optional, after every accepted step [t0, t1] (before drift control): the first time in
+  // (t0, t1] at which the dynamics switches (an event), or NaN for none; dense(s, x) writes the
+  // state at s in [t0, t1]. The integrator then stops there (SegmentResult::event).
+  using Dense = std::function<void(double s, double* x)>;
+  std::function<double(double t0, const double* x0, double t1, const double* x1,
+                       const Dense& dense)>
+      find_event;
+};
+
+// Outcome of one segment.
+struct SegmentResult {
+  Status status = Status::kOk;  // kOk, or why it stopped
+  std::string message;          // describe the failure ("" when ok)
+  double t_reached = 0.0;       // time of the state left in x
+  long steps = 0;               // accepted steps
+  long rejected = 0;            // rejected steps (error test failures)
+  double last_step = 0.0;       // size of the last accepted step (a good first step next time)
+  bool event = false;           // stopped early at an event found by hooks.find_event
+};
+
+// Integrates x (size ode.size(), the state at t0) to t1, calling hooks.output at each of
+// `outputs` (ascending, inside (t0, t1]) and hooks.after_step after each accepted step.
+// first_step: the step to try first (adaptive) or the step (RK4). On return x is the state at
+// result.t_reached (t1 unless it failed).
+SegmentResult integrate_explicit(Integrator method, ConstrainedOde& ode, std::vector<double>& x,
+                                 double t0, double t1, const std::vector<double>& outputs,
+                                 const SimulationOptions& options, SegmentHooks& hooks,
+                                 double first_step);
+
+// The same with SUNDIALS CVODE (BDF, Newton iteration, dense direct linear solver with a
+// difference-quotient Jacobian); projection through CVodeSetProjFn calling hooks.after_step.
+SegmentResult integrate_bdf(ConstrainedOde& ode, std::vector<double>& x, double t0, double t1,
+                            const std::vector<double>& outputs, const SimulationOptions& options,
+                            SegmentHooks& hooks, double first_step);
+
+}  // namespace ukdyn::detail

@@ -1,0 +1,106 @@
+// JSON summary of a run: statistics, final state and the options given.
+#include "ukdyn/io.hpp"
+
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
+#include <memory>
+#include <stdexcept>
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+namespace ukdyn {
+namespace {
+
+constexpr const char* kWho = "ukdyn::write_summary_json";
+
+
+struct FileCloser {
+  void operator()(std::FILE* f) const { std::fclose(f); }
+};
+
+[[noreturn]] void throw_io_error(const std::string& path, const char* doing, int err) {
+  throw std::runtime_error(std::string(kWho) + ": cannot " + doing + " '" + path +
+                           "': " + (err != 0 ? std::strerror(err) : "unknown reason"));
+}
+
+}  // namespace
+
+void write_summary_json(const Trajectory& traj, const SimulationOptions& options,
+                        const std::string& path) {
+  using nlohmann::json;
+  traj.check_consistent("ukdyn::write_summary_json");
+  const RunStatistics& s = traj.stats;
+  const std::size_t N = traj.t.size(), n = std::size_t(traj.n);
+
+  // statistics of the run (NaN and Inf, which JSON lacks, are written as null)
+  json j = json::object();
+  j["status"] = to_string(s.status);
+  j["message"] = s.message;
+  j["steps"] = s.steps;
+  j["rejected_steps"] = s.rejected_steps;
+  j["evaluations"] = s.evaluations;
+  j["projections"] = s.projections;
+  j["wall_time"] = s.wall_time;
+  j["max_position_violation"] = s.max_position_violation;
+  j["max_velocity_violation"] = s.max_velocity_violation;
+  j["energy_drift"] = s.energy_drift;
+
+  // time span and the last sample by coordinate name (null when there is no sample)
+  j["t_start"] = N > 0 ? json(traj.t.front()) : json(nullptr);
+  j["t_reached"] = s.t_reached;
+  j["samples"] = N;
+  if (N > 0) {
+    json q = json::object(), qd = json::object();
+    for (std::size_t c = 0; c < n; ++c) {
+      q[traj.coordinate_names[c]] = traj.q[(N - 1) * n + c];
+      qd[traj.coordinate_names[c]] = traj.qd[(N - 1) * n + c];
+    }
+    j["final_state"] = {{"q", std::move(q)}, {"q_dot", std::move(qd)}};
+  } else {
+    j["final_state"] = nullptr;
+  }
+  j["constraints"] = traj.constraint_names;
+
+  // the options given
+  json drift_per_constraint = json::object();
+  for (const auto& [name, d] : options.drift_per_constraint) {
+    drift_per_constraint[name] = {{"method", to_string(d.method)}, {"alpha", d.alpha},
+                                  {"beta", d.beta}};
+  }
+  j["options"] = {
+      {"integrator", to_string(options.integrator)},
+      {"drift", to_string(options.drift)},
+      {"drift_per_constraint", std::move(drift_per_constraint)},
+      {"baumgarte_alpha", options.baumgarte_alpha},
+      {"baumgarte_beta", options.baumgarte_beta},
+      {"rtol", options.rtol},
+      {"atol", options.atol},
+      {"step", options.step},
+      {"max_step", options.max_step},
+      {"max_steps", options.max_steps},
+      {"output_every", options.output_every},
+      {"t_start", options.t_start},
+      {"t_end", options.t_end},
+      {"projection_tolerance", options.projection.tolerance},
+      {"projection_max_iterations", options.projection.max_iterations},
+  };
+
+  // names are user text: invalid UTF-8 is replaced (U+FFFD) rather than refused
+  std::string text = j.dump(2, ' ', false, json::error_handler_t::replace);
+  text += '\n';
+
+  errno = 0;
+  std::unique_ptr<std::FILE, FileCloser> file(std::fopen(path.c_str(), "wb"));
+  if (!file) throw_io_error(path, "open", errno);
+  if (std::fwrite(text.data(), 1, text.size(), file.get()) != text.size()) {
+    throw_io_error(path, "write", errno);
+  }
+  errno = 0;
+  if (std::fclose(file.release()) != 0) {
+    throw_io_error(path, "write", errno);
+  }
+}
+
+}  // namespace ukdyn

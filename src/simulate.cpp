@@ -1,0 +1,557 @@
+// simulate(): the driver of a run. Splits [t_start, t_end] at breakpoints (the ends of
+// constraint intervals and those the user gives), integrates each segment with the chosen method,
+// applies drift control after every accepted step, and records samples.
+#include "ukdyn/simulate.hpp"
+
+#include <Eigen/QR>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <functional>
+#include <limits>
+#include <sstream>
+#include <stdexcept>
+
+#include "detail.hpp"
+#include "integrator.hpp"
+#include "ukdyn/forward.hpp"
+#include "ukdyn/projection.hpp"
+
+namespace ukdyn {
+
+const char* to_string(Integrator integrator) {
+  switch (integrator) {
+    case Integrator::kRK4: return "rk4";
+    case Integrator::kDopri5: return "dopri5";
+    case Integrator::kRKF78: return "rkf78";
+    case Integrator::kBDF: return "bdf";
+  }
+  return "unknown";
+}
+
+Integrator integrator_from_string(const std::string& name) {
+  for (Integrator i : {Integrator::kRK4, Integrator::kDopri5, Integrator::kRKF78,
+                       Integrator::kBDF}) {
+    if (name == to_string(i)) return i;
+  }
+  throw std::invalid_argument("ukdyn: unknown integrator '" + name +
+                              "'; the integrators are rk4, dopri5, rkf78, bdf");
+}
+
+const char* to_string(DriftControl drift) {
+  switch (drift) {
+    case DriftControl::kNone: return "none";
+    case DriftControl::kBaumgarte: return "baumgarte";
+    case DriftControl::kProjection: return "projection";
+  }
+  return "unknown";
+}
+
+DriftControl drift_from_string(const std::string& name) {
+  for (DriftControl d : {DriftControl::kNone, DriftControl::kBaumgarte,
+                         DriftControl::kProjection}) {
+    if (name == to_string(d)) return d;
+  }
+  throw std::invalid_argument("ukdyn: unknown drift control '" + name +
+                              "'; the choices are none, baumgarte, projection");
+}
+
+namespace {
+
+// stick/slip transitions after which a run is declared chattering
+constexpr long kMaxEvents = 100000;
+
+std::string format(double v) {
+  std::ostringstream s;
+  s.precision(3);
+  s << v;
+  return s.str();
+}
+
+// one line per constraint whose violation exceeds tol (after evaluate_violations)
+std::vector<std::string> violated(const System& sys, const Workspace& ws, double tol) {
+  std::vector<std::string> lines;
+  for (Index k = 0; k < sys.constraint_count(); ++k) {
+    const double p = position_violation(sys, ws, k), v = velocity_violation(sys, ws, k);
+    if (p > tol || v > tol) {
+      lines.push_back("constraint '" + sys.constraint(k).name() + "' (" +
+                      to_string(sys.constraint(k).kind()) + "): position violation " + format(p) +
+                      ", velocity violation " + format(v));
+    }
+  }
+  return lines;
+}
+
+std::string join(const std::vector<std::string>& lines) {
+  std::string out;
+  for (const auto& l : lines) out += (out.empty() ? "" : "; ") + l;
+  return out;
+}
+
+void validate(const System& sys, const VectorXd& q0, const VectorXd& qd0,
+              const SimulationOptions& o) {
+  auto fail = [](const std::string& what) {
+    throw std::invalid_argument("ukdyn::simulate: " + what);
+  };
+  if (q0.size() != sys.dofs() || qd0.size() != sys.dofs()) {
+    fail("q0 and qd0 need n = " + std::to_string(sys.dofs()) + " entries, got " +
+         std::to_string(q0.size()) + " and " + std::to_string(qd0.size()));
+  }
+  if (!(o.t_end > o.t_start)) {
+    fail("t_end (" + format(o.t_end) + ") must be greater than t_start (" + format(o.t_start) +
+         ")");
+  }
+  if (!(o.step > 0.0)) fail("step must be > 0, got " + format(o.step));
+  if (!(o.rtol > 0.0) || !(o.atol > 0.0)) fail("rtol and atol must be > 0");
+  if (!(o.output_every >= 0.0)) fail("output_every must be >= 0");
+  if (!(o.max_step >= 0.0)) fail("max_step must be >= 0");
+  if (o.max_steps <= 0) fail("max_steps must be positive");
+  for (const auto& [name, d] : o.drift_per_constraint) {
+    sys.constraint_index(name);  // throws naming the unknown constraint
+    if (!(d.alpha >= 0.0 && d.beta >= 0.0)) fail("Baumgarte gains of '" + name + "' must be >= 0");
+  }
+}
+
+// sorted, de-duplicated times in [a, b]
+std::vector<double> sorted_times(std::vector<double> v, double a, double b) {
+  v.erase(std::remove_if(v.begin(), v.end(),
+                         [&](double t) { return !(t >= a && t <= b) || !std::isfinite(t); }),
+          v.end());
+  std::sort(v.begin(), v.end());
+  const double eps = 1e-12 * std::max({1.0, std::abs(a), std::abs(b)});
+  std::vector<double> out;
+  for (double t : v) {
+    if (out.empty() || t - out.back() > eps) out.push_back(t);
+  }
+  return out;
+}
+
+// the run's sample times: t_start, every output_every, output_at, t_end
+std::vector<double> sample_times(const SimulationOptions& o) {
+  std::vector<double> v = o.output_at;
+  v.push_back(o.t_start);
+  v.push_back(o.t_end);
+  if (o.output_every > 0.0) {
+    const long count = long(std::floor((o.t_end - o.t_start) / o.output_every * (1 + 1e-12)));
+    for (long i = 1; i <= count; ++i) v.push_back(o.t_start + double(i) * o.output_every);
+  }
+  return sorted_times(std::move(v), o.t_start, o.t_end);
+}
+
+// the segments' ends: t_start, breakpoints inside, t_end
+std::vector<double> segment_ends(const System& sys, const SimulationOptions& o) {
+  std::vector<double> v = o.breakpoints;
+  for (const auto& c : sys.constraints()) {
+    v.push_back(c.active_interval().begin);
+    v.push_back(c.active_interval().end);
+  }
+  v.push_back(o.t_start);
+  v.push_back(o.t_end);
+  return sorted_times(std::move(v), o.t_start, o.t_end);
+}
+
+// The solver settings of the integration: the Gauss and virtual-work residuals are not part of a
+// trajectory, so they are not computed at every evaluation (the consistency test still is).
+SolverOptions integration_options(SolverOptions o) {
+  o.compute_residuals = false;
+  return o;
+}
+
+// Everything a run shares between the integrator's callbacks.
+class Run {
+ public:
+  Run(const System& sys, const SimulationOptions& o, Trajectory& traj)
+      : sys_(sys), o_(o), ws_(sys, integration_options(o.solver)), traj_(traj), n_(sys.dofs()),
+        q_(n_), qd_(n_) {
+    // drift control of each constraint
+    const Index K = sys.constraint_count();
+    projection_ = o.projection;
+    projection_.mask.assign(std::size_t(K), 0);
+    for (Index k = 0; k < K; ++k) {
+      ConstraintDrift d{o.drift, 0.0, 0.0};
+      if (auto it = o.drift_per_constraint.find(sys.constraint(k).name());
+          it != o.drift_per_constraint.end()) {
+        d = it->second;
+      }
+      if (d.method == DriftControl::kProjection) {
+        projection_.mask[std::size_t(k)] = 1;
+        projecting_ = projecting_ || sys.constraint(k).kind() != ConstraintKind::kAcceleration;
+      } else if (d.method == DriftControl::kBaumgarte) {
+        ws_.stabilization[std::size_t(k)] = Stabilization{d.alpha > 0 ? d.alpha : o.baumgarte_alpha,
+                                                          d.beta > 0 ? d.beta : o.baumgarte_beta};
+      }
+    }
+  }
+
+  Workspace& workspace() { return ws_; }
+  bool projecting() const { return projecting_; }
+
+  // --- Coulomb contacts: stick or slip -------------------------------------------------------
+  // the friction force while sliding, the stick constraint while sticking
+  void apply_contact_modes() {
+    const auto& contacts = sys_.friction_contacts();
+    for (std::size_t c = 0; c < contacts.size(); ++c) {
+      ws_.nonideal_enabled[std::size_t(contacts[c].force)] = sticking_[c] ? 0 : 1;
+      ws_.activity_override[std::size_t(contacts[c].stick_constraint)] = sticking_[c] ? 1 : 0;
+    }
+  }
+
+  // initial modes: a contact at rest sticks when the force holding it is within mu N
+  void initial_contact_modes(double t, const double* x) {
+    const auto& contacts = sys_.friction_contacts();
+    sticking_.assign(contacts.size(), 0);
+    for (std::size_t c = 0; c < contacts.size(); ++c) {
+      if (sliding_speed(c, x) == 0.0) {
+        sticking_[c] = 1;
+        apply_contact_modes();
+        if (stick_margin(c, t, x) < 0.0) {
+          sticking_[c] = 0;
+          set_slip_hint(c, true);
+        }
+      }
+    }
+    apply_contact_modes();
+  }
+
+  // the first switch of a contact inside [t0, t1] (see SegmentHooks::find_event)
+  double find_event(double t0, const double* x0, double t1, const double* x1,
+                    const detail::SegmentHooks::Dense& dense) {
+    const auto& contacts = sys_.friction_contacts();
+    double first = std::numeric_limits<double>::quiet_NaN();
+    switching_ = -1;
+    for (std::size_t c = 0; c < contacts.size(); ++c) {
+      // g ≤ 0 marks the switch: sliding, v·v(t0) (the velocity reverses); sticking,
+      // mu N − |holding force|
+      std::function<double(double, const double*)> g;
+      if (!sticking_[c]) {
+        // (a reversal means something only once the contact slides: |v| above its eps)
+        const VectorXd v0 = sliding_velocity(c, x0);
+        if (v0.norm() <= contacts[c].eps) continue;
+        g = [this, c, v0](double, const double* x) { return sliding_velocity(c, x).dot(v0); };
+      } else {
+        g = [this, c](double t, const double* x) { return stick_margin(c, t, x); };
+      }
+      if (g(t1, x1) > 0.0) continue;
+      // bisection on the dense output: [lo, hi] with g(lo) > 0 >= g(hi)
+      double lo = t0, hi = t1;
+      std::vector<double> xs(sample_.size());
+      while (hi - lo > 1e-14 * std::max(1.0, std::abs(hi))) {
+        const double mid = 0.5 * (lo + hi);
+        dense(mid, xs.data());
+        (g(mid, xs.data()) > 0.0 ? lo : hi) = mid;
+      }
+      if (std::isnan(first) || hi < first) {
+        first = hi;
+        switching_ = Index(c);
+      }
+    }
+    return first;
+  }
+
+  // switches the contact found by the last find_event; a contact that starts to stick has its
+  // sliding velocity projected to zero
+  Status switch_contact(double t, double* x) {
+    const std::size_t c = std::size_t(switching_);
+    const bool releasing = sticking_[c] != 0;
+    if (releasing) stick_margin(c, t, x);  // the holding force just before release
+    sticking_[c] = sticking_[c] ? 0 : 1;
+    set_slip_hint(c, releasing);
+    apply_contact_modes();
+    ++traj_.stats.events;
+    bool changed = false;
+    ProjectionOptions all = o_.projection;
+    return project(t, x, all, changed);
+  }
+
+  // projects x = [q; q'; W] in place with the given mask; false when it did not converge
+  Status project(double t, double* x, const ProjectionOptions& p, bool& changed) {
+    q_ = Eigen::Map<const VectorXd>(x, n_);
+    qd_ = Eigen::Map<const VectorXd>(x + n_, n_);
+    const ProjectionResult rp = project_positions(sys_, ws_, q_, t, p);
+    if (rp.status != Status::kOk) return rp.status;
+    const ProjectionResult rv = project_velocities(sys_, ws_, q_, qd_, t, p);
+    if (rv.status != Status::kOk) return rv.status;
+    note_violation(rp.violation, rv.violation);
+    changed = rp.iterations > 0 || rv.iterations > 0;
+    if (changed) {
+      ++traj_.stats.projections;
+      Eigen::Map<VectorXd>(x, n_) = q_;
+      Eigen::Map<VectorXd>(x + n_, n_) = qd_;
+    }
+    if (!rp.converged || !rv.converged) {
+      failure_ = "drift control: the projection onto the constraints did not converge at t = " +
+                 format(t) + " (position violation " + format(rp.violation) +
+                 ", velocity violation " + format(rv.violation) + " after " +
+                 std::to_string(rp.iterations) + " and " + std::to_string(rv.iterations) +
+                 " iterations)";
+      return Status::kProjectionFailed;
+    }
+    return Status::kOk;
+  }
+
+  // drift control after an accepted step
+  Status after_step(double t, double* x, bool& changed) {
+    changed = false;
+    return projecting_ ? project(t, x, projection_, changed) : Status::kOk;
+  }
+
+  // records a sample at t from the state x (projected first, when projecting)
+  Status record(double t, const double* x) {
+    std::copy(x, x + 2 * n_ + 1, sample_.begin());
+    if (projecting_) {
+      bool changed = false;
+      ProjectionOptions quiet = projection_;
+      if (const Status s = project(t, sample_.data(), quiet, changed); s != Status::kOk) return s;
+    }
+    q_ = Eigen::Map<const VectorXd>(sample_.data(), n_);
+    qd_ = Eigen::Map<const VectorXd>(sample_.data() + n_, n_);
+    const Status s = forward_dynamics(sys_, ws_, q_, qd_, t);
+    auto push = [](std::vector<double>& f, const VectorXd& v) {
+      f.insert(f.end(), v.data(), v.data() + v.size());
+    };
+    traj_.t.push_back(t);
+    push(traj_.q, q_);
+    push(traj_.qd, qd_);
+    push(traj_.qdd, ws_.qdd);
+    push(traj_.Qc_ideal, ws_.Qc_ideal);
+    push(traj_.Qc_nonideal, ws_.Qc_nonideal);
+    push(traj_.lambda, ws_.lambda);
+    const double T = 0.5 * qd_.dot(ws_.M * qd_), V = sys_.potential_energy(q_, t);
+    traj_.kinetic_energy.push_back(T);
+    traj_.potential_energy.push_back(V);
+    traj_.energy.push_back(T + V);
+    traj_.work_nonideal.push_back(sample_[std::size_t(2 * n_)]);
+    // violations of each constraint
+    evaluate_violations(sys_, ws_, q_, qd_, t);
+    for (Index k = 0; k < sys_.constraint_count(); ++k) {
+      const double p = position_violation(sys_, ws_, k), v = velocity_violation(sys_, ws_, k);
+      traj_.position_violation.push_back(p);
+      traj_.velocity_violation.push_back(v);
+      note_violation(p, v);
+    }
+    if (s != Status::kOk) failure_ = describe_status(sys_, ws_);
+    return s;
+  }
+
+  const std::string& failure() const { return failure_; }
+
+ private:
+  // q' on the contact's sliding coordinates
+  VectorXd sliding_velocity(std::size_t c, const double* x) const {
+    const auto& coords = sys_.friction_contacts()[c].coordinates;
+    VectorXd v(Index(coords.size()));
+    for (std::size_t r = 0; r < coords.size(); ++r) v[Index(r)] = x[n_ + coords[r]];
+    return v;
+  }
+  double sliding_speed(std::size_t c, const double* x) const {
+    return sliding_velocity(c, x).norm();
+  }
+  // mu N − |holding force|, with the contact sticking, at (t, x). The stick rows make the
+  // normal constraint's rows redundant, so their minimum-norm shares split the reaction
+  // arbitrarily; the reaction R = share(normal) + share(stick) is unique, and is split here into
+  // its part along the normal constraint's rows (N) and the rest (the friction that holds).
+  double stick_margin(std::size_t c, double t, const double* x) {
+    const FrictionContact& contact = sys_.friction_contacts()[c];
+    q_ = Eigen::Map<const VectorXd>(x, n_);
+    qd_ = Eigen::Map<const VectorXd>(x + n_, n_);
+    if (forward_dynamics(sys_, ws_, q_, qd_, t) != Status::kOk) return -1.0;
+    const VectorXd R = ws_.shares.col(contact.normal_constraint) +
+                       ws_.shares.col(contact.stick_constraint);
+    const Index k = contact.normal_constraint;
+    const MatrixXd Nt = ws_.A.middleRows(sys_.row_offset(k), sys_.constraint(k).rows()).transpose();
+    const VectorXd RN = Nt * Nt.completeOrthogonalDecomposition().solve(R);
+    holding_ = R - RN;
+    return contact.mu * RN.norm() - holding_.norm();
+  }
+
+  // the friction of a contact that starts to slip from rest points along the force that held
+  // it (see CoulombFriction); a contact that sticks, or slides, needs no hint
+  void set_slip_hint(std::size_t c, bool from_rest) {
+    const FrictionContact& contact = sys_.friction_contacts()[c];
+    auto hint = ws_.slip_hint.col(contact.force);
+    hint.setZero();
+    if (!from_rest || holding_.size() != n_) return;
+    for (Index i : contact.coordinates) hint[i] = holding_[i];
+    if (hint.norm() > 0.0) hint.normalize();
+  }
+
+  void note_violation(double p, double v) {
+    traj_.stats.max_position_violation = std::max(traj_.stats.max_position_violation, p);
+    traj_.stats.max_velocity_violation = std::max(traj_.stats.max_velocity_violation, v);
+  }
+
+  const System& sys_;
+  const SimulationOptions& o_;
+  Workspace ws_;
+  Trajectory& traj_;
+  Index n_;
+  VectorXd q_, qd_;
+  std::vector<double> sample_ = std::vector<double>(std::size_t(2 * n_ + 1));
+  ProjectionOptions projection_;
+  bool projecting_ = false;
+  std::vector<unsigned char> sticking_;  // (contacts) contact c sticks
+  VectorXd holding_;                     // (n) the holding force of the last stick_margin
+  Index switching_ = -1;                 // the contact of the last event found
+  std::string failure_;
+};
+
+// max |E − E0 − W| over the samples, relative to max(|E0|, largest kinetic energy)
+double energy_drift(const Trajectory& traj) {
+  if (traj.energy.empty()) return 0.0;
+  const double E0 = traj.energy.front();
+  double scale = std::abs(E0), drift = 0.0;
+  for (double T : traj.kinetic_energy) scale = std::max(scale, std::abs(T));
+  for (std::size_t i = 0; i < traj.energy.size(); ++i) {
+    drift = std::max(drift, std::abs(traj.energy[i] - E0 - traj.work_nonideal[i]));
+  }
+  return scale > 0 ? drift / scale : drift;
+}
+
+}  // namespace
+
+std::vector<std::string> check_initial_conditions(const System& sys, const VectorXd& q,
+                                                  const VectorXd& qd, double t,
+                                                  double tolerance) {
+  Workspace ws(sys);
+  evaluate_violations(sys, ws, q, qd, t);
+  return violated(sys, ws, tolerance);
+}
+
+Trajectory simulate(const System& sys, const VectorXd& q0, const VectorXd& qd0,
+                    const SimulationOptions& o) {
+  validate(sys, q0, qd0, o);
+  const auto wall_start = std::chrono::steady_clock::now();
+  Trajectory traj;
+  traj.coordinate_names = sys.coordinate_names();
+  for (const auto& c : sys.constraints()) {
+    traj.constraint_names.push_back(c.name());
+    traj.constraint_rows.push_back(c.rows());
+    traj.constraint_kinds.push_back(c.kind());
+  }
+  traj.n = sys.dofs();
+  traj.m = sys.constraint_rows();
+  Run run(sys, o, traj);
+  Workspace& ws = run.workspace();
+  const Index n = sys.dofs();
+
+  // initial conditions: consistent, or projected on request
+  VectorXd q = q0, qd = qd0;
+  evaluate_violations(sys, ws, q, qd, o.t_start);
+  if (auto bad = violated(sys, ws, o.initial_tolerance); !bad.empty()) {
+    if (!o.project_initial) {
+      throw std::invalid_argument("ukdyn::simulate: inconsistent initial conditions at t = " +
+                                  format(o.t_start) + ": " + join(bad) +
+                                  " (set project_initial to project them onto the constraints)");
+    }
+    ProjectionOptions all = o.projection;
+    const auto rp = project_positions(sys, ws, q, o.t_start, all);
+    const auto rv = project_velocities(sys, ws, q, qd, o.t_start, all);
+    evaluate_violations(sys, ws, q, qd, o.t_start);
+    bad = violated(sys, ws, o.initial_tolerance);
+    if (!rp.converged || !rv.converged || !bad.empty()) {
+      throw std::invalid_argument(
+          "ukdyn::simulate: no consistent initial state near the one given: after projection " +
+          (bad.empty() ? std::string("the iteration did not converge") : join(bad)));
+    }
+  }
+
+  // x = [q; q'; W]
+  std::vector<double> x(std::size_t(2 * n + 1), 0.0);
+  Eigen::Map<VectorXd>(x.data(), n) = q;
+  Eigen::Map<VectorXd>(x.data() + n, n) = qd;
+
+  detail::ConstrainedOde ode(sys, ws);
+  detail::SegmentHooks hooks;
+  hooks.after_step = [&](double t, double* xs, bool& changed) {
+    return run.after_step(t, xs, changed);
+  };
+  hooks.output = [&](double t, const double* xs) { return run.record(t, xs); };
+  if (!sys.friction_contacts().empty()) {
+    hooks.find_event = [&](double t0, const double* x0, double t1, const double* x1,
+                           const detail::SegmentHooks::Dense& dense) {
+      return run.find_event(t0, x0, t1, x1, dense);
+    };
+  }
+
+  const std::vector<double> samples = sample_times(o), ends = segment_ends(sys, o);
+  auto finish = [&](Status status, const std::string& message, double t_reached) {
+    traj.stats.status = status;
+    traj.stats.message = message;
+    traj.stats.t_reached = t_reached;
+    traj.stats.evaluations = ode.evaluations();
+    traj.stats.energy_drift = energy_drift(traj);
+    traj.stats.wall_time =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
+    std::fill(ws.activity_override.begin(), ws.activity_override.end(), -1);
+    return traj;
+  };
+
+  // (CVODE estimates its own first step, which on stiff problems can be far below o.step)
+  double first_step = o.integrator == Integrator::kBDF ? 0.0 : o.step;
+  std::size_t next_sample = 0;
+  run.initial_contact_modes(o.t_start, x.data());
+  for (std::size_t seg = 0; seg + 1 < ends.size(); ++seg) {
+    double a = ends[seg];
+    const double b = ends[seg + 1], mid = 0.5 * (a + b);
+    // the constraints of this segment: those active in its interior
+    for (Index k = 0; k < sys.constraint_count(); ++k) {
+      ws.activity_override[std::size_t(k)] = sys.constraint(k).is_active(mid) ? 1 : 0;
+    }
+    run.apply_contact_modes();
+    // a constraint that switches on finds the state inconsistent: project onto it
+    bool changed = false;
+    if (seg > 0 && sys.constraint_count() > 0) {
+      ProjectionOptions all = o.projection;
+      if (const Status s = run.project(a, x.data(), all, changed); s != Status::kOk) {
+        return finish(s, run.failure().empty() ? describe_status(sys, ws) : run.failure(), a);
+      }
+    }
+    // the sample at the start of the run
+    if (seg == 0 && next_sample < samples.size() && samples[next_sample] == a) {
+      if (const Status s = run.record(a, x.data()); s != Status::kOk) {
+        return finish(s, run.failure(), a);
+      }
+      ++next_sample;
+    }
+    // [a, b], restarted after every stick/slip event
+    for (;;) {
+      std::vector<double> outputs;
+      for (std::size_t i = next_sample; i < samples.size() && samples[i] <= b; ++i) {
+        outputs.push_back(samples[i]);
+      }
+      detail::SegmentResult r =
+          o.integrator == Integrator::kBDF
+              ? detail::integrate_bdf(ode, x, a, b, outputs, o, hooks, first_step)
+              : detail::integrate_explicit(o.integrator, ode, x, a, b, outputs, o, hooks,
+                                           first_step);
+      traj.stats.steps += r.steps;
+      traj.stats.rejected_steps += r.rejected;
+      if (r.last_step > 0 && o.integrator != Integrator::kRK4) first_step = r.last_step;
+      while (next_sample < samples.size() && samples[next_sample] <= r.t_reached) ++next_sample;
+      if (r.status != Status::kOk) {
+        std::string message = r.message;
+        if (message.empty()) message = run.failure();
+        if (message.empty()) message = describe_status(sys, ws);
+        return finish(r.status, message, r.t_reached);
+      }
+      if (!r.event) break;
+      // a contact sticks or slips: switch it and go on from there (but not forever)
+      if (traj.stats.events >= kMaxEvents) {
+        return finish(Status::kIntegratorFailure,
+                      "stick/slip: more than " + std::to_string(kMaxEvents) +
+                          " transitions (chattering) by t = " + format(r.t_reached),
+                      r.t_reached);
+      }
+      if (const Status s = run.switch_contact(r.t_reached, x.data()); s != Status::kOk) {
+        return finish(s, run.failure().empty() ? describe_status(sys, ws) : run.failure(),
+                      r.t_reached);
+      }
+      a = r.t_reached;
+      if (!(a < b)) break;
+    }
+  }
+  return finish(Status::kOk, "", o.t_end);
+}
+
+}  // namespace ukdyn

@@ -1,0 +1,162 @@
+// Constraint violations and projection onto the constraints (drift control): the correction of
+// least M-norm, dq = −L⁻ᵀ W⁺ phi, through the same decomposition as the dynamics.
+#include <algorithm>
+#include <stdexcept>
+#include <string>
+
+#include "detail.hpp"
+#include "ukdyn/projection.hpp"
+
+namespace ukdyn {
+
+namespace {
+// constraint k takes part in a projection
+bool selected(const ProjectionOptions& o, Index k) {
+  return o.mask.empty() || o.mask[std::size_t(k)] != 0;
+}
+
+void require_tolerance(const ProjectionOptions& o, const char* who) {
+  if (!(o.tolerance > 0.0) || o.max_iterations < 0) {
+    throw std::invalid_argument(std::string(who) +
+                                ": ProjectionOptions need tolerance > 0 and max_iterations >= 0");
+  }
+}
+
+// which rows a projection works on
+enum class Level { kPosition, kVelocity };
+
+// constraint k takes part in a projection of this level at t
+bool takes_part(const System& sys, const Workspace& ws, const ProjectionOptions& o, Index k,
+                double t, Level level) {
+  const ConstraintKind kind = sys.constraint(k).kind();
+  return selected(o, k) && detail::is_active(sys, ws, k, t) &&
+         (kind == ConstraintKind::kHolonomic ||
+          (level == Level::kVelocity && kind == ConstraintKind::kNonholonomic));
+}
+
+// e = −violation on the rows of the constraints that take part (zero elsewhere); returns the
+// largest |violation|, or −1 when no row takes part
+double measure_violation(const System& sys, Workspace& ws, const VectorXd& q, const VectorXd& qd,
+                         double t, const ProjectionOptions& o, Level level) {
+  double worst = -1.0;
+  for (Index k = 0; k < sys.constraint_count(); ++k) {
+    const Index r0 = sys.row_offset(k), rows = sys.constraint(k).rows();
+    auto ek = ws.e.segment(r0, rows);
+    if (!takes_part(sys, ws, o, k, t, level)) {
+      ek.setZero();
+      continue;
+    }
+    auto pk = ws.phi.segment(r0, rows);
+    auto vk = ws.phi_dot.segment(r0, rows);
+    sys.constraint(k).model().violation(q, qd, t, ws.scratch[std::size_t(k)].get(), pk, vk);
+    if (level == Level::kPosition) {
+      ek = -pk;
+    } else {
+      ek = -vk;
+    }
+    worst = std::max(worst, ek.cwiseAbs().maxCoeff());
+  }
+  return worst;
+}
+
+// A on the rows of the constraints that take part: dphi/dq (holonomic) or dpsi/dq'
+// (nonholonomic), zero elsewhere; only needed when a correction is
+void assemble_jacobian(const System& sys, Workspace& ws, const VectorXd& q, const VectorXd& qd,
+                       double t, const ProjectionOptions& o, Level level) {
+  for (Index k = 0; k < sys.constraint_count(); ++k) {
+    const Index r0 = sys.row_offset(k), rows = sys.constraint(k).rows();
+    auto Ak = ws.A.middleRows(r0, rows);
+    if (!takes_part(sys, ws, o, k, t, level)) {
+      Ak.setZero();
+      continue;
+    }
+    sys.constraint(k).model().acceleration_form(q, qd, t, ws.scratch[std::size_t(k)].get(), Ak,
+                                                ws.b.segment(r0, rows));
+  }
+}
+
+// x += L⁻ᵀ W⁺ e with the decomposition of the assembled A
+void correct(Workspace& ws, VectorXd& x) {
+  detail::with_decomposition(ws, [&](auto& d) {
+    d.compute_constraints(ws.A);
+    d.solve_ideal(ws.e, ws.dqdd, ws.tmp_n, ws.lambda_tmp);
+  });
+  x += ws.dqdd;
+}
+}  // namespace
+
+void evaluate_violations(const System& sys, Workspace& ws, const VectorXd& q, const VectorXd& qd,
+                         double t) {
+  detail::require_same_system(sys, ws, "ukdyn::evaluate_violations");
+  for (Index k = 0; k < sys.constraint_count(); ++k) {
+    const Constraint& c = sys.constraint(k);
+    auto pk = ws.phi.segment(sys.row_offset(k), c.rows());
+    auto vk = ws.phi_dot.segment(sys.row_offset(k), c.rows());
+    if (!detail::is_active(sys, ws, k, t)) {
+      pk.setZero();
+      vk.setZero();
+      continue;
+    }
+    c.model().violation(q, qd, t, ws.scratch[std::size_t(k)].get(), pk, vk);
+  }
+}
+
+double position_violation(const System& sys, const Workspace& ws, Index k) {
+  return ws.phi.segment(sys.row_offset(k), sys.constraint(k).rows()).cwiseAbs().maxCoeff();
+}
+
+double velocity_violation(const System& sys, const Workspace& ws, Index k) {
+  return ws.phi_dot.segment(sys.row_offset(k), sys.constraint(k).rows()).cwiseAbs().maxCoeff();
+}
+
+ProjectionResult project_positions(const System& sys, Workspace& ws, VectorXd& q, double t,
+                                   const ProjectionOptions& options) {
+  detail::require_same_system(sys, ws, "ukdyn::project_positions");
+  require_tolerance(options, "ukdyn::project_positions");
+  ProjectionResult res;
+  for (;;) {
+    // phi(q)
+    const double worst = measure_violation(sys, ws, q, ws.zero_n, t, options, Level::kPosition);
+    res.violation = std::max(worst, 0.0);
+    if (worst <= options.tolerance) {
+      res.converged = true;
+      return res;
+    }
+    if (res.iterations == options.max_iterations) return res;
+    // A = dphi/dq, M(q) = L Lᵀ;  q += −L⁻ᵀ W⁺ phi
+    assemble_jacobian(sys, ws, q, ws.zero_n, t, options, Level::kPosition);
+    res.status = detail::evaluate_mass(sys, ws, q, t);
+    if (res.status != Status::kOk) return res;
+    correct(ws, q);
+    ++res.iterations;
+  }
+}
+
+ProjectionResult project_velocities(const System& sys, Workspace& ws, const VectorXd& q,
+                                    VectorXd& qd, double t, const ProjectionOptions& options) {
+  detail::require_same_system(sys, ws, "ukdyn::project_velocities");
+  require_tolerance(options, "ukdyn::project_velocities");
+  ProjectionResult res;
+  bool factorized = false;
+  for (;;) {
+    // phi'(q, q')
+    const double worst = measure_violation(sys, ws, q, qd, t, options, Level::kVelocity);
+    res.violation = std::max(worst, 0.0);
+    if (worst <= options.tolerance) {
+      res.converged = true;
+      return res;
+    }
+    if (res.iterations == options.max_iterations) return res;
+    // A, and M(q) = L Lᵀ once (q is fixed);  q' += −L⁻ᵀ W⁺ phi'
+    assemble_jacobian(sys, ws, q, qd, t, options, Level::kVelocity);
+    if (!factorized) {
+      res.status = detail::evaluate_mass(sys, ws, q, t);
+      if (res.status != Status::kOk) return res;
+      factorized = true;
+    }
+    correct(ws, qd);
+    ++res.iterations;
+  }
+}
+
+}  // namespace ukdyn

@@ -1,0 +1,56 @@
+// Trajectory: the consistency of its names and fields (tier 1 for writers and hand-made ones).
+#include <stdexcept>
+#include <string>
+
+#include "ukdyn/simulate.hpp"
+
+namespace ukdyn {
+
+void Trajectory::check_consistent(const char* who) const {
+  const Trajectory& traj = *this;
+  const std::size_t N = traj.t.size();
+  const std::size_t n = std::size_t(traj.n), m = std::size_t(traj.m);
+  const std::size_t K = traj.constraint_names.size();
+  auto fail = [&](const std::string& what) {
+    throw std::invalid_argument(std::string(who) + ": inconsistent trajectory: " + what +
+                                " (a Trajectory from ukdyn::simulate() is always consistent)");
+  };
+  if (traj.n < 0 || traj.m < 0) fail("negative n or m");
+  if (traj.coordinate_names.size() != n) {
+    fail(std::to_string(traj.coordinate_names.size()) + " coordinate names, expected n = " +
+         std::to_string(n));
+  }
+  if (traj.constraint_rows.size() != K || traj.constraint_kinds.size() != K) {
+    fail(std::to_string(K) + " constraint names but " +
+         std::to_string(traj.constraint_rows.size()) + " row counts and " +
+         std::to_string(traj.constraint_kinds.size()) + " kinds");
+  }
+  Index rows = 0;
+  for (Index r : traj.constraint_rows) rows += r;
+  if (rows != traj.m) {
+    fail("the constraints have " + std::to_string(rows) + " rows in all, expected m = " +
+         std::to_string(m));
+  }
+  auto field = [&](const char* name, const std::vector<double>& f, std::size_t width,
+                   const char* width_name) {
+    if (f.size() != N * width) {
+      fail("field '" + std::string(name) + "' has " + std::to_string(f.size()) +
+           " values, expected N × " + width_name + " = " + std::to_string(N) + " × " +
+           std::to_string(width));
+    }
+  };
+  field("q", traj.q, n, "n");
+  field("qd", traj.qd, n, "n");
+  field("qdd", traj.qdd, n, "n");
+  field("Qc_ideal", traj.Qc_ideal, n, "n");
+  field("Qc_nonideal", traj.Qc_nonideal, n, "n");
+  field("lambda", traj.lambda, m, "m");
+  field("position_violation", traj.position_violation, K, "K");
+  field("velocity_violation", traj.velocity_violation, K, "K");
+  field("kinetic_energy", traj.kinetic_energy, 1, "1");
+  field("potential_energy", traj.potential_energy, 1, "1");
+  field("energy", traj.energy, 1, "1");
+  field("work_nonideal", traj.work_nonideal, 1, "1");
+}
+
+}  // namespace ukdyn
