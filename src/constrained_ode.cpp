@@ -1,4 +1,6 @@
 // ConstrainedOde: the first-order system x' = f(t, x), x = [q; q'; W], that the integrators see.
+#include <algorithm>
+#include <cmath>
 #include <limits>
 
 #include "integrator.hpp"
@@ -14,8 +16,16 @@ void ConstrainedOde::clear_failure() {
   failure_message_.clear();
 }
 
-bool ConstrainedOde::operator()(const double* x, double* dxdt, double t) {
+void ConstrainedOde::set_window(double a, double b) {
+  auto delta = [](double v) { return 1e-13 * std::max(1.0, std::abs(v)); };
+  lo_ = std::isfinite(a) ? a + delta(a) : a;
+  hi_ = std::isfinite(b) ? b - delta(b) : b;
+}
+
+bool ConstrainedOde::operator()(const double* x, double* dxdt, double t_in) {
   ++evaluations_;
+  // one-sided at a breakpoint end of the segment
+  const double t = std::min(std::max(t_in, lo_), hi_);
   // q, q' from x
   q_ = Eigen::Map<const VectorXd>(x, n_);
   qd_ = Eigen::Map<const VectorXd>(x + n_, n_);

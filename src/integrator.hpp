@@ -3,6 +3,7 @@
 #pragma once
 
 #include <functional>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -34,6 +35,11 @@ class ConstrainedOde {
   const std::string& failure_message() const { return failure_message_; }
   void clear_failure();
 
+  // Evaluations of the segment [a, b] take place strictly inside it at a breakpoint end: t is
+  // clamped to [a + δ, b − δ] (δ = 1e-13 relative), so each segment sees its own side of a jump
+  // that the user's callables make at a breakpoint. Infinite ends: no clamping.
+  void set_window(double a, double b);
+
   const System& system() const { return sys_; }
   Workspace& workspace() { return ws_; }
 
@@ -43,6 +49,8 @@ class ConstrainedOde {
   Index n_;
   VectorXd q_, qd_;  // (n) scratch
   long evaluations_ = 0;
+  double lo_ = -std::numeric_limits<double>::infinity();
+  double hi_ = std::numeric_limits<double>::infinity();
   Status failure_ = Status::kOk;
   std::string failure_message_;
 };

@@ -514,6 +514,9 @@ Trajectory simulate(const System& sys, const VectorXd& q0, const VectorXd& qd0,
       }
       ++next_sample;
     }
+    // evaluations at a breakpoint end are one-sided (the run's own ends are not breakpoints)
+    const double inf = std::numeric_limits<double>::infinity();
+    ode.set_window(seg == 0 ? -inf : a, seg + 2 == ends.size() ? inf : b);
     // [a, b], restarted after every stick/slip event
     for (;;) {
       std::vector<double> outputs;

@@ -149,6 +149,38 @@ TEST(Simulate, ConstraintSwitchingOnAnInterval) {
   EXPECT_NEAR(x(4), 3.0, 1e-10);  // horizontal motion untouched throughout
 }
 
+TEST(Simulate, NonIdealForceActiveOnAnIntervalWithBreakpoints) {
+  // a particle on the floor pushed along it by C = F during [1, 2] only: at rest until t = 1,
+  // x'' = F on [1, 2], coasting after; the non-ideal work is F · F/2
+  const double F = 3.0;
+  const System sys =
+      SystemBuilder({"x", "y"})
+          .mass_matrix(MatrixXd::Identity(2, 2))
+          .forces([](const VectorXd&, const VectorXd&, double, Eigen::Ref<VectorXd> Q) {
+            Q << 0.0, -kG;
+          })
+          .add(holonomic("floor", 1, [](const auto& q, const auto&, auto& phi) { phi[0] = q[1]; }))
+          .add(NonIdealForce("push", [F](const VectorXd&, const VectorXd&, double t,
+                                         const IdealForceInfo&, Eigen::Ref<VectorXd> C) {
+            if (t >= 1.0 && t <= 2.0) C[0] = F;
+          }))
+          .build();
+  SimulationOptions o;
+  o.t_end = 3.0;
+  o.breakpoints = {1.0, 2.0};
+  o.output_every = 0.0;
+  o.output_at = {0.5, 1.5, 3.0};
+  const Trajectory tr = simulate(sys, vec({0.0, 0.0}), vec({0.0, 0.0}), o);
+  ASSERT_EQ(tr.stats.status, Status::kOk) << tr.stats.message;
+  ASSERT_EQ(tr.samples(), 4);
+  EXPECT_NEAR(tr.q[2], 0.0, 1e-14);                  // t = 0.5: at rest
+  EXPECT_NEAR(tr.q[4], 0.5 * F * 0.25, 1e-10);       // t = 1.5
+  EXPECT_NEAR(tr.Qc_nonideal[4], F, 1e-12);          // the push is a non-ideal constraint force
+  EXPECT_NEAR(tr.q[6], 0.5 * F + F, 1e-10);          // t = 3: F/2 after the push, then F · 1
+  EXPECT_NEAR(tr.work_nonideal.back(), 0.5 * F * F, 1e-10);
+  EXPECT_NEAR(tr.stats.energy_drift, 0.0, 1e-10);    // E(t) − E(0) = W(t) throughout
+}
+
 TEST(Simulate, FailureKeepsTheSamplesRecordedSoFar) {
   const System sys =
       SystemBuilder({"x"})
