@@ -10,6 +10,10 @@ packages=(
   libsundials-dev                      # SUNDIALS CVODE: BDF for stiff problems
   libhdf5-dev                          # HDF5 trajectories
   nlohmann-json3-dev                   # JSON run summaries
+  libginac-dev                         # symbolic expressions of model files
+  libyaml-cpp-dev                      # model files
+  libcli11-dev                         # the ukdyn command line
+  python3-matplotlib                   # plots of ukdyn run
   libgtest-dev libgmock-dev            # tests
   libbenchmark-dev                     # benchmarks
 )

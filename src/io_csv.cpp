@@ -101,10 +101,21 @@ std::vector<std::string> csv_columns(const Trajectory& traj) {
   return columns(traj);
 }
 
-void write_csv(const Trajectory& traj, const std::string& path) {
+void write_csv(const Trajectory& traj, const std::string& path) { write_csv(traj, path, {}); }
+
+void write_csv(const Trajectory& traj, const std::string& path,
+               const std::vector<CsvColumn>& extra) {
   traj.check_consistent(kWho);
-  const std::vector<std::string> cols = columns(traj);
+  std::vector<std::string> cols = columns(traj);
   const std::size_t N = traj.t.size();
+  for (const CsvColumn& e : extra) {
+    if (e.values.size() != N) {
+      throw std::invalid_argument(std::string(kWho) + ": extra column '" + e.name + "' has " +
+                                  std::to_string(e.values.size()) + " values, expected N = " +
+                                  std::to_string(N));
+    }
+    cols.push_back(e.name);
+  }
   const std::size_t n = std::size_t(traj.n), m = std::size_t(traj.m);
   const std::size_t K = traj.constraint_names.size();
 
@@ -160,6 +171,10 @@ void write_csv(const Trajectory& traj, const std::string& path) {
                           &traj.work_nonideal}) {
       buf += ',';
       append_number(buf, (*f)[i]);
+    }
+    for (const CsvColumn& e : extra) {
+      buf += ',';
+      append_number(buf, e.values[i]);
     }
     buf += '\n';
     if (buf.size() >= kFlushAt) flush();

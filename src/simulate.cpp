@@ -221,14 +221,21 @@ class Run {
     double first = std::numeric_limits<double>::quiet_NaN();
     switching_ = -1;
     for (std::size_t c = 0; c < contacts.size(); ++c) {
-      // g ≤ 0 marks the switch: sliding, v·v(t0) (the velocity reverses); sticking,
+      // g ≤ 0 marks the switch: sliding, the speed falls to v_stop; sticking,
       // mu N − |holding force|
       std::function<double(double, const double*)> g;
       if (!sticking_[c]) {
-        // (a reversal means something only once the contact slides: |v| above its eps)
+        // the sliding speed along the step's initial direction falls to v_stop = 100 eps: the
+        // contact stops, whether its velocity would reverse (sliding uphill) or decay to rest
+        // (decelerating downhill, where the regularized law would only creep); the stop is
+        // then early by v_stop / deceleration, the position off by v_stop² / (2 deceleration)
+        const double v_stop = 100.0 * contacts[c].eps;
         const VectorXd v0 = sliding_velocity(c, x0);
-        if (v0.norm() <= contacts[c].eps) continue;
-        g = [this, c, v0](double, const double* x) { return sliding_velocity(c, x).dot(v0); };
+        if (v0.norm() <= v_stop) continue;
+        const VectorXd dir = v0.normalized();
+        g = [this, c, dir, v_stop](double, const double* x) {
+          return sliding_velocity(c, x).dot(dir) - v_stop;
+        };
       } else {
         g = [this, c](double t, const double* x) { return stick_margin(c, t, x); };
       }
@@ -293,6 +300,7 @@ class Run {
   // drift control after an accepted step
   Status after_step(double t, double* x, bool& changed) {
     changed = false;
+    if (o_.progress) o_.progress(t);
     return projecting_ ? project(t, x, projection_, changed) : Status::kOk;
   }
 

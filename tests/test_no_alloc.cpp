@@ -1,6 +1,8 @@
 // No heap allocation per evaluation once the workspace exists, for every kind of constraint,
 // non-ideal forces, rank-deficient and large systems.
 #include <cmath>
+#include <string>
+#include <utility>
 #include <vector>
 
 #include <gtest/gtest.h>

@@ -290,6 +290,27 @@ TEST(StickSlip, BlockSlidingUpARoughInclineStopsAndSticks) {
               1e-9);
 }
 
+TEST(StickSlip, BlockSlidingDownDeceleratesToRestAndSticks) {
+  // mu > tan(alpha): sliding down, the block decelerates at g (mu cos α − sin α) and stops
+  // without its velocity reversing (the regularized law alone would only creep)
+  const double alpha = 0.3, mu = 0.8, v0 = 1.0;
+  const double decel = kG * (mu * std::cos(alpha) - std::sin(alpha));
+  const double t_stop = v0 / decel, s_stop = v0 * v0 / (2 * decel);
+  SimulationOptions o;
+  o.t_end = 1.0;
+  o.output_every = 0.0;
+  o.output_at = {0.5 * t_stop, 0.9};
+  const VectorXd down = vec({-std::cos(alpha), -std::sin(alpha)});
+  const Trajectory tr = simulate(block(alpha, mu), VectorXd::Zero(2), v0 * down, o);
+  ASSERT_EQ(tr.stats.status, Status::kOk) << tr.stats.message;
+  EXPECT_EQ(tr.stats.events, 1);
+  EXPECT_LT(tr.stats.steps, 1000);
+  auto s = [&](int i) { return vec({tr.q[2 * i], tr.q[2 * i + 1]}).dot(down); };
+  EXPECT_NEAR(s(1), v0 * 0.5 * t_stop - 0.5 * decel * 0.25 * t_stop * t_stop, 1e-10);
+  EXPECT_NEAR(s(2), s_stop, 1e-10);  // stuck where it stopped
+  EXPECT_NEAR(tr.qd[4], 0.0, 1e-12);
+}
+
 TEST(StickSlip, BlockAtRestSlipsWhenThePushExceedsStaticFriction) {
   // horizontal floor, F = k t: sticks until k t_s = mu m g, then x = k (t − t_s)³ / (6 m)
   const double mu = 0.4, k = 2.0, t_slip = mu * kG / k;

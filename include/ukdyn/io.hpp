@@ -24,6 +24,18 @@ std::vector<std::string> csv_columns(const Trajectory& traj);
 /// written.
 void write_csv(const Trajectory& traj, const std::string& path);
 
+/// A further CSV column: its name and one value per sample.
+struct CsvColumn {
+  std::string name;            ///< header name
+  std::vector<double> values;  ///< N values
+};
+
+/// The same, with `extra` columns after the standard ones (e.g. a model's output expressions).
+/// @throws std::invalid_argument when a column does not have N values; std::runtime_error as
+/// above.
+void write_csv(const Trajectory& traj, const std::string& path,
+               const std::vector<CsvColumn>& extra);
+
 /// Writes a JSON summary: the run statistics (steps, rejected steps, evaluations, wall time,
 /// largest violations, energy drift, status, message), t_start, t_reached, the final state by
 /// coordinate name, and the options given. @throws std::runtime_error naming the path.

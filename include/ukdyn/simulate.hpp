@@ -12,6 +12,7 @@
 /// forces, violations and energy are those of a consistent state.
 #pragma once
 
+#include <functional>
 #include <map>
 #include <string>
 #include <vector>
@@ -92,6 +93,9 @@ struct SimulationOptions {
   double initial_tolerance = 1e-10;
 
   SolverOptions solver;             ///< settings of the fundamental-equation solver
+
+  /// Called after every accepted step with the time reached (for progress bars); may be empty.
+  std::function<void(double t)> progress;
 };
 
 /// Statistics of a run.

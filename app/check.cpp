@@ -1,0 +1,74 @@
+// `ukdyn check`: the report of check_model(), readable.
+#include <cstdio>
+#include <string>
+
+#include <ukdyn/model.hpp>
+
+#include "commands.hpp"
+
+namespace ukdyn::cli {
+namespace {
+
+const char* kind_name(ConstraintKind kind) {
+  switch (kind) {
+    case ConstraintKind::kHolonomic: return "holonomic";
+    case ConstraintKind::kNonholonomic: return "nonholonomic";
+    default: return "acceleration form";
+  }
+}
+
+std::string join(const std::vector<std::string>& items) {
+  std::string s;
+  for (const auto& item : items) s += (s.empty() ? "" : ", ") + item;
+  return s;
+}
+
+}  // namespace
+
+int check_command(const ModelSource& source) {
+  const Model model = load_source(source);
+  const CheckReport r = check_model(model);
+  const System& sys = model.system;
+  const double t = model.options.t_start;
+
+  std::printf("model: %s (%s)\n", model.name.c_str(), model.file.c_str());
+  std::printf("  coordinates         %lld  (%s)\n", static_cast<long long>(r.coordinates),
+              join(sys.coordinate_names()).c_str());
+  std::printf("  constraints         %lld\n", static_cast<long long>(sys.constraint_count()));
+  for (const Constraint& c : sys.constraints()) {
+    std::printf("    %-20s %s, %lld row%s%s\n", c.name().c_str(), kind_name(c.kind()),
+                static_cast<long long>(c.rows()), c.rows() == 1 ? "" : "s",
+                c.is_active(t) ? "" : ", inactive at t_start");
+  }
+  std::printf("  constraint rows     %lld  (active at t = %g)\n",
+              static_cast<long long>(r.constraint_rows), t);
+  std::printf("  rank of A           %lld\n", static_cast<long long>(r.rank));
+  std::printf("  degrees of freedom  %lld\n", static_cast<long long>(r.degrees_of_freedom));
+  if (r.redundant.empty()) {
+    std::printf("  redundant constraints  none\n");
+  } else {
+    std::printf("  redundant constraints  %s  (their rows add nothing to the rank of the ones "
+                "before them; the motion is the same without them)\n",
+                join(r.redundant).c_str());
+  }
+  if (r.initial_violations.empty()) {
+    std::printf("  initial state       consistent with every constraint\n");
+  } else {
+    std::printf("  initial state       violates %zu constraint%s%s:\n",
+                r.initial_violations.size(), r.initial_violations.size() == 1 ? "" : "s",
+                model.project_initial ? " (projected before a run: initial: project: true)" : "");
+    for (const auto& v : r.initial_violations) std::printf("    %s\n", v.c_str());
+  }
+  std::printf("  mass matrix         %s\n", r.mass_positive_definite
+                                                ? "symmetric positive definite"
+                                                : "NOT symmetric positive definite");
+  if (r.ok()) {
+    std::printf("ok\n");
+    return kExitOk;
+  }
+  std::printf("problems:\n");
+  for (const auto& p : r.problems) std::printf("  - %s\n", p.c_str());
+  return kExitCheck;
+}
+
+}  // namespace ukdyn::cli

@@ -1,0 +1,61 @@
+// The subcommands of the ukdyn program. main.cpp parses the command line and calls these; each
+// returns the process exit code. No physics here: everything is a library call.
+#pragma once
+
+#include <map>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include <ukdyn/model.hpp>
+
+namespace ukdyn::cli {
+
+/// Exit codes (documented in `ukdyn --help` and README.md).
+enum ExitCode : int {
+  kExitOk = 0,         ///< success
+  kExitRunFailed = 1,  ///< the run failed numerically (what was computed is still written)
+  kExitUsage = 2,      ///< bad command line
+  kExitModel = 3,      ///< bad model file (ModelError), or a model that cannot be started
+  kExitCheck = 4,      ///< `check` found problems
+};
+
+/// A mistake on the command line found after parsing (bad --set, unknown example): exit 2.
+class UsageError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+/// Where a model comes from: a file or a built-in example, with parameter overrides.
+struct ModelSource {
+  std::string path;              ///< MODEL.yaml, or empty
+  std::string example;           ///< --example NAME, or empty
+  std::vector<std::string> set;  ///< --set name=value, in order
+};
+
+/// Parses "name=value" pairs. @throws UsageError on a missing '=' or a value that is not a number.
+std::map<std::string, double> parse_overrides(const std::vector<std::string>& set);
+
+/// Loads the model of `source`. @throws UsageError (neither or both of path and example, an
+/// unknown example), ModelError (the model file).
+Model load_source(const ModelSource& source);
+
+/// Settings of `ukdyn run`.
+struct RunArguments {
+  ModelSource source;
+  std::string out_dir;           ///< -o DIR (empty: ukdyn-<model>)
+  std::optional<double> t_end;   ///< --t-end
+  bool plots = true;             ///< false with --no-plots
+};
+
+/// `ukdyn run`: simulate, write trajectory.csv, summary.json and the plots.
+int run_command(const RunArguments& args);
+
+/// `ukdyn check`: print check_model()'s report; kExitCheck when it found problems.
+int check_command(const ModelSource& source);
+
+/// `ukdyn examples`: list the built-in examples.
+int examples_command();
+
+}  // namespace ukdyn::cli

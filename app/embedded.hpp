@@ -1,0 +1,21 @@
+// Files embedded in the ukdyn binary at build time (embed.cmake writes embedded.cpp in the build
+// tree), so that the program needs nothing from the source tree when it runs.
+#pragma once
+
+#include <span>
+
+namespace ukdyn::cli {
+
+/// An embedded text file.
+struct EmbeddedFile {
+  const char* name;  ///< the file's stem ("pendulum" for examples/models/pendulum.yaml)
+  const char* text;  ///< its contents
+};
+
+/// app/plot_trajectory.py.
+extern const char* const kPlotScript;
+
+/// examples/models/*.yaml, sorted by name.
+std::span<const EmbeddedFile> example_models();
+
+}  // namespace ukdyn::cli

@@ -1,0 +1,96 @@
+// ukdyn: the command-line front end. Argument parsing and dispatch only; the subcommands live in
+// run.cpp, check.cpp and source.cpp, the physics in the library.
+#include <cstdio>
+#include <exception>
+#include <optional>
+#include <string>
+
+#include <CLI/CLI.hpp>
+
+#include <ukdyn/model.hpp>
+
+#include "commands.hpp"
+
+namespace {
+
+constexpr const char* kExitCodes = R"(Exit codes:
+  0  ok
+  1  the run failed numerically (status not ok); the trajectory up to the failure is still
+     written (also: the output files could not be written)
+  2  bad command line
+  3  bad model file (printed as FILE:LINE:COLUMN: error: MESSAGE (hint: ...)), or a model
+     that cannot be started (inconsistent initial state without initial: project: true)
+  4  check found problems)";
+
+// the options shared by run and check: MODEL.yaml or --example NAME, and --set
+void add_source_options(CLI::App* cmd, ukdyn::cli::ModelSource& source) {
+  auto* path = cmd->add_option("model", source.path, "the model file (YAML)");
+  cmd->add_option("--example", source.example,
+                  "a built-in example instead of a file (ukdyn examples lists them)")
+      ->excludes(path);
+  cmd->add_option("--set", source.set,
+                  "override a parameter: --set name=value (repeatable)")
+      ->type_name("NAME=VALUE")
+      ->expected(1)
+      ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  using namespace ukdyn::cli;
+  CLI::App app("ukdyn: explicit equations of motion of constrained mechanical systems "
+               "(Udwadia-Kalaba). Runs and checks model files (YAML).",
+               "ukdyn");
+  app.footer(kExitCodes);
+  app.require_subcommand(1);
+
+  RunArguments run;
+  std::optional<double> t_end;
+  bool no_plots = false;
+  CLI::App* run_cmd = app.add_subcommand(
+      "run", "simulate a model; write DIR/trajectory.csv, DIR/summary.json and PNG plots");
+  add_source_options(run_cmd, run.source);
+  run_cmd->add_option("-o,--output", run.out_dir,
+                      "output directory (default: ukdyn-<model name>; created if missing)")
+      ->type_name("DIR");
+  run_cmd->add_option("--t-end", t_end, "end time, instead of the model's simulate: t_end")
+      ->type_name("T");
+  run_cmd->add_flag("--no-plots", no_plots, "write no plots (plots need /usr/bin/python3 "
+                    "with matplotlib, or $UKDYN_PYTHON)");
+
+  ModelSource check;
+  CLI::App* check_cmd = app.add_subcommand(
+      "check", "report coordinates, constraint rank, degrees of freedom, redundant "
+               "constraints, initial consistency and M at the initial state");
+  add_source_options(check_cmd, check);
+
+  app.add_subcommand("examples", "list the built-in examples");
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    // --help prints and exits 0; everything else is a bad command line
+    const int code = app.exit(e);
+    return code == 0 ? kExitOk : kExitUsage;
+  }
+
+  try {
+    if (run_cmd->parsed()) {
+      run.t_end = t_end;
+      run.plots = !no_plots;
+      return run_command(run);
+    }
+    if (check_cmd->parsed()) return check_command(check);
+    return examples_command();
+  } catch (const UsageError& e) {
+    std::fprintf(stderr, "error: %s\nRun with --help for more information.\n", e.what());
+    return kExitUsage;
+  } catch (const ukdyn::ModelError& e) {
+    std::fprintf(stderr, "%s\n", e.what());
+    return kExitModel;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "error: %s\n", e.what());
+    return kExitRunFailed;
+  }
+}

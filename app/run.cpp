@@ -1,0 +1,189 @@
+// `ukdyn run`: load a model, simulate it, write trajectory.csv (the library's columns and the
+// model's output expressions), summary.json and the plots.
+#include <algorithm>
+#include <charconv>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <string_view>
+#include <system_error>
+#include <vector>
+
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <ukdyn/io.hpp>
+#include <ukdyn/model.hpp>
+#include <ukdyn/simulate.hpp>
+
+#include "commands.hpp"
+#include "embedded.hpp"
+#include "progress.hpp"
+
+extern char** environ;
+
+namespace ukdyn::cli {
+namespace fs = std::filesystem;
+namespace {
+
+// the exit code plot_trajectory.py uses when matplotlib cannot be imported
+constexpr int kPlotNoMatplotlib = 3;
+
+// the library's CSV with one more column per output expression
+void write_trajectory_csv(const Model& model, const Trajectory& traj, const fs::path& path) {
+  const auto values = evaluate_output_expressions(model, traj);
+  const auto standard = csv_columns(traj);
+  std::vector<CsvColumn> extra;
+  for (std::size_t k = 0; k < values.size(); ++k) {
+    const std::string& name = model.output_names[k];
+    if (std::find(standard.begin(), standard.end(), name) != standard.end()) {
+      std::fprintf(stderr, "warning: the output expression '%s' has the name of a standard "
+                   "column; the CSV holds two columns of that name\n", name.c_str());
+    }
+    extra.push_back(CsvColumn{name, values[k]});
+  }
+  write_csv(traj, path.string(), extra);
+}
+
+// runs `python script csv dir`; returns its exit status, or −1 when it could not start
+int run_python(const std::string& python, const std::string& script, const std::string& csv,
+               const std::string& dir) {
+  std::vector<std::string> args = {python, script, csv, dir};
+  std::vector<char*> argv;
+  for (auto& a : args) argv.push_back(a.data());
+  argv.push_back(nullptr);
+  pid_t pid = 0;
+  if (posix_spawn(&pid, python.c_str(), nullptr, nullptr, argv.data(), environ) != 0) return -1;
+  int status = 0;
+  while (waitpid(pid, &status, 0) < 0) {
+    if (errno != EINTR) return -1;
+  }
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+// writes the plots with plot_trajectory.py (embedded) and /usr/bin/python3 (or $UKDYN_PYTHON);
+// returns the files written; a missing python or matplotlib is a warning, not an error
+std::vector<fs::path> make_plots(const fs::path& csv, const fs::path& dir) {
+  const char* env = std::getenv("UKDYN_PYTHON");
+  const std::string python = env && *env ? env : "/usr/bin/python3";
+  if (::access(python.c_str(), X_OK) != 0) {
+    std::fprintf(stderr, "warning: %s not found: no plots (set UKDYN_PYTHON to a python with "
+                 "matplotlib, or pass --no-plots)\n", python.c_str());
+    return {};
+  }
+  // the script goes to a private temporary file, removed afterwards
+  std::string script = (fs::temp_directory_path() / "ukdyn-plot-XXXXXX.py").string();
+  const int fd = ::mkstemps(script.data(), 3);
+  if (fd < 0) {
+    std::fprintf(stderr, "warning: cannot create a temporary file for the plot script: no plots\n");
+    return {};
+  }
+  const std::string_view text(kPlotScript);
+  const bool written = ::write(fd, text.data(), text.size()) == ssize_t(text.size());
+  ::close(fd);
+  const int code = written ? run_python(python, script, csv.string(), dir.string()) : -1;
+  fs::remove(script);
+  if (code == kPlotNoMatplotlib) {
+    std::fprintf(stderr, "warning: %s has no matplotlib: no plots (install python3-matplotlib, "
+                 "or pass --no-plots)\n", python.c_str());
+    return {};
+  }
+  if (code != 0) {
+    std::fprintf(stderr, "warning: the plot script failed (exit %d): no plots\n", code);
+    return {};
+  }
+  std::vector<fs::path> files;
+  for (const char* name : {"coordinates.png", "constraint_forces.png", "violation.png",
+                           "energy.png", "outputs.png"}) {
+    if (fs::exists(dir / name)) files.push_back(dir / name);
+  }
+  return files;
+}
+
+// the default output directory: ukdyn-<file stem or example name>
+std::string default_out_dir(const ModelSource& source) {
+  const std::string stem =
+      source.example.empty() ? fs::path(source.path).stem().string() : source.example;
+  return "ukdyn-" + stem;
+}
+
+}  // namespace
+
+int run_command(const RunArguments& args) {
+  Model model = load_source(args.source);
+
+  // the model's settings, with the command line's
+  SimulationOptions options = model.options;
+  if (args.t_end) {
+    if (!(*args.t_end > options.t_start)) {
+      char text[96];
+      std::snprintf(text, sizeof text, "--t-end %g must be after the model's t_start = %g",
+                    *args.t_end, options.t_start);
+      throw UsageError(text);
+    }
+    options.t_end = *args.t_end;
+  }
+  options.project_initial = model.project_initial;
+  const fs::path dir = args.out_dir.empty() ? default_out_dir(args.source) : args.out_dir;
+
+  std::printf("ukdyn run: %s (%s), t = %g … %g s\n", model.name.c_str(), model.file.c_str(),
+              options.t_start, options.t_end);
+  std::fflush(stdout);
+
+  // simulate, with a progress bar on a terminal
+  Trajectory traj;
+  {
+    ProgressBar bar(options.t_start, options.t_end, ProgressBar::is_terminal(stderr));
+    options.progress = [&bar](double t) { bar.update(t); };
+    try {
+      traj = simulate(model.system, model.q0, model.qd0, options);
+    } catch (const std::invalid_argument& e) {
+      // the model cannot be started (inconsistent initial state, bad settings)
+      bar.finish();
+      const bool initial = std::string_view(e.what()).find("initial") != std::string_view::npos;
+      std::fprintf(stderr, "%s: error: %s%s\n", model.file.c_str(), e.what(),
+                   initial && !model.project_initial
+                       ? " (hint: add `project: true` under `initial:` in the model file)"
+                       : "");
+      return kExitModel;
+    }
+  }
+  options.progress = nullptr;
+
+  // files
+  std::error_code ec;
+  fs::create_directories(dir, ec);
+  if (ec) {
+    std::fprintf(stderr, "error: cannot create the directory '%s': %s\n", dir.c_str(),
+                 ec.message().c_str());
+    return kExitRunFailed;
+  }
+  std::vector<fs::path> files = {dir / "trajectory.csv", dir / "summary.json"};
+  write_trajectory_csv(model, traj, files[0]);
+  write_summary_json(traj, options, files[1].string());
+  if (args.plots) {
+    for (const auto& f : make_plots(files[0], dir)) files.push_back(f);
+  }
+
+  // what happened
+  const RunStatistics& s = traj.stats;
+  std::printf("  %lld samples to t = %g s: %ld steps (%ld rejected), %ld evaluations, %.3g s\n",
+              static_cast<long long>(traj.samples()), s.t_reached, s.steps, s.rejected_steps,
+              s.evaluations, s.wall_time);
+  std::printf("  max violation %.3g (position), %.3g (velocity); energy drift %.3g\n",
+              s.max_position_violation, s.max_velocity_violation, s.energy_drift);
+  for (const auto& f : files) std::printf("  wrote %s\n", f.c_str());
+  if (s.status != Status::kOk) {
+    std::fprintf(stderr, "error: the run failed at t = %g s: %s\n", s.t_reached,
+                 s.message.empty() ? to_string(s.status) : s.message.c_str());
+    return kExitRunFailed;
+  }
+  std::printf("  status: ok\n");
+  return kExitOk;
+}
+
+}  // namespace ukdyn::cli

@@ -1,0 +1,85 @@
+/// @file model.hpp
+/// Model files: a mechanical system written down in YAML with symbolic expressions (see
+/// docs/model-format.md), turned into a System, an initial state and simulation settings.
+#pragma once
+
+#include <map>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "ukdyn/expression.hpp"
+#include "ukdyn/simulate.hpp"
+#include "ukdyn/system.hpp"
+
+namespace ukdyn {
+
+/// An error in a model file: what, where (file:line:column, 1-based) and a hint. what() reads
+/// "FILE:LINE:COLUMN: error: MESSAGE (hint: HINT)".
+class ModelError : public std::runtime_error {
+ public:
+  ModelError(std::string file, int line, int column, std::string message, std::string hint = "");
+  const std::string& file() const { return file_; }        ///< the file (or "<string>")
+  int line() const { return line_; }                       ///< 1-based line
+  int column() const { return column_; }                   ///< 1-based column
+  const std::string& message() const { return message_; }  ///< what is wrong
+  const std::string& hint() const { return hint_; }        ///< how to fix it (may be empty)
+
+ private:
+  std::string file_;
+  int line_, column_;
+  std::string message_, hint_;
+};
+
+/// A model read from a file: the system and everything needed to run it.
+struct Model {
+  std::string name;                        ///< `name:`
+  std::string file;                        ///< where it came from
+  std::map<std::string, double> parameters;  ///< `parameters:` after overrides
+  System system;                           ///< the description
+  VectorXd q0, qd0;                        ///< `initial:` (not yet projected)
+  bool project_initial = false;            ///< `initial: project:`
+  SimulationOptions options;               ///< `simulate:` and `output:`
+  /// `output: expressions:` by name, compiled over (q, q_dot, t): evaluate with
+  /// evaluate_output_expressions().
+  std::vector<std::string> output_names;
+  expr::Program output_program;
+};
+
+/// Reads a model from YAML text. `file` names it in errors; `overrides` replace parameter
+/// values (as --set name=value does). @throws ModelError with file:line:column and a hint.
+Model parse_model(const std::string& text, const std::string& file = "<string>",
+                  const std::map<std::string, double>& overrides = {});
+
+/// Reads a model file. @throws ModelError (including when the file cannot be read).
+Model load_model(const std::string& path, const std::map<std::string, double>& overrides = {});
+
+/// What `ukdyn check` reports about a model at its initial state.
+struct CheckReport {
+  Index coordinates = 0;       ///< n
+  Index constraint_rows = 0;   ///< m (active at t_start)
+  Index rank = 0;              ///< rank of A at the initial state
+  Index degrees_of_freedom = 0;  ///< n − rank
+  /// Constraints whose rows add nothing to the rank of those before them (in declaration
+  /// order): removing them leaves the motion unchanged.
+  std::vector<std::string> redundant;
+  /// One line per constraint the initial state violates (check_initial_conditions).
+  std::vector<std::string> initial_violations;
+  bool mass_positive_definite = false;  ///< M(q0, t_start) symmetric positive definite
+  std::vector<std::string> problems;    ///< what makes the model unusable (empty: fine)
+  /// True when there are no problems.
+  bool ok() const { return problems.empty(); }
+};
+
+/// Checks a model at its initial state: sizes, rank and redundancy of the constraints, initial
+/// consistency (against initial_tolerance of its options), and M. Cost: a few evaluations.
+CheckReport check_model(const Model& model);
+
+/// The values of the model's output expressions at every sample of a trajectory: one vector per
+/// name, in output_names order.
+std::vector<std::vector<double>> evaluate_output_expressions(const Model& model,
+                                                             const Trajectory& traj);
+
+}  // namespace ukdyn

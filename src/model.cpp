@@ -1,0 +1,817 @@
+// Model files: YAML with symbolic expressions → a System, an initial state and run settings.
+// Derivatives are symbolic (expression.hpp):
+//   Lagrangian      M = ∂²T/∂q̇∂q̇,  Q = ∂L/∂q − D(∂T/∂q̇) − ∂V/∂q … (L = T − V) + forces
+//   holonomic       A = ∂φ/∂q,  b = −D(D φ)          (D: total time derivative without q̈)
+//   nonholonomic    A = ∂ψ/∂q̇,  b = −D ψ
+// Every error names file:line:column and gives a hint.
+#include "ukdyn/model.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <set>
+#include <sstream>
+
+#include <yaml-cpp/yaml.h>
+
+#include "ukdyn/constraint.hpp"
+#include "ukdyn/nonideal.hpp"
+
+namespace ukdyn {
+
+ModelError::ModelError(std::string file, int line, int column, std::string message,
+                       std::string hint)
+    : std::runtime_error(
+          file +
+          (line > 0 ? ":" + std::to_string(line) + ":" + std::to_string(column) : std::string()) +
+          ": error: " + message + (hint.empty() ? "" : " (hint: " + hint + ")")),
+      file_(std::move(file)),
+      line_(line),
+      column_(column),
+      message_(std::move(message)),
+      hint_(std::move(hint)) {}
+
+namespace {
+
+using expr::Expr;
+using expr::ExpressionSet;
+using expr::Program;
+
+const std::vector<std::string> kTopLevelKeys = {
+    "name",   "parameters",  "coordinates", "kinetic_energy", "potential_energy", "mass_matrix",
+    "forces", "constraints", "nonideal",    "initial",        "simulate",         "output"};
+
+bool is_identifier(const std::string& s) {
+  if (s.empty() || !(std::isalpha(static_cast<unsigned char>(s[0])) || s[0] == '_')) return false;
+  return std::all_of(s.begin(), s.end(), [](char c) {
+    return std::isalnum(static_cast<unsigned char>(c)) || c == '_';
+  });
+}
+
+// a number as a person writes it (2, 0.5, 1e-06)
+std::string brief(double v) {
+  std::ostringstream s;
+  s << v;
+  return s.str();
+}
+
+std::string join(const std::vector<std::string>& v) {
+  std::string out;
+  for (const auto& s : v) out += (out.empty() ? "" : ", ") + s;
+  return out;
+}
+
+// A program's evaluation with buffers owned by the caller.
+struct Evaluator {
+  Program program;
+  std::vector<double> out, scratch;
+  explicit Evaluator(Program p)
+      : program(std::move(p)),
+        out(std::size_t(program.outputs())),
+        scratch(std::size_t(program.scratch_size())) {}
+  const double* run(const double* in) {
+    program.evaluate(in, out.data(), scratch.data());
+    return out.data();
+  }
+};
+
+// the inputs of every program: [q; q'; t; N_c …; lambda_c …]
+struct InputLayout {
+  Index n = 0, extra = 0;
+  Index size() const { return 2 * n + 1 + extra; }
+  void fill(std::vector<double>& in, const VectorXd& q, const VectorXd& qd, double t) const {
+    std::copy(q.data(), q.data() + n, in.begin());
+    std::copy(qd.data(), qd.data() + n, in.begin() + n);
+    in[std::size_t(2 * n)] = t;
+  }
+};
+
+// Buffers of one compiled constraint.
+struct CompiledScratch final : ConstraintScratch {
+  CompiledScratch(const Program& accel_program, const Program& levels_program, Index inputs)
+      : in(std::size_t(inputs), 0.0), accel(accel_program), levels(levels_program) {}
+  std::vector<double> in;
+  Evaluator accel, levels;
+};
+
+// A constraint from model-file expressions: one program for [A (row-major); b], one for
+// [phi; phi'] (holonomic), [psi] (nonholonomic) or nothing (acceleration form).
+class CompiledConstraint final : public ConstraintModel {
+ public:
+  CompiledConstraint(ConstraintKind kind, Index rows, Index n, InputLayout layout, Program accel,
+                     Program levels)
+      : kind_(kind),
+        rows_(rows),
+        n_(n),
+        layout_(layout),
+        accel_(std::move(accel)),
+        levels_(std::move(levels)) {}
+
+  std::unique_ptr<ConstraintScratch> make_scratch(Index) const override {
+    return std::make_unique<CompiledScratch>(accel_, levels_, layout_.size());
+  }
+
+  void acceleration_form(const VectorXd& q, const VectorXd& qd, double t, ConstraintScratch* s,
+                         Eigen::Ref<MatrixXd> A, Eigen::Ref<VectorXd> b) const override {
+    auto& w = static_cast<CompiledScratch&>(*s);
+    layout_.fill(w.in, q, qd, t);
+    const double* out = w.accel.run(w.in.data());
+    for (Index r = 0; r < rows_; ++r) {
+      for (Index j = 0; j < n_; ++j) A(r, j) = out[r * n_ + j];
+      b[r] = out[rows_ * n_ + r];
+    }
+  }
+
+  void violation(const VectorXd& q, const VectorXd& qd, double t, ConstraintScratch* s,
+                 Eigen::Ref<VectorXd> position, Eigen::Ref<VectorXd> velocity) const override {
+    position.setZero();
+    velocity.setZero();
+    if (kind_ == ConstraintKind::kAcceleration) return;
+    auto& w = static_cast<CompiledScratch&>(*s);
+    layout_.fill(w.in, q, qd, t);
+    const double* out = w.levels.run(w.in.data());
+    if (kind_ == ConstraintKind::kHolonomic) {
+      for (Index r = 0; r < rows_; ++r) {
+        position[r] = out[r];
+        velocity[r] = out[rows_ + r];
+      }
+    } else {
+      for (Index r = 0; r < rows_; ++r) velocity[r] = out[r];
+    }
+  }
+
+ private:
+  ConstraintKind kind_;
+  Index rows_, n_;
+  InputLayout layout_;
+  Program accel_, levels_;
+};
+
+// Per-thread buffers of the callables of System (whose signatures carry no scratch): sized on
+// first use in a thread, never again.
+struct ThreadBuffers {
+  std::vector<double> in, out, scratch;
+  void reserve(Index inputs, const Program& p) {
+    if (in.size() < std::size_t(inputs)) in.assign(std::size_t(inputs), 0.0);
+    if (out.size() < std::size_t(p.outputs())) out.resize(std::size_t(p.outputs()));
+    if (scratch.size() < std::size_t(p.scratch_size()))
+      scratch.resize(std::size_t(p.scratch_size()));
+  }
+};
+ThreadBuffers& buffers() {
+  thread_local ThreadBuffers b;
+  return b;
+}
+
+// The reader: one model file.
+class Reader {
+ public:
+  Reader(std::string file, const std::map<std::string, double>& overrides)
+      : file_(std::move(file)), overrides_(overrides) {}
+
+  Model read(const std::string& text);
+
+ private:
+  [[noreturn]] void fail(const YAML::Node& at, const std::string& message,
+                         const std::string& hint = "") const {
+    const YAML::Mark m = at.Mark();
+    throw ModelError(file_, m.line + 1, m.column + 1, message, hint);
+  }
+  [[noreturn]] void fail_at(const YAML::Mark& m, const std::string& message,
+                            const std::string& hint = "") const {
+    throw ModelError(file_, m.line + 1, m.column + 1, message, hint);
+  }
+
+  double number(const YAML::Node& node, const std::string& what);
+  Expr expression(const YAML::Node& node, const std::string& what);
+  std::vector<YAML::Node> rows_of(const YAML::Node& node, const std::string& what);
+  void read_parameters(const YAML::Node& root);
+  void read_coordinates(const YAML::Node& root);
+  void read_dynamics(const YAML::Node& root, SystemBuilder& builder);
+  void read_constraints(const YAML::Node& root, SystemBuilder& builder);
+  void read_nonideal(const YAML::Node& root, SystemBuilder& builder);
+  void read_initial(const YAML::Node& root, Model& model);
+  void read_simulate(const YAML::Node& root, Model& model);
+  void read_output(const YAML::Node& root, Model& model);
+  Index coordinate(const YAML::Node& node);
+
+  std::string file_;
+  std::map<std::string, double> overrides_;
+  std::map<std::string, double> parameters_;
+  std::vector<std::string> coordinates_, velocities_;
+  std::vector<std::string> constraint_names_;  // in declaration order
+  std::vector<Index> constraint_rows_;
+  std::unique_ptr<ExpressionSet> set_;
+  InputLayout layout_;
+  std::vector<std::pair<std::string, std::string>> chain_;
+};
+
+double Reader::number(const YAML::Node& node, const std::string& what) {
+  if (!node.IsScalar()) fail(node, what + " must be a number");
+  // a number, or an expression of the parameters only
+  const Expr e = expression(node, what);
+  for (const auto& name : set_->input_names()) {
+    if (!set_->independent_of(e, name)) {
+      fail(node, what + " must be a constant, but depends on '" + name + "'",
+           "use numbers and parameters here");
+    }
+  }
+  const Program p = set_->compile({e});
+  std::vector<double> in(std::size_t(p.inputs()), 0.0), scratch(std::size_t(p.scratch_size()));
+  double out = 0.0;
+  p.evaluate(in.data(), &out, scratch.data());
+  return out;
+}
+
+Expr Reader::expression(const YAML::Node& node, const std::string& what) {
+  if (!node.IsScalar()) {
+    fail(node, what + " must be an expression (a number or a formula)",
+         "write it as a single value, e.g. 0.5*m*x_dot^2");
+  }
+  try {
+    return set_->parse(node.Scalar());
+  } catch (const expr::ParseError& e) {
+    // the expression starts at the node; quoted scalars start one character later
+    YAML::Mark m = node.Mark();
+    const bool quoted = node.Tag() == "!";
+    m.column += int(e.position()) + (quoted ? 1 : 0);
+    fail_at(m, "in " + what + ": " + e.what(),
+            "expressions use the coordinates, their velocities (x_dot), t and the parameters");
+  }
+}
+
+std::vector<YAML::Node> Reader::rows_of(const YAML::Node& node, const std::string& what) {
+  std::vector<YAML::Node> rows;
+  if (node.IsSequence()) {
+    for (const auto& r : node) rows.push_back(r);
+  } else if (node.IsScalar()) {
+    rows.push_back(node);
+  } else {
+    fail(node, what + " must be an expression or a list of expressions");
+  }
+  if (rows.empty()) fail(node, what + " has no rows");
+  return rows;
+}
+
+void Reader::read_parameters(const YAML::Node& root) {
+  const YAML::Node p = root["parameters"];
+  if (p) {
+    if (!p.IsMap()) fail(p, "parameters must be a mapping name: value", "e.g. {m: 1, g: 9.81}");
+    for (const auto& kv : p) {
+      const std::string name = kv.first.Scalar();
+      if (!is_identifier(name))
+        fail(kv.first, "parameter name '" + name + "' is not an identifier");
+      if (name == "t") fail(kv.first, "'t' is time and cannot be a parameter");
+      if (!kv.second.IsScalar()) fail(kv.second, "parameter '" + name + "' must be a number");
+      try {
+        std::size_t used = 0;
+        const double v = std::stod(kv.second.Scalar(), &used);
+        if (used != kv.second.Scalar().size()) throw std::invalid_argument("trailing text");
+        parameters_[name] = v;
+      } catch (const std::exception&) {
+        fail(kv.second,
+             "parameter '" + name + "' must be a number, got '" + kv.second.Scalar() + "'");
+      }
+    }
+  }
+  for (const auto& [name, value] : overrides_) {
+    if (!parameters_.count(name)) {
+      std::vector<std::string> known;
+      for (const auto& kv : parameters_) known.push_back(kv.first);
+      throw ModelError(
+          file_, 0, 0, "--set " + name + ": the model has no parameter '" + name + "'",
+          known.empty() ? "it declares no parameters" : "its parameters are " + join(known));
+    }
+    parameters_[name] = value;
+  }
+}
+
+void Reader::read_coordinates(const YAML::Node& root) {
+  const YAML::Node c = root["coordinates"];
+  if (!c)
+    throw ModelError(file_, 1, 1, "no 'coordinates:'",
+                     "list the coordinates, e.g. coordinates: [x, y]");
+  if (!c.IsSequence() || c.size() == 0) fail(c, "coordinates must be a non-empty list of names");
+  std::set<std::string> seen;
+  for (const auto& node : c) {
+    const std::string name = node.Scalar();
+    if (!node.IsScalar() || !is_identifier(name))
+      fail(node, "coordinate '" + name + "' is not an identifier");
+    if (name == "t" || parameters_.count(name))
+      fail(node, "coordinate '" + name + "' clashes with time or a parameter");
+    if (!seen.insert(name).second) fail(node, "coordinate '" + name + "' is listed twice");
+    coordinates_.push_back(name);
+    velocities_.push_back(name + "_dot");
+    chain_.emplace_back(name, name + "_dot");
+  }
+}
+
+Index Reader::coordinate(const YAML::Node& node) {
+  const std::string name = node.Scalar();
+  for (std::size_t i = 0; i < coordinates_.size(); ++i) {
+    if (coordinates_[i] == name) return Index(i);
+  }
+  fail(node, "unknown coordinate '" + name + "'", "the coordinates are " + join(coordinates_));
+}
+
+void Reader::read_dynamics(const YAML::Node& root, SystemBuilder& builder) {
+  const Index n = Index(coordinates_.size());
+  const YAML::Node T = root["kinetic_energy"], V = root["potential_energy"],
+                   Mnode = root["mass_matrix"], F = root["forces"];
+  if (T && Mnode) fail(Mnode, "give either kinetic_energy or mass_matrix, not both");
+  if (!T && !Mnode) {
+    throw ModelError(
+        file_, 1, 1, "no dynamics: neither 'kinetic_energy' nor 'mass_matrix'",
+        "add kinetic_energy: 0.5*m*x_dot^2 (and potential_energy), or mass_matrix and forces");
+  }
+  std::vector<Expr> M(static_cast<std::size_t>(n * n)), Q(static_cast<std::size_t>(n));
+  const Expr zero = set_->constant(0.0);
+  std::fill(Q.begin(), Q.end(), zero);
+  const Expr Ve = V ? expression(V, "potential_energy") : zero;
+  if (V) {
+    for (const auto& v : velocities_) {
+      if (!set_->independent_of(Ve, v))
+        fail(V, "potential_energy depends on the velocity '" + v + "'");
+    }
+  }
+  if (T) {
+    // M = ∂²T/∂q̇∂q̇;  Q = ∂T/∂q − D(∂T/∂q̇) − ∂V/∂q (the q̈ part of D is M q̈)
+    const Expr Te = expression(T, "kinetic_energy");
+    for (Index i = 0; i < n; ++i) {
+      const Expr dT = set_->diff(Te, velocities_[std::size_t(i)]);
+      for (Index j = 0; j < n; ++j)
+        M[std::size_t(i * n + j)] = set_->diff(dT, velocities_[std::size_t(j)]);
+      Q[std::size_t(i)] = set_->subtract(set_->diff(Te, coordinates_[std::size_t(i)]),
+                                         set_->total_derivative(dT, "t", chain_));
+    }
+  } else {
+    if (!Mnode.IsSequence() || Index(Mnode.size()) != n) {
+      fail(Mnode, "mass_matrix must be a list of " + std::to_string(n) + " rows",
+           "one row per coordinate: [[m, 0], [0, m]]");
+    }
+    for (Index i = 0; i < n; ++i) {
+      const YAML::Node row = Mnode[std::size_t(i)];
+      if (!row.IsSequence() || Index(row.size()) != n) {
+        fail(row, "row " + std::to_string(i + 1) + " of mass_matrix must have " +
+                      std::to_string(n) + " entries");
+      }
+      for (Index j = 0; j < n; ++j) {
+        const Expr e = expression(row[std::size_t(j)], "mass_matrix");
+        for (const auto& v : velocities_) {
+          if (!set_->independent_of(e, v))
+            fail(row[std::size_t(j)], "mass_matrix depends on the velocity '" + v + "'");
+        }
+        M[std::size_t(i * n + j)] = e;
+      }
+    }
+  }
+  // − ∂V/∂q, and non-conservative forces
+  for (Index i = 0; i < n; ++i) {
+    if (V)
+      Q[std::size_t(i)] =
+          set_->subtract(Q[std::size_t(i)], set_->diff(Ve, coordinates_[std::size_t(i)]));
+  }
+  if (F) {
+    const auto rows = rows_of(F, "forces");
+    if (Index(rows.size()) != n)
+      fail(F, "forces must have " + std::to_string(n) + " entries, one per coordinate");
+    for (Index i = 0; i < n; ++i)
+      Q[std::size_t(i)] = set_->add(Q[std::size_t(i)], expression(rows[std::size_t(i)], "forces"));
+  }
+
+  // M: a constant matrix when it depends on nothing (factorized once per workspace)
+  bool constant = true;
+  for (Expr e : M) {
+    for (const auto& name : set_->input_names())
+      constant = constant && set_->independent_of(e, name);
+  }
+  const InputLayout layout = layout_;
+  const Program Mp = set_->compile(M), Qp = set_->compile(Q);
+  if (constant) {
+    MatrixXd Mc(n, n);
+    std::vector<double> in(std::size_t(layout.size()), 0.0),
+        scratch(std::size_t(Mp.scratch_size()));
+    Mp.evaluate(in.data(), Mc.data(), scratch.data());  // symmetric: row- or column-major alike
+    builder.mass_matrix(Mc);
+  } else {
+    builder.mass_matrix([Mp, layout, n](const VectorXd& q, double t, Eigen::Ref<MatrixXd> Mout) {
+      ThreadBuffers& b = buffers();
+      b.reserve(layout.size(), Mp);
+      std::copy(q.data(), q.data() + n, b.in.begin());
+      b.in[std::size_t(2 * n)] = t;
+      Mp.evaluate(b.in.data(), b.out.data(), b.scratch.data());
+      for (Index i = 0; i < n; ++i) {
+        for (Index j = 0; j < n; ++j) Mout(i, j) = b.out[std::size_t(i * n + j)];
+      }
+    });
+  }
+  builder.forces(
+      [Qp, layout](const VectorXd& q, const VectorXd& qd, double t, Eigen::Ref<VectorXd> Qout) {
+        ThreadBuffers& b = buffers();
+        b.reserve(layout.size(), Qp);
+        layout.fill(b.in, q, qd, t);
+        Qp.evaluate(b.in.data(), Qout.data(), b.scratch.data());
+      });
+  if (V) {
+    const Program Vp = set_->compile({Ve});
+    builder.potential_energy([Vp, layout](const VectorXd& q, double t) {
+      ThreadBuffers& b = buffers();
+      b.reserve(layout.size(), Vp);
+      std::copy(q.data(), q.data() + layout.n, b.in.begin());
+      b.in[std::size_t(2 * layout.n)] = t;
+      double v = 0.0;
+      Vp.evaluate(b.in.data(), &v, b.scratch.data());
+      return v;
+    });
+  }
+}
+
+void Reader::read_constraints(const YAML::Node& root, SystemBuilder& builder) {
+  const YAML::Node cs = root["constraints"];
+  if (!cs) return;
+  if (!cs.IsSequence())
+    fail(cs, "constraints must be a list", "- {name: rod, holonomic: x^2 + y^2 - 1}");
+  const Index n = Index(coordinates_.size());
+  std::set<std::string> seen;
+  for (const auto& c : cs) {
+    if (!c.IsMap()) fail(c, "a constraint must be a mapping with a name and a kind");
+    if (!c["name"]) fail(c, "a constraint needs a name", "{name: rod, holonomic: ...}");
+    const std::string name = c["name"].Scalar();
+    if (!seen.insert(name).second) fail(c["name"], "constraint '" + name + "' is declared twice");
+    for (const auto& kv : c) {
+      static const std::set<std::string> keys = {"name", "holonomic", "nonholonomic", "A",
+                                                 "b",    "active",    "stabilization"};
+      if (!keys.count(kv.first.Scalar())) {
+        fail(kv.first, "unknown key '" + kv.first.Scalar() + "' in constraint '" + name + "'",
+             "a constraint has name, holonomic | nonholonomic | A and b, active, stabilization");
+      }
+    }
+    const int kinds = int(bool(c["holonomic"])) + int(bool(c["nonholonomic"])) + int(bool(c["A"]));
+    if (kinds != 1) {
+      fail(c,
+           "constraint '" + name + "' needs exactly one of holonomic, nonholonomic, or A with b");
+    }
+    const std::string what = "constraint '" + name + "'";
+    std::vector<Expr> accel, levels;
+    ConstraintKind kind;
+    Index rows = 0;
+    if (c["holonomic"]) {
+      // A = ∂φ/∂q, b = −D(Dφ); levels [φ; Dφ]
+      kind = ConstraintKind::kHolonomic;
+      const auto phis = rows_of(c["holonomic"], what);
+      rows = Index(phis.size());
+      std::vector<Expr> phi, phid, b;
+      for (const auto& node : phis) {
+        const Expr e = expression(node, what);
+        for (const auto& v : velocities_) {
+          if (!set_->independent_of(e, v)) {
+            fail(node, what + " is holonomic but depends on the velocity '" + v + "'",
+                 "write it as nonholonomic: instead");
+          }
+        }
+        phi.push_back(e);
+        phid.push_back(set_->total_derivative(e, "t", chain_));
+        b.push_back(set_->negate(set_->total_derivative(phid.back(), "t", chain_)));
+      }
+      for (Index r = 0; r < rows; ++r) {
+        for (Index j = 0; j < n; ++j)
+          accel.push_back(set_->diff(phi[std::size_t(r)], coordinates_[std::size_t(j)]));
+      }
+      accel.insert(accel.end(), b.begin(), b.end());
+      levels = phi;
+      levels.insert(levels.end(), phid.begin(), phid.end());
+    } else if (c["nonholonomic"]) {
+      // A = ∂ψ/∂q̇, b = −Dψ; levels [ψ]
+      kind = ConstraintKind::kNonholonomic;
+      const auto psis = rows_of(c["nonholonomic"], what);
+      rows = Index(psis.size());
+      std::vector<Expr> psi, b;
+      for (const auto& node : psis) {
+        psi.push_back(expression(node, what));
+        b.push_back(set_->negate(set_->total_derivative(psi.back(), "t", chain_)));
+      }
+      for (Index r = 0; r < rows; ++r) {
+        for (Index j = 0; j < n; ++j)
+          accel.push_back(set_->diff(psi[std::size_t(r)], velocities_[std::size_t(j)]));
+      }
+      accel.insert(accel.end(), b.begin(), b.end());
+      levels = psi;
+    } else {
+      kind = ConstraintKind::kAcceleration;
+      const YAML::Node A = c["A"], b = c["b"];
+      if (!b) fail(c, what + " gives A but no b");
+      if (!A.IsSequence() || A.size() == 0) fail(A, "A must be a list of rows");
+      rows = Index(A.size());
+      const auto bs = rows_of(b, what + ", b");
+      if (Index(bs.size()) != rows)
+        fail(b, "b must have one entry per row of A (" + std::to_string(rows) + ")");
+      for (const auto& row : A) {
+        if (!row.IsSequence() || Index(row.size()) != n)
+          fail(row, "each row of A must have " + std::to_string(n) + " entries");
+        for (const auto& e : row) accel.push_back(expression(e, what + ", A"));
+      }
+      for (const auto& e : bs) accel.push_back(expression(e, what + ", b"));
+    }
+    Constraint constraint(name, kind, rows,
+                          std::make_shared<CompiledConstraint>(
+                              kind, rows, n, layout_, set_->compile(accel), set_->compile(levels)));
+    if (const YAML::Node a = c["active"]) {
+      if (!a.IsSequence() || a.size() != 2) fail(a, "active must be [t0, t1]");
+      const double t0 = number(a[0], "active"), t1 = number(a[1], "active");
+      if (!(t0 <= t1)) fail(a, "active needs t0 <= t1");
+      constraint.active_between(t0, t1);
+    }
+    if (const YAML::Node s = c["stabilization"]) {
+      if (!s.IsMap()) fail(s, "stabilization must be {alpha: …, beta: …}");
+      const double alpha = s["alpha"] ? number(s["alpha"], "alpha") : 0.0;
+      const double beta = s["beta"] ? number(s["beta"], "beta") : 0.0;
+      if (alpha < 0 || beta < 0) fail(s, "stabilization gains must be >= 0");
+      constraint.stabilize(alpha, beta);
+    }
+    builder.add(constraint);
+    constraint_names_.push_back(name);
+    constraint_rows_.push_back(rows);
+  }
+}
+
+void Reader::read_nonideal(const YAML::Node& root, SystemBuilder& builder) {
+  const YAML::Node ns = root["nonideal"];
+  if (!ns) return;
+  if (!ns.IsSequence()) fail(ns, "nonideal must be a list");
+  int index = 0;
+  for (const auto& f : ns) {
+    ++index;
+    if (!f.IsMap()) fail(f, "a non-ideal force must be a mapping");
+    std::vector<Index> coords;
+    if (const YAML::Node cn = f["coordinates"]) {
+      if (!cn.IsSequence()) fail(cn, "coordinates must be a list of coordinate names");
+      for (const auto& c : cn) coords.push_back(coordinate(c));
+    }
+    if (f["friction"]) {
+      const std::string law = f["friction"].Scalar();
+      if (law == "coulomb") {
+        if (!f["constraint"])
+          fail(f, "coulomb friction needs the constraint that gives N",
+               "{friction: coulomb, constraint: plane, mu: 0.3}");
+        const std::string on = f["constraint"].Scalar();
+        if (std::find(constraint_names_.begin(), constraint_names_.end(), on) ==
+            constraint_names_.end()) {
+          fail(f["constraint"], "no constraint named '" + on + "'",
+               "the constraints are " + join(constraint_names_));
+        }
+        if (!f["mu"]) fail(f, "coulomb friction needs mu");
+        CoulombFriction spec;
+        spec.constraint = on;
+        spec.mu = number(f["mu"], "mu");
+        spec.coordinates = coords;
+        if (f["regularization_velocity"])
+          spec.regularization_velocity =
+              number(f["regularization_velocity"], "regularization_velocity");
+        if (spec.mu < 0) fail(f["mu"], "mu must be >= 0");
+        builder.add(coulomb_friction(spec));
+      } else if (law == "viscous") {
+        if (!f["c"])
+          fail(f, "viscous friction needs its coefficient c", "{friction: viscous, c: 0.3}");
+        ViscousFriction spec;
+        spec.coefficient = number(f["c"], "c");
+        spec.coordinates = coords;
+        spec.name = "viscous." + std::to_string(index);
+        if (spec.coefficient < 0) fail(f["c"], "c must be >= 0");
+        builder.add(viscous_friction(spec));
+      } else {
+        fail(f["friction"], "unknown friction law '" + law + "'",
+             "the laws are coulomb and viscous");
+      }
+    } else if (f["C"]) {
+      // C(q, q', t, N_c, lambda_c)
+      const auto rows = rows_of(f["C"], "C");
+      const Index n = Index(coordinates_.size());
+      if (Index(rows.size()) != n)
+        fail(f["C"], "C must have " + std::to_string(n) + " entries, one per coordinate");
+      std::vector<Expr> C;
+      for (const auto& r : rows) C.push_back(expression(r, "C"));
+      const Program Cp = set_->compile(C);
+      const InputLayout layout = layout_;
+      const std::vector<std::string> names = constraint_names_;
+      NonIdealForce force(
+          "C." + std::to_string(index),
+          NonIdealForce::Binder([Cp, layout, names](const System& sys) -> NonIdealFn {
+            std::vector<Index> ks;
+            for (const auto& nm : names) ks.push_back(sys.constraint_index(nm));
+            return [Cp, layout, ks](const VectorXd& q, const VectorXd& qd, double t,
+                                    const IdealForceInfo& ideal, Eigen::Ref<VectorXd> Cout) {
+              ThreadBuffers& b = buffers();
+              b.reserve(layout.size(), Cp);
+              layout.fill(b.in, q, qd, t);
+              // N_c, then lambda_c (first row of each constraint)
+              const std::size_t base = std::size_t(2 * layout.n + 1);
+              for (std::size_t i = 0; i < ks.size(); ++i) {
+                b.in[base + i] = ideal.normal_force(ks[i]);
+                b.in[base + ks.size() + i] = ideal.lambda(ks[i])[0];
+              }
+              Cp.evaluate(b.in.data(), Cout.data(), b.scratch.data());
+            };
+          }));
+      builder.add(force);
+    } else {
+      fail(f, "a non-ideal force needs 'friction' (coulomb, viscous) or 'C'");
+    }
+  }
+}
+
+void Reader::read_initial(const YAML::Node& root, Model& model) {
+  const Index n = Index(coordinates_.size());
+  model.q0 = VectorXd::Zero(n);
+  model.qd0 = VectorXd::Zero(n);
+  const YAML::Node init = root["initial"];
+  if (!init) return;
+  if (!init.IsMap()) fail(init, "initial must be a mapping with q, q_dot and project");
+  auto read_map = [&](const char* key, VectorXd& v) {
+    const YAML::Node m = init[key];
+    if (!m) return;
+    if (!m.IsMap())
+      fail(m, std::string("initial ") + key + " must map coordinate names to values",
+           "q: {x: 0, y: 1}");
+    for (const auto& kv : m)
+      v[coordinate(kv.first)] = number(kv.second, std::string("initial ") + key);
+  };
+  read_map("q", model.q0);
+  read_map("q_dot", model.qd0);
+  if (init["project"]) model.project_initial = init["project"].as<bool>(false);
+}
+
+void Reader::read_simulate(const YAML::Node& root, Model& model) {
+  SimulationOptions& o = model.options;
+  o.t_end = 1.0;
+  const YAML::Node s = root["simulate"];
+  if (!s) return;
+  if (!s.IsMap()) fail(s, "simulate must be a mapping", "{t_end: 2, integrator: dopri5}");
+  for (const auto& kv : s) {
+    const std::string key = kv.first.Scalar();
+    const YAML::Node v = kv.second;
+    if (key == "t_end")
+      o.t_end = number(v, key);
+    else if (key == "t_start")
+      o.t_start = number(v, key);
+    else if (key == "rtol")
+      o.rtol = number(v, key);
+    else if (key == "atol")
+      o.atol = number(v, key);
+    else if (key == "step")
+      o.step = number(v, key);
+    else if (key == "max_step")
+      o.max_step = number(v, key);
+    else if (key == "integrator") {
+      try {
+        o.integrator = integrator_from_string(v.Scalar());
+      } catch (const std::invalid_argument&) {
+        fail(v, "unknown integrator '" + v.Scalar() + "'", "rk4, dopri5, rkf78 or bdf");
+      }
+    } else if (key == "drift") {
+      try {
+        o.drift = drift_from_string(v.Scalar());
+      } catch (const std::invalid_argument&) {
+        fail(v, "unknown drift control '" + v.Scalar() + "'", "none, baumgarte or projection");
+      }
+    } else {
+      fail(kv.first, "unknown key '" + key + "' in simulate",
+           "t_start, t_end, integrator, rtol, atol, step, max_step, drift");
+    }
+  }
+  if (!(o.t_end > o.t_start)) fail(s, "t_end must be greater than t_start");
+}
+
+void Reader::read_output(const YAML::Node& root, Model& model) {
+  SimulationOptions& o = model.options;
+  const YAML::Node out = root["output"];
+  std::vector<Expr> exprs;
+  if (out) {
+    if (!out.IsMap())
+      fail(out, "output must be a mapping", "{every: 0.01, at: [1], expressions: {s: x + y}}");
+    for (const auto& kv : out) {
+      const std::string key = kv.first.Scalar();
+      if (key == "every") {
+        o.output_every = number(kv.second, "every");
+        if (o.output_every < 0) fail(kv.second, "every must be >= 0");
+      } else if (key == "at") {
+        if (!kv.second.IsSequence()) fail(kv.second, "at must be a list of times");
+        for (const auto& tn : kv.second) {
+          const double t = number(tn, "output time");
+          if (t < o.t_start || t > o.t_end) {
+            fail(tn, "output time " + tn.Scalar() + " is outside the run [" + brief(o.t_start) +
+                         ", " + brief(o.t_end) + "]");
+          }
+          o.output_at.push_back(t);
+        }
+      } else if (key == "expressions") {
+        if (!kv.second.IsMap()) fail(kv.second, "expressions must map names to expressions");
+        for (const auto& e : kv.second) {
+          model.output_names.push_back(e.first.Scalar());
+          exprs.push_back(expression(e.second, "output expression '" + e.first.Scalar() + "'"));
+        }
+      } else {
+        fail(kv.first, "unknown key '" + key + "' in output", "every, at, expressions");
+      }
+    }
+  }
+  model.output_program = set_->compile(exprs);
+}
+
+Model Reader::read(const std::string& text) {
+  YAML::Node root;
+  try {
+    root = YAML::Load(text);
+  } catch (const YAML::ParserException& e) {
+    throw ModelError(file_, e.mark.line + 1, e.mark.column + 1, "YAML syntax: " + e.msg,
+                     "check the indentation, brackets and colons");
+  }
+  if (!root.IsMap()) {
+    throw ModelError(file_, 1, 1, "a model is a mapping of keys",
+                     "start with name:, coordinates:, …");
+  }
+  for (const auto& kv : root) {
+    const std::string key = kv.first.Scalar();
+    if (std::find(kTopLevelKeys.begin(), kTopLevelKeys.end(), key) == kTopLevelKeys.end()) {
+      fail(kv.first, "unknown key '" + key + "'", "the keys are " + join(kTopLevelKeys));
+    }
+  }
+  read_parameters(root);
+  read_coordinates(root);
+
+  // the expression inputs: q, q_dot, t, N_c and lambda_c for each named constraint
+  std::vector<std::string> inputs = coordinates_;
+  inputs.insert(inputs.end(), velocities_.begin(), velocities_.end());
+  inputs.push_back("t");
+  std::vector<std::string> cnames;
+  if (const YAML::Node cs = root["constraints"]; cs && cs.IsSequence()) {
+    for (const auto& c : cs) {
+      if (c.IsMap() && c["name"] && is_identifier(c["name"].Scalar()))
+        cnames.push_back(c["name"].Scalar());
+    }
+  }
+  for (const auto& c : cnames) inputs.push_back("N_" + c);
+  for (const auto& c : cnames) inputs.push_back("lambda_" + c);
+  try {
+    set_ = std::make_unique<ExpressionSet>(inputs);
+  } catch (const std::invalid_argument& e) {
+    fail(root["coordinates"], e.what());
+  }
+  for (const auto& [name, value] : parameters_) set_->set_constant(name, value);
+  layout_.n = Index(coordinates_.size());
+  layout_.extra = Index(2 * cnames.size());
+
+  SystemBuilder builder(coordinates_);
+  read_dynamics(root, builder);
+  read_constraints(root, builder);
+  read_nonideal(root, builder);
+  Model model = [&] {
+    try {
+      return Model{.system = builder.build()};
+    } catch (const std::invalid_argument& e) {
+      throw ModelError(file_, 1, 1, e.what());
+    }
+  }();
+  model.file = file_;
+  model.name = root["name"] ? root["name"].Scalar() : file_;
+  model.parameters = parameters_;
+  read_initial(root, model);
+  read_simulate(root, model);
+  read_output(root, model);
+  model.options.project_initial = model.project_initial;
+  return model;
+}
+
+}  // namespace
+
+Model parse_model(const std::string& text, const std::string& file,
+                  const std::map<std::string, double>& overrides) {
+  return Reader(file, overrides).read(text);
+}
+
+Model load_model(const std::string& path, const std::map<std::string, double>& overrides) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw ModelError(path, 0, 0, "cannot read the model file", "check the path");
+  std::ostringstream text;
+  text << in.rdbuf();
+  return parse_model(text.str(), path, overrides);
+}
+
+std::vector<std::vector<double>> evaluate_output_expressions(const Model& model,
+                                                             const Trajectory& traj) {
+  const Program& p = model.output_program;
+  const Index n = traj.n, N = traj.samples();
+  std::vector<std::vector<double>> out(std::size_t(p.outputs()),
+                                       std::vector<double>(std::size_t(N)));
+  std::vector<double> in(std::size_t(p.inputs()), 0.0), values(std::size_t(p.outputs())),
+      scratch(std::size_t(p.scratch_size()));
+  for (Index i = 0; i < N; ++i) {
+    std::copy_n(traj.q.begin() + i * n, n, in.begin());
+    std::copy_n(traj.qd.begin() + i * n, n, in.begin() + n);
+    in[std::size_t(2 * n)] = traj.t[std::size_t(i)];
+    p.evaluate(in.data(), values.data(), scratch.data());
+    for (std::size_t k = 0; k < values.size(); ++k) out[k][std::size_t(i)] = values[k];
+  }
+  return out;
+}
+
+}  // namespace ukdyn

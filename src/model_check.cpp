@@ -1,0 +1,158 @@
+// check_model: what `ukdyn check` reports about a model at its initial state — sizes, rank and
+// redundancy of the constraints, consistency of the initial state, and M.
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <exception>
+#include <string>
+#include <string_view>
+#include <utility>
+#include <vector>
+
+#include <Eigen/QR>
+
+#include "ukdyn/forward.hpp"
+#include "ukdyn/model.hpp"
+#include "ukdyn/projection.hpp"
+#include "ukdyn/workspace.hpp"
+
+namespace ukdyn {
+namespace {
+
+// numerical rank of the rows S (k × n) with Eigen's column-pivoting QR and the solver's relative
+// threshold: pivot j counts when |R_jj| > threshold · |R_00| (as in FundamentalDecomposition)
+Index rank_of_rows(const MatrixXd& S, double threshold) {
+  if (S.rows() == 0 || S.cols() == 0) return 0;
+  if (!S.allFinite()) return 0;
+  Eigen::ColPivHouseholderQR<MatrixXd> qr(S.transpose());
+  qr.setThreshold(threshold);
+  return qr.rank();
+}
+
+// a number for messages, 3 significant digits
+std::string format(double x) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.3g", x);
+  return buf;
+}
+
+}  // namespace
+
+CheckReport check_model(const Model& model) {
+  const System& sys = model.system;
+  const SimulationOptions& o = model.options;
+  const double t = o.t_start;
+  const Index n = sys.dofs();
+  CheckReport report;
+  report.coordinates = n;
+
+  // the initial state must have n finite entries before anything is evaluated
+  if (model.q0.size() != n || model.qd0.size() != n) {
+    report.problems.push_back("the initial state has " + std::to_string(model.q0.size()) +
+                              " positions and " + std::to_string(model.qd0.size()) +
+                              " velocities, expected n = " + std::to_string(n));
+    return report;
+  }
+  if (!model.q0.allFinite() || !model.qd0.allFinite()) {
+    report.problems.push_back("the initial state holds NaN or Inf");
+    return report;
+  }
+
+  Workspace ws(sys, o.solver);
+  const double threshold = o.solver.rank_threshold;
+
+  // M(q0, t), Q(q0, q'0, t): M is positive definite when stage 1 got past its factorization
+  const Status s_mass = evaluate_unconstrained(sys, ws, model.q0, model.qd0, t);
+  const bool mass_failed =
+      s_mass == Status::kMassNotPositiveDefinite || s_mass == Status::kMassNotSymmetric ||
+      (s_mass == Status::kNonFiniteInput && std::string_view(ws.failed_quantity) == "M");
+  report.mass_positive_definite = !mass_failed;
+  if (s_mass != Status::kOk) report.problems.push_back(describe_status(sys, ws));
+
+  // A, b of the constraints active at t_start, and the whole fundamental equation when M allows
+  Status s_all = Status::kOk;
+  if (report.mass_positive_definite && s_mass == Status::kOk) {
+    s_all = forward_dynamics(sys, ws, model.q0, model.qd0, t);
+    if (s_all != Status::kOk) report.problems.push_back(describe_status(sys, ws));
+  } else {
+    ws.status = Status::kOk;
+    const Status s_a = assemble_constraints(sys, ws, model.q0, model.qd0, t);
+    if (s_a != Status::kOk) report.problems.push_back(describe_status(sys, ws));
+  }
+  report.constraint_rows = ws.active_rows;
+
+  // the rows of the active constraints, in declaration order
+  std::vector<Index> active;
+  for (Index k = 0; k < sys.constraint_count(); ++k) {
+    if (ws.active[std::size_t(k)]) active.push_back(k);
+  }
+  MatrixXd stacked(ws.active_rows, n);
+  {
+    Index r = 0;
+    for (Index k : active) {
+      const Index rows = sys.constraint(k).rows();
+      stacked.middleRows(r, rows) = ws.A.middleRows(sys.row_offset(k), rows);
+      r += rows;
+    }
+  }
+
+  // rank A: the decomposition's when stage 3 ran, else the QR rank of the stacked rows
+  const bool solved = report.mass_positive_definite && s_mass == Status::kOk &&
+                      (s_all == Status::kOk || s_all == Status::kInconsistentConstraints ||
+                       s_all == Status::kNonFiniteResult);
+  report.rank = solved ? ws.rank : rank_of_rows(stacked, threshold);
+  report.degrees_of_freedom = n - report.rank;
+
+  // redundancy: constraint k is redundant when its rows do not raise the rank of those before it
+  if (stacked.allFinite()) {
+    MatrixXd kept(0, n);
+    Index kept_rank = 0;
+    for (Index k : active) {
+      const Index rows = sys.constraint(k).rows();
+      MatrixXd grown(kept.rows() + rows, n);
+      grown << kept, ws.A.middleRows(sys.row_offset(k), rows);
+      const Index grown_rank = rank_of_rows(grown, threshold);
+      if (grown_rank <= kept_rank) {
+        report.redundant.push_back(sys.constraint(k).name());
+      } else {
+        kept = std::move(grown);
+        kept_rank = grown_rank;
+      }
+    }
+  }
+
+  // initial consistency, and whether projection finds a consistent state near
+  report.initial_violations =
+      check_initial_conditions(sys, model.q0, model.qd0, t, o.initial_tolerance);
+  if (!report.initial_violations.empty()) {
+    const bool project = model.project_initial || o.project_initial;
+    if (!project) {
+      report.problems.push_back(
+          "the initial state violates the constraints and `initial: project:` is not true");
+    } else if (report.mass_positive_definite) {
+      VectorXd q = model.q0, qd = model.qd0;
+      Workspace wp(sys, o.solver);
+      try {
+        const ProjectionResult rp = project_positions(sys, wp, q, t, o.projection);
+        const ProjectionResult rv = project_velocities(sys, wp, q, qd, t, o.projection);
+        const auto left = check_initial_conditions(sys, q, qd, t, o.initial_tolerance);
+        if (!rp.converged || !rv.converged || !left.empty()) {
+          report.problems.push_back(
+              "no consistent initial state near the given one: projection left a violation of " +
+              format(std::max(rp.violation, rv.violation)));
+        }
+      } catch (const std::exception& e) {
+        report.problems.push_back(std::string("projecting the initial state failed: ") +
+                                  e.what());
+      }
+    }
+  }
+
+  // the energy must be finite where the run starts
+  if (sys.has_potential() && !std::isfinite(sys.potential_energy(model.q0, t))) {
+    report.problems.push_back("the potential energy is not finite at the initial state");
+  }
+  return report;
+}
+
+}  // namespace ukdyn
