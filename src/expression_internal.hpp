@@ -1,0 +1,119 @@
+// Internal to the expression engine (expression.hpp): what its parser (expression_parse.cpp),
+// its compiler and tape (expression_compile.cpp) and ExpressionSet (expression.cpp) share.
+#pragma once
+
+#include <cstdint>
+#include <map>
+#include <string>
+#include <vector>
+
+#include <ginac/ginac.h>
+
+#include "ukdyn/expression.hpp"
+
+namespace ukdyn::expr {
+namespace detail {
+
+// ---------------------------------------------------------------------------------------------
+// the tape
+
+// One operation of the register machine: s[dst] = code(s[a], s[b]). Unary operations read a
+// only (b = a). kSinCos writes two registers: s[dst] = sin s[a], s[b] = cos s[a].
+// clang-format off
+enum class Code : std::uint8_t {
+  kAdd, kSub, kMul, kDiv, kNeg, kRecip, kSqrt, kPow,
+  kSin, kCos, kSinCos, kTan, kAsin, kAcos, kAtan, kAtan2,
+  kSinh, kCosh, kTanh, kExp, kLog, kAbs,
+};
+// clang-format on
+
+struct Op {
+  Code code;
+  std::int32_t dst, a, b;
+};
+
+// a function of the language: its name, number of arguments and tape operation
+struct FunctionInfo {
+  const char* name;
+  int arity;
+  Code code;
+};
+
+// the function called `name`, or null
+const FunctionInfo* find_function(const std::string& name);
+// a letter or '_', then letters, digits, '_'
+bool is_identifier(const std::string& s);
+// "a, b, c" (at most 20, then "…")
+std::string listing(const std::vector<std::string>& names);
+// the shortest decimal that reads back as v, as an exact rational
+GiNaC::numeric exact(double v);
+// `text` parsed into GiNaC over `names` (known: the names in declaration order, for
+// suggestions). Throws ParseError.
+GiNaC::ex parse_expression(const std::string& text, const std::map<std::string, GiNaC::ex>& names,
+                           const std::vector<std::string>& known);
+
+}  // namespace detail
+
+struct Program::Tape {
+  Index inputs = 0;
+  std::vector<double> constants;           // copied to scratch[inputs …] on each evaluation
+  std::vector<detail::Op> ops;             // in execution order, on physical slots
+  std::vector<std::int32_t> output_slots;  // out[k] = scratch[output_slots[k]]
+  Index scratch = 0;                       // inputs + constants + registers
+};
+
+struct ExpressionSet::Impl {
+  std::vector<std::string> input_names;
+  std::vector<GiNaC::ex> input_symbols;      // realsymbols, in input order
+  std::map<std::string, GiNaC::ex> symbols;  // inputs and constants by name
+  std::vector<std::string> known;            // inputs then constants, in declaration order
+  GiNaC::exmap constant_values;              // constant symbol → its exact value
+  std::vector<GiNaC::ex> expressions;        // by handle
+
+  Expr add(GiNaC::ex e) {
+    expressions.push_back(std::move(e));
+    return Expr(expressions.size() - 1);
+  }
+
+  const GiNaC::ex& at(Expr e, const char* who) const {
+    if (e < 0 || std::size_t(e) >= expressions.size()) {
+      throw std::invalid_argument(std::string("ukdyn::expr::ExpressionSet::") + who +
+                                  ": no expression with handle " + std::to_string(e) +
+                                  " (the set holds " + std::to_string(expressions.size()) +
+                                  "; handles come from this set's parse(), constant(), …)");
+    }
+    return expressions[std::size_t(e)];
+  }
+
+  const GiNaC::ex& input(const std::string& name, const char* who) const {
+    for (std::size_t i = 0; i < input_names.size(); ++i) {
+      if (input_names[i] == name) return input_symbols[i];
+    }
+    throw std::invalid_argument(std::string("ukdyn::expr::ExpressionSet::") + who + ": '" + name +
+                                "' is not an input (the inputs are " +
+                                detail::listing(input_names) + ")");
+  }
+
+  // throws unless `name` can be declared
+  void check_new_name(const std::string& name, const char* who) const {
+    const std::string where = std::string("ukdyn::expr::ExpressionSet::") + who;
+    if (!detail::is_identifier(name)) {
+      throw std::invalid_argument(where + ": '" + name +
+                                  "' is not a name (a letter or '_', then letters, digits, '_')");
+    }
+    if (detail::find_function(name) != nullptr) {
+      throw std::invalid_argument(where + ": '" + name + "' is a function of the language");
+    }
+    if (symbols.count(name) != 0) {
+      throw std::invalid_argument(where + ": '" + name + "' is already declared");
+    }
+  }
+
+  void declare(const std::string& name, const char* who) {
+    check_new_name(name, who);
+    symbols.emplace(name, GiNaC::realsymbol(name));
+    known.push_back(name);
+  }
+};
+
+}  // namespace ukdyn::expr

@@ -1,0 +1,475 @@
+// The model language's parser (see expression.hpp): a small recursive-descent parser with
+// positions and suggestions in its errors, building GiNaC expressions directly rather than with
+// GiNaC::parser: GiNaC's parser reports no positions (line and column are always 0), lets a
+// unary minus after an operator swallow the rest of the expression (it reads x^-2+y as
+// x^(-2+y) and 2/-x*y as -2/(x*y)), and accepts I, Pi and {lists}, which are not in the
+// language. Decimal numbers become exact rationals (0.1 is 1/10), so derivatives and
+// is_zero() are exact; they are rounded to double once, when compiling.
+
+#include <algorithm>
+#include <array>
+#include <cctype>
+#include <charconv>
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <map>
+#include <optional>
+#include <sstream>
+#include <tuple>
+#include <unordered_map>
+#include <unordered_set>
+#include <utility>
+
+#include <ginac/ginac.h>
+
+#include "expression_internal.hpp"
+#include "ukdyn/status.hpp"
+
+namespace ukdyn::expr::detail {
+
+// ---------------------------------------------------------------------------------------------
+// the language's functions
+
+constexpr std::array<FunctionInfo, 14> kFunctions{{
+    {"sin", 1, Code::kSin},
+    {"cos", 1, Code::kCos},
+    {"tan", 1, Code::kTan},
+    {"asin", 1, Code::kAsin},
+    {"acos", 1, Code::kAcos},
+    {"atan", 1, Code::kAtan},
+    {"atan2", 2, Code::kAtan2},
+    {"sinh", 1, Code::kSinh},
+    {"cosh", 1, Code::kCosh},
+    {"tanh", 1, Code::kTanh},
+    {"exp", 1, Code::kExp},
+    {"log", 1, Code::kLog},
+    {"sqrt", 1, Code::kSqrt},
+    {"abs", 1, Code::kAbs},
+}};
+
+const FunctionInfo* find_function(const std::string& name) {
+  for (const auto& f : kFunctions) {
+    if (name == f.name) return &f;
+  }
+  return nullptr;
+}
+
+// the GiNaC expression of a call of a language function
+GiNaC::ex call(const FunctionInfo& f, const GiNaC::exvector& a) {
+  switch (f.code) {
+    case Code::kSin:
+      return GiNaC::sin(a[0]);
+    case Code::kCos:
+      return GiNaC::cos(a[0]);
+    case Code::kTan:
+      return GiNaC::tan(a[0]);
+    case Code::kAsin:
+      return GiNaC::asin(a[0]);
+    case Code::kAcos:
+      return GiNaC::acos(a[0]);
+    case Code::kAtan:
+      return GiNaC::atan(a[0]);
+    case Code::kAtan2:
+      return GiNaC::atan2(a[0], a[1]);
+    case Code::kSinh:
+      return GiNaC::sinh(a[0]);
+    case Code::kCosh:
+      return GiNaC::cosh(a[0]);
+    case Code::kTanh:
+      return GiNaC::tanh(a[0]);
+    case Code::kExp:
+      return GiNaC::exp(a[0]);
+    case Code::kLog:
+      return GiNaC::log(a[0]);
+    case Code::kSqrt:
+      return GiNaC::sqrt(a[0]);
+    case Code::kAbs:
+      return GiNaC::abs(a[0]);
+    default:
+      break;
+  }
+  UKDYN_CHECK(false, "expression: a language function without a GiNaC counterpart");
+  return {};
+}
+
+// ---------------------------------------------------------------------------------------------
+// names and suggestions
+
+bool is_identifier(const std::string& s) {
+  if (s.empty() || !(std::isalpha(static_cast<unsigned char>(s[0])) || s[0] == '_')) return false;
+  return std::all_of(s.begin(), s.end(), [](char c) {
+    return std::isalnum(static_cast<unsigned char>(c)) || c == '_';
+  });
+}
+
+// Levenshtein distance (insertions, deletions, substitutions), O(|a| |b|)
+std::size_t edit_distance(const std::string& a, const std::string& b) {
+  std::vector<std::size_t> row(b.size() + 1);
+  for (std::size_t j = 0; j <= b.size(); ++j) row[j] = j;
+  for (std::size_t i = 1; i <= a.size(); ++i) {
+    std::size_t diagonal = row[0];
+    row[0] = i;
+    for (std::size_t j = 1; j <= b.size(); ++j) {
+      const std::size_t up = row[j];
+      row[j] = std::min({row[j] + 1, row[j - 1] + 1, diagonal + (a[i - 1] == b[j - 1] ? 0 : 1)});
+      diagonal = up;
+    }
+  }
+  return row[b.size()];
+}
+
+std::string lowercase(std::string s) {
+  for (char& c : s) c = char(std::tolower(static_cast<unsigned char>(c)));
+  return s;
+}
+
+// up to three of `known` close to `name` (same letters up to case, or a few edits away, but not
+// as many edits as the name has characters), closest first
+std::vector<std::string> close_matches(const std::string& name,
+                                       const std::vector<std::string>& known) {
+  const std::size_t limit = name.size() <= 3 ? 1 : name.size() <= 6 ? 2 : 3;
+  std::vector<std::pair<std::size_t, std::string>> found;
+  for (const auto& k : known) {
+    const std::size_t d = lowercase(k) == lowercase(name) ? 0 : edit_distance(name, k);
+    if (d == 0 || (d <= limit && d < name.size())) found.emplace_back(d, k);
+  }
+  std::sort(found.begin(), found.end());
+  std::vector<std::string> out;
+  for (std::size_t i = 0; i < found.size() && i < 3; ++i) out.push_back(found[i].second);
+  return out;
+}
+
+// "'a'", "'a' or 'b'", "'a', 'b' or 'c'"
+std::string quoted_alternatives(const std::vector<std::string>& names) {
+  std::string s;
+  for (std::size_t i = 0; i < names.size(); ++i) {
+    if (i > 0) s += i + 1 == names.size() ? " or " : ", ";
+    s += "'" + names[i] + "'";
+  }
+  return s;
+}
+
+// "a, b, c" (at most 20, then "…")
+std::string listing(const std::vector<std::string>& names) {
+  std::string s;
+  for (std::size_t i = 0; i < names.size() && i < 20; ++i) s += (i > 0 ? ", " : "") + names[i];
+  if (names.size() > 20) s += ", …";
+  return s.empty() ? "none" : s;
+}
+
+std::vector<std::string> function_names() {
+  std::vector<std::string> names;
+  for (const auto& f : kFunctions) names.emplace_back(f.name);
+  return names;
+}
+
+// ---------------------------------------------------------------------------------------------
+// numbers
+
+// the exact rational written in decimal as digits · 10^exponent10
+GiNaC::numeric decimal(const std::string& digits, long exponent10) {
+  GiNaC::numeric n(digits.c_str());
+  const GiNaC::numeric ten(10);
+  return exponent10 >= 0 ? n * ten.power(exponent10) : n / ten.power(-exponent10);
+}
+
+// the shortest decimal that reads back as v, as an exact rational (so constant(0.1) is 1/10,
+// like the text "0.1")
+GiNaC::numeric exact(double v) {
+  if (std::isfinite(v) && v == std::trunc(v) && std::fabs(v) < 9.0e15) {
+    return GiNaC::numeric(static_cast<long>(v));
+  }
+  char buf[64];
+  const auto r = std::to_chars(buf, buf + sizeof buf, v, std::chars_format::scientific);
+  UKDYN_CHECK(r.ec == std::errc(), "expression: to_chars failed");
+  // d.ddddde±xx
+  const std::string text(buf, r.ptr);
+  const std::size_t e = text.find('e');
+  std::string mantissa = text.substr(0, e);
+  long exponent = std::strtol(text.c_str() + e + 1, nullptr, 10);
+  const std::size_t dot = mantissa.find('.');
+  if (dot != std::string::npos) {
+    exponent -= long(mantissa.size() - dot - 1);
+    mantissa.erase(dot, 1);
+  }
+  return decimal(mantissa, exponent);
+}
+
+// ---------------------------------------------------------------------------------------------
+// the parser
+//
+//   expression := term (('+' | '-') term)*
+//   term       := unary (('*' | '/') unary)*
+//   unary      := ('+' | '-') unary | power
+//   power      := primary ['^' unary]          (a^b^c and a^-b^c are refused as ambiguous)
+//   primary    := number | name | function '(' expression (',' expression)* ')'
+//               | '(' expression ')'
+// so -x^2 = -(x^2), x^-2*y = (x^-2)*y and 2*-x+y = 2*(-x)+y, as in Python and Fortran.
+
+enum class Kind { kNumber, kName, kOperator, kEnd };
+
+struct Token {
+  Kind kind = Kind::kEnd;
+  std::string text;
+  std::size_t position = 0;
+};
+
+class Parser {
+ public:
+  Parser(const std::string& text, const std::map<std::string, GiNaC::ex>& names,
+         const std::vector<std::string>& known)
+      : text_(text), names_(names), known_(known) {
+    next();
+  }
+
+  GiNaC::ex parse() {
+    if (token_.kind == Kind::kEnd) fail("empty expression", token_.position);
+    GiNaC::ex e = expression();
+    if (token_.kind != Kind::kEnd) {
+      fail("unexpected " + describe(token_) + " (missing operator?)", token_.position);
+    }
+    return e;
+  }
+
+ private:
+  [[noreturn]] static void fail(const std::string& what, std::size_t position) {
+    throw ParseError(what, position);
+  }
+
+  static std::string describe(const Token& t) {
+    switch (t.kind) {
+      case Kind::kNumber:
+        return "number '" + t.text + "'";
+      case Kind::kName:
+        return "name '" + t.text + "'";
+      case Kind::kOperator:
+        return "'" + t.text + "'";
+      case Kind::kEnd:
+        break;
+    }
+    return "end of expression";
+  }
+
+  bool is(const char* op) const { return token_.kind == Kind::kOperator && token_.text == op; }
+
+  // reads the next token into token_
+  void next() {
+    while (pos_ < text_.size() && std::isspace(static_cast<unsigned char>(text_[pos_]))) ++pos_;
+    token_ = Token{Kind::kEnd, "", pos_};
+    if (pos_ >= text_.size()) return;
+    const auto digit = [&](std::size_t i) {
+      return i < text_.size() && std::isdigit(static_cast<unsigned char>(text_[i]));
+    };
+    const std::size_t start = pos_;
+    const char c = text_[pos_];
+    if (digit(pos_) || (c == '.' && digit(pos_ + 1))) {
+      // digits ['.' digits] [('e' | 'E') ['+' | '-'] digits]
+      while (digit(pos_)) ++pos_;
+      if (pos_ < text_.size() && text_[pos_] == '.') {
+        ++pos_;
+        while (digit(pos_)) ++pos_;
+      }
+      if (pos_ < text_.size() && (text_[pos_] == 'e' || text_[pos_] == 'E')) {
+        std::size_t k = pos_ + 1;
+        if (k < text_.size() && (text_[k] == '+' || text_[k] == '-')) ++k;
+        if (digit(k)) {
+          pos_ = k;
+          while (digit(pos_)) ++pos_;
+        }
+      }
+      token_ = Token{Kind::kNumber, text_.substr(start, pos_ - start), start};
+      return;
+    }
+    if (std::isalpha(static_cast<unsigned char>(c)) || c == '_') {
+      while (pos_ < text_.size() &&
+             (std::isalnum(static_cast<unsigned char>(text_[pos_])) || text_[pos_] == '_')) {
+        ++pos_;
+      }
+      token_ = Token{Kind::kName, text_.substr(start, pos_ - start), start};
+      return;
+    }
+    if (std::strchr("+-*/^(),", c) != nullptr) {
+      if (c == '*' && pos_ + 1 < text_.size() && text_[pos_ + 1] == '*') {
+        fail("'**' is not an operator: write powers with '^' (x^2)", start);
+      }
+      ++pos_;
+      token_ = Token{Kind::kOperator, std::string(1, c), start};
+      return;
+    }
+    fail(std::string("unexpected character '") + c + "'", start);
+  }
+
+  // GiNaC evaluates as it builds (1/0, log(0) throw): report such errors at `position`
+  template <class F>
+  static GiNaC::ex build(F&& f, std::size_t position) {
+    try {
+      return f();
+    } catch (const std::exception& e) {
+      fail(std::string("cannot evaluate: ") + e.what(), position);
+    }
+  }
+
+  GiNaC::ex expression() {
+    GiNaC::ex e = term();
+    while (is("+") || is("-")) {
+      const bool plus = is("+");
+      const std::size_t at = token_.position;
+      next();
+      const GiNaC::ex rhs = term();
+      e = build([&] { return plus ? e + rhs : e - rhs; }, at);
+    }
+    return e;
+  }
+
+  GiNaC::ex term() {
+    GiNaC::ex e = unary();
+    while (is("*") || is("/")) {
+      const bool times = is("*");
+      const std::size_t at = token_.position;
+      next();
+      const GiNaC::ex rhs = unary();
+      e = build([&] { return times ? e * rhs : e / rhs; }, at);
+    }
+    return e;
+  }
+
+  // in_exponent: the operand right of a '^', which may not hold another '^' unparenthesized
+  GiNaC::ex unary(bool in_exponent = false) {
+    if (is("+")) {
+      next();
+      return unary(in_exponent);
+    }
+    if (is("-")) {
+      next();
+      return -unary(in_exponent);
+    }
+    return power(in_exponent);
+  }
+
+  GiNaC::ex power(bool in_exponent) {
+    const GiNaC::ex base = primary();
+    if (!is("^")) return base;
+    if (in_exponent) fail("a^b^c is ambiguous: write (a^b)^c or a^(b^c)", token_.position);
+    const std::size_t at = token_.position;
+    next();
+    const GiNaC::ex exponent = unary(true);
+    return build([&] { return GiNaC::pow(base, exponent); }, at);
+  }
+
+  GiNaC::ex primary() {
+    const Token t = token_;
+    switch (t.kind) {
+      case Kind::kNumber:
+        next();
+        return number(t);
+      case Kind::kName:
+        next();
+        return is("(") ? function_call(t) : name(t);
+      case Kind::kOperator:
+        if (t.text == "(") {
+          next();
+          GiNaC::ex e = expression();
+          if (!is(")")) {
+            fail("expected ')' to close the '(' at position " + std::to_string(t.position) +
+                     ", got " + describe(token_),
+                 token_.position);
+          }
+          next();
+          return e;
+        }
+        fail("unexpected " + describe(t), t.position);
+      case Kind::kEnd:
+        break;
+    }
+    fail("unexpected end of expression", t.position);
+  }
+
+  static GiNaC::ex number(const Token& t) {
+    // mantissa digits and the power of ten
+    const std::string& s = t.text;
+    std::string digits;
+    long exponent = 0;
+    std::size_t i = 0;
+    bool fraction = false;
+    for (; i < s.size() && s[i] != 'e' && s[i] != 'E'; ++i) {
+      if (s[i] == '.') {
+        fraction = true;
+      } else {
+        digits += s[i];
+        if (fraction) --exponent;
+      }
+    }
+    if (i < s.size()) {
+      const long e = std::strtol(s.c_str() + i + 1, nullptr, 10);
+      if (std::abs(e) > 400) fail("number '" + s + "' is out of range", t.position);
+      exponent += e;
+    }
+    return decimal(digits, exponent);
+  }
+
+  GiNaC::ex name(const Token& t) const {
+    const auto it = names_.find(t.text);
+    if (it != names_.end()) return it->second;
+    if (find_function(t.text) != nullptr) {
+      fail("'" + t.text + "' is a function: write " + t.text + "(...)", t.position);
+    }
+    const auto close = close_matches(t.text, known_);
+    if (!close.empty()) {
+      fail("unknown name '" + t.text + "' (did you mean " + quoted_alternatives(close) + "?)",
+           t.position);
+    }
+    fail("unknown name '" + t.text + "' (known names: " + listing(known_) + ")", t.position);
+  }
+
+  GiNaC::ex function_call(const Token& t) {
+    const FunctionInfo* f = find_function(t.text);
+    if (f == nullptr) {
+      if (names_.count(t.text) != 0) {
+        fail("'" + t.text + "' is not a function (missing '*' before '('?)", t.position);
+      }
+      const auto close = close_matches(t.text, function_names());
+      fail("unknown function '" + t.text + "' (" +
+               (close.empty() ? "the functions are " + listing(function_names())
+                              : "did you mean " + quoted_alternatives(close) + "?") +
+               ")",
+           t.position);
+    }
+    const std::size_t open = token_.position;
+    next();  // '('
+    GiNaC::exvector args;
+    if (!is(")")) {
+      while (true) {
+        args.push_back(expression());
+        if (is(")")) break;
+        if (!is(",")) {
+          fail("expected ',' or ')' in the arguments of " + t.text + " (opened at position " +
+                   std::to_string(open) + "), got " + describe(token_),
+               token_.position);
+        }
+        next();
+      }
+    }
+    next();  // ')'
+    if (int(args.size()) != f->arity) {
+      fail(t.text + " takes " + std::to_string(f->arity) +
+               (f->arity == 1 ? " argument" : " arguments") + ", got " +
+               std::to_string(args.size()),
+           t.position);
+    }
+    return build([&] { return call(*f, args); }, t.position);
+  }
+
+  const std::string& text_;
+  const std::map<std::string, GiNaC::ex>& names_;
+  const std::vector<std::string>& known_;
+  std::size_t pos_ = 0;
+  Token token_;
+};
+
+GiNaC::ex parse_expression(const std::string& text, const std::map<std::string, GiNaC::ex>& names,
+                           const std::vector<std::string>& known) {
+  return Parser(text, names, known).parse();
+}
+
+}  // namespace ukdyn::expr::detail
