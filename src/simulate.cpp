@@ -22,17 +22,21 @@ namespace ukdyn {
 
 const char* to_string(Integrator integrator) {
   switch (integrator) {
-    case Integrator::kRK4: return "rk4";
-    case Integrator::kDopri5: return "dopri5";
-    case Integrator::kRKF78: return "rkf78";
-    case Integrator::kBDF: return "bdf";
+    case Integrator::kRK4:
+      return "rk4";
+    case Integrator::kDopri5:
+      return "dopri5";
+    case Integrator::kRKF78:
+      return "rkf78";
+    case Integrator::kBDF:
+      return "bdf";
   }
   return "unknown";
 }
 
 Integrator integrator_from_string(const std::string& name) {
-  for (Integrator i : {Integrator::kRK4, Integrator::kDopri5, Integrator::kRKF78,
-                       Integrator::kBDF}) {
+  for (Integrator i :
+       {Integrator::kRK4, Integrator::kDopri5, Integrator::kRKF78, Integrator::kBDF}) {
     if (name == to_string(i)) return i;
   }
   throw std::invalid_argument("ukdyn: unknown integrator '" + name +
@@ -41,16 +45,19 @@ Integrator integrator_from_string(const std::string& name) {
 
 const char* to_string(DriftControl drift) {
   switch (drift) {
-    case DriftControl::kNone: return "none";
-    case DriftControl::kBaumgarte: return "baumgarte";
-    case DriftControl::kProjection: return "projection";
+    case DriftControl::kNone:
+      return "none";
+    case DriftControl::kBaumgarte:
+      return "baumgarte";
+    case DriftControl::kProjection:
+      return "projection";
   }
   return "unknown";
 }
 
 DriftControl drift_from_string(const std::string& name) {
-  for (DriftControl d : {DriftControl::kNone, DriftControl::kBaumgarte,
-                         DriftControl::kProjection}) {
+  for (DriftControl d :
+       {DriftControl::kNone, DriftControl::kBaumgarte, DriftControl::kProjection}) {
     if (name == to_string(d)) return d;
   }
   throw std::invalid_argument("ukdyn: unknown drift control '" + name +
@@ -162,8 +169,13 @@ SolverOptions integration_options(SolverOptions o) {
 class Run {
  public:
   Run(const System& sys, const SimulationOptions& o, Trajectory& traj)
-      : sys_(sys), o_(o), ws_(sys, integration_options(o.solver)), traj_(traj), n_(sys.dofs()),
-        q_(n_), qd_(n_) {
+      : sys_(sys),
+        o_(o),
+        ws_(sys, integration_options(o.solver)),
+        traj_(traj),
+        n_(sys.dofs()),
+        q_(n_),
+        qd_(n_) {
     // drift control of each constraint
     const Index K = sys.constraint_count();
     projection_ = o.projection;
@@ -223,33 +235,27 @@ class Run {
     for (std::size_t c = 0; c < contacts.size(); ++c) {
       // g ≤ 0 marks the switch: sliding, the speed falls to v_stop; sticking,
       // mu N − |holding force|
-      std::function<double(double, const double*)> g;
+      double te;
       if (!sticking_[c]) {
         // the sliding speed along the step's initial direction falls to v_stop = 100 eps: the
         // contact stops, whether its velocity would reverse (sliding uphill) or decay to rest
         // (decelerating downhill, where the regularized law would only creep); the stop is
         // then early by v_stop / deceleration, the position off by v_stop² / (2 deceleration)
         const double v_stop = 100.0 * contacts[c].eps;
-        const VectorXd v0 = sliding_velocity(c, x0);
-        if (v0.norm() <= v_stop) continue;
-        const VectorXd dir = v0.normalized();
-        g = [this, c, dir, v_stop](double, const double* x) {
-          return sliding_velocity(c, x).dot(dir) - v_stop;
-        };
+        const Index k = sliding_velocity(c, x0, direction_);
+        const double speed = direction_.head(k).norm();
+        if (speed <= v_stop) continue;
+        direction_.head(k) /= speed;
+        te = locate(t0, x0, t1, x1, dense, [&](double, const double* x) {
+          sliding_velocity(c, x, velocity_);
+          return velocity_.head(k).dot(direction_.head(k)) - v_stop;
+        });
       } else {
-        g = [this, c](double t, const double* x) { return stick_margin(c, t, x); };
+        te = locate(t0, x0, t1, x1, dense,
+                    [&](double t, const double* x) { return stick_margin(c, t, x); });
       }
-      if (g(t1, x1) > 0.0) continue;
-      // bisection on the dense output: [lo, hi] with g(lo) > 0 >= g(hi)
-      double lo = t0, hi = t1;
-      std::vector<double> xs(sample_.size());
-      while (hi - lo > 1e-14 * std::max(1.0, std::abs(hi))) {
-        const double mid = 0.5 * (lo + hi);
-        dense(mid, xs.data());
-        (g(mid, xs.data()) > 0.0 ? lo : hi) = mid;
-      }
-      if (std::isnan(first) || hi < first) {
-        first = hi;
+      if (!std::isnan(te) && (std::isnan(first) || te < first)) {
+        first = te;
         switching_ = Index(c);
       }
     }
@@ -346,15 +352,31 @@ class Run {
 
  private:
   // q' on the contact's sliding coordinates
-  VectorXd sliding_velocity(std::size_t c, const double* x) const {
+  // q' on contact c's sliding coordinates into the head of v; returns how many
+  Index sliding_velocity(std::size_t c, const double* x, VectorXd& v) const {
     const auto& coords = sys_.friction_contacts()[c].coordinates;
-    VectorXd v(Index(coords.size()));
     for (std::size_t r = 0; r < coords.size(); ++r) v[Index(r)] = x[n_ + coords[r]];
-    return v;
+    return Index(coords.size());
   }
-  double sliding_speed(std::size_t c, const double* x) const {
-    return sliding_velocity(c, x).norm();
+  double sliding_speed(std::size_t c, const double* x) {
+    return velocity_.head(sliding_velocity(c, x, velocity_)).norm();
   }
+
+  // the first s in (t0, t1] with g(s) <= 0, by bisection on the dense output (g(t0) > 0 is
+  // assumed), or NaN when g(t1) > 0
+  template <class G>
+  double locate(double t0, const double*, double t1, const double* x1,
+                const detail::SegmentHooks::Dense& dense, G&& g) {
+    if (g(t1, x1) > 0.0) return std::numeric_limits<double>::quiet_NaN();
+    double lo = t0, hi = t1;
+    while (hi - lo > 1e-14 * std::max(1.0, std::abs(hi))) {
+      const double mid = 0.5 * (lo + hi);
+      dense(mid, event_x_.data());
+      (g(mid, event_x_.data()) > 0.0 ? lo : hi) = mid;
+    }
+    return hi;
+  }
+
   // mu N − |holding force|, with the contact sticking, at (t, x). The stick rows make the
   // normal constraint's rows redundant, so their minimum-norm shares split the reaction
   // arbitrarily; the reaction R = share(normal) + share(stick) is unique, and is split here into
@@ -364,13 +386,20 @@ class Run {
     q_ = Eigen::Map<const VectorXd>(x, n_);
     qd_ = Eigen::Map<const VectorXd>(x + n_, n_);
     if (forward_dynamics(sys_, ws_, q_, qd_, t) != Status::kOk) return -1.0;
-    const VectorXd R = ws_.shares.col(contact.normal_constraint) +
-                       ws_.shares.col(contact.stick_constraint);
-    const Index k = contact.normal_constraint;
-    const MatrixXd Nt = ws_.A.middleRows(sys_.row_offset(k), sys_.constraint(k).rows()).transpose();
-    const VectorXd RN = Nt * Nt.completeOrthogonalDecomposition().solve(R);
-    holding_ = R - RN;
-    return contact.mu * RN.norm() - holding_.norm();
+    reaction_ =
+        ws_.shares.col(contact.normal_constraint) + ws_.shares.col(contact.stick_constraint);
+    const Index k = contact.normal_constraint, rows = sys_.constraint(k).rows();
+    const auto normals = ws_.A.middleRows(sys_.row_offset(k), rows);
+    // R_N = projection of R onto the normal rows: a (a·R)/(a·a) for one row
+    if (rows == 1) {
+      const double aa = normals.row(0).squaredNorm();
+      normal_ = normals.row(0).transpose() * (aa > 0.0 ? normals.row(0).dot(reaction_) / aa : 0.0);
+    } else {
+      const MatrixXd Nt = normals.transpose();
+      normal_ = Nt * Nt.completeOrthogonalDecomposition().solve(reaction_);
+    }
+    holding_ = reaction_ - normal_;
+    return contact.mu * normal_.norm() - holding_.norm();
   }
 
   // the friction of a contact that starts to slip from rest points along the force that held
@@ -379,7 +408,7 @@ class Run {
     const FrictionContact& contact = sys_.friction_contacts()[c];
     auto hint = ws_.slip_hint.col(contact.force);
     hint.setZero();
-    if (!from_rest || holding_.size() != n_) return;
+    if (!from_rest) return;
     for (Index i : contact.coordinates) hint[i] = holding_[i];
     if (hint.norm() > 0.0) hint.normalize();
   }
@@ -398,9 +427,14 @@ class Run {
   std::vector<double> sample_ = std::vector<double>(std::size_t(2 * n_ + 1));
   ProjectionOptions projection_;
   bool projecting_ = false;
-  std::vector<unsigned char> sticking_;  // (contacts) contact c sticks
-  VectorXd holding_;                     // (n) the holding force of the last stick_margin
-  Index switching_ = -1;                 // the contact of the last event found
+  std::vector<unsigned char> sticking_;      // (contacts) contact c sticks
+  VectorXd holding_ = VectorXd::Zero(n_);    // (n) holding force of the last stick_margin
+  VectorXd reaction_ = VectorXd::Zero(n_);   // (n) scratch of stick_margin: R
+  VectorXd normal_ = VectorXd::Zero(n_);     // (n) scratch of stick_margin: R_N
+  VectorXd velocity_ = VectorXd::Zero(n_);   // (n) sliding velocities (head)
+  VectorXd direction_ = VectorXd::Zero(n_);  // (n) sliding direction at the step's start (head)
+  std::vector<double> event_x_ = std::vector<double>(std::size_t(2 * n_ + 1));  // dense state
+  Index switching_ = -1;  // the contact of the last event found
   std::string failure_;
 };
 
@@ -419,8 +453,7 @@ double energy_drift(const Trajectory& traj) {
 }  // namespace
 
 std::vector<std::string> check_initial_conditions(const System& sys, const VectorXd& q,
-                                                  const VectorXd& qd, double t,
-                                                  double tolerance) {
+                                                  const VectorXd& qd, double t, double tolerance) {
   Workspace ws(sys);
   evaluate_violations(sys, ws, q, qd, t);
   return violated(sys, ws, tolerance);
@@ -448,9 +481,9 @@ Trajectory simulate(const System& sys, const VectorXd& q0, const VectorXd& qd0,
   evaluate_violations(sys, ws, q, qd, o.t_start);
   if (auto bad = violated(sys, ws, o.initial_tolerance); !bad.empty()) {
     if (!o.project_initial) {
-      throw std::invalid_argument("ukdyn::simulate: inconsistent initial conditions at t = " +
-                                  format(o.t_start) + ": " + join(bad) +
-                                  " (set project_initial to project them onto the constraints)");
+      throw std::invalid_argument(
+          "ukdyn::simulate: inconsistent initial conditions at t = " + format(o.t_start) + ": " +
+          join(bad) + " (set project_initial to project them onto the constraints)");
     }
     ProjectionOptions all = o.projection;
     const auto rp = project_positions(sys, ws, q, o.t_start, all);
