@@ -38,7 +38,8 @@ struct ModelSource {
 std::map<std::string, double> parse_overrides(const std::vector<std::string>& set);
 
 /// Loads the model of `source`. @throws UsageError (neither or both of path and example, an
-/// unknown example), ModelError (the model file).
+/// unknown example, --set of a parameter the model does not declare), ModelError (the model
+/// file).
 Model load_source(const ModelSource& source);
 
 /// Settings of `ukdyn run`.

@@ -17,7 +17,8 @@ constexpr const char* kExitCodes = R"(Exit codes:
   0  ok
   1  the run failed numerically (status not ok); the trajectory up to the failure is still
      written (also: the output files could not be written)
-  2  bad command line
+  2  bad command line (also --set of a parameter the model does not declare, an unknown
+     --example)
   3  bad model file (printed as FILE:LINE:COLUMN: error: MESSAGE (hint: ...)), or a model
      that cannot be started (inconsistent initial state without initial: project: true)
   4  check found problems)";

@@ -63,11 +63,19 @@ Model load_source(const ModelSource& source) {
   if (source.path.empty() == source.example.empty()) {
     throw UsageError("give either a model file or --example NAME (ukdyn examples lists them)");
   }
-  if (!source.path.empty()) return load_model(source.path, overrides);
-  for (const auto& f : example_models()) {
-    if (source.example == f.name) {
-      return parse_model(f.text, "examples/models/" + source.example + ".yaml", overrides);
+  try {
+    if (!source.path.empty()) return load_model(source.path, overrides);
+    for (const auto& f : example_models()) {
+      if (source.example == f.name) {
+        return parse_model(f.text, "examples/models/" + source.example + ".yaml", overrides);
+      }
     }
+  } catch (const ModelError& e) {
+    // --set of a parameter the model does not declare is a command-line mistake (exit 2): the
+    // reader reports it without a position (line 0), naming the option
+    if (e.line() == 0 && e.message().rfind("--set ", 0) == 0)
+      throw UsageError(e.message() + (e.hint().empty() ? "" : " (" + e.hint() + ")"));
+    throw;
   }
   throw UsageError("no example called '" + source.example + "'; the examples are " +
                    example_names());

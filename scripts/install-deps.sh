@@ -11,11 +11,13 @@ packages=(
   libhdf5-dev                          # HDF5 trajectories
   nlohmann-json3-dev                   # JSON run summaries
   libginac-dev                         # symbolic expressions of model files
+  libsuitesparse-dev                   # CHOLMOD / SuiteSparseQR: the sparse engine
   libyaml-cpp-dev                      # model files
   libcli11-dev                         # the ukdyn command line
   python3-matplotlib                   # plots of ukdyn run
   libgtest-dev libgmock-dev            # tests
   libbenchmark-dev                     # benchmarks
+  clang libclang-rt-14-dev             # fuzz/: libFuzzer and the sanitizer runtimes of clang
 )
 
 missing=()

@@ -20,6 +20,41 @@ const char* to_string(ConstraintKind kind) {
 
 std::unique_ptr<ConstraintScratch> ConstraintModel::make_scratch(Index) const { return nullptr; }
 
+const std::vector<Index>& ConstraintModel::columns() const {
+  static const std::vector<Index> kAll;  // empty: every coordinate
+  return kAll;
+}
+
+void ConstraintModel::acceleration_form_local(const VectorXd&, const VectorXd&, double,
+                                              ConstraintScratch*, Eigen::Ref<MatrixXd>,
+                                              Eigen::Ref<VectorXd>) const {
+  throw std::logic_error(
+      "ukdyn::ConstraintModel: a model that declares columns() must implement "
+      "acceleration_form_local");
+}
+
+void ConstraintModel::acceleration_form(const VectorXd& q, const VectorXd& qd, double t,
+                                        ConstraintScratch* scratch, Eigen::Ref<MatrixXd> A,
+                                        Eigen::Ref<VectorXd> b) const {
+  const std::vector<Index>& cols = columns();
+  if (cols.empty()) {
+    throw std::logic_error(
+        "ukdyn::ConstraintModel: a dense model (no columns()) must implement acceleration_form");
+  }
+  const Index k = Index(cols.size());
+  acceleration_form_local(q, qd, t, scratch, A.leftCols(k), b);
+  // scatter column j to cols[j], last first: cols[j] >= j and increasing, so a column is moved
+  // before anything is written over it
+  Index next = A.cols();  // columns >= next are final
+  for (Index j = k - 1; j >= 0; --j) {
+    const Index c = cols[std::size_t(j)];
+    for (Index z = c + 1; z < next; ++z) A.col(z).setZero();
+    if (c != j) A.col(c) = A.col(j);
+    next = c;
+  }
+  for (Index z = 0; z < next; ++z) A.col(z).setZero();
+}
+
 void ConstraintModel::violation(const VectorXd&, const VectorXd&, double, ConstraintScratch*,
                                 Eigen::Ref<VectorXd> position,
                                 Eigen::Ref<VectorXd> velocity) const {

@@ -154,7 +154,7 @@ FundamentalDecomposition& FundamentalDecomposition::compute_constraints(
     for (Index j = 0; j < m_; ++j) {
       lower_solve(L_.data(), n_, inv_ldiag_.data(), X_.col(j).data(), n_);
     }
-  } else {
+  } else if (m_ > 0) {  // (Eigen's solve takes &X(0, 0) even when X is empty)
     L_.triangularView<Eigen::Lower>().solveInPlace(X_);
   }
   // Wᵀ Π = Q [R11 R12; 0 0], then [R11 R12] = [T 0] Z when rank-deficient

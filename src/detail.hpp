@@ -33,6 +33,20 @@ inline void require_same_system(const System& sys, const Workspace& ws, const ch
 // Q; shared with the projections).
 Status evaluate_mass(const System& sys, Workspace& ws, const VectorXd& q, double t);
 
+// Writes constraint k's rows of A (dense matrix or the sparse engine's pattern) and b from its
+// acceleration form at (q, q', t); with `check`, kNonFiniteInput (recorded) when A is not
+// finite.
+Status write_constraint_rows(const System& sys, Workspace& ws, Index k, const VectorXd& q,
+                             const VectorXd& qd, double t, bool check = true);
+// Zeroes constraint k's rows of A and b.
+void zero_constraint_rows(const System& sys, Workspace& ws, Index k);
+
+// Copies constraint k's rows of A (as last assembled) into out (rows × n), either engine.
+void copy_constraint_rows(const System& sys, const Workspace& ws, Index k,
+                          Eigen::Ref<MatrixXd> out);
+// Kinetic energy ½ q'ᵀ M q' with the M of the last evaluation, either engine.
+double kinetic_energy(const Workspace& ws, const VectorXd& qd);
+
 // Whether constraint k acts at t, honouring ws.activity_override.
 inline bool is_active(const System& sys, const Workspace& ws, Index k, double t) {
   const signed char forced = ws.activity_override[std::size_t(k)];

@@ -51,7 +51,7 @@ void ExpressionSet::set_constant(const std::string& name, double value) {
 }
 
 Expr ExpressionSet::parse(const std::string& text) {
-  return impl_->add(parse_expression(text, impl_->symbols, impl_->known));
+  return impl_->add(parse_expression(text, impl_->symbols, impl_->known, impl_->constant_values));
 }
 
 Expr ExpressionSet::constant(double value) {

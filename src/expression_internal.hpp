@@ -48,9 +48,10 @@ std::string listing(const std::vector<std::string>& names);
 // the shortest decimal that reads back as v, as an exact rational
 GiNaC::numeric exact(double v);
 // `text` parsed into GiNaC over `names` (known: the names in declaration order, for
-// suggestions). Throws ParseError.
+// suggestions; values: the constants' values, which must leave every operation defined). Throws
+// ParseError.
 GiNaC::ex parse_expression(const std::string& text, const std::map<std::string, GiNaC::ex>& names,
-                           const std::vector<std::string>& known);
+                           const std::vector<std::string>& known, const GiNaC::exmap& values);
 
 }  // namespace detail
 

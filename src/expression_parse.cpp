@@ -196,6 +196,28 @@ GiNaC::numeric exact(double v) {
   return decimal(mantissa, exponent);
 }
 
+// A bound of the bits of the exact numbers in `e` (a product multiplies its factors' numbers, a
+// power of numbers raises them): what GiNaC would compute if `e` were raised to an integer
+// power, since (2 x)^n is 2^n x^n and (2^(1/2))^n is 2^(n/2) for it.
+double numeric_bits(const GiNaC::ex& e) {
+  if (GiNaC::is_a<GiNaC::numeric>(e)) {
+    const GiNaC::numeric& n = GiNaC::ex_to<GiNaC::numeric>(e);
+    if (!n.is_rational()) return 64.0;
+    return double(std::max(n.numer().int_length(), n.denom().int_length()));
+  }
+  if (GiNaC::is_a<GiNaC::power>(e) && GiNaC::is_a<GiNaC::numeric>(e.op(1))) {
+    const GiNaC::numeric p = GiNaC::abs(GiNaC::ex_to<GiNaC::numeric>(e.op(1)));
+    const double magnitude = p.is_real() && p < GiNaC::numeric(1L << 30) ? p.to_double() : 1e30;
+    return numeric_bits(e.op(0)) * std::max(1.0, magnitude);
+  }
+  if (GiNaC::is_a<GiNaC::mul>(e)) {
+    double bits = 0.0;
+    for (std::size_t i = 0; i < e.nops(); ++i) bits += numeric_bits(e.op(i));
+    return bits;
+  }
+  return 0.0;
+}
+
 // ---------------------------------------------------------------------------------------------
 // the parser
 //
@@ -217,9 +239,15 @@ struct Token {
 
 class Parser {
  public:
+  // Deepest nesting of parentheses, calls and signs: the parser and GiNaC recurse on it.
+  static constexpr int kMaxDepth = 100;
+  // Largest exact number a power may make (GiNaC computes 10^(10^9) digit by digit); a double
+  // holds at most 2^1024, so nothing of use is refused.
+  static constexpr double kMaxPowerBits = 4096.0;
+
   Parser(const std::string& text, const std::map<std::string, GiNaC::ex>& names,
-         const std::vector<std::string>& known)
-      : text_(text), names_(names), known_(known) {
+         const std::vector<std::string>& known, const GiNaC::exmap& values)
+      : text_(text), names_(names), known_(known), values_(values) {
     next();
   }
 
@@ -310,6 +338,96 @@ class Parser {
     }
   }
 
+  // e with the constants' values (those compile() puts in): an operation may divide by zero or
+  // take log(0) with them though not with their symbols, like 1/(L - 1) with L = 1. Checked here,
+  // where the position is known, as each operation is built from operands already checked (in
+  // compile's substitution, GiNaC would also leak the objects it was building).
+  GiNaC::ex valued(const GiNaC::ex& e, std::size_t position) const {
+    if (values_.empty()) return e;
+    return build([&] { return e.subs(values_); }, position);
+  }
+
+  static std::string printed(const GiNaC::ex& e) {
+    std::ostringstream os;
+    os << e;
+    return os.str();
+  }
+
+  // true when e depends on an input (a symbol that is not a constant)
+  bool has_input(const GiNaC::ex& e) const {
+    for (auto i = e.preorder_begin(); i != e.preorder_end(); ++i) {
+      if (GiNaC::is_a<GiNaC::symbol>(*i) && values_.find(*i) == values_.end()) return true;
+    }
+    return false;
+  }
+
+  // base^exponent, as GiNaC computes it when the constants get their values (compile() substitutes
+  // them, and so does valued()): refused when an exact number of more than kMaxPowerBits bits, so
+  // lc^(10^90) with lc = 0.3 as well as 10^(10^90)
+  void check_power_size(const GiNaC::ex& base, const GiNaC::ex& exponent, std::size_t at) const {
+    const GiNaC::ex p = valued(exponent, at);
+    if (!GiNaC::is_a<GiNaC::numeric>(p) || !GiNaC::ex_to<GiNaC::numeric>(p).is_real()) return;
+    const GiNaC::numeric magnitude = GiNaC::abs(GiNaC::ex_to<GiNaC::numeric>(p));
+    const GiNaC::ex b = valued(base, at);
+    const double bits = std::min(numeric_bits(b), 1e15);
+    if (bits > 1.0 &&
+        magnitude * GiNaC::numeric(long(bits)) > GiNaC::numeric(long(kMaxPowerBits))) {
+      fail("the power makes a number too large to compute exactly (over " +
+               std::to_string(int(kMaxPowerBits)) + " bits)" +
+               (p.is_equal(exponent) && b.is_equal(base) ? "" : " with the parameters' values"),
+           at);
+    }
+  }
+
+  // base^exponent and its first two derivatives (the model takes no more) with the constants'
+  // values: 0^p needs p > 0, and the derivatives of b^p where b is 0 need p a whole number,
+  // since they hold b^(p - 1), b^(p - 2) and, when p is not constant, log(b)
+  void check_power(const GiNaC::ex& base, const GiNaC::ex& exponent, std::size_t at) const {
+    if (!valued(base, at).is_zero()) return;
+    const GiNaC::ex p = valued(exponent, at);
+    const bool numeric = GiNaC::is_a<GiNaC::numeric>(p);
+    const bool positive = numeric && GiNaC::ex_to<GiNaC::numeric>(p).is_positive();
+    const bool with_values = !base.is_zero() || !exponent.is_equal(p);
+    if (!positive) {
+      fail("cannot evaluate: 0^" + (numeric ? printed(p) : "(" + printed(p) + ")") +
+               (with_values ? " with the parameters' values" : ""),
+           at);
+    }
+    if ((has_input(base) || has_input(exponent)) && !GiNaC::ex_to<GiNaC::numeric>(p).is_integer()) {
+      fail("cannot differentiate: the base of this power is 0 with the parameters' values, and " +
+               printed(p) + " is not a whole number",
+           at);
+    }
+  }
+
+  // f(args) with the constants' values: log(0) and tan(acos(0)) are undefined, and sqrt and abs
+  // at 0, asin and acos at 1 or -1 and atan2 at (0, 0) have no derivative
+  void check_call(const FunctionInfo& f, const GiNaC::exvector& args, std::size_t at) const {
+    if (f.code == Code::kSqrt) check_power(args[0], GiNaC::numeric(1, 2), at);
+    if (values_.empty()) return;  // as built
+    GiNaC::exvector v;
+    bool inputs = false;
+    for (const auto& a : args) {
+      v.push_back(valued(a, at));
+      inputs = inputs || has_input(a);
+    }
+    build([&] { return call(f, v); }, at);
+    if (!inputs) return;  // a constant: no derivative taken
+    const std::string name = f.name;
+    if (f.code == Code::kAbs && v[0].is_zero()) {
+      fail("cannot differentiate: the argument of abs is 0 with the parameters' values", at);
+    }
+    if ((f.code == Code::kAsin || f.code == Code::kAcos) &&
+        (v[0].is_equal(GiNaC::ex(1)) || v[0].is_equal(GiNaC::ex(-1)))) {
+      fail("cannot differentiate: the argument of " + name + " is " + printed(v[0]) +
+               " with the parameters' values",
+           at);
+    }
+    if (f.code == Code::kAtan2 && v[0].is_zero() && v[1].is_zero()) {
+      fail("cannot differentiate: both arguments of atan2 are 0 with the parameters' values", at);
+    }
+  }
+
   GiNaC::ex expression() {
     GiNaC::ex e = term();
     while (is("+") || is("-")) {
@@ -329,13 +447,37 @@ class Parser {
       const std::size_t at = token_.position;
       next();
       const GiNaC::ex rhs = unary();
+      if (!times && valued(rhs, at).is_zero()) {
+        fail(std::string("cannot evaluate: division by zero") +
+                 (rhs.is_zero() ? "" : " with the parameters' values"),
+             at);
+      }
       e = build([&] { return times ? e * rhs : e / rhs; }, at);
+      // a product adds the exponents of a common base: x^a * x^(b - a) is x^b
+      const bool product = GiNaC::is_a<GiNaC::mul>(e);
+      for (std::size_t i = 0; i < (product ? e.nops() : 1); ++i) {
+        const GiNaC::ex f = product ? e.op(i) : e;
+        if (GiNaC::is_a<GiNaC::power>(f)) check_power_size(f.op(0), f.op(1), at);
+      }
     }
     return e;
   }
 
   // in_exponent: the operand right of a '^', which may not hold another '^' unparenthesized
   GiNaC::ex unary(bool in_exponent = false) {
+    // every nested operand passes here: count the depth
+    if (depth_ == kMaxDepth) {
+      fail("the expression nests more than " + std::to_string(kMaxDepth) +
+               " deep (parentheses, function calls and signs)",
+           token_.position);
+    }
+    ++depth_;
+    GiNaC::ex e = signed_operand(in_exponent);
+    --depth_;
+    return e;
+  }
+
+  GiNaC::ex signed_operand(bool in_exponent) {
     if (is("+")) {
       next();
       return unary(in_exponent);
@@ -354,6 +496,8 @@ class Parser {
     const std::size_t at = token_.position;
     next();
     const GiNaC::ex exponent = unary(true);
+    check_power_size(base, exponent, at);
+    check_power(base, exponent, at);
     return build([&] { return GiNaC::pow(base, exponent); }, at);
   }
 
@@ -401,9 +545,14 @@ class Parser {
       }
     }
     if (i < s.size()) {
-      const long e = std::strtol(s.c_str() + i + 1, nullptr, 10);
-      if (std::abs(e) > 400) fail("number '" + s + "' is out of range", t.position);
-      exponent += e;
+      // ['+' | '-'] digits, saturated: strtol's LONG_MIN for 1e-9223372036854775809 has no abs()
+      std::size_t k = i + 1;
+      const bool negative = s[k] == '-';
+      if (s[k] == '+' || s[k] == '-') ++k;
+      long e = 0;
+      for (; k < s.size() && e <= 400; ++k) e = 10 * e + (s[k] - '0');
+      if (e > 400) fail("number '" + s + "' is out of range", t.position);
+      exponent += negative ? -e : e;
     }
     return decimal(digits, exponent);
   }
@@ -457,19 +606,22 @@ class Parser {
                std::to_string(args.size()),
            t.position);
     }
+    check_call(*f, args, t.position);
     return build([&] { return call(*f, args); }, t.position);
   }
 
   const std::string& text_;
   const std::map<std::string, GiNaC::ex>& names_;
   const std::vector<std::string>& known_;
+  const GiNaC::exmap& values_;
   std::size_t pos_ = 0;
+  int depth_ = 0;  // of unary() calls
   Token token_;
 };
 
 GiNaC::ex parse_expression(const std::string& text, const std::map<std::string, GiNaC::ex>& names,
-                           const std::vector<std::string>& known) {
-  return Parser(text, names, known).parse();
+                           const std::vector<std::string>& known, const GiNaC::exmap& values) {
+  return Parser(text, names, known, values).parse();
 }
 
 }  // namespace ukdyn::expr::detail

@@ -12,6 +12,7 @@
 #include <set>
 #include <sstream>
 
+#include <Eigen/Cholesky>
 #include <yaml-cpp/yaml.h>
 
 #include "ukdyn/constraint.hpp"
@@ -183,7 +184,9 @@ class Reader {
   }
 
   double number(const YAML::Node& node, const std::string& what);
-  Expr expression(const YAML::Node& node, const std::string& what);
+  Expr expression(const YAML::Node& node, const std::string& what, bool in_C = false);
+  Program compile(const std::vector<Expr>& exprs, const YAML::Node& where,
+                  const std::string& what) const;
   std::vector<YAML::Node> rows_of(const YAML::Node& node, const std::string& what);
   void read_parameters(const YAML::Node& root);
   void read_coordinates(const YAML::Node& root);
@@ -193,6 +196,7 @@ class Reader {
   void read_initial(const YAML::Node& root, Model& model);
   void read_simulate(const YAML::Node& root, Model& model);
   void read_output(const YAML::Node& root, Model& model);
+  void check_mass_matrix(const YAML::Node& root, const Model& model);
   Index coordinate(const YAML::Node& node);
 
   std::string file_;
@@ -200,6 +204,7 @@ class Reader {
   std::map<std::string, double> parameters_;
   std::vector<std::string> coordinates_, velocities_;
   std::vector<std::string> constraint_names_;  // in declaration order
+  std::vector<std::string> constraint_inputs_;  // N_c and lambda_c of each named constraint
   std::vector<Index> constraint_rows_;
   std::unique_ptr<ExpressionSet> set_;
   InputLayout layout_;
@@ -216,27 +221,60 @@ double Reader::number(const YAML::Node& node, const std::string& what) {
            "use numbers and parameters here");
     }
   }
-  const Program p = set_->compile({e});
+  const Program p = compile({e}, node, what);
   std::vector<double> in(std::size_t(p.inputs()), 0.0), scratch(std::size_t(p.scratch_size()));
   double out = 0.0;
   p.evaluate(in.data(), &out, scratch.data());
+  if (!std::isfinite(out))
+    fail(node, what + " must be a finite number, but is " + brief(out),
+         "a double holds magnitudes up to about 1.8e308");
   return out;
 }
 
-Expr Reader::expression(const YAML::Node& node, const std::string& what) {
+Expr Reader::expression(const YAML::Node& node, const std::string& what, bool in_C) {
   if (!node.IsScalar()) {
     fail(node, what + " must be an expression (a number or a formula)",
          "write it as a single value, e.g. 0.5*m*x_dot^2");
   }
+  Expr e = 0;
   try {
-    return set_->parse(node.Scalar());
-  } catch (const expr::ParseError& e) {
+    e = set_->parse(node.Scalar());
+  } catch (const expr::ParseError& error) {
     // the expression starts at the node; quoted scalars start one character later
     YAML::Mark m = node.Mark();
     const bool quoted = node.Tag() == "!";
-    m.column += int(e.position()) + (quoted ? 1 : 0);
-    fail_at(m, "in " + what + ": " + e.what(),
-            "expressions use the coordinates, their velocities (x_dot), t and the parameters");
+    m.column += int(error.position()) + (quoted ? 1 : 0);
+    const std::string message = error.what();
+    fail_at(
+        m, "in " + what + ": " + message,
+        message.find("the parameters' values") != std::string::npos
+            ? "change the parameter's value, or write the expression for it"
+            : "expressions use the coordinates, their velocities (x_dot), t and the parameters");
+  }
+  compile({e}, node, what);  // defined with the parameters' values? (errors point here)
+  // the constraints' forces are inputs of C only (nothing else is evaluated with them)
+  for (std::size_t k = 0; !in_C && k < constraint_inputs_.size(); ++k) {
+    if (!set_->independent_of(e, constraint_inputs_[k])) {
+      fail(node, "in " + what + ": '" + constraint_inputs_[k] + "' is known only in a C",
+           "a constraint's N_ and lambda_ are inputs of the non-ideal forces written as C");
+    }
+  }
+  return e;
+}
+
+// The constants of an expression are evaluated when it is compiled, with the parameters' values:
+// 1/(L - 1) with L = 1 or sqrt(L - 2) with L = 1 fail only then.
+Program Reader::compile(const std::vector<Expr>& exprs, const YAML::Node& where,
+                        const std::string& what) const {
+  try {
+    return set_->compile(exprs);
+  } catch (const std::exception& e) {
+    std::string reason = e.what();
+    const std::string prefix = "ukdyn::expr::ExpressionSet::compile: ";
+    if (reason.rfind(prefix, 0) == 0) reason.erase(0, prefix.size());
+    fail(where, "cannot evaluate " + what + " with the parameters' values: " + reason,
+         "a parameter value makes it undefined: a division by zero, or sqrt or log of a "
+         "negative number");
   }
 }
 
@@ -267,14 +305,17 @@ void Reader::read_parameters(const YAML::Node& root) {
         std::size_t used = 0;
         const double v = std::stod(kv.second.Scalar(), &used);
         if (used != kv.second.Scalar().size()) throw std::invalid_argument("trailing text");
+        if (!std::isfinite(v)) throw std::invalid_argument("nan or inf");
         parameters_[name] = v;
       } catch (const std::exception&) {
         fail(kv.second,
-             "parameter '" + name + "' must be a number, got '" + kv.second.Scalar() + "'");
+             "parameter '" + name + "' must be a finite number, got '" + kv.second.Scalar() + "'");
       }
     }
   }
   for (const auto& [name, value] : overrides_) {
+    if (!std::isfinite(value))
+      throw ModelError(file_, 0, 0, "--set " + name + ": the value must be a finite number");
     if (!parameters_.count(name)) {
       std::vector<std::string> known;
       for (const auto& kv : parameters_) known.push_back(kv.first);
@@ -386,7 +427,9 @@ void Reader::read_dynamics(const YAML::Node& root, SystemBuilder& builder) {
       constant = constant && set_->independent_of(e, name);
   }
   const InputLayout layout = layout_;
-  const Program Mp = set_->compile(M), Qp = set_->compile(Q);
+  const YAML::Node dynamics = T ? T : Mnode;
+  const Program Mp = compile(M, dynamics, T ? "the derivatives of kinetic_energy" : "mass_matrix"),
+                Qp = compile(Q, dynamics, "the generalized forces");
   if (constant) {
     MatrixXd Mc(n, n);
     std::vector<double> in(std::size_t(layout.size()), 0.0),
@@ -413,7 +456,7 @@ void Reader::read_dynamics(const YAML::Node& root, SystemBuilder& builder) {
         Qp.evaluate(b.in.data(), Qout.data(), b.scratch.data());
       });
   if (V) {
-    const Program Vp = set_->compile({Ve});
+    const Program Vp = compile({Ve}, V, "potential_energy");
     builder.potential_energy([Vp, layout](const VectorXd& q, double t) {
       ThreadBuffers& b = buffers();
       b.reserve(layout.size(), Vp);
@@ -512,9 +555,11 @@ void Reader::read_constraints(const YAML::Node& root, SystemBuilder& builder) {
       }
       for (const auto& e : bs) accel.push_back(expression(e, what + ", b"));
     }
-    Constraint constraint(name, kind, rows,
-                          std::make_shared<CompiledConstraint>(
-                              kind, rows, n, layout_, set_->compile(accel), set_->compile(levels)));
+    Constraint constraint(
+        name, kind, rows,
+        std::make_shared<CompiledConstraint>(kind, rows, n, layout_,
+                                             compile(accel, c, "the derivatives of " + what),
+                                             compile(levels, c, what)));
     if (const YAML::Node a = c["active"]) {
       if (!a.IsSequence() || a.size() != 2) fail(a, "active must be [t0, t1]");
       const double t0 = number(a[0], "active"), t1 = number(a[1], "active");
@@ -589,8 +634,8 @@ void Reader::read_nonideal(const YAML::Node& root, SystemBuilder& builder) {
       if (Index(rows.size()) != n)
         fail(f["C"], "C must have " + std::to_string(n) + " entries, one per coordinate");
       std::vector<Expr> C;
-      for (const auto& r : rows) C.push_back(expression(r, "C"));
-      const Program Cp = set_->compile(C);
+      for (const auto& r : rows) C.push_back(expression(r, "C", true));
+      const Program Cp = compile(C, f["C"], "C");
       const InputLayout layout = layout_;
       const std::vector<std::string> names = constraint_names_;
       NonIdealForce force(
@@ -681,6 +726,41 @@ void Reader::read_simulate(const YAML::Node& root, Model& model) {
   if (!(o.t_end > o.t_start)) fail(s, "t_end must be greater than t_start");
 }
 
+// M(q0, t_start) must be symmetric positive definite: a model that fails here cannot start, so
+// the error points at the declaration of M (or T) rather than at the run.
+void Reader::check_mass_matrix(const YAML::Node& root, const Model& model) {
+  const Index n = model.system.dofs();
+  MatrixXd M(n, n);
+  model.system.mass_matrix(model.q0, model.options.t_start, M);
+  const YAML::Node at = root["mass_matrix"] ? root["mass_matrix"] : root["kinetic_energy"];
+  const std::string where = " at the initial state (t = " + brief(model.options.t_start) + ")";
+  const std::string source = root["mass_matrix"] ? "mass_matrix" : "kinetic_energy";
+  if (!M.allFinite()) {
+    fail(at, "the mass matrix is not finite" + where,
+         "check " + source + " for divisions by zero or logarithms of non-positive values at q0");
+  }
+  const double scale = M.cwiseAbs().maxCoeff();
+  if ((M - M.transpose()).cwiseAbs().maxCoeff() > 1e-12 * scale) {
+    fail(at, "the mass matrix is not symmetric" + where, "M(i, j) must equal M(j, i)");
+  }
+  Eigen::LLT<MatrixXd> llt(M);
+  if (scale == 0.0 || llt.info() != Eigen::Success) {
+    std::string lacking;
+    for (Index i = 0; i < n; ++i) {
+      if (!(M(i, i) > 0)) lacking += (lacking.empty() ? "" : ", ") + coordinates_[std::size_t(i)];
+    }
+    const bool from_T = source == "kinetic_energy";
+    fail(at, "the mass matrix is not positive definite" + where,
+         !lacking.empty()
+             ? "no positive inertia for " + lacking +
+                   (from_T ? ": the kinetic energy must involve every velocity with a positive "
+                             "coefficient"
+                           : ": every diagonal entry of M must be positive")
+             : (from_T ? "the kinetic energy must be positive for every non-zero velocity"
+                       : "M must be positive definite: check the off-diagonal entries"));
+  }
+}
+
 void Reader::read_output(const YAML::Node& root, Model& model) {
   SimulationOptions& o = model.options;
   const YAML::Node out = root["output"];
@@ -714,7 +794,7 @@ void Reader::read_output(const YAML::Node& root, Model& model) {
       }
     }
   }
-  model.output_program = set_->compile(exprs);
+  model.output_program = compile(exprs, out ? out : root, "the output expressions");
 }
 
 Model Reader::read(const std::string& text) {
@@ -745,18 +825,38 @@ Model Reader::read(const std::string& text) {
   std::vector<std::string> cnames;
   if (const YAML::Node cs = root["constraints"]; cs && cs.IsSequence()) {
     for (const auto& c : cs) {
-      if (c.IsMap() && c["name"] && is_identifier(c["name"].Scalar()))
-        cnames.push_back(c["name"].Scalar());
+      if (c.IsMap() && c["name"] && is_identifier(c["name"].Scalar()) &&
+          std::find(cnames.begin(), cnames.end(), c["name"].Scalar()) == cnames.end())
+        cnames.push_back(c["name"].Scalar());  // (a name given twice is refused below)
     }
   }
-  for (const auto& c : cnames) inputs.push_back("N_" + c);
-  for (const auto& c : cnames) inputs.push_back("lambda_" + c);
+  for (const auto& c : cnames) constraint_inputs_.push_back("N_" + c);
+  for (const auto& c : cnames) constraint_inputs_.push_back("lambda_" + c);
+  inputs.insert(inputs.end(), constraint_inputs_.begin(), constraint_inputs_.end());
   try {
     set_ = std::make_unique<ExpressionSet>(inputs);
   } catch (const std::invalid_argument& e) {
-    fail(root["coordinates"], e.what());
+    std::string message = e.what();
+    if (const auto k = message.find(": "); k != std::string::npos) message.erase(0, k + 2);
+    fail(root["coordinates"], "a coordinate's name is taken: " + message,
+         "x_dot is the velocity of x, and N_c and lambda_c are the forces of constraint c");
   }
-  for (const auto& [name, value] : parameters_) set_->set_constant(name, value);
+  for (const auto& [name, value] : parameters_) {
+    try {
+      set_->set_constant(name, value);
+    } catch (const std::invalid_argument& e) {
+      // a function's name, or a velocity's or a constraint's input (x_dot, N_rod, lambda_rod)
+      const YAML::Node p = root["parameters"];
+      for (const auto& kv : p) {
+        if (kv.first.Scalar() == name) {
+          fail(kv.first, "parameter '" + name + "' clashes with a function or an input",
+               "the names x_dot (each coordinate's velocity), N_c and lambda_c (each "
+               "constraint's), and the functions sin, cos, … are taken");
+        }
+      }
+      throw ModelError(file_, 1, 1, e.what());
+    }
+  }
   layout_.n = Index(coordinates_.size());
   layout_.extra = Index(2 * cnames.size());
 
@@ -776,6 +876,7 @@ Model Reader::read(const std::string& text) {
   model.parameters = parameters_;
   read_initial(root, model);
   read_simulate(root, model);
+  check_mass_matrix(root, model);
   read_output(root, model);
   model.options.project_initial = model.project_initial;
   return model;

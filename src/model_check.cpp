@@ -11,6 +11,7 @@
 
 #include <Eigen/QR>
 
+#include "detail.hpp"
 #include "ukdyn/forward.hpp"
 #include "ukdyn/model.hpp"
 #include "ukdyn/projection.hpp"
@@ -91,7 +92,7 @@ CheckReport check_model(const Model& model) {
     Index r = 0;
     for (Index k : active) {
       const Index rows = sys.constraint(k).rows();
-      stacked.middleRows(r, rows) = ws.A.middleRows(sys.row_offset(k), rows);
+      detail::copy_constraint_rows(sys, ws, k, stacked.middleRows(r, rows));
       r += rows;
     }
   }
@@ -110,7 +111,8 @@ CheckReport check_model(const Model& model) {
     for (Index k : active) {
       const Index rows = sys.constraint(k).rows();
       MatrixXd grown(kept.rows() + rows, n);
-      grown << kept, ws.A.middleRows(sys.row_offset(k), rows);
+      grown.topRows(kept.rows()) = kept;
+      detail::copy_constraint_rows(sys, ws, k, grown.bottomRows(rows));
       const Index grown_rank = rank_of_rows(grown, threshold);
       if (grown_rank <= kept_rank) {
         report.redundant.push_back(sys.constraint(k).name());

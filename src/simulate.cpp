@@ -331,7 +331,7 @@ class Run {
     push(traj_.Qc_ideal, ws_.Qc_ideal);
     push(traj_.Qc_nonideal, ws_.Qc_nonideal);
     push(traj_.lambda, ws_.lambda);
-    const double T = 0.5 * qd_.dot(ws_.M * qd_), V = sys_.potential_energy(q_, t);
+    const double T = detail::kinetic_energy(ws_, qd_), V = sys_.potential_energy(q_, t);
     traj_.kinetic_energy.push_back(T);
     traj_.potential_energy.push_back(V);
     traj_.energy.push_back(T + V);
@@ -389,7 +389,9 @@ class Run {
     reaction_ =
         ws_.shares.col(contact.normal_constraint) + ws_.shares.col(contact.stick_constraint);
     const Index k = contact.normal_constraint, rows = sys_.constraint(k).rows();
-    const auto normals = ws_.A.middleRows(sys_.row_offset(k), rows);
+    if (normals_.rows() != rows) normals_.resize(rows, n_);  // (once per contact size)
+    detail::copy_constraint_rows(sys_, ws_, k, normals_);
+    const auto& normals = normals_;
     // R_N = projection of R onto the normal rows: a (a·R)/(a·a) for one row
     if (rows == 1) {
       const double aa = normals.row(0).squaredNorm();
@@ -431,6 +433,7 @@ class Run {
   VectorXd holding_ = VectorXd::Zero(n_);    // (n) holding force of the last stick_margin
   VectorXd reaction_ = VectorXd::Zero(n_);   // (n) scratch of stick_margin: R
   VectorXd normal_ = VectorXd::Zero(n_);     // (n) scratch of stick_margin: R_N
+  MatrixXd normals_;                         // (rows × n) the normal constraint's rows of A
   VectorXd velocity_ = VectorXd::Zero(n_);   // (n) sliding velocities (head)
   VectorXd direction_ = VectorXd::Zero(n_);  // (n) sliding direction at the step's start (head)
   std::vector<double> event_x_ = std::vector<double>(std::size_t(2 * n_ + 1));  // dense state

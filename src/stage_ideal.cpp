@@ -1,21 +1,34 @@
 // Stage 3: the ideal constrained motion (eqs. 9, 11):
 //   e = b − A a,  q'' = a + L⁻ᵀ W⁺ e,  Qc_ideal = L W⁺ e = Aᵀ lambda,  lambda = G⁺ e.
+// Dense engine: complete orthogonal decomposition of W (decomposition.hpp); sparse engine:
+// rank-revealing sparse LDLᵀ of G = W Wᵀ with the null space of the dropped rows (sparse.hpp).
 #include "detail.hpp"
 #include "ukdyn/forward.hpp"
+#include "ukdyn/sparse.hpp"
 
 namespace ukdyn {
 
 Status solve_ideal(const System& sys, Workspace& ws) {
   detail::require_same_system(sys, ws, "ukdyn::solve_ideal");
-  // e = b − A a
-  ws.e = ws.b;
-  ws.e.noalias() -= ws.A * ws.a;
-  // decompose A L⁻ᵀ; dq = L⁻ᵀ W⁺ e, Qc_ideal = L W⁺ e, lambda = G⁺ e
-  detail::with_decomposition(ws, [&](auto& d) {
-    d.compute_constraints(ws.A);
-    ws.rank = d.rank();
-    d.solve_ideal(ws.e, ws.dqdd, ws.Qc_ideal, ws.lambda);
-  });
+  if (ws.sparse) {
+    // e = b − A a;  W = A L⁻ᵀ, G = W Wᵀ = P L_G D L_Gᵀ Pᵀ;  dq = L⁻ᵀ W⁺ e, Qc_ideal, lambda = G⁺ e
+    SparseDecomposition& sp = *ws.sparse;
+    sp.multiply_A(ws.a, ws.e);
+    ws.e = ws.b - ws.e;
+    sp.compute_constraints();
+    ws.rank = sp.rank();
+    sp.solve_ideal(ws.e, ws.dqdd, ws.Qc_ideal, ws.lambda);
+  } else {
+    // e = b − A a
+    ws.e = ws.b;
+    ws.e.noalias() -= ws.A * ws.a;
+    // decompose A L⁻ᵀ; dq = L⁻ᵀ W⁺ e, Qc_ideal = L W⁺ e, lambda = G⁺ e
+    detail::with_decomposition(ws, [&](auto& d) {
+      d.compute_constraints(ws.A);
+      ws.rank = d.rank();
+      d.solve_ideal(ws.e, ws.dqdd, ws.Qc_ideal, ws.lambda);
+    });
+  }
   // q'' = a + dq
   ws.qdd = ws.a + ws.dqdd;
   if (ws.rank < ws.active_rows) ++ws.counters.rank_deficient;
@@ -25,6 +38,14 @@ Status solve_ideal(const System& sys, Workspace& ws) {
 
 void compute_shares(const System& sys, Workspace& ws) {
   detail::require_same_system(sys, ws, "ukdyn::compute_shares");
+  if (ws.sparse) {
+    // share_k = A_kᵀ lambda_k on the columns of constraint k only (the rest stays zero)
+    if (ws.shares.rows() != sys.dofs()) ws.shares.setZero(sys.dofs(), sys.constraint_count());
+    for (Index k = 0; k < sys.constraint_count(); ++k) {
+      ws.sparse->share(k, ws.lambda, ws.shares.col(k));
+    }
+    return;
+  }
   // share_k = A_kᵀ lambda_k
   for (Index k = 0; k < sys.constraint_count(); ++k) {
     const Index r0 = sys.row_offset(k), rows = sys.constraint(k).rows();

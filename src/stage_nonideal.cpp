@@ -4,6 +4,7 @@
 #include "detail.hpp"
 #include "ukdyn/forward.hpp"
 #include "ukdyn/nonideal.hpp"
+#include "ukdyn/sparse.hpp"
 
 namespace ukdyn {
 
@@ -28,9 +29,13 @@ Status apply_nonideal(const System& sys, Workspace& ws, const VectorXd& q, const
     ws.C += ws.C_term;
   }
   // Qc_nonideal, lambda_nonideal and dq = L⁻ᵀ (I − W⁺W) L⁻¹ C
-  detail::with_decomposition(ws, [&](auto& d) {
-    d.project_nonideal(ws.C, ws.dqdd, ws.Qc_nonideal, ws.lambda_nonideal);
-  });
+  if (ws.sparse) {
+    ws.sparse->project_nonideal(ws.C, ws.dqdd, ws.Qc_nonideal, ws.lambda_nonideal);
+  } else {
+    detail::with_decomposition(ws, [&](auto& d) {
+      d.project_nonideal(ws.C, ws.dqdd, ws.Qc_nonideal, ws.lambda_nonideal);
+    });
+  }
   // q'' += dq;  Qc = Qc_ideal + Qc_nonideal
   ws.qdd += ws.dqdd;
   ws.Qc = ws.Qc_ideal + ws.Qc_nonideal;

@@ -6,6 +6,7 @@
 
 #include "detail.hpp"
 #include "ukdyn/projection.hpp"
+#include "ukdyn/sparse.hpp"
 
 namespace ukdyn {
 
@@ -64,23 +65,26 @@ double measure_violation(const System& sys, Workspace& ws, const VectorXd& q, co
 void assemble_jacobian(const System& sys, Workspace& ws, const VectorXd& q, const VectorXd& qd,
                        double t, const ProjectionOptions& o, Level level) {
   for (Index k = 0; k < sys.constraint_count(); ++k) {
-    const Index r0 = sys.row_offset(k), rows = sys.constraint(k).rows();
-    auto Ak = ws.A.middleRows(r0, rows);
     if (!takes_part(sys, ws, o, k, t, level)) {
-      Ak.setZero();
+      detail::zero_constraint_rows(sys, ws, k);
       continue;
     }
-    sys.constraint(k).model().acceleration_form(q, qd, t, ws.scratch[std::size_t(k)].get(), Ak,
-                                                ws.b.segment(r0, rows));
+    // (a non-finite A shows up as a non-finite correction, as with the dense engine)
+    detail::write_constraint_rows(sys, ws, k, q, qd, t, /*check=*/false);
   }
 }
 
 // x += L⁻ᵀ W⁺ e with the decomposition of the assembled A
 void correct(Workspace& ws, VectorXd& x) {
-  detail::with_decomposition(ws, [&](auto& d) {
-    d.compute_constraints(ws.A);
-    d.solve_ideal(ws.e, ws.dqdd, ws.tmp_n, ws.lambda_tmp);
-  });
+  if (ws.sparse) {
+    ws.sparse->compute_constraints();
+    ws.sparse->solve_ideal(ws.e, ws.dqdd, ws.tmp_n, ws.lambda_tmp);
+  } else {
+    detail::with_decomposition(ws, [&](auto& d) {
+      d.compute_constraints(ws.A);
+      d.solve_ideal(ws.e, ws.dqdd, ws.tmp_n, ws.lambda_tmp);
+    });
+  }
   x += ws.dqdd;
 }
 }  // namespace

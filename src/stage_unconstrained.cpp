@@ -4,6 +4,7 @@
 
 #include "detail.hpp"
 #include "ukdyn/forward.hpp"
+#include "ukdyn/sparse.hpp"
 
 namespace ukdyn {
 
@@ -19,7 +20,41 @@ double asymmetry(const MatrixXd& M) {
 }  // namespace
 
 namespace detail {
+namespace {
+// the sparse engine: the blocks M_bb(q,t) that are not constant, the same checks as below on
+// the blocks, and M_bb = L_b L_bᵀ block by block
+Status evaluate_mass_blocks(const System& sys, Workspace& ws, const VectorXd& q, double t) {
+  SparseDecomposition& sp = *ws.sparse;
+  const auto& blocks = sys.mass_blocks();
+  for (std::size_t b = 0; b < blocks.size(); ++b) {
+    if (!blocks[b].constant()) blocks[b].fn(q, t, sp.mass_block(Index(b)));
+  }
+  if (!sp.mass_finite()) return detail::fail(ws, Status::kNonFiniteInput, "M", -1, t);
+  if (sp.mass_asymmetry() > ws.options().symmetry_tolerance * sp.mass_max_abs()) {
+    return detail::fail(ws, Status::kMassNotSymmetric, "M", -1, t);
+  }
+  if (sp.compute_mass().info() != Eigen::Success) {
+    return detail::fail(ws, Status::kMassNotPositiveDefinite, "M", -1, t);
+  }
+  return Status::kOk;
+}
+}  // namespace
+
+double kinetic_energy(const Workspace& ws, const VectorXd& qd) {
+  if (ws.sparse) return 0.5 * ws.sparse->mass_norm_squared(qd);
+  return 0.5 * qd.dot(ws.M * qd);
+}
+
 Status evaluate_mass(const System& sys, Workspace& ws, const VectorXd& q, double t) {
+  if (ws.sparse) {
+    // M(q,t) block by block; constant blocks evaluated and factorized once
+    if (!(sys.mass_is_constant() && ws.mass_factorized)) {
+      ws.mass_factorized = false;
+      if (const Status s = evaluate_mass_blocks(sys, ws, q, t); s != Status::kOk) return s;
+      ws.mass_factorized = true;
+    }
+    return Status::kOk;
+  }
   // M(q,t) and M = L Lᵀ; a constant M is evaluated and factorized once
   if (!(sys.mass_is_constant() && ws.mass_factorized)) {
     ws.mass_factorized = false;
@@ -48,7 +83,11 @@ Status evaluate_unconstrained(const System& sys, Workspace& ws, const VectorXd& 
   sys.forces(q, qd, t, ws.Q);
   if (!ws.Q.allFinite()) return detail::fail(ws, Status::kNonFiniteInput, "Q", -1, t);
   // a = M⁻¹ Q
-  detail::with_decomposition(ws, [&](auto& d) { d.solve_mass(ws.Q, ws.a); });
+  if (ws.sparse) {
+    ws.sparse->solve_mass(ws.Q, ws.a);
+  } else {
+    detail::with_decomposition(ws, [&](auto& d) { d.solve_mass(ws.Q, ws.a); });
+  }
   return Status::kOk;
 }
 

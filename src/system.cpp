@@ -5,6 +5,7 @@
 
 #include "ukdyn/autodiff.hpp"
 
+#include <algorithm>
 #include <atomic>
 #include <set>
 #include <stdexcept>
@@ -82,6 +83,24 @@ SystemBuilder& SystemBuilder::mass_matrix(const MatrixXd& M) {
   return *this;
 }
 
+SystemBuilder& SystemBuilder::mass_block(Index offset, const MatrixXd& Mkk) {
+  if (Mkk.rows() != Mkk.cols() || Mkk.rows() == 0) {
+    throw std::invalid_argument("ukdyn::SystemBuilder::mass_block: expected a non-empty square "
+                                "block, got " + std::to_string(Mkk.rows()) + "x" +
+                                std::to_string(Mkk.cols()));
+  }
+  mass_blocks_.push_back(MassBlock{offset, Mkk.rows(), {}, Mkk});
+  return *this;
+}
+
+SystemBuilder& SystemBuilder::mass_block(Index offset, Index size, MassBlockFn fn) {
+  if (size <= 0 || !fn) {
+    throw std::invalid_argument("ukdyn::SystemBuilder::mass_block: need size > 0 and a callable");
+  }
+  mass_blocks_.push_back(MassBlock{offset, size, std::move(fn), {}});
+  return *this;
+}
+
 SystemBuilder& SystemBuilder::forces(ForceFn fn) {
   forces_ = std::move(fn);
   return *this;
@@ -103,15 +122,57 @@ SystemBuilder& SystemBuilder::add(NonIdealForce f) {
 }
 
 System SystemBuilder::build() const {
-  if (!mass_) {
+  if (!mass_ && mass_blocks_.empty()) {
     throw std::invalid_argument("ukdyn::SystemBuilder::build: no mass matrix was given "
-                                "(call mass_matrix(fn) or mass_matrix(M))");
+                                "(call mass_matrix(fn), mass_matrix(M) or mass_block(...))");
+  }
+  if (mass_ && !mass_blocks_.empty()) {
+    throw std::invalid_argument("ukdyn::SystemBuilder::build: give either mass_matrix or "
+                                "mass_block, not both");
   }
   System s;
   s.n_ = n_;
   s.names_ = names_;
   s.mass_ = mass_;
   s.mass_constant_ = has_constant_mass_;
+  if (!mass_blocks_.empty()) {
+    // blocks tile [0, n): sorted by offset, each starting where the previous one ended
+    std::vector<MassBlock> blocks = mass_blocks_;
+    std::sort(blocks.begin(), blocks.end(),
+              [](const MassBlock& a, const MassBlock& b) { return a.offset < b.offset; });
+    Index next = 0;
+    bool constant = true;
+    for (const MassBlock& b : blocks) {
+      if (b.offset != next) {
+        throw std::invalid_argument(
+            "ukdyn::SystemBuilder::build: mass blocks must tile the coordinates: " +
+            (b.offset < next ? "the block at offset " + std::to_string(b.offset) +
+                                   " overlaps the one before it"
+                             : "coordinates " + std::to_string(next) + " to " +
+                                   std::to_string(b.offset - 1) + " have no mass block"));
+      }
+      next = b.offset + b.size;
+      constant = constant && b.constant();
+    }
+    if (next != n_) {
+      throw std::invalid_argument("ukdyn::SystemBuilder::build: mass blocks cover " +
+                                  std::to_string(next) + " coordinates, the system has " +
+                                  std::to_string(n_));
+    }
+    s.mass_blocks_ = blocks;
+    s.mass_constant_ = constant;
+    s.mass_ = [blocks](const VectorXd& q, double t, Eigen::Ref<MatrixXd> M) {
+      M.setZero();
+      for (const MassBlock& b : blocks) {
+        auto Mk = M.block(b.offset, b.offset, b.size, b.size);
+        if (b.constant()) {
+          Mk = b.value;
+        } else {
+          b.fn(q, t, Mk);
+        }
+      }
+    };
+  }
   s.forces_ = forces_ ? forces_
                       : ForceFn([](const VectorXd&, const VectorXd&, double,
                                    Eigen::Ref<VectorXd> Q) { Q.setZero(); });
@@ -145,6 +206,14 @@ System SystemBuilder::build() const {
     if (!seen.insert(c.name()).second) {
       throw std::invalid_argument("ukdyn::SystemBuilder::build: constraint '" + c.name() +
                                   "' is declared twice");
+    }
+    const std::vector<Index>& cols = c.model().columns();
+    for (std::size_t j = 0; j < cols.size(); ++j) {
+      if (cols[j] < 0 || cols[j] >= n_ || (j > 0 && cols[j] <= cols[j - 1])) {
+        throw std::invalid_argument("ukdyn::SystemBuilder::build: constraint '" + c.name() +
+                                    "': columns() must be strictly increasing coordinate "
+                                    "indices in [0, " + std::to_string(n_) + ")");
+      }
     }
     s.offsets_.push_back(s.m_);
     s.m_ += c.rows();

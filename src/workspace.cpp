@@ -1,11 +1,13 @@
 // Workspace: sizing every buffer once; describing a failed evaluation.
 #include "ukdyn/workspace.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <sstream>
 #include <stdexcept>
 
 #include "ukdyn/reference.hpp"
+#include "ukdyn/sparse.hpp"
 #include "ukdyn/system.hpp"
 
 namespace ukdyn {
@@ -24,11 +26,60 @@ Workspace::Workspace(const System& sys, const SolverOptions& options)
     throw std::invalid_argument("ukdyn::Workspace: SolverOptions::symmetry_tolerance must be "
                                 ">= 0, got " + std::to_string(options.symmetry_tolerance));
   }
+  if (!(options.sparse_rank_threshold > 0.0 && options.sparse_rank_threshold < 1.0)) {
+    throw std::invalid_argument("ukdyn::Workspace: SolverOptions::sparse_rank_threshold must lie "
+                                "in (0, 1), got " + std::to_string(options.sparse_rank_threshold));
+  }
+  if (options.sparse_threshold < 0) {
+    throw std::invalid_argument("ukdyn::Workspace: SolverOptions::sparse_threshold must be >= 0, "
+                                "got " + std::to_string(options.sparse_threshold));
+  }
+  // the engine: sparse for a block-diagonal M from sparse_threshold coordinates on (kAuto)
+  bool use_sparse = false;
+  switch (options.engine) {
+    case Engine::kDense: break;
+    case Engine::kSparse:
+      if (!sys.mass_is_block_diagonal()) {
+        throw std::invalid_argument(
+            "ukdyn::Workspace: Engine::kSparse needs a block-diagonal mass matrix (give M with "
+            "SystemBuilder::mass_block), got a system whose M is one dense matrix");
+      }
+      if (options.algorithm != Algorithm::kDefault) {
+        throw std::invalid_argument(
+            "ukdyn::Workspace: Engine::kSparse runs Algorithm::kDefault only, got the textbook "
+            "algorithm (use Engine::kDense or kAuto with it)");
+      }
+      use_sparse = true;
+      break;
+    case Engine::kAuto: {
+      // rows of constraints without columns() are dense rows of the sparse A: each couples every
+      // body, so many of them make G dense and the sparse engine slower than the dense one
+      Index dense_rows = 0;
+      for (const auto& c : sys.constraints()) {
+        if (c.model().columns().empty()) dense_rows += c.rows();
+      }
+      use_sparse = options.algorithm == Algorithm::kDefault && sys.mass_is_block_diagonal() &&
+                   sys.dofs() >= options.sparse_threshold && dense_rows <= kAutoMaxDenseRows;
+      break;
+    }
+  }
   const Index n = n_, m = m_, K = sys.constraint_count();
-  M.setZero(n, n);
+  if (use_sparse) {
+    sparse = std::make_unique<SparseDecomposition>(sys);
+    sparse->set_threshold(options.sparse_rank_threshold);
+    Index rows = 0, width = 0;
+    for (const auto& c : sys.constraints()) {
+      rows = std::max(rows, c.rows());
+      const Index cols = Index(c.model().columns().size());
+      width = std::max(width, cols == 0 ? n : cols);
+    }
+    A_rows.setZero(rows, width);
+  } else {
+    M.setZero(n, n);
+    A.setZero(m, n);
+  }
   Q.setZero(n);
   a.setZero(n);
-  A.setZero(m, n);
   b.setZero(m);
   active.assign(std::size_t(K), 0);
   activity_override.assign(std::size_t(K), -1);
@@ -39,12 +90,13 @@ Workspace::Workspace(const System& sys, const SolverOptions& options)
   phi_dot.setZero(m);
   zero_n.setZero(n);
   lambda_tmp.setZero(m);
-  decomposition.resize(n, m);
+  decomposition.resize(use_sparse ? 0 : n, use_sparse ? 0 : m);
   decomposition.set_threshold(options.rank_threshold);
   e.setZero(m);
   lambda.setZero(m);
   Qc_ideal.setZero(n);
-  shares.setZero(n, K);
+  // (the sparse engine sizes them on first use when no non-ideal force needs them)
+  if (!use_sparse || sys.nonideal_count() > 0) shares.setZero(n, K);
   C.setZero(n);
   Qc_nonideal.setZero(n);
   lambda_nonideal.setZero(m);
@@ -107,3 +159,4 @@ void throw_if_failed(const System& sys, const Workspace& ws) {
 }
 
 }  // namespace ukdyn
+

@@ -360,5 +360,131 @@ TEST(MassMatrix, CallableAndConstantAgree) {
   }
 }
 
+// ---------------------------------------------------------------------------------------------
+// block-diagonal M and constraints with local columns (the inputs of the sparse engine) give the
+// same motion through the dense engine as the same system written densely
+
+// a rod between particles i and j of a planar chain (fixed point (fx, fy) when j < 0):
+// phi = (|p_i − p_j|² − L²)/2, A_i = (p_i − p_j)ᵀ, A_j = −A_i, b = −|v_i − v_j|²
+class LocalRod final : public ConstraintModel {
+ public:
+  LocalRod(Index i, Index j, double L) : i_(i), j_(j), L_(L) {
+    if (j >= 0) cols_ = {2 * j, 2 * j + 1};
+    cols_.insert(cols_.end(), {2 * i, 2 * i + 1});
+    if (j > i) std::swap_ranges(cols_.begin(), cols_.begin() + 2, cols_.begin() + 2);
+  }
+  const std::vector<Index>& columns() const override { return cols_; }
+  void acceleration_form_local(const VectorXd& q, const VectorXd& qd, double, ConstraintScratch*,
+                               Eigen::Ref<MatrixXd> A, Eigen::Ref<VectorXd> b) const override {
+    const double dx = q[2 * i_] - (j_ >= 0 ? q[2 * j_] : 0.0);
+    const double dy = q[2 * i_ + 1] - (j_ >= 0 ? q[2 * j_ + 1] : 0.0);
+    const double vx = qd[2 * i_] - (j_ >= 0 ? qd[2 * j_] : 0.0);
+    const double vy = qd[2 * i_ + 1] - (j_ >= 0 ? qd[2 * j_ + 1] : 0.0);
+    // column order of cols_: the lower particle first
+    const Index own = (j_ >= 0 && j_ < i_) ? 2 : 0, other = 2 - own;
+    A(0, own) = dx;
+    A(0, own + 1) = dy;
+    if (j_ >= 0) {
+      A(0, other) = -dx;
+      A(0, other + 1) = -dy;
+    }
+    b[0] = -(vx * vx + vy * vy);
+  }
+  void violation(const VectorXd& q, const VectorXd&, double, ConstraintScratch*,
+                 Eigen::Ref<VectorXd> position, Eigen::Ref<VectorXd> velocity) const override {
+    const double dx = q[2 * i_] - (j_ >= 0 ? q[2 * j_] : 0.0);
+    const double dy = q[2 * i_ + 1] - (j_ >= 0 ? q[2 * j_ + 1] : 0.0);
+    position[0] = 0.5 * (dx * dx + dy * dy - L_ * L_);
+    velocity[0] = 0.0;
+  }
+
+ private:
+  Index i_, j_;
+  double L_;
+  std::vector<Index> cols_;
+};
+
+TEST(BlockDiagonalAndLocal, SameMotionAsTheDenseDescription) {
+  // three particles of masses 1, 2, 3 hanging in a chain from the origin, the last one also
+  // tied back to particle 0 (a closed loop) — and a state-dependent block for particle 1
+  const std::vector<double> mass = {1.0, 2.0, 3.0};
+  const auto block_fn = [](const VectorXd& q, double, Eigen::Ref<MatrixXd> Mk) {
+    Mk << 2.0 + q[2] * q[2], 0.5, 0.5, 2.0;
+  };
+  SystemBuilder blocks(6), dense(6);
+  blocks.mass_block(4, 3.0 * MatrixXd::Identity(2, 2))
+      .mass_block(2, 2, block_fn)
+      .mass_block(0, 1.0 * MatrixXd::Identity(2, 2));
+  dense.mass_matrix([&](const VectorXd& q, double t, Eigen::Ref<MatrixXd> M) {
+    M.setZero();
+    M.block(0, 0, 2, 2).setIdentity();
+    block_fn(q, t, M.block(2, 2, 2, 2));
+    M.block(4, 4, 2, 2) = 3.0 * MatrixXd::Identity(2, 2);
+  });
+  const auto Q = [&](const VectorXd&, const VectorXd&, double, Eigen::Ref<VectorXd> F) {
+    F << 0.1, -9.81 * mass[0], 0.0, -9.81 * mass[1], -0.3, -9.81 * mass[2];
+  };
+  blocks.forces(Q);
+  dense.forces(Q);
+  const struct { Index i, j; } rods[] = {{0, -1}, {1, 0}, {2, 1}, {0, 2}};
+  for (const auto& r : rods) {
+    const std::string name = "rod" + std::to_string(r.i) + std::to_string(r.j);
+    blocks.add(Constraint(name, ConstraintKind::kHolonomic, 1,
+                          std::make_shared<LocalRod>(r.i, r.j, 1.0)));
+    const Index i = r.i, j = r.j;
+    dense.add(holonomic(name, 1, [i, j](const auto& q, const auto&, auto& phi) {
+      if (j >= 0) {
+        phi[0] = 0.5 * ((q[2 * i] - q[2 * j]) * (q[2 * i] - q[2 * j]) +
+                        (q[2 * i + 1] - q[2 * j + 1]) * (q[2 * i + 1] - q[2 * j + 1]) - 1.0);
+      } else {
+        phi[0] = 0.5 * (q[2 * i] * q[2 * i] + q[2 * i + 1] * q[2 * i + 1] - 1.0);
+      }
+    }));
+  }
+  const System a = blocks.build(), b = dense.build();
+  EXPECT_TRUE(a.mass_is_block_diagonal());
+  EXPECT_FALSE(a.mass_is_constant());
+  ASSERT_EQ(a.mass_blocks().size(), 3u);
+  EXPECT_EQ(a.mass_blocks()[1].offset, 2);  // sorted by offset
+  const VectorXd q = vec({0.3, -0.95, 0.9, -1.6, 0.2, -1.9});
+  const VectorXd qd = vec({0.4, -0.2, 1.1, 0.3, -0.5, 0.7});
+  Workspace wa(a), wb(b);
+  ASSERT_EQ(forward_dynamics(a, wa, q, qd, 0.0), Status::kOk);
+  ASSERT_EQ(forward_dynamics(b, wb, q, qd, 0.0), Status::kOk);
+  EXPECT_NEAR((wa.M - wb.M).norm(), 0.0, 1e-15);
+  EXPECT_NEAR((wa.A - wb.A).norm(), 0.0, 1e-14);  // the scatter of the local columns
+  EXPECT_NEAR((wa.b - wb.b).norm(), 0.0, 1e-14);
+  EXPECT_NEAR((wa.qdd - wb.qdd).norm(), 0.0, 1e-12 * wb.qdd.norm());
+  EXPECT_NEAR((wa.Qc - wb.Qc).norm(), 0.0, 1e-12 * wb.Qc.norm());
+}
+
+TEST(BlockDiagonalAndLocal, BuilderRefusesBlocksThatDoNotTileAndBadColumns) {
+  const auto error_of = [](const SystemBuilder& b) -> std::string {
+    try {
+      b.build();
+    } catch (const std::invalid_argument& e) {
+      return e.what();
+    }
+    return "";
+  };
+  SystemBuilder gap(4);
+  gap.mass_block(0, MatrixXd::Identity(2, 2)).mass_block(3, MatrixXd::Identity(1, 1));
+  EXPECT_NE(error_of(gap).find("coordinates 2 to 2 have no mass block"), std::string::npos)
+      << error_of(gap);
+  SystemBuilder overlap(3);
+  overlap.mass_block(0, MatrixXd::Identity(2, 2)).mass_block(1, MatrixXd::Identity(2, 2));
+  EXPECT_NE(error_of(overlap).find("overlaps"), std::string::npos);
+  SystemBuilder both(2);
+  both.mass_block(0, MatrixXd::Identity(2, 2)).mass_matrix(MatrixXd::Identity(2, 2));
+  EXPECT_NE(error_of(both).find("not both"), std::string::npos);
+  SystemBuilder out_of_range(2);
+  out_of_range.mass_matrix(MatrixXd::Identity(2, 2))
+      .add(Constraint("rod", ConstraintKind::kHolonomic, 1,
+                      std::make_shared<LocalRod>(1, 0, 1.0)));  // columns 0..3 of 2
+  EXPECT_NE(error_of(out_of_range).find("constraint 'rod': columns() must be strictly increasing"),
+            std::string::npos)
+      << error_of(out_of_range);
+}
+
 }  // namespace
 }  // namespace ukdyn

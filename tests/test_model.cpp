@@ -93,6 +93,7 @@ TEST(Model, VelocityDependentKineticEnergyGivesCoriolisTerms) {
 parameters: {m: 3}
 coordinates: [r, th]
 kinetic_energy: 0.5*m*(r_dot^2 + r^2*th_dot^2)
+initial: {q: {r: 1}}
 )");
   EXPECT_FALSE(m.system.mass_is_constant());
   Workspace ws(m.system);
@@ -246,6 +247,34 @@ TEST(ModelErrors, HolonomicConstraintMayNotDependOnVelocity) {
       "constraints:\n  - {name: c, holonomic: x_dot}\n");
   EXPECT_TRUE(contains(e, "is holonomic but depends on the velocity 'x_dot'")) << e;
   EXPECT_TRUE(contains(e, "nonholonomic")) << e;
+}
+
+TEST(ModelErrors, MassMatrixNotPositiveDefiniteAtTheInitialState) {
+  // M = diag(1, −1): points at the mass_matrix value and names the coordinate without inertia
+  std::string e = error_of("coordinates: [x, y]\nmass_matrix: [[1, 0], [0, -1]]\n");
+  EXPECT_TRUE(contains(e, "m.yaml:2:14: error: the mass matrix is not positive definite at the "
+                          "initial state (t = 0) (hint: no positive inertia for y: every diagonal"))
+      << e;
+  // polar coordinates at r = 0: T = ½(r'² + r²θ'²) gives no inertia to θ there
+  e = error_of(
+      "coordinates: [r, th]\nkinetic_energy: 0.5*(r_dot^2 + r^2*th_dot^2)\n"
+      "initial: {q: {r: 0}}\n");
+  EXPECT_TRUE(contains(e, "m.yaml:2:17: error: the mass matrix is not positive definite")) << e;
+  EXPECT_TRUE(contains(e, "no positive inertia for th: the kinetic energy must involve every "
+                          "velocity"))
+      << e;
+  // positive diagonal, indefinite: [[1, 2], [2, 1]]
+  e = error_of("coordinates: [x, y]\nmass_matrix: [[1, 2], [2, 1]]\n");
+  EXPECT_TRUE(contains(e, "not positive definite at the initial state (t = 0) (hint: M must be "
+                          "positive definite: check the off-diagonal entries)"))
+      << e;
+  // not symmetric; not finite (1/x at x = 0)
+  e = error_of("coordinates: [x, y]\nmass_matrix: [[1, 2], [0, 1]]\n");
+  EXPECT_TRUE(contains(e, "m.yaml:2:14: error: the mass matrix is not symmetric")) << e;
+  e = error_of("coordinates: [x]\nmass_matrix: [[1/x]]\n");
+  EXPECT_TRUE(contains(e, "m.yaml:2:14: error: the mass matrix is not finite at the initial "
+                          "state (t = 0)"))
+      << e;
 }
 
 TEST(ModelErrors, MissingFile) {

@@ -19,6 +19,8 @@
 /// q and q' arrive as `const Eigen::Matrix<S, Dynamic, 1>&`, t as `const S&`, out as
 /// `Eigen::Matrix<S, Dynamic, 1>&` already sized to `rows`. Keep intermediate values in
 /// variables of type S (`S x = q[0];`), not `auto`: AutoDiff expressions hold references.
+/// Branch with if/else, not `cond ? q[1] : 0.0 * q[0]`: the two arms have different types and
+/// their common type may be plain double, which silently drops the derivatives.
 #pragma once
 
 #include <memory>

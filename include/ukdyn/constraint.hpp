@@ -13,6 +13,7 @@
 #include <functional>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include <Eigen/Core>
 
@@ -58,10 +59,26 @@ class ConstraintModel {
 
   /// Writes this constraint's rows of A (rows × n) and b (rows) at (q, q', t).
   /// Must not allocate. Cost: that of the user callable times ceil(n/4) + 1 passes for the
-  /// automatically differentiated kinds.
+  /// automatically differentiated kinds. The default serves the local kind (columns() not
+  /// empty): acceleration_form_local into the first columns of A, scattered in place to
+  /// columns() and the rest zeroed — O(rows · n). A dense model must override it.
   virtual void acceleration_form(const VectorXd& q, const VectorXd& qd, double t,
                                  ConstraintScratch* scratch, Eigen::Ref<MatrixXd> A,
-                                 Eigen::Ref<VectorXd> b) const = 0;
+                                 Eigen::Ref<VectorXd> b) const;
+
+  /// The coordinates this constraint depends on, strictly increasing: its rows of A are zero
+  /// in every other column (a joint touches the coordinates of its two bodies only). Empty, the
+  /// default: any of the n coordinates (dense rows). A model that declares columns implements
+  /// acceleration_form_local; the sparse engine then assembles A in O(rows · columns) per
+  /// constraint, independent of n. Must return the same list on every call.
+  virtual const std::vector<Index>& columns() const;
+
+  /// The local acceleration form, for models with columns(): A_local (rows × columns().size())
+  /// holds the non-zero columns of A in columns() order; b as in acceleration_form. Must not
+  /// allocate. The default throws std::logic_error (a model with columns must override it).
+  virtual void acceleration_form_local(const VectorXd& q, const VectorXd& qd, double t,
+                                       ConstraintScratch* scratch, Eigen::Ref<MatrixXd> A_local,
+                                       Eigen::Ref<VectorXd> b) const;
 
   /// Writes the violation of the constraint at position level (phi; zero for the nonholonomic
   /// and acceleration kinds) and velocity level (d phi/dt along the motion = A q' + dphi/dt for

@@ -20,6 +20,21 @@ namespace ukdyn {
 
 /// Writes the mass matrix M(q, t) (n × n, symmetric positive definite). Must not allocate.
 using MassMatrixFn = std::function<void(const VectorXd& q, double t, Eigen::Ref<MatrixXd> M)>;
+/// Writes one diagonal block M_kk(q, t) (size × size, symmetric positive definite) of a
+/// block-diagonal mass matrix. Must not allocate.
+using MassBlockFn = std::function<void(const VectorXd& q, double t, Eigen::Ref<MatrixXd> Mk)>;
+
+/// One diagonal block of a block-diagonal mass matrix: the coordinates [offset, offset + size)
+/// (one body's, in absolute coordinates). Constant (value) or state-dependent (fn).
+struct MassBlock {
+  Index offset = 0;  ///< first coordinate
+  Index size = 0;    ///< number of coordinates
+  MassBlockFn fn;    ///< M_kk(q, t); empty for a constant block
+  MatrixXd value;    ///< the constant block (size × size) when fn is empty
+  /// True for a constant block.
+  bool constant() const { return !fn; }
+};
+
 /// Potential energy V(q, t) of the forces in Q that derive from one (for energy reports only:
 /// Q must already contain −dV/dq).
 using PotentialFn = std::function<double(const VectorXd& q, double t)>;
@@ -57,6 +72,11 @@ class System {
 
   /// True when M was given as a constant matrix (the workspace then factorizes it once).
   bool mass_is_constant() const { return mass_constant_; }
+  /// True when M was given as diagonal blocks (SystemBuilder::mass_block): zero elsewhere.
+  bool mass_is_block_diagonal() const { return !mass_blocks_.empty(); }
+  /// The diagonal blocks of M, by increasing offset, tiling [0, n) (empty unless
+  /// mass_is_block_diagonal()).
+  const std::vector<MassBlock>& mass_blocks() const { return mass_blocks_; }
   /// Writes M(q, t) into M (n × n).
   void mass_matrix(const VectorXd& q, double t, Eigen::Ref<MatrixXd> M) const { mass_(q, t, M); }
   /// Writes Q(q, q', t) into Q (n).
@@ -93,6 +113,7 @@ class System {
   std::vector<std::string> names_;
   MassMatrixFn mass_;
   bool mass_constant_ = false;
+  std::vector<MassBlock> mass_blocks_;
   ForceFn forces_;
   PotentialFn potential_;
   std::vector<Constraint> constraints_;
@@ -115,6 +136,12 @@ class SystemBuilder {
   SystemBuilder& mass_matrix(MassMatrixFn fn);
   /// A constant mass matrix (n × n); factorized once per workspace.
   SystemBuilder& mass_matrix(const MatrixXd& M);
+  /// A constant diagonal block of M on the coordinates [offset, offset + M_kk.rows()). Blocks
+  /// (of either kind, in any order) must tile [0, n) exactly; M is zero outside them. Replaces
+  /// mass_matrix(); the sparse engine factorizes M block by block. Checked in build().
+  SystemBuilder& mass_block(Index offset, const MatrixXd& Mkk);
+  /// A state-dependent diagonal block M_kk(q, t) (size × size) on [offset, offset + size).
+  SystemBuilder& mass_block(Index offset, Index size, MassBlockFn fn);
   /// Q(q, q', t) as a callable (default: zero).
   SystemBuilder& forces(ForceFn fn);
   /// V(q, t) for energy reports (default: none, V = 0). Q must contain −dV/dq itself.
@@ -125,7 +152,8 @@ class SystemBuilder {
   SystemBuilder& add(NonIdealForce f);
 
   /// Validates and returns the system. @throws std::invalid_argument naming the problem: no mass
-  /// matrix, a constant M of the wrong size, duplicate names, a non-ideal force that cannot be
+  /// matrix, a constant M of the wrong size, mass blocks that overlap or leave coordinates
+  /// without a block, constraint columns() out of range or not increasing, duplicate names, a non-ideal force that cannot be
   /// bound.
   System build() const;
 
@@ -135,6 +163,7 @@ class SystemBuilder {
   MassMatrixFn mass_;
   MatrixXd mass_constant_;
   bool has_constant_mass_ = false;
+  std::vector<MassBlock> mass_blocks_;
   ForceFn forces_;
   PotentialFn potential_;
   std::vector<Constraint> constraints_;

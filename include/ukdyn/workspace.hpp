@@ -20,6 +20,7 @@ namespace ukdyn {
 
 class System;
 class TextbookDecomposition;
+class SparseDecomposition;
 
 /// Which algorithm evaluates the fundamental equation.
 enum class Algorithm {
@@ -27,12 +28,39 @@ enum class Algorithm {
   kTextbook,  ///< eqs. (9)–(12) as printed: M^{±1/2} by eigendecomposition, SVD B⁺ (allocates)
 };
 
+/// Engine::kAuto leaves a system with more rows than this from constraints without columns()
+/// (dense rows) to the dense engine.
+inline constexpr Index kAutoMaxDenseRows = 8;
+
+/// Which engine carries the default algorithm (docs/sparse.md).
+enum class Engine {
+  /// kSparse when M is block-diagonal (SystemBuilder::mass_block), the algorithm is kDefault,
+  /// n >= SolverOptions::sparse_threshold and at most kAutoMaxDenseRows constraint rows come
+  /// from constraints without columns(); kDense otherwise.
+  kAuto,
+  kDense,   ///< dense M and A: FundamentalDecomposition (decomposition.hpp), O(n³) per evaluation
+  /// block-diagonal M, sparse A, sparse rank-revealing LDLᵀ of G (sparse.hpp): O(bodies) for
+  /// chains and trees with loop closures. Needs a block-diagonal M and Algorithm::kDefault.
+  kSparse,
+};
+
 /// Settings of a workspace. All tolerances are relative and documented where they are used.
 struct SolverOptions {
   Algorithm algorithm = Algorithm::kDefault;  ///< see Algorithm
+  Engine engine = Engine::kAuto;  ///< see Engine
+  /// With Engine::kAuto, the sparse engine is used from this many coordinates on. Measured
+  /// (docs/sparse.md): from n = 24 on it was faster on every structure tried (chains: 3.9× at
+  /// n = 24; densely coupled bodies: 1.4–2.6×) except heavily redundant ones (m > n); below,
+  /// both take a few µs and the dense engine keeps its tighter rank decision. Must be >= 0.
+  Index sparse_threshold = 24;
   /// Pivot k of the decomposition of A L⁻ᵀ counts as zero when |R_kk| <= rank_threshold · |R_00|
   /// (see decomposition.hpp). Must lie in (0, 1).
   double rank_threshold = FundamentalDecomposition::kDefaultThreshold;
+  /// The sparse engine's rank threshold tau: row k of W = A L⁻ᵀ counts as dependent when its
+  /// part outside the span of the rows eliminated before it has norm <= tau ‖w_k‖ (the pivot of
+  /// G = W Wᵀ, or its recomputation in the space of W, is <= tau² G_kk; see sparse.hpp and
+  /// docs/sparse.md for why 1e-6 and not rank_threshold's 1e-10). Must lie in (0, 1).
+  double sparse_rank_threshold = 1e-6;
   /// The constraints are reported inconsistent (kInconsistentConstraints) when
   /// ‖A q'' − b‖ > consistency_tolerance · (‖A‖_F ‖q''‖ + ‖b‖ + ‖A‖_F ‖a‖). Must be > 0.
   double consistency_tolerance = 1e-8;
@@ -79,12 +107,17 @@ class Workspace {
   Index dofs() const { return n_; }
   Index rows() const { return m_; }
 
+  /// True when this workspace runs the sparse engine (see Engine); then M and A below are
+  /// empty (0 × 0) and their values live in `sparse` (sparse->mass_block(b), sparse->matrix_A()).
+  bool is_sparse() const { return sparse != nullptr; }
+
   // --- stage 1, evaluate_unconstrained --------------------------------------------------
-  MatrixXd M;             ///< mass matrix M(q,t) (n × n)
+  MatrixXd M;             ///< mass matrix M(q,t) (n × n; 0 × 0 with the sparse engine)
   VectorXd Q;             ///< impressed force Q(q,q',t) (n)
   VectorXd a;             ///< unconstrained acceleration a = M⁻¹ Q (n)
   // --- stage 2, assemble_constraints ----------------------------------------------------
-  MatrixXd A;             ///< constraint matrix (m × n); rows of inactive constraints are zero
+  MatrixXd A;             ///< constraint matrix (m × n; 0 × 0 with the sparse engine); rows of
+                          ///< inactive constraints are zero
   VectorXd b;             ///< constraint right-hand side (m); zero on inactive rows
   std::vector<unsigned char> active;  ///< (K) constraint k active at this t?
   Index active_rows = 0;  ///< rows of the active constraints
@@ -99,12 +132,17 @@ class Workspace {
   VectorXd phi;           ///< position-level violation per row (m)
   VectorXd phi_dot;       ///< velocity-level violation per row (m)
   // --- stage 3, solve_ideal ---------------------------------------------------------------
-  FundamentalDecomposition decomposition;  ///< Cholesky of M, COD of A L⁻ᵀ
+  FundamentalDecomposition decomposition;  ///< Cholesky of M, COD of A L⁻ᵀ (dense engine; sized
+                                           ///< 0 × 0 with the sparse engine)
+  /// the sparse engine (M blocks, sparse A, LDLᵀ of G), or null with the dense engine
+  std::unique_ptr<SparseDecomposition> sparse;
   VectorXd e;             ///< error signal e = b − A a (m)
   VectorXd lambda;        ///< minimum-norm multipliers of the ideal force, G⁺ e (m)
   VectorXd Qc_ideal;      ///< ideal constraint force Aᵀ lambda, eq. (11) (n)
   MatrixXd shares;        ///< (n × K) column k: constraint k's share A_kᵀ lambda_k (filled when
-                          ///< the system has non-ideal forces, or by compute_shares)
+                          ///< the system has non-ideal forces, or by compute_shares; with the
+                          ///< sparse engine and no non-ideal forces, sized by the first
+                          ///< compute_shares)
   Index rank = 0;         ///< numerical rank of A
   // --- stage 4, apply_nonideal ------------------------------------------------------------
   /// (number of non-ideal forces) force i takes part (default 1); the simulation switches a
@@ -137,6 +175,9 @@ class Workspace {
   VectorXd tmp_m;         ///< (m)
   VectorXd zero_n;        ///< (n) zeros (the velocity of a position-only evaluation)
   VectorXd lambda_tmp;    ///< (m) multipliers of a projection (discarded)
+  /// (largest rows × widest constraint) one constraint's rows of A before they go into the
+  /// sparse engine's pattern (width: its columns(), n for dense rows); 0 × 0 with the dense one
+  MatrixXd A_rows;
   std::vector<std::unique_ptr<ConstraintScratch>> scratch;  ///< (K) per-constraint buffers
   std::unique_ptr<TextbookDecomposition> textbook;  ///< only with Algorithm::kTextbook
   bool mass_factorized = false;  ///< constant M already factorized

@@ -1,0 +1,54 @@
+#!/usr/bin/env bash
+# Fuzzes the model reader for a bounded time: scripts/fuzz.sh [SECONDS] (default 120).
+# Builds fuzz/fuzz_model with clang (libFuzzer, AddressSanitizer, UndefinedBehaviorSanitizer) in
+# build-fuzz/, seeds a scratch corpus with examples/models/*.yaml and fuzz/corpus/*.yaml (the
+# repository is never written to), and runs the fuzzer with the dictionary fuzz/model.dict.
+# Fails on any crash, uncaught exception, hang or slow input (-timeout, per input), memory
+# blow-up (-rss_limit_mb), leak or sanitizer report; the offending input is kept in
+# build-fuzz/artifacts/. Environment: FUZZ_TIMEOUT (seconds per input, default 10), FUZZ_JOBS
+# (build parallelism, default 2), FUZZ_ARGS (more libFuzzer flags).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+root=$PWD
+
+seconds=${1:-120}
+timeout=${FUZZ_TIMEOUT:-10}
+if ! [[ $seconds =~ ^[0-9]+$ && $seconds -gt 0 ]]; then
+  echo "usage: scripts/fuzz.sh [SECONDS]  (a positive whole number, default 120)" >&2
+  exit 2
+fi
+
+echo "=== fuzz: building fuzz/fuzz_model (clang, libFuzzer + ASan + UBSan) in build-fuzz/ ==="
+CC=clang CXX=clang++ cmake -S . -B build-fuzz -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
+  -DUKDYN_BUILD_FUZZ=ON -DUKDYN_BUILD_TESTS=OFF -DUKDYN_BUILD_BENCHMARKS=OFF \
+  -DUKDYN_BUILD_EXAMPLES=OFF >/dev/null
+cmake --build build-fuzz --parallel "${FUZZ_JOBS:-2}" --target fuzz_model
+
+scratch=$(mktemp -d "${TMPDIR:-/tmp}/ukdyn-fuzz.XXXXXX")
+trap 'rm -rf "$scratch"' EXIT
+mkdir -p "$scratch/corpus" "$scratch/artifacts"
+cp examples/models/*.yaml fuzz/corpus/*.yaml "$scratch/corpus/"
+
+export ASAN_OPTIONS="abort_on_error=1:detect_leaks=1:strict_string_checks=1"
+export UBSAN_OPTIONS="halt_on_error=1:print_stacktrace=1"
+export LSAN_OPTIONS="suppressions=$root/.ci/lsan.supp:print_suppressions=0"
+
+echo "=== fuzz: running for ${seconds} s (at most ${timeout} s per input) ==="
+status=0
+# shellcheck disable=SC2086  # FUZZ_ARGS is a list of flags
+build-fuzz/fuzz/fuzz_model "$scratch/corpus" -dict=fuzz/model.dict -max_len=4096 \
+  -max_total_time="$seconds" -timeout="$timeout" -rss_limit_mb=2048 \
+  -artifact_prefix="$scratch/artifacts/" -print_final_stats=1 ${FUZZ_ARGS:-} \
+  2>"$scratch/log" || status=$?
+grep -E "^(#[0-9]+ +DONE|stat::|Done [0-9]+ runs)" "$scratch/log" || true
+
+if ((status != 0)) || [ -n "$(ls -A "$scratch/artifacts")" ]; then
+  tail -n 60 "$scratch/log" >&2
+  mkdir -p build-fuzz/artifacts
+  cp "$scratch/artifacts/"* build-fuzz/artifacts/ 2>/dev/null || true
+  cp "$scratch/log" build-fuzz/artifacts/fuzz.log
+  echo "fuzz: FAILED (libFuzzer exit status $status); inputs and log in build-fuzz/artifacts/" >&2
+  echo "      reproduce with: build-fuzz/fuzz/fuzz_model build-fuzz/artifacts/<input>" >&2
+  exit 1
+fi
+echo "fuzz: no crash, hang, leak or sanitizer report in ${seconds} s"

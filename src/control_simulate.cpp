@@ -1,0 +1,426 @@
+// Controlled simulation: the plant (a System that may differ from the controller's nominal
+// model) under the control force, run by simulate(). The control is evaluated inside the plant's
+// force callable with a workspace the callable owns, so an evaluation allocates nothing.
+//
+// simulate_controlled integrates, besides the plant, the control's work ∫ Qcᵀq' dt, effort
+// ∫ QcᵀQc dt and absolute work ∫ |Qcᵀq'| dt — and with the robust term each row's Lyapunov
+// bound V_i' = −gamma_i V_i + kappa_i epsilon / 2 — exactly, with the integrator's own error
+// control: the plant is augmented with unit-mass auxiliary coordinates z whose "force" is the
+// integrand, so z' is the integral. M stays block diagonal, the physical constraints have zero
+// columns on z (so projections leave z alone), and the auxiliary coordinates are stripped from
+// the result (their kinetic energy ½ z'ᵀz' removed from the energies).
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <memory>
+#include <stdexcept>
+#include <string>
+#include <utility>
+
+#include "control_internal.hpp"
+#include "ukdyn/forward.hpp"
+#include "ukdyn/projection.hpp"
+
+namespace ukdyn {
+
+namespace {
+
+// auxiliary coordinates: work, effort, absolute work, then one bound state per requirement row
+constexpr Index kWork = 0, kEffort = 1, kWorkAbs = 2, kBounds = 3;
+
+// --- plant constraints on the augmented coordinates [q; z] -------------------------------------
+
+struct HeadScratch final : ConstraintScratch {
+  HeadScratch(std::unique_ptr<ConstraintScratch> in, Index n) : inner(std::move(in)), q(n), qd(n) {}
+  std::unique_ptr<ConstraintScratch> inner;
+  VectorXd q, qd;  // (n) the plant's part of the state
+};
+
+// The plant's constraint evaluated on q = x.head(n): its own rows, zero columns for z.
+class HeadConstraintModel final : public ConstraintModel {
+ public:
+  HeadConstraintModel(Constraint inner, Index n) : inner_(std::move(inner)), n_(n) {}
+
+  std::unique_ptr<ConstraintScratch> make_scratch(Index) const override {
+    return std::make_unique<HeadScratch>(inner_.model().make_scratch(n_), n_);
+  }
+
+  void acceleration_form(const VectorXd& q, const VectorXd& qd, double t, ConstraintScratch* s,
+                         Eigen::Ref<MatrixXd> A, Eigen::Ref<VectorXd> b) const override {
+    auto& w = static_cast<HeadScratch&>(*s);
+    w.q = q.head(n_);
+    w.qd = qd.head(n_);
+    inner_.model().acceleration_form(w.q, w.qd, t, w.inner.get(), A.leftCols(n_), b);
+    A.rightCols(A.cols() - n_).setZero();
+  }
+
+  void violation(const VectorXd& q, const VectorXd& qd, double t, ConstraintScratch* s,
+                 Eigen::Ref<VectorXd> position, Eigen::Ref<VectorXd> velocity) const override {
+    auto& w = static_cast<HeadScratch&>(*s);
+    w.q = q.head(n_);
+    w.qd = qd.head(n_);
+    inner_.model().violation(w.q, w.qd, t, w.inner.get(), position, velocity);
+  }
+
+ private:
+  Constraint inner_;
+  Index n_;
+};
+
+Constraint on_head(const Constraint& c, Index n) {
+  Constraint out(c.name(), c.kind(), c.rows(), std::make_shared<HeadConstraintModel>(c, n));
+  const TimeInterval& iv = c.active_interval();
+  if (iv.begin != TimeInterval{}.begin || iv.end != TimeInterval{}.end) {
+    out.active_between(iv.begin, iv.end);
+  }
+  if (c.stabilization().enabled()) out.stabilize(c.stabilization().alpha, c.stabilization().beta);
+  return out;
+}
+
+// --- the control inside the plant's force ------------------------------------------------------
+
+// Everything the controlled plant's callables share (one per controlled system).
+struct ControlledPlant {
+  ControlledPlant(const Controller& c, const System& p, Index aux_count)
+      : ctrl(c), plant(p), cws(c), n(p.dofs()), aux(aux_count), q(n), qd(n), qm(n) {
+    stats.first_not_met = std::numeric_limits<double>::quiet_NaN();
+  }
+
+  // Q ← Q_plant(q, q', t) + Qc_control and the auxiliary integrands; NaN when the control fails
+  void force(const VectorXd& xq, const VectorXd& xqd, double t, Eigen::Ref<VectorXd> Q) {
+    const VectorXd* pq = &xq;
+    const VectorXd* pqd = &xqd;
+    if (aux > 0) {
+      q = xq.head(n);
+      qd = xqd.head(n);
+      pq = &q;
+      pqd = &qd;
+    }
+    plant.forces(*pq, *pqd, t, Q.head(n));
+    const ControlStatus s = compute_control(ctrl, cws, *pq, *pqd, t);
+    ++stats.evaluations;
+    if (s != ControlStatus::kOk && s != ControlStatus::kRequirementsNotMet) {
+      if (failure.empty()) failure = describe_control_status(ctrl, cws);
+      Q.setConstant(std::numeric_limits<double>::quiet_NaN());
+      return;
+    }
+    if (s == ControlStatus::kRequirementsNotMet) note_not_met(t);
+    for (Index i = 0; i < cws.kappa.size(); ++i)
+      stats.max_kappa = std::max(stats.max_kappa, cws.kappa[i]);
+    // Q += Qc_control
+    Q.head(n) += cws.Qc_control;
+    if (aux == 0) return;
+    // z'' = (Qcᵀq', QcᵀQc, |Qcᵀq'|, −gamma_i V_i + kappa_i epsilon / 2)
+    Q[n + kWork] = cws.power;
+    Q[n + kEffort] = cws.Qc_control.squaredNorm();
+    Q[n + kWorkAbs] = std::abs(cws.power);
+    if (const auto& r = ctrl.robust(); r && aux > kBounds) {
+      for (Index i = 0; i < ctrl.requirement_rows(); ++i) {
+        Q[n + kBounds + i] =
+            -ctrl.robust_rate(i) * xqd[n + kBounds + i] + 0.5 * cws.kappa[i] * r->boundary_layer;
+      }
+    }
+  }
+
+  void note_not_met(double t) {
+    ++stats.not_met;
+    for (Index i = 0; i < cws.residual.size(); ++i) {
+      if (!cws.met[std::size_t(i)]) {
+        stats.max_residual = std::max(stats.max_residual, std::abs(cws.residual[i]));
+      }
+    }
+    if (stats.not_met == 1) {
+      stats.first_not_met = t;
+      stats.not_met_message = describe_control_status(ctrl, cws);  // once
+    }
+  }
+
+  Controller ctrl;
+  System plant;
+  ControlWorkspace cws;
+  Index n, aux;
+  VectorXd q, qd;  // (n) plant part of the state, for the force
+  VectorXd qm;     // (n) plant part of q, for M and V
+  ControlStatistics stats;
+  std::string failure;  // describe_control_status() of the first failure
+};
+
+void require_same_plant(const Controller& ctrl, const System& plant, const char* who) {
+  const System& model = ctrl.model();
+  auto fail = [&](const std::string& what) {
+    throw std::invalid_argument(std::string(who) + ": the plant and the controller's model " +
+                                what +
+                                " (the nominal model must describe the same mechanism, "
+                                "with the parameters the controller believes)");
+  };
+  if (plant.coordinate_names() != model.coordinate_names()) fail("have different coordinates");
+  if (plant.constraint_count() != model.constraint_count()) {
+    fail("have different physical constraints (" + std::to_string(plant.constraint_count()) +
+         " and " + std::to_string(model.constraint_count()) + ")");
+  }
+  for (Index k = 0; k < plant.constraint_count(); ++k) {
+    if (plant.constraint(k).name() != model.constraint(k).name() ||
+        plant.constraint(k).rows() != model.constraint(k).rows()) {
+      fail("differ in constraint " + std::to_string(k) + " ('" + plant.constraint(k).name() +
+           "' and '" + model.constraint(k).name() + "')");
+    }
+  }
+}
+
+// The plant with the control in its force; aux > 0 appends the auxiliary coordinates.
+System build_controlled(const std::shared_ptr<ControlledPlant>& st,
+                        const std::vector<std::string>& aux_names) {
+  const System& plant = st->plant;
+  const Index n = plant.dofs(), aux = st->aux;
+  std::vector<std::string> names = plant.coordinate_names();
+  names.insert(names.end(), aux_names.begin(), aux_names.end());
+  SystemBuilder b(names);
+  // M = diag(M_plant, I)
+  if (plant.mass_is_constant()) {
+    MatrixXd M = MatrixXd::Identity(n + aux, n + aux);
+    plant.mass_matrix(VectorXd::Zero(n), 0.0, M.topLeftCorner(n, n));
+    b.mass_matrix(M);
+  } else if (aux == 0) {
+    b.mass_matrix([st](const VectorXd& q, double t, Eigen::Ref<MatrixXd> M) {
+      st->plant.mass_matrix(q, t, M);
+    });
+  } else {
+    b.mass_matrix([st, n, aux](const VectorXd& x, double t, Eigen::Ref<MatrixXd> M) {
+      st->qm = x.head(n);
+      st->plant.mass_matrix(st->qm, t, M.topLeftCorner(n, n));
+      M.topRightCorner(n, aux).setZero();
+      M.bottomLeftCorner(aux, n).setZero();
+      M.bottomRightCorner(aux, aux).setIdentity();
+    });
+  }
+  // Q = Q_plant + Qc_control (+ the auxiliary integrands)
+  b.forces([st](const VectorXd& q, const VectorXd& qd, double t, Eigen::Ref<VectorXd> Q) {
+    st->force(q, qd, t, Q);
+  });
+  if (plant.has_potential()) {
+    if (aux == 0) {
+      b.potential_energy(
+          [st](const VectorXd& q, double t) { return st->plant.potential_energy(q, t); });
+    } else {
+      b.potential_energy([st, n](const VectorXd& x, double t) {
+        st->qm = x.head(n);
+        return st->plant.potential_energy(st->qm, t);
+      });
+    }
+  }
+  // the physical constraints (stick constraints of Coulomb contacts stay inactive)
+  for (const Constraint& c : plant.constraints()) b.add(aux == 0 ? c : on_head(c, n));
+  // the non-ideal forces, with the same indices
+  for (Index i = 0; i < plant.nonideal_count(); ++i) {
+    NonIdealFn fn = plant.nonideal(i);
+    if (aux == 0) {
+      b.add(NonIdealForce(plant.nonideal_name(i), std::move(fn)));
+      continue;
+    }
+    auto buffers = std::make_shared<std::pair<VectorXd, VectorXd>>(VectorXd(n), VectorXd(n));
+    b.add(NonIdealForce(
+        plant.nonideal_name(i),
+        NonIdealFn([fn, buffers, n](const VectorXd& x, const VectorXd& xd, double t,
+                                    const IdealForceInfo& ideal, Eigen::Ref<VectorXd> C) {
+          buffers->first = x.head(n);
+          buffers->second = xd.head(n);
+          fn(buffers->first, buffers->second, t, ideal, C.head(n));
+        })));
+  }
+  return b.build();
+}
+
+}  // namespace
+
+System controlled_system(const Controller& ctrl, const System& plant) {
+  require_same_plant(ctrl, plant, "ukdyn::controlled_system");
+  return build_controlled(std::make_shared<ControlledPlant>(ctrl, plant, 0), {});
+}
+
+ControlledTrajectory simulate_controlled(const Controller& ctrl, const System& plant,
+                                         const VectorXd& q0, const VectorXd& qd0,
+                                         const SimulationOptions& options) {
+  const char* who = "ukdyn::simulate_controlled";
+  require_same_plant(ctrl, plant, who);
+  const Index n = plant.dofs(), m_r = ctrl.requirement_rows();
+  if (q0.size() != n || qd0.size() != n) {
+    throw std::invalid_argument(std::string(who) + ": q0 and qd0 need n = " + std::to_string(n) +
+                                " entries, got " + std::to_string(q0.size()) + " and " +
+                                std::to_string(qd0.size()));
+  }
+  const bool robust = ctrl.robust().has_value();
+  const Index aux = kBounds + (robust ? m_r : 0);
+  std::vector<std::string> aux_names = {"ukdyn.control.work", "ukdyn.control.effort",
+                                        "ukdyn.control.work_abs"};
+  for (Index i = 0; robust && i < m_r; ++i) {
+    aux_names.push_back("ukdyn.control.bound." + ctrl.row_names()[std::size_t(i)]);
+  }
+  for (const auto& name : aux_names) {
+    for (const auto& c : plant.coordinate_names()) {
+      if (c == name) {
+        throw std::invalid_argument(std::string(who) + ": the plant has a coordinate named '" +
+                                    name + "', which the controlled simulation reserves");
+      }
+    }
+  }
+  auto st = std::make_shared<ControlledPlant>(ctrl, plant, aux);
+  const System sys = build_controlled(st, aux_names);
+
+  // initial state [q0; 0], [qd0; 0, 0, 0, V_i(0)]
+  VectorXd x0 = VectorXd::Zero(n + aux), xd0 = VectorXd::Zero(n + aux);
+  x0.head(n) = q0;
+  xd0.head(n) = qd0;
+  if (robust) {
+    ControlWorkspace cws(ctrl);
+    evaluate_violations(ctrl.requirements(), cws.req, q0, qd0, options.t_start);
+    for (Index i = 0; i < m_r; ++i) {
+      const bool holonomic =
+          ctrl.requirement(ctrl.row_requirement(i)).kind() == ConstraintKind::kHolonomic;
+      const double e = holonomic ? cws.req.phi[i] : cws.req.phi_dot[i];
+      const double e_dot = holonomic ? cws.req.phi_dot[i] : 0.0;
+      xd0[n + kBounds + i] = ctrl.lyapunov(i, e, e_dot);
+    }
+  }
+  // the requirements' switching times are breakpoints of the dynamics
+  SimulationOptions o = options;
+  for (const Constraint& c : ctrl.requirements().constraints()) {
+    for (double t : {c.active_interval().begin, c.active_interval().end}) {
+      if (std::isfinite(t)) o.breakpoints.push_back(t);
+    }
+  }
+  Trajectory full = simulate(sys, x0, xd0, o);
+
+  // the plant's trajectory: strip z, and z'ᵀz'/2 from the energies
+  ControlledTrajectory run;
+  Trajectory& tr = run.plant;
+  tr.coordinate_names = plant.coordinate_names();
+  tr.constraint_names = full.constraint_names;
+  tr.constraint_rows = full.constraint_rows;
+  tr.constraint_kinds = full.constraint_kinds;
+  tr.n = n;
+  tr.m = full.m;
+  tr.t = full.t;
+  const Index N = full.samples(), w = n + aux;
+  auto strip = [&](const std::vector<double>& f, std::vector<double>& out) {
+    out.reserve(std::size_t(N * n));
+    for (Index j = 0; j < N; ++j) {
+      out.insert(out.end(), f.begin() + j * w, f.begin() + j * w + n);
+    }
+  };
+  strip(full.q, tr.q);
+  strip(full.qd, tr.qd);
+  strip(full.qdd, tr.qdd);
+  strip(full.Qc_ideal, tr.Qc_ideal);
+  strip(full.Qc_nonideal, tr.Qc_nonideal);
+  tr.lambda = full.lambda;
+  tr.position_violation = full.position_violation;
+  tr.velocity_violation = full.velocity_violation;
+  tr.potential_energy = full.potential_energy;
+  tr.work_nonideal = full.work_nonideal;
+  tr.stats = full.stats;
+  for (Index j = 0; j < N; ++j) {
+    const auto z_dot = Eigen::Map<const VectorXd>(full.qd.data() + j * w + n, aux);
+    const double T = full.kinetic_energy[std::size_t(j)] - 0.5 * z_dot.squaredNorm();
+    tr.kinetic_energy.push_back(T);
+    tr.energy.push_back(T + tr.potential_energy[std::size_t(j)]);
+  }
+
+  // the control at every sample (evaluated afresh at the sample's state)
+  run.row_names = ctrl.row_names();
+  run.robust = robust;
+  run.control = st->stats;
+  ControlWorkspace cws(ctrl);
+  VectorXd q(n), qd(n), qdd(n);
+  for (Index j = 0; j < N; ++j) {
+    const double t = tr.t[std::size_t(j)];
+    q = Eigen::Map<const VectorXd>(tr.q.data() + j * n, n);
+    qd = Eigen::Map<const VectorXd>(tr.qd.data() + j * n, n);
+    qdd = Eigen::Map<const VectorXd>(tr.qdd.data() + j * n, n);
+    compute_control(ctrl, cws, q, qd, t);
+    // errors: phi (holonomic), psi (nonholonomic), A_r q'' − b_r (acceleration form)
+    const VectorXd accel_residual = cws.req.A * qdd - cws.req.b;
+    evaluate_violations(ctrl.requirements(), cws.req, q, qd, t);
+    for (Index i = 0; i < m_r; ++i) {
+      switch (ctrl.requirement(ctrl.row_requirement(i)).kind()) {
+        case ConstraintKind::kHolonomic:
+          run.error.push_back(cws.req.phi[i]);
+          run.error_rate.push_back(cws.req.phi_dot[i]);
+          break;
+        case ConstraintKind::kNonholonomic:
+          run.error.push_back(cws.req.phi_dot[i]);
+          run.error_rate.push_back(0.0);
+          break;
+        case ConstraintKind::kAcceleration:
+          run.error.push_back(accel_residual[i]);
+          run.error_rate.push_back(0.0);
+          break;
+      }
+    }
+    run.Qc_control.insert(run.Qc_control.end(), cws.Qc_control.data(), cws.Qc_control.data() + n);
+    run.Qc_robust.insert(run.Qc_robust.end(), cws.Qc_robust.data(), cws.Qc_robust.data() + n);
+    run.control_power.push_back(cws.Qc_control.dot(qd));
+    const double* z_dot = full.qd.data() + j * w + n;
+    run.control_work.push_back(z_dot[kWork]);
+    run.control_effort.push_back(z_dot[kEffort]);
+    run.control_work_abs.push_back(z_dot[kWorkAbs]);
+    for (Index i = 0; robust && i < m_r; ++i) {
+      run.error_bound.push_back(
+          std::sqrt(std::max(z_dot[kBounds + i], 0.0) / ctrl.robust_scale(i)));
+    }
+  }
+
+  // energy balance with the control's work: E(t) − E(0) − W_nonideal(t) − W_control(t)
+  if (N > 0) {
+    const double E0 = tr.energy.front();
+    double scale = std::abs(E0), drift = 0.0;
+    for (double T : tr.kinetic_energy) scale = std::max(scale, std::abs(T));
+    for (Index j = 0; j < N; ++j) {
+      const std::size_t i = std::size_t(j);
+      drift =
+          std::max(drift, std::abs(tr.energy[i] - E0 - tr.work_nonideal[i] - run.control_work[i]));
+    }
+    tr.stats.energy_drift = scale > 0 ? drift / scale : drift;
+  }
+  if (!st->failure.empty() && tr.stats.status != Status::kOk) {
+    tr.stats.message = "the controller failed: " + st->failure;
+  }
+  return run;
+}
+
+std::vector<CsvColumn> control_csv_columns(const ControlledTrajectory& run) {
+  const Index N = run.samples(), n = run.plant.n, m_r = Index(run.row_names.size());
+  if (Index(run.error.size()) != N * m_r || Index(run.Qc_control.size()) != N * n ||
+      Index(run.control_power.size()) != N || Index(run.control_effort.size()) != N ||
+      Index(run.control_work_abs.size()) != N || Index(run.control_work.size()) != N ||
+      (run.robust && Index(run.error_bound.size()) != N * m_r)) {
+    throw std::invalid_argument(
+        "ukdyn::control_csv_columns: inconsistent controlled trajectory "
+        "(one from simulate_controlled() always is consistent)");
+  }
+  std::vector<CsvColumn> cols;
+  auto matrix = [&](const std::string& prefix, const std::vector<double>& f,
+                    const std::vector<std::string>& names) {
+    const Index width = Index(names.size());
+    for (Index i = 0; i < width; ++i) {
+      CsvColumn c{prefix + names[std::size_t(i)], {}};
+      c.values.reserve(std::size_t(N));
+      for (Index j = 0; j < N; ++j) c.values.push_back(f[std::size_t(j * width + i)]);
+      cols.push_back(std::move(c));
+    }
+  };
+  matrix("error.", run.error, run.row_names);
+  if (run.robust) matrix("error_bound.", run.error_bound, run.row_names);
+  matrix("Qc_control.", run.Qc_control, run.plant.coordinate_names);
+  if (run.robust) matrix("Qc_robust.", run.Qc_robust, run.plant.coordinate_names);
+  cols.push_back({"control_power", run.control_power});
+  cols.push_back({"control_effort", run.control_effort});
+  cols.push_back({"control_work_abs", run.control_work_abs});
+  cols.push_back({"control_work", run.control_work});
+  return cols;
+}
+
+void write_csv(const ControlledTrajectory& run, const std::string& path) {
+  write_csv(run.plant, path, control_csv_columns(run));
+}
+
+}  // namespace ukdyn

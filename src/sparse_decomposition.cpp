@@ -1,0 +1,509 @@
+// SparseDecomposition, the numerical part (every evaluation; no allocation): block Cholesky of M,
+// W = A L⁻ᵀ, G = W Wᵀ, the rank-revealing up-looking LDLᵀ of P G Pᵀ, the null-space basis of
+// the dropped rows, and the solves of sparse.hpp.
+#include <algorithm>
+#include <cmath>
+
+#include "ukdyn/sparse.hpp"
+
+namespace ukdyn {
+
+namespace {
+// A = L Lᵀ in place on the lower triangle of the s × s column-major block A; inv ← 1 / L_kk;
+// false unless every pivot is positive
+bool block_cholesky(double* A, Index s, double* inv) {
+  for (Index k = 0; k < s; ++k) {
+    double* Ak = A + k * s;
+    if (!(Ak[k] > 0.0)) return false;
+    const double d = std::sqrt(Ak[k]);
+    inv[k] = 1.0 / d;
+    Ak[k] = d;
+    for (Index i = k + 1; i < s; ++i) Ak[i] *= inv[k];
+    for (Index j = k + 1; j < s; ++j) {
+      const double f = Ak[j];
+      double* Aj = A + j * s;
+      for (Index i = j; i < s; ++i) Aj[i] -= f * Ak[i];
+    }
+  }
+  return true;
+}
+
+// x ← L⁻¹ x, L the lower triangle of an s × s block
+inline void block_lower_solve(const double* L, const double* inv, double* x, Index s) {
+  for (Index k = 0; k < s; ++k) {
+    const double xk = (x[k] *= inv[k]);
+    const double* Lk = L + k * s;
+    for (Index i = k + 1; i < s; ++i) x[i] -= Lk[i] * xk;
+  }
+}
+
+// x ← L⁻ᵀ x
+inline void block_upper_solve(const double* L, const double* inv, double* x, Index s) {
+  for (Index k = s - 1; k >= 0; --k) {
+    const double* Lk = L + k * s;
+    double v = x[k];
+    for (Index i = k + 1; i < s; ++i) v -= Lk[i] * x[i];
+    x[k] = v * inv[k];
+  }
+}
+}  // namespace
+
+// --- M ------------------------------------------------------------------------------------
+
+Eigen::Map<MatrixXd> SparseDecomposition::mass_block(Index b) {
+  const Index s = block_size(b);
+  return Eigen::Map<MatrixXd>(Mv_.data() + blk_val_[std::size_t(b)], s, s);
+}
+
+Eigen::Map<const MatrixXd> SparseDecomposition::mass_block(Index b) const {
+  const Index s = block_size(b);
+  return Eigen::Map<const MatrixXd>(Mv_.data() + blk_val_[std::size_t(b)], s, s);
+}
+
+double SparseDecomposition::mass_max_abs() const {
+  double worst = 0.0;
+  for (double v : Mv_) worst = std::max(worst, std::abs(v));
+  return worst;
+}
+
+double SparseDecomposition::mass_asymmetry() const {
+  double worst = 0.0;
+  for (Index b = 0; b < block_count(); ++b) {
+    const auto Mb = mass_block(b);
+    for (Index j = 0; j < Mb.cols(); ++j) {
+      for (Index i = 0; i < j; ++i) worst = std::max(worst, std::abs(Mb(i, j) - Mb(j, i)));
+    }
+  }
+  return worst;
+}
+
+bool SparseDecomposition::mass_finite() const {
+  for (double v : Mv_) {
+    if (!std::isfinite(v)) return false;
+  }
+  return true;
+}
+
+SparseDecomposition& SparseDecomposition::compute_mass() {
+  // M_bb = L_b L_bᵀ, block by block (constant blocks once)
+  info_ = Eigen::Success;
+  for (Index b = 0; b < block_count(); ++b) {
+    if (blk_const_[std::size_t(b)] && const_factorized_) continue;
+    const Index s = block_size(b), v0 = blk_val_[std::size_t(b)];
+    std::copy(Mv_.begin() + v0, Mv_.begin() + v0 + s * s, Lv_.begin() + v0);
+    if (!block_cholesky(Lv_.data() + v0, s, inv_ldiag_.data() + block_offset(b))) {
+      info_ = Eigen::NumericalIssue;
+      const_factorized_ = false;
+      return *this;
+    }
+  }
+  const_factorized_ = true;
+  return *this;
+}
+
+void SparseDecomposition::mass_lower_solve(double* x) const {
+  for (Index b = 0; b < block_count(); ++b) {
+    const Index o = block_offset(b);
+    block_lower_solve(Lv_.data() + blk_val_[std::size_t(b)], inv_ldiag_.data() + o, x + o,
+                      block_size(b));
+  }
+}
+
+void SparseDecomposition::mass_upper_solve(double* x) const {
+  for (Index b = 0; b < block_count(); ++b) {
+    const Index o = block_offset(b);
+    block_upper_solve(Lv_.data() + blk_val_[std::size_t(b)], inv_ldiag_.data() + o, x + o,
+                      block_size(b));
+  }
+}
+
+void SparseDecomposition::mass_lower_multiply(const double* x, double* y) const {
+  // y_i = Σ_{k <= i} L_ik x_k, block by block
+  for (Index b = 0; b < block_count(); ++b) {
+    const Index o = block_offset(b), s = block_size(b);
+    const double* L = Lv_.data() + blk_val_[std::size_t(b)];
+    for (Index i = 0; i < s; ++i) y[o + i] = 0.0;
+    for (Index k = 0; k < s; ++k) {
+      const double xk = x[o + k];
+      for (Index i = k; i < s; ++i) y[o + i] += L[k * s + i] * xk;
+    }
+  }
+}
+
+void SparseDecomposition::solve_mass(const Eigen::Ref<const VectorXd>& f,
+                                     Eigen::Ref<VectorXd> x) const {
+  // x = L⁻ᵀ L⁻¹ f
+  x = f;
+  mass_lower_solve(x.data());
+  mass_upper_solve(x.data());
+}
+
+void SparseDecomposition::multiply_mass(const Eigen::Ref<const VectorXd>& x,
+                                        Eigen::Ref<VectorXd> y) const {
+  for (Index b = 0; b < block_count(); ++b) {
+    const Index o = block_offset(b), s = block_size(b);
+    y.segment(o, s).noalias() = mass_block(b) * x.segment(o, s);
+  }
+}
+
+double SparseDecomposition::mass_norm_squared(const Eigen::Ref<const VectorXd>& x) const {
+  // ‖Lᵀ x‖², (Lᵀ x)_k = Σ_{i >= k} L_ik x_i
+  double sum = 0.0;
+  for (Index b = 0; b < block_count(); ++b) {
+    const Index o = block_offset(b), s = block_size(b);
+    const double* L = Lv_.data() + blk_val_[std::size_t(b)];
+    for (Index k = 0; k < s; ++k) {
+      double v = 0.0;
+      for (Index i = k; i < s; ++i) v += L[k * s + i] * x[o + i];
+      sum += v * v;
+    }
+  }
+  return sum;
+}
+
+// --- A ------------------------------------------------------------------------------------
+
+Eigen::Map<const Eigen::SparseMatrix<double, Eigen::RowMajor, int>> SparseDecomposition::matrix_A()
+    const {
+  return Eigen::Map<const Eigen::SparseMatrix<double, Eigen::RowMajor, int>>(
+      m_, n_, Index(Av_.size()), row_ptr_.data(), col_.data(), Av_.data());
+}
+
+void SparseDecomposition::set_constraint_rows(Index k, const Eigen::Ref<const MatrixXd>& A_k) {
+  const Index r0 = con_r0_[std::size_t(k)], rows = con_rows_[std::size_t(k)];
+  const auto& lp = local_pos_[std::size_t(k)];
+  for (Index r = 0; r < rows; ++r) {
+    double* row = Av_.data() + row_ptr_[std::size_t(r0 + r)];
+    if (lp.empty()) {
+      // dense rows: all n columns in order
+      for (Index c = 0; c < n_; ++c) row[c] = A_k(r, c);
+    } else {
+      // local columns into their places (the rest of the pattern stays zero)
+      for (std::size_t j = 0; j < lp.size(); ++j) row[lp[j]] = A_k(r, Index(j));
+    }
+  }
+}
+
+void SparseDecomposition::zero_constraint_rows(Index k) {
+  const Index r0 = con_r0_[std::size_t(k)], rows = con_rows_[std::size_t(k)];
+  std::fill(Av_.begin() + row_ptr_[std::size_t(r0)], Av_.begin() + row_ptr_[std::size_t(r0 + rows)],
+            0.0);
+}
+
+void SparseDecomposition::multiply_A(const Eigen::Ref<const VectorXd>& x,
+                                     Eigen::Ref<VectorXd> y) const {
+  for (Index i = 0; i < m_; ++i) {
+    double v = 0.0;
+    for (int p = row_ptr_[std::size_t(i)]; p < row_ptr_[std::size_t(i) + 1]; ++p) {
+      v += Av_[std::size_t(p)] * x[col_[std::size_t(p)]];
+    }
+    y[i] = v;
+  }
+}
+
+void SparseDecomposition::multiply_At(const Eigen::Ref<const VectorXd>& lambda,
+                                      Eigen::Ref<VectorXd> y) const {
+  y.setZero();
+  for (Index i = 0; i < m_; ++i) {
+    const double li = lambda[i];
+    if (li == 0.0) continue;
+    for (int p = row_ptr_[std::size_t(i)]; p < row_ptr_[std::size_t(i) + 1]; ++p) {
+      y[col_[std::size_t(p)]] += Av_[std::size_t(p)] * li;
+    }
+  }
+}
+
+void SparseDecomposition::share(Index k, const Eigen::Ref<const VectorXd>& lambda,
+                                Eigen::Ref<VectorXd> y) const {
+  const Index r0 = con_r0_[std::size_t(k)], rows = con_rows_[std::size_t(k)];
+  // every row of constraint k has the same pattern: zero it, then accumulate
+  for (int p = row_ptr_[std::size_t(r0)]; p < row_ptr_[std::size_t(r0) + 1]; ++p) {
+    y[col_[std::size_t(p)]] = 0.0;
+  }
+  for (Index i = r0; i < r0 + rows; ++i) {
+    const double li = lambda[i];
+    for (int p = row_ptr_[std::size_t(i)]; p < row_ptr_[std::size_t(i) + 1]; ++p) {
+      y[col_[std::size_t(p)]] += Av_[std::size_t(p)] * li;
+    }
+  }
+}
+
+double SparseDecomposition::norm_A() const {
+  double s = 0.0;
+  for (double v : Av_) s += v * v;
+  return std::sqrt(s);
+}
+
+void SparseDecomposition::constraint_rows_dense(Index k, Eigen::Ref<MatrixXd> out) const {
+  const Index r0 = con_r0_[std::size_t(k)], rows = con_rows_[std::size_t(k)];
+  out.setZero();
+  for (Index r = 0; r < rows; ++r) {
+    for (int p = row_ptr_[std::size_t(r0 + r)]; p < row_ptr_[std::size_t(r0 + r) + 1]; ++p) {
+      out(r, col_[std::size_t(p)]) = Av_[std::size_t(p)];
+    }
+  }
+}
+
+// --- W, G and its factorization -----------------------------------------------------------
+
+void SparseDecomposition::multiply_W(const double* x, double* y) const {
+  for (Index i = 0; i < m_; ++i) {
+    double v = 0.0;
+    for (int p = row_ptr_[std::size_t(i)]; p < row_ptr_[std::size_t(i) + 1]; ++p) {
+      v += Wv_[std::size_t(p)] * x[col_[std::size_t(p)]];
+    }
+    y[i] = v;
+  }
+}
+
+void SparseDecomposition::multiply_Wt(const double* lambda, double* y) const {
+  std::fill(y, y + n_, 0.0);
+  for (Index i = 0; i < m_; ++i) {
+    const double li = lambda[i];
+    if (li == 0.0) continue;
+    for (int p = row_ptr_[std::size_t(i)]; p < row_ptr_[std::size_t(i) + 1]; ++p) {
+      y[col_[std::size_t(p)]] += Wv_[std::size_t(p)] * li;
+    }
+  }
+}
+
+SparseDecomposition& SparseDecomposition::compute_constraints() {
+  // W = A L⁻ᵀ: each row segment on block b is L_b⁻¹ a_ibᵀ
+  std::copy(Av_.begin(), Av_.end(), Wv_.begin());
+  for (Index i = 0; i < m_; ++i) {
+    for (int s = seg_ptr_[std::size_t(i)]; s < seg_ptr_[std::size_t(i) + 1]; ++s) {
+      const Index b = seg_blk_[std::size_t(s)], o = block_offset(b);
+      block_lower_solve(Lv_.data() + blk_val_[std::size_t(b)], inv_ldiag_.data() + o,
+                        Wv_.data() + seg_pos_[std::size_t(s)], block_size(b));
+    }
+  }
+  // G = W Wᵀ (permuted, upper): G_ij = Σ_b w_ib · w_jb
+  std::fill(Gx_.begin(), Gx_.end(), 0.0);
+  const double* W = Wv_.data();
+  for (const Product& pr : program_) {
+    const double* x = W + pr.wi;
+    const double* y = W + pr.wj;
+    double s = 0.0;
+    for (int t = 0; t < pr.len; ++t) s += x[t] * y[t];
+    Gx_[std::size_t(pr.target)] += s;
+  }
+  factor_G();
+  null_basis();
+  return *this;
+}
+
+void SparseDecomposition::factor_G() {
+  // up-looking LDLᵀ: row k of L_G from the sparse triangular solve L_G(0:k,0:k) D y = G(0:k, k)
+  // along the elimination tree; a pivot d_k <= tau² G_kk marks row k as dependent on the rows
+  // before it: d_k = 0 and column k of L_G stays zero (its entries would be roundoff / roundoff)
+  const int m = int(m_);
+  const double tau2 = threshold_ * threshold_;
+  Index dropped = 0;
+  rechecked_ = 0;
+  for (int k = 0; k < m; ++k) {
+    double* Y = Y_.data();
+    int top = m;
+    flag_[std::size_t(k)] = k;
+    Lnz_[std::size_t(k)] = 0;
+    Y[k] = 0.0;
+    // scatter column k of G; the pattern of row k of L_G is the union of the tree paths
+    for (int p = Gp_[std::size_t(k)]; p < Gp_[std::size_t(k) + 1]; ++p) {
+      int i = Gi_[std::size_t(p)];
+      Y[i] += Gx_[std::size_t(p)];
+      int len = 0;
+      for (; flag_[std::size_t(i)] != k; i = parent_[std::size_t(i)]) {
+        pattern_[std::size_t(len++)] = i;
+        flag_[std::size_t(i)] = k;
+      }
+      while (len > 0) pattern_[std::size_t(--top)] = pattern_[std::size_t(--len)];
+    }
+    // d_k = G_kk − Σ l_ki² d_i
+    double d = Y[k];
+    Y[k] = 0.0;
+    for (; top < m; ++top) {
+      const int i = pattern_[std::size_t(top)];
+      const double yi = Y[i];
+      Y[i] = 0.0;
+      const int p2 = Lp_[std::size_t(i)] + Lnz_[std::size_t(i)];
+      for (int p = Lp_[std::size_t(i)]; p < p2; ++p) Y[Li_[std::size_t(p)]] -= Lx_[std::size_t(p)] * yi;
+      const double lki = yi * D_[std::size_t(i)];  // D_ holds 1/d_i, 0 for dropped rows
+      d -= lki * yi;
+      Li_[std::size_t(p2)] = k;
+      Lx_[std::size_t(p2)] = lki;
+      ++Lnz_[std::size_t(i)];
+    }
+    // rank decision. The pivot of G carries roundoff of order eps κ(G_11) G_kk (G_11: the rows
+    // before k); a suspicious pivot is also estimated in the space of W: v = L_G⁻ᵀ e_k (rows
+    // <= k) gives w_k − Σ_j c_j w_j = Σ_j v_j w_j, whose norm is d_k^{1/2} with an error of
+    // order eps κ(G_11) ‖W‖ ‖v‖ — much smaller when the dependence is local, larger along long
+    // loops. The row is dependent when either estimate is below the threshold.
+    const double gkk = Gx_[std::size_t(Gdiag_[std::size_t(k)])];
+    if (gkk != 0.0 && d > tau2 * gkk && d <= kSuspect * gkk && recompute_pivot(k) <= tau2 * gkk) {
+      d = 0.0;
+    }
+    if (gkk == 0.0) {
+      dropped_[std::size_t(k)] = 2;  // zero row of A (an inactive constraint)
+      D_[std::size_t(k)] = 0.0;
+      ++dropped;
+    } else if (d <= tau2 * gkk) {
+      dropped_[std::size_t(k)] = 1;
+      D_[std::size_t(k)] = 0.0;
+      ++dropped;
+    } else {
+      dropped_[std::size_t(k)] = 0;
+      D_[std::size_t(k)] = 1.0 / d;
+    }
+  }
+  rank_ = m_ - dropped;
+}
+
+double SparseDecomposition::recompute_pivot(int k) {
+  // v = L_G⁻ᵀ e_k over the rows eliminated so far (permuted order; row k of L_G is complete)
+  double* v = wm3_.data();
+  std::fill(v, v + k + 1, 0.0);
+  v[k] = 1.0;
+  for (int j = k - 1; j >= 0; --j) {
+    double x = 0.0;
+    for (int p = Lp_[std::size_t(j)]; p < Lp_[std::size_t(j)] + Lnz_[std::size_t(j)]; ++p) {
+      x -= Lx_[std::size_t(p)] * v[Li_[std::size_t(p)]];
+    }
+    v[j] = x;
+  }
+  // r = Wᵀ Pᵀ v = Σ_j v_j w_(perm j);  d_k = ‖r‖²
+  double* r = wn3_.data();
+  std::fill(r, r + n_, 0.0);
+  for (int j = 0; j <= k; ++j) {
+    const double vj = v[j];
+    if (vj == 0.0) continue;
+    const int i = perm_[std::size_t(j)];
+    for (int p = row_ptr_[std::size_t(i)]; p < row_ptr_[std::size_t(i) + 1]; ++p) {
+      r[col_[std::size_t(p)]] += Wv_[std::size_t(p)] * vj;
+    }
+  }
+  double d = 0.0;
+  for (Index c = 0; c < n_; ++c) d += r[c] * r[c];
+  ++rechecked_;
+  return d;
+}
+
+void SparseDecomposition::null_basis() {
+  // n_k = L_G⁻ᵀ e_k for each dependent row k (zero rows need no column: their n_k = e_k is
+  // orthogonal to every other one); orthonormalized by modified Gram–Schmidt, twice
+  d_ = 0;
+  for (Index k = 0; k < m_; ++k) {
+    if (dropped_[std::size_t(k)] != 1) continue;
+    if (d_ == N_.cols()) {
+      // more dependent rows than reserved: the only allocation after construction
+      N_.conservativeResize(m_, std::min(m_, std::max<Index>(1, 2 * N_.cols())));
+      null_rows_.resize(std::size_t(N_.cols()));
+    }
+    double* x = N_.col(d_).data();
+    std::fill(x, x + m_, 0.0);
+    x[k] = 1.0;
+    for (Index j = k - 1; j >= 0; --j) {
+      double v = 0.0;
+      for (int p = Lp_[std::size_t(j)]; p < Lp_[std::size_t(j)] + Lnz_[std::size_t(j)]; ++p) {
+        v += Lx_[std::size_t(p)] * x[Li_[std::size_t(p)]];
+      }
+      x[j] = -v;
+    }
+    auto col = N_.col(d_);
+    for (int pass = 0; pass < 2; ++pass) {
+      for (Index c = 0; c < d_; ++c) col -= N_.col(c).dot(col) * N_.col(c);
+    }
+    const double norm = col.norm();
+    if (!(norm > 0.0)) continue;
+    col /= norm;
+    null_rows_[std::size_t(d_)] = int(k);
+    ++d_;
+  }
+}
+
+void SparseDecomposition::project_range(double* x) const {
+  // x ← (I − N Nᵀ) x, and zero on zero rows
+  for (Index k = 0; k < m_; ++k) {
+    if (dropped_[std::size_t(k)] == 2) x[k] = 0.0;
+  }
+  Eigen::Map<VectorXd> v(x, m_);
+  for (Index c = 0; c < d_; ++c) v -= N_.col(c).dot(v) * N_.col(c);
+}
+
+void SparseDecomposition::solve_G_permuted(double* x) {
+  // x ← (I − N Nᵀ) L_G⁻ᵀ D⁺ L_G⁻¹ (I − N Nᵀ) x
+  if (d_ > 0 || rank_ < m_) project_range(x);
+  const int m = int(m_);
+  for (int j = 0; j < m; ++j) {
+    const double xj = x[j];
+    if (xj != 0.0) {
+      for (int p = Lp_[std::size_t(j)]; p < Lp_[std::size_t(j) + 1]; ++p) {
+        x[Li_[std::size_t(p)]] -= Lx_[std::size_t(p)] * xj;
+      }
+    }
+  }
+  for (int j = 0; j < m; ++j) x[j] *= D_[std::size_t(j)];
+  for (int j = m - 1; j >= 0; --j) {
+    double v = x[j];
+    for (int p = Lp_[std::size_t(j)]; p < Lp_[std::size_t(j) + 1]; ++p) {
+      v -= Lx_[std::size_t(p)] * x[Li_[std::size_t(p)]];
+    }
+    x[j] = v;
+  }
+  if (d_ > 0) project_range(x);
+}
+
+void SparseDecomposition::solve_min_norm(const double* e, double* lambda, double* y) {
+  // lambda = G⁺ e, y = Wᵀ lambda
+  for (Index k = 0; k < m_; ++k) wm_[std::size_t(k)] = e[perm_[std::size_t(k)]];
+  solve_G_permuted(wm_.data());
+  for (Index k = 0; k < m_; ++k) lambda[perm_[std::size_t(k)]] = wm_[std::size_t(k)];
+  multiply_Wt(lambda, y);
+  // one step of refinement (corrected seminormal equations): r = e − W y, lambda += G⁺ r,
+  // y += Wᵀ G⁺ r — brings the error from eps κ(W)² towards that of an orthogonal factorization
+  multiply_W(y, wm2_.data());
+  for (Index k = 0; k < m_; ++k) {
+    const Index i = perm_[std::size_t(k)];
+    wm_[std::size_t(k)] = e[i] - wm2_[std::size_t(i)];
+  }
+  solve_G_permuted(wm_.data());
+  for (Index k = 0; k < m_; ++k) {
+    const Index i = perm_[std::size_t(k)];
+    lambda[i] += wm_[std::size_t(k)];
+    wm2_[std::size_t(i)] = wm_[std::size_t(k)];
+  }
+  multiply_Wt(wm2_.data(), wn2_.data());
+  for (Index i = 0; i < n_; ++i) y[i] += wn2_[std::size_t(i)];
+}
+
+void SparseDecomposition::solve_ideal(const Eigen::Ref<const VectorXd>& e,
+                                      Eigen::Ref<VectorXd> dqdd, Eigen::Ref<VectorXd> Qc,
+                                      Eigen::Ref<VectorXd> lambda) {
+  // lambda = G⁺ e;  y = Wᵀ lambda = W⁺ e
+  solve_min_norm(e.data(), lambda.data(), wn_.data());
+  // Qc = L y;  dqdd = L⁻ᵀ y
+  mass_lower_multiply(wn_.data(), Qc.data());
+  std::copy(wn_.begin(), wn_.end(), dqdd.data());
+  mass_upper_solve(dqdd.data());
+}
+
+void SparseDecomposition::project_nonideal(const Eigen::Ref<const VectorXd>& C,
+                                           Eigen::Ref<VectorXd> dqdd, Eigen::Ref<VectorXd> Qc,
+                                           Eigen::Ref<VectorXd> lambda) {
+  // c = L⁻¹ C;  lambda = −G⁺ W c, W⁺W c = Wᵀ G⁺ W c
+  std::copy(C.data(), C.data() + n_, wn_.begin());
+  mass_lower_solve(wn_.data());
+  multiply_W(wn_.data(), wm3_.data());
+  solve_min_norm(wm3_.data(), lambda.data(), wn3_.data());
+  lambda = -lambda;
+  // c⊥ = c − W⁺W c = (I − W⁺W) c;  Qc = L c⊥;  dqdd = L⁻ᵀ c⊥
+  for (Index i = 0; i < n_; ++i) wn_[std::size_t(i)] -= wn3_[std::size_t(i)];
+  mass_lower_multiply(wn_.data(), Qc.data());
+  std::copy(wn_.begin(), wn_.end(), dqdd.data());
+  mass_upper_solve(dqdd.data());
+}
+
+void SparseDecomposition::apply_pinv(const Eigen::Ref<const VectorXd>& e, Eigen::Ref<VectorXd> y) {
+  // y = Wᵀ G⁺ e
+  solve_min_norm(e.data(), wm3_.data(), y.data());
+}
+
+}  // namespace ukdyn
