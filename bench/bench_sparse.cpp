@@ -28,6 +28,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include "support/planar_revolute.hpp"
+
 #include <ukdyn/forward.hpp>
 #include <ukdyn/simulate.hpp>
 #include <ukdyn/sparse.hpp>
@@ -48,58 +50,7 @@ Eigen::Matrix2d rot(double th) {
   return R;
 }
 
-// point s_i of body i on point s_j of body j (or on the ground point s_j when j < 0):
-// phi = p_i + R_i s_i − p_j − R_j s_j, A_i = [I | R_i J s_i], A_j = −[I | R_j J s_j],
-// b = R_i s_i theta_i'² − R_j s_j theta_j'²
-class PlanarRevolute final : public ukdyn::ConstraintModel {
- public:
-  PlanarRevolute(Index i, Eigen::Vector2d si, Index j, Eigen::Vector2d sj)
-      : i_(i), j_(j), si_(si), sj_(sj) {
-    const Index lo = j >= 0 ? std::min(i, j) : i, hi = j >= 0 ? std::max(i, j) : i;
-    for (Index c = 0; c < 3; ++c) cols_.push_back(3 * lo + c);
-    if (hi != lo) {
-      for (Index c = 0; c < 3; ++c) cols_.push_back(3 * hi + c);
-    }
-  }
-  const std::vector<Index>& columns() const override { return cols_; }
-  void acceleration_form_local(const VectorXd& q, const VectorXd& qd, double,
-                               ukdyn::ConstraintScratch*, Eigen::Ref<MatrixXd> A,
-                               Eigen::Ref<VectorXd> b) const override {
-    const Index oi = (j_ >= 0 && j_ < i_) ? 3 : 0, oj = 3 - oi;
-    const Eigen::Vector2d ri = rot(q[3 * i_ + 2]) * si_;
-    A.block(0, oi, 2, 2).setIdentity();
-    A(0, oi + 2) = -ri.y();
-    A(1, oi + 2) = ri.x();
-    const double wi = qd[3 * i_ + 2];
-    b = ri * wi * wi;
-    if (j_ >= 0) {
-      const Eigen::Vector2d rj = rot(q[3 * j_ + 2]) * sj_;
-      A.block(0, oj, 2, 2) = -Eigen::Matrix2d::Identity();
-      A(0, oj + 2) = rj.y();
-      A(1, oj + 2) = -rj.x();
-      const double wj = qd[3 * j_ + 2];
-      b -= rj * wj * wj;
-    }
-  }
-  void violation(const VectorXd& q, const VectorXd& qd, double, ukdyn::ConstraintScratch*,
-                 Eigen::Ref<VectorXd> position, Eigen::Ref<VectorXd> velocity) const override {
-    const Eigen::Vector2d ri = rot(q[3 * i_ + 2]) * si_;
-    position = q.segment<2>(3 * i_) + ri;
-    velocity = qd.segment<2>(3 * i_) + Eigen::Vector2d(-ri.y(), ri.x()) * qd[3 * i_ + 2];
-    if (j_ >= 0) {
-      const Eigen::Vector2d rj = rot(q[3 * j_ + 2]) * sj_;
-      position -= q.segment<2>(3 * j_) + rj;
-      velocity -= qd.segment<2>(3 * j_) + Eigen::Vector2d(-rj.y(), rj.x()) * qd[3 * j_ + 2];
-    } else {
-      position -= sj_;
-    }
-  }
-
- private:
-  Index i_, j_;
-  Eigen::Vector2d si_, sj_;
-  std::vector<Index> cols_;
-};
+using ukdyn::testing::PlanarRevolute;  // tests/support/planar_revolute.hpp
 
 // a rod of length d between the centres of mass of bodies i < j: phi = (|p_i − p_j|² − d²)/2,
 // A = [Δᵀ 0 −Δᵀ 0] with Δ = p_i − p_j, b = −|v_i − v_j|²

@@ -5,14 +5,17 @@
 # repository is never written to), and runs the fuzzer with the dictionary fuzz/model.dict.
 # Fails on any crash, uncaught exception, hang or slow input (-timeout, per input), memory
 # blow-up (-rss_limit_mb), leak or sanitizer report; the offending input is kept in
-# build-fuzz/artifacts/. Environment: FUZZ_TIMEOUT (seconds per input, default 10), FUZZ_JOBS
-# (build parallelism, default 2), FUZZ_ARGS (more libFuzzer flags).
+# build-fuzz/artifacts/. Environment: FUZZ_TIMEOUT (seconds per input, default 10), FUZZ_RSS_MB
+# (memory limit, default 2048: AddressSanitizer's own memory grows by a few KB per run, so runs of
+# more than about 20 minutes need more), FUZZ_JOBS (build parallelism, default 2), FUZZ_ARGS (more
+# libFuzzer flags).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 root=$PWD
 
 seconds=${1:-120}
 timeout=${FUZZ_TIMEOUT:-10}
+rss_mb=${FUZZ_RSS_MB:-2048}
 if ! [[ $seconds =~ ^[0-9]+$ && $seconds -gt 0 ]]; then
   echo "usage: scripts/fuzz.sh [SECONDS]  (a positive whole number, default 120)" >&2
   exit 2
@@ -37,7 +40,7 @@ echo "=== fuzz: running for ${seconds} s (at most ${timeout} s per input) ==="
 status=0
 # shellcheck disable=SC2086  # FUZZ_ARGS is a list of flags
 build-fuzz/fuzz/fuzz_model "$scratch/corpus" -dict=fuzz/model.dict -max_len=4096 \
-  -max_total_time="$seconds" -timeout="$timeout" -rss_limit_mb=2048 \
+  -max_total_time="$seconds" -timeout="$timeout" -rss_limit_mb="$rss_mb" \
   -artifact_prefix="$scratch/artifacts/" -print_final_stats=1 ${FUZZ_ARGS:-} \
   2>"$scratch/log" || status=$?
 grep -E "^(#[0-9]+ +DONE|stat::|Done [0-9]+ runs)" "$scratch/log" || true

@@ -263,7 +263,8 @@ Expr Reader::expression(const YAML::Node& node, const std::string& what, bool in
 }
 
 // The constants of an expression are evaluated when it is compiled, with the parameters' values:
-// 1/(L - 1) with L = 1 or sqrt(L - 2) with L = 1 fail only then.
+// sqrt(L - 2) with L = 1 is complex only then (the parser refuses what divides by zero, like
+// 1/(L - 1) with L = 1, where it is written).
 Program Reader::compile(const std::vector<Expr>& exprs, const YAML::Node& where,
                         const std::string& what) const {
   try {
@@ -380,8 +381,18 @@ void Reader::read_dynamics(const YAML::Node& root, SystemBuilder& builder) {
     const Expr Te = expression(T, "kinetic_energy");
     for (Index i = 0; i < n; ++i) {
       const Expr dT = set_->diff(Te, velocities_[std::size_t(i)]);
-      for (Index j = 0; j < n; ++j)
-        M[std::size_t(i * n + j)] = set_->diff(dT, velocities_[std::size_t(j)]);
+      for (Index j = 0; j < n; ++j) {
+        const Expr e = set_->diff(dT, velocities_[std::size_t(j)]);
+        // T must be quadratic in the velocities: M = ∂²T/∂q̇∂q̇ may not depend on them
+        for (const auto& v : velocities_) {
+          if (!set_->independent_of(e, v)) {
+            fail(T, "kinetic_energy is not quadratic in the velocities: its mass matrix depends "
+                    "on '" + v + "'",
+                 "T = ½ q̇ᵀ M(q, t) q̇ + (terms linear in q̇) + T0(q, t)");
+          }
+        }
+        M[std::size_t(i * n + j)] = e;
+      }
       Q[std::size_t(i)] = set_->subtract(set_->diff(Te, coordinates_[std::size_t(i)]),
                                          set_->total_derivative(dT, "t", chain_));
     }
@@ -856,6 +867,11 @@ Model Reader::read(const std::string& text) {
       }
       throw ModelError(file_, 1, 1, e.what());
     }
+  }
+  // pi: built in, unless a parameter or coordinate takes the name
+  if (!parameters_.count("pi") &&
+      std::find(inputs.begin(), inputs.end(), "pi") == inputs.end()) {
+    set_->set_constant("pi", 3.14159265358979323846);
   }
   layout_.n = Index(coordinates_.size());
   layout_.extra = Index(2 * cnames.size());

@@ -277,6 +277,26 @@ TEST(ModelErrors, MassMatrixNotPositiveDefiniteAtTheInitialState) {
       << e;
 }
 
+TEST(ModelErrors, KineticEnergyNotQuadraticInTheVelocities) {
+  const std::string e = error_of("coordinates: [x]\nkinetic_energy: x_dot^4\n");
+  EXPECT_TRUE(contains(e, "m.yaml:2:17: error: kinetic_energy is not quadratic in the velocities: "
+                          "its mass matrix depends on 'x_dot'"))
+      << e;
+}
+
+TEST(Model, PiIsBuiltInUnlessTheModelNamesIt) {
+  // x'' = -x from x(0) = 1: a run of t_end = 2*pi comes back to x = 1
+  const Model m = parse_model(
+      "coordinates: [x]\nmass_matrix: [[1]]\nforces: [-x]\ninitial: {q: {x: 1}}\n"
+      "simulate: {t_end: 2*pi, rtol: 1e-12, atol: 1e-14}\n");
+  EXPECT_NEAR(m.options.t_end, 2 * 3.14159265358979323846, 1e-15);
+  const Trajectory tr = simulate(m.system, m.q0, m.qd0, m.options);
+  EXPECT_NEAR(tr.q.back(), 1.0, 1e-9);
+  const Model own = parse_model(
+      "parameters: {pi: 3}\ncoordinates: [x]\nmass_matrix: [[1]]\nsimulate: {t_end: pi}\n");
+  EXPECT_DOUBLE_EQ(own.options.t_end, 3.0);
+}
+
 TEST(ModelErrors, MissingFile) {
   try {
     load_model("/nonexistent/model.yaml");

@@ -1,5 +1,6 @@
-// Inputs the model-reader fuzzer (fuzz/fuzz_model.cpp) found troublesome: each must give a
-// clear ModelError, not a crash, a hang or a sanitizer report.
+// Inputs the model-reader fuzzer (fuzz/fuzz_model.cpp) found troublesome, and their relatives
+// found while fixing them: each must give a clear ModelError, not a crash, a hang, a leak or a
+// sanitizer report.
 #include <gtest/gtest.h>
 
 #include <chrono>

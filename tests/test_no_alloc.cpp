@@ -97,5 +97,69 @@ INSTANTIATE_TEST_SUITE_P(Sizes, NoAllocationRandom,
                                            Case{120, 80, 40}, Case{10, 15, 8}),
                          testing::CaseName());
 
+// multibody models (multibody.hpp): quaternion blocks, closed-form and AD-based joint rows,
+// rolling, a drive and pin friction — on the dense engine and, for a long chain, the sparse one
+TEST(NoAllocation, MultibodyModels) {
+  using mb::BodyId;
+  using mb::Frame;
+  const BodyId kGround = mb::kGround;
+  using Eigen::Quaterniond;
+  using Eigen::Vector3d;
+  const auto about = [](double angle, const Vector3d& axis) {
+    return Quaterniond(Eigen::AngleAxisd(angle, axis.normalized()));
+  };
+  {  // a heavy top on a spherical joint
+    mb::Multibody b;
+    const BodyId top = b.add_rigid_body("top", 1.0, {0.02, 0.02, 0.01}, {0.05, 0.0, 0.2},
+                                        about(0.25, Vector3d::UnitY()), {0, 0.1, 0}, {0.3, 0, 20});
+    b.add_joint(mb::spherical("tip", kGround, {0, 0, 0}, top, {0, 0, -0.2062}));
+    b.set_gravity({0, 0, -9.81});
+    const mb::MultibodyModel m = b.build();
+    EXPECT_EQ(allocations_of(m.system, m.q0, m.qd0, 3), 0);
+  }
+  {  // a rolling disk
+    mb::Multibody b;
+    const double R = 0.3;
+    const BodyId disk = b.add_rigid_body("disk", 1.0, {R * R / 4, R * R / 4, R * R / 2},
+                                         {0, 0, R * std::cos(0.3)},
+                                         about(1.2707963, Vector3d::UnitY()), {0.5, 0, 0});
+    b.add_joint(mb::rolling_disk("roll", disk, R));
+    b.set_gravity({0, 0, -9.81});
+    const mb::MultibodyModel m = b.build();
+    EXPECT_EQ(allocations_of(m.system, m.q0, m.qd0, 3), 0);
+  }
+  {  // a driven crank with pin friction, and a long planar chain closed to ground (sparse)
+    mb::Multibody b;
+    b.set_gravity({0, -9.81, 0});
+    const BodyId crank = b.add_planar_body("crank", 1.0, 0.1, {0.5, 0, 0}, {0, 0.5, 1.0});
+    mb::Joint pin = mb::revolute("pin", kGround, Frame::planar(0, 0), crank, Frame::planar(-0.5, 0));
+    pin.drive = [](double t) { return Vector3d(t, 1.0, 0.0); };
+    pin.friction.mu = 0.2;
+    pin.friction.radius = 0.01;
+    b.add_joint(pin);
+    const mb::MultibodyModel m = b.build();
+    EXPECT_EQ(allocations_of(m.system, m.q0, m.qd0, 3), 0);
+  }
+  {
+    mb::Multibody b;
+    b.set_gravity({0, -9.81, 0});
+    const int N = 40;
+    const double L = 2.0 / N;
+    BodyId prev = kGround;
+    for (int i = 0; i < N; ++i) {
+      const BodyId link =
+          b.add_planar_body("link" + std::to_string(i), L, L * L * L / 12, {(i + 0.5) * L, 0, 0});
+      b.add_joint(mb::revolute("pin" + std::to_string(i), prev,
+                               Frame::planar(prev == kGround ? 0.0 : L / 2, 0), link,
+                               Frame::planar(-L / 2, 0)));
+      prev = link;
+    }
+    b.add_joint(mb::revolute("close", kGround, Frame::planar(2.0, 0), prev, Frame::planar(L / 2, 0)));
+    const mb::MultibodyModel m = b.build();
+    EXPECT_EQ(allocations_of(m.system, m.q0, m.qd0, 3, SolverOptions{.engine = Engine::kSparse}),
+              0);
+  }
+}
+
 }  // namespace
 }  // namespace ukdyn

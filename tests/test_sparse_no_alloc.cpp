@@ -12,6 +12,7 @@
 #include <ukdyn/sparse.hpp>
 
 #include "support/alloc_counter.hpp"
+#include "support/planar_revolute.hpp"
 
 namespace ukdyn {
 namespace {
@@ -19,56 +20,7 @@ namespace {
 using testing::start_counting_allocations;
 using testing::stop_counting_allocations;
 
-// body i's point s_i on the ground point g: phi = p_i + R_i s_i − g (local columns 3i … 3i+2),
-// or on body j's point s_j
-class Pin final : public ConstraintModel {
- public:
-  Pin(Index i, Eigen::Vector2d si, Index j, Eigen::Vector2d sj) : i_(i), j_(j), si_(si), sj_(sj) {
-    const Index lo = j >= 0 ? std::min(i, j) : i, hi = j >= 0 ? std::max(i, j) : i;
-    for (Index c = 0; c < 3; ++c) cols_.push_back(3 * lo + c);
-    if (hi != lo) {
-      for (Index c = 0; c < 3; ++c) cols_.push_back(3 * hi + c);
-    }
-  }
-  const std::vector<Index>& columns() const override { return cols_; }
-  void acceleration_form_local(const VectorXd& q, const VectorXd& qd, double, ConstraintScratch*,
-                               Eigen::Ref<MatrixXd> A, Eigen::Ref<VectorXd> b) const override {
-    const Index oi = (j_ >= 0 && j_ < i_) ? 3 : 0, oj = 3 - oi;
-    const Eigen::Vector2d ri = rotated(q[3 * i_ + 2], si_);
-    A.block(0, oi, 2, 2).setIdentity();
-    A(0, oi + 2) = -ri.y();
-    A(1, oi + 2) = ri.x();
-    b = ri * qd[3 * i_ + 2] * qd[3 * i_ + 2];
-    if (j_ >= 0) {
-      const Eigen::Vector2d rj = rotated(q[3 * j_ + 2], sj_);
-      A.block(0, oj, 2, 2) = -Eigen::Matrix2d::Identity();
-      A(0, oj + 2) = rj.y();
-      A(1, oj + 2) = -rj.x();
-      b -= rj * qd[3 * j_ + 2] * qd[3 * j_ + 2];
-    }
-  }
-  void violation(const VectorXd& q, const VectorXd& qd, double, ConstraintScratch*,
-                 Eigen::Ref<VectorXd> position, Eigen::Ref<VectorXd> velocity) const override {
-    const Eigen::Vector2d ri = rotated(q[3 * i_ + 2], si_);
-    position = q.segment<2>(3 * i_) + ri;
-    velocity = qd.segment<2>(3 * i_) + Eigen::Vector2d(-ri.y(), ri.x()) * qd[3 * i_ + 2];
-    if (j_ >= 0) {
-      const Eigen::Vector2d rj = rotated(q[3 * j_ + 2], sj_);
-      position -= q.segment<2>(3 * j_) + rj;
-      velocity -= qd.segment<2>(3 * j_) + Eigen::Vector2d(-rj.y(), rj.x()) * qd[3 * j_ + 2];
-    } else {
-      position -= sj_;
-    }
-  }
-
- private:
-  static Eigen::Vector2d rotated(double th, const Eigen::Vector2d& s) {
-    return {std::cos(th) * s.x() - std::sin(th) * s.y(), std::sin(th) * s.x() + std::cos(th) * s.y()};
-  }
-  Index i_, j_;
-  Eigen::Vector2d si_, sj_;
-  std::vector<Index> cols_;
-};
+using Pin = testing::PlanarRevolute;  // point s_i of body i on point s_j of body j (or ground)
 
 struct Chain {
   System sys;
