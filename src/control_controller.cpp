@@ -157,7 +157,8 @@ Controller ControllerBuilder::build() const {
     refuse("ControlOptions::feasibility_tolerance must be > 0, got " +
            format(options_.feasibility_tolerance));
   }
-  // requirements: a System over the model's coordinates (placeholder mass, never used)
+  // requirements: a System over the model's coordinates, evaluated by the constraint stage only
+  // (its identity mass matrix is never evaluated)
   if (requirements_.empty()) {
     refuse("no requirement (add one with require(constraint, error dynamics))");
   }

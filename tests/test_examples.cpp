@@ -25,6 +25,8 @@
 #include "ukdyn/model.hpp"
 #include "ukdyn/ukdyn.hpp"
 
+#include "support/hermite_root.hpp"
+
 namespace ukdyn {
 namespace {
 
@@ -71,27 +73,7 @@ double max_change(const std::vector<double>& f) {
   return worst;
 }
 
-// root of the cubic Hermite interpolant of f on [t0, t1] (f0, f1 of opposite signs, d0, d1 the
-// derivatives), by bisection to round-off
-double hermite_root(double t0, double t1, double f0, double f1, double d0, double d1) {
-  const double h = t1 - t0;
-  auto f = [&](double t) {
-    const double s = (t - t0) / h, s2 = s * s, s3 = s2 * s;
-    return (2 * s3 - 3 * s2 + 1) * f0 + (s3 - 2 * s2 + s) * h * d0 + (-2 * s3 + 3 * s2) * f1 +
-           (s3 - s2) * h * d1;
-  };
-  double a = t0, b = t1, fa = f0;
-  for (int it = 0; it < 200 && b - a > 1e-15 * std::abs(b); ++it) {
-    const double c = 0.5 * (a + b), fc = f(c);
-    if ((fc < 0) == (fa < 0)) {
-      a = c;
-      fa = fc;
-    } else {
-      b = c;
-    }
-  }
-  return 0.5 * (a + b);
-}
+using testing::hermite_root;  // support/hermite_root.hpp
 
 // times where coordinate j's velocity changes sign, located on the Hermite interpolant of q'_j
 // (with q''_j from the samples)
@@ -154,22 +136,12 @@ TEST(ExampleModels, EveryFileLoadsAndChecksClean) {
 // ---------------------------------------------------------------------------------------------
 // pendulum.yaml: released horizontally, back at the start after one period
 
-// complete elliptic integral of the first kind K(k) = pi / (2 AGM(1, sqrt(1 − k²)))
-double elliptic_K(double k) {
-  double a = 1.0, b = std::sqrt(1.0 - k * k);
-  for (int i = 0; i < 40 && std::abs(a - b) > 1e-16 * a; ++i) {
-    const double an = 0.5 * (a + b);
-    b = std::sqrt(a * b);
-    a = an;
-  }
-  return kPi / (2 * a);
-}
 
 TEST(ExampleModels, PendulumPeriodIsTheEllipticIntegralAndTheRodTensionThreeMgCos) {
   const Model m = load_example("pendulum");
   const double mass = m.parameters.at("m"), L = m.parameters.at("L"), g = m.parameters.at("g");
   // amplitude 90°: T = 4 sqrt(L/g) K(sin 45°); the file runs exactly one period
-  const double period = 4 * std::sqrt(L / g) * elliptic_K(std::sin(kPi / 4));
+  const double period = 4 * std::sqrt(L / g) * std::comp_ellint_1(std::sin(kPi / 4));
   EXPECT_NEAR(m.options.t_end, period, 1e-11);  // the file holds 13 digits
   const Trajectory tr = run(m);
   const Index N = tr.samples();

@@ -189,8 +189,9 @@ class Controller {
 
   /// The nominal model of the plant (the parameters the controller believes).
   const System& model() const { return model_; }
-  /// The requirements, as a System over the same coordinates whose constraints they are (its
-  /// mass matrix is a placeholder, never used).
+  /// The requirements, as a System over the same coordinates whose constraints they are, so
+  /// that the constraint stage (assemble_constraints, evaluate_violations) evaluates them; only
+  /// its constraints are read (its mass matrix is the identity and is never evaluated).
   const System& requirements() const { return requirements_; }
   /// The requirement with index k (0 <= k < K_r).
   const Constraint& requirement(Index k) const { return requirements_.constraint(k); }
