@@ -2,6 +2,7 @@
 #include <cstdio>
 #include <string>
 
+#include <ukdyn/control.hpp>
 #include <ukdyn/model.hpp>
 
 #include "commands.hpp"
@@ -62,6 +63,24 @@ int check_command(const ModelSource& source) {
   std::printf("  mass matrix         %s\n", r.mass_positive_definite
                                                 ? "symmetric positive definite"
                                                 : "NOT symmetric positive definite");
+  if (model.controller) {
+    const Controller& ctrl = *model.controller;
+    std::printf("  control             %s law, %lld requirement%s, %s%s\n", to_string(ctrl.law()),
+                static_cast<long long>(ctrl.requirement_count()),
+                ctrl.requirement_count() == 1 ? "" : "s",
+                ctrl.fully_actuated() ? "every coordinate actuated" : "actuated:",
+                ctrl.robust() ? ", robust term" : "");
+    if (!ctrl.fully_actuated()) {
+      for (Index j : ctrl.actuated_coordinates()) {
+        std::printf("                        %s\n", sys.coordinate_names()[std::size_t(j)].c_str());
+      }
+    }
+    for (Index k = 0; k < ctrl.requirement_count(); ++k) {
+      const Constraint& c = ctrl.requirement(k);
+      std::printf("    %-20s %s, %lld row%s\n", c.name().c_str(), kind_name(c.kind()),
+                  static_cast<long long>(c.rows()), c.rows() == 1 ? "" : "s");
+    }
+  }
   if (r.ok()) {
     std::printf("ok\n");
     return kExitOk;

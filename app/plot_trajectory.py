@@ -4,8 +4,11 @@
 usage: plot_trajectory.py TRAJECTORY.csv OUTPUT_DIR
 
 Writes coordinates.png, constraint_forces.png (ideal and non-ideal parts), violation.png,
-energy.png (energy and the work of the non-ideal forces) and, when the model has output
-expressions (the columns after work_nonideal), outputs.png. Exits 3 when matplotlib is missing.
+energy.png (energy and the work of the non-ideal forces and of the control), and when the run
+has them: control.png (tracking error per requirement with the robust bound, control force per
+coordinate, control power and cumulative effort), bodies.png (the paths of the bodies' centres
+of mass, multibody models) and outputs.png (the model's output expressions). Exits 3 when
+matplotlib is missing.
 """
 import csv
 import os
@@ -92,19 +95,60 @@ def main():
     axes[0].set_ylabel("|violation|")
     finish(fig, axes, os.path.join(out, "violation.png"))
 
-    # energy and the work of the non-ideal forces: E - W stays constant
+    # energy and the work of the non-ideal forces (and of the control): E - W stays constant
+    controlled = "control_work" in col
     fig, axes = figure("energy: " + name, rows=2)
-    for h in ("kinetic_energy", "potential_energy", "energy", "work_nonideal"):
+    works = ("work_nonideal", "control_work") if controlled else ("work_nonideal",)
+    for h in ("kinetic_energy", "potential_energy", "energy") + works:
         axes[0].plot(t, col[h], label=h.replace("_", " "))
-    balance = [e - w - (col["energy"][0] - col["work_nonideal"][0])
-               for e, w in zip(col["energy"], col["work_nonideal"])]
+    work = [sum(col[h][i] for h in works) for i in range(len(t))]
+    balance = [e - w - (col["energy"][0] - work[0]) for e, w in zip(col["energy"], work)]
     axes[0].set_ylabel("J")
     axes[1].plot(t, balance, color="k", label="E(t) - E(0) - W(t)")
     axes[1].set_ylabel("energy balance [J]")
     finish(fig, axes, os.path.join(out, "energy.png"))
 
-    # the model's output expressions
-    extra = header[header.index("work_nonideal") + 1:]
+    # the control: tracking errors (with the robust bound), forces, power and effort
+    if controlled:
+        fig, axes = figure("control: " + name, rows=3)
+        for h in header:
+            if h.startswith("error."):
+                line = axes[0].plot(t, col[h], label=h[len("error."):])[0]
+                bound = "error_bound." + h[len("error."):]
+                if bound in col:
+                    axes[0].plot(t, col[bound], "--", color=line.get_color(), lw=0.8)
+                    axes[0].plot(t, [-b for b in col[bound]], "--", color=line.get_color(), lw=0.8)
+        axes[0].set_ylabel("tracking error")
+        for c in coords:
+            axes[1].plot(t, col["Qc_control." + c], label=c)
+        axes[1].set_ylabel("control force Qc")
+        axes[2].plot(t, col["control_power"], label="power")
+        axes[2].plot(t, col["control_effort"], label="effort: integral of Qc^T Qc")
+        axes[2].plot(t, col["control_work_abs"], label="integral of |power|")
+        axes[2].set_ylabel("power, effort")
+        finish(fig, axes, os.path.join(out, "control.png"))
+
+    # the bodies of a multibody model: paths of their centres of mass in the x-y plane
+    bodies = [h[: -len(".qw")] for h in header if h.endswith(".qw")]
+    if bodies:
+        fig, ax = plt.subplots(figsize=(6.5, 6.5))
+        fig.suptitle("bodies (centre of mass paths, x-y): " + name)
+        for b in bodies:
+            line = ax.plot(col[b + ".x"], col[b + ".y"], label=b, lw=0.9)[0]
+            ax.plot(col[b + ".x"][0], col[b + ".y"][0], "o", color=line.get_color())
+        ax.set_aspect("equal", "datalim")
+        ax.grid(True, alpha=0.3)
+        ax.legend(loc="best", fontsize="small")
+        ax.set_xlabel("x [m]")
+        ax.set_ylabel("y [m]")
+        fig.tight_layout()
+        fig.savefig(os.path.join(out, "bodies.png"), dpi=110)
+        plt.close(fig)
+
+    # the model's output expressions (named by identifiers: no '.', not a control column)
+    control_scalars = {"control_power", "control_effort", "control_work_abs", "control_work"}
+    extra = [h for h in header[header.index("work_nonideal") + 1:]
+             if "." not in h and h not in control_scalars]
     if extra:
         fig, axes = figure("output expressions: " + name)
         for h in extra:

@@ -18,6 +18,7 @@
 
 #include <ukdyn/io.hpp>
 #include <ukdyn/model.hpp>
+#include <ukdyn/run.hpp>
 #include <ukdyn/simulate.hpp>
 
 #include "commands.hpp"
@@ -33,20 +34,15 @@ namespace {
 // the exit code plot_trajectory.py uses when matplotlib cannot be imported
 constexpr int kPlotNoMatplotlib = 3;
 
-// the library's CSV with one more column per output expression
-void write_trajectory_csv(const Model& model, const Trajectory& traj, const fs::path& path) {
-  const auto values = evaluate_output_expressions(model, traj);
-  const auto standard = csv_columns(traj);
-  std::vector<CsvColumn> extra;
-  for (std::size_t k = 0; k < values.size(); ++k) {
-    const std::string& name = model.output_names[k];
-    if (std::find(standard.begin(), standard.end(), name) != standard.end()) {
-      std::fprintf(stderr, "warning: the output expression '%s' has the name of a standard "
-                   "column; the CSV holds two columns of that name\n", name.c_str());
+// warns about an output expression named like a standard column (the CSV then has two)
+void warn_duplicate_columns(const ModelRun& run) {
+  const auto standard = csv_columns(run.trajectory);
+  for (const CsvColumn& c : run.extra_columns) {
+    if (std::find(standard.begin(), standard.end(), c.name) != standard.end()) {
+      std::fprintf(stderr, "warning: the output column '%s' has the name of a standard "
+                   "column; the CSV holds two columns of that name\n", c.name.c_str());
     }
-    extra.push_back(CsvColumn{name, values[k]});
   }
-  write_csv(traj, path.string(), extra);
 }
 
 // runs `python script csv dir`; returns its exit status, or −1 when it could not start
@@ -98,7 +94,7 @@ std::vector<fs::path> make_plots(const fs::path& csv, const fs::path& dir) {
   }
   std::vector<fs::path> files;
   for (const char* name : {"coordinates.png", "constraint_forces.png", "violation.png",
-                           "energy.png", "outputs.png"}) {
+                           "energy.png", "control.png", "bodies.png", "outputs.png"}) {
     if (fs::exists(dir / name)) files.push_back(dir / name);
   }
   return files;
@@ -135,12 +131,12 @@ int run_command(const RunArguments& args) {
   std::fflush(stdout);
 
   // simulate, with a progress bar on a terminal
-  Trajectory traj;
+  ModelRun run;
   {
     ProgressBar bar(options.t_start, options.t_end, ProgressBar::is_terminal(stderr));
     options.progress = [&bar](double t) { bar.update(t); };
     try {
-      traj = simulate(model.system, model.q0, model.qd0, options);
+      run = run_model(model, options);
     } catch (const std::invalid_argument& e) {
       // the model cannot be started (inconsistent initial state, bad settings)
       bar.finish();
@@ -163,19 +159,34 @@ int run_command(const RunArguments& args) {
     return kExitRunFailed;
   }
   std::vector<fs::path> files = {dir / "trajectory.csv", dir / "summary.json"};
-  write_trajectory_csv(model, traj, files[0]);
-  write_summary_json(traj, options, files[1].string());
+  warn_duplicate_columns(run);
+  write_csv(run, files[0].string());
+  write_summary_json(run.trajectory, options, files[1].string());
   if (args.plots) {
     for (const auto& f : make_plots(files[0], dir)) files.push_back(f);
   }
 
   // what happened
-  const RunStatistics& s = traj.stats;
+  const RunStatistics& s = run.trajectory.stats;
   std::printf("  %lld samples to t = %g s: %ld steps (%ld rejected), %ld evaluations, %.3g s\n",
-              static_cast<long long>(traj.samples()), s.t_reached, s.steps, s.rejected_steps,
+              static_cast<long long>(run.trajectory.samples()), s.t_reached, s.steps, s.rejected_steps,
               s.evaluations, s.wall_time);
   std::printf("  max violation %.3g (position), %.3g (velocity); energy drift %.3g\n",
               s.max_position_violation, s.max_velocity_violation, s.energy_drift);
+  if (run.controlled) {
+    const ControlStatistics& c = run.control;
+    std::printf("  control: %ld evaluations", c.evaluations);
+    if (c.max_kappa > 0) std::printf(", largest robust gain %.3g", c.max_kappa);
+    std::printf("\n");
+    if (c.not_met > 0) {
+      std::fprintf(stderr,
+                   "warning: the control could not meet every requirement in %ld of %ld "
+                   "evaluations (first at t = %g: %s); largest residual %.3g. It applied the "
+                   "least-squares force: see the error.* columns for what was not met\n",
+                   c.not_met, c.evaluations, c.first_not_met, c.not_met_message.c_str(),
+                   c.max_residual);
+    }
+  }
   for (const auto& f : files) std::printf("  wrote %s\n", f.c_str());
   if (s.status != Status::kOk) {
     std::fprintf(stderr, "error: the run failed at t = %g s: %s\n", s.t_reached,

@@ -26,6 +26,8 @@
 
 #include <benchmark/benchmark.h>
 
+#include "shared_protocol.hpp"
+
 #include <ukdyn/gallery.hpp>
 #include <ukdyn/simulate.hpp>
 
@@ -159,24 +161,10 @@ std::string record(const std::string& name) {
   const ukdyn::SimulationOptions opt = options(info.T, 0.0);
 
   // one warm-up run, then five timed runs of the stepping loop; median wall time
-  std::vector<double> wall;
-  VectorXd q_first;
-  bool deterministic = true;
-  for (int run = 0; run < 6; ++run) {
-    const auto t0 = std::chrono::steady_clock::now();
-    const ukdyn::Trajectory tr = ukdyn::simulate(ex.system, ex.q0, ex.qd0, opt);
-    const auto t1 = std::chrono::steady_clock::now();
-    const VectorXd q_end = Eigen::Map<const VectorXd>(tr.q.data() + tr.q.size() - tr.n, tr.n);
-    if (run == 0) {
-      q_first = q_end;
-    } else {
-      deterministic = deterministic && q_end == q_first;
-      wall.push_back(std::chrono::duration<double>(t1 - t0).count());
-    }
-  }
-  std::vector<double> sorted = wall;
-  std::sort(sorted.begin(), sorted.end());
-  const double median = sorted[sorted.size() / 2];
+  const ukdyn::bench::TimedRuns timed = ukdyn::bench::time_runs(ex.system, ex.q0, ex.qd0, opt);
+  const std::vector<double>& wall = timed.wall;
+  const bool deterministic = timed.deterministic;
+  const double median = timed.median();
   const Accuracy a = measure_accuracy(name);
 
   const auto& so = opt;
@@ -203,7 +191,7 @@ std::string record(const std::string& name) {
      << str("distance between coupler tip and rocker tip with every link placed from its "
             "proximal point at its exact length (0 for P1)")
      << ", \"evaluations\": " << a.evaluations << ", \"projections\": " << a.projections
-     << ", \"wall_per_sim_s_min\": " << num(sorted.front() / info.T) << "}, \"settings\": {"
+     << ", \"wall_per_sim_s_min\": " << num(*std::min_element(wall.begin(), wall.end()) / info.T) << "}, \"settings\": {"
      << "\"drift\": \"projection\", \"projection_tolerance\": " << num(so.projection.tolerance)
      << ", \"projection_max_iterations\": " << so.projection.max_iterations
      << ", \"rank_threshold\": " << num(so.solver.rank_threshold)

@@ -12,6 +12,7 @@
 #include <string>
 
 #include "ukdyn/model.hpp"
+#include "ukdyn/run.hpp"
 #include "ukdyn/simulate.hpp"
 
 namespace {
@@ -53,8 +54,10 @@ void run_briefly(const ukdyn::Model& model) {
   o.output_at.clear();
   o.progress = nullptr;
   try {
-    const ukdyn::Trajectory tr = ukdyn::simulate(model.system, model.q0, model.qd0, o);
-    (void)ukdyn::evaluate_output_expressions(model, tr);
+    // as `ukdyn run` does: under the controller of a control: section, with the bodies' and
+    // the output expressions' columns
+    const ukdyn::ModelRun run = ukdyn::run_model(model, o);
+    (void)run.columns();
   } catch (const std::invalid_argument&) {
     // documented misuse: inconsistent initial conditions without `project: true`, bad tolerances
   }

@@ -15,6 +15,11 @@ packages=(
   libyaml-cpp-dev                      # model files
   libcli11-dev                         # the ukdyn command line
   python3-matplotlib                   # plots of ukdyn run
+  pybind11-dev python3-dev             # the Python module (python/)
+  python3-numpy python3-pandas         # its arrays and DataFrames
+  python3-sympy                        # SymPy-defined models
+  python3-pytest                       # its tests
+  jupyter-notebook python3-nbconvert python3-ipykernel  # the notebook in examples/, run by the tests
   libgtest-dev libgmock-dev            # tests
   libbenchmark-dev                     # benchmarks
   clang libclang-rt-14-dev             # fuzz/: libFuzzer and the sanitizer runtimes of clang

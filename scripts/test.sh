@@ -5,6 +5,6 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 
 scripts/install-deps.sh
-cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=Release
+cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=Release -DUKDYN_BUILD_PYTHON=ON
 cmake --build build --parallel 2
 ctest --test-dir build --output-on-failure --parallel 2

@@ -11,6 +11,7 @@
 #include <map>
 #include <optional>
 #include <sstream>
+#include <string_view>
 #include <tuple>
 #include <unordered_map>
 #include <unordered_set>
@@ -255,6 +256,84 @@ class Compiler {
     return v;
   }
 
+  // A structural key of e that is the same in every process, and the same for e and −e.
+  // GiNaC orders the operands of sums and products by hashes that depend on addresses (they
+  // change with ASLR from run to run), and picks the sign of a sum by that order too ((x1 − x2)²
+  // in one run is (x2 − x1)² in the next). The compiler visits operands in the order of this
+  // key instead, so a model evaluates to the same bits in every run: terms that flip sign
+  // between runs keep their place, and a flipped value is an exact negation of the other.
+  std::uint64_t key(const GiNaC::ex& e) {
+    const auto hit = keys_.find(e);
+    if (hit != keys_.end()) return hit->second;
+    std::uint64_t h = 1469598103934665603ull;  // FNV-1a over bytes and operand keys
+    const auto mix_bytes = [&h](std::string_view bytes) {
+      for (const char c : bytes) {
+        h ^= std::uint8_t(c);
+        h *= 1099511628211ull;
+      }
+    };
+    const auto mix = [&h](std::uint64_t k) {
+      for (int i = 0; i < 8; ++i) {
+        h ^= (k >> (8 * i)) & 0xffu;
+        h *= 1099511628211ull;
+      }
+    };
+    using GiNaC::is_a;
+    if (is_a<GiNaC::numeric>(e)) {
+      mix_bytes("n");
+      mix_bytes(printed(GiNaC::abs(GiNaC::ex_to<GiNaC::numeric>(e))));
+    } else if (is_a<GiNaC::symbol>(e)) {
+      mix_bytes("s");
+      mix_bytes(GiNaC::ex_to<GiNaC::symbol>(e).get_name());
+    } else if (is_a<GiNaC::add>(e) || is_a<GiNaC::mul>(e)) {
+      // commutative: the operands' keys in sorted order; a product's sign is left out, and
+      // ±1·f is f
+      const bool product = is_a<GiNaC::mul>(e);
+      std::vector<std::uint64_t> ks;
+      ks.reserve(e.nops());
+      for (std::size_t i = 0; i < e.nops(); ++i) {
+        const GiNaC::ex f = e.op(i);
+        if (product && is_a<GiNaC::numeric>(f) && GiNaC::abs(GiNaC::ex_to<GiNaC::numeric>(f)).is_equal(1))
+          continue;
+        ks.push_back(key(f));
+      }
+      if (product && ks.size() == 1) {
+        h = ks.front();
+      } else {
+        mix_bytes(product ? "*" : "+");
+        std::sort(ks.begin(), ks.end());
+        for (const std::uint64_t k : ks) mix(k);
+      }
+    } else if (is_a<GiNaC::function>(e)) {
+      mix_bytes("f");
+      mix_bytes(GiNaC::ex_to<GiNaC::function>(e).get_name());
+      for (std::size_t i = 0; i < e.nops(); ++i) mix(key(e.op(i)));
+    } else if (is_a<GiNaC::power>(e)) {
+      mix_bytes("^");
+      mix(key(e.op(0)));
+      mix(key(e.op(1)));
+    } else {
+      // constants (pi) and anything else: as printed
+      mix_bytes(GiNaC::ex_to<GiNaC::basic>(e).class_name());
+      mix_bytes(printed(e));
+    }
+    keys_.emplace(e, h);
+    return h;
+  }
+
+  // the operands of a sum or a product in the order of their keys
+  std::vector<GiNaC::ex> ordered_operands(const GiNaC::ex& e) {
+    std::vector<std::pair<std::uint64_t, GiNaC::ex>> ops;
+    ops.reserve(e.nops());
+    for (std::size_t i = 0; i < e.nops(); ++i) ops.emplace_back(key(e.op(i)), e.op(i));
+    std::stable_sort(ops.begin(), ops.end(),
+                     [](const auto& x, const auto& y) { return x.first < y.first; });
+    std::vector<GiNaC::ex> out;
+    out.reserve(ops.size());
+    for (auto& o : ops) out.push_back(std::move(o.second));
+    return out;
+  }
+
   // c·rest with the numeric factor c split off
   static std::pair<GiNaC::numeric, GiNaC::ex> split_coefficient(const GiNaC::ex& e) {
     if (GiNaC::is_a<GiNaC::numeric>(e)) return {GiNaC::ex_to<GiNaC::numeric>(e), 1};
@@ -268,18 +347,20 @@ class Compiler {
     return {1, e};
   }
 
-  // Σ c_i·t_i: positive terms added, negative ones subtracted (no negations)
+  // Σ c_i·t_i: positive terms added, negative ones subtracted (a negation only when the first
+  // term in key order is negative)
   std::int32_t compile_add(const GiNaC::ex& e) {
     std::vector<std::pair<bool, std::int32_t>> terms;  // (negative, |c_i|·t_i)
-    for (std::size_t i = 0; i < e.nops(); ++i) {
-      const auto [c, rest] = split_coefficient(e.op(i));
+    for (const GiNaC::ex& term : ordered_operands(e)) {
+      const auto [c, rest] = split_coefficient(term);
       if (c.is_real() && c.is_negative()) {
         terms.emplace_back(true, scaled(-c, rest));
       } else {
         terms.emplace_back(false, scaled(c, rest));
       }
     }
-    std::stable_partition(terms.begin(), terms.end(), [](const auto& t) { return !t.first; });
+    // (in key order, whatever the signs: a sum whose terms flip sign between runs is then an
+    // exact negation, not a reassociation)
     std::int32_t sum = -1;
     for (const auto& [negative, v] : terms) {
       if (sum < 0) {
@@ -305,8 +386,7 @@ class Compiler {
     const auto times = [&](std::int32_t& product, std::int32_t v) {
       product = product < 0 ? v : emit(Code::kMul, product, v);
     };
-    for (std::size_t i = 0; i < e.nops(); ++i) {
-      const GiNaC::ex f = e.op(i);
+    for (const GiNaC::ex& f : ordered_operands(e)) {
       if (GiNaC::is_a<GiNaC::numeric>(f)) {
         c *= GiNaC::ex_to<GiNaC::numeric>(f);
       } else if (GiNaC::is_a<GiNaC::power>(f) && GiNaC::is_a<GiNaC::numeric>(f.op(1)) &&
@@ -395,6 +475,7 @@ class Compiler {
   std::vector<Op> ops_;                              // SSA: dst is a value
   std::map<std::tuple<Code, std::int32_t, std::int32_t>, std::int32_t> ops_memo_;
   ExMemo memo_;
+  std::unordered_map<GiNaC::ex, std::uint64_t, std::hash<GiNaC::ex>, GiNaC::ex_is_equal> keys_;
 };
 
 }  // namespace

@@ -1,7 +1,8 @@
-// The explicit integrators, from Boost.Odeint: classical RK4 (fixed step, cubic Hermite output),
-// Dormand–Prince 5(4) (adaptive, its own dense output) and Runge–Kutta–Fehlberg 7(8) (adaptive,
-// landing exactly on output times). Step-size control is Odeint's; this file only walks the
-// steps so that the driver can project after each accepted one and count what happened.
+// The explicit integrators, from Boost.Odeint: classical RK4 and Dormand–Prince's 5th-order
+// formula (fixed step, cubic Hermite output), Dormand–Prince 5(4) (adaptive, its own dense
+// output) and Runge–Kutta–Fehlberg 7(8) (adaptive, landing exactly on output times). Step-size
+// control is Odeint's; this file only walks the steps so that the driver can project after each
+// accepted one and count what happened.
 #include <algorithm>
 #include <cmath>
 #include <string>
@@ -85,12 +86,33 @@ void hermite(double s, double t0, double t1, const State& x0, const State& d0, c
   }
 }
 
-// classical RK4 with the step (t1 − t0) / N closest to `step` from below
-SegmentResult rk4(ConstrainedOde& ode, State& x, double t0, double t1,
-                  const std::vector<double>& outputs, SegmentHooks& hooks, double step) {
+// Dormand–Prince's tableau (Dormand & Prince 1980, Hairer–Nørsett–Wanner I, table II.5.2)
+// without its 7th (first-same-as-last) stage, which only the error estimate needs: the 6-stage,
+// 5th-order formula that dopri5 propagates, as an Odeint generic Runge–Kutta stepper
+using Dopri5Fixed = odeint::explicit_generic_rk<6, 5, State, double, State, double>;
+
+Dopri5Fixed dopri5_fixed() {
+  const boost::array<double, 1> a1 = {1.0 / 5};
+  const boost::array<double, 2> a2 = {3.0 / 40, 9.0 / 40};
+  const boost::array<double, 3> a3 = {44.0 / 45, -56.0 / 15, 32.0 / 9};
+  const boost::array<double, 4> a4 = {19372.0 / 6561, -25360.0 / 2187, 64448.0 / 6561,
+                                      -212.0 / 729};
+  const boost::array<double, 5> a5 = {9017.0 / 3168, -355.0 / 33, 46732.0 / 5247, 49.0 / 176,
+                                      -5103.0 / 18656};
+  const boost::array<double, 6> b = {35.0 / 384,     0.0,      500.0 / 1113, 125.0 / 192,
+                                     -2187.0 / 6784, 11.0 / 84};
+  const boost::array<double, 6> c = {0.0, 1.0 / 5, 3.0 / 10, 4.0 / 5, 8.0 / 9, 1.0};
+  return Dopri5Fixed(boost::fusion::make_vector(a1, a2, a3, a4, a5), b, c);
+}
+
+// a fixed-step Runge–Kutta method (RK4 or the 5th-order Dormand–Prince formula) with the step
+// (t1 − t0) / N closest to `step` from below; k1 of each step is the derivative at the state
+// after drift control, so a step costs (stages − 1) + 1 evaluations
+template <class Stepper>
+SegmentResult fixed_step(Stepper stepper, ConstrainedOde& ode, State& x, double t0, double t1,
+                         const std::vector<double>& outputs, SegmentHooks& hooks, double step) {
   SegmentResult r;
   const OdeFn fn{&ode};
-  odeint::runge_kutta4<State> stepper;
   const long N = std::max(1L, long(std::ceil((t1 - t0) / step * (1.0 - 1e-12))));
   const double h = (t1 - t0) / double(N);
   State dxdt(x.size()), x_new(x.size()), dxdt_new(x.size()), out(x.size());
@@ -295,7 +317,9 @@ SegmentResult integrate_explicit(Integrator method, ConstrainedOde& ode, std::ve
                                  double first_step) {
   switch (method) {
     case Integrator::kRK4:
-      return rk4(ode, x, t0, t1, outputs, hooks, first_step);
+      return fixed_step(odeint::runge_kutta4<State>(), ode, x, t0, t1, outputs, hooks, first_step);
+    case Integrator::kRK5:
+      return fixed_step(dopri5_fixed(), ode, x, t0, t1, outputs, hooks, first_step);
     case Integrator::kDopri5:
       return dopri5(ode, x, t0, t1, outputs, options, hooks, first_step, options.max_steps);
     case Integrator::kRKF78:

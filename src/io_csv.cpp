@@ -101,6 +101,48 @@ std::vector<std::string> csv_columns(const Trajectory& traj) {
   return columns(traj);
 }
 
+std::vector<CsvColumn> csv_table(const Trajectory& traj) {
+  traj.check_consistent("ukdyn::csv_table");
+  const std::vector<std::string> names = columns(traj);
+  const std::size_t N = traj.t.size(), n = std::size_t(traj.n), m = std::size_t(traj.m);
+  const std::size_t K = traj.constraint_names.size();
+  std::vector<CsvColumn> table;
+  table.reserve(names.size());
+  auto next = [&] {
+    table.push_back(CsvColumn{names[table.size()], std::vector<double>(N)});
+    return &table.back().values;
+  };
+  *next() = traj.t;
+  auto field = [&](const std::vector<double>& f, std::size_t width) {
+    for (std::size_t j = 0; j < width; ++j) {
+      std::vector<double>& v = *next();
+      for (std::size_t i = 0; i < N; ++i) v[i] = f[i * width + j];
+    }
+  };
+  field(traj.q, n);
+  field(traj.qd, n);
+  field(traj.qdd, n);
+  field(traj.Qc_ideal, n);
+  field(traj.Qc_nonideal, n);
+  field(traj.lambda, m);
+  for (std::size_t k = 0; k < K; ++k) {
+    const bool holonomic = traj.constraint_kinds[k] == ConstraintKind::kHolonomic;
+    const std::vector<double>& f = holonomic ? traj.position_violation : traj.velocity_violation;
+    std::vector<double>& v = *next();
+    for (std::size_t i = 0; i < N; ++i) v[i] = f[i * K + k];
+  }
+  for (std::size_t k = 0; k < K; ++k) {
+    if (traj.constraint_kinds[k] != ConstraintKind::kHolonomic) continue;
+    std::vector<double>& v = *next();
+    for (std::size_t i = 0; i < N; ++i) v[i] = traj.velocity_violation[i * K + k];
+  }
+  for (const auto* f : {&traj.kinetic_energy, &traj.potential_energy, &traj.energy,
+                        &traj.work_nonideal}) {
+    *next() = *f;
+  }
+  return table;
+}
+
 void write_csv(const Trajectory& traj, const std::string& path) { write_csv(traj, path, {}); }
 
 void write_csv(const Trajectory& traj, const std::string& path,

@@ -18,6 +18,8 @@
 #include "ukdyn/constraint.hpp"
 #include "ukdyn/nonideal.hpp"
 
+#include "model_reader.hpp"
+
 namespace ukdyn {
 
 ModelError::ModelError(std::string file, int line, int column, std::string message,
@@ -32,184 +34,7 @@ ModelError::ModelError(std::string file, int line, int column, std::string messa
       message_(std::move(message)),
       hint_(std::move(hint)) {}
 
-namespace {
-
-using expr::Expr;
-using expr::ExpressionSet;
-using expr::Program;
-
-const std::vector<std::string> kTopLevelKeys = {
-    "name",   "parameters",  "coordinates", "kinetic_energy", "potential_energy", "mass_matrix",
-    "forces", "constraints", "nonideal",    "initial",        "simulate",         "output"};
-
-bool is_identifier(const std::string& s) {
-  if (s.empty() || !(std::isalpha(static_cast<unsigned char>(s[0])) || s[0] == '_')) return false;
-  return std::all_of(s.begin(), s.end(), [](char c) {
-    return std::isalnum(static_cast<unsigned char>(c)) || c == '_';
-  });
-}
-
-// a number as a person writes it (2, 0.5, 1e-06)
-std::string brief(double v) {
-  std::ostringstream s;
-  s << v;
-  return s.str();
-}
-
-std::string join(const std::vector<std::string>& v) {
-  std::string out;
-  for (const auto& s : v) out += (out.empty() ? "" : ", ") + s;
-  return out;
-}
-
-// A program's evaluation with buffers owned by the caller.
-struct Evaluator {
-  Program program;
-  std::vector<double> out, scratch;
-  explicit Evaluator(Program p)
-      : program(std::move(p)),
-        out(std::size_t(program.outputs())),
-        scratch(std::size_t(program.scratch_size())) {}
-  const double* run(const double* in) {
-    program.evaluate(in, out.data(), scratch.data());
-    return out.data();
-  }
-};
-
-// the inputs of every program: [q; q'; t; N_c …; lambda_c …]
-struct InputLayout {
-  Index n = 0, extra = 0;
-  Index size() const { return 2 * n + 1 + extra; }
-  void fill(std::vector<double>& in, const VectorXd& q, const VectorXd& qd, double t) const {
-    std::copy(q.data(), q.data() + n, in.begin());
-    std::copy(qd.data(), qd.data() + n, in.begin() + n);
-    in[std::size_t(2 * n)] = t;
-  }
-};
-
-// Buffers of one compiled constraint.
-struct CompiledScratch final : ConstraintScratch {
-  CompiledScratch(const Program& accel_program, const Program& levels_program, Index inputs)
-      : in(std::size_t(inputs), 0.0), accel(accel_program), levels(levels_program) {}
-  std::vector<double> in;
-  Evaluator accel, levels;
-};
-
-// A constraint from model-file expressions: one program for [A (row-major); b], one for
-// [phi; phi'] (holonomic), [psi] (nonholonomic) or nothing (acceleration form).
-class CompiledConstraint final : public ConstraintModel {
- public:
-  CompiledConstraint(ConstraintKind kind, Index rows, Index n, InputLayout layout, Program accel,
-                     Program levels)
-      : kind_(kind),
-        rows_(rows),
-        n_(n),
-        layout_(layout),
-        accel_(std::move(accel)),
-        levels_(std::move(levels)) {}
-
-  std::unique_ptr<ConstraintScratch> make_scratch(Index) const override {
-    return std::make_unique<CompiledScratch>(accel_, levels_, layout_.size());
-  }
-
-  void acceleration_form(const VectorXd& q, const VectorXd& qd, double t, ConstraintScratch* s,
-                         Eigen::Ref<MatrixXd> A, Eigen::Ref<VectorXd> b) const override {
-    auto& w = static_cast<CompiledScratch&>(*s);
-    layout_.fill(w.in, q, qd, t);
-    const double* out = w.accel.run(w.in.data());
-    for (Index r = 0; r < rows_; ++r) {
-      for (Index j = 0; j < n_; ++j) A(r, j) = out[r * n_ + j];
-      b[r] = out[rows_ * n_ + r];
-    }
-  }
-
-  void violation(const VectorXd& q, const VectorXd& qd, double t, ConstraintScratch* s,
-                 Eigen::Ref<VectorXd> position, Eigen::Ref<VectorXd> velocity) const override {
-    position.setZero();
-    velocity.setZero();
-    if (kind_ == ConstraintKind::kAcceleration) return;
-    auto& w = static_cast<CompiledScratch&>(*s);
-    layout_.fill(w.in, q, qd, t);
-    const double* out = w.levels.run(w.in.data());
-    if (kind_ == ConstraintKind::kHolonomic) {
-      for (Index r = 0; r < rows_; ++r) {
-        position[r] = out[r];
-        velocity[r] = out[rows_ + r];
-      }
-    } else {
-      for (Index r = 0; r < rows_; ++r) velocity[r] = out[r];
-    }
-  }
-
- private:
-  ConstraintKind kind_;
-  Index rows_, n_;
-  InputLayout layout_;
-  Program accel_, levels_;
-};
-
-// Per-thread buffers of the callables of System (whose signatures carry no scratch): sized on
-// first use in a thread, never again.
-struct ThreadBuffers {
-  std::vector<double> in, out, scratch;
-  void reserve(Index inputs, const Program& p) {
-    if (in.size() < std::size_t(inputs)) in.assign(std::size_t(inputs), 0.0);
-    if (out.size() < std::size_t(p.outputs())) out.resize(std::size_t(p.outputs()));
-    if (scratch.size() < std::size_t(p.scratch_size()))
-      scratch.resize(std::size_t(p.scratch_size()));
-  }
-};
-ThreadBuffers& buffers() {
-  thread_local ThreadBuffers b;
-  return b;
-}
-
-// The reader: one model file.
-class Reader {
- public:
-  Reader(std::string file, const std::map<std::string, double>& overrides)
-      : file_(std::move(file)), overrides_(overrides) {}
-
-  Model read(const std::string& text);
-
- private:
-  [[noreturn]] void fail(const YAML::Node& at, const std::string& message,
-                         const std::string& hint = "") const {
-    const YAML::Mark m = at.Mark();
-    throw ModelError(file_, m.line + 1, m.column + 1, message, hint);
-  }
-  [[noreturn]] void fail_at(const YAML::Mark& m, const std::string& message,
-                            const std::string& hint = "") const {
-    throw ModelError(file_, m.line + 1, m.column + 1, message, hint);
-  }
-
-  double number(const YAML::Node& node, const std::string& what);
-  Expr expression(const YAML::Node& node, const std::string& what, bool in_C = false);
-  Program compile(const std::vector<Expr>& exprs, const YAML::Node& where,
-                  const std::string& what) const;
-  std::vector<YAML::Node> rows_of(const YAML::Node& node, const std::string& what);
-  void read_parameters(const YAML::Node& root);
-  void read_coordinates(const YAML::Node& root);
-  void read_dynamics(const YAML::Node& root, SystemBuilder& builder);
-  void read_constraints(const YAML::Node& root, SystemBuilder& builder);
-  void read_nonideal(const YAML::Node& root, SystemBuilder& builder);
-  void read_initial(const YAML::Node& root, Model& model);
-  void read_simulate(const YAML::Node& root, Model& model);
-  void read_output(const YAML::Node& root, Model& model);
-  void check_mass_matrix(const YAML::Node& root, const Model& model);
-  Index coordinate(const YAML::Node& node);
-
-  std::string file_;
-  std::map<std::string, double> overrides_;
-  std::map<std::string, double> parameters_;
-  std::vector<std::string> coordinates_, velocities_;
-  std::vector<std::string> constraint_names_;  // in declaration order
-  std::vector<std::string> constraint_inputs_;  // N_c and lambda_c of each named constraint
-  std::vector<Index> constraint_rows_;
-  std::unique_ptr<ExpressionSet> set_;
-  InputLayout layout_;
-  std::vector<std::pair<std::string, std::string>> chain_;
-};
+namespace model_reader {
 
 double Reader::number(const YAML::Node& node, const std::string& what) {
   if (!node.IsScalar()) fail(node, what + " must be a number");
@@ -480,12 +305,92 @@ void Reader::read_dynamics(const YAML::Node& root, SystemBuilder& builder) {
   }
 }
 
+Constraint Reader::read_constraint(const YAML::Node& c, const std::string& name,
+                                   const std::string& what) {
+  const Index n = Index(coordinates_.size());
+  const int kinds = int(bool(c["holonomic"])) + int(bool(c["nonholonomic"])) + int(bool(c["A"]));
+  if (kinds != 1) {
+    fail(c, what + " needs exactly one of holonomic, nonholonomic, or A with b");
+  }
+  std::vector<Expr> accel, levels;
+  ConstraintKind kind;
+  Index rows = 0;
+  if (c["holonomic"]) {
+    // A = ∂φ/∂q, b = −D(Dφ); levels [φ; Dφ]
+    kind = ConstraintKind::kHolonomic;
+    const auto phis = rows_of(c["holonomic"], what);
+    rows = Index(phis.size());
+    std::vector<Expr> phi, phid, b;
+    for (const auto& node : phis) {
+      const Expr e = expression(node, what);
+      for (const auto& v : velocities_) {
+        if (!set_->independent_of(e, v)) {
+          fail(node, what + " is holonomic but depends on the velocity '" + v + "'",
+               "write it as nonholonomic: instead");
+        }
+      }
+      phi.push_back(e);
+      phid.push_back(set_->total_derivative(e, "t", chain_));
+      b.push_back(set_->negate(set_->total_derivative(phid.back(), "t", chain_)));
+    }
+    for (Index r = 0; r < rows; ++r) {
+      for (Index j = 0; j < n; ++j)
+        accel.push_back(set_->diff(phi[std::size_t(r)], coordinates_[std::size_t(j)]));
+    }
+    accel.insert(accel.end(), b.begin(), b.end());
+    levels = phi;
+    levels.insert(levels.end(), phid.begin(), phid.end());
+  } else if (c["nonholonomic"]) {
+    // A = ∂ψ/∂q̇, b = −Dψ; levels [ψ]
+    kind = ConstraintKind::kNonholonomic;
+    const auto psis = rows_of(c["nonholonomic"], what);
+    rows = Index(psis.size());
+    std::vector<Expr> psi, b;
+    for (const auto& node : psis) {
+      psi.push_back(expression(node, what));
+      b.push_back(set_->negate(set_->total_derivative(psi.back(), "t", chain_)));
+    }
+    for (Index r = 0; r < rows; ++r) {
+      for (Index j = 0; j < n; ++j)
+        accel.push_back(set_->diff(psi[std::size_t(r)], velocities_[std::size_t(j)]));
+    }
+    accel.insert(accel.end(), b.begin(), b.end());
+    levels = psi;
+  } else {
+    kind = ConstraintKind::kAcceleration;
+    const YAML::Node A = c["A"], b = c["b"];
+    if (!b) fail(c, what + " gives A but no b");
+    if (!A.IsSequence() || A.size() == 0) fail(A, "A must be a list of rows");
+    rows = Index(A.size());
+    const auto bs = rows_of(b, what + ", b");
+    if (Index(bs.size()) != rows)
+      fail(b, "b must have one entry per row of A (" + std::to_string(rows) + ")");
+    for (const auto& row : A) {
+      if (!row.IsSequence() || Index(row.size()) != n)
+        fail(row, "each row of A must have " + std::to_string(n) + " entries");
+      for (const auto& e : row) accel.push_back(expression(e, what + ", A"));
+    }
+    for (const auto& e : bs) accel.push_back(expression(e, what + ", b"));
+  }
+  Constraint constraint(
+      name, kind, rows,
+      std::make_shared<CompiledConstraint>(kind, rows, n, layout_,
+                                           compile(accel, c, "the derivatives of " + what),
+                                           compile(levels, c, what)));
+  if (const YAML::Node a = c["active"]) {
+    if (!a.IsSequence() || a.size() != 2) fail(a, "active must be [t0, t1]");
+    const double t0 = number(a[0], "active"), t1 = number(a[1], "active");
+    if (!(t0 <= t1)) fail(a, "active needs t0 <= t1");
+    constraint.active_between(t0, t1);
+  }
+  return constraint;
+}
+
 void Reader::read_constraints(const YAML::Node& root, SystemBuilder& builder) {
   const YAML::Node cs = root["constraints"];
   if (!cs) return;
   if (!cs.IsSequence())
     fail(cs, "constraints must be a list", "- {name: rod, holonomic: x^2 + y^2 - 1}");
-  const Index n = Index(coordinates_.size());
   std::set<std::string> seen;
   for (const auto& c : cs) {
     if (!c.IsMap()) fail(c, "a constraint must be a mapping with a name and a kind");
@@ -500,83 +405,7 @@ void Reader::read_constraints(const YAML::Node& root, SystemBuilder& builder) {
              "a constraint has name, holonomic | nonholonomic | A and b, active, stabilization");
       }
     }
-    const int kinds = int(bool(c["holonomic"])) + int(bool(c["nonholonomic"])) + int(bool(c["A"]));
-    if (kinds != 1) {
-      fail(c,
-           "constraint '" + name + "' needs exactly one of holonomic, nonholonomic, or A with b");
-    }
-    const std::string what = "constraint '" + name + "'";
-    std::vector<Expr> accel, levels;
-    ConstraintKind kind;
-    Index rows = 0;
-    if (c["holonomic"]) {
-      // A = ∂φ/∂q, b = −D(Dφ); levels [φ; Dφ]
-      kind = ConstraintKind::kHolonomic;
-      const auto phis = rows_of(c["holonomic"], what);
-      rows = Index(phis.size());
-      std::vector<Expr> phi, phid, b;
-      for (const auto& node : phis) {
-        const Expr e = expression(node, what);
-        for (const auto& v : velocities_) {
-          if (!set_->independent_of(e, v)) {
-            fail(node, what + " is holonomic but depends on the velocity '" + v + "'",
-                 "write it as nonholonomic: instead");
-          }
-        }
-        phi.push_back(e);
-        phid.push_back(set_->total_derivative(e, "t", chain_));
-        b.push_back(set_->negate(set_->total_derivative(phid.back(), "t", chain_)));
-      }
-      for (Index r = 0; r < rows; ++r) {
-        for (Index j = 0; j < n; ++j)
-          accel.push_back(set_->diff(phi[std::size_t(r)], coordinates_[std::size_t(j)]));
-      }
-      accel.insert(accel.end(), b.begin(), b.end());
-      levels = phi;
-      levels.insert(levels.end(), phid.begin(), phid.end());
-    } else if (c["nonholonomic"]) {
-      // A = ∂ψ/∂q̇, b = −Dψ; levels [ψ]
-      kind = ConstraintKind::kNonholonomic;
-      const auto psis = rows_of(c["nonholonomic"], what);
-      rows = Index(psis.size());
-      std::vector<Expr> psi, b;
-      for (const auto& node : psis) {
-        psi.push_back(expression(node, what));
-        b.push_back(set_->negate(set_->total_derivative(psi.back(), "t", chain_)));
-      }
-      for (Index r = 0; r < rows; ++r) {
-        for (Index j = 0; j < n; ++j)
-          accel.push_back(set_->diff(psi[std::size_t(r)], velocities_[std::size_t(j)]));
-      }
-      accel.insert(accel.end(), b.begin(), b.end());
-      levels = psi;
-    } else {
-      kind = ConstraintKind::kAcceleration;
-      const YAML::Node A = c["A"], b = c["b"];
-      if (!b) fail(c, what + " gives A but no b");
-      if (!A.IsSequence() || A.size() == 0) fail(A, "A must be a list of rows");
-      rows = Index(A.size());
-      const auto bs = rows_of(b, what + ", b");
-      if (Index(bs.size()) != rows)
-        fail(b, "b must have one entry per row of A (" + std::to_string(rows) + ")");
-      for (const auto& row : A) {
-        if (!row.IsSequence() || Index(row.size()) != n)
-          fail(row, "each row of A must have " + std::to_string(n) + " entries");
-        for (const auto& e : row) accel.push_back(expression(e, what + ", A"));
-      }
-      for (const auto& e : bs) accel.push_back(expression(e, what + ", b"));
-    }
-    Constraint constraint(
-        name, kind, rows,
-        std::make_shared<CompiledConstraint>(kind, rows, n, layout_,
-                                             compile(accel, c, "the derivatives of " + what),
-                                             compile(levels, c, what)));
-    if (const YAML::Node a = c["active"]) {
-      if (!a.IsSequence() || a.size() != 2) fail(a, "active must be [t0, t1]");
-      const double t0 = number(a[0], "active"), t1 = number(a[1], "active");
-      if (!(t0 <= t1)) fail(a, "active needs t0 <= t1");
-      constraint.active_between(t0, t1);
-    }
+    Constraint constraint = read_constraint(c, name, "constraint '" + name + "'");
     if (const YAML::Node s = c["stabilization"]) {
       if (!s.IsMap()) fail(s, "stabilization must be {alpha: …, beta: …}");
       const double alpha = s["alpha"] ? number(s["alpha"], "alpha") : 0.0;
@@ -586,7 +415,7 @@ void Reader::read_constraints(const YAML::Node& root, SystemBuilder& builder) {
     }
     builder.add(constraint);
     constraint_names_.push_back(name);
-    constraint_rows_.push_back(rows);
+    constraint_rows_.push_back(constraint.rows());
   }
 }
 
@@ -677,8 +506,9 @@ void Reader::read_nonideal(const YAML::Node& root, SystemBuilder& builder) {
 
 void Reader::read_initial(const YAML::Node& root, Model& model) {
   const Index n = Index(coordinates_.size());
-  model.q0 = VectorXd::Zero(n);
-  model.qd0 = VectorXd::Zero(n);
+  // a multibody model's bodies give the initial state; initial: overrides it by name
+  if (model.q0.size() != n) model.q0 = VectorXd::Zero(n);
+  if (model.qd0.size() != n) model.qd0 = VectorXd::Zero(n);
   const YAML::Node init = root["initial"];
   if (!init) return;
   if (!init.IsMap()) fail(init, "initial must be a mapping with q, q_dot and project");
@@ -721,7 +551,7 @@ void Reader::read_simulate(const YAML::Node& root, Model& model) {
       try {
         o.integrator = integrator_from_string(v.Scalar());
       } catch (const std::invalid_argument&) {
-        fail(v, "unknown integrator '" + v.Scalar() + "'", "rk4, dopri5, rkf78 or bdf");
+        fail(v, "unknown integrator '" + v.Scalar() + "'", "rk4, rk5, dopri5, rkf78 or bdf");
       }
     } else if (key == "drift") {
       try {
@@ -826,21 +656,29 @@ Model Reader::read(const std::string& text) {
       fail(kv.first, "unknown key '" + key + "'", "the keys are " + join(kTopLevelKeys));
     }
   }
-  read_parameters(root);
-  read_coordinates(root);
+  Model model = read_plant(root);
+  read_control(root, model);
+  return model;
+}
 
-  // the expression inputs: q, q_dot, t, N_c and lambda_c for each named constraint
+Model Reader::read_plant(const YAML::Node& root) {
+  read_parameters(root);
+  Model model = root["bodies"] ? read_multibody(root) : read_generalized(root);
+  model.file = file_;
+  model.name = root["name"] ? root["name"].Scalar() : file_;
+  model.parameters = parameters_;
+  read_initial(root, model);
+  read_simulate(root, model);
+  check_mass_matrix(root, model);
+  read_output(root, model);
+  model.options.project_initial = model.project_initial;
+  return model;
+}
+
+void Reader::make_expression_set(const YAML::Node& root, const std::vector<std::string>& cnames) {
   std::vector<std::string> inputs = coordinates_;
   inputs.insert(inputs.end(), velocities_.begin(), velocities_.end());
   inputs.push_back("t");
-  std::vector<std::string> cnames;
-  if (const YAML::Node cs = root["constraints"]; cs && cs.IsSequence()) {
-    for (const auto& c : cs) {
-      if (c.IsMap() && c["name"] && is_identifier(c["name"].Scalar()) &&
-          std::find(cnames.begin(), cnames.end(), c["name"].Scalar()) == cnames.end())
-        cnames.push_back(c["name"].Scalar());  // (a name given twice is refused below)
-    }
-  }
   for (const auto& c : cnames) constraint_inputs_.push_back("N_" + c);
   for (const auto& c : cnames) constraint_inputs_.push_back("lambda_" + c);
   inputs.insert(inputs.end(), constraint_inputs_.begin(), constraint_inputs_.end());
@@ -849,7 +687,8 @@ Model Reader::read(const std::string& text) {
   } catch (const std::invalid_argument& e) {
     std::string message = e.what();
     if (const auto k = message.find(": "); k != std::string::npos) message.erase(0, k + 2);
-    fail(root["coordinates"], "a coordinate's name is taken: " + message,
+    const YAML::Node where = root["coordinates"] ? root["coordinates"] : root["bodies"];
+    fail(where ? where : root, "a coordinate's name is taken: " + message,
          "x_dot is the velocity of x, and N_c and lambda_c are the forces of constraint c");
   }
   for (const auto& [name, value] : parameters_) {
@@ -875,34 +714,36 @@ Model Reader::read(const std::string& text) {
   }
   layout_.n = Index(coordinates_.size());
   layout_.extra = Index(2 * cnames.size());
+}
 
+Model Reader::read_generalized(const YAML::Node& root) {
+  read_coordinates(root);
+  // the named constraints (a name given twice is refused by read_constraints)
+  std::vector<std::string> cnames;
+  if (const YAML::Node cs = root["constraints"]; cs && cs.IsSequence()) {
+    for (const auto& c : cs) {
+      if (c.IsMap() && c["name"] && is_identifier(c["name"].Scalar()) &&
+          std::find(cnames.begin(), cnames.end(), c["name"].Scalar()) == cnames.end())
+        cnames.push_back(c["name"].Scalar());
+    }
+  }
+  make_expression_set(root, cnames);
   SystemBuilder builder(coordinates_);
   read_dynamics(root, builder);
   read_constraints(root, builder);
   read_nonideal(root, builder);
-  Model model = [&] {
-    try {
-      return Model{.system = builder.build()};
-    } catch (const std::invalid_argument& e) {
-      throw ModelError(file_, 1, 1, e.what());
-    }
-  }();
-  model.file = file_;
-  model.name = root["name"] ? root["name"].Scalar() : file_;
-  model.parameters = parameters_;
-  read_initial(root, model);
-  read_simulate(root, model);
-  check_mass_matrix(root, model);
-  read_output(root, model);
-  model.options.project_initial = model.project_initial;
-  return model;
+  try {
+    return Model{.system = builder.build()};
+  } catch (const std::invalid_argument& e) {
+    throw ModelError(file_, 1, 1, e.what());
+  }
 }
 
-}  // namespace
+}  // namespace model_reader
 
 Model parse_model(const std::string& text, const std::string& file,
                   const std::map<std::string, double>& overrides) {
-  return Reader(file, overrides).read(text);
+  return model_reader::Reader(file, overrides).read(text);
 }
 
 Model load_model(const std::string& path, const std::map<std::string, double>& overrides) {
@@ -915,7 +756,7 @@ Model load_model(const std::string& path, const std::map<std::string, double>& o
 
 std::vector<std::vector<double>> evaluate_output_expressions(const Model& model,
                                                              const Trajectory& traj) {
-  const Program& p = model.output_program;
+  const expr::Program& p = model.output_program;
   const Index n = traj.n, N = traj.samples();
   std::vector<std::vector<double>> out(std::size_t(p.outputs()),
                                        std::vector<double>(std::size_t(N)));

@@ -489,6 +489,26 @@ MultibodyModel Multibody::build() const {
     if (f.type == ForceType::kApplied && !f.wrench) {
       throw std::invalid_argument(who + "force '" + f.name + "': empty wrench callable");
     }
+    if (f.type == ForceType::kTorsionSpring) {
+      // between two oriented bodies of one kind (planar, or rigid and the ground)
+      const BodyKind none = BodyKind::kParticle;
+      const BodyKind ka = f.body_a == kGround ? none : out.bodies[std::size_t(f.body_a)].kind;
+      const BodyKind kb = f.body_b == kGround ? none : out.bodies[std::size_t(f.body_b)].kind;
+      const bool particle = (f.body_a != kGround && ka == BodyKind::kParticle) ||
+                            (f.body_b != kGround && kb == BodyKind::kParticle);
+      const bool mixed = f.body_a != kGround && f.body_b != kGround && ka != kb;
+      if (particle || mixed || f.body_a == f.body_b) {
+        throw std::invalid_argument(who + "torsion spring '" + f.name +
+                                    "' must join two different planar bodies or two rigid "
+                                    "bodies (or one and the ground)");
+      }
+      const bool spatial = ka == BodyKind::kRigid || kb == BodyKind::kRigid;
+      if (spatial && f.rest != 0.0) {
+        throw std::invalid_argument(who + "torsion spring '" + f.name +
+                                    "': between rigid bodies the rest orientation is the "
+                                    "bodies' aligned frames (theta0 must be 0)");
+      }
+    }
   }
   return MultibodyModel{sb.build(),
                         std::move(out.q0),

@@ -1,4 +1,4 @@
-// Force elements: gravity, spring-dampers between body points, planar torsional springs, applied
+// Force elements: gravity, spring-dampers between body points, torsional springs, applied
 // wrenches, the quaternions' velocity terms (gyroscopic), and joint friction (non-ideal).
 #include <cmath>
 #include <memory>
@@ -36,6 +36,18 @@ std::shared_ptr<const ForceData> force_data(const std::vector<BodyInfo>& bodies,
     d->b.push_back(body_ref(bodies, f.body_b));
   }
   return d;
+}
+
+// relative rotation of b with respect to a as a world-frame rotation vector theta n (|theta| <= pi):
+// R_WB(b) = R_WB(a) R(n_a, theta), n = R_WB(a) n_a
+Vector3d relative_rotation_W(const BodyRef& A, const BodyRef& B, const VectorXd& q) {
+  const Matrix3d Ra = rotation_WB(A, q);
+  const Eigen::AngleAxisd rel(Matrix3d(Ra.transpose() * rotation_WB(B, q)));
+  return Ra * (rel.angle() * rel.axis());
+}
+
+bool spatial(const BodyRef& A, const BodyRef& B) {
+  return A.kind == BodyKind::kRigid || B.kind == BodyKind::kRigid;
 }
 
 }  // namespace
@@ -78,7 +90,17 @@ ForceFn make_forces(const std::vector<BodyInfo>& bodies, const std::vector<Force
           break;
         }
         case ForceType::kTorsionSpring: {
-          // torque on b = −k (theta_b − theta_a − theta0) − c (theta_b' − theta_a')
+          if (spatial(A, B)) {
+            // rigid bodies: torque on b = −k theta n − c (omega_b − omega_a), the gradient of
+            // V = ½ k theta² (an isotropic rotational spring; about a revolute joint's axis
+            // it is the joint's torsion spring)
+            const Vector3d w = angular_velocity_W(B, q, qd) - angular_velocity_W(A, q, qd);
+            const Vector3d T = -f.stiffness * relative_rotation_W(A, B, q) - f.damping * w;
+            add_torque(B, q, T, Q);
+            add_torque(A, q, -T, Q);
+            break;
+          }
+          // planar: torque on b = −k (theta_b − theta_a − theta0) − c (theta_b' − theta_a')
           const double th =
               (B.ground() ? 0.0 : q[B.offset + 2]) - (A.ground() ? 0.0 : q[A.offset + 2]);
           const double w =
@@ -118,6 +140,8 @@ PotentialFn make_potential(const std::vector<BodyInfo>& bodies, const std::vecto
                           point_state(d->a[i], q, zero, f.point_a).first)
                              .norm();
         V += 0.5 * f.stiffness * (l - f.rest) * (l - f.rest);
+      } else if (f.type == ForceType::kTorsionSpring && spatial(d->a[i], d->b[i])) {
+        V += 0.5 * f.stiffness * relative_rotation_W(d->a[i], d->b[i], q).squaredNorm();
       } else if (f.type == ForceType::kTorsionSpring) {
         const BodyRef &A = d->a[i], &B = d->b[i];
         const double th =

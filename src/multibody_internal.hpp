@@ -141,6 +141,9 @@ class JointModel final : public ConstraintModel {
   std::vector<BodyRef> slots_;
   std::vector<Row> rows_;
   std::vector<Index> cols_;
+  // the rows are a planar revolute's d·e_x, d·e_y between planar bodies (or the ground), which
+  // acceleration_form_local and violation evaluate by a shorter path (same A, b, phi, phi')
+  bool planar_revolute_ = false;
 };
 
 /// The unit norm of a quaternion: phi = (u·u − 1)/2, A = uᵀ, b = −u'·u' (closed form).

@@ -2,6 +2,7 @@
 // a dot product of two vector expressions (body vectors R s, point differences), a distance, or
 // a linear combination of coordinates, whose A and b follow from the kinematics of its vectors.
 #include <algorithm>
+#include <cmath>
 #include <stdexcept>
 
 #include "multibody_internal.hpp"
@@ -94,7 +95,47 @@ JointModel::JointModel(std::vector<BodyRef> slots, std::vector<Row> rows)
       r.local.push_back(Index(c - cols_.begin()));
     }
   }
+  // the planar revolute pattern: d = o_C − o_P dotted with e_x and e_y, constant offsets 0
+  const auto planar_or_ground = [this](int slot) {
+    return slot >= 0 && slot < int(slots_.size()) &&
+           (slots_[std::size_t(slot)].ground() ||
+            slots_[std::size_t(slot)].kind == BodyKind::kPlanar);
+  };
+  const auto axis_row = [&](const Row& r, const Vector3d& axis) {
+    return r.kind == Row::kDot && r.a.kind == VecExpr::kPointDiff && r.b.kind == VecExpr::kWorld &&
+           r.b.world == axis && !r.c.motion && r.c.c0 == 0.0 && planar_or_ground(r.a.slot_a) &&
+           planar_or_ground(r.a.slot_b);
+  };
+  planar_revolute_ = rows_.size() == 2 && axis_row(rows_[0], Vector3d::UnitX()) &&
+                     axis_row(rows_[1], Vector3d::UnitY()) &&
+                     rows_[0].a.slot_a == rows_[1].a.slot_a &&
+                     rows_[0].a.slot_b == rows_[1].a.slot_b && rows_[0].a.s_a == rows_[1].a.s_a &&
+                     rows_[0].a.s_b == rows_[1].a.s_b;
 }
+
+namespace {
+// (R(theta) s)_xy of a planar body and its theta' (the ground: s_xy, at rest)
+struct PlanarPoint {
+  double rx, ry, w;
+};
+PlanarPoint planar_point(const BodyRef& b, const VectorXd& q, const VectorXd& qd,
+                         const Vector3d& s) {
+  if (b.ground()) return {s.x(), s.y(), 0.0};
+  const double c = std::cos(q[b.offset + 2]), sn = std::sin(q[b.offset + 2]);
+  return {c * s.x() - sn * s.y(), sn * s.x() + c * s.y(), qd[b.offset + 2]};
+}
+
+// the same vector expression (rows of one joint often share one: d·e_x, d·e_y of a revolute)
+bool same_expr(const VecExpr& e, const VecExpr& f) {
+  return e.kind == f.kind && e.slot_a == f.slot_a && e.slot_b == f.slot_b && e.s_a == f.s_a &&
+         e.s_b == f.s_b && e.world == f.world;
+}
+// row r's first vector is the previous row's: its kinematics in ka can be reused
+bool reuses_a(const std::vector<Row>& rows, std::size_t r) {
+  return r > 0 && rows[r].kind != Row::kLinear && rows[r - 1].kind != Row::kLinear &&
+         same_expr(rows[r].a, rows[r - 1].a);
+}
+}  // namespace
 
 void JointModel::eval(const VecExpr& e, const VectorXd& q, const VectorXd& qd, VecKin& k) const {
   k.clear();
@@ -116,6 +157,27 @@ void JointModel::acceleration_form_local(const VectorXd& q, const VectorXd& qd, 
                                          ConstraintScratch*, Eigen::Ref<MatrixXd> A,
                                          Eigen::Ref<VectorXd> b) const {
   const Index k = local_count();
+  if (planar_revolute_) {
+    // phi = (x_C + R_C s_C − x_P − R_P s_P)_xy:  A = ±[I | e_z × R s] on each body,
+    // b = Σ ± theta'² R s  (the dot rows' A = e_iᵀ J_d, b = −e_i·g_d, g = −theta'² R s)
+    A.setZero();
+    b.setZero();
+    const VecExpr& d = rows_[0].a;
+    for (int side = 0; side < 2; ++side) {
+      const BodyRef& body = slots_[std::size_t(side == 0 ? d.slot_b : d.slot_a)];
+      if (body.ground()) continue;
+      const double sign = side == 0 ? 1.0 : -1.0;
+      const PlanarPoint p = planar_point(body, q, qd, side == 0 ? d.s_b : d.s_a);
+      const Index l = body.local;
+      A(0, l) += sign;
+      A(1, l + 1) += sign;
+      A(0, l + 2) -= sign * p.ry;
+      A(1, l + 2) += sign * p.rx;
+      b[0] += sign * p.w * p.w * p.rx;
+      b[1] += sign * p.w * p.w * p.ry;
+    }
+    return;
+  }
   VecKin ka, kb;
   for (std::size_t r = 0; r < rows_.size(); ++r) {
     const Row& row = rows_[r];
@@ -123,16 +185,22 @@ void JointModel::acceleration_form_local(const VectorXd& q, const VectorXd& qd, 
     switch (row.kind) {
       case Row::kDot: {
         // phi = a·b − c:  A = bᵀ J_a + aᵀ J_b,  b = −(g_a·b + 2 v_a·v_b + a·g_b) + c''
-        eval(row.a, q, qd, ka);
-        eval(row.b, q, qd, kb);
-        A.row(i) = (kb.x.transpose() * ka.J.leftCols(k) + ka.x.transpose() * kb.J.leftCols(k));
-        b[i] = -(ka.g.dot(kb.x) + 2.0 * ka.v.dot(kb.v) + ka.x.dot(kb.g));
+        if (!reuses_a(rows_, r)) eval(row.a, q, qd, ka);
+        if (row.b.kind == VecExpr::kWorld) {
+          // a constant b (a world axis): A = bᵀ J_a,  b = −g_a·b
+          A.row(i) = row.b.world.transpose() * ka.J.leftCols(k);
+          b[i] = -ka.g.dot(row.b.world);
+        } else {
+          eval(row.b, q, qd, kb);
+          A.row(i) = (kb.x.transpose() * ka.J.leftCols(k) + ka.x.transpose() * kb.J.leftCols(k));
+          b[i] = -(ka.g.dot(kb.x) + 2.0 * ka.v.dot(kb.v) + ka.x.dot(kb.g));
+        }
         if (row.c.motion) b[i] += row.c.at(t)[2];
         break;
       }
       case Row::kDistance: {
         // phi = (a·a − L²)/(2L):  A = aᵀ J_a / L,  b = −(a·g_a + v_a·v_a) / L
-        eval(row.a, q, qd, ka);
+        if (!reuses_a(rows_, r)) eval(row.a, q, qd, ka);
         A.row(i) = ka.x.transpose() * ka.J.leftCols(k) / row.length;
         b[i] = -(ka.x.dot(ka.g) + ka.v.squaredNorm()) / row.length;
         break;
@@ -152,6 +220,26 @@ void JointModel::acceleration_form_local(const VectorXd& q, const VectorXd& qd, 
 
 void JointModel::violation(const VectorXd& q, const VectorXd& qd, double t, ConstraintScratch*,
                            Eigen::Ref<VectorXd> position, Eigen::Ref<VectorXd> velocity) const {
+  if (planar_revolute_) {
+    // phi = (x_C + R_C s_C − x_P − R_P s_P)_xy,  phi' = Σ ± (x' + theta' e_z × R s)_xy
+    position.setZero();
+    velocity.setZero();
+    const VecExpr& d = rows_[0].a;
+    for (int side = 0; side < 2; ++side) {
+      const BodyRef& body = slots_[std::size_t(side == 0 ? d.slot_b : d.slot_a)];
+      const double sign = side == 0 ? 1.0 : -1.0;
+      const PlanarPoint p = planar_point(body, q, qd, side == 0 ? d.s_b : d.s_a);
+      position[0] += sign * p.rx;
+      position[1] += sign * p.ry;
+      if (body.ground()) continue;
+      const Index o = body.offset;
+      position[0] += sign * q[o];
+      position[1] += sign * q[o + 1];
+      velocity[0] += sign * (qd[o] - p.w * p.ry);
+      velocity[1] += sign * (qd[o + 1] + p.w * p.rx);
+    }
+    return;
+  }
   VecKin ka, kb;
   for (std::size_t r = 0; r < rows_.size(); ++r) {
     const Row& row = rows_[r];
@@ -159,13 +247,13 @@ void JointModel::violation(const VectorXd& q, const VectorXd& qd, double t, Cons
     const Vector3d c = row.c.at(t);
     switch (row.kind) {
       case Row::kDot:
-        eval(row.a, q, qd, ka);
+        if (!reuses_a(rows_, r)) eval(row.a, q, qd, ka);
         eval(row.b, q, qd, kb);
         position[i] = ka.x.dot(kb.x) - c[0];
         velocity[i] = ka.v.dot(kb.x) + ka.x.dot(kb.v) - c[1];
         break;
       case Row::kDistance:
-        eval(row.a, q, qd, ka);
+        if (!reuses_a(rows_, r)) eval(row.a, q, qd, ka);
         position[i] = (ka.x.squaredNorm() - row.length * row.length) * (0.5 / row.length);
         velocity[i] = ka.x.dot(ka.v) / row.length;
         break;

@@ -4,6 +4,8 @@
 #include <cmath>
 #include <fstream>
 #include <iomanip>
+#include <limits>
+#include <memory>
 #include <stdexcept>
 
 #include "multibody_internal.hpp"
@@ -226,6 +228,97 @@ void write_poses_csv(const MultibodyModel& mb, const Trajectory& tr, const std::
     os << '\n';
   }
   if (!os) throw std::runtime_error("ukdyn::mb::write_poses_csv: error writing '" + path + "'");
+}
+
+std::vector<CsvColumn> report_csv_columns(const MultibodyModel& mb, const Trajectory& tr) {
+  if (tr.n != mb.system.dofs() || tr.m != mb.system.constraint_rows()) {
+    throw std::invalid_argument("ukdyn::mb::report_csv_columns: the trajectory has " +
+                                std::to_string(tr.n) + " coordinates and " + std::to_string(tr.m) +
+                                " constraint rows, the model " + std::to_string(mb.system.dofs()) +
+                                " and " + std::to_string(mb.system.constraint_rows()));
+  }
+  const std::size_t N = std::size_t(tr.samples());
+  std::vector<CsvColumn> cols;
+  const auto add = [&](std::string name) {
+    cols.push_back(CsvColumn{std::move(name), std::vector<double>(N)});
+    return cols.size() - 1;
+  };
+  // poses: 7 per body, then the kinetic energies
+  for (const BodyInfo& b : mb.bodies) {
+    for (const char* s : {".x", ".y", ".z", ".qw", ".qx", ".qy", ".qz"}) add(b.name + s);
+  }
+  const std::size_t energy0 = cols.size();
+  for (const BodyInfo& b : mb.bodies) add(b.name + ".kinetic_energy");
+  // joints: the reaction's components (planar: fx, fy, tz), the friction's, the drive's effort
+  struct JointColumns {
+    std::vector<int> components;  // indices into (force_W, torque_W) stacked
+    std::size_t ideal = 0, friction = 0, drive = 0, gear = 0;
+  };
+  std::vector<JointColumns> jc(mb.joints.size());
+  bool any_friction = false;
+  for (std::size_t j = 0; j < mb.joints.size(); ++j) {
+    const JointInfo& J = mb.joints[j];
+    JointColumns& c = jc[j];
+    const std::string base = "reaction." + J.name + ".";
+    if (J.type == JointType::kGear) {  // its multiplier: the torque along joint a's angle
+      c.gear = add(base + "torque");
+      continue;
+    }
+    c.components = J.planar ? std::vector<int>{0, 1, 5} : std::vector<int>{0, 1, 2, 3, 4, 5};
+    const char* names[] = {"fx", "fy", "fz", "tx", "ty", "tz"};
+    c.ideal = cols.size();
+    for (int k : c.components) add(base + names[k]);
+    if (J.friction >= 0) {
+      any_friction = true;
+      c.friction = cols.size();
+      for (int k : c.components) add(base + "friction_" + names[k]);
+    }
+    if (J.drive >= 0) c.drive = add("drive." + J.name);
+  }
+  const auto Q = Trajectory::view(tr.q, tr.n), Qd = Trajectory::view(tr.qd, tr.n),
+             L = Trajectory::view(tr.lambda, tr.m);
+  VectorXd q(tr.n), qd(tr.n), lambda(tr.m);
+  std::unique_ptr<Workspace> ws;  // for the friction forces (they need an evaluation)
+  if (any_friction) ws = std::make_unique<Workspace>(mb.system);
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  for (std::size_t i = 0; i < N; ++i) {
+    q = Q.col(Index(i));
+    qd = Qd.col(Index(i));
+    lambda = L.col(Index(i));
+    const double t = tr.t[i];
+    for (std::size_t b = 0; b < mb.bodies.size(); ++b) {
+      const Pose p = body_pose(mb, q, BodyId(b));
+      const double v[7] = {p.p_WB.x(), p.p_WB.y(), p.p_WB.z(), p.R_WB.w(),
+                           p.R_WB.x(), p.R_WB.y(), p.R_WB.z()};
+      for (std::size_t c = 0; c < 7; ++c) cols[7 * b + c].values[i] = v[c];
+      cols[energy0 + b].values[i] = kinetic_energy(mb, q, qd, BodyId(b));
+    }
+    const bool evaluated =
+        any_friction && forward_dynamics(mb.system, *ws, q, qd, t) == Status::kOk;
+    for (std::size_t j = 0; j < mb.joints.size(); ++j) {
+      const JointInfo& J = mb.joints[j];
+      const JointColumns& c = jc[j];
+      if (J.type == JointType::kGear) {
+        cols[c.gear].values[i] = lambda[mb.system.row_offset(J.constraints.front())];
+        continue;
+      }
+      JointReaction r;
+      if (J.friction >= 0 && evaluated) {
+        r = joint_reaction(mb, *ws, q, qd, t, Index(j));
+      } else {
+        r = joint_reaction(mb, q, qd, t, lambda, Index(j));
+      }
+      Eigen::Matrix<double, 6, 1> ideal, fr;
+      ideal << r.force_W, r.torque_W;
+      fr << r.nonideal_force_W, r.nonideal_torque_W;
+      for (std::size_t k = 0; k < c.components.size(); ++k) {
+        cols[c.ideal + k].values[i] = ideal[c.components[k]];
+        if (J.friction >= 0) cols[c.friction + k].values[i] = evaluated ? fr[c.components[k]] : nan;
+      }
+      if (J.drive >= 0) cols[c.drive].values[i] = lambda[mb.system.row_offset(J.drive)];
+    }
+  }
+  return cols;
 }
 
 }  // namespace ukdyn::mb

@@ -24,6 +24,8 @@ const char* to_string(Integrator integrator) {
   switch (integrator) {
     case Integrator::kRK4:
       return "rk4";
+    case Integrator::kRK5:
+      return "rk5";
     case Integrator::kDopri5:
       return "dopri5";
     case Integrator::kRKF78:
@@ -35,12 +37,12 @@ const char* to_string(Integrator integrator) {
 }
 
 Integrator integrator_from_string(const std::string& name) {
-  for (Integrator i :
-       {Integrator::kRK4, Integrator::kDopri5, Integrator::kRKF78, Integrator::kBDF}) {
+  for (Integrator i : {Integrator::kRK4, Integrator::kRK5, Integrator::kDopri5, Integrator::kRKF78,
+                       Integrator::kBDF}) {
     if (name == to_string(i)) return i;
   }
   throw std::invalid_argument("ukdyn: unknown integrator '" + name +
-                              "'; the integrators are rk4, dopri5, rkf78, bdf");
+                              "'; the integrators are rk4, rk5, dopri5, rkf78, bdf");
 }
 
 const char* to_string(DriftControl drift) {
@@ -574,7 +576,9 @@ Trajectory simulate(const System& sys, const VectorXd& q0, const VectorXd& qd0,
                                            first_step);
       traj.stats.steps += r.steps;
       traj.stats.rejected_steps += r.rejected;
-      if (r.last_step > 0 && o.integrator != Integrator::kRK4) first_step = r.last_step;
+      // (the fixed-step methods keep o.step)
+      const bool fixed = o.integrator == Integrator::kRK4 || o.integrator == Integrator::kRK5;
+      if (r.last_step > 0 && !fixed) first_step = r.last_step;
       while (next_sample < samples.size() && samples[next_sample] <= r.t_reached) ++next_sample;
       if (r.status != Status::kOk) {
         std::string message = r.message;

@@ -21,6 +21,7 @@
 #include <ukdyn/reference.hpp>
 #include <ukdyn/ukdyn.hpp>
 
+#include "support/error_dynamics.hpp"
 #include "support/random_problem.hpp"
 
 namespace ukdyn {
@@ -55,11 +56,7 @@ SimulationOptions tight(double t_end, double every = 0.05) {
 }
 
 // e(t) of e'' + 2 zeta omega e' + omega² e = 0 from e(0) = e0, e'(0) = e1
-double second_order_error(double zeta, double omega, double e0, double e1, double t) {
-  if (zeta == 1.0) return (e0 + (e1 + omega * e0) * t) * std::exp(-omega * t);
-  const double wd = omega * std::sqrt(1.0 - zeta * zeta), a = zeta * omega;
-  return std::exp(-a * t) * (e0 * std::cos(wd * t) + (e1 + a * e0) / wd * std::sin(wd * t));
-}
+using test::second_order_error;
 
 // ---------------------------------------------------------------------------------------------
 // models

@@ -210,7 +210,7 @@ TEST(ModelErrors, UnknownKeysAndKindsAreNamedWithTheChoices) {
   EXPECT_TRUE(contains(e, "m.yaml:3:1: error: unknown key 'integrator'")) << e;
   EXPECT_TRUE(contains(e, "simulate")) << e;
   e = error_of("coordinates: [x]\nmass_matrix: [[1]]\nsimulate: {integrator: euler}\n");
-  EXPECT_TRUE(contains(e, "m.yaml:3:24: error: unknown integrator 'euler' (hint: rk4, dopri5"))
+  EXPECT_TRUE(contains(e, "m.yaml:3:24: error: unknown integrator 'euler' (hint: rk4, rk5, dopri5"))
       << e;
 }
 

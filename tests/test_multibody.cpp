@@ -16,6 +16,8 @@
 #include "ukdyn/multibody.hpp"
 #include "ukdyn/simulate.hpp"
 
+#include "support/slider_crank.hpp"
+
 namespace ukdyn {
 namespace {
 
@@ -287,6 +289,83 @@ TEST(MultibodyRigidBody, TorqueFreeMotionKeepsEnergyAndAngularMomentumForAnyJ0) 
   }
   // the same motion (the quaternion sign is not ambiguous: both start from the same u)
   EXPECT_NEAR((ends[0] - ends[1]).norm(), 0.0, 1e-6);
+}
+
+TEST(MultibodyForces, RotationalSpringBetweenRigidBodiesOscillatesAboutAFixedAxis) {
+  // an isotropic body (J = j I) on a spherical joint at its centre, tied to the ground by a
+  // rotational spring k: from rest at 0.8 rad about n the relative rotation stays about n with
+  // angle 0.8 cos(sqrt(k/j) t); the energy ½ k theta² + ½ j w² is conserved
+  const double j = 0.4, k = 3.0, theta0 = 0.8;
+  const Vector3d n = Vector3d(1, 2, 2) / 3.0;
+  Multibody b;
+  const BodyId B = b.add_rigid_body("ball", 2.0, {j, j, j}, {0, 0, 0}, about(theta0, n));
+  b.add_joint(mb::spherical("centre", kGround, {0, 0, 0}, B, {0, 0, 0}));
+  b.add_force(mb::torsion_spring("spring", kGround, B, k, 0.0, 0.0));
+  b.set_gravity({0, 0, -kG});
+  const MultibodyModel m = b.build();
+  SimulationOptions o;
+  o.t_end = 3.0;
+  o.output_every = 0.25;
+  o.rtol = 1e-11;
+  o.atol = 1e-13;
+  const Trajectory tr = simulate(m.system, m.q0, m.qd0, o);
+  ASSERT_EQ(tr.stats.status, Status::kOk) << tr.stats.message;
+  const double E0 = mb::total_energy(m, m.q0, m.qd0, 0.0);
+  EXPECT_NEAR(E0 - 2.0 * kG * 0.0, 0.5 * k * theta0 * theta0, 1e-12);
+  for (Index i = 0; i < tr.samples(); ++i) {
+    const double t = tr.t[std::size_t(i)];
+    const VectorXd q = sample(tr.q, 7, i), qd = sample(tr.qd, 7, i);
+    const Eigen::AngleAxisd rel(mb::body_pose(m, q, B).R_WB);
+    const double expected = theta0 * std::cos(std::sqrt(k / j) * t);
+    // the signed angle about n
+    const double angle = rel.angle() * (rel.axis().dot(n) >= 0 ? 1.0 : -1.0);
+    EXPECT_NEAR(angle, expected, 1e-8) << t;
+    if (std::abs(expected) > 0.05) EXPECT_NEAR(std::abs(rel.axis().dot(n)), 1.0, 1e-9) << t;
+    EXPECT_NEAR(mb::total_energy(m, q, qd, t), E0, 1e-9 * E0) << t;
+  }
+}
+
+TEST(MultibodyForces, RotationalSpringAboutARevoluteAxisHasThePeriodOfJzzOverK) {
+  // a rigid body on a revolute joint about the vertical z axis through its centre (gravity
+  // does not act about it), twisted 0.3 rad: period 2 pi sqrt(J3 / k)
+  const double J3 = 0.5, k = 2.0;
+  Multibody b;
+  const BodyId B = b.add_rigid_body("disk", 1.0, {0.3, 0.3, J3}, {0, 0, 0}, about(0.3, {0, 0, 1}));
+  b.add_joint(mb::revolute("axle", kGround, Frame::at({0, 0, 0}), B, Frame::at({0, 0, 0})));
+  b.add_force(mb::torsion_spring("twist", kGround, B, k, 0.0, 0.0));
+  b.set_gravity({0, 0, -kG});
+  const MultibodyModel m = b.build();
+  SimulationOptions o;
+  o.t_end = 2 * std::numbers::pi * std::sqrt(J3 / k);  // one period
+  o.rtol = 1e-11;
+  o.atol = 1e-13;
+  const Trajectory tr = simulate(m.system, m.q0, m.qd0, o);
+  ASSERT_EQ(tr.stats.status, Status::kOk) << tr.stats.message;
+  const VectorXd qT = sample(tr.q, 7, tr.samples() - 1);
+  const Eigen::AngleAxisd rel(mb::body_pose(m, qT, B).R_WB);
+  EXPECT_NEAR(rel.angle(), 0.3, 1e-8);
+  EXPECT_NEAR(rel.axis().z(), 1.0, 1e-9);
+}
+
+TEST(MultibodyErrors, TorsionSpringNeedsTwoOrientedBodiesOfOneKind) {
+  Multibody b;
+  const BodyId P = b.add_particle("p", 1.0, {0, 0, 0});
+  b.add_force(mb::torsion_spring("bad", kGround, P, 1.0, 0.0, 0.0));
+  EXPECT_THROW(
+      {
+        try {
+          b.build();
+        } catch (const std::invalid_argument& e) {
+          EXPECT_NE(std::string(e.what()).find("torsion spring 'bad' must join"), std::string::npos)
+              << e.what();
+          throw;
+        }
+      },
+      std::invalid_argument);
+  Multibody r;
+  const BodyId R = r.add_rigid_body("r", 1.0, {1, 1, 1}, {0, 0, 0}, Quaterniond::Identity());
+  r.add_force(mb::torsion_spring("rest", kGround, R, 1.0, 0.0, 0.2));
+  EXPECT_THROW(r.build(), std::invalid_argument);
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -573,32 +652,7 @@ TEST(MultibodyValidation, RollingDiskInSteadyCircularMotionReturnsAfterOnePeriod
 // ---------------------------------------------------------------------------------------------
 // slider-crank with prescribed crank rotation
 
-struct SliderCrank {
-  double r = 0.3, l = 1.0, mc = 1.0, mr = 2.0, ms = 0.5, w = 2 * kPi, th0 = 0.3;
-  double Ic() const { return mc * r * r / 12; }
-  double Ir() const { return mr * l * l / 12; }
-  // crank angle, piston position, rod angle and their rates at t
-  struct State {
-    double th, x, phi, xd, phid;
-  };
-  State at(double t) const {
-    const double th = th0 + w * t, s = std::sin(th), c = std::cos(th);
-    const double root = std::sqrt(l * l - r * r * s * s);
-    const double x = r * c + root, xd = (-r * s - r * r * s * c / root) * w;
-    const double phi = std::asin(-r * s / l), phid = -r * c * w / (l * std::cos(phi));
-    return {th, x, phi, xd, phid};
-  }
-  // E = T + V from the closed-form kinematics
-  double energy(double t) const {
-    const State z = at(t);
-    const Vector3d Bd = r * w * Vector3d(-std::sin(z.th), std::cos(z.th), 0);
-    const Vector3d Gd = 0.5 * (Bd + Vector3d(z.xd, 0, 0));
-    const double T = 0.5 * (Ic() + mc * r * r / 4) * w * w + 0.5 * mr * Gd.squaredNorm() +
-                     0.5 * Ir() * z.phid * z.phid + 0.5 * ms * z.xd * z.xd;
-    const double V = mc * kG * 0.5 * r * std::sin(z.th) + mr * kG * 0.5 * r * std::sin(z.th);
-    return T + V;
-  }
-};
+using test::SliderCrank;
 
 MultibodyModel slider_crank(const SliderCrank& c) {
   const auto z = c.at(0.0);

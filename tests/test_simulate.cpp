@@ -6,6 +6,7 @@
 #include <ukdyn/simulate.hpp>
 #include <ukdyn/ukdyn.hpp>
 
+#include "support/oscillator.hpp"
 #include "support/random_problem.hpp"
 
 namespace ukdyn {
@@ -15,16 +16,7 @@ constexpr double kG = 9.81;
 
 using testing::vec;
 
-// x'' = −x, one coordinate
-System oscillator() {
-  return SystemBuilder({"x"})
-      .mass_matrix(MatrixXd::Identity(1, 1))
-      .forces([](const VectorXd& q, const VectorXd&, double, Eigen::Ref<VectorXd> Q) {
-        Q[0] = -q[0];
-      })
-      .potential_energy([](const VectorXd& q, double) { return 0.5 * q[0] * q[0]; })
-      .build();
-}
+using test::oscillator;
 
 // a particle in the plane under gravity, optionally on the floor y = 0 during [t0, t1]
 System particle(double t0 = 1.0, double t1 = -1.0) {

@@ -30,6 +30,10 @@ struct CsvColumn {
   std::vector<double> values;  ///< N values
 };
 
+/// The standard columns with their values, in CSV order (what write_csv writes, as numbers).
+/// Cost O(N × columns).
+std::vector<CsvColumn> csv_table(const Trajectory& traj);
+
 /// The same, with `extra` columns after the standard ones (e.g. a model's output expressions).
 /// @throws std::invalid_argument when a column does not have N values; std::runtime_error as
 /// above.

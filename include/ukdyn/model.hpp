@@ -4,6 +4,7 @@
 #pragma once
 
 #include <map>
+#include <memory>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -15,6 +16,11 @@
 #include "ukdyn/system.hpp"
 
 namespace ukdyn {
+
+class Controller;
+namespace mb {
+struct MultibodyModel;
+}
 
 /// An error in a model file: what, where (file:line:column, 1-based) and a hint. what() reads
 /// "FILE:LINE:COLUMN: error: MESSAGE (hint: HINT)".
@@ -46,6 +52,13 @@ struct Model {
   /// evaluate_output_expressions().
   std::vector<std::string> output_names;
   expr::Program output_program;
+  /// `control:` — the controller (with its nominal model) that run_model() applies to the
+  /// plant `system`; null when the model has no control section (control.hpp).
+  std::shared_ptr<const Controller> controller;
+  /// `bodies:`, `joints:`, `forces:` — the multibody description that `system` was built from
+  /// (its poses and joint reactions are reported); null for a model in generalized coordinates
+  /// (multibody.hpp).
+  std::shared_ptr<const mb::MultibodyModel> multibody;
 };
 
 /// Reads a model from YAML text. `file` names it in errors; `overrides` replace parameter

@@ -34,6 +34,7 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
+#include "ukdyn/io.hpp"
 #include "ukdyn/simulate.hpp"
 #include "ukdyn/system.hpp"
 #include "ukdyn/types.hpp"
@@ -169,7 +170,7 @@ using WrenchFn = std::function<Wrench(const VectorXd& q, const VectorXd& qd, dou
 /// The kinds of force element.
 enum class ForceType {
   kSpringDamper,   ///< between two body points: F = (k (l − l0) + c l') along the line
-  kTorsionSpring,  ///< planar: torque −k (dtheta − theta0) − c dtheta' between two bodies
+  kTorsionSpring,  ///< torque −k (dtheta − theta0) − c dtheta' between two bodies (see torsion_spring)
   kApplied,        ///< an applied wrench (WrenchFn) on one body at one point
 };
 
@@ -186,7 +187,12 @@ struct Force {
 /// Spring-damper between body points (l0 = rest length). Potential ½ k (l − l0)².
 Force spring_damper(std::string name, BodyId a, const Vector3d& pa, BodyId b, const Vector3d& pb,
                     double k, double c, double rest_length);
-/// Planar torsional spring-damper: torque −k (theta_b − theta_a − theta0) − c (…)' on b.
+/// Torsional spring-damper between two planar bodies: torque −k (theta_b − theta_a − theta0) −
+/// c (theta_b' − theta_a') on b (and its opposite on a). Between two rigid bodies (or one and the
+/// ground): an isotropic rotational spring, torque −k theta n − c (omega_b − omega_a) on b with
+/// theta n the rotation vector of b relative to a (|theta| < pi; V = ½ k theta²); theta0 must be
+/// 0 (the rest orientation is the bodies' frames aligned). About a revolute joint's axis it is
+/// that joint's torsion spring. Checked by build().
 Force torsion_spring(std::string name, BodyId a, BodyId b, double k, double c, double theta0);
 /// An applied wrench on `body`, the force acting at body point p.
 Force applied(std::string name, BodyId body, const Vector3d& p, WrenchFn fn);
@@ -325,5 +331,21 @@ double drive_effort(const MultibodyModel& mb, const VectorXd& q, const VectorXd&
 /// @throws std::runtime_error when the file cannot be written, std::invalid_argument when tr
 /// does not belong to mb (size).
 void write_poses_csv(const MultibodyModel& mb, const Trajectory& tr, const std::string& path);
+
+/// The multibody columns of a model run's CSV (run.hpp), one value per sample of tr, in order:
+///  - `<b>.x, <b>.y, <b>.z, <b>.qw, <b>.qx, <b>.qy, <b>.qz` for every body (its pose, as
+///    write_poses_csv);
+///  - `<b>.kinetic_energy` for every body (kinetic_energy);
+///  - per joint, its ideal reaction on its child (joint_reaction from the sample's lambda,
+///    world frame, reduced to the joint point): `reaction.<j>.fx, .fy, .tz` for a planar joint,
+///    `reaction.<j>.fx, .fy, .fz, .tx, .ty, .tz` for a spatial one (rolling contacts: at the
+///    centre); with friction the same components of the friction force as
+///    `reaction.<j>.friction_fx, …` (an evaluation per sample; NaN where it fails); with a
+///    drive its effort `drive.<j>` (drive_effort); a gear: its multiplier
+///    `reaction.<j>.torque` (the torque along joint a's angle or rate).
+/// @throws std::invalid_argument when tr does not belong to mb (sizes).
+/// Cost O(N × (bodies + joints × joint rows × joint columns)), plus one forward_dynamics per
+/// sample when a joint has friction.
+std::vector<CsvColumn> report_csv_columns(const MultibodyModel& mb, const Trajectory& tr);
 
 }  // namespace ukdyn::mb

@@ -1,0 +1,184 @@
+// ukdyn.Model: model files and the built-in examples (model.hpp), run as `ukdyn run` runs them
+// (run.hpp), and check_model.
+#include <filesystem>
+#include <map>
+
+#include "common.hpp"
+#include "embedded.hpp"  // app/embedded.hpp: the example models, embedded at build time
+
+namespace ukdyn::python {
+namespace {
+
+using Overrides = std::map<std::string, double>;
+
+std::string example_list() {
+  std::string names;
+  for (const auto& f : cli::example_models()) names += (names.empty() ? "" : ", ") + std::string(f.name);
+  return names;
+}
+
+const cli::EmbeddedFile* find_example(const std::string& name) {
+  for (const auto& f : cli::example_models()) {
+    if (name == f.name) return &f;
+  }
+  return nullptr;
+}
+
+// the model run with settings; q0 / qd0 replace the initial state when given
+py::tuple run(const Model& model, const py::dict& settings, py::object q0, py::object qd0) {
+  SimulationOptions o = model.options;
+  apply_simulation_options(o, settings, "Model.simulate");
+  const Model* m = &model;
+  std::optional<Model> changed;
+  if (!q0.is_none() || !qd0.is_none()) {
+    changed.emplace(model);
+    if (!q0.is_none()) read_vector(q0, model.system.dofs(), "Model.simulate", "q0", changed->q0);
+    if (!qd0.is_none()) read_vector(qd0, model.system.dofs(), "Model.simulate", "qd0", changed->qd0);
+    m = &*changed;
+  }
+  ModelRun r;
+  {
+    py::gil_scoped_release release;  // the run is C++ only (model files hold no Python code)
+    r = run_model(*m, o);
+  }
+  return run_tuple(std::move(r));
+}
+
+py::dict check(const Model& model) {
+  CheckReport r;
+  {
+    py::gil_scoped_release release;
+    r = check_model(model);
+  }
+  py::dict d;
+  d["coordinates"] = r.coordinates;
+  d["constraint_rows"] = r.constraint_rows;
+  d["rank"] = r.rank;
+  d["degrees_of_freedom"] = r.degrees_of_freedom;
+  d["redundant"] = r.redundant;
+  d["initial_violations"] = r.initial_violations;
+  d["mass_positive_definite"] = r.mass_positive_definite;
+  d["problems"] = r.problems;
+  d["ok"] = r.ok();
+  return d;
+}
+
+}  // namespace
+
+void bind_model(py::module_& m) {
+  py::class_<Model, std::shared_ptr<Model>>(m, "Model", R"doc(
+A model read from a model file, an example or SymPy expressions (the C++ ukdyn::Model): the
+system, its parameters, initial state and simulation settings, output expressions and, when
+the file has a `control:` section, its controller. Immutable; load one with ukdyn.load(),
+ukdyn.parse() or ukdyn.from_sympy(). Model.simulate() runs it exactly as `ukdyn run` does.
+)doc")
+      .def_readonly("name", &Model::name, "The model's `name:` (the file name otherwise).")
+      .def_readonly("file", &Model::file, "Where it came from (a path, examples/models/NAME.yaml, "
+                                          "or the name given to parse()).")
+      .def_property_readonly(
+          "parameters", [](const Model& md) { return py::dict(py::cast(md.parameters)); },
+          "The `parameters:` after overrides, as a new dict name -> value.")
+      .def_property_readonly("coordinates",
+                             [](const Model& md) { return md.system.coordinate_names(); },
+                             "The coordinate names (n).")
+      .def_property_readonly(
+          "constraints",
+          [](const Model& md) {
+            py::list out;
+            for (const Constraint& c : md.system.constraints()) out.append(c.name());
+            return out;
+          },
+          "The constraint names, including the stick constraints of Coulomb friction.")
+      .def_property_readonly("q0", [](const Model& md) { return copy_vector(md.q0); },
+                             "The initial positions of `initial: q:` (n; a copy, not projected).")
+      .def_property_readonly("qd0", [](const Model& md) { return copy_vector(md.qd0); },
+                             "The initial velocities of `initial: q_dot:` (n; a copy).")
+      .def_readonly("project_initial", &Model::project_initial, "`initial: project:`.")
+      .def_property_readonly(
+          "options", [](const Model& md) { return simulation_options_dict(md.options); },
+          "The `simulate:` and `output:` settings as a dict (the keys simulate() accepts).")
+      .def_readonly("output_names", &Model::output_names,
+                    "The names of the `output: expressions:` (the last CSV columns).")
+      .def_property_readonly(
+          "system", [](const Model& md) { return SystemHandle{md.system, nullptr}; },
+          "The System (the plant, without its controller).")
+      .def_property_readonly(
+          "controller",
+          [](const Model& md) -> py::object {
+            if (!md.controller) return py::none();
+            return py::cast(ControllerHandle{md.controller, nullptr});
+          },
+          "The Controller of the `control:` section, or None.")
+      .def_property_readonly("is_multibody", [](const Model& md) { return bool(md.multibody); },
+                             "True for a model written with bodies:/joints:/forces:.")
+      .def("_run", &run, py::arg("settings"), py::arg("q0") = py::none(),
+           py::arg("qd0") = py::none(),
+           "Runs the model (run_model, run.hpp) with the GIL released; returns (names, columns, "
+           "statistics, control statistics or None). Use Model.simulate().")
+      .def("check", &check, R"doc(What `ukdyn check` reports (check_model, model.hpp), as a dict:
+coordinates, constraint_rows, rank, degrees_of_freedom, redundant (constraint names),
+initial_violations, mass_positive_definite, problems, ok.)doc")
+      .def(
+          "solver",
+          [](const Model& md, py::kwargs kw) {
+            return py::cast(SystemHandle{md.system, nullptr}).attr("solver")(**kw);
+          },
+          "A Solver of the model's system (see System.solver()).")
+      .def("__repr__", [](const Model& md) {
+        return "<ukdyn.Model '" + md.name + "' n=" + std::to_string(md.system.dofs()) +
+               " constraints=" + std::to_string(md.system.constraint_count()) +
+               (md.controller ? " controlled" : "") + ">";
+      });
+
+  m.def(
+      "_load_file",
+      [](const std::string& path, const Overrides& overrides) {
+        py::gil_scoped_release release;
+        return std::make_shared<Model>(load_model(path, overrides));
+      },
+      py::arg("path"), py::arg("overrides"), "load_model(path, overrides). Raises ModelError.");
+  m.def(
+      "_parse",
+      [](const std::string& text, const std::string& file, const Overrides& overrides) {
+        py::gil_scoped_release release;
+        return std::make_shared<Model>(parse_model(text, file, overrides));
+      },
+      py::arg("text"), py::arg("file"), py::arg("overrides"),
+      "parse_model(text, file, overrides). Raises ModelError.");
+  m.def(
+      "_load_example",
+      [](const std::string& name, const Overrides& overrides) {
+        const cli::EmbeddedFile* f = find_example(name);
+        if (!f) {
+          throw std::invalid_argument("no model file or example called '" + name +
+                                      "'; the examples are " + example_list());
+        }
+        py::gil_scoped_release release;
+        return std::make_shared<Model>(
+            parse_model(f->text, "examples/models/" + name + ".yaml", overrides));
+      },
+      py::arg("name"), py::arg("overrides"),
+      "The built-in example `name`. Raises ValueError listing the examples for another name.");
+  m.def(
+      "examples",
+      []() {
+        std::vector<std::string> names;
+        for (const auto& f : cli::example_models()) names.emplace_back(f.name);
+        return names;
+      },
+      "The names of the built-in example models (examples/models/*.yaml), sorted.");
+  m.def(
+      "example_text",
+      [](const std::string& name) {
+        const cli::EmbeddedFile* f = find_example(name);
+        if (!f) {
+          throw std::invalid_argument("no example called '" + name + "'; the examples are " +
+                                      example_list());
+        }
+        return std::string(f->text);
+      },
+      py::arg("name"),
+      "The YAML text of a built-in example. Raises ValueError listing the examples.");
+}
+
+}  // namespace ukdyn::python

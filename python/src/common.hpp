@@ -1,0 +1,105 @@
+// Shared declarations of the Python module's binding files (python/src/*.cpp): conversions
+// between NumPy and Eigen, simulation settings from keyword arguments, and the handles that the
+// bound classes wrap. The module only translates; no physics lives here (STYLE.md).
+#pragma once
+
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+
+#include <ukdyn/ukdyn.hpp>
+#include <ukdyn/model.hpp>
+#include <ukdyn/run.hpp>
+
+namespace ukdyn::python {
+namespace py = pybind11;
+
+// --- NumPy <-> Eigen -----------------------------------------------------------------------------
+
+/// A 1-D NumPy array that takes over `v` (no copy: the array owns the vector through a capsule).
+py::array_t<double> take(std::vector<double>&& v);
+/// A fresh 1-D NumPy array holding a copy of v.
+py::array_t<double> copy_vector(const Eigen::Ref<const VectorXd>& v);
+/// A fresh 2-D NumPy array (Fortran order, like Eigen) holding a copy of M.
+py::array_t<double> copy_matrix(const Eigen::Ref<const MatrixXd>& M);
+/// A read-only NumPy view of a workspace buffer (no copy), kept alive by `owner`. The buffer
+/// must not be reallocated while the view lives (workspace buffers are sized once).
+py::array view_vector(const VectorXd& v, py::handle owner);
+/// The same for a matrix (Fortran order).
+py::array view_matrix(const MatrixXd& M, py::handle owner);
+
+/// Copies a 1-D sequence of n numbers into out (resized to n). @throws std::invalid_argument
+/// naming `who` and `what` with the expected and the actual size.
+void read_vector(py::handle obj, Index n, const char* who, const char* what, VectorXd& out);
+/// Copies an n-entry vector into `out` (which has n entries) without allocating when obj is a
+/// contiguous float64 array. @throws std::invalid_argument as read_vector.
+void read_into(py::handle obj, const char* who, const char* what, Eigen::Ref<VectorXd> out);
+/// Copies a rows × cols matrix into `out` (rows × cols). @throws std::invalid_argument.
+void read_matrix_into(py::handle obj, const char* who, const char* what, Eigen::Ref<MatrixXd> out);
+/// A matrix of any size from a 2-D sequence. @throws std::invalid_argument.
+MatrixXd read_matrix(py::handle obj, const char* who, const char* what);
+
+// --- settings and reports --------------------------------------------------------------------------
+
+/// Applies keyword settings (t_start, t_end, integrator, step, rtol, atol, max_step, max_steps,
+/// output_every, output_at, breakpoints, drift, baumgarte_alpha, baumgarte_beta,
+/// project_initial, initial_tolerance, and the solver's rank_threshold, consistency_tolerance,
+/// engine, algorithm) to `o`. @throws std::invalid_argument naming an unknown key or a bad value.
+void apply_simulation_options(SimulationOptions& o, const py::dict& settings, const char* who);
+/// Applies solver settings (rank_threshold, sparse_rank_threshold, consistency_tolerance,
+/// symmetry_tolerance, compute_residuals, engine, algorithm, sparse_threshold) to `o`, removing
+/// the keys it used from `settings`.
+void apply_solver_options(SolverOptions& o, py::dict& settings);
+/// The settings as a dict (the keys apply_simulation_options understands).
+py::dict simulation_options_dict(const SimulationOptions& o);
+/// The statistics of a run as a dict.
+py::dict statistics_dict(const RunStatistics& s);
+
+/// A model run as the tuple (names, columns, statistics, control statistics or None) that the
+/// Python Result class wraps; the columns are NumPy arrays taking over run.columns().
+py::tuple run_tuple(ModelRun&& run);
+
+// --- handles -----------------------------------------------------------------------------------------
+
+/// Where the Python callables of a System report a Python exception: the first one raised
+/// during an evaluation is kept here (the callable writes NaN so that the evaluation stops with
+/// kNonFiniteInput), and the front end raises it again once the C++ call has returned.
+struct CallbackErrors {
+  std::optional<py::error_already_set> error;  ///< the first exception, if any (GIL to touch)
+  /// Raises the stored exception (and forgets it). Needs the GIL.
+  void raise_if_any();
+};
+
+/// A System as Python sees it: the description, and the exception slot of its Python callables
+/// (null for systems built in C++: model files).
+struct SystemHandle {
+  System system;                            ///< the description
+  std::shared_ptr<CallbackErrors> errors;   ///< null unless built from Python callables
+  /// Raises a pending exception of the callables, if any. Needs the GIL.
+  void raise_pending() const {
+    if (errors) errors->raise_if_any();
+  }
+};
+
+/// A Controller as Python sees it (immutable, shared with the model it came from).
+struct ControllerHandle {
+  std::shared_ptr<const Controller> controller;  ///< not null
+  std::shared_ptr<CallbackErrors> errors;        ///< null unless it calls Python callables
+  /// Raises a pending exception of the callables, if any. Needs the GIL.
+  void raise_pending() const {
+    if (errors) errors->raise_if_any();
+  }
+};
+
+// --- the binding files ----------------------------------------------------------------------------
+void bind_model(py::module_& m);      // bind_model.cpp
+void bind_solver(py::module_& m);     // bind_solver.cpp
+void bind_control(py::module_& m);    // bind_control.cpp
+void bind_callables(py::module_& m);  // bind_callables.cpp
+
+}  // namespace ukdyn::python

@@ -1,0 +1,291 @@
+// Conversions between NumPy and Eigen, simulation settings from keyword arguments, and run
+// reports as Python objects (common.hpp).
+#include <cmath>
+#include <cstring>
+#include <string>
+
+#include "common.hpp"
+
+namespace ukdyn::python {
+namespace {
+
+std::string size_message(const char* who, const char* what, const std::string& expected,
+                         const std::string& actual) {
+  return std::string(who) + ": " + what + " must have " + expected + " (got " + actual + ")";
+}
+
+std::string shape_text(const py::array& a) {
+  std::string s = "shape (";
+  for (py::ssize_t k = 0; k < a.ndim(); ++k) s += (k ? ", " : "") + std::to_string(a.shape(k));
+  return s + (a.ndim() == 1 ? ",)" : ")");
+}
+
+// obj as a float64 array (a view when it already is one; converted otherwise)
+py::array_t<double> as_array(py::handle obj, const char* who, const char* what) {
+  auto a = py::array_t<double>::ensure(obj);
+  if (!a) throw std::invalid_argument(std::string(who) + ": " + what + " must be numbers");
+  return a;
+}
+
+}  // namespace
+
+void CallbackErrors::raise_if_any() {
+  if (!error) return;
+  py::error_already_set e = std::move(*error);
+  error.reset();
+  throw e;
+}
+
+py::array_t<double> take(std::vector<double>&& v) {
+  auto* owned = new std::vector<double>(std::move(v));
+  py::capsule owner(owned, [](void* p) { delete static_cast<std::vector<double>*>(p); });
+  return py::array_t<double>({py::ssize_t(owned->size())}, {py::ssize_t(sizeof(double))},
+                             owned->data(), owner);
+}
+
+py::array_t<double> copy_vector(const Eigen::Ref<const VectorXd>& v) {
+  py::array_t<double> a(v.size());
+  if (v.size() > 0) std::memcpy(a.mutable_data(), v.data(), sizeof(double) * std::size_t(v.size()));
+  return a;
+}
+
+py::array_t<double> copy_matrix(const Eigen::Ref<const MatrixXd>& M) {
+  py::array_t<double, py::array::f_style> a({py::ssize_t(M.rows()), py::ssize_t(M.cols())});
+  Eigen::Map<MatrixXd>(a.mutable_data(), M.rows(), M.cols()) = M;
+  return a;
+}
+
+py::array view_vector(const VectorXd& v, py::handle owner) {
+  py::array a(py::dtype::of<double>(), {py::ssize_t(v.size())}, {py::ssize_t(sizeof(double))},
+              v.data(), owner);
+  py::detail::array_proxy(a.ptr())->flags &= ~py::detail::npy_api::NPY_ARRAY_WRITEABLE_;
+  return a;
+}
+
+py::array view_matrix(const MatrixXd& M, py::handle owner) {
+  py::array a(py::dtype::of<double>(), {py::ssize_t(M.rows()), py::ssize_t(M.cols())},
+              {py::ssize_t(sizeof(double)), py::ssize_t(sizeof(double) * M.rows())}, M.data(),
+              owner);
+  py::detail::array_proxy(a.ptr())->flags &= ~py::detail::npy_api::NPY_ARRAY_WRITEABLE_;
+  return a;
+}
+
+void read_into(py::handle obj, const char* who, const char* what, Eigen::Ref<VectorXd> out) {
+  const Index n = out.size();
+  // fast path: a contiguous float64 array of the right size, copied without any allocation
+  if (py::isinstance<py::array_t<double, py::array::c_style>>(obj)) {
+    auto a = py::reinterpret_borrow<py::array_t<double, py::array::c_style>>(obj);
+    if (a.ndim() == 1 && a.shape(0) == n) {
+      if (n > 0) std::memcpy(out.data(), a.data(), sizeof(double) * std::size_t(n));
+      return;
+    }
+  }
+  py::array_t<double> a = as_array(obj, who, what);
+  if (a.ndim() > 1 || a.size() != n) {
+    throw std::invalid_argument(size_message(who, what, std::to_string(n) + " entries",
+                                             a.ndim() > 1 ? shape_text(a)
+                                                          : std::to_string(a.size())));
+  }
+  auto r = a.unchecked();
+  if (a.ndim() == 0) {
+    out[0] = *a.data();
+  } else {
+    for (Index i = 0; i < n; ++i) out[i] = r(i);
+  }
+}
+
+void read_vector(py::handle obj, Index n, const char* who, const char* what, VectorXd& out) {
+  out.resize(n);
+  read_into(obj, who, what, out);
+}
+
+void read_matrix_into(py::handle obj, const char* who, const char* what, Eigen::Ref<MatrixXd> out) {
+  py::array_t<double> a = as_array(obj, who, what);
+  const Index rows = out.rows(), cols = out.cols();
+  // a single row or column may be given as a 1-D array
+  const bool flat_ok = a.ndim() == 1 && (rows == 1 || cols == 1) && a.size() == rows * cols;
+  if (!(a.ndim() == 2 && a.shape(0) == rows && a.shape(1) == cols) && !flat_ok) {
+    throw std::invalid_argument(size_message(
+        who, what, "shape (" + std::to_string(rows) + ", " + std::to_string(cols) + ")",
+        shape_text(a)));
+  }
+  if (flat_ok) {
+    auto r = a.unchecked<1>();
+    // out may be a block with an outer stride (rows of a larger A): index, never data()[i]
+    for (Index i = 0; i < rows * cols; ++i) {
+      if (rows == 1) out(0, i) = r(i);
+      else out(i, 0) = r(i);
+    }
+    return;
+  }
+  auto r = a.unchecked<2>();
+  for (Index i = 0; i < rows; ++i)
+    for (Index j = 0; j < cols; ++j) out(i, j) = r(i, j);
+}
+
+MatrixXd read_matrix(py::handle obj, const char* who, const char* what) {
+  py::array_t<double> a = as_array(obj, who, what);
+  if (a.ndim() != 2) {
+    throw std::invalid_argument(size_message(who, what, "two dimensions", shape_text(a)));
+  }
+  MatrixXd M(a.shape(0), a.shape(1));
+  read_matrix_into(a, who, what, M);
+  return M;
+}
+
+// --- settings ----------------------------------------------------------------------------------
+
+namespace {
+
+double number(py::handle v, const std::string& who, const char* key) {
+  try {
+    return v.cast<double>();
+  } catch (const py::cast_error&) {
+    throw std::invalid_argument(who + ": " + key + " must be a number (got " +
+                                std::string(py::str(py::type::of(v).attr("__name__"))) + ")");
+  }
+}
+
+std::vector<double> numbers(py::handle v, const std::string& who, const char* key) {
+  std::vector<double> out;
+  if (py::isinstance<py::float_>(v) || py::isinstance<py::int_>(v)) return {number(v, who, key)};
+  for (py::handle x : py::iter(v)) out.push_back(number(x, who, key));
+  return out;
+}
+
+std::string text(py::handle v, const std::string& who, const char* key) {
+  if (!py::isinstance<py::str>(v)) throw std::invalid_argument(who + ": " + key + " must be a string");
+  return v.cast<std::string>();
+}
+
+Engine engine_from(const std::string& s, const std::string& who) {
+  if (s == "auto") return Engine::kAuto;
+  if (s == "dense") return Engine::kDense;
+  if (s == "sparse") return Engine::kSparse;
+  throw std::invalid_argument(who + ": engine '" + s + "' is not one of auto, dense, sparse");
+}
+
+Algorithm algorithm_from(const std::string& s, const std::string& who) {
+  if (s == "default") return Algorithm::kDefault;
+  if (s == "textbook") return Algorithm::kTextbook;
+  throw std::invalid_argument(who + ": algorithm '" + s + "' is not one of default, textbook");
+}
+
+}  // namespace
+
+void apply_solver_options(SolverOptions& o, py::dict& settings) {
+  const std::string who = "solver options";
+  py::list used;
+  for (auto [k, v] : settings) {
+    const std::string key = py::str(k);
+    if (key == "rank_threshold") o.rank_threshold = number(v, who, "rank_threshold");
+    else if (key == "sparse_rank_threshold") o.sparse_rank_threshold = number(v, who, "sparse_rank_threshold");
+    else if (key == "consistency_tolerance") o.consistency_tolerance = number(v, who, "consistency_tolerance");
+    else if (key == "symmetry_tolerance") o.symmetry_tolerance = number(v, who, "symmetry_tolerance");
+    else if (key == "compute_residuals") o.compute_residuals = v.cast<bool>();
+    else if (key == "sparse_threshold") o.sparse_threshold = v.cast<Index>();
+    else if (key == "engine") o.engine = engine_from(text(v, who, "engine"), who);
+    else if (key == "algorithm") o.algorithm = algorithm_from(text(v, who, "algorithm"), who);
+    else continue;
+    used.append(k);
+  }
+  for (py::handle k : used) PyDict_DelItem(settings.ptr(), k.ptr());
+}
+
+void apply_simulation_options(SimulationOptions& o, const py::dict& given, const char* who_c) {
+  const std::string who = who_c;
+  py::dict settings = given.attr("copy")();
+  apply_solver_options(o.solver, settings);
+  for (auto [k, v] : settings) {
+    const std::string key = py::str(k);
+    if (v.is_none()) continue;  // None: keep the model's value
+    if (key == "t_start") o.t_start = number(v, who, "t_start");
+    else if (key == "t_end") o.t_end = number(v, who, "t_end");
+    else if (key == "integrator") o.integrator = integrator_from_string(text(v, who, "integrator"));
+    else if (key == "step") o.step = number(v, who, "step");
+    else if (key == "rtol") o.rtol = number(v, who, "rtol");
+    else if (key == "atol") o.atol = number(v, who, "atol");
+    else if (key == "max_step") o.max_step = number(v, who, "max_step");
+    else if (key == "max_steps") o.max_steps = v.cast<long>();
+    else if (key == "output_every") o.output_every = number(v, who, "output_every");
+    else if (key == "output_at") o.output_at = numbers(v, who, "output_at");
+    else if (key == "breakpoints") o.breakpoints = numbers(v, who, "breakpoints");
+    else if (key == "drift") o.drift = drift_from_string(text(v, who, "drift"));
+    else if (key == "baumgarte_alpha") o.baumgarte_alpha = number(v, who, "baumgarte_alpha");
+    else if (key == "baumgarte_beta") o.baumgarte_beta = number(v, who, "baumgarte_beta");
+    else if (key == "project_initial") o.project_initial = v.cast<bool>();
+    else if (key == "initial_tolerance") o.initial_tolerance = number(v, who, "initial_tolerance");
+    else if (key == "projection_tolerance") o.projection.tolerance = number(v, who, "projection_tolerance");
+    else if (key == "projection_iterations") o.projection.max_iterations = v.cast<int>();
+    else {
+      throw std::invalid_argument(
+          who + ": unknown setting '" + key +
+          "' (known: t_start, t_end, integrator, step, rtol, atol, max_step, max_steps, "
+          "output_every, output_at, breakpoints, drift, baumgarte_alpha, baumgarte_beta, "
+          "project_initial, initial_tolerance, projection_tolerance, projection_iterations, "
+          "rank_threshold, sparse_rank_threshold, consistency_tolerance, symmetry_tolerance, "
+          "compute_residuals, sparse_threshold, engine, algorithm)");
+    }
+  }
+}
+
+py::dict simulation_options_dict(const SimulationOptions& o) {
+  py::dict d;
+  d["t_start"] = o.t_start;
+  d["t_end"] = o.t_end;
+  d["integrator"] = to_string(o.integrator);
+  d["step"] = o.step;
+  d["rtol"] = o.rtol;
+  d["atol"] = o.atol;
+  d["max_step"] = o.max_step;
+  d["max_steps"] = o.max_steps;
+  d["output_every"] = o.output_every;
+  d["output_at"] = o.output_at;
+  d["breakpoints"] = o.breakpoints;
+  d["drift"] = to_string(o.drift);
+  d["baumgarte_alpha"] = o.baumgarte_alpha;
+  d["baumgarte_beta"] = o.baumgarte_beta;
+  d["project_initial"] = o.project_initial;
+  d["initial_tolerance"] = o.initial_tolerance;
+  return d;
+}
+
+py::dict statistics_dict(const RunStatistics& s) {
+  py::dict d;
+  d["steps"] = s.steps;
+  d["rejected_steps"] = s.rejected_steps;
+  d["evaluations"] = s.evaluations;
+  d["projections"] = s.projections;
+  d["events"] = s.events;
+  d["wall_time"] = s.wall_time;
+  d["max_position_violation"] = s.max_position_violation;
+  d["max_velocity_violation"] = s.max_velocity_violation;
+  d["energy_drift"] = s.energy_drift;
+  d["t_reached"] = s.t_reached;
+  d["status"] = to_string(s.status);
+  d["message"] = s.message;
+  return d;
+}
+
+py::tuple run_tuple(ModelRun&& run) {
+  std::vector<CsvColumn> columns = run.columns();
+  py::list names, values;
+  for (CsvColumn& c : columns) {
+    names.append(c.name);
+    values.append(take(std::move(c.values)));
+  }
+  py::object control = py::none();
+  if (run.controlled) {
+    py::dict c;
+    c["evaluations"] = run.control.evaluations;
+    c["not_met"] = run.control.not_met;
+    c["max_residual"] = run.control.max_residual;
+    c["first_not_met"] = run.control.first_not_met;
+    c["not_met_message"] = run.control.not_met_message;
+    c["max_kappa"] = run.control.max_kappa;
+    control = c;
+  }
+  return py::make_tuple(names, values, statistics_dict(run.trajectory.stats), control);
+}
+
+}  // namespace ukdyn::python

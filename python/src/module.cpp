@@ -1,0 +1,42 @@
+// The Python module ukdyn._ukdyn: exception translation and the module's entry point. The
+// classes and functions are bound in bind_*.cpp; the package ukdyn (python/ukdyn/) wraps them.
+#include "common.hpp"
+
+namespace ukdyn::python {
+namespace {
+
+// the exception classes of ukdyn/errors.py (imported when first needed)
+py::object error_class(const char* name) {
+  return py::module_::import("ukdyn.errors").attr(name);
+}
+
+// C++ exceptions -> Python: ModelError -> ukdyn.ModelError (file, line, column, message, hint),
+// SolveError -> ukdyn.SolveError (status); the rest follow pybind11's defaults
+// (std::invalid_argument -> ValueError, other std::exception -> RuntimeError)
+void translate(std::exception_ptr p) {
+  try {
+    if (p) std::rethrow_exception(p);
+  } catch (const ModelError& e) {
+    py::object cls = error_class("ModelError");
+    py::object err = cls(e.what(), e.file(), e.line(), e.column(), e.message(), e.hint());
+    PyErr_SetObject(cls.ptr(), err.ptr());
+  } catch (const SolveError& e) {
+    py::object cls = error_class("SolveError");
+    py::object err = cls(e.what(), to_string(e.status()));
+    PyErr_SetObject(cls.ptr(), err.ptr());
+  }
+}
+
+}  // namespace
+}  // namespace ukdyn::python
+
+PYBIND11_MODULE(_ukdyn, m) {
+  namespace up = ukdyn::python;
+  m.doc() =
+      "ukdyn's compiled core (pybind11). Use the package `ukdyn`, which wraps it; docs/python.md.";
+  pybind11::register_exception_translator(&up::translate);
+  up::bind_model(m);
+  up::bind_solver(m);
+  up::bind_control(m);
+  up::bind_callables(m);
+}

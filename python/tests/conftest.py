@@ -1,0 +1,40 @@
+"""Shared fixtures of the Python tests (run by CTest as python.pytest; see python/CMakeLists.txt).
+
+Environment (set by CTest): PYTHONPATH (the built package), UKDYN_CLI (the ukdyn command),
+UKDYN_EXAMPLES_DIR (examples/models), UKDYN_TEST_OUTPUT (a scratch directory).
+"""
+
+import os
+import pathlib
+import shutil
+
+import pytest
+
+ROOT = pathlib.Path(__file__).resolve().parents[2]
+
+
+@pytest.fixture(scope="session")
+def examples_dir() -> pathlib.Path:
+    """examples/models of the source tree."""
+    return pathlib.Path(os.environ.get("UKDYN_EXAMPLES_DIR", ROOT / "examples" / "models"))
+
+
+@pytest.fixture(scope="session")
+def testdata_dir() -> pathlib.Path:
+    """app/testdata: the command's malformed and inconsistent models."""
+    return ROOT / "app" / "testdata"
+
+
+@pytest.fixture(scope="session")
+def cli() -> str:
+    """The ukdyn command (UKDYN_CLI, or build/app/ukdyn)."""
+    path = os.environ.get("UKDYN_CLI") or str(ROOT / "build" / "app" / "ukdyn")
+    if not os.access(path, os.X_OK):
+        pytest.skip(f"the ukdyn command is not built ({path})")
+    return path
+
+
+@pytest.fixture()
+def out_dir(tmp_path: pathlib.Path) -> pathlib.Path:
+    """A fresh scratch directory."""
+    return tmp_path

@@ -1,0 +1,159 @@
+"""Systems and controllers from Python callables (the slow path), exceptions from callables, and
+the GIL released during runs."""
+
+import math
+import threading
+import time
+
+import numpy as np
+import pytest
+
+import ukdyn
+
+G = 9.81
+
+
+def callable_pendulum(c=0.0):
+    def A(q, qd, t):
+        return [q]  # grad of (x^2 + y^2 - 1)/2
+
+    def b(q, qd, t):
+        return [-(qd @ qd)]
+
+    forces = [ukdyn.viscous(c)] if c else []
+    return ukdyn.from_callables(["x", "y"], M=np.eye(2), Q=lambda q, qd, t: [0.0, -G],
+                                V=lambda q, t: G * q[1],
+                                constraints=[ukdyn.constraint("rod", A, b)], nonideal=forces)
+
+
+def state(theta=0.6, theta_dot=1.5):
+    s, c = math.sin(theta), math.cos(theta)
+    return np.array([s, -c]), theta_dot * np.array([c, s])
+
+
+def test_callable_pendulum_solves_like_the_model_file():
+    q, qd = state()
+    a = callable_pendulum().solver().solve(q, qd)
+    b = ukdyn.load("pendulum").solver().solve(q, qd)
+    for name in ["qdd", "Qc_ideal", "lambda_"]:
+        np.testing.assert_allclose(getattr(a, name), getattr(b, name), rtol=0, atol=1e-13)
+
+
+def test_viscous_pivot_friction_gives_the_readme_demo_numbers():
+    """pendulum_demo: theta'' = -g sin(theta) - c theta' (m = L = 1), Qc_nonideal = -c q'."""
+    q, qd = state()
+    for system in (callable_pendulum(c=0.2),
+                   ukdyn.from_callables(["x", "y"], M=lambda q, t: np.eye(2),
+                                        Q=lambda q, qd, t: np.array([0.0, -G]),
+                                        constraints=[ukdyn.constraint(
+                                            "rod", lambda q, qd, t: q, lambda q, qd, t: -(qd @ qd))],
+                                        nonideal=[ukdyn.nonideal("pivot", lambda q, qd, t: -0.2 * qd)])):
+        sol = system.solver().solve(q, qd)
+        theta_ddot = sol.qdd @ np.array([math.cos(0.6), math.sin(0.6)])
+        assert theta_ddot == pytest.approx(-G * math.sin(0.6) - 0.2 * 1.5, abs=1e-12)
+        assert theta_ddot == pytest.approx(-5.839142664005, abs=1e-12)
+        np.testing.assert_allclose(sol.Qc_nonideal, [-0.247600684473, -0.169392742019], atol=1e-12)
+        np.testing.assert_allclose(sol.qdd, [-6.089697966281, -1.440022822764], atol=1e-12)
+
+
+def test_readme_incline_with_coulomb_friction():
+    m, alpha, mu = 2.0, 0.5, 0.3
+    system = ukdyn.from_callables(
+        ["x", "y"], M=m * np.eye(2), Q=lambda q, qd, t: [0.0, -m * G],
+        constraints=[ukdyn.constraint("plane", lambda q, qd, t: [math.tan(alpha), 1.0],
+                                      lambda q, qd, t: [0.0])],
+        nonideal=[ukdyn.coulomb("plane", mu)])
+    down = np.array([math.cos(alpha), -math.sin(alpha)])
+    sol = system.solver().solve([0.0, 0.0], down)
+    assert sol.qdd @ down == pytest.approx(G * (math.sin(alpha) - mu * math.cos(alpha)), abs=1e-12)
+    assert sol.qdd @ down == pytest.approx(2.120439, abs=1e-6)
+
+
+def test_callable_pendulum_period_by_simulation():
+    """Released horizontally, back at (1, 0) after 4 sqrt(L/g) K(1/2) = 2.367841947576 s."""
+    T = 2.367841947576
+    r = ukdyn.simulate(callable_pendulum(), [1.0, 0.0], [0.0, 0.0], t_end=T, rtol=1e-11,
+                       atol=1e-13, drift="none", output_every=0.1)
+    assert r.ok and r.t[-1] == pytest.approx(T, abs=1e-12)
+    assert r.x[-1] == pytest.approx(1.0, abs=1e-6)
+    assert r.y[-1] == pytest.approx(0.0, abs=1e-6)
+    np.testing.assert_allclose(r.energy, 0.0, rtol=0, atol=1e-7)
+    assert r.names[:3] == ["t", "x", "y"]
+
+
+def test_exception_in_a_callable_is_raised_again_unchanged():
+    def Q(q, qd, t):
+        if t > 0.05:
+            raise ZeroDivisionError("Q failed on purpose")
+        return [0.0, -G]
+
+    system = ukdyn.from_callables(["x", "y"], M=np.eye(2), Q=Q)
+    with pytest.raises(ZeroDivisionError, match="on purpose"):
+        system.solver().solve([0.0, 0.0], [0.0, 0.0], t=0.1)
+    with pytest.raises(ZeroDivisionError, match="on purpose"):
+        ukdyn.simulate(system, [0.0, 0.0], [0.0, 0.0], t_end=0.2)
+    # the system is usable again afterwards
+    assert system.solver().solve([0.0, 0.0], [0.0, 0.0], t=0.0).ok
+
+
+def test_wrong_shape_from_a_callable_is_a_value_error():
+    system = ukdyn.from_callables(["x", "y"], M=lambda q, t: np.eye(3))
+    with pytest.raises(ValueError, match=r"M\(q, t\) must have shape \(2, 2\) \(got shape \(3, 3\)\)"):
+        system.solver().solve([0.0, 0.0], [0.0, 0.0])
+    with pytest.raises(ValueError, match="M must be 2 × 2"):
+        ukdyn.from_callables(["x", "y"], M=np.eye(3))
+    with pytest.raises(ValueError, match="named twice"):
+        ukdyn.from_callables(["x", "x"], M=np.eye(2))
+
+
+def test_the_gil_is_released_during_a_run():
+    model = ukdyn.load("pendulum")
+    done = threading.Event()
+    ticks = []
+
+    def run():  # about 10^6 evaluations, all in C++
+        model.simulate(t_end=2.0, integrator="rk4", step=1e-5, output_every=0.1)
+        done.set()
+
+    worker = threading.Thread(target=run)
+    start = time.perf_counter()
+    worker.start()
+    while not done.is_set():
+        ticks.append(time.perf_counter())
+        time.sleep(0.001)
+    worker.join()
+    elapsed = time.perf_counter() - start
+    # the main thread kept running during the C++ run (about one tick per millisecond); with the
+    # GIL held by the run it would tick once or twice
+    assert elapsed > 0.05, "the run was too short to tell"
+    assert len(ticks) >= 10
+
+
+def test_callable_controller_tracks_sin_t_with_the_prescribed_error_dynamics():
+    """A unit mass, x'' = u, required to follow sin t with e'' + 4 e' + 4 e = 0 written into
+    b_r; from x(0) = 1, x'(0) = 1: e = x - sin t = (1 + 2t) e^(-2t)."""
+    plant = ukdyn.from_callables(["x"], M=np.eye(1))
+
+    def b_r(q, qd, t):
+        e, e_dot = q[0] - math.sin(t), qd[0] - math.cos(t)
+        return [-math.sin(t) - 4 * e_dot - 4 * e]
+
+    ctrl = ukdyn.controller(plant, [ukdyn.constraint("track", lambda q, qd, t: [[1.0]], b_r)])
+    assert ctrl.row_names == ["track"] and ctrl.law == "gauss" and ctrl.fully_actuated
+    sol = ctrl.solver().compute([1.0], [1.0], 0.0)
+    assert sol.ok and sol.met == [True]
+    np.testing.assert_allclose(sol.Qc_control, [-4.0], rtol=0, atol=1e-14)  # -sin 0 - 0 - 4
+    r = ukdyn.simulate(plant, [1.0], [1.0], controller=ctrl, t_end=3.0, rtol=1e-11, atol=1e-13)
+    e = r.x - np.sin(r.t)
+    np.testing.assert_allclose(e, (1 + 2 * r.t) * np.exp(-2 * r.t), rtol=0, atol=1e-8)
+    assert "Qc_control.x" in r and r.control["not_met"] == 0
+
+
+def test_control_solver_of_a_model_file_controller():
+    m = ukdyn.load("control_duffing")
+    p = m.parameters
+    sol = m.controller.solver().compute([1.0], [0.0], 0.0)
+    # e = 1, e' = -1 at t = 0: x'' = -sin 0 - 4(-1) - 4(1) = 0, so Qc = m*0 - Q
+    Q = 1.0 - 1.0 + p["F"]
+    np.testing.assert_allclose(sol.Qc_control, [-Q], rtol=0, atol=1e-13)
+    assert sol.status == "ok" and sol.rank == 1

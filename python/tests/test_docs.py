@@ -1,0 +1,51 @@
+"""Docstrings on everything public, and stubs that name everything the compiled module has."""
+
+import ast
+import inspect
+import pathlib
+
+import ukdyn
+from ukdyn import _ukdyn
+
+STUB = pathlib.Path(ukdyn.__file__).with_name("_ukdyn.pyi")
+
+
+def public(obj):
+    return [n for n in dir(obj) if not n.startswith("_")]
+
+
+def test_every_public_symbol_has_a_docstring():
+    missing = []
+    for name in ukdyn.__all__:
+        obj = getattr(ukdyn, name)
+        if not (inspect.getdoc(obj) or "").strip():
+            missing.append(name)
+        if inspect.isclass(obj):
+            for member in public(obj):
+                attr = getattr(obj, member)
+                if callable(attr) or isinstance(attr, property):
+                    if not (inspect.getdoc(attr) or "").strip():
+                        missing.append(f"{name}.{member}")
+    assert not missing, f"no docstring: {missing}"
+
+
+def test_stubs_name_every_class_member_and_function_of_the_compiled_module():
+    tree = ast.parse(STUB.read_text())
+    stubbed = {}
+    for node in tree.body:
+        if isinstance(node, ast.ClassDef):
+            members = {n.name for n in node.body if isinstance(n, ast.FunctionDef)}
+            members |= {n.target.id for n in node.body if isinstance(n, ast.AnnAssign)}
+            stubbed[node.name] = members
+        elif isinstance(node, ast.FunctionDef):
+            stubbed[node.name] = None
+    for name in dir(_ukdyn):
+        if name.startswith("__"):
+            continue
+        obj = getattr(_ukdyn, name)
+        if inspect.isclass(obj):
+            assert name in stubbed, f"class {name} missing from the stub"
+            missing = set(public(obj)) - stubbed[name]
+            assert not missing, f"{name}: {missing} missing from the stub"
+        elif callable(obj):
+            assert name in stubbed, f"function {name} missing from the stub"

@@ -1,0 +1,118 @@
+"""ukdyn: the Udwadia–Kalaba equations of motion of constrained mechanical systems, in Python.
+
+The C++ library (README.md) behind a thin module (docs/python.md):
+
+* :func:`load` a model file or a built-in example, with parameter overrides
+  (``ukdyn.load("pendulum", L=2.0)``); :func:`parse` YAML text; :func:`from_sympy` a model from
+  SymPy expressions (translated to the model-file language: exact derivatives, evaluation in
+  C++); :func:`from_callables` a system from Python functions (slow, flexible);
+* :meth:`Model.simulate` / :func:`simulate` → :class:`Result` (the columns of trajectory.csv as
+  NumPy arrays, a pandas DataFrame, plots), bit-identical to ``ukdyn run``;
+* :meth:`Model.solver` / :meth:`System.solver` → :class:`Solver`, one evaluation at a time
+  (``solve(q, q_dot, t)`` → q'', forces, multipliers, rank, residuals);
+* :attr:`Model.controller` / :func:`controller` → :class:`Controller`, exact tracking control,
+  ``controller.solver().compute(q, q_dot, t)``.
+
+Errors: :class:`ModelError`, :class:`SolveError`, ValueError, RuntimeError (:mod:`ukdyn.errors`).
+"""
+
+from __future__ import annotations
+
+import os
+from typing import Any, Optional
+
+from . import _ukdyn
+from ._ukdyn import (ControlSolution, ControlSolver, Controller, Model, Solution, Solver,
+                     System, example_text, examples)
+from .callables import (coulomb, constraint, controller, from_callables, nonideal, simulate,
+                        viscous)
+from .errors import ModelError, SolveError
+from .results import Result
+from .symbolic import from_sympy, sympy_to_yaml, velocities
+
+__version__ = "0.1.0"
+
+__all__ = [
+    "ControlSolution", "ControlSolver", "Controller", "Model", "ModelError", "Result",
+    "Solution", "SolveError", "Solver", "System", "constraint", "controller", "coulomb",
+    "example_text", "examples", "from_callables", "from_sympy", "load", "nonideal", "parse",
+    "simulate", "sympy_to_yaml", "velocities", "viscous",
+]
+
+
+def _overrides(who: str, overrides: dict) -> dict:
+    out = {}
+    for name, value in overrides.items():
+        try:
+            out[str(name)] = float(value)
+        except (TypeError, ValueError):
+            raise ValueError(f"{who}: the override {name}={value!r} is not a number") from None
+    return out
+
+
+def load(source: "str | os.PathLike[str]", /, **overrides: float) -> Model:
+    """Reads a model file, or a built-in example by name, with parameter overrides.
+
+    ``ukdyn.load("model.yaml", m=2.0)`` is ``ukdyn run model.yaml --set m=2``;
+    ``ukdyn.load("pendulum")`` reads the built-in example (:func:`examples` lists them; they are
+    compiled into the module). A path-like source, or a string that names an existing file,
+    ends in .yaml/.yml or contains a path separator, is read as a file.
+
+    Raises :class:`ModelError` (file:line:column, message, hint) for a bad or unreadable model
+    file and for an override of a parameter the model does not declare; ValueError for a name
+    that is neither a file nor an example (the message lists the examples) or an override that
+    is not a number.
+    """
+    values = _overrides("load", overrides)
+    path = os.fspath(source)
+    if (not isinstance(source, str) or os.path.exists(path) or path.endswith((".yaml", ".yml"))
+            or os.sep in path):
+        return _ukdyn._load_file(path, values)
+    return _ukdyn._load_example(path, values)
+
+
+def parse(text: str, file: str = "<string>", **overrides: float) -> Model:
+    """Reads a model from YAML text (docs/model-format.md); ``file`` names it in errors.
+
+    Raises :class:`ModelError` as :func:`load`.
+    """
+    return _ukdyn._parse(text, file, _overrides("parse", overrides))
+
+
+def _model_simulate(self: Model, *, t_end: Optional[float] = None, q0: Any = None,
+                    qd0: Any = None, check: bool = True, **settings: Any) -> Result:
+    """Simulates the model exactly as ``ukdyn run`` does (run_model, run.hpp) → :class:`Result`.
+
+    Without arguments the model's own ``simulate:`` and ``output:`` settings apply; keyword
+    settings replace them: t_start, t_end, integrator ('rk4', 'dopri5', 'rkf78', 'bdf'), step,
+    rtol, atol, max_step, max_steps, output_every, output_at, breakpoints, drift ('projection',
+    'baumgarte', 'none'), baumgarte_alpha, baumgarte_beta, project_initial, initial_tolerance,
+    projection_tolerance, projection_iterations, and the solver's rank_threshold,
+    consistency_tolerance, engine, algorithm (simulate.hpp, SimulationOptions). ``q0``/``qd0``
+    replace the initial state. A model with a ``control:`` section runs under its controller.
+    The GIL is released during the run.
+
+    Raises ValueError for a bad setting or an inconsistent initial state (unless
+    ``project_initial=True`` or the model says ``project: true``), and
+    :class:`ukdyn.SolveError` (``.result`` holds the samples up to the failure) when the run
+    fails numerically and ``check`` is True; with ``check=False`` the failed run's Result is
+    returned (see ``Result.ok``, ``Result.message``).
+    """
+    if t_end is not None:
+        settings["t_end"] = t_end
+    names, columns, stats, control = self._run(settings, q0, qd0)
+    from .callables import _finish
+    return _finish(Result(names, columns, stats, control, self.coordinates), check)
+
+
+def _model_solve(self: Model, q: Any, q_dot: Any, t: float = 0.0, check: bool = True) -> Solution:
+    """One evaluation of the model's fundamental equation at (q, q', t) → :class:`Solution`.
+
+    A convenience that makes a new :class:`Solver` per call; in a loop, make one with
+    :meth:`Model.solver` and call its ``solve``. Raises as :meth:`Solver.solve`.
+    """
+    return self.solver().solve(q, q_dot, t, check)
+
+
+Model.simulate = _model_simulate  # type: ignore[attr-defined]
+Model.solve = _model_solve  # type: ignore[attr-defined]

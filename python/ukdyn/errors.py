@@ -1,0 +1,65 @@
+"""The exceptions of ukdyn (docs/python.md, "Errors").
+
+The C++ library's errors arrive in Python as:
+
+* :class:`ModelError` for a bad model file (the C++ ``ukdyn::ModelError``): ``str(err)`` is the
+  C++ ``what()``, ``FILE:LINE:COLUMN: error: MESSAGE (hint: HINT)``, and the parts are
+  attributes;
+* :class:`SolveError` for an evaluation or a run that failed numerically (the C++
+  ``ukdyn::SolveError``, or a run whose status is not ``ok``);
+* :class:`ValueError` for misuse (the C++ ``std::invalid_argument``: wrong sizes, unknown
+  settings, an inconsistent initial state, an unknown example);
+* :class:`RuntimeError` for anything else the C++ code throws.
+
+An exception raised inside a Python callable of a system (``ukdyn.from_callables``) is raised
+again, unchanged, by the call that evaluated it.
+"""
+
+from __future__ import annotations
+
+from typing import Any, Optional
+
+__all__ = ["ModelError", "SolveError"]
+
+
+class ModelError(RuntimeError):
+    """An error in a model file, with where it is and how to fix it.
+
+    ``str(err)`` is exactly the C++ ``what()``: ``FILE:LINE:COLUMN: error: MESSAGE (hint: HINT)``
+    (without ``:LINE:COLUMN`` when the error has no position, e.g. an override of a parameter
+    the model does not declare).
+
+    Attributes:
+        file: the file (or the name given to :func:`ukdyn.parse`, ``"<sympy>"`` for SymPy models).
+        line: 1-based line, 0 when the error has no position.
+        column: 1-based column, 0 when the error has no position.
+        message: what is wrong.
+        hint: how to fix it ("" when there is no hint).
+    """
+
+    def __init__(self, what: str, file: str = "", line: int = 0, column: int = 0,
+                 message: str = "", hint: str = "") -> None:
+        super().__init__(what)
+        self.file = file
+        self.line = line
+        self.column = column
+        self.message = message or what
+        self.hint = hint
+
+
+class SolveError(RuntimeError):
+    """An evaluation or a simulation that failed numerically.
+
+    ``str(err)`` is the C++ ``describe_status()`` text (what failed, where and when) or, for a
+    run, the run's message.
+
+    Attributes:
+        status: the short status name (``"inconsistent constraints"``, ...; status.hpp).
+        result: for a failed simulation, the :class:`ukdyn.Result` with the samples computed
+            before the failure; None otherwise.
+    """
+
+    def __init__(self, what: str, status: str = "", result: Optional[Any] = None) -> None:
+        super().__init__(what)
+        self.status = status
+        self.result = result

@@ -1,0 +1,232 @@
+"""Simulation results: the columns of ``trajectory.csv`` as NumPy arrays, a pandas view, plots.
+
+A :class:`Result` holds exactly the columns that ``ukdyn run`` writes to ``trajectory.csv``, by the
+same names and in the same order (io.hpp lists them): ``t``; each coordinate ``x``; ``x_dot``;
+``x_ddot``; ``Qc_ideal.x``; ``Qc_nonideal.x``; ``lambda.<constraint>``; ``violation.<constraint>``;
+``violation_velocity.<constraint>``; ``kinetic_energy``, ``potential_energy``, ``energy``;
+``work_nonideal``; then the control's columns (``error.<row>``, ``Qc_control.<coord>``, ...), the
+bodies' poses of multibody models, and the model's output expressions.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any, Dict, Iterator, List, Optional, Sequence
+
+import numpy as np
+
+__all__ = ["Result"]
+
+
+class Result:
+    """The samples of a simulation, column by column.
+
+    ``result["x"]`` is the column ``x`` (a 1-D float64 NumPy array with one value per sample, the
+    array the C++ run filled: no copy was made); ``result.t`` the sample times;
+    ``result.names`` the column names in CSV order; ``result.to_dataframe()`` a pandas
+    DataFrame; ``result.plot()`` and its siblings draw with matplotlib. Columns whose names are
+    Python identifiers are also attributes (``result.theta``).
+
+    Attributes:
+        names: the column names, in the order of ``trajectory.csv``.
+        coordinates: the coordinate names.
+        stats: the run's statistics (steps, rejected_steps, evaluations, projections, events,
+            wall_time, max_position_violation, max_velocity_violation, energy_drift, t_reached,
+            status, message; simulate.hpp, RunStatistics).
+        control: the controller's statistics for a controlled run (evaluations, not_met,
+            max_residual, first_not_met, not_met_message, max_kappa), else None.
+    """
+
+    def __init__(self, names: Sequence[str], columns: Sequence[np.ndarray],
+                 stats: Dict[str, Any], control: Optional[Dict[str, Any]],
+                 coordinates: Sequence[str]) -> None:
+        self.names: List[str] = list(names)
+        self._columns: List[np.ndarray] = list(columns)
+        self._index: Dict[str, int] = {}
+        for k, name in enumerate(self.names):
+            self._index.setdefault(name, k)  # a duplicate name (an output expression): the first
+        self.stats: Dict[str, Any] = dict(stats)
+        self.control: Optional[Dict[str, Any]] = control
+        self.coordinates: List[str] = list(coordinates)
+
+    # --- columns -----------------------------------------------------------------------------
+    def __getitem__(self, name: str) -> np.ndarray:
+        """The column called ``name``. Raises KeyError naming the close matches."""
+        try:
+            return self._columns[self._index[name]]
+        except KeyError:
+            import difflib
+            close = difflib.get_close_matches(name, self.names, n=3)
+            hint = f" (did you mean {', '.join(repr(c) for c in close)}?)" if close else ""
+            raise KeyError(f"no column '{name}'{hint}") from None
+
+    def __getattr__(self, name: str) -> np.ndarray:
+        if name.startswith("_"):
+            raise AttributeError(name)
+        index = self.__dict__.get("_index", {})
+        if name in index:
+            return self._columns[index[name]]
+        raise AttributeError(f"'Result' object has no attribute or column '{name}'")
+
+    def __contains__(self, name: object) -> bool:
+        return name in self._index
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(self.names)
+
+    def __len__(self) -> int:
+        """The number of samples N."""
+        return len(self._columns[0]) if self._columns else 0
+
+    def __repr__(self) -> str:
+        return (f"<ukdyn.Result {len(self)} samples, {len(self.names)} columns, "
+                f"t = {self.t[0] if len(self) else math.nan:g} … "
+                f"{self.t[-1] if len(self) else math.nan:g}, status '{self.status}'>")
+
+    def columns(self) -> Dict[str, np.ndarray]:
+        """Every column by name (a new dict of the same arrays; first of duplicate names)."""
+        return {name: self._columns[k] for name, k in self._index.items()}
+
+    def group(self, prefix: str) -> Dict[str, np.ndarray]:
+        """The columns whose names start with ``prefix + "."``, keyed by the rest of the name:
+        ``result.group("lambda")`` → ``{"rod": array}``."""
+        p = prefix + "."
+        return {n[len(p):]: self._columns[k] for n, k in self._index.items() if n.startswith(p)}
+
+    @property
+    def t(self) -> np.ndarray:
+        """The sample times (N)."""
+        return self["t"]
+
+    @property
+    def q(self) -> np.ndarray:
+        """The coordinates as an N × n array (a new array, coordinates in order)."""
+        return np.column_stack([self[c] for c in self.coordinates])
+
+    @property
+    def q_dot(self) -> np.ndarray:
+        """The velocities as an N × n array (a new array)."""
+        return np.column_stack([self[c + "_dot"] for c in self.coordinates])
+
+    @property
+    def q_ddot(self) -> np.ndarray:
+        """The accelerations as an N × n array (a new array)."""
+        return np.column_stack([self[c + "_ddot"] for c in self.coordinates])
+
+    # --- status ------------------------------------------------------------------------------
+    @property
+    def status(self) -> str:
+        """The run's status: ``"ok"`` or why it stopped early (status.hpp)."""
+        return str(self.stats.get("status", "ok"))
+
+    @property
+    def ok(self) -> bool:
+        """True when the run reached its end time."""
+        return self.status == "ok"
+
+    @property
+    def message(self) -> str:
+        """What failed, where and when ("" when ok)."""
+        return str(self.stats.get("message", ""))
+
+    # --- pandas and files ---------------------------------------------------------------------
+    def to_dataframe(self, index: Optional[str] = None) -> "Any":
+        """A pandas DataFrame of every column (CSV order; duplicate names keep their first
+        column). ``index="t"`` makes the time the index. Needs pandas (python3-pandas)."""
+        import pandas as pd
+        frame = pd.DataFrame(self.columns(), copy=False)
+        return frame.set_index(index) if index else frame
+
+    @property
+    def df(self) -> "Any":
+        """``to_dataframe()``."""
+        return self.to_dataframe()
+
+    def to_csv(self, path: str) -> None:
+        """Writes the columns as ``ukdyn run`` writes ``trajectory.csv``: the header, then one
+        row per sample, numbers in the shortest form that reads back bit for bit."""
+        def fmt(x: float) -> str:
+            if math.isnan(x):
+                return "nan"
+            if math.isinf(x):
+                return "inf" if x > 0 else "-inf"
+            r = repr(float(x))
+            return r[:-2] if r.endswith(".0") else r
+        with open(path, "w", encoding="utf-8") as f:
+            f.write(",".join(self.names) + "\n")
+            for i in range(len(self)):
+                f.write(",".join(fmt(c[i]) for c in self._columns) + "\n")
+
+    # --- plots -------------------------------------------------------------------------------
+    def plot(self, *columns: str, ax: Any = None, x: str = "t", **kwargs: Any) -> Any:
+        """Plots columns against time (or against column ``x``) with matplotlib; without
+        columns, the coordinates. Returns the Axes. Extra keyword arguments go to ``ax.plot``."""
+        import matplotlib.pyplot as plt
+        if ax is None:
+            _, ax = plt.subplots()
+        names = list(columns) or self.coordinates
+        for name in names:
+            ax.plot(self[x], self[name], label=name, **kwargs)
+        ax.set_xlabel("t [s]" if x == "t" else x)
+        ax.legend()
+        ax.grid(True, alpha=0.3)
+        return ax
+
+    def plot_forces(self, ax: Any = None) -> Any:
+        """The ideal and non-ideal constraint forces per coordinate (``Qc_ideal.*`` solid,
+        ``Qc_nonideal.*`` dashed). Returns the Axes."""
+        import matplotlib.pyplot as plt
+        if ax is None:
+            _, ax = plt.subplots()
+        for c in self.coordinates:
+            line, = ax.plot(self.t, self["Qc_ideal." + c], label="Qc_ideal." + c)
+            if np.any(self["Qc_nonideal." + c]):
+                ax.plot(self.t, self["Qc_nonideal." + c], "--", color=line.get_color(),
+                        label="Qc_nonideal." + c)
+        ax.set_xlabel("t [s]")
+        ax.set_ylabel("generalized force")
+        ax.legend()
+        ax.grid(True, alpha=0.3)
+        return ax
+
+    def plot_violation(self, ax: Any = None) -> Any:
+        """The constraint violations ``violation.*`` on a log scale. Returns the Axes."""
+        import matplotlib.pyplot as plt
+        if ax is None:
+            _, ax = plt.subplots()
+        for name, values in self.group("violation").items():
+            ax.semilogy(self.t, np.maximum(np.abs(values), 1e-17), label=name)
+        ax.set_xlabel("t [s]")
+        ax.set_ylabel("|violation|")
+        if ax.get_legend_handles_labels()[0]:
+            ax.legend()
+        ax.grid(True, alpha=0.3)
+        return ax
+
+    def plot_energy(self, ax: Any = None) -> Any:
+        """The energy E, the work of the non-ideal forces W, and E − W (constant when the
+        energy balance holds). Returns the Axes."""
+        import matplotlib.pyplot as plt
+        if ax is None:
+            _, ax = plt.subplots()
+        E, W = self["energy"], self["work_nonideal"]
+        ax.plot(self.t, E, label="energy E")
+        ax.plot(self.t, W, label="work of non-ideal forces W")
+        ax.plot(self.t, E - W, "--", label="E − W")
+        if "control_work" in self:
+            ax.plot(self.t, self["control_work"], label="work of the control")
+        ax.set_xlabel("t [s]")
+        ax.legend()
+        ax.grid(True, alpha=0.3)
+        return ax
+
+    def plot_all(self) -> Any:
+        """Coordinates, constraint forces, violation and energy in a 2 × 2 figure. Returns the
+        Figure."""
+        import matplotlib.pyplot as plt
+        fig, axes = plt.subplots(2, 2, figsize=(11, 7), constrained_layout=True)
+        self.plot(ax=axes[0, 0])
+        self.plot_forces(ax=axes[0, 1])
+        self.plot_violation(ax=axes[1, 0])
+        self.plot_energy(ax=axes[1, 1])
+        return fig

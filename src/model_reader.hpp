@@ -1,0 +1,232 @@
+// The model-file reader's internals, shared by the files that read its sections:
+//   model.cpp            the file, parameters, coordinates, dynamics, constraints, non-ideal
+//                        forces, initial state, settings and outputs
+//   model_multibody.cpp  bodies:, joints: and forces: (a multibody model)
+//   model_control.cpp    control: (the controller run_model applies)
+#pragma once
+
+#include <algorithm>
+#include <cctype>
+#include <map>
+#include <memory>
+#include <sstream>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <yaml-cpp/yaml.h>
+
+#include "ukdyn/constraint.hpp"
+#include "ukdyn/control.hpp"
+#include "ukdyn/expression.hpp"
+#include "ukdyn/model.hpp"
+
+namespace ukdyn::model_reader {
+
+using expr::Expr;
+using expr::ExpressionSet;
+using expr::Program;
+
+// the keys of a model file
+inline const std::vector<std::string> kTopLevelKeys = {
+    "name",        "parameters", "coordinates", "kinetic_energy", "potential_energy",
+    "mass_matrix", "forces",     "constraints", "nonideal",       "initial",
+    "simulate",    "output",     "bodies",      "joints",         "control"};
+
+inline bool is_identifier(const std::string& s) {
+  if (s.empty() || !(std::isalpha(static_cast<unsigned char>(s[0])) || s[0] == '_')) return false;
+  return std::all_of(s.begin(), s.end(), [](char c) {
+    return std::isalnum(static_cast<unsigned char>(c)) || c == '_';
+  });
+}
+
+// a number as a person writes it (2, 0.5, 1e-06)
+inline std::string brief(double v) {
+  std::ostringstream s;
+  s << v;
+  return s.str();
+}
+
+inline std::string join(const std::vector<std::string>& v) {
+  std::string out;
+  for (const auto& s : v) out += (out.empty() ? "" : ", ") + s;
+  return out;
+}
+
+// A program's evaluation with buffers owned by the caller.
+struct Evaluator {
+  Program program;
+  std::vector<double> out, scratch;
+  explicit Evaluator(Program p)
+      : program(std::move(p)),
+        out(std::size_t(program.outputs())),
+        scratch(std::size_t(program.scratch_size())) {}
+  const double* run(const double* in) {
+    program.evaluate(in, out.data(), scratch.data());
+    return out.data();
+  }
+};
+
+// the inputs of every program: [q; q'; t; N_c …; lambda_c …]
+struct InputLayout {
+  Index n = 0, extra = 0;
+  Index size() const { return 2 * n + 1 + extra; }
+  void fill(std::vector<double>& in, const VectorXd& q, const VectorXd& qd, double t) const {
+    std::copy(q.data(), q.data() + n, in.begin());
+    std::copy(qd.data(), qd.data() + n, in.begin() + n);
+    in[std::size_t(2 * n)] = t;
+  }
+};
+
+// Buffers of one compiled constraint.
+struct CompiledScratch final : ConstraintScratch {
+  CompiledScratch(const Program& accel_program, const Program& levels_program, Index inputs)
+      : in(std::size_t(inputs), 0.0), accel(accel_program), levels(levels_program) {}
+  std::vector<double> in;
+  Evaluator accel, levels;
+};
+
+// A constraint from model-file expressions: one program for [A (row-major); b], one for
+// [phi; phi'] (holonomic), [psi] (nonholonomic) or nothing (acceleration form).
+class CompiledConstraint final : public ConstraintModel {
+ public:
+  CompiledConstraint(ConstraintKind kind, Index rows, Index n, InputLayout layout, Program accel,
+                     Program levels)
+      : kind_(kind),
+        rows_(rows),
+        n_(n),
+        layout_(layout),
+        accel_(std::move(accel)),
+        levels_(std::move(levels)) {}
+
+  std::unique_ptr<ConstraintScratch> make_scratch(Index) const override {
+    return std::make_unique<CompiledScratch>(accel_, levels_, layout_.size());
+  }
+
+  void acceleration_form(const VectorXd& q, const VectorXd& qd, double t, ConstraintScratch* s,
+                         Eigen::Ref<MatrixXd> A, Eigen::Ref<VectorXd> b) const override {
+    auto& w = static_cast<CompiledScratch&>(*s);
+    layout_.fill(w.in, q, qd, t);
+    const double* out = w.accel.run(w.in.data());
+    for (Index r = 0; r < rows_; ++r) {
+      for (Index j = 0; j < n_; ++j) A(r, j) = out[r * n_ + j];
+      b[r] = out[rows_ * n_ + r];
+    }
+  }
+
+  void violation(const VectorXd& q, const VectorXd& qd, double t, ConstraintScratch* s,
+                 Eigen::Ref<VectorXd> position, Eigen::Ref<VectorXd> velocity) const override {
+    position.setZero();
+    velocity.setZero();
+    if (kind_ == ConstraintKind::kAcceleration) return;
+    auto& w = static_cast<CompiledScratch&>(*s);
+    layout_.fill(w.in, q, qd, t);
+    const double* out = w.levels.run(w.in.data());
+    if (kind_ == ConstraintKind::kHolonomic) {
+      for (Index r = 0; r < rows_; ++r) {
+        position[r] = out[r];
+        velocity[r] = out[rows_ + r];
+      }
+    } else {
+      for (Index r = 0; r < rows_; ++r) velocity[r] = out[r];
+    }
+  }
+
+ private:
+  ConstraintKind kind_;
+  Index rows_, n_;
+  InputLayout layout_;
+  Program accel_, levels_;
+};
+
+// Per-thread buffers of the callables of System (whose signatures carry no scratch): sized on
+// first use in a thread, never again.
+struct ThreadBuffers {
+  std::vector<double> in, out, scratch;
+  void reserve(Index inputs, const Program& p) {
+    if (in.size() < std::size_t(inputs)) in.assign(std::size_t(inputs), 0.0);
+    if (out.size() < std::size_t(p.outputs())) out.resize(std::size_t(p.outputs()));
+    if (scratch.size() < std::size_t(p.scratch_size()))
+      scratch.resize(std::size_t(p.scratch_size()));
+  }
+};
+inline ThreadBuffers& buffers() {
+  thread_local ThreadBuffers b;
+  return b;
+}
+
+// The reader: one model file.
+class Reader {
+ public:
+  Reader(std::string file, const std::map<std::string, double>& overrides)
+      : file_(std::move(file)), overrides_(overrides) {}
+
+  /// The whole file: the plant, then its controller (control:).
+  Model read(const std::string& text);
+
+ private:
+  // the plant (everything but control:); `root` is the parsed file
+  Model read_plant(const YAML::Node& root);
+  // generalized coordinates: coordinates:, kinetic_energy: / mass_matrix:, forces:, …
+  Model read_generalized(const YAML::Node& root);
+  // the expression inputs [q; q'; t; N_c …; lambda_c …] over coordinates_ and velocities_,
+  // with the parameters (and pi) as constants; `cnames`: the named constraints
+  void make_expression_set(const YAML::Node& root, const std::vector<std::string>& cnames);
+  [[noreturn]] void fail(const YAML::Node& at, const std::string& message,
+                         const std::string& hint = "") const {
+    const YAML::Mark m = at.Mark();
+    throw ModelError(file_, m.line + 1, m.column + 1, message, hint);
+  }
+  [[noreturn]] void fail_at(const YAML::Mark& m, const std::string& message,
+                            const std::string& hint = "") const {
+    throw ModelError(file_, m.line + 1, m.column + 1, message, hint);
+  }
+
+  double number(const YAML::Node& node, const std::string& what);
+  Expr expression(const YAML::Node& node, const std::string& what, bool in_C = false);
+  Program compile(const std::vector<Expr>& exprs, const YAML::Node& where,
+                  const std::string& what) const;
+  std::vector<YAML::Node> rows_of(const YAML::Node& node, const std::string& what);
+  void read_parameters(const YAML::Node& root);
+  void read_coordinates(const YAML::Node& root);
+  void read_dynamics(const YAML::Node& root, SystemBuilder& builder);
+  void read_constraints(const YAML::Node& root, SystemBuilder& builder);
+  // one constraint's rows (holonomic:, nonholonomic: or A: with b:) and active:, compiled
+  Constraint read_constraint(const YAML::Node& c, const std::string& name,
+                             const std::string& what);
+  void read_nonideal(const YAML::Node& root, SystemBuilder& builder);
+  void read_initial(const YAML::Node& root, Model& model);
+  void read_simulate(const YAML::Node& root, Model& model);
+  void read_output(const YAML::Node& root, Model& model);
+  void check_mass_matrix(const YAML::Node& root, const Model& model);
+  Index coordinate(const YAML::Node& node);
+
+  // ---- multibody models (model_multibody.cpp): bodies:, joints:, forces: -----------------
+  // Builds the plant from the bodies, joints and force elements; sets coordinates_,
+  // velocities_ (the bodies' coordinates: <body>_x, _y, _theta | _z, _u0 … _u3) and the
+  // expression set; fills model.multibody, q0 and qd0 (the bodies' initial poses and velocities).
+  Model read_multibody(const YAML::Node& root);
+  // the sections' reader (model_multibody.cpp): uses fail, number, expression and compile
+  friend class MultibodyReader;
+
+  // ---- control (model_control.cpp): control: ---------------------------------------------
+  // Builds model.controller from the control: section (nothing when absent). With `nominal:`
+  // the plant is read again with those parameters for the controller's own model.
+  void read_control(const YAML::Node& root, Model& model);
+  ErrorDynamics read_error_dynamics(const YAML::Node& r, const std::string& what,
+                                    ConstraintKind kind);
+  WeightFn read_weight(const YAML::Node& N, bool& constant, MatrixXd& value);
+
+  std::string file_;
+  std::map<std::string, double> overrides_;
+  std::map<std::string, double> parameters_;
+  std::vector<std::string> coordinates_, velocities_;
+  std::vector<std::string> constraint_names_;  // in declaration order
+  std::vector<std::string> constraint_inputs_;  // N_c and lambda_c of each named constraint
+  std::vector<Index> constraint_rows_;
+  std::unique_ptr<ExpressionSet> set_;
+  InputLayout layout_;
+  std::vector<std::pair<std::string, std::string>> chain_;
+};
+
+}  // namespace ukdyn::model_reader
