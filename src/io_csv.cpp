@@ -53,44 +53,68 @@ struct FileCloser {
                            "': " + (err != 0 ? std::strerror(err) : "unknown reason"));
 }
 
-// The header names, in column order (sizes already checked).
-std::vector<std::string> columns(const Trajectory& traj) {
+// One standard column: its header name and where its values are, field[i · width + index] for
+// sample i.
+struct ColumnRef {
+  std::string name;
+  const std::vector<double>* field;
+  std::size_t width, index;
+};
+
+// The standard columns, in order (sizes already checked): the one description that the header,
+// csv_table and the rows of write_csv read.
+std::vector<ColumnRef> column_refs(const Trajectory& traj) {
   const auto& x = traj.coordinate_names;
+  const std::size_t n = x.size(), m = std::size_t(traj.m);
   const std::size_t K = traj.constraint_names.size();
-  std::vector<std::string> cols;
-  cols.reserve(1 + 5 * x.size() + std::size_t(traj.m) + 2 * K + 4);
+  std::vector<ColumnRef> cols;
+  cols.reserve(1 + 5 * n + m + 2 * K + 4);
+  const auto scalar = [&](std::string name, const std::vector<double>& f) {
+    cols.push_back(ColumnRef{std::move(name), &f, 1, 0});
+  };
 
   // t, then q, q', q'', Qc_ideal, Qc_nonideal by coordinate
-  cols.emplace_back("t");
-  for (const auto& name : x) cols.push_back(name);
-  for (const auto& name : x) cols.push_back(name + "_dot");
-  for (const auto& name : x) cols.push_back(name + "_ddot");
-  for (const auto& name : x) cols.push_back("Qc_ideal." + name);
-  for (const auto& name : x) cols.push_back("Qc_nonideal." + name);
+  scalar("t", traj.t);
+  const auto by_coordinate = [&](const std::vector<double>& f, const char* prefix,
+                                 const char* suffix) {
+    for (std::size_t j = 0; j < n; ++j) cols.push_back(ColumnRef{prefix + x[j] + suffix, &f, n, j});
+  };
+  by_coordinate(traj.q, "", "");
+  by_coordinate(traj.qd, "", "_dot");
+  by_coordinate(traj.qdd, "", "_ddot");
+  by_coordinate(traj.Qc_ideal, "Qc_ideal.", "");
+  by_coordinate(traj.Qc_nonideal, "Qc_nonideal.", "");
 
   // lambda by constraint row; the row number only when a constraint has several rows
+  std::size_t row = 0;
   for (std::size_t k = 0; k < K; ++k) {
     const std::string base = "lambda." + traj.constraint_names[k];
     const Index rows = traj.constraint_rows[k];
-    if (rows == 1) {
-      cols.push_back(base);
-    } else {
-      for (Index r = 0; r < rows; ++r) cols.push_back(base + "." + std::to_string(r));
+    for (Index r = 0; r < rows; ++r) {
+      cols.push_back(ColumnRef{rows == 1 ? base : base + "." + std::to_string(r), &traj.lambda, m,
+                               row++});
     }
   }
 
-  // violations: one per constraint, then the velocity level of the holonomic ones
-  for (const auto& name : traj.constraint_names) cols.push_back("violation." + name);
+  // violations: one per constraint (position level if holonomic, else velocity level; 0 for
+  // the acceleration kind), then the velocity level of the holonomic ones
+  for (std::size_t k = 0; k < K; ++k) {
+    const bool holonomic = traj.constraint_kinds[k] == ConstraintKind::kHolonomic;
+    cols.push_back(ColumnRef{"violation." + traj.constraint_names[k],
+                             holonomic ? &traj.position_violation : &traj.velocity_violation, K,
+                             k});
+  }
   for (std::size_t k = 0; k < K; ++k) {
     if (traj.constraint_kinds[k] == ConstraintKind::kHolonomic) {
-      cols.push_back("violation_velocity." + traj.constraint_names[k]);
+      cols.push_back(ColumnRef{"violation_velocity." + traj.constraint_names[k],
+                               &traj.velocity_violation, K, k});
     }
   }
 
-  cols.emplace_back("kinetic_energy");
-  cols.emplace_back("potential_energy");
-  cols.emplace_back("energy");
-  cols.emplace_back("work_nonideal");
+  scalar("kinetic_energy", traj.kinetic_energy);
+  scalar("potential_energy", traj.potential_energy);
+  scalar("energy", traj.energy);
+  scalar("work_nonideal", traj.work_nonideal);
   return cols;
 }
 
@@ -98,47 +122,19 @@ std::vector<std::string> columns(const Trajectory& traj) {
 
 std::vector<std::string> csv_columns(const Trajectory& traj) {
   traj.check_consistent("ukdyn::csv_columns");
-  return columns(traj);
+  std::vector<std::string> names;
+  for (auto& c : column_refs(traj)) names.push_back(std::move(c.name));
+  return names;
 }
 
 std::vector<CsvColumn> csv_table(const Trajectory& traj) {
   traj.check_consistent("ukdyn::csv_table");
-  const std::vector<std::string> names = columns(traj);
-  const std::size_t N = traj.t.size(), n = std::size_t(traj.n), m = std::size_t(traj.m);
-  const std::size_t K = traj.constraint_names.size();
+  const std::size_t N = traj.t.size();
   std::vector<CsvColumn> table;
-  table.reserve(names.size());
-  auto next = [&] {
-    table.push_back(CsvColumn{names[table.size()], std::vector<double>(N)});
-    return &table.back().values;
-  };
-  *next() = traj.t;
-  auto field = [&](const std::vector<double>& f, std::size_t width) {
-    for (std::size_t j = 0; j < width; ++j) {
-      std::vector<double>& v = *next();
-      for (std::size_t i = 0; i < N; ++i) v[i] = f[i * width + j];
-    }
-  };
-  field(traj.q, n);
-  field(traj.qd, n);
-  field(traj.qdd, n);
-  field(traj.Qc_ideal, n);
-  field(traj.Qc_nonideal, n);
-  field(traj.lambda, m);
-  for (std::size_t k = 0; k < K; ++k) {
-    const bool holonomic = traj.constraint_kinds[k] == ConstraintKind::kHolonomic;
-    const std::vector<double>& f = holonomic ? traj.position_violation : traj.velocity_violation;
-    std::vector<double>& v = *next();
-    for (std::size_t i = 0; i < N; ++i) v[i] = f[i * K + k];
-  }
-  for (std::size_t k = 0; k < K; ++k) {
-    if (traj.constraint_kinds[k] != ConstraintKind::kHolonomic) continue;
-    std::vector<double>& v = *next();
-    for (std::size_t i = 0; i < N; ++i) v[i] = traj.velocity_violation[i * K + k];
-  }
-  for (const auto* f : {&traj.kinetic_energy, &traj.potential_energy, &traj.energy,
-                        &traj.work_nonideal}) {
-    *next() = *f;
+  for (auto& c : column_refs(traj)) {
+    std::vector<double> values(N);
+    for (std::size_t i = 0; i < N; ++i) values[i] = (*c.field)[i * c.width + c.index];
+    table.push_back(CsvColumn{std::move(c.name), std::move(values)});
   }
   return table;
 }
@@ -148,7 +144,7 @@ void write_csv(const Trajectory& traj, const std::string& path) { write_csv(traj
 void write_csv(const Trajectory& traj, const std::string& path,
                const std::vector<CsvColumn>& extra) {
   traj.check_consistent(kWho);
-  std::vector<std::string> cols = columns(traj);
+  std::vector<ColumnRef> cols = column_refs(traj);
   const std::size_t N = traj.t.size();
   for (const CsvColumn& e : extra) {
     if (e.values.size() != N) {
@@ -156,10 +152,8 @@ void write_csv(const Trajectory& traj, const std::string& path,
                                   std::to_string(e.values.size()) + " values, expected N = " +
                                   std::to_string(N));
     }
-    cols.push_back(e.name);
+    cols.push_back(ColumnRef{e.name, &e.values, 1, 0});
   }
-  const std::size_t n = std::size_t(traj.n), m = std::size_t(traj.m);
-  const std::size_t K = traj.constraint_names.size();
 
   errno = 0;
   std::unique_ptr<std::FILE, FileCloser> file(std::fopen(path.c_str(), "wb"));
@@ -179,44 +173,15 @@ void write_csv(const Trajectory& traj, const std::string& path,
   // header
   for (std::size_t c = 0; c < cols.size(); ++c) {
     if (c > 0) buf += ',';
-    append_field(buf, cols[c]);
+    append_field(buf, cols[c].name);
   }
   buf += '\n';
 
-  // one row per sample, in the order of csv_columns()
-  auto row_of = [&](const std::vector<double>& f, std::size_t i, std::size_t width) {
-    for (std::size_t j = 0; j < width; ++j) {
-      buf += ',';
-      append_number(buf, f[i * width + j]);
-    }
-  };
+  // one row per sample
   for (std::size_t i = 0; i < N; ++i) {
-    append_number(buf, traj.t[i]);
-    row_of(traj.q, i, n);
-    row_of(traj.qd, i, n);
-    row_of(traj.qdd, i, n);
-    row_of(traj.Qc_ideal, i, n);
-    row_of(traj.Qc_nonideal, i, n);
-    row_of(traj.lambda, i, m);
-    // violation: position level if holonomic, else velocity level (0 for the acceleration kind)
-    for (std::size_t k = 0; k < K; ++k) {
-      buf += ',';
-      const bool holonomic = traj.constraint_kinds[k] == ConstraintKind::kHolonomic;
-      append_number(buf, (holonomic ? traj.position_violation : traj.velocity_violation)[i * K + k]);
-    }
-    for (std::size_t k = 0; k < K; ++k) {
-      if (traj.constraint_kinds[k] != ConstraintKind::kHolonomic) continue;
-      buf += ',';
-      append_number(buf, traj.velocity_violation[i * K + k]);
-    }
-    for (const auto* f : {&traj.kinetic_energy, &traj.potential_energy, &traj.energy,
-                          &traj.work_nonideal}) {
-      buf += ',';
-      append_number(buf, (*f)[i]);
-    }
-    for (const CsvColumn& e : extra) {
-      buf += ',';
-      append_number(buf, e.values[i]);
+    for (std::size_t c = 0; c < cols.size(); ++c) {
+      if (c > 0) buf += ',';
+      append_number(buf, (*cols[c].field)[i * cols[c].width + cols[c].index]);
     }
     buf += '\n';
     if (buf.size() >= kFlushAt) flush();

@@ -95,10 +95,9 @@ WeightFn Reader::read_weight(const YAML::Node& N, bool& constant, MatrixXd& valu
   const Program p = compile(entries, N, "N");
   if (constant) {
     std::vector<double> in(std::size_t(p.inputs()), 0.0), scratch(std::size_t(p.scratch_size()));
-    value.resize(n, n);
-    MatrixXd rowmajor(n, n);
-    p.evaluate(in.data(), rowmajor.data(), scratch.data());  // column-major of Nᵀ
-    value = rowmajor.transpose();
+    MatrixXd transposed(n, n);  // the entries come row by row: column-major, that is Nᵀ
+    p.evaluate(in.data(), transposed.data(), scratch.data());
+    value = transposed.transpose();
     return {};
   }
   const InputLayout layout = layout_;

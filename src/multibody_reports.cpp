@@ -1,6 +1,7 @@
 // Reports of a multibody model: poses, velocities, energies and momenta of the bodies; the
 // reaction of each joint (ideal and friction parts) reduced to the joint point; driving efforts;
 // and the poses of every body at every sample of a trajectory, for animation.
+#include <array>
 #include <cmath>
 #include <fstream>
 #include <iomanip>
@@ -203,6 +204,16 @@ double drive_effort(const MultibodyModel& mb, const VectorXd&, const VectorXd&, 
   return lambda[mb.system.row_offset(J.drive)];
 }
 
+namespace {
+
+// a pose as 7 numbers (centre of mass, unit quaternion) and the suffixes of their columns
+constexpr const char* kPoseSuffixes[7] = {".x", ".y", ".z", ".qw", ".qx", ".qy", ".qz"};
+std::array<double, 7> pose_values(const Pose& p) {
+  return {p.p_WB.x(), p.p_WB.y(), p.p_WB.z(), p.R_WB.w(), p.R_WB.x(), p.R_WB.y(), p.R_WB.z()};
+}
+
+}  // namespace
+
 void write_poses_csv(const MultibodyModel& mb, const Trajectory& tr, const std::string& path) {
   if (tr.n != mb.system.dofs()) {
     throw std::invalid_argument("ukdyn::mb::write_poses_csv: the trajectory has " +
@@ -213,7 +224,7 @@ void write_poses_csv(const MultibodyModel& mb, const Trajectory& tr, const std::
   if (!os) throw std::runtime_error("ukdyn::mb::write_poses_csv: cannot write '" + path + "'");
   os << "t";
   for (const BodyInfo& b : mb.bodies) {
-    for (const char* s : {".x", ".y", ".z", ".qw", ".qx", ".qy", ".qz"}) os << ',' << b.name << s;
+    for (const char* s : kPoseSuffixes) os << ',' << b.name << s;
   }
   os << '\n' << std::setprecision(17);
   const auto Q = Trajectory::view(tr.q, tr.n);
@@ -221,9 +232,7 @@ void write_poses_csv(const MultibodyModel& mb, const Trajectory& tr, const std::
     const VectorXd q = Q.col(i);
     os << tr.t[std::size_t(i)];
     for (BodyId b = 0; b < BodyId(mb.bodies.size()); ++b) {
-      const Pose p = body_pose(mb, q, b);
-      os << ',' << p.p_WB.x() << ',' << p.p_WB.y() << ',' << p.p_WB.z() << ',' << p.R_WB.w() << ','
-         << p.R_WB.x() << ',' << p.R_WB.y() << ',' << p.R_WB.z();
+      for (const double v : pose_values(body_pose(mb, q, b))) os << ',' << v;
     }
     os << '\n';
   }
@@ -245,7 +254,7 @@ std::vector<CsvColumn> report_csv_columns(const MultibodyModel& mb, const Trajec
   };
   // poses: 7 per body, then the kinetic energies
   for (const BodyInfo& b : mb.bodies) {
-    for (const char* s : {".x", ".y", ".z", ".qw", ".qx", ".qy", ".qz"}) add(b.name + s);
+    for (const char* s : kPoseSuffixes) add(b.name + s);
   }
   const std::size_t energy0 = cols.size();
   for (const BodyInfo& b : mb.bodies) add(b.name + ".kinetic_energy");
@@ -287,9 +296,7 @@ std::vector<CsvColumn> report_csv_columns(const MultibodyModel& mb, const Trajec
     lambda = L.col(Index(i));
     const double t = tr.t[i];
     for (std::size_t b = 0; b < mb.bodies.size(); ++b) {
-      const Pose p = body_pose(mb, q, BodyId(b));
-      const double v[7] = {p.p_WB.x(), p.p_WB.y(), p.p_WB.z(), p.R_WB.w(),
-                           p.R_WB.x(), p.R_WB.y(), p.R_WB.z()};
+      const std::array<double, 7> v = pose_values(body_pose(mb, q, BodyId(b)));
       for (std::size_t c = 0; c < 7; ++c) cols[7 * b + c].values[i] = v[c];
       cols[energy0 + b].values[i] = kinetic_energy(mb, q, qd, BodyId(b));
     }
@@ -315,7 +322,7 @@ std::vector<CsvColumn> report_csv_columns(const MultibodyModel& mb, const Trajec
         cols[c.ideal + k].values[i] = ideal[c.components[k]];
         if (J.friction >= 0) cols[c.friction + k].values[i] = evaluated ? fr[c.components[k]] : nan;
       }
-      if (J.drive >= 0) cols[c.drive].values[i] = lambda[mb.system.row_offset(J.drive)];
+      if (J.drive >= 0) cols[c.drive].values[i] = drive_effort(mb, q, qd, t, lambda, Index(j));
     }
   }
   return cols;
