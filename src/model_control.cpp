@@ -45,6 +45,16 @@ ErrorDynamics Reader::read_error_dynamics(const YAML::Node& r, const std::string
             [this](const YAML::Node& at, const std::string& m, const std::string& h) {
               fail(at, m, h);
             });
+  // the ranges are ErrorDynamics' own: its refusal becomes an error at the dynamics
+  const auto checked = [&](auto make) {
+    try {
+      return make();
+    } catch (const std::invalid_argument& e) {
+      std::string message = e.what();
+      if (const auto k = message.find(": "); k != std::string::npos) message.erase(0, k + 2);
+      fail(d, "the dynamics of " + what + ": " + message, "the gains must be positive numbers");
+    }
+  };
   const bool holonomic = kind == ConstraintKind::kHolonomic;
   if (d["rate"]) {
     if (holonomic || d.size() != 1) {
@@ -54,8 +64,7 @@ ErrorDynamics Reader::read_error_dynamics(const YAML::Node& r, const std::string
                      : "write {rate: k} only");
     }
     const double k = number(d["rate"], "rate");
-    if (!(k >= 0)) fail(d["rate"], "rate must be >= 0");
-    return ErrorDynamics::first_order(k);
+    return checked([k] { return ErrorDynamics::first_order(k); });
   }
   if (!holonomic) {
     fail(d, what + " is not holonomic: its error dynamics are first order, {rate: k}",
@@ -66,14 +75,11 @@ ErrorDynamics Reader::read_error_dynamics(const YAML::Node& r, const std::string
     if (!d["omega"]) fail(d, "zeta needs omega", "{omega: 2, zeta: 1}");
     const double omega = number(d["omega"], "omega");
     const double zeta = d["zeta"] ? number(d["zeta"], "zeta") : 1.0;
-    if (!(omega >= 0)) fail(d["omega"], "omega must be >= 0");
-    if (!(zeta >= 0)) fail(d["zeta"], "zeta must be >= 0");
-    return ErrorDynamics::second_order(omega, zeta);
+    return checked([omega, zeta] { return ErrorDynamics::second_order(omega, zeta); });
   }
   const double alpha = d["alpha"] ? number(d["alpha"], "alpha") : 0.0;
   const double beta = d["beta"] ? number(d["beta"], "beta") : 0.0;
-  if (!(alpha >= 0) || !(beta >= 0)) fail(d, "alpha and beta must be >= 0");
-  return ErrorDynamics::gains(alpha, beta);
+  return checked([alpha, beta] { return ErrorDynamics::gains(alpha, beta); });
 }
 
 WeightFn Reader::read_weight(const YAML::Node& N, bool& constant, MatrixXd& value) {

@@ -265,6 +265,13 @@ TEST(ModelControl, BadControlSectionsAreLocatedErrors) {
                "rate: gives first-order error dynamics");
   expect_error("  requirements: [{name: r, nonholonomic: x_dot - 1, dynamics: {omega: 2}}]\n", 8,
                63, "its error dynamics are first order");
+  // (found by the fuzzer: ErrorDynamics' own range check escaped as std::invalid_argument)
+  expect_error("  requirements: [{name: r, holonomic: x - t, dynamics: {omega: 0, zeta: 1}}]\n",
+               8, 56, "omega and zeta must be > 0, got omega = 0");
+  expect_error("  requirements: [{name: r, nonholonomic: x_dot - 1, dynamics: {rate: -1}}]\n", 8,
+               63, "the rate must be > 0");
+  expect_error("  requirements: [{name: r, holonomic: x - t, dynamics: {alpha: -1}}]\n", 8, 56,
+               "the dynamics of requirement 'r'");
   expect_error("  requirements: [{name: r, holonomic: x - q}]\n", 8, 43,
                "in requirement 'r': unknown name 'q'");
   expect_error("  requirements: [{name: r, holonomic: x - t}]\n  law: lqr\n", 9, 8,
