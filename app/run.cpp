@@ -173,6 +173,16 @@ int run_command(const RunArguments& args) {
               s.evaluations, s.wall_time);
   std::printf("  max violation %.3g (position), %.3g (velocity); energy drift %.3g\n",
               s.max_position_violation, s.max_velocity_violation, s.energy_drift);
+  if (s.events > 0 || s.stick_refusals > 0) {
+    std::printf("  friction: %ld stick/slip events, %ld stops where sticking was refused\n",
+                s.events, s.stick_refusals);
+  }
+  for (std::size_t i = 0; i < s.notes.size() && i < 3; ++i) {
+    std::printf("  note: %s\n", s.notes[i].c_str());
+  }
+  if (s.notes.size() > 3) {
+    std::printf("  (%zu more notes in summary.json)\n", s.notes.size() - 3);
+  }
   if (run.controlled) {
     const ControlStatistics& c = run.control;
     std::printf("  control: %ld evaluations", c.evaluations);

@@ -44,6 +44,19 @@ void zero_constraint_rows(const System& sys, Workspace& ws, Index k);
 // Copies constraint k's rows of A (as last assembled) into out (rows × n), either engine.
 void copy_constraint_rows(const System& sys, const Workspace& ws, Index k,
                           Eigen::Ref<MatrixXd> out);
+// The stick constraint of a Coulomb contact: psi = q'_c − u(q, t) on `coordinates` (nonholonomic,
+// local columns), inactive until the simulation switches it on (contact.cpp).
+Constraint stick_constraint(const std::string& name, const std::vector<Index>& coordinates,
+                            const SurfaceVelocityFn& surface);
+// Contact c's sliding velocity relative to its constraint, v_rel = P (v − u) (see
+// CoulombFriction), into ws.sliding.col(c).head(|coordinates|). With rows_assembled, N_k is read
+// from the rows of A that the workspace last assembled at (q, t); else constraint k is evaluated
+// here. Returns the number B of independent normals: ws.contact_basis.topRows(B) then holds
+// them, orthonormal, for projecting other vectors. No allocation; O(rows_k · n + rows_k² ·
+// |coordinates|).
+Index sliding_velocity(const System& sys, Workspace& ws, Index c, const VectorXd& q,
+                       const VectorXd& qd, double t, bool rows_assembled);
+
 // Kinetic energy ½ q'ᵀ M q' with the M of the last evaluation, either engine.
 double kinetic_energy(const Workspace& ws, const VectorXd& qd);
 

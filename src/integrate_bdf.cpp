@@ -1,6 +1,8 @@
 // integrate_bdf: one segment with SUNDIALS CVODE (variable-order BDF, Newton iteration, dense
 // direct linear solver with CVODE's difference-quotient Jacobian), drift control through
-// CVODE's projection interface (CVodeSetProjFn) calling SegmentHooks::after_step.
+// CVODE's projection interface (CVodeSetProjFn) calling SegmentHooks::after_step, and events
+// (SegmentHooks::find_event) located on CVODE's interpolant of each step, as with the explicit
+// methods' dense output.
 //
 // CVODE calls the projection function after the corrector has converged and before the error
 // test, so after_step also sees step attempts that the error test then rejects; CVODE restores
@@ -213,23 +215,11 @@ SegmentResult integrate_bdf(ConstrainedOde& ode, std::vector<double>& x, double 
     require(CVodeSetProjErrEst(mem, SUNFALSE), "CVodeSetProjErrEst", cb);
   }
 
-  // x(tout) by CVODE (dense output inside the steps taken); false when it stopped early
-  auto advance = [&](double tout) -> bool {
-    // at most the steps still allowed by options.max_steps (CVODE counts them per call)
+  // after CVODE returned `flag` < 0: x = the last accepted state zn[0] at tn (the initial state
+  // before any step), and why it stopped: the ode, the hook (which describes its own failure to
+  // the driver, so no message), or CVODE itself
+  auto stopped = [&](int flag) {
     long taken = 0;
-    CVodeGetNumSteps(mem, &taken);
-    require(CVodeSetMaxNumSteps(mem, std::max(1L, options.max_steps - taken)),
-            "CVodeSetMaxNumSteps", cb);
-    double t_returned = result.t_reached;
-    const int flag = CVode(mem, tout, y.get(), &t_returned, CV_NORMAL);
-    if (cb.exception) std::rethrow_exception(cb.exception);
-    if (flag >= 0) {
-      std::copy(y_data, y_data + size, x.begin());
-      result.t_reached = t_returned;
-      return true;
-    }
-
-    // x = the last accepted state zn[0] at tn (the initial state before any step)
     CVodeGetNumSteps(mem, &taken);
     double tn = t0;
     if (taken > 0 && CVodeGetCurrentTime(mem, &tn) == CV_SUCCESS &&
@@ -237,9 +227,6 @@ SegmentResult integrate_bdf(ConstrainedOde& ode, std::vector<double>& x, double 
       std::copy(y_data, y_data + size, x.begin());
       result.t_reached = tn;
     }
-
-    // why: the ode, the hook (which describes its own failure to the driver, so no message),
-    // or CVODE itself
     if (cb.rhs_failed && ode.failed()) {
       result.status = ode.failure();
       result.message = ode.failure_message();
@@ -250,27 +237,106 @@ SegmentResult integrate_bdf(ConstrainedOde& ode, std::vector<double>& x, double 
       result.message = "CVODE " + flag_name(flag) + " at t = " + time_text(result.t_reached) +
                        (cb.cvode_message.empty() ? "" : ": " + cb.cvode_message);
     }
+  };
+
+  // an output hook's refusal ends the segment there
+  auto emit = [&](double tout, const double* state) -> bool {
+    if (!hooks.output) return true;
+    const Status s = hooks.output(tout, state);
+    if (s == Status::kOk) return true;
+    result.status = s;  // the hook describes its failure to the driver
+    result.t_reached = tout;
     return false;
   };
 
-  // each output time in turn, then the segment end
-  bool going = true;
-  for (std::size_t i = 0; going && i < outputs.size(); ++i) {
-    const double tout = outputs[i];
-    UKDYN_CHECK(tout > t0 && tout <= t1 && (i == 0 || tout >= outputs[i - 1]),
-                "integrate_bdf: outputs must be ascending and inside (t0, t1]");
-    // an output within rounding of t0 sees the initial state (CVODE refuses so short a first
-    // step); any other is reached by CVODE
-    if (!(result.t_reached == t0 && same_time(t0, tout))) going = advance(tout);
-    if (!going || !hooks.output) continue;
-    const Status s = hooks.output(tout, x.data());
-    if (s != Status::kOk) {
-      result.status = s;  // the hook describes its failure to the driver
-      going = false;
+  if (hooks.find_event) {
+    // one step at a time, each checked by hooks.find_event on CVODE's interpolant of the step
+    // (CVodeGetDky, valid on [t_n − h, t_n]); outputs come from the same interpolant
+    const VectorPtr dky(N_VNew_Serial(sunindextype(size), context.get()));
+    UKDYN_CHECK(dky != nullptr, "integrate_bdf: N_VNew_Serial failed");
+    const double* dky_data = N_VGetArrayPointer(dky.get());
+    const SegmentHooks::Dense dense = [&](double s, double* out) {
+      UKDYN_CHECK(CVodeGetDky(mem, s, 0, dky.get()) == CV_SUCCESS,
+                  "integrate_bdf: CVodeGetDky outside the last step");
+      std::copy(dky_data, dky_data + size, out);
+    };
+    std::vector<double> x_old = x;
+    std::vector<double> out(std::size_t(size), 0.0);
+    double t_old = t0;
+    std::size_t next = 0;
+    // outputs within rounding of t0 see the initial state
+    while (next < outputs.size() && same_time(t0, outputs[next])) {
+      if (!emit(outputs[next++], x.data())) return result;
     }
+    while (t_old < t1) {
+      long taken = 0;
+      CVodeGetNumSteps(mem, &taken);
+      if (taken >= options.max_steps) {
+        result.status = Status::kIntegratorFailure;
+        result.message = "bdf: step limit max_steps = " + std::to_string(options.max_steps) +
+                         " reached at t = " + time_text(t_old);
+        break;
+      }
+      double t_new = t_old;
+      const int flag = CVode(mem, t1, y.get(), &t_new, CV_ONE_STEP);
+      if (cb.exception) std::rethrow_exception(cb.exception);
+      if (flag < 0) {
+        stopped(flag);
+        break;
+      }
+      const double te = hooks.find_event(t_old, x_old.data(), t_new, y_data, dense);
+      const double until = std::isnan(te) ? t_new : te;
+      bool going = true;
+      for (; going && next < outputs.size() && outputs[next] <= until; ++next) {
+        dense(outputs[next], out.data());
+        going = emit(outputs[next], out.data());
+      }
+      if (!going) break;
+      if (!std::isnan(te)) {
+        dense(te, x.data());
+        result.t_reached = te;
+        result.event = true;
+        break;
+      }
+      std::copy(y_data, y_data + size, x_old.begin());
+      t_old = t_new;
+      x = x_old;
+      result.t_reached = t_new;
+    }
+  } else {
+    // x(tout) by CVODE (dense output inside the steps taken); false when it stopped early
+    auto advance = [&](double tout) -> bool {
+      // at most the steps still allowed by options.max_steps (CVODE counts them per call)
+      long taken = 0;
+      CVodeGetNumSteps(mem, &taken);
+      require(CVodeSetMaxNumSteps(mem, std::max(1L, options.max_steps - taken)),
+              "CVodeSetMaxNumSteps", cb);
+      double t_returned = result.t_reached;
+      const int flag = CVode(mem, tout, y.get(), &t_returned, CV_NORMAL);
+      if (cb.exception) std::rethrow_exception(cb.exception);
+      if (flag >= 0) {
+        std::copy(y_data, y_data + size, x.begin());
+        result.t_reached = t_returned;
+        return true;
+      }
+      stopped(flag);
+      return false;
+    };
+
+    // each output time in turn, then the segment end
+    bool going = true;
+    for (std::size_t i = 0; going && i < outputs.size(); ++i) {
+      const double tout = outputs[i];
+      UKDYN_CHECK(tout > t0 && tout <= t1 && (i == 0 || tout >= outputs[i - 1]),
+                  "integrate_bdf: outputs must be ascending and inside (t0, t1]");
+      // an output within rounding of t0 sees the initial state (CVODE refuses so short a first
+      // step); any other is reached by CVODE
+      if (!(result.t_reached == t0 && same_time(t0, tout))) going = advance(tout);
+      if (going) going = emit(tout, x.data());
+    }
+    if (going && result.t_reached < t1) going = advance(t1);
+    if (going) result.t_reached = t1;
   }
-  if (going && result.t_reached < t1) going = advance(t1);
-  if (going) result.t_reached = t1;
 
   // statistics
   long steps = 0, error_fails = 0, convergence_fails = 0;

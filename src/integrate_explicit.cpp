@@ -35,9 +35,14 @@ SegmentResult failed(const ConstrainedOde& ode, SegmentResult r, double t) {
 
 // When hooks.find_event reports a switch inside the step just taken: emit the samples up to it,
 // leave the state there in x and return true (the integrator then returns r with r.event).
+// `dense` locates the event and gives the samples; `restart(te, x)` gives the state the run
+// restarts from: one step of the method from (t0, x0) to te, as accurate as any step (an
+// interpolant, a cubic Hermite in particular, is less so, and its error would enter the run at
+// every event).
 bool stop_at_event(SegmentHooks& hooks, double t0, const State& x0, double t1, const State& x1,
-                   const SegmentHooks::Dense& dense, const std::vector<double>& outputs,
-                   std::size_t& next, State& x, SegmentResult& r) {
+                   const SegmentHooks::Dense& dense, const SegmentHooks::Dense& restart,
+                   const std::vector<double>& outputs, std::size_t& next, State& x,
+                   SegmentResult& r) {
   if (!hooks.find_event) return false;
   const double te = hooks.find_event(t0, x0.data(), t1, x1.data(), dense);
   if (std::isnan(te)) return false;
@@ -50,7 +55,7 @@ bool stop_at_event(SegmentHooks& hooks, double t0, const State& x0, double t1, c
       return true;
     }
   }
-  dense(te, x.data());
+  restart(te, x.data());
   r.t_reached = te;
   r.event = true;
   return true;
@@ -147,7 +152,12 @@ SegmentResult fixed_step(Stepper stepper, ConstrainedOde& ode, State& x, double 
       hermite(s, t, t_new, x, dxdt, x_new, dxdt_new, tmp);
       std::copy(tmp.begin(), tmp.end(), xs);
     };
-    if (stop_at_event(hooks, t, x, t_new, x_new, dense, outputs, next, x, r)) return r;
+    const SegmentHooks::Dense restart = [&](double s, double* xs) {
+      State tmp = x, d = dxdt;
+      stepper.do_step(fn, tmp, d, t, s - t);
+      std::copy(tmp.begin(), tmp.end(), xs);
+    };
+    if (stop_at_event(hooks, t, x, t_new, x_new, dense, restart, outputs, next, x, r)) return r;
     // samples inside (t, t_new] by cubic Hermite interpolation
     for (; next < outputs.size() && outputs[next] <= t_new; ++next) {
       hermite(outputs[next], t, t_new, x, dxdt, x_new, dxdt_new, out);
@@ -206,8 +216,13 @@ SegmentResult dopri5(ConstrainedOde& ode, State& x, double t0, double t1,
         stepper.stepper().calc_state(s, tmp, x_old, dxdt_old, t_old, x_new, dxdt_new, t_new);
         std::copy(tmp.begin(), tmp.end(), xs);
       };
-      if (hooks.find_event &&
-          stop_at_event(hooks, t_old, x_old, t_new, x_new, dense, outputs, next, x, r)) {
+      const SegmentHooks::Dense restart = [&](double s, double* xs) {
+        State tmp = x_old, d = dxdt_old;
+        odeint::runge_kutta_dopri5<State>().do_step(fn, tmp, d, t_old, s - t_old);
+        std::copy(tmp.begin(), tmp.end(), xs);
+      };
+      if (hooks.find_event && stop_at_event(hooks, t_old, x_old, t_new, x_new, dense, restart,
+                                            outputs, next, x, r)) {
         return r;
       }
     }
@@ -287,7 +302,14 @@ SegmentResult rkf78(ConstrainedOde& ode, State& x, double t0, double t1,
         hermite(s, t_old, t_new, x_old, d_old, x_new, d_new, tmp);
         std::copy(tmp.begin(), tmp.end(), xs);
       };
-      if (stop_at_event(hooks, t_old, x_old, t_new, x_new, dense, outputs, next, x, r)) return r;
+      const SegmentHooks::Dense restart = [&](double s, double* xs) {
+        State tmp = x_old;
+        odeint::runge_kutta_fehlberg78<State>().do_step(fn, tmp, t_old, s - t_old);
+        std::copy(tmp.begin(), tmp.end(), xs);
+      };
+      if (stop_at_event(hooks, t_old, x_old, t_new, x_new, dense, restart, outputs, next, x, r)) {
+        return r;
+      }
     }
     if (next < outputs.size() && t == outputs[next]) {
       if (const Status s = hooks.output(t, x.data()); s != Status::kOk) {

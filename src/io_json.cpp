@@ -42,6 +42,9 @@ void write_summary_json(const Trajectory& traj, const SimulationOptions& options
   j["rejected_steps"] = s.rejected_steps;
   j["evaluations"] = s.evaluations;
   j["projections"] = s.projections;
+  j["events"] = s.events;
+  j["stick_refusals"] = s.stick_refusals;
+  j["notes"] = s.notes;
   j["wall_time"] = s.wall_time;
   j["max_position_violation"] = s.max_position_violation;
   j["max_velocity_violation"] = s.max_velocity_violation;

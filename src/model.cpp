@@ -419,6 +419,44 @@ void Reader::read_constraints(const YAML::Node& root, SystemBuilder& builder) {
   }
 }
 
+SurfaceVelocityFn Reader::surface_velocity(const YAML::Node& node, std::size_t count) {
+  const std::string what = "surface_velocity";
+  const auto rows = rows_of(node, what);
+  if (rows.size() != count) {
+    fail(node, "surface_velocity needs " + std::to_string(count) +
+                   " entries, one per sliding coordinate",
+         "the velocity of the surface under the contact, e.g. [V, 0] for a belt moving at V");
+  }
+  // [u; u'], u' = (du/dq) q' + du/dt
+  std::vector<Expr> u, u_dot;
+  for (const auto& r : rows) {
+    const Expr e = expression(r, what);
+    for (const auto& v : velocities_) {
+      if (!set_->independent_of(e, v)) {
+        fail(r, "surface_velocity depends on the velocity '" + v + "'",
+             "the surface velocity may depend on the coordinates and t only");
+      }
+    }
+    u.push_back(e);
+    u_dot.push_back(set_->total_derivative(e, "t", chain_));
+  }
+  u.insert(u.end(), u_dot.begin(), u_dot.end());
+  const Program p = compile(u, node, what);
+  const InputLayout layout = layout_;
+  const Index k = Index(count);
+  return [p, layout, k](const VectorXd& q, const VectorXd& qd, double t, Eigen::Ref<VectorXd> uo,
+                        Eigen::Ref<VectorXd> udo) {
+    ThreadBuffers& b = buffers();
+    b.reserve(layout.size(), p);
+    layout.fill(b.in, q, qd, t);
+    p.evaluate(b.in.data(), b.out.data(), b.scratch.data());
+    for (Index r = 0; r < k; ++r) {
+      uo[r] = b.out[std::size_t(r)];
+      udo[r] = b.out[std::size_t(k + r)];
+    }
+  };
+}
+
 void Reader::read_nonideal(const YAML::Node& root, SystemBuilder& builder) {
   const YAML::Node ns = root["nonideal"];
   if (!ns) return;
@@ -427,6 +465,16 @@ void Reader::read_nonideal(const YAML::Node& root, SystemBuilder& builder) {
   for (const auto& f : ns) {
     ++index;
     if (!f.IsMap()) fail(f, "a non-ideal force must be a mapping");
+    for (const auto& kv : f) {
+      static const std::set<std::string> keys = {
+          "friction", "constraint", "mu", "mu_static", "coordinates", "regularization_velocity",
+          "surface_velocity", "c", "C"};
+      if (!keys.count(kv.first.Scalar())) {
+        fail(kv.first, "unknown key '" + kv.first.Scalar() + "' in a non-ideal force",
+             "the keys are friction, constraint, mu, mu_static, coordinates, "
+             "regularization_velocity, surface_velocity (coulomb), c (viscous), C");
+      }
+    }
     std::vector<Index> coords;
     if (const YAML::Node cn = f["coordinates"]) {
       if (!cn.IsSequence()) fail(cn, "coordinates must be a list of coordinate names");
@@ -453,6 +501,16 @@ void Reader::read_nonideal(const YAML::Node& root, SystemBuilder& builder) {
           spec.regularization_velocity =
               number(f["regularization_velocity"], "regularization_velocity");
         if (spec.mu < 0) fail(f["mu"], "mu must be >= 0");
+        if (const YAML::Node ms = f["mu_static"]) {
+          spec.mu_static = number(ms, "mu_static");
+          if (!(*spec.mu_static >= spec.mu)) {
+            fail(ms, "mu_static must be >= mu (the kinetic coefficient)");
+          }
+        }
+        if (const YAML::Node un = f["surface_velocity"]) {
+          spec.surface_velocity = surface_velocity(un, coords.empty() ? coordinates_.size()
+                                                                      : coords.size());
+        }
         builder.add(coulomb_friction(spec));
       } else if (law == "viscous") {
         if (!f["c"])

@@ -195,6 +195,9 @@ class Reader {
   Constraint read_constraint(const YAML::Node& c, const std::string& name,
                              const std::string& what);
   void read_nonideal(const YAML::Node& root, SystemBuilder& builder);
+  // a Coulomb friction's surface_velocity: `count` expressions of q and t, compiled with their
+  // rates along the motion
+  SurfaceVelocityFn surface_velocity(const YAML::Node& node, std::size_t count);
   void read_initial(const YAML::Node& root, Model& model);
   void read_simulate(const YAML::Node& root, Model& model);
   void read_output(const YAML::Node& root, Model& model);

@@ -1,6 +1,7 @@
 // Non-ideal forces: the view of the ideal force they read, and the ready-made friction laws.
 #include "ukdyn/nonideal.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 #include <utility>
@@ -16,6 +17,10 @@ Eigen::Ref<const VectorXd> IdealForceInfo::lambda(Index k) const { return ws_.la
 Eigen::Ref<const VectorXd> IdealForceInfo::share(Index k) const { return ws_.shares.col(k); }
 Eigen::Ref<const VectorXd> IdealForceInfo::slip_hint(Index i) const {
   return ws_.slip_hint.col(i);
+}
+Eigen::Ref<const VectorXd> IdealForceInfo::sliding_velocity(Index c) const {
+  const auto& contacts = sys_.friction_contacts();
+  return ws_.sliding.col(c).head(Index(contacts[std::size_t(c)].coordinates.size()));
 }
 Index IdealForceInfo::constraint_index(std::string_view name) const {
   return sys_.constraint_index(name);
@@ -40,10 +45,16 @@ std::vector<Index> resolve_coordinates(const std::vector<Index>& listed, Index n
     for (Index i = 0; i < n; ++i) all[std::size_t(i)] = i;
     return all;
   }
-  for (Index i : listed) {
+  for (std::size_t j = 0; j < listed.size(); ++j) {
+    const Index i = listed[j];
     if (i < 0 || i >= n) {
       throw std::invalid_argument(who + ": coordinate index " + std::to_string(i) +
                                   " is out of range [0, " + std::to_string(n) + ")");
+    }
+    if (std::find(listed.begin(), listed.begin() + std::ptrdiff_t(j), i) !=
+        listed.begin() + std::ptrdiff_t(j)) {
+      throw std::invalid_argument(who + ": coordinate index " + std::to_string(i) +
+                                  " is listed twice");
     }
   }
   return listed;
@@ -62,29 +73,38 @@ NonIdealForce coulomb_friction(CoulombFriction spec) {
       throw std::invalid_argument(who + ": regularization_velocity must be > 0, got " +
                                   std::to_string(spec.regularization_velocity));
     }
+    if (spec.mu_static && !(*spec.mu_static >= spec.mu)) {
+      throw std::invalid_argument(who + ": mu_static must be >= mu = " + std::to_string(spec.mu) +
+                                  ", got " + std::to_string(*spec.mu_static));
+    }
     const Index k = sys.constraint_index(spec.constraint);
     const std::vector<Index> coords = resolve_coordinates(spec.coordinates, sys.dofs(), who);
     const double mu = spec.mu, eps2 = spec.regularization_velocity * spec.regularization_velocity;
-    const Index self = sys.nonideal_count();  // this force's index once bound
-    return [k, coords, mu, eps2, self](const VectorXd&, const VectorXd& qd, double,
-                                       const IdealForceInfo& ideal, Eigen::Ref<VectorXd> C) {
-      double v2 = 0.0;
-      for (Index i : coords) v2 += qd[i] * qd[i];
+    const Index self = sys.nonideal_count();                   // this force's index once bound
+    const Index contact = Index(sys.friction_contacts().size());  // and its contact's
+    return [k, coords, mu, eps2, self, contact](const VectorXd&, const VectorXd&, double,
+                                                const IdealForceInfo& ideal,
+                                                Eigen::Ref<VectorXd> C) {
+      // v_rel, the sliding velocity relative to the constraint (see CoulombFriction)
+      const auto v = ideal.sliding_velocity(contact);
+      const double v2 = v.squaredNorm();
       const double N = ideal.normal_force(k);
       const auto hint = ideal.slip_hint(self);
       if (hint.squaredNorm() > 0.0) {
-        // slipping from rest: mu N along the hint, then exactly −mu N v/|v|
-        if (v2 <= eps2) {
+        // slipping from rest: mu N along the hint while |v_rel| <= 100 eps (the speed at which
+        // the simulation locates stops: a restart from v_rel ≈ 0 never sees the friction flip
+        // inside its first step), then exactly −mu N v_rel/|v_rel|
+        if (v2 <= 1e4 * eps2) {
           for (Index i : coords) C[i] = mu * N * hint[i];
         } else {
           const double scale = -mu * N / std::sqrt(v2);
-          for (Index i : coords) C[i] = scale * qd[i];
+          for (std::size_t r = 0; r < coords.size(); ++r) C[coords[r]] = scale * v[Index(r)];
         }
         return;
       }
-      // C_i = −mu N v_i / sqrt(|v|² + eps²)
+      // C_i = −mu N v_rel,i / sqrt(|v_rel|² + eps²)
       const double scale = -mu * N / std::sqrt(v2 + eps2);
-      for (Index i : coords) C[i] = scale * qd[i];
+      for (std::size_t r = 0; r < coords.size(); ++r) C[coords[r]] = scale * v[Index(r)];
     };
   }));
   force.coulomb_ = std::make_shared<const CoulombFriction>(spec);

@@ -70,6 +70,12 @@ namespace {
 
 // stick/slip transitions after which a run is declared chattering
 constexpr long kMaxEvents = 100000;
+// notes a run keeps (RunStatistics::notes)
+constexpr std::size_t kMaxNotes = 20;
+
+// What a Coulomb contact does: slides (friction acts), sticks (the stick constraint acts), or
+// slides through a zero of v_rel at which it could not stick (the zero is its next event).
+enum class ContactMode : unsigned char { kSliding, kSticking, kPassing };
 
 std::string format(double v) {
   std::ostringstream s;
@@ -201,28 +207,27 @@ class Run {
   Workspace& workspace() { return ws_; }
   bool projecting() const { return projecting_; }
 
-  // --- Coulomb contacts: stick or slip -------------------------------------------------------
+  // --- Coulomb contacts: stick, slide, or slide through v_rel = 0 (docs/friction.md) ----------
   // the friction force while sliding, the stick constraint while sticking
   void apply_contact_modes() {
     const auto& contacts = sys_.friction_contacts();
     for (std::size_t c = 0; c < contacts.size(); ++c) {
-      ws_.nonideal_enabled[std::size_t(contacts[c].force)] = sticking_[c] ? 0 : 1;
-      ws_.activity_override[std::size_t(contacts[c].stick_constraint)] = sticking_[c] ? 1 : 0;
+      const bool sticks = mode_[c] == ContactMode::kSticking;
+      ws_.nonideal_enabled[std::size_t(contacts[c].force)] = sticks ? 0 : 1;
+      ws_.activity_override[std::size_t(contacts[c].stick_constraint)] = sticks ? 1 : 0;
     }
   }
 
-  // initial modes: a contact at rest sticks when the force holding it is within mu N
-  void initial_contact_modes(double t, const double* x) {
+  // initial modes: a contact at rest (|v_rel| <= eps) sticks when sticking is admissible, else it
+  // starts to slide with friction against its impending motion
+  void initial_contact_modes(double t, double* x) {
     const auto& contacts = sys_.friction_contacts();
-    sticking_.assign(contacts.size(), 0);
+    mode_.assign(contacts.size(), ContactMode::kSliding);
+    apply_contact_modes();
     for (std::size_t c = 0; c < contacts.size(); ++c) {
-      if (sliding_speed(c, x) == 0.0) {
-        sticking_[c] = 1;
-        apply_contact_modes();
-        if (stick_margin(c, t, x) < 0.0) {
-          sticking_[c] = 0;
-          set_slip_hint(c, true);
-        }
+      const Index k = relative_velocity(c, t, x, velocity_);
+      if (velocity_.head(k).norm() <= contacts[c].eps && !try_stick(c, t, x)) {
+        start_sliding(c, t, x);
       }
     }
     apply_contact_modes();
@@ -235,26 +240,43 @@ class Run {
     double first = std::numeric_limits<double>::quiet_NaN();
     switching_ = -1;
     for (std::size_t c = 0; c < contacts.size(); ++c) {
-      // g ≤ 0 marks the switch: sliding, the speed falls to v_stop; sticking,
-      // mu N − |holding force|
-      double te;
-      if (!sticking_[c]) {
-        // the sliding speed along the step's initial direction falls to v_stop = 100 eps: the
-        // contact stops, whether its velocity would reverse (sliding uphill) or decay to rest
-        // (decelerating downhill, where the regularized law would only creep); the stop is
-        // then early by v_stop / deceleration, the position off by v_stop² / (2 deceleration)
-        const double v_stop = 100.0 * contacts[c].eps;
-        const Index k = sliding_velocity(c, x0, direction_);
-        const double speed = direction_.head(k).norm();
-        if (speed <= v_stop) continue;
-        direction_.head(k) /= speed;
-        te = locate(t0, x0, t1, x1, dense, [&](double, const double* x) {
-          sliding_velocity(c, x, velocity_);
-          return velocity_.head(k).dot(direction_.head(k)) - v_stop;
-        });
-      } else {
-        te = locate(t0, x0, t1, x1, dense,
-                    [&](double t, const double* x) { return stick_margin(c, t, x); });
+      double te = std::numeric_limits<double>::quiet_NaN();
+      switch (mode_[c]) {
+        case ContactMode::kSticking:
+          // the holding force reaches mu_static N: mu_static N − |holding force| falls to zero
+          te = locate(t0, t1, x1, dense,
+                      [&](double t, const double* x) { return stick_margin(c, t, x); });
+          break;
+        case ContactMode::kSliding: {
+          // the sliding speed along the step's initial direction falls to v_stop = 100 eps: the
+          // contact stops, or would have to, whether its velocity would reverse or decay to
+          // rest (where the regularized law would only creep); the stop is then early by
+          // v_stop / deceleration, the position off by v_stop² / (2 deceleration)
+          const double v_stop = 100.0 * contacts[c].eps;
+          const Index k = relative_velocity(c, t0, x0, direction_);
+          const double speed = direction_.head(k).norm();
+          if (speed <= v_stop) continue;
+          direction_.head(k) /= speed;
+          te = locate(t0, t1, x1, dense, [&](double t, const double* x) {
+            relative_velocity(c, t, x, velocity_);
+            return velocity_.head(k).dot(direction_.head(k)) - v_stop;
+          });
+          break;
+        }
+        case ContactMode::kPassing: {
+          // a contact that could not stick: the zero of v_rel along its direction then
+          const Index k = Index(contacts[c].coordinates.size());
+          auto along = [&](double t, const double* x) {
+            relative_velocity(c, t, x, velocity_);
+            return velocity_.head(k).dot(passing_.col(Index(c)).head(k));
+          };
+          if (along(t0, x0) <= 0.0) {
+            mode_[c] = ContactMode::kSliding;  // passed already (within rounding of the start)
+            continue;
+          }
+          te = locate(t0, t1, x1, dense, along);
+          break;
+        }
       }
       if (!std::isnan(te) && (std::isnan(first) || te < first)) {
         first = te;
@@ -264,19 +286,38 @@ class Run {
     return first;
   }
 
-  // switches the contact found by the last find_event; a contact that starts to stick has its
-  // sliding velocity projected to zero
+  // switches the contact found by the last find_event at (t, x)
   Status switch_contact(double t, double* x) {
     const std::size_t c = std::size_t(switching_);
-    const bool releasing = sticking_[c] != 0;
-    if (releasing) stick_margin(c, t, x);  // the holding force just before release
-    sticking_[c] = sticking_[c] ? 0 : 1;
-    set_slip_hint(c, releasing);
-    apply_contact_modes();
     ++traj_.stats.events;
-    bool changed = false;
-    ProjectionOptions all = o_.projection;
-    return project(t, x, all, changed);
+    switch (mode_[c]) {
+      case ContactMode::kSticking: {
+        // release: friction from its full magnitude along the force that held the contact
+        stick_margin(c, t, x);
+        mode_[c] = ContactMode::kSliding;
+        set_slip_hint(c, holding_);
+        apply_contact_modes();
+        bool changed = false;
+        ProjectionOptions all = o_.projection;
+        return project(t, x, all, changed);
+      }
+      case ContactMode::kSliding: {
+        // the contact stops, or would have to: it sticks when that is admissible, else it
+        // slides on through v_rel = 0, the next event of this contact
+        if (try_stick(c, t, x)) return Status::kOk;
+        const Index k = relative_velocity(c, t, x, velocity_);
+        const double speed = velocity_.head(k).norm();
+        passing_.col(Index(c)).head(k) = velocity_.head(k) / (speed > 0.0 ? speed : 1.0);
+        mode_[c] = ContactMode::kPassing;
+        return Status::kOk;
+      }
+      case ContactMode::kPassing:
+        // v_rel = 0 passed: the friction turns against the new motion, at its full magnitude
+        start_sliding(c, t, x);
+        apply_contact_modes();
+        return Status::kOk;
+    }
+    return Status::kOk;
   }
 
   // projects x = [q; q'; W] in place with the given mask; false when it did not converge
@@ -337,6 +378,7 @@ class Run {
     traj_.kinetic_energy.push_back(T);
     traj_.potential_energy.push_back(V);
     traj_.energy.push_back(T + V);
+    peak_kinetic_ = std::max(peak_kinetic_, T);
     traj_.work_nonideal.push_back(sample_[std::size_t(2 * n_)]);
     // violations of each constraint
     evaluate_violations(sys_, ws_, q_, qd_, t);
@@ -353,22 +395,21 @@ class Run {
   const std::string& failure() const { return failure_; }
 
  private:
-  // q' on the contact's sliding coordinates
-  // q' on contact c's sliding coordinates into the head of v; returns how many
-  Index sliding_velocity(std::size_t c, const double* x, VectorXd& v) const {
-    const auto& coords = sys_.friction_contacts()[c].coordinates;
-    for (std::size_t r = 0; r < coords.size(); ++r) v[Index(r)] = x[n_ + coords[r]];
-    return Index(coords.size());
-  }
-  double sliding_speed(std::size_t c, const double* x) {
-    return velocity_.head(sliding_velocity(c, x, velocity_)).norm();
+  // contact c's v_rel at (t, x) into the head of v; returns its length
+  Index relative_velocity(std::size_t c, double t, const double* x, VectorXd& v) {
+    q_ = Eigen::Map<const VectorXd>(x, n_);
+    qd_ = Eigen::Map<const VectorXd>(x + n_, n_);
+    detail::sliding_velocity(sys_, ws_, Index(c), q_, qd_, t, false);
+    const Index k = Index(sys_.friction_contacts()[c].coordinates.size());
+    v.head(k) = ws_.sliding.col(Index(c)).head(k);
+    return k;
   }
 
   // the first s in (t0, t1] with g(s) <= 0, by bisection on the dense output (g(t0) > 0 is
   // assumed), or NaN when g(t1) > 0
   template <class G>
-  double locate(double t0, const double*, double t1, const double* x1,
-                const detail::SegmentHooks::Dense& dense, G&& g) {
+  double locate(double t0, double t1, const double* x1, const detail::SegmentHooks::Dense& dense,
+                G&& g) {
     if (g(t1, x1) > 0.0) return std::numeric_limits<double>::quiet_NaN();
     double lo = t0, hi = t1;
     while (hi - lo > 1e-14 * std::max(1.0, std::abs(hi))) {
@@ -379,15 +420,18 @@ class Run {
     return hi;
   }
 
-  // mu N − |holding force|, with the contact sticking, at (t, x). The stick rows make the
-  // normal constraint's rows redundant, so their minimum-norm shares split the reaction
-  // arbitrarily; the reaction R = share(normal) + share(stick) is unique, and is split here into
-  // its part along the normal constraint's rows (N) and the rest (the friction that holds).
+  // mu_static N − |holding force|, with the contact sticking, at (t, x); NaN when the
+  // constraints with the stick rows have no solution there. The stick rows make the normal
+  // constraint's rows redundant, so their minimum-norm shares split the reaction arbitrarily;
+  // the reaction R = share(normal) + share(stick) is unique, and is split here into its part
+  // along the normal constraint's rows (N) and the rest (the friction that holds).
   double stick_margin(std::size_t c, double t, const double* x) {
     const FrictionContact& contact = sys_.friction_contacts()[c];
     q_ = Eigen::Map<const VectorXd>(x, n_);
     qd_ = Eigen::Map<const VectorXd>(x + n_, n_);
-    if (forward_dynamics(sys_, ws_, q_, qd_, t) != Status::kOk) return -1.0;
+    if (forward_dynamics(sys_, ws_, q_, qd_, t) != Status::kOk) {
+      return std::numeric_limits<double>::quiet_NaN();
+    }
     reaction_ =
         ws_.shares.col(contact.normal_constraint) + ws_.shares.col(contact.stick_constraint);
     const Index k = contact.normal_constraint, rows = sys_.constraint(k).rows();
@@ -403,17 +447,96 @@ class Run {
       normal_ = Nt * Nt.completeOrthogonalDecomposition().solve(reaction_);
     }
     holding_ = reaction_ - normal_;
-    return contact.mu * normal_.norm() - holding_.norm();
+    return contact.mu_static * normal_.norm() - holding_.norm();
   }
 
-  // the friction of a contact that starts to slip from rest points along the force that held
-  // it (see CoulombFriction); a contact that sticks, or slides, needs no hint
-  void set_slip_hint(std::size_t c, bool from_rest) {
+  // Sticks contact c at (t, x) when sticking is admissible, projecting the velocities of x onto
+  // the stick rows; else leaves x and the mode as they were and returns false. Admissible:
+  // (1) the projection removes at most rtol · (largest kinetic energy of the run) — a zero of
+  // v_rel that the mechanism passes through kinematically (a dead centre) would need a velocity
+  // jump; (2) the constraints with the stick rows have a solution there; (3) the force that
+  // holds the contact lies within mu_static N.
+  bool try_stick(std::size_t c, double t, double* x) {
+    q_ = Eigen::Map<const VectorXd>(x, n_);
+    qd_ = Eigen::Map<const VectorXd>(x + n_, n_);
+    const bool evaluated = forward_dynamics(sys_, ws_, q_, qd_, t) == Status::kOk;
+    const double T_before = detail::kinetic_energy(ws_, qd_);
+    mode_[c] = ContactMode::kSticking;
+    apply_contact_modes();
+    auto refuse = [&](const std::string& why) {
+      mode_[c] = ContactMode::kSliding;
+      apply_contact_modes();
+      if (!why.empty()) {
+        ++traj_.stats.stick_refusals;
+        if (traj_.stats.notes.size() < kMaxNotes) {
+          traj_.stats.notes.push_back("t = " + format(t) + ": contact '" +
+                                      sys_.nonideal_name(sys_.friction_contacts()[c].force) +
+                                      "' did not stick: " + why + "; it slides on through v = 0");
+        }
+      }
+      return false;
+    };
+    // (1) the velocities with the stick rows, and the kinetic energy that takes
+    ProjectionOptions all = o_.projection;
+    const ProjectionResult rv = project_velocities(sys_, ws_, q_, qd_, t, all);
+    if (!evaluated || rv.status != Status::kOk || !rv.converged) {
+      return refuse("the velocities cannot be projected onto the stick rows");
+    }
+    const double removed = T_before - detail::kinetic_energy(ws_, qd_);
+    const double allowed = std::max(o_.rtol, 1e-14) * std::max(peak_kinetic_, T_before);
+    if (removed > allowed) {
+      return refuse("sticking would remove " + format(removed) +
+                    " of kinetic energy (a zero of the sliding velocity that the mechanism passes "
+                    "through)");
+    }
+    std::copy(x, x + 2 * n_ + 1, trial_.begin());
+    Eigen::Map<VectorXd>(trial_.data() + n_, n_) = qd_;
+    // (2), (3)
+    const double margin = stick_margin(c, t, trial_.data());
+    if (std::isnan(margin)) return refuse("the constraints with the stick rows have no solution");
+    if (margin < 0.0) return refuse("");  // it reverses: friction cannot hold it
+    if (rv.iterations > 0) ++traj_.stats.projections;
+    note_violation(0.0, rv.violation);
+    std::copy(trial_.begin(), trial_.end(), x);
+    set_slip_hint(c, VectorXd());
+    return true;
+  }
+
+  // contact c slides from v_rel = 0 (released, or passing): friction at its full magnitude
+  // against the impending motion, the acceleration of v_rel without this friction
+  void start_sliding(std::size_t c, double t, const double* x) {
+    const FrictionContact& contact = sys_.friction_contacts()[c];
+    mode_[c] = ContactMode::kSliding;
+    set_slip_hint(c, VectorXd());
+    apply_contact_modes();
+    ws_.nonideal_enabled[std::size_t(contact.force)] = 0;
+    q_ = Eigen::Map<const VectorXd>(x, n_);
+    qd_ = Eigen::Map<const VectorXd>(x + n_, n_);
+    const bool evaluated = forward_dynamics(sys_, ws_, q_, qd_, t) == Status::kOk;
+    apply_contact_modes();
+    if (!evaluated) return;  // (the regularized law then decides)
+    // a_rel = P (q''_c − u'), P the tangential projector of sliding_velocity
+    const Index k = Index(contact.coordinates.size());
+    for (Index r = 0; r < k; ++r) velocity_[r] = ws_.qdd[contact.coordinates[std::size_t(r)]];
+    const Index basis = detail::sliding_velocity(sys_, ws_, Index(c), q_, qd_, t, false);
+    if (contact.surface_velocity) velocity_.head(k) -= ws_.surface_u_dot.head(k);
+    for (Index j = 0; j < basis; ++j) {
+      const auto e = ws_.contact_basis.row(j).head(k);
+      velocity_.head(k) -= velocity_.head(k).dot(e) * e.transpose();
+    }
+    holding_.setZero();
+    for (Index r = 0; r < k; ++r) holding_[contact.coordinates[std::size_t(r)]] = -velocity_[r];
+    set_slip_hint(c, holding_);
+  }
+
+  // the direction of the friction at |v_rel| <= eps: along `along` (n) on the contact's
+  // sliding coordinates, normalized; none when `along` is empty or zero (see CoulombFriction)
+  void set_slip_hint(std::size_t c, const VectorXd& along) {
     const FrictionContact& contact = sys_.friction_contacts()[c];
     auto hint = ws_.slip_hint.col(contact.force);
     hint.setZero();
-    if (!from_rest) return;
-    for (Index i : contact.coordinates) hint[i] = holding_[i];
+    if (along.size() == 0) return;
+    for (Index i : contact.coordinates) hint[i] = along[i];
     if (hint.norm() > 0.0) hint.normalize();
   }
 
@@ -431,7 +554,11 @@ class Run {
   std::vector<double> sample_ = std::vector<double>(std::size_t(2 * n_ + 1));
   ProjectionOptions projection_;
   bool projecting_ = false;
-  std::vector<unsigned char> sticking_;      // (contacts) contact c sticks
+  std::vector<ContactMode> mode_;            // (contacts) what contact c does
+  MatrixXd passing_ = MatrixXd::Zero(n_, Index(sys_.friction_contacts().size()));  // (n × contacts)
+                                             // head of col c: v_rel's direction when c passes
+  std::vector<double> trial_ = std::vector<double>(std::size_t(2 * n_ + 1));  // a trial state
+  double peak_kinetic_ = 0.0;                // largest kinetic energy at the samples so far
   VectorXd holding_ = VectorXd::Zero(n_);    // (n) holding force of the last stick_margin
   VectorXd reaction_ = VectorXd::Zero(n_);   // (n) scratch of stick_margin: R
   VectorXd normal_ = VectorXd::Zero(n_);     // (n) scratch of stick_margin: R_N

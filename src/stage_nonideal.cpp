@@ -19,6 +19,13 @@ Status apply_nonideal(const System& sys, Workspace& ws, const VectorXd& q, const
     ws.Qc = ws.Qc_ideal;
     return Status::kOk;
   }
+  // v_rel of each Coulomb contact whose friction acts (its constraint's rows are assembled)
+  const auto& contacts = sys.friction_contacts();
+  for (std::size_t c = 0; c < contacts.size(); ++c) {
+    if (ws.nonideal_enabled[std::size_t(contacts[c].force)]) {
+      detail::sliding_velocity(sys, ws, Index(c), q, qd, t, true);
+    }
+  }
   // C = Σ C_i(q, q', t, ideal force)
   const IdealForceInfo ideal(sys, ws);
   for (Index i = 0; i < sys.nonideal_count(); ++i) {

@@ -3,6 +3,7 @@
 
 #include <limits>
 
+#include "detail.hpp"
 #include "ukdyn/autodiff.hpp"
 
 #include <algorithm>
@@ -192,11 +193,8 @@ System SystemBuilder::build() const {
                                     " is out of range [0, " + std::to_string(n_) + ")");
       }
     }
-    Constraint stick = nonholonomic(
-        "stick." + f.name(), Index(coords.size()),
-        [coords](const auto&, const auto& qd, const auto&, auto& psi) {
-          for (std::size_t r = 0; r < coords.size(); ++r) psi[Index(r)] = qd[coords[r]];
-        });
+    Constraint stick = detail::stick_constraint("stick." + f.name(), coords,
+                                                spec->surface_velocity);
     const double never = std::numeric_limits<double>::infinity();
     stick.active_between(never, never);
     all.push_back(stick);
@@ -235,15 +233,14 @@ System SystemBuilder::build() const {
       contact.force = Index(s.nonideal_fns_.size()) - 1;
       contact.normal_constraint = s.constraint_index(spec->constraint);
       contact.stick_constraint = s.constraint_index("stick." + f.name());
-      contact.coordinates = s.constraint(contact.stick_constraint).rows() == n_ &&
-                                    spec->coordinates.empty()
-                                ? std::vector<Index>()
-                                : spec->coordinates;
+      contact.coordinates = spec->coordinates;
       if (contact.coordinates.empty()) {
         for (Index i = 0; i < n_; ++i) contact.coordinates.push_back(i);
       }
       contact.mu = spec->mu;
+      contact.mu_static = spec->mu_static.value_or(spec->mu);
       contact.eps = spec->regularization_velocity;
+      contact.surface_velocity = spec->surface_velocity;
       s.contacts_.push_back(contact);
     }
   }

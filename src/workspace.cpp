@@ -85,6 +85,18 @@ Workspace::Workspace(const System& sys, const SolverOptions& options)
   activity_override.assign(std::size_t(K), -1);
   nonideal_enabled.assign(std::size_t(sys.nonideal_count()), 1);
   slip_hint.setZero(n, sys.nonideal_count());
+  // Coulomb contacts: relative sliding velocities and their scratch
+  Index contact_rows_max = 0, contact_width = 0;
+  for (const auto& contact : sys.friction_contacts()) {
+    contact_rows_max = std::max(contact_rows_max, sys.constraint(contact.normal_constraint).rows());
+    contact_width = std::max(contact_width, Index(contact.coordinates.size()));
+  }
+  sliding.setZero(contact_width, Index(sys.friction_contacts().size()));
+  contact_rows.setZero(contact_rows_max, n);
+  contact_b.setZero(contact_rows_max);
+  contact_basis.setZero(contact_rows_max, contact_width);
+  surface_u.setZero(contact_width);
+  surface_u_dot.setZero(contact_width);
   for (const auto& c : sys.constraints()) stabilization.push_back(c.stabilization());
   phi.setZero(m);
   phi_dot.setZero(m);

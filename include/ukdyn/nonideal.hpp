@@ -8,6 +8,7 @@
 
 #include <functional>
 #include <memory>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -43,6 +44,10 @@ class IdealForceInfo {
   /// The slip hint of non-ideal force i (see Workspace::slip_hint): zero unless the force is a
   /// Coulomb friction that has just started to slip from rest.
   Eigen::Ref<const VectorXd> slip_hint(Index i) const;
+  /// The sliding velocity of Coulomb contact c relative to its constraint, v_rel (one entry per
+  /// sliding coordinate; see CoulombFriction), computed once per evaluation before the
+  /// non-ideal forces are called.
+  Eigen::Ref<const VectorXd> sliding_velocity(Index c) const;
   /// Euclidean norm of share(k): the normal force of a contact constraint written in Cartesian
   /// coordinates. Cost O(n).
   double normal_force(Index k) const { return share(k).norm(); }
@@ -84,32 +89,56 @@ class NonIdealForce {
   std::shared_ptr<const CoulombFriction> coulomb_;
 };
 
-/// Coulomb friction on a constraint surface. While sliding:
-///   C_i = −mu N v_i / sqrt(|v|² + eps²)  for i in `coordinates`, zero elsewhere,
-/// where v is q' restricted to `coordinates` (the sliding velocity, which must be Cartesian for
-/// N to be the physical normal force), N = |A_kᵀ lambda_k| the norm of constraint k's share of
-/// the ideal force, and eps = `regularization_velocity`. For |v| >> eps this is exact Coulomb
-/// friction of magnitude mu N opposing v (relative error about eps² / (2 |v|²)). When the
-/// simulation has just released a sticking contact (v = 0), friction starts at its full
-/// magnitude mu N opposing the impending motion, i.e. along the force that held the contact,
-/// and follows −mu N v/|v| exactly once |v| > eps (no regularization while slipping from rest).
-/// Sticking: the system also gets a nonholonomic constraint "stick.<name>" (v = 0 on
-/// `coordinates`), inactive unless the simulation switches it on. simulate() locates the instant
-/// the sliding velocity reverses (an event, found on the integrator's dense output) and sticks
-/// there: the friction force is switched off and the stick constraint on, so the block is held
-/// by an ideal constraint force; it slips again when that force exceeds mu N (a second event).
-/// No regularization enters the stick phase. A single forward_dynamics call always sees the
-/// sliding law.
+/// The velocity u of the surface's material point under a contact, on the contact's sliding
+/// coordinates (one entry each), and its rate u' = du/dt = (du/dq) q' + du/dt along the motion.
+/// u may depend on q and t, not on q'. Must not allocate.
+using SurfaceVelocityFn = std::function<void(const VectorXd& q, const VectorXd& qd, double t,
+                                             Eigen::Ref<VectorXd> u, Eigen::Ref<VectorXd> u_dot)>;
+
+/// Coulomb friction on a constraint surface (docs/friction.md has the equations). While sliding:
+///   C_i = −mu N v_rel,i / sqrt(|v_rel|² + eps²)  for i in `coordinates`, zero elsewhere,
+/// where N = |A_kᵀ lambda_k| is the norm of constraint k's share of the ideal force and v_rel the
+/// sliding velocity relative to the constraint:
+///   v_rel = P (v − u),   P = I − N_k⁺ N_k,
+/// v = q' restricted to `coordinates` (Cartesian, for N to be the physical normal force), N_k
+/// constraint k's rows of A restricted to those coordinates, u the surface velocity.
+/// P removes the velocity along the constraint's normals, which a bilateral contact shares with
+/// the surface: for phi(q, t) that depends on t (a wire that rotates, a platform that rises) the
+/// surface's normal motion is thereby derived from phi itself. A motion of the surface along
+/// itself (a conveyor belt, a turntable under a block in the plane) leaves phi unchanged and
+/// cannot be derived: it is given as `surface_velocity`. For |v_rel| >> eps this is exact
+/// Coulomb friction of magnitude mu N opposing v_rel. When the simulation releases a sticking
+/// contact, or lets a contact pass through v_rel = 0, friction starts at its full magnitude
+/// against the impending motion (Workspace::slip_hint), keeps that direction while
+/// |v_rel| <= 100 eps (the speed at which stops are located) and then follows
+/// −mu N v_rel/|v_rel| exactly.
+///
+/// Sticking: the system also gets a nonholonomic constraint "stick.<name>", v − u = 0 on
+/// `coordinates`, inactive unless the simulation switches it on. simulate() locates the instant
+/// the sliding speed falls to 100 eps (an event on the integrator's dense output) and sticks
+/// there only when sticking is admissible: the velocity projection onto the stick rows removes at
+/// most a tolerance-level kinetic energy (a zero of v_rel that the mechanism passes through
+/// kinematically, like a slider-crank's dead centre, would need a velocity jump), the
+/// constraints stay consistent with the stick rows, and the force that holds the contact lies
+/// within mu_static N. Otherwise the contact slides through v_rel = 0 (a second event, where the
+/// friction reverses). A sticking contact slips again when its holding force exceeds
+/// mu_static N. No regularization enters the stick phase. A single forward_dynamics call always
+/// sees the sliding law.
 struct CoulombFriction {
   std::string constraint;            ///< name of the constraint whose share gives N
-  double mu = 0.0;                   ///< friction coefficient, >= 0
-  std::vector<Index> coordinates;    ///< sliding coordinates (empty: all n)
+  double mu = 0.0;                   ///< kinetic friction coefficient, >= 0
+  /// static friction coefficient (>= mu): a stick holds while |holding force| <= mu_static N;
+  /// unset: equal to mu
+  std::optional<double> mu_static;
+  std::vector<Index> coordinates;    ///< sliding coordinates (empty: all n), distinct
   double regularization_velocity = 1e-9;  ///< eps above, > 0, in velocity units
+  SurfaceVelocityFn surface_velocity;     ///< u above; empty: the surface has no tangential motion
   std::string name;                  ///< force name (default "coulomb.<constraint>")
 };
 
 /// The non-ideal force of a CoulombFriction law. Binding throws std::invalid_argument if the
-/// constraint does not exist, mu < 0, eps <= 0 or a coordinate is out of range. Cost O(n).
+/// constraint does not exist, mu < 0, mu_static < mu, eps <= 0, or a coordinate is out of range
+/// or repeated. Cost per evaluation O(n + rows_k · |coordinates|).
 NonIdealForce coulomb_friction(CoulombFriction spec);
 
 /// Viscous friction C_i = −c_i q'_i on `coordinates` (all when empty).

@@ -109,7 +109,12 @@ struct RunStatistics {
   long evaluations = 0;             ///< evaluations of the fundamental equation
   long projections = 0;             ///< projections that moved the state (with BDF, CVODE
                                     ///< projects before its error test, so rejected attempts count)
-  long events = 0;                  ///< stick/slip transitions of Coulomb contacts
+  long events = 0;                  ///< stick/slip events of Coulomb contacts
+  /// stops of a Coulomb contact where sticking was refused as not admissible (it would have
+  /// removed kinetic energy, or left the constraints without solution): the contact slid on
+  long stick_refusals = 0;
+  /// what the run decided on its own, one line each with its time (at most 20): a refused stick
+  std::vector<std::string> notes;
   double wall_time = 0.0;           ///< seconds
   double max_position_violation = 0.0;  ///< largest |phi| seen after a step or at a sample
   double max_velocity_violation = 0.0;  ///< largest |phi'|, |psi| likewise

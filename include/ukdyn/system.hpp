@@ -48,8 +48,10 @@ struct FrictionContact {
   Index normal_constraint = -1;  ///< index of the constraint whose share gives N
   Index stick_constraint = -1;   ///< index of the (normally inactive) stick constraint
   std::vector<Index> coordinates;  ///< the sliding coordinates
-  double mu = 0.0;               ///< friction coefficient
+  double mu = 0.0;               ///< kinetic friction coefficient
+  double mu_static = 0.0;        ///< static friction coefficient (>= mu)
   double eps = 0.0;              ///< regularization velocity: below it the contact is at rest
+  SurfaceVelocityFn surface_velocity;  ///< the surface's tangential velocity, or empty
 };
 
 /// An immutable constrained mechanical system M(q,t) q'' = Q(q,q',t) + Qc with constraints

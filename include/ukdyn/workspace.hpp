@@ -152,6 +152,9 @@ class Workspace {
   /// rest, the unit direction of the friction at |v| <= eps (opposing the impending motion:
   /// along the force that held it); zero columns when unset. Set by the simulation.
   MatrixXd slip_hint;
+  /// (largest sliding coordinates × Coulomb contacts) column c: contact c's sliding velocity
+  /// relative to its constraint, v_rel (see CoulombFriction), filled before the forces are called
+  MatrixXd sliding;
   VectorXd C;             ///< non-ideal work vector, sum of the system's forces (n)
   VectorXd Qc_nonideal;   ///< non-ideal constraint force, eq. (12) (n)
   VectorXd lambda_nonideal;  ///< multipliers with Qc_nonideal = C + Aᵀ lambda_nonideal (m)
@@ -175,6 +178,11 @@ class Workspace {
   VectorXd tmp_m;         ///< (m)
   VectorXd zero_n;        ///< (n) zeros (the velocity of a position-only evaluation)
   VectorXd lambda_tmp;    ///< (m) multipliers of a projection (discarded)
+  MatrixXd contact_rows;  ///< (largest normal rows × n) a contact's normal constraint's rows of A
+  VectorXd contact_b;     ///< (largest normal rows) their b, when evaluated apart
+  MatrixXd contact_basis; ///< (largest normal rows × largest sliding coordinates) orthonormal N_k
+  VectorXd surface_u;     ///< (largest sliding coordinates) a contact's surface velocity u
+  VectorXd surface_u_dot; ///< (largest sliding coordinates) its rate u' = du/dt
   /// (largest rows × widest constraint) one constraint's rows of A before they go into the
   /// sparse engine's pattern (width: its columns(), n for dense rows); 0 × 0 with the dense one
   MatrixXd A_rows;

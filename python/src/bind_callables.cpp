@@ -110,7 +110,7 @@ SystemHandle from_callables(const std::vector<std::string>& coordinates, py::obj
     b.add(make_constraint(c.cast<py::tuple>(), errs, "from_callables"));
   }
   // non-ideal forces: ("C", name, fn) with fn(q, q', t, Qc_ideal, lambda); ("viscous", c,
-  // coordinates); ("coulomb", constraint, mu, coordinates, eps)
+  // coordinates); ("coulomb", constraint, mu, coordinates, eps, mu_static, surface_velocity)
   for (py::handle item : nonideal) {
     py::tuple spec = item.cast<py::tuple>();
     const std::string kind = spec[0].cast<std::string>();
@@ -150,6 +150,30 @@ SystemHandle from_callables(const std::vector<std::string>& coordinates, py::obj
       f.mu = spec[2].cast<double>();
       f.coordinates = coordinate_indices(spec[3]);
       if (!spec[4].is_none()) f.regularization_velocity = spec[4].cast<double>();
+      if (spec.size() > 5 && !spec[5].is_none()) f.mu_static = spec[5].cast<double>();
+      if (spec.size() > 6 && !spec[6].is_none()) {
+        // u(q, t) and u' = du/dt along the motion, from surface_velocity(q, q_dot, t) -> (u, u')
+        py::object fn = spec[6];
+        const std::string what =
+            "coulomb friction on '" + f.constraint + "': surface_velocity(q, q_dot, t)";
+        f.surface_velocity = [errs, fn, what](const VectorXd& q, const VectorXd& qd, double t,
+                                              Eigen::Ref<VectorXd> u, Eigen::Ref<VectorXd> u_dot) {
+          call_python(
+              *errs,
+              [&] {
+                const py::tuple pair = fn(copy_vector(q), copy_vector(qd), t).cast<py::tuple>();
+                if (pair.size() != 2) {
+                  throw std::invalid_argument(what + " must return (u, u_dot)");
+                }
+                read_into(pair[0], "ukdyn callable", what.c_str(), u);
+                read_into(pair[1], "ukdyn callable", what.c_str(), u_dot);
+              },
+              [&] {
+                u.setConstant(kNaN);
+                u_dot.setConstant(kNaN);
+              });
+        };
+      }
       b.add(coulomb_friction(f));
     } else {
       throw std::invalid_argument("from_callables: unknown non-ideal force kind '" + kind + "'");

@@ -257,6 +257,8 @@ py::dict statistics_dict(const RunStatistics& s) {
   d["evaluations"] = s.evaluations;
   d["projections"] = s.projections;
   d["events"] = s.events;
+  d["stick_refusals"] = s.stick_refusals;
+  d["notes"] = s.notes;
   d["wall_time"] = s.wall_time;
   d["max_position_violation"] = s.max_position_violation;
   d["max_velocity_violation"] = s.max_velocity_violation;

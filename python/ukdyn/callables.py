@@ -99,12 +99,22 @@ def viscous(c: float, coordinates: Sequence[str] = ()) -> NonIdealSpec:
 
 
 def coulomb(constraint: str, mu: float, coordinates: Sequence[str] = (),
-            regularization_velocity: Optional[float] = None) -> NonIdealSpec:
+            regularization_velocity: Optional[float] = None, mu_static: Optional[float] = None,
+            surface_velocity: Optional[Callable[..., Any]] = None) -> NonIdealSpec:
     """Coulomb friction on the surface of ``constraint`` (nonideal.hpp, CoulombFriction), in C++:
     magnitude mu |N|, N that constraint's share of the ideal force, opposite to the sliding
-    velocity of ``coordinates`` (all when empty); stick and slip are events in simulate()."""
+    velocity of ``coordinates`` (all when empty) relative to the constraint; stick and slip are
+    events in simulate() (docs/friction.md).
+
+    Args:
+        mu_static: the static coefficient (>= mu) of sticking and release; default mu.
+        surface_velocity: ``f(q, q_dot, t) -> (u, u_dot)``, the surface's velocity along itself
+            under the contact on ``coordinates`` (a belt, a turntable) and its rate
+            u' = (du/dq) q' + du/dt; u may depend on q and t only. Default: none.
+    """
     return NonIdealSpec(("coulomb", str(constraint), float(mu), list(coordinates),
-                         regularization_velocity))
+                         regularization_velocity,
+                         None if mu_static is None else float(mu_static), surface_velocity))
 
 
 def from_callables(coordinates: Union[int, Sequence[str]], M: Any, Q: Optional[Callable[..., Any]] = None,

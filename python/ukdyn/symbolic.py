@@ -306,7 +306,9 @@ def sympy_to_yaml(coordinates: Sequence[Any], *, T: Any = None, V: Any = None, M
             f = dict(f)
             if "C" in f:
                 f["C"] = [ex(x) for x in f["C"]]
-            for key in ("mu", "c", "coefficient", "regularization_velocity"):
+            if "surface_velocity" in f:
+                f["surface_velocity"] = [ex(x) for x in f["surface_velocity"]]
+            for key in ("mu", "mu_static", "c", "coefficient", "regularization_velocity"):
                 if key in f and not isinstance(f[key], (int, float)):
                     f[key] = ex(f[key])
             if "coordinates" in f:
