@@ -2,6 +2,7 @@
 #include "ukdyn/io.hpp"
 
 #include <cerrno>
+#include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <memory>
@@ -42,6 +43,10 @@ void write_summary_json(const Trajectory& traj, const SimulationOptions& options
   j["rejected_steps"] = s.rejected_steps;
   j["evaluations"] = s.evaluations;
   j["projections"] = s.projections;
+  j["stiff_switches"] = s.stiff_switches;
+  j["stiff_switch_time"] =
+      std::isfinite(s.stiff_switch_time) ? json(s.stiff_switch_time) : json(nullptr);
+  j["stiff_steps"] = s.stiff_steps;
   j["wall_time"] = s.wall_time;
   j["max_position_violation"] = s.max_position_violation;
   j["max_velocity_violation"] = s.max_velocity_violation;
@@ -80,6 +85,7 @@ void write_summary_json(const Trajectory& traj, const SimulationOptions& options
       {"step", options.step},
       {"max_step", options.max_step},
       {"max_steps", options.max_steps},
+      {"stiff_switch", options.stiff_switch},
       {"output_every", options.output_every},
       {"t_start", options.t_start},
       {"t_end", options.t_end},
