@@ -195,10 +195,11 @@ SegmentResult dopri5(ConstrainedOde& ode, State& x, double t0, double t1,
                      const std::vector<double>& outputs, const SimulationOptions& o,
                      SegmentHooks& hooks, double dt, long max_steps) {
   SegmentResult r;
-  // the stiffness test reads the last two stages of each step (only when it can act on them)
+  // the stiffness test reads the last two stages of each step (for the switch, and for the
+  // diagnosis of a collapsed step size when the switch is off)
   StageProbe probe;
   StiffnessTest stiffness;
-  const OdeFn fn{&ode, o.stiff_switch ? &probe : nullptr};
+  const OdeFn fn{&ode, &probe};
   auto stepper = controlled(o, odeint::runge_kutta_dopri5<State>());
   State dxdt(x.size()), x_old(x.size()), dxdt_old(x.size()), out(x.size());
   fn(x, dxdt, t0);
@@ -218,7 +219,7 @@ SegmentResult dopri5(ConstrainedOde& ode, State& x, double t0, double t1,
       ++r.rejected;
       if (++rejections > kMaxRejections || t + dt == t) {
         r.collapsed = true;
-        r.stiffness = stiffness.last();
+        r.stiffness = stiffness.recent();
         return stop(r, Status::kIntegratorFailure, t,
                     "dopri5: step size underflow at t = " + std::to_string(t));
       }
@@ -229,7 +230,7 @@ SegmentResult dopri5(ConstrainedOde& ode, State& x, double t0, double t1,
     ++r.steps;
     r.last_step = t - t_old;
     // h·ρ from the 6th and 7th stages, before anything else evaluates f
-    const bool stiff = o.stiff_switch && stiffness.accepted(probe.h_rho(r.last_step));
+    const bool stiff = stiffness.accepted(probe.h_rho(r.last_step)) && o.stiff_switch;
     // a switch of the dynamics inside the step: stop there
     {
       const State x_new = x, dxdt_new = dxdt;
@@ -263,7 +264,7 @@ SegmentResult dopri5(ConstrainedOde& ode, State& x, double t0, double t1,
         if (ode.failed()) return failed(ode, r, t);
       }
     }
-    r.stiffness = stiffness.last();
+    r.stiffness = stiffness.recent();
     // stiff: the driver goes on with BDF from here (x is the state after drift control)
     if (stiff && t < t1) {
       r.stiff = true;

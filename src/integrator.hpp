@@ -2,6 +2,8 @@
 // (integrate_explicit.cpp: Boost.Odeint; integrate_bdf.cpp: SUNDIALS CVODE). Not installed.
 #pragma once
 
+#include <algorithm>
+#include <array>
 #include <functional>
 #include <limits>
 #include <string>
@@ -88,7 +90,7 @@ struct SegmentResult {
   // the step size collapsed: the adaptive method gave up (step size underflow, too many
   // rejections, or options.max_steps); the driver adds a diagnosis to the message
   bool collapsed = false;
-  double stiffness = 0.0;       // h·ρ at the last accepted step (dopri5 only; 0 when unknown)
+  double stiffness = 0.0;       // largest h·ρ of the last accepted steps (dopri5; 0: unknown)
 };
 
 // Hairer and Wanner's stiffness test of dopri5 (Hairer, Nørsett, Wanner, Solving ODEs I,
@@ -109,6 +111,7 @@ class StiffnessTest {
   // after an accepted step of size h with h·ρ = h_rho; true once the problem is stiff
   bool accepted(double h_rho) {
     last_ = h_rho;
+    recent_[next_++ % recent_.size()] = h_rho;
     if (h_rho > kStiffBound) {
       non_stiff_ = 0;
       return ++stiff_ >= kStiffSteps;
@@ -117,10 +120,15 @@ class StiffnessTest {
     return false;
   }
   double last() const { return last_; }
+  // the largest h·ρ of the last kStiffSteps + 1 accepted steps (at the stability bound h·ρ
+  // oscillates around 3.3, so one step says little)
+  double recent() const { return *std::max_element(recent_.begin(), recent_.end()); }
 
  private:
   int stiff_ = 0, non_stiff_ = 0;
   double last_ = 0.0;
+  std::array<double, kStiffSteps + 1> recent_{};
+  std::size_t next_ = 0;
 };
 
 // Integrates x (size ode.size(), the state at t0) to t1, calling hooks.output at each of

@@ -548,7 +548,7 @@ std::string diagnose_collapse(const System& sys, Workspace& ws, const Simulation
   if (explicit_method && (r.stiffness > 0.8 * detail::StiffnessTest::kStiffBound ||
                           rejected_share > 0.25)) {
     std::string text = "Likely cause: stiffness " + where + " (";
-    if (r.stiffness > 0) text += "h·rho = " + format(r.stiffness) + " at the last step, ";
+    if (r.stiffness > 0) text += "h·rho up to " + format(r.stiffness) + " in the last steps, ";
     text += format(100.0 * rejected_share) + "% of the steps rejected, last step " +
             format(r.last_step) + " s): the step size is held by stability, not accuracy (fast "
             "modes: stiff springs, regularized friction near rest, large damping). Try: "
