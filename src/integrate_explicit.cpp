@@ -30,10 +30,13 @@ struct StageProbe {
     x_last = x;
     f_last = f;
   }
-  // h·ρ ≈ h ‖f7 − f6‖ / ‖y7 − y6‖ (0 when the two stages coincide)
+  // h·ρ ≈ h ‖f7 − f6‖ / ‖y7 − y6‖ (0 when the two stages coincide), over [q; q'] only: W is
+  // a quadrature (W' = q'ᵀ Qc_nonideal, no component depends on W, its Jacobian column is
+  // zero) that adds no stiffness, but its smooth change can swamp y7 − y6 (a damper written
+  // as a non-ideal force C: W' = −c q'² is large while the stiff part of y7 − y6 is tiny)
   double h_rho(double h) const {
     double num = 0.0, den = 0.0;
-    for (std::size_t i = 0; i < x_last.size(); ++i) {
+    for (std::size_t i = 0; i + 1 < x_last.size(); ++i) {
       num += (f_last[i] - f_prev[i]) * (f_last[i] - f_prev[i]);
       den += (x_last[i] - x_prev[i]) * (x_last[i] - x_prev[i]);
     }

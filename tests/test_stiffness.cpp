@@ -68,6 +68,30 @@ TEST(Stiffness, SwitchesToBdfOnAStiffSpringDamperAndMatchesTheClosedForm) {
   EXPECT_NEAR(tr.q.back(), slow.q.back(), 1e-7);
 }
 
+// The same oscillator with its damper as a non-ideal (viscous) force: then the work W of the
+// non-ideal force is integrated too, W' = −c x'² changes fast and smoothly, and the test must
+// still see the stiff mode (it leaves W out of h·ρ)
+TEST(Stiffness, SwitchesEarlyWhenTheDamperIsANonIdealForce) {
+  const System sys = SystemBuilder({"x"})
+                         .mass_matrix(MatrixXd::Identity(1, 1))
+                         .forces([](const VectorXd& q, const VectorXd&, double,
+                                    Eigen::Ref<VectorXd> Q) { Q[0] = -kSlow * kFast * q[0]; })
+                         .add(viscous_friction({.coefficient = kSlow + kFast}))
+                         .build();
+  SimulationOptions o;
+  o.t_end = 5.0;
+  o.output_every = 0.5;
+  const Trajectory tr = simulate(sys, one(1.0), one(0.0), o);
+  ASSERT_EQ(tr.stats.status, Status::kOk) << tr.stats.message;
+  EXPECT_EQ(tr.stats.stiff_switches, 1);
+  EXPECT_GT(tr.stats.stiff_switch_time, 1e-4);
+  EXPECT_LT(tr.stats.stiff_switch_time, 2e-2);
+  for (Index i = 0; i < tr.samples(); ++i) {
+    const double t = tr.t[std::size_t(i)];
+    EXPECT_NEAR(tr.q[std::size_t(i)], stiff_exact(t), 1e-7) << "t = " << t;
+  }
+}
+
 TEST(Stiffness, ANonStiffProblemDoesNotSwitchAndKeepsDopri5sTrajectoryBitForBit) {
   // every gallery problem (including Coulomb stick/slip on the incline), on defaults
   for (const std::string& name : gallery::names()) {
