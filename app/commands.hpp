@@ -47,6 +47,9 @@ struct RunArguments {
   ModelSource source;
   std::string out_dir;           ///< -o DIR (empty: ukdyn-<model>)
   std::optional<double> t_end;   ///< --t-end
+  std::optional<std::string> integrator;  ///< --integrator NAME
+  std::optional<double> rtol, atol, step;  ///< --rtol, --atol, --step (validated: > 0)
+  bool no_stiff_switch = false;  ///< --no-stiff-switch
   bool plots = true;             ///< false with --no-plots
 };
 

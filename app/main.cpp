@@ -57,6 +57,26 @@ int main(int argc, char** argv) {
       ->type_name("DIR");
   run_cmd->add_option("--t-end", t_end, "end time, instead of the model's simulate: t_end")
       ->type_name("T");
+  run_cmd->add_option("--integrator", run.integrator,
+                      "integration method, instead of the model's simulate: integrator: rk4, "
+                      "rk5, dopri5 (default; switches to bdf by itself when the problem turns "
+                      "stiff), rkf78, bdf")
+      ->type_name("NAME");
+  run_cmd->add_option("--rtol", run.rtol,
+                      "relative tolerance of the adaptive methods (default 1e-9), instead of "
+                      "simulate: rtol")
+      ->type_name("X");
+  run_cmd->add_option("--atol", run.atol,
+                      "absolute tolerance of the adaptive methods (default 1e-11), instead of "
+                      "simulate: atol")
+      ->type_name("X");
+  run_cmd->add_option("--step", run.step,
+                      "rk4, rk5: the step; dopri5, rkf78: the first step tried (default 1e-3), "
+                      "instead of simulate: step")
+      ->type_name("X");
+  run_cmd->add_flag("--no-stiff-switch", run.no_stiff_switch,
+                    "dopri5 throughout, even when the problem turns stiff (simulate: "
+                    "stiff_switch: false)");
   run_cmd->add_flag("--no-plots", no_plots, "write no plots (plots need /usr/bin/python3 "
                     "with matplotlib, or $UKDYN_PYTHON)");
 

@@ -1,43 +1,68 @@
-// A one-line progress bar on a terminal, fed by SimulationOptions::progress.
+// Progress of `ukdyn run`, fed by SimulationOptions::progress: a one-line bar on a terminal, or
+// a plain log line every few seconds when stderr is not one (batch jobs, pipes, CI logs).
 #pragma once
 
 #include <chrono>
 #include <cstdio>
+#include <string>
+
+#include <ukdyn/simulate.hpp>
 
 namespace ukdyn::cli {
 
-/// Draws "[=====>    ]  42%  t = 4.2 of 10 s" on a terminal (stderr) for runs longer than
-/// `delay`, redrawing at most every `interval`. Does nothing when the stream is not a terminal.
-/// update() is cheap between redraws (one clock read), so it can be called after every step.
+/// On a terminal, draws "[=====>    ]  42%  t = 4.2 of 10 s  h = 1e-03 s dopri5  (3.1 s, ETA
+/// 4 s)" on stderr for runs longer than `delay`, redrawing at most every `interval`. Otherwise
+/// (Mode::kLog) writes a line "ukdyn: t = 4.2 of 10 s (42%), step 1e-03 s (dopri5), 1234
+/// steps, 5.0 s elapsed, ETA 7 s" every `interval` (5 s by default). update() is cheap between
+/// outputs (one clock read), so it can be called after every step.
+///
+/// The ETA extrapolates the rate of simulated time over the last 3–6 s of wall time (not since
+/// the start), so a run that turns slow — a stiff phase — shows it within seconds.
 class ProgressBar {
  public:
   using Clock = std::chrono::steady_clock;
+  enum class Mode {
+    kOff,  ///< nothing
+    kBar,  ///< a bar redrawn in place (terminals)
+    kLog,  ///< a plain line every interval (files, pipes)
+  };
 
-  /// A bar from t_start to t_end on `stream`; drawn only if `enabled` (typically isatty).
-  ProgressBar(double t_start, double t_end, bool enabled, std::FILE* stream = stderr,
-              Clock::duration delay = std::chrono::seconds(1),
-              Clock::duration interval = std::chrono::milliseconds(100));
+  /// Progress from t_start to t_end on `stream`. The defaults of delay and interval are those
+  /// of the mode (kBar: 1 s and 0.1 s; kLog: 5 s and 5 s) when given as negative.
+  ProgressBar(double t_start, double t_end, Mode mode, std::FILE* stream = stderr,
+              Clock::duration delay = Clock::duration(-1),
+              Clock::duration interval = Clock::duration(-1));
   ~ProgressBar();
   ProgressBar(const ProgressBar&) = delete;
   ProgressBar& operator=(const ProgressBar&) = delete;
 
-  /// The run has reached time t.
-  void update(double t);
+  /// The run has reached p.t with step p.step.
+  void update(const ProgressReport& p);
   /// Erases the bar (if it was drawn). Called by the destructor too.
   void finish();
 
-  /// True when `stream` is a terminal.
-  static bool is_terminal(std::FILE* stream);
+  /// kBar when `stream` is a terminal, else kLog.
+  static Mode mode_for(std::FILE* stream);
+  /// "12 s", "3 min 20 s", "2 h 5 min", or "?" for a negative or non-finite time.
+  static std::string duration_text(double seconds);
 
  private:
-  void draw(double t, Clock::time_point now);
+  void draw(const ProgressReport& p, Clock::time_point now);
+  // seconds of wall time still needed at the recent rate, or −1 when unknown
+  double eta(double t, Clock::time_point now);
 
   double t_start_, t_end_;
-  bool enabled_;
+  Mode mode_;
   std::FILE* stream_;
   Clock::time_point start_, next_draw_;
   Clock::duration interval_;
   bool drawn_ = false;
+  // (wall time, simulated time) at two moments a window apart: the rate for the ETA
+  struct Anchor {
+    Clock::time_point wall;
+    double t;
+  };
+  Anchor older_, newer_;
 };
 
 }  // namespace ukdyn::cli

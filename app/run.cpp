@@ -1,10 +1,12 @@
 // `ukdyn run`: load a model, simulate it, write trajectory.csv (the library's columns and the
 // model's output expressions), summary.json and the plots.
 #include <algorithm>
+#include <chrono>
 #include <charconv>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <string>
@@ -107,6 +109,43 @@ std::string default_out_dir(const ModelSource& source) {
   return "ukdyn-" + stem;
 }
 
+// a positive, finite number given to `flag`, or a UsageError naming it
+double positive(const char* flag, double value) {
+  if (!(value > 0.0) || !std::isfinite(value)) {
+    char text[128];
+    std::snprintf(text, sizeof text, "%s %g: must be a positive number", flag, value);
+    throw UsageError(text);
+  }
+  return value;
+}
+
+// --integrator, --rtol, --atol, --step and --no-stiff-switch replace the model's simulate:
+void apply_integration_flags(const RunArguments& args, SimulationOptions& options) {
+  if (args.integrator) {
+    try {
+      options.integrator = integrator_from_string(*args.integrator);
+    } catch (const std::invalid_argument&) {
+      throw UsageError("--integrator " + *args.integrator +
+                       ": unknown integrator (the integrators are rk4, rk5, dopri5, rkf78, bdf)");
+    }
+  }
+  if (args.rtol) options.rtol = positive("--rtol", *args.rtol);
+  if (args.atol) options.atol = positive("--atol", *args.atol);
+  if (args.step) options.step = positive("--step", *args.step);
+  if (args.no_stiff_switch) options.stiff_switch = false;
+}
+
+// the progress display's interval: the mode's default, or $UKDYN_PROGRESS_INTERVAL seconds
+// (for tests, which cannot wait 5 s for a log line)
+ProgressBar::Clock::duration progress_interval() {
+  const char* env = std::getenv("UKDYN_PROGRESS_INTERVAL");
+  double seconds = -1.0;
+  if (env && *env) std::from_chars(env, env + std::strlen(env), seconds);
+  if (!(seconds >= 0.0) || !std::isfinite(seconds)) return ProgressBar::Clock::duration(-1);
+  return std::chrono::duration_cast<ProgressBar::Clock::duration>(
+      std::chrono::duration<double>(seconds));
+}
+
 }  // namespace
 
 int run_command(const RunArguments& args) {
@@ -123,6 +162,7 @@ int run_command(const RunArguments& args) {
     }
     options.t_end = *args.t_end;
   }
+  apply_integration_flags(args, options);
   options.project_initial = model.project_initial;
   const fs::path dir = args.out_dir.empty() ? default_out_dir(args.source) : args.out_dir;
 
@@ -133,8 +173,9 @@ int run_command(const RunArguments& args) {
   // simulate, with a progress bar on a terminal
   ModelRun run;
   {
-    ProgressBar bar(options.t_start, options.t_end, ProgressBar::is_terminal(stderr));
-    options.progress = [&bar](double t) { bar.update(t); };
+    ProgressBar bar(options.t_start, options.t_end, ProgressBar::mode_for(stderr), stderr,
+                    progress_interval(), progress_interval());
+    options.progress = [&bar](const ProgressReport& p) { bar.update(p); };
     try {
       run = run_model(model, options);
     } catch (const std::invalid_argument& e) {
@@ -171,6 +212,11 @@ int run_command(const RunArguments& args) {
   std::printf("  %lld samples to t = %g s: %ld steps (%ld rejected), %ld evaluations, %.3g s\n",
               static_cast<long long>(run.trajectory.samples()), s.t_reached, s.steps, s.rejected_steps,
               s.evaluations, s.wall_time);
+  if (s.stiff_switches > 0) {
+    std::printf("  stiff from t = %g s: %s switched to bdf %ld time%s (%ld of the steps by bdf)\n",
+                s.stiff_switch_time, to_string(options.integrator), s.stiff_switches,
+                s.stiff_switches == 1 ? "" : "s", s.stiff_steps);
+  }
   std::printf("  max violation %.3g (position), %.3g (velocity); energy drift %.3g\n",
               s.max_position_violation, s.max_velocity_violation, s.energy_drift);
   if (s.events > 0 || s.stick_refusals > 0) {

@@ -9,7 +9,10 @@
 // integrand, so z' is the integral. M stays block diagonal, the physical constraints have zero
 // columns on z (so projections leave z alone), and the auxiliary coordinates are stripped from
 // the result (their kinetic energy ½ z'ᵀz' removed from the energies).
+#include <Eigen/SVD>
+
 #include <algorithm>
+#include <cstdio>
 #include <cmath>
 #include <limits>
 #include <memory>
@@ -82,7 +85,16 @@ Constraint on_head(const Constraint& c, Index n) {
 // Everything the controlled plant's callables share (one per controlled system).
 struct ControlledPlant {
   ControlledPlant(const Controller& c, const System& p, Index aux_count)
-      : ctrl(c), plant(p), cws(c), n(p.dofs()), aux(aux_count), q(n), qd(n), qm(n) {
+      : ctrl(c),
+        plant(p),
+        cws(c),
+        n(p.dofs()),
+        aux(aux_count),
+        q(n),
+        qd(n),
+        qm(n),
+        q_last(n),
+        qd_last(n) {
     stats.first_not_met = std::numeric_limits<double>::quiet_NaN();
   }
 
@@ -99,6 +111,10 @@ struct ControlledPlant {
     plant.forces(*pq, *pqd, t, Q.head(n));
     const ControlStatus s = compute_control(ctrl, cws, *pq, *pqd, t);
     ++stats.evaluations;
+    // where the control was last evaluated (a failed run's diagnosis looks there)
+    q_last = *pq;
+    qd_last = *pqd;
+    t_last = t;
     if (s != ControlStatus::kOk && s != ControlStatus::kRequirementsNotMet) {
       if (failure.empty()) failure = describe_control_status(ctrl, cws);
       Q.setConstant(std::numeric_limits<double>::quiet_NaN());
@@ -141,9 +157,49 @@ struct ControlledPlant {
   Index n, aux;
   VectorXd q, qd;  // (n) plant part of the state, for the force
   VectorXd qm;     // (n) plant part of q, for M and V
+  VectorXd q_last, qd_last;  // (n) the state of the last control evaluation, at t_last
+  double t_last = 0.0;
   ControlStatistics stats;
   std::string failure;  // describe_control_status() of the first failure
 };
+
+// sigma_min / sigma_max of the active requirement rows A_r at (q, q', t), NaN without rows
+double requirement_gap(const Controller& ctrl, ControlWorkspace& cws, const VectorXd& q,
+                       const VectorXd& qd, double t) {
+  compute_control(ctrl, cws, q, qd, t);
+  MatrixXd rows(cws.req.active_rows, cws.req.A.cols());
+  Index k = 0;
+  for (Index i = 0; i < cws.req.A.rows() && k < rows.rows(); ++i) {
+    if (cws.req.A.row(i).squaredNorm() > 0.0) rows.row(k++) = cws.req.A.row(i);
+  }
+  if (k == 0) return std::numeric_limits<double>::quiet_NaN();
+  const VectorXd sv = Eigen::JacobiSVD<MatrixXd>(rows.topRows(k)).singularValues();
+  return sv[0] > 0.0 ? sv[sv.size() - 1] / sv[0] : 0.0;
+}
+
+// A controlled run whose step size collapsed: when the requirement rows have (nearly) lost
+// rank where the control was last evaluated, that is the likely cause, and it replaces the
+// driver's general diagnosis.
+void diagnose_requirements(const ControlledPlant& st, const VectorXd& q0, const VectorXd& qd0,
+                           double t0, RunStatistics& stats) {
+  if (stats.status != Status::kIntegratorFailure || st.stats.evaluations == 0) return;
+  ControlWorkspace cws(st.ctrl);
+  const double start = requirement_gap(st.ctrl, cws, q0, qd0, t0);
+  const double now = requirement_gap(st.ctrl, cws, st.q_last, st.qd_last, st.t_last);
+  if (!(now < 1e-4) || start < 100.0 * now) return;
+  std::string& m = stats.message;
+  for (const char* cause : {". Likely cause", ". The step size collapsed"}) {
+    if (const auto at = m.find(cause); at != std::string::npos) m.erase(at);
+  }
+  char gaps[160];
+  std::snprintf(gaps, sizeof gaps, "sigma_min / sigma_max of the requirement rows %.3g at t = %g "
+                "s, %.3g at the start", now, st.t_last, start);
+  m += std::string(". Likely cause: the requirements lost rank (") + gaps +
+       "): they cannot all be met there — a path that leaves the reachable set, or passes a "
+       "singular configuration of the mechanism (an arm stretched out). Try: a requirement that "
+       "stays inside the workspace, fewer requirement rows, or actuated coordinates and a "
+       "weighted law that tolerate the loss (docs/control.md)";
+}
 
 void require_same_plant(const Controller& ctrl, const System& plant, const char* who) {
   const System& model = ctrl.model();
@@ -318,6 +374,7 @@ ControlledTrajectory simulate_controlled(const Controller& ctrl, const System& p
   tr.potential_energy = full.potential_energy;
   tr.work_nonideal = full.work_nonideal;
   tr.stats = full.stats;
+  diagnose_requirements(*st, q0, qd0, options.t_start, tr.stats);
   for (Index j = 0; j < N; ++j) {
     const auto z_dot = Eigen::Map<const VectorXd>(full.qd.data() + j * w + n, aux);
     const double T = full.kinetic_energy[std::size_t(j)] - 0.5 * z_dot.squaredNorm();

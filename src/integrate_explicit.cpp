@@ -19,10 +19,39 @@ namespace {
 namespace odeint = boost::numeric::odeint;
 using State = std::vector<double>;
 
-// Odeint's view of the ODE
+// The last two evaluations (x, f(x)), for StiffnessTest: after an accepted dopri5 step they are
+// the 6th stage and the 7th (FSAL) one, both at t + h. Two copies of 2n + 1 numbers per
+// evaluation, nothing else: the trajectory is unchanged.
+struct StageProbe {
+  State x_prev, f_prev, x_last, f_last;  // (2n + 1) each
+  void record(const State& x, const State& f) {
+    std::swap(x_prev, x_last);
+    std::swap(f_prev, f_last);
+    x_last = x;
+    f_last = f;
+  }
+  // h·ρ ≈ h ‖f7 − f6‖ / ‖y7 − y6‖ (0 when the two stages coincide), over [q; q'] only: W is
+  // a quadrature (W' = q'ᵀ Qc_nonideal, no component depends on W, its Jacobian column is
+  // zero) that adds no stiffness, but its smooth change can swamp y7 − y6 (a damper written
+  // as a non-ideal force C: W' = −c q'² is large while the stiff part of y7 − y6 is tiny)
+  double h_rho(double h) const {
+    double num = 0.0, den = 0.0;
+    for (std::size_t i = 0; i + 1 < x_last.size(); ++i) {
+      num += (f_last[i] - f_prev[i]) * (f_last[i] - f_prev[i]);
+      den += (x_last[i] - x_prev[i]) * (x_last[i] - x_prev[i]);
+    }
+    return den > 0.0 ? std::abs(h) * std::sqrt(num / den) : 0.0;
+  }
+};
+
+// Odeint's view of the ODE (Odeint copies it: state lives behind the pointers)
 struct OdeFn {
   ConstrainedOde* ode;
-  void operator()(const State& x, State& dxdt, double t) const { (*ode)(x.data(), dxdt.data(), t); }
+  StageProbe* probe = nullptr;
+  void operator()(const State& x, State& dxdt, double t) const {
+    (*ode)(x.data(), dxdt.data(), t);
+    if (probe) probe->record(x, dxdt);
+  }
 };
 
 // after a failed evaluation: the result that reports it
@@ -179,7 +208,11 @@ SegmentResult dopri5(ConstrainedOde& ode, State& x, double t0, double t1,
                      const std::vector<double>& outputs, const SimulationOptions& o,
                      SegmentHooks& hooks, double dt, long max_steps) {
   SegmentResult r;
-  const OdeFn fn{&ode};
+  // the stiffness test reads the last two stages of each step (for the switch, and for the
+  // diagnosis of a collapsed step size when the switch is off)
+  StageProbe probe;
+  StiffnessTest stiffness;
+  const OdeFn fn{&ode, &probe};
   auto stepper = controlled(o, odeint::runge_kutta_dopri5<State>());
   State dxdt(x.size()), x_old(x.size()), dxdt_old(x.size()), out(x.size());
   fn(x, dxdt, t0);
@@ -198,6 +231,8 @@ SegmentResult dopri5(ConstrainedOde& ode, State& x, double t0, double t1,
     if (result == odeint::fail) {
       ++r.rejected;
       if (++rejections > kMaxRejections || t + dt == t) {
+        r.collapsed = true;
+        r.stiffness = stiffness.recent();
         return stop(r, Status::kIntegratorFailure, t,
                     "dopri5: step size underflow at t = " + std::to_string(t));
       }
@@ -207,6 +242,8 @@ SegmentResult dopri5(ConstrainedOde& ode, State& x, double t0, double t1,
     if (t1 - t < 1e-14 * std::max(1.0, std::abs(t1))) t = t1;
     ++r.steps;
     r.last_step = t - t_old;
+    // h·ρ from the 6th and 7th stages, before anything else evaluates f
+    const bool stiff = stiffness.accepted(probe.h_rho(r.last_step)) && o.stiff_switch;
     // a switch of the dynamics inside the step: stop there
     {
       const State x_new = x, dxdt_new = dxdt;
@@ -245,7 +282,15 @@ SegmentResult dopri5(ConstrainedOde& ode, State& x, double t0, double t1,
         if (ode.failed()) return failed(ode, r, t);
       }
     }
+    r.stiffness = stiffness.recent();
+    // stiff: the driver goes on with BDF from here (x is the state after drift control)
+    if (stiff && t < t1) {
+      r.stiff = true;
+      r.t_reached = t;
+      return r;
+    }
     if (r.steps >= max_steps) {
+      r.collapsed = true;
       return stop(r, Status::kIntegratorFailure, t,
                   "dopri5: step limit reached at t = " + std::to_string(t));
     }
@@ -279,6 +324,7 @@ SegmentResult rkf78(ConstrainedOde& ode, State& x, double t0, double t1,
       ++r.rejected;
       dt = step;
       if (++rejections > kMaxRejections || t + dt == t) {
+        r.collapsed = true;
         return stop(r, Status::kIntegratorFailure, t,
                     "rkf78: step size underflow at t = " + std::to_string(t));
       }
@@ -324,6 +370,7 @@ SegmentResult rkf78(ConstrainedOde& ode, State& x, double t0, double t1,
       }
     }
     if (r.steps >= max_steps) {
+      r.collapsed = true;
       return stop(r, Status::kIntegratorFailure, t,
                   "rkf78: step limit reached at t = " + std::to_string(t));
     }

@@ -2,6 +2,8 @@
 // (integrate_explicit.cpp: Boost.Odeint; integrate_bdf.cpp: SUNDIALS CVODE). Not installed.
 #pragma once
 
+#include <algorithm>
+#include <array>
 #include <functional>
 #include <limits>
 #include <string>
@@ -81,6 +83,52 @@ struct SegmentResult {
   long rejected = 0;            // rejected steps (error test failures)
   double last_step = 0.0;       // size of the last accepted step (a good first step next time)
   bool event = false;           // stopped early at an event found by hooks.find_event
+  // stopped early because the problem became stiff (dopri5 with options.stiff_switch): the
+  // state left in x is the projected state after the last accepted step; the driver goes on
+  // with BDF (see StiffnessTest)
+  bool stiff = false;
+  // the step size collapsed: the adaptive method gave up (step size underflow, too many
+  // rejections, or options.max_steps); the driver adds a diagnosis to the message
+  bool collapsed = false;
+  double stiffness = 0.0;       // largest h·ρ of the last accepted steps (dopri5; 0: unknown)
+};
+
+// Hairer and Wanner's stiffness test of dopri5 (Hairer, Nørsett, Wanner, Solving ODEs I,
+// sec. IV.2; the STIFF branch of DOPRI5). The 6th and 7th (FSAL) stages of Dormand–Prince are
+// both evaluated at t + h, at states y6 and y7, so
+//   h·ρ ≈ h ‖f(y7) − f(y6)‖ / ‖y7 − y6‖
+// estimates h times the dominant eigenvalue of ∂f/∂x along the direction in which the step
+// errs. dopri5's stability region reaches about 3.3 along the negative real axis: when the
+// step size is held there by stability rather than by accuracy, h·ρ sits near 3.3. The problem
+// is declared stiff after kStiffSteps accepted steps with h·ρ > kStiffBound, unless
+// kNonStiffSteps consecutive steps below it intervene (which restart the count).
+class StiffnessTest {
+ public:
+  static constexpr double kStiffBound = 3.25;
+  static constexpr int kStiffSteps = 15;
+  static constexpr int kNonStiffSteps = 6;
+
+  // after an accepted step of size h with h·ρ = h_rho; true once the problem is stiff
+  bool accepted(double h_rho) {
+    last_ = h_rho;
+    recent_[next_++ % recent_.size()] = h_rho;
+    if (h_rho > kStiffBound) {
+      non_stiff_ = 0;
+      return ++stiff_ >= kStiffSteps;
+    }
+    if (++non_stiff_ >= kNonStiffSteps) stiff_ = 0;
+    return false;
+  }
+  double last() const { return last_; }
+  // the largest h·ρ of the last kStiffSteps + 1 accepted steps (at the stability bound h·ρ
+  // oscillates around 3.3, so one step says little)
+  double recent() const { return *std::max_element(recent_.begin(), recent_.end()); }
+
+ private:
+  int stiff_ = 0, non_stiff_ = 0;
+  double last_ = 0.0;
+  std::array<double, kStiffSteps + 1> recent_{};
+  std::size_t next_ = 0;
 };
 
 // Integrates x (size ode.size(), the state at t0) to t1, calling hooks.output at each of

@@ -2,6 +2,7 @@
 #include "ukdyn/io.hpp"
 
 #include <cerrno>
+#include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <memory>
@@ -45,6 +46,10 @@ void write_summary_json(const Trajectory& traj, const SimulationOptions& options
   j["events"] = s.events;
   j["stick_refusals"] = s.stick_refusals;
   j["notes"] = s.notes;
+  j["stiff_switches"] = s.stiff_switches;
+  j["stiff_switch_time"] =
+      std::isfinite(s.stiff_switch_time) ? json(s.stiff_switch_time) : json(nullptr);
+  j["stiff_steps"] = s.stiff_steps;
   j["wall_time"] = s.wall_time;
   j["max_position_violation"] = s.max_position_violation;
   j["max_velocity_violation"] = s.max_velocity_violation;
@@ -83,6 +88,7 @@ void write_summary_json(const Trajectory& traj, const SimulationOptions& options
       {"step", options.step},
       {"max_step", options.max_step},
       {"max_steps", options.max_steps},
+      {"stiff_switch", options.stiff_switch},
       {"output_every", options.output_every},
       {"t_start", options.t_start},
       {"t_end", options.t_end},

@@ -605,6 +605,11 @@ void Reader::read_simulate(const YAML::Node& root, Model& model) {
       o.step = number(v, key);
     else if (key == "max_step")
       o.max_step = number(v, key);
+    else if (key == "stiff_switch") {
+      if (!v.IsScalar() || (v.Scalar() != "true" && v.Scalar() != "false"))
+        fail(v, "stiff_switch must be true or false");
+      o.stiff_switch = v.Scalar() == "true";
+    }
     else if (key == "integrator") {
       try {
         o.integrator = integrator_from_string(v.Scalar());
@@ -619,7 +624,7 @@ void Reader::read_simulate(const YAML::Node& root, Model& model) {
       }
     } else {
       fail(kv.first, "unknown key '" + key + "' in simulate",
-           "t_start, t_end, integrator, rtol, atol, step, max_step, drift");
+           "t_start, t_end, integrator, rtol, atol, step, max_step, stiff_switch, drift");
     }
   }
   if (!(o.t_end > o.t_start)) fail(s, "t_end must be greater than t_start");

@@ -4,6 +4,7 @@
 #include "ukdyn/simulate.hpp"
 
 #include <Eigen/QR>
+#include <Eigen/SVD>
 
 #include <algorithm>
 #include <chrono>
@@ -349,9 +350,12 @@ class Run {
   // drift control after an accepted step
   Status after_step(double t, double* x, bool& changed) {
     changed = false;
-    if (o_.progress) o_.progress(t);
+    if (o_.progress) report_progress(t);
     return projecting_ ? project(t, x, projection_, changed) : Status::kOk;
   }
+
+  // the method taking the steps from now on (for the progress report)
+  void set_integrator(Integrator method) { progress_.integrator = method; }
 
   // records a sample at t from the state x (projected first, when projecting)
   Status record(double t, const double* x) {
@@ -395,6 +399,15 @@ class Run {
   const std::string& failure() const { return failure_; }
 
  private:
+  // step size from the times the steps reach (BDF reports converged attempts, so a rejected
+  // attempt can make t go back: then the step is unknown and the last one is kept)
+  void report_progress(double t) {
+    if (progress_.steps > 0 && t > progress_.t) progress_.step = t - progress_.t;
+    progress_.t = t;
+    ++progress_.steps;
+    o_.progress(progress_);
+  }
+
   // contact c's v_rel at (t, x) into the head of v; returns its length
   Index relative_velocity(std::size_t c, double t, const double* x, VectorXd& v) {
     q_ = Eigen::Map<const VectorXd>(x, n_);
@@ -568,6 +581,7 @@ class Run {
   std::vector<double> event_x_ = std::vector<double>(std::size_t(2 * n_ + 1));  // dense state
   Index switching_ = -1;  // the contact of the last event found
   std::string failure_;
+  ProgressReport progress_;  // what the last progress report said
 };
 
 // max |E − E0 − W| over the samples, relative to max(|E0|, largest kinetic energy)
@@ -580,6 +594,104 @@ double energy_drift(const Trajectory& traj) {
     drift = std::max(drift, std::abs(traj.energy[i] - E0 - traj.work_nonideal[i]));
   }
   return scale > 0 ? drift / scale : drift;
+}
+
+// --- a collapsed step size: why, and what to try ------------------------------------------
+
+// the adaptive method gave up (explicit methods say so; CVODE by its flags)
+bool step_collapsed(const detail::SegmentResult& r) {
+  if (r.collapsed) return true;
+  for (const char* flag : {"CV_TOO_MUCH_WORK", "CV_ERR_FAILURE", "CV_CONV_FAILURE"}) {
+    if (r.message.find(flag) != std::string::npos) return true;
+  }
+  return false;
+}
+
+// rank of A and the gap sigma_r / sigma_1 of W = L⁻¹ Aᵀ (r = r_ref, the rank to compare with;
+// NaN with the sparse engine or without constraints) at state x (2n + 1) and t. Cost O(n m²).
+struct ConstraintRank {
+  bool valid = false;  // M and the state were fine, so rank and gap mean something
+  Index rank = 0, rows = 0;
+  double gap = std::numeric_limits<double>::quiet_NaN();
+};
+ConstraintRank constraint_rank(const System& sys, Workspace& ws, const std::vector<double>& x,
+                               double t, Index r_ref) {
+  const Index n = sys.dofs();
+  const VectorXd q = Eigen::Map<const VectorXd>(x.data(), n);
+  const VectorXd qd = Eigen::Map<const VectorXd>(x.data() + n, n);
+  ConstraintRank c;
+  const Status s = forward_dynamics(sys, ws, q, qd, t);
+  if (s == Status::kNonFiniteInput || s == Status::kMassNotSymmetric ||
+      s == Status::kMassNotPositiveDefinite) {
+    return c;
+  }
+  c.valid = true;
+  c.rank = ws.rank;
+  c.rows = ws.active_rows;
+  if (ws.is_sparse() || ws.active_rows == 0 || r_ref <= 0) return c;
+  // W = L⁻¹ Aᵀ: its singular values are those of B = A M^{-1/2}
+  const MatrixXd W =
+      ws.decomposition.matrix_llt().triangularView<Eigen::Lower>().solve(ws.A.transpose());
+  const VectorXd sv = Eigen::JacobiSVD<MatrixXd>(W).singularValues();
+  if (sv.size() > 0 && sv[0] > 0) c.gap = sv[std::min(r_ref, Index(sv.size())) - 1] / sv[0];
+  return c;
+}
+
+// The likely cause of a collapsed step size — a singular configuration (the constraints lose
+// rank), stiffness (the step held at dopri5's stability bound, many rejections), or neither
+// (a jump in the forces, tolerances below the noise) — and what to try. x is the state where
+// the method gave up (r.t_reached), x0 the one where it started (t0).
+std::string diagnose_collapse(const System& sys, Workspace& ws, const SimulationOptions& o,
+                              Integrator method, const detail::SegmentResult& r,
+                              const std::vector<double>& x, const std::vector<double>& x0,
+                              double t0, const RunStatistics& stats) {
+  const long steps = stats.steps, rejected = stats.rejected_steps;
+  const double rejected_share = steps + rejected > 0 ? double(rejected) / double(steps + rejected)
+                                                     : 0.0;
+  const std::string where = "at t = " + format(r.t_reached) + " s";
+  // a singular configuration: the rank drops, or the gap of the rank-th singular value closes
+  if (sys.constraint_count() > 0) {
+    const ConstraintRank start = constraint_rank(sys, ws, x0, t0, -1);
+    const ConstraintRank from = constraint_rank(sys, ws, x0, t0, start.rank);
+    const ConstraintRank now = constraint_rank(sys, ws, x, r.t_reached, start.rank);
+    const bool lost = start.valid && now.valid && now.rank < start.rank;
+    const bool closing = now.gap < 1e-6 && !(from.gap < 1e3 * now.gap);
+    if (lost || closing) {
+      return "Likely cause: a singular configuration " + where + ": the constraints " +
+             (lost ? "lost rank (rank of A " + std::to_string(now.rank) + " of " +
+                         std::to_string(now.rows) + " active rows, " +
+                         std::to_string(start.rank) + " at t = " + format(t0) + " s)"
+                   : "are about to lose rank (sigma_" + std::to_string(start.rank) +
+                         " / sigma_1 = " + format(now.gap) + ", " + format(from.gap) +
+                         " at t = " + format(t0) + " s)") +
+             ", so the constraint forces grow without bound (a dead centre, a stretched or "
+             "folded linkage, a branch point). Try: check the geometry and the initial state "
+             "(ukdyn check), start away from that position, or pass through it with a fixed step "
+             "(integrator: rk4, step: 1e-4)";
+    }
+  }
+  // stiffness: the step held near dopri5's stability bound, or many rejections
+  const bool explicit_method = method != Integrator::kBDF;
+  if (explicit_method && (r.stiffness > 0.8 * detail::StiffnessTest::kStiffBound ||
+                          rejected_share > 0.25)) {
+    std::string text = "Likely cause: stiffness " + where + " (";
+    if (r.stiffness > 0) text += "h·rho up to " + format(r.stiffness) + " in the last steps, ";
+    text += format(100.0 * rejected_share) + "% of the steps rejected, last step " +
+            format(r.last_step) + " s): the step size is held by stability, not accuracy (fast "
+            "modes: stiff springs, regularized friction near rest, large damping). Try: "
+            "integrator: bdf (--integrator bdf)";
+    if (method == Integrator::kDopri5 && !o.stiff_switch) {
+      text += ", or leave stiff_switch on (dopri5 then switches to BDF by itself)";
+    }
+    return text;
+  }
+  return "The step size collapsed " + where + " (" + std::to_string(rejected) + " of " +
+         std::to_string(steps + rejected) +
+         " steps rejected) with no sign of stiffness or of a singular configuration. Likely "
+         "causes: the forces jump (give the time of the jump as a breakpoint), or the "
+         "tolerances are below the roundoff of the accelerations. Try: breakpoints, or looser "
+         "tolerances (--rtol 1e-7 --atol 1e-9)" +
+         std::string(explicit_method ? ", or integrator: bdf" : "");
 }
 
 }  // namespace
@@ -662,6 +774,7 @@ Trajectory simulate(const System& sys, const VectorXd& q0, const VectorXd& qd0,
 
   // (CVODE estimates its own first step, which on stiff problems can be far below o.step)
   double first_step = o.integrator == Integrator::kBDF ? 0.0 : o.step;
+  std::vector<double> x_start;  // (2n + 1) the state where the integrator last started
   std::size_t next_sample = 0;
   run.initial_contact_modes(o.t_start, x.data());
   for (std::size_t seg = 0; seg + 1 < ends.size(); ++seg) {
@@ -690,30 +803,48 @@ Trajectory simulate(const System& sys, const VectorXd& q0, const VectorXd& qd0,
     // evaluations at a breakpoint end are one-sided (the run's own ends are not breakpoints)
     const double inf = std::numeric_limits<double>::infinity();
     ode.set_window(seg == 0 ? -inf : a, seg + 2 == ends.size() ? inf : b);
-    // [a, b], restarted after every stick/slip event
+    // [a, b], restarted after every stick/slip event and stiffness switch; the segment starts
+    // with the chosen method, and goes on with BDF once dopri5 finds it stiff until the next
+    // event (a switch of the dynamics) or the segment's end
+    Integrator method = o.integrator;
     for (;;) {
       std::vector<double> outputs;
       for (std::size_t i = next_sample; i < samples.size() && samples[i] <= b; ++i) {
         outputs.push_back(samples[i]);
       }
+      const bool switched = method != o.integrator;
+      x_start = x;
+      run.set_integrator(method);
+      // (after a switch CVODE estimates its own first step: dopri5's last one is stability-bound)
       detail::SegmentResult r =
-          o.integrator == Integrator::kBDF
-              ? detail::integrate_bdf(ode, x, a, b, outputs, o, hooks, first_step)
-              : detail::integrate_explicit(o.integrator, ode, x, a, b, outputs, o, hooks,
-                                           first_step);
+          method == Integrator::kBDF
+              ? detail::integrate_bdf(ode, x, a, b, outputs, o, hooks, switched ? 0.0 : first_step)
+              : detail::integrate_explicit(method, ode, x, a, b, outputs, o, hooks, first_step);
       traj.stats.steps += r.steps;
       traj.stats.rejected_steps += r.rejected;
+      if (switched) traj.stats.stiff_steps += r.steps;
       // (the fixed-step methods keep o.step)
-      const bool fixed = o.integrator == Integrator::kRK4 || o.integrator == Integrator::kRK5;
+      const bool fixed = method == Integrator::kRK4 || method == Integrator::kRK5;
       if (r.last_step > 0 && !fixed) first_step = r.last_step;
       while (next_sample < samples.size() && samples[next_sample] <= r.t_reached) ++next_sample;
       if (r.status != Status::kOk) {
         std::string message = r.message;
         if (message.empty()) message = run.failure();
         if (message.empty()) message = describe_status(sys, ws);
+        if (r.status == Status::kIntegratorFailure && step_collapsed(r)) {
+          message += ". " + diagnose_collapse(sys, ws, o, method, r, x, x_start, a, traj.stats);
+        }
         return finish(r.status, message, r.t_reached);
       }
+      if (r.stiff) {
+        // dopri5 found the problem stiff: BDF from here
+        if (traj.stats.stiff_switches++ == 0) traj.stats.stiff_switch_time = r.t_reached;
+        method = Integrator::kBDF;
+        a = r.t_reached;
+        continue;
+      }
       if (!r.event) break;
+      method = o.integrator;
       // a contact sticks or slips: switch it and go on from there (but not forever)
       if (traj.stats.events >= kMaxEvents) {
         return finish(Status::kIntegratorFailure,

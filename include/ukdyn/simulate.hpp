@@ -13,6 +13,7 @@
 #pragma once
 
 #include <functional>
+#include <limits>
 #include <map>
 #include <string>
 #include <vector>
@@ -61,6 +62,15 @@ struct ConstraintDrift {
   double alpha = 0.0, beta = 0.0;  ///< Baumgarte gains when method is kBaumgarte (0: defaults)
 };
 
+/// What SimulationOptions::progress receives after every accepted step.
+struct ProgressReport {
+  double t = 0.0;     ///< time reached
+  double step = 0.0;  ///< size of the last step (with BDF: of the last converged step attempt)
+  long steps = 0;     ///< steps so far (with BDF, converged attempts: the error test may reject some)
+  Integrator integrator = Integrator::kDopri5;  ///< the method taking the steps now (kBDF after
+                                                ///< a stiffness switch)
+};
+
 /// Settings of a simulation. Defaults give constraint violations below 1e-10 on the test
 /// problems without the user touching anything.
 struct SimulationOptions {
@@ -78,6 +88,13 @@ struct SimulationOptions {
   double atol = 1e-11;
   double max_step = 0.0;            ///< largest step of adaptive methods (0: unlimited)
   long max_steps = 10'000'000;      ///< give up after this many accepted steps
+  /// kDopri5 only: when Hairer and Wanner's stiffness test fires (h·ρ > 3.25 at 15 accepted
+  /// steps, ρ the dominant eigenvalue of the Jacobian estimated from the last two stages), go
+  /// on with kBDF for the rest of the segment — up to the next breakpoint or stick/slip event,
+  /// after which dopri5 starts again. A problem that is not stiff never switches, and its
+  /// trajectory is bit for bit that of plain dopri5. false: dopri5 throughout, however slow
+  /// (docs/simulation.md, "Stiffness").
+  bool stiff_switch = true;
 
   double output_every = 0.01;       ///< sample spacing (0: only t_start and t_end)
   std::vector<double> output_at;    ///< further sample times (merged, sorted)
@@ -98,8 +115,8 @@ struct SimulationOptions {
 
   SolverOptions solver;             ///< settings of the fundamental-equation solver
 
-  /// Called after every accepted step with the time reached (for progress bars); may be empty.
-  std::function<void(double t)> progress;
+  /// Called after every accepted step (for progress bars and logs); may be empty.
+  std::function<void(const ProgressReport&)> progress;
 };
 
 /// Statistics of a run.
@@ -115,6 +132,12 @@ struct RunStatistics {
   long stick_refusals = 0;
   /// what the run decided on its own, one line each with its time (at most 20): a refused stick
   std::vector<std::string> notes;
+  /// switches from dopri5 to BDF because the problem became stiff (SimulationOptions::
+  /// stiff_switch), the time of the first (NaN when none), and the steps BDF took after them
+  /// (included in steps)
+  long stiff_switches = 0;
+  double stiff_switch_time = std::numeric_limits<double>::quiet_NaN();
+  long stiff_steps = 0;
   double wall_time = 0.0;           ///< seconds
   double max_position_violation = 0.0;  ///< largest |phi| seen after a step or at a sample
   double max_velocity_violation = 0.0;  ///< largest |phi'|, |psi| likewise

@@ -207,6 +207,7 @@ void apply_simulation_options(SimulationOptions& o, const py::dict& given, const
     else if (key == "atol") o.atol = number(v, who, "atol");
     else if (key == "max_step") o.max_step = number(v, who, "max_step");
     else if (key == "max_steps") o.max_steps = v.cast<long>();
+    else if (key == "stiff_switch") o.stiff_switch = v.cast<bool>();
     else if (key == "output_every") o.output_every = number(v, who, "output_every");
     else if (key == "output_at") o.output_at = numbers(v, who, "output_at");
     else if (key == "breakpoints") o.breakpoints = numbers(v, who, "breakpoints");
@@ -221,6 +222,7 @@ void apply_simulation_options(SimulationOptions& o, const py::dict& given, const
       throw std::invalid_argument(
           who + ": unknown setting '" + key +
           "' (known: t_start, t_end, integrator, step, rtol, atol, max_step, max_steps, "
+          "stiff_switch, "
           "output_every, output_at, breakpoints, drift, baumgarte_alpha, baumgarte_beta, "
           "project_initial, initial_tolerance, projection_tolerance, projection_iterations, "
           "rank_threshold, sparse_rank_threshold, consistency_tolerance, symmetry_tolerance, "
@@ -239,6 +241,7 @@ py::dict simulation_options_dict(const SimulationOptions& o) {
   d["atol"] = o.atol;
   d["max_step"] = o.max_step;
   d["max_steps"] = o.max_steps;
+  d["stiff_switch"] = o.stiff_switch;
   d["output_every"] = o.output_every;
   d["output_at"] = o.output_at;
   d["breakpoints"] = o.breakpoints;
@@ -259,6 +262,9 @@ py::dict statistics_dict(const RunStatistics& s) {
   d["events"] = s.events;
   d["stick_refusals"] = s.stick_refusals;
   d["notes"] = s.notes;
+  d["stiff_switches"] = s.stiff_switches;
+  d["stiff_switch_time"] = s.stiff_switch_time;
+  d["stiff_steps"] = s.stiff_steps;
   d["wall_time"] = s.wall_time;
   d["max_position_violation"] = s.max_position_violation;
   d["max_velocity_violation"] = s.max_velocity_violation;

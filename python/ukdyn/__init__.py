@@ -85,7 +85,8 @@ def _model_simulate(self: Model, *, t_end: Optional[float] = None, q0: Any = Non
 
     Without arguments the model's own ``simulate:`` and ``output:`` settings apply; keyword
     settings replace them: t_start, t_end, integrator ('rk4', 'dopri5', 'rkf78', 'bdf'), step,
-    rtol, atol, max_step, max_steps, output_every, output_at, breakpoints, drift ('projection',
+    rtol, atol, max_step, max_steps, stiff_switch (dopri5 goes on with BDF once the problem
+    turns stiff; default True), output_every, output_at, breakpoints, drift ('projection',
     'baumgarte', 'none'), baumgarte_alpha, baumgarte_beta, project_initial, initial_tolerance,
     projection_tolerance, projection_iterations, and the solver's rank_threshold,
     consistency_tolerance, engine, algorithm (simulate.hpp, SimulationOptions). ``q0``/``qd0``

@@ -31,6 +31,7 @@ class Result:
         names: the column names, in the order of ``trajectory.csv``.
         coordinates: the coordinate names.
         stats: the run's statistics (steps, rejected_steps, evaluations, projections, events,
+            stiff_switches, stiff_switch_time, stiff_steps,
             wall_time, max_position_violation, max_velocity_violation, energy_drift, t_reached,
             status, message; simulate.hpp, RunStatistics).
         control: the controller's statistics for a controlled run (evaluations, not_met,
