@@ -264,10 +264,46 @@ System build_controlled(const std::shared_ptr<ControlledPlant>& st,
       });
     }
   }
-  // the physical constraints (stick constraints of Coulomb contacts stay inactive)
-  for (const Constraint& c : plant.constraints()) b.add(aux == 0 ? c : on_head(c, n));
-  // the non-ideal forces, with the same indices
+  // the physical constraints; the stick constraints of Coulomb contacts come again with their
+  // contacts below (last, in the same order, so every index stays the plant's)
+  const auto& contacts = plant.friction_contacts();
+  auto contact_of_force = [&](Index i) -> const FrictionContact* {
+    for (const auto& c : contacts) {
+      if (c.force == i) return &c;
+    }
+    return nullptr;
+  };
+  for (Index k = 0; k < plant.constraint_count(); ++k) {
+    const bool stick = std::any_of(contacts.begin(), contacts.end(),
+                                   [k](const FrictionContact& c) { return c.stick_constraint == k; });
+    if (!stick) b.add(aux == 0 ? plant.constraint(k) : on_head(plant.constraint(k), n));
+  }
+  // the non-ideal forces, with the same indices; a Coulomb contact stays one (its sliding
+  // velocity, sticking and slipping need the system to know it)
   for (Index i = 0; i < plant.nonideal_count(); ++i) {
+    if (const FrictionContact* c = contact_of_force(i)) {
+      CoulombFriction spec;
+      spec.constraint = plant.constraint(c->normal_constraint).name();
+      spec.mu = c->mu;
+      spec.mu_static = c->mu_static;
+      spec.coordinates = c->coordinates;
+      spec.regularization_velocity = c->eps;
+      spec.name = plant.nonideal_name(i);
+      if (c->surface_velocity && aux > 0) {
+        auto buffers = std::make_shared<std::pair<VectorXd, VectorXd>>(VectorXd(n), VectorXd(n));
+        spec.surface_velocity = [u = c->surface_velocity, buffers, n](
+                                    const VectorXd& x, const VectorXd& xd, double t,
+                                    Eigen::Ref<VectorXd> uo, Eigen::Ref<VectorXd> udo) {
+          buffers->first = x.head(n);
+          buffers->second = xd.head(n);
+          u(buffers->first, buffers->second, t, uo, udo);
+        };
+      } else {
+        spec.surface_velocity = c->surface_velocity;
+      }
+      b.add(coulomb_friction(spec));
+      continue;
+    }
     NonIdealFn fn = plant.nonideal(i);
     if (aux == 0) {
       b.add(NonIdealForce(plant.nonideal_name(i), std::move(fn)));

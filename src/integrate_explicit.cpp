@@ -175,18 +175,17 @@ SegmentResult fixed_step(Stepper stepper, ConstrainedOde& ode, State& x, double 
     }
     fn(x_new, dxdt_new, t_new);
     if (ode.failed()) return failed(ode, r, t_new);
-    // a switch of the dynamics inside the step: stop there
-    const SegmentHooks::Dense dense = [&](double s, double* xs) {
-      State tmp(x.size());
-      hermite(s, t, t_new, x, dxdt, x_new, dxdt_new, tmp);
-      std::copy(tmp.begin(), tmp.end(), xs);
-    };
-    const SegmentHooks::Dense restart = [&](double s, double* xs) {
+    // a switch of the dynamics inside the step: stop there. The state at s inside the step is
+    // one step of the method from t to s (a cubic Hermite of a step across a jump of the forces
+    // would misplace the event by O(h · jump))
+    const SegmentHooks::Dense state_at = [&](double s, double* xs) {
       State tmp = x, d = dxdt;
       stepper.do_step(fn, tmp, d, t, s - t);
       std::copy(tmp.begin(), tmp.end(), xs);
     };
-    if (stop_at_event(hooks, t, x, t_new, x_new, dense, restart, outputs, next, x, r)) return r;
+    if (stop_at_event(hooks, t, x, t_new, x_new, state_at, state_at, outputs, next, x, r)) {
+      return r;
+    }
     // samples inside (t, t_new] by cubic Hermite interpolation
     for (; next < outputs.size() && outputs[next] <= t_new; ++next) {
       hermite(outputs[next], t, t_new, x, dxdt, x_new, dxdt_new, out);
@@ -309,7 +308,7 @@ SegmentResult rkf78(ConstrainedOde& ode, State& x, double t0, double t1,
   std::size_t next = 0;
   double t = t0;
   int rejections = 0;
-  State x_old(x.size()), d_old(x.size()), d_new(x.size());
+  State x_old(x.size());
   while (t < t1) {
     // the next stop: an output time or the segment's end
     const double target = next < outputs.size() ? std::min(outputs[next], t1) : t1;
@@ -336,24 +335,18 @@ SegmentResult rkf78(ConstrainedOde& ode, State& x, double t0, double t1,
     // a shortened step leaves the suggestion for the full one
     if (!landing) dt = step;
     if (landing) t = target;
-    // a switch of the dynamics inside the step: stop there (cubic Hermite between the ends)
+    // a switch of the dynamics inside the step: stop there. The state at s inside the step is
+    // one Fehlberg step from t_old to s (as accurate as any step; a cubic Hermite is not)
     if (hooks.find_event) {
-      fn(x_old, d_old, t_old);
-      fn(x, d_new, t);
-      if (ode.failed()) return failed(ode, r, t_old);
       const State x_new = x;
       const double t_new = t;
-      const SegmentHooks::Dense dense = [&](double s, double* xs) {
-        State tmp(x.size());
-        hermite(s, t_old, t_new, x_old, d_old, x_new, d_new, tmp);
-        std::copy(tmp.begin(), tmp.end(), xs);
-      };
-      const SegmentHooks::Dense restart = [&](double s, double* xs) {
+      const SegmentHooks::Dense state_at = [&](double s, double* xs) {
         State tmp = x_old;
         odeint::runge_kutta_fehlberg78<State>().do_step(fn, tmp, t_old, s - t_old);
         std::copy(tmp.begin(), tmp.end(), xs);
       };
-      if (stop_at_event(hooks, t_old, x_old, t_new, x_new, dense, restart, outputs, next, x, r)) {
+      if (stop_at_event(hooks, t_old, x_old, t_new, x_new, state_at, state_at, outputs, next, x,
+                        r)) {
         return r;
       }
     }

@@ -313,7 +313,10 @@ class Run {
         return Status::kOk;
       }
       case ContactMode::kPassing:
-        // v_rel = 0 passed: the friction turns against the new motion, at its full magnitude
+        // v_rel = 0: it sticks now if it can (a stop located early, where the velocity jump
+        // was not yet tolerance-level); else the friction turns against the new motion, at
+        // its full magnitude
+        if (try_stick(c, t, x, false)) return Status::kOk;
         start_sliding(c, t, x);
         apply_contact_modes();
         return Status::kOk;
@@ -469,7 +472,8 @@ class Run {
   // v_rel that the mechanism passes through kinematically (a dead centre) would need a velocity
   // jump; (2) the constraints with the stick rows have a solution there; (3) the force that
   // holds the contact lies within mu_static N.
-  bool try_stick(std::size_t c, double t, double* x) {
+  // `report`: a refusal for reasons 1 or 2 is counted and noted.
+  bool try_stick(std::size_t c, double t, double* x, bool report = true) {
     q_ = Eigen::Map<const VectorXd>(x, n_);
     qd_ = Eigen::Map<const VectorXd>(x + n_, n_);
     const bool evaluated = forward_dynamics(sys_, ws_, q_, qd_, t) == Status::kOk;
@@ -479,7 +483,7 @@ class Run {
     auto refuse = [&](const std::string& why) {
       mode_[c] = ContactMode::kSliding;
       apply_contact_modes();
-      if (!why.empty()) {
+      if (report && !why.empty()) {
         ++traj_.stats.stick_refusals;
         if (traj_.stats.notes.size() < kMaxNotes) {
           traj_.stats.notes.push_back("t = " + format(t) + ": contact '" +
