@@ -171,8 +171,10 @@ int run_command(const RunArguments& args) {
   std::printf("  %lld samples to t = %g s: %ld steps (%ld rejected), %ld evaluations, %.3g s\n",
               static_cast<long long>(run.trajectory.samples()), s.t_reached, s.steps, s.rejected_steps,
               s.evaluations, s.wall_time);
-  std::printf("  max violation %.3g (position), %.3g (velocity); energy drift %.3g\n",
-              s.max_position_violation, s.max_velocity_violation, s.energy_drift);
+  std::printf("  max violation %.3g (position), %.3g (velocity)\n", s.max_position_violation,
+              s.max_velocity_violation);
+  std::printf("  energy balance %.3g of %.3g J exchanged (tolerance %.3g)\n", s.energy_balance,
+              s.energy_exchanged, options.energy_balance_tolerance);
   if (run.controlled) {
     const ControlStatistics& c = run.control;
     std::printf("  control: %ld evaluations", c.evaluations);
@@ -188,6 +190,11 @@ int run_command(const RunArguments& args) {
     }
   }
   for (const auto& f : files) std::printf("  wrote %s\n", f.c_str());
+  if (s.status == Status::kEnergyBalance) {
+    std::fprintf(stderr, "warning: %s\n", s.message.c_str());
+    std::printf("  status: energy_balance\n");
+    return kExitEnergyBalance;
+  }
   if (s.status != Status::kOk) {
     std::fprintf(stderr, "error: the run failed at t = %g s: %s\n", s.t_reached,
                  s.message.empty() ? to_string(s.status) : s.message.c_str());

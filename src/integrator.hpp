@@ -14,9 +14,28 @@
 
 namespace ukdyn::detail {
 
+// The work channels integrated after q and q' (docs/simulation.md, "Energy balance"): their
+// offsets in x after 2n, or −1 when the system does not need the channel.
+//   nonideal  W_nonideal' = q'ᵀ Qc_nonideal                         (always)
+//   ideal     W_ideal'    = q'ᵀ Qc_ideal − (the drives' part)        (always)
+//   drive     W_drive'    = Σ over drives k of q'ᵀ A_kᵀ lambda_k      (a constraint is_drive())
+//   external  W_external' = P_ext(q, q', t)                          (System::has_external_power)
+struct WorkLayout {
+  explicit WorkLayout(const System& sys);
+  Index nonideal = 0, ideal = 1, drive = -1, external = -1;
+  Index count = 2;              // number of channels
+  std::vector<Index> drives;    // indices of the drive constraints
+};
+
+// The power of constraint k's share of the ideal force along q', q'ᵀ A_kᵀ lambda_k, after
+// solve_ideal (either engine); scratch (n) is used by the sparse engine. Cost O(rows · n).
+double constraint_power(const System& sys, const Workspace& ws, Index k, const VectorXd& qd,
+                        VectorXd& scratch);
+
 // The first-order system x' = f(t, x) of a constrained mechanical system, x = [q; q'; W]
-// (2n + 1), W the work of the non-ideal constraint forces:
-//   f = [q'; q''; q'ᵀ Qc_nonideal],  q'' from forward_dynamics.
+// (2n + WorkLayout::count), W the work channels:
+//   f = [q'; q''; q'ᵀ Qc_nonideal; q'ᵀ Qc_ideal − P_drive; P_drive; P_ext],  q'' from
+//   forward_dynamics (absent channels left out).
 // A failed evaluation (status not kOk) fills dxdt with NaN, is remembered, and makes
 // operator() return false; integrators must stop at once when it does.
 class ConstrainedOde {
@@ -26,7 +45,8 @@ class ConstrainedOde {
   // dxdt = f(t, x) for x, dxdt of size(); false when the evaluation failed
   bool operator()(const double* x, double* dxdt, double t);
 
-  Index size() const { return 2 * n_ + 1; }
+  Index size() const { return 2 * n_ + works_.count; }
+  const WorkLayout& works() const { return works_; }
   Index dofs() const { return n_; }
   long evaluations() const { return evaluations_; }
   bool failed() const { return failure_ != Status::kOk; }
@@ -47,7 +67,8 @@ class ConstrainedOde {
   const System& sys_;
   Workspace& ws_;
   Index n_;
-  VectorXd q_, qd_;  // (n) scratch
+  WorkLayout works_;
+  VectorXd q_, qd_, share_;  // (n) scratch
   long evaluations_ = 0;
   double lo_ = -std::numeric_limits<double>::infinity();
   double hi_ = std::numeric_limits<double>::infinity();

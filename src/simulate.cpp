@@ -115,6 +115,10 @@ void validate(const System& sys, const VectorXd& q0, const VectorXd& qd0,
   if (!(o.rtol > 0.0) || !(o.atol > 0.0)) fail("rtol and atol must be > 0");
   if (!(o.output_every >= 0.0)) fail("output_every must be >= 0");
   if (!(o.max_step >= 0.0)) fail("max_step must be >= 0");
+  if (!(o.energy_balance_tolerance > 0.0)) {
+    fail("energy_balance_tolerance must be > 0 (infinity: no check), got " +
+         format(o.energy_balance_tolerance));
+  }
   if (o.max_steps <= 0) fail("max_steps must be positive");
   for (const auto& [name, d] : o.drift_per_constraint) {
     sys.constraint_index(name);  // throws naming the unknown constraint
@@ -314,7 +318,7 @@ class Run {
 
   // records a sample at t from the state x (projected first, when projecting)
   Status record(double t, const double* x) {
-    std::copy(x, x + 2 * n_ + 1, sample_.begin());
+    std::copy(x, x + sample_.size(), sample_.begin());
     if (projecting_) {
       bool changed = false;
       ProjectionOptions quiet = projection_;
@@ -337,7 +341,15 @@ class Run {
     traj_.kinetic_energy.push_back(T);
     traj_.potential_energy.push_back(V);
     traj_.energy.push_back(T + V);
-    traj_.work_nonideal.push_back(sample_[std::size_t(2 * n_)]);
+    // the work channels (absent ones are zero)
+    const auto work = [&](Index channel) {
+      return channel < 0 ? 0.0 : sample_[std::size_t(2 * n_ + channel)];
+    };
+    traj_.work_nonideal.push_back(work(works_.nonideal));
+    traj_.work_ideal.push_back(work(works_.ideal));
+    traj_.work_drive.push_back(work(works_.drive));
+    traj_.work_external.push_back(work(works_.external));
+    traj_.work_control.push_back(0.0);
     // violations of each constraint
     evaluate_violations(sys_, ws_, q_, qd_, t);
     for (Index k = 0; k < sys_.constraint_count(); ++k) {
@@ -428,7 +440,8 @@ class Run {
   Trajectory& traj_;
   Index n_;
   VectorXd q_, qd_;
-  std::vector<double> sample_ = std::vector<double>(std::size_t(2 * n_ + 1));
+  detail::WorkLayout works_ = detail::WorkLayout(sys_);  // the work channels after q, q' in x
+  std::vector<double> sample_ = std::vector<double>(std::size_t(2 * n_ + works_.count));
   ProjectionOptions projection_;
   bool projecting_ = false;
   std::vector<unsigned char> sticking_;      // (contacts) contact c sticks
@@ -438,22 +451,10 @@ class Run {
   MatrixXd normals_;                         // (rows × n) the normal constraint's rows of A
   VectorXd velocity_ = VectorXd::Zero(n_);   // (n) sliding velocities (head)
   VectorXd direction_ = VectorXd::Zero(n_);  // (n) sliding direction at the step's start (head)
-  std::vector<double> event_x_ = std::vector<double>(std::size_t(2 * n_ + 1));  // dense state
+  std::vector<double> event_x_ = std::vector<double>(sample_.size());  // dense state
   Index switching_ = -1;  // the contact of the last event found
   std::string failure_;
 };
-
-// max |E − E0 − W| over the samples, relative to max(|E0|, largest kinetic energy)
-double energy_drift(const Trajectory& traj) {
-  if (traj.energy.empty()) return 0.0;
-  const double E0 = traj.energy.front();
-  double scale = std::abs(E0), drift = 0.0;
-  for (double T : traj.kinetic_energy) scale = std::max(scale, std::abs(T));
-  for (std::size_t i = 0; i < traj.energy.size(); ++i) {
-    drift = std::max(drift, std::abs(traj.energy[i] - E0 - traj.work_nonideal[i]));
-  }
-  return scale > 0 ? drift / scale : drift;
-}
 
 }  // namespace
 
@@ -502,8 +503,8 @@ Trajectory simulate(const System& sys, const VectorXd& q0, const VectorXd& qd0,
     }
   }
 
-  // x = [q; q'; W]
-  std::vector<double> x(std::size_t(2 * n + 1), 0.0);
+  // x = [q; q'; W] (the work channels start at 0)
+  std::vector<double> x(std::size_t(2 * n + detail::WorkLayout(sys).count), 0.0);
   Eigen::Map<VectorXd>(x.data(), n) = q;
   Eigen::Map<VectorXd>(x.data() + n, n) = qd;
 
@@ -526,7 +527,8 @@ Trajectory simulate(const System& sys, const VectorXd& q0, const VectorXd& qd0,
     traj.stats.message = message;
     traj.stats.t_reached = t_reached;
     traj.stats.evaluations = ode.evaluations();
-    traj.stats.energy_drift = energy_drift(traj);
+    // the energy balance certifies a run that reached its end
+    compute_energy_balance(traj, o.energy_balance_tolerance);
     traj.stats.wall_time =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
     std::fill(ws.activity_override.begin(), ws.activity_override.end(), -1);

@@ -111,6 +111,11 @@ SystemBuilder& SystemBuilder::potential_energy(PotentialFn fn) {
   return *this;
 }
 
+SystemBuilder& SystemBuilder::external_power(PowerFn fn) {
+  external_power_ = std::move(fn);
+  return *this;
+}
+
 SystemBuilder& SystemBuilder::add(Constraint c) {
   constraints_.push_back(std::move(c));
   return *this;
@@ -219,6 +224,7 @@ System SystemBuilder::build() const {
     s.m_ += c.rows();
   }
   s.potential_ = potential_;
+  s.external_power_ = external_power_;
   s.constraints_ = all;
   s.id_ = next_system_id();
   // bind the non-ideal forces last: they may look up constraints and coordinates by name
