@@ -2,6 +2,7 @@
 // channel against a closed form or an independent quadrature, and the warning status of a run
 // whose balance fails.
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <string>
 
@@ -38,6 +39,13 @@ std::vector<double> column(const ModelRun& run, const std::string& name) {
   }
   ADD_FAILURE() << "no column " << name;
   return {};
+}
+
+// a measured number in the test report (--gtest_output=xml, or the console's record lines)
+void record(const std::string& name, double value) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.3e", value);
+  ::testing::Test::RecordProperty(name, buf);
 }
 
 double largest_abs(const std::vector<double>& v) {
@@ -91,9 +99,11 @@ TEST_P(BeadOnRotatingWire, TheWiresWorkIsTheGainOfKineticEnergy) {
   const double T0 = bead.kinetic(0.0), gain = bead.kinetic(o.t_end) - T0;
   ASSERT_GT(gain, 100.0);  // (r grows 10-fold: the wire does a lot of work)
   const double tol = (bdf ? 1e-6 : 1e-9) * gain;
+  double worst = 0.0;
   for (Index i = 0; i < tr.samples(); ++i) {
     const std::size_t s = std::size_t(i);
     EXPECT_NEAR(tr.work_ideal[s], bead.kinetic(tr.t[s]) - T0, tol) << "t " << tr.t[s];
+    worst = std::max(worst, std::abs(tr.work_ideal[s] - (bead.kinetic(tr.t[s]) - T0)) / gain);
     EXPECT_EQ(tr.work_nonideal[s], 0.0);
     EXPECT_EQ(tr.work_drive[s], 0.0);
     EXPECT_EQ(tr.work_external[s], 0.0);
@@ -103,6 +113,8 @@ TEST_P(BeadOnRotatingWire, TheWiresWorkIsTheGainOfKineticEnergy) {
   EXPECT_NEAR(tr.stats.energy_exchanged, gain, tol);
   EXPECT_NEAR(tr.stats.energy_balance, 0.0, bdf ? 1e-6 : 1e-9);
   EXPECT_NEAR(largest_abs(tr.energy_balance_residual), 0.0, tol);
+  record("work_ideal_relative_error", worst);
+  record("energy_balance", tr.stats.energy_balance);
   // the old figure raised a false alarm here: E(t) − E(0) is the wire's work
   EXPECT_GT(tr.energy.back() - tr.energy.front(), 100.0);
 }
@@ -150,10 +162,15 @@ TEST(EnergyBalance, PendulumOfPrescribedVaryingLength) {
   const std::vector<double> W = simpson(power, o.output_every);
   const double scale = largest_abs(tr.work_ideal);
   ASSERT_GT(scale, 0.5);  // the rod works: of the order of joules
+  double worst = 0.0;
   for (std::size_t i = 0; i < W.size(); i += 2) {
     EXPECT_NEAR(tr.work_ideal[i], W[i], 1e-9 * scale) << "t " << tr.t[i];
+    worst = std::max(worst, std::abs(tr.work_ideal[i] - W[i]));
   }
   EXPECT_NEAR(tr.stats.energy_balance, 0.0, 1e-9);
+  record("work_ideal_vs_simpson", worst);
+  record("work_ideal_scale", scale);
+  record("energy_balance", tr.stats.energy_balance);
   EXPECT_NEAR(largest_abs(tr.energy_balance_residual), 0.0, 1e-9 * scale);
 }
 
@@ -186,6 +203,8 @@ TEST(EnergyBalance, ConservativePendulumExchangesNothing) {
   EXPECT_NEAR(tr.stats.energy_exchanged, 0.0, 1e-8);
   EXPECT_NEAR(tr.stats.energy_balance, 0.0, 1e-9);  // relative to T_max = m g L = 9.81 J
   EXPECT_NEAR(tr.stats.energy_drift, 0.0, 1e-9);
+  record("work_ideal", largest_abs(tr.work_ideal));
+  record("energy_balance", tr.stats.energy_balance);
 }
 
 // --- external forces: SystemBuilder::external_power --------------------------------------------
@@ -224,6 +243,7 @@ TEST(EnergyBalance, DamperWorkIsTheExternalWork) {
   }
   EXPECT_LT(tr.work_external.back(), -1.0);  // most of E(0) = 2 J is gone
   EXPECT_NEAR(tr.stats.energy_balance, 0.0, 1e-8);
+  record("energy_balance", tr.stats.energy_balance);
 }
 
 // A pendulum whose Q (gravity m g) is not −∂V/∂q of the V it declares (2 m g y): energy appears
@@ -319,9 +339,14 @@ TEST(EnergyBalance, SliderCrankDriveWork) {
   const std::vector<double> W = simpson(power, o.output_every);
   const double scale = largest_abs(tr.work_drive);
   ASSERT_GT(scale, 1.0);
+  double worst = 0.0;
   for (std::size_t i = 0; i < W.size(); i += 2) {
     EXPECT_NEAR(tr.work_drive[i], W[i], 1e-7 * scale) << "t " << tr.t[i];
+    worst = std::max(worst, std::abs(tr.work_drive[i] - W[i]));
   }
+  record("work_drive_vs_simpson", worst);
+  record("work_drive_scale", scale);
+  record("energy_balance", tr.stats.energy_balance);
   // the other joints do no work
   EXPECT_NEAR(largest_abs(tr.work_ideal), 0.0, 1e-8 * scale);
   EXPECT_NEAR(tr.stats.energy_balance, 0.0, 1e-8);
@@ -377,6 +402,9 @@ TEST(EnergyBalance, SphereOnTurntableNoFalseAlarm) {
   EXPECT_NEAR(tr.energy.back() - tr.energy.front(), -0.14088, 1e-5);
   EXPECT_NEAR(tr.work_ideal.back(), -0.14088, 1e-5);
   EXPECT_NEAR(tr.stats.energy_balance, 0.0, 1e-8);
+  record("delta_E", tr.energy.back() - tr.energy.front());
+  record("work_ideal", tr.work_ideal.back());
+  record("energy_balance", tr.stats.energy_balance);
 }
 
 }  // namespace
