@@ -173,8 +173,13 @@ int run_command(const RunArguments& args) {
               s.evaluations, s.wall_time);
   std::printf("  max violation %.3g (position), %.3g (velocity)\n", s.max_position_violation,
               s.max_velocity_violation);
-  std::printf("  energy balance %.3g of %.3g J exchanged (tolerance %.3g)\n", s.energy_balance,
-              s.energy_exchanged, options.energy_balance_tolerance);
+  if (s.energy_balance_checked) {
+    std::printf("  energy balance %.3g of %.3g J exchanged (tolerance %.3g)\n", s.energy_balance,
+                s.energy_exchanged, options.energy_balance_tolerance);
+  } else {
+    std::printf("  energy balance %.3g of %.3g J exchanged (not checked)\n", s.energy_balance,
+                s.energy_exchanged);
+  }
   if (run.controlled) {
     const ControlStatistics& c = run.control;
     std::printf("  control: %ld evaluations", c.evaluations);

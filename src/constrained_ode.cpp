@@ -10,10 +10,11 @@
 
 namespace ukdyn::detail {
 
-WorkLayout::WorkLayout(const System& sys) {
+WorkLayout::WorkLayout(const System& sys, bool quiet_channels) : quiet(quiet_channels) {
   for (Index k = 0; k < sys.constraint_count(); ++k) {
     if (sys.constraint(k).is_drive()) drives.push_back(k);
   }
+  if (sys.constraint_count() > 0) ideal = count++;
   if (!drives.empty()) drive = count++;
   if (sys.has_external_power()) external = count++;
 }
@@ -33,11 +34,11 @@ double constraint_power(const System& sys, const Workspace& ws, Index k, const V
   return p;
 }
 
-ConstrainedOde::ConstrainedOde(const System& sys, Workspace& ws)
+ConstrainedOde::ConstrainedOde(const System& sys, Workspace& ws, bool quiet)
     : sys_(sys),
       ws_(ws),
       n_(sys.dofs()),
-      works_(sys),
+      works_(sys, quiet),
       q_(sys.dofs()),
       qd_(sys.dofs()),
       share_(VectorXd::Zero(sys.dofs())) {}
@@ -78,9 +79,11 @@ bool ConstrainedOde::operator()(const double* x, double* dxdt, double t_in) {
   for (Index k : works_.drives) {
     if (ws_.active[std::size_t(k)]) drive += constraint_power(sys_, ws_, k, qd_, share_);
   }
-  w[works_.ideal] = qd_.dot(ws_.Qc_ideal) - drive;
-  if (works_.drive >= 0) w[works_.drive] = drive;
-  if (works_.external >= 0) w[works_.external] = sys_.external_power(q_, qd_, t);
+  // (the quiet channels scaled by 2⁻³², see WorkLayout)
+  const double quiet = works_.quiet ? WorkLayout::kQuietScale : 1.0;
+  if (works_.ideal >= 0) w[works_.ideal] = quiet * (qd_.dot(ws_.Qc_ideal) - drive);
+  if (works_.drive >= 0) w[works_.drive] = quiet * drive;
+  if (works_.external >= 0) w[works_.external] = quiet * sys_.external_power(q_, qd_, t);
   return true;
 }
 

@@ -44,6 +44,7 @@ void compute_energy_balance(Trajectory& traj, double tolerance) {
   traj.check_consistent("ukdyn::compute_energy_balance");
   RunStatistics& s = traj.stats;
   s.energy_balance = s.energy_exchanged = s.energy_drift = 0.0;
+  s.energy_balance_checked = std::isfinite(tolerance);
   if (N == 0) return;
   const std::vector<double>* works[] = {&traj.work_nonideal, &traj.work_ideal, &traj.work_drive,
                                         &traj.work_external, &traj.work_control};

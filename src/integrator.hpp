@@ -17,13 +17,29 @@ namespace ukdyn::detail {
 // The work channels integrated after q and q' (docs/simulation.md, "Energy balance"): their
 // offsets in x after 2n, or −1 when the system does not need the channel.
 //   nonideal  W_nonideal' = q'ᵀ Qc_nonideal                         (always)
-//   ideal     W_ideal'    = q'ᵀ Qc_ideal − (the drives' part)        (always)
+//   ideal     W_ideal'    = q'ᵀ Qc_ideal − (the drives' part)        (the system has constraints)
 //   drive     W_drive'    = Σ over drives k of q'ᵀ A_kᵀ lambda_k      (a constraint is_drive())
 //   external  W_external' = P_ext(q, q', t)                          (System::has_external_power)
+//
+// The channels after W_nonideal are stored scaled by kQuietScale = 2⁻³² (x holds W · 2⁻³²), so
+// that the step-size control, which weighs every component of x, follows the motion (and
+// W_nonideal, as it always has) alone: a power that carries noise — q'ᵀ Qc_ideal of scleronomic
+// constraints near a singular configuration, where the multipliers are large and A q' is
+// roundoff — must not shrink the steps (it switched the double four-bar's branch). The
+// quadrature itself is unchanged: the same stages, and scaling by a power of two commutes with
+// rounding, so W · 2⁻³² · 2³² is bit for bit the unscaled sum.
+//
+// With BDF the channels are not scaled: CVODE's error test is a root-mean-square over the
+// components, which a component of negligible error would loosen (by √((N+1)/N)).
 struct WorkLayout {
-  explicit WorkLayout(const System& sys);
-  Index nonideal = 0, ideal = 1, drive = -1, external = -1;
-  Index count = 2;              // number of channels
+  static constexpr double kQuietScale = 0x1p-32;
+  // quiet: scale the channels after W_nonideal (the explicit integrators)
+  explicit WorkLayout(const System& sys, bool quiet = true);
+  // the scale of channel c in x (1 for W_nonideal, and for every channel when not quiet)
+  double scale(Index c) const { return c == nonideal || !quiet ? 1.0 : kQuietScale; }
+  bool quiet = true;
+  Index nonideal = 0, ideal = -1, drive = -1, external = -1;
+  Index count = 1;              // number of channels
   std::vector<Index> drives;    // indices of the drive constraints
 };
 
@@ -40,7 +56,8 @@ double constraint_power(const System& sys, const Workspace& ws, Index k, const V
 // operator() return false; integrators must stop at once when it does.
 class ConstrainedOde {
  public:
-  ConstrainedOde(const System& sys, Workspace& ws);
+  // quiet: see WorkLayout (true for the explicit integrators, false for BDF)
+  ConstrainedOde(const System& sys, Workspace& ws, bool quiet = true);
 
   // dxdt = f(t, x) for x, dxdt of size(); false when the evaluation failed
   bool operator()(const double* x, double* dxdt, double t);

@@ -48,6 +48,7 @@ void write_summary_json(const Trajectory& traj, const SimulationOptions& options
   j["energy_balance"] = s.energy_balance;
   j["energy_exchanged"] = s.energy_exchanged;
   j["energy_balance_tolerance"] = options.energy_balance_tolerance;
+  j["energy_balance_checked"] = s.energy_balance_checked;
   j["energy_drift"] = s.energy_drift;
 
   // time span and the last sample by coordinate name (null when there is no sample)

@@ -321,6 +321,8 @@ void Reader::read_dynamics(const YAML::Node& root, SystemBuilder& builder) {
         layout.fill(b.in, q, qd, t);
         Qp.evaluate(b.in.data(), Qout.data(), b.scratch.data());
       });
+  // V and P_ext account for every force's work (the run's energy balance is checked)
+  builder.accounts_for_energy();
   if (!set_->is_zero(P_ext)) {
     const Program Pp = compile({P_ext}, dynamics, "the external power");
     builder.external_power([Pp, layout](const VectorXd& q, const VectorXd& qd, double t) {

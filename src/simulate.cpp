@@ -343,7 +343,7 @@ class Run {
     traj_.energy.push_back(T + V);
     // the work channels (absent ones are zero)
     const auto work = [&](Index channel) {
-      return channel < 0 ? 0.0 : sample_[std::size_t(2 * n_ + channel)];
+      return channel < 0 ? 0.0 : sample_[std::size_t(2 * n_ + channel)] / works_.scale(channel);
     };
     traj_.work_nonideal.push_back(work(works_.nonideal));
     traj_.work_ideal.push_back(work(works_.ideal));
@@ -440,7 +440,8 @@ class Run {
   Trajectory& traj_;
   Index n_;
   VectorXd q_, qd_;
-  detail::WorkLayout works_ = detail::WorkLayout(sys_);  // the work channels after q, q' in x
+  // the work channels after q, q' in x (quiet unless BDF, see WorkLayout)
+  detail::WorkLayout works_ = detail::WorkLayout(sys_, o_.integrator != Integrator::kBDF);
   std::vector<double> sample_ = std::vector<double>(std::size_t(2 * n_ + works_.count));
   ProjectionOptions projection_;
   bool projecting_ = false;
@@ -508,7 +509,7 @@ Trajectory simulate(const System& sys, const VectorXd& q0, const VectorXd& qd0,
   Eigen::Map<VectorXd>(x.data(), n) = q;
   Eigen::Map<VectorXd>(x.data() + n, n) = qd;
 
-  detail::ConstrainedOde ode(sys, ws);
+  detail::ConstrainedOde ode(sys, ws, o.integrator != Integrator::kBDF);
   detail::SegmentHooks hooks;
   hooks.after_step = [&](double t, double* xs, bool& changed) {
     return run.after_step(t, xs, changed);
@@ -528,7 +529,10 @@ Trajectory simulate(const System& sys, const VectorXd& q0, const VectorXd& qd0,
     traj.stats.t_reached = t_reached;
     traj.stats.evaluations = ode.evaluations();
     // the energy balance certifies a run that reached its end
-    compute_energy_balance(traj, o.energy_balance_tolerance);
+    // (a system that does not account for its forces' work is reported, not checked)
+    compute_energy_balance(traj, sys.accounts_for_energy()
+                                     ? o.energy_balance_tolerance
+                                     : std::numeric_limits<double>::infinity());
     traj.stats.wall_time =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
     std::fill(ws.activity_override.begin(), ws.activity_override.end(), -1);

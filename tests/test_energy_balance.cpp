@@ -200,7 +200,8 @@ TEST(EnergyBalance, ConservativePendulumExchangesNothing) {
   EXPECT_EQ(largest_abs(tr.work_drive), 0.0);
   EXPECT_EQ(largest_abs(tr.work_external), 0.0);
   EXPECT_EQ(largest_abs(tr.work_control), 0.0);
-  EXPECT_NEAR(tr.stats.energy_exchanged, 0.0, 1e-8);
+  // (the rod's channel integrates λ A q', the velocity drift within each step)
+  EXPECT_NEAR(tr.stats.energy_exchanged, 0.0, 1e-7);
   EXPECT_NEAR(tr.stats.energy_balance, 0.0, 1e-9);  // relative to T_max = m g L = 9.81 J
   EXPECT_NEAR(tr.stats.energy_drift, 0.0, 1e-9);
   record("work_ideal", largest_abs(tr.work_ideal));
@@ -285,7 +286,7 @@ TEST(EnergyBalance, ForcesInconsistentWithThePotentialEndWithTheWarning) {
   EXPECT_NEAR(ok.stats.energy_balance, 0.0, 1e-9);
   for (Index i = 0; i < ok.samples(); ++i) {
     const std::size_t s = std::size_t(i);
-    EXPECT_NEAR(ok.work_external[s], kG * ok.q[2 * s + 1], 1e-9);  // m g (y − y0), y0 = 0
+    EXPECT_NEAR(ok.work_external[s], kG * ok.q[2 * s + 1], 1e-8);  // m g (y − y0), y0 = 0
   }
 }
 

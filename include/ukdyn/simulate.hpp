@@ -103,7 +103,9 @@ struct SimulationOptions {
   SolverOptions solver;             ///< settings of the fundamental-equation solver
 
   /// A run that reaches t_end with RunStatistics::energy_balance above this ends with
-  /// Status::kEnergyBalance (a warning: the samples are complete) instead of kOk. The default
+  /// Status::kEnergyBalance (a warning: the samples are complete) instead of kOk, when the
+  /// system accounts for its forces' work (System::accounts_for_energy; otherwise the balance
+  /// is reported, not checked). The default
   /// leaves room for the error of the default tolerances on long runs and catches lost energy
   /// (a jump of the state, forces in Q that V does not describe and no external power
   /// declares). Must be > 0; infinity turns the check off.
@@ -132,6 +134,10 @@ struct RunStatistics {
   double energy_balance = 0.0;
   /// The energy exchanged (J): the sum over the work channels of Σ_i |W(t_i) − W(t_{i−1})|.
   double energy_exchanged = 0.0;
+  /// Whether energy_balance was checked against the tolerance: false for a system that does
+  /// not account for its forces' work (System::accounts_for_energy) and when the tolerance is
+  /// infinite.
+  bool energy_balance_checked = false;
   /// The older figure: max |E(t) − E(0) − ΣW(t)| relative to max(|E(0)|, largest kinetic
   /// energy); meaningless when E(0) is near 0 — energy_balance replaces it.
   double energy_drift = 0.0;
@@ -194,7 +200,8 @@ Trajectory simulate(const System& sys, const VectorXd& q0, const VectorXd& qd0,
 
 /// The energy balance of a trajectory from its energies and work channels: fills
 /// traj.energy_balance_residual and traj.stats.energy_balance, energy_exchanged and
-/// energy_drift (see RunStatistics); then, when the status is kOk and energy_balance exceeds
+/// energy_drift and energy_balance_checked (= tolerance is finite) (see RunStatistics); then,
+/// when the status is kOk and energy_balance exceeds
 /// `tolerance` (or is NaN), sets Status::kEnergyBalance and a message saying by how much, when
 /// and why it may be. simulate() calls it; call it again after changing a work column
 /// (simulate_controlled does, with work_control). @throws std::invalid_argument when traj is

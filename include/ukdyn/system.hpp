@@ -105,6 +105,12 @@ class System {
     return external_power_ ? external_power_(q, qd, t) : 0.0;
   }
 
+  /// True when the description accounts for the work of every force in Q — it declared a
+  /// potential or an external power, or gave no Q, or said so (SystemBuilder::
+  /// accounts_for_energy) — so that a run's energy balance certifies it. A system that gives Q
+  /// and neither V nor an external power makes no claim: its balance is reported, not checked.
+  bool accounts_for_energy() const { return accounts_for_energy_; }
+
   /// Number of non-ideal forces.
   Index nonideal_count() const { return Index(nonideal_fns_.size()); }
   /// Name of non-ideal force i.
@@ -131,6 +137,7 @@ class System {
   ForceFn forces_;
   PotentialFn potential_;
   PowerFn external_power_;
+  bool accounts_for_energy_ = true;
   std::vector<Constraint> constraints_;
   std::vector<Index> offsets_;
   std::vector<std::string> nonideal_names_;
@@ -166,6 +173,11 @@ class SystemBuilder {
   /// velocity terms that do no work, and a Q that does work otherwise shows up in the
   /// simulation's energy balance residual.
   SystemBuilder& external_power(PowerFn fn);
+  /// Declares that V and the external power (either possibly absent) account for the work of
+  /// every force in Q — a Q of velocity terms that do no work, say — so that the simulation
+  /// checks the energy balance (System::accounts_for_energy). Implied by potential_energy(),
+  /// external_power(), and by giving no forces().
+  SystemBuilder& accounts_for_energy(bool accounts = true);
   /// Adds a constraint (names must be unique).
   SystemBuilder& add(Constraint c);
   /// Adds a non-ideal force (its C is summed with the others').
@@ -187,6 +199,7 @@ class SystemBuilder {
   ForceFn forces_;
   PotentialFn potential_;
   PowerFn external_power_;
+  bool accounts_for_energy_ = false;
   std::vector<Constraint> constraints_;
   std::vector<NonIdealForce> nonideal_;
 };

@@ -265,6 +265,7 @@ py::dict statistics_dict(const RunStatistics& s) {
   d["max_velocity_violation"] = s.max_velocity_violation;
   d["energy_balance"] = s.energy_balance;
   d["energy_exchanged"] = s.energy_exchanged;
+  d["energy_balance_checked"] = s.energy_balance_checked;
   d["energy_drift"] = s.energy_drift;
   d["t_reached"] = s.t_reached;
   d["status"] = to_string(s.status);
