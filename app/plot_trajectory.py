@@ -104,8 +104,10 @@ def main():
     fig, axes = figure("energy balance: " + name, rows=2)
     E0 = col["energy"][0]
     axes[0].plot(t, [e - E0 for e in col["energy"]], color="k", lw=1.6, label="E(t) - E(0)")
+    # the channels that carry more than the drift (1e-9 of the energy exchanged)
+    scale = max([abs(e - E0) for e in col["energy"]] + [abs(v) for h in WORKS for v in col[h]])
     for h in WORKS:
-        if any(v != 0.0 for v in col[h]):
+        if any(abs(v) > 1e-9 * scale for v in col[h]):
             axes[0].plot(t, col[h], label=h.replace("_", " "))
     axes[0].set_ylabel("J")
     axes[1].plot(t, col["energy_balance_residual"], color="k",

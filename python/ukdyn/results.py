@@ -214,10 +214,15 @@ class Result:
         if ax is None:
             _, ax = plt.subplots()
         E = self["energy"]
-        ax.plot(self.t, E - E[0], "k", lw=1.6, label="E − E(0)")
-        for name in ("work_nonideal", "work_ideal", "work_drive", "work_external",
-                     "work_control"):
-            if name in self and np.any(self[name] != 0.0):
+        dE = E - E[0]
+        ax.plot(self.t, dE, "k", lw=1.6, label="E − E(0)")
+        # the channels that carry more than the drift (1e-9 of the energy exchanged)
+        works = [n for n in ("work_nonideal", "work_ideal", "work_drive", "work_external",
+                             "work_control") if n in self]
+        scale = max([float(np.max(np.abs(dE), initial=0.0))] +
+                    [float(np.max(np.abs(self[n]), initial=0.0)) for n in works])
+        for name in works:
+            if np.max(np.abs(self[name]), initial=0.0) > 1e-9 * scale:
                 ax.plot(self.t, self[name], label=name.replace("_", " "))
         ax.plot(self.t, self["energy_balance_residual"], "--", label="residual E − E(0) − ΣW")
         ax.set_xlabel("t [s]")
