@@ -19,6 +19,9 @@ enum ExitCode : int {
   kExitUsage = 2,      ///< bad command line
   kExitModel = 3,      ///< bad model file (ModelError), or a model that cannot be started
   kExitCheck = 4,      ///< `check` found problems
+  /// the run reached its end but its energy balance failed (Status::kEnergyBalance): the
+  /// trajectory is complete, but energy was gained or lost that no work accounts for
+  kExitEnergyBalance = 5,
 };
 
 /// A mistake on the command line found after parsing (bad --set, unknown example): exit 2.

@@ -21,7 +21,9 @@ constexpr const char* kExitCodes = R"(Exit codes:
      --example)
   3  bad model file (printed as FILE:LINE:COLUMN: error: MESSAGE (hint: ...)), or a model
      that cannot be started (inconsistent initial state without initial: project: true)
-  4  check found problems)";
+  4  check found problems
+  5  the run reached its end, but its energy balance residual exceeds the tolerance (status
+     energy_balance): energy was gained or lost that no work channel accounts for)";
 
 // the options shared by run and check: MODEL.yaml or --example NAME, and --set
 void add_source_options(CLI::App* cmd, ukdyn::cli::ModelSource& source) {

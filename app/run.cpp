@@ -217,8 +217,15 @@ int run_command(const RunArguments& args) {
                 s.stiff_switch_time, to_string(options.integrator), s.stiff_switches,
                 s.stiff_switches == 1 ? "" : "s", s.stiff_steps);
   }
-  std::printf("  max violation %.3g (position), %.3g (velocity); energy drift %.3g\n",
-              s.max_position_violation, s.max_velocity_violation, s.energy_drift);
+  std::printf("  max violation %.3g (position), %.3g (velocity)\n", s.max_position_violation,
+              s.max_velocity_violation);
+  if (s.energy_balance_checked) {
+    std::printf("  energy balance %.3g of %.3g J exchanged (tolerance %.3g)\n", s.energy_balance,
+                s.energy_exchanged, options.energy_balance_tolerance);
+  } else {
+    std::printf("  energy balance %.3g of %.3g J exchanged (not checked)\n", s.energy_balance,
+                s.energy_exchanged);
+  }
   if (s.events > 0 || s.stick_refusals > 0) {
     std::printf("  friction: %ld stick/slip events, %ld stops where sticking was refused\n",
                 s.events, s.stick_refusals);
@@ -244,6 +251,11 @@ int run_command(const RunArguments& args) {
     }
   }
   for (const auto& f : files) std::printf("  wrote %s\n", f.c_str());
+  if (s.status == Status::kEnergyBalance) {
+    std::fprintf(stderr, "warning: %s\n", s.message.c_str());
+    std::printf("  status: energy_balance\n");
+    return kExitEnergyBalance;
+  }
   if (s.status != Status::kOk) {
     std::fprintf(stderr, "error: the run failed at t = %g s: %s\n", s.t_reached,
                  s.message.empty() ? to_string(s.status) : s.message.c_str());

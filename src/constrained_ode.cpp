@@ -1,15 +1,47 @@
-// ConstrainedOde: the first-order system x' = f(t, x), x = [q; q'; W], that the integrators see.
+// ConstrainedOde: the first-order system x' = f(t, x), x = [q; q'; W], that the integrators see,
+// W the work channels of the energy balance.
 #include <algorithm>
 #include <cmath>
 #include <limits>
 
 #include "integrator.hpp"
 #include "ukdyn/forward.hpp"
+#include "ukdyn/sparse.hpp"
 
 namespace ukdyn::detail {
 
-ConstrainedOde::ConstrainedOde(const System& sys, Workspace& ws)
-    : sys_(sys), ws_(ws), n_(sys.dofs()), q_(sys.dofs()), qd_(sys.dofs()) {}
+WorkLayout::WorkLayout(const System& sys, bool quiet_channels) : quiet(quiet_channels) {
+  for (Index k = 0; k < sys.constraint_count(); ++k) {
+    if (sys.constraint(k).is_drive()) drives.push_back(k);
+  }
+  if (sys.constraint_count() > 0) ideal = count++;
+  if (!drives.empty()) drive = count++;
+  if (sys.has_external_power()) external = count++;
+}
+
+double constraint_power(const System& sys, const Workspace& ws, Index k, const VectorXd& qd,
+                        VectorXd& scratch) {
+  if (ws.sparse) {
+    // share_k = A_kᵀ lambda_k on constraint k's columns
+    scratch.setZero();
+    ws.sparse->share(k, ws.lambda, scratch);
+    return qd.dot(scratch);
+  }
+  // q'ᵀ A_kᵀ lambda_k = Σ_rows lambda_r (A_r q')
+  const Index r0 = sys.row_offset(k), rows = sys.constraint(k).rows();
+  double p = 0.0;
+  for (Index r = r0; r < r0 + rows; ++r) p += ws.lambda[r] * ws.A.row(r).dot(qd);
+  return p;
+}
+
+ConstrainedOde::ConstrainedOde(const System& sys, Workspace& ws, bool quiet)
+    : sys_(sys),
+      ws_(ws),
+      n_(sys.dofs()),
+      works_(sys, quiet),
+      q_(sys.dofs()),
+      qd_(sys.dofs()),
+      share_(VectorXd::Zero(sys.dofs())) {}
 
 void ConstrainedOde::clear_failure() {
   failure_ = Status::kOk;
@@ -38,10 +70,20 @@ bool ConstrainedOde::operator()(const double* x, double* dxdt, double t_in) {
     for (Index i = 0; i < size(); ++i) dxdt[i] = std::numeric_limits<double>::quiet_NaN();
     return false;
   }
-  // x' = [q'; q''; q'ᵀ Qc_nonideal]
+  // x' = [q'; q''; q'ᵀ Qc_nonideal; q'ᵀ Qc_ideal − P_drive; P_drive; P_ext]
   Eigen::Map<VectorXd>(dxdt, n_) = qd_;
   Eigen::Map<VectorXd>(dxdt + n_, n_) = ws_.qdd;
-  dxdt[2 * n_] = qd_.dot(ws_.Qc_nonideal);
+  double* w = dxdt + 2 * n_;
+  w[works_.nonideal] = qd_.dot(ws_.Qc_nonideal);
+  double drive = 0.0;
+  for (Index k : works_.drives) {
+    if (ws_.active[std::size_t(k)]) drive += constraint_power(sys_, ws_, k, qd_, share_);
+  }
+  // (the quiet channels scaled by 2⁻³², see WorkLayout)
+  const double quiet = works_.quiet ? WorkLayout::kQuietScale : 1.0;
+  if (works_.ideal >= 0) w[works_.ideal] = quiet * (qd_.dot(ws_.Qc_ideal) - drive);
+  if (works_.drive >= 0) w[works_.drive] = quiet * drive;
+  if (works_.external >= 0) w[works_.external] = quiet * sys_.external_power(q_, qd_, t);
   return true;
 }
 

@@ -77,6 +77,7 @@ Constraint on_head(const Constraint& c, Index n) {
     out.active_between(iv.begin, iv.end);
   }
   if (c.stabilization().enabled()) out.stabilize(c.stabilization().alpha, c.stabilization().beta);
+  out.mark_drive(c.is_drive());
   return out;
 }
 
@@ -264,6 +265,21 @@ System build_controlled(const std::shared_ptr<ControlledPlant>& st,
       });
     }
   }
+  // the plant's external power (the control's work is integrated apart, in z)
+  if (plant.has_external_power()) {
+    if (aux == 0) {
+      b.external_power([st](const VectorXd& q, const VectorXd& qd, double t) {
+        return st->plant.external_power(q, qd, t);
+      });
+    } else {
+      auto buffers = std::make_shared<std::pair<VectorXd, VectorXd>>(VectorXd(n), VectorXd(n));
+      b.external_power([st, buffers, n](const VectorXd& x, const VectorXd& xd, double t) {
+        buffers->first = x.head(n);
+        buffers->second = xd.head(n);
+        return st->plant.external_power(buffers->first, buffers->second, t);
+      });
+    }
+  }
   // the physical constraints; the stick constraints of Coulomb contacts come again with their
   // contacts below (last, in the same order, so every index stays the plant's)
   const auto& contacts = plant.friction_contacts();
@@ -380,6 +396,8 @@ ControlledTrajectory simulate_controlled(const Controller& ctrl, const System& p
       if (std::isfinite(t)) o.breakpoints.push_back(t);
     }
   }
+  // (the augmented system's balance includes z: the plant's is checked below)
+  o.energy_balance_tolerance = std::numeric_limits<double>::infinity();
   Trajectory full = simulate(sys, x0, xd0, o);
 
   // the plant's trajectory: strip z, and z'ᵀz'/2 from the energies
@@ -409,6 +427,9 @@ ControlledTrajectory simulate_controlled(const Controller& ctrl, const System& p
   tr.velocity_violation = full.velocity_violation;
   tr.potential_energy = full.potential_energy;
   tr.work_nonideal = full.work_nonideal;
+  tr.work_ideal = full.work_ideal;
+  tr.work_drive = full.work_drive;
+  tr.work_external = full.work_external;
   tr.stats = full.stats;
   diagnose_requirements(*st, q0, qd0, options.t_start, tr.stats);
   for (Index j = 0; j < N; ++j) {
@@ -462,19 +483,13 @@ ControlledTrajectory simulate_controlled(const Controller& ctrl, const System& p
     }
   }
 
-  // energy balance with the control's work: E(t) − E(0) − W_nonideal(t) − W_control(t)
-  if (N > 0) {
-    const double E0 = tr.energy.front();
-    double scale = std::abs(E0), drift = 0.0;
-    for (double T : tr.kinetic_energy) scale = std::max(scale, std::abs(T));
-    for (Index j = 0; j < N; ++j) {
-      const std::size_t i = std::size_t(j);
-      drift =
-          std::max(drift, std::abs(tr.energy[i] - E0 - tr.work_nonideal[i] - run.control_work[i]));
-    }
-    tr.stats.energy_drift = scale > 0 ? drift / scale : drift;
-  }
-  if (!st->failure.empty() && tr.stats.status != Status::kOk) {
+  // the plant's energy balance, with the control's work
+  tr.work_control = run.control_work;
+  compute_energy_balance(tr, plant.accounts_for_energy()
+                                 ? options.energy_balance_tolerance
+                                 : std::numeric_limits<double>::infinity());
+  if (!st->failure.empty() && tr.stats.status != Status::kOk &&
+      tr.stats.status != Status::kEnergyBalance) {
     tr.stats.message = "the controller failed: " + st->failure;
   }
   return run;

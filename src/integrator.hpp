@@ -16,19 +16,56 @@
 
 namespace ukdyn::detail {
 
+// The work channels integrated after q and q' (docs/simulation.md, "Energy balance"): their
+// offsets in x after 2n, or −1 when the system does not need the channel.
+//   nonideal  W_nonideal' = q'ᵀ Qc_nonideal                         (always)
+//   ideal     W_ideal'    = q'ᵀ Qc_ideal − (the drives' part)        (the system has constraints)
+//   drive     W_drive'    = Σ over drives k of q'ᵀ A_kᵀ lambda_k      (a constraint is_drive())
+//   external  W_external' = P_ext(q, q', t)                          (System::has_external_power)
+//
+// The channels after W_nonideal are stored scaled by kQuietScale = 2⁻³² (x holds W · 2⁻³²), so
+// that the step-size control, which weighs every component of x, follows the motion (and
+// W_nonideal, as it always has) alone: a power that carries noise — q'ᵀ Qc_ideal of scleronomic
+// constraints near a singular configuration, where the multipliers are large and A q' is
+// roundoff — must not shrink the steps (it switched the double four-bar's branch). The
+// quadrature itself is unchanged: the same stages, and scaling by a power of two commutes with
+// rounding, so W · 2⁻³² · 2³² is bit for bit the unscaled sum.
+//
+// With BDF the channels are not scaled: CVODE's error test is a root-mean-square over the
+// components, which a component of negligible error would loosen (by √((N+1)/N)).
+struct WorkLayout {
+  static constexpr double kQuietScale = 0x1p-32;
+  // quiet: scale the channels after W_nonideal (the explicit integrators)
+  explicit WorkLayout(const System& sys, bool quiet = true);
+  // the scale of channel c in x (1 for W_nonideal, and for every channel when not quiet)
+  double scale(Index c) const { return c == nonideal || !quiet ? 1.0 : kQuietScale; }
+  bool quiet = true;
+  Index nonideal = 0, ideal = -1, drive = -1, external = -1;
+  Index count = 1;              // number of channels
+  std::vector<Index> drives;    // indices of the drive constraints
+};
+
+// The power of constraint k's share of the ideal force along q', q'ᵀ A_kᵀ lambda_k, after
+// solve_ideal (either engine); scratch (n) is used by the sparse engine. Cost O(rows · n).
+double constraint_power(const System& sys, const Workspace& ws, Index k, const VectorXd& qd,
+                        VectorXd& scratch);
+
 // The first-order system x' = f(t, x) of a constrained mechanical system, x = [q; q'; W]
-// (2n + 1), W the work of the non-ideal constraint forces:
-//   f = [q'; q''; q'ᵀ Qc_nonideal],  q'' from forward_dynamics.
+// (2n + WorkLayout::count), W the work channels:
+//   f = [q'; q''; q'ᵀ Qc_nonideal; q'ᵀ Qc_ideal − P_drive; P_drive; P_ext],  q'' from
+//   forward_dynamics (absent channels left out).
 // A failed evaluation (status not kOk) fills dxdt with NaN, is remembered, and makes
 // operator() return false; integrators must stop at once when it does.
 class ConstrainedOde {
  public:
-  ConstrainedOde(const System& sys, Workspace& ws);
+  // quiet: see WorkLayout (true for the explicit integrators, false for BDF)
+  ConstrainedOde(const System& sys, Workspace& ws, bool quiet = true);
 
   // dxdt = f(t, x) for x, dxdt of size(); false when the evaluation failed
   bool operator()(const double* x, double* dxdt, double t);
 
-  Index size() const { return 2 * n_ + 1; }
+  Index size() const { return 2 * n_ + works_.count; }
+  const WorkLayout& works() const { return works_; }
   Index dofs() const { return n_; }
   long evaluations() const { return evaluations_; }
   bool failed() const { return failure_ != Status::kOk; }
@@ -49,7 +86,8 @@ class ConstrainedOde {
   const System& sys_;
   Workspace& ws_;
   Index n_;
-  VectorXd q_, qd_;  // (n) scratch
+  WorkLayout works_;
+  VectorXd q_, qd_, share_;  // (n) scratch
   long evaluations_ = 0;
   double lo_ = -std::numeric_limits<double>::infinity();
   double hi_ = std::numeric_limits<double>::infinity();

@@ -68,7 +68,7 @@ std::vector<ColumnRef> column_refs(const Trajectory& traj) {
   const std::size_t n = x.size(), m = std::size_t(traj.m);
   const std::size_t K = traj.constraint_names.size();
   std::vector<ColumnRef> cols;
-  cols.reserve(1 + 5 * n + m + 2 * K + 4);
+  cols.reserve(1 + 5 * n + m + 2 * K + 9);
   const auto scalar = [&](std::string name, const std::vector<double>& f) {
     cols.push_back(ColumnRef{std::move(name), &f, 1, 0});
   };
@@ -115,6 +115,11 @@ std::vector<ColumnRef> column_refs(const Trajectory& traj) {
   scalar("potential_energy", traj.potential_energy);
   scalar("energy", traj.energy);
   scalar("work_nonideal", traj.work_nonideal);
+  scalar("work_ideal", traj.work_ideal);
+  scalar("work_drive", traj.work_drive);
+  scalar("work_external", traj.work_external);
+  scalar("work_control", traj.work_control);
+  scalar("energy_balance_residual", traj.energy_balance_residual);
   return cols;
 }
 

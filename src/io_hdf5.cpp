@@ -132,6 +132,11 @@ void write_hdf5(const Trajectory& traj, const std::string& path) {
         {"potential_energy", traj.potential_energy, 1, true},
         {"energy", traj.energy, 1, true},
         {"work_nonideal", traj.work_nonideal, 1, true},
+        {"work_ideal", traj.work_ideal, 1, true},
+        {"work_drive", traj.work_drive, 1, true},
+        {"work_external", traj.work_external, 1, true},
+        {"work_control", traj.work_control, 1, true},
+        {"energy_balance_residual", traj.energy_balance_residual, 1, true},
     };
     for (const Field& f : fields) {
       stage = std::string("write dataset '") + f.name + "'";
@@ -166,6 +171,8 @@ void write_hdf5(const Trajectory& traj, const std::string& path) {
     write_scalar_attribute(file, "wall_time", s.wall_time);
     write_scalar_attribute(file, "max_position_violation", s.max_position_violation);
     write_scalar_attribute(file, "max_velocity_violation", s.max_velocity_violation);
+    write_scalar_attribute(file, "energy_balance", s.energy_balance);
+    write_scalar_attribute(file, "energy_exchanged", s.energy_exchanged);
     write_scalar_attribute(file, "energy_drift", s.energy_drift);
     write_scalar_attribute(file, "t_reached", s.t_reached);
 

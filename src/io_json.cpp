@@ -53,6 +53,10 @@ void write_summary_json(const Trajectory& traj, const SimulationOptions& options
   j["wall_time"] = s.wall_time;
   j["max_position_violation"] = s.max_position_violation;
   j["max_velocity_violation"] = s.max_velocity_violation;
+  j["energy_balance"] = s.energy_balance;
+  j["energy_exchanged"] = s.energy_exchanged;
+  j["energy_balance_tolerance"] = options.energy_balance_tolerance;
+  j["energy_balance_checked"] = s.energy_balance_checked;
   j["energy_drift"] = s.energy_drift;
 
   // time span and the last sample by coordinate name (null when there is no sample)
@@ -89,6 +93,7 @@ void write_summary_json(const Trajectory& traj, const SimulationOptions& options
       {"max_step", options.max_step},
       {"max_steps", options.max_steps},
       {"stiff_switch", options.stiff_switch},
+      {"energy_balance_tolerance", options.energy_balance_tolerance},
       {"output_every", options.output_every},
       {"t_start", options.t_start},
       {"t_end", options.t_end},

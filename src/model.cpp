@@ -201,11 +201,20 @@ void Reader::read_dynamics(const YAML::Node& root, SystemBuilder& builder) {
         fail(V, "potential_energy depends on the velocity '" + v + "'");
     }
   }
+  // the external power P_ext (System::external_power): the rate of E = ½ q̇ᵀ M q̇ + V that V
+  // does not account for, q̇ᵀ F + P_time (the forces F beside the energies, the explicit time
+  // dependence); for a Lagrangian P_time = ∂V/∂t − ∂T/∂t + D T0, T0 = T(q̇ = 0), which is
+  // T − q̇ · ∂T/∂q̇ + ½ q̇ᵀ M q̇; for a mass matrix P_time = ½ q̇ᵀ D(M) q̇ + ∂V/∂t
+  std::vector<Expr> qdot;
+  for (const auto& v : velocities_) qdot.push_back(set_->parse(v));
+  Expr P_time = V ? set_->diff(Ve, "t") : zero;
   if (T) {
     // M = ∂²T/∂q̇∂q̇;  Q = ∂T/∂q − D(∂T/∂q̇) − ∂V/∂q (the q̈ part of D is M q̈)
     const Expr Te = expression(T, "kinetic_energy");
+    Expr T0 = Te;
     for (Index i = 0; i < n; ++i) {
       const Expr dT = set_->diff(Te, velocities_[std::size_t(i)]);
+      T0 = set_->subtract(T0, set_->multiply(qdot[std::size_t(i)], dT));
       for (Index j = 0; j < n; ++j) {
         const Expr e = set_->diff(dT, velocities_[std::size_t(j)]);
         // T must be quadratic in the velocities: M = ∂²T/∂q̇∂q̇ may not depend on them
@@ -221,6 +230,16 @@ void Reader::read_dynamics(const YAML::Node& root, SystemBuilder& builder) {
       Q[std::size_t(i)] = set_->subtract(set_->diff(Te, coordinates_[std::size_t(i)]),
                                          set_->total_derivative(dT, "t", chain_));
     }
+    for (Index i = 0; i < n; ++i) {
+      for (Index j = 0; j < n; ++j) {
+        T0 = set_->add(T0, set_->multiply(set_->constant(0.5),
+                                          set_->multiply(qdot[std::size_t(i)],
+                                                         set_->multiply(M[std::size_t(i * n + j)],
+                                                                        qdot[std::size_t(j)]))));
+      }
+    }
+    P_time = set_->add(set_->subtract(P_time, set_->diff(Te, "t")),
+                       set_->total_derivative(T0, "t", chain_));
   } else {
     if (!Mnode.IsSequence() || Index(Mnode.size()) != n) {
       fail(Mnode, "mass_matrix must be a list of " + std::to_string(n) + " rows",
@@ -239,6 +258,11 @@ void Reader::read_dynamics(const YAML::Node& root, SystemBuilder& builder) {
             fail(row[std::size_t(j)], "mass_matrix depends on the velocity '" + v + "'");
         }
         M[std::size_t(i * n + j)] = e;
+        P_time = set_->add(
+            P_time, set_->multiply(set_->constant(0.5),
+                                   set_->multiply(qdot[std::size_t(i)],
+                                                  set_->multiply(set_->total_derivative(e, "t", chain_),
+                                                                 qdot[std::size_t(j)]))));
       }
     }
   }
@@ -252,9 +276,15 @@ void Reader::read_dynamics(const YAML::Node& root, SystemBuilder& builder) {
     const auto rows = rows_of(F, "forces");
     if (Index(rows.size()) != n)
       fail(F, "forces must have " + std::to_string(n) + " entries, one per coordinate");
-    for (Index i = 0; i < n; ++i)
-      Q[std::size_t(i)] = set_->add(Q[std::size_t(i)], expression(rows[std::size_t(i)], "forces"));
+    Expr P = P_time;
+    for (Index i = 0; i < n; ++i) {
+      const Expr f = expression(rows[std::size_t(i)], "forces");
+      Q[std::size_t(i)] = set_->add(Q[std::size_t(i)], f);
+      P = set_->add(P, set_->multiply(qdot[std::size_t(i)], f));
+    }
+    P_time = P;
   }
+  const Expr P_ext = P_time;
 
   // M: a constant matrix when it depends on nothing (factorized once per workspace)
   bool constant = true;
@@ -291,6 +321,19 @@ void Reader::read_dynamics(const YAML::Node& root, SystemBuilder& builder) {
         layout.fill(b.in, q, qd, t);
         Qp.evaluate(b.in.data(), Qout.data(), b.scratch.data());
       });
+  // V and P_ext account for every force's work (the run's energy balance is checked)
+  builder.accounts_for_energy();
+  if (!set_->is_zero(P_ext)) {
+    const Program Pp = compile({P_ext}, dynamics, "the external power");
+    builder.external_power([Pp, layout](const VectorXd& q, const VectorXd& qd, double t) {
+      ThreadBuffers& b = buffers();
+      b.reserve(layout.size(), Pp);
+      layout.fill(b.in, q, qd, t);
+      double p = 0.0;
+      Pp.evaluate(b.in.data(), &p, b.scratch.data());
+      return p;
+    });
+  }
   if (V) {
     const Program Vp = compile({Ve}, V, "potential_energy");
     builder.potential_energy([Vp, layout](const VectorXd& q, double t) {
@@ -610,7 +653,11 @@ void Reader::read_simulate(const YAML::Node& root, Model& model) {
         fail(v, "stiff_switch must be true or false");
       o.stiff_switch = v.Scalar() == "true";
     }
-    else if (key == "integrator") {
+    else if (key == "energy_balance_tolerance") {
+      o.energy_balance_tolerance = number(v, key);
+      if (!(o.energy_balance_tolerance > 0.0))
+        fail(v, "energy_balance_tolerance must be > 0", "1e-6, the default");
+    } else if (key == "integrator") {
       try {
         o.integrator = integrator_from_string(v.Scalar());
       } catch (const std::invalid_argument&) {
@@ -624,7 +671,8 @@ void Reader::read_simulate(const YAML::Node& root, Model& model) {
       }
     } else {
       fail(kv.first, "unknown key '" + key + "' in simulate",
-           "t_start, t_end, integrator, rtol, atol, step, max_step, stiff_switch, drift");
+           "t_start, t_end, integrator, rtol, atol, step, max_step, stiff_switch, drift, "
+           "energy_balance_tolerance");
     }
   }
   if (!(o.t_end > o.t_start)) fail(s, "t_end must be greater than t_start");

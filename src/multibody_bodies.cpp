@@ -327,6 +327,9 @@ MultibodyModel Multibody::build() const {
   }
   sb.forces(detail::make_forces(out.bodies, d.forces, d.g));
   sb.potential_energy(detail::make_potential(out.bodies, d.forces, d.g));
+  if (PowerFn power = detail::make_external_power(out.bodies, d.forces)) {
+    sb.external_power(std::move(power));
+  }
   Index k = 0;  // constraint count
   // unit quaternions
   for (const BodyInfo& b : out.bodies) {
@@ -461,14 +464,15 @@ MultibodyModel Multibody::build() const {
         std::make_shared<detail::JointModel>(std::vector<BodyRef>{P, C}, std::move(rows))));
     info.constraints.push_back(k++);
     if (j.drive && !info.planar && j.type == JointType::kRevolute) {
-      sb.add(detail::spatial_revolute_drive(j, P, C));
+      sb.add(detail::spatial_revolute_drive(j, P, C).mark_drive());
       info.drive = k;
       info.constraints.push_back(k++);
     } else if (j.drive) {
       Row r = info.planar ? detail::planar_drive_row(j, P, C) : detail::spatial_drive_row(j, P, C);
       sb.add(Constraint(j.name + ".drive", ConstraintKind::kHolonomic, 1,
                         std::make_shared<detail::JointModel>(std::vector<BodyRef>{P, C},
-                                                             std::vector<Row>{std::move(r)})));
+                                                             std::vector<Row>{std::move(r)}))
+                 .mark_drive());
       info.drive = k;
       info.constraints.push_back(k++);
     }

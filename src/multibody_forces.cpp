@@ -153,6 +153,53 @@ PotentialFn make_potential(const std::vector<BodyInfo>& bodies, const std::vecto
   };
 }
 
+PowerFn make_external_power(const std::vector<BodyInfo>& bodies, const std::vector<Force>& forces) {
+  bool any = false;
+  for (const Force& f : forces) any = any || f.type == ForceType::kApplied || f.damping != 0.0;
+  if (!any) return {};
+  auto d = force_data(bodies, forces, Vector3d::Zero());
+  return [d](const VectorXd& q, const VectorXd& qd, double t) {
+    // P = Σ −c l'² (spring-dampers) + Σ −c |ω_b − ω_a|² (torsion) + Σ F · v_p + T · ω (applied)
+    double P = 0.0;
+    for (std::size_t i = 0; i < d->forces.size(); ++i) {
+      const Force& f = d->forces[i];
+      const BodyRef &A = d->a[i], &B = d->b[i];
+      switch (f.type) {
+        case ForceType::kSpringDamper: {
+          if (f.damping == 0.0) break;
+          const auto [xa, va] = point_state(A, q, qd, f.point_a);
+          const auto [xb, vb] = point_state(B, q, qd, f.point_b);
+          const double l = (xb - xa).norm();
+          if (l == 0.0) break;
+          const double ld = (xb - xa).dot(vb - va) / l;
+          P -= f.damping * ld * ld;
+          break;
+        }
+        case ForceType::kTorsionSpring: {
+          if (f.damping == 0.0) break;
+          if (spatial(A, B)) {
+            P -= f.damping *
+                 (angular_velocity_W(B, q, qd) - angular_velocity_W(A, q, qd)).squaredNorm();
+            break;
+          }
+          const double w =
+              (B.ground() ? 0.0 : qd[B.offset + 2]) - (A.ground() ? 0.0 : qd[A.offset + 2]);
+          P -= f.damping * w * w;
+          break;
+        }
+        case ForceType::kApplied: {
+          if (A.ground()) break;
+          const Wrench w = f.wrench(q, qd, t);
+          P += w.force.dot(point_state(A, q, qd, f.point_a).second) +
+               w.torque.dot(angular_velocity_W(A, q, qd));
+          break;
+        }
+      }
+    }
+    return P;
+  };
+}
+
 // ---- joint friction ----------------------------------------------------------------------
 
 void joint_friction_C(const Joint& j, const BodyRef& P, const BodyRef& C, bool planar, Index k,

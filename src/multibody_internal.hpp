@@ -358,6 +358,10 @@ ForceFn make_forces(const std::vector<BodyInfo>& bodies, const std::vector<Force
                     const Vector3d& g);
 PotentialFn make_potential(const std::vector<BodyInfo>& bodies, const std::vector<Force>& forces,
                            const Vector3d& g);
+/// The power of the force elements that V does not account for — the dampers of spring-dampers
+/// and torsion springs and the applied wrenches — or an empty callable when there are none
+/// (gravity and springs derive from V, the quaternions' velocity terms do no work).
+PowerFn make_external_power(const std::vector<BodyInfo>& bodies, const std::vector<Force>& forces);
 
 /// M_kk of a quaternion: 4 E(u)ᵀ diag(J0, J) E(u) (4 × 4).
 void quaternion_mass(const Vector4d& u, double J0, const Vector3d& J, Eigen::Ref<MatrixXd> Mk);

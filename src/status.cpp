@@ -15,6 +15,7 @@ const char* to_string(Status s) {
     case Status::kNonFiniteResult: return "non-finite result";
     case Status::kProjectionFailed: return "projection onto the constraints failed";
     case Status::kIntegratorFailure: return "integrator failure";
+    case Status::kEnergyBalance: return "energy_balance";
   }
   return "unknown status";
 }

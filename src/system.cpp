@@ -112,6 +112,16 @@ SystemBuilder& SystemBuilder::potential_energy(PotentialFn fn) {
   return *this;
 }
 
+SystemBuilder& SystemBuilder::external_power(PowerFn fn) {
+  external_power_ = std::move(fn);
+  return *this;
+}
+
+SystemBuilder& SystemBuilder::accounts_for_energy(bool accounts) {
+  accounts_for_energy_ = accounts;
+  return *this;
+}
+
 SystemBuilder& SystemBuilder::add(Constraint c) {
   constraints_.push_back(std::move(c));
   return *this;
@@ -217,6 +227,8 @@ System SystemBuilder::build() const {
     s.m_ += c.rows();
   }
   s.potential_ = potential_;
+  s.external_power_ = external_power_;
+  s.accounts_for_energy_ = accounts_for_energy_ || potential_ || external_power_ || !forces_;
   s.constraints_ = all;
   s.id_ = next_system_id();
   // bind the non-ideal forces last: they may look up constraints and coordinates by name

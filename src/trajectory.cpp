@@ -51,6 +51,11 @@ void Trajectory::check_consistent(const char* who) const {
   field("potential_energy", traj.potential_energy, 1, "1");
   field("energy", traj.energy, 1, "1");
   field("work_nonideal", traj.work_nonideal, 1, "1");
+  field("work_ideal", traj.work_ideal, 1, "1");
+  field("work_drive", traj.work_drive, 1, "1");
+  field("work_external", traj.work_external, 1, "1");
+  field("work_control", traj.work_control, 1, "1");
+  field("energy_balance_residual", traj.energy_balance_residual, 1, "1");
 }
 
 }  // namespace ukdyn

@@ -153,7 +153,7 @@ double energy(const std::vector<double>& s) {
 
 // released from rest at θ0 from the bottom: x = (sin θ0, −cos θ0, 0, 0, W = 0)
 std::vector<double> pendulum_at_rest(double theta0) {
-  return {std::sin(theta0), -std::cos(theta0), 0.0, 0.0, 0.0};
+  return {std::sin(theta0), -std::cos(theta0), 0.0, 0.0, 0.0, 0.0};  // W_nonideal, W_ideal
 }
 
 // period of the pendulum of amplitude θ0: T = 4 √(L/g) K(sin(θ0/2))

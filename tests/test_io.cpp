@@ -92,6 +92,11 @@ Trajectory hand_made_trajectory() {
   fill(tr.potential_energy, 1);
   fill(tr.energy, 1);
   fill(tr.work_nonideal, 1);
+  fill(tr.work_ideal, 1);
+  fill(tr.work_drive, 1);
+  fill(tr.work_external, 1);
+  fill(tr.work_control, 1);
+  fill(tr.energy_balance_residual, 1);
   tr.energy[2] = kNaN;
   tr.lambda[1 * 3 + 2] = kInf;
   tr.Qc_nonideal[3 * 2 + 0] = -kInf;
@@ -104,6 +109,8 @@ Trajectory hand_made_trajectory() {
   tr.stats.max_position_violation = 1.0 / 3.0 * 1e-12;
   tr.stats.max_velocity_violation = 2.5e-11;
   tr.stats.energy_drift = 0.1 * 1e-9;
+  tr.stats.energy_balance = 0.3 * 1e-9;
+  tr.stats.energy_exchanged = 12.75;
   tr.stats.t_reached = 0.35;
   tr.stats.status = Status::kMassNotPositiveDefinite;
   tr.stats.message = "mass matrix not positive definite at t = 0.3";
@@ -135,6 +142,11 @@ double expected_value(const Trajectory& tr, const std::string& name, std::size_t
       {"potential_energy", [&](std::size_t s) { return tr.potential_energy[s]; }},
       {"energy", [&](std::size_t s) { return tr.energy[s]; }},
       {"work_nonideal", [&](std::size_t s) { return tr.work_nonideal[s]; }},
+      {"work_ideal", [&](std::size_t s) { return tr.work_ideal[s]; }},
+      {"work_drive", [&](std::size_t s) { return tr.work_drive[s]; }},
+      {"work_external", [&](std::size_t s) { return tr.work_external[s]; }},
+      {"work_control", [&](std::size_t s) { return tr.work_control[s]; }},
+      {"energy_balance_residual", [&](std::size_t s) { return tr.energy_balance_residual[s]; }},
   };
   return by_name.at(name)(i);
 }
@@ -150,7 +162,8 @@ const std::vector<std::string> kDocumentedColumns = {
     "violation.rod", "violation.knife",
     "violation_velocity.rod",
     "kinetic_energy", "potential_energy", "energy",
-    "work_nonideal",
+    "work_nonideal", "work_ideal", "work_drive", "work_external", "work_control",
+    "energy_balance_residual",
 };
 
 // ---------------------------------------------------------------------------------------------
@@ -174,7 +187,9 @@ TEST(IoCsv, ValuesReadBackBitForBitInTheirColumns) {
   std::size_t count = 0;
   for (const auto* f : {&tr.q, &tr.qd, &tr.qdd, &tr.Qc_ideal, &tr.Qc_nonideal, &tr.lambda,
                         &tr.position_violation, &tr.velocity_violation, &tr.kinetic_energy,
-                        &tr.potential_energy, &tr.energy, &tr.work_nonideal}) {
+                        &tr.potential_energy, &tr.energy, &tr.work_nonideal, &tr.work_ideal,
+                        &tr.work_drive, &tr.work_external, &tr.work_control,
+                        &tr.energy_balance_residual}) {
     for (double v : *f) {
       distinct.insert(bits(v));
       ++count;
@@ -253,7 +268,8 @@ TEST(IoCsv, EmptyTrajectoryWritesTheHeaderOnly) {
   write_csv(tr, path);
   EXPECT_EQ(read_text(path),
             "t,x,x_dot,x_ddot,Qc_ideal.x,Qc_nonideal.x,kinetic_energy,potential_energy,energy,"
-            "work_nonideal\n");
+            "work_nonideal,work_ideal,work_drive,work_external,work_control,"
+            "energy_balance_residual\n");
 }
 
 TEST(IoCsv, NamesWithCommasAreQuoted) {
@@ -265,7 +281,8 @@ TEST(IoCsv, NamesWithCommasAreQuoted) {
   const std::string text = read_text(path);
   EXPECT_EQ(text.substr(0, text.find('\n')),
             "t,\"a,b\",\"a,b_dot\",\"a,b_ddot\",\"Qc_ideal.a,b\",\"Qc_nonideal.a,b\","
-            "kinetic_energy,potential_energy,energy,work_nonideal");
+            "kinetic_energy,potential_energy,energy,work_nonideal,work_ideal,work_drive,"
+            "work_external,work_control,energy_balance_residual");
 }
 
 TEST(IoCsv, UnwritablePathThrowsNamingPathAndReason) {
@@ -330,6 +347,9 @@ TEST(IoJson, SummaryReadsBack) {
             bits(tr.stats.max_position_violation));
   EXPECT_EQ(j.at("max_velocity_violation").get<double>(), 2.5e-11);
   EXPECT_EQ(bits(j.at("energy_drift").get<double>()), bits(tr.stats.energy_drift));
+  EXPECT_EQ(bits(j.at("energy_balance").get<double>()), bits(tr.stats.energy_balance));
+  EXPECT_EQ(j.at("energy_exchanged").get<double>(), 12.75);
+  EXPECT_EQ(j.at("energy_balance_tolerance").get<double>(), options.energy_balance_tolerance);
   EXPECT_EQ(j.at("t_start").get<double>(), 0.0);
   EXPECT_EQ(j.at("t_reached").get<double>(), 0.35);
   EXPECT_EQ(j.at("samples"), 5);
@@ -423,6 +443,9 @@ TEST(IoHdf5, FieldsReadBackBitForBit) {
                    "potential_energy");
   expect_same_bits(read_hdf5_field(path, "energy"), tr.energy, "energy");  // holds the NaN
   expect_same_bits(read_hdf5_field(path, "work_nonideal"), tr.work_nonideal, "work_nonideal");
+  expect_same_bits(read_hdf5_field(path, "work_drive"), tr.work_drive, "work_drive");
+  expect_same_bits(read_hdf5_field(path, "energy_balance_residual"), tr.energy_balance_residual,
+                   "energy_balance_residual");
 }
 
 TEST(IoHdf5, LongRunSpansSeveralChunks) {
@@ -440,6 +463,8 @@ TEST(IoHdf5, LongRunSpansSeveralChunks) {
   tr.qd = tr.qdd = tr.Qc_ideal = tr.Qc_nonideal = tr.q;
   tr.lambda = tr.position_violation = tr.velocity_violation = tr.t;
   tr.kinetic_energy = tr.potential_energy = tr.energy = tr.work_nonideal = tr.t;
+  tr.work_ideal = tr.work_drive = tr.work_external = tr.work_control = tr.t;
+  tr.energy_balance_residual = tr.t;
   const std::string path = temp_path("long.h5");
   write_hdf5(tr, path);
   expect_same_bits(read_hdf5_field(path, "t"), tr.t, "t");

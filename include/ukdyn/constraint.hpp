@@ -111,6 +111,17 @@ class Constraint {
   /// The Baumgarte gains (zero: no stabilization).
   const Stabilization& stabilization() const { return stabilization_; }
 
+  /// Marks the constraint as a drive: a prescribed motion (a rheonomic constraint that an
+  /// actuator enforces, like a multibody joint's `drive:`). Its force does work; the simulation
+  /// reports that work as `work_drive`, apart from the other ideal constraints' `work_ideal`
+  /// (docs/simulation.md, "Energy balance"). Changes nothing else.
+  Constraint& mark_drive(bool drive = true) {
+    drive_ = drive;
+    return *this;
+  }
+  /// True for a drive (mark_drive).
+  bool is_drive() const { return drive_; }
+
   const std::string& name() const { return name_; }            ///< its unique name
   ConstraintKind kind() const { return kind_; }                ///< declared form
   Index rows() const { return rows_; }                         ///< number of scalar rows
@@ -124,6 +135,7 @@ class Constraint {
   Index rows_;
   TimeInterval active_;
   Stabilization stabilization_;
+  bool drive_ = false;
   std::shared_ptr<const ConstraintModel> model_;
 };
 

@@ -5,7 +5,9 @@
 /// `Qc_nonideal.x`; `lambda.<constraint>` (`lambda.<constraint>.<row>` for several rows);
 /// `violation.<constraint>` (position level for holonomic constraints, velocity level for
 /// nonholonomic ones, 0 for the acceleration kind); `violation_velocity.<constraint>` for the
-/// holonomic ones; `kinetic_energy`, `potential_energy`, `energy`; `work_nonideal`. Numbers are
+/// holonomic ones; `kinetic_energy`, `potential_energy`, `energy`; the energy balance:
+/// `work_nonideal`, `work_ideal`, `work_drive`, `work_external`, `work_control`,
+/// `energy_balance_residual` (simulate.hpp, Trajectory; docs/simulation.md). Numbers are
 /// written by std::to_chars in the shortest form that reads back bit for bit (`0.1`, `1e-300`,
 /// `-2.5e+17`; independent of the locale); NaN as `nan`, infinities as `inf` and `-inf`.
 #pragma once
@@ -41,14 +43,16 @@ void write_csv(const Trajectory& traj, const std::string& path,
                const std::vector<CsvColumn>& extra);
 
 /// Writes a JSON summary: the run statistics (steps, rejected steps, evaluations, wall time,
-/// largest violations, energy drift, status, message), t_start, t_reached, the final state by
+/// largest violations, energy_balance, energy_exchanged, energy_balance_tolerance, energy drift,
+/// status, message), t_start, t_reached, the final state by
 /// coordinate name, and the options given. @throws std::runtime_error naming the path.
 void write_summary_json(const Trajectory& traj, const SimulationOptions& options,
                         const std::string& path);
 
 /// Writes the trajectory to an HDF5 file: one dataset per field (`t`, `q`, `q_dot`, `q_ddot`,
 /// `Qc_ideal`, `Qc_nonideal`, `lambda`, `position_violation`, `velocity_violation`,
-/// `kinetic_energy`, `potential_energy`, `energy`, `work_nonideal`; matrices N × width,
+/// `kinetic_energy`, `potential_energy`, `energy`, `work_nonideal`, `work_ideal`, `work_drive`,
+/// `work_external`, `work_control`, `energy_balance_residual`; matrices N × width,
 /// chunked and compressed), the names as string attributes (`coordinate_names`,
 /// `constraint_names`) and the statistics as attributes of the root group.
 /// @throws std::runtime_error naming the path.

@@ -3,8 +3,11 @@
 /// control, switching at constraint intervals, and a trajectory of everything a user needs to
 /// trust the result.
 ///
-/// The integrated state is x = [q; q'; W] (2n + 1), W the work done by the non-ideal constraint
-/// forces (dW/dt = q'ᵀ Qc_nonideal). Integrators come from Boost.Odeint (RK4, Dormand–Prince 5(4),
+/// The integrated state is x = [q; q'; W], W the work channels of the energy balance: the work of
+/// the non-ideal constraint forces (dW/dt = q'ᵀ Qc_nonideal), of the ideal ones (non-zero when
+/// constraints depend on t), of drives (constraints marked as drives) and of the external forces
+/// (System::external_power), each only when the system has such forces (docs/simulation.md,
+/// "Energy balance"). Integrators come from Boost.Odeint (RK4, Dormand–Prince 5(4),
 /// Runge–Kutta–Fehlberg 7(8)) and SUNDIALS CVODE (BDF); ukdyn writes no step-size control of its
 /// own. Output times are reached by dense output (Dormand–Prince, BDF), by landing on them
 /// exactly (Fehlberg), or by cubic Hermite interpolation between fixed steps (RK4); a sample is
@@ -115,6 +118,15 @@ struct SimulationOptions {
 
   SolverOptions solver;             ///< settings of the fundamental-equation solver
 
+  /// A run that reaches t_end with RunStatistics::energy_balance above this ends with
+  /// Status::kEnergyBalance (a warning: the samples are complete) instead of kOk, when the
+  /// system accounts for its forces' work (System::accounts_for_energy; otherwise the balance
+  /// is reported, not checked). The default
+  /// leaves room for the error of the default tolerances on long runs and catches lost energy
+  /// (a jump of the state, forces in Q that V does not describe and no external power
+  /// declares). Must be > 0; infinity turns the check off.
+  double energy_balance_tolerance = 1e-6;
+
   /// Called after every accepted step (for progress bars and logs); may be empty.
   std::function<void(const ProgressReport&)> progress;
 };
@@ -141,11 +153,25 @@ struct RunStatistics {
   double wall_time = 0.0;           ///< seconds
   double max_position_violation = 0.0;  ///< largest |phi| seen after a step or at a sample
   double max_velocity_violation = 0.0;  ///< largest |phi'|, |psi| likewise
-  /// max |E(t) − E(0) − W(t)| over the samples, relative to max(|E(0)|, largest kinetic energy)
+  /// The energy balance's certificate: max over the samples of |E(t) − E(0) − ΣW(t)| (ΣW the
+  /// sum of the work channels, Trajectory::energy_balance_residual) relative to the energy the
+  /// run exchanged: max(energy_exchanged, largest kinetic energy, 1e-9 · largest |T| + |V|)
+  /// (never a division by zero). NaN when an energy is NaN. Compared with
+  /// SimulationOptions::energy_balance_tolerance.
+  double energy_balance = 0.0;
+  /// The energy exchanged (J): the sum over the work channels of Σ_i |W(t_i) − W(t_{i−1})|.
+  double energy_exchanged = 0.0;
+  /// Whether energy_balance was checked against the tolerance: false for a system that does
+  /// not account for its forces' work (System::accounts_for_energy) and when the tolerance is
+  /// infinite.
+  bool energy_balance_checked = false;
+  /// The older figure: max |E(t) − E(0) − ΣW(t)| relative to max(|E(0)|, largest kinetic
+  /// energy); meaningless when E(0) is near 0 — energy_balance replaces it.
   double energy_drift = 0.0;
   double t_reached = 0.0;           ///< last time integrated to
-  Status status = Status::kOk;      ///< kOk, or why the run stopped early
-  std::string message;              ///< describe_status() of a failure, or "" when ok
+  Status status = Status::kOk;      ///< kOk, kEnergyBalance (a warning), or why the run stopped
+                                    ///< early
+  std::string message;              ///< describe_status() of a failure, the warning, or 
 };
 
 /// Everything recorded at the sample times, stored sample after sample (column i of each
@@ -165,7 +191,16 @@ struct Trajectory {
   std::vector<double> position_violation;  ///< N × K: max |phi| of each constraint (0 if none)
   std::vector<double> velocity_violation;  ///< N × K: max |phi'| or |psi| of each constraint
   std::vector<double> kinetic_energy, potential_energy, energy;  ///< N each
+  // the energy balance (docs/simulation.md): E(t) − E(0) = the sum of these works
   std::vector<double> work_nonideal;  ///< N: work done by Qc_nonideal since t_start
+  /// N: work done by Qc_ideal since t_start, without the drives' share: zero (up to the drift)
+  /// unless constraints depend on t explicitly
+  std::vector<double> work_ideal;
+  std::vector<double> work_drive;     ///< N: work done by the drives' share of Qc_ideal
+  std::vector<double> work_external;  ///< N: ∫ P_ext dt (System::external_power), else 0
+  std::vector<double> work_control;   ///< N: work of a controller (simulate_controlled), else 0
+  /// N: E(t) − E(0) − (the sum of the five works above): the balance's failure
+  std::vector<double> energy_balance_residual;
   RunStatistics stats;              ///< of the whole run
 
   /// Number of samples N.
@@ -189,6 +224,17 @@ struct Trajectory {
 /// project_initial is false (the message names each violated constraint and by how much).
 Trajectory simulate(const System& sys, const VectorXd& q0, const VectorXd& qd0,
                     const SimulationOptions& options = {});
+
+/// The energy balance of a trajectory from its energies and work channels: fills
+/// traj.energy_balance_residual and traj.stats.energy_balance, energy_exchanged and
+/// energy_drift and energy_balance_checked (= tolerance is finite) (see RunStatistics); then,
+/// when the status is kOk and energy_balance exceeds
+/// `tolerance` (or is NaN), sets Status::kEnergyBalance and a message saying by how much, when
+/// and why it may be. simulate() calls it; call it again after changing a work column
+/// (simulate_controlled does, with work_control). @throws std::invalid_argument when traj is
+/// not consistent. Cost O(N).
+void compute_energy_balance(Trajectory& traj,
+                            double tolerance = std::numeric_limits<double>::infinity());
 
 /// Consistency of a state with each constraint: one line per violated constraint, naming it
 /// and giving the position and velocity violation; empty when every |row| <= tolerance.

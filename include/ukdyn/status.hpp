@@ -26,6 +26,10 @@ enum class Status {
   kProjectionFailed,            ///< drift control could not bring the state back onto the
                                 ///< constraints (no consistent state near)
   kIntegratorFailure,           ///< the integrator gave up (step size underflow, step limit)
+  /// A warning, not a failure: the run reached its end, but its energy balance residual
+  /// (RunStatistics::energy_balance) exceeds SimulationOptions::energy_balance_tolerance — energy
+  /// was gained or lost that no work channel accounts for. Its name is "energy_balance".
+  kEnergyBalance,
 };
 
 /// Short English name of a status ("ok", "mass matrix not positive definite", …). Cost O(1).

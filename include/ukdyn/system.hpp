@@ -38,6 +38,12 @@ struct MassBlock {
 /// Potential energy V(q, t) of the forces in Q that derive from one (for energy reports only:
 /// Q must already contain −dV/dq).
 using PotentialFn = std::function<double(const VectorXd& q, double t)>;
+/// The external power P_ext(q, q', t) (W): the rate at which the forces in Q that do not derive
+/// from the potential V do work, plus the explicit time dependence of the energy:
+///   P_ext = q'ᵀ Q_np + ∂V/∂t − ½ q'ᵀ (∂M/∂t) q'   (Lagrangian Q, Q_np its non-potential part),
+/// in general P_ext = q'ᵀ (Q + ∂V/∂q) + ½ q'ᵀ Ṁ q' + ∂V/∂t. Integrated into `work_external`
+/// (docs/simulation.md, "Energy balance"). Must not allocate.
+using PowerFn = std::function<double(const VectorXd& q, const VectorXd& qd, double t)>;
 /// Writes the impressed force Q(q, q', t) (n). Must not allocate.
 using ForceFn =
     std::function<void(const VectorXd& q, const VectorXd& qd, double t, Eigen::Ref<VectorXd> Q)>;
@@ -93,6 +99,20 @@ class System {
     return potential_ ? potential_(q, t) : 0.0;
   }
 
+  /// True when an external power was given (SystemBuilder::external_power); without one the
+  /// forces in Q are taken to be conservative (−∂V/∂q and velocity terms that do no work).
+  bool has_external_power() const { return bool(external_power_); }
+  /// P_ext(q, q', t) (see PowerFn), or 0 when none was given.
+  double external_power(const VectorXd& q, const VectorXd& qd, double t) const {
+    return external_power_ ? external_power_(q, qd, t) : 0.0;
+  }
+
+  /// True when the description accounts for the work of every force in Q — it declared a
+  /// potential or an external power, or gave no Q, or said so (SystemBuilder::
+  /// accounts_for_energy) — so that a run's energy balance certifies it. A system that gives Q
+  /// and neither V nor an external power makes no claim: its balance is reported, not checked.
+  bool accounts_for_energy() const { return accounts_for_energy_; }
+
   /// Number of non-ideal forces.
   Index nonideal_count() const { return Index(nonideal_fns_.size()); }
   /// Name of non-ideal force i.
@@ -118,6 +138,8 @@ class System {
   std::vector<MassBlock> mass_blocks_;
   ForceFn forces_;
   PotentialFn potential_;
+  PowerFn external_power_;
+  bool accounts_for_energy_ = true;
   std::vector<Constraint> constraints_;
   std::vector<Index> offsets_;
   std::vector<std::string> nonideal_names_;
@@ -148,6 +170,16 @@ class SystemBuilder {
   SystemBuilder& forces(ForceFn fn);
   /// V(q, t) for energy reports (default: none, V = 0). Q must contain −dV/dq itself.
   SystemBuilder& potential_energy(PotentialFn fn);
+  /// P_ext(q, q', t), the power of the forces in Q that V does not account for (dampers,
+  /// applied loads, a time-dependent V; see PowerFn). Default: none — Q is −∂V/∂q plus
+  /// velocity terms that do no work, and a Q that does work otherwise shows up in the
+  /// simulation's energy balance residual.
+  SystemBuilder& external_power(PowerFn fn);
+  /// Declares that V and the external power (either possibly absent) account for the work of
+  /// every force in Q — a Q of velocity terms that do no work, say — so that the simulation
+  /// checks the energy balance (System::accounts_for_energy). Implied by potential_energy(),
+  /// external_power(), and by giving no forces().
+  SystemBuilder& accounts_for_energy(bool accounts = true);
   /// Adds a constraint (names must be unique).
   SystemBuilder& add(Constraint c);
   /// Adds a non-ideal force (its C is summed with the others').
@@ -168,6 +200,8 @@ class SystemBuilder {
   std::vector<MassBlock> mass_blocks_;
   ForceFn forces_;
   PotentialFn potential_;
+  PowerFn external_power_;
+  bool accounts_for_energy_ = false;
   std::vector<Constraint> constraints_;
   std::vector<NonIdealForce> nonideal_;
 };

@@ -70,7 +70,7 @@ Constraint make_constraint(const py::tuple& spec, std::shared_ptr<CallbackErrors
 
 SystemHandle from_callables(const std::vector<std::string>& coordinates, py::object M,
                             py::object Q, py::object V, const py::list& constraints,
-                            const py::list& nonideal) {
+                            const py::list& nonideal, py::object P) {
   auto errs = std::make_shared<CallbackErrors>();
   const Index n = Index(coordinates.size());
   SystemBuilder b(coordinates);
@@ -103,6 +103,16 @@ SystemHandle from_callables(const std::vector<std::string>& coordinates, py::obj
       double value = kNaN;
       call_python(
           *errs, [&] { value = V(copy_vector(q), t).template cast<double>(); }, [&] { value = kNaN; });
+      return value;
+    });
+  }
+  if (!P.is_none()) {
+    b.external_power([errs, P](const VectorXd& q, const VectorXd& qd, double t) {
+      double value = kNaN;
+      call_python(
+          *errs,
+          [&] { value = P(copy_vector(q), copy_vector(qd), t).template cast<double>(); },
+          [&] { value = kNaN; });
       return value;
     });
   }
@@ -261,7 +271,7 @@ py::tuple simulate_system(const SystemHandle& h, py::handle q0, py::handle qd0,
 
 void bind_callables(py::module_& m) {
   m.def("_from_callables", &from_callables, py::arg("coordinates"), py::arg("M"), py::arg("Q"),
-        py::arg("V"), py::arg("constraints"), py::arg("nonideal"),
+        py::arg("V"), py::arg("constraints"), py::arg("nonideal"), py::arg("P") = py::none(),
         "A System from Python callables; use ukdyn.from_callables().");
   m.def("_build_controller", &build_controller, py::arg("model"), py::arg("requirements"),
         py::arg("law"), py::arg("N"), py::arg("actuated"), py::arg("S"), py::arg("robust"),

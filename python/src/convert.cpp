@@ -218,6 +218,8 @@ void apply_simulation_options(SimulationOptions& o, const py::dict& given, const
     else if (key == "initial_tolerance") o.initial_tolerance = number(v, who, "initial_tolerance");
     else if (key == "projection_tolerance") o.projection.tolerance = number(v, who, "projection_tolerance");
     else if (key == "projection_iterations") o.projection.max_iterations = v.cast<int>();
+    else if (key == "energy_balance_tolerance")
+      o.energy_balance_tolerance = number(v, who, "energy_balance_tolerance");
     else {
       throw std::invalid_argument(
           who + ": unknown setting '" + key +
@@ -225,7 +227,7 @@ void apply_simulation_options(SimulationOptions& o, const py::dict& given, const
           "stiff_switch, "
           "output_every, output_at, breakpoints, drift, baumgarte_alpha, baumgarte_beta, "
           "project_initial, initial_tolerance, projection_tolerance, projection_iterations, "
-          "rank_threshold, sparse_rank_threshold, consistency_tolerance, symmetry_tolerance, "
+          "energy_balance_tolerance, rank_threshold, sparse_rank_threshold, consistency_tolerance, symmetry_tolerance, "
           "compute_residuals, sparse_threshold, engine, algorithm)");
     }
   }
@@ -250,6 +252,7 @@ py::dict simulation_options_dict(const SimulationOptions& o) {
   d["baumgarte_beta"] = o.baumgarte_beta;
   d["project_initial"] = o.project_initial;
   d["initial_tolerance"] = o.initial_tolerance;
+  d["energy_balance_tolerance"] = o.energy_balance_tolerance;
   return d;
 }
 
@@ -268,6 +271,9 @@ py::dict statistics_dict(const RunStatistics& s) {
   d["wall_time"] = s.wall_time;
   d["max_position_violation"] = s.max_position_violation;
   d["max_velocity_violation"] = s.max_velocity_violation;
+  d["energy_balance"] = s.energy_balance;
+  d["energy_exchanged"] = s.energy_exchanged;
+  d["energy_balance_checked"] = s.energy_balance_checked;
   d["energy_drift"] = s.energy_drift;
   d["t_reached"] = s.t_reached;
   d["status"] = to_string(s.status);

@@ -26,14 +26,15 @@ from ._ukdyn import (ControlSolution, ControlSolver, Controller, Model, Solution
                      System, example_text, examples)
 from .callables import (coulomb, constraint, controller, from_callables, nonideal, simulate,
                         viscous)
-from .errors import ModelError, SolveError
+from .errors import EnergyBalanceWarning, ModelError, SolveError
 from .results import Result
 from .symbolic import from_sympy, sympy_to_yaml, velocities
 
 __version__ = "0.1.0"
 
 __all__ = [
-    "ControlSolution", "ControlSolver", "Controller", "Model", "ModelError", "Result",
+    "ControlSolution", "ControlSolver", "Controller", "EnergyBalanceWarning", "Model",
+    "ModelError", "Result",
     "Solution", "SolveError", "Solver", "System", "constraint", "controller", "coulomb",
     "example_text", "examples", "from_callables", "from_sympy", "load", "nonideal", "parse",
     "simulate", "sympy_to_yaml", "velocities", "viscous",

@@ -16,12 +16,13 @@ from __future__ import annotations
 
 import inspect
 import math
+import warnings
 from typing import Any, Callable, NamedTuple, Optional, Sequence, Tuple, Union
 
 import numpy as np
 
 from . import _ukdyn
-from .errors import SolveError
+from .errors import EnergyBalanceWarning, SolveError
 from .results import Result
 
 __all__ = ["constraint", "nonideal", "viscous", "coulomb", "from_callables", "controller",
@@ -120,7 +121,8 @@ def coulomb(constraint: str, mu: float, coordinates: Sequence[str] = (),
 def from_callables(coordinates: Union[int, Sequence[str]], M: Any, Q: Optional[Callable[..., Any]] = None,
                    V: Optional[Callable[..., Any]] = None,
                    constraints: Sequence[ConstraintSpec] = (),
-                   nonideal: Sequence[NonIdealSpec] = ()) -> "_ukdyn.System":
+                   nonideal: Sequence[NonIdealSpec] = (),
+                   P: Optional[Callable[..., Any]] = None) -> "_ukdyn.System":
     """A System whose M, Q, V, constraints and C are Python callables (the slow path).
 
     Args:
@@ -131,6 +133,11 @@ def from_callables(coordinates: Union[int, Sequence[str]], M: Any, Q: Optional[C
             (for the energy columns only; Q must contain −∂V/∂q itself).
         constraints: :func:`constraint` specs.
         nonideal: :func:`nonideal`, :func:`viscous`, :func:`coulomb` specs.
+        P: ``P(q, q_dot, t)`` → a number, the external power: the rate at which the forces in
+            Q that V does not account for do work (dampers, applied loads; system.hpp,
+            PowerFn), integrated into the ``work_external`` column. Without it Q is taken to be
+            −∂V/∂q plus forces that do no work, and a Q that does work otherwise makes the run's
+            energy balance fail (status ``"energy_balance"``).
 
     Returns a :class:`ukdyn.System`; run it with :func:`simulate` or ``system.solver()``.
     Raises ValueError for a bad size or name (the C++ ``SystemBuilder::build`` message). An
@@ -149,7 +156,7 @@ def from_callables(coordinates: Union[int, Sequence[str]], M: Any, Q: Optional[C
             raise ValueError("from_callables: non-ideal forces must be made by ukdyn.nonideal(), "
                              "ukdyn.viscous() or ukdyn.coulomb()")
         forces.append(f.spec)
-    return _ukdyn._from_callables(names, M, Q, V, specs, forces)
+    return _ukdyn._from_callables(names, M, Q, V, specs, forces, P)
 
 
 def controller(system: "_ukdyn.System", requirements: Sequence[ConstraintSpec],
@@ -205,6 +212,10 @@ def simulate(system: Any, q0: Any = None, qd0: Any = None, *, controller: Any = 
 
 
 def _finish(result: Result, check: bool) -> Result:
+    if result.status == "energy_balance":
+        # the run is complete: a warning, not an error (warnings.simplefilter("error") makes it one)
+        warnings.warn(EnergyBalanceWarning(result.message), stacklevel=3)
+        return result
     if check and not result.ok:
         raise SolveError(result.message or result.status, result.status, result)
     return result

@@ -9,7 +9,9 @@ The C++ library's errors arrive in Python as:
   ``ukdyn::SolveError``, or a run whose status is not ``ok``);
 * :class:`ValueError` for misuse (the C++ ``std::invalid_argument``: wrong sizes, unknown
   settings, an inconsistent initial state, an unknown example);
-* :class:`RuntimeError` for anything else the C++ code throws.
+* :class:`RuntimeError` for anything else the C++ code throws;
+* :class:`EnergyBalanceWarning` (a warning, not an exception) for a run that reached its end but
+  whose energy balance residual exceeds its tolerance (status ``"energy_balance"``).
 
 An exception raised inside a Python callable of a system (``ukdyn.from_callables``) is raised
 again, unchanged, by the call that evaluated it.
@@ -19,7 +21,7 @@ from __future__ import annotations
 
 from typing import Any, Optional
 
-__all__ = ["ModelError", "SolveError"]
+__all__ = ["EnergyBalanceWarning", "ModelError", "SolveError"]
 
 
 class ModelError(RuntimeError):
@@ -63,3 +65,10 @@ class SolveError(RuntimeError):
         super().__init__(what)
         self.status = status
         self.result = result
+
+
+class EnergyBalanceWarning(UserWarning):
+    """A run reached its end, but its energy balance failed: E(t) − E(0) differs from the sum
+    of the works by more than ``energy_balance_tolerance`` of the energy exchanged
+    (``Result.stats["energy_balance"]``; docs/simulation.md, "Energy balance"). The result is
+    complete; its status is ``"energy_balance"`` and ``Result.ok`` is False."""

@@ -4,7 +4,8 @@ A :class:`Result` holds exactly the columns that ``ukdyn run`` writes to ``traje
 same names and in the same order (io.hpp lists them): ``t``; each coordinate ``x``; ``x_dot``;
 ``x_ddot``; ``Qc_ideal.x``; ``Qc_nonideal.x``; ``lambda.<constraint>``; ``violation.<constraint>``;
 ``violation_velocity.<constraint>``; ``kinetic_energy``, ``potential_energy``, ``energy``;
-``work_nonideal``; then the control's columns (``error.<row>``, ``Qc_control.<coord>``, ...), the
+the energy balance: ``work_nonideal``, ``work_ideal``, ``work_drive``, ``work_external``,
+``work_control``, ``energy_balance_residual``; then the control's columns (``error.<row>``, ``Qc_control.<coord>``, ...), the
 bodies' poses of multibody models, and the model's output expressions.
 """
 
@@ -32,8 +33,10 @@ class Result:
         coordinates: the coordinate names.
         stats: the run's statistics (steps, rejected_steps, evaluations, projections, events,
             stiff_switches, stiff_switch_time, stiff_steps,
-            wall_time, max_position_violation, max_velocity_violation, energy_drift, t_reached,
-            status, message; simulate.hpp, RunStatistics).
+            wall_time, max_position_violation, max_velocity_violation, energy_balance (the
+            balance residual relative to the energy exchanged), energy_exchanged,
+            energy_drift, t_reached, status, message; simulate.hpp, RunStatistics). The status
+            is ``"energy_balance"`` when the run ended but its balance failed.
         control: the controller's statistics for a controlled run (evaluations, not_met,
             max_residual, first_not_met, not_met_message, max_kappa), else None.
     """
@@ -205,18 +208,26 @@ class Result:
         return ax
 
     def plot_energy(self, ax: Any = None) -> Any:
-        """The energy E, the work of the non-ideal forces W, and E − W (constant when the
-        energy balance holds). Returns the Axes."""
+        """The energy balance: E(t) − E(0), each work channel that is not zero (non-ideal,
+        ideal, drive, external, control) and the residual E(t) − E(0) − Σ W, which stays at the
+        integration error when the balance holds. Returns the Axes."""
         import matplotlib.pyplot as plt
         if ax is None:
             _, ax = plt.subplots()
-        E, W = self["energy"], self["work_nonideal"]
-        ax.plot(self.t, E, label="energy E")
-        ax.plot(self.t, W, label="work of non-ideal forces W")
-        ax.plot(self.t, E - W, "--", label="E − W")
-        if "control_work" in self:
-            ax.plot(self.t, self["control_work"], label="work of the control")
+        E = self["energy"]
+        dE = E - E[0]
+        ax.plot(self.t, dE, "k", lw=1.6, label="E − E(0)")
+        # the channels that carry more than the drift (1e-9 of the energy exchanged)
+        works = [n for n in ("work_nonideal", "work_ideal", "work_drive", "work_external",
+                             "work_control") if n in self]
+        scale = max([float(np.max(np.abs(dE), initial=0.0))] +
+                    [float(np.max(np.abs(self[n]), initial=0.0)) for n in works])
+        for name in works:
+            if np.max(np.abs(self[name]), initial=0.0) > 1e-9 * scale:
+                ax.plot(self.t, self[name], label=name.replace("_", " "))
+        ax.plot(self.t, self["energy_balance_residual"], "--", label="residual E − E(0) − ΣW")
         ax.set_xlabel("t [s]")
+        ax.set_ylabel("J")
         ax.legend()
         ax.grid(True, alpha=0.3)
         return ax
