@@ -206,7 +206,7 @@ void joint_friction_C(const Joint& j, const BodyRef& P, const BodyRef& C, bool p
                       const VectorXd& q, const VectorXd& qd, const IdealForceInfo& ideal,
                       Eigen::Ref<VectorXd> out) {
   // N = |reaction force| on the child (on the parent when the child is the ground)
-  const auto share = ideal.share(k);
+  const auto share = ideal.reaction(k);  // the joint's whole reaction
   const BodyRef& on = C.ground() ? P : C;
   const double N = on.kind == BodyKind::kPlanar ? std::hypot(share[on.offset], share[on.offset + 1])
                                                 : share.segment<3>(on.offset).norm();

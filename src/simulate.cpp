@@ -18,6 +18,7 @@
 #include "integrator.hpp"
 #include "ukdyn/forward.hpp"
 #include "ukdyn/projection.hpp"
+#include "ukdyn/sparse.hpp"
 
 namespace ukdyn {
 
@@ -321,7 +322,13 @@ class Run {
         // was not yet tolerance-level); else the friction turns against the new motion, at
         // its full magnitude
         if (try_stick(c, t, x, false)) return Status::kOk;
-        start_sliding(c, t, x);
+        if (!start_sliding(c, t, x) && traj_.stats.notes.size() < kMaxNotes) {
+          traj_.stats.notes.push_back(
+              "t = " + format(t) + ": contact '" + sys_.nonideal_name(sys_.friction_contacts()[c].force) +
+              "' comes to rest, but its stick constraint (v - u = 0) does not fit the "
+              "constraints there: the regularized law holds it (creeping at about the "
+              "regularization velocity); see docs/friction.md, Limits");
+        }
         apply_contact_modes();
         return Status::kOk;
     }
@@ -460,8 +467,20 @@ class Run {
     if (forward_dynamics(sys_, ws_, q_, qd_, t) != Status::kOk) {
       return std::numeric_limits<double>::quiet_NaN();
     }
+    // R = the two constraints' shares of the ideal force and of the other contacts' friction
     reaction_ =
         ws_.shares.col(contact.normal_constraint) + ws_.shares.col(contact.stick_constraint);
+    for (Index k : {contact.normal_constraint, contact.stick_constraint}) {
+      if (ws_.is_sparse()) {
+        reaction_part_.setZero();
+        ws_.sparse->share(k, ws_.lambda_nonideal, reaction_part_);
+        reaction_ += reaction_part_;
+      } else {
+        const Index r0 = sys_.row_offset(k), rows = sys_.constraint(k).rows();
+        reaction_.noalias() +=
+            ws_.A.middleRows(r0, rows).transpose() * ws_.lambda_nonideal.segment(r0, rows);
+      }
+    }
     const Index k = contact.normal_constraint, rows = sys_.constraint(k).rows();
     if (normals_.rows() != rows) normals_.resize(rows, n_);  // (once per contact size)
     detail::copy_constraint_rows(sys_, ws_, k, normals_);
@@ -531,9 +550,11 @@ class Run {
     return true;
   }
 
-  // contact c slides from v_rel = 0 (released, or passing): friction at its full magnitude
-  // against the impending motion, the acceleration of v_rel without this friction
-  void start_sliding(std::size_t c, double t, const double* x) {
+  // contact c slides from v_rel = 0 (passing, or at the start): friction at its full magnitude
+  // against the impending motion, the acceleration of v_rel without this friction. Returns
+  // false when that friction would turn the motion back (it could hold the contact): then the
+  // regularized law acts instead, with no hint.
+  bool start_sliding(std::size_t c, double t, const double* x) {
     const FrictionContact& contact = sys_.friction_contacts()[c];
     mode_[c] = ContactMode::kSliding;
     set_slip_hint(c, VectorXd());
@@ -543,8 +564,29 @@ class Run {
     qd_ = Eigen::Map<const VectorXd>(x + n_, n_);
     const bool evaluated = forward_dynamics(sys_, ws_, q_, qd_, t) == Status::kOk;
     apply_contact_modes();
-    if (!evaluated) return;  // (the regularized law then decides)
-    // a_rel = P (q''_c − u'), P the tangential projector of sliding_velocity
+    if (!evaluated) return true;  // (the regularized law then decides)
+    // a_rel = P (q''_c − u') without this friction: the impending motion
+    relative_acceleration(c, t);
+    holding_.setZero();
+    const auto& coords = contact.coordinates;
+    for (std::size_t r = 0; r < coords.size(); ++r) holding_[coords[r]] = -velocity_[Index(r)];
+    set_slip_hint(c, holding_);
+    // with the friction at its full magnitude against it, does the contact still move that way?
+    // If not, friction could hold it although the stick was not admissible (a stick constraint
+    // that the model cannot express): no hint then, the regularized law holds it near rest
+    const Index k = Index(coords.size());
+    direction_.head(k) = -velocity_.head(k);
+    if (forward_dynamics(sys_, ws_, q_, qd_, t) != Status::kOk) return true;
+    relative_acceleration(c, t);
+    if (velocity_.head(k).dot(direction_.head(k)) > 0.0) return true;
+    set_slip_hint(c, VectorXd());
+    return false;
+  }
+
+  // a_rel = P (q''_c − u') of contact c from the last evaluation (at q_, qd_, t) into the head of
+  // velocity_, P the tangential projector of sliding_velocity
+  void relative_acceleration(std::size_t c, double t) {
+    const FrictionContact& contact = sys_.friction_contacts()[c];
     const Index k = Index(contact.coordinates.size());
     for (Index r = 0; r < k; ++r) velocity_[r] = ws_.qdd[contact.coordinates[std::size_t(r)]];
     const Index basis = detail::sliding_velocity(sys_, ws_, Index(c), q_, qd_, t, false);
@@ -553,9 +595,6 @@ class Run {
       const auto e = ws_.contact_basis.row(j).head(k);
       velocity_.head(k) -= velocity_.head(k).dot(e) * e.transpose();
     }
-    holding_.setZero();
-    for (Index r = 0; r < k; ++r) holding_[contact.coordinates[std::size_t(r)]] = -velocity_[r];
-    set_slip_hint(c, holding_);
   }
 
   // the direction of the friction at |v_rel| <= eps: along `along` (n) on the contact's
@@ -592,6 +631,7 @@ class Run {
   double peak_kinetic_ = 0.0;                // largest kinetic energy at the samples so far
   VectorXd holding_ = VectorXd::Zero(n_);    // (n) holding force of the last stick_margin
   VectorXd reaction_ = VectorXd::Zero(n_);   // (n) scratch of stick_margin: R
+  VectorXd reaction_part_ = VectorXd::Zero(n_);  // (n) scratch of stick_margin
   VectorXd normal_ = VectorXd::Zero(n_);     // (n) scratch of stick_margin: R_N
   MatrixXd normals_;                         // (rows × n) the normal constraint's rows of A
   VectorXd velocity_ = VectorXd::Zero(n_);   // (n) sliding velocities (head)

@@ -109,6 +109,10 @@ Workspace::Workspace(const System& sys, const SolverOptions& options)
   Qc_ideal.setZero(n);
   // (the sparse engine sizes them on first use when no non-ideal force needs them)
   if (!use_sparse || sys.nonideal_count() > 0) shares.setZero(n, K);
+  if (sys.nonideal_count() > 0) {
+    reactions.setZero(n, K);
+    reactions_next.setZero(n, K);
+  }
   C.setZero(n);
   Qc_nonideal.setZero(n);
   lambda_nonideal.setZero(m);

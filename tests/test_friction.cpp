@@ -348,6 +348,61 @@ TEST(Friction, PendulumOnARoughBlockSticksSlipsAndSticksWhereTheFixedPivotPendul
   EXPECT_GE(worst_margin, -1e-9);
 }
 
+// ---------------------------------------------------------------------------------------------
+// two contacts whose normal forces depend on each other's friction
+
+TEST(Friction, LadderSlidesWithTheTrueNormalForcesOfBothContacts) {
+  // reference: Newton–Euler for the rod with both normals unknown; theta decreasing, so the
+  // floor's friction acts along −x on the foot and the wall's along +y on the top:
+  //   m xG'' = N_B − mu_f N_A,  m yG'' = N_A + mu_w N_B − m g,  I θ'' = torques
+  const Model m = load_example("ladder_coulomb");
+  const double mass = m.parameters.at("m"), L = m.parameters.at("L"), g = m.parameters.at("g"),
+               mu_f = m.parameters.at("mu_f"), mu_w = m.parameters.at("mu_w"),
+               th0 = m.parameters.at("th0");
+  const double I = mass * L * L / 12;
+  struct Sol { double NA, NB, thdd; };
+  auto solve = [&](double th, double w) {
+    const double s = std::sin(th), c = std::cos(th), fA = -mu_f, fB = mu_w;
+    Eigen::Matrix3d A;
+    A << fA, 1, mass * L / 2 * s,  //
+        1, fB, -mass * L / 2 * c,  //
+        L / 2 * (c + fA * s), -L / 2 * (s + c * fB), I;
+    const Eigen::Vector3d rhs(-mass * L / 2 * c * w * w, mass * g - mass * L / 2 * s * w * w, 0);
+    const Eigen::Vector3d x = A.partialPivLu().solve(rhs);
+    return Sol{x[0], x[1], x[2]};
+  };
+  // θ(t) by RK4, h = 1e-5
+  std::vector<double> th_ref;  // every 0.01 s
+  double th = th0, w = 0.0;
+  const double h = 1e-5;
+  for (int step = 0; step <= 40000; ++step) {
+    if (step % 1000 == 0) th_ref.push_back(th);
+    auto f = [&](double a, double b) { return solve(a, b).thdd; };
+    const double k1a = w, k1b = f(th, w), k2a = w + h / 2 * k1b, k2b = f(th + h / 2 * k1a, k2a),
+                 k3a = w + h / 2 * k2b, k3b = f(th + h / 2 * k2a, k3a), k4a = w + h * k3b,
+                 k4b = f(th + h * k3a, k4a);
+    th += h / 6 * (k1a + 2 * k2a + 2 * k3a + k4a);
+    w += h / 6 * (k1b + 2 * k2b + 2 * k3b + k4b);
+  }
+  const Trajectory tr = run(m);
+  const auto theta = output(m, tr, "theta");
+  ASSERT_EQ(theta.size(), th_ref.size());
+  double worst = 0.0;
+  for (std::size_t i = 0; i < theta.size(); ++i) worst = std::max(worst, std::abs(theta[i] - th_ref[i]));
+  EXPECT_NEAR(worst, 0.0, 1e-8);
+  // at the start: the true normals (N_A = 7.0259, N_B = 3.2637 by the user report's reference,
+  // against 6.2387 and 3.6772 from the frictionless reactions), and |F| = mu N at each contact
+  const Sol s0 = solve(th0, 0.0);
+  EXPECT_NEAR(s0.NA, 7.0259, 1e-4);
+  EXPECT_NEAR(s0.NB, 3.2637, 1e-4);
+  // the foot's acceleration at the start, x_A = L cos θ: x_A'' = −L sin θ θ'' at rest (the
+  // frictionless normals would give θ'' = −2.630553 instead of −2.590777)
+  EXPECT_NEAR(s0.thdd, -2.590777, 1e-6);
+  EXPECT_NEAR(tr.qdd[std::size_t(m.system.coordinate_index("xA"))],
+              -L * std::sin(th0) * s0.thdd, 1e-9);
+  EXPECT_NEAR(balance_error(tr) / std::abs(tr.work_nonideal.back()), 0.0, 1e-8);
+}
+
 TEST(Friction, StaticCoefficientBelowTheKineticOneIsRefused) {
   std::string text = read_file(std::string(UKDYN_EXAMPLES_DIR) + "/conveyor_stick_slip.yaml");
   const auto at = text.find("mu_static: mu_s");

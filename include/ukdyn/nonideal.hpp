@@ -1,9 +1,11 @@
 /// @file nonideal.hpp
 /// Non-ideal constraints: the work vector C of eq. (7), supplied by the modeller.
 ///
-/// C may depend on (q, q', t) and on the ideal constraint force, because Qc_ideal does not
-/// depend on C (eq. 11): friction whose magnitude follows a normal reaction is therefore explicit,
-/// with no iteration. A system may hold several non-ideal forces; their C vectors are summed.
+/// C may depend on (q, q', t), on the ideal constraint force (which does not depend on C, eq. 11)
+/// and on the constraints' whole reactions (IdealForceInfo::reaction: the ideal share plus the
+/// reaction that C itself causes), which apply_nonideal settles by iteration: friction follows
+/// the true normal force even where one contact's friction presses on another. A system may hold
+/// several non-ideal forces; their C vectors are summed.
 #pragma once
 
 #include <functional>
@@ -48,13 +50,21 @@ class IdealForceInfo {
   /// sliding coordinate; see CoulombFriction), computed once per evaluation before the
   /// non-ideal forces are called.
   Eigen::Ref<const VectorXd> sliding_velocity(Index c) const;
-  /// Euclidean norm of share(k): the normal force of a contact constraint written in Cartesian
-  /// coordinates. Cost O(n).
-  double normal_force(Index k) const { return share(k).norm(); }
+  /// Constraint k's whole reaction: its share of the ideal force plus the reaction that the
+  /// non-ideal forces themselves cause on it, A_kᵀ lambda_nonideal,k (friction at one contact
+  /// changes the normal force at another: a ladder against a rough wall and a rough floor).
+  /// apply_nonideal evaluates C until this settles. Cost O(n).
+  Eigen::Ref<const VectorXd> reaction(Index k) const;
+  /// Euclidean norm of reaction(k): the normal force of a contact constraint written in
+  /// Cartesian coordinates. Cost O(n).
+  double normal_force(Index k) const { return reaction(k).norm(); }
+  /// True once reaction() or normal_force() was called (apply_nonideal iterates only then).
+  bool read_reactions() const { return read_reactions_; }
 
  private:
   const System& sys_;
   const Workspace& ws_;
+  mutable bool read_reactions_ = false;  // (a transient view's own flag)
 };
 
 /// A non-ideal force's C(q, q', t, ideal force): writes C (n), which is zero on entry.
@@ -97,8 +107,8 @@ using SurfaceVelocityFn = std::function<void(const VectorXd& q, const VectorXd& 
 
 /// Coulomb friction on a constraint surface (docs/friction.md has the equations). While sliding:
 ///   C_i = −mu N v_rel,i / sqrt(|v_rel|² + eps²)  for i in `coordinates`, zero elsewhere,
-/// where N = |A_kᵀ lambda_k| is the norm of constraint k's share of the ideal force and v_rel the
-/// sliding velocity relative to the constraint:
+/// where N = |A_kᵀ (lambda_k + lambda_nonideal,k)| is the norm of constraint k's whole reaction
+/// (IdealForceInfo::normal_force) and v_rel the sliding velocity relative to the constraint:
 ///   v_rel = P (v − u),   P = I − N_k⁺ N_k,
 /// v = q' restricted to `coordinates` (Cartesian, for N to be the physical normal force), N_k
 /// constraint k's rows of A restricted to those coordinates, u the surface velocity.

@@ -86,6 +86,9 @@ struct Counters {
   std::int64_t evaluations = 0;     ///< calls to forward_dynamics
   std::int64_t rank_deficient = 0;  ///< evaluations where rank A < active rows (redundancy)
   std::int64_t failures = 0;        ///< evaluations whose status was not kOk
+  /// evaluations whose non-ideal forces, reading the reactions they cause themselves, did not
+  /// settle within the iteration limit of apply_nonideal (the last iterate was used)
+  std::int64_t nonideal_unsettled = 0;
 };
 
 /// Buffers and results of evaluations of one System. Fields are public, annotated with their
@@ -155,6 +158,13 @@ class Workspace {
   /// (largest sliding coordinates × Coulomb contacts) column c: contact c's sliding velocity
   /// relative to its constraint, v_rel (see CoulombFriction), filled before the forces are called
   MatrixXd sliding;
+  /// (n × K, when the system has non-ideal forces) column k: constraint k's whole reaction
+  /// A_kᵀ (lambda_k + lambda_nonideal,k): its share of the ideal force plus the part that the
+  /// non-ideal forces cause (the friction at one contact pressing on another). apply_nonideal
+  /// evaluates C until it settles, so that a friction law reading its normal force
+  /// (IdealForceInfo::reaction) sees the whole reaction.
+  MatrixXd reactions;
+  MatrixXd reactions_next;  ///< (n × K) scratch of that iteration
   VectorXd C;             ///< non-ideal work vector, sum of the system's forces (n)
   VectorXd Qc_nonideal;   ///< non-ideal constraint force, eq. (12) (n)
   VectorXd lambda_nonideal;  ///< multipliers with Qc_nonideal = C + Aᵀ lambda_nonideal (m)
