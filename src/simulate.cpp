@@ -746,7 +746,8 @@ Trajectory simulate(const System& sys, const VectorXd& q0, const VectorXd& qd0,
   Eigen::Map<VectorXd>(x.data(), n) = q;
   Eigen::Map<VectorXd>(x.data() + n, n) = qd;
 
-  detail::ConstrainedOde ode(sys, ws);
+  // (stage states violated beyond the projection tolerance may take the least-squares q'')
+  detail::ConstrainedOde ode(sys, ws, o.projection.tolerance);
   detail::SegmentHooks hooks;
   hooks.after_step = [&](double t, double* xs, bool& changed) {
     return run.after_step(t, xs, changed);
@@ -765,6 +766,7 @@ Trajectory simulate(const System& sys, const VectorXd& q0, const VectorXd& qd0,
     traj.stats.message = message;
     traj.stats.t_reached = t_reached;
     traj.stats.evaluations = ode.evaluations();
+    traj.stats.least_squares = ode.least_squares();
     traj.stats.energy_drift = energy_drift(traj);
     traj.stats.wall_time =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
