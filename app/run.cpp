@@ -217,6 +217,11 @@ int run_command(const RunArguments& args) {
                 s.stiff_switch_time, to_string(options.integrator), s.stiff_switches,
                 s.stiff_switches == 1 ? "" : "s", s.stiff_steps);
   }
+  if (s.least_squares > 0) {
+    std::printf("  redundant constraints: %ld evaluations off the constraints took the "
+                "least-squares acceleration\n",
+                s.least_squares);
+  }
   std::printf("  max violation %.3g (position), %.3g (velocity)\n", s.max_position_violation,
               s.max_velocity_violation);
   if (s.energy_balance_checked) {

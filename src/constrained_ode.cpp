@@ -6,6 +6,7 @@
 
 #include "integrator.hpp"
 #include "ukdyn/forward.hpp"
+#include "ukdyn/projection.hpp"
 #include "ukdyn/sparse.hpp"
 
 namespace ukdyn::detail {
@@ -34,14 +35,47 @@ double constraint_power(const System& sys, const Workspace& ws, Index k, const V
   return p;
 }
 
-ConstrainedOde::ConstrainedOde(const System& sys, Workspace& ws, bool quiet)
+ConstrainedOde::ConstrainedOde(const System& sys, Workspace& ws, bool quiet,
+                               double off_manifold_tolerance)
     : sys_(sys),
       ws_(ws),
       n_(sys.dofs()),
       works_(sys, quiet),
       q_(sys.dofs()),
       qd_(sys.dofs()),
-      share_(VectorXd::Zero(sys.dofs())) {}
+      share_(VectorXd::Zero(sys.dofs())),
+      violation_rows_(std::size_t(sys.constraint_rows()), 0),
+      off_manifold_tolerance_(off_manifold_tolerance) {
+  for (Index k = 0; k < sys.constraint_count(); ++k) {
+    const Constraint& c = sys.constraint(k);
+    if (c.kind() == ConstraintKind::kAcceleration) continue;
+    for (Index i = 0; i < c.rows(); ++i) violation_rows_[std::size_t(sys.row_offset(k) + i)] = 1;
+  }
+}
+
+bool ConstrainedOde::explained_by_violation(double t) {
+  if (!(off_manifold_tolerance_ > 0.0)) return false;
+  // r = A q'' − b (the part of e outside range(A), the rows that cannot all hold)
+  if (ws_.is_sparse()) {
+    ws_.sparse->multiply_A(ws_.qdd, ws_.tmp_m);
+    ws_.tmp_m -= ws_.b;
+  } else {
+    ws_.tmp_m = -ws_.b;
+    ws_.tmp_m.noalias() += ws_.A * ws_.qdd;
+  }
+  const double r_max = ws_.tmp_m.cwiseAbs().maxCoeff();
+  if (!(r_max > 0.0)) return false;
+  // phi, phi' (psi) of every row at this state
+  evaluate_violations(sys_, ws_, q_, qd_, t);
+  // largest violation among the rows carrying r; none may be of acceleration form
+  double violation = 0.0;
+  for (Index i = 0; i < ws_.tmp_m.size(); ++i) {
+    if (std::abs(ws_.tmp_m[i]) < kResidualShare * r_max) continue;
+    if (!violation_rows_[std::size_t(i)]) return false;
+    violation = std::max({violation, std::abs(ws_.phi[i]), std::abs(ws_.phi_dot[i])});
+  }
+  return violation > off_manifold_tolerance_;
+}
 
 void ConstrainedOde::clear_failure() {
   failure_ = Status::kOk;
@@ -61,7 +95,12 @@ bool ConstrainedOde::operator()(const double* x, double* dxdt, double t_in) {
   // q, q' from x
   q_ = Eigen::Map<const VectorXd>(x, n_);
   qd_ = Eigen::Map<const VectorXd>(x + n_, n_);
-  const Status s = forward_dynamics(sys_, ws_, q_, qd_, t);
+  Status s = forward_dynamics(sys_, ws_, q_, qd_, t);
+  // off the manifold, an inconsistency its violation explains: the least-squares q''
+  if (s == Status::kInconsistentConstraints && explained_by_violation(t)) {
+    ++least_squares_;
+    ws_.status = s = Status::kOk;
+  }
   if (s != Status::kOk) {
     if (failure_ == Status::kOk) {
       failure_ = s;

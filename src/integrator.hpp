@@ -56,10 +56,22 @@ double constraint_power(const System& sys, const Workspace& ws, Index k, const V
 //   forward_dynamics (absent channels left out).
 // A failed evaluation (status not kOk) fills dxdt with NaN, is remembered, and makes
 // operator() return false; integrators must stop at once when it does.
+//
+// Off the constraint manifold, one failure is not one: the stage states of a Runge–Kutta step
+// (and CVODE's Newton iterates) are not projected, so they violate the constraints by about the
+// local error. With redundant constraints (A rank deficient on the manifold, as in an
+// overconstrained loop) the redundant rows' b then no longer agree with the others and
+// A q'' = b has no solution, although the state projected after the step is consistent. Such an
+// evaluation is accepted with the least-squares (minimum M-norm) q'' of the pseudo-inverse form
+// and counted (least_squares()) when the inconsistency is explained by the state's own
+// violation (explained_by_violation below); see docs/simulation.md, "Redundant constraints".
 class ConstrainedOde {
  public:
-  // quiet: see WorkLayout (true for the explicit integrators, false for BDF)
-  ConstrainedOde(const System& sys, Workspace& ws, bool quiet = true);
+  // quiet: see WorkLayout (true for the explicit integrators, false for BDF);
+  // off_manifold_tolerance: a row violated by more than this (|phi| or |phi'|, |psi|; the
+  // projection tolerance) puts the state off the manifold; 0 or NaN: never accept
+  ConstrainedOde(const System& sys, Workspace& ws, bool quiet = true,
+                 double off_manifold_tolerance = 0.0);
 
   // dxdt = f(t, x) for x, dxdt of size(); false when the evaluation failed
   bool operator()(const double* x, double* dxdt, double t);
@@ -68,6 +80,9 @@ class ConstrainedOde {
   const WorkLayout& works() const { return works_; }
   Index dofs() const { return n_; }
   long evaluations() const { return evaluations_; }
+  // evaluations off the constraint manifold that found A q'' = b without solution and went on
+  // with the least-squares q''
+  long least_squares() const { return least_squares_; }
   bool failed() const { return failure_ != Status::kOk; }
   Status failure() const { return failure_; }
   // describe_status() of the first failure, with its time
@@ -83,12 +98,23 @@ class ConstrainedOde {
   Workspace& workspace() { return ws_; }
 
  private:
+  // after forward_dynamics reported kInconsistentConstraints at (q_, qd_, t): true when the
+  // rows that carry the residual A q'' − b (|r_i| >= kResidualShare max |r|) all belong to
+  // holonomic or nonholonomic constraints (an acceleration-form row has no violation that could
+  // explain it) and at least one of them is violated by more than off_manifold_tolerance_.
+  // Overwrites ws.phi, ws.phi_dot, ws.tmp_m; allocates nothing.
+  bool explained_by_violation(double t);
+  static constexpr double kResidualShare = 1e-3;
+
   const System& sys_;
   Workspace& ws_;
   Index n_;
   WorkLayout works_;
   VectorXd q_, qd_, share_;  // (n) scratch
+  std::vector<unsigned char> violation_rows_;  // (m) row i has a violation (not acceleration form)
+  double off_manifold_tolerance_ = 0.0;
   long evaluations_ = 0;
+  long least_squares_ = 0;
   double lo_ = -std::numeric_limits<double>::infinity();
   double hi_ = std::numeric_limits<double>::infinity();
   Status failure_ = Status::kOk;

@@ -167,6 +167,7 @@ void write_hdf5(const Trajectory& traj, const std::string& path) {
     write_scalar_attribute(file, "steps", s.steps);
     write_scalar_attribute(file, "rejected_steps", s.rejected_steps);
     write_scalar_attribute(file, "evaluations", s.evaluations);
+    write_scalar_attribute(file, "least_squares", s.least_squares);
     write_scalar_attribute(file, "projections", s.projections);
     write_scalar_attribute(file, "wall_time", s.wall_time);
     write_scalar_attribute(file, "max_position_violation", s.max_position_violation);

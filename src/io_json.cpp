@@ -42,6 +42,7 @@ void write_summary_json(const Trajectory& traj, const SimulationOptions& options
   j["steps"] = s.steps;
   j["rejected_steps"] = s.rejected_steps;
   j["evaluations"] = s.evaluations;
+  j["least_squares"] = s.least_squares;
   j["projections"] = s.projections;
   j["events"] = s.events;
   j["stick_refusals"] = s.stick_refusals;

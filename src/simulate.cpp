@@ -792,7 +792,9 @@ Trajectory simulate(const System& sys, const VectorXd& q0, const VectorXd& qd0,
   Eigen::Map<VectorXd>(x.data(), n) = q;
   Eigen::Map<VectorXd>(x.data() + n, n) = qd;
 
-  detail::ConstrainedOde ode(sys, ws, o.integrator != Integrator::kBDF);
+  // (quiet work channels for the explicit integrators; stage states violated beyond the
+  // projection tolerance may take the least-squares q'')
+  detail::ConstrainedOde ode(sys, ws, o.integrator != Integrator::kBDF, o.projection.tolerance);
   detail::SegmentHooks hooks;
   hooks.after_step = [&](double t, double* xs, bool& changed) {
     return run.after_step(t, xs, changed);
@@ -811,6 +813,7 @@ Trajectory simulate(const System& sys, const VectorXd& q0, const VectorXd& qd0,
     traj.stats.message = message;
     traj.stats.t_reached = t_reached;
     traj.stats.evaluations = ode.evaluations();
+    traj.stats.least_squares = ode.least_squares();
     // the energy balance certifies a run that reached its end
     // (a system that does not account for its forces' work is reported, not checked)
     compute_energy_balance(traj, sys.accounts_for_energy()

@@ -137,6 +137,33 @@ Eigen::Ref<const VectorXd> Workspace::lambda_of(const System& sys, Index k) cons
   return lambda.segment(sys.row_offset(k), sys.constraint(k).rows());
 }
 
+namespace {
+// "; the constraints that cannot all hold: 'a', 'b'" — those with a row carrying the
+// least-squares residual r = A q'' − b (|r_i| >= 1e-3 max |r|), or "" when r is unavailable
+std::string inconsistent_constraints(const System& sys, const Workspace& ws) {
+  const Index m = sys.constraint_rows();
+  if (ws.qdd.size() != sys.dofs() || ws.b.size() != m || m == 0) return "";
+  VectorXd r(m);
+  if (ws.sparse) {
+    ws.sparse->multiply_A(ws.qdd, r);
+  } else if (ws.A.rows() == m && ws.A.cols() == sys.dofs()) {
+    r.noalias() = ws.A * ws.qdd;
+  } else {
+    return "";
+  }
+  r -= ws.b;
+  const double r_max = r.cwiseAbs().maxCoeff();
+  if (!(r_max > 0.0)) return "";
+  std::string names;
+  for (Index k = 0; k < sys.constraint_count(); ++k) {
+    const auto rows = r.segment(sys.row_offset(k), sys.constraint(k).rows());
+    if (rows.size() == 0 || rows.cwiseAbs().maxCoeff() < 1e-3 * r_max) continue;
+    names += (names.empty() ? "'" : ", '") + sys.constraint(k).name() + "'";
+  }
+  return names.empty() ? "" : "; the constraints that cannot all hold: " + names;
+}
+}  // namespace
+
 std::string describe_status(const System& sys, const Workspace& ws) {
   std::ostringstream s;
   s.precision(6);
@@ -157,6 +184,7 @@ std::string describe_status(const System& sys, const Workspace& ws) {
     case Status::kInconsistentConstraints:
       s << ": A q'' = b has no solution; residual |A q'' - b| = " << ws.residuals.constraint
         << " with rank(A) = " << ws.rank << " of " << ws.active_rows << " active rows";
+      s << inconsistent_constraints(sys, ws);
       break;
     case Status::kMassNotPositiveDefinite:
       s << ": the Cholesky factorization of M failed (is every coordinate given inertia?)";

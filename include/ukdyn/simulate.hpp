@@ -136,6 +136,11 @@ struct RunStatistics {
   long steps = 0;                   ///< accepted steps
   long rejected_steps = 0;          ///< steps rejected by the error control
   long evaluations = 0;             ///< evaluations of the fundamental equation
+  /// evaluations at states off the constraints (Runge–Kutta stages, Newton iterates: a row
+  /// violated beyond projection.tolerance) where A q'' = b had no solution because of that
+  /// violation (redundant constraints), and the least-squares q'' was used (docs/simulation.md,
+  /// "Redundant constraints"); included in evaluations
+  long least_squares = 0;
   long projections = 0;             ///< projections that moved the state (with BDF, CVODE
                                     ///< projects before its error test, so rejected attempts count)
   long events = 0;                  ///< stick/slip events of Coulomb contacts

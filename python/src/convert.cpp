@@ -261,6 +261,7 @@ py::dict statistics_dict(const RunStatistics& s) {
   d["steps"] = s.steps;
   d["rejected_steps"] = s.rejected_steps;
   d["evaluations"] = s.evaluations;
+  d["least_squares"] = s.least_squares;
   d["projections"] = s.projections;
   d["events"] = s.events;
   d["stick_refusals"] = s.stick_refusals;

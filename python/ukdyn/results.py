@@ -31,7 +31,8 @@ class Result:
     Attributes:
         names: the column names, in the order of ``trajectory.csv``.
         coordinates: the coordinate names.
-        stats: the run's statistics (steps, rejected_steps, evaluations, projections, events,
+        stats: the run's statistics (steps, rejected_steps, evaluations, least_squares,
+            projections, events,
             stiff_switches, stiff_switch_time, stiff_steps,
             wall_time, max_position_violation, max_velocity_violation, energy_balance (the
             balance residual relative to the energy exchanged), energy_exchanged,
