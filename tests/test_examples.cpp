@@ -26,6 +26,7 @@
 #include "ukdyn/ukdyn.hpp"
 
 #include "support/hermite_root.hpp"
+#include "support/model_output.hpp"
 
 namespace ukdyn {
 namespace {
@@ -49,15 +50,7 @@ Trajectory run(const Model& m) {
   return tr;
 }
 
-// the output expression `name` of the model at every sample
-std::vector<double> output(const Model& m, const Trajectory& tr, const std::string& name) {
-  const auto values = evaluate_output_expressions(m, tr);
-  for (std::size_t k = 0; k < m.output_names.size(); ++k) {
-    if (m.output_names[k] == name) return values[k];
-  }
-  ADD_FAILURE() << m.file << " has no output expression " << name;
-  return {};
-}
+using testing::output;  // support/model_output.hpp
 
 // largest |f_i| over the samples
 double max_abs(const std::vector<double>& f) {

@@ -14,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include "support/model_output.hpp"
 #include "ukdyn/model.hpp"
 #include "ukdyn/ukdyn.hpp"
 
@@ -53,15 +54,7 @@ double coord(const Model& m, const Trajectory& tr, const std::vector<double>& fi
   return field[std::size_t(i * tr.n + m.system.coordinate_index(name))];
 }
 
-// the output expression `name` at every sample
-std::vector<double> output(const Model& m, const Trajectory& tr, const std::string& name) {
-  const auto values = evaluate_output_expressions(m, tr);
-  for (std::size_t k = 0; k < m.output_names.size(); ++k) {
-    if (m.output_names[k] == name) return values[k];
-  }
-  ADD_FAILURE() << m.file << " has no output expression " << name;
-  return {};
-}
+using testing::output;  // support/model_output.hpp
 
 // max over the samples of |E − E0 − W_nonideal| (the models below have scleronomic
 // constraints and conservative forces, so friction is the only work done)

@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "ukdyn/forward.hpp"
+#include "support/model_output.hpp"
 #include "ukdyn/model.hpp"
 #include "ukdyn/multibody.hpp"
 #include "ukdyn/run.hpp"
@@ -58,14 +59,7 @@ const std::vector<double>& column(const ModelRun& r, const std::string& name) {
   return none;
 }
 
-std::vector<double> output(const Model& m, const Trajectory& tr, const std::string& name) {
-  const auto values = evaluate_output_expressions(m, tr);
-  for (std::size_t k = 0; k < m.output_names.size(); ++k) {
-    if (m.output_names[k] == name) return values[k];
-  }
-  ADD_FAILURE() << m.file << " has no output expression " << name;
-  return {};
-}
+using testing::output;  // support/model_output.hpp
 
 // the body z axis in the world at sample i (body b's quaternion starts at coordinate o + 3)
 Vector3d axis_z(const mb::MultibodyModel& m, const Trajectory& tr, Index i) {
