@@ -575,7 +575,7 @@ class Run {
     // If not, friction could hold it although the stick was not admissible (a stick constraint
     // that the model cannot express): no hint then, the regularized law holds it near rest
     const Index k = Index(coords.size());
-    direction_.head(k) = -velocity_.head(k);
+    direction_.head(k) = velocity_.head(k);
     if (forward_dynamics(sys_, ws_, q_, qd_, t) != Status::kOk) return true;
     relative_acceleration(c, t);
     if (velocity_.head(k).dot(direction_.head(k)) > 0.0) return true;

@@ -293,15 +293,18 @@ TEST(ExampleModels, FourBarFrictionBalancesEnergyWithThePinWorkAndKeepsTheLoopCl
   const double scale = tr.kinetic_energy[0];
   ASSERT_GT(scale, 0.1);
   double balance = 0.0, power_err = 0.0, closure = 0.0;
+  Workspace ws(m.system);
   for (Index i = 0; i < N; ++i) {
-    const auto q = at(tr.q, 4, i), qd = at(tr.qd, 4, i);
+    const VectorXd q = at(tr.q, 4, i), qd = at(tr.qd, 4, i);
     balance = std::max(balance, std::abs(tr.energy[std::size_t(i)] - tr.energy[0] -
                                          tr.work_nonideal[std::size_t(i)]));
     // the power of the non-ideal force is that of the pin torque,
-    //   tau w = −(c w + mu r_pin N sgn_eps(w)) w,  w the crank's rate, N = |lambda_crank|
-    // (the crank row has a unit gradient on its circle)
+    //   tau w = −(c w + mu r_pin N sgn_eps(w)) w,  w the crank's rate, N the crank pin's whole
+    // reaction (its ideal share and what the friction itself causes: Workspace::reactions, by
+    // an evaluation at the sample)
     const double w = (q[0] * qd[1] - q[1] * qd[0]) / (lc * lc);
-    const double N_crank = std::abs(tr.lambda[std::size_t(i * 3 + 0)]);
+    ASSERT_EQ(forward_dynamics(m.system, ws, q, qd, tr.t[std::size_t(i)]), Status::kOk);
+    const double N_crank = ws.reactions.col(m.system.constraint_index("crank")).norm();
     const double tau = -(c * w + mu * r_pin * N_crank * w / std::sqrt(w * w + eps * eps));
     power_err = std::max(power_err, std::abs(qd.dot(at(tr.Qc_nonideal, 4, i)) - tau * w));
     closure = std::max(closure, at(tr.position_violation, 3, i).maxCoeff());

@@ -445,9 +445,19 @@ TEST(MultibodyReactions, PinFrictionIsCoulombOfTheJointsOwnReactionPlusViscous) 
   ASSERT_EQ(forward_dynamics(m.system, ws, m.q0, m.qd0, 0.0), Status::kOk);
   const auto ri = mb::joint_reaction(ideal, wi, ideal.q0, ideal.qd0, 0.0, 0);
   const auto r = mb::joint_reaction(m, ws, m.q0, m.qd0, 0.0, 0);
-  // the ideal part does not see the friction; friction torque −(mu r N + c w) with N = |F|
-  const double N = ri.force_W.norm();
-  const double T = -(mu * radius * N + visc * c.w);
+  // the ideal part does not see the friction; friction torque T = −(mu r N + c w) with N the
+  // pin's whole force, which T itself changes through θ'' (N = |m a_G + m g e_y|,
+  // a_G = l θ'' t − l w² r, θ'' = (−m g l cos θ + T) / I_p): the fixed point, by iteration
+  const double N_ideal = ri.force_W.norm();
+  const Eigen::Vector2d er(std::cos(c.theta), std::sin(c.theta)), et(-std::sin(c.theta),
+                                                                      std::cos(c.theta));
+  double T = -(mu * radius * N_ideal + visc * c.w), N = N_ideal;
+  for (int k = 0; k < 100; ++k) {
+    const double thdd = (-c.m * kG * c.l * std::cos(c.theta) + T) / c.Ip();
+    N = (c.m * (c.l * thdd * et - c.l * c.w * c.w * er) + Eigen::Vector2d(0, c.m * kG)).norm();
+    T = -(mu * radius * N + visc * c.w);
+  }
+  EXPECT_GT(std::abs(N - N_ideal), 1e-6 * N);  // (the friction does change the pin force)
   EXPECT_NEAR((r.force_W - ri.force_W).norm(), 0.0, 1e-12 * N);
   EXPECT_NEAR(r.nonideal_torque_W.z() - T, 0.0, 1e-9 * std::abs(T));
   EXPECT_NEAR(r.nonideal_force_W.norm(), 0.0, 1e-15);
