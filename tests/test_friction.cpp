@@ -402,6 +402,27 @@ TEST(Friction, LadderSlidesWithTheTrueNormalForcesOfBothContacts) {
   EXPECT_NEAR(balance_error(tr) / std::abs(tr.work_nonideal.back()), 0.0, 1e-8);
 }
 
+TEST(Friction, LadderHoldsExactlyFromTheAngleWhereBothFrictionsTogetherSuffice) {
+  // statics: the ladder holds iff tan θ >= (1 − mu_f mu_w) / (2 mu_f) (both contacts at their
+  // limit at the threshold: a statically indeterminate pair of sticks)
+  const double mu_f = 0.2, mu_w = 0.3;
+  const double threshold = std::atan((1 - mu_f * mu_w) / (2 * mu_f));  // 1.16808 rad
+  for (double offset : {-5e-3, -1e-3, 1e-3, 5e-3}) {
+    const double th0 = threshold + offset;
+    const Model m = load_example("ladder_coulomb", {{"th0", th0}});
+    const Trajectory tr = run(m);
+    const auto theta = output(m, tr, "theta");
+    const double fall = theta.front() - theta.back();
+    if (offset > 0) {
+      EXPECT_NEAR(fall, 0.0, 1e-12) << "th0 = threshold + " << offset;
+    } else {
+      // it slides: θ falls by about ½ θ'' t² (θ'' → 0 at the threshold)
+      EXPECT_GT(fall, 1e-5) << "th0 = threshold + " << offset;
+      EXPECT_LT(fall, 0.05) << "th0 = threshold + " << offset;
+    }
+  }
+}
+
 TEST(Friction, StaticCoefficientBelowTheKineticOneIsRefused) {
   std::string text = read_file(std::string(UKDYN_EXAMPLES_DIR) + "/conveyor_stick_slip.yaml");
   const auto at = text.find("mu_static: mu_s");
