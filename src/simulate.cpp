@@ -262,6 +262,9 @@ class Run {
           const Index k = relative_velocity(c, t0, x0, direction_);
           const double speed = direction_.head(k).norm();
           if (speed <= v_stop) continue;
+          // sliding clearly: the start direction of a release or passage has served (on a
+          // curved path it would no longer oppose the motion when the contact next slows down)
+          if (ws_.slip_hint.col(contacts[c].force).squaredNorm() > 0.0) set_slip_hint(c, VectorXd());
           direction_.head(k) /= speed;
           te = locate(t0, t1, x1, dense, [&](double t, const double* x) {
             relative_velocity(c, t, x, velocity_);
@@ -528,7 +531,9 @@ class Run {
     ProjectionOptions all = o_.projection;
     const ProjectionResult rv = project_velocities(sys_, ws_, q_, qd_, t, all);
     if (!evaluated || rv.status != Status::kOk || !rv.converged) {
-      return refuse("the velocities cannot be projected onto the stick rows");
+      return refuse("the velocities cannot be projected onto the stick rows (a constraint that "
+                    "moves along its normal? give the surface's motion as surface_velocity, "
+                    "docs/friction.md)");
     }
     const double removed = T_before - detail::kinetic_energy(ws_, qd_);
     const double allowed = std::max(o_.rtol, 1e-14) * std::max(peak_kinetic_, T_before);

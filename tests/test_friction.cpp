@@ -209,6 +209,69 @@ TEST(Friction, BeadOnARotatingWireFeelsMuNAlongTheWire) {
   EXPECT_EQ(tr.stats.events, 0);
 }
 
+TEST(Friction, BeadOnASpinningHoopTurnsBackOnceThenRestsWhereFrictionHolds) {
+  // reduced equation in θ (from the bottom): m R θ'' = −m g sin θ + m Ω² R sin θ cos θ + F,
+  // F = −μ N sgn θ', N = |(m (R θ'² + Ω² R sin² θ + g cos θ), 2 m Ω R cos θ θ')|; at rest the
+  // friction needed is m |Ω² R sin θ cos θ − g sin θ| against μ N. RK4, h = 1e-6, with the
+  // turning points located linearly within a step.
+  const Model m = load_example("hoop_bead_friction");
+  const double mass = m.parameters.at("m"), R = m.parameters.at("R"), Om = m.parameters.at("Om"),
+               g = m.parameters.at("g"), mu = m.parameters.at("mu"), th0 = m.parameters.at("th0");
+  auto normal = [&](double th, double w) {
+    return std::hypot(mass * (R * w * w + Om * Om * R * std::sin(th) * std::sin(th) +
+                              g * std::cos(th)),
+                      2 * mass * Om * R * std::cos(th) * w);
+  };
+  auto drive = [&](double th) {  // the tangential force without friction
+    return -mass * g * std::sin(th) + mass * Om * Om * R * std::sin(th) * std::cos(th);
+  };
+  double th = th0, w = 0.0, t = 0.0, sign = drive(th0) > 0 ? 1.0 : -1.0;
+  std::vector<double> turns;
+  double t_rest = -1.0, th_rest = 0.0;
+  const double h = 1e-6;
+  std::vector<std::pair<double, double>> path;  // (t, θ) every 0.01 s
+  for (long step = 0; t < 2.0 && t_rest < 0; ++step) {
+    if (step % 10000 == 0) path.emplace_back(double(step / 10000) * 0.01, th);
+    auto f = [&](double a, double b) { return (drive(a) - sign * mu * normal(a, b)) / (mass * R); };
+    const double k1a = w, k1b = f(th, w), k2a = w + h / 2 * k1b, k2b = f(th + h / 2 * k1a, k2a),
+                 k3a = w + h / 2 * k2b, k3b = f(th + h / 2 * k2a, k3a), k4a = w + h * k3b,
+                 k4b = f(th + h * k3a, k4a);
+    const double w_new = w + h / 6 * (k1b + 2 * k2b + 2 * k3b + k4b);
+    const double th_new = th + h / 6 * (k1a + 2 * k2a + 2 * k3a + k4a);
+    if (w_new * sign < 0) {  // θ' reaches zero in this step
+      const double t_zero = t + h * w / (w - w_new);
+      if (std::abs(drive(th_new)) <= mu * normal(th_new, 0.0)) {
+        t_rest = t_zero;
+        th_rest = th_new;
+      } else {
+        turns.push_back(t_zero);
+        sign = -sign;
+      }
+    }
+    th = th_new;
+    w = w_new;
+    t += h;
+  }
+  ASSERT_EQ(turns.size(), 1u);
+  ASSERT_GT(t_rest, 0.0);
+  const Trajectory tr = run(m);
+  const auto theta = output(m, tr, "theta"), theta_dot = output(m, tr, "theta_dot");
+  // before the turn, θ(t) as the reduced equation (the turn puts an O(h) error into the latter)
+  double before = 0.0;
+  for (const auto& [ts, ths] : path) {
+    if (ts > turns[0] - 0.01) break;
+    before = std::max(before, std::abs(theta[std::size_t(sample_at(tr, ts))] - ths));
+  }
+  EXPECT_NEAR(before, 0.0, 1e-8);
+  // at rest relative to the hoop after t_rest, where the reduced equation stops
+  for (Index i = sample_at(tr, t_rest + 0.01); i < tr.samples(); ++i) {
+    EXPECT_NEAR(theta[std::size_t(i)], th_rest, 1e-5);
+    EXPECT_NEAR(theta_dot[std::size_t(i)], 0.0, 1e-9);
+  }
+  EXPECT_EQ(tr.stats.stick_refusals, 0);
+  EXPECT_GE(tr.stats.events, 3);  // the turn (a stop that reverses, its passage), the stick
+}
+
 TEST(Friction, ConveyorBeltStickSlipPhasesLastAsTheClosedFormSays) {
   // stick until k x = μs m g; slip on the arc x = x_eq + A cos ωτ + B sin ωτ (x_eq = μk m g / k)
   // for τ_slip = (2π − 2φ)/ω, tan φ = A/B; stick again for 2 (x_s − x_eq) / V; and so on
