@@ -4,6 +4,7 @@
 #include <cmath>
 #include <limits>
 
+#include "detail.hpp"
 #include "integrator.hpp"
 #include "ukdyn/forward.hpp"
 #include "ukdyn/projection.hpp"
@@ -23,9 +24,7 @@ WorkLayout::WorkLayout(const System& sys, bool quiet_channels) : quiet(quiet_cha
 double constraint_power(const System& sys, const Workspace& ws, Index k, const VectorXd& qd,
                         VectorXd& scratch) {
   if (ws.sparse) {
-    // share_k = A_kᵀ lambda_k on constraint k's columns
-    scratch.setZero();
-    ws.sparse->share(k, ws.lambda, scratch);
+    constraint_share(sys, ws, k, ws.lambda, scratch);  // share_k = A_kᵀ lambda_k
     return qd.dot(scratch);
   }
   // q'ᵀ A_kᵀ lambda_k = Σ_rows lambda_r (A_r q')

@@ -123,11 +123,15 @@ Index sliding_velocity(const System& sys, Workspace& ws, Index c, const VectorXd
     ++basis;
   }
   // v_rel = (I − Σ e_j e_jᵀ)(v − u)
+  remove_normals(ws, basis, v);
+  return basis;
+}
+
+void remove_normals(const Workspace& ws, Index basis, Eigen::Ref<VectorXd> v) {
   for (Index j = 0; j < basis; ++j) {
-    const auto e = ws.contact_basis.row(j).head(nc);
+    const auto e = ws.contact_basis.row(j).head(v.size());
     v -= v.dot(e) * e.transpose();
   }
-  return basis;
 }
 
 }  // namespace detail

@@ -57,6 +57,15 @@ Constraint stick_constraint(const std::string& name, const std::vector<Index>& c
 Index sliding_velocity(const System& sys, Workspace& ws, Index c, const VectorXd& q,
                        const VectorXd& qd, double t, bool rows_assembled);
 
+// v −= Σ_j (v·e_j) e_j over the first `basis` rows e_j of ws.contact_basis (orthonormal, from
+// sliding_velocity): the part of v (|coordinates|) tangent to the contact's constraint.
+void remove_normals(const Workspace& ws, Index basis, Eigen::Ref<VectorXd> v);
+
+// out = A_kᵀ lambda_k (n) for any multipliers lambda (m) with the rows of A last assembled,
+// either engine: constraint k's share of the force Aᵀ lambda. O(rows_k · n).
+void constraint_share(const System& sys, const Workspace& ws, Index k, const VectorXd& lambda,
+                      Eigen::Ref<VectorXd> out);
+
 // Kinetic energy ½ q'ᵀ M q' with the M of the last evaluation, either engine.
 double kinetic_energy(const Workspace& ws, const VectorXd& qd);
 

@@ -18,7 +18,6 @@
 #include "integrator.hpp"
 #include "ukdyn/forward.hpp"
 #include "ukdyn/projection.hpp"
-#include "ukdyn/sparse.hpp"
 
 namespace ukdyn {
 
@@ -474,15 +473,8 @@ class Run {
     reaction_ =
         ws_.shares.col(contact.normal_constraint) + ws_.shares.col(contact.stick_constraint);
     for (Index k : {contact.normal_constraint, contact.stick_constraint}) {
-      if (ws_.is_sparse()) {
-        reaction_part_.setZero();
-        ws_.sparse->share(k, ws_.lambda_nonideal, reaction_part_);
-        reaction_ += reaction_part_;
-      } else {
-        const Index r0 = sys_.row_offset(k), rows = sys_.constraint(k).rows();
-        reaction_.noalias() +=
-            ws_.A.middleRows(r0, rows).transpose() * ws_.lambda_nonideal.segment(r0, rows);
-      }
+      detail::constraint_share(sys_, ws_, k, ws_.lambda_nonideal, reaction_part_);
+      reaction_ += reaction_part_;
     }
     const Index k = contact.normal_constraint, rows = sys_.constraint(k).rows();
     if (normals_.rows() != rows) normals_.resize(rows, n_);  // (once per contact size)
@@ -596,10 +588,7 @@ class Run {
     for (Index r = 0; r < k; ++r) velocity_[r] = ws_.qdd[contact.coordinates[std::size_t(r)]];
     const Index basis = detail::sliding_velocity(sys_, ws_, Index(c), q_, qd_, t, false);
     if (contact.surface_velocity) velocity_.head(k) -= ws_.surface_u_dot.head(k);
-    for (Index j = 0; j < basis; ++j) {
-      const auto e = ws_.contact_basis.row(j).head(k);
-      velocity_.head(k) -= velocity_.head(k).dot(e) * e.transpose();
-    }
+    detail::remove_normals(ws_, basis, velocity_.head(k));
   }
 
   // the direction of the friction at |v_rel| <= eps: along `along` (n) on the contact's

@@ -38,20 +38,27 @@ Status solve_ideal(const System& sys, Workspace& ws) {
 
 void compute_shares(const System& sys, Workspace& ws) {
   detail::require_same_system(sys, ws, "ukdyn::compute_shares");
-  if (ws.sparse) {
-    // share_k = A_kᵀ lambda_k on the columns of constraint k only (the rest stays zero)
-    if (ws.shares.rows() != sys.dofs()) ws.shares.setZero(sys.dofs(), sys.constraint_count());
-    for (Index k = 0; k < sys.constraint_count(); ++k) {
-      ws.sparse->share(k, ws.lambda, ws.shares.col(k));
-    }
-    return;
-  }
+  if (ws.shares.rows() != sys.dofs()) ws.shares.setZero(sys.dofs(), sys.constraint_count());
   // share_k = A_kᵀ lambda_k
   for (Index k = 0; k < sys.constraint_count(); ++k) {
-    const Index r0 = sys.row_offset(k), rows = sys.constraint(k).rows();
-    ws.shares.col(k).noalias() =
-        ws.A.middleRows(r0, rows).transpose() * ws.lambda.segment(r0, rows);
+    detail::constraint_share(sys, ws, k, ws.lambda, ws.shares.col(k));
   }
 }
+
+namespace detail {
+
+void constraint_share(const System& sys, const Workspace& ws, Index k, const VectorXd& lambda,
+                      Eigen::Ref<VectorXd> out) {
+  if (ws.sparse) {
+    // (the sparse engine writes constraint k's columns only)
+    out.setZero();
+    ws.sparse->share(k, lambda, out);
+    return;
+  }
+  const Index r0 = sys.row_offset(k), rows = sys.constraint(k).rows();
+  out.noalias() = ws.A.middleRows(r0, rows).transpose() * lambda.segment(r0, rows);
+}
+
+}  // namespace detail
 
 }  // namespace ukdyn

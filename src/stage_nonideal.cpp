@@ -61,14 +61,7 @@ Status apply_nonideal(const System& sys, Workspace& ws, const VectorXd& q, const
     double change = 0.0, size = 0.0;
     for (Index k = 0; k < sys.constraint_count(); ++k) {
       auto next = ws.reactions_next.col(k);
-      if (ws.sparse) {
-        next.setZero();  // (share writes the constraint's columns only)
-        ws.sparse->share(k, ws.lambda_nonideal, next);
-      } else {
-        const Index r0 = sys.row_offset(k), rows = sys.constraint(k).rows();
-        next.noalias() =
-            ws.A.middleRows(r0, rows).transpose() * ws.lambda_nonideal.segment(r0, rows);
-      }
+      detail::constraint_share(sys, ws, k, ws.lambda_nonideal, next);
       next += ws.shares.col(k);
       change = std::max(change, (next - ws.reactions.col(k)).lpNorm<Eigen::Infinity>());
       size = std::max(size, next.lpNorm<Eigen::Infinity>());
