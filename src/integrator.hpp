@@ -210,4 +210,17 @@ SegmentResult integrate_bdf(ConstrainedOde& ode, std::vector<double>& x, double 
                             const std::vector<double>& outputs, const SimulationOptions& options,
                             SegmentHooks& hooks, double first_step);
 
+// --- step-size collapse (step_diagnosis.cpp) ----------------------------------------------
+
+// three significant digits, for messages
+std::string format_short(double v);
+// the adaptive method gave up (explicit methods say so; CVODE by its flags)
+bool step_collapsed(const SegmentResult& r);
+// The likely cause of the collapse that r reports, and what to try (one or two sentences):
+// x is the state where the method gave up (r.t_reached), x0 the one where it started (t0).
+std::string diagnose_collapse(const System& sys, Workspace& ws, const SimulationOptions& o,
+                              Integrator method, const SegmentResult& r,
+                              const std::vector<double>& x, const std::vector<double>& x0,
+                              double t0, const RunStatistics& stats);
+
 }  // namespace ukdyn::detail
