@@ -60,9 +60,11 @@ int check_command(const ModelSource& source) {
                 model.project_initial ? " (projected before a run: initial: project: true)" : "");
     for (const auto& v : r.initial_violations) std::printf("    %s\n", v.c_str());
   }
-  std::printf("  mass matrix         %s\n", r.mass_positive_definite
-                                                ? "symmetric positive definite"
-                                                : "NOT symmetric positive definite");
+  std::printf("  mass matrix         %s\n",
+              !r.mass_positive_definite ? "NOT symmetric positive (semi-)definite"
+              : r.mass_singular ? "singular, symmetric positive semi-definite (the constraints "
+                                  "determine the rest: docs/singular-mass.md)"
+                                : "symmetric positive definite");
   if (model.controller) {
     const Controller& ctrl = *model.controller;
     std::printf("  control             %s law, %lld requirement%s, %s%s\n", to_string(ctrl.law()),

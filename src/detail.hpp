@@ -31,7 +31,16 @@ inline void require_same_system(const System& sys, const Workspace& ws, const ch
 
 // M(q,t), its checks and its factorization into the workspace's decomposition (stage 1 without
 // Q; shared with the projections).
+// A singular, positive semi-definite M sets ws.mass_singular and is factorized later by
+// complete_singular_mass.
 Status evaluate_mass(const System& sys, Workspace& ws, const VectorXd& q, double t);
+
+// For a singular M (ws.mass_singular), with A (and b) assembled: factorizes the auxiliary
+// M_A = M + Aᵀ G A, G = diag(s / ‖a_i‖²), s the largest diagonal of M (the sparse engine: each
+// singular block with the rows local to it); with `forces`, a = M_A⁻¹ (Q + Aᵀ G b). When M_A is
+// not positive definite ([M; A] rank deficient): kMotionUndetermined, or with `regularize` (a
+// projection's metric) M_A + 1e-8 s I. Cost O(nnz(A)·(row nnz) + n³/3) dense.
+Status complete_singular_mass(Workspace& ws, double t, bool forces, bool regularize);
 
 // Writes constraint k's rows of A (dense matrix or the sparse engine's pattern) and b from its
 // acceleration form at (q, q', t); with `check`, kNonFiniteInput (recorded) when A is not

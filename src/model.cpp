@@ -16,6 +16,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include "ukdyn/constraint.hpp"
+#include "ukdyn/forward.hpp"
 #include "ukdyn/nonideal.hpp"
 
 #include "model_reader.hpp"
@@ -678,8 +679,10 @@ void Reader::read_simulate(const YAML::Node& root, Model& model) {
   if (!(o.t_end > o.t_start)) fail(s, "t_end must be greater than t_start");
 }
 
-// M(q0, t_start) must be symmetric positive definite: a model that fails here cannot start, so
-// the error points at the declaration of M (or T) rather than at the run.
+// M(q0, t_start) must be symmetric positive semi-definite, and where it is singular the
+// constraints must determine the coordinates it gives no inertia ([M; A] of full column rank):
+// a model that fails here cannot start, so the error points at the declaration of M (or T)
+// rather than at the run.
 void Reader::check_mass_matrix(const YAML::Node& root, const Model& model) {
   const Index n = model.system.dofs();
   MatrixXd M(n, n);
@@ -695,21 +698,38 @@ void Reader::check_mass_matrix(const YAML::Node& root, const Model& model) {
   if ((M - M.transpose()).cwiseAbs().maxCoeff() > 1e-12 * scale) {
     fail(at, "the mass matrix is not symmetric" + where, "M(i, j) must equal M(j, i)");
   }
-  Eigen::LLT<MatrixXd> llt(M);
-  if (scale == 0.0 || llt.info() != Eigen::Success) {
+  if (scale > 0.0 && Eigen::LLT<MatrixXd>(M).info() == Eigen::Success) return;
+  // a singular M is accepted when it is positive semi-definite (M + 1e-10 max|M| I positive
+  // definite) and the constraints determine the coordinates it gives no inertia
+  MatrixXd shifted = M;
+  shifted.diagonal().array() += 1e-10 * (scale > 0.0 ? scale : 1.0);
+  const bool from_T = source == "kinetic_energy";
+  if (Eigen::LLT<MatrixXd>(shifted).info() != Eigen::Success) {
+    std::string negative;
+    for (Index i = 0; i < n; ++i) {
+      if (M(i, i) < 0) negative += (negative.empty() ? "" : ", ") + coordinates_[std::size_t(i)];
+    }
+    fail(at, "the mass matrix is not positive semi-definite" + where,
+         !negative.empty()
+             ? "negative inertia for " + negative +
+                   (from_T ? ": the kinetic energy must not decrease with any velocity"
+                           : ": every diagonal entry of M must be >= 0")
+             : (from_T ? "the kinetic energy must be >= 0 for every velocity"
+                       : "M must be positive semi-definite: check the off-diagonal entries"));
+  }
+  Workspace ws(model.system, model.options.solver);
+  if (forward_dynamics(model.system, ws, model.q0, model.qd0, model.options.t_start) ==
+      Status::kMotionUndetermined) {
     std::string lacking;
     for (Index i = 0; i < n; ++i) {
       if (!(M(i, i) > 0)) lacking += (lacking.empty() ? "" : ", ") + coordinates_[std::size_t(i)];
     }
-    const bool from_T = source == "kinetic_energy";
-    fail(at, "the mass matrix is not positive definite" + where,
-         !lacking.empty()
-             ? "no positive inertia for " + lacking +
-                   (from_T ? ": the kinetic energy must involve every velocity with a positive "
-                             "coefficient"
-                           : ": every diagonal entry of M must be positive")
-             : (from_T ? "the kinetic energy must be positive for every non-zero velocity"
-                       : "M must be positive definite: check the off-diagonal entries"));
+    fail(at, "the mass matrix is singular" + where + " and the constraints do not determine "
+             "every coordinate: " + describe_status(model.system, ws),
+         (lacking.empty() ? std::string("give the coordinates inertia")
+                          : "no inertia for " + lacking) +
+             (from_T ? ": the kinetic energy must involve every velocity that no constraint fixes"
+                     : ": a zero row of M needs constraints that fix its coordinate"));
   }
 }
 

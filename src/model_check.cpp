@@ -68,6 +68,7 @@ CheckReport check_model(const Model& model) {
       s_mass == Status::kMassNotPositiveDefinite || s_mass == Status::kMassNotSymmetric ||
       (s_mass == Status::kNonFiniteInput && std::string_view(ws.failed_quantity) == "M");
   report.mass_positive_definite = !mass_failed;
+  report.mass_singular = !mass_failed && ws.mass_singular;
   if (s_mass != Status::kOk) report.problems.push_back(describe_status(sys, ws));
 
   // A, b of the constraints active at t_start, and the whole fundamental equation when M allows

@@ -456,9 +456,14 @@ void MultibodyReader::read_bodies() {
         break;
       }
       case BodyKind::kRigid: {
+        if (b["J0"]) {
+          r_.fail(b["J0"], what + ": J0 (a fictitious inertia of the quaternion) is no longer "
+                  "needed: the singular quaternion mass matrix is used with the unit-norm "
+                  "constraint", "remove the J0 line");
+        }
         check_keys(b,
                    {"name", "type", "mass", "inertia", "position", "orientation", "velocity",
-                    "angular_velocity", "J0"},
+                    "angular_velocity"},
                    "rigid body '" + d.name + "'");
         const double m = positive(require(b, "mass", what, "mass: 1"), what + " mass");
         const YAML::Node In = require(b, "inertia", what, "inertia: [A, A, C]");
@@ -479,7 +484,6 @@ void MultibodyReader::read_bodies() {
           r_.fail(In, what + ": the principal inertias violate the triangle inequality",
                   "no mass distribution has J1 + J2 < J3");
         }
-        const double J0 = b["J0"] ? positive(b["J0"], what + " J0") : 0.0;
         const Vector3d p =
             b["position"] ? vec(b["position"], what + " position", 3, 3) : Vector3d::Zero();
         const Vector3d v =
@@ -490,7 +494,7 @@ void MultibodyReader::read_bodies() {
         const Eigen::Quaterniond u = b["orientation"]
                                          ? orientation(b["orientation"], what + " orientation")
                                          : Eigen::Quaterniond::Identity();
-        builder_.add_rigid_body(d.name, m, J, p, u, v, w, J0);
+        builder_.add_rigid_body(d.name, m, J, p, u, v, w);
         break;
       }
     }

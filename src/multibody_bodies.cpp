@@ -202,7 +202,7 @@ BodyId Multibody::add_particle(std::string name, double mass, const Vector3d& p0
                                const Vector3d& v0) {
   require_positive(mass, "add_particle('" + name + "')", "mass");
   Data::Body b;
-  b.info = {std::move(name), BodyKind::kParticle, d_->n, 3, mass, Vector3d::Zero(), 0.0};
+  b.info = {std::move(name), BodyKind::kParticle, d_->n, 3, mass, Vector3d::Zero()};
   b.q0 = p0;
   b.qd0 = v0;
   d_->n += 3;
@@ -215,7 +215,7 @@ BodyId Multibody::add_planar_body(std::string name, double mass, double inertia,
   require_positive(mass, "add_planar_body('" + name + "')", "mass");
   require_positive(inertia, "add_planar_body('" + name + "')", "inertia");
   Data::Body b;
-  b.info = {std::move(name), BodyKind::kPlanar, d_->n, 3, mass, Vector3d(0, 0, inertia), 0.0};
+  b.info = {std::move(name), BodyKind::kPlanar, d_->n, 3, mass, Vector3d(0, 0, inertia)};
   b.q0 = pose0;
   b.qd0 = vel0;
   d_->n += 3;
@@ -225,18 +225,16 @@ BodyId Multibody::add_planar_body(std::string name, double mass, double inertia,
 
 BodyId Multibody::add_rigid_body(std::string name, double mass, const Vector3d& inertia,
                                  const Vector3d& r0, const Quaterniond& u0, const Vector3d& v0,
-                                 const Vector3d& w0, double J0) {
+                                 const Vector3d& w0) {
   const std::string who = "add_rigid_body('" + name + "')";
   require_positive(mass, who, "mass");
   for (int i = 0; i < 3; ++i) require_positive(inertia[i], who, "each principal inertia");
-  if (J0 == 0.0) J0 = inertia.mean();
-  require_positive(J0, who, "J0");
   if (!(u0.norm() > 0.0)) {
     throw std::invalid_argument("ukdyn::mb::Multibody::" + who + ": the quaternion is zero");
   }
   const Quaterniond u = u0.normalized();
   Data::Body b;
-  b.info = {std::move(name), BodyKind::kRigid, d_->n, 7, mass, inertia, J0};
+  b.info = {std::move(name), BodyKind::kRigid, d_->n, 7, mass, inertia};
   b.q0.resize(7);
   b.qd0.resize(7);
   b.q0 << r0, u.w(), u.x(), u.y(), u.z();
@@ -308,7 +306,7 @@ MultibodyModel Multibody::build() const {
     for (Index i = 0; i < b.info.size; ++i) names.push_back(b.info.name + suffix[i]);
   }
   SystemBuilder sb(names);
-  // mass blocks: m I3 (particle), diag(m, m, I) (planar), m I3 + 4 Eᵀ J E (rigid)
+  // mass blocks: m I3 (particle), diag(m, m, I) (planar), m I3 + 4 E_vᵀ J E_v (rigid)
   for (const BodyInfo& b : out.bodies) {
     if (b.kind == BodyKind::kPlanar) {
       sb.mass_block(b.offset,
@@ -318,10 +316,10 @@ MultibodyModel Multibody::build() const {
     }
     if (b.kind == BodyKind::kRigid) {
       const Index o = b.offset + 3;
-      const double J0 = b.J0;
       const Vector3d J = b.inertia;
-      sb.mass_block(o, 4, [o, J0, J](const VectorXd& q, double, Eigen::Ref<MatrixXd> Mk) {
-        detail::quaternion_mass(q.segment<4>(o), J0, J, Mk);
+      // singular (rank 3): the unit-norm constraint "<body>.unit" completes it
+      sb.mass_block(o, 4, [o, J](const VectorXd& q, double, Eigen::Ref<MatrixXd> Mk) {
+        detail::quaternion_mass(q.segment<4>(o), J, Mk);
       });
     }
   }

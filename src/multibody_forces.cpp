@@ -68,7 +68,7 @@ ForceFn make_forces(const std::vector<BodyInfo>& bodies, const std::vector<Force
       }
       if (b.kind == BodyKind::kRigid) {
         Q.segment<4>(o + 3) +=
-            quaternion_velocity_force(q.segment<4>(o + 3), qd.segment<4>(o + 3), b.J0, b.inertia);
+            quaternion_velocity_force(q.segment<4>(o + 3), qd.segment<4>(o + 3), b.inertia);
       }
     }
     for (std::size_t i = 0; i < d->forces.size(); ++i) {

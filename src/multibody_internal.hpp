@@ -363,10 +363,10 @@ PotentialFn make_potential(const std::vector<BodyInfo>& bodies, const std::vecto
 /// (gravity and springs derive from V, the quaternions' velocity terms do no work).
 PowerFn make_external_power(const std::vector<BodyInfo>& bodies, const std::vector<Force>& forces);
 
-/// M_kk of a quaternion: 4 E(u)ᵀ diag(J0, J) E(u) (4 × 4).
-void quaternion_mass(const Vector4d& u, double J0, const Vector3d& J, Eigen::Ref<MatrixXd> Mk);
-/// The quaternion's velocity-dependent force −8 E_v(u')ᵀ J E_v(u) u' − 4 J0 |u'|² u (4).
-Vector4d quaternion_velocity_force(const Vector4d& u, const Vector4d& ud, double J0,
-                                   const Vector3d& J);
+/// M_kk of a quaternion: 4 E_v(u)ᵀ J E_v(u) (4 × 4, positive semi-definite of rank 3: singular
+/// along u, which the unit-norm constraint determines; docs/multibody.md 1.1).
+void quaternion_mass(const Vector4d& u, const Vector3d& J, Eigen::Ref<MatrixXd> Mk);
+/// The quaternion's velocity-dependent force −8 E_v(u')ᵀ J E_v(u) u' (4).
+Vector4d quaternion_velocity_force(const Vector4d& u, const Vector4d& ud, const Vector3d& J);
 
 }  // namespace ukdyn::mb::detail

@@ -271,17 +271,16 @@ void JointModel::violation(const VectorXd& q, const VectorXd& qd, double t, Cons
 
 // ---- quaternion mass matrix and velocity terms ---------------------------------------------
 
-void quaternion_mass(const Vector4d& u, double J0, const Vector3d& J, Eigen::Ref<MatrixXd> Mk) {
-  // M = 4 Eᵀ diag(J0, J) E,  E = [uᵀ; E_v(u)]
+void quaternion_mass(const Vector4d& u, const Vector3d& J, Eigen::Ref<MatrixXd> Mk) {
+  // M = 4 E_vᵀ J E_v (rank 3, singular along u)
   const Matrix34 Ev = E_v(u);
-  Mk = 4.0 * (J0 * u * u.transpose() + Ev.transpose() * J.asDiagonal() * Ev);
+  Mk = 4.0 * (Ev.transpose() * J.asDiagonal() * Ev);
 }
 
-Vector4d quaternion_velocity_force(const Vector4d& u, const Vector4d& ud, double J0,
-                                   const Vector3d& J) {
-  // Q_u = −8 E_v(u')ᵀ J E_v(u) u' − 4 J0 |u'|² u   (docs/multibody.md, eq. Q)
+Vector4d quaternion_velocity_force(const Vector4d& u, const Vector4d& ud, const Vector3d& J) {
+  // Q_u = −8 E_v(u')ᵀ J E_v(u) u'   (docs/multibody.md, eq. Q)
   const Vector3d Jw = J.asDiagonal() * (E_v(u) * ud);
-  return -8.0 * E_v(ud).transpose() * Jw - 4.0 * J0 * ud.squaredNorm() * u;
+  return -8.0 * E_v(ud).transpose() * Jw;
 }
 
 void add_point_force(const BodyRef& b, const VectorXd& q, const Vector3d& s, const Vector3d& F,

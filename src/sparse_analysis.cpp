@@ -238,6 +238,23 @@ SparseDecomposition::SparseDecomposition(const System& sys)
   wn_.assign(std::size_t(n_), 0.0);
   wn2_.assign(std::size_t(n_), 0.0);
   wn3_.assign(std::size_t(n_), 0.0);
+  // rows local to one block (a single segment): the rows a singular block is augmented with
+  blk_sing_.assign(nb, 0);
+  aug_g_.assign(std::size_t(m), 0.0);
+  local_row_ptr_.assign(nb + 1, 0);
+  for (int i = 0; i < m; ++i) {
+    if (seg_ptr_[std::size_t(i) + 1] - seg_ptr_[std::size_t(i)] == 1) {
+      ++local_row_ptr_[std::size_t(seg_blk_[std::size_t(seg_ptr_[std::size_t(i)])]) + 1];
+    }
+  }
+  for (std::size_t b = 0; b < nb; ++b) local_row_ptr_[b + 1] += local_row_ptr_[b];
+  local_rows_.assign(std::size_t(local_row_ptr_[nb]), 0);
+  std::vector<int> fill(local_row_ptr_.begin(), local_row_ptr_.end() - 1);
+  for (int i = 0; i < m; ++i) {
+    if (seg_ptr_[std::size_t(i) + 1] - seg_ptr_[std::size_t(i)] == 1) {
+      local_rows_[std::size_t(fill[std::size_t(seg_blk_[std::size_t(seg_ptr_[std::size_t(i)])])]++)] = i;
+    }
+  }
 }
 
 SparseDecomposition::~SparseDecomposition() = default;

@@ -85,20 +85,100 @@ bool SparseDecomposition::mass_finite() const {
 }
 
 SparseDecomposition& SparseDecomposition::compute_mass() {
-  // M_bb = L_b L_bᵀ, block by block (constant blocks once)
+  // M_bb = L_b L_bᵀ, block by block (constant blocks once); a singular block is checked to be
+  // positive semi-definite and left for compute_augmented_mass
   info_ = Eigen::Success;
+  undetermined_block_ = -1;
   for (Index b = 0; b < block_count(); ++b) {
     if (blk_const_[std::size_t(b)] && const_factorized_) continue;
-    const Index s = block_size(b), v0 = blk_val_[std::size_t(b)];
+    const Index s = block_size(b), v0 = blk_val_[std::size_t(b)], o = block_offset(b);
     std::copy(Mv_.begin() + v0, Mv_.begin() + v0 + s * s, Lv_.begin() + v0);
-    if (!block_cholesky(Lv_.data() + v0, s, inv_ldiag_.data() + block_offset(b))) {
+    blk_sing_[std::size_t(b)] = 0;
+    if (block_cholesky(Lv_.data() + v0, s, inv_ldiag_.data() + o)) {
+      double lo = inv_ldiag_[std::size_t(o)], hi = lo;  // 1 / L_kk
+      for (Index k = o; k < o + s; ++k) {
+        lo = std::min(lo, inv_ldiag_[std::size_t(k)]);
+        hi = std::max(hi, inv_ldiag_[std::size_t(k)]);
+      }
+      // pivots L_kk² within kSingularPivotRatio of each other: regular
+      if (lo * lo >= kSingularPivotRatio * hi * hi) continue;
+    }
+    // positive semi-definite: M_bb + 1e-10 max|M_bb| I is positive definite (a zero block is)
+    double scale = 0.0;
+    for (Index p = v0; p < v0 + s * s; ++p) scale = std::max(scale, std::abs(Mv_[std::size_t(p)]));
+    if (scale > 0.0) {
+      std::copy(Mv_.begin() + v0, Mv_.begin() + v0 + s * s, Lv_.begin() + v0);
+      for (Index k = 0; k < s; ++k) Lv_[std::size_t(v0 + k * s + k)] += 1e-10 * scale;
+      if (!block_cholesky(Lv_.data() + v0, s, inv_ldiag_.data() + o)) {
+        info_ = Eigen::NumericalIssue;
+        const_factorized_ = false;
+        return *this;
+      }
+    }
+    blk_sing_[std::size_t(b)] = 1;
+  }
+  const_factorized_ = true;
+  singular_blocks_ = 0;
+  for (unsigned char f : blk_sing_) singular_blocks_ += f;
+  return *this;
+}
+
+SparseDecomposition& SparseDecomposition::compute_augmented_mass(double regularization) {
+  info_ = Eigen::Success;
+  undetermined_block_ = -1;
+  std::fill(aug_g_.begin(), aug_g_.end(), 0.0);
+  if (singular_blocks_ == 0) return *this;
+  double global = 0.0;  // largest diagonal of M, for a zero block
+  for (Index b = 0; b < block_count(); ++b) {
+    const auto Mb = mass_block(b);
+    global = std::max(global, Mb.diagonal().maxCoeff());
+  }
+  if (!(global > 0.0)) global = 1.0;
+  for (Index b = 0; b < block_count(); ++b) {
+    if (!blk_sing_[std::size_t(b)]) continue;
+    const Index s = block_size(b), v0 = blk_val_[std::size_t(b)], o = block_offset(b);
+    std::copy(Mv_.begin() + v0, Mv_.begin() + v0 + s * s, Lv_.begin() + v0);
+    double sb = mass_block(b).diagonal().maxCoeff();
+    if (!(sb > 0.0)) sb = global;
+    double* L = Lv_.data() + v0;
+    for (int p = local_row_ptr_[std::size_t(b)]; p < local_row_ptr_[std::size_t(b) + 1]; ++p) {
+      const int i = local_rows_[std::size_t(p)];
+      const double* a = Av_.data() + row_ptr_[std::size_t(i)];  // the block's s columns in order
+      double norm2 = 0.0;
+      for (Index k = 0; k < s; ++k) norm2 += a[k] * a[k];
+      if (!(norm2 > 0.0)) continue;  // an inactive row
+      const double g = sb / norm2;
+      aug_g_[std::size_t(i)] = g;
+      for (Index j = 0; j < s; ++j) {
+        const double f = g * a[j];
+        for (Index k = j; k < s; ++k) L[j * s + k] += f * a[k];
+      }
+    }
+    if (regularization > 0.0) {
+      for (Index k = 0; k < s; ++k) L[k * s + k] += regularization * sb;
+    }
+    if (!block_cholesky(L, s, inv_ldiag_.data() + o)) {
       info_ = Eigen::NumericalIssue;
-      const_factorized_ = false;
+      undetermined_block_ = b;
       return *this;
     }
   }
-  const_factorized_ = true;
   return *this;
+}
+
+void SparseDecomposition::augment_forces(const Eigen::Ref<const VectorXd>& b,
+                                         Eigen::Ref<VectorXd> Q) const {
+  for (Index blk = 0; blk < block_count(); ++blk) {
+    if (!blk_sing_[std::size_t(blk)]) continue;
+    const Index s = block_size(blk), o = block_offset(blk);
+    for (int p = local_row_ptr_[std::size_t(blk)]; p < local_row_ptr_[std::size_t(blk) + 1]; ++p) {
+      const int i = local_rows_[std::size_t(p)];
+      const double gb = aug_g_[std::size_t(i)] * b[i];
+      if (gb == 0.0) continue;
+      const double* a = Av_.data() + row_ptr_[std::size_t(i)];
+      for (Index k = 0; k < s; ++k) Q[o + k] += gb * a[k];
+    }
+  }
 }
 
 void SparseDecomposition::mass_lower_solve(double* x) const {
@@ -147,10 +227,17 @@ void SparseDecomposition::multiply_mass(const Eigen::Ref<const VectorXd>& x,
 }
 
 double SparseDecomposition::mass_norm_squared(const Eigen::Ref<const VectorXd>& x) const {
-  // ‖Lᵀ x‖², (Lᵀ x)_k = Σ_{i >= k} L_ik x_i
+  // ‖Lᵀ x‖², (Lᵀ x)_k = Σ_{i >= k} L_ik x_i; xᵀ M_bb x for a singular block (L is M_A's factor)
   double sum = 0.0;
   for (Index b = 0; b < block_count(); ++b) {
     const Index o = block_offset(b), s = block_size(b);
+    if (blk_sing_[std::size_t(b)]) {
+      const double* Mb = Mv_.data() + blk_val_[std::size_t(b)];
+      for (Index j = 0; j < s; ++j) {
+        for (Index i = 0; i < s; ++i) sum += x[o + i] * Mb[j * s + i] * x[o + j];
+      }
+      continue;
+    }
     const double* L = Lv_.data() + blk_val_[std::size_t(b)];
     for (Index k = 0; k < s; ++k) {
       double v = 0.0;

@@ -87,6 +87,8 @@ Status assemble_constraints(const System& sys, Workspace& ws, const VectorXd& q,
       if (!bk.allFinite()) return detail::fail(ws, Status::kNonFiniteInput, "b", k, t);
     }
   }
+  // a singular M: stage 1 completes with the constraints, M_A = M + Aᵀ G A, a = M_A⁻¹ Q_A
+  if (ws.mass_singular) return detail::complete_singular_mass(ws, t, /*forces=*/true, false);
   return Status::kOk;
 }
 

@@ -4,6 +4,8 @@
 #include <stdexcept>
 #include <string>
 
+#include <cstdio>
+#include <cstdlib>
 #include "detail.hpp"
 #include "ukdyn/projection.hpp"
 #include "ukdyn/sparse.hpp"
@@ -130,6 +132,9 @@ ProjectionResult project_positions(const System& sys, Workspace& ws, VectorXd& q
     // A = dphi/dq, M(q) = L Lᵀ;  q += −L⁻ᵀ W⁺ phi
     assemble_jacobian(sys, ws, q, ws.zero_n, t, options, Level::kPosition);
     res.status = detail::evaluate_mass(sys, ws, q, t);
+    if (res.status == Status::kOk && ws.mass_singular) {
+      res.status = detail::complete_singular_mass(ws, t, /*forces=*/false, /*regularize=*/true);
+    }
     if (res.status != Status::kOk) return res;
     correct(ws, q);
     ++res.iterations;
@@ -155,6 +160,9 @@ ProjectionResult project_velocities(const System& sys, Workspace& ws, const Vect
     assemble_jacobian(sys, ws, q, qd, t, options, Level::kVelocity);
     if (!factorized) {
       res.status = detail::evaluate_mass(sys, ws, q, t);
+      if (res.status == Status::kOk && ws.mass_singular) {
+        res.status = detail::complete_singular_mass(ws, t, /*forces=*/false, /*regularize=*/true);
+      }
       if (res.status != Status::kOk) return res;
       factorized = true;
     }

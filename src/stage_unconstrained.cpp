@@ -1,6 +1,10 @@
 // Stage 1: the unconstrained system. M(q,t), Q(q,q',t), M = L Lᵀ, a = M⁻¹ Q (eqs. 1, 2).
+// A singular (positive semi-definite) M is factorized after stage 2 as the auxiliary
+// M_A = M + Aᵀ G A, with Q_A = Q + Aᵀ G b (complete_singular_mass; docs/singular-mass.md).
 #include <algorithm>
 #include <cmath>
+
+#include <Eigen/Cholesky>
 
 #include "detail.hpp"
 #include "ukdyn/forward.hpp"
@@ -22,7 +26,7 @@ double asymmetry(const MatrixXd& M) {
 namespace detail {
 namespace {
 // the sparse engine: the blocks M_bb(q,t) that are not constant, the same checks as below on
-// the blocks, and M_bb = L_b L_bᵀ block by block
+// the blocks, and M_bb = L_b L_bᵀ block by block (singular blocks: checked, factorized later)
 Status evaluate_mass_blocks(const System& sys, Workspace& ws, const VectorXd& q, double t) {
   SparseDecomposition& sp = *ws.sparse;
   const auto& blocks = sys.mass_blocks();
@@ -37,6 +41,34 @@ Status evaluate_mass_blocks(const System& sys, Workspace& ws, const VectorXd& q,
     return detail::fail(ws, Status::kMassNotPositiveDefinite, "M", -1, t);
   }
   return Status::kOk;
+}
+
+// Whether the factor just computed is that of a regular M: Cholesky succeeded and its pivots
+// L_kk² lie within kSingularPivotRatio of each other (else M is treated as singular).
+bool regular_factor(const Workspace& ws, Eigen::ComputationInfo info) {
+  if (info != Eigen::Success) return false;
+  if (ws.textbook) return true;
+  const auto d = ws.decomposition.matrix_llt().diagonal();
+  const double lo = d.cwiseAbs().minCoeff(), hi = d.cwiseAbs().maxCoeff();
+  return lo * lo >= SparseDecomposition::kSingularPivotRatio * hi * hi;
+}
+// Whether M + shift I is positive definite (M positive semi-definite to within shift), block by
+// block when the system gives M as diagonal blocks (O(Σ size³) instead of O(n³)); uses the lower
+// triangle of ws.M_aux as scratch.
+bool positive_semidefinite(const System& sys, Workspace& ws, double shift) {
+  using Llt = Eigen::internal::llt_inplace<double, Eigen::Lower>;
+  if (sys.mass_is_block_diagonal()) {
+    for (const MassBlock& b : sys.mass_blocks()) {
+      auto S = ws.M_aux.topLeftCorner(b.size, b.size);
+      S.triangularView<Eigen::Lower>() = ws.M.block(b.offset, b.offset, b.size, b.size);
+      S.diagonal().array() += shift;
+      if (Llt::unblocked(S) != -1) return false;
+    }
+    return true;
+  }
+  ws.M_aux.triangularView<Eigen::Lower>() = ws.M;
+  ws.M_aux.diagonal().array() += shift;
+  return Llt::blocked(ws.M_aux) == -1;
 }
 }  // namespace
 
@@ -53,6 +85,7 @@ Status evaluate_mass(const System& sys, Workspace& ws, const VectorXd& q, double
       if (const Status s = evaluate_mass_blocks(sys, ws, q, t); s != Status::kOk) return s;
       ws.mass_factorized = true;
     }
+    ws.mass_singular = ws.sparse->mass_singular();
     return Status::kOk;
   }
   // M(q,t) and M = L Lᵀ; a constant M is evaluated and factorized once
@@ -64,13 +97,79 @@ Status evaluate_mass(const System& sys, Workspace& ws, const VectorXd& q, double
     if (asymmetry(ws.M) > ws.options().symmetry_tolerance * scale) {
       return detail::fail(ws, Status::kMassNotSymmetric, "M", -1, t);
     }
-    const auto info = detail::with_decomposition(
-        ws, [&](auto& d) { return d.compute_mass(ws.M).info(); });
-    if (info != Eigen::Success) {
+    if (!ws.mass_singular) {
+      const auto info = detail::with_decomposition(
+          ws, [&](auto& d) { return d.compute_mass(ws.M).info(); });
+      if (regular_factor(ws, info)) {
+        ws.mass_factorized = true;
+        return Status::kOk;
+      }
+    }
+    // singular: accepted when positive semi-definite, M + 1e-10 max|M| I positive definite;
+    // factorized with the constraints (complete_singular_mass). From now on this workspace
+    // takes the singular path.
+    if (scale > 0.0 && !positive_semidefinite(sys, ws, 1e-10 * scale)) {
       return detail::fail(ws, Status::kMassNotPositiveDefinite, "M", -1, t);
     }
+    ws.mass_singular = true;
     ws.mass_factorized = true;
   }
+  return Status::kOk;
+}
+
+Status complete_singular_mass(Workspace& ws, double t, bool forces, bool regularize) {
+  if (ws.sparse) {
+    SparseDecomposition& sp = *ws.sparse;
+    // a projection's metric only needs to be positive definite: M_A + 1e-8 s I where the
+    // projection's rows leave M_A singular
+    if (sp.compute_augmented_mass().info() != Eigen::Success &&
+        !(regularize && sp.compute_augmented_mass(1e-8).info() == Eigen::Success)) {
+      return detail::fail(ws, Status::kMotionUndetermined, "M", sp.undetermined_block(), t);
+    }
+    if (forces) {
+      ws.tmp_n = ws.Q;
+      sp.augment_forces(ws.b, ws.tmp_n);
+      sp.solve_mass(ws.tmp_n, ws.a);
+    }
+    return Status::kOk;
+  }
+  // M_A = M + Σ_i g_i a_i a_iᵀ (lower triangle), g_i = s / ‖a_i‖², s = max diag M; only the
+  // non-zero entries of each row of A take part
+  const Index n = ws.dofs();
+  ws.M_aux.triangularView<Eigen::Lower>() = ws.M;
+  double s = ws.M.diagonal().maxCoeff();
+  if (!(s > 0.0)) s = 1.0;
+  if (forces) ws.tmp_n = ws.Q;
+  for (Index i = 0; i < ws.A.rows(); ++i) {
+    Index nz = 0;
+    double norm2 = 0.0;
+    for (Index j = 0; j < n; ++j) {
+      const double v = ws.A(i, j);
+      if (v != 0.0) {
+        ws.nonzero_cols[std::size_t(nz++)] = j;
+        norm2 += v * v;
+      }
+    }
+    if (nz == 0) continue;  // an inactive row
+    const double g = s / norm2;
+    for (Index p = 0; p < nz; ++p) {
+      const Index j = ws.nonzero_cols[std::size_t(p)];
+      const double f = g * ws.A(i, j);
+      for (Index r = p; r < nz; ++r) {
+        const Index k = ws.nonzero_cols[std::size_t(r)];
+        ws.M_aux(std::max(j, k), std::min(j, k)) += f * ws.A(i, k);
+      }
+      if (forces) ws.tmp_n[j] += f * ws.b[i];
+    }
+  }
+  auto info = detail::with_decomposition(ws, [&](auto& d) { return d.compute_mass(ws.M_aux).info(); });
+  if (info != Eigen::Success && regularize) {
+    // a projection's metric only needs to be positive definite
+    ws.M_aux.diagonal().array() += 1e-8 * s;
+    info = detail::with_decomposition(ws, [&](auto& d) { return d.compute_mass(ws.M_aux).info(); });
+  }
+  if (info != Eigen::Success) return detail::fail(ws, Status::kMotionUndetermined, "M", -1, t);
+  if (forces) detail::with_decomposition(ws, [&](auto& d) { d.solve_mass(ws.tmp_n, ws.a); });
   return Status::kOk;
 }
 }  // namespace detail
@@ -82,7 +181,8 @@ Status evaluate_unconstrained(const System& sys, Workspace& ws, const VectorXd& 
   // Q(q,q',t)
   sys.forces(q, qd, t, ws.Q);
   if (!ws.Q.allFinite()) return detail::fail(ws, Status::kNonFiniteInput, "Q", -1, t);
-  // a = M⁻¹ Q
+  // a = M⁻¹ Q; for a singular M, a = M_A⁻¹ Q_A once A is known (assemble_constraints)
+  if (ws.mass_singular) return Status::kOk;
   if (ws.sparse) {
     ws.sparse->solve_mass(ws.Q, ws.a);
   } else {

@@ -16,6 +16,7 @@ const char* to_string(Status s) {
     case Status::kProjectionFailed: return "projection onto the constraints failed";
     case Status::kIntegratorFailure: return "integrator failure";
     case Status::kEnergyBalance: return "energy_balance";
+    case Status::kMotionUndetermined: return "motion not determined";
   }
   return "unknown status";
 }

@@ -6,6 +6,8 @@
 #include <sstream>
 #include <stdexcept>
 
+#include <Eigen/Eigenvalues>
+
 #include "ukdyn/reference.hpp"
 #include "ukdyn/sparse.hpp"
 #include "ukdyn/system.hpp"
@@ -76,10 +78,12 @@ Workspace::Workspace(const System& sys, const SolverOptions& options)
     A_rows.setZero(rows, width);
   } else {
     M.setZero(n, n);
+    M_aux.setZero(n, n);
     A.setZero(m, n);
   }
   Q.setZero(n);
   a.setZero(n);
+  nonzero_cols.assign(std::size_t(n), 0);
   b.setZero(m);
   active.assign(std::size_t(K), 0);
   activity_override.assign(std::size_t(K), -1);
@@ -164,6 +168,71 @@ std::string inconsistent_constraints(const System& sys, const Workspace& ws) {
 }
 }  // namespace
 
+namespace {
+// The coordinates that [M; A] leaves undetermined: the null space of M / s + Aᵀ diag(1/‖a_i‖²) A
+// (s the largest diagonal of M), from the M and A of the failed evaluation; with the sparse
+// engine only the failed block and the rows local to it (which are all it uses). Error path:
+// allocates. Returns a list of quoted coordinate names.
+std::string undetermined_coordinates(const System& sys, const Workspace& ws) {
+  const Index n = sys.dofs();
+  MatrixXd M, A;
+  Index o = 0, size = n;
+  if (ws.sparse) {
+    const SparseDecomposition& sp = *ws.sparse;
+    const Index b = ws.failed_index;
+    if (b < 0 || b >= sp.block_count()) return "";
+    o = sp.block_offset(b);
+    size = sp.block_size(b);
+    M = sp.mass_block(b);
+    const auto As = sp.matrix_A();
+    std::vector<Index> local;
+    for (Index i = 0; i < As.rows(); ++i) {
+      bool inside = true, any = false;
+      for (decltype(As)::InnerIterator it(As, i); it; ++it) {
+        if (it.value() == 0.0) continue;
+        any = true;
+        inside = inside && it.col() >= o && it.col() < o + size;
+      }
+      if (any && inside) local.push_back(i);
+    }
+    A.setZero(Index(local.size()), size);
+    for (std::size_t r = 0; r < local.size(); ++r) {
+      for (decltype(As)::InnerIterator it(As, local[r]); it; ++it) {
+        if (it.value() != 0.0) A(Index(r), it.col() - o) = it.value();
+      }
+    }
+  } else {
+    M = ws.M.selfadjointView<Eigen::Lower>();
+    A = ws.A;
+  }
+  double s = M.diagonal().maxCoeff();
+  if (!(s > 0.0)) s = 1.0;
+  MatrixXd N = M / s;
+  for (Index i = 0; i < A.rows(); ++i) {
+    const double norm2 = A.row(i).squaredNorm();
+    if (norm2 > 0.0) N += A.row(i).transpose() * A.row(i) / norm2;
+  }
+  Eigen::SelfAdjointEigenSolver<MatrixXd> eig(N);
+  const VectorXd& ev = eig.eigenvalues();
+  const double top = std::max(ev.cwiseAbs().maxCoeff(), 1.0);
+  std::vector<bool> named(std::size_t(size), false);
+  for (Index k = 0; k < size; ++k) {
+    if (ev[k] > 1e-9 * top) continue;
+    const VectorXd v = eig.eigenvectors().col(k);
+    const double vmax = v.cwiseAbs().maxCoeff();
+    for (Index i = 0; i < size; ++i) {
+      if (std::abs(v[i]) > 0.1 * vmax) named[std::size_t(i)] = true;
+    }
+  }
+  std::string names;
+  for (Index i = 0; i < size; ++i) {
+    if (!named[std::size_t(i)]) continue;
+    names += (names.empty() ? "'" : ", '") + sys.coordinate_names()[std::size_t(o + i)] + "'";
+  }
+  return names;
+}
+}  // namespace
+
 std::string describe_status(const System& sys, const Workspace& ws) {
   std::ostringstream s;
   s.precision(6);
@@ -173,7 +242,9 @@ std::string describe_status(const System& sys, const Workspace& ws) {
   const std::string what = ws.failed_quantity;
   if (!what.empty()) s << " in " << what;
   const Index k = ws.failed_index;
-  if ((what == "A" || what == "b") && k >= 0 && k < sys.constraint_count()) {
+  if (ws.status == Status::kMotionUndetermined) {
+    // (failed_index is the sparse engine's block, reported below)
+  } else if ((what == "A" || what == "b") && k >= 0 && k < sys.constraint_count()) {
     s << " of constraint '" << sys.constraint(k).name() << "'";
   } else if (what == "C" && k >= 0 && k < sys.nonideal_count()) {
     s << " of non-ideal force '" << sys.nonideal_name(k) << "'";
@@ -187,8 +258,20 @@ std::string describe_status(const System& sys, const Workspace& ws) {
       s << inconsistent_constraints(sys, ws);
       break;
     case Status::kMassNotPositiveDefinite:
-      s << ": the Cholesky factorization of M failed (is every coordinate given inertia?)";
+      s << ": M is not positive semi-definite (it has a negative eigenvalue; a singular M is "
+           "accepted when the constraints determine the coordinates it gives no inertia)";
       break;
+    case Status::kMotionUndetermined: {
+      const std::string names = undetermined_coordinates(sys, ws);
+      s << ": M is singular and [M; A] does not have full column rank, so the accelerations of "
+        << (names.empty() ? std::string("some coordinates") : "the coordinates " + names)
+        << " are not determined (give them inertia, or constraints that fix them)";
+      if (ws.sparse) {
+        s << "; the sparse engine completes a singular block of M only with constraints on that "
+             "block alone (use Engine::kDense for constraints that tie it to other bodies)";
+      }
+      break;
+    }
     case Status::kMassNotSymmetric:
       s << ": M differs from its transpose by more than the symmetry tolerance "
         << ws.options().symmetry_tolerance << " (relative)";

@@ -250,23 +250,27 @@ TEST(ModelErrors, HolonomicConstraintMayNotDependOnVelocity) {
 }
 
 TEST(ModelErrors, MassMatrixNotPositiveDefiniteAtTheInitialState) {
-  // M = diag(1, −1): points at the mass_matrix value and names the coordinate without inertia
+  // M = diag(1, −1): points at the mass_matrix value and names the coordinate
   std::string e = error_of("coordinates: [x, y]\nmass_matrix: [[1, 0], [0, -1]]\n");
-  EXPECT_TRUE(contains(e, "m.yaml:2:14: error: the mass matrix is not positive definite at the "
-                          "initial state (t = 0) (hint: no positive inertia for y: every diagonal"))
+  EXPECT_TRUE(contains(e, "m.yaml:2:14: error: the mass matrix is not positive semi-definite at "
+                          "the initial state (t = 0) (hint: negative inertia for y: every "
+                          "diagonal"))
       << e;
-  // polar coordinates at r = 0: T = ½(r'² + r²θ'²) gives no inertia to θ there
+  // polar coordinates at r = 0: T = ½(r'² + r²θ'²) gives no inertia to θ there, and no
+  // constraint determines it (a singular M is accepted only then)
   e = error_of(
       "coordinates: [r, th]\nkinetic_energy: 0.5*(r_dot^2 + r^2*th_dot^2)\n"
       "initial: {q: {r: 0}}\n");
-  EXPECT_TRUE(contains(e, "m.yaml:2:17: error: the mass matrix is not positive definite")) << e;
-  EXPECT_TRUE(contains(e, "no positive inertia for th: the kinetic energy must involve every "
-                          "velocity"))
+  EXPECT_TRUE(contains(e, "m.yaml:2:17: error: the mass matrix is singular at the initial state "
+                          "(t = 0) and the constraints do not determine every coordinate"))
+      << e;
+  EXPECT_TRUE(contains(e, "the coordinates 'th' are not determined")) << e;
+  EXPECT_TRUE(contains(e, "no inertia for th: the kinetic energy must involve every velocity"))
       << e;
   // positive diagonal, indefinite: [[1, 2], [2, 1]]
   e = error_of("coordinates: [x, y]\nmass_matrix: [[1, 2], [2, 1]]\n");
-  EXPECT_TRUE(contains(e, "not positive definite at the initial state (t = 0) (hint: M must be "
-                          "positive definite: check the off-diagonal entries)"))
+  EXPECT_TRUE(contains(e, "not positive semi-definite at the initial state (t = 0) (hint: M must "
+                          "be positive semi-definite: check the off-diagonal entries)"))
       << e;
   // not symmetric; not finite (1/x at x = 0)
   e = error_of("coordinates: [x, y]\nmass_matrix: [[1, 2], [0, 1]]\n");

@@ -97,6 +97,58 @@ INSTANTIATE_TEST_SUITE_P(Sizes, NoAllocationRandom,
                                            Case{120, 80, 40}, Case{10, 15, 8}),
                          testing::CaseName());
 
+// singular mass matrices (the auxiliary M + Aᵀ G A): the pendulum in (x, y, theta) with
+// M = diag(m, m, 0) on the dense engine, and a chain of rigid bodies whose quaternion blocks are
+// singular on the sparse engine
+TEST(NoAllocation, SingularMassMatrices) {
+  {
+    MatrixXd M = MatrixXd::Zero(3, 3);
+    M(0, 0) = M(1, 1) = 2.0;
+    const System sys =
+        SystemBuilder({"x", "y", "th"})
+            .mass_matrix(M)
+            .forces([](const VectorXd&, const VectorXd&, double, Eigen::Ref<VectorXd> Q) {
+              Q << 0.0, -19.62, 0.0;
+            })
+            .add(holonomic("cx", 1, [](const auto& q, const auto&, auto& phi) {
+              using std::sin;
+              phi[0] = q[0] - sin(q[2]);
+            }))
+            .add(holonomic("cy", 1, [](const auto& q, const auto&, auto& phi) {
+              using std::cos;
+              phi[0] = q[1] + cos(q[2]);
+            }))
+            .build();
+    VectorXd q(3), qd(3);
+    q << std::sin(0.7), -std::cos(0.7), 0.7;
+    qd << std::cos(0.7) * 1.5, std::sin(0.7) * 1.5, 1.5;
+    EXPECT_EQ(allocations_of(sys, q, qd, 3), 0);
+    Workspace ws(sys);
+    ASSERT_EQ(forward_dynamics(sys, ws, q, qd, 0.0), Status::kOk);
+    EXPECT_TRUE(ws.mass_singular);
+  }
+  {
+    mb::Multibody b;
+    b.set_gravity({0, 0, -9.81});
+    mb::BodyId prev = mb::kGround;
+    for (int i = 0; i < 12; ++i) {
+      const Eigen::Quaterniond u(Eigen::AngleAxisd(0.1 * i, Eigen::Vector3d::UnitX()));
+      const mb::BodyId id =
+          b.add_rigid_body("b" + std::to_string(i), 1.0, {0.1, 0.1, 0.02},
+                           u * Eigen::Vector3d(0, 0, -0.5), u, Eigen::Vector3d::Zero(), {0, 0, 1});
+      b.add_joint(mb::spherical("s" + std::to_string(i), prev, {0, 0, 0}, id, {0, 0, 0.5}));
+      prev = id;
+    }
+    const mb::MultibodyModel m = b.build();
+    SolverOptions o;
+    o.engine = Engine::kSparse;
+    EXPECT_EQ(allocations_of(m.system, m.q0, m.qd0, 3, o), 0);
+    Workspace ws(m.system, o);
+    ASSERT_EQ(forward_dynamics(m.system, ws, m.q0, m.qd0, 0.0), Status::kOk);
+    EXPECT_TRUE(ws.mass_singular);
+  }
+}
+
 // multibody models (multibody.hpp): quaternion blocks, closed-form and AD-based joint rows,
 // rolling, a drive and pin friction — on the dense engine and, for a long chain, the sparse one
 TEST(NoAllocation, MultibodyModels) {

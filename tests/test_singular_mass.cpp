@@ -149,8 +149,8 @@ class EllipticPendulum {
 };
 
 // the pendulum as a System: dense M = diag(m, m, J), or the blocks diag(m, m) and (J) for the
-// sparse engine
-System xytheta_pendulum(const PendulumParams& p, bool blocks = false) {
+// sparse engine, or (one_block) the single block diag(m, m, J)
+System xytheta_pendulum(const PendulumParams& p, bool blocks = false, bool one_block = false) {
   auto rod = [L = p.L](const auto& q, const auto&, auto& phi) {
     using std::cos;
     using std::sin;
@@ -158,7 +158,9 @@ System xytheta_pendulum(const PendulumParams& p, bool blocks = false) {
     phi[1] = q[1] + L * cos(q[2]);
   };
   SystemBuilder b(std::vector<std::string>{"x", "y", "theta"});
-  if (blocks) {
+  if (one_block) {
+    b.mass_block(0, Eigen::Vector3d(p.m, p.m, p.J).asDiagonal().toDenseMatrix());
+  } else if (blocks) {
     b.mass_block(0, p.m * MatrixXd::Identity(2, 2));
     b.mass_block(2, MatrixXd::Constant(1, 1, p.J));
   } else {
@@ -359,9 +361,27 @@ TEST(SingularMass, RedundantPendulumFollowsTheEllipticSolutionForThreePeriods) {
   }
 }
 
+// The sparse engine completes a singular block with the rows local to it (docs/singular-mass.md):
+// theta's own block (0) is tied to (x, y) only by the rod rows, so that form is refused with
+// the documented error and hint; diag(m, m, 0) as one block runs.
+TEST(SingularMass, SparseEngineNeedsTheRowsThatDetermineASingularBlockToBeLocal) {
+  const PendulumParams p;
+  const System split = xytheta_pendulum(p, true);
+  Workspace ws(split, SolverOptions{.engine = Engine::kSparse});
+  VectorXd q, qd;
+  pendulum_state(p, 0.9, -1.7, q, qd);
+  ASSERT_EQ(forward_dynamics(split, ws, q, qd, 0.25), Status::kMotionUndetermined);
+  const std::string msg = describe_status(split, ws);
+  EXPECT_NE(msg.find("the coordinates 'theta' are not determined"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("use Engine::kDense"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("t = 0.25"), std::string::npos) << msg;
+  Workspace wd(split, SolverOptions{.engine = Engine::kDense});
+  EXPECT_EQ(forward_dynamics(split, wd, q, qd, 0.25), Status::kOk) << describe_status(split, wd);
+}
+
 TEST(SingularMass, RedundantPendulumIsTheSameOnTheDenseAndTheSparseEngine) {
   const PendulumParams p;
-  const System dense = xytheta_pendulum(p), blocks = xytheta_pendulum(p, true);
+  const System dense = xytheta_pendulum(p), blocks = xytheta_pendulum(p, true, true);
   Workspace wd(dense, SolverOptions{.engine = Engine::kDense});
   Workspace wb(blocks, SolverOptions{.engine = Engine::kDense});
   Workspace ws(blocks, SolverOptions{.engine = Engine::kSparse});

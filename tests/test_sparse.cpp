@@ -595,7 +595,12 @@ TEST(SparseEngine, MassNotPositiveDefiniteAndNaNAreReported) {
   const System sys = b.build();
   Workspace ws(sys, sparse_options());
   VectorXd q = VectorXd::Zero(4), qd = VectorXd::Zero(4);
+  q[0] = -1.0;  // indefinite
   EXPECT_EQ(forward_dynamics(sys, ws, q, qd, 0.0), Status::kMassNotPositiveDefinite);
+  q[0] = 0.0;  // singular, and no constraint determines coordinate 2
+  EXPECT_EQ(forward_dynamics(sys, ws, q, qd, 0.0), Status::kMotionUndetermined);
+  EXPECT_NE(describe_status(sys, ws).find("the coordinates 'q2'"), std::string::npos)
+      << describe_status(sys, ws);
   q[0] = 1.0;
   EXPECT_EQ(forward_dynamics(sys, ws, q, qd, 0.0), Status::kOk);
   q[0] = std::nan("");

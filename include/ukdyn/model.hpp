@@ -80,7 +80,11 @@ struct CheckReport {
   std::vector<std::string> redundant;
   /// One line per constraint the initial state violates (check_initial_conditions).
   std::vector<std::string> initial_violations;
-  bool mass_positive_definite = false;  ///< M(q0, t_start) symmetric positive definite
+  /// M(q0, t_start) symmetric positive definite, or positive semi-definite (mass_singular)
+  bool mass_positive_definite = false;
+  /// M(q0, t_start) singular: positive semi-definite, completed by the constraints when [M; A]
+  /// has full column rank (docs/singular-mass.md; otherwise a problem is listed)
+  bool mass_singular = false;
   std::vector<std::string> problems;    ///< what makes the model unusable (empty: fine)
   /// True when there are no problems.
   bool ok() const { return problems.empty(); }

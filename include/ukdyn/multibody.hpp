@@ -5,10 +5,10 @@
 ///  - particle      (x, y, z)                                   3 coordinates, M = m I
 ///  - planar body   (x, y, theta) of its centre of mass          3 coordinates, M = diag(m, m, I)
 ///  - rigid body    centre of mass r and quaternion u = (u0, u1, u2, u3)   7 coordinates,
-///                  M = diag(m I3, 4 E(u)ᵀ J E(u)) with J = diag(J0, J1, J2, J3)
-/// (docs/multibody.md: the quaternion equations of motion of Udwadia & Schutte 2010). The unit
-/// norm of u is a constraint "<body>.unit" of the system; J0, the fictitious inertia of the
-/// fourth direction, does not change the motion.
+///                  M = diag(m I3, 4 E_v(u)ᵀ J E_v(u)) with J = diag(J1, J2, J3)
+/// (docs/multibody.md: the quaternion equations of motion of Udwadia & Schutte 2010). The 4 × 4
+/// quaternion block is singular along u; the unit norm of u, a constraint "<body>.unit" of the
+/// system, determines that direction (a singular M with [M; A] of full column rank).
 ///
 /// Every joint is one or more named constraints whose rows touch the coordinates of its bodies
 /// only (ConstraintModel::columns()), with A and b in closed form (rolling contacts, spatial
@@ -205,7 +205,6 @@ struct BodyInfo {
   Index size = 0;    ///< 3 or 7
   double mass = 0.0;
   Vector3d inertia = Vector3d::Zero();  ///< principal moments about the centre of mass (planar: z)
-  double J0 = 0.0;  ///< rigid: fictitious inertia of the fourth quaternion direction
 };
 
 /// Metadata of a joint in a built model.
@@ -251,11 +250,10 @@ class Multibody {
                          const Vector3d& vel0 = Vector3d::Zero());
   /// A rigid body of mass m > 0 with principal inertia (J1, J2, J3) > 0 about its centre of mass
   /// (body axes = principal axes); pose: centre of mass r0 and orientation R_WB = u0;
-  /// velocity v0 (world) and angular velocity w0 (world). J0 > 0: the fictitious inertia of the
-  /// fourth quaternion direction (0: the mean of J1, J2, J3; the motion does not depend on it).
+  /// velocity v0 (world) and angular velocity w0 (world).
   BodyId add_rigid_body(std::string name, double mass, const Vector3d& inertia, const Vector3d& r0,
                         const Quaterniond& u0, const Vector3d& v0 = Vector3d::Zero(),
-                        const Vector3d& w0 = Vector3d::Zero(), double J0 = 0.0);
+                        const Vector3d& w0 = Vector3d::Zero());
   /// Adds a joint (checked in build()).
   Multibody& add_joint(Joint joint);
   /// Adds a force element (checked in build()).

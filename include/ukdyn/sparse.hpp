@@ -95,9 +95,40 @@ class SparseDecomposition {
   /// Factorizes every block M_bb = L_b L_bᵀ (reads the lower triangles). On failure info() is
   /// NumericalIssue. Cost O(Σ size³ / 3), i.e. O(N) for N bodies.
   SparseDecomposition& compute_mass();
-  /// Success, or NumericalIssue when a block of M is not positive definite.
+  /// Success, or NumericalIssue when a block of M is not positive semi-definite (after
+  /// compute_mass), or when a singular block is not determined by its constraints (after
+  /// compute_augmented_mass; see undetermined_block()).
   Eigen::ComputationInfo info() const { return info_; }
-  /// x = M⁻¹ f; y = M x; returns ‖Lᵀ x‖² = xᵀ M x. Cost O(Σ size²).
+
+  // --- singular M (docs/singular-mass.md) --------------------------------------------------
+  /// A block whose Cholesky factorization fails, or whose pivots span more than
+  /// kSingularPivotRatio, is singular. It is accepted when it is positive semi-definite
+  /// (M_bb + 1e-10 max|M_bb| I is positive definite) and then factorized by
+  /// compute_augmented_mass, once A is written. The ratio is generous: the last pivot of an
+  /// exactly singular matrix carries roundoff of order eps · cond of its regular part (a rod's
+  /// quaternion block, axial inertia 1e-4 of the transverse: ~1e-12), and an M that is merely
+  /// that ill-conditioned is also better served by M_A (which is then always positive definite).
+  static constexpr double kSingularPivotRatio = 1e-8;
+  /// Whether the last compute_mass found a singular (positive semi-definite) block.
+  bool mass_singular() const { return singular_blocks_ > 0; }
+  /// Number of singular blocks, and whether block b is one.
+  Index singular_blocks() const { return singular_blocks_; }
+  bool block_is_singular(Index b) const { return blk_sing_[std::size_t(b)] != 0; }
+  /// The auxiliary mass matrix of Udwadia & Schutte for the singular blocks: each singular block
+  /// b is factorized as M_bb + Σ_i g_i a_i a_iᵀ over the rows i of A local to b (rows touching
+  /// no other block), g_i = s_b / ‖a_i‖² with s_b = max diag M_bb (the largest diagonal of M
+  /// for a zero block). Rows touching other blocks are not used: they would couple the blocks.
+  /// Then q'' and Qc of the fundamental equation with (M_A, Q_A = Q + Aᵀ G b) are those of the
+  /// singular system (fundamental-equation section 6). On failure info() is NumericalIssue and
+  /// undetermined_block() names the block. With regularization > 0 (a projection's metric,
+  /// which only needs to be positive definite) regularization · s_b I is added as well.
+  /// Cost O(Σ_singular (local rows · size² + size³)).
+  SparseDecomposition& compute_augmented_mass(double regularization = 0.0);
+  /// Q += Aᵀ G b with the weights of the last compute_augmented_mass. Cost O(nnz of those rows).
+  void augment_forces(const Eigen::Ref<const VectorXd>& b, Eigen::Ref<VectorXd> Q) const;
+  /// The block compute_augmented_mass could not factorize, or −1.
+  Index undetermined_block() const { return undetermined_block_; }
+  /// x = M⁻¹ f (M_A⁻¹ f for a singular M); y = M x; returns xᵀ M x. Cost O(Σ size²).
   void solve_mass(const Eigen::Ref<const VectorXd>& f, Eigen::Ref<VectorXd> x) const;
   void multiply_mass(const Eigen::Ref<const VectorXd>& x, Eigen::Ref<VectorXd> y) const;
   double mass_norm_squared(const Eigen::Ref<const VectorXd>& x) const;
@@ -198,6 +229,12 @@ class SparseDecomposition {
   // L_G (strictly lower, by columns) and D; work arrays of the up-looking factorization
   std::vector<int> parent_, Lp_, Lnz_, Li_, flag_, pattern_;
   std::vector<double> Lx_, D_, Y_;
+  // singular blocks: flags, the rows local to each block (CSR), the weights g_i of the last
+  // augmentation (0 for rows not used)
+  std::vector<unsigned char> blk_sing_;
+  std::vector<int> local_row_ptr_, local_rows_;
+  std::vector<double> aug_g_;
+  Index singular_blocks_ = 0, undetermined_block_ = -1;
   std::vector<unsigned char> dropped_;  // 0 kept, 1 dependent row, 2 zero row (trivial)
   // orthonormal null-space basis (permuted order), d_ columns of capacity N_.cols()
   MatrixXd N_;

@@ -20,7 +20,8 @@ enum class Status {
   kOk = 0,                      ///< q'' and all forces are valid
   kNonFiniteInput,              ///< q, q', t, M, Q, A, b or C holds NaN or Inf (see Workspace::detail)
   kMassNotSymmetric,            ///< M differs from Mᵀ by more than the symmetry tolerance
-  kMassNotPositiveDefinite,     ///< the Cholesky factorization of M failed
+  kMassNotPositiveDefinite,     ///< M is not positive semi-definite (a singular, positive
+                                ///< semi-definite M is accepted: see kMotionUndetermined)
   kInconsistentConstraints,     ///< A q'' = b has no solution; ‖A q'' − b‖ is in the residuals
   kNonFiniteResult,             ///< the inputs were finite but a result overflowed
   kProjectionFailed,            ///< drift control could not bring the state back onto the
@@ -30,6 +31,10 @@ enum class Status {
   /// (RunStatistics::energy_balance) exceeds SimulationOptions::energy_balance_tolerance — energy
   /// was gained or lost that no work channel accounts for. Its name is "energy_balance".
   kEnergyBalance,
+  /// M is singular and [M; A] does not have full column rank: the constraints do not determine
+  /// the accelerations of some coordinates (describe_status names them). Its name is
+  /// "motion not determined".
+  kMotionUndetermined,
 };
 
 /// Short English name of a status ("ok", "mass matrix not positive definite", …). Cost O(1).

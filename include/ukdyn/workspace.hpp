@@ -117,7 +117,14 @@ class Workspace {
   // --- stage 1, evaluate_unconstrained --------------------------------------------------
   MatrixXd M;             ///< mass matrix M(q,t) (n × n; 0 × 0 with the sparse engine)
   VectorXd Q;             ///< impressed force Q(q,q',t) (n)
-  VectorXd a;             ///< unconstrained acceleration a = M⁻¹ Q (n)
+  VectorXd a;             ///< unconstrained acceleration a = M⁻¹ Q (n); for a singular M, that
+                          ///< of the auxiliary system, M_A⁻¹ Q_A (see mass_singular)
+  /// True once M was found singular (positive semi-definite, not definite; then [M; A] must
+  /// have full column rank): from then on this workspace factorizes the auxiliary
+  /// M_A = M + Aᵀ G A and uses Q_A = Q + Aᵀ G b after stage 2, which give the same q'' and Qc
+  /// (Udwadia & Schutte 2010; docs/singular-mass.md). M and Q above stay the system's own.
+  bool mass_singular = false;
+  MatrixXd M_aux;         ///< M_A (n × n, lower triangle; dense engine)
   // --- stage 2, assemble_constraints ----------------------------------------------------
   MatrixXd A;             ///< constraint matrix (m × n; 0 × 0 with the sparse engine); rows of
                           ///< inactive constraints are zero
@@ -199,6 +206,7 @@ class Workspace {
   std::vector<std::unique_ptr<ConstraintScratch>> scratch;  ///< (K) per-constraint buffers
   std::unique_ptr<TextbookDecomposition> textbook;  ///< only with Algorithm::kTextbook
   bool mass_factorized = false;  ///< constant M already factorized
+  std::vector<Index> nonzero_cols;  ///< (n) columns of one row of A (the auxiliary M_A)
 
  private:
   SolverOptions options_;

@@ -58,6 +58,7 @@ py::dict check(const Model& model) {
   d["redundant"] = r.redundant;
   d["initial_violations"] = r.initial_violations;
   d["mass_positive_definite"] = r.mass_positive_definite;
+  d["mass_singular"] = r.mass_singular;
   d["problems"] = r.problems;
   d["ok"] = r.ok();
   return d;
@@ -117,7 +118,7 @@ ukdyn.parse() or ukdyn.from_sympy(). Model.simulate() runs it exactly as `ukdyn 
            "statistics, control statistics or None). Use Model.simulate().")
       .def("check", &check, R"doc(What `ukdyn check` reports (check_model, model.hpp), as a dict:
 coordinates, constraint_rows, rank, degrees_of_freedom, redundant (constraint names),
-initial_violations, mass_positive_definite, problems, ok.)doc")
+initial_violations, mass_positive_definite, mass_singular, problems, ok.)doc")
       .def(
           "solver",
           [](const Model& md, py::kwargs kw) {
