@@ -699,16 +699,21 @@ void Reader::check_mass_matrix(const YAML::Node& root, const Model& model) {
     fail(at, "the mass matrix is not symmetric" + where, "M(i, j) must equal M(j, i)");
   }
   if (scale > 0.0 && Eigen::LLT<MatrixXd>(M).info() == Eigen::Success) return;
+  // the names of the coordinates i with pred(i), comma-separated
+  const auto coordinates_where = [&](auto pred) {
+    std::string names;
+    for (Index i = 0; i < n; ++i) {
+      if (pred(i)) names += (names.empty() ? "" : ", ") + coordinates_[std::size_t(i)];
+    }
+    return names;
+  };
   // a singular M is accepted when it is positive semi-definite (M + 1e-10 max|M| I positive
   // definite) and the constraints determine the coordinates it gives no inertia
   MatrixXd shifted = M;
   shifted.diagonal().array() += 1e-10 * (scale > 0.0 ? scale : 1.0);
   const bool from_T = source == "kinetic_energy";
   if (Eigen::LLT<MatrixXd>(shifted).info() != Eigen::Success) {
-    std::string negative;
-    for (Index i = 0; i < n; ++i) {
-      if (M(i, i) < 0) negative += (negative.empty() ? "" : ", ") + coordinates_[std::size_t(i)];
-    }
+    const std::string negative = coordinates_where([&](Index i) { return M(i, i) < 0; });
     fail(at, "the mass matrix is not positive semi-definite" + where,
          !negative.empty()
              ? "negative inertia for " + negative +
@@ -720,10 +725,7 @@ void Reader::check_mass_matrix(const YAML::Node& root, const Model& model) {
   Workspace ws(model.system, model.options.solver);
   if (forward_dynamics(model.system, ws, model.q0, model.qd0, model.options.t_start) ==
       Status::kMotionUndetermined) {
-    std::string lacking;
-    for (Index i = 0; i < n; ++i) {
-      if (!(M(i, i) > 0)) lacking += (lacking.empty() ? "" : ", ") + coordinates_[std::size_t(i)];
-    }
+    const std::string lacking = coordinates_where([&](Index i) { return !(M(i, i) > 0); });
     fail(at, "the mass matrix is singular" + where + " and the constraints do not determine "
              "every coordinate: " + describe_status(model.system, ws),
          (lacking.empty() ? std::string("give the coordinates inertia")

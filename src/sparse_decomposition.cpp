@@ -93,8 +93,8 @@ SparseDecomposition& SparseDecomposition::compute_mass() {
     if (blk_const_[std::size_t(b)] && const_factorized_) continue;
     const Index s = block_size(b), v0 = blk_val_[std::size_t(b)], o = block_offset(b);
     std::copy(Mv_.begin() + v0, Mv_.begin() + v0 + s * s, Lv_.begin() + v0);
-    blk_sing_[std::size_t(b)] = 0;
-    if (block_cholesky(Lv_.data() + v0, s, inv_ldiag_.data() + o)) {
+    // a block found singular before skips the regular attempt (M_A serves any PSD block)
+    if (!blk_sing_[std::size_t(b)] && block_cholesky(Lv_.data() + v0, s, inv_ldiag_.data() + o)) {
       double lo = inv_ldiag_[std::size_t(o)], hi = lo;  // 1 / L_kk
       for (Index k = o; k < o + s; ++k) {
         lo = std::min(lo, inv_ldiag_[std::size_t(k)]);
