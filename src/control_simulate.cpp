@@ -486,7 +486,7 @@ ControlledTrajectory simulate_controlled(const Controller& ctrl, const System& p
   // the plant's energy balance, with the control's work
   tr.work_control = run.control_work;
   compute_energy_balance(tr, plant.accounts_for_energy()
-                                 ? options.energy_balance_tolerance
+                                 ? checked_energy_balance_tolerance(options)
                                  : std::numeric_limits<double>::infinity());
   if (!st->failure.empty() && tr.stats.status != Status::kOk &&
       tr.stats.status != Status::kEnergyBalance) {

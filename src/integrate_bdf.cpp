@@ -64,6 +64,8 @@ struct Callbacks {
   SegmentHooks& hooks;
   std::vector<double> corrected;     // (2n + 1) the copy of ycur handed to after_step
   bool rhs_failed = false;           // the ode refused an evaluation
+  // a step reached a singular configuration (rank_margin < kSingularMargin) from a regular one
+  bool singular = false, regular = false;
   Status hook_status = Status::kOk;  // after_step asked to stop
   std::string cvode_message;         // CVODE's last error, "function: message"
   std::exception_ptr exception;      // thrown by a callback, rethrown once CVODE has returned
@@ -82,7 +84,7 @@ int rhs(sunrealtype t, N_Vector x, N_Vector dxdt, void* data) {
 }
 
 // corr = after_step(ycur) − ycur, zero when the hook left the state alone
-int project(sunrealtype t, N_Vector ycur, N_Vector corr, sunrealtype /*eps_proj*/, N_Vector /*err*/,
+int project(sunrealtype t, N_Vector ycur, N_Vector corr, sunrealtype /*eps_proj*/, N_Vector err,
             void* data) {
   auto& cb = *static_cast<Callbacks*>(data);
   const double* y = N_VGetArrayPointer(ycur);
@@ -101,7 +103,24 @@ int project(sunrealtype t, N_Vector ycur, N_Vector corr, sunrealtype /*eps_proj*
     cb.hook_status = s;
     return -1;
   }
+  // (the last evaluation was at the corrector's last iterate, the state of this step)
+  const double margin = cb.ode.workspace().rank_margin;
+  if (margin < kSingularMargin && cb.regular && cb.hooks.project_stage) {
+    cb.singular = true;
+    return -1;
+  }
+  if (margin >= kSingularMargin) cb.regular = true;
   for (std::size_t i = 0; i < size; ++i) c[i] = changed ? cb.corrected[i] - y[i] : 0.0;
+  // the error estimate as the projected solution sees it (CVodeSetProjErrEst): without its
+  // components normal to the constraints, which the projection removes
+  if (err != nullptr && cb.hooks.project_error) {
+    try {
+      cb.hooks.project_error(t, cb.corrected.data(), N_VGetArrayPointer(err));
+    } catch (...) {
+      cb.exception = std::current_exception();
+      return -1;
+    }
+  }
   return 0;
 }
 
@@ -208,11 +227,12 @@ SegmentResult integrate_bdf(ConstrainedOde& ode, std::vector<double>& x, double 
   }
   require(CVodeSetStopTime(mem, t1), "CVodeSetStopTime", cb);
 
-  // drift control: after_step as CVODE's projection, every step; the hook cannot project an
-  // error vector, so the error estimate is left as it is
+  // drift control: after_step as CVODE's projection, every step; the error estimate is
+  // projected too when the driver can (hooks.project_error), as for the explicit methods
   if (hooks.after_step) {
     require(CVodeSetProjFn(mem, project), "CVodeSetProjFn", cb);
-    require(CVodeSetProjErrEst(mem, SUNFALSE), "CVodeSetProjErrEst", cb);
+    require(CVodeSetProjErrEst(mem, hooks.project_error ? SUNTRUE : SUNFALSE),
+            "CVodeSetProjErrEst", cb);
   }
 
   // after CVODE returned `flag` < 0: x = the last accepted state zn[0] at tn (the initial state
@@ -227,7 +247,9 @@ SegmentResult integrate_bdf(ConstrainedOde& ode, std::vector<double>& x, double 
       std::copy(y_data, y_data + size, x.begin());
       result.t_reached = tn;
     }
-    if (cb.rhs_failed && ode.failed()) {
+    if (cb.singular) {
+      result.singular = true;  // (status kOk: the driver crosses with dopri5)
+    } else if (cb.rhs_failed && ode.failed()) {
       result.status = ode.failure();
       result.message = ode.failure_message();
     } else if (cb.hook_status != Status::kOk) {

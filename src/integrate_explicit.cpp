@@ -44,11 +44,62 @@ struct StageProbe {
   }
 };
 
+// Projected stages near a singular configuration. Off the constraints, q'' carries a stage
+// state's violation δ along the normal of the smallest singular value σ_r of A M^{-1/2} as δ/σ_r;
+// the Runge–Kutta stages (violated by O(h²)) then leave the constraints by δ/σ_r, and near a
+// singular pose of a closed loop (σ_r → 0) the step either collapses onto the pose or crosses
+// it onto another branch. While `on`, each state f is evaluated at is first projected onto the
+// constraints (hooks.project_stage), so that f is evaluated on the constraint manifold, where
+// the motion is smooth through the pose: the method integrates x' = f(π(x)), whose solution
+// from a consistent state is the same. It is on for a step when Workspace::rank_margin (σ_r/σ_1
+// estimated by the decomposition) at the step's start, or extrapolated to its end from the
+// last two steps, is below kMargin; where the margin is unknown (NaN: the sparse engine,
+// kTextbook), for the retry of a rejected step and the kAfterRejection steps after it.
+struct StageProjection {
+  static constexpr double kMargin = kSingularMargin;
+  static constexpr int kAfterRejection = 3;
+  SegmentHooks* hooks = nullptr;
+  bool on = false;
+  State y;  // (size of x) the projected copy
+  double margin = 1.0, margin_prev = 1.0;  // at the last two accepted states
+  double step_prev = 0.0;                  // between them
+  int pending = 0;  // (unknown margin) steps still to project after a rejection
+
+  StageProjection(SegmentHooks& h, std::size_t size) : hooks(&h), y(size) {}
+  // after the evaluation at the accepted state (t, x) left `m` in the workspace
+  void accepted(double m, double step) {
+    margin_prev = margin;
+    margin = m;
+    step_prev = step;
+    if (pending > 0) --pending;
+  }
+  void rejected() { pending = kAfterRejection + 1; }
+  // whether the attempt of size dt from the last accepted state projects its stages
+  bool decide(double dt) {
+    if (!hooks->project_stage) return on = false;
+    if (std::isnan(margin)) return on = pending > 0;
+    double predicted = margin;
+    if (step_prev > 0.0 && margin_prev > margin) {
+      predicted = margin - (margin_prev - margin) * std::abs(dt / step_prev);
+    }
+    return on = std::min(margin, predicted) < kMargin;
+  }
+};
+
 // Odeint's view of the ODE (Odeint copies it: state lives behind the pointers)
 struct OdeFn {
   ConstrainedOde* ode;
   StageProbe* probe = nullptr;
+  StageProjection* projection = nullptr;
   void operator()(const State& x, State& dxdt, double t) const {
+    if (projection && projection->on) {
+      projection->y = x;
+      if (projection->hooks->project_stage(t, projection->y.data())) {
+        (*ode)(projection->y.data(), dxdt.data(), t);
+        if (probe) probe->record(x, dxdt);
+        return;
+      }
+    }
     (*ode)(x.data(), dxdt.data(), t);
     if (probe) probe->record(x, dxdt);
   }
@@ -98,13 +149,59 @@ SegmentResult& stop(SegmentResult& r, Status s, double t, std::string message = 
   return r;
 }
 
-// Odeint's controlled stepper with the run's tolerances (and largest step, when given)
-template <class Stepper>
-auto controlled(const SimulationOptions& o, Stepper stepper) {
-  using Controlled = decltype(odeint::make_controlled(o.atol, o.rtol, stepper));
-  return o.max_step > 0 ? Controlled(odeint::make_controlled(o.atol, o.rtol, o.max_step, stepper))
-                        : odeint::make_controlled(o.atol, o.rtol, stepper);
-}
+// Odeint's step-size control (controlled_runge_kutta::try_step, with its error checker and
+// step adjuster, so that steps and step sizes are Odeint's), with one addition: a step whose
+// error estimate fails is measured again with the estimate's components normal to the
+// constraints taken out (hooks.project_error), since the projection after the step removes
+// them. Near a singular configuration (a closed loop whose constraints lose rank) the stage
+// states' violation δ enters q'' along the normal of the vanishing singular value σ as δ/σ: the
+// normal components of the estimate grow like 1/σ and shrink the step onto the singular pose,
+// while the motion along the constraints — what the projected solution keeps — is smooth
+// there (docs/simulation.md, "Singular configurations").
+class StepControl {
+ public:
+  StepControl(const SimulationOptions& o, SegmentHooks& hooks, std::size_t size)
+      : checker_(o.atol, o.rtol), adjuster_(o.max_step > 0 ? o.max_step : 0.0), hooks_(hooks),
+        err_(size), err_normal_(size) {}
+
+  // the local error estimate the next attempt writes
+  State& error() { return err_; }
+  // false (and dt = the largest step) when dt exceeds the largest step, as Odeint does
+  bool admissible(double& dt) {
+    if (adjuster_.check_step_size_limit(dt)) return true;
+    dt = adjuster_.get_max_dt();
+    return false;
+  }
+  // after an attempt from (t, in, dxdt_in) of size dt that reached `out` with error(): accept
+  // (t += dt, dt the next step) or reject (dt the step to try again)
+  template <int ErrorOrder, int StepperOrder>
+  bool judge(const State& in, const State& dxdt_in, const State& out, double& t, double& dt,
+             long& tangential) {
+    if (hooks_.project_error) err_normal_ = err_;
+    double e = checker_.error(algebra_, in, dxdt_in, err_, dt);
+    if (e > 1.0 && hooks_.project_error &&
+        hooks_.project_error(t + dt, out.data(), err_normal_.data())) {
+      const double e_tangential = checker_.error(algebra_, in, dxdt_in, err_normal_, dt);
+      if (e_tangential <= 1.0) ++tangential;
+      e = std::min(e, e_tangential);
+    }
+    if (e > 1.0) {
+      dt = adjuster_.decrease_step(dt, e, ErrorOrder);
+      return false;
+    }
+    t += dt;
+    dt = adjuster_.increase_step(dt, e, StepperOrder);
+    return true;
+  }
+
+ private:
+  odeint::default_error_checker<double, odeint::range_algebra, odeint::default_operations>
+      checker_;
+  odeint::default_step_adjuster<double, double> adjuster_;
+  odeint::range_algebra algebra_;
+  SegmentHooks& hooks_;
+  State err_, err_normal_;  // the estimate; its copy for project_error
+};
 
 // consecutive rejected steps after which an adaptive method gives up
 constexpr int kMaxRejections = 200;
@@ -211,23 +308,37 @@ SegmentResult dopri5(ConstrainedOde& ode, State& x, double t0, double t1,
   // diagnosis of a collapsed step size when the switch is off)
   StageProbe probe;
   StiffnessTest stiffness;
-  const OdeFn fn{&ode, &probe};
-  auto stepper = controlled(o, odeint::runge_kutta_dopri5<State>());
+  StageProjection projection(hooks, x.size());
+  const OdeFn fn{&ode, &probe, &projection};
+  using Stepper = odeint::runge_kutta_dopri5<State>;
+  Stepper stepper;
+  StepControl control(o, hooks, x.size());
   State dxdt(x.size()), x_old(x.size()), dxdt_old(x.size()), out(x.size());
   fn(x, dxdt, t0);
   if (ode.failed()) return failed(ode, r, t0);
+  projection.accepted(ode.workspace().rank_margin, 0.0);
+  bool low_margin = projection.margin < kSingularMargin;  // (crossing) seen below kSingularMargin
   std::size_t next = 0;
   double t = t0;
   int rejections = 0;
   while (t < t1) {
     // land on the segment's end
     if (t + dt >= t1 || t1 - (t + dt) < 1e-12 * std::max(1.0, std::abs(t1))) dt = t1 - t;
-    x_old = x;
-    dxdt_old = dxdt;
+    projection.decide(dt);
+    std::swap(x_old, x);
+    std::swap(dxdt_old, dxdt);
     const double t_old = t;
-    const auto result = stepper.try_step(fn, x, dxdt, t, dt);
-    if (ode.failed()) return failed(ode, r, t_old);
-    if (result == odeint::fail) {
+    bool accepted = false;
+    if (control.admissible(dt)) {
+      stepper.do_step(fn, x_old, dxdt_old, t, x, dxdt, dt, control.error());
+      if (ode.failed()) return failed(ode, r, t_old);
+      accepted = control.judge<Stepper::error_order_value, Stepper::stepper_order_value>(
+          x_old, dxdt_old, x, t, dt, r.tangential_steps);
+    }
+    if (!accepted) {
+      std::swap(x_old, x);
+      std::swap(dxdt_old, dxdt);
+      projection.rejected();
       ++r.rejected;
       if (++rejections > kMaxRejections || t + dt == t) {
         r.collapsed = true;
@@ -241,15 +352,19 @@ SegmentResult dopri5(ConstrainedOde& ode, State& x, double t0, double t1,
     if (t1 - t < 1e-14 * std::max(1.0, std::abs(t1))) t = t1;
     ++r.steps;
     r.last_step = t - t_old;
+    if (projection.on) ++r.projected_stage_steps;
+    // the margin at the new state (its FSAL evaluation, or the one after drift control below)
+    double margin = ode.workspace().rank_margin;
     // h·ρ from the 6th and 7th stages, before anything else evaluates f
-    const bool stiff = stiffness.accepted(probe.h_rho(r.last_step)) && o.stiff_switch;
+    const bool stiff = stiffness.accepted(probe.h_rho(r.last_step)) && o.stiff_switch &&
+                       !hooks.cross_singular;
     // a switch of the dynamics inside the step: stop there
     {
       const State x_new = x, dxdt_new = dxdt;
       const double t_new = t;
       const SegmentHooks::Dense dense = [&](double s, double* xs) {
         State tmp(x.size());
-        stepper.stepper().calc_state(s, tmp, x_old, dxdt_old, t_old, x_new, dxdt_new, t_new);
+        stepper.calc_state(s, tmp, x_old, dxdt_old, t_old, x_new, dxdt_new, t_new);
         std::copy(tmp.begin(), tmp.end(), xs);
       };
       const SegmentHooks::Dense restart = [&](double s, double* xs) {
@@ -264,7 +379,7 @@ SegmentResult dopri5(ConstrainedOde& ode, State& x, double t0, double t1,
     }
     // samples inside (t_old, t] from the method's dense output
     for (; next < outputs.size() && outputs[next] <= t; ++next) {
-      stepper.stepper().calc_state(outputs[next], out, x_old, dxdt_old, t_old, x, dxdt, t);
+      stepper.calc_state(outputs[next], out, x_old, dxdt_old, t_old, x, dxdt, t);
       if (const Status s = hooks.output(outputs[next], out.data()); s != Status::kOk) {
         return stop(r, s, outputs[next]);
       }
@@ -279,9 +394,20 @@ SegmentResult dopri5(ConstrainedOde& ode, State& x, double t0, double t1,
       if (changed) {
         fn(x, dxdt, t);
         if (ode.failed()) return failed(ode, r, t);
+        margin = ode.workspace().rank_margin;
       }
     }
+    projection.accepted(margin, r.last_step);
     r.stiffness = stiffness.recent();
+    // crossing for BDF: past the singular configuration, BDF goes on from here
+    if (hooks.cross_singular) {
+      low_margin = low_margin || margin < kSingularMargin;
+      if (low_margin && margin >= 2.0 * kSingularMargin && t < t1) {
+        r.crossed = true;
+        r.t_reached = t;
+        return r;
+      }
+    }
     // stiff: the driver goes on with BDF from here (x is the state after drift control)
     if (stiff && t < t1) {
       r.stiff = true;
@@ -303,12 +429,17 @@ SegmentResult rkf78(ConstrainedOde& ode, State& x, double t0, double t1,
                     const std::vector<double>& outputs, const SimulationOptions& o,
                     SegmentHooks& hooks, double dt, long max_steps) {
   SegmentResult r;
-  const OdeFn fn{&ode};
-  auto stepper = controlled(o, odeint::runge_kutta_fehlberg78<State>());
+  StageProjection projection(hooks, x.size());
+  const OdeFn fn{&ode, nullptr, &projection};
+  using Stepper = odeint::runge_kutta_fehlberg78<State>;
+  Stepper stepper;
+  StepControl control(o, hooks, x.size());
   std::size_t next = 0;
   double t = t0;
   int rejections = 0;
-  State x_old(x.size());
+  State x_old(x.size()), dxdt(x.size()), x_out(x.size());
+  // the derivative at x, evaluated again only when x changes
+  bool dxdt_current = false;
   while (t < t1) {
     // the next stop: an output time or the segment's end
     const double target = next < outputs.size() ? std::min(outputs[next], t1) : t1;
@@ -317,9 +448,28 @@ SegmentResult rkf78(ConstrainedOde& ode, State& x, double t0, double t1,
     double step = landing ? target - t : dt;
     const double t_old = t;
     if (hooks.find_event) x_old = x;
-    const auto result = stepper.try_step(fn, x, t, step);
-    if (ode.failed()) return failed(ode, r, t_old);
-    if (result == odeint::fail) {
+    bool accepted = false;
+    if (control.admissible(step)) {
+      if (!dxdt_current) {
+        // (x is consistent: the evaluation at x is not projected)
+        projection.on = false;
+        fn(x, dxdt, t);
+        if (ode.failed()) return failed(ode, r, t_old);
+        dxdt_current = true;
+        projection.accepted(ode.workspace().rank_margin, r.last_step);
+      }
+      projection.decide(step);
+      stepper.do_step(fn, x, dxdt, t, x_out, step, control.error());
+      if (ode.failed()) return failed(ode, r, t_old);
+      accepted = control.judge<Stepper::error_order_value, Stepper::stepper_order_value>(
+          x, dxdt, x_out, t, step, r.tangential_steps);
+    }
+    if (accepted) {
+      std::swap(x, x_out);
+      dxdt_current = false;
+      if (projection.on) ++r.projected_stage_steps;
+    } else {
+      projection.rejected();
       ++r.rejected;
       dt = step;
       if (++rejections > kMaxRejections || t + dt == t) {

@@ -121,6 +121,11 @@ class ConstrainedOde {
   std::string failure_message_;
 };
 
+// Workspace::rank_margin (σ_r/σ_1) below which the constraints are near a singular
+// configuration: dopri5 and rkf78 project their stages there, BDF hands the crossing to dopri5
+// (docs/simulation.md, "Singular configurations")
+constexpr double kSingularMargin = 1e-2;
+
 // What the driver asks of an integrator for one segment [t0, t1] (no breakpoint inside).
 struct SegmentHooks {
   // after every accepted step, with the state at t: may correct x in place (projection) and
@@ -133,6 +138,19 @@ struct SegmentHooks {
   // (t0, t1] at which the dynamics switches (an event), or NaN for none; dense(s, x) writes the
   // state at s in [t0, t1]. The integrator then stops there (SegmentResult::event).
   using Dense = std::function<void(double s, double* x)>;
+  // optional: removes from a step's local error estimate err (the size of x) the components
+  // that after_step's projection removes at the state x reached by the step (before drift
+  // control); false when drift control does not project, and err is then used as it is. The
+  // adaptive methods measure a rejected step's error again this way (see
+  // docs/simulation.md, "Singular configurations").
+  std::function<bool(double t, const double* x, double* err)> project_error;
+  // optional: projects the state x at t onto the constraints, as after_step does (no other
+  // effect); false when it could not
+  std::function<bool(double t, double* x)> project_stage;
+  // dopri5 crossing a singular configuration for BDF: ends the segment (SegmentResult::crossed)
+  // once the margin, having been below kSingularMargin, is back above twice it; no stiffness
+  // switch meanwhile
+  bool cross_singular = false;
   std::function<double(double t0, const double* x0, double t1, const double* x1,
                        const Dense& dense)>
       find_event;
@@ -155,6 +173,14 @@ struct SegmentResult {
   // rejections, or options.max_steps); the driver adds a diagnosis to the message
   bool collapsed = false;
   double stiffness = 0.0;       // largest h·ρ of the last accepted steps (dopri5; 0: unknown)
+  // BDF stopped before a singular configuration (a step reached rank_margin < kSingularMargin):
+  // x is the last accepted state; the driver crosses with dopri5 (hooks.cross_singular)
+  bool singular = false;
+  bool crossed = false;  // dopri5 with hooks.cross_singular is past the singular configuration
+  // accepted steps whose error estimate passed only once its components normal to the
+  // constraints (which the projection after the step removes) were taken out
+  long tangential_steps = 0;
+  long projected_stage_steps = 0;  // accepted steps with projected stages
 };
 
 // Hairer and Wanner's stiffness test of dopri5 (Hairer, Nørsett, Wanner, Solving ODEs I,

@@ -43,6 +43,8 @@ void write_summary_json(const Trajectory& traj, const SimulationOptions& options
   j["rejected_steps"] = s.rejected_steps;
   j["evaluations"] = s.evaluations;
   j["least_squares"] = s.least_squares;
+  j["tangential_steps"] = s.tangential_steps;
+  j["projected_stage_steps"] = s.projected_stage_steps;
   j["projections"] = s.projections;
   j["events"] = s.events;
   j["stick_refusals"] = s.stick_refusals;

@@ -44,6 +44,14 @@ Integrator integrator_from_string(const std::string& name) {
                               "'; the integrators are rk4, rk5, dopri5, rkf78, bdf");
 }
 
+double checked_energy_balance_tolerance(const SimulationOptions& o) {
+  constexpr double kBalancePerRtol = 1e3;
+  const bool adaptive = o.integrator == Integrator::kDopri5 ||
+                        o.integrator == Integrator::kRKF78 || o.integrator == Integrator::kBDF;
+  return adaptive ? std::max(o.energy_balance_tolerance, kBalancePerRtol * o.rtol)
+                  : o.energy_balance_tolerance;
+}
+
 const char* to_string(DriftControl drift) {
   switch (drift) {
     case DriftControl::kNone:
@@ -355,6 +363,28 @@ class Run {
       return Status::kProjectionFailed;
     }
     return Status::kOk;
+  }
+
+  // removes from a step's error estimate err the components normal to the projected
+  // constraints at the state x the step reached: what project() after the step removes
+  bool project_error(double t, const double* x, double* err) {
+    q_ = Eigen::Map<const VectorXd>(x, n_);
+    qd_ = Eigen::Map<const VectorXd>(x + n_, n_);
+    Eigen::Map<VectorXd> dq(err, n_), dqd(err + n_, n_);
+    return remove_normal_components(sys_, ws_, q_, qd_, t, projection_, dq, dqd) == Status::kOk;
+  }
+
+  // projects a stage state x in place onto the projected constraints; false when it failed
+  bool project_stage(double t, double* x) {
+    q_ = Eigen::Map<const VectorXd>(x, n_);
+    qd_ = Eigen::Map<const VectorXd>(x + n_, n_);
+    const ProjectionResult rp = project_positions(sys_, ws_, q_, t, projection_);
+    if (rp.status != Status::kOk || !rp.converged) return false;
+    const ProjectionResult rv = project_velocities(sys_, ws_, q_, qd_, t, projection_);
+    if (rv.status != Status::kOk || !rv.converged) return false;
+    Eigen::Map<VectorXd>(x, n_) = q_;
+    Eigen::Map<VectorXd>(x + n_, n_) = qd_;
+    return true;
   }
 
   // drift control after an accepted step
@@ -690,6 +720,12 @@ Trajectory simulate(const System& sys, const VectorXd& q0, const VectorXd& qd0,
     return run.after_step(t, xs, changed);
   };
   hooks.output = [&](double t, const double* xs) { return run.record(t, xs); };
+  if (run.projecting()) {
+    hooks.project_error = [&](double t, const double* xs, double* err) {
+      return run.project_error(t, xs, err);
+    };
+    hooks.project_stage = [&](double t, double* xs) { return run.project_stage(t, xs); };
+  }
   if (!sys.friction_contacts().empty()) {
     hooks.find_event = [&](double t0, const double* x0, double t1, const double* x1,
                            const detail::SegmentHooks::Dense& dense) {
@@ -707,7 +743,7 @@ Trajectory simulate(const System& sys, const VectorXd& q0, const VectorXd& qd0,
     // the energy balance certifies a run that reached its end
     // (a system that does not account for its forces' work is reported, not checked)
     compute_energy_balance(traj, sys.accounts_for_energy()
-                                     ? o.energy_balance_tolerance
+                                     ? checked_energy_balance_tolerance(o)
                                      : std::numeric_limits<double>::infinity());
     traj.stats.wall_time =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
@@ -750,21 +786,27 @@ Trajectory simulate(const System& sys, const VectorXd& q0, const VectorXd& qd0,
     // with the chosen method, and goes on with BDF once dopri5 finds it stiff until the next
     // event (a switch of the dynamics) or the segment's end
     Integrator method = o.integrator;
+    bool crossing = false;  // dopri5 across a singular configuration for BDF
+    bool r_crossed = false;  // the last segment was such a crossing
     for (;;) {
       std::vector<double> outputs;
       for (std::size_t i = next_sample; i < samples.size() && samples[i] <= b; ++i) {
         outputs.push_back(samples[i]);
       }
-      const bool switched = method != o.integrator;
+      const bool switched = method != o.integrator && !crossing;
       x_start = x;
       run.set_integrator(method);
+      hooks.cross_singular = crossing;
       // (after a switch CVODE estimates its own first step: dopri5's last one is stability-bound)
       detail::SegmentResult r =
           method == Integrator::kBDF
-              ? detail::integrate_bdf(ode, x, a, b, outputs, o, hooks, switched ? 0.0 : first_step)
+              ? detail::integrate_bdf(ode, x, a, b, outputs, o, hooks,
+                                      switched || r_crossed ? 0.0 : first_step)
               : detail::integrate_explicit(method, ode, x, a, b, outputs, o, hooks, first_step);
       traj.stats.steps += r.steps;
       traj.stats.rejected_steps += r.rejected;
+      traj.stats.tangential_steps += r.tangential_steps;
+      traj.stats.projected_stage_steps += r.projected_stage_steps;
       if (switched) traj.stats.stiff_steps += r.steps;
       // (the fixed-step methods keep o.step)
       const bool fixed = method == Integrator::kRK4 || method == Integrator::kRK5;
@@ -780,6 +822,15 @@ Trajectory simulate(const System& sys, const VectorXd& q0, const VectorXd& qd0,
         }
         return finish(r.status, message, r.t_reached);
       }
+      if (r.singular || r.crossed) {
+        // BDF before a singular configuration: dopri5 (projected stages) across it, then BDF
+        crossing = r.singular;
+        r_crossed = r.crossed;
+        method = r.singular ? Integrator::kDopri5 : Integrator::kBDF;
+        a = r.t_reached;
+        continue;
+      }
+      r_crossed = false;
       if (r.stiff) {
         // dopri5 found the problem stiff: BDF from here
         if (traj.stats.stiff_switches++ == 0) traj.stats.stiff_switch_time = r.t_reached;

@@ -2,6 +2,9 @@
 //   e = b − A a,  q'' = a + L⁻ᵀ W⁺ e,  Qc_ideal = L W⁺ e = Aᵀ lambda,  lambda = G⁺ e.
 // Dense engine: complete orthogonal decomposition of W (decomposition.hpp); sparse engine:
 // rank-revealing sparse LDLᵀ of G = W Wᵀ with the null space of the dropped rows (sparse.hpp).
+#include <limits>
+#include <type_traits>
+
 #include "detail.hpp"
 #include "ukdyn/forward.hpp"
 #include "ukdyn/sparse.hpp"
@@ -17,6 +20,7 @@ Status solve_ideal(const System& sys, Workspace& ws) {
     ws.e = ws.b - ws.e;
     sp.compute_constraints();
     ws.rank = sp.rank();
+    ws.rank_margin = std::numeric_limits<double>::quiet_NaN();
     sp.solve_ideal(ws.e, ws.dqdd, ws.Qc_ideal, ws.lambda);
   } else {
     // e = b − A a
@@ -26,6 +30,11 @@ Status solve_ideal(const System& sys, Workspace& ws) {
     detail::with_decomposition(ws, [&](auto& d) {
       d.compute_constraints(ws.A);
       ws.rank = d.rank();
+      if constexpr (std::is_same_v<std::decay_t<decltype(d)>, FundamentalDecomposition>) {
+        ws.rank_margin = d.rank() == 0 ? 1.0 : d.min_pivot() / d.max_pivot();
+      } else {
+        ws.rank_margin = std::numeric_limits<double>::quiet_NaN();
+      }
       d.solve_ideal(ws.e, ws.dqdd, ws.Qc_ideal, ws.lambda);
     });
   }

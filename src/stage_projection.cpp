@@ -77,7 +77,8 @@ void assemble_jacobian(const System& sys, Workspace& ws, const VectorXd& q, cons
 }
 
 // x += L⁻ᵀ W⁺ e with the decomposition of the assembled A
-void correct(Workspace& ws, VectorXd& x) {
+template <class Vector>
+void correct(Workspace& ws, Vector&& x) {
   if (ws.sparse) {
     ws.sparse->compute_constraints();
     ws.sparse->solve_ideal(ws.e, ws.dqdd, ws.tmp_n, ws.lambda_tmp);
@@ -88,6 +89,26 @@ void correct(Workspace& ws, VectorXd& x) {
     });
   }
   x += ws.dqdd;
+}
+
+// M(q) = L Lᵀ (completed when M is singular) for a projection at (q, t)
+Status factorize_mass(const System& sys, Workspace& ws, const VectorXd& q, double t) {
+  Status s = detail::evaluate_mass(sys, ws, q, t);
+  if (s == Status::kOk && ws.mass_singular) {
+    s = detail::complete_singular_mass(ws, t, /*forces=*/false, /*regularize=*/true);
+  }
+  return s;
+}
+
+// dx −= L⁻ᵀ W⁺ A dx over the rows of the assembled A (its other rows are zero)
+void remove_normal(Workspace& ws, Eigen::Ref<VectorXd> dx) {
+  if (ws.sparse) {
+    ws.sparse->multiply_A(dx, ws.e);
+  } else {
+    ws.e.noalias() = ws.A * dx;
+  }
+  ws.e = -ws.e;
+  correct(ws, dx);
 }
 }  // namespace
 
@@ -131,10 +152,7 @@ ProjectionResult project_positions(const System& sys, Workspace& ws, VectorXd& q
     if (res.iterations == options.max_iterations) return res;
     // A = dphi/dq, M(q) = L Lᵀ;  q += −L⁻ᵀ W⁺ phi
     assemble_jacobian(sys, ws, q, ws.zero_n, t, options, Level::kPosition);
-    res.status = detail::evaluate_mass(sys, ws, q, t);
-    if (res.status == Status::kOk && ws.mass_singular) {
-      res.status = detail::complete_singular_mass(ws, t, /*forces=*/false, /*regularize=*/true);
-    }
+    res.status = factorize_mass(sys, ws, q, t);
     if (res.status != Status::kOk) return res;
     correct(ws, q);
     ++res.iterations;
@@ -159,16 +177,38 @@ ProjectionResult project_velocities(const System& sys, Workspace& ws, const Vect
     // A, and M(q) = L Lᵀ once (q is fixed);  q' += −L⁻ᵀ W⁺ phi'
     assemble_jacobian(sys, ws, q, qd, t, options, Level::kVelocity);
     if (!factorized) {
-      res.status = detail::evaluate_mass(sys, ws, q, t);
-      if (res.status == Status::kOk && ws.mass_singular) {
-        res.status = detail::complete_singular_mass(ws, t, /*forces=*/false, /*regularize=*/true);
-      }
+      res.status = factorize_mass(sys, ws, q, t);
       if (res.status != Status::kOk) return res;
       factorized = true;
     }
     correct(ws, qd);
     ++res.iterations;
   }
+}
+
+Status remove_normal_components(const System& sys, Workspace& ws, const VectorXd& q,
+                                const VectorXd& qd, double t, const ProjectionOptions& options,
+                                Eigen::Ref<VectorXd> dq, Eigen::Ref<VectorXd> dqd) {
+  detail::require_same_system(sys, ws, "ukdyn::remove_normal_components");
+  const Index n = sys.dofs();
+  if (q.size() != n || qd.size() != n || dq.size() != n || dqd.size() != n) {
+    throw std::invalid_argument("ukdyn::remove_normal_components: q, q', dq and dq' need " +
+                                std::to_string(n) + " entries");
+  }
+  bool holonomic = false, nonholonomic = false;
+  for (Index k = 0; k < sys.constraint_count(); ++k) {
+    if (!takes_part(sys, ws, options, k, t, Level::kVelocity)) continue;
+    (sys.constraint(k).kind() == ConstraintKind::kHolonomic ? holonomic : nonholonomic) = true;
+  }
+  if (!holonomic && !nonholonomic) return Status::kOk;
+  if (const Status s = factorize_mass(sys, ws, q, t); s != Status::kOk) return s;
+  // velocity level (the rows of both kinds), then the position level (holonomic rows only)
+  assemble_jacobian(sys, ws, q, qd, t, options, Level::kVelocity);
+  remove_normal(ws, dqd);
+  if (!holonomic) return Status::kOk;
+  if (nonholonomic) assemble_jacobian(sys, ws, q, ws.zero_n, t, options, Level::kPosition);
+  remove_normal(ws, dq);
+  return Status::kOk;
 }
 
 }  // namespace ukdyn

@@ -24,6 +24,7 @@
 /// pivots are of order 1e-16) are dropped, and a configuration-dependent loss of rank is
 /// detected once it is within 1e-10 of singular.
 #pragma once
+#include <cmath>
 
 #include <Eigen/Cholesky>
 #include <Eigen/Core>
@@ -69,6 +70,9 @@ class FundamentalDecomposition {
   double threshold() const { return threshold_; }
   /// Largest pivot |R_00| of the last decomposition (an estimate of ‖W‖₂).
   double max_pivot() const { return max_pivot_; }
+  /// Smallest kept pivot |R_{r−1,r−1}| of the last decomposition (an estimate of σ_r(W), the
+  /// smallest non-zero singular value); 0 when r = 0. Cost O(1).
+  double min_pivot() const { return rank_ > 0 ? 1.0 / std::abs(inv_tdiag_[rank_ - 1]) : 0.0; }
   /// Number of coordinates n and constraint rows m this object was sized for.
   Index dofs() const { return n_; }
   Index rows() const { return m_; }

@@ -63,4 +63,20 @@ ProjectionResult project_positions(const System& sys, Workspace& ws, VectorXd& q
 ProjectionResult project_velocities(const System& sys, Workspace& ws, const VectorXd& q,
                                     VectorXd& qd, double t, const ProjectionOptions& options = {});
 
+
+/// Removes from a perturbation (dq, dq') of the state (q, q') at t the components that
+/// project_positions and project_velocities at (q, t) remove, to first order:
+///     dq  ← dq  − M⁻¹ Aₚᵀ (Aₚ M⁻¹ Aₚᵀ)⁺ Aₚ dq,    Aₚ the rows of project_positions,
+///     dq' ← dq' − M⁻¹ Aᵥᵀ (Aᵥ M⁻¹ Aᵥᵀ)⁺ Aᵥ dq',   Aᵥ the rows of project_velocities,
+/// both M-orthogonal projections onto the null space of the rows (the same decomposition as a
+/// projection, so redundant rows and a singular M are handled as there). What is left is the
+/// part of the perturbation that a projection after it keeps: the integrators measure a step's
+/// local error that way when drift control projects (docs/simulation.md, "Singular
+/// configurations"). Overwrites the workspace's evaluation buffers as a projection does.
+/// Cost: one evaluation of M and of the rows' Jacobians, one decomposition (two when
+/// nonholonomic rows take part), O(n m) per vector. Allocates nothing.
+Status remove_normal_components(const System& sys, Workspace& ws, const VectorXd& q,
+                                const VectorXd& qd, double t, const ProjectionOptions& options,
+                                Eigen::Ref<VectorXd> dq, Eigen::Ref<VectorXd> dqd);
+
 }  // namespace ukdyn

@@ -124,12 +124,18 @@ struct SimulationOptions {
   /// is reported, not checked). The default
   /// leaves room for the error of the default tolerances on long runs and catches lost energy
   /// (a jump of the state, forces in Q that V does not describe and no external power
-  /// declares). Must be > 0; infinity turns the check off.
+  /// declares). Must be > 0; infinity turns the check off. The adaptive methods check against
+  /// max(energy_balance_tolerance, 1000 · rtol) (checked_energy_balance_tolerance): a run at a
+  /// loose rtol cannot certify the balance below its own error.
   double energy_balance_tolerance = 1e-6;
 
   /// Called after every accepted step (for progress bars and logs); may be empty.
   std::function<void(const ProgressReport&)> progress;
 };
+
+/// The tolerance a run's energy balance is checked against: max(energy_balance_tolerance,
+/// 1000 · rtol) for dopri5, rkf78 and BDF, energy_balance_tolerance for the fixed-step methods.
+double checked_energy_balance_tolerance(const SimulationOptions& options);
 
 /// Statistics of a run.
 struct RunStatistics {
@@ -141,6 +147,13 @@ struct RunStatistics {
   /// violation (redundant constraints), and the least-squares q'' was used (docs/simulation.md,
   /// "Redundant constraints"); included in evaluations
   long least_squares = 0;
+  /// accepted steps of dopri5 and rkf78 whose error estimate passed only without its components
+  /// normal to the projected constraints, which the projection after the step removes: the
+  /// steps across a singular configuration (docs/simulation.md, "Singular configurations")
+  long tangential_steps = 0;
+  /// accepted steps of dopri5 and rkf78 that evaluated f at projected stage states, near a
+  /// singular configuration (Workspace::rank_margin below 1e-2; docs/simulation.md)
+  long projected_stage_steps = 0;
   long projections = 0;             ///< projections that moved the state (with BDF, CVODE
                                     ///< projects before its error test, so rejected attempts count)
   long events = 0;                  ///< stick/slip events of Coulomb contacts

@@ -154,6 +154,11 @@ class Workspace {
                           ///< sparse engine and no non-ideal forces, sized by the first
                           ///< compute_shares)
   Index rank = 0;         ///< numerical rank of A
+  /// How far A is from losing rank: the smallest kept pivot of W = A L⁻ᵀ over the largest
+  /// (FundamentalDecomposition::min_pivot() / max_pivot(), an estimate of σ_r / σ_1), 1 without
+  /// constraint rows; NaN with the sparse engine and Algorithm::kTextbook. It falls to 0 as a
+  /// closed loop approaches a singular configuration.
+  double rank_margin = 1.0;
   // --- stage 4, apply_nonideal ------------------------------------------------------------
   /// (number of non-ideal forces) force i takes part (default 1); the simulation switches a
   /// Coulomb friction off while its contact sticks

@@ -262,6 +262,8 @@ py::dict statistics_dict(const RunStatistics& s) {
   d["rejected_steps"] = s.rejected_steps;
   d["evaluations"] = s.evaluations;
   d["least_squares"] = s.least_squares;
+  d["tangential_steps"] = s.tangential_steps;
+  d["projected_stage_steps"] = s.projected_stage_steps;
   d["projections"] = s.projections;
   d["events"] = s.events;
   d["stick_refusals"] = s.stick_refusals;
