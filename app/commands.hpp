@@ -22,6 +22,11 @@ enum ExitCode : int {
   /// the run reached its end but its energy balance failed (Status::kEnergyBalance): the
   /// trajectory is complete, but energy was gained or lost that no work accounts for
   kExitEnergyBalance = 5,
+  /// the output directory is in use by another run (flock on DIR/.ukdyn.lock): nothing was run
+  kExitBusy = 6,
+  /// the run was interrupted: exit code 128 + the signal's number (130 SIGINT, 143 SIGTERM),
+  /// as a shell reports a program the signal ended; the samples up to there are written
+  kExitInterruptedBase = 128,
 };
 
 /// A mistake on the command line found after parsing (bad --set, unknown example): exit 2.

@@ -23,7 +23,15 @@ constexpr const char* kExitCodes = R"(Exit codes:
      that cannot be started (inconsistent initial state without initial: project: true)
   4  check found problems
   5  the run reached its end, but its energy balance residual exceeds the tolerance (status
-     energy_balance): energy was gained or lost that no work channel accounts for)";
+     energy_balance): energy was gained or lost that no work channel accounts for
+  6  the output directory is in use by another ukdyn run (its pid is named); nothing was run
+  130, 143  interrupted by SIGINT (Ctrl-C) or SIGTERM (128 + the signal's number): the run
+     stopped at its next step and the trajectory up to there, summary.json (status
+     interrupted, t_reached) and the plots are written; a second signal ends it at once
+
+Output files are written under a temporary name and renamed when complete; the directory is
+locked for the run (DIR/.ukdyn.lock), and a run removes the previous run's files from it just
+before writing its own.)";
 
 // the options shared by run and check: MODEL.yaml or --example NAME, and --set
 void add_source_options(CLI::App* cmd, ukdyn::cli::ModelSource& source) {

@@ -7,8 +7,8 @@ Writes coordinates.png, constraint_forces.png (ideal and non-ideal parts), viola
 energy.png (the energy balance: E(t) - E(0) with each work channel, and the residual), and when the run
 has them: control.png (tracking error per requirement with the robust bound, control force per
 coordinate, control power and cumulative effort), bodies.png (the paths of the bodies' centres
-of mass, multibody models) and outputs.png (the model's output expressions). Exits 3 when
-matplotlib is missing.
+of mass, multibody models) and outputs.png (the model's output expressions). Each file is written
+under a temporary name and renamed when complete. Exits 3 when matplotlib is missing.
 """
 import csv
 import os
@@ -52,8 +52,20 @@ def finish(fig, axes, path):
         if ax.get_legend_handles_labels()[0]:
             ax.legend(loc="best", fontsize="small")
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    save(fig, path)
+
+
+def save(fig, path):
+    """Writes the figure whole or not at all: a hidden temporary beside path, then renamed."""
+    directory, name = os.path.split(path)
+    temporary = os.path.join(directory, ".%s.tmp-%d" % (name, os.getpid()))
+    try:
+        fig.savefig(temporary, dpi=110, format="png")
+        os.replace(temporary, path)
+    finally:
+        plt.close(fig)
+        if os.path.exists(temporary):
+            os.remove(temporary)
 
 
 def main():
@@ -149,8 +161,7 @@ def main():
         ax.set_xlabel("x [m]")
         ax.set_ylabel("y [m]")
         fig.tight_layout()
-        fig.savefig(os.path.join(out, "bodies.png"), dpi=110)
-        plt.close(fig)
+        save(fig, os.path.join(out, "bodies.png"))
 
     # the model's output expressions (named by identifiers: no '.', not a control column)
     control_scalars = {"control_power", "control_effort", "control_work_abs", "control_work"}

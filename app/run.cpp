@@ -9,10 +9,13 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <system_error>
 #include <vector>
+
+#include <csignal>
 
 #include <spawn.h>
 #include <sys/wait.h>
@@ -25,7 +28,9 @@
 
 #include "commands.hpp"
 #include "embedded.hpp"
+#include "output_dir.hpp"
 #include "progress.hpp"
+#include "stop_signals.hpp"
 
 extern char** environ;
 
@@ -95,9 +100,10 @@ std::vector<fs::path> make_plots(const fs::path& csv, const fs::path& dir) {
     return {};
   }
   std::vector<fs::path> files;
-  for (const char* name : {"coordinates.png", "constraint_forces.png", "violation.png",
-                           "energy.png", "control.png", "bodies.png", "outputs.png"}) {
-    if (fs::exists(dir / name)) files.push_back(dir / name);
+  for (const char* name : kRunOutputs) {
+    if (fs::path(name).extension() == ".png" && fs::exists(dir / name)) {
+      files.push_back(dir / name);
+    }
   }
   return files;
 }
@@ -166,9 +172,27 @@ int run_command(const RunArguments& args) {
   options.project_initial = model.project_initial;
   const fs::path dir = args.out_dir.empty() ? default_out_dir(args.source) : args.out_dir;
 
+  // the directory, held for the run: a second run into it is refused now, before it computes
+  // anything, and this one's files are never mixed with another's
+  std::optional<OutputDirectory> out;
+  try {
+    out.emplace(dir);
+  } catch (const DirectoryBusy& e) {
+    std::fprintf(stderr, "error: %s\n", e.what());
+    return kExitBusy;
+  } catch (const std::runtime_error& e) {
+    std::fprintf(stderr, "error: %s\n", e.what());
+    return kExitRunFailed;
+  }
+
   std::printf("ukdyn run: %s (%s), t = %g … %g s\n", model.name.c_str(), model.file.c_str(),
               options.t_start, options.t_end);
   std::fflush(stdout);
+
+  // SIGINT, SIGTERM: the run stops at its next step and what it computed is written; a second
+  // signal ends the program at once
+  StopSignals signals;
+  options.should_stop = [] { return StopSignals::received() != 0; };
 
   // simulate, with a progress bar on a terminal
   ModelRun run;
@@ -190,16 +214,24 @@ int run_command(const RunArguments& args) {
     }
   }
   options.progress = nullptr;
-
-  // files
-  std::error_code ec;
-  fs::create_directories(dir, ec);
-  if (ec) {
-    std::fprintf(stderr, "error: cannot create the directory '%s': %s\n", dir.c_str(),
-                 ec.message().c_str());
-    return kExitRunFailed;
+  options.should_stop = nullptr;
+  const int received = StopSignals::received();
+  RunStatistics& stats = run.trajectory.stats;
+  if (stats.status == Status::kInterrupted) {
+    char text[160];
+    std::snprintf(text, sizeof text,
+                  "interrupted by %s at t = %g s: the samples computed up to there are written",
+                  StopSignals::name(received), stats.t_reached);
+    stats.message = text;
+    std::fprintf(stderr, "interrupted by %s at t = %g s; writing what was computed\n",
+                 StopSignals::name(received), stats.t_reached);
   }
-  std::vector<fs::path> files = {dir / "trajectory.csv", dir / "summary.json"};
+
+  // files: the previous run's go first (each directory holds one run's files); each is written
+  // under a temporary name and renamed when complete, trajectory.csv first, summary.json second
+  // (its presence says that trajectory.csv is complete), the plots last
+  out->remove_previous_outputs();
+  std::vector<fs::path> files = {dir / kRunOutputs[0], dir / kRunOutputs[1]};
   warn_duplicate_columns(run);
   write_csv(run, files[0].string());
   write_summary_json(run.trajectory, options, files[1].string());
@@ -260,6 +292,10 @@ int run_command(const RunArguments& args) {
     std::fprintf(stderr, "warning: %s\n", s.message.c_str());
     std::printf("  status: energy_balance\n");
     return kExitEnergyBalance;
+  }
+  if (s.status == Status::kInterrupted) {
+    std::printf("  status: interrupted\n");
+    return kExitInterruptedBase + (received != 0 ? received : SIGINT);
   }
   if (s.status != Status::kOk) {
     std::fprintf(stderr, "error: the run failed at t = %g s: %s\n", s.t_reached,

@@ -489,7 +489,7 @@ ControlledTrajectory simulate_controlled(const Controller& ctrl, const System& p
                                  ? checked_energy_balance_tolerance(options)
                                  : std::numeric_limits<double>::infinity());
   if (!st->failure.empty() && tr.stats.status != Status::kOk &&
-      tr.stats.status != Status::kEnergyBalance) {
+      tr.stats.status != Status::kEnergyBalance && tr.stats.status != Status::kInterrupted) {
     tr.stats.message = "the controller failed: " + st->failure;
   }
   return run;

@@ -1,4 +1,5 @@
-// CSV writer of a trajectory: one header line, then one row per sample.
+// CSV writer of a trajectory: one header line, then one row per sample, written under a
+// temporary name and renamed when complete.
 #include "ukdyn/io.hpp"
 
 #include <cerrno>
@@ -11,6 +12,8 @@
 #include <string>
 #include <system_error>
 #include <vector>
+
+#include "io_atomic.hpp"
 
 namespace ukdyn {
 namespace {
@@ -160,9 +163,9 @@ void write_csv(const Trajectory& traj, const std::string& path,
     cols.push_back(ColumnRef{e.name, &e.values, 1, 0});
   }
 
-  errno = 0;
-  std::unique_ptr<std::FILE, FileCloser> file(std::fopen(path.c_str(), "wb"));
-  if (!file) throw_io_error(path, "open", errno);
+  // a temporary beside `path`, renamed over it when complete (io_atomic.hpp)
+  detail::AtomicFile out(path, kWho);
+  std::unique_ptr<std::FILE, FileCloser> file(out.open_stdio());
 
   // rows are built in one buffer, written out whenever it passes kFlushAt bytes
   constexpr std::size_t kFlushAt = std::size_t(1) << 18;
@@ -198,6 +201,7 @@ void write_csv(const Trajectory& traj, const std::string& path,
   if (std::fclose(file.release()) != 0) {
     throw_io_error(path, "write", errno);
   }
+  out.commit();
 }
 
 }  // namespace ukdyn

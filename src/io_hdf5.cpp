@@ -1,5 +1,5 @@
 // HDF5 writer and reader of trajectories (HDF5 C++ API): one dataset per field, names and
-// statistics as attributes.
+// statistics as attributes; written under a temporary name and renamed when complete.
 #include "ukdyn/io.hpp"
 
 #include <H5Cpp.h>
@@ -11,6 +11,8 @@
 #include <stdexcept>
 #include <string>
 #include <vector>
+
+#include "io_atomic.hpp"
 
 namespace ukdyn {
 namespace {
@@ -98,10 +100,13 @@ void write_hdf5(const Trajectory& traj, const std::string& path) {
   const std::size_t K = traj.constraint_names.size();
 
   H5::Exception::dontPrint();
+  // a temporary beside `path` (HDF5 opens it by name), renamed over it when complete
+  detail::AtomicFile out(path, kWho);
+  out.release_descriptor();
   H5::H5File file = [&] {
     errno = 0;
     try {
-      return H5::H5File(path, H5F_ACC_TRUNC);
+      return H5::H5File(out.write_path(), H5F_ACC_TRUNC);
     } catch (const H5::Exception& e) {
       throw std::runtime_error(std::string(kWho) + ": cannot create '" + path +
                                "': " + describe(e, errno));
@@ -184,6 +189,7 @@ void write_hdf5(const Trajectory& traj, const std::string& path) {
     throw std::runtime_error(std::string(kWho) + ": cannot " + stage + " in '" + path +
                              "': " + describe(e, 0));
   }
+  out.commit();
 }
 
 std::vector<double> read_hdf5_field(const std::string& path, const std::string& dataset) {

@@ -11,6 +11,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include "io_atomic.hpp"
+
 namespace ukdyn {
 namespace {
 
@@ -108,9 +110,9 @@ void write_summary_json(const Trajectory& traj, const SimulationOptions& options
   std::string text = j.dump(2, ' ', false, json::error_handler_t::replace);
   text += '\n';
 
-  errno = 0;
-  std::unique_ptr<std::FILE, FileCloser> file(std::fopen(path.c_str(), "wb"));
-  if (!file) throw_io_error(path, "open", errno);
+  // a temporary beside `path`, renamed over it when complete (io_atomic.hpp)
+  detail::AtomicFile out(path, kWho);
+  std::unique_ptr<std::FILE, FileCloser> file(out.open_stdio());
   if (std::fwrite(text.data(), 1, text.size(), file.get()) != text.size()) {
     throw_io_error(path, "write", errno);
   }
@@ -118,6 +120,7 @@ void write_summary_json(const Trajectory& traj, const SimulationOptions& options
   if (std::fclose(file.release()) != 0) {
     throw_io_error(path, "write", errno);
   }
+  out.commit();
 }
 
 }  // namespace ukdyn

@@ -387,18 +387,37 @@ class Run {
     return true;
   }
 
-  // drift control after an accepted step
+  // drift control after an accepted step; then a requested stop (see stop_requested)
   Status after_step(double t, double* x, bool& changed) {
     changed = false;
     if (o_.progress) report_progress(t);
-    return projecting_ ? project(t, x, projection_, changed) : Status::kOk;
+    if (projecting_) {
+      if (const Status s = project(t, x, projection_, changed); s != Status::kOk) return s;
+    }
+    if (!stop_requested()) return Status::kOk;
+    // a sample inside the step just taken that is not recorded yet (the fixed-step methods and
+    // BDF emit the samples of a step after this call): the run stops there, in record(), so that
+    // every sample before the stop is the uninterrupted run's. Otherwise it stops here and the
+    // driver records the state at t. (The count bounds the wait, should a sample never come.)
+    if (sample_due(t) && ++stop_wait_ < kMaxStopWait) return Status::kOk;
+    return Status::kInterrupted;
   }
+
+  // SimulationOptions::should_stop, asked once a step until it says yes (then remembered)
+  bool stop_requested() {
+    if (!stop_requested_ && o_.should_stop && o_.should_stop()) stop_requested_ = true;
+    return stop_requested_;
+  }
+
+  // the run's sample times (sorted), which record() marks off as they are recorded
+  void set_samples(const std::vector<double>& samples) { samples_ = &samples; }
 
   // the method taking the steps from now on (for the progress report)
   void set_integrator(Integrator method) { progress_.integrator = method; }
 
-  // records a sample at t from the state x (projected first, when projecting)
-  Status record(double t, const double* x) {
+  // records a sample at t from the state x (projected first, when projecting); returns
+  // kInterrupted after recording it when a stop was requested, unless it is the `last` one
+  Status record(double t, const double* x, bool last = false) {
     std::copy(x, x + sample_.size(), sample_.begin());
     if (projecting_) {
       bool changed = false;
@@ -440,13 +459,25 @@ class Run {
       traj_.velocity_violation.push_back(v);
       note_violation(p, v);
     }
-    if (s != Status::kOk) failure_ = describe_status(sys_, ws_);
-    return s;
+    // the samples recorded (or passed) by now
+    while (samples_ && next_sample_ < samples_->size() && (*samples_)[next_sample_] <= t) {
+      ++next_sample_;
+    }
+    if (s != Status::kOk) {
+      failure_ = describe_status(sys_, ws_);
+      return s;
+    }
+    return !last && stop_requested() ? Status::kInterrupted : Status::kOk;
   }
 
   const std::string& failure() const { return failure_; }
 
  private:
+  // whether a sample time in (last recorded sample, t] has not been recorded yet
+  bool sample_due(double t) const {
+    return samples_ && next_sample_ < samples_->size() && (*samples_)[next_sample_] <= t;
+  }
+
   // step size from the times the steps reach (BDF reports converged attempts, so a rejected
   // attempt can make t go back: then the step is unknown and the last one is kept)
   void report_progress(double t) {
@@ -658,6 +689,13 @@ class Run {
   Index switching_ = -1;  // the contact of the last event found
   std::string failure_;
   ProgressReport progress_;  // what the last progress report said
+  // a requested stop (SimulationOptions::should_stop): asked for; accepted steps since, waiting
+  // for a sample due inside the step; the sample times and the first one not recorded yet
+  bool stop_requested_ = false;
+  long stop_wait_ = 0;
+  static constexpr long kMaxStopWait = 1000;
+  const std::vector<double>* samples_ = nullptr;
+  std::size_t next_sample_ = 0;
 };
 
 }  // namespace
@@ -734,9 +772,14 @@ Trajectory simulate(const System& sys, const VectorXd& q0, const VectorXd& qd0,
   }
 
   const std::vector<double> samples = sample_times(o), ends = segment_ends(sys, o);
+  run.set_samples(samples);
   auto finish = [&](Status status, const std::string& message, double t_reached) {
     traj.stats.status = status;
     traj.stats.message = message;
+    if (status == Status::kInterrupted && message.empty()) {
+      traj.stats.message = "interrupted at t = " + format(t_reached) +
+                           ": the run was stopped on request; the samples up to there are kept";
+    }
     traj.stats.t_reached = t_reached;
     traj.stats.evaluations = ode.evaluations();
     traj.stats.least_squares = ode.least_squares();
@@ -812,6 +855,16 @@ Trajectory simulate(const System& sys, const VectorXd& q0, const VectorXd& qd0,
       const bool fixed = method == Integrator::kRK4 || method == Integrator::kRK5;
       if (r.last_step > 0 && !fixed) first_step = r.last_step;
       while (next_sample < samples.size() && samples[next_sample] <= r.t_reached) ++next_sample;
+      if (r.status == Status::kInterrupted) {
+        // stopped on request: at a sample (recorded), or after a step, where x is the state at
+        // r.t_reached (after drift control; BDF: its last accepted step), recorded as the last
+        if (traj.t.empty() || r.t_reached > traj.t.back()) {
+          if (const Status s = run.record(r.t_reached, x.data(), true); s != Status::kOk) {
+            return finish(s, run.failure(), r.t_reached);
+          }
+        }
+        return finish(Status::kInterrupted, "", traj.t.back());
+      }
       if (r.status != Status::kOk) {
         std::string message = r.message;
         if (message.empty()) message = run.failure();

@@ -17,6 +17,7 @@ const char* to_string(Status s) {
     case Status::kIntegratorFailure: return "integrator failure";
     case Status::kEnergyBalance: return "energy_balance";
     case Status::kMotionUndetermined: return "motion not determined";
+    case Status::kInterrupted: return "interrupted";
   }
   return "unknown status";
 }

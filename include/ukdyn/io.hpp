@@ -10,6 +10,13 @@
 /// `energy_balance_residual` (simulate.hpp, Trajectory; docs/simulation.md). Numbers are
 /// written by std::to_chars in the shortest form that reads back bit for bit (`0.1`, `1e-300`,
 /// `-2.5e+17`; independent of the locale); NaN as `nan`, infinities as `inf` and `-inf`.
+///
+/// Every writer writes whole files or none: it writes a hidden temporary `.NAME.tmp-PID-N` in
+/// the directory of `path` and renames it over `path` when complete, so a process killed while
+/// writing leaves the previous file (or none) under `path`, never a truncated one; on an error
+/// the temporary is removed. A `path` that exists and is not a regular file (/dev/stdout, a
+/// FIFO) is written in place; a symbolic link is followed and its target replaced
+/// (docs/simulation.md, "Interrupts and outputs").
 #pragma once
 
 #include <string>

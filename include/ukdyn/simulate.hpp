@@ -131,6 +131,17 @@ struct SimulationOptions {
 
   /// Called after every accepted step (for progress bars and logs); may be empty.
   std::function<void(const ProgressReport&)> progress;
+
+  /// A request to stop (Ctrl-C, a deadline, a GUI's stop button); may be empty. Called after
+  /// every accepted step, from the thread running simulate(); once it has returned true the run
+  /// stops within a step: at the next sample time if one falls inside the step under way, else
+  /// at the step's end, where a last sample is recorded. The run then ends with
+  /// Status::kInterrupted, RunStatistics::t_reached the time of that last sample, and every
+  /// sample before it as an uninterrupted run has it (docs/simulation.md, "Interrupts and
+  /// outputs"). It is not called again after it returned true. Must be cheap (it runs once a
+  /// step) and must not throw; the command line sets it from SIGINT and SIGTERM, the Python
+  /// module from Python's signal handlers.
+  std::function<bool()> should_stop;
 };
 
 /// The tolerance a run's energy balance is checked against: max(energy_balance_tolerance,
@@ -187,9 +198,11 @@ struct RunStatistics {
   /// energy); meaningless when E(0) is near 0 — energy_balance replaces it.
   double energy_drift = 0.0;
   double t_reached = 0.0;           ///< last time integrated to
-  Status status = Status::kOk;      ///< kOk, kEnergyBalance (a warning), or why the run stopped
-                                    ///< early
-  std::string message;              ///< describe_status() of a failure, the warning, or 
+  Status status = Status::kOk;      ///< kOk, kEnergyBalance (a warning), kInterrupted (stopped
+                                    ///< by SimulationOptions::should_stop), or why the run
+                                    ///< stopped early
+  std::string message;              ///< describe_status() of a failure, the warning, or where
+                                    ///< the run was interrupted ("" when ok)
 };
 
 /// Everything recorded at the sample times, stored sample after sample (column i of each
@@ -236,7 +249,8 @@ struct Trajectory {
 /// Integrates sys from (q0, qd0) at options.t_start to options.t_end and returns the samples.
 /// A numerical failure (inconsistent constraints, NaN, a projection that does not converge, the
 /// step limit) stops the run: the samples recorded so far are kept and stats.status /
-/// stats.message say what happened, where and when.
+/// stats.message say what happened, where and when. So does a stop requested by
+/// options.should_stop (Status::kInterrupted, the last sample at stats.t_reached).
 /// @throws std::invalid_argument on misuse: sizes, t_end <= t_start, bad tolerances, an unknown
 /// constraint in drift_per_constraint, or initial conditions that violate the constraints when
 /// project_initial is false (the message names each violated constraint and by how much).

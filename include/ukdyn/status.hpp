@@ -35,6 +35,10 @@ enum class Status {
   /// the accelerations of some coordinates (describe_status names them). Its name is
   /// "motion not determined".
   kMotionUndetermined,
+  /// Not a failure: the run was stopped on request (SimulationOptions::should_stop — Ctrl-C in
+  /// `ukdyn run` and in Python) before t_end. The samples up to RunStatistics::t_reached are
+  /// kept, the last one at t_reached. Its name is "interrupted".
+  kInterrupted,
 };
 
 /// Short English name of a status ("ok", "mass matrix not positive definite", …). Cost O(1).

@@ -238,9 +238,11 @@ ControllerHandle build_controller(const SystemHandle& model, const py::list& req
 // simulate() (or simulate_controlled()) of a System with the GIL released; the exception of a
 // Python callable, if one was raised, replaces whatever the run reported
 py::tuple simulate_system(const SystemHandle& h, py::handle q0, py::handle qd0,
-                          const py::dict& settings, py::object controller) {
+                          const py::dict& settings, py::object controller, py::object stop) {
   SimulationOptions o;
   apply_simulation_options(o, settings, "simulate");
+  const InterruptCheck interrupt(stop);
+  interrupt.attach(o);
   VectorXd q, qd;
   read_vector(q0, h.system.dofs(), "simulate", "q0", q);
   read_vector(qd0, h.system.dofs(), "simulate", "qd0", qd);
@@ -264,7 +266,7 @@ py::tuple simulate_system(const SystemHandle& h, py::handle q0, py::handle qd0,
   }
   h.raise_pending();
   if (ctrl) ctrl->raise_pending();
-  return run_tuple(std::move(run));
+  return run_tuple(std::move(run), interrupt.exception());
 }
 
 }  // namespace
@@ -277,8 +279,8 @@ void bind_callables(py::module_& m) {
         py::arg("law"), py::arg("N"), py::arg("actuated"), py::arg("S"), py::arg("robust"),
         "A Controller from a System and acceleration-form requirements; use ukdyn.controller().");
   m.def("_simulate_system", &simulate_system, py::arg("system"), py::arg("q0"), py::arg("qd0"),
-        py::arg("settings"), py::arg("controller") = py::none(),
-        "simulate() of a System (GIL released); use ukdyn.simulate().");
+        py::arg("settings"), py::arg("controller") = py::none(), py::arg("stop") = py::none(),
+        "simulate() of a System (GIL released; stop() as in Model._run); use ukdyn.simulate().");
 }
 
 }  // namespace ukdyn::python

@@ -24,10 +24,14 @@ const cli::EmbeddedFile* find_example(const std::string& name) {
   return nullptr;
 }
 
-// the model run with settings; q0 / qd0 replace the initial state when given
-py::tuple run(const Model& model, const py::dict& settings, py::object q0, py::object qd0) {
+// the model run with settings; q0 / qd0 replace the initial state when given; `stop` is asked
+// every InterruptCheck::kInterval whether to stop (after Python's signal handlers ran)
+py::tuple run(const Model& model, const py::dict& settings, py::object q0, py::object qd0,
+              py::object stop) {
   SimulationOptions o = model.options;
   apply_simulation_options(o, settings, "Model.simulate");
+  const InterruptCheck interrupt(stop);
+  interrupt.attach(o);
   const Model* m = &model;
   std::optional<Model> changed;
   if (!q0.is_none() || !qd0.is_none()) {
@@ -41,7 +45,7 @@ py::tuple run(const Model& model, const py::dict& settings, py::object q0, py::o
     py::gil_scoped_release release;  // the run is C++ only (model files hold no Python code)
     r = run_model(*m, o);
   }
-  return run_tuple(std::move(r));
+  return run_tuple(std::move(r), interrupt.exception());
 }
 
 py::dict check(const Model& model) {
@@ -113,9 +117,11 @@ ukdyn.parse() or ukdyn.from_sympy(). Model.simulate() runs it exactly as `ukdyn 
       .def_property_readonly("is_multibody", [](const Model& md) { return bool(md.multibody); },
                              "True for a model written with bodies:/joints:/forces:.")
       .def("_run", &run, py::arg("settings"), py::arg("q0") = py::none(),
-           py::arg("qd0") = py::none(),
+           py::arg("qd0") = py::none(), py::arg("stop") = py::none(),
            "Runs the model (run_model, run.hpp) with the GIL released; returns (names, columns, "
-           "statistics, control statistics or None). Use Model.simulate().")
+           "statistics, control statistics or None, the exception a signal handler raised or "
+           "None). stop() is called every 20 ms of the run, after Python's signal handlers; "
+           "true stops the run. Use Model.simulate().")
       .def("check", &check, R"doc(What `ukdyn check` reports (check_model, model.hpp), as a dict:
 coordinates, constraint_rows, rank, degrees_of_freedom, redundant (constraint names),
 initial_violations, mass_positive_definite, mass_singular, problems, ok.)doc")

@@ -60,9 +60,33 @@ py::dict simulation_options_dict(const SimulationOptions& o);
 /// The statistics of a run as a dict.
 py::dict statistics_dict(const RunStatistics& s);
 
-/// A model run as the tuple (names, columns, statistics, control statistics or None) that the
-/// Python Result class wraps; the columns are NumPy arrays taking over run.columns().
-py::tuple run_tuple(ModelRun&& run);
+/// A model run as the tuple (names, columns, statistics, control statistics or None,
+/// interrupt) that the Python Result class wraps; the columns are NumPy arrays taking over
+/// run.columns(); interrupt is InterruptCheck::exception() (None unless a signal handler raised).
+py::tuple run_tuple(ModelRun&& run, py::object interrupt = py::none());
+
+/// Ctrl-C during a run with the GIL released (docs/python.md, "Interrupts"). attach() sets
+/// SimulationOptions::should_stop to a check that, at most every kInterval of the run, takes the
+/// GIL, runs Python's signal handlers (PyErr_CheckSignals; only the main thread runs them) and
+/// then calls `stop` (a Python callable, or None): a true result, or an exception raised by a
+/// handler or by `stop`, stops the run at its next step (Status::kInterrupted). The Python side
+/// (ukdyn/interrupt.py) gives `stop`: it reports that its SIGINT handler was called, and raises
+/// ukdyn.Interrupted (a KeyboardInterrupt) with the partial result once the run has returned.
+class InterruptCheck {
+ public:
+  /// How often the run looks at Python's signals (a GIL acquisition each time).
+  static constexpr double kInterval = 0.02;  // s
+  /// With the GIL. `stop` is borrowed: it must outlive the run (an argument of the call).
+  explicit InterruptCheck(py::handle stop);
+  /// Sets o.should_stop.
+  void attach(SimulationOptions& o) const;
+  /// The exception that a signal handler (or `stop`) raised during the run, or None. The GIL.
+  py::object exception() const;
+
+ private:
+  struct State;
+  std::shared_ptr<State> state_;
+};
 
 // --- handles -----------------------------------------------------------------------------------------
 

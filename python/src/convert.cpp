@@ -1,7 +1,9 @@
 // Conversions between NumPy and Eigen, simulation settings from keyword arguments, and run
 // reports as Python objects (common.hpp).
+#include <chrono>
 #include <cmath>
 #include <cstring>
+#include <optional>
 #include <string>
 
 #include "common.hpp"
@@ -284,7 +286,50 @@ py::dict statistics_dict(const RunStatistics& s) {
   return d;
 }
 
-py::tuple run_tuple(ModelRun&& run) {
+struct InterruptCheck::State {
+  PyObject* stop = nullptr;  // borrowed (see the constructor); null or None: no callable
+  std::chrono::steady_clock::time_point next{};  // the next look at the signals
+  bool stopped = false;
+  std::optional<py::error_already_set> error;  // what a handler raised (touched with the GIL)
+};
+
+InterruptCheck::InterruptCheck(py::handle stop) : state_(std::make_shared<State>()) {
+  state_->stop = stop.is_none() ? nullptr : stop.ptr();
+}
+
+void InterruptCheck::attach(SimulationOptions& o) const {
+  const auto interval = std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+      std::chrono::duration<double>(kInterval));
+  o.should_stop = [st = state_, interval]() -> bool {
+    if (st->stopped) return true;
+    // (a clock read a step; the GIL only every interval)
+    const auto now = std::chrono::steady_clock::now();
+    if (now < st->next) return false;
+    st->next = now + interval;
+    py::gil_scoped_acquire gil;
+    // Python's handlers of the signals that arrived (KeyboardInterrupt from the default one)
+    if (PyErr_CheckSignals() != 0) {
+      st->error.emplace();
+      st->stopped = true;
+      return true;
+    }
+    if (st->stop) {
+      PyObject* answer = PyObject_CallNoArgs(st->stop);
+      const int yes = answer ? PyObject_IsTrue(answer) : -1;
+      Py_XDECREF(answer);
+      if (yes < 0) st->error.emplace();
+      st->stopped = yes != 0;
+    }
+    return st->stopped;
+  };
+}
+
+py::object InterruptCheck::exception() const {
+  if (!state_->error) return py::none();
+  return state_->error->value();
+}
+
+py::tuple run_tuple(ModelRun&& run, py::object interrupt) {
   std::vector<CsvColumn> columns = run.columns();
   py::list names, values;
   for (CsvColumn& c : columns) {
@@ -302,7 +347,8 @@ py::tuple run_tuple(ModelRun&& run) {
     c["max_kappa"] = run.control.max_kappa;
     control = c;
   }
-  return py::make_tuple(names, values, statistics_dict(run.trajectory.stats), control);
+  return py::make_tuple(names, values, statistics_dict(run.trajectory.stats), control,
+                        std::move(interrupt));
 }
 
 }  // namespace ukdyn::python

@@ -13,7 +13,8 @@ The C++ library (README.md) behind a thin module (docs/python.md):
 * :attr:`Model.controller` / :func:`controller` → :class:`Controller`, exact tracking control,
   ``controller.solver().compute(q, q_dot, t)``.
 
-Errors: :class:`ModelError`, :class:`SolveError`, ValueError, RuntimeError (:mod:`ukdyn.errors`).
+Errors: :class:`ModelError`, :class:`SolveError`, ValueError, RuntimeError (:mod:`ukdyn.errors`);
+Ctrl-C during a run raises :class:`Interrupted` (a KeyboardInterrupt) with the partial result.
 """
 
 from __future__ import annotations
@@ -22,19 +23,20 @@ import os
 from typing import Any, Optional
 
 from . import _ukdyn
+from . import interrupt as _interrupt
 from ._ukdyn import (ControlSolution, ControlSolver, Controller, Model, Solution, Solver,
                      System, example_text, examples)
 from .callables import (coulomb, constraint, controller, from_callables, nonideal, simulate,
                         viscous)
-from .errors import EnergyBalanceWarning, ModelError, SolveError
+from .errors import EnergyBalanceWarning, Interrupted, ModelError, SolveError
 from .results import Result
 from .symbolic import from_sympy, sympy_to_yaml, velocities
 
 __version__ = "0.1.0"
 
 __all__ = [
-    "ControlSolution", "ControlSolver", "Controller", "EnergyBalanceWarning", "Model",
-    "ModelError", "Result",
+    "ControlSolution", "ControlSolver", "Controller", "EnergyBalanceWarning", "Interrupted",
+    "Model", "ModelError", "Result",
     "Solution", "SolveError", "Solver", "System", "constraint", "controller", "coulomb",
     "example_text", "examples", "from_callables", "from_sympy", "load", "nonideal", "parse",
     "simulate", "sympy_to_yaml", "velocities", "viscous",
@@ -98,13 +100,18 @@ def _model_simulate(self: Model, *, t_end: Optional[float] = None, q0: Any = Non
     ``project_initial=True`` or the model says ``project: true``), and
     :class:`ukdyn.SolveError` (``.result`` holds the samples up to the failure) when the run
     fails numerically and ``check`` is True; with ``check=False`` the failed run's Result is
-    returned (see ``Result.ok``, ``Result.message``).
+    returned (see ``Result.ok``, ``Result.message``). Ctrl-C stops the run at its next step and
+    raises :class:`ukdyn.Interrupted` (a KeyboardInterrupt) whose ``.result`` (``.partial``)
+    holds the samples computed up to there (docs/python.md, "Interrupts").
     """
     if t_end is not None:
         settings["t_end"] = t_end
-    names, columns, stats, control = self._run(settings, q0, qd0)
     from .callables import _finish
-    return _finish(Result(names, columns, stats, control, self.coordinates), check)
+    with _interrupt.guard() as interrupt:
+        names, columns, stats, control, raised = self._run(settings, q0, qd0, interrupt.stop)
+    result = Result(names, columns, stats, control, self.coordinates)
+    interrupt.raise_if_interrupted(result, raised)
+    return _finish(result, check)
 
 
 def _model_solve(self: Model, q: Any, q_dot: Any, t: float = 0.0, check: bool = True) -> Solution:

@@ -22,6 +22,7 @@ from typing import Any, Callable, NamedTuple, Optional, Sequence, Tuple, Union
 import numpy as np
 
 from . import _ukdyn
+from . import interrupt as _interrupt
 from .errors import EnergyBalanceWarning, SolveError
 from .results import Result
 
@@ -195,7 +196,8 @@ def simulate(system: Any, q0: Any = None, qd0: Any = None, *, controller: Any = 
 
     Raises ValueError (bad settings, an inconsistent initial state unless
     ``project_initial=True``), :class:`ukdyn.SolveError` (with ``.result``) when the run fails
-    and ``check`` is True, or the exception of a callable.
+    and ``check`` is True, or the exception of a callable; Ctrl-C raises
+    :class:`ukdyn.Interrupted` (a KeyboardInterrupt) with the partial result as ``.result``.
     """
     if isinstance(system, _ukdyn.Model):
         if controller is not None:
@@ -207,8 +209,12 @@ def simulate(system: Any, q0: Any = None, qd0: Any = None, *, controller: Any = 
                          f"{type(system).__name__}")
     if q0 is None or qd0 is None:
         raise ValueError("simulate: a System needs q0 and qd0")
-    names, columns, stats, control = _ukdyn._simulate_system(system, q0, qd0, settings, controller)
-    return _finish(Result(names, columns, stats, control, system.coordinates), check)
+    with _interrupt.guard() as interrupt:
+        names, columns, stats, control, raised = _ukdyn._simulate_system(
+            system, q0, qd0, settings, controller, interrupt.stop)
+    result = Result(names, columns, stats, control, system.coordinates)
+    interrupt.raise_if_interrupted(result, raised)
+    return _finish(result, check)
 
 
 def _finish(result: Result, check: bool) -> Result:

@@ -11,7 +11,9 @@ The C++ library's errors arrive in Python as:
   settings, an inconsistent initial state, an unknown example);
 * :class:`RuntimeError` for anything else the C++ code throws;
 * :class:`EnergyBalanceWarning` (a warning, not an exception) for a run that reached its end but
-  whose energy balance residual exceeds its tolerance (status ``"energy_balance"``).
+  whose energy balance residual exceeds its tolerance (status ``"energy_balance"``);
+* :class:`Interrupted`, a ``KeyboardInterrupt``, for Ctrl-C during a simulation: the run stops
+  at its next step and ``.result`` (``.partial``) holds what it computed.
 
 An exception raised inside a Python callable of a system (``ukdyn.from_callables``) is raised
 again, unchanged, by the call that evaluated it.
@@ -21,7 +23,7 @@ from __future__ import annotations
 
 from typing import Any, Optional
 
-__all__ = ["EnergyBalanceWarning", "ModelError", "SolveError"]
+__all__ = ["EnergyBalanceWarning", "Interrupted", "ModelError", "SolveError"]
 
 
 class ModelError(RuntimeError):
@@ -72,3 +74,26 @@ class EnergyBalanceWarning(UserWarning):
     of the works by more than ``energy_balance_tolerance`` of the energy exchanged
     (``Result.stats["energy_balance"]``; docs/simulation.md, "Energy balance"). The result is
     complete; its status is ``"energy_balance"`` and ``Result.ok`` is False."""
+
+
+class Interrupted(KeyboardInterrupt):
+    """Ctrl-C (SIGINT) during :meth:`ukdyn.Model.simulate` or :func:`ukdyn.simulate`: the run
+    stopped at its next step (within about 20 ms plus one step) and kept what it computed.
+
+    ``except KeyboardInterrupt`` catches it. ``str(err)`` says where the run stopped.
+
+    Attributes:
+        result: the :class:`ukdyn.Result` with the samples computed before the interrupt — each
+            as an uninterrupted run has it, the last one at ``result.stats["t_reached"]``;
+            status ``"interrupted"`` (``"ok"`` if the signal came after the run had ended).
+        partial: the same object.
+    """
+
+    def __init__(self, what: str, result: Optional[Any] = None) -> None:
+        super().__init__(what)
+        self.result = result
+
+    @property
+    def partial(self) -> Optional[Any]:
+        """The partial result (``result``)."""
+        return self.result

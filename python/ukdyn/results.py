@@ -12,6 +12,7 @@ bodies' poses of multibody models, and the model's output expressions.
 from __future__ import annotations
 
 import math
+import os
 from typing import Any, Dict, Iterator, List, Optional, Sequence
 
 import numpy as np
@@ -149,7 +150,10 @@ class Result:
 
     def to_csv(self, path: str) -> None:
         """Writes the columns as ``ukdyn run`` writes ``trajectory.csv``: the header, then one
-        row per sample, numbers in the shortest form that reads back bit for bit."""
+        row per sample, numbers in the shortest form that reads back bit for bit. Like the C++
+        writers, whole or not at all: a hidden temporary beside ``path``, renamed over it when
+        complete (a path that exists and is not a regular file, like /dev/stdout, is written in
+        place)."""
         def fmt(x: float) -> str:
             if math.isnan(x):
                 return "nan"
@@ -157,10 +161,26 @@ class Result:
                 return "inf" if x > 0 else "-inf"
             r = repr(float(x))
             return r[:-2] if r.endswith(".0") else r
-        with open(path, "w", encoding="utf-8") as f:
+
+        def write(f: Any) -> None:
             f.write(",".join(self.names) + "\n")
             for i in range(len(self)):
                 f.write(",".join(fmt(c[i]) for c in self._columns) + "\n")
+
+        target = os.path.realpath(os.fspath(path))
+        if os.path.exists(target) and not os.path.isfile(target):
+            with open(target, "w", encoding="utf-8") as f:
+                write(f)
+            return
+        directory, name = os.path.split(target)
+        temporary = os.path.join(directory, f".{name}.tmp-{os.getpid()}-{id(self)}")
+        try:
+            with open(temporary, "x", encoding="utf-8") as f:
+                write(f)
+            os.replace(temporary, target)
+        finally:
+            if os.path.exists(temporary):
+                os.remove(temporary)
 
     # --- plots -------------------------------------------------------------------------------
     def plot(self, *columns: str, ax: Any = None, x: str = "t", **kwargs: Any) -> Any:

@@ -1,0 +1,50 @@
+// The output directory of `ukdyn run`: one run at a time, and the files of one run only
+// (docs/simulation.md, "Interrupts and outputs").
+#pragma once
+
+#include <array>
+#include <filesystem>
+#include <stdexcept>
+#include <string>
+
+namespace ukdyn::cli {
+
+/// The files `ukdyn run` writes into its directory, in the order it writes them (the plots only
+/// those that apply to the model).
+inline constexpr std::array<const char*, 9> kRunOutputs = {
+    "trajectory.csv", "summary.json",    "coordinates.png", "constraint_forces.png",
+    "violation.png",  "energy.png",      "control.png",     "bodies.png",
+    "outputs.png"};
+
+/// Another run holds the directory: the message names it and the other run's pid.
+class DirectoryBusy : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+/// The output directory, held for a run: created when missing and locked — flock(2) on
+/// DIR/.ukdyn.lock, which holds the pid of the run that locked it — until destroyed (or the
+/// process ends, however it ends: the kernel drops the lock). A second run into a locked
+/// directory is refused at its start, before it computes anything.
+class OutputDirectory {
+ public:
+  /// @throws DirectoryBusy when another run holds it; std::runtime_error naming the directory
+  /// when it cannot be created or locked.
+  explicit OutputDirectory(std::filesystem::path dir);
+  ~OutputDirectory();
+  OutputDirectory(const OutputDirectory&) = delete;
+  OutputDirectory& operator=(const OutputDirectory&) = delete;
+
+  const std::filesystem::path& path() const { return dir_; }
+
+  /// Removes what a previous run wrote here (kRunOutputs, and the temporaries `.NAME.tmp-*` of
+  /// a run killed while writing), so that the directory then holds this run's files only; other
+  /// files are left alone. @throws std::runtime_error naming a file that cannot be removed.
+  void remove_previous_outputs() const;
+
+ private:
+  std::filesystem::path dir_;
+  int lock_fd_ = -1;
+};
+
+}  // namespace ukdyn::cli
