@@ -10,8 +10,19 @@
 //                  before, tests/support/fictitious_inertia.hpp). N = 3 runs the dense engine
 //                  (21 coordinates), N = 16 and 64 the sparse one.
 //
-// The acceptance bound of the issue: singular / regular <= 1.3 on each pair.
+// The acceptance bound of the issue: singular / regular <= 1.3 on each pair; for the quaternion
+// chains, "not slower than today": singular / fictitious <= 1.00.
+//
+// Instruction counts (reproducible where wall times are not): `bench_singular_mass --evaluate
+// CASE N` runs N evaluations of one case (chain3, chain16, chain64, pendulum3; suffix "_before"
+// for the fictitious-inertia or hand-regularized system) on one workspace, after one evaluation
+// that detects the singular M; under `valgrind --tool=callgrind
+// --toggle-collect='ukdyn::forward_dynamics*'` the difference of the counts for two N, divided
+// by the difference of the N, is the cost of one evaluation (bench/RESULTS.md).
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
 #include <string>
 
 #include <benchmark/benchmark.h>
@@ -113,6 +124,46 @@ void BM_Chain(benchmark::State& state) {
 }
 BENCHMARK(BM_Chain)->Args({3, 0})->Args({3, 1})->Args({16, 0})->Args({16, 1})->Args({64, 0})->Args({64, 1});
 
+// --evaluate CASE N: N + 1 evaluations of one case, no timing (for callgrind)
+int evaluate_count(const std::string& name, long count) {
+  const bool before = name.size() > 7 && name.compare(name.size() - 7, 7, "_before") == 0;
+  const std::string base = before ? name.substr(0, name.size() - 7) : name;
+  auto run = [count](const System& sys, const VectorXd& q, const VectorXd& qd) {
+    Workspace ws(sys);
+    for (long i = 0; i <= count; ++i) {
+      if (forward_dynamics(sys, ws, q, qd, 0.0) != Status::kOk) {
+        std::fprintf(stderr, "%s\n", describe_status(sys, ws).c_str());
+        return 1;
+      }
+    }
+    std::printf("%ld evaluations, singular %d, sparse %d\n", count + 1, int(ws.mass_singular),
+                int(ws.is_sparse()));
+    return 0;
+  };
+  if (base == "pendulum3") {
+    VectorXd q(3), qd(3);
+    q << kL * std::sin(1.0), -kL * std::cos(1.0), 1.0;
+    qd << kL * std::cos(1.0) * 0.5, kL * std::sin(1.0) * 0.5, 0.5;
+    return run(pendulum3(before), q, qd);
+  }
+  if (base.rfind("chain", 0) == 0) {
+    const mb::MultibodyModel m = chain(std::atoi(base.c_str() + 5));
+    if (before) return run(test::with_fictitious_inertia(m.system, (0.1 + 0.1 + 0.02) / 3.0), m.q0, m.qd0);
+    return run(m.system, m.q0, m.qd0);
+  }
+  std::fprintf(stderr, "unknown case '%s' (chainN, pendulum3, with or without _before)\n", name.c_str());
+  return 2;
+}
+
 }  // namespace
 
-BENCHMARK_MAIN();
+int main(int argc, char** argv) {
+  if (argc == 4 && std::strcmp(argv[1], "--evaluate") == 0) {
+    return evaluate_count(argv[2], std::atol(argv[3]));
+  }
+  benchmark::Initialize(&argc, argv);
+  if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
+  benchmark::RunSpecifiedBenchmarks();
+  benchmark::Shutdown();
+  return 0;
+}

@@ -317,8 +317,8 @@ MultibodyModel Multibody::build() const {
     if (b.kind == BodyKind::kRigid) {
       const Index o = b.offset + 3;
       const Vector3d J = b.inertia;
-      // singular (rank 3): the unit-norm constraint "<body>.unit" completes it
-      sb.mass_block(o, 4, [o, J](const VectorXd& q, double, Eigen::Ref<MatrixXd> Mk) {
+      // singular (rank 3) by construction: the unit-norm constraint "<body>.unit" completes it
+      sb.singular_mass_block(o, 4, [o, J](const VectorXd& q, double, Eigen::Ref<MatrixXd> Mk) {
         detail::quaternion_mass(q.segment<4>(o), J, Mk);
       });
     }

@@ -238,8 +238,14 @@ SparseDecomposition::SparseDecomposition(const System& sys)
   wn_.assign(std::size_t(n_), 0.0);
   wn2_.assign(std::size_t(n_), 0.0);
   wn3_.assign(std::size_t(n_), 0.0);
-  // rows local to one block (a single segment): the rows a singular block is augmented with
+  // rows local to one block (a single segment): the rows a singular block is augmented with;
+  // blocks singular by construction (MassBlock::singular) take that path from the start
   blk_sing_.assign(nb, 0);
+  blk_known_.assign(nb, 0);
+  for (std::size_t b = 0; b < nb; ++b) {
+    if (blocks[b].singular) blk_sing_[b] = blk_known_[b] = 1;
+  }
+  singular_blocks_ = Index(std::count(blk_sing_.begin(), blk_sing_.end(), 1));
   aug_g_.assign(std::size_t(m), 0.0);
   local_row_ptr_.assign(nb + 1, 0);
   for (int i = 0; i < m; ++i) {

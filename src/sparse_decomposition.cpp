@@ -9,9 +9,15 @@
 namespace ukdyn {
 
 namespace {
-// A = L Lᵀ in place on the lower triangle of the s × s column-major block A; inv ← 1 / L_kk;
-// false unless every pivot is positive
-bool block_cholesky(double* A, Index s, double* inv) {
+// The block kernels for an s × s column-major block; S > 0 fixes s at compile time (bodies'
+// blocks are 3 × 3 and 4 × 4), S = 0 takes it at run time. The same operations in the same order
+// either way.
+
+// A = L Lᵀ in place on the lower triangle of A; inv ← 1 / L_kk; false unless every pivot is
+// positive
+template <Index S>
+bool cholesky_kernel(double* A, Index size, double* inv) {
+  const Index s = S > 0 ? S : size;
   for (Index k = 0; k < s; ++k) {
     double* Ak = A + k * s;
     if (!(Ak[k] > 0.0)) return false;
@@ -28,8 +34,10 @@ bool block_cholesky(double* A, Index s, double* inv) {
   return true;
 }
 
-// x ← L⁻¹ x, L the lower triangle of an s × s block
-inline void block_lower_solve(const double* L, const double* inv, double* x, Index s) {
+// x ← L⁻¹ x, L the lower triangle
+template <Index S>
+inline void lower_solve_kernel(const double* L, const double* inv, double* x, Index size) {
+  const Index s = S > 0 ? S : size;
   for (Index k = 0; k < s; ++k) {
     const double xk = (x[k] *= inv[k]);
     const double* Lk = L + k * s;
@@ -38,12 +46,82 @@ inline void block_lower_solve(const double* L, const double* inv, double* x, Ind
 }
 
 // x ← L⁻ᵀ x
-inline void block_upper_solve(const double* L, const double* inv, double* x, Index s) {
+template <Index S>
+inline void upper_solve_kernel(const double* L, const double* inv, double* x, Index size) {
+  const Index s = S > 0 ? S : size;
   for (Index k = s - 1; k >= 0; --k) {
     const double* Lk = L + k * s;
     double v = x[k];
     for (Index i = k + 1; i < s; ++i) v -= Lk[i] * x[i];
     x[k] = v * inv[k];
+  }
+}
+
+// M_A,bb = M_bb + Σ_i g_i a_i a_iᵀ + r s_b I into L (then factorized in place, inv ← 1 / L_kk)
+// over the rows i local to the block (CSR rows [r0, r1) of A, their s entries at Av + row_ptr[i]),
+// g_i = s_b / ‖a_i‖² (0 for an inactive row) into g; false unless M_A,bb is positive definite
+template <Index S>
+bool augment_kernel(const double* M, double* L, double* inv, Index size, double sb,
+                    const int* r0, const int* r1, const int* row_ptr, const double* Av, double* g,
+                    double regularization) {
+  const Index s = S > 0 ? S : size;
+  std::copy(M, M + s * s, L);
+  for (const int* p = r0; p != r1; ++p) {
+    const double* a = Av + row_ptr[*p];  // the block's s columns in order
+    double norm2 = 0.0;
+    for (Index k = 0; k < s; ++k) norm2 += a[k] * a[k];
+    if (!(norm2 > 0.0)) {  // an inactive row
+      g[*p] = 0.0;
+      continue;
+    }
+    const double gi = sb / norm2;
+    g[*p] = gi;
+    for (Index j = 0; j < s; ++j) {
+      const double f = gi * a[j];
+      for (Index k = j; k < s; ++k) L[j * s + k] += f * a[k];
+    }
+  }
+  if (regularization > 0.0) {
+    for (Index k = 0; k < s; ++k) L[k * s + k] += regularization * sb;
+  }
+  return cholesky_kernel<S>(L, s, inv);
+}
+
+// Q += Σ_i g_i b_i a_i over the rows i local to a block (as augment_kernel), Q its s entries
+template <Index S>
+void augment_forces_kernel(double* Q, Index size, const int* r0, const int* r1,
+                           const int* row_ptr, const double* Av, const double* g,
+                           const double* b) {
+  const Index s = S > 0 ? S : size;
+  for (const int* p = r0; p != r1; ++p) {
+    const double gb = g[*p] * b[*p];
+    if (gb == 0.0) continue;
+    const double* a = Av + row_ptr[*p];
+    for (Index k = 0; k < s; ++k) Q[k] += gb * a[k];
+  }
+}
+
+bool block_cholesky(double* A, Index s, double* inv) {
+  switch (s) {
+    case 3: return cholesky_kernel<3>(A, s, inv);
+    case 4: return cholesky_kernel<4>(A, s, inv);
+    default: return cholesky_kernel<0>(A, s, inv);
+  }
+}
+
+inline void block_lower_solve(const double* L, const double* inv, double* x, Index s) {
+  switch (s) {
+    case 3: return lower_solve_kernel<3>(L, inv, x, s);
+    case 4: return lower_solve_kernel<4>(L, inv, x, s);
+    default: return lower_solve_kernel<0>(L, inv, x, s);
+  }
+}
+
+inline void block_upper_solve(const double* L, const double* inv, double* x, Index s) {
+  switch (s) {
+    case 3: return upper_solve_kernel<3>(L, inv, x, s);
+    case 4: return upper_solve_kernel<4>(L, inv, x, s);
+    default: return upper_solve_kernel<0>(L, inv, x, s);
   }
 }
 }  // namespace
@@ -86,22 +164,26 @@ bool SparseDecomposition::mass_finite() const {
 
 SparseDecomposition& SparseDecomposition::compute_mass() {
   // M_bb = L_b L_bᵀ, block by block (constant blocks once); a singular block is checked to be
-  // positive semi-definite and left for compute_augmented_mass
+  // positive semi-definite and left for compute_augmented_mass (a block singular by
+  // construction: checked at the first compute only)
   info_ = Eigen::Success;
   undetermined_block_ = -1;
   for (Index b = 0; b < block_count(); ++b) {
-    if (blk_const_[std::size_t(b)] && const_factorized_) continue;
-    const Index s = block_size(b), v0 = blk_val_[std::size_t(b)], o = block_offset(b);
-    std::copy(Mv_.begin() + v0, Mv_.begin() + v0 + s * s, Lv_.begin() + v0);
+    const std::size_t bs = std::size_t(b);
+    if ((blk_const_[bs] || blk_known_[bs]) && checked_) continue;
+    const Index s = block_size(b), v0 = blk_val_[bs], o = block_offset(b);
     // a block found singular before skips the regular attempt (M_A serves any PSD block)
-    if (!blk_sing_[std::size_t(b)] && block_cholesky(Lv_.data() + v0, s, inv_ldiag_.data() + o)) {
-      double lo = inv_ldiag_[std::size_t(o)], hi = lo;  // 1 / L_kk
-      for (Index k = o; k < o + s; ++k) {
-        lo = std::min(lo, inv_ldiag_[std::size_t(k)]);
-        hi = std::max(hi, inv_ldiag_[std::size_t(k)]);
+    if (!blk_sing_[bs]) {
+      std::copy(Mv_.begin() + v0, Mv_.begin() + v0 + s * s, Lv_.begin() + v0);
+      if (block_cholesky(Lv_.data() + v0, s, inv_ldiag_.data() + o)) {
+        double lo = inv_ldiag_[std::size_t(o)], hi = lo;  // 1 / L_kk
+        for (Index k = o; k < o + s; ++k) {
+          lo = std::min(lo, inv_ldiag_[std::size_t(k)]);
+          hi = std::max(hi, inv_ldiag_[std::size_t(k)]);
+        }
+        // pivots L_kk² within kSingularPivotRatio of each other: regular
+        if (lo * lo >= kSingularPivotRatio * hi * hi) continue;
       }
-      // pivots L_kk² within kSingularPivotRatio of each other: regular
-      if (lo * lo >= kSingularPivotRatio * hi * hi) continue;
     }
     // positive semi-definite: M_bb + 1e-10 max|M_bb| I is positive definite (a zero block is)
     double scale = 0.0;
@@ -111,53 +193,62 @@ SparseDecomposition& SparseDecomposition::compute_mass() {
       for (Index k = 0; k < s; ++k) Lv_[std::size_t(v0 + k * s + k)] += 1e-10 * scale;
       if (!block_cholesky(Lv_.data() + v0, s, inv_ldiag_.data() + o)) {
         info_ = Eigen::NumericalIssue;
-        const_factorized_ = false;
+        checked_ = false;
         return *this;
       }
     }
-    blk_sing_[std::size_t(b)] = 1;
+    if (!blk_sing_[bs]) {
+      blk_sing_[bs] = 1;
+      ++singular_blocks_;
+    }
   }
-  const_factorized_ = true;
-  singular_blocks_ = 0;
-  for (unsigned char f : blk_sing_) singular_blocks_ += f;
+  checked_ = true;
   return *this;
 }
 
 SparseDecomposition& SparseDecomposition::compute_augmented_mass(double regularization) {
   info_ = Eigen::Success;
   undetermined_block_ = -1;
-  std::fill(aug_g_.begin(), aug_g_.end(), 0.0);
   if (singular_blocks_ == 0) return *this;
-  double global = 0.0;  // largest diagonal of M, for a zero block
+  double global = -1.0;  // largest diagonal of M, for a zero block (found when first needed)
   for (Index b = 0; b < block_count(); ++b) {
-    const auto Mb = mass_block(b);
-    global = std::max(global, Mb.diagonal().maxCoeff());
-  }
-  if (!(global > 0.0)) global = 1.0;
-  for (Index b = 0; b < block_count(); ++b) {
-    if (!blk_sing_[std::size_t(b)]) continue;
-    const Index s = block_size(b), v0 = blk_val_[std::size_t(b)], o = block_offset(b);
-    std::copy(Mv_.begin() + v0, Mv_.begin() + v0 + s * s, Lv_.begin() + v0);
-    double sb = mass_block(b).diagonal().maxCoeff();
-    if (!(sb > 0.0)) sb = global;
-    double* L = Lv_.data() + v0;
-    for (int p = local_row_ptr_[std::size_t(b)]; p < local_row_ptr_[std::size_t(b) + 1]; ++p) {
-      const int i = local_rows_[std::size_t(p)];
-      const double* a = Av_.data() + row_ptr_[std::size_t(i)];  // the block's s columns in order
-      double norm2 = 0.0;
-      for (Index k = 0; k < s; ++k) norm2 += a[k] * a[k];
-      if (!(norm2 > 0.0)) continue;  // an inactive row
-      const double g = sb / norm2;
-      aug_g_[std::size_t(i)] = g;
-      for (Index j = 0; j < s; ++j) {
-        const double f = g * a[j];
-        for (Index k = j; k < s; ++k) L[j * s + k] += f * a[k];
+    const std::size_t bs = std::size_t(b);
+    if (!blk_sing_[bs]) continue;
+    const Index s = block_size(b), v0 = blk_val_[bs], o = block_offset(b);
+    const double* Mb = Mv_.data() + v0;
+    // M_A,bb = M_bb + Σ_i g_i a_i a_iᵀ over the rows local to b, g_i = s_b / ‖a_i‖²,
+    // s_b = max diag M_bb
+    double sb = Mb[0];
+    for (Index k = 1; k < s; ++k) sb = std::max(sb, Mb[k * s + k]);
+    if (!(sb > 0.0)) {
+      if (global < 0.0) {
+        global = 0.0;
+        for (Index c = 0; c < block_count(); ++c) {
+          global = std::max(global, mass_block(c).diagonal().maxCoeff());
+        }
+        if (!(global > 0.0)) global = 1.0;
       }
+      sb = global;
     }
-    if (regularization > 0.0) {
-      for (Index k = 0; k < s; ++k) L[k * s + k] += regularization * sb;
+    const int* r0 = local_rows_.data() + local_row_ptr_[bs];
+    const int* r1 = local_rows_.data() + local_row_ptr_[bs + 1];
+    double* L = Lv_.data() + v0;
+    double* inv = inv_ldiag_.data() + o;
+    bool ok;
+    switch (s) {
+      case 3:
+        ok = augment_kernel<3>(Mb, L, inv, s, sb, r0, r1, row_ptr_.data(), Av_.data(),
+                               aug_g_.data(), regularization);
+        break;
+      case 4:
+        ok = augment_kernel<4>(Mb, L, inv, s, sb, r0, r1, row_ptr_.data(), Av_.data(),
+                               aug_g_.data(), regularization);
+        break;
+      default:
+        ok = augment_kernel<0>(Mb, L, inv, s, sb, r0, r1, row_ptr_.data(), Av_.data(),
+                               aug_g_.data(), regularization);
     }
-    if (!block_cholesky(L, s, inv_ldiag_.data() + o)) {
+    if (!ok) {
       info_ = Eigen::NumericalIssue;
       undetermined_block_ = b;
       return *this;
@@ -168,15 +259,23 @@ SparseDecomposition& SparseDecomposition::compute_augmented_mass(double regulari
 
 void SparseDecomposition::augment_forces(const Eigen::Ref<const VectorXd>& b,
                                          Eigen::Ref<VectorXd> Q) const {
+  // Q_b += Σ_i g_i b_i a_i over the rows local to each singular block
   for (Index blk = 0; blk < block_count(); ++blk) {
-    if (!blk_sing_[std::size_t(blk)]) continue;
-    const Index s = block_size(blk), o = block_offset(blk);
-    for (int p = local_row_ptr_[std::size_t(blk)]; p < local_row_ptr_[std::size_t(blk) + 1]; ++p) {
-      const int i = local_rows_[std::size_t(p)];
-      const double gb = aug_g_[std::size_t(i)] * b[i];
-      if (gb == 0.0) continue;
-      const double* a = Av_.data() + row_ptr_[std::size_t(i)];
-      for (Index k = 0; k < s; ++k) Q[o + k] += gb * a[k];
+    const std::size_t bs = std::size_t(blk);
+    if (!blk_sing_[bs]) continue;
+    const Index s = block_size(blk);
+    double* Qb = Q.data() + block_offset(blk);
+    const int* r0 = local_rows_.data() + local_row_ptr_[bs];
+    const int* r1 = local_rows_.data() + local_row_ptr_[bs + 1];
+    switch (s) {
+      case 3:
+        augment_forces_kernel<3>(Qb, s, r0, r1, row_ptr_.data(), Av_.data(), aug_g_.data(), b.data());
+        break;
+      case 4:
+        augment_forces_kernel<4>(Qb, s, r0, r1, row_ptr_.data(), Av_.data(), aug_g_.data(), b.data());
+        break;
+      default:
+        augment_forces_kernel<0>(Qb, s, r0, r1, row_ptr_.data(), Av_.data(), aug_g_.data(), b.data());
     }
   }
 }
@@ -214,6 +313,12 @@ void SparseDecomposition::solve_mass(const Eigen::Ref<const VectorXd>& f,
                                      Eigen::Ref<VectorXd> x) const {
   // x = L⁻ᵀ L⁻¹ f
   x = f;
+  mass_lower_solve(x.data());
+  mass_upper_solve(x.data());
+}
+
+void SparseDecomposition::solve_mass_in_place(Eigen::Ref<VectorXd> x) const {
+  // x ← L⁻ᵀ L⁻¹ x
   mass_lower_solve(x.data());
   mass_upper_solve(x.data());
 }

@@ -102,6 +102,15 @@ SystemBuilder& SystemBuilder::mass_block(Index offset, Index size, MassBlockFn f
   return *this;
 }
 
+SystemBuilder& SystemBuilder::singular_mass_block(Index offset, Index size, MassBlockFn fn) {
+  if (size <= 0 || !fn) {
+    throw std::invalid_argument(
+        "ukdyn::SystemBuilder::singular_mass_block: need size > 0 and a callable");
+  }
+  mass_blocks_.push_back(MassBlock{offset, size, std::move(fn), {}, /*singular=*/true});
+  return *this;
+}
+
 SystemBuilder& SystemBuilder::forces(ForceFn fn) {
   forces_ = std::move(fn);
   return *this;

@@ -80,6 +80,26 @@ Workspace::Workspace(const System& sys, const SolverOptions& options)
     M.setZero(n, n);
     M_aux.setZero(n, n);
     A.setZero(m, n);
+    // rows local to a block singular by construction (constraints with sorted columns()), when
+    // the other blocks are constant
+    const auto& blocks = sys.mass_blocks();
+    const bool local = std::all_of(blocks.begin(), blocks.end(), [](const MassBlock& blk) {
+      return blk.singular || blk.constant();
+    });
+    for (const MassBlock& blk : blocks) {
+      if (!local) break;
+      if (!blk.singular) continue;
+      for (Index k = 0; k < K; ++k) {
+        const auto& cols = sys.constraint(k).model().columns();
+        if (cols.empty() || cols.front() < blk.offset || cols.back() >= blk.offset + blk.size) {
+          continue;
+        }
+        for (Index r = 0; r < sys.constraint(k).rows(); ++r) {
+          singular_local_rows.insert(singular_local_rows.end(),
+                                     {sys.row_offset(k) + r, blk.offset, blk.size});
+        }
+      }
+    }
   }
   Q.setZero(n);
   a.setZero(n);

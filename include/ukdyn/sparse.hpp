@@ -108,6 +108,8 @@ class SparseDecomposition {
   /// exactly singular matrix carries roundoff of order eps · cond of its regular part (a rod's
   /// quaternion block, axial inertia 1e-4 of the transverse: ~1e-12), and an M that is merely
   /// that ill-conditioned is also better served by M_A (which is then always positive definite).
+  /// A block singular by construction (MassBlock::singular) is singular from the start and
+  /// checked at the first compute_mass only: later ones leave it to compute_augmented_mass.
   static constexpr double kSingularPivotRatio = 1e-8;
   /// Whether the last compute_mass found a singular (positive semi-definite) block.
   bool mass_singular() const { return singular_blocks_ > 0; }
@@ -130,6 +132,8 @@ class SparseDecomposition {
   Index undetermined_block() const { return undetermined_block_; }
   /// x = M⁻¹ f (M_A⁻¹ f for a singular M); y = M x; returns xᵀ M x. Cost O(Σ size²).
   void solve_mass(const Eigen::Ref<const VectorXd>& f, Eigen::Ref<VectorXd> x) const;
+  /// x ← M⁻¹ x (M_A⁻¹ x for a singular M). Cost O(Σ size²).
+  void solve_mass_in_place(Eigen::Ref<VectorXd> x) const;
   void multiply_mass(const Eigen::Ref<const VectorXd>& x, Eigen::Ref<VectorXd> y) const;
   double mass_norm_squared(const Eigen::Ref<const VectorXd>& x) const;
 
@@ -209,7 +213,8 @@ class SparseDecomposition {
   std::vector<Index> blk_off_, blk_val_;
   std::vector<unsigned char> blk_const_;
   std::vector<double> Mv_, Lv_, inv_ldiag_;
-  bool const_factorized_ = false;
+  // a compute_mass succeeded: constant blocks factorized, blocks singular by construction checked
+  bool checked_ = false;
   Eigen::ComputationInfo info_ = Eigen::InvalidInput;
   // A and W, compressed rows; each row is a run of whole blocks (segments)
   std::vector<int> row_ptr_, col_;
@@ -229,9 +234,9 @@ class SparseDecomposition {
   // L_G (strictly lower, by columns) and D; work arrays of the up-looking factorization
   std::vector<int> parent_, Lp_, Lnz_, Li_, flag_, pattern_;
   std::vector<double> Lx_, D_, Y_;
-  // singular blocks: flags, the rows local to each block (CSR), the weights g_i of the last
-  // augmentation (0 for rows not used)
-  std::vector<unsigned char> blk_sing_;
+  // singular blocks: flags (found singular, or singular by construction), the rows local to each
+  // block (CSR), the weights g_i of the last augmentation (0 for rows not used)
+  std::vector<unsigned char> blk_sing_, blk_known_;
   std::vector<int> local_row_ptr_, local_rows_;
   std::vector<double> aug_g_;
   Index singular_blocks_ = 0, undetermined_block_ = -1;

@@ -31,6 +31,11 @@ struct MassBlock {
   Index size = 0;    ///< number of coordinates
   MassBlockFn fn;    ///< M_kk(q, t); empty for a constant block
   MatrixXd value;    ///< the constant block (size × size) when fn is empty
+  /// Singular (positive semi-definite, never definite) for every (q, t) by construction, like
+  /// a unit quaternion's 4 E_vᵀ J E_v (SystemBuilder::singular_mass_block): the engines complete
+  /// it with the constraints from the first evaluation on, and check it positive semi-definite
+  /// at the first evaluation of a workspace only (docs/singular-mass.md).
+  bool singular = false;
   /// True for a constant block.
   bool constant() const { return !fn; }
 };
@@ -166,6 +171,12 @@ class SystemBuilder {
   SystemBuilder& mass_block(Index offset, const MatrixXd& Mkk);
   /// A state-dependent diagonal block M_kk(q, t) (size × size) on [offset, offset + size).
   SystemBuilder& mass_block(Index offset, Index size, MassBlockFn fn);
+  /// A state-dependent diagonal block that is singular and positive semi-definite for every
+  /// (q, t) by construction — the 4 × 4 block of a unit quaternion, which its unit-norm
+  /// constraint completes (MassBlock::singular). The caller guarantees it: after the first
+  /// evaluation of a workspace the block is no longer checked, and the evaluations skip the
+  /// regular factorization attempt and the semi-definiteness check (docs/singular-mass.md).
+  SystemBuilder& singular_mass_block(Index offset, Index size, MassBlockFn fn);
   /// Q(q, q', t) as a callable (default: zero).
   SystemBuilder& forces(ForceFn fn);
   /// V(q, t) for energy reports (default: none, V = 0). Q must contain −dV/dq itself.

@@ -125,6 +125,15 @@ class Workspace {
   /// (Udwadia & Schutte 2010; docs/singular-mass.md). M and Q above stay the system's own.
   bool mass_singular = false;
   MatrixXd M_aux;         ///< M_A (n × n, lower triangle; dense engine)
+  /// (3 per row: row, block offset, block size) the rows of A whose constraint's columns() lie
+  /// in one mass block singular by construction (MassBlock::singular), e.g. a quaternion's unit
+  /// norm, when every other block is constant; the dense engine then completes M with these
+  /// alone, block by block as the sparse engine does. Filled at construction (dense engine).
+  std::vector<Index> singular_local_rows;
+  /// How the dense complete_singular_mass completes M: 0 not known yet, 1 with
+  /// singular_local_rows (they made all of M_A regular once; later only the completed blocks are
+  /// checked, the others being constant), 2 with every row of A (they did not).
+  int singular_completion = 0;
   // --- stage 2, assemble_constraints ----------------------------------------------------
   MatrixXd A;             ///< constraint matrix (m × n; 0 × 0 with the sparse engine); rows of
                           ///< inactive constraints are zero
