@@ -111,9 +111,10 @@ int project(sunrealtype t, N_Vector ycur, N_Vector corr, sunrealtype /*eps_proj*
   }
   if (margin >= kSingularMargin) cb.regular = true;
   for (std::size_t i = 0; i < size; ++i) c[i] = changed ? cb.corrected[i] - y[i] : 0.0;
-  // the error estimate as the projected solution sees it (CVodeSetProjErrEst): without its
-  // components normal to the constraints, which the projection removes
-  if (err != nullptr && cb.hooks.project_error) {
+  // approaching a singular configuration, the error estimate as the projected solution sees
+  // it: without its components normal to the constraints, which the projection removes (left
+  // as it is elsewhere, where the steps are those of CVODE without error projection)
+  if (err != nullptr && cb.hooks.project_error && margin < kTangentialMargin) {
     try {
       cb.hooks.project_error(t, cb.corrected.data(), N_VGetArrayPointer(err));
     } catch (...) {
@@ -228,7 +229,7 @@ SegmentResult integrate_bdf(ConstrainedOde& ode, std::vector<double>& x, double 
   require(CVodeSetStopTime(mem, t1), "CVodeSetStopTime", cb);
 
   // drift control: after_step as CVODE's projection, every step; the error estimate is
-  // projected too when the driver can (hooks.project_error), as for the explicit methods
+  // projected where the rank margin is below kTangentialMargin (see project)
   if (hooks.after_step) {
     require(CVodeSetProjFn(mem, project), "CVodeSetProjFn", cb);
     require(CVodeSetProjErrEst(mem, hooks.project_error ? SUNTRUE : SUNFALSE),

@@ -174,12 +174,15 @@ class StepControl {
   }
   // after an attempt from (t, in, dxdt_in) of size dt that reached `out` with error(): accept
   // (t += dt, dt the next step) or reject (dt the step to try again)
+  // (tangential: the attempt projected its stages, near a singular configuration; elsewhere the
+  // whole estimate counts, as in Odeint)
   template <int ErrorOrder, int StepperOrder>
   bool judge(const State& in, const State& dxdt_in, const State& out, double& t, double& dt,
-             long& tangential) {
-    if (hooks_.project_error) err_normal_ = err_;
+             bool tangential_control, long& tangential) {
+    const bool retry = tangential_control && hooks_.project_error;
+    if (retry) err_normal_ = err_;
     double e = checker_.error(algebra_, in, dxdt_in, err_, dt);
-    if (e > 1.0 && hooks_.project_error &&
+    if (e > 1.0 && retry &&
         hooks_.project_error(t + dt, out.data(), err_normal_.data())) {
       const double e_tangential = checker_.error(algebra_, in, dxdt_in, err_normal_, dt);
       if (e_tangential <= 1.0) ++tangential;
@@ -333,7 +336,7 @@ SegmentResult dopri5(ConstrainedOde& ode, State& x, double t0, double t1,
       stepper.do_step(fn, x_old, dxdt_old, t, x, dxdt, dt, control.error());
       if (ode.failed()) return failed(ode, r, t_old);
       accepted = control.judge<Stepper::error_order_value, Stepper::stepper_order_value>(
-          x_old, dxdt_old, x, t, dt, r.tangential_steps);
+          x_old, dxdt_old, x, t, dt, projection.on, r.tangential_steps);
     }
     if (!accepted) {
       std::swap(x_old, x);
@@ -462,7 +465,7 @@ SegmentResult rkf78(ConstrainedOde& ode, State& x, double t0, double t1,
       stepper.do_step(fn, x, dxdt, t, x_out, step, control.error());
       if (ode.failed()) return failed(ode, r, t_old);
       accepted = control.judge<Stepper::error_order_value, Stepper::stepper_order_value>(
-          x, dxdt, x_out, t, step, r.tangential_steps);
+          x, dxdt, x_out, t, step, projection.on, r.tangential_steps);
     }
     if (accepted) {
       std::swap(x, x_out);

@@ -125,6 +125,8 @@ class ConstrainedOde {
 // configuration: dopri5 and rkf78 project their stages there, BDF hands the crossing to dopri5
 // (docs/simulation.md, "Singular configurations")
 constexpr double kSingularMargin = 1e-2;
+// rank margin below which BDF's error estimate loses its components normal to the constraints
+constexpr double kTangentialMargin = std::numeric_limits<double>::infinity();
 
 // What the driver asks of an integrator for one segment [t0, t1] (no breakpoint inside).
 struct SegmentHooks {

@@ -36,7 +36,10 @@ double velocity_violation(const System& sys, const Workspace& ws, Index k);
 /// Settings of a projection.
 struct ProjectionOptions {
   /// Converged when every projected row satisfies |phi_i| <= tolerance (position) or
-  /// |phi'_i| <= tolerance (velocity), in the constraint's own units. Must be > 0.
+  /// |phi'_i| <= tolerance (velocity), in the constraint's own units, or when the violation
+  /// has stalled at the roundoff floor of the rows, below 100 · tolerance (three corrections
+  /// in a row that do not halve it: near a singular configuration, or with redundant rows, the
+  /// floor can sit just above 1e-12). Must be > 0.
   double tolerance = 1e-12;
   /// Gauss–Newton iterations at most (each one evaluation of M and the constraints).
   int max_iterations = 20;

@@ -82,11 +82,8 @@ struct SimulationOptions {
   Integrator integrator = Integrator::kDopri5;  ///< method
   double step = 1e-3;               ///< RK4, RK5: the step; dopri5, rkf78: the first step tried
                                     ///< (BDF estimates its own)
-  /// Relative and absolute tolerances of the adaptive methods. The defaults stop short of the
-  /// tightest possible: near a singular configuration (a mechanism whose constraints lose rank,
-  /// like the double four-bar with its cranks horizontal) the accelerations carry a roundoff of
-  /// order eps/σ_min, and an error control tighter than that noise shrinks the step onto the
-  /// singular point, where the branch can switch (observed for dopri5 at rtol 1e-10, not at 1e-9).
+  /// Relative and absolute tolerances of the adaptive methods; any rtol down to 1e-12 works,
+  /// through singular configurations too (docs/simulation.md, "Singular configurations").
   double rtol = 1e-9;
   double atol = 1e-11;
   double max_step = 0.0;            ///< largest step of adaptive methods (0: unlimited)
