@@ -125,19 +125,11 @@ std::string case_name(const ::testing::TestParamInfo<Case>& info) {
 INSTANTIATE_TEST_SUITE_P(
     AllModelsIntegratorsTolerances, DoubleFourBar,
     ::testing::Combine(::testing::Values("double_four_bar", "double_four_bar_bodies",
-                                         "double_four_bar_redundant", "parallelogram_four_bar"),
+                                         "double_four_bar_redundant",
+                                         "double_four_bar_bodies_redundant",
+                                         "parallelogram_four_bar"),
                        ::testing::Values(Integrator::kDopri5, Integrator::kRKF78,
                                          Integrator::kBDF),
-                       ::testing::Values(1e-6, 1e-9, 1e-12)),
-    case_name);
-
-// The bodies model with a redundant fourth crank: dopri5 and rkf78. (BDF on it is not yet
-// usable: far from any singular pose, from t ≈ 0.4 s, CVODE takes ~10⁵ steps per 0.1 s —
-// known defect, docs/simulation.md "Known limits".)
-INSTANTIATE_TEST_SUITE_P(
-    RedundantBodies, DoubleFourBar,
-    ::testing::Combine(::testing::Values("double_four_bar_bodies_redundant"),
-                       ::testing::Values(Integrator::kDopri5, Integrator::kRKF78),
                        ::testing::Values(1e-6, 1e-9, 1e-12)),
     case_name);
 
