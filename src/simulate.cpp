@@ -340,13 +340,21 @@ class Run {
   }
 
   // projects x = [q; q'; W] in place with the given mask; false when it did not converge
-  Status project(double t, double* x, const ProjectionOptions& p, bool& changed) {
+  // q_, q'_ ← x projected onto the constraints of p: positions, then velocities (stops at the
+  // first evaluation that fails: its status)
+  Status project_into(double t, const double* x, const ProjectionOptions& p, ProjectionResult& rp,
+                      ProjectionResult& rv) {
     q_ = Eigen::Map<const VectorXd>(x, n_);
     qd_ = Eigen::Map<const VectorXd>(x + n_, n_);
-    const ProjectionResult rp = project_positions(sys_, ws_, q_, t, p);
+    rp = project_positions(sys_, ws_, q_, t, p);
     if (rp.status != Status::kOk) return rp.status;
-    const ProjectionResult rv = project_velocities(sys_, ws_, q_, qd_, t, p);
-    if (rv.status != Status::kOk) return rv.status;
+    rv = project_velocities(sys_, ws_, q_, qd_, t, p);
+    return rv.status;
+  }
+
+  Status project(double t, double* x, const ProjectionOptions& p, bool& changed) {
+    ProjectionResult rp, rv;
+    if (const Status s = project_into(t, x, p, rp, rv); s != Status::kOk) return s;
     note_violation(rp.violation, rv.violation);
     changed = rp.iterations > 0 || rv.iterations > 0;
     if (changed) {
@@ -376,12 +384,11 @@ class Run {
 
   // projects a stage state x in place onto the projected constraints; false when it failed
   bool project_stage(double t, double* x) {
-    q_ = Eigen::Map<const VectorXd>(x, n_);
-    qd_ = Eigen::Map<const VectorXd>(x + n_, n_);
-    const ProjectionResult rp = project_positions(sys_, ws_, q_, t, projection_);
-    if (rp.status != Status::kOk || !rp.converged) return false;
-    const ProjectionResult rv = project_velocities(sys_, ws_, q_, qd_, t, projection_);
-    if (rv.status != Status::kOk || !rv.converged) return false;
+    ProjectionResult rp, rv;
+    if (project_into(t, x, projection_, rp, rv) != Status::kOk || !rp.converged ||
+        !rv.converged) {
+      return false;
+    }
     Eigen::Map<VectorXd>(x, n_) = q_;
     Eigen::Map<VectorXd>(x + n_, n_) = qd_;
     return true;
