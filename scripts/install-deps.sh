@@ -19,6 +19,7 @@ packages=(
   python3-numpy python3-pandas         # its arrays and DataFrames
   python3-sympy                        # SymPy-defined models
   python3-pytest                       # its tests
+  python3-hypothesis                   # the front ends' fuzzing (fuzz/fuzz_cli.py, fuzz_python.py)
   jupyter-notebook python3-nbconvert python3-ipykernel  # the notebook in examples/, run by the tests
   libgtest-dev libgmock-dev            # tests
   libbenchmark-dev                     # benchmarks

@@ -1,0 +1,27 @@
+#!/usr/bin/env bash
+# Fuzzes the two front ends for a bounded time each: scripts/fuzz_frontends.sh [SECONDS]
+# (default 60 per front end).
+#   fuzz/fuzz_cli.py     the `ukdyn` command line (argument parsing and the runs it starts)
+#   fuzz/fuzz_python.py  the Python module's entry points (parse, load, simulate, solve, control,
+#                        from_callables, results)
+# Both use hypothesis (python3-hypothesis) with Debian's /usr/bin/python3 and the Release build in
+# build/ (scripts/test.sh builds it). Fails on the first finding: a crash, a hang (FUZZ_TIMEOUT
+# seconds per input, default 60), an undocumented exit code or exception, an unclear message,
+# or a result that is silently wrong (fuzz/README.md lists the promises).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+seconds=${1:-60}
+if ! [[ $seconds =~ ^[0-9]+$ && $seconds -gt 0 ]]; then
+  echo "usage: scripts/fuzz_frontends.sh [SECONDS]  (a positive whole number, default 60)" >&2
+  exit 2
+fi
+if [ ! -x build/app/ukdyn ] || [ ! -d build/python/ukdyn ]; then
+  echo "fuzz_frontends: build/ has no ukdyn or Python module: run scripts/test.sh first" >&2
+  exit 2
+fi
+
+echo "=== fuzz: the command line, ${seconds} s ==="
+/usr/bin/python3 fuzz/fuzz_cli.py build/app/ukdyn "$seconds"
+echo "=== fuzz: the Python module, ${seconds} s ==="
+PYTHONPATH="$PWD/build/python" /usr/bin/python3 fuzz/fuzz_python.py "$seconds"
