@@ -179,7 +179,12 @@ Not thread-safe: one per thread.
           [](ControlSolver& s, py::handle q, py::handle qd, double t, bool check) {
             const ControlStatus st = s.evaluate(q, qd, t);
             if (check && st != ControlStatus::kOk && st != ControlStatus::kRequirementsNotMet) {
-              throw std::runtime_error(describe_control_status(*s.handle().controller, s.ws()));
+              // a numerical failure, as Solver.solve reports one: ukdyn.SolveError
+              const Status why = st == ControlStatus::kModelFailed ? s.ws().model.status
+                                 : st == ControlStatus::kNonFiniteInput ? Status::kNonFiniteInput
+                                 : st == ControlStatus::kNonFiniteResult ? Status::kNonFiniteResult
+                                                                         : Status::kMassNotPositiveDefinite;
+              throw SolveError(why, describe_control_status(*s.handle().controller, s.ws()));
             }
             return s.snapshot(t);
           },
@@ -188,8 +193,9 @@ Not thread-safe: one per thread.
 
 Returns a ControlSolution. Requirements that cannot all be met are not an error (status
 'requirements not met', the least-squares force; see met and residual). Raises ValueError for
-inputs of the wrong size and, when check is True, RuntimeError (describe_control_status) when
-the evaluation fails. Cost: one forward_dynamics of the nominal model and
+inputs of the wrong size and, when check is True, ukdyn.SolveError (describe_control_status;
+its status is the nominal model's, or non-finite input/result, or "mass matrix not positive
+definite" for a weight N that is not) when the evaluation fails. Cost: one forward_dynamics of the nominal model and
 O(n² m_r + n m_r²).)doc")
       .def_property_readonly("controller", [](const ControlSolver& s) { return s.handle(); },
                              "The controller.");

@@ -3,6 +3,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstring>
+#include <limits>
 #include <optional>
 #include <string>
 
@@ -22,8 +23,14 @@ std::string shape_text(const py::array& a) {
   return s + (a.ndim() == 1 ? ",)" : ")");
 }
 
-// obj as a float64 array (a view when it already is one; converted otherwise)
+// obj as a float64 array (a view when it already is one; converted otherwise). Complex numbers
+// are refused rather than cast with their imaginary part dropped.
 py::array_t<double> as_array(py::handle obj, const char* who, const char* what) {
+  if (obj.is_none()) throw std::invalid_argument(std::string(who) + ": " + what + " is None");
+  if (PyComplex_Check(obj.ptr()) ||
+      (py::isinstance<py::array>(obj) && py::reinterpret_borrow<py::array>(obj).dtype().kind() == 'c')) {
+    throw std::invalid_argument(std::string(who) + ": " + what + " must be real numbers (got complex)");
+  }
   auto a = py::array_t<double>::ensure(obj);
   if (!a) throw std::invalid_argument(std::string(who) + ": " + what + " must be numbers");
   return a;
@@ -139,18 +146,58 @@ MatrixXd read_matrix(py::handle obj, const char* who, const char* what) {
 
 namespace {
 
+std::string type_name(py::handle v) {
+  return std::string(py::str(py::type::of(v).attr("__name__")));
+}
+
 double number(py::handle v, const std::string& who, const char* key) {
+  // a complex (Python's or NumPy's) would be cast with its imaginary part dropped
+  if (PyComplex_Check(v.ptr()) || type_name(v).find("complex") != std::string::npos) {
+    throw std::invalid_argument(who + ": " + key + " must be a real number (got " + type_name(v) + ")");
+  }
   try {
     return v.cast<double>();
   } catch (const py::cast_error&) {
-    throw std::invalid_argument(who + ": " + key + " must be a number (got " +
-                                std::string(py::str(py::type::of(v).attr("__name__"))) + ")");
+    throw std::invalid_argument(who + ": " + key + " must be a number (got " + type_name(v) + ")");
   }
+}
+
+// a whole number: a Python int or an integral float within the range of T
+template <class T>
+T integer(py::handle v, const std::string& who, const char* key) {
+  if (py::isinstance<py::bool_>(v) || !(py::isinstance<py::int_>(v) || py::isinstance<py::float_>(v) ||
+                                        py::hasattr(v, "__index__"))) {
+    throw std::invalid_argument(who + ": " + key + " must be a whole number (got " + type_name(v) + ")");
+  }
+  const double x = number(v, who, key);
+  if (!(std::isfinite(x) && x == std::floor(x) && x >= double(std::numeric_limits<T>::min()) &&
+        x <= double(std::numeric_limits<T>::max()))) {
+    throw std::invalid_argument(who + ": " + key + " must be a whole number between " +
+                                std::to_string(std::numeric_limits<T>::min()) + " and " +
+                                std::to_string(std::numeric_limits<T>::max()) + " (got " +
+                                std::string(py::repr(v)) + ")");
+  }
+  return static_cast<T>(x);
+}
+
+// True or False (also NumPy's bool); 0 and 1 are accepted as the integers they are
+bool boolean(py::handle v, const std::string& who, const char* key) {
+  if (py::isinstance<py::bool_>(v) || type_name(v) == "bool_") return PyObject_IsTrue(v.ptr()) == 1;
+  if (py::isinstance<py::int_>(v)) {
+    const double x = number(v, who, key);
+    if (x == 0 || x == 1) return x == 1;
+  }
+  throw std::invalid_argument(who + ": " + key + " must be True or False (got " +
+                              std::string(py::repr(v)).substr(0, 60) + ")");
 }
 
 std::vector<double> numbers(py::handle v, const std::string& who, const char* key) {
   std::vector<double> out;
   if (py::isinstance<py::float_>(v) || py::isinstance<py::int_>(v)) return {number(v, who, key)};
+  if (py::isinstance<py::str>(v) || !py::hasattr(v, "__iter__")) {
+    throw std::invalid_argument(who + ": " + key + " must be a number or a sequence of numbers (got " +
+                                type_name(v) + ")");
+  }
   for (py::handle x : py::iter(v)) out.push_back(number(x, who, key));
   return out;
 }
@@ -180,12 +227,13 @@ void apply_solver_options(SolverOptions& o, py::dict& settings) {
   py::list used;
   for (auto [k, v] : settings) {
     const std::string key = py::str(k);
+    if (v.is_none()) continue;  // None: keep the default (as simulate's settings)
     if (key == "rank_threshold") o.rank_threshold = number(v, who, "rank_threshold");
     else if (key == "sparse_rank_threshold") o.sparse_rank_threshold = number(v, who, "sparse_rank_threshold");
     else if (key == "consistency_tolerance") o.consistency_tolerance = number(v, who, "consistency_tolerance");
     else if (key == "symmetry_tolerance") o.symmetry_tolerance = number(v, who, "symmetry_tolerance");
-    else if (key == "compute_residuals") o.compute_residuals = v.cast<bool>();
-    else if (key == "sparse_threshold") o.sparse_threshold = v.cast<Index>();
+    else if (key == "compute_residuals") o.compute_residuals = boolean(v, who, "compute_residuals");
+    else if (key == "sparse_threshold") o.sparse_threshold = integer<Index>(v, who, "sparse_threshold");
     else if (key == "engine") o.engine = engine_from(text(v, who, "engine"), who);
     else if (key == "algorithm") o.algorithm = algorithm_from(text(v, who, "algorithm"), who);
     else continue;
@@ -208,18 +256,18 @@ void apply_simulation_options(SimulationOptions& o, const py::dict& given, const
     else if (key == "rtol") o.rtol = number(v, who, "rtol");
     else if (key == "atol") o.atol = number(v, who, "atol");
     else if (key == "max_step") o.max_step = number(v, who, "max_step");
-    else if (key == "max_steps") o.max_steps = v.cast<long>();
-    else if (key == "stiff_switch") o.stiff_switch = v.cast<bool>();
+    else if (key == "max_steps") o.max_steps = integer<long>(v, who, "max_steps");
+    else if (key == "stiff_switch") o.stiff_switch = boolean(v, who, "stiff_switch");
     else if (key == "output_every") o.output_every = number(v, who, "output_every");
     else if (key == "output_at") o.output_at = numbers(v, who, "output_at");
     else if (key == "breakpoints") o.breakpoints = numbers(v, who, "breakpoints");
     else if (key == "drift") o.drift = drift_from_string(text(v, who, "drift"));
     else if (key == "baumgarte_alpha") o.baumgarte_alpha = number(v, who, "baumgarte_alpha");
     else if (key == "baumgarte_beta") o.baumgarte_beta = number(v, who, "baumgarte_beta");
-    else if (key == "project_initial") o.project_initial = v.cast<bool>();
+    else if (key == "project_initial") o.project_initial = boolean(v, who, "project_initial");
     else if (key == "initial_tolerance") o.initial_tolerance = number(v, who, "initial_tolerance");
     else if (key == "projection_tolerance") o.projection.tolerance = number(v, who, "projection_tolerance");
-    else if (key == "projection_iterations") o.projection.max_iterations = v.cast<int>();
+    else if (key == "projection_iterations") o.projection.max_iterations = integer<int>(v, who, "projection_iterations");
     else if (key == "energy_balance_tolerance")
       o.energy_balance_tolerance = number(v, who, "energy_balance_tolerance");
     else {

@@ -122,7 +122,7 @@ def test_ctrl_c_during_simulate_raises_keyboard_interrupt_with_the_partial_resul
     # the partial result: interrupted, times increasing, the last at t_reached
     assert r["has_partial"] and r["same_object"]
     assert r["status"] == "interrupted"
-    assert r["samples"] >= 3
+    assert r["samples"] >= 2  # the initial state and the state at t_reached, at least (loaded machine)
     assert r["increasing"]
     assert r["t_last"] == pytest.approx(r["t_reached"], rel=1e-15, abs=0.0)
     assert 0.5 < r["t_reached"] < 5e4
