@@ -28,10 +28,16 @@ inline ControlStatus fail(ControlWorkspace& ws, ControlStatus s, const char* qua
   return s;
 }
 
-// Tier 1: refuses a workspace made for another controller.
+// Tier 1: refuses a workspace made for another controller, or a moved-from one
+// (controller_id() 0).
 inline void require_same_controller(const Controller& ctrl, const ControlWorkspace& ws,
                                     const char* who) {
   if (ctrl.id() != ws.controller_id()) {
+    if (ws.controller_id() == 0) {
+      throw std::invalid_argument(std::string(who) +
+                                  ": the control workspace is empty (moved from); make one with "
+                                  "ControlWorkspace(ctrl)");
+    }
     throw std::invalid_argument(std::string(who) +
                                 ": the control workspace was made for another controller (make "
                                 "one with ControlWorkspace(ctrl))");

@@ -20,13 +20,30 @@ inline Status fail(Workspace& ws, Status s, const char* quantity, Index index, d
   return s;
 }
 
-// Tier 1: refuses a workspace made for another system.
+// Tier 1: refuses a workspace made for another system, or a moved-from one (system_id() 0,
+// which no System has): one compare when the workspace is right.
 inline void require_same_system(const System& sys, const Workspace& ws, const char* who) {
-  if (sys.id() != ws.system_id()) {
+  if (sys.id() == ws.system_id()) return;
+  if (ws.system_id() == 0) {
     throw std::invalid_argument(std::string(who) +
-                                ": the workspace was made for another system (make one with "
-                                "Workspace(sys))");
+                                ": the workspace is empty (moved from: its buffers went to "
+                                "another Workspace); make one with Workspace(sys), or move-assign "
+                                "one to it");
   }
+  throw std::invalid_argument(std::string(who) +
+                              ": the workspace was made for another system (make one with "
+                              "Workspace(sys))");
+}
+
+// Tier 1: q (and q', when given) have n entries.
+inline void require_state_size(const System& sys, const VectorXd& q, const VectorXd* qd,
+                               const char* who) {
+  const Index n = sys.dofs();
+  if (q.size() == n && (!qd || qd->size() == n)) return;
+  const bool bad_q = q.size() != n;
+  throw std::invalid_argument(std::string(who) + ": " + (bad_q ? "q" : "q_dot") + " has " +
+                              std::to_string(bad_q ? q.size() : qd->size()) +
+                              " entries, expected n = " + std::to_string(n));
 }
 
 // M(q,t), its checks and its factorization into the workspace's decomposition (stage 1 without

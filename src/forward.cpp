@@ -2,6 +2,7 @@
 #include "ukdyn/forward.hpp"
 
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 #include <string>
 
@@ -24,6 +25,22 @@ Index first_non_finite(const VectorXd& v) {
   }
   return -1;
 }
+
+// A failure before the results were computed (non-finite input, M, A, b or C): q'', the forces
+// and the multipliers hold NaN rather than the previous evaluation's values, which a caller
+// ignoring the status would otherwise take for this one's. (A failure found by check_result —
+// inconsistent constraints, a non-finite result — keeps what was computed: the least-squares
+// q'' that describe_status reports the residual of.) No allocation.
+Status invalidate_results(Workspace& ws, Status s) {
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  ws.qdd.setConstant(nan);
+  ws.Qc.setConstant(nan);
+  ws.Qc_ideal.setConstant(nan);
+  ws.Qc_nonideal.setConstant(nan);
+  ws.lambda.setConstant(nan);
+  ws.lambda_nonideal.setConstant(nan);
+  return s;
+}
 }  // namespace
 
 Status forward_dynamics(const System& sys, Workspace& ws, const VectorXd& q, const VectorXd& qd,
@@ -37,22 +54,24 @@ Status forward_dynamics(const System& sys, Workspace& ws, const VectorXd& q, con
   ws.failed_index = -1;
   ws.failed_time = t;
   // inputs
-  if (!std::isfinite(t)) return detail::fail(ws, Status::kNonFiniteInput, "t", -1, t);
+  if (!std::isfinite(t)) {
+    return invalidate_results(ws, detail::fail(ws, Status::kNonFiniteInput, "t", -1, t));
+  }
   if (Index i = first_non_finite(q); i >= 0) {
-    return detail::fail(ws, Status::kNonFiniteInput, "q", i, t);
+    return invalidate_results(ws, detail::fail(ws, Status::kNonFiniteInput, "q", i, t));
   }
   if (Index i = first_non_finite(qd); i >= 0) {
-    return detail::fail(ws, Status::kNonFiniteInput, "q_dot", i, t);
+    return invalidate_results(ws, detail::fail(ws, Status::kNonFiniteInput, "q_dot", i, t));
   }
   // M, Q, a → A, b → ideal → non-ideal → checks
   Status s = evaluate_unconstrained(sys, ws, q, qd, t);
-  if (s != Status::kOk) return s;
+  if (s != Status::kOk) return invalidate_results(ws, s);
   s = assemble_constraints(sys, ws, q, qd, t);
-  if (s != Status::kOk) return s;
+  if (s != Status::kOk) return invalidate_results(ws, s);
   s = solve_ideal(sys, ws);
-  if (s != Status::kOk) return s;
+  if (s != Status::kOk) return invalidate_results(ws, s);
   s = apply_nonideal(sys, ws, q, qd, t);
-  if (s != Status::kOk) return s;
+  if (s != Status::kOk) return invalidate_results(ws, s);
   return check_result(sys, ws);
 }
 

@@ -116,6 +116,13 @@ void validate(const System& sys, const VectorXd& q0, const VectorXd& qd0,
     fail("q0 and qd0 need n = " + std::to_string(sys.dofs()) + " entries, got " +
          std::to_string(q0.size()) + " and " + std::to_string(qd0.size()));
   }
+  // a non-finite initial state is misuse, named like forward_dynamics names it
+  for (Index i = 0; i < sys.dofs(); ++i) {
+    if (std::isfinite(q0[i]) && std::isfinite(qd0[i])) continue;
+    const bool in_q = !std::isfinite(q0[i]);
+    fail(std::string(in_q ? "q0" : "qd0") + " is not finite at coordinate '" +
+         sys.coordinate_names()[std::size_t(i)] + "' (" + format(in_q ? q0[i] : qd0[i]) + ")");
+  }
   if (!(o.t_end > o.t_start)) {
     fail("t_end (" + format(o.t_end) + ") must be greater than t_start (" + format(o.t_start) +
          ")");

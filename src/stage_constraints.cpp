@@ -56,6 +56,7 @@ void copy_constraint_rows(const System& sys, const Workspace& ws, Index k,
 Status assemble_constraints(const System& sys, Workspace& ws, const VectorXd& q,
                             const VectorXd& qd, double t) {
   detail::require_same_system(sys, ws, "ukdyn::assemble_constraints");
+  detail::require_state_size(sys, q, &qd, "ukdyn::assemble_constraints");
   ws.active_rows = 0;
   for (Index k = 0; k < sys.constraint_count(); ++k) {
     const Constraint& c = sys.constraint(k);

@@ -16,6 +16,7 @@ constexpr int kMaxReactionIterations = 50;
 Status apply_nonideal(const System& sys, Workspace& ws, const VectorXd& q, const VectorXd& qd,
                       double t) {
   detail::require_same_system(sys, ws, "ukdyn::apply_nonideal");
+  detail::require_state_size(sys, q, &qd, "ukdyn::apply_nonideal");
   ws.C.setZero();
   if (sys.nonideal_count() == 0) {
     // ideal constraints: Qc = Qc_ideal

@@ -1,6 +1,7 @@
 // Constraint violations and projection onto the constraints (drift control): the correction of
 // least M-norm, dq = −L⁻ᵀ W⁺ phi, through the same decomposition as the dynamics.
 #include <algorithm>
+#include <cmath>
 #include <limits>
 #include <stdexcept>
 #include <string>
@@ -24,6 +25,40 @@ void require_tolerance(const ProjectionOptions& o, const char* who) {
     throw std::invalid_argument(std::string(who) +
                                 ": ProjectionOptions need tolerance > 0 and max_iterations >= 0");
   }
+}
+
+// index of the first non-finite entry, or −1
+Index first_non_finite(const VectorXd& v) {
+  for (Index i = 0; i < v.size(); ++i) {
+    if (!std::isfinite(v[i])) return i;
+  }
+  return -1;
+}
+
+// Tier 1: the sizes; then the inputs, as forward_dynamics checks them: a non-finite t, q (or
+// q') is recorded in the workspace as kNonFiniteInput naming the coordinate (describe_status,
+// throw_if_failed) and returned, so that a NaN state is never reported converged.
+Status check_inputs(const System& sys, Workspace& ws, const VectorXd& q, const VectorXd* qd,
+                    double t, const char* who) {
+  detail::require_state_size(sys, q, qd, who);
+  if (!std::isfinite(t)) return detail::fail(ws, Status::kNonFiniteInput, "t", -1, t);
+  if (const Index i = first_non_finite(q); i >= 0) {
+    return detail::fail(ws, Status::kNonFiniteInput, "q", i, t);
+  }
+  if (qd) {
+    if (const Index i = first_non_finite(*qd); i >= 0) {
+      return detail::fail(ws, Status::kNonFiniteInput, "q_dot", i, t);
+    }
+  }
+  return Status::kOk;
+}
+
+// a projection that stopped on a failed evaluation: not converged, violation NaN (unknown)
+ProjectionResult failed(ProjectionResult res, Status s = Status::kOk) {
+  if (s != Status::kOk) res.status = s;
+  res.converged = false;
+  res.violation = std::numeric_limits<double>::quiet_NaN();
+  return res;
 }
 
 // which rows a projection works on
@@ -58,7 +93,14 @@ double measure_violation(const System& sys, Workspace& ws, const VectorXd& q, co
     } else {
       ek = -vk;
     }
-    worst = std::max(worst, ek.cwiseAbs().maxCoeff());
+    // (a NaN row must not vanish in the max: it is reported, see check_violation)
+    const double row = ek.cwiseAbs().maxCoeff();
+    if (!std::isfinite(row)) {
+      detail::fail(ws, Status::kNonFiniteInput, level == Level::kPosition ? "phi" : "phi_dot", k,
+                   t);
+      return std::numeric_limits<double>::quiet_NaN();
+    }
+    worst = std::max(worst, row);
   }
   return worst;
 }
@@ -137,6 +179,7 @@ void remove_normal(Workspace& ws, Eigen::Ref<VectorXd> dx) {
 void evaluate_violations(const System& sys, Workspace& ws, const VectorXd& q, const VectorXd& qd,
                          double t) {
   detail::require_same_system(sys, ws, "ukdyn::evaluate_violations");
+  detail::require_state_size(sys, q, &qd, "ukdyn::evaluate_violations");
   for (Index k = 0; k < sys.constraint_count(); ++k) {
     const Constraint& c = sys.constraint(k);
     auto pk = ws.phi.segment(sys.row_offset(k), c.rows());
@@ -163,10 +206,13 @@ ProjectionResult project_positions(const System& sys, Workspace& ws, VectorXd& q
   detail::require_same_system(sys, ws, "ukdyn::project_positions");
   require_tolerance(options, "ukdyn::project_positions");
   ProjectionResult res;
+  res.status = check_inputs(sys, ws, q, nullptr, t, "ukdyn::project_positions");
+  if (res.status != Status::kOk) return failed(res);
   Settling settling;
   for (;;) {
     // phi(q)
     const double worst = measure_violation(sys, ws, q, ws.zero_n, t, options, Level::kPosition);
+    if (std::isnan(worst)) return failed(res, ws.status);
     res.violation = std::max(worst, 0.0);
     if (settling.done(worst, options.tolerance)) {
       res.converged = true;
@@ -179,6 +225,10 @@ ProjectionResult project_positions(const System& sys, Workspace& ws, VectorXd& q
     if (res.status != Status::kOk) return res;
     correct(ws, q);
     ++res.iterations;
+    if (const Index i = first_non_finite(q); i >= 0) {
+      detail::fail(ws, Status::kNonFiniteResult, "q", i, t);
+      return failed(res, Status::kNonFiniteResult);
+    }
   }
 }
 
@@ -187,11 +237,14 @@ ProjectionResult project_velocities(const System& sys, Workspace& ws, const Vect
   detail::require_same_system(sys, ws, "ukdyn::project_velocities");
   require_tolerance(options, "ukdyn::project_velocities");
   ProjectionResult res;
+  res.status = check_inputs(sys, ws, q, &qd, t, "ukdyn::project_velocities");
+  if (res.status != Status::kOk) return failed(res);
   Settling settling;
   bool factorized = false;
   for (;;) {
     // phi'(q, q')
     const double worst = measure_violation(sys, ws, q, qd, t, options, Level::kVelocity);
+    if (std::isnan(worst)) return failed(res, ws.status);
     res.violation = std::max(worst, 0.0);
     if (settling.done(worst, options.tolerance)) {
       res.converged = true;
@@ -207,6 +260,10 @@ ProjectionResult project_velocities(const System& sys, Workspace& ws, const Vect
     }
     correct(ws, qd);
     ++res.iterations;
+    if (const Index i = first_non_finite(qd); i >= 0) {
+      detail::fail(ws, Status::kNonFiniteResult, "q_dot", i, t);
+      return failed(res, Status::kNonFiniteResult);
+    }
   }
 }
 

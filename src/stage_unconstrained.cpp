@@ -251,6 +251,7 @@ Status complete_singular_mass(Workspace& ws, double t, bool forces, bool regular
 Status evaluate_unconstrained(const System& sys, Workspace& ws, const VectorXd& q,
                               const VectorXd& qd, double t) {
   detail::require_same_system(sys, ws, "ukdyn::evaluate_unconstrained");
+  detail::require_state_size(sys, q, &qd, "ukdyn::evaluate_unconstrained");
   if (const Status s = detail::evaluate_mass(sys, ws, q, t); s != Status::kOk) return s;
   // Q(q,q',t)
   sys.forces(q, qd, t, ws.Q);

@@ -264,7 +264,8 @@ std::string describe_status(const System& sys, const Workspace& ws) {
   const Index k = ws.failed_index;
   if (ws.status == Status::kMotionUndetermined) {
     // (failed_index is the sparse engine's block, reported below)
-  } else if ((what == "A" || what == "b") && k >= 0 && k < sys.constraint_count()) {
+  } else if ((what == "A" || what == "b" || what == "phi" || what == "phi_dot") && k >= 0 &&
+             k < sys.constraint_count()) {
     s << " of constraint '" << sys.constraint(k).name() << "'";
   } else if (what == "C" && k >= 0 && k < sys.nonideal_count()) {
     s << " of non-ideal force '" << sys.nonideal_name(k) << "'";

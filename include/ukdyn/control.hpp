@@ -330,7 +330,8 @@ class ControlWorkspace {
   /// Sizes every buffer for `ctrl`. Cost O(n² + n m_r + n k).
   explicit ControlWorkspace(const Controller& ctrl);
 
-  /// Identity of the controller this workspace was made for.
+  /// Identity of the controller this workspace was made for; 0 once moved from (the stages
+  /// then throw std::invalid_argument saying the workspace is empty).
   std::uint64_t controller_id() const { return controller_id_; }
 
   // --- stage 1, evaluate_model -----------------------------------------------------------
@@ -393,7 +394,7 @@ class ControlWorkspace {
   bool cost_factorized = false;    ///< a constant cost matrix is already factorized
 
  private:
-  std::uint64_t controller_id_ = 0;
+  MovedFromZero<std::uint64_t> controller_id_;
 };
 
 // ---------------------------------------------------------------------------------------------

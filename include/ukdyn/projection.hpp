@@ -51,18 +51,30 @@ struct ProjectionOptions {
 struct ProjectionResult {
   bool converged = false;    ///< the tolerance was met
   int iterations = 0;        ///< corrections applied
-  double violation = 0.0;    ///< max |row| after the last correction (0 if nothing to project)
-  Status status = Status::kOk;  ///< kOk, or why an evaluation failed (M, NaN, …)
+  /// max |row| after the last correction (0 if nothing to project; NaN when a non-finite
+  /// input, violation or correction stopped the projection)
+  double violation = 0.0;
+  /// kOk, or why an evaluation failed: M (kMassNotPositiveDefinite, …), kNonFiniteInput for a
+  /// non-finite t, q, q' or constraint violation, kNonFiniteResult for a correction that is
+  /// not finite. A failing status is also recorded in the workspace (ws.status,
+  /// failed_quantity "t", "q", "q_dot", "phi", "phi_dot", failed_index the coordinate or
+  /// constraint), so describe_status / throw_if_failed name it ("non-finite input (NaN or Inf)
+  /// at t = 0 in q (coordinate 'x')"); converged is then false.
+  Status status = Status::kOk;
 };
 
 /// q ← q − M⁻¹ Aᵀ (A M⁻¹ Aᵀ)⁺ phi(q, t) over the holonomic constraints (active at t and in the
 /// mask), iterated until converged. Cost per iteration O(n³/3 + m n² + m² n) and the constraints'.
+/// @throws std::invalid_argument when q does not have n entries, the workspace is of another
+/// system or empty (moved from), or the options are out of range. A non-finite t or q is not
+/// projected: status kNonFiniteInput (see ProjectionResult), q unchanged.
 ProjectionResult project_positions(const System& sys, Workspace& ws, VectorXd& q, double t,
                                    const ProjectionOptions& options = {});
 
 /// q' ← q' − M⁻¹ Aᵀ (A M⁻¹ Aᵀ)⁺ phi'(q, q', t) over the holonomic and nonholonomic
 /// constraints (active at t and in the mask), q fixed; iterated, since psi may be nonlinear in
-/// q'. Cost as project_positions.
+/// q'. Cost as project_positions. Throws and reports non-finite inputs (t, q, q') as
+/// project_positions does.
 ProjectionResult project_velocities(const System& sys, Workspace& ws, const VectorXd& q,
                                     VectorXd& qd, double t, const ProjectionOptions& options = {});
 

@@ -91,6 +91,29 @@ struct Counters {
   std::int64_t nonideal_unsettled = 0;
 };
 
+/// A value that a move hands over, leaving a value-initialized one (0) behind: the identity and
+/// sizes of a workspace, so that a moved-from workspace reads as empty (system_id() 0, which no
+/// System has) and every entry point refuses it with std::invalid_argument rather than reading
+/// its empty buffers. Costs nothing where it is read.
+template <class T>
+class MovedFromZero {
+ public:
+  MovedFromZero() = default;
+  MovedFromZero(T v) : v_(v) {}  // NOLINT: implicit, it stands for a T
+  MovedFromZero(const MovedFromZero&) = default;
+  MovedFromZero& operator=(const MovedFromZero&) = default;
+  MovedFromZero(MovedFromZero&& o) noexcept : v_(o.v_) { o.v_ = T{}; }
+  MovedFromZero& operator=(MovedFromZero&& o) noexcept {
+    v_ = o.v_;
+    if (this != &o) o.v_ = T{};
+    return *this;
+  }
+  operator T() const { return v_; }  // NOLINT: implicit, it stands for a T
+
+ private:
+  T v_{};
+};
+
 /// Buffers and results of evaluations of one System. Fields are public, annotated with their
 /// size and the stage that fills them (forward.hpp lists the stages).
 class Workspace {
@@ -99,12 +122,15 @@ class Workspace {
   /// @throws std::invalid_argument if an option is out of range.
   explicit Workspace(const System& sys, const SolverOptions& options = {});
   ~Workspace();
+  /// Moves every buffer; the moved-from workspace is left empty: system_id() 0, dofs() and
+  /// rows() 0, and every entry point given it throws std::invalid_argument ("the workspace is
+  /// empty (moved from)") until a workspace is move-assigned into it.
   Workspace(Workspace&&) noexcept;
   Workspace& operator=(Workspace&&) noexcept;
 
   /// Options in force (set at construction).
   const SolverOptions& options() const { return options_; }
-  /// Identity of the system this workspace was made for.
+  /// Identity of the system this workspace was made for; 0 for a moved-from workspace.
   std::uint64_t system_id() const { return system_id_; }
   /// Index n and m of the system.
   Index dofs() const { return n_; }
@@ -224,8 +250,8 @@ class Workspace {
 
  private:
   SolverOptions options_;
-  std::uint64_t system_id_ = 0;
-  Index n_ = 0, m_ = 0;
+  MovedFromZero<std::uint64_t> system_id_;
+  MovedFromZero<Index> n_, m_;
 };
 
 /// A one-line description of ws.status: what failed, where and when, with the residual for
