@@ -1,6 +1,7 @@
 cmake_minimum_required(VERSION 3.25)
 # Test driver: runs the command after `--` and checks its exit code and output.
-#   cmake -DEXPECT_CODE=N -DEXPECT_REGEX=RE [-DCSV=file -DCSV_HEADER=RE] -P expect.cmake -- CMD ARGS...
+#   cmake -DEXPECT_CODE=N -DEXPECT_REGEX=RE [-DEXPECT_NO_REGEX=RE] [-DCSV=file -DCSV_HEADER=RE]
+#         -P expect.cmake -- CMD ARGS...
 # CTest's PASS_REGULAR_EXPRESSION ignores the exit code; this checks both.
 set(cmd)
 set(seen_separator FALSE)
@@ -26,6 +27,10 @@ if(NOT "${code}" STREQUAL "${EXPECT_CODE}")
 endif()
 if(NOT "${out}${err}" MATCHES "${EXPECT_REGEX}")
   message(FATAL_ERROR "the output does not match '${EXPECT_REGEX}'")
+endif()
+# -DEXPECT_NO_REGEX=RE: the output must not match RE (e.g. "warning")
+if(DEFINED EXPECT_NO_REGEX AND "${out}${err}" MATCHES "${EXPECT_NO_REGEX}")
+  message(FATAL_ERROR "the output matches '${EXPECT_NO_REGEX}', which it must not")
 endif()
 if(DEFINED CSV)
   if(NOT EXISTS "${CSV}")

@@ -179,6 +179,10 @@ Index Reader::coordinate(const YAML::Node& node) {
   for (std::size_t i = 0; i < coordinates_.size(); ++i) {
     if (coordinates_[i] == name) return Index(i);
   }
+  // crank.x for crank_x (names_coordinate)
+  for (std::size_t i = 0; i < coordinates_.size(); ++i) {
+    if (names_coordinate(name, coordinates_[i])) return Index(i);
+  }
   fail(node, "unknown coordinate '" + name + "'", "the coordinates are " + join(coordinates_));
 }
 

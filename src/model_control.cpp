@@ -212,10 +212,15 @@ void Reader::read_control(const YAML::Node& root, Model& model) {
       fail(a, "actuated must be a list of coordinates", "actuated: [x]");
     std::vector<std::string> names;
     for (const auto& x : a) {
-      const std::string name = x.Scalar();
-      if (std::find(coordinates_.begin(), coordinates_.end(), name) == coordinates_.end())
-        fail(x, "actuated: '" + name + "' is not a coordinate",
+      // (crank.x or crank_x: names_coordinate; the list holds the reader's spelling)
+      const auto known = std::find_if(coordinates_.begin(), coordinates_.end(),
+                                      [&](const std::string& c) {
+                                        return names_coordinate(x.Scalar(), c);
+                                      });
+      if (known == coordinates_.end())
+        fail(x, "actuated: '" + x.Scalar() + "' is not a coordinate",
              "the coordinates are " + join(coordinates_));
+      const std::string name = *known;
       if (std::find(names.begin(), names.end(), name) != names.end())
         fail(x, "actuated: '" + name + "' is listed twice");
       names.push_back(name);

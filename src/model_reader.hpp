@@ -40,6 +40,20 @@ inline bool is_identifier(const std::string& s) {
   });
 }
 
+// Whether `given` names the coordinate `name`: the same text, or the same once every '.' is
+// read as '_' — a body's coordinates are spelled crank.x in the CSV and the C++/Python names,
+// crank_x in expressions (a '.' is not an identifier character); both are accepted wherever a
+// model file names a coordinate (docs/multibody.md).
+inline bool names_coordinate(const std::string& given, const std::string& name) {
+  if (given == name) return true;
+  if (given.size() != name.size()) return false;
+  for (std::size_t i = 0; i < given.size(); ++i) {
+    const char a = given[i] == '.' ? '_' : given[i], b = name[i] == '.' ? '_' : name[i];
+    if (a != b) return false;
+  }
+  return true;
+}
+
 // a number as a person writes it (2, 0.5, 1e-06)
 inline std::string brief(double v) {
   std::ostringstream s;

@@ -1,6 +1,7 @@
 // Reports of a multibody model: poses, velocities, energies and momenta of the bodies; the
 // reaction of each joint (ideal and friction parts) reduced to the joint point; driving efforts;
 // and the poses of every body at every sample of a trajectory, for animation.
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <fstream>
@@ -252,9 +253,18 @@ std::vector<CsvColumn> report_csv_columns(const MultibodyModel& mb, const Trajec
     cols.push_back(CsvColumn{std::move(name), std::vector<double>(N)});
     return cols.size() - 1;
   };
-  // poses: 7 per body, then the kinetic energies
+  // poses: 7 per body, without the components that are coordinates of the body (its centre
+  // of mass <b>.x, <b>.y (, <b>.z) is already a standard column, with the same values); then
+  // the kinetic energies. pose_column[7 b + c]: the column of component c, or −1
+  const auto& coordinates = mb.system.coordinate_names();
+  std::vector<std::ptrdiff_t> pose_column;
   for (const BodyInfo& b : mb.bodies) {
-    for (const char* s : kPoseSuffixes) add(b.name + s);
+    for (const char* s : kPoseSuffixes) {
+      const std::string name = b.name + s;
+      const bool is_coordinate =
+          std::find(coordinates.begin(), coordinates.end(), name) != coordinates.end();
+      pose_column.push_back(is_coordinate ? -1 : std::ptrdiff_t(add(name)));
+    }
   }
   const std::size_t energy0 = cols.size();
   for (const BodyInfo& b : mb.bodies) add(b.name + ".kinetic_energy");
@@ -297,7 +307,10 @@ std::vector<CsvColumn> report_csv_columns(const MultibodyModel& mb, const Trajec
     const double t = tr.t[i];
     for (std::size_t b = 0; b < mb.bodies.size(); ++b) {
       const std::array<double, 7> v = pose_values(body_pose(mb, q, BodyId(b)));
-      for (std::size_t c = 0; c < 7; ++c) cols[7 * b + c].values[i] = v[c];
+      for (std::size_t c = 0; c < 7; ++c) {
+        const std::ptrdiff_t col = pose_column[7 * b + c];
+        if (col >= 0) cols[std::size_t(col)].values[i] = v[c];
+      }
       cols[energy0 + b].values[i] = kinetic_energy(mb, q, qd, BodyId(b));
     }
     const bool evaluated =

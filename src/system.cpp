@@ -31,8 +31,11 @@ Index System::constraint_index(std::string_view name) const {
   for (std::size_t k = 0; k < constraints_.size(); ++k) {
     if (constraints_[k].name() == name) return Index(k);
   }
+  // (the contacts' stick constraints are internal: not listed)
   std::vector<std::string> names;
-  for (const auto& c : constraints_) names.push_back(c.name());
+  for (std::size_t k = 0; k < user_constraints_ && k < constraints_.size(); ++k) {
+    names.push_back(constraints_[k].name());
+  }
   throw std::invalid_argument("ukdyn::System: no constraint named '" + std::string(name) +
                               "'; the constraints are " + join_names(names));
 }
@@ -41,6 +44,24 @@ Index System::coordinate_index(std::string_view name) const {
   for (std::size_t i = 0; i < names_.size(); ++i) {
     if (names_[i] == name) return Index(i);
   }
+  // the other spelling of a body's coordinate: crank_x for crank.x (and back), when exactly one
+  // coordinate matches with every '.' read as '_'
+  const auto key = [](std::string_view s) {
+    std::string k(s);
+    std::replace(k.begin(), k.end(), '.', '_');
+    return k;
+  };
+  const std::string wanted = key(name);
+  Index found = -1;
+  for (std::size_t i = 0; i < names_.size(); ++i) {
+    if (key(names_[i]) != wanted) continue;
+    if (found >= 0) {
+      found = -1;
+      break;
+    }
+    found = Index(i);
+  }
+  if (found >= 0) return found;
   throw std::invalid_argument("ukdyn::System: no coordinate named '" + std::string(name) +
                               "'; the coordinates are " + join_names(names_));
 }
@@ -239,6 +260,7 @@ System SystemBuilder::build() const {
   s.external_power_ = external_power_;
   s.accounts_for_energy_ = accounts_for_energy_ || potential_ || external_power_ || !forces_;
   s.constraints_ = all;
+  s.user_constraints_ = constraints_.size();
   s.id_ = next_system_id();
   // bind the non-ideal forces last: they may look up constraints and coordinates by name
   std::set<std::string> seen_forces;

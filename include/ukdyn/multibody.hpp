@@ -332,7 +332,10 @@ void write_poses_csv(const MultibodyModel& mb, const Trajectory& tr, const std::
 
 /// The multibody columns of a model run's CSV (run.hpp), one value per sample of tr, in order:
 ///  - `<b>.x, <b>.y, <b>.z, <b>.qw, <b>.qx, <b>.qy, <b>.qz` for every body (its pose, as
-///    write_poses_csv);
+///    write_poses_csv), except the components that are coordinates of the system (the centre
+///    of mass `<b>.x, <b>.y` of a planar body, `<b>.x, <b>.y, <b>.z` of a rigid body or a
+///    particle: the standard coordinate columns hold them), so that no name repeats one of
+///    csv_columns();
 ///  - `<b>.kinetic_energy` for every body (kinetic_energy);
 ///  - per joint, its ideal reaction on its child (joint_reaction from the sample's lambda,
 ///    world frame, reduced to the joint point): `reaction.<j>.fx, .fy, .tz` for a planar joint,

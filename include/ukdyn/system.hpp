@@ -77,10 +77,13 @@ class System {
   const Constraint& constraint(Index k) const { return constraints_.at(std::size_t(k)); }
   /// First row of constraint k in A and b (rows k..k+rows−1 belong to it).
   Index row_offset(Index k) const { return offsets_.at(std::size_t(k)); }
-  /// Index of the constraint called `name`. @throws std::invalid_argument naming it and the
-  /// known names when there is none. Cost O(K).
+  /// Index of the constraint called `name` (also the internal stick constraint
+  /// "stick.<force>" of a Coulomb contact). @throws std::invalid_argument naming it and the
+  /// constraints given to the builder when there is none. Cost O(K).
   Index constraint_index(std::string_view name) const;
-  /// Index of the coordinate called `name`. @throws std::invalid_argument. Cost O(n).
+  /// Index of the coordinate called `name`; a body's coordinate may also be spelled with '_'
+  /// for '.' (crank_x for crank.x, as model-file expressions write it; docs/multibody.md) when
+  /// that names exactly one coordinate. @throws std::invalid_argument. Cost O(n).
   Index coordinate_index(std::string_view name) const;
 
   /// True when M was given as a constant matrix (the workspace then factorizes it once).
@@ -146,6 +149,7 @@ class System {
   PowerFn external_power_;
   bool accounts_for_energy_ = true;
   std::vector<Constraint> constraints_;
+  std::size_t user_constraints_ = 0;  // the first ones; the others are the contacts' stick rows
   std::vector<Index> offsets_;
   std::vector<std::string> nonideal_names_;
   std::vector<NonIdealFn> nonideal_fns_;
