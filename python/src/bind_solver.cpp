@@ -31,9 +31,9 @@ class Solver {
         qd_(VectorXd::Zero(h_.system.dofs())) {}
 
   // forward_dynamics at (q, q', t); raises a pending exception of the system's callables
-  Status evaluate(py::handle q, py::handle qd, double t) {
-    read_into(q, "Solver.solve", "q", q_);
-    read_into(qd, "Solver.solve", "q_dot", qd_);
+  Status evaluate(py::handle q, py::handle qd, double t, const char* who) {
+    read_into(q, who, "q", q_);
+    read_into(qd, who, "q_dot", qd_);
     const Status s = forward_dynamics(h_.system, ws_, q_, qd_, t);
     h_.raise_pending();
     return s;
@@ -292,7 +292,7 @@ next evaluation) — the fastest path. Not thread-safe: one solver per thread.
       .def(
           "solve",
           [](Solver& s, py::handle q, py::handle qd, double t, bool check) {
-            s.evaluate(q, qd, t);
+            s.evaluate(q, qd, t, "Solver.solve");
             s.t_last = t;
             if (check) throw_if_failed(s.handle().system, s.ws());
             return s.snapshot(t);
@@ -310,7 +310,7 @@ Cost: one evaluation, O(n³/3 + m n² + m² n), plus the copies.)doc")
           "evaluate",
           [](Solver& s, py::handle q, py::handle qd, double t) {
             s.t_last = t;
-            return to_string(s.evaluate(q, qd, t));
+            return to_string(s.evaluate(q, qd, t, "Solver.evaluate"));
           },
           py::arg("q"), py::arg("q_dot"), py::arg("t") = 0.0,
           "Evaluates at (q, q', t) like solve() but returns only the status ('ok', ...); the "

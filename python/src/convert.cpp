@@ -26,7 +26,15 @@ std::string shape_text(const py::array& a) {
 // obj as a float64 array (a view when it already is one; converted otherwise). Complex numbers
 // are refused rather than cast with their imaginary part dropped.
 py::array_t<double> as_array(py::handle obj, const char* who, const char* what) {
-  if (obj.is_none()) throw std::invalid_argument(std::string(who) + ": " + what + " is None");
+  // (NumPy would read None as a 0-d NaN: "must have 2 entries (got 1)"); a callable's value is
+  // read with who "ukdyn callable" and what "Q(q, q_dot, t)", …
+  if (obj.is_none()) {
+    const bool returned = std::strcmp(who, "ukdyn callable") == 0;
+    throw std::invalid_argument(std::string(who) + ": " + what +
+                                (returned ? " returned None (it must return numbers: did it "
+                                            "miss a return statement?)"
+                                          : " is None"));
+  }
   if (PyComplex_Check(obj.ptr()) ||
       (py::isinstance<py::array>(obj) && py::reinterpret_borrow<py::array>(obj).dtype().kind() == 'c')) {
     throw std::invalid_argument(std::string(who) + ": " + what + " must be real numbers (got complex)");

@@ -54,28 +54,61 @@ class Result:
         self.stats: Dict[str, Any] = dict(stats)
         self.control: Optional[Dict[str, Any]] = control
         self.coordinates: List[str] = list(coordinates)
+        self._alias: Dict[str, int] = self._spellings()
+
+    def _spellings(self) -> Dict[str, int]:
+        """The other spelling of the columns of a body's coordinates: ``crank_x``, ``crank_x_dot``,
+        ``Qc_ideal.crank_x`` … for ``crank.x``, ``crank.x_dot``, ``Qc_ideal.crank.x`` (model-file
+        expressions write ``crank_x``; docs/multibody.md). Never shadows a real column."""
+        other = {c: c.replace(".", "_") for c in self.coordinates if "." in c}
+        alias: Dict[str, int] = {}
+        if not other:
+            return alias
+        for name, k in self._index.items():
+            spelled = None
+            # <c>, <c>_dot, <c>_ddot, …
+            for c in (name, name.rsplit("_", 1)[0]):
+                if c in other:
+                    spelled = other[c] + name[len(c):]
+                    break
+            # <prefix>.<c>: Qc_ideal.crank.x, Qc_control.crank.x, …
+            if spelled is None:
+                start = name.find(".")
+                while start >= 0 and spelled is None:
+                    rest = name[start + 1:]
+                    if rest in other:
+                        spelled = name[:start + 1] + other[rest]
+                    start = name.find(".", start + 1)
+            if spelled is not None and spelled not in self._index:
+                alias.setdefault(spelled, k)
+        return alias
+
+    def _find(self, name: str) -> Optional[int]:
+        k = self._index.get(name)
+        return k if k is not None else self.__dict__.get("_alias", {}).get(name)
 
     # --- columns -----------------------------------------------------------------------------
     def __getitem__(self, name: str) -> np.ndarray:
-        """The column called ``name``. Raises KeyError naming the close matches."""
-        try:
-            return self._columns[self._index[name]]
-        except KeyError:
-            import difflib
-            close = difflib.get_close_matches(name, self.names, n=3)
-            hint = f" (did you mean {', '.join(repr(c) for c in close)}?)" if close else ""
-            raise KeyError(f"no column '{name}'{hint}") from None
+        """The column called ``name`` (a body's coordinate in either spelling, ``crank.x`` or
+        ``crank_x``). Raises KeyError naming the close matches."""
+        k = self._find(name) if isinstance(name, str) else None
+        if k is not None:
+            return self._columns[k]
+        import difflib
+        close = difflib.get_close_matches(str(name), self.names, n=3)
+        hint = f" (did you mean {', '.join(repr(c) for c in close)}?)" if close else ""
+        raise KeyError(f"no column '{name}'{hint}")
 
     def __getattr__(self, name: str) -> np.ndarray:
         if name.startswith("_"):
             raise AttributeError(name)
-        index = self.__dict__.get("_index", {})
-        if name in index:
-            return self._columns[index[name]]
+        k = self._find(name) if "_index" in self.__dict__ else None
+        if k is not None:
+            return self._columns[k]
         raise AttributeError(f"'Result' object has no attribute or column '{name}'")
 
     def __contains__(self, name: object) -> bool:
-        return name in self._index
+        return isinstance(name, str) and self._find(name) is not None
 
     def __iter__(self) -> Iterator[str]:
         return iter(self.names)
