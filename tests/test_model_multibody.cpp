@@ -369,10 +369,11 @@ TEST(ModelMultibody, RunColumnsHoldPosesEnergiesReactionsAndFriction) {
     // kinetic energy of a rod turning about its end: ½ (m L²/3) theta'²
     EXPECT_NEAR(column(run, "rod.kinetic_energy")[std::size_t(i)],
                 0.5 * mass * L * L / 3 * qd[2] * qd[2], 1e-9);
-    // the pose columns
-    EXPECT_NEAR(column(run, "rod.x")[std::size_t(i)], q[0], 1e-15);
+    // the pose columns (rod.x, rod.y are the coordinate columns: not repeated)
+    EXPECT_EQ(column(run, "rod.z")[std::size_t(i)], 0.0);
     EXPECT_NEAR(column(run, "rod.qw")[std::size_t(i)], std::cos(q[2] / 2), 1e-15);
   }
+  for (const auto& col : run.extra_columns) EXPECT_TRUE(col.name != "rod.x" && col.name != "rod.y");
   // a planar joint reports fx, fy, tz only
   for (const auto& col : run.extra_columns) EXPECT_NE(col.name, "reaction.pin.fz");
 }
