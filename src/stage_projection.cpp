@@ -194,10 +194,12 @@ void evaluate_violations(const System& sys, Workspace& ws, const VectorXd& q, co
 }
 
 double position_violation(const System& sys, const Workspace& ws, Index k) {
+  detail::require_same_system(sys, ws, "ukdyn::position_violation");
   return ws.phi.segment(sys.row_offset(k), sys.constraint(k).rows()).cwiseAbs().maxCoeff();
 }
 
 double velocity_violation(const System& sys, const Workspace& ws, Index k) {
+  detail::require_same_system(sys, ws, "ukdyn::velocity_violation");
   return ws.phi_dot.segment(sys.row_offset(k), sys.constraint(k).rows()).cwiseAbs().maxCoeff();
 }
 

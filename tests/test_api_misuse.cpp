@@ -85,6 +85,8 @@ TEST_F(ApiMisuse, MovedFromWorkspaceIsEmptyAndRefusedByEveryEntryPoint) {
   EXPECT_INVALID(project_positions(sys, ws, q, 0.0), "ukdyn::project_positions: ");
   EXPECT_INVALID(project_positions(sys, ws, q, 0.0), empty);
   EXPECT_INVALID(project_velocities(sys, ws, q, qd, 0.0), empty);
+  EXPECT_INVALID(position_violation(sys, ws, 0), "ukdyn::position_violation: ");
+  EXPECT_INVALID(velocity_violation(sys, ws, 0), empty);
   // the workspace it went to works: q'' of the pendulum released at rest from (L, 0) is
   // (0, −g) (the rod carries no force at rest when horizontal)
   ASSERT_EQ(forward_dynamics(sys, taken, q, qd, 0.0), Status::kOk);
