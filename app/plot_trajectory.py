@@ -27,13 +27,24 @@ except ImportError:
 WORKS = ("work_nonideal", "work_ideal", "work_drive", "work_external", "work_control")
 
 
+# the most rows a plot reads: a longer run (ukdyn run streams any number of rows to the CSV) is
+# thinned to every k-th row and the last, so that the plots' memory does not grow with the run
+MAX_ROWS = 200000
+
+
 def read(path):
-    """The columns of the CSV by name (in order) as lists of floats."""
+    """The columns of the CSV by name (in order) as lists of floats (at most about MAX_ROWS rows:
+    every k-th one and the last)."""
+    with open(path, newline="") as f:
+        total = sum(1 for _ in f) - 1
+    stride = max(1, -(-total // MAX_ROWS))
     with open(path, newline="") as f:
         rows = csv.reader(f)
         header = next(rows)
         data = [[] for _ in header]
-        for row in rows:
+        for i, row in enumerate(rows):
+            if i % stride and i != total - 1:
+                continue
             for j, value in enumerate(row):
                 data[j].append(float(value))
     return header, data

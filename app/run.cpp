@@ -194,6 +194,22 @@ int run_command(const RunArguments& args) {
   StopSignals signals;
   options.should_stop = [] { return StopSignals::received() != 0; };
 
+  // trajectory.csv streams to its temporary while the run goes (memory does not grow with
+  // the run's length): created with the first samples — a run that cannot start leaves the
+  // previous run's files — after removing the previous run's files (each directory holds one
+  // run's files); renamed when the run has ended, however it ended
+  std::vector<fs::path> files = {dir / kRunOutputs[0], dir / kRunOutputs[1]};
+  std::optional<CsvWriter> csv;
+  auto start_csv = [&](const ModelRun& first) {
+    out->remove_previous_outputs();
+    warn_duplicate_columns(first);
+    csv.emplace(files[0].string());
+  };
+  auto write_rows = [&](const ModelRun& chunk) {
+    if (!csv) start_csv(chunk);
+    csv->append(chunk.trajectory, chunk.extra_columns);
+  };
+
   // simulate, with a progress bar on a terminal
   ModelRun run;
   {
@@ -201,7 +217,7 @@ int run_command(const RunArguments& args) {
                     progress_interval(), progress_interval());
     options.progress = [&bar](const ProgressReport& p) { bar.update(p); };
     try {
-      run = run_model(model, options);
+      run = run_model(model, options, write_rows);
     } catch (const std::invalid_argument& e) {
       // the model cannot be started (inconsistent initial state, bad settings)
       bar.finish();
@@ -227,13 +243,14 @@ int run_command(const RunArguments& args) {
                  StopSignals::name(received), stats.t_reached);
   }
 
-  // files: the previous run's go first (each directory holds one run's files); each is written
-  // under a temporary name and renamed when complete, trajectory.csv first, summary.json second
-  // (its presence says that trajectory.csv is complete), the plots last
-  out->remove_previous_outputs();
-  std::vector<fs::path> files = {dir / kRunOutputs[0], dir / kRunOutputs[1]};
-  warn_duplicate_columns(run);
-  write_csv(run, files[0].string());
+  // files: each is written under a temporary name and renamed when complete, trajectory.csv
+  // first (just its header when the run recorded no sample), summary.json second (its
+  // presence says that trajectory.csv is complete), the plots last
+  if (!csv) {
+    start_csv(run);
+    csv->append(run.trajectory, run.extra_columns);
+  }
+  csv->commit();
   write_summary_json(run.trajectory, options, files[1].string());
   if (args.plots) {
     for (const auto& f : make_plots(files[0], dir)) files.push_back(f);
@@ -242,7 +259,7 @@ int run_command(const RunArguments& args) {
   // what happened
   const RunStatistics& s = run.trajectory.stats;
   std::printf("  %lld samples to t = %g s: %ld steps (%ld rejected), %ld evaluations, %.3g s\n",
-              static_cast<long long>(run.trajectory.samples()), s.t_reached, s.steps, s.rejected_steps,
+              static_cast<long long>(csv->rows()), s.t_reached, s.steps, s.rejected_steps,
               s.evaluations, s.wall_time);
   if (s.stiff_switches > 0) {
     std::printf("  stiff from t = %g s: %s switched to bdf %ld time%s (%ld of the steps by bdf)\n",

@@ -8,6 +8,7 @@
 #include <sstream>
 #include <string>
 
+#include "energy_balance.hpp"
 #include "ukdyn/simulate.hpp"
 
 namespace ukdyn {
@@ -22,14 +23,9 @@ std::string format(double v) {
 }
 
 // the warning of a run whose balance fails: the worst sample and what may cause it
-std::string warning(const Trajectory& traj, double tolerance) {
-  const auto& r = traj.energy_balance_residual;
-  std::size_t worst = 0;
-  for (std::size_t i = 0; i < r.size(); ++i) {
-    if (!(std::abs(r[i]) <= std::abs(r[worst]))) worst = i;
-  }
-  return "energy balance: E(t) - E(0) - (sum of the works) = " + format(r[worst]) + " J at t = " +
-         format(traj.t[worst]) + " s, " + format(traj.stats.energy_balance) +
+std::string warning(double worst_r, double worst_t, double balance, double tolerance) {
+  return "energy balance: E(t) - E(0) - (sum of the works) = " + format(worst_r) + " J at t = " +
+         format(worst_t) + " s, " + format(balance) +
          " of the energy exchanged, above the tolerance " + format(tolerance) +
          " (energy_balance_tolerance): energy was gained or lost that no work channel accounts "
          "for (integration error, a jump of the state, or forces in Q that neither the potential "
@@ -38,46 +34,64 @@ std::string warning(const Trajectory& traj, double tolerance) {
 
 }  // namespace
 
+namespace detail {
+
+double EnergyBalance::add(double t, double T, double V, double E, const double (&works)[5]) {
+  // r_i = E_i − E_0 − ΣW_i;  exchanged = Σ_channels Σ_i |W_i − W_{i−1}|
+  if (count_ == 0) E0_ = E;
+  double sum = 0.0;
+  for (int c = 0; c < 5; ++c) {
+    sum += works[c];
+    if (count_ > 0) exchanged_ += std::abs(works[c] - previous_[c]);
+    previous_[c] = works[c];
+  }
+  const double r = E - E0_ - sum;
+  finite_ = finite_ && std::isfinite(r);
+  largest_ = std::max(largest_, std::abs(r));
+  T_max_ = std::max(T_max_, std::abs(T));
+  level_ = std::max(level_, std::abs(T) + std::abs(V));
+  if (count_ == 0 || !(std::abs(r) <= std::abs(worst_r_))) {
+    worst_r_ = r;
+    worst_t_ = t;
+  }
+  ++count_;
+  return r;
+}
+
+void EnergyBalance::finish(RunStatistics& s, double tolerance) const {
+  s.energy_balance = s.energy_exchanged = s.energy_drift = 0.0;
+  s.energy_balance_checked = std::isfinite(tolerance);
+  if (count_ == 0) return;
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  // relative to the energy exchanged, the kinetic energy, or the roundoff of E = T + V
+  const double scale =
+      std::max({exchanged_, T_max_, 1e-9 * level_, std::numeric_limits<double>::min()});
+  s.energy_exchanged = exchanged_;
+  s.energy_balance = finite_ ? largest_ / scale : nan;
+  const double old_scale = std::max(std::abs(E0_), T_max_);
+  s.energy_drift = !finite_ ? nan : old_scale > 0 ? largest_ / old_scale : largest_;
+  // a run that ended well but whose balance fails: the warning status
+  if (s.status == Status::kOk && std::isfinite(tolerance) && !(s.energy_balance <= tolerance)) {
+    s.status = Status::kEnergyBalance;
+    s.message = warning(worst_r_, worst_t_, s.energy_balance, tolerance);
+  }
+}
+
+}  // namespace detail
+
 void compute_energy_balance(Trajectory& traj, double tolerance) {
   const std::size_t N = traj.t.size();
   traj.energy_balance_residual.resize(N);
   traj.check_consistent("ukdyn::compute_energy_balance");
-  RunStatistics& s = traj.stats;
-  s.energy_balance = s.energy_exchanged = s.energy_drift = 0.0;
-  s.energy_balance_checked = std::isfinite(tolerance);
-  if (N == 0) return;
-  const std::vector<double>* works[] = {&traj.work_nonideal, &traj.work_ideal, &traj.work_drive,
-                                        &traj.work_external, &traj.work_control};
-  const double E0 = traj.energy.front();
-  const double nan = std::numeric_limits<double>::quiet_NaN();
-  // r_i = E_i − E_0 − ΣW_i;  exchanged = Σ_channels Σ_i |W_i − W_{i−1}|
-  double largest = 0.0, T_max = 0.0, level = 0.0, exchanged = 0.0;
-  bool finite = true;
+  detail::EnergyBalance balance;
   for (std::size_t i = 0; i < N; ++i) {
-    double sum = 0.0;
-    for (const auto* w : works) {
-      sum += (*w)[i];
-      if (i > 0) exchanged += std::abs((*w)[i] - (*w)[i - 1]);
-    }
-    const double r = traj.energy[i] - E0 - sum;
-    traj.energy_balance_residual[i] = r;
-    finite = finite && std::isfinite(r);
-    largest = std::max(largest, std::abs(r));
-    T_max = std::max(T_max, std::abs(traj.kinetic_energy[i]));
-    level = std::max(level, std::abs(traj.kinetic_energy[i]) + std::abs(traj.potential_energy[i]));
+    const double works[5] = {traj.work_nonideal[i], traj.work_ideal[i], traj.work_drive[i],
+                             traj.work_external[i], traj.work_control[i]};
+    traj.energy_balance_residual[i] =
+        balance.add(traj.t[i], traj.kinetic_energy[i], traj.potential_energy[i], traj.energy[i],
+                    works);
   }
-  // relative to the energy exchanged, the kinetic energy, or the roundoff of E = T + V
-  const double scale =
-      std::max({exchanged, T_max, 1e-9 * level, std::numeric_limits<double>::min()});
-  s.energy_exchanged = exchanged;
-  s.energy_balance = finite ? largest / scale : nan;
-  const double old_scale = std::max(std::abs(E0), T_max);
-  s.energy_drift = !finite ? nan : old_scale > 0 ? largest / old_scale : largest;
-  // a run that ended well but whose balance fails: the warning status
-  if (s.status == Status::kOk && std::isfinite(tolerance) && !(s.energy_balance <= tolerance)) {
-    s.status = Status::kEnergyBalance;
-    s.message = warning(traj, tolerance);
-  }
+  balance.finish(traj.stats, tolerance);
 }
 
 }  // namespace ukdyn

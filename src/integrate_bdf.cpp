@@ -179,7 +179,7 @@ bool same_time(double t, double t_other) {
 }  // namespace
 
 SegmentResult integrate_bdf(ConstrainedOde& ode, std::vector<double>& x, double t0, double t1,
-                            const std::vector<double>& outputs, const SimulationOptions& options,
+                            const SampleTimes& outputs, const SimulationOptions& options,
                             SegmentHooks& hooks, double first_step) {
   const Index size = ode.size();
   UKDYN_CHECK(Index(x.size()) == size, "integrate_bdf: x must have ode.size() entries");

@@ -121,7 +121,7 @@ SegmentResult failed(const ConstrainedOde& ode, SegmentResult r, double t) {
 // every event).
 bool stop_at_event(SegmentHooks& hooks, double t0, const State& x0, double t1, const State& x1,
                    const SegmentHooks::Dense& dense, const SegmentHooks::Dense& restart,
-                   const std::vector<double>& outputs, std::size_t& next, State& x,
+                   const SampleTimes& outputs, std::size_t& next, State& x,
                    SegmentResult& r) {
   if (!hooks.find_event) return false;
   const double te = hooks.find_event(t0, x0.data(), t1, x1.data(), dense);
@@ -244,7 +244,7 @@ Dopri5Fixed dopri5_fixed() {
 // after drift control, so a step costs (stages − 1) + 1 evaluations
 template <class Stepper>
 SegmentResult fixed_step(Stepper stepper, ConstrainedOde& ode, State& x, double t0, double t1,
-                         const std::vector<double>& outputs, SegmentHooks& hooks, double step) {
+                         const SampleTimes& outputs, SegmentHooks& hooks, double step) {
   SegmentResult r;
   const OdeFn fn{&ode};
   const long N = std::max(1L, long(std::ceil((t1 - t0) / step * (1.0 - 1e-12))));
@@ -304,7 +304,7 @@ SegmentResult fixed_step(Stepper stepper, ConstrainedOde& ode, State& x, double 
 
 // Dormand–Prince 5(4): Odeint's controller, its dense output between accepted steps
 SegmentResult dopri5(ConstrainedOde& ode, State& x, double t0, double t1,
-                     const std::vector<double>& outputs, const SimulationOptions& o,
+                     const SampleTimes& outputs, const SimulationOptions& o,
                      SegmentHooks& hooks, double dt, long max_steps) {
   SegmentResult r;
   // the stiffness test reads the last two stages of each step (for the switch, and for the
@@ -429,7 +429,7 @@ SegmentResult dopri5(ConstrainedOde& ode, State& x, double t0, double t1,
 
 // Runge–Kutta–Fehlberg 7(8): Odeint's controller, steps shortened to land on output times
 SegmentResult rkf78(ConstrainedOde& ode, State& x, double t0, double t1,
-                    const std::vector<double>& outputs, const SimulationOptions& o,
+                    const SampleTimes& outputs, const SimulationOptions& o,
                     SegmentHooks& hooks, double dt, long max_steps) {
   SegmentResult r;
   StageProjection projection(hooks, x.size());
@@ -527,7 +527,7 @@ SegmentResult rkf78(ConstrainedOde& ode, State& x, double t0, double t1,
 }  // namespace
 
 SegmentResult integrate_explicit(Integrator method, ConstrainedOde& ode, std::vector<double>& x,
-                                 double t0, double t1, const std::vector<double>& outputs,
+                                 double t0, double t1, const SampleTimes& outputs,
                                  const SimulationOptions& options, SegmentHooks& hooks,
                                  double first_step) {
   switch (method) {

@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "sample_grid.hpp"
 #include "ukdyn/simulate.hpp"
 #include "ukdyn/status.hpp"
 #include "ukdyn/system.hpp"
@@ -228,14 +229,14 @@ class StiffnessTest {
 // first_step: the step to try first (adaptive) or the step (RK4). On return x is the state at
 // result.t_reached (t1 unless it failed).
 SegmentResult integrate_explicit(Integrator method, ConstrainedOde& ode, std::vector<double>& x,
-                                 double t0, double t1, const std::vector<double>& outputs,
+                                 double t0, double t1, const SampleTimes& outputs,
                                  const SimulationOptions& options, SegmentHooks& hooks,
                                  double first_step);
 
 // The same with SUNDIALS CVODE (BDF, Newton iteration, dense direct linear solver with a
 // difference-quotient Jacobian); projection through CVodeSetProjFn calling hooks.after_step.
 SegmentResult integrate_bdf(ConstrainedOde& ode, std::vector<double>& x, double t0, double t1,
-                            const std::vector<double>& outputs, const SimulationOptions& options,
+                            const SampleTimes& outputs, const SimulationOptions& options,
                             SegmentHooks& hooks, double first_step);
 
 // --- step-size collapse (step_diagnosis.cpp) ----------------------------------------------

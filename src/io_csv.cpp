@@ -149,8 +149,31 @@ std::vector<CsvColumn> csv_table(const Trajectory& traj) {
 
 void write_csv(const Trajectory& traj, const std::string& path) { write_csv(traj, path, {}); }
 
-void write_csv(const Trajectory& traj, const std::string& path,
-               const std::vector<CsvColumn>& extra) {
+struct CsvWriter::Impl {
+  explicit Impl(const std::string& p) : path(p), out(p, kWho), file(out.open_stdio()) {
+    buf.reserve(kFlushAt + 4096);
+  }
+  // rows are built in one buffer, written out whenever it passes kFlushAt bytes
+  static constexpr std::size_t kFlushAt = std::size_t(1) << 18;
+  void flush() {
+    if (!buf.empty() && std::fwrite(buf.data(), 1, buf.size(), file.get()) != buf.size()) {
+      throw_io_error(path, "write", errno);
+    }
+    buf.clear();
+  }
+  std::string path;
+  // a temporary beside `path`, renamed over it when complete (io_atomic.hpp)
+  detail::AtomicFile out;
+  std::unique_ptr<std::FILE, FileCloser> file;
+  std::string buf;
+  std::vector<std::string> header;  // empty until the first append
+};
+
+CsvWriter::CsvWriter(const std::string& path) : impl_(new Impl(path)) {}
+
+CsvWriter::~CsvWriter() { delete impl_; }
+
+void CsvWriter::append(const Trajectory& traj, const std::vector<CsvColumn>& extra) {
   traj.check_consistent(kWho);
   std::vector<ColumnRef> cols = column_refs(traj);
   const std::size_t N = traj.t.size();
@@ -162,28 +185,25 @@ void write_csv(const Trajectory& traj, const std::string& path,
     }
     cols.push_back(ColumnRef{e.name, &e.values, 1, 0});
   }
+  Impl& w = *impl_;
+  std::string& buf = w.buf;
 
-  // a temporary beside `path`, renamed over it when complete (io_atomic.hpp)
-  detail::AtomicFile out(path, kWho);
-  std::unique_ptr<std::FILE, FileCloser> file(out.open_stdio());
-
-  // rows are built in one buffer, written out whenever it passes kFlushAt bytes
-  constexpr std::size_t kFlushAt = std::size_t(1) << 18;
-  std::string buf;
-  buf.reserve(kFlushAt + 32 * cols.size() + 64);
-  auto flush = [&] {
-    if (!buf.empty() && std::fwrite(buf.data(), 1, buf.size(), file.get()) != buf.size()) {
-      throw_io_error(path, "write", errno);
+  // header, the first time; the same columns after
+  if (w.header.empty()) {
+    for (std::size_t c = 0; c < cols.size(); ++c) {
+      if (c > 0) buf += ',';
+      append_field(buf, cols[c].name);
+      w.header.push_back(cols[c].name);
     }
-    buf.clear();
-  };
-
-  // header
-  for (std::size_t c = 0; c < cols.size(); ++c) {
-    if (c > 0) buf += ',';
-    append_field(buf, cols[c].name);
+    buf += '\n';
+  } else {
+    bool same = w.header.size() == cols.size();
+    for (std::size_t c = 0; same && c < cols.size(); ++c) same = w.header[c] == cols[c].name;
+    if (!same) {
+      throw std::invalid_argument(std::string(kWho) + ": '" + w.path +
+                                  "': the columns differ from those of the rows written before");
+    }
   }
-  buf += '\n';
 
   // one row per sample
   for (std::size_t i = 0; i < N; ++i) {
@@ -192,15 +212,34 @@ void write_csv(const Trajectory& traj, const std::string& path,
       append_number(buf, (*cols[c].field)[i * cols[c].width + cols[c].index]);
     }
     buf += '\n';
-    if (buf.size() >= kFlushAt) flush();
+    if (buf.size() >= Impl::kFlushAt) w.flush();
   }
-  flush();
+  rows_ += Index(N);
+}
 
+void CsvWriter::commit() {
+  Impl& w = *impl_;
+  w.flush();
   // fclose writes what stdio still holds: its failure (a full disk) is a write error too
   errno = 0;
-  if (std::fclose(file.release()) != 0) {
-    throw_io_error(path, "write", errno);
+  if (std::fclose(w.file.release()) != 0) {
+    throw_io_error(w.path, "write", errno);
   }
+  w.out.commit();
+}
+
+void write_csv(const Trajectory& traj, const std::string& path,
+               const std::vector<CsvColumn>& extra) {
+  traj.check_consistent(kWho);
+  for (const CsvColumn& e : extra) {
+    if (e.values.size() != traj.t.size()) {
+      throw std::invalid_argument(std::string(kWho) + ": extra column '" + e.name + "' has " +
+                                  std::to_string(e.values.size()) + " values, expected N = " +
+                                  std::to_string(traj.t.size()));
+    }
+  }
+  CsvWriter out(path);
+  out.append(traj, extra);
   out.commit();
 }
 

@@ -65,9 +65,11 @@ void write_summary_json(const Trajectory& traj, const SimulationOptions& options
   j["energy_drift"] = s.energy_drift;
 
   // time span and the last sample by coordinate name (null when there is no sample)
-  j["t_start"] = N > 0 ? json(traj.t.front()) : json(nullptr);
+  // (a streamed run's trajectory holds its last sample only: stats.samples counts them all)
+  const bool streamed = s.samples > long(N);
+  j["t_start"] = streamed ? json(options.t_start) : N > 0 ? json(traj.t.front()) : json(nullptr);
   j["t_reached"] = s.t_reached;
-  j["samples"] = N;
+  j["samples"] = streamed ? std::size_t(s.samples) : N;
   if (N > 0) {
     json q = json::object(), qd = json::object();
     for (std::size_t c = 0; c < n; ++c) {

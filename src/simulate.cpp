@@ -7,13 +7,16 @@
 
 #include <algorithm>
 #include <chrono>
+#include <exception>
 #include <cmath>
 #include <functional>
 #include <limits>
 #include <stdexcept>
 
 #include "detail.hpp"
+#include "energy_balance.hpp"
 #include "integrator.hpp"
+#include "sample_grid.hpp"
 #include "ukdyn/forward.hpp"
 #include "ukdyn/projection.hpp"
 
@@ -156,16 +159,21 @@ std::vector<double> sorted_times(std::vector<double> v, double a, double b) {
   return out;
 }
 
-// the run's sample times: t_start, every output_every, output_at, t_end
-std::vector<double> sample_times(const SimulationOptions& o) {
-  std::vector<double> v = o.output_at;
-  v.push_back(o.t_start);
-  v.push_back(o.t_end);
-  if (o.output_every > 0.0) {
-    const long count = long(std::floor((o.t_end - o.t_start) / o.output_every * (1 + 1e-12)));
-    for (long i = 1; i <= count; ++i) v.push_back(o.t_start + double(i) * o.output_every);
+// the run's sample times (t_start, every output_every, output_at, t_end), refused above the
+// bound of a streamed run, or of one kept in memory (values per sample: t, q, q', q'', Qc_ideal,
+// Qc_nonideal, lambda, two violations per constraint, three energies, six works)
+detail::SampleGrid sample_grid(const System& sys, const SimulationOptions& o) {
+  if (o.sample_sink) {
+    return detail::SampleGrid(o, kMaxStreamedSamples,
+                              "of a streamed run (kMaxStreamedSamples)");
   }
-  return sorted_times(std::move(v), o.t_start, o.t_end);
+  const double per_sample = double(1 + 5 * sys.dofs() + sys.constraint_rows() +
+                                   2 * sys.constraint_count() + 9);
+  const std::string bound = "of a run kept in memory (kMaxStoredValues = 2^28 values, " +
+                            std::to_string(long(per_sample)) +
+                            " per sample; a SimulationOptions::sample_sink streams up to 1e9)";
+  return detail::SampleGrid(o, std::min(kMaxStreamedSamples, std::floor(kMaxStoredValues / per_sample)),
+                            bound.c_str());
 }
 
 // the segments' ends: t_start, breakpoints inside, t_end
@@ -198,6 +206,15 @@ class Run {
         n_(sys.dofs()),
         q_(n_),
         qd_(n_) {
+    // a streamed run records each sample into one_, which the sink receives
+    if (o.sample_sink) {
+      one_.coordinate_names = traj.coordinate_names;
+      one_.constraint_names = traj.constraint_names;
+      one_.constraint_rows = traj.constraint_rows;
+      one_.constraint_kinds = traj.constraint_kinds;
+      one_.n = traj.n;
+      one_.m = traj.m;
+    }
     // drift control of each constraint
     const Index K = sys.constraint_count();
     projection_ = o.projection;
@@ -424,7 +441,15 @@ class Run {
   }
 
   // the run's sample times (sorted), which record() marks off as they are recorded
-  void set_samples(const std::vector<double>& samples) { samples_ = &samples; }
+  void set_samples(const detail::SampleGrid& samples) { samples_ = &samples; }
+
+  // samples recorded so far, and the time of the last one
+  long recorded() const { return traj_.stats.samples; }
+  double last_time() const { return last_time_; }
+  // the energy balance of the samples recorded
+  const detail::EnergyBalance& balance() const { return balance_; }
+  // what the sample sink threw (null when nothing)
+  const std::exception_ptr& sink_error() const { return sink_error_; }
 
   // the method taking the steps from now on (for the progress report)
   void set_integrator(Integrator method) { progress_.integrator = method; }
@@ -441,37 +466,64 @@ class Run {
     q_ = Eigen::Map<const VectorXd>(sample_.data(), n_);
     qd_ = Eigen::Map<const VectorXd>(sample_.data() + n_, n_);
     const Status s = forward_dynamics(sys_, ws_, q_, qd_, t);
+    // into the trajectory kept, or into one_ for the sink
+    const bool streamed = bool(o_.sample_sink);
+    Trajectory& out = streamed ? one_ : traj_;
+    if (streamed) {
+      for (auto* f : {&one_.t, &one_.q, &one_.qd, &one_.qdd, &one_.Qc_ideal, &one_.Qc_nonideal,
+                      &one_.lambda, &one_.position_violation, &one_.velocity_violation,
+                      &one_.kinetic_energy, &one_.potential_energy, &one_.energy,
+                      &one_.work_nonideal, &one_.work_ideal, &one_.work_drive,
+                      &one_.work_external, &one_.work_control, &one_.energy_balance_residual}) {
+        f->clear();
+      }
+    }
     auto push = [](std::vector<double>& f, const VectorXd& v) {
       f.insert(f.end(), v.data(), v.data() + v.size());
     };
-    traj_.t.push_back(t);
-    push(traj_.q, q_);
-    push(traj_.qd, qd_);
-    push(traj_.qdd, ws_.qdd);
-    push(traj_.Qc_ideal, ws_.Qc_ideal);
-    push(traj_.Qc_nonideal, ws_.Qc_nonideal);
-    push(traj_.lambda, ws_.lambda);
+    out.t.push_back(t);
+    push(out.q, q_);
+    push(out.qd, qd_);
+    push(out.qdd, ws_.qdd);
+    push(out.Qc_ideal, ws_.Qc_ideal);
+    push(out.Qc_nonideal, ws_.Qc_nonideal);
+    push(out.lambda, ws_.lambda);
     const double T = detail::kinetic_energy(ws_, qd_), V = sys_.potential_energy(q_, t);
-    traj_.kinetic_energy.push_back(T);
-    traj_.potential_energy.push_back(V);
-    traj_.energy.push_back(T + V);
+    out.kinetic_energy.push_back(T);
+    out.potential_energy.push_back(V);
+    out.energy.push_back(T + V);
     peak_kinetic_ = std::max(peak_kinetic_, T);
-    // the work channels (absent ones are zero)
+    // the work channels (absent ones are zero), and the balance so far
     const auto work = [&](Index channel) {
       return channel < 0 ? 0.0 : sample_[std::size_t(2 * n_ + channel)] / works_.scale(channel);
     };
-    traj_.work_nonideal.push_back(work(works_.nonideal));
-    traj_.work_ideal.push_back(work(works_.ideal));
-    traj_.work_drive.push_back(work(works_.drive));
-    traj_.work_external.push_back(work(works_.external));
-    traj_.work_control.push_back(0.0);
+    const double works[5] = {work(works_.nonideal), work(works_.ideal), work(works_.drive),
+                             work(works_.external), 0.0};
+    out.work_nonideal.push_back(works[0]);
+    out.work_ideal.push_back(works[1]);
+    out.work_drive.push_back(works[2]);
+    out.work_external.push_back(works[3]);
+    out.work_control.push_back(works[4]);
+    out.energy_balance_residual.push_back(balance_.add(t, T, V, T + V, works));
     // violations of each constraint
     evaluate_violations(sys_, ws_, q_, qd_, t);
     for (Index k = 0; k < sys_.constraint_count(); ++k) {
       const double p = position_violation(sys_, ws_, k), v = velocity_violation(sys_, ws_, k);
-      traj_.position_violation.push_back(p);
-      traj_.velocity_violation.push_back(v);
+      out.position_violation.push_back(p);
+      out.velocity_violation.push_back(v);
       note_violation(p, v);
+    }
+    ++traj_.stats.samples;
+    last_time_ = t;
+    // the sample to the sink; what it throws stops the run (the driver rethrows it)
+    if (streamed) {
+      try {
+        o_.sample_sink(one_);
+      } catch (...) {
+        sink_error_ = std::current_exception();
+        failure_ = "the sample sink failed at t = " + format(t);
+        return Status::kInterrupted;
+      }
     }
     // the samples recorded (or passed) by now
     while (samples_ && next_sample_ < samples_->size() && (*samples_)[next_sample_] <= t) {
@@ -708,8 +760,13 @@ class Run {
   bool stop_requested_ = false;
   long stop_wait_ = 0;
   static constexpr long kMaxStopWait = 1000;
-  const std::vector<double>* samples_ = nullptr;
+  const detail::SampleGrid* samples_ = nullptr;
   std::size_t next_sample_ = 0;
+  // streamed runs (SimulationOptions::sample_sink): the sample being recorded; what the sink threw
+  Trajectory one_;
+  std::exception_ptr sink_error_;
+  double last_time_ = 0.0;            // time of the last sample recorded
+  detail::EnergyBalance balance_;     // of the samples recorded
 };
 
 }  // namespace
@@ -724,6 +781,8 @@ std::vector<std::string> check_initial_conditions(const System& sys, const Vecto
 Trajectory simulate(const System& sys, const VectorXd& q0, const VectorXd& qd0,
                     const SimulationOptions& o) {
   validate(sys, q0, qd0, o);
+  // the sample times, refused now if too many
+  const detail::SampleGrid samples = sample_grid(sys, o);
   const auto wall_start = std::chrono::steady_clock::now();
   Trajectory traj;
   traj.coordinate_names = sys.coordinate_names();
@@ -785,9 +844,14 @@ Trajectory simulate(const System& sys, const VectorXd& q0, const VectorXd& qd0,
     };
   }
 
-  const std::vector<double> samples = sample_times(o), ends = segment_ends(sys, o);
+  const std::vector<double> ends = segment_ends(sys, o);
   run.set_samples(samples);
   auto finish = [&](Status status, const std::string& message, double t_reached) {
+    // the sink's exception, once the integrator has returned
+    if (run.sink_error()) {
+      std::fill(ws.activity_override.begin(), ws.activity_override.end(), -1);
+      std::rethrow_exception(run.sink_error());
+    }
     traj.stats.status = status;
     traj.stats.message = message;
     if (status == Status::kInterrupted && message.empty()) {
@@ -799,9 +863,13 @@ Trajectory simulate(const System& sys, const VectorXd& q0, const VectorXd& qd0,
     traj.stats.least_squares = ode.least_squares();
     // the energy balance certifies a run that reached its end
     // (a system that does not account for its forces' work is reported, not checked)
-    compute_energy_balance(traj, sys.accounts_for_energy()
-                                     ? checked_energy_balance_tolerance(o)
-                                     : std::numeric_limits<double>::infinity());
+    const double tolerance = sys.accounts_for_energy() ? checked_energy_balance_tolerance(o)
+                                                       : std::numeric_limits<double>::infinity();
+    if (o.sample_sink) {
+      run.balance().finish(traj.stats, tolerance);
+    } else {
+      compute_energy_balance(traj, tolerance);
+    }
     traj.stats.wall_time =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
     std::fill(ws.activity_override.begin(), ws.activity_override.end(), -1);
@@ -846,10 +914,7 @@ Trajectory simulate(const System& sys, const VectorXd& q0, const VectorXd& qd0,
     bool crossing = false;  // dopri5 across a singular configuration for BDF
     bool r_crossed = false;  // the last segment was such a crossing
     for (;;) {
-      std::vector<double> outputs;
-      for (std::size_t i = next_sample; i < samples.size() && samples[i] <= b; ++i) {
-        outputs.push_back(samples[i]);
-      }
+      const detail::SampleTimes outputs(samples, next_sample, samples.upper_bound(b));
       const bool switched = method != o.integrator && !crossing;
       x_start = x;
       run.set_integrator(method);
@@ -868,16 +933,16 @@ Trajectory simulate(const System& sys, const VectorXd& q0, const VectorXd& qd0,
       // (the fixed-step methods keep o.step)
       const bool fixed = method == Integrator::kRK4 || method == Integrator::kRK5;
       if (r.last_step > 0 && !fixed) first_step = r.last_step;
-      while (next_sample < samples.size() && samples[next_sample] <= r.t_reached) ++next_sample;
+      next_sample = std::max(next_sample, samples.upper_bound(r.t_reached));
       if (r.status == Status::kInterrupted) {
         // stopped on request: at a sample (recorded), or after a step, where x is the state at
         // r.t_reached (after drift control; BDF: its last accepted step), recorded as the last
-        if (traj.t.empty() || r.t_reached > traj.t.back()) {
+        if (run.recorded() == 0 || r.t_reached > run.last_time()) {
           if (const Status s = run.record(r.t_reached, x.data(), true); s != Status::kOk) {
             return finish(s, run.failure(), r.t_reached);
           }
         }
-        return finish(Status::kInterrupted, "", traj.t.back());
+        return finish(Status::kInterrupted, "", run.last_time());
       }
       if (r.status != Status::kOk) {
         std::string message = r.message;

@@ -286,7 +286,7 @@ TEST(BdfFailure, NonFiniteForceStopsWithTheOdeStatus) {
     ++outputs_seen;
     return Status::kOk;
   };
-  const SegmentResult r = integrate_bdf(ode, x, 0.0, 1.0, {0.25, 0.75}, options, hooks, 0.0);
+  const SegmentResult r = integrate_bdf(ode, x, 0.0, 1.0, std::vector<double>{0.25, 0.75}, options, hooks, 0.0);
 
   EXPECT_EQ(r.status, Status::kNonFiniteInput);
   EXPECT_TRUE(ode.failed());
@@ -331,7 +331,7 @@ TEST(BdfFailure, OutputHookStopsWithItsStatus) {
   hooks.output = [](double t, const double*) {
     return t > 0.4 ? Status::kMassNotSymmetric : Status::kOk;
   };
-  const SegmentResult r = integrate_bdf(ode, x, 0.0, 1.0, {0.2, 0.5, 0.8}, options, hooks, 0.0);
+  const SegmentResult r = integrate_bdf(ode, x, 0.0, 1.0, std::vector<double>{0.2, 0.5, 0.8}, options, hooks, 0.0);
   EXPECT_EQ(r.status, Status::kMassNotSymmetric);
   EXPECT_EQ(r.message, "");
   EXPECT_EQ(r.t_reached, 0.5);

@@ -49,10 +49,44 @@ std::vector<CsvColumn> csv_table(const Trajectory& traj);
 void write_csv(const Trajectory& traj, const std::string& path,
                const std::vector<CsvColumn>& extra);
 
+/// trajectory.csv written piece by piece while a run produces its samples (run_model with a
+/// chunk callback, `ukdyn run`), with write_csv's columns and numbers, under the same temporary
+/// name until commit(): memory O(one piece), whatever the run's length. Destroyed without
+/// commit() (an exception, a failure), it removes the temporary.
+class CsvWriter {
+ public:
+  /// Creates the temporary beside `path`; nothing is written yet.
+  /// @throws std::runtime_error naming the path.
+  explicit CsvWriter(const std::string& path);
+  ~CsvWriter();
+  CsvWriter(const CsvWriter&) = delete;
+  CsvWriter& operator=(const CsvWriter&) = delete;
+
+  /// Appends one row per sample of traj (its standard columns, then `extra`, each with
+  /// traj.samples() values); the first call writes the header (a traj without samples writes
+  /// just the header). Later calls must have the same columns. @throws std::invalid_argument
+  /// when a column has the wrong length or the columns changed; std::runtime_error naming the
+  /// path when it cannot be written. Cost O(samples × columns).
+  void append(const Trajectory& traj, const std::vector<CsvColumn>& extra = {});
+  /// Rows appended so far.
+  Index rows() const { return rows_; }
+  /// Writes what is buffered, closes the file and renames it over the path (appends nothing:
+  /// call append() once before, if only for the header). @throws std::runtime_error.
+  void commit();
+
+ private:
+  struct Impl;
+  Impl* impl_;
+  Index rows_ = 0;
+};
+
 /// Writes a JSON summary: the run statistics (steps, rejected steps, evaluations, wall time,
 /// largest violations, energy_balance, energy_exchanged, energy_balance_tolerance, energy drift,
 /// status, message), t_start, t_reached, the final state by
-/// coordinate name, and the options given. @throws std::runtime_error naming the path.
+/// coordinate name, and the options given. A trajectory that holds only the last sample of a
+/// streamed run (traj.stats.samples > traj.samples(), see SimulationOptions::sample_sink) is
+/// summarised with samples = stats.samples and t_start = options.t_start.
+/// @throws std::runtime_error naming the path.
 void write_summary_json(const Trajectory& traj, const SimulationOptions& options,
                         const std::string& path);
 

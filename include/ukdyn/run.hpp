@@ -4,6 +4,8 @@
 /// every column of trajectory.csv by name, with its values.
 #pragma once
 
+#include <cstddef>
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
@@ -39,6 +41,21 @@ struct ModelRun {
 /// @throws std::invalid_argument when the run cannot start (an inconsistent initial state,
 /// bad settings), as simulate() does.
 ModelRun run_model(const Model& model, const SimulationOptions& options);
+
+/// run_model with the samples passed on as they are computed instead of kept (`ukdyn run`
+/// streams trajectory.csv this way): `chunk` receives, in time order, a ModelRun whose
+/// trajectory holds the next samples (at most chunk_samples; names, sizes filled, stats empty)
+/// and whose extra_columns hold those samples' values. Returns the run's statistics
+/// (trajectory.stats, with stats.samples counting every sample), the names, and the last
+/// sample only (trajectory and extra_columns with one value each; none when no sample was
+/// recorded). Memory O(chunk_samples × columns) whatever the run's length, and the grid may
+/// have up to kMaxStreamedSamples samples. A controlled model (a `control:` section) is run
+/// in memory, as simulate_controlled keeps its samples: its chunk is the whole run, and the
+/// returned ModelRun holds every sample. An exception thrown by `chunk` stops the run and
+/// propagates. @throws std::invalid_argument as run_model.
+ModelRun run_model(const Model& model, const SimulationOptions& options,
+                   const std::function<void(const ModelRun& chunk)>& chunk,
+                   std::size_t chunk_samples = 4096);
 
 /// run_model(model, model.options).
 ModelRun run_model(const Model& model);

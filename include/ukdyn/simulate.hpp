@@ -65,6 +65,8 @@ struct ConstraintDrift {
   double alpha = 0.0, beta = 0.0;  ///< Baumgarte gains when method is kBaumgarte (0: defaults)
 };
 
+struct Trajectory;
+
 /// What SimulationOptions::progress receives after every accepted step.
 struct ProgressReport {
   double t = 0.0;     ///< time reached
@@ -129,6 +131,18 @@ struct SimulationOptions {
   /// Called after every accepted step (for progress bars and logs); may be empty.
   std::function<void(const ProgressReport&)> progress;
 
+  /// Where the samples go, one call per sample in time order, each as a Trajectory holding
+  /// exactly that sample (names and sizes filled, samples() == 1, energy_balance_residual
+  /// included, stats empty; the reference is valid during the call only). Empty (the default):
+  /// simulate() keeps every sample in the Trajectory it returns. Set: the returned Trajectory
+  /// holds no sample, only the names and the statistics (RunStatistics::samples counts the
+  /// calls; energy balance and violations are computed as the samples go), so memory does not
+  /// grow with the run's length, and the grid may have up to kMaxStreamedSamples samples
+  /// (docs/simulation.md, "Sample grid and streaming"). Called from the thread running
+  /// simulate(); an exception it throws stops the run and propagates out of simulate() (the
+  /// samples it received before stay received).
+  std::function<void(const Trajectory& sample)> sample_sink;
+
   /// A request to stop (Ctrl-C, a deadline, a GUI's stop button); may be empty. Called after
   /// every accepted step, from the thread running simulate(); once it has returned true the run
   /// stops within a step: at the next sample time if one falls inside the step under way, else
@@ -140,6 +154,17 @@ struct SimulationOptions {
   /// module from Python's signal handlers.
   std::function<bool()> should_stop;
 };
+
+/// The most samples a run's grid (t_start, every output_every, output_at, t_end) may have when
+/// its samples go to SimulationOptions::sample_sink: 10⁹. A larger grid is refused at the start
+/// (std::invalid_argument naming output_every, t_start, t_end, the count and this bound).
+inline constexpr double kMaxStreamedSamples = 1e9;
+
+/// The most values a run kept in memory (no sample_sink) may store: 2²⁸ doubles (2 GiB), i.e.
+/// at most kMaxStoredValues / (1 + 5n + m + 2K + 9) samples (the values of one sample: t, q,
+/// q', q'', Qc_ideal, Qc_nonideal, lambda, two violations per constraint, energies and works);
+/// a larger grid is refused at the start like one above kMaxStreamedSamples.
+inline constexpr double kMaxStoredValues = 268435456.0;
 
 /// The tolerance a run's energy balance is checked against: max(energy_balance_tolerance,
 /// 1000 · rtol) for dopri5, rkf78 and BDF, energy_balance_tolerance for the fixed-step methods.
@@ -195,6 +220,9 @@ struct RunStatistics {
   /// energy); meaningless when E(0) is near 0 — energy_balance replaces it.
   double energy_drift = 0.0;
   double t_reached = 0.0;           ///< last time integrated to
+  /// samples recorded: Trajectory::samples() of a run kept in memory, the calls of
+  /// SimulationOptions::sample_sink of a streamed one
+  long samples = 0;
   Status status = Status::kOk;      ///< kOk, kEnergyBalance (a warning), kInterrupted (stopped
                                     ///< by SimulationOptions::should_stop), or why the run
                                     ///< stopped early
@@ -243,14 +271,17 @@ struct Trajectory {
   }
 };
 
-/// Integrates sys from (q0, qd0) at options.t_start to options.t_end and returns the samples.
+/// Integrates sys from (q0, qd0) at options.t_start to options.t_end and returns the samples
+/// (or, with options.sample_sink, passes them on one by one and returns the statistics).
 /// A numerical failure (inconsistent constraints, NaN, a projection that does not converge, the
 /// step limit) stops the run: the samples recorded so far are kept and stats.status /
 /// stats.message say what happened, where and when. So does a stop requested by
 /// options.should_stop (Status::kInterrupted, the last sample at stats.t_reached).
 /// @throws std::invalid_argument on misuse: sizes, t_end <= t_start, bad tolerances, an unknown
 /// constraint in drift_per_constraint, or initial conditions that violate the constraints when
-/// project_initial is false (the message names each violated constraint and by how much).
+/// project_initial is false (the message names each violated constraint and by how much), and
+/// on a sample grid above kMaxStreamedSamples (with a sample_sink) or kMaxStoredValues (in
+/// memory), refused before anything is integrated.
 Trajectory simulate(const System& sys, const VectorXd& q0, const VectorXd& qd0,
                     const SimulationOptions& options = {});
 
