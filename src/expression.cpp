@@ -33,6 +33,8 @@ ExpressionSet::ExpressionSet(std::vector<std::string> input_names)
   for (const auto& name : input_names) {
     impl_->declare(name, "ExpressionSet");
     impl_->input_symbols.push_back(impl_->symbols.at(name));
+    impl_->input_index.emplace(name, impl_->input_symbols.size() - 1);
+    impl_->symbol_index.emplace(impl_->input_symbols.back(), impl_->input_symbols.size() - 1);
   }
   impl_->input_names = std::move(input_names);
 }
@@ -88,14 +90,19 @@ Expr ExpressionSet::total_derivative(
     const std::vector<std::pair<std::string, std::string>>& chain) {
   const GiNaC::ex& f = impl_->at(e, "total_derivative");
   const GiNaC::ex& t = impl_->input(time, "total_derivative");
-  // D e = ∂e/∂t + Σ ∂e/∂q_i · q̇_i   (no ∂e/∂q̇_i · q̈_i)
-  GiNaC::ex d = f.diff(GiNaC::ex_to<GiNaC::symbol>(t));
+  // D e = ∂e/∂t + Σ ∂e/∂q_i · q̇_i   (no ∂e/∂q̇_i · q̈_i), summed at once; the terms of the
+  // q_i that e does not hold are 0 and left out (the same sum)
+  const std::vector<Index> in_e = inputs_of(e);
+  GiNaC::exvector d{f.diff(GiNaC::ex_to<GiNaC::symbol>(t))};
   for (const auto& [q, qd] : chain) {
-    const GiNaC::ex& qs = impl_->input(q, "total_derivative");
+    const auto qi = impl_->input_index.find(q);
+    if (qi == impl_->input_index.end()) impl_->input(q, "total_derivative");  // throws
     const GiNaC::ex& qds = impl_->input(qd, "total_derivative");
-    d += f.diff(GiNaC::ex_to<GiNaC::symbol>(qs)) * qds;
+    if (!std::binary_search(in_e.begin(), in_e.end(), Index(qi->second))) continue;
+    d.push_back(f.diff(GiNaC::ex_to<GiNaC::symbol>(impl_->input_symbols[qi->second])) * qds);
   }
-  return impl_->add(d);
+  if (d.size() == 1) return impl_->add(d.front());
+  return impl_->add(GiNaC::dynallocate<GiNaC::add>(d));
 }
 
 bool ExpressionSet::independent_of(Expr e, const std::string& name) const {
@@ -106,6 +113,39 @@ bool ExpressionSet::independent_of(Expr e, const std::string& name) const {
         "' is neither an input nor a constant (known names: " + listing(impl_->known) + ")");
   }
   return !impl_->at(e, "independent_of").has(it->second);
+}
+
+std::vector<Index> ExpressionSet::inputs_of(Expr e) const {
+  const GiNaC::ex& x = impl_->at(e, "inputs_of");
+  std::vector<Index> found;
+  // a symbol in x, or a subtree: each node is visited once per occurrence, as by has()
+  std::vector<GiNaC::ex> stack{x};
+  while (!stack.empty()) {
+    const GiNaC::ex y = std::move(stack.back());
+    stack.pop_back();
+    if (GiNaC::is_a<GiNaC::symbol>(y)) {
+      const auto it = impl_->symbol_index.find(y);
+      if (it != impl_->symbol_index.end()) found.push_back(Index(it->second));
+      continue;
+    }
+    for (std::size_t k = y.nops(); k-- > 0;) stack.push_back(y.op(k));
+  }
+  std::sort(found.begin(), found.end());
+  found.erase(std::unique(found.begin(), found.end()), found.end());
+  return found;
+}
+
+bool ExpressionSet::is_literal_zero(Expr e) const {
+  const GiNaC::ex& x = impl_->at(e, "is_literal_zero");
+  return GiNaC::is_exactly_a<GiNaC::numeric>(x) && x.is_zero();
+}
+
+Expr ExpressionSet::sum(const std::vector<Expr>& terms) {
+  GiNaC::exvector v;
+  v.reserve(terms.size());
+  for (Expr t : terms) v.push_back(impl_->at(t, "sum"));
+  if (v.empty()) return impl_->add(GiNaC::ex(0));
+  return impl_->add(GiNaC::dynallocate<GiNaC::add>(v));
 }
 
 bool ExpressionSet::is_zero(Expr e) const {

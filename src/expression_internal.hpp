@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <map>
 #include <string>
+#include <unordered_map>
 #include <vector>
 
 #include <ginac/ginac.h>
@@ -66,6 +67,9 @@ struct Program::Tape {
 struct ExpressionSet::Impl {
   std::vector<std::string> input_names;
   std::vector<GiNaC::ex> input_symbols;      // realsymbols, in input order
+  std::unordered_map<std::string, std::size_t> input_index;  // input name → its index
+  // input symbol → its index (symbols compare by serial number, not by name)
+  std::map<GiNaC::ex, std::size_t, GiNaC::ex_is_less> symbol_index;
   std::map<std::string, GiNaC::ex> symbols;  // inputs and constants by name
   std::vector<std::string> known;            // inputs then constants, in declaration order
   GiNaC::exmap constant_values;              // constant symbol → its exact value
@@ -87,9 +91,8 @@ struct ExpressionSet::Impl {
   }
 
   const GiNaC::ex& input(const std::string& name, const char* who) const {
-    for (std::size_t i = 0; i < input_names.size(); ++i) {
-      if (input_names[i] == name) return input_symbols[i];
-    }
+    if (const auto it = input_index.find(name); it != input_index.end())
+      return input_symbols[it->second];
     throw std::invalid_argument(std::string("ukdyn::expr::ExpressionSet::") + who + ": '" + name +
                                 "' is not an input (the inputs are " +
                                 detail::listing(input_names) + ")");
