@@ -6,6 +6,7 @@
 #include <map>
 #include <string>
 #include <unordered_map>
+#include <utility>
 #include <vector>
 
 #include <ginac/ginac.h>
@@ -74,6 +75,19 @@ struct ExpressionSet::Impl {
   std::vector<std::string> known;            // inputs then constants, in declaration order
   GiNaC::exmap constant_values;              // constant symbol → its exact value
   std::vector<GiNaC::ex> expressions;        // by handle
+  // of the long sums differentiated so far (by handle): input index → the terms that hold it
+  std::unordered_map<Expr, std::unordered_map<std::size_t, std::vector<std::size_t>>>
+      terms_holding;
+
+  // the last chain of total_derivative, by names and by input indices
+  std::vector<std::pair<std::string, std::string>> chain_names;
+  std::vector<std::pair<std::size_t, std::size_t>> chain_indices;
+  // input index → the index of its velocity in that chain, or −1; empty when a coordinate is
+  // listed twice
+  std::vector<std::ptrdiff_t> velocity_of;
+
+  // ∂f/∂(input i) where f is the expression of handle e (expression.cpp)
+  GiNaC::ex derivative(Expr e, const GiNaC::ex& f, std::size_t i);
 
   Expr add(GiNaC::ex e) {
     expressions.push_back(std::move(e));
