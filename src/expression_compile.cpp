@@ -78,11 +78,10 @@ using ExMemo =
 
 class Compiler {
  public:
-  // values 0 … n_inputs−1 are the inputs; `inputs` maps their symbols to them
-  Compiler(Index n_inputs, const std::vector<GiNaC::ex>& input_symbols)
-      : n_inputs_(std::int32_t(n_inputs)), constant_of_(std::size_t(n_inputs)) {
-    for (std::int32_t i = 0; i < n_inputs_; ++i) memo_.emplace(input_symbols[std::size_t(i)], i);
-  }
+  // values 0 … n_inputs−1 are the inputs; `inputs` maps their symbols to them (looked up when
+  // met: a small expression of a model with many inputs does not hash them all)
+  Compiler(Index n_inputs, const std::map<GiNaC::ex, std::size_t, GiNaC::ex_is_less>& inputs)
+      : n_inputs_(std::int32_t(n_inputs)), inputs_(inputs), constant_of_(std::size_t(n_inputs)) {}
 
   // the value of e (memoized on e: shared subtrees are compiled once)
   std::int32_t compile(const GiNaC::ex& e) {
@@ -164,6 +163,9 @@ class Compiler {
   std::int32_t compile_new(const GiNaC::ex& e) {
     using GiNaC::is_a;
     if (is_a<GiNaC::numeric>(e)) return constant(GiNaC::ex_to<GiNaC::numeric>(e));
+    if (is_a<GiNaC::symbol>(e)) {
+      if (const auto it = inputs_.find(e); it != inputs_.end()) return std::int32_t(it->second);
+    }
     if (is_a<GiNaC::constant>(e)) return constant_of(GiNaC::evalf(e));
     if (is_a<GiNaC::add>(e)) return compile_add(e);
     if (is_a<GiNaC::mul>(e)) return compile_mul(e);
@@ -470,6 +472,7 @@ class Compiler {
   }
 
   std::int32_t n_inputs_;
+  const std::map<GiNaC::ex, std::size_t, GiNaC::ex_is_less>& inputs_;
   std::vector<std::optional<double>> constant_of_;   // per value: its value if constant
   std::map<std::uint64_t, std::int32_t> constants_;  // bits of a constant → value
   std::vector<Op> ops_;                              // SSA: dst is a value
@@ -513,7 +516,7 @@ void Program::evaluate(const double* in, double* out, double* scratch) const {
 }
 
 Program ExpressionSet::compile(const std::vector<Expr>& outputs) const {
-  Compiler compiler(Index(impl_->input_names.size()), impl_->input_symbols);
+  Compiler compiler(Index(impl_->input_names.size()), impl_->symbol_index);
   std::vector<std::int32_t> values;
   values.reserve(outputs.size());
   for (const Expr o : outputs) {

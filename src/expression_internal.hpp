@@ -5,6 +5,8 @@
 #include <cstdint>
 #include <map>
 #include <string>
+#include <unordered_map>
+#include <utility>
 #include <vector>
 
 #include <ginac/ginac.h>
@@ -66,10 +68,26 @@ struct Program::Tape {
 struct ExpressionSet::Impl {
   std::vector<std::string> input_names;
   std::vector<GiNaC::ex> input_symbols;      // realsymbols, in input order
+  std::unordered_map<std::string, std::size_t> input_index;  // input name → its index
+  // input symbol → its index (symbols compare by serial number, not by name)
+  std::map<GiNaC::ex, std::size_t, GiNaC::ex_is_less> symbol_index;
   std::map<std::string, GiNaC::ex> symbols;  // inputs and constants by name
   std::vector<std::string> known;            // inputs then constants, in declaration order
   GiNaC::exmap constant_values;              // constant symbol → its exact value
   std::vector<GiNaC::ex> expressions;        // by handle
+  // of the long sums differentiated so far (by handle): input index → the terms that hold it
+  std::unordered_map<Expr, std::unordered_map<std::size_t, std::vector<std::size_t>>>
+      terms_holding;
+
+  // the last chain of total_derivative, by names and by input indices
+  std::vector<std::pair<std::string, std::string>> chain_names;
+  std::vector<std::pair<std::size_t, std::size_t>> chain_indices;
+  // input index → the index of its velocity in that chain, or −1; empty when a coordinate is
+  // listed twice
+  std::vector<std::ptrdiff_t> velocity_of;
+
+  // ∂f/∂(input i) where f is the expression of handle e (expression.cpp)
+  GiNaC::ex derivative(Expr e, const GiNaC::ex& f, std::size_t i);
 
   Expr add(GiNaC::ex e) {
     expressions.push_back(std::move(e));
@@ -87,9 +105,8 @@ struct ExpressionSet::Impl {
   }
 
   const GiNaC::ex& input(const std::string& name, const char* who) const {
-    for (std::size_t i = 0; i < input_names.size(); ++i) {
-      if (input_names[i] == name) return input_symbols[i];
-    }
+    if (const auto it = input_index.find(name); it != input_index.end())
+      return input_symbols[it->second];
     throw std::invalid_argument(std::string("ukdyn::expr::ExpressionSet::") + who + ": '" + name +
                                 "' is not an input (the inputs are " +
                                 detail::listing(input_names) + ")");

@@ -428,16 +428,20 @@ class Parser {
     }
   }
 
+  // a + b − c … is summed at once (the same expression as term by term, but adding a term to a
+  // sum of k terms copies them: a sum of N terms would take O(N²))
   GiNaC::ex expression() {
     GiNaC::ex e = term();
+    if (!is("+") && !is("-")) return e;
+    GiNaC::exvector terms{e};
+    const std::size_t first = token_.position;
     while (is("+") || is("-")) {
       const bool plus = is("+");
-      const std::size_t at = token_.position;
       next();
-      const GiNaC::ex rhs = term();
-      e = build([&] { return plus ? e + rhs : e - rhs; }, at);
+      GiNaC::ex rhs = term();
+      terms.push_back(plus ? rhs : -rhs);
     }
-    return e;
+    return build([&] { return GiNaC::ex(GiNaC::dynallocate<GiNaC::add>(terms)); }, first);
   }
 
   GiNaC::ex term() {

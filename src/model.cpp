@@ -36,16 +36,30 @@ ModelError::ModelError(std::string file, int line, int column, std::string messa
       hint_(std::move(hint)) {}
 
 namespace model_reader {
+namespace {
+
+// The first velocity (in declaration order) that e depends on, or null: the inputs are
+// [q; q'; t; …], so the velocities are the inputs n … 2n − 1 (one traversal of e).
+const std::string* velocity_in(const ExpressionSet& set, Expr e,
+                               const std::vector<std::string>& velocities) {
+  const Index n = Index(velocities.size());
+  for (const Index k : set.inputs_of(e)) {
+    if (k >= n && k < 2 * n) return &velocities[std::size_t(k - n)];
+  }
+  return nullptr;
+}
+
+}  // namespace
 
 double Reader::number(const YAML::Node& node, const std::string& what) {
   if (!node.IsScalar()) fail(node, what + " must be a number");
   // a number, or an expression of the parameters only
   const Expr e = expression(node, what);
-  for (const auto& name : set_->input_names()) {
-    if (!set_->independent_of(e, name)) {
-      fail(node, what + " must be a constant, but depends on '" + name + "'",
-           "use numbers and parameters here");
-    }
+  if (const auto inputs = set_->inputs_of(e); !inputs.empty()) {
+    fail(node,
+         what + " must be a constant, but depends on '" +
+             set_->input_names()[std::size_t(inputs.front())] + "'",
+         "use numbers and parameters here");
   }
   const Program p = compile({e}, node, what);
   std::vector<double> in(std::size_t(p.inputs()), 0.0), scratch(std::size_t(p.scratch_size()));
@@ -79,9 +93,13 @@ Expr Reader::expression(const YAML::Node& node, const std::string& what, bool in
   }
   compile({e}, node, what);  // defined with the parameters' values? (errors point here)
   // the constraints' forces are inputs of C only (nothing else is evaluated with them)
-  for (std::size_t k = 0; !in_C && k < constraint_inputs_.size(); ++k) {
-    if (!set_->independent_of(e, constraint_inputs_[k])) {
-      fail(node, "in " + what + ": '" + constraint_inputs_[k] + "' is known only in a C",
+  // (they are the last inputs, in the order of constraint_inputs_)
+  const Index first_force = Index(set_->input_names().size() - constraint_inputs_.size());
+  if (!in_C && !constraint_inputs_.empty()) {
+    if (const auto inputs = set_->inputs_of(e); !inputs.empty() && inputs.back() >= first_force) {
+      const Index k = *std::lower_bound(inputs.begin(), inputs.end(), first_force);
+      fail(node, "in " + what + ": '" + set_->input_names()[std::size_t(k)] +
+                     "' is known only in a C",
            "a constraint's N_ and lambda_ are inputs of the non-ideal forces written as C");
     }
   }
@@ -196,15 +214,20 @@ void Reader::read_dynamics(const YAML::Node& root, SystemBuilder& builder) {
         file_, 1, 1, "no dynamics: neither 'kinetic_energy' nor 'mass_matrix'",
         "add kinetic_energy: 0.5*m*x_dot^2 (and potential_energy), or mass_matrix and forces");
   }
-  std::vector<Expr> M(static_cast<std::size_t>(n * n)), Q(static_cast<std::size_t>(n));
+  // M by its entries that are not the number 0 (row i, column j, entry), in row-major order:
+  // a large M is mostly zeros, which are neither stored, differentiated nor compiled
+  struct Entry {
+    Index i, j;
+    Expr e;
+  };
+  std::vector<Entry> M;
+  std::vector<Expr> Q(static_cast<std::size_t>(n));
   const Expr zero = set_->constant(0.0);
   std::fill(Q.begin(), Q.end(), zero);
   const Expr Ve = V ? expression(V, "potential_energy") : zero;
   if (V) {
-    for (const auto& v : velocities_) {
-      if (!set_->independent_of(Ve, v))
-        fail(V, "potential_energy depends on the velocity '" + v + "'");
-    }
+    if (const std::string* v = velocity_in(*set_, Ve, velocities_))
+      fail(V, "potential_energy depends on the velocity '" + *v + "'");
   }
   // the external power P_ext (System::external_power): the rate of E = ½ q̇ᵀ M q̇ + V that V
   // does not account for, q̇ᵀ F + P_time (the forces F beside the energies, the explicit time
@@ -216,35 +239,41 @@ void Reader::read_dynamics(const YAML::Node& root, SystemBuilder& builder) {
   if (T) {
     // M = ∂²T/∂q̇∂q̇;  Q = ∂T/∂q − D(∂T/∂q̇) − ∂V/∂q (the q̈ part of D is M q̈)
     const Expr Te = expression(T, "kinetic_energy");
-    Expr T0 = Te;
+    // T0 = T − Σ q̇_i ∂T/∂q̇_i + Σ ½ q̇_i M_ij q̇_j, summed at once (the same expression as
+    // term by term); only the velocities T holds give derivatives that are not 0
+    std::vector<Expr> T0{Te};
+    const std::vector<Index> in_T = set_->inputs_of(Te);
     for (Index i = 0; i < n; ++i) {
-      const Expr dT = set_->diff(Te, velocities_[std::size_t(i)]);
-      T0 = set_->subtract(T0, set_->multiply(qdot[std::size_t(i)], dT));
-      for (Index j = 0; j < n; ++j) {
+      const bool has_i = std::binary_search(in_T.begin(), in_T.end(), n + i);
+      // ∂T/∂q̇_i = 0 when T does not hold q̇_i: then row i of M is 0
+      const Expr dT = has_i ? set_->diff(Te, velocities_[std::size_t(i)]) : zero;
+      if (has_i) T0.push_back(set_->negate(set_->multiply(qdot[std::size_t(i)], dT)));
+      for (const Index k : has_i ? set_->inputs_of(dT) : std::vector<Index>()) {
+        if (k < n || k >= 2 * n) continue;
+        const Index j = k - n;
         const Expr e = set_->diff(dT, velocities_[std::size_t(j)]);
         // T must be quadratic in the velocities: M = ∂²T/∂q̇∂q̇ may not depend on them
-        for (const auto& v : velocities_) {
-          if (!set_->independent_of(e, v)) {
-            fail(T, "kinetic_energy is not quadratic in the velocities: its mass matrix depends "
-                    "on '" + v + "'",
-                 "T = ½ q̇ᵀ M(q, t) q̇ + (terms linear in q̇) + T0(q, t)");
-          }
+        if (const std::string* v = velocity_in(*set_, e, velocities_)) {
+          fail(T, "kinetic_energy is not quadratic in the velocities: its mass matrix depends "
+                  "on '" + *v + "'",
+               "T = ½ q̇ᵀ M(q, t) q̇ + (terms linear in q̇) + T0(q, t)");
         }
-        M[std::size_t(i * n + j)] = e;
+        if (!set_->is_literal_zero(e)) M.push_back({i, j, e});
       }
-      Q[std::size_t(i)] = set_->subtract(set_->diff(Te, coordinates_[std::size_t(i)]),
-                                         set_->total_derivative(dT, "t", chain_));
+      // ∂T/∂q_i is 0 when T does not hold q_i (not differentiated)
+      const Expr dTq = std::binary_search(in_T.begin(), in_T.end(), i)
+                           ? set_->diff(Te, coordinates_[std::size_t(i)])
+                           : zero;
+      Q[std::size_t(i)] = set_->subtract(dTq, set_->total_derivative(dT, "t", chain_));
     }
-    for (Index i = 0; i < n; ++i) {
-      for (Index j = 0; j < n; ++j) {
-        T0 = set_->add(T0, set_->multiply(set_->constant(0.5),
-                                          set_->multiply(qdot[std::size_t(i)],
-                                                         set_->multiply(M[std::size_t(i * n + j)],
-                                                                        qdot[std::size_t(j)]))));
-      }
+    const Expr half = set_->constant(0.5);
+    for (const Entry& m : M) {
+      T0.push_back(set_->multiply(
+          half, set_->multiply(qdot[std::size_t(m.i)],
+                               set_->multiply(m.e, qdot[std::size_t(m.j)]))));
     }
     P_time = set_->add(set_->subtract(P_time, set_->diff(Te, "t")),
-                       set_->total_derivative(T0, "t", chain_));
+                       set_->total_derivative(set_->sum(T0), "t", chain_));
   } else {
     if (!Mnode.IsSequence() || Index(Mnode.size()) != n) {
       fail(Mnode, "mass_matrix must be a list of " + std::to_string(n) + " rows",
@@ -258,24 +287,31 @@ void Reader::read_dynamics(const YAML::Node& root, SystemBuilder& builder) {
       }
       for (Index j = 0; j < n; ++j) {
         const Expr e = expression(row[std::size_t(j)], "mass_matrix");
-        for (const auto& v : velocities_) {
-          if (!set_->independent_of(e, v))
-            fail(row[std::size_t(j)], "mass_matrix depends on the velocity '" + v + "'");
-        }
-        M[std::size_t(i * n + j)] = e;
-        P_time = set_->add(
-            P_time, set_->multiply(set_->constant(0.5),
-                                   set_->multiply(qdot[std::size_t(i)],
-                                                  set_->multiply(set_->total_derivative(e, "t", chain_),
-                                                                 qdot[std::size_t(j)]))));
+        if (const std::string* v = velocity_in(*set_, e, velocities_))
+          fail(row[std::size_t(j)], "mass_matrix depends on the velocity '" + *v + "'");
+        if (!set_->is_literal_zero(e)) M.push_back({i, j, e});
       }
     }
+    // P_time + Σ ½ q̇_i D(M_ij) q̇_j, summed at once (the same expression as term by term)
+    std::vector<Expr> terms{P_time};
+    for (const Entry& m : M) {
+      const Expr De = set_->total_derivative(m.e, "t", chain_);
+      if (set_->is_literal_zero(De)) continue;
+      terms.push_back(set_->multiply(
+          set_->constant(0.5),
+          set_->multiply(qdot[std::size_t(m.i)], set_->multiply(De, qdot[std::size_t(m.j)]))));
+    }
+    P_time = set_->sum(terms);
   }
-  // − ∂V/∂q, and non-conservative forces
+  // − ∂V/∂q (0 for the q_i that V does not hold: not differentiated), and non-conservative
+  // forces
+  const std::vector<Index> in_V = V ? set_->inputs_of(Ve) : std::vector<Index>();
   for (Index i = 0; i < n; ++i) {
     if (V)
-      Q[std::size_t(i)] =
-          set_->subtract(Q[std::size_t(i)], set_->diff(Ve, coordinates_[std::size_t(i)]));
+      Q[std::size_t(i)] = set_->subtract(
+          Q[std::size_t(i)], std::binary_search(in_V.begin(), in_V.end(), i)
+                                 ? set_->diff(Ve, coordinates_[std::size_t(i)])
+                                 : zero);
   }
   if (F) {
     const auto rows = rows_of(F, "forces");
@@ -293,30 +329,76 @@ void Reader::read_dynamics(const YAML::Node& root, SystemBuilder& builder) {
 
   // M: a constant matrix when it depends on nothing (factorized once per workspace)
   bool constant = true;
-  for (Expr e : M) {
-    for (const auto& name : set_->input_names())
-      constant = constant && set_->independent_of(e, name);
+  std::vector<Expr> entries;
+  auto at = std::make_shared<std::vector<std::pair<Index, Index>>>();  // (i, j) of entries[k]
+  for (const Entry& m : M) {
+    constant = constant && set_->inputs_of(m.e).empty();
+    entries.push_back(m.e);
+    at->emplace_back(m.i, m.j);
   }
   const InputLayout layout = layout_;
   const YAML::Node dynamics = T ? T : Mnode;
-  const Program Mp = compile(M, dynamics, T ? "the derivatives of kinetic_energy" : "mass_matrix"),
+  const Program Mp = compile(entries, dynamics,
+                             T ? "the derivatives of kinetic_energy" : "mass_matrix"),
                 Qp = compile(Q, dynamics, "the generalized forces");
   if (constant) {
-    MatrixXd Mc(n, n);
-    std::vector<double> in(std::size_t(layout.size()), 0.0),
+    std::vector<double> in(std::size_t(layout.size()), 0.0), out(entries.size()),
         scratch(std::size_t(Mp.scratch_size()));
-    Mp.evaluate(in.data(), Mc.data(), scratch.data());  // symmetric: row- or column-major alike
-    builder.mass_matrix(Mc);
+    Mp.evaluate(in.data(), out.data(), scratch.data());
+    // a large block-diagonal M (uncoupled coordinates or groups of them) is given by its blocks,
+    // which the sparse engine factorizes one by one (a dense M of 10⁴ coordinates is 800 MB):
+    // the blocks start where no entry of the rows before reaches
+    std::vector<Index> reach(static_cast<std::size_t>(n));  // the last row or column an entry of row i reaches
+    for (Index i = 0; i < n; ++i) reach[std::size_t(i)] = i;
+    for (const auto& [i, j] : *at) {
+      Index& r = reach[std::size_t(std::min(i, j))];
+      r = std::max(r, std::max(i, j));
+    }
+    std::vector<Index> starts{0};
+    for (Index i = 0, end = 0; i + 1 < n; ++i) {
+      end = std::max(end, reach[std::size_t(i)]);
+      if (end == i) starts.push_back(i + 1);
+    }
+    std::vector<MatrixXd> blocks;
+    if (n >= SolverOptions().sparse_threshold && starts.size() > 1) {
+      starts.push_back(n);
+      for (std::size_t k = 0; k + 1 < starts.size(); ++k) {
+        const Index size = starts[k + 1] - starts[k];
+        blocks.push_back(MatrixXd::Zero(size, size));
+      }
+      for (std::size_t k = 0; k < out.size(); ++k) {
+        const auto [i, j] = (*at)[k];
+        const std::size_t b =
+            std::size_t(std::upper_bound(starts.begin(), starts.end(), i) - starts.begin()) - 1;
+        blocks[b](i - starts[b], j - starts[b]) = out[k];
+      }
+      // only a symmetric positive definite M (else the checks of the dense M report it)
+      for (const MatrixXd& B : blocks) {
+        if (!B.allFinite() || B != B.transpose() ||
+            Eigen::LLT<MatrixXd>(B).info() != Eigen::Success) {
+          blocks.clear();
+          break;
+        }
+      }
+    }
+    if (!blocks.empty()) {
+      for (std::size_t b = 0; b < blocks.size(); ++b) builder.mass_block(starts[b], blocks[b]);
+    } else {
+      MatrixXd Mc = MatrixXd::Zero(n, n);
+      for (std::size_t k = 0; k < out.size(); ++k) Mc((*at)[k].first, (*at)[k].second) = out[k];
+      builder.mass_matrix(Mc);
+    }
   } else {
-    builder.mass_matrix([Mp, layout, n](const VectorXd& q, double t, Eigen::Ref<MatrixXd> Mout) {
+    builder.mass_matrix([Mp, at, layout, n](const VectorXd& q, double t,
+                                            Eigen::Ref<MatrixXd> Mout) {
       ThreadBuffers& b = buffers();
       b.reserve(layout.size(), Mp);
       std::copy(q.data(), q.data() + n, b.in.begin());
       b.in[std::size_t(2 * n)] = t;
       Mp.evaluate(b.in.data(), b.out.data(), b.scratch.data());
-      for (Index i = 0; i < n; ++i) {
-        for (Index j = 0; j < n; ++j) Mout(i, j) = b.out[std::size_t(i * n + j)];
-      }
+      Mout.setZero();
+      for (std::size_t k = 0; k < at->size(); ++k)
+        Mout((*at)[k].first, (*at)[k].second) = b.out[k];
     });
   }
   builder.forces(
@@ -371,19 +453,22 @@ Constraint Reader::read_constraint(const YAML::Node& c, const std::string& name,
     std::vector<Expr> phi, phid, b;
     for (const auto& node : phis) {
       const Expr e = expression(node, what);
-      for (const auto& v : velocities_) {
-        if (!set_->independent_of(e, v)) {
-          fail(node, what + " is holonomic but depends on the velocity '" + v + "'",
-               "write it as nonholonomic: instead");
-        }
+      if (const std::string* v = velocity_in(*set_, e, velocities_)) {
+        fail(node, what + " is holonomic but depends on the velocity '" + *v + "'",
+             "write it as nonholonomic: instead");
       }
       phi.push_back(e);
       phid.push_back(set_->total_derivative(e, "t", chain_));
       b.push_back(set_->negate(set_->total_derivative(phid.back(), "t", chain_)));
     }
+    // ∂φ/∂q_j is 0 for the q_j that φ does not hold (not differentiated)
+    const Expr zero = set_->constant(0.0);
     for (Index r = 0; r < rows; ++r) {
+      const std::vector<Index> in_phi = set_->inputs_of(phi[std::size_t(r)]);
       for (Index j = 0; j < n; ++j)
-        accel.push_back(set_->diff(phi[std::size_t(r)], coordinates_[std::size_t(j)]));
+        accel.push_back(std::binary_search(in_phi.begin(), in_phi.end(), j)
+                            ? set_->diff(phi[std::size_t(r)], coordinates_[std::size_t(j)])
+                            : zero);
     }
     accel.insert(accel.end(), b.begin(), b.end());
     levels = phi;
@@ -398,9 +483,14 @@ Constraint Reader::read_constraint(const YAML::Node& c, const std::string& name,
       psi.push_back(expression(node, what));
       b.push_back(set_->negate(set_->total_derivative(psi.back(), "t", chain_)));
     }
+    // ∂ψ/∂q̇_j is 0 for the q̇_j that ψ does not hold (not differentiated)
+    const Expr zero = set_->constant(0.0);
     for (Index r = 0; r < rows; ++r) {
+      const std::vector<Index> in_psi = set_->inputs_of(psi[std::size_t(r)]);
       for (Index j = 0; j < n; ++j)
-        accel.push_back(set_->diff(psi[std::size_t(r)], velocities_[std::size_t(j)]));
+        accel.push_back(std::binary_search(in_psi.begin(), in_psi.end(), n + j)
+                            ? set_->diff(psi[std::size_t(r)], velocities_[std::size_t(j)])
+                            : zero);
     }
     accel.insert(accel.end(), b.begin(), b.end());
     levels = psi;
@@ -479,11 +569,9 @@ SurfaceVelocityFn Reader::surface_velocity(const YAML::Node& node, std::size_t c
   std::vector<Expr> u, u_dot;
   for (const auto& r : rows) {
     const Expr e = expression(r, what);
-    for (const auto& v : velocities_) {
-      if (!set_->independent_of(e, v)) {
-        fail(r, "surface_velocity depends on the velocity '" + v + "'",
-             "the surface velocity may depend on the coordinates and t only");
-      }
+    if (const std::string* v = velocity_in(*set_, e, velocities_)) {
+      fail(r, "surface_velocity depends on the velocity '" + *v + "'",
+           "the surface velocity may depend on the coordinates and t only");
     }
     u.push_back(e);
     u_dot.push_back(set_->total_derivative(e, "t", chain_));
@@ -689,6 +777,17 @@ void Reader::read_simulate(const YAML::Node& root, Model& model) {
 // rather than at the run.
 void Reader::check_mass_matrix(const YAML::Node& root, const Model& model) {
   const Index n = model.system.dofs();
+  // M given by constant blocks is symmetric positive definite when they are (read_dynamics
+  // gives blocks only then; a dense M of many coordinates would not fit)
+  if (model.system.mass_is_block_diagonal() &&
+      std::all_of(model.system.mass_blocks().begin(), model.system.mass_blocks().end(),
+                  [](const MassBlock& b) {
+                    return b.constant() && !b.singular && b.value.allFinite() &&
+                           b.value == b.value.transpose() &&
+                           Eigen::LLT<MatrixXd>(b.value).info() == Eigen::Success;
+                  })) {
+    return;
+  }
   MatrixXd M(n, n);
   model.system.mass_matrix(model.q0, model.options.t_start, M);
   const YAML::Node at = root["mass_matrix"] ? root["mass_matrix"] : root["kinetic_energy"];

@@ -105,8 +105,14 @@ CheckReport check_model(const Model& model) {
   report.rank = solved ? ws.rank : rank_of_rows(stacked, threshold);
   report.degrees_of_freedom = n - report.rank;
 
-  // redundancy: constraint k is redundant when its rows do not raise the rank of those before it
-  if (stacked.allFinite()) {
+  // redundancy: constraint k is redundant when its rows do not raise the rank of those before it;
+  // none is when all the rows are independent (one decomposition instead of one per constraint)
+  // (the sparse engine's rank when it found them all independent: its threshold, 1e-6, is the
+  // stricter; a dense QR of a chain of 10⁴ coordinates would take minutes)
+  const bool independent =
+      stacked.allFinite() && ((solved && ws.is_sparse() && ws.rank == stacked.rows()) ||
+                              rank_of_rows(stacked, threshold) == stacked.rows());
+  if (stacked.allFinite() && !independent) {
     MatrixXd kept(0, n);
     Index kept_rank = 0;
     for (Index k : active) {

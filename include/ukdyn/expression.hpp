@@ -114,6 +114,17 @@ class ExpressionSet {
   /// True when e does not depend on `name` (an input or a constant). @throws
   /// std::invalid_argument on an unknown name.
   bool independent_of(Expr e, const std::string& name) const;
+  /// The inputs e depends on, as indices into input_names(), ascending, each once. One
+  /// traversal of e (names are not looked up): use it rather than independent_of() in loops
+  /// over many inputs. @throws std::invalid_argument on a handle not from this set.
+  std::vector<Index> inputs_of(Expr e) const;
+  /// True when e is stored as the number 0 — what diff() gives for an input e does not hold —
+  /// without simplifying it (O(1); is_zero() also finds x - x after normalization).
+  bool is_literal_zero(Expr e) const;
+  /// The sum of `terms` (0 when empty), built at once: the same expression as adding them one
+  /// by one with add(), in time O(k log k) for k terms rather than O(k²).
+  Expr sum(const std::vector<Expr>& terms);
+
   /// True when e is identically zero (after GiNaC's normalization).
   bool is_zero(Expr e) const;
   /// e printed in the model language (for messages and reports).
