@@ -11,6 +11,7 @@
 /// forward_dynamics again before reading results.
 #pragma once
 
+#include <string>
 #include <vector>
 
 #include <Eigen/Core>
@@ -54,6 +55,26 @@ struct ProjectionResult {
   double violation = 0.0;    ///< max |row| after the last correction (0 if nothing to project)
   Status status = Status::kOk;  ///< kOk, or why an evaluation failed (M, NaN, …)
 };
+
+/// Constraints that cannot hold together near a state (find_constraint_conflict).
+struct ConstraintConflict {
+  bool found = false;          ///< a part of the violation that no correction removes
+  bool velocity_level = false;  ///< found in phi' (a drive the constraints cannot follow)
+  double residual = 0.0;       ///< |(I − A A⁺) phi| (or phi'): the violation left at least
+  std::vector<std::string> names;  ///< the constraints whose rows carry it, declaration order
+};
+
+/// Whether the active constraints contradict each other at (q, q', t), linearized: the part
+/// (I − A A⁺) phi of the position violation over the holonomic rows, then of the velocity
+/// violation phi' over all rows, outside the range of A (at the workspace's rank threshold),
+/// counts when it exceeds 100 · tolerance and 1e-3 of the violation. Then Gauss–Newton (the
+/// projection) stalls at a nonzero violation: contradictory constraints (x = 0 and x = 1, or
+/// 1 = 0) or a mechanism that locks up (A loses rank while the drive asks for a motion outside
+/// its range). A diagnosis, not a proof: at a singular point of a consistent set the linearized
+/// test may also fire, so call it where the projection has failed. Cost: one evaluation of the
+/// constraints and a QR of A, O(m n min(m, n)).
+ConstraintConflict find_constraint_conflict(const System& sys, Workspace& ws, const VectorXd& q,
+                                            const VectorXd& qd, double t, double tolerance);
 
 /// q ← q − M⁻¹ Aᵀ (A M⁻¹ Aᵀ)⁺ phi(q, t) over the holonomic constraints (active at t and in the
 /// mask), iterated until converged. Cost per iteration O(n³/3 + m n² + m² n) and the constraints'.
