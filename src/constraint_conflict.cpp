@@ -13,6 +13,7 @@
 #include <vector>
 
 #include <Eigen/QR>
+#include <Eigen/SVD>
 
 #include "detail.hpp"
 #include "ukdyn/forward.hpp"
@@ -82,10 +83,11 @@ ConstraintConflict find_constraint_conflict(const System& sys, Workspace& ws, co
   if (!A.allFinite() || !phi.allFinite() || !phi_dot.allFinite()) return out;
 
   // what no correction removes, first at the position level, then at the velocity level;
-  // significant when it is well above the tolerance and a good part of the violation itself
+  // significant when it is above the tolerance (what a projection stalls at) and not roundoff
+  // of the violation itself
   auto significant = [&](const VectorXd& u, const VectorXd& v) {
     const double un = u.cwiseAbs().maxCoeff();
-    return un > 100.0 * tolerance && un > 1e-3 * v.cwiseAbs().maxCoeff();
+    return un > tolerance && un > 1e-3 * v.cwiseAbs().maxCoeff();
   };
   auto name_rows = [&](const VectorXd& u, const std::vector<Index>& who) {
     const double un = u.cwiseAbs().maxCoeff();
@@ -112,6 +114,23 @@ ConstraintConflict find_constraint_conflict(const System& sys, Workspace& ws, co
     out.velocity_level = true;
     out.residual = u.norm();
     name_rows(u, owner);
+    return out;
+  }
+  // just short of the pose where A loses rank, A is still regular but nearly singular: the
+  // velocities it asks for grow like 1/sigma_min (a four-bar at lock-up: |q'| ~ 1e6) and the
+  // projection stalls at the roundoff of A q'. Near rank loss: sigma_min < 1e-6 sigma_max; the
+  // rows are those of the left singular vector of sigma_min
+  if (rows <= n) {
+    Eigen::JacobiSVD<MatrixXd> svd(A, Eigen::ComputeFullU);
+    const VectorXd& sv = svd.singularValues();
+    const double ratio = sv[sv.size() - 1] / sv[0];
+    if (sv[0] > 0.0 && ratio < 1e-6) {
+      out.found = true;
+      out.velocity_level = true;
+      out.singular_ratio = ratio;
+      out.residual = phi_dot.cwiseAbs().maxCoeff();
+      name_rows(svd.matrixU().col(sv.size() - 1), owner);
+    }
   }
   return out;
 }

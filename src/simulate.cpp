@@ -94,8 +94,12 @@ std::string describe_conflict(const ConstraintConflict& c, double t) {
   if (c.velocity_level) {
     return "the constraints have no solution near t = " + format(t) +
            ": the mechanism locks up (constraint rows that cannot be satisfied: " + names +
-           "; the motion they ask for leaves the directions the constraints allow, residual " +
-           format(c.residual) + ")";
+           (c.singular_ratio > 0.0
+                ? "; the constraint Jacobian is nearly singular there (sigma_min/sigma_max = " +
+                      format(c.singular_ratio) +
+                      ") and the velocities it asks for grow without bound)"
+                : "; the motion they ask for leaves the directions the constraints allow, "
+                  "residual " + format(c.residual) + ")");
   }
   if (c.names.size() == 1) {
     return "the constraint " + names + " cannot be satisfied near t = " + format(t) +
