@@ -124,8 +124,8 @@ TEST(ModelDiagnoses, SelfReferencingAliasAndDeepNesting) {
   EXPECT_TRUE(contains(e, "m.yaml:1:21: error: this alias refers to a node that contains it"))
       << e;
   e = error_of("name: " + std::string(100000, '[') + "\n");
-  EXPECT_TRUE(contains(e, "m.yaml:1:")) << e;
-  EXPECT_TRUE(contains(e, "the YAML nests too deep")) << e;
+  // (yaml-cpp marks where it gave up: the end of the brackets)
+  EXPECT_TRUE(contains(e, "m.yaml:2:1: error: the YAML nests too deep")) << e;
 }
 
 // ---- D18: not a model file --------------------------------------------------------------------
