@@ -208,7 +208,8 @@ int run_command(const RunArguments& args) {
       // (no hint to project when the constraints contradict each other: it cannot help)
       const bool initial =
           std::string_view(e.what()).find("initial") != std::string_view::npos &&
-          std::string_view(e.what()).find("contradict") == std::string_view::npos;
+          std::string_view(e.what()).find("contradict") == std::string_view::npos &&
+          std::string_view(e.what()).find("cannot be satisfied") == std::string_view::npos;
       std::fprintf(stderr, "%s: error: %s%s\n", model.file.c_str(), e.what(),
                    initial && !model.project_initial
                        ? " (hint: add `project: true` under `initial:` in the model file)"
