@@ -52,6 +52,11 @@ int check_command(const ModelSource& source) {
                 "before them; the motion is the same without them)\n",
                 join(r.redundant).c_str());
   }
+  if (!r.contradictory.empty()) {
+    std::printf("  contradictory constraints  %s  (inconsistent: no state satisfies them "
+                "together)\n",
+                join(r.contradictory).c_str());
+  }
   if (r.initial_violations.empty()) {
     std::printf("  initial state       consistent with every constraint\n");
   } else {

@@ -98,6 +98,20 @@ int main(int argc, char** argv) {
 
   app.add_subcommand("examples", "list the built-in examples");
 
+  // an unknown subcommand is named (CLI11 would say only "A subcommand is required")
+  if (argc > 1 && argv[1][0] != '-') {
+    const std::string first = argv[1];
+    bool known = false;
+    for (const CLI::App* sub : app.get_subcommands({})) known = known || sub->check_name(first);
+    if (!known) {
+      std::fprintf(stderr,
+                   "error: unknown subcommand '%s' (the subcommands are run, check, examples)\n"
+                   "Run with --help for more information.\n",
+                   first.c_str());
+      return kExitUsage;
+    }
+  }
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -221,7 +221,11 @@ int run_command(const RunArguments& args) {
     } catch (const std::invalid_argument& e) {
       // the model cannot be started (inconsistent initial state, bad settings)
       bar.finish();
-      const bool initial = std::string_view(e.what()).find("initial") != std::string_view::npos;
+      // (no hint to project when the constraints contradict each other: it cannot help)
+      const bool initial =
+          std::string_view(e.what()).find("initial") != std::string_view::npos &&
+          std::string_view(e.what()).find("contradict") == std::string_view::npos &&
+          std::string_view(e.what()).find("cannot be satisfied") == std::string_view::npos;
       std::fprintf(stderr, "%s: error: %s%s\n", model.file.c_str(), e.what(),
                    initial && !model.project_initial
                        ? " (hint: add `project: true` under `initial:` in the model file)"

@@ -238,6 +238,15 @@ class Compiler {
     if (ca && cb) {
       double s[3] = {*ca, *cb, 0.0};
       step(Op{code, 2, 0, 1}, s);
+      // a constant part the evaluation would compute as NaN or Inf (the parser refuses those it
+      // sees where they are written; this catches what only the rounding to double makes so)
+      if (!std::isfinite(s[2])) {
+        throw std::invalid_argument(
+            "ukdyn::expr::ExpressionSet::compile: a constant part of the expression is not a "
+            "finite number in double precision (" +
+            std::to_string(s[0]) + (is_unary(code) ? "" : ", " + std::to_string(s[1])) +
+            " give " + std::to_string(s[2]) + ")");
+      }
       return constant(s[2]);
     }
     // x·1 = x, x + 0 = x, x − 0 = x, x / 1 = x

@@ -13,6 +13,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstring>
+#include <limits>
 #include <map>
 #include <optional>
 #include <sstream>
@@ -353,6 +354,16 @@ class Parser {
     return os.str();
   }
 
+  // e as printed, shortened to about 60 characters (for messages)
+  static std::string brief(const GiNaC::ex& e) {
+    std::string s = printed(e);
+    if (s.size() > 60) s = s.substr(0, 57) + "...";
+    const bool compound = !GiNaC::is_a<GiNaC::symbol>(e) && !GiNaC::is_a<GiNaC::function>(e) &&
+                          !(GiNaC::is_a<GiNaC::numeric>(e) && GiNaC::ex_to<GiNaC::numeric>(e).is_integer() &&
+                            !GiNaC::ex_to<GiNaC::numeric>(e).is_negative());
+    return compound ? "(" + s + ")" : s;
+  }
+
   // true when e depends on an input (a symbol that is not a constant)
   bool has_input(const GiNaC::ex& e) const {
     for (auto i = e.preorder_begin(); i != e.preorder_end(); ++i) {
@@ -400,19 +411,91 @@ class Parser {
     }
   }
 
+  // A constant sub-expression (no input) with the constants' values must be a finite real
+  // double: acos(2) and (-8)^(1/3) are complex, exp(1000) and 10^400 overflow. `what` names it
+  // in the message ("acos(...)", "the power"). Evaluated with GiNaC's evalf (about 17 digits,
+  // its float exponent does not overflow); exp, sinh and cosh of more than 1000 are refused
+  // before, unevaluated. Cost: one evalf of the sub-expression.
+  void check_constant_value(const GiNaC::ex& e, const std::string& what, std::size_t at) const {
+    if (has_input(e)) return;
+    const GiNaC::ex v = valued(e, at);
+    const bool with_values = !v.is_equal(e);
+    const std::string suffix = with_values ? " with the parameters' values" : "";
+    GiNaC::ex f;
+    try {
+      f = GiNaC::evalf(v);
+    } catch (const std::exception& error) {
+      fail("cannot evaluate " + what + suffix + ": " + error.what(), at);
+    }
+    if (!GiNaC::is_a<GiNaC::numeric>(f)) return;  // not a number (cannot happen: no symbols)
+    const GiNaC::numeric n = GiNaC::ex_to<GiNaC::numeric>(f);
+    if (!n.is_real()) {
+      fail("cannot evaluate: " + what + " is complex" + suffix + " (" + printed(f) + ")", at);
+    }
+    if (GiNaC::abs(n) > GiNaC::numeric(std::numeric_limits<double>::max())) {
+      fail("cannot evaluate: " + what + " overflows a double" + suffix + " (about " +
+               printed(f) + "; a double holds magnitudes up to about 1.8e308)",
+           at);
+    }
+  }
+
+  // the distance from x to the nearest of a + k pi (k whole), and x's roundoff when the value is
+  // rounded to a double: within a few roundoffs, a double argument cannot tell the two apart
+  static bool within_roundoff_of(const GiNaC::numeric& x, const GiNaC::numeric& a) {
+    const GiNaC::numeric pi = GiNaC::ex_to<GiNaC::numeric>(GiNaC::evalf(GiNaC::Pi));
+    const double turns = ((x - a) / pi).to_double();
+    if (!(std::fabs(turns) < 1e15)) return false;  // beyond where a double resolves a period
+    const GiNaC::numeric k(long(std::llround(turns)));
+    const GiNaC::numeric distance = GiNaC::abs(x - a - k * pi);
+    const double scale = std::max(1.0, std::fabs(x.to_double()));
+    return distance <= GiNaC::numeric(8.0 * std::numeric_limits<double>::epsilon() * scale);
+  }
+
+  // tan(x) with x a constant at a pole (pi/2 + k pi) to within roundoff: a double computes a
+  // large finite number (tan(pi/2) is 1.633e16) that is only noise
+  void check_pole(const FunctionInfo& f, const GiNaC::exvector& args, std::size_t at) const {
+    if (f.code != Code::kTan || has_input(args[0])) return;
+    GiNaC::ex x;
+    try {
+      x = GiNaC::evalf(valued(args[0], at));
+    } catch (const std::exception&) {
+      return;  // reported by check_constant_value
+    }
+    if (!GiNaC::is_a<GiNaC::numeric>(x) || !GiNaC::ex_to<GiNaC::numeric>(x).is_real()) return;
+    const GiNaC::numeric half_pi = GiNaC::ex_to<GiNaC::numeric>(GiNaC::evalf(GiNaC::Pi / 2));
+    if (within_roundoff_of(GiNaC::ex_to<GiNaC::numeric>(x), half_pi)) {
+      fail("cannot evaluate: tan is at its pole (pi/2 + k pi) to within roundoff: its argument "
+           "is " + printed(x) + (valued(args[0], at).is_equal(args[0]) ? "" : " with the parameters' values") +
+               ", and a double gives a meaningless large number there",
+           at);
+    }
+  }
+
   // f(args) with the constants' values: log(0) and tan(acos(0)) are undefined, and sqrt and abs
   // at 0, asin and acos at 1 or -1 and atan2 at (0, 0) have no derivative
   void check_call(const FunctionInfo& f, const GiNaC::exvector& args, std::size_t at) const {
     if (f.code == Code::kSqrt) check_power(args[0], GiNaC::numeric(1, 2), at);
-    if (values_.empty()) return;  // as built
+    if (values_.empty()) {  // as built; a constant: finite and real, away from a pole
+      if (std::none_of(args.begin(), args.end(), [&](const GiNaC::ex& a) { return has_input(a); })) {
+        check_pole(f, args, at);
+        const GiNaC::ex value = build([&] { return call(f, args); }, at);
+        check_constant_value(value, brief(value), at);
+      }
+      return;
+    }
     GiNaC::exvector v;
     bool inputs = false;
     for (const auto& a : args) {
       v.push_back(valued(a, at));
       inputs = inputs || has_input(a);
     }
-    build([&] { return call(f, v); }, at);
-    if (!inputs) return;  // a constant: no derivative taken
+    const GiNaC::ex value = build([&] { return call(f, v); }, at);
+    if (!inputs) {
+      // a constant: finite and real, away from a pole; no derivative taken
+      check_pole(f, args, at);
+      check_constant_value(value, brief(call(f, args)), at);
+      return;
+    }
     const std::string name = f.name;
     if (f.code == Code::kAbs && v[0].is_zero()) {
       fail("cannot differentiate: the argument of abs is 0 with the parameters' values", at);
@@ -457,6 +540,10 @@ class Parser {
              at);
       }
       e = build([&] { return times ? e * rhs : e / rhs; }, at);
+      // a product of numbers (1e300*1e300, 1/1e-400): exact here, a double holds it?
+      if (GiNaC::is_a<GiNaC::numeric>(e)) {
+        check_constant_value(e, times ? "the product" : "the quotient", at);
+      }
       // a product adds the exponents of a common base: x^a * x^(b - a) is x^b
       const bool product = GiNaC::is_a<GiNaC::mul>(e);
       for (std::size_t i = 0; i < (product ? e.nops() : 1); ++i) {
@@ -502,7 +589,9 @@ class Parser {
     const GiNaC::ex exponent = unary(true);
     check_power_size(base, exponent, at);
     check_power(base, exponent, at);
-    return build([&] { return GiNaC::pow(base, exponent); }, at);
+    const GiNaC::ex e = build([&] { return GiNaC::pow(base, exponent); }, at);
+    check_constant_value(e, "the power " + brief(base) + "^" + brief(exponent), at);
+    return e;
   }
 
   GiNaC::ex primary() {

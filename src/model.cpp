@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <set>
 #include <sstream>
@@ -85,9 +86,17 @@ Expr Reader::expression(const YAML::Node& node, const std::string& what, bool in
     const bool quoted = node.Tag() == "!";
     m.column += int(error.position()) + (quoted ? 1 : 0);
     const std::string message = error.what();
+    // a flow mapping or list ({a: atan2(y, x)}) ends the value at the comma: '(' left open
+    const std::string& text = node.Scalar();
+    const bool cut = std::count(text.begin(), text.end(), '(') >
+                     std::count(text.begin(), text.end(), ')');
     fail_at(
         m, "in " + what + ": " + message,
-        message.find("the parameters' values") != std::string::npos
+        cut && !quoted
+            ? "inside YAML brackets {…} or […] a comma ends the value, so '" + text +
+                  "' may be cut short: quote the expression (\"atan2(y, x)\") or write it on "
+                  "its own line (block style)"
+        : message.find("the parameters' values") != std::string::npos
             ? "change the parameter's value, or write the expression for it"
             : "expressions use the coordinates, their velocities (x_dot), t and the parameters");
   }
@@ -633,9 +642,14 @@ void Reader::read_nonideal(const YAML::Node& root, SystemBuilder& builder) {
         spec.constraint = on;
         spec.mu = number(f["mu"], "mu");
         spec.coordinates = coords;
-        if (f["regularization_velocity"])
-          spec.regularization_velocity =
-              number(f["regularization_velocity"], "regularization_velocity");
+        if (const YAML::Node rv = f["regularization_velocity"]) {
+          spec.regularization_velocity = number(rv, "regularization_velocity");
+          if (!(spec.regularization_velocity > 0)) {
+            fail(rv, "regularization_velocity must be > 0, got " + rv.Scalar(),
+                 "the speed below which the friction force is scaled down, e.g. 1e-4; "
+                 "docs/friction.md");
+          }
+        }
         if (spec.mu < 0) fail(f["mu"], "mu must be >= 0");
         if (const YAML::Node ms = f["mu_static"]) {
           spec.mu_static = number(ms, "mu_static");
@@ -875,12 +889,27 @@ void Reader::read_output(const YAML::Node& root, Model& model) {
 }
 
 Model Reader::read(const std::string& text) {
+  // not YAML at all: an XML robot description (URDF, MJCF, SDF)
+  const std::size_t first = text.find_first_not_of(" \t\r\n");
+  if (first != std::string::npos && text[first] == '<') {
+    throw ModelError(file_, 1, 1,
+                     "this looks like an XML file (URDF, MJCF, SDF …): ukdyn reads its own YAML "
+                     "model format",
+                     "see docs/model-format.md; write the bodies and joints under bodies: and "
+                     "joints:");
+  }
+  // duplicate keys, a second document, self-referencing aliases, runaway nesting (model_yaml.cpp)
+  check_yaml_structure(text, file_);
   YAML::Node root;
   try {
     root = YAML::Load(text);
   } catch (const YAML::ParserException& e) {
     throw ModelError(file_, e.mark.line + 1, e.mark.column + 1, "YAML syntax: " + e.msg,
                      "check the indentation, brackets and colons");
+  }
+  if (root.IsNull()) {
+    throw ModelError(file_, 0, 0, "the model file is empty (or holds only comments)",
+                     "start with name:, coordinates:, … (docs/model-format.md)");
   }
   if (!root.IsMap()) {
     throw ModelError(file_, 1, 1, "a model is a mapping of keys",
@@ -983,11 +1012,31 @@ Model parse_model(const std::string& text, const std::string& file,
 }
 
 Model load_model(const std::string& path, const std::map<std::string, double>& overrides) {
+  // a directory, a device or a stream is not a model file; a regular file is read whole, up to
+  // kMaxModelFileBytes (a bounded read: /dev/zero or a runaway file never fills the memory)
+  std::error_code ec;
+  const auto status = std::filesystem::status(path, ec);
+  if (!ec && std::filesystem::is_directory(status)) {
+    throw ModelError(path, 0, 0, "is a directory, not a model file",
+                     "give the path of a .yaml model file");
+  }
   std::ifstream in(path, std::ios::binary);
   if (!in) throw ModelError(path, 0, 0, "cannot read the model file", "check the path");
-  std::ostringstream text;
-  text << in.rdbuf();
-  return parse_model(text.str(), path, overrides);
+  std::string text;
+  std::vector<char> chunk(std::size_t(1) << 16);
+  while (in) {
+    in.read(chunk.data(), std::streamsize(chunk.size()));
+    text.append(chunk.data(), std::size_t(in.gcount()));
+    if (text.size() > kMaxModelFileBytes) {
+      throw ModelError(path, 0, 0,
+                       "the model file is larger than " +
+                           std::to_string(kMaxModelFileBytes >> 20) + " MB" +
+                           (std::filesystem::is_regular_file(status) ? "" : " (it is not a regular file)"),
+                       "a model file is a few kB of YAML; is this the right file?");
+    }
+  }
+  if (in.bad()) throw ModelError(path, 0, 0, "cannot read the model file", "check the path");
+  return parse_model(text, path, overrides);
 }
 
 std::vector<std::vector<double>> evaluate_output_expressions(const Model& model,

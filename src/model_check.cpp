@@ -133,7 +133,43 @@ CheckReport check_model(const Model& model) {
   // initial consistency, and whether projection finds a consistent state near
   report.initial_violations =
       check_initial_conditions(sys, model.q0, model.qd0, t, o.initial_tolerance);
-  if (!report.initial_violations.empty()) {
+  // constraints that contradict each other (x = 0 and x = 1, 1 = 0): where the position
+  // projection from q0 stalls, the violation no correction removes (find_constraint_conflict);
+  // such constraints are not "redundant", and projecting cannot help
+  if (!report.initial_violations.empty() && report.mass_positive_definite) {
+    try {
+      VectorXd q = model.q0, qd = model.qd0;
+      Workspace wc(sys, o.solver);
+      const ProjectionResult rp = project_positions(sys, wc, q, t, o.projection);
+      ProjectionResult rv;
+      if (rp.status == Status::kOk && rp.converged)
+        rv = project_velocities(sys, wc, q, qd, t, o.projection);
+      if (rp.status == Status::kOk && (!rp.converged || !rv.converged)) {
+        const ConstraintConflict c =
+            find_constraint_conflict(sys, wc, q, rp.converged ? qd : model.qd0, t,
+                                     o.projection.tolerance);
+        if (c.found) report.contradictory = c.names;
+      }
+    } catch (const std::exception&) {
+      // reported below, by the projection of the initial state
+    }
+  }
+  if (!report.contradictory.empty()) {
+    std::string names;
+    for (const auto& c : report.contradictory) names += (names.empty() ? "'" : ", '") + c + "'";
+    report.problems.push_back(
+        report.contradictory.size() == 1
+            ? "the constraint " + names +
+                  " cannot be satisfied: no state satisfies it (correct or remove it; "
+                  "projecting the initial state cannot help)"
+            : "the constraints " + names +
+                  " contradict each other: no state satisfies them together (correct or remove "
+                  "one of them; projecting the initial state cannot help)");
+    std::erase_if(report.redundant, [&](const std::string& name) {
+      return std::find(report.contradictory.begin(), report.contradictory.end(), name) !=
+             report.contradictory.end();
+    });
+  } else if (!report.initial_violations.empty()) {
     const bool project = model.project_initial || o.project_initial;
     if (!project) {
       report.problems.push_back(

@@ -139,6 +139,14 @@ class MultibodyReader {
   YAML::Node root_;
   std::vector<BodyDecl> bodies_;
   std::vector<JointDecl> joints_;
+  // the spring-dampers' entries and points, checked at the initial pose after the build
+  struct SpringDecl {
+    YAML::Node node;
+    std::string what;
+    BodyId a, b;
+    Vector3d pa, pb;
+  };
+  std::vector<SpringDecl> springs_;
   mb::Multibody builder_;
 };
 
@@ -735,6 +743,7 @@ void MultibodyReader::read_forces() {
       const double c = f["c"] ? non_negative(f["c"], what + " c") : 0.0;
       const double L = f["length"] ? non_negative(f["length"], what + " length") : 0.0;
       builder_.add_force(mb::spring_damper(name, a, pa, b, pb, k, c, L));
+      springs_.push_back(SpringDecl{f, what, a, b, pa, pb});
     } else if (type == "torsion_spring") {
       check_keys(f, {"name", "type", "a", "b", "k", "c", "angle"}, what);
       if (!planar_model)
@@ -791,6 +800,20 @@ Model MultibodyReader::read() {
     r_.fail(root_["bodies"],
             "internal: the bodies have " + std::to_string(built->system.coordinate_names().size()) +
                 " coordinates, the reader named " + std::to_string(r_.coordinates_.size()));
+  // a spring-damper whose points coincide at the start: the direction of its force is undefined
+  // (it would exert nothing there, whatever its rest length)
+  for (const SpringDecl& sd : springs_) {
+    const Vector3d pa = mb::world_point(*built, built->q0, sd.a, sd.pa);
+    const Vector3d pb = mb::world_point(*built, built->q0, sd.b, sd.pb);
+    if ((pa - pb).norm() <= 1e-12 * (1.0 + pa.norm())) {
+      r_.fail(sd.node,
+              sd.what + ": its two points coincide in the initial pose (at [" +
+                  brief(pa.x()) + ", " + brief(pa.y()) + ", " + brief(pa.z()) +
+                  "]), where the direction of a spring-damper's force is undefined",
+              "move a body (position:) or an attachment point (point_a:, point_b:) so that the "
+              "spring has a length");
+    }
+  }
   Model model{.system = built->system};
   model.q0 = built->q0;
   model.qd0 = built->qd0;

@@ -169,6 +169,11 @@ inline ThreadBuffers& buffers() {
   return b;
 }
 
+// Refuses, located, what yaml-cpp's node tree would hide: a key given twice in a mapping, a
+// second document, an alias inside the node it names, nesting deeper than yaml-cpp allows; and
+// YAML syntax errors (model_yaml.cpp). @throws ModelError
+void check_yaml_structure(const std::string& text, const std::string& file);
+
 // The reader: one model file.
 class Reader {
  public:

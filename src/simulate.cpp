@@ -90,6 +90,45 @@ enum class ContactMode : unsigned char { kSliding, kSticking, kPassing };
 // three significant digits, for messages
 std::string format(double v) { return detail::format_short(v); }
 
+// "the constraints … contradict each other …" / "… the mechanism locks up …" (run messages)
+std::string describe_conflict(const ConstraintConflict& c, double t) {
+  std::string names;
+  for (const auto& s : c.names) names += (names.empty() ? "'" : ", '") + s + "'";
+  if (c.velocity_level) {
+    return "the constraints have no solution near t = " + format(t) +
+           ": the mechanism locks up (constraint rows that cannot be satisfied: " + names +
+           (c.singular_ratio > 0.0
+                ? "; the constraint Jacobian is nearly singular there (sigma_min/sigma_max = " +
+                      format(c.singular_ratio) +
+                      ") and the velocities it asks for grow without bound)"
+                : "; the motion they ask for leaves the directions the constraints allow, "
+                  "residual " + format(c.residual) + ")");
+  }
+  if (c.names.size() == 1) {
+    return "the constraint " + names + " cannot be satisfied near t = " + format(t) +
+           ": no state satisfies it (the least violation is " + format(c.residual) +
+           "; projecting the initial state cannot help: correct or remove it)";
+  }
+  return "the constraints " + names + " contradict each other near t = " + format(t) +
+         ": no state satisfies them together (the least violation is " + format(c.residual) +
+         "; projecting the initial state cannot help: correct or remove one of them)";
+}
+
+// the conflict of the initial state's constraints: at the state the position projection reaches
+// from (q, q') (the least violation, Gauss–Newton), when that projection does not converge
+ConstraintConflict initial_conflict(const System& sys, Workspace& ws, const VectorXd& q,
+                                    const VectorXd& qd, const SimulationOptions& o) {
+  VectorXd qp = q;
+  const ProjectionResult rp = project_positions(sys, ws, qp, o.t_start, o.projection);
+  if (rp.status != Status::kOk) return {};
+  VectorXd qdp = qd;
+  const ProjectionResult rv = project_velocities(sys, ws, qp, qdp, o.t_start, o.projection);
+  if (rp.converged && rv.converged) return {};
+  return find_constraint_conflict(sys, ws, qp, rp.converged ? qdp : qd, o.t_start,
+                                  o.projection.tolerance);
+}
+
+
 // one line per constraint whose violation exceeds tol (after evaluate_violations)
 std::vector<std::string> violated(const System& sys, const Workspace& ws, double tol) {
   std::vector<std::string> lines;
@@ -392,6 +431,10 @@ class Run {
                  ", velocity violation " + format(rv.violation) + " after " +
                  std::to_string(rp.iterations) + " and " + std::to_string(rv.iterations) +
                  " iterations)";
+      // the cause, when it is that no state near satisfies the constraints (lock-up)
+      const ConstraintConflict c =
+          find_constraint_conflict(sys_, ws_, q_, qd_, t, p.tolerance);
+      if (c.found) failure_ = describe_conflict(c, t) + "; " + failure_;
       return Status::kProjectionFailed;
     }
     return Status::kOk;
@@ -797,10 +840,14 @@ Trajectory simulate(const System& sys, const VectorXd& q0, const VectorXd& qd0,
   Workspace& ws = run.workspace();
   const Index n = sys.dofs();
 
-  // initial conditions: consistent, or projected on request
+  // initial conditions: consistent, or projected on request (constraints that contradict each
+  // other are named: no projection helps)
   VectorXd q = q0, qd = qd0;
   evaluate_violations(sys, ws, q, qd, o.t_start);
   if (auto bad = violated(sys, ws, o.initial_tolerance); !bad.empty()) {
+    if (const auto c = initial_conflict(sys, ws, q, qd, o); c.found) {
+      throw std::invalid_argument("ukdyn::simulate: " + describe_conflict(c, o.t_start));
+    }
     if (!o.project_initial) {
       throw std::invalid_argument(
           "ukdyn::simulate: inconsistent initial conditions at t = " + format(o.t_start) + ": " +

@@ -3,6 +3,7 @@
 /// docs/model-format.md), turned into a System, an initial state and simulation settings.
 #pragma once
 
+#include <cstddef>
 #include <map>
 #include <memory>
 #include <stdexcept>
@@ -66,7 +67,12 @@ struct Model {
 Model parse_model(const std::string& text, const std::string& file = "<string>",
                   const std::map<std::string, double>& overrides = {});
 
-/// Reads a model file. @throws ModelError (including when the file cannot be read).
+/// The largest model file load_model() reads: 64 MB (a model file is a few kB; this bounds the
+/// memory a wrong path such as /dev/zero can take).
+inline constexpr std::size_t kMaxModelFileBytes = std::size_t(64) << 20;
+
+/// Reads a model file. @throws ModelError (including when the file cannot be read, is a
+/// directory, is empty, or is larger than kMaxModelFileBytes).
 Model load_model(const std::string& path, const std::map<std::string, double>& overrides = {});
 
 /// What `ukdyn check` reports about a model at its initial state.
@@ -78,6 +84,9 @@ struct CheckReport {
   /// Constraints whose rows add nothing to the rank of those before them (in declaration
   /// order): removing them leaves the motion unchanged.
   std::vector<std::string> redundant;
+  /// Constraints that contradict each other near the initial state: no state satisfies them
+  /// together, so projection cannot help (find_constraint_conflict); not listed as redundant.
+  std::vector<std::string> contradictory;
   /// One line per constraint the initial state violates (check_initial_conditions).
   std::vector<std::string> initial_violations;
   /// M(q0, t_start) symmetric positive definite, or positive semi-definite (mass_singular)

@@ -11,6 +11,7 @@
 /// forward_dynamics again before reading results.
 #pragma once
 
+#include <string>
 #include <vector>
 
 #include <Eigen/Core>
@@ -62,6 +63,29 @@ struct ProjectionResult {
   /// at t = 0 in q (coordinate 'x')"); converged is then false.
   Status status = Status::kOk;
 };
+
+/// Constraints that cannot hold together near a state (find_constraint_conflict).
+struct ConstraintConflict {
+  bool found = false;          ///< a part of the violation that no correction removes
+  bool velocity_level = false;  ///< found in phi' (a drive the constraints cannot follow)
+  double residual = 0.0;       ///< |(I − A A⁺) phi| (or phi'): the violation left at least
+  /// sigma_min / sigma_max of A when A is nearly singular (< 1e-6, lock-up approached), else 0
+  double singular_ratio = 0.0;
+  std::vector<std::string> names;  ///< the constraints whose rows carry it, declaration order
+};
+
+/// Whether the active constraints contradict each other at (q, q', t), linearized: the part
+/// (I − A A⁺) phi of the position violation over the holonomic rows, then of the velocity
+/// violation phi' over all rows, outside the range of A (at the workspace's rank threshold),
+/// counts when it exceeds the tolerance and 1e-3 of the violation. Then Gauss–Newton (the
+/// projection) stalls at a nonzero violation: contradictory constraints (x = 0 and x = 1, or
+/// 1 = 0) or a mechanism that locks up (A loses rank while the drive asks for a motion outside
+/// its range; or A nearly singular, sigma_min < 1e-6 sigma_max, with m <= n: the velocities
+/// it asks for grow like 1/sigma_min as the lock-up is approached). A diagnosis, not a proof: at a singular point of a consistent set the linearized
+/// test may also fire, so call it where the projection has failed. Cost: one evaluation of the
+/// constraints and a QR of A, O(m n min(m, n)).
+ConstraintConflict find_constraint_conflict(const System& sys, Workspace& ws, const VectorXd& q,
+                                            const VectorXd& qd, double t, double tolerance);
 
 /// q ← q − M⁻¹ Aᵀ (A M⁻¹ Aᵀ)⁺ phi(q, t) over the holonomic constraints (active at t and in the
 /// mask), iterated until converged. Cost per iteration O(n³/3 + m n² + m² n) and the constraints'.

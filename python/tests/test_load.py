@@ -148,3 +148,17 @@ def test_multibody_model_reports_its_joint_reactions():
     assert m.is_multibody
     r = m.simulate(t_end=0.2)
     assert r.ok and any(name.startswith("reaction.") for name in r.names)
+
+
+def test_directory_is_named_as_a_directory(out_dir):
+    # the same message as `ukdyn run DIR` (load_model): not "a model is a mapping of keys"
+    with pytest.raises(ukdyn.ModelError, match="is a directory, not a model file"):
+        ukdyn.load(str(out_dir))
+
+
+def test_duplicate_key_is_a_model_error_at_the_second_copy():
+    with pytest.raises(ukdyn.ModelError) as err:
+        ukdyn.parse("coordinates: [x]\nkinetic_energy: 0.5*x_dot^2\nkinetic_energy: x_dot^2\n",
+                    "m.yaml")
+    assert "m.yaml:3:1: error: the key 'kinetic_energy' is given twice" in str(err.value)
+    assert "first at line 2" in str(err.value)
