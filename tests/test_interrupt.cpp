@@ -55,7 +55,9 @@ using Clock = std::chrono::steady_clock;
 
 // a fresh, empty scratch directory for one test
 fs::path scratch(const std::string& name) {
-  const fs::path dir = fs::path(::testing::TempDir()) / ("ukdyn_interrupt_" + name);
+  // the pid makes it unique: test runs of other trees may share the temp directory
+  const fs::path dir = fs::path(::testing::TempDir()) /
+                       ("ukdyn_interrupt_" + name + "." + std::to_string(::getpid()));
   fs::remove_all(dir);
   fs::create_directories(dir);
   return dir;

@@ -338,7 +338,9 @@ std::string read_text(const fs::path& path) {
 }
 
 fs::path scratch(const std::string& name) {
-  const fs::path dir = fs::path(::testing::TempDir()) / ("ukdyn_stream_" + name);
+  // the pid makes it unique: test runs of other trees may share the temp directory
+  const fs::path dir = fs::path(::testing::TempDir()) /
+                       ("ukdyn_stream_" + name + "." + std::to_string(::getpid()));
   fs::remove_all(dir);
   fs::create_directories(dir);
   return dir;
