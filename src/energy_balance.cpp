@@ -71,8 +71,11 @@ void compute_energy_balance(Trajectory& traj, double tolerance) {
       std::max({exchanged, T_max, 1e-9 * level, std::numeric_limits<double>::min()});
   s.energy_exchanged = exchanged;
   s.energy_balance = finite ? largest / scale : nan;
-  const double old_scale = std::max(std::abs(E0), T_max);
-  s.energy_drift = !finite ? nan : old_scale > 0 ? largest / old_scale : largest;
+  // the older figure: relative to the run's energy, or absolute (J) when that is below one unit
+  // of energy (a run in which nothing moves has E(0) = T = 0: never divide by them)
+  constexpr double kDriftFloor = 1.0;
+  const double old_scale = std::max({std::abs(E0), T_max, exchanged, kDriftFloor});
+  s.energy_drift = !finite ? nan : largest / old_scale;
   // a run that ended well but whose balance fails: the warning status
   if (s.status == Status::kOk && std::isfinite(tolerance) && !(s.energy_balance <= tolerance)) {
     s.status = Status::kEnergyBalance;
