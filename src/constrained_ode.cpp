@@ -98,7 +98,7 @@ Status ConstrainedOde::take_failure(std::string& description) {
 std::string left_domain(const char* method, double t, double h, const std::string& description) {
   char text[320];
   std::snprintf(text, sizeof text,
-                "%s: no step beyond t = %.10g succeeds: every attempt, down to the smallest "
+                "%s: no step beyond t = %.17g succeeds: every attempt, down to the smallest "
                 "step (h = %.3g), reaches a state where the model cannot be evaluated (the "
                 "solution leaves the model's domain there): ",
                 method, t, h);

@@ -383,8 +383,14 @@ SegmentResult integrate_bdf(ConstrainedOde& ode, std::vector<double>& x, double 
       // at most the steps still allowed by options.max_steps (CVODE counts them per call)
       long taken = 0;
       CVodeGetNumSteps(mem, &taken);
-      require(CVodeSetMaxNumSteps(mem, std::max(1L, max_steps - taken)),
-              "CVodeSetMaxNumSteps", cb);
+      if (taken >= max_steps) {
+        // (CVODE counts its limit per call: one more step per output time otherwise)
+        result.status = Status::kIntegratorFailure;
+        result.message = "bdf: step limit max_steps = " + std::to_string(max_steps) +
+                         " reached at t = " + time_text(result.t_reached);
+        return false;
+      }
+      require(CVodeSetMaxNumSteps(mem, max_steps - taken), "CVodeSetMaxNumSteps", cb);
       double t_returned = result.t_reached;
       const int flag = CVode(mem, tout, y.get(), &t_returned, CV_NORMAL);
       if (cb.exception) std::rethrow_exception(cb.exception);
