@@ -460,19 +460,23 @@ SegmentResult rkf78(ConstrainedOde& ode, State& x, double t0, double t1,
   double t = t0;
   int rejections = 0;
   std::string outside_description;  // of the last trial state outside the model's domain
+  Status outside_last = Status::kOk;  // the last attempt's, when it was outside the domain
   State x_old(x.size()), dxdt(x.size()), x_out(x.size());
   // the derivative at x, evaluated again only when x changes
   bool dxdt_current = false;
   while (t < t1) {
     // the next stop: an output time or the segment's end
     const double target = next < outputs.size() ? std::min(outputs[next], t1) : t1;
+    // (after an attempt outside the model's domain, the halved step is not stretched to land)
     const bool landing =
-        t + dt >= target || target - (t + dt) < 1e-12 * std::max(1.0, std::abs(target));
+        t + dt >= target || (outside_last == Status::kOk &&
+                             target - (t + dt) < 1e-12 * std::max(1.0, std::abs(target)));
     double step = landing ? target - t : dt;
     const double t_old = t;
     if (hooks.find_event) x_old = x;
     bool accepted = false;
     Status outside = Status::kOk;  // a trial state outside the model's domain
+    outside_last = Status::kOk;
     if (control.admissible(step)) {
       if (!dxdt_current) {
         // (x is consistent: the evaluation at x is not projected)
@@ -486,7 +490,7 @@ SegmentResult rkf78(ConstrainedOde& ode, State& x, double t0, double t1,
       stepper.do_step(fn, x, dxdt, t, x_out, step, control.error());
       if (ode.failed()) {
         // a trial state outside the model's domain: rejected, half the step
-        outside = ode.take_failure(outside_description);
+        outside = outside_last = ode.take_failure(outside_description);
         step *= 0.5;
       } else {
         accepted = control.judge<Stepper::error_order_value, Stepper::stepper_order_value>(
