@@ -762,6 +762,13 @@ void check_settings(const System& sys, const SimulationOptions& o) {
                        format(o.t_end) + "], 16 eps max(|t_start|, |t_end|) = " +
                        format(resolution));
     }
+    // samples no closer than the steps (between steps they would be interpolated, not
+    // integrated)
+    if (o.output_every > 0.0 && o.output_every < o.step) {
+      fail("output_every", "(" + format(o.output_every) + ") is below the step (" +
+                               format(o.step) + ") of " + to_string(o.integrator) +
+                               ": take a step <= output_every, or output_every >= step");
+    }
     // the steps of each segment, as integrate_explicit takes them (counted in double: the
     // count may exceed any integer)
     const std::vector<double> ends = segment_ends(sys, o);

@@ -147,6 +147,34 @@ TEST(RunSettings, FixedStepCountSumsTheSegmentsBetweenBreakpoints) {
   EXPECT_EQ(tr.stats.steps, 4);
 }
 
+TEST(RunSettings, FixedStepSamplesCloserThanTheStepAreRefused) {
+  for (Integrator method : {Integrator::kRK4, Integrator::kRK5}) {
+    SimulationOptions o;
+    o.integrator = method;
+    o.step = 0.02;
+    o.output_every = 0.01;
+    const Refusal r = refusal(o);
+    EXPECT_EQ(r.setting, "output_every") << r.message;
+    EXPECT_TRUE(contains(r.message, "output_every (0.01) is below the step (0.02) of " +
+                                        std::string(to_string(method))))
+        << r.message;
+    // equal: runs, a sample at every step
+    o.output_every = 0.02;
+    const Trajectory tr = simulate(oscillator(), one(1.0), one(0.0), o);
+    EXPECT_EQ(tr.stats.status, Status::kOk) << tr.stats.message;
+    EXPECT_EQ(tr.samples(), 51);
+    EXPECT_NEAR(tr.q.back(), std::cos(1.0), 1e-7);
+  }
+  // in a model file: at output: every
+  const ModelError e = model_error(kOscillator + "simulate: {integrator: rk4, step: 0.1}
+" +
+                                   "output: {every: 0.01}
+");
+  EXPECT_EQ(e.line(), 6);
+  EXPECT_EQ(e.column(), 18);
+  EXPECT_TRUE(contains(e.message(), "is below the step (0.1) of rk4")) << e.message();
+}
+
 // --- other settings ------------------------------------------------------------------------
 
 TEST(RunSettings, OutputTimesOutsideTheRunOrNanAreRefused) {

@@ -175,7 +175,8 @@ class SettingError : public std::invalid_argument {
 /// finite and > 0; max_step, output_every finite and >= 0; every output_at time finite and in
 /// [t_start, t_end]; max_steps > 0; Baumgarte gains, initial_tolerance and projection.tolerance
 /// finite and >= 0 (the tolerance > 0); energy_balance_tolerance > 0. For kRK4 and kRK5 also:
-/// step at least 16 ε max(|t_start|, |t_end|) (a step t cannot resolve), and the steps the
+/// step at least 16 ε max(|t_start|, |t_end|) (a step t cannot resolve), output_every (when
+/// > 0) at least step (samples closer than the steps would be interpolated), and the steps the
 /// run takes (Σ over the segments between breakpoints of ⌈length / step⌉) at most max_steps.
 /// @throws SettingError naming the first setting at fault. Cost O(breakpoints).
 void check_settings(const System& sys, const SimulationOptions& options);

@@ -122,3 +122,8 @@ simulate: {{t_end: 2, integrator: {integrator}}}
     assert message.count("t = ") == 1
     np.testing.assert_allclose(r.x, r.t, rtol=0, atol=1e-9)
     assert r.t[-1] == pytest.approx(0.99, abs=1e-12)
+
+
+def test_fixed_step_samples_closer_than_the_step_raise(oscillator):
+    with pytest.raises(ValueError, match=r"output_every \(0\.001\) is below the step \(0\.01\) of rk4"):
+        oscillator.simulate(integrator="rk4", step=0.01, output_every=0.001)
