@@ -57,6 +57,7 @@ struct RunArguments {
   std::optional<double> t_end;   ///< --t-end
   std::optional<std::string> integrator;  ///< --integrator NAME
   std::optional<double> rtol, atol, step;  ///< --rtol, --atol, --step (validated: > 0)
+  std::optional<long> max_steps;  ///< --max-steps (validated: > 0)
   bool no_stiff_switch = false;  ///< --no-stiff-switch
   bool plots = true;             ///< false with --no-plots
 };

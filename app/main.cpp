@@ -84,6 +84,10 @@ int main(int argc, char** argv) {
                       "rk4, rk5: the step; dopri5, rkf78: the first step tried (default 1e-3), "
                       "instead of simulate: step")
       ->type_name("X");
+  run_cmd->add_option("--max-steps", run.max_steps,
+                      "give up after this many accepted steps (default 10000000), instead of "
+                      "simulate: max_steps")
+      ->type_name("N");
   run_cmd->add_flag("--no-stiff-switch", run.no_stiff_switch,
                     "dopri5 throughout, even when the problem turns stiff (simulate: "
                     "stiff_switch: false)");

@@ -138,7 +138,43 @@ void apply_integration_flags(const RunArguments& args, SimulationOptions& option
   if (args.rtol) options.rtol = positive("--rtol", *args.rtol);
   if (args.atol) options.atol = positive("--atol", *args.atol);
   if (args.step) options.step = positive("--step", *args.step);
+  if (args.max_steps) {
+    if (*args.max_steps <= 0) {
+      throw UsageError("--max-steps " + std::to_string(*args.max_steps) +
+                       ": must be a positive number of steps");
+    }
+    options.max_steps = *args.max_steps;
+  }
   if (args.no_stiff_switch) options.stiff_switch = false;
+}
+
+// the settings with the command line's flags, as simulate() checks them: the model's own were
+// checked when it was read, so a setting at fault here is due to a flag (named, with its value)
+void check_flags(const RunArguments& args, const Model& model, const SimulationOptions& options) {
+  try {
+    check_settings(model.system, options);
+  } catch (const SettingError& e) {
+    std::string message = e.what();
+    if (message.rfind("ukdyn::simulate: ", 0) == 0) message.erase(0, 17);
+    // the flags given, the one of the setting first
+    char value[64];
+    std::string flags;
+    auto add = [&](bool given, const char* flag, const std::string& setting, double v) {
+      if (!given) return;
+      std::snprintf(value, sizeof value, "%s %g", flag, v);
+      flags = setting == e.setting() ? value + (flags.empty() ? "" : ", " + flags)
+                                     : flags + (flags.empty() ? "" : ", ") + value;
+    };
+    add(bool(args.t_end), "--t-end", "t_end", args.t_end.value_or(0.0));
+    add(bool(args.step), "--step", "step", args.step.value_or(0.0));
+    add(bool(args.rtol), "--rtol", "rtol", args.rtol.value_or(0.0));
+    add(bool(args.atol), "--atol", "atol", args.atol.value_or(0.0));
+    add(bool(args.max_steps), "--max-steps", "max_steps", double(args.max_steps.value_or(0)));
+    if (args.integrator) {
+      flags += (flags.empty() ? "--integrator " : ", --integrator ") + *args.integrator;
+    }
+    throw UsageError((flags.empty() ? std::string() : flags + ": ") + message);
+  }
 }
 
 // the progress display's interval: the mode's default, or $UKDYN_PROGRESS_INTERVAL seconds
@@ -160,9 +196,10 @@ int run_command(const RunArguments& args) {
   // the model's settings, with the command line's
   SimulationOptions options = model.options;
   if (args.t_end) {
-    if (!(*args.t_end > options.t_start)) {
+    if (!(*args.t_end > options.t_start) || !std::isfinite(*args.t_end)) {
       char text[96];
-      std::snprintf(text, sizeof text, "--t-end %g must be after the model's t_start = %g",
+      std::snprintf(text, sizeof text,
+                    "--t-end %g must be a finite time after the model's t_start = %g",
                     *args.t_end, options.t_start);
       throw UsageError(text);
     }
@@ -170,6 +207,7 @@ int run_command(const RunArguments& args) {
   }
   apply_integration_flags(args, options);
   options.project_initial = model.project_initial;
+  check_flags(args, model, options);
   const fs::path dir = args.out_dir.empty() ? default_out_dir(args.source) : args.out_dir;
 
   // the directory, held for the run: a second run into it is refused now, before it computes

@@ -2,7 +2,9 @@
 // W the work channels of the energy balance.
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <limits>
+#include <string>
 
 #include "detail.hpp"
 #include "integrator.hpp"
@@ -79,6 +81,28 @@ bool ConstrainedOde::explained_by_violation(double t) {
 void ConstrainedOde::clear_failure() {
   failure_ = Status::kOk;
   failure_message_.clear();
+}
+
+Status ConstrainedOde::take_failure(std::string& description) {
+  const Status s = failure_;
+  // describe_status() says "<status> at t = <time>[ in …]: …": the time is the trial stage's
+  description = failure_message_;
+  if (const auto at = description.find(" at t = "); at != std::string::npos) {
+    const auto end = description.find_first_of(" :", at + 8);
+    description.erase(at, end == std::string::npos ? std::string::npos : end - at);
+  }
+  clear_failure();
+  return s;
+}
+
+std::string left_domain(const char* method, double t, double h, const std::string& description) {
+  char text[320];
+  std::snprintf(text, sizeof text,
+                "%s: no step beyond t = %.17g succeeds: every attempt, down to the smallest "
+                "step (h = %.3g), reaches a state where the model cannot be evaluated (the "
+                "solution leaves the model's domain there): ",
+                method, t, h);
+  return text + description;
 }
 
 void ConstrainedOde::set_window(double a, double b) {

@@ -68,8 +68,11 @@ void EnergyBalance::finish(RunStatistics& s, double tolerance) const {
       std::max({exchanged_, T_max_, 1e-9 * level_, std::numeric_limits<double>::min()});
   s.energy_exchanged = exchanged_;
   s.energy_balance = finite_ ? largest_ / scale : nan;
-  const double old_scale = std::max(std::abs(E0_), T_max_);
-  s.energy_drift = !finite_ ? nan : old_scale > 0 ? largest_ / old_scale : largest_;
+  // the older figure: relative to the run's energy, or absolute (J) when that is below one unit
+  // of energy (a run in which nothing moves has E(0) = T = 0: never divide by them)
+  constexpr double kDriftFloor = 1.0;
+  const double old_scale = std::max({std::abs(E0_), T_max_, exchanged_, kDriftFloor});
+  s.energy_drift = !finite_ ? nan : largest_ / old_scale;
   // a run that ended well but whose balance fails: the warning status
   if (s.status == Status::kOk && std::isfinite(tolerance) && !(s.energy_balance <= tolerance)) {
     s.status = Status::kEnergyBalance;

@@ -64,6 +64,14 @@ struct Callbacks {
   SegmentHooks& hooks;
   std::vector<double> corrected;     // (2n + 1) the copy of ycur handed to after_step
   bool rhs_failed = false;           // the ode refused an evaluation
+  // the last evaluation refused (a state outside the model's domain: CVODE retries the step
+  // smaller), its status and its description without time (ConstrainedOde::take_failure)
+  Status outside = Status::kOk;
+  std::string outside_description;
+  // the time of the last evaluation that succeeded: a failure a few rounding units after it has
+  // pinned the domain's boundary to the resolution of t (CVODE would go on with steps that
+  // t + h = t cannot advance, up to max_steps)
+  double t_ok = std::numeric_limits<double>::quiet_NaN();
   // redundant constraints: f is evaluated at the state projected onto the constraints,
   // x' = f(π(x)) (same solution from a consistent state). Off the constraints a row that is
   // redundant only on them (functionally dependent) regains a tiny pivot, which the rank
@@ -80,7 +88,10 @@ struct Callbacks {
   std::exception_ptr exception;      // thrown by a callback, rethrown once CVODE has returned
 };
 
-// x' = f(t, x); a failed evaluation is unrecoverable (negative), so CVODE stops at once
+// x' = f(t, x). A failed evaluation (a state outside the model's domain: M not positive
+// definite, a NaN) is recoverable (positive): CVODE retries the step smaller, and gives up only
+// when that keeps failing (CV_REPTD_RHSFUNC_ERR, CV_FIRST_RHSFUNC_ERR). An exception is not
+// (negative): CVODE stops at once.
 int rhs(sunrealtype t, N_Vector x, N_Vector dxdt, void* data) {
   auto& cb = *static_cast<Callbacks*>(data);
   try {
@@ -89,7 +100,17 @@ int rhs(sunrealtype t, N_Vector x, N_Vector dxdt, void* data) {
       std::copy(xs, xs + cb.projected.size(), cb.projected.begin());
       if (cb.hooks.project_stage(t, cb.projected.data())) xs = cb.projected.data();
     }
-    if (cb.ode(xs, N_VGetArrayPointer(dxdt), t)) return 0;
+    if (cb.ode(xs, N_VGetArrayPointer(dxdt), t)) {
+      cb.outside = Status::kOk;
+      cb.t_ok = t;
+      return 0;
+    }
+    cb.outside = cb.ode.take_failure(cb.outside_description);
+    // (a failure in the same step attempt as the success, at the same t, is a Newton iterate
+    // outside the domain: retried)
+    const double gap = t - cb.t_ok;
+    const bool pinned = gap > 0.0 && gap <= 4.0 * std::numeric_limits<double>::epsilon() * std::abs(t);
+    return pinned ? -1 : 1;
   } catch (...) {
     cb.exception = std::current_exception();
   }
@@ -186,6 +207,7 @@ SegmentResult integrate_bdf(ConstrainedOde& ode, std::vector<double>& x, double 
   UKDYN_CHECK(t1 > t0, "integrate_bdf: the segment must have t1 > t0");
   SegmentResult result;
   result.t_reached = t0;
+  const long max_steps = std::min(options.max_steps, hooks.max_steps);
 
   // a segment shorter than rounding: nothing to integrate, the outputs see x
   if (same_time(t0, t1)) {
@@ -273,6 +295,12 @@ SegmentResult integrate_bdf(ConstrainedOde& ode, std::vector<double>& x, double 
     }
     if (cb.singular) {
       result.singular = true;  // (status kOk: the driver crosses with dopri5)
+    } else if (cb.outside != Status::kOk) {
+      // the last evaluation, of a step CVODE could not shrink further, was outside the domain
+      double h = 0.0;
+      CVodeGetCurrentStep(mem, &h);
+      result.status = cb.outside;
+      result.message = left_domain("bdf", result.t_reached, h, cb.outside_description);
     } else if (cb.rhs_failed && ode.failed()) {
       result.status = ode.failure();
       result.message = ode.failure_message();
@@ -317,9 +345,9 @@ SegmentResult integrate_bdf(ConstrainedOde& ode, std::vector<double>& x, double 
     while (t_old < t1) {
       long taken = 0;
       CVodeGetNumSteps(mem, &taken);
-      if (taken >= options.max_steps) {
+      if (taken >= max_steps) {
         result.status = Status::kIntegratorFailure;
-        result.message = "bdf: step limit max_steps = " + std::to_string(options.max_steps) +
+        result.message = "bdf: step limit max_steps = " + std::to_string(max_steps) +
                          " reached at t = " + time_text(t_old);
         break;
       }
@@ -355,8 +383,14 @@ SegmentResult integrate_bdf(ConstrainedOde& ode, std::vector<double>& x, double 
       // at most the steps still allowed by options.max_steps (CVODE counts them per call)
       long taken = 0;
       CVodeGetNumSteps(mem, &taken);
-      require(CVodeSetMaxNumSteps(mem, std::max(1L, options.max_steps - taken)),
-              "CVodeSetMaxNumSteps", cb);
+      if (taken >= max_steps) {
+        // (CVODE counts its limit per call: one more step per output time otherwise)
+        result.status = Status::kIntegratorFailure;
+        result.message = "bdf: step limit max_steps = " + std::to_string(max_steps) +
+                         " reached at t = " + time_text(result.t_reached);
+        return false;
+      }
+      require(CVodeSetMaxNumSteps(mem, max_steps - taken), "CVodeSetMaxNumSteps", cb);
       double t_returned = result.t_reached;
       const int flag = CVode(mem, tout, y.get(), &t_returned, CV_NORMAL);
       if (cb.exception) std::rethrow_exception(cb.exception);

@@ -244,10 +244,19 @@ Dopri5Fixed dopri5_fixed() {
 // after drift control, so a step costs (stages − 1) + 1 evaluations
 template <class Stepper>
 SegmentResult fixed_step(Stepper stepper, ConstrainedOde& ode, State& x, double t0, double t1,
-                         const SampleTimes& outputs, SegmentHooks& hooks, double step) {
+                         const SampleTimes& outputs, SegmentHooks& hooks, double step,
+                         long max_steps) {
   SegmentResult r;
   const OdeFn fn{&ode};
-  const long N = std::max(1L, long(std::ceil((t1 - t0) / step * (1.0 - 1e-12))));
+  // N steps (counted in double first: (t1 − t0) / step may exceed any integer)
+  const double count = std::max(1.0, std::ceil((t1 - t0) / step * (1.0 - 1e-12)));
+  if (!(count <= double(max_steps))) {
+    return stop(r, Status::kIntegratorFailure, t0,
+                "step limit: the segment [" + format_short(t0) + ", " + format_short(t1) +
+                    "] needs " + format_short(count) + " steps of " + format_short(step) +
+                    ", more than the " + std::to_string(max_steps) + " the run has left");
+  }
+  const long N = long(count);
   const double h = (t1 - t0) / double(N);
   State dxdt(x.size()), x_new(x.size()), dxdt_new(x.size()), out(x.size());
   // k1 of the first step
@@ -324,6 +333,7 @@ SegmentResult dopri5(ConstrainedOde& ode, State& x, double t0, double t1,
   std::size_t next = 0;
   double t = t0;
   int rejections = 0;
+  std::string outside_description;  // of the last trial state outside the model's domain
   while (t < t1) {
     // land on the segment's end
     if (t + dt >= t1 || t1 - (t + dt) < 1e-12 * std::max(1.0, std::abs(t1))) dt = t1 - t;
@@ -332,11 +342,17 @@ SegmentResult dopri5(ConstrainedOde& ode, State& x, double t0, double t1,
     std::swap(dxdt_old, dxdt);
     const double t_old = t;
     bool accepted = false;
+    Status outside = Status::kOk;  // a trial state outside the model's domain
     if (control.admissible(dt)) {
       stepper.do_step(fn, x_old, dxdt_old, t, x, dxdt, dt, control.error());
-      if (ode.failed()) return failed(ode, r, t_old);
-      accepted = control.judge<Stepper::error_order_value, Stepper::stepper_order_value>(
-          x_old, dxdt_old, x, t, dt, projection.on, r.tangential_steps);
+      if (ode.failed()) {
+        // rejected: half the step, from the same state
+        outside = ode.take_failure(outside_description);
+        dt *= 0.5;
+      } else {
+        accepted = control.judge<Stepper::error_order_value, Stepper::stepper_order_value>(
+            x_old, dxdt_old, x, t, dt, projection.on, r.tangential_steps);
+      }
     }
     if (!accepted) {
       std::swap(x_old, x);
@@ -344,6 +360,9 @@ SegmentResult dopri5(ConstrainedOde& ode, State& x, double t0, double t1,
       projection.rejected();
       ++r.rejected;
       if (++rejections > kMaxRejections || t + dt == t) {
+        if (outside != Status::kOk) {
+          return stop(r, outside, t, left_domain("dopri5", t, dt, outside_description));
+        }
         r.collapsed = true;
         r.stiffness = stiffness.recent();
         return stop(r, Status::kIntegratorFailure, t,
@@ -440,18 +459,24 @@ SegmentResult rkf78(ConstrainedOde& ode, State& x, double t0, double t1,
   std::size_t next = 0;
   double t = t0;
   int rejections = 0;
+  std::string outside_description;  // of the last trial state outside the model's domain
+  Status outside_last = Status::kOk;  // the last attempt's, when it was outside the domain
   State x_old(x.size()), dxdt(x.size()), x_out(x.size());
   // the derivative at x, evaluated again only when x changes
   bool dxdt_current = false;
   while (t < t1) {
     // the next stop: an output time or the segment's end
     const double target = next < outputs.size() ? std::min(outputs[next], t1) : t1;
+    // (after an attempt outside the model's domain, the halved step is not stretched to land)
     const bool landing =
-        t + dt >= target || target - (t + dt) < 1e-12 * std::max(1.0, std::abs(target));
+        t + dt >= target || (outside_last == Status::kOk &&
+                             target - (t + dt) < 1e-12 * std::max(1.0, std::abs(target)));
     double step = landing ? target - t : dt;
     const double t_old = t;
     if (hooks.find_event) x_old = x;
     bool accepted = false;
+    Status outside = Status::kOk;  // a trial state outside the model's domain
+    outside_last = Status::kOk;
     if (control.admissible(step)) {
       if (!dxdt_current) {
         // (x is consistent: the evaluation at x is not projected)
@@ -463,9 +488,14 @@ SegmentResult rkf78(ConstrainedOde& ode, State& x, double t0, double t1,
       }
       projection.decide(step);
       stepper.do_step(fn, x, dxdt, t, x_out, step, control.error());
-      if (ode.failed()) return failed(ode, r, t_old);
-      accepted = control.judge<Stepper::error_order_value, Stepper::stepper_order_value>(
-          x, dxdt, x_out, t, step, projection.on, r.tangential_steps);
+      if (ode.failed()) {
+        // a trial state outside the model's domain: rejected, half the step
+        outside = outside_last = ode.take_failure(outside_description);
+        step *= 0.5;
+      } else {
+        accepted = control.judge<Stepper::error_order_value, Stepper::stepper_order_value>(
+            x, dxdt, x_out, t, step, projection.on, r.tangential_steps);
+      }
     }
     if (accepted) {
       std::swap(x, x_out);
@@ -476,6 +506,9 @@ SegmentResult rkf78(ConstrainedOde& ode, State& x, double t0, double t1,
       ++r.rejected;
       dt = step;
       if (++rejections > kMaxRejections || t + dt == t) {
+        if (outside != Status::kOk) {
+          return stop(r, outside, t, left_domain("rkf78", t, dt, outside_description));
+        }
         r.collapsed = true;
         return stop(r, Status::kIntegratorFailure, t,
                     "rkf78: step size underflow at t = " + std::to_string(t));
@@ -530,15 +563,17 @@ SegmentResult integrate_explicit(Integrator method, ConstrainedOde& ode, std::ve
                                  double t0, double t1, const SampleTimes& outputs,
                                  const SimulationOptions& options, SegmentHooks& hooks,
                                  double first_step) {
+  const long max_steps = std::min(options.max_steps, hooks.max_steps);
   switch (method) {
     case Integrator::kRK4:
-      return fixed_step(odeint::runge_kutta4<State>(), ode, x, t0, t1, outputs, hooks, first_step);
+      return fixed_step(odeint::runge_kutta4<State>(), ode, x, t0, t1, outputs, hooks, first_step,
+                        max_steps);
     case Integrator::kRK5:
-      return fixed_step(dopri5_fixed(), ode, x, t0, t1, outputs, hooks, first_step);
+      return fixed_step(dopri5_fixed(), ode, x, t0, t1, outputs, hooks, first_step, max_steps);
     case Integrator::kDopri5:
-      return dopri5(ode, x, t0, t1, outputs, options, hooks, first_step, options.max_steps);
+      return dopri5(ode, x, t0, t1, outputs, options, hooks, first_step, max_steps);
     case Integrator::kRKF78:
-      return rkf78(ode, x, t0, t1, outputs, options, hooks, first_step, options.max_steps);
+      return rkf78(ode, x, t0, t1, outputs, options, hooks, first_step, max_steps);
     case Integrator::kBDF:
       break;
   }

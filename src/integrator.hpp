@@ -89,6 +89,10 @@ class ConstrainedOde {
   // describe_status() of the first failure, with its time
   const std::string& failure_message() const { return failure_message_; }
   void clear_failure();
+  // Takes the failure for a rejected step attempt (its trial state left the model's domain):
+  // keeps its status and description without its time (for left_domain()) and clears it.
+  // Returns that status.
+  Status take_failure(std::string& description_without_time);
 
   // Evaluations of the segment [a, b] take place strictly inside it at a breakpoint end: t is
   // clamped to [a + δ, b − δ] (δ = 1e-13 relative), so each segment sees its own side of a jump
@@ -150,6 +154,10 @@ struct SegmentHooks {
   // optional: projects the state x at t onto the constraints, as after_step does (no other
   // effect); false when it could not
   std::function<bool(double t, double* x)> project_stage;
+  // the accepted steps this segment may take: the run's options.max_steps less the steps
+  // taken before it (the driver sets it before each segment); the integrators stop at
+  // min(options.max_steps, max_steps)
+  long max_steps = std::numeric_limits<long>::max();
   // dopri5 crossing a singular configuration for BDF: ends the segment (SegmentResult::crossed)
   // once the margin, having been below kSingularMargin, is back above twice it; no stiffness
   // switch meanwhile
@@ -238,6 +246,12 @@ SegmentResult integrate_explicit(Integrator method, ConstrainedOde& ode, std::ve
 SegmentResult integrate_bdf(ConstrainedOde& ode, std::vector<double>& x, double t0, double t1,
                             const SampleTimes& outputs, const SimulationOptions& options,
                             SegmentHooks& hooks, double first_step);
+
+// The message of an adaptive method (`method`) that gives up because every step from t, down to
+// the smallest step h, reached a state where the model cannot be evaluated (M not positive
+// definite, a NaN, …: the solution leaves the model's domain there): it quotes the one time t,
+// the last state reached, and `description` (ConstrainedOde::take_failure) says what failed.
+std::string left_domain(const char* method, double t, double h, const std::string& description);
 
 // --- step-size collapse (step_diagnosis.cpp) ----------------------------------------------
 

@@ -755,6 +755,14 @@ void Reader::read_simulate(const YAML::Node& root, Model& model) {
       o.step = number(v, key);
     else if (key == "max_step")
       o.max_step = number(v, key);
+    else if (key == "max_steps") {
+      // a whole number of steps, at least 1 (counted in a long)
+      const double steps = number(v, key);
+      if (!(steps >= 1.0 && steps <= 1e18 && std::floor(steps) == steps))
+        fail(v, "max_steps must be a whole number of steps from 1 to 1e18, got " + brief(steps),
+             "10000000, the default");
+      o.max_steps = long(steps);
+    }
     else if (key == "stiff_switch") {
       if (!v.IsScalar() || (v.Scalar() != "true" && v.Scalar() != "false"))
         fail(v, "stiff_switch must be true or false");
@@ -778,8 +786,8 @@ void Reader::read_simulate(const YAML::Node& root, Model& model) {
       }
     } else {
       fail(kv.first, "unknown key '" + key + "' in simulate",
-           "t_start, t_end, integrator, rtol, atol, step, max_step, stiff_switch, drift, "
-           "energy_balance_tolerance");
+           "t_start, t_end, integrator, rtol, atol, step, max_step, max_steps, stiff_switch, "
+           "drift, energy_balance_tolerance");
     }
   }
   if (!(o.t_end > o.t_start)) fail(s, "t_end must be greater than t_start");
@@ -937,7 +945,34 @@ Model Reader::read_plant(const YAML::Node& root) {
   check_mass_matrix(root, model);
   read_output(root, model);
   model.options.project_initial = model.project_initial;
+  check_settings(root, model);
   return model;
+}
+
+// the run's settings as simulate() checks them (ukdyn::check_settings), located at the key that
+// gave the setting at fault: simulate: KEY, output: every / at, or the simulate: mapping when the
+// setting is a default that the others make unusable (rk4's step over a longer t_end)
+void Reader::check_settings(const YAML::Node& root, const Model& model) {
+  try {
+    ukdyn::check_settings(model.system, model.options);
+  } catch (const SettingError& e) {
+    std::string message = e.what();
+    if (message.rfind("ukdyn::simulate: ", 0) == 0) message.erase(0, 17);
+    const YAML::Node simulate = root["simulate"], output = root["output"];
+    YAML::Node at;
+    if (e.setting() == "output_every" && output && output.IsMap() && output["every"]) {
+      at = output["every"];
+    } else if (e.setting() == "output_at" && output && output.IsMap() && output["at"]) {
+      at = output["at"];
+    } else if (simulate && simulate.IsMap() && simulate[e.setting()]) {
+      at = simulate[e.setting()];
+    } else if (simulate) {
+      at = simulate;
+    } else {
+      at = root;
+    }
+    fail(at, message);
+  }
 }
 
 void Reader::make_expression_set(const YAML::Node& root, const std::vector<std::string>& cnames) {

@@ -221,6 +221,7 @@ class Reader {
   void read_simulate(const YAML::Node& root, Model& model);
   void read_output(const YAML::Node& root, Model& model);
   void check_mass_matrix(const YAML::Node& root, const Model& model);
+  void check_settings(const YAML::Node& root, const Model& model);
   Index coordinate(const YAML::Node& node);
 
   // ---- multibody models (model_multibody.cpp): bodies:, joints:, forces: -----------------

@@ -149,6 +149,8 @@ std::string join(const std::vector<std::string>& lines) {
   return out;
 }
 
+// the sizes of q0, qd0 and the per-constraint drift settings (the run's other settings:
+// check_settings)
 void validate(const System& sys, const VectorXd& q0, const VectorXd& qd0,
               const SimulationOptions& o) {
   auto fail = [](const std::string& what) {
@@ -165,23 +167,18 @@ void validate(const System& sys, const VectorXd& q0, const VectorXd& qd0,
     fail(std::string(in_q ? "q0" : "qd0") + " is not finite at coordinate '" +
          sys.coordinate_names()[std::size_t(i)] + "' (" + format(in_q ? q0[i] : qd0[i]) + ")");
   }
-  if (!(o.t_end > o.t_start)) {
-    fail("t_end (" + format(o.t_end) + ") must be greater than t_start (" + format(o.t_start) +
-         ")");
-  }
-  if (!(o.step > 0.0)) fail("step must be > 0, got " + format(o.step));
-  if (!(o.rtol > 0.0) || !(o.atol > 0.0)) fail("rtol and atol must be > 0");
-  if (!(o.output_every >= 0.0)) fail("output_every must be >= 0");
-  if (!(o.max_step >= 0.0)) fail("max_step must be >= 0");
-  if (!(o.energy_balance_tolerance > 0.0)) {
-    fail("energy_balance_tolerance must be > 0 (infinity: no check), got " +
-         format(o.energy_balance_tolerance));
-  }
-  if (o.max_steps <= 0) fail("max_steps must be positive");
   for (const auto& [name, d] : o.drift_per_constraint) {
     sys.constraint_index(name);  // throws naming the unknown constraint
-    if (!(d.alpha >= 0.0 && d.beta >= 0.0)) fail("Baumgarte gains of '" + name + "' must be >= 0");
+    if (!(d.alpha >= 0.0 && d.beta >= 0.0 && std::isfinite(d.alpha) && std::isfinite(d.beta))) {
+      throw SettingError("drift_per_constraint", "ukdyn::simulate: Baumgarte gains of '" + name +
+                                                     "' must be finite and >= 0");
+    }
   }
+}
+
+// the resolution of the run's times: sorted_times merges samples and segment ends closer than this
+double time_resolution(double a, double b) {
+  return 1e-12 * std::max({1.0, std::abs(a), std::abs(b)});
 }
 
 // sorted, de-duplicated times in [a, b]
@@ -814,6 +811,89 @@ class Run {
 
 }  // namespace
 
+void check_settings(const System& sys, const SimulationOptions& o) {
+  auto fail = [](const char* setting, const std::string& what) {
+    throw SettingError(setting, "ukdyn::simulate: " + std::string(setting) + " " + what);
+  };
+  auto finite = [](double v) { return std::isfinite(v); };
+  // the run's interval: finite, and longer than the resolution of its times
+  if (!finite(o.t_start)) fail("t_start", "(" + format(o.t_start) + ") must be a finite number");
+  if (!finite(o.t_end)) fail("t_end", "(" + format(o.t_end) + ") must be a finite number");
+  if (!(o.t_end - o.t_start > time_resolution(o.t_start, o.t_end))) {
+    fail("t_end", "(" + format(o.t_end) + ") must exceed t_start (" + format(o.t_start) +
+                      ") by more than 1e-12 max(1, |t_start|, |t_end|) = " +
+                      format(time_resolution(o.t_start, o.t_end)) +
+                      ", the resolution of the run's times");
+  }
+  if (!(o.step > 0.0) || !finite(o.step)) fail("step", "must be a finite number > 0, got " + format(o.step));
+  if (!(o.rtol > 0.0) || !finite(o.rtol)) fail("rtol", "must be a finite number > 0, got " + format(o.rtol));
+  if (!(o.atol > 0.0) || !finite(o.atol)) fail("atol", "must be a finite number > 0, got " + format(o.atol));
+  if (!(o.output_every >= 0.0) || !finite(o.output_every)) {
+    fail("output_every", "must be a finite number >= 0 (0: only t_start and t_end), got " +
+                             format(o.output_every));
+  }
+  for (std::size_t i = 0; i < o.output_at.size(); ++i) {
+    const double t = o.output_at[i];
+    if (!(t >= o.t_start && t <= o.t_end)) {
+      fail("output_at", "time " + format(t) + " (entry " + std::to_string(i) +
+                            ") is outside the run [" + format(o.t_start) + ", " +
+                            format(o.t_end) + "]");
+    }
+  }
+  if (!(o.max_step >= 0.0)) fail("max_step", "must be >= 0 (0: unlimited), got " + format(o.max_step));
+  if (!(o.energy_balance_tolerance > 0.0)) {
+    fail("energy_balance_tolerance",
+         "must be > 0 (infinity: no check), got " + format(o.energy_balance_tolerance));
+  }
+  if (o.max_steps <= 0) fail("max_steps", "must be positive, got " + std::to_string(o.max_steps));
+  if (!(o.baumgarte_alpha >= 0.0) || !finite(o.baumgarte_alpha)) {
+    fail("baumgarte_alpha", "must be a finite number >= 0, got " + format(o.baumgarte_alpha));
+  }
+  if (!(o.baumgarte_beta >= 0.0) || !finite(o.baumgarte_beta)) {
+    fail("baumgarte_beta", "must be a finite number >= 0, got " + format(o.baumgarte_beta));
+  }
+  if (!(o.initial_tolerance >= 0.0) || !finite(o.initial_tolerance)) {
+    fail("initial_tolerance", "must be a finite number >= 0, got " + format(o.initial_tolerance));
+  }
+  if (!(o.projection.tolerance > 0.0) || !finite(o.projection.tolerance)) {
+    fail("projection_tolerance",
+         "(projection.tolerance) must be a finite number > 0, got " + format(o.projection.tolerance));
+  }
+  // the fixed-step methods: a step that t resolves, and at most max_steps of them
+  if (o.integrator == Integrator::kRK4 || o.integrator == Integrator::kRK5) {
+    const double resolution =
+        16.0 * std::numeric_limits<double>::epsilon() * std::max(std::abs(o.t_start), std::abs(o.t_end));
+    if (!(o.step >= resolution)) {
+      fail("step", "(" + format(o.step) + ") of " + to_string(o.integrator) +
+                       " is below the resolution of t on [" + format(o.t_start) + ", " +
+                       format(o.t_end) + "], 16 eps max(|t_start|, |t_end|) = " +
+                       format(resolution));
+    }
+    // samples no closer than the steps (between steps they would be interpolated, not
+    // integrated)
+    if (o.output_every > 0.0 && o.output_every < o.step) {
+      fail("output_every", "(" + format(o.output_every) + ") is below the step (" +
+                               format(o.step) + ") of " + to_string(o.integrator) +
+                               ": take a step <= output_every, or output_every >= step");
+    }
+    // the steps of each segment, as integrate_explicit takes them (counted in double: the
+    // count may exceed any integer)
+    const std::vector<double> ends = segment_ends(sys, o);
+    double steps = 0.0;
+    for (std::size_t k = 0; k + 1 < ends.size(); ++k) {
+      steps += std::max(1.0, std::ceil((ends[k + 1] - ends[k]) / o.step * (1.0 - 1e-12)));
+    }
+    if (steps > double(o.max_steps)) {
+      fail("step", "(" + format(o.step) + ") of " + to_string(o.integrator) + " takes " +
+                       format(steps) + " steps over [" + format(o.t_start) + ", " +
+                       format(o.t_end) + "], more than max_steps = " +
+                       std::to_string(o.max_steps) +
+                       " (take a larger step, or raise max_steps: simulate: max_steps in a "
+                       "model file, --max-steps on the command line, max_steps= in Python)");
+    }
+  }
+}
+
 std::vector<std::string> check_initial_conditions(const System& sys, const VectorXd& q,
                                                   const VectorXd& qd, double t, double tolerance) {
   Workspace ws(sys);
@@ -822,8 +902,17 @@ std::vector<std::string> check_initial_conditions(const System& sys, const Vecto
 }
 
 Trajectory simulate(const System& sys, const VectorXd& q0, const VectorXd& qd0,
-                    const SimulationOptions& o) {
-  validate(sys, q0, qd0, o);
+                    const SimulationOptions& given) {
+  validate(sys, q0, qd0, given);
+  check_settings(sys, given);
+  // an rtol below roundoff is raised to the smallest one that means anything (with a note)
+  SimulationOptions o = given;
+  std::string rtol_note;
+  if (o.rtol < kMinimumRtol) {
+    rtol_note = "rtol = " + format(given.rtol) + " is below the roundoff of double: the run uses "
+                "rtol = " + format(kMinimumRtol) + " (kMinimumRtol, 100 eps)";
+    o.rtol = kMinimumRtol;
+  }
   // the sample times, refused now if too many
   const detail::SampleGrid samples = sample_grid(sys, o);
   const auto wall_start = std::chrono::steady_clock::now();
@@ -836,6 +925,7 @@ Trajectory simulate(const System& sys, const VectorXd& q0, const VectorXd& qd0,
   }
   traj.n = sys.dofs();
   traj.m = sys.constraint_rows();
+  if (!rtol_note.empty()) traj.stats.notes.push_back(rtol_note);
   Run run(sys, o, traj);
   Workspace& ws = run.workspace();
   const Index n = sys.dofs();
@@ -966,6 +1056,7 @@ Trajectory simulate(const System& sys, const VectorXd& q0, const VectorXd& qd0,
       x_start = x;
       run.set_integrator(method);
       hooks.cross_singular = crossing;
+      hooks.max_steps = o.max_steps - traj.stats.steps;  // (> 0: checked after each segment)
       // (after a switch CVODE estimates its own first step: dopri5's last one is stability-bound)
       detail::SegmentResult r =
           method == Integrator::kBDF
@@ -995,6 +1086,12 @@ Trajectory simulate(const System& sys, const VectorXd& q0, const VectorXd& qd0,
         std::string message = r.message;
         if (message.empty()) message = run.failure();
         if (message.empty()) message = describe_status(sys, ws);
+        if (r.status == Status::kIntegratorFailure &&
+            (traj.stats.steps >= o.max_steps || message.find("step limit") != std::string::npos)) {
+          message += " (the run's limit max_steps = " + std::to_string(o.max_steps) +
+                     " accepted steps; raise it: simulate: max_steps in a model file, "
+                     "--max-steps on the command line, max_steps= in Python)";
+        }
         if (r.status == Status::kIntegratorFailure && detail::step_collapsed(r)) {
           message += ". " +
                      detail::diagnose_collapse(sys, ws, o, method, r, x, x_start, a, traj.stats);
@@ -1010,6 +1107,16 @@ Trajectory simulate(const System& sys, const VectorXd& q0, const VectorXd& qd0,
         continue;
       }
       r_crossed = false;
+      // the run's step limit, reached exactly at the end of a segment that goes on
+      if (traj.stats.steps >= o.max_steps && r.t_reached < o.t_end) {
+        return finish(Status::kIntegratorFailure,
+                      std::string(to_string(method)) + ": step limit reached at t = " +
+                          format(r.t_reached) + " (the run's limit max_steps = " +
+                          std::to_string(o.max_steps) +
+                          " accepted steps; raise it: simulate: max_steps in a model file, "
+                          "--max-steps on the command line, max_steps= in Python)",
+                      r.t_reached);
+      }
       if (r.stiff) {
         // dopri5 found the problem stiff: BDF from here
         if (traj.stats.stiff_switches++ == 0) traj.stats.stiff_switch_time = r.t_reached;

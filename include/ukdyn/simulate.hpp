@@ -18,6 +18,7 @@
 #include <functional>
 #include <limits>
 #include <map>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -86,10 +87,16 @@ struct SimulationOptions {
                                     ///< (BDF estimates its own)
   /// Relative and absolute tolerances of the adaptive methods; any rtol down to 1e-12 works,
   /// through singular configurations too (docs/simulation.md, "Singular configurations").
+  /// An rtol below kMinimumRtol (the roundoff of double) is raised to it, with a note in
+  /// RunStatistics::notes, as CVODE does with tolerances it cannot meet.
   double rtol = 1e-9;
   double atol = 1e-11;
   double max_step = 0.0;            ///< largest step of adaptive methods (0: unlimited)
-  long max_steps = 10'000'000;      ///< give up after this many accepted steps
+  /// Give up after this many accepted steps in the whole run, with every method: the adaptive
+  /// methods stop there (Status::kIntegratorFailure, the message says how to raise it); a
+  /// fixed-step run (kRK4, kRK5) that would need more is refused before it starts (SettingError).
+  /// Model files: simulate: max_steps; command line: --max-steps; Python: max_steps=.
+  long max_steps = 10'000'000;
   /// kDopri5 only: when Hairer and Wanner's stiffness test fires (h·ρ > 3.25 at 15 accepted
   /// steps, ρ the dominant eigenvalue of the Jacobian estimated from the last two stages), go
   /// on with kBDF for the rest of the segment — up to the next breakpoint or stick/slip event,
@@ -166,6 +173,39 @@ inline constexpr double kMaxStreamedSamples = 1e9;
 /// a larger grid is refused at the start like one above kMaxStreamedSamples.
 inline constexpr double kMaxStoredValues = 268435456.0;
 
+/// The smallest rtol a run uses: 100 ε ≈ 2.2e-14 (ε the machine epsilon of double). Below it the
+/// error estimates are roundoff; a smaller SimulationOptions::rtol is raised to this with a note.
+inline constexpr double kMinimumRtol = 100.0 * std::numeric_limits<double>::epsilon();
+
+/// A setting of SimulationOptions that a run cannot use (misuse, the first tier of errors): a
+/// std::invalid_argument whose what() names the setting, its value and the rule it breaks, and
+/// whose setting() is the setting's name as SimulationOptions spells it ("t_end", "step",
+/// "max_steps", "output_at", "output_every", "rtol", …), so that front ends can point at the
+/// model file's key or the command-line flag that gave it.
+class SettingError : public std::invalid_argument {
+ public:
+  /// @param setting the name of the setting; @param what the full message.
+  SettingError(std::string setting, const std::string& what)
+      : std::invalid_argument(what), setting_(std::move(setting)) {}
+  /// The name of the setting at fault.
+  const std::string& setting() const { return setting_; }
+
+ private:
+  std::string setting_;
+};
+
+/// Checks the settings of a run of sys as simulate() does before it starts, without running it.
+/// The rules (docs/simulation.md, "Settings"): t_start and t_end finite, and t_end − t_start >
+/// 1e-12 · max(1, |t_start|, |t_end|) (the resolution of the run's times); step, rtol, atol
+/// finite and > 0; max_step, output_every finite and >= 0; every output_at time finite and in
+/// [t_start, t_end]; max_steps > 0; Baumgarte gains, initial_tolerance and projection.tolerance
+/// finite and >= 0 (the tolerance > 0); energy_balance_tolerance > 0. For kRK4 and kRK5 also:
+/// step at least 16 ε max(|t_start|, |t_end|) (a step t cannot resolve), output_every (when
+/// > 0) at least step (samples closer than the steps would be interpolated), and the steps the
+/// run takes (Σ over the segments between breakpoints of ⌈length / step⌉) at most max_steps.
+/// @throws SettingError naming the first setting at fault. Cost O(breakpoints).
+void check_settings(const System& sys, const SimulationOptions& options);
+
 /// The tolerance a run's energy balance is checked against: max(energy_balance_tolerance,
 /// 1000 · rtol) for dopri5, rkf78 and BDF, energy_balance_tolerance for the fixed-step methods.
 double checked_energy_balance_tolerance(const SimulationOptions& options);
@@ -217,7 +257,10 @@ struct RunStatistics {
   /// infinite.
   bool energy_balance_checked = false;
   /// The older figure: max |E(t) − E(0) − ΣW(t)| relative to max(|E(0)|, largest kinetic
-  /// energy); meaningless when E(0) is near 0 — energy_balance replaces it.
+  /// energy, energy_exchanged, 1): relative to the run's energy when that exceeds one unit of
+  /// energy (1 J in SI units), and the absolute residual below it, so that a run in which
+  /// nothing moves (E(0) = 0, a block at rest) reports its roundoff, never a division by a
+  /// vanishing energy. energy_balance is the figure the run is checked by.
   double energy_drift = 0.0;
   double t_reached = 0.0;           ///< last time integrated to
   /// samples recorded: Trajectory::samples() of a run kept in memory, the calls of
@@ -277,7 +320,8 @@ struct Trajectory {
 /// step limit) stops the run: the samples recorded so far are kept and stats.status /
 /// stats.message say what happened, where and when. So does a stop requested by
 /// options.should_stop (Status::kInterrupted, the last sample at stats.t_reached).
-/// @throws std::invalid_argument on misuse: sizes, t_end <= t_start, bad tolerances, an unknown
+/// @throws SettingError for a setting a run cannot use (check_settings); std::invalid_argument
+/// on other misuse: sizes, an unknown
 /// constraint in drift_per_constraint, or initial conditions that violate the constraints when
 /// project_initial is false (the message names each violated constraint and by how much), and
 /// on a sample grid above kMaxStreamedSamples (with a sample_sink) or kMaxStoredValues (in
