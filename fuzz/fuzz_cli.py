@@ -39,8 +39,9 @@ from hypothesis import HealthCheck, Phase, given, settings
 from hypothesis import strategies as st
 
 def text(**kw: int) -> st.SearchStrategy[str]:
-    """Arbitrary text, without NUL (a command line cannot hold one)."""
-    return st.text(alphabet=st.characters(blacklist_characters="\x00"), **kw)
+    """Arbitrary text, without NUL and lone surrogates (a command line cannot hold them)."""
+    return st.text(alphabet=st.characters(blacklist_categories=("Cs",),
+                                          blacklist_characters="\x00"), **kw)
 
 
 ROOT = Path(__file__).resolve().parent.parent

@@ -96,8 +96,9 @@ def judge(cat: str, what: str, o: Outcome, code: Optional[set[int]] = None,
     a signal is X, a timeout H; anything else is U (to be read)."""
     if o.hang:
         got = "H"
-    elif o.code is not None and o.code < 0:
-        got = "X"
+    elif o.code is not None and o.code < 0 and not (o.code == -6 and "what():" in o.out and
+                                                     "invalid_argument" in o.out):
+        got = "X"  # killed by a signal (an uncaught std::invalid_argument's abort is the caller's)
     elif (code is None or o.code in code) and (not words or re.search(words, o.out, re.S)) \
             and (ok is None or ok()):
         got = cls
@@ -188,7 +189,7 @@ def main() -> int:
               cls="OK" if o.code == 0 else "C")
 
     # ---------------- YAML ----------------
-    for f, words in (("dup_keys_precedence.yaml", r"duplicate"), ("dup_key.yaml", r"duplicate"),
+    for f, words in (("dup_keys_precedence.yaml", r"given twice"), ("dup_key.yaml", r"given twice"),
                      ("yaml_multi_doc.yaml", r"document"),
                      ("yaml_flow_comma.yaml", r"quot"),
                      ("deep_yaml.yaml", r"nest|deep")):
@@ -221,16 +222,23 @@ def main() -> int:
         o, out = run_model(str(M / f))
         s = summary(out)
         judge("numerics", f + " (valid to t = 1)", o, {1},
-              r"not positive definite", ok=lambda: (s.get("t_reached") or 0) > 0.99, cls="OK")
+              r"no step beyond t = 0\.99999|(not positive definite|not determined) at t = 1 ",
+              ok=lambda: (s.get("t_reached") or 0) > 0.99, cls="OK")
     for f in ("step_tiny.yaml", "step_1e-20.yaml"):
         o, out = run_model(str(M / f))
         judge("numerics", f, o, {2, 3}, r"step")
     o, out = run_model(str(M / "every_tiny.yaml"), timeout=60)
     judge("numerics", "output every 1e-9 on a 1 s run", o, {2, 3}, r"every|sample",
           ok=lambda: o.seconds < 10)
+    # rk4 without error control steps across the pole: the samples every 0.01 it asks for are
+    # refused (closer than the step); with samples every step the energy balance flags the jump
     o, out = run_model(str(M / "div0_runtime3.yaml"))
-    judge("numerics", "force 1/x^2 crossed with rk4 h = 0.25", o, {0, 1, 5},
-          ok=lambda: o.code != 0 or "warning" in o.out, cls="C")
+    judge("numerics", "force 1/x^2 crossed with rk4 h = 0.25", o, {3},
+          r"output_every \(0\.01\) is below the step \(0\.25\)")
+    cross = W / "div0_every_step.yaml"
+    cross.write_text((M / "div0_runtime3.yaml").read_text() + "output: {every: 0.25}\n")
+    o, out = run_model(str(cross))
+    judge("numerics", "the same, samples every step", o, {5}, r"warning: energy balance")
     if not QUICK:
         o = sh([UKDYN, "check", str(gen / "coords_10000.yaml")], timeout=600)
         judge("numerics", "10^4 coordinates (decoupled oscillators) load (< 60 s)", o, {0, 4},
@@ -241,7 +249,7 @@ def main() -> int:
     judge("constraints", "x = 0 and x = 1, run", o, {3},
           r"inconsistent", ok=lambda: "project: true" not in o.out)
     o = ukdyn("check", str(M / "inconsistent_noproj.yaml"))
-    judge("constraints", "x = 0 and x = 1, check", o, {4}, r"inconsistent",
+    judge("constraints", "x = 0 and x = 1, check", o, {4}, r"contradict",
           ok=lambda: "redundant" not in o.out)
     o, out = run_model(str(M / "constraint_const.yaml"))
     judge("constraints", "1 + 0*x = 0", o, {3}, r"inconsistent|no state|cannot",
@@ -283,9 +291,10 @@ def main() -> int:
     o = sh(["bash", str(C / "scripts" / "build_cpp.sh")], env={**ENV, "P": str(ROOT)})
     if o.code == 0:
         p = sh([str(W / "cpp_projection_nan_and_moved")])
+        # the program does not catch: std::terminate prints the exception (SIGABRT is its own)
         judge("C++", "project_positions NaN / moved-from Workspace", p, None,
-              r"(?i)non-finite|nan", ok=lambda: p.code is not None and p.code >= 0 and
-              "converged = true" not in p.out.lower())
+              r"converged 0 iterations 0 violation nan status 1.*invalid_argument.*the workspace "
+              r"is empty \(moved from", ok=lambda: p.code in (0, -6))
         for case in ("foreign", "foreign_same_n", "size", "size0", "nan", "nant", "sim_size",
                      "sim_nan", "sim_inf"):
             p = sh([str(W / "cpp_misuse"), case])

@@ -45,6 +45,8 @@
 #include <ukdyn/run.hpp>
 #include <ukdyn/simulate.hpp>
 
+#include "support/cli_process.hpp"
+
 extern char** environ;
 
 namespace ukdyn {
@@ -54,21 +56,10 @@ namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
 
 // a fresh, empty scratch directory for one test
-fs::path scratch(const std::string& name) {
-  // the pid makes it unique: test runs of other trees may share the temp directory
-  const fs::path dir = fs::path(::testing::TempDir()) /
-                       ("ukdyn_interrupt_" + name + "." + std::to_string(::getpid()));
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  return dir;
-}
+fs::path scratch(const std::string& name) { return test::scratch_directory("ukdyn_interrupt_", name); }
 
-std::string read_text(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
+using test::Command;
+using test::read_text;
 
 // the names of the files in dir (hidden ones too)
 std::vector<std::string> listing(const fs::path& dir) {
@@ -336,96 +327,6 @@ TEST(AtomicOutput, AFileThatIsNotRegularIsWrittenInPlace) {
 
 // --- 3. the command -------------------------------------------------------------------------------
 
-// A `ukdyn run` process: stdout to a file, stderr read through a pipe.
-class Command {
- public:
-  explicit Command(const std::vector<std::string>& args, const fs::path& stdout_file) {
-    std::vector<std::string> argv_s = {UKDYN_CLI};
-    argv_s.insert(argv_s.end(), args.begin(), args.end());
-    std::vector<char*> argv;
-    for (auto& a : argv_s) argv.push_back(a.data());
-    argv.push_back(nullptr);
-    // the progress log every 0.05 s (stderr is a pipe, not a terminal)
-    std::vector<std::string> env_s = {"UKDYN_PROGRESS_INTERVAL=0.05"};
-    for (char** e = environ; *e; ++e) {
-      if (std::strncmp(*e, "UKDYN_PROGRESS_INTERVAL=", 24) != 0) env_s.emplace_back(*e);
-    }
-    std::vector<char*> env;
-    for (auto& e : env_s) env.push_back(e.data());
-    env.push_back(nullptr);
-
-    int fds[2];
-    if (::pipe2(fds, O_CLOEXEC) != 0) throw std::runtime_error("pipe");
-    posix_spawn_file_actions_t actions;
-    posix_spawn_file_actions_init(&actions);
-    posix_spawn_file_actions_addopen(&actions, 1, stdout_file.c_str(), O_WRONLY | O_CREAT | O_TRUNC,
-                                     0644);
-    posix_spawn_file_actions_adddup2(&actions, fds[1], 2);
-    // (the child's SIGINT and SIGTERM at their defaults, whatever the test runner set)
-    posix_spawnattr_t attr;
-    posix_spawnattr_init(&attr);
-    sigset_t defaults;
-    sigemptyset(&defaults);
-    sigaddset(&defaults, SIGINT);
-    sigaddset(&defaults, SIGTERM);
-    posix_spawnattr_setsigdefault(&attr, &defaults);
-    posix_spawnattr_setflags(&attr, POSIX_SPAWN_SETSIGDEF);
-    const int rc = posix_spawn(&pid_, argv[0], &actions, &attr, argv.data(), env.data());
-    posix_spawn_file_actions_destroy(&actions);
-    posix_spawnattr_destroy(&attr);
-    ::close(fds[1]);
-    err_ = fds[0];
-    if (rc != 0) throw std::runtime_error(std::string("cannot start ") + UKDYN_CLI);
-  }
-  ~Command() {
-    if (pid_ > 0 && !status_) {
-      ::kill(pid_, SIGKILL);
-      wait();
-    }
-    if (err_ >= 0) ::close(err_);
-  }
-
-  pid_t pid() const { return pid_; }
-  const std::string& stderr_text() const { return stderr_; }
-
-  // reads stderr until `text` appears (true) or the process closes it / the time runs out
-  bool wait_for(const std::string& text, double seconds) {
-    const auto deadline = Clock::now() + std::chrono::duration<double>(seconds);
-    while (stderr_.find(text) == std::string::npos) {
-      const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(deadline - Clock::now());
-      if (left.count() <= 0 || !read_some(int(left.count()))) return false;
-    }
-    return true;
-  }
-
-  // waits for the exit: the exit code, or 128 + the signal that ended it
-  int wait() {
-    while (read_some(-1)) {
-    }
-    int status = 0;
-    while (::waitpid(pid_, &status, 0) < 0 && errno == EINTR) {
-    }
-    status_ = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
-    return *status_;
-  }
-
- private:
-  // one read of stderr (timeout in ms, −1: none); false at its end
-  bool read_some(int timeout_ms) {
-    pollfd p{err_, POLLIN, 0};
-    if (::poll(&p, 1, timeout_ms) <= 0) return timeout_ms < 0 ? false : true;
-    char buf[4096];
-    const ssize_t got = ::read(err_, buf, sizeof buf);
-    if (got <= 0) return false;
-    stderr_.append(buf, std::size_t(got));
-    return true;
-  }
-
-  pid_t pid_ = -1;
-  int err_ = -1;
-  std::string stderr_;
-  std::optional<int> status_;
-};
 
 // trajectory.csv: the header and the rows, each checked to have the header's width
 struct Csv {

@@ -38,6 +38,7 @@
 #include <ukdyn/simulate.hpp>
 
 #include "../src/sample_grid.hpp"
+#include "support/cli_process.hpp"
 
 extern char** environ;
 
@@ -330,77 +331,10 @@ TEST(SampleGrid, AGridAboveTheBoundIsRefusedBeforeIntegratingNamingTheCountAndTh
 
 // --- the command --------------------------------------------------------------------------
 
-std::string read_text(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
+fs::path scratch(const std::string& name) { return test::scratch_directory("ukdyn_stream_", name); }
 
-fs::path scratch(const std::string& name) {
-  // the pid makes it unique: test runs of other trees may share the temp directory
-  const fs::path dir = fs::path(::testing::TempDir()) /
-                       ("ukdyn_stream_" + name + "." + std::to_string(::getpid()));
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  return dir;
-}
-
-// `ukdyn ARGS` with stdout to a file and stderr to a pipe; waits with a deadline
-class Command {
- public:
-  Command(const std::vector<std::string>& args, const fs::path& stdout_file) {
-    std::vector<std::string> argv_s = {UKDYN_CLI};
-    argv_s.insert(argv_s.end(), args.begin(), args.end());
-    std::vector<char*> argv;
-    for (auto& a : argv_s) argv.push_back(a.data());
-    argv.push_back(nullptr);
-    int fds[2];
-    if (::pipe2(fds, O_CLOEXEC) != 0) throw std::runtime_error("pipe");
-    posix_spawn_file_actions_t actions;
-    posix_spawn_file_actions_init(&actions);
-    posix_spawn_file_actions_addopen(&actions, 1, stdout_file.c_str(),
-                                     O_WRONLY | O_CREAT | O_TRUNC, 0644);
-    posix_spawn_file_actions_adddup2(&actions, fds[1], 2);
-    posix_spawnattr_t attr;
-    posix_spawnattr_init(&attr);
-    sigset_t defaults;
-    sigemptyset(&defaults);
-    sigaddset(&defaults, SIGINT);
-    posix_spawnattr_setsigdefault(&attr, &defaults);
-    posix_spawnattr_setflags(&attr, POSIX_SPAWN_SETSIGDEF);
-    const int rc = posix_spawn(&pid_, argv[0], &actions, &attr, argv.data(), environ);
-    posix_spawn_file_actions_destroy(&actions);
-    posix_spawnattr_destroy(&attr);
-    ::close(fds[1]);
-    err_ = fds[0];
-    if (rc != 0) throw std::runtime_error(std::string("cannot start ") + UKDYN_CLI);
-  }
-  ~Command() {
-    if (pid_ > 0 && code_ < 0) {
-      ::kill(pid_, SIGKILL);
-      wait();
-    }
-    if (err_ >= 0) ::close(err_);
-  }
-  pid_t pid() const { return pid_; }
-  const std::string& stderr_text() const { return stderr_; }
-  int wait() {
-    char buf[4096];
-    for (ssize_t got; (got = ::read(err_, buf, sizeof buf)) > 0;) stderr_.append(buf, std::size_t(got));
-    int status = 0;
-    while (::waitpid(pid_, &status, 0) < 0 && errno == EINTR) {
-    }
-    code_ = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
-    return code_;
-  }
-
- private:
-  pid_t pid_ = -1;
-  int err_ = -1;
-  int code_ = -1;
-  std::string stderr_;
-};
+using test::Command;
+using test::read_text;
 
 // the rows of a CSV (after the header); each must be complete (ends with a newline, same width)
 std::vector<std::vector<double>> csv_rows(const fs::path& path, std::vector<std::string>& header) {
