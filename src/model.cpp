@@ -906,6 +906,16 @@ Model Reader::read(const std::string& text) {
                      "see docs/model-format.md; write the bodies and joints under bodies: and "
                      "joints:");
   }
+  // a NUL byte: a binary file, or text cut by a C string (YAML's own message names an escape)
+  if (const std::size_t nul = text.find('\0'); nul != std::string::npos) {
+    const std::size_t line_start = text.rfind('\n', nul) == std::string::npos
+                                       ? 0
+                                       : text.rfind('\n', nul) + 1;
+    const int line = 1 + int(std::count(text.begin(), text.begin() + long(nul), '\n'));
+    throw ModelError(file_, line, int(nul - line_start) + 1,
+                     "the model text holds a NUL byte (is this a binary file?)",
+                     "a model file is YAML text (docs/model-format.md)");
+  }
   // duplicate keys, a second document, self-referencing aliases, runaway nesting (model_yaml.cpp)
   check_yaml_structure(text, file_);
   YAML::Node root;

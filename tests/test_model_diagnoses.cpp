@@ -151,6 +151,15 @@ TEST(ModelDiagnoses, DirectoryEmptyFileXmlAndDevZero) {
   std::filesystem::remove_all(dir);
 }
 
+TEST(ModelDiagnoses, ANulByteIsNamedWhereItIs) {
+  // yaml-cpp's own message was "unknown escape character: <newline>"
+  std::string text = "coordinates: [x]\nkinetic_energy: 0.5*x_dot^2";
+  text += '\0';
+  text += "\n";
+  const std::string e = error_of(text);
+  EXPECT_TRUE(contains(e, "m.yaml:2:28: error: the model text holds a NUL byte")) << e;
+}
+
 TEST(ModelDiagnoses, FlowMappingCommaSuggestsQuoting) {
   const std::string e = error_of_file(kData + "yaml_flow_comma.yaml");
   EXPECT_TRUE(contains(e, "yaml_flow_comma.yaml:18:")) << e;
