@@ -926,7 +926,8 @@ Model Reader::read(const std::string& text) {
                      "check the indentation, brackets and colons");
   }
   if (root.IsNull()) {
-    throw ModelError(file_, 0, 0, "the model file is empty (or holds only comments)",
+    // located where the model should begin, as every reader error is (file:line:column)
+    throw ModelError(file_, 1, 1, "the model file is empty (or holds only comments)",
                      "start with name:, coordinates:, … (docs/model-format.md)");
   }
   if (!root.IsMap()) {

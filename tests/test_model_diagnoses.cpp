@@ -139,6 +139,7 @@ TEST(ModelDiagnoses, DirectoryEmptyFileXmlAndDevZero) {
   { std::ofstream(empty) << "# nothing\n"; }
   e = error_of_file(empty);
   EXPECT_TRUE(contains(e, "the model file is empty")) << e;
+  EXPECT_TRUE(contains(e, "empty.yaml:1:1: error:")) << e;  // located, as every reader error
   const std::string urdf = (dir / "robot.urdf").string();
   { std::ofstream(urdf) << "<?xml version=\"1.0\"?>\n<robot name=\"r\"></robot>\n"; }
   e = error_of_file(urdf);
