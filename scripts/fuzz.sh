@@ -8,7 +8,8 @@
 # build-fuzz/artifacts/. Environment: FUZZ_TIMEOUT (seconds per input, default 10), FUZZ_RSS_MB
 # (memory limit, default 2048: AddressSanitizer's own memory grows by a few KB per run, so runs of
 # more than about 20 minutes need more), FUZZ_JOBS (build parallelism, default 2), FUZZ_ARGS (more
-# libFuzzer flags).
+# libFuzzer flags), FUZZ_BUILD_DIR (an already configured clang build with -DUKDYN_BUILD_FUZZ=ON
+# to build the target in, instead of build-fuzz/: CI reuses its sanitizer build, build-asan/).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 root=$PWD
@@ -21,11 +22,17 @@ if ! [[ $seconds =~ ^[0-9]+$ && $seconds -gt 0 ]]; then
   exit 2
 fi
 
-echo "=== fuzz: building fuzz/fuzz_model (clang, libFuzzer + ASan + UBSan) in build-fuzz/ ==="
-CC=clang CXX=clang++ cmake -S . -B build-fuzz -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
-  -DUKDYN_BUILD_FUZZ=ON -DUKDYN_BUILD_TESTS=OFF -DUKDYN_BUILD_BENCHMARKS=OFF \
-  -DUKDYN_BUILD_EXAMPLES=OFF >/dev/null
-cmake --build build-fuzz --parallel "${FUZZ_JOBS:-2}" --target fuzz_model
+build=${FUZZ_BUILD_DIR:-build-fuzz}
+echo "=== fuzz: building fuzz/fuzz_model (clang, libFuzzer + ASan + UBSan) in $build/ ==="
+if [ -z "${FUZZ_BUILD_DIR:-}" ]; then
+  CC=clang CXX=clang++ cmake -S . -B build-fuzz -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
+    -DUKDYN_BUILD_FUZZ=ON -DUKDYN_BUILD_TESTS=OFF -DUKDYN_BUILD_BENCHMARKS=OFF \
+    -DUKDYN_BUILD_EXAMPLES=OFF >/dev/null
+elif ! [ -f "$build/CMakeCache.txt" ] || ! grep -q "^UKDYN_BUILD_FUZZ:BOOL=ON" "$build/CMakeCache.txt"; then
+  echo "scripts/fuzz.sh: FUZZ_BUILD_DIR=$build is not a build configured with -DUKDYN_BUILD_FUZZ=ON" >&2
+  exit 2
+fi
+cmake --build "$build" --parallel "${FUZZ_JOBS:-2}" --target fuzz_model
 
 scratch=$(mktemp -d "${TMPDIR:-/tmp}/ukdyn-fuzz.XXXXXX")
 trap 'rm -rf "$scratch"' EXIT
@@ -39,7 +46,7 @@ export LSAN_OPTIONS="suppressions=$root/.ci/lsan.supp:print_suppressions=0"
 echo "=== fuzz: running for ${seconds} s (at most ${timeout} s per input) ==="
 status=0
 # shellcheck disable=SC2086  # FUZZ_ARGS is a list of flags
-build-fuzz/fuzz/fuzz_model "$scratch/corpus" -dict=fuzz/model.dict -max_len=4096 \
+"$build/fuzz/fuzz_model" "$scratch/corpus" -dict=fuzz/model.dict -max_len=4096 \
   -max_total_time="$seconds" -timeout="$timeout" -rss_limit_mb="$rss_mb" \
   -artifact_prefix="$scratch/artifacts/" -print_final_stats=1 ${FUZZ_ARGS:-} \
   2>"$scratch/log" || status=$?
@@ -47,11 +54,11 @@ grep -E "^(#[0-9]+ +DONE|stat::|Done [0-9]+ runs)" "$scratch/log" || true
 
 if ((status != 0)) || [ -n "$(ls -A "$scratch/artifacts")" ]; then
   tail -n 60 "$scratch/log" >&2
-  mkdir -p build-fuzz/artifacts
-  cp "$scratch/artifacts/"* build-fuzz/artifacts/ 2>/dev/null || true
-  cp "$scratch/log" build-fuzz/artifacts/fuzz.log
-  echo "fuzz: FAILED (libFuzzer exit status $status); inputs and log in build-fuzz/artifacts/" >&2
-  echo "      reproduce with: build-fuzz/fuzz/fuzz_model build-fuzz/artifacts/<input>" >&2
+  mkdir -p "$build/artifacts"
+  cp "$scratch/artifacts/"* "$build/artifacts/" 2>/dev/null || true
+  cp "$scratch/log" "$build/artifacts/fuzz.log"
+  echo "fuzz: FAILED (libFuzzer exit status $status); inputs and log in $build/artifacts/" >&2
+  echo "      reproduce with: $build/fuzz/fuzz_model $build/artifacts/<input>" >&2
   exit 1
 fi
 echo "fuzz: no crash, hang, leak or sanitizer report in ${seconds} s"

@@ -21,6 +21,8 @@
 #include <utility>
 
 #include "control_internal.hpp"
+#include "energy_balance.hpp"
+#include "sample_grid.hpp"
 #include "ukdyn/forward.hpp"
 #include "ukdyn/projection.hpp"
 
@@ -345,9 +347,10 @@ System controlled_system(const Controller& ctrl, const System& plant) {
   return build_controlled(std::make_shared<ControlledPlant>(ctrl, plant, 0), {});
 }
 
-ControlledTrajectory simulate_controlled(const Controller& ctrl, const System& plant,
-                                         const VectorXd& q0, const VectorXd& qd0,
-                                         const SimulationOptions& options) {
+ControlledTrajectory simulate_controlled(
+    const Controller& ctrl, const System& plant, const VectorXd& q0, const VectorXd& qd0,
+    const SimulationOptions& options,
+    const std::function<void(const ControlledTrajectory& sample)>& sample_sink) {
   const char* who = "ukdyn::simulate_controlled";
   require_same_plant(ctrl, plant, who);
   const Index n = plant.dofs(), m_r = ctrl.requirement_rows();
@@ -398,58 +401,78 @@ ControlledTrajectory simulate_controlled(const Controller& ctrl, const System& p
   }
   // (the augmented system's balance includes z: the plant's is checked below)
   o.energy_balance_tolerance = std::numeric_limits<double>::infinity();
-  Trajectory full = simulate(sys, x0, xd0, o);
+  const double tolerance = plant.accounts_for_energy() ? checked_energy_balance_tolerance(options)
+                                                       : std::numeric_limits<double>::infinity();
 
-  // the plant's trajectory: strip z, and z'ᵀz'/2 from the energies
+  // the names; the samples go into `run` (kept) or into `one` (each passed to the sink)
   ControlledTrajectory run;
   Trajectory& tr = run.plant;
   tr.coordinate_names = plant.coordinate_names();
-  tr.constraint_names = full.constraint_names;
-  tr.constraint_rows = full.constraint_rows;
-  tr.constraint_kinds = full.constraint_kinds;
-  tr.n = n;
-  tr.m = full.m;
-  tr.t = full.t;
-  const Index N = full.samples(), w = n + aux;
-  auto strip = [&](const std::vector<double>& f, std::vector<double>& out) {
-    out.reserve(std::size_t(N * n));
-    for (Index j = 0; j < N; ++j) {
-      out.insert(out.end(), f.begin() + j * w, f.begin() + j * w + n);
-    }
-  };
-  strip(full.q, tr.q);
-  strip(full.qd, tr.qd);
-  strip(full.qdd, tr.qdd);
-  strip(full.Qc_ideal, tr.Qc_ideal);
-  strip(full.Qc_nonideal, tr.Qc_nonideal);
-  tr.lambda = full.lambda;
-  tr.position_violation = full.position_violation;
-  tr.velocity_violation = full.velocity_violation;
-  tr.potential_energy = full.potential_energy;
-  tr.work_nonideal = full.work_nonideal;
-  tr.work_ideal = full.work_ideal;
-  tr.work_drive = full.work_drive;
-  tr.work_external = full.work_external;
-  tr.stats = full.stats;
-  diagnose_requirements(*st, q0, qd0, options.t_start, tr.stats);
-  for (Index j = 0; j < N; ++j) {
-    const auto z_dot = Eigen::Map<const VectorXd>(full.qd.data() + j * w + n, aux);
-    const double T = full.kinetic_energy[std::size_t(j)] - 0.5 * z_dot.squaredNorm();
-    tr.kinetic_energy.push_back(T);
-    tr.energy.push_back(T + tr.potential_energy[std::size_t(j)]);
-  }
-
-  // the control at every sample (evaluated afresh at the sample's state)
   run.row_names = ctrl.row_names();
   run.robust = robust;
-  run.control = st->stats;
+  const bool streamed = bool(sample_sink);
+  ControlledTrajectory one;
+  if (!streamed) {
+    // kept in memory: the plant's values and the control's per sample, bounded as simulate()
+    // bounds its own (the augmented run itself streams into `run`, one sample at a time)
+    const double per_sample =
+        double(1 + 5 * n + plant.constraint_rows() + 2 * plant.constraint_count() + 9 +
+               2 * n + (robust ? 3 : 2) * m_r + 4);
+    const std::string bound = "of a controlled run kept in memory (kMaxStoredValues = 2^28 "
+                              "values, " + std::to_string(long(per_sample)) + " per sample)";
+    (void)detail::SampleGrid(options, std::min(kMaxStreamedSamples,
+                                               std::floor(kMaxStoredValues / per_sample)),
+                             bound.c_str());
+  }
+  ControlledTrajectory& out = streamed ? one : run;
+  detail::EnergyBalance balance;  // the plant's, with the control's work
   ControlWorkspace cws(ctrl);
   VectorXd q(n), qd(n), qdd(n);
-  for (Index j = 0; j < N; ++j) {
-    const double t = tr.t[std::size_t(j)];
-    q = Eigen::Map<const VectorXd>(tr.q.data() + j * n, n);
-    qd = Eigen::Map<const VectorXd>(tr.qd.data() + j * n, n);
-    qdd = Eigen::Map<const VectorXd>(tr.qdd.data() + j * n, n);
+  o.sample_sink = [&](const Trajectory& s) {
+    // the plant's sample: strip z, and z'ᵀz'/2 from the energies
+    if (streamed) {
+      if (one.plant.coordinate_names.empty()) {
+        one.plant.coordinate_names = tr.coordinate_names;
+        one.plant.constraint_names = s.constraint_names;
+        one.plant.constraint_rows = s.constraint_rows;
+        one.plant.constraint_kinds = s.constraint_kinds;
+        one.plant.n = n;
+        one.plant.m = s.m;
+        one.row_names = run.row_names;
+        one.robust = robust;
+      }
+      for (auto* f : sample_fields(one)) f->clear();
+    }
+    Trajectory& p = out.plant;
+    const double t = s.t[0];
+    p.t.push_back(t);
+    for (auto [to, from] : {std::pair{&p.q, &s.q}, {&p.qd, &s.qd}, {&p.qdd, &s.qdd},
+                            {&p.Qc_ideal, &s.Qc_ideal}, {&p.Qc_nonideal, &s.Qc_nonideal}}) {
+      to->insert(to->end(), from->begin(), from->begin() + n);
+    }
+    for (auto [to, from] : {std::pair{&p.lambda, &s.lambda},
+                            {&p.position_violation, &s.position_violation},
+                            {&p.velocity_violation, &s.velocity_violation},
+                            {&p.potential_energy, &s.potential_energy},
+                            {&p.work_nonideal, &s.work_nonideal}, {&p.work_ideal, &s.work_ideal},
+                            {&p.work_drive, &s.work_drive},
+                            {&p.work_external, &s.work_external}}) {
+      to->insert(to->end(), from->begin(), from->end());
+    }
+    const double* z_dot = s.qd.data() + n;
+    const double T = s.kinetic_energy[0] - 0.5 * Eigen::Map<const VectorXd>(z_dot, aux).squaredNorm();
+    const double V = s.potential_energy[0];
+    p.kinetic_energy.push_back(T);
+    p.energy.push_back(T + V);
+    p.work_control.push_back(z_dot[kWork]);
+    const double works[5] = {s.work_nonideal[0], s.work_ideal[0], s.work_drive[0],
+                             s.work_external[0], z_dot[kWork]};
+    p.energy_balance_residual.push_back(balance.add(t, T, V, T + V, works));
+
+    // the control at the sample (evaluated afresh at the sample's state)
+    q = Eigen::Map<const VectorXd>(s.q.data(), n);
+    qd = Eigen::Map<const VectorXd>(s.qd.data(), n);
+    qdd = Eigen::Map<const VectorXd>(s.qdd.data(), n);
     compute_control(ctrl, cws, q, qd, t);
     // errors: phi (holonomic), psi (nonholonomic), A_r q'' − b_r (acceleration form)
     const VectorXd accel_residual = cws.req.A * qdd - cws.req.b;
@@ -457,42 +480,70 @@ ControlledTrajectory simulate_controlled(const Controller& ctrl, const System& p
     for (Index i = 0; i < m_r; ++i) {
       switch (ctrl.requirement(ctrl.row_requirement(i)).kind()) {
         case ConstraintKind::kHolonomic:
-          run.error.push_back(cws.req.phi[i]);
-          run.error_rate.push_back(cws.req.phi_dot[i]);
+          out.error.push_back(cws.req.phi[i]);
+          out.error_rate.push_back(cws.req.phi_dot[i]);
           break;
         case ConstraintKind::kNonholonomic:
-          run.error.push_back(cws.req.phi_dot[i]);
-          run.error_rate.push_back(0.0);
+          out.error.push_back(cws.req.phi_dot[i]);
+          out.error_rate.push_back(0.0);
           break;
         case ConstraintKind::kAcceleration:
-          run.error.push_back(accel_residual[i]);
-          run.error_rate.push_back(0.0);
+          out.error.push_back(accel_residual[i]);
+          out.error_rate.push_back(0.0);
           break;
       }
     }
-    run.Qc_control.insert(run.Qc_control.end(), cws.Qc_control.data(), cws.Qc_control.data() + n);
-    run.Qc_robust.insert(run.Qc_robust.end(), cws.Qc_robust.data(), cws.Qc_robust.data() + n);
-    run.control_power.push_back(cws.Qc_control.dot(qd));
-    const double* z_dot = full.qd.data() + j * w + n;
-    run.control_work.push_back(z_dot[kWork]);
-    run.control_effort.push_back(z_dot[kEffort]);
-    run.control_work_abs.push_back(z_dot[kWorkAbs]);
+    out.Qc_control.insert(out.Qc_control.end(), cws.Qc_control.data(), cws.Qc_control.data() + n);
+    out.Qc_robust.insert(out.Qc_robust.end(), cws.Qc_robust.data(), cws.Qc_robust.data() + n);
+    out.control_power.push_back(cws.Qc_control.dot(qd));
+    out.control_work.push_back(z_dot[kWork]);
+    out.control_effort.push_back(z_dot[kEffort]);
+    out.control_work_abs.push_back(z_dot[kWorkAbs]);
     for (Index i = 0; robust && i < m_r; ++i) {
-      run.error_bound.push_back(
+      out.error_bound.push_back(
           std::sqrt(std::max(z_dot[kBounds + i], 0.0) / ctrl.robust_scale(i)));
     }
-  }
+    if (streamed) sample_sink(one);
+  };
+  const Trajectory full = simulate(sys, x0, xd0, o);
 
-  // the plant's energy balance, with the control's work
-  tr.work_control = run.control_work;
-  compute_energy_balance(tr, plant.accounts_for_energy()
-                                 ? checked_energy_balance_tolerance(options)
-                                 : std::numeric_limits<double>::infinity());
+  // the names, the statistics and the plant's energy balance
+  tr.constraint_names = full.constraint_names;
+  tr.constraint_rows = full.constraint_rows;
+  tr.constraint_kinds = full.constraint_kinds;
+  tr.n = n;
+  tr.m = full.m;
+  tr.stats = full.stats;
+  diagnose_requirements(*st, q0, qd0, options.t_start, tr.stats);
+  run.control = st->stats;
+  balance.finish(tr.stats, tolerance);
   if (!st->failure.empty() && tr.stats.status != Status::kOk &&
       tr.stats.status != Status::kEnergyBalance && tr.stats.status != Status::kInterrupted) {
     tr.stats.message = "the controller failed: " + st->failure;
   }
   return run;
+}
+
+ControlledTrajectory simulate_controlled(const Controller& ctrl, const System& plant,
+                                         const VectorXd& q0, const VectorXd& qd0,
+                                         const SimulationOptions& options) {
+  if (!options.sample_sink) return simulate_controlled(ctrl, plant, q0, qd0, options, nullptr);
+  // the plant's part of each sample to the options' sink
+  SimulationOptions o = options;
+  o.sample_sink = nullptr;
+  return simulate_controlled(ctrl, plant, q0, qd0, o,
+                             [&](const ControlledTrajectory& s) { options.sample_sink(s.plant); });
+}
+
+std::vector<std::vector<double>*> sample_fields(ControlledTrajectory& run) {
+  return {&run.plant.t, &run.plant.q, &run.plant.qd, &run.plant.qdd, &run.plant.Qc_ideal,
+          &run.plant.Qc_nonideal, &run.plant.lambda, &run.plant.position_violation,
+          &run.plant.velocity_violation, &run.plant.kinetic_energy, &run.plant.potential_energy,
+          &run.plant.energy, &run.plant.work_nonideal, &run.plant.work_ideal,
+          &run.plant.work_drive, &run.plant.work_external, &run.plant.work_control,
+          &run.plant.energy_balance_residual, &run.error, &run.error_rate, &run.error_bound,
+          &run.Qc_control, &run.Qc_robust, &run.control_power, &run.control_effort,
+          &run.control_work_abs, &run.control_work};
 }
 
 std::vector<CsvColumn> control_csv_columns(const ControlledTrajectory& run) {

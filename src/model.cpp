@@ -39,6 +39,25 @@ ModelError::ModelError(std::string file, int line, int column, std::string messa
 namespace model_reader {
 namespace {
 
+// The columns of a constraint's A: the union of the rows' inputs in [offset, offset + n), less
+// offset, increasing; all n when no row holds any (A is zero: kept dense, as written). O(total
+// inputs · log).
+std::vector<Index> local_columns(const std::vector<std::vector<Index>>& inputs, Index offset,
+                                 Index n) {
+  std::set<Index> union_of;
+  for (const auto& in : inputs) {
+    for (const Index k : in) {
+      if (k >= offset && k < offset + n) union_of.insert(k - offset);
+    }
+  }
+  std::vector<Index> columns(union_of.begin(), union_of.end());
+  if (columns.empty()) {
+    columns.resize(std::size_t(n));
+    for (Index j = 0; j < n; ++j) columns[std::size_t(j)] = j;
+  }
+  return columns;
+}
+
 // The first velocity (in declaration order) that e depends on, or null: the inputs are
 // [q; q'; t; …], so the velocities are the inputs n … 2n − 1 (one traversal of e).
 const std::string* velocity_in(const ExpressionSet& set, Expr e,
@@ -454,6 +473,8 @@ Constraint Reader::read_constraint(const YAML::Node& c, const std::string& name,
   std::vector<Expr> accel, levels;
   ConstraintKind kind;
   Index rows = 0;
+  std::vector<Index> columns;  // of A: all n (dense rows) or fewer (a local model)
+  const Expr zero = set_->constant(0.0);
   if (c["holonomic"]) {
     // A = ∂φ/∂q, b = −D(Dφ); levels [φ; Dφ]
     kind = ConstraintKind::kHolonomic;
@@ -470,12 +491,14 @@ Constraint Reader::read_constraint(const YAML::Node& c, const std::string& name,
       phid.push_back(set_->total_derivative(e, "t", chain_));
       b.push_back(set_->negate(set_->total_derivative(phid.back(), "t", chain_)));
     }
-    // ∂φ/∂q_j is 0 for the q_j that φ does not hold (not differentiated)
-    const Expr zero = set_->constant(0.0);
+    // ∂φ/∂q_j is 0 for the q_j that no row of φ holds: A's columns are those that some row holds
+    std::vector<std::vector<Index>> in_phi;
+    for (const Expr& e : phi) in_phi.push_back(set_->inputs_of(e));
+    columns = local_columns(in_phi, 0, n);
     for (Index r = 0; r < rows; ++r) {
-      const std::vector<Index> in_phi = set_->inputs_of(phi[std::size_t(r)]);
-      for (Index j = 0; j < n; ++j)
-        accel.push_back(std::binary_search(in_phi.begin(), in_phi.end(), j)
+      const auto& in = in_phi[std::size_t(r)];
+      for (const Index j : columns)
+        accel.push_back(std::binary_search(in.begin(), in.end(), j)
                             ? set_->diff(phi[std::size_t(r)], coordinates_[std::size_t(j)])
                             : zero);
     }
@@ -492,12 +515,14 @@ Constraint Reader::read_constraint(const YAML::Node& c, const std::string& name,
       psi.push_back(expression(node, what));
       b.push_back(set_->negate(set_->total_derivative(psi.back(), "t", chain_)));
     }
-    // ∂ψ/∂q̇_j is 0 for the q̇_j that ψ does not hold (not differentiated)
-    const Expr zero = set_->constant(0.0);
+    // ∂ψ/∂q̇_j is 0 for the q̇_j that no row of ψ holds: A's columns are those that some row holds
+    std::vector<std::vector<Index>> in_psi;
+    for (const Expr& e : psi) in_psi.push_back(set_->inputs_of(e));
+    columns = local_columns(in_psi, n, n);
     for (Index r = 0; r < rows; ++r) {
-      const std::vector<Index> in_psi = set_->inputs_of(psi[std::size_t(r)]);
-      for (Index j = 0; j < n; ++j)
-        accel.push_back(std::binary_search(in_psi.begin(), in_psi.end(), n + j)
+      const auto& in = in_psi[std::size_t(r)];
+      for (const Index j : columns)
+        accel.push_back(std::binary_search(in.begin(), in.end(), n + j)
                             ? set_->diff(psi[std::size_t(r)], velocities_[std::size_t(j)])
                             : zero);
     }
@@ -512,18 +537,32 @@ Constraint Reader::read_constraint(const YAML::Node& c, const std::string& name,
     const auto bs = rows_of(b, what + ", b");
     if (Index(bs.size()) != rows)
       fail(b, "b must have one entry per row of A (" + std::to_string(rows) + ")");
+    std::vector<Expr> entries;
     for (const auto& row : A) {
       if (!row.IsSequence() || Index(row.size()) != n)
         fail(row, "each row of A must have " + std::to_string(n) + " entries");
-      for (const auto& e : row) accel.push_back(expression(e, what + ", A"));
+      for (const auto& e : row) entries.push_back(expression(e, what + ", A"));
     }
+    // the columns with an entry that is not a literal 0
+    std::vector<std::vector<Index>> nonzero(1);
+    for (Index j = 0; j < n; ++j) {
+      for (Index r = 0; r < rows; ++r) {
+        if (set_->is_literal_zero(entries[std::size_t(r * n + j)])) continue;
+        nonzero[0].push_back(j);
+        break;
+      }
+    }
+    columns = local_columns(nonzero, 0, n);
+    for (Index r = 0; r < rows; ++r)
+      for (const Index j : columns) accel.push_back(entries[std::size_t(r * n + j)]);
     for (const auto& e : bs) accel.push_back(expression(e, what + ", b"));
   }
   Constraint constraint(
       name, kind, rows,
-      std::make_shared<CompiledConstraint>(kind, rows, n, layout_,
-                                           compile(accel, c, "the derivatives of " + what),
-                                           compile(levels, c, what)));
+      std::make_shared<CompiledConstraint>(
+          kind, rows, n, layout_, compile(accel, c, "the derivatives of " + what),
+          compile(levels, c, what),
+          Index(columns.size()) < n ? columns : std::vector<Index>{}));
   if (const YAML::Node a = c["active"]) {
     if (!a.IsSequence() || a.size() != 2) fail(a, "active must be [t0, t1]");
     const double t0 = number(a[0], "active"), t1 = number(a[1], "active");

@@ -212,8 +212,8 @@ void Reader::read_control(const YAML::Node& root, Model& model) {
     for (const auto& x : a) {
       // (crank.x or crank_x: names_coordinate; the list holds the reader's spelling)
       const auto known = std::find_if(coordinates_.begin(), coordinates_.end(),
-                                      [&](const std::string& c) {
-                                        return names_coordinate(x.Scalar(), c);
+                                      [&](const std::string& coordinate) {
+                                        return names_coordinate(x.Scalar(), coordinate);
                                       });
       if (known == coordinates_.end())
         fail(x, "actuated: '" + x.Scalar() + "' is not a coordinate",

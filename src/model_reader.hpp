@@ -101,30 +101,47 @@ struct CompiledScratch final : ConstraintScratch {
 };
 
 // A constraint from model-file expressions: one program for [A (row-major); b], one for
-// [phi; phi'] (holonomic), [psi] (nonholonomic) or nothing (acceleration form).
+// [phi; phi'] (holonomic), [psi] (nonholonomic) or nothing (acceleration form). With `columns`
+// (the coordinates A can be non-zero in, strictly increasing, fewer than n) the program's A holds
+// those columns only (rows × columns.size()): the model is local, and a large model's sparse
+// engine assembles A in O(rows · columns) instead of O(rows · n) (x2k = x2k+1 over 10⁴
+// coordinates); empty, A is rows × n (dense rows).
 class CompiledConstraint final : public ConstraintModel {
  public:
   CompiledConstraint(ConstraintKind kind, Index rows, Index n, InputLayout layout, Program accel,
-                     Program levels)
+                     Program levels, std::vector<Index> columns = {})
       : kind_(kind),
         rows_(rows),
         n_(n),
         layout_(layout),
         accel_(std::move(accel)),
-        levels_(std::move(levels)) {}
+        levels_(std::move(levels)),
+        columns_(std::move(columns)),
+        width_(columns_.empty() ? n : Index(columns_.size())) {}
 
   std::unique_ptr<ConstraintScratch> make_scratch(Index) const override {
     return std::make_unique<CompiledScratch>(accel_, levels_, layout_.size());
   }
 
+  const std::vector<Index>& columns() const override { return columns_; }
+
   void acceleration_form(const VectorXd& q, const VectorXd& qd, double t, ConstraintScratch* s,
                          Eigen::Ref<MatrixXd> A, Eigen::Ref<VectorXd> b) const override {
-    auto& w = static_cast<CompiledScratch&>(*s);
-    layout_.fill(w.in, q, qd, t);
-    const double* out = w.accel.run(w.in.data());
+    const double* out = evaluate(q, qd, t, s);
+    if (!columns_.empty()) A.setZero();
     for (Index r = 0; r < rows_; ++r) {
-      for (Index j = 0; j < n_; ++j) A(r, j) = out[r * n_ + j];
-      b[r] = out[rows_ * n_ + r];
+      for (Index k = 0; k < width_; ++k) A(r, column(k)) = out[r * width_ + k];
+      b[r] = out[rows_ * width_ + r];
+    }
+  }
+
+  void acceleration_form_local(const VectorXd& q, const VectorXd& qd, double t,
+                               ConstraintScratch* s, Eigen::Ref<MatrixXd> A_local,
+                               Eigen::Ref<VectorXd> b) const override {
+    const double* out = evaluate(q, qd, t, s);
+    for (Index r = 0; r < rows_; ++r) {
+      for (Index k = 0; k < width_; ++k) A_local(r, k) = out[r * width_ + k];
+      b[r] = out[rows_ * width_ + r];
     }
   }
 
@@ -147,10 +164,21 @@ class CompiledConstraint final : public ConstraintModel {
   }
 
  private:
+  // [A (rows × width_, row-major); b] at (q, q', t)
+  const double* evaluate(const VectorXd& q, const VectorXd& qd, double t,
+                         ConstraintScratch* s) const {
+    auto& w = static_cast<CompiledScratch&>(*s);
+    layout_.fill(w.in, q, qd, t);
+    return w.accel.run(w.in.data());
+  }
+  Index column(Index k) const { return columns_.empty() ? k : columns_[std::size_t(k)]; }
+
   ConstraintKind kind_;
   Index rows_, n_;
   InputLayout layout_;
   Program accel_, levels_;
+  std::vector<Index> columns_;
+  Index width_;
 };
 
 // Per-thread buffers of the callables of System (whose signatures carry no scratch): sized on

@@ -51,47 +51,77 @@ void add_model_columns(const Model& model, const Trajectory& traj, std::vector<C
 ModelRun run_model(const Model& model, const SimulationOptions& options,
                    const std::function<void(const ModelRun& chunk)>& chunk,
                    std::size_t chunk_samples) {
-  if (model.controller) {
-    ModelRun run = run_model(model, options);
-    if (run.trajectory.samples() > 0) chunk(run);
-    return run;
-  }
-  // the samples gather in `piece` (its capacity kept), passed on every chunk_samples
+  // the samples gather in `gathered` (plant and control; its capacity kept), passed on as a
+  // ModelRun every chunk_samples; `last` holds the last sample
+  const bool controlled = bool(model.controller);
+  ControlledTrajectory gathered, last;
   ModelRun piece;
-  Trajectory last;  // the last sample
   const std::size_t size = std::max<std::size_t>(chunk_samples, 1);
-  auto pass_on = [&] {
-    if (piece.trajectory.samples() == 0) return;
-    piece.extra_columns.clear();
-    add_model_columns(model, piece.trajectory, piece.extra_columns);
-    chunk(piece);
-    for (auto* f : fields(piece.trajectory)) f->clear();
+  // the columns of the samples in `from`: the control's, the bodies', the output expressions'
+  auto columns_of = [&](const ControlledTrajectory& from) {
+    std::vector<CsvColumn> cols;
+    if (controlled) cols = control_csv_columns(from);
+    add_model_columns(model, from.plant, cols);
+    return cols;
   };
-  SimulationOptions o = options;
-  o.sample_sink = [&](const Trajectory& sample) {
-    if (last.coordinate_names.empty() && piece.trajectory.coordinate_names.empty()) {
-      copy_header(piece.trajectory, sample);
-      copy_header(last, sample);
+  auto pass_on = [&] {
+    if (gathered.samples() == 0) return;
+    piece.extra_columns = columns_of(gathered);
+    std::swap(piece.trajectory, gathered.plant);
+    chunk(piece);
+    std::swap(piece.trajectory, gathered.plant);
+    for (auto* f : sample_fields(gathered)) f->clear();
+  };
+  auto take = [&](const ControlledTrajectory& sample) {
+    if (last.plant.coordinate_names.empty()) {
+      for (ControlledTrajectory* to : {&gathered, &last}) {
+        copy_header(to->plant, sample.plant);
+        to->row_names = sample.row_names;
+        to->robust = sample.robust;
+      }
     }
-    auto to = fields(piece.trajectory), one = fields(last);
-    auto from = fields(const_cast<Trajectory&>(sample));
+    auto to = sample_fields(gathered), one = sample_fields(last);
+    auto from = sample_fields(const_cast<ControlledTrajectory&>(sample));
     for (std::size_t f = 0; f < to.size(); ++f) {
       to[f]->insert(to[f]->end(), from[f]->begin(), from[f]->end());
       *one[f] = *from[f];
     }
-    if (std::size_t(piece.trajectory.samples()) >= size) pass_on();
+    if (std::size_t(gathered.samples()) >= size) pass_on();
   };
-  Trajectory result = simulate(model.system, model.q0, model.qd0, o);
+  ModelRun run;
+  if (controlled) {
+    ControlledTrajectory c = simulate_controlled(*model.controller, model.system, model.q0,
+                                                 model.qd0, options, take);
+    run.trajectory = std::move(c.plant);
+    run.control = std::move(c.control);
+    run.controlled = true;
+  } else {
+    // an uncontrolled sample is a controlled one without the control's values
+    ControlledTrajectory wrapped;
+    SimulationOptions o = options;
+    o.sample_sink = [&](const Trajectory& sample) {
+      if (wrapped.plant.coordinate_names.empty()) copy_header(wrapped.plant, sample);
+      for (auto* f : fields(wrapped.plant)) f->clear();
+      auto to = fields(wrapped.plant), from = fields(const_cast<Trajectory&>(sample));
+      for (std::size_t f = 0; f < to.size(); ++f) *to[f] = *from[f];
+      take(wrapped);
+    };
+    run.trajectory = simulate(model.system, model.q0, model.qd0, o);
+  }
   pass_on();
 
-  // the statistics, the names and the last sample
-  ModelRun run;
-  run.trajectory = std::move(result);
+  // the statistics, the names and the last sample with its columns
   if (last.samples() > 0) {
-    auto to = fields(run.trajectory), from = fields(last);
+    auto to = fields(run.trajectory), from = fields(last.plant);
     for (std::size_t f = 0; f < to.size(); ++f) *to[f] = *from[f];
   }
-  add_model_columns(model, run.trajectory, run.extra_columns);
+  // (the names of the columns also when no sample was recorded: a header-only CSV)
+  last.plant = run.trajectory;
+  if (controlled) {
+    last.row_names = model.controller->row_names();
+    last.robust = model.controller->robust().has_value();
+  }
+  run.extra_columns = columns_of(last);
   return run;
 }
 

@@ -42,8 +42,7 @@ std::vector<Row> planar_joint_rows(const Joint& j, const BodyRef& P, const BodyR
   const VecExpr d = origin_difference(j);
   const VecExpr ex = VecExpr::constant(Vector3d::UnitX()),
                 ey = VecExpr::constant(Vector3d::UnitY());
-  // the parent frame's axes, as body vectors of the parent
-  const VecExpr xP = VecExpr::body_vector(0, j.frame_parent.R.col(0));
+  // the parent frame's y axis, as a body vector of the parent
   const VecExpr yP = VecExpr::body_vector(0, j.frame_parent.R.col(1));
   switch (j.type) {
     case JointType::kRevolute:  // d = 0

@@ -9,16 +9,16 @@ namespace ukdyn {
 void Trajectory::check_consistent(const char* who) const {
   const Trajectory& traj = *this;
   const std::size_t N = traj.t.size();
-  const std::size_t n = std::size_t(traj.n), m = std::size_t(traj.m);
+  const std::size_t nq = std::size_t(traj.n), mr = std::size_t(traj.m);  // (not n, m: members)
   const std::size_t K = traj.constraint_names.size();
   auto fail = [&](const std::string& what) {
     throw std::invalid_argument(std::string(who) + ": inconsistent trajectory: " + what +
                                 " (a Trajectory from ukdyn::simulate() is always consistent)");
   };
   if (traj.n < 0 || traj.m < 0) fail("negative n or m");
-  if (traj.coordinate_names.size() != n) {
+  if (traj.coordinate_names.size() != nq) {
     fail(std::to_string(traj.coordinate_names.size()) + " coordinate names, expected n = " +
-         std::to_string(n));
+         std::to_string(nq));
   }
   if (traj.constraint_rows.size() != K || traj.constraint_kinds.size() != K) {
     fail(std::to_string(K) + " constraint names but " +
@@ -29,7 +29,7 @@ void Trajectory::check_consistent(const char* who) const {
   for (Index r : traj.constraint_rows) rows += r;
   if (rows != traj.m) {
     fail("the constraints have " + std::to_string(rows) + " rows in all, expected m = " +
-         std::to_string(m));
+         std::to_string(mr));
   }
   auto field = [&](const char* name, const std::vector<double>& f, std::size_t width,
                    const char* width_name) {
@@ -39,12 +39,12 @@ void Trajectory::check_consistent(const char* who) const {
            std::to_string(width));
     }
   };
-  field("q", traj.q, n, "n");
-  field("qd", traj.qd, n, "n");
-  field("qdd", traj.qdd, n, "n");
-  field("Qc_ideal", traj.Qc_ideal, n, "n");
-  field("Qc_nonideal", traj.Qc_nonideal, n, "n");
-  field("lambda", traj.lambda, m, "m");
+  field("q", traj.q, nq, "n");
+  field("qd", traj.qd, nq, "n");
+  field("qdd", traj.qdd, nq, "n");
+  field("Qc_ideal", traj.Qc_ideal, nq, "n");
+  field("Qc_nonideal", traj.Qc_nonideal, nq, "n");
+  field("lambda", traj.lambda, mr, "m");
   field("position_violation", traj.position_violation, K, "K");
   field("velocity_violation", traj.velocity_violation, K, "K");
   field("kinetic_energy", traj.kinetic_energy, 1, "1");

@@ -206,6 +206,74 @@ TEST(ModelLoad, ThreeHundredOscillatorsTiedInPairsMoveAsPairs) {
   EXPECT_EQ(r.rank, pairs);
   EXPECT_EQ(r.degrees_of_freedom, n - pairs);
   EXPECT_TRUE(r.redundant.empty());
+  // each constraint is local to its pair: the sparse engine runs it, and the dense engine (an
+  // independent factorization of the whole M and A) agrees
+  for (int c = 0; c < pairs; ++c) {
+    ASSERT_EQ(model.system.constraint(c).model().columns(), (std::vector<Index>{2 * c, 2 * c + 1}));
+  }
+  EXPECT_TRUE(ws.is_sparse());
+  SolverOptions dense;
+  dense.engine = Engine::kDense;
+  Workspace wd(model.system, dense);
+  ASSERT_EQ(forward_dynamics(model.system, wd, q, qd, 0.0), Status::kOk);
+  for (int i = 0; i < n; ++i) ASSERT_NEAR(ws.qdd[i], wd.qdd[i], 1e-12 * (1.0 + std::abs(wd.qdd[i])));
+}
+
+TEST(ModelLoad, LocalConstraintsOfEveryKindWriteTheirColumnsOnly) {
+  // 30 unit masses on springs k_i = 1 + i; three constraints, each over two coordinates:
+  //   holonomic q0 − q1 = 0, nonholonomic q2' − t q3' = 0, acceleration form q4'' − q5'' = 0.1,
+  //   and one over no coordinate written in full (q29 − q29 + t − 1/2, kept dense)
+  const int n = 30;
+  std::string names, T, V, A = "[";
+  for (int i = 0; i < n; ++i) {
+    const std::string q = "q" + std::to_string(i);
+    names += (i ? ", " : "") + q;
+    T += (i ? " + " : "") + q + "_dot^2";
+    V += (i ? " + " : "") + std::to_string(1 + i) + "*" + q + "^2";
+    A += std::string(i ? ", " : "") + (i == 4 ? "1" : i == 5 ? "-1" : "0");
+  }
+  A += "]";
+  const Model model = parse_model(
+      "coordinates: [" + names + "]\nkinetic_energy: 0.5*(" + T + ")\npotential_energy: 0.5*(" +
+          V + ")\nconstraints:\n  - {name: h, holonomic: q0 - q1}\n"
+          "  - {name: nh, nonholonomic: q2_dot - t*q3_dot}\n"
+          "  - {name: acc, A: [" + A + "], b: [0.1]}\n",
+      "local.yaml");
+  EXPECT_EQ(model.system.constraint(0).model().columns(), (std::vector<Index>{0, 1}));
+  EXPECT_EQ(model.system.constraint(1).model().columns(), (std::vector<Index>{2, 3}));
+  EXPECT_EQ(model.system.constraint(2).model().columns(), (std::vector<Index>{4, 5}));
+  // the dense form: rows of A over all n columns, zero outside the pair
+  const Constraint& nh = model.system.constraint(1);
+  auto scratch = nh.model().make_scratch(n);
+  VectorXd q = VectorXd::LinSpaced(n, -1.0, 1.0), qd = VectorXd::LinSpaced(n, 0.5, -0.7);
+  MatrixXd Arow = MatrixXd::Constant(1, n, 7.0);
+  VectorXd b(1);
+  nh.model().acceleration_form(q, qd, 2.0, scratch.get(), Arow, b);
+  MatrixXd expected = MatrixXd::Zero(1, n);
+  expected(0, 2) = 1.0;
+  expected(0, 3) = -2.0;
+  EXPECT_EQ(Arow, expected);
+  EXPECT_DOUBLE_EQ(b[0], qd[3]);  // b = −∂ψ/∂t = q3'
+  // the motion at a consistent state: q0 = q1, q2' = t q3'
+  q[1] = q[0];
+  qd[1] = qd[0];
+  const double t = 2.0;
+  qd[2] = t * qd[3];
+  Workspace ws(model.system);
+  ASSERT_TRUE(ws.is_sparse());
+  ASSERT_EQ(forward_dynamics(model.system, ws, q, qd, t), Status::kOk);
+  // pair 0: one mass 2 on spring 1 + 2; pair 4, 5: q4'' − q5'' = 0.1 with the force split evenly
+  EXPECT_NEAR(ws.qdd[0], -3.0 / 2.0 * q[0], 1e-13);
+  EXPECT_NEAR(ws.qdd[1], ws.qdd[0], 1e-13);
+  const double f4 = -5.0 * q[4], f5 = -6.0 * q[5], lam = (0.1 - (f4 - f5)) / 2.0;
+  EXPECT_NEAR(ws.qdd[4], f4 + lam, 1e-13);
+  EXPECT_NEAR(ws.qdd[5], f5 - lam, 1e-13);
+  // nonholonomic: q2'' − t q3'' = q3', the reaction along (1, −t) for unit masses
+  const double f2 = -3.0 * q[2], f3 = -4.0 * q[3];
+  const double mu = (qd[3] - (f2 - t * f3)) / (1.0 + t * t);
+  EXPECT_NEAR(ws.qdd[2], f2 + mu, 1e-13);
+  EXPECT_NEAR(ws.qdd[3], f3 - t * mu, 1e-13);
+  for (int i = 6; i < n; ++i) EXPECT_NEAR(ws.qdd[i], -(1.0 + i) * q[i], 1e-13);
 }
 
 TEST(ModelLoad, CoupledBlocksOfTheMassMatrixKeepTheirCoupling) {

@@ -31,6 +31,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <ukdyn/control.hpp>
 #include <ukdyn/gallery.hpp>
 #include <ukdyn/io.hpp>
 #include <ukdyn/model.hpp>
@@ -63,6 +64,19 @@ void append(Trajectory& to, const Trajectory& from) {
     auto* d = const_cast<std::vector<double>*>(dst[f]);
     d->insert(d->end(), src[f]->begin(), src[f]->end());
   }
+}
+
+// a sink's sample kept: the names with the first, then the values appended
+void keep(Trajectory& received, const Trajectory& one) {
+  if (received.coordinate_names.empty()) {
+    received.coordinate_names = one.coordinate_names;
+    received.constraint_names = one.constraint_names;
+    received.constraint_rows = one.constraint_rows;
+    received.constraint_kinds = one.constraint_kinds;
+    received.n = one.n;
+    received.m = one.m;
+  }
+  append(received, one);
 }
 
 // bit for bit (NaN equal to NaN)
@@ -104,15 +118,7 @@ TEST_P(SampleSink, ReceivesTheInMemorySamplesBitForBitAndTheRunKeepsNone) {
     ++calls;
     EXPECT_EQ(one.samples(), 1);
     one.check_consistent("sink");
-    if (received.coordinate_names.empty()) {
-      received.coordinate_names = one.coordinate_names;
-      received.constraint_names = one.constraint_names;
-      received.constraint_rows = one.constraint_rows;
-      received.constraint_kinds = one.constraint_kinds;
-      received.n = one.n;
-      received.m = one.m;
-    }
-    append(received, one);
+    keep(received, one);
   };
   const Trajectory streamed = simulate(ex.system, ex.q0, ex.qd0, o);
 
@@ -185,6 +191,150 @@ TEST(SampleSink, AnExceptionFromTheSinkStopsTheRunAndPropagates) {
       },
       std::runtime_error);
   EXPECT_EQ(calls, 50);  // not called again after it threw
+}
+
+// ---- controlled runs: streamed as the plant's and the control's values ------------------------
+
+// every column of a run, by name (the standard ones and the extra ones)
+std::vector<CsvColumn> all_columns(const ModelRun& run) { return run.columns(); }
+
+class ControlledStream : public ::testing::TestWithParam<const char*> {};
+
+TEST_P(ControlledStream, ChunksHoldTheInMemoryColumnsBitForBitAndTheRunKeepsOneSample) {
+  const Model model = load_model(std::string(UKDYN_EXAMPLES_DIR) + "/" + GetParam() + ".yaml");
+  ASSERT_TRUE(model.controller);
+  SimulationOptions o = model.options;
+  o.t_end = std::min(o.t_end, o.t_start + 2.0);
+  o.output_at = {o.t_start + 0.123456};
+  const ModelRun memory = run_model(model, o);
+  ASSERT_TRUE(memory.controlled);
+  const auto expected = all_columns(memory);
+  ASSERT_GT(memory.trajectory.samples(), 20);
+
+  // in chunks of 7 samples: the same columns, in the same order, bit for bit
+  std::vector<CsvColumn> got;
+  long chunks = 0;
+  const ModelRun streamed = run_model(
+      model, o,
+      [&](const ModelRun& chunk) {
+        ++chunks;
+        EXPECT_LE(chunk.trajectory.samples(), 7);
+        chunk.trajectory.check_consistent("chunk");
+        const auto cols = chunk.columns();
+        if (got.empty()) {
+          got = cols;
+          return;
+        }
+        ASSERT_EQ(cols.size(), got.size());
+        for (std::size_t c = 0; c < cols.size(); ++c) {
+          ASSERT_EQ(cols[c].name, got[c].name);
+          ASSERT_EQ(cols[c].values.size(), std::size_t(chunk.trajectory.samples()));
+          got[c].values.insert(got[c].values.end(), cols[c].values.begin(), cols[c].values.end());
+        }
+      },
+      7);
+  EXPECT_EQ(chunks, (memory.trajectory.samples() + 6) / 7);
+  ASSERT_EQ(got.size(), expected.size());
+  for (std::size_t c = 0; c < got.size(); ++c) {
+    EXPECT_EQ(got[c].name, expected[c].name);
+    ASSERT_EQ(got[c].values.size(), expected[c].values.size()) << got[c].name;
+    for (std::size_t i = 0; i < got[c].values.size(); ++i) {
+      ASSERT_TRUE(same_bits(got[c].values[i], expected[c].values[i]))
+          << got[c].name << " sample " << i;
+    }
+  }
+  // the result: the statistics of the whole run, the last sample with its columns
+  EXPECT_TRUE(streamed.controlled);
+  EXPECT_EQ(streamed.trajectory.samples(), 1);
+  EXPECT_EQ(streamed.trajectory.stats.samples, memory.trajectory.samples());
+  EXPECT_EQ(streamed.trajectory.stats.status, memory.trajectory.stats.status);
+  EXPECT_TRUE(same_bits(streamed.trajectory.stats.energy_drift, memory.trajectory.stats.energy_drift));
+  EXPECT_EQ(streamed.control.not_met, memory.control.not_met);
+  const auto last = all_columns(streamed);
+  ASSERT_EQ(last.size(), expected.size());
+  for (std::size_t c = 0; c < last.size(); ++c) {
+    ASSERT_EQ(last[c].values.size(), 1u) << last[c].name;
+    EXPECT_TRUE(same_bits(last[c].values[0], expected[c].values.back())) << last[c].name;
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(Stream, ControlledStream,
+                         ::testing::Values("control_uncertain_duffing", "control_triple_pendulum",
+                                           "control_spacecraft"),
+                         [](const auto& p) { return std::string(p.param); });
+
+TEST(ControlledStream, TheSinkOfTheOptionsReceivesThePlantAndTheRunKeepsNone) {
+  const Model model = load_model(std::string(UKDYN_EXAMPLES_DIR) + "/control_duffing.yaml");
+  SimulationOptions o = model.options;
+  o.t_end = o.t_start + 3.0;
+  const ControlledTrajectory memory =
+      simulate_controlled(*model.controller, model.system, model.q0, model.qd0, o);
+  Trajectory received;
+  o.sample_sink = [&](const Trajectory& one) {
+    EXPECT_EQ(one.samples(), 1);
+    one.check_consistent("sink");
+    keep(received, one);
+  };
+  const ControlledTrajectory streamed =
+      simulate_controlled(*model.controller, model.system, model.q0, model.qd0, o);
+  EXPECT_EQ(streamed.samples(), 0);
+  EXPECT_TRUE(streamed.error.empty());
+  EXPECT_EQ(streamed.plant.stats.samples, memory.samples());
+  expect_same_samples(received, memory.plant);
+  EXPECT_TRUE(same_bits(streamed.plant.stats.energy_balance, memory.plant.stats.energy_balance));
+  // and the control's work is in the balance: the residual stays at the integration's error
+  // (the control does work: without it the residual would be of the size of the work)
+  double work = 0.0, residual = 0.0;
+  for (std::size_t i = 0; i < received.t.size(); ++i) {
+    work = std::max(work, std::abs(received.work_control[i]));
+    residual = std::max(residual, std::abs(received.energy_balance_residual[i]));
+  }
+  EXPECT_GT(work, 0.1);
+  EXPECT_LT(residual, 1e-6 * work);
+}
+
+TEST(ControlledStream, AnInterruptedControlledRunEndsWithTheSampleAtTReached) {
+  const Model model = load_model(std::string(UKDYN_EXAMPLES_DIR) + "/control_duffing.yaml");
+  SimulationOptions o = model.options;
+  o.t_end = 1000.0;
+  long asked = 0;
+  o.should_stop = [&] { return ++asked >= 300; };
+  std::vector<double> times;
+  const ModelRun run = run_model(model, o, [&](const ModelRun& chunk) {
+    times.insert(times.end(), chunk.trajectory.t.begin(), chunk.trajectory.t.end());
+  }, 16);
+  EXPECT_EQ(run.trajectory.stats.status, Status::kInterrupted);
+  ASSERT_GE(times.size(), 2u);
+  EXPECT_EQ(long(times.size()), run.trajectory.stats.samples);
+  EXPECT_DOUBLE_EQ(times.back(), run.trajectory.stats.t_reached);
+  EXPECT_DOUBLE_EQ(run.trajectory.t.at(0), times.back());
+  EXPECT_LT(run.trajectory.stats.t_reached, 1000.0);
+}
+
+TEST(ControlledStream, AGridAboveTheMemoryBoundIsRefusedUnlessStreamed) {
+  const Model model = load_model(std::string(UKDYN_EXAMPLES_DIR) + "/control_duffing.yaml");
+  SimulationOptions o = model.options;
+  o.t_end = 1e6;
+  o.output_every = 1e-2;  // 10⁸ samples: above the bound in memory (about 10⁷), not streamed
+  try {
+    simulate_controlled(*model.controller, model.system, model.q0, model.qd0, o);
+    ADD_FAILURE() << "no refusal";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("controlled run kept in memory"), std::string::npos)
+        << e.what();
+  }
+  // streamed, the same grid starts (stopped at once)
+  o.should_stop = [] { return true; };
+  long calls = 0;
+  const ControlledTrajectory r = simulate_controlled(
+      *model.controller, model.system, model.q0, model.qd0, o,
+      [&](const ControlledTrajectory& one) {
+        ++calls;
+        EXPECT_EQ(one.samples(), 1);
+      });
+  EXPECT_EQ(r.plant.stats.status, Status::kInterrupted);
+  EXPECT_GE(calls, 1);
+  EXPECT_EQ(calls, r.plant.stats.samples);
 }
 
 // the former sample_times(): every time in one vector, sorted, near-duplicates dropped
@@ -361,14 +511,16 @@ std::vector<std::vector<double>> csv_rows(const fs::path& path, std::vector<std:
   return rows;
 }
 
-const std::string kLongModel = std::string(UKDYN_TEST_DATA_DIR) + "/interrupt_pendulum.yaml";
+const std::string kStreamModel = std::string(UKDYN_TEST_DATA_DIR) + "/stream_pendulum.yaml";
 
 TEST(Cli, RunStreamsTheCsvWhileItRunsAndAnInterruptLeavesRowsMatchingTheSummary) {
   const fs::path dir = scratch("interrupt"), out = dir / "out";
-  Command run({"run", kLongModel, "-o", out.string(), "--no-plots"}, dir / "stdout.txt");
-  // the CSV's temporary appears and grows while the run goes (rows written before the end)
+  Command run({"run", kStreamModel, "-o", out.string(), "--no-plots"}, dir / "stdout.txt");
+  // the CSV's temporary appears and grows while the run goes (rows written before the end:
+  // the first chunk of 4096 rows is 1.5 MB, 41 s of the model's time; the deadline only bounds
+  // a broken run, and is far above the sanitizer build's few seconds on a loaded machine)
   std::uintmax_t seen = 0;
-  const auto deadline = Clock::now() + std::chrono::seconds(120);
+  const auto deadline = Clock::now() + std::chrono::seconds(600);
   while (seen < 300000 && Clock::now() < deadline) {
     if (fs::exists(out)) {
       for (const auto& e : fs::directory_iterator(out)) {
@@ -396,12 +548,12 @@ TEST(Cli, RunStreamsTheCsvWhileItRunsAndAnInterruptLeavesRowsMatchingTheSummary)
   EXPECT_DOUBLE_EQ(rows.back()[0], summary["t_reached"].get<double>());
   const std::size_t x = std::size_t(std::find(header.begin(), header.end(), "x") - header.begin());
   EXPECT_DOUBLE_EQ(summary["final_state"]["q"]["x"].get<double>(), rows.back()[x]);
-  // every 0.5 s; the last at the end of the step where the signal was seen (docs/simulation.md)
+  // every 0.01 s; the last at the end of the step where the signal was seen (docs/simulation.md)
   for (std::size_t i = 1; i + 1 < rows.size(); ++i) {
-    ASSERT_NEAR(rows[i][0] - rows[i - 1][0], 0.5, 1e-9) << "row " << i;
+    ASSERT_NEAR(rows[i][0] - rows[i - 1][0], 0.01, 1e-9) << "row " << i;
   }
   EXPECT_GT(rows.back()[0], rows[rows.size() - 2][0]);
-  EXPECT_LE(rows.back()[0] - rows[rows.size() - 2][0], 0.5 + 1e-9);
+  EXPECT_LE(rows.back()[0] - rows[rows.size() - 2][0], 0.01 + 1e-9);
   const std::string out_text = read_text(dir / "stdout.txt");
   EXPECT_NE(out_text.find("  " + std::to_string(rows.size()) + " samples to t = "), std::string::npos)
       << out_text;

@@ -502,9 +502,31 @@ struct ControlledTrajectory {
 /// A controller failure stops the run (plant.stats.status, .message say why); requirements not
 /// met are not a failure (control.not_met counts them).
 /// @throws std::invalid_argument as controlled_system() and simulate().
+/// The samples are kept in the result, bounded as simulate() bounds its own (kMaxStoredValues,
+/// counting the control's values too); with options.sample_sink set, each sample's plant part
+/// goes there instead (the overload below, which also passes the control's values).
+/// Memory: the augmented run's samples are converted one at a time, never stored.
 ControlledTrajectory simulate_controlled(const Controller& ctrl, const System& plant,
                                          const VectorXd& q0, const VectorXd& qd0,
                                          const SimulationOptions& options = {});
+
+/// simulate_controlled streamed: each sample, the plant's and the control's values, goes to
+/// `sample_sink` as a ControlledTrajectory holding that sample only (names filled, stats
+/// empty; valid during the call only), in time order, as it is computed; the result holds
+/// the names and the statistics but no sample (plant.stats.samples counts them; the energy
+/// balance and the violations are certified as the samples go). Memory does not grow with the
+/// run's length, and the grid may have up to kMaxStreamedSamples samples. An exception the
+/// sink throws stops the run and propagates. An empty sink: the samples are kept, as above
+/// (options.sample_sink is ignored by this overload).
+ControlledTrajectory simulate_controlled(
+    const Controller& ctrl, const System& plant, const VectorXd& q0, const VectorXd& qd0,
+    const SimulationOptions& options,
+    const std::function<void(const ControlledTrajectory& sample)>& sample_sink);
+
+/// The per-sample fields of a controlled run in one list — the plant's (t, q, …,
+/// energy_balance_residual), then the control's (error … control_work) — to clear or to
+/// append samples to (run_model's chunks). Cost O(1).
+std::vector<std::vector<double>*> sample_fields(ControlledTrajectory& run);
 
 /// The control's CSV columns, in order: `error.<row>`, `error_bound.<row>` (robust only),
 /// `Qc_control.<coord>`, `Qc_robust.<coord>` (robust only), `control_power`, `control_effort`,

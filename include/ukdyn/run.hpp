@@ -49,10 +49,10 @@ ModelRun run_model(const Model& model, const SimulationOptions& options);
 /// (trajectory.stats, with stats.samples counting every sample), the names, and the last
 /// sample only (trajectory and extra_columns with one value each; none when no sample was
 /// recorded). Memory O(chunk_samples × columns) whatever the run's length, and the grid may
-/// have up to kMaxStreamedSamples samples. A controlled model (a `control:` section) is run
-/// in memory, as simulate_controlled keeps its samples: its chunk is the whole run, and the
-/// returned ModelRun holds every sample. An exception thrown by `chunk` stops the run and
-/// propagates. @throws std::invalid_argument as run_model.
+/// have up to kMaxStreamedSamples samples; a controlled model (a `control:` section) streams
+/// the same way, the control's columns with the plant's (simulate_controlled's streamed
+/// overload). An exception thrown by `chunk` stops the run and propagates.
+/// @throws std::invalid_argument as run_model.
 ModelRun run_model(const Model& model, const SimulationOptions& options,
                    const std::function<void(const ModelRun& chunk)>& chunk,
                    std::size_t chunk_samples = 4096);
