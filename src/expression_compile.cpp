@@ -98,16 +98,34 @@ class Compiler {
     fuse_sin_cos();
     const std::int32_t n_values = std::int32_t(constant_of_.size());
 
-    // physical slots: inputs, then constants, then registers
+    // physical slots: the inputs read (all of them, or those the ops and outputs read), then
+    // constants, then registers
+    std::vector<char> is_read(std::size_t(n_inputs_), 0);
+    const auto mark = [&](std::int32_t v) {
+      if (v >= 0 && v < n_inputs_) is_read[std::size_t(v)] = 1;
+    };
+    for (const Op& op : ops_) {
+      mark(op.a);
+      if (!is_unary(op.code)) mark(op.b);
+    }
+    for (const std::int32_t v : outputs) mark(v);
     std::vector<std::int32_t> slot(std::size_t(n_values), -1);
-    for (std::int32_t i = 0; i < n_inputs_; ++i) slot[std::size_t(i)] = i;
+    std::int32_t slots_read = 0;
+    for (std::int32_t i = 0; i < n_inputs_; ++i) {
+      if (is_read[std::size_t(i)]) {
+        slot[std::size_t(i)] = slots_read++;
+        tape.read.push_back(i);
+      }
+    }
+    if (slots_read == n_inputs_) tape.read.clear();  // every input: copied at once
+    tape.slots_read = slots_read;
     for (std::int32_t v = 0; v < n_values; ++v) {
       if (const auto& c = constant_of_[std::size_t(v)]) {
-        slot[std::size_t(v)] = n_inputs_ + std::int32_t(tape.constants.size());
+        slot[std::size_t(v)] = slots_read + std::int32_t(tape.constants.size());
         tape.constants.push_back(*c);
       }
     }
-    const std::int32_t first_register = n_inputs_ + std::int32_t(tape.constants.size());
+    const std::int32_t first_register = slots_read + std::int32_t(tape.constants.size());
 
     // last reading op of each value (outputs live to the end)
     constexpr std::int32_t kForever = INT32_MAX;
@@ -516,9 +534,13 @@ void Program::evaluate(const double* in, double* out, double* scratch) const {
   if (!tape_) return;
   const Tape& t = *tape_;
   double* const s = scratch;
-  // s = [in | constants | registers]
-  std::copy_n(in, t.inputs, s);
-  std::copy(t.constants.begin(), t.constants.end(), s + t.inputs);
+  // s = [inputs read | constants | registers]
+  if (t.read.empty()) {
+    std::copy_n(in, t.slots_read, s);
+  } else {
+    for (std::size_t i = 0; i < t.read.size(); ++i) s[i] = in[t.read[i]];
+  }
+  std::copy(t.constants.begin(), t.constants.end(), s + t.slots_read);
   for (const Op& op : t.ops) step(op, s);
   const std::size_t n_out = t.output_slots.size();
   for (std::size_t k = 0; k < n_out; ++k) out[k] = s[t.output_slots[k]];

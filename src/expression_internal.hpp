@@ -58,11 +58,16 @@ GiNaC::ex parse_expression(const std::string& text, const std::map<std::string, 
 }  // namespace detail
 
 struct Program::Tape {
-  Index inputs = 0;
-  std::vector<double> constants;           // copied to scratch[inputs …] on each evaluation
+  Index inputs = 0;  // of the set: the length of `in`
+  // the inputs the program reads, increasing: scratch[i] = in[read[i]]; all of them (read
+  // empty) when it reads every input (copied at once). A small program of a model with 10⁴
+  // coordinates (a constraint between two) copies its two inputs, not 2·10⁴ + 1.
+  std::vector<std::int32_t> read;
+  Index slots_read = 0;                    // scratch slots of the inputs: read.size() or inputs
+  std::vector<double> constants;           // copied to scratch[slots_read …] on each evaluation
   std::vector<detail::Op> ops;             // in execution order, on physical slots
   std::vector<std::int32_t> output_slots;  // out[k] = scratch[output_slots[k]]
-  Index scratch = 0;                       // inputs + constants + registers
+  Index scratch = 0;                       // inputs read + constants + registers
 };
 
 struct ExpressionSet::Impl {

@@ -557,11 +557,18 @@ Constraint Reader::read_constraint(const YAML::Node& c, const std::string& name,
       for (const Index j : columns) accel.push_back(entries[std::size_t(r * n + j)]);
     for (const auto& e : bs) accel.push_back(expression(e, what + ", b"));
   }
+  // the inputs the programs read (each evaluation fills those only)
+  std::set<Index> read;
+  for (const auto* list : {&accel, &levels}) {
+    for (const Expr& e : *list) {
+      for (const Index k : set_->inputs_of(e)) read.insert(k);
+    }
+  }
   Constraint constraint(
       name, kind, rows,
       std::make_shared<CompiledConstraint>(
           kind, rows, n, layout_, compile(accel, c, "the derivatives of " + what),
-          compile(levels, c, what),
+          compile(levels, c, what), std::vector<Index>(read.begin(), read.end()),
           Index(columns.size()) < n ? columns : std::vector<Index>{}));
   if (const YAML::Node a = c["active"]) {
     if (!a.IsSequence() || a.size() != 2) fail(a, "active must be [t0, t1]");

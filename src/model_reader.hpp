@@ -92,13 +92,22 @@ struct InputLayout {
   }
 };
 
-// Buffers of one compiled constraint.
+// Buffers of one compiled constraint (its outputs and scratch; the inputs are per thread).
 struct CompiledScratch final : ConstraintScratch {
-  CompiledScratch(const Program& accel_program, const Program& levels_program, Index inputs)
-      : in(std::size_t(inputs), 0.0), accel(accel_program), levels(levels_program) {}
-  std::vector<double> in;
+  CompiledScratch(const Program& accel_program, const Program& levels_program)
+      : accel(accel_program), levels(levels_program) {}
   Evaluator accel, levels;
 };
+
+// The input vector [q; q'; t; …] the compiled constraints of a thread share: each writes the
+// inputs its programs read (and only those are read), so a model of 10⁴ coordinates and 5000
+// local constraints fills O(1) inputs per constraint, and keeps one vector, not 5000. Sized on
+// first use in a thread (the extra inputs stay 0: constraints do not read them).
+inline std::vector<double>& constraint_inputs(Index size) {
+  thread_local std::vector<double> in;
+  if (in.size() < std::size_t(size)) in.resize(std::size_t(size), 0.0);
+  return in;
+}
 
 // A constraint from model-file expressions: one program for [A (row-major); b], one for
 // [phi; phi'] (holonomic), [psi] (nonholonomic) or nothing (acceleration form). With `columns`
@@ -108,19 +117,22 @@ struct CompiledScratch final : ConstraintScratch {
 // coordinates); empty, A is rows × n (dense rows).
 class CompiledConstraint final : public ConstraintModel {
  public:
+  // `inputs`: the inputs (indices into [q; q'; t; …]) that accel and levels read, increasing
   CompiledConstraint(ConstraintKind kind, Index rows, Index n, InputLayout layout, Program accel,
-                     Program levels, std::vector<Index> columns = {})
+                     Program levels, std::vector<Index> inputs, std::vector<Index> columns = {})
       : kind_(kind),
         rows_(rows),
         n_(n),
         layout_(layout),
         accel_(std::move(accel)),
         levels_(std::move(levels)),
+        inputs_(std::move(inputs)),
         columns_(std::move(columns)),
         width_(columns_.empty() ? n : Index(columns_.size())) {}
 
   std::unique_ptr<ConstraintScratch> make_scratch(Index) const override {
-    return std::make_unique<CompiledScratch>(accel_, levels_, layout_.size());
+    constraint_inputs(layout_.size());  // (sized now, never during a run)
+    return std::make_unique<CompiledScratch>(accel_, levels_);
   }
 
   const std::vector<Index>& columns() const override { return columns_; }
@@ -150,9 +162,7 @@ class CompiledConstraint final : public ConstraintModel {
     position.setZero();
     velocity.setZero();
     if (kind_ == ConstraintKind::kAcceleration) return;
-    auto& w = static_cast<CompiledScratch&>(*s);
-    layout_.fill(w.in, q, qd, t);
-    const double* out = w.levels.run(w.in.data());
+    const double* out = static_cast<CompiledScratch&>(*s).levels.run(fill(q, qd, t));
     if (kind_ == ConstraintKind::kHolonomic) {
       for (Index r = 0; r < rows_; ++r) {
         position[r] = out[r];
@@ -164,12 +174,18 @@ class CompiledConstraint final : public ConstraintModel {
   }
 
  private:
+  // the inputs the programs read, in this thread's input vector: O(inputs)
+  const double* fill(const VectorXd& q, const VectorXd& qd, double t) const {
+    std::vector<double>& in = constraint_inputs(layout_.size());
+    for (const Index k : inputs_) {
+      in[std::size_t(k)] = k < n_ ? q[k] : k < 2 * n_ ? qd[k - n_] : k == 2 * n_ ? t : 0.0;
+    }
+    return in.data();
+  }
   // [A (rows × width_, row-major); b] at (q, q', t)
   const double* evaluate(const VectorXd& q, const VectorXd& qd, double t,
                          ConstraintScratch* s) const {
-    auto& w = static_cast<CompiledScratch&>(*s);
-    layout_.fill(w.in, q, qd, t);
-    return w.accel.run(w.in.data());
+    return static_cast<CompiledScratch&>(*s).accel.run(fill(q, qd, t));
   }
   Index column(Index k) const { return columns_.empty() ? k : columns_[std::size_t(k)]; }
 
@@ -177,6 +193,7 @@ class CompiledConstraint final : public ConstraintModel {
   Index rows_, n_;
   InputLayout layout_;
   Program accel_, levels_;
+  std::vector<Index> inputs_;
   std::vector<Index> columns_;
   Index width_;
 };
