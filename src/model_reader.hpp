@@ -92,22 +92,30 @@ struct InputLayout {
   }
 };
 
-// Buffers of one compiled constraint (its outputs and scratch; the inputs are per thread).
-struct CompiledScratch final : ConstraintScratch {
-  CompiledScratch(const Program& accel_program, const Program& levels_program)
-      : accel(accel_program), levels(levels_program) {}
-  Evaluator accel, levels;
-};
-
-// The input vector [q; q'; t; …] the compiled constraints of a thread share: each writes the
-// inputs its programs read (and only those are read), so a model of 10⁴ coordinates and 5000
-// local constraints fills O(1) inputs per constraint, and keeps one vector, not 5000. Sized on
-// first use in a thread (the extra inputs stay 0: constraints do not read them).
+// The input vector [q; q'; t; …] the compiled constraints of a thread share when the model is
+// large: each writes the inputs its programs read (and only those are read), so a model of 10⁴
+// coordinates and 5000 local constraints fills O(1) inputs per constraint and keeps one vector,
+// not 5000. Sized on first use in a thread (the extra inputs stay 0: constraints do not read
+// them).
 inline std::vector<double>& constraint_inputs(Index size) {
   thread_local std::vector<double> in;
   if (in.size() < std::size_t(size)) in.resize(std::size_t(size), 0.0);
   return in;
 }
+
+// Inputs of at most this many values are kept by each constraint's scratch (no thread-local
+// look-up per evaluation); larger ones are shared per thread (constraint_inputs).
+inline constexpr Index kOwnInputsMax = 1024;
+
+// Buffers of one compiled constraint: its outputs and scratch, and its inputs when small.
+struct CompiledScratch final : ConstraintScratch {
+  CompiledScratch(const Program& accel_program, const Program& levels_program, Index inputs)
+      : in(std::size_t(inputs <= kOwnInputsMax ? inputs : 0), 0.0),
+        accel(accel_program),
+        levels(levels_program) {}
+  std::vector<double> in;  // empty: the thread's constraint_inputs
+  Evaluator accel, levels;
+};
 
 // A constraint from model-file expressions: one program for [A (row-major); b], one for
 // [phi; phi'] (holonomic), [psi] (nonholonomic) or nothing (acceleration form). With `columns`
@@ -131,8 +139,8 @@ class CompiledConstraint final : public ConstraintModel {
         width_(columns_.empty() ? n : Index(columns_.size())) {}
 
   std::unique_ptr<ConstraintScratch> make_scratch(Index) const override {
-    constraint_inputs(layout_.size());  // (sized now, never during a run)
-    return std::make_unique<CompiledScratch>(accel_, levels_);
+    if (layout_.size() > kOwnInputsMax) constraint_inputs(layout_.size());  // (sized now)
+    return std::make_unique<CompiledScratch>(accel_, levels_, layout_.size());
   }
 
   const std::vector<Index>& columns() const override { return columns_; }
@@ -140,11 +148,17 @@ class CompiledConstraint final : public ConstraintModel {
   void acceleration_form(const VectorXd& q, const VectorXd& qd, double t, ConstraintScratch* s,
                          Eigen::Ref<MatrixXd> A, Eigen::Ref<VectorXd> b) const override {
     const double* out = evaluate(q, qd, t, s);
-    if (!columns_.empty()) A.setZero();
-    for (Index r = 0; r < rows_; ++r) {
-      for (Index k = 0; k < width_; ++k) A(r, column(k)) = out[r * width_ + k];
-      b[r] = out[rows_ * width_ + r];
+    if (columns_.empty()) {
+      for (Index r = 0; r < rows_; ++r) {
+        for (Index j = 0; j < n_; ++j) A(r, j) = out[r * n_ + j];
+      }
+    } else {
+      A.setZero();
+      for (Index r = 0; r < rows_; ++r) {
+        for (Index k = 0; k < width_; ++k) A(r, columns_[std::size_t(k)]) = out[r * width_ + k];
+      }
     }
+    for (Index r = 0; r < rows_; ++r) b[r] = out[rows_ * width_ + r];
   }
 
   void acceleration_form_local(const VectorXd& q, const VectorXd& qd, double t,
@@ -162,7 +176,8 @@ class CompiledConstraint final : public ConstraintModel {
     position.setZero();
     velocity.setZero();
     if (kind_ == ConstraintKind::kAcceleration) return;
-    const double* out = static_cast<CompiledScratch&>(*s).levels.run(fill(q, qd, t));
+    auto& w = static_cast<CompiledScratch&>(*s);
+    const double* out = w.levels.run(fill(w, q, qd, t));
     if (kind_ == ConstraintKind::kHolonomic) {
       for (Index r = 0; r < rows_; ++r) {
         position[r] = out[r];
@@ -174,9 +189,9 @@ class CompiledConstraint final : public ConstraintModel {
   }
 
  private:
-  // the inputs the programs read, in this thread's input vector: O(inputs)
-  const double* fill(const VectorXd& q, const VectorXd& qd, double t) const {
-    std::vector<double>& in = constraint_inputs(layout_.size());
+  // the inputs the programs read, in the scratch's or this thread's input vector: O(inputs)
+  const double* fill(CompiledScratch& w, const VectorXd& q, const VectorXd& qd, double t) const {
+    std::vector<double>& in = w.in.empty() ? constraint_inputs(layout_.size()) : w.in;
     for (const Index k : inputs_) {
       in[std::size_t(k)] = k < n_ ? q[k] : k < 2 * n_ ? qd[k - n_] : k == 2 * n_ ? t : 0.0;
     }
@@ -185,9 +200,9 @@ class CompiledConstraint final : public ConstraintModel {
   // [A (rows × width_, row-major); b] at (q, q', t)
   const double* evaluate(const VectorXd& q, const VectorXd& qd, double t,
                          ConstraintScratch* s) const {
-    return static_cast<CompiledScratch&>(*s).accel.run(fill(q, qd, t));
+    auto& w = static_cast<CompiledScratch&>(*s);
+    return w.accel.run(fill(w, q, qd, t));
   }
-  Index column(Index k) const { return columns_.empty() ? k : columns_[std::size_t(k)]; }
 
   ConstraintKind kind_;
   Index rows_, n_;

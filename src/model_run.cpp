@@ -72,17 +72,24 @@ ModelRun run_model(const Model& model, const SimulationOptions& options,
     std::swap(piece.trajectory, gathered.plant);
     for (auto* f : sample_fields(gathered)) f->clear();
   };
-  auto take = [&](const ControlledTrajectory& sample) {
+  // a sample: the plant's, and the control's values when `control` is not null
+  auto take = [&](const Trajectory& plant, const ControlledTrajectory* control) {
     if (last.plant.coordinate_names.empty()) {
       for (ControlledTrajectory* to : {&gathered, &last}) {
-        copy_header(to->plant, sample.plant);
-        to->row_names = sample.row_names;
-        to->robust = sample.robust;
+        copy_header(to->plant, plant);
+        if (control) {
+          to->row_names = control->row_names;
+          to->robust = control->robust;
+        }
       }
     }
     auto to = sample_fields(gathered), one = sample_fields(last);
-    auto from = sample_fields(const_cast<ControlledTrajectory&>(sample));
-    for (std::size_t f = 0; f < to.size(); ++f) {
+    auto from = fields(const_cast<Trajectory&>(plant));
+    if (control) {
+      const auto all = sample_fields(const_cast<ControlledTrajectory&>(*control));
+      from.insert(from.end(), all.begin() + std::ptrdiff_t(from.size()), all.end());
+    }
+    for (std::size_t f = 0; f < from.size(); ++f) {
       to[f]->insert(to[f]->end(), from[f]->begin(), from[f]->end());
       *one[f] = *from[f];
     }
@@ -90,22 +97,15 @@ ModelRun run_model(const Model& model, const SimulationOptions& options,
   };
   ModelRun run;
   if (controlled) {
-    ControlledTrajectory c = simulate_controlled(*model.controller, model.system, model.q0,
-                                                 model.qd0, options, take);
+    ControlledTrajectory c =
+        simulate_controlled(*model.controller, model.system, model.q0, model.qd0, options,
+                            [&](const ControlledTrajectory& sample) { take(sample.plant, &sample); });
     run.trajectory = std::move(c.plant);
     run.control = std::move(c.control);
     run.controlled = true;
   } else {
-    // an uncontrolled sample is a controlled one without the control's values
-    ControlledTrajectory wrapped;
     SimulationOptions o = options;
-    o.sample_sink = [&](const Trajectory& sample) {
-      if (wrapped.plant.coordinate_names.empty()) copy_header(wrapped.plant, sample);
-      for (auto* f : fields(wrapped.plant)) f->clear();
-      auto to = fields(wrapped.plant), from = fields(const_cast<Trajectory&>(sample));
-      for (std::size_t f = 0; f < to.size(); ++f) *to[f] = *from[f];
-      take(wrapped);
-    };
+    o.sample_sink = [&](const Trajectory& sample) { take(sample, nullptr); };
     run.trajectory = simulate(model.system, model.q0, model.qd0, o);
   }
   pass_on();
