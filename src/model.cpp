@@ -588,6 +588,8 @@ void Reader::read_constraints(const YAML::Node& root, SystemBuilder& builder) {
   for (const auto& c : cs) {
     if (!c.IsMap()) fail(c, "a constraint must be a mapping with a name and a kind");
     if (!c["name"]) fail(c, "a constraint needs a name", "{name: rod, holonomic: ...}");
+    if (!c["name"].IsScalar() || c["name"].Scalar().empty())
+      fail(c["name"], "a constraint's name must be a non-empty text", "{name: rod, ...}");
     const std::string name = c["name"].Scalar();
     if (!seen.insert(name).second) fail(c["name"], "constraint '" + name + "' is declared twice");
     for (const auto& kv : c) {

@@ -1,9 +1,9 @@
 // Inputs the model-reader fuzzer (fuzz/fuzz_model.cpp) found troublesome, and their relatives
 // found while fixing them: each must give a clear ModelError, not a crash, a hang, a leak or a
-// sanitizer report.
+// sanitizer report. A hang fails by the CTest TIMEOUT of 60 s (tests/CMakeLists.txt), not by a
+// clock in the test.
 #include <gtest/gtest.h>
 
-#include <chrono>
 #include <string>
 
 #include "ukdyn/model.hpp"
@@ -162,7 +162,6 @@ TEST(ModelFuzzRegressions, DeeplyNestedExpression) {
 // gigabytes), including when a power of a power or a numeric factor hides it.
 TEST(ModelFuzzRegressions, PowerTooLargeToComputeExactly) {
   const std::string head = "coordinates: [x]\nmass_matrix: [[1]]\n";
-  const auto start = std::chrono::steady_clock::now();
   for (const std::string f : {"10^1000000000", "(2*x)^1000000000", "(2^1000)^1000",
                               "sqrt(3)^99999999", "(x/7)^-100000"}) {
     const ModelError e = error_of(head + "forces: [" + f + "]\n");
@@ -170,7 +169,6 @@ TEST(ModelFuzzRegressions, PowerTooLargeToComputeExactly) {
     EXPECT_TRUE(contains(e.message(), "the power makes a number too large to compute exactly"))
         << e.what();
   }
-  EXPECT_LT(std::chrono::steady_clock::now() - start, std::chrono::seconds(1));
   // large exponents of symbols, and powers of numbers that fit a double, are fine
   EXPECT_NO_THROW(
       parse_model(head + "forces: [x^1000000000 + 2^1000 - 10^-1000 + 1^1000000000]\n"));
@@ -186,7 +184,6 @@ TEST(ModelFuzzRegressions, PowerTooLargeToComputeExactly) {
 // four-bar's C with lc^2 mutated into lc^2000000…). Exponents a product adds up too.
 TEST(ModelFuzzRegressions, PowerTooLargeWithTheParametersValues) {
   const std::string head = "parameters: {lc: 0.3}\ncoordinates: [x]\nmass_matrix: [[1]]\n";
-  const auto start = std::chrono::steady_clock::now();
   ModelError e = error_of(head + "forces: [x/lc^2" + std::string(91, '0') + "]\n");
   EXPECT_TRUE(contains(e.what(),
                        "f.yaml:4:14: error: in forces: the power makes a number too "
@@ -196,7 +193,6 @@ TEST(ModelFuzzRegressions, PowerTooLargeWithTheParametersValues) {
   e = error_of(head + "forces: [lc^1000 * lc^1000]\n");  // lc^2000
   EXPECT_TRUE(contains(e.what(), "f.yaml:4:18: error: in forces: the power makes a number too"))
       << e.what();
-  EXPECT_LT(std::chrono::steady_clock::now() - start, std::chrono::seconds(1));
   EXPECT_NO_THROW(parse_model(head + "forces: [x^(10^90) + lc^x * lc^(10^90 - x) + lc^1000]\n"));
 }
 
@@ -205,7 +201,6 @@ TEST(ModelFuzzRegressions, PowerTooLargeWithTheParametersValues) {
 // 0.52222222222222221e-400222…, loaded quickly under clang and hung only in the Release build).
 TEST(ModelFuzzRegressions, NumberWithAnExponentBeyondALong) {
   const std::string head = "coordinates: [x]\nmass_matrix: [[1]]\n";
-  const auto start = std::chrono::steady_clock::now();
   for (const std::string n : {"0.52222222222222221e-400222222222222222222222222222222222",
                               "1e-9223372036854775808", "1.5E+99999999999999999999", "1e401"}) {
     const ModelError e = error_of(head + "forces: [" + n + "*x]\n");
@@ -213,7 +208,6 @@ TEST(ModelFuzzRegressions, NumberWithAnExponentBeyondALong) {
         contains(e.what(), "f.yaml:3:10: error: in forces: number '" + n + "' is out of range"))
         << e.what();
   }
-  EXPECT_LT(std::chrono::steady_clock::now() - start, std::chrono::seconds(1));
   EXPECT_NO_THROW(parse_model(head + "forces: [1e400*x - 1e-400 + 0.5E+0]\n"));
 }
 
@@ -265,6 +259,18 @@ TEST(ModelFuzzRegressions, NamesGivenTwice) {
                        "already declared"))
       << e.what();
   EXPECT_FALSE(contains(e.what(), "ukdyn::expr")) << e.what();
+}
+
+// A constraint named by an empty text or a list: the library's Constraint refused the empty name
+// with std::invalid_argument, which escaped the reader (found by CI's fuzzer).
+TEST(ModelFuzzRegressions, ConstraintNameThatIsEmptyOrNotAText) {
+  const std::string head = "coordinates: [x]\nmass_matrix: [[1]]\nconstraints:\n";
+  for (const std::string name : {"\"\"", "[c]", "{a: b}", "~"}) {
+    const ModelError e = error_of(head + "  - {name: " + name + ", holonomic: x}\n");
+    EXPECT_TRUE(contains(e.what(), "f.yaml:4:12: error: a constraint's name must be a non-empty "
+                                   "text"))
+        << e.what();
+  }
 }
 
 }  // namespace
