@@ -50,15 +50,20 @@ std::map<std::string, double> parse_overrides(const std::vector<std::string>& se
 /// file).
 Model load_source(const ModelSource& source);
 
+/// A simulation option given on the command line (options.hpp): its name in the table, the flag
+/// as written (`--rtol`, `--no-stiff-switch`) and its text ("false" for `--no-NAME`).
+struct FlagSetting {
+  std::string name, flag, text;
+};
+
 /// Settings of `ukdyn run`.
 struct RunArguments {
   ModelSource source;
   std::string out_dir;           ///< -o DIR (empty: ukdyn-<model>)
-  std::optional<double> t_end;   ///< --t-end
-  std::optional<std::string> integrator;  ///< --integrator NAME
-  std::optional<double> rtol, atol, step;  ///< --rtol, --atol, --step (validated: > 0)
-  std::optional<long> max_steps;  ///< --max-steps (validated: > 0)
-  bool no_stiff_switch = false;  ///< --no-stiff-switch
+  /// the option flags given, in the table's order: one flag per option of the table (--t-end,
+  /// --integrator, --rtol, --max-steps, --stiff-switch / --no-stiff-switch, …), each replacing
+  /// the model's simulate: setting of that name
+  std::vector<FlagSetting> settings;
   bool plots = true;             ///< false with --no-plots
 };
 

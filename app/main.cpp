@@ -1,6 +1,9 @@
 // ukdyn: the command-line front end. Argument parsing and dispatch only; the subcommands live in
 // run.cpp, check.cpp and source.cpp, the physics in the library.
 #include <cstdio>
+#include <map>
+#include <utility>
+#include <vector>
 #include <exception>
 #include <optional>
 #include <string>
@@ -8,6 +11,7 @@
 #include <CLI/CLI.hpp>
 
 #include <ukdyn/model.hpp>
+#include <ukdyn/options.hpp>
 
 #include "commands.hpp"
 
@@ -57,7 +61,6 @@ int main(int argc, char** argv) {
   app.require_subcommand(1);
 
   RunArguments run;
-  std::optional<double> t_end;
   bool no_plots = false;
   CLI::App* run_cmd = app.add_subcommand(
       "run", "simulate a model; write DIR/trajectory.csv, DIR/summary.json and PNG plots");
@@ -65,32 +68,36 @@ int main(int argc, char** argv) {
   run_cmd->add_option("-o,--output", run.out_dir,
                       "output directory (default: ukdyn-<model name>; created if missing)")
       ->type_name("DIR");
-  run_cmd->add_option("--t-end", t_end, "end time, instead of the model's simulate: t_end")
-      ->type_name("T");
-  run_cmd->add_option("--integrator", run.integrator,
-                      "integration method, instead of the model's simulate: integrator: rk4, "
-                      "rk5, dopri5 (default; switches to bdf by itself when the problem turns "
-                      "stiff), rkf78, bdf")
-      ->type_name("NAME");
-  run_cmd->add_option("--rtol", run.rtol,
-                      "relative tolerance of the adaptive methods (default 1e-9), instead of "
-                      "simulate: rtol")
-      ->type_name("X");
-  run_cmd->add_option("--atol", run.atol,
-                      "absolute tolerance of the adaptive methods (default 1e-11), instead of "
-                      "simulate: atol")
-      ->type_name("X");
-  run_cmd->add_option("--step", run.step,
-                      "rk4, rk5: the step; dopri5, rkf78: the first step tried (default 1e-3), "
-                      "instead of simulate: step")
-      ->type_name("X");
-  run_cmd->add_option("--max-steps", run.max_steps,
-                      "give up after this many accepted steps (default 10000000), instead of "
-                      "simulate: max_steps")
-      ->type_name("N");
-  run_cmd->add_flag("--no-stiff-switch", run.no_stiff_switch,
-                    "dopri5 throughout, even when the problem turns stiff (simulate: "
-                    "stiff_switch: false)");
+  // one flag per simulation option of the table (options.hpp), replacing simulate: NAME; a
+  // boolean option also has --no-NAME
+  std::map<std::string, std::string> texts;
+  std::map<std::string, bool> negated;
+  std::vector<std::pair<const ukdyn::OptionInfo*, CLI::Option*>> flags, no_flags;
+  const ukdyn::SimulationOptions defaults;
+  for (const ukdyn::OptionInfo& info : ukdyn::option_table()) {
+    std::string names = ukdyn::option_flag(info);
+    for (const std::string& alias : info.aliases) {
+      ukdyn::OptionInfo a;
+      a.name = alias;
+      names += "," + ukdyn::option_flag(a);
+    }
+    const char* type = info.type == ukdyn::OptionType::kNumber    ? "X"
+                       : info.type == ukdyn::OptionType::kInteger ? "N"
+                       : info.type == ukdyn::OptionType::kChoice  ? "NAME"
+                       : info.type == ukdyn::OptionType::kBool    ? "BOOL"
+                                                                   : "T1,T2,...";
+    const std::string help = info.doc + ": " + ukdyn::option_rule(info) + " (default " +
+                             ukdyn::option_text(info.get(defaults)) + "), instead of simulate: " +
+                             info.name;
+    flags.emplace_back(&info, run_cmd->add_option(names, texts[info.name], help)->type_name(type));
+    if (info.type == ukdyn::OptionType::kBool) {
+      const std::string no = "--no-" + ukdyn::option_flag(info).substr(2);
+      no_flags.emplace_back(&info, run_cmd->add_flag(no, negated[info.name],
+                                                     "the same as " + ukdyn::option_flag(info) +
+                                                         " false (simulate: " + info.name +
+                                                         ": false)"));
+    }
+  }
   run_cmd->add_flag("--no-plots", no_plots, "write no plots (plots need /usr/bin/python3 "
                     "with matplotlib, or $UKDYN_PYTHON)");
 
@@ -126,7 +133,16 @@ int main(int argc, char** argv) {
 
   try {
     if (run_cmd->parsed()) {
-      run.t_end = t_end;
+      for (const auto& [info, opt] : flags) {
+        if (opt->count() > 0) {
+          run.settings.push_back({info->name, opt->get_name(), texts[info->name]});
+        }
+        for (const auto& [no_info, no_opt] : no_flags) {
+          if (no_info == info && no_opt->count() > 0) {
+            run.settings.push_back({info->name, no_opt->get_name(), "false"});
+          }
+        }
+      }
       run.plots = !no_plots;
       return run_command(run);
     }

@@ -23,6 +23,7 @@
 
 #include <ukdyn/io.hpp>
 #include <ukdyn/model.hpp>
+#include <ukdyn/options.hpp>
 #include <ukdyn/run.hpp>
 #include <ukdyn/simulate.hpp>
 
@@ -115,37 +116,16 @@ std::string default_out_dir(const ModelSource& source) {
   return "ukdyn-" + stem;
 }
 
-// a positive, finite number given to `flag`, or a UsageError naming it
-double positive(const char* flag, double value) {
-  if (!(value > 0.0) || !std::isfinite(value)) {
-    char text[128];
-    std::snprintf(text, sizeof text, "%s %g: must be a positive number", flag, value);
-    throw UsageError(text);
-  }
-  return value;
-}
-
-// --integrator, --rtol, --atol, --step and --no-stiff-switch replace the model's simulate:
-void apply_integration_flags(const RunArguments& args, SimulationOptions& options) {
-  if (args.integrator) {
+// the option flags replace the model's simulate: settings, each through the table's setter
+// (options.hpp): a bad value is a UsageError naming the flag, its text and the rule
+void apply_option_flags(const RunArguments& args, SimulationOptions& options) {
+  for (const FlagSetting& f : args.settings) {
     try {
-      options.integrator = integrator_from_string(*args.integrator);
-    } catch (const std::invalid_argument&) {
-      throw UsageError("--integrator " + *args.integrator +
-                       ": unknown integrator (the integrators are rk4, rk5, dopri5, rkf78, bdf)");
+      set_option_text(options, f.name, f.text);
+    } catch (const OptionError& e) {
+      throw UsageError(f.flag + " " + f.text + ": " + e.what());
     }
   }
-  if (args.rtol) options.rtol = positive("--rtol", *args.rtol);
-  if (args.atol) options.atol = positive("--atol", *args.atol);
-  if (args.step) options.step = positive("--step", *args.step);
-  if (args.max_steps) {
-    if (*args.max_steps <= 0) {
-      throw UsageError("--max-steps " + std::to_string(*args.max_steps) +
-                       ": must be a positive number of steps");
-    }
-    options.max_steps = *args.max_steps;
-  }
-  if (args.no_stiff_switch) options.stiff_switch = false;
 }
 
 // the settings with the command line's flags, as simulate() checks them: the model's own were
@@ -157,21 +137,11 @@ void check_flags(const RunArguments& args, const Model& model, const SimulationO
     std::string message = e.what();
     if (message.rfind("ukdyn::simulate: ", 0) == 0) message.erase(0, 17);
     // the flags given, the one of the setting first
-    char value[64];
     std::string flags;
-    auto add = [&](bool given, const char* flag, const std::string& setting, double v) {
-      if (!given) return;
-      std::snprintf(value, sizeof value, "%s %g", flag, v);
-      flags = setting == e.setting() ? value + (flags.empty() ? "" : ", " + flags)
-                                     : flags + (flags.empty() ? "" : ", ") + value;
-    };
-    add(bool(args.t_end), "--t-end", "t_end", args.t_end.value_or(0.0));
-    add(bool(args.step), "--step", "step", args.step.value_or(0.0));
-    add(bool(args.rtol), "--rtol", "rtol", args.rtol.value_or(0.0));
-    add(bool(args.atol), "--atol", "atol", args.atol.value_or(0.0));
-    add(bool(args.max_steps), "--max-steps", "max_steps", double(args.max_steps.value_or(0)));
-    if (args.integrator) {
-      flags += (flags.empty() ? "--integrator " : ", --integrator ") + *args.integrator;
+    for (const FlagSetting& f : args.settings) {
+      const std::string given = f.flag + " " + f.text;
+      flags = f.name == e.setting() ? given + (flags.empty() ? "" : ", " + flags)
+                                    : flags + (flags.empty() ? "" : ", ") + given;
     }
     throw UsageError((flags.empty() ? std::string() : flags + ": ") + message);
   }
@@ -195,18 +165,20 @@ int run_command(const RunArguments& args) {
 
   // the model's settings, with the command line's
   SimulationOptions options = model.options;
-  if (args.t_end) {
-    if (!(*args.t_end > options.t_start) || !std::isfinite(*args.t_end)) {
+  options.project_initial = model.project_initial;
+  for (const FlagSetting& f : args.settings) {
+    // --t-end: a finite time after the model's t_start (said before the table's rule)
+    double t_end = 0.0;
+    if (f.name == "t_end" && std::sscanf(f.text.c_str(), "%lf", &t_end) == 1 &&
+        (!(t_end > options.t_start) || !std::isfinite(t_end))) {
       char text[96];
       std::snprintf(text, sizeof text,
-                    "--t-end %g must be a finite time after the model's t_start = %g",
-                    *args.t_end, options.t_start);
+                    "--t-end %g must be a finite time after the model's t_start = %g", t_end,
+                    options.t_start);
       throw UsageError(text);
     }
-    options.t_end = *args.t_end;
   }
-  apply_integration_flags(args, options);
-  options.project_initial = model.project_initial;
+  apply_option_flags(args, options);
   check_flags(args, model, options);
   const fs::path dir = args.out_dir.empty() ? default_out_dir(args.source) : args.out_dir;
 
@@ -265,7 +237,7 @@ int run_command(const RunArguments& args) {
           std::string_view(e.what()).find("contradict") == std::string_view::npos &&
           std::string_view(e.what()).find("cannot be satisfied") == std::string_view::npos;
       std::fprintf(stderr, "%s: error: %s%s\n", model.file.c_str(), e.what(),
-                   initial && !model.project_initial
+                   initial && !options.project_initial
                        ? " (hint: add `project: true` under `initial:` in the model file)"
                        : "");
       return kExitModel;

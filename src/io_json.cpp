@@ -11,6 +11,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include "ukdyn/options.hpp"
+
 #include "io_atomic.hpp"
 
 namespace ukdyn {
@@ -82,31 +84,23 @@ void write_summary_json(const Trajectory& traj, const SimulationOptions& options
   }
   j["constraints"] = traj.constraint_names;
 
-  // the options given
+  // the options given: every option of the table (options.hpp), and the per-constraint drift
+  json given = json::object();
+  for (const OptionInfo& info : option_table()) {
+    const OptionValue v = info.get(options);
+    if (const bool* b = std::get_if<bool>(&v)) given[info.name] = *b;
+    else if (const long* l = std::get_if<long>(&v)) given[info.name] = *l;
+    else if (const double* d = std::get_if<double>(&v)) given[info.name] = *d;
+    else if (const std::string* text = std::get_if<std::string>(&v)) given[info.name] = *text;
+    else given[info.name] = std::get<std::vector<double>>(v);
+  }
   json drift_per_constraint = json::object();
   for (const auto& [name, d] : options.drift_per_constraint) {
     drift_per_constraint[name] = {{"method", to_string(d.method)}, {"alpha", d.alpha},
                                   {"beta", d.beta}};
   }
-  j["options"] = {
-      {"integrator", to_string(options.integrator)},
-      {"drift", to_string(options.drift)},
-      {"drift_per_constraint", std::move(drift_per_constraint)},
-      {"baumgarte_alpha", options.baumgarte_alpha},
-      {"baumgarte_beta", options.baumgarte_beta},
-      {"rtol", options.rtol},
-      {"atol", options.atol},
-      {"step", options.step},
-      {"max_step", options.max_step},
-      {"max_steps", options.max_steps},
-      {"stiff_switch", options.stiff_switch},
-      {"energy_balance_tolerance", options.energy_balance_tolerance},
-      {"output_every", options.output_every},
-      {"t_start", options.t_start},
-      {"t_end", options.t_end},
-      {"projection_tolerance", options.projection.tolerance},
-      {"projection_max_iterations", options.projection.max_iterations},
-  };
+  given["drift_per_constraint"] = std::move(drift_per_constraint);
+  j["options"] = std::move(given);
 
   // names are user text: invalid UTF-8 is replaced (U+FFFD) rather than refused
   std::string text = j.dump(2, ' ', false, json::error_handler_t::replace);

@@ -19,6 +19,7 @@
 #include "ukdyn/constraint.hpp"
 #include "ukdyn/forward.hpp"
 #include "ukdyn/nonideal.hpp"
+#include "ukdyn/options.hpp"
 
 #include "model_reader.hpp"
 
@@ -788,54 +789,34 @@ void Reader::read_simulate(const YAML::Node& root, Model& model) {
   const YAML::Node s = root["simulate"];
   if (!s) return;
   if (!s.IsMap()) fail(s, "simulate must be a mapping", "{t_end: 2, integrator: dopri5}");
+  // every key is an option of the table (options.hpp), set by its one validating setter
   for (const auto& kv : s) {
     const std::string key = kv.first.Scalar();
     const YAML::Node v = kv.second;
-    if (key == "t_end")
-      o.t_end = number(v, key);
-    else if (key == "t_start")
-      o.t_start = number(v, key);
-    else if (key == "rtol")
-      o.rtol = number(v, key);
-    else if (key == "atol")
-      o.atol = number(v, key);
-    else if (key == "step")
-      o.step = number(v, key);
-    else if (key == "max_step")
-      o.max_step = number(v, key);
-    else if (key == "max_steps") {
-      // a whole number of steps, at least 1 (counted in a long)
-      const double steps = number(v, key);
-      if (!(steps >= 1.0 && steps <= 1e18 && std::floor(steps) == steps))
-        fail(v, "max_steps must be a whole number of steps from 1 to 1e18, got " + brief(steps),
-             "10000000, the default");
-      o.max_steps = long(steps);
-    }
-    else if (key == "stiff_switch") {
-      if (!v.IsScalar() || (v.Scalar() != "true" && v.Scalar() != "false"))
-        fail(v, "stiff_switch must be true or false");
-      o.stiff_switch = v.Scalar() == "true";
-    }
-    else if (key == "energy_balance_tolerance") {
-      o.energy_balance_tolerance = number(v, key);
-      if (!(o.energy_balance_tolerance > 0.0))
-        fail(v, "energy_balance_tolerance must be > 0", "1e-6, the default");
-    } else if (key == "integrator") {
-      try {
-        o.integrator = integrator_from_string(v.Scalar());
-      } catch (const std::invalid_argument&) {
-        fail(v, "unknown integrator '" + v.Scalar() + "'", "rk4, rk5, dopri5, rkf78 or bdf");
+    const OptionInfo* info = find_option(key);
+    if (!info) fail(kv.first, "unknown key '" + key + "' in simulate", option_names());
+    try {
+      switch (info->type) {
+        case OptionType::kNumber:
+        case OptionType::kInteger:
+          // a number, or an expression of the parameters
+          set_option(o, key, number(v, key));
+          break;
+        case OptionType::kNumbers: {
+          if (!v.IsSequence()) fail(v, key + " must be a list of numbers", "[0.5, 1.5]");
+          std::vector<double> list;
+          for (const auto& x : v) list.push_back(number(x, key));
+          set_option(o, key, list);
+          break;
+        }
+        case OptionType::kBool:
+        case OptionType::kChoice:
+          if (!v.IsScalar()) fail(v, key + " must be " + option_rule(*info));
+          set_option_text(o, key, v.Scalar());
+          break;
       }
-    } else if (key == "drift") {
-      try {
-        o.drift = drift_from_string(v.Scalar());
-      } catch (const std::invalid_argument&) {
-        fail(v, "unknown drift control '" + v.Scalar() + "'", "none, baumgarte or projection");
-      }
-    } else {
-      fail(kv.first, "unknown key '" + key + "' in simulate",
-           "t_start, t_end, integrator, rtol, atol, step, max_step, max_steps, stiff_switch, "
-           "drift, energy_balance_tolerance");
+    } catch (const OptionError& e) {
+      fail(v, e.problem(), e.hint());
     }
   }
   if (!(o.t_end > o.t_start)) fail(s, "t_end must be greater than t_start");
@@ -1003,6 +984,8 @@ Model Reader::read_plant(const YAML::Node& root) {
   read_simulate(root, model);
   check_mass_matrix(root, model);
   read_output(root, model);
+  // initial: project: true, or simulate: project_initial: true
+  model.project_initial = model.project_initial || model.options.project_initial;
   model.options.project_initial = model.project_initial;
   check_settings(root, model);
   return model;

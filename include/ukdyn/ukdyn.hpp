@@ -12,6 +12,7 @@
 #include "ukdyn/model.hpp"
 #include "ukdyn/multibody.hpp"
 #include "ukdyn/nonideal.hpp"
+#include "ukdyn/options.hpp"
 #include "ukdyn/projection.hpp"
 #include "ukdyn/run.hpp"
 #include "ukdyn/simulate.hpp"

@@ -205,9 +205,7 @@ A q'' = b and non-ideal work vector C (the C++ ukdyn::System). Made by a model
             if (py::len(d) > 0) {
               throw std::invalid_argument("System.solver: unknown setting '" +
                                           std::string(py::str(d.begin()->first)) +
-                                          "' (known: rank_threshold, sparse_rank_threshold, "
-                                          "consistency_tolerance, symmetry_tolerance, "
-                                          "compute_residuals, sparse_threshold, engine, algorithm)");
+                                          "' (known: " + solver_option_names() + ")");
             }
             return std::make_unique<Solver>(h, o);
           },

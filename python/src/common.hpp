@@ -46,17 +46,21 @@ MatrixXd read_matrix(py::handle obj, const char* who, const char* what);
 
 // --- settings and reports --------------------------------------------------------------------------
 
-/// Applies keyword settings (t_start, t_end, integrator, step, rtol, atol, max_step, max_steps,
-/// output_every, output_at, breakpoints, drift, baumgarte_alpha, baumgarte_beta,
-/// project_initial, initial_tolerance, and the solver's rank_threshold, consistency_tolerance,
-/// engine, algorithm) to `o`. @throws std::invalid_argument naming an unknown key or a bad value.
+/// Applies keyword settings to `o`: every option of the table (options.hpp, by name or alias),
+/// each through its validating setter; None keeps the value. @throws std::invalid_argument
+/// naming an unknown key (with the known ones) or the option whose value is bad.
 void apply_simulation_options(SimulationOptions& o, const py::dict& settings, const char* who);
-/// Applies solver settings (rank_threshold, sparse_rank_threshold, consistency_tolerance,
-/// symmetry_tolerance, compute_residuals, engine, algorithm, sparse_threshold) to `o`, removing
-/// the keys it used from `settings`.
+/// Applies the solver options of the table (OptionInfo::solver: rank_threshold, engine, …) to
+/// `o`, removing the keys it used from `settings`.
 void apply_solver_options(SolverOptions& o, py::dict& settings);
-/// The settings as a dict (the keys apply_simulation_options understands).
+/// The names of the table's solver options, comma-separated.
+std::string solver_option_names();
+/// The options as a dict: every option of the table by its name (apply_simulation_options
+/// takes it back).
 py::dict simulation_options_dict(const SimulationOptions& o);
+/// The table as a list of dicts (name, type, default, range, choices, aliases, solver, flag,
+/// example, doc).
+py::list options_list();
 /// The statistics of a run as a dict.
 py::dict statistics_dict(const RunStatistics& s);
 

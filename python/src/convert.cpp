@@ -7,6 +7,8 @@
 #include <optional>
 #include <string>
 
+#include <ukdyn/options.hpp>
+
 #include "common.hpp"
 
 namespace ukdyn::python {
@@ -215,103 +217,103 @@ std::string text(py::handle v, const std::string& who, const char* key) {
   return v.cast<std::string>();
 }
 
-Engine engine_from(const std::string& s, const std::string& who) {
-  if (s == "auto") return Engine::kAuto;
-  if (s == "dense") return Engine::kDense;
-  if (s == "sparse") return Engine::kSparse;
-  throw std::invalid_argument(who + ": engine '" + s + "' is not one of auto, dense, sparse");
+// a Python value as the option's type (a type error names the key as given)
+OptionValue option_value(const OptionInfo& info, py::handle v, const std::string& who,
+                         const char* key) {
+  switch (info.type) {
+    case OptionType::kNumber: return number(v, who, key);
+    case OptionType::kInteger: return integer<long>(v, who, key);
+    case OptionType::kBool: return boolean(v, who, key);
+    case OptionType::kChoice: return text(v, who, key);
+    case OptionType::kNumbers: return numbers(v, who, key);
+  }
+  return number(v, who, key);
 }
 
-Algorithm algorithm_from(const std::string& s, const std::string& who) {
-  if (s == "default") return Algorithm::kDefault;
-  if (s == "textbook") return Algorithm::kTextbook;
-  throw std::invalid_argument(who + ": algorithm '" + s + "' is not one of default, textbook");
+// sets the option `key` through the table's setter (options.hpp): a range error names it
+void set_from_python(SimulationOptions& o, const OptionInfo& info, const std::string& key,
+                     py::handle v, const std::string& who) {
+  const OptionValue value = option_value(info, v, who, key.c_str());
+  try {
+    set_option(o, key, value);
+  } catch (const OptionError& e) {
+    throw std::invalid_argument(who + ": " + e.what());
+  }
+}
+
+py::object to_python(const OptionValue& v) {
+  if (const bool* b = std::get_if<bool>(&v)) return py::bool_(*b);
+  if (const long* l = std::get_if<long>(&v)) return py::int_(*l);
+  if (const double* d = std::get_if<double>(&v)) return py::float_(*d);
+  if (const std::string* t = std::get_if<std::string>(&v)) return py::str(*t);
+  return py::cast(std::get<std::vector<double>>(v));
 }
 
 }  // namespace
 
+std::string solver_option_names() {
+  std::string out;
+  for (const OptionInfo& info : option_table()) {
+    if (info.solver) out += (out.empty() ? "" : ", ") + info.name;
+  }
+  return out;
+}
+
 void apply_solver_options(SolverOptions& o, py::dict& settings) {
   const std::string who = "solver options";
+  SimulationOptions with;
+  with.solver = o;
   py::list used;
   for (auto [k, v] : settings) {
     const std::string key = py::str(k);
-    if (v.is_none()) continue;  // None: keep the default (as simulate's settings)
-    if (key == "rank_threshold") o.rank_threshold = number(v, who, "rank_threshold");
-    else if (key == "sparse_rank_threshold") o.sparse_rank_threshold = number(v, who, "sparse_rank_threshold");
-    else if (key == "consistency_tolerance") o.consistency_tolerance = number(v, who, "consistency_tolerance");
-    else if (key == "symmetry_tolerance") o.symmetry_tolerance = number(v, who, "symmetry_tolerance");
-    else if (key == "compute_residuals") o.compute_residuals = boolean(v, who, "compute_residuals");
-    else if (key == "sparse_threshold") o.sparse_threshold = integer<Index>(v, who, "sparse_threshold");
-    else if (key == "engine") o.engine = engine_from(text(v, who, "engine"), who);
-    else if (key == "algorithm") o.algorithm = algorithm_from(text(v, who, "algorithm"), who);
-    else continue;
+    const OptionInfo* info = find_option(key);
+    if (!info || !info->solver) continue;
+    if (!v.is_none()) set_from_python(with, *info, key, v, who);  // None: keep the default
     used.append(k);
   }
+  o = with.solver;
   for (py::handle k : used) PyDict_DelItem(settings.ptr(), k.ptr());
 }
 
 void apply_simulation_options(SimulationOptions& o, const py::dict& given, const char* who_c) {
   const std::string who = who_c;
-  py::dict settings = given.attr("copy")();
-  apply_solver_options(o.solver, settings);
-  for (auto [k, v] : settings) {
+  for (auto [k, v] : given) {
     const std::string key = py::str(k);
-    if (v.is_none()) continue;  // None: keep the model's value
-    if (key == "t_start") o.t_start = number(v, who, "t_start");
-    else if (key == "t_end") o.t_end = number(v, who, "t_end");
-    else if (key == "integrator") o.integrator = integrator_from_string(text(v, who, "integrator"));
-    else if (key == "step") o.step = number(v, who, "step");
-    else if (key == "rtol") o.rtol = number(v, who, "rtol");
-    else if (key == "atol") o.atol = number(v, who, "atol");
-    else if (key == "max_step") o.max_step = number(v, who, "max_step");
-    else if (key == "max_steps") o.max_steps = integer<long>(v, who, "max_steps");
-    else if (key == "stiff_switch") o.stiff_switch = boolean(v, who, "stiff_switch");
-    else if (key == "output_every") o.output_every = number(v, who, "output_every");
-    else if (key == "output_at") o.output_at = numbers(v, who, "output_at");
-    else if (key == "breakpoints") o.breakpoints = numbers(v, who, "breakpoints");
-    else if (key == "drift") o.drift = drift_from_string(text(v, who, "drift"));
-    else if (key == "baumgarte_alpha") o.baumgarte_alpha = number(v, who, "baumgarte_alpha");
-    else if (key == "baumgarte_beta") o.baumgarte_beta = number(v, who, "baumgarte_beta");
-    else if (key == "project_initial") o.project_initial = boolean(v, who, "project_initial");
-    else if (key == "initial_tolerance") o.initial_tolerance = number(v, who, "initial_tolerance");
-    else if (key == "projection_tolerance") o.projection.tolerance = number(v, who, "projection_tolerance");
-    else if (key == "projection_iterations") o.projection.max_iterations = integer<int>(v, who, "projection_iterations");
-    else if (key == "energy_balance_tolerance")
-      o.energy_balance_tolerance = number(v, who, "energy_balance_tolerance");
-    else {
-      throw std::invalid_argument(
-          who + ": unknown setting '" + key +
-          "' (known: t_start, t_end, integrator, step, rtol, atol, max_step, max_steps, "
-          "stiff_switch, "
-          "output_every, output_at, breakpoints, drift, baumgarte_alpha, baumgarte_beta, "
-          "project_initial, initial_tolerance, projection_tolerance, projection_iterations, "
-          "energy_balance_tolerance, rank_threshold, sparse_rank_threshold, consistency_tolerance, symmetry_tolerance, "
-          "compute_residuals, sparse_threshold, engine, algorithm)");
+    const OptionInfo* info = find_option(key);
+    if (!info) {
+      throw std::invalid_argument(who + ": unknown setting '" + key + "' (known: " +
+                                  option_names() + ")");
     }
+    if (v.is_none()) continue;  // None: keep the model's value
+    set_from_python(o, *info, key, v, who);
   }
 }
 
 py::dict simulation_options_dict(const SimulationOptions& o) {
   py::dict d;
-  d["t_start"] = o.t_start;
-  d["t_end"] = o.t_end;
-  d["integrator"] = to_string(o.integrator);
-  d["step"] = o.step;
-  d["rtol"] = o.rtol;
-  d["atol"] = o.atol;
-  d["max_step"] = o.max_step;
-  d["max_steps"] = o.max_steps;
-  d["stiff_switch"] = o.stiff_switch;
-  d["output_every"] = o.output_every;
-  d["output_at"] = o.output_at;
-  d["breakpoints"] = o.breakpoints;
-  d["drift"] = to_string(o.drift);
-  d["baumgarte_alpha"] = o.baumgarte_alpha;
-  d["baumgarte_beta"] = o.baumgarte_beta;
-  d["project_initial"] = o.project_initial;
-  d["initial_tolerance"] = o.initial_tolerance;
-  d["energy_balance_tolerance"] = o.energy_balance_tolerance;
+  for (const OptionInfo& info : option_table()) d[py::str(info.name)] = to_python(info.get(o));
   return d;
+}
+
+py::list options_list() {
+  py::list out;
+  const SimulationOptions defaults;
+  for (const OptionInfo& info : option_table()) {
+    static const char* const kTypes[] = {"number", "integer", "bool", "choice", "numbers"};
+    py::dict d;
+    d["name"] = info.name;
+    d["type"] = kTypes[int(info.type)];
+    d["default"] = to_python(info.get(defaults));
+    d["range"] = option_rule(info);
+    d["choices"] = info.choices;
+    d["aliases"] = info.aliases;
+    d["solver"] = info.solver;
+    d["flag"] = option_flag(info);
+    d["example"] = info.example;
+    d["doc"] = info.doc;
+    out.append(d);
+  }
+  return out;
 }
 
 py::dict statistics_dict(const RunStatistics& s) {

@@ -39,4 +39,17 @@ PYBIND11_MODULE(_ukdyn, m) {
   up::bind_solver(m);
   up::bind_control(m);
   up::bind_callables(m);
+  // the options table (options.hpp): what every simulate() accepts
+  m.def("_options", &up::options_list,
+        "The simulation options table: a list of dicts (name, type, default, range, choices, "
+        "aliases, solver, flag, example, doc).");
+  m.def(
+      "_simulation_options",
+      [](const pybind11::dict& settings) {
+        ukdyn::SimulationOptions o;
+        up::apply_simulation_options(o, settings, "simulation_options");
+        return up::simulation_options_dict(o);
+      },
+      pybind11::arg("settings"),
+      "The default options with `settings` applied through the table's setter, as a dict.");
 }

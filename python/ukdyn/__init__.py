@@ -38,8 +38,8 @@ __all__ = [
     "ControlSolution", "ControlSolver", "Controller", "EnergyBalanceWarning", "Interrupted",
     "Model", "ModelError", "Result",
     "Solution", "SolveError", "Solver", "System", "constraint", "controller", "coulomb",
-    "example_text", "examples", "from_callables", "from_sympy", "load", "nonideal", "parse",
-    "simulate", "sympy_to_yaml", "velocities", "viscous",
+    "example_text", "examples", "from_callables", "from_sympy", "load", "nonideal", "options",
+    "parse", "simulate", "simulation_options", "sympy_to_yaml", "velocities", "viscous",
 ]
 
 
@@ -87,13 +87,9 @@ def _model_simulate(self: Model, *, t_end: Optional[float] = None, q0: Any = Non
     """Simulates the model exactly as ``ukdyn run`` does (run_model, run.hpp) → :class:`Result`.
 
     Without arguments the model's own ``simulate:`` and ``output:`` settings apply; keyword
-    settings replace them: t_start, t_end, integrator ('rk4', 'dopri5', 'rkf78', 'bdf'), step,
-    rtol, atol, max_step, max_steps, stiff_switch (dopri5 goes on with BDF once the problem
-    turns stiff; default True), output_every, output_at, breakpoints, drift ('projection',
-    'baumgarte', 'none'), baumgarte_alpha, baumgarte_beta, project_initial, initial_tolerance,
-    projection_tolerance, projection_iterations, and the solver's rank_threshold,
-    consistency_tolerance, engine, algorithm (simulate.hpp, SimulationOptions). ``q0``/``qd0``
-    replace the initial state. A model with a ``control:`` section runs under its controller.
+    settings replace them: every option of :func:`ukdyn.options` (the table of options.hpp,
+    listed below; the same as the model file's ``simulate:`` keys and ``ukdyn run``'s flags).
+    ``q0``/``qd0`` replace the initial state. A model with a ``control:`` section runs under its controller.
     The GIL is released during the run.
 
     Raises ValueError for a bad setting or an inconsistent initial state (unless
@@ -122,6 +118,32 @@ def _model_solve(self: Model, q: Any, q_dot: Any, t: float = 0.0, check: bool = 
     """
     return self.solver().solve(q, q_dot, t, check)
 
+
+def options() -> list:
+    """The simulation options table (include/ukdyn/options.hpp): one dict per option with its
+    ``name``, ``type`` ('number', 'integer', 'bool', 'choice', 'numbers'), ``default``,
+    ``range`` (in words), ``choices``, ``aliases`` (older spellings, also accepted), ``solver``
+    (a solver setting, also taken by :meth:`System.solver`), ``flag`` (``ukdyn run``'s) and
+    ``doc``. Every ``simulate`` takes exactly these names as keyword settings."""
+    return _ukdyn._options()
+
+
+def simulation_options(**settings: Any) -> dict:
+    """The default simulation options with ``settings`` applied, as a dict by option name:
+    each setting checked exactly as ``simulate`` checks it (ValueError naming the option)."""
+    return _ukdyn._simulation_options(settings)
+
+
+def _options_doc() -> str:
+    lines = ["", "    Settings (the options table; defaults in brackets):", ""]
+    for o in _ukdyn._options():
+        alias = f" (also {', '.join(o['aliases'])})" if o["aliases"] else ""
+        lines.append(f"    - ``{o['name']}``{alias} [{o['default']!r}]: {o['doc']}; "
+                     f"{o['range']}")
+    return "\n".join(lines) + "\n"
+
+
+_model_simulate.__doc__ = (_model_simulate.__doc__ or "") + _options_doc()
 
 Model.simulate = _model_simulate  # type: ignore[attr-defined]
 Model.solve = _model_solve  # type: ignore[attr-defined]
