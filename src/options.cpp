@@ -142,9 +142,12 @@ std::vector<OptionInfo> make_table() {
   t.push_back(with(number("output_every", 0.0, false, kInf, true, "0.05",
                           "sample spacing (0: only t_start and t_end)"),
                    UKDYN_FIELD(output_every, double)));
-  t.push_back(with(numbers("output_at", "0.25,0.75",
-                           "further sample times, inside [t_start, t_end]"),
-                   UKDYN_FIELD(output_at, std::vector<double>)));
+  {
+    // (each time inside [t_start, t_end]: check_settings says so, naming the run's interval)
+    OptionInfo i = numbers("output_at", "0.25,0.75", "further sample times, inside [t_start, t_end]");
+    i.allow_infinite = true;
+    t.push_back(with(std::move(i), UKDYN_FIELD(output_at, std::vector<double>)));
+  }
   t.push_back(with(numbers("breakpoints", "0.5",
                            "times where the dynamics jumps (the integrators stop there)"),
                    UKDYN_FIELD(breakpoints, std::vector<double>)));
@@ -314,7 +317,7 @@ OptionValue checked(const OptionInfo& i, std::string_view given, const OptionVal
         return wrong_type();
       }
       for (double v : *list) {
-        if (!std::isfinite(v)) refuse(i, given, number_text(v));
+        if (!i.allow_infinite && !std::isfinite(v)) refuse(i, given, number_text(v));
       }
       return value;
     }
@@ -368,6 +371,10 @@ std::string option_names() {
 void set_option(SimulationOptions& o, std::string_view name, const OptionValue& value) {
   const OptionInfo& i = row(name);
   i.put(o, checked(i, name, value));
+}
+
+void check_options(const SimulationOptions& o) {
+  for (const OptionInfo& i : option_table()) checked(i, i.name, i.get(o));
 }
 
 void set_option_text(SimulationOptions& o, std::string_view name, std::string_view text) {
@@ -429,7 +436,7 @@ std::string option_rule(const OptionInfo& i) {
   switch (i.type) {
     case OptionType::kBool: return "true or false";
     case OptionType::kChoice: return join_or(i.choices);
-    case OptionType::kNumbers: return "a list of finite numbers";
+    case OptionType::kNumbers: return i.allow_infinite ? "a list of numbers" : "a list of finite numbers";
     case OptionType::kInteger:
       return "a whole number from " + number_text(i.min) + " to " + number_text(i.max);
     case OptionType::kNumber: break;

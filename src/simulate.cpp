@@ -3,6 +3,8 @@
 // applies drift control after every accepted step, and records samples.
 #include "ukdyn/simulate.hpp"
 
+#include "ukdyn/options.hpp"
+
 #include <Eigen/QR>
 
 #include <algorithm>
@@ -858,6 +860,12 @@ void check_settings(const System& sys, const SimulationOptions& o) {
   if (!(o.projection.tolerance > 0.0) || !finite(o.projection.tolerance)) {
     fail("projection_tolerance",
          "(projection.tolerance) must be a finite number > 0, got " + format(o.projection.tolerance));
+  }
+  // every option within the range of the options table (options.hpp): the ones not checked above
+  try {
+    check_options(o);
+  } catch (const OptionError& e) {
+    throw SettingError(e.setting(), "ukdyn::simulate: " + e.problem());
   }
   // the fixed-step methods: a step that t resolves, and at most max_steps of them
   if (o.integrator == Integrator::kRK4 || o.integrator == Integrator::kRK5) {

@@ -170,7 +170,15 @@ TEST(OptionsTable, OutOfRangeIsRefusedNamingTheOption) {
     SimulationOptions o;
     try {
       set_option_text(o, info.name, bad);
-      ADD_FAILURE() << "accepted";
+      // output_at's times are checked against the run's interval by check_settings
+      ASSERT_TRUE(info.type == OptionType::kNumbers && info.allow_infinite) << "accepted";
+      try {
+        check_settings(parse_model(kModel).system, o);
+        ADD_FAILURE() << "check_settings accepted it";
+      } catch (const SettingError& e) {
+        EXPECT_EQ(e.setting(), info.name);
+        EXPECT_TRUE(contains(e.what(), info.name)) << e.what();
+      }
     } catch (const OptionError& e) {
       EXPECT_EQ(e.setting(), info.name);
       const std::string named = info.type == OptionType::kChoice ? info.noun : info.name;

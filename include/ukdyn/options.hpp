@@ -28,7 +28,7 @@ enum class OptionType {
   kInteger,  ///< a whole number in [min, max] (given as an integer or a whole double)
   kBool,     ///< true or false
   kChoice,   ///< one of OptionInfo::choices
-  kNumbers,  ///< a list of numbers, each finite
+  kNumbers,  ///< a list of numbers (each finite unless OptionInfo::allow_infinite)
 };
 
 /// An option's value: bool (kBool), long (kInteger), double (kNumber), text (kChoice), or a list
@@ -44,7 +44,9 @@ struct OptionInfo {
   /// bound
   double min = -HUGE_VAL, max = HUGE_VAL;
   bool min_open = false, max_open = false;  ///< strict bound (> min, < max)
-  bool allow_infinite = false;       ///< kNumber: ±inf accepted when inside the bounds
+  /// kNumber: ±inf accepted when inside the bounds; kNumbers: entries not checked here (output_at:
+  /// check_settings refuses a time outside the run, naming the run's interval)
+  bool allow_infinite = false;
   std::vector<std::string> choices;  ///< kChoice: the accepted names
   std::string noun;                  ///< kChoice: what a choice is ("integrator", "drift control")
   std::vector<std::string> aliases;  ///< older spellings, accepted on input everywhere
@@ -89,6 +91,11 @@ std::string option_names();
 /// Relations between options (t_end after t_start, output_at inside the run, an rk4 step count
 /// within max_steps) are check_settings()'s. Cost O(1) (O(entries) for lists).
 void set_option(SimulationOptions& o, std::string_view name, const OptionValue& value);
+
+/// Checks every option's value in o against the table's rules, as set_option would (check_settings
+/// calls it, so a SimulationOptions filled field by field in C++ is held to the same ranges).
+/// @throws OptionError for the first option out of its range. Cost O(options + list entries).
+void check_options(const SimulationOptions& o);
 
 /// set_option() from text as a person types it: a number ("1e-9", "inf"), a whole number, true
 /// or false, a choice's name, or comma-separated numbers ("0.5,1.5"; "" the empty list).
