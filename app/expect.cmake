@@ -1,7 +1,7 @@
 cmake_minimum_required(VERSION 3.25)
 # Test driver: runs the command after `--` and checks its exit code and output.
 #   cmake -DEXPECT_CODE=N -DEXPECT_REGEX=RE [-DEXPECT_NO_REGEX=RE] [-DCSV=file -DCSV_HEADER=RE]
-#         -P expect.cmake -- CMD ARGS...
+#         [-DJSON=file -DJSON_REGEX=RE] -P expect.cmake -- CMD ARGS...
 # CTest's PASS_REGULAR_EXPRESSION ignores the exit code; this checks both.
 set(cmd)
 set(seen_separator FALSE)
@@ -39,5 +39,12 @@ if(DEFINED CSV)
   file(STRINGS "${CSV}" header LIMIT_COUNT 1)
   if(NOT "${header}" MATCHES "${CSV_HEADER}")
     message(FATAL_ERROR "the header of ${CSV} does not match '${CSV_HEADER}': ${header}")
+  endif()
+endif()
+# -DJSON=file -DJSON_REGEX=RE: the file written (summary.json) must match RE
+if(DEFINED JSON)
+  file(READ "${JSON}" json_text)
+  if(NOT "${json_text}" MATCHES "${JSON_REGEX}")
+    message(FATAL_ERROR "${JSON} does not match '${JSON_REGEX}'")
   endif()
 endif()

@@ -820,6 +820,25 @@ void Reader::read_simulate(const YAML::Node& root, Model& model) {
     }
   }
   if (!(o.t_end > o.t_start)) fail(s, "t_end must be greater than t_start");
+  // solver options that this system cannot use (engine: sparse with a dense M, …) are refused
+  // here, at their key, as the workspace a run makes would refuse them
+  std::vector<YAML::Node> solver_keys;
+  for (const auto& kv : s) {
+    if (find_option(kv.first.Scalar())->solver) solver_keys.push_back(kv.first);
+  }
+  if (!solver_keys.empty()) {
+    try {
+      Workspace ws(model.system, o.solver);
+    } catch (const std::invalid_argument& e) {
+      std::string message = e.what();
+      if (const auto k = message.find(": "); k != std::string::npos) message.erase(0, k + 2);
+      YAML::Node at = solver_keys.front();
+      for (const YAML::Node& key : solver_keys) {
+        if (message.find(key.Scalar()) != std::string::npos) at = key;
+      }
+      fail(at, message);
+    }
+  }
 }
 
 // M(q0, t_start) must be symmetric positive semi-definite, and where it is singular the

@@ -12,6 +12,8 @@ namespace ukdyn {
 namespace {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
+// 2^63: an integer option bounded by it takes every long (the bound itself excluded)
+constexpr double kLongEnd = 9223372036854775808.0;
 
 // shortest round-trip text of a number ("1e-09", "0.5", "inf")
 std::string number_text(double v) {
@@ -57,7 +59,8 @@ OptionInfo number(std::string name, double min, bool min_open, double max, bool 
 
 OptionInfo integer(std::string name, double min, double max, std::string example,
                    std::string doc) {
-  OptionInfo i = number(std::move(name), min, false, max, false, std::move(example), std::move(doc));
+  OptionInfo i = number(std::move(name), min, false, max, max == kLongEnd, std::move(example),
+                        std::move(doc));
   i.type = OptionType::kInteger;
   return i;
 }
@@ -132,7 +135,7 @@ std::vector<OptionInfo> make_table() {
     i.allow_infinite = true;
     t.push_back(with(std::move(i), UKDYN_FIELD(max_step, double)));
   }
-  t.push_back(with(integer("max_steps", 1.0, 1e18, "123456",
+  t.push_back(with(integer("max_steps", 1.0, kLongEnd, "123456",
                            "accepted steps a run may take, with every method"),
                    UKDYN_FIELD(max_steps, long)));
   t.push_back(with(boolean("stiff_switch",
@@ -214,7 +217,7 @@ std::vector<OptionInfo> make_table() {
         o.solver.algorithm = std::get<std::string>(v) == "textbook" ? Algorithm::kTextbook
                                                                     : Algorithm::kDefault;
       }));
-  t.push_back(with(solver(integer("sparse_threshold", 0.0, 1e18, "8",
+  t.push_back(with(solver(integer("sparse_threshold", 0.0, kLongEnd, "8",
                                   "engine auto: the sparse engine from this many coordinates on")),
                    UKDYN_FIELD(solver.sparse_threshold, long)));
   t.push_back(with(solver(number("rank_threshold", 0.0, true, 1.0, true, "1e-09",
@@ -291,7 +294,11 @@ OptionValue checked(const OptionInfo& i, std::string_view given, const OptionVal
     }
     case OptionType::kInteger: {
       if (const long* l = std::get_if<long>(&value)) {
-        if (!in_range(i, double(*l))) refuse(i, given, std::to_string(*l));
+        // (every long is below 2^63, though double(LONG_MAX) rounds to it)
+        const double x = double(*l);
+        const bool above = i.min_open ? x > i.min : x >= i.min;
+        const bool below = i.max >= kLongEnd || (i.max_open ? x < i.max : x <= i.max);
+        if (!above || !below) refuse(i, given, std::to_string(*l));
         return *l;
       }
       const double* d = std::get_if<double>(&value);
@@ -438,7 +445,9 @@ std::string option_rule(const OptionInfo& i) {
     case OptionType::kChoice: return join_or(i.choices);
     case OptionType::kNumbers: return i.allow_infinite ? "a list of numbers" : "a list of finite numbers";
     case OptionType::kInteger:
-      return "a whole number from " + number_text(i.min) + " to " + number_text(i.max);
+      return i.max >= kLongEnd ? "a whole number >= " + number_text(i.min)
+                               : "a whole number from " + number_text(i.min) + " to " +
+                                     number_text(i.max);
     case OptionType::kNumber: break;
   }
   const bool low = std::isfinite(i.min), high = std::isfinite(i.max);

@@ -10,6 +10,7 @@
 #include <filesystem>
 #include <cstdint>
 #include <fstream>
+#include <limits>
 #include <set>
 #include <sstream>
 #include <string>
@@ -129,6 +130,21 @@ TEST(OptionsTable, ModelFileNamesTheOptionsOfAnUnknownKey) {
   }
 }
 
+TEST(OptionsTable, ModelFileRefusesSolverOptionsTheSystemCannotUse) {
+  // the sparse engine needs a block-diagonal M: refused at the key, not when the run starts
+  try {
+    parse_model("coordinates: [x, y]\nmass_matrix: [[2, 1], [1, 2]]\nforces: [0, 0]\n"
+                "simulate: {t_end: 2, engine: sparse}\n",
+                "m.yaml");
+    FAIL() << "accepted";
+  } catch (const ModelError& e) {
+    EXPECT_EQ(e.line(), 4);
+    EXPECT_EQ(e.column(), 22);
+    EXPECT_TRUE(contains(e.message(), "Engine::kSparse needs a block-diagonal mass matrix"))
+        << e.what();
+  }
+}
+
 TEST(OptionsTable, JsonSummaryEchoesEveryOption) {
   // every option at its example value at once (t_end first: output_at must lie inside)
   SimulationOptions o;
@@ -213,8 +229,15 @@ TEST(OptionsTable, SetterRulesReadTheSameForEveryOption) {
     set_option(o, "max_steps", 2.5);
     FAIL();
   } catch (const OptionError& e) {
-    EXPECT_EQ(e.problem(), "max_steps must be a whole number from 1 to 1e+18, got 2.5");
+    EXPECT_EQ(e.problem(), "max_steps must be a whole number >= 1, got 2.5");
   }
+  // every long is a whole number of steps; a double at 2^63 or beyond is not a long
+  set_option(o, "max_steps", std::numeric_limits<long>::max());
+  EXPECT_EQ(o.max_steps, std::numeric_limits<long>::max());
+  EXPECT_THROW(set_option(o, "max_steps", 9223372036854775808.0), OptionError);
+  set_option(o, "max_steps", 4503599627370496.0);  // 2^52
+  EXPECT_EQ(o.max_steps, 4503599627370496L);
+  o.max_steps = SimulationOptions{}.max_steps;
   try {
     set_option(o, "integrator", std::string("euler"));
     FAIL();
