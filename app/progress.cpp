@@ -57,8 +57,12 @@ std::string ProgressBar::duration_text(double s) {
 
 void ProgressBar::update(const ProgressReport& p) {
   if (mode_ == Mode::kOff) return;
+  update(p, Clock::now());
+}
+
+void ProgressBar::update(const ProgressReport& p, Clock::time_point now) {
+  if (mode_ == Mode::kOff) return;
   // nothing before the delay has passed, then at most one output per interval
-  const Clock::time_point now = Clock::now();
   if (now < next_draw_) return;
   next_draw_ = now + interval_;
   draw(p, now);

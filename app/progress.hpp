@@ -36,8 +36,11 @@ class ProgressBar {
   ProgressBar(const ProgressBar&) = delete;
   ProgressBar& operator=(const ProgressBar&) = delete;
 
-  /// The run has reached p.t with step p.step.
+  /// The run has reached p.t with step p.step (at Clock::now()).
   void update(const ProgressReport& p);
+  /// The same at the wall-clock time `now` (later than the previous call's): what the tests
+  /// drive, so that no test depends on the speed of the machine.
+  void update(const ProgressReport& p, Clock::time_point now);
   /// Erases the bar (if it was drawn). Called by the destructor too.
   void finish();
 

@@ -44,6 +44,12 @@ TextbookDecomposition& TextbookDecomposition::compute_constraints(
   UKDYN_CHECK(A.rows() == m_ && A.cols() == n_, "TextbookDecomposition: A has the wrong size");
   // B = A M^{−1/2} = U Σ Vᵀ;  B⁺ = V Σ⁺ Uᵀ;  (B Bᵀ)⁺ = U Σ⁺² Uᵀ
   B_ = A * M_inv_half_;
+  if (m_ == 0) {  // no constraint: B⁺ is n × 0 (Eigen's SVD does not take an empty matrix)
+    rank_ = 0;
+    B_pinv_.setZero(n_, 0);
+    G_pinv_.setZero(0, 0);
+    return *this;
+  }
   Eigen::BDCSVD<MatrixXd> svd(B_, Eigen::ComputeThinU | Eigen::ComputeThinV);
   const VectorXd& s = svd.singularValues();
   const double smax = s.size() > 0 ? s[0] : 0.0;

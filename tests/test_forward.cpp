@@ -174,6 +174,26 @@ TEST_P(DefaultVsTextbook, AgreeOnRandomSystems) {
   EXPECT_NEAR(rel_diff(fast.lambda_nonideal, slow.lambda_nonideal), 0.0, 1e-9);
 }
 
+// Without constraints the textbook formula is a = M⁻¹ Q: it crashed (Eigen's SVD of the empty
+// B = A M^{-1/2}; `ukdyn run --algorithm textbook` on an oscillator).
+TEST(DefaultVsTextbook, NoConstraintsIsMInverseQ) {
+  SystemBuilder b({"x", "y"});
+  Eigen::Matrix2d M;
+  M << 2.0, 0.5, 0.5, 1.0;
+  b.mass_matrix(M).forces([](const VectorXd& q, const VectorXd&, double, Eigen::Ref<VectorXd> Q) {
+    Q << -3.0 * q[0], 1.0;
+  });
+  const System sys = b.build();
+  Workspace slow(sys, SolverOptions{.algorithm = Algorithm::kTextbook});
+  const VectorXd q = (VectorXd(2) << 1.0, 0.0).finished(), qd = VectorXd::Zero(2);
+  ASSERT_EQ(forward_dynamics(sys, slow, q, qd, 0.0), Status::kOk);
+  // [2 0.5; 0.5 1] a = [-3; 1]: M⁻¹ = [1 -0.5; -0.5 2] / 1.75, a = [-2; 2]
+  EXPECT_NEAR(slow.qdd[0], (-3.0 * 1.0 - 0.5 * 1.0) / 1.75, 1e-13);
+  EXPECT_NEAR(slow.qdd[1], (2.0 * 1.0 + 0.5 * 3.0) / 1.75, 1e-13);
+  EXPECT_NEAR(slow.Qc.norm(), 0.0, 1e-15);
+  EXPECT_EQ(slow.rank, 0);
+}
+
 INSTANTIATE_TEST_SUITE_P(Sizes, DefaultVsTextbook,
                          ::testing::Values(Case{6, 3, 3}, Case{6, 3, 2}, Case{12, 6, 6},
                                            Case{12, 6, 4}, Case{30, 20, 20}, Case{30, 20, 11},
