@@ -541,7 +541,8 @@ class Run {
     push(out.Qc_ideal, ws_.Qc_ideal);
     push(out.Qc_nonideal, ws_.Qc_nonideal);
     push(out.lambda, ws_.lambda);
-    const double T = detail::kinetic_energy(ws_, qd_), V = sys_.potential_energy(q_, t, ws_.callables.get());
+    const double T = detail::kinetic_energy(ws_, qd_),
+                 V = sys_.potential_energy(q_, t, ws_.callables.get());
     out.kinetic_energy.push_back(T);
     out.potential_energy.push_back(V);
     out.energy.push_back(T + V);

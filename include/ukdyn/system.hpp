@@ -59,7 +59,7 @@ using ForceFn =
 /// ConstraintScratch is for a constraint. Made once by System::make_scratch() when a Workspace
 /// is constructed (sized then: nothing allocates afterwards) and passed to every evaluation of
 /// that workspace. A System itself holds no mutable state: one System serves any number of
-/// threads at once, each with its own Workspace (docs/architecture.md, "Thread safety").
+/// threads at once, each with its own Workspace (docs/algorithm.md, "Thread safety").
 struct CallableScratch {
   virtual ~CallableScratch() = default;
 };
