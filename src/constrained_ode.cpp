@@ -145,7 +145,8 @@ bool ConstrainedOde::operator()(const double* x, double* dxdt, double t_in) {
   const double quiet = works_.quiet ? WorkLayout::kQuietScale : 1.0;
   if (works_.ideal >= 0) w[works_.ideal] = quiet * (qd_.dot(ws_.Qc_ideal) - drive);
   if (works_.drive >= 0) w[works_.drive] = quiet * drive;
-  if (works_.external >= 0) w[works_.external] = quiet * sys_.external_power(q_, qd_, t);
+  if (works_.external >= 0)
+    w[works_.external] = quiet * sys_.external_power(q_, qd_, t, ws_.callables.get());
   return true;
 }
 

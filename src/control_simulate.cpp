@@ -1,6 +1,9 @@
 // Controlled simulation: the plant (a System that may differ from the controller's nominal
 // model) under the control force, run by simulate(). The control is evaluated inside the plant's
-// force callable with a workspace the callable owns, so an evaluation allocates nothing.
+// force callable with the control workspace in the controlled system's per-workspace scratch
+// (ControlledScratch), so an evaluation allocates nothing and one controlled System serves
+// several threads, each with its own Workspace; the run's control statistics are read from that
+// scratch after the run.
 //
 // simulate_controlled integrates, besides the plant, the control's work ∫ Qcᵀq' dt, effort
 // ∫ QcᵀQc dt and absolute work ∫ |Qcᵀq'| dt — and with the robust term each row's Lyapunov
@@ -16,11 +19,13 @@
 #include <cmath>
 #include <limits>
 #include <memory>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <utility>
 
 #include "control_internal.hpp"
+#include "detail.hpp"
 #include "energy_balance.hpp"
 #include "sample_grid.hpp"
 #include "ukdyn/forward.hpp"
@@ -32,6 +37,9 @@ namespace {
 
 // auxiliary coordinates: work, effort, absolute work, then one bound state per requirement row
 constexpr Index kWork = 0, kEffort = 1, kWorkAbs = 2, kBounds = 3;
+
+struct ControlledScratch;
+CallableScratch* plant_scratch(CallableScratch* controlled);
 
 // --- plant constraints on the augmented coordinates [q; z] -------------------------------------
 
@@ -48,6 +56,12 @@ class HeadConstraintModel final : public ConstraintModel {
 
   std::unique_ptr<ConstraintScratch> make_scratch(Index) const override {
     return std::make_unique<HeadScratch>(inner_.model().make_scratch(n_), n_);
+  }
+  // the plant's constraint shares the plant's scratch (inside the controlled system's)
+  std::unique_ptr<ConstraintScratch> make_scratch_sharing(Index,
+                                                          CallableScratch* shared) const override {
+    return std::make_unique<HeadScratch>(
+        inner_.model().make_scratch_sharing(n_, plant_scratch(shared)), n_);
   }
 
   void acceleration_form(const VectorXd& q, const VectorXd& qd, double t, ConstraintScratch* s,
@@ -85,86 +99,111 @@ Constraint on_head(const Constraint& c, Index n) {
 
 // --- the control inside the plant's force ------------------------------------------------------
 
-// Everything the controlled plant's callables share (one per controlled system).
+// The controlled plant's description (immutable, shared by the controlled system's callables):
+// the controller and the plant, n plant coordinates and aux auxiliary ones.
 struct ControlledPlant {
   ControlledPlant(const Controller& c, const System& p, Index aux_count)
-      : ctrl(c),
-        plant(p),
-        cws(c),
-        n(p.dofs()),
-        aux(aux_count),
-        q(n),
-        qd(n),
-        qm(n),
-        q_last(n),
-        qd_last(n) {
-    stats.first_not_met = std::numeric_limits<double>::quiet_NaN();
-  }
+      : ctrl(c), plant(p), n(p.dofs()), aux(aux_count) {}
 
   // Q ← Q_plant(q, q', t) + Qc_control and the auxiliary integrands; NaN when the control fails
-  void force(const VectorXd& xq, const VectorXd& xqd, double t, Eigen::Ref<VectorXd> Q) {
-    const VectorXd* pq = &xq;
-    const VectorXd* pqd = &xqd;
-    if (aux > 0) {
-      q = xq.head(n);
-      qd = xqd.head(n);
-      pq = &q;
-      pqd = &qd;
-    }
-    plant.forces(*pq, *pqd, t, Q.head(n));
-    const ControlStatus s = compute_control(ctrl, cws, *pq, *pqd, t);
-    ++stats.evaluations;
-    // where the control was last evaluated (a failed run's diagnosis looks there)
-    q_last = *pq;
-    qd_last = *pqd;
-    t_last = t;
-    if (s != ControlStatus::kOk && s != ControlStatus::kRequirementsNotMet) {
-      if (failure.empty()) failure = describe_control_status(ctrl, cws);
-      Q.setConstant(std::numeric_limits<double>::quiet_NaN());
-      return;
-    }
-    if (s == ControlStatus::kRequirementsNotMet) note_not_met(t);
-    for (Index i = 0; i < cws.kappa.size(); ++i)
-      stats.max_kappa = std::max(stats.max_kappa, cws.kappa[i]);
-    // Q += Qc_control
-    Q.head(n) += cws.Qc_control;
-    if (aux == 0) return;
-    // z'' = (Qcᵀq', QcᵀQc, |Qcᵀq'|, −gamma_i V_i + kappa_i epsilon / 2)
-    Q[n + kWork] = cws.power;
-    Q[n + kEffort] = cws.Qc_control.squaredNorm();
-    Q[n + kWorkAbs] = std::abs(cws.power);
-    if (const auto& r = ctrl.robust(); r && aux > kBounds) {
-      for (Index i = 0; i < ctrl.requirement_rows(); ++i) {
-        Q[n + kBounds + i] =
-            -ctrl.robust_rate(i) * xqd[n + kBounds + i] + 0.5 * cws.kappa[i] * r->boundary_layer;
-      }
-    }
-  }
-
-  void note_not_met(double t) {
-    ++stats.not_met;
-    for (Index i = 0; i < cws.residual.size(); ++i) {
-      if (!cws.met[std::size_t(i)]) {
-        stats.max_residual = std::max(stats.max_residual, std::abs(cws.residual[i]));
-      }
-    }
-    if (stats.not_met == 1) {
-      stats.first_not_met = t;
-      stats.not_met_message = describe_control_status(ctrl, cws);  // once
-    }
-  }
+  void force(ControlledScratch& w, const VectorXd& xq, const VectorXd& xqd, double t,
+             Eigen::Ref<VectorXd> Q) const;
+  void note_not_met(ControlledScratch& w, double t) const;
 
   Controller ctrl;
   System plant;
-  ControlWorkspace cws;
   Index n, aux;
-  VectorXd q, qd;  // (n) plant part of the state, for the force
-  VectorXd qm;     // (n) plant part of q, for M and V
+};
+
+// The controlled system's per-workspace scratch (its CallableScratch): the control workspace,
+// the plant's own scratch, the plant part of the state, and the run's control statistics.
+struct ControlledScratch final : CallableScratch {
+  explicit ControlledScratch(const ControlledPlant& p)
+      : cws(p.ctrl),
+        plant(p.plant.make_scratch()),
+        q(p.n),
+        qd(p.n),
+        qm(p.n),
+        qp(p.n),
+        qdp(p.n),
+        qc(p.n),
+        qdc(p.n),
+        q_last(p.n),
+        qd_last(p.n) {
+    stats.first_not_met = std::numeric_limits<double>::quiet_NaN();
+  }
+  ControlWorkspace cws;
+  std::unique_ptr<CallableScratch> plant;  // the plant's callables' scratch (may be null)
+  VectorXd q, qd;    // (n) plant part of the state, for the force
+  VectorXd qm;       // (n) plant part of q, for M and V
+  VectorXd qp, qdp;  // (n) for the external power
+  VectorXd qc, qdc;  // (n) for the non-ideal forces
   VectorXd q_last, qd_last;  // (n) the state of the last control evaluation, at t_last
   double t_last = 0.0;
   ControlStatistics stats;
   std::string failure;  // describe_control_status() of the first failure
 };
+
+CallableScratch* plant_scratch(CallableScratch* controlled) {
+  auto* w = dynamic_cast<ControlledScratch*>(controlled);
+  return w != nullptr ? w->plant.get() : nullptr;
+}
+
+void ControlledPlant::force(ControlledScratch& w, const VectorXd& xq, const VectorXd& xqd,
+                            double t, Eigen::Ref<VectorXd> Q) const {
+  ControlWorkspace& cws = w.cws;
+  ControlStatistics& stats = w.stats;
+  const VectorXd* pq = &xq;
+  const VectorXd* pqd = &xqd;
+  if (aux > 0) {
+    w.q = xq.head(n);
+    w.qd = xqd.head(n);
+    pq = &w.q;
+    pqd = &w.qd;
+  }
+  plant.forces(*pq, *pqd, t, w.plant.get(), Q.head(n));
+  const ControlStatus s = compute_control(ctrl, cws, *pq, *pqd, t);
+  ++stats.evaluations;
+  // where the control was last evaluated (a failed run's diagnosis looks there)
+  w.q_last = *pq;
+  w.qd_last = *pqd;
+  w.t_last = t;
+  if (s != ControlStatus::kOk && s != ControlStatus::kRequirementsNotMet) {
+    if (w.failure.empty()) w.failure = describe_control_status(ctrl, cws);
+    Q.setConstant(std::numeric_limits<double>::quiet_NaN());
+    return;
+  }
+  if (s == ControlStatus::kRequirementsNotMet) note_not_met(w, t);
+  for (Index i = 0; i < cws.kappa.size(); ++i)
+    stats.max_kappa = std::max(stats.max_kappa, cws.kappa[i]);
+  // Q += Qc_control
+  Q.head(n) += cws.Qc_control;
+  if (aux == 0) return;
+  // z'' = (Qcᵀq', QcᵀQc, |Qcᵀq'|, −gamma_i V_i + kappa_i epsilon / 2)
+  Q[n + kWork] = cws.power;
+  Q[n + kEffort] = cws.Qc_control.squaredNorm();
+  Q[n + kWorkAbs] = std::abs(cws.power);
+  if (const auto& r = ctrl.robust(); r && aux > kBounds) {
+    for (Index i = 0; i < ctrl.requirement_rows(); ++i) {
+      Q[n + kBounds + i] =
+          -ctrl.robust_rate(i) * xqd[n + kBounds + i] + 0.5 * cws.kappa[i] * r->boundary_layer;
+    }
+  }
+}
+
+void ControlledPlant::note_not_met(ControlledScratch& w, double t) const {
+  ControlStatistics& stats = w.stats;
+  ++stats.not_met;
+  for (Index i = 0; i < w.cws.residual.size(); ++i) {
+    if (!w.cws.met[std::size_t(i)]) {
+      stats.max_residual = std::max(stats.max_residual, std::abs(w.cws.residual[i]));
+    }
+  }
+  if (stats.not_met == 1) {
+    stats.first_not_met = t;
+    stats.not_met_message = describe_control_status(ctrl, w.cws);  // once
+  }
+}
 
 // sigma_min / sigma_max of the active requirement rows A_r at (q, q', t), NaN without rows
 double requirement_gap(const Controller& ctrl, ControlWorkspace& cws, const VectorXd& q,
@@ -183,12 +222,13 @@ double requirement_gap(const Controller& ctrl, ControlWorkspace& cws, const Vect
 // A controlled run whose step size collapsed: when the requirement rows have (nearly) lost
 // rank where the control was last evaluated, that is the likely cause, and it replaces the
 // driver's general diagnosis.
-void diagnose_requirements(const ControlledPlant& st, const VectorXd& q0, const VectorXd& qd0,
-                           double t0, RunStatistics& stats) {
-  if (stats.status != Status::kIntegratorFailure || st.stats.evaluations == 0) return;
+void diagnose_requirements(const ControlledPlant& st, const ControlledScratch& w,
+                           const VectorXd& q0, const VectorXd& qd0, double t0,
+                           RunStatistics& stats) {
+  if (stats.status != Status::kIntegratorFailure || w.stats.evaluations == 0) return;
   ControlWorkspace cws(st.ctrl);
   const double start = requirement_gap(st.ctrl, cws, q0, qd0, t0);
-  const double now = requirement_gap(st.ctrl, cws, st.q_last, st.qd_last, st.t_last);
+  const double now = requirement_gap(st.ctrl, cws, w.q_last, w.qd_last, w.t_last);
   if (!(now < 1e-4) || start < 100.0 * now) return;
   std::string& m = stats.message;
   for (const char* cause : {". Likely cause", ". The step size collapsed"}) {
@@ -196,7 +236,7 @@ void diagnose_requirements(const ControlledPlant& st, const VectorXd& q0, const 
   }
   char gaps[160];
   std::snprintf(gaps, sizeof gaps, "sigma_min / sigma_max of the requirement rows %.3g at t = %g "
-                "s, %.3g at the start", now, st.t_last, start);
+                "s, %.3g at the start", now, w.t_last, start);
   m += std::string(". Likely cause: the requirements lost rank (") + gaps +
        "): they cannot all be met there — a path that leaves the reachable set, or passes a "
        "singular configuration of the mechanism (an arm stretched out). Try: a requirement that "
@@ -227,58 +267,71 @@ void require_same_plant(const Controller& ctrl, const System& plant, const char*
 }
 
 // The plant with the control in its force; aux > 0 appends the auxiliary coordinates.
-System build_controlled(const std::shared_ptr<ControlledPlant>& st,
+System build_controlled(const std::shared_ptr<const ControlledPlant>& st,
                         const std::vector<std::string>& aux_names) {
   const System& plant = st->plant;
   const Index n = plant.dofs(), aux = st->aux;
   std::vector<std::string> names = plant.coordinate_names();
   names.insert(names.end(), aux_names.begin(), aux_names.end());
   SystemBuilder b(names);
+  // every workspace of the controlled system gets its own control workspace and plant scratch
+  b.scratch([st]() -> std::unique_ptr<CallableScratch> {
+    return std::make_unique<ControlledScratch>(*st);
+  });
+  const auto scratch = [](CallableScratch* s) -> ControlledScratch& {
+    return static_cast<ControlledScratch&>(*s);
+  };
   // M = diag(M_plant, I)
   if (plant.mass_is_constant()) {
     MatrixXd M = MatrixXd::Identity(n + aux, n + aux);
     plant.mass_matrix(VectorXd::Zero(n), 0.0, M.topLeftCorner(n, n));
     b.mass_matrix(M);
   } else if (aux == 0) {
-    b.mass_matrix([st](const VectorXd& q, double t, Eigen::Ref<MatrixXd> M) {
-      st->plant.mass_matrix(q, t, M);
+    b.mass_matrix([st, scratch](const VectorXd& q, double t, CallableScratch* s,
+                                Eigen::Ref<MatrixXd> M) {
+      st->plant.mass_matrix(q, t, scratch(s).plant.get(), M);
     });
   } else {
-    b.mass_matrix([st, n, aux](const VectorXd& x, double t, Eigen::Ref<MatrixXd> M) {
-      st->qm = x.head(n);
-      st->plant.mass_matrix(st->qm, t, M.topLeftCorner(n, n));
+    b.mass_matrix([st, n, aux, scratch](const VectorXd& x, double t, CallableScratch* s,
+                                        Eigen::Ref<MatrixXd> M) {
+      ControlledScratch& w = scratch(s);
+      w.qm = x.head(n);
+      st->plant.mass_matrix(w.qm, t, w.plant.get(), M.topLeftCorner(n, n));
       M.topRightCorner(n, aux).setZero();
       M.bottomLeftCorner(aux, n).setZero();
       M.bottomRightCorner(aux, aux).setIdentity();
     });
   }
   // Q = Q_plant + Qc_control (+ the auxiliary integrands)
-  b.forces([st](const VectorXd& q, const VectorXd& qd, double t, Eigen::Ref<VectorXd> Q) {
-    st->force(q, qd, t, Q);
-  });
+  b.forces([st, scratch](const VectorXd& q, const VectorXd& qd, double t, CallableScratch* s,
+                         Eigen::Ref<VectorXd> Q) { st->force(scratch(s), q, qd, t, Q); });
   if (plant.has_potential()) {
     if (aux == 0) {
-      b.potential_energy(
-          [st](const VectorXd& q, double t) { return st->plant.potential_energy(q, t); });
+      b.potential_energy([st, scratch](const VectorXd& q, double t, CallableScratch* s) {
+        return st->plant.potential_energy(q, t, scratch(s).plant.get());
+      });
     } else {
-      b.potential_energy([st, n](const VectorXd& x, double t) {
-        st->qm = x.head(n);
-        return st->plant.potential_energy(st->qm, t);
+      b.potential_energy([st, n, scratch](const VectorXd& x, double t, CallableScratch* s) {
+        ControlledScratch& w = scratch(s);
+        w.qm = x.head(n);
+        return st->plant.potential_energy(w.qm, t, w.plant.get());
       });
     }
   }
   // the plant's external power (the control's work is integrated apart, in z)
   if (plant.has_external_power()) {
     if (aux == 0) {
-      b.external_power([st](const VectorXd& q, const VectorXd& qd, double t) {
-        return st->plant.external_power(q, qd, t);
-      });
+      b.external_power(
+          [st, scratch](const VectorXd& q, const VectorXd& qd, double t, CallableScratch* s) {
+            return st->plant.external_power(q, qd, t, scratch(s).plant.get());
+          });
     } else {
-      auto buffers = std::make_shared<std::pair<VectorXd, VectorXd>>(VectorXd(n), VectorXd(n));
-      b.external_power([st, buffers, n](const VectorXd& x, const VectorXd& xd, double t) {
-        buffers->first = x.head(n);
-        buffers->second = xd.head(n);
-        return st->plant.external_power(buffers->first, buffers->second, t);
+      b.external_power([st, n, scratch](const VectorXd& x, const VectorXd& xd, double t,
+                                        CallableScratch* s) {
+        ControlledScratch& w = scratch(s);
+        w.qp = x.head(n);
+        w.qdp = xd.head(n);
+        return st->plant.external_power(w.qp, w.qdp, t, w.plant.get());
       });
     }
   }
@@ -308,13 +361,13 @@ System build_controlled(const std::shared_ptr<ControlledPlant>& st,
       spec.regularization_velocity = c->eps;
       spec.name = plant.nonideal_name(i);
       if (c->surface_velocity && aux > 0) {
-        auto buffers = std::make_shared<std::pair<VectorXd, VectorXd>>(VectorXd(n), VectorXd(n));
-        spec.surface_velocity = [u = c->surface_velocity, buffers, n](
+        // (SurfaceVelocityFn carries no scratch: the plant's part of the state is copied for
+        // the call, which allocates — a controlled run with a moving friction surface only)
+        spec.surface_velocity = [u = c->surface_velocity, n](
                                     const VectorXd& x, const VectorXd& xd, double t,
                                     Eigen::Ref<VectorXd> uo, Eigen::Ref<VectorXd> udo) {
-          buffers->first = x.head(n);
-          buffers->second = xd.head(n);
-          u(buffers->first, buffers->second, t, uo, udo);
+          const VectorXd q = x.head(n), qd = xd.head(n);
+          u(q, qd, t, uo, udo);
         };
       } else {
         spec.surface_velocity = c->surface_velocity;
@@ -322,19 +375,27 @@ System build_controlled(const std::shared_ptr<ControlledPlant>& st,
       b.add(coulomb_friction(spec));
       continue;
     }
+    // the plant's force, with the plant's scratch (IdealForceInfo::scratch)
     NonIdealFn fn = plant.nonideal(i);
     if (aux == 0) {
-      b.add(NonIdealForce(plant.nonideal_name(i), std::move(fn)));
+      b.add(NonIdealForce(
+          plant.nonideal_name(i),
+          NonIdealFn([fn, scratch](const VectorXd& q, const VectorXd& qd, double t,
+                                   const IdealForceInfo& ideal, Eigen::Ref<VectorXd> C) {
+            const IdealForceInfo plant_ideal(ideal, scratch(ideal.scratch()).plant.get());
+            fn(q, qd, t, plant_ideal, C);
+          })));
       continue;
     }
-    auto buffers = std::make_shared<std::pair<VectorXd, VectorXd>>(VectorXd(n), VectorXd(n));
     b.add(NonIdealForce(
         plant.nonideal_name(i),
-        NonIdealFn([fn, buffers, n](const VectorXd& x, const VectorXd& xd, double t,
+        NonIdealFn([fn, n, scratch](const VectorXd& x, const VectorXd& xd, double t,
                                     const IdealForceInfo& ideal, Eigen::Ref<VectorXd> C) {
-          buffers->first = x.head(n);
-          buffers->second = xd.head(n);
-          fn(buffers->first, buffers->second, t, ideal, C.head(n));
+          ControlledScratch& w = scratch(ideal.scratch());
+          w.qc = x.head(n);
+          w.qdc = xd.head(n);
+          const IdealForceInfo plant_ideal(ideal, w.plant.get());
+          fn(w.qc, w.qdc, t, plant_ideal, C.head(n));
         })));
   }
   return b.build();
@@ -374,7 +435,7 @@ ControlledTrajectory simulate_controlled(
       }
     }
   }
-  auto st = std::make_shared<ControlledPlant>(ctrl, plant, aux);
+  const auto st = std::make_shared<const ControlledPlant>(ctrl, plant, aux);
   const System sys = build_controlled(st, aux_names);
 
   // initial state [q0; 0], [qd0; 0, 0, 0, V_i(0)]
@@ -505,7 +566,19 @@ ControlledTrajectory simulate_controlled(
     }
     if (streamed) sample_sink(one);
   };
-  const Trajectory full = simulate(sys, x0, xd0, o);
+  // the control statistics, read from the run's workspace (its ControlledScratch) at the end
+  std::optional<ControlledScratch> after;
+  const Trajectory full =
+      detail::simulate_observed(sys, x0, xd0, o, [&](const Workspace& ws) {
+        after.emplace(*st);
+        const auto& w = static_cast<const ControlledScratch&>(*ws.callables);
+        after->stats = w.stats;
+        after->failure = w.failure;
+        after->q_last = w.q_last;
+        after->qd_last = w.qd_last;
+        after->t_last = w.t_last;
+      });
+  const ControlledScratch& w = *after;
 
   // the names, the statistics and the plant's energy balance
   tr.constraint_names = full.constraint_names;
@@ -514,12 +587,12 @@ ControlledTrajectory simulate_controlled(
   tr.n = n;
   tr.m = full.m;
   tr.stats = full.stats;
-  diagnose_requirements(*st, q0, qd0, options.t_start, tr.stats);
-  run.control = st->stats;
+  diagnose_requirements(*st, w, q0, qd0, options.t_start, tr.stats);
+  run.control = w.stats;
   balance.finish(tr.stats, tolerance);
-  if (!st->failure.empty() && tr.stats.status != Status::kOk &&
+  if (!w.failure.empty() && tr.stats.status != Status::kOk &&
       tr.stats.status != Status::kEnergyBalance && tr.stats.status != Status::kInterrupted) {
-    tr.stats.message = "the controller failed: " + st->failure;
+    tr.stats.message = "the controller failed: " + w.failure;
   }
   return run;
 }

@@ -1,6 +1,7 @@
 // Internal helpers shared by the stages (not installed).
 #pragma once
 
+#include <functional>
 #include <stdexcept>
 #include <string>
 
@@ -8,7 +9,19 @@
 #include "ukdyn/system.hpp"
 #include "ukdyn/workspace.hpp"
 
+namespace ukdyn {
+struct SimulationOptions;
+struct Trajectory;
+}  // namespace ukdyn
+
 namespace ukdyn::detail {
+
+// simulate(), with `finished` called with the run's workspace when the run ends (it returns or
+// throws): a caller reads there what the system's callables recorded in their per-workspace
+// scratch — the controlled plant's control statistics (control_simulate.cpp).
+Trajectory simulate_observed(const System& sys, const VectorXd& q0, const VectorXd& qd0,
+                             const SimulationOptions& options,
+                             const std::function<void(const Workspace&)>& finished);
 
 // Records a failing status in the workspace (tier 3) and returns it.
 inline Status fail(Workspace& ws, Status s, const char* quantity, Index index, double t) {

@@ -418,10 +418,10 @@ void Reader::read_dynamics(const YAML::Node& root, SystemBuilder& builder) {
       builder.mass_matrix(Mc);
     }
   } else {
-    builder.mass_matrix([Mp, at, layout, n](const VectorXd& q, double t,
+    sizes_->fit(layout.size(), Mp);
+    builder.mass_matrix([Mp, at, layout, n](const VectorXd& q, double t, CallableScratch* s,
                                             Eigen::Ref<MatrixXd> Mout) {
-      ThreadBuffers& b = buffers();
-      b.reserve(layout.size(), Mp);
+      ModelBuffers& b = model_buffers(s);
       std::copy(q.data(), q.data() + n, b.in.begin());
       b.in[std::size_t(2 * n)] = t;
       Mp.evaluate(b.in.data(), b.out.data(), b.scratch.data());
@@ -430,10 +430,13 @@ void Reader::read_dynamics(const YAML::Node& root, SystemBuilder& builder) {
         Mout((*at)[k].first, (*at)[k].second) = b.out[k];
     });
   }
+  // the callables' buffers: one ModelBuffers per workspace, sized for every program of the model
+  builder.scratch(BufferSizes::factory(sizes_));
+  sizes_->fit(layout.size(), Qp);
   builder.forces(
-      [Qp, layout](const VectorXd& q, const VectorXd& qd, double t, Eigen::Ref<VectorXd> Qout) {
-        ThreadBuffers& b = buffers();
-        b.reserve(layout.size(), Qp);
+      [Qp, layout](const VectorXd& q, const VectorXd& qd, double t, CallableScratch* s,
+                   Eigen::Ref<VectorXd> Qout) {
+        ModelBuffers& b = model_buffers(s);
         layout.fill(b.in, q, qd, t);
         Qp.evaluate(b.in.data(), Qout.data(), b.scratch.data());
       });
@@ -441,9 +444,10 @@ void Reader::read_dynamics(const YAML::Node& root, SystemBuilder& builder) {
   builder.accounts_for_energy();
   if (!set_->is_zero(P_ext)) {
     const Program Pp = compile({P_ext}, dynamics, "the external power");
-    builder.external_power([Pp, layout](const VectorXd& q, const VectorXd& qd, double t) {
-      ThreadBuffers& b = buffers();
-      b.reserve(layout.size(), Pp);
+    sizes_->fit(layout.size(), Pp);
+    builder.external_power([Pp, layout](const VectorXd& q, const VectorXd& qd, double t,
+                                        CallableScratch* s) {
+      ModelBuffers& b = model_buffers(s);
       layout.fill(b.in, q, qd, t);
       double p = 0.0;
       Pp.evaluate(b.in.data(), &p, b.scratch.data());
@@ -452,9 +456,9 @@ void Reader::read_dynamics(const YAML::Node& root, SystemBuilder& builder) {
   }
   if (V) {
     const Program Vp = compile({Ve}, V, "potential_energy");
-    builder.potential_energy([Vp, layout](const VectorXd& q, double t) {
-      ThreadBuffers& b = buffers();
-      b.reserve(layout.size(), Vp);
+    sizes_->fit(layout.size(), Vp);
+    builder.potential_energy([Vp, layout](const VectorXd& q, double t, CallableScratch* s) {
+      ModelBuffers& b = model_buffers(s);
       std::copy(q.data(), q.data() + layout.n, b.in.begin());
       b.in[std::size_t(2 * layout.n)] = t;
       double v = 0.0;
@@ -638,16 +642,22 @@ SurfaceVelocityFn Reader::surface_velocity(const YAML::Node& node, std::size_t c
   const Program p = compile(u, node, what);
   const InputLayout layout = layout_;
   const Index k = Index(count);
+  // (its signature carries no scratch: buffers of the call, evaluate_local)
   return [p, layout, k](const VectorXd& q, const VectorXd& qd, double t, Eigen::Ref<VectorXd> uo,
                         Eigen::Ref<VectorXd> udo) {
-    ThreadBuffers& b = buffers();
-    b.reserve(layout.size(), p);
-    layout.fill(b.in, q, qd, t);
-    p.evaluate(b.in.data(), b.out.data(), b.scratch.data());
-    for (Index r = 0; r < k; ++r) {
-      uo[r] = b.out[std::size_t(r)];
-      udo[r] = b.out[std::size_t(k + r)];
-    }
+    evaluate_local(
+        p, layout.size(),
+        [&](double* in) {
+          std::copy(q.data(), q.data() + layout.n, in);
+          std::copy(qd.data(), qd.data() + layout.n, in + layout.n);
+          in[2 * layout.n] = t;
+        },
+        [&](const double* out) {
+          for (Index r = 0; r < k; ++r) {
+            uo[r] = out[r];
+            udo[r] = out[k + r];
+          }
+        });
   };
 }
 
@@ -735,6 +745,7 @@ void Reader::read_nonideal(const YAML::Node& root, SystemBuilder& builder) {
       const Program Cp = compile(C, f["C"], "C");
       const InputLayout layout = layout_;
       const std::vector<std::string> names = constraint_names_;
+      sizes_->fit(layout.size(), Cp);
       NonIdealForce force(
           "C." + std::to_string(index),
           NonIdealForce::Binder([Cp, layout, names](const System& sys) -> NonIdealFn {
@@ -742,8 +753,7 @@ void Reader::read_nonideal(const YAML::Node& root, SystemBuilder& builder) {
             for (const auto& nm : names) ks.push_back(sys.constraint_index(nm));
             return [Cp, layout, ks](const VectorXd& q, const VectorXd& qd, double t,
                                     const IdealForceInfo& ideal, Eigen::Ref<VectorXd> Cout) {
-              ThreadBuffers& b = buffers();
-              b.reserve(layout.size(), Cp);
+              ModelBuffers& b = model_buffers(ideal.scratch());
               layout.fill(b.in, q, qd, t);
               // N_c, then lambda_c (first row of each constraint)
               const std::size_t base = std::size_t(2 * layout.n + 1);

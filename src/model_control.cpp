@@ -105,14 +105,20 @@ WeightFn Reader::read_weight(const YAML::Node& N, bool& constant, MatrixXd& valu
     return {};
   }
   const InputLayout layout = layout_;
+  // (its signature carries no scratch: buffers of the call, evaluate_local)
   return [p, layout, n](const VectorXd& q, const VectorXd& qd, double t, Eigen::Ref<MatrixXd> W) {
-    ThreadBuffers& b = buffers();
-    b.reserve(layout.size(), p);
-    layout.fill(b.in, q, qd, t);
-    p.evaluate(b.in.data(), b.out.data(), b.scratch.data());
-    for (Index i = 0; i < n; ++i) {
-      for (Index j = 0; j < n; ++j) W(i, j) = b.out[std::size_t(i * n + j)];
-    }
+    evaluate_local(
+        p, layout.size(),
+        [&](double* in) {
+          std::copy(q.data(), q.data() + layout.n, in);
+          std::copy(qd.data(), qd.data() + layout.n, in + layout.n);
+          in[2 * layout.n] = t;
+        },
+        [&](const double* out) {
+          for (Index i = 0; i < n; ++i) {
+            for (Index j = 0; j < n; ++j) W(i, j) = out[i * n + j];
+          }
+        });
   };
 }
 

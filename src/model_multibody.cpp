@@ -305,12 +305,13 @@ mb::MotionFn MultibodyReader::drive(const YAML::Node& node, const std::string& w
   const Expr fd = set.diff(f, "t"), fdd = set.diff(fd, "t");
   const Program p = r_.compile({f, fd, fdd}, node, what + " drive and its derivatives");
   const InputLayout layout = r_.layout_;
+  // (its signature carries no scratch: buffers of the call, evaluate_local)
   return [p, layout](double t) {
-    ThreadBuffers& b = buffers();
-    b.reserve(layout.size(), p);
-    b.in[std::size_t(2 * layout.n)] = t;
-    p.evaluate(b.in.data(), b.out.data(), b.scratch.data());
-    return Vector3d(b.out[0], b.out[1], b.out[2]);
+    Vector3d value;
+    evaluate_local(
+        p, layout.size(), [&](double* in) { in[2 * layout.n] = t; },
+        [&](const double* v) { value = Vector3d(v[0], v[1], v[2]); });
+    return value;
   };
 }
 
@@ -340,14 +341,20 @@ mb::WrenchFn MultibodyReader::wrench(const YAML::Node& f, bool planar_body,
   }
   const Program p = r_.compile(out, f, what);
   const InputLayout layout = r_.layout_;
+  // (its signature carries no scratch: buffers of the call, evaluate_local)
   return [p, layout](const VectorXd& q, const VectorXd& qd, double t) {
-    ThreadBuffers& b = buffers();
-    b.reserve(layout.size(), p);
-    layout.fill(b.in, q, qd, t);
-    p.evaluate(b.in.data(), b.out.data(), b.scratch.data());
     mb::Wrench w;
-    w.force = Vector3d(b.out[0], b.out[1], b.out[2]);
-    w.torque = Vector3d(b.out[3], b.out[4], b.out[5]);
+    evaluate_local(
+        p, layout.size(),
+        [&](double* in) {
+          std::copy(q.data(), q.data() + layout.n, in);
+          std::copy(qd.data(), qd.data() + layout.n, in + layout.n);
+          in[2 * layout.n] = t;
+        },
+        [&](const double* v) {
+          w.force = Vector3d(v[0], v[1], v[2]);
+          w.torque = Vector3d(v[3], v[4], v[5]);
+        });
     return w;
   };
 }

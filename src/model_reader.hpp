@@ -92,28 +92,83 @@ struct InputLayout {
   }
 };
 
-// The input vector [q; q'; t; …] the compiled constraints of a thread share when the model is
-// large: each writes the inputs its programs read (and only those are read), so a model of 10⁴
-// coordinates and 5000 local constraints fills O(1) inputs per constraint and keeps one vector,
-// not 5000. Sized on first use in a thread (the extra inputs stay 0: constraints do not read
-// them).
-inline std::vector<double>& constraint_inputs(Index size) {
-  thread_local std::vector<double> in;
-  if (in.size() < std::size_t(size)) in.resize(std::size_t(size), 0.0);
-  return in;
+// The buffers of a model file's callables M, Q, V, P_ext and C for one workspace (its
+// CallableScratch, SystemBuilder::scratch): the input vector [q; q'; t; N_c …; lambda_c …],
+// and the outputs and scratch of the largest program. A large model's compiled constraints
+// share its input vector too: each writes the inputs its programs read (and only those are
+// read), so a model of 10⁴ coordinates and 5000 local constraints fills O(1) inputs per
+// constraint and keeps one vector per workspace, not 5000. Every user writes the inputs it
+// reads before evaluating (the extra inputs stay 0 for the constraints, which do not read them).
+struct ModelBuffers final : CallableScratch {
+  std::vector<double> in, out, scratch;
+};
+
+// The sizes of a model's ModelBuffers: grown while the reader compiles (fit), read only
+// afterwards, when a Workspace makes its scratch (factory).
+struct BufferSizes {
+  std::size_t inputs = 0, outputs = 0, scratch = 0;
+  void fit(Index in, const Program& p) {
+    inputs = std::max(inputs, std::size_t(in));
+    outputs = std::max(outputs, std::size_t(p.outputs()));
+    scratch = std::max(scratch, std::size_t(p.scratch_size()));
+  }
+  static ScratchFactory factory(std::shared_ptr<const BufferSizes> sizes) {
+    return [sizes]() -> std::unique_ptr<CallableScratch> {
+      auto b = std::make_unique<ModelBuffers>();
+      b->in.assign(sizes->inputs, 0.0);
+      b->out.assign(sizes->outputs, 0.0);
+      b->scratch.assign(sizes->scratch, 0.0);
+      return b;
+    };
+  }
+};
+
+// The buffers of a model file's callable given the workspace's scratch: the model's
+// ModelBuffers (SystemBuilder::scratch), or — when it is evaluated without one (System's
+// convenience accessors make a scratch per call, so this is only a misuse guard) — a failure.
+inline ModelBuffers& model_buffers(CallableScratch* s) {
+  return static_cast<ModelBuffers&>(*s);
 }
 
-// Inputs of at most this many values are kept by each constraint's scratch (no thread-local
-// look-up per evaluation); larger ones are shared per thread (constraint_inputs).
+// Evaluates p at the inputs `fill` writes into an input vector of `inputs` values, with buffers
+// of this call — for the callables whose signature carries no scratch (a multibody drive or
+// applied wrench, a friction's surface velocity, a controller's weight N): on the stack when
+// in, out and scratch fit in kLocalDoubles (no allocation: small models), else allocated for the
+// call. Thread-safe: nothing is shared. `use` reads the outputs.
+inline constexpr std::size_t kLocalDoubles = 2048;
+template <class Fill, class Use>
+void evaluate_local(const Program& p, Index inputs, Fill&& fill, Use&& use) {
+  const std::size_t ni = std::size_t(inputs), no = std::size_t(p.outputs()),
+                    ns = std::size_t(p.scratch_size()), total = ni + no + ns;
+  double local[kLocalDoubles];
+  std::vector<double> heap;
+  double* base = local;
+  if (total > kLocalDoubles) {
+    heap.assign(total, 0.0);
+    base = heap.data();
+  } else {
+    std::fill(local, local + ni, 0.0);
+  }
+  fill(base);
+  p.evaluate(base, base + ni, base + ni + no);
+  use(static_cast<const double*>(base + ni));
+}
+
+// Inputs of at most this many values are kept by each constraint's scratch; larger ones are
+// shared through the workspace's ModelBuffers.
 inline constexpr Index kOwnInputsMax = 1024;
 
 // Buffers of one compiled constraint: its outputs and scratch, and its inputs when small.
 struct CompiledScratch final : ConstraintScratch {
-  CompiledScratch(const Program& accel_program, const Program& levels_program, Index inputs)
-      : in(std::size_t(inputs <= kOwnInputsMax ? inputs : 0), 0.0),
+  // `shared`: the workspace's input vector to use, or null for one of its own
+  CompiledScratch(const Program& accel_program, const Program& levels_program, Index size,
+                  std::vector<double>* shared)
+      : in(shared != nullptr ? 0 : std::size_t(size), 0.0),
+        inputs(shared != nullptr ? shared : &in),
         accel(accel_program),
         levels(levels_program) {}
-  std::vector<double> in;  // empty: the thread's constraint_inputs
+  std::vector<double> in;       // its own inputs (small model), else empty
+  std::vector<double>* inputs;  // in, or the workspace's ModelBuffers::in
   Evaluator accel, levels;
 };
 
@@ -138,9 +193,19 @@ class CompiledConstraint final : public ConstraintModel {
         columns_(std::move(columns)),
         width_(columns_.empty() ? n : Index(columns_.size())) {}
 
+  // own inputs (a small model's, or without the workspace's ModelBuffers)
   std::unique_ptr<ConstraintScratch> make_scratch(Index) const override {
-    if (layout_.size() > kOwnInputsMax) constraint_inputs(layout_.size());  // (sized now)
-    return std::make_unique<CompiledScratch>(accel_, levels_, layout_.size());
+    return std::make_unique<CompiledScratch>(accel_, levels_, layout_.size(), nullptr);
+  }
+  // a large model's constraints share the workspace's input vector (ModelBuffers)
+  std::unique_ptr<ConstraintScratch> make_scratch_sharing(Index n,
+                                                          CallableScratch* shared) const override {
+    auto* buffers = dynamic_cast<ModelBuffers*>(shared);
+    if (layout_.size() <= kOwnInputsMax || buffers == nullptr ||
+        buffers->in.size() < std::size_t(layout_.size())) {
+      return make_scratch(n);
+    }
+    return std::make_unique<CompiledScratch>(accel_, levels_, layout_.size(), &buffers->in);
   }
 
   const std::vector<Index>& columns() const override { return columns_; }
@@ -189,9 +254,9 @@ class CompiledConstraint final : public ConstraintModel {
   }
 
  private:
-  // the inputs the programs read, in the scratch's or this thread's input vector: O(inputs)
+  // the inputs the programs read, in the scratch's or the workspace's input vector: O(inputs)
   const double* fill(CompiledScratch& w, const VectorXd& q, const VectorXd& qd, double t) const {
-    std::vector<double>& in = w.in.empty() ? constraint_inputs(layout_.size()) : w.in;
+    std::vector<double>& in = *w.inputs;
     for (const Index k : inputs_) {
       in[std::size_t(k)] = k < n_ ? q[k] : k < 2 * n_ ? qd[k - n_] : k == 2 * n_ ? t : 0.0;
     }
@@ -212,22 +277,6 @@ class CompiledConstraint final : public ConstraintModel {
   std::vector<Index> columns_;
   Index width_;
 };
-
-// Per-thread buffers of the callables of System (whose signatures carry no scratch): sized on
-// first use in a thread, never again.
-struct ThreadBuffers {
-  std::vector<double> in, out, scratch;
-  void reserve(Index inputs, const Program& p) {
-    if (in.size() < std::size_t(inputs)) in.assign(std::size_t(inputs), 0.0);
-    if (out.size() < std::size_t(p.outputs())) out.resize(std::size_t(p.outputs()));
-    if (scratch.size() < std::size_t(p.scratch_size()))
-      scratch.resize(std::size_t(p.scratch_size()));
-  }
-};
-inline ThreadBuffers& buffers() {
-  thread_local ThreadBuffers b;
-  return b;
-}
 
 // Refuses, located, what yaml-cpp's node tree would hide: a key given twice in a mapping, a
 // second document, an alias inside the node it names, nesting deeper than yaml-cpp allows; and
@@ -310,6 +359,8 @@ class Reader {
   std::unique_ptr<ExpressionSet> set_;
   InputLayout layout_;
   std::vector<std::pair<std::string, std::string>> chain_;
+  // the sizes of the model's ModelBuffers (the plant's callables')
+  std::shared_ptr<BufferSizes> sizes_ = std::make_shared<BufferSizes>();
 };
 
 }  // namespace ukdyn::model_reader

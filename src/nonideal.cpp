@@ -12,11 +12,15 @@
 namespace ukdyn {
 
 const VectorXd& IdealForceInfo::Qc_ideal() const { return ws_.Qc_ideal; }
+CallableScratch* IdealForceInfo::scratch() const {
+  return replaced_ ? scratch_ : ws_.callables.get();
+}
 const VectorXd& IdealForceInfo::lambda() const { return ws_.lambda; }
 Eigen::Ref<const VectorXd> IdealForceInfo::lambda(Index k) const { return ws_.lambda_of(sys_, k); }
 Eigen::Ref<const VectorXd> IdealForceInfo::share(Index k) const { return ws_.shares.col(k); }
 Eigen::Ref<const VectorXd> IdealForceInfo::reaction(Index k) const {
   read_reactions_ = true;
+  if (outer_ != nullptr) outer_->read_reactions_ = true;
   return ws_.reactions.col(k);
 }
 Eigen::Ref<const VectorXd> IdealForceInfo::slip_hint(Index i) const {

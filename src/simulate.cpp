@@ -236,8 +236,21 @@ SolverOptions integration_options(SolverOptions o) {
 // Everything a run shares between the integrator's callbacks.
 class Run {
  public:
-  Run(const System& sys, const SimulationOptions& o, Trajectory& traj)
-      : sys_(sys),
+  // a Run is neither copied nor moved (its members refer to each other)
+  Run(const Run&) = delete;
+  Run& operator=(const Run&) = delete;
+  ~Run() {
+    if (!finished_) return;
+    try {
+      finished_(ws_);
+    } catch (...) {  // (an observer's failure must not end the program in a destructor)
+    }
+  }
+  // `finished`: called with the workspace when the run ends (detail::simulate_observed)
+  Run(const System& sys, const SimulationOptions& o, Trajectory& traj,
+      std::function<void(const Workspace&)> finished = {})
+      : finished_(std::move(finished)),
+        sys_(sys),
         o_(o),
         ws_(sys, integration_options(o.solver)),
         traj_(traj),
@@ -530,7 +543,8 @@ class Run {
     push(out.Qc_ideal, ws_.Qc_ideal);
     push(out.Qc_nonideal, ws_.Qc_nonideal);
     push(out.lambda, ws_.lambda);
-    const double T = detail::kinetic_energy(ws_, qd_), V = sys_.potential_energy(q_, t);
+    const double T = detail::kinetic_energy(ws_, qd_),
+                 V = sys_.potential_energy(q_, t, ws_.callables.get());
     out.kinetic_energy.push_back(T);
     out.potential_energy.push_back(V);
     out.energy.push_back(T + V);
@@ -770,6 +784,7 @@ class Run {
     traj_.stats.max_velocity_violation = std::max(traj_.stats.max_velocity_violation, v);
   }
 
+  std::function<void(const Workspace&)> finished_;
   const System& sys_;
   const SimulationOptions& o_;
   Workspace ws_;
@@ -911,6 +926,12 @@ std::vector<std::string> check_initial_conditions(const System& sys, const Vecto
 
 Trajectory simulate(const System& sys, const VectorXd& q0, const VectorXd& qd0,
                     const SimulationOptions& given) {
+  return detail::simulate_observed(sys, q0, qd0, given, {});
+}
+
+Trajectory detail::simulate_observed(const System& sys, const VectorXd& q0, const VectorXd& qd0,
+                                     const SimulationOptions& given,
+                                     const std::function<void(const Workspace&)>& finished) {
   validate(sys, q0, qd0, given);
   check_settings(sys, given);
   // an rtol below roundoff is raised to the smallest one that means anything (with a note)
@@ -934,7 +955,7 @@ Trajectory simulate(const System& sys, const VectorXd& q0, const VectorXd& qd0,
   traj.n = sys.dofs();
   traj.m = sys.constraint_rows();
   if (!rtol_note.empty()) traj.stats.notes.push_back(rtol_note);
-  Run run(sys, o, traj);
+  Run run(sys, o, traj, finished);
   Workspace& ws = run.workspace();
   const Index n = sys.dofs();
 

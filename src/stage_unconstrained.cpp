@@ -111,7 +111,7 @@ Status evaluate_mass(const System& sys, Workspace& ws, const VectorXd& q, double
   // M(q,t) and M = L Lᵀ; a constant M is evaluated and factorized once
   if (!(sys.mass_is_constant() && ws.mass_factorized)) {
     ws.mass_factorized = false;
-    sys.mass_matrix(q, t, ws.M);
+    sys.mass_matrix(q, t, ws.callables.get(), ws.M);
     if (!ws.M.allFinite()) return detail::fail(ws, Status::kNonFiniteInput, "M", -1, t);
     const double scale = ws.M.cwiseAbs().maxCoeff();
     if (asymmetry(ws.M) > ws.options().symmetry_tolerance * scale) {
@@ -254,7 +254,7 @@ Status evaluate_unconstrained(const System& sys, Workspace& ws, const VectorXd& 
   detail::require_state_size(sys, q, &qd, "ukdyn::evaluate_unconstrained");
   if (const Status s = detail::evaluate_mass(sys, ws, q, t); s != Status::kOk) return s;
   // Q(q,q',t)
-  sys.forces(q, qd, t, ws.Q);
+  sys.forces(q, qd, t, ws.callables.get(), ws.Q);
   if (!ws.Q.allFinite()) return detail::fail(ws, Status::kNonFiniteInput, "Q", -1, t);
   // a = M⁻¹ Q; for a singular M, a = M_A⁻¹ Q_A once A is known (assemble_constraints)
   if (ws.mass_singular) return Status::kOk;

@@ -86,7 +86,23 @@ SystemBuilder::SystemBuilder(std::vector<std::string> coordinate_names)
   }
 }
 
+SystemBuilder& SystemBuilder::scratch(ScratchFactory factory) {
+  scratch_ = std::move(factory);
+  return *this;
+}
+
+// A callable without scratch is wrapped into one that ignores it (an empty one stays empty).
 SystemBuilder& SystemBuilder::mass_matrix(MassMatrixFn fn) {
+  mass_ = nullptr;
+  if (fn) {
+    mass_ = [f = std::move(fn)](const VectorXd& q, double t, CallableScratch*,
+                                Eigen::Ref<MatrixXd> M) { f(q, t, M); };
+  }
+  has_constant_mass_ = false;
+  return *this;
+}
+
+SystemBuilder& SystemBuilder::mass_matrix(MassMatrixScratchFn fn) {
   mass_ = std::move(fn);
   has_constant_mass_ = false;
   return *this;
@@ -101,7 +117,7 @@ SystemBuilder& SystemBuilder::mass_matrix(const MatrixXd& M) {
   }
   mass_constant_ = M;
   has_constant_mass_ = true;
-  mass_ = [M](const VectorXd&, double, Eigen::Ref<MatrixXd> out) { out = M; };
+  mass_ = [M](const VectorXd&, double, CallableScratch*, Eigen::Ref<MatrixXd> out) { out = M; };
   return *this;
 }
 
@@ -133,16 +149,44 @@ SystemBuilder& SystemBuilder::singular_mass_block(Index offset, Index size, Mass
 }
 
 SystemBuilder& SystemBuilder::forces(ForceFn fn) {
+  forces_ = nullptr;
+  if (fn) {
+    forces_ = [f = std::move(fn)](const VectorXd& q, const VectorXd& qd, double t,
+                                  CallableScratch*, Eigen::Ref<VectorXd> Q) { f(q, qd, t, Q); };
+  }
+  return *this;
+}
+
+SystemBuilder& SystemBuilder::forces(ForceScratchFn fn) {
   forces_ = std::move(fn);
   return *this;
 }
 
 SystemBuilder& SystemBuilder::potential_energy(PotentialFn fn) {
+  potential_ = nullptr;
+  if (fn) {
+    potential_ = [f = std::move(fn)](const VectorXd& q, double t, CallableScratch*) {
+      return f(q, t);
+    };
+  }
+  return *this;
+}
+
+SystemBuilder& SystemBuilder::potential_energy(PotentialScratchFn fn) {
   potential_ = std::move(fn);
   return *this;
 }
 
 SystemBuilder& SystemBuilder::external_power(PowerFn fn) {
+  external_power_ = nullptr;
+  if (fn) {
+    external_power_ = [f = std::move(fn)](const VectorXd& q, const VectorXd& qd, double t,
+                                          CallableScratch*) { return f(q, qd, t); };
+  }
+  return *this;
+}
+
+SystemBuilder& SystemBuilder::external_power(PowerScratchFn fn) {
   external_power_ = std::move(fn);
   return *this;
 }
@@ -202,7 +246,7 @@ System SystemBuilder::build() const {
     }
     s.mass_blocks_ = blocks;
     s.mass_constant_ = constant;
-    s.mass_ = [blocks](const VectorXd& q, double t, Eigen::Ref<MatrixXd> M) {
+    s.mass_ = [blocks](const VectorXd& q, double t, CallableScratch*, Eigen::Ref<MatrixXd> M) {
       M.setZero();
       for (const MassBlock& b : blocks) {
         auto Mk = M.block(b.offset, b.offset, b.size, b.size);
@@ -215,8 +259,11 @@ System SystemBuilder::build() const {
     };
   }
   s.forces_ = forces_ ? forces_
-                      : ForceFn([](const VectorXd&, const VectorXd&, double,
-                                   Eigen::Ref<VectorXd> Q) { Q.setZero(); });
+                      : ForceScratchFn([](const VectorXd&, const VectorXd&, double,
+                                          CallableScratch*, Eigen::Ref<VectorXd> Q) {
+                          Q.setZero();
+                        });
+  s.scratch_ = scratch_;
   // each Coulomb contact brings its stick constraint v = 0, inactive unless switched on
   std::vector<Constraint> all = constraints_;
   for (const auto& f : nonideal_) {

@@ -146,7 +146,9 @@ Workspace::Workspace(const System& sys, const SolverOptions& options)
   C_term.setZero(n);
   tmp_n.setZero(n);
   tmp_m.setZero(m);
-  for (const auto& c : sys.constraints()) scratch.push_back(c.model().make_scratch(n));
+  callables = sys.make_scratch();
+  for (const auto& c : sys.constraints())
+    scratch.push_back(c.model().make_scratch_sharing(n, callables.get()));
   if (options.algorithm == Algorithm::kTextbook) {
     textbook = std::make_unique<TextbookDecomposition>(n, m);
     textbook->set_threshold(options.rank_threshold);

@@ -39,6 +39,8 @@ struct Stabilization {
 /// Short name of a kind ("holonomic", "nonholonomic", "acceleration"). Cost O(1).
 const char* to_string(ConstraintKind kind);
 
+struct CallableScratch;
+
 /// Scratch memory one constraint needs while it is evaluated (automatic-differentiation
 /// buffers). Made once per workspace by ConstraintModel::make_scratch, so evaluation does not
 /// allocate.
@@ -56,6 +58,15 @@ class ConstraintModel {
   /// Scratch for evaluating this constraint on a system with n coordinates (may be null).
   /// Called once when a workspace is made; may allocate.
   virtual std::unique_ptr<ConstraintScratch> make_scratch(Index n) const;
+  /// The same, given the workspace's scratch of the system's callables (System::make_scratch,
+  /// possibly null), which a constraint may share buffers with — the compiled constraints of a
+  /// large model file share one input vector there. Called by the Workspace; the default calls
+  /// make_scratch(n).
+  virtual std::unique_ptr<ConstraintScratch> make_scratch_sharing(Index n,
+                                                                  CallableScratch* shared) const {
+    (void)shared;
+    return make_scratch(n);
+  }
 
   /// Writes this constraint's rows of A (rows × n) and b (rows) at (q, q', t).
   /// Must not allocate. Cost: that of the user callable times ceil(n/4) + 1 passes for the

@@ -445,10 +445,12 @@ std::string describe_control_status(const Controller& ctrl, const ControlWorkspa
 
 /// The plant under the control: a System with the plant's coordinates, mass matrix, potential,
 /// physical constraints and non-ideal forces, whose impressed force is Q + Qc_control, the
-/// control computed by `ctrl` (its nominal model may differ from the plant) with a workspace
-/// that the returned system owns. Run it with simulate() or forward_dynamics(). When the
+/// control computed by `ctrl` (its nominal model may differ from the plant) with a control
+/// workspace that each Workspace of the returned system owns (its CallableScratch, made when
+/// the Workspace is). Run it with simulate() or forward_dynamics(). When the
 /// controller fails at a state, Q is NaN there (forward_dynamics reports kNonFiniteInput on Q).
-/// Not thread-safe: copies share the controller's workspace. Coulomb stick/slip switching is not
+/// Thread-safe like any System: several threads may run it at once, one Workspace each (the
+/// control's statistics are each workspace's). Coulomb stick/slip switching is not
 /// carried over (the sliding law applies throughout). Requirements active on intervals switch
 /// the force: give their ends as SimulationOptions::breakpoints (simulate_controlled does).
 /// @throws std::invalid_argument unless the plant and the controller's model have the same

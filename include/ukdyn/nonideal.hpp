@@ -23,6 +23,7 @@ namespace ukdyn {
 
 class System;
 class Workspace;
+struct CallableScratch;
 struct CoulombFriction;
 
 /// Read-only view of the ideal constraint force at the current evaluation, handed to each
@@ -31,6 +32,11 @@ class IdealForceInfo {
  public:
   /// @param sys the system; @param ws its workspace after the ideal stage.
   IdealForceInfo(const System& sys, const Workspace& ws) : sys_(sys), ws_(ws) {}
+  /// The same view with `scratch` for scratch() — for a wrapper that calls a force of another
+  /// system with that system's scratch (the controlled plant's forces, inside the controlled
+  /// system's workspace). Reading reactions through it counts as reading them through `outer`.
+  IdealForceInfo(const IdealForceInfo& outer, CallableScratch* scratch)
+      : sys_(outer.sys_), ws_(outer.ws_), outer_(&outer), scratch_(scratch), replaced_(true) {}
 
   /// The ideal constraint force Qc_ideal (n), eq. (11).
   const VectorXd& Qc_ideal() const;
@@ -58,12 +64,18 @@ class IdealForceInfo {
   /// Euclidean norm of reaction(k): the normal force of a contact constraint written in
   /// Cartesian coordinates. Cost O(n).
   double normal_force(Index k) const { return reaction(k).norm(); }
+  /// The workspace's scratch of the system's callables (System::make_scratch; null when the
+  /// system has no ScratchFactory): a non-ideal force's buffers for this evaluation.
+  CallableScratch* scratch() const;
   /// True once reaction() or normal_force() was called (apply_nonideal iterates only then).
   bool read_reactions() const { return read_reactions_; }
 
  private:
   const System& sys_;
   const Workspace& ws_;
+  const IdealForceInfo* outer_ = nullptr;  // the view this one replaces the scratch of
+  CallableScratch* scratch_ = nullptr;     // scratch() when replaced_
+  bool replaced_ = false;
   mutable bool read_reactions_ = false;  // (a transient view's own flag)
 };
 

@@ -6,6 +6,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <memory>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -53,6 +54,30 @@ using PowerFn = std::function<double(const VectorXd& q, const VectorXd& qd, doub
 using ForceFn =
     std::function<void(const VectorXd& q, const VectorXd& qd, double t, Eigen::Ref<VectorXd> Q)>;
 
+/// The buffers a description's callables (M, Q, V, P_ext, and the non-ideal forces' C through
+/// IdealForceInfo::scratch()) write during an evaluation, for one Workspace — what
+/// ConstraintScratch is for a constraint. Made once by System::make_scratch() when a Workspace
+/// is constructed (sized then: nothing allocates afterwards) and passed to every evaluation of
+/// that workspace. A System itself holds no mutable state: one System serves any number of
+/// threads at once, each with its own Workspace (docs/algorithm.md, "Thread safety").
+struct CallableScratch {
+  virtual ~CallableScratch() = default;
+};
+/// Makes the per-workspace scratch of a description's callables (SystemBuilder::scratch).
+using ScratchFactory = std::function<std::unique_ptr<CallableScratch>()>;
+/// M(q, t) with the workspace's scratch (nullptr when the system has no ScratchFactory).
+using MassMatrixScratchFn = std::function<void(const VectorXd& q, double t, CallableScratch* s,
+                                               Eigen::Ref<MatrixXd> M)>;
+/// Q(q, q', t) with the workspace's scratch (see MassMatrixScratchFn).
+using ForceScratchFn = std::function<void(const VectorXd& q, const VectorXd& qd, double t,
+                                          CallableScratch* s, Eigen::Ref<VectorXd> Q)>;
+/// V(q, t) with the workspace's scratch (see MassMatrixScratchFn).
+using PotentialScratchFn =
+    std::function<double(const VectorXd& q, double t, CallableScratch* s)>;
+/// P_ext(q, q', t) with the workspace's scratch (see MassMatrixScratchFn).
+using PowerScratchFn = std::function<double(const VectorXd& q, const VectorXd& qd, double t,
+                                            CallableScratch* s)>;
+
 /// A Coulomb friction contact, for the simulation's stick/slip switching (see CoulombFriction).
 struct FrictionContact {
   Index force = -1;              ///< index of the friction's non-ideal force
@@ -67,6 +92,9 @@ struct FrictionContact {
 
 /// An immutable constrained mechanical system M(q,t) q'' = Q(q,q',t) + Qc with constraints
 /// A q'' = b and non-ideal work vector C. Cheap to copy (callables are shared).
+/// Thread safety: a System is never written after build(); everything an evaluation writes is
+/// in a Workspace (its CallableScratch and ConstraintScratch included), so any number of
+/// threads may evaluate or simulate one System (and its copies) at once, one Workspace each.
 class System {
  public:
   Index dofs() const { return n_; }                         ///< n, number of coordinates
@@ -93,26 +121,58 @@ class System {
   /// The diagonal blocks of M, by increasing offset, tiling [0, n) (empty unless
   /// mass_is_block_diagonal()).
   const std::vector<MassBlock>& mass_blocks() const { return mass_blocks_; }
-  /// Writes M(q, t) into M (n × n).
-  void mass_matrix(const VectorXd& q, double t, Eigen::Ref<MatrixXd> M) const { mass_(q, t, M); }
-  /// Writes Q(q, q', t) into Q (n).
+  /// The per-workspace scratch of the callables (SystemBuilder::scratch), or nullptr when they
+  /// need none. A Workspace calls it once, when constructed.
+  std::unique_ptr<CallableScratch> make_scratch() const {
+    return scratch_ ? scratch_() : nullptr;
+  }
+  /// Writes M(q, t) into M (n × n); `s` is the workspace's scratch (make_scratch()).
+  void mass_matrix(const VectorXd& q, double t, CallableScratch* s, Eigen::Ref<MatrixXd> M) const {
+    mass_(q, t, s, M);
+  }
+  /// M(q, t) with a scratch of its own: allocates when the system has a ScratchFactory (for
+  /// reports and tests; the engines pass their workspace's scratch).
+  void mass_matrix(const VectorXd& q, double t, Eigen::Ref<MatrixXd> M) const {
+    const auto s = make_scratch();
+    mass_(q, t, s.get(), M);
+  }
+  /// Writes Q(q, q', t) into Q (n); `s` is the workspace's scratch.
+  void forces(const VectorXd& q, const VectorXd& qd, double t, CallableScratch* s,
+              Eigen::Ref<VectorXd> Q) const {
+    forces_(q, qd, t, s, Q);
+  }
+  /// Q(q, q', t) with a scratch of its own (allocates when the system has a ScratchFactory).
   void forces(const VectorXd& q, const VectorXd& qd, double t, Eigen::Ref<VectorXd> Q) const {
-    forces_(q, qd, t, Q);
+    const auto s = make_scratch();
+    forces_(q, qd, t, s.get(), Q);
   }
 
   /// True when a potential energy was given.
   bool has_potential() const { return bool(potential_); }
-  /// V(q, t), or 0 when none was given.
+  /// V(q, t), or 0 when none was given; `s` is the workspace's scratch.
+  double potential_energy(const VectorXd& q, double t, CallableScratch* s) const {
+    return potential_ ? potential_(q, t, s) : 0.0;
+  }
+  /// V(q, t) with a scratch of its own (allocates when the system has a ScratchFactory).
   double potential_energy(const VectorXd& q, double t) const {
-    return potential_ ? potential_(q, t) : 0.0;
+    if (!potential_) return 0.0;
+    const auto s = make_scratch();
+    return potential_(q, t, s.get());
   }
 
   /// True when an external power was given (SystemBuilder::external_power); without one the
   /// forces in Q are taken to be conservative (−∂V/∂q and velocity terms that do no work).
   bool has_external_power() const { return bool(external_power_); }
-  /// P_ext(q, q', t) (see PowerFn), or 0 when none was given.
+  /// P_ext(q, q', t) (see PowerFn), or 0 when none was given; `s` is the workspace's scratch.
+  double external_power(const VectorXd& q, const VectorXd& qd, double t,
+                        CallableScratch* s) const {
+    return external_power_ ? external_power_(q, qd, t, s) : 0.0;
+  }
+  /// P_ext(q, q', t) with a scratch of its own (allocates when the system has a ScratchFactory).
   double external_power(const VectorXd& q, const VectorXd& qd, double t) const {
-    return external_power_ ? external_power_(q, qd, t) : 0.0;
+    if (!external_power_) return 0.0;
+    const auto s = make_scratch();
+    return external_power_(q, qd, t, s.get());
   }
 
   /// True when the description accounts for the work of every force in Q — it declared a
@@ -141,12 +201,13 @@ class System {
 
   Index n_ = 0, m_ = 0;
   std::vector<std::string> names_;
-  MassMatrixFn mass_;
+  ScratchFactory scratch_;
+  MassMatrixScratchFn mass_;
   bool mass_constant_ = false;
   std::vector<MassBlock> mass_blocks_;
-  ForceFn forces_;
-  PotentialFn potential_;
-  PowerFn external_power_;
+  ForceScratchFn forces_;
+  PotentialScratchFn potential_;
+  PowerScratchFn external_power_;
   bool accounts_for_energy_ = true;
   std::vector<Constraint> constraints_;
   std::size_t user_constraints_ = 0;  // the first ones; the others are the contacts' stick rows
@@ -165,8 +226,13 @@ class SystemBuilder {
   /// A system whose coordinates have these (unique, non-empty) names.
   explicit SystemBuilder(std::vector<std::string> coordinate_names);
 
+  /// The factory of the per-workspace scratch the callables given with a CallableScratch*
+  /// parameter receive (System::make_scratch). Default: none (they receive nullptr).
+  SystemBuilder& scratch(ScratchFactory factory);
   /// M(q, t) as a callable.
   SystemBuilder& mass_matrix(MassMatrixFn fn);
+  /// M(q, t) as a callable of the workspace's scratch (SystemBuilder::scratch).
+  SystemBuilder& mass_matrix(MassMatrixScratchFn fn);
   /// A constant mass matrix (n × n); factorized once per workspace.
   SystemBuilder& mass_matrix(const MatrixXd& M);
   /// A constant diagonal block of M on the coordinates [offset, offset + M_kk.rows()). Blocks
@@ -183,13 +249,19 @@ class SystemBuilder {
   SystemBuilder& singular_mass_block(Index offset, Index size, MassBlockFn fn);
   /// Q(q, q', t) as a callable (default: zero).
   SystemBuilder& forces(ForceFn fn);
+  /// Q(q, q', t) as a callable of the workspace's scratch (SystemBuilder::scratch).
+  SystemBuilder& forces(ForceScratchFn fn);
   /// V(q, t) for energy reports (default: none, V = 0). Q must contain −dV/dq itself.
   SystemBuilder& potential_energy(PotentialFn fn);
+  /// V(q, t) as a callable of the workspace's scratch (SystemBuilder::scratch).
+  SystemBuilder& potential_energy(PotentialScratchFn fn);
   /// P_ext(q, q', t), the power of the forces in Q that V does not account for (dampers,
   /// applied loads, a time-dependent V; see PowerFn). Default: none — Q is −∂V/∂q plus
   /// velocity terms that do no work, and a Q that does work otherwise shows up in the
   /// simulation's energy balance residual.
   SystemBuilder& external_power(PowerFn fn);
+  /// P_ext(q, q', t) as a callable of the workspace's scratch (SystemBuilder::scratch).
+  SystemBuilder& external_power(PowerScratchFn fn);
   /// Declares that V and the external power (either possibly absent) account for the work of
   /// every force in Q — a Q of velocity terms that do no work, say — so that the simulation
   /// checks the energy balance (System::accounts_for_energy). Implied by potential_energy(),
@@ -209,13 +281,14 @@ class SystemBuilder {
  private:
   Index n_;
   std::vector<std::string> names_;
-  MassMatrixFn mass_;
+  ScratchFactory scratch_;
+  MassMatrixScratchFn mass_;
   MatrixXd mass_constant_;
   bool has_constant_mass_ = false;
   std::vector<MassBlock> mass_blocks_;
-  ForceFn forces_;
-  PotentialFn potential_;
-  PowerFn external_power_;
+  ForceScratchFn forces_;
+  PotentialScratchFn potential_;
+  PowerScratchFn external_power_;
   bool accounts_for_energy_ = false;
   std::vector<Constraint> constraints_;
   std::vector<NonIdealForce> nonideal_;

@@ -19,6 +19,7 @@
 namespace ukdyn {
 
 class System;
+struct CallableScratch;
 class TextbookDecomposition;
 class SparseDecomposition;
 
@@ -243,6 +244,9 @@ class Workspace {
   /// (largest rows × widest constraint) one constraint's rows of A before they go into the
   /// sparse engine's pattern (width: its columns(), n for dense rows); 0 × 0 with the dense one
   MatrixXd A_rows;
+  /// The buffers of the system's callables M, Q, V, P_ext and C (System::make_scratch; null when
+  /// they need none): made before the constraints' scratch, which may share it.
+  std::unique_ptr<CallableScratch> callables;
   std::vector<std::unique_ptr<ConstraintScratch>> scratch;  ///< (K) per-constraint buffers
   std::unique_ptr<TextbookDecomposition> textbook;  ///< only with Algorithm::kTextbook
   bool mass_factorized = false;  ///< constant M already factorized
