@@ -2,26 +2,24 @@
 #include <cstdio>
 #include <string>
 
-#include <ukdyn/control.hpp>
-#include <ukdyn/model.hpp>
+#include <ukdyn/control/control.hpp>
+#include <ukdyn/modelfile/model.hpp>
 
 #include "commands.hpp"
+#include "ukdyn/core/format.hpp"
 
 namespace ukdyn::cli {
 namespace {
 
 const char* kind_name(ConstraintKind kind) {
   switch (kind) {
-    case ConstraintKind::kHolonomic: return "holonomic";
-    case ConstraintKind::kNonholonomic: return "nonholonomic";
-    default: return "acceleration form";
+    case ConstraintKind::kHolonomic:
+      return "holonomic";
+    case ConstraintKind::kNonholonomic:
+      return "nonholonomic";
+    default:
+      return "acceleration form";
   }
-}
-
-std::string join(const std::vector<std::string>& items) {
-  std::string s;
-  for (const auto& item : items) s += (s.empty() ? "" : ", ") + item;
-  return s;
 }
 
 }  // namespace
@@ -48,20 +46,22 @@ int check_command(const ModelSource& source) {
   if (r.redundant.empty()) {
     std::printf("  redundant constraints  none\n");
   } else {
-    std::printf("  redundant constraints  %s  (their rows add nothing to the rank of the ones "
-                "before them; the motion is the same without them)\n",
-                join(r.redundant).c_str());
+    std::printf(
+        "  redundant constraints  %s  (their rows add nothing to the rank of the ones "
+        "before them; the motion is the same without them)\n",
+        join(r.redundant).c_str());
   }
   if (!r.contradictory.empty()) {
-    std::printf("  contradictory constraints  %s  (inconsistent: no state satisfies them "
-                "together)\n",
-                join(r.contradictory).c_str());
+    std::printf(
+        "  contradictory constraints  %s  (inconsistent: no state satisfies them "
+        "together)\n",
+        join(r.contradictory).c_str());
   }
   if (r.initial_violations.empty()) {
     std::printf("  initial state       consistent with every constraint\n");
   } else {
-    std::printf("  initial state       violates %zu constraint%s%s:\n",
-                r.initial_violations.size(), r.initial_violations.size() == 1 ? "" : "s",
+    std::printf("  initial state       violates %zu constraint%s%s:\n", r.initial_violations.size(),
+                r.initial_violations.size() == 1 ? "" : "s",
                 model.project_initial ? " (projected before a run: initial: project: true)" : "");
     for (const auto& v : r.initial_violations) std::printf("    %s\n", v.c_str());
   }

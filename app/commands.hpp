@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-#include <ukdyn/model.hpp>
+#include <ukdyn/modelfile/model.hpp>
 
 namespace ukdyn::cli {
 
@@ -50,8 +50,8 @@ std::map<std::string, double> parse_overrides(const std::vector<std::string>& se
 /// file).
 Model load_source(const ModelSource& source);
 
-/// A simulation option given on the command line (options.hpp): its name in the table, the flag
-/// as written (`--rtol`, `--no-stiff-switch`) and its text ("false" for `--no-NAME`).
+/// A simulation option given on the command line (simulation/options.hpp): its name in the table,
+/// the flag as written (`--rtol`, `--no-stiff-switch`) and its text ("false" for `--no-NAME`).
 struct FlagSetting {
   std::string name, flag, text;
 };
@@ -59,12 +59,12 @@ struct FlagSetting {
 /// Settings of `ukdyn run`.
 struct RunArguments {
   ModelSource source;
-  std::string out_dir;           ///< -o DIR (empty: ukdyn-<model>)
+  std::string out_dir;  ///< -o DIR (empty: ukdyn-<model>)
   /// the option flags given, in the table's order: one flag per option of the table (--t-end,
   /// --integrator, --rtol, --max-steps, --stiff-switch / --no-stiff-switch, …), each replacing
   /// the model's simulate: setting of that name
   std::vector<FlagSetting> settings;
-  bool plots = true;             ///< false with --no-plots
+  bool plots = true;  ///< false with --no-plots
 };
 
 /// `ukdyn run`: simulate, write trajectory.csv, summary.json and the plots.

@@ -1,17 +1,17 @@
 // ukdyn: the command-line front end. Argument parsing and dispatch only; the subcommands live in
 // run.cpp, check.cpp and source.cpp, the physics in the library.
 #include <cstdio>
-#include <map>
-#include <utility>
-#include <vector>
 #include <exception>
+#include <map>
 #include <optional>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include <CLI/CLI.hpp>
 
-#include <ukdyn/model.hpp>
-#include <ukdyn/options.hpp>
+#include <ukdyn/modelfile/model.hpp>
+#include <ukdyn/simulation/options.hpp>
 
 #include "commands.hpp"
 
@@ -43,8 +43,7 @@ void add_source_options(CLI::App* cmd, ukdyn::cli::ModelSource& source) {
   cmd->add_option("--example", source.example,
                   "a built-in example instead of a file (ukdyn examples lists them)")
       ->excludes(path);
-  cmd->add_option("--set", source.set,
-                  "override a parameter: --set name=value (repeatable)")
+  cmd->add_option("--set", source.set, "override a parameter: --set name=value (repeatable)")
       ->type_name("NAME=VALUE")
       ->expected(1)
       ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
@@ -54,9 +53,10 @@ void add_source_options(CLI::App* cmd, ukdyn::cli::ModelSource& source) {
 
 int main(int argc, char** argv) {
   using namespace ukdyn::cli;
-  CLI::App app("ukdyn: explicit equations of motion of constrained mechanical systems "
-               "(Udwadia-Kalaba). Runs and checks model files (YAML).",
-               "ukdyn");
+  CLI::App app(
+      "ukdyn: explicit equations of motion of constrained mechanical systems "
+      "(Udwadia-Kalaba). Runs and checks model files (YAML).",
+      "ukdyn");
   app.footer(kExitCodes);
   app.require_subcommand(1);
 
@@ -65,11 +65,12 @@ int main(int argc, char** argv) {
   CLI::App* run_cmd = app.add_subcommand(
       "run", "simulate a model; write DIR/trajectory.csv, DIR/summary.json and PNG plots");
   add_source_options(run_cmd, run.source);
-  run_cmd->add_option("-o,--output", run.out_dir,
-                      "output directory (default: ukdyn-<model name>; created if missing)")
+  run_cmd
+      ->add_option("-o,--output", run.out_dir,
+                   "output directory (default: ukdyn-<model name>; created if missing)")
       ->type_name("DIR");
-  // one flag per simulation option of the table (options.hpp), replacing simulate: NAME; a
-  // boolean option also has --no-NAME
+  // one flag per simulation option of the table (simulation/options.hpp), replacing simulate: NAME;
+  // a boolean option also has --no-NAME
   std::map<std::string, std::string> texts;
   std::map<std::string, bool> negated;
   std::vector<std::pair<const ukdyn::OptionInfo*, CLI::Option*>> flags, no_flags;
@@ -85,26 +86,28 @@ int main(int argc, char** argv) {
                        : info.type == ukdyn::OptionType::kInteger ? "N"
                        : info.type == ukdyn::OptionType::kChoice  ? "NAME"
                        : info.type == ukdyn::OptionType::kBool    ? "BOOL"
-                                                                   : "T1,T2,...";
+                                                                  : "T1,T2,...";
     const std::string help = info.doc + ": " + ukdyn::option_rule(info) + " (default " +
-                             ukdyn::option_text(info.get(defaults)) + "), instead of simulate: " +
-                             info.name;
+                             ukdyn::option_text(info.get(defaults)) +
+                             "), instead of simulate: " + info.name;
     flags.emplace_back(&info, run_cmd->add_option(names, texts[info.name], help)->type_name(type));
     if (info.type == ukdyn::OptionType::kBool) {
       const std::string no = "--no-" + ukdyn::option_flag(info).substr(2);
-      no_flags.emplace_back(&info, run_cmd->add_flag(no, negated[info.name],
-                                                     "the same as " + ukdyn::option_flag(info) +
-                                                         " false (simulate: " + info.name +
-                                                         ": false)"));
+      no_flags.emplace_back(&info,
+                            run_cmd->add_flag(no, negated[info.name],
+                                              "the same as " + ukdyn::option_flag(info) +
+                                                  " false (simulate: " + info.name + ": false)"));
     }
   }
-  run_cmd->add_flag("--no-plots", no_plots, "write no plots (plots need /usr/bin/python3 "
+  run_cmd->add_flag("--no-plots", no_plots,
+                    "write no plots (plots need /usr/bin/python3 "
                     "with matplotlib, or $UKDYN_PYTHON)");
 
   ModelSource check;
-  CLI::App* check_cmd = app.add_subcommand(
-      "check", "report coordinates, constraint rank, degrees of freedom, redundant "
-               "constraints, initial consistency and M at the initial state");
+  CLI::App* check_cmd =
+      app.add_subcommand("check",
+                         "report coordinates, constraint rank, degrees of freedom, redundant "
+                         "constraints, initial consistency and M at the initial state");
   add_source_options(check_cmd, check);
 
   app.add_subcommand("examples", "list the built-in examples");

@@ -11,6 +11,7 @@
 #include <string>
 #include <string_view>
 #include <system_error>
+#include "ukdyn/core/format.hpp"
 
 namespace ukdyn::cli {
 namespace fs = std::filesystem;
@@ -58,7 +59,7 @@ OutputDirectory::OutputDirectory(fs::path dir) : dir_(std::move(dir)) {
     throw std::runtime_error("cannot lock '" + lock.string() + "': " + std::strerror(err));
   }
   // the holder's pid, for the message of a run refused
-  const std::string pid = std::to_string(::getpid()) + "\n";
+  const std::string pid = ukdyn::format_number(::getpid()) + "\n";
   if (::ftruncate(lock_fd_, 0) != 0 || ::pwrite(lock_fd_, pid.data(), pid.size(), 0) < 0) {
     // only the message of a refused run would miss it
   }

@@ -23,7 +23,7 @@ except ImportError:
     sys.stderr.write("plot_trajectory.py: matplotlib is not installed\n")
     sys.exit(3)
 
-# the work channels of the energy balance (io.hpp), in CSV order
+# the work channels of the energy balance (io/trajectory_files.hpp), in CSV order
 WORKS = ("work_nonideal", "work_ideal", "work_drive", "work_external", "work_control")
 
 

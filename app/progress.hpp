@@ -6,7 +6,7 @@
 #include <cstdio>
 #include <string>
 
-#include <ukdyn/simulate.hpp>
+#include <ukdyn/simulation/simulate.hpp>
 
 namespace ukdyn::cli {
 

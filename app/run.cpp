@@ -1,8 +1,8 @@
 // `ukdyn run`: load a model, simulate it, write trajectory.csv (the library's columns and the
 // model's output expressions), summary.json and the plots.
 #include <algorithm>
-#include <chrono>
 #include <charconv>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -21,11 +21,11 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
-#include <ukdyn/io.hpp>
-#include <ukdyn/model.hpp>
-#include <ukdyn/options.hpp>
-#include <ukdyn/run.hpp>
-#include <ukdyn/simulate.hpp>
+#include <ukdyn/io/trajectory_files.hpp>
+#include <ukdyn/modelfile/model.hpp>
+#include <ukdyn/modelfile/run.hpp>
+#include <ukdyn/simulation/options.hpp>
+#include <ukdyn/simulation/simulate.hpp>
 
 #include "commands.hpp"
 #include "embedded.hpp"
@@ -47,8 +47,10 @@ void warn_duplicate_columns(const ModelRun& run) {
   const auto standard = csv_columns(run.trajectory);
   for (const CsvColumn& c : run.extra_columns) {
     if (std::find(standard.begin(), standard.end(), c.name) != standard.end()) {
-      std::fprintf(stderr, "warning: the output column '%s' has the name of a standard "
-                   "column; the CSV holds two columns of that name\n", c.name.c_str());
+      std::fprintf(stderr,
+                   "warning: the output column '%s' has the name of a standard "
+                   "column; the CSV holds two columns of that name\n",
+                   c.name.c_str());
     }
   }
 }
@@ -75,8 +77,10 @@ std::vector<fs::path> make_plots(const fs::path& csv, const fs::path& dir) {
   const char* env = std::getenv("UKDYN_PYTHON");
   const std::string python = env && *env ? env : "/usr/bin/python3";
   if (::access(python.c_str(), X_OK) != 0) {
-    std::fprintf(stderr, "warning: %s not found: no plots (set UKDYN_PYTHON to a python with "
-                 "matplotlib, or pass --no-plots)\n", python.c_str());
+    std::fprintf(stderr,
+                 "warning: %s not found: no plots (set UKDYN_PYTHON to a python with "
+                 "matplotlib, or pass --no-plots)\n",
+                 python.c_str());
     return {};
   }
   // the script goes to a private temporary file, removed afterwards
@@ -92,8 +96,10 @@ std::vector<fs::path> make_plots(const fs::path& csv, const fs::path& dir) {
   const int code = written ? run_python(python, script, csv.string(), dir.string()) : -1;
   fs::remove(script);
   if (code == kPlotNoMatplotlib) {
-    std::fprintf(stderr, "warning: %s has no matplotlib: no plots (install python3-matplotlib, "
-                 "or pass --no-plots)\n", python.c_str());
+    std::fprintf(stderr,
+                 "warning: %s has no matplotlib: no plots (install python3-matplotlib, "
+                 "or pass --no-plots)\n",
+                 python.c_str());
     return {};
   }
   if (code != 0) {
@@ -117,7 +123,7 @@ std::string default_out_dir(const ModelSource& source) {
 }
 
 // the option flags replace the model's simulate: settings, each through the table's setter
-// (options.hpp): a bad value is a UsageError naming the flag, its text and the rule
+// (simulation/options.hpp): a bad value is a UsageError naming the flag, its text and the rule
 void apply_option_flags(const RunArguments& args, SimulationOptions& options) {
   for (const FlagSetting& f : args.settings) {
     try {
@@ -228,18 +234,17 @@ int run_command(const RunArguments& args) {
     options.progress = [&bar](const ProgressReport& p) { bar.update(p); };
     try {
       run = run_model(model, options, write_rows);
-    } catch (const std::invalid_argument& e) {
-      // the model cannot be started (inconsistent initial state, bad settings)
-      bar.finish();
+    } catch (const InconsistentInitialState& e) {
       // (no hint to project when the constraints contradict each other: it cannot help)
-      const bool initial =
-          std::string_view(e.what()).find("initial") != std::string_view::npos &&
-          std::string_view(e.what()).find("contradict") == std::string_view::npos &&
-          std::string_view(e.what()).find("cannot be satisfied") == std::string_view::npos;
+      bar.finish();
+      const bool hint = e.cause() == InconsistentInitialState::Cause::kNotProjected;
       std::fprintf(stderr, "%s: error: %s%s\n", model.file.c_str(), e.what(),
-                   initial && !options.project_initial
-                       ? " (hint: add `project: true` under `initial:` in the model file)"
-                       : "");
+                   hint ? " (hint: add `project: true` under `initial:` in the model file)" : "");
+      return kExitModel;
+    } catch (const std::invalid_argument& e) {
+      // the model cannot be started (bad settings)
+      bar.finish();
+      std::fprintf(stderr, "%s: error: %s\n", model.file.c_str(), e.what());
       return kExitModel;
     }
   }
@@ -281,9 +286,10 @@ int run_command(const RunArguments& args) {
                 s.stiff_switches == 1 ? "" : "s", s.stiff_steps);
   }
   if (s.least_squares > 0) {
-    std::printf("  redundant constraints: %ld evaluations off the constraints took the "
-                "least-squares acceleration\n",
-                s.least_squares);
+    std::printf(
+        "  redundant constraints: %ld evaluations off the constraints took the "
+        "least-squares acceleration\n",
+        s.least_squares);
   }
   std::printf("  max violation %.3g (position), %.3g (velocity)\n", s.max_position_violation,
               s.max_velocity_violation);

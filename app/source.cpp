@@ -70,12 +70,9 @@ Model load_source(const ModelSource& source) {
         return parse_model(f.text, "examples/models/" + source.example + ".yaml", overrides);
       }
     }
-  } catch (const ModelError& e) {
-    // --set of a parameter the model does not declare is a command-line mistake (exit 2): the
-    // reader reports it without a position (line 0), naming the option
-    if (e.line() == 0 && e.message().rfind("--set ", 0) == 0)
-      throw UsageError(e.message() + (e.hint().empty() ? "" : " (" + e.hint() + ")"));
-    throw;
+  } catch (const OverrideError& e) {
+    // --set of a parameter the model does not declare is a command-line mistake (exit 2)
+    throw UsageError(e.message() + (e.hint().empty() ? "" : " (" + e.hint() + ")"));
   }
   throw UsageError("no example called '" + source.example + "'; the examples are " +
                    example_names());

@@ -53,9 +53,12 @@ int StopSignals::received() { return g_received.load(std::memory_order_relaxed);
 
 const char* StopSignals::name(int sig) {
   switch (sig) {
-    case SIGINT: return "SIGINT";
-    case SIGTERM: return "SIGTERM";
-    default: return "a signal";
+    case SIGINT:
+      return "SIGINT";
+    case SIGTERM:
+      return "SIGTERM";
+    default:
+      return "a signal";
   }
 }
 

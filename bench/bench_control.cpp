@@ -1,5 +1,5 @@
-// Control-force evaluations per second (compute_control, control.hpp) for an n-link pendulum in
-// absolute joint angles (state-dependent, dense M), n = 3, 7, 30, with
+// Control-force evaluations per second (compute_control, control/control.hpp) for an n-link
+// pendulum in absolute joint angles (state-dependent, dense M), n = 3, 7, 30, with
 //   - "joints": every joint angle follows a trajectory (m_r = n rows, one requirement), and
 //   - "tip":    only the end point follows a path (m_r = 2 rows, redundant actuation),
 // under the Gauss law and the weighted law with a state-dependent N. For scale, "model" is one
@@ -10,7 +10,7 @@
 
 #include <benchmark/benchmark.h>
 
-#include <ukdyn/control.hpp>
+#include <ukdyn/control/control.hpp>
 #include <ukdyn/ukdyn.hpp>
 
 namespace {
@@ -30,16 +30,17 @@ ukdyn::System chain(Index n) {
   }
   return ukdyn::SystemBuilder(names)
       .mass_matrix([mu](const VectorXd& q, double, Eigen::Ref<MatrixXd> M) {
-        const Index dofs = q.size();
-        for (Index j = 0; j < dofs; ++j) {
-          for (Index i = 0; i < dofs; ++i) M(i, j) = mu(i, j) * std::cos(q[i] - q[j]);
+        const Index coordinate_count = q.size();
+        for (Index j = 0; j < coordinate_count; ++j) {
+          for (Index i = 0; i < coordinate_count; ++i) M(i, j) = mu(i, j) * std::cos(q[i] - q[j]);
         }
       })
       .forces([mu](const VectorXd& q, const VectorXd& qd, double, Eigen::Ref<VectorXd> Q) {
-        const Index dofs = q.size();
-        for (Index i = 0; i < dofs; ++i) {
+        const Index coordinate_count = q.size();
+        for (Index i = 0; i < coordinate_count; ++i) {
           double s = 9.81 * mu(i, i) * std::sin(q[i]);
-          for (Index j = 0; j < dofs; ++j) s += mu(i, j) * std::sin(q[i] - q[j]) * qd[j] * qd[j];
+          for (Index j = 0; j < coordinate_count; ++j)
+            s += mu(i, j) * std::sin(q[i] - q[j]) * qd[j] * qd[j];
           Q[i] = -s;
         }
       })
@@ -85,7 +86,7 @@ VectorXd state(Index n, double scale) {
 }
 
 void run(benchmark::State& st, const ukdyn::Controller& ctrl) {
-  const Index n = ctrl.dofs();
+  const Index n = ctrl.coordinate_count();
   ukdyn::ControlWorkspace ws(ctrl);
   const VectorXd q = state(n, 0.2), qd = state(n, 0.5);
   double t = 0.0;

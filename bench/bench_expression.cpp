@@ -9,7 +9,7 @@
 
 #include <benchmark/benchmark.h>
 
-#include <ukdyn/expression.hpp>
+#include <ukdyn/modelfile/expression.hpp>
 
 namespace {
 

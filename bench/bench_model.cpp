@@ -3,7 +3,7 @@
 // Three ways to write one system:
 //   file  examples/models/NAME.yaml through load_model(): M, Q, A, b, phi, phi' derived
 //         symbolically by GiNaC and run on compiled expression tapes;
-//   ad    the C++ gallery (gallery.hpp): M and Q by hand, constraints as generic callables
+//   ad    the C++ gallery (gallery/gallery.hpp): M and Q by hand, constraints as generic callables
 //         differentiated by Eigen's AutoDiff — what a C++ user of the library writes;
 //   hand  everything by hand: M, Q, and each constraint's A, b, phi, phi' derived on paper and
 //         coded as a ConstraintModel (the fastest a C++ user can do with the engine).
@@ -24,11 +24,11 @@
 
 #include <benchmark/benchmark.h>
 
-#include <ukdyn/forward.hpp>
-#include <ukdyn/gallery.hpp>
-#include <ukdyn/model.hpp>
-#include <ukdyn/projection.hpp>
-#include <ukdyn/simulate.hpp>
+#include <ukdyn/dynamics/forward.hpp>
+#include <ukdyn/dynamics/projection.hpp>
+#include <ukdyn/gallery/gallery.hpp>
+#include <ukdyn/modelfile/model.hpp>
+#include <ukdyn/simulation/simulate.hpp>
 
 namespace {
 
@@ -41,10 +41,12 @@ using ukdyn::VectorXd;
 
 // The distance between two points of a planar linkage, phi = (|p_i − p_j|² − L²) / (2L), with
 // p = (q[2k], q[2k+1]) for a moving point k and a fixed point otherwise (index −1 and `fixed`).
-//   A_i = (p_i − p_j)ᵀ / L,  A_j = −A_i;  b = −|v_i − v_j|² / L;  phi' = (p_i − p_j)·(v_i − v_j) / L
+//   A_i = (p_i − p_j)ᵀ / L,  A_j = −A_i;  b = −|v_i − v_j|² / L;  phi' = (p_i − p_j)·(v_i − v_j) /
+//   L
 class Distance final : public ukdyn::ConstraintModel {
  public:
-  Distance(Index i, Index j, double fx, double fy, double L) : i_(i), j_(j), fx_(fx), fy_(fy), L_(L) {}
+  Distance(Index i, Index j, double fx, double fy, double L)
+      : i_(i), j_(j), fx_(fx), fy_(fy), L_(L) {}
 
   void acceleration_form(const VectorXd& q, const VectorXd& qd, double, ukdyn::ConstraintScratch*,
                          Eigen::Ref<MatrixXd> A, Eigen::Ref<VectorXd> b) const override {
@@ -121,9 +123,8 @@ ukdyn::System hand_double_four_bar() {
       .forces([](const VectorXd&, const VectorXd&, double, Eigen::Ref<VectorXd> Q) {
         Q << 0.0, -m * g, 0.0, -1.5 * m * g, 0.0, -m * g;
       })
-      .potential_energy([](const VectorXd& q, double) {
-        return m * g * (q[1] + 1.5 * q[3] + q[5]);
-      })
+      .potential_energy(
+          [](const VectorXd& q, double) { return m * g * (q[1] + 1.5 * q[3] + q[5]); })
       .add(distance("crank1", 0, -1, 0.0, 0.0, L))
       .add(distance("crank2", 1, -1, 1.0, 0.0, L))
       .add(distance("crank3", 2, -1, 2.0, 0.0, L))
@@ -136,7 +137,7 @@ ukdyn::System hand_double_four_bar() {
 // the comparisons
 
 struct Case {
-  std::string file;   // examples/models/<file>.yaml
+  std::string file;  // examples/models/<file>.yaml
   std::function<ukdyn::System()> cpp;
 };
 
@@ -234,10 +235,20 @@ BENCHMARK_CAPTURE(BM_Eval, pendulum_vs_hand, kPendulumHand)->Iterations(200);
 BENCHMARK_CAPTURE(BM_Eval, double_four_bar_vs_ad, kFourBarAd)->Iterations(100);
 BENCHMARK_CAPTURE(BM_Eval, double_four_bar_vs_hand, kFourBarHand)->Iterations(100);
 BENCHMARK_CAPTURE(BM_Eval, chaplygin_sleigh_vs_ad, kSleighAd)->Iterations(200);
-BENCHMARK_CAPTURE(BM_Sim, pendulum_vs_ad, kPendulumAd)->Iterations(15)->Unit(benchmark::kMillisecond);
-BENCHMARK_CAPTURE(BM_Sim, pendulum_vs_hand, kPendulumHand)->Iterations(15)->Unit(benchmark::kMillisecond);
-BENCHMARK_CAPTURE(BM_Sim, double_four_bar_vs_ad, kFourBarAd)->Iterations(9)->Unit(benchmark::kMillisecond);
-BENCHMARK_CAPTURE(BM_Sim, double_four_bar_vs_hand, kFourBarHand)->Iterations(9)->Unit(benchmark::kMillisecond);
-BENCHMARK_CAPTURE(BM_Sim, chaplygin_sleigh_vs_ad, kSleighAd)->Iterations(15)->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(BM_Sim, pendulum_vs_ad, kPendulumAd)
+    ->Iterations(15)
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(BM_Sim, pendulum_vs_hand, kPendulumHand)
+    ->Iterations(15)
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(BM_Sim, double_four_bar_vs_ad, kFourBarAd)
+    ->Iterations(9)
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(BM_Sim, double_four_bar_vs_hand, kFourBarHand)
+    ->Iterations(9)
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(BM_Sim, chaplygin_sleigh_vs_ad, kSleighAd)
+    ->Iterations(15)
+    ->Unit(benchmark::kMillisecond);
 
 BENCHMARK_MAIN();

@@ -1,6 +1,6 @@
 // Loading large models (issue #14, item 7): parse_model() + check_model() of generated models,
 // the time `ukdyn check` spends before anything runs. The models are those of
-// /work/shared/reproducers/bad-input/scripts/gen_scaling.py, generated in memory:
+// gen_scaling.py of the bad-input defect report (not in the repository), generated in memory:
 //   Uncoupled/N        N oscillators, T = ½ Σ q̇_i², V = Σ ½ q_i²
 //   Constrained/N      N oscillators with N/2 holonomic constraints q_{2k} − q_{2k+1} = 0
 //   DistinctTerms/N    one coordinate, V = Σ_{i=1}^{N} sin(x + i)/N (N distinct terms)
@@ -10,7 +10,7 @@
 
 #include <benchmark/benchmark.h>
 
-#include <ukdyn/model.hpp>
+#include <ukdyn/modelfile/model.hpp>
 
 namespace {
 
@@ -43,10 +43,11 @@ std::string chain(int n) {
   for (int i = 0; i < n; ++i) {
     b += "  - {name: l" + std::to_string(i) + ", type: planar, mass: 1, inertia: 0.1, position: [" +
          std::to_string(i + 0.5) + ", 0]}\n";
-    j += i == 0 ? "  - {name: p0, type: revolute, parent: ground, child: l0, child_point: [-0.5, 0]}\n"
-                : "  - {name: p" + std::to_string(i) + ", type: revolute, parent: l" +
-                      std::to_string(i - 1) + ", child: l" + std::to_string(i) +
-                      ", parent_point: [0.5, 0], child_point: [-0.5, 0]}\n";
+    j += i == 0
+             ? "  - {name: p0, type: revolute, parent: ground, child: l0, child_point: [-0.5, 0]}\n"
+             : "  - {name: p" + std::to_string(i) + ", type: revolute, parent: l" +
+                   std::to_string(i - 1) + ", child: l" + std::to_string(i) +
+                   ", parent_point: [0.5, 0], child_point: [-0.5, 0]}\n";
   }
   return b + j + "forces:\n  - {type: gravity, g: [0, -9.81]}\nsimulate: {t_end: 0.01}\n";
 }
@@ -61,21 +62,47 @@ void load_and_check(benchmark::State& state, const std::string& text) {
   state.counters["bytes"] = double(text.size());
 }
 
-void Uncoupled(benchmark::State& state) { load_and_check(state, uncoupled(int(state.range(0)), 0)); }
+void Uncoupled(benchmark::State& state) {
+  load_and_check(state, uncoupled(int(state.range(0)), 0));
+}
 void Constrained(benchmark::State& state) {
   load_and_check(state, uncoupled(int(state.range(0)), int(state.range(0)) / 2));
 }
-void DistinctTerms(benchmark::State& state) { load_and_check(state, distinct_terms(int(state.range(0)))); }
+void DistinctTerms(benchmark::State& state) {
+  load_and_check(state, distinct_terms(int(state.range(0))));
+}
 void Chain(benchmark::State& state) { load_and_check(state, chain(int(state.range(0)))); }
 
-BENCHMARK(Uncoupled)->Arg(100)->Arg(1000)->Arg(10000)->Unit(benchmark::kMillisecond)
-    ->Iterations(1)->Repetitions(1)->Complexity();
-BENCHMARK(Constrained)->Arg(100)->Arg(300)->Arg(1000)->Arg(10000)->Unit(benchmark::kMillisecond)
-    ->Iterations(1)->Complexity();
-BENCHMARK(DistinctTerms)->Arg(10000)->Arg(100000)->Arg(400000)->Unit(benchmark::kMillisecond)
-    ->Iterations(1)->Complexity();
-BENCHMARK(Chain)->Arg(100)->Arg(1000)->Arg(3334)->Unit(benchmark::kMillisecond)
-    ->Iterations(1)->Complexity();
+BENCHMARK(Uncoupled)
+    ->Arg(100)
+    ->Arg(1000)
+    ->Arg(10000)
+    ->Unit(benchmark::kMillisecond)
+    ->Iterations(1)
+    ->Repetitions(1)
+    ->Complexity();
+BENCHMARK(Constrained)
+    ->Arg(100)
+    ->Arg(300)
+    ->Arg(1000)
+    ->Arg(10000)
+    ->Unit(benchmark::kMillisecond)
+    ->Iterations(1)
+    ->Complexity();
+BENCHMARK(DistinctTerms)
+    ->Arg(10000)
+    ->Arg(100000)
+    ->Arg(400000)
+    ->Unit(benchmark::kMillisecond)
+    ->Iterations(1)
+    ->Complexity();
+BENCHMARK(Chain)
+    ->Arg(100)
+    ->Arg(1000)
+    ->Arg(3334)
+    ->Unit(benchmark::kMillisecond)
+    ->Iterations(1)
+    ->Complexity();
 
 }  // namespace
 

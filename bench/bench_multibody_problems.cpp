@@ -1,7 +1,7 @@
 // ukdyn on the shared benchmark problems P1 (double pendulum), P2 (crank-rocker four-bar) and P3
-// (closed chain, N = 8, 32, 128) of ../shared/benchmarks/README.md, each built with the
-// multibody layer (multibody.hpp): one planar body (x, y, theta of its centre of mass) per link
-// of problems.json, one revolute joint per hinge and per loop closure, gravity (0, −9.81).
+// (closed chain, N = 8, 32, 128) of bench/data/README.md, each built with the
+// multibody layer (multibody/multibody.hpp): one planar body (x, y, theta of its centre of mass)
+// per link of problems.json, one revolute joint per hinge and per loop closure, gravity (0, −9.81).
 // P1's point masses are planar bodies with the stated inertia 1e-9 about their centre (the tip).
 // Fixed step h = 1e-3 with RK4 and with RK5 (Dormand–Prince's 5th-order formula at a fixed
 // step), projection drift control, the sparse engine (--engine=dense for the dense one).
@@ -17,7 +17,7 @@
 //   --projection-tolerance=TOL                          drift projection tolerance (default
 //                                                       1e-10: a tenth of the closure target)
 //   --problems=PATH                                     problems.json (default:
-//                                                       ../shared/benchmarks/ beside the repo)
+//                                                       bench/data/ in the repository)
 //
 // Counters: ms_per_sim_s (wall milliseconds per simulated second), max_violation and
 // final_violation (distance between the two loop-closure points from the body poses,
@@ -42,8 +42,8 @@
 
 #include "shared_protocol.hpp"
 
-#include <ukdyn/multibody.hpp>
-#include <ukdyn/simulate.hpp>
+#include <ukdyn/multibody/multibody.hpp>
+#include <ukdyn/simulation/simulate.hpp>
 
 namespace {
 
@@ -128,9 +128,7 @@ std::vector<Problem> load(const std::string& path) {
 
 // a point given in link k's frame (origin at the proximal hinge, x along the link), as a point
 // of its body (origin at the centre of mass, same axes)
-Vector3d body_point(const Link& k, const Eigen::Vector2d& p) {
-  return {p.x() - k.com_x, p.y(), 0};
-}
+Vector3d body_point(const Link& k, const Eigen::Vector2d& p) { return {p.x() - k.com_x, p.y(), 0}; }
 
 // P1 with particles: the point mass of link k (at its tip, com_x = length) is particle k, tied
 // to the previous one (the ground pivot for link 0) by a distance joint "J<k>" of the link's length
@@ -250,7 +248,8 @@ struct Config {
 // one: RK4, ms per simulated second, sparse against dense, P1 3.1 / 3.7, P2 5.6 / 8.7,
 // P3 N = 8 14.8 / 34.2)
 std::string g_engine = "sparse";
-double g_projection_tolerance = 1e-10;  // --projection-tolerance= (joints held to 1e-10 m, under the 1e-9 target)
+double g_projection_tolerance =
+    1e-10;  // --projection-tolerance= (joints held to 1e-10 m, under the 1e-9 target)
 
 ukdyn::Engine engine_for(const mb::MultibodyModel&) {
   return g_engine == "dense" ? ukdyn::Engine::kDense : ukdyn::Engine::kSparse;
@@ -337,8 +336,7 @@ void BM_Problem(benchmark::State& state, const Problem& p, ukdyn::Integrator met
   if (!a.error.empty()) state.SkipWithError(a.error.c_str());
 }
 
-// --- --json=PATH: the record format of ../shared/benchmarks/README.md ------------------------
-
+// --- --json=PATH: the record format of bench/data/README.md ----------------------------------
 
 nlohmann::ordered_json record(const Problem& p, ukdyn::Integrator method) {
   const mb::MultibodyModel m = build(p);
@@ -358,10 +356,11 @@ nlohmann::ordered_json record(const Problem& p, ukdyn::Integrator method) {
   nlohmann::ordered_json r;
   r["engine"] = "ukdyn";
   r["config"] =
-      std::string(p.particles
-                      ? "multibody.hpp: particles (x, y, z) and distance joints (the massless "
-                        "rods), "
-                      : "multibody.hpp: planar bodies (x, y, theta) and revolute joints, ") +
+      std::string(
+          p.particles
+              ? "multibody/multibody.hpp: particles (x, y, z) and distance joints (the massless "
+                "rods), "
+              : "multibody/multibody.hpp: planar bodies (x, y, theta) and revolute joints, ") +
       (sparse ? "sparse engine (block Cholesky of M, rank-revealing sparse LDL' of A M^-1 A')"
               : "dense engine (Cholesky of M + complete orthogonal decomposition)") +
       ", projection drift control, " +
@@ -372,7 +371,7 @@ nlohmann::ordered_json record(const Problem& p, ukdyn::Integrator method) {
   r["integrator"] = integrator;
   r["h"] = kStep;
   r["T"] = p.T;
-  r["nq"] = m.system.dofs();
+  r["nq"] = m.system.coordinate_count();
   r["n_closure_eqs"] = m.system.constraint_rows();
   r["wall_runs"] = wall;
   r["wall_per_sim_s"] = timed.median() / p.T;
@@ -423,8 +422,7 @@ nlohmann::ordered_json record(const Problem& p, ukdyn::Integrator method) {
 int main(int argc, char** argv) {
   std::string json_path;
   std::string problems =
-      (std::filesystem::path(__FILE__).parent_path() / "../../shared/benchmarks/problems.json")
-          .string();
+      (std::filesystem::path(__FILE__).parent_path() / "data/problems.json").string();
   // our flags; the rest goes to Google Benchmark
   std::vector<char*> rest = {argv[0]};
   for (int i = 1; i < argc; ++i) {

@@ -1,6 +1,6 @@
 // ukdyn on the shared benchmark problems P1 (double pendulum) and P2 (crank-rocker four-bar) of
-// ../shared/benchmarks/README.md: RK4 at h = 1e-3 for T = 10 s with the default drift control
-// (projection), in the natural coordinates of gallery.hpp.
+// bench/data/README.md: RK4 at h = 1e-3 for T = 10 s with the default drift control
+// (projection), in the natural coordinates of gallery/gallery.hpp.
 //
 //   bench_shared_problems [google-benchmark flags]   timing by Google Benchmark; the counters
 //                                                    carry the accuracy figures of a separate run
@@ -28,8 +28,8 @@
 
 #include "shared_protocol.hpp"
 
-#include <ukdyn/gallery.hpp>
-#include <ukdyn/simulate.hpp>
+#include <ukdyn/gallery/gallery.hpp>
+#include <ukdyn/simulation/simulate.hpp>
 
 namespace {
 
@@ -131,7 +131,7 @@ BENCHMARK_CAPTURE(BM_SharedProblem, P2, std::string("shared_P2"))
     ->MinTime(2.0);
 
 // ---------------------------------------------------------------------------------------------
-// --json=PATH: the record format of ../shared/benchmarks/README.md
+// --json=PATH: the record format of bench/data/README.md
 
 std::string num(double v) {
   if (!std::isfinite(v)) return "null";
@@ -172,7 +172,7 @@ std::string record(const std::string& name) {
   os << "{\"engine\": \"ukdyn\", \"config\": "
      << str("natural coordinates, fundamental equation (Cholesky + COD), projection drift control")
      << ", \"problem\": " << str(info.id) << ", \"integrator\": \"rk4\", \"h\": " << num(kStep)
-     << ", \"T\": " << num(info.T) << ", \"nq\": " << ex.system.dofs()
+     << ", \"T\": " << num(info.T) << ", \"nq\": " << ex.system.coordinate_count()
      << ", \"n_closure_eqs\": " << ex.system.constraint_rows() << ", \"wall_runs\": [";
   for (std::size_t i = 0; i < wall.size(); ++i) os << (i ? ", " : "") << num(wall[i]);
   os << "], \"wall_per_sim_s\": " << num(median / info.T)
@@ -191,7 +191,8 @@ std::string record(const std::string& name) {
      << str("distance between coupler tip and rocker tip with every link placed from its "
             "proximal point at its exact length (0 for P1)")
      << ", \"evaluations\": " << a.evaluations << ", \"projections\": " << a.projections
-     << ", \"wall_per_sim_s_min\": " << num(*std::min_element(wall.begin(), wall.end()) / info.T) << "}, \"settings\": {"
+     << ", \"wall_per_sim_s_min\": " << num(*std::min_element(wall.begin(), wall.end()) / info.T)
+     << "}, \"settings\": {"
      << "\"drift\": \"projection\", \"projection_tolerance\": " << num(so.projection.tolerance)
      << ", \"projection_max_iterations\": " << so.projection.max_iterations
      << ", \"rank_threshold\": " << num(so.solver.rank_threshold)

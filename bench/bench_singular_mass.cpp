@@ -5,10 +5,10 @@
 //                  the same coordinates and constraints with the regular M + c Aᵀ A, Q + c Aᵀ b
 //                  written by hand (c = m; the same motion)
 //   Chain/N        N rigid bodies (quaternions) hanging in a chain of spherical joints under
-//                  gravity: the singular 4 × 4 quaternion blocks (how multibody.hpp builds them
-//                  now), against the fictitious-inertia blocks with J0 = mean(J) (how it built them
-//                  before, tests/support/fictitious_inertia.hpp). N = 3 runs the dense engine
-//                  (21 coordinates), N = 16 and 64 the sparse one.
+//                  gravity: the singular 4 × 4 quaternion blocks (how multibody/multibody.hpp
+//                  builds them now), against the fictitious-inertia blocks with J0 = mean(J) (how
+//                  it built them before, tests/support/fictitious_inertia.hpp). N = 3 runs the
+//                  dense engine (21 coordinates), N = 16 and 64 the sparse one.
 //
 // The acceptance bound of the issue: singular / regular <= 1.3 on each pair; for the quaternion
 // chains, "not slower than today": singular / fictitious <= 1.00.
@@ -27,9 +27,9 @@
 
 #include <benchmark/benchmark.h>
 
-#include <ukdyn/autodiff.hpp>
-#include <ukdyn/forward.hpp>
-#include <ukdyn/multibody.hpp>
+#include <ukdyn/core/autodiff.hpp>
+#include <ukdyn/dynamics/forward.hpp>
+#include <ukdyn/multibody/multibody.hpp>
 
 #include "support/fictitious_inertia.hpp"
 
@@ -63,8 +63,14 @@ System pendulum3(bool regular) {
       Q << 0.0, -kM * kG, 0.0;
     });
   }
-  b.add(holonomic("cx", 1, [](const auto& q, const auto&, auto& phi) { using std::sin; phi[0] = q[0] - kL * sin(q[2]); }));
-  b.add(holonomic("cy", 1, [](const auto& q, const auto&, auto& phi) { using std::cos; phi[0] = q[1] + kL * cos(q[2]); }));
+  b.add(holonomic("cx", 1, [](const auto& q, const auto&, auto& phi) {
+    using std::sin;
+    phi[0] = q[0] - kL * sin(q[2]);
+  }));
+  b.add(holonomic("cy", 1, [](const auto& q, const auto&, auto& phi) {
+    using std::cos;
+    phi[0] = q[1] + kL * cos(q[2]);
+  }));
   return b.build();
 }
 
@@ -97,14 +103,15 @@ mb::MultibodyModel chain(int N) {
   b.set_gravity({0, 0, -kG});
   mb::BodyId prev = mb::kGround;
   for (int i = 0; i < N; ++i) {
-    const Eigen::Quaterniond u(Eigen::AngleAxisd(0.2 * (i + 1), Eigen::Vector3d(1, 0.5, 0).normalized()));
+    const Eigen::Quaterniond u(
+        Eigen::AngleAxisd(0.2 * (i + 1), Eigen::Vector3d(1, 0.5, 0).normalized()));
     const Eigen::Vector3d r = u * Eigen::Vector3d(0, 0, -0.5) + Eigen::Vector3d(0, 0, -1.0 * i);
     const mb::BodyId id = b.add_rigid_body("b" + std::to_string(i), 1.0, {0.1, 0.1, 0.02}, r, u,
                                            Eigen::Vector3d::Zero(), {0.3, -0.2, 1.0});
-    b.add_joint(mb::spherical("s" + std::to_string(i), prev,
-                              prev == mb::kGround ? Eigen::Vector3d(0, 0, 0)
-                                                  : Eigen::Vector3d(0, 0, -0.5),
-                              id, {0, 0, 0.5}));
+    b.add_joint(
+        mb::spherical("s" + std::to_string(i), prev,
+                      prev == mb::kGround ? Eigen::Vector3d(0, 0, 0) : Eigen::Vector3d(0, 0, -0.5),
+                      id, {0, 0, 0.5}));
     prev = id;
   }
   return b.build();
@@ -122,7 +129,8 @@ void BM_Chain(benchmark::State& state) {
   }
   state.SetLabel(regular ? "fictitious J0 (before)" : "singular (now)");
 }
-BENCHMARK(BM_Chain)->Args({3, 0})->Args({3, 1})->Args({16, 0})->Args({16, 1})->Args({64, 0})->Args({64, 1});
+BENCHMARK(BM_Chain)->Args({3, 0})->Args({3, 1})->Args({16, 0})->Args({16, 1})->Args({64, 0})->Args(
+    {64, 1});
 
 // --evaluate CASE N: N + 1 evaluations of one case, no timing (for callgrind)
 int evaluate_count(const std::string& name, long count) {
@@ -148,10 +156,12 @@ int evaluate_count(const std::string& name, long count) {
   }
   if (base.rfind("chain", 0) == 0) {
     const mb::MultibodyModel m = chain(std::atoi(base.c_str() + 5));
-    if (before) return run(test::with_fictitious_inertia(m.system, (0.1 + 0.1 + 0.02) / 3.0), m.q0, m.qd0);
+    if (before)
+      return run(test::with_fictitious_inertia(m.system, (0.1 + 0.1 + 0.02) / 3.0), m.q0, m.qd0);
     return run(m.system, m.q0, m.qd0);
   }
-  std::fprintf(stderr, "unknown case '%s' (chainN, pendulum3, with or without _before)\n", name.c_str());
+  std::fprintf(stderr, "unknown case '%s' (chainN, pendulum3, with or without _before)\n",
+               name.c_str());
   return 2;
 }
 

@@ -11,7 +11,7 @@
 // (deficient = 2), as redundant joints produce.
 #include <benchmark/benchmark.h>
 
-#include <ukdyn/reference.hpp>
+#include <ukdyn/reference/reference.hpp>
 #include <ukdyn/ukdyn.hpp>
 
 #include "support/alloc_counter.hpp"
@@ -107,7 +107,8 @@ void BM_KKT(benchmark::State& state) {
   const Index n = p.M.rows(), m = p.A.rows();
   KktSolver kkt(n, m);
   VectorXd qdd(n), lambda(m);
-  measure(state, p, [&] { kkt.solve(p.M, p.Q, p.A, p.b, qdd, lambda); }, qdd, lambda);
+  measure(
+      state, p, [&] { kkt.solve(p.M, p.Q, p.A, p.b, qdd, lambda); }, qdd, lambda);
 }
 
 // the whole forward_dynamics call; M through a callable so that it is factorized every time
@@ -129,7 +130,8 @@ void BM_Pipeline(benchmark::State& state, bool residuals) {
   const System sys = builder.build();
   Workspace ws(sys, SolverOptions{.compute_residuals = residuals});
   const VectorXd z = VectorXd::Zero(n);
-  measure(state, p, [&] { forward_dynamics(sys, ws, z, z, 0.0); }, ws.qdd, ws.lambda);
+  measure(
+      state, p, [&] { forward_dynamics(sys, ws, z, z, 0.0); }, ws.qdd, ws.lambda);
   if (ws.status != Status::kOk) state.SkipWithError(describe_status(sys, ws).c_str());
 }
 

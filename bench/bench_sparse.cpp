@@ -6,13 +6,13 @@
 //   bench_sparse --evaluations       one evaluation of the fundamental equation, dense and sparse,
 //                                    N = 8 … 1024 (dense up to 256): median ns per evaluation and
 //                                    per body over 5 timed repetitions (after a warm-up)
-//   bench_sparse --p3 [--json=PATH]  the shared problem P3 (N = 8, 32, 128; ../shared/benchmarks):
+//   bench_sparse --p3 [--json=PATH]  the shared problem P3 (N = 8, 32, 128; bench/data):
 //                                    RK4, h = 1e-3, T = 2 s, projection drift control, sparse
 //                                    engine; one warm-up and five timed runs (median ms per
 //                                    simulated second), then a run sampled at every step for the
 //                                    closure violation, energy drift and the reported coordinate
 //   --step=H                         the RK4 step of --p3 (default 1e-3, the shared protocol's)
-//   --problems=PATH                  problems.json (default: ../shared/benchmarks/ beside the repo)
+//   --problems=PATH                  problems.json (default: bench/data/ in the repository)
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -30,11 +30,11 @@
 
 #include "support/planar_revolute.hpp"
 
-#include <ukdyn/forward.hpp>
-#include <ukdyn/simulate.hpp>
-#include <ukdyn/sparse.hpp>
-#include <ukdyn/system.hpp>
-#include <ukdyn/workspace.hpp>
+#include <ukdyn/core/system.hpp>
+#include <ukdyn/dynamics/forward.hpp>
+#include <ukdyn/dynamics/workspace.hpp>
+#include <ukdyn/linalg/sparse.hpp>
+#include <ukdyn/simulation/simulate.hpp>
 
 namespace {
 
@@ -163,7 +163,8 @@ Chain ladder(const std::vector<double>& phi_half) {
     const Index o = side * H;
     const std::string s = side ? "b" : "a";
     b.add(pin(s + "pin0", o, back, -1, Eigen::Vector2d(d * double(side), 0.0)));
-    for (Index i = 1; i < H; ++i) b.add(pin(s + "pin" + std::to_string(i), o + i, back, o + i - 1, tip));
+    for (Index i = 1; i < H; ++i)
+      b.add(pin(s + "pin" + std::to_string(i), o + i, back, o + i - 1, tip));
     b.add(pin(s + "closure", o + H - 1, tip, -1, p + Eigen::Vector2d(d * double(side), 0.0)));
   }
   for (Index i = 1; i < H; ++i) {
@@ -244,8 +245,8 @@ void ladders() {
     const ukdyn::SparseDecomposition d(c.sys);
     ukdyn::Workspace ws(c.sys, ukdyn::SolverOptions{.engine = ukdyn::Engine::kSparse});
     ukdyn::forward_dynamics(c.sys, ws, c.q0, c.qd0, 0.0);
-    std::cout << "| " << N << " | " << c.sys.dofs() << " | " << c.sys.constraint_rows() << " | "
-              << ws.rank << " | " << std::fixed << std::setprecision(0);
+    std::cout << "| " << N << " | " << c.sys.coordinate_count() << " | " << c.sys.constraint_rows()
+              << " | " << ws.rank << " | " << std::fixed << std::setprecision(0);
     if (std::isnan(dense)) {
       std::cout << "— | " << sparse << " | — | ";
     } else {
@@ -264,8 +265,9 @@ void ladders() {
 }
 
 void evaluations() {
-  std::cout << "One evaluation of the fundamental equation (forward_dynamics, no Gauss/virtual-work "
-               "residuals), closed chains of N planar bodies: n = 3N, m = 2N + 2; median of 5\n\n";
+  std::cout
+      << "One evaluation of the fundamental equation (forward_dynamics, no Gauss/virtual-work "
+         "residuals), closed chains of N planar bodies: n = 3N, m = 2N + 2; median of 5\n\n";
   std::cout << "| N | n | m | dense ns | sparse ns | dense / sparse | sparse ns per body | "
                "nnz(A) | nnz(L_G) | sparse vs dense (q'', lambda) |\n"
                "|---|---|---|---|---|---|---|---|---|---|\n";
@@ -354,11 +356,12 @@ std::string num(double v) {
 
 void p3(const std::string& problems, const std::string& json_path) {
   std::vector<std::string> records;
-  std::cout << "\nP3 (closed chain), RK4 h = 1e-3, T = 2 s, projection drift control, sparse engine\n\n"
-            << "| problem | n | m | ms per simulated second (median of 5) | runs (ms/s) | max "
-               "closure violation (m) | final violation (m) | phi link 1 at T (rad) | error vs "
-               "reference | max rel. energy drift | projections |\n"
-            << "|---|---|---|---|---|---|---|---|---|---|---|\n";
+  std::cout
+      << "\nP3 (closed chain), RK4 h = 1e-3, T = 2 s, projection drift control, sparse engine\n\n"
+      << "| problem | n | m | ms per simulated second (median of 5) | runs (ms/s) | max "
+         "closure violation (m) | final violation (m) | phi link 1 at T (rad) | error vs "
+         "reference | max rel. energy drift | projections |\n"
+      << "|---|---|---|---|---|---|---|---|---|---|---|\n";
   for (const P3& p : load_p3(problems)) {
     const Chain c = chain(p.phi0, Eigen::Vector2d(1.2, 0.0));
     const Index N = Index(p.phi0.size());
@@ -368,7 +371,8 @@ void p3(const std::string& problems, const std::string& json_path) {
       const auto t0 = std::chrono::steady_clock::now();
       const ukdyn::Trajectory tr = ukdyn::simulate(c.sys, c.q0, c.qd0, p3_options(p.T, 0.0));
       const auto t1 = std::chrono::steady_clock::now();
-      if (tr.stats.status != ukdyn::Status::kOk) std::cerr << p.id << ": " << tr.stats.message << "\n";
+      if (tr.stats.status != ukdyn::Status::kOk)
+        std::cerr << p.id << ": " << tr.stats.message << "\n";
       if (run > 0) wall.push_back(std::chrono::duration<double>(t1 - t0).count());
     }
     // a run sampled at every step: closure from the poses, energy, coordinate
@@ -405,15 +409,16 @@ void p3(const std::string& problems, const std::string& json_path) {
       << ", \"nq\": " << n << ", \"n_closure_eqs\": " << c.sys.constraint_rows()
       << ", \"wall_runs\": [";
     for (std::size_t i = 0; i < wall.size(); ++i) r << (i ? ", " : "") << num(wall[i]);
-    r << "], \"wall_per_sim_s\": " << num(median(wall) / p.T) << ", \"max_violation\": "
-      << num(max_gap) << ", \"final_violation\": " << num(final_gap) << ", \"E0\": " << num(E0)
-      << ", \"E_final\": " << num(tr.energy.back() - p.V_eq)
+    r << "], \"wall_per_sim_s\": " << num(median(wall) / p.T)
+      << ", \"max_violation\": " << num(max_gap) << ", \"final_violation\": " << num(final_gap)
+      << ", \"E0\": " << num(E0) << ", \"E_final\": " << num(tr.energy.back() - p.V_eq)
       << ", \"rel_drift_final\": " << num((tr.energy.back() - p.V_eq - E0) / std::abs(E0))
       << ", \"rel_drift_max\": " << num(drift) << ", \"coord_name\": \"phi_link1\", \"coord_t1\": "
       << num(tr.q[std::size_t((S / 2) * n + 2)]) << ", \"coord_final\": " << num(coord)
       << ", \"steps\": " << tr.stats.steps << ", \"deterministic\": true, \"extra\": "
-      << "{\"coord_reference\": " << num(p.reference) << ", \"coord_error\": "
-      << num(coord - p.reference) << "}, \"settings\": {\"drift\": \"projection\", "
+      << "{\"coord_reference\": " << num(p.reference)
+      << ", \"coord_error\": " << num(coord - p.reference)
+      << "}, \"settings\": {\"drift\": \"projection\", "
       << "\"projection_tolerance\": 1e-12}, \"error\": "
       << (tr.stats.status == ukdyn::Status::kOk ? "null" : "\"" + tr.stats.message + "\"") << "}";
     records.push_back(r.str());
@@ -434,8 +439,7 @@ int main(int argc, char** argv) {
   bool want_eval = false, want_p3 = false;
   std::string json_path;
   std::string problems =
-      (std::filesystem::path(__FILE__).parent_path() / "../../shared/benchmarks/problems.json")
-          .string();
+      (std::filesystem::path(__FILE__).parent_path() / "data/problems.json").string();
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     if (a == "--evaluations") {

@@ -14,9 +14,9 @@
 
 #include <benchmark/benchmark.h>
 
-#include <ukdyn/model.hpp>
-#include <ukdyn/run.hpp>
-#include <ukdyn/simulate.hpp>
+#include <ukdyn/modelfile/model.hpp>
+#include <ukdyn/modelfile/run.hpp>
+#include <ukdyn/simulation/simulate.hpp>
 
 namespace {
 

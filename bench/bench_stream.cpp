@@ -15,11 +15,11 @@
 #include <limits>
 #include <string>
 
-#include <ukdyn/gallery.hpp>
-#include <ukdyn/io.hpp>
-#include <ukdyn/model.hpp>
-#include <ukdyn/run.hpp>
-#include <ukdyn/simulate.hpp>
+#include <ukdyn/gallery/gallery.hpp>
+#include <ukdyn/io/trajectory_files.hpp>
+#include <ukdyn/modelfile/model.hpp>
+#include <ukdyn/modelfile/run.hpp>
+#include <ukdyn/simulation/simulate.hpp>
 
 namespace {
 
@@ -43,10 +43,9 @@ int child(Mode mode, long samples) {
       return run.trajectory.samples() == samples ? 0 : 1;
     }
     ukdyn::CsvWriter csv("/dev/null");
-    const ukdyn::ModelRun run = ukdyn::run_model(
-        model, o, [&](const ukdyn::ModelRun& chunk) {
-          csv.append(chunk.trajectory, chunk.extra_columns);
-        });
+    const ukdyn::ModelRun run = ukdyn::run_model(model, o, [&](const ukdyn::ModelRun& chunk) {
+      csv.append(chunk.trajectory, chunk.extra_columns);
+    });
     csv.commit();
     return run.trajectory.stats.samples == samples && csv.rows() == samples ? 0 : 1;
   }
@@ -56,10 +55,9 @@ int child(Mode mode, long samples) {
     o.t_end = t_end;
     o.output_every = 0.01;
     ukdyn::CsvWriter csv("/dev/null");
-    const ukdyn::ModelRun run = ukdyn::run_model(
-        model, o, [&](const ukdyn::ModelRun& chunk) {
-          csv.append(chunk.trajectory, chunk.extra_columns);
-        });
+    const ukdyn::ModelRun run = ukdyn::run_model(model, o, [&](const ukdyn::ModelRun& chunk) {
+      csv.append(chunk.trajectory, chunk.extra_columns);
+    });
     csv.commit();
     return run.trajectory.stats.samples == samples && csv.rows() == samples ? 0 : 1;
   }

@@ -1,4 +1,4 @@
-// The timing protocol of ../shared/benchmarks/README.md, shared by the benchmarks that write its
+// The timing protocol of bench/data/README.md, shared by the benchmarks that write its
 // result records: one warm-up run, then five timed runs of the stepping loop.
 #pragma once
 
@@ -8,7 +8,7 @@
 
 #include <Eigen/Core>
 
-#include <ukdyn/simulate.hpp>
+#include <ukdyn/simulation/simulate.hpp>
 
 namespace ukdyn::bench {
 

@@ -6,14 +6,19 @@
 
 int main() {
   const double m = 2.0, g = 9.81, alpha = 0.5, mu = 0.3;
-  ukdyn::System sys = ukdyn::SystemBuilder({"x", "y"})
-      .mass_matrix(m * Eigen::Matrix2d::Identity())
-      .forces([=](const auto&, const auto&, double, Eigen::Ref<Eigen::VectorXd> Q) { Q << 0, -m * g; })
-      .add(ukdyn::holonomic("plane", 1, [=](const auto& q, const auto&, auto& phi) {
-        phi[0] = q[1] + q[0] * std::tan(alpha);  // the incline y = -x tan(alpha)
-      }))
-      .add(ukdyn::coulomb_friction({.constraint = "plane", .mu = mu}))
-      .build();
+  ukdyn::System sys =
+      ukdyn::SystemBuilder({"x", "y"})
+          .mass_matrix(m * Eigen::Matrix2d::Identity())
+          .forces([=](const auto&, const auto&, double, Eigen::Ref<Eigen::VectorXd> Q) {
+            Q << 0, -m * g;
+          })
+          .add(ukdyn::holonomic("plane", 1,
+                                [=](const auto& q, const auto&, auto& phi) {
+                                  phi[0] = q[1] +
+                                           q[0] * std::tan(alpha);  // the incline y = -x tan(alpha)
+                                }))
+          .add(ukdyn::coulomb_friction({.constraint = "plane", .mu = mu}))
+          .build();
   ukdyn::Workspace ws(sys);
   Eigen::VectorXd q(2), qd(2);
   q << 0, 0;

@@ -11,9 +11,9 @@
 #include <stdexcept>
 #include <string>
 
-#include "ukdyn/model.hpp"
-#include "ukdyn/run.hpp"
-#include "ukdyn/simulate.hpp"
+#include "ukdyn/modelfile/model.hpp"
+#include "ukdyn/modelfile/run.hpp"
+#include "ukdyn/simulation/simulate.hpp"
 
 namespace {
 

@@ -116,7 +116,7 @@ def bench_solve_overhead():
 
         ev = min(loop(solver.evaluate) for _ in range(5))
         so = min(loop(solver.solve) for _ in range(5))
-        n, m = model.system.dofs, model.system.constraint_rows
+        n, m = model.system.coordinate_count, model.system.constraint_rows
         print(f"  {name:18s} (n={n}, m={m})  C++ {cpp * 1e6:6.2f} µs   evaluate {ev * 1e6:6.2f} µs "
               f"(+{(ev - cpp) * 1e6:5.2f})   solve {so * 1e6:6.2f} µs (+{(so - cpp) * 1e6:5.2f})")
 

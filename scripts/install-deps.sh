@@ -24,6 +24,7 @@ packages=(
   libgtest-dev libgmock-dev            # tests
   libbenchmark-dev                     # benchmarks
   clang libclang-rt-14-dev             # fuzz/: libFuzzer and the sanitizer runtimes of clang
+  clang-format                         # scripts/format.sh: the house style, checked by CI
 )
 
 missing=()

@@ -3,7 +3,8 @@
 
 usage: scripts/reliability_rerun.py [REPORT_DIR]     (from the project root, after scripts/setup.sh)
 
-REPORT_DIR is the report's folder of reproducers (default ../shared/reproducers/bad-input: its
+REPORT_DIR is the defect report's folder of reproducers, outside the repository (default
+../shared/reproducers/bad-input, beside the repository: its
 models/ and scripts/). Each case runs the real program (build/app/ukdyn), the Python module
 (build/python) or a small C++ program linked to build/libukdyn.a, and is judged against what
 docs/reliability.md promises: the exit code, the words of the message (what and where), and for

@@ -7,6 +7,7 @@
 #include <limits>
 
 #include "common.hpp"
+#include "ukdyn/core/format.hpp"
 
 namespace ukdyn::python {
 namespace {
@@ -68,9 +69,9 @@ Constraint make_constraint(const py::tuple& spec, std::shared_ptr<CallbackErrors
   return c;
 }
 
-SystemHandle from_callables(const std::vector<std::string>& coordinates, py::object M,
-                            py::object Q, py::object V, const py::list& constraints,
-                            const py::list& nonideal, py::object P) {
+SystemHandle from_callables(const std::vector<std::string>& coordinates, py::object M, py::object Q,
+                            py::object V, const py::list& constraints, const py::list& nonideal,
+                            py::object P) {
   auto errs = std::make_shared<CallbackErrors>();
   const Index n = Index(coordinates.size());
   SystemBuilder b(coordinates);
@@ -84,9 +85,10 @@ SystemHandle from_callables(const std::vector<std::string>& coordinates, py::obj
   } else {
     MatrixXd Mc = read_matrix(M, "from_callables", "M");
     if (Mc.rows() != n || Mc.cols() != n) {
-      throw std::invalid_argument("from_callables: M must be " + std::to_string(n) + " × " +
-                                  std::to_string(n) + " (got " + std::to_string(Mc.rows()) +
-                                  " × " + std::to_string(Mc.cols()) + ")");
+      throw std::invalid_argument("from_callables: M must be " + ukdyn::format_number(n) + " × " +
+                                  ukdyn::format_number(n) + " (got " +
+                                  ukdyn::format_number(Mc.rows()) + " × " +
+                                  ukdyn::format_number(Mc.cols()) + ")");
     }
     b.mass_matrix(Mc);
   }
@@ -94,7 +96,10 @@ SystemHandle from_callables(const std::vector<std::string>& coordinates, py::obj
     b.forces([errs, Q](const VectorXd& q, const VectorXd& qd, double t, Eigen::Ref<VectorXd> out) {
       call_python(
           *errs,
-          [&] { read_into(Q(copy_vector(q), copy_vector(qd), t), "ukdyn callable", "Q(q, q_dot, t)", out); },
+          [&] {
+            read_into(Q(copy_vector(q), copy_vector(qd), t), "ukdyn callable", "Q(q, q_dot, t)",
+                      out);
+          },
           [&] { out.setConstant(kNaN); });
     });
   }
@@ -102,7 +107,8 @@ SystemHandle from_callables(const std::vector<std::string>& coordinates, py::obj
     b.potential_energy([errs, V](const VectorXd& q, double t) {
       double value = kNaN;
       call_python(
-          *errs, [&] { value = V(copy_vector(q), t).template cast<double>(); }, [&] { value = kNaN; });
+          *errs, [&] { value = V(copy_vector(q), t).template cast<double>(); },
+          [&] { value = kNaN; });
       return value;
     });
   }
@@ -110,8 +116,7 @@ SystemHandle from_callables(const std::vector<std::string>& coordinates, py::obj
     b.external_power([errs, P](const VectorXd& q, const VectorXd& qd, double t) {
       double value = kNaN;
       call_python(
-          *errs,
-          [&] { value = P(copy_vector(q), copy_vector(qd), t).template cast<double>(); },
+          *errs, [&] { value = P(copy_vector(q), copy_vector(qd), t).template cast<double>(); },
           [&] { value = kNaN; });
       return value;
     });
@@ -139,21 +144,21 @@ SystemHandle from_callables(const std::vector<std::string>& coordinates, py::obj
       const std::string name = spec[1].cast<std::string>();
       py::object fn = spec[2];
       const std::string what = "non-ideal force '" + name + "': C(q, q_dot, t, Qc_ideal, lambda)";
-      b.add(NonIdealForce(name, [errs, fn, what](const VectorXd& q, const VectorXd& qd, double t,
-                                                  const IdealForceInfo& ideal,
-                                                  Eigen::Ref<VectorXd> C) {
-        call_python(
-            *errs,
-            [&] {
-              read_into(fn(copy_vector(q), copy_vector(qd), t, copy_vector(ideal.Qc_ideal()),
-                           copy_vector(ideal.lambda())),
-                        "ukdyn callable", what.c_str(), C);
-            },
-            [&] { C.setConstant(kNaN); });
-      }));
+      b.add(NonIdealForce(
+          name, [errs, fn, what](const VectorXd& q, const VectorXd& qd, double t,
+                                 const IdealForceInfo& ideal, Eigen::Ref<VectorXd> C) {
+            call_python(
+                *errs,
+                [&] {
+                  read_into(fn(copy_vector(q), copy_vector(qd), t, copy_vector(ideal.Qc_ideal()),
+                               copy_vector(ideal.lambda())),
+                            "ukdyn callable", what.c_str(), C);
+                },
+                [&] { C.setConstant(kNaN); });
+          }));
     } else if (kind == "viscous") {
-      b.add(viscous_friction({.coefficient = spec[1].cast<double>(),
-                              .coordinates = coordinate_indices(spec[2])}));
+      b.add(viscous_friction(
+          {.coefficient = spec[1].cast<double>(), .coordinates = coordinate_indices(spec[2])}));
     } else if (kind == "coulomb") {
       CoulombFriction f;
       f.constraint = spec[1].cast<std::string>();
@@ -205,12 +210,16 @@ ControllerHandle build_controller(const SystemHandle& model, const py::list& req
   } else if (law == "weighted") {
     if (N.is_none()) throw std::invalid_argument("controller: law 'weighted' needs N");
     if (PyCallable_Check(N.ptr())) {
-      b.weighted([errs, N](const VectorXd& q, const VectorXd& qd, double t, Eigen::Ref<MatrixXd> out) {
-        call_python(
-            *errs,
-            [&] { read_matrix_into(N(copy_vector(q), copy_vector(qd), t), "ukdyn callable", "N(q, q_dot, t)", out); },
-            [&] { out.setConstant(kNaN); });
-      });
+      b.weighted(
+          [errs, N](const VectorXd& q, const VectorXd& qd, double t, Eigen::Ref<MatrixXd> out) {
+            call_python(
+                *errs,
+                [&] {
+                  read_matrix_into(N(copy_vector(q), copy_vector(qd), t), "ukdyn callable",
+                                   "N(q, q_dot, t)", out);
+                },
+                [&] { out.setConstant(kNaN); });
+          });
     } else {
       b.weighted(read_matrix(N, "controller", "N"));
     }
@@ -224,11 +233,16 @@ ControllerHandle build_controller(const SystemHandle& model, const py::list& req
     RobustControl rc;
     for (auto [k, v] : d) {
       const std::string key = py::str(k);
-      if (key == "bound") rc.bound = v.cast<double>();
-      else if (key == "relative_bound") rc.relative_bound = v.cast<double>();
-      else if (key == "gain_uncertainty") rc.gain_uncertainty = v.cast<double>();
-      else if (key == "boundary_layer") rc.boundary_layer = v.cast<double>();
-      else throw std::invalid_argument("controller: unknown robust setting '" + key + "'");
+      if (key == "bound")
+        rc.bound = v.cast<double>();
+      else if (key == "relative_bound")
+        rc.relative_bound = v.cast<double>();
+      else if (key == "gain_uncertainty")
+        rc.gain_uncertainty = v.cast<double>();
+      else if (key == "boundary_layer")
+        rc.boundary_layer = v.cast<double>();
+      else
+        throw std::invalid_argument("controller: unknown robust setting '" + key + "'");
     }
     b.robust(rc);
   }
@@ -244,9 +258,10 @@ py::tuple simulate_system(const SystemHandle& h, py::handle q0, py::handle qd0,
   const InterruptCheck interrupt(stop);
   interrupt.attach(o);
   VectorXd q, qd;
-  read_vector(q0, h.system.dofs(), "simulate", "q0", q);
-  read_vector(qd0, h.system.dofs(), "simulate", "qd0", qd);
-  const ControllerHandle* ctrl = controller.is_none() ? nullptr : &controller.cast<const ControllerHandle&>();
+  read_vector(q0, h.system.coordinate_count(), "simulate", "q0", q);
+  read_vector(qd0, h.system.coordinate_count(), "simulate", "qd0", qd);
+  const ControllerHandle* ctrl =
+      controller.is_none() ? nullptr : &controller.cast<const ControllerHandle&>();
   ModelRun run;
   try {
     py::gil_scoped_release release;

@@ -1,6 +1,7 @@
 // ukdyn.Controller, ukdyn.ControlSolver and ukdyn.ControlSolution: exact tracking control
-// (control.hpp) one evaluation at a time.
+// (control/control.hpp) one evaluation at a time.
 #include "common.hpp"
+#include "ukdyn/core/format.hpp"
 
 namespace ukdyn::python {
 namespace {
@@ -22,8 +23,8 @@ class ControlSolver {
   explicit ControlSolver(ControllerHandle h)
       : h_(std::move(h)),
         ws_(*h_.controller),
-        q_(VectorXd::Zero(h_.controller->dofs())),
-        qd_(VectorXd::Zero(h_.controller->dofs())) {}
+        q_(VectorXd::Zero(h_.controller->coordinate_count())),
+        qd_(VectorXd::Zero(h_.controller->coordinate_count())) {}
 
   ControlStatus evaluate(py::handle q, py::handle qd, double t) {
     read_into(q, "ControlSolver.compute", "q", q_);
@@ -73,20 +74,23 @@ py::array solution_vector(py::object self) {
 
 void bind_control(py::module_& m) {
   py::class_<ControllerHandle>(m, "Controller", R"doc(
-An immutable tracking controller (the C++ ukdyn::Controller, control.hpp; docs/control.md): the
+An immutable tracking controller (the C++ ukdyn::Controller, control/control.hpp; docs/control.md): the
 nominal model of the plant, the requirements with their error dynamics, the law (Gauss or
 weighted), the actuated coordinates and the robust settings. A model file's `control:`
 section makes one (Model.controller); ukdyn.from_sympy(requirements=...) writes that section.
 )doc")
-      .def_property_readonly("dofs", [](const ControllerHandle& h) { return h.controller->dofs(); },
-                             "n, the plant's coordinates.")
-      .def_property_readonly("requirement_rows",
-                             [](const ControllerHandle& h) { return h.controller->requirement_rows(); },
-                             "m_r, the rows of all requirements.")
-      .def_property_readonly("row_names",
-                             [](const ControllerHandle& h) { return h.controller->row_names(); },
-                             "Names of the requirement rows ('<requirement>' or "
-                             "'<requirement>.<row>'), the CSV's error.<row> columns.")
+      .def_property_readonly(
+          "coordinate_count",
+          [](const ControllerHandle& h) { return h.controller->coordinate_count(); },
+          "n, the plant's coordinates.")
+      .def_property_readonly(
+          "requirement_rows",
+          [](const ControllerHandle& h) { return h.controller->requirement_rows(); },
+          "m_r, the rows of all requirements.")
+      .def_property_readonly(
+          "row_names", [](const ControllerHandle& h) { return h.controller->row_names(); },
+          "Names of the requirement rows ('<requirement>' or "
+          "'<requirement>.<row>'), the CSV's error.<row> columns.")
       .def_property_readonly(
           "requirements",
           [](const ControllerHandle& h) {
@@ -96,42 +100,50 @@ section makes one (Model.controller); ukdyn.from_sympy(requirements=...) writes 
             return out;
           },
           "The requirement names.")
-      .def_property_readonly("law", [](const ControllerHandle& h) { return to_string(h.controller->law()); },
-                             "'gauss' or 'weighted'.")
-      .def_property_readonly("actuators", [](const ControllerHandle& h) { return h.controller->actuators(); },
-                             "k, the columns of the actuation matrix S (n when fully actuated).")
-      .def_property_readonly("fully_actuated",
-                             [](const ControllerHandle& h) { return h.controller->fully_actuated(); },
-                             "True when every coordinate is actuated (S = I).")
-      .def_property_readonly("actuation",
-                             [](const ControllerHandle& h) { return copy_matrix(h.controller->actuation()); },
-                             "The actuation matrix S (n × k; a copy).")
-      .def_property_readonly("robust",
-                             [](const ControllerHandle& h) -> py::object {
-                               const auto& r = h.controller->robust();
-                               if (!r) return py::none();
-                               py::dict d;
-                               d["bound"] = r->bound;
-                               d["relative_bound"] = r->relative_bound;
-                               d["gain_uncertainty"] = r->gain_uncertainty;
-                               d["boundary_layer"] = r->boundary_layer;
-                               return d;
-                             },
-                             "The robust settings as a dict, or None.")
       .def_property_readonly(
-          "model", [](const ControllerHandle& h) { return SystemHandle{h.controller->model(), nullptr}; },
+          "law", [](const ControllerHandle& h) { return to_string(h.controller->law()); },
+          "'gauss' or 'weighted'.")
+      .def_property_readonly(
+          "actuators", [](const ControllerHandle& h) { return h.controller->actuators(); },
+          "k, the columns of the actuation matrix S (n when fully actuated).")
+      .def_property_readonly(
+          "fully_actuated",
+          [](const ControllerHandle& h) { return h.controller->fully_actuated(); },
+          "True when every coordinate is actuated (S = I).")
+      .def_property_readonly(
+          "actuation",
+          [](const ControllerHandle& h) { return copy_matrix(h.controller->actuation()); },
+          "The actuation matrix S (n × k; a copy).")
+      .def_property_readonly(
+          "robust",
+          [](const ControllerHandle& h) -> py::object {
+            const auto& r = h.controller->robust();
+            if (!r) return py::none();
+            py::dict d;
+            d["bound"] = r->bound;
+            d["relative_bound"] = r->relative_bound;
+            d["gain_uncertainty"] = r->gain_uncertainty;
+            d["boundary_layer"] = r->boundary_layer;
+            return d;
+          },
+          "The robust settings as a dict, or None.")
+      .def_property_readonly(
+          "model",
+          [](const ControllerHandle& h) {
+            return SystemHandle{h.controller->model(), nullptr};
+          },
           "The nominal model (a System) the controller computes with.")
       .def(
           "solver", [](const ControllerHandle& h) { return std::make_unique<ControlSolver>(h); },
           "A ControlSolver (a control workspace, every buffer allocated once).")
       .def("__repr__", [](const ControllerHandle& h) {
         return "<ukdyn.Controller law='" + std::string(to_string(h.controller->law())) +
-               "' rows=" + std::to_string(h.controller->requirement_rows()) + ">";
+               "' rows=" + ukdyn::format_number(h.controller->requirement_rows()) + ">";
       });
 
   py::class_<ControlSolution>(m, "ControlSolution", R"doc(
 The results of one control evaluation (ControlSolver.compute), copied out of the workspace.
-Glossary of control.hpp: e = b_r − A_r a_p, Qc_control = Qc_nominal + Qc_robust = S u (+ S u_robust).
+Glossary of control/control.hpp: e = b_r − A_r a_p, Qc_control = Qc_nominal + Qc_robust = S u (+ S u_robust).
 )doc")
       .def_readonly("t", &ControlSolution::t, "The time of the evaluation.")
       .def_property_readonly("Qc_control", &solution_vector<&ControlSolution::Qc_control>,
@@ -158,19 +170,20 @@ Glossary of control.hpp: e = b_r − A_r a_p, Qc_control = Qc_nominal + Qc_robus
       .def_readonly("rank", &ControlSolution::rank, "Rank of the requirement rows.")
       .def_readonly("rows_not_met", &ControlSolution::rows_not_met, "Rows not met.")
       .def_readonly("power", &ControlSolution::power, "The control power Qc_controlᵀ q'.")
-      .def_property_readonly("status", [](const ControlSolution& s) { return to_string(s.status); },
-                             "'ok', 'requirements not met' (a least-squares force) or a failure.")
-      .def_property_readonly("ok", [](const ControlSolution& s) { return s.status == ControlStatus::kOk; },
-                             "True when every requirement is met.")
-      .def_readonly("message", &ControlSolution::message,
-                    "describe_control_status() ('' when ok).")
+      .def_property_readonly(
+          "status", [](const ControlSolution& s) { return to_string(s.status); },
+          "'ok', 'requirements not met' (a least-squares force) or a failure.")
+      .def_property_readonly(
+          "ok", [](const ControlSolution& s) { return s.status == ControlStatus::kOk; },
+          "True when every requirement is met.")
+      .def_readonly("message", &ControlSolution::message, "describe_control_status() ('' when ok).")
       .def("__repr__", [](const ControlSolution& s) {
-        return std::string("<ukdyn.ControlSolution t=") + std::to_string(s.t) + " status='" +
+        return std::string("<ukdyn.ControlSolution t=") + ukdyn::format_number(s.t) + " status='" +
                to_string(s.status) + "'>";
       });
 
   py::class_<ControlSolver>(m, "ControlSolver", R"doc(
-A Controller and its ControlWorkspace: compute_control (control.hpp) one state at a time.
+A Controller and its ControlWorkspace: compute_control (control/control.hpp) one state at a time.
 Not thread-safe: one per thread.
 )doc")
       .def(py::init<ControllerHandle>(), py::arg("controller"))
@@ -180,16 +193,17 @@ Not thread-safe: one per thread.
             const ControlStatus st = s.evaluate(q, qd, t);
             if (check && st != ControlStatus::kOk && st != ControlStatus::kRequirementsNotMet) {
               // a numerical failure, as Solver.solve reports one: ukdyn.SolveError
-              const Status why = st == ControlStatus::kModelFailed ? s.ws().model.status
+              const Status why = st == ControlStatus::kModelFailed      ? s.ws().model.status
                                  : st == ControlStatus::kNonFiniteInput ? Status::kNonFiniteInput
-                                 : st == ControlStatus::kNonFiniteResult ? Status::kNonFiniteResult
-                                                                         : Status::kMassNotPositiveDefinite;
+                                 : st == ControlStatus::kNonFiniteResult
+                                     ? Status::kNonFiniteResult
+                                     : Status::kMassNotPositiveDefinite;
               throw SolveError(why, describe_control_status(*s.handle().controller, s.ws()));
             }
             return s.snapshot(t);
           },
           py::arg("q"), py::arg("q_dot"), py::arg("t") = 0.0, py::arg("check") = true,
-          R"doc(The control force at (q, q', t) (compute_control, control.hpp).
+          R"doc(The control force at (q, q', t) (compute_control, control/control.hpp).
 
 Returns a ControlSolution. Requirements that cannot all be met are not an error (status
 'requirements not met', the least-squares force; see met and residual). Raises ValueError for
@@ -197,8 +211,8 @@ inputs of the wrong size and, when check is True, ukdyn.SolveError (describe_con
 its status is the nominal model's, or non-finite input/result, or "mass matrix not positive
 definite" for a weight N that is not) when the evaluation fails. Cost: one forward_dynamics of the nominal model and
 O(n² m_r + n m_r²).)doc")
-      .def_property_readonly("controller", [](const ControlSolver& s) { return s.handle(); },
-                             "The controller.");
+      .def_property_readonly(
+          "controller", [](const ControlSolver& s) { return s.handle(); }, "The controller.");
 }
 
 }  // namespace ukdyn::python

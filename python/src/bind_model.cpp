@@ -1,10 +1,11 @@
-// ukdyn.Model: model files and the built-in examples (model.hpp), run as `ukdyn run` runs them
-// (run.hpp), and check_model.
+// ukdyn.Model: model files and the built-in examples (modelfile/model.hpp), run as `ukdyn run` runs
+// them (modelfile/run.hpp), and check_model.
 #include <filesystem>
 #include <map>
 
 #include "common.hpp"
 #include "embedded.hpp"  // app/embedded.hpp: the example models, embedded at build time
+#include "ukdyn/core/format.hpp"
 
 namespace ukdyn::python {
 namespace {
@@ -13,7 +14,8 @@ using Overrides = std::map<std::string, double>;
 
 std::string example_list() {
   std::string names;
-  for (const auto& f : cli::example_models()) names += (names.empty() ? "" : ", ") + std::string(f.name);
+  for (const auto& f : cli::example_models())
+    names += (names.empty() ? "" : ", ") + std::string(f.name);
   return names;
 }
 
@@ -36,8 +38,10 @@ py::tuple run(const Model& model, const py::dict& settings, py::object q0, py::o
   std::optional<Model> changed;
   if (!q0.is_none() || !qd0.is_none()) {
     changed.emplace(model);
-    if (!q0.is_none()) read_vector(q0, model.system.dofs(), "Model.simulate", "q0", changed->q0);
-    if (!qd0.is_none()) read_vector(qd0, model.system.dofs(), "Model.simulate", "qd0", changed->qd0);
+    if (!q0.is_none())
+      read_vector(q0, model.system.coordinate_count(), "Model.simulate", "q0", changed->q0);
+    if (!qd0.is_none())
+      read_vector(qd0, model.system.coordinate_count(), "Model.simulate", "qd0", changed->qd0);
     m = &*changed;
   }
   ModelRun r;
@@ -78,14 +82,15 @@ the file has a `control:` section, its controller. Immutable; load one with ukdy
 ukdyn.parse() or ukdyn.from_sympy(). Model.simulate() runs it exactly as `ukdyn run` does.
 )doc")
       .def_readonly("name", &Model::name, "The model's `name:` (the file name otherwise).")
-      .def_readonly("file", &Model::file, "Where it came from (a path, examples/models/NAME.yaml, "
-                                          "or the name given to parse()).")
+      .def_readonly("file", &Model::file,
+                    "Where it came from (a path, examples/models/NAME.yaml, "
+                    "or the name given to parse()).")
       .def_property_readonly(
           "parameters", [](const Model& md) { return py::dict(py::cast(md.parameters)); },
           "The `parameters:` after overrides, as a new dict name -> value.")
-      .def_property_readonly("coordinates",
-                             [](const Model& md) { return md.system.coordinate_names(); },
-                             "The coordinate names (n).")
+      .def_property_readonly(
+          "coordinates", [](const Model& md) { return md.system.coordinate_names(); },
+          "The coordinate names (n).")
       .def_property_readonly(
           "constraints",
           [](const Model& md) {
@@ -94,10 +99,12 @@ ukdyn.parse() or ukdyn.from_sympy(). Model.simulate() runs it exactly as `ukdyn 
             return out;
           },
           "The constraint names, including the stick constraints of Coulomb friction.")
-      .def_property_readonly("q0", [](const Model& md) { return copy_vector(md.q0); },
-                             "The initial positions of `initial: q:` (n; a copy, not projected).")
-      .def_property_readonly("qd0", [](const Model& md) { return copy_vector(md.qd0); },
-                             "The initial velocities of `initial: q_dot:` (n; a copy).")
+      .def_property_readonly(
+          "q0", [](const Model& md) { return copy_vector(md.q0); },
+          "The initial positions of `initial: q:` (n; a copy, not projected).")
+      .def_property_readonly(
+          "qd0", [](const Model& md) { return copy_vector(md.qd0); },
+          "The initial velocities of `initial: q_dot:` (n; a copy).")
       .def_readonly("project_initial", &Model::project_initial, "`initial: project:`.")
       .def_property_readonly(
           "options", [](const Model& md) { return simulation_options_dict(md.options); },
@@ -105,7 +112,10 @@ ukdyn.parse() or ukdyn.from_sympy(). Model.simulate() runs it exactly as `ukdyn 
       .def_readonly("output_names", &Model::output_names,
                     "The names of the `output: expressions:` (the last CSV columns).")
       .def_property_readonly(
-          "system", [](const Model& md) { return SystemHandle{md.system, nullptr}; },
+          "system",
+          [](const Model& md) {
+            return SystemHandle{md.system, nullptr};
+          },
           "The System (the plant, without its controller).")
       .def_property_readonly(
           "controller",
@@ -114,15 +124,18 @@ ukdyn.parse() or ukdyn.from_sympy(). Model.simulate() runs it exactly as `ukdyn 
             return py::cast(ControllerHandle{md.controller, nullptr});
           },
           "The Controller of the `control:` section, or None.")
-      .def_property_readonly("is_multibody", [](const Model& md) { return bool(md.multibody); },
-                             "True for a model written with bodies:/joints:/forces:.")
+      .def_property_readonly(
+          "is_multibody", [](const Model& md) { return bool(md.multibody); },
+          "True for a model written with bodies:/joints:/forces:.")
       .def("_run", &run, py::arg("settings"), py::arg("q0") = py::none(),
            py::arg("qd0") = py::none(), py::arg("stop") = py::none(),
-           "Runs the model (run_model, run.hpp) with the GIL released; returns (names, columns, "
+           "Runs the model (run_model, modelfile/run.hpp) with the GIL released; returns (names, "
+           "columns, "
            "statistics, control statistics or None, the exception a signal handler raised or "
            "None). stop() is called every 20 ms of the run, after Python's signal handlers; "
            "true stops the run. Use Model.simulate().")
-      .def("check", &check, R"doc(What `ukdyn check` reports (check_model, model.hpp), as a dict:
+      .def("check", &check,
+           R"doc(What `ukdyn check` reports (check_model, modelfile/model.hpp), as a dict:
 coordinates, constraint_rows, rank, degrees_of_freedom, redundant (constraint names),
 initial_violations, mass_positive_definite, mass_singular, problems, ok.)doc")
       .def(
@@ -132,8 +145,9 @@ initial_violations, mass_positive_definite, mass_singular, problems, ok.)doc")
           },
           "A Solver of the model's system (see System.solver()).")
       .def("__repr__", [](const Model& md) {
-        return "<ukdyn.Model '" + md.name + "' n=" + std::to_string(md.system.dofs()) +
-               " constraints=" + std::to_string(md.system.constraint_count()) +
+        return "<ukdyn.Model '" + md.name +
+               "' n=" + ukdyn::format_number(md.system.coordinate_count()) +
+               " constraints=" + ukdyn::format_number(md.system.constraint_count()) +
                (md.controller ? " controlled" : "") + ">";
       });
 

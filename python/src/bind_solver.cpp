@@ -1,9 +1,10 @@
 // ukdyn.System, ukdyn.Solver and ukdyn.Solution: the fundamental equation one evaluation at a
-// time (forward_dynamics, forward.hpp) for users who write their own loops.
+// time (forward_dynamics, dynamics/forward.hpp) for users who write their own loops.
 #include <chrono>
 #include <cmath>
 
 #include "common.hpp"
+#include "ukdyn/core/format.hpp"
 
 namespace ukdyn::python {
 namespace {
@@ -27,8 +28,8 @@ class Solver {
   Solver(SystemHandle h, const SolverOptions& options)
       : h_(std::move(h)),
         ws_(h_.system, options),
-        q_(VectorXd::Zero(h_.system.dofs())),
-        qd_(VectorXd::Zero(h_.system.dofs())) {}
+        q_(VectorXd::Zero(h_.system.coordinate_count())),
+        qd_(VectorXd::Zero(h_.system.coordinate_count())) {}
 
   // forward_dynamics at (q, q', t); raises a pending exception of the system's callables
   Status evaluate(py::handle q, py::handle qd, double t, const char* who) {
@@ -117,14 +118,15 @@ An immutable constrained mechanical system M(q,t) q'' = Q(q,q',t) + Qc with cons
 A q'' = b and non-ideal work vector C (the C++ ukdyn::System). Made by a model
 (`Model.system`) or from Python callables (`ukdyn.from_callables`). Cheap to copy.
 )doc")
-      .def_property_readonly("dofs", [](const SystemHandle& h) { return h.system.dofs(); },
-                             "n, the number of coordinates.")
-      .def_property_readonly("constraint_rows",
-                             [](const SystemHandle& h) { return h.system.constraint_rows(); },
-                             "m, the rows of all constraints.")
-      .def_property_readonly("coordinates",
-                             [](const SystemHandle& h) { return h.system.coordinate_names(); },
-                             "The coordinate names (n).")
+      .def_property_readonly(
+          "coordinate_count", [](const SystemHandle& h) { return h.system.coordinate_count(); },
+          "n, the number of coordinates.")
+      .def_property_readonly(
+          "constraint_rows", [](const SystemHandle& h) { return h.system.constraint_rows(); },
+          "m, the rows of all constraints.")
+      .def_property_readonly(
+          "coordinates", [](const SystemHandle& h) { return h.system.coordinate_names(); },
+          "The coordinate names (n).")
       .def_property_readonly(
           "constraints",
           [](const SystemHandle& h) {
@@ -155,19 +157,20 @@ A q'' = b and non-ideal work vector C (the C++ ukdyn::System). Made by a model
           "nonideal_forces",
           [](const SystemHandle& h) {
             py::list out;
-            for (Index i = 0; i < h.system.nonideal_count(); ++i) out.append(h.system.nonideal_name(i));
+            for (Index i = 0; i < h.system.nonideal_count(); ++i)
+              out.append(h.system.nonideal_name(i));
             return out;
           },
           "The names of the non-ideal forces whose C vectors are summed.")
-      .def_property_readonly("mass_is_constant",
-                             [](const SystemHandle& h) { return h.system.mass_is_constant(); },
-                             "True when M was given as a constant matrix (factorized once).")
+      .def_property_readonly(
+          "mass_is_constant", [](const SystemHandle& h) { return h.system.mass_is_constant(); },
+          "True when M was given as a constant matrix (factorized once).")
       .def(
           "mass_matrix",
           [](const SystemHandle& h, py::handle q, double t) {
             VectorXd qv;
-            read_vector(q, h.system.dofs(), "System.mass_matrix", "q", qv);
-            MatrixXd M(h.system.dofs(), h.system.dofs());
+            read_vector(q, h.system.coordinate_count(), "System.mass_matrix", "q", qv);
+            MatrixXd M(h.system.coordinate_count(), h.system.coordinate_count());
             h.system.mass_matrix(qv, t, M);
             h.raise_pending();
             return copy_matrix(M);
@@ -177,9 +180,9 @@ A q'' = b and non-ideal work vector C (the C++ ukdyn::System). Made by a model
           "forces",
           [](const SystemHandle& h, py::handle q, py::handle qd, double t) {
             VectorXd qv, qdv;
-            read_vector(q, h.system.dofs(), "System.forces", "q", qv);
-            read_vector(qd, h.system.dofs(), "System.forces", "q_dot", qdv);
-            VectorXd Q = VectorXd::Zero(h.system.dofs());
+            read_vector(q, h.system.coordinate_count(), "System.forces", "q", qv);
+            read_vector(qd, h.system.coordinate_count(), "System.forces", "q_dot", qdv);
+            VectorXd Q = VectorXd::Zero(h.system.coordinate_count());
             h.system.forces(qv, qdv, t, Q);
             h.raise_pending();
             return copy_vector(Q);
@@ -190,7 +193,7 @@ A q'' = b and non-ideal work vector C (the C++ ukdyn::System). Made by a model
           "potential_energy",
           [](const SystemHandle& h, py::handle q, double t) {
             VectorXd qv;
-            read_vector(q, h.system.dofs(), "System.potential_energy", "q", qv);
+            read_vector(q, h.system.coordinate_count(), "System.potential_energy", "q", qv);
             const double V = h.system.potential_energy(qv, t);
             h.raise_pending();
             return V;
@@ -211,14 +214,14 @@ A q'' = b and non-ideal work vector C (the C++ ukdyn::System). Made by a model
           },
           R"doc(A Solver for this system (a workspace: every buffer allocated once).
 
-Keyword settings (SolverOptions, workspace.hpp): rank_threshold, sparse_rank_threshold,
+Keyword settings (SolverOptions, dynamics/workspace.hpp): rank_threshold, sparse_rank_threshold,
 consistency_tolerance, symmetry_tolerance, compute_residuals, sparse_threshold,
 engine ('auto', 'dense', 'sparse'), algorithm ('default', 'textbook').
 Raises ValueError for an unknown setting or a value out of range.)doc")
       .def("__repr__", [](const SystemHandle& h) {
-        return "<ukdyn.System n=" + std::to_string(h.system.dofs()) +
-               " m=" + std::to_string(h.system.constraint_rows()) + " constraints=" +
-               std::to_string(h.system.constraint_count()) + ">";
+        return "<ukdyn.System n=" + ukdyn::format_number(h.system.coordinate_count()) +
+               " m=" + ukdyn::format_number(h.system.constraint_rows()) +
+               " constraints=" + ukdyn::format_number(h.system.constraint_count()) + ">";
       });
 
   py::class_<Solution>(m, "Solution", R"doc(
@@ -250,24 +253,26 @@ e = b − A a, Qc = Qc_ideal + Qc_nonideal.
       .def_property_readonly("b", &solution_vector<&Solution::b>,
                              "The constraints' right-hand side b (m); zero on inactive rows.")
       .def_property_readonly(
-          "A",
-          [](py::object self) { return view_matrix(self.cast<const Solution&>().A, self); },
+          "A", [](py::object self) { return view_matrix(self.cast<const Solution&>().A, self); },
           "The constraint matrix A (m × n; 0 × 0 with the sparse engine).")
       .def_readonly("rank", &Solution::rank, "The numerical rank of A.")
       .def_readonly("active_rows", &Solution::active_rows, "Rows of the active constraints.")
       .def_property_readonly(
           "residuals", [](const Solution& s) { return residuals_dict(s.residuals); },
           "{'constraint': ‖A q'' − b‖, 'gauss': stationarity of Gauss's function, "
-          "'virtual_work': ‖Qc − C − Aᵀ(lambda + lambda_nonideal)‖} (workspace.hpp, Residuals).")
-      .def_property_readonly("status", [](const Solution& s) { return to_string(s.status); },
-                             "The outcome: 'ok' or what failed (status.hpp).")
-      .def_property_readonly("ok", [](const Solution& s) { return s.status == Status::kOk; },
-                             "True when the status is 'ok'.")
+          "'virtual_work': ‖Qc − C − Aᵀ(lambda + lambda_nonideal)‖} (dynamics/workspace.hpp, "
+          "Residuals).")
+      .def_property_readonly(
+          "status", [](const Solution& s) { return to_string(s.status); },
+          "The outcome: 'ok' or what failed (core/status.hpp).")
+      .def_property_readonly(
+          "ok", [](const Solution& s) { return s.status == Status::kOk; },
+          "True when the status is 'ok'.")
       .def_readonly("message", &Solution::message,
                     "describe_status(): what failed, where and when ('' when ok).")
       .def("__repr__", [](const Solution& s) {
-        return std::string("<ukdyn.Solution t=") + std::to_string(s.t) + " status='" +
-               to_string(s.status) + "' rank=" + std::to_string(s.rank) + ">";
+        return std::string("<ukdyn.Solution t=") + ukdyn::format_number(s.t) + " status='" +
+               to_string(s.status) + "' rank=" + ukdyn::format_number(s.rank) + ">";
       });
 
   py::class_<Solver>(m, "Solver", R"doc(
@@ -296,7 +301,7 @@ next evaluation) — the fastest path. Not thread-safe: one solver per thread.
             return s.snapshot(t);
           },
           py::arg("q"), py::arg("q_dot"), py::arg("t") = 0.0, py::arg("check") = true,
-          R"doc(Evaluates the constrained motion at (q, q', t) (forward_dynamics, forward.hpp).
+          R"doc(Evaluates the constrained motion at (q, q', t) (forward_dynamics, dynamics/forward.hpp).
 
 q, q_dot: n numbers each (a contiguous float64 array is read without conversion).
 Returns a Solution: q'', Qc, Qc_ideal, Qc_nonideal, the multipliers, rank, residuals, status.
@@ -316,7 +321,8 @@ Cost: one evaluation, O(n³/3 + m n² + m² n), plus the copies.)doc")
       .def("_time_cpp", &Solver::time_cpp, py::arg("q"), py::arg("q_dot"), py::arg("t"),
            py::arg("repeats"),
            "Mean seconds of one evaluation over `repeats` calls made in C++ (for benchmarks).")
-      .def_property_readonly("system", [](const Solver& s) { return s.handle(); }, "The system.")
+      .def_property_readonly(
+          "system", [](const Solver& s) { return s.handle(); }, "The system.")
       .def_property_readonly("qdd", &live_vector<&Workspace::qdd>, "Live view of q'' (n).")
       .def_property_readonly("Qc", &live_vector<&Workspace::Qc>, "Live view of Qc (n).")
       .def_property_readonly("Qc_ideal", &live_vector<&Workspace::Qc_ideal>,
@@ -335,10 +341,11 @@ Cost: one evaluation, O(n³/3 + m n² + m² n), plus the copies.)doc")
       .def_property_readonly(
           "A", [](py::object self) { return view_matrix(self.cast<const Solver&>().ws().A, self); },
           "Live view of A (m × n; 0 × 0 with the sparse engine).")
-      .def_property_readonly("rank", [](const Solver& s) { return s.ws().rank; },
-                             "Rank of A at the last evaluation.")
-      .def_property_readonly("status", [](const Solver& s) { return to_string(s.ws().status); },
-                             "Status of the last evaluation.")
+      .def_property_readonly(
+          "rank", [](const Solver& s) { return s.ws().rank; }, "Rank of A at the last evaluation.")
+      .def_property_readonly(
+          "status", [](const Solver& s) { return to_string(s.ws().status); },
+          "Status of the last evaluation.")
       .def_property_readonly(
           "message",
           [](const Solver& s) {
@@ -346,10 +353,12 @@ Cost: one evaluation, O(n³/3 + m n² + m² n), plus the copies.)doc")
                                                 : describe_status(s.handle().system, s.ws());
           },
           "describe_status() of the last evaluation ('' when ok).")
-      .def_property_readonly("residuals", [](const Solver& s) { return residuals_dict(s.ws().residuals); },
-                             "Residuals of the last evaluation (see Solution.residuals).")
-      .def_property_readonly("is_sparse", [](const Solver& s) { return s.ws().is_sparse(); },
-                             "True when the sparse engine evaluates this system.")
+      .def_property_readonly(
+          "residuals", [](const Solver& s) { return residuals_dict(s.ws().residuals); },
+          "Residuals of the last evaluation (see Solution.residuals).")
+      .def_property_readonly(
+          "is_sparse", [](const Solver& s) { return s.ws().is_sparse(); },
+          "True when the sparse engine evaluates this system.")
       .def_property_readonly(
           "counters",
           [](const Solver& s) {

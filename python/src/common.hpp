@@ -1,6 +1,6 @@
 // Shared declarations of the Python module's binding files (python/src/*.cpp): conversions
 // between NumPy and Eigen, simulation settings from keyword arguments, and the handles that the
-// bound classes wrap. The module only translates; no physics lives here (STYLE.md).
+// bound classes wrap. The module only translates; no physics lives here (docs/style.md).
 #pragma once
 
 #include <memory>
@@ -12,9 +12,9 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
+#include <ukdyn/modelfile/model.hpp>
+#include <ukdyn/modelfile/run.hpp>
 #include <ukdyn/ukdyn.hpp>
-#include <ukdyn/model.hpp>
-#include <ukdyn/run.hpp>
 
 namespace ukdyn::python {
 namespace py = pybind11;
@@ -44,10 +44,11 @@ void read_matrix_into(py::handle obj, const char* who, const char* what, Eigen::
 /// A matrix of any size from a 2-D sequence. @throws std::invalid_argument.
 MatrixXd read_matrix(py::handle obj, const char* who, const char* what);
 
-// --- settings and reports --------------------------------------------------------------------------
+// --- settings and reports
+// --------------------------------------------------------------------------
 
-/// Applies keyword settings to `o`: every option of the table (options.hpp, by name or alias),
-/// each through its validating setter; None keeps the value. @throws std::invalid_argument
+/// Applies keyword settings to `o`: every option of the table (simulation/options.hpp, by name or
+/// alias), each through its validating setter; None keeps the value. @throws std::invalid_argument
 /// naming an unknown key (with the known ones) or the option whose value is bad.
 void apply_simulation_options(SimulationOptions& o, const py::dict& settings, const char* who);
 /// Applies the solver options of the table (OptionInfo::solver: rank_threshold, engine, …) to
@@ -92,7 +93,8 @@ class InterruptCheck {
   std::shared_ptr<State> state_;
 };
 
-// --- handles -----------------------------------------------------------------------------------------
+// --- handles
+// -----------------------------------------------------------------------------------------
 
 /// Where the Python callables of a System report a Python exception: the first one raised
 /// during an evaluation is kept here (the callable writes NaN so that the evaluation stops with
@@ -106,8 +108,8 @@ struct CallbackErrors {
 /// A System as Python sees it: the description, and the exception slot of its Python callables
 /// (null for systems built in C++: model files).
 struct SystemHandle {
-  System system;                            ///< the description
-  std::shared_ptr<CallbackErrors> errors;   ///< null unless built from Python callables
+  System system;                           ///< the description
+  std::shared_ptr<CallbackErrors> errors;  ///< null unless built from Python callables
   /// Raises a pending exception of the callables, if any. Needs the GIL.
   void raise_pending() const {
     if (errors) errors->raise_if_any();
@@ -124,7 +126,8 @@ struct ControllerHandle {
   }
 };
 
-// --- the binding files ----------------------------------------------------------------------------
+// --- the binding files
+// ----------------------------------------------------------------------------
 void bind_model(py::module_& m);      // bind_model.cpp
 void bind_solver(py::module_& m);     // bind_solver.cpp
 void bind_control(py::module_& m);    // bind_control.cpp

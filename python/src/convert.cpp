@@ -7,9 +7,10 @@
 #include <optional>
 #include <string>
 
-#include <ukdyn/options.hpp>
+#include <ukdyn/simulation/options.hpp>
 
 #include "common.hpp"
+#include "ukdyn/core/format.hpp"
 
 namespace ukdyn::python {
 namespace {
@@ -21,7 +22,8 @@ std::string size_message(const char* who, const char* what, const std::string& e
 
 std::string shape_text(const py::array& a) {
   std::string s = "shape (";
-  for (py::ssize_t k = 0; k < a.ndim(); ++k) s += (k ? ", " : "") + std::to_string(a.shape(k));
+  for (py::ssize_t k = 0; k < a.ndim(); ++k)
+    s += (k ? ", " : "") + ukdyn::format_number(a.shape(k));
   return s + (a.ndim() == 1 ? ",)" : ")");
 }
 
@@ -38,8 +40,10 @@ py::array_t<double> as_array(py::handle obj, const char* who, const char* what) 
                                           : " is None"));
   }
   if (PyComplex_Check(obj.ptr()) ||
-      (py::isinstance<py::array>(obj) && py::reinterpret_borrow<py::array>(obj).dtype().kind() == 'c')) {
-    throw std::invalid_argument(std::string(who) + ": " + what + " must be real numbers (got complex)");
+      (py::isinstance<py::array>(obj) &&
+       py::reinterpret_borrow<py::array>(obj).dtype().kind() == 'c')) {
+    throw std::invalid_argument(std::string(who) + ": " + what +
+                                " must be real numbers (got complex)");
   }
   auto a = py::array_t<double>::ensure(obj);
   if (!a) throw std::invalid_argument(std::string(who) + ": " + what + " must be numbers");
@@ -101,9 +105,9 @@ void read_into(py::handle obj, const char* who, const char* what, Eigen::Ref<Vec
   }
   py::array_t<double> a = as_array(obj, who, what);
   if (a.ndim() > 1 || a.size() != n) {
-    throw std::invalid_argument(size_message(who, what, std::to_string(n) + " entries",
-                                             a.ndim() > 1 ? shape_text(a)
-                                                          : std::to_string(a.size())));
+    throw std::invalid_argument(
+        size_message(who, what, ukdyn::format_number(n) + " entries",
+                     a.ndim() > 1 ? shape_text(a) : ukdyn::format_number(a.size())));
   }
   auto r = a.unchecked();
   if (a.ndim() == 0) {
@@ -125,15 +129,17 @@ void read_matrix_into(py::handle obj, const char* who, const char* what, Eigen::
   const bool flat_ok = a.ndim() == 1 && (rows == 1 || cols == 1) && a.size() == rows * cols;
   if (!(a.ndim() == 2 && a.shape(0) == rows && a.shape(1) == cols) && !flat_ok) {
     throw std::invalid_argument(size_message(
-        who, what, "shape (" + std::to_string(rows) + ", " + std::to_string(cols) + ")",
+        who, what, "shape (" + ukdyn::format_number(rows) + ", " + ukdyn::format_number(cols) + ")",
         shape_text(a)));
   }
   if (flat_ok) {
     auto r = a.unchecked<1>();
     // out may be a block with an outer stride (rows of a larger A): index, never data()[i]
     for (Index i = 0; i < rows * cols; ++i) {
-      if (rows == 1) out(0, i) = r(i);
-      else out(i, 0) = r(i);
+      if (rows == 1)
+        out(0, i) = r(i);
+      else
+        out(i, 0) = r(i);
     }
     return;
   }
@@ -163,7 +169,8 @@ std::string type_name(py::handle v) {
 double number(py::handle v, const std::string& who, const char* key) {
   // a complex (Python's or NumPy's) would be cast with its imaginary part dropped
   if (PyComplex_Check(v.ptr()) || type_name(v).find("complex") != std::string::npos) {
-    throw std::invalid_argument(who + ": " + key + " must be a real number (got " + type_name(v) + ")");
+    throw std::invalid_argument(who + ": " + key + " must be a real number (got " + type_name(v) +
+                                ")");
   }
   try {
     return v.cast<double>();
@@ -175,16 +182,18 @@ double number(py::handle v, const std::string& who, const char* key) {
 // a whole number: a Python int or an integral float within the range of T
 template <class T>
 T integer(py::handle v, const std::string& who, const char* key) {
-  if (py::isinstance<py::bool_>(v) || !(py::isinstance<py::int_>(v) || py::isinstance<py::float_>(v) ||
-                                        py::hasattr(v, "__index__"))) {
-    throw std::invalid_argument(who + ": " + key + " must be a whole number (got " + type_name(v) + ")");
+  if (py::isinstance<py::bool_>(v) ||
+      !(py::isinstance<py::int_>(v) || py::isinstance<py::float_>(v) ||
+        py::hasattr(v, "__index__"))) {
+    throw std::invalid_argument(who + ": " + key + " must be a whole number (got " + type_name(v) +
+                                ")");
   }
   const double x = number(v, who, key);
   if (!(std::isfinite(x) && x == std::floor(x) && x >= double(std::numeric_limits<T>::min()) &&
         x <= double(std::numeric_limits<T>::max()))) {
     throw std::invalid_argument(who + ": " + key + " must be a whole number between " +
-                                std::to_string(std::numeric_limits<T>::min()) + " and " +
-                                std::to_string(std::numeric_limits<T>::max()) + " (got " +
+                                ukdyn::format_number(std::numeric_limits<T>::min()) + " and " +
+                                ukdyn::format_number(std::numeric_limits<T>::max()) + " (got " +
                                 std::string(py::repr(v)) + ")");
   }
   return static_cast<T>(x);
@@ -205,15 +214,16 @@ std::vector<double> numbers(py::handle v, const std::string& who, const char* ke
   std::vector<double> out;
   if (py::isinstance<py::float_>(v) || py::isinstance<py::int_>(v)) return {number(v, who, key)};
   if (py::isinstance<py::str>(v) || !py::hasattr(v, "__iter__")) {
-    throw std::invalid_argument(who + ": " + key + " must be a number or a sequence of numbers (got " +
-                                type_name(v) + ")");
+    throw std::invalid_argument(
+        who + ": " + key + " must be a number or a sequence of numbers (got " + type_name(v) + ")");
   }
   for (py::handle x : py::iter(v)) out.push_back(number(x, who, key));
   return out;
 }
 
 std::string text(py::handle v, const std::string& who, const char* key) {
-  if (!py::isinstance<py::str>(v)) throw std::invalid_argument(who + ": " + key + " must be a string");
+  if (!py::isinstance<py::str>(v))
+    throw std::invalid_argument(who + ": " + key + " must be a string");
   return v.cast<std::string>();
 }
 
@@ -221,16 +231,21 @@ std::string text(py::handle v, const std::string& who, const char* key) {
 OptionValue option_value(const OptionInfo& info, py::handle v, const std::string& who,
                          const char* key) {
   switch (info.type) {
-    case OptionType::kNumber: return number(v, who, key);
-    case OptionType::kInteger: return integer<long>(v, who, key);
-    case OptionType::kBool: return boolean(v, who, key);
-    case OptionType::kChoice: return text(v, who, key);
-    case OptionType::kNumbers: return numbers(v, who, key);
+    case OptionType::kNumber:
+      return number(v, who, key);
+    case OptionType::kInteger:
+      return integer<long>(v, who, key);
+    case OptionType::kBool:
+      return boolean(v, who, key);
+    case OptionType::kChoice:
+      return text(v, who, key);
+    case OptionType::kNumbers:
+      return numbers(v, who, key);
   }
   return number(v, who, key);
 }
 
-// sets the option `key` through the table's setter (options.hpp): a range error names it
+// sets the option `key` through the table's setter (simulation/options.hpp): a range error names it
 void set_from_python(SimulationOptions& o, const OptionInfo& info, const std::string& key,
                      py::handle v, const std::string& who) {
   const OptionValue value = option_value(info, v, who, key.c_str());
@@ -281,8 +296,8 @@ void apply_simulation_options(SimulationOptions& o, const py::dict& given, const
     const std::string key = py::str(k);
     const OptionInfo* info = find_option(key);
     if (!info) {
-      throw std::invalid_argument(who + ": unknown setting '" + key + "' (known: " +
-                                  option_names() + ")");
+      throw std::invalid_argument(who + ": unknown setting '" + key +
+                                  "' (known: " + option_names() + ")");
     }
     if (v.is_none()) continue;  // None: keep the model's value
     set_from_python(o, *info, key, v, who);

@@ -6,9 +6,7 @@ namespace ukdyn::python {
 namespace {
 
 // the exception classes of ukdyn/errors.py (imported when first needed)
-py::object error_class(const char* name) {
-  return py::module_::import("ukdyn.errors").attr(name);
-}
+py::object error_class(const char* name) { return py::module_::import("ukdyn.errors").attr(name); }
 
 // C++ exceptions -> Python: ModelError -> ukdyn.ModelError (file, line, column, message, hint),
 // SolveError -> ukdyn.SolveError (status); the rest follow pybind11's defaults
@@ -19,6 +17,12 @@ void translate(std::exception_ptr p) {
   } catch (const ModelError& e) {
     py::object cls = error_class("ModelError");
     py::object err = cls(e.what(), e.file(), e.line(), e.column(), e.message(), e.hint());
+    PyErr_SetObject(cls.ptr(), err.ptr());
+  } catch (const InconsistentInitialState& e) {
+    // a ValueError, as every std::invalid_argument, typed with its cause
+    static const char* const causes[] = {"not_projected", "contradictory", "projection_failed"};
+    py::object cls = error_class("InconsistentInitialState");
+    py::object err = cls(e.what(), causes[int(e.cause())]);
     PyErr_SetObject(cls.ptr(), err.ptr());
   } catch (const SolveError& e) {
     py::object cls = error_class("SolveError");
@@ -39,7 +43,7 @@ PYBIND11_MODULE(_ukdyn, m) {
   up::bind_solver(m);
   up::bind_control(m);
   up::bind_callables(m);
-  // the options table (options.hpp): what every simulate() accepts
+  // the options table (simulation/options.hpp): what every simulate() accepts
   m.def("_options", &up::options_list,
         "The simulation options table: a list of dicts (name, type, default, range, choices, "
         "aliases, solver, flag, example, doc).");

@@ -114,3 +114,27 @@ def test_body_coordinates_are_found_by_both_spellings(slider_crank):
     assert r.names.count("crank.qw") == 1 and r.names.count("crank.z") == 1
     with pytest.raises(KeyError, match="no column 'crank_w'"):
         r["crank_w"]
+
+
+# --- typed errors ----------------------------------------------------------------------------
+
+def test_inconsistent_initial_state_is_a_value_error_typed_by_its_cause():
+    text = ("coordinates: [x, y]\nmass_matrix: [[1, 0], [0, 1]]\nforces: [0, -9.81]\n"
+            "constraints:\n  - {name: rod, holonomic: x^2 + y^2 - 1}\n"
+            "initial: {q: {x: 1.1, y: 0}}\nsimulate: {t_end: 0.01}\n")
+    model = ukdyn.parse(text, "off_rod.yaml")
+    with pytest.raises(ukdyn.InconsistentInitialState) as info:
+        model.simulate()
+    assert isinstance(info.value, ValueError)
+    assert info.value.cause == "not_projected"
+    assert "inconsistent initial conditions at t = 0" in str(info.value)
+    contradictory = text.replace("initial: {q: {x: 1.1, y: 0}}\n", "").replace(
+        "  - {name: rod", "  - {name: a, holonomic: x}\n  - {name: b, holonomic: x - 1}\n"
+        "  - {name: rod")
+    with pytest.raises(ukdyn.InconsistentInitialState) as info:
+        ukdyn.parse(contradictory, "c.yaml").simulate(project_initial=True)
+    assert info.value.cause == "contradictory"
+    # projected onto the rod in the M-norm (M = I): starts at (1, 0)
+    result = model.simulate(project_initial=True)
+    assert result.q[0, 0] == pytest.approx(1.0, abs=1e-12)
+    assert result.q[0, 1] == pytest.approx(0.0, abs=1e-12)

@@ -1,6 +1,6 @@
 """A model run from Python gives bit-identical results to `ukdyn run` on the same file.
 
-The command writes every number in the shortest form that reads back bit for bit (io.hpp), so
+The command writes every number in the shortest form that reads back bit for bit (io/trajectory_files.hpp), so
 parsing its trajectory.csv gives back the doubles it computed; they must equal the arrays of
 Model.simulate() exactly, column by column and in the same order.
 

@@ -1,4 +1,4 @@
-"""The closed-form cases of the engine and simulation issues, from Python (tests/test_examples.cpp
+"""The closed-form cases of the engine and simulation issues, from Python (tests/modelfile/test_examples.cpp
 checks the same in C++). Every reference number comes from analysis, not from ukdyn."""
 
 import math

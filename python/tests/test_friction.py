@@ -1,4 +1,4 @@
-"""Coulomb friction from Python (docs/friction.md; tests/test_friction.cpp checks the same in
+"""Coulomb friction from Python (docs/friction.md; tests/simulation/test_friction.cpp checks the same in
 C++): static and kinetic coefficients and a surface velocity, from a model file, from SymPy and
 from callables. Reference numbers from the stick-slip oscillator's closed form."""
 

@@ -1,4 +1,4 @@
-"""The options table (include/ukdyn/options.hpp) in Python: the keyword settings that simulate()
+"""The options table (include/ukdyn/simulation/options.hpp) in Python: the keyword settings that simulate()
 takes, Model.options and simulation_options() are exactly the table's names, each value
 round-trips, an out-of-range value raises ValueError naming the option, and the docstring of
 Model.simulate lists every option."""

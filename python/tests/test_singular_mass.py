@@ -1,5 +1,5 @@
 """Singular (positive semi-definite) mass matrices from Python (issue #13, item 3; C++:
-tests/test_singular_mass.cpp). A pendulum in the redundant coordinates (x, y, theta) with
+tests/dynamics/test_singular_mass.cpp). A pendulum in the redundant coordinates (x, y, theta) with
 T = m (x'^2 + y'^2) / 2, i.e. M = diag(m, m, 0): theta has no inertia and follows from the
 constraints x = L sin(theta), y = -L cos(theta) alone. Released at rest from theta0 it obeys
 theta'' = -w^2 sin(theta), w^2 = m g L / (m L^2 + J) with J = 0, whose exact solution is

@@ -104,7 +104,7 @@ def test_model_solve_convenience_matches_the_solver():
     m = ukdyn.load("pendulum")
     np.testing.assert_array_equal(m.solve(q, qd).qdd, m.solver().solve(q, qd).qdd)
     system = m.system
-    assert system.dofs == 2 and system.coordinates == ["x", "y"]
+    assert system.coordinate_count == 2 and system.coordinates == ["x", "y"]
     assert system.constraint_info()[0]["kind"] == "holonomic"
     np.testing.assert_allclose(system.mass_matrix(q), np.eye(2), rtol=0, atol=0)
     np.testing.assert_allclose(system.forces(q, qd), [0.0, -G], rtol=0, atol=1e-15)

@@ -13,7 +13,8 @@ The C++ library (README.md) behind a thin module (docs/python.md):
 * :attr:`Model.controller` / :func:`controller` → :class:`Controller`, exact tracking control,
   ``controller.solver().compute(q, q_dot, t)``.
 
-Errors: :class:`ModelError`, :class:`SolveError`, ValueError, RuntimeError (:mod:`ukdyn.errors`);
+Errors: :class:`ModelError`, :class:`SolveError`, :class:`InconsistentInitialState` (a
+ValueError), ValueError, RuntimeError (:mod:`ukdyn.errors`);
 Ctrl-C during a run raises :class:`Interrupted` (a KeyboardInterrupt) with the partial result.
 """
 
@@ -28,14 +29,16 @@ from ._ukdyn import (ControlSolution, ControlSolver, Controller, Model, Solution
                      System, example_text, examples)
 from .callables import (coulomb, constraint, controller, from_callables, nonideal, simulate,
                         viscous)
-from .errors import EnergyBalanceWarning, Interrupted, ModelError, SolveError
+from .errors import (EnergyBalanceWarning, InconsistentInitialState, Interrupted, ModelError,
+                     SolveError)
 from .results import Result
 from .symbolic import from_sympy, sympy_to_yaml, velocities
 
 __version__ = "0.1.0"
 
 __all__ = [
-    "ControlSolution", "ControlSolver", "Controller", "EnergyBalanceWarning", "Interrupted",
+    "ControlSolution", "ControlSolver", "Controller", "EnergyBalanceWarning",
+    "InconsistentInitialState", "Interrupted",
     "Model", "ModelError", "Result",
     "Solution", "SolveError", "Solver", "System", "constraint", "controller", "coulomb",
     "example_text", "examples", "from_callables", "from_sympy", "load", "nonideal", "options",
@@ -84,10 +87,10 @@ def parse(text: str, file: str = "<string>", **overrides: float) -> Model:
 
 def _model_simulate(self: Model, *, t_end: Optional[float] = None, q0: Any = None,
                     qd0: Any = None, check: bool = True, **settings: Any) -> Result:
-    """Simulates the model exactly as ``ukdyn run`` does (run_model, run.hpp) → :class:`Result`.
+    """Simulates the model exactly as ``ukdyn run`` does (run_model, modelfile/run.hpp) → :class:`Result`.
 
     Without arguments the model's own ``simulate:`` and ``output:`` settings apply; keyword
-    settings replace them: every option of :func:`ukdyn.options` (the table of options.hpp,
+    settings replace them: every option of :func:`ukdyn.options` (the table of simulation/options.hpp,
     listed below; the same as the model file's ``simulate:`` keys and ``ukdyn run``'s flags).
     ``q0``/``qd0`` replace the initial state. A model with a ``control:`` section runs under its controller.
     The GIL is released during the run.
@@ -120,7 +123,7 @@ def _model_solve(self: Model, q: Any, q_dot: Any, t: float = 0.0, check: bool = 
 
 
 def options() -> list:
-    """The simulation options table (include/ukdyn/options.hpp): one dict per option with its
+    """The simulation options table (include/ukdyn/simulation/options.hpp): one dict per option with its
     ``name``, ``type`` ('number', 'integer', 'bool', 'choice', 'numbers'), ``default``,
     ``range`` (in words), ``choices``, ``aliases`` (older spellings, also accepted), ``solver``
     (a solver setting, also taken by :meth:`System.solver`), ``flag`` (``ukdyn run``'s) and

@@ -103,7 +103,7 @@ def viscous(c: float, coordinates: Sequence[str] = ()) -> NonIdealSpec:
 def coulomb(constraint: str, mu: float, coordinates: Sequence[str] = (),
             regularization_velocity: Optional[float] = None, mu_static: Optional[float] = None,
             surface_velocity: Optional[Callable[..., Any]] = None) -> NonIdealSpec:
-    """Coulomb friction on the surface of ``constraint`` (nonideal.hpp, CoulombFriction), in C++:
+    """Coulomb friction on the surface of ``constraint`` (core/nonideal.hpp, CoulombFriction), in C++:
     magnitude mu |N|, N that constraint's share of the ideal force, opposite to the sliding
     velocity of ``coordinates`` (all when empty) relative to the constraint; stick and slip are
     events in simulate() (docs/friction.md).
@@ -135,7 +135,7 @@ def from_callables(coordinates: Union[int, Sequence[str]], M: Any, Q: Optional[C
         constraints: :func:`constraint` specs.
         nonideal: :func:`nonideal`, :func:`viscous`, :func:`coulomb` specs.
         P: ``P(q, q_dot, t)`` → a number, the external power: the rate at which the forces in
-            Q that V does not account for do work (dampers, applied loads; system.hpp,
+            Q that V does not account for do work (dampers, applied loads; core/system.hpp,
             PowerFn), integrated into the ``work_external`` column. Without it Q is taken to be
             −∂V/∂q plus forces that do no work, and a Q that does work otherwise makes the run's
             energy balance fail (status ``"energy_balance"``).
@@ -163,7 +163,7 @@ def from_callables(coordinates: Union[int, Sequence[str]], M: Any, Q: Optional[C
 def controller(system: "_ukdyn.System", requirements: Sequence[ConstraintSpec],
                law: str = "gauss", N: Any = None, actuated: Optional[Sequence[str]] = None,
                S: Any = None, robust: Optional[dict] = None) -> "_ukdyn.Controller":
-    """A tracking Controller (control.hpp, ControllerBuilder) for the nominal model ``system``.
+    """A tracking Controller (control/control.hpp, ControllerBuilder) for the nominal model ``system``.
 
     Args:
         system: the nominal model (its constraints are the plant's physical constraints).

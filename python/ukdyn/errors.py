@@ -23,7 +23,8 @@ from __future__ import annotations
 
 from typing import Any, Optional
 
-__all__ = ["EnergyBalanceWarning", "Interrupted", "ModelError", "SolveError"]
+__all__ = ["EnergyBalanceWarning", "InconsistentInitialState", "Interrupted", "ModelError",
+           "SolveError"]
 
 
 class ModelError(RuntimeError):
@@ -58,7 +59,7 @@ class SolveError(RuntimeError):
     run, the run's message.
 
     Attributes:
-        status: the short status name (``"inconsistent constraints"``, ...; status.hpp).
+        status: the short status name (``"inconsistent constraints"``, ...; core/status.hpp).
         result: for a failed simulation, the :class:`ukdyn.Result` with the samples computed
             before the failure; None otherwise.
     """
@@ -67,6 +68,21 @@ class SolveError(RuntimeError):
         super().__init__(what)
         self.status = status
         self.result = result
+
+
+class InconsistentInitialState(ValueError):
+    """The initial state does not satisfy the constraints (the C++
+    ``ukdyn::InconsistentInitialState``; a ``ValueError`` like every misuse).
+
+    Attributes:
+        cause: ``"not_projected"`` (``project_initial=True`` may help), ``"contradictory"``
+            (constraints no state satisfies together: no projection helps) or
+            ``"projection_failed"`` (projection found no consistent state nearby).
+    """
+
+    def __init__(self, what: str, cause: str = "") -> None:
+        super().__init__(what)
+        self.cause = cause
 
 
 class EnergyBalanceWarning(UserWarning):

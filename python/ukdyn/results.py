@@ -1,7 +1,7 @@
 """Simulation results: the columns of ``trajectory.csv`` as NumPy arrays, a pandas view, plots.
 
 A :class:`Result` holds exactly the columns that ``ukdyn run`` writes to ``trajectory.csv``, by the
-same names and in the same order (io.hpp lists them): ``t``; each coordinate ``x``; ``x_dot``;
+same names and in the same order (io/trajectory_files.hpp lists them): ``t``; each coordinate ``x``; ``x_dot``;
 ``x_ddot``; ``Qc_ideal.x``; ``Qc_nonideal.x``; ``lambda.<constraint>``; ``violation.<constraint>``;
 ``violation_velocity.<constraint>``; ``kinetic_energy``, ``potential_energy``, ``energy``;
 the energy balance: ``work_nonideal``, ``work_ideal``, ``work_drive``, ``work_external``,
@@ -37,7 +37,7 @@ class Result:
             stiff_switches, stiff_switch_time, stiff_steps,
             wall_time, max_position_violation, max_velocity_violation, energy_balance (the
             balance residual relative to the energy exchanged), energy_exchanged,
-            energy_drift, t_reached, status, message; simulate.hpp, RunStatistics). The status
+            energy_drift, t_reached, status, message; simulation/simulate.hpp, RunStatistics). The status
             is ``"energy_balance"`` when the run ended but its balance failed.
         control: the controller's statistics for a controlled run (evaluations, not_met,
             max_residual, first_not_met, not_met_message, max_kappa), else None.
@@ -155,7 +155,7 @@ class Result:
     # --- status ------------------------------------------------------------------------------
     @property
     def status(self) -> str:
-        """The run's status: ``"ok"`` or why it stopped early (status.hpp)."""
+        """The run's status: ``"ok"`` or why it stopped early (core/status.hpp)."""
         return str(self.stats.get("status", "ok"))
 
     @property

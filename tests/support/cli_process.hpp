@@ -1,7 +1,7 @@
-// Helpers of the tests that run the `ukdyn` command as a process (test_interrupt.cpp,
-// test_stream.cpp): a fresh scratch directory, a file's text, and Command, a `ukdyn` process with
-// stdout to a file and stderr read through a pipe. The including target defines UKDYN_CLI, the
-// path of the built program.
+// Helpers of the tests that run the `ukdyn` command as a process (simulation/test_interrupt.cpp,
+// simulation/test_stream.cpp): a fresh scratch directory, a file's text, and Command, a `ukdyn`
+// process with stdout to a file and stderr read through a pipe. The including target defines
+// UKDYN_CLI, the path of the built program.
 #pragma once
 
 #include <gtest/gtest.h>
@@ -37,8 +37,8 @@ namespace fs = std::filesystem;
 /// A fresh, empty directory `<temp>/<prefix><name>.<pid>` for one test (the pid makes it unique:
 /// test runs of other trees may share the temp directory).
 inline fs::path scratch_directory(const std::string& prefix, const std::string& name) {
-  const fs::path dir = fs::path(::testing::TempDir()) /
-                       (prefix + name + "." + std::to_string(::getpid()));
+  const fs::path dir =
+      fs::path(::testing::TempDir()) / (prefix + name + "." + std::to_string(::getpid()));
   fs::remove_all(dir);
   fs::create_directories(dir);
   return dir;
@@ -55,7 +55,6 @@ inline std::string read_text(const fs::path& path) {
 // A `ukdyn run` process: stdout to a file, stderr read through a pipe.
 class Command {
   using Clock = std::chrono::steady_clock;
-
 
  public:
   explicit Command(const std::vector<std::string>& args, const fs::path& stdout_file) {
@@ -111,7 +110,8 @@ class Command {
   bool wait_for(const std::string& text, double seconds) {
     const auto deadline = Clock::now() + std::chrono::duration<double>(seconds);
     while (stderr_.find(text) == std::string::npos) {
-      const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(deadline - Clock::now());
+      const auto left =
+          std::chrono::duration_cast<std::chrono::milliseconds>(deadline - Clock::now());
       if (left.count() <= 0 || !read_some(int(left.count()))) return false;
     }
     return true;

@@ -8,12 +8,12 @@
 
 #include <vector>
 
-#include "ukdyn/system.hpp"
+#include "ukdyn/core/system.hpp"
 
 namespace ukdyn::test {
 
 inline System with_fictitious_inertia(const System& sys, double J0) {
-  // the quaternions: the state-dependent 4 × 4 blocks (multibody.hpp builds no other)
+  // the quaternions: the state-dependent 4 × 4 blocks (multibody/multibody.hpp builds no other)
   std::vector<Index> quats;
   for (const MassBlock& b : sys.mass_blocks()) {
     if (!b.constant() && b.size == 4) quats.push_back(b.offset);
@@ -33,13 +33,13 @@ inline System with_fictitious_inertia(const System& sys, double J0) {
       sb.mass_block(b.offset, b.size, b.fn);
     }
   }
-  sb.forces([&sys, quats, J0](const VectorXd& q, const VectorXd& qd, double t,
-                              Eigen::Ref<VectorXd> Q) {
-    sys.forces(q, qd, t, Q);
-    for (Index o : quats) {
-      Q.segment<4>(o) -= 4.0 * J0 * qd.segment<4>(o).squaredNorm() * q.segment<4>(o);
-    }
-  });
+  sb.forces(
+      [&sys, quats, J0](const VectorXd& q, const VectorXd& qd, double t, Eigen::Ref<VectorXd> Q) {
+        sys.forces(q, qd, t, Q);
+        for (Index o : quats) {
+          Q.segment<4>(o) -= 4.0 * J0 * qd.segment<4>(o).squaredNorm() * q.segment<4>(o);
+        }
+      });
   for (Index k = 0; k < sys.constraint_count(); ++k) sb.add(sys.constraint(k));
   return sb.build();
 }

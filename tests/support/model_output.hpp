@@ -7,8 +7,8 @@
 #include <string>
 #include <vector>
 
-#include "ukdyn/model.hpp"
-#include "ukdyn/simulate.hpp"
+#include "ukdyn/modelfile/model.hpp"
+#include "ukdyn/simulation/simulate.hpp"
 
 namespace ukdyn::testing {
 

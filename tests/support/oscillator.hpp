@@ -1,7 +1,7 @@
 // x'' = −x (unit mass and stiffness), one coordinate: x = cos t from (1, 0), energy ½ x'² + ½ x².
 #pragma once
 
-#include "ukdyn/system.hpp"
+#include "ukdyn/core/system.hpp"
 
 namespace ukdyn::test {
 

@@ -1,5 +1,6 @@
 // Test and benchmark support: a planar revolute joint with local columns (the input of the
-// sparse engine), written out by hand so that the engine's tests do not depend on multibody.hpp.
+// sparse engine), written out by hand so that the engine's tests do not depend on
+// multibody/multibody.hpp.
 #pragma once
 
 #include <algorithm>
@@ -10,7 +11,7 @@
 
 #include <Eigen/Core>
 
-#include <ukdyn/constraint.hpp>
+#include <ukdyn/core/constraint.hpp>
 
 namespace ukdyn::testing {
 

@@ -9,9 +9,9 @@
 #include <Eigen/Core>
 #include <Eigen/SVD>
 
-#include <ukdyn/constraint.hpp>
-#include <ukdyn/nonideal.hpp>
-#include <ukdyn/system.hpp>
+#include <ukdyn/core/constraint.hpp>
+#include <ukdyn/core/nonideal.hpp>
+#include <ukdyn/core/system.hpp>
 
 namespace ukdyn::testing {
 
@@ -72,9 +72,9 @@ inline System make_system(const RandomProblem& p) {
         }));
   }
   if (!p.C.isZero(0.0)) {
-    builder.add(NonIdealForce("C", [C = p.C](const VectorXd&, const VectorXd&, double,
-                                             const IdealForceInfo&,
-                                             Eigen::Ref<VectorXd> out) { out = C; }));
+    builder.add(NonIdealForce(
+        "C", [C = p.C](const VectorXd&, const VectorXd&, double, const IdealForceInfo&,
+                       Eigen::Ref<VectorXd> out) { out = C; }));
   }
   return builder.build();
 }

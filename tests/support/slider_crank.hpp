@@ -1,6 +1,7 @@
 // The slider-crank of the multibody validation (issue #5): crank r turning at the prescribed
 // rate w, rod l, slider on the x axis; closed-form kinematics and the energy by hand, for the
-// C++ test (test_multibody.cpp) and the model-file test (test_model_multibody.cpp).
+// C++ test (multibody/test_multibody.cpp) and the model-file test
+// (modelfile/test_model_multibody.cpp).
 #pragma once
 
 #include <cmath>

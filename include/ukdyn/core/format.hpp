@@ -1,0 +1,28 @@
+/// @file format.hpp
+/// Text of numbers and lists in messages: the one formatter of the library, its command line
+/// and its Python module, so that every message prints numbers the same way.
+#pragma once
+
+#include <string>
+#include <string_view>
+#include <type_traits>
+#include <vector>
+
+namespace ukdyn {
+
+/// A number as messages print it. significant = 0 (the default): the shortest text that reads
+/// back as the same double (std::to_chars; "0.1", "-0", "1e-12", "inf", "nan"), never a
+/// fixed six decimals that show a small number as "0.000000". significant > 0: that many
+/// significant digits, as printf's %g ("1.8e-12" for 3). Cost O(1), allocates the string.
+std::string format_number(double v, int significant = 0);
+
+/// An integer as messages print it (every digit). Cost O(digits).
+template <class Int, std::enable_if_t<std::is_integral_v<Int>, int> = 0>
+std::string format_number(Int v) {
+  return std::to_string(v);
+}
+
+/// The items joined by `separator` ("a, b, c"); empty for none. Cost O(total length).
+std::string join(const std::vector<std::string>& items, std::string_view separator = ", ");
+
+}  // namespace ukdyn

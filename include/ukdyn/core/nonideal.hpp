@@ -1,0 +1,177 @@
+/// @file core/nonideal.hpp
+/// Non-ideal constraints: the work vector C of eq. (7), supplied by the modeller.
+///
+/// C may depend on (q, q', t), on the ideal constraint force (which does not depend on C, eq. 11)
+/// and on the constraints' whole reactions (IdealForceInfo::reaction: the ideal share plus the
+/// reaction that C itself causes), which apply_nonideal settles by iteration: friction follows
+/// the true normal force even where one contact's friction presses on another. A system may hold
+/// several non-ideal forces; their C vectors are summed.
+#pragma once
+
+#include <functional>
+#include <memory>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "ukdyn/core/types.hpp"
+
+namespace ukdyn {
+
+class System;
+class Workspace;
+struct CallableScratch;
+struct CoulombFriction;
+
+/// Read-only view of the ideal constraint force at the current evaluation, handed to each
+/// non-ideal force. Valid only during that call.
+class IdealForceInfo {
+ public:
+  /// @param sys the system; @param ws its workspace after the ideal stage.
+  IdealForceInfo(const System& sys, const Workspace& ws) : sys_(sys), ws_(ws) {}
+  /// The same view with `scratch` for scratch() — for a wrapper that calls a force of another
+  /// system with that system's scratch (the controlled plant's forces, inside the controlled
+  /// system's workspace). Reading reactions through it counts as reading them through `outer`.
+  IdealForceInfo(const IdealForceInfo& outer, CallableScratch* scratch)
+      : sys_(outer.sys_), ws_(outer.ws_), outer_(&outer), scratch_(scratch), replaced_(true) {}
+
+  /// The ideal constraint force Qc_ideal (n), eq. (11).
+  const VectorXd& Qc_ideal() const;
+  /// The minimum-norm multipliers of the ideal force (m), Qc_ideal = Aᵀ lambda.
+  const VectorXd& lambda() const;
+  /// The multipliers of constraint k (its rows of lambda).
+  Eigen::Ref<const VectorXd> lambda(Index k) const;
+  /// Constraint k's share of the ideal force, A_kᵀ lambda_k (n). The shares sum to Qc_ideal.
+  Eigen::Ref<const VectorXd> share(Index k) const;
+  /// Index of the constraint called `name` (O(K) string comparisons: to stay fast, resolve it
+  /// once, in a NonIdealForce::Binder). @throws std::invalid_argument when there is none.
+  Index constraint_index(std::string_view name) const;
+  /// The slip hint of non-ideal force i (see Workspace::slip_hint): zero unless the force is a
+  /// Coulomb friction that has just started to slip from rest.
+  Eigen::Ref<const VectorXd> slip_hint(Index i) const;
+  /// The sliding velocity of Coulomb contact c relative to its constraint, v_rel (one entry per
+  /// sliding coordinate; see CoulombFriction), computed once per evaluation before the
+  /// non-ideal forces are called.
+  Eigen::Ref<const VectorXd> sliding_velocity(Index c) const;
+  /// Constraint k's whole reaction: its share of the ideal force plus the reaction that the
+  /// non-ideal forces themselves cause on it, A_kᵀ lambda_nonideal,k (friction at one contact
+  /// changes the normal force at another: a ladder against a rough wall and a rough floor).
+  /// apply_nonideal evaluates C until this settles. Cost O(n).
+  Eigen::Ref<const VectorXd> reaction(Index k) const;
+  /// Euclidean norm of reaction(k): the normal force of a contact constraint written in
+  /// Cartesian coordinates. Cost O(n).
+  double normal_force(Index k) const { return reaction(k).norm(); }
+  /// The workspace's scratch of the system's callables (System::make_scratch; null when the
+  /// system has no ScratchFactory): a non-ideal force's buffers for this evaluation.
+  CallableScratch* scratch() const;
+  /// True once reaction() or normal_force() was called (apply_nonideal iterates only then).
+  bool read_reactions() const { return read_reactions_; }
+
+ private:
+  const System& sys_;
+  const Workspace& ws_;
+  const IdealForceInfo* outer_ = nullptr;  // the view this one replaces the scratch of
+  CallableScratch* scratch_ = nullptr;     // scratch() when replaced_
+  bool replaced_ = false;
+  mutable bool read_reactions_ = false;  // (a transient view's own flag)
+};
+
+/// A non-ideal force's C(q, q', t, ideal force): writes C (n), which is zero on entry.
+/// Must not allocate.
+using NonIdealFn = std::function<void(const VectorXd& q, const VectorXd& qd, double t,
+                                      const IdealForceInfo& ideal, Eigen::Ref<VectorXd> C)>;
+
+/// A named contribution to C. It is bound to a system when the system is built, so it may
+/// refer to constraints by name (resolved once, never in the hot path).
+class NonIdealForce {
+ public:
+  /// Makes the callable once the system's constraints are known; may throw
+  /// std::invalid_argument naming what it could not resolve.
+  using Binder = std::function<NonIdealFn(const System& sys)>;
+
+  /// A force given directly by its callable. @throws std::invalid_argument if fn is empty.
+  NonIdealForce(std::string name, NonIdealFn fn);
+  /// A force that needs the system to be bound (see Binder).
+  NonIdealForce(std::string name, Binder bind);
+
+  const std::string& name() const { return name_; }  ///< its name, unique within a system
+  /// The callable for system `sys` (called once by SystemBuilder::build).
+  NonIdealFn bind(const System& sys) const { return bind_(sys); }
+  /// The Coulomb law behind this force, when it was made by coulomb_friction() (the
+  /// simulation then handles sticking), or null.
+  const CoulombFriction* coulomb() const { return coulomb_.get(); }
+
+ private:
+  friend NonIdealForce coulomb_friction(CoulombFriction spec);
+  std::string name_;
+  Binder bind_;
+  std::shared_ptr<const CoulombFriction> coulomb_;
+};
+
+/// The velocity u of the surface's material point under a contact, on the contact's sliding
+/// coordinates (one entry each), and its rate u' = du/dt = (du/dq) q' + du/dt along the motion.
+/// u may depend on q and t, not on q'. Must not allocate.
+using SurfaceVelocityFn = std::function<void(const VectorXd& q, const VectorXd& qd, double t,
+                                             Eigen::Ref<VectorXd> u, Eigen::Ref<VectorXd> u_dot)>;
+
+/// Coulomb friction on a constraint surface (docs/friction.md has the equations). While sliding:
+///   C_i = −mu N v_rel,i / sqrt(|v_rel|² + eps²)  for i in `coordinates`, zero elsewhere,
+/// where N = |A_kᵀ (lambda_k + lambda_nonideal,k)| is the norm of constraint k's whole reaction
+/// (IdealForceInfo::normal_force) and v_rel the sliding velocity relative to the constraint:
+///   v_rel = P (v − u),   P = I − N_k⁺ N_k,
+/// v = q' restricted to `coordinates` (Cartesian, for N to be the physical normal force), N_k
+/// constraint k's rows of A restricted to those coordinates, u the surface velocity.
+/// P removes the velocity along the constraint's normals, which a bilateral contact shares with
+/// the surface: for phi(q, t) that depends on t (a wire that rotates, a platform that rises) the
+/// surface's normal motion is thereby derived from phi itself. A motion of the surface along
+/// itself (a conveyor belt, a turntable under a block in the plane) leaves phi unchanged and
+/// cannot be derived: it is given as `surface_velocity`. For |v_rel| >> eps this is exact
+/// Coulomb friction of magnitude mu N opposing v_rel. When the simulation releases a sticking
+/// contact, or lets a contact pass through v_rel = 0, friction starts at its full magnitude
+/// against the impending motion (Workspace::slip_hint), keeps that direction while
+/// |v_rel| <= 100 eps (the speed at which stops are located) and then follows
+/// −mu N v_rel/|v_rel| exactly.
+///
+/// Sticking: the system also gets a nonholonomic constraint "stick.<name>", v − u = 0 on
+/// `coordinates`, inactive unless the simulation switches it on. simulate() locates the instant
+/// the sliding speed falls to 100 eps (an event on the integrator's dense output) and sticks
+/// there only when sticking is admissible: the velocity projection onto the stick rows removes at
+/// most a tolerance-level kinetic energy (a zero of v_rel that the mechanism passes through
+/// kinematically, like a slider-crank's dead centre, would need a velocity jump), the
+/// constraints stay consistent with the stick rows, and the force that holds the contact lies
+/// within mu_static N. Otherwise the contact slides through v_rel = 0 (a second event, where the
+/// friction reverses). A sticking contact slips again when its holding force exceeds
+/// mu_static N. No regularization enters the stick phase. A single forward_dynamics call always
+/// sees the sliding law.
+struct CoulombFriction {
+  std::string constraint;  ///< name of the constraint whose share gives N
+  double mu = 0.0;         ///< kinetic friction coefficient, >= 0
+  /// static friction coefficient (>= mu): a stick holds while |holding force| <= mu_static N;
+  /// unset: equal to mu
+  std::optional<double> mu_static;
+  std::vector<Index> coordinates;         ///< sliding coordinates (empty: all n), distinct
+  double regularization_velocity = 1e-9;  ///< eps above, > 0, in velocity units
+  SurfaceVelocityFn surface_velocity;     ///< u above; empty: the surface has no tangential motion
+  std::string name;                       ///< force name (default "coulomb.<constraint>")
+};
+
+/// The non-ideal force of a CoulombFriction law. Binding throws std::invalid_argument if the
+/// constraint does not exist, mu < 0, mu_static < mu, eps <= 0, or a coordinate is out of range
+/// or repeated. Cost per evaluation O(n + rows_k · |coordinates|).
+NonIdealForce coulomb_friction(CoulombFriction spec);
+
+/// Viscous friction C_i = −c_i q'_i on `coordinates` (all when empty).
+struct ViscousFriction {
+  double coefficient = 0.0;        ///< c >= 0, the same for every listed coordinate
+  std::vector<Index> coordinates;  ///< damped coordinates (empty: all n)
+  std::string name = "viscous";    ///< force name
+};
+
+/// The non-ideal force of a ViscousFriction law. Binding throws std::invalid_argument on
+/// c < 0 or a coordinate out of range. Cost O(n).
+NonIdealForce viscous_friction(ViscousFriction spec);
+
+}  // namespace ukdyn

@@ -1,0 +1,119 @@
+/// @file modelfile/model.hpp
+/// Model files: a mechanical system written down in YAML with symbolic expressions (see
+/// docs/model-format.md), turned into a System, an initial state and simulation settings.
+#pragma once
+
+#include <cstddef>
+#include <map>
+#include <memory>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "ukdyn/core/system.hpp"
+#include "ukdyn/modelfile/expression.hpp"
+#include "ukdyn/simulation/simulate.hpp"
+
+namespace ukdyn {
+
+class Controller;
+namespace mb {
+struct MultibodyModel;
+}
+
+/// An error in a model file: what, where (file:line:column, 1-based) and a hint. what() reads
+/// "FILE:LINE:COLUMN: error: MESSAGE (hint: HINT)".
+class ModelError : public std::runtime_error {
+ public:
+  ModelError(std::string file, int line, int column, std::string message, std::string hint = "");
+  const std::string& file() const { return file_; }        ///< the file (or "<string>")
+  int line() const { return line_; }                       ///< 1-based line
+  int column() const { return column_; }                   ///< 1-based column
+  const std::string& message() const { return message_; }  ///< what is wrong
+  const std::string& hint() const { return hint_; }        ///< how to fix it (may be empty)
+
+ private:
+  std::string file_;
+  int line_, column_;
+  std::string message_, hint_;
+};
+
+/// A parameter override (load_model's `overrides`, `ukdyn run --set`) that names no parameter
+/// of the model or is not a finite number: a ModelError without a position (line and column 0)
+/// whose message starts with "--set NAME:". Front ends treat it as a mistake of their caller.
+class OverrideError : public ModelError {
+ public:
+  using ModelError::ModelError;
+};
+
+/// A model read from a file: the system and everything needed to run it.
+struct Model {
+  std::string name;                          ///< `name:`
+  std::string file;                          ///< where it came from
+  std::map<std::string, double> parameters;  ///< `parameters:` after overrides
+  System system;                             ///< the description
+  VectorXd q0, qd0;                          ///< `initial:` (not yet projected)
+  bool project_initial = false;              ///< `initial: project:`
+  SimulationOptions options;                 ///< `simulate:` and `output:`
+  /// `output: expressions:` by name, compiled over (q, q_dot, t): evaluate with
+  /// evaluate_output_expressions().
+  std::vector<std::string> output_names;
+  expr::Program output_program;
+  /// `control:` — the controller (with its nominal model) that run_model() applies to the
+  /// plant `system`; null when the model has no control section (control/control.hpp).
+  std::shared_ptr<const Controller> controller;
+  /// `bodies:`, `joints:`, `forces:` — the multibody description that `system` was built from
+  /// (its poses and joint reactions are reported); null for a model in generalized coordinates
+  /// (multibody/multibody.hpp).
+  std::shared_ptr<const mb::MultibodyModel> multibody;
+};
+
+/// Reads a model from YAML text. `file` names it in errors; `overrides` replace parameter
+/// values (as --set name=value does). @throws ModelError with file:line:column and a hint.
+Model parse_model(const std::string& text, const std::string& file = "<string>",
+                  const std::map<std::string, double>& overrides = {});
+
+/// The largest model file load_model() reads: 64 MB (a model file is a few kB; this bounds the
+/// memory a wrong path such as /dev/zero can take).
+inline constexpr std::size_t kMaxModelFileBytes = std::size_t(64) << 20;
+
+/// Reads a model file. @throws ModelError (including when the file cannot be read, is a
+/// directory, is empty, or is larger than kMaxModelFileBytes).
+Model load_model(const std::string& path, const std::map<std::string, double>& overrides = {});
+
+/// What `ukdyn check` reports about a model at its initial state.
+struct CheckReport {
+  Index coordinates = 0;         ///< n
+  Index constraint_rows = 0;     ///< m (active at t_start)
+  Index rank = 0;                ///< rank of A at the initial state
+  Index degrees_of_freedom = 0;  ///< n − rank
+  /// Constraints whose rows add nothing to the rank of those before them (in declaration
+  /// order): removing them leaves the motion unchanged.
+  std::vector<std::string> redundant;
+  /// Constraints that contradict each other near the initial state: no state satisfies them
+  /// together, so projection cannot help (find_constraint_conflict); not listed as redundant.
+  std::vector<std::string> contradictory;
+  /// One line per constraint the initial state violates (check_initial_conditions).
+  std::vector<std::string> initial_violations;
+  /// M(q0, t_start) symmetric positive definite, or positive semi-definite (mass_singular)
+  bool mass_positive_definite = false;
+  /// M(q0, t_start) singular: positive semi-definite, completed by the constraints when [M; A]
+  /// has full column rank (docs/singular-mass.md; otherwise a problem is listed)
+  bool mass_singular = false;
+  std::vector<std::string> problems;  ///< what makes the model unusable (empty: fine)
+  /// True when there are no problems.
+  bool ok() const { return problems.empty(); }
+};
+
+/// Checks a model at its initial state: sizes, rank and redundancy of the constraints, initial
+/// consistency (against initial_tolerance of its options), and M. Cost: a few evaluations.
+CheckReport check_model(const Model& model);
+
+/// The values of the model's output expressions at every sample of a trajectory: one vector per
+/// name, in output_names order.
+std::vector<std::vector<double>> evaluate_output_expressions(const Model& model,
+                                                             const Trajectory& traj);
+
+}  // namespace ukdyn

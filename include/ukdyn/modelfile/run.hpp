@@ -1,0 +1,68 @@
+/// @file modelfile/run.hpp
+/// Running a model as `ukdyn run` does, for every front end (the command, the Python module):
+/// the simulation — under its controller when the model file has a `control:` section — and
+/// every column of trajectory.csv by name, with its values.
+#pragma once
+
+#include <cstddef>
+#include <functional>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "ukdyn/control/control.hpp"
+#include "ukdyn/io/trajectory_files.hpp"
+#include "ukdyn/modelfile/model.hpp"
+#include "ukdyn/simulation/simulate.hpp"
+
+namespace ukdyn {
+
+/// A model's run: the plant's trajectory and the columns that follow the standard ones.
+struct ModelRun {
+  /// The plant's motion, as simulate() records it (for a controlled model: its `plant`).
+  Trajectory trajectory;
+  /// Whether the model ran under its controller (a `control:` section).
+  bool controlled = false;
+  /// The controller over the run (controlled runs only).
+  ControlStatistics control;
+  /// The columns after the standard ones of io/trajectory_files.hpp, in CSV order: the control's
+  /// (control_csv_columns), the bodies' poses (multibody models), then the model's output
+  /// expressions.
+  std::vector<CsvColumn> extra_columns;
+
+  /// Every column of trajectory.csv, in order: csv_table(trajectory) then extra_columns.
+  /// Cost O(N × columns) (copies).
+  std::vector<CsvColumn> columns() const;
+};
+
+/// Simulates the model with `options` (usually model.options, perhaps with another t_end):
+/// simulate(), or simulate_controlled() with the model's controller. A failure during the run
+/// is reported in trajectory.stats (status, message) with the samples computed before it.
+/// @throws std::invalid_argument when the run cannot start (an inconsistent initial state,
+/// bad settings), as simulate() does.
+ModelRun run_model(const Model& model, const SimulationOptions& options);
+
+/// run_model with the samples passed on as they are computed instead of kept (`ukdyn run`
+/// streams trajectory.csv this way): `chunk` receives, in time order, a ModelRun whose
+/// trajectory holds the next samples (at most chunk_samples; names, sizes filled, stats empty)
+/// and whose extra_columns hold those samples' values. Returns the run's statistics
+/// (trajectory.stats, with stats.samples counting every sample), the names, and the last
+/// sample only (trajectory and extra_columns with one value each; none when no sample was
+/// recorded). Memory O(chunk_samples × columns) whatever the run's length, and the grid may
+/// have up to kMaxStreamedSamples samples; a controlled model (a `control:` section) streams
+/// the same way, the control's columns with the plant's (simulate_controlled's streamed
+/// overload). An exception thrown by `chunk` stops the run and propagates.
+/// @throws std::invalid_argument as run_model.
+ModelRun run_model(const Model& model, const SimulationOptions& options,
+                   const std::function<void(const ModelRun& chunk)>& chunk,
+                   std::size_t chunk_samples = 4096);
+
+/// run_model(model, model.options).
+ModelRun run_model(const Model& model);
+
+/// Writes trajectory.csv: the standard columns then run.extra_columns (write_csv of
+/// io/trajectory_files.hpp).
+/// @throws std::runtime_error naming the path if it cannot be written.
+void write_csv(const ModelRun& run, const std::string& path);
+
+}  // namespace ukdyn

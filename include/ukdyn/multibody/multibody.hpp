@@ -1,0 +1,354 @@
+/// @file multibody/multibody.hpp
+/// Bodies, joints and force elements: a modelling layer that produces an ordinary System.
+///
+/// Every body keeps its own absolute coordinates (no coordinate elimination):
+///  - particle      (x, y, z)                                   3 coordinates, M = m I
+///  - planar body   (x, y, theta) of its centre of mass          3 coordinates, M = diag(m, m, I)
+///  - rigid body    centre of mass r and quaternion u = (u0, u1, u2, u3)   7 coordinates,
+///                  M = diag(m I3, 4 E_v(u)ᵀ J E_v(u)) with J = diag(J1, J2, J3)
+/// (docs/multibody.md: the quaternion equations of motion of Udwadia & Schutte 2010). The 4 × 4
+/// quaternion block is singular along u; the unit norm of u, a constraint "<body>.unit" of the
+/// system, determines that direction (a singular M with [M; A] of full column rank).
+///
+/// Every joint is one or more named constraints whose rows touch the coordinates of its bodies
+/// only (ConstraintModel::columns()), with A and b in closed form (rolling contacts, spatial
+/// revolute drives and spatial gears: automatic
+/// differentiation on the bodies' own coordinates). Joint friction is a
+/// NonIdealForce that reads the joint's own ideal reaction. The result of Multibody::build() is a
+/// System with one mass block per body part (mass_block), which both the dense and the sparse
+/// engine run, plus the metadata that the reports (joint reactions, energies, momenta, poses)
+/// need.
+///
+/// Frames: the world frame W has z up for spatial models; planar models move in the (x, y) plane.
+/// A body frame B has its origin at the centre of mass. A joint connects a frame F_P on its
+/// parent body and a frame F_C on its child body (Frame: origin p_BF and orientation R_BF in body
+/// coordinates); the ground is the body kGround, whose frame is W.
+#pragma once
+
+#include <functional>
+#include <memory>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+
+#include "ukdyn/core/system.hpp"
+#include "ukdyn/core/types.hpp"
+#include "ukdyn/dynamics/workspace.hpp"
+#include "ukdyn/io/trajectory_files.hpp"
+#include "ukdyn/simulation/simulate.hpp"
+
+namespace ukdyn::mb {
+
+using Eigen::Matrix3d;
+using Eigen::Quaterniond;
+using Eigen::Vector3d;
+
+/// A body: an index returned by Multibody::add_*; kGround is the fixed world.
+using BodyId = Index;
+/// The ground (world frame W).
+inline constexpr BodyId kGround = -1;
+
+/// The coordinates a body carries.
+enum class BodyKind {
+  kParticle,  ///< (x, y, z)
+  kPlanar,    ///< (x, y, theta) in the (x, y) plane
+  kRigid,     ///< (x, y, z, u0, u1, u2, u3), u a unit quaternion (u0 the scalar part)
+};
+
+/// A frame fixed on a body: origin p (body coordinates, metres) and orientation R (columns: the
+/// frame's x, y, z axes in body coordinates). On a planar body only p.x, p.y and a rotation about
+/// z make sense; on a particle only p (an offset that does not rotate).
+struct Frame {
+  Vector3d p = Vector3d::Zero();      ///< origin p_BF
+  Matrix3d R = Matrix3d::Identity();  ///< orientation R_BF
+  /// The frame at p with the body's orientation.
+  static Frame at(const Vector3d& p) { return {p, Matrix3d::Identity()}; }
+  /// A planar frame at (x, y) whose x axis makes `angle` with the body's x axis.
+  static Frame planar(double x, double y, double angle = 0.0);
+  /// The frame at p whose z axis is `axis` (normalized); x and y complete a right-handed frame.
+  /// @throws std::invalid_argument when axis is zero.
+  static Frame with_z(const Vector3d& p, const Vector3d& axis);
+};
+
+/// A prescribed (driving) motion of a joint's relative coordinate: returns (f(t), f'(t), f''(t)).
+using MotionFn = std::function<Vector3d(double t)>;
+
+/// Friction in a joint, applied as a non-ideal force (reported apart from the ideal reaction).
+/// Revolute joints: a torque about the axis; prismatic joints: a force along the axis.
+/// Coulomb: magnitude mu · radius · N (revolute; N the norm of the joint's ideal reaction force,
+/// radius the pin radius) or mu · N (prismatic, N the norm of the reaction force), opposing the
+/// relative rate w as w / sqrt(w² + eps²). Viscous: −c w.
+struct JointFriction {
+  double mu = 0.0;               ///< Coulomb coefficient, >= 0
+  double radius = 0.0;           ///< pin radius of a revolute joint (m), >= 0
+  double viscous = 0.0;          ///< viscous coefficient c >= 0 (N m s or N s/m)
+  double regularization = 1e-6;  ///< eps > 0, in units of the relative rate
+  /// True when either law is present.
+  bool enabled() const { return mu > 0.0 || viscous > 0.0; }
+};
+
+/// The kinds of joint. Planar kinds apply between planar bodies (and the ground); spatial kinds
+/// between rigid bodies, particles and the ground. Rows per kind: docs/multibody.md.
+enum class JointType {
+  kRevolute,       ///< planar: common point (2 rows); spatial: + z axes aligned (5 rows)
+  kPrismatic,      ///< planar: slide along the parent frame's x, no rotation (2);
+                   ///< spatial: slide along the parent frame's z, no rotation (5)
+  kWeld,           ///< no relative motion (planar 3, spatial 6)
+  kDistance,       ///< |p_C − p_P| = length (1)
+  kPointOnLine,    ///< child origin on the parent frame's x line (planar 1) or z line (spatial 2)
+  kSpherical,      ///< common point (3)
+  kCylindrical,    ///< slide along and turn about the parent z axis (4)
+  kUniversal,      ///< common point, parent z ⊥ child z (4)
+  kPlanar,         ///< child frame's xy plane slides in the parent's xy plane (3)
+  kPointOnPlane,   ///< child origin in the parent frame's xy plane (1)
+  kGear,           ///< planar: angle(a) − ratio · angle(b) = its initial value (1, holonomic);
+                   ///< spatial: rate(a) − ratio · rate(b) = 0 (1, nonholonomic)
+  kRollingDisk,    ///< thin disk (child, axis = child frame z, radius) rolls on z = 0 (1 + 2)
+  kRollingSphere,  ///< sphere (child, radius) rolls on z = 0 (1 + 2)
+};
+
+/// Short name of a joint type ("revolute", …). Cost O(1).
+const char* to_string(JointType type);
+
+/// A joint between a parent and a child body. Use the factory functions below.
+struct Joint {
+  std::string name;  ///< unique; names its constraints
+  JointType type = JointType::kRevolute;
+  BodyId parent = kGround, child = kGround;
+  Frame frame_parent, frame_child;  ///< F_P on the parent, F_C on the child
+  double length = 0.0;              ///< kDistance: the distance (m), > 0
+  double radius = 0.0;              ///< rolling: the radius (m), > 0
+  std::string gear_a, gear_b;       ///< kGear: names of two planar revolute joints
+  double ratio = 1.0;               ///< kGear: angle_a − ratio · angle_b = const
+  /// Prescribed motion of the joint's relative coordinate: revolute: the angle of F_C's x axis
+  /// from F_P's x axis about the axis (planar: a linear row; spatial: the angle error by
+  /// automatic differentiation); prismatic, cylindrical: the slide of F_C's origin along the
+  /// axis. Added as a rheonomic constraint "<name>.drive", whose multiplier is the driving
+  /// torque or force (drive_effort).
+  MotionFn drive;
+  JointFriction friction;  ///< adds a non-ideal force "<name>.friction"
+};
+
+/// @name Joint factories (frames in body coordinates)
+/// @{
+Joint revolute(std::string name, BodyId parent, const Frame& fp, BodyId child, const Frame& fc);
+Joint prismatic(std::string name, BodyId parent, const Frame& fp, BodyId child, const Frame& fc);
+Joint weld(std::string name, BodyId parent, const Frame& fp, BodyId child, const Frame& fc);
+Joint distance(std::string name, BodyId parent, const Vector3d& p_parent, BodyId child,
+               const Vector3d& p_child, double length);
+Joint point_on_line(std::string name, BodyId parent, const Frame& fp, BodyId child,
+                    const Vector3d& p_child);
+Joint spherical(std::string name, BodyId parent, const Vector3d& p_parent, BodyId child,
+                const Vector3d& p_child);
+Joint cylindrical(std::string name, BodyId parent, const Frame& fp, BodyId child, const Frame& fc);
+Joint universal(std::string name, BodyId parent, const Frame& fp, BodyId child, const Frame& fc);
+Joint planar_joint(std::string name, BodyId parent, const Frame& fp, BodyId child, const Frame& fc);
+Joint point_on_plane(std::string name, BodyId parent, const Frame& fp, BodyId child,
+                     const Vector3d& p_child);
+/// A gear between revolute joints a and b: planar, angle(a) − ratio · angle(b) = its initial
+/// value; spatial, (ω_Ca − ω_Pa)·z_Pa = ratio (ω_Cb − ω_Pb)·z_Pb (velocity level: the initial
+/// rates must satisfy it).
+Joint gear(std::string name, std::string joint_a, std::string joint_b, double ratio);
+/// A thin disk of `radius` rolling without slipping on the plane z = 0; its axis is the z axis
+/// of `axis_frame` (child coordinates; the disk's centre is the body's centre of mass).
+Joint rolling_disk(std::string name, BodyId disk, double radius, const Frame& axis_frame = {});
+/// A sphere of `radius` (centre = centre of mass) rolling without slipping on z = 0.
+Joint rolling_sphere(std::string name, BodyId sphere, double radius);
+/// @}
+
+/// Applied force at a body point and torque (world frame W), from (q, q', t).
+struct Wrench {
+  Vector3d force = Vector3d::Zero();   ///< F (N), applied at the point
+  Vector3d torque = Vector3d::Zero();  ///< tau (N m) about the body's centre of mass (planar: z)
+};
+/// Callable of an applied wrench. Must not allocate.
+using WrenchFn = std::function<Wrench(const VectorXd& q, const VectorXd& qd, double t)>;
+
+/// The kinds of force element.
+enum class ForceType {
+  kSpringDamper,   ///< between two body points: F = (k (l − l0) + c l') along the line
+  kTorsionSpring,  ///< torque −k (dtheta − theta0) − c dtheta' between two bodies (see
+                   ///< torsion_spring)
+  kApplied,        ///< an applied wrench (WrenchFn) on one body at one point
+};
+
+/// A force element (gravity is Multibody::set_gravity).
+struct Force {
+  std::string name;
+  ForceType type = ForceType::kApplied;
+  BodyId body_a = kGround, body_b = kGround;  ///< the two bodies (kApplied: body_a)
+  Vector3d point_a = Vector3d::Zero(), point_b = Vector3d::Zero();  ///< body points
+  double stiffness = 0.0, damping = 0.0, rest = 0.0;                ///< k, c and l0 (or theta0)
+  WrenchFn wrench;                                                  ///< kApplied
+};
+
+/// Spring-damper between body points (l0 = rest length). Potential ½ k (l − l0)².
+Force spring_damper(std::string name, BodyId a, const Vector3d& pa, BodyId b, const Vector3d& pb,
+                    double k, double c, double rest_length);
+/// Torsional spring-damper between two planar bodies: torque −k (theta_b − theta_a − theta0) −
+/// c (theta_b' − theta_a') on b (and its opposite on a). Between two rigid bodies (or one and the
+/// ground): an isotropic rotational spring, torque −k theta n − c (omega_b − omega_a) on b with
+/// theta n the rotation vector of b relative to a (|theta| < pi; V = ½ k theta²); theta0 must be
+/// 0 (the rest orientation is the bodies' frames aligned). About a revolute joint's axis it is
+/// that joint's torsion spring. Checked by build().
+Force torsion_spring(std::string name, BodyId a, BodyId b, double k, double c, double theta0);
+/// An applied wrench on `body`, the force acting at body point p.
+Force applied(std::string name, BodyId body, const Vector3d& p, WrenchFn fn);
+
+/// Metadata of a body in a built model.
+struct BodyInfo {
+  std::string name;
+  BodyKind kind = BodyKind::kParticle;
+  Index offset = 0;  ///< first coordinate
+  Index size = 0;    ///< 3 or 7
+  double mass = 0.0;
+  Vector3d inertia = Vector3d::Zero();  ///< principal moments about the centre of mass (planar: z)
+};
+
+/// Metadata of a joint in a built model.
+struct JointInfo {
+  std::string name;
+  JointType type = JointType::kRevolute;
+  BodyId parent = kGround, child = kGround;
+  Frame frame_parent, frame_child;
+  bool planar = false;             ///< between planar bodies
+  std::vector<Index> constraints;  ///< indices in System of its constraints (joint, drive)
+  Index drive = -1;                ///< index of the "<name>.drive" constraint, or −1
+  Index friction = -1;             ///< index of its non-ideal force, or −1
+  JointFriction friction_law;      ///< its friction parameters (for the reports)
+};
+
+/// The result of Multibody::build(): the System, a consistent initial state and metadata.
+struct MultibodyModel {
+  System system;                  ///< ready for Workspace, forward_dynamics, simulate
+  VectorXd q0, qd0;               ///< initial state from the bodies' initial poses and velocities
+  std::vector<BodyInfo> bodies;   ///< by BodyId
+  std::vector<JointInfo> joints;  ///< in the order added
+  Vector3d gravity = Vector3d::Zero();
+  /// Index of a body by name. @throws std::invalid_argument listing the names.
+  BodyId body(std::string_view name) const;
+  /// Index of a joint by name. @throws std::invalid_argument listing the names.
+  Index joint(std::string_view name) const;
+};
+
+/// Collects bodies, joints and forces; build() turns them into a MultibodyModel.
+class Multibody {
+ public:
+  Multibody();
+  ~Multibody();
+  Multibody(const Multibody&);
+  Multibody& operator=(const Multibody&);
+
+  /// A particle of mass m > 0 at p0 with velocity v0 (world).
+  BodyId add_particle(std::string name, double mass, const Vector3d& p0,
+                      const Vector3d& v0 = Vector3d::Zero());
+  /// A planar body of mass m > 0 and inertia I > 0 about its centre of mass; pose0 = (x, y,
+  /// theta), vel0 = (x', y', theta').
+  BodyId add_planar_body(std::string name, double mass, double inertia, const Vector3d& pose0,
+                         const Vector3d& vel0 = Vector3d::Zero());
+  /// A rigid body of mass m > 0 with principal inertia (J1, J2, J3) > 0 about its centre of mass
+  /// (body axes = principal axes); pose: centre of mass r0 and orientation R_WB = u0;
+  /// velocity v0 (world) and angular velocity w0 (world).
+  BodyId add_rigid_body(std::string name, double mass, const Vector3d& inertia, const Vector3d& r0,
+                        const Quaterniond& u0, const Vector3d& v0 = Vector3d::Zero(),
+                        const Vector3d& w0 = Vector3d::Zero());
+  /// Adds a joint (checked in build()).
+  Multibody& add_joint(Joint joint);
+  /// Adds a force element (checked in build()).
+  Multibody& add_force(Force force);
+  /// Uniform gravity g (world; e.g. (0, −9.81, 0) for planar, (0, 0, −9.81) for spatial).
+  Multibody& set_gravity(const Vector3d& g);
+
+  /// Builds the System: coordinates named "<body>.x" … "<body>.u3"; one constant mass block per
+  /// particle, planar body and rigid translation, one state-dependent 4 × 4 block per quaternion;
+  /// the constraints "<body>.unit", then per joint "<joint>" (and "<joint>.drive",
+  /// "<joint>.contact" for rolling height); forces Q = gravity + springs + applied + the
+  /// quaternion's velocity terms; potential energy of gravity and springs.
+  /// @throws std::invalid_argument naming the problem (unknown body, joint between bodies of
+  /// different kinds, bad parameter, a gear on a non-planar-revolute joint, duplicate names).
+  MultibodyModel build() const;
+
+ private:
+  struct Data;
+  std::unique_ptr<Data> d_;
+};
+
+/// Pose of a body at q: position of its centre of mass and orientation (planar: rotation about z
+/// by theta; particle: identity).
+struct Pose {
+  Vector3d p_WB = Vector3d::Zero();
+  Quaterniond R_WB = Quaterniond::Identity();
+};
+/// The pose of body b at q (the quaternion normalized). Cost O(1).
+Pose body_pose(const MultibodyModel& mb, const VectorXd& q, BodyId b);
+/// Velocity of the centre of mass and angular velocity (world) of body b. Cost O(1).
+std::pair<Vector3d, Vector3d> body_velocity(const MultibodyModel& mb, const VectorXd& q,
+                                            const VectorXd& qd, BodyId b);
+/// Kinetic energy of body b: ½ m v² + ½ ω_Bᵀ J ω_B. Cost O(1).
+double kinetic_energy(const MultibodyModel& mb, const VectorXd& q, const VectorXd& qd, BodyId b);
+/// Total mechanical energy: kinetic energies + potential of gravity and springs. Cost O(bodies).
+double total_energy(const MultibodyModel& mb, const VectorXd& q, const VectorXd& qd, double t);
+/// Linear momentum Σ m v and angular momentum about the world origin Σ (r × m v + R J ω_B).
+std::pair<Vector3d, Vector3d> momentum(const MultibodyModel& mb, const VectorXd& q,
+                                       const VectorXd& qd);
+/// The world position of body point p (body coordinates) at q.
+Vector3d world_point(const MultibodyModel& mb, const VectorXd& q, BodyId b, const Vector3d& p);
+
+/// Reaction of a joint on its child body (on its parent when the child is the ground), reduced
+/// to the joint point (the origin of F_C, at its world position):
+///   force_W, torque_W      ideal part, world frame;
+///   force_B, torque_B      the same in the body's frame;
+///   nonideal_force_W, nonideal_torque_W   the joint friction (its C), world frame.
+/// For a planar joint the torque is along z. From the joint's share A_kᵀ lambda_k of the ideal
+/// generalized force (the drive's share is reported separately, see drive_effort).
+struct JointReaction {
+  BodyId body = kGround;  ///< the body the reaction acts on
+  Vector3d force_W = Vector3d::Zero(), torque_W = Vector3d::Zero();
+  Vector3d force_B = Vector3d::Zero(), torque_B = Vector3d::Zero();
+  Vector3d nonideal_force_W = Vector3d::Zero(), nonideal_torque_W = Vector3d::Zero();
+};
+
+/// The reaction of joint j at (q, q', t) given the multipliers lambda (m) of an evaluation
+/// (ws.lambda, or a Trajectory sample's lambda). The non-ideal part is zero in this overload.
+/// Allocates (a report, not for the hot path). Cost O(rows · columns of the joint).
+JointReaction joint_reaction(const MultibodyModel& mb, const VectorXd& q, const VectorXd& qd,
+                             double t, const VectorXd& lambda, Index j);
+/// As above, after forward_dynamics(mb.system, ws, q, qd, t): also the joint friction's force.
+JointReaction joint_reaction(const MultibodyModel& mb, Workspace& ws, const VectorXd& q,
+                             const VectorXd& qd, double t, Index j);
+/// The driving torque (revolute) or force (prismatic) of joint j's prescribed motion: the
+/// generalized force of "<joint>.drive" along the driven coordinate. @throws std::invalid_argument
+/// when the joint has no drive.
+double drive_effort(const MultibodyModel& mb, const VectorXd& q, const VectorXd& qd, double t,
+                    const VectorXd& lambda, Index j);
+
+/// Writes every body's pose at every sample of tr as CSV for animation: a header
+/// `t,<b>.x,<b>.y,<b>.z,<b>.qw,<b>.qx,<b>.qy,<b>.qz,…` then one line per sample.
+/// @throws std::runtime_error when the file cannot be written, std::invalid_argument when tr
+/// does not belong to mb (size).
+void write_poses_csv(const MultibodyModel& mb, const Trajectory& tr, const std::string& path);
+
+/// The multibody columns of a model run's CSV (modelfile/run.hpp), one value per sample of tr, in
+/// order:
+///  - `<b>.x, <b>.y, <b>.z, <b>.qw, <b>.qx, <b>.qy, <b>.qz` for every body (its pose, as
+///    write_poses_csv), except the components that are coordinates of the system (the centre
+///    of mass `<b>.x, <b>.y` of a planar body, `<b>.x, <b>.y, <b>.z` of a rigid body or a
+///    particle: the standard coordinate columns hold them), so that no name repeats one of
+///    csv_columns();
+///  - `<b>.kinetic_energy` for every body (kinetic_energy);
+///  - per joint, its ideal reaction on its child (joint_reaction from the sample's lambda,
+///    world frame, reduced to the joint point): `reaction.<j>.fx, .fy, .tz` for a planar joint,
+///    `reaction.<j>.fx, .fy, .fz, .tx, .ty, .tz` for a spatial one (rolling contacts: at the
+///    centre); with friction the same components of the friction force as
+///    `reaction.<j>.friction_fx, …` (an evaluation per sample; NaN where it fails); with a
+///    drive its effort `drive.<j>` (drive_effort); a gear: its multiplier
+///    `reaction.<j>.torque` (the torque along joint a's angle or rate).
+/// @throws std::invalid_argument when tr does not belong to mb (sizes).
+/// Cost O(N × (bodies + joints × joint rows × joint columns)), plus one forward_dynamics per
+/// sample when a joint has friction.
+std::vector<CsvColumn> report_csv_columns(const MultibodyModel& mb, const Trajectory& tr);
+
+}  // namespace ukdyn::mb

@@ -1,0 +1,156 @@
+// Stage 3 of the control pipeline: the control laws. A force F meets the requirements on the
+// physically constrained nominal model iff X F = e, X = A_r P, P = L⁻ᵀ (I − W_p⁺ W_p) L⁻¹.
+// Every law is the least-cost solution (least squares when none exists), computed with the
+// decomposition of the fundamental equation — a "mass" matrix (the cost) and "constraint" rows:
+//
+//   Gauss, every coordinate actuated:  min F ᵀ M⁻¹ F     mass M,        rows X M:   F = L W⁺ e
+//   otherwise, F = S u:                min uᵀ Nu u       mass Nu,       rows X S:   u = R⁻ᵀ W⁺ e
+//        Nu = Sᵀ N S (weighted law; N itself when S = I), or Sᵀ M⁻¹ S (Gauss law with actuation)
+//
+// (with W = rows · (Cholesky factor)⁻ᵀ). Neither M^{1/2}, N^{1/2} nor any pseudo-inverse is formed.
+// X M = A_r P M: row i is L (I − W_p⁺W_p) L⁻¹ A_r,iᵀ, the "non-ideal projection" of A_r,iᵀ, and
+// X = A_r P: row i is P A_r,iᵀ; both A_r and A_r M⁻¹ without physical constraints.
+#include <cmath>
+
+#include "control/internal.hpp"
+
+namespace ukdyn {
+
+namespace control_detail {
+
+void apply_law(const Controller& ctrl, ControlWorkspace& ws, const Eigen::Ref<const VectorXd>& r,
+               Eigen::Ref<VectorXd> u, Eigen::Ref<VectorXd> Q, Eigen::Ref<VectorXd> minv_Q) {
+  if (gauss_direct(ctrl)) {
+    // Q = L W⁺ r;  M⁻¹ Q = L⁻ᵀ W⁺ r
+    ws.decomposition.solve_ideal(r, minv_Q, Q, ws.lambda_r);
+    u = Q;
+    return;
+  }
+  // u = R⁻ᵀ W⁺ r (Nu u into tmp_k)
+  ws.decomposition.solve_ideal(r, u, ws.tmp_k, ws.lambda_r);
+  // Q = S u
+  if (ctrl.fully_actuated()) {
+    Q = u;
+  } else if (!ctrl.actuated_coordinates().empty()) {
+    Q.setZero();
+    const auto& idx = ctrl.actuated_coordinates();
+    for (std::size_t j = 0; j < idx.size(); ++j) Q[idx[j]] = u[Index(j)];
+  } else {
+    Q.noalias() = ctrl.actuation() * u;
+  }
+}
+
+}  // namespace control_detail
+
+ControlStatus solve_law(const Controller& ctrl, ControlWorkspace& ws, const VectorXd& q,
+                        const VectorXd& qd, double t) {
+  control_detail::require_same_controller(ctrl, ws, "ukdyn::solve_law");
+  const Index m_r = ctrl.requirement_rows();
+  const bool physical = ws.model.active_rows > 0;
+  FundamentalDecomposition& dp = ws.model.decomposition;  // M = L Lᵀ and W_p of the model
+  const MatrixXd& A = ws.req.A;
+  double solution_norm = 0.0;  // ‖M⁻¹ Q_c‖ resp. ‖u‖, for the feasibility test
+  if (control_detail::gauss_direct(ctrl)) {
+    // mass M (a constant M is factorized once)
+    if (!(ctrl.model().mass_is_constant() && ws.cost_factorized)) {
+      ws.decomposition.compute_mass(ws.model.M);
+      if (ws.decomposition.info() != Eigen::Success) {
+        return control_detail::fail(ws, ControlStatus::kModelFailed, "M", -1, t);
+      }
+      ws.cost_factorized = true;
+    }
+    // rows X M = A_r P M
+    if (!physical) {
+      ws.X = A;
+    } else {
+      for (Index i = 0; i < m_r; ++i) {
+        ws.tmp_n = A.row(i).transpose();
+        dp.project_nonideal(ws.tmp_n, ws.tmp_n2, ws.tmp_n3, ws.lambda_p);
+        ws.X.row(i) = ws.tmp_n3.transpose();
+      }
+    }
+    ws.decomposition.compute_constraints(ws.X);
+    ws.rank = ws.decomposition.rank();
+    // Qc = L W⁺ e, eq. (25);  M⁻¹ Qc into tmp_n
+    control_detail::apply_law(ctrl, ws, ws.e, ws.u, ws.Qc_nominal, ws.tmp_n);
+    // residual = X Qc − e = (X M)(M⁻¹ Qc) − e
+    ws.residual.noalias() = ws.X * ws.tmp_n;
+    ws.residual -= ws.e;
+    solution_norm = ws.tmp_n.norm();
+  } else {
+    // X = A_r P
+    for (Index i = 0; i < m_r; ++i) {
+      ws.tmp_n = A.row(i).transpose();
+      if (physical) {
+        dp.project_nonideal(ws.tmp_n, ws.tmp_n2, ws.tmp_n3, ws.lambda_p);
+      } else {
+        dp.solve_mass(ws.tmp_n, ws.tmp_n2);
+      }
+      ws.X.row(i) = ws.tmp_n2.transpose();
+    }
+    // cost matrix Nu and its Cholesky factor (a constant one once)
+    const bool constant = ctrl.law() == ControlLaw::kWeighted ? ctrl.weight_is_constant()
+                                                              : ctrl.model().mass_is_constant();
+    if (!(constant && ws.cost_factorized)) {
+      if (ctrl.law() == ControlLaw::kWeighted) {
+        // N(q, q', t); Nu = Sᵀ N S
+        ctrl.weight(q, qd, t, ws.N);
+        if (!ws.N.allFinite()) {
+          return control_detail::fail(ws, ControlStatus::kNonFiniteInput, "N", -1, t);
+        }
+        if (ctrl.fully_actuated()) {
+          ws.decomposition.compute_mass(ws.N);
+        } else {
+          ws.MinvS.noalias() = ws.N * ctrl.actuation();
+          ws.Nu.noalias() = ctrl.actuation().transpose() * ws.MinvS;
+          ws.decomposition.compute_mass(ws.Nu);
+        }
+      } else {
+        // Nu = Sᵀ M⁻¹ S
+        for (Index j = 0; j < ctrl.actuators(); ++j) {
+          dp.solve_mass(ctrl.actuation().col(j), ws.MinvS.col(j));
+        }
+        ws.Nu.noalias() = ctrl.actuation().transpose() * ws.MinvS;
+        ws.decomposition.compute_mass(ws.Nu);
+      }
+      if (ws.decomposition.info() != Eigen::Success) {
+        return control_detail::fail(ws, ControlStatus::kWeightNotPositiveDefinite, "N", -1, t);
+      }
+      ws.cost_factorized = true;
+    }
+    // rows X S
+    if (ctrl.fully_actuated()) {
+      ws.XS = ws.X;
+    } else if (!ctrl.actuated_coordinates().empty()) {
+      const auto& idx = ctrl.actuated_coordinates();
+      for (std::size_t j = 0; j < idx.size(); ++j) ws.XS.col(Index(j)) = ws.X.col(idx[j]);
+    } else {
+      ws.XS.noalias() = ws.X * ctrl.actuation();
+    }
+    ws.decomposition.compute_constraints(ws.XS);
+    ws.rank = ws.decomposition.rank();
+    // u = R⁻ᵀ (X S R⁻ᵀ)⁺ e,  Qc = S u
+    control_detail::apply_law(ctrl, ws, ws.e, ws.u, ws.Qc_nominal, ws.tmp_n);
+    // residual = X S u − e
+    ws.residual.noalias() = ws.XS * ws.u;
+    ws.residual -= ws.e;
+    solution_norm = ws.u.norm();
+  }
+  // row i met when |residual_i| <= tol (‖row_i‖ ‖solution‖ + |e_i|)
+  const MatrixXd& rows = control_detail::gauss_direct(ctrl) ? ws.X : ws.XS;
+  const double tol = ctrl.options().feasibility_tolerance;
+  ws.rows_not_met = 0;
+  for (Index i = 0; i < m_r; ++i) {
+    const double scale = rows.row(i).norm() * solution_norm + std::abs(ws.e[i]);
+    const bool ok = std::abs(ws.residual[i]) <= tol * scale;
+    ws.met[std::size_t(i)] = ok ? 1 : 0;
+    if (!ok) ++ws.rows_not_met;
+  }
+  if (ws.rows_not_met > 0) {
+    ws.status = ControlStatus::kRequirementsNotMet;
+    return ControlStatus::kRequirementsNotMet;
+  }
+  return ControlStatus::kOk;
+}
+
+}  // namespace ukdyn

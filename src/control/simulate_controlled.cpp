@@ -1,0 +1,687 @@
+// Controlled simulation: the plant (a System that may differ from the controller's nominal
+// model) under the control force, run by simulate(). The control is evaluated inside the plant's
+// force callable with the control workspace in the controlled system's per-workspace scratch
+// (ControlledScratch), so an evaluation allocates nothing and one controlled System serves
+// several threads, each with its own Workspace; the run's control statistics are read from that
+// scratch after the run.
+//
+// simulate_controlled integrates, besides the plant, the control's work ∫ Qcᵀq' dt, effort
+// ∫ QcᵀQc dt and absolute work ∫ |Qcᵀq'| dt — and with the robust term each row's Lyapunov
+// bound V_i' = −gamma_i V_i + kappa_i epsilon / 2 — exactly, with the integrator's own error
+// control: the plant is augmented with unit-mass auxiliary coordinates z whose "force" is the
+// integrand, so z' is the integral. M stays block diagonal, the physical constraints have zero
+// columns on z (so projections leave z alone), and the auxiliary coordinates are stripped from
+// the result (their kinetic energy ½ z'ᵀz' removed from the energies).
+#include <Eigen/SVD>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <memory>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <utility>
+
+#include "control/internal.hpp"
+#include "dynamics/internal.hpp"
+#include "simulation/energy_balance.hpp"
+#include "simulation/sample_grid.hpp"
+#include "ukdyn/core/format.hpp"
+#include "ukdyn/dynamics/forward.hpp"
+#include "ukdyn/dynamics/projection.hpp"
+
+namespace ukdyn {
+
+namespace {
+
+// auxiliary coordinates: work, effort, absolute work, then one bound state per requirement row
+constexpr Index kWork = 0, kEffort = 1, kWorkAbs = 2, kBounds = 3;
+
+struct ControlledScratch;
+CallableScratch* plant_scratch(CallableScratch* controlled);
+
+// --- plant constraints on the augmented coordinates [q; z] -------------------------------------
+
+struct HeadScratch final : ConstraintScratch {
+  HeadScratch(std::unique_ptr<ConstraintScratch> in, Index n) : inner(std::move(in)), q(n), qd(n) {}
+  std::unique_ptr<ConstraintScratch> inner;
+  VectorXd q, qd;  // (n) the plant's part of the state
+};
+
+// The plant's constraint evaluated on q = x.head(n): its own rows, zero columns for z.
+class HeadConstraintModel final : public ConstraintModel {
+ public:
+  HeadConstraintModel(Constraint inner, Index n) : inner_(std::move(inner)), n_(n) {}
+
+  std::unique_ptr<ConstraintScratch> make_scratch(Index) const override {
+    return std::make_unique<HeadScratch>(inner_.model().make_scratch(n_), n_);
+  }
+  // the plant's constraint shares the plant's scratch (inside the controlled system's)
+  std::unique_ptr<ConstraintScratch> make_scratch_sharing(Index,
+                                                          CallableScratch* shared) const override {
+    return std::make_unique<HeadScratch>(
+        inner_.model().make_scratch_sharing(n_, plant_scratch(shared)), n_);
+  }
+
+  void acceleration_form(const VectorXd& q, const VectorXd& qd, double t, ConstraintScratch* s,
+                         Eigen::Ref<MatrixXd> A, Eigen::Ref<VectorXd> b) const override {
+    auto& w = static_cast<HeadScratch&>(*s);
+    w.q = q.head(n_);
+    w.qd = qd.head(n_);
+    inner_.model().acceleration_form(w.q, w.qd, t, w.inner.get(), A.leftCols(n_), b);
+    A.rightCols(A.cols() - n_).setZero();
+  }
+
+  void violation(const VectorXd& q, const VectorXd& qd, double t, ConstraintScratch* s,
+                 Eigen::Ref<VectorXd> position, Eigen::Ref<VectorXd> velocity) const override {
+    auto& w = static_cast<HeadScratch&>(*s);
+    w.q = q.head(n_);
+    w.qd = qd.head(n_);
+    inner_.model().violation(w.q, w.qd, t, w.inner.get(), position, velocity);
+  }
+
+ private:
+  Constraint inner_;
+  Index n_;
+};
+
+Constraint on_head(const Constraint& c, Index n) {
+  Constraint out(c.name(), c.kind(), c.rows(), std::make_shared<HeadConstraintModel>(c, n));
+  const TimeInterval& iv = c.active_interval();
+  if (iv.begin != TimeInterval{}.begin || iv.end != TimeInterval{}.end) {
+    out.active_between(iv.begin, iv.end);
+  }
+  if (c.stabilization().enabled()) out.stabilize(c.stabilization().alpha, c.stabilization().beta);
+  out.mark_drive(c.is_drive());
+  return out;
+}
+
+// --- the control inside the plant's force ------------------------------------------------------
+
+// The controlled plant's description (immutable, shared by the controlled system's callables):
+// the controller and the plant, n plant coordinates and aux auxiliary ones.
+struct ControlledPlant {
+  ControlledPlant(const Controller& c, const System& p, Index aux_count)
+      : ctrl(c), plant(p), n(p.coordinate_count()), aux(aux_count) {}
+
+  // Q ← Q_plant(q, q', t) + Qc_control and the auxiliary integrands; NaN when the control fails
+  void force(ControlledScratch& w, const VectorXd& xq, const VectorXd& xqd, double t,
+             Eigen::Ref<VectorXd> Q) const;
+  void note_not_met(ControlledScratch& w, double t) const;
+
+  Controller ctrl;
+  System plant;
+  Index n, aux;
+};
+
+// The controlled system's per-workspace scratch (its CallableScratch): the control workspace,
+// the plant's own scratch, the plant part of the state, and the run's control statistics.
+struct ControlledScratch final : CallableScratch {
+  explicit ControlledScratch(const ControlledPlant& p)
+      : cws(p.ctrl),
+        plant(p.plant.make_scratch()),
+        q(p.n),
+        qd(p.n),
+        qm(p.n),
+        qp(p.n),
+        qdp(p.n),
+        qc(p.n),
+        qdc(p.n),
+        q_last(p.n),
+        qd_last(p.n) {
+    stats.first_not_met = std::numeric_limits<double>::quiet_NaN();
+  }
+  ControlWorkspace cws;
+  std::unique_ptr<CallableScratch> plant;  // the plant's callables' scratch (may be null)
+  VectorXd q, qd;                          // (n) plant part of the state, for the force
+  VectorXd qm;                             // (n) plant part of q, for M and V
+  VectorXd qp, qdp;                        // (n) for the external power
+  VectorXd qc, qdc;                        // (n) for the non-ideal forces
+  VectorXd q_last, qd_last;  // (n) the state of the last control evaluation, at t_last
+  double t_last = 0.0;
+  ControlStatistics stats;
+  std::string failure;  // describe_control_status() of the first failure
+};
+
+CallableScratch* plant_scratch(CallableScratch* controlled) {
+  auto* w = dynamic_cast<ControlledScratch*>(controlled);
+  return w != nullptr ? w->plant.get() : nullptr;
+}
+
+void ControlledPlant::force(ControlledScratch& w, const VectorXd& xq, const VectorXd& xqd, double t,
+                            Eigen::Ref<VectorXd> Q) const {
+  ControlWorkspace& cws = w.cws;
+  ControlStatistics& stats = w.stats;
+  const VectorXd* pq = &xq;
+  const VectorXd* pqd = &xqd;
+  if (aux > 0) {
+    w.q = xq.head(n);
+    w.qd = xqd.head(n);
+    pq = &w.q;
+    pqd = &w.qd;
+  }
+  plant.forces(*pq, *pqd, t, w.plant.get(), Q.head(n));
+  const ControlStatus s = compute_control(ctrl, cws, *pq, *pqd, t);
+  ++stats.evaluations;
+  // where the control was last evaluated (a failed run's diagnosis looks there)
+  w.q_last = *pq;
+  w.qd_last = *pqd;
+  w.t_last = t;
+  if (s != ControlStatus::kOk && s != ControlStatus::kRequirementsNotMet) {
+    if (w.failure.empty()) w.failure = describe_control_status(ctrl, cws);
+    Q.setConstant(std::numeric_limits<double>::quiet_NaN());
+    return;
+  }
+  if (s == ControlStatus::kRequirementsNotMet) note_not_met(w, t);
+  for (Index i = 0; i < cws.kappa.size(); ++i)
+    stats.max_kappa = std::max(stats.max_kappa, cws.kappa[i]);
+  // Q += Qc_control
+  Q.head(n) += cws.Qc_control;
+  if (aux == 0) return;
+  // z'' = (Qcᵀq', QcᵀQc, |Qcᵀq'|, −gamma_i V_i + kappa_i epsilon / 2)
+  Q[n + kWork] = cws.power;
+  Q[n + kEffort] = cws.Qc_control.squaredNorm();
+  Q[n + kWorkAbs] = std::abs(cws.power);
+  if (const auto& r = ctrl.robust(); r && aux > kBounds) {
+    for (Index i = 0; i < ctrl.requirement_rows(); ++i) {
+      Q[n + kBounds + i] =
+          -ctrl.robust_rate(i) * xqd[n + kBounds + i] + 0.5 * cws.kappa[i] * r->boundary_layer;
+    }
+  }
+}
+
+void ControlledPlant::note_not_met(ControlledScratch& w, double t) const {
+  ControlStatistics& stats = w.stats;
+  ++stats.not_met;
+  for (Index i = 0; i < w.cws.residual.size(); ++i) {
+    if (!w.cws.met[std::size_t(i)]) {
+      stats.max_residual = std::max(stats.max_residual, std::abs(w.cws.residual[i]));
+    }
+  }
+  if (stats.not_met == 1) {
+    stats.first_not_met = t;
+    stats.not_met_message = describe_control_status(ctrl, w.cws);  // once
+  }
+}
+
+// sigma_min / sigma_max of the active requirement rows A_r at (q, q', t), NaN without rows
+double requirement_gap(const Controller& ctrl, ControlWorkspace& cws, const VectorXd& q,
+                       const VectorXd& qd, double t) {
+  compute_control(ctrl, cws, q, qd, t);
+  MatrixXd rows(cws.req.active_rows, cws.req.A.cols());
+  Index k = 0;
+  for (Index i = 0; i < cws.req.A.rows() && k < rows.rows(); ++i) {
+    if (cws.req.A.row(i).squaredNorm() > 0.0) rows.row(k++) = cws.req.A.row(i);
+  }
+  if (k == 0) return std::numeric_limits<double>::quiet_NaN();
+  const VectorXd sv = Eigen::JacobiSVD<MatrixXd>(rows.topRows(k)).singularValues();
+  return sv[0] > 0.0 ? sv[sv.size() - 1] / sv[0] : 0.0;
+}
+
+// A controlled run whose step size collapsed: when the requirement rows have (nearly) lost
+// rank where the control was last evaluated, that is the likely cause, and it replaces the
+// driver's general diagnosis.
+void diagnose_requirements(const ControlledPlant& st, const ControlledScratch& w,
+                           const VectorXd& q0, const VectorXd& qd0, double t0,
+                           RunStatistics& stats) {
+  if (stats.status != Status::kIntegratorFailure || w.stats.evaluations == 0) return;
+  ControlWorkspace cws(st.ctrl);
+  const double start = requirement_gap(st.ctrl, cws, q0, qd0, t0);
+  const double now = requirement_gap(st.ctrl, cws, w.q_last, w.qd_last, w.t_last);
+  if (!(now < 1e-4) || start < 100.0 * now) return;
+  std::string& m = stats.message;
+  for (const char* cause : {". Likely cause", ". The step size collapsed"}) {
+    if (const auto at = m.find(cause); at != std::string::npos) m.erase(at);
+  }
+  char gaps[160];
+  std::snprintf(gaps, sizeof gaps,
+                "sigma_min / sigma_max of the requirement rows %.3g at t = %g "
+                "s, %.3g at the start",
+                now, w.t_last, start);
+  m += std::string(". Likely cause: the requirements lost rank (") + gaps +
+       "): they cannot all be met there — a path that leaves the reachable set, or passes a "
+       "singular configuration of the mechanism (an arm stretched out). Try: a requirement that "
+       "stays inside the workspace, fewer requirement rows, or actuated coordinates and a "
+       "weighted law that tolerate the loss (docs/control.md)";
+}
+
+void require_same_plant(const Controller& ctrl, const System& plant, const char* who) {
+  const System& model = ctrl.model();
+  auto fail = [&](const std::string& what) {
+    throw std::invalid_argument(std::string(who) + ": the plant and the controller's model " +
+                                what +
+                                " (the nominal model must describe the same mechanism, "
+                                "with the parameters the controller believes)");
+  };
+  if (plant.coordinate_names() != model.coordinate_names()) fail("have different coordinates");
+  if (plant.constraint_count() != model.constraint_count()) {
+    fail("have different physical constraints (" + format_number(plant.constraint_count()) +
+         " and " + format_number(model.constraint_count()) + ")");
+  }
+  for (Index k = 0; k < plant.constraint_count(); ++k) {
+    if (plant.constraint(k).name() != model.constraint(k).name() ||
+        plant.constraint(k).rows() != model.constraint(k).rows()) {
+      fail("differ in constraint " + format_number(k) + " ('" + plant.constraint(k).name() +
+           "' and '" + model.constraint(k).name() + "')");
+    }
+  }
+}
+
+// The plant with the control in its force; aux > 0 appends the auxiliary coordinates.
+System build_controlled(const std::shared_ptr<const ControlledPlant>& st,
+                        const std::vector<std::string>& aux_names) {
+  const System& plant = st->plant;
+  const Index n = plant.coordinate_count(), aux = st->aux;
+  std::vector<std::string> names = plant.coordinate_names();
+  names.insert(names.end(), aux_names.begin(), aux_names.end());
+  SystemBuilder b(names);
+  // every workspace of the controlled system gets its own control workspace and plant scratch
+  b.scratch([st]() -> std::unique_ptr<CallableScratch> {
+    return std::make_unique<ControlledScratch>(*st);
+  });
+  const auto scratch = [](CallableScratch* s) -> ControlledScratch& {
+    return static_cast<ControlledScratch&>(*s);
+  };
+  // M = diag(M_plant, I)
+  if (plant.mass_is_constant()) {
+    MatrixXd M = MatrixXd::Identity(n + aux, n + aux);
+    plant.mass_matrix(VectorXd::Zero(n), 0.0, M.topLeftCorner(n, n));
+    b.mass_matrix(M);
+  } else if (aux == 0) {
+    b.mass_matrix(
+        [st, scratch](const VectorXd& q, double t, CallableScratch* s, Eigen::Ref<MatrixXd> M) {
+          st->plant.mass_matrix(q, t, scratch(s).plant.get(), M);
+        });
+  } else {
+    b.mass_matrix([st, n, aux, scratch](const VectorXd& x, double t, CallableScratch* s,
+                                        Eigen::Ref<MatrixXd> M) {
+      ControlledScratch& w = scratch(s);
+      w.qm = x.head(n);
+      st->plant.mass_matrix(w.qm, t, w.plant.get(), M.topLeftCorner(n, n));
+      M.topRightCorner(n, aux).setZero();
+      M.bottomLeftCorner(aux, n).setZero();
+      M.bottomRightCorner(aux, aux).setIdentity();
+    });
+  }
+  // Q = Q_plant + Qc_control (+ the auxiliary integrands)
+  b.forces([st, scratch](const VectorXd& q, const VectorXd& qd, double t, CallableScratch* s,
+                         Eigen::Ref<VectorXd> Q) { st->force(scratch(s), q, qd, t, Q); });
+  if (plant.has_potential()) {
+    if (aux == 0) {
+      b.potential_energy([st, scratch](const VectorXd& q, double t, CallableScratch* s) {
+        return st->plant.potential_energy(q, t, scratch(s).plant.get());
+      });
+    } else {
+      b.potential_energy([st, n, scratch](const VectorXd& x, double t, CallableScratch* s) {
+        ControlledScratch& w = scratch(s);
+        w.qm = x.head(n);
+        return st->plant.potential_energy(w.qm, t, w.plant.get());
+      });
+    }
+  }
+  // the plant's external power (the control's work is integrated apart, in z)
+  if (plant.has_external_power()) {
+    if (aux == 0) {
+      b.external_power(
+          [st, scratch](const VectorXd& q, const VectorXd& qd, double t, CallableScratch* s) {
+            return st->plant.external_power(q, qd, t, scratch(s).plant.get());
+          });
+    } else {
+      b.external_power(
+          [st, n, scratch](const VectorXd& x, const VectorXd& xd, double t, CallableScratch* s) {
+            ControlledScratch& w = scratch(s);
+            w.qp = x.head(n);
+            w.qdp = xd.head(n);
+            return st->plant.external_power(w.qp, w.qdp, t, w.plant.get());
+          });
+    }
+  }
+  // the physical constraints; the stick constraints of Coulomb contacts come again with their
+  // contacts below (last, in the same order, so every index stays the plant's)
+  const auto& contacts = plant.friction_contacts();
+  auto contact_of_force = [&](Index i) -> const FrictionContact* {
+    for (const auto& c : contacts) {
+      if (c.force == i) return &c;
+    }
+    return nullptr;
+  };
+  for (Index k = 0; k < plant.constraint_count(); ++k) {
+    const bool stick = std::any_of(contacts.begin(), contacts.end(), [k](const FrictionContact& c) {
+      return c.stick_constraint == k;
+    });
+    if (!stick) b.add(aux == 0 ? plant.constraint(k) : on_head(plant.constraint(k), n));
+  }
+  // the non-ideal forces, with the same indices; a Coulomb contact stays one (its sliding
+  // velocity, sticking and slipping need the system to know it)
+  for (Index i = 0; i < plant.nonideal_count(); ++i) {
+    if (const FrictionContact* c = contact_of_force(i)) {
+      CoulombFriction spec;
+      spec.constraint = plant.constraint(c->normal_constraint).name();
+      spec.mu = c->mu;
+      spec.mu_static = c->mu_static;
+      spec.coordinates = c->coordinates;
+      spec.regularization_velocity = c->eps;
+      spec.name = plant.nonideal_name(i);
+      if (c->surface_velocity && aux > 0) {
+        // (SurfaceVelocityFn carries no scratch: the plant's part of the state is copied for
+        // the call, which allocates — a controlled run with a moving friction surface only)
+        spec.surface_velocity = [u = c->surface_velocity, n](const VectorXd& x, const VectorXd& xd,
+                                                             double t, Eigen::Ref<VectorXd> uo,
+                                                             Eigen::Ref<VectorXd> udo) {
+          const VectorXd q = x.head(n), qd = xd.head(n);
+          u(q, qd, t, uo, udo);
+        };
+      } else {
+        spec.surface_velocity = c->surface_velocity;
+      }
+      b.add(coulomb_friction(spec));
+      continue;
+    }
+    // the plant's force, with the plant's scratch (IdealForceInfo::scratch)
+    NonIdealFn fn = plant.nonideal(i);
+    if (aux == 0) {
+      b.add(NonIdealForce(
+          plant.nonideal_name(i),
+          NonIdealFn([fn, scratch](const VectorXd& q, const VectorXd& qd, double t,
+                                   const IdealForceInfo& ideal, Eigen::Ref<VectorXd> C) {
+            const IdealForceInfo plant_ideal(ideal, scratch(ideal.scratch()).plant.get());
+            fn(q, qd, t, plant_ideal, C);
+          })));
+      continue;
+    }
+    b.add(NonIdealForce(
+        plant.nonideal_name(i),
+        NonIdealFn([fn, n, scratch](const VectorXd& x, const VectorXd& xd, double t,
+                                    const IdealForceInfo& ideal, Eigen::Ref<VectorXd> C) {
+          ControlledScratch& w = scratch(ideal.scratch());
+          w.qc = x.head(n);
+          w.qdc = xd.head(n);
+          const IdealForceInfo plant_ideal(ideal, w.plant.get());
+          fn(w.qc, w.qdc, t, plant_ideal, C.head(n));
+        })));
+  }
+  return b.build();
+}
+
+}  // namespace
+
+System controlled_system(const Controller& ctrl, const System& plant) {
+  require_same_plant(ctrl, plant, "ukdyn::controlled_system");
+  return build_controlled(std::make_shared<ControlledPlant>(ctrl, plant, 0), {});
+}
+
+ControlledTrajectory simulate_controlled(
+    const Controller& ctrl, const System& plant, const VectorXd& q0, const VectorXd& qd0,
+    const SimulationOptions& options,
+    const std::function<void(const ControlledTrajectory& sample)>& sample_sink) {
+  const char* who = "ukdyn::simulate_controlled";
+  require_same_plant(ctrl, plant, who);
+  const Index n = plant.coordinate_count(), m_r = ctrl.requirement_rows();
+  if (q0.size() != n || qd0.size() != n) {
+    throw std::invalid_argument(std::string(who) + ": q0 and qd0 need n = " + format_number(n) +
+                                " entries, got " + format_number(q0.size()) + " and " +
+                                format_number(qd0.size()));
+  }
+  const bool robust = ctrl.robust().has_value();
+  const Index aux = kBounds + (robust ? m_r : 0);
+  std::vector<std::string> aux_names = {"ukdyn.control.work", "ukdyn.control.effort",
+                                        "ukdyn.control.work_abs"};
+  for (Index i = 0; robust && i < m_r; ++i) {
+    aux_names.push_back("ukdyn.control.bound." + ctrl.row_names()[std::size_t(i)]);
+  }
+  for (const auto& name : aux_names) {
+    for (const auto& c : plant.coordinate_names()) {
+      if (c == name) {
+        throw std::invalid_argument(std::string(who) + ": the plant has a coordinate named '" +
+                                    name + "', which the controlled simulation reserves");
+      }
+    }
+  }
+  const auto st = std::make_shared<const ControlledPlant>(ctrl, plant, aux);
+  const System sys = build_controlled(st, aux_names);
+
+  // initial state [q0; 0], [qd0; 0, 0, 0, V_i(0)]
+  VectorXd x0 = VectorXd::Zero(n + aux), xd0 = VectorXd::Zero(n + aux);
+  x0.head(n) = q0;
+  xd0.head(n) = qd0;
+  if (robust) {
+    ControlWorkspace cws(ctrl);
+    evaluate_violations(ctrl.requirements(), cws.req, q0, qd0, options.t_start);
+    for (Index i = 0; i < m_r; ++i) {
+      const bool holonomic =
+          ctrl.requirement(ctrl.row_requirement(i)).kind() == ConstraintKind::kHolonomic;
+      const double e = holonomic ? cws.req.phi[i] : cws.req.phi_dot[i];
+      const double e_dot = holonomic ? cws.req.phi_dot[i] : 0.0;
+      xd0[n + kBounds + i] = ctrl.lyapunov(i, e, e_dot);
+    }
+  }
+  // the requirements' switching times are breakpoints of the dynamics
+  SimulationOptions o = options;
+  for (const Constraint& c : ctrl.requirements().constraints()) {
+    for (double t : {c.active_interval().begin, c.active_interval().end}) {
+      if (std::isfinite(t)) o.breakpoints.push_back(t);
+    }
+  }
+  // (the augmented system's balance includes z: the plant's is checked below)
+  o.energy_balance_tolerance = std::numeric_limits<double>::infinity();
+  const double tolerance = plant.accounts_for_energy() ? checked_energy_balance_tolerance(options)
+                                                       : std::numeric_limits<double>::infinity();
+
+  // the names; the samples go into `run` (kept) or into `one` (each passed to the sink)
+  ControlledTrajectory run;
+  Trajectory& tr = run.plant;
+  tr.coordinate_names = plant.coordinate_names();
+  run.row_names = ctrl.row_names();
+  run.robust = robust;
+  const bool streamed = bool(sample_sink);
+  ControlledTrajectory one;
+  if (!streamed) {
+    // kept in memory: the plant's values and the control's per sample, bounded as simulate()
+    // bounds its own (the augmented run itself streams into `run`, one sample at a time)
+    const double per_sample =
+        double(1 + 5 * n + plant.constraint_rows() + 2 * plant.constraint_count() + 9 + 2 * n +
+               (robust ? 3 : 2) * m_r + 4);
+    const std::string bound =
+        "of a controlled run kept in memory (kMaxStoredValues = 2^28 "
+        "values, " +
+        format_number(long(per_sample)) + " per sample)";
+    (void)detail::SampleGrid(
+        options, std::min(kMaxStreamedSamples, std::floor(kMaxStoredValues / per_sample)),
+        bound.c_str());
+  }
+  ControlledTrajectory& out = streamed ? one : run;
+  detail::EnergyBalance balance;  // the plant's, with the control's work
+  ControlWorkspace cws(ctrl);
+  VectorXd q(n), qd(n), qdd(n);
+  o.sample_sink = [&](const Trajectory& s) {
+    // the plant's sample: strip z, and z'ᵀz'/2 from the energies
+    if (streamed) {
+      if (one.plant.coordinate_names.empty()) {
+        one.plant.coordinate_names = tr.coordinate_names;
+        one.plant.constraint_names = s.constraint_names;
+        one.plant.constraint_rows = s.constraint_rows;
+        one.plant.constraint_kinds = s.constraint_kinds;
+        one.plant.n = n;
+        one.plant.m = s.m;
+        one.row_names = run.row_names;
+        one.robust = robust;
+      }
+      for (auto* f : sample_fields(one)) f->clear();
+    }
+    Trajectory& p = out.plant;
+    const double t = s.t[0];
+    p.t.push_back(t);
+    for (auto [to, from] : {std::pair{&p.q, &s.q},
+                            {&p.qd, &s.qd},
+                            {&p.qdd, &s.qdd},
+                            {&p.Qc_ideal, &s.Qc_ideal},
+                            {&p.Qc_nonideal, &s.Qc_nonideal}}) {
+      to->insert(to->end(), from->begin(), from->begin() + n);
+    }
+    for (auto [to, from] : {std::pair{&p.lambda, &s.lambda},
+                            {&p.position_violation, &s.position_violation},
+                            {&p.velocity_violation, &s.velocity_violation},
+                            {&p.potential_energy, &s.potential_energy},
+                            {&p.work_nonideal, &s.work_nonideal},
+                            {&p.work_ideal, &s.work_ideal},
+                            {&p.work_drive, &s.work_drive},
+                            {&p.work_external, &s.work_external}}) {
+      to->insert(to->end(), from->begin(), from->end());
+    }
+    const double* z_dot = s.qd.data() + n;
+    const double T =
+        s.kinetic_energy[0] - 0.5 * Eigen::Map<const VectorXd>(z_dot, aux).squaredNorm();
+    const double V = s.potential_energy[0];
+    p.kinetic_energy.push_back(T);
+    p.energy.push_back(T + V);
+    p.work_control.push_back(z_dot[kWork]);
+    const double works[5] = {s.work_nonideal[0], s.work_ideal[0], s.work_drive[0],
+                             s.work_external[0], z_dot[kWork]};
+    p.energy_balance_residual.push_back(balance.add(t, T, V, T + V, works));
+
+    // the control at the sample (evaluated afresh at the sample's state)
+    q = Eigen::Map<const VectorXd>(s.q.data(), n);
+    qd = Eigen::Map<const VectorXd>(s.qd.data(), n);
+    qdd = Eigen::Map<const VectorXd>(s.qdd.data(), n);
+    compute_control(ctrl, cws, q, qd, t);
+    // errors: phi (holonomic), psi (nonholonomic), A_r q'' − b_r (acceleration form)
+    const VectorXd accel_residual = cws.req.A * qdd - cws.req.b;
+    evaluate_violations(ctrl.requirements(), cws.req, q, qd, t);
+    for (Index i = 0; i < m_r; ++i) {
+      switch (ctrl.requirement(ctrl.row_requirement(i)).kind()) {
+        case ConstraintKind::kHolonomic:
+          out.error.push_back(cws.req.phi[i]);
+          out.error_rate.push_back(cws.req.phi_dot[i]);
+          break;
+        case ConstraintKind::kNonholonomic:
+          out.error.push_back(cws.req.phi_dot[i]);
+          out.error_rate.push_back(0.0);
+          break;
+        case ConstraintKind::kAcceleration:
+          out.error.push_back(accel_residual[i]);
+          out.error_rate.push_back(0.0);
+          break;
+      }
+    }
+    out.Qc_control.insert(out.Qc_control.end(), cws.Qc_control.data(), cws.Qc_control.data() + n);
+    out.Qc_robust.insert(out.Qc_robust.end(), cws.Qc_robust.data(), cws.Qc_robust.data() + n);
+    out.control_power.push_back(cws.Qc_control.dot(qd));
+    out.control_work.push_back(z_dot[kWork]);
+    out.control_effort.push_back(z_dot[kEffort]);
+    out.control_work_abs.push_back(z_dot[kWorkAbs]);
+    for (Index i = 0; robust && i < m_r; ++i) {
+      out.error_bound.push_back(
+          std::sqrt(std::max(z_dot[kBounds + i], 0.0) / ctrl.robust_scale(i)));
+    }
+    if (streamed) sample_sink(one);
+  };
+  // the control statistics, read from the run's workspace (its ControlledScratch) at the end
+  std::optional<ControlledScratch> after;
+  const Trajectory full = detail::simulate_observed(sys, x0, xd0, o, [&](const Workspace& ws) {
+    after.emplace(*st);
+    const auto& w = static_cast<const ControlledScratch&>(*ws.callables);
+    after->stats = w.stats;
+    after->failure = w.failure;
+    after->q_last = w.q_last;
+    after->qd_last = w.qd_last;
+    after->t_last = w.t_last;
+  });
+  const ControlledScratch& w = *after;
+
+  // the names, the statistics and the plant's energy balance
+  tr.constraint_names = full.constraint_names;
+  tr.constraint_rows = full.constraint_rows;
+  tr.constraint_kinds = full.constraint_kinds;
+  tr.n = n;
+  tr.m = full.m;
+  tr.stats = full.stats;
+  diagnose_requirements(*st, w, q0, qd0, options.t_start, tr.stats);
+  run.control = w.stats;
+  balance.finish(tr.stats, tolerance);
+  if (!w.failure.empty() && tr.stats.status != Status::kOk &&
+      tr.stats.status != Status::kEnergyBalance && tr.stats.status != Status::kInterrupted) {
+    tr.stats.message = "the controller failed: " + w.failure;
+  }
+  return run;
+}
+
+ControlledTrajectory simulate_controlled(const Controller& ctrl, const System& plant,
+                                         const VectorXd& q0, const VectorXd& qd0,
+                                         const SimulationOptions& options) {
+  if (!options.sample_sink) return simulate_controlled(ctrl, plant, q0, qd0, options, nullptr);
+  // the plant's part of each sample to the options' sink
+  SimulationOptions o = options;
+  o.sample_sink = nullptr;
+  return simulate_controlled(ctrl, plant, q0, qd0, o,
+                             [&](const ControlledTrajectory& s) { options.sample_sink(s.plant); });
+}
+
+std::vector<std::vector<double>*> sample_fields(ControlledTrajectory& run) {
+  return {&run.plant.t,
+          &run.plant.q,
+          &run.plant.qd,
+          &run.plant.qdd,
+          &run.plant.Qc_ideal,
+          &run.plant.Qc_nonideal,
+          &run.plant.lambda,
+          &run.plant.position_violation,
+          &run.plant.velocity_violation,
+          &run.plant.kinetic_energy,
+          &run.plant.potential_energy,
+          &run.plant.energy,
+          &run.plant.work_nonideal,
+          &run.plant.work_ideal,
+          &run.plant.work_drive,
+          &run.plant.work_external,
+          &run.plant.work_control,
+          &run.plant.energy_balance_residual,
+          &run.error,
+          &run.error_rate,
+          &run.error_bound,
+          &run.Qc_control,
+          &run.Qc_robust,
+          &run.control_power,
+          &run.control_effort,
+          &run.control_work_abs,
+          &run.control_work};
+}
+
+std::vector<CsvColumn> control_csv_columns(const ControlledTrajectory& run) {
+  const Index N = run.samples(), n = run.plant.n, m_r = Index(run.row_names.size());
+  if (Index(run.error.size()) != N * m_r || Index(run.Qc_control.size()) != N * n ||
+      Index(run.control_power.size()) != N || Index(run.control_effort.size()) != N ||
+      Index(run.control_work_abs.size()) != N || Index(run.control_work.size()) != N ||
+      (run.robust && Index(run.error_bound.size()) != N * m_r)) {
+    throw std::invalid_argument(
+        "ukdyn::control_csv_columns: inconsistent controlled trajectory "
+        "(one from simulate_controlled() always is consistent)");
+  }
+  std::vector<CsvColumn> cols;
+  auto matrix = [&](const std::string& prefix, const std::vector<double>& f,
+                    const std::vector<std::string>& names) {
+    const Index width = Index(names.size());
+    for (Index i = 0; i < width; ++i) {
+      CsvColumn c{prefix + names[std::size_t(i)], {}};
+      c.values.reserve(std::size_t(N));
+      for (Index j = 0; j < N; ++j) c.values.push_back(f[std::size_t(j * width + i)]);
+      cols.push_back(std::move(c));
+    }
+  };
+  matrix("error.", run.error, run.row_names);
+  if (run.robust) matrix("error_bound.", run.error_bound, run.row_names);
+  matrix("Qc_control.", run.Qc_control, run.plant.coordinate_names);
+  if (run.robust) matrix("Qc_robust.", run.Qc_robust, run.plant.coordinate_names);
+  cols.push_back({"control_power", run.control_power});
+  cols.push_back({"control_effort", run.control_effort});
+  cols.push_back({"control_work_abs", run.control_work_abs});
+  cols.push_back({"control_work", run.control_work});
+  return cols;
+}
+
+void write_csv(const ControlledTrajectory& run, const std::string& path) {
+  write_csv(run.plant, path, control_csv_columns(run));
+}
+
+}  // namespace ukdyn

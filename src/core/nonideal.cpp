@@ -1,0 +1,143 @@
+// Non-ideal forces: the view of the ideal force they read, and the ready-made friction laws.
+#include "ukdyn/core/nonideal.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <utility>
+
+#include "ukdyn/core/format.hpp"
+#include "ukdyn/core/system.hpp"
+#include "ukdyn/dynamics/workspace.hpp"
+
+namespace ukdyn {
+
+const VectorXd& IdealForceInfo::Qc_ideal() const { return ws_.Qc_ideal; }
+CallableScratch* IdealForceInfo::scratch() const {
+  return replaced_ ? scratch_ : ws_.callables.get();
+}
+const VectorXd& IdealForceInfo::lambda() const { return ws_.lambda; }
+Eigen::Ref<const VectorXd> IdealForceInfo::lambda(Index k) const { return ws_.lambda_of(sys_, k); }
+Eigen::Ref<const VectorXd> IdealForceInfo::share(Index k) const { return ws_.shares.col(k); }
+Eigen::Ref<const VectorXd> IdealForceInfo::reaction(Index k) const {
+  read_reactions_ = true;
+  if (outer_ != nullptr) outer_->read_reactions_ = true;
+  return ws_.reactions.col(k);
+}
+Eigen::Ref<const VectorXd> IdealForceInfo::slip_hint(Index i) const { return ws_.slip_hint.col(i); }
+Eigen::Ref<const VectorXd> IdealForceInfo::sliding_velocity(Index c) const {
+  const auto& contacts = sys_.friction_contacts();
+  return ws_.sliding.col(c).head(Index(contacts[std::size_t(c)].coordinates.size()));
+}
+Index IdealForceInfo::constraint_index(std::string_view name) const {
+  return sys_.constraint_index(name);
+}
+
+NonIdealForce::NonIdealForce(std::string name, NonIdealFn fn) : name_(std::move(name)) {
+  if (!fn) throw std::invalid_argument("ukdyn::NonIdealForce '" + name_ + "': empty callable");
+  bind_ = [fn = std::move(fn)](const System&) { return fn; };
+}
+
+NonIdealForce::NonIdealForce(std::string name, Binder bind)
+    : name_(std::move(name)), bind_(std::move(bind)) {
+  if (!bind_) throw std::invalid_argument("ukdyn::NonIdealForce '" + name_ + "': empty binder");
+}
+
+namespace {
+// the listed coordinates, all of them when the list is empty; checks the range
+std::vector<Index> resolve_coordinates(const std::vector<Index>& listed, Index n,
+                                       const std::string& who) {
+  if (listed.empty()) {
+    std::vector<Index> all(static_cast<std::size_t>(n));
+    for (Index i = 0; i < n; ++i) all[std::size_t(i)] = i;
+    return all;
+  }
+  for (std::size_t j = 0; j < listed.size(); ++j) {
+    const Index i = listed[j];
+    if (i < 0 || i >= n) {
+      throw std::invalid_argument(who + ": coordinate index " + format_number(i) +
+                                  " is out of range [0, " + format_number(n) + ")");
+    }
+    if (std::find(listed.begin(), listed.begin() + std::ptrdiff_t(j), i) !=
+        listed.begin() + std::ptrdiff_t(j)) {
+      throw std::invalid_argument(who + ": coordinate index " + format_number(i) +
+                                  " is listed twice");
+    }
+  }
+  return listed;
+}
+}  // namespace
+
+NonIdealForce coulomb_friction(CoulombFriction spec) {
+  std::string name = spec.name.empty() ? "coulomb." + spec.constraint : spec.name;
+  spec.name = name;
+  NonIdealForce force(
+      name, NonIdealForce::Binder([spec, name](const System& sys) -> NonIdealFn {
+        const std::string who = "ukdyn::coulomb_friction '" + name + "'";
+        if (!(spec.mu >= 0.0)) {
+          throw std::invalid_argument(who + ": mu must be >= 0, got " + format_number(spec.mu));
+        }
+        if (!(spec.regularization_velocity > 0.0)) {
+          throw std::invalid_argument(who + ": regularization_velocity must be > 0, got " +
+                                      format_number(spec.regularization_velocity));
+        }
+        if (spec.mu_static && !(*spec.mu_static >= spec.mu)) {
+          throw std::invalid_argument(who +
+                                      ": mu_static must be >= mu = " + format_number(spec.mu) +
+                                      ", got " + format_number(*spec.mu_static));
+        }
+        const Index k = sys.constraint_index(spec.constraint);
+        const std::vector<Index> coords =
+            resolve_coordinates(spec.coordinates, sys.coordinate_count(), who);
+        const double mu = spec.mu,
+                     eps2 = spec.regularization_velocity * spec.regularization_velocity;
+        const Index self = sys.nonideal_count();  // this force's index once bound
+        const Index contact = Index(sys.friction_contacts().size());  // and its contact's
+        return [k, coords, mu, eps2, self, contact](const VectorXd&, const VectorXd&, double,
+                                                    const IdealForceInfo& ideal,
+                                                    Eigen::Ref<VectorXd> C) {
+          // v_rel, the sliding velocity relative to the constraint (see CoulombFriction)
+          const auto v = ideal.sliding_velocity(contact);
+          const double v2 = v.squaredNorm();
+          const double N = ideal.normal_force(k);
+          const auto hint = ideal.slip_hint(self);
+          if (hint.squaredNorm() > 0.0) {
+            // slipping from rest: mu N along the hint while |v_rel| <= 100 eps (the speed at which
+            // the simulation locates stops: a restart from v_rel ≈ 0 never sees the friction flip
+            // inside its first step), then exactly −mu N v_rel/|v_rel|
+            if (v2 <= 1e4 * eps2) {
+              for (Index i : coords) C[i] = mu * N * hint[i];
+            } else {
+              const double scale = -mu * N / std::sqrt(v2);
+              for (std::size_t r = 0; r < coords.size(); ++r) C[coords[r]] = scale * v[Index(r)];
+            }
+            return;
+          }
+          // C_i = −mu N v_rel,i / sqrt(|v_rel|² + eps²)
+          const double scale = -mu * N / std::sqrt(v2 + eps2);
+          for (std::size_t r = 0; r < coords.size(); ++r) C[coords[r]] = scale * v[Index(r)];
+        };
+      }));
+  force.coulomb_ = std::make_shared<const CoulombFriction>(spec);
+  return force;
+}
+
+NonIdealForce viscous_friction(ViscousFriction spec) {
+  return NonIdealForce(spec.name, NonIdealForce::Binder([spec](const System& sys) -> NonIdealFn {
+                         const std::string who = "ukdyn::viscous_friction '" + spec.name + "'";
+                         if (!(spec.coefficient >= 0.0)) {
+                           throw std::invalid_argument(who + ": coefficient must be >= 0, got " +
+                                                       format_number(spec.coefficient));
+                         }
+                         const std::vector<Index> coords =
+                             resolve_coordinates(spec.coordinates, sys.coordinate_count(), who);
+                         const double c = spec.coefficient;
+                         // C_i = −c q'_i
+                         return [coords, c](const VectorXd&, const VectorXd& qd, double,
+                                            const IdealForceInfo&, Eigen::Ref<VectorXd> C) {
+                           for (Index i : coords) C[i] = -c * qd[i];
+                         };
+                       }));
+}
+
+}  // namespace ukdyn

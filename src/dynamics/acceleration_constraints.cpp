@@ -1,0 +1,96 @@
+// Stage 2: the constraints in acceleration form, A q'' = b (eq. 5). Rows of constraints that are
+// inactive at t are zero, so they exert no force and cost no special case downstream.
+// Stabilized constraints (Baumgarte) get b ← b − 2α phi' − β² phi, resp. b ← b − α psi.
+// With the sparse engine each constraint writes its local columns (or dense rows) into a small
+// buffer, which goes into the fixed sparse pattern of A (linalg/sparse.hpp).
+#include "dynamics/internal.hpp"
+#include "ukdyn/dynamics/forward.hpp"
+#include "ukdyn/linalg/sparse.hpp"
+
+namespace ukdyn {
+
+namespace detail {
+Status write_constraint_rows(const System& sys, Workspace& ws, Index k, const VectorXd& q,
+                             const VectorXd& qd, double t, bool check) {
+  const Constraint& c = sys.constraint(k);
+  auto bk = ws.b.segment(sys.row_offset(k), c.rows());
+  if (!ws.sparse) {
+    auto Ak = ws.A.middleRows(sys.row_offset(k), c.rows());
+    c.model().acceleration_form(q, qd, t, ws.scratch[std::size_t(k)].get(), Ak, bk);
+    if (check && !Ak.allFinite()) return fail(ws, Status::kNonFiniteInput, "A", k, t);
+    return Status::kOk;
+  }
+  // sparse: the local form (rows × columns) or the dense rows (rows × n), then the pattern
+  const Index width = ws.sparse->constraint_is_local(k) ? Index(c.model().columns().size())
+                                                        : sys.coordinate_count();
+  auto Ak = ws.A_rows.topLeftCorner(c.rows(), width);
+  if (ws.sparse->constraint_is_local(k)) {
+    c.model().acceleration_form_local(q, qd, t, ws.scratch[std::size_t(k)].get(), Ak, bk);
+  } else {
+    c.model().acceleration_form(q, qd, t, ws.scratch[std::size_t(k)].get(), Ak, bk);
+  }
+  ws.sparse->set_constraint_rows(k, Ak);
+  if (check && !Ak.allFinite()) return fail(ws, Status::kNonFiniteInput, "A", k, t);
+  return Status::kOk;
+}
+
+void zero_constraint_rows(const System& sys, Workspace& ws, Index k) {
+  const Index r0 = sys.row_offset(k), rows = sys.constraint(k).rows();
+  ws.b.segment(r0, rows).setZero();
+  if (ws.sparse) {
+    ws.sparse->zero_constraint_rows(k);
+  } else {
+    ws.A.middleRows(r0, rows).setZero();
+  }
+}
+void copy_constraint_rows(const System& sys, const Workspace& ws, Index k,
+                          Eigen::Ref<MatrixXd> out) {
+  if (ws.sparse) {
+    ws.sparse->constraint_rows_dense(k, out);
+  } else {
+    out = ws.A.middleRows(sys.row_offset(k), sys.constraint(k).rows());
+  }
+}
+}  // namespace detail
+
+Status assemble_constraints(const System& sys, Workspace& ws, const VectorXd& q, const VectorXd& qd,
+                            double t) {
+  detail::require_same_system(sys, ws, "ukdyn::assemble_constraints");
+  detail::require_state_size(sys, q, &qd, "ukdyn::assemble_constraints");
+  ws.active_rows = 0;
+  for (Index k = 0; k < sys.constraint_count(); ++k) {
+    const Constraint& c = sys.constraint(k);
+    auto bk = ws.b.segment(sys.row_offset(k), c.rows());
+    if (!detail::is_active(sys, ws, k, t)) {
+      // inactive: zero rows
+      detail::zero_constraint_rows(sys, ws, k);
+      ws.active[std::size_t(k)] = 0;
+      continue;
+    }
+    ws.active[std::size_t(k)] = 1;
+    ws.active_rows += c.rows();
+    // A_k, b_k from the constraint's own form
+    if (const Status s = detail::write_constraint_rows(sys, ws, k, q, qd, t); s != Status::kOk) {
+      return s;
+    }
+    if (!bk.allFinite()) return detail::fail(ws, Status::kNonFiniteInput, "b", k, t);
+    // Baumgarte: phi'' + 2α phi' + β² phi = 0, psi' + α psi = 0
+    const Stabilization& st = ws.stabilization[std::size_t(k)];
+    if (st.enabled() && c.kind() != ConstraintKind::kAcceleration) {
+      auto pk = ws.phi.segment(sys.row_offset(k), c.rows());
+      auto vk = ws.phi_dot.segment(sys.row_offset(k), c.rows());
+      c.model().violation(q, qd, t, ws.scratch[std::size_t(k)].get(), pk, vk);
+      if (c.kind() == ConstraintKind::kHolonomic) {
+        bk -= 2.0 * st.alpha * vk + st.beta * st.beta * pk;
+      } else {
+        bk -= st.alpha * vk;
+      }
+      if (!bk.allFinite()) return detail::fail(ws, Status::kNonFiniteInput, "b", k, t);
+    }
+  }
+  // a singular M: stage 1 completes with the constraints, M_A = M + Aᵀ G A, a = M_A⁻¹ Q_A
+  if (ws.mass_singular) return detail::complete_singular_mass(ws, t, /*forces=*/true, false);
+  return Status::kOk;
+}
+
+}  // namespace ukdyn

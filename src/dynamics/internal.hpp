@@ -1,0 +1,125 @@
+// Internal helpers shared by the stages (not installed).
+#pragma once
+
+#include <functional>
+#include <stdexcept>
+#include <string>
+
+#include "ukdyn/core/format.hpp"
+#include "ukdyn/core/system.hpp"
+#include "ukdyn/dynamics/workspace.hpp"
+#include "ukdyn/reference/reference.hpp"
+
+namespace ukdyn {
+struct SimulationOptions;
+struct Trajectory;
+}  // namespace ukdyn
+
+namespace ukdyn::detail {
+
+// simulate(), with `finished` called with the run's workspace when the run ends (it returns or
+// throws): a caller reads there what the system's callables recorded in their per-workspace
+// scratch — the controlled plant's control statistics (control/simulate_controlled.cpp).
+Trajectory simulate_observed(const System& sys, const VectorXd& q0, const VectorXd& qd0,
+                             const SimulationOptions& options,
+                             const std::function<void(const Workspace&)>& finished);
+
+// Records a failing status in the workspace (tier 3) and returns it.
+inline Status fail(Workspace& ws, Status s, const char* quantity, Index index, double t) {
+  ws.status = s;
+  ws.failed_quantity = quantity;
+  ws.failed_index = index;
+  ws.failed_time = t;
+  ++ws.counters.failures;
+  return s;
+}
+
+// Tier 1: refuses a workspace made for another system, or a moved-from one (system_id() 0,
+// which no System has): one compare when the workspace is right.
+inline void require_same_system(const System& sys, const Workspace& ws, const char* who) {
+  if (sys.id() == ws.system_id()) return;
+  if (ws.system_id() == 0) {
+    throw std::invalid_argument(std::string(who) +
+                                ": the workspace is empty (moved from: its buffers went to "
+                                "another Workspace); make one with Workspace(sys), or move-assign "
+                                "one to it");
+  }
+  throw std::invalid_argument(std::string(who) +
+                              ": the workspace was made for another system (make one with "
+                              "Workspace(sys))");
+}
+
+// Tier 1: q (and q', when given) have n entries.
+inline void require_state_size(const System& sys, const VectorXd& q, const VectorXd* qd,
+                               const char* who) {
+  const Index n = sys.coordinate_count();
+  if (q.size() == n && (!qd || qd->size() == n)) return;
+  const bool bad_q = q.size() != n;
+  throw std::invalid_argument(std::string(who) + ": " + (bad_q ? "q" : "q_dot") + " has " +
+                              format_number(bad_q ? q.size() : qd->size()) +
+                              " entries, expected n = " + format_number(n));
+}
+
+// M(q,t), its checks and its factorization into the workspace's decomposition (stage 1 without
+// Q; shared with the projections).
+// A singular, positive semi-definite M sets ws.mass_singular and is factorized later by
+// complete_singular_mass.
+Status evaluate_mass(const System& sys, Workspace& ws, const VectorXd& q, double t);
+
+// For a singular M (ws.mass_singular), with A (and b) assembled: factorizes the auxiliary
+// M_A = M + Aᵀ G A, G = diag(s / ‖a_i‖²), s the largest diagonal of M (the sparse engine: each
+// singular block with the rows local to it); with `forces`, a = M_A⁻¹ (Q + Aᵀ G b). When M_A is
+// not positive definite ([M; A] rank deficient): kMotionUndetermined, or with `regularize` (a
+// projection's metric) M_A + 1e-8 s I. Cost O(nnz(A)·(row nnz) + n³/3) dense.
+Status complete_singular_mass(Workspace& ws, double t, bool forces, bool regularize);
+
+// Writes constraint k's rows of A (dense matrix or the sparse engine's pattern) and b from its
+// acceleration form at (q, q', t); with `check`, kNonFiniteInput (recorded) when A is not
+// finite.
+Status write_constraint_rows(const System& sys, Workspace& ws, Index k, const VectorXd& q,
+                             const VectorXd& qd, double t, bool check = true);
+// Zeroes constraint k's rows of A and b.
+void zero_constraint_rows(const System& sys, Workspace& ws, Index k);
+
+// Copies constraint k's rows of A (as last assembled) into out (rows × n), either engine.
+void copy_constraint_rows(const System& sys, const Workspace& ws, Index k,
+                          Eigen::Ref<MatrixXd> out);
+// The stick constraint of a Coulomb contact: psi = q'_c − u(q, t) on `coordinates` (nonholonomic,
+// local columns), inactive until the simulation switches it on (core/coulomb_contact.cpp).
+Constraint stick_constraint(const std::string& name, const std::vector<Index>& coordinates,
+                            const SurfaceVelocityFn& surface);
+// Contact c's sliding velocity relative to its constraint, v_rel = P (v − u) (see
+// CoulombFriction), into ws.sliding.col(c).head(|coordinates|). With rows_assembled, N_k is read
+// from the rows of A that the workspace last assembled at (q, t); else constraint k is evaluated
+// here. Returns the number B of independent normals: ws.contact_basis.topRows(B) then holds
+// them, orthonormal, for projecting other vectors. No allocation; O(rows_k · n + rows_k² ·
+// |coordinates|).
+Index sliding_velocity(const System& sys, Workspace& ws, Index c, const VectorXd& q,
+                       const VectorXd& qd, double t, bool rows_assembled);
+
+// v −= Σ_j (v·e_j) e_j over the first `basis` rows e_j of ws.contact_basis (orthonormal, from
+// sliding_velocity): the part of v (|coordinates|) tangent to the contact's constraint.
+void remove_normals(const Workspace& ws, Index basis, Eigen::Ref<VectorXd> v);
+
+// out = A_kᵀ lambda_k (n) for any multipliers lambda (m) with the rows of A last assembled,
+// either engine: constraint k's share of the force Aᵀ lambda. O(rows_k · n).
+void constraint_share(const System& sys, const Workspace& ws, Index k, const VectorXd& lambda,
+                      Eigen::Ref<VectorXd> out);
+
+// Kinetic energy ½ q'ᵀ M q' with the M of the last evaluation, either engine.
+double kinetic_energy(const Workspace& ws, const VectorXd& qd);
+
+// Whether constraint k acts at t, honouring ws.activity_override.
+inline bool is_active(const System& sys, const Workspace& ws, Index k, double t) {
+  const signed char forced = ws.activity_override[std::size_t(k)];
+  return forced < 0 ? sys.constraint(k).is_active(t) : forced > 0;
+}
+
+// Calls f with the decomposition the workspace's algorithm uses.
+template <class F>
+decltype(auto) with_decomposition(Workspace& ws, F&& f) {
+  if (ws.textbook) return f(*ws.textbook);
+  return f(ws.decomposition);
+}
+
+}  // namespace ukdyn::detail

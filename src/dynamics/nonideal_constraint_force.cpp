@@ -1,0 +1,83 @@
+// Stage 4: non-ideal constraints (eqs. 7, 9, 12). C is summed from the system's forces, which may
+// read the ideal force (it does not depend on C) and the reactions (which do: iterated to a
+// fixed point), then projected:
+//   Qc_nonideal = L (I − W⁺W) L⁻¹ C,   q'' += L⁻ᵀ (I − W⁺W) L⁻¹ C.
+#include "dynamics/internal.hpp"
+#include "ukdyn/core/nonideal.hpp"
+#include "ukdyn/dynamics/forward.hpp"
+#include "ukdyn/linalg/sparse.hpp"
+
+namespace ukdyn {
+namespace {
+// evaluations of C that apply_nonideal allows for the reactions to settle
+constexpr int kMaxReactionIterations = 50;
+}  // namespace
+
+Status apply_nonideal(const System& sys, Workspace& ws, const VectorXd& q, const VectorXd& qd,
+                      double t) {
+  detail::require_same_system(sys, ws, "ukdyn::apply_nonideal");
+  detail::require_state_size(sys, q, &qd, "ukdyn::apply_nonideal");
+  ws.C.setZero();
+  if (sys.nonideal_count() == 0) {
+    // ideal constraints: Qc = Qc_ideal
+    ws.Qc_nonideal.setZero();
+    ws.lambda_nonideal.setZero();
+    ws.Qc = ws.Qc_ideal;
+    return Status::kOk;
+  }
+  // v_rel of each Coulomb contact whose friction acts (its constraint's rows are assembled)
+  const auto& contacts = sys.friction_contacts();
+  for (std::size_t c = 0; c < contacts.size(); ++c) {
+    if (ws.nonideal_enabled[std::size_t(contacts[c].force)]) {
+      detail::sliding_velocity(sys, ws, Index(c), q, qd, t, true);
+    }
+  }
+  // C = Σ C_i(q, q', t, reactions), then its projection. A force that reads a reaction (a
+  // friction's normal force) sees the ideal shares first, then the whole reactions
+  // A_kᵀ (lambda_k + lambda_nonideal,k) of the last C, until they settle: C is a fixed point of
+  // C ↦ C(reactions(C)), a contraction for friction coefficients of ordinary size (no
+  // iteration when no force reads a reaction)
+  ws.reactions = ws.shares;
+  for (int iteration = 0;; ++iteration) {
+    const IdealForceInfo ideal(sys, ws);
+    ws.C.setZero();
+    for (Index i = 0; i < sys.nonideal_count(); ++i) {
+      if (!ws.nonideal_enabled[std::size_t(i)]) continue;
+      ws.C_term.setZero();
+      sys.nonideal(i)(q, qd, t, ideal, ws.C_term);
+      if (!ws.C_term.allFinite()) return detail::fail(ws, Status::kNonFiniteInput, "C", i, t);
+      ws.C += ws.C_term;
+    }
+    // Qc_nonideal, lambda_nonideal and dq = L⁻ᵀ (I − W⁺W) L⁻¹ C
+    if (ws.sparse) {
+      ws.sparse->project_nonideal(ws.C, ws.dqdd, ws.Qc_nonideal, ws.lambda_nonideal);
+    } else {
+      detail::with_decomposition(ws, [&](auto& d) {
+        d.project_nonideal(ws.C, ws.dqdd, ws.Qc_nonideal, ws.lambda_nonideal);
+      });
+    }
+    if (!ideal.read_reactions()) break;
+    // reactions_k = share_k + A_kᵀ lambda_nonideal,k; settled when none moves by more than
+    // 1e-13 of the largest reaction
+    double change = 0.0, size = 0.0;
+    for (Index k = 0; k < sys.constraint_count(); ++k) {
+      auto next = ws.reactions_next.col(k);
+      detail::constraint_share(sys, ws, k, ws.lambda_nonideal, next);
+      next += ws.shares.col(k);
+      change = std::max(change, (next - ws.reactions.col(k)).lpNorm<Eigen::Infinity>());
+      size = std::max(size, next.lpNorm<Eigen::Infinity>());
+    }
+    if (!(change > 1e-13 * size)) break;
+    if (iteration == kMaxReactionIterations) {
+      ++ws.counters.nonideal_unsettled;
+      break;
+    }
+    ws.reactions.swap(ws.reactions_next);
+  }
+  // q'' += dq;  Qc = Qc_ideal + Qc_nonideal
+  ws.qdd += ws.dqdd;
+  ws.Qc = ws.Qc_ideal + ws.Qc_nonideal;
+  return Status::kOk;
+}
+
+}  // namespace ukdyn

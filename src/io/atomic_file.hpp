@@ -1,0 +1,51 @@
+// Internal: files written whole or not at all (the writers of io/trajectory_files.hpp). Not
+// installed.
+#pragma once
+
+#include <cstdio>
+#include <string>
+
+namespace ukdyn::detail {
+
+// A file written under a temporary name in the directory of its final path and renamed over
+// that path by commit(), so that the final name never shows a partly written file: a run killed
+// while writing leaves the previous file (or none) and a hidden temporary
+// `.NAME.tmp-PID-COUNT`, which nothing reads. Destroyed without commit() (an exception), it
+// removes the temporary. A path that exists and is not a regular file (/dev/null, /dev/stdout, a
+// FIFO, a directory) is opened in place — there is nothing to rename — and a symbolic link is
+// followed to its target, which is replaced. No fsync: the guarantee is against killed
+// processes, not against a power cut.
+//
+// Errors throw std::runtime_error "WHO: cannot open|write|replace 'PATH': REASON", naming the
+// final path.
+class AtomicFile {
+ public:
+  // creates the temporary (O_EXCL, mode 0666 less the umask), or nothing for an in-place path
+  AtomicFile(std::string path, const char* who);
+  ~AtomicFile();
+  AtomicFile(const AtomicFile&) = delete;
+  AtomicFile& operator=(const AtomicFile&) = delete;
+
+  // the name to write now: the temporary, or the path itself when written in place
+  const std::string& write_path() const { return write_path_; }
+  // a stdio stream on write_path() ("wb"), owned by the caller (fclose it before commit())
+  std::FILE* open_stdio();
+  // closes the descriptor of the temporary so that a library can open write_path() by name
+  void release_descriptor();
+  // renames the temporary over the final path (nothing when written in place)
+  void commit();
+
+  // "cannot DOING 'path': strerror(err)" as std::runtime_error
+  [[noreturn]] void fail(const char* doing, int err) const;
+
+ private:
+  std::string path_;        // the final path, as given
+  std::string target_;      // where the file goes (path_, or the target of a symbolic link)
+  std::string write_path_;  // the temporary, or target_ in place
+  const char* who_;
+  int fd_ = -1;  // the temporary's descriptor until open_stdio / release_descriptor
+  bool in_place_ = false;
+  bool committed_ = false;
+};
+
+}  // namespace ukdyn::detail

@@ -1,0 +1,127 @@
+// JSON summary of a run: statistics, final state and the options given.
+#include "ukdyn/io/trajectory_files.hpp"
+
+#include <cerrno>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <memory>
+#include <stdexcept>
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+#include "ukdyn/simulation/options.hpp"
+
+#include "io/atomic_file.hpp"
+
+namespace ukdyn {
+namespace {
+
+constexpr const char* kWho = "ukdyn::write_summary_json";
+
+struct FileCloser {
+  void operator()(std::FILE* f) const { std::fclose(f); }
+};
+
+[[noreturn]] void throw_io_error(const std::string& path, const char* doing, int err) {
+  throw std::runtime_error(std::string(kWho) + ": cannot " + doing + " '" + path +
+                           "': " + (err != 0 ? std::strerror(err) : "unknown reason"));
+}
+
+}  // namespace
+
+void write_summary_json(const Trajectory& traj, const SimulationOptions& options,
+                        const std::string& path) {
+  using nlohmann::json;
+  traj.check_consistent("ukdyn::write_summary_json");
+  const RunStatistics& s = traj.stats;
+  const std::size_t N = traj.t.size(), n = std::size_t(traj.n);
+
+  // statistics of the run (NaN and Inf, which JSON lacks, are written as null)
+  json j = json::object();
+  j["status"] = to_string(s.status);
+  j["message"] = s.message;
+  j["steps"] = s.steps;
+  j["rejected_steps"] = s.rejected_steps;
+  j["evaluations"] = s.evaluations;
+  j["least_squares"] = s.least_squares;
+  j["tangential_steps"] = s.tangential_steps;
+  j["projected_stage_steps"] = s.projected_stage_steps;
+  j["projections"] = s.projections;
+  j["events"] = s.events;
+  j["stick_refusals"] = s.stick_refusals;
+  j["notes"] = s.notes;
+  j["stiff_switches"] = s.stiff_switches;
+  j["stiff_switch_time"] =
+      std::isfinite(s.stiff_switch_time) ? json(s.stiff_switch_time) : json(nullptr);
+  j["stiff_steps"] = s.stiff_steps;
+  j["wall_time"] = s.wall_time;
+  j["max_position_violation"] = s.max_position_violation;
+  j["max_velocity_violation"] = s.max_velocity_violation;
+  j["energy_balance"] = s.energy_balance;
+  j["energy_exchanged"] = s.energy_exchanged;
+  j["energy_balance_tolerance"] = options.energy_balance_tolerance;
+  j["energy_balance_checked"] = s.energy_balance_checked;
+  j["energy_drift"] = s.energy_drift;
+
+  // time span and the last sample by coordinate name (null when there is no sample)
+  // (a streamed run's trajectory holds its last sample only: stats.samples counts them all)
+  const bool streamed = s.samples > long(N);
+  j["t_start"] = streamed ? json(options.t_start) : N > 0 ? json(traj.t.front()) : json(nullptr);
+  j["t_reached"] = s.t_reached;
+  j["samples"] = streamed ? std::size_t(s.samples) : N;
+  if (N > 0) {
+    json q = json::object(), qd = json::object();
+    for (std::size_t c = 0; c < n; ++c) {
+      q[traj.coordinate_names[c]] = traj.q[(N - 1) * n + c];
+      qd[traj.coordinate_names[c]] = traj.qd[(N - 1) * n + c];
+    }
+    j["final_state"] = {{"q", std::move(q)}, {"q_dot", std::move(qd)}};
+  } else {
+    j["final_state"] = nullptr;
+  }
+  j["constraints"] = traj.constraint_names;
+
+  // the options given: every option of the table (simulation/options.hpp), and the per-constraint
+  // drift
+  json given = json::object();
+  for (const OptionInfo& info : option_table()) {
+    const OptionValue v = info.get(options);
+    if (const bool* b = std::get_if<bool>(&v))
+      given[info.name] = *b;
+    else if (const long* l = std::get_if<long>(&v))
+      given[info.name] = *l;
+    else if (const double* d = std::get_if<double>(&v))
+      given[info.name] = *d;
+    else if (const std::string* text = std::get_if<std::string>(&v))
+      given[info.name] = *text;
+    else
+      given[info.name] = std::get<std::vector<double>>(v);
+  }
+  json drift_per_constraint = json::object();
+  for (const auto& [name, d] : options.drift_per_constraint) {
+    drift_per_constraint[name] = {
+        {"method", to_string(d.method)}, {"alpha", d.alpha}, {"beta", d.beta}};
+  }
+  given["drift_per_constraint"] = std::move(drift_per_constraint);
+  j["options"] = std::move(given);
+
+  // names are user text: invalid UTF-8 is replaced (U+FFFD) rather than refused
+  std::string text = j.dump(2, ' ', false, json::error_handler_t::replace);
+  text += '\n';
+
+  // a temporary beside `path`, renamed over it when complete (io/atomic_file.hpp)
+  detail::AtomicFile out(path, kWho);
+  std::unique_ptr<std::FILE, FileCloser> file(out.open_stdio());
+  if (std::fwrite(text.data(), 1, text.size(), file.get()) != text.size()) {
+    throw_io_error(path, "write", errno);
+  }
+  errno = 0;
+  if (std::fclose(file.release()) != 0) {
+    throw_io_error(path, "write", errno);
+  }
+  out.commit();
+}
+
+}  // namespace ukdyn

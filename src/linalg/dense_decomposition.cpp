@@ -1,0 +1,365 @@
+// FundamentalDecomposition: Cholesky of M, complete orthogonal decomposition of Wᵀ = L⁻¹ Aᵀ.
+// Notation as in linalg/decomposition.hpp: Wᵀ Π = Q [T 0; 0 0] Z, Q = H_0 ⋯ H_{r−1}, Z = Z_0 ⋯
+// Z_{r−1}.
+#include "ukdyn/linalg/decomposition.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+#include <string>
+
+#include "ukdyn/core/format.hpp"
+#include "ukdyn/core/status.hpp"
+
+namespace ukdyn {
+
+namespace {
+// Small dense kernels on column-major storage (ld = leading dimension), written as plain loops
+// so that the compiler vectorizes them without the per-call set-up of Eigen's expression and
+// blocking machinery, which dominates at the sizes of most mechanical systems. Every inner loop
+// runs down a column: contiguous memory.
+
+// dot product of n entries, with four independent partial sums so that the additions pipeline
+// (one running sum is bound by the latency of the floating-point add)
+inline double dot(const double* __restrict x, const double* __restrict y, Index n) {
+  double s0 = 0.0, s1 = 0.0, s2 = 0.0, s3 = 0.0;
+  Index i = 0;
+  for (; i + 4 <= n; i += 4) {
+    s0 += x[i] * y[i];
+    s1 += x[i + 1] * y[i + 1];
+    s2 += x[i + 2] * y[i + 2];
+    s3 += x[i + 3] * y[i + 3];
+  }
+  for (; i < n; ++i) s0 += x[i] * y[i];
+  return (s0 + s1) + (s2 + s3);
+}
+
+// y ← y + a x over n entries
+inline void axpy(double a, const double* __restrict x, double* __restrict y, Index n) {
+  for (Index i = 0; i < n; ++i) y[i] += a * x[i];
+}
+
+// The triangular solves multiply by the reciprocals of the diagonal (`inv`, kept when the factor
+// is made): a division's latency is four times a multiplication's, and each solve is a chain.
+
+// x ← L⁻¹ x, L lower triangular (n × n)
+inline void lower_solve(const double* L, Index ld, const double* inv, double* x, Index n) {
+  for (Index k = 0; k < n; ++k) {
+    x[k] *= inv[k];
+    axpy(-x[k], L + k * ld + k + 1, x + k + 1, n - k - 1);
+  }
+}
+
+// x ← L⁻ᵀ x, L lower triangular
+inline void lower_transpose_solve(const double* L, Index ld, const double* inv, double* x,
+                                  Index n) {
+  for (Index k = n - 1; k >= 0; --k) {
+    x[k] = (x[k] - dot(L + k * ld + k + 1, x + k + 1, n - k - 1)) * inv[k];
+  }
+}
+
+// y ← L x, L lower triangular
+inline void lower_multiply(const double* L, Index ld, const double* x, double* y, Index n) {
+  for (Index i = 0; i < n; ++i) y[i] = 0.0;
+  for (Index k = 0; k < n; ++k) axpy(x[k], L + k * ld + k, y + k, n - k);
+}
+
+// x ← T⁻¹ x, T upper triangular (r × r)
+inline void upper_solve(const double* T, Index ld, const double* inv, double* x, Index r) {
+  for (Index k = r - 1; k >= 0; --k) {
+    x[k] *= inv[k];
+    axpy(-x[k], T + k * ld, x, k);
+  }
+}
+
+// x ← T⁻ᵀ x, T upper triangular
+inline void upper_transpose_solve(const double* T, Index ld, const double* inv, double* x,
+                                  Index r) {
+  for (Index k = 0; k < r; ++k) x[k] = (x[k] - dot(T + k * ld, x, k)) * inv[k];
+}
+
+// up to this n the plain loops (Cholesky, and L X = Aᵀ one column at a time) take fewer
+// instructions than Eigen's blocked Cholesky and triangular solve; above it Eigen's win (callgrind
+// counts per evaluation, n = 6 … 120: see bench/RESULTS.md)
+constexpr Index kSmall = 20;
+
+// A = L Lᵀ in place on the lower triangle of A (n × n), right-looking; false unless every pivot
+// is positive
+inline bool cholesky_in_place(double* A, Index ld, Index n) {
+  for (Index k = 0; k < n; ++k) {
+    double* Ak = A + k * ld;
+    if (!(Ak[k] > 0.0)) return false;
+    const double d = std::sqrt(Ak[k]), inv = 1.0 / d;
+    Ak[k] = d;
+    for (Index i = k + 1; i < n; ++i) Ak[i] *= inv;
+    // trailing columns: A(j:n, j) −= L(j, k) L(j:n, k)
+    for (Index j = k + 1; j < n; ++j) axpy(-Ak[j], Ak + j, A + j * ld + j, n - j);
+  }
+  return true;
+}
+}  // namespace
+
+void FundamentalDecomposition::resize(Index n, Index m) {
+  n_ = n;
+  m_ = m;
+  L_.resize(n, n);
+  X_.resize(n, m);
+  tau_.resize(m);
+  ztau_.resize(m);
+  perm_.resize(m);
+  norm_.resize(m);
+  norm_ref_.resize(m);
+  wm_.resize(m);
+  wn_.resize(n);
+  inv_ldiag_.resize(n);
+  inv_tdiag_.resize(m);
+  rank_ = 0;
+  max_pivot_ = 0.0;
+  info_ = Eigen::InvalidInput;
+}
+
+FundamentalDecomposition& FundamentalDecomposition::set_threshold(double threshold) {
+  if (!(threshold > 0.0 && threshold < 1.0)) {
+    throw std::invalid_argument(
+        "ukdyn::FundamentalDecomposition::set_threshold: the relative rank threshold must lie "
+        "in (0, 1), got " +
+        format_number(threshold));
+  }
+  threshold_ = threshold;
+  return *this;
+}
+
+FundamentalDecomposition& FundamentalDecomposition::compute_mass(
+    const Eigen::Ref<const MatrixXd>& M) {
+  UKDYN_CHECK(M.rows() == n_ && M.cols() == n_, "compute_mass: M has the wrong size");
+  // M = L Lᵀ, in place on the lower triangle of L_. Large n: Eigen's blocked kernel (the one
+  // behind Eigen::LLT, called directly: an LLT object leaves its info member uninitialized until
+  // compute(), so moving an unused one is undefined behaviour, and it also computes a norm we do
+  // not need)
+  L_ = M;
+  const bool ok = n_ <= kSmall
+                      ? cholesky_in_place(L_.data(), n_, n_)
+                      : Eigen::internal::llt_inplace<double, Eigen::Lower>::blocked(L_) == -1;
+  info_ = ok ? Eigen::Success : Eigen::NumericalIssue;
+  // 1 / L_kk for the solves
+  if (ok) inv_ldiag_ = L_.diagonal().cwiseInverse();
+  return *this;
+}
+
+FundamentalDecomposition& FundamentalDecomposition::compute_constraints(
+    const Eigen::Ref<const MatrixXd>& A) {
+  UKDYN_CHECK(A.rows() == m_ && A.cols() == n_, "compute_constraints: A has the wrong size");
+  UKDYN_CHECK(info_ == Eigen::Success, "compute_constraints: M is not factorized");
+  // Wᵀ = L⁻¹ Aᵀ
+  X_ = A.transpose();
+  if (n_ <= kSmall) {
+    for (Index j = 0; j < m_; ++j) {
+      lower_solve(L_.data(), n_, inv_ldiag_.data(), X_.col(j).data(), n_);
+    }
+  } else if (m_ > 0) {  // (Eigen's solve takes &X(0, 0) even when X is empty)
+    L_.triangularView<Eigen::Lower>().solveInPlace(X_);
+  }
+  // Wᵀ Π = Q [R11 R12; 0 0], then [R11 R12] = [T 0] Z when rank-deficient
+  factor_qr();
+  if (rank_ < m_) factor_rz();
+  // 1 / T_kk for the solves
+  for (Index k = 0; k < rank_; ++k) inv_tdiag_[k] = 1.0 / X_(k, k);
+  return *this;
+}
+
+void FundamentalDecomposition::factor_qr() {
+  const Index n = n_, m = m_, kmax = std::min(n, m);
+  // sqrt(eps): below it a downdated column norm is recomputed (LAPACK dlaqp2)
+  const double tol3z = std::sqrt(std::numeric_limits<double>::epsilon());
+  for (Index j = 0; j < m; ++j) {
+    norm_[j] = X_.col(j).norm();
+    norm_ref_[j] = norm_[j];
+    perm_[j] = int(j);
+  }
+  rank_ = 0;
+  max_pivot_ = 0.0;
+  for (Index k = 0; k < kmax; ++k) {
+    // pivot: bring the remaining column of largest norm to position k
+    Index p = k;
+    for (Index j = k + 1; j < m; ++j) {
+      if (norm_[j] > norm_[p]) p = j;
+    }
+    if (p != k) {
+      X_.col(k).swap(X_.col(p));
+      std::swap(norm_[k], norm_[p]);
+      std::swap(norm_ref_[k], norm_ref_[p]);
+      std::swap(perm_[k], perm_[p]);
+    }
+    // |R_kk| = ‖X(k:n, k)‖; stop at the numerical rank
+    auto v = X_.col(k).segment(k + 1, n - k - 1);
+    const double alpha = X_(k, k);
+    const double sigma = v.squaredNorm();
+    const double pivot = std::sqrt(alpha * alpha + sigma);
+    if (k == 0) max_pivot_ = pivot;
+    if (pivot == 0.0 || pivot <= threshold_ * max_pivot_) break;
+    // Householder H_k = I − tau v vᵀ (v_0 = 1) with H_k X(k:n, k) = beta e_1
+    double tau = 0.0;
+    if (sigma > 0.0) {
+      const double beta = alpha >= 0.0 ? -pivot : pivot;
+      tau = (beta - alpha) / beta;
+      v *= 1.0 / (alpha - beta);
+      X_(k, k) = beta;
+    }
+    tau_[k] = tau;
+    // X(k:n, j) −= tau v (vᵀ X(k:n, j)) for the trailing columns
+    if (tau != 0.0) {
+      const double* vk = v.data();
+      for (Index j = k + 1; j < m; ++j) {
+        double* xj = X_.col(j).data() + k;
+        const double s = tau * (xj[0] + dot(vk, xj + 1, n - k - 1));
+        xj[0] -= s;
+        axpy(-s, vk, xj + 1, n - k - 1);
+      }
+    }
+    // downdate the partial norms of the trailing columns
+    for (Index j = k + 1; j < m; ++j) {
+      if (norm_[j] == 0.0) continue;
+      const double ratio = std::abs(X_(k, j)) / norm_[j];
+      const double temp = std::max(0.0, 1.0 - ratio * ratio);
+      const double rel = norm_[j] / norm_ref_[j];
+      if (temp * rel * rel <= tol3z) {
+        const double* xj = X_.col(j).data() + k + 1;
+        norm_[j] = std::sqrt(dot(xj, xj, n - k - 1));
+        norm_ref_[j] = norm_[j];
+      } else {
+        norm_[j] *= std::sqrt(temp);
+      }
+    }
+    rank_ = k + 1;
+  }
+}
+
+void FundamentalDecomposition::factor_rz() {
+  const Index r = rank_, p = m_ - rank_;
+  // rows i = r−1 … 0: Z_i on coordinates {i, r … m−1} zeroes row i of R12
+  for (Index i = r - 1; i >= 0; --i) {
+    auto v = X_.row(i).segment(r, p);
+    const double alpha = X_(i, i);
+    const double sigma = v.squaredNorm();
+    if (sigma == 0.0) {
+      ztau_[i] = 0.0;
+      continue;
+    }
+    const double norm = std::sqrt(alpha * alpha + sigma);
+    const double beta = alpha >= 0.0 ? -norm : norm;
+    const double tau = (beta - alpha) / beta;
+    v *= 1.0 / (alpha - beta);
+    X_(i, i) = beta;
+    ztau_[i] = tau;
+    // rows l < i: row_l ← row_l Z_i
+    for (Index l = 0; l < i; ++l) {
+      auto xl = X_.row(l).segment(r, p);
+      const double s = tau * (X_(l, i) + xl.dot(v));
+      X_(l, i) -= s;
+      xl -= s * v;
+    }
+  }
+}
+
+void FundamentalDecomposition::apply_q(Eigen::Ref<VectorXd> x, bool transpose) const {
+  // Q x = H_0 (H_1 (⋯ H_{r−1} x));  Qᵀ x = H_{r−1} (⋯ H_0 x)
+  const Index n = n_, r = rank_;
+  for (Index i = 0; i < r; ++i) {
+    const Index k = transpose ? i : r - 1 - i;
+    if (tau_[k] == 0.0) continue;
+    const double* v = X_.col(k).data() + k + 1;
+    double* xk = x.data() + k;
+    const double s = tau_[k] * (xk[0] + dot(v, xk + 1, n - k - 1));
+    xk[0] -= s;
+    axpy(-s, v, xk + 1, n - k - 1);
+  }
+}
+
+void FundamentalDecomposition::apply_z(Eigen::Ref<VectorXd> x, bool transpose) const {
+  // Z x = Z_0 (⋯ Z_{r−1} x);  Zᵀ x = Z_{r−1} (⋯ Z_0 x)
+  const Index r = rank_, p = m_ - rank_;
+  if (p == 0) return;
+  for (Index j = 0; j < r; ++j) {
+    const Index i = transpose ? j : r - 1 - j;
+    if (ztau_[i] == 0.0) continue;
+    const auto v = X_.row(i).segment(r, p);
+    auto xt = x.segment(r, p);
+    const double s = ztau_[i] * (x[i] + xt.dot(v.transpose()));
+    x[i] -= s;
+    xt -= s * v.transpose();
+  }
+}
+
+void FundamentalDecomposition::solve_mass(const Eigen::Ref<const VectorXd>& f,
+                                          Eigen::Ref<VectorXd> x) const {
+  UKDYN_CHECK(f.size() == n_ && x.size() == n_, "solve_mass: wrong sizes");
+  // x = L⁻ᵀ L⁻¹ f
+  x = f;
+  const MatrixXd& L = L_;
+  lower_solve(L.data(), n_, inv_ldiag_.data(), x.data(), n_);
+  lower_transpose_solve(L.data(), n_, inv_ldiag_.data(), x.data(), n_);
+}
+
+void FundamentalDecomposition::apply_pinv(const Eigen::Ref<const VectorXd>& e,
+                                          Eigen::Ref<VectorXd> y) {
+  UKDYN_CHECK(e.size() == m_ && y.size() == n_, "apply_pinv: wrong sizes");
+  const Index r = rank_;
+  // w = Z Πᵀ e
+  for (Index k = 0; k < m_; ++k) wm_[k] = e[perm_[k]];
+  apply_z(wm_, false);
+  // u = T⁻ᵀ w_{1:r}
+  upper_transpose_solve(X_.data(), n_, inv_tdiag_.data(), wm_.data(), r);
+  // y = Q [u; 0]
+  y.head(r) = wm_.head(r);
+  y.tail(n_ - r).setZero();
+  apply_q(y, false);
+}
+
+void FundamentalDecomposition::solve_ideal(const Eigen::Ref<const VectorXd>& e,
+                                           Eigen::Ref<VectorXd> dqdd, Eigen::Ref<VectorXd> Qc,
+                                           Eigen::Ref<VectorXd> lambda) {
+  UKDYN_CHECK(dqdd.size() == n_ && Qc.size() == n_ && lambda.size() == m_,
+              "solve_ideal: wrong sizes");
+  const Index r = rank_;
+  // y = W⁺ e (leaves u = T⁻ᵀ w_{1:r} in wm_)
+  apply_pinv(e, wn_);
+  // Qc_ideal = L y;  q'' − a = L⁻ᵀ y
+  const MatrixXd& L = L_;
+  lower_multiply(L.data(), n_, wn_.data(), Qc.data(), n_);
+  dqdd = wn_;
+  lower_transpose_solve(L.data(), n_, inv_ldiag_.data(), dqdd.data(), n_);
+  // lambda = Π Zᵀ [T⁻¹ u; 0]
+  upper_solve(X_.data(), n_, inv_tdiag_.data(), wm_.data(), r);
+  wm_.tail(m_ - r).setZero();
+  apply_z(wm_, true);
+  for (Index k = 0; k < m_; ++k) lambda[perm_[k]] = wm_[k];
+}
+
+void FundamentalDecomposition::project_nonideal(const Eigen::Ref<const VectorXd>& C,
+                                                Eigen::Ref<VectorXd> dqdd, Eigen::Ref<VectorXd> Qc,
+                                                Eigen::Ref<VectorXd> lambda) {
+  UKDYN_CHECK(C.size() == n_ && dqdd.size() == n_ && Qc.size() == n_ && lambda.size() == m_,
+              "project_nonideal: wrong sizes");
+  const Index r = rank_;
+  // v = Qᵀ L⁻¹ C
+  wn_ = C;
+  const MatrixXd& L = L_;
+  lower_solve(L.data(), n_, inv_ldiag_.data(), wn_.data(), n_);
+  apply_q(wn_, true);
+  // lambda = −G⁺ A M⁻¹ C = −Π Zᵀ [T⁻¹ v_{1:r}; 0]
+  wm_.head(r) = wn_.head(r);
+  upper_solve(X_.data(), n_, inv_tdiag_.data(), wm_.data(), r);
+  wm_.tail(m_ - r).setZero();
+  apply_z(wm_, true);
+  for (Index k = 0; k < m_; ++k) lambda[perm_[k]] = -wm_[k];
+  // c⊥ = (I − W⁺W) L⁻¹ C = Q [0; v_{r+1:n}]
+  wn_.head(r).setZero();
+  apply_q(wn_, false);
+  // Qc_nonideal = L c⊥;  q''_nonideal = L⁻ᵀ c⊥
+  lower_multiply(L.data(), n_, wn_.data(), Qc.data(), n_);
+  dqdd = wn_;
+  lower_transpose_solve(L.data(), n_, inv_ldiag_.data(), dqdd.data(), n_);
+}
+
+}  // namespace ukdyn

@@ -1,0 +1,198 @@
+// check_model: what `ukdyn check` reports about a model at its initial state — sizes, rank and
+// redundancy of the constraints, consistency of the initial state, and M.
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <exception>
+#include <string>
+#include <string_view>
+#include <utility>
+#include <vector>
+
+#include <Eigen/QR>
+
+#include "dynamics/internal.hpp"
+#include "ukdyn/core/format.hpp"
+#include "ukdyn/dynamics/forward.hpp"
+#include "ukdyn/dynamics/projection.hpp"
+#include "ukdyn/dynamics/workspace.hpp"
+#include "ukdyn/modelfile/model.hpp"
+
+namespace ukdyn {
+namespace {
+
+// numerical rank of the rows S (k × n) with Eigen's column-pivoting QR and the solver's relative
+// threshold: pivot j counts when |R_jj| > threshold · |R_00| (as in FundamentalDecomposition)
+Index rank_of_rows(const MatrixXd& S, double threshold) {
+  if (S.rows() == 0 || S.cols() == 0) return 0;
+  if (!S.allFinite()) return 0;
+  Eigen::ColPivHouseholderQR<MatrixXd> qr(S.transpose());
+  qr.setThreshold(threshold);
+  return qr.rank();
+}
+
+// a number for messages, 3 significant digits
+std::string format(double x) { return format_number(x, 3); }
+
+}  // namespace
+
+CheckReport check_model(const Model& model) {
+  const System& sys = model.system;
+  const SimulationOptions& o = model.options;
+  const double t = o.t_start;
+  const Index n = sys.coordinate_count();
+  CheckReport report;
+  report.coordinates = n;
+
+  // the initial state must have n finite entries before anything is evaluated
+  if (model.q0.size() != n || model.qd0.size() != n) {
+    report.problems.push_back("the initial state has " + format_number(model.q0.size()) +
+                              " positions and " + format_number(model.qd0.size()) +
+                              " velocities, expected n = " + format_number(n));
+    return report;
+  }
+  if (!model.q0.allFinite() || !model.qd0.allFinite()) {
+    report.problems.push_back("the initial state holds NaN or Inf");
+    return report;
+  }
+
+  Workspace ws(sys, o.solver);
+  const double threshold = o.solver.rank_threshold;
+
+  // M(q0, t), Q(q0, q'0, t): M is positive definite when stage 1 got past its factorization
+  const Status s_mass = evaluate_unconstrained(sys, ws, model.q0, model.qd0, t);
+  const bool mass_failed =
+      s_mass == Status::kMassNotPositiveDefinite || s_mass == Status::kMassNotSymmetric ||
+      (s_mass == Status::kNonFiniteInput && std::string_view(ws.failed_quantity) == "M");
+  report.mass_positive_definite = !mass_failed;
+  report.mass_singular = !mass_failed && ws.mass_singular;
+  if (s_mass != Status::kOk) report.problems.push_back(describe_status(sys, ws));
+
+  // A, b of the constraints active at t_start, and the whole fundamental equation when M allows
+  Status s_all = Status::kOk;
+  if (report.mass_positive_definite && s_mass == Status::kOk) {
+    s_all = forward_dynamics(sys, ws, model.q0, model.qd0, t);
+    if (s_all != Status::kOk) report.problems.push_back(describe_status(sys, ws));
+  } else {
+    ws.status = Status::kOk;
+    const Status s_a = assemble_constraints(sys, ws, model.q0, model.qd0, t);
+    if (s_a != Status::kOk) report.problems.push_back(describe_status(sys, ws));
+  }
+  report.constraint_rows = ws.active_rows;
+
+  // the rows of the active constraints, in declaration order
+  std::vector<Index> active;
+  for (Index k = 0; k < sys.constraint_count(); ++k) {
+    if (ws.active[std::size_t(k)]) active.push_back(k);
+  }
+  MatrixXd stacked(ws.active_rows, n);
+  {
+    Index r = 0;
+    for (Index k : active) {
+      const Index rows = sys.constraint(k).rows();
+      detail::copy_constraint_rows(sys, ws, k, stacked.middleRows(r, rows));
+      r += rows;
+    }
+  }
+
+  // rank A: the decomposition's when stage 3 ran, else the QR rank of the stacked rows
+  const bool solved = report.mass_positive_definite && s_mass == Status::kOk &&
+                      (s_all == Status::kOk || s_all == Status::kInconsistentConstraints ||
+                       s_all == Status::kNonFiniteResult);
+  report.rank = solved ? ws.rank : rank_of_rows(stacked, threshold);
+  report.degrees_of_freedom = n - report.rank;
+
+  // redundancy: constraint k is redundant when its rows do not raise the rank of those before it;
+  // none is when all the rows are independent (one decomposition instead of one per constraint)
+  // (the sparse engine's rank when it found them all independent: its threshold, 1e-6, is the
+  // stricter; a dense QR of a chain of 10⁴ coordinates would take minutes)
+  const bool independent =
+      stacked.allFinite() && ((solved && ws.is_sparse() && ws.rank == stacked.rows()) ||
+                              rank_of_rows(stacked, threshold) == stacked.rows());
+  if (stacked.allFinite() && !independent) {
+    MatrixXd kept(0, n);
+    Index kept_rank = 0;
+    for (Index k : active) {
+      const Index rows = sys.constraint(k).rows();
+      MatrixXd grown(kept.rows() + rows, n);
+      grown.topRows(kept.rows()) = kept;
+      detail::copy_constraint_rows(sys, ws, k, grown.bottomRows(rows));
+      const Index grown_rank = rank_of_rows(grown, threshold);
+      if (grown_rank <= kept_rank) {
+        report.redundant.push_back(sys.constraint(k).name());
+      } else {
+        kept = std::move(grown);
+        kept_rank = grown_rank;
+      }
+    }
+  }
+
+  // initial consistency, and whether projection finds a consistent state near
+  report.initial_violations =
+      check_initial_conditions(sys, model.q0, model.qd0, t, o.initial_tolerance);
+  // constraints that contradict each other (x = 0 and x = 1, 1 = 0): where the position
+  // projection from q0 stalls, the violation no correction removes (find_constraint_conflict);
+  // such constraints are not "redundant", and projecting cannot help
+  if (!report.initial_violations.empty() && report.mass_positive_definite) {
+    try {
+      VectorXd q = model.q0, qd = model.qd0;
+      Workspace wc(sys, o.solver);
+      const ProjectionResult rp = project_positions(sys, wc, q, t, o.projection);
+      ProjectionResult rv;
+      if (rp.status == Status::kOk && rp.converged)
+        rv = project_velocities(sys, wc, q, qd, t, o.projection);
+      if (rp.status == Status::kOk && (!rp.converged || !rv.converged)) {
+        const ConstraintConflict c = find_constraint_conflict(
+            sys, wc, q, rp.converged ? qd : model.qd0, t, o.projection.tolerance);
+        if (c.found) report.contradictory = c.names;
+      }
+    } catch (const std::exception&) {
+      // reported below, by the projection of the initial state
+    }
+  }
+  if (!report.contradictory.empty()) {
+    std::string names;
+    for (const auto& c : report.contradictory) names += (names.empty() ? "'" : ", '") + c + "'";
+    report.problems.push_back(
+        report.contradictory.size() == 1
+            ? "the constraint " + names +
+                  " cannot be satisfied: no state satisfies it (correct or remove it; "
+                  "projecting the initial state cannot help)"
+            : "the constraints " + names +
+                  " contradict each other: no state satisfies them together (correct or remove "
+                  "one of them; projecting the initial state cannot help)");
+    std::erase_if(report.redundant, [&](const std::string& name) {
+      return std::find(report.contradictory.begin(), report.contradictory.end(), name) !=
+             report.contradictory.end();
+    });
+  } else if (!report.initial_violations.empty()) {
+    const bool project = model.project_initial || o.project_initial;
+    if (!project) {
+      report.problems.push_back(
+          "the initial state violates the constraints and `initial: project:` is not true");
+    } else if (report.mass_positive_definite) {
+      VectorXd q = model.q0, qd = model.qd0;
+      Workspace wp(sys, o.solver);
+      try {
+        const ProjectionResult rp = project_positions(sys, wp, q, t, o.projection);
+        const ProjectionResult rv = project_velocities(sys, wp, q, qd, t, o.projection);
+        const auto left = check_initial_conditions(sys, q, qd, t, o.initial_tolerance);
+        if (!rp.converged || !rv.converged || !left.empty()) {
+          report.problems.push_back(
+              "no consistent initial state near the given one: projection left a violation of " +
+              format(std::max(rp.violation, rv.violation)));
+        }
+      } catch (const std::exception& e) {
+        report.problems.push_back(std::string("projecting the initial state failed: ") + e.what());
+      }
+    }
+  }
+
+  // the energy must be finite where the run starts
+  if (sys.has_potential() && !std::isfinite(sys.potential_energy(model.q0, t))) {
+    report.problems.push_back("the potential energy is not finite at the initial state");
+  }
+  return report;
+}
+
+}  // namespace ukdyn

@@ -1,0 +1,232 @@
+// ExpressionSet: the symbolic expressions of a model (see modelfile/expression.hpp); parsing is in
+// modelfile/expression_parse.cpp, compilation in modelfile/expression_compile.cpp.
+
+#include <algorithm>
+#include <array>
+#include <cctype>
+#include <charconv>
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <map>
+#include <optional>
+#include <sstream>
+#include <tuple>
+#include <unordered_map>
+#include <unordered_set>
+#include <utility>
+
+#include <ginac/ginac.h>
+
+#include "modelfile/expression_internal.hpp"
+#include "ukdyn/core/format.hpp"
+#include "ukdyn/core/status.hpp"
+
+namespace ukdyn::expr {
+
+using namespace detail;
+
+// ---------------------------------------------------------------------------------------------
+// ExpressionSet
+
+ExpressionSet::ExpressionSet(std::vector<std::string> input_names)
+    : impl_(std::make_unique<Impl>()) {
+  for (const auto& name : input_names) {
+    impl_->declare(name, "ExpressionSet");
+    impl_->input_symbols.push_back(impl_->symbols.at(name));
+    impl_->input_index.emplace(name, impl_->input_symbols.size() - 1);
+    impl_->symbol_index.emplace(impl_->input_symbols.back(), impl_->input_symbols.size() - 1);
+  }
+  impl_->input_names = std::move(input_names);
+}
+
+ExpressionSet::~ExpressionSet() = default;
+ExpressionSet::ExpressionSet(ExpressionSet&&) noexcept = default;
+ExpressionSet& ExpressionSet::operator=(ExpressionSet&&) noexcept = default;
+
+void ExpressionSet::set_constant(const std::string& name, double value) {
+  if (!std::isfinite(value)) {
+    throw std::invalid_argument("ukdyn::expr::ExpressionSet::set_constant: the value of '" + name +
+                                "' must be finite, got " + format_number(value));
+  }
+  impl_->declare(name, "set_constant");
+  impl_->constant_values[impl_->symbols.at(name)] = exact(value);
+}
+
+Expr ExpressionSet::parse(const std::string& text) {
+  return impl_->add(parse_expression(text, impl_->symbols, impl_->known, impl_->constant_values));
+}
+
+Expr ExpressionSet::constant(double value) {
+  if (!std::isfinite(value)) {
+    throw std::invalid_argument(
+        "ukdyn::expr::ExpressionSet::constant: the value must be finite, "
+        "got " +
+        format_number(value));
+  }
+  return impl_->add(exact(value));
+}
+
+Expr ExpressionSet::add(Expr a, Expr b) {
+  return impl_->add(impl_->at(a, "add") + impl_->at(b, "add"));
+}
+Expr ExpressionSet::subtract(Expr a, Expr b) {
+  return impl_->add(impl_->at(a, "subtract") - impl_->at(b, "subtract"));
+}
+Expr ExpressionSet::multiply(Expr a, Expr b) {
+  return impl_->add(impl_->at(a, "multiply") * impl_->at(b, "multiply"));
+}
+Expr ExpressionSet::negate(Expr a) { return impl_->add(-impl_->at(a, "negate")); }
+
+namespace {
+
+// the indices of the inputs (by symbol_index) that x holds, ascending, each once
+std::vector<std::size_t> gather_inputs(
+    const GiNaC::ex& x, const std::map<GiNaC::ex, std::size_t, GiNaC::ex_is_less>& symbol_index) {
+  std::vector<std::size_t> found;
+  std::vector<GiNaC::ex> stack{x};
+  while (!stack.empty()) {
+    const GiNaC::ex y = std::move(stack.back());
+    stack.pop_back();
+    if (GiNaC::is_a<GiNaC::symbol>(y)) {
+      const auto it = symbol_index.find(y);
+      if (it != symbol_index.end()) found.push_back(it->second);
+      continue;
+    }
+    for (std::size_t k = y.nops(); k-- > 0;) stack.push_back(y.op(k));
+  }
+  std::sort(found.begin(), found.end());
+  found.erase(std::unique(found.begin(), found.end()), found.end());
+  return found;
+}
+
+}  // namespace
+
+// ∂f/∂(input i), f the expression of handle e. A long sum is differentiated through the terms
+// that hold the input only (found once per sum): GiNaC differentiates a sum term by term and
+// drops the terms whose derivative is 0, so the sum of the other terms differentiates to the
+// same expression — in O(terms holding it) rather than O(terms).
+GiNaC::ex ExpressionSet::Impl::derivative(Expr e, const GiNaC::ex& f, std::size_t i) {
+  const GiNaC::symbol& x = GiNaC::ex_to<GiNaC::symbol>(input_symbols[i]);
+  constexpr std::size_t kLongSum = 16;
+  if (!GiNaC::is_exactly_a<GiNaC::add>(f) || f.nops() < kLongSum) return f.diff(x);
+  auto it = terms_holding.find(e);
+  if (it == terms_holding.end()) {
+    std::unordered_map<std::size_t, std::vector<std::size_t>> index;
+    for (std::size_t k = 0; k < f.nops(); ++k) {
+      for (const std::size_t input : gather_inputs(f.op(k), symbol_index))
+        index[input].push_back(k);
+    }
+    it = terms_holding.emplace(e, std::move(index)).first;
+  }
+  const auto terms = it->second.find(i);
+  if (terms == it->second.end()) return GiNaC::ex(0);
+  GiNaC::exvector v;
+  v.reserve(terms->second.size());
+  for (const std::size_t k : terms->second) v.push_back(f.op(k));
+  // the sum of those terms as built, not evaluated (one term stays a sum of one term)
+  GiNaC::add& sum = GiNaC::dynallocate<GiNaC::add>(v);
+  const GiNaC::ptr<GiNaC::basic> keep(sum);  // freed on return
+  return sum.diff(x);
+}
+
+Expr ExpressionSet::diff(Expr e, const std::string& name) {
+  impl_->input(name, "diff");  // throws unless an input
+  // ∂e/∂x
+  const GiNaC::ex& f = impl_->at(e, "diff");
+  return impl_->add(impl_->derivative(e, f, impl_->input_index.at(name)));
+}
+
+Expr ExpressionSet::total_derivative(
+    const Expr e, const std::string& time,
+    const std::vector<std::pair<std::string, std::string>>& chain) {
+  const GiNaC::ex& f = impl_->at(e, "total_derivative");
+  const GiNaC::ex& t = impl_->input(time, "total_derivative");
+  // D e = ∂e/∂t + Σ ∂e/∂q_i · q̇_i   (no ∂e/∂q̇_i · q̈_i), summed at once; the terms of the
+  // q_i that e does not hold are 0 and left out (the same sum)
+  // the chain by input indices, looked up once while the same chain comes back (a model passes
+  // one chain for all its expressions; comparing it is cheaper than looking its names up)
+  if (chain != impl_->chain_names) {
+    std::vector<std::pair<std::size_t, std::size_t>> resolved;
+    for (const auto& [q, qd] : chain) {
+      impl_->input(q, "total_derivative");  // throws unless an input
+      impl_->input(qd, "total_derivative");
+      resolved.emplace_back(impl_->input_index.at(q), impl_->input_index.at(qd));
+    }
+    impl_->chain_names = chain;
+    impl_->velocity_of.assign(impl_->input_symbols.size(), -1);
+    for (const auto& [qi, qdi] : resolved) {
+      // a coordinate listed twice counts twice, as the sum over the chain does
+      if (impl_->velocity_of[qi] >= 0) {
+        impl_->velocity_of.clear();
+        break;
+      }
+      impl_->velocity_of[qi] = std::ptrdiff_t(qdi);
+    }
+    impl_->chain_indices = std::move(resolved);
+  }
+  const std::vector<Index> in_e = inputs_of(e);
+  GiNaC::exvector d{f.diff(GiNaC::ex_to<GiNaC::symbol>(t))};
+  if (!impl_->velocity_of.empty() || impl_->chain_indices.empty()) {
+    // through the inputs e holds
+    for (const Index k : in_e) {
+      if (const std::ptrdiff_t qdi =
+              impl_->velocity_of.empty() ? -1 : impl_->velocity_of[std::size_t(k)];
+          qdi >= 0)
+        d.push_back(impl_->derivative(e, f, std::size_t(k)) *
+                    impl_->input_symbols[std::size_t(qdi)]);
+    }
+  } else {
+    for (const auto& [qi, qdi] : impl_->chain_indices) {
+      if (!std::binary_search(in_e.begin(), in_e.end(), Index(qi))) continue;
+      d.push_back(impl_->derivative(e, f, qi) * impl_->input_symbols[qdi]);
+    }
+  }
+  if (d.size() == 1) return impl_->add(d.front());
+  return impl_->add(GiNaC::dynallocate<GiNaC::add>(d));
+}
+
+bool ExpressionSet::independent_of(Expr e, const std::string& name) const {
+  const auto it = impl_->symbols.find(name);
+  if (it == impl_->symbols.end()) {
+    throw std::invalid_argument(
+        "ukdyn::expr::ExpressionSet::independent_of: '" + name +
+        "' is neither an input nor a constant (known names: " + listing(impl_->known) + ")");
+  }
+  return !impl_->at(e, "independent_of").has(it->second);
+}
+
+std::vector<Index> ExpressionSet::inputs_of(Expr e) const {
+  // each node is visited once per occurrence, as by has()
+  const std::vector<std::size_t> found =
+      gather_inputs(impl_->at(e, "inputs_of"), impl_->symbol_index);
+  return std::vector<Index>(found.begin(), found.end());
+}
+
+bool ExpressionSet::is_literal_zero(Expr e) const {
+  const GiNaC::ex& x = impl_->at(e, "is_literal_zero");
+  return GiNaC::is_exactly_a<GiNaC::numeric>(x) && x.is_zero();
+}
+
+Expr ExpressionSet::sum(const std::vector<Expr>& terms) {
+  GiNaC::exvector v;
+  v.reserve(terms.size());
+  for (Expr t : terms) v.push_back(impl_->at(t, "sum"));
+  if (v.empty()) return impl_->add(GiNaC::ex(0));
+  return impl_->add(GiNaC::dynallocate<GiNaC::add>(v));
+}
+
+bool ExpressionSet::is_zero(Expr e) const {
+  const GiNaC::ex x = impl_->at(e, "is_zero").expand();
+  return x.is_zero() || GiNaC::normal(x).is_zero();
+}
+
+std::string ExpressionSet::to_string(Expr e) const {
+  std::ostringstream os;
+  os << impl_->at(e, "to_string");
+  return os.str();
+}
+
+const std::vector<std::string>& ExpressionSet::input_names() const { return impl_->input_names; }
+
+}  // namespace ukdyn::expr

@@ -1,0 +1,143 @@
+// Internal to the expression engine (modelfile/expression.hpp): what its parser
+// (modelfile/expression_parse.cpp), its compiler and tape (modelfile/expression_compile.cpp) and
+// ExpressionSet (modelfile/expression.cpp) share.
+#pragma once
+
+#include <cstdint>
+#include <map>
+#include <string>
+#include <unordered_map>
+#include <utility>
+#include <vector>
+
+#include <ginac/ginac.h>
+
+#include "ukdyn/core/format.hpp"
+#include "ukdyn/modelfile/expression.hpp"
+
+namespace ukdyn::expr {
+namespace detail {
+
+// ---------------------------------------------------------------------------------------------
+// the tape
+
+// One operation of the register machine: s[dst] = code(s[a], s[b]). Unary operations read a
+// only (b = a). kSinCos writes two registers: s[dst] = sin s[a], s[b] = cos s[a].
+// clang-format off
+enum class Code : std::uint8_t {
+  kAdd, kSub, kMul, kDiv, kNeg, kRecip, kSqrt, kPow,
+  kSin, kCos, kSinCos, kTan, kAsin, kAcos, kAtan, kAtan2,
+  kSinh, kCosh, kTanh, kExp, kLog, kAbs,
+};
+// clang-format on
+
+struct Op {
+  Code code;
+  std::int32_t dst, a, b;
+};
+
+// a function of the language: its name, number of arguments and tape operation
+struct FunctionInfo {
+  const char* name;
+  int arity;
+  Code code;
+};
+
+// the function called `name`, or null
+const FunctionInfo* find_function(const std::string& name);
+// a letter or '_', then letters, digits, '_'
+bool is_identifier(const std::string& s);
+// "a, b, c" (at most 20, then "…")
+std::string listing(const std::vector<std::string>& names);
+// the shortest decimal that reads back as v, as an exact rational
+GiNaC::numeric exact(double v);
+// `text` parsed into GiNaC over `names` (known: the names in declaration order, for
+// suggestions; values: the constants' values, which must leave every operation defined). Throws
+// ParseError.
+GiNaC::ex parse_expression(const std::string& text, const std::map<std::string, GiNaC::ex>& names,
+                           const std::vector<std::string>& known, const GiNaC::exmap& values);
+
+}  // namespace detail
+
+struct Program::Tape {
+  Index inputs = 0;  // of the set: the length of `in`
+  // the inputs the program reads, increasing: scratch[i] = in[read[i]]; all of them (read
+  // empty) when it reads every input (copied at once). A small program of a model with 10⁴
+  // coordinates (a constraint between two) copies its two inputs, not 2·10⁴ + 1.
+  std::vector<std::int32_t> read;
+  Index slots_read = 0;                    // scratch slots of the inputs: read.size() or inputs
+  std::vector<double> constants;           // copied to scratch[slots_read …] on each evaluation
+  std::vector<detail::Op> ops;             // in execution order, on physical slots
+  std::vector<std::int32_t> output_slots;  // out[k] = scratch[output_slots[k]]
+  Index scratch = 0;                       // inputs read + constants + registers
+};
+
+struct ExpressionSet::Impl {
+  std::vector<std::string> input_names;
+  std::vector<GiNaC::ex> input_symbols;                      // realsymbols, in input order
+  std::unordered_map<std::string, std::size_t> input_index;  // input name → its index
+  // input symbol → its index (symbols compare by serial number, not by name)
+  std::map<GiNaC::ex, std::size_t, GiNaC::ex_is_less> symbol_index;
+  std::map<std::string, GiNaC::ex> symbols;  // inputs and constants by name
+  std::vector<std::string> known;            // inputs then constants, in declaration order
+  GiNaC::exmap constant_values;              // constant symbol → its exact value
+  std::vector<GiNaC::ex> expressions;        // by handle
+  // of the long sums differentiated so far (by handle): input index → the terms that hold it
+  std::unordered_map<Expr, std::unordered_map<std::size_t, std::vector<std::size_t>>> terms_holding;
+
+  // the last chain of total_derivative, by names and by input indices
+  std::vector<std::pair<std::string, std::string>> chain_names;
+  std::vector<std::pair<std::size_t, std::size_t>> chain_indices;
+  // input index → the index of its velocity in that chain, or −1; empty when a coordinate is
+  // listed twice
+  std::vector<std::ptrdiff_t> velocity_of;
+
+  // ∂f/∂(input i) where f is the expression of handle e (modelfile/expression.cpp)
+  GiNaC::ex derivative(Expr e, const GiNaC::ex& f, std::size_t i);
+
+  Expr add(GiNaC::ex e) {
+    expressions.push_back(std::move(e));
+    return Expr(expressions.size() - 1);
+  }
+
+  const GiNaC::ex& at(Expr e, const char* who) const {
+    if (e < 0 || std::size_t(e) >= expressions.size()) {
+      throw std::invalid_argument(std::string("ukdyn::expr::ExpressionSet::") + who +
+                                  ": no expression with handle " + format_number(e) +
+                                  " (the set holds " + format_number(expressions.size()) +
+                                  "; handles come from this set's parse(), constant(), …)");
+    }
+    return expressions[std::size_t(e)];
+  }
+
+  const GiNaC::ex& input(const std::string& name, const char* who) const {
+    if (const auto it = input_index.find(name); it != input_index.end())
+      return input_symbols[it->second];
+    throw std::invalid_argument(std::string("ukdyn::expr::ExpressionSet::") + who + ": '" + name +
+                                "' is not an input (the inputs are " +
+                                detail::listing(input_names) + ")");
+  }
+
+  // throws unless `name` can be declared
+  void check_new_name(const std::string& name, const char* who) const {
+    const std::string where = std::string("ukdyn::expr::ExpressionSet::") + who;
+    if (!detail::is_identifier(name)) {
+      throw std::invalid_argument(where + ": '" + name +
+                                  "' is not a name (a letter or '_', then letters, digits, '_')");
+    }
+    if (detail::find_function(name) != nullptr) {
+      throw std::invalid_argument(where + ": '" + name + "' is a function of the language");
+    }
+    if (symbols.count(name) != 0) {
+      throw std::invalid_argument(where + ": '" + name + "' is already declared");
+    }
+  }
+
+  void declare(const std::string& name, const char* who) {
+    check_new_name(name, who);
+    symbols.emplace(name, GiNaC::realsymbol(name));
+    known.push_back(name);
+  }
+};
+
+}  // namespace ukdyn::expr

@@ -1,0 +1,1170 @@
+// Model files: YAML with symbolic expressions → a System, an initial state and run settings.
+// Derivatives are symbolic (modelfile/expression.hpp):
+//   Lagrangian      M = ∂²T/∂q̇∂q̇,  Q = ∂L/∂q − D(∂T/∂q̇) − ∂V/∂q … (L = T − V) + forces
+//   holonomic       A = ∂φ/∂q,  b = −D(D φ)          (D: total time derivative without q̈)
+//   nonholonomic    A = ∂ψ/∂q̇,  b = −D ψ
+// Every error names file:line:column and gives a hint.
+#include "ukdyn/modelfile/model.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <set>
+#include <sstream>
+
+#include <yaml-cpp/yaml.h>
+#include <Eigen/Cholesky>
+
+#include "ukdyn/core/constraint.hpp"
+#include "ukdyn/core/format.hpp"
+#include "ukdyn/core/nonideal.hpp"
+#include "ukdyn/dynamics/forward.hpp"
+#include "ukdyn/simulation/options.hpp"
+
+#include "modelfile/reader.hpp"
+
+namespace ukdyn {
+
+ModelError::ModelError(std::string file, int line, int column, std::string message,
+                       std::string hint)
+    : std::runtime_error(
+          file +
+          (line > 0 ? ":" + format_number(line) + ":" + format_number(column) : std::string()) +
+          ": error: " + message + (hint.empty() ? "" : " (hint: " + hint + ")")),
+      file_(std::move(file)),
+      line_(line),
+      column_(column),
+      message_(std::move(message)),
+      hint_(std::move(hint)) {}
+
+namespace model_reader {
+namespace {
+
+// The columns of a constraint's A: the union of the rows' inputs in [offset, offset + n), less
+// offset, increasing; all n when no row holds any (A is zero: kept dense, as written). O(total
+// inputs · log).
+std::vector<Index> local_columns(const std::vector<std::vector<Index>>& inputs, Index offset,
+                                 Index n) {
+  std::set<Index> union_of;
+  for (const auto& in : inputs) {
+    for (const Index k : in) {
+      if (k >= offset && k < offset + n) union_of.insert(k - offset);
+    }
+  }
+  std::vector<Index> columns(union_of.begin(), union_of.end());
+  if (columns.empty()) {
+    columns.resize(std::size_t(n));
+    for (Index j = 0; j < n; ++j) columns[std::size_t(j)] = j;
+  }
+  return columns;
+}
+
+// The first velocity (in declaration order) that e depends on, or null: the inputs are
+// [q; q'; t; …], so the velocities are the inputs n … 2n − 1 (one traversal of e).
+const std::string* velocity_in(const ExpressionSet& set, Expr e,
+                               const std::vector<std::string>& velocities) {
+  const Index n = Index(velocities.size());
+  for (const Index k : set.inputs_of(e)) {
+    if (k >= n && k < 2 * n) return &velocities[std::size_t(k - n)];
+  }
+  return nullptr;
+}
+
+}  // namespace
+
+double Reader::number(const YAML::Node& node, const std::string& what) {
+  if (!node.IsScalar()) fail(node, what + " must be a number");
+  // a number, or an expression of the parameters only
+  const Expr e = expression(node, what);
+  if (const auto inputs = set_->inputs_of(e); !inputs.empty()) {
+    fail(node,
+         what + " must be a constant, but depends on '" +
+             set_->input_names()[std::size_t(inputs.front())] + "'",
+         "use numbers and parameters here");
+  }
+  const Program p = compile({e}, node, what);
+  std::vector<double> in(std::size_t(p.inputs()), 0.0), scratch(std::size_t(p.scratch_size()));
+  double out = 0.0;
+  p.evaluate(in.data(), &out, scratch.data());
+  if (!std::isfinite(out))
+    fail(node, what + " must be a finite number, but is " + brief(out),
+         "a double holds magnitudes up to about 1.8e308");
+  return out;
+}
+
+Expr Reader::expression(const YAML::Node& node, const std::string& what, bool in_C) {
+  if (!node.IsScalar()) {
+    fail(node, what + " must be an expression (a number or a formula)",
+         "write it as a single value, e.g. 0.5*m*x_dot^2");
+  }
+  Expr e = 0;
+  try {
+    e = set_->parse(node.Scalar());
+  } catch (const expr::ParseError& error) {
+    // the expression starts at the node; quoted scalars start one character later
+    YAML::Mark m = node.Mark();
+    const bool quoted = node.Tag() == "!";
+    m.column += int(error.position()) + (quoted ? 1 : 0);
+    const std::string message = error.what();
+    // a flow mapping or list ({a: atan2(y, x)}) ends the value at the comma: '(' left open
+    const std::string& text = node.Scalar();
+    const bool cut =
+        std::count(text.begin(), text.end(), '(') > std::count(text.begin(), text.end(), ')');
+    fail_at(
+        m, "in " + what + ": " + message,
+        cut && !quoted
+            ? "inside YAML brackets {…} or […] a comma ends the value, so '" + text +
+                  "' may be cut short: quote the expression (\"atan2(y, x)\") or write it on "
+                  "its own line (block style)"
+        : message.find("the parameters' values") != std::string::npos
+            ? "change the parameter's value, or write the expression for it"
+            : "expressions use the coordinates, their velocities (x_dot), t and the parameters");
+  }
+  compile({e}, node, what);  // defined with the parameters' values? (errors point here)
+  // the constraints' forces are inputs of C only (nothing else is evaluated with them)
+  // (they are the last inputs, in the order of constraint_inputs_)
+  const Index first_force = Index(set_->input_names().size() - constraint_inputs_.size());
+  if (!in_C && !constraint_inputs_.empty()) {
+    if (const auto inputs = set_->inputs_of(e); !inputs.empty() && inputs.back() >= first_force) {
+      const Index k = *std::lower_bound(inputs.begin(), inputs.end(), first_force);
+      fail(node,
+           "in " + what + ": '" + set_->input_names()[std::size_t(k)] + "' is known only in a C",
+           "a constraint's N_ and lambda_ are inputs of the non-ideal forces written as C");
+    }
+  }
+  return e;
+}
+
+// The constants of an expression are evaluated when it is compiled, with the parameters' values:
+// sqrt(L - 2) with L = 1 is complex only then (the parser refuses what divides by zero, like
+// 1/(L - 1) with L = 1, where it is written).
+Program Reader::compile(const std::vector<Expr>& exprs, const YAML::Node& where,
+                        const std::string& what) const {
+  try {
+    return set_->compile(exprs);
+  } catch (const std::exception& e) {
+    std::string reason = e.what();
+    const std::string prefix = "ukdyn::expr::ExpressionSet::compile: ";
+    if (reason.rfind(prefix, 0) == 0) reason.erase(0, prefix.size());
+    fail(where, "cannot evaluate " + what + " with the parameters' values: " + reason,
+         "a parameter value makes it undefined: a division by zero, or sqrt or log of a "
+         "negative number");
+  }
+}
+
+std::vector<YAML::Node> Reader::rows_of(const YAML::Node& node, const std::string& what) {
+  std::vector<YAML::Node> rows;
+  if (node.IsSequence()) {
+    for (const auto& r : node) rows.push_back(r);
+  } else if (node.IsScalar()) {
+    rows.push_back(node);
+  } else {
+    fail(node, what + " must be an expression or a list of expressions");
+  }
+  if (rows.empty()) fail(node, what + " has no rows");
+  return rows;
+}
+
+void Reader::read_parameters(const YAML::Node& root) {
+  const YAML::Node p = root["parameters"];
+  if (p) {
+    if (!p.IsMap()) fail(p, "parameters must be a mapping name: value", "e.g. {m: 1, g: 9.81}");
+    for (const auto& kv : p) {
+      const std::string name = kv.first.Scalar();
+      if (!is_identifier(name))
+        fail(kv.first, "parameter name '" + name + "' is not an identifier");
+      if (name == "t") fail(kv.first, "'t' is time and cannot be a parameter");
+      if (!kv.second.IsScalar()) fail(kv.second, "parameter '" + name + "' must be a number");
+      try {
+        std::size_t used = 0;
+        const double v = std::stod(kv.second.Scalar(), &used);
+        if (used != kv.second.Scalar().size()) throw std::invalid_argument("trailing text");
+        if (!std::isfinite(v)) throw std::invalid_argument("nan or inf");
+        parameters_[name] = v;
+      } catch (const std::exception&) {
+        fail(kv.second,
+             "parameter '" + name + "' must be a finite number, got '" + kv.second.Scalar() + "'");
+      }
+    }
+  }
+  for (const auto& [name, value] : overrides_) {
+    if (!std::isfinite(value))
+      throw OverrideError(file_, 0, 0, "--set " + name + ": the value must be a finite number");
+    if (!parameters_.count(name)) {
+      std::vector<std::string> known;
+      for (const auto& kv : parameters_) known.push_back(kv.first);
+      throw OverrideError(
+          file_, 0, 0, "--set " + name + ": the model has no parameter '" + name + "'",
+          known.empty() ? "it declares no parameters" : "its parameters are " + join(known));
+    }
+    parameters_[name] = value;
+  }
+}
+
+void Reader::read_coordinates(const YAML::Node& root) {
+  const YAML::Node c = root["coordinates"];
+  if (!c)
+    throw ModelError(file_, 1, 1, "no 'coordinates:'",
+                     "list the coordinates, e.g. coordinates: [x, y]");
+  if (!c.IsSequence() || c.size() == 0) fail(c, "coordinates must be a non-empty list of names");
+  std::set<std::string> seen;
+  for (const auto& node : c) {
+    const std::string name = node.Scalar();
+    if (!node.IsScalar() || !is_identifier(name))
+      fail(node, "coordinate '" + name + "' is not an identifier");
+    if (name == "t" || parameters_.count(name))
+      fail(node, "coordinate '" + name + "' clashes with time or a parameter");
+    if (!seen.insert(name).second) fail(node, "coordinate '" + name + "' is listed twice");
+    coordinates_.push_back(name);
+    velocities_.push_back(name + "_dot");
+    chain_.emplace_back(name, name + "_dot");
+  }
+}
+
+Index Reader::coordinate(const YAML::Node& node) {
+  const std::string name = node.Scalar();
+  for (std::size_t i = 0; i < coordinates_.size(); ++i) {
+    if (coordinates_[i] == name) return Index(i);
+  }
+  // crank.x for crank_x (names_coordinate)
+  for (std::size_t i = 0; i < coordinates_.size(); ++i) {
+    if (names_coordinate(name, coordinates_[i])) return Index(i);
+  }
+  fail(node, "unknown coordinate '" + name + "'", "the coordinates are " + join(coordinates_));
+}
+
+void Reader::read_dynamics(const YAML::Node& root, SystemBuilder& builder) {
+  const Index n = Index(coordinates_.size());
+  const YAML::Node T = root["kinetic_energy"], V = root["potential_energy"],
+                   Mnode = root["mass_matrix"], F = root["forces"];
+  if (T && Mnode) fail(Mnode, "give either kinetic_energy or mass_matrix, not both");
+  if (!T && !Mnode) {
+    throw ModelError(
+        file_, 1, 1, "no dynamics: neither 'kinetic_energy' nor 'mass_matrix'",
+        "add kinetic_energy: 0.5*m*x_dot^2 (and potential_energy), or mass_matrix and forces");
+  }
+  // M by its entries that are not the number 0 (row i, column j, entry), in row-major order:
+  // a large M is mostly zeros, which are neither stored, differentiated nor compiled
+  struct Entry {
+    Index i, j;
+    Expr e;
+  };
+  std::vector<Entry> M;
+  std::vector<Expr> Q(static_cast<std::size_t>(n));
+  const Expr zero = set_->constant(0.0);
+  std::fill(Q.begin(), Q.end(), zero);
+  const Expr Ve = V ? expression(V, "potential_energy") : zero;
+  if (V) {
+    if (const std::string* v = velocity_in(*set_, Ve, velocities_))
+      fail(V, "potential_energy depends on the velocity '" + *v + "'");
+  }
+  // the external power P_ext (System::external_power): the rate of E = ½ q̇ᵀ M q̇ + V that V
+  // does not account for, q̇ᵀ F + P_time (the forces F beside the energies, the explicit time
+  // dependence); for a Lagrangian P_time = ∂V/∂t − ∂T/∂t + D T0, T0 = T(q̇ = 0), which is
+  // T − q̇ · ∂T/∂q̇ + ½ q̇ᵀ M q̇; for a mass matrix P_time = ½ q̇ᵀ D(M) q̇ + ∂V/∂t
+  std::vector<Expr> qdot;
+  for (const auto& v : velocities_) qdot.push_back(set_->parse(v));
+  Expr P_time = V ? set_->diff(Ve, "t") : zero;
+  if (T) {
+    // M = ∂²T/∂q̇∂q̇;  Q = ∂T/∂q − D(∂T/∂q̇) − ∂V/∂q (the q̈ part of D is M q̈)
+    const Expr Te = expression(T, "kinetic_energy");
+    // T0 = T − Σ q̇_i ∂T/∂q̇_i + Σ ½ q̇_i M_ij q̇_j, summed at once (the same expression as
+    // term by term); only the velocities T holds give derivatives that are not 0
+    std::vector<Expr> T0{Te};
+    const std::vector<Index> in_T = set_->inputs_of(Te);
+    for (Index i = 0; i < n; ++i) {
+      const bool has_i = std::binary_search(in_T.begin(), in_T.end(), n + i);
+      // ∂T/∂q̇_i = 0 when T does not hold q̇_i: then row i of M is 0
+      const Expr dT = has_i ? set_->diff(Te, velocities_[std::size_t(i)]) : zero;
+      if (has_i) T0.push_back(set_->negate(set_->multiply(qdot[std::size_t(i)], dT)));
+      for (const Index k : has_i ? set_->inputs_of(dT) : std::vector<Index>()) {
+        if (k < n || k >= 2 * n) continue;
+        const Index j = k - n;
+        const Expr e = set_->diff(dT, velocities_[std::size_t(j)]);
+        // T must be quadratic in the velocities: M = ∂²T/∂q̇∂q̇ may not depend on them
+        if (const std::string* v = velocity_in(*set_, e, velocities_)) {
+          fail(T,
+               "kinetic_energy is not quadratic in the velocities: its mass matrix depends "
+               "on '" +
+                   *v + "'",
+               "T = ½ q̇ᵀ M(q, t) q̇ + (terms linear in q̇) + T0(q, t)");
+        }
+        if (!set_->is_literal_zero(e)) M.push_back({i, j, e});
+      }
+      // ∂T/∂q_i is 0 when T does not hold q_i (not differentiated)
+      const Expr dTq = std::binary_search(in_T.begin(), in_T.end(), i)
+                           ? set_->diff(Te, coordinates_[std::size_t(i)])
+                           : zero;
+      Q[std::size_t(i)] = set_->subtract(dTq, set_->total_derivative(dT, "t", chain_));
+    }
+    const Expr half = set_->constant(0.5);
+    for (const Entry& m : M) {
+      T0.push_back(set_->multiply(
+          half,
+          set_->multiply(qdot[std::size_t(m.i)], set_->multiply(m.e, qdot[std::size_t(m.j)]))));
+    }
+    P_time = set_->add(set_->subtract(P_time, set_->diff(Te, "t")),
+                       set_->total_derivative(set_->sum(T0), "t", chain_));
+  } else {
+    if (!Mnode.IsSequence() || Index(Mnode.size()) != n) {
+      fail(Mnode, "mass_matrix must be a list of " + format_number(n) + " rows",
+           "one row per coordinate: [[m, 0], [0, m]]");
+    }
+    for (Index i = 0; i < n; ++i) {
+      const YAML::Node row = Mnode[std::size_t(i)];
+      if (!row.IsSequence() || Index(row.size()) != n) {
+        fail(row, "row " + format_number(i + 1) + " of mass_matrix must have " + format_number(n) +
+                      " entries");
+      }
+      for (Index j = 0; j < n; ++j) {
+        const Expr e = expression(row[std::size_t(j)], "mass_matrix");
+        if (const std::string* v = velocity_in(*set_, e, velocities_))
+          fail(row[std::size_t(j)], "mass_matrix depends on the velocity '" + *v + "'");
+        if (!set_->is_literal_zero(e)) M.push_back({i, j, e});
+      }
+    }
+    // P_time + Σ ½ q̇_i D(M_ij) q̇_j, summed at once (the same expression as term by term)
+    std::vector<Expr> terms{P_time};
+    for (const Entry& m : M) {
+      const Expr De = set_->total_derivative(m.e, "t", chain_);
+      if (set_->is_literal_zero(De)) continue;
+      terms.push_back(set_->multiply(
+          set_->constant(0.5),
+          set_->multiply(qdot[std::size_t(m.i)], set_->multiply(De, qdot[std::size_t(m.j)]))));
+    }
+    P_time = set_->sum(terms);
+  }
+  // − ∂V/∂q (0 for the q_i that V does not hold: not differentiated), and non-conservative
+  // forces
+  const std::vector<Index> in_V = V ? set_->inputs_of(Ve) : std::vector<Index>();
+  for (Index i = 0; i < n; ++i) {
+    if (V)
+      Q[std::size_t(i)] =
+          set_->subtract(Q[std::size_t(i)], std::binary_search(in_V.begin(), in_V.end(), i)
+                                                ? set_->diff(Ve, coordinates_[std::size_t(i)])
+                                                : zero);
+  }
+  if (F) {
+    const auto rows = rows_of(F, "forces");
+    if (Index(rows.size()) != n)
+      fail(F, "forces must have " + format_number(n) + " entries, one per coordinate");
+    Expr P = P_time;
+    for (Index i = 0; i < n; ++i) {
+      const Expr f = expression(rows[std::size_t(i)], "forces");
+      Q[std::size_t(i)] = set_->add(Q[std::size_t(i)], f);
+      P = set_->add(P, set_->multiply(qdot[std::size_t(i)], f));
+    }
+    P_time = P;
+  }
+  const Expr P_ext = P_time;
+
+  // M: a constant matrix when it depends on nothing (factorized once per workspace)
+  bool constant = true;
+  std::vector<Expr> entries;
+  auto at = std::make_shared<std::vector<std::pair<Index, Index>>>();  // (i, j) of entries[k]
+  for (const Entry& m : M) {
+    constant = constant && set_->inputs_of(m.e).empty();
+    entries.push_back(m.e);
+    at->emplace_back(m.i, m.j);
+  }
+  const InputLayout layout = layout_;
+  const YAML::Node dynamics = T ? T : Mnode;
+  const Program Mp = compile(entries, dynamics,
+                             T ? "the derivatives of kinetic_energy" : "mass_matrix"),
+                Qp = compile(Q, dynamics, "the generalized forces");
+  if (constant) {
+    std::vector<double> in(std::size_t(layout.size()), 0.0), out(entries.size()),
+        scratch(std::size_t(Mp.scratch_size()));
+    Mp.evaluate(in.data(), out.data(), scratch.data());
+    // a large block-diagonal M (uncoupled coordinates or groups of them) is given by its blocks,
+    // which the sparse engine factorizes one by one (a dense M of 10⁴ coordinates is 800 MB):
+    // the blocks start where no entry of the rows before reaches
+    std::vector<Index> reach(
+        static_cast<std::size_t>(n));  // the last row or column an entry of row i reaches
+    for (Index i = 0; i < n; ++i) reach[std::size_t(i)] = i;
+    for (const auto& [i, j] : *at) {
+      Index& r = reach[std::size_t(std::min(i, j))];
+      r = std::max(r, std::max(i, j));
+    }
+    std::vector<Index> starts{0};
+    for (Index i = 0, end = 0; i + 1 < n; ++i) {
+      end = std::max(end, reach[std::size_t(i)]);
+      if (end == i) starts.push_back(i + 1);
+    }
+    std::vector<MatrixXd> blocks;
+    if (n >= SolverOptions().sparse_threshold && starts.size() > 1) {
+      starts.push_back(n);
+      for (std::size_t k = 0; k + 1 < starts.size(); ++k) {
+        const Index size = starts[k + 1] - starts[k];
+        blocks.push_back(MatrixXd::Zero(size, size));
+      }
+      for (std::size_t k = 0; k < out.size(); ++k) {
+        const auto [i, j] = (*at)[k];
+        const std::size_t b =
+            std::size_t(std::upper_bound(starts.begin(), starts.end(), i) - starts.begin()) - 1;
+        blocks[b](i - starts[b], j - starts[b]) = out[k];
+      }
+      // only a symmetric positive definite M (else the checks of the dense M report it)
+      for (const MatrixXd& B : blocks) {
+        if (!B.allFinite() || B != B.transpose() ||
+            Eigen::LLT<MatrixXd>(B).info() != Eigen::Success) {
+          blocks.clear();
+          break;
+        }
+      }
+    }
+    if (!blocks.empty()) {
+      for (std::size_t b = 0; b < blocks.size(); ++b) builder.mass_block(starts[b], blocks[b]);
+    } else {
+      MatrixXd Mc = MatrixXd::Zero(n, n);
+      for (std::size_t k = 0; k < out.size(); ++k) Mc((*at)[k].first, (*at)[k].second) = out[k];
+      builder.mass_matrix(Mc);
+    }
+  } else {
+    sizes_->fit(layout.size(), Mp);
+    builder.mass_matrix([Mp, at, layout, n](const VectorXd& q, double t, CallableScratch* s,
+                                            Eigen::Ref<MatrixXd> Mout) {
+      ModelBuffers& b = model_buffers(s);
+      std::copy(q.data(), q.data() + n, b.in.begin());
+      b.in[std::size_t(2 * n)] = t;
+      Mp.evaluate(b.in.data(), b.out.data(), b.scratch.data());
+      Mout.setZero();
+      for (std::size_t k = 0; k < at->size(); ++k) Mout((*at)[k].first, (*at)[k].second) = b.out[k];
+    });
+  }
+  // the callables' buffers: one ModelBuffers per workspace, sized for every program of the model
+  builder.scratch(BufferSizes::factory(sizes_));
+  sizes_->fit(layout.size(), Qp);
+  builder.forces([Qp, layout](const VectorXd& q, const VectorXd& qd, double t, CallableScratch* s,
+                              Eigen::Ref<VectorXd> Qout) {
+    ModelBuffers& b = model_buffers(s);
+    layout.fill(b.in, q, qd, t);
+    Qp.evaluate(b.in.data(), Qout.data(), b.scratch.data());
+  });
+  // V and P_ext account for every force's work (the run's energy balance is checked)
+  builder.accounts_for_energy();
+  if (!set_->is_zero(P_ext)) {
+    const Program Pp = compile({P_ext}, dynamics, "the external power");
+    sizes_->fit(layout.size(), Pp);
+    builder.external_power(
+        [Pp, layout](const VectorXd& q, const VectorXd& qd, double t, CallableScratch* s) {
+          ModelBuffers& b = model_buffers(s);
+          layout.fill(b.in, q, qd, t);
+          double p = 0.0;
+          Pp.evaluate(b.in.data(), &p, b.scratch.data());
+          return p;
+        });
+  }
+  if (V) {
+    const Program Vp = compile({Ve}, V, "potential_energy");
+    sizes_->fit(layout.size(), Vp);
+    builder.potential_energy([Vp, layout](const VectorXd& q, double t, CallableScratch* s) {
+      ModelBuffers& b = model_buffers(s);
+      std::copy(q.data(), q.data() + layout.n, b.in.begin());
+      b.in[std::size_t(2 * layout.n)] = t;
+      double v = 0.0;
+      Vp.evaluate(b.in.data(), &v, b.scratch.data());
+      return v;
+    });
+  }
+}
+
+Constraint Reader::read_constraint(const YAML::Node& c, const std::string& name,
+                                   const std::string& what) {
+  const Index n = Index(coordinates_.size());
+  const int kinds = int(bool(c["holonomic"])) + int(bool(c["nonholonomic"])) + int(bool(c["A"]));
+  if (kinds != 1) {
+    fail(c, what + " needs exactly one of holonomic, nonholonomic, or A with b");
+  }
+  std::vector<Expr> accel, levels;
+  ConstraintKind kind;
+  Index rows = 0;
+  std::vector<Index> columns;  // of A: all n (dense rows) or fewer (a local model)
+  const Expr zero = set_->constant(0.0);
+  if (c["holonomic"]) {
+    // A = ∂φ/∂q, b = −D(Dφ); levels [φ; Dφ]
+    kind = ConstraintKind::kHolonomic;
+    const auto phis = rows_of(c["holonomic"], what);
+    rows = Index(phis.size());
+    std::vector<Expr> phi, phid, b;
+    for (const auto& node : phis) {
+      const Expr e = expression(node, what);
+      if (const std::string* v = velocity_in(*set_, e, velocities_)) {
+        fail(node, what + " is holonomic but depends on the velocity '" + *v + "'",
+             "write it as nonholonomic: instead");
+      }
+      phi.push_back(e);
+      phid.push_back(set_->total_derivative(e, "t", chain_));
+      b.push_back(set_->negate(set_->total_derivative(phid.back(), "t", chain_)));
+    }
+    // ∂φ/∂q_j is 0 for the q_j that no row of φ holds: A's columns are those that some row holds
+    std::vector<std::vector<Index>> in_phi;
+    for (const Expr& e : phi) in_phi.push_back(set_->inputs_of(e));
+    columns = local_columns(in_phi, 0, n);
+    for (Index r = 0; r < rows; ++r) {
+      const auto& in = in_phi[std::size_t(r)];
+      for (const Index j : columns)
+        accel.push_back(std::binary_search(in.begin(), in.end(), j)
+                            ? set_->diff(phi[std::size_t(r)], coordinates_[std::size_t(j)])
+                            : zero);
+    }
+    accel.insert(accel.end(), b.begin(), b.end());
+    levels = phi;
+    levels.insert(levels.end(), phid.begin(), phid.end());
+  } else if (c["nonholonomic"]) {
+    // A = ∂ψ/∂q̇, b = −Dψ; levels [ψ]
+    kind = ConstraintKind::kNonholonomic;
+    const auto psis = rows_of(c["nonholonomic"], what);
+    rows = Index(psis.size());
+    std::vector<Expr> psi, b;
+    for (const auto& node : psis) {
+      psi.push_back(expression(node, what));
+      b.push_back(set_->negate(set_->total_derivative(psi.back(), "t", chain_)));
+    }
+    // ∂ψ/∂q̇_j is 0 for the q̇_j that no row of ψ holds: A's columns are those that some row holds
+    std::vector<std::vector<Index>> in_psi;
+    for (const Expr& e : psi) in_psi.push_back(set_->inputs_of(e));
+    columns = local_columns(in_psi, n, n);
+    for (Index r = 0; r < rows; ++r) {
+      const auto& in = in_psi[std::size_t(r)];
+      for (const Index j : columns)
+        accel.push_back(std::binary_search(in.begin(), in.end(), n + j)
+                            ? set_->diff(psi[std::size_t(r)], velocities_[std::size_t(j)])
+                            : zero);
+    }
+    accel.insert(accel.end(), b.begin(), b.end());
+    levels = psi;
+  } else {
+    kind = ConstraintKind::kAcceleration;
+    const YAML::Node A = c["A"], b = c["b"];
+    if (!b) fail(c, what + " gives A but no b");
+    if (!A.IsSequence() || A.size() == 0) fail(A, "A must be a list of rows");
+    rows = Index(A.size());
+    const auto bs = rows_of(b, what + ", b");
+    if (Index(bs.size()) != rows)
+      fail(b, "b must have one entry per row of A (" + format_number(rows) + ")");
+    std::vector<Expr> entries;
+    for (const auto& row : A) {
+      if (!row.IsSequence() || Index(row.size()) != n)
+        fail(row, "each row of A must have " + format_number(n) + " entries");
+      for (const auto& e : row) entries.push_back(expression(e, what + ", A"));
+    }
+    // the columns with an entry that is not a literal 0
+    std::vector<std::vector<Index>> nonzero(1);
+    for (Index j = 0; j < n; ++j) {
+      for (Index r = 0; r < rows; ++r) {
+        if (set_->is_literal_zero(entries[std::size_t(r * n + j)])) continue;
+        nonzero[0].push_back(j);
+        break;
+      }
+    }
+    columns = local_columns(nonzero, 0, n);
+    for (Index r = 0; r < rows; ++r)
+      for (const Index j : columns) accel.push_back(entries[std::size_t(r * n + j)]);
+    for (const auto& e : bs) accel.push_back(expression(e, what + ", b"));
+  }
+  // the inputs the programs read (each evaluation fills those only)
+  std::set<Index> read;
+  for (const auto* list : {&accel, &levels}) {
+    for (const Expr& e : *list) {
+      for (const Index k : set_->inputs_of(e)) read.insert(k);
+    }
+  }
+  Constraint constraint(name, kind, rows,
+                        std::make_shared<CompiledConstraint>(
+                            kind, rows, n, layout_, compile(accel, c, "the derivatives of " + what),
+                            compile(levels, c, what), std::vector<Index>(read.begin(), read.end()),
+                            Index(columns.size()) < n ? columns : std::vector<Index>{}));
+  if (const YAML::Node a = c["active"]) {
+    if (!a.IsSequence() || a.size() != 2) fail(a, "active must be [t0, t1]");
+    const double t0 = number(a[0], "active"), t1 = number(a[1], "active");
+    if (!(t0 <= t1)) fail(a, "active needs t0 <= t1");
+    constraint.active_between(t0, t1);
+  }
+  return constraint;
+}
+
+void Reader::read_constraints(const YAML::Node& root, SystemBuilder& builder) {
+  const YAML::Node cs = root["constraints"];
+  if (!cs) return;
+  if (!cs.IsSequence())
+    fail(cs, "constraints must be a list", "- {name: rod, holonomic: x^2 + y^2 - 1}");
+  std::set<std::string> seen;
+  for (const auto& c : cs) {
+    if (!c.IsMap()) fail(c, "a constraint must be a mapping with a name and a kind");
+    if (!c["name"]) fail(c, "a constraint needs a name", "{name: rod, holonomic: ...}");
+    if (!c["name"].IsScalar() || c["name"].Scalar().empty())
+      fail(c["name"], "a constraint's name must be a non-empty text", "{name: rod, ...}");
+    const std::string name = c["name"].Scalar();
+    if (!seen.insert(name).second) fail(c["name"], "constraint '" + name + "' is declared twice");
+    for (const auto& kv : c) {
+      static const std::set<std::string> keys = {"name", "holonomic", "nonholonomic", "A",
+                                                 "b",    "active",    "stabilization"};
+      if (!keys.count(kv.first.Scalar())) {
+        fail(kv.first, "unknown key '" + kv.first.Scalar() + "' in constraint '" + name + "'",
+             "a constraint has name, holonomic | nonholonomic | A and b, active, stabilization");
+      }
+    }
+    Constraint constraint = read_constraint(c, name, "constraint '" + name + "'");
+    if (const YAML::Node s = c["stabilization"]) {
+      if (!s.IsMap()) fail(s, "stabilization must be {alpha: …, beta: …}");
+      const double alpha = s["alpha"] ? number(s["alpha"], "alpha") : 0.0;
+      const double beta = s["beta"] ? number(s["beta"], "beta") : 0.0;
+      if (alpha < 0 || beta < 0) fail(s, "stabilization gains must be >= 0");
+      constraint.stabilize(alpha, beta);
+    }
+    builder.add(constraint);
+    constraint_names_.push_back(name);
+    constraint_rows_.push_back(constraint.rows());
+  }
+}
+
+SurfaceVelocityFn Reader::surface_velocity(const YAML::Node& node, std::size_t count) {
+  const std::string what = "surface_velocity";
+  const auto rows = rows_of(node, what);
+  if (rows.size() != count) {
+    fail(node,
+         "surface_velocity needs " + format_number(count) + " entries, one per sliding coordinate",
+         "the velocity of the surface under the contact, e.g. [V, 0] for a belt moving at V");
+  }
+  // [u; u'], u' = (du/dq) q' + du/dt
+  std::vector<Expr> u, u_dot;
+  for (const auto& r : rows) {
+    const Expr e = expression(r, what);
+    if (const std::string* v = velocity_in(*set_, e, velocities_)) {
+      fail(r, "surface_velocity depends on the velocity '" + *v + "'",
+           "the surface velocity may depend on the coordinates and t only");
+    }
+    u.push_back(e);
+    u_dot.push_back(set_->total_derivative(e, "t", chain_));
+  }
+  u.insert(u.end(), u_dot.begin(), u_dot.end());
+  const Program p = compile(u, node, what);
+  const InputLayout layout = layout_;
+  const Index k = Index(count);
+  // (its signature carries no scratch: buffers of the call, evaluate_local)
+  return [p, layout, k](const VectorXd& q, const VectorXd& qd, double t, Eigen::Ref<VectorXd> uo,
+                        Eigen::Ref<VectorXd> udo) {
+    evaluate_local(
+        p, layout.size(),
+        [&](double* in) {
+          std::copy(q.data(), q.data() + layout.n, in);
+          std::copy(qd.data(), qd.data() + layout.n, in + layout.n);
+          in[2 * layout.n] = t;
+        },
+        [&](const double* out) {
+          for (Index r = 0; r < k; ++r) {
+            uo[r] = out[r];
+            udo[r] = out[k + r];
+          }
+        });
+  };
+}
+
+void Reader::read_nonideal(const YAML::Node& root, SystemBuilder& builder) {
+  const YAML::Node ns = root["nonideal"];
+  if (!ns) return;
+  if (!ns.IsSequence()) fail(ns, "nonideal must be a list");
+  int index = 0;
+  for (const auto& f : ns) {
+    ++index;
+    if (!f.IsMap()) fail(f, "a non-ideal force must be a mapping");
+    for (const auto& kv : f) {
+      static const std::set<std::string> keys = {
+          "friction",         "constraint",  "mu",
+          "mu_static",        "coordinates", "regularization_velocity",
+          "surface_velocity", "c",           "C"};
+      if (!keys.count(kv.first.Scalar())) {
+        fail(kv.first, "unknown key '" + kv.first.Scalar() + "' in a non-ideal force",
+             "the keys are friction, constraint, mu, mu_static, coordinates, "
+             "regularization_velocity, surface_velocity (coulomb), c (viscous), C");
+      }
+    }
+    std::vector<Index> coords;
+    if (const YAML::Node cn = f["coordinates"]) {
+      if (!cn.IsSequence()) fail(cn, "coordinates must be a list of coordinate names");
+      for (const auto& c : cn) coords.push_back(coordinate(c));
+    }
+    if (f["friction"]) {
+      const std::string law = f["friction"].Scalar();
+      if (law == "coulomb") {
+        if (!f["constraint"])
+          fail(f, "coulomb friction needs the constraint that gives N",
+               "{friction: coulomb, constraint: plane, mu: 0.3}");
+        const std::string on = f["constraint"].Scalar();
+        if (std::find(constraint_names_.begin(), constraint_names_.end(), on) ==
+            constraint_names_.end()) {
+          fail(f["constraint"], "no constraint named '" + on + "'",
+               "the constraints are " + join(constraint_names_));
+        }
+        if (!f["mu"]) fail(f, "coulomb friction needs mu");
+        CoulombFriction spec;
+        spec.constraint = on;
+        spec.mu = number(f["mu"], "mu");
+        spec.coordinates = coords;
+        if (const YAML::Node rv = f["regularization_velocity"]) {
+          spec.regularization_velocity = number(rv, "regularization_velocity");
+          if (!(spec.regularization_velocity > 0)) {
+            fail(rv, "regularization_velocity must be > 0, got " + rv.Scalar(),
+                 "the speed below which the friction force is scaled down, e.g. 1e-4; "
+                 "docs/friction.md");
+          }
+        }
+        if (spec.mu < 0) fail(f["mu"], "mu must be >= 0");
+        if (const YAML::Node ms = f["mu_static"]) {
+          spec.mu_static = number(ms, "mu_static");
+          if (!(*spec.mu_static >= spec.mu)) {
+            fail(ms, "mu_static must be >= mu (the kinetic coefficient)");
+          }
+        }
+        if (const YAML::Node un = f["surface_velocity"]) {
+          spec.surface_velocity =
+              surface_velocity(un, coords.empty() ? coordinates_.size() : coords.size());
+        }
+        builder.add(coulomb_friction(spec));
+      } else if (law == "viscous") {
+        if (!f["c"])
+          fail(f, "viscous friction needs its coefficient c", "{friction: viscous, c: 0.3}");
+        ViscousFriction spec;
+        spec.coefficient = number(f["c"], "c");
+        spec.coordinates = coords;
+        spec.name = "viscous." + format_number(index);
+        if (spec.coefficient < 0) fail(f["c"], "c must be >= 0");
+        builder.add(viscous_friction(spec));
+      } else {
+        fail(f["friction"], "unknown friction law '" + law + "'",
+             "the laws are coulomb and viscous");
+      }
+    } else if (f["C"]) {
+      // C(q, q', t, N_c, lambda_c)
+      const auto rows = rows_of(f["C"], "C");
+      const Index n = Index(coordinates_.size());
+      if (Index(rows.size()) != n)
+        fail(f["C"], "C must have " + format_number(n) + " entries, one per coordinate");
+      std::vector<Expr> C;
+      for (const auto& r : rows) C.push_back(expression(r, "C", true));
+      const Program Cp = compile(C, f["C"], "C");
+      const InputLayout layout = layout_;
+      const std::vector<std::string> names = constraint_names_;
+      sizes_->fit(layout.size(), Cp);
+      NonIdealForce force(
+          "C." + format_number(index),
+          NonIdealForce::Binder([Cp, layout, names](const System& sys) -> NonIdealFn {
+            std::vector<Index> ks;
+            for (const auto& nm : names) ks.push_back(sys.constraint_index(nm));
+            return [Cp, layout, ks](const VectorXd& q, const VectorXd& qd, double t,
+                                    const IdealForceInfo& ideal, Eigen::Ref<VectorXd> Cout) {
+              ModelBuffers& b = model_buffers(ideal.scratch());
+              layout.fill(b.in, q, qd, t);
+              // N_c, then lambda_c (first row of each constraint)
+              const std::size_t base = std::size_t(2 * layout.n + 1);
+              for (std::size_t i = 0; i < ks.size(); ++i) {
+                b.in[base + i] = ideal.normal_force(ks[i]);
+                b.in[base + ks.size() + i] = ideal.lambda(ks[i])[0];
+              }
+              Cp.evaluate(b.in.data(), Cout.data(), b.scratch.data());
+            };
+          }));
+      builder.add(force);
+    } else {
+      fail(f, "a non-ideal force needs 'friction' (coulomb, viscous) or 'C'");
+    }
+  }
+}
+
+void Reader::read_initial(const YAML::Node& root, Model& model) {
+  const Index n = Index(coordinates_.size());
+  // a multibody model's bodies give the initial state; initial: overrides it by name
+  if (model.q0.size() != n) model.q0 = VectorXd::Zero(n);
+  if (model.qd0.size() != n) model.qd0 = VectorXd::Zero(n);
+  const YAML::Node init = root["initial"];
+  if (!init) return;
+  if (!init.IsMap()) fail(init, "initial must be a mapping with q, q_dot and project");
+  auto read_map = [&](const char* key, VectorXd& v) {
+    const YAML::Node m = init[key];
+    if (!m) return;
+    if (!m.IsMap())
+      fail(m, std::string("initial ") + key + " must map coordinate names to values",
+           "q: {x: 0, y: 1}");
+    for (const auto& kv : m)
+      v[coordinate(kv.first)] = number(kv.second, std::string("initial ") + key);
+  };
+  read_map("q", model.q0);
+  read_map("q_dot", model.qd0);
+  if (init["project"]) model.project_initial = init["project"].as<bool>(false);
+}
+
+void Reader::read_simulate(const YAML::Node& root, Model& model) {
+  SimulationOptions& o = model.options;
+  o.t_end = 1.0;
+  const YAML::Node s = root["simulate"];
+  if (!s) return;
+  if (!s.IsMap()) fail(s, "simulate must be a mapping", "{t_end: 2, integrator: dopri5}");
+  // every key is an option of the table (simulation/options.hpp), set by its one validating setter
+  for (const auto& kv : s) {
+    const std::string key = kv.first.Scalar();
+    const YAML::Node v = kv.second;
+    const OptionInfo* info = find_option(key);
+    if (!info) fail(kv.first, "unknown key '" + key + "' in simulate", option_names());
+    try {
+      switch (info->type) {
+        case OptionType::kNumber:
+        case OptionType::kInteger:
+          // a number, or an expression of the parameters
+          set_option(o, key, number(v, key));
+          break;
+        case OptionType::kNumbers: {
+          if (!v.IsSequence()) fail(v, key + " must be a list of numbers", "[0.5, 1.5]");
+          std::vector<double> list;
+          for (const auto& x : v) list.push_back(number(x, key));
+          set_option(o, key, list);
+          break;
+        }
+        case OptionType::kBool:
+        case OptionType::kChoice:
+          if (!v.IsScalar()) fail(v, key + " must be " + option_rule(*info));
+          set_option_text(o, key, v.Scalar());
+          break;
+      }
+    } catch (const OptionError& e) {
+      fail(v, e.problem(), e.hint());
+    }
+  }
+  if (!(o.t_end > o.t_start)) fail(s, "t_end must be greater than t_start");
+  // solver options that this system cannot use (engine: sparse with a dense M, …) are refused
+  // here, at their key, as the workspace a run makes would refuse them
+  std::vector<YAML::Node> solver_keys;
+  for (const auto& kv : s) {
+    if (find_option(kv.first.Scalar())->solver) solver_keys.push_back(kv.first);
+  }
+  if (!solver_keys.empty()) {
+    try {
+      Workspace ws(model.system, o.solver);
+    } catch (const std::invalid_argument& e) {
+      std::string message = e.what();
+      if (const auto k = message.find(": "); k != std::string::npos) message.erase(0, k + 2);
+      YAML::Node at = solver_keys.front();
+      for (const YAML::Node& key : solver_keys) {
+        if (message.find(key.Scalar()) != std::string::npos) at = key;
+      }
+      fail(at, message);
+    }
+  }
+}
+
+// M(q0, t_start) must be symmetric positive semi-definite, and where it is singular the
+// constraints must determine the coordinates it gives no inertia ([M; A] of full column rank):
+// a model that fails here cannot start, so the error points at the declaration of M (or T)
+// rather than at the run.
+void Reader::check_mass_matrix(const YAML::Node& root, const Model& model) {
+  const Index n = model.system.coordinate_count();
+  // M given by constant blocks is symmetric positive definite when they are (read_dynamics
+  // gives blocks only then; a dense M of many coordinates would not fit)
+  if (model.system.mass_is_block_diagonal() &&
+      std::all_of(model.system.mass_blocks().begin(), model.system.mass_blocks().end(),
+                  [](const MassBlock& b) {
+                    return b.constant() && !b.singular && b.value.allFinite() &&
+                           b.value == b.value.transpose() &&
+                           Eigen::LLT<MatrixXd>(b.value).info() == Eigen::Success;
+                  })) {
+    return;
+  }
+  MatrixXd M(n, n);
+  model.system.mass_matrix(model.q0, model.options.t_start, M);
+  const YAML::Node at = root["mass_matrix"] ? root["mass_matrix"] : root["kinetic_energy"];
+  const std::string where = " at the initial state (t = " + brief(model.options.t_start) + ")";
+  const std::string source = root["mass_matrix"] ? "mass_matrix" : "kinetic_energy";
+  if (!M.allFinite()) {
+    fail(at, "the mass matrix is not finite" + where,
+         "check " + source + " for divisions by zero or logarithms of non-positive values at q0");
+  }
+  const double scale = M.cwiseAbs().maxCoeff();
+  if ((M - M.transpose()).cwiseAbs().maxCoeff() > 1e-12 * scale) {
+    fail(at, "the mass matrix is not symmetric" + where, "M(i, j) must equal M(j, i)");
+  }
+  if (scale > 0.0 && Eigen::LLT<MatrixXd>(M).info() == Eigen::Success) return;
+  // the names of the coordinates i with pred(i), comma-separated
+  const auto coordinates_where = [&](auto pred) {
+    std::string names;
+    for (Index i = 0; i < n; ++i) {
+      if (pred(i)) names += (names.empty() ? "" : ", ") + coordinates_[std::size_t(i)];
+    }
+    return names;
+  };
+  // a singular M is accepted when it is positive semi-definite (M + 1e-10 max|M| I positive
+  // definite) and the constraints determine the coordinates it gives no inertia
+  MatrixXd shifted = M;
+  shifted.diagonal().array() += 1e-10 * (scale > 0.0 ? scale : 1.0);
+  const bool from_T = source == "kinetic_energy";
+  if (Eigen::LLT<MatrixXd>(shifted).info() != Eigen::Success) {
+    const std::string negative = coordinates_where([&](Index i) { return M(i, i) < 0; });
+    fail(at, "the mass matrix is not positive semi-definite" + where,
+         !negative.empty()
+             ? "negative inertia for " + negative +
+                   (from_T ? ": the kinetic energy must not decrease with any velocity"
+                           : ": every diagonal entry of M must be >= 0")
+             : (from_T ? "the kinetic energy must be >= 0 for every velocity"
+                       : "M must be positive semi-definite: check the off-diagonal entries"));
+  }
+  Workspace ws(model.system, model.options.solver);
+  if (forward_dynamics(model.system, ws, model.q0, model.qd0, model.options.t_start) ==
+      Status::kMotionUndetermined) {
+    const std::string lacking = coordinates_where([&](Index i) { return !(M(i, i) > 0); });
+    fail(at,
+         "the mass matrix is singular" + where +
+             " and the constraints do not determine "
+             "every coordinate: " +
+             describe_status(model.system, ws),
+         (lacking.empty() ? std::string("give the coordinates inertia")
+                          : "no inertia for " + lacking) +
+             (from_T ? ": the kinetic energy must involve every velocity that no constraint fixes"
+                     : ": a zero row of M needs constraints that fix its coordinate"));
+  }
+}
+
+void Reader::read_output(const YAML::Node& root, Model& model) {
+  SimulationOptions& o = model.options;
+  const YAML::Node out = root["output"];
+  std::vector<Expr> exprs;
+  if (out) {
+    if (!out.IsMap())
+      fail(out, "output must be a mapping", "{every: 0.01, at: [1], expressions: {s: x + y}}");
+    for (const auto& kv : out) {
+      const std::string key = kv.first.Scalar();
+      if (key == "every") {
+        o.output_every = number(kv.second, "every");
+        if (o.output_every < 0) fail(kv.second, "every must be >= 0");
+      } else if (key == "at") {
+        if (!kv.second.IsSequence()) fail(kv.second, "at must be a list of times");
+        for (const auto& tn : kv.second) {
+          const double t = number(tn, "output time");
+          if (t < o.t_start || t > o.t_end) {
+            fail(tn, "output time " + tn.Scalar() + " is outside the run [" + brief(o.t_start) +
+                         ", " + brief(o.t_end) + "]");
+          }
+          o.output_at.push_back(t);
+        }
+      } else if (key == "expressions") {
+        if (!kv.second.IsMap()) fail(kv.second, "expressions must map names to expressions");
+        for (const auto& e : kv.second) {
+          model.output_names.push_back(e.first.Scalar());
+          exprs.push_back(expression(e.second, "output expression '" + e.first.Scalar() + "'"));
+        }
+      } else {
+        fail(kv.first, "unknown key '" + key + "' in output", "every, at, expressions");
+      }
+    }
+  }
+  model.output_program = compile(exprs, out ? out : root, "the output expressions");
+}
+
+Model Reader::read(const std::string& text) {
+  // not YAML at all: an XML robot description (URDF, MJCF, SDF)
+  const std::size_t first = text.find_first_not_of(" \t\r\n");
+  if (first != std::string::npos && text[first] == '<') {
+    throw ModelError(file_, 1, 1,
+                     "this looks like an XML file (URDF, MJCF, SDF …): ukdyn reads its own YAML "
+                     "model format",
+                     "see docs/model-format.md; write the bodies and joints under bodies: and "
+                     "joints:");
+  }
+  // a NUL byte: a binary file, or text cut by a C string (YAML's own message names an escape)
+  if (const std::size_t nul = text.find('\0'); nul != std::string::npos) {
+    const std::size_t line_start =
+        text.rfind('\n', nul) == std::string::npos ? 0 : text.rfind('\n', nul) + 1;
+    const int line = 1 + int(std::count(text.begin(), text.begin() + long(nul), '\n'));
+    throw ModelError(file_, line, int(nul - line_start) + 1,
+                     "the model text holds a NUL byte (is this a binary file?)",
+                     "a model file is YAML text (docs/model-format.md)");
+  }
+  // duplicate keys, a second document, self-referencing aliases, runaway nesting
+  // (modelfile/yaml_structure.cpp)
+  check_yaml_structure(text, file_);
+  YAML::Node root;
+  try {
+    root = YAML::Load(text);
+  } catch (const YAML::ParserException& e) {
+    throw ModelError(file_, e.mark.line + 1, e.mark.column + 1, "YAML syntax: " + e.msg,
+                     "check the indentation, brackets and colons");
+  }
+  if (root.IsNull()) {
+    // located where the model should begin, as every reader error is (file:line:column)
+    throw ModelError(file_, 1, 1, "the model file is empty (or holds only comments)",
+                     "start with name:, coordinates:, … (docs/model-format.md)");
+  }
+  if (!root.IsMap()) {
+    throw ModelError(file_, 1, 1, "a model is a mapping of keys",
+                     "start with name:, coordinates:, …");
+  }
+  for (const auto& kv : root) {
+    const std::string key = kv.first.Scalar();
+    if (std::find(kTopLevelKeys.begin(), kTopLevelKeys.end(), key) == kTopLevelKeys.end()) {
+      fail(kv.first, "unknown key '" + key + "'", "the keys are " + join(kTopLevelKeys));
+    }
+  }
+  Model model = read_plant(root);
+  read_control(root, model);
+  return model;
+}
+
+Model Reader::read_plant(const YAML::Node& root) {
+  read_parameters(root);
+  Model model = root["bodies"] ? read_multibody(root) : read_generalized(root);
+  model.file = file_;
+  model.name = root["name"] ? root["name"].Scalar() : file_;
+  model.parameters = parameters_;
+  read_initial(root, model);
+  read_simulate(root, model);
+  check_mass_matrix(root, model);
+  read_output(root, model);
+  // initial: project: true, or simulate: project_initial: true
+  model.project_initial = model.project_initial || model.options.project_initial;
+  model.options.project_initial = model.project_initial;
+  check_settings(root, model);
+  return model;
+}
+
+// the run's settings as simulate() checks them (ukdyn::check_settings), located at the key that
+// gave the setting at fault: simulate: KEY, output: every / at, or the simulate: mapping when the
+// setting is a default that the others make unusable (rk4's step over a longer t_end)
+void Reader::check_settings(const YAML::Node& root, const Model& model) {
+  try {
+    ukdyn::check_settings(model.system, model.options);
+  } catch (const SettingError& e) {
+    std::string message = e.what();
+    if (message.rfind("ukdyn::simulate: ", 0) == 0) message.erase(0, 17);
+    const YAML::Node simulate = root["simulate"], output = root["output"];
+    YAML::Node at;
+    if (e.setting() == "output_every" && output && output.IsMap() && output["every"]) {
+      at = output["every"];
+    } else if (e.setting() == "output_at" && output && output.IsMap() && output["at"]) {
+      at = output["at"];
+    } else if (simulate && simulate.IsMap() && simulate[e.setting()]) {
+      at = simulate[e.setting()];
+    } else if (simulate) {
+      at = simulate;
+    } else {
+      at = root;
+    }
+    fail(at, message);
+  }
+}
+
+void Reader::make_expression_set(const YAML::Node& root, const std::vector<std::string>& cnames) {
+  std::vector<std::string> inputs = coordinates_;
+  inputs.insert(inputs.end(), velocities_.begin(), velocities_.end());
+  inputs.push_back("t");
+  for (const auto& c : cnames) constraint_inputs_.push_back("N_" + c);
+  for (const auto& c : cnames) constraint_inputs_.push_back("lambda_" + c);
+  inputs.insert(inputs.end(), constraint_inputs_.begin(), constraint_inputs_.end());
+  try {
+    set_ = std::make_unique<ExpressionSet>(inputs);
+  } catch (const std::invalid_argument& e) {
+    std::string message = e.what();
+    if (const auto k = message.find(": "); k != std::string::npos) message.erase(0, k + 2);
+    const YAML::Node where = root["coordinates"] ? root["coordinates"] : root["bodies"];
+    fail(where ? where : root, "a coordinate's name is taken: " + message,
+         "x_dot is the velocity of x, and N_c and lambda_c are the forces of constraint c");
+  }
+  for (const auto& [name, value] : parameters_) {
+    try {
+      set_->set_constant(name, value);
+    } catch (const std::invalid_argument& e) {
+      // a function's name, or a velocity's or a constraint's input (x_dot, N_rod, lambda_rod)
+      const YAML::Node p = root["parameters"];
+      for (const auto& kv : p) {
+        if (kv.first.Scalar() == name) {
+          fail(kv.first, "parameter '" + name + "' clashes with a function or an input",
+               "the names x_dot (each coordinate's velocity), N_c and lambda_c (each "
+               "constraint's), and the functions sin, cos, … are taken");
+        }
+      }
+      throw ModelError(file_, 1, 1, e.what());
+    }
+  }
+  // pi: built in, unless a parameter or coordinate takes the name
+  if (!parameters_.count("pi") && std::find(inputs.begin(), inputs.end(), "pi") == inputs.end()) {
+    set_->set_constant("pi", 3.14159265358979323846);
+  }
+  layout_.n = Index(coordinates_.size());
+  layout_.extra = Index(2 * cnames.size());
+}
+
+Model Reader::read_generalized(const YAML::Node& root) {
+  read_coordinates(root);
+  // the named constraints (a name given twice is refused by read_constraints)
+  std::vector<std::string> cnames;
+  if (const YAML::Node cs = root["constraints"]; cs && cs.IsSequence()) {
+    for (const auto& c : cs) {
+      if (c.IsMap() && c["name"] && is_identifier(c["name"].Scalar()) &&
+          std::find(cnames.begin(), cnames.end(), c["name"].Scalar()) == cnames.end())
+        cnames.push_back(c["name"].Scalar());
+    }
+  }
+  make_expression_set(root, cnames);
+  SystemBuilder builder(coordinates_);
+  read_dynamics(root, builder);
+  read_constraints(root, builder);
+  read_nonideal(root, builder);
+  try {
+    return Model{.system = builder.build()};
+  } catch (const std::invalid_argument& e) {
+    throw ModelError(file_, 1, 1, e.what());
+  }
+}
+
+}  // namespace model_reader
+
+Model parse_model(const std::string& text, const std::string& file,
+                  const std::map<std::string, double>& overrides) {
+  return model_reader::Reader(file, overrides).read(text);
+}
+
+Model load_model(const std::string& path, const std::map<std::string, double>& overrides) {
+  // a directory, a device or a stream is not a model file; a regular file is read whole, up to
+  // kMaxModelFileBytes (a bounded read: /dev/zero or a runaway file never fills the memory)
+  std::error_code ec;
+  const auto status = std::filesystem::status(path, ec);
+  if (!ec && std::filesystem::is_directory(status)) {
+    throw ModelError(path, 0, 0, "is a directory, not a model file",
+                     "give the path of a .yaml model file");
+  }
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw ModelError(path, 0, 0, "cannot read the model file", "check the path");
+  std::string text;
+  std::vector<char> chunk(std::size_t(1) << 16);
+  while (in) {
+    in.read(chunk.data(), std::streamsize(chunk.size()));
+    text.append(chunk.data(), std::size_t(in.gcount()));
+    if (text.size() > kMaxModelFileBytes) {
+      throw ModelError(
+          path, 0, 0,
+          "the model file is larger than " + format_number(kMaxModelFileBytes >> 20) + " MB" +
+              (std::filesystem::is_regular_file(status) ? "" : " (it is not a regular file)"),
+          "a model file is a few kB of YAML; is this the right file?");
+    }
+  }
+  if (in.bad()) throw ModelError(path, 0, 0, "cannot read the model file", "check the path");
+  return parse_model(text, path, overrides);
+}
+
+std::vector<std::vector<double>> evaluate_output_expressions(const Model& model,
+                                                             const Trajectory& traj) {
+  const expr::Program& p = model.output_program;
+  const Index n = traj.n, N = traj.samples();
+  std::vector<std::vector<double>> out(std::size_t(p.outputs()),
+                                       std::vector<double>(std::size_t(N)));
+  std::vector<double> in(std::size_t(p.inputs()), 0.0), values(std::size_t(p.outputs())),
+      scratch(std::size_t(p.scratch_size()));
+  for (Index i = 0; i < N; ++i) {
+    std::copy_n(traj.q.begin() + i * n, n, in.begin());
+    std::copy_n(traj.qd.begin() + i * n, n, in.begin() + n);
+    in[std::size_t(2 * n)] = traj.t[std::size_t(i)];
+    p.evaluate(in.data(), values.data(), scratch.data());
+    for (std::size_t k = 0; k < values.size(); ++k) out[k][std::size_t(i)] = values[k];
+  }
+  return out;
+}
+
+}  // namespace ukdyn

@@ -1,0 +1,358 @@
+// The model-file reader's internals, shared by the files that read its sections:
+//   modelfile/reader.cpp            the file, parameters, coordinates, dynamics, constraints,
+//   non-ideal
+//                        forces, initial state, settings and outputs
+//   modelfile/reader_multibody.cpp  bodies:, joints: and forces: (a multibody model)
+//   modelfile/reader_control.cpp    control: (the controller run_model applies)
+#pragma once
+
+#include <algorithm>
+#include <cctype>
+#include <map>
+#include <memory>
+#include <sstream>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <yaml-cpp/yaml.h>
+
+#include "ukdyn/control/control.hpp"
+#include "ukdyn/core/constraint.hpp"
+#include "ukdyn/core/format.hpp"
+#include "ukdyn/modelfile/expression.hpp"
+#include "ukdyn/modelfile/model.hpp"
+
+namespace ukdyn::model_reader {
+
+using expr::Expr;
+using expr::ExpressionSet;
+using expr::Program;
+
+// the keys of a model file
+inline const std::vector<std::string> kTopLevelKeys = {
+    "name",        "parameters", "coordinates", "kinetic_energy", "potential_energy",
+    "mass_matrix", "forces",     "constraints", "nonideal",       "initial",
+    "simulate",    "output",     "bodies",      "joints",         "control"};
+
+inline bool is_identifier(const std::string& s) {
+  if (s.empty() || !(std::isalpha(static_cast<unsigned char>(s[0])) || s[0] == '_')) return false;
+  return std::all_of(s.begin(), s.end(), [](char c) {
+    return std::isalnum(static_cast<unsigned char>(c)) || c == '_';
+  });
+}
+
+// Whether `given` names the coordinate `name`: the same text, or the same once every '.' is
+// read as '_' — a body's coordinates are spelled crank.x in the CSV and the C++/Python names,
+// crank_x in expressions (a '.' is not an identifier character); both are accepted wherever a
+// model file names a coordinate (docs/multibody.md).
+inline bool names_coordinate(const std::string& given, const std::string& name) {
+  if (given == name) return true;
+  if (given.size() != name.size()) return false;
+  for (std::size_t i = 0; i < given.size(); ++i) {
+    const char a = given[i] == '.' ? '_' : given[i], b = name[i] == '.' ? '_' : name[i];
+    if (a != b) return false;
+  }
+  return true;
+}
+
+// a number as a person writes it (2, 0.5, 1e-06): the shortest text that reads back the same
+inline std::string brief(double v) { return format_number(v); }
+
+// A program's evaluation with buffers owned by the caller.
+struct Evaluator {
+  Program program;
+  std::vector<double> out, scratch;
+  explicit Evaluator(Program p)
+      : program(std::move(p)),
+        out(std::size_t(program.outputs())),
+        scratch(std::size_t(program.scratch_size())) {}
+  const double* run(const double* in) {
+    program.evaluate(in, out.data(), scratch.data());
+    return out.data();
+  }
+};
+
+// the inputs of every program: [q; q'; t; N_c …; lambda_c …]
+struct InputLayout {
+  Index n = 0, extra = 0;
+  Index size() const { return 2 * n + 1 + extra; }
+  void fill(std::vector<double>& in, const VectorXd& q, const VectorXd& qd, double t) const {
+    std::copy(q.data(), q.data() + n, in.begin());
+    std::copy(qd.data(), qd.data() + n, in.begin() + n);
+    in[std::size_t(2 * n)] = t;
+  }
+};
+
+// The buffers of a model file's callables M, Q, V, P_ext and C for one workspace (its
+// CallableScratch, SystemBuilder::scratch): the input vector [q; q'; t; N_c …; lambda_c …],
+// and the outputs and scratch of the largest program. A large model's compiled constraints
+// share its input vector too: each writes the inputs its programs read (and only those are
+// read), so a model of 10⁴ coordinates and 5000 local constraints fills O(1) inputs per
+// constraint and keeps one vector per workspace, not 5000. Every user writes the inputs it
+// reads before evaluating (the extra inputs stay 0 for the constraints, which do not read them).
+struct ModelBuffers final : CallableScratch {
+  std::vector<double> in, out, scratch;
+};
+
+// The sizes of a model's ModelBuffers: grown while the reader compiles (fit), read only
+// afterwards, when a Workspace makes its scratch (factory).
+struct BufferSizes {
+  std::size_t inputs = 0, outputs = 0, scratch = 0;
+  void fit(Index in, const Program& p) {
+    inputs = std::max(inputs, std::size_t(in));
+    outputs = std::max(outputs, std::size_t(p.outputs()));
+    scratch = std::max(scratch, std::size_t(p.scratch_size()));
+  }
+  static ScratchFactory factory(std::shared_ptr<const BufferSizes> sizes) {
+    return [sizes]() -> std::unique_ptr<CallableScratch> {
+      auto b = std::make_unique<ModelBuffers>();
+      b->in.assign(sizes->inputs, 0.0);
+      b->out.assign(sizes->outputs, 0.0);
+      b->scratch.assign(sizes->scratch, 0.0);
+      return b;
+    };
+  }
+};
+
+// The buffers of a model file's callable given the workspace's scratch: the model's
+// ModelBuffers (SystemBuilder::scratch), or — when it is evaluated without one (System's
+// convenience accessors make a scratch per call, so this is only a misuse guard) — a failure.
+inline ModelBuffers& model_buffers(CallableScratch* s) { return static_cast<ModelBuffers&>(*s); }
+
+// Evaluates p at the inputs `fill` writes into an input vector of `inputs` values, with buffers
+// of this call — for the callables whose signature carries no scratch (a multibody drive or
+// applied wrench, a friction's surface velocity, a controller's weight N): on the stack when
+// in, out and scratch fit in kLocalDoubles (no allocation: small models), else allocated for the
+// call. Thread-safe: nothing is shared. `use` reads the outputs.
+inline constexpr std::size_t kLocalDoubles = 2048;
+template <class Fill, class Use>
+void evaluate_local(const Program& p, Index inputs, Fill&& fill, Use&& use) {
+  const std::size_t ni = std::size_t(inputs), no = std::size_t(p.outputs()),
+                    ns = std::size_t(p.scratch_size()), total = ni + no + ns;
+  double local[kLocalDoubles];
+  std::vector<double> heap;
+  double* base = local;
+  if (total > kLocalDoubles) {
+    heap.assign(total, 0.0);
+    base = heap.data();
+  } else {
+    std::fill(local, local + ni, 0.0);
+  }
+  fill(base);
+  p.evaluate(base, base + ni, base + ni + no);
+  use(static_cast<const double*>(base + ni));
+}
+
+// Inputs of at most this many values are kept by each constraint's scratch; larger ones are
+// shared through the workspace's ModelBuffers.
+inline constexpr Index kOwnInputsMax = 1024;
+
+// Buffers of one compiled constraint: its outputs and scratch, and its inputs when small.
+struct CompiledScratch final : ConstraintScratch {
+  // `shared`: the workspace's input vector to use, or null for one of its own
+  CompiledScratch(const Program& accel_program, const Program& levels_program, Index size,
+                  std::vector<double>* shared)
+      : in(shared != nullptr ? 0 : std::size_t(size), 0.0),
+        inputs(shared != nullptr ? shared : &in),
+        accel(accel_program),
+        levels(levels_program) {}
+  std::vector<double> in;       // its own inputs (small model), else empty
+  std::vector<double>* inputs;  // in, or the workspace's ModelBuffers::in
+  Evaluator accel, levels;
+};
+
+// A constraint from model-file expressions: one program for [A (row-major); b], one for
+// [phi; phi'] (holonomic), [psi] (nonholonomic) or nothing (acceleration form). With `columns`
+// (the coordinates A can be non-zero in, strictly increasing, fewer than n) the program's A holds
+// those columns only (rows × columns.size()): the model is local, and a large model's sparse
+// engine assembles A in O(rows · columns) instead of O(rows · n) (x2k = x2k+1 over 10⁴
+// coordinates); empty, A is rows × n (dense rows).
+class CompiledConstraint final : public ConstraintModel {
+ public:
+  // `inputs`: the inputs (indices into [q; q'; t; …]) that accel and levels read, increasing
+  CompiledConstraint(ConstraintKind kind, Index rows, Index n, InputLayout layout, Program accel,
+                     Program levels, std::vector<Index> inputs, std::vector<Index> columns = {})
+      : kind_(kind),
+        rows_(rows),
+        n_(n),
+        layout_(layout),
+        accel_(std::move(accel)),
+        levels_(std::move(levels)),
+        inputs_(std::move(inputs)),
+        columns_(std::move(columns)),
+        width_(columns_.empty() ? n : Index(columns_.size())) {}
+
+  // own inputs (a small model's, or without the workspace's ModelBuffers)
+  std::unique_ptr<ConstraintScratch> make_scratch(Index) const override {
+    return std::make_unique<CompiledScratch>(accel_, levels_, layout_.size(), nullptr);
+  }
+  // a large model's constraints share the workspace's input vector (ModelBuffers)
+  std::unique_ptr<ConstraintScratch> make_scratch_sharing(Index n,
+                                                          CallableScratch* shared) const override {
+    auto* buffers = dynamic_cast<ModelBuffers*>(shared);
+    if (layout_.size() <= kOwnInputsMax || buffers == nullptr ||
+        buffers->in.size() < std::size_t(layout_.size())) {
+      return make_scratch(n);
+    }
+    return std::make_unique<CompiledScratch>(accel_, levels_, layout_.size(), &buffers->in);
+  }
+
+  const std::vector<Index>& columns() const override { return columns_; }
+
+  void acceleration_form(const VectorXd& q, const VectorXd& qd, double t, ConstraintScratch* s,
+                         Eigen::Ref<MatrixXd> A, Eigen::Ref<VectorXd> b) const override {
+    const double* out = evaluate(q, qd, t, s);
+    if (columns_.empty()) {
+      for (Index r = 0; r < rows_; ++r) {
+        for (Index j = 0; j < n_; ++j) A(r, j) = out[r * n_ + j];
+      }
+    } else {
+      A.setZero();
+      for (Index r = 0; r < rows_; ++r) {
+        for (Index k = 0; k < width_; ++k) A(r, columns_[std::size_t(k)]) = out[r * width_ + k];
+      }
+    }
+    for (Index r = 0; r < rows_; ++r) b[r] = out[rows_ * width_ + r];
+  }
+
+  void acceleration_form_local(const VectorXd& q, const VectorXd& qd, double t,
+                               ConstraintScratch* s, Eigen::Ref<MatrixXd> A_local,
+                               Eigen::Ref<VectorXd> b) const override {
+    const double* out = evaluate(q, qd, t, s);
+    for (Index r = 0; r < rows_; ++r) {
+      for (Index k = 0; k < width_; ++k) A_local(r, k) = out[r * width_ + k];
+      b[r] = out[rows_ * width_ + r];
+    }
+  }
+
+  void violation(const VectorXd& q, const VectorXd& qd, double t, ConstraintScratch* s,
+                 Eigen::Ref<VectorXd> position, Eigen::Ref<VectorXd> velocity) const override {
+    position.setZero();
+    velocity.setZero();
+    if (kind_ == ConstraintKind::kAcceleration) return;
+    auto& w = static_cast<CompiledScratch&>(*s);
+    const double* out = w.levels.run(fill(w, q, qd, t));
+    if (kind_ == ConstraintKind::kHolonomic) {
+      for (Index r = 0; r < rows_; ++r) {
+        position[r] = out[r];
+        velocity[r] = out[rows_ + r];
+      }
+    } else {
+      for (Index r = 0; r < rows_; ++r) velocity[r] = out[r];
+    }
+  }
+
+ private:
+  // the inputs the programs read, in the scratch's or the workspace's input vector: O(inputs)
+  const double* fill(CompiledScratch& w, const VectorXd& q, const VectorXd& qd, double t) const {
+    std::vector<double>& in = *w.inputs;
+    for (const Index k : inputs_) {
+      in[std::size_t(k)] = k < n_ ? q[k] : k < 2 * n_ ? qd[k - n_] : k == 2 * n_ ? t : 0.0;
+    }
+    return in.data();
+  }
+  // [A (rows × width_, row-major); b] at (q, q', t)
+  const double* evaluate(const VectorXd& q, const VectorXd& qd, double t,
+                         ConstraintScratch* s) const {
+    auto& w = static_cast<CompiledScratch&>(*s);
+    return w.accel.run(fill(w, q, qd, t));
+  }
+
+  ConstraintKind kind_;
+  Index rows_, n_;
+  InputLayout layout_;
+  Program accel_, levels_;
+  std::vector<Index> inputs_;
+  std::vector<Index> columns_;
+  Index width_;
+};
+
+// Refuses, located, what yaml-cpp's node tree would hide: a key given twice in a mapping, a
+// second document, an alias inside the node it names, nesting deeper than yaml-cpp allows; and
+// YAML syntax errors (modelfile/yaml_structure.cpp). @throws ModelError
+void check_yaml_structure(const std::string& text, const std::string& file);
+
+// The reader: one model file.
+class Reader {
+ public:
+  Reader(std::string file, const std::map<std::string, double>& overrides)
+      : file_(std::move(file)), overrides_(overrides) {}
+
+  /// The whole file: the plant, then its controller (control:).
+  Model read(const std::string& text);
+
+ private:
+  // the plant (everything but control:); `root` is the parsed file
+  Model read_plant(const YAML::Node& root);
+  // generalized coordinates: coordinates:, kinetic_energy: / mass_matrix:, forces:, …
+  Model read_generalized(const YAML::Node& root);
+  // the expression inputs [q; q'; t; N_c …; lambda_c …] over coordinates_ and velocities_,
+  // with the parameters (and pi) as constants; `cnames`: the named constraints
+  void make_expression_set(const YAML::Node& root, const std::vector<std::string>& cnames);
+  [[noreturn]] void fail(const YAML::Node& at, const std::string& message,
+                         const std::string& hint = "") const {
+    const YAML::Mark m = at.Mark();
+    throw ModelError(file_, m.line + 1, m.column + 1, message, hint);
+  }
+  [[noreturn]] void fail_at(const YAML::Mark& m, const std::string& message,
+                            const std::string& hint = "") const {
+    throw ModelError(file_, m.line + 1, m.column + 1, message, hint);
+  }
+
+  double number(const YAML::Node& node, const std::string& what);
+  Expr expression(const YAML::Node& node, const std::string& what, bool in_C = false);
+  Program compile(const std::vector<Expr>& exprs, const YAML::Node& where,
+                  const std::string& what) const;
+  std::vector<YAML::Node> rows_of(const YAML::Node& node, const std::string& what);
+  void read_parameters(const YAML::Node& root);
+  void read_coordinates(const YAML::Node& root);
+  void read_dynamics(const YAML::Node& root, SystemBuilder& builder);
+  void read_constraints(const YAML::Node& root, SystemBuilder& builder);
+  // one constraint's rows (holonomic:, nonholonomic: or A: with b:) and active:, compiled
+  Constraint read_constraint(const YAML::Node& c, const std::string& name, const std::string& what);
+  void read_nonideal(const YAML::Node& root, SystemBuilder& builder);
+  // a Coulomb friction's surface_velocity: `count` expressions of q and t, compiled with their
+  // rates along the motion
+  SurfaceVelocityFn surface_velocity(const YAML::Node& node, std::size_t count);
+  void read_initial(const YAML::Node& root, Model& model);
+  void read_simulate(const YAML::Node& root, Model& model);
+  void read_output(const YAML::Node& root, Model& model);
+  void check_mass_matrix(const YAML::Node& root, const Model& model);
+  void check_settings(const YAML::Node& root, const Model& model);
+  Index coordinate(const YAML::Node& node);
+
+  // ---- multibody models (modelfile/reader_multibody.cpp): bodies:, joints:, forces:
+  // ----------------- Builds the plant from the bodies, joints and force elements; sets
+  // coordinates_, velocities_ (the bodies' coordinates: <body>_x, _y, _theta | _z, _u0 … _u3) and
+  // the expression set; fills model.multibody, q0 and qd0 (the bodies' initial poses and
+  // velocities).
+  Model read_multibody(const YAML::Node& root);
+  // the sections' reader (modelfile/reader_multibody.cpp): uses fail, number, expression and
+  // compile
+  friend class MultibodyReader;
+
+  // ---- control (modelfile/reader_control.cpp): control:
+  // --------------------------------------------- Builds model.controller from the control: section
+  // (nothing when absent). With `nominal:` the plant is read again with those parameters for the
+  // controller's own model.
+  void read_control(const YAML::Node& root, Model& model);
+  ErrorDynamics read_error_dynamics(const YAML::Node& r, const std::string& what,
+                                    ConstraintKind kind);
+  WeightFn read_weight(const YAML::Node& N, bool& constant, MatrixXd& value);
+
+  std::string file_;
+  std::map<std::string, double> overrides_;
+  std::map<std::string, double> parameters_;
+  std::vector<std::string> coordinates_, velocities_;
+  std::vector<std::string> constraint_names_;   // in declaration order
+  std::vector<std::string> constraint_inputs_;  // N_c and lambda_c of each named constraint
+  std::vector<Index> constraint_rows_;
+  std::unique_ptr<ExpressionSet> set_;
+  InputLayout layout_;
+  std::vector<std::pair<std::string, std::string>> chain_;
+  // the sizes of the model's ModelBuffers (the plant's callables')
+  std::shared_ptr<BufferSizes> sizes_ = std::make_shared<BufferSizes>();
+};
+
+}  // namespace ukdyn::model_reader

@@ -1,0 +1,260 @@
+// The control: section of a model file (docs/model-format.md; the API is docs/control.md):
+//   control:
+//     requirements:
+//       - {name: track, holonomic: x - sin(t), dynamics: {omega: 2, zeta: 1}}
+//       - {name: v, nonholonomic: x_dot - 1, dynamics: {rate: 3}}
+//     law: gauss | weighted        (weighted: N: [[...], ...], a matrix of expressions)
+//     actuated: [x]                (default: every coordinate)
+//     nominal: {m: 1.2}            (parameters the controller believes)
+//     robust: {bound: 0.5, boundary_layer: 0.01, relative_bound: 0, gain_uncertainty: 0}
+// Each requirement is read like a constraint (holonomic:, nonholonomic:, A: with b:, active:)
+// and handed to ControllerBuilder with its error dynamics.
+#include <set>
+
+#include <yaml-cpp/yaml.h>
+
+#include "modelfile/reader.hpp"
+#include "ukdyn/core/format.hpp"
+
+namespace ukdyn::model_reader {
+namespace {
+
+// the keys of a mapping must be among `keys`
+template <class Fail>
+void only_keys(const YAML::Node& map, const std::set<std::string>& keys, const std::string& what,
+               Fail fail) {
+  for (const auto& kv : map) {
+    if (!keys.count(kv.first.Scalar())) {
+      std::vector<std::string> list(keys.begin(), keys.end());
+      fail(kv.first, "unknown key '" + kv.first.Scalar() + "' in " + what,
+           "the keys are " + join(list));
+    }
+  }
+}
+
+}  // namespace
+
+ErrorDynamics Reader::read_error_dynamics(const YAML::Node& r, const std::string& what,
+                                          ConstraintKind kind) {
+  const YAML::Node d = r["dynamics"];
+  if (!d) return ErrorDynamics::none();
+  if (!d.IsMap()) {
+    fail(d, "the dynamics of " + what + " must be a mapping",
+         "{omega: 2, zeta: 1} or {alpha: 4, beta: 2} (holonomic), {rate: 3} (nonholonomic)");
+  }
+  only_keys(
+      d, {"omega", "zeta", "alpha", "beta", "rate"}, "the dynamics of " + what,
+      [this](const YAML::Node& at, const std::string& m, const std::string& h) { fail(at, m, h); });
+  // the ranges are ErrorDynamics' own: its refusal becomes an error at the dynamics
+  const auto checked = [&](auto make) {
+    try {
+      return make();
+    } catch (const std::invalid_argument& e) {
+      std::string message = e.what();
+      if (const auto k = message.find(": "); k != std::string::npos) message.erase(0, k + 2);
+      fail(d, "the dynamics of " + what + ": " + message, "the gains must be positive numbers");
+    }
+  };
+  const bool holonomic = kind == ConstraintKind::kHolonomic;
+  if (d["rate"]) {
+    if (holonomic || d.size() != 1) {
+      fail(d,
+           "rate: gives first-order error dynamics e' + rate e = 0, for a nonholonomic "
+           "requirement alone",
+           holonomic ? "a holonomic requirement takes {omega, zeta} or {alpha, beta}"
+                     : "write {rate: k} only");
+    }
+    const double k = number(d["rate"], "rate");
+    return checked([k] { return ErrorDynamics::first_order(k); });
+  }
+  if (!holonomic) {
+    fail(d, what + " is not holonomic: its error dynamics are first order, {rate: k}",
+         "e' + k e = 0 with e the requirement's value");
+  }
+  if (d["omega"] || d["zeta"]) {
+    if (d["alpha"] || d["beta"]) fail(d, "give {omega, zeta} or {alpha, beta}, not both");
+    if (!d["omega"]) fail(d, "zeta needs omega", "{omega: 2, zeta: 1}");
+    const double omega = number(d["omega"], "omega");
+    const double zeta = d["zeta"] ? number(d["zeta"], "zeta") : 1.0;
+    return checked([omega, zeta] { return ErrorDynamics::second_order(omega, zeta); });
+  }
+  const double alpha = d["alpha"] ? number(d["alpha"], "alpha") : 0.0;
+  const double beta = d["beta"] ? number(d["beta"], "beta") : 0.0;
+  return checked([alpha, beta] { return ErrorDynamics::gains(alpha, beta); });
+}
+
+WeightFn Reader::read_weight(const YAML::Node& N, bool& constant, MatrixXd& value) {
+  const Index n = Index(coordinates_.size());
+  const std::string hint =
+      "N is n × n: one list of " + format_number(n) + " entries per coordinate";
+  if (!N.IsSequence() || Index(N.size()) != n)
+    fail(N, "N must be a list of " + format_number(n) + " rows", hint);
+  std::vector<Expr> entries;
+  constant = true;
+  for (const auto& row : N) {
+    if (!row.IsSequence() || Index(row.size()) != n)
+      fail(row, "each row of N must have " + format_number(n) + " entries", hint);
+    for (const auto& e : row) {
+      entries.push_back(expression(e, "N"));
+      if (!set_->inputs_of(entries.back()).empty()) constant = false;
+    }
+  }
+  const Program p = compile(entries, N, "N");
+  if (constant) {
+    std::vector<double> in(std::size_t(p.inputs()), 0.0), scratch(std::size_t(p.scratch_size()));
+    MatrixXd transposed(n, n);  // the entries come row by row: column-major, that is Nᵀ
+    p.evaluate(in.data(), transposed.data(), scratch.data());
+    value = transposed.transpose();
+    return {};
+  }
+  const InputLayout layout = layout_;
+  // (its signature carries no scratch: buffers of the call, evaluate_local)
+  return [p, layout, n](const VectorXd& q, const VectorXd& qd, double t, Eigen::Ref<MatrixXd> W) {
+    evaluate_local(
+        p, layout.size(),
+        [&](double* in) {
+          std::copy(q.data(), q.data() + layout.n, in);
+          std::copy(qd.data(), qd.data() + layout.n, in + layout.n);
+          in[2 * layout.n] = t;
+        },
+        [&](const double* out) {
+          for (Index i = 0; i < n; ++i) {
+            for (Index j = 0; j < n; ++j) W(i, j) = out[i * n + j];
+          }
+        });
+  };
+}
+
+void Reader::read_control(const YAML::Node& root, Model& model) {
+  const YAML::Node c = root["control"];
+  if (!c) return;
+  auto failer = [this](const YAML::Node& at, const std::string& m, const std::string& h) {
+    fail(at, m, h);
+  };
+  if (!c.IsMap()) {
+    fail(c, "control must be a mapping",
+         "control: {requirements: [{name: track, holonomic: x - sin(t)}], law: gauss}");
+  }
+  only_keys(c, {"requirements", "law", "N", "actuated", "nominal", "robust"}, "control", failer);
+
+  // the controller's own model: the plant, or the plant with the nominal parameters
+  Reader* ctl = this;
+  std::unique_ptr<Reader> nominal_reader;
+  System nominal = model.system;
+  if (const YAML::Node nom = c["nominal"]) {
+    if (!nom.IsMap()) fail(nom, "nominal must be a mapping parameter: value", "{m: 1.2}");
+    std::map<std::string, double> values = overrides_;
+    for (const auto& kv : nom) {
+      const std::string name = kv.first.Scalar();
+      if (!parameters_.count(name)) {
+        std::vector<std::string> known;
+        for (const auto& p : parameters_) known.push_back(p.first);
+        fail(kv.first, "nominal: the model has no parameter '" + name + "'",
+             known.empty() ? "declare it under parameters:" : "its parameters are " + join(known));
+      }
+      values[name] = number(kv.second, "nominal " + name);
+    }
+    nominal_reader = std::make_unique<Reader>(file_, values);
+    nominal = nominal_reader->read_plant(root).system;
+    ctl = nominal_reader.get();
+  }
+  ControllerBuilder builder(nominal);
+
+  // requirements
+  const YAML::Node rs = c["requirements"];
+  if (!rs || !rs.IsSequence() || rs.size() == 0) {
+    fail(rs ? rs : c, "control needs a list of requirements",
+         "requirements: [{name: track, holonomic: x - sin(t), dynamics: {omega: 2, zeta: 1}}]");
+  }
+  std::set<std::string> seen(constraint_names_.begin(), constraint_names_.end());
+  for (const auto& r : rs) {
+    if (!r.IsMap() || !r["name"]) {
+      fail(r, "a requirement is a mapping with a name and its expression",
+           "{name: track, holonomic: x - sin(t), dynamics: {omega: 2, zeta: 1}}");
+    }
+    const std::string name = r["name"].Scalar();
+    if (!is_identifier(name)) fail(r["name"], "a requirement's name must be an identifier");
+    if (!seen.insert(name).second) {
+      fail(r["name"], "the name '" + name + "' is taken (by a constraint or a requirement)");
+    }
+    only_keys(r, {"name", "holonomic", "nonholonomic", "A", "b", "active", "dynamics"},
+              "requirement '" + name + "'", failer);
+    const std::string what = "requirement '" + name + "'";
+    const Constraint req = ctl->read_constraint(r, name, what);
+    const ErrorDynamics d = ctl->read_error_dynamics(r, what, req.kind());
+    try {
+      builder.require(req, d);
+    } catch (const std::invalid_argument& e) {
+      fail(r, e.what());
+    }
+  }
+
+  // law
+  const std::string law = c["law"] ? c["law"].Scalar() : "gauss";
+  if (law == "gauss") {
+    if (c["N"]) fail(c["N"], "N is the weight of law: weighted", "add law: weighted");
+    builder.gauss();
+  } else if (law == "weighted") {
+    if (!c["N"]) fail(c["law"], "law: weighted needs the weight N: [[...], ...]");
+    bool constant = false;
+    MatrixXd value;
+    WeightFn fn = ctl->read_weight(c["N"], constant, value);
+    try {
+      if (constant) {
+        builder.weighted(value);
+      } else {
+        builder.weighted(std::move(fn));
+      }
+    } catch (const std::invalid_argument& e) {
+      fail(c["N"], e.what());
+    }
+  } else {
+    fail(c["law"], "unknown law '" + law + "'", "the laws are gauss and weighted");
+  }
+
+  // actuation
+  if (const YAML::Node a = c["actuated"]) {
+    if (!a.IsSequence() || a.size() == 0)
+      fail(a, "actuated must be a list of coordinates", "actuated: [x]");
+    std::vector<std::string> names;
+    for (const auto& x : a) {
+      // (crank.x or crank_x: names_coordinate; the list holds the reader's spelling)
+      const auto known = std::find_if(
+          coordinates_.begin(), coordinates_.end(),
+          [&](const std::string& coordinate) { return names_coordinate(x.Scalar(), coordinate); });
+      if (known == coordinates_.end())
+        fail(x, "actuated: '" + x.Scalar() + "' is not a coordinate",
+             "the coordinates are " + join(coordinates_));
+      const std::string name = *known;
+      if (std::find(names.begin(), names.end(), name) != names.end())
+        fail(x, "actuated: '" + name + "' is listed twice");
+      names.push_back(name);
+    }
+    builder.actuated(names);
+  }
+
+  // robust term
+  if (const YAML::Node rb = c["robust"]) {
+    if (!rb.IsMap()) fail(rb, "robust must be a mapping", "{bound: 0.5, boundary_layer: 0.01}");
+    only_keys(rb, {"bound", "relative_bound", "gain_uncertainty", "boundary_layer"}, "robust",
+              failer);
+    RobustControl settings;
+    if (rb["bound"]) settings.bound = number(rb["bound"], "bound");
+    if (rb["relative_bound"])
+      settings.relative_bound = number(rb["relative_bound"], "relative_bound");
+    if (rb["gain_uncertainty"])
+      settings.gain_uncertainty = number(rb["gain_uncertainty"], "gain_uncertainty");
+    if (!rb["boundary_layer"])
+      fail(rb, "robust needs boundary_layer (> 0)", "{bound: 0.5, boundary_layer: 0.01}");
+    settings.boundary_layer = number(rb["boundary_layer"], "boundary_layer");
+    builder.robust(settings);
+  }
+
+  try {
+    model.controller = std::make_shared<const Controller>(builder.build());
+  } catch (const std::invalid_argument& e) {
+    fail(c, e.what());
+  }
+}
+
+}  // namespace ukdyn::model_reader

@@ -1,0 +1,172 @@
+// run_model: a model's simulation (under its controller when it has one) and its CSV columns,
+// shared by `ukdyn run` and the Python module.
+#include "ukdyn/modelfile/run.hpp"
+
+#include <algorithm>
+
+#include "ukdyn/multibody/multibody.hpp"
+
+namespace ukdyn {
+
+std::vector<CsvColumn> ModelRun::columns() const {
+  std::vector<CsvColumn> all = csv_table(trajectory);
+  all.insert(all.end(), extra_columns.begin(), extra_columns.end());
+  return all;
+}
+
+namespace {
+
+// the sample fields of a trajectory, in one list
+std::vector<std::vector<double>*> fields(Trajectory& t) {
+  return {&t.t,
+          &t.q,
+          &t.qd,
+          &t.qdd,
+          &t.Qc_ideal,
+          &t.Qc_nonideal,
+          &t.lambda,
+          &t.position_violation,
+          &t.velocity_violation,
+          &t.kinetic_energy,
+          &t.potential_energy,
+          &t.energy,
+          &t.work_nonideal,
+          &t.work_ideal,
+          &t.work_drive,
+          &t.work_external,
+          &t.work_control,
+          &t.energy_balance_residual};
+}
+
+// the names and sizes of `from` (no samples)
+void copy_header(Trajectory& to, const Trajectory& from) {
+  to.coordinate_names = from.coordinate_names;
+  to.constraint_names = from.constraint_names;
+  to.constraint_rows = from.constraint_rows;
+  to.constraint_kinds = from.constraint_kinds;
+  to.n = from.n;
+  to.m = from.m;
+}
+
+// the model's columns after the standard ones, for the samples of traj: the bodies' poses
+// (multibody models), then the output expressions (not the control's)
+void add_model_columns(const Model& model, const Trajectory& traj, std::vector<CsvColumn>& out) {
+  if (model.multibody) {
+    for (auto& col : mb::report_csv_columns(*model.multibody, traj)) out.push_back(std::move(col));
+  }
+  const auto values = evaluate_output_expressions(model, traj);
+  for (std::size_t k = 0; k < values.size(); ++k) {
+    out.push_back(CsvColumn{model.output_names[k], values[k]});
+  }
+}
+
+}  // namespace
+
+ModelRun run_model(const Model& model, const SimulationOptions& options,
+                   const std::function<void(const ModelRun& chunk)>& chunk,
+                   std::size_t chunk_samples) {
+  // the samples gather in `gathered` (plant and control; its capacity kept), passed on as a
+  // ModelRun every chunk_samples; `last` holds the last sample
+  const bool controlled = bool(model.controller);
+  ControlledTrajectory gathered, last;
+  ModelRun piece;
+  const std::size_t size = std::max<std::size_t>(chunk_samples, 1);
+  // the columns of the samples in `from`: the control's, the bodies', the output expressions'
+  auto columns_of = [&](const ControlledTrajectory& from) {
+    std::vector<CsvColumn> cols;
+    if (controlled) cols = control_csv_columns(from);
+    add_model_columns(model, from.plant, cols);
+    return cols;
+  };
+  auto pass_on = [&] {
+    if (gathered.samples() == 0) return;
+    piece.extra_columns = columns_of(gathered);
+    std::swap(piece.trajectory, gathered.plant);
+    chunk(piece);
+    std::swap(piece.trajectory, gathered.plant);
+    for (auto* f : sample_fields(gathered)) f->clear();
+  };
+  // a sample: the plant's, and the control's values when `control` is not null
+  auto take = [&](const Trajectory& plant, const ControlledTrajectory* control) {
+    if (last.plant.coordinate_names.empty()) {
+      for (ControlledTrajectory* to : {&gathered, &last}) {
+        copy_header(to->plant, plant);
+        if (control) {
+          to->row_names = control->row_names;
+          to->robust = control->robust;
+        }
+      }
+    }
+    auto to = sample_fields(gathered), one = sample_fields(last);
+    auto from = fields(const_cast<Trajectory&>(plant));
+    if (control) {
+      const auto all = sample_fields(const_cast<ControlledTrajectory&>(*control));
+      from.insert(from.end(), all.begin() + std::ptrdiff_t(from.size()), all.end());
+    }
+    for (std::size_t f = 0; f < from.size(); ++f) {
+      to[f]->insert(to[f]->end(), from[f]->begin(), from[f]->end());
+      *one[f] = *from[f];
+    }
+    if (std::size_t(gathered.samples()) >= size) pass_on();
+  };
+  ModelRun run;
+  if (controlled) {
+    ControlledTrajectory c = simulate_controlled(
+        *model.controller, model.system, model.q0, model.qd0, options,
+        [&](const ControlledTrajectory& sample) { take(sample.plant, &sample); });
+    run.trajectory = std::move(c.plant);
+    run.control = std::move(c.control);
+    run.controlled = true;
+  } else {
+    SimulationOptions o = options;
+    o.sample_sink = [&](const Trajectory& sample) { take(sample, nullptr); };
+    run.trajectory = simulate(model.system, model.q0, model.qd0, o);
+  }
+  pass_on();
+
+  // the statistics, the names and the last sample with its columns
+  if (last.samples() > 0) {
+    auto to = fields(run.trajectory), from = fields(last.plant);
+    for (std::size_t f = 0; f < to.size(); ++f) *to[f] = *from[f];
+  }
+  // (the names of the columns also when no sample was recorded: a header-only CSV)
+  last.plant = run.trajectory;
+  if (controlled) {
+    last.row_names = model.controller->row_names();
+    last.robust = model.controller->robust().has_value();
+  }
+  run.extra_columns = columns_of(last);
+  return run;
+}
+
+ModelRun run_model(const Model& model, const SimulationOptions& options) {
+  ModelRun run;
+  if (model.controller) {
+    ControlledTrajectory c =
+        simulate_controlled(*model.controller, model.system, model.q0, model.qd0, options);
+    run.extra_columns = control_csv_columns(c);
+    run.trajectory = std::move(c.plant);
+    run.control = std::move(c.control);
+    run.controlled = true;
+  } else {
+    run.trajectory = simulate(model.system, model.q0, model.qd0, options);
+  }
+  if (model.multibody) {
+    for (auto& col : mb::report_csv_columns(*model.multibody, run.trajectory)) {
+      run.extra_columns.push_back(std::move(col));
+    }
+  }
+  const auto values = evaluate_output_expressions(model, run.trajectory);
+  for (std::size_t k = 0; k < values.size(); ++k) {
+    run.extra_columns.push_back(CsvColumn{model.output_names[k], values[k]});
+  }
+  return run;
+}
+
+ModelRun run_model(const Model& model) { return run_model(model, model.options); }
+
+void write_csv(const ModelRun& run, const std::string& path) {
+  write_csv(run.trajectory, path, run.extra_columns);
+}
+
+}  // namespace ukdyn

@@ -1,0 +1,264 @@
+// Force elements: gravity, spring-dampers between body points, torsional springs, applied
+// wrenches, the quaternions' velocity terms (gyroscopic), and joint friction (non-ideal).
+#include <cmath>
+#include <memory>
+#include <stdexcept>
+
+#include "multibody/internal.hpp"
+#include "ukdyn/core/system.hpp"
+
+namespace ukdyn::mb::detail {
+namespace {
+
+// world position and velocity of body point s
+std::pair<Vector3d, Vector3d> point_state(const BodyRef& b, const VectorXd& q, const VectorXd& qd,
+                                          const Vector3d& s) {
+  VecKin k;
+  add_body_vector(b, q, qd, s, true, 1.0, k);
+  return {k.x, k.v};
+}
+
+struct ForceData {
+  std::vector<BodyInfo> bodies;
+  std::vector<Force> forces;
+  std::vector<BodyRef> a, b;  // per force
+  Vector3d g;
+};
+
+std::shared_ptr<const ForceData> force_data(const std::vector<BodyInfo>& bodies,
+                                            const std::vector<Force>& forces, const Vector3d& g) {
+  auto d = std::make_shared<ForceData>();
+  d->bodies = bodies;
+  d->forces = forces;
+  d->g = g;
+  for (const Force& f : forces) {
+    d->a.push_back(body_ref(bodies, f.body_a));
+    d->b.push_back(body_ref(bodies, f.body_b));
+  }
+  return d;
+}
+
+// relative rotation of b with respect to a as a world-frame rotation vector theta n (|theta| <=
+// pi): R_WB(b) = R_WB(a) R(n_a, theta), n = R_WB(a) n_a
+Vector3d relative_rotation_W(const BodyRef& A, const BodyRef& B, const VectorXd& q) {
+  const Matrix3d Ra = rotation_WB(A, q);
+  const Eigen::AngleAxisd rel(Matrix3d(Ra.transpose() * rotation_WB(B, q)));
+  return Ra * (rel.angle() * rel.axis());
+}
+
+bool spatial(const BodyRef& A, const BodyRef& B) {
+  return A.kind == BodyKind::kRigid || B.kind == BodyKind::kRigid;
+}
+
+}  // namespace
+
+ForceFn make_forces(const std::vector<BodyInfo>& bodies, const std::vector<Force>& forces,
+                    const Vector3d& g) {
+  auto d = force_data(bodies, forces, g);
+  return [d](const VectorXd& q, const VectorXd& qd, double t, Eigen::Ref<VectorXd> Q) {
+    Q.setZero();
+    // gravity m g on each centre of mass; the quaternions' velocity terms
+    for (const BodyInfo& b : d->bodies) {
+      const Index o = b.offset;
+      if (b.kind == BodyKind::kPlanar) {
+        Q[o] += b.mass * d->g.x();
+        Q[o + 1] += b.mass * d->g.y();
+      } else {
+        Q.segment<3>(o) += b.mass * d->g;
+      }
+      if (b.kind == BodyKind::kRigid) {
+        Q.segment<4>(o + 3) +=
+            quaternion_velocity_force(q.segment<4>(o + 3), qd.segment<4>(o + 3), b.inertia);
+      }
+    }
+    for (std::size_t i = 0; i < d->forces.size(); ++i) {
+      const Force& f = d->forces[i];
+      const BodyRef &A = d->a[i], &B = d->b[i];
+      switch (f.type) {
+        case ForceType::kSpringDamper: {
+          // F on b = −(k (l − l0) + c l') n,  n = (x_b − x_a)/l
+          const auto [xa, va] = point_state(A, q, qd, f.point_a);
+          const auto [xb, vb] = point_state(B, q, qd, f.point_b);
+          const Vector3d dx = xb - xa;
+          const double l = dx.norm();
+          if (l == 0.0) break;
+          const Vector3d n = dx / l;
+          const double ld = n.dot(vb - va);
+          const Vector3d F = -(f.stiffness * (l - f.rest) + f.damping * ld) * n;
+          add_point_force(B, q, f.point_b, F, Q);
+          add_point_force(A, q, f.point_a, -F, Q);
+          break;
+        }
+        case ForceType::kTorsionSpring: {
+          if (spatial(A, B)) {
+            // rigid bodies: torque on b = −k theta n − c (omega_b − omega_a), the gradient of
+            // V = ½ k theta² (an isotropic rotational spring; about a revolute joint's axis
+            // it is the joint's torsion spring)
+            const Vector3d w = angular_velocity_W(B, q, qd) - angular_velocity_W(A, q, qd);
+            const Vector3d T = -f.stiffness * relative_rotation_W(A, B, q) - f.damping * w;
+            add_torque(B, q, T, Q);
+            add_torque(A, q, -T, Q);
+            break;
+          }
+          // planar: torque on b = −k (theta_b − theta_a − theta0) − c (theta_b' − theta_a')
+          const double th =
+              (B.ground() ? 0.0 : q[B.offset + 2]) - (A.ground() ? 0.0 : q[A.offset + 2]);
+          const double w =
+              (B.ground() ? 0.0 : qd[B.offset + 2]) - (A.ground() ? 0.0 : qd[A.offset + 2]);
+          const double T = -f.stiffness * (th - f.rest) - f.damping * w;
+          add_torque(B, q, Vector3d(0, 0, T), Q);
+          add_torque(A, q, Vector3d(0, 0, -T), Q);
+          break;
+        }
+        case ForceType::kApplied: {
+          const Wrench w = f.wrench(q, qd, t);
+          add_point_force(A, q, f.point_a, w.force, Q);
+          add_torque(A, q, w.torque, Q);
+          break;
+        }
+      }
+    }
+  };
+}
+
+PotentialFn make_potential(const std::vector<BodyInfo>& bodies, const std::vector<Force>& forces,
+                           const Vector3d& g) {
+  auto d = force_data(bodies, forces, g);
+  return [d](const VectorXd& q, double) {
+    // V = −Σ m g · r + Σ ½ k (l − l0)² + Σ ½ k (dtheta − theta0)²
+    double V = 0.0;
+    for (const BodyInfo& b : d->bodies) {
+      const Vector3d r = b.kind == BodyKind::kPlanar ? Vector3d(q[b.offset], q[b.offset + 1], 0.0)
+                                                     : Vector3d(q.segment<3>(b.offset));
+      V -= b.mass * d->g.dot(r);
+    }
+    const VectorXd zero = VectorXd::Zero(q.size());
+    for (std::size_t i = 0; i < d->forces.size(); ++i) {
+      const Force& f = d->forces[i];
+      if (f.type == ForceType::kSpringDamper) {
+        const double l = (point_state(d->b[i], q, zero, f.point_b).first -
+                          point_state(d->a[i], q, zero, f.point_a).first)
+                             .norm();
+        V += 0.5 * f.stiffness * (l - f.rest) * (l - f.rest);
+      } else if (f.type == ForceType::kTorsionSpring && spatial(d->a[i], d->b[i])) {
+        V += 0.5 * f.stiffness * relative_rotation_W(d->a[i], d->b[i], q).squaredNorm();
+      } else if (f.type == ForceType::kTorsionSpring) {
+        const BodyRef &A = d->a[i], &B = d->b[i];
+        const double th =
+            (B.ground() ? 0.0 : q[B.offset + 2]) - (A.ground() ? 0.0 : q[A.offset + 2]);
+        V += 0.5 * f.stiffness * (th - f.rest) * (th - f.rest);
+      }
+    }
+    return V;
+  };
+}
+
+PowerFn make_external_power(const std::vector<BodyInfo>& bodies, const std::vector<Force>& forces) {
+  bool any = false;
+  for (const Force& f : forces) any = any || f.type == ForceType::kApplied || f.damping != 0.0;
+  if (!any) return {};
+  auto d = force_data(bodies, forces, Vector3d::Zero());
+  return [d](const VectorXd& q, const VectorXd& qd, double t) {
+    // P = Σ −c l'² (spring-dampers) + Σ −c |ω_b − ω_a|² (torsion) + Σ F · v_p + T · ω (applied)
+    double P = 0.0;
+    for (std::size_t i = 0; i < d->forces.size(); ++i) {
+      const Force& f = d->forces[i];
+      const BodyRef &A = d->a[i], &B = d->b[i];
+      switch (f.type) {
+        case ForceType::kSpringDamper: {
+          if (f.damping == 0.0) break;
+          const auto [xa, va] = point_state(A, q, qd, f.point_a);
+          const auto [xb, vb] = point_state(B, q, qd, f.point_b);
+          const double l = (xb - xa).norm();
+          if (l == 0.0) break;
+          const double ld = (xb - xa).dot(vb - va) / l;
+          P -= f.damping * ld * ld;
+          break;
+        }
+        case ForceType::kTorsionSpring: {
+          if (f.damping == 0.0) break;
+          if (spatial(A, B)) {
+            P -= f.damping *
+                 (angular_velocity_W(B, q, qd) - angular_velocity_W(A, q, qd)).squaredNorm();
+            break;
+          }
+          const double w =
+              (B.ground() ? 0.0 : qd[B.offset + 2]) - (A.ground() ? 0.0 : qd[A.offset + 2]);
+          P -= f.damping * w * w;
+          break;
+        }
+        case ForceType::kApplied: {
+          if (A.ground()) break;
+          const Wrench w = f.wrench(q, qd, t);
+          P += w.force.dot(point_state(A, q, qd, f.point_a).second) +
+               w.torque.dot(angular_velocity_W(A, q, qd));
+          break;
+        }
+      }
+    }
+    return P;
+  };
+}
+
+// ---- joint friction ----------------------------------------------------------------------
+
+void joint_friction_C(const Joint& j, const BodyRef& P, const BodyRef& C, bool planar, Index k,
+                      const VectorXd& q, const VectorXd& qd, const IdealForceInfo& ideal,
+                      Eigen::Ref<VectorXd> out) {
+  // N = |reaction force| on the child (on the parent when the child is the ground)
+  const auto share = ideal.reaction(k);  // the joint's whole reaction
+  const BodyRef& on = C.ground() ? P : C;
+  const double N = on.kind == BodyKind::kPlanar ? std::hypot(share[on.offset], share[on.offset + 1])
+                                                : share.segment<3>(on.offset).norm();
+  const JointFriction& fr = j.friction;
+  const double eps = fr.regularization;
+  const Matrix3d R_P = rotation_WB(P, q);
+  if (j.type == JointType::kRevolute) {
+    // relative rate w about the axis; torque T = −(mu r N w / sqrt(w² + eps²) + c w) on C
+    const Vector3d axis = planar ? Vector3d::UnitZ() : Vector3d(R_P * j.frame_parent.R.col(2));
+    const double w = (angular_velocity_W(C, q, qd) - angular_velocity_W(P, q, qd)).dot(axis);
+    const double T = -(fr.mu * fr.radius * N * w / std::sqrt(w * w + eps * eps) + fr.viscous * w);
+    add_torque(C, q, T * axis, out);
+    add_torque(P, q, -T * axis, out);
+    return;
+  }
+  // prismatic: sliding rate along the axis (x_P planar, z_P spatial); force at the frames'
+  // origins, which lie on the axis line (no couple)
+  const Vector3d axis = R_P * j.frame_parent.R.col(planar ? 0 : 2);
+  VecKin kc, kp;
+  add_body_vector(C, q, qd, j.frame_child.p, true, 1.0, kc);
+  add_body_vector(P, q, qd, j.frame_parent.p, true, 1.0, kp);
+  // velocity of the parent's material point at o_C: v_P(o_P) + ω_P × (o_C − o_P)
+  const Vector3d vP = kp.v + angular_velocity_W(P, q, qd).cross(kc.x - kp.x);
+  const double w = (kc.v - vP).dot(axis);
+  const double F = -(fr.mu * N * w / std::sqrt(w * w + eps * eps) + fr.viscous * w);
+  add_point_force(C, q, j.frame_child.p, F * axis, out);
+  add_point_force(P, q, j.frame_parent.p, -F * axis, out);
+}
+
+NonIdealForce joint_friction_force(const Joint& j, const BodyRef& P, const BodyRef& C,
+                                   const std::string& constraint, bool planar) {
+  if (j.type != JointType::kRevolute && j.type != JointType::kPrismatic) {
+    throw std::invalid_argument("ukdyn::mb::Multibody::build: joint '" + j.name +
+                                "': friction needs a revolute or prismatic joint, got " +
+                                to_string(j.type));
+  }
+  const JointFriction& fr = j.friction;
+  if (!(fr.mu >= 0.0) || !(fr.radius >= 0.0) || !(fr.viscous >= 0.0) ||
+      !(fr.regularization > 0.0)) {
+    throw std::invalid_argument("ukdyn::mb::Multibody::build: joint '" + j.name +
+                                "': friction needs mu, radius, viscous >= 0 and "
+                                "regularization > 0");
+  }
+  return NonIdealForce(
+      j.name + ".friction",
+      NonIdealForce::Binder([j, P, C, constraint, planar](const System& sys) -> NonIdealFn {
+        const Index k = sys.constraint_index(constraint);
+        return [j, P, C, planar, k](const VectorXd& q, const VectorXd& qd, double,
+                                    const IdealForceInfo& ideal, Eigen::Ref<VectorXd> out) {
+          joint_friction_C(j, P, C, planar, k, q, qd, ideal, out);
+        };
+      }));
+}
+
+}  // namespace ukdyn::mb::detail

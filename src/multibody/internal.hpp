@@ -1,0 +1,370 @@
+// Private to the multibody layer: body kinematics in closed form, the joint constraint model
+// built from rows of vector expressions, and the builder's storage.
+#pragma once
+
+#include <array>
+#include <cmath>
+#include <memory>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "ukdyn/core/autodiff.hpp"
+#include "ukdyn/core/constraint.hpp"
+#include "ukdyn/multibody/multibody.hpp"
+
+namespace ukdyn::mb::detail {
+
+/// Largest number of local columns of a joint (two rigid bodies).
+inline constexpr int kMaxCols = 14;
+using JacobianRow = Eigen::Matrix<double, 3, kMaxCols>;
+using Matrix34 = Eigen::Matrix<double, 3, 4>;
+using Vector4d = Eigen::Vector4d;
+
+/// A body as a joint sees it: kind, its first coordinate in q and its first local column.
+struct BodyRef {
+  BodyKind kind = BodyKind::kParticle;
+  Index offset = -1;  // −1: the ground
+  Index local = 0;
+  bool ground() const { return offset < 0; }
+  Index size() const { return ground() ? 0 : (kind == BodyKind::kRigid ? 7 : 3); }
+};
+
+// ---- quaternion algebra (u = (u0, u1, u2, u3), u0 scalar) ----------------------------------
+
+/// R(u) s = (u0² − e·e) s + 2 (e·s) e + 2 u0 (e × s): |u|² R_unit(u) s, homogeneous quadratic.
+inline Vector3d rotate(const Vector4d& u, const Vector3d& s) {
+  const Vector3d e = u.tail<3>();
+  return (u[0] * u[0] - e.squaredNorm()) * s + 2.0 * e.dot(s) * e + 2.0 * u[0] * e.cross(s);
+}
+/// D(u, s) = ∂(R(u) s)/∂u (3 × 4), linear in u; D(u, s) u = 2 R(u) s.
+inline Matrix34 rotate_jacobian(const Vector4d& u, const Vector3d& s) {
+  const Vector3d e = u.tail<3>();
+  Matrix34 D;
+  D.col(0) = 2.0 * (u[0] * s + e.cross(s));
+  Matrix3d S;  // [s]×
+  S << 0, -s.z(), s.y(), s.z(), 0, -s.x(), -s.y(), s.x(), 0;
+  D.rightCols<3>() =
+      2.0 * (-s * e.transpose() + e.dot(s) * Matrix3d::Identity() + e * s.transpose() - u[0] * S);
+  return D;
+}
+/// E_v(u): the last three rows of Udwadia–Schutte's E(u), ω_B = 2 E_v(u) u' (unit u).
+inline Matrix34 E_v(const Vector4d& u) {
+  Matrix34 E;
+  E << -u[1], u[0], u[3], -u[2],  //
+      -u[2], -u[3], u[0], u[1],   //
+      -u[3], u[2], -u[1], u[0];
+  return E;
+}
+/// G_v(u): ω_W = 2 G_v(u) u' (unit u), ω_W = 2 (u0 e' − u0' e + e × e').
+inline Matrix34 G_v(const Vector4d& u) {
+  Matrix34 G;
+  G << -u[1], u[0], -u[3], u[2],  //
+      -u[2], u[3], u[0], -u[1],   //
+      -u[3], -u[2], u[1], u[0];
+  return G;
+}
+
+/// Kinematics of a vector expression along the motion: value x, velocity v = dx/dt, bias
+/// g = d²x/dt² at q'' = 0 (so that x'' = J q''_local + g), Jacobian J on the local columns.
+struct VecKin {
+  Vector3d x = Vector3d::Zero(), v = Vector3d::Zero(), g = Vector3d::Zero();
+  JacobianRow J = JacobianRow::Zero();
+  void clear() {
+    x.setZero();
+    v.setZero();
+    g.setZero();
+    J.setZero();
+  }
+};
+
+/// Adds sign · (point p_B + R s, or R s when !translate) of body b to k. Cost O(1).
+void add_body_vector(const BodyRef& b, const VectorXd& q, const VectorXd& qd, const Vector3d& s,
+                     bool translate, double sign, VecKin& k);
+
+/// A vector expression of a joint row.
+struct VecExpr {
+  enum Kind { kWorld, kBodyVector, kPointDiff } kind = kWorld;
+  int slot_a = -1, slot_b = -1;  // kBodyVector: slot_a; kPointDiff: x_b − x_a
+  Vector3d s_a = Vector3d::Zero(), s_b = Vector3d::Zero(), world = Vector3d::Zero();
+  static VecExpr constant(const Vector3d& w) { return {kWorld, -1, -1, {}, {}, w}; }
+  static VecExpr body_vector(int slot, const Vector3d& s) {
+    return {kBodyVector, slot, -1, s, {}, {}};
+  }
+  static VecExpr diff(int a, const Vector3d& sa, int b, const Vector3d& sb) {
+    return {kPointDiff, a, b, sa, sb, {}};
+  }
+};
+
+/// A time-dependent offset c(t): constant c0 plus an optional motion f(t) (f, f', f'').
+struct Offset {
+  double c0 = 0.0;
+  std::shared_ptr<const MotionFn> motion;
+  Vector3d at(double t) const {
+    Vector3d c(c0, 0.0, 0.0);
+    if (motion) c += (*motion)(t);
+    return c;
+  }
+};
+
+/// One scalar row of a joint.
+///  kDot       phi = a · b − c(t)
+///  kDistance  phi = (a · a − L²) / (2 L), a a point difference
+///  kLinear    phi = Σ coef_i q[column_i] − c(t)   (global coordinates, local columns)
+struct Row {
+  enum Kind { kDot, kDistance, kLinear } kind = kDot;
+  VecExpr a, b;
+  double length = 0.0;
+  std::vector<std::pair<Index, double>> terms;  // kLinear: (global coordinate, coefficient)
+  std::vector<Index> local;                     // kLinear: local column of each term
+  Offset c;
+};
+
+/// The closed-form joint model: rows over the coordinates of up to four bodies (slots).
+class JointModel final : public ConstraintModel {
+ public:
+  JointModel(std::vector<BodyRef> slots, std::vector<Row> rows);
+  const std::vector<Index>& columns() const override { return cols_; }
+  void acceleration_form_local(const VectorXd& q, const VectorXd& qd, double t,
+                               ConstraintScratch* scratch, Eigen::Ref<MatrixXd> A_local,
+                               Eigen::Ref<VectorXd> b) const override;
+  void violation(const VectorXd& q, const VectorXd& qd, double t, ConstraintScratch* scratch,
+                 Eigen::Ref<VectorXd> position, Eigen::Ref<VectorXd> velocity) const override;
+  const std::vector<BodyRef>& slots() const { return slots_; }
+  const std::vector<Row>& rows() const { return rows_; }
+  Index local_count() const { return Index(cols_.size()); }
+
+ private:
+  void eval(const VecExpr& e, const VectorXd& q, const VectorXd& qd, VecKin& k) const;
+  std::vector<BodyRef> slots_;
+  std::vector<Row> rows_;
+  std::vector<Index> cols_;
+  // the rows are a planar revolute's d·e_x, d·e_y between planar bodies (or the ground), which
+  // acceleration_form_local and violation evaluate by a shorter path (same A, b, phi, phi')
+  bool planar_revolute_ = false;
+};
+
+/// The unit norm of a quaternion: phi = (u·u − 1)/2, A = uᵀ, b = −u'·u' (closed form).
+class UnitQuaternionModel final : public ConstraintModel {
+ public:
+  explicit UnitQuaternionModel(Index offset) : cols_{offset, offset + 1, offset + 2, offset + 3} {}
+  const std::vector<Index>& columns() const override { return cols_; }
+  void acceleration_form_local(const VectorXd& q, const VectorXd& qd, double, ConstraintScratch*,
+                               Eigen::Ref<MatrixXd> A, Eigen::Ref<VectorXd> b) const override {
+    const auto u = q.segment<4>(cols_[0]);
+    const auto ud = qd.segment<4>(cols_[0]);
+    A.row(0) = u.transpose();
+    b[0] = -ud.squaredNorm();
+  }
+  void violation(const VectorXd& q, const VectorXd& qd, double, ConstraintScratch*,
+                 Eigen::Ref<VectorXd> position, Eigen::Ref<VectorXd> velocity) const override {
+    const auto u = q.segment<4>(cols_[0]);
+    position[0] = 0.5 * (u.squaredNorm() - 1.0);
+    velocity[0] = u.dot(qd.segment<4>(cols_[0]));
+  }
+
+ private:
+  std::vector<Index> cols_;
+};
+
+/// A constraint on a few columns whose A and b come from automatic differentiation of a
+/// callable on the local coordinates (the inner model sees a system of columns().size()
+/// coordinates). Used for rolling contacts and as the independent reference in the tests.
+class LocalAutodiffModel final : public ConstraintModel {
+ public:
+  LocalAutodiffModel(std::vector<Index> cols, std::shared_ptr<const ConstraintModel> inner)
+      : cols_(std::move(cols)), inner_(std::move(inner)) {}
+  struct Scratch final : ConstraintScratch {
+    std::unique_ptr<ConstraintScratch> inner;
+    VectorXd q, qd;
+  };
+  std::unique_ptr<ConstraintScratch> make_scratch(Index) const override {
+    auto s = std::make_unique<Scratch>();
+    s->inner = inner_->make_scratch(Index(cols_.size()));
+    s->q.resize(Index(cols_.size()));
+    s->qd.resize(Index(cols_.size()));
+    return s;
+  }
+  const std::vector<Index>& columns() const override { return cols_; }
+  void acceleration_form_local(const VectorXd& q, const VectorXd& qd, double t,
+                               ConstraintScratch* scratch, Eigen::Ref<MatrixXd> A,
+                               Eigen::Ref<VectorXd> b) const override {
+    auto& s = gather(q, qd, scratch);
+    inner_->acceleration_form(s.q, s.qd, t, s.inner.get(), A, b);
+  }
+  void violation(const VectorXd& q, const VectorXd& qd, double t, ConstraintScratch* scratch,
+                 Eigen::Ref<VectorXd> position, Eigen::Ref<VectorXd> velocity) const override {
+    auto& s = gather(q, qd, scratch);
+    inner_->violation(s.q, s.qd, t, s.inner.get(), position, velocity);
+  }
+
+ private:
+  Scratch& gather(const VectorXd& q, const VectorXd& qd, ConstraintScratch* scratch) const {
+    auto& s = static_cast<Scratch&>(*scratch);
+    for (std::size_t i = 0; i < cols_.size(); ++i) {
+      s.q[Index(i)] = q[cols_[i]];
+      s.qd[Index(i)] = qd[cols_[i]];
+    }
+    return s;
+  }
+  std::vector<Index> cols_;
+  std::shared_ptr<const ConstraintModel> inner_;
+};
+
+// ---- generic (scalar-templated) position level, for the automatic-differentiation checks ----
+
+/// The value of a scalar (double, or the value part of a dual number).
+inline double value_of(double x) { return x; }
+template <class D>
+double value_of(const Eigen::AutoDiffScalar<D>& x) {
+  return value_of(x.value());
+}
+
+template <class S>
+using Vec3 = Eigen::Matrix<S, 3, 1>;
+
+/// Point (translate) or vector of body b at generic q.
+template <class S, class V>
+Vec3<S> body_vector_generic(const BodyRef& b, const V& q, const Vector3d& s, bool translate) {
+  using std::cos;
+  using std::sin;
+  Vec3<S> x;
+  if (b.ground()) {
+    for (int i = 0; i < 3; ++i) x[i] = S(s[i]);
+    return x;
+  }
+  const Index o = b.offset;
+  if (b.kind == BodyKind::kParticle) {
+    for (int i = 0; i < 3; ++i) x[i] = S(s[i]);
+  } else if (b.kind == BodyKind::kPlanar) {
+    const S c = cos(q[o + 2]), sn = sin(q[o + 2]);
+    x[0] = c * s.x() - sn * s.y();
+    x[1] = sn * s.x() + c * s.y();
+    x[2] = S(s.z());
+  } else {
+    const S w = q[o + 3];
+    Vec3<S> e;
+    e << q[o + 4], q[o + 5], q[o + 6];
+    const Vec3<S> sv = s.cast<S>();
+    const S es = e.dot(sv);
+    const S ee = e.dot(e);
+    x = (w * w - ee) * sv + (2.0 * es) * e + (2.0 * w) * e.cross(sv);
+  }
+  if (translate) {
+    if (b.kind == BodyKind::kPlanar) {
+      x[0] += q[o];
+      x[1] += q[o + 1];
+    } else {
+      for (int i = 0; i < 3; ++i) x[i] += q[o + i];
+    }
+  }
+  return x;
+}
+
+template <class S, class V>
+Vec3<S> vec_expr_generic(const std::vector<BodyRef>& slots, const VecExpr& e, const V& q) {
+  switch (e.kind) {
+    case VecExpr::kWorld:
+      return e.world.cast<S>();
+    case VecExpr::kBodyVector:
+      return body_vector_generic<S>(slots[std::size_t(e.slot_a)], q, e.s_a, false);
+    case VecExpr::kPointDiff:
+      break;
+  }
+  const Vec3<S> xb = body_vector_generic<S>(slots[std::size_t(e.slot_b)], q, e.s_b, true);
+  const Vec3<S> xa = body_vector_generic<S>(slots[std::size_t(e.slot_a)], q, e.s_a, true);
+  return xb - xa;
+}
+
+/// The rows' phi(q, t) at generic q (global coordinates) and t, with c(t) expanded to second
+/// order about t0 (exact for what a second-order forward pass sees).
+template <class S, class V, class Out>
+void joint_phi_generic(const JointModel& jm, const V& q, const S& t, double t0, Out& phi) {
+  for (std::size_t r = 0; r < jm.rows().size(); ++r) {
+    const Row& row = jm.rows()[r];
+    const Vector3d c = row.c.at(t0);
+    const S dt = t - t0;
+    const S c_t = c[0] + c[1] * dt + 0.5 * c[2] * dt * dt;
+    S out;
+    switch (row.kind) {
+      case Row::kDot: {
+        const Vec3<S> a = vec_expr_generic<S>(jm.slots(), row.a, q);
+        const Vec3<S> b = vec_expr_generic<S>(jm.slots(), row.b, q);
+        out = a.dot(b) - c_t;
+        break;
+      }
+      case Row::kDistance: {
+        const Vec3<S> a = vec_expr_generic<S>(jm.slots(), row.a, q);
+        out = (a.dot(a) - row.length * row.length) * (0.5 / row.length);
+        break;
+      }
+      case Row::kLinear: {
+        out = -c_t;
+        for (const auto& [i, coef] : row.terms) out += coef * q[i];
+        break;
+      }
+    }
+    phi[Index(r)] = out;
+  }
+}
+
+}  // namespace ukdyn::mb::detail
+
+namespace ukdyn::mb::detail {
+
+/// The joint's view of body id (ground: offset −1).
+BodyRef body_ref(const std::vector<BodyInfo>& bodies, BodyId id);
+
+/// Adds the generalized force of a world force F_W acting at body point s (body coordinates) to
+/// Q: translation += F; planar theta += ((R s) × F)_z; quaternion += D(u, s)ᵀ F. Cost O(1).
+void add_point_force(const BodyRef& b, const VectorXd& q, const Vector3d& s, const Vector3d& F_W,
+                     Eigen::Ref<VectorXd> Q);
+/// Adds the generalized force of a world torque: planar theta += tau_z; quaternion += 2 G_vᵀ tau.
+void add_torque(const BodyRef& b, const VectorXd& q, const Vector3d& tau_W, Eigen::Ref<VectorXd> Q);
+/// Angular velocity (world) of a body: planar (0, 0, theta'); rigid 2 G_v(u) u' / |u|².
+Vector3d angular_velocity_W(const BodyRef& b, const VectorXd& q, const VectorXd& qd);
+/// Orientation matrix R_WB (rigid: of the normalized quaternion; planar: about z).
+Matrix3d rotation_WB(const BodyRef& b, const VectorXd& q);
+
+/// Rows of a planar joint (parent slot 0, child slot 1); the drive row, if any, separately.
+std::vector<Row> planar_joint_rows(const Joint& j, const BodyRef& P, const BodyRef& C);
+Row planar_drive_row(const Joint& j, const BodyRef& P, const BodyRef& C);
+/// Rows of a spatial joint (parent slot 0, child slot 1); the drive row, if any, separately.
+std::vector<Row> spatial_joint_rows(const Joint& j, const BodyRef& P, const BodyRef& C);
+Row spatial_drive_row(const Joint& j, const BodyRef& P, const BodyRef& C);
+/// "<name>.drive" of a spatial revolute joint: its angle = f(t) (holonomic, AD on the bodies).
+Constraint spatial_revolute_drive(const Joint& j, const BodyRef& P, const BodyRef& C);
+/// A gear between two spatial revolute joints at velocity level (nonholonomic, AD).
+Constraint spatial_gear(const Joint& gear, const Joint& a, const BodyRef& Pa, const BodyRef& Ca,
+                        const Joint& b, const BodyRef& Pb, const BodyRef& Cb);
+/// The constraints of a rolling contact of rigid body C on z = 0: "<name>.contact" (holonomic
+/// height, 1 row) and "<name>" (nonholonomic, 2 rows: the contact point's horizontal velocity).
+std::vector<Constraint> rolling_constraints(const Joint& j, const BodyRef& C);
+/// The joint friction of a revolute or prismatic joint whose constraint is `constraint`.
+NonIdealForce joint_friction_force(const Joint& j, const BodyRef& P, const BodyRef& C,
+                                   const std::string& constraint, bool planar);
+/// The friction's C at the current evaluation (as the NonIdealForce computes it); used by the
+/// reports. k = the joint's constraint index.
+void joint_friction_C(const Joint& j, const BodyRef& P, const BodyRef& C, bool planar, Index k,
+                      const VectorXd& q, const VectorXd& qd, const IdealForceInfo& ideal,
+                      Eigen::Ref<VectorXd> out);
+
+/// Q(q, q', t) and V(q, t) of gravity, force elements and the quaternions' velocity terms.
+ForceFn make_forces(const std::vector<BodyInfo>& bodies, const std::vector<Force>& forces,
+                    const Vector3d& g);
+PotentialFn make_potential(const std::vector<BodyInfo>& bodies, const std::vector<Force>& forces,
+                           const Vector3d& g);
+/// The power of the force elements that V does not account for — the dampers of spring-dampers
+/// and torsion springs and the applied wrenches — or an empty callable when there are none
+/// (gravity and springs derive from V, the quaternions' velocity terms do no work).
+PowerFn make_external_power(const std::vector<BodyInfo>& bodies, const std::vector<Force>& forces);
+
+/// M_kk of a quaternion: 4 E_v(u)ᵀ J E_v(u) (4 × 4, positive semi-definite of rank 3: singular
+/// along u, which the unit-norm constraint determines; docs/multibody.md 1.1).
+void quaternion_mass(const Vector4d& u, const Vector3d& J, Eigen::Ref<MatrixXd> Mk);
+/// The quaternion's velocity-dependent force −8 E_v(u')ᵀ J E_v(u) u' (4).
+Vector4d quaternion_velocity_force(const Vector4d& u, const Vector4d& ud, const Vector3d& J);
+
+}  // namespace ukdyn::mb::detail

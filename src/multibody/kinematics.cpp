@@ -1,0 +1,338 @@
+// Body kinematics in closed form and the joint constraint model built on it: every joint row is
+// a dot product of two vector expressions (body vectors R s, point differences), a distance, or
+// a linear combination of coordinates, whose A and b follow from the kinematics of its vectors.
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+#include "multibody/internal.hpp"
+
+namespace ukdyn::mb::detail {
+
+BodyRef body_ref(const std::vector<BodyInfo>& bodies, BodyId id) {
+  if (id == kGround) return {};
+  const BodyInfo& b = bodies.at(std::size_t(id));
+  return {b.kind, b.offset, 0};
+}
+
+void add_body_vector(const BodyRef& b, const VectorXd& q, const VectorXd& qd, const Vector3d& s,
+                     bool translate, double sign, VecKin& k) {
+  if (b.ground()) {
+    k.x += sign * s;
+    return;
+  }
+  const Index o = b.offset, l = b.local;
+  switch (b.kind) {
+    case BodyKind::kParticle:
+      // x = r + s: J = I, v = r', g = 0
+      k.x += sign * s;
+      if (translate) {
+        k.x += sign * q.segment<3>(o);
+        k.v += sign * qd.segment<3>(o);
+        k.J.block<3, 3>(0, l) += sign * Matrix3d::Identity();
+      }
+      break;
+    case BodyKind::kPlanar: {
+      // x = (x, y, 0) + R(theta) s: dx/dtheta = e_z × R s, g = −theta'² (R s)_xy
+      const double c = std::cos(q[o + 2]), sn = std::sin(q[o + 2]), w = qd[o + 2];
+      const double rx = c * s.x() - sn * s.y(), ry = sn * s.x() + c * s.y();
+      k.x += sign * Vector3d(rx, ry, s.z());
+      k.v += sign * w * Vector3d(-ry, rx, 0.0);
+      k.g += sign * (-w * w) * Vector3d(rx, ry, 0.0);
+      k.J(0, l + 2) += sign * -ry;
+      k.J(1, l + 2) += sign * rx;
+      if (translate) {
+        k.x += sign * Vector3d(q[o], q[o + 1], 0.0);
+        k.v += sign * Vector3d(qd[o], qd[o + 1], 0.0);
+        k.J(0, l) += sign;
+        k.J(1, l + 1) += sign;
+      }
+      break;
+    }
+    case BodyKind::kRigid: {
+      // x = r + R(u) s: J = [I, D(u, s)], v = r' + D(u, s) u', g = 2 R(u') s
+      const Vector4d u = q.segment<4>(o + 3), ud = qd.segment<4>(o + 3);
+      const Matrix34 D = rotate_jacobian(u, s);
+      k.x += sign * rotate(u, s);
+      k.v += sign * (D * ud);
+      k.g += sign * 2.0 * rotate(ud, s);
+      k.J.block<3, 4>(0, l + 3) += sign * D;
+      if (translate) {
+        k.x += sign * q.segment<3>(o);
+        k.v += sign * qd.segment<3>(o);
+        k.J.block<3, 3>(0, l) += sign * Matrix3d::Identity();
+      }
+      break;
+    }
+  }
+}
+
+JointModel::JointModel(std::vector<BodyRef> slots, std::vector<Row> rows)
+    : slots_(std::move(slots)), rows_(std::move(rows)) {
+  // local columns: the bodies' coordinates by increasing offset (each body once)
+  std::vector<Index> order;
+  for (const BodyRef& s : slots_) {
+    if (!s.ground()) order.push_back(s.offset);
+  }
+  std::sort(order.begin(), order.end());
+  order.erase(std::unique(order.begin(), order.end()), order.end());
+  for (Index o : order) {
+    for (BodyRef& s : slots_) {
+      if (s.offset == o) s.local = Index(cols_.size());
+    }
+    const auto it =
+        std::find_if(slots_.begin(), slots_.end(), [o](const BodyRef& s) { return s.offset == o; });
+    for (Index i = 0; i < it->size(); ++i) cols_.push_back(o + i);
+  }
+  // linear rows: the local column of each term
+  for (Row& r : rows_) {
+    r.local.clear();
+    for (const auto& [i, coef] : r.terms) {
+      const auto c = std::find(cols_.begin(), cols_.end(), i);
+      if (c == cols_.end()) {
+        throw std::logic_error("ukdyn::mb: a linear joint row refers to a coordinate of no body");
+      }
+      r.local.push_back(Index(c - cols_.begin()));
+    }
+  }
+  // the planar revolute pattern: d = o_C − o_P dotted with e_x and e_y, constant offsets 0
+  const auto planar_or_ground = [this](int slot) {
+    return slot >= 0 && slot < int(slots_.size()) &&
+           (slots_[std::size_t(slot)].ground() ||
+            slots_[std::size_t(slot)].kind == BodyKind::kPlanar);
+  };
+  const auto axis_row = [&](const Row& r, const Vector3d& axis) {
+    return r.kind == Row::kDot && r.a.kind == VecExpr::kPointDiff && r.b.kind == VecExpr::kWorld &&
+           r.b.world == axis && !r.c.motion && r.c.c0 == 0.0 && planar_or_ground(r.a.slot_a) &&
+           planar_or_ground(r.a.slot_b);
+  };
+  planar_revolute_ = rows_.size() == 2 && axis_row(rows_[0], Vector3d::UnitX()) &&
+                     axis_row(rows_[1], Vector3d::UnitY()) &&
+                     rows_[0].a.slot_a == rows_[1].a.slot_a &&
+                     rows_[0].a.slot_b == rows_[1].a.slot_b && rows_[0].a.s_a == rows_[1].a.s_a &&
+                     rows_[0].a.s_b == rows_[1].a.s_b;
+}
+
+namespace {
+// (R(theta) s)_xy of a planar body and its theta' (the ground: s_xy, at rest)
+struct PlanarPoint {
+  double rx, ry, w;
+};
+PlanarPoint planar_point(const BodyRef& b, const VectorXd& q, const VectorXd& qd,
+                         const Vector3d& s) {
+  if (b.ground()) return {s.x(), s.y(), 0.0};
+  const double c = std::cos(q[b.offset + 2]), sn = std::sin(q[b.offset + 2]);
+  return {c * s.x() - sn * s.y(), sn * s.x() + c * s.y(), qd[b.offset + 2]};
+}
+
+// the same vector expression (rows of one joint often share one: d·e_x, d·e_y of a revolute)
+bool same_expr(const VecExpr& e, const VecExpr& f) {
+  return e.kind == f.kind && e.slot_a == f.slot_a && e.slot_b == f.slot_b && e.s_a == f.s_a &&
+         e.s_b == f.s_b && e.world == f.world;
+}
+// row r's first vector is the previous row's: its kinematics in ka can be reused
+bool reuses_a(const std::vector<Row>& rows, std::size_t r) {
+  return r > 0 && rows[r].kind != Row::kLinear && rows[r - 1].kind != Row::kLinear &&
+         same_expr(rows[r].a, rows[r - 1].a);
+}
+}  // namespace
+
+void JointModel::eval(const VecExpr& e, const VectorXd& q, const VectorXd& qd, VecKin& k) const {
+  k.clear();
+  switch (e.kind) {
+    case VecExpr::kWorld:
+      k.x = e.world;
+      break;
+    case VecExpr::kBodyVector:
+      add_body_vector(slots_[std::size_t(e.slot_a)], q, qd, e.s_a, false, 1.0, k);
+      break;
+    case VecExpr::kPointDiff:
+      add_body_vector(slots_[std::size_t(e.slot_b)], q, qd, e.s_b, true, 1.0, k);
+      add_body_vector(slots_[std::size_t(e.slot_a)], q, qd, e.s_a, true, -1.0, k);
+      break;
+  }
+}
+
+void JointModel::acceleration_form_local(const VectorXd& q, const VectorXd& qd, double t,
+                                         ConstraintScratch*, Eigen::Ref<MatrixXd> A,
+                                         Eigen::Ref<VectorXd> b) const {
+  const Index k = local_count();
+  if (planar_revolute_) {
+    // phi = (x_C + R_C s_C − x_P − R_P s_P)_xy:  A = ±[I | e_z × R s] on each body,
+    // b = Σ ± theta'² R s  (the dot rows' A = e_iᵀ J_d, b = −e_i·g_d, g = −theta'² R s)
+    A.setZero();
+    b.setZero();
+    const VecExpr& d = rows_[0].a;
+    for (int side = 0; side < 2; ++side) {
+      const BodyRef& body = slots_[std::size_t(side == 0 ? d.slot_b : d.slot_a)];
+      if (body.ground()) continue;
+      const double sign = side == 0 ? 1.0 : -1.0;
+      const PlanarPoint p = planar_point(body, q, qd, side == 0 ? d.s_b : d.s_a);
+      const Index l = body.local;
+      A(0, l) += sign;
+      A(1, l + 1) += sign;
+      A(0, l + 2) -= sign * p.ry;
+      A(1, l + 2) += sign * p.rx;
+      b[0] += sign * p.w * p.w * p.rx;
+      b[1] += sign * p.w * p.w * p.ry;
+    }
+    return;
+  }
+  VecKin ka, kb;
+  for (std::size_t r = 0; r < rows_.size(); ++r) {
+    const Row& row = rows_[r];
+    const Index i = Index(r);
+    switch (row.kind) {
+      case Row::kDot: {
+        // phi = a·b − c:  A = bᵀ J_a + aᵀ J_b,  b = −(g_a·b + 2 v_a·v_b + a·g_b) + c''
+        if (!reuses_a(rows_, r)) eval(row.a, q, qd, ka);
+        if (row.b.kind == VecExpr::kWorld) {
+          // a constant b (a world axis): A = bᵀ J_a,  b = −g_a·b
+          A.row(i) = row.b.world.transpose() * ka.J.leftCols(k);
+          b[i] = -ka.g.dot(row.b.world);
+        } else {
+          eval(row.b, q, qd, kb);
+          A.row(i) = (kb.x.transpose() * ka.J.leftCols(k) + ka.x.transpose() * kb.J.leftCols(k));
+          b[i] = -(ka.g.dot(kb.x) + 2.0 * ka.v.dot(kb.v) + ka.x.dot(kb.g));
+        }
+        if (row.c.motion) b[i] += row.c.at(t)[2];
+        break;
+      }
+      case Row::kDistance: {
+        // phi = (a·a − L²)/(2L):  A = aᵀ J_a / L,  b = −(a·g_a + v_a·v_a) / L
+        if (!reuses_a(rows_, r)) eval(row.a, q, qd, ka);
+        A.row(i) = ka.x.transpose() * ka.J.leftCols(k) / row.length;
+        b[i] = -(ka.x.dot(ka.g) + ka.v.squaredNorm()) / row.length;
+        break;
+      }
+      case Row::kLinear: {
+        // phi = Σ coef q_i − c:  A = coef,  b = c''
+        A.row(i).setZero();
+        for (std::size_t z = 0; z < row.terms.size(); ++z) {
+          A(i, row.local[z]) += row.terms[z].second;
+        }
+        b[i] = row.c.motion ? row.c.at(t)[2] : 0.0;
+        break;
+      }
+    }
+  }
+}
+
+void JointModel::violation(const VectorXd& q, const VectorXd& qd, double t, ConstraintScratch*,
+                           Eigen::Ref<VectorXd> position, Eigen::Ref<VectorXd> velocity) const {
+  if (planar_revolute_) {
+    // phi = (x_C + R_C s_C − x_P − R_P s_P)_xy,  phi' = Σ ± (x' + theta' e_z × R s)_xy
+    position.setZero();
+    velocity.setZero();
+    const VecExpr& d = rows_[0].a;
+    for (int side = 0; side < 2; ++side) {
+      const BodyRef& body = slots_[std::size_t(side == 0 ? d.slot_b : d.slot_a)];
+      const double sign = side == 0 ? 1.0 : -1.0;
+      const PlanarPoint p = planar_point(body, q, qd, side == 0 ? d.s_b : d.s_a);
+      position[0] += sign * p.rx;
+      position[1] += sign * p.ry;
+      if (body.ground()) continue;
+      const Index o = body.offset;
+      position[0] += sign * q[o];
+      position[1] += sign * q[o + 1];
+      velocity[0] += sign * (qd[o] - p.w * p.ry);
+      velocity[1] += sign * (qd[o + 1] + p.w * p.rx);
+    }
+    return;
+  }
+  VecKin ka, kb;
+  for (std::size_t r = 0; r < rows_.size(); ++r) {
+    const Row& row = rows_[r];
+    const Index i = Index(r);
+    const Vector3d c = row.c.at(t);
+    switch (row.kind) {
+      case Row::kDot:
+        if (!reuses_a(rows_, r)) eval(row.a, q, qd, ka);
+        eval(row.b, q, qd, kb);
+        position[i] = ka.x.dot(kb.x) - c[0];
+        velocity[i] = ka.v.dot(kb.x) + ka.x.dot(kb.v) - c[1];
+        break;
+      case Row::kDistance:
+        if (!reuses_a(rows_, r)) eval(row.a, q, qd, ka);
+        position[i] = (ka.x.squaredNorm() - row.length * row.length) * (0.5 / row.length);
+        velocity[i] = ka.x.dot(ka.v) / row.length;
+        break;
+      case Row::kLinear:
+        position[i] = -c[0];
+        velocity[i] = -c[1];
+        for (const auto& [z, coef] : row.terms) {
+          position[i] += coef * q[z];
+          velocity[i] += coef * qd[z];
+        }
+        break;
+    }
+  }
+}
+
+// ---- quaternion mass matrix and velocity terms ---------------------------------------------
+
+void quaternion_mass(const Vector4d& u, const Vector3d& J, Eigen::Ref<MatrixXd> Mk) {
+  // M = 4 E_vᵀ J E_v (rank 3, singular along u)
+  const Matrix34 Ev = E_v(u);
+  Mk = 4.0 * (Ev.transpose() * J.asDiagonal() * Ev);
+}
+
+Vector4d quaternion_velocity_force(const Vector4d& u, const Vector4d& ud, const Vector3d& J) {
+  // Q_u = −8 E_v(u')ᵀ J E_v(u) u'   (docs/multibody.md, eq. Q)
+  const Vector3d Jw = J.asDiagonal() * (E_v(u) * ud);
+  return -8.0 * E_v(ud).transpose() * Jw;
+}
+
+void add_point_force(const BodyRef& b, const VectorXd& q, const Vector3d& s, const Vector3d& F,
+                     Eigen::Ref<VectorXd> Q) {
+  if (b.ground()) return;
+  const Index o = b.offset;
+  switch (b.kind) {
+    case BodyKind::kParticle:
+      Q.segment<3>(o) += F;
+      break;
+    case BodyKind::kPlanar: {
+      const double c = std::cos(q[o + 2]), sn = std::sin(q[o + 2]);
+      const double rx = c * s.x() - sn * s.y(), ry = sn * s.x() + c * s.y();
+      Q[o] += F.x();
+      Q[o + 1] += F.y();
+      Q[o + 2] += rx * F.y() - ry * F.x();
+      break;
+    }
+    case BodyKind::kRigid:
+      Q.segment<3>(o) += F;
+      Q.segment<4>(o + 3) += rotate_jacobian(q.segment<4>(o + 3), s).transpose() * F;
+      break;
+  }
+}
+
+void add_torque(const BodyRef& b, const VectorXd& q, const Vector3d& tau, Eigen::Ref<VectorXd> Q) {
+  if (b.ground()) return;
+  const Index o = b.offset;
+  if (b.kind == BodyKind::kPlanar) {
+    Q[o + 2] += tau.z();
+  } else if (b.kind == BodyKind::kRigid) {
+    // virtual power tauᵀ ω_W = tauᵀ 2 G_v u'
+    Q.segment<4>(o + 3) += 2.0 * G_v(q.segment<4>(o + 3)).transpose() * tau;
+  }
+}
+
+Vector3d angular_velocity_W(const BodyRef& b, const VectorXd& q, const VectorXd& qd) {
+  if (b.ground() || b.kind == BodyKind::kParticle) return Vector3d::Zero();
+  const Index o = b.offset;
+  if (b.kind == BodyKind::kPlanar) return {0.0, 0.0, qd[o + 2]};
+  const Vector4d u = q.segment<4>(o + 3);
+  return 2.0 * G_v(u) * qd.segment<4>(o + 3) / u.squaredNorm();
+}
+
+Matrix3d rotation_WB(const BodyRef& b, const VectorXd& q) {
+  if (b.ground() || b.kind == BodyKind::kParticle) return Matrix3d::Identity();
+  const Index o = b.offset;
+  if (b.kind == BodyKind::kPlanar) {
+    return Eigen::AngleAxisd(q[o + 2], Vector3d::UnitZ()).toRotationMatrix();
+  }
+  const Vector4d u = q.segment<4>(o + 3);
+  return Quaterniond(u[0], u[1], u[2], u[3]).normalized().toRotationMatrix();
+}
+
+}  // namespace ukdyn::mb::detail

@@ -1,0 +1,153 @@
+// ConstrainedOde: the first-order system x' = f(t, x), x = [q; q'; W], that the integrators see,
+// W the work channels of the energy balance.
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <string>
+
+#include "dynamics/internal.hpp"
+#include "simulation/integrator.hpp"
+#include "ukdyn/dynamics/forward.hpp"
+#include "ukdyn/dynamics/projection.hpp"
+#include "ukdyn/linalg/sparse.hpp"
+
+namespace ukdyn::detail {
+
+WorkLayout::WorkLayout(const System& sys, bool quiet_channels) : quiet(quiet_channels) {
+  for (Index k = 0; k < sys.constraint_count(); ++k) {
+    if (sys.constraint(k).is_drive()) drives.push_back(k);
+  }
+  if (sys.constraint_count() > 0) ideal = count++;
+  if (!drives.empty()) drive = count++;
+  if (sys.has_external_power()) external = count++;
+}
+
+double constraint_power(const System& sys, const Workspace& ws, Index k, const VectorXd& qd,
+                        VectorXd& scratch) {
+  if (ws.sparse) {
+    constraint_share(sys, ws, k, ws.lambda, scratch);  // share_k = A_kᵀ lambda_k
+    return qd.dot(scratch);
+  }
+  // q'ᵀ A_kᵀ lambda_k = Σ_rows lambda_r (A_r q')
+  const Index r0 = sys.row_offset(k), rows = sys.constraint(k).rows();
+  double p = 0.0;
+  for (Index r = r0; r < r0 + rows; ++r) p += ws.lambda[r] * ws.A.row(r).dot(qd);
+  return p;
+}
+
+ConstrainedOde::ConstrainedOde(const System& sys, Workspace& ws, bool quiet,
+                               double off_manifold_tolerance)
+    : sys_(sys),
+      ws_(ws),
+      n_(sys.coordinate_count()),
+      works_(sys, quiet),
+      q_(sys.coordinate_count()),
+      qd_(sys.coordinate_count()),
+      share_(VectorXd::Zero(sys.coordinate_count())),
+      violation_rows_(std::size_t(sys.constraint_rows()), 0),
+      off_manifold_tolerance_(off_manifold_tolerance) {
+  for (Index k = 0; k < sys.constraint_count(); ++k) {
+    const Constraint& c = sys.constraint(k);
+    if (c.kind() == ConstraintKind::kAcceleration) continue;
+    for (Index i = 0; i < c.rows(); ++i) violation_rows_[std::size_t(sys.row_offset(k) + i)] = 1;
+  }
+}
+
+bool ConstrainedOde::explained_by_violation(double t) {
+  if (!(off_manifold_tolerance_ > 0.0)) return false;
+  // r = A q'' − b (the part of e outside range(A), the rows that cannot all hold)
+  if (ws_.is_sparse()) {
+    ws_.sparse->multiply_A(ws_.qdd, ws_.tmp_m);
+    ws_.tmp_m -= ws_.b;
+  } else {
+    ws_.tmp_m = -ws_.b;
+    ws_.tmp_m.noalias() += ws_.A * ws_.qdd;
+  }
+  const double r_max = ws_.tmp_m.cwiseAbs().maxCoeff();
+  if (!(r_max > 0.0)) return false;
+  // phi, phi' (psi) of every row at this state
+  evaluate_violations(sys_, ws_, q_, qd_, t);
+  // largest violation among the rows carrying r; none may be of acceleration form
+  double violation = 0.0;
+  for (Index i = 0; i < ws_.tmp_m.size(); ++i) {
+    if (std::abs(ws_.tmp_m[i]) < kResidualShare * r_max) continue;
+    if (!violation_rows_[std::size_t(i)]) return false;
+    violation = std::max({violation, std::abs(ws_.phi[i]), std::abs(ws_.phi_dot[i])});
+  }
+  return violation > off_manifold_tolerance_;
+}
+
+void ConstrainedOde::clear_failure() {
+  failure_ = Status::kOk;
+  failure_message_.clear();
+}
+
+Status ConstrainedOde::take_failure(std::string& description) {
+  const Status s = failure_;
+  // describe_status() says "<status> at t = <time>[ in …]: …": the time is the trial stage's
+  description = failure_message_;
+  if (const auto at = description.find(" at t = "); at != std::string::npos) {
+    const auto end = description.find_first_of(" :", at + 8);
+    description.erase(at, end == std::string::npos ? std::string::npos : end - at);
+  }
+  clear_failure();
+  return s;
+}
+
+std::string left_domain(const char* method, double t, double h, const std::string& description) {
+  char text[320];
+  std::snprintf(text, sizeof text,
+                "%s: no step beyond t = %.17g succeeds: every attempt, down to the smallest "
+                "step (h = %.3g), reaches a state where the model cannot be evaluated (the "
+                "solution leaves the model's domain there): ",
+                method, t, h);
+  return text + description;
+}
+
+void ConstrainedOde::set_window(double a, double b) {
+  auto delta = [](double v) { return 1e-13 * std::max(1.0, std::abs(v)); };
+  lo_ = std::isfinite(a) ? a + delta(a) : a;
+  hi_ = std::isfinite(b) ? b - delta(b) : b;
+}
+
+bool ConstrainedOde::operator()(const double* x, double* dxdt, double t_in) {
+  ++evaluations_;
+  // one-sided at a breakpoint end of the segment
+  const double t = std::min(std::max(t_in, lo_), hi_);
+  // q, q' from x
+  q_ = Eigen::Map<const VectorXd>(x, n_);
+  qd_ = Eigen::Map<const VectorXd>(x + n_, n_);
+  Status s = forward_dynamics(sys_, ws_, q_, qd_, t);
+  // off the manifold, an inconsistency its violation explains: the least-squares q''
+  if (s == Status::kInconsistentConstraints && explained_by_violation(t)) {
+    ++least_squares_;
+    ws_.status = s = Status::kOk;
+  }
+  if (s != Status::kOk) {
+    if (failure_ == Status::kOk) {
+      failure_ = s;
+      failure_message_ = describe_status(sys_, ws_);
+    }
+    for (Index i = 0; i < size(); ++i) dxdt[i] = std::numeric_limits<double>::quiet_NaN();
+    return false;
+  }
+  // x' = [q'; q''; q'ᵀ Qc_nonideal; q'ᵀ Qc_ideal − P_drive; P_drive; P_ext]
+  Eigen::Map<VectorXd>(dxdt, n_) = qd_;
+  Eigen::Map<VectorXd>(dxdt + n_, n_) = ws_.qdd;
+  double* w = dxdt + 2 * n_;
+  w[works_.nonideal] = qd_.dot(ws_.Qc_nonideal);
+  double drive = 0.0;
+  for (Index k : works_.drives) {
+    if (ws_.active[std::size_t(k)]) drive += constraint_power(sys_, ws_, k, qd_, share_);
+  }
+  // (the quiet channels scaled by 2⁻³², see WorkLayout)
+  const double quiet = works_.quiet ? WorkLayout::kQuietScale : 1.0;
+  if (works_.ideal >= 0) w[works_.ideal] = quiet * (qd_.dot(ws_.Qc_ideal) - drive);
+  if (works_.drive >= 0) w[works_.drive] = quiet * drive;
+  if (works_.external >= 0)
+    w[works_.external] = quiet * sys_.external_power(q_, qd_, t, ws_.callables.get());
+  return true;
+}
+
+}  // namespace ukdyn::detail

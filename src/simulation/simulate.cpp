@@ -1,0 +1,1184 @@
+// simulate(): the driver of a run. Splits [t_start, t_end] at breakpoints (the ends of
+// constraint intervals and those the user gives), integrates each segment with the chosen method,
+// applies drift control after every accepted step, and records samples.
+#include "ukdyn/simulation/simulate.hpp"
+
+#include "ukdyn/simulation/options.hpp"
+
+#include <Eigen/QR>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <exception>
+#include <functional>
+#include <limits>
+#include <stdexcept>
+
+#include "dynamics/internal.hpp"
+#include "simulation/energy_balance.hpp"
+#include "simulation/integrator.hpp"
+#include "simulation/sample_grid.hpp"
+#include "ukdyn/core/format.hpp"
+#include "ukdyn/dynamics/forward.hpp"
+#include "ukdyn/dynamics/projection.hpp"
+
+namespace ukdyn {
+
+const char* to_string(Integrator integrator) {
+  switch (integrator) {
+    case Integrator::kRK4:
+      return "rk4";
+    case Integrator::kRK5:
+      return "rk5";
+    case Integrator::kDopri5:
+      return "dopri5";
+    case Integrator::kRKF78:
+      return "rkf78";
+    case Integrator::kBDF:
+      return "bdf";
+  }
+  return "unknown";
+}
+
+Integrator integrator_from_string(const std::string& name) {
+  for (Integrator i : {Integrator::kRK4, Integrator::kRK5, Integrator::kDopri5, Integrator::kRKF78,
+                       Integrator::kBDF}) {
+    if (name == to_string(i)) return i;
+  }
+  throw std::invalid_argument("ukdyn: unknown integrator '" + name +
+                              "'; the integrators are rk4, rk5, dopri5, rkf78, bdf");
+}
+
+double checked_energy_balance_tolerance(const SimulationOptions& o) {
+  constexpr double kBalancePerRtol = 1e3;
+  const bool adaptive = o.integrator == Integrator::kDopri5 || o.integrator == Integrator::kRKF78 ||
+                        o.integrator == Integrator::kBDF;
+  return adaptive ? std::max(o.energy_balance_tolerance, kBalancePerRtol * o.rtol)
+                  : o.energy_balance_tolerance;
+}
+
+const char* to_string(DriftControl drift) {
+  switch (drift) {
+    case DriftControl::kNone:
+      return "none";
+    case DriftControl::kBaumgarte:
+      return "baumgarte";
+    case DriftControl::kProjection:
+      return "projection";
+  }
+  return "unknown";
+}
+
+DriftControl drift_from_string(const std::string& name) {
+  for (DriftControl d :
+       {DriftControl::kNone, DriftControl::kBaumgarte, DriftControl::kProjection}) {
+    if (name == to_string(d)) return d;
+  }
+  throw std::invalid_argument("ukdyn: unknown drift control '" + name +
+                              "'; the choices are none, baumgarte, projection");
+}
+
+namespace {
+
+// stick/slip transitions after which a run is declared chattering
+constexpr long kMaxEvents = 100000;
+// notes a run keeps (RunStatistics::notes)
+constexpr std::size_t kMaxNotes = 20;
+
+// What a Coulomb contact does: slides (friction acts), sticks (the stick constraint acts), or
+// slides through a zero of v_rel at which it could not stick (the zero is its next event).
+enum class ContactMode : unsigned char { kSliding, kSticking, kPassing };
+
+// three significant digits, for messages
+std::string format(double v) { return detail::format_short(v); }
+
+// "the constraints … contradict each other …" / "… the mechanism locks up …" (run messages)
+std::string describe_conflict(const ConstraintConflict& c, double t) {
+  std::string names;
+  for (const auto& s : c.names) names += (names.empty() ? "'" : ", '") + s + "'";
+  if (c.velocity_level) {
+    return "the constraints have no solution near t = " + format(t) +
+           ": the mechanism locks up (constraint rows that cannot be satisfied: " + names +
+           (c.singular_ratio > 0.0
+                ? "; the constraint Jacobian is nearly singular there (sigma_min/sigma_max = " +
+                      format(c.singular_ratio) +
+                      ") and the velocities it asks for grow without bound)"
+                : "; the motion they ask for leaves the directions the constraints allow, "
+                  "residual " +
+                      format(c.residual) + ")");
+  }
+  if (c.names.size() == 1) {
+    return "the constraint " + names + " cannot be satisfied near t = " + format(t) +
+           ": no state satisfies it (the least violation is " + format(c.residual) +
+           "; projecting the initial state cannot help: correct or remove it)";
+  }
+  return "the constraints " + names + " contradict each other near t = " + format(t) +
+         ": no state satisfies them together (the least violation is " + format(c.residual) +
+         "; projecting the initial state cannot help: correct or remove one of them)";
+}
+
+// the conflict of the initial state's constraints: at the state the position projection reaches
+// from (q, q') (the least violation, Gauss–Newton), when that projection does not converge
+ConstraintConflict initial_conflict(const System& sys, Workspace& ws, const VectorXd& q,
+                                    const VectorXd& qd, const SimulationOptions& o) {
+  VectorXd qp = q;
+  const ProjectionResult rp = project_positions(sys, ws, qp, o.t_start, o.projection);
+  if (rp.status != Status::kOk) return {};
+  VectorXd qdp = qd;
+  const ProjectionResult rv = project_velocities(sys, ws, qp, qdp, o.t_start, o.projection);
+  if (rp.converged && rv.converged) return {};
+  return find_constraint_conflict(sys, ws, qp, rp.converged ? qdp : qd, o.t_start,
+                                  o.projection.tolerance);
+}
+
+// one line per constraint whose violation exceeds tol (after evaluate_violations)
+std::vector<std::string> violated(const System& sys, const Workspace& ws, double tol) {
+  std::vector<std::string> lines;
+  for (Index k = 0; k < sys.constraint_count(); ++k) {
+    const double p = position_violation(sys, ws, k), v = velocity_violation(sys, ws, k);
+    if (p > tol || v > tol) {
+      lines.push_back("constraint '" + sys.constraint(k).name() + "' (" +
+                      to_string(sys.constraint(k).kind()) + "): position violation " + format(p) +
+                      ", velocity violation " + format(v));
+    }
+  }
+  return lines;
+}
+
+std::string join_lines(const std::vector<std::string>& lines) { return join(lines, "; "); }
+
+// the sizes of q0, qd0 and the per-constraint drift settings (the run's other settings:
+// check_settings)
+void validate(const System& sys, const VectorXd& q0, const VectorXd& qd0,
+              const SimulationOptions& o) {
+  auto fail = [](const std::string& what) {
+    throw std::invalid_argument("ukdyn::simulate: " + what);
+  };
+  if (q0.size() != sys.coordinate_count() || qd0.size() != sys.coordinate_count()) {
+    fail("q0 and qd0 need n = " + format_number(sys.coordinate_count()) + " entries, got " +
+         format_number(q0.size()) + " and " + format_number(qd0.size()));
+  }
+  // a non-finite initial state is misuse, named like forward_dynamics names it
+  for (Index i = 0; i < sys.coordinate_count(); ++i) {
+    if (std::isfinite(q0[i]) && std::isfinite(qd0[i])) continue;
+    const bool in_q = !std::isfinite(q0[i]);
+    fail(std::string(in_q ? "q0" : "qd0") + " is not finite at coordinate '" +
+         sys.coordinate_names()[std::size_t(i)] + "' (" + format(in_q ? q0[i] : qd0[i]) + ")");
+  }
+  for (const auto& [name, d] : o.drift_per_constraint) {
+    sys.constraint_index(name);  // throws naming the unknown constraint
+    if (!(d.alpha >= 0.0 && d.beta >= 0.0 && std::isfinite(d.alpha) && std::isfinite(d.beta))) {
+      throw SettingError("drift_per_constraint", "ukdyn::simulate: Baumgarte gains of '" + name +
+                                                     "' must be finite and >= 0");
+    }
+  }
+}
+
+// the resolution of the run's times: sorted_times merges samples and segment ends closer than this
+double time_resolution(double a, double b) {
+  return 1e-12 * std::max({1.0, std::abs(a), std::abs(b)});
+}
+
+// sorted, de-duplicated times in [a, b]
+std::vector<double> sorted_times(std::vector<double> v, double a, double b) {
+  v.erase(std::remove_if(v.begin(), v.end(),
+                         [&](double t) { return !(t >= a && t <= b) || !std::isfinite(t); }),
+          v.end());
+  std::sort(v.begin(), v.end());
+  const double eps = 1e-12 * std::max({1.0, std::abs(a), std::abs(b)});
+  std::vector<double> out;
+  for (double t : v) {
+    if (out.empty() || t - out.back() > eps) out.push_back(t);
+  }
+  return out;
+}
+
+// the run's sample times (t_start, every output_every, output_at, t_end), refused above the
+// bound of a streamed run, or of one kept in memory (values per sample: t, q, q', q'', Qc_ideal,
+// Qc_nonideal, lambda, two violations per constraint, three energies, six works)
+detail::SampleGrid sample_grid(const System& sys, const SimulationOptions& o) {
+  if (o.sample_sink) {
+    return detail::SampleGrid(o, kMaxStreamedSamples, "of a streamed run (kMaxStreamedSamples)");
+  }
+  const double per_sample = double(1 + 5 * sys.coordinate_count() + sys.constraint_rows() +
+                                   2 * sys.constraint_count() + 9);
+  const std::string bound = "of a run kept in memory (kMaxStoredValues = 2^28 values, " +
+                            format_number(long(per_sample)) +
+                            " per sample; a SimulationOptions::sample_sink streams up to 1e9)";
+  return detail::SampleGrid(
+      o, std::min(kMaxStreamedSamples, std::floor(kMaxStoredValues / per_sample)), bound.c_str());
+}
+
+// the segments' ends: t_start, breakpoints inside, t_end
+std::vector<double> segment_ends(const System& sys, const SimulationOptions& o) {
+  std::vector<double> v = o.breakpoints;
+  for (const auto& c : sys.constraints()) {
+    v.push_back(c.active_interval().begin);
+    v.push_back(c.active_interval().end);
+  }
+  v.push_back(o.t_start);
+  v.push_back(o.t_end);
+  return sorted_times(std::move(v), o.t_start, o.t_end);
+}
+
+// The solver settings of the integration: the Gauss and virtual-work residuals are not part of a
+// trajectory, so they are not computed at every evaluation (the consistency test still is).
+SolverOptions integration_options(SolverOptions o) {
+  o.compute_residuals = false;
+  return o;
+}
+
+// Everything a run shares between the integrator's callbacks.
+class Run {
+ public:
+  // a Run is neither copied nor moved (its members refer to each other)
+  Run(const Run&) = delete;
+  Run& operator=(const Run&) = delete;
+  ~Run() {
+    if (!finished_) return;
+    try {
+      finished_(ws_);
+    } catch (...) {  // (an observer's failure must not end the program in a destructor)
+    }
+  }
+  // `finished`: called with the workspace when the run ends (detail::simulate_observed)
+  Run(const System& sys, const SimulationOptions& o, Trajectory& traj,
+      std::function<void(const Workspace&)> finished = {})
+      : finished_(std::move(finished)),
+        sys_(sys),
+        o_(o),
+        ws_(sys, integration_options(o.solver)),
+        traj_(traj),
+        n_(sys.coordinate_count()),
+        q_(n_),
+        qd_(n_) {
+    // a streamed run records each sample into one_, which the sink receives
+    if (o.sample_sink) {
+      one_.coordinate_names = traj.coordinate_names;
+      one_.constraint_names = traj.constraint_names;
+      one_.constraint_rows = traj.constraint_rows;
+      one_.constraint_kinds = traj.constraint_kinds;
+      one_.n = traj.n;
+      one_.m = traj.m;
+    }
+    // drift control of each constraint
+    const Index K = sys.constraint_count();
+    projection_ = o.projection;
+    projection_.mask.assign(std::size_t(K), 0);
+    for (Index k = 0; k < K; ++k) {
+      ConstraintDrift d{o.drift, 0.0, 0.0};
+      if (auto it = o.drift_per_constraint.find(sys.constraint(k).name());
+          it != o.drift_per_constraint.end()) {
+        d = it->second;
+      }
+      if (d.method == DriftControl::kProjection) {
+        projection_.mask[std::size_t(k)] = 1;
+        projecting_ = projecting_ || sys.constraint(k).kind() != ConstraintKind::kAcceleration;
+      } else if (d.method == DriftControl::kBaumgarte) {
+        ws_.stabilization[std::size_t(k)] = Stabilization{d.alpha > 0 ? d.alpha : o.baumgarte_alpha,
+                                                          d.beta > 0 ? d.beta : o.baumgarte_beta};
+      }
+    }
+  }
+
+  Workspace& workspace() { return ws_; }
+  bool projecting() const { return projecting_; }
+
+  // --- Coulomb contacts: stick, slide, or slide through v_rel = 0 (docs/friction.md) ----------
+  // the friction force while sliding, the stick constraint while sticking
+  void apply_contact_modes() {
+    const auto& contacts = sys_.friction_contacts();
+    for (std::size_t c = 0; c < contacts.size(); ++c) {
+      const bool sticks = mode_[c] == ContactMode::kSticking;
+      ws_.nonideal_enabled[std::size_t(contacts[c].force)] = sticks ? 0 : 1;
+      ws_.activity_override[std::size_t(contacts[c].stick_constraint)] = sticks ? 1 : 0;
+    }
+  }
+
+  // initial modes: a contact at rest (|v_rel| <= eps) sticks when sticking is admissible, else it
+  // starts to slide with friction against its impending motion
+  void initial_contact_modes(double t, double* x) {
+    const auto& contacts = sys_.friction_contacts();
+    mode_.assign(contacts.size(), ContactMode::kSliding);
+    apply_contact_modes();
+    for (std::size_t c = 0; c < contacts.size(); ++c) {
+      const Index k = relative_velocity(c, t, x, velocity_);
+      if (velocity_.head(k).norm() <= contacts[c].eps && !try_stick(c, t, x)) {
+        start_sliding(c, t, x);
+      }
+    }
+    apply_contact_modes();
+  }
+
+  // the first switch of a contact inside [t0, t1] (see SegmentHooks::find_event)
+  double find_event(double t0, const double* x0, double t1, const double* x1,
+                    const detail::SegmentHooks::Dense& dense) {
+    const auto& contacts = sys_.friction_contacts();
+    double first = std::numeric_limits<double>::quiet_NaN();
+    switching_ = -1;
+    for (std::size_t c = 0; c < contacts.size(); ++c) {
+      double te = std::numeric_limits<double>::quiet_NaN();
+      switch (mode_[c]) {
+        case ContactMode::kSticking:
+          // the holding force reaches mu_static N: mu_static N − |holding force| falls to zero
+          te = locate(t0, t1, x1, dense,
+                      [&](double t, const double* x) { return stick_margin(c, t, x); });
+          break;
+        case ContactMode::kSliding: {
+          // the sliding speed along the step's initial direction falls to v_stop = 100 eps: the
+          // contact stops, or would have to, whether its velocity would reverse or decay to
+          // rest (where the regularized law would only creep); the stop is then early by
+          // v_stop / deceleration, the position off by v_stop² / (2 deceleration)
+          const double v_stop = 100.0 * contacts[c].eps;
+          const Index k = relative_velocity(c, t0, x0, direction_);
+          const double speed = direction_.head(k).norm();
+          if (speed <= v_stop) continue;
+          // sliding clearly: the start direction of a release or passage has served (on a
+          // curved path it would no longer oppose the motion when the contact next slows down)
+          if (ws_.slip_hint.col(contacts[c].force).squaredNorm() > 0.0)
+            set_slip_hint(c, VectorXd());
+          direction_.head(k) /= speed;
+          te = locate(t0, t1, x1, dense, [&](double t, const double* x) {
+            relative_velocity(c, t, x, velocity_);
+            return velocity_.head(k).dot(direction_.head(k)) - v_stop;
+          });
+          break;
+        }
+        case ContactMode::kPassing: {
+          // a contact that could not stick: the zero of v_rel along its direction then
+          const Index k = Index(contacts[c].coordinates.size());
+          auto along = [&](double t, const double* x) {
+            relative_velocity(c, t, x, velocity_);
+            return velocity_.head(k).dot(passing_.col(Index(c)).head(k));
+          };
+          if (along(t0, x0) <= 0.0) {
+            mode_[c] = ContactMode::kSliding;  // passed already (within rounding of the start)
+            continue;
+          }
+          te = locate(t0, t1, x1, dense, along);
+          break;
+        }
+      }
+      if (!std::isnan(te) && (std::isnan(first) || te < first)) {
+        first = te;
+        switching_ = Index(c);
+      }
+    }
+    return first;
+  }
+
+  // switches the contact found by the last find_event at (t, x)
+  Status switch_contact(double t, double* x) {
+    const std::size_t c = std::size_t(switching_);
+    ++traj_.stats.events;
+    switch (mode_[c]) {
+      case ContactMode::kSticking: {
+        // release: friction from its full magnitude along the force that held the contact
+        stick_margin(c, t, x);
+        mode_[c] = ContactMode::kSliding;
+        set_slip_hint(c, holding_);
+        apply_contact_modes();
+        bool changed = false;
+        ProjectionOptions all = o_.projection;
+        return project(t, x, all, changed);
+      }
+      case ContactMode::kSliding: {
+        // the contact stops, or would have to: it sticks when that is admissible, else it
+        // slides on through v_rel = 0, the next event of this contact
+        if (try_stick(c, t, x)) return Status::kOk;
+        const Index k = relative_velocity(c, t, x, velocity_);
+        const double speed = velocity_.head(k).norm();
+        passing_.col(Index(c)).head(k) = velocity_.head(k) / (speed > 0.0 ? speed : 1.0);
+        mode_[c] = ContactMode::kPassing;
+        return Status::kOk;
+      }
+      case ContactMode::kPassing:
+        // v_rel = 0: it sticks now if it can (a stop located early, where the velocity jump
+        // was not yet tolerance-level); else the friction turns against the new motion, at
+        // its full magnitude
+        if (try_stick(c, t, x, false)) return Status::kOk;
+        if (!start_sliding(c, t, x) && traj_.stats.notes.size() < kMaxNotes) {
+          traj_.stats.notes.push_back(
+              "t = " + format(t) + ": contact '" +
+              sys_.nonideal_name(sys_.friction_contacts()[c].force) +
+              "' comes to rest, but its stick constraint (v - u = 0) does not fit the "
+              "constraints there: the regularized law holds it (creeping at about the "
+              "regularization velocity); see docs/friction.md, Limits");
+        }
+        apply_contact_modes();
+        return Status::kOk;
+    }
+    return Status::kOk;
+  }
+
+  // projects x = [q; q'; W] in place with the given mask; false when it did not converge
+  // q_, q'_ ← x projected onto the constraints of p: positions, then velocities (stops at the
+  // first evaluation that fails: its status)
+  Status project_into(double t, const double* x, const ProjectionOptions& p, ProjectionResult& rp,
+                      ProjectionResult& rv) {
+    q_ = Eigen::Map<const VectorXd>(x, n_);
+    qd_ = Eigen::Map<const VectorXd>(x + n_, n_);
+    rp = project_positions(sys_, ws_, q_, t, p);
+    if (rp.status != Status::kOk) return rp.status;
+    rv = project_velocities(sys_, ws_, q_, qd_, t, p);
+    return rv.status;
+  }
+
+  Status project(double t, double* x, const ProjectionOptions& p, bool& changed) {
+    ProjectionResult rp, rv;
+    if (const Status s = project_into(t, x, p, rp, rv); s != Status::kOk) return s;
+    note_violation(rp.violation, rv.violation);
+    changed = rp.iterations > 0 || rv.iterations > 0;
+    if (changed) {
+      ++traj_.stats.projections;
+      Eigen::Map<VectorXd>(x, n_) = q_;
+      Eigen::Map<VectorXd>(x + n_, n_) = qd_;
+    }
+    if (!rp.converged || !rv.converged) {
+      failure_ = "drift control: the projection onto the constraints did not converge at t = " +
+                 format(t) + " (position violation " + format(rp.violation) +
+                 ", velocity violation " + format(rv.violation) + " after " +
+                 format_number(rp.iterations) + " and " + format_number(rv.iterations) +
+                 " iterations)";
+      // the cause, when it is that no state near satisfies the constraints (lock-up)
+      const ConstraintConflict c = find_constraint_conflict(sys_, ws_, q_, qd_, t, p.tolerance);
+      if (c.found) failure_ = describe_conflict(c, t) + "; " + failure_;
+      return Status::kProjectionFailed;
+    }
+    return Status::kOk;
+  }
+
+  // removes from a step's error estimate err the components normal to the projected
+  // constraints at the state x the step reached: what project() after the step removes
+  bool project_error(double t, const double* x, double* err) {
+    q_ = Eigen::Map<const VectorXd>(x, n_);
+    qd_ = Eigen::Map<const VectorXd>(x + n_, n_);
+    Eigen::Map<VectorXd> dq(err, n_), dqd(err + n_, n_);
+    return remove_normal_components(sys_, ws_, q_, qd_, t, projection_, dq, dqd) == Status::kOk;
+  }
+
+  // projects a stage state x in place onto the projected constraints; false when it failed
+  bool project_stage(double t, double* x) {
+    ProjectionResult rp, rv;
+    if (project_into(t, x, projection_, rp, rv) != Status::kOk || !rp.converged || !rv.converged) {
+      return false;
+    }
+    Eigen::Map<VectorXd>(x, n_) = q_;
+    Eigen::Map<VectorXd>(x + n_, n_) = qd_;
+    return true;
+  }
+
+  // drift control after an accepted step; then a requested stop (see stop_requested)
+  Status after_step(double t, double* x, bool& changed) {
+    changed = false;
+    if (o_.progress) report_progress(t);
+    if (projecting_) {
+      if (const Status s = project(t, x, projection_, changed); s != Status::kOk) return s;
+    }
+    if (!stop_requested()) return Status::kOk;
+    // a sample inside the step just taken that is not recorded yet (the fixed-step methods and
+    // BDF emit the samples of a step after this call): the run stops there, in record(), so that
+    // every sample before the stop is the uninterrupted run's. Otherwise it stops here and the
+    // driver records the state at t. (The count bounds the wait, should a sample never come.)
+    if (sample_due(t) && ++stop_wait_ < kMaxStopWait) return Status::kOk;
+    return Status::kInterrupted;
+  }
+
+  // SimulationOptions::should_stop, asked once a step until it says yes (then remembered)
+  bool stop_requested() {
+    if (!stop_requested_ && o_.should_stop && o_.should_stop()) stop_requested_ = true;
+    return stop_requested_;
+  }
+
+  // the run's sample times (sorted), which record() marks off as they are recorded
+  void set_samples(const detail::SampleGrid& samples) { samples_ = &samples; }
+
+  // samples recorded so far, and the time of the last one
+  long recorded() const { return traj_.stats.samples; }
+  double last_time() const { return last_time_; }
+  // the energy balance of the samples recorded
+  const detail::EnergyBalance& balance() const { return balance_; }
+  // what the sample sink threw (null when nothing)
+  const std::exception_ptr& sink_error() const { return sink_error_; }
+
+  // the method taking the steps from now on (for the progress report)
+  void set_integrator(Integrator method) { progress_.integrator = method; }
+
+  // records a sample at t from the state x (projected first, when projecting); returns
+  // kInterrupted after recording it when a stop was requested, unless it is the `last` one
+  Status record(double t, const double* x, bool last = false) {
+    std::copy(x, x + sample_.size(), sample_.begin());
+    if (projecting_) {
+      bool changed = false;
+      ProjectionOptions quiet = projection_;
+      if (const Status s = project(t, sample_.data(), quiet, changed); s != Status::kOk) return s;
+    }
+    q_ = Eigen::Map<const VectorXd>(sample_.data(), n_);
+    qd_ = Eigen::Map<const VectorXd>(sample_.data() + n_, n_);
+    const Status s = forward_dynamics(sys_, ws_, q_, qd_, t);
+    // into the trajectory kept, or into one_ for the sink
+    const bool streamed = bool(o_.sample_sink);
+    Trajectory& out = streamed ? one_ : traj_;
+    if (streamed) {
+      for (auto* f : {&one_.t, &one_.q, &one_.qd, &one_.qdd, &one_.Qc_ideal, &one_.Qc_nonideal,
+                      &one_.lambda, &one_.position_violation, &one_.velocity_violation,
+                      &one_.kinetic_energy, &one_.potential_energy, &one_.energy,
+                      &one_.work_nonideal, &one_.work_ideal, &one_.work_drive, &one_.work_external,
+                      &one_.work_control, &one_.energy_balance_residual}) {
+        f->clear();
+      }
+    }
+    auto push = [](std::vector<double>& f, const VectorXd& v) {
+      f.insert(f.end(), v.data(), v.data() + v.size());
+    };
+    out.t.push_back(t);
+    push(out.q, q_);
+    push(out.qd, qd_);
+    push(out.qdd, ws_.qdd);
+    push(out.Qc_ideal, ws_.Qc_ideal);
+    push(out.Qc_nonideal, ws_.Qc_nonideal);
+    push(out.lambda, ws_.lambda);
+    const double T = detail::kinetic_energy(ws_, qd_),
+                 V = sys_.potential_energy(q_, t, ws_.callables.get());
+    out.kinetic_energy.push_back(T);
+    out.potential_energy.push_back(V);
+    out.energy.push_back(T + V);
+    peak_kinetic_ = std::max(peak_kinetic_, T);
+    // the work channels (absent ones are zero), and the balance so far
+    const auto work = [&](Index channel) {
+      return channel < 0 ? 0.0 : sample_[std::size_t(2 * n_ + channel)] / works_.scale(channel);
+    };
+    const double works[5] = {work(works_.nonideal), work(works_.ideal), work(works_.drive),
+                             work(works_.external), 0.0};
+    out.work_nonideal.push_back(works[0]);
+    out.work_ideal.push_back(works[1]);
+    out.work_drive.push_back(works[2]);
+    out.work_external.push_back(works[3]);
+    out.work_control.push_back(works[4]);
+    out.energy_balance_residual.push_back(balance_.add(t, T, V, T + V, works));
+    // violations of each constraint
+    evaluate_violations(sys_, ws_, q_, qd_, t);
+    for (Index k = 0; k < sys_.constraint_count(); ++k) {
+      const double p = position_violation(sys_, ws_, k), v = velocity_violation(sys_, ws_, k);
+      out.position_violation.push_back(p);
+      out.velocity_violation.push_back(v);
+      note_violation(p, v);
+    }
+    ++traj_.stats.samples;
+    last_time_ = t;
+    // the sample to the sink; what it throws stops the run (the driver rethrows it)
+    if (streamed) {
+      try {
+        o_.sample_sink(one_);
+      } catch (...) {
+        sink_error_ = std::current_exception();
+        failure_ = "the sample sink failed at t = " + format(t);
+        return Status::kInterrupted;
+      }
+    }
+    // the samples recorded (or passed) by now
+    while (samples_ && next_sample_ < samples_->size() && (*samples_)[next_sample_] <= t) {
+      ++next_sample_;
+    }
+    if (s != Status::kOk) {
+      failure_ = describe_status(sys_, ws_);
+      return s;
+    }
+    return !last && stop_requested() ? Status::kInterrupted : Status::kOk;
+  }
+
+  const std::string& failure() const { return failure_; }
+
+ private:
+  // whether a sample time in (last recorded sample, t] has not been recorded yet
+  bool sample_due(double t) const {
+    return samples_ && next_sample_ < samples_->size() && (*samples_)[next_sample_] <= t;
+  }
+
+  // step size from the times the steps reach (BDF reports converged attempts, so a rejected
+  // attempt can make t go back: then the step is unknown and the last one is kept)
+  void report_progress(double t) {
+    if (progress_.steps > 0 && t > progress_.t) progress_.step = t - progress_.t;
+    progress_.t = t;
+    ++progress_.steps;
+    o_.progress(progress_);
+  }
+
+  // contact c's v_rel at (t, x) into the head of v; returns its length
+  Index relative_velocity(std::size_t c, double t, const double* x, VectorXd& v) {
+    q_ = Eigen::Map<const VectorXd>(x, n_);
+    qd_ = Eigen::Map<const VectorXd>(x + n_, n_);
+    detail::sliding_velocity(sys_, ws_, Index(c), q_, qd_, t, false);
+    const Index k = Index(sys_.friction_contacts()[c].coordinates.size());
+    v.head(k) = ws_.sliding.col(Index(c)).head(k);
+    return k;
+  }
+
+  // the first s in (t0, t1] with g(s) <= 0, by bisection on the dense output (g(t0) > 0 is
+  // assumed), or NaN when g(t1) > 0
+  template <class G>
+  double locate(double t0, double t1, const double* x1, const detail::SegmentHooks::Dense& dense,
+                G&& g) {
+    if (g(t1, x1) > 0.0) return std::numeric_limits<double>::quiet_NaN();
+    double lo = t0, hi = t1;
+    while (hi - lo > 1e-14 * std::max(1.0, std::abs(hi))) {
+      const double mid = 0.5 * (lo + hi);
+      dense(mid, event_x_.data());
+      (g(mid, event_x_.data()) > 0.0 ? lo : hi) = mid;
+    }
+    return hi;
+  }
+
+  // mu_static N − |holding force|, with the contact sticking, at (t, x); NaN when the
+  // constraints with the stick rows have no solution there. The stick rows make the normal
+  // constraint's rows redundant, so their minimum-norm shares split the reaction arbitrarily;
+  // the reaction R = share(normal) + share(stick) is unique, and is split here into its part
+  // along the normal constraint's rows (N) and the rest (the friction that holds).
+  double stick_margin(std::size_t c, double t, const double* x) {
+    const FrictionContact& contact = sys_.friction_contacts()[c];
+    q_ = Eigen::Map<const VectorXd>(x, n_);
+    qd_ = Eigen::Map<const VectorXd>(x + n_, n_);
+    if (forward_dynamics(sys_, ws_, q_, qd_, t) != Status::kOk) {
+      return std::numeric_limits<double>::quiet_NaN();
+    }
+    // R = the two constraints' shares of the ideal force and of the other contacts' friction
+    reaction_ =
+        ws_.shares.col(contact.normal_constraint) + ws_.shares.col(contact.stick_constraint);
+    for (Index k : {contact.normal_constraint, contact.stick_constraint}) {
+      detail::constraint_share(sys_, ws_, k, ws_.lambda_nonideal, reaction_part_);
+      reaction_ += reaction_part_;
+    }
+    const Index k = contact.normal_constraint, rows = sys_.constraint(k).rows();
+    if (normals_.rows() != rows) normals_.resize(rows, n_);  // (once per contact size)
+    detail::copy_constraint_rows(sys_, ws_, k, normals_);
+    const auto& normals = normals_;
+    // R_N = projection of R onto the normal rows: a (a·R)/(a·a) for one row
+    if (rows == 1) {
+      const double aa = normals.row(0).squaredNorm();
+      normal_ = normals.row(0).transpose() * (aa > 0.0 ? normals.row(0).dot(reaction_) / aa : 0.0);
+    } else {
+      const MatrixXd Nt = normals.transpose();
+      normal_ = Nt * Nt.completeOrthogonalDecomposition().solve(reaction_);
+    }
+    holding_ = reaction_ - normal_;
+    return contact.mu_static * normal_.norm() - holding_.norm();
+  }
+
+  // Sticks contact c at (t, x) when sticking is admissible, projecting the velocities of x onto
+  // the stick rows; else leaves x and the mode as they were and returns false. Admissible:
+  // (1) the projection removes at most rtol · (largest kinetic energy of the run) — a zero of
+  // v_rel that the mechanism passes through kinematically (a dead centre) would need a velocity
+  // jump; (2) the constraints with the stick rows have a solution there; (3) the force that
+  // holds the contact lies within mu_static N.
+  // `report`: a refusal for reasons 1 or 2 is counted and noted.
+  bool try_stick(std::size_t c, double t, double* x, bool report = true) {
+    q_ = Eigen::Map<const VectorXd>(x, n_);
+    qd_ = Eigen::Map<const VectorXd>(x + n_, n_);
+    const bool evaluated = forward_dynamics(sys_, ws_, q_, qd_, t) == Status::kOk;
+    const double T_before = detail::kinetic_energy(ws_, qd_);
+    mode_[c] = ContactMode::kSticking;
+    apply_contact_modes();
+    auto refuse = [&](const std::string& why) {
+      mode_[c] = ContactMode::kSliding;
+      apply_contact_modes();
+      if (report && !why.empty()) {
+        ++traj_.stats.stick_refusals;
+        if (traj_.stats.notes.size() < kMaxNotes) {
+          traj_.stats.notes.push_back("t = " + format(t) + ": contact '" +
+                                      sys_.nonideal_name(sys_.friction_contacts()[c].force) +
+                                      "' did not stick: " + why + "; it slides on through v = 0");
+        }
+      }
+      return false;
+    };
+    // (1) the velocities with the stick rows, and the kinetic energy that takes
+    ProjectionOptions all = o_.projection;
+    const ProjectionResult rv = project_velocities(sys_, ws_, q_, qd_, t, all);
+    if (!evaluated || rv.status != Status::kOk || !rv.converged) {
+      return refuse(
+          "the velocities cannot be projected onto the stick rows (a constraint that "
+          "moves along its normal? give the surface's motion as surface_velocity, "
+          "docs/friction.md)");
+    }
+    const double removed = T_before - detail::kinetic_energy(ws_, qd_);
+    const double allowed = std::max(o_.rtol, 1e-14) * std::max(peak_kinetic_, T_before);
+    if (removed > allowed) {
+      return refuse("sticking would remove " + format(removed) +
+                    " of kinetic energy (a zero of the sliding velocity that the mechanism passes "
+                    "through)");
+    }
+    std::copy(x, x + sample_.size(), trial_.begin());
+    Eigen::Map<VectorXd>(trial_.data() + n_, n_) = qd_;
+    // (2), (3)
+    const double margin = stick_margin(c, t, trial_.data());
+    if (std::isnan(margin)) return refuse("the constraints with the stick rows have no solution");
+    if (margin < 0.0) return refuse("");  // it reverses: friction cannot hold it
+    if (rv.iterations > 0) ++traj_.stats.projections;
+    note_violation(0.0, rv.violation);
+    std::copy(trial_.begin(), trial_.end(), x);
+    set_slip_hint(c, VectorXd());
+    return true;
+  }
+
+  // contact c slides from v_rel = 0 (passing, or at the start): friction at its full magnitude
+  // against the impending motion, the acceleration of v_rel without this friction. Returns
+  // false when that friction would turn the motion back (it could hold the contact): then the
+  // regularized law acts instead, with no hint.
+  bool start_sliding(std::size_t c, double t, const double* x) {
+    const FrictionContact& contact = sys_.friction_contacts()[c];
+    mode_[c] = ContactMode::kSliding;
+    set_slip_hint(c, VectorXd());
+    apply_contact_modes();
+    ws_.nonideal_enabled[std::size_t(contact.force)] = 0;
+    q_ = Eigen::Map<const VectorXd>(x, n_);
+    qd_ = Eigen::Map<const VectorXd>(x + n_, n_);
+    const bool evaluated = forward_dynamics(sys_, ws_, q_, qd_, t) == Status::kOk;
+    apply_contact_modes();
+    if (!evaluated) return true;  // (the regularized law then decides)
+    // a_rel = P (q''_c − u') without this friction: the impending motion
+    relative_acceleration(c, t);
+    holding_.setZero();
+    const auto& coords = contact.coordinates;
+    for (std::size_t r = 0; r < coords.size(); ++r) holding_[coords[r]] = -velocity_[Index(r)];
+    set_slip_hint(c, holding_);
+    // with the friction at its full magnitude against it, does the contact still move that way?
+    // If not, friction could hold it although the stick was not admissible (a stick constraint
+    // that the model cannot express): no hint then, the regularized law holds it near rest
+    const Index k = Index(coords.size());
+    direction_.head(k) = velocity_.head(k);
+    if (forward_dynamics(sys_, ws_, q_, qd_, t) != Status::kOk) return true;
+    relative_acceleration(c, t);
+    if (velocity_.head(k).dot(direction_.head(k)) > 0.0) return true;
+    set_slip_hint(c, VectorXd());
+    return false;
+  }
+
+  // a_rel = P (q''_c − u') of contact c from the last evaluation (at q_, qd_, t) into the head of
+  // velocity_, P the tangential projector of sliding_velocity
+  void relative_acceleration(std::size_t c, double t) {
+    const FrictionContact& contact = sys_.friction_contacts()[c];
+    const Index k = Index(contact.coordinates.size());
+    for (Index r = 0; r < k; ++r) velocity_[r] = ws_.qdd[contact.coordinates[std::size_t(r)]];
+    const Index basis = detail::sliding_velocity(sys_, ws_, Index(c), q_, qd_, t, false);
+    if (contact.surface_velocity) velocity_.head(k) -= ws_.surface_u_dot.head(k);
+    detail::remove_normals(ws_, basis, velocity_.head(k));
+  }
+
+  // the direction of the friction at |v_rel| <= eps: along `along` (n) on the contact's
+  // sliding coordinates, normalized; none when `along` is empty or zero (see CoulombFriction)
+  void set_slip_hint(std::size_t c, const VectorXd& along) {
+    const FrictionContact& contact = sys_.friction_contacts()[c];
+    auto hint = ws_.slip_hint.col(contact.force);
+    hint.setZero();
+    if (along.size() == 0) return;
+    for (Index i : contact.coordinates) hint[i] = along[i];
+    if (hint.norm() > 0.0) hint.normalize();
+  }
+
+  void note_violation(double p, double v) {
+    traj_.stats.max_position_violation = std::max(traj_.stats.max_position_violation, p);
+    traj_.stats.max_velocity_violation = std::max(traj_.stats.max_velocity_violation, v);
+  }
+
+  std::function<void(const Workspace&)> finished_;
+  const System& sys_;
+  const SimulationOptions& o_;
+  Workspace ws_;
+  Trajectory& traj_;
+  Index n_;
+  VectorXd q_, qd_;
+  // the work channels after q, q' in x (quiet unless BDF, see WorkLayout)
+  detail::WorkLayout works_ = detail::WorkLayout(sys_, o_.integrator != Integrator::kBDF);
+  std::vector<double> sample_ = std::vector<double>(std::size_t(2 * n_ + works_.count));
+  ProjectionOptions projection_;
+  bool projecting_ = false;
+  std::vector<ContactMode> mode_;  // (contacts) what contact c does
+  MatrixXd passing_ = MatrixXd::Zero(
+      n_,
+      Index(sys_.friction_contacts().size()));  // (n × contacts)
+                                                // head of col c: v_rel's direction when c passes
+  std::vector<double> trial_ = std::vector<double>(sample_.size());  // a trial state
+  double peak_kinetic_ = 0.0;                    // largest kinetic energy at the samples so far
+  VectorXd holding_ = VectorXd::Zero(n_);        // (n) holding force of the last stick_margin
+  VectorXd reaction_ = VectorXd::Zero(n_);       // (n) scratch of stick_margin: R
+  VectorXd reaction_part_ = VectorXd::Zero(n_);  // (n) scratch of stick_margin
+  VectorXd normal_ = VectorXd::Zero(n_);         // (n) scratch of stick_margin: R_N
+  MatrixXd normals_;                             // (rows × n) the normal constraint's rows of A
+  VectorXd velocity_ = VectorXd::Zero(n_);       // (n) sliding velocities (head)
+  VectorXd direction_ = VectorXd::Zero(n_);      // (n) sliding direction at the step's start (head)
+  std::vector<double> event_x_ = std::vector<double>(sample_.size());  // dense state
+  Index switching_ = -1;  // the contact of the last event found
+  std::string failure_;
+  ProgressReport progress_;  // what the last progress report said
+  // a requested stop (SimulationOptions::should_stop): asked for; accepted steps since, waiting
+  // for a sample due inside the step; the sample times and the first one not recorded yet
+  bool stop_requested_ = false;
+  long stop_wait_ = 0;
+  static constexpr long kMaxStopWait = 1000;
+  const detail::SampleGrid* samples_ = nullptr;
+  std::size_t next_sample_ = 0;
+  // streamed runs (SimulationOptions::sample_sink): the sample being recorded; what the sink threw
+  Trajectory one_;
+  std::exception_ptr sink_error_;
+  double last_time_ = 0.0;         // time of the last sample recorded
+  detail::EnergyBalance balance_;  // of the samples recorded
+};
+
+}  // namespace
+
+void check_settings(const System& sys, const SimulationOptions& o) {
+  auto fail = [](const char* setting, const std::string& what) {
+    throw SettingError(setting, "ukdyn::simulate: " + std::string(setting) + " " + what);
+  };
+  auto finite = [](double v) { return std::isfinite(v); };
+  // the run's interval: finite, and longer than the resolution of its times
+  if (!finite(o.t_start)) fail("t_start", "(" + format(o.t_start) + ") must be a finite number");
+  if (!finite(o.t_end)) fail("t_end", "(" + format(o.t_end) + ") must be a finite number");
+  if (!(o.t_end - o.t_start > time_resolution(o.t_start, o.t_end))) {
+    fail("t_end", "(" + format(o.t_end) + ") must exceed t_start (" + format(o.t_start) +
+                      ") by more than 1e-12 max(1, |t_start|, |t_end|) = " +
+                      format(time_resolution(o.t_start, o.t_end)) +
+                      ", the resolution of the run's times");
+  }
+  if (!(o.step > 0.0) || !finite(o.step))
+    fail("step", "must be a finite number > 0, got " + format(o.step));
+  if (!(o.rtol > 0.0) || !finite(o.rtol))
+    fail("rtol", "must be a finite number > 0, got " + format(o.rtol));
+  if (!(o.atol > 0.0) || !finite(o.atol))
+    fail("atol", "must be a finite number > 0, got " + format(o.atol));
+  if (!(o.output_every >= 0.0) || !finite(o.output_every)) {
+    fail("output_every",
+         "must be a finite number >= 0 (0: only t_start and t_end), got " + format(o.output_every));
+  }
+  for (std::size_t i = 0; i < o.output_at.size(); ++i) {
+    const double t = o.output_at[i];
+    if (!(t >= o.t_start && t <= o.t_end)) {
+      fail("output_at", "time " + format(t) + " (entry " + format_number(i) +
+                            ") is outside the run [" + format(o.t_start) + ", " + format(o.t_end) +
+                            "]");
+    }
+  }
+  if (!(o.max_step >= 0.0))
+    fail("max_step", "must be >= 0 (0: unlimited), got " + format(o.max_step));
+  if (!(o.energy_balance_tolerance > 0.0)) {
+    fail("energy_balance_tolerance",
+         "must be > 0 (infinity: no check), got " + format(o.energy_balance_tolerance));
+  }
+  if (o.max_steps <= 0) fail("max_steps", "must be positive, got " + format_number(o.max_steps));
+  if (!(o.baumgarte_alpha >= 0.0) || !finite(o.baumgarte_alpha)) {
+    fail("baumgarte_alpha", "must be a finite number >= 0, got " + format(o.baumgarte_alpha));
+  }
+  if (!(o.baumgarte_beta >= 0.0) || !finite(o.baumgarte_beta)) {
+    fail("baumgarte_beta", "must be a finite number >= 0, got " + format(o.baumgarte_beta));
+  }
+  if (!(o.initial_tolerance >= 0.0) || !finite(o.initial_tolerance)) {
+    fail("initial_tolerance", "must be a finite number >= 0, got " + format(o.initial_tolerance));
+  }
+  if (!(o.projection.tolerance > 0.0) || !finite(o.projection.tolerance)) {
+    fail("projection_tolerance", "(projection.tolerance) must be a finite number > 0, got " +
+                                     format(o.projection.tolerance));
+  }
+  // every option within the range of the options table (simulation/options.hpp): the ones not
+  // checked above
+  try {
+    check_options(o);
+  } catch (const OptionError& e) {
+    throw SettingError(e.setting(), "ukdyn::simulate: " + e.problem());
+  }
+  // the fixed-step methods: a step that t resolves, and at most max_steps of them
+  if (o.integrator == Integrator::kRK4 || o.integrator == Integrator::kRK5) {
+    const double resolution = 16.0 * std::numeric_limits<double>::epsilon() *
+                              std::max(std::abs(o.t_start), std::abs(o.t_end));
+    if (!(o.step >= resolution)) {
+      fail("step", "(" + format(o.step) + ") of " + to_string(o.integrator) +
+                       " is below the resolution of t on [" + format(o.t_start) + ", " +
+                       format(o.t_end) +
+                       "], 16 eps max(|t_start|, |t_end|) = " + format(resolution));
+    }
+    // samples no closer than the steps (between steps they would be interpolated, not
+    // integrated)
+    if (o.output_every > 0.0 && o.output_every < o.step) {
+      fail("output_every", "(" + format(o.output_every) + ") is below the step (" + format(o.step) +
+                               ") of " + to_string(o.integrator) +
+                               ": take a step <= output_every, or output_every >= step");
+    }
+    // the steps of each segment, as integrate_explicit takes them (counted in double: the
+    // count may exceed any integer)
+    const std::vector<double> ends = segment_ends(sys, o);
+    double steps = 0.0;
+    for (std::size_t k = 0; k + 1 < ends.size(); ++k) {
+      steps += std::max(1.0, std::ceil((ends[k + 1] - ends[k]) / o.step * (1.0 - 1e-12)));
+    }
+    if (steps > double(o.max_steps)) {
+      fail("step", "(" + format(o.step) + ") of " + to_string(o.integrator) + " takes " +
+                       format(steps) + " steps over [" + format(o.t_start) + ", " +
+                       format(o.t_end) + "], more than max_steps = " + format_number(o.max_steps) +
+                       " (take a larger step, or raise max_steps: simulate: max_steps in a "
+                       "model file, --max-steps on the command line, max_steps= in Python)");
+    }
+  }
+}
+
+std::vector<std::string> check_initial_conditions(const System& sys, const VectorXd& q,
+                                                  const VectorXd& qd, double t, double tolerance) {
+  Workspace ws(sys);
+  evaluate_violations(sys, ws, q, qd, t);
+  return violated(sys, ws, tolerance);
+}
+
+Trajectory simulate(const System& sys, const VectorXd& q0, const VectorXd& qd0,
+                    const SimulationOptions& given) {
+  return detail::simulate_observed(sys, q0, qd0, given, {});
+}
+
+Trajectory detail::simulate_observed(const System& sys, const VectorXd& q0, const VectorXd& qd0,
+                                     const SimulationOptions& given,
+                                     const std::function<void(const Workspace&)>& finished) {
+  validate(sys, q0, qd0, given);
+  check_settings(sys, given);
+  // an rtol below roundoff is raised to the smallest one that means anything (with a note)
+  SimulationOptions o = given;
+  std::string rtol_note;
+  if (o.rtol < kMinimumRtol) {
+    rtol_note = "rtol = " + format(given.rtol) +
+                " is below the roundoff of double: the run uses "
+                "rtol = " +
+                format(kMinimumRtol) + " (kMinimumRtol, 100 eps)";
+    o.rtol = kMinimumRtol;
+  }
+  // the sample times, refused now if too many
+  const detail::SampleGrid samples = sample_grid(sys, o);
+  const auto wall_start = std::chrono::steady_clock::now();
+  Trajectory traj;
+  traj.coordinate_names = sys.coordinate_names();
+  for (const auto& c : sys.constraints()) {
+    traj.constraint_names.push_back(c.name());
+    traj.constraint_rows.push_back(c.rows());
+    traj.constraint_kinds.push_back(c.kind());
+  }
+  traj.n = sys.coordinate_count();
+  traj.m = sys.constraint_rows();
+  if (!rtol_note.empty()) traj.stats.notes.push_back(rtol_note);
+  Run run(sys, o, traj, finished);
+  Workspace& ws = run.workspace();
+  const Index n = sys.coordinate_count();
+
+  // initial conditions: consistent, or projected on request (constraints that contradict each
+  // other are named: no projection helps)
+  VectorXd q = q0, qd = qd0;
+  evaluate_violations(sys, ws, q, qd, o.t_start);
+  if (auto bad = violated(sys, ws, o.initial_tolerance); !bad.empty()) {
+    if (const auto c = initial_conflict(sys, ws, q, qd, o); c.found) {
+      throw InconsistentInitialState(InconsistentInitialState::Cause::kContradictory,
+                                     "ukdyn::simulate: " + describe_conflict(c, o.t_start));
+    }
+    if (!o.project_initial) {
+      throw InconsistentInitialState(
+          InconsistentInitialState::Cause::kNotProjected,
+          "ukdyn::simulate: inconsistent initial conditions at t = " + format(o.t_start) + ": " +
+              join_lines(bad) + " (set project_initial to project them onto the constraints)");
+    }
+    ProjectionOptions all = o.projection;
+    const auto rp = project_positions(sys, ws, q, o.t_start, all);
+    const auto rv = project_velocities(sys, ws, q, qd, o.t_start, all);
+    evaluate_violations(sys, ws, q, qd, o.t_start);
+    bad = violated(sys, ws, o.initial_tolerance);
+    if (!rp.converged || !rv.converged || !bad.empty()) {
+      throw InconsistentInitialState(
+          InconsistentInitialState::Cause::kProjectionFailed,
+          "ukdyn::simulate: no consistent initial state near the one given: after projection " +
+              (bad.empty() ? std::string("the iteration did not converge") : join_lines(bad)));
+    }
+  }
+
+  // x = [q; q'; W] (the work channels start at 0)
+  std::vector<double> x(std::size_t(2 * n + detail::WorkLayout(sys).count), 0.0);
+  Eigen::Map<VectorXd>(x.data(), n) = q;
+  Eigen::Map<VectorXd>(x.data() + n, n) = qd;
+
+  // (quiet work channels for the explicit integrators; stage states violated beyond the
+  // projection tolerance may take the least-squares q'')
+  detail::ConstrainedOde ode(sys, ws, o.integrator != Integrator::kBDF, o.projection.tolerance);
+  detail::SegmentHooks hooks;
+  hooks.after_step = [&](double t, double* xs, bool& changed) {
+    return run.after_step(t, xs, changed);
+  };
+  hooks.output = [&](double t, const double* xs) { return run.record(t, xs); };
+  if (run.projecting()) {
+    hooks.project_error = [&](double t, const double* xs, double* err) {
+      return run.project_error(t, xs, err);
+    };
+    hooks.project_stage = [&](double t, double* xs) { return run.project_stage(t, xs); };
+  }
+  if (!sys.friction_contacts().empty()) {
+    hooks.find_event = [&](double t0, const double* x0, double t1, const double* x1,
+                           const detail::SegmentHooks::Dense& dense) {
+      return run.find_event(t0, x0, t1, x1, dense);
+    };
+  }
+
+  const std::vector<double> ends = segment_ends(sys, o);
+  run.set_samples(samples);
+  auto finish = [&](Status status, const std::string& message, double t_reached) {
+    // the sink's exception, once the integrator has returned
+    if (run.sink_error()) {
+      std::fill(ws.activity_override.begin(), ws.activity_override.end(), -1);
+      std::rethrow_exception(run.sink_error());
+    }
+    traj.stats.status = status;
+    traj.stats.message = message;
+    if (status == Status::kInterrupted && message.empty()) {
+      traj.stats.message = "interrupted at t = " + format(t_reached) +
+                           ": the run was stopped on request; the samples up to there are kept";
+    }
+    traj.stats.t_reached = t_reached;
+    traj.stats.evaluations = ode.evaluations();
+    traj.stats.least_squares = ode.least_squares();
+    // the energy balance certifies a run that reached its end
+    // (a system that does not account for its forces' work is reported, not checked)
+    const double tolerance = sys.accounts_for_energy() ? checked_energy_balance_tolerance(o)
+                                                       : std::numeric_limits<double>::infinity();
+    if (o.sample_sink) {
+      run.balance().finish(traj.stats, tolerance);
+    } else {
+      compute_energy_balance(traj, tolerance);
+    }
+    traj.stats.wall_time =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
+    std::fill(ws.activity_override.begin(), ws.activity_override.end(), -1);
+    return traj;
+  };
+
+  // (CVODE estimates its own first step, which on stiff problems can be far below o.step)
+  double first_step = o.integrator == Integrator::kBDF ? 0.0 : o.step;
+  std::vector<double> x_start;  // (2n + 1) the state where the integrator last started
+  std::size_t next_sample = 0;
+  run.initial_contact_modes(o.t_start, x.data());
+  for (std::size_t seg = 0; seg + 1 < ends.size(); ++seg) {
+    double a = ends[seg];
+    const double b = ends[seg + 1], mid = 0.5 * (a + b);
+    // the constraints of this segment: those active in its interior
+    for (Index k = 0; k < sys.constraint_count(); ++k) {
+      ws.activity_override[std::size_t(k)] = sys.constraint(k).is_active(mid) ? 1 : 0;
+    }
+    run.apply_contact_modes();
+    // a constraint that switches on finds the state inconsistent: project onto it
+    bool changed = false;
+    if (seg > 0 && sys.constraint_count() > 0) {
+      ProjectionOptions all = o.projection;
+      if (const Status s = run.project(a, x.data(), all, changed); s != Status::kOk) {
+        return finish(s, run.failure().empty() ? describe_status(sys, ws) : run.failure(), a);
+      }
+    }
+    // the sample at the start of the run
+    if (seg == 0 && next_sample < samples.size() && samples[next_sample] == a) {
+      if (const Status s = run.record(a, x.data()); s != Status::kOk) {
+        return finish(s, run.failure(), a);
+      }
+      ++next_sample;
+    }
+    // evaluations at a breakpoint end are one-sided (the run's own ends are not breakpoints)
+    const double inf = std::numeric_limits<double>::infinity();
+    ode.set_window(seg == 0 ? -inf : a, seg + 2 == ends.size() ? inf : b);
+    // [a, b], restarted after every stick/slip event and stiffness switch; the segment starts
+    // with the chosen method, and goes on with BDF once dopri5 finds it stiff until the next
+    // event (a switch of the dynamics) or the segment's end
+    Integrator method = o.integrator;
+    bool crossing = false;   // dopri5 across a singular configuration for BDF
+    bool r_crossed = false;  // the last segment was such a crossing
+    for (;;) {
+      const detail::SampleTimes outputs(samples, next_sample, samples.upper_bound(b));
+      const bool switched = method != o.integrator && !crossing;
+      x_start = x;
+      run.set_integrator(method);
+      hooks.cross_singular = crossing;
+      hooks.max_steps = o.max_steps - traj.stats.steps;  // (> 0: checked after each segment)
+      // (after a switch CVODE estimates its own first step: dopri5's last one is stability-bound)
+      detail::SegmentResult r =
+          method == Integrator::kBDF
+              ? detail::integrate_bdf(ode, x, a, b, outputs, o, hooks,
+                                      switched || r_crossed ? 0.0 : first_step)
+              : detail::integrate_explicit(method, ode, x, a, b, outputs, o, hooks, first_step);
+      traj.stats.steps += r.steps;
+      traj.stats.rejected_steps += r.rejected;
+      traj.stats.tangential_steps += r.tangential_steps;
+      traj.stats.projected_stage_steps += r.projected_stage_steps;
+      if (switched) traj.stats.stiff_steps += r.steps;
+      // (the fixed-step methods keep o.step)
+      const bool fixed = method == Integrator::kRK4 || method == Integrator::kRK5;
+      if (r.last_step > 0 && !fixed) first_step = r.last_step;
+      next_sample = std::max(next_sample, samples.upper_bound(r.t_reached));
+      if (r.status == Status::kInterrupted) {
+        // stopped on request: at a sample (recorded), or after a step, where x is the state at
+        // r.t_reached (after drift control; BDF: its last accepted step), recorded as the last
+        if (run.recorded() == 0 || r.t_reached > run.last_time()) {
+          if (const Status s = run.record(r.t_reached, x.data(), true); s != Status::kOk) {
+            return finish(s, run.failure(), r.t_reached);
+          }
+        }
+        return finish(Status::kInterrupted, "", run.last_time());
+      }
+      if (r.status != Status::kOk) {
+        std::string message = r.message;
+        if (message.empty()) message = run.failure();
+        if (message.empty()) message = describe_status(sys, ws);
+        if (r.status == Status::kIntegratorFailure &&
+            (traj.stats.steps >= o.max_steps || message.find("step limit") != std::string::npos)) {
+          message += " (the run's limit max_steps = " + format_number(o.max_steps) +
+                     " accepted steps; raise it: simulate: max_steps in a model file, "
+                     "--max-steps on the command line, max_steps= in Python)";
+        }
+        if (r.status == Status::kIntegratorFailure && detail::step_collapsed(r)) {
+          message +=
+              ". " + detail::diagnose_collapse(sys, ws, o, method, r, x, x_start, a, traj.stats);
+        }
+        return finish(r.status, message, r.t_reached);
+      }
+      if (r.singular || r.crossed) {
+        // BDF before a singular configuration: dopri5 (projected stages) across it, then BDF
+        crossing = r.singular;
+        r_crossed = r.crossed;
+        method = r.singular ? Integrator::kDopri5 : Integrator::kBDF;
+        a = r.t_reached;
+        continue;
+      }
+      r_crossed = false;
+      // the run's step limit, reached exactly at the end of a segment that goes on
+      if (traj.stats.steps >= o.max_steps && r.t_reached < o.t_end) {
+        return finish(Status::kIntegratorFailure,
+                      std::string(to_string(method)) +
+                          ": step limit reached at t = " + format(r.t_reached) +
+                          " (the run's limit max_steps = " + format_number(o.max_steps) +
+                          " accepted steps; raise it: simulate: max_steps in a model file, "
+                          "--max-steps on the command line, max_steps= in Python)",
+                      r.t_reached);
+      }
+      if (r.stiff) {
+        // dopri5 found the problem stiff: BDF from here
+        if (traj.stats.stiff_switches++ == 0) traj.stats.stiff_switch_time = r.t_reached;
+        method = Integrator::kBDF;
+        a = r.t_reached;
+        continue;
+      }
+      if (!r.event) break;
+      method = o.integrator;
+      // a contact sticks or slips: switch it and go on from there (but not forever)
+      if (traj.stats.events >= kMaxEvents) {
+        return finish(Status::kIntegratorFailure,
+                      "stick/slip: more than " + format_number(kMaxEvents) +
+                          " transitions (chattering) by t = " + format(r.t_reached),
+                      r.t_reached);
+      }
+      if (const Status s = run.switch_contact(r.t_reached, x.data()); s != Status::kOk) {
+        return finish(s, run.failure().empty() ? describe_status(sys, ws) : run.failure(),
+                      r.t_reached);
+      }
+      a = r.t_reached;
+      if (!(a < b)) break;
+    }
+  }
+  return finish(Status::kOk, "", o.t_end);
+}
+
+}  // namespace ukdyn

@@ -1,0 +1,197 @@
+// Bad input: misuse throws std::invalid_argument with a useful message (tier 1); numerical
+// failures set a status that describe_status() explains and throw_if_failed() raises (tier 3).
+#include <cmath>
+#include <limits>
+
+#include <gtest/gtest.h>
+
+#include <ukdyn/ukdyn.hpp>
+
+namespace ukdyn {
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+bool contains(const std::string& s, const std::string& part) {
+  return s.find(part) != std::string::npos;
+}
+
+System pendulum(MassMatrixFn mass) {
+  return SystemBuilder({"x", "y"})
+      .mass_matrix(std::move(mass))
+      .forces(
+          [](const VectorXd&, const VectorXd&, double, Eigen::Ref<VectorXd> Q) { Q << 0.0, -9.81; })
+      .add(holonomic(
+          "rod", 1,
+          [](const auto& q, const auto&, auto& phi) { phi[0] = q[0] * q[0] + q[1] * q[1] - 1.0; }))
+      .build();
+}
+
+MassMatrixFn identity_mass() {
+  return [](const VectorXd&, double, Eigen::Ref<MatrixXd> M) { M.setIdentity(); };
+}
+
+VectorXd state(double x, double y) {
+  VectorXd v(2);
+  v << x, y;
+  return v;
+}
+
+TEST(Errors, MassNotPositiveDefiniteIsAStatusWithAClearMessage) {
+  const System sys =
+      pendulum([](const VectorXd&, double, Eigen::Ref<MatrixXd> M) { M << 1.0, 0.0, 0.0, -2.0; });
+  Workspace ws(sys);
+  EXPECT_EQ(forward_dynamics(sys, ws, state(1, 0), state(0, 0), 0.25),
+            Status::kMassNotPositiveDefinite);
+  const std::string msg = describe_status(sys, ws);
+  EXPECT_TRUE(contains(msg, "mass matrix not positive definite")) << msg;
+  EXPECT_TRUE(contains(msg, "t = 0.25")) << msg;
+  EXPECT_THROW(throw_if_failed(sys, ws), SolveError);
+  EXPECT_EQ(ws.counters.failures, 1);
+}
+
+TEST(Errors, MassNotSymmetric) {
+  const System sys =
+      pendulum([](const VectorXd&, double, Eigen::Ref<MatrixXd> M) { M << 1.0, 0.5, 0.0, 1.0; });
+  Workspace ws(sys);
+  EXPECT_EQ(forward_dynamics(sys, ws, state(1, 0), state(0, 0), 0.0), Status::kMassNotSymmetric);
+  EXPECT_TRUE(contains(describe_status(sys, ws), "not symmetric"));
+}
+
+TEST(Errors, NaNInStateNamesTheCoordinate) {
+  const System sys = pendulum(identity_mass());
+  Workspace ws(sys);
+  EXPECT_EQ(forward_dynamics(sys, ws, state(1, 0), state(0, kNaN), 0.0), Status::kNonFiniteInput);
+  const std::string msg = describe_status(sys, ws);
+  EXPECT_TRUE(contains(msg, "q_dot")) << msg;
+  EXPECT_TRUE(contains(msg, "coordinate 'y'")) << msg;
+  EXPECT_EQ(forward_dynamics(sys, ws, state(1, 0), state(0, 0), kNaN), Status::kNonFiniteInput);
+  EXPECT_STREQ(ws.failed_quantity, "t");
+}
+
+TEST(Errors, NaNFromAConstraintNamesTheConstraint) {
+  const System sys =
+      SystemBuilder(2)
+          .mass_matrix(MatrixXd::Identity(2, 2))
+          .add(holonomic("ok", 1, [](const auto& q, const auto&, auto& phi) { phi[0] = q[0]; }))
+          .add(holonomic("bad", 1,
+                         [](const auto& q, const auto&, auto& phi) {
+                           using std::sqrt;
+                           phi[0] = sqrt(q[1]);  // derivative is Inf at 0, NaN below
+                         }))
+          .build();
+  Workspace ws(sys);
+  EXPECT_EQ(forward_dynamics(sys, ws, state(0, -1), state(0, 0), 0.0), Status::kNonFiniteInput);
+  const std::string msg = describe_status(sys, ws);
+  EXPECT_TRUE(contains(msg, "constraint 'bad'")) << msg;
+  EXPECT_EQ(ws.failed_index, 1);
+}
+
+TEST(Errors, NaNInForceOrC) {
+  const System sys = SystemBuilder(2)
+                         .mass_matrix(MatrixXd::Identity(2, 2))
+                         .forces([](const VectorXd&, const VectorXd&, double t,
+                                    Eigen::Ref<VectorXd> Q) { Q << (t > 1 ? kNaN : 0.0), 0.0; })
+                         .add(NonIdealForce("broken",
+                                            [](const VectorXd&, const VectorXd&, double t,
+                                               const IdealForceInfo&, Eigen::Ref<VectorXd> C) {
+                                              if (t < 0) C[0] = kNaN;
+                                            }))
+                         .build();
+  Workspace ws(sys);
+  EXPECT_EQ(forward_dynamics(sys, ws, state(0, 0), state(0, 0), 2.0), Status::kNonFiniteInput);
+  EXPECT_STREQ(ws.failed_quantity, "Q");
+  EXPECT_EQ(forward_dynamics(sys, ws, state(0, 0), state(0, 0), -1.0), Status::kNonFiniteInput);
+  EXPECT_TRUE(contains(describe_status(sys, ws), "non-ideal force 'broken'"));
+  EXPECT_EQ(forward_dynamics(sys, ws, state(0, 0), state(0, 0), 0.0), Status::kOk);
+}
+
+TEST(Errors, InconsistentConstraintsAreReportedNotLeastSquared) {
+  // x'' = 0 and x'' = 1 at once
+  auto row = [](double rhs) {
+    return [rhs](const VectorXd&, const VectorXd&, double, Eigen::Ref<MatrixXd> A,
+                 Eigen::Ref<VectorXd> b) {
+      A << 1.0, 0.0;
+      b << rhs;
+    };
+  };
+  const System sys = SystemBuilder(2)
+                         .mass_matrix(MatrixXd::Identity(2, 2))
+                         .add(acceleration_constraint("zero", 1, row(0.0)))
+                         .add(acceleration_constraint("one", 1, row(1.0)))
+                         .build();
+  Workspace ws(sys);
+  EXPECT_EQ(forward_dynamics(sys, ws, state(0, 0), state(0, 0), 0.0),
+            Status::kInconsistentConstraints);
+  EXPECT_NEAR(ws.residuals.constraint, std::sqrt(0.5), 1e-14);  // least squares x'' = 1/2
+  EXPECT_EQ(ws.rank, 1);
+  const std::string msg = describe_status(sys, ws);
+  EXPECT_TRUE(contains(msg, "inconsistent constraints")) << msg;
+  EXPECT_TRUE(contains(msg, "rank(A) = 1 of 2 active rows")) << msg;
+  try {
+    throw_if_failed(sys, ws);
+    FAIL();
+  } catch (const SolveError& e) {
+    EXPECT_EQ(e.status(), Status::kInconsistentConstraints);
+  }
+}
+
+TEST(Errors, MisuseThrowsInvalidArgumentNamingTheProblem) {
+  const System sys = pendulum(identity_mass());
+  const System other = pendulum(identity_mass());
+  Workspace ws(sys);
+  try {
+    forward_dynamics(sys, ws, VectorXd::Zero(3), VectorXd::Zero(2), 0.0);
+    FAIL();
+  } catch (const std::invalid_argument& e) {
+    EXPECT_TRUE(contains(e.what(), "q has 3 entries, expected n = 2")) << e.what();
+  }
+  try {
+    forward_dynamics(other, ws, VectorXd::Zero(2), VectorXd::Zero(2), 0.0);
+    FAIL();
+  } catch (const std::invalid_argument& e) {
+    EXPECT_TRUE(contains(e.what(), "another system")) << e.what();
+  }
+  EXPECT_THROW(Workspace(sys, SolverOptions{.rank_threshold = 0.0}), std::invalid_argument);
+  EXPECT_THROW(Workspace(sys, SolverOptions{.consistency_tolerance = -1.0}), std::invalid_argument);
+}
+
+TEST(Errors, BuilderRejectsIncompleteOrDuplicateDescriptions) {
+  EXPECT_THROW(SystemBuilder(0), std::invalid_argument);
+  EXPECT_THROW(SystemBuilder({"x", "x"}), std::invalid_argument);
+  try {
+    SystemBuilder(2).build();
+    FAIL();
+  } catch (const std::invalid_argument& e) {
+    EXPECT_TRUE(contains(e.what(), "no mass matrix")) << e.what();
+  }
+  EXPECT_THROW(SystemBuilder(2).mass_matrix(MatrixXd::Identity(3, 3)), std::invalid_argument);
+  auto c = holonomic("c", 1, [](const auto& q, const auto&, auto& phi) { phi[0] = q[0]; });
+  EXPECT_THROW(SystemBuilder(2).mass_matrix(MatrixXd::Identity(2, 2)).add(c).add(c).build(),
+               std::invalid_argument);
+  EXPECT_THROW(holonomic("", 1, [](const auto&, const auto&, auto&) {}), std::invalid_argument);
+  EXPECT_THROW(holonomic("z", 0, [](const auto&, const auto&, auto&) {}), std::invalid_argument);
+  EXPECT_THROW(c.active_between(2.0, 1.0), std::invalid_argument);
+  const System sys = pendulum(identity_mass());
+  try {
+    sys.constraint_index("rdo");
+    FAIL();
+  } catch (const std::invalid_argument& e) {
+    EXPECT_TRUE(contains(e.what(), "no constraint named 'rdo'; the constraints are 'rod'"))
+        << e.what();
+  }
+}
+
+TEST(Errors, RecoversAfterAFailure) {
+  const System sys = pendulum(identity_mass());
+  Workspace ws(sys);
+  EXPECT_EQ(forward_dynamics(sys, ws, state(kNaN, 0), state(0, 0), 0.0), Status::kNonFiniteInput);
+  EXPECT_EQ(forward_dynamics(sys, ws, state(1, 0), state(0, 0), 0.0), Status::kOk);
+  EXPECT_EQ(describe_status(sys, ws), "ok");
+  EXPECT_NEAR(ws.Qc.norm(), 0.0, 1e-15);  // horizontal at rest: no tension
+  EXPECT_EQ(ws.counters.evaluations, 2);
+  EXPECT_EQ(ws.counters.failures, 1);
+}
+
+}  // namespace
+}  // namespace ukdyn

@@ -1,0 +1,274 @@
+// Diagnoses that name the cause (issue #14, items 4 and 6, and D18 of the reliability report):
+// constant sub-expressions that are not finite real doubles, duplicate YAML keys and documents,
+// contradictory and locking constraints, files that are not model files.
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+#include <gtest/gtest.h>
+
+#include <ukdyn/modelfile/model.hpp>
+#include <ukdyn/ukdyn.hpp>
+
+namespace ukdyn {
+namespace {
+
+const std::string kData = std::string(UKDYN_TEST_DATA_DIR) + "/diagnoses/";
+
+// the error a model text raises, or "" when it loads
+std::string error_of(const std::string& text) {
+  try {
+    parse_model(text, "m.yaml");
+  } catch (const ModelError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+std::string error_of_file(const std::string& path) {
+  try {
+    load_model(path);
+  } catch (const ModelError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+bool contains(const std::string& s, const std::string& part) {
+  return s.find(part) != std::string::npos;
+}
+
+// a one-coordinate model whose potential is `V` (line 3, from column 19)
+std::string with_potential(const std::string& V) {
+  return "coordinates: [x]\nkinetic_energy: 0.5*x_dot^2\npotential_energy: " + V +
+         "\ninitial: {q: {x: 0.5}}\n";
+}
+
+}  // namespace
+
+// ---- D12: constant sub-expressions, located at their function or operator --------------------
+
+TEST(ModelDiagnoses, ComplexConstantsAreLocatedAtTheirFunction) {
+  std::string e = error_of(with_potential("acos(2)*x"));
+  EXPECT_TRUE(contains(e,
+                       "m.yaml:3:19: error: in potential_energy: cannot evaluate: acos(2) is "
+                       "complex"))
+      << e;
+  // (-8)^(1/3): the '^' is the 5th character
+  e = error_of(with_potential("(-8)^(1/3)*x"));
+  EXPECT_TRUE(contains(e, "m.yaml:3:23: error:")) << e;
+  EXPECT_TRUE(contains(e, "is complex")) << e;
+}
+
+TEST(ModelDiagnoses, OverflowingConstantsAreLocated) {
+  std::string e = error_of(with_potential("exp(1000)*x"));
+  EXPECT_TRUE(contains(e, "m.yaml:3:19: error:")) << e;
+  EXPECT_TRUE(contains(e, "exp(1000) overflows a double")) << e;
+  e = error_of(with_potential("10^400*x"));
+  EXPECT_TRUE(contains(e, "m.yaml:3:21: error:")) << e;
+  EXPECT_TRUE(contains(e, "overflows a double")) << e;
+  e = error_of(with_potential("x + sinh(1e6)"));
+  EXPECT_TRUE(contains(e, "m.yaml:3:23: error:")) << e;
+  EXPECT_TRUE(contains(e, "overflows a double")) << e;
+  e = error_of(with_potential("1e300*1e300*x"));
+  EXPECT_TRUE(contains(e, "overflows a double")) << e;
+}
+
+TEST(ModelDiagnoses, TangentAtItsPoleToWithinRoundoffIsRefused) {
+  std::string e = error_of(with_potential("tan(pi/2)*x"));
+  EXPECT_TRUE(contains(e, "m.yaml:3:19: error:")) << e;
+  EXPECT_TRUE(contains(e, "tan is at its pole")) << e;
+  // with a parameter: tan(3*pi/2) too
+  e = error_of("parameters: {a: 4.71238898038469}\n" + with_potential("tan(a)*x"));
+  EXPECT_TRUE(contains(e, "m.yaml:4:19: error:")) << e;
+  EXPECT_TRUE(contains(e, "tan is at its pole")) << e;
+}
+
+TEST(ModelDiagnoses, LargeButFiniteConstantsAreKept) {
+  // exp(700) ≈ 1.0e304, 10^300, tan(1.57) ≈ 1255.8, acos(1) = 0, (-8)^3: all finite and real
+  for (const char* V : {"exp(700)*x", "10^300*x", "tan(1.57)*x", "acos(1)*x", "(-8)^3*x",
+                        "sinh(700)*x^2", "x*tan(pi/4)"}) {
+    EXPECT_EQ(error_of(with_potential(V)), "") << V;
+  }
+  const Model m = parse_model(with_potential("tan(1.57)*x"));
+  // Q = -dV/dx = -tan(1.57) = -1255.7655915007897 (closed form)
+  Workspace ws(m.system);
+  ASSERT_EQ(forward_dynamics(m.system, ws, m.q0, m.qd0, 0.0), Status::kOk);
+  EXPECT_NEAR(ws.qdd[0], -1255.7655915007897, 1e-9);
+}
+
+// ---- D9: duplicate keys and a second document ------------------------------------------------
+
+TEST(ModelDiagnoses, DuplicateKeysAreErrorsAtTheSecondCopy) {
+  // a parameter given twice: the second k (column 20), the first named by line and column
+  std::string e = error_of_file(kData + "dup_keys_precedence.yaml");
+  EXPECT_TRUE(contains(e,
+                       "dup_keys_precedence.yaml:1:20: error: the key 'k' is given twice in "
+                       "this mapping (first at line 1, column 14)"))
+      << e;
+  // a top-level key given twice
+  e = error_of("coordinates: [x]\nkinetic_energy: 0.5*x_dot^2\nkinetic_energy: x_dot^2\n");
+  EXPECT_TRUE(contains(e, "m.yaml:3:1: error: the key 'kinetic_energy' is given twice")) << e;
+  EXPECT_TRUE(contains(e, "first at line 2")) << e;
+  // deep inside: a constraint's entry
+  e = error_of(
+      "coordinates: [x, y]\nkinetic_energy: 0.5*(x_dot^2 + y_dot^2)\nconstraints:\n"
+      "  - name: c\n    holonomic: x\n    holonomic: y\n");
+  EXPECT_TRUE(contains(e, "m.yaml:6:5: error: the key 'holonomic' is given twice")) << e;
+}
+
+TEST(ModelDiagnoses, ASecondDocumentIsAnError) {
+  const std::string e = error_of_file(kData + "yaml_multi_doc.yaml");
+  EXPECT_TRUE(contains(e, "yaml_multi_doc.yaml:3:")) << e;
+  EXPECT_TRUE(contains(e, "a second YAML document")) << e;
+}
+
+TEST(ModelDiagnoses, SelfReferencingAliasAndDeepNesting) {
+  std::string e = error_of("coordinates: &c [x, *c]\nkinetic_energy: 0.5*x_dot^2\n");
+  EXPECT_TRUE(contains(e, "m.yaml:1:21: error: this alias refers to a node that contains it")) << e;
+  e = error_of("name: " + std::string(100000, '[') + "\n");
+  // (yaml-cpp marks where it gave up: the end of the brackets)
+  EXPECT_TRUE(contains(e, "m.yaml:2:1: error: the YAML nests too deep")) << e;
+}
+
+// ---- D18: not a model file --------------------------------------------------------------------
+
+TEST(ModelDiagnoses, DirectoryEmptyFileXmlAndDevZero) {
+  std::string e = error_of_file(kData);
+  EXPECT_TRUE(contains(e, "is a directory, not a model file")) << e;
+  const auto dir = std::filesystem::temp_directory_path() / "ukdyn_test_model_diagnoses";
+  std::filesystem::create_directories(dir);
+  const std::string empty = (dir / "empty.yaml").string();
+  { std::ofstream(empty) << "# nothing\n"; }
+  e = error_of_file(empty);
+  EXPECT_TRUE(contains(e, "the model file is empty")) << e;
+  EXPECT_TRUE(contains(e, "empty.yaml:1:1: error:")) << e;  // located, as every reader error
+  const std::string urdf = (dir / "robot.urdf").string();
+  { std::ofstream(urdf) << "<?xml version=\"1.0\"?>\n<robot name=\"r\"></robot>\n"; }
+  e = error_of_file(urdf);
+  EXPECT_TRUE(contains(e, "XML")) << e;
+  EXPECT_TRUE(contains(e, "docs/model-format.md")) << e;
+  if (std::filesystem::exists("/dev/zero")) {
+    e = error_of_file("/dev/zero");
+    EXPECT_TRUE(contains(e, "larger than 64 MB")) << e;
+  }
+  std::filesystem::remove_all(dir);
+}
+
+TEST(ModelDiagnoses, ANulByteIsNamedWhereItIs) {
+  // yaml-cpp's own message was "unknown escape character: <newline>"
+  std::string text = "coordinates: [x]\nkinetic_energy: 0.5*x_dot^2";
+  text += '\0';
+  text += "\n";
+  const std::string e = error_of(text);
+  EXPECT_TRUE(contains(e, "m.yaml:2:28: error: the model text holds a NUL byte")) << e;
+}
+
+TEST(ModelDiagnoses, FlowMappingCommaSuggestsQuoting) {
+  const std::string e = error_of_file(kData + "yaml_flow_comma.yaml");
+  EXPECT_TRUE(contains(e, "yaml_flow_comma.yaml:18:")) << e;
+  EXPECT_TRUE(contains(e, "quote the expression")) << e;
+}
+
+TEST(ModelDiagnoses, RegularizationVelocityZeroIsLocatedAtItsEntry) {
+  const std::string e = error_of_file(kData + "coulomb_regularization_zero.yaml");
+  EXPECT_TRUE(contains(e,
+                       "coulomb_regularization_zero.yaml:8:78: error: "
+                       "regularization_velocity must be > 0"))
+      << e;
+}
+
+TEST(ModelDiagnoses, SpringWhosePointsCoincideIsRefused) {
+  const std::string e = error_of_file(kData + "mb_spring_zero_length.yaml");
+  EXPECT_TRUE(contains(e,
+                       "mb_spring_zero_length.yaml:5:5: error: force 's': its two points "
+                       "coincide"))
+      << e;
+}
+
+// ---- D11: contradictory and locking constraints ----------------------------------------------
+
+TEST(ModelDiagnoses, ContradictoryConstraintsAreNamedByCheckAndRun) {
+  for (const char* file : {"inconsistent_noproj.yaml", "inconsistent_constraints.yaml"}) {
+    const Model m = load_model(kData + file);
+    const CheckReport r = check_model(m);
+    EXPECT_EQ(r.contradictory, (std::vector<std::string>{"at0", "at1"})) << file;
+    EXPECT_TRUE(r.redundant.empty()) << file;
+    ASSERT_FALSE(r.ok());
+    EXPECT_TRUE(contains(r.problems.front(), "contradict each other")) << r.problems.front();
+    try {
+      run_model(m);
+      ADD_FAILURE() << file << ": ran";
+    } catch (const InconsistentInitialState& e) {
+      EXPECT_EQ(e.cause(), InconsistentInitialState::Cause::kContradictory) << file;
+      const std::string what = e.what();
+      EXPECT_TRUE(contains(what, "the constraints 'at0', 'at1' contradict each other")) << what;
+      EXPECT_FALSE(contains(what, "project_initial")) << what;
+      // x = 0 and x = 1: the least-squares x = 1/2 leaves (1/2, -1/2), norm 1/sqrt(2)
+      EXPECT_TRUE(contains(what, "least violation is 0.707")) << what;
+    }
+  }
+  // 1 = 0
+  const Model m = load_model(kData + "constraint_const.yaml");
+  const CheckReport r = check_model(m);
+  EXPECT_EQ(r.contradictory, (std::vector<std::string>{"c"}));
+  try {
+    run_model(m);
+    ADD_FAILURE() << "ran";
+  } catch (const InconsistentInitialState& e) {
+    EXPECT_EQ(e.cause(), InconsistentInitialState::Cause::kContradictory);
+    EXPECT_TRUE(contains(e.what(), "the constraint 'c' cannot be satisfied")) << e.what();
+  }
+}
+
+// The causes are typed (front ends read cause(), not the message): a pendulum started off its
+// rod is kNotProjected without projection, and consistent after it
+TEST(ModelDiagnoses, InconsistentInitialStateIsTypedByItsCause) {
+  const std::string text =
+      "coordinates: [x, y]\nmass_matrix: [[1, 0], [0, 1]]\nforces: [0, -9.81]\n"
+      "constraints:\n  - {name: rod, holonomic: x^2 + y^2 - 1}\n"
+      "initial: {q: {x: 1.1, y: 0}}\nsimulate: {t_end: 0.01}\n";
+  Model m = parse_model(text, "m.yaml");
+  try {
+    run_model(m);
+    ADD_FAILURE() << "ran from an inconsistent state";
+  } catch (const InconsistentInitialState& e) {
+    EXPECT_EQ(e.cause(), InconsistentInitialState::Cause::kNotProjected);
+    EXPECT_TRUE(contains(e.what(), "inconsistent initial conditions at t = 0: ")) << e.what();
+  }
+  m.options.project_initial = true;
+  const ModelRun run = run_model(m);
+  // projected onto the rod in the M-norm (M = I): (1, 0)
+  EXPECT_NEAR(run.trajectory.q[0], 1.0, 1e-12);
+  EXPECT_NEAR(run.trajectory.q[1], 0.0, 1e-12);
+}
+
+TEST(ModelDiagnoses, ConsistentRedundantConstraintsAreNotContradictory) {
+  // x = 1 twice over, started at x = 0.5 with projection: redundant, consistent
+  const Model m = parse_model(
+      "coordinates: [x, y]\nkinetic_energy: 0.5*(x_dot^2+y_dot^2)\n"
+      "constraints:\n  - {name: a, holonomic: x - 1}\n  - {name: b, holonomic: 2*x - 2}\n"
+      "initial: {q: {x: 0.5}, project: true}\nsimulate: {t_end: 0.1}\n");
+  const CheckReport r = check_model(m);
+  EXPECT_TRUE(r.contradictory.empty());
+  EXPECT_EQ(r.redundant, (std::vector<std::string>{"b"}));
+  const ModelRun run = run_model(m);
+  EXPECT_EQ(run.trajectory.stats.status, Status::kOk);
+}
+
+TEST(ModelDiagnoses, FourBarLockUpIsReportedAsLockUp) {
+  // the crank angle where |BD| = lb + lr: (lc cos θ − d)² + (lc sin θ)² = 0.64 gives
+  // cos θ = (0.09 + 1 − 0.64)/0.6 = 0.75, θ = t = acos(0.75) = 0.7227 s
+  Model m = load_model(kData + "fourbar_lockup.yaml");
+  m.options.t_end = 1.0;
+  const ModelRun run = run_model(m);
+  const RunStatistics& s = run.trajectory.stats;
+  EXPECT_NE(s.status, Status::kOk);
+  EXPECT_NEAR(s.t_reached, std::acos(0.75), 2e-3);
+  EXPECT_TRUE(contains(s.message, "the constraints have no solution near t = ")) << s.message;
+  EXPECT_TRUE(contains(s.message, "the mechanism locks up")) << s.message;
+  EXPECT_TRUE(contains(s.message, "'drive'")) << s.message;
+}
+
+}  // namespace ukdyn
