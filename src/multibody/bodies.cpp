@@ -169,7 +169,7 @@ Force applied(std::string name, BodyId body, const Vector3d& p, WrenchFn fn) {
 
 // ---------------------------------------------------------------------------------------------
 
-struct Multibody::Data {
+struct Multibody::Impl {
   struct Body {
     BodyInfo info;
     VectorXd q0, qd0;  // the body's coordinates and velocities
@@ -181,11 +181,11 @@ struct Multibody::Data {
   Index n = 0;
 };
 
-Multibody::Multibody() : d_(std::make_unique<Data>()) {}
+Multibody::Multibody() : impl_(std::make_unique<Impl>()) {}
 Multibody::~Multibody() = default;
-Multibody::Multibody(const Multibody& o) : d_(std::make_unique<Data>(*o.d_)) {}
+Multibody::Multibody(const Multibody& o) : impl_(std::make_unique<Impl>(*o.impl_)) {}
 Multibody& Multibody::operator=(const Multibody& o) {
-  d_ = std::make_unique<Data>(*o.d_);
+  impl_ = std::make_unique<Impl>(*o.impl_);
   return *this;
 }
 
@@ -202,26 +202,26 @@ void require_positive(double x, const std::string& who, const char* what) {
 BodyId Multibody::add_particle(std::string name, double mass, const Vector3d& p0,
                                const Vector3d& v0) {
   require_positive(mass, "add_particle('" + name + "')", "mass");
-  Data::Body b;
-  b.info = {std::move(name), BodyKind::kParticle, d_->n, 3, mass, Vector3d::Zero()};
+  Impl::Body b;
+  b.info = {std::move(name), BodyKind::kParticle, impl_->n, 3, mass, Vector3d::Zero()};
   b.q0 = p0;
   b.qd0 = v0;
-  d_->n += 3;
-  d_->bodies.push_back(std::move(b));
-  return BodyId(d_->bodies.size()) - 1;
+  impl_->n += 3;
+  impl_->bodies.push_back(std::move(b));
+  return BodyId(impl_->bodies.size()) - 1;
 }
 
 BodyId Multibody::add_planar_body(std::string name, double mass, double inertia,
                                   const Vector3d& pose0, const Vector3d& vel0) {
   require_positive(mass, "add_planar_body('" + name + "')", "mass");
   require_positive(inertia, "add_planar_body('" + name + "')", "inertia");
-  Data::Body b;
-  b.info = {std::move(name), BodyKind::kPlanar, d_->n, 3, mass, Vector3d(0, 0, inertia)};
+  Impl::Body b;
+  b.info = {std::move(name), BodyKind::kPlanar, impl_->n, 3, mass, Vector3d(0, 0, inertia)};
   b.q0 = pose0;
   b.qd0 = vel0;
-  d_->n += 3;
-  d_->bodies.push_back(std::move(b));
-  return BodyId(d_->bodies.size()) - 1;
+  impl_->n += 3;
+  impl_->bodies.push_back(std::move(b));
+  return BodyId(impl_->bodies.size()) - 1;
 }
 
 BodyId Multibody::add_rigid_body(std::string name, double mass, const Vector3d& inertia,
@@ -234,29 +234,29 @@ BodyId Multibody::add_rigid_body(std::string name, double mass, const Vector3d& 
     throw std::invalid_argument("ukdyn::mb::Multibody::" + who + ": the quaternion is zero");
   }
   const Quaterniond u = u0.normalized();
-  Data::Body b;
-  b.info = {std::move(name), BodyKind::kRigid, d_->n, 7, mass, inertia};
+  Impl::Body b;
+  b.info = {std::move(name), BodyKind::kRigid, impl_->n, 7, mass, inertia};
   b.q0.resize(7);
   b.qd0.resize(7);
   b.q0 << r0, u.w(), u.x(), u.y(), u.z();
   // u' = ½ (0, ω_W) ⊗ u = ½ (−ω·e, u0 ω + ω × e)
   const Vector3d e(u.x(), u.y(), u.z());
   b.qd0 << v0, -0.5 * w0.dot(e), 0.5 * (u.w() * w0 + w0.cross(e));
-  d_->n += 7;
-  d_->bodies.push_back(std::move(b));
-  return BodyId(d_->bodies.size()) - 1;
+  impl_->n += 7;
+  impl_->bodies.push_back(std::move(b));
+  return BodyId(impl_->bodies.size()) - 1;
 }
 
 Multibody& Multibody::add_joint(Joint joint) {
-  d_->joints.push_back(std::move(joint));
+  impl_->joints.push_back(std::move(joint));
   return *this;
 }
 Multibody& Multibody::add_force(Force force) {
-  d_->forces.push_back(std::move(force));
+  impl_->forces.push_back(std::move(force));
   return *this;
 }
 Multibody& Multibody::set_gravity(const Vector3d& g) {
-  d_->g = g;
+  impl_->g = g;
   return *this;
 }
 
@@ -283,7 +283,7 @@ Index MultibodyModel::joint(std::string_view name) const {
 // ---------------------------------------------------------------------------------------------
 
 MultibodyModel Multibody::build() const {
-  const Data& d = *d_;
+  const Impl& d = *impl_;
   const std::string who = "ukdyn::mb::Multibody::build: ";
   if (d.n == 0) throw std::invalid_argument(who + "no bodies");
   struct {  // everything of the MultibodyModel but its System (which has no default state)

@@ -272,8 +272,8 @@ class Multibody {
   MultibodyModel build() const;
 
  private:
-  struct Data;
-  std::unique_ptr<Data> d_;
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
 };
 
 /// Pose of a body at q: position of its centre of mass and orientation (planar: rotation about z
