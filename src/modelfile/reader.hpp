@@ -1,9 +1,9 @@
-// The model-file reader's internals, shared by the files that read its sections:
-//   modelfile/reader.cpp            the file, parameters, coordinates, dynamics, constraints,
-//   non-ideal
-//                        forces, initial state, settings and outputs
-//   modelfile/reader_multibody.cpp  bodies:, joints: and forces: (a multibody model)
-//   modelfile/reader_control.cpp    control: (the controller run_model applies)
+// The model-file reader's internals, shared by the files that read its sections (modelfile/):
+//   reader.cpp            the file, parameters, coordinates, dynamics, constraints, non-ideal
+//                         forces, initial state, settings and outputs
+//   reader_multibody.cpp  bodies:, joints: and forces: (a multibody model)
+//   reader_control.cpp    control: (the controller run_model applies)
+//   yaml_structure.cpp    what yaml-cpp's node tree hides (duplicate keys, documents, aliases)
 #pragma once
 
 #include <algorithm>
@@ -322,20 +322,18 @@ class Reader {
   void check_settings(const YAML::Node& root, const Model& model);
   Index coordinate(const YAML::Node& node);
 
-  // ---- multibody models (modelfile/reader_multibody.cpp): bodies:, joints:, forces:
-  // ----------------- Builds the plant from the bodies, joints and force elements; sets
-  // coordinates_, velocities_ (the bodies' coordinates: <body>_x, _y, _theta | _z, _u0 … _u3) and
-  // the expression set; fills model.multibody, q0 and qd0 (the bodies' initial poses and
-  // velocities).
+  // ---- multibody models (modelfile/reader_multibody.cpp): bodies:, joints:, forces: --------
+  // Builds the plant from the bodies, joints and force elements; sets coordinates_, velocities_
+  // (the bodies' coordinates: <body>_x, _y, _theta | _z, _u0 … _u3) and the expression set;
+  // fills model.multibody, q0 and qd0 (the bodies' initial poses and velocities).
   Model read_multibody(const YAML::Node& root);
   // the sections' reader (modelfile/reader_multibody.cpp): uses fail, number, expression and
   // compile
   friend class MultibodyReader;
 
-  // ---- control (modelfile/reader_control.cpp): control:
-  // --------------------------------------------- Builds model.controller from the control: section
-  // (nothing when absent). With `nominal:` the plant is read again with those parameters for the
-  // controller's own model.
+  // ---- control (modelfile/reader_control.cpp): control: ------------------------------------
+  // Builds model.controller from the control: section (nothing when absent). With `nominal:` the
+  // plant is read again with those parameters for the controller's own model.
   void read_control(const YAML::Node& root, Model& model);
   ErrorDynamics read_error_dynamics(const YAML::Node& r, const std::string& what,
                                     ConstraintKind kind);

@@ -175,8 +175,7 @@ class Workspace {
   /// (K) Baumgarte gains in force, initialized from Constraint::stabilization(); the
   /// simulation may change them (DriftControl::kBaumgarte).
   std::vector<Stabilization> stabilization;
-  // --- violations, evaluate_violations (dynamics/projection.hpp) and stabilized assembly
-  // ----------
+  // --- violations, evaluate_violations (dynamics/projection.hpp) and stabilized assembly ---
   VectorXd phi;      ///< position-level violation per row (m)
   VectorXd phi_dot;  ///< velocity-level violation per row (m)
   // --- stage 3, solve_ideal ---------------------------------------------------------------
