@@ -18,6 +18,11 @@
 //                                                       1e-10: a tenth of the closure target)
 //   --problems=PATH                                     problems.json (default:
 //                                                       bench/data/ in the repository)
+//   --once=ID/rk4|rk5                                   one run of the timed loop (e.g. P1/rk4)
+//                                                       and nothing else, for instruction
+//                                                       counts: valgrind --tool=callgrind
+//                                                       --toggle-collect='ukdyn::simulate(*'
+//                                                       (instructions per step = Ir / steps)
 //
 // Counters: ms_per_sim_s (wall milliseconds per simulated second), max_violation and
 // final_violation (distance between the two loop-closure points from the body poses,
@@ -420,7 +425,7 @@ nlohmann::ordered_json record(const Problem& p, ukdyn::Integrator method) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  std::string json_path;
+  std::string json_path, once;
   std::string problems =
       (std::filesystem::path(__FILE__).parent_path() / "data/problems.json").string();
   // our flags; the rest goes to Google Benchmark
@@ -438,6 +443,8 @@ int main(int argc, char** argv) {
       g_projection_tolerance = std::atof(argv[i] + 23);
     } else if (std::strncmp(argv[i], "--problems=", 11) == 0) {
       problems = argv[i] + 11;
+    } else if (std::strncmp(argv[i], "--once=", 7) == 0) {
+      once = argv[i] + 7;
     } else {
       rest.push_back(argv[i]);
     }
@@ -450,6 +457,27 @@ int main(int argc, char** argv) {
     return 1;
   }
   const ukdyn::Integrator methods[] = {ukdyn::Integrator::kRK4, ukdyn::Integrator::kRK5};
+  if (!once.empty()) {
+    for (const Problem& p : all) {
+      for (ukdyn::Integrator method : methods) {
+        const std::string id = p.id + (method == ukdyn::Integrator::kRK4 ? "/rk4" : "/rk5");
+        if (id != once) continue;
+        const mb::MultibodyModel m = build(p);
+        const ukdyn::Trajectory tr =
+            ukdyn::simulate(m.system, m.q0, m.qd0, options(m, method, p.T, 0.0));
+        std::cout << id << ": " << tr.stats.steps << " steps, " << tr.stats.evaluations
+                  << " evaluations, " << tr.stats.projections << " projections, coordinate at T "
+                  << coordinate(
+                         p, m,
+                         Eigen::Map<const VectorXd>(tr.q.data() + (tr.samples() - 1) * tr.n, tr.n))
+                  << "\n";
+        return tr.stats.status == ukdyn::Status::kOk ? 0 : 1;
+      }
+    }
+    std::cerr << "bench_multibody_problems: --once=" << once
+              << ": no such problem (P1, P1_particles, P2, P3_N8, ... with /rk4 or /rk5)\n";
+    return 2;
+  }
   if (!json_path.empty()) {
     nlohmann::ordered_json records = nlohmann::ordered_json::array();
     for (const Problem& p : all) {
