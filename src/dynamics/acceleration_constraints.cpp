@@ -1,55 +1,27 @@
 // Stage 2: the constraints in acceleration form, A q'' = b (eq. 5). Rows of constraints that are
 // inactive at t are zero, so they exert no force and cost no special case downstream.
 // Stabilized constraints (Baumgarte) get b ← b − 2α phi' − β² phi, resp. b ← b − α psi.
-// With the sparse engine each constraint writes its local columns (or dense rows) into a small
-// buffer, which goes into the fixed sparse pattern of A (linalg/sparse.hpp).
+// The engine writes the rows (dynamics/engine.hpp): the sparse one takes each constraint's local
+// columns (or dense rows) into the fixed sparse pattern of A (linalg/sparse.hpp).
+#include "dynamics/engine.hpp"
 #include "dynamics/internal.hpp"
 #include "ukdyn/dynamics/forward.hpp"
-#include "ukdyn/linalg/sparse.hpp"
 
 namespace ukdyn {
 
 namespace detail {
 Status write_constraint_rows(const System& sys, Workspace& ws, Index k, const VectorXd& q,
                              const VectorXd& qd, double t, bool check) {
-  const Constraint& c = sys.constraint(k);
-  auto bk = ws.b.segment(sys.row_offset(k), c.rows());
-  if (!ws.sparse) {
-    auto Ak = ws.A.middleRows(sys.row_offset(k), c.rows());
-    c.model().acceleration_form(q, qd, t, ws.scratch[std::size_t(k)].get(), Ak, bk);
-    if (check && !Ak.allFinite()) return fail(ws, Status::kNonFiniteInput, "A", k, t);
-    return Status::kOk;
-  }
-  // sparse: the local form (rows × columns) or the dense rows (rows × n), then the pattern
-  const Index width = ws.sparse->constraint_is_local(k) ? Index(c.model().columns().size())
-                                                        : sys.coordinate_count();
-  auto Ak = ws.A_rows.topLeftCorner(c.rows(), width);
-  if (ws.sparse->constraint_is_local(k)) {
-    c.model().acceleration_form_local(q, qd, t, ws.scratch[std::size_t(k)].get(), Ak, bk);
-  } else {
-    c.model().acceleration_form(q, qd, t, ws.scratch[std::size_t(k)].get(), Ak, bk);
-  }
-  ws.sparse->set_constraint_rows(k, Ak);
-  if (check && !Ak.allFinite()) return fail(ws, Status::kNonFiniteInput, "A", k, t);
-  return Status::kOk;
+  return ws.engine->write_constraint_rows(sys, ws, k, q, qd, t, check);
 }
 
 void zero_constraint_rows(const System& sys, Workspace& ws, Index k) {
-  const Index r0 = sys.row_offset(k), rows = sys.constraint(k).rows();
-  ws.b.segment(r0, rows).setZero();
-  if (ws.sparse) {
-    ws.sparse->zero_constraint_rows(k);
-  } else {
-    ws.A.middleRows(r0, rows).setZero();
-  }
+  ws.b.segment(sys.row_offset(k), sys.constraint(k).rows()).setZero();
+  ws.engine->zero_constraint_rows(sys, ws, k);
 }
 void copy_constraint_rows(const System& sys, const Workspace& ws, Index k,
                           Eigen::Ref<MatrixXd> out) {
-  if (ws.sparse) {
-    ws.sparse->constraint_rows_dense(k, out);
-  } else {
-    out = ws.A.middleRows(sys.row_offset(k), sys.constraint(k).rows());
-  }
+  ws.engine->copy_constraint_rows(sys, ws, k, out);
 }
 }  // namespace detail
 

@@ -8,7 +8,6 @@
 #include "ukdyn/core/format.hpp"
 #include "ukdyn/core/system.hpp"
 #include "ukdyn/dynamics/workspace.hpp"
-#include "ukdyn/reference/reference.hpp"
 
 namespace ukdyn {
 struct SimulationOptions;
@@ -113,13 +112,6 @@ double kinetic_energy(const Workspace& ws, const VectorXd& qd);
 inline bool is_active(const System& sys, const Workspace& ws, Index k, double t) {
   const signed char forced = ws.activity_override[std::size_t(k)];
   return forced < 0 ? sys.constraint(k).is_active(t) : forced > 0;
-}
-
-// Calls f with the decomposition the workspace's algorithm uses.
-template <class F>
-decltype(auto) with_decomposition(Workspace& ws, F&& f) {
-  if (ws.textbook) return f(*ws.textbook);
-  return f(ws.decomposition);
 }
 
 }  // namespace ukdyn::detail

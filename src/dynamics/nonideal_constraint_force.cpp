@@ -2,10 +2,10 @@
 // read the ideal force (it does not depend on C) and the reactions (which do: iterated to a
 // fixed point), then projected:
 //   Qc_nonideal = L (I − W⁺W) L⁻¹ C,   q'' += L⁻ᵀ (I − W⁺W) L⁻¹ C.
+#include "dynamics/engine.hpp"
 #include "dynamics/internal.hpp"
 #include "ukdyn/core/nonideal.hpp"
 #include "ukdyn/dynamics/forward.hpp"
-#include "ukdyn/linalg/sparse.hpp"
 
 namespace ukdyn {
 namespace {
@@ -49,13 +49,7 @@ Status apply_nonideal(const System& sys, Workspace& ws, const VectorXd& q, const
       ws.C += ws.C_term;
     }
     // Qc_nonideal, lambda_nonideal and dq = L⁻ᵀ (I − W⁺W) L⁻¹ C
-    if (ws.sparse) {
-      ws.sparse->project_nonideal(ws.C, ws.dqdd, ws.Qc_nonideal, ws.lambda_nonideal);
-    } else {
-      detail::with_decomposition(ws, [&](auto& d) {
-        d.project_nonideal(ws.C, ws.dqdd, ws.Qc_nonideal, ws.lambda_nonideal);
-      });
-    }
+    ws.engine->project_nonideal(ws);
     if (!ideal.read_reactions()) break;
     // reactions_k = share_k + A_kᵀ lambda_nonideal,k; settled when none moves by more than
     // 1e-13 of the largest reaction

@@ -8,10 +8,10 @@
 
 #include <cstdio>
 #include <cstdlib>
+#include "dynamics/engine.hpp"
 #include "dynamics/internal.hpp"
 #include "ukdyn/core/format.hpp"
 #include "ukdyn/dynamics/projection.hpp"
-#include "ukdyn/linalg/sparse.hpp"
 
 namespace ukdyn {
 
@@ -144,15 +144,8 @@ struct Settling {
 // x += L⁻ᵀ W⁺ e with the decomposition of the assembled A
 template <class Vector>
 void correct(Workspace& ws, Vector&& x) {
-  if (ws.sparse) {
-    ws.sparse->compute_constraints();
-    ws.sparse->solve_ideal(ws.e, ws.dqdd, ws.tmp_n, ws.lambda_tmp);
-  } else {
-    detail::with_decomposition(ws, [&](auto& d) {
-      d.compute_constraints(ws.A);
-      d.solve_ideal(ws.e, ws.dqdd, ws.tmp_n, ws.lambda_tmp);
-    });
-  }
+  ws.engine->decompose_constraints(ws);
+  ws.engine->solve_ideal(ws, ws.e, ws.dqdd, ws.tmp_n, ws.lambda_tmp);
   x += ws.dqdd;
 }
 
@@ -167,11 +160,7 @@ Status factorize_mass(const System& sys, Workspace& ws, const VectorXd& q, doubl
 
 // dx −= L⁻ᵀ W⁺ A dx over the rows of the assembled A (its other rows are zero)
 void remove_normal(Workspace& ws, Eigen::Ref<VectorXd> dx) {
-  if (ws.sparse) {
-    ws.sparse->multiply_A(dx, ws.e);
-  } else {
-    ws.e.noalias() = ws.A * dx;
-  }
+  ws.engine->multiply_A(ws, dx, ws.e);
   ws.e = -ws.e;
   correct(ws, dx);
 }
@@ -202,6 +191,33 @@ double position_violation(const System& sys, const Workspace& ws, Index k) {
 double velocity_violation(const System& sys, const Workspace& ws, Index k) {
   detail::require_same_system(sys, ws, "ukdyn::velocity_violation");
   return ws.phi_dot.segment(sys.row_offset(k), sys.constraint(k).rows()).cwiseAbs().maxCoeff();
+}
+
+Violations measure_violations(const System& sys, Workspace& ws, const VectorXd& q,
+                              const VectorXd& qd, double t, const ProjectionOptions& options) {
+  detail::require_same_system(sys, ws, "ukdyn::measure_violations");
+  require_tolerance(options, "ukdyn::measure_violations");
+  detail::require_state_size(sys, q, &qd, "ukdyn::measure_violations");
+  Violations v;
+  v.finite = std::isfinite(t) && first_non_finite(q) < 0 && first_non_finite(qd) < 0;
+  if (!v.finite) return v;
+  for (Index k = 0; k < sys.constraint_count(); ++k) {
+    const bool position = takes_part(sys, ws, options, k, t, Level::kPosition);
+    if (!position && !takes_part(sys, ws, options, k, t, Level::kVelocity)) continue;
+    const Index r0 = sys.row_offset(k), rows = sys.constraint(k).rows();
+    auto pk = ws.phi.segment(r0, rows);
+    auto vk = ws.phi_dot.segment(r0, rows);
+    sys.constraint(k).model().violation(q, qd, t, ws.scratch[std::size_t(k)].get(), pk, vk);
+    // (a NaN must not vanish in the max)
+    const double p = position ? pk.cwiseAbs().maxCoeff() : -1.0, d = vk.cwiseAbs().maxCoeff();
+    if (!std::isfinite(p) || !std::isfinite(d)) {
+      v.finite = false;
+      return v;
+    }
+    v.position = std::max(v.position, p);
+    v.velocity = std::max(v.velocity, d);
+  }
+  return v;
 }
 
 ProjectionResult project_positions(const System& sys, Workspace& ws, VectorXd& q, double t,

@@ -8,6 +8,7 @@
 
 #include <Eigen/Eigenvalues>
 
+#include "dynamics/engine.hpp"
 #include "ukdyn/core/format.hpp"
 #include "ukdyn/core/system.hpp"
 #include "ukdyn/linalg/sparse.hpp"
@@ -169,6 +170,10 @@ Workspace::Workspace(const System& sys, const SolverOptions& options)
     textbook = std::make_unique<TextbookDecomposition>(n, m);
     textbook->set_threshold(options.rank_threshold);
   }
+  // the engine, once: each stage calls it (dynamics/engine.hpp)
+  engine = use_sparse ? &detail::sparse_engine()
+           : textbook ? &detail::textbook_engine()
+                      : &detail::dense_engine();
 }
 
 Workspace::~Workspace() = default;
@@ -186,14 +191,7 @@ std::string inconsistent_constraints(const System& sys, const Workspace& ws) {
   const Index m = sys.constraint_rows();
   if (ws.qdd.size() != sys.coordinate_count() || ws.b.size() != m || m == 0) return "";
   VectorXd r(m);
-  if (ws.sparse) {
-    ws.sparse->multiply_A(ws.qdd, r);
-  } else if (ws.A.rows() == m && ws.A.cols() == sys.coordinate_count()) {
-    r.noalias() = ws.A * ws.qdd;
-  } else {
-    return "";
-  }
-  r -= ws.b;
+  ws.engine->constraint_residual(ws, ws.qdd, r);
   const double r_max = r.cwiseAbs().maxCoeff();
   if (!(r_max > 0.0)) return "";
   std::string names;

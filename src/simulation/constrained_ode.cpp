@@ -6,6 +6,7 @@
 #include <limits>
 #include <string>
 
+#include "dynamics/engine.hpp"
 #include "dynamics/internal.hpp"
 #include "simulation/integrator.hpp"
 #include "ukdyn/dynamics/forward.hpp"
@@ -25,15 +26,7 @@ WorkLayout::WorkLayout(const System& sys, bool quiet_channels) : quiet(quiet_cha
 
 double constraint_power(const System& sys, const Workspace& ws, Index k, const VectorXd& qd,
                         VectorXd& scratch) {
-  if (ws.sparse) {
-    constraint_share(sys, ws, k, ws.lambda, scratch);  // share_k = A_kᵀ lambda_k
-    return qd.dot(scratch);
-  }
-  // q'ᵀ A_kᵀ lambda_k = Σ_rows lambda_r (A_r q')
-  const Index r0 = sys.row_offset(k), rows = sys.constraint(k).rows();
-  double p = 0.0;
-  for (Index r = r0; r < r0 + rows; ++r) p += ws.lambda[r] * ws.A.row(r).dot(qd);
-  return p;
+  return ws.engine->constraint_power(sys, ws, k, qd, scratch);
 }
 
 ConstrainedOde::ConstrainedOde(const System& sys, Workspace& ws, bool quiet,
@@ -57,13 +50,7 @@ ConstrainedOde::ConstrainedOde(const System& sys, Workspace& ws, bool quiet,
 bool ConstrainedOde::explained_by_violation(double t) {
   if (!(off_manifold_tolerance_ > 0.0)) return false;
   // r = A q'' − b (the part of e outside range(A), the rows that cannot all hold)
-  if (ws_.is_sparse()) {
-    ws_.sparse->multiply_A(ws_.qdd, ws_.tmp_m);
-    ws_.tmp_m -= ws_.b;
-  } else {
-    ws_.tmp_m = -ws_.b;
-    ws_.tmp_m.noalias() += ws_.A * ws_.qdd;
-  }
+  ws_.engine->constraint_residual(ws_, ws_.qdd, ws_.tmp_m);
   const double r_max = ws_.tmp_m.cwiseAbs().maxCoeff();
   if (!(r_max > 0.0)) return false;
   // phi, phi' (psi) of every row at this state

@@ -426,6 +426,16 @@ class Run {
   }
 
   Status project(double t, double* x, const ProjectionOptions& p, bool& changed) {
+    // the cheap test first: each constraint's violation once; within the tolerance (most steps)
+    // the projections would measure the same and change nothing
+    q_ = Eigen::Map<const VectorXd>(x, n_);
+    qd_ = Eigen::Map<const VectorXd>(x + n_, n_);
+    if (const Violations v = measure_violations(sys_, ws_, q_, qd_, t, p);
+        v.finite && v.position <= p.tolerance && v.velocity <= p.tolerance) {
+      note_violation(std::max(v.position, 0.0), std::max(v.velocity, 0.0));
+      changed = false;
+      return Status::kOk;
+    }
     ProjectionResult rp, rv;
     if (const Status s = project_into(t, x, p, rp, rv); s != Status::kOk) return s;
     note_violation(rp.violation, rv.violation);

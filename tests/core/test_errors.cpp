@@ -106,15 +106,45 @@ TEST(Errors, NaNInForceOrC) {
   EXPECT_EQ(forward_dynamics(sys, ws, state(0, 0), state(0, 0), 0.0), Status::kOk);
 }
 
+// the acceleration constraint x'' = rhs on (x, y)
+auto row(double rhs) {
+  return [rhs](const VectorXd&, const VectorXd&, double, Eigen::Ref<MatrixXd> A,
+               Eigen::Ref<VectorXd> b) {
+    A << 1.0, 0.0;
+    b << rhs;
+  };
+}
+
+TEST(Errors, InconsistentConstraintsAreFoundWithoutResidualsOnBothEngines) {
+  // x'' = 0 and x'' = 1 at once, residuals off (as the simulation runs): the consistency test
+  // still runs because the rank (1) is below the active rows (2); a full-rank A skips it
+  const System sys = SystemBuilder(2)
+                         .mass_block(0, MatrixXd::Identity(1, 1))
+                         .mass_block(1, MatrixXd::Identity(1, 1))
+                         .add(acceleration_constraint("zero", 1, row(0.0)))
+                         .add(acceleration_constraint("one", 1, row(1.0)))
+                         .build();
+  for (const Engine engine : {Engine::kDense, Engine::kSparse}) {
+    Workspace ws(sys, SolverOptions{.engine = engine, .compute_residuals = false});
+    EXPECT_EQ(forward_dynamics(sys, ws, state(0, 0), state(0, 0), 0.0),
+              Status::kInconsistentConstraints);
+    EXPECT_NEAR(ws.residuals.constraint, std::sqrt(0.5), 1e-14);
+    // one of them alone: full row rank, no test and no residual unless asked
+    ws.activity_override = {1, 0};
+    EXPECT_EQ(forward_dynamics(sys, ws, state(0, 0), state(0, 0), 0.0), Status::kOk);
+    EXPECT_EQ(ws.rank, 1);
+    EXPECT_TRUE(std::isnan(ws.residuals.constraint));
+    EXPECT_NEAR(ws.qdd[0], 0.0, 1e-15);
+  }
+  Workspace asked(sys, SolverOptions{.compute_residuals = true});
+  asked.activity_override = {0, 1};
+  EXPECT_EQ(forward_dynamics(sys, asked, state(0, 0), state(0, 0), 0.0), Status::kOk);
+  EXPECT_NEAR(asked.qdd[0], 1.0, 1e-15);
+  EXPECT_NEAR(asked.residuals.constraint, 0.0, 1e-15);
+}
+
 TEST(Errors, InconsistentConstraintsAreReportedNotLeastSquared) {
   // x'' = 0 and x'' = 1 at once
-  auto row = [](double rhs) {
-    return [rhs](const VectorXd&, const VectorXd&, double, Eigen::Ref<MatrixXd> A,
-                 Eigen::Ref<VectorXd> b) {
-      A << 1.0, 0.0;
-      b << rhs;
-    };
-  };
   const System sys = SystemBuilder(2)
                          .mass_matrix(MatrixXd::Identity(2, 2))
                          .add(acceleration_constraint("zero", 1, row(0.0)))

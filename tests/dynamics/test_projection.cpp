@@ -23,6 +23,29 @@ System circle(double L, const MatrixXd& M) {
       .build();
 }
 
+TEST(Projection, MeasureViolationsGivesWhatTheProjectionsStartFrom) {
+  // phi = x² + y² − L², phi' = 2 (x x' + y y'); the holonomic row takes part at both levels
+  const double L = 1.5;
+  const System sys = circle(L, MatrixXd::Identity(2, 2));
+  Workspace ws(sys);
+  const VectorXd q = vec({1.9, -0.4}), qd = vec({0.3, 0.7});
+  const Violations v = measure_violations(sys, ws, q, qd, 0.0);
+  EXPECT_TRUE(v.finite);
+  EXPECT_NEAR(v.position, 1.9 * 1.9 + 0.4 * 0.4 - L * L, 1e-14);
+  EXPECT_NEAR(v.velocity, std::abs(2.0 * (1.9 * 0.3 - 0.4 * 0.7)), 1e-14);
+  // the same numbers as the projections' first measurement (bitwise: the same violation pass)
+  VectorXd qp = q, qdp = qd;
+  EXPECT_EQ(project_positions(sys, ws, qp, 0.0, {.tolerance = 10.0}).violation, v.position);
+  EXPECT_EQ(project_velocities(sys, ws, q, qdp, 0.0, {.tolerance = 10.0}).violation, v.velocity);
+  // a constraint left out by the mask takes no part (−1: no row)
+  const Violations none = measure_violations(sys, ws, q, qd, 0.0, {.mask = {0}});
+  EXPECT_EQ(none.position, -1.0);
+  EXPECT_EQ(none.velocity, -1.0);
+  // a non-finite state is left to the projections, which report it
+  EXPECT_FALSE(measure_violations(sys, ws, vec({NAN, 0.0}), qd, 0.0).finite);
+  EXPECT_FALSE(measure_violations(sys, ws, q, vec({0.0, INFINITY}), 0.0).finite);
+}
+
 TEST(Projection, PositionsOntoACircleAreRadialForScalarMass) {
   const double L = 1.5;
   const System sys = circle(L, 3.0 * MatrixXd::Identity(2, 2));

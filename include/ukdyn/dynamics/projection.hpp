@@ -87,6 +87,27 @@ struct ConstraintConflict {
 ConstraintConflict find_constraint_conflict(const System& sys, Workspace& ws, const VectorXd& q,
                                             const VectorXd& qd, double t, double tolerance);
 
+/// The largest violations a projection would start from (see measure_violations).
+struct Violations {
+  /// max |phi_i| over the rows project_positions corrects (−1 when none takes part)
+  double position = -1.0;
+  /// max |phi'_i| (|psi_i|) over the rows project_velocities corrects (−1 when none takes part)
+  double velocity = -1.0;
+  /// t, q and q' are finite and so is every violation measured; else the entries above are
+  /// unspecified and the projections, which report the cause, must run
+  bool finite = true;
+};
+
+/// The violations that project_positions and project_velocities would measure first at
+/// (q, q', t) with these options, each constraint's violation() evaluated once for both
+/// levels (the projections evaluate it once per level and also check the inputs). When both
+/// are within options.tolerance and `finite`, neither projection would change the state: the
+/// cheap test the simulation makes after every step before projecting. Writes ws.phi and
+/// ws.phi_dot on the rows taking part. Cost: one violation pass per constraint, O(n).
+/// @throws std::invalid_argument as project_velocities.
+Violations measure_violations(const System& sys, Workspace& ws, const VectorXd& q,
+                              const VectorXd& qd, double t, const ProjectionOptions& options = {});
+
 /// q ← q − M⁻¹ Aᵀ (A M⁻¹ Aᵀ)⁺ phi(q, t) over the holonomic constraints (active at t and in the
 /// mask), iterated until converged. Cost per iteration O(n³/3 + m n² + m² n) and the constraints'.
 /// @throws std::invalid_argument when q does not have n entries, the workspace is of another

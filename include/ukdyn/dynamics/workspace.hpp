@@ -20,6 +20,9 @@ namespace ukdyn {
 
 class System;
 struct CallableScratch;
+namespace detail {
+class EngineOps;
+}
 class TextbookDecomposition;
 class SparseDecomposition;
 
@@ -74,7 +77,9 @@ struct SolverOptions {
 
 /// Residuals of the last evaluation (absolute, in the units of the quantity).
 struct Residuals {
-  double constraint = 0.0;  ///< ‖A q'' − b‖: the constraints are met
+  /// ‖A q'' − b‖: the constraints are met. Computed with compute_residuals, and otherwise only
+  /// when A has lost row rank (where inconsistent constraints can occur); NaN when not computed.
+  double constraint = 0.0;
   /// ‖M q'' − Q − C − Aᵀ(lambda + lambda_nonideal)‖: stationarity of Gauss's function
   /// (M x − Q − C)ᵀ M⁻¹ (M x − Q − C) on {x : A x = b}.
   double gauss = 0.0;
@@ -250,7 +255,10 @@ class Workspace {
   std::unique_ptr<CallableScratch> callables;
   std::vector<std::unique_ptr<ConstraintScratch>> scratch;  ///< (K) per-constraint buffers
   std::unique_ptr<TextbookDecomposition> textbook;          ///< only with Algorithm::kTextbook
-  bool mass_factorized = false;                             ///< constant M already factorized
+  /// The engine chosen at construction (dense, sparse or textbook; src/dynamics/engine.hpp):
+  /// the stages call it and never branch on the engine themselves. Internal.
+  const detail::EngineOps* engine = nullptr;
+  bool mass_factorized = false;     ///< constant M already factorized
   std::vector<Index> nonzero_cols;  ///< (n) columns of one row of A (the auxiliary M_A)
 
  private:

@@ -1,0 +1,151 @@
+// The dense engine on FundamentalDecomposition (dynamics/dense_engine.hpp), and the parts of the
+// dense singular-mass completion that do not depend on the decomposition.
+#include "dynamics/dense_engine.hpp"
+
+namespace ukdyn::detail {
+
+template <>
+FundamentalDecomposition& decomposition_of<FundamentalDecomposition>(Workspace& ws) {
+  return ws.decomposition;
+}
+
+const EngineOps& dense_engine() {
+  static const DenseEngine<FundamentalDecomposition> engine;
+  return engine;
+}
+
+double asymmetry(const MatrixXd& M) {
+  double worst = 0.0;
+  for (Index j = 0; j < M.cols(); ++j) {
+    for (Index i = 0; i < j; ++i) worst = std::max(worst, std::abs(M(i, j) - M(j, i)));
+  }
+  return worst;
+}
+
+bool positive_semidefinite(const System& sys, Workspace& ws, double shift) {
+  using Llt = Eigen::internal::llt_inplace<double, Eigen::Lower>;
+  if (sys.mass_is_block_diagonal()) {
+    for (const MassBlock& b : sys.mass_blocks()) {
+      if (ws.mass_singular && (b.constant() || b.singular)) continue;
+      auto S = ws.M_aux.topLeftCorner(b.size, b.size);
+      S.triangularView<Eigen::Lower>() = ws.M.block(b.offset, b.offset, b.size, b.size);
+      S.diagonal().array() += shift;
+      if (Llt::unblocked(S) != -1) return false;
+    }
+    return true;
+  }
+  ws.M_aux.triangularView<Eigen::Lower>() = ws.M;
+  ws.M_aux.diagonal().array() += shift;
+  return Llt::blocked(ws.M_aux) == -1;
+}
+
+namespace {
+// M_A += g a aᵀ on one diagonal block (lower triangle; Mo its first entry, column-major with
+// leading dimension ld), g = s / ‖a‖², a = the block's part of a row of A (entries a[k inc]);
+// Qo (when not null) += g b_i a. S > 0 fixes the block size at compile time (a quaternion's 4).
+template <Index S>
+void add_local_row(double* Mo, Index ld, const double* a, Index inc, Index size, double s,
+                   double b_i, double* Qo) {
+  const Index n = S > 0 ? S : size;
+  double norm2 = 0.0;
+  for (Index k = 0; k < n; ++k) norm2 += a[k * inc] * a[k * inc];
+  if (!(norm2 > 0.0)) return;  // an inactive row
+  const double g = s / norm2;
+  for (Index j = 0; j < n; ++j) {
+    const double f = g * a[j * inc];
+    for (Index k = j; k < n; ++k) Mo[j * ld + k] += f * a[k * inc];
+    if (Qo) Qo[j] += f * b_i;
+  }
+}
+}  // namespace
+
+bool complete_singular_mass_locally(Workspace& ws, bool forces, bool regularize) {
+  // M completed block by block with the rows local to its blocks singular by construction (a
+  // quaternion's unit norm; the other blocks are constant), while they suffice:
+  // M_A,bb = M_bb + Σ_local g_i a_i a_iᵀ, g_i = s_b / ‖a_i‖², s_b = max diag M_bb (as the sparse
+  // engine), O(Σ size²) instead of O(Σ nnz(a_i)²)
+  if (ws.singular_local_rows.empty() || ws.singular_completion == 2) return false;
+  const Index n = ws.coordinate_count(), m = ws.rows();
+  std::copy(ws.M.data(), ws.M.data() + n * n, ws.M_aux.data());  // (one memcpy)
+  if (forces) ws.tmp_n = ws.Q;
+  const auto& rows = ws.singular_local_rows;
+  for (std::size_t r = 0; r < rows.size(); r += 3) {
+    const Index i = rows[r], o = rows[r + 1], size = rows[r + 2];
+    double* Mo = ws.M_aux.data() + o * n + o;
+    const double* a = ws.A.data() + o * m + i;  // row i of A from column o
+    double* Qo = forces ? ws.tmp_n.data() + o : nullptr;
+    const double* Mb = ws.M.data() + o * n + o;
+    double sb = Mb[0];
+    for (Index k = 1; k < size; ++k) sb = std::max(sb, Mb[k * n + k]);
+    if (!(sb > 0.0)) {  // a zero block: the largest diagonal of M (1 if M = 0)
+      sb = ws.M.diagonal().maxCoeff();
+      if (!(sb > 0.0)) sb = 1.0;
+    }
+    if (size == 4) {
+      add_local_row<4>(Mo, n, a, m, size, sb, ws.b[i], Qo);
+    } else {
+      add_local_row<0>(Mo, n, a, m, size, sb, ws.b[i], Qo);
+    }
+  }
+  // factorized, with pivots L_kk² within kSingularPivotRatio of each other: on all of M_A the
+  // first time, then on each completed block
+  if (ws.decomposition.compute_mass(ws.M_aux).info() == Eigen::Success) {
+    const auto& L = ws.decomposition.matrix_llt();
+    const auto regular = [&](Index o, Index size) {
+      double lo = L(o, o), hi = lo;  // L_kk > 0
+      for (Index k = o + 1; k < o + size; ++k) {
+        lo = std::min(lo, L(k, k));
+        hi = std::max(hi, L(k, k));
+      }
+      return lo * lo >= SparseDecomposition::kSingularPivotRatio * hi * hi;
+    };
+    bool ok = ws.singular_completion == 1 || regular(0, n);
+    for (std::size_t r = 0; ok && ws.singular_completion == 1 && r < rows.size(); r += 3) {
+      ok = regular(rows[r + 1], rows[r + 2]);
+    }
+    if (ok) {
+      if (!regularize) ws.singular_completion = 1;
+      if (forces) ws.decomposition.solve_mass(ws.tmp_n, ws.a);
+      return true;
+    }
+  }
+  // other blocks are singular too (or a projection left out the local rows): every row, from
+  // now on unless this is a projection
+  if (!regularize) ws.singular_completion = 2;
+  return false;
+}
+
+double assemble_auxiliary_mass(Workspace& ws, bool forces) {
+  double s = ws.M.diagonal().maxCoeff();
+  if (!(s > 0.0)) s = 1.0;
+  // M_A = M + Σ_i g_i a_i a_iᵀ (lower triangle), g_i = s / ‖a_i‖², s = max diag M; only the
+  // non-zero entries of each row of A take part
+  const Index n = ws.coordinate_count();
+  ws.M_aux.triangularView<Eigen::Lower>() = ws.M;
+  if (forces) ws.tmp_n = ws.Q;
+  for (Index i = 0; i < ws.A.rows(); ++i) {
+    Index nz = 0;
+    double norm2 = 0.0;
+    for (Index j = 0; j < n; ++j) {
+      const double v = ws.A(i, j);
+      if (v != 0.0) {
+        ws.nonzero_cols[std::size_t(nz++)] = j;
+        norm2 += v * v;
+      }
+    }
+    if (nz == 0) continue;  // an inactive row
+    const double g = s / norm2;
+    for (Index p = 0; p < nz; ++p) {
+      const Index j = ws.nonzero_cols[std::size_t(p)];
+      const double f = g * ws.A(i, j);
+      for (Index r = p; r < nz; ++r) {
+        const Index k = ws.nonzero_cols[std::size_t(r)];
+        ws.M_aux(std::max(j, k), std::min(j, k)) += f * ws.A(i, k);
+      }
+      if (forces) ws.tmp_n[j] += f * ws.b[i];
+    }
+  }
+  return s;
+}
+
+}  // namespace ukdyn::detail
