@@ -9,22 +9,6 @@
 
 namespace ukdyn {
 
-namespace detail {
-Status write_constraint_rows(const System& sys, Workspace& ws, Index k, const VectorXd& q,
-                             const VectorXd& qd, double t, bool check) {
-  return ws.engine->write_constraint_rows(sys, ws, k, q, qd, t, check);
-}
-
-void zero_constraint_rows(const System& sys, Workspace& ws, Index k) {
-  ws.b.segment(sys.row_offset(k), sys.constraint(k).rows()).setZero();
-  ws.engine->zero_constraint_rows(sys, ws, k);
-}
-void copy_constraint_rows(const System& sys, const Workspace& ws, Index k,
-                          Eigen::Ref<MatrixXd> out) {
-  ws.engine->copy_constraint_rows(sys, ws, k, out);
-}
-}  // namespace detail
-
 Status assemble_constraints(const System& sys, Workspace& ws, const VectorXd& q, const VectorXd& qd,
                             double t) {
   detail::require_same_system(sys, ws, "ukdyn::assemble_constraints");

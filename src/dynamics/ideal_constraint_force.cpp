@@ -35,13 +35,4 @@ void compute_shares(const System& sys, Workspace& ws) {
   }
 }
 
-namespace detail {
-
-void constraint_share(const System& sys, const Workspace& ws, Index k, const VectorXd& lambda,
-                      Eigen::Ref<VectorXd> out) {
-  ws.engine->constraint_share(sys, ws, k, lambda, out);
-}
-
-}  // namespace detail
-
 }  // namespace ukdyn

@@ -5,6 +5,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "dynamics/engine.hpp"
 #include "ukdyn/core/format.hpp"
 #include "ukdyn/core/system.hpp"
 #include "ukdyn/dynamics/workspace.hpp"
@@ -63,26 +64,37 @@ inline void require_state_size(const System& sys, const VectorXd& q, const Vecto
 // Q; shared with the projections).
 // A singular, positive semi-definite M sets ws.mass_singular and is factorized later by
 // complete_singular_mass.
-Status evaluate_mass(const System& sys, Workspace& ws, const VectorXd& q, double t);
+inline Status evaluate_mass(const System& sys, Workspace& ws, const VectorXd& q, double t) {
+  return ws.engine->evaluate_mass(sys, ws, q, t);
+}
 
 // For a singular M (ws.mass_singular), with A (and b) assembled: factorizes the auxiliary
 // M_A = M + Aᵀ G A, G = diag(s / ‖a_i‖²), s the largest diagonal of M (the sparse engine: each
 // singular block with the rows local to it); with `forces`, a = M_A⁻¹ (Q + Aᵀ G b). When M_A is
 // not positive definite ([M; A] rank deficient): kMotionUndetermined, or with `regularize` (a
 // projection's metric) M_A + 1e-8 s I. Cost O(nnz(A)·(row nnz) + n³/3) dense.
-Status complete_singular_mass(Workspace& ws, double t, bool forces, bool regularize);
+inline Status complete_singular_mass(Workspace& ws, double t, bool forces, bool regularize) {
+  return ws.engine->complete_singular_mass(ws, t, forces, regularize);
+}
 
 // Writes constraint k's rows of A (dense matrix or the sparse engine's pattern) and b from its
 // acceleration form at (q, q', t); with `check`, kNonFiniteInput (recorded) when A is not
 // finite.
-Status write_constraint_rows(const System& sys, Workspace& ws, Index k, const VectorXd& q,
-                             const VectorXd& qd, double t, bool check = true);
+inline Status write_constraint_rows(const System& sys, Workspace& ws, Index k, const VectorXd& q,
+                                    const VectorXd& qd, double t, bool check = true) {
+  return ws.engine->write_constraint_rows(sys, ws, k, q, qd, t, check);
+}
 // Zeroes constraint k's rows of A and b.
-void zero_constraint_rows(const System& sys, Workspace& ws, Index k);
+inline void zero_constraint_rows(const System& sys, Workspace& ws, Index k) {
+  ws.b.segment(sys.row_offset(k), sys.constraint(k).rows()).setZero();
+  ws.engine->zero_constraint_rows(sys, ws, k);
+}
 
 // Copies constraint k's rows of A (as last assembled) into out (rows × n), either engine.
-void copy_constraint_rows(const System& sys, const Workspace& ws, Index k,
-                          Eigen::Ref<MatrixXd> out);
+inline void copy_constraint_rows(const System& sys, const Workspace& ws, Index k,
+                                 Eigen::Ref<MatrixXd> out) {
+  ws.engine->copy_constraint_rows(sys, ws, k, out);
+}
 // The stick constraint of a Coulomb contact: psi = q'_c − u(q, t) on `coordinates` (nonholonomic,
 // local columns), inactive until the simulation switches it on (core/coulomb_contact.cpp).
 Constraint stick_constraint(const std::string& name, const std::vector<Index>& coordinates,
@@ -102,11 +114,15 @@ void remove_normals(const Workspace& ws, Index basis, Eigen::Ref<VectorXd> v);
 
 // out = A_kᵀ lambda_k (n) for any multipliers lambda (m) with the rows of A last assembled,
 // either engine: constraint k's share of the force Aᵀ lambda. O(rows_k · n).
-void constraint_share(const System& sys, const Workspace& ws, Index k, const VectorXd& lambda,
-                      Eigen::Ref<VectorXd> out);
+inline void constraint_share(const System& sys, const Workspace& ws, Index k,
+                             const VectorXd& lambda, Eigen::Ref<VectorXd> out) {
+  ws.engine->constraint_share(sys, ws, k, lambda, out);
+}
 
 // Kinetic energy ½ q'ᵀ M q' with the M of the last evaluation, either engine.
-double kinetic_energy(const Workspace& ws, const VectorXd& qd);
+inline double kinetic_energy(const Workspace& ws, const VectorXd& qd) {
+  return ws.engine->kinetic_energy(ws, qd);
+}
 
 // Whether constraint k acts at t, honouring ws.activity_override.
 inline bool is_active(const System& sys, const Workspace& ws, Index k, double t) {

@@ -8,22 +8,6 @@
 
 namespace ukdyn {
 
-namespace detail {
-
-double kinetic_energy(const Workspace& ws, const VectorXd& qd) {
-  return ws.engine->kinetic_energy(ws, qd);
-}
-
-Status evaluate_mass(const System& sys, Workspace& ws, const VectorXd& q, double t) {
-  return ws.engine->evaluate_mass(sys, ws, q, t);
-}
-
-Status complete_singular_mass(Workspace& ws, double t, bool forces, bool regularize) {
-  return ws.engine->complete_singular_mass(ws, t, forces, regularize);
-}
-
-}  // namespace detail
-
 Status evaluate_unconstrained(const System& sys, Workspace& ws, const VectorXd& q,
                               const VectorXd& qd, double t) {
   detail::require_same_system(sys, ws, "ukdyn::evaluate_unconstrained");

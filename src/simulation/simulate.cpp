@@ -427,19 +427,23 @@ class Run {
 
   Status project(double t, double* x, const ProjectionOptions& p, bool& changed) {
     // the cheap test first: each constraint's violation once; within the tolerance (most steps)
-    // the projections would measure the same and change nothing
-    q_ = Eigen::Map<const VectorXd>(x, n_);
-    qd_ = Eigen::Map<const VectorXd>(x + n_, n_);
-    if (const Violations v = measure_violations(sys_, ws_, q_, qd_, t, p);
-        v.finite && v.position <= p.tolerance && v.velocity <= p.tolerance) {
-      note_violation(std::max(v.position, 0.0), std::max(v.velocity, 0.0));
-      changed = false;
-      return Status::kOk;
+    // the projections would measure the same and change nothing. After a step that needed a
+    // projection the next one likely does too: then straight to the projections.
+    if (!projected_last_) {
+      q_ = Eigen::Map<const VectorXd>(x, n_);
+      qd_ = Eigen::Map<const VectorXd>(x + n_, n_);
+      if (const Violations v = measure_violations(sys_, ws_, q_, qd_, t, p);
+          v.finite && v.position <= p.tolerance && v.velocity <= p.tolerance) {
+        note_violation(std::max(v.position, 0.0), std::max(v.velocity, 0.0));
+        changed = false;
+        return Status::kOk;
+      }
     }
     ProjectionResult rp, rv;
     if (const Status s = project_into(t, x, p, rp, rv); s != Status::kOk) return s;
     note_violation(rp.violation, rv.violation);
     changed = rp.iterations > 0 || rv.iterations > 0;
+    projected_last_ = changed;
     if (changed) {
       ++traj_.stats.projections;
       Eigen::Map<VectorXd>(x, n_) = q_;
@@ -792,6 +796,7 @@ class Run {
   }
 
   std::function<void(const Workspace&)> finished_;
+  bool projected_last_ = false;  // the last project() changed the state
   const System& sys_;
   const SimulationOptions& o_;
   Workspace ws_;
