@@ -411,8 +411,8 @@ TEST_P(RunSignal, WritesTheTrajectorySoFarAndASummaryThatSaysInterrupted) {
             std::string::npos)
       << run.stderr_text();
   EXPECT_NE(out_text.find("status: interrupted"), std::string::npos) << out_text;
-  // (writing a few thousand rows, and with plots running matplotlib: seconds, not minutes)
-  EXPECT_LT(seconds, c.plots ? 60.0 : 20.0);
+  // (writing a few thousand rows, and with plots running matplotlib: seconds, not minutes; a run
+  // that never stops fails by CTest's TIMEOUT, not by a wall-clock assertion)
   std::printf("  %s: exited %.3f s after the signal\n", c.name, seconds);
 
   // the summary: interrupted, with the time reached
@@ -515,11 +515,10 @@ TEST(Cli, ASecondRunIntoADirectoryInUseIsRefusedNamingItAndTheFirstRunsPid) {
   ASSERT_TRUE(first.wait_for("ukdyn: t = ", 60.0)) << first.stderr_text();
 
   // the second, with another rod length, is refused at once: exit 6, nothing computed or written
-  const auto start = Clock::now();
+  // (no step taken: its output is empty)
   Command second({"run", kLongModel, "-o", out.string(), "--no-plots", "--set", "L=2"},
                  dir / "second.txt");
   EXPECT_EQ(second.wait(), 6);
-  EXPECT_LT(std::chrono::duration<double>(Clock::now() - start).count(), 30.0);
   const std::string expected = "error: the output directory '" + out.string() +
                                "' is in use by another ukdyn run (pid " +
                                std::to_string(first.pid()) + ")";
