@@ -62,6 +62,9 @@ class PoseCache final : public CallableScratch {
   explicit PoseCache(Index bodies);
   /// The number of entries.
   Index body_count() const { return Index(trig_.size()); }
+  /// How many rotations were computed (cos/sin pairs and matrices: the misses), for the tests
+  /// that check each is computed once per evaluation.
+  std::int64_t computed() const { return computed_; }
   /// cos theta, sin theta of planar body b at theta: std::cos and std::sin of theta, computed
   /// when theta differs (bitwise) from the previous call's for b. Cost O(1).
   CosSin cos_sin(const BodyRef& b, double theta) {
@@ -70,6 +73,7 @@ class PoseCache final : public CallableScratch {
     if (key != e.key) {
       const CosSin cs = cos_sin_of(theta);
       e = {key, cs.c, cs.s};
+      ++computed_;
     }
     return {e.c, e.s};
   }
@@ -89,6 +93,7 @@ class PoseCache final : public CallableScratch {
   };
   std::vector<Trig> trig_;
   std::vector<Rotation> rotation_;
+  std::int64_t computed_ = 0;
 };
 
 /// cos theta, sin theta of planar body b: from the cache, or computed when it is null. O(1).

@@ -34,6 +34,7 @@ const Matrix3d& PoseCache::rotation(const BodyRef& b, const VectorXd& q) {
     e.R = rotation_WB(b, q, nullptr);
     e.key = key;
     e.valid = true;
+    ++computed_;
   }
   return e.R;
 }
