@@ -147,18 +147,25 @@ inline Matrix34 G_v(const Vector4d& u) {
 struct VecKin {
   Vector3d x = Vector3d::Zero(), v = Vector3d::Zero(), g = Vector3d::Zero();
   JacobianRow J = JacobianRow::Zero();
-  void clear() {
+  /// Tag of the constructor that leaves every entry unset (for one that clear() sets next).
+  struct Unset {};
+  VecKin() = default;
+  explicit VecKin(Unset) : x(), v(), g(), J() {}
+  /// Zeros x and v, and g and J unless !second_order.
+  void clear(bool second_order = true) {
     x.setZero();
     v.setZero();
+    if (!second_order) return;
     g.setZero();
     J.setZero();
   }
 };
 
 /// Adds sign · (point p_B + R s, or R s when !translate) of body b to k; a planar body's cos and
-/// sin from `cache` when given. Cost O(1).
+/// sin from `cache` when given; x and v only when !second_order (g and J untouched). Cost O(1).
 void add_body_vector(const BodyRef& b, const VectorXd& q, const VectorXd& qd, const Vector3d& s,
-                     bool translate, double sign, VecKin& k, PoseCache* cache = nullptr);
+                     bool translate, double sign, VecKin& k, PoseCache* cache = nullptr,
+                     bool second_order = true);
 
 /// A vector expression of a joint row.
 struct VecExpr {
@@ -237,8 +244,9 @@ class JointModel final : public ConstraintModel {
   Index local_count() const { return Index(cols_.size()); }
 
  private:
-  void eval(const VecExpr& e, const VectorXd& q, const VectorXd& qd, PoseCache* cache,
-            VecKin& k) const;
+  // the kinematics of e into k (x and v only when !second_order: the violations)
+  void eval(const VecExpr& e, const VectorXd& q, const VectorXd& qd, PoseCache* cache, VecKin& k,
+            bool second_order = true) const;
   std::vector<BodyRef> slots_;
   std::vector<Row> rows_;
   std::vector<Index> cols_;

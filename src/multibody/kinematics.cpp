@@ -40,7 +40,7 @@ const Matrix3d& PoseCache::rotation(const BodyRef& b, const VectorXd& q) {
 }
 
 void add_body_vector(const BodyRef& b, const VectorXd& q, const VectorXd& qd, const Vector3d& s,
-                     bool translate, double sign, VecKin& k, PoseCache* cache) {
+                     bool translate, double sign, VecKin& k, PoseCache* cache, bool second_order) {
   if (b.ground()) {
     k.x += sign * s;
     return;
@@ -53,7 +53,7 @@ void add_body_vector(const BodyRef& b, const VectorXd& q, const VectorXd& qd, co
       if (translate) {
         k.x += sign * q.segment<3>(o);
         k.v += sign * qd.segment<3>(o);
-        k.J.block<3, 3>(0, l) += sign * Matrix3d::Identity();
+        if (second_order) k.J.block<3, 3>(0, l) += sign * Matrix3d::Identity();
       }
       break;
     case BodyKind::kPlanar: {
@@ -63,14 +63,18 @@ void add_body_vector(const BodyRef& b, const VectorXd& q, const VectorXd& qd, co
       const double rx = c * s.x() - sn * s.y(), ry = sn * s.x() + c * s.y();
       k.x += sign * Vector3d(rx, ry, s.z());
       k.v += sign * w * Vector3d(-ry, rx, 0.0);
-      k.g += sign * (-w * w) * Vector3d(rx, ry, 0.0);
-      k.J(0, l + 2) += sign * -ry;
-      k.J(1, l + 2) += sign * rx;
+      if (second_order) {
+        k.g += sign * (-w * w) * Vector3d(rx, ry, 0.0);
+        k.J(0, l + 2) += sign * -ry;
+        k.J(1, l + 2) += sign * rx;
+      }
       if (translate) {
         k.x += sign * Vector3d(q[o], q[o + 1], 0.0);
         k.v += sign * Vector3d(qd[o], qd[o + 1], 0.0);
-        k.J(0, l) += sign;
-        k.J(1, l + 1) += sign;
+        if (second_order) {
+          k.J(0, l) += sign;
+          k.J(1, l + 1) += sign;
+        }
       }
       break;
     }
@@ -80,12 +84,14 @@ void add_body_vector(const BodyRef& b, const VectorXd& q, const VectorXd& qd, co
       const Matrix34 D = rotate_jacobian(u, s);
       k.x += sign * rotate(u, s);
       k.v += sign * (D * ud);
-      k.g += sign * 2.0 * rotate(ud, s);
-      k.J.block<3, 4>(0, l + 3) += sign * D;
+      if (second_order) {
+        k.g += sign * 2.0 * rotate(ud, s);
+        k.J.block<3, 4>(0, l + 3) += sign * D;
+      }
       if (translate) {
         k.x += sign * q.segment<3>(o);
         k.v += sign * qd.segment<3>(o);
-        k.J.block<3, 3>(0, l) += sign * Matrix3d::Identity();
+        if (second_order) k.J.block<3, 3>(0, l) += sign * Matrix3d::Identity();
       }
       break;
     }
@@ -195,18 +201,21 @@ std::unique_ptr<ConstraintScratch> JointModel::make_scratch_sharing(Index n,
 }
 
 void JointModel::eval(const VecExpr& e, const VectorXd& q, const VectorXd& qd, PoseCache* cache,
-                      VecKin& k) const {
-  k.clear();
+                      VecKin& k, bool second_order) const {
+  k.clear(second_order);
   switch (e.kind) {
     case VecExpr::kWorld:
       k.x = e.world;
       break;
     case VecExpr::kBodyVector:
-      add_body_vector(slots_[std::size_t(e.slot_a)], q, qd, e.s_a, false, 1.0, k, cache);
+      add_body_vector(slots_[std::size_t(e.slot_a)], q, qd, e.s_a, false, 1.0, k, cache,
+                      second_order);
       break;
     case VecExpr::kPointDiff:
-      add_body_vector(slots_[std::size_t(e.slot_b)], q, qd, e.s_b, true, 1.0, k, cache);
-      add_body_vector(slots_[std::size_t(e.slot_a)], q, qd, e.s_a, true, -1.0, k, cache);
+      add_body_vector(slots_[std::size_t(e.slot_b)], q, qd, e.s_b, true, 1.0, k, cache,
+                      second_order);
+      add_body_vector(slots_[std::size_t(e.slot_a)], q, qd, e.s_a, true, -1.0, k, cache,
+                      second_order);
       break;
   }
 }
@@ -265,7 +274,8 @@ void JointModel::acceleration_form_local(const VectorXd& q, const VectorXd& qd, 
     }
     return;
   }
-  VecKin ka, kb;
+  // (every use is preceded by eval, which clears what it writes)
+  VecKin ka{VecKin::Unset{}}, kb{VecKin::Unset{}};
   for (std::size_t r = 0; r < rows_.size(); ++r) {
     const Row& row = rows_[r];
     const Index i = Index(r);
@@ -329,20 +339,21 @@ void JointModel::violation(const VectorXd& q, const VectorXd& qd, double t,
     }
     return;
   }
-  VecKin ka, kb;
+  // positions and velocities only (every use is preceded by eval)
+  VecKin ka{VecKin::Unset{}}, kb{VecKin::Unset{}};
   for (std::size_t r = 0; r < rows_.size(); ++r) {
     const Row& row = rows_[r];
     const Index i = Index(r);
     const Vector3d c = row.c.at(t);
     switch (row.kind) {
       case Row::kDot:
-        if (!reuses_a_[r]) eval(row.a, q, qd, cache, ka);
-        eval(row.b, q, qd, cache, kb);
+        if (!reuses_a_[r]) eval(row.a, q, qd, cache, ka, false);
+        eval(row.b, q, qd, cache, kb, false);
         position[i] = ka.x.dot(kb.x) - c[0];
         velocity[i] = ka.v.dot(kb.x) + ka.x.dot(kb.v) - c[1];
         break;
       case Row::kDistance:
-        if (!reuses_a_[r]) eval(row.a, q, qd, cache, ka);
+        if (!reuses_a_[r]) eval(row.a, q, qd, cache, ka, false);
         position[i] = (ka.x.squaredNorm() - row.length * row.length) * (0.5 / row.length);
         velocity[i] = ka.x.dot(ka.v) / row.length;
         break;
