@@ -244,6 +244,13 @@ class JointModel final : public ConstraintModel {
   Index local_count() const { return Index(cols_.size()); }
 
  private:
+  // the rows other than a planar revolute's, out of line (the planar revolute path stays short)
+  [[gnu::noinline]] void general_form(const VectorXd& q, const VectorXd& qd, double t,
+                                      PoseCache* cache, Eigen::Ref<MatrixXd> A,
+                                      Eigen::Ref<VectorXd> b) const;
+  [[gnu::noinline]] void general_violation(const VectorXd& q, const VectorXd& qd, double t,
+                                           PoseCache* cache, Eigen::Ref<VectorXd> position,
+                                           Eigen::Ref<VectorXd> velocity) const;
   // the kinematics of e into k (x and v only when !second_order: the violations)
   void eval(const VecExpr& e, const VectorXd& q, const VectorXd& qd, PoseCache* cache, VecKin& k,
             bool second_order = true) const;

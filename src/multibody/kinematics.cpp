@@ -177,7 +177,11 @@ JointModel::JointModel(std::vector<BodyRef> slots, std::vector<Row> rows)
                      axis_row(rows_[1], Vector3d::UnitY()) &&
                      rows_[0].a.slot_a == rows_[1].a.slot_a &&
                      rows_[0].a.slot_b == rows_[1].a.slot_b && rows_[0].a.s_a == rows_[1].a.s_a &&
-                     rows_[0].a.s_b == rows_[1].a.s_b;
+                     rows_[0].a.s_b == rows_[1].a.s_b &&
+                     (slots_[std::size_t(rows_[0].a.slot_a)].ground() ||
+                      slots_[std::size_t(rows_[0].a.slot_b)].ground() ||
+                      slots_[std::size_t(rows_[0].a.slot_a)].offset !=
+                          slots_[std::size_t(rows_[0].a.slot_b)].offset);
   reuses_a_.resize(rows_.size());
   for (std::size_t r = 0; r < rows_.size(); ++r) reuses_a_[r] = reuses_a(rows_, r) ? 1 : 0;
 }
@@ -247,33 +251,39 @@ void JointModel::acceleration_form_local(const VectorXd& q, const VectorXd& qd, 
                                          ConstraintScratch* scratch, Eigen::Ref<MatrixXd> A,
                                          Eigen::Ref<VectorXd> b) const {
   PoseCache* const cache = cache_of(scratch);
-  const Index k = local_count();
   if (planar_revolute_) {
     // phi = (x_C + R_C s_C − x_P − R_P s_P)_xy:  A = ±[I | e_z × R s] on each body,
     // b = Σ ± theta'² R s  (the dot rows' A = e_iᵀ J_d, b = −e_i·g_d, g = −theta'² R s)
-    // (zeros stored one by one: setZero on these 2-row blocks costs a memset call per column)
-    for (Index c = 0; c < k; ++c) {
-      A(0, c) = 0.0;
-      A(1, c) = 0.0;
-    }
-    b[0] = 0.0;
-    b[1] = 0.0;
+    // The two bodies' columns tile the local ones (the constructor checks it), so every entry
+    // of A is written once: each is the sum on zero of its one term, written out as such
+    // (0 + x and 0 − x, which differ from x and −x in the sign of a zero).
     const VecExpr& d = rows_[0].a;
+    double b0 = 0.0, b1 = 0.0;
     for (int side = 0; side < 2; ++side) {
       const BodyRef& body = slots_[std::size_t(side == 0 ? d.slot_b : d.slot_a)];
       if (body.ground()) continue;
       const double sign = side == 0 ? 1.0 : -1.0;
       const PlanarPoint p = planar_point(body, q, qd, side == 0 ? d.s_b : d.s_a, cache);
       const Index l = body.local;
-      A(0, l) += sign;
-      A(1, l + 1) += sign;
-      A(0, l + 2) -= sign * p.ry;
-      A(1, l + 2) += sign * p.rx;
-      b[0] += sign * p.w * p.w * p.rx;
-      b[1] += sign * p.w * p.w * p.ry;
+      A(0, l) = 0.0 + sign;
+      A(1, l) = 0.0;
+      A(0, l + 1) = 0.0;
+      A(1, l + 1) = 0.0 + sign;
+      A(0, l + 2) = 0.0 - sign * p.ry;
+      A(1, l + 2) = 0.0 + sign * p.rx;
+      b0 += sign * p.w * p.w * p.rx;
+      b1 += sign * p.w * p.w * p.ry;
     }
+    b[0] = b0;
+    b[1] = b1;
     return;
   }
+  general_form(q, qd, t, cache, A, b);
+}
+
+void JointModel::general_form(const VectorXd& q, const VectorXd& qd, double t, PoseCache* cache,
+                              Eigen::Ref<MatrixXd> A, Eigen::Ref<VectorXd> b) const {
+  const Index k = local_count();
   // (every use is preceded by eval, which clears what it writes)
   VecKin ka{VecKin::Unset{}}, kb{VecKin::Unset{}};
   for (std::size_t r = 0; r < rows_.size(); ++r) {
@@ -339,6 +349,12 @@ void JointModel::violation(const VectorXd& q, const VectorXd& qd, double t,
     }
     return;
   }
+  general_violation(q, qd, t, cache, position, velocity);
+}
+
+void JointModel::general_violation(const VectorXd& q, const VectorXd& qd, double t,
+                                   PoseCache* cache, Eigen::Ref<VectorXd> position,
+                                   Eigen::Ref<VectorXd> velocity) const {
   // positions and velocities only (every use is preceded by eval)
   VecKin ka{VecKin::Unset{}}, kb{VecKin::Unset{}};
   for (std::size_t r = 0; r < rows_.size(); ++r) {
