@@ -331,22 +331,26 @@ void JointModel::violation(const VectorXd& q, const VectorXd& qd, double t,
   PoseCache* const cache = cache_of(scratch);
   if (planar_revolute_) {
     // phi = (x_C + R_C s_C − x_P − R_P s_P)_xy,  phi' = Σ ± (x' + theta' e_z × R s)_xy
-    position[0] = position[1] = 0.0;
-    velocity[0] = velocity[1] = 0.0;
+    // (summed in locals, in the same order, then stored)
+    double p0 = 0.0, p1 = 0.0, v0 = 0.0, v1 = 0.0;
     const VecExpr& d = rows_[0].a;
     for (int side = 0; side < 2; ++side) {
       const BodyRef& body = slots_[std::size_t(side == 0 ? d.slot_b : d.slot_a)];
       const double sign = side == 0 ? 1.0 : -1.0;
       const PlanarPoint p = planar_point(body, q, qd, side == 0 ? d.s_b : d.s_a, cache);
-      position[0] += sign * p.rx;
-      position[1] += sign * p.ry;
+      p0 += sign * p.rx;
+      p1 += sign * p.ry;
       if (body.ground()) continue;
       const Index o = body.offset;
-      position[0] += sign * q[o];
-      position[1] += sign * q[o + 1];
-      velocity[0] += sign * (qd[o] - p.w * p.ry);
-      velocity[1] += sign * (qd[o + 1] + p.w * p.rx);
+      p0 += sign * q[o];
+      p1 += sign * q[o + 1];
+      v0 += sign * (qd[o] - p.w * p.ry);
+      v1 += sign * (qd[o + 1] + p.w * p.rx);
     }
+    position[0] = p0;
+    position[1] = p1;
+    velocity[0] = v0;
+    velocity[1] = v1;
     return;
   }
   general_violation(q, qd, t, cache, position, velocity);
