@@ -324,9 +324,14 @@ MultibodyModel Multibody::build() const {
       });
     }
   }
+  // the per-workspace memo of the bodies' rotations, which the forces and the joints share
+  const Index body_count = Index(out.bodies.size());
+  sb.scratch([body_count]() -> std::unique_ptr<CallableScratch> {
+    return std::make_unique<detail::PoseCache>(body_count);
+  });
   sb.forces(detail::make_forces(out.bodies, d.forces, d.g));
   sb.potential_energy(detail::make_potential(out.bodies, d.forces, d.g));
-  if (PowerFn power = detail::make_external_power(out.bodies, d.forces)) {
+  if (PowerScratchFn power = detail::make_external_power(out.bodies, d.forces)) {
     sb.external_power(std::move(power));
   }
   Index k = 0;  // constraint count

@@ -3,7 +3,9 @@
 #pragma once
 
 #include <array>
+#include <bit>
 #include <cmath>
+#include <cstdint>
 #include <memory>
 #include <string>
 #include <utility>
@@ -13,6 +15,7 @@
 
 #include "ukdyn/core/autodiff.hpp"
 #include "ukdyn/core/constraint.hpp"
+#include "ukdyn/core/system.hpp"
 #include "ukdyn/multibody/multibody.hpp"
 
 namespace ukdyn::mb::detail {
@@ -23,14 +26,86 @@ using JacobianRow = Eigen::Matrix<double, 3, kMaxCols>;
 using Matrix34 = Eigen::Matrix<double, 3, 4>;
 using Vector4d = Eigen::Vector4d;
 
-/// A body as a joint sees it: kind, its first coordinate in q and its first local column.
+/// A body as a joint sees it: kind, its first coordinate in q, its first local column and its
+/// index among the model's bodies (the entry of the PoseCache).
 struct BodyRef {
   BodyKind kind = BodyKind::kParticle;
   Index offset = -1;  // −1: the ground
   Index local = 0;
+  Index id = -1;  // the BodyId (−1: the ground)
   bool ground() const { return offset < 0; }
   Index size() const { return ground() ? 0 : (kind == BodyKind::kRigid ? 7 : 3); }
 };
+
+// ---- the bodies' rotations, once per evaluation ---------------------------------------------
+
+/// cos theta and sin theta of a planar body.
+struct CosSin {
+  double c, s;
+};
+/// {std::cos(theta), std::sin(theta)}, out of line: one sincos call, whichever branch asks for
+/// it (inlined into two branches, one of them got a sincos and the other a cos and a sin).
+CosSin cos_sin_of(double theta);
+
+/// The multibody System's per-workspace scratch (its CallableScratch, made by
+/// System::make_scratch, which its joints' ConstraintScratch share): a memo of each body's
+/// rotation, so that the joints, forces and violation checks of one evaluation compute it once
+/// — planar: cos and sin of theta; any body: R_WB (rotation_WB). An entry is keyed on the exact
+/// bits of the body's orientation coordinates (planar theta; rigid u0..u3) and recomputed when
+/// they differ: a callable may be called at any q (projection, violation checks, Jacobian
+/// checks), and a hit returns bitwise what the computation would. Lookup O(1) (a compare), no
+/// allocation after construction. It lives in the Workspace, never in the System, so one
+/// System serves any number of threads (docs/algorithm.md, "Thread safety").
+class PoseCache final : public CallableScratch {
+ public:
+  /// Entries for `bodies` bodies (BodyRef::id in [0, bodies)). Allocates.
+  explicit PoseCache(Index bodies);
+  /// The number of entries.
+  Index body_count() const { return Index(trig_.size()); }
+  /// How many rotations were computed (cos/sin pairs and matrices: the misses), for the tests
+  /// that check each is computed once per evaluation.
+  std::int64_t computed() const { return computed_; }
+  /// cos theta, sin theta of planar body b at theta: std::cos and std::sin of theta, computed
+  /// when theta differs (bitwise) from the previous call's for b. Cost O(1).
+  CosSin cos_sin(const BodyRef& b, double theta) {
+    Trig& e = trig_[std::size_t(b.id)];
+    const std::uint64_t key = std::bit_cast<std::uint64_t>(theta);
+    if (key != e.key) {
+      const CosSin cs = cos_sin_of(theta);
+      e = {key, cs.c, cs.s};
+      ++computed_;
+    }
+    return {e.c, e.s};
+  }
+  /// R_WB of body b (not the ground, not a particle) at q, as rotation_WB computes it, recomputed
+  /// when the body's orientation coordinates differ from the previous call's. Cost O(1).
+  const Matrix3d& rotation(const BodyRef& b, const VectorXd& q);
+
+ private:
+  struct Trig {  // planar: cos and sin of the theta whose bits are key
+    std::uint64_t key;
+    double c, s;
+  };
+  struct Rotation {  // R_WB at the orientation coordinates whose bits are key (valid once set)
+    std::array<std::uint64_t, 4> key{};
+    bool valid = false;
+    Matrix3d R;
+  };
+  std::vector<Trig> trig_;
+  std::vector<Rotation> rotation_;
+  std::int64_t computed_ = 0;
+};
+
+/// cos theta, sin theta of planar body b: from the cache, or computed when it is null. O(1).
+inline CosSin planar_cos_sin(PoseCache* cache, const BodyRef& b, double theta) {
+  if (cache != nullptr) return cache->cos_sin(b, theta);
+  return cos_sin_of(theta);
+}
+
+/// The PoseCache in a description callable's scratch (null when none was given: the callables
+/// then compute every rotation). The scratch of the multibody System's callables is always one
+/// (System::make_scratch); cost O(1).
+inline PoseCache* pose_cache(CallableScratch* s) { return static_cast<PoseCache*>(s); }
 
 // ---- quaternion algebra (u = (u0, u1, u2, u3), u0 scalar) ----------------------------------
 
@@ -72,17 +147,25 @@ inline Matrix34 G_v(const Vector4d& u) {
 struct VecKin {
   Vector3d x = Vector3d::Zero(), v = Vector3d::Zero(), g = Vector3d::Zero();
   JacobianRow J = JacobianRow::Zero();
-  void clear() {
+  /// Tag of the constructor that leaves every entry unset (for one that clear() sets next).
+  struct Unset {};
+  VecKin() = default;
+  explicit VecKin(Unset) : x(), v(), g(), J() {}
+  /// Zeros x and v, and g and J unless !second_order.
+  void clear(bool second_order = true) {
     x.setZero();
     v.setZero();
+    if (!second_order) return;
     g.setZero();
     J.setZero();
   }
 };
 
-/// Adds sign · (point p_B + R s, or R s when !translate) of body b to k. Cost O(1).
+/// Adds sign · (point p_B + R s, or R s when !translate) of body b to k; a planar body's cos and
+/// sin from `cache` when given; x and v only when !second_order (g and J untouched). Cost O(1).
 void add_body_vector(const BodyRef& b, const VectorXd& q, const VectorXd& qd, const Vector3d& s,
-                     bool translate, double sign, VecKin& k);
+                     bool translate, double sign, VecKin& k, PoseCache* cache = nullptr,
+                     bool second_order = true);
 
 /// A vector expression of a joint row.
 struct VecExpr {
@@ -122,11 +205,35 @@ struct Row {
   Offset c;
 };
 
+/// Largest number of rows of a joint model (a spatial weld: 6).
+inline constexpr int kMaxRows = 6;
+
 /// The closed-form joint model: rows over the coordinates of up to four bodies (slots).
+/// Its scratch points to the System's PoseCache (make_scratch_sharing), so that the joints and
+/// forces of one evaluation compute each body's rotation once.
 class JointModel final : public ConstraintModel {
  public:
+  /// The scratch: the PoseCache it reads the bodies' rotations from (the workspace's shared one,
+  /// or its own).
+  struct Scratch final : ConstraintScratch {
+    PoseCache* cache = nullptr;
+    std::unique_ptr<PoseCache> own;
+  };
+  /// @throws std::logic_error with more than kMaxRows rows or kMaxCols local columns.
   JointModel(std::vector<BodyRef> slots, std::vector<Row> rows);
+  /// A Scratch with a PoseCache of its own (for evaluations outside a workspace). Allocates.
+  std::unique_ptr<ConstraintScratch> make_scratch(Index n) const override;
+  /// A Scratch on the workspace's PoseCache (the multibody System's CallableScratch), or
+  /// make_scratch(n) when `shared` is none or too small for this joint's bodies.
+  std::unique_ptr<ConstraintScratch> make_scratch_sharing(Index n,
+                                                          CallableScratch* shared) const override;
   const std::vector<Index>& columns() const override { return cols_; }
+  /// The dense rows (rows × n): the local form into a fixed-size buffer, then placed at
+  /// columns() with zeros elsewhere — the values of the default scatter, in O(rows · n) stores
+  /// without moving columns. Does not allocate.
+  void acceleration_form(const VectorXd& q, const VectorXd& qd, double t,
+                         ConstraintScratch* scratch, Eigen::Ref<MatrixXd> A,
+                         Eigen::Ref<VectorXd> b) const override;
   void acceleration_form_local(const VectorXd& q, const VectorXd& qd, double t,
                                ConstraintScratch* scratch, Eigen::Ref<MatrixXd> A_local,
                                Eigen::Ref<VectorXd> b) const override;
@@ -137,10 +244,23 @@ class JointModel final : public ConstraintModel {
   Index local_count() const { return Index(cols_.size()); }
 
  private:
-  void eval(const VecExpr& e, const VectorXd& q, const VectorXd& qd, VecKin& k) const;
+  // the rows other than a planar revolute's, out of line (the planar revolute path stays short)
+  [[gnu::noinline]] void general_form(const VectorXd& q, const VectorXd& qd, double t,
+                                      PoseCache* cache, Eigen::Ref<MatrixXd> A,
+                                      Eigen::Ref<VectorXd> b) const;
+  [[gnu::noinline]] void general_violation(const VectorXd& q, const VectorXd& qd, double t,
+                                           PoseCache* cache, Eigen::Ref<VectorXd> position,
+                                           Eigen::Ref<VectorXd> velocity) const;
+  // the kinematics of e into k (x and v only when !second_order: the violations)
+  void eval(const VecExpr& e, const VectorXd& q, const VectorXd& qd, PoseCache* cache, VecKin& k,
+            bool second_order = true) const;
   std::vector<BodyRef> slots_;
   std::vector<Row> rows_;
   std::vector<Index> cols_;
+  // per row: its first vector is the previous row's, whose kinematics are reused (the rows of
+  // one joint often share one: d·e_x, d·e_y of a revolute)
+  std::vector<char> reuses_a_;
+  Index max_id_ = -1;  // the largest BodyRef::id of the slots (the PoseCache entries it reads)
   // the rows are a planar revolute's d·e_x, d·e_y between planar bodies (or the ground), which
   // acceleration_form_local and violation evaluate by a shorter path (same A, b, phi, phi')
   bool planar_revolute_ = false;
@@ -320,13 +440,14 @@ BodyRef body_ref(const std::vector<BodyInfo>& bodies, BodyId id);
 /// Adds the generalized force of a world force F_W acting at body point s (body coordinates) to
 /// Q: translation += F; planar theta += ((R s) × F)_z; quaternion += D(u, s)ᵀ F. Cost O(1).
 void add_point_force(const BodyRef& b, const VectorXd& q, const Vector3d& s, const Vector3d& F_W,
-                     Eigen::Ref<VectorXd> Q);
+                     Eigen::Ref<VectorXd> Q, PoseCache* cache = nullptr);
 /// Adds the generalized force of a world torque: planar theta += tau_z; quaternion += 2 G_vᵀ tau.
 void add_torque(const BodyRef& b, const VectorXd& q, const Vector3d& tau_W, Eigen::Ref<VectorXd> Q);
 /// Angular velocity (world) of a body: planar (0, 0, theta'); rigid 2 G_v(u) u' / |u|².
 Vector3d angular_velocity_W(const BodyRef& b, const VectorXd& q, const VectorXd& qd);
-/// Orientation matrix R_WB (rigid: of the normalized quaternion; planar: about z).
-Matrix3d rotation_WB(const BodyRef& b, const VectorXd& q);
+/// Orientation matrix R_WB (rigid: of the normalized quaternion; planar: about z); from `cache`
+/// when given (the same bits).
+Matrix3d rotation_WB(const BodyRef& b, const VectorXd& q, PoseCache* cache = nullptr);
 
 /// Rows of a planar joint (parent slot 0, child slot 1); the drive row, if any, separately.
 std::vector<Row> planar_joint_rows(const Joint& j, const BodyRef& P, const BodyRef& C);
@@ -352,14 +473,16 @@ void joint_friction_C(const Joint& j, const BodyRef& P, const BodyRef& C, bool p
                       Eigen::Ref<VectorXd> out);
 
 /// Q(q, q', t) and V(q, t) of gravity, force elements and the quaternions' velocity terms.
-ForceFn make_forces(const std::vector<BodyInfo>& bodies, const std::vector<Force>& forces,
-                    const Vector3d& g);
-PotentialFn make_potential(const std::vector<BodyInfo>& bodies, const std::vector<Force>& forces,
+/// Each takes the workspace's PoseCache as its scratch (System::make_scratch; null: none).
+ForceScratchFn make_forces(const std::vector<BodyInfo>& bodies, const std::vector<Force>& forces,
                            const Vector3d& g);
+PotentialScratchFn make_potential(const std::vector<BodyInfo>& bodies,
+                                  const std::vector<Force>& forces, const Vector3d& g);
 /// The power of the force elements that V does not account for — the dampers of spring-dampers
 /// and torsion springs and the applied wrenches — or an empty callable when there are none
 /// (gravity and springs derive from V, the quaternions' velocity terms do no work).
-PowerFn make_external_power(const std::vector<BodyInfo>& bodies, const std::vector<Force>& forces);
+PowerScratchFn make_external_power(const std::vector<BodyInfo>& bodies,
+                                   const std::vector<Force>& forces);
 
 /// M_kk of a quaternion: 4 E_v(u)ᵀ J E_v(u) (4 × 4, positive semi-definite of rank 3: singular
 /// along u, which the unit-norm constraint determines; docs/multibody.md 1.1).

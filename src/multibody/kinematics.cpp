@@ -12,11 +12,35 @@ namespace ukdyn::mb::detail {
 BodyRef body_ref(const std::vector<BodyInfo>& bodies, BodyId id) {
   if (id == kGround) return {};
   const BodyInfo& b = bodies.at(std::size_t(id));
-  return {b.kind, b.offset, 0};
+  return {b.kind, b.offset, 0, id};
+}
+
+CosSin cos_sin_of(double theta) { return {std::cos(theta), std::sin(theta)}; }
+
+PoseCache::PoseCache(Index bodies) : trig_(std::size_t(bodies)), rotation_(std::size_t(bodies)) {
+  // every entry starts as a valid memo: theta = 0
+  const CosSin zero = cos_sin_of(0.0);
+  for (Trig& e : trig_) e = {std::bit_cast<std::uint64_t>(0.0), zero.c, zero.s};
+}
+
+const Matrix3d& PoseCache::rotation(const BodyRef& b, const VectorXd& q) {
+  Rotation& e = rotation_[std::size_t(b.id)];
+  // the orientation coordinates: planar theta; rigid u0..u3
+  const Index first = b.kind == BodyKind::kPlanar ? b.offset + 2 : b.offset + 3;
+  const int count = b.kind == BodyKind::kPlanar ? 1 : 4;
+  std::array<std::uint64_t, 4> key{};
+  for (int i = 0; i < count; ++i) key[std::size_t(i)] = std::bit_cast<std::uint64_t>(q[first + i]);
+  if (!e.valid || key != e.key) {
+    e.R = rotation_WB(b, q, nullptr);
+    e.key = key;
+    e.valid = true;
+    ++computed_;
+  }
+  return e.R;
 }
 
 void add_body_vector(const BodyRef& b, const VectorXd& q, const VectorXd& qd, const Vector3d& s,
-                     bool translate, double sign, VecKin& k) {
+                     bool translate, double sign, VecKin& k, PoseCache* cache, bool second_order) {
   if (b.ground()) {
     k.x += sign * s;
     return;
@@ -29,23 +53,28 @@ void add_body_vector(const BodyRef& b, const VectorXd& q, const VectorXd& qd, co
       if (translate) {
         k.x += sign * q.segment<3>(o);
         k.v += sign * qd.segment<3>(o);
-        k.J.block<3, 3>(0, l) += sign * Matrix3d::Identity();
+        if (second_order) k.J.block<3, 3>(0, l) += sign * Matrix3d::Identity();
       }
       break;
     case BodyKind::kPlanar: {
       // x = (x, y, 0) + R(theta) s: dx/dtheta = e_z × R s, g = −theta'² (R s)_xy
-      const double c = std::cos(q[o + 2]), sn = std::sin(q[o + 2]), w = qd[o + 2];
+      const CosSin cs = planar_cos_sin(cache, b, q[o + 2]);
+      const double c = cs.c, sn = cs.s, w = qd[o + 2];
       const double rx = c * s.x() - sn * s.y(), ry = sn * s.x() + c * s.y();
       k.x += sign * Vector3d(rx, ry, s.z());
       k.v += sign * w * Vector3d(-ry, rx, 0.0);
-      k.g += sign * (-w * w) * Vector3d(rx, ry, 0.0);
-      k.J(0, l + 2) += sign * -ry;
-      k.J(1, l + 2) += sign * rx;
+      if (second_order) {
+        k.g += sign * (-w * w) * Vector3d(rx, ry, 0.0);
+        k.J(0, l + 2) += sign * -ry;
+        k.J(1, l + 2) += sign * rx;
+      }
       if (translate) {
         k.x += sign * Vector3d(q[o], q[o + 1], 0.0);
         k.v += sign * Vector3d(qd[o], qd[o + 1], 0.0);
-        k.J(0, l) += sign;
-        k.J(1, l + 1) += sign;
+        if (second_order) {
+          k.J(0, l) += sign;
+          k.J(1, l + 1) += sign;
+        }
       }
       break;
     }
@@ -55,17 +84,49 @@ void add_body_vector(const BodyRef& b, const VectorXd& q, const VectorXd& qd, co
       const Matrix34 D = rotate_jacobian(u, s);
       k.x += sign * rotate(u, s);
       k.v += sign * (D * ud);
-      k.g += sign * 2.0 * rotate(ud, s);
-      k.J.block<3, 4>(0, l + 3) += sign * D;
+      if (second_order) {
+        k.g += sign * 2.0 * rotate(ud, s);
+        k.J.block<3, 4>(0, l + 3) += sign * D;
+      }
       if (translate) {
         k.x += sign * q.segment<3>(o);
         k.v += sign * qd.segment<3>(o);
-        k.J.block<3, 3>(0, l) += sign * Matrix3d::Identity();
+        if (second_order) k.J.block<3, 3>(0, l) += sign * Matrix3d::Identity();
       }
       break;
     }
   }
 }
+
+namespace {
+// (R(theta) s)_xy of a planar body and its theta' (the ground: s_xy, at rest)
+struct PlanarPoint {
+  double rx, ry, w;
+};
+inline PlanarPoint planar_point(const BodyRef& b, const VectorXd& q, const VectorXd& qd,
+                                const Vector3d& s, PoseCache* cache) {
+  if (b.ground()) return {s.x(), s.y(), 0.0};
+  const CosSin cs = planar_cos_sin(cache, b, q[b.offset + 2]);
+  const double c = cs.c, sn = cs.s;
+  return {c * s.x() - sn * s.y(), sn * s.x() + c * s.y(), qd[b.offset + 2]};
+}
+
+// the same vector expression (rows of one joint often share one: d·e_x, d·e_y of a revolute)
+bool same_expr(const VecExpr& e, const VecExpr& f) {
+  return e.kind == f.kind && e.slot_a == f.slot_a && e.slot_b == f.slot_b && e.s_a == f.s_a &&
+         e.s_b == f.s_b && e.world == f.world;
+}
+// row r's first vector is the previous row's: its kinematics in ka can be reused
+bool reuses_a(const std::vector<Row>& rows, std::size_t r) {
+  return r > 0 && rows[r].kind != Row::kLinear && rows[r - 1].kind != Row::kLinear &&
+         same_expr(rows[r].a, rows[r - 1].a);
+}
+
+// the PoseCache of a JointModel's scratch (null: none, every rotation is computed)
+PoseCache* cache_of(ConstraintScratch* scratch) {
+  return scratch != nullptr ? static_cast<JointModel::Scratch*>(scratch)->cache : nullptr;
+}
+}  // namespace
 
 JointModel::JointModel(std::vector<BodyRef> slots, std::vector<Row> rows)
     : slots_(std::move(slots)), rows_(std::move(rows)) {
@@ -106,92 +167,138 @@ JointModel::JointModel(std::vector<BodyRef> slots, std::vector<Row> rows)
            r.b.world == axis && !r.c.motion && r.c.c0 == 0.0 && planar_or_ground(r.a.slot_a) &&
            planar_or_ground(r.a.slot_b);
   };
+  for (const BodyRef& s : slots_) max_id_ = std::max(max_id_, s.id);
+  if (rows_.size() > std::size_t(kMaxRows) || cols_.size() > std::size_t(kMaxCols)) {
+    throw std::logic_error(
+        "ukdyn::mb: a joint model has more rows or columns than kMaxRows, "
+        "kMaxCols");
+  }
   planar_revolute_ = rows_.size() == 2 && axis_row(rows_[0], Vector3d::UnitX()) &&
                      axis_row(rows_[1], Vector3d::UnitY()) &&
                      rows_[0].a.slot_a == rows_[1].a.slot_a &&
                      rows_[0].a.slot_b == rows_[1].a.slot_b && rows_[0].a.s_a == rows_[1].a.s_a &&
-                     rows_[0].a.s_b == rows_[1].a.s_b;
+                     rows_[0].a.s_b == rows_[1].a.s_b &&
+                     (slots_[std::size_t(rows_[0].a.slot_a)].ground() ||
+                      slots_[std::size_t(rows_[0].a.slot_b)].ground() ||
+                      slots_[std::size_t(rows_[0].a.slot_a)].offset !=
+                          slots_[std::size_t(rows_[0].a.slot_b)].offset);
+  reuses_a_.resize(rows_.size());
+  for (std::size_t r = 0; r < rows_.size(); ++r) reuses_a_[r] = reuses_a(rows_, r) ? 1 : 0;
 }
 
-namespace {
-// (R(theta) s)_xy of a planar body and its theta' (the ground: s_xy, at rest)
-struct PlanarPoint {
-  double rx, ry, w;
-};
-PlanarPoint planar_point(const BodyRef& b, const VectorXd& q, const VectorXd& qd,
-                         const Vector3d& s) {
-  if (b.ground()) return {s.x(), s.y(), 0.0};
-  const double c = std::cos(q[b.offset + 2]), sn = std::sin(q[b.offset + 2]);
-  return {c * s.x() - sn * s.y(), sn * s.x() + c * s.y(), qd[b.offset + 2]};
+std::unique_ptr<ConstraintScratch> JointModel::make_scratch(Index) const {
+  auto s = std::make_unique<Scratch>();
+  s->own = std::make_unique<PoseCache>(max_id_ + 1);
+  s->cache = s->own.get();
+  return s;
 }
 
-// the same vector expression (rows of one joint often share one: d·e_x, d·e_y of a revolute)
-bool same_expr(const VecExpr& e, const VecExpr& f) {
-  return e.kind == f.kind && e.slot_a == f.slot_a && e.slot_b == f.slot_b && e.s_a == f.s_a &&
-         e.s_b == f.s_b && e.world == f.world;
+std::unique_ptr<ConstraintScratch> JointModel::make_scratch_sharing(Index n,
+                                                                    CallableScratch* shared) const {
+  // the multibody System's callables' scratch is its PoseCache; any other (this joint's
+  // constraint inside another system) or none: a cache of its own
+  auto* cache = dynamic_cast<PoseCache*>(shared);
+  if (cache == nullptr || cache->body_count() <= max_id_) return make_scratch(n);
+  auto s = std::make_unique<Scratch>();
+  s->cache = cache;
+  return s;
 }
-// row r's first vector is the previous row's: its kinematics in ka can be reused
-bool reuses_a(const std::vector<Row>& rows, std::size_t r) {
-  return r > 0 && rows[r].kind != Row::kLinear && rows[r - 1].kind != Row::kLinear &&
-         same_expr(rows[r].a, rows[r - 1].a);
-}
-}  // namespace
 
-void JointModel::eval(const VecExpr& e, const VectorXd& q, const VectorXd& qd, VecKin& k) const {
-  k.clear();
+void JointModel::eval(const VecExpr& e, const VectorXd& q, const VectorXd& qd, PoseCache* cache,
+                      VecKin& k, bool second_order) const {
+  k.clear(second_order);
   switch (e.kind) {
     case VecExpr::kWorld:
       k.x = e.world;
       break;
     case VecExpr::kBodyVector:
-      add_body_vector(slots_[std::size_t(e.slot_a)], q, qd, e.s_a, false, 1.0, k);
+      add_body_vector(slots_[std::size_t(e.slot_a)], q, qd, e.s_a, false, 1.0, k, cache,
+                      second_order);
       break;
     case VecExpr::kPointDiff:
-      add_body_vector(slots_[std::size_t(e.slot_b)], q, qd, e.s_b, true, 1.0, k);
-      add_body_vector(slots_[std::size_t(e.slot_a)], q, qd, e.s_a, true, -1.0, k);
+      add_body_vector(slots_[std::size_t(e.slot_b)], q, qd, e.s_b, true, 1.0, k, cache,
+                      second_order);
+      add_body_vector(slots_[std::size_t(e.slot_a)], q, qd, e.s_a, true, -1.0, k, cache,
+                      second_order);
       break;
   }
 }
 
-void JointModel::acceleration_form_local(const VectorXd& q, const VectorXd& qd, double t,
-                                         ConstraintScratch*, Eigen::Ref<MatrixXd> A,
-                                         Eigen::Ref<VectorXd> b) const {
+void JointModel::acceleration_form(const VectorXd& q, const VectorXd& qd, double t,
+                                   ConstraintScratch* scratch, Eigen::Ref<MatrixXd> A,
+                                   Eigen::Ref<VectorXd> b) const {
   const Index k = local_count();
+  Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::ColMajor, kMaxRows, kMaxCols> local(
+      A.rows(), k);
+  acceleration_form_local(q, qd, t, scratch, local, b);
+  // column by column: a local column where columns() has one, zeros elsewhere
+  const Index rows = A.rows(), n = A.cols(), stride = A.outerStride();
+  double* a = A.data();
+  const double* l = local.data();
+  Index j = 0;  // the next local column
+  for (Index c = 0; c < n; ++c, a += stride) {
+    if (j < k && cols_[std::size_t(j)] == c) {
+      for (Index i = 0; i < rows; ++i) a[i] = l[i];
+      l += rows;
+      ++j;
+    } else {
+      for (Index i = 0; i < rows; ++i) a[i] = 0.0;
+    }
+  }
+}
+
+void JointModel::acceleration_form_local(const VectorXd& q, const VectorXd& qd, double t,
+                                         ConstraintScratch* scratch, Eigen::Ref<MatrixXd> A,
+                                         Eigen::Ref<VectorXd> b) const {
+  PoseCache* const cache = cache_of(scratch);
   if (planar_revolute_) {
     // phi = (x_C + R_C s_C − x_P − R_P s_P)_xy:  A = ±[I | e_z × R s] on each body,
     // b = Σ ± theta'² R s  (the dot rows' A = e_iᵀ J_d, b = −e_i·g_d, g = −theta'² R s)
-    A.setZero();
-    b.setZero();
+    // The two bodies' columns tile the local ones (the constructor checks it), so every entry
+    // of A is written once: each is the sum on zero of its one term, written out as such
+    // (0 + x and 0 − x, which differ from x and −x in the sign of a zero).
     const VecExpr& d = rows_[0].a;
+    double b0 = 0.0, b1 = 0.0;
     for (int side = 0; side < 2; ++side) {
       const BodyRef& body = slots_[std::size_t(side == 0 ? d.slot_b : d.slot_a)];
       if (body.ground()) continue;
       const double sign = side == 0 ? 1.0 : -1.0;
-      const PlanarPoint p = planar_point(body, q, qd, side == 0 ? d.s_b : d.s_a);
+      const PlanarPoint p = planar_point(body, q, qd, side == 0 ? d.s_b : d.s_a, cache);
       const Index l = body.local;
-      A(0, l) += sign;
-      A(1, l + 1) += sign;
-      A(0, l + 2) -= sign * p.ry;
-      A(1, l + 2) += sign * p.rx;
-      b[0] += sign * p.w * p.w * p.rx;
-      b[1] += sign * p.w * p.w * p.ry;
+      A(0, l) = 0.0 + sign;
+      A(1, l) = 0.0;
+      A(0, l + 1) = 0.0;
+      A(1, l + 1) = 0.0 + sign;
+      A(0, l + 2) = 0.0 - sign * p.ry;
+      A(1, l + 2) = 0.0 + sign * p.rx;
+      b0 += sign * p.w * p.w * p.rx;
+      b1 += sign * p.w * p.w * p.ry;
     }
+    b[0] = b0;
+    b[1] = b1;
     return;
   }
-  VecKin ka, kb;
+  general_form(q, qd, t, cache, A, b);
+}
+
+void JointModel::general_form(const VectorXd& q, const VectorXd& qd, double t, PoseCache* cache,
+                              Eigen::Ref<MatrixXd> A, Eigen::Ref<VectorXd> b) const {
+  const Index k = local_count();
+  // (every use is preceded by eval, which clears what it writes)
+  VecKin ka{VecKin::Unset{}}, kb{VecKin::Unset{}};
   for (std::size_t r = 0; r < rows_.size(); ++r) {
     const Row& row = rows_[r];
     const Index i = Index(r);
     switch (row.kind) {
       case Row::kDot: {
         // phi = a·b − c:  A = bᵀ J_a + aᵀ J_b,  b = −(g_a·b + 2 v_a·v_b + a·g_b) + c''
-        if (!reuses_a(rows_, r)) eval(row.a, q, qd, ka);
+        if (!reuses_a_[r]) eval(row.a, q, qd, cache, ka);
         if (row.b.kind == VecExpr::kWorld) {
           // a constant b (a world axis): A = bᵀ J_a,  b = −g_a·b
           A.row(i) = row.b.world.transpose() * ka.J.leftCols(k);
           b[i] = -ka.g.dot(row.b.world);
         } else {
-          eval(row.b, q, qd, kb);
+          eval(row.b, q, qd, cache, kb);
           A.row(i) = (kb.x.transpose() * ka.J.leftCols(k) + ka.x.transpose() * kb.J.leftCols(k));
           b[i] = -(ka.g.dot(kb.x) + 2.0 * ka.v.dot(kb.v) + ka.x.dot(kb.g));
         }
@@ -200,7 +307,7 @@ void JointModel::acceleration_form_local(const VectorXd& q, const VectorXd& qd, 
       }
       case Row::kDistance: {
         // phi = (a·a − L²)/(2L):  A = aᵀ J_a / L,  b = −(a·g_a + v_a·v_a) / L
-        if (!reuses_a(rows_, r)) eval(row.a, q, qd, ka);
+        if (!reuses_a_[r]) eval(row.a, q, qd, cache, ka);
         A.row(i) = ka.x.transpose() * ka.J.leftCols(k) / row.length;
         b[i] = -(ka.x.dot(ka.g) + ka.v.squaredNorm()) / row.length;
         break;
@@ -218,42 +325,55 @@ void JointModel::acceleration_form_local(const VectorXd& q, const VectorXd& qd, 
   }
 }
 
-void JointModel::violation(const VectorXd& q, const VectorXd& qd, double t, ConstraintScratch*,
-                           Eigen::Ref<VectorXd> position, Eigen::Ref<VectorXd> velocity) const {
+void JointModel::violation(const VectorXd& q, const VectorXd& qd, double t,
+                           ConstraintScratch* scratch, Eigen::Ref<VectorXd> position,
+                           Eigen::Ref<VectorXd> velocity) const {
+  PoseCache* const cache = cache_of(scratch);
   if (planar_revolute_) {
     // phi = (x_C + R_C s_C − x_P − R_P s_P)_xy,  phi' = Σ ± (x' + theta' e_z × R s)_xy
-    position.setZero();
-    velocity.setZero();
+    // (summed in locals, in the same order, then stored)
+    double p0 = 0.0, p1 = 0.0, v0 = 0.0, v1 = 0.0;
     const VecExpr& d = rows_[0].a;
     for (int side = 0; side < 2; ++side) {
       const BodyRef& body = slots_[std::size_t(side == 0 ? d.slot_b : d.slot_a)];
       const double sign = side == 0 ? 1.0 : -1.0;
-      const PlanarPoint p = planar_point(body, q, qd, side == 0 ? d.s_b : d.s_a);
-      position[0] += sign * p.rx;
-      position[1] += sign * p.ry;
+      const PlanarPoint p = planar_point(body, q, qd, side == 0 ? d.s_b : d.s_a, cache);
+      p0 += sign * p.rx;
+      p1 += sign * p.ry;
       if (body.ground()) continue;
       const Index o = body.offset;
-      position[0] += sign * q[o];
-      position[1] += sign * q[o + 1];
-      velocity[0] += sign * (qd[o] - p.w * p.ry);
-      velocity[1] += sign * (qd[o + 1] + p.w * p.rx);
+      p0 += sign * q[o];
+      p1 += sign * q[o + 1];
+      v0 += sign * (qd[o] - p.w * p.ry);
+      v1 += sign * (qd[o + 1] + p.w * p.rx);
     }
+    position[0] = p0;
+    position[1] = p1;
+    velocity[0] = v0;
+    velocity[1] = v1;
     return;
   }
-  VecKin ka, kb;
+  general_violation(q, qd, t, cache, position, velocity);
+}
+
+void JointModel::general_violation(const VectorXd& q, const VectorXd& qd, double t,
+                                   PoseCache* cache, Eigen::Ref<VectorXd> position,
+                                   Eigen::Ref<VectorXd> velocity) const {
+  // positions and velocities only (every use is preceded by eval)
+  VecKin ka{VecKin::Unset{}}, kb{VecKin::Unset{}};
   for (std::size_t r = 0; r < rows_.size(); ++r) {
     const Row& row = rows_[r];
     const Index i = Index(r);
     const Vector3d c = row.c.at(t);
     switch (row.kind) {
       case Row::kDot:
-        if (!reuses_a(rows_, r)) eval(row.a, q, qd, ka);
-        eval(row.b, q, qd, kb);
+        if (!reuses_a_[r]) eval(row.a, q, qd, cache, ka, false);
+        eval(row.b, q, qd, cache, kb, false);
         position[i] = ka.x.dot(kb.x) - c[0];
         velocity[i] = ka.v.dot(kb.x) + ka.x.dot(kb.v) - c[1];
         break;
       case Row::kDistance:
-        if (!reuses_a(rows_, r)) eval(row.a, q, qd, ka);
+        if (!reuses_a_[r]) eval(row.a, q, qd, cache, ka, false);
         position[i] = (ka.x.squaredNorm() - row.length * row.length) * (0.5 / row.length);
         velocity[i] = ka.x.dot(ka.v) / row.length;
         break;
@@ -268,7 +388,6 @@ void JointModel::violation(const VectorXd& q, const VectorXd& qd, double t, Cons
     }
   }
 }
-
 // ---- quaternion mass matrix and velocity terms ---------------------------------------------
 
 void quaternion_mass(const Vector4d& u, const Vector3d& J, Eigen::Ref<MatrixXd> Mk) {
@@ -284,7 +403,7 @@ Vector4d quaternion_velocity_force(const Vector4d& u, const Vector4d& ud, const 
 }
 
 void add_point_force(const BodyRef& b, const VectorXd& q, const Vector3d& s, const Vector3d& F,
-                     Eigen::Ref<VectorXd> Q) {
+                     Eigen::Ref<VectorXd> Q, PoseCache* cache) {
   if (b.ground()) return;
   const Index o = b.offset;
   switch (b.kind) {
@@ -292,7 +411,8 @@ void add_point_force(const BodyRef& b, const VectorXd& q, const Vector3d& s, con
       Q.segment<3>(o) += F;
       break;
     case BodyKind::kPlanar: {
-      const double c = std::cos(q[o + 2]), sn = std::sin(q[o + 2]);
+      const CosSin cs = planar_cos_sin(cache, b, q[o + 2]);
+      const double c = cs.c, sn = cs.s;
       const double rx = c * s.x() - sn * s.y(), ry = sn * s.x() + c * s.y();
       Q[o] += F.x();
       Q[o + 1] += F.y();
@@ -325,8 +445,9 @@ Vector3d angular_velocity_W(const BodyRef& b, const VectorXd& q, const VectorXd&
   return 2.0 * G_v(u) * qd.segment<4>(o + 3) / u.squaredNorm();
 }
 
-Matrix3d rotation_WB(const BodyRef& b, const VectorXd& q) {
+Matrix3d rotation_WB(const BodyRef& b, const VectorXd& q, PoseCache* cache) {
   if (b.ground() || b.kind == BodyKind::kParticle) return Matrix3d::Identity();
+  if (cache != nullptr) return cache->rotation(b, q);
   const Index o = b.offset;
   if (b.kind == BodyKind::kPlanar) {
     return Eigen::AngleAxisd(q[o + 2], Vector3d::UnitZ()).toRotationMatrix();

@@ -17,7 +17,10 @@
 /// NonIdealForce that reads the joint's own ideal reaction. The result of Multibody::build() is a
 /// System with one mass block per body part (mass_block), which both the dense and the sparse
 /// engine run, plus the metadata that the reports (joint reactions, energies, momenta, poses)
-/// need.
+/// need. Its callables' per-workspace scratch (System::make_scratch) holds each body's rotation
+/// (planar cos/sin theta, R_WB) for the state last seen, keyed on the exact orientation
+/// coordinates: the joints, forces and violation checks of one evaluation compute it once, and
+/// the results are bitwise those of computing it everywhere.
 ///
 /// Frames: the world frame W has z up for spatial models; planar models move in the (x, y) plane.
 /// A body frame B has its origin at the centre of mass. A joint connects a frame F_P on its
