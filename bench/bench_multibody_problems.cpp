@@ -460,7 +460,8 @@ int main(int argc, char** argv) {
   if (!once.empty()) {
     for (const Problem& p : all) {
       for (ukdyn::Integrator method : methods) {
-        const std::string id = p.id + (method == ukdyn::Integrator::kRK4 ? "/rk4" : "/rk5");
+        const std::string id = p.id + (p.particles ? "_particles" : "") +
+                               (method == ukdyn::Integrator::kRK4 ? "/rk4" : "/rk5");
         if (id != once) continue;
         const mb::MultibodyModel m = build(p);
         const ukdyn::Trajectory tr =
