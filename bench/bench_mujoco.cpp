@@ -5,11 +5,11 @@
 // "MuJoCo 2.2.2, RK4, default soft constraints".
 //
 // Each problem of problems.json becomes an MJCF model, built as a string and loaded from MuJoCo's
-// virtual file system:
+// virtual file system (a chain deeper than kBodiesPerFile continues in <include>d files):
 //   * link k is a body whose frame sits at its proximal hinge with x along the link; it is the
 //     child of its parent link's body (of the world body for parent −1) at joint_in_parent, turned
-//     by phi0 − phi0(parent), so that the model is defined in the initial configuration (qpos0 =
-//     0);
+//     by phi0 − phi0(parent): the model is defined in the initial pose, qpos0 = 0, which is where
+//     MuJoCo computes a connect constraint's second anchor;
 //   * one hinge joint about z at the body's origin, without damping, armature, stiffness or
 //     friction loss; the link angle is phi0 + the hinge angles from the root down;
 //   * an <inertial> element with the link's mass at (com_x, 0, 0) and diaginertia I_com (about the
@@ -37,10 +37,10 @@
 //                                           to see how far the results depend on them
 //
 // Counters: ms_per_sim_s (wall milliseconds per simulated second), max_violation and
-// final_violation (distance between the two connect points, from the body poses xpos, xmat of
-// mj_kinematics; 0 for P1), coord_final and coord_error (reported coordinate at T and its
-// difference from the reference, rad), rel_drift_max (|E − E0| / |E0|, energy measured from V_eq,
-// MuJoCo's potential and kinetic energy), steps.
+// final_violation (distance between the two connect points, from the body poses xpos, xmat that
+// mj_forward computes on a copy of the state; 0 for P1), coord_final and coord_error (reported
+// coordinate at T and its difference from the reference, rad), rel_drift_max (|E − E0| / |E0|,
+// energy measured from V_eq, MuJoCo's potential and kinetic energy), steps.
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -261,6 +261,9 @@ ModelPtr compile(const Problem& p) {
       m->ngeom != 0) {
     throw std::runtime_error("bench_mujoco: " + p.id + ": unexpected model sizes");
   }
+  if (p.links[0].parent >= 0 || m->jnt_qposadr[mj_name2id(m.get(), mjOBJ_JOINT, "J0")] != 0) {
+    throw std::runtime_error("bench_mujoco: " + p.id + ": link 0's hinge is not qpos[0]");
+  }
   for (std::size_t c = 0; c < p.closures.size(); ++c) {
     const mjtNum* data = m->eq_data + c * mjNEQDATA;
     const Closure& cl = p.closures[c];
@@ -273,7 +276,8 @@ ModelPtr compile(const Problem& p) {
   return m;
 }
 
-// the reported coordinate: the angle of the first link (P2: the crank), phi0 + its hinge angle
+// the reported coordinate: the angle of the first link (P2: the crank), a root link, phi0 + its
+// hinge angle (the first joint in the XML: qpos[0])
 double coordinate(const Problem& p, const mjData* d) { return p.links[0].phi0 + d->qpos[0]; }
 
 // steps of one run: T / h
@@ -314,7 +318,8 @@ Check check(const Problem& p, const mjModel* e, const mjData* d, mjData* s) {
       w[0] = q[0], w[1] = q[1], w[2] = 0.0;
       return;
     }
-    const int body = b + 1;  // body 0 is the world
+    // MuJoCo numbers the bodies depth first through the XML: look link b's body up by name
+    const int body = mj_name2id(e, mjOBJ_BODY, p.links[std::size_t(b)].name.c_str());
     const mjtNum* x = s->xpos + 3 * body;
     const mjtNum* R = s->xmat + 9 * body;
     for (int r = 0; r < 3; ++r) w[r] = x[r] + R[3 * r] * q[0] + R[3 * r + 1] * q[1];
