@@ -59,6 +59,8 @@
 #include <mujoco/mujoco.h>
 #include <nlohmann/json.hpp>
 
+#include "shared_problems.hpp"
+
 /// One run of the stepping loop: `steps` calls of mj_step from the state in d. Not inlined and
 /// outside any namespace, so that `valgrind --tool=callgrind --toggle-collect='run_mujoco*'`
 /// counts exactly the loop. Cost: steps × (4 evaluations of MuJoCo's forward dynamics).
@@ -70,77 +72,12 @@ namespace {
 
 constexpr double kStep = 1e-3;
 
-// reference coordinates at T (shared README, from a run at accuracy 1e-10)
-const std::map<std::string, double> kReference = {{"P1", -2.1392711},
-                                                  {"P2", 3.1507615},
-                                                  {"P3_N8", -1.4271540},
-                                                  {"P3_N32", -1.3904325},
-                                                  {"P3_N128", -1.3939935}};
-
-// --- the problems, from problems.json (as in bench_multibody_problems) -------------------------
-
-struct Link {
-  std::string name;
-  int parent = -1;           // link index, −1: the ground
-  double joint[2] = {0, 0};  // hinge in the parent link's frame (ground: world)
-  double phi0 = 0, length = 0, mass = 0, com_x = 0;
-  double I_com[3] = {0, 0, 0};  // about the link's own axis, then the two transverse ones
-};
-struct Closure {
-  int b1 = 0, b2 = -1;                    // links (b2 = −1: the ground)
-  double p1[2] = {0, 0}, p2[2] = {0, 0};  // points in the links' frames (ground: world)
-};
-struct Problem {
-  std::string id, coord_name;
-  double T = 0, V_eq = 0, reference = 0;
-  std::vector<Link> links;
-  std::vector<Closure> closures;
-};
-
-void point(const nlohmann::json& j, double (&p)[2]) {
-  p[0] = j.at(0).get<double>();
-  p[1] = j.at(1).get<double>();
-}
+using shared_problems::Closure;
+using shared_problems::Link;
+using shared_problems::Problem;
 
 std::vector<Problem> load(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw std::runtime_error("bench_mujoco: cannot read " + path + " (use --problems=PATH)");
-  const nlohmann::json j = nlohmann::json::parse(in);
-  std::vector<Problem> out;
-  for (const auto& p : j.at("problems")) {
-    Problem r;
-    r.id = p.at("id");
-    r.coord_name = p.at("coord_name");
-    r.T = p.at("T");
-    r.V_eq = p.at("V_eq");
-    r.reference = kReference.at(r.id);
-    for (const auto& l : p.at("links")) {
-      Link k;
-      k.name = l.at("name");
-      k.parent = l.at("parent");
-      point(l.at("joint_in_parent"), k.joint);
-      k.phi0 = l.at("phi0");
-      k.length = l.at("length");
-      k.mass = l.at("mass");
-      k.com_x = l.at("com_x");
-      for (int a = 0; a < 3; ++a) k.I_com[a] = l.at("I_com").at(a);
-      if (k.parent >= int(r.links.size())) {
-        throw std::runtime_error("bench_mujoco: " + r.id + ": link " + k.name +
-                                 " comes before its parent");
-      }
-      r.links.push_back(k);
-    }
-    for (const auto& c : p.at("closures")) {
-      Closure k;
-      k.b1 = c.at("b1");
-      k.b2 = c.at("b2");
-      point(c.at("p1"), k.p1);
-      point(c.at("p2"), k.p2);
-      r.closures.push_back(k);
-    }
-    out.push_back(r);
-  }
-  return out;
+  return shared_problems::load(path, "bench_mujoco");
 }
 
 // --- the MJCF --------------------------------------------------------------------------------
@@ -313,7 +250,7 @@ Check check(const Problem& p, const mjModel* e, const mjData* d, mjData* s) {
   Check c;
   c.E = s->energy[0] + s->energy[1] - p.V_eq;
   // world point of a point (x, y) of link b's frame: xpos + xmat (x, y, 0)
-  const auto world = [&](int b, const double(&q)[2], double(&w)[3]) {
+  const auto world = [&](int b, const Eigen::Vector2d& q, double(&w)[3]) {
     if (b < 0) {
       w[0] = q[0], w[1] = q[1], w[2] = 0.0;
       return;
@@ -537,18 +474,7 @@ int main(int argc, char** argv) {
         records.push_back(record(p));
         std::cout << records.back().dump() << std::endl;
       }
-      std::ofstream out(json_path);
-      if (!out) {
-        std::cerr << "bench_mujoco: cannot write '" << json_path << "'\n";
-        return 1;
-      }
-      // one record per line
-      out << "[\n";
-      for (std::size_t i = 0; i < records.size(); ++i) {
-        out << "  " << records[i].dump() << (i + 1 < records.size() ? ",\n" : "\n");
-      }
-      out << "]\n";
-      return 0;
+      return shared_problems::write_records(json_path, records, "bench_mujoco");
     }
     // compile every model once before timing anything, so that a bad one stops the program
     for (const Problem& p : all) compile(p);

@@ -45,6 +45,7 @@
 #include <benchmark/benchmark.h>
 #include <nlohmann/json.hpp>
 
+#include "shared_problems.hpp"
 #include "shared_protocol.hpp"
 
 #include <ukdyn/multibody/multibody.hpp>
@@ -59,70 +60,17 @@ using ukdyn::VectorXd;
 
 constexpr double kStep = 1e-3;
 
-// reference coordinates at T (shared README, from a run at accuracy 1e-10)
-const std::map<std::string, double> kReference = {{"P1", -2.1392711},
-                                                  {"P2", 3.1507615},
-                                                  {"P3_N8", -1.4271540},
-                                                  {"P3_N32", -1.3904325},
-                                                  {"P3_N128", -1.3939935}};
+using shared_problems::Closure;
+using shared_problems::Link;
+using shared_problems::Problem;
 
-// --- the problems, from problems.json ---------------------------------------------------------
-
-struct Link {
-  std::string name;
-  int parent = -1;        // link index, −1: the ground
-  Eigen::Vector2d joint;  // hinge in the parent link's frame (ground: world)
-  double phi0 = 0, length = 0, mass = 0, com_x = 0, inertia = 0;  // inertia about z
-};
-struct Closure {
-  int b1 = 0, b2 = -1;     // links (b2 = −1: the ground)
-  Eigen::Vector2d p1, p2;  // points in the links' frames (ground: world)
-};
-struct Problem {
-  std::string id, coord_name;
-  bool particles = false;  // P1's point masses as particles and distance joints (see build)
-  double T = 0, V_eq = 0, reference = 0;
-  std::vector<Link> links;
-  std::vector<Closure> closures;
-};
-
-Eigen::Vector2d point(const nlohmann::json& j) {
-  return {j.at(0).get<double>(), j.at(1).get<double>()};
-}
-
+// the shared problems, and P1 a second time, its point masses as particles (x, y, z) held by
+// distance joints (the massless rods) instead of planar bodies with inertia 1e-9 and revolute
+// joints
 std::vector<Problem> load(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) {
-    throw std::runtime_error("bench_multibody_problems: cannot read " + path +
-                             " (use --problems=PATH)");
-  }
-  const nlohmann::json j = nlohmann::json::parse(in);
   std::vector<Problem> out;
-  for (const auto& p : j.at("problems")) {
-    Problem r;
-    r.id = p.at("id");
-    r.coord_name = p.at("coord_name");
-    r.T = p.at("T");
-    r.V_eq = p.at("V_eq");
-    r.reference = kReference.at(r.id);
-    for (const auto& l : p.at("links")) {
-      Link k;
-      k.name = l.at("name");
-      k.parent = l.at("parent");
-      k.joint = point(l.at("joint_in_parent"));
-      k.phi0 = l.at("phi0");
-      k.length = l.at("length");
-      k.mass = l.at("mass");
-      k.com_x = l.at("com_x");
-      k.inertia = l.at("I_com")[2];
-      r.links.push_back(k);
-    }
-    for (const auto& c : p.at("closures")) {
-      r.closures.push_back({c.at("b1"), c.at("b2"), point(c.at("p1")), point(c.at("p2"))});
-    }
+  for (Problem& r : shared_problems::load(path, "bench_multibody_problems")) {
     out.push_back(r);
-    // P1 a second time, its point masses as particles (x, y, z) held by distance joints (the
-    // massless rods) instead of planar bodies with inertia 1e-9 and revolute joints
     if (r.id == "P1") {
       r.particles = true;
       out.push_back(r);
@@ -177,7 +125,7 @@ mb::MultibodyModel build(const Problem& p) {
       hinge[k] = hinge[std::size_t(l.parent)] + l.joint.x() * up + l.joint.y() * vp;
     }
     const Eigen::Vector2d com = hinge[k] + l.com_x * u;
-    b.add_planar_body(l.name, l.mass, l.inertia, Vector3d(com.x(), com.y(), l.phi0));
+    b.add_planar_body(l.name, l.mass, l.I_com.z(), Vector3d(com.x(), com.y(), l.phi0));
   }
   for (std::size_t k = 0; k < p.links.size(); ++k) {
     const Link& l = p.links[k];
@@ -487,18 +435,7 @@ int main(int argc, char** argv) {
         std::cout << records.back().dump() << std::endl;
       }
     }
-    std::ofstream out(json_path);
-    if (!out) {
-      std::cerr << "bench_multibody_problems: cannot write '" << json_path << "'\n";
-      return 1;
-    }
-    // one record per line
-    out << "[\n";
-    for (std::size_t i = 0; i < records.size(); ++i) {
-      out << "  " << records[i].dump() << (i + 1 < records.size() ? ",\n" : "\n");
-    }
-    out << "]\n";
-    return 0;
+    return shared_problems::write_records(json_path, records, "bench_multibody_problems");
   }
   for (const Problem& p : all) {
     for (ukdyn::Integrator method : methods) {
