@@ -229,7 +229,8 @@ struct Accuracy {
   double coord_t1 = NAN, coord_final = 0, coord_error = 0;
   double max_phi = 0;  // largest constraint residual of any joint (simulate's own measure)
   long steps = 0, evaluations = 0, projections = 0;
-  std::string error;  // "" when the run finished
+  std::string error;    // "" when the run finished
+  std::string warning;  // the energy-balance warning of a finished run (Status::kEnergyBalance)
 };
 
 Accuracy measure_accuracy(const Problem& p, const mb::MultibodyModel& m, ukdyn::Integrator method) {
@@ -256,7 +257,12 @@ Accuracy measure_accuracy(const Problem& p, const mb::MultibodyModel& m, ukdyn::
   a.steps = tr.stats.steps;
   a.evaluations = tr.stats.evaluations;
   a.projections = tr.stats.projections;
-  if (tr.stats.status != ukdyn::Status::kOk || std::abs(tr.t.back() - p.T) > 1e-9) {
+  // a finished run may warn that its energy balance exceeds the tolerance (energy gained or lost
+  // that no work channel accounts for: the integration error of the fixed step): kept as a
+  // warning, not an error
+  if (tr.stats.status == ukdyn::Status::kEnergyBalance) a.warning = tr.stats.message;
+  if ((tr.stats.status != ukdyn::Status::kOk && tr.stats.status != ukdyn::Status::kEnergyBalance) ||
+      std::abs(tr.t.back() - p.T) > 1e-9) {
     a.error = tr.stats.message.empty() ? "run stopped at t = " + std::to_string(tr.t.back())
                                        : tr.stats.message;
   }
@@ -286,6 +292,7 @@ void BM_Problem(benchmark::State& state, const Problem& p, ukdyn::Integrator met
   state.counters["coord_error"] = a.coord_error;
   state.counters["rel_drift_max"] = a.rel_drift_max;
   state.counters["steps"] = double(a.steps);
+  state.counters["energy_balance_warning"] = a.warning.empty() ? 0.0 : 1.0;
   if (!a.error.empty()) state.SkipWithError(a.error.c_str());
 }
 
@@ -358,7 +365,8 @@ nlohmann::ordered_json record(const Problem& p, ukdyn::Integrator method) {
                                        "about the tip"},
       {"evaluations", a.evaluations},
       {"projections", a.projections},
-      {"wall_per_sim_s_min", *std::min_element(wall.begin(), wall.end()) / p.T}};
+      {"wall_per_sim_s_min", *std::min_element(wall.begin(), wall.end()) / p.T},
+      {"warnings", a.warning}};
   r["settings"] = {{"drift", "projection"},
                    {"projection_tolerance", opt.projection.tolerance},
                    {"projection_max_iterations", opt.projection.max_iterations},
@@ -420,7 +428,10 @@ int main(int argc, char** argv) {
                          p, m,
                          Eigen::Map<const VectorXd>(tr.q.data() + (tr.samples() - 1) * tr.n, tr.n))
                   << "\n";
-        return tr.stats.status == ukdyn::Status::kOk ? 0 : 1;
+        return tr.stats.status == ukdyn::Status::kOk ||
+                       tr.stats.status == ukdyn::Status::kEnergyBalance
+                   ? 0
+                   : 1;
       }
     }
     std::cerr << "bench_multibody_problems: --once=" << once

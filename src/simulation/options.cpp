@@ -238,7 +238,9 @@ std::vector<OptionInfo> make_table() {
                                  "relative asymmetry of M above which it is refused")),
                    UKDYN_FIELD(solver.symmetry_tolerance, double)));
   t.push_back(
-      with(solver(boolean("compute_residuals", "compute the Gauss and virtual-work residuals")),
+      with(solver(boolean(
+               "compute_residuals",
+               "compute the Gauss, virtual-work and constraint residuals at every evaluation")),
            UKDYN_FIELD(solver.compute_residuals, bool)));
   return t;
 }
