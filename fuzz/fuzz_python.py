@@ -270,6 +270,11 @@ def fuzz_simulate(data: st.DataObject) -> None:
         step = kwargs.get("step", 1e-3)
         if isinstance(step, float) and math.isfinite(step) and 0 < step < 1e-4:
             kwargs["step"] = 1e-4  # keep fixed-step runs short; tiny steps have own cases
+    max_step = kwargs.get("max_step")
+    if (isinstance(max_step, float) and 0 < max_step < 1e-4 and isinstance(t_end, float)
+            and math.isfinite(t_end) and (t_end - t0) / max_step <= 1e7):
+        # keep adaptive runs short; a max_step too small for max_steps is refused (kept as drawn)
+        kwargs["max_step"] = 1e-4
     n = len(model.coordinates)
     q0 = data.draw(st.one_of(st.none(), st.none(), states(n)))
     where = f"{name}.simulate(t_end={t_end!r}, q0={q0!r}, **{kwargs!r})"

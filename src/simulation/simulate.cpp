@@ -901,10 +901,29 @@ void check_settings(const System& sys, const SimulationOptions& o) {
   } catch (const OptionError& e) {
     throw SettingError(e.setting(), "ukdyn::simulate: " + e.problem());
   }
+  const double resolution = 16.0 * std::numeric_limits<double>::epsilon() *
+                            std::max(std::abs(o.t_start), std::abs(o.t_end));
+  // the adaptive methods held to max_step: a step that t resolves, and a run that max_steps
+  // allows — at least (t_end − t_start) / max_step steps (else the run would crawl towards
+  // max_steps for hours, e.g. max_step = 1e-300)
+  if (o.max_step > 0.0 && o.integrator != Integrator::kRK4 && o.integrator != Integrator::kRK5) {
+    if (!(o.max_step >= resolution)) {
+      fail("max_step", "(" + format(o.max_step) + ") is below the resolution of t on [" +
+                           format(o.t_start) + ", " + format(o.t_end) +
+                           "], 16 eps max(|t_start|, |t_end|) = " + format(resolution) +
+                           " (0: unlimited)");
+    }
+    const double least = (o.t_end - o.t_start) / o.max_step;
+    if (least > double(o.max_steps)) {
+      fail("max_step", "(" + format(o.max_step) + ") needs at least " + format(least) +
+                           " steps over [" + format(o.t_start) + ", " + format(o.t_end) +
+                           "], more than max_steps = " + format_number(o.max_steps) +
+                           " (a larger max_step, or raise max_steps: simulate: max_steps in a "
+                           "model file, --max-steps on the command line, max_steps= in Python)");
+    }
+  }
   // the fixed-step methods: a step that t resolves, and at most max_steps of them
   if (o.integrator == Integrator::kRK4 || o.integrator == Integrator::kRK5) {
-    const double resolution = 16.0 * std::numeric_limits<double>::epsilon() *
-                              std::max(std::abs(o.t_start), std::abs(o.t_end));
     if (!(o.step >= resolution)) {
       fail("step", "(" + format(o.step) + ") of " + to_string(o.integrator) +
                        " is below the resolution of t on [" + format(o.t_start) + ", " +

@@ -108,6 +108,38 @@ TEST(RunSettings, FixedStepBelowTheResolutionOfTimeIsRefused) {
   }
 }
 
+TEST(RunSettings, AdaptiveMaxStepThatMaxStepsCannotReachIsRefused) {
+  // max_step = 1e-300 over [0, 1] asks for at least 1e300 steps (the Python fuzzer's hang);
+  // 1e-9 asks for 1e9 > max_steps = 10^7; below the resolution of t, a step cannot advance t
+  for (Integrator method : {Integrator::kDopri5, Integrator::kRKF78, Integrator::kBDF}) {
+    SimulationOptions o;
+    o.integrator = method;
+    o.max_step = 1e-9;
+    Refusal r = refusal(o);
+    EXPECT_EQ(r.setting, "max_step") << r.message;
+    EXPECT_TRUE(contains(r.message,
+                         "needs at least 1e+09 steps over [0, 1], more than "
+                         "max_steps = 10000000"))
+        << r.message;
+    EXPECT_TRUE(contains(r.message, "--max-steps")) << r.message;
+    o.max_step = 1e-300;
+    o.max_steps = std::numeric_limits<long>::max();  // (the resolution, not the count)
+    r = refusal(o);
+    EXPECT_EQ(r.setting, "max_step") << r.message;
+    EXPECT_TRUE(contains(r.message, "below the resolution of t on [0, 1]")) << r.message;
+  }
+  // a max_step that max_steps allows: accepted, and the run takes at least 1 / max_step steps
+  SimulationOptions o;
+  o.integrator = Integrator::kDopri5;
+  o.max_step = 1e-2;
+  o.max_steps = 1000;
+  const Trajectory tr = simulate(oscillator(), one(1.0), one(0.0), o);
+  EXPECT_EQ(tr.stats.status, Status::kOk) << tr.stats.message;
+  EXPECT_NEAR(tr.t.back(), 1.0, 1e-12);
+  EXPECT_GE(tr.stats.steps, 100);
+  EXPECT_LE(tr.stats.steps, 1000);
+}
+
 TEST(RunSettings, FixedStepCountAboveMaxStepsIsRefusedWithHowToRaiseIt) {
   for (Integrator method : {Integrator::kRK4, Integrator::kRK5}) {
     SimulationOptions o;
