@@ -270,6 +270,12 @@ def fuzz_simulate(data: st.DataObject) -> None:
         step = kwargs.get("step", 1e-3)
         if isinstance(step, float) and math.isfinite(step) and 0 < step < 1e-4:
             kwargs["step"] = 1e-4  # keep fixed-step runs short; tiny steps have own cases
+    # tolerances far below roundoff make an adaptive run crawl towards max_steps (minutes, a
+    # documented open problem: docs/reliability.md, "Open"), not fail: keep accepted ones >= 1e-16
+    for key in ("rtol", "atol"):
+        tol = kwargs.get(key)
+        if isinstance(tol, float) and 0 < tol < 1e-16:
+            kwargs[key] = 1e-16
     max_step = kwargs.get("max_step")
     if (isinstance(max_step, float) and 0 < max_step < 1e-4 and isinstance(t_end, float)
             and math.isfinite(t_end) and (t_end - t0) / max_step <= 1e7):
