@@ -35,7 +35,7 @@ import tempfile
 import time
 from pathlib import Path
 
-from hypothesis import HealthCheck, Phase, given, settings
+from hypothesis import HealthCheck, Phase, given, seed, settings
 from hypothesis import strategies as st
 
 def text(**kw: int) -> st.SearchStrategy[str]:
@@ -47,6 +47,9 @@ def text(**kw: int) -> st.SearchStrategy[str]:
 ROOT = Path(__file__).resolve().parent.parent
 TIMEOUT = float(os.environ.get("FUZZ_TIMEOUT", "60"))
 KEEP_GOING = os.environ.get("FUZZ_KEEP_GOING") == "1"  # collect every finding (development)
+# FUZZ_SEED=N: batch k draws from seed N + k, so a run replays the same inputs in the same order
+# (CI: it fails for a change, not for the luck of the draw); unset: fresh inputs every run
+SEED = int(os.environ["FUZZ_SEED"]) if os.environ.get("FUZZ_SEED") else None
 EXIT_CODES = {0, 1, 2, 3, 4, 5, 6}
 ESCAPED = ("terminate called", "std::bad_alloc", "what():", "Segmentation", "AddressSanitizer",
            "runtime error:")
@@ -225,38 +228,44 @@ def main() -> int:
     count = 0
     finding: list[str] = []
 
-    @settings(max_examples=25, deadline=None, database=None, derandomize=False,
-              phases=[Phase.generate], suppress_health_check=list(HealthCheck))
-    @given(st.data())
-    def batch(data: st.DataObject) -> None:
-        nonlocal count
-        args = data.draw(command_lines(names, models, str(out)))
-        shutil.rmtree(out, ignore_errors=True)
-        count += 1
-        try:
-            run_one(ukdyn, args, out)
-        except Finding as e:
-            finding.append(f"{e}\n  arguments: {args!r}")
-            if not KEEP_GOING:
-                raise
+    def batch(k: int) -> None:
+        @settings(max_examples=25, deadline=None, database=None, derandomize=False,
+                  phases=[Phase.generate], suppress_health_check=list(HealthCheck))
+        @given(st.data())
+        def run(data: st.DataObject) -> None:
+            nonlocal count
+            args = data.draw(command_lines(names, models, str(out)))
+            shutil.rmtree(out, ignore_errors=True)
+            count += 1
+            try:
+                run_one(ukdyn, args, out)
+            except Finding as e:
+                finding.append(f"{e}\n  arguments: {args!r}")
+                if not KEEP_GOING:
+                    raise
+
+        (seed(SEED + k)(run) if SEED is not None else run)()
 
     start = time.monotonic()
     try:
+        k = 0
         while time.monotonic() - start < seconds and (KEEP_GOING or not finding):
             try:
-                batch()
+                batch(k)
             except Finding:
                 break
+            k += 1
     finally:
         shutil.rmtree(scratch, ignore_errors=True)
     elapsed = time.monotonic() - start
     if finding:
-        print(f"fuzz_cli: {len(finding)} FINDING(S) in {count} inputs ({elapsed:.0f} s):",
+        print(f"fuzz_cli: {len(finding)} FINDING(S) in {count} inputs ({elapsed:.0f} s, "
+              f"seed {SEED}):",
               file=sys.stderr)
         for f in finding:
             print(f, file=sys.stderr)
         return 1
-    print(f"fuzz_cli: {count} command lines in {elapsed:.0f} s: no crash, hang, undocumented "
+    print(f"fuzz_cli: {count} command lines in {elapsed:.0f} s (seed {SEED}): no crash, hang, undocumented "
           "exit code or inconsistent output")
     return 0
 

@@ -7,7 +7,8 @@
 # Both use hypothesis (python3-hypothesis) with Debian's /usr/bin/python3 and the Release build in
 # build/ (scripts/test.sh builds it). Fails on the first finding: a crash, a hang (FUZZ_TIMEOUT
 # seconds per input, default 60), an undocumented exit code or exception, an unclear message,
-# or a result that is silently wrong (fuzz/README.md lists the promises).
+# or a result that is silently wrong (fuzz/README.md lists the promises). FUZZ_SEED=N replays
+# one sequence of inputs (CI sets it); without it each run draws new ones.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 

@@ -2,6 +2,8 @@
 // classes and functions are bound in bind_*.cpp; the package ukdyn (python/ukdyn/) wraps them.
 #include "common.hpp"
 
+#include <ukdyn/core/format.hpp>
+
 namespace ukdyn::python {
 namespace {
 
@@ -10,7 +12,8 @@ py::object error_class(const char* name) { return py::module_::import("ukdyn.err
 
 // C++ exceptions -> Python: ModelError -> ukdyn.ModelError (file, line, column, message, hint),
 // SolveError -> ukdyn.SolveError (status); the rest follow pybind11's defaults
-// (std::invalid_argument -> ValueError, other std::exception -> RuntimeError)
+// (std::invalid_argument -> ValueError, other std::exception -> RuntimeError), with any byte of
+// a message that is not UTF-8 shown as U+FFFD
 void translate(std::exception_ptr p) {
   try {
     if (p) std::rethrow_exception(p);
@@ -28,6 +31,20 @@ void translate(std::exception_ptr p) {
     py::object cls = error_class("SolveError");
     py::object err = cls(e.what(), to_string(e.status()));
     PyErr_SetObject(cls.ptr(), err.ptr());
+  } catch (const py::builtin_exception&) {
+    throw;  // pybind11's own (py::value_error, …): its default translation
+  } catch (const py::error_already_set&) {
+    throw;
+  } catch (const std::exception& e) {
+    // a message that is not valid UTF-8 (pybind11's default would raise UnicodeDecodeError
+    // in its place): the same Python class, with U+FFFD for each bad byte; otherwise the default
+    const std::string text = valid_utf8(e.what());
+    if (text == e.what()) throw;
+    PyObject* cls = dynamic_cast<const std::invalid_argument*>(&e) != nullptr ||
+                            dynamic_cast<const std::domain_error*>(&e) != nullptr
+                        ? PyExc_ValueError
+                        : PyExc_RuntimeError;
+    PyErr_SetString(cls, text.c_str());
   }
 }
 

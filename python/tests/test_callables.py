@@ -107,26 +107,43 @@ def test_wrong_shape_from_a_callable_is_a_value_error():
 
 
 def test_the_gil_is_released_during_a_run():
+    """Counted in GIL handoffs, not in time. The run calls stop() with the GIL every 20 ms of
+    its work (Model._run's stop hook, which Model.simulate gives its Ctrl-C guard). Meanwhile a
+    second thread loops on time.sleep(0), each pass giving the GIL away and taking it back. Were
+    the GIL held while the run computes, that thread could only take it when the run gives it up
+    at a checkpoint, and would get back to the run thread at its next sleep(0): about one pass
+    per checkpoint. With the GIL released it passes freely all the while."""
     model = ukdyn.load("pendulum")
+    passes = 0
     done = threading.Event()
-    ticks = []
+    seen: list[int] = []  # the passes made before each checkpoint
 
-    def run():  # about 10^6 evaluations, all in C++
-        model.simulate(t_end=2.0, integrator="rk4", step=1e-5, output_every=0.1)
-        done.set()
+    def spin():
+        nonlocal passes
+        while not done.is_set():
+            passes += 1
+            time.sleep(0)
 
-    worker = threading.Thread(target=run)
-    start = time.perf_counter()
+    def stop():
+        seen.append(passes)
+        return len(seen) > 10  # ten intervals of the run's work, then stop
+
+    worker = threading.Thread(target=spin)
     worker.start()
-    while not done.is_set():
-        ticks.append(time.perf_counter())
-        time.sleep(0.001)
-    worker.join()
-    elapsed = time.perf_counter() - start
-    # the main thread kept running during the C++ run (about one tick per millisecond); with the
-    # GIL held by the run it would tick once or twice
-    assert elapsed > 0.05, "the run was too short to tell"
-    assert len(ticks) >= 10
+    try:
+        # a run far longer than ten intervals: stop() ends it
+        _, _, stats, _, raised = model._run(
+            {"t_end": 50.0, "integrator": "rk4", "step": 1e-5, "output_every": 1.0}, None, None,
+            stop)
+    finally:
+        done.set()
+        worker.join()
+    assert raised is None
+    assert stats["status"] == "interrupted" and 0 < stats["t_reached"] < 50.0
+    assert len(seen) == 11
+    # held (tried by removing the release): exactly one pass per checkpoint, 10 in all;
+    # released: about 300 per interval here
+    assert seen[-1] - seen[0] > 100, f"passes before each checkpoint: {seen}"
 
 
 def test_callable_controller_tracks_sin_t_with_the_prescribed_error_dynamics():

@@ -96,6 +96,16 @@ def test_parse_reports_positions_in_the_text():
     assert m.file == "spring.yaml" and m.coordinates == ["x"]
 
 
+def test_a_character_outside_ascii_is_quoted_whole():
+    # CI's fuzzer: "Omeéa" in an expression gave a message holding half of 'é', which Python
+    # could not decode (UnicodeDecodeError instead of ModelError)
+    text = "coordinates: [x]\nkinetic_energy: 0.5*x_dot^2\npotential_energy: 2*Ome\u00e9a*x^2\n"
+    with pytest.raises(ukdyn.ModelError) as err:
+        ukdyn.parse(text, "spring.yaml")
+    assert (err.value.line, err.value.column) == (3, 24)
+    assert err.value.message.endswith("unexpected character '\u00e9'")
+
+
 def test_unknown_key_is_a_model_error():
     with pytest.raises(ukdyn.ModelError, match="kinetic_enrgy"):
         ukdyn.parse("coordinates: [x]\nkinetic_enrgy: 0.5*x_dot^2\n")

@@ -327,7 +327,15 @@ class Parser {
       token_ = Token{Kind::kOperator, std::string(1, c), start};
       return;
     }
-    fail(std::string("unexpected character '") + c + "'", start);
+    // the whole character (a UTF-8 sequence of 1 to 4 bytes), never a piece of one
+    const auto lead = static_cast<unsigned char>(c);
+    std::size_t width = lead < 0xC0 ? 1 : lead < 0xE0 ? 2 : lead < 0xF0 ? 3 : 4;
+    std::size_t end = start + 1;
+    while (end < text_.size() && end < start + width &&
+           (static_cast<unsigned char>(text_[end]) & 0xC0) == 0x80) {
+      ++end;
+    }
+    fail("unexpected character '" + valid_utf8(text_.substr(start, end - start)) + "'", start);
   }
 
   // GiNaC evaluates as it builds (1/0, log(0) throw): report such errors at `position`

@@ -28,15 +28,15 @@ namespace ukdyn {
 
 ModelError::ModelError(std::string file, int line, int column, std::string message,
                        std::string hint)
-    : std::runtime_error(
+    : std::runtime_error(valid_utf8(
           file +
           (line > 0 ? ":" + format_number(line) + ":" + format_number(column) : std::string()) +
-          ": error: " + message + (hint.empty() ? "" : " (hint: " + hint + ")")),
-      file_(std::move(file)),
+          ": error: " + message + (hint.empty() ? "" : " (hint: " + hint + ")"))),
+      file_(valid_utf8(file)),
       line_(line),
       column_(column),
-      message_(std::move(message)),
-      hint_(std::move(hint)) {}
+      message_(valid_utf8(message)),
+      hint_(valid_utf8(hint)) {}
 
 namespace model_reader {
 namespace {

@@ -93,6 +93,10 @@ enum class ContactMode : unsigned char { kSliding, kSticking, kPassing };
 // three significant digits, for messages
 std::string format(double v) { return detail::format_short(v); }
 
+// where each front end sets max_steps (the end of every message about the step limit)
+const std::string kRaiseMaxSteps =
+    "simulate: max_steps in a model file, --max-steps on the command line, max_steps= in Python";
+
 // "the constraints … contradict each other …" / "… the mechanism locks up …" (run messages)
 std::string describe_conflict(const ConstraintConflict& c, double t) {
   std::string names;
@@ -918,8 +922,7 @@ void check_settings(const System& sys, const SimulationOptions& o) {
       fail("max_step", "(" + format(o.max_step) + ") needs at least " + format(least) +
                            " steps over [" + format(o.t_start) + ", " + format(o.t_end) +
                            "], more than max_steps = " + format_number(o.max_steps) +
-                           " (a larger max_step, or raise max_steps: simulate: max_steps in a "
-                           "model file, --max-steps on the command line, max_steps= in Python)");
+                           " (a larger max_step, or raise max_steps: " + kRaiseMaxSteps + ")");
     }
   }
   // the fixed-step methods: a step that t resolves, and at most max_steps of them
@@ -948,8 +951,7 @@ void check_settings(const System& sys, const SimulationOptions& o) {
       fail("step", "(" + format(o.step) + ") of " + to_string(o.integrator) + " takes " +
                        format(steps) + " steps over [" + format(o.t_start) + ", " +
                        format(o.t_end) + "], more than max_steps = " + format_number(o.max_steps) +
-                       " (take a larger step, or raise max_steps: simulate: max_steps in a "
-                       "model file, --max-steps on the command line, max_steps= in Python)");
+                       " (take a larger step, or raise max_steps: " + kRaiseMaxSteps + ")");
     }
   }
 }
@@ -1160,8 +1162,7 @@ Trajectory detail::simulate_observed(const System& sys, const VectorXd& q0, cons
         if (r.status == Status::kIntegratorFailure &&
             (traj.stats.steps >= o.max_steps || message.find("step limit") != std::string::npos)) {
           message += " (the run's limit max_steps = " + format_number(o.max_steps) +
-                     " accepted steps; raise it: simulate: max_steps in a model file, "
-                     "--max-steps on the command line, max_steps= in Python)";
+                     " accepted steps; raise it: " + kRaiseMaxSteps + ")";
         }
         if (r.status == Status::kIntegratorFailure && detail::step_collapsed(r)) {
           message +=
@@ -1184,8 +1185,7 @@ Trajectory detail::simulate_observed(const System& sys, const VectorXd& q0, cons
                       std::string(to_string(method)) +
                           ": step limit reached at t = " + format(r.t_reached) +
                           " (the run's limit max_steps = " + format_number(o.max_steps) +
-                          " accepted steps; raise it: simulate: max_steps in a model file, "
-                          "--max-steps on the command line, max_steps= in Python)",
+                          " accepted steps; raise it: " + kRaiseMaxSteps + ")",
                       r.t_reached);
       }
       if (r.stiff) {

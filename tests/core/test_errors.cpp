@@ -5,6 +5,8 @@
 
 #include <gtest/gtest.h>
 
+#include <ukdyn/core/format.hpp>
+#include <ukdyn/modelfile/model.hpp>
 #include <ukdyn/ukdyn.hpp>
 
 namespace ukdyn {
@@ -35,6 +37,31 @@ VectorXd state(double x, double y) {
   VectorXd v(2);
   v << x, y;
   return v;
+}
+
+// valid_utf8 keeps well-formed UTF-8 and turns each ill-formed piece into one U+FFFD (the
+// "maximal subpart" rule of the Unicode standard, section 3.9)
+TEST(Errors, MessagesAreValidUtf8) {
+  const std::string bad = "\xEF\xBF\xBD";
+  EXPECT_EQ(ukdyn::valid_utf8("plain ascii"), "plain ascii");
+  EXPECT_EQ(ukdyn::valid_utf8("\xC3\xA9 \xE2\x88\x9A \xF0\x9F\x98\x80"),
+            "\xC3\xA9 \xE2\x88\x9A \xF0\x9F\x98\x80");  // é √ 😀 kept
+  EXPECT_EQ(ukdyn::valid_utf8("a\xC3"
+                              "b"),
+            "a" + bad + "b");                                               // lead without its tail
+  EXPECT_EQ(ukdyn::valid_utf8("\xA9"), bad);                                // stray continuation
+  EXPECT_EQ(ukdyn::valid_utf8("\xF0\x9F\x98"), bad);                        // cut short: one U+FFFD
+  EXPECT_EQ(ukdyn::valid_utf8("\xC0\xAF"), bad + bad);                      // overlong '/'
+  EXPECT_EQ(ukdyn::valid_utf8("\xED\xA0\x80"), bad + bad + bad);            // a surrogate
+  EXPECT_EQ(ukdyn::valid_utf8("\xF4\x90\x80\x80"), bad + bad + bad + bad);  // above U+10FFFF
+  EXPECT_EQ(ukdyn::valid_utf8(std::string("a\0b", 3)), std::string("a\0b", 3));
+  // a ModelError built from bytes that are not UTF-8 holds and prints valid UTF-8
+  const ukdyn::ModelError e("m\xFF.yaml", 3, 4, "unexpected '\xC3'", "h\x80");
+  EXPECT_EQ(e.file(), "m" + bad + ".yaml");
+  EXPECT_EQ(e.message(), "unexpected '" + bad + "'");
+  EXPECT_EQ(e.hint(), "h" + bad);
+  EXPECT_EQ(std::string(e.what()),
+            "m" + bad + ".yaml:3:4: error: unexpected '" + bad + "' (hint: h" + bad + ")");
 }
 
 TEST(Errors, MassNotPositiveDefiniteIsAStatusWithAClearMessage) {

@@ -377,6 +377,20 @@ TEST(ExprParseError, SyntaxErrorsNameTheTokenAndPosition) {
   EXPECT_EQ(std::string(e.what()), "unexpected character '#'");
   EXPECT_EQ(e.position(), 2u);
 
+  // a character of several bytes is quoted whole, never cut into invalid UTF-8 (CI's Python
+  // fuzzer: 'Omeéa' gave "unexpected character '\xC3'", which Python could not decode)
+  e = parse_error(s,
+                  "x + Ome\xC3\xA9"
+                  "a");
+  EXPECT_EQ(std::string(e.what()), "unexpected character '\xC3\xA9'");
+  EXPECT_EQ(e.position(), 7u);
+  e = parse_error(s,
+                  "x * \xE2\x88\x9A"
+                  "2");  // x * √2
+  EXPECT_EQ(std::string(e.what()), "unexpected character '\xE2\x88\x9A'");
+  e = parse_error(s, "x \xF0\x9F\x98");  // a 4-byte sequence cut short by the end
+  EXPECT_EQ(std::string(e.what()), "unexpected character '\xEF\xBF\xBD'");
+
   e = parse_error(s, "x^2^3");
   EXPECT_TRUE(starts_with(e.what(), "a^b^c is ambiguous"));
   EXPECT_EQ(e.position(), 3u);

@@ -25,4 +25,11 @@ std::string format_number(Int v) {
 /// The items joined by `separator` ("a, b, c"); empty for none. Cost O(total length).
 std::string join(const std::vector<std::string>& items, std::string_view separator = ", ");
 
+/// `text` as valid UTF-8: every byte that does not belong to a well-formed UTF-8 sequence
+/// (a stray continuation byte, a sequence cut short, an overlong form, a surrogate, a code
+/// point above U+10FFFF) becomes U+FFFD. Messages quote what a user wrote through it, so that
+/// a terminal, a JSON record and Python (whose str must be valid UTF-8) can all show them.
+/// Cost O(length), allocates the string.
+std::string valid_utf8(std::string_view text);
+
 }  // namespace ukdyn
