@@ -44,7 +44,19 @@ int check_command(const ModelSource& source) {
   std::printf("  rank of A           %lld\n", static_cast<long long>(r.rank));
   std::printf("  degrees of freedom  %lld\n", static_cast<long long>(r.degrees_of_freedom));
   if (r.redundant.empty()) {
-    std::printf("  redundant constraints  none\n");
+    // no constraint is redundant as a whole, yet rows may depend on each other (a closed
+    // spatial loop's, as the Bricard mechanism's): say so rather than a bare "none" beside a rank
+    // below the row count
+    const long long dependent = static_cast<long long>(r.constraint_rows - r.rank);
+    if (dependent > 0 && r.contradictory.empty()) {
+      std::printf(
+          "  redundant constraints  none as a whole; %lld of the %lld rows %s on the others "
+          "(rank %lld), as the rows of a closed loop can: ukdyn's solution needs no change\n",
+          dependent, static_cast<long long>(r.constraint_rows),
+          dependent == 1 ? "depends" : "depend", static_cast<long long>(r.rank));
+    } else {
+      std::printf("  redundant constraints  none\n");
+    }
   } else {
     std::printf(
         "  redundant constraints  %s  (their rows add nothing to the rank of the ones "

@@ -21,6 +21,7 @@
 namespace ukdyn {
 class System;
 class Workspace;
+class TextbookDecomposition;
 }  // namespace ukdyn
 
 namespace ukdyn::detail {
@@ -99,6 +100,18 @@ class EngineOps {
 /// The engines (one object each, shared by every workspace).
 const EngineOps& dense_engine();
 const EngineOps& sparse_engine();
-const EngineOps& textbook_engine();  // reference/textbook_engine.cpp
+
+/// The textbook engine is not in the core library: the reference library (src/reference/,
+/// target ukdyn::reference) registers it when it is linked, before main (a static
+/// initializer of reference/textbook_engine.cpp). Set once, then only read.
+struct TextbookProvider {
+  TextbookDecomposition* (*make)(Index n, Index m, double rank_threshold);
+  void (*destroy)(TextbookDecomposition*);
+  const EngineOps* engine;
+};
+/// The registered provider, or null when ukdyn::reference is not linked.
+const TextbookProvider* textbook_provider();
+/// Called by the reference library's static initializer.
+void register_textbook_provider(const TextbookProvider* provider);
 
 }  // namespace ukdyn::detail

@@ -2,6 +2,7 @@
 #include "ukdyn/dynamics/workspace.hpp"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <sstream>
 #include <stdexcept>
@@ -12,7 +13,6 @@
 #include "ukdyn/core/format.hpp"
 #include "ukdyn/core/system.hpp"
 #include "ukdyn/linalg/sparse.hpp"
-#include "ukdyn/reference/reference.hpp"
 
 namespace ukdyn {
 
@@ -166,15 +166,37 @@ Workspace::Workspace(const System& sys, const SolverOptions& options)
   callables = sys.make_scratch();
   for (const auto& c : sys.constraints())
     scratch.push_back(c.model().make_scratch_sharing(n, callables.get()));
+  const detail::TextbookProvider* reference = nullptr;
   if (options.algorithm == Algorithm::kTextbook) {
-    textbook = std::make_unique<TextbookDecomposition>(n, m);
-    textbook->set_threshold(options.rank_threshold);
+    reference = detail::textbook_provider();
+    if (reference == nullptr) {
+      throw std::invalid_argument(
+          "ukdyn::Workspace: Algorithm::kTextbook is in the reference library, which this "
+          "program does not link: add ukdyn::reference to its target_link_libraries (the "
+          "ukdyn command and the Python module include it)");
+    }
+    textbook.reset(reference->make(n, m, options.rank_threshold));
   }
   // the engine, once: each stage calls it (dynamics/engine.hpp)
-  engine = use_sparse ? &detail::sparse_engine()
-           : textbook ? &detail::textbook_engine()
-                      : &detail::dense_engine();
+  engine = use_sparse  ? &detail::sparse_engine()
+           : reference ? reference->engine
+                       : &detail::dense_engine();
 }
+
+void TextbookDeleter::operator()(TextbookDecomposition* p) const {
+  if (p != nullptr) detail::textbook_provider()->destroy(p);
+}
+
+namespace detail {
+namespace {
+// set once, before main, by the reference library's static initializer; read afterwards
+std::atomic<const TextbookProvider*> g_textbook_provider{nullptr};
+}  // namespace
+const TextbookProvider* textbook_provider() { return g_textbook_provider.load(); }
+void register_textbook_provider(const TextbookProvider* provider) {
+  g_textbook_provider.store(provider);
+}
+}  // namespace detail
 
 Workspace::~Workspace() = default;
 Workspace::Workspace(Workspace&&) noexcept = default;

@@ -26,10 +26,19 @@ class EngineOps;
 class TextbookDecomposition;
 class SparseDecomposition;
 
+/// Deletes a TextbookDecomposition through the reference library that made it (the core
+/// library does not contain the textbook formula: target ukdyn::reference does).
+struct TextbookDeleter {
+  void operator()(TextbookDecomposition* p) const;  ///< Cost: the decomposition's destructor
+};
+
 /// Which algorithm evaluates the fundamental equation.
 enum class Algorithm {
-  kDefault,   ///< Cholesky of M + complete orthogonal decomposition of A L⁻ᵀ (no allocation)
-  kTextbook,  ///< eqs. (9)–(12) as printed: M^{±1/2} by eigendecomposition, SVD B⁺ (allocates)
+  kDefault,  ///< Cholesky of M + complete orthogonal decomposition of A L⁻ᵀ (no allocation)
+  /// eqs. (9)–(12) as printed: M^{±1/2} by eigendecomposition, SVD B⁺ (allocates). A reference,
+  /// in the library ukdyn::reference (link it; the command and the Python module do): without
+  /// it, a Workspace asked for kTextbook throws std::invalid_argument saying so.
+  kTextbook,
 };
 
 /// Engine::kAuto leaves a system with more rows than this from constraints without columns()
@@ -254,7 +263,8 @@ class Workspace {
   /// they need none): made before the constraints' scratch, which may share it.
   std::unique_ptr<CallableScratch> callables;
   std::vector<std::unique_ptr<ConstraintScratch>> scratch;  ///< (K) per-constraint buffers
-  std::unique_ptr<TextbookDecomposition> textbook;          ///< only with Algorithm::kTextbook
+  /// only with Algorithm::kTextbook (made by the reference library, ukdyn::reference)
+  std::unique_ptr<TextbookDecomposition, TextbookDeleter> textbook;
   /// The engine chosen at construction (dense, sparse or textbook; src/dynamics/engine.hpp):
   /// the stages call it and never branch on the engine themselves. Internal.
   const detail::EngineOps* engine = nullptr;
