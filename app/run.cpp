@@ -294,11 +294,11 @@ int run_command(const RunArguments& args) {
   std::printf("  max violation %.3g (position), %.3g (velocity)\n", s.max_position_violation,
               s.max_velocity_violation);
   if (s.energy_balance_checked) {
-    std::printf("  energy balance %.3g of %.3g J exchanged (tolerance %.3g)\n", s.energy_balance,
-                s.energy_exchanged, options.energy_balance_tolerance);
+    std::printf("  energy balance %.3g relative (energy exchanged %.3g J; tolerance %.3g)\n",
+                s.energy_balance, s.energy_exchanged, options.energy_balance_tolerance);
   } else {
-    std::printf("  energy balance %.3g of %.3g J exchanged (not checked)\n", s.energy_balance,
-                s.energy_exchanged);
+    std::printf("  energy balance %.3g relative (energy exchanged %.3g J; not checked)\n",
+                s.energy_balance, s.energy_exchanged);
   }
   if (s.events > 0 || s.stick_refusals > 0) {
     std::printf("  friction: %ld stick/slip events, %ld stops where sticking was refused\n",
