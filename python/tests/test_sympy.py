@@ -98,6 +98,36 @@ def test_sympy_requirement_becomes_a_control_section_like_the_duffing_file():
         np.testing.assert_allclose(a[name], b[name], rtol=rtol, atol=1e-10, err_msg=name)
 
 
+def test_sympy_objects_in_settings_are_written_as_expressions():
+    # (reproducers, 2026-11-25) a parameter symbol as a requirement's omega raised "from_sympy:
+    # cannot write wn"; it is a parameter of the model like any other, and gives the numbers of
+    # the same model with the number written in
+    c, F, w, wn = sp.symbols("c F w wn")
+
+    def duffing(omega, extra):
+        return ukdyn.from_sympy(
+            [x], T=m * ukdyn.velocities(x)[0]**2 / 2,
+            Q=[-c * ukdyn.velocities(x)[0] + x - x**3 + F * sp.cos(w * t)],
+            requirements=[{"name": "track", "holonomic": x - sp.sin(t),
+                           "dynamics": {"omega": omega, "zeta": sp.Integer(1)}}],
+            control={"law": "gauss"}, parameters={m: 1, c: 0.3, F: 0.5, w: 1.2, **extra},
+            initial={"q": {x: 1}, "q_dot": {x: 0}},
+            simulate={"t_end": 2, "integrator": "dopri5", "rtol": 1e-11, "atol": 1e-13},
+            output={"every": 0.1})
+
+    a, b = duffing(wn, {wn: 2}).simulate(), duffing(2, {}).simulate()
+    assert a.names == b.names
+    # e = x - sin t follows e'' + 2 ωn e' + ωn² e = 0 from e(0) = 1, e'(0) = -1: (1 + t) e^(-2t)
+    e = np.asarray(a["x"]) - np.sin(a.t)
+    np.testing.assert_allclose(e, (1 + a.t) * np.exp(-2 * a.t), rtol=0, atol=1e-8)
+    np.testing.assert_allclose(a["x"], b["x"], rtol=0, atol=1e-12)
+    # a number SymPy holds (Integer, Float, Rational) is written as that number
+    assert "zeta: 1" in ukdyn.sympy_to_yaml(
+        [x], T=m * ukdyn.velocities(x)[0]**2 / 2, parameters={m: 1},
+        requirements=[{"name": "r", "holonomic": x, "dynamics": {"omega": wn, "zeta": sp.Integer(1)}}],
+        control={"law": "gauss"})
+
+
 @pytest.mark.parametrize("expr", [
     x**2 - 3 * x * y / 7 + sp.Rational(1, 3),
     -x**-2 * y + sp.sqrt(1 + x**2) / (x * y + 2),

@@ -352,6 +352,21 @@ def sympy_to_yaml(coordinates: Sequence[Any], *, T: Any = None, V: Any = None, M
             else:
                 ctrl[k] = {_key(a): b for a, b in v.items()} if isinstance(v, dict) else v
         doc["control"] = ctrl
+
+    # any SymPy object left in a setting (a parameter symbol as a requirement's omega, an
+    # expression as a gain) is written as an expression of the model language: the reader then
+    # accepts it or names it at file:line:column, instead of a traceback from here
+    def settle(v: Any) -> Any:
+        if isinstance(v, dict):
+            return {k: settle(x) for k, x in v.items()}
+        if isinstance(v, (list, tuple)):
+            return [settle(x) for x in v]
+        if isinstance(v, sp.Basic) and not isinstance(v, _Expr):
+            number = float(v) if v.is_number and v.is_real else None
+            return number if number is not None else ex(v)
+        return v
+
+    doc = settle(doc)
     return "# written by ukdyn.sympy_to_yaml\n" + "\n".join(_block(doc)) + "\n"
 
 
