@@ -60,6 +60,7 @@ int run_python(const std::string& python, const std::string& script, const std::
                const std::string& dir) {
   std::vector<std::string> args = {python, script, csv, dir};
   std::vector<char*> argv;
+  argv.reserve(args.size() + 1);
   for (auto& a : args) argv.push_back(a.data());
   argv.push_back(nullptr);
   pid_t pid = 0;

@@ -123,21 +123,24 @@ NonIdealForce coulomb_friction(CoulombFriction spec) {
 }
 
 NonIdealForce viscous_friction(ViscousFriction spec) {
-  return NonIdealForce(spec.name, NonIdealForce::Binder([spec](const System& sys) -> NonIdealFn {
-                         const std::string who = "ukdyn::viscous_friction '" + spec.name + "'";
-                         if (!(spec.coefficient >= 0.0)) {
-                           throw std::invalid_argument(who + ": coefficient must be >= 0, got " +
-                                                       format_number(spec.coefficient));
-                         }
-                         const std::vector<Index> coords =
-                             resolve_coordinates(spec.coordinates, sys.coordinate_count(), who);
-                         const double c = spec.coefficient;
-                         // C_i = −c q'_i
-                         return [coords, c](const VectorXd&, const VectorXd& qd, double,
-                                            const IdealForceInfo&, Eigen::Ref<VectorXd> C) {
-                           for (Index i : coords) C[i] = -c * qd[i];
-                         };
-                       }));
+  std::string name = spec.name;  // copied first: spec moves into the binder
+  return NonIdealForce(
+      std::move(name),
+      NonIdealForce::Binder([spec = std::move(spec)](const System& sys) -> NonIdealFn {
+        const std::string who = "ukdyn::viscous_friction '" + spec.name + "'";
+        if (!(spec.coefficient >= 0.0)) {
+          throw std::invalid_argument(who + ": coefficient must be >= 0, got " +
+                                      format_number(spec.coefficient));
+        }
+        const std::vector<Index> coords =
+            resolve_coordinates(spec.coordinates, sys.coordinate_count(), who);
+        const double c = spec.coefficient;
+        // C_i = −c q'_i
+        return [coords, c](const VectorXd&, const VectorXd& qd, double, const IdealForceInfo&,
+                           Eigen::Ref<VectorXd> C) {
+          for (Index i : coords) C[i] = -c * qd[i];
+        };
+      }));
 }
 
 }  // namespace ukdyn

@@ -162,6 +162,7 @@ std::string listing(const std::vector<std::string>& names) {
 
 std::vector<std::string> function_names() {
   std::vector<std::string> names;
+  names.reserve(kFunctions.size());
   for (const auto& f : kFunctions) names.emplace_back(f.name);
   return names;
 }
@@ -595,7 +596,7 @@ class Parser {
   }
 
   GiNaC::ex power(bool in_exponent) {
-    const GiNaC::ex base = primary();
+    GiNaC::ex base = primary();
     if (!is("^")) return base;
     if (in_exponent) fail("a^b^c is ambiguous: write (a^b)^c or a^(b^c)", token_.position);
     const std::size_t at = token_.position;
@@ -603,7 +604,7 @@ class Parser {
     const GiNaC::ex exponent = unary(true);
     check_power_size(base, exponent, at);
     check_power(base, exponent, at);
-    const GiNaC::ex e = build([&] { return GiNaC::pow(base, exponent); }, at);
+    GiNaC::ex e = build([&] { return GiNaC::pow(base, exponent); }, at);
     check_constant_value(e, "the power " + brief(base) + "^" + brief(exponent), at);
     return e;
   }

@@ -26,8 +26,8 @@
 
 namespace ukdyn {
 
-ModelError::ModelError(std::string file, int line, int column, std::string message,
-                       std::string hint)
+ModelError::ModelError(const std::string& file, int line, int column, const std::string& message,
+                       const std::string& hint)
     : std::runtime_error(valid_utf8(
           file +
           (line > 0 ? ":" + format_number(line) + ":" + format_number(column) : std::string()) +
@@ -223,7 +223,7 @@ void Reader::read_coordinates(const YAML::Node& root) {
 }
 
 Index Reader::coordinate(const YAML::Node& node) {
-  const std::string name = node.Scalar();
+  const std::string& name = node.Scalar();
   for (std::size_t i = 0; i < coordinates_.size(); ++i) {
     if (coordinates_[i] == name) return Index(i);
   }
@@ -500,6 +500,7 @@ Constraint Reader::read_constraint(const YAML::Node& c, const std::string& name,
     }
     // ∂φ/∂q_j is 0 for the q_j that no row of φ holds: A's columns are those that some row holds
     std::vector<std::vector<Index>> in_phi;
+    in_phi.reserve(phi.size());
     for (const Expr& e : phi) in_phi.push_back(set_->inputs_of(e));
     columns = local_columns(in_phi, 0, n);
     for (Index r = 0; r < rows; ++r) {
@@ -524,6 +525,7 @@ Constraint Reader::read_constraint(const YAML::Node& c, const std::string& name,
     }
     // ∂ψ/∂q̇_j is 0 for the q̇_j that no row of ψ holds: A's columns are those that some row holds
     std::vector<std::vector<Index>> in_psi;
+    in_psi.reserve(psi.size());
     for (const Expr& e : psi) in_psi.push_back(set_->inputs_of(e));
     columns = local_columns(in_psi, n, n);
     for (Index r = 0; r < rows; ++r) {
@@ -743,6 +745,7 @@ void Reader::read_nonideal(const YAML::Node& root, SystemBuilder& builder) {
       if (Index(rows.size()) != n)
         fail(f["C"], "C must have " + format_number(n) + " entries, one per coordinate");
       std::vector<Expr> C;
+      C.reserve(rows.size());
       for (const auto& r : rows) C.push_back(expression(r, "C", true));
       const Program Cp = compile(C, f["C"], "C");
       const InputLayout layout = layout_;
@@ -752,6 +755,7 @@ void Reader::read_nonideal(const YAML::Node& root, SystemBuilder& builder) {
           "C." + format_number(index),
           NonIdealForce::Binder([Cp, layout, names](const System& sys) -> NonIdealFn {
             std::vector<Index> ks;
+            ks.reserve(names.size());
             for (const auto& nm : names) ks.push_back(sys.constraint_index(nm));
             return [Cp, layout, ks](const VectorXd& q, const VectorXd& qd, double t,
                                     const IdealForceInfo& ideal, Eigen::Ref<VectorXd> Cout) {

@@ -105,7 +105,7 @@ struct BufferSizes {
     scratch = std::max(scratch, std::size_t(p.scratch_size()));
   }
   static ScratchFactory factory(std::shared_ptr<const BufferSizes> sizes) {
-    return [sizes]() -> std::unique_ptr<CallableScratch> {
+    return [sizes = std::move(sizes)]() -> std::unique_ptr<CallableScratch> {
       auto b = std::make_unique<ModelBuffers>();
       b->in.assign(sizes->inputs, 0.0);
       b->out.assign(sizes->outputs, 0.0);

@@ -242,7 +242,7 @@ Eigen::Quaterniond MultibodyReader::orientation(const YAML::Node& node, const st
 // a body by name ("ground": the world)
 BodyId MultibodyReader::body(const YAML::Node& node, const std::string& what) {
   if (!node.IsScalar()) r_.fail(node, what + " must be the name of a body or ground");
-  const std::string name = node.Scalar();
+  const std::string& name = node.Scalar();
   if (name == "ground") return kGround;
   for (std::size_t i = 0; i < bodies_.size(); ++i) {
     if (bodies_[i].name == name) return BodyId(i);
@@ -337,7 +337,7 @@ mb::WrenchFn MultibodyReader::wrench(const YAML::Node& f, bool planar_body,
     } else {
       if (!T.IsSequence() || T.size() != 3)
         r_.fail(T, what + ": torque must be a list of 3 expressions", "[Tx, Ty, Tz]");
-      for (int i = 0; i < 3; ++i) out[std::size_t(3 + i)] = r_.expression(T[i], what + " torque");
+      for (int i = 0; i < 3; ++i) out[3 + std::size_t(i)] = r_.expression(T[i], what + " torque");
     }
   }
   const Program p = r_.compile(out, f, what);
@@ -397,7 +397,7 @@ void MultibodyReader::declare_bodies() {
   for (const auto& b : bs) {
     check_map(b, "a body", "{name: link, type: planar, mass: 1, inertia: 0.1}");
     const YAML::Node n = require(b, "name", "a body", "{name: link, type: planar, ...}");
-    const std::string name = n.Scalar();
+    const std::string& name = n.Scalar();
     if (!n.IsScalar() || !is_identifier(name))
       r_.fail(n, "body name '" + name + "' is not an identifier",
               "letters, digits and _: it names the coordinates " + name + "_x, …");
@@ -728,7 +728,7 @@ void MultibodyReader::read_forces() {
               "in a model with bodies:, forces: lists force elements, e.g. {type: gravity, g: "
               "[0, -9.81]}; generalized forces need coordinates:");
     const YAML::Node t = require(f, "type", "a force element", "type: spring_damper");
-    const std::string type = t.Scalar();
+    const std::string& type = t.Scalar();
     const std::string name = name_of(f, "a force element", type + "_" + format_number(index));
     if (!names.insert(name).second)
       r_.fail(f["name"] ? f["name"] : f, "force '" + name + "' is declared twice");

@@ -364,7 +364,7 @@ Vec3<S> body_vector_generic(const BodyRef& b, const V& q, const Vector3d& s, boo
     x[1] = sn * s.x() + c * s.y();
     x[2] = S(s.z());
   } else {
-    const S w = q[o + 3];
+    const S& w = q[o + 3];
     Vec3<S> e;
     e << q[o + 4], q[o + 5], q[o + 6];
     const Vec3<S> sv = s.cast<S>();

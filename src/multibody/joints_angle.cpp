@@ -49,7 +49,8 @@ Vec3<S> omega_generic(const BodyRef& b, const V& q, const V& qd) {
   Vec3<S> e, ed;
   e << q[o + 4], q[o + 5], q[o + 6];
   ed << qd[o + 4], qd[o + 5], qd[o + 6];
-  const S u0 = q[o + 3], u0d = qd[o + 3];
+  const S& u0 = q[o + 3];
+  const S& u0d = qd[o + 3];
   return 2.0 * (u0 * ed - u0d * e + e.cross(ed));
 }
 

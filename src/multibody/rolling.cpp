@@ -14,7 +14,7 @@ namespace {
 // c = −R h / |h| with h = e_z − (a · e_z) a (the steepest descent in the disk's plane)
 template <class S, class V>
 Vec3<S> disk_contact(const V& q, const Vector3d& n, double radius) {
-  const S w = q[3];
+  const S& w = q[3];
   Vec3<S> e;
   e << q[4], q[5], q[6];
   const Vec3<S> nv = n.cast<S>();
@@ -32,7 +32,8 @@ Vec3<S> omega_world(const V& q, const V& qd) {
   Vec3<S> e, ed;
   e << q[4], q[5], q[6];
   ed << qd[4], qd[5], qd[6];
-  const S w = q[3], wd = qd[3];
+  const S& w = q[3];
+  const S& wd = qd[3];
   return 2.0 * (w * ed - wd * e + e.cross(ed));
 }
 

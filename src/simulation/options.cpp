@@ -470,7 +470,7 @@ std::string option_rule(const OptionInfo& i) {
       break;
   }
   const bool low = std::isfinite(i.min), high = std::isfinite(i.max);
-  const std::string kind = i.allow_infinite ? "a number" : "a finite number";
+  std::string kind = i.allow_infinite ? "a number" : "a finite number";
   if (!low && !high) return kind;
   if (low && high) {
     return kind + " in " + (i.min_open ? "(" : "[") + number_text(i.min) + ", " +

@@ -27,7 +27,8 @@ struct MultibodyModel;
 /// "FILE:LINE:COLUMN: error: MESSAGE (hint: HINT)".
 class ModelError : public std::runtime_error {
  public:
-  ModelError(std::string file, int line, int column, std::string message, std::string hint = "");
+  ModelError(const std::string& file, int line, int column, const std::string& message,
+             const std::string& hint = "");
   const std::string& file() const { return file_; }        ///< the file (or "<string>")
   int line() const { return line_; }                       ///< 1-based line
   int column() const { return column_; }                   ///< 1-based column
