@@ -23,8 +23,9 @@ constexpr const char* kExitCodes = R"(Exit codes:
      written (also: the output files could not be written)
   2  bad command line (also --set of a parameter the model does not declare, an unknown
      --example)
-  3  bad model file (printed as FILE:LINE:COLUMN: error: MESSAGE (hint: ...)), or a model
-     that cannot be started (inconsistent initial state without initial: project: true)
+  3  bad model file (printed as FILE:LINE:COLUMN: error: MESSAGE (hint: ...)), including a
+     setting of the file a run cannot use, and a model that cannot be started (inconsistent
+     initial state: at initial:, or at the constraints that contradict each other)
   4  check found problems
   5  the run reached its end, but its energy balance residual exceeds the tolerance (status
      energy_balance): energy was gained or lost that no work channel accounts for

@@ -135,14 +135,14 @@ void apply_option_flags(const RunArguments& args, SimulationOptions& options) {
   }
 }
 
-// the settings with the command line's flags, as simulate() checks them: the model's own were
-// checked when it was read, so a setting at fault here is due to a flag (named, with its value)
+// the settings with the command line's flags, as the run checks them (check_run_settings, the
+// check the model reader made of the file's own): those were accepted when the model was read, so
+// a setting at fault here is due to a flag (named, with its value: a UsageError, exit 2)
 void check_flags(const RunArguments& args, const Model& model, const SimulationOptions& options) {
   try {
-    check_settings(model.system, options);
+    check_run_settings(model, options);
   } catch (const SettingError& e) {
-    std::string message = e.what();
-    if (message.rfind("ukdyn::simulate: ", 0) == 0) message.erase(0, 17);
+    const std::string message = user_message(e);
     // the flags given, the one of the setting first
     std::string flags;
     for (const FlagSetting& f : args.settings) {
@@ -236,16 +236,20 @@ int run_command(const RunArguments& args) {
     try {
       run = run_model(model, options, write_rows);
     } catch (const InconsistentInitialState& e) {
-      // (no hint to project when the constraints contradict each other: it cannot help)
+      // at the initial: section or the constraint's entry (no hint to project when the
+      // constraints contradict each other: it cannot help)
       bar.finish();
-      const bool hint = e.cause() == InconsistentInitialState::Cause::kNotProjected;
-      std::fprintf(stderr, "%s: error: %s%s\n", model.file.c_str(), e.what(),
-                   hint ? " (hint: add `project: true` under `initial:` in the model file)" : "");
+      std::fprintf(stderr, "%s\n", locate_run_error(model, e).what());
+      return kExitModel;
+    } catch (const SettingError& e) {
+      // (checked before the run: the file's settings when it was read, the flags' above)
+      bar.finish();
+      std::fprintf(stderr, "%s\n", locate_run_error(model, e).what());
       return kExitModel;
     } catch (const std::invalid_argument& e) {
-      // the model cannot be started (bad settings)
+      // the model cannot be started
       bar.finish();
-      std::fprintf(stderr, "%s: error: %s\n", model.file.c_str(), e.what());
+      std::fprintf(stderr, "%s: error: %s\n", model.file.c_str(), user_message(e).c_str());
       return kExitModel;
     }
   }

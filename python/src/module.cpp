@@ -11,9 +11,11 @@ namespace {
 py::object error_class(const char* name) { return py::module_::import("ukdyn.errors").attr(name); }
 
 // C++ exceptions -> Python: ModelError -> ukdyn.ModelError (file, line, column, message, hint),
-// SolveError -> ukdyn.SolveError (status); the rest follow pybind11's defaults
-// (std::invalid_argument -> ValueError, other std::exception -> RuntimeError), with any byte of
-// a message that is not UTF-8 shown as U+FFFD
+// SolveError -> ukdyn.SolveError (status), InconsistentInitialState ->
+// ukdyn.InconsistentInitialState and SettingError -> ValueError (their text without
+// "ukdyn::simulate: "); the rest follow pybind11's defaults (std::invalid_argument -> ValueError,
+// other std::exception -> RuntimeError), with any byte of a message that is not UTF-8 shown as
+// U+FFFD
 void translate(std::exception_ptr p) {
   try {
     if (p) std::rethrow_exception(p);
@@ -25,8 +27,11 @@ void translate(std::exception_ptr p) {
     // a ValueError, as every std::invalid_argument, typed with its cause
     static const char* const causes[] = {"not_projected", "contradictory", "projection_failed"};
     py::object cls = error_class("InconsistentInitialState");
-    py::object err = cls(e.what(), causes[int(e.cause())]);
+    py::object err = cls(valid_utf8(user_message(e)), causes[int(e.cause())]);
     PyErr_SetObject(cls.ptr(), err.ptr());
+  } catch (const SettingError& e) {
+    // a ValueError naming the setting, without the C++ function's name
+    PyErr_SetString(PyExc_ValueError, valid_utf8(user_message(e)).c_str());
   } catch (const SolveError& e) {
     py::object cls = error_class("SolveError");
     py::object err = cls(e.what(), to_string(e.status()));

@@ -127,3 +127,31 @@ simulate: {{t_end: 2, integrator: {integrator}}}
 def test_fixed_step_samples_closer_than_the_step_raise(oscillator):
     with pytest.raises(ValueError, match=r"output_every \(0\.001\) is below the step \(0\.01\) of rk4"):
         oscillator.simulate(integrator="rk4", step=0.01, output_every=0.001)
+
+
+def test_settings_errors_do_not_name_the_cpp_function(oscillator):
+    # a keyword's bad value: a ValueError naming the setting, not "ukdyn::simulate:"
+    with pytest.raises(ValueError) as info:
+        oscillator.simulate(t_end=1e300)
+    assert str(info.value).startswith("the output grid (output_every = 0.01, t_start = 0, "
+                                      "t_end = 1e+300) has 1e+302 samples")
+    assert "ukdyn::" not in str(info.value)
+    with pytest.raises(ValueError) as info:
+        oscillator.simulate(t_end=1e-300)
+    assert str(info.value).startswith("t_end (1e-300) must exceed t_start")
+
+
+def test_a_grid_ukdyn_run_refuses_is_refused_when_the_model_is_read():
+    # as `ukdyn run` and `ukdyn check` refuse it: at output: every's value
+    with pytest.raises(ukdyn.ModelError) as info:
+        ukdyn.parse(OSCILLATOR.lstrip("\n") + "output: {every: 1e-9}\n", "tiny.yaml")
+    assert (info.value.line, info.value.column) == (5, 17)
+    assert info.value.message.startswith("the output grid (output_every = 1e-09")
+
+
+def test_inconsistent_initial_state_message_has_no_cpp_function_name():
+    text = ("coordinates: [x, y]\nkinetic_energy: 0.5*(x_dot^2+y_dot^2)\nconstraints:\n"
+            "  - {name: at0, holonomic: x}\n  - {name: at1, holonomic: x - 1}\n")
+    with pytest.raises(ukdyn.InconsistentInitialState) as info:
+        ukdyn.parse(text, "c.yaml").simulate()
+    assert str(info.value).startswith("the constraints 'at0', 'at1' contradict each other")

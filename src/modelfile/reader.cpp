@@ -20,6 +20,7 @@
 #include "ukdyn/core/format.hpp"
 #include "ukdyn/core/nonideal.hpp"
 #include "ukdyn/dynamics/forward.hpp"
+#include "ukdyn/modelfile/run.hpp"
 #include "ukdyn/simulation/options.hpp"
 
 #include "modelfile/reader.hpp"
@@ -617,6 +618,7 @@ void Reader::read_constraints(const YAML::Node& root, SystemBuilder& builder) {
       constraint.stabilize(alpha, beta);
     }
     builder.add(constraint);
+    positions_.constraints[name] = position(c);
     constraint_names_.push_back(name);
     constraint_rows_.push_back(constraint.rows());
   }
@@ -785,6 +787,7 @@ void Reader::read_initial(const YAML::Node& root, Model& model) {
   const YAML::Node init = root["initial"];
   if (!init) return;
   if (!init.IsMap()) fail(init, "initial must be a mapping with q, q_dot and project");
+  positions_.initial = position(init);
   auto read_map = [&](const char* key, VectorXd& v) {
     const YAML::Node m = init[key];
     if (!m) return;
@@ -805,12 +808,14 @@ void Reader::read_simulate(const YAML::Node& root, Model& model) {
   const YAML::Node s = root["simulate"];
   if (!s) return;
   if (!s.IsMap()) fail(s, "simulate must be a mapping", "{t_end: 2, integrator: dopri5}");
+  positions_.simulate = position(s);
   // every key is an option of the table (simulation/options.hpp), set by its one validating setter
   for (const auto& kv : s) {
     const std::string key = kv.first.Scalar();
     const YAML::Node v = kv.second;
     const OptionInfo* info = find_option(key);
     if (!info) fail(kv.first, "unknown key '" + key + "' in simulate", option_names());
+    positions_.settings[info->name] = position(v);
     try {
       switch (info->type) {
         case OptionType::kNumber:
@@ -939,8 +944,10 @@ void Reader::read_output(const YAML::Node& root, Model& model) {
       if (key == "every") {
         o.output_every = number(kv.second, "every");
         if (o.output_every < 0) fail(kv.second, "every must be >= 0");
+        positions_.settings["output_every"] = position(kv.second);
       } else if (key == "at") {
         if (!kv.second.IsSequence()) fail(kv.second, "at must be a list of times");
+        positions_.settings["output_at"] = position(kv.second);
         for (const auto& tn : kv.second) {
           const double t = number(tn, "output time");
           if (t < o.t_start || t > o.t_end) {
@@ -1029,29 +1036,17 @@ Model Reader::read_plant(const YAML::Node& root) {
   return model;
 }
 
-// the run's settings as simulate() checks them (ukdyn::check_settings), located at the key that
-// gave the setting at fault: simulate: KEY, output: every / at, or the simulate: mapping when the
-// setting is a default that the others make unusable (rk4's step over a longer t_end)
-void Reader::check_settings(const YAML::Node& root, const Model& model) {
+// the run's settings as `ukdyn run` checks them (check_run_settings, modelfile/run.hpp: the same
+// check_settings a run makes), located at the key that gave the setting at fault
+// (locate_run_error: simulate: KEY, output: every / at, or the simulate: mapping when the setting
+// is a default that the others make unusable, e.g. rk4's step over a longer t_end)
+void Reader::check_settings(const YAML::Node& root, Model& model) {
+  positions_.start = position(root);
+  model.positions = positions_;
   try {
-    ukdyn::check_settings(model.system, model.options);
+    check_run_settings(model, model.options);
   } catch (const SettingError& e) {
-    std::string message = e.what();
-    if (message.rfind("ukdyn::simulate: ", 0) == 0) message.erase(0, 17);
-    const YAML::Node simulate = root["simulate"], output = root["output"];
-    YAML::Node at;
-    if (e.setting() == "output_every" && output && output.IsMap() && output["every"]) {
-      at = output["every"];
-    } else if (e.setting() == "output_at" && output && output.IsMap() && output["at"]) {
-      at = output["at"];
-    } else if (simulate && simulate.IsMap() && simulate[e.setting()]) {
-      at = simulate[e.setting()];
-    } else if (simulate) {
-      at = simulate;
-    } else {
-      at = root;
-    }
-    fail(at, message);
+    throw locate_run_error(model, e);
   }
 }
 

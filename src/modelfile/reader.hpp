@@ -295,6 +295,11 @@ class Reader {
     const YAML::Mark m = at.Mark();
     throw ModelError(file_, m.line + 1, m.column + 1, message, hint);
   }
+  // where a node is in the file (1-based)
+  static FilePosition position(const YAML::Node& at) {
+    const YAML::Mark m = at.Mark();
+    return {m.line + 1, m.column + 1};
+  }
   [[noreturn]] void fail_at(const YAML::Mark& m, const std::string& message,
                             const std::string& hint = "") const {
     throw ModelError(file_, m.line + 1, m.column + 1, message, hint);
@@ -319,7 +324,7 @@ class Reader {
   void read_simulate(const YAML::Node& root, Model& model);
   void read_output(const YAML::Node& root, Model& model);
   void check_mass_matrix(const YAML::Node& root, const Model& model);
-  void check_settings(const YAML::Node& root, const Model& model);
+  void check_settings(const YAML::Node& root, Model& model);
   Index coordinate(const YAML::Node& node);
 
   // ---- multibody models (modelfile/reader_multibody.cpp): bodies:, joints:, forces: --------
@@ -343,6 +348,7 @@ class Reader {
   std::map<std::string, double> overrides_;
   std::map<std::string, double> parameters_;
   std::vector<std::string> coordinates_, velocities_;
+  ModelPositions positions_;  // where the file gives what a run may refuse (Model::positions)
   std::vector<std::string> constraint_names_;   // in declaration order
   std::vector<std::string> constraint_inputs_;  // N_c and lambda_c of each named constraint
   std::vector<Index> constraint_rows_;

@@ -548,6 +548,7 @@ void MultibodyReader::declare_joints() {
                 "joint names name their constraints: make them unique");
     }
     joints_.push_back({name, kind->type, j});
+    r_.positions_.constraints[name] = Reader::position(j);
   }
 }
 

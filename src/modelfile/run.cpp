@@ -165,6 +165,74 @@ ModelRun run_model(const Model& model, const SimulationOptions& options) {
 
 ModelRun run_model(const Model& model) { return run_model(model, model.options); }
 
+void check_run_settings(const Model& model, const SimulationOptions& options) {
+  // as `ukdyn run` runs it: streamed (run_model with a chunk sets a sample_sink)
+  SimulationOptions streamed = options;
+  streamed.sample_sink = [](const Trajectory&) {};
+  check_settings(model.system, streamed);
+}
+
+namespace {
+
+// the ModelError of `model`'s file at `at` (the model's start when unknown)
+ModelError error_at(const Model& model, FilePosition at, const std::string& message,
+                    const std::string& hint = "") {
+  if (!at.known()) at = model.positions.start;
+  if (!at.known()) at = {1, 1};
+  return ModelError(model.file, at.line, at.column, message, hint);
+}
+
+// the entry of constraint `name`: its own, or that of the joint it is named after (a joint's
+// constraints are named "<joint>" or "<joint>.<part>" / "<joint>_<part>")
+FilePosition constraint_position(const Model& model, const std::string& name) {
+  const auto& all = model.positions.constraints;
+  if (const auto it = all.find(name); it != all.end()) return it->second;
+  FilePosition best;
+  std::size_t longest = 0;
+  for (const auto& [declared, at] : all) {
+    if (declared.size() > longest && name.size() > declared.size() &&
+        name.compare(0, declared.size(), declared) == 0 &&
+        (name[declared.size()] == '.' || name[declared.size()] == '_')) {
+      best = at;
+      longest = declared.size();
+    }
+  }
+  return best;
+}
+
+}  // namespace
+
+ModelError locate_run_error(const Model& model, const SettingError& e) {
+  const ModelPositions& p = model.positions;
+  const auto given = [&](const std::string& name) {
+    const auto it = p.settings.find(name);
+    return it == p.settings.end() ? FilePosition{} : it->second;
+  };
+  FilePosition at = given(e.setting());
+  // the sample grid of a default spacing: too many samples for the file's t_end
+  if (!at.known() && (e.setting() == "output_every" || e.setting() == "output_at")) {
+    at = given("t_end");
+  }
+  if (!at.known()) at = p.simulate;
+  return error_at(model, at, user_message(e));
+}
+
+ModelError locate_run_error(const Model& model, const InconsistentInitialState& e) {
+  using Cause = InconsistentInitialState::Cause;
+  const FilePosition constraint =
+      e.constraints().empty() ? FilePosition{} : constraint_position(model, e.constraints()[0]);
+  FilePosition at;
+  if (e.cause() == Cause::kContradictory) {
+    at = constraint.known() ? constraint : model.positions.initial;
+  } else {
+    at = model.positions.initial.known() ? model.positions.initial : constraint;
+  }
+  return error_at(model, at, user_message(e),
+                  e.cause() == Cause::kNotProjected
+                      ? "add `project: true` under `initial:` in the model file"
+                      : "");
+}
+
 void write_csv(const ModelRun& run, const std::string& path) {
   write_csv(run.trajectory, path, run.extra_columns);
 }

@@ -48,26 +48,28 @@ SampleGrid::SampleGrid(const SimulationOptions& o, double max_samples, const cha
     const double count = (b - a_) / every_ * (1 + 1e-12);
     const double total = std::floor(count) + double(irregular.size());
     if (!(total <= max_samples)) {
-      throw std::invalid_argument(
+      throw SettingError(
+          "output_every",
           "ukdyn::simulate: the output grid (" + options + ") has " + count_text(total) +
-          " samples, more than the bound of " + count_text(std::floor(max_samples)) + " " +
-          bound_name +
-          " (docs/simulation.md, \"Sample grid and streaming\"): use a larger "
-          "output_every (model file: output: every:) or a shorter run (t_end, --t-end)");
+              " samples, more than the bound of " + count_text(std::floor(max_samples)) + " " +
+              bound_name +
+              " (docs/simulation.md, \"Sample grid and streaming\"): use a larger "
+              "output_every (model file: output: every:) or a shorter run (t_end, --t-end)");
     }
     if (!(every_ > 2.0 * eps)) {
-      throw std::invalid_argument(
-          "ukdyn::simulate: the sample spacing output_every = " + g(every_) +
-          " is below the resolution of the sample times, 2e-12 · max(1, |t_start|, |t_end|) = " +
-          g(2.0 * eps) + " (" + options + "): consecutive samples would merge");
+      throw SettingError("output_every",
+                         "ukdyn::simulate: the sample spacing output_every = " + g(every_) +
+                             " is below the resolution of the sample times, 2e-12 · max(1, "
+                             "|t_start|, |t_end|) = " +
+                             g(2.0 * eps) + " (" + options + "): consecutive samples would merge");
     }
     last_ = long(std::floor(count));
     while (last_ > 0 && !(grid(last_) <= b)) --last_;
   } else if (!(double(irregular.size()) <= max_samples)) {
-    throw std::invalid_argument("ukdyn::simulate: output_at has " +
-                                count_text(double(irregular.size())) +
-                                " samples, more than the bound of " +
-                                count_text(std::floor(max_samples)) + " " + bound_name);
+    throw SettingError("output_at", "ukdyn::simulate: output_at has " +
+                                        count_text(double(irregular.size())) +
+                                        " samples, more than the bound of " +
+                                        count_text(std::floor(max_samples)) + " " + bound_name);
   }
 
   // the merge, as a sort of all the times followed by "keep t if t − (last kept) > eps" would

@@ -17,10 +17,11 @@ namespace ukdyn::detail {
 // regular grid plus the few irregular times (output_at, t_end) and the grid points they drop:
 // memory O(output_at.size()), time[i] in O(log output_at.size()).
 //
-// The constructor refuses (std::invalid_argument, naming output_every, t_start, t_end, the count
-// and the bound) a grid of more than `max_samples` samples, before any time is computed (the
-// count of the regular part is formed in double, so 1e300 / 0.01 is refused, not overflowed),
-// and a spacing output_every at or below 2 eps, where consecutive times would merge.
+// The constructor refuses (SettingError for output_every, or output_at without it, naming
+// output_every, t_start, t_end, the count and the bound) a grid of more than `max_samples` samples,
+// before any time is computed (the count of the regular part is formed in double, so 1e300 / 0.01
+// is refused, not overflowed), and a spacing output_every at or below 2 eps, where consecutive
+// times would merge.
 class SampleGrid {
  public:
   SampleGrid(const SimulationOptions& o, double max_samples, const char* bound_name);

@@ -136,12 +136,15 @@ ConstraintConflict initial_conflict(const System& sys, Workspace& ws, const Vect
                                   o.projection.tolerance);
 }
 
-// one line per constraint whose violation exceeds tol (after evaluate_violations)
-std::vector<std::string> violated(const System& sys, const Workspace& ws, double tol) {
+// one line per constraint whose violation exceeds tol (after evaluate_violations); their names
+// in `names` when given
+std::vector<std::string> violated(const System& sys, const Workspace& ws, double tol,
+                                  std::vector<std::string>* names = nullptr) {
   std::vector<std::string> lines;
   for (Index k = 0; k < sys.constraint_count(); ++k) {
     const double p = position_violation(sys, ws, k), v = velocity_violation(sys, ws, k);
     if (p > tol || v > tol) {
+      if (names) names->push_back(sys.constraint(k).name());
       lines.push_back("constraint '" + sys.constraint(k).name() + "' (" +
                       to_string(sys.constraint(k).kind()) + "): position violation " + format(p) +
                       ", velocity violation " + format(v));
@@ -954,6 +957,16 @@ void check_settings(const System& sys, const SimulationOptions& o) {
                        " (take a larger step, or raise max_steps: " + kRaiseMaxSteps + ")");
     }
   }
+  // the sample grid: within the bound of a streamed run (o.sample_sink) or of one kept in memory,
+  // its spacing above the resolution of t (SettingError naming output_every or output_at)
+  (void)sample_grid(sys, o);
+}
+
+std::string user_message(const std::exception& e) {
+  std::string message = e.what();
+  const std::string prefix = "ukdyn::simulate: ";
+  if (message.rfind(prefix, 0) == 0) message.erase(0, prefix.size());
+  return message;
 }
 
 std::vector<std::string> check_initial_conditions(const System& sys, const VectorXd& q,
@@ -1004,27 +1017,32 @@ Trajectory detail::simulate_observed(const System& sys, const VectorXd& q0, cons
   // other are named: no projection helps)
   VectorXd q = q0, qd = qd0;
   evaluate_violations(sys, ws, q, qd, o.t_start);
-  if (auto bad = violated(sys, ws, o.initial_tolerance); !bad.empty()) {
+  std::vector<std::string> bad_names;
+  if (auto bad = violated(sys, ws, o.initial_tolerance, &bad_names); !bad.empty()) {
     if (const auto c = initial_conflict(sys, ws, q, qd, o); c.found) {
       throw InconsistentInitialState(InconsistentInitialState::Cause::kContradictory,
-                                     "ukdyn::simulate: " + describe_conflict(c, o.t_start));
+                                     "ukdyn::simulate: " + describe_conflict(c, o.t_start),
+                                     c.names);
     }
     if (!o.project_initial) {
       throw InconsistentInitialState(
           InconsistentInitialState::Cause::kNotProjected,
           "ukdyn::simulate: inconsistent initial conditions at t = " + format(o.t_start) + ": " +
-              join_lines(bad) + " (set project_initial to project them onto the constraints)");
+              join_lines(bad) + " (set project_initial to project them onto the constraints)",
+          bad_names);
     }
     ProjectionOptions all = o.projection;
     const auto rp = project_positions(sys, ws, q, o.t_start, all);
     const auto rv = project_velocities(sys, ws, q, qd, o.t_start, all);
     evaluate_violations(sys, ws, q, qd, o.t_start);
-    bad = violated(sys, ws, o.initial_tolerance);
+    bad_names.clear();
+    bad = violated(sys, ws, o.initial_tolerance, &bad_names);
     if (!rp.converged || !rv.converged || !bad.empty()) {
       throw InconsistentInitialState(
           InconsistentInitialState::Cause::kProjectionFailed,
           "ukdyn::simulate: no consistent initial state near the one given: after projection " +
-              (bad.empty() ? std::string("the iteration did not converge") : join_lines(bad)));
+              (bad.empty() ? std::string("the iteration did not converge") : join_lines(bad)),
+          bad_names);
     }
   }
 

@@ -9,6 +9,7 @@
 #include <gtest/gtest.h>
 
 #include <ukdyn/modelfile/model.hpp>
+#include <ukdyn/modelfile/run.hpp>
 #include <ukdyn/simulation/simulate.hpp>
 #include <ukdyn/ukdyn.hpp>
 
@@ -350,6 +351,94 @@ TEST(RunSettings, ModelFileSettingsAreLocated) {
   EXPECT_EQ(e.line(), 5);
   EXPECT_EQ(e.column(), 11);
   EXPECT_TRUE(contains(e.message(), "takes 1e+08 steps")) << e.message();
+}
+
+TEST(RunSettings, ModelFileSampleGridIsRefusedWhenReadAtOutputEvery) {
+  // the grid `ukdyn run` would refuse (a streamed run: more than 1e9 samples) is refused when
+  // the model is read (so `ukdyn check` refuses it too), at output: every's value, without the
+  // C++ function's name
+  ModelError e = model_error(kOscillator + "output: {every: 1e-9}\n");
+  EXPECT_EQ(e.line(), 5);
+  EXPECT_EQ(e.column(), 17);
+  EXPECT_EQ(e.message().rfind("the output grid (output_every = 1e-09, t_start = 0, t_end = 1) "
+                              "has 1000000002 samples, more than the bound of 1000000000 of a "
+                              "streamed run",
+                              0),
+            0u)
+      << e.message();
+  EXPECT_TRUE(contains(e.what(), "settings.yaml:5:17: error: the output grid")) << e.what();
+  // the same key under simulate:
+  e = model_error(kOscillator + "simulate:\n  t_end: 2\n  output_every: 1e-9\n");
+  EXPECT_EQ(e.line(), 7);
+  EXPECT_EQ(e.column(), 17);
+  // the default spacing over a long t_end: at t_end's value
+  e = model_error(kOscillator + "simulate: {t_end: 1e300}\n");
+  EXPECT_EQ(e.line(), 5);
+  EXPECT_EQ(e.column(), 19);
+  EXPECT_TRUE(contains(e.message(), "t_end = 1e+300) has 1e+302 samples")) << e.message();
+  // a spacing below the resolution of the sample times
+  e = model_error(kOscillator + "simulate: {t_start: 1e6, t_end: 1000000.001}\n" +
+                  "output: {every: 1e-9}\n");
+  EXPECT_EQ(e.line(), 6);
+  EXPECT_EQ(e.column(), 17);
+  EXPECT_TRUE(contains(e.message(), "below the resolution of the sample times")) << e.message();
+  EXPECT_FALSE(contains(e.what(), "ukdyn::")) << e.what();
+  // a grid a streamed run accepts is accepted (10^8 samples: more than a run kept in memory may
+  // hold, which simulate() refuses when it is run without a sample_sink)
+  const Model m = parse_model(kOscillator + "simulate: {t_end: 1e6}\n");
+  EXPECT_NO_THROW(check_run_settings(m, m.options));
+  EXPECT_THROW(check_settings(m.system, m.options), SettingError);
+}
+
+// the ModelError `ukdyn run` reports for a model whose initial state it cannot start from
+ModelError start_error(const std::string& text) {
+  const Model m = parse_model(text, "start.yaml");
+  try {
+    run_model(m);
+  } catch (const InconsistentInitialState& e) {
+    return locate_run_error(m, e);
+  }
+  ADD_FAILURE() << "the run started:\n" << text;
+  return ModelError("", 0, 0, "");
+}
+
+TEST(RunSettings, InconsistentInitialStatesAreLocatedAtInitialOrTheConstraint) {
+  const std::string two =
+      "coordinates: [x, y]\n"
+      "kinetic_energy: 0.5*(x_dot^2+y_dot^2)\n"
+      "constraints:\n"
+      "  - {name: at0, holonomic: x}\n"
+      "  - {name: at1, holonomic: x - 1}\n";
+  // constraints that contradict each other: at the first one's entry (with or without initial:)
+  for (const std::string& text : {two, two + "initial: {project: true}\n"}) {
+    const ModelError e = start_error(text);
+    EXPECT_EQ(e.line(), 4) << e.what();
+    EXPECT_EQ(e.column(), 5) << e.what();
+    EXPECT_EQ(e.message().rfind("the constraints 'at0', 'at1' contradict each other", 0), 0u)
+        << e.message();
+    EXPECT_EQ(e.hint(), "");
+  }
+  // 1 = 0: at the constraint
+  ModelError e = start_error(
+      "coordinates: [x, y]\nkinetic_energy: 0.5*(x_dot^2+y_dot^2)\nconstraints:\n"
+      "  - {name: other, holonomic: y}\n  - {name: c, holonomic: 1 + 0*x}\n");
+  EXPECT_EQ(e.line(), 5);
+  EXPECT_EQ(e.column(), 5);
+  EXPECT_EQ(e.message().rfind("the constraint 'c' cannot be satisfied", 0), 0u) << e.message();
+  // a state off the rod, not projected: at initial:, with the hint to project
+  const std::string rod =
+      "coordinates: [x, y]\nkinetic_energy: 0.5*(x_dot^2+y_dot^2)\nconstraints:\n"
+      "  - {name: rod, holonomic: x^2 + y^2 - 1}\n";
+  e = start_error(rod + "initial:\n  q: {x: 1.5, y: 0}\n");
+  EXPECT_EQ(e.line(), 6);
+  EXPECT_EQ(e.column(), 3);
+  EXPECT_EQ(e.message().rfind("inconsistent initial conditions at t = 0: constraint 'rod'", 0), 0u)
+      << e.message();
+  EXPECT_EQ(e.hint(), "add `project: true` under `initial:` in the model file");
+  // without initial: (the state the file implies, q = 0): at the constraint it violates
+  e = start_error(rod);
+  EXPECT_EQ(e.line(), 4);
+  EXPECT_EQ(e.column(), 5);
 }
 
 // --- energy drift of a run in which nothing moves ------------------------------------------

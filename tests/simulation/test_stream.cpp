@@ -593,26 +593,36 @@ TEST(Cli, RunStreamsTheCsvWhileItRunsAndAnInterruptLeavesRowsMatchingTheSummary)
 
 TEST(Cli, AGridAboveTheBoundIsRefusedAtOnceNamingTheOption) {
   const fs::path dir = scratch("refused");
-  // every 1e-9 on a 1 s run (reliability report, D7): refused before the run, exit 3
-  {
-    Command run({"run", std::string(UKDYN_TEST_DATA_DIR) + "/stream_every_tiny.yaml", "-o",
-                 (dir / "tiny").string(), "--no-plots"},
-                dir / "tiny.txt");
-    EXPECT_EQ(run.wait(), 3) << run.stderr_text();
+  // every 1e-9 on a 1 s run (reliability report, D7): refused when the model is read, before
+  // the run, exit 3, at output: every's value (line 7, column 17), without "ukdyn::simulate:";
+  // `ukdyn check` refuses it the same way
+  for (const char* command : {"run", "check"}) {
+    std::vector<std::string> args = {command,
+                                     std::string(UKDYN_TEST_DATA_DIR) + "/stream_every_tiny.yaml"};
+    if (std::string(command) == "run") {
+      for (const char* a : {"-o", "", "--no-plots"}) args.emplace_back(a);
+      args[3] = (dir / "tiny").string();
+    }
+    Command run(args, dir / (std::string(command) + "_tiny.txt"));
+    EXPECT_EQ(run.wait(), 3) << command << ": " << run.stderr_text();
     expect_names(run.stderr_text(),
-                 {"stream_every_tiny.yaml: error: ukdyn::simulate: the output grid (output_every = "
+                 {"stream_every_tiny.yaml:7:17: error: the output grid (output_every = "
                   "1e-09, t_start = 0, t_end = 1) has 1000000002 samples, more than the bound of "
                   "1000000000 of a streamed run",
                   "output: every:"});
+    EXPECT_EQ(run.stderr_text().find("ukdyn::"), std::string::npos) << run.stderr_text();
     EXPECT_FALSE(fs::exists(dir / "tiny" / "trajectory.csv"));
   }
-  // --t-end 1e300 (the count overflowed, D7)
+  // --t-end 1e300 (the count overflowed, D7): the flag's fault, exit 2, naming it
   {
     Command run({"run", "--example", "pendulum", "--t-end", "1e300", "-o", (dir / "huge").string(),
                  "--no-plots"},
                 dir / "huge.txt");
-    EXPECT_EQ(run.wait(), 3) << run.stderr_text();
-    expect_names(run.stderr_text(), {"t_end = 1e+300) has 1e+302 samples", "--t-end"});
+    EXPECT_EQ(run.wait(), 2) << run.stderr_text();
+    expect_names(run.stderr_text(),
+                 {"error: --t-end 1e300: the output grid (output_every = 0.01, t_start = 0, "
+                  "t_end = 1e+300) has 1e+302 samples"});
+    EXPECT_EQ(run.stderr_text().find("ukdyn::"), std::string::npos) << run.stderr_text();
   }
 }
 

@@ -12,6 +12,8 @@
 
 #include <stdexcept>
 #include <string>
+#include <utility>
+#include <vector>
 
 namespace ukdyn {
 
@@ -67,14 +69,21 @@ class InconsistentInitialState : public std::invalid_argument {
     kContradictory,     ///< constraints that no state satisfies together: no projection helps
     kProjectionFailed,  ///< project_initial was on, and no consistent state was found nearby
   };
-  /// @param cause why; @param what the full message.
-  InconsistentInitialState(Cause cause, const std::string& what)
-      : std::invalid_argument(what), cause_(cause) {}
+  /// @param cause why; @param what the full message; @param constraints the constraints at
+  /// fault, in declaration order (those that contradict each other, or those violated).
+  InconsistentInitialState(Cause cause, const std::string& what,
+                           std::vector<std::string> constraints = {})
+      : std::invalid_argument(what), cause_(cause), constraints_(std::move(constraints)) {}
   /// Why no consistent initial state was used.
   Cause cause() const { return cause_; }
+  /// The names of the constraints at fault (front ends point at their declarations): for
+  /// kContradictory those that contradict each other, else those the state violates. May be
+  /// empty (the projection did not converge, with no constraint left violated).
+  const std::vector<std::string>& constraints() const { return constraints_; }
 
  private:
   Cause cause_;
+  std::vector<std::string> constraints_;
 };
 
 namespace detail {

@@ -49,6 +49,28 @@ class OverrideError : public ModelError {
   using ModelError::ModelError;
 };
 
+/// A place in a model file: 1-based line and column (0: unknown, e.g. a default).
+struct FilePosition {
+  int line = 0, column = 0;
+  bool known() const { return line > 0; }  ///< given in the file
+};
+
+/// Where a model file gave what a run can refuse, recorded by the reader so that an error found
+/// later (a setting a run cannot use, an inconsistent initial state) is reported at
+/// FILE:LINE:COLUMN like the reader's own (locate_run_error in modelfile/run.hpp).
+struct ModelPositions {
+  FilePosition start;     ///< the model's first key
+  FilePosition simulate;  ///< the `simulate:` mapping
+  FilePosition initial;   ///< the `initial:` section
+  /// the value of each simulation option the file gives, by its name in the options table
+  /// (simulation/options.hpp; an alias under its name): `simulate: NAME`, and `output: every`
+  /// (output_every), `output: at` (output_at)
+  std::map<std::string, FilePosition> settings;
+  /// each constraint's entry under `constraints:`, and each joint's under `joints:` (a joint's
+  /// constraints are named after it), by name
+  std::map<std::string, FilePosition> constraints;
+};
+
 /// A model read from a file: the system and everything needed to run it.
 struct Model {
   std::string name;                          ///< `name:`
@@ -69,6 +91,9 @@ struct Model {
   /// (its poses and joint reactions are reported); null for a model in generalized coordinates
   /// (multibody/multibody.hpp).
   std::shared_ptr<const mb::MultibodyModel> multibody;
+  /// Where the file gave the settings, the initial state and the constraints (all unknown for
+  /// a model not read from text).
+  ModelPositions positions;
 };
 
 /// Reads a model from YAML text. `file` names it in errors; `overrides` replace parameter

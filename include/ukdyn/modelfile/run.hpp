@@ -60,6 +60,27 @@ ModelRun run_model(const Model& model, const SimulationOptions& options,
 /// run_model(model, model.options).
 ModelRun run_model(const Model& model);
 
+/// Checks the settings of a run of `model` with `options` (model.options, or a front end's
+/// changes of them) as `ukdyn run` runs it: check_settings() of a streamed run (its sample
+/// grid held to kMaxStreamedSamples). The model reader calls it on the file's settings, so a
+/// model that `ukdyn check` and load_model() accept is one whose settings `ukdyn run` accepts.
+/// @throws SettingError naming the setting at fault (its text begins "ukdyn::simulate: ").
+void check_run_settings(const Model& model, const SimulationOptions& options);
+
+/// A SettingError of a run of `model` with the file's settings, as a ModelError at the value of
+/// the key that gave the setting (Model::positions: `simulate: KEY`, `output: every` / `at`);
+/// for a setting the file leaves at its default, at what makes the default unusable
+/// (`simulate: t_end` for the sample grid) or the `simulate:` mapping, else the model's start.
+/// The message is user_message(e) (no C++ function name).
+ModelError locate_run_error(const Model& model, const SettingError& e);
+
+/// An InconsistentInitialState of a run of `model`, as a ModelError: a state that violates the
+/// constraints (not projected, or the projection failed) at the `initial:` section, or at the
+/// first constraint it violates when the file has no `initial:`; constraints that contradict
+/// each other at the first one's entry. A hint says to add `project: true` under `initial:`
+/// when projecting may help (Cause::kNotProjected).
+ModelError locate_run_error(const Model& model, const InconsistentInitialState& e);
+
 /// Writes trajectory.csv: the standard columns then run.extra_columns (write_csv of
 /// io/trajectory_files.hpp).
 /// @throws std::runtime_error naming the path if it cannot be written.

@@ -203,8 +203,16 @@ class SettingError : public std::invalid_argument {
 /// step at least 16 ε max(|t_start|, |t_end|) (a step t cannot resolve), output_every (when
 /// > 0) at least step (samples closer than the steps would be interpolated), and the steps the
 /// run takes (Σ over the segments between breakpoints of ⌈length / step⌉) at most max_steps.
-/// @throws SettingError naming the first setting at fault. Cost O(breakpoints).
+/// Last, the sample grid: at most kMaxStreamedSamples samples when options.sample_sink is set
+/// (a streamed run, as `ukdyn run`'s), else at most what kMaxStoredValues allows; and a spacing
+/// output_every above the resolution of the sample times (setting "output_every", or
+/// "output_at" for too many output_at times without it).
+/// @throws SettingError naming the first setting at fault. Cost O(breakpoints + output_at).
 void check_settings(const System& sys, const SimulationOptions& options);
+
+/// The message of an exception that simulate() (or check_settings) threw, for a front end's
+/// user: what() without the leading "ukdyn::simulate: " that names the C++ function.
+std::string user_message(const std::exception& e);
 
 /// The tolerance a run's energy balance is checked against: max(energy_balance_tolerance,
 /// 1000 · rtol) for dopri5, rkf78 and BDF, energy_balance_tolerance for the fixed-step methods.
