@@ -1,10 +1,11 @@
 // Coulomb contacts: the sliding velocity relative to the constraint (docs/friction.md),
 //   v_rel = P (v − u),  P = I − N_k⁺ N_k,
-// and the stick constraint v − u = 0 that the simulation switches on while a contact sticks.
+// and the stick constraint P (v − u) = 0 that the simulation switches on while a contact sticks.
 #include <algorithm>
 #include <cmath>
 #include <memory>
 #include <numeric>
+#include <optional>
 #include <stdexcept>
 #include <utility>
 
@@ -17,19 +18,55 @@ namespace detail {
 
 namespace {
 
-// u and u' on the sliding coordinates
+// u and u' on the sliding coordinates; the normal constraint's scratch and buffers for the
+// tangential projector P at (q, t) and at the shifted points of its rate
 class StickScratch final : public ConstraintScratch {
  public:
-  explicit StickScratch(Index size) : u(VectorXd::Zero(size)), u_dot(VectorXd::Zero(size)) {}
-  VectorXd u, u_dot;
+  StickScratch(Index n, Index size, Index rows, std::unique_ptr<ConstraintScratch> normal_scratch)
+      : u(VectorXd::Zero(size)),
+        u_dot(VectorXd::Zero(size)),
+        w(VectorXd::Zero(size)),
+        g(VectorXd::Zero(size)),
+        rate(VectorXd::Zero(size)),
+        rate2(VectorXd::Zero(size)),
+        shifted(VectorXd::Zero(n)),
+        rows_n(MatrixXd::Zero(std::max<Index>(rows, 1), n)),
+        b_n(VectorXd::Zero(std::max<Index>(rows, 1))),
+        basis(MatrixXd::Zero(std::max<Index>(rows, 1), size)),
+        normal(std::move(normal_scratch)) {}
+  VectorXd u, u_dot;  // (size) surface velocity and its rate
+  VectorXd w;         // (size) v − u
+  VectorXd g;         // (size) scratch: P(s) w
+  VectorXd rate;      // (size) dP/dt w, central difference at h
+  VectorXd rate2;     // (size) the same at 2h
+  VectorXd shifted;   // (n) q + s q'
+  MatrixXd rows_n;    // (rows × n) the normal constraint's rows of A
+  VectorXd b_n;       // (rows) its b (unused)
+  MatrixXd basis;     // (rows × size) orthonormal basis of its rows on the sliding coordinates
+  Index basis_size = 0;
+  std::unique_ptr<ConstraintScratch> normal;
 };
 
-// psi = v − u(q, t) on the sliding coordinates: A = the unit rows of those coordinates,
-// b = u' (so that A q'' = b is d psi/dt = 0)
+// The stick constraint of a Coulomb contact: the contact moves with the surface,
+//   psi = P (v − u) = 0,   P = I − N_k⁺ N_k  (the tangential projector of sliding_velocity),
+// on the sliding coordinates. The normal part of v is the normal constraint's business: for a
+// rheonomic constraint (a rotating wire) the stuck contact moves with the surface's normal
+// motion, which the constraint itself imposes. Rows: P (size rows, rank size − rank N_k: the
+// rows are dependent, which the pseudo-inverse of the Udwadia–Kalaba equation takes). Along the
+// motion d psi/dt = P (v' − u') + P' (v − u); its tangential part is the acceleration form
+//   P q''_c = P u' − P P' (v − u),
+// with P' (v − u) the derivative of s ↦ P(q + s q', t + s)(v − u) at 0 (Richardson-extrapolated
+// central differences: P depends on the rows of A only, which models do not differentiate).
+// Without a normal constraint (none found) P = I: psi = v − u.
 class StickModel final : public ConstraintModel {
  public:
-  StickModel(std::vector<Index> coordinates, SurfaceVelocityFn surface)
-      : coordinates_(std::move(coordinates)), surface_(std::move(surface)) {
+  StickModel(std::vector<Index> coordinates, SurfaceVelocityFn surface,
+             std::optional<Constraint> normal)
+      : coordinates_(std::move(coordinates)),
+        surface_(std::move(surface)),
+        normal_constraint_(std::move(normal)),
+        normal_(normal_constraint_ ? &normal_constraint_->model() : nullptr),
+        normal_rows_(normal_constraint_ ? normal_constraint_->rows() : 0) {
     columns_ = coordinates_;
     std::sort(columns_.begin(), columns_.end());
     position_.resize(coordinates_.size());
@@ -39,48 +76,141 @@ class StickModel final : public ConstraintModel {
     }
   }
 
-  std::unique_ptr<ConstraintScratch> make_scratch(Index) const override {
-    return std::make_unique<StickScratch>(Index(coordinates_.size()));
+  std::unique_ptr<ConstraintScratch> make_scratch(Index n) const override {
+    // the normal constraint's own scratch (not the workspace's shared one: it is evaluated here
+    // at shifted points, which must not disturb a shared cache)
+    return std::make_unique<StickScratch>(n, Index(coordinates_.size()), normal_rows_,
+                                          normal_ ? normal_->make_scratch(n) : nullptr);
   }
   const std::vector<Index>& columns() const override { return columns_; }
 
   void acceleration_form_local(const VectorXd& q, const VectorXd& qd, double t,
                                ConstraintScratch* scratch, Eigen::Ref<MatrixXd> A_local,
                                Eigen::Ref<VectorXd> b) const override {
-    A_local.setZero();
-    for (std::size_t r = 0; r < coordinates_.size(); ++r) A_local(Index(r), position_[r]) = 1.0;
-    if (!surface_) {
-      b.setZero();
-      return;
-    }
     auto& s = static_cast<StickScratch&>(*scratch);
-    surface_(q, qd, t, s.u, s.u_dot);
-    b = s.u_dot;
+    const Index nc = Index(coordinates_.size());
+    // w = v − u, and u'
+    for (Index r = 0; r < nc; ++r) s.w[r] = qd[coordinates_[std::size_t(r)]];
+    if (surface_) {
+      surface_(q, qd, t, s.u, s.u_dot);
+      s.w -= s.u;
+    } else {
+      s.u_dot.setZero();
+    }
+    // the rate P' w, then P at (q, t) itself (its basis stays in the scratch)
+    s.rate.setZero();
+    if (normal_) {
+      double h = 1e-3;
+      for (int pass = 0; pass < 2; ++pass) {
+        difference(q, qd, t, h, s, s.rate);
+        difference(q, qd, t, 2.0 * h, s, s.rate2);
+        s.rate = (4.0 * s.rate - s.rate2) / 3.0;
+        // the basis turns at about |P' w| / |w|: keep h well below its time scale
+        const double w_norm = s.w.norm(), turn = s.rate.norm();
+        if (!(turn * h > 5e-3 * w_norm)) break;
+        h = 5e-3 * w_norm / turn;
+      }
+      basis_at(q, qd, t, 0.0, s);
+    }
+    // A_local = P in the rows' coordinate order
+    A_local.setZero();
+    for (Index r = 0; r < nc; ++r) {
+      A_local(r, position_[std::size_t(r)]) = 1.0;
+      for (Index j = 0; j < s.basis_size; ++j) {
+        for (Index c = 0; c < nc; ++c) {
+          A_local(r, position_[std::size_t(c)]) -= s.basis(j, r) * s.basis(j, c);
+        }
+      }
+    }
+    // b = P (u' − P' w)
+    b = s.u_dot - s.rate;
+    project(s, b);
   }
 
   void violation(const VectorXd& q, const VectorXd& qd, double t, ConstraintScratch* scratch,
                  Eigen::Ref<VectorXd> position, Eigen::Ref<VectorXd> velocity) const override {
+    auto& s = static_cast<StickScratch&>(*scratch);
     position.setZero();
     for (std::size_t r = 0; r < coordinates_.size(); ++r) velocity[Index(r)] = qd[coordinates_[r]];
-    if (!surface_) return;
-    auto& s = static_cast<StickScratch&>(*scratch);
-    surface_(q, qd, t, s.u, s.u_dot);
-    velocity -= s.u;
+    if (surface_) {
+      surface_(q, qd, t, s.u, s.u_dot);
+      velocity -= s.u;
+    }
+    if (normal_) {
+      basis_at(q, qd, t, 0.0, s);
+      project(s, velocity);
+    }
   }
 
  private:
+  // the orthonormal basis of the normal rows on the sliding coordinates at (q + step q', t + step)
+  // into s.basis (Gram–Schmidt twice, as sliding_velocity)
+  void basis_at(const VectorXd& q, const VectorXd& qd, double t, double step,
+                StickScratch& s) const {
+    if (step == 0.0) {
+      normal_->acceleration_form(q, qd, t, s.normal.get(), s.rows_n, s.b_n.head(normal_rows_));
+    } else {
+      s.shifted = q + step * qd;
+      normal_->acceleration_form(s.shifted, qd, t + step, s.normal.get(), s.rows_n,
+                                 s.b_n.head(normal_rows_));
+    }
+    const Index nc = Index(coordinates_.size());
+    Index basis = 0;
+    for (Index i = 0; i < normal_rows_; ++i) {
+      auto e = s.basis.row(basis);
+      for (Index r = 0; r < nc; ++r) e[r] = s.rows_n(i, coordinates_[std::size_t(r)]);
+      const double norm0 = e.norm();
+      if (!(norm0 > 0.0)) continue;
+      for (int pass = 0; pass < 2; ++pass) {
+        for (Index j = 0; j < basis; ++j) e -= e.dot(s.basis.row(j)) * s.basis.row(j);
+      }
+      const double norm = e.norm();
+      if (norm <= 1e-10 * norm0) continue;
+      e /= norm;
+      ++basis;
+    }
+    s.basis_size = basis;
+  }
+
+  // v ← P v with the basis in s
+  static void project(const StickScratch& s, Eigen::Ref<VectorXd> v) {
+    for (Index j = 0; j < s.basis_size; ++j) {
+      const auto e = s.basis.row(j);
+      v -= v.dot(e) * e.transpose();
+    }
+  }
+
+  // out = (P(h) w − P(−h) w) / (2h), P(s) at (q + s q', t + s)
+  void difference(const VectorXd& q, const VectorXd& qd, double t, double h, StickScratch& s,
+                  VectorXd& out) const {
+    basis_at(q, qd, t, h, s);
+    s.g = s.w;
+    project(s, s.g);
+    out = s.g;
+    basis_at(q, qd, t, -h, s);
+    s.g = s.w;
+    project(s, s.g);
+    out -= s.g;
+    out /= 2.0 * h;
+  }
+
   std::vector<Index> coordinates_;  // in the friction's order (the rows)
   std::vector<Index> columns_;      // sorted
   std::vector<Index> position_;     // row r's coordinate within columns_
   SurfaceVelocityFn surface_;
+  std::optional<Constraint> normal_constraint_;  // the contact's normal constraint, if known
+  const ConstraintModel* normal_;                // its model, or null
+  Index normal_rows_;
 };
 
 }  // namespace
 
 Constraint stick_constraint(const std::string& name, const std::vector<Index>& coordinates,
-                            const SurfaceVelocityFn& surface) {
+                            const SurfaceVelocityFn& surface, const Constraint* normal) {
+  std::optional<Constraint> copy;
+  if (normal != nullptr) copy = *normal;
   return Constraint(name, ConstraintKind::kNonholonomic, Index(coordinates.size()),
-                    std::make_shared<const StickModel>(coordinates, surface));
+                    std::make_shared<const StickModel>(coordinates, surface, std::move(copy)));
 }
 
 Index sliding_velocity(const System& sys, Workspace& ws, Index c, const VectorXd& q,

@@ -268,7 +268,7 @@ System SystemBuilder::build() const {
                   : ForceScratchFn([](const VectorXd&, const VectorXd&, double, CallableScratch*,
                                       Eigen::Ref<VectorXd> Q) { Q.setZero(); });
   s.scratch_ = scratch_;
-  // each Coulomb contact brings its stick constraint v = 0, inactive unless switched on
+  // each Coulomb contact brings its stick constraint P (v − u) = 0, inactive unless switched on
   std::vector<Constraint> all = constraints_;
   for (const auto& f : nonideal_) {
     const CoulombFriction* spec = f.coulomb();
@@ -284,8 +284,13 @@ System SystemBuilder::build() const {
                                     " is out of range [0, " + format_number(n_) + ")");
       }
     }
+    // its normal constraint, by name (binding below reports one that does not exist)
+    const Constraint* normal = nullptr;
+    for (const auto& c : constraints_) {
+      if (c.name() == spec->constraint) normal = &c;
+    }
     Constraint stick =
-        detail::stick_constraint("stick." + f.name(), coords, spec->surface_velocity);
+        detail::stick_constraint("stick." + f.name(), coords, spec->surface_velocity, normal);
     const double never = std::numeric_limits<double>::infinity();
     stick.active_between(never, never);
     all.push_back(stick);

@@ -95,10 +95,13 @@ inline void copy_constraint_rows(const System& sys, const Workspace& ws, Index k
                                  Eigen::Ref<MatrixXd> out) {
   ws.engine->copy_constraint_rows(sys, ws, k, out);
 }
-// The stick constraint of a Coulomb contact: psi = q'_c − u(q, t) on `coordinates` (nonholonomic,
-// local columns), inactive until the simulation switches it on (core/coulomb_contact.cpp).
+// The stick constraint of a Coulomb contact: psi = P (q'_c − u(q, t)) on `coordinates`, P the
+// tangential projector of the normal constraint `normal` (sliding_velocity; P = I when normal is
+// null), nonholonomic, local columns, inactive until the simulation switches it on
+// (core/coulomb_contact.cpp). The stuck contact thus moves with the normal motion that a
+// rheonomic normal constraint imposes.
 Constraint stick_constraint(const std::string& name, const std::vector<Index>& coordinates,
-                            const SurfaceVelocityFn& surface);
+                            const SurfaceVelocityFn& surface, const Constraint* normal);
 // Contact c's sliding velocity relative to its constraint, v_rel = P (v − u) (see
 // CoulombFriction), into ws.sliding.col(c).head(|coordinates|). With rows_assembled, N_k is read
 // from the rows of A that the workspace last assembled at (q, t); else constraint k is evaluated

@@ -405,13 +405,17 @@ class Run {
         // was not yet tolerance-level); else the friction turns against the new motion, at
         // its full magnitude
         if (try_stick(c, t, x, false)) return Status::kOk;
-        if (!start_sliding(c, t, x) && traj_.stats.notes.size() < kMaxNotes) {
-          traj_.stats.notes.push_back(
-              "t = " + format(t) + ": contact '" +
-              sys_.nonideal_name(sys_.friction_contacts()[c].force) +
-              "' comes to rest, but its stick constraint (v - u = 0) does not fit the "
-              "constraints there: the regularized law holds it (creeping at about the "
-              "regularization velocity); see docs/friction.md, Limits");
+        if (!start_sliding(c, t, x)) {
+          // friction could hold the contact, but it cannot stick: the regularized law would
+          // only creep towards rest (stiff, millions of steps); stop with the reason instead
+          failure_ = "t = " + format(t) + ": contact '" +
+                     sys_.nonideal_name(sys_.friction_contacts()[c].force) +
+                     "' comes to rest where friction could hold it, but it cannot stick (" +
+                     (refusal_.empty() ? std::string("its stick was refused") : refusal_) +
+                     "); the run stops here rather than creep under the regularized law "
+                     "(docs/friction.md, Limits)";
+          apply_contact_modes();
+          return Status::kIntegratorFailure;
         }
         apply_contact_modes();
         return Status::kOk;
@@ -701,6 +705,7 @@ class Run {
     mode_[c] = ContactMode::kSticking;
     apply_contact_modes();
     auto refuse = [&](const std::string& why) {
+      refusal_ = why;
       mode_[c] = ContactMode::kSliding;
       apply_contact_modes();
       if (report && !why.empty()) {
@@ -718,9 +723,8 @@ class Run {
     const ProjectionResult rv = project_velocities(sys_, ws_, q_, qd_, t, all);
     if (!evaluated || rv.status != Status::kOk || !rv.converged) {
       return refuse(
-          "the velocities cannot be projected onto the stick rows (a constraint that "
-          "moves along its normal? give the surface's motion as surface_velocity, "
-          "docs/friction.md)");
+          "the velocities cannot be projected onto the stick rows (its tangential motion is "
+          "fixed by the other constraints?)");
     }
     const double removed = T_before - detail::kinetic_energy(ws_, qd_);
     const double allowed = std::max(o_.rtol, 1e-14) * std::max(peak_kinetic_, T_before);
@@ -832,6 +836,7 @@ class Run {
   std::vector<double> event_x_ = std::vector<double>(sample_.size());  // dense state
   Index switching_ = -1;  // the contact of the last event found
   std::string failure_;
+  std::string refusal_;      // why the last refused stick was refused (empty: friction cannot hold)
   ProgressReport progress_;  // what the last progress report said
   // a requested stop (SimulationOptions::should_stop): asked for; accepted steps since, waiting
   // for a sample due inside the step; the sample times and the first one not recorded yet

@@ -135,7 +135,7 @@ using SurfaceVelocityFn = std::function<void(const VectorXd& q, const VectorXd& 
 /// |v_rel| <= 100 eps (the speed at which stops are located) and then follows
 /// −mu N v_rel/|v_rel| exactly.
 ///
-/// Sticking: the system also gets a nonholonomic constraint "stick.<name>", v − u = 0 on
+/// Sticking: the system also gets a nonholonomic constraint "stick.<name>", P (v − u) = 0 on
 /// `coordinates`, inactive unless the simulation switches it on. simulate() locates the instant
 /// the sliding speed falls to 100 eps (an event on the integrator's dense output) and sticks
 /// there only when sticking is admissible: the velocity projection onto the stick rows removes at
@@ -145,7 +145,11 @@ using SurfaceVelocityFn = std::function<void(const VectorXd& q, const VectorXd& 
 /// within mu_static N. Otherwise the contact slides through v_rel = 0 (a second event, where the
 /// friction reverses). A sticking contact slips again when its holding force exceeds
 /// mu_static N. No regularization enters the stick phase. A single forward_dynamics call always
-/// sees the sliding law.
+/// sees the sliding law. P is the tangential projector of v_rel: a stuck contact on a rheonomic
+/// constraint moves with the surface's normal motion (a bead stuck on a rotating wire), which
+/// the constraint imposes. A contact that comes to rest where friction could hold it but that
+/// cannot stick stops the run (Status::kIntegratorFailure, with the reason) instead of creeping
+/// under the regularized law.
 struct CoulombFriction {
   std::string constraint;  ///< name of the constraint whose share gives N
   double mu = 0.0;         ///< kinetic friction coefficient, >= 0
