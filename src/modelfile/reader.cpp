@@ -788,6 +788,21 @@ void Reader::read_initial(const YAML::Node& root, Model& model) {
   if (!init) return;
   if (!init.IsMap()) fail(init, "initial must be a mapping with q, q_dot and project");
   positions_.initial = position(init);
+  // a coordinate's value written straight under initial: (initial: {x: 1}) would otherwise be
+  // ignored: every key is checked, and a coordinate's name gets a hint to its place
+  for (const auto& kv : init) {
+    const std::string key = kv.first.Scalar();
+    if (key == "q" || key == "q_dot" || key == "project") continue;
+    const std::string base = key.size() > 4 && key.compare(key.size() - 4, 4, "_dot") == 0
+                                 ? key.substr(0, key.size() - 4)
+                                 : key;
+    const bool coordinate_name =
+        std::find(coordinates_.begin(), coordinates_.end(), base) != coordinates_.end();
+    fail(kv.first, "unknown key '" + key + "' in initial",
+         coordinate_name ? "positions go under q and velocities under q_dot: initial: {q: {" +
+                               base + ": 1}, q_dot: {" + base + ": 0}}"
+                         : "initial has q, q_dot and project");
+  }
   auto read_map = [&](const char* key, VectorXd& v) {
     const YAML::Node m = init[key];
     if (!m) return;
@@ -799,7 +814,12 @@ void Reader::read_initial(const YAML::Node& root, Model& model) {
   };
   read_map("q", model.q0);
   read_map("q_dot", model.qd0);
-  if (init["project"]) model.project_initial = init["project"].as<bool>(false);
+  if (const YAML::Node p = init["project"]) {
+    bool value = false;
+    if (!p.IsScalar() || !YAML::convert<bool>::decode(p, value))
+      fail(p, "initial project must be true or false", "project: true");
+    model.project_initial = value;
+  }
 }
 
 void Reader::read_simulate(const YAML::Node& root, Model& model) {

@@ -271,4 +271,28 @@ TEST(ModelDiagnoses, FourBarLockUpIsReportedAsLockUp) {
   EXPECT_TRUE(contains(s.message, "'drive'")) << s.message;
 }
 
+// ---- initial: every key is checked (a coordinate written straight under it was ignored) ----
+
+TEST(ModelDiagnoses, InitialKeysAreCheckedAndCoordinatesPointedToQ) {
+  const std::string head = "coordinates: [x, th]\nkinetic_energy: 0.5*x_dot^2 + 0.5*th_dot^2\n";
+  std::string e = error_of(head + "initial: {q: {x: 0}, th: 1}\n");
+  EXPECT_TRUE(contains(e, "m.yaml:3:22: error: unknown key 'th' in initial")) << e;
+  EXPECT_TRUE(contains(e, "initial: {q: {th: 1}, q_dot: {th: 0}}")) << e;
+  e = error_of(head + "initial: {th_dot: 1}\n");
+  EXPECT_TRUE(contains(e, "m.yaml:3:11: error: unknown key 'th_dot' in initial")) << e;
+  EXPECT_TRUE(contains(e, "q: {th: 1}")) << e;
+  e = error_of(head + "initial: {qdot: {x: 1}}\n");
+  EXPECT_TRUE(contains(e, "unknown key 'qdot' in initial (hint: initial has q, q_dot and project)"))
+      << e;
+  // project is a boolean, not any word
+  e = error_of(head + "initial: {q: {x: 0}, project: maybe}\n");
+  EXPECT_TRUE(contains(e, "m.yaml:3:31: error: initial project must be true or false")) << e;
+  EXPECT_EQ(error_of(head + "initial: {q: {x: 0.5}, q_dot: {th: 2}, project: false}\n"), "");
+  const Model m =
+      parse_model(head + "initial: {q: {x: 0.5}, q_dot: {th: 2}, project: false}\n", "m.yaml");
+  EXPECT_EQ(m.q0[0], 0.5);
+  EXPECT_EQ(m.qd0[1], 2.0);
+  EXPECT_FALSE(m.project_initial);
+}
+
 }  // namespace ukdyn
