@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include <ukdyn/io/provenance.hpp>
 #include <ukdyn/modelfile/model.hpp>
 
 namespace ukdyn::cli {
@@ -65,7 +66,27 @@ struct RunArguments {
   /// the model's simulate: setting of that name
   std::vector<FlagSetting> settings;
   bool plots = true;  ///< false with --no-plots
+  /// --format: the trajectory's files, "csv" (trajectory.csv) and/or "hdf5" (trajectory.h5)
+  std::vector<std::string> formats = {"csv"};
+  /// --from-summary FILE: the summary.json of an earlier run to make again (its model, parameter
+  /// overrides and settings; flags and --set given as well apply on top)
+  std::string from_summary;
+  std::vector<std::string> arguments;  ///< the command line, for summary.json's provenance
 };
+
+/// Fills args from an earlier run's summary.json (args.from_summary): the model file (checked
+/// unchanged by its SHA-256) or example, the overridden parameters as --set, every setting as a
+/// flag; what args already has applies after them. @throws UsageError naming the file and what
+/// is wrong with it.
+void apply_summary(RunArguments& args);
+
+/// The text of the model `source` names (the file's bytes, or the example's text).
+/// @throws UsageError when the file cannot be read or the example does not exist.
+std::string source_text(const ModelSource& source);
+
+/// What a run of `model` from `source` is made from (summary.json's provenance).
+RunProvenance provenance_of(const ModelSource& source, const Model& model,
+                            const std::vector<std::string>& arguments);
 
 /// `ukdyn run`: simulate, write trajectory.csv, summary.json and the plots.
 int run_command(const RunArguments& args);

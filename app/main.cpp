@@ -100,6 +100,17 @@ int main(int argc, char** argv) {
                                                   " false (simulate: " + info.name + ": false)"));
     }
   }
+  run_cmd
+      ->add_option("--format", run.formats,
+                   "the trajectory's files: csv (trajectory.csv), hdf5 (trajectory.h5, the same "
+                   "columns with summary.json as attributes), or csv,hdf5 (default csv)")
+      ->delimiter(',')
+      ->type_name("LIST");
+  run_cmd
+      ->add_option("--from-summary", run.from_summary,
+                   "make an earlier run again from its summary.json: the same model (checked "
+                   "unchanged), parameter overrides and settings; --set and flags apply on top")
+      ->type_name("FILE");
   run_cmd->add_flag("--no-plots", no_plots,
                     "write no plots (plots need /usr/bin/python3 "
                     "with matplotlib, or $UKDYN_PYTHON)");
@@ -148,6 +159,7 @@ int main(int argc, char** argv) {
         }
       }
       run.plots = !no_plots;
+      run.arguments.assign(argv, argv + argc);
       return run_command(run);
     }
     if (check_cmd->parsed()) return check_command(check);

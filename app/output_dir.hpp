@@ -11,10 +11,9 @@ namespace ukdyn::cli {
 
 /// The files `ukdyn run` writes into its directory, in the order it writes them (the plots only
 /// those that apply to the model).
-inline constexpr std::array<const char*, 9> kRunOutputs = {
-    "trajectory.csv",        "summary.json",  "coordinates.png",
-    "constraint_forces.png", "violation.png", "energy.png",
-    "control.png",           "bodies.png",    "outputs.png"};
+inline constexpr std::array<const char*, 10> kRunOutputs = {
+    "trajectory.csv", "summary.json", "coordinates.png", "constraint_forces.png", "violation.png",
+    "energy.png",     "control.png",  "bodies.png",      "outputs.png",           "trajectory.h5"};
 
 /// Another run holds the directory: the message names it and the other run's pid.
 class DirectoryBusy : public std::runtime_error {

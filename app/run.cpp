@@ -167,8 +167,22 @@ ProgressBar::Clock::duration progress_interval() {
 
 }  // namespace
 
-int run_command(const RunArguments& args) {
+int run_command(const RunArguments& given) {
+  RunArguments args = given;
+  if (!args.from_summary.empty()) apply_summary(args);
+  bool want_csv = false, want_hdf5 = false;
+  for (const std::string& f : args.formats) {
+    if (f == "csv") {
+      want_csv = true;
+    } else if (f == "hdf5") {
+      want_hdf5 = true;
+    } else {
+      throw UsageError("--format " + f + ": the formats are csv and hdf5 (--format csv,hdf5)");
+    }
+  }
+  if (!want_csv && !want_hdf5) throw UsageError("--format: give csv, hdf5 or both");
   Model model = load_source(args.source);
+  const RunProvenance provenance = provenance_of(args.source, model, args.arguments);
 
   // the model's settings, with the command line's
   SimulationOptions options = model.options;
@@ -214,17 +228,37 @@ int run_command(const RunArguments& args) {
   // trajectory.csv streams to its temporary while the run goes (memory does not grow with
   // the run's length): created with the first samples — a run that cannot start leaves the
   // previous run's files — after removing the previous run's files (each directory holds one
-  // run's files); renamed when the run has ended, however it ended
-  std::vector<fs::path> files = {dir / kRunOutputs[0], dir / kRunOutputs[1]};
+  // run's files); renamed when the run has ended, however it ended. trajectory.h5 (--format
+  // hdf5) gathers the same columns in memory and is written after the run.
+  const fs::path csv_path = dir / kRunOutputs[0], summary_path = dir / kRunOutputs[1];
+  const fs::path hdf5_path = dir / "trajectory.h5";
+  std::vector<fs::path> files;
   std::optional<CsvWriter> csv;
-  auto start_csv = [&](const ModelRun& first) {
+  std::vector<CsvColumn> table;
+  Index rows = 0;
+  bool started = false;
+  auto start = [&](const ModelRun& first) {
     out->remove_previous_outputs();
     warn_duplicate_columns(first);
-    csv.emplace(files[0].string());
+    if (want_csv) csv.emplace(csv_path.string());
+    started = true;
   };
   auto write_rows = [&](const ModelRun& chunk) {
-    if (!csv) start_csv(chunk);
-    csv->append(chunk.trajectory, chunk.extra_columns);
+    if (!started) start(chunk);
+    if (csv) csv->append(chunk.trajectory, chunk.extra_columns);
+    if (want_hdf5) {
+      std::vector<CsvColumn> part = csv_table(chunk.trajectory);
+      part.insert(part.end(), chunk.extra_columns.begin(), chunk.extra_columns.end());
+      if (table.empty()) {
+        table = std::move(part);
+      } else {
+        for (std::size_t c = 0; c < table.size() && c < part.size(); ++c) {
+          table[c].values.insert(table[c].values.end(), part[c].values.begin(),
+                                 part[c].values.end());
+        }
+      }
+    }
+    rows += chunk.trajectory.samples();
   };
 
   // simulate, with a progress bar on a terminal
@@ -270,21 +304,28 @@ int run_command(const RunArguments& args) {
   // files: each is written under a temporary name and renamed when complete, trajectory.csv
   // first (just its header when the run recorded no sample), summary.json second (its
   // presence says that trajectory.csv is complete), the plots last
-  if (!csv) {
-    start_csv(run);
-    csv->append(run.trajectory, run.extra_columns);
+  if (!started) write_rows(run);
+  if (csv) {
+    csv->commit();
+    files.push_back(csv_path);
   }
-  csv->commit();
-  write_summary_json(run.trajectory, options, files[1].string());
-  if (args.plots) {
-    for (const auto& f : make_plots(files[0], dir)) files.push_back(f);
+  const ControlStatistics* control = run.controlled ? &run.control : nullptr;
+  if (want_hdf5) {
+    write_table_hdf5(hdf5_path.string(), table,
+                     summary_json(run.trajectory, options, &provenance, control));
+    files.push_back(hdf5_path);
+  }
+  write_summary_json(run.trajectory, options, summary_path.string(), provenance, control);
+  files.push_back(summary_path);
+  if (args.plots && csv) {
+    for (const auto& f : make_plots(csv_path, dir)) files.push_back(f);
   }
 
   // what happened
   const RunStatistics& s = run.trajectory.stats;
   std::printf("  %lld samples to t = %g s: %ld steps (%ld rejected), %ld evaluations, %.3g s\n",
-              static_cast<long long>(csv->rows()), s.t_reached, s.steps, s.rejected_steps,
-              s.evaluations, s.wall_time);
+              static_cast<long long>(rows), s.t_reached, s.steps, s.rejected_steps, s.evaluations,
+              s.wall_time);
   if (s.stiff_switches > 0) {
     std::printf("  stiff from t = %g s: %s switched to bdf %ld time%s (%ld of the steps by bdf)\n",
                 s.stiff_switch_time, to_string(options.integrator), s.stiff_switches,

@@ -2,9 +2,18 @@
 #include <algorithm>
 #include <charconv>
 #include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <sstream>
 #include <string>
 #include <string_view>
 #include <system_error>
+
+#include <nlohmann/json.hpp>
+
+#include <ukdyn/core/format.hpp>
+#include <ukdyn/simulation/options.hpp>
 
 #include "commands.hpp"
 #include "embedded.hpp"
@@ -76,6 +85,106 @@ Model load_source(const ModelSource& source) {
   }
   throw UsageError("no example called '" + source.example + "'; the examples are " +
                    example_names());
+}
+
+std::string source_text(const ModelSource& source) {
+  if (!source.path.empty()) {
+    std::ifstream in(source.path, std::ios::binary);
+    if (!in) throw UsageError("cannot read the model file '" + source.path + "'");
+    return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+  }
+  for (const auto& f : example_models()) {
+    if (source.example == f.name) return f.text;
+  }
+  throw UsageError("no example called '" + source.example + "'; the examples are " +
+                   example_names());
+}
+
+RunProvenance provenance_of(const ModelSource& source, const Model& model,
+                            const std::vector<std::string>& arguments) {
+  RunProvenance p;
+  p.model_name = model.name;
+  if (!source.path.empty()) {
+    std::error_code ec;
+    const auto absolute = std::filesystem::absolute(source.path, ec);
+    p.model_file = ec ? source.path : absolute.lexically_normal().string();
+  }
+  p.example = source.example;
+  p.model_sha256 = sha256_hex(source_text(source));
+  const auto overrides = parse_overrides(source.set);
+  for (const auto& [name, value] : model.parameters) {
+    p.parameters.push_back({name, value, overrides.count(name) > 0});
+  }
+  p.arguments = arguments;
+  return p;
+}
+
+namespace {
+// the text of a setting's value as its flag would take it
+std::string setting_text(const nlohmann::json& v) {
+  if (v.is_boolean()) return v.get<bool>() ? "true" : "false";
+  if (v.is_string()) return v.get<std::string>();
+  if (v.is_number_integer()) return std::to_string(v.get<long long>());
+  if (v.is_number()) return format_number(v.get<double>());
+  std::string text;
+  for (const auto& x : v) text += (text.empty() ? "" : ",") + format_number(x.get<double>());
+  return text;
+}
+}  // namespace
+
+void apply_summary(RunArguments& args) {
+  const std::string& file = args.from_summary;
+  if (!args.source.path.empty() || !args.source.example.empty()) {
+    throw UsageError("--from-summary " + file +
+                     " names the model itself: give no model file or --example with it");
+  }
+  std::ifstream in(file);
+  if (!in) throw UsageError("--from-summary: cannot read '" + file + "'");
+  const nlohmann::json j = nlohmann::json::parse(in, nullptr, false);
+  const auto bad = [&](const std::string& what) {
+    return UsageError("--from-summary " + file + ": " + what);
+  };
+  if (j.is_discarded() || !j.is_object()) throw bad("not a JSON summary of a ukdyn run");
+  const auto it = j.find("provenance");
+  if (it == j.end() || !it->is_object() || !it->contains("model_sha256")) {
+    throw bad("it records no model (written by a ukdyn before 0.1's provenance)");
+  }
+  const nlohmann::json& p = *it;
+  try {
+    // the model, unchanged since that run
+    ModelSource source;
+    if (p.contains("example") && p["example"].is_string()) {
+      source.example = p["example"].get<std::string>();
+    } else {
+      source.path = p.at("model_file").get<std::string>();
+    }
+    const std::string hash = sha256_hex(source_text(source));
+    if (hash != p.at("model_sha256").get<std::string>()) {
+      throw bad("the model " + (source.path.empty() ? "example " + source.example : source.path) +
+                " has changed since that run (SHA-256 " + hash + ", the run's " +
+                p.at("model_sha256").get<std::string>() +
+                "): run the model itself to simulate the new version");
+    }
+    // its overrides, then those given now
+    std::vector<std::string> set;
+    for (const auto& name : p.at("overridden")) {
+      const std::string key = name.get<std::string>();
+      set.push_back(key + "=" + format_number(p.at("parameters").at(key).get<double>()));
+    }
+    set.insert(set.end(), args.source.set.begin(), args.source.set.end());
+    source.set = std::move(set);
+    // every setting, then the flags given now
+    std::vector<FlagSetting> settings;
+    for (const auto& [key, value] : j.at("options").items()) {
+      if (!find_option(key) || value.is_null() || value.is_object()) continue;
+      settings.push_back({key, "--from-summary (" + key + ")", setting_text(value)});
+    }
+    settings.insert(settings.end(), args.settings.begin(), args.settings.end());
+    args.settings = std::move(settings);
+    args.source = std::move(source);
+  } catch (const nlohmann::json::exception& e) {
+    throw bad(std::string("malformed provenance or options (") + e.what() + ")");
+  }
 }
 
 int examples_command() {

@@ -6,6 +6,7 @@
 #include "common.hpp"
 #include "embedded.hpp"  // app/embedded.hpp: the example models, embedded at build time
 #include "ukdyn/core/format.hpp"
+#include "ukdyn/io/trajectory_files.hpp"
 
 namespace ukdyn::python {
 namespace {
@@ -180,6 +181,41 @@ initial_violations, mass_positive_definite, mass_singular, problems, ok.)doc")
       },
       py::arg("name"), py::arg("overrides"),
       "The built-in example `name`. Raises ValueError listing the examples for another name.");
+  m.def(
+      "_write_table_hdf5",
+      [](const std::string& path, const std::vector<std::string>& names,
+         const std::vector<std::vector<double>>& values, const std::string& summary) {
+        if (names.size() != values.size())
+          throw std::invalid_argument("_write_table_hdf5: names and columns differ in number");
+        std::vector<CsvColumn> columns;
+        for (std::size_t c = 0; c < names.size(); ++c) columns.push_back({names[c], values[c]});
+        py::gil_scoped_release release;
+        write_table_hdf5(path, columns, summary);
+      },
+      py::arg("path"), py::arg("names"), py::arg("columns"), py::arg("summary"),
+      "write_table_hdf5(path, columns, summary) (io/trajectory_files.hpp).");
+  m.def(
+      "_read_table_hdf5",
+      [](const std::string& path) {
+        std::vector<CsvColumn> columns;
+        std::string summary;
+        {
+          py::gil_scoped_release release;
+          columns = read_table_hdf5(path);
+          try {
+            summary = read_hdf5_string_attribute(path, "summary");
+          } catch (const std::runtime_error&) {
+            summary.clear();  // a table written without a summary
+          }
+        }
+        py::list names, values;
+        for (auto& c : columns) {
+          names.append(c.name);
+          values.append(py::array_t<double>(py::ssize_t(c.values.size()), c.values.data()));
+        }
+        return py::make_tuple(names, values, summary);
+      },
+      py::arg("path"), "(names, columns, summary text) of a write_table_hdf5 file.");
   m.def(
       "examples",
       []() {

@@ -36,13 +36,26 @@ from .symbolic import from_sympy, sympy_to_yaml, velocities
 
 __version__ = "0.1.0"
 
+
+def read_hdf5(path: str) -> "tuple[Result, dict]":
+    """Reads a ``trajectory.h5`` (``ukdyn run --format hdf5``, :meth:`Result.to_hdf5`): its
+    columns as a :class:`Result` and its summary (``summary.json``'s content) as a dict."""
+    import json as _json
+
+    names, columns, summary_text = _ukdyn._read_table_hdf5(os.fspath(path))
+    summary = _json.loads(summary_text) if summary_text else {}
+    coordinates = [n for n in names if n + "_dot" in names and n + "_ddot" in names]
+    stats = {k: v for k, v in summary.items() if not isinstance(v, (dict, list))}
+    return Result(names, columns, stats, summary.get("control"), coordinates), summary
+
+
 __all__ = [
     "ControlSolution", "ControlSolver", "Controller", "EnergyBalanceWarning",
     "InconsistentInitialState", "Interrupted",
     "Model", "ModelError", "Result",
     "Solution", "SolveError", "Solver", "System", "constraint", "controller", "coulomb",
     "example_text", "examples", "from_callables", "from_sympy", "load", "nonideal", "options",
-    "parse", "simulate", "simulation_options", "sympy_to_yaml", "velocities", "viscous",
+    "parse", "read_hdf5", "simulate", "simulation_options", "sympy_to_yaml", "velocities", "viscous",
 ]
 
 

@@ -11,6 +11,7 @@ bodies' poses of multibody models, and the model's output expressions.
 
 from __future__ import annotations
 
+import json
 import math
 import os
 from typing import Any, Dict, Iterator, List, Optional, Sequence
@@ -214,6 +215,32 @@ class Result:
         finally:
             if os.path.exists(temporary):
                 os.remove(temporary)
+
+    def to_hdf5(self, path: str) -> None:
+        """Writes the columns to HDF5 as ``ukdyn run --format hdf5`` writes ``trajectory.h5``:
+        one 1-D float64 dataset per column, named as in the CSV (a ``/`` written ``|``, a name
+        met twice suffixed ``#2``), the names in order as the root attribute ``columns``, and the
+        statistics (with ``control`` for a controlled run) as the JSON attribute ``summary`` and
+        one attribute per number or string. Whole or not at all, like ``to_csv``. Read it back
+        with :func:`ukdyn.read_hdf5`."""
+        from . import _ukdyn, __version__
+
+        def plain(v: Any) -> Any:
+            if isinstance(v, float) and not math.isfinite(v):
+                return None  # JSON has no NaN or infinity
+            if isinstance(v, dict):
+                return {k: plain(x) for k, x in v.items()}
+            if isinstance(v, (list, tuple)):
+                return [plain(x) for x in v]
+            return v
+
+        summary = dict(plain(self.stats))
+        if self.control is not None:
+            summary["control"] = plain(self.control)
+        summary["provenance"] = {"ukdyn_version": __version__, "written_by": "Result.to_hdf5"}
+        _ukdyn._write_table_hdf5(os.fspath(path), self.names,
+                                 [np.asarray(c, dtype=np.float64) for c in self._columns],
+                                 json.dumps(summary))
 
     # --- plots -------------------------------------------------------------------------------
     def plot(self, *columns: str, ax: Any = None, x: str = "t", **kwargs: Any) -> Any:

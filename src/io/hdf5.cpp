@@ -3,11 +3,13 @@
 #include "ukdyn/io/trajectory_files.hpp"
 
 #include <H5Cpp.h>
+#include <nlohmann/json.hpp>
 
 #include <algorithm>
 #include <cerrno>
 #include <cstdint>
 #include <cstring>
+#include <set>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -89,6 +91,35 @@ void write_field(H5::H5File& file, const char* name, const std::vector<double>& 
   if (!f.empty()) ds.write(f.data(), H5::PredType::NATIVE_DOUBLE);
 }
 
+// Writes the HDF5 file `path` whole or not at all: a temporary beside it (HDF5 opens it by
+// name) that body(file, stage) fills — `stage` says what it is doing, for the error message —
+// closed (closing flushes: its failure is a write error too) and renamed over `path`.
+template <class Body>
+void write_whole_file(const std::string& path, const char* who, Body&& body) {
+  H5::Exception::dontPrint();
+  detail::AtomicFile out(path, who);
+  out.release_descriptor();
+  errno = 0;
+  H5::H5File file = [&] {
+    try {
+      return H5::H5File(out.write_path(), H5F_ACC_TRUNC);
+    } catch (const H5::Exception& e) {
+      throw std::runtime_error(std::string(who) + ": cannot create '" + path +
+                               "': " + describe(e, errno));
+    }
+  }();
+  std::string stage;
+  try {
+    body(file, stage);
+    stage = "close the file";
+    file.close();
+  } catch (const H5::Exception& e) {
+    throw std::runtime_error(std::string(who) + ": cannot " + stage + " in '" + path +
+                             "': " + describe(e, 0));
+  }
+  out.commit();
+}
+
 }  // namespace
 
 void write_hdf5(const Trajectory& traj, const std::string& path) {
@@ -98,22 +129,7 @@ void write_hdf5(const Trajectory& traj, const std::string& path) {
   const std::size_t n = std::size_t(traj.n), m = std::size_t(traj.m);
   const std::size_t K = traj.constraint_names.size();
 
-  H5::Exception::dontPrint();
-  // a temporary beside `path` (HDF5 opens it by name), renamed over it when complete
-  detail::AtomicFile out(path, kWho);
-  out.release_descriptor();
-  H5::H5File file = [&] {
-    errno = 0;
-    try {
-      return H5::H5File(out.write_path(), H5F_ACC_TRUNC);
-    } catch (const H5::Exception& e) {
-      throw std::runtime_error(std::string(kWho) + ": cannot create '" + path +
-                               "': " + describe(e, errno));
-    }
-  }();
-
-  std::string stage;  // what was being done, for the error message
-  try {
+  write_whole_file(path, kWho, [&](H5::H5File& file, std::string& stage) {
     // one dataset per field
     struct Field {
       const char* name;
@@ -179,15 +195,110 @@ void write_hdf5(const Trajectory& traj, const std::string& path) {
     write_scalar_attribute(file, "energy_exchanged", s.energy_exchanged);
     write_scalar_attribute(file, "energy_drift", s.energy_drift);
     write_scalar_attribute(file, "t_reached", s.t_reached);
+  });
+}
 
-    // closing flushes: its failure is a write error too
-    stage = "close the file";
-    file.close();
-  } catch (const H5::Exception& e) {
-    throw std::runtime_error(std::string(kWho) + ": cannot " + stage + " in '" + path +
-                             "': " + describe(e, 0));
+void write_table_hdf5(const std::string& path, const std::vector<CsvColumn>& columns,
+                      const std::string& summary) {
+  constexpr const char* kWho = "ukdyn::write_table_hdf5";
+  const std::size_t N = columns.empty() ? 0 : columns.front().values.size();
+  for (const CsvColumn& c : columns) {
+    if (c.values.size() != N) {
+      throw std::invalid_argument(std::string(kWho) + ": column '" + c.name + "' has " +
+                                  std::to_string(c.values.size()) + " values, the first " +
+                                  std::to_string(N));
+    }
   }
-  out.commit();
+  // the summary's top-level numbers, booleans and strings become attributes of their own
+  nlohmann::json j;
+  if (!summary.empty()) {
+    j = nlohmann::json::parse(summary, nullptr, false);
+    if (j.is_discarded() || !j.is_object()) {
+      throw std::invalid_argument(std::string(kWho) + ": the summary is not a JSON object");
+    }
+  }
+
+  write_whole_file(path, kWho, [&](H5::H5File& file, std::string& stage) {
+    // one dataset per column, named as in the CSV ('/' would open a group: written '|'); a name
+    // met twice gets "#2", "#3"
+    std::vector<std::string> names;
+    std::set<std::string> used;
+    for (const CsvColumn& c : columns) {
+      std::string name = c.name.empty() ? "column" : c.name;
+      std::replace(name.begin(), name.end(), '/', '|');
+      if (name == ".") name = "|";
+      const std::string base = name;
+      for (int k = 2; !used.insert(name).second; ++k) name = base + "#" + std::to_string(k);
+      stage = "write dataset '" + name + "'";
+      write_field(file, name.c_str(), c.values, N, 1, true);
+      names.push_back(name);
+    }
+    stage = "write the attributes";
+    write_strings_attribute(file, "columns", names);
+    if (!summary.empty()) {
+      write_string_attribute(file, "summary", summary);
+      for (const auto& [key, v] : j.items()) {
+        if (key == "columns" || key == "summary") continue;
+        if (v.is_boolean()) {
+          write_scalar_attribute(file, key.c_str(), long(v.get<bool>()));
+        } else if (v.is_number_integer()) {
+          write_scalar_attribute(file, key.c_str(), long(v.get<std::int64_t>()));
+        } else if (v.is_number()) {
+          write_scalar_attribute(file, key.c_str(), v.get<double>());
+        } else if (v.is_string()) {
+          write_string_attribute(file, key.c_str(), v.get<std::string>());
+        }
+      }
+    }
+  });
+}
+
+std::string read_hdf5_string_attribute(const std::string& path, const std::string& name) {
+  constexpr const char* kWho = "ukdyn::read_hdf5_string_attribute";
+  H5::Exception::dontPrint();
+  try {
+    H5::H5File file(path, H5F_ACC_RDONLY);
+    if (!file.attrExists(name)) {
+      throw std::runtime_error(std::string(kWho) + ": no attribute '" + name + "' in '" + path +
+                               "'");
+    }
+    H5::Attribute attr = file.openAttribute(name);
+    std::string value;
+    attr.read(attr.getStrType(), value);
+    return value;
+  } catch (const H5::Exception& e) {
+    throw std::runtime_error(std::string(kWho) + ": cannot read attribute '" + name + "' of '" +
+                             path + "': " + describe(e, errno));
+  }
+}
+
+std::vector<CsvColumn> read_table_hdf5(const std::string& path) {
+  constexpr const char* kWho = "ukdyn::read_table_hdf5";
+  H5::Exception::dontPrint();
+  std::vector<std::string> names;
+  try {
+    H5::H5File file(path, H5F_ACC_RDONLY);
+    if (!file.attrExists("columns")) {
+      throw std::runtime_error(std::string(kWho) + ": '" + path +
+                               "' has no attribute 'columns' (not written by write_table_hdf5)");
+    }
+    H5::Attribute attr = file.openAttribute("columns");
+    const hssize_t count = attr.getSpace().getSimpleExtentNpoints();
+    std::vector<char*> ptrs(std::size_t(std::max<hssize_t>(count, 0)), nullptr);
+    const H5::StrType type = string_type();
+    if (!ptrs.empty()) attr.read(type, ptrs.data());
+    for (char* p : ptrs) names.emplace_back(p ? p : "");
+    if (!ptrs.empty()) {
+      H5Dvlen_reclaim(type.getId(), attr.getSpace().getId(), H5P_DEFAULT, ptrs.data());
+    }
+  } catch (const H5::Exception& e) {
+    throw std::runtime_error(std::string(kWho) + ": cannot read the columns of '" + path +
+                             "': " + describe(e, errno));
+  }
+  std::vector<CsvColumn> columns;
+  columns.reserve(names.size());
+  for (const std::string& name : names) columns.push_back({name, read_hdf5_field(path, name)});
+  return columns;
 }
 
 std::vector<double> read_hdf5_field(const std::string& path, const std::string& dataset) {

@@ -11,6 +11,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "ukdyn/control/control.hpp"
 #include "ukdyn/simulation/options.hpp"
 
 #include "io/atomic_file.hpp"
@@ -29,12 +30,14 @@ struct FileCloser {
                            "': " + (err != 0 ? std::strerror(err) : "unknown reason"));
 }
 
+void write_summary_json_text(const std::string& text, const std::string& path);
+
 }  // namespace
 
-void write_summary_json(const Trajectory& traj, const SimulationOptions& options,
-                        const std::string& path) {
+std::string summary_json(const Trajectory& traj, const SimulationOptions& options,
+                         const RunProvenance* provenance, const ControlStatistics* control) {
   using nlohmann::json;
-  traj.check_consistent("ukdyn::write_summary_json");
+  traj.check_consistent("ukdyn::summary_json");
   const RunStatistics& s = traj.stats;
   const std::size_t N = traj.t.size(), n = std::size_t(traj.n);
 
@@ -107,10 +110,54 @@ void write_summary_json(const Trajectory& traj, const SimulationOptions& options
   given["drift_per_constraint"] = std::move(drift_per_constraint);
   j["options"] = std::move(given);
 
+  if (control) {
+    j["control"] = {
+        {"evaluations", control->evaluations},
+        {"not_met", control->not_met},
+        {"max_residual", control->max_residual},
+        {"first_not_met",
+         std::isfinite(control->first_not_met) ? json(control->first_not_met) : json(nullptr)},
+        {"not_met_message", control->not_met_message},
+        {"max_kappa", control->max_kappa}};
+  }
+  // what the run was made from (io/provenance.hpp)
+  json made = {{"ukdyn_version", version()}, {"ukdyn_commit", commit()}};
+  if (provenance) {
+    const RunProvenance& p = *provenance;
+    made["model_name"] = p.model_name;
+    made["model_file"] = p.model_file.empty() ? json(nullptr) : json(p.model_file);
+    made["example"] = p.example.empty() ? json(nullptr) : json(p.example);
+    made["model_sha256"] = p.model_sha256;
+    json parameters = json::object(), overridden = json::array();
+    for (const ProvenanceParameter& q : p.parameters) {
+      parameters[q.name] = q.value;
+      if (q.overridden) overridden.push_back(q.name);
+    }
+    made["parameters"] = std::move(parameters);
+    made["overridden"] = std::move(overridden);
+    made["arguments"] = p.arguments;
+  }
+  j["provenance"] = std::move(made);
+
   // names are user text: invalid UTF-8 is replaced (U+FFFD) rather than refused
   std::string text = j.dump(2, ' ', false, json::error_handler_t::replace);
   text += '\n';
+  return text;
+}
 
+void write_summary_json(const Trajectory& traj, const SimulationOptions& options,
+                        const std::string& path) {
+  write_summary_json_text(summary_json(traj, options), path);
+}
+
+void write_summary_json(const Trajectory& traj, const SimulationOptions& options,
+                        const std::string& path, const RunProvenance& provenance,
+                        const ControlStatistics* control) {
+  write_summary_json_text(summary_json(traj, options, &provenance, control), path);
+}
+
+namespace {
+void write_summary_json_text(const std::string& text, const std::string& path) {
   // a temporary beside `path`, renamed over it when complete (io/atomic_file.hpp)
   detail::AtomicFile out(path, kWho);
   std::unique_ptr<std::FILE, FileCloser> file(out.open_stdio());
@@ -123,5 +170,6 @@ void write_summary_json(const Trajectory& traj, const SimulationOptions& options
   }
   out.commit();
 }
+}  // namespace
 
 }  // namespace ukdyn

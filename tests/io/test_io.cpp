@@ -19,6 +19,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include <ukdyn/control/control.hpp>
+#include <ukdyn/io/provenance.hpp>
 #include <ukdyn/io/trajectory_files.hpp>
 
 namespace ukdyn {
@@ -539,4 +541,102 @@ TEST(IoHdf5, MissingFileOrDatasetThrowsNamingThem) {
 }
 
 }  // namespace
+// ---- provenance (issue #16 item 4): SHA-256, version, summary.json's provenance -----------
+
+TEST(Provenance, Sha256MatchesTheStandardVectors) {
+  // FIPS 180-4's examples, and lengths around the padding's block boundary (55, 56, 64, 119
+  // bytes), checked against Python's hashlib
+  EXPECT_EQ(sha256_hex(""), "e3b0c44298fc1c149afbf4c8996fb92427ae41e4649b934ca495991b7852b855");
+  EXPECT_EQ(sha256_hex("abc"), "ba7816bf8f01cfea414140de5dae2223b00361a396177a9cb410ff61f20015ad");
+  EXPECT_EQ(sha256_hex("abcdbcdecdefdefgefghfghighijhijkijkljklmklmnlmnomnopnopq"),
+            "248d6a61d20638b8e5c026930c3e6039a33ce45964ff2167f6ecedd419db06c1");
+  EXPECT_EQ(sha256_hex(std::string(55, 'a')),
+            "9f4390f8d30c2dd92ec9f095b65e2b9ae9b0a925a5258e241c9f1e910f734318");
+  EXPECT_EQ(sha256_hex(std::string(56, 'a')),
+            "b35439a4ac6f0948b6d6f9e3c6af0f5f590ce20f1bde7090ef7970686ec6738a");
+  EXPECT_EQ(sha256_hex(std::string(64, 'a')),
+            "ffe054fe7ae0cb6dc65c3af9b61d5209f439851db43d0ba5997337df154668eb");
+  EXPECT_EQ(sha256_hex(std::string(119, 'a')),
+            "31eba51c313a5c08226adf18d4a359cfdfd8d2e816b13f4af952f7ea6584dcfb");
+  EXPECT_EQ(sha256_hex(std::string(1000000, 'a')),
+            "cdc76e5c9914fb9281a1c7e284d73e67f1809a48a497200e046d39ccc7112cd0");
+}
+
+TEST(Provenance, SummaryRecordsTheModelItsParametersAndTheBuild) {
+  const Trajectory tr = hand_made_trajectory();
+  RunProvenance p;
+  p.model_name = "two masses";
+  p.model_file = "/models/two.yaml";
+  p.model_sha256 = sha256_hex("text");
+  p.parameters = {{"k", 100.0, false}, {"m", 0.1, true}};
+  p.arguments = {"ukdyn", "run", "/models/two.yaml", "--set", "m=0.1"};
+  ControlStatistics c;
+  c.evaluations = 40;
+  c.not_met = 2;
+  c.first_not_met = 0.25;
+  c.max_kappa = 3.5;
+  const auto j = nlohmann::json::parse(summary_json(tr, SimulationOptions{}, &p, &c));
+  const auto& made = j.at("provenance");
+  EXPECT_EQ(made.at("ukdyn_version"), std::string(version()));
+  EXPECT_EQ(std::string(version()), "0.1.0");
+  EXPECT_FALSE(std::string(commit()).empty());
+  EXPECT_EQ(made.at("model_name"), "two masses");
+  EXPECT_EQ(made.at("model_file"), "/models/two.yaml");
+  EXPECT_TRUE(made.at("example").is_null());
+  EXPECT_EQ(made.at("model_sha256"), sha256_hex("text"));
+  EXPECT_EQ(made.at("parameters").at("k"), 100.0);
+  EXPECT_EQ(made.at("parameters").at("m"), 0.1);
+  EXPECT_EQ(made.at("overridden"), nlohmann::json::array({"m"}));
+  EXPECT_EQ(made.at("arguments").size(), 5u);
+  EXPECT_EQ(j.at("control").at("evaluations"), 40);
+  EXPECT_EQ(j.at("control").at("not_met"), 2);
+  EXPECT_EQ(j.at("control").at("first_not_met"), 0.25);
+  EXPECT_EQ(j.at("control").at("max_kappa"), 3.5);
+  // without provenance: the build only, and no control
+  const auto plain = nlohmann::json::parse(summary_json(tr, SimulationOptions{}));
+  EXPECT_EQ(plain.at("provenance").size(), 2u);
+  EXPECT_FALSE(plain.contains("control"));
+}
+
+TEST(IoHdf5, TableRoundTripsBitwiseWithTheSummaryAsAttributes) {
+  const Trajectory tr = hand_made_trajectory();
+  std::vector<CsvColumn> columns = csv_table(tr);
+  const std::size_t N = tr.t.size();
+  // further columns as a run adds them: hard values, a '/' in a name, a name met twice
+  CsvColumn hard{"out.hard", {}}, slash{"a/b", {}}, twice{"t", {}};
+  for (std::size_t i = 0; i < N; ++i) {
+    hard.values.push_back(kHardValues[i % kHardValues.size()]);
+    slash.values.push_back(-0.0);
+    twice.values.push_back(kNaN);
+  }
+  columns.push_back(hard);
+  columns.push_back(slash);
+  columns.push_back(twice);
+  const std::string summary = summary_json(tr, SimulationOptions{});
+  const std::string path = temp_path("table.h5");
+  write_table_hdf5(path, columns, summary);
+
+  const std::vector<CsvColumn> back = read_table_hdf5(path);
+  ASSERT_EQ(back.size(), columns.size());
+  for (std::size_t c = 0; c < columns.size(); ++c) {
+    ASSERT_EQ(back[c].values.size(), N) << columns[c].name;
+    for (std::size_t i = 0; i < N; ++i) {
+      EXPECT_EQ(bits(back[c].values[i]), bits(columns[c].values[i]))
+          << columns[c].name << " sample " << i;
+    }
+  }
+  EXPECT_EQ(back[columns.size() - 2].name, "a|b");
+  EXPECT_EQ(back.back().name, "t#2");
+  EXPECT_EQ(read_hdf5_string_attribute(path, "summary"), summary);
+  EXPECT_EQ(read_hdf5_string_attribute(path, "status"), "mass matrix not positive definite");
+  EXPECT_EQ(read_hdf5_field(path, "t").size(), N);
+
+  // columns of different lengths, and a summary that is not a JSON object, are refused
+  columns.back().values.pop_back();
+  EXPECT_THROW(write_table_hdf5(temp_path("bad.h5"), columns, summary), std::invalid_argument);
+  columns.back().values.push_back(0.0);
+  EXPECT_THROW(write_table_hdf5(temp_path("bad.h5"), columns, "[1, 2]"), std::invalid_argument);
+  EXPECT_THROW(read_table_hdf5(temp_path("no_such.h5")), std::runtime_error);
+}
+
 }  // namespace ukdyn

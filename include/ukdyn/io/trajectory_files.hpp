@@ -22,9 +22,12 @@
 #include <string>
 #include <vector>
 
+#include "ukdyn/io/provenance.hpp"
 #include "ukdyn/simulation/simulate.hpp"
 
 namespace ukdyn {
+
+struct ControlStatistics;  // control/control.hpp
 
 /// The CSV header names of a trajectory, in column order.
 std::vector<std::string> csv_columns(const Trajectory& traj);
@@ -90,6 +93,21 @@ class CsvWriter {
 void write_summary_json(const Trajectory& traj, const SimulationOptions& options,
                         const std::string& path);
 
+/// As above, with what the run was made from under `provenance` (the model's name, file and
+/// SHA-256, every parameter with `overridden` marked, the command line, ukdyn's version and
+/// commit; io/provenance.hpp) and, for a controlled run, its statistics under `control`
+/// (evaluations, not_met, max_residual, first_not_met, not_met_message, max_kappa; null for
+/// none). @throws std::runtime_error naming the path.
+void write_summary_json(const Trajectory& traj, const SimulationOptions& options,
+                        const std::string& path, const RunProvenance& provenance,
+                        const ControlStatistics* control = nullptr);
+
+/// The text write_summary_json writes (pretty-printed JSON, ending in a newline); `provenance`
+/// and `control` may be null. Cost O(coordinates + options).
+std::string summary_json(const Trajectory& traj, const SimulationOptions& options,
+                         const RunProvenance* provenance = nullptr,
+                         const ControlStatistics* control = nullptr);
+
 /// Writes the trajectory to an HDF5 file: one dataset per field (`t`, `q`, `q_dot`, `q_ddot`,
 /// `Qc_ideal`, `Qc_nonideal`, `lambda`, `position_violation`, `velocity_violation`,
 /// `kinetic_energy`, `potential_energy`, `energy`, `work_nonideal`, `work_ideal`, `work_drive`,
@@ -98,6 +116,25 @@ void write_summary_json(const Trajectory& traj, const SimulationOptions& options
 /// `constraint_names`) and the statistics as attributes of the root group.
 /// @throws std::runtime_error naming the path.
 void write_hdf5(const Trajectory& traj, const std::string& path);
+
+/// Writes a table of columns (csv_table() and a run's further columns: control, poses,
+/// reactions, outputs — every column trajectory.csv has) to HDF5: one 1-D dataset per column,
+/// named as in the CSV (a '/' written '|', a name met twice suffixed "#2", …), the names in order
+/// as the root attribute `columns`, and, when `summary` (summary_json()'s text) is not empty, the
+/// whole text as the attribute `summary` and each of its top-level numbers, booleans and strings
+/// as an attribute of its own. Chunked and compressed like write_hdf5.
+/// @throws std::invalid_argument when the columns differ in length or the summary is not a JSON
+/// object; std::runtime_error naming the path.
+void write_table_hdf5(const std::string& path, const std::vector<CsvColumn>& columns,
+                      const std::string& summary = "");
+
+/// Reads back a table written by write_table_hdf5: its columns in order, each named as its
+/// dataset. @throws std::runtime_error naming the path or the dataset.
+std::vector<CsvColumn> read_table_hdf5(const std::string& path);
+
+/// Reads a string attribute of the root group of an HDF5 file (the `summary` of
+/// write_table_hdf5). @throws std::runtime_error naming the path or the attribute.
+std::string read_hdf5_string_attribute(const std::string& path, const std::string& name);
 
 /// Reads back the sample times and one N × width field of an HDF5 trajectory (for tests and
 /// tools). @throws std::runtime_error naming the path or the dataset.
