@@ -318,3 +318,47 @@ TEST(ModelErrors, MissingFile) {
 
 }  // namespace
 }  // namespace ukdyn
+
+namespace ukdyn {
+namespace {
+
+// A particle in the V-shaped potential V = F |x| (issue #16 item 6d): the force −F sign(x) is
+// derived from abs (0 at x = 0, not 0/0), and with x(0) = A, x'(0) = 0 the motion is parabolic
+// arcs, x = A − F t²/(2m) until x = 0 at t1 = sqrt(2 m A / F): period 4 t1. The switch at x = 0
+// is not an event: dopri5 meets its tolerance by shrinking the steps around it.
+TEST(Model, NonSmoothPotentialGivesTheClosedFormMotion) {
+  const Model m = parse_model(R"(
+parameters: {m: 1, F: 2, A: 0.5}
+coordinates: [x]
+kinetic_energy: 0.5*m*x_dot^2
+potential_energy: F*abs(x)
+initial: {q: {x: A}}
+simulate: {t_end: 4*sqrt(2*m*A/F), rtol: 1e-11, atol: 1e-13}
+output: {every: 0, at: [sqrt(2*m*A/F), 2*sqrt(2*m*A/F)]}
+)");
+  const double t1 = std::sqrt(0.5);
+  Workspace ws(m.system);
+  ASSERT_EQ(forward_dynamics(m.system, ws, vec({0.0}), vec({1.0}), 0.0), Status::kOk);
+  EXPECT_EQ(ws.qdd[0], 0.0);  // sign(0) = 0
+  ASSERT_EQ(forward_dynamics(m.system, ws, vec({-0.2}), vec({1.0}), 0.0), Status::kOk);
+  EXPECT_EQ(ws.qdd[0], 2.0);
+  const Trajectory tr = simulate(m.system, m.q0, m.qd0, m.options);
+  ASSERT_EQ(tr.stats.status, Status::kOk) << tr.stats.message;
+  const auto at = [&](double t) {
+    for (std::size_t i = 0; i < tr.t.size(); ++i) {
+      if (std::abs(tr.t[i] - t) < 1e-12) return i;
+    }
+    ADD_FAILURE() << "no sample at " << t;
+    return std::size_t(0);
+  };
+  // x(t1) = 0 with x'(t1) = −F t1 / m; x(2 t1) = −A, x(4 t1) = A; energy F A throughout
+  EXPECT_NEAR(tr.q[at(t1)], 0.0, 1e-8);
+  EXPECT_NEAR(tr.qd[at(t1)], -2 * t1, 1e-8);
+  EXPECT_NEAR(tr.q[at(2 * t1)], -0.5, 1e-8);
+  EXPECT_NEAR(tr.q.back(), 0.5, 1e-8);
+  EXPECT_NEAR(tr.qd.back(), 0.0, 1e-8);
+  EXPECT_NEAR(tr.energy.back(), 1.0, 1e-7);
+}
+
+}  // namespace
+}  // namespace ukdyn
