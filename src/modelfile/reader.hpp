@@ -311,6 +311,12 @@ class Reader {
                   const std::string& what) const;
   std::vector<YAML::Node> rows_of(const YAML::Node& node, const std::string& what);
   void read_parameters(const YAML::Node& root);
+  // the value of the parameter `name` written as an expression at `node` of the parameters
+  // before it (`earlier` holds them as constants; `order` lists every parameter, `index` is
+  // this one's place): located errors for a parameter written at or after it, unknown names,
+  // and values that are not finite
+  double derived_parameter(const YAML::Node& node, const std::string& name, ExpressionSet& earlier,
+                           const std::vector<std::string>& order, std::size_t index);
   void read_coordinates(const YAML::Node& root);
   void read_dynamics(const YAML::Node& root, SystemBuilder& builder);
   void read_constraints(const YAML::Node& root, SystemBuilder& builder);

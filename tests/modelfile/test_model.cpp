@@ -189,6 +189,84 @@ TEST(Model, ParametersCanBeOverridden) {
   EXPECT_DOUBLE_EQ(m.parameters.at("k"), 5.0);
 }
 
+TEST(Model, DerivedParametersAreEvaluatedInOrderAndFollowOverrides) {
+  // a rod of mass m and length L pinned at one end: I = m L²/12 about its centre, Ip = I +
+  // m (L/2)² = m L²/3 about the pin; T = ½ Ip θ'², V = −m g (L/2) cos θ
+  const std::string text = R"(
+parameters: {m: 3, L: 2, I: m*L^2/12, Ip: I + m*(L/2)^2, g: 9.81, w: sqrt(m*g*(L/2)/Ip)}
+coordinates: [th]
+kinetic_energy: 0.5*Ip*th_dot^2
+potential_energy: -m*g*(L/2)*cos(th)
+)";
+  const Model a = parse_model(text);
+  EXPECT_NEAR(a.parameters.at("I"), 1.0, 1e-15);
+  EXPECT_NEAR(a.parameters.at("Ip"), 4.0, 1e-15);
+  EXPECT_NEAR(a.parameters.at("w"), std::sqrt(3 * kG * 1.0 / 4.0), 1e-15);
+  Workspace wa(a.system);
+  ASSERT_EQ(forward_dynamics(a.system, wa, vec({0.3}), vec({0.0}), 0.0), Status::kOk);
+  EXPECT_NEAR(wa.M(0, 0), 4.0, 1e-14);
+  // --set m=2 re-evaluates the parameters after it: I = 2/3, Ip = 8/3
+  const Model b = parse_model(text, "m.yaml", {{"m", 2.0}});
+  EXPECT_NEAR(b.parameters.at("I"), 2.0 / 3.0, 1e-15);
+  EXPECT_NEAR(b.parameters.at("Ip"), 8.0 / 3.0, 1e-15);
+  Workspace wb(b.system);
+  ASSERT_EQ(forward_dynamics(b.system, wb, vec({0.3}), vec({0.0}), 0.0), Status::kOk);
+  EXPECT_NEAR(wb.M(0, 0), 8.0 / 3.0, 1e-14);
+  EXPECT_NEAR(wb.qdd[0], -2 * kG * 1.0 * std::sin(0.3) / (8.0 / 3.0), 1e-13);
+  // an override of a derived parameter wins over its expression, and the later ones follow it
+  const Model c = parse_model(text, "m.yaml", {{"I", 5.0}});
+  EXPECT_DOUBLE_EQ(c.parameters.at("I"), 5.0);
+  EXPECT_NEAR(c.parameters.at("Ip"), 8.0, 1e-15);
+  EXPECT_NEAR(c.parameters.at("w"), std::sqrt(3 * kG / 8.0), 1e-15);
+}
+
+TEST(Model, DerivedParametersInAMultibodyModel) {
+  // the bodies' numbers read the derived parameters like the others (a pendulum on a pin)
+  const Model m = parse_model(R"(
+parameters: {m: 2, L: 1.5, J: m*L^2/12, g: 9.81}
+bodies:
+  - {name: rod, type: planar, mass: m, inertia: J, position: [L/2, 0], angle: 0}
+joints:
+  - {name: pin, type: revolute, parent: ground, child: rod, child_point: [-L/2, 0]}
+forces:
+  - {type: gravity, g: [0, -g]}
+)",
+                              "m.yaml", {{"L", 3.0}});
+  EXPECT_NEAR(m.parameters.at("J"), 2 * 9.0 / 12, 1e-15);
+  Workspace ws(m.system);
+  ASSERT_EQ(forward_dynamics(m.system, ws, m.q0, m.qd0, 0.0), Status::kOk);
+  EXPECT_NEAR(ws.M(2, 2), 1.5, 1e-15);
+}
+
+TEST(ModelErrors, DerivedParameterReferringToALaterOrUnknownParameter) {
+  std::string e = error_of(
+      "parameters: {I: m*L^2/12, m: 1, L: 2}\ncoordinates: [x]\n"
+      "mass_matrix: [[I]]\n");
+  // 'm' at offset 0 of the value at column 17
+  EXPECT_TRUE(contains(e,
+                       "m.yaml:1:17: error: in parameter 'I': 'm' is defined after 'I' "
+                       "(parameters are evaluated in the order written) (hint: move m above I)"))
+      << e;
+  e = error_of("parameters:\n  m: 1\n  I: m*Len^2/12\ncoordinates: [x]\nmass_matrix: [[I]]\n");
+  EXPECT_TRUE(contains(e, "m.yaml:3:8: error: in parameter 'I': unknown name 'Len'")) << e;
+  e = error_of("parameters: {k: 2*k}\ncoordinates: [x]\nmass_matrix: [[k]]\n");
+  EXPECT_TRUE(contains(e, "m.yaml:1:19: error: in parameter 'k': 'k' refers to itself")) << e;
+  // a coordinate is not known to the parameters
+  e = error_of("parameters: {k: 2*x}\ncoordinates: [x]\nmass_matrix: [[k]]\n");
+  EXPECT_TRUE(contains(e, "m.yaml:1:19: error: in parameter 'k': unknown name 'x'")) << e;
+  // values that are not defined
+  e = error_of("parameters: {a: 0, k: 1/a}\ncoordinates: [x]\nmass_matrix: [[k]]\n");
+  EXPECT_TRUE(contains(e,
+                       "m.yaml:1:24: error: in parameter 'k': cannot evaluate: division by "
+                       "zero with the parameters' values"))
+      << e;
+  e = error_of("parameters: {a: 2, k: sqrt(1 - a)}\ncoordinates: [x]\nmass_matrix: [[k]]\n");
+  EXPECT_TRUE(contains(e, "m.yaml:1:23: error: in parameter 'k': cannot evaluate")) << e;
+  e = error_of("parameters: {k: [1, 2]}\ncoordinates: [x]\nmass_matrix: [[k]]\n");
+  EXPECT_TRUE(contains(e, "m.yaml:1:17: error: parameter 'k' must be a number or an expression"))
+      << e;
+}
+
 TEST(ModelErrors, YamlSyntaxHasLineAndColumn) {
   const std::string e = error_of("coordinates: [x, y\nmass_matrix: [[1, 0], [0, 1]]\n");
   EXPECT_TRUE(contains(e, "m.yaml:")) << e;
