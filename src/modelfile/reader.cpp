@@ -24,6 +24,7 @@
 #include "ukdyn/modelfile/run.hpp"
 #include "ukdyn/simulation/options.hpp"
 
+#include "modelfile/initial_keep.hpp"
 #include "modelfile/reader.hpp"
 
 namespace ukdyn {
@@ -879,7 +880,60 @@ void Reader::read_initial(const YAML::Node& root, Model& model) {
   };
   read_map("q", model.q0);
   read_map("q_dot", model.qd0);
-  if (init["project"]) model.project_initial = init["project"].as<bool>(false);
+  const YAML::Node project = init["project"];
+  if (project && project.IsMap()) {
+    // project: {keep: [x, y_dot, …]}: x keeps its position and its velocity, y_dot the velocity
+    for (const auto& kv : project) {
+      if (kv.first.Scalar() != "keep")
+        fail(kv.first, "unknown key '" + kv.first.Scalar() + "' in initial: project",
+             "project: true, or project: {keep: [names]}");
+    }
+    const YAML::Node keep = project["keep"];
+    if (!keep || !keep.IsSequence() || keep.size() == 0) {
+      fail(keep ? keep : project, "keep must be a list of coordinates (x) or velocities (x_dot)",
+           "project: {keep: [crank_theta]} keeps the crank's angle and rate");
+    }
+    keep_node_ = keep;
+    keep_q_.assign(std::size_t(n), 0);
+    keep_qd_.assign(std::size_t(n), 0);
+    for (const auto& k : keep) {
+      const std::string name = k.Scalar();
+      bool velocity_only = false;
+      Index j = -1;
+      for (std::size_t i = 0; i < coordinates_.size() && j < 0; ++i) {
+        if (names_coordinate(name, coordinates_[i])) j = Index(i);
+      }
+      for (std::size_t i = 0; i < velocities_.size() && j < 0; ++i) {
+        if (names_coordinate(name, velocities_[i])) {
+          j = Index(i);
+          velocity_only = true;
+        }
+      }
+      if (!k.IsScalar() || j < 0) {
+        fail(k, "keep: '" + name + "' is not a coordinate or a velocity",
+             "the coordinates are " + join(coordinates_) +
+                 " (x keeps x and x_dot, x_dot only the velocity)");
+      }
+      if ((velocity_only ? keep_qd_ : keep_q_)[std::size_t(j)])
+        fail(k, "keep: '" + name + "' is listed twice");
+      if (!velocity_only) keep_q_[std::size_t(j)] = 1;
+      keep_qd_[std::size_t(j)] = 1;
+      kept_names_.push_back(name);
+    }
+    model.project_initial = true;
+  } else if (project) {
+    model.project_initial = project.as<bool>(false);
+  }
+}
+
+void Reader::apply_keep(Model& model) {
+  if (keep_q_.empty()) return;
+  const std::string why = project_keeping(model.system, model.q0, model.qd0, model.options.t_start,
+                                          keep_q_, keep_qd_, kept_names_);
+  if (!why.empty()) {
+    fail(keep_node_, "initial: project: " + why,
+         "keep fewer coordinates, or give values that the constraints allow");
+  }
 }
 
 void Reader::read_simulate(const YAML::Node& root, Model& model) {
@@ -1113,6 +1167,7 @@ Model Reader::read_plant(const YAML::Node& root) {
   model.project_initial = model.project_initial || model.options.project_initial;
   model.options.project_initial = model.project_initial;
   check_settings(root, model);
+  apply_keep(model);
   return model;
 }
 

@@ -355,6 +355,13 @@ class Reader {
   std::map<std::string, double> parameters_;
   std::vector<std::string> coordinates_, velocities_;
   ModelPositions positions_;  // where the file gives what a run may refuse (Model::positions)
+  // initial: project: {keep: [...]}: the node, and per coordinate whether its position and its
+  // velocity are kept (empty without keep)
+  YAML::Node keep_node_;
+  std::vector<unsigned char> keep_q_, keep_qd_;
+  std::vector<std::string> kept_names_;
+  // makes the initial state consistent keeping keep_q_, keep_qd_ (initial_keep.hpp)
+  void apply_keep(Model& model);
   std::vector<std::string> constraint_names_;   // in declaration order
   std::vector<std::string> constraint_inputs_;  // N_c and lambda_c of each named constraint
   std::vector<Index> constraint_rows_;

@@ -1,5 +1,6 @@
 // Model files: symbolic derivation against closed forms and against the AD-derived constraints,
 // and the errors users meet (file:line:column and a hint).
+#include <algorithm>
 #include <cmath>
 
 #include <gtest/gtest.h>
@@ -265,6 +266,120 @@ TEST(ModelErrors, DerivedParameterReferringToALaterOrUnknownParameter) {
   e = error_of("parameters: {k: [1, 2]}\ncoordinates: [x]\nmass_matrix: [[k]]\n");
   EXPECT_TRUE(contains(e, "m.yaml:1:17: error: parameter 'k' must be a number or an expression"))
       << e;
+}
+
+// A slider-crank in (crank angle th, rod angle ph, slider x): r sin th = l sin ph,
+// x = r cos th + l cos ph. initial: project: {keep: [th]} holds th and th' as given and solves
+// for the rest: the closure solution, not the least M-norm change of every coordinate (which
+// turned 8 rad/s into 2.14 in the new-user report).
+const char* kSliderCrankKeep = R"(
+parameters: {r: 0.3, l: 1, Jc: 0.01, Jr: 0.17, ms: 0.5}
+coordinates: [th, ph, x]
+kinetic_energy: 0.5*Jc*th_dot^2 + 0.5*Jr*ph_dot^2 + 0.5*ms*x_dot^2
+constraints:
+  - {name: loop, holonomic: [r*cos(th) + l*cos(ph) - x, r*sin(th) - l*sin(ph)]}
+initial:
+  q: {th: 0.7, ph: 0, x: 1}
+  q_dot: {th: 8, ph: 1, x: -3}
+  project: {keep: [th]}
+)";
+
+TEST(Model, InitialProjectionKeepsTheNamedCoordinatesAndSolvesForTheOthers) {
+  const Model m = parse_model(kSliderCrankKeep);
+  const double r = 0.3, l = 1.0, th = 0.7, w = 8.0;
+  const double ph = std::asin(r * std::sin(th) / l), x = r * std::cos(th) + l * std::cos(ph);
+  const double ph_dot = r * std::cos(th) * w / (l * std::cos(ph));
+  const double x_dot = -r * std::sin(th) * w - l * std::sin(ph) * ph_dot;
+  EXPECT_EQ(m.q0[0], 0.7);  // exactly as given
+  EXPECT_EQ(m.qd0[0], 8.0);
+  EXPECT_NEAR(m.q0[1], ph, 1e-14);
+  EXPECT_NEAR(m.q0[2], x, 1e-14);
+  EXPECT_NEAR(m.qd0[1], ph_dot, 1e-13);
+  EXPECT_NEAR(m.qd0[2], x_dot, 1e-13);
+  Workspace ws(m.system);
+  evaluate_violations(m.system, ws, m.q0, m.qd0, 0.0);
+  EXPECT_NEAR(ws.phi.cwiseAbs().maxCoeff(), 0.0, 1e-12);
+  EXPECT_NEAR(ws.phi_dot.cwiseAbs().maxCoeff(), 0.0, 1e-12);
+  // the run starts from it unchanged
+  SimulationOptions o = m.options;
+  o.t_end = 1e-3;
+  const Trajectory tr = simulate(m.system, m.q0, m.qd0, o);
+  EXPECT_EQ(tr.q[0], 0.7);  // sample 0, coordinate th (row-major N × n)
+  EXPECT_EQ(tr.qd[0], 8.0);
+  // x_dot alone: the crank's angle is then free, its rate not: the velocities keep th' = 8 and
+  // x' as solved from it
+  std::string text = kSliderCrankKeep;
+  text.replace(text.find("keep: [th]"), 10, "keep: [th_dot]");
+  const Model v = parse_model(text);
+  EXPECT_EQ(v.qd0[0], 8.0);
+  Workspace wv(v.system);
+  evaluate_violations(v.system, wv, v.q0, v.qd0, 0.0);
+  EXPECT_NEAR(wv.phi.cwiseAbs().maxCoeff(), 0.0, 1e-12);
+  EXPECT_NEAR(wv.phi_dot.cwiseAbs().maxCoeff(), 0.0, 1e-12);
+  EXPECT_GT(std::abs(v.q0[0] - 0.7), 1e-6);  // th moved (least M-norm with ph and x)
+}
+
+TEST(Model, InitialProjectionKeepsABodyCoordinateOfAMultibodyModel) {
+  // the new-user report's slider-crank, every pose but the crank's written roughly, every
+  // velocity but the crank's left 0: keep: [crank_theta] gives the closed-form closure
+  const Model m = parse_model(R"(
+parameters: {r: 0.3, l: 1, mc: 1, mr: 2, ms: 0.5, th0: 0.3, w0: 8}
+bodies:
+  - {name: crank, type: planar, mass: mc, inertia: mc*r^2/12, position: [0.1, 0.1], angle: th0,
+     angular_velocity: w0}
+  - {name: rod, type: planar, mass: mr, inertia: mr*l^2/12, position: [0.8, 0], angle: 0}
+  - {name: slider, type: planar, mass: ms, inertia: 0.01, position: [1.3, 0]}
+joints:
+  - {name: pin, type: revolute, parent: ground, child: crank, child_point: [-r/2, 0]}
+  - {name: crank_rod, type: revolute, parent: crank, child: rod, parent_point: [r/2, 0],
+     child_point: [-l/2, 0]}
+  - {name: rod_slider, type: revolute, parent: rod, child: slider, parent_point: [l/2, 0]}
+  - {name: slide, type: prismatic, parent: ground, child: slider}
+initial: {project: {keep: [crank.theta]}}
+)");
+  const double r = 0.3, l = 1.0, th = 0.3, w = 8.0;
+  const double root = std::sqrt(l * l - r * r * std::sin(th) * std::sin(th));
+  const auto at = [&](const std::string& name) {
+    const auto& names = m.system.coordinate_names();
+    return Index(std::find(names.begin(), names.end(), name) - names.begin());
+  };
+  EXPECT_EQ(m.q0[at("crank.theta")], 0.3);
+  EXPECT_EQ(m.qd0[at("crank.theta")], 8.0);
+  EXPECT_NEAR(m.q0[at("crank.x")], r / 2 * std::cos(th), 1e-14);
+  EXPECT_NEAR(m.q0[at("rod.theta")], std::asin(-r * std::sin(th) / l), 1e-14);
+  EXPECT_NEAR(m.q0[at("slider.x")], r * std::cos(th) + root, 1e-14);
+  EXPECT_NEAR(m.qd0[at("rod.theta")], -r * std::cos(th) * w / root, 1e-13);
+  EXPECT_NEAR(m.qd0[at("slider.x")], r * std::sin(th) * (-r * std::cos(th) * w / root - w), 1e-13);
+  Workspace ws(m.system);
+  evaluate_violations(m.system, ws, m.q0, m.qd0, 0.0);
+  EXPECT_NEAR(ws.phi.cwiseAbs().maxCoeff(), 0.0, 1e-12);
+  EXPECT_NEAR(ws.phi_dot.cwiseAbs().maxCoeff(), 0.0, 1e-12);
+}
+
+TEST(ModelErrors, InitialProjectionKeepingTooMuchOrTheImpossible) {
+  std::string text = kSliderCrankKeep;
+  // th and x kept: ph alone cannot close the loop's two rows
+  text.replace(text.find("keep: [th]"), 10, "keep: [th, x]");
+  std::string e = error_of(text);
+  EXPECT_TRUE(contains(e,
+                       "m.yaml:10:19: error: initial: project: keeping th, x over-determines "
+                       "the constraints: the other positions cannot satisfy them (rank 1"))
+      << e;
+  // a crank longer than the rod cannot close at th = 0.7: Newton does not converge
+  e = error_of(kSliderCrankKeep, {{"r", 1.0}, {"l", 0.3}});
+  EXPECT_TRUE(contains(e,
+                       "m.yaml:10:19: error: initial: project: the Newton iteration for the "
+                       "positions did not converge"))
+      << e;
+  text = kSliderCrankKeep;
+  text.replace(text.find("keep: [th]"), 10, "keep: [tht]");
+  e = error_of(text);
+  EXPECT_TRUE(contains(e, "m.yaml:10:20: error: keep: 'tht' is not a coordinate or a velocity"))
+      << e;
+  text = kSliderCrankKeep;
+  text.replace(text.find("keep: [th]"), 10, "kept: [th]");
+  e = error_of(text);
+  EXPECT_TRUE(contains(e, "m.yaml:10:13: error: unknown key 'kept' in initial: project")) << e;
 }
 
 TEST(ModelErrors, YamlSyntaxHasLineAndColumn) {
