@@ -40,6 +40,18 @@ def test_overrides_replace_parameters_and_enter_the_initial_state():
     np.testing.assert_array_equal(m.q0, [2.0, 0.0])  # initial: q: {x: L}
 
 
+def test_overrides_re_evaluate_the_derived_parameters_after_them():
+    text = ("parameters: {m: 3, L: 2, I: m*L^2/12, Ip: I + m*(L/2)^2}\n"
+            "coordinates: [th]\nkinetic_energy: 0.5*Ip*th_dot^2\n")
+    assert ukdyn.parse(text).parameters == pytest.approx({"m": 3, "L": 2, "I": 1, "Ip": 4},
+                                                         rel=1e-15)
+    # m = 2: I = 2/3, Ip = 8/3; an override of I itself wins over its expression
+    assert ukdyn.parse(text, m=2).parameters == pytest.approx(
+        {"m": 2, "L": 2, "I": 2 / 3, "Ip": 8 / 3}, rel=1e-15)
+    assert ukdyn.parse(text, I=5).parameters == pytest.approx(
+        {"m": 3, "L": 2, "I": 5, "Ip": 8}, rel=1e-15)
+
+
 def test_unknown_example_lists_the_examples():
     with pytest.raises(ValueError) as err:
         ukdyn.load("pendullum")

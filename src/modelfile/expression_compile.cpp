@@ -30,7 +30,8 @@ using namespace detail;
 
 bool is_unary(Code c) {
   return !(c == Code::kAdd || c == Code::kSub || c == Code::kMul || c == Code::kDiv ||
-           c == Code::kPow || c == Code::kAtan2);
+           c == Code::kPow || c == Code::kAtan2 || c == Code::kMin || c == Code::kMax ||
+           c == Code::kPickIf || c == Code::kPickElse);
 }
 bool is_commutative(Code c) { return c == Code::kAdd || c == Code::kMul; }
 
@@ -65,6 +66,13 @@ inline void step(const Op& op, double* s) {
     case Code::kExp: s[op.dst] = std::exp(s[op.a]); break;
     case Code::kLog: s[op.dst] = std::log(s[op.a]); break;
     case Code::kAbs: s[op.dst] = std::fabs(s[op.a]); break;
+    case Code::kSign: s[op.dst] = s[op.a] > 0.0 ? 1.0 : s[op.a] < 0.0 ? -1.0 : s[op.a]; break;
+    case Code::kHeaviside: s[op.dst] = s[op.a] > 0.0 ? 1.0 : s[op.a] < 0.0 ? 0.0 : s[op.a] == 0.0 ? 0.5 : s[op.a]; break;
+    case Code::kMin: s[op.dst] = s[op.b] < s[op.a] ? s[op.b] : s[op.a]; break;
+    case Code::kMax: s[op.dst] = s[op.b] > s[op.a] ? s[op.b] : s[op.a]; break;
+    case Code::kPickIf: s[op.dst] = s[op.a] > 0.0 ? s[op.b] : 0.0; break;
+    case Code::kPickElse: s[op.dst] = s[op.a] > 0.0 ? 0.0 : s[op.b]; break;
+    case Code::kIf: break;  // compiled as kPickIf + kPickElse
   }
 }
 // clang-format on
@@ -189,12 +197,18 @@ class Compiler {
     if (is_a<GiNaC::power>(e)) return compile_power(e.op(0), e.op(1));
     if (is_a<GiNaC::function>(e)) {
       const std::string name = GiNaC::ex_to<GiNaC::function>(e).get_name();
-      const FunctionInfo* f = find_function(name);
+      // (the language's abs is registered with GiNaC as lang_abs: expression_parse.cpp)
+      const FunctionInfo* f = find_function(name == "lang_abs" ? "abs" : name);
       if (f == nullptr || std::size_t(f->arity) != e.nops()) {
         throw std::invalid_argument("ukdyn::expr::ExpressionSet::compile: the function '" + name +
                                     "' (in " + printed(e) + ") cannot be compiled");
       }
       const std::int32_t a = compile(e.op(0));
+      if (f->code == Code::kIf) {
+        // if(c, a, b) = (c > 0 ? a : 0) + (c > 0 ? 0 : b): exactly a or b
+        return emit(Code::kAdd, emit(Code::kPickIf, a, compile(e.op(1))),
+                    emit(Code::kPickElse, a, compile(e.op(2))));
+      }
       return f->arity == 2 ? emit(f->code, a, compile(e.op(1))) : emit(f->code, a);
     }
     if (is_a<GiNaC::symbol>(e)) {
@@ -335,7 +349,8 @@ class Compiler {
       }
     } else if (is_a<GiNaC::function>(e)) {
       mix_bytes("f");
-      mix_bytes(GiNaC::ex_to<GiNaC::function>(e).get_name());
+      const std::string name = GiNaC::ex_to<GiNaC::function>(e).get_name();
+      mix_bytes(name == "lang_abs" ? std::string("abs") : name);
       for (std::size_t i = 0; i < e.nops(); ++i) mix(key(e.op(i)));
     } else if (is_a<GiNaC::power>(e)) {
       mix_bytes("^");

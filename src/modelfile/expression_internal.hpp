@@ -22,12 +22,18 @@ namespace detail {
 // the tape
 
 // One operation of the register machine: s[dst] = code(s[a], s[b]). Unary operations read a
-// only (b = a). kSinCos writes two registers: s[dst] = sin s[a], s[b] = cos s[a].
+// only (b = a). kSinCos writes two registers: s[dst] = sin s[a], s[b] = cos s[a]. The
+// non-smooth functions: kSign (−1, 0, 1), kHeaviside (0, ½ at 0, 1), kMin, kMax; if(c, a, b)
+// is compiled as kPickIf(c, a) + kPickElse(c, b), where kPickIf is s[b] when s[a] > 0 and 0
+// otherwise, kPickElse the other way round: exactly a or b (a sum with an exact 0), and an
+// infinite or NaN value of the branch not taken does not leak into the result.
+// kIf is the language function (three arguments), never on a tape.
 // clang-format off
 enum class Code : std::uint8_t {
   kAdd, kSub, kMul, kDiv, kNeg, kRecip, kSqrt, kPow,
   kSin, kCos, kSinCos, kTan, kAsin, kAcos, kAtan, kAtan2,
   kSinh, kCosh, kTanh, kExp, kLog, kAbs,
+  kSign, kHeaviside, kMin, kMax, kPickIf, kPickElse, kIf,
 };
 // clang-format on
 
@@ -45,6 +51,8 @@ struct FunctionInfo {
 
 // the function called `name`, or null
 const FunctionInfo* find_function(const std::string& name);
+// the GiNaC expression of a call of a language function (args: f.arity of them)
+GiNaC::ex call(const FunctionInfo& f, const GiNaC::exvector& args);
 // a letter or '_', then letters, digits, '_'
 bool is_identifier(const std::string& s);
 // "a, b, c" (at most 20, then "…")

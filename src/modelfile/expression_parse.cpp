@@ -33,21 +33,139 @@ namespace ukdyn::expr::detail {
 // ---------------------------------------------------------------------------------------------
 // the language's functions
 
-constexpr std::array<FunctionInfo, 14> kFunctions{{
-    {"sin", 1, Code::kSin},
-    {"cos", 1, Code::kCos},
-    {"tan", 1, Code::kTan},
-    {"asin", 1, Code::kAsin},
-    {"acos", 1, Code::kAcos},
-    {"atan", 1, Code::kAtan},
-    {"atan2", 2, Code::kAtan2},
-    {"sinh", 1, Code::kSinh},
-    {"cosh", 1, Code::kCosh},
-    {"tanh", 1, Code::kTanh},
-    {"exp", 1, Code::kExp},
-    {"log", 1, Code::kLog},
-    {"sqrt", 1, Code::kSqrt},
-    {"abs", 1, Code::kAbs},
+// abs and the non-smooth functions are GiNaC functions of our own, registered under their names in
+// the language (GiNaC's step and csgn have no derivative, so diff() would leave D[0](step)(x),
+// which cannot be compiled). Each folds when its arguments are real numbers (if(c, a, b) when c is)
+// and has the derivative where it exists: sign(x) for abs (GiNaC's own abs has x/abs(x), NaN at 0,
+// where a potential F·abs(x) has the force 0 by symmetry), 0 for sign and heaviside, and the
+// derivative of the branch taken for max, min (if(a − b, da, db)) and if (if(c, da, db)).
+DECLARE_FUNCTION_1P(lang_abs)
+DECLARE_FUNCTION_1P(lang_sign)
+DECLARE_FUNCTION_1P(lang_heaviside)
+DECLARE_FUNCTION_2P(lang_min)
+DECLARE_FUNCTION_2P(lang_max)
+DECLARE_FUNCTION_3P(lang_if)
+
+namespace {
+
+// x as a real number, or null
+const GiNaC::numeric* real_number(const GiNaC::ex& x) {
+  if (!GiNaC::is_exactly_a<GiNaC::numeric>(x)) return nullptr;
+  const auto& n = GiNaC::ex_to<GiNaC::numeric>(x);
+  return n.is_real() ? &n : nullptr;
+}
+
+GiNaC::ex abs_eval(const GiNaC::ex& x) {
+  if (GiNaC::is_exactly_a<GiNaC::numeric>(x)) return GiNaC::abs(GiNaC::ex_to<GiNaC::numeric>(x));
+  return lang_abs(x).hold();
+}
+GiNaC::ex abs_evalf(const GiNaC::ex& x) { return abs_eval(x); }
+GiNaC::ex abs_deriv(const GiNaC::ex& x, unsigned) { return lang_sign(x); }
+void abs_print(const GiNaC::ex& x, const GiNaC::print_context& c) {
+  c.s << "abs(";
+  x.print(c);
+  c.s << ")";
+}
+
+GiNaC::ex sign_eval(const GiNaC::ex& x) {
+  if (const auto* n = real_number(x))
+    return GiNaC::numeric(n->is_zero() ? 0 : n->is_positive() ? 1 : -1);
+  return lang_sign(x).hold();
+}
+GiNaC::ex sign_evalf(const GiNaC::ex& x) { return sign_eval(x); }
+GiNaC::ex sign_deriv(const GiNaC::ex&, unsigned) { return 0; }
+
+GiNaC::ex heaviside_eval(const GiNaC::ex& x) {
+  if (const auto* n = real_number(x)) {
+    return n->is_zero() ? GiNaC::numeric(1, 2) : GiNaC::numeric(n->is_positive() ? 1 : 0);
+  }
+  return lang_heaviside(x).hold();
+}
+GiNaC::ex heaviside_evalf(const GiNaC::ex& x) { return heaviside_eval(x); }
+GiNaC::ex heaviside_deriv(const GiNaC::ex&, unsigned) { return 0; }
+
+GiNaC::ex min_eval(const GiNaC::ex& a, const GiNaC::ex& b) {
+  const auto *na = real_number(a), *nb = real_number(b);
+  if (na != nullptr && nb != nullptr) return *nb < *na ? b : a;
+  if (a.is_equal(b)) return a;
+  return lang_min(a, b).hold();
+}
+GiNaC::ex min_evalf(const GiNaC::ex& a, const GiNaC::ex& b) { return min_eval(a, b); }
+// d min(a, b) = if(b − a, da, db): the derivative of the branch taken (b's at a tie), picked
+// like if's value, so a derivative that is infinite where its branch is not taken does not leak
+GiNaC::ex min_deriv(const GiNaC::ex& a, const GiNaC::ex& b, const GiNaC::symbol& s) {
+  return lang_if(b - a, a.diff(s), b.diff(s));
+}
+
+GiNaC::ex max_eval(const GiNaC::ex& a, const GiNaC::ex& b) {
+  const auto *na = real_number(a), *nb = real_number(b);
+  if (na != nullptr && nb != nullptr) return *nb > *na ? b : a;
+  if (a.is_equal(b)) return a;
+  return lang_max(a, b).hold();
+}
+GiNaC::ex max_evalf(const GiNaC::ex& a, const GiNaC::ex& b) { return max_eval(a, b); }
+GiNaC::ex max_deriv(const GiNaC::ex& a, const GiNaC::ex& b, const GiNaC::symbol& s) {
+  return lang_if(a - b, a.diff(s), b.diff(s));
+}
+
+GiNaC::ex if_eval(const GiNaC::ex& c, const GiNaC::ex& a, const GiNaC::ex& b) {
+  if (const auto* n = real_number(c)) return n->is_positive() ? a : b;
+  if (a.is_equal(b)) return a;
+  return lang_if(c, a, b).hold();
+}
+GiNaC::ex if_evalf(const GiNaC::ex& c, const GiNaC::ex& a, const GiNaC::ex& b) {
+  return if_eval(c, a, b);
+}
+// d if(c, a, b) = if(c, da, db): the condition contributes nothing where it is differentiable
+GiNaC::ex if_deriv(const GiNaC::ex& c, const GiNaC::ex& a, const GiNaC::ex& b,
+                   const GiNaC::symbol& s) {
+  return lang_if(c, a.diff(s), b.diff(s));
+}
+
+}  // namespace
+
+// registered as "lang_abs" (GiNaC has its own "abs", and warns on a second function of that
+// name), printed as abs(...)
+unsigned lang_abs_SERIAL::serial =
+    GiNaC::function::register_new(GiNaC::function_options("lang_abs", 1)
+                                      .eval_func(abs_eval)
+                                      .evalf_func(abs_evalf)
+                                      .derivative_func(abs_deriv)
+                                      .print_func<GiNaC::print_context>(abs_print));
+unsigned lang_sign_SERIAL::serial = GiNaC::function::register_new(GiNaC::function_options("sign", 1)
+                                                                      .eval_func(sign_eval)
+                                                                      .evalf_func(sign_evalf)
+                                                                      .derivative_func(sign_deriv));
+unsigned lang_heaviside_SERIAL::serial =
+    GiNaC::function::register_new(GiNaC::function_options("heaviside", 1)
+                                      .eval_func(heaviside_eval)
+                                      .evalf_func(heaviside_evalf)
+                                      .derivative_func(heaviside_deriv));
+unsigned lang_min_SERIAL::serial =
+    GiNaC::function::register_new(GiNaC::function_options("min", 2)
+                                      .eval_func(min_eval)
+                                      .evalf_func(min_evalf)
+                                      .expl_derivative_func(min_deriv));
+unsigned lang_max_SERIAL::serial =
+    GiNaC::function::register_new(GiNaC::function_options("max", 2)
+                                      .eval_func(max_eval)
+                                      .evalf_func(max_evalf)
+                                      .expl_derivative_func(max_deriv));
+unsigned lang_if_SERIAL::serial = GiNaC::function::register_new(
+    GiNaC::function_options("if", 3).eval_func(if_eval).evalf_func(if_evalf).expl_derivative_func(
+        if_deriv));
+
+constexpr std::array<FunctionInfo, 19> kFunctions{{
+    {"sin", 1, Code::kSin},     {"cos", 1, Code::kCos},
+    {"tan", 1, Code::kTan},     {"asin", 1, Code::kAsin},
+    {"acos", 1, Code::kAcos},   {"atan", 1, Code::kAtan},
+    {"atan2", 2, Code::kAtan2}, {"sinh", 1, Code::kSinh},
+    {"cosh", 1, Code::kCosh},   {"tanh", 1, Code::kTanh},
+    {"exp", 1, Code::kExp},     {"log", 1, Code::kLog},
+    {"sqrt", 1, Code::kSqrt},   {"abs", 1, Code::kAbs},
+    {"sign", 1, Code::kSign},   {"heaviside", 1, Code::kHeaviside},
+    {"min", 2, Code::kMin},     {"max", 2, Code::kMax},
+    {"if", 3, Code::kIf},
 }};
 
 const FunctionInfo* find_function(const std::string& name) {
@@ -87,7 +205,17 @@ GiNaC::ex call(const FunctionInfo& f, const GiNaC::exvector& a) {
     case Code::kSqrt:
       return GiNaC::sqrt(a[0]);
     case Code::kAbs:
-      return GiNaC::abs(a[0]);
+      return lang_abs(a[0]);
+    case Code::kSign:
+      return lang_sign(a[0]);
+    case Code::kHeaviside:
+      return lang_heaviside(a[0]);
+    case Code::kMin:
+      return lang_min(a[0], a[1]);
+    case Code::kMax:
+      return lang_max(a[0], a[1]);
+    case Code::kIf:
+      return lang_if(a[0], a[1], a[2]);
     default:
       break;
   }

@@ -10,6 +10,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <set>
 #include <sstream>
 
@@ -23,6 +24,7 @@
 #include "ukdyn/modelfile/run.hpp"
 #include "ukdyn/simulation/options.hpp"
 
+#include "modelfile/initial_keep.hpp"
 #include "modelfile/reader.hpp"
 
 namespace ukdyn {
@@ -167,25 +169,56 @@ std::vector<YAML::Node> Reader::rows_of(const YAML::Node& node, const std::strin
   return rows;
 }
 
+// Parameters are numbers or expressions of the parameters before them (`I: m*L^2/12`), read
+// in the order written, each evaluated once with the values before it: a name defined later
+// (or the parameter itself) is an error, so there are no cycles. An override (--set) replaces
+// the parameter's value where it is defined, whether the file gives a number or an expression
+// (the override wins), and the parameters after it are evaluated with the new value.
 void Reader::read_parameters(const YAML::Node& root) {
   const YAML::Node p = root["parameters"];
   if (p) {
     if (!p.IsMap()) fail(p, "parameters must be a mapping name: value", "e.g. {m: 1, g: 9.81}");
+    // the names in order (for "defined after it"), and pi, built in unless a parameter takes it
+    std::vector<std::string> order;
+    for (const auto& kv : p) order.push_back(kv.first.Scalar());
+    ExpressionSet earlier(std::vector<std::string>{});
+    if (std::find(order.begin(), order.end(), "pi") == order.end())
+      earlier.set_constant("pi", 3.14159265358979323846);
+    std::size_t index = 0;
     for (const auto& kv : p) {
       const std::string name = kv.first.Scalar();
+      ++index;
       if (!is_identifier(name))
         fail(kv.first, "parameter name '" + name + "' is not an identifier");
       if (name == "t") fail(kv.first, "'t' is time and cannot be a parameter");
-      if (!kv.second.IsScalar()) fail(kv.second, "parameter '" + name + "' must be a number");
+      if (!kv.second.IsScalar()) {
+        fail(kv.second, "parameter '" + name + "' must be a number or an expression",
+             "of the parameters written before it, e.g. I: m*L^2/12");
+      }
+      const std::string& text = kv.second.Scalar();
+      double v = 0.0;
+      bool is_number = false;
       try {
         std::size_t used = 0;
-        const double v = std::stod(kv.second.Scalar(), &used);
-        if (used != kv.second.Scalar().size()) throw std::invalid_argument("trailing text");
-        if (!std::isfinite(v)) throw std::invalid_argument("nan or inf");
-        parameters_[name] = v;
-      } catch (const std::exception&) {
-        fail(kv.second,
-             "parameter '" + name + "' must be a finite number, got '" + kv.second.Scalar() + "'");
+        v = std::stod(text, &used);
+        is_number = used == text.size();
+      } catch (const std::out_of_range&) {
+        is_number = true;  // 1e999: refused below as not finite
+        v = std::numeric_limits<double>::infinity();
+      } catch (const std::invalid_argument&) {
+        is_number = false;  // a name or a formula
+      }
+      if (is_number && !std::isfinite(v)) {
+        fail(kv.second, "parameter '" + name + "' must be a finite number, got '" + text + "'");
+      }
+      if (!is_number) v = derived_parameter(kv.second, name, earlier, order, index - 1);
+      if (const auto o = overrides_.find(name); o != overrides_.end()) v = o->second;
+      parameters_[name] = v;
+      try {
+        earlier.set_constant(name, v);
+      } catch (const std::invalid_argument&) {
+        // a function's name: refused with its position once the expressions are set up
+        // (read_generalized / read_multibody); not usable in the parameters after it
       }
     }
   }
@@ -201,6 +234,54 @@ void Reader::read_parameters(const YAML::Node& root) {
     }
     parameters_[name] = value;
   }
+}
+
+double Reader::derived_parameter(const YAML::Node& node, const std::string& name,
+                                 ExpressionSet& earlier, const std::vector<std::string>& order,
+                                 std::size_t index) {
+  const std::string what = "parameter '" + name + "'";
+  const std::string& text = node.Scalar();
+  Expr e = 0;
+  try {
+    e = earlier.parse(text);
+  } catch (const expr::ParseError& error) {
+    YAML::Mark m = node.Mark();
+    m.column += int(error.position()) + (node.Tag() == "!" ? 1 : 0);
+    // the name at the error: a parameter written at or after this one?
+    std::size_t end = error.position();
+    while (end < text.size() &&
+           (std::isalnum(static_cast<unsigned char>(text[end])) || text[end] == '_'))
+      ++end;
+    const std::string token = text.substr(error.position(), end - error.position());
+    const auto later = std::find(order.begin() + std::ptrdiff_t(index), order.end(), token);
+    if (!token.empty() && later != order.end()) {
+      if (later == order.begin() + std::ptrdiff_t(index)) {
+        fail_at(m, "in " + what + ": '" + name + "' refers to itself",
+                "a parameter is a number or an expression of the parameters before it");
+      }
+      fail_at(m,
+              "in " + what + ": '" + token + "' is defined after '" + name +
+                  "' (parameters are evaluated in the order written)",
+              "move " + token + " above " + name);
+    }
+    fail_at(m, "in " + what + ": " + error.what(),
+            "a parameter is a number or an expression of the parameters before it (and pi)");
+  }
+  double out = 0.0;
+  try {
+    const Program p = earlier.compile({e});
+    std::vector<double> scratch(std::size_t(p.scratch_size()));
+    p.evaluate(nullptr, &out, scratch.data());
+  } catch (const std::exception& error) {
+    std::string reason = error.what();
+    const std::string prefix = "ukdyn::expr::ExpressionSet::compile: ";
+    if (reason.rfind(prefix, 0) == 0) reason.erase(0, prefix.size());
+    fail(node, "cannot evaluate " + what + ": " + reason);
+  }
+  if (!std::isfinite(out)) {
+    fail(node, what + " must be a finite number, but '" + text + "' is " + brief(out));
+  }
+  return out;
 }
 
 void Reader::read_coordinates(const YAML::Node& root) {
@@ -814,11 +895,63 @@ void Reader::read_initial(const YAML::Node& root, Model& model) {
   };
   read_map("q", model.q0);
   read_map("q_dot", model.qd0);
-  if (const YAML::Node p = init["project"]) {
+  const YAML::Node project = init["project"];
+  if (project && project.IsMap()) {
+    // project: {keep: [x, y_dot, …]}: x keeps its position and its velocity, y_dot the velocity
+    for (const auto& kv : project) {
+      if (kv.first.Scalar() != "keep")
+        fail(kv.first, "unknown key '" + kv.first.Scalar() + "' in initial: project",
+             "project: true, or project: {keep: [names]}");
+    }
+    const YAML::Node keep = project["keep"];
+    if (!keep || !keep.IsSequence() || keep.size() == 0) {
+      fail(keep ? keep : project, "keep must be a list of coordinates (x) or velocities (x_dot)",
+           "project: {keep: [crank_theta]} keeps the crank's angle and rate");
+    }
+    keep_node_ = keep;
+    keep_q_.assign(std::size_t(n), 0);
+    keep_qd_.assign(std::size_t(n), 0);
+    for (const auto& k : keep) {
+      const std::string name = k.Scalar();
+      bool velocity_only = false;
+      Index j = -1;
+      for (std::size_t i = 0; i < coordinates_.size() && j < 0; ++i) {
+        if (names_coordinate(name, coordinates_[i])) j = Index(i);
+      }
+      for (std::size_t i = 0; i < velocities_.size() && j < 0; ++i) {
+        if (names_coordinate(name, velocities_[i])) {
+          j = Index(i);
+          velocity_only = true;
+        }
+      }
+      if (!k.IsScalar() || j < 0) {
+        fail(k, "keep: '" + name + "' is not a coordinate or a velocity",
+             "the coordinates are " + join(coordinates_) +
+                 " (x keeps x and x_dot, x_dot only the velocity)");
+      }
+      if ((velocity_only ? keep_qd_ : keep_q_)[std::size_t(j)])
+        fail(k, "keep: '" + name + "' is listed twice");
+      if (!velocity_only) keep_q_[std::size_t(j)] = 1;
+      keep_qd_[std::size_t(j)] = 1;
+      kept_names_.push_back(name);
+    }
+    model.project_initial = true;
+  } else if (project) {
     bool value = false;
-    if (!p.IsScalar() || !YAML::convert<bool>::decode(p, value))
-      fail(p, "initial project must be true or false", "project: true");
+    if (!project.IsScalar() || !YAML::convert<bool>::decode(project, value))
+      fail(project, "initial project must be true or false, or {keep: [names]}",
+           "project: true");
     model.project_initial = value;
+  }
+}
+
+void Reader::apply_keep(Model& model) {
+  if (keep_q_.empty()) return;
+  const std::string why = project_keeping(model.system, model.q0, model.qd0, model.options.t_start,
+                                          keep_q_, keep_qd_, kept_names_);
+  if (!why.empty()) {
+    fail(keep_node_, "initial: project: " + why,
+         "keep fewer coordinates, or give values that the constraints allow");
   }
 }
 
@@ -1053,6 +1186,7 @@ Model Reader::read_plant(const YAML::Node& root) {
   model.project_initial = model.project_initial || model.options.project_initial;
   model.options.project_initial = model.project_initial;
   check_settings(root, model);
+  apply_keep(model);
   return model;
 }
 

@@ -311,6 +311,12 @@ class Reader {
                   const std::string& what) const;
   std::vector<YAML::Node> rows_of(const YAML::Node& node, const std::string& what);
   void read_parameters(const YAML::Node& root);
+  // the value of the parameter `name` written as an expression at `node` of the parameters
+  // before it (`earlier` holds them as constants; `order` lists every parameter, `index` is
+  // this one's place): located errors for a parameter written at or after it, unknown names,
+  // and values that are not finite
+  double derived_parameter(const YAML::Node& node, const std::string& name, ExpressionSet& earlier,
+                           const std::vector<std::string>& order, std::size_t index);
   void read_coordinates(const YAML::Node& root);
   void read_dynamics(const YAML::Node& root, SystemBuilder& builder);
   void read_constraints(const YAML::Node& root, SystemBuilder& builder);
@@ -349,6 +355,13 @@ class Reader {
   std::map<std::string, double> parameters_;
   std::vector<std::string> coordinates_, velocities_;
   ModelPositions positions_;  // where the file gives what a run may refuse (Model::positions)
+  // initial: project: {keep: [...]}: the node, and per coordinate whether its position and its
+  // velocity are kept (empty without keep)
+  YAML::Node keep_node_;
+  std::vector<unsigned char> keep_q_, keep_qd_;
+  std::vector<std::string> kept_names_;
+  // makes the initial state consistent keeping keep_q_, keep_qd_ (initial_keep.hpp)
+  void apply_keep(Model& model);
   std::vector<std::string> constraint_names_;   // in declaration order
   std::vector<std::string> constraint_inputs_;  // N_c and lambda_c of each named constraint
   std::vector<Index> constraint_rows_;

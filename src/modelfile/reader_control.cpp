@@ -9,12 +9,15 @@
 //     robust: {bound: 0.5, boundary_layer: 0.01, relative_bound: 0, gain_uncertainty: 0}
 // Each requirement is read like a constraint (holonomic:, nonholonomic:, A: with b:, active:)
 // and handed to ControllerBuilder with its error dynamics.
+#include <algorithm>
+#include <cmath>
 #include <set>
 
 #include <yaml-cpp/yaml.h>
 
 #include "modelfile/reader.hpp"
 #include "ukdyn/core/format.hpp"
+#include "ukdyn/multibody/multibody.hpp"
 
 namespace ukdyn::model_reader {
 namespace {
@@ -30,6 +33,56 @@ void only_keys(const YAML::Node& map, const std::set<std::string>& keys, const s
            "the keys are " + join(list));
     }
   }
+}
+
+// The column of the actuation matrix S of a joint's own effort u (Q_c = S u), when it does not
+// depend on the coordinates (ControllerBuilder::actuation takes a constant S); otherwise empty,
+// with `why` saying why. A planar revolute joint: the torque u on the child and −u on the parent
+// (rows of their angles). A planar prismatic joint on the ground: the force u along the slide
+// direction d (the parent frame's x axis, fixed) at the child's joint point, whose offset r from
+// the child's centre of mass is fixed too (the joint holds the child's angle at α_P − α_C):
+// rows (d_x, d_y, r × d) of the child's (x, y, theta) — the virtual work u δs of the slide s.
+VectorXd actuation_of_joint(const mb::MultibodyModel& m, const mb::JointInfo& j, std::string& why) {
+  const Index n = m.system.coordinate_count();
+  const auto angle_of = [&](mb::BodyId b) { return m.bodies[std::size_t(b)].offset + 2; };
+  if (!j.planar && (j.type == mb::JointType::kRevolute || j.type == mb::JointType::kPrismatic)) {
+    why =
+        "is a spatial joint: the generalized force of its effort depends on the bodies' "
+        "orientations, and the controller's actuation matrix is constant (planar revolute joints "
+        "and planar prismatic joints on the ground can be actuated)";
+    return {};
+  }
+  if (j.type == mb::JointType::kRevolute) {
+    VectorXd s = VectorXd::Zero(n);
+    s[angle_of(j.child)] += 1.0;
+    if (j.parent != mb::kGround) s[angle_of(j.parent)] -= 1.0;
+    return s;
+  }
+  if (j.type == mb::JointType::kPrismatic) {
+    if (j.parent != mb::kGround) {
+      why =
+          "is a prismatic joint between two bodies: its force turns with the parent body, and the "
+          "controller's actuation matrix is constant (a prismatic joint on the ground can be "
+          "actuated)";
+      return {};
+    }
+    const double alpha_p = std::atan2(j.frame_parent.R(1, 0), j.frame_parent.R(0, 0));
+    const double alpha_c = std::atan2(j.frame_child.R(1, 0), j.frame_child.R(0, 0));
+    const double theta = alpha_p - alpha_c;  // the child's angle the joint holds
+    const double dx = std::cos(alpha_p), dy = std::sin(alpha_p);
+    const double px = j.frame_child.p.x(), py = j.frame_child.p.y();
+    const double rx = std::cos(theta) * px - std::sin(theta) * py;
+    const double ry = std::sin(theta) * px + std::cos(theta) * py;
+    const Index o = m.bodies[std::size_t(j.child)].offset;
+    VectorXd s = VectorXd::Zero(n);
+    s[o] = dx;
+    s[o + 1] = dy;
+    s[o + 2] = rx * dy - ry * dx;
+    return s;
+  }
+  why = std::string("is a ") + mb::to_string(j.type) +
+        " joint: only revolute and prismatic joints have a coordinate of their own to actuate";
+  return {};
 }
 
 }  // namespace
@@ -212,25 +265,71 @@ void Reader::read_control(const YAML::Node& root, Model& model) {
     fail(c["law"], "unknown law '" + law + "'", "the laws are gauss and weighted");
   }
 
-  // actuation
+  // actuation: coordinates (either spelling, as S's unit columns) and, in a multibody model,
+  // joints (the generalized force of the joint's own effort: actuation_of_joint)
   if (const YAML::Node a = c["actuated"]) {
     if (!a.IsSequence() || a.size() == 0)
       fail(a, "actuated must be a list of coordinates", "actuated: [x]");
-    std::vector<std::string> names;
+    const std::vector<std::string>& system_names = model.system.coordinate_names();
+    const Index n = Index(system_names.size());
+    std::vector<std::string> names;  // the System's names of the actuated coordinates
+    std::vector<std::string> given;  // every entry, for "listed twice"
+    std::vector<VectorXd> columns;   // S's columns, in order
+    bool joints = false;
     for (const auto& x : a) {
+      const std::string entry = x.Scalar();
       // (crank.x or crank_x: names_coordinate; the list holds the reader's spelling)
       const auto known = std::find_if(
           coordinates_.begin(), coordinates_.end(),
-          [&](const std::string& coordinate) { return names_coordinate(x.Scalar(), coordinate); });
-      if (known == coordinates_.end())
-        fail(x, "actuated: '" + x.Scalar() + "' is not a coordinate",
-             "the coordinates are " + join(coordinates_));
-      const std::string name = *known;
-      if (std::find(names.begin(), names.end(), name) != names.end())
-        fail(x, "actuated: '" + name + "' is listed twice");
-      names.push_back(name);
+          [&](const std::string& coordinate) { return names_coordinate(entry, coordinate); });
+      if (known != coordinates_.end()) {
+        const Index k = Index(known - coordinates_.begin());
+        const std::string& name = system_names[std::size_t(k)];
+        if (std::find(given.begin(), given.end(), name) != given.end())
+          fail(x, "actuated: '" + entry + "' is listed twice");
+        given.push_back(name);
+        names.push_back(name);
+        columns.push_back(VectorXd::Unit(n, k));
+        continue;
+      }
+      const bool is_joint =
+          model.multibody &&
+          std::any_of(model.multibody->joints.begin(), model.multibody->joints.end(),
+                      [&](const mb::JointInfo& j) { return j.name == entry; });
+      if (!is_joint) {
+        std::vector<std::string> choices = coordinates_;
+        if (model.multibody) {
+          for (const auto& j : model.multibody->joints) choices.push_back(j.name);
+        }
+        fail(x,
+             "actuated: '" + entry + "' is not a coordinate" +
+                 (model.multibody ? std::string(" or a joint") : std::string()),
+             (model.multibody ? "the coordinates and joints are " : "the coordinates are ") +
+                 join(choices));
+      }
+      if (std::find(given.begin(), given.end(), entry) != given.end())
+        fail(x, "actuated: '" + entry + "' is listed twice");
+      given.push_back(entry);
+      const mb::MultibodyModel& mbm = *model.multibody;
+      std::string why;
+      VectorXd column = actuation_of_joint(mbm, mbm.joints[std::size_t(mbm.joint(entry))], why);
+      if (column.size() == 0)
+        fail(x, "actuated: joint '" + entry + "' " + why,
+             "actuate body coordinates instead (<body>_theta, <body>_x, …)");
+      columns.push_back(std::move(column));
+      joints = true;
     }
-    builder.actuated(names);
+    try {
+      if (joints) {
+        MatrixXd S(n, Index(columns.size()));
+        for (Index j = 0; j < S.cols(); ++j) S.col(j) = columns[std::size_t(j)];
+        builder.actuation(S);
+      } else {
+        builder.actuated(names);
+      }
+    } catch (const std::invalid_argument& e) {
+      fail(a, e.what());
+    }
   }
 
   // robust term

@@ -115,6 +115,37 @@ TEST(ExprEvaluate, RootsPowersAndAbs) {
   EXPECT_NEAR(value_at(s, s.parse("abs(x - y)"), {3.0, 1.0}), 2.0, kTol);
 }
 
+TEST(ExprEvaluate, NonSmoothFunctions) {
+  ExpressionSet s({"x", "y"});
+  // sign: −1, 0, 1; heaviside: 0, ½ at 0, 1
+  EXPECT_NEAR(value_at(s, s.parse("sign(x - y)"), {1.0, 3.0}), -1.0, kTol);
+  EXPECT_NEAR(value_at(s, s.parse("sign(x - y)"), {3.0, 3.0}), 0.0, kTol);
+  EXPECT_NEAR(value_at(s, s.parse("sign(x - y)"), {3.5, 3.0}), 1.0, kTol);
+  EXPECT_NEAR(value_at(s, s.parse("heaviside(x)"), {-0.1, 0.0}), 0.0, kTol);
+  EXPECT_NEAR(value_at(s, s.parse("heaviside(x)"), {0.0, 0.0}), 0.5, kTol);
+  EXPECT_NEAR(value_at(s, s.parse("heaviside(x)"), {1e-300, 0.0}), 1.0, kTol);
+  // min, max of both orders; with a common term (2 + x)
+  EXPECT_NEAR(value_at(s, s.parse("min(x, y)"), {1.0, 3.0}), 1.0, kTol);
+  EXPECT_NEAR(value_at(s, s.parse("min(x, y)"), {4.0, 3.0}), 3.0, kTol);
+  EXPECT_NEAR(value_at(s, s.parse("max(x, y)"), {1.0, 3.0}), 3.0, kTol);
+  EXPECT_NEAR(value_at(s, s.parse("max(x, y)"), {4.0, 3.0}), 4.0, kTol);
+  EXPECT_NEAR(value_at(s, s.parse("max(2 + x, 2*y) - min(x, y)"), {1.0, 3.0}), 5.0, kTol);
+  // if(c, a, b): a where c > 0, b where c <= 0
+  EXPECT_NEAR(value_at(s, s.parse("if(x - 1, x^2, -y)"), {2.0, 5.0}), 4.0, kTol);
+  EXPECT_NEAR(value_at(s, s.parse("if(x - 1, x^2, -y)"), {1.0, 5.0}), -5.0, kTol);
+  EXPECT_NEAR(value_at(s, s.parse("if(x - 1, x^2, -y)"), {0.5, 5.0}), -5.0, kTol);
+  // the branch not taken may be infinite or NaN there: exactly the other one
+  EXPECT_EQ(value_at(s, s.parse("if(x, 1/x, 0)"), {0.0, 0.0}), 0.0);
+  EXPECT_EQ(value_at(s, s.parse("if(x, log(x), y)"), {-1.0, 0.1}), 0.1);
+  EXPECT_EQ(value_at(s, s.parse("if(x, sqrt(x), y)"), {0.09, 7.0}), 0.3);
+  // constant arguments fold exactly, also with constants
+  s.set_constant("k", -2.0);
+  EXPECT_EQ(value_at(s, s.parse("sign(k) + heaviside(k) + max(k, 1/3)*3 + min(k, -3) + abs(k)"),
+                     {0.0, 0.0}),
+            -1.0 + 0.0 + 1.0 - 3.0 + 2.0);
+  EXPECT_EQ(value_at(s, s.parse("if(k, x, y) + heaviside(0) + sign(0)"), {1.0, 5.0}), 5.5);
+}
+
 TEST(ExprEvaluate, NumbersAreReadExactly) {
   ExpressionSet s({"x"});
   EXPECT_NEAR(value_at(s, s.parse("1e-3*x + 2.5E+2 + .5"), {2000.0}), 252.5, kTol);
@@ -232,6 +263,53 @@ TEST(ExprDiff, DerivativesOfTheFunctions) {
   EXPECT_NEAR(value_at(s, s.diff(s.parse("tan(x)"), "x"), {x, y}), 1 / (std::cos(x) * std::cos(x)),
               kTol);
   EXPECT_NEAR(value_at(s, s.diff(s.parse("log(sqrt(x))"), "x"), {x, y}), 1 / (2 * x), kTol);
+}
+
+TEST(ExprDiff, DerivativesOfTheNonSmoothFunctions) {
+  ExpressionSet s({"x", "y"});
+  // d abs(x)/dx = sign(x), 0 at 0 (not 0/0); d sign/dx = d heaviside/dx = 0 away from 0
+  EXPECT_NEAR(value_at(s, s.diff(s.parse("abs(x)"), "x"), {-0.3, 0.0}), -1.0, kTol);
+  EXPECT_EQ(value_at(s, s.diff(s.parse("abs(x)"), "x"), {0.0, 0.0}), 0.0);
+  EXPECT_EQ(value_at(s, s.diff(s.parse("3*abs(x)^2"), "x"), {-0.5, 0.0}), -3.0);
+  EXPECT_TRUE(s.is_zero(s.diff(s.parse("sign(x^2 - y)"), "x")));
+  EXPECT_TRUE(s.is_zero(s.diff(s.parse("heaviside(sin(x))"), "x")));
+  // d max(x², y)/dx = 2x where x² > y, 0 where x² < y; d/dy the other way round
+  const Expr m = s.parse("max(x^2, y)");
+  EXPECT_NEAR(value_at(s, s.diff(m, "x"), {1.5, 1.0}), 3.0, kTol);
+  EXPECT_NEAR(value_at(s, s.diff(m, "x"), {0.5, 1.0}), 0.0, kTol);
+  EXPECT_NEAR(value_at(s, s.diff(m, "y"), {0.5, 1.0}), 1.0, kTol);
+  EXPECT_NEAR(value_at(s, s.diff(m, "y"), {1.5, 1.0}), 0.0, kTol);
+  // d min(x², y)/dx: 0 where x² > y, 2x where x² < y
+  const Expr n = s.parse("min(x^2, y)");
+  EXPECT_NEAR(value_at(s, s.diff(n, "x"), {1.5, 1.0}), 0.0, kTol);
+  EXPECT_NEAR(value_at(s, s.diff(n, "x"), {0.5, 1.0}), 1.0, kTol);
+  // d if(x − 1, x³, −2y)/dx = 3x² where x > 1, 0 where x ≤ 1; the condition adds nothing;
+  // second derivatives too (6x, 0)
+  const Expr f = s.parse("if(x - 1, x^3, -2*y)");
+  EXPECT_NEAR(value_at(s, s.diff(f, "x"), {2.0, 1.0}), 12.0, kTol);
+  EXPECT_NEAR(value_at(s, s.diff(f, "x"), {0.5, 1.0}), 0.0, kTol);
+  EXPECT_NEAR(value_at(s, s.diff(f, "y"), {0.5, 1.0}), -2.0, kTol);
+  EXPECT_NEAR(value_at(s, s.diff(f, "y"), {2.0, 1.0}), 0.0, kTol);
+  EXPECT_NEAR(value_at(s, s.diff(s.diff(f, "x"), "x"), {2.0, 1.0}), 12.0, kTol);
+  // the derivative of the branch not taken does not leak: d/dx if(x, sqrt(x), -x) at x = −1
+  EXPECT_EQ(value_at(s, s.diff(s.parse("if(x, sqrt(x), -x)"), "x"), {-1.0, 0.0}), -1.0);
+  EXPECT_EQ(value_at(s, s.diff(s.parse("max(sqrt(x), y)"), "y"), {-1.0, 0.0}), 1.0);
+  // printed in the language and read back
+  for (const char* text : {"max(x, y^2) - min(x, 2)*sign(y)", "if(x - y, heaviside(x), abs(y))"}) {
+    const Expr e = s.parse(text);
+    EXPECT_TRUE(s.is_zero(s.subtract(s.parse(s.to_string(e)), e))) << s.to_string(e);
+  }
+}
+
+TEST(ExprParseError, NonSmoothFunctionsTakeTheirArguments) {
+  ExpressionSet s({"x", "y"});
+  EXPECT_EQ(std::string(parse_error(s, "if(x, y)").what()), "if takes 3 arguments, got 2");
+  EXPECT_EQ(std::string(parse_error(s, "max(x)").what()), "max takes 2 arguments, got 1");
+  EXPECT_EQ(std::string(parse_error(s, "1 + sign(x, y)").what()), "sign takes 1 argument, got 2");
+  EXPECT_EQ(parse_error(s, "1 + sign(x, y)").position(), 4u);
+  EXPECT_TRUE(starts_with(parse_error(s, "heavyside(x)").what(),
+                          "unknown function 'heavyside' (did you mean 'heaviside'"));
+  EXPECT_THROW(ExpressionSet({"max"}), std::invalid_argument);  // a function's name
 }
 
 TEST(ExprDiff, TotalDerivativeOfACircleConstraint) {
@@ -430,7 +508,7 @@ TEST(ExprParseError, UnknownFunctionsAndMisusedNames) {
   ParseError e = parse_error(s, "1 + gamma(x)");
   EXPECT_EQ(std::string(e.what()),
             "unknown function 'gamma' (the functions are sin, cos, tan, asin, acos, atan, "
-            "atan2, sinh, cosh, tanh, exp, log, sqrt, abs)");
+            "atan2, sinh, cosh, tanh, exp, log, sqrt, abs, sign, heaviside, min, max, if)");
   EXPECT_EQ(e.position(), 4u);
 
   e = parse_error(s, "sine(x)");

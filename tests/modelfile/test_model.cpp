@@ -1,5 +1,6 @@
 // Model files: symbolic derivation against closed forms and against the AD-derived constraints,
 // and the errors users meet (file:line:column and a hint).
+#include <algorithm>
 #include <cmath>
 
 #include <gtest/gtest.h>
@@ -189,6 +190,198 @@ TEST(Model, ParametersCanBeOverridden) {
   EXPECT_DOUBLE_EQ(m.parameters.at("k"), 5.0);
 }
 
+TEST(Model, DerivedParametersAreEvaluatedInOrderAndFollowOverrides) {
+  // a rod of mass m and length L pinned at one end: I = m L²/12 about its centre, Ip = I +
+  // m (L/2)² = m L²/3 about the pin; T = ½ Ip θ'², V = −m g (L/2) cos θ
+  const std::string text = R"(
+parameters: {m: 3, L: 2, I: m*L^2/12, Ip: I + m*(L/2)^2, g: 9.81, w: sqrt(m*g*(L/2)/Ip)}
+coordinates: [th]
+kinetic_energy: 0.5*Ip*th_dot^2
+potential_energy: -m*g*(L/2)*cos(th)
+)";
+  const Model a = parse_model(text);
+  EXPECT_NEAR(a.parameters.at("I"), 1.0, 1e-15);
+  EXPECT_NEAR(a.parameters.at("Ip"), 4.0, 1e-15);
+  EXPECT_NEAR(a.parameters.at("w"), std::sqrt(3 * kG * 1.0 / 4.0), 1e-15);
+  Workspace wa(a.system);
+  ASSERT_EQ(forward_dynamics(a.system, wa, vec({0.3}), vec({0.0}), 0.0), Status::kOk);
+  EXPECT_NEAR(wa.M(0, 0), 4.0, 1e-14);
+  // --set m=2 re-evaluates the parameters after it: I = 2/3, Ip = 8/3
+  const Model b = parse_model(text, "m.yaml", {{"m", 2.0}});
+  EXPECT_NEAR(b.parameters.at("I"), 2.0 / 3.0, 1e-15);
+  EXPECT_NEAR(b.parameters.at("Ip"), 8.0 / 3.0, 1e-15);
+  Workspace wb(b.system);
+  ASSERT_EQ(forward_dynamics(b.system, wb, vec({0.3}), vec({0.0}), 0.0), Status::kOk);
+  EXPECT_NEAR(wb.M(0, 0), 8.0 / 3.0, 1e-14);
+  EXPECT_NEAR(wb.qdd[0], -2 * kG * 1.0 * std::sin(0.3) / (8.0 / 3.0), 1e-13);
+  // an override of a derived parameter wins over its expression, and the later ones follow it
+  const Model c = parse_model(text, "m.yaml", {{"I", 5.0}});
+  EXPECT_DOUBLE_EQ(c.parameters.at("I"), 5.0);
+  EXPECT_NEAR(c.parameters.at("Ip"), 8.0, 1e-15);
+  EXPECT_NEAR(c.parameters.at("w"), std::sqrt(3 * kG / 8.0), 1e-15);
+}
+
+TEST(Model, DerivedParametersInAMultibodyModel) {
+  // the bodies' numbers read the derived parameters like the others (a pendulum on a pin)
+  const Model m = parse_model(R"(
+parameters: {m: 2, L: 1.5, J: m*L^2/12, g: 9.81}
+bodies:
+  - {name: rod, type: planar, mass: m, inertia: J, position: [L/2, 0], angle: 0}
+joints:
+  - {name: pin, type: revolute, parent: ground, child: rod, child_point: [-L/2, 0]}
+forces:
+  - {type: gravity, g: [0, -g]}
+)",
+                              "m.yaml", {{"L", 3.0}});
+  EXPECT_NEAR(m.parameters.at("J"), 2 * 9.0 / 12, 1e-15);
+  Workspace ws(m.system);
+  ASSERT_EQ(forward_dynamics(m.system, ws, m.q0, m.qd0, 0.0), Status::kOk);
+  EXPECT_NEAR(ws.M(2, 2), 1.5, 1e-15);
+}
+
+TEST(ModelErrors, DerivedParameterReferringToALaterOrUnknownParameter) {
+  std::string e = error_of(
+      "parameters: {I: m*L^2/12, m: 1, L: 2}\ncoordinates: [x]\n"
+      "mass_matrix: [[I]]\n");
+  // 'm' at offset 0 of the value at column 17
+  EXPECT_TRUE(contains(e,
+                       "m.yaml:1:17: error: in parameter 'I': 'm' is defined after 'I' "
+                       "(parameters are evaluated in the order written) (hint: move m above I)"))
+      << e;
+  e = error_of("parameters:\n  m: 1\n  I: m*Len^2/12\ncoordinates: [x]\nmass_matrix: [[I]]\n");
+  EXPECT_TRUE(contains(e, "m.yaml:3:8: error: in parameter 'I': unknown name 'Len'")) << e;
+  e = error_of("parameters: {k: 2*k}\ncoordinates: [x]\nmass_matrix: [[k]]\n");
+  EXPECT_TRUE(contains(e, "m.yaml:1:19: error: in parameter 'k': 'k' refers to itself")) << e;
+  // a coordinate is not known to the parameters
+  e = error_of("parameters: {k: 2*x}\ncoordinates: [x]\nmass_matrix: [[k]]\n");
+  EXPECT_TRUE(contains(e, "m.yaml:1:19: error: in parameter 'k': unknown name 'x'")) << e;
+  // values that are not defined
+  e = error_of("parameters: {a: 0, k: 1/a}\ncoordinates: [x]\nmass_matrix: [[k]]\n");
+  EXPECT_TRUE(contains(e,
+                       "m.yaml:1:24: error: in parameter 'k': cannot evaluate: division by "
+                       "zero with the parameters' values"))
+      << e;
+  e = error_of("parameters: {a: 2, k: sqrt(1 - a)}\ncoordinates: [x]\nmass_matrix: [[k]]\n");
+  EXPECT_TRUE(contains(e, "m.yaml:1:23: error: in parameter 'k': cannot evaluate")) << e;
+  e = error_of("parameters: {k: [1, 2]}\ncoordinates: [x]\nmass_matrix: [[k]]\n");
+  EXPECT_TRUE(contains(e, "m.yaml:1:17: error: parameter 'k' must be a number or an expression"))
+      << e;
+}
+
+// A slider-crank in (crank angle th, rod angle ph, slider x): r sin th = l sin ph,
+// x = r cos th + l cos ph. initial: project: {keep: [th]} holds th and th' as given and solves
+// for the rest: the closure solution, not the least M-norm change of every coordinate (which
+// turned 8 rad/s into 2.14 in the new-user report).
+const char* kSliderCrankKeep = R"(
+parameters: {r: 0.3, l: 1, Jc: 0.01, Jr: 0.17, ms: 0.5}
+coordinates: [th, ph, x]
+kinetic_energy: 0.5*Jc*th_dot^2 + 0.5*Jr*ph_dot^2 + 0.5*ms*x_dot^2
+constraints:
+  - {name: loop, holonomic: [r*cos(th) + l*cos(ph) - x, r*sin(th) - l*sin(ph)]}
+initial:
+  q: {th: 0.7, ph: 0, x: 1}
+  q_dot: {th: 8, ph: 1, x: -3}
+  project: {keep: [th]}
+)";
+
+TEST(Model, InitialProjectionKeepsTheNamedCoordinatesAndSolvesForTheOthers) {
+  const Model m = parse_model(kSliderCrankKeep);
+  const double r = 0.3, l = 1.0, th = 0.7, w = 8.0;
+  const double ph = std::asin(r * std::sin(th) / l), x = r * std::cos(th) + l * std::cos(ph);
+  const double ph_dot = r * std::cos(th) * w / (l * std::cos(ph));
+  const double x_dot = -r * std::sin(th) * w - l * std::sin(ph) * ph_dot;
+  EXPECT_EQ(m.q0[0], 0.7);  // exactly as given
+  EXPECT_EQ(m.qd0[0], 8.0);
+  EXPECT_NEAR(m.q0[1], ph, 1e-14);
+  EXPECT_NEAR(m.q0[2], x, 1e-14);
+  EXPECT_NEAR(m.qd0[1], ph_dot, 1e-13);
+  EXPECT_NEAR(m.qd0[2], x_dot, 1e-13);
+  Workspace ws(m.system);
+  evaluate_violations(m.system, ws, m.q0, m.qd0, 0.0);
+  EXPECT_NEAR(ws.phi.cwiseAbs().maxCoeff(), 0.0, 1e-12);
+  EXPECT_NEAR(ws.phi_dot.cwiseAbs().maxCoeff(), 0.0, 1e-12);
+  // the run starts from it unchanged
+  SimulationOptions o = m.options;
+  o.t_end = 1e-3;
+  const Trajectory tr = simulate(m.system, m.q0, m.qd0, o);
+  EXPECT_EQ(tr.q[0], 0.7);  // sample 0, coordinate th (row-major N × n)
+  EXPECT_EQ(tr.qd[0], 8.0);
+  // x_dot alone: the crank's angle is then free, its rate not: the velocities keep th' = 8 and
+  // x' as solved from it
+  std::string text = kSliderCrankKeep;
+  text.replace(text.find("keep: [th]"), 10, "keep: [th_dot]");
+  const Model v = parse_model(text);
+  EXPECT_EQ(v.qd0[0], 8.0);
+  Workspace wv(v.system);
+  evaluate_violations(v.system, wv, v.q0, v.qd0, 0.0);
+  EXPECT_NEAR(wv.phi.cwiseAbs().maxCoeff(), 0.0, 1e-12);
+  EXPECT_NEAR(wv.phi_dot.cwiseAbs().maxCoeff(), 0.0, 1e-12);
+  EXPECT_GT(std::abs(v.q0[0] - 0.7), 1e-6);  // th moved (least M-norm with ph and x)
+}
+
+TEST(Model, InitialProjectionKeepsABodyCoordinateOfAMultibodyModel) {
+  // the new-user report's slider-crank, every pose but the crank's written roughly, every
+  // velocity but the crank's left 0: keep: [crank_theta] gives the closed-form closure
+  const Model m = parse_model(R"(
+parameters: {r: 0.3, l: 1, mc: 1, mr: 2, ms: 0.5, th0: 0.3, w0: 8}
+bodies:
+  - {name: crank, type: planar, mass: mc, inertia: mc*r^2/12, position: [0.1, 0.1], angle: th0,
+     angular_velocity: w0}
+  - {name: rod, type: planar, mass: mr, inertia: mr*l^2/12, position: [0.8, 0], angle: 0}
+  - {name: slider, type: planar, mass: ms, inertia: 0.01, position: [1.3, 0]}
+joints:
+  - {name: pin, type: revolute, parent: ground, child: crank, child_point: [-r/2, 0]}
+  - {name: crank_rod, type: revolute, parent: crank, child: rod, parent_point: [r/2, 0],
+     child_point: [-l/2, 0]}
+  - {name: rod_slider, type: revolute, parent: rod, child: slider, parent_point: [l/2, 0]}
+  - {name: slide, type: prismatic, parent: ground, child: slider}
+initial: {project: {keep: [crank.theta]}}
+)");
+  const double r = 0.3, l = 1.0, th = 0.3, w = 8.0;
+  const double root = std::sqrt(l * l - r * r * std::sin(th) * std::sin(th));
+  const auto at = [&](const std::string& name) {
+    const auto& names = m.system.coordinate_names();
+    return Index(std::find(names.begin(), names.end(), name) - names.begin());
+  };
+  EXPECT_EQ(m.q0[at("crank.theta")], 0.3);
+  EXPECT_EQ(m.qd0[at("crank.theta")], 8.0);
+  EXPECT_NEAR(m.q0[at("crank.x")], r / 2 * std::cos(th), 1e-14);
+  EXPECT_NEAR(m.q0[at("rod.theta")], std::asin(-r * std::sin(th) / l), 1e-14);
+  EXPECT_NEAR(m.q0[at("slider.x")], r * std::cos(th) + root, 1e-14);
+  EXPECT_NEAR(m.qd0[at("rod.theta")], -r * std::cos(th) * w / root, 1e-13);
+  EXPECT_NEAR(m.qd0[at("slider.x")], r * std::sin(th) * (-r * std::cos(th) * w / root - w), 1e-13);
+  Workspace ws(m.system);
+  evaluate_violations(m.system, ws, m.q0, m.qd0, 0.0);
+  EXPECT_NEAR(ws.phi.cwiseAbs().maxCoeff(), 0.0, 1e-12);
+  EXPECT_NEAR(ws.phi_dot.cwiseAbs().maxCoeff(), 0.0, 1e-12);
+}
+
+TEST(ModelErrors, InitialProjectionKeepingTooMuchOrTheImpossible) {
+  std::string text = kSliderCrankKeep;
+  // th and x kept: ph alone cannot close the loop's two rows
+  text.replace(text.find("keep: [th]"), 10, "keep: [th, x]");
+  std::string e = error_of(text);
+  EXPECT_TRUE(contains(e,
+                       "m.yaml:10:19: error: initial: project: keeping th, x over-determines "
+                       "the constraints: the other positions cannot satisfy them (rank 1"))
+      << e;
+  // a crank longer than the rod cannot close at th = 0.7: Newton does not converge
+  e = error_of(kSliderCrankKeep, {{"r", 1.0}, {"l", 0.3}});
+  EXPECT_TRUE(contains(e,
+                       "m.yaml:10:19: error: initial: project: the Newton iteration for the "
+                       "positions did not converge"))
+      << e;
+  text = kSliderCrankKeep;
+  text.replace(text.find("keep: [th]"), 10, "keep: [tht]");
+  e = error_of(text);
+  EXPECT_TRUE(contains(e, "m.yaml:10:20: error: keep: 'tht' is not a coordinate or a velocity"))
+      << e;
+  text = kSliderCrankKeep;
+  text.replace(text.find("keep: [th]"), 10, "kept: [th]");
+  e = error_of(text);
+  EXPECT_TRUE(contains(e, "m.yaml:10:13: error: unknown key 'kept' in initial: project")) << e;
+}
+
 TEST(ModelErrors, YamlSyntaxHasLineAndColumn) {
   const std::string e = error_of("coordinates: [x, y\nmass_matrix: [[1, 0], [0, 1]]\n");
   EXPECT_TRUE(contains(e, "m.yaml:")) << e;
@@ -314,6 +507,50 @@ TEST(ModelErrors, MissingFile) {
     EXPECT_TRUE(contains(e.what(), "/nonexistent/model.yaml: error: cannot read the model file"))
         << e.what();
   }
+}
+
+}  // namespace
+}  // namespace ukdyn
+
+namespace ukdyn {
+namespace {
+
+// A particle in the V-shaped potential V = F |x| (issue #16 item 6d): the force −F sign(x) is
+// derived from abs (0 at x = 0, not 0/0), and with x(0) = A, x'(0) = 0 the motion is parabolic
+// arcs, x = A − F t²/(2m) until x = 0 at t1 = sqrt(2 m A / F): period 4 t1. The switch at x = 0
+// is not an event: dopri5 meets its tolerance by shrinking the steps around it.
+TEST(Model, NonSmoothPotentialGivesTheClosedFormMotion) {
+  const Model m = parse_model(R"(
+parameters: {m: 1, F: 2, A: 0.5}
+coordinates: [x]
+kinetic_energy: 0.5*m*x_dot^2
+potential_energy: F*abs(x)
+initial: {q: {x: A}}
+simulate: {t_end: 4*sqrt(2*m*A/F), rtol: 1e-11, atol: 1e-13}
+output: {every: 0, at: [sqrt(2*m*A/F), 2*sqrt(2*m*A/F)]}
+)");
+  const double t1 = std::sqrt(0.5);
+  Workspace ws(m.system);
+  ASSERT_EQ(forward_dynamics(m.system, ws, vec({0.0}), vec({1.0}), 0.0), Status::kOk);
+  EXPECT_EQ(ws.qdd[0], 0.0);  // sign(0) = 0
+  ASSERT_EQ(forward_dynamics(m.system, ws, vec({-0.2}), vec({1.0}), 0.0), Status::kOk);
+  EXPECT_EQ(ws.qdd[0], 2.0);
+  const Trajectory tr = simulate(m.system, m.q0, m.qd0, m.options);
+  ASSERT_EQ(tr.stats.status, Status::kOk) << tr.stats.message;
+  const auto at = [&](double t) {
+    for (std::size_t i = 0; i < tr.t.size(); ++i) {
+      if (std::abs(tr.t[i] - t) < 1e-12) return i;
+    }
+    ADD_FAILURE() << "no sample at " << t;
+    return std::size_t(0);
+  };
+  // x(t1) = 0 with x'(t1) = −F t1 / m; x(2 t1) = −A, x(4 t1) = A; energy F A throughout
+  EXPECT_NEAR(tr.q[at(t1)], 0.0, 1e-8);
+  EXPECT_NEAR(tr.qd[at(t1)], -2 * t1, 1e-8);
+  EXPECT_NEAR(tr.q[at(2 * t1)], -0.5, 1e-8);
+  EXPECT_NEAR(tr.q.back(), 0.5, 1e-8);
+  EXPECT_NEAR(tr.qd.back(), 0.0, 1e-8);
+  EXPECT_NEAR(tr.energy.back(), 1.0, 1e-7);
 }
 
 }  // namespace

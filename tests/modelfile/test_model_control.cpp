@@ -6,6 +6,7 @@
 #include <fstream>
 #include <iterator>
 #include <map>
+#include <numbers>
 #include <random>
 #include <string>
 #include <vector>
@@ -17,6 +18,7 @@
 #include <Eigen/SVD>
 
 #include "ukdyn/control/control.hpp"
+#include "ukdyn/dynamics/workspace.hpp"
 #include "ukdyn/modelfile/model.hpp"
 #include "ukdyn/modelfile/run.hpp"
 
@@ -99,6 +101,170 @@ TEST(ModelControl, TriplePendulumJointsFollowTheirErrorDynamics) {
   RecordProperty("max_error_deviation", std::to_string(worst));
   // the plant's energy balance with the control's work (as simulate_controlled measures it)
   EXPECT_NEAR(r.trajectory.stats.energy_drift, 0.0, 1e-8);
+}
+
+// The arm of arm_circle.yaml as bodies and joints, actuated at its joints (issue #16 item 6c):
+// the tip error follows its closed form, and the joint torques are those of the same arm in
+// relative joint angles (an independent model: there Qc_control.q1 is the shoulder torque and
+// Qc_control.q2 the elbow's; here the shoulder torque acts on link1 and the elbow's on link2
+// and, opposite, on link1). Both requirement rows fix both degrees of freedom, so the torques
+// are unique.
+TEST(ModelControl, MultibodyArmActuatedAtItsJointsMatchesTheJointAngleModel) {
+  const std::string dir = UKDYN_TEST_DATA_DIR;
+  SimulationOptions o;
+  const Model bodies = load_model(dir + "/arm_circle_bodies.yaml");
+  ASSERT_TRUE(bodies.controller);
+  EXPECT_FALSE(bodies.controller->fully_actuated());
+  EXPECT_EQ(bodies.controller->actuators(), 2);
+  const ModelRun rb = run_ok(bodies);
+  Model angles = load_model(dir + "/arm_circle.yaml");
+  angles.options = bodies.options;
+  angles.options.t_end = bodies.options.t_end;
+  const ModelRun ra = run_ok(angles);
+  ASSERT_EQ(rb.trajectory.t.size(), ra.trajectory.t.size());
+  // e(0) = tip(0) − (cx + R, cy), e'(0) = −(0, R W); critically damped with ω = 4
+  const double L1 = 0.6, L2 = 0.5, a1 = 0.2, a2 = 1.4;
+  const double ex0 = L1 * std::cos(a1) + L2 * std::cos(a2) - 0.85;
+  const double ey0 = L1 * std::sin(a1) + L2 * std::sin(a2) - 0.2;
+  const auto ex = column(rb, "error.tip.0"), ey = column(rb, "error.tip.1");
+  const auto t1 = column(rb, "Qc_control.link1.theta"), t2 = column(rb, "Qc_control.link2.theta");
+  const auto fx = column(rb, "Qc_control.link2.x");
+  const auto q1 = column(ra, "Qc_control.q1"), q2 = column(ra, "Qc_control.q2");
+  for (std::size_t i = 0; i < ex.size(); ++i) {
+    const double t = rb.trajectory.t[i];
+    EXPECT_NEAR(ex[i], second_order_error(1.0, 4.0, ex0, 0.0, t), 1e-8) << t;
+    EXPECT_NEAR(ey[i], second_order_error(1.0, 4.0, ey0, -0.5, t), 1e-8) << t;
+    // shoulder = Qc(link1.theta) + elbow, elbow = Qc(link2.theta); no force on a centre of mass
+    EXPECT_NEAR(t1[i] + t2[i], q1[i], 1e-6 * (1 + std::abs(q1[i]))) << t;
+    EXPECT_NEAR(t2[i], q2[i], 1e-6 * (1 + std::abs(q2[i]))) << t;
+    EXPECT_EQ(fx[i], 0.0) << t;
+  }
+  // the shoulder holds the arm up against gravity: about 7.7 … 11.1 N m (the report's range)
+  EXPECT_NEAR(t1[0] + t2[0], q1[0], 1e-9);
+  EXPECT_GT(q1[0], 5.0);
+}
+
+// The reproducer's spellings of the bodies' coordinates both work: the same torques as the
+// joints give (their columns span the same space), and errors name the choices.
+TEST(ModelControl, MultibodyActuatedAcceptsBothSpellingsAndRefusesOtherJoints) {
+  std::ifstream in(std::string(UKDYN_TEST_DATA_DIR) + "/arm_circle_bodies.yaml");
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const auto with = [&](const std::string& list) {
+    std::string t = text;
+    const std::string key = "actuated: [shoulder, elbow]";
+    t.replace(t.find(key), key.size(), "actuated: " + list);
+    return t;
+  };
+  const Model joints = parse_model(text, "arm.yaml");
+  Workspace ws(joints.system);
+  for (const std::string list :
+       {"[link1_theta, link2_theta]", "[link1.theta, link2.theta]", "[shoulder, link2_theta]"}) {
+    const Model m = parse_model(with(list), "arm.yaml");
+    ASSERT_TRUE(m.controller) << list;
+    EXPECT_EQ(m.controller->actuators(), 2) << list;
+    SimulationOptions o = m.options;
+    o.t_end = 0.5;
+    const ModelRun a = run_model(m, o), b = run_model(joints, o);
+    EXPECT_EQ(a.trajectory.stats.status, Status::kOk) << list;
+    EXPECT_EQ(a.control.not_met, 0) << list;
+    const auto ta = column(a, "Qc_control.link1.theta"), tb = column(b, "Qc_control.link1.theta");
+    ASSERT_EQ(ta.size(), tb.size());
+    for (std::size_t i = 0; i < ta.size(); ++i)
+      EXPECT_NEAR(ta[i], tb[i], 1e-7 * (1 + std::abs(tb[i]))) << list;
+  }
+  const auto error = [&](const std::string& list) -> std::string {
+    try {
+      parse_model(with(list), "arm.yaml");
+    } catch (const ModelError& e) {
+      return e.what();
+    }
+    return "";
+  };
+  std::string e = error("[wrist]");
+  EXPECT_NE(e.find("arm.yaml:26:14: error: actuated: 'wrist' is not a coordinate or a joint "
+                   "(hint: the coordinates and joints are link1_x, link1_y, link1_theta, link2_x, "
+                   "link2_y, link2_theta, shoulder, elbow)"),
+            std::string::npos)
+      << e;
+  e = error("[shoulder, shoulder]");
+  EXPECT_NE(e.find("arm.yaml:26:24: error: actuated: 'shoulder' is listed twice"),
+            std::string::npos)
+      << e;
+  e = error("[link2.theta, link2_theta]");
+  EXPECT_NE(e.find("error: actuated: 'link2_theta' is listed twice"), std::string::npos) << e;
+}
+
+// A joint that cannot be actuated with a constant actuation matrix is refused at its name.
+TEST(ModelControl, MultibodyJointsThatCannotBeActuatedAreLocatedErrors) {
+  const std::string base = R"(parameters: {m: 1}
+bodies:
+  - {name: a, type: planar, mass: m, inertia: 0.1, position: [1, 0]}
+  - {name: b, type: planar, mass: m, inertia: 0.1, position: [2, 0]}
+joints:
+  - {name: pin, type: revolute, parent: ground, child: a, child_point: [-1, 0]}
+  - {name: slide, type: prismatic, parent: a, child: b}
+  - {name: rod, type: distance, parent: ground, child: b, parent_point: [0, 0], length: 2}
+control:
+  requirements: [{name: r, holonomic: a_theta - t}]
+)";
+  const auto error = [&](const std::string& list) -> std::string {
+    try {
+      parse_model(base + "  actuated: " + list + "\n", "j.yaml");
+    } catch (const ModelError& e) {
+      return e.what();
+    }
+    return "";
+  };
+  std::string e = error("[rod]");
+  EXPECT_NE(e.find("j.yaml:11:14: error: actuated: joint 'rod' is a distance joint: only "
+                   "revolute and prismatic joints have a coordinate of their own to actuate"),
+            std::string::npos)
+      << e;
+  e = error("[pin, slide]");
+  EXPECT_NE(e.find("j.yaml:11:19: error: actuated: joint 'slide' is a prismatic joint between "
+                   "two bodies"),
+            std::string::npos)
+      << e;
+}
+
+// A prismatic joint on the ground, actuated: a block on a slide inclined at 30° under gravity,
+// its position required to follow s(t) = 0.5 t²; the actuator force is u = m s'' + m g sin 30°
+// along the slide (the closed form), the Gauss law puts nothing elsewhere.
+TEST(ModelControl, MultibodyPrismaticJointOnTheGroundIsActuatedAlongItsSlide) {
+  // the joint point (0.1, 0.2) of the block turned by 0.25 is r = (rx, ry) from its centre,
+  // and starts at the origin (s = 0)
+  const Model m = parse_model(R"(parameters: {m: 2, g: 9.81, a: pi/6, th: 0.25,
+  rx: 0.1*cos(th) - 0.2*sin(th), ry: 0.1*sin(th) + 0.2*cos(th)}
+bodies:
+  - {name: block, type: planar, mass: m, inertia: 0.1, angle: th, position: [-rx, -ry]}
+joints:
+  - {name: slide, type: prismatic, parent: ground, child: block, parent_angle: a,
+     child_angle: a - th, child_point: [0.1, 0.2]}
+forces:
+  - {type: gravity, g: [0, -g]}
+control:
+  requirements:
+    - {name: s, holonomic: (block_x + rx)*cos(a) + (block_y + ry)*sin(a) - 0.5*t^2,
+       dynamics: {omega: 3}}
+  actuated: [slide]
+simulate: {t_end: 1}
+output: {every: 0.1}
+)",
+                              "p.yaml");
+  const ModelRun r = run_ok(m);
+  const auto fx = column(r, "Qc_control.block.x"), fy = column(r, "Qc_control.block.y");
+  const auto tz = column(r, "Qc_control.block.theta");
+  const auto e = column(r, "error.s");
+  const double pi = std::numbers::pi, u = 2 * 1.0 + 2 * 9.81 * 0.5;
+  const double rx = 0.1 * std::cos(0.25) - 0.2 * std::sin(0.25);
+  const double ry = 0.1 * std::sin(0.25) + 0.2 * std::cos(0.25);
+  ASSERT_EQ(fx.size(), 11u);
+  for (std::size_t i = 0; i < fx.size(); ++i) {
+    EXPECT_NEAR(e[i], 0.0, 1e-9);
+    EXPECT_NEAR(fx[i], u * std::cos(pi / 6), 1e-8);
+    EXPECT_NEAR(fy[i], u * std::sin(pi / 6), 1e-8);
+    EXPECT_NEAR(tz[i], u * (rx * std::sin(pi / 6) - ry * std::cos(pi / 6)), 1e-8);
+  }
 }
 
 TEST(ModelControl, TipRequirementWeightedLawIsOptimalAmongAdmissibleControls) {

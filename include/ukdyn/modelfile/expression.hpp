@@ -4,7 +4,11 @@
 ///
 /// The language: numbers (`2`, `0.5`, `.5`, `1e-3`; read as exact rationals), names, + − * /
 /// ^ (power), parentheses, and the functions sin, cos, tan, asin, acos, atan, atan2(y, x), sinh,
-/// cosh, tanh, exp, log, sqrt, abs. Precedence as in Python: `-x^2` is −(x²), `x^-2*y` is
+/// cosh, tanh, exp, log, sqrt, abs, and the non-smooth sign (0 at 0), heaviside (½ at 0),
+/// min(a, b), max(a, b) and if(c, a, b) (a where c > 0, else b), differentiated where they are
+/// differentiable (d abs(x) = sign(x) dx, d sign = d heaviside = 0, d max(a, b) = if(a − b, da,
+/// db), d min(a, b) = if(b − a, da, db), d if(c, a, b) = if(c, da, db); docs/model-format.md).
+/// Precedence as in Python: `-x^2` is −(x²), `x^-2*y` is
 /// (x⁻²)·y; `a^b^c` is refused as ambiguous. Names are the inputs declared when the set is made
 /// (coordinates, their velocities `x_dot`, time `t`, …) and constants (parameters) whose values
 /// are fixed before compiling. GiNaC types stay inside src/modelfile/expression.cpp: this header is
