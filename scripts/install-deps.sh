@@ -5,6 +5,7 @@ set -euo pipefail
 
 packages=(
   build-essential cmake ninja-build    # compiler and build system
+  file                                 # cpack -G DEB: CPack's dpkg-shlibdeps step detects ELF files with it
   libeigen3-dev                        # linear algebra and AutoDiff
   libboost-dev                         # Boost.Odeint: RK4, Dormand-Prince, Fehlberg
   libsundials-dev                      # SUNDIALS CVODE: BDF for stiff problems
