@@ -17,6 +17,7 @@ packages=(
   libcli11-dev                         # the ukdyn command line
   python3-matplotlib                   # plots of ukdyn run
   pybind11-dev python3-dev             # the Python module (python/)
+  python3-venv python3-setuptools python3-wheel  # pip install . into .venv/ (pyproject.toml: setuptools drives CMake)
   python3-numpy python3-pandas         # its arrays and DataFrames
   python3-sympy                        # SymPy-defined models
   python3-pytest                       # its tests
