@@ -5,6 +5,7 @@ set -euo pipefail
 
 packages=(
   build-essential cmake ninja-build    # compiler and build system
+  file                                 # cpack -G DEB: CPack's dpkg-shlibdeps step detects ELF files with it
   libeigen3-dev                        # linear algebra and AutoDiff
   libboost-dev                         # Boost.Odeint: RK4, Dormand-Prince, Fehlberg
   libsundials-dev                      # SUNDIALS CVODE: BDF for stiff problems
@@ -16,6 +17,7 @@ packages=(
   libcli11-dev                         # the ukdyn command line
   python3-matplotlib                   # plots of ukdyn run
   pybind11-dev python3-dev             # the Python module (python/)
+  python3-venv python3-setuptools python3-wheel  # pip install . into .venv/ (pyproject.toml: setuptools drives CMake)
   python3-numpy python3-pandas         # its arrays and DataFrames
   python3-sympy                        # SymPy-defined models
   python3-pytest                       # its tests

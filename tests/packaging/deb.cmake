@@ -1,0 +1,71 @@
+# CTest package.deb (tests/CMakeLists.txt): build the Debian package with CPack, extract it with
+# dpkg -x into a temporary directory, and run what it holds from there: `ukdyn run --example
+# pendulum` and `import ukdyn` in Debian's /usr/bin/python3.
+#
+#   cmake -DBUILD_DIR=... -DWORK_DIR=... -DVERSION=... -P deb.cmake
+cmake_minimum_required(VERSION 3.25)  # the policies of today (CMP0054: quoted arguments)
+foreach(var BUILD_DIR WORK_DIR VERSION)
+  if(NOT DEFINED ${var})
+    message(FATAL_ERROR "deb.cmake: -D${var}=... is required")
+  endif()
+endforeach()
+
+function(run step)
+  execute_process(COMMAND ${ARGN} RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE out)
+  message("--- ${step}: ${ARGN}\n${out}")
+  if(NOT rc EQUAL 0)
+    message(FATAL_ERROR "${step} failed (exit ${rc})")
+  endif()
+  set(last_output "${out}" PARENT_SCOPE)
+endfunction()
+
+file(REMOVE_RECURSE ${WORK_DIR})
+get_filename_component(cmake_bin ${CMAKE_COMMAND} DIRECTORY)
+find_program(CPACK cpack HINTS ${cmake_bin} REQUIRED)
+
+# the package, under its Debian name
+run(cpack ${CPACK} -G DEB --config ${BUILD_DIR}/CPackConfig.cmake -B ${WORK_DIR}/cpack)
+run(arch dpkg --print-architecture)
+string(STRIP "${last_output}" arch)
+set(deb ${WORK_DIR}/cpack/ukdyn_${VERSION}_${arch}.deb)
+if(NOT EXISTS ${deb})
+  file(GLOB made ${WORK_DIR}/cpack/*.deb)
+  message(FATAL_ERROR "no ${deb} (made: ${made})")
+endif()
+file(SIZE ${deb} size)
+message("${deb}: ${size} bytes")
+
+# its control fields: Depends names the run-time libraries (dpkg-shlibdeps) and Python
+run(info dpkg-deb --field ${deb} Package Version Architecture Depends Recommends)
+foreach(dep "libc6" "libstdc\\+\\+6" "libsundials-cvode" "libyaml-cpp" "libginac" "libhdf5"
+            "libcholmod" "python3-numpy")
+  if(NOT last_output MATCHES "Depends:[^\n]*${dep}")
+    message(FATAL_ERROR "Depends lacks ${dep}")
+  endif()
+endforeach()
+
+# extracted, not installed: everything runs from the temporary tree
+set(root ${WORK_DIR}/root)
+run(extract dpkg -x ${deb} ${root})
+set(ukdyn ${root}/usr/bin/ukdyn)
+run(ldd ldd ${ukdyn})
+if(last_output MATCHES "not found")
+  message(FATAL_ERROR "${ukdyn}: a library is not found")
+endif()
+run(command ${ukdyn} run --example pendulum -o ${WORK_DIR}/out)
+foreach(f trajectory.csv summary.json)
+  if(NOT EXISTS ${WORK_DIR}/out/${f})
+    message(FATAL_ERROR "ukdyn run wrote no ${f}")
+  endif()
+endforeach()
+
+# the Python module, from the extracted tree only (no user site: scripts/setup.sh's .pth there
+# points into the build tree)
+set(site ${root}/usr/lib/python3/dist-packages)
+run(python ${CMAKE_COMMAND} -E env PYTHONPATH=${site} PYTHONNOUSERSITE=1 PYTHONDONTWRITEBYTECODE=1
+    /usr/bin/python3 -c "import ukdyn, math
+assert ukdyn.__file__.startswith('${site}/'), ukdyn.__file__
+r = ukdyn.load('pendulum').simulate(t_end=0.5)
+print('import ukdyn from', ukdyn.__file__, 'pendulum to t =', r.t[-1])
+assert math.isclose(r.t[-1], 0.5, rel_tol=1e-12), r.t[-1]")
+message("package.deb: ok")
