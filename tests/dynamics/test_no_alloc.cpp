@@ -1,5 +1,6 @@
 // No heap allocation per evaluation once the workspace exists, for every kind of constraint,
 // non-ideal forces, rank-deficient and large systems.
+#include <array>
 #include <cmath>
 #include <string>
 #include <utility>
@@ -82,6 +83,17 @@ TEST(NoAllocation, AutomaticallyDifferentiatedConstraintsAndFriction) {
   q << 0.3, -0.2, 0.4, 0.009, 0.0;
   qd << 0.5, 0.2, -0.1, 0.03, 0.0;
   EXPECT_EQ(allocations_of(sys, q, qd, 10), 0);
+  // the same state as views (a segment of a longer vector, a Map over a std::array) and as
+  // fixed-size vectors: the entry points and the callables take Eigen::Ref, nothing is copied
+  VectorXd padded = VectorXd::Zero(9);
+  padded.segment(2, 5) = q;
+  std::array<double, 5> qd_values{};
+  Eigen::Map<VectorXd>(qd_values.data(), 5) = qd;
+  EXPECT_EQ(allocations_of(sys, padded.segment(2, 5),
+                           Eigen::Map<const VectorXd>(qd_values.data(), 5), 10),
+            0);
+  const Eigen::Vector<double, 5> q_fixed = q, qd_fixed = qd;
+  EXPECT_EQ(allocations_of(sys, q_fixed, qd_fixed, 10), 0);
 }
 
 using testing::Case;
