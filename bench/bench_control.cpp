@@ -29,13 +29,14 @@ ukdyn::System chain(Index n) {
     for (Index j = 0; j < n; ++j) mu(i, j) = double(n - std::max(i, j));
   }
   return ukdyn::SystemBuilder(names)
-      .mass_matrix([mu](const VectorXd& q, double, Eigen::Ref<MatrixXd> M) {
+      .mass_matrix([mu](const Eigen::Ref<const VectorXd>& q, double, Eigen::Ref<MatrixXd> M) {
         const Index coordinate_count = q.size();
         for (Index j = 0; j < coordinate_count; ++j) {
           for (Index i = 0; i < coordinate_count; ++i) M(i, j) = mu(i, j) * std::cos(q[i] - q[j]);
         }
       })
-      .forces([mu](const VectorXd& q, const VectorXd& qd, double, Eigen::Ref<VectorXd> Q) {
+      .forces([mu](const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd,
+                   double, Eigen::Ref<VectorXd> Q) {
         const Index coordinate_count = q.size();
         for (Index i = 0; i < coordinate_count; ++i) {
           double s = 9.81 * mu(i, i) * std::sin(q[i]);
@@ -72,7 +73,8 @@ ukdyn::Constraint tip(Index n) {
 }
 
 // N = diag(1 + 0.1 i + 0.5 sin² th_i)
-void weight(const VectorXd& q, const VectorXd&, double, Eigen::Ref<MatrixXd> N) {
+void weight(const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>&, double,
+            Eigen::Ref<MatrixXd> N) {
   N.setZero();
   for (Index i = 0; i < q.size(); ++i) {
     N(i, i) = 1.0 + 0.1 * double(i) + 0.5 * std::sin(q[i]) * std::sin(q[i]);

@@ -48,8 +48,9 @@ class Distance final : public ukdyn::ConstraintModel {
   Distance(Index i, Index j, double fx, double fy, double L)
       : i_(i), j_(j), fx_(fx), fy_(fy), L_(L) {}
 
-  void acceleration_form(const VectorXd& q, const VectorXd& qd, double, ukdyn::ConstraintScratch*,
-                         Eigen::Ref<MatrixXd> A, Eigen::Ref<VectorXd> b) const override {
+  void acceleration_form(const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd,
+                         double, ukdyn::ConstraintScratch*, Eigen::Ref<MatrixXd> A,
+                         Eigen::Ref<VectorXd> b) const override {
     double dx, dy, vx, vy;
     relative(q, qd, dx, dy, vx, vy);
     A.setZero();
@@ -62,8 +63,9 @@ class Distance final : public ukdyn::ConstraintModel {
     b[0] = -(vx * vx + vy * vy) / L_;
   }
 
-  void violation(const VectorXd& q, const VectorXd& qd, double, ukdyn::ConstraintScratch*,
-                 Eigen::Ref<VectorXd> position, Eigen::Ref<VectorXd> velocity) const override {
+  void violation(const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd, double,
+                 ukdyn::ConstraintScratch*, Eigen::Ref<VectorXd> position,
+                 Eigen::Ref<VectorXd> velocity) const override {
     double dx, dy, vx, vy;
     relative(q, qd, dx, dy, vx, vy);
     position[0] = (dx * dx + dy * dy - L_ * L_) / (2 * L_);
@@ -71,8 +73,8 @@ class Distance final : public ukdyn::ConstraintModel {
   }
 
  private:
-  void relative(const VectorXd& q, const VectorXd& qd, double& dx, double& dy, double& vx,
-                double& vy) const {
+  void relative(const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd,
+                double& dx, double& dy, double& vx, double& vy) const {
     dx = q[2 * i_] - (j_ >= 0 ? q[2 * j_] : fx_);
     dy = q[2 * i_ + 1] - (j_ >= 0 ? q[2 * j_ + 1] : fy_);
     vx = qd[2 * i_] - (j_ >= 0 ? qd[2 * j_] : 0.0);
@@ -92,10 +94,9 @@ ukdyn::System hand_pendulum() {
   constexpr double m = 1, g = 9.81;
   return ukdyn::SystemBuilder({"x", "y"})
       .mass_matrix(m * MatrixXd::Identity(2, 2))
-      .forces([](const VectorXd&, const VectorXd&, double, Eigen::Ref<VectorXd> Q) {
-        Q << 0.0, -m * g;
-      })
-      .potential_energy([](const VectorXd& q, double) { return m * g * q[1]; })
+      .forces([](const Eigen::Ref<const VectorXd>&, const Eigen::Ref<const VectorXd>&, double,
+                 Eigen::Ref<VectorXd> Q) { Q << 0.0, -m * g; })
+      .potential_energy([](const Eigen::Ref<const VectorXd>& q, double) { return m * g * q[1]; })
       .add(distance("rod", 0, -1, 0.0, 0.0, 1.0))
       .build();
 }
@@ -120,11 +121,11 @@ ukdyn::System hand_double_four_bar() {
   // −dV/dy: crank k: m g/2 on tip k; coupler: m g/2 on each end
   return ukdyn::SystemBuilder({"x1", "y1", "x2", "y2", "x3", "y3"})
       .mass_matrix(M)
-      .forces([](const VectorXd&, const VectorXd&, double, Eigen::Ref<VectorXd> Q) {
-        Q << 0.0, -m * g, 0.0, -1.5 * m * g, 0.0, -m * g;
+      .forces([](const Eigen::Ref<const VectorXd>&, const Eigen::Ref<const VectorXd>&, double,
+                 Eigen::Ref<VectorXd> Q) { Q << 0.0, -m * g, 0.0, -1.5 * m * g, 0.0, -m * g; })
+      .potential_energy([](const Eigen::Ref<const VectorXd>& q, double) {
+        return m * g * (q[1] + 1.5 * q[3] + q[5]);
       })
-      .potential_energy(
-          [](const VectorXd& q, double) { return m * g * (q[1] + 1.5 * q[3] + q[5]); })
       .add(distance("crank1", 0, -1, 0.0, 0.0, L))
       .add(distance("crank2", 1, -1, 1.0, 0.0, L))
       .add(distance("crank3", 2, -1, 2.0, 0.0, L))

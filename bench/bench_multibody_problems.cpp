@@ -153,12 +153,14 @@ mb::MultibodyModel build(const Problem& p) {
 }
 
 // a body point in the world (the ground: the point itself)
-Vector3d world(const mb::MultibodyModel& m, const VectorXd& q, mb::BodyId b, const Vector3d& p) {
+Vector3d world(const mb::MultibodyModel& m, const Eigen::Ref<const VectorXd>& q, mb::BodyId b,
+               const Vector3d& p) {
   return b == mb::kGround ? p : mb::world_point(m, q, b, p);
 }
 
 // the largest distance between the two closure points, from the body poses (0 without loops)
-double closure_gap(const Problem& p, const mb::MultibodyModel& m, const VectorXd& q) {
+double closure_gap(const Problem& p, const mb::MultibodyModel& m,
+                   const Eigen::Ref<const VectorXd>& q) {
   double gap = 0.0;
   for (const Closure& c : p.closures) {
     const Vector3d x1 = world(m, q, c.b1, body_point(p.links[std::size_t(c.b1)], c.p1));
@@ -171,7 +173,8 @@ double closure_gap(const Problem& p, const mb::MultibodyModel& m, const VectorXd
 
 // the largest distance between the two frames of any revolute joint (hinges and closures), or
 // for particles the largest error of a rod's length, | |x_k − x_hinge| − L_k |
-double joint_gap(const Problem& p, const mb::MultibodyModel& m, const VectorXd& q) {
+double joint_gap(const Problem& p, const mb::MultibodyModel& m,
+                 const Eigen::Ref<const VectorXd>& q) {
   double gap = 0.0;
   for (std::size_t k = 0; k < m.joints.size(); ++k) {
     const mb::JointInfo& j = m.joints[k];
@@ -184,7 +187,8 @@ double joint_gap(const Problem& p, const mb::MultibodyModel& m, const VectorXd& 
 
 // the reported coordinate: the angle of link 1 (P2: the crank), theta of its body, or for
 // particles the direction from the ground pivot to the first particle
-double coordinate(const Problem& p, const mb::MultibodyModel& m, const VectorXd& q) {
+double coordinate(const Problem& p, const mb::MultibodyModel& m,
+                  const Eigen::Ref<const VectorXd>& q) {
   const Index o = m.bodies[0].offset;
   if (!p.particles) return q[o + 2];
   return std::atan2(q[o + 1] - p.links[0].joint.y(), q[o] - p.links[0].joint.x());

@@ -43,14 +43,15 @@ constexpr double kM = 1.0, kL = 1.0, kG = 9.81;
 System pendulum3(bool regular) {
   SystemBuilder b(std::vector<std::string>{"x", "y", "th"});
   if (regular) {
-    b.mass_matrix([](const VectorXd& q, double, Eigen::Ref<MatrixXd> M) {
+    b.mass_matrix([](const Eigen::Ref<const VectorXd>& q, double, Eigen::Ref<MatrixXd> M) {
       const double c = std::cos(q[2]), s = std::sin(q[2]);
       // rows a1 = (1, 0, −L c), a2 = (0, 1, −L s)
       M << kM + kM, 0.0, -kM * kL * c,  //
           0.0, kM + kM, -kM * kL * s,   //
           -kM * kL * c, -kM * kL * s, kM * kL * kL;
     });
-    b.forces([](const VectorXd& q, const VectorXd& qd, double, Eigen::Ref<VectorXd> Q) {
+    b.forces([](const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd, double,
+                Eigen::Ref<VectorXd> Q) {
       const double c = std::cos(q[2]), s = std::sin(q[2]), w2 = qd[2] * qd[2];
       const double b1 = -kL * s * w2, b2 = kL * c * w2;  // x'' = b1 + L c th'', y'' = b2 + L s th''
       Q << kM * b1, -kM * kG + kM * b2, -kM * kL * (c * b1 + s * b2);
@@ -59,9 +60,8 @@ System pendulum3(bool regular) {
     MatrixXd M = MatrixXd::Zero(3, 3);
     M(0, 0) = M(1, 1) = kM;
     b.mass_matrix(M);
-    b.forces([](const VectorXd&, const VectorXd&, double, Eigen::Ref<VectorXd> Q) {
-      Q << 0.0, -kM * kG, 0.0;
-    });
+    b.forces([](const Eigen::Ref<const VectorXd>&, const Eigen::Ref<const VectorXd>&, double,
+                Eigen::Ref<VectorXd> Q) { Q << 0.0, -kM * kG, 0.0; });
   }
   b.add(holonomic("cx", 1, [](const auto& q, const auto&, auto& phi) {
     using std::sin;
@@ -74,7 +74,8 @@ System pendulum3(bool regular) {
   return b.build();
 }
 
-void evaluate(benchmark::State& state, const System& sys, const VectorXd& q, const VectorXd& qd) {
+void evaluate(benchmark::State& state, const System& sys, const Eigen::Ref<const VectorXd>& q,
+              const Eigen::Ref<const VectorXd>& qd) {
   Workspace ws(sys);
   for (auto _ : state) {
     if (forward_dynamics(sys, ws, q, qd, 0.0) != Status::kOk) {
@@ -136,7 +137,8 @@ BENCHMARK(BM_Chain)->Args({3, 0})->Args({3, 1})->Args({16, 0})->Args({16, 1})->A
 int evaluate_count(const std::string& name, long count) {
   const bool before = name.size() > 7 && name.compare(name.size() - 7, 7, "_before") == 0;
   const std::string base = before ? name.substr(0, name.size() - 7) : name;
-  auto run = [count](const System& sys, const VectorXd& q, const VectorXd& qd) {
+  auto run = [count](const System& sys, const Eigen::Ref<const VectorXd>& q,
+                     const Eigen::Ref<const VectorXd>& qd) {
     Workspace ws(sys);
     for (long i = 0; i <= count; ++i) {
       if (forward_dynamics(sys, ws, q, qd, 0.0) != Status::kOk) {

@@ -59,7 +59,7 @@ std::pair<VectorXd, VectorXd> textbook(const testing::RandomProblem& p) {
 // textbook formula.
 template <class F>
 void measure(benchmark::State& state, const testing::RandomProblem& p, F&& eval,
-             const VectorXd& qdd, const VectorXd& lambda) {
+             const Eigen::Ref<const VectorXd>& qdd, const Eigen::Ref<const VectorXd>& lambda) {
   eval();
   testing::start_counting_allocations();
   for (int i = 0; i < 10; ++i) eval();
@@ -116,14 +116,16 @@ void BM_Pipeline(benchmark::State& state, bool residuals) {
   const auto p = problem(state);
   const Index n = p.M.rows();
   SystemBuilder builder(n);
-  builder.mass_matrix([M = p.M](const VectorXd&, double, Eigen::Ref<MatrixXd> out) { out = M; })
-      .forces([Q = p.Q](const VectorXd&, const VectorXd&, double, Eigen::Ref<VectorXd> out) {
-        out = Q;
+  builder
+      .mass_matrix([M = p.M](const Eigen::Ref<const VectorXd>&, double, Eigen::Ref<MatrixXd> out) {
+        out = M;
       })
+      .forces([Q = p.Q](const Eigen::Ref<const VectorXd>&, const Eigen::Ref<const VectorXd>&,
+                        double, Eigen::Ref<VectorXd> out) { out = Q; })
       .add(acceleration_constraint(
           "A", p.A.rows(),
-          [A = p.A, b = p.b](const VectorXd&, const VectorXd&, double, Eigen::Ref<MatrixXd> Ao,
-                             Eigen::Ref<VectorXd> bo) {
+          [A = p.A, b = p.b](const Eigen::Ref<const VectorXd>&, const Eigen::Ref<const VectorXd>&,
+                             double, Eigen::Ref<MatrixXd> Ao, Eigen::Ref<VectorXd> bo) {
             Ao = A;
             bo = b;
           }));

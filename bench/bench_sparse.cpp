@@ -61,7 +61,8 @@ class Rung final : public ukdyn::ConstraintModel {
     for (Index c = 0; c < 3; ++c) cols_.push_back(3 * j + c);
   }
   const std::vector<Index>& columns() const override { return cols_; }
-  void acceleration_form_local(const VectorXd& q, const VectorXd& qd, double,
+  void acceleration_form_local(const Eigen::Ref<const VectorXd>& q,
+                               const Eigen::Ref<const VectorXd>& qd, double,
                                ukdyn::ConstraintScratch*, Eigen::Ref<MatrixXd> A,
                                Eigen::Ref<VectorXd> b) const override {
     const Eigen::Vector2d D = q.segment<2>(3 * i_) - q.segment<2>(3 * j_);
@@ -71,8 +72,9 @@ class Rung final : public ukdyn::ConstraintModel {
     A.block(0, 3, 1, 2) = -D.transpose();
     b[0] = -V.squaredNorm();
   }
-  void violation(const VectorXd& q, const VectorXd& qd, double, ukdyn::ConstraintScratch*,
-                 Eigen::Ref<VectorXd> position, Eigen::Ref<VectorXd> velocity) const override {
+  void violation(const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd, double,
+                 ukdyn::ConstraintScratch*, Eigen::Ref<VectorXd> position,
+                 Eigen::Ref<VectorXd> velocity) const override {
     const Eigen::Vector2d D = q.segment<2>(3 * i_) - q.segment<2>(3 * j_);
     const Eigen::Vector2d V = qd.segment<2>(3 * i_) - qd.segment<2>(3 * j_);
     position[0] = 0.5 * (D.squaredNorm() - d_ * d_);
@@ -107,11 +109,12 @@ Chain chain(const std::vector<double>& phi, Eigen::Vector2d closure) {
     b.mass_block(3 * i, Eigen::Vector3d(m, m, I).asDiagonal().toDenseMatrix());
   }
   if (std::isnan(closure.x())) closure = p;
-  b.forces([N, m, g](const VectorXd&, const VectorXd&, double, Eigen::Ref<VectorXd> Q) {
+  b.forces([N, m, g](const Eigen::Ref<const VectorXd>&, const Eigen::Ref<const VectorXd>&, double,
+                     Eigen::Ref<VectorXd> Q) {
     Q.setZero();
     for (Index i = 0; i < N; ++i) Q[3 * i + 1] = -m * g;
   });
-  b.potential_energy([N, m, g](const VectorXd& x, double) {
+  b.potential_energy([N, m, g](const Eigen::Ref<const VectorXd>& x, double) {
     double V = 0.0;
     for (Index i = 0; i < N; ++i) V += m * g * x[3 * i + 1];
     return V;
@@ -149,7 +152,8 @@ Chain ladder(const std::vector<double>& phi_half) {
   for (Index k = 0; k < N; ++k) {
     b.mass_block(3 * k, Eigen::Vector3d(m, m, I).asDiagonal().toDenseMatrix());
   }
-  b.forces([N, m, g](const VectorXd&, const VectorXd&, double, Eigen::Ref<VectorXd> Q) {
+  b.forces([N, m, g](const Eigen::Ref<const VectorXd>&, const Eigen::Ref<const VectorXd>&, double,
+                     Eigen::Ref<VectorXd> Q) {
     Q.setZero();
     for (Index i = 0; i < N; ++i) Q[3 * i + 1] = -m * g;
   });

@@ -26,8 +26,8 @@ struct TimedRuns {
 };
 
 /// Runs simulate(sys, q0, qd0, opt) six times: a warm-up, then five timed runs.
-inline TimedRuns time_runs(const System& sys, const VectorXd& q0, const VectorXd& qd0,
-                           const SimulationOptions& opt) {
+inline TimedRuns time_runs(const System& sys, const Eigen::Ref<const VectorXd>& q0,
+                           const Eigen::Ref<const VectorXd>& qd0, const SimulationOptions& opt) {
   TimedRuns r;
   VectorXd q_first;
   for (int run = 0; run < 6; ++run) {

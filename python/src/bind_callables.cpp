@@ -50,7 +50,8 @@ Constraint make_constraint(const py::tuple& spec, std::shared_ptr<CallbackErrors
   const std::string what_b = "constraint '" + name + "': b(q, q_dot, t)";
   Constraint c = acceleration_constraint(
       name, rows,
-      [errs, A_fn, b_fn, what_A, what_b](const VectorXd& q, const VectorXd& qd, double t,
+      [errs, A_fn, b_fn, what_A, what_b](const Eigen::Ref<const VectorXd>& q,
+                                         const Eigen::Ref<const VectorXd>& qd, double t,
                                          Eigen::Ref<MatrixXd> A, Eigen::Ref<VectorXd> b) {
         call_python(
             *errs,
@@ -77,7 +78,8 @@ SystemHandle from_callables(const std::vector<std::string>& coordinates, py::obj
   SystemBuilder b(coordinates);
   // M: a constant matrix or M(q, t)
   if (PyCallable_Check(M.ptr())) {
-    b.mass_matrix([errs, M](const VectorXd& q, double t, Eigen::Ref<MatrixXd> out) {
+    b.mass_matrix([errs, M](const Eigen::Ref<const VectorXd>& q, double t,
+                            Eigen::Ref<MatrixXd> out) {
       call_python(
           *errs, [&] { read_matrix_into(M(copy_vector(q), t), "ukdyn callable", "M(q, t)", out); },
           [&] { out.setConstant(kNaN); });
@@ -93,7 +95,8 @@ SystemHandle from_callables(const std::vector<std::string>& coordinates, py::obj
     b.mass_matrix(Mc);
   }
   if (!Q.is_none()) {
-    b.forces([errs, Q](const VectorXd& q, const VectorXd& qd, double t, Eigen::Ref<VectorXd> out) {
+    b.forces([errs, Q](const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd,
+                       double t, Eigen::Ref<VectorXd> out) {
       call_python(
           *errs,
           [&] {
@@ -104,7 +107,7 @@ SystemHandle from_callables(const std::vector<std::string>& coordinates, py::obj
     });
   }
   if (!V.is_none()) {
-    b.potential_energy([errs, V](const VectorXd& q, double t) {
+    b.potential_energy([errs, V](const Eigen::Ref<const VectorXd>& q, double t) {
       double value = kNaN;
       call_python(
           *errs, [&] { value = V(copy_vector(q), t).template cast<double>(); },
@@ -113,7 +116,8 @@ SystemHandle from_callables(const std::vector<std::string>& coordinates, py::obj
     });
   }
   if (!P.is_none()) {
-    b.external_power([errs, P](const VectorXd& q, const VectorXd& qd, double t) {
+    b.external_power([errs, P](const Eigen::Ref<const VectorXd>& q,
+                               const Eigen::Ref<const VectorXd>& qd, double t) {
       double value = kNaN;
       call_python(
           *errs, [&] { value = P(copy_vector(q), copy_vector(qd), t).template cast<double>(); },
@@ -145,7 +149,8 @@ SystemHandle from_callables(const std::vector<std::string>& coordinates, py::obj
       py::object fn = spec[2];
       const std::string what = "non-ideal force '" + name + "': C(q, q_dot, t, Qc_ideal, lambda)";
       b.add(NonIdealForce(
-          name, [errs, fn, what](const VectorXd& q, const VectorXd& qd, double t,
+          name, [errs, fn, what](const Eigen::Ref<const VectorXd>& q,
+                                 const Eigen::Ref<const VectorXd>& qd, double t,
                                  const IdealForceInfo& ideal, Eigen::Ref<VectorXd> C) {
             call_python(
                 *errs,
@@ -171,7 +176,8 @@ SystemHandle from_callables(const std::vector<std::string>& coordinates, py::obj
         py::object fn = spec[6];
         const std::string what =
             "coulomb friction on '" + f.constraint + "': surface_velocity(q, q_dot, t)";
-        f.surface_velocity = [errs, fn, what](const VectorXd& q, const VectorXd& qd, double t,
+        f.surface_velocity = [errs, fn, what](const Eigen::Ref<const VectorXd>& q,
+                                              const Eigen::Ref<const VectorXd>& qd, double t,
                                               Eigen::Ref<VectorXd> u, Eigen::Ref<VectorXd> u_dot) {
           call_python(
               *errs,
@@ -210,16 +216,17 @@ ControllerHandle build_controller(const SystemHandle& model, const py::list& req
   } else if (law == "weighted") {
     if (N.is_none()) throw std::invalid_argument("controller: law 'weighted' needs N");
     if (PyCallable_Check(N.ptr())) {
-      b.weighted(
-          [errs, N](const VectorXd& q, const VectorXd& qd, double t, Eigen::Ref<MatrixXd> out) {
-            call_python(
-                *errs,
-                [&] {
-                  read_matrix_into(N(copy_vector(q), copy_vector(qd), t), "ukdyn callable",
-                                   "N(q, q_dot, t)", out);
-                },
-                [&] { out.setConstant(kNaN); });
-          });
+      b.weighted([errs, N](const Eigen::Ref<const VectorXd>& q,
+                           const Eigen::Ref<const VectorXd>& qd, double t,
+                           Eigen::Ref<MatrixXd> out) {
+        call_python(
+            *errs,
+            [&] {
+              read_matrix_into(N(copy_vector(q), copy_vector(qd), t), "ukdyn callable",
+                               "N(q, q_dot, t)", out);
+            },
+            [&] { out.setConstant(kNaN); });
+      });
     } else {
       b.weighted(read_matrix(N, "controller", "N"));
     }

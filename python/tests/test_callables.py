@@ -69,6 +69,43 @@ def test_readme_incline_with_coulomb_friction():
     assert sol.qdd @ down == pytest.approx(2.120439, abs=1e-6)
 
 
+def test_callables_receive_their_own_numpy_arrays():
+    """The C++ side hands the callables views of its memory (Eigen::Ref); the module copies each
+    into a fresh float64 array, so a callable may keep what it receives."""
+    seen = []
+
+    def Q(q, qd, t):
+        seen.append((q, qd))
+        return [0.0, -G]
+
+    def A(q, qd, t):
+        seen.append((q, qd))
+        return [q]
+
+    def b(q, qd, t):
+        return [-(qd @ qd)]
+
+    solver = ukdyn.from_callables(["x", "y"], M=np.eye(2), Q=Q,
+                                  constraints=[ukdyn.constraint("rod", A, b)]).solver()
+    q1, qd1 = state(0.6, 1.5)
+    solver.solve(q1, qd1)
+    first = len(seen)
+    q2, qd2 = state(-0.3, 0.5)
+    solver.solve(q2, qd2)
+    assert 0 < first < len(seen)
+    for q, qd in seen:
+        for a in (q, qd):
+            assert isinstance(a, np.ndarray) and a.dtype == np.float64 and a.shape == (2,)
+            assert a.flags.owndata and a.flags.writeable
+    # the arrays of the first solve still hold its state: nothing was a view of a reused buffer
+    for q, qd in seen[:first]:
+        np.testing.assert_array_equal(q, q1)
+        np.testing.assert_array_equal(qd, qd1)
+    for q, qd in seen[first:]:
+        np.testing.assert_array_equal(q, q2)
+        np.testing.assert_array_equal(qd, qd2)
+
+
 def test_callable_pendulum_period_by_simulation():
     """Released horizontally, back at (1, 0) after 4 sqrt(L/g) K(1/2) = 2.367841947576 s."""
     T = 2.367841947576

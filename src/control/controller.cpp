@@ -110,7 +110,7 @@ ControllerBuilder& ControllerBuilder::weighted(WeightFn N) {
   return *this;
 }
 
-ControllerBuilder& ControllerBuilder::weighted(const MatrixXd& N) {
+ControllerBuilder& ControllerBuilder::weighted(const Eigen::Ref<const MatrixXd>& N) {
   law_ = ControlLaw::kWeighted;
   weight_constant_ = N;
   has_weight_constant_ = true;
@@ -129,7 +129,7 @@ ControllerBuilder& ControllerBuilder::actuated(const std::vector<std::string>& c
   return *this;
 }
 
-ControllerBuilder& ControllerBuilder::actuation(const MatrixXd& S) {
+ControllerBuilder& ControllerBuilder::actuation(const Eigen::Ref<const MatrixXd>& S) {
   S_ = S;
   has_actuation_matrix_ = true;
   actuated_names_.clear();
@@ -187,9 +187,8 @@ Controller ControllerBuilder::build() const {
     if (has_weight_constant_) {
       check_weight(weight_constant_, n);
       const MatrixXd N = weight_constant_;
-      c.weight_ = [N](const VectorXd&, const VectorXd&, double, Eigen::Ref<MatrixXd> out) {
-        out = N;
-      };
+      c.weight_ = [N](const Eigen::Ref<const VectorXd>&, const Eigen::Ref<const VectorXd>&, double,
+                      Eigen::Ref<MatrixXd> out) { out = N; };
       c.weight_constant_ = true;
     } else {
       c.weight_ = weight_;

@@ -7,7 +7,8 @@
 
 namespace ukdyn {
 
-ControlStatus check_control(const Controller& ctrl, ControlWorkspace& ws, const VectorXd& qd) {
+ControlStatus check_control(const Controller& ctrl, ControlWorkspace& ws,
+                            const Eigen::Ref<const VectorXd>& qd) {
   control_detail::require_same_controller(ctrl, ws, "ukdyn::check_control");
   FundamentalDecomposition& dp = ws.model.decomposition;
   // Qc_control = Qc_nominal + Qc_robust

@@ -42,8 +42,9 @@ void apply_law(const Controller& ctrl, ControlWorkspace& ws, const Eigen::Ref<co
 
 }  // namespace control_detail
 
-ControlStatus solve_law(const Controller& ctrl, ControlWorkspace& ws, const VectorXd& q,
-                        const VectorXd& qd, double t) {
+ControlStatus solve_law(const Controller& ctrl, ControlWorkspace& ws,
+                        const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd,
+                        double t) {
   control_detail::require_same_controller(ctrl, ws, "ukdyn::solve_law");
   const Index m_r = ctrl.requirement_rows();
   const bool physical = ws.model.active_rows > 0;

@@ -6,8 +6,9 @@
 
 namespace ukdyn {
 
-ControlStatus evaluate_model(const Controller& ctrl, ControlWorkspace& ws, const VectorXd& q,
-                             const VectorXd& qd, double t) {
+ControlStatus evaluate_model(const Controller& ctrl, ControlWorkspace& ws,
+                             const Eigen::Ref<const VectorXd>& q,
+                             const Eigen::Ref<const VectorXd>& qd, double t) {
   control_detail::require_same_controller(ctrl, ws, "ukdyn::evaluate_model");
   // M, L, a, A_p, W_p, a_p = model.qdd, physical reaction model.Qc
   if (forward_dynamics(ctrl.model(), ws.model, q, qd, t) != Status::kOk) {

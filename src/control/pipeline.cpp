@@ -8,7 +8,7 @@
 namespace ukdyn {
 
 namespace {
-void require_size(const VectorXd& v, Index n, const char* what) {
+void require_size(const Eigen::Ref<const VectorXd>& v, Index n, const char* what) {
   if (v.size() != n) {
     throw std::invalid_argument(std::string("ukdyn::compute_control: ") + what + " has " +
                                 format_number(v.size()) +
@@ -17,8 +17,9 @@ void require_size(const VectorXd& v, Index n, const char* what) {
 }
 }  // namespace
 
-ControlStatus compute_control(const Controller& ctrl, ControlWorkspace& ws, const VectorXd& q,
-                              const VectorXd& qd, double t) {
+ControlStatus compute_control(const Controller& ctrl, ControlWorkspace& ws,
+                              const Eigen::Ref<const VectorXd>& q,
+                              const Eigen::Ref<const VectorXd>& qd, double t) {
   control_detail::require_same_controller(ctrl, ws, "ukdyn::compute_control");
   require_size(q, ctrl.coordinate_count(), "q");
   require_size(qd, ctrl.coordinate_count(), "q_dot");

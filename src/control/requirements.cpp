@@ -78,8 +78,9 @@ Constraint requirement(Constraint c, const ErrorDynamics& d) {
   return c.stabilize(d.alpha, d.order == Order::kSecond ? d.beta : 0.0);
 }
 
-ControlStatus assemble_requirements(const Controller& ctrl, ControlWorkspace& ws, const VectorXd& q,
-                                    const VectorXd& qd, double t) {
+ControlStatus assemble_requirements(const Controller& ctrl, ControlWorkspace& ws,
+                                    const Eigen::Ref<const VectorXd>& q,
+                                    const Eigen::Ref<const VectorXd>& qd, double t) {
   control_detail::require_same_controller(ctrl, ws, "ukdyn::assemble_requirements");
   // A_r, b_r of the active requirements, b_r ← b_r − 2α phi' − β² phi (resp. − α psi)
   if (assemble_constraints(ctrl.requirements(), ws.req, q, qd, t) != Status::kOk) {

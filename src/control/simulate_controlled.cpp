@@ -45,9 +45,8 @@ CallableScratch* plant_scratch(CallableScratch* controlled);
 // --- plant constraints on the augmented coordinates [q; z] -------------------------------------
 
 struct HeadScratch final : ConstraintScratch {
-  HeadScratch(std::unique_ptr<ConstraintScratch> in, Index n) : inner(std::move(in)), q(n), qd(n) {}
+  explicit HeadScratch(std::unique_ptr<ConstraintScratch> in) : inner(std::move(in)) {}
   std::unique_ptr<ConstraintScratch> inner;
-  VectorXd q, qd;  // (n) the plant's part of the state
 };
 
 // The plant's constraint evaluated on q = x.head(n): its own rows, zero columns for z.
@@ -56,30 +55,29 @@ class HeadConstraintModel final : public ConstraintModel {
   HeadConstraintModel(Constraint inner, Index n) : inner_(std::move(inner)), n_(n) {}
 
   std::unique_ptr<ConstraintScratch> make_scratch(Index) const override {
-    return std::make_unique<HeadScratch>(inner_.model().make_scratch(n_), n_);
+    return std::make_unique<HeadScratch>(inner_.model().make_scratch(n_));
   }
   // the plant's constraint shares the plant's scratch (inside the controlled system's)
   std::unique_ptr<ConstraintScratch> make_scratch_sharing(Index,
                                                           CallableScratch* shared) const override {
     return std::make_unique<HeadScratch>(
-        inner_.model().make_scratch_sharing(n_, plant_scratch(shared)), n_);
+        inner_.model().make_scratch_sharing(n_, plant_scratch(shared)));
   }
 
-  void acceleration_form(const VectorXd& q, const VectorXd& qd, double t, ConstraintScratch* s,
-                         Eigen::Ref<MatrixXd> A, Eigen::Ref<VectorXd> b) const override {
+  void acceleration_form(const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd,
+                         double t, ConstraintScratch* s, Eigen::Ref<MatrixXd> A,
+                         Eigen::Ref<VectorXd> b) const override {
+    // the plant's part of the state, as views (no copy)
     auto& w = static_cast<HeadScratch&>(*s);
-    w.q = q.head(n_);
-    w.qd = qd.head(n_);
-    inner_.model().acceleration_form(w.q, w.qd, t, w.inner.get(), A.leftCols(n_), b);
+    inner_.model().acceleration_form(q.head(n_), qd.head(n_), t, w.inner.get(), A.leftCols(n_), b);
     A.rightCols(A.cols() - n_).setZero();
   }
 
-  void violation(const VectorXd& q, const VectorXd& qd, double t, ConstraintScratch* s,
-                 Eigen::Ref<VectorXd> position, Eigen::Ref<VectorXd> velocity) const override {
+  void violation(const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd,
+                 double t, ConstraintScratch* s, Eigen::Ref<VectorXd> position,
+                 Eigen::Ref<VectorXd> velocity) const override {
     auto& w = static_cast<HeadScratch&>(*s);
-    w.q = q.head(n_);
-    w.qd = qd.head(n_);
-    inner_.model().violation(w.q, w.qd, t, w.inner.get(), position, velocity);
+    inner_.model().violation(q.head(n_), qd.head(n_), t, w.inner.get(), position, velocity);
   }
 
  private:
@@ -107,8 +105,8 @@ struct ControlledPlant {
       : ctrl(c), plant(p), n(p.coordinate_count()), aux(aux_count) {}
 
   // Q ← Q_plant(q, q', t) + Qc_control and the auxiliary integrands; NaN when the control fails
-  void force(ControlledScratch& w, const VectorXd& xq, const VectorXd& xqd, double t,
-             Eigen::Ref<VectorXd> Q) const;
+  void force(ControlledScratch& w, const Eigen::Ref<const VectorXd>& xq,
+             const Eigen::Ref<const VectorXd>& xqd, double t, Eigen::Ref<VectorXd> Q) const;
   void note_not_met(ControlledScratch& w, double t) const;
 
   Controller ctrl;
@@ -117,28 +115,15 @@ struct ControlledPlant {
 };
 
 // The controlled system's per-workspace scratch (its CallableScratch): the control workspace,
-// the plant's own scratch, the plant part of the state, and the run's control statistics.
+// the plant's own scratch, and the run's control statistics. (The plant's callables get the
+// plant part of the state, x.head(n), as a view: nothing is copied.)
 struct ControlledScratch final : CallableScratch {
   explicit ControlledScratch(const ControlledPlant& p)
-      : cws(p.ctrl),
-        plant(p.plant.make_scratch()),
-        q(p.n),
-        qd(p.n),
-        qm(p.n),
-        qp(p.n),
-        qdp(p.n),
-        qc(p.n),
-        qdc(p.n),
-        q_last(p.n),
-        qd_last(p.n) {
+      : cws(p.ctrl), plant(p.plant.make_scratch()), q_last(p.n), qd_last(p.n) {
     stats.first_not_met = std::numeric_limits<double>::quiet_NaN();
   }
   ControlWorkspace cws;
   std::unique_ptr<CallableScratch> plant;  // the plant's callables' scratch (may be null)
-  VectorXd q, qd;                          // (n) plant part of the state, for the force
-  VectorXd qm;                             // (n) plant part of q, for M and V
-  VectorXd qp, qdp;                        // (n) for the external power
-  VectorXd qc, qdc;                        // (n) for the non-ideal forces
   VectorXd q_last, qd_last;  // (n) the state of the last control evaluation, at t_last
   double t_last = 0.0;
   ControlStatistics stats;
@@ -150,24 +135,19 @@ CallableScratch* plant_scratch(CallableScratch* controlled) {
   return w != nullptr ? w->plant.get() : nullptr;
 }
 
-void ControlledPlant::force(ControlledScratch& w, const VectorXd& xq, const VectorXd& xqd, double t,
+void ControlledPlant::force(ControlledScratch& w, const Eigen::Ref<const VectorXd>& xq,
+                            const Eigen::Ref<const VectorXd>& xqd, double t,
                             Eigen::Ref<VectorXd> Q) const {
   ControlWorkspace& cws = w.cws;
   ControlStatistics& stats = w.stats;
-  const VectorXd* pq = &xq;
-  const VectorXd* pqd = &xqd;
-  if (aux > 0) {
-    w.q = xq.head(n);
-    w.qd = xqd.head(n);
-    pq = &w.q;
-    pqd = &w.qd;
-  }
-  plant.forces(*pq, *pqd, t, w.plant.get(), Q.head(n));
-  const ControlStatus s = compute_control(ctrl, cws, *pq, *pqd, t);
+  // the plant's part of the state, as views (no copy)
+  const Eigen::Ref<const VectorXd> q = xq.head(n), qd = xqd.head(n);
+  plant.forces(q, qd, t, w.plant.get(), Q.head(n));
+  const ControlStatus s = compute_control(ctrl, cws, q, qd, t);
   ++stats.evaluations;
   // where the control was last evaluated (a failed run's diagnosis looks there)
-  w.q_last = *pq;
-  w.qd_last = *pqd;
+  w.q_last = q;
+  w.qd_last = qd;
   w.t_last = t;
   if (s != ControlStatus::kOk && s != ControlStatus::kRequirementsNotMet) {
     if (w.failure.empty()) w.failure = describe_control_status(ctrl, cws);
@@ -207,8 +187,9 @@ void ControlledPlant::note_not_met(ControlledScratch& w, double t) const {
 }
 
 // sigma_min / sigma_max of the active requirement rows A_r at (q, q', t), NaN without rows
-double requirement_gap(const Controller& ctrl, ControlWorkspace& cws, const VectorXd& q,
-                       const VectorXd& qd, double t) {
+double requirement_gap(const Controller& ctrl, ControlWorkspace& cws,
+                       const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd,
+                       double t) {
   compute_control(ctrl, cws, q, qd, t);
   MatrixXd rows(cws.req.active_rows, cws.req.A.cols());
   Index k = 0;
@@ -224,8 +205,8 @@ double requirement_gap(const Controller& ctrl, ControlWorkspace& cws, const Vect
 // rank where the control was last evaluated, that is the likely cause, and it replaces the
 // driver's general diagnosis.
 void diagnose_requirements(const ControlledPlant& st, const ControlledScratch& w,
-                           const VectorXd& q0, const VectorXd& qd0, double t0,
-                           RunStatistics& stats) {
+                           const Eigen::Ref<const VectorXd>& q0,
+                           const Eigen::Ref<const VectorXd>& qd0, double t0, RunStatistics& stats) {
   if (stats.status != Status::kIntegratorFailure || w.stats.evaluations == 0) return;
   ControlWorkspace cws(st.ctrl);
   const double start = requirement_gap(st.ctrl, cws, q0, qd0, t0);
@@ -290,52 +271,50 @@ System build_controlled(const std::shared_ptr<const ControlledPlant>& st,
     plant.mass_matrix(VectorXd::Zero(n), 0.0, M.topLeftCorner(n, n));
     b.mass_matrix(M);
   } else if (aux == 0) {
-    b.mass_matrix(
-        [st, scratch](const VectorXd& q, double t, CallableScratch* s, Eigen::Ref<MatrixXd> M) {
-          st->plant.mass_matrix(q, t, scratch(s).plant.get(), M);
-        });
+    b.mass_matrix([st, scratch](const Eigen::Ref<const VectorXd>& q, double t, CallableScratch* s,
+                                Eigen::Ref<MatrixXd> M) {
+      st->plant.mass_matrix(q, t, scratch(s).plant.get(), M);
+    });
   } else {
-    b.mass_matrix([st, n, aux, scratch](const VectorXd& x, double t, CallableScratch* s,
-                                        Eigen::Ref<MatrixXd> M) {
-      ControlledScratch& w = scratch(s);
-      w.qm = x.head(n);
-      st->plant.mass_matrix(w.qm, t, w.plant.get(), M.topLeftCorner(n, n));
+    b.mass_matrix([st, n, aux, scratch](const Eigen::Ref<const VectorXd>& x, double t,
+                                        CallableScratch* s, Eigen::Ref<MatrixXd> M) {
+      st->plant.mass_matrix(x.head(n), t, scratch(s).plant.get(), M.topLeftCorner(n, n));
       M.topRightCorner(n, aux).setZero();
       M.bottomLeftCorner(aux, n).setZero();
       M.bottomRightCorner(aux, aux).setIdentity();
     });
   }
   // Q = Q_plant + Qc_control (+ the auxiliary integrands)
-  b.forces([st, scratch](const VectorXd& q, const VectorXd& qd, double t, CallableScratch* s,
+  b.forces([st, scratch](const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd,
+                         double t, CallableScratch* s,
                          Eigen::Ref<VectorXd> Q) { st->force(scratch(s), q, qd, t, Q); });
   if (plant.has_potential()) {
     if (aux == 0) {
-      b.potential_energy([st, scratch](const VectorXd& q, double t, CallableScratch* s) {
-        return st->plant.potential_energy(q, t, scratch(s).plant.get());
-      });
+      b.potential_energy(
+          [st, scratch](const Eigen::Ref<const VectorXd>& q, double t, CallableScratch* s) {
+            return st->plant.potential_energy(q, t, scratch(s).plant.get());
+          });
     } else {
-      b.potential_energy([st, n, scratch](const VectorXd& x, double t, CallableScratch* s) {
-        ControlledScratch& w = scratch(s);
-        w.qm = x.head(n);
-        return st->plant.potential_energy(w.qm, t, w.plant.get());
-      });
+      b.potential_energy(
+          [st, n, scratch](const Eigen::Ref<const VectorXd>& x, double t, CallableScratch* s) {
+            return st->plant.potential_energy(x.head(n), t, scratch(s).plant.get());
+          });
     }
   }
   // the plant's external power (the control's work is integrated apart, in z)
   if (plant.has_external_power()) {
     if (aux == 0) {
-      b.external_power(
-          [st, scratch](const VectorXd& q, const VectorXd& qd, double t, CallableScratch* s) {
-            return st->plant.external_power(q, qd, t, scratch(s).plant.get());
-          });
+      b.external_power([st, scratch](const Eigen::Ref<const VectorXd>& q,
+                                     const Eigen::Ref<const VectorXd>& qd, double t,
+                                     CallableScratch* s) {
+        return st->plant.external_power(q, qd, t, scratch(s).plant.get());
+      });
     } else {
-      b.external_power(
-          [st, n, scratch](const VectorXd& x, const VectorXd& xd, double t, CallableScratch* s) {
-            ControlledScratch& w = scratch(s);
-            w.qp = x.head(n);
-            w.qdp = xd.head(n);
-            return st->plant.external_power(w.qp, w.qdp, t, w.plant.get());
-          });
+      b.external_power([st, n, scratch](const Eigen::Ref<const VectorXd>& x,
+                                        const Eigen::Ref<const VectorXd>& xd, double t,
+                                        CallableScratch* s) {
+        return st->plant.external_power(x.head(n), xd.head(n), t, scratch(s).plant.get());
+      });
     }
   }
   // the physical constraints; the stick constraints of Coulomb contacts come again with their
@@ -365,13 +344,12 @@ System build_controlled(const std::shared_ptr<const ControlledPlant>& st,
       spec.regularization_velocity = c->eps;
       spec.name = plant.nonideal_name(i);
       if (c->surface_velocity && aux > 0) {
-        // (SurfaceVelocityFn carries no scratch: the plant's part of the state is copied for
-        // the call, which allocates — a controlled run with a moving friction surface only)
-        spec.surface_velocity = [u = c->surface_velocity, n](const VectorXd& x, const VectorXd& xd,
+        // the plant's part of the state, as views (no copy)
+        spec.surface_velocity = [u = c->surface_velocity, n](const Eigen::Ref<const VectorXd>& x,
+                                                             const Eigen::Ref<const VectorXd>& xd,
                                                              double t, Eigen::Ref<VectorXd> uo,
                                                              Eigen::Ref<VectorXd> udo) {
-          const VectorXd q = x.head(n), qd = xd.head(n);
-          u(q, qd, t, uo, udo);
+          u(x.head(n), xd.head(n), t, uo, udo);
         };
       } else {
         spec.surface_velocity = c->surface_velocity;
@@ -384,7 +362,8 @@ System build_controlled(const std::shared_ptr<const ControlledPlant>& st,
     if (aux == 0) {
       b.add(NonIdealForce(
           plant.nonideal_name(i),
-          NonIdealFn([fn, scratch](const VectorXd& q, const VectorXd& qd, double t,
+          NonIdealFn([fn, scratch](const Eigen::Ref<const VectorXd>& q,
+                                   const Eigen::Ref<const VectorXd>& qd, double t,
                                    const IdealForceInfo& ideal, Eigen::Ref<VectorXd> C) {
             const IdealForceInfo plant_ideal(ideal, scratch(ideal.scratch()).plant.get());
             fn(q, qd, t, plant_ideal, C);
@@ -393,13 +372,11 @@ System build_controlled(const std::shared_ptr<const ControlledPlant>& st,
     }
     b.add(NonIdealForce(
         plant.nonideal_name(i),
-        NonIdealFn([fn, n, scratch](const VectorXd& x, const VectorXd& xd, double t,
+        NonIdealFn([fn, n, scratch](const Eigen::Ref<const VectorXd>& x,
+                                    const Eigen::Ref<const VectorXd>& xd, double t,
                                     const IdealForceInfo& ideal, Eigen::Ref<VectorXd> C) {
-          ControlledScratch& w = scratch(ideal.scratch());
-          w.qc = x.head(n);
-          w.qdc = xd.head(n);
-          const IdealForceInfo plant_ideal(ideal, w.plant.get());
-          fn(w.qc, w.qdc, t, plant_ideal, C.head(n));
+          const IdealForceInfo plant_ideal(ideal, scratch(ideal.scratch()).plant.get());
+          fn(x.head(n), xd.head(n), t, plant_ideal, C.head(n));
         })));
   }
   return b.build();
@@ -413,8 +390,8 @@ System controlled_system(const Controller& ctrl, const System& plant) {
 }
 
 ControlledTrajectory simulate_controlled(
-    const Controller& ctrl, const System& plant, const VectorXd& q0, const VectorXd& qd0,
-    const SimulationOptions& options,
+    const Controller& ctrl, const System& plant, const Eigen::Ref<const VectorXd>& q0,
+    const Eigen::Ref<const VectorXd>& qd0, const SimulationOptions& options,
     const std::function<void(const ControlledTrajectory& sample)>& sample_sink) {
   const char* who = "ukdyn::simulate_controlled";
   require_same_plant(ctrl, plant, who);
@@ -608,7 +585,8 @@ ControlledTrajectory simulate_controlled(
 }
 
 ControlledTrajectory simulate_controlled(const Controller& ctrl, const System& plant,
-                                         const VectorXd& q0, const VectorXd& qd0,
+                                         const Eigen::Ref<const VectorXd>& q0,
+                                         const Eigen::Ref<const VectorXd>& qd0,
                                          const SimulationOptions& options) {
   if (!options.sample_sink) return simulate_controlled(ctrl, plant, q0, qd0, options, nullptr);
   // the plant's part of each sample to the options' sink

@@ -29,7 +29,8 @@ const std::vector<Index>& ConstraintModel::columns() const {
   return kAll;
 }
 
-void ConstraintModel::acceleration_form_local(const VectorXd&, const VectorXd&, double,
+void ConstraintModel::acceleration_form_local(const Eigen::Ref<const VectorXd>&,
+                                              const Eigen::Ref<const VectorXd>&, double,
                                               ConstraintScratch*, Eigen::Ref<MatrixXd>,
                                               Eigen::Ref<VectorXd>) const {
   throw std::logic_error(
@@ -37,7 +38,8 @@ void ConstraintModel::acceleration_form_local(const VectorXd&, const VectorXd&, 
       "acceleration_form_local");
 }
 
-void ConstraintModel::acceleration_form(const VectorXd& q, const VectorXd& qd, double t,
+void ConstraintModel::acceleration_form(const Eigen::Ref<const VectorXd>& q,
+                                        const Eigen::Ref<const VectorXd>& qd, double t,
                                         ConstraintScratch* scratch, Eigen::Ref<MatrixXd> A,
                                         Eigen::Ref<VectorXd> b) const {
   const std::vector<Index>& cols = columns();
@@ -59,7 +61,8 @@ void ConstraintModel::acceleration_form(const VectorXd& q, const VectorXd& qd, d
   for (Index z = 0; z < next; ++z) A.col(z).setZero();
 }
 
-void ConstraintModel::violation(const VectorXd&, const VectorXd&, double, ConstraintScratch*,
+void ConstraintModel::violation(const Eigen::Ref<const VectorXd>&,
+                                const Eigen::Ref<const VectorXd>&, double, ConstraintScratch*,
                                 Eigen::Ref<VectorXd> position,
                                 Eigen::Ref<VectorXd> velocity) const {
   position.setZero();
@@ -102,8 +105,9 @@ namespace {
 class AccelerationModel final : public ConstraintModel {
  public:
   explicit AccelerationModel(AccelerationFormFn fn) : fn_(std::move(fn)) {}
-  void acceleration_form(const VectorXd& q, const VectorXd& qd, double t, ConstraintScratch*,
-                         Eigen::Ref<MatrixXd> A, Eigen::Ref<VectorXd> b) const override {
+  void acceleration_form(const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd,
+                         double t, ConstraintScratch*, Eigen::Ref<MatrixXd> A,
+                         Eigen::Ref<VectorXd> b) const override {
     fn_(q, qd, t, A, b);
   }
 
@@ -123,14 +127,15 @@ Constraint acceleration_constraint(std::string name, Index rows, AccelerationFor
 
 namespace ad {
 
-void set_constant(Vec<Jet>& x, const VectorXd& v) {
+void set_constant(Vec<Jet>& x, const Eigen::Ref<const VectorXd>& v) {
   for (Index i = 0; i < v.size(); ++i) {
     x[i].value() = v[i];
     x[i].derivatives().setZero();
   }
 }
 
-void seed_second_order(Vec<Dual2>& x, const VectorXd& q, const VectorXd& qd) {
+void seed_second_order(Vec<Dual2>& x, const Eigen::Ref<const VectorXd>& q,
+                       const Eigen::Ref<const VectorXd>& qd) {
   // x_i(s) = q_i + s q'_i: value q_i, first derivative q'_i, second derivative 0
   for (Index i = 0; i < q.size(); ++i) {
     x[i].value() = Dual(q[i], Dual::DerType::Constant(qd[i]));

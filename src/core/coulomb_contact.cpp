@@ -84,7 +84,8 @@ class StickModel final : public ConstraintModel {
   }
   const std::vector<Index>& columns() const override { return columns_; }
 
-  void acceleration_form_local(const VectorXd& q, const VectorXd& qd, double t,
+  void acceleration_form_local(const Eigen::Ref<const VectorXd>& q,
+                               const Eigen::Ref<const VectorXd>& qd, double t,
                                ConstraintScratch* scratch, Eigen::Ref<MatrixXd> A_local,
                                Eigen::Ref<VectorXd> b) const override {
     auto& s = static_cast<StickScratch&>(*scratch);
@@ -127,8 +128,9 @@ class StickModel final : public ConstraintModel {
     project(s, b);
   }
 
-  void violation(const VectorXd& q, const VectorXd& qd, double t, ConstraintScratch* scratch,
-                 Eigen::Ref<VectorXd> position, Eigen::Ref<VectorXd> velocity) const override {
+  void violation(const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd,
+                 double t, ConstraintScratch* scratch, Eigen::Ref<VectorXd> position,
+                 Eigen::Ref<VectorXd> velocity) const override {
     auto& s = static_cast<StickScratch&>(*scratch);
     position.setZero();
     for (std::size_t r = 0; r < coordinates_.size(); ++r) velocity[Index(r)] = qd[coordinates_[r]];
@@ -145,8 +147,8 @@ class StickModel final : public ConstraintModel {
  private:
   // the orthonormal basis of the normal rows on the sliding coordinates at (q + step q', t + step)
   // into s.basis (Gram–Schmidt twice, as sliding_velocity)
-  void basis_at(const VectorXd& q, const VectorXd& qd, double t, double step,
-                StickScratch& s) const {
+  void basis_at(const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd, double t,
+                double step, StickScratch& s) const {
     if (step == 0.0) {
       normal_->acceleration_form(q, qd, t, s.normal.get(), s.rows_n, s.b_n.head(normal_rows_));
     } else {
@@ -181,8 +183,8 @@ class StickModel final : public ConstraintModel {
   }
 
   // out = (P(h) w − P(−h) w) / (2h), P(s) at (q + s q', t + s)
-  void difference(const VectorXd& q, const VectorXd& qd, double t, double h, StickScratch& s,
-                  VectorXd& out) const {
+  void difference(const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd,
+                  double t, double h, StickScratch& s, VectorXd& out) const {
     basis_at(q, qd, t, h, s);
     s.g = s.w;
     project(s, s.g);
@@ -213,8 +215,9 @@ Constraint stick_constraint(const std::string& name, const std::vector<Index>& c
                     std::make_shared<const StickModel>(coordinates, surface, std::move(copy)));
 }
 
-Index sliding_velocity(const System& sys, Workspace& ws, Index c, const VectorXd& q,
-                       const VectorXd& qd, double t, bool rows_assembled) {
+Index sliding_velocity(const System& sys, Workspace& ws, Index c,
+                       const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd,
+                       double t, bool rows_assembled) {
   const FrictionContact& contact = sys.friction_contacts()[std::size_t(c)];
   const std::vector<Index>& coords = contact.coordinates;
   const Index nc = Index(coords.size()), k = contact.normal_constraint;

@@ -93,9 +93,9 @@ NonIdealForce coulomb_friction(CoulombFriction spec) {
                      eps2 = spec.regularization_velocity * spec.regularization_velocity;
         const Index self = sys.nonideal_count();  // this force's index once bound
         const Index contact = Index(sys.friction_contacts().size());  // and its contact's
-        return [k, coords, mu, eps2, self, contact](const VectorXd&, const VectorXd&, double,
-                                                    const IdealForceInfo& ideal,
-                                                    Eigen::Ref<VectorXd> C) {
+        return [k, coords, mu, eps2, self, contact](
+                   const Eigen::Ref<const VectorXd>&, const Eigen::Ref<const VectorXd>&, double,
+                   const IdealForceInfo& ideal, Eigen::Ref<VectorXd> C) {
           // v_rel, the sliding velocity relative to the constraint (see CoulombFriction)
           const auto v = ideal.sliding_velocity(contact);
           const double v2 = v.squaredNorm();
@@ -136,8 +136,8 @@ NonIdealForce viscous_friction(ViscousFriction spec) {
             resolve_coordinates(spec.coordinates, sys.coordinate_count(), who);
         const double c = spec.coefficient;
         // C_i = −c q'_i
-        return [coords, c](const VectorXd&, const VectorXd& qd, double, const IdealForceInfo&,
-                           Eigen::Ref<VectorXd> C) {
+        return [coords, c](const Eigen::Ref<const VectorXd>&, const Eigen::Ref<const VectorXd>& qd,
+                           double, const IdealForceInfo&, Eigen::Ref<VectorXd> C) {
           for (Index i : coords) C[i] = -c * qd[i];
         };
       }));

@@ -98,7 +98,7 @@ SystemBuilder& SystemBuilder::scratch(ScratchFactory factory) {
 SystemBuilder& SystemBuilder::mass_matrix(MassMatrixFn fn) {
   mass_ = nullptr;
   if (fn) {
-    mass_ = [f = std::move(fn)](const VectorXd& q, double t, CallableScratch*,
+    mass_ = [f = std::move(fn)](const Eigen::Ref<const VectorXd>& q, double t, CallableScratch*,
                                 Eigen::Ref<MatrixXd> M) { f(q, t, M); };
   }
   has_constant_mass_ = false;
@@ -111,7 +111,7 @@ SystemBuilder& SystemBuilder::mass_matrix(MassMatrixScratchFn fn) {
   return *this;
 }
 
-SystemBuilder& SystemBuilder::mass_matrix(const MatrixXd& M) {
+SystemBuilder& SystemBuilder::mass_matrix(const Eigen::Ref<const MatrixXd>& M) {
   if (M.rows() != n_ || M.cols() != n_) {
     throw std::invalid_argument("ukdyn::SystemBuilder::mass_matrix: expected a " +
                                 format_number(n_) + "x" + format_number(n_) + " matrix, got " +
@@ -119,11 +119,13 @@ SystemBuilder& SystemBuilder::mass_matrix(const MatrixXd& M) {
   }
   mass_constant_ = M;
   has_constant_mass_ = true;
-  mass_ = [M](const VectorXd&, double, CallableScratch*, Eigen::Ref<MatrixXd> out) { out = M; };
+  // the closure owns its copy of M (the argument is a view, gone after this call)
+  mass_ = [M = mass_constant_](const Eigen::Ref<const VectorXd>&, double, CallableScratch*,
+                               Eigen::Ref<MatrixXd> out) { out = M; };
   return *this;
 }
 
-SystemBuilder& SystemBuilder::mass_block(Index offset, const MatrixXd& Mkk) {
+SystemBuilder& SystemBuilder::mass_block(Index offset, const Eigen::Ref<const MatrixXd>& Mkk) {
   if (Mkk.rows() != Mkk.cols() || Mkk.rows() == 0) {
     throw std::invalid_argument(
         "ukdyn::SystemBuilder::mass_block: expected a non-empty square "
@@ -154,7 +156,8 @@ SystemBuilder& SystemBuilder::singular_mass_block(Index offset, Index size, Mass
 SystemBuilder& SystemBuilder::forces(ForceFn fn) {
   forces_ = nullptr;
   if (fn) {
-    forces_ = [f = std::move(fn)](const VectorXd& q, const VectorXd& qd, double t, CallableScratch*,
+    forces_ = [f = std::move(fn)](const Eigen::Ref<const VectorXd>& q,
+                                  const Eigen::Ref<const VectorXd>& qd, double t, CallableScratch*,
                                   Eigen::Ref<VectorXd> Q) { f(q, qd, t, Q); };
   }
   return *this;
@@ -168,9 +171,8 @@ SystemBuilder& SystemBuilder::forces(ForceScratchFn fn) {
 SystemBuilder& SystemBuilder::potential_energy(PotentialFn fn) {
   potential_ = nullptr;
   if (fn) {
-    potential_ = [f = std::move(fn)](const VectorXd& q, double t, CallableScratch*) {
-      return f(q, t);
-    };
+    potential_ = [f = std::move(fn)](const Eigen::Ref<const VectorXd>& q, double t,
+                                     CallableScratch*) { return f(q, t); };
   }
   return *this;
 }
@@ -183,7 +185,8 @@ SystemBuilder& SystemBuilder::potential_energy(PotentialScratchFn fn) {
 SystemBuilder& SystemBuilder::external_power(PowerFn fn) {
   external_power_ = nullptr;
   if (fn) {
-    external_power_ = [f = std::move(fn)](const VectorXd& q, const VectorXd& qd, double t,
+    external_power_ = [f = std::move(fn)](const Eigen::Ref<const VectorXd>& q,
+                                          const Eigen::Ref<const VectorXd>& qd, double t,
                                           CallableScratch*) { return f(q, qd, t); };
   }
   return *this;
@@ -251,7 +254,8 @@ System SystemBuilder::build() const {
     }
     s.mass_blocks_ = blocks;
     s.mass_constant_ = constant;
-    s.mass_ = [blocks](const VectorXd& q, double t, CallableScratch*, Eigen::Ref<MatrixXd> M) {
+    s.mass_ = [blocks](const Eigen::Ref<const VectorXd>& q, double t, CallableScratch*,
+                       Eigen::Ref<MatrixXd> M) {
       M.setZero();
       for (const MassBlock& b : blocks) {
         auto Mk = M.block(b.offset, b.offset, b.size, b.size);
@@ -263,10 +267,11 @@ System SystemBuilder::build() const {
       }
     };
   }
-  s.forces_ = forces_
-                  ? forces_
-                  : ForceScratchFn([](const VectorXd&, const VectorXd&, double, CallableScratch*,
-                                      Eigen::Ref<VectorXd> Q) { Q.setZero(); });
+  s.forces_ =
+      forces_
+          ? forces_
+          : ForceScratchFn([](const Eigen::Ref<const VectorXd>&, const Eigen::Ref<const VectorXd>&,
+                              double, CallableScratch*, Eigen::Ref<VectorXd> Q) { Q.setZero(); });
   s.scratch_ = scratch_;
   // each Coulomb contact brings its stick constraint P (v − u) = 0, inactive unless switched on
   std::vector<Constraint> all = constraints_;

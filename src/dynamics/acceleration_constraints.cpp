@@ -9,8 +9,8 @@
 
 namespace ukdyn {
 
-Status assemble_constraints(const System& sys, Workspace& ws, const VectorXd& q, const VectorXd& qd,
-                            double t) {
+Status assemble_constraints(const System& sys, Workspace& ws, const Eigen::Ref<const VectorXd>& q,
+                            const Eigen::Ref<const VectorXd>& qd, double t) {
   detail::require_same_system(sys, ws, "ukdyn::assemble_constraints");
   detail::require_state_size(sys, q, &qd, "ukdyn::assemble_constraints");
   ws.active_rows = 0;

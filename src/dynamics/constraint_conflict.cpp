@@ -25,7 +25,7 @@ namespace {
 
 // the part of rhs outside the numerical range of S (rows × n): rhs − S S⁺ rhs, with Eigen's
 // column-pivoting QR of S at the relative rank threshold
-VectorXd outside_range(const MatrixXd& S, const VectorXd& rhs, double threshold) {
+VectorXd outside_range(const MatrixXd& S, const Eigen::Ref<const VectorXd>& rhs, double threshold) {
   if (S.rows() == 0) return rhs;
   if (S.cols() == 0 || S.isZero(0.0)) return rhs;
   Eigen::ColPivHouseholderQR<MatrixXd> qr(S);
@@ -36,8 +36,10 @@ VectorXd outside_range(const MatrixXd& S, const VectorXd& rhs, double threshold)
 
 }  // namespace
 
-ConstraintConflict find_constraint_conflict(const System& sys, Workspace& ws, const VectorXd& q,
-                                            const VectorXd& qd, double t, double tolerance) {
+ConstraintConflict find_constraint_conflict(const System& sys, Workspace& ws,
+                                            const Eigen::Ref<const VectorXd>& q,
+                                            const Eigen::Ref<const VectorXd>& qd, double t,
+                                            double tolerance) {
   ConstraintConflict out;
   const Index n = sys.coordinate_count();
   if (q.size() != n || qd.size() != n || !q.allFinite() || !qd.allFinite()) return out;
@@ -85,11 +87,11 @@ ConstraintConflict find_constraint_conflict(const System& sys, Workspace& ws, co
   // what no correction removes, first at the position level, then at the velocity level;
   // significant when it is above the tolerance (what a projection stalls at) and not roundoff
   // of the violation itself
-  auto significant = [&](const VectorXd& u, const VectorXd& v) {
+  auto significant = [&](const Eigen::Ref<const VectorXd>& u, const Eigen::Ref<const VectorXd>& v) {
     const double un = u.cwiseAbs().maxCoeff();
     return un > tolerance && un > 1e-3 * v.cwiseAbs().maxCoeff();
   };
-  auto name_rows = [&](const VectorXd& u, const std::vector<Index>& who) {
+  auto name_rows = [&](const Eigen::Ref<const VectorXd>& u, const std::vector<Index>& who) {
     const double un = u.cwiseAbs().maxCoeff();
     for (Index i = 0; i < u.size(); ++i) {
       if (std::abs(u[i]) < 0.1 * un) continue;

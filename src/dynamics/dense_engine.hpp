@@ -47,7 +47,7 @@ double assemble_auxiliary_mass(Workspace& ws, bool forces);
 template <class D>
 class DenseEngine final : public EngineOps {
  public:
-  Status evaluate_mass(const System& sys, Workspace& ws, const VectorXd& q,
+  Status evaluate_mass(const System& sys, Workspace& ws, const Eigen::Ref<const VectorXd>& q,
                        double t) const override {
     // M(q,t) and M = L Lᵀ; a constant M is evaluated and factorized once
     if (sys.mass_is_constant() && ws.mass_factorized) return Status::kOk;
@@ -98,8 +98,10 @@ class DenseEngine final : public EngineOps {
     return 0.5 * qd.dot(ws.M * qd);
   }
 
-  Status write_constraint_rows(const System& sys, Workspace& ws, Index k, const VectorXd& q,
-                               const VectorXd& qd, double t, bool check) const override {
+  Status write_constraint_rows(const System& sys, Workspace& ws, Index k,
+                               const Eigen::Ref<const VectorXd>& q,
+                               const Eigen::Ref<const VectorXd>& qd, double t,
+                               bool check) const override {
     const Constraint& c = sys.constraint(k);
     auto Ak = ws.A.middleRows(sys.row_offset(k), c.rows());
     auto bk = ws.b.segment(sys.row_offset(k), c.rows());

@@ -34,8 +34,8 @@ class EngineOps {
   // --- stage 1: M, its factor, a = M⁻¹ Q ---------------------------------------------------
   /// M(q,t), its checks and M = L Lᵀ (a singular, positive semi-definite M sets
   /// ws.mass_singular; it is factorized by complete_singular_mass once A is known).
-  virtual Status evaluate_mass(const System& sys, Workspace& ws, const VectorXd& q,
-                               double t) const = 0;
+  virtual Status evaluate_mass(const System& sys, Workspace& ws,
+                               const Eigen::Ref<const VectorXd>& q, double t) const = 0;
   /// ws.a = M⁻¹ ws.Q with the factor of evaluate_mass (a regular M).
   virtual void solve_mass(Workspace& ws) const = 0;
   /// For a singular M, with A and b assembled: M_A = M + Aᵀ G A factorized; with `forces`,
@@ -49,8 +49,10 @@ class EngineOps {
   // --- stage 2: A and b ---------------------------------------------------------------------
   /// Constraint k's rows of A and b from its acceleration form at (q, q', t); with `check`,
   /// kNonFiniteInput (recorded) when A is not finite.
-  virtual Status write_constraint_rows(const System& sys, Workspace& ws, Index k, const VectorXd& q,
-                                       const VectorXd& qd, double t, bool check) const = 0;
+  virtual Status write_constraint_rows(const System& sys, Workspace& ws, Index k,
+                                       const Eigen::Ref<const VectorXd>& q,
+                                       const Eigen::Ref<const VectorXd>& qd, double t,
+                                       bool check) const = 0;
   /// Constraint k's rows of A set to zero (b is the caller's).
   virtual void zero_constraint_rows(const System& sys, Workspace& ws, Index k) const = 0;
   /// Constraint k's rows of A as last assembled, into out (rows × n).

@@ -12,7 +12,7 @@
 namespace ukdyn {
 
 namespace {
-void require_size(const VectorXd& v, Index n, const char* what) {
+void require_size(const Eigen::Ref<const VectorXd>& v, Index n, const char* what) {
   if (v.size() != n) {
     throw std::invalid_argument(std::string("ukdyn::forward_dynamics: ") + what + " has " +
                                 format_number(v.size()) +
@@ -20,7 +20,7 @@ void require_size(const VectorXd& v, Index n, const char* what) {
   }
 }
 // index of the first non-finite entry, or −1
-Index first_non_finite(const VectorXd& v) {
+Index first_non_finite(const Eigen::Ref<const VectorXd>& v) {
   for (Index i = 0; i < v.size(); ++i) {
     if (!std::isfinite(v[i])) return i;
   }
@@ -44,8 +44,8 @@ Status invalidate_results(Workspace& ws, Status s) {
 }
 }  // namespace
 
-Status forward_dynamics(const System& sys, Workspace& ws, const VectorXd& q, const VectorXd& qd,
-                        double t) {
+Status forward_dynamics(const System& sys, Workspace& ws, const Eigen::Ref<const VectorXd>& q,
+                        const Eigen::Ref<const VectorXd>& qd, double t) {
   detail::require_same_system(sys, ws, "ukdyn::forward_dynamics");
   require_size(q, sys.coordinate_count(), "q");
   require_size(qd, sys.coordinate_count(), "q_dot");

@@ -20,7 +20,8 @@ namespace ukdyn::detail {
 // simulate(), with `finished` called with the run's workspace when the run ends (it returns or
 // throws): a caller reads there what the system's callables recorded in their per-workspace
 // scratch — the controlled plant's control statistics (control/simulate_controlled.cpp).
-Trajectory simulate_observed(const System& sys, const VectorXd& q0, const VectorXd& qd0,
+Trajectory simulate_observed(const System& sys, const Eigen::Ref<const VectorXd>& q0,
+                             const Eigen::Ref<const VectorXd>& qd0,
                              const SimulationOptions& options,
                              const std::function<void(const Workspace&)>& finished);
 
@@ -50,8 +51,8 @@ inline void require_same_system(const System& sys, const Workspace& ws, const ch
 }
 
 // Tier 1: q (and q', when given) have n entries.
-inline void require_state_size(const System& sys, const VectorXd& q, const VectorXd* qd,
-                               const char* who) {
+inline void require_state_size(const System& sys, const Eigen::Ref<const VectorXd>& q,
+                               const Eigen::Ref<const VectorXd>* qd, const char* who) {
   const Index n = sys.coordinate_count();
   if (q.size() == n && (!qd || qd->size() == n)) return;
   const bool bad_q = q.size() != n;
@@ -64,7 +65,8 @@ inline void require_state_size(const System& sys, const VectorXd& q, const Vecto
 // Q; shared with the projections).
 // A singular, positive semi-definite M sets ws.mass_singular and is factorized later by
 // complete_singular_mass.
-inline Status evaluate_mass(const System& sys, Workspace& ws, const VectorXd& q, double t) {
+inline Status evaluate_mass(const System& sys, Workspace& ws, const Eigen::Ref<const VectorXd>& q,
+                            double t) {
   return ws.engine->evaluate_mass(sys, ws, q, t);
 }
 
@@ -80,8 +82,10 @@ inline Status complete_singular_mass(Workspace& ws, double t, bool forces, bool 
 // Writes constraint k's rows of A (dense matrix or the sparse engine's pattern) and b from its
 // acceleration form at (q, q', t); with `check`, kNonFiniteInput (recorded) when A is not
 // finite.
-inline Status write_constraint_rows(const System& sys, Workspace& ws, Index k, const VectorXd& q,
-                                    const VectorXd& qd, double t, bool check = true) {
+inline Status write_constraint_rows(const System& sys, Workspace& ws, Index k,
+                                    const Eigen::Ref<const VectorXd>& q,
+                                    const Eigen::Ref<const VectorXd>& qd, double t,
+                                    bool check = true) {
   return ws.engine->write_constraint_rows(sys, ws, k, q, qd, t, check);
 }
 // Zeroes constraint k's rows of A and b.
@@ -108,8 +112,9 @@ Constraint stick_constraint(const std::string& name, const std::vector<Index>& c
 // here. Returns the number B of independent normals: ws.contact_basis.topRows(B) then holds
 // them, orthonormal, for projecting other vectors. No allocation; O(rows_k · n + rows_k² ·
 // |coordinates|).
-Index sliding_velocity(const System& sys, Workspace& ws, Index c, const VectorXd& q,
-                       const VectorXd& qd, double t, bool rows_assembled);
+Index sliding_velocity(const System& sys, Workspace& ws, Index c,
+                       const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd,
+                       double t, bool rows_assembled);
 
 // v −= Σ_j (v·e_j) e_j over the first `basis` rows e_j of ws.contact_basis (orthonormal, from
 // sliding_velocity): the part of v (|coordinates|) tangent to the contact's constraint.

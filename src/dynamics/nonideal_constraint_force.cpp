@@ -13,8 +13,8 @@ namespace {
 constexpr int kMaxReactionIterations = 50;
 }  // namespace
 
-Status apply_nonideal(const System& sys, Workspace& ws, const VectorXd& q, const VectorXd& qd,
-                      double t) {
+Status apply_nonideal(const System& sys, Workspace& ws, const Eigen::Ref<const VectorXd>& q,
+                      const Eigen::Ref<const VectorXd>& qd, double t) {
   detail::require_same_system(sys, ws, "ukdyn::apply_nonideal");
   detail::require_state_size(sys, q, &qd, "ukdyn::apply_nonideal");
   ws.C.setZero();

@@ -29,7 +29,7 @@ void require_tolerance(const ProjectionOptions& o, const char* who) {
 }
 
 // index of the first non-finite entry, or −1
-Index first_non_finite(const VectorXd& v) {
+Index first_non_finite(const Eigen::Ref<const VectorXd>& v) {
   for (Index i = 0; i < v.size(); ++i) {
     if (!std::isfinite(v[i])) return i;
   }
@@ -39,8 +39,8 @@ Index first_non_finite(const VectorXd& v) {
 // Tier 1: the sizes; then the inputs, as forward_dynamics checks them: a non-finite t, q (or
 // q') is recorded in the workspace as kNonFiniteInput naming the coordinate (describe_status,
 // throw_if_failed) and returned, so that a NaN state is never reported converged.
-Status check_inputs(const System& sys, Workspace& ws, const VectorXd& q, const VectorXd* qd,
-                    double t, const char* who) {
+Status check_inputs(const System& sys, Workspace& ws, const Eigen::Ref<const VectorXd>& q,
+                    const Eigen::Ref<const VectorXd>* qd, double t, const char* who) {
   detail::require_state_size(sys, q, qd, who);
   if (!std::isfinite(t)) return detail::fail(ws, Status::kNonFiniteInput, "t", -1, t);
   if (const Index i = first_non_finite(q); i >= 0) {
@@ -76,8 +76,9 @@ bool takes_part(const System& sys, const Workspace& ws, const ProjectionOptions&
 
 // e = −violation on the rows of the constraints that take part (zero elsewhere); returns the
 // largest |violation|, or −1 when no row takes part
-double measure_violation(const System& sys, Workspace& ws, const VectorXd& q, const VectorXd& qd,
-                         double t, const ProjectionOptions& o, Level level) {
+double measure_violation(const System& sys, Workspace& ws, const Eigen::Ref<const VectorXd>& q,
+                         const Eigen::Ref<const VectorXd>& qd, double t, const ProjectionOptions& o,
+                         Level level) {
   double worst = -1.0;
   for (Index k = 0; k < sys.constraint_count(); ++k) {
     const Index r0 = sys.row_offset(k), rows = sys.constraint(k).rows();
@@ -108,8 +109,9 @@ double measure_violation(const System& sys, Workspace& ws, const VectorXd& q, co
 
 // A on the rows of the constraints that take part: dphi/dq (holonomic) or dpsi/dq'
 // (nonholonomic), zero elsewhere; only needed when a correction is
-void assemble_jacobian(const System& sys, Workspace& ws, const VectorXd& q, const VectorXd& qd,
-                       double t, const ProjectionOptions& o, Level level) {
+void assemble_jacobian(const System& sys, Workspace& ws, const Eigen::Ref<const VectorXd>& q,
+                       const Eigen::Ref<const VectorXd>& qd, double t, const ProjectionOptions& o,
+                       Level level) {
   for (Index k = 0; k < sys.constraint_count(); ++k) {
     if (!takes_part(sys, ws, o, k, t, level)) {
       detail::zero_constraint_rows(sys, ws, k);
@@ -150,7 +152,8 @@ void correct(Workspace& ws, Vector&& x) {
 }
 
 // M(q) = L Lᵀ (completed when M is singular) for a projection at (q, t)
-Status factorize_mass(const System& sys, Workspace& ws, const VectorXd& q, double t) {
+Status factorize_mass(const System& sys, Workspace& ws, const Eigen::Ref<const VectorXd>& q,
+                      double t) {
   Status s = detail::evaluate_mass(sys, ws, q, t);
   if (s == Status::kOk && ws.mass_singular) {
     s = detail::complete_singular_mass(ws, t, /*forces=*/false, /*regularize=*/true);
@@ -166,8 +169,8 @@ void remove_normal(Workspace& ws, Eigen::Ref<VectorXd> dx) {
 }
 }  // namespace
 
-void evaluate_violations(const System& sys, Workspace& ws, const VectorXd& q, const VectorXd& qd,
-                         double t) {
+void evaluate_violations(const System& sys, Workspace& ws, const Eigen::Ref<const VectorXd>& q,
+                         const Eigen::Ref<const VectorXd>& qd, double t) {
   detail::require_same_system(sys, ws, "ukdyn::evaluate_violations");
   detail::require_state_size(sys, q, &qd, "ukdyn::evaluate_violations");
   for (Index k = 0; k < sys.constraint_count(); ++k) {
@@ -193,8 +196,9 @@ double velocity_violation(const System& sys, const Workspace& ws, Index k) {
   return ws.phi_dot.segment(sys.row_offset(k), sys.constraint(k).rows()).cwiseAbs().maxCoeff();
 }
 
-Violations measure_violations(const System& sys, Workspace& ws, const VectorXd& q,
-                              const VectorXd& qd, double t, const ProjectionOptions& options) {
+Violations measure_violations(const System& sys, Workspace& ws, const Eigen::Ref<const VectorXd>& q,
+                              const Eigen::Ref<const VectorXd>& qd, double t,
+                              const ProjectionOptions& options) {
   detail::require_same_system(sys, ws, "ukdyn::measure_violations");
   require_tolerance(options, "ukdyn::measure_violations");
   detail::require_state_size(sys, q, &qd, "ukdyn::measure_violations");
@@ -251,12 +255,14 @@ ProjectionResult project_positions(const System& sys, Workspace& ws, VectorXd& q
   }
 }
 
-ProjectionResult project_velocities(const System& sys, Workspace& ws, const VectorXd& q,
-                                    VectorXd& qd, double t, const ProjectionOptions& options) {
+ProjectionResult project_velocities(const System& sys, Workspace& ws,
+                                    const Eigen::Ref<const VectorXd>& q, VectorXd& qd, double t,
+                                    const ProjectionOptions& options) {
   detail::require_same_system(sys, ws, "ukdyn::project_velocities");
   require_tolerance(options, "ukdyn::project_velocities");
   ProjectionResult res;
-  res.status = check_inputs(sys, ws, q, &qd, t, "ukdyn::project_velocities");
+  const Eigen::Ref<const VectorXd> qd_in = qd;  // a view, for the checks
+  res.status = check_inputs(sys, ws, q, &qd_in, t, "ukdyn::project_velocities");
   if (res.status != Status::kOk) return failed(res);
   Settling settling;
   bool factorized = false;
@@ -286,9 +292,11 @@ ProjectionResult project_velocities(const System& sys, Workspace& ws, const Vect
   }
 }
 
-Status remove_normal_components(const System& sys, Workspace& ws, const VectorXd& q,
-                                const VectorXd& qd, double t, const ProjectionOptions& options,
-                                Eigen::Ref<VectorXd> dq, Eigen::Ref<VectorXd> dqd) {
+Status remove_normal_components(const System& sys, Workspace& ws,
+                                const Eigen::Ref<const VectorXd>& q,
+                                const Eigen::Ref<const VectorXd>& qd, double t,
+                                const ProjectionOptions& options, Eigen::Ref<VectorXd> dq,
+                                Eigen::Ref<VectorXd> dqd) {
   detail::require_same_system(sys, ws, "ukdyn::remove_normal_components");
   const Index n = sys.coordinate_count();
   if (q.size() != n || qd.size() != n || dq.size() != n || dqd.size() != n) {

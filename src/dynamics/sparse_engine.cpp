@@ -14,7 +14,7 @@ namespace {
 
 class SparseEngine final : public EngineOps {
  public:
-  Status evaluate_mass(const System& sys, Workspace& ws, const VectorXd& q,
+  Status evaluate_mass(const System& sys, Workspace& ws, const Eigen::Ref<const VectorXd>& q,
                        double t) const override {
     SparseDecomposition& sp = *ws.sparse;
     // M(q,t) block by block; constant blocks evaluated and factorized once
@@ -60,8 +60,10 @@ class SparseEngine final : public EngineOps {
     return 0.5 * ws.sparse->mass_norm_squared(qd);
   }
 
-  Status write_constraint_rows(const System& sys, Workspace& ws, Index k, const VectorXd& q,
-                               const VectorXd& qd, double t, bool check) const override {
+  Status write_constraint_rows(const System& sys, Workspace& ws, Index k,
+                               const Eigen::Ref<const VectorXd>& q,
+                               const Eigen::Ref<const VectorXd>& qd, double t,
+                               bool check) const override {
     // the local form (rows × columns) or the dense rows (rows × n), then the pattern
     const Constraint& c = sys.constraint(k);
     auto bk = ws.b.segment(sys.row_offset(k), c.rows());

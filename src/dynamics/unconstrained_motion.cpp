@@ -8,8 +8,8 @@
 
 namespace ukdyn {
 
-Status evaluate_unconstrained(const System& sys, Workspace& ws, const VectorXd& q,
-                              const VectorXd& qd, double t) {
+Status evaluate_unconstrained(const System& sys, Workspace& ws, const Eigen::Ref<const VectorXd>& q,
+                              const Eigen::Ref<const VectorXd>& qd, double t) {
   detail::require_same_system(sys, ws, "ukdyn::evaluate_unconstrained");
   detail::require_state_size(sys, q, &qd, "ukdyn::evaluate_unconstrained");
   if (const Status s = detail::evaluate_mass(sys, ws, q, t); s != Status::kOk) return s;

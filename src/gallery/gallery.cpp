@@ -122,12 +122,10 @@ System link_system(std::vector<std::string> coordinate_names, const std::vector<
   SystemBuilder b(std::move(coordinate_names));
   // Q is constant (gravity), V = −Qᵀ q + V_const − V_datum
   b.mass_matrix(lm.M)
-      .forces([Q = lm.Q](const VectorXd&, const VectorXd&, double, Eigen::Ref<VectorXd> out) {
-        out = Q;
-      })
-      .potential_energy([Q = lm.Q, c = lm.V_const - V_datum](const VectorXd& q, double) {
-        return -Q.dot(q) + c;
-      });
+      .forces([Q = lm.Q](const Eigen::Ref<const VectorXd>&, const Eigen::Ref<const VectorXd>&,
+                         double, Eigen::Ref<VectorXd> out) { out = Q; })
+      .potential_energy([Q = lm.Q, c = lm.V_const - V_datum](const Eigen::Ref<const VectorXd>& q,
+                                                             double) { return -Q.dot(q) + c; });
   for (Constraint& c : constraints) b.add(std::move(c));
   return b.build();
 }
@@ -162,7 +160,8 @@ double on_branch(double phi, double begin) {
   return phi;
 }
 
-void require_shared_q(const char* who, const std::string& name, const VectorXd& q) {
+void require_shared_q(const char* who, const std::string& name,
+                      const Eigen::Ref<const VectorXd>& q) {
   if (q.size() != 4) {
     throw std::invalid_argument(std::string("ukdyn::gallery::") + who + ": q of \"" + name +
                                 "\" must have 4 entries, got " + format_number(q.size()));
@@ -217,16 +216,18 @@ Example pendulum(double m, double L, double g) {
   require(m > 0, "pendulum", "m", m, "> 0");
   require(L > 0, "pendulum", "L", L, "> 0");
   // M = m I, Q = (0, −m g), V = m g y; the rod (x² + y² − L²) / (2L) = 0
-  System sys = SystemBuilder({"x", "y"})
-                   .mass_matrix(m * MatrixXd::Identity(2, 2))
-                   .forces([w = m * g](const VectorXd&, const VectorXd&, double,
-                                       Eigen::Ref<VectorXd> Q) { Q << 0.0, -w; })
-                   .potential_energy([w = m * g](const VectorXd& q, double) { return w * q[1]; })
-                   .add(holonomic("rod", 1,
-                                  [L](const auto& q, const auto&, auto& phi) {
-                                    phi[0] = (q[0] * q[0] + q[1] * q[1] - L * L) * (0.5 / L);
-                                  }))
-                   .build();
+  System sys =
+      SystemBuilder({"x", "y"})
+          .mass_matrix(m * MatrixXd::Identity(2, 2))
+          .forces([w = m * g](const Eigen::Ref<const VectorXd>&, const Eigen::Ref<const VectorXd>&,
+                              double, Eigen::Ref<VectorXd> Q) { Q << 0.0, -w; })
+          .potential_energy(
+              [w = m * g](const Eigen::Ref<const VectorXd>& q, double) { return w * q[1]; })
+          .add(holonomic("rod", 1,
+                         [L](const auto& q, const auto&, auto& phi) {
+                           phi[0] = (q[0] * q[0] + q[1] * q[1] - L * L) * (0.5 / L);
+                         }))
+          .build();
   std::ostringstream d;
   d.precision(12);
   d << "Planar pendulum in Cartesian coordinates (x, y): mass " << m << " kg on a massless rod "
@@ -269,10 +270,10 @@ Example block_on_incline(double alpha, double mu, double v0, double m, double g)
   System sys =
       SystemBuilder({"x", "y"})
           .mass_matrix(m * MatrixXd::Identity(2, 2))
-          .forces([w = m * g](const VectorXd&, const VectorXd&, double, Eigen::Ref<VectorXd> Q) {
-            Q << 0.0, -w;
-          })
-          .potential_energy([w = m * g](const VectorXd& q, double) { return w * q[1]; })
+          .forces([w = m * g](const Eigen::Ref<const VectorXd>&, const Eigen::Ref<const VectorXd>&,
+                              double, Eigen::Ref<VectorXd> Q) { Q << 0.0, -w; })
+          .potential_energy(
+              [w = m * g](const Eigen::Ref<const VectorXd>& q, double) { return w * q[1]; })
           .add(holonomic(
               "incline", 1,
               [s, c](const auto& q, const auto&, auto& phi) { phi[0] = -q[0] * s + q[1] * c; }))
@@ -389,7 +390,7 @@ Example shared_P2() {
   return {"shared_P2", std::move(d), std::move(sys), q0, VectorXd::Zero(4), 10.0};
 }
 
-double reported_coordinate(const std::string& name, const VectorXd& q) {
+double reported_coordinate(const std::string& name, const Eigen::Ref<const VectorXd>& q) {
   if (name == "shared_P1") {
     require_shared_q("reported_coordinate", name, q);
     return on_branch(std::atan2(q[1], q[0]), kP1_branch_begin);
@@ -401,7 +402,7 @@ double reported_coordinate(const std::string& name, const VectorXd& q) {
   unknown_shared("reported_coordinate", name);
 }
 
-double closure_violation(const std::string& name, const VectorXd& q) {
+double closure_violation(const std::string& name, const Eigen::Ref<const VectorXd>& q) {
   if (name == "shared_P1") {
     require_shared_q("closure_violation", name, q);
     return 0.0;

@@ -505,8 +505,8 @@ void Reader::read_dynamics(const YAML::Node& root, SystemBuilder& builder) {
     }
   } else {
     sizes_->fit(layout.size(), Mp);
-    builder.mass_matrix([Mp, at, layout, n](const VectorXd& q, double t, CallableScratch* s,
-                                            Eigen::Ref<MatrixXd> Mout) {
+    builder.mass_matrix([Mp, at, layout, n](const Eigen::Ref<const VectorXd>& q, double t,
+                                            CallableScratch* s, Eigen::Ref<MatrixXd> Mout) {
       ModelBuffers& b = model_buffers(s);
       std::copy(q.data(), q.data() + n, b.in.begin());
       b.in[std::size_t(2 * n)] = t;
@@ -518,7 +518,8 @@ void Reader::read_dynamics(const YAML::Node& root, SystemBuilder& builder) {
   // the callables' buffers: one ModelBuffers per workspace, sized for every program of the model
   builder.scratch(BufferSizes::factory(sizes_));
   sizes_->fit(layout.size(), Qp);
-  builder.forces([Qp, layout](const VectorXd& q, const VectorXd& qd, double t, CallableScratch* s,
+  builder.forces([Qp, layout](const Eigen::Ref<const VectorXd>& q,
+                              const Eigen::Ref<const VectorXd>& qd, double t, CallableScratch* s,
                               Eigen::Ref<VectorXd> Qout) {
     ModelBuffers& b = model_buffers(s);
     layout.fill(b.in, q, qd, t);
@@ -529,26 +530,28 @@ void Reader::read_dynamics(const YAML::Node& root, SystemBuilder& builder) {
   if (!set_->is_zero(P_ext)) {
     const Program Pp = compile({P_ext}, dynamics, "the external power");
     sizes_->fit(layout.size(), Pp);
-    builder.external_power(
-        [Pp, layout](const VectorXd& q, const VectorXd& qd, double t, CallableScratch* s) {
-          ModelBuffers& b = model_buffers(s);
-          layout.fill(b.in, q, qd, t);
-          double p = 0.0;
-          Pp.evaluate(b.in.data(), &p, b.scratch.data());
-          return p;
-        });
+    builder.external_power([Pp, layout](const Eigen::Ref<const VectorXd>& q,
+                                        const Eigen::Ref<const VectorXd>& qd, double t,
+                                        CallableScratch* s) {
+      ModelBuffers& b = model_buffers(s);
+      layout.fill(b.in, q, qd, t);
+      double p = 0.0;
+      Pp.evaluate(b.in.data(), &p, b.scratch.data());
+      return p;
+    });
   }
   if (V) {
     const Program Vp = compile({Ve}, V, "potential_energy");
     sizes_->fit(layout.size(), Vp);
-    builder.potential_energy([Vp, layout](const VectorXd& q, double t, CallableScratch* s) {
-      ModelBuffers& b = model_buffers(s);
-      std::copy(q.data(), q.data() + layout.n, b.in.begin());
-      b.in[std::size_t(2 * layout.n)] = t;
-      double v = 0.0;
-      Vp.evaluate(b.in.data(), &v, b.scratch.data());
-      return v;
-    });
+    builder.potential_energy(
+        [Vp, layout](const Eigen::Ref<const VectorXd>& q, double t, CallableScratch* s) {
+          ModelBuffers& b = model_buffers(s);
+          std::copy(q.data(), q.data() + layout.n, b.in.begin());
+          b.in[std::size_t(2 * layout.n)] = t;
+          double v = 0.0;
+          Vp.evaluate(b.in.data(), &v, b.scratch.data());
+          return v;
+        });
   }
 }
 
@@ -729,8 +732,8 @@ SurfaceVelocityFn Reader::surface_velocity(const YAML::Node& node, std::size_t c
   const InputLayout layout = layout_;
   const Index k = Index(count);
   // (its signature carries no scratch: buffers of the call, evaluate_local)
-  return [p, layout, k](const VectorXd& q, const VectorXd& qd, double t, Eigen::Ref<VectorXd> uo,
-                        Eigen::Ref<VectorXd> udo) {
+  return [p, layout, k](const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd,
+                        double t, Eigen::Ref<VectorXd> uo, Eigen::Ref<VectorXd> udo) {
     evaluate_local(
         p, layout.size(),
         [&](double* in) {
@@ -840,7 +843,8 @@ void Reader::read_nonideal(const YAML::Node& root, SystemBuilder& builder) {
             std::vector<Index> ks;
             ks.reserve(names.size());
             for (const auto& nm : names) ks.push_back(sys.constraint_index(nm));
-            return [Cp, layout, ks](const VectorXd& q, const VectorXd& qd, double t,
+            return [Cp, layout, ks](const Eigen::Ref<const VectorXd>& q,
+                                    const Eigen::Ref<const VectorXd>& qd, double t,
                                     const IdealForceInfo& ideal, Eigen::Ref<VectorXd> Cout) {
               ModelBuffers& b = model_buffers(ideal.scratch());
               layout.fill(b.in, q, qd, t);

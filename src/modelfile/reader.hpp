@@ -77,7 +77,8 @@ struct Evaluator {
 struct InputLayout {
   Index n = 0, extra = 0;
   Index size() const { return 2 * n + 1 + extra; }
-  void fill(std::vector<double>& in, const VectorXd& q, const VectorXd& qd, double t) const {
+  void fill(std::vector<double>& in, const Eigen::Ref<const VectorXd>& q,
+            const Eigen::Ref<const VectorXd>& qd, double t) const {
     std::copy(q.data(), q.data() + n, in.begin());
     std::copy(qd.data(), qd.data() + n, in.begin() + n);
     in[std::size_t(2 * n)] = t;
@@ -200,8 +201,9 @@ class CompiledConstraint final : public ConstraintModel {
 
   const std::vector<Index>& columns() const override { return columns_; }
 
-  void acceleration_form(const VectorXd& q, const VectorXd& qd, double t, ConstraintScratch* s,
-                         Eigen::Ref<MatrixXd> A, Eigen::Ref<VectorXd> b) const override {
+  void acceleration_form(const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd,
+                         double t, ConstraintScratch* s, Eigen::Ref<MatrixXd> A,
+                         Eigen::Ref<VectorXd> b) const override {
     const double* out = evaluate(q, qd, t, s);
     if (columns_.empty()) {
       for (Index r = 0; r < rows_; ++r) {
@@ -216,8 +218,9 @@ class CompiledConstraint final : public ConstraintModel {
     for (Index r = 0; r < rows_; ++r) b[r] = out[rows_ * width_ + r];
   }
 
-  void acceleration_form_local(const VectorXd& q, const VectorXd& qd, double t,
-                               ConstraintScratch* s, Eigen::Ref<MatrixXd> A_local,
+  void acceleration_form_local(const Eigen::Ref<const VectorXd>& q,
+                               const Eigen::Ref<const VectorXd>& qd, double t, ConstraintScratch* s,
+                               Eigen::Ref<MatrixXd> A_local,
                                Eigen::Ref<VectorXd> b) const override {
     const double* out = evaluate(q, qd, t, s);
     for (Index r = 0; r < rows_; ++r) {
@@ -226,8 +229,9 @@ class CompiledConstraint final : public ConstraintModel {
     }
   }
 
-  void violation(const VectorXd& q, const VectorXd& qd, double t, ConstraintScratch* s,
-                 Eigen::Ref<VectorXd> position, Eigen::Ref<VectorXd> velocity) const override {
+  void violation(const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd,
+                 double t, ConstraintScratch* s, Eigen::Ref<VectorXd> position,
+                 Eigen::Ref<VectorXd> velocity) const override {
     position.setZero();
     velocity.setZero();
     if (kind_ == ConstraintKind::kAcceleration) return;
@@ -245,7 +249,8 @@ class CompiledConstraint final : public ConstraintModel {
 
  private:
   // the inputs the programs read, in the scratch's or the workspace's input vector: O(inputs)
-  const double* fill(CompiledScratch& w, const VectorXd& q, const VectorXd& qd, double t) const {
+  const double* fill(CompiledScratch& w, const Eigen::Ref<const VectorXd>& q,
+                     const Eigen::Ref<const VectorXd>& qd, double t) const {
     std::vector<double>& in = *w.inputs;
     for (const Index k : inputs_) {
       in[std::size_t(k)] = k < n_ ? q[k] : k < 2 * n_ ? qd[k - n_] : k == 2 * n_ ? t : 0.0;
@@ -253,8 +258,8 @@ class CompiledConstraint final : public ConstraintModel {
     return in.data();
   }
   // [A (rows × width_, row-major); b] at (q, q', t)
-  const double* evaluate(const VectorXd& q, const VectorXd& qd, double t,
-                         ConstraintScratch* s) const {
+  const double* evaluate(const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd,
+                         double t, ConstraintScratch* s) const {
     auto& w = static_cast<CompiledScratch&>(*s);
     return w.accel.run(fill(w, q, qd, t));
   }

@@ -162,7 +162,8 @@ WeightFn Reader::read_weight(const YAML::Node& N, bool& constant, MatrixXd& valu
   }
   const InputLayout layout = layout_;
   // (its signature carries no scratch: buffers of the call, evaluate_local)
-  return [p, layout, n](const VectorXd& q, const VectorXd& qd, double t, Eigen::Ref<MatrixXd> W) {
+  return [p, layout, n](const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd,
+                        double t, Eigen::Ref<MatrixXd> W) {
     evaluate_local(
         p, layout.size(),
         [&](double* in) {

@@ -343,7 +343,8 @@ mb::WrenchFn MultibodyReader::wrench(const YAML::Node& f, bool planar_body,
   const Program p = r_.compile(out, f, what);
   const InputLayout layout = r_.layout_;
   // (its signature carries no scratch: buffers of the call, evaluate_local)
-  return [p, layout](const VectorXd& q, const VectorXd& qd, double t) {
+  return [p, layout](const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd,
+                     double t) {
     mb::Wrench w;
     evaluate_local(
         p, layout.size(),

@@ -319,9 +319,10 @@ MultibodyModel Multibody::build() const {
       const Index o = b.offset + 3;
       const Vector3d J = b.inertia;
       // singular (rank 3) by construction: the unit-norm constraint "<body>.unit" completes it
-      sb.singular_mass_block(o, 4, [o, J](const VectorXd& q, double, Eigen::Ref<MatrixXd> Mk) {
-        detail::quaternion_mass(q.segment<4>(o), J, Mk);
-      });
+      sb.singular_mass_block(
+          o, 4, [o, J](const Eigen::Ref<const VectorXd>& q, double, Eigen::Ref<MatrixXd> Mk) {
+            detail::quaternion_mass(q.segment<4>(o), J, Mk);
+          });
     }
   }
   // the per-workspace memo of the bodies' rotations, which the forces and the joints share

@@ -12,8 +12,9 @@ namespace ukdyn::mb::detail {
 namespace {
 
 // world position and velocity of body point s (a planar body's cos and sin from the cache)
-std::pair<Vector3d, Vector3d> point_state(const BodyRef& b, const VectorXd& q, const VectorXd& qd,
-                                          const Vector3d& s, PoseCache* cache) {
+std::pair<Vector3d, Vector3d> point_state(const BodyRef& b, const Eigen::Ref<const VectorXd>& q,
+                                          const Eigen::Ref<const VectorXd>& qd, const Vector3d& s,
+                                          PoseCache* cache) {
   VecKin k;
   add_body_vector(b, q, qd, s, true, 1.0, k, cache);
   return {k.x, k.v};
@@ -57,8 +58,8 @@ std::shared_ptr<const ForceData> force_data(const std::vector<BodyInfo>& bodies,
 
 // relative rotation of b with respect to a as a world-frame rotation vector theta n (|theta| <=
 // pi): R_WB(b) = R_WB(a) R(n_a, theta), n = R_WB(a) n_a
-Vector3d relative_rotation_W(const BodyRef& A, const BodyRef& B, const VectorXd& q,
-                             PoseCache* cache) {
+Vector3d relative_rotation_W(const BodyRef& A, const BodyRef& B,
+                             const Eigen::Ref<const VectorXd>& q, PoseCache* cache) {
   const Matrix3d Ra = rotation_WB(A, q, cache);
   const Eigen::AngleAxisd rel(Matrix3d(Ra.transpose() * rotation_WB(B, q, cache)));
   return Ra * (rel.angle() * rel.axis());
@@ -73,8 +74,8 @@ bool spatial(const BodyRef& A, const BodyRef& B) {
 ForceScratchFn make_forces(const std::vector<BodyInfo>& bodies, const std::vector<Force>& forces,
                            const Vector3d& g) {
   auto d = force_data(bodies, forces, g);
-  return [d](const VectorXd& q, const VectorXd& qd, double t, CallableScratch* scratch,
-             Eigen::Ref<VectorXd> Q) {
+  return [d](const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd, double t,
+             CallableScratch* scratch, Eigen::Ref<VectorXd> Q) {
     PoseCache* const cache = pose_cache(scratch);
     // gravity m g on each centre of mass (summed once); the quaternions' velocity terms
     Q = d->Q_gravity;
@@ -136,7 +137,7 @@ ForceScratchFn make_forces(const std::vector<BodyInfo>& bodies, const std::vecto
 PotentialScratchFn make_potential(const std::vector<BodyInfo>& bodies,
                                   const std::vector<Force>& forces, const Vector3d& g) {
   auto d = force_data(bodies, forces, g);
-  return [d](const VectorXd& q, double, CallableScratch* scratch) {
+  return [d](const Eigen::Ref<const VectorXd>& q, double, CallableScratch* scratch) {
     PoseCache* const cache = pose_cache(scratch);
     // V = −Σ m g · r + Σ ½ k (l − l0)² + Σ ½ k (dtheta − theta0)²
     double V = 0.0;
@@ -172,7 +173,8 @@ PowerScratchFn make_external_power(const std::vector<BodyInfo>& bodies,
   for (const Force& f : forces) any = any || f.type == ForceType::kApplied || f.damping != 0.0;
   if (!any) return {};
   auto d = force_data(bodies, forces, Vector3d::Zero());
-  return [d](const VectorXd& q, const VectorXd& qd, double t, CallableScratch* scratch) {
+  return [d](const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd, double t,
+             CallableScratch* scratch) {
     PoseCache* const cache = pose_cache(scratch);
     // P = Σ −c l'² (spring-dampers) + Σ −c |ω_b − ω_a|² (torsion) + Σ F · v_p + T · ω (applied)
     double P = 0.0;
@@ -218,8 +220,8 @@ PowerScratchFn make_external_power(const std::vector<BodyInfo>& bodies,
 // ---- joint friction ----------------------------------------------------------------------
 
 void joint_friction_C(const Joint& j, const BodyRef& P, const BodyRef& C, bool planar, Index k,
-                      const VectorXd& q, const VectorXd& qd, const IdealForceInfo& ideal,
-                      Eigen::Ref<VectorXd> out) {
+                      const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd,
+                      const IdealForceInfo& ideal, Eigen::Ref<VectorXd> out) {
   // N = |reaction force| on the child (on the parent when the child is the ground)
   const auto share = ideal.reaction(k);  // the joint's whole reaction
   const BodyRef& on = C.ground() ? P : C;
@@ -270,7 +272,8 @@ NonIdealForce joint_friction_force(const Joint& j, const BodyRef& P, const BodyR
       j.name + ".friction",
       NonIdealForce::Binder([j, P, C, constraint, planar](const System& sys) -> NonIdealFn {
         const Index k = sys.constraint_index(constraint);
-        return [j, P, C, planar, k](const VectorXd& q, const VectorXd& qd, double,
+        return [j, P, C, planar, k](const Eigen::Ref<const VectorXd>& q,
+                                    const Eigen::Ref<const VectorXd>& qd, double,
                                     const IdealForceInfo& ideal, Eigen::Ref<VectorXd> out) {
           joint_friction_C(j, P, C, planar, k, q, qd, ideal, out);
         };

@@ -79,7 +79,7 @@ class PoseCache final : public CallableScratch {
   }
   /// R_WB of body b (not the ground, not a particle) at q, as rotation_WB computes it, recomputed
   /// when the body's orientation coordinates differ from the previous call's. Cost O(1).
-  const Matrix3d& rotation(const BodyRef& b, const VectorXd& q);
+  const Matrix3d& rotation(const BodyRef& b, const Eigen::Ref<const VectorXd>& q);
 
  private:
   struct Trig {  // planar: cos and sin of the theta whose bits are key
@@ -163,9 +163,9 @@ struct VecKin {
 
 /// Adds sign · (point p_B + R s, or R s when !translate) of body b to k; a planar body's cos and
 /// sin from `cache` when given; x and v only when !second_order (g and J untouched). Cost O(1).
-void add_body_vector(const BodyRef& b, const VectorXd& q, const VectorXd& qd, const Vector3d& s,
-                     bool translate, double sign, VecKin& k, PoseCache* cache = nullptr,
-                     bool second_order = true);
+void add_body_vector(const BodyRef& b, const Eigen::Ref<const VectorXd>& q,
+                     const Eigen::Ref<const VectorXd>& qd, const Vector3d& s, bool translate,
+                     double sign, VecKin& k, PoseCache* cache = nullptr, bool second_order = true);
 
 /// A vector expression of a joint row.
 struct VecExpr {
@@ -231,28 +231,33 @@ class JointModel final : public ConstraintModel {
   /// The dense rows (rows × n): the local form into a fixed-size buffer, then placed at
   /// columns() with zeros elsewhere — the values of the default scatter, in O(rows · n) stores
   /// without moving columns. Does not allocate.
-  void acceleration_form(const VectorXd& q, const VectorXd& qd, double t,
-                         ConstraintScratch* scratch, Eigen::Ref<MatrixXd> A,
+  void acceleration_form(const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd,
+                         double t, ConstraintScratch* scratch, Eigen::Ref<MatrixXd> A,
                          Eigen::Ref<VectorXd> b) const override;
-  void acceleration_form_local(const VectorXd& q, const VectorXd& qd, double t,
+  void acceleration_form_local(const Eigen::Ref<const VectorXd>& q,
+                               const Eigen::Ref<const VectorXd>& qd, double t,
                                ConstraintScratch* scratch, Eigen::Ref<MatrixXd> A_local,
                                Eigen::Ref<VectorXd> b) const override;
-  void violation(const VectorXd& q, const VectorXd& qd, double t, ConstraintScratch* scratch,
-                 Eigen::Ref<VectorXd> position, Eigen::Ref<VectorXd> velocity) const override;
+  void violation(const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd,
+                 double t, ConstraintScratch* scratch, Eigen::Ref<VectorXd> position,
+                 Eigen::Ref<VectorXd> velocity) const override;
   const std::vector<BodyRef>& slots() const { return slots_; }
   const std::vector<Row>& rows() const { return rows_; }
   Index local_count() const { return Index(cols_.size()); }
 
  private:
   // the rows other than a planar revolute's, out of line (the planar revolute path stays short)
-  [[gnu::noinline]] void general_form(const VectorXd& q, const VectorXd& qd, double t,
+  [[gnu::noinline]] void general_form(const Eigen::Ref<const VectorXd>& q,
+                                      const Eigen::Ref<const VectorXd>& qd, double t,
                                       PoseCache* cache, Eigen::Ref<MatrixXd> A,
                                       Eigen::Ref<VectorXd> b) const;
-  [[gnu::noinline]] void general_violation(const VectorXd& q, const VectorXd& qd, double t,
+  [[gnu::noinline]] void general_violation(const Eigen::Ref<const VectorXd>& q,
+                                           const Eigen::Ref<const VectorXd>& qd, double t,
                                            PoseCache* cache, Eigen::Ref<VectorXd> position,
                                            Eigen::Ref<VectorXd> velocity) const;
   // the kinematics of e into k (x and v only when !second_order: the violations)
-  void eval(const VecExpr& e, const VectorXd& q, const VectorXd& qd, PoseCache* cache, VecKin& k,
+  void eval(const VecExpr& e, const Eigen::Ref<const VectorXd>& q,
+            const Eigen::Ref<const VectorXd>& qd, PoseCache* cache, VecKin& k,
             bool second_order = true) const;
   std::vector<BodyRef> slots_;
   std::vector<Row> rows_;
@@ -271,15 +276,17 @@ class UnitQuaternionModel final : public ConstraintModel {
  public:
   explicit UnitQuaternionModel(Index offset) : cols_{offset, offset + 1, offset + 2, offset + 3} {}
   const std::vector<Index>& columns() const override { return cols_; }
-  void acceleration_form_local(const VectorXd& q, const VectorXd& qd, double, ConstraintScratch*,
+  void acceleration_form_local(const Eigen::Ref<const VectorXd>& q,
+                               const Eigen::Ref<const VectorXd>& qd, double, ConstraintScratch*,
                                Eigen::Ref<MatrixXd> A, Eigen::Ref<VectorXd> b) const override {
     const auto u = q.segment<4>(cols_[0]);
     const auto ud = qd.segment<4>(cols_[0]);
     A.row(0) = u.transpose();
     b[0] = -ud.squaredNorm();
   }
-  void violation(const VectorXd& q, const VectorXd& qd, double, ConstraintScratch*,
-                 Eigen::Ref<VectorXd> position, Eigen::Ref<VectorXd> velocity) const override {
+  void violation(const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd, double,
+                 ConstraintScratch*, Eigen::Ref<VectorXd> position,
+                 Eigen::Ref<VectorXd> velocity) const override {
     const auto u = q.segment<4>(cols_[0]);
     position[0] = 0.5 * (u.squaredNorm() - 1.0);
     velocity[0] = u.dot(qd.segment<4>(cols_[0]));
@@ -308,20 +315,23 @@ class LocalAutodiffModel final : public ConstraintModel {
     return s;
   }
   const std::vector<Index>& columns() const override { return cols_; }
-  void acceleration_form_local(const VectorXd& q, const VectorXd& qd, double t,
+  void acceleration_form_local(const Eigen::Ref<const VectorXd>& q,
+                               const Eigen::Ref<const VectorXd>& qd, double t,
                                ConstraintScratch* scratch, Eigen::Ref<MatrixXd> A,
                                Eigen::Ref<VectorXd> b) const override {
     auto& s = gather(q, qd, scratch);
     inner_->acceleration_form(s.q, s.qd, t, s.inner.get(), A, b);
   }
-  void violation(const VectorXd& q, const VectorXd& qd, double t, ConstraintScratch* scratch,
-                 Eigen::Ref<VectorXd> position, Eigen::Ref<VectorXd> velocity) const override {
+  void violation(const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd,
+                 double t, ConstraintScratch* scratch, Eigen::Ref<VectorXd> position,
+                 Eigen::Ref<VectorXd> velocity) const override {
     auto& s = gather(q, qd, scratch);
     inner_->violation(s.q, s.qd, t, s.inner.get(), position, velocity);
   }
 
  private:
-  Scratch& gather(const VectorXd& q, const VectorXd& qd, ConstraintScratch* scratch) const {
+  Scratch& gather(const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd,
+                  ConstraintScratch* scratch) const {
     auto& s = static_cast<Scratch&>(*scratch);
     for (std::size_t i = 0; i < cols_.size(); ++i) {
       s.q[Index(i)] = q[cols_[i]];
@@ -439,15 +449,18 @@ BodyRef body_ref(const std::vector<BodyInfo>& bodies, BodyId id);
 
 /// Adds the generalized force of a world force F_W acting at body point s (body coordinates) to
 /// Q: translation += F; planar theta += ((R s) × F)_z; quaternion += D(u, s)ᵀ F. Cost O(1).
-void add_point_force(const BodyRef& b, const VectorXd& q, const Vector3d& s, const Vector3d& F_W,
-                     Eigen::Ref<VectorXd> Q, PoseCache* cache = nullptr);
+void add_point_force(const BodyRef& b, const Eigen::Ref<const VectorXd>& q, const Vector3d& s,
+                     const Vector3d& F_W, Eigen::Ref<VectorXd> Q, PoseCache* cache = nullptr);
 /// Adds the generalized force of a world torque: planar theta += tau_z; quaternion += 2 G_vᵀ tau.
-void add_torque(const BodyRef& b, const VectorXd& q, const Vector3d& tau_W, Eigen::Ref<VectorXd> Q);
+void add_torque(const BodyRef& b, const Eigen::Ref<const VectorXd>& q, const Vector3d& tau_W,
+                Eigen::Ref<VectorXd> Q);
 /// Angular velocity (world) of a body: planar (0, 0, theta'); rigid 2 G_v(u) u' / |u|².
-Vector3d angular_velocity_W(const BodyRef& b, const VectorXd& q, const VectorXd& qd);
+Vector3d angular_velocity_W(const BodyRef& b, const Eigen::Ref<const VectorXd>& q,
+                            const Eigen::Ref<const VectorXd>& qd);
 /// Orientation matrix R_WB (rigid: of the normalized quaternion; planar: about z); from `cache`
 /// when given (the same bits).
-Matrix3d rotation_WB(const BodyRef& b, const VectorXd& q, PoseCache* cache = nullptr);
+Matrix3d rotation_WB(const BodyRef& b, const Eigen::Ref<const VectorXd>& q,
+                     PoseCache* cache = nullptr);
 
 /// Rows of a planar joint (parent slot 0, child slot 1); the drive row, if any, separately.
 std::vector<Row> planar_joint_rows(const Joint& j, const BodyRef& P, const BodyRef& C);
@@ -469,8 +482,8 @@ NonIdealForce joint_friction_force(const Joint& j, const BodyRef& P, const BodyR
 /// The friction's C at the current evaluation (as the NonIdealForce computes it); used by the
 /// reports. k = the joint's constraint index.
 void joint_friction_C(const Joint& j, const BodyRef& P, const BodyRef& C, bool planar, Index k,
-                      const VectorXd& q, const VectorXd& qd, const IdealForceInfo& ideal,
-                      Eigen::Ref<VectorXd> out);
+                      const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd,
+                      const IdealForceInfo& ideal, Eigen::Ref<VectorXd> out);
 
 /// Q(q, q', t) and V(q, t) of gravity, force elements and the quaternions' velocity terms.
 /// Each takes the workspace's PoseCache as its scratch (System::make_scratch; null: none).

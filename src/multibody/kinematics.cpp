@@ -23,7 +23,7 @@ PoseCache::PoseCache(Index bodies) : trig_(std::size_t(bodies)), rotation_(std::
   for (Trig& e : trig_) e = {std::bit_cast<std::uint64_t>(0.0), zero.c, zero.s};
 }
 
-const Matrix3d& PoseCache::rotation(const BodyRef& b, const VectorXd& q) {
+const Matrix3d& PoseCache::rotation(const BodyRef& b, const Eigen::Ref<const VectorXd>& q) {
   Rotation& e = rotation_[std::size_t(b.id)];
   // the orientation coordinates: planar theta; rigid u0..u3
   const Index first = b.kind == BodyKind::kPlanar ? b.offset + 2 : b.offset + 3;
@@ -39,8 +39,9 @@ const Matrix3d& PoseCache::rotation(const BodyRef& b, const VectorXd& q) {
   return e.R;
 }
 
-void add_body_vector(const BodyRef& b, const VectorXd& q, const VectorXd& qd, const Vector3d& s,
-                     bool translate, double sign, VecKin& k, PoseCache* cache, bool second_order) {
+void add_body_vector(const BodyRef& b, const Eigen::Ref<const VectorXd>& q,
+                     const Eigen::Ref<const VectorXd>& qd, const Vector3d& s, bool translate,
+                     double sign, VecKin& k, PoseCache* cache, bool second_order) {
   if (b.ground()) {
     k.x += sign * s;
     return;
@@ -103,8 +104,9 @@ namespace {
 struct PlanarPoint {
   double rx, ry, w;
 };
-inline PlanarPoint planar_point(const BodyRef& b, const VectorXd& q, const VectorXd& qd,
-                                const Vector3d& s, PoseCache* cache) {
+inline PlanarPoint planar_point(const BodyRef& b, const Eigen::Ref<const VectorXd>& q,
+                                const Eigen::Ref<const VectorXd>& qd, const Vector3d& s,
+                                PoseCache* cache) {
   if (b.ground()) return {s.x(), s.y(), 0.0};
   const CosSin cs = planar_cos_sin(cache, b, q[b.offset + 2]);
   const double c = cs.c, sn = cs.s;
@@ -204,8 +206,9 @@ std::unique_ptr<ConstraintScratch> JointModel::make_scratch_sharing(Index n,
   return s;
 }
 
-void JointModel::eval(const VecExpr& e, const VectorXd& q, const VectorXd& qd, PoseCache* cache,
-                      VecKin& k, bool second_order) const {
+void JointModel::eval(const VecExpr& e, const Eigen::Ref<const VectorXd>& q,
+                      const Eigen::Ref<const VectorXd>& qd, PoseCache* cache, VecKin& k,
+                      bool second_order) const {
   k.clear(second_order);
   switch (e.kind) {
     case VecExpr::kWorld:
@@ -224,7 +227,8 @@ void JointModel::eval(const VecExpr& e, const VectorXd& q, const VectorXd& qd, P
   }
 }
 
-void JointModel::acceleration_form(const VectorXd& q, const VectorXd& qd, double t,
+void JointModel::acceleration_form(const Eigen::Ref<const VectorXd>& q,
+                                   const Eigen::Ref<const VectorXd>& qd, double t,
                                    ConstraintScratch* scratch, Eigen::Ref<MatrixXd> A,
                                    Eigen::Ref<VectorXd> b) const {
   const Index k = local_count();
@@ -247,7 +251,8 @@ void JointModel::acceleration_form(const VectorXd& q, const VectorXd& qd, double
   }
 }
 
-void JointModel::acceleration_form_local(const VectorXd& q, const VectorXd& qd, double t,
+void JointModel::acceleration_form_local(const Eigen::Ref<const VectorXd>& q,
+                                         const Eigen::Ref<const VectorXd>& qd, double t,
                                          ConstraintScratch* scratch, Eigen::Ref<MatrixXd> A,
                                          Eigen::Ref<VectorXd> b) const {
   PoseCache* const cache = cache_of(scratch);
@@ -281,7 +286,8 @@ void JointModel::acceleration_form_local(const VectorXd& q, const VectorXd& qd, 
   general_form(q, qd, t, cache, A, b);
 }
 
-void JointModel::general_form(const VectorXd& q, const VectorXd& qd, double t, PoseCache* cache,
+void JointModel::general_form(const Eigen::Ref<const VectorXd>& q,
+                              const Eigen::Ref<const VectorXd>& qd, double t, PoseCache* cache,
                               Eigen::Ref<MatrixXd> A, Eigen::Ref<VectorXd> b) const {
   const Index k = local_count();
   // (every use is preceded by eval, which clears what it writes)
@@ -325,7 +331,8 @@ void JointModel::general_form(const VectorXd& q, const VectorXd& qd, double t, P
   }
 }
 
-void JointModel::violation(const VectorXd& q, const VectorXd& qd, double t,
+void JointModel::violation(const Eigen::Ref<const VectorXd>& q,
+                           const Eigen::Ref<const VectorXd>& qd, double t,
                            ConstraintScratch* scratch, Eigen::Ref<VectorXd> position,
                            Eigen::Ref<VectorXd> velocity) const {
   PoseCache* const cache = cache_of(scratch);
@@ -356,8 +363,9 @@ void JointModel::violation(const VectorXd& q, const VectorXd& qd, double t,
   general_violation(q, qd, t, cache, position, velocity);
 }
 
-void JointModel::general_violation(const VectorXd& q, const VectorXd& qd, double t,
-                                   PoseCache* cache, Eigen::Ref<VectorXd> position,
+void JointModel::general_violation(const Eigen::Ref<const VectorXd>& q,
+                                   const Eigen::Ref<const VectorXd>& qd, double t, PoseCache* cache,
+                                   Eigen::Ref<VectorXd> position,
                                    Eigen::Ref<VectorXd> velocity) const {
   // positions and velocities only (every use is preceded by eval)
   VecKin ka{VecKin::Unset{}}, kb{VecKin::Unset{}};
@@ -402,8 +410,8 @@ Vector4d quaternion_velocity_force(const Vector4d& u, const Vector4d& ud, const 
   return -8.0 * E_v(ud).transpose() * Jw;
 }
 
-void add_point_force(const BodyRef& b, const VectorXd& q, const Vector3d& s, const Vector3d& F,
-                     Eigen::Ref<VectorXd> Q, PoseCache* cache) {
+void add_point_force(const BodyRef& b, const Eigen::Ref<const VectorXd>& q, const Vector3d& s,
+                     const Vector3d& F, Eigen::Ref<VectorXd> Q, PoseCache* cache) {
   if (b.ground()) return;
   const Index o = b.offset;
   switch (b.kind) {
@@ -426,7 +434,8 @@ void add_point_force(const BodyRef& b, const VectorXd& q, const Vector3d& s, con
   }
 }
 
-void add_torque(const BodyRef& b, const VectorXd& q, const Vector3d& tau, Eigen::Ref<VectorXd> Q) {
+void add_torque(const BodyRef& b, const Eigen::Ref<const VectorXd>& q, const Vector3d& tau,
+                Eigen::Ref<VectorXd> Q) {
   if (b.ground()) return;
   const Index o = b.offset;
   if (b.kind == BodyKind::kPlanar) {
@@ -437,7 +446,8 @@ void add_torque(const BodyRef& b, const VectorXd& q, const Vector3d& tau, Eigen:
   }
 }
 
-Vector3d angular_velocity_W(const BodyRef& b, const VectorXd& q, const VectorXd& qd) {
+Vector3d angular_velocity_W(const BodyRef& b, const Eigen::Ref<const VectorXd>& q,
+                            const Eigen::Ref<const VectorXd>& qd) {
   if (b.ground() || b.kind == BodyKind::kParticle) return Vector3d::Zero();
   const Index o = b.offset;
   if (b.kind == BodyKind::kPlanar) return {0.0, 0.0, qd[o + 2]};
@@ -445,7 +455,7 @@ Vector3d angular_velocity_W(const BodyRef& b, const VectorXd& q, const VectorXd&
   return 2.0 * G_v(u) * qd.segment<4>(o + 3) / u.squaredNorm();
 }
 
-Matrix3d rotation_WB(const BodyRef& b, const VectorXd& q, PoseCache* cache) {
+Matrix3d rotation_WB(const BodyRef& b, const Eigen::Ref<const VectorXd>& q, PoseCache* cache) {
   if (b.ground() || b.kind == BodyKind::kParticle) return Matrix3d::Identity();
   if (cache != nullptr) return cache->rotation(b, q);
   const Index o = b.offset;

@@ -18,7 +18,7 @@ namespace ukdyn::mb {
 
 using detail::BodyRef;
 
-Pose body_pose(const MultibodyModel& mb, const VectorXd& q, BodyId b) {
+Pose body_pose(const MultibodyModel& mb, const Eigen::Ref<const VectorXd>& q, BodyId b) {
   const BodyInfo& info = mb.bodies.at(std::size_t(b));
   const Index o = info.offset;
   Pose p;
@@ -38,8 +38,9 @@ Pose body_pose(const MultibodyModel& mb, const VectorXd& q, BodyId b) {
   return p;
 }
 
-std::pair<Vector3d, Vector3d> body_velocity(const MultibodyModel& mb, const VectorXd& q,
-                                            const VectorXd& qd, BodyId b) {
+std::pair<Vector3d, Vector3d> body_velocity(const MultibodyModel& mb,
+                                            const Eigen::Ref<const VectorXd>& q,
+                                            const Eigen::Ref<const VectorXd>& qd, BodyId b) {
   const BodyInfo& info = mb.bodies.at(std::size_t(b));
   const BodyRef ref = detail::body_ref(mb.bodies, b);
   const Index o = info.offset;
@@ -48,7 +49,8 @@ std::pair<Vector3d, Vector3d> body_velocity(const MultibodyModel& mb, const Vect
   return {v, detail::angular_velocity_W(ref, q, qd)};
 }
 
-double kinetic_energy(const MultibodyModel& mb, const VectorXd& q, const VectorXd& qd, BodyId b) {
+double kinetic_energy(const MultibodyModel& mb, const Eigen::Ref<const VectorXd>& q,
+                      const Eigen::Ref<const VectorXd>& qd, BodyId b) {
   const BodyInfo& info = mb.bodies.at(std::size_t(b));
   const auto [v, w] = body_velocity(mb, q, qd, b);
   double T = 0.5 * info.mass * v.squaredNorm();
@@ -61,14 +63,16 @@ double kinetic_energy(const MultibodyModel& mb, const VectorXd& q, const VectorX
   return T;
 }
 
-double total_energy(const MultibodyModel& mb, const VectorXd& q, const VectorXd& qd, double t) {
+double total_energy(const MultibodyModel& mb, const Eigen::Ref<const VectorXd>& q,
+                    const Eigen::Ref<const VectorXd>& qd, double t) {
   double E = mb.system.potential_energy(q, t);
   for (BodyId b = 0; b < BodyId(mb.bodies.size()); ++b) E += kinetic_energy(mb, q, qd, b);
   return E;
 }
 
-std::pair<Vector3d, Vector3d> momentum(const MultibodyModel& mb, const VectorXd& q,
-                                       const VectorXd& qd) {
+std::pair<Vector3d, Vector3d> momentum(const MultibodyModel& mb,
+                                       const Eigen::Ref<const VectorXd>& q,
+                                       const Eigen::Ref<const VectorXd>& qd) {
   Vector3d P = Vector3d::Zero(), L = Vector3d::Zero();
   for (BodyId b = 0; b < BodyId(mb.bodies.size()); ++b) {
     const BodyInfo& info = mb.bodies[std::size_t(b)];
@@ -86,7 +90,8 @@ std::pair<Vector3d, Vector3d> momentum(const MultibodyModel& mb, const VectorXd&
   return {P, L};
 }
 
-Vector3d world_point(const MultibodyModel& mb, const VectorXd& q, BodyId b, const Vector3d& p) {
+Vector3d world_point(const MultibodyModel& mb, const Eigen::Ref<const VectorXd>& q, BodyId b,
+                     const Vector3d& p) {
   detail::VecKin k;
   const VectorXd zero = VectorXd::Zero(q.size());
   BodyRef ref = detail::body_ref(mb.bodies, b);
@@ -102,7 +107,8 @@ Vector3d world_point(const MultibodyModel& mb, const VectorXd& q, BodyId b, cons
 namespace {
 
 // generalized force g (n) on body b → (force, torque about its centre of mass), world frame
-std::pair<Vector3d, Vector3d> wrench_of(const BodyRef& b, const VectorXd& q, const VectorXd& g) {
+std::pair<Vector3d, Vector3d> wrench_of(const BodyRef& b, const Eigen::Ref<const VectorXd>& q,
+                                        const Eigen::Ref<const VectorXd>& g) {
   const Index o = b.offset;
   switch (b.kind) {
     case BodyKind::kParticle:
@@ -119,8 +125,9 @@ std::pair<Vector3d, Vector3d> wrench_of(const BodyRef& b, const VectorXd& q, con
 }
 
 // Σ A_kᵀ lambda_k over the listed constraints (n)
-VectorXd shares_of(const System& sys, const std::vector<Index>& ks, const VectorXd& q,
-                   const VectorXd& qd, double t, const VectorXd& lambda) {
+VectorXd shares_of(const System& sys, const std::vector<Index>& ks,
+                   const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd,
+                   double t, const Eigen::Ref<const VectorXd>& lambda) {
   VectorXd g = VectorXd::Zero(sys.coordinate_count());
   for (Index k : ks) {
     const Constraint& c = sys.constraint(k);
@@ -134,8 +141,8 @@ VectorXd shares_of(const System& sys, const std::vector<Index>& ks, const Vector
 }
 
 // reduce a generalized force on the reporting body of joint j to the joint point
-void reduce(const MultibodyModel& mb, const JointInfo& J, const VectorXd& q, const VectorXd& g,
-            Vector3d& F, Vector3d& tau, BodyId& on) {
+void reduce(const MultibodyModel& mb, const JointInfo& J, const Eigen::Ref<const VectorXd>& q,
+            const Eigen::Ref<const VectorXd>& g, Vector3d& F, Vector3d& tau, BodyId& on) {
   on = J.child != kGround ? J.child : J.parent;
   const Vector3d p = J.child != kGround ? J.frame_child.p : J.frame_parent.p;
   const BodyRef ref = detail::body_ref(mb.bodies, on);
@@ -148,8 +155,9 @@ void reduce(const MultibodyModel& mb, const JointInfo& J, const VectorXd& q, con
 
 }  // namespace
 
-JointReaction joint_reaction(const MultibodyModel& mb, const VectorXd& q, const VectorXd& qd,
-                             double t, const VectorXd& lambda, Index j) {
+JointReaction joint_reaction(const MultibodyModel& mb, const Eigen::Ref<const VectorXd>& q,
+                             const Eigen::Ref<const VectorXd>& qd, double t,
+                             const Eigen::Ref<const VectorXd>& lambda, Index j) {
   const JointInfo& J = mb.joints.at(std::size_t(j));
   if (q.size() != mb.system.coordinate_count() || qd.size() != mb.system.coordinate_count() ||
       lambda.size() != mb.system.constraint_rows()) {
@@ -170,8 +178,9 @@ JointReaction joint_reaction(const MultibodyModel& mb, const VectorXd& q, const 
   return r;
 }
 
-JointReaction joint_reaction(const MultibodyModel& mb, Workspace& ws, const VectorXd& q,
-                             const VectorXd& qd, double t, Index j) {
+JointReaction joint_reaction(const MultibodyModel& mb, Workspace& ws,
+                             const Eigen::Ref<const VectorXd>& q,
+                             const Eigen::Ref<const VectorXd>& qd, double t, Index j) {
   JointReaction r = joint_reaction(mb, q, qd, t, ws.lambda, j);
   const JointInfo& J = mb.joints.at(std::size_t(j));
   if (J.friction < 0) return r;
@@ -195,8 +204,9 @@ JointReaction joint_reaction(const MultibodyModel& mb, Workspace& ws, const Vect
   return r;
 }
 
-double drive_effort(const MultibodyModel& mb, const VectorXd&, const VectorXd&, double,
-                    const VectorXd& lambda, Index j) {
+double drive_effort(const MultibodyModel& mb, const Eigen::Ref<const VectorXd>&,
+                    const Eigen::Ref<const VectorXd>&, double,
+                    const Eigen::Ref<const VectorXd>& lambda, Index j) {
   const JointInfo& J = mb.joints.at(std::size_t(j));
   if (J.drive < 0) {
     throw std::invalid_argument("ukdyn::mb::drive_effort: joint '" + J.name + "' has no drive");
@@ -231,7 +241,7 @@ void write_poses_csv(const MultibodyModel& mb, const Trajectory& tr, const std::
   os << '\n' << std::setprecision(17);
   const auto Q = Trajectory::view(tr.q, tr.n);
   for (Index i = 0; i < tr.samples(); ++i) {
-    const VectorXd q = Q.col(i);
+    const auto q = Q.col(i);  // a view of sample i
     os << tr.t[std::size_t(i)];
     for (BodyId b = 0; b < BodyId(mb.bodies.size()); ++b) {
       for (const double v : pose_values(body_pose(mb, q, b))) os << ',' << v;

@@ -124,16 +124,18 @@ std::string describe_conflict(const ConstraintConflict& c, double t) {
 
 // the conflict of the initial state's constraints: at the state the position projection reaches
 // from (q, q') (the least violation, Gauss–Newton), when that projection does not converge
-ConstraintConflict initial_conflict(const System& sys, Workspace& ws, const VectorXd& q,
-                                    const VectorXd& qd, const SimulationOptions& o) {
+ConstraintConflict initial_conflict(const System& sys, Workspace& ws,
+                                    const Eigen::Ref<const VectorXd>& q,
+                                    const Eigen::Ref<const VectorXd>& qd,
+                                    const SimulationOptions& o) {
   VectorXd qp = q;
   const ProjectionResult rp = project_positions(sys, ws, qp, o.t_start, o.projection);
   if (rp.status != Status::kOk) return {};
   VectorXd qdp = qd;
   const ProjectionResult rv = project_velocities(sys, ws, qp, qdp, o.t_start, o.projection);
   if (rp.converged && rv.converged) return {};
-  return find_constraint_conflict(sys, ws, qp, rp.converged ? qdp : qd, o.t_start,
-                                  o.projection.tolerance);
+  return find_constraint_conflict(sys, ws, qp, rp.converged ? Eigen::Ref<const VectorXd>(qdp) : qd,
+                                  o.t_start, o.projection.tolerance);
 }
 
 // one line per constraint whose violation exceeds tol (after evaluate_violations); their names
@@ -157,8 +159,8 @@ std::string join_lines(const std::vector<std::string>& lines) { return join(line
 
 // the sizes of q0, qd0 and the per-constraint drift settings (the run's other settings:
 // check_settings)
-void validate(const System& sys, const VectorXd& q0, const VectorXd& qd0,
-              const SimulationOptions& o) {
+void validate(const System& sys, const Eigen::Ref<const VectorXd>& q0,
+              const Eigen::Ref<const VectorXd>& qd0, const SimulationOptions& o) {
   auto fail = [](const std::string& what) {
     throw std::invalid_argument("ukdyn::simulate: " + what);
   };
@@ -554,7 +556,7 @@ class Run {
         f->clear();
       }
     }
-    auto push = [](std::vector<double>& f, const VectorXd& v) {
+    auto push = [](std::vector<double>& f, const Eigen::Ref<const VectorXd>& v) {
       f.insert(f.end(), v.data(), v.data() + v.size());
     };
     out.t.push_back(t);
@@ -792,7 +794,7 @@ class Run {
 
   // the direction of the friction at |v_rel| <= eps: along `along` (n) on the contact's
   // sliding coordinates, normalized; none when `along` is empty or zero (see CoulombFriction)
-  void set_slip_hint(std::size_t c, const VectorXd& along) {
+  void set_slip_hint(std::size_t c, const Eigen::Ref<const VectorXd>& along) {
     const FrictionContact& contact = sys_.friction_contacts()[c];
     auto hint = ws_.slip_hint.col(contact.force);
     hint.setZero();
@@ -974,19 +976,22 @@ std::string user_message(const std::exception& e) {
   return message;
 }
 
-std::vector<std::string> check_initial_conditions(const System& sys, const VectorXd& q,
-                                                  const VectorXd& qd, double t, double tolerance) {
+std::vector<std::string> check_initial_conditions(const System& sys,
+                                                  const Eigen::Ref<const VectorXd>& q,
+                                                  const Eigen::Ref<const VectorXd>& qd, double t,
+                                                  double tolerance) {
   Workspace ws(sys);
   evaluate_violations(sys, ws, q, qd, t);
   return violated(sys, ws, tolerance);
 }
 
-Trajectory simulate(const System& sys, const VectorXd& q0, const VectorXd& qd0,
-                    const SimulationOptions& given) {
+Trajectory simulate(const System& sys, const Eigen::Ref<const VectorXd>& q0,
+                    const Eigen::Ref<const VectorXd>& qd0, const SimulationOptions& given) {
   return detail::simulate_observed(sys, q0, qd0, given, {});
 }
 
-Trajectory detail::simulate_observed(const System& sys, const VectorXd& q0, const VectorXd& qd0,
+Trajectory detail::simulate_observed(const System& sys, const Eigen::Ref<const VectorXd>& q0,
+                                     const Eigen::Ref<const VectorXd>& qd0,
                                      const SimulationOptions& given,
                                      const std::function<void(const Workspace&)>& finished) {
   validate(sys, q0, qd0, given);

@@ -28,8 +28,7 @@ struct ConstraintRank {
 ConstraintRank constraint_rank(const System& sys, Workspace& ws, const std::vector<double>& x,
                                double t, Index r_ref) {
   const Index n = sys.coordinate_count();
-  const VectorXd q = Eigen::Map<const VectorXd>(x.data(), n);
-  const VectorXd qd = Eigen::Map<const VectorXd>(x.data() + n, n);
+  const Eigen::Map<const VectorXd> q(x.data(), n), qd(x.data() + n, n);  // views of x
   ConstraintRank c;
   const Status s = forward_dynamics(sys, ws, q, qd, t);
   if (s == Status::kNonFiniteInput || s == Status::kMassNotSymmetric ||

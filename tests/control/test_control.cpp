@@ -65,7 +65,8 @@ using test::second_order_error;
 System duffing(double m = 1.0) {
   return SystemBuilder({"x"})
       .mass_matrix(MatrixXd::Constant(1, 1, m))
-      .forces([](const VectorXd& q, const VectorXd& qd, double t, Eigen::Ref<VectorXd> Q) {
+      .forces([](const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd,
+                 double t, Eigen::Ref<VectorXd> Q) {
         Q[0] = -0.3 * qd[0] + q[0] - q[0] * q[0] * q[0] + 0.5 * std::cos(1.2 * t);
       })
       .build();
@@ -92,7 +93,7 @@ struct Chain {
     for (Index k = std::max(i, j); k < n(); ++k) s += m[std::size_t(k)];
     return s;
   }
-  MatrixXd mass(const VectorXd& th) const {
+  MatrixXd mass(const Eigen::Ref<const VectorXd>& th) const {
     MatrixXd M(n(), n());
     for (Index i = 0; i < n(); ++i) {
       for (Index j = 0; j < n(); ++j) {
@@ -101,7 +102,7 @@ struct Chain {
     }
     return M;
   }
-  VectorXd force(const VectorXd& th, const VectorXd& w) const {
+  VectorXd force(const Eigen::Ref<const VectorXd>& th, const Eigen::Ref<const VectorXd>& w) const {
     VectorXd Q(n());
     for (Index i = 0; i < n(); ++i) {
       Q[i] = -kG * mu(i, i) * L[std::size_t(i)] * std::sin(th[i]);
@@ -118,11 +119,12 @@ System chain_system(const Chain& c) {
   std::vector<std::string> names;
   for (Index i = 0; i < c.n(); ++i) names.push_back("th" + std::to_string(i + 1));
   return SystemBuilder(names)
-      .mass_matrix([c](const VectorXd& q, double, Eigen::Ref<MatrixXd> M) { M = c.mass(q); })
-      .forces([c](const VectorXd& q, const VectorXd& qd, double, Eigen::Ref<VectorXd> Q) {
-        Q = c.force(q, qd);
+      .mass_matrix([c](const Eigen::Ref<const VectorXd>& q, double, Eigen::Ref<MatrixXd> M) {
+        M = c.mass(q);
       })
-      .potential_energy([c](const VectorXd& q, double) {
+      .forces([c](const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd, double,
+                  Eigen::Ref<VectorXd> Q) { Q = c.force(q, qd); })
+      .potential_energy([c](const Eigen::Ref<const VectorXd>& q, double) {
         double V = 0.0;
         for (Index i = 0; i < c.n(); ++i)
           V -= kG * c.mu(i, i) * c.L[std::size_t(i)] * std::cos(q[i]);
@@ -169,8 +171,9 @@ Constraint tip_requirement() {
 }
 
 // A_r and b_r of the tip requirement with e'' + 2α e' + β² e = 0, by hand (independent of AD)
-void tip_acceleration_form(const VectorXd& th, const VectorXd& w, double t, double alpha,
-                           double beta, MatrixXd& A, VectorXd& b) {
+void tip_acceleration_form(const Eigen::Ref<const VectorXd>& th,
+                           const Eigen::Ref<const VectorXd>& w, double t, double alpha, double beta,
+                           MatrixXd& A, VectorXd& b) {
   const auto& L = kTriple.L;
   A.resize(2, 3);
   b.resize(2);
@@ -198,10 +201,9 @@ void tip_acceleration_form(const VectorXd& th, const VectorXd& w, double t, doub
 System cartesian_pendulum(double m, double L) {
   return SystemBuilder({"x", "y"})
       .mass_matrix(m * MatrixXd::Identity(2, 2))
-      .forces([m](const VectorXd&, const VectorXd&, double, Eigen::Ref<VectorXd> Q) {
-        Q << 0.0, -m * kG;
-      })
-      .potential_energy([m](const VectorXd& q, double) { return m * kG * q[1]; })
+      .forces([m](const Eigen::Ref<const VectorXd>&, const Eigen::Ref<const VectorXd>&, double,
+                  Eigen::Ref<VectorXd> Q) { Q << 0.0, -m * kG; })
+      .potential_energy([m](const Eigen::Ref<const VectorXd>& q, double) { return m * kG * q[1]; })
       .add(holonomic("rod", 1,
                      [L](const auto& q, const auto&, auto& phi) {
                        phi[0] = (q[0] * q[0] + q[1] * q[1] - L * L) / (2 * L);
@@ -347,7 +349,7 @@ TEST(ControlTriplePendulum, JointAnglesFollowPrescribedTrajectories) {
 TEST(ControlTriplePendulum, EndPointWeightedLawIsOptimal) {
   const System sys = chain_system(kTriple);
   const double omega = 2.0;  // ζ = 1: α = β = 2
-  auto N_of = [](const VectorXd& q, const VectorXd& qd) {
+  auto N_of = [](const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd) {
     MatrixXd N = MatrixXd::Zero(3, 3);
     N.diagonal() << 1.0 + q[0] * q[0], 2.0 + 0.5 * std::sin(q[1]), 3.0 + 0.1 * qd[2] * qd[2];
     N(0, 1) = N(1, 0) = 0.3 * std::cos(q[2]);
@@ -355,7 +357,8 @@ TEST(ControlTriplePendulum, EndPointWeightedLawIsOptimal) {
   };
   const Controller ctrl = ControllerBuilder(sys)
                               .require(tip_requirement(), ErrorDynamics::second_order(omega))
-                              .weighted([N_of](const VectorXd& q, const VectorXd& qd, double,
+                              .weighted([N_of](const Eigen::Ref<const VectorXd>& q,
+                                               const Eigen::Ref<const VectorXd>& qd, double,
                                                Eigen::Ref<MatrixXd> N) { N = N_of(q, qd); })
                               .build();
   ControlWorkspace ws(ctrl);
@@ -466,14 +469,14 @@ TEST(ControlLaws, WeightedWithInverseMassIsGaussAndWithMassIsNot) {
   const Controller gauss = builder().build();
   const Controller inverse_mass =
       builder()
-          .weighted([](const VectorXd& q, const VectorXd&, double, Eigen::Ref<MatrixXd> N) {
-            N = kTriple.mass(q).inverse();
-          })
+          .weighted([](const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>&,
+                       double, Eigen::Ref<MatrixXd> N) { N = kTriple.mass(q).inverse(); })
           .build();
-  const Controller mass = builder()
-                              .weighted([](const VectorXd& q, const VectorXd&, double,
-                                           Eigen::Ref<MatrixXd> N) { N = kTriple.mass(q); })
-                              .build();
+  const Controller mass =
+      builder()
+          .weighted([](const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>&,
+                       double, Eigen::Ref<MatrixXd> N) { N = kTriple.mass(q); })
+          .build();
   // actuating every coordinate through S = I takes the general path (cost Sᵀ M⁻¹ S)
   const Controller through_S = builder().actuation(MatrixXd::Identity(3, 3)).build();
   ControlWorkspace wg(gauss), wi(inverse_mass), wm(mass), ws(through_S);
@@ -623,17 +626,19 @@ TEST(ControlPhysical, NonIdealPlantForcesAndEnergyBalance) {
   // control still gives the prescribed error (C does not read the reaction), and
   // E(t) − E(0) = W_nonideal(t) + W_control(t)
   const double m = 1.0, L = 1.0, omega = 3.0;
-  const System sys = SystemBuilder({"x", "y"})
-                         .mass_matrix(m * MatrixXd::Identity(2, 2))
-                         .forces([m](const VectorXd&, const VectorXd&, double,
-                                     Eigen::Ref<VectorXd> Q) { Q << 0.0, -m * kG; })
-                         .potential_energy([m](const VectorXd& q, double) { return m * kG * q[1]; })
-                         .add(holonomic("rod", 1,
-                                        [L](const auto& q, const auto&, auto& phi) {
-                                          phi[0] = (q[0] * q[0] + q[1] * q[1] - L * L) / (2 * L);
-                                        }))
-                         .add(viscous_friction({.coefficient = 0.4}))
-                         .build();
+  const System sys =
+      SystemBuilder({"x", "y"})
+          .mass_matrix(m * MatrixXd::Identity(2, 2))
+          .forces([m](const Eigen::Ref<const VectorXd>&, const Eigen::Ref<const VectorXd>&, double,
+                      Eigen::Ref<VectorXd> Q) { Q << 0.0, -m * kG; })
+          .potential_energy(
+              [m](const Eigen::Ref<const VectorXd>& q, double) { return m * kG * q[1]; })
+          .add(holonomic("rod", 1,
+                         [L](const auto& q, const auto&, auto& phi) {
+                           phi[0] = (q[0] * q[0] + q[1] * q[1] - L * L) / (2 * L);
+                         }))
+          .add(viscous_friction({.coefficient = 0.4}))
+          .build();
   const Controller ctrl =
       ControllerBuilder(sys).require(track_x(), ErrorDynamics::second_order(omega)).build();
   const VectorXd q0 = vec({L * std::sin(0.2), -L * std::cos(0.2)}), qd0 = vec({0.0, 0.0});
@@ -672,11 +677,12 @@ const Eigen::Vector4d kJbar(1.0, 1.0, 2.0, 3.0);  // J0, J1, J2, J3
 
 System spacecraft() {
   return SystemBuilder({"u0", "u1", "u2", "u3"})
-      .mass_matrix([](const VectorXd& u, double, Eigen::Ref<MatrixXd> M) {
+      .mass_matrix([](const Eigen::Ref<const VectorXd>& u, double, Eigen::Ref<MatrixXd> M) {
         const Eigen::Matrix4d E = E_of(u);
         M = 4.0 * E.transpose() * kJbar.asDiagonal() * E;
       })
-      .forces([](const VectorXd& u, const VectorXd& ud, double, Eigen::Ref<VectorXd> Q) {
+      .forces([](const Eigen::Ref<const VectorXd>& u, const Eigen::Ref<const VectorXd>& ud, double,
+                 Eigen::Ref<VectorXd> Q) {
         const Eigen::Vector4d J(0.0, kJbar[1], kJbar[2], kJbar[3]);
         Q = -8.0 * E_of(ud).transpose() * J.asDiagonal() * E_of(u) * ud -
             4.0 * kJbar[0] * ud.squaredNorm() * u;
@@ -807,7 +813,8 @@ TEST(ControlGyroscopes, SlaveSynchronizesWithPrescribedErrorDynamics) {
   const System pair =
       SystemBuilder({"master", "slave"})
           .mass_matrix(MatrixXd::Identity(2, 2))
-          .forces([](const VectorXd& q, const VectorXd& qd, double t, Eigen::Ref<VectorXd> Q) {
+          .forces([](const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd,
+                     double t, Eigen::Ref<VectorXd> Q) {
             Q << gyro_force(q[0], qd[0], t), gyro_force(q[1], qd[1], t);
           })
           .build();
@@ -827,9 +834,8 @@ TEST(ControlGyroscopes, SlaveSynchronizesWithPrescribedErrorDynamics) {
   const System master =
       SystemBuilder({"master"})
           .mass_matrix(MatrixXd::Identity(1, 1))
-          .forces([](const VectorXd& q, const VectorXd& qd, double t, Eigen::Ref<VectorXd> Q) {
-            Q[0] = gyro_force(q[0], qd[0], t);
-          })
+          .forces([](const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd,
+                     double t, Eigen::Ref<VectorXd> Q) { Q[0] = gyro_force(q[0], qd[0], t); })
           .build();
   const Trajectory alone = simulate(master, vec({1.0}), vec({-0.5}), tight(6));
   ASSERT_EQ(alone.samples(), run.samples());

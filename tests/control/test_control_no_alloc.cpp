@@ -19,7 +19,8 @@ using testing::start_counting_allocations;
 using testing::stop_counting_allocations;
 
 // allocations made by `calls` evaluations on a fresh control workspace (none before them)
-long allocations_of(const Controller& ctrl, const VectorXd& q, const VectorXd& qd, int calls,
+long allocations_of(const Controller& ctrl, const Eigen::Ref<const VectorXd>& q,
+                    const Eigen::Ref<const VectorXd>& qd, int calls,
                     ControlStatus expected = ControlStatus::kOk) {
   ControlWorkspace ws(ctrl);
   start_counting_allocations();
@@ -43,12 +44,13 @@ System chain() {
   const Eigen::Vector3d mgL(9.81 * (m[0] + m[1] + m[2]) * L[0], 9.81 * (m[1] + m[2]) * L[1],
                             9.81 * m[2] * L[2]);
   return SystemBuilder({"th1", "th2", "th3"})
-      .mass_matrix([mu](const VectorXd& q, double, Eigen::Ref<MatrixXd> M) {
+      .mass_matrix([mu](const Eigen::Ref<const VectorXd>& q, double, Eigen::Ref<MatrixXd> M) {
         for (Index i = 0; i < 3; ++i) {
           for (Index j = 0; j < 3; ++j) M(i, j) = mu(i, j) * std::cos(q[i] - q[j]);
         }
       })
-      .forces([mu, mgL](const VectorXd& q, const VectorXd& qd, double, Eigen::Ref<VectorXd> Q) {
+      .forces([mu, mgL](const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd,
+                        double, Eigen::Ref<VectorXd> Q) {
         for (Index i = 0; i < 3; ++i) {
           Q[i] = -mgL[i] * std::sin(q[i]);
           for (Index j = 0; j < 3; ++j) Q[i] -= mu(i, j) * std::sin(q[i] - q[j]) * qd[j] * qd[j];
@@ -100,7 +102,8 @@ TEST(ControlNoAllocation, WeightedStateDependentAndConstant) {
   const Controller c =
       ControllerBuilder(chain())
           .require(tip(), ErrorDynamics::second_order(2.0))
-          .weighted([](const VectorXd& q, const VectorXd&, double, Eigen::Ref<MatrixXd> N) {
+          .weighted([](const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>&,
+                       double, Eigen::Ref<MatrixXd> N) {
             N.setZero();
             N(0, 0) = 1.0 + q[0] * q[0];
             N(1, 1) = 2.0;
@@ -146,7 +149,8 @@ TEST(ControlNoAllocation, PhysicalConstraintsNonholonomicAndRobust) {
   const System pendulum =
       SystemBuilder({"x", "y"})
           .mass_matrix(MatrixXd::Identity(2, 2))
-          .forces([](const VectorXd&, const VectorXd&, double, Eigen::Ref<VectorXd> Q) {
+          .forces([](const Eigen::Ref<const VectorXd>&, const Eigen::Ref<const VectorXd>&, double,
+                     Eigen::Ref<VectorXd> Q) {
             Q[0] = 0.0;
             Q[1] = -9.81;
           })

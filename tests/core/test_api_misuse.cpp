@@ -31,7 +31,7 @@ std::string message_of(F&& f) {
 }
 
 // every entry of v is NaN (and v is not empty)
-bool all_nan(const VectorXd& v) {
+bool all_nan(const Eigen::Ref<const VectorXd>& v) {
   if (v.size() == 0) return false;
   for (Index i = 0; i < v.size(); ++i) {
     if (!std::isnan(v[i])) return false;

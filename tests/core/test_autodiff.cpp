@@ -16,7 +16,8 @@ struct Derived {
 };
 
 // A, b and the violations of constraint c at (q, q', t)
-Derived derive(const Constraint& c, const VectorXd& q, const VectorXd& qd, double t) {
+Derived derive(const Constraint& c, const Eigen::Ref<const VectorXd>& q,
+               const Eigen::Ref<const VectorXd>& qd, double t) {
   const Index n = q.size();
   auto scratch = c.model().make_scratch(n);
   Derived d{MatrixXd(c.rows(), n), VectorXd(c.rows()), VectorXd(c.rows()), VectorXd(c.rows())};

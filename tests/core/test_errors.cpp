@@ -21,8 +21,8 @@ bool contains(const std::string& s, const std::string& part) {
 System pendulum(MassMatrixFn mass) {
   return SystemBuilder({"x", "y"})
       .mass_matrix(std::move(mass))
-      .forces(
-          [](const VectorXd&, const VectorXd&, double, Eigen::Ref<VectorXd> Q) { Q << 0.0, -9.81; })
+      .forces([](const Eigen::Ref<const VectorXd>&, const Eigen::Ref<const VectorXd>&, double,
+                 Eigen::Ref<VectorXd> Q) { Q << 0.0, -9.81; })
       .add(holonomic(
           "rod", 1,
           [](const auto& q, const auto&, auto& phi) { phi[0] = q[0] * q[0] + q[1] * q[1] - 1.0; }))
@@ -30,7 +30,7 @@ System pendulum(MassMatrixFn mass) {
 }
 
 MassMatrixFn identity_mass() {
-  return [](const VectorXd&, double, Eigen::Ref<MatrixXd> M) { M.setIdentity(); };
+  return [](const Eigen::Ref<const VectorXd>&, double, Eigen::Ref<MatrixXd> M) { M.setIdentity(); };
 }
 
 VectorXd state(double x, double y) {
@@ -65,8 +65,8 @@ TEST(Errors, MessagesAreValidUtf8) {
 }
 
 TEST(Errors, MassNotPositiveDefiniteIsAStatusWithAClearMessage) {
-  const System sys =
-      pendulum([](const VectorXd&, double, Eigen::Ref<MatrixXd> M) { M << 1.0, 0.0, 0.0, -2.0; });
+  const System sys = pendulum([](const Eigen::Ref<const VectorXd>&, double,
+                                 Eigen::Ref<MatrixXd> M) { M << 1.0, 0.0, 0.0, -2.0; });
   Workspace ws(sys);
   EXPECT_EQ(forward_dynamics(sys, ws, state(1, 0), state(0, 0), 0.25),
             Status::kMassNotPositiveDefinite);
@@ -78,8 +78,8 @@ TEST(Errors, MassNotPositiveDefiniteIsAStatusWithAClearMessage) {
 }
 
 TEST(Errors, MassNotSymmetric) {
-  const System sys =
-      pendulum([](const VectorXd&, double, Eigen::Ref<MatrixXd> M) { M << 1.0, 0.5, 0.0, 1.0; });
+  const System sys = pendulum([](const Eigen::Ref<const VectorXd>&, double,
+                                 Eigen::Ref<MatrixXd> M) { M << 1.0, 0.5, 0.0, 1.0; });
   Workspace ws(sys);
   EXPECT_EQ(forward_dynamics(sys, ws, state(1, 0), state(0, 0), 0.0), Status::kMassNotSymmetric);
   EXPECT_TRUE(contains(describe_status(sys, ws), "not symmetric"));
@@ -115,16 +115,18 @@ TEST(Errors, NaNFromAConstraintNamesTheConstraint) {
 }
 
 TEST(Errors, NaNInForceOrC) {
-  const System sys = SystemBuilder(2)
-                         .mass_matrix(MatrixXd::Identity(2, 2))
-                         .forces([](const VectorXd&, const VectorXd&, double t,
-                                    Eigen::Ref<VectorXd> Q) { Q << (t > 1 ? kNaN : 0.0), 0.0; })
-                         .add(NonIdealForce("broken",
-                                            [](const VectorXd&, const VectorXd&, double t,
-                                               const IdealForceInfo&, Eigen::Ref<VectorXd> C) {
-                                              if (t < 0) C[0] = kNaN;
-                                            }))
-                         .build();
+  const System sys =
+      SystemBuilder(2)
+          .mass_matrix(MatrixXd::Identity(2, 2))
+          .forces([](const Eigen::Ref<const VectorXd>&, const Eigen::Ref<const VectorXd>&, double t,
+                     Eigen::Ref<VectorXd> Q) { Q << (t > 1 ? kNaN : 0.0), 0.0; })
+          .add(
+              NonIdealForce("broken",
+                            [](const Eigen::Ref<const VectorXd>&, const Eigen::Ref<const VectorXd>&,
+                               double t, const IdealForceInfo&, Eigen::Ref<VectorXd> C) {
+                              if (t < 0) C[0] = kNaN;
+                            }))
+          .build();
   Workspace ws(sys);
   EXPECT_EQ(forward_dynamics(sys, ws, state(0, 0), state(0, 0), 2.0), Status::kNonFiniteInput);
   EXPECT_STREQ(ws.failed_quantity, "Q");
@@ -135,8 +137,8 @@ TEST(Errors, NaNInForceOrC) {
 
 // the acceleration constraint x'' = rhs on (x, y)
 auto row(double rhs) {
-  return [rhs](const VectorXd&, const VectorXd&, double, Eigen::Ref<MatrixXd> A,
-               Eigen::Ref<VectorXd> b) {
+  return [rhs](const Eigen::Ref<const VectorXd>&, const Eigen::Ref<const VectorXd>&, double,
+               Eigen::Ref<MatrixXd> A, Eigen::Ref<VectorXd> b) {
     A << 1.0, 0.0;
     b << rhs;
   };

@@ -14,9 +14,8 @@ constexpr double kG = 9.81;
 SystemBuilder particle_on_floor(double m) {
   SystemBuilder b({"x", "y"});
   b.mass_matrix(m * MatrixXd::Identity(2, 2))
-      .forces([m](const VectorXd&, const VectorXd&, double, Eigen::Ref<VectorXd> Q) {
-        Q << 0.0, -m * kG;
-      })
+      .forces([m](const Eigen::Ref<const VectorXd>&, const Eigen::Ref<const VectorXd>&, double,
+                  Eigen::Ref<VectorXd> Q) { Q << 0.0, -m * kG; })
       .add(holonomic("floor", 1, [](const auto& q, const auto&, auto& phi) { phi[0] = q[1]; }));
   return b;
 }
@@ -52,9 +51,8 @@ TEST(Coulomb, NormalForceFollowsTheIdealShareOfTheNamedConstraint) {
   const System sys =
       SystemBuilder({"x", "y", "z"})
           .mass_matrix(m * MatrixXd::Identity(3, 3))
-          .forces([=](const VectorXd&, const VectorXd&, double, Eigen::Ref<VectorXd> Q) {
-            Q << -push, 0.0, -m * kG;
-          })
+          .forces([=](const Eigen::Ref<const VectorXd>&, const Eigen::Ref<const VectorXd>&, double,
+                      Eigen::Ref<VectorXd> Q) { Q << -push, 0.0, -m * kG; })
           .add(holonomic("floor", 1, [](const auto& q, const auto&, auto& phi) { phi[0] = q[2]; }))
           .add(holonomic("wall", 1, [](const auto& q, const auto&, auto& phi) { phi[0] = q[0]; }))
           .add(coulomb_friction({.constraint = "floor", .mu = mu, .coordinates = {0, 1}}))
@@ -89,12 +87,12 @@ TEST(CustomC, MayReadTheIdealForceAndChangeSignOnIntervals) {
   const double m = 1.0, k = 0.25;
   const System sys =
       particle_on_floor(m)
-          .add(NonIdealForce("boost",
-                             [k](const VectorXd&, const VectorXd&, double t,
-                                 const IdealForceInfo& ideal, Eigen::Ref<VectorXd> C) {
-                               if (t >= 1.0)
-                                 C[0] = k * ideal.normal_force(ideal.constraint_index("floor"));
-                             }))
+          .add(NonIdealForce(
+              "boost",
+              [k](const Eigen::Ref<const VectorXd>&, const Eigen::Ref<const VectorXd>&, double t,
+                  const IdealForceInfo& ideal, Eigen::Ref<VectorXd> C) {
+                if (t >= 1.0) C[0] = k * ideal.normal_force(ideal.constraint_index("floor"));
+              }))
           .build();
   Workspace ws(sys);
   const VectorXd q = VectorXd::Zero(2), qd = VectorXd::Zero(2);

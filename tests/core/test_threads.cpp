@@ -47,8 +47,9 @@ void expect_same_run(const Trajectory& a, const Trajectory& b) {
   EXPECT_EQ(a.work_nonideal, b.work_nonideal);
 }
 
-void check_system(const System& sys, const VectorXd& q0, const VectorXd& qd0,
-                  const SimulationOptions& o, Status expected = Status::kOk) {
+void check_system(const System& sys, const Eigen::Ref<const VectorXd>& q0,
+                  const Eigen::Ref<const VectorXd>& qd0, const SimulationOptions& o,
+                  Status expected = Status::kOk) {
   const auto [serial, parallel] = serial_then_parallel([&] { return simulate(sys, q0, qd0, o); });
   ASSERT_EQ(serial.stats.status, expected) << serial.stats.message;
   ASSERT_GT(serial.samples(), 2);

@@ -29,7 +29,8 @@ SystemBuilder particle(Index d, double m) {
   names.resize(std::size_t(d));
   SystemBuilder b(names);
   b.mass_matrix(m * MatrixXd::Identity(d, d))
-      .forces([m, d](const VectorXd&, const VectorXd&, double, Eigen::Ref<VectorXd> Q) {
+      .forces([m, d](const Eigen::Ref<const VectorXd>&, const Eigen::Ref<const VectorXd>&, double,
+                     Eigen::Ref<VectorXd> Q) {
         Q.setZero();
         Q[d - 1] = -m * kG;
       });
@@ -182,9 +183,8 @@ TEST(DefaultVsTextbook, NoConstraintsIsMInverseQ) {
   SystemBuilder b({"x", "y"});
   Eigen::Matrix2d M;
   M << 2.0, 0.5, 0.5, 1.0;
-  b.mass_matrix(M).forces([](const VectorXd& q, const VectorXd&, double, Eigen::Ref<VectorXd> Q) {
-    Q << -3.0 * q[0], 1.0;
-  });
+  b.mass_matrix(M).forces([](const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>&,
+                             double, Eigen::Ref<VectorXd> Q) { Q << -3.0 * q[0], 1.0; });
   const System sys = b.build();
   Workspace slow(sys, SolverOptions{.algorithm = Algorithm::kTextbook});
   const VectorXd q = (VectorXd(2) << 1.0, 0.0).finished(), qd = VectorXd::Zero(2);
@@ -230,7 +230,7 @@ TEST_P(Properties, ConstraintsAreSatisfied) {
 TEST_P(Properties, GaussPrincipleRandomFeasiblePerturbationsNeverLowerTheGaussian) {
   // G(x) = (M x − Q − C)ᵀ M⁻¹ (M x − Q − C); for A v = 0, G(q'' + v) − G(q'') = vᵀ M v >= 0
   const Eigen::LLT<MatrixXd> llt(p.M);
-  auto gaussian = [&](const VectorXd& x) {
+  auto gaussian = [&](const Eigen::Ref<const VectorXd>& x) {
     const VectorXd r = p.M * x - p.Q - p.C;
     return r.dot(llt.solve(r));
   };
@@ -359,14 +359,14 @@ TEST(MassMatrix, CallableAndConstantAgree) {
   const auto p = random_problem(7, 3, 3, 9u, true);
   const System s1 = make_system(p);
   SystemBuilder b(7);
-  b.mass_matrix([M = p.M](const VectorXd&, double, Eigen::Ref<MatrixXd> out) { out = M; })
-      .forces([Q = p.Q](const VectorXd&, const VectorXd&, double, Eigen::Ref<VectorXd> out) {
-        out = Q;
-      })
+  b.mass_matrix(
+       [M = p.M](const Eigen::Ref<const VectorXd>&, double, Eigen::Ref<MatrixXd> out) { out = M; })
+      .forces([Q = p.Q](const Eigen::Ref<const VectorXd>&, const Eigen::Ref<const VectorXd>&,
+                        double, Eigen::Ref<VectorXd> out) { out = Q; })
       .add(s1.constraint(0));
-  b.add(
-      NonIdealForce("C", [C = p.C](const VectorXd&, const VectorXd&, double, const IdealForceInfo&,
-                                   Eigen::Ref<VectorXd> out) { out = C; }));
+  b.add(NonIdealForce(
+      "C", [C = p.C](const Eigen::Ref<const VectorXd>&, const Eigen::Ref<const VectorXd>&, double,
+                     const IdealForceInfo&, Eigen::Ref<VectorXd> out) { out = C; }));
   const System s2 = b.build();
   EXPECT_TRUE(s1.mass_is_constant());
   EXPECT_FALSE(s2.mass_is_constant());
@@ -393,7 +393,8 @@ class LocalRod final : public ConstraintModel {
     if (j > i) std::swap_ranges(cols_.begin(), cols_.begin() + 2, cols_.begin() + 2);
   }
   const std::vector<Index>& columns() const override { return cols_; }
-  void acceleration_form_local(const VectorXd& q, const VectorXd& qd, double, ConstraintScratch*,
+  void acceleration_form_local(const Eigen::Ref<const VectorXd>& q,
+                               const Eigen::Ref<const VectorXd>& qd, double, ConstraintScratch*,
                                Eigen::Ref<MatrixXd> A, Eigen::Ref<VectorXd> b) const override {
     const double dx = q[2 * i_] - (j_ >= 0 ? q[2 * j_] : 0.0);
     const double dy = q[2 * i_ + 1] - (j_ >= 0 ? q[2 * j_ + 1] : 0.0);
@@ -409,8 +410,9 @@ class LocalRod final : public ConstraintModel {
     }
     b[0] = -(vx * vx + vy * vy);
   }
-  void violation(const VectorXd& q, const VectorXd&, double, ConstraintScratch*,
-                 Eigen::Ref<VectorXd> position, Eigen::Ref<VectorXd> velocity) const override {
+  void violation(const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>&, double,
+                 ConstraintScratch*, Eigen::Ref<VectorXd> position,
+                 Eigen::Ref<VectorXd> velocity) const override {
     const double dx = q[2 * i_] - (j_ >= 0 ? q[2 * j_] : 0.0);
     const double dy = q[2 * i_ + 1] - (j_ >= 0 ? q[2 * j_ + 1] : 0.0);
     position[0] = 0.5 * (dx * dx + dy * dy - L_ * L_);
@@ -427,20 +429,21 @@ TEST(BlockDiagonalAndLocal, SameMotionAsTheDenseDescription) {
   // three particles of masses 1, 2, 3 hanging in a chain from the origin, the last one also
   // tied back to particle 0 (a closed loop) — and a state-dependent block for particle 1
   const std::vector<double> mass = {1.0, 2.0, 3.0};
-  const auto block_fn = [](const VectorXd& q, double, Eigen::Ref<MatrixXd> Mk) {
+  const auto block_fn = [](const Eigen::Ref<const VectorXd>& q, double, Eigen::Ref<MatrixXd> Mk) {
     Mk << 2.0 + q[2] * q[2], 0.5, 0.5, 2.0;
   };
   SystemBuilder blocks(6), dense(6);
   blocks.mass_block(4, 3.0 * MatrixXd::Identity(2, 2))
       .mass_block(2, 2, block_fn)
       .mass_block(0, 1.0 * MatrixXd::Identity(2, 2));
-  dense.mass_matrix([&](const VectorXd& q, double t, Eigen::Ref<MatrixXd> M) {
+  dense.mass_matrix([&](const Eigen::Ref<const VectorXd>& q, double t, Eigen::Ref<MatrixXd> M) {
     M.setZero();
     M.block(0, 0, 2, 2).setIdentity();
     block_fn(q, t, M.block(2, 2, 2, 2));
     M.block(4, 4, 2, 2) = 3.0 * MatrixXd::Identity(2, 2);
   });
-  const auto Q = [&](const VectorXd&, const VectorXd&, double, Eigen::Ref<VectorXd> F) {
+  const auto Q = [&](const Eigen::Ref<const VectorXd>&, const Eigen::Ref<const VectorXd>&, double,
+                     Eigen::Ref<VectorXd> F) {
     F << 0.1, -9.81 * mass[0], 0.0, -9.81 * mass[1], -0.3, -9.81 * mass[2];
   };
   blocks.forces(Q);

@@ -1,5 +1,6 @@
 // No heap allocation per evaluation once the workspace exists, for every kind of constraint,
 // non-ideal forces, rank-deficient and large systems.
+#include <array>
 #include <cmath>
 #include <string>
 #include <utility>
@@ -19,7 +20,8 @@ using testing::start_counting_allocations;
 using testing::stop_counting_allocations;
 
 // allocations made by `calls` evaluations on a fresh workspace (none before them)
-long allocations_of(const System& sys, const VectorXd& q, const VectorXd& qd, int calls,
+long allocations_of(const System& sys, const Eigen::Ref<const VectorXd>& q,
+                    const Eigen::Ref<const VectorXd>& qd, int calls,
                     const SolverOptions& options = {}) {
   Workspace ws(sys, options);
   start_counting_allocations();
@@ -50,11 +52,12 @@ TEST(NoAllocation, AutomaticallyDifferentiatedConstraintsAndFriction) {
   // edge and a velocity-quadratic constraint, Coulomb and viscous friction, state-dependent M
   const System sys =
       SystemBuilder({"x", "y", "th", "z", "w"})
-          .mass_matrix([](const VectorXd& q, double, Eigen::Ref<MatrixXd> M) {
+          .mass_matrix([](const Eigen::Ref<const VectorXd>& q, double, Eigen::Ref<MatrixXd> M) {
             M.setIdentity();
             M(2, 2) = 1.0 + 0.1 * q[0] * q[0];
           })
-          .forces([](const VectorXd& q, const VectorXd& qd, double t, Eigen::Ref<VectorXd> Q) {
+          .forces([](const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd,
+                     double t, Eigen::Ref<VectorXd> Q) {
             Q = -0.1 * qd;
             Q[3] -= 9.81;
             Q[0] += std::sin(t) * q[1];
@@ -80,6 +83,17 @@ TEST(NoAllocation, AutomaticallyDifferentiatedConstraintsAndFriction) {
   q << 0.3, -0.2, 0.4, 0.009, 0.0;
   qd << 0.5, 0.2, -0.1, 0.03, 0.0;
   EXPECT_EQ(allocations_of(sys, q, qd, 10), 0);
+  // the same state as views (a segment of a longer vector, a Map over a std::array) and as
+  // fixed-size vectors: the entry points and the callables take Eigen::Ref, nothing is copied
+  VectorXd padded = VectorXd::Zero(9);
+  padded.segment(2, 5) = q;
+  std::array<double, 5> qd_values{};
+  Eigen::Map<VectorXd>(qd_values.data(), 5) = qd;
+  EXPECT_EQ(allocations_of(sys, padded.segment(2, 5),
+                           Eigen::Map<const VectorXd>(qd_values.data(), 5), 10),
+            0);
+  const Eigen::Vector<double, 5> q_fixed = q, qd_fixed = qd;
+  EXPECT_EQ(allocations_of(sys, q_fixed, qd_fixed, 10), 0);
 }
 
 using testing::Case;
@@ -106,21 +120,22 @@ TEST(NoAllocation, SingularMassMatrices) {
   {
     MatrixXd M = MatrixXd::Zero(3, 3);
     M(0, 0) = M(1, 1) = 2.0;
-    const System sys = SystemBuilder({"x", "y", "th"})
-                           .mass_matrix(M)
-                           .forces([](const VectorXd&, const VectorXd&, double,
-                                      Eigen::Ref<VectorXd> Q) { Q << 0.0, -19.62, 0.0; })
-                           .add(holonomic("cx", 1,
-                                          [](const auto& q, const auto&, auto& phi) {
-                                            using std::sin;
-                                            phi[0] = q[0] - sin(q[2]);
-                                          }))
-                           .add(holonomic("cy", 1,
-                                          [](const auto& q, const auto&, auto& phi) {
-                                            using std::cos;
-                                            phi[0] = q[1] + cos(q[2]);
-                                          }))
-                           .build();
+    const System sys =
+        SystemBuilder({"x", "y", "th"})
+            .mass_matrix(M)
+            .forces([](const Eigen::Ref<const VectorXd>&, const Eigen::Ref<const VectorXd>&, double,
+                       Eigen::Ref<VectorXd> Q) { Q << 0.0, -19.62, 0.0; })
+            .add(holonomic("cx", 1,
+                           [](const auto& q, const auto&, auto& phi) {
+                             using std::sin;
+                             phi[0] = q[0] - sin(q[2]);
+                           }))
+            .add(holonomic("cy", 1,
+                           [](const auto& q, const auto&, auto& phi) {
+                             using std::cos;
+                             phi[0] = q[1] + cos(q[2]);
+                           }))
+            .build();
     VectorXd q(3), qd(3);
     q << std::sin(0.7), -std::cos(0.7), 0.7;
     qd << std::cos(0.7) * 1.5, std::sin(0.7) * 1.5, 1.5;

@@ -44,15 +44,15 @@ System contradictory_pendulum(double gap) {
   auto rod = [](const auto& q, const auto&, auto& phi) {
     phi[0] = 0.5 * (q[0] * q[0] + q[1] * q[1] - 1.0);
   };
-  auto rod_again = [gap](const VectorXd& q, const VectorXd& qd, double t, Eigen::Ref<MatrixXd> A,
-                         Eigen::Ref<VectorXd> b) {
+  auto rod_again = [gap](const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd,
+                         double t, Eigen::Ref<MatrixXd> A, Eigen::Ref<VectorXd> b) {
     A << q[0], q[1];
     b << -qd.squaredNorm() + (t > 0.5 ? gap : 0.0);
   };
   return SystemBuilder(std::vector<std::string>{"x", "y"})
       .mass_matrix(MatrixXd::Identity(2, 2))
-      .forces(
-          [](const VectorXd&, const VectorXd&, double, Eigen::Ref<VectorXd> Q) { Q << 0.0, -kG; })
+      .forces([](const Eigen::Ref<const VectorXd>&, const Eigen::Ref<const VectorXd>&, double,
+                 Eigen::Ref<VectorXd> Q) { Q << 0.0, -kG; })
       .add(holonomic("rod", 1, rod))
       .add(acceleration_constraint("rod_again", 1, rod_again))
       .build();

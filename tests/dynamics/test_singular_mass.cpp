@@ -72,8 +72,8 @@ constexpr std::optional<S> motion_undetermined_status() {
 const std::optional<Status> kMotionUndetermined = motion_undetermined_status<Status>();
 
 // ‖actual − expected‖ within tol · ‖expected‖ (two-sided: EXPECT_NEAR on the norm)
-void expect_relative(const VectorXd& actual, const VectorXd& expected, double tol,
-                     const char* what) {
+void expect_relative(const Eigen::Ref<const VectorXd>& actual,
+                     const Eigen::Ref<const VectorXd>& expected, double tol, const char* what) {
   ASSERT_EQ(actual.size(), expected.size()) << what;
   EXPECT_NEAR((actual - expected).norm(), 0.0, tol * std::max(expected.norm(), 1e-300))
       << what << "\n  actual   " << actual.transpose() << "\n  expected " << expected.transpose();
@@ -168,10 +168,10 @@ System xytheta_pendulum(const PendulumParams& p, bool blocks = false, bool one_b
   }
   const double m = p.m, g = p.g;
   return b
-      .forces([m, g](const VectorXd&, const VectorXd&, double, Eigen::Ref<VectorXd> Q) {
-        Q << 0.0, -m * g, 0.0;
-      })
-      .potential_energy([m, g](const VectorXd& q, double) { return m * g * q[1]; })
+      .forces([m, g](const Eigen::Ref<const VectorXd>&, const Eigen::Ref<const VectorXd>&, double,
+                     Eigen::Ref<VectorXd> Q) { Q << 0.0, -m * g, 0.0; })
+      .potential_energy(
+          [m, g](const Eigen::Ref<const VectorXd>& q, double) { return m * g * q[1]; })
       .add(holonomic("rod", 2, rod))
       .build();
 }
@@ -293,25 +293,28 @@ System auxiliary_pendulum(const PendulumParams& p, double g_aux) {
     phi[1] = q[1] + L * cos(q[2]);
   };
   const double m = p.m, g = p.g, L = p.L;
-  auto A_of = [L](const VectorXd& q) {
+  auto A_of = [L](const Eigen::Ref<const VectorXd>& q) {
     Eigen::Matrix<double, 2, 3> A;
     A << 1.0, 0.0, -L * std::cos(q[2]), 0.0, 1.0, -L * std::sin(q[2]);
     return A;
   };
   return SystemBuilder(std::vector<std::string>{"x", "y", "theta"})
-      .mass_matrix([m, g_aux, A_of](const VectorXd& q, double, Eigen::Ref<MatrixXd> M) {
-        const Eigen::Matrix<double, 2, 3> A = A_of(q);
-        M = g_aux * A.transpose() * A;
-        M(0, 0) += m;
-        M(1, 1) += m;
-      })
-      .forces([m, g, L, g_aux, A_of](const VectorXd& q, const VectorXd& qd, double,
+      .mass_matrix(
+          [m, g_aux, A_of](const Eigen::Ref<const VectorXd>& q, double, Eigen::Ref<MatrixXd> M) {
+            const Eigen::Matrix<double, 2, 3> A = A_of(q);
+            M = g_aux * A.transpose() * A;
+            M(0, 0) += m;
+            M(1, 1) += m;
+          })
+      .forces([m, g, L, g_aux, A_of](const Eigen::Ref<const VectorXd>& q,
+                                     const Eigen::Ref<const VectorXd>& qd, double,
                                      Eigen::Ref<VectorXd> Q) {
         const Vector2d b(-L * std::sin(q[2]) * qd[2] * qd[2], L * std::cos(q[2]) * qd[2] * qd[2]);
         Q = g_aux * A_of(q).transpose() * b;
         Q[1] -= m * g;
       })
-      .potential_energy([m, g](const VectorXd& q, double) { return m * g * q[1]; })
+      .potential_energy(
+          [m, g](const Eigen::Ref<const VectorXd>& q, double) { return m * g * q[1]; })
       .add(holonomic("rod", 2, rod))
       .build();
 }
@@ -596,21 +599,23 @@ System dumbbell_system(const Dumbbell& d, bool midpoint) {
   const double m1 = d.m1, m2 = d.m2, g = d.g;
   SystemBuilder b(names);
   b.mass_matrix(MatrixXd(diag.asDiagonal()))
-      .forces([m1, m2, g](const VectorXd&, const VectorXd&, double, Eigen::Ref<VectorXd> Q) {
+      .forces([m1, m2, g](const Eigen::Ref<const VectorXd>&, const Eigen::Ref<const VectorXd>&,
+                          double, Eigen::Ref<VectorXd> Q) {
         Q.setZero();
         Q[1] = -m1 * g;
         Q[3] = -m2 * g;
       })
-      .potential_energy(
-          [m1, m2, g](const VectorXd& q, double) { return m1 * g * q[1] + m2 * g * q[3]; })
+      .potential_energy([m1, m2, g](const Eigen::Ref<const VectorXd>& q, double) {
+        return m1 * g * q[1] + m2 * g * q[3];
+      })
       .add(holonomic("link", 1, link));
   if (midpoint) b.add(holonomic("midpoint", 2, mid));
   return b.build();
 }
 
 // the particles' q'' and constraint force from the closed form at t
-void expect_dumbbell_closed_form(const Dumbbell& d, const VectorXd& qdd, const VectorXd& Qc,
-                                 double t) {
+void expect_dumbbell_closed_form(const Dumbbell& d, const Eigen::Ref<const VectorXd>& qdd,
+                                 const Eigen::Ref<const VectorXd>& Qc, double t) {
   const Vector2d rdd = -d.w * d.w * d.r(t), cdd(0.0, -d.g);
   VectorXd a(4);
   a << cdd + d.m2 / d.total() * rdd, cdd - d.m1 / d.total() * rdd;
@@ -686,16 +691,17 @@ TEST(SingularMass, MasslessMidpointMovesWithTheLinkAndChangesNothing) {
 TEST(SingularMass, UndeterminedCoordinateIsNamedWithTheTime) {
   ASSERT_TRUE(kMotionUndetermined.has_value()) << "Status::kMotionUndetermined is not declared";
   // M = diag(1, 0) and a constraint on 'anchor' only: nothing determines slack''
-  const System sys = SystemBuilder(std::vector<std::string>{"anchor", "slack"})
-                         .mass_matrix(Eigen::Vector2d(1.0, 0.0).asDiagonal().toDenseMatrix())
-                         .forces([](const VectorXd&, const VectorXd&, double,
-                                    Eigen::Ref<VectorXd> Q) { Q << 0.0, -1.0; })
-                         .add(holonomic("pin", 1,
-                                        [](const auto& q, const auto& t, auto& phi) {
-                                          using std::sin;
-                                          phi[0] = q[0] - 0.5 * sin(t);
-                                        }))
-                         .build();
+  const System sys =
+      SystemBuilder(std::vector<std::string>{"anchor", "slack"})
+          .mass_matrix(Eigen::Vector2d(1.0, 0.0).asDiagonal().toDenseMatrix())
+          .forces([](const Eigen::Ref<const VectorXd>&, const Eigen::Ref<const VectorXd>&, double,
+                     Eigen::Ref<VectorXd> Q) { Q << 0.0, -1.0; })
+          .add(holonomic("pin", 1,
+                         [](const auto& q, const auto& t, auto& phi) {
+                           using std::sin;
+                           phi[0] = q[0] - 0.5 * sin(t);
+                         }))
+          .build();
   Workspace ws(sys);
   VectorXd q(2), qd(2);
   q << 0.5 * std::sin(0.75), 0.0;
@@ -737,10 +743,9 @@ TEST(SingularMass, SimulationStopsWhenTheOnlyConstraintOnAMasslessCoordinateEnds
   const System sys =
       SystemBuilder(std::vector<std::string>{"anchor", "slack"})
           .mass_matrix(Eigen::Vector2d(1.0, 0.0).asDiagonal().toDenseMatrix())
-          .forces([](const VectorXd&, const VectorXd&, double, Eigen::Ref<VectorXd> Q) {
-            Q << -9.81, 0.0;
-          })
-          .potential_energy([](const VectorXd& q, double) { return 9.81 * q[0]; })
+          .forces([](const Eigen::Ref<const VectorXd>&, const Eigen::Ref<const VectorXd>&, double,
+                     Eigen::Ref<VectorXd> Q) { Q << -9.81, 0.0; })
+          .potential_energy([](const Eigen::Ref<const VectorXd>& q, double) { return 9.81 * q[0]; })
           .add(holonomic("hold", 1,
                          [](const auto& q, const auto&, auto& phi) { phi[0] = q[1] - q[0]; })
                    .active_between(0.0, 0.5))
@@ -858,22 +863,25 @@ struct Solved {
 };
 
 // the regular auxiliary system with constant M_A, Q_A and the constant rows A q'' = b
-Solved auxiliary(const std::vector<std::string>& names, const MatrixXd& M, const VectorXd& Q,
-                 const MatrixXd& A, const VectorXd& b, const MatrixXd& G) {
+Solved auxiliary(const std::vector<std::string>& names, const MatrixXd& M,
+                 const Eigen::Ref<const VectorXd>& Q, const MatrixXd& A,
+                 const Eigen::Ref<const VectorXd>& b, const MatrixXd& G) {
   const MatrixXd MA = M + A.transpose() * G * A;
   const VectorXd QA = Q + A.transpose() * G * b;
-  const System sys = SystemBuilder(names)
-                         .mass_matrix(MA)
-                         .forces([QA](const VectorXd&, const VectorXd&, double,
-                                      Eigen::Ref<VectorXd> out) { out = QA; })
-                         .add(acceleration_constraint(
-                             "aux", A.rows(),
-                             [A, b](const VectorXd&, const VectorXd&, double,
-                                    Eigen::Ref<MatrixXd> Aout, Eigen::Ref<VectorXd> bout) {
-                               Aout = A;
-                               bout = b;
-                             }))
-                         .build();
+  const System sys =
+      SystemBuilder(names)
+          .mass_matrix(MA)
+          .forces([QA](const Eigen::Ref<const VectorXd>&, const Eigen::Ref<const VectorXd>&, double,
+                       Eigen::Ref<VectorXd> out) { out = QA; })
+          .add(acceleration_constraint(
+              "aux", A.rows(),
+              [A, b = VectorXd(b)](const Eigen::Ref<const VectorXd>&,
+                                   const Eigen::Ref<const VectorXd>&, double,
+                                   Eigen::Ref<MatrixXd> Aout, Eigen::Ref<VectorXd> bout) {
+                Aout = A;
+                bout = b;
+              }))
+          .build();
   Workspace ws(sys);
   const VectorXd zero = VectorXd::Zero(M.rows());
   EXPECT_EQ(forward_dynamics(sys, ws, zero, zero, 0.0), Status::kOk) << describe_status(sys, ws);
@@ -881,7 +889,8 @@ Solved auxiliary(const std::vector<std::string>& names, const MatrixXd& M, const
   return {ws.qdd, M * ws.qdd - Q, ws.lambda};
 }
 
-Solved kkt(const MatrixXd& M, const VectorXd& Q, const MatrixXd& A, const VectorXd& b) {
+Solved kkt(const MatrixXd& M, const Eigen::Ref<const VectorXd>& Q, const MatrixXd& A,
+           const Eigen::Ref<const VectorXd>& b) {
   const Index n = M.rows(), m = A.rows();
   MatrixXd K = MatrixXd::Zero(n + m, n + m);
   K.topLeftCorner(n, n) = M;
@@ -934,9 +943,9 @@ std::vector<Case> g_cases() {
     const System sys =
         SystemBuilder(std::vector<std::string>{"a", "b", "c"})
             .mass_matrix(M)
-            .forces([](const VectorXd&, const VectorXd& qd, double, Eigen::Ref<VectorXd> Q) {
-              Q << 0.3, -1.0 - 0.4 * qd[1], 0.5 + 0.2 * qd[2];
-            })
+            .forces([](const Eigen::Ref<const VectorXd>&, const Eigen::Ref<const VectorXd>& qd,
+                       double,
+                       Eigen::Ref<VectorXd> Q) { Q << 0.3, -1.0 - 0.4 * qd[1], 0.5 + 0.2 * qd[2]; })
             .accounts_for_energy(false)
             .add(holonomic("curve", 1,
                            [](const auto& q, const auto&, auto& phi) {

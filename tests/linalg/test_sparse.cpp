@@ -63,11 +63,12 @@ Chain closed_chain(const std::vector<double>& phi, int closures, bool with_frict
     p += L * u;
     b.mass_block(3 * i, Eigen::Vector3d(m, m, I).asDiagonal().toDenseMatrix());
   }
-  b.forces([N, m](const VectorXd&, const VectorXd&, double, Eigen::Ref<VectorXd> Q) {
+  b.forces([N, m](const Eigen::Ref<const VectorXd>&, const Eigen::Ref<const VectorXd>&, double,
+                  Eigen::Ref<VectorXd> Q) {
     Q.setZero();
     for (Index i = 0; i < N; ++i) Q[3 * i + 1] = -9.81 * m;
   });
-  b.potential_energy([N, m](const VectorXd& x, double) {
+  b.potential_energy([N, m](const Eigen::Ref<const VectorXd>& x, double) {
     double V = 0.0;
     for (Index i = 0; i < N; ++i) V += 9.81 * m * x[3 * i + 1];
     return V;
@@ -90,7 +91,8 @@ class Rung final : public ConstraintModel {
     for (Index c = 0; c < 3; ++c) cols_.push_back(3 * j + c);
   }
   const std::vector<Index>& columns() const override { return cols_; }
-  void acceleration_form_local(const VectorXd& q, const VectorXd& qd, double, ConstraintScratch*,
+  void acceleration_form_local(const Eigen::Ref<const VectorXd>& q,
+                               const Eigen::Ref<const VectorXd>& qd, double, ConstraintScratch*,
                                Eigen::Ref<MatrixXd> A, Eigen::Ref<VectorXd> b) const override {
     const Eigen::Vector2d D = q.segment<2>(3 * i_) - q.segment<2>(3 * j_);
     const Eigen::Vector2d V = qd.segment<2>(3 * i_) - qd.segment<2>(3 * j_);
@@ -99,8 +101,9 @@ class Rung final : public ConstraintModel {
     A.block(0, 3, 1, 2) = -D.transpose();
     b[0] = -V.squaredNorm();
   }
-  void violation(const VectorXd& q, const VectorXd& qd, double, ConstraintScratch*,
-                 Eigen::Ref<VectorXd> position, Eigen::Ref<VectorXd> velocity) const override {
+  void violation(const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd, double,
+                 ConstraintScratch*, Eigen::Ref<VectorXd> position,
+                 Eigen::Ref<VectorXd> velocity) const override {
     const Eigen::Vector2d D = q.segment<2>(3 * i_) - q.segment<2>(3 * j_);
     position[0] = 0.5 * (D.squaredNorm() - d_ * d_);
     velocity[0] = D.dot(qd.segment<2>(3 * i_) - qd.segment<2>(3 * j_));
@@ -132,7 +135,8 @@ Chain ladder(const std::vector<double>& phi) {
   for (Index k = 0; k < N; ++k) {
     b.mass_block(3 * k, Eigen::Vector3d(m, m, I).asDiagonal().toDenseMatrix());
   }
-  b.forces([N, m](const VectorXd&, const VectorXd&, double, Eigen::Ref<VectorXd> Q) {
+  b.forces([N, m](const Eigen::Ref<const VectorXd>&, const Eigen::Ref<const VectorXd>&, double,
+                  Eigen::Ref<VectorXd> Q) {
     Q.setZero();
     for (Index i = 0; i < N; ++i) Q[3 * i + 1] = -9.81 * m;
   });
@@ -160,8 +164,9 @@ class LocalLinear final : public ConstraintModel {
   LocalLinear(std::vector<Index> cols, MatrixXd A, VectorXd b)
       : cols_(std::move(cols)), A_(std::move(A)), b_(std::move(b)) {}
   const std::vector<Index>& columns() const override { return cols_; }
-  void acceleration_form_local(const VectorXd&, const VectorXd&, double, ConstraintScratch*,
-                               Eigen::Ref<MatrixXd> A, Eigen::Ref<VectorXd> b) const override {
+  void acceleration_form_local(const Eigen::Ref<const VectorXd>&, const Eigen::Ref<const VectorXd>&,
+                               double, ConstraintScratch*, Eigen::Ref<MatrixXd> A,
+                               Eigen::Ref<VectorXd> b) const override {
     A = A_;
     b = b_;
   }
@@ -211,16 +216,18 @@ RandomSparse random_sparse(unsigned seed, Index bodies, Index constraints, bool 
     if (k % 3 == 1) {
       // state-dependent: M_k (1 + 0.1 q_first²)
       const Index first = off[std::size_t(k)];
-      b.mass_block(first, size[std::size_t(k)],
-                   [Mk, first](const VectorXd& q, double, Eigen::Ref<MatrixXd> out) {
-                     out = Mk * (1.0 + 0.1 * q[first] * q[first]);
-                   });
+      b.mass_block(
+          first, size[std::size_t(k)],
+          [Mk, first](const Eigen::Ref<const VectorXd>& q, double, Eigen::Ref<MatrixXd> out) {
+            out = Mk * (1.0 + 0.1 * q[first] * q[first]);
+          });
     } else {
       b.mass_block(off[std::size_t(k)], Mk);
     }
   }
   const VectorXd Q = gaussian(n, 1);
-  b.forces([Q](const VectorXd&, const VectorXd&, double, Eigen::Ref<VectorXd> out) { out = Q; });
+  b.forces([Q](const Eigen::Ref<const VectorXd>&, const Eigen::Ref<const VectorXd>&, double,
+               Eigen::Ref<VectorXd> out) { out = Q; });
   struct Made {
     std::vector<Index> cols;
     MatrixXd A;
@@ -282,12 +289,13 @@ RandomSparse random_sparse(unsigned seed, Index bodies, Index constraints, bool 
   {
     const MatrixXd A = gaussian(1, n);
     const VectorXd rhs = A * x0 + VectorXd::Constant(1, inconsistent ? 0.0 : 0.0);
-    b.add(acceleration_constraint("dense", 1,
-                                  [A, rhs](const VectorXd&, const VectorXd&, double,
-                                           Eigen::Ref<MatrixXd> Aout, Eigen::Ref<VectorXd> bout) {
-                                    Aout = A;
-                                    bout = rhs;
-                                  }));
+    b.add(acceleration_constraint(
+        "dense", 1,
+        [A, rhs](const Eigen::Ref<const VectorXd>&, const Eigen::Ref<const VectorXd>&, double,
+                 Eigen::Ref<MatrixXd> Aout, Eigen::Ref<VectorXd> bout) {
+          Aout = A;
+          bout = rhs;
+        }));
   }
   {
     const Index k = body(gen);
@@ -307,8 +315,9 @@ RandomSparse random_sparse(unsigned seed, Index bodies, Index constraints, bool 
                        made[0].cols, made[0].A, made[0].A * x + VectorXd::Ones(made[0].A.rows()))));
   }
   const VectorXd C = gaussian(n, 1);
-  b.add(NonIdealForce("C", [C](const VectorXd&, const VectorXd&, double, const IdealForceInfo&,
-                               Eigen::Ref<VectorXd> out) { out = C; }));
+  b.add(NonIdealForce(
+      "C", [C](const Eigen::Ref<const VectorXd>&, const Eigen::Ref<const VectorXd>&, double,
+               const IdealForceInfo&, Eigen::Ref<VectorXd> out) { out = C; }));
   made_up.system = std::make_shared<const System>(b.build());
   made_up.q = gaussian(n, 1);
   made_up.qd = gaussian(n, 1);
@@ -329,8 +338,8 @@ void report_worst(const char* what) {
 }
 
 // every result of one evaluation, sparse against dense
-void expect_same(const System& sys, const VectorXd& q, const VectorXd& qd, double tol,
-                 Status expected = Status::kOk) {
+void expect_same(const System& sys, const Eigen::Ref<const VectorXd>& q,
+                 const Eigen::Ref<const VectorXd>& qd, double tol, Status expected = Status::kOk) {
   Workspace wd(sys, dense_options()), ws(sys, sparse_options());
   ASSERT_FALSE(wd.is_sparse());
   ASSERT_TRUE(ws.is_sparse());
@@ -509,9 +518,8 @@ TEST(SparseEngine, CoulombStickSlipEqualsDense) {
   b.mass_block(0, MatrixXd::Identity(2, 2))
       .mass_block(2, 2.0 * MatrixXd::Identity(2, 2))
       .mass_block(4, 3.0 * MatrixXd::Identity(2, 2));
-  b.forces([](const VectorXd&, const VectorXd&, double t, Eigen::Ref<VectorXd> Q) {
-    Q << 6.0 * t, -9.81, 0.0, -2 * 9.81, 0.0, -3 * 9.81;
-  });
+  b.forces([](const Eigen::Ref<const VectorXd>&, const Eigen::Ref<const VectorXd>&, double t,
+              Eigen::Ref<VectorXd> Q) { Q << 6.0 * t, -9.81, 0.0, -2 * 9.81, 0.0, -3 * 9.81; });
   b.add(Constraint("floor", ConstraintKind::kHolonomic, 1,
                    std::make_shared<LocalLinear>(std::vector<Index>{1}, MatrixXd::Ones(1, 1),
                                                  VectorXd::Zero(1))));
@@ -566,12 +574,13 @@ TEST(SparseEngine, ChoiceOfEngine) {
   const auto with_dense_rows = [](Index rows) {
     SystemBuilder b(30);
     for (Index i = 0; i < 10; ++i) b.mass_block(3 * i, MatrixXd::Identity(3, 3));
-    b.add(acceleration_constraint("rows", rows,
-                                  [](const VectorXd&, const VectorXd&, double,
-                                     Eigen::Ref<MatrixXd> A, Eigen::Ref<VectorXd> rhs) {
-                                    A.setIdentity();
-                                    rhs.setZero();
-                                  }));
+    b.add(acceleration_constraint(
+        "rows", rows,
+        [](const Eigen::Ref<const VectorXd>&, const Eigen::Ref<const VectorXd>&, double,
+           Eigen::Ref<MatrixXd> A, Eigen::Ref<VectorXd> rhs) {
+          A.setIdentity();
+          rhs.setZero();
+        }));
     return b.build();
   };
   EXPECT_TRUE(Workspace(with_dense_rows(kAutoMaxDenseRows)).is_sparse());
@@ -595,7 +604,7 @@ TEST(SparseEngine, ChoiceOfEngine) {
 TEST(SparseEngine, MassNotPositiveDefiniteAndNaNAreReported) {
   SystemBuilder b(4);
   b.mass_block(0, MatrixXd::Identity(2, 2))
-      .mass_block(2, 2, [](const VectorXd& q, double, Eigen::Ref<MatrixXd> M) {
+      .mass_block(2, 2, [](const Eigen::Ref<const VectorXd>& q, double, Eigen::Ref<MatrixXd> M) {
         M << q[0], 0.0, 0.0, 1.0;
       });
   const System sys = b.build();

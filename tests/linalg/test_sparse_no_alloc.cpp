@@ -43,15 +43,17 @@ Chain chain(Index N, int closures, bool extras) {
     p += L * u;
     const MatrixXd Mi = Eigen::Vector3d(m, m, I).asDiagonal().toDenseMatrix();
     if (extras && i % 2 == 1) {
-      b.mass_block(3 * i, 3, [Mi, i](const VectorXd& x, double, Eigen::Ref<MatrixXd> out) {
-        out = Mi * (1.0 + 0.01 * x[3 * i] * x[3 * i]);
-      });
+      b.mass_block(3 * i, 3,
+                   [Mi, i](const Eigen::Ref<const VectorXd>& x, double, Eigen::Ref<MatrixXd> out) {
+                     out = Mi * (1.0 + 0.01 * x[3 * i] * x[3 * i]);
+                   });
     } else {
       b.mass_block(3 * i, Mi);
     }
   }
   for (Index i = 0; i < 3 * N; ++i) qd[i] = 0.2 * std::cos(1.3 * double(i));
-  b.forces([N, m](const VectorXd&, const VectorXd& v, double, Eigen::Ref<VectorXd> Q) {
+  b.forces([N, m](const Eigen::Ref<const VectorXd>&, const Eigen::Ref<const VectorXd>& v, double,
+                  Eigen::Ref<VectorXd> Q) {
     Q = -0.01 * v;
     for (Index i = 0; i < N; ++i) Q[3 * i + 1] -= 9.81 * m;
   });
@@ -65,13 +67,14 @@ Chain chain(Index N, int closures, bool extras) {
   for (int c = 0; c < closures; ++c) b.add(pin("close" + std::to_string(c), N - 1, tip, -1, p));
   if (extras) {
     // a dense row: the sum of the angular accelerations is prescribed
-    b.add(acceleration_constraint("dense", 1,
-                                  [N](const VectorXd&, const VectorXd&, double,
-                                      Eigen::Ref<MatrixXd> A, Eigen::Ref<VectorXd> rhs) {
-                                    A.setZero();
-                                    for (Index i = 0; i < N; ++i) A(0, 3 * i + 2) = 1.0;
-                                    rhs[0] = 0.0;
-                                  }));
+    b.add(acceleration_constraint(
+        "dense", 1,
+        [N](const Eigen::Ref<const VectorXd>&, const Eigen::Ref<const VectorXd>&, double,
+            Eigen::Ref<MatrixXd> A, Eigen::Ref<VectorXd> rhs) {
+          A.setZero();
+          for (Index i = 0; i < N; ++i) A(0, 3 * i + 2) = 1.0;
+          rhs[0] = 0.0;
+        }));
     Constraint later = pin("later", N / 2, back, -1, Eigen::Vector2d::Zero());
     later.active_between(100.0, 101.0);
     b.add(later);

@@ -107,8 +107,9 @@ initial: {q: {r: 1}}
 }
 
 // symbolic A, b of a model constraint against the AD-derived ones of the same function
-void expect_same_constraint_rows(const System& from_file, const System& from_ad, const VectorXd& q,
-                                 const VectorXd& qd, double t) {
+void expect_same_constraint_rows(const System& from_file, const System& from_ad,
+                                 const Eigen::Ref<const VectorXd>& q,
+                                 const Eigen::Ref<const VectorXd>& qd, double t) {
   Workspace w1(from_file), w2(from_ad);
   ASSERT_EQ(assemble_constraints(from_file, w1, q, qd, t), Status::kOk);
   ASSERT_EQ(assemble_constraints(from_ad, w2, q, qd, t), Status::kOk);

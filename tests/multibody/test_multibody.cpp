@@ -46,8 +46,9 @@ VectorXd sample(const std::vector<double>& f, Index width, Index i) {
 // joint-level checks: closed-form A, b and violations against forward-mode AD of joint_phi
 
 // compares every closed-form joint constraint of `m` with an AD twin of its position function
-void expect_joints_match_autodiff(const MultibodyModel& m, const VectorXd& q, const VectorXd& qd,
-                                  double t, int expected_models) {
+void expect_joints_match_autodiff(const MultibodyModel& m, const Eigen::Ref<const VectorXd>& q,
+                                  const Eigen::Ref<const VectorXd>& qd, double t,
+                                  int expected_models) {
   const System& sys = m.system;
   const Index n = sys.coordinate_count();
   int checked = 0;
@@ -241,9 +242,11 @@ TEST(MultibodyRigidBody, QuaternionEquationsMatchEulerAndTheFictitiousInertiaFor
   const Vector3d w0(1.5, -2.0, 0.7);
   Multibody b;
   const BodyId B = b.add_rigid_body("B", 2.0, J, {0.1, 0.2, 0.3}, u0, {0.3, 0.0, -0.1}, w0);
-  b.add_force(mb::applied("push", B, s, [F, tau](const VectorXd&, const VectorXd&, double) {
-    return mb::Wrench{F, tau};
-  }));
+  b.add_force(mb::applied(
+      "push", B, s,
+      [F, tau](const Eigen::Ref<const VectorXd>&, const Eigen::Ref<const VectorXd>&, double) {
+        return mb::Wrench{F, tau};
+      }));
   const MultibodyModel m = b.build();
   Workspace ws(m.system);
   ASSERT_EQ(forward_dynamics(m.system, ws, m.q0, m.qd0, 0.0), Status::kOk);
@@ -815,9 +818,11 @@ TEST(MultibodyDrives, SpatialGearSharesTheTorqueByTheEffectiveInertia) {
   b.add_joint(mb::revolute("ja", kGround, {}, A, {}));
   b.add_joint(mb::revolute("jb", kGround, Frame::at({1, 0, 0}), B, {}));
   b.add_joint(mb::gear("gear", "ja", "jb", r));
-  b.add_force(mb::applied("motor", A, {0, 0, 0}, [tau](const VectorXd&, const VectorXd&, double) {
-    return mb::Wrench{Vector3d::Zero(), Vector3d(0, 0, tau)};
-  }));
+  b.add_force(mb::applied(
+      "motor", A, {0, 0, 0},
+      [tau](const Eigen::Ref<const VectorXd>&, const Eigen::Ref<const VectorXd>&, double) {
+        return mb::Wrench{Vector3d::Zero(), Vector3d(0, 0, tau)};
+      }));
   const MultibodyModel m = b.build();
   ASSERT_TRUE(check_initial_conditions(m.system, m.q0, m.qd0, 0.0, 1e-14).empty());
   Workspace ws(m.system);
@@ -834,9 +839,11 @@ TEST(MultibodyRolling, SphereUnderAHorizontalPushAcceleratesAtFiveSeventhsOfFOve
   const BodyId S = b.add_rigid_body("ball", m, {J, J, J}, {0, 0, R}, Quaterniond::Identity(),
                                     {1.0, 0.5, 0}, {-0.5 / R, 1.0 / R, 0.3});
   b.add_joint(mb::rolling_sphere("roll", S, R));
-  b.add_force(mb::applied("push", S, {0, 0, 0}, [F](const VectorXd&, const VectorXd&, double) {
-    return mb::Wrench{Vector3d(F, 0, 0), Vector3d::Zero()};
-  }));
+  b.add_force(mb::applied(
+      "push", S, {0, 0, 0},
+      [F](const Eigen::Ref<const VectorXd>&, const Eigen::Ref<const VectorXd>&, double) {
+        return mb::Wrench{Vector3d(F, 0, 0), Vector3d::Zero()};
+      }));
   b.set_gravity({0, 0, -kG});
   const MultibodyModel mm = b.build();
   ASSERT_TRUE(check_initial_conditions(mm.system, mm.q0, mm.qd0, 0.0, 1e-14).empty());

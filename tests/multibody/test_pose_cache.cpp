@@ -28,7 +28,7 @@ using mb::Multibody;
 using mb::MultibodyModel;
 
 // bitwise equality of two vectors (NaN payloads and signed zeros included)
-bool same_bits(const VectorXd& a, const VectorXd& b) {
+bool same_bits(const Eigen::Ref<const VectorXd>& a, const Eigen::Ref<const VectorXd>& b) {
   if (a.size() != b.size()) return false;
   for (Index i = 0; i < a.size(); ++i) {
     if (std::bit_cast<std::uint64_t>(a[i]) != std::bit_cast<std::uint64_t>(b[i])) return false;
@@ -61,8 +61,9 @@ MultibodyModel planar_chain() {
       mb::prismatic("slide", b1, Frame::planar(0.4, 0, 0.2), b2, Frame::planar(-0.3, 0.05, -0.1)));
   b.add_force(mb::spring_damper("spring", b0, {0.2, 0.1, 0}, b2, {-0.1, 0.2, 0}, 30.0, 0.4, 1.1));
   b.add_force(mb::torsion_spring("torsion", b0, b1, 5.0, 0.1, 0.2));
-  b.add_force(
-      mb::applied("push", b1, {0.3, -0.2, 0}, [](const VectorXd&, const VectorXd&, double t) {
+  b.add_force(mb::applied(
+      "push", b1, {0.3, -0.2, 0},
+      [](const Eigen::Ref<const VectorXd>&, const Eigen::Ref<const VectorXd>&, double t) {
         return mb::Wrench{Vector3d(std::cos(t), 0.5, 0), Vector3d(0, 0, 0.1)};
       }));
   return b.build();
@@ -107,7 +108,8 @@ struct Evaluation {
 };
 
 // forward dynamics, then the violations and Q, at (q, q0', t) through ws
-Evaluation evaluate(const MultibodyModel& m, Workspace& ws, const VectorXd& q, double t) {
+Evaluation evaluate(const MultibodyModel& m, Workspace& ws, const Eigen::Ref<const VectorXd>& q,
+                    double t) {
   Evaluation e;
   e.status = forward_dynamics(m.system, ws, q, m.qd0, t);
   e.qdd = ws.qdd;

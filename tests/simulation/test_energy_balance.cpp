@@ -128,19 +128,20 @@ INSTANTIATE_TEST_SUITE_P(Methods, BeadOnRotatingWire,
 // against Simpson's rule on the power q'ᵀ Qc_ideal of the recorded samples.
 TEST(EnergyBalance, PendulumOfPrescribedVaryingLength) {
   const double L0 = 1.0, eps = 0.2, w = 3.0, theta0 = 0.4;
-  const System sys = SystemBuilder({"x", "y"})
-                         .mass_matrix(MatrixXd::Identity(2, 2))
-                         .forces([](const VectorXd&, const VectorXd&, double,
-                                    Eigen::Ref<VectorXd> Q) { Q << 0.0, -kG; })
-                         .potential_energy([](const VectorXd& q, double) { return kG * q[1]; })
-                         .add(holonomic("rod", 1,
-                                        [=](const auto& q, const auto& t, auto& phi) {
-                                          using std::sin;
-                                          using S = std::decay_t<decltype(t)>;
-                                          const S L = L0 + eps * sin(w * t);
-                                          phi[0] = q[0] * q[0] + q[1] * q[1] - L * L;
-                                        }))
-                         .build();
+  const System sys =
+      SystemBuilder({"x", "y"})
+          .mass_matrix(MatrixXd::Identity(2, 2))
+          .forces([](const Eigen::Ref<const VectorXd>&, const Eigen::Ref<const VectorXd>&, double,
+                     Eigen::Ref<VectorXd> Q) { Q << 0.0, -kG; })
+          .potential_energy([](const Eigen::Ref<const VectorXd>& q, double) { return kG * q[1]; })
+          .add(holonomic("rod", 1,
+                         [=](const auto& q, const auto& t, auto& phi) {
+                           using std::sin;
+                           using S = std::decay_t<decltype(t)>;
+                           const S L = L0 + eps * sin(w * t);
+                           phi[0] = q[0] * q[0] + q[1] * q[1] - L * L;
+                         }))
+          .build();
   // at t = 0: L = L0, L' = eps w along the rod, no swing rate
   const double s = std::sin(theta0), c = std::cos(theta0), Ld = eps * w;
   SimulationOptions o;
@@ -175,16 +176,17 @@ TEST(EnergyBalance, PendulumOfPrescribedVaryingLength) {
 // A conservative pendulum: every channel stays at zero (work_ideal at the drift), the balance
 // holds relative to the largest kinetic energy.
 TEST(EnergyBalance, ConservativePendulumExchangesNothing) {
-  const System sys = SystemBuilder({"x", "y"})
-                         .mass_matrix(MatrixXd::Identity(2, 2))
-                         .forces([](const VectorXd&, const VectorXd&, double,
-                                    Eigen::Ref<VectorXd> Q) { Q << 0.0, -kG; })
-                         .potential_energy([](const VectorXd& q, double) { return kG * q[1]; })
-                         .add(holonomic("rod", 1,
-                                        [](const auto& q, const auto&, auto& phi) {
-                                          phi[0] = q[0] * q[0] + q[1] * q[1] - 1.0;
-                                        }))
-                         .build();
+  const System sys =
+      SystemBuilder({"x", "y"})
+          .mass_matrix(MatrixXd::Identity(2, 2))
+          .forces([](const Eigen::Ref<const VectorXd>&, const Eigen::Ref<const VectorXd>&, double,
+                     Eigen::Ref<VectorXd> Q) { Q << 0.0, -kG; })
+          .potential_energy([](const Eigen::Ref<const VectorXd>& q, double) { return kG * q[1]; })
+          .add(holonomic("rod", 1,
+                         [](const auto& q, const auto&, auto& phi) {
+                           phi[0] = q[0] * q[0] + q[1] * q[1] - 1.0;
+                         }))
+          .build();
   SimulationOptions o;
   o.t_end = 5.0;
   o.rtol = 1e-10;
@@ -214,12 +216,13 @@ TEST(EnergyBalance, DamperWorkIsTheExternalWork) {
   const System sys =
       SystemBuilder({"x"})
           .mass_matrix(MatrixXd::Identity(1, 1))
-          .forces([=](const VectorXd& q, const VectorXd& qd, double, Eigen::Ref<VectorXd> Q) {
-            Q[0] = -k * q[0] - c * qd[0];
-          })
-          .potential_energy([=](const VectorXd& q, double) { return 0.5 * k * q[0] * q[0]; })
-          .external_power(
-              [=](const VectorXd&, const VectorXd& qd, double) { return -c * qd[0] * qd[0]; })
+          .forces([=](const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd,
+                      double, Eigen::Ref<VectorXd> Q) { Q[0] = -k * q[0] - c * qd[0]; })
+          .potential_energy(
+              [=](const Eigen::Ref<const VectorXd>& q, double) { return 0.5 * k * q[0] * q[0]; })
+          .external_power([=](const Eigen::Ref<const VectorXd>&,
+                              const Eigen::Ref<const VectorXd>& qd,
+                              double) { return -c * qd[0] * qd[0]; })
           .build();
   SimulationOptions o;
   o.t_end = 6.0;
@@ -248,14 +251,15 @@ TEST(EnergyBalance, DamperWorkIsTheExternalWork) {
 System inconsistent_pendulum(bool declare_power) {
   SystemBuilder b({"x", "y"});
   b.mass_matrix(MatrixXd::Identity(2, 2))
-      .forces(
-          [](const VectorXd&, const VectorXd&, double, Eigen::Ref<VectorXd> Q) { Q << 0.0, -kG; })
-      .potential_energy([](const VectorXd& q, double) { return 2 * kG * q[1]; })
+      .forces([](const Eigen::Ref<const VectorXd>&, const Eigen::Ref<const VectorXd>&, double,
+                 Eigen::Ref<VectorXd> Q) { Q << 0.0, -kG; })
+      .potential_energy([](const Eigen::Ref<const VectorXd>& q, double) { return 2 * kG * q[1]; })
       .add(holonomic("rod", 1, [](const auto& q, const auto&, auto& phi) {
         phi[0] = q[0] * q[0] + q[1] * q[1] - 1.0;
       }));
   if (declare_power) {
-    b.external_power([](const VectorXd&, const VectorXd& qd, double) { return kG * qd[1]; });
+    b.external_power([](const Eigen::Ref<const VectorXd>&, const Eigen::Ref<const VectorXd>& qd,
+                        double) { return kG * qd[1]; });
   }
   return b.build();
 }
@@ -289,9 +293,9 @@ TEST(EnergyBalance, ForcesInconsistentWithThePotentialEndWithTheWarning) {
 TEST(EnergyBalance, AJumpOfTheStateIsCaught) {
   SystemBuilder b({"x", "y"});
   b.mass_matrix(MatrixXd::Identity(2, 2))
-      .forces(
-          [](const VectorXd&, const VectorXd&, double, Eigen::Ref<VectorXd> Q) { Q << 0.0, -kG; })
-      .potential_energy([](const VectorXd& q, double) { return kG * q[1]; });
+      .forces([](const Eigen::Ref<const VectorXd>&, const Eigen::Ref<const VectorXd>&, double,
+                 Eigen::Ref<VectorXd> Q) { Q << 0.0, -kG; })
+      .potential_energy([](const Eigen::Ref<const VectorXd>& q, double) { return kG * q[1]; });
   Constraint floor =
       holonomic("floor", 1, [](const auto& q, const auto&, auto& phi) { phi[0] = q[1]; });
   floor.active_between(0.5, 2.0);

@@ -33,9 +33,8 @@ constexpr double kStiffK = 1e4, kStiffC = 1e4 + 1;
 System stiff_oscillator() {
   return SystemBuilder(std::vector<std::string>{"x"})
       .mass_matrix(MatrixXd::Identity(1, 1))
-      .forces([](const VectorXd& q, const VectorXd& qd, double, Eigen::Ref<VectorXd> Q) {
-        Q[0] = -kStiffK * q[0] - kStiffC * qd[0];
-      })
+      .forces([](const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd, double,
+                 Eigen::Ref<VectorXd> Q) { Q[0] = -kStiffK * q[0] - kStiffC * qd[0]; })
       .build();
 }
 
@@ -132,11 +131,12 @@ TEST(BdfStiff, FirstStepFarTooLargeForTheTransientIsCutDown) {
 System pendulum() {
   return SystemBuilder(std::vector<std::string>{"x", "y"})
       .mass_matrix(MatrixXd::Identity(2, 2))
-      .forces([](const VectorXd&, const VectorXd&, double, Eigen::Ref<VectorXd> Q) {
+      .forces([](const Eigen::Ref<const VectorXd>&, const Eigen::Ref<const VectorXd>&, double,
+                 Eigen::Ref<VectorXd> Q) {
         Q[0] = 0.0;
         Q[1] = -kG;
       })
-      .potential_energy([](const VectorXd& q, double) { return kG * q[1]; })
+      .potential_energy([](const Eigen::Ref<const VectorXd>& q, double) { return kG * q[1]; })
       .add(holonomic(
           "rod", 1,
           [](const auto& q, const auto&, auto& phi) { phi[0] = q[0] * q[0] + q[1] * q[1] - 1.0; }))
@@ -261,7 +261,8 @@ TEST(BdfProjection, WithoutTheHookTheStateDriftsOffTheRod) {
 System failing_particle() {
   return SystemBuilder(std::vector<std::string>{"y"})
       .mass_matrix(MatrixXd::Identity(1, 1))
-      .forces([](const VectorXd&, const VectorXd&, double t, Eigen::Ref<VectorXd> Q) {
+      .forces([](const Eigen::Ref<const VectorXd>&, const Eigen::Ref<const VectorXd>&, double t,
+                 Eigen::Ref<VectorXd> Q) {
         Q[0] = t > 0.5 ? std::numeric_limits<double>::quiet_NaN() : -kG;
       })
       .build();
@@ -428,9 +429,9 @@ TEST(BdfSimulate, ConstraintSwitchingRestartsCvodeOnEachSegment) {
   // free fall until t = 1; the floor y = 0 during [1, 2]; free fall again after t = 2
   SystemBuilder b(std::vector<std::string>{"x", "y"});
   b.mass_matrix(MatrixXd::Identity(2, 2))
-      .forces(
-          [](const VectorXd&, const VectorXd&, double, Eigen::Ref<VectorXd> Q) { Q << 0.0, -kG; })
-      .potential_energy([](const VectorXd& q, double) { return kG * q[1]; });
+      .forces([](const Eigen::Ref<const VectorXd>&, const Eigen::Ref<const VectorXd>&, double,
+                 Eigen::Ref<VectorXd> Q) { Q << 0.0, -kG; })
+      .potential_energy([](const Eigen::Ref<const VectorXd>& q, double) { return kG * q[1]; });
   Constraint floor =
       holonomic("floor", 1, [](const auto& q, const auto&, auto& phi) { phi[0] = q[1]; });
   floor.active_between(1.0, 2.0);

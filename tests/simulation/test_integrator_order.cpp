@@ -29,9 +29,9 @@ using test::oscillator;
 System pendulum() {
   return SystemBuilder({"x", "y"})
       .mass_matrix(MatrixXd::Identity(2, 2))
-      .forces(
-          [](const VectorXd&, const VectorXd&, double, Eigen::Ref<VectorXd> Q) { Q << 0.0, -kG; })
-      .potential_energy([](const VectorXd& q, double) { return kG * q[1]; })
+      .forces([](const Eigen::Ref<const VectorXd>&, const Eigen::Ref<const VectorXd>&, double,
+                 Eigen::Ref<VectorXd> Q) { Q << 0.0, -kG; })
+      .potential_energy([](const Eigen::Ref<const VectorXd>& q, double) { return kG * q[1]; })
       .add(holonomic(
           "rod", 1,
           [](const auto& q, const auto&, auto& phi) { phi[0] = q[0] * q[0] + q[1] * q[1] - 1.0; }))
@@ -39,8 +39,9 @@ System pendulum() {
 }
 
 // a fixed-step run of `steps` steps over [0, T], samples at 0 and T only
-Trajectory fixed_run(const System& sys, const VectorXd& q0, const VectorXd& qd0, double T,
-                     long steps, Integrator method) {
+Trajectory fixed_run(const System& sys, const Eigen::Ref<const VectorXd>& q0,
+                     const Eigen::Ref<const VectorXd>& qd0, double T, long steps,
+                     Integrator method) {
   SimulationOptions o;
   o.integrator = method;
   o.t_end = T;
@@ -187,9 +188,8 @@ TEST_P(FixedStep, LocatesAStickSlipEvent) {
   const System sys =
       SystemBuilder({"x", "y"})
           .mass_matrix(MatrixXd::Identity(2, 2))
-          .forces([](const VectorXd&, const VectorXd&, double, Eigen::Ref<VectorXd> Q) {
-            Q << 0.0, -kG;
-          })
+          .forces([](const Eigen::Ref<const VectorXd>&, const Eigen::Ref<const VectorXd>&, double,
+                     Eigen::Ref<VectorXd> Q) { Q << 0.0, -kG; })
           .add(holonomic("plane", 1,
                          [alpha](const auto& q, const auto&, auto& phi) {
                            phi[0] = q[1] - q[0] * std::tan(alpha);

@@ -534,7 +534,8 @@ TEST(RunSettings, ANanForceAfterHalfTimeEndsAdaptiveRunsJustBeforeIt) {
   const System sys =
       SystemBuilder(std::vector<std::string>{"y"})
           .mass_matrix(MatrixXd::Identity(1, 1))
-          .forces([](const VectorXd&, const VectorXd&, double t, Eigen::Ref<VectorXd> Q) {
+          .forces([](const Eigen::Ref<const VectorXd>&, const Eigen::Ref<const VectorXd>&, double t,
+                     Eigen::Ref<VectorXd> Q) {
             Q[0] = t > 0.5 ? std::numeric_limits<double>::quiet_NaN() : -1.0;
           })
           .build();

@@ -23,9 +23,9 @@ using test::oscillator;
 System particle(double t0 = 1.0, double t1 = -1.0) {
   SystemBuilder b({"x", "y"});
   b.mass_matrix(MatrixXd::Identity(2, 2))
-      .forces(
-          [](const VectorXd&, const VectorXd&, double, Eigen::Ref<VectorXd> Q) { Q << 0.0, -kG; })
-      .potential_energy([](const VectorXd& q, double) { return kG * q[1]; });
+      .forces([](const Eigen::Ref<const VectorXd>&, const Eigen::Ref<const VectorXd>&, double,
+                 Eigen::Ref<VectorXd> Q) { Q << 0.0, -kG; })
+      .potential_energy([](const Eigen::Ref<const VectorXd>& q, double) { return kG * q[1]; });
   if (t1 >= t0) {
     Constraint floor =
         holonomic("floor", 1, [](const auto& q, const auto&, auto& phi) { phi[0] = q[1]; });
@@ -38,9 +38,9 @@ System particle(double t0 = 1.0, double t1 = -1.0) {
 System pendulum() {
   return SystemBuilder({"x", "y"})
       .mass_matrix(MatrixXd::Identity(2, 2))
-      .forces(
-          [](const VectorXd&, const VectorXd&, double, Eigen::Ref<VectorXd> Q) { Q << 0.0, -kG; })
-      .potential_energy([](const VectorXd& q, double) { return kG * q[1]; })
+      .forces([](const Eigen::Ref<const VectorXd>&, const Eigen::Ref<const VectorXd>&, double,
+                 Eigen::Ref<VectorXd> Q) { Q << 0.0, -kG; })
+      .potential_energy([](const Eigen::Ref<const VectorXd>& q, double) { return kG * q[1]; })
       .add(holonomic(
           "rod", 1,
           [](const auto& q, const auto&, auto& phi) { phi[0] = q[0] * q[0] + q[1] * q[1] - 1.0; }))
@@ -149,15 +149,15 @@ TEST(Simulate, NonIdealForceActiveOnAnIntervalWithBreakpoints) {
   const System sys =
       SystemBuilder({"x", "y"})
           .mass_matrix(MatrixXd::Identity(2, 2))
-          .forces([](const VectorXd&, const VectorXd&, double, Eigen::Ref<VectorXd> Q) {
-            Q << 0.0, -kG;
-          })
+          .forces([](const Eigen::Ref<const VectorXd>&, const Eigen::Ref<const VectorXd>&, double,
+                     Eigen::Ref<VectorXd> Q) { Q << 0.0, -kG; })
           .add(holonomic("floor", 1, [](const auto& q, const auto&, auto& phi) { phi[0] = q[1]; }))
-          .add(NonIdealForce("push",
-                             [F](const VectorXd&, const VectorXd&, double t, const IdealForceInfo&,
-                                 Eigen::Ref<VectorXd> C) {
-                               if (t >= 1.0 && t <= 2.0) C[0] = F;
-                             }))
+          .add(NonIdealForce(
+              "push",
+              [F](const Eigen::Ref<const VectorXd>&, const Eigen::Ref<const VectorXd>&, double t,
+                  const IdealForceInfo&, Eigen::Ref<VectorXd> C) {
+                if (t >= 1.0 && t <= 2.0) C[0] = F;
+              }))
           .build();
   SimulationOptions o;
   o.t_end = 3.0;
@@ -179,9 +179,8 @@ TEST(Simulate, FailureKeepsTheSamplesRecordedSoFar) {
   const System sys =
       SystemBuilder({"x"})
           .mass_matrix(MatrixXd::Identity(1, 1))
-          .forces([](const VectorXd&, const VectorXd&, double t, Eigen::Ref<VectorXd> Q) {
-            Q[0] = t < 0.5 ? 1.0 : std::nan("");
-          })
+          .forces([](const Eigen::Ref<const VectorXd>&, const Eigen::Ref<const VectorXd>&, double t,
+                     Eigen::Ref<VectorXd> Q) { Q[0] = t < 0.5 ? 1.0 : std::nan(""); })
           .build();
   SimulationOptions o;
   o.t_end = 1.0;
@@ -224,10 +223,9 @@ TEST(Simulate, WorkOfNonIdealForcesBalancesTheEnergy) {
   const System sys =
       SystemBuilder({"x", "y"})
           .mass_matrix(MatrixXd::Identity(2, 2))
-          .forces([](const VectorXd&, const VectorXd&, double, Eigen::Ref<VectorXd> Q) {
-            Q << 0.0, -kG;
-          })
-          .potential_energy([](const VectorXd& q, double) { return kG * q[1]; })
+          .forces([](const Eigen::Ref<const VectorXd>&, const Eigen::Ref<const VectorXd>&, double,
+                     Eigen::Ref<VectorXd> Q) { Q << 0.0, -kG; })
+          .potential_energy([](const Eigen::Ref<const VectorXd>& q, double) { return kG * q[1]; })
           .add(holonomic("floor", 1, [](const auto& q, const auto&, auto& phi) { phi[0] = q[1]; }))
           .add(viscous_friction({.coefficient = 0.5}))
           .build();
@@ -245,9 +243,8 @@ TEST(Simulate, WorkOfNonIdealForcesBalancesTheEnergy) {
 System block(double alpha, double mu, double k = 0.0) {
   return SystemBuilder({"x", "y"})
       .mass_matrix(MatrixXd::Identity(2, 2))
-      .forces([k](const VectorXd&, const VectorXd&, double t, Eigen::Ref<VectorXd> Q) {
-        Q << k * t, -kG;
-      })
+      .forces([k](const Eigen::Ref<const VectorXd>&, const Eigen::Ref<const VectorXd>&, double t,
+                  Eigen::Ref<VectorXd> Q) { Q << k * t, -kG; })
       .add(holonomic("plane", 1,
                      [alpha](const auto& q, const auto&, auto& phi) {
                        phi[0] =

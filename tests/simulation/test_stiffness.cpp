@@ -27,9 +27,9 @@ constexpr double kSlow = 1.0, kFast = 1e4;
 System stiff_oscillator() {
   return SystemBuilder({"x"})
       .mass_matrix(MatrixXd::Identity(1, 1))
-      .forces([](const VectorXd& q, const VectorXd& qd, double, Eigen::Ref<VectorXd> Q) {
-        Q[0] = -kSlow * kFast * q[0] - (kSlow + kFast) * qd[0];
-      })
+      .forces(
+          [](const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd, double,
+             Eigen::Ref<VectorXd> Q) { Q[0] = -kSlow * kFast * q[0] - (kSlow + kFast) * qd[0]; })
       .build();
 }
 double stiff_exact(double t) {
@@ -72,12 +72,13 @@ TEST(Stiffness, SwitchesToBdfOnAStiffSpringDamperAndMatchesTheClosedForm) {
 // non-ideal force is integrated too, W' = −c x'² changes fast and smoothly, and the test must
 // still see the stiff mode (it leaves W out of h·ρ)
 TEST(Stiffness, SwitchesEarlyWhenTheDamperIsANonIdealForce) {
-  const System sys = SystemBuilder({"x"})
-                         .mass_matrix(MatrixXd::Identity(1, 1))
-                         .forces([](const VectorXd& q, const VectorXd&, double,
-                                    Eigen::Ref<VectorXd> Q) { Q[0] = -kSlow * kFast * q[0]; })
-                         .add(viscous_friction({.coefficient = kSlow + kFast}))
-                         .build();
+  const System sys =
+      SystemBuilder({"x"})
+          .mass_matrix(MatrixXd::Identity(1, 1))
+          .forces([](const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>&, double,
+                     Eigen::Ref<VectorXd> Q) { Q[0] = -kSlow * kFast * q[0]; })
+          .add(viscous_friction({.coefficient = kSlow + kFast}))
+          .build();
   SimulationOptions o;
   o.t_end = 5.0;
   o.output_every = 0.5;

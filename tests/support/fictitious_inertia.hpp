@@ -24,22 +24,25 @@ inline System with_fictitious_inertia(const System& sys, double J0) {
       sb.mass_block(b.offset, b.value);
     } else if (b.size == 4) {
       const Index o = b.offset;
-      sb.mass_block(o, 4, [fn = b.fn, o, J0](const VectorXd& q, double t, Eigen::Ref<MatrixXd> M) {
-        fn(q, t, M);
-        const Eigen::Vector4d u = q.segment<4>(o);
-        M += 4.0 * J0 * u * u.transpose();
-      });
+      sb.mass_block(o, 4,
+                    [fn = b.fn, o, J0](const Eigen::Ref<const VectorXd>& q, double t,
+                                       Eigen::Ref<MatrixXd> M) {
+                      fn(q, t, M);
+                      const Eigen::Vector4d u = q.segment<4>(o);
+                      M += 4.0 * J0 * u * u.transpose();
+                    });
     } else {
       sb.mass_block(b.offset, b.size, b.fn);
     }
   }
-  sb.forces(
-      [&sys, quats, J0](const VectorXd& q, const VectorXd& qd, double t, Eigen::Ref<VectorXd> Q) {
-        sys.forces(q, qd, t, Q);
-        for (Index o : quats) {
-          Q.segment<4>(o) -= 4.0 * J0 * qd.segment<4>(o).squaredNorm() * q.segment<4>(o);
-        }
-      });
+  sb.forces([&sys, quats, J0](const Eigen::Ref<const VectorXd>& q,
+                              const Eigen::Ref<const VectorXd>& qd, double t,
+                              Eigen::Ref<VectorXd> Q) {
+    sys.forces(q, qd, t, Q);
+    for (Index o : quats) {
+      Q.segment<4>(o) -= 4.0 * J0 * qd.segment<4>(o).squaredNorm() * q.segment<4>(o);
+    }
+  });
   for (Index k = 0; k < sys.constraint_count(); ++k) sb.add(sys.constraint(k));
   return sb.build();
 }

@@ -8,9 +8,10 @@ namespace ukdyn::test {
 inline System oscillator() {
   return SystemBuilder({"x"})
       .mass_matrix(MatrixXd::Identity(1, 1))
-      .forces(
-          [](const VectorXd& q, const VectorXd&, double, Eigen::Ref<VectorXd> Q) { Q[0] = -q[0]; })
-      .potential_energy([](const VectorXd& q, double) { return 0.5 * q[0] * q[0]; })
+      .forces([](const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>&, double,
+                 Eigen::Ref<VectorXd> Q) { Q[0] = -q[0]; })
+      .potential_energy(
+          [](const Eigen::Ref<const VectorXd>& q, double) { return 0.5 * q[0] * q[0]; })
       .build();
 }
 

@@ -30,7 +30,8 @@ class PlanarRevolute final : public ConstraintModel {
     }
   }
   const std::vector<Index>& columns() const override { return cols_; }
-  void acceleration_form_local(const VectorXd& q, const VectorXd& qd, double, ConstraintScratch*,
+  void acceleration_form_local(const Eigen::Ref<const VectorXd>& q,
+                               const Eigen::Ref<const VectorXd>& qd, double, ConstraintScratch*,
                                Eigen::Ref<MatrixXd> A, Eigen::Ref<VectorXd> b) const override {
     const Index oi = (j_ >= 0 && j_ < i_) ? 3 : 0, oj = 3 - oi;
     const Eigen::Vector2d ri = rot(q[3 * i_ + 2]) * si_;
@@ -48,8 +49,9 @@ class PlanarRevolute final : public ConstraintModel {
       b -= rj * wj * wj;
     }
   }
-  void violation(const VectorXd& q, const VectorXd& qd, double, ConstraintScratch*,
-                 Eigen::Ref<VectorXd> position, Eigen::Ref<VectorXd> velocity) const override {
+  void violation(const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd, double,
+                 ConstraintScratch*, Eigen::Ref<VectorXd> position,
+                 Eigen::Ref<VectorXd> velocity) const override {
     const Eigen::Vector2d ri = rot(q[3 * i_ + 2]) * si_;
     position = q.segment<2>(3 * i_) + ri;
     velocity = qd.segment<2>(3 * i_) + Eigen::Vector2d(-ri.y(), ri.x()) * qd[3 * i_ + 2];

@@ -60,21 +60,22 @@ inline RandomProblem random_problem(Index n, Index m, Index r, unsigned seed, bo
 inline System make_system(const RandomProblem& p) {
   const Index n = p.M.rows();
   SystemBuilder builder(n);
-  builder.mass_matrix(p.M).forces(
-      [Q = p.Q](const VectorXd&, const VectorXd&, double, Eigen::Ref<VectorXd> out) { out = Q; });
+  builder.mass_matrix(p.M).forces([Q = p.Q](const Eigen::Ref<const VectorXd>&,
+                                            const Eigen::Ref<const VectorXd>&, double,
+                                            Eigen::Ref<VectorXd> out) { out = Q; });
   if (p.A.rows() > 0) {
     builder.add(acceleration_constraint(
         "A", p.A.rows(),
-        [A = p.A, b = p.b](const VectorXd&, const VectorXd&, double, Eigen::Ref<MatrixXd> Aout,
-                           Eigen::Ref<VectorXd> bout) {
+        [A = p.A, b = p.b](const Eigen::Ref<const VectorXd>&, const Eigen::Ref<const VectorXd>&,
+                           double, Eigen::Ref<MatrixXd> Aout, Eigen::Ref<VectorXd> bout) {
           Aout = A;
           bout = b;
         }));
   }
   if (!p.C.isZero(0.0)) {
     builder.add(NonIdealForce(
-        "C", [C = p.C](const VectorXd&, const VectorXd&, double, const IdealForceInfo&,
-                       Eigen::Ref<VectorXd> out) { out = C; }));
+        "C", [C = p.C](const Eigen::Ref<const VectorXd>&, const Eigen::Ref<const VectorXd>&, double,
+                       const IdealForceInfo&, Eigen::Ref<VectorXd> out) { out = C; }));
   }
   return builder.build();
 }

@@ -126,7 +126,8 @@ const char* to_string(ControlLaw law);
 /// Writes the weight N(q, q', t) (n × n, symmetric positive definite; the lower triangle is
 /// read). Must not allocate.
 using WeightFn =
-    std::function<void(const VectorXd& q, const VectorXd& qd, double t, Eigen::Ref<MatrixXd> N)>;
+    std::function<void(const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd,
+                       double t, Eigen::Ref<MatrixXd> N)>;
 
 /// The robust term for a plant that differs from the nominal model (docs/control.md derives it).
 /// The controller assumes that the nominal force leaves each requirement row i with the
@@ -202,7 +203,8 @@ class Controller {
 
   ControlLaw law() const { return law_; }  ///< the law
   /// Writes N(q, q', t) (weighted law only). Cost: the user's callable.
-  void weight(const VectorXd& q, const VectorXd& qd, double t, Eigen::Ref<MatrixXd> N) const {
+  void weight(const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd, double t,
+              Eigen::Ref<MatrixXd> N) const {
     weight_(q, qd, t, N);
   }
   /// True when N was given as a constant matrix (factorized once per workspace).
@@ -263,12 +265,12 @@ class ControllerBuilder {
   /// The weighted law with N(q, q', t).
   ControllerBuilder& weighted(WeightFn N);
   /// The weighted law with a constant N (n × n, symmetric positive definite).
-  ControllerBuilder& weighted(const MatrixXd& N);
+  ControllerBuilder& weighted(const Eigen::Ref<const MatrixXd>& N);
 
   /// Only these coordinates are actuated: S = the columns of I that select them, Q_c = S u.
   ControllerBuilder& actuated(const std::vector<std::string>& coordinates);
   /// A general actuation matrix S (n × k, full column rank): Q_c = S u.
-  ControllerBuilder& actuation(const MatrixXd& S);
+  ControllerBuilder& actuation(const Eigen::Ref<const MatrixXd>& S);
 
   /// Adds the robust term (see RobustControl).
   ControllerBuilder& robust(const RobustControl& settings);
@@ -406,25 +408,29 @@ class ControlWorkspace {
 /// controller. Cost: one forward_dynamics of the model, the requirements' evaluation, and
 /// O(n² m_r + n m_r² + m_p n m_r) (+ O(n³/3) for a state-dependent M or N; + O(n² k) with
 /// actuation). No allocation.
-ControlStatus compute_control(const Controller& ctrl, ControlWorkspace& ws, const VectorXd& q,
-                              const VectorXd& qd, double t);
+ControlStatus compute_control(const Controller& ctrl, ControlWorkspace& ws,
+                              const Eigen::Ref<const VectorXd>& q,
+                              const Eigen::Ref<const VectorXd>& qd, double t);
 
 /// Stage 1: forward_dynamics of the nominal model into ws.model (a_p = ws.model.qdd). Sets
 /// kModelFailed when it fails. Cost O(n³/3 + m_p n² + m_p² n).
-ControlStatus evaluate_model(const Controller& ctrl, ControlWorkspace& ws, const VectorXd& q,
-                             const VectorXd& qd, double t);
+ControlStatus evaluate_model(const Controller& ctrl, ControlWorkspace& ws,
+                             const Eigen::Ref<const VectorXd>& q,
+                             const Eigen::Ref<const VectorXd>& qd, double t);
 
 /// Stage 2: A_r and b_r of the requirements active at t (with their error dynamics) into ws.req,
 /// and e = b_r − A_r a_p. Needs stage 1. Cost: the requirements' own, O(n m_r) besides.
-ControlStatus assemble_requirements(const Controller& ctrl, ControlWorkspace& ws, const VectorXd& q,
-                                    const VectorXd& qd, double t);
+ControlStatus assemble_requirements(const Controller& ctrl, ControlWorkspace& ws,
+                                    const Eigen::Ref<const VectorXd>& q,
+                                    const Eigen::Ref<const VectorXd>& qd, double t);
 
 /// Stage 3: the law. X = A_r P; the decomposition; Qc_nominal = L W⁺ e with W = X M L⁻ᵀ
 /// (Gauss, fully actuated: eq. 25 on the physically constrained model) or u = R⁻ᵀ (X S R⁻ᵀ)⁺ e,
 /// R Rᵀ = Sᵀ N S (or Sᵀ M⁻¹ S), Qc_nominal = S u; then the residual of every row and which are
 /// met. Needs stages 1–2. Cost O(m_r n² + m_r² n) (+ O(m_p n m_r) with physical constraints).
-ControlStatus solve_law(const Controller& ctrl, ControlWorkspace& ws, const VectorXd& q,
-                        const VectorXd& qd, double t);
+ControlStatus solve_law(const Controller& ctrl, ControlWorkspace& ws,
+                        const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd,
+                        double t);
 
 /// Stage 4: the robust term (no-op, Qc_robust = 0, without robust settings): s, kappa,
 /// v = −kappa sat(s / epsilon), and Qc_robust = the law's force for v. Needs stage 3.
@@ -433,7 +439,8 @@ ControlStatus apply_robust(const Controller& ctrl, ControlWorkspace& ws);
 
 /// Stage 5: Qc_control, q'' = a_p + P Qc_control, Qc_physical, power, finiteness.
 /// Cost O(n² + n m_p).
-ControlStatus check_control(const Controller& ctrl, ControlWorkspace& ws, const VectorXd& qd);
+ControlStatus check_control(const Controller& ctrl, ControlWorkspace& ws,
+                            const Eigen::Ref<const VectorXd>& qd);
 
 /// A one-line description of ws.status: for kRequirementsNotMet, which requirement rows are
 /// missed and by how much, which are met, and the actuated coordinates; for a failure, what and
@@ -509,7 +516,8 @@ struct ControlledTrajectory {
 /// goes there instead (the overload below, which also passes the control's values).
 /// Memory: the augmented run's samples are converted one at a time, never stored.
 ControlledTrajectory simulate_controlled(const Controller& ctrl, const System& plant,
-                                         const VectorXd& q0, const VectorXd& qd0,
+                                         const Eigen::Ref<const VectorXd>& q0,
+                                         const Eigen::Ref<const VectorXd>& qd0,
                                          const SimulationOptions& options = {});
 
 /// simulate_controlled streamed: each sample, the plant's and the control's values, goes to
@@ -521,8 +529,8 @@ ControlledTrajectory simulate_controlled(const Controller& ctrl, const System& p
 /// sink throws stops the run and propagates. An empty sink: the samples are kept, as above
 /// (options.sample_sink is ignored by this overload).
 ControlledTrajectory simulate_controlled(
-    const Controller& ctrl, const System& plant, const VectorXd& q0, const VectorXd& qd0,
-    const SimulationOptions& options,
+    const Controller& ctrl, const System& plant, const Eigen::Ref<const VectorXd>& q0,
+    const Eigen::Ref<const VectorXd>& qd0, const SimulationOptions& options,
     const std::function<void(const ControlledTrajectory& sample)>& sample_sink);
 
 /// The per-sample fields of a controlled run in one list — the plant's (t, q, …,

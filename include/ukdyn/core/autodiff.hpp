@@ -61,9 +61,10 @@ struct NonholonomicScratch final : ConstraintScratch {
 };
 
 /// Fills x with values v and zero derivatives. Cost O(n kChunk).
-void set_constant(Vec<Jet>& x, const VectorXd& v);
+void set_constant(Vec<Jet>& x, const Eigen::Ref<const VectorXd>& v);
 /// Seeds x(q + s q', t + s) for a second-order pass along (q', 1). Cost O(n).
-void seed_second_order(Vec<Dual2>& x, const VectorXd& q, const VectorXd& qd);
+void seed_second_order(Vec<Dual2>& x, const Eigen::Ref<const VectorXd>& q,
+                       const Eigen::Ref<const VectorXd>& qd);
 /// The time variable t + s of a second-order pass.
 Dual2 seed_time_second_order(double t);
 
@@ -77,8 +78,9 @@ class HolonomicModel final : public ConstraintModel {
     return std::make_unique<HolonomicScratch>(n, rows_);
   }
 
-  void acceleration_form(const VectorXd& q, const VectorXd& qd, double t, ConstraintScratch* s,
-                         Eigen::Ref<MatrixXd> A, Eigen::Ref<VectorXd> b) const override {
+  void acceleration_form(const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd,
+                         double t, ConstraintScratch* s, Eigen::Ref<MatrixXd> A,
+                         Eigen::Ref<VectorXd> b) const override {
     auto& w = static_cast<HolonomicScratch&>(*s);
     const Index n = q.size();
     // A = dphi/dq, kChunk Jacobian columns per pass
@@ -98,8 +100,9 @@ class HolonomicModel final : public ConstraintModel {
     for (Index r = 0; r < rows_; ++r) b[r] = -w.out2[r].derivatives()[0].derivatives()[0];
   }
 
-  void violation(const VectorXd& q, const VectorXd& qd, double t, ConstraintScratch* s,
-                 Eigen::Ref<VectorXd> position, Eigen::Ref<VectorXd> velocity) const override {
+  void violation(const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd,
+                 double t, ConstraintScratch* s, Eigen::Ref<VectorXd> position,
+                 Eigen::Ref<VectorXd> velocity) const override {
     auto& w = static_cast<HolonomicScratch&>(*s);
     // phi and d/ds phi(q + s q', t + s) from one second-order pass
     second_order_pass(q, qd, t, w);
@@ -110,8 +113,8 @@ class HolonomicModel final : public ConstraintModel {
   }
 
  private:
-  void second_order_pass(const VectorXd& q, const VectorXd& qd, double t,
-                         HolonomicScratch& w) const {
+  void second_order_pass(const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd,
+                         double t, HolonomicScratch& w) const {
     seed_second_order(w.q2, q, qd);
     const Dual2 t2 = seed_time_second_order(t);
     f_(std::as_const(w.q2), t2, w.out2);
@@ -132,8 +135,9 @@ class NonholonomicModel final : public ConstraintModel {
     return std::make_unique<NonholonomicScratch>(n, rows_);
   }
 
-  void acceleration_form(const VectorXd& q, const VectorXd& qd, double t, ConstraintScratch* s,
-                         Eigen::Ref<MatrixXd> A, Eigen::Ref<VectorXd> b) const override {
+  void acceleration_form(const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd,
+                         double t, ConstraintScratch* s, Eigen::Ref<MatrixXd> A,
+                         Eigen::Ref<VectorXd> b) const override {
     auto& w = static_cast<NonholonomicScratch&>(*s);
     const Index n = q.size();
     set_constant(w.qj, q);
@@ -156,8 +160,9 @@ class NonholonomicModel final : public ConstraintModel {
     }
   }
 
-  void violation(const VectorXd& q, const VectorXd& qd, double t, ConstraintScratch* s,
-                 Eigen::Ref<VectorXd> position, Eigen::Ref<VectorXd> velocity) const override {
+  void violation(const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd,
+                 double t, ConstraintScratch* s, Eigen::Ref<VectorXd> position,
+                 Eigen::Ref<VectorXd> velocity) const override {
     auto& w = static_cast<NonholonomicScratch&>(*s);
     set_constant(w.qj, q);
     set_constant(w.qdj, qd);
@@ -169,8 +174,8 @@ class NonholonomicModel final : public ConstraintModel {
 
  private:
   // sets derivative slot k of direction j to `on` (1 seeds, 0 clears)
-  static void seed(NonholonomicScratch& w, const VectorXd& qd, Jet& tj, Index j, Index k,
-                   double on) {
+  static void seed(NonholonomicScratch& w, const Eigen::Ref<const VectorXd>& qd, Jet& tj, Index j,
+                   Index k, double on) {
     const Index n = qd.size();
     if (j < n) {
       w.qdj[j].derivatives()[k] = on;

@@ -68,12 +68,14 @@ class ConstraintModel {
     return make_scratch(n);
   }
 
-  /// Writes this constraint's rows of A (rows × n) and b (rows) at (q, q', t).
+  /// Writes this constraint's rows of A (rows × n) and b (rows) at (q, q', t). q and q' (n
+  /// each) are views of the caller's memory, valid during the call only (in every method here).
   /// Must not allocate. Cost: that of the user callable times ceil(n/4) + 1 passes for the
   /// automatically differentiated kinds. The default serves the local kind (columns() not
   /// empty): acceleration_form_local into the first columns of A, scattered in place to
   /// columns() and the rest zeroed — O(rows · n). A dense model must override it.
-  virtual void acceleration_form(const VectorXd& q, const VectorXd& qd, double t,
+  virtual void acceleration_form(const Eigen::Ref<const VectorXd>& q,
+                                 const Eigen::Ref<const VectorXd>& qd, double t,
                                  ConstraintScratch* scratch, Eigen::Ref<MatrixXd> A,
                                  Eigen::Ref<VectorXd> b) const;
 
@@ -87,15 +89,16 @@ class ConstraintModel {
   /// The local acceleration form, for models with columns(): A_local (rows × columns().size())
   /// holds the non-zero columns of A in columns() order; b as in acceleration_form. Must not
   /// allocate. The default throws std::logic_error (a model with columns must override it).
-  virtual void acceleration_form_local(const VectorXd& q, const VectorXd& qd, double t,
+  virtual void acceleration_form_local(const Eigen::Ref<const VectorXd>& q,
+                                       const Eigen::Ref<const VectorXd>& qd, double t,
                                        ConstraintScratch* scratch, Eigen::Ref<MatrixXd> A_local,
                                        Eigen::Ref<VectorXd> b) const;
 
   /// Writes the violation of the constraint at position level (phi; zero for the nonholonomic
   /// and acceleration kinds) and velocity level (d phi/dt along the motion = A q' + dphi/dt for
   /// holonomic, psi for nonholonomic, zero for the acceleration kind). Both have `rows` entries.
-  virtual void violation(const VectorXd& q, const VectorXd& qd, double t,
-                         ConstraintScratch* scratch, Eigen::Ref<VectorXd> position,
+  virtual void violation(const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd,
+                         double t, ConstraintScratch* scratch, Eigen::Ref<VectorXd> position,
                          Eigen::Ref<VectorXd> velocity) const;
 };
 
@@ -150,9 +153,11 @@ class Constraint {
   std::shared_ptr<const ConstraintModel> model_;
 };
 
-/// User callable of the acceleration form: writes A (rows × n) and b (rows) at (q, q', t).
-using AccelerationFormFn = std::function<void(const VectorXd& q, const VectorXd& qd, double t,
-                                              Eigen::Ref<MatrixXd> A, Eigen::Ref<VectorXd> b)>;
+/// User callable of the acceleration form: writes A (rows × n) and b (rows) at (q, q', t). q and
+/// q' are views, valid during the call only (see the note on callables in core/system.hpp).
+using AccelerationFormFn =
+    std::function<void(const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd,
+                       double t, Eigen::Ref<MatrixXd> A, Eigen::Ref<VectorXd> b)>;
 
 /// A constraint given directly in acceleration form A(q,q',t) q'' = b(q,q',t).
 /// The callable must write every entry of its rows (they are not cleared between calls) and

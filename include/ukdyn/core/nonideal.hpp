@@ -79,10 +79,12 @@ class IdealForceInfo {
   mutable bool read_reactions_ = false;  // (a transient view's own flag)
 };
 
-/// A non-ideal force's C(q, q', t, ideal force): writes C (n), which is zero on entry.
+/// A non-ideal force's C(q, q', t, ideal force): writes C (n), which is zero on entry. q and q'
+/// are views, valid during the call only (see the note on callables in core/system.hpp).
 /// Must not allocate.
-using NonIdealFn = std::function<void(const VectorXd& q, const VectorXd& qd, double t,
-                                      const IdealForceInfo& ideal, Eigen::Ref<VectorXd> C)>;
+using NonIdealFn =
+    std::function<void(const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd,
+                       double t, const IdealForceInfo& ideal, Eigen::Ref<VectorXd> C)>;
 
 /// A named contribution to C. It is bound to a system when the system is built, so it may
 /// refer to constraints by name (resolved once, never in the hot path).
@@ -114,8 +116,9 @@ class NonIdealForce {
 /// The velocity u of the surface's material point under a contact, on the contact's sliding
 /// coordinates (one entry each), and its rate u' = du/dt = (du/dq) q' + du/dt along the motion.
 /// u may depend on q and t, not on q'. Must not allocate.
-using SurfaceVelocityFn = std::function<void(const VectorXd& q, const VectorXd& qd, double t,
-                                             Eigen::Ref<VectorXd> u, Eigen::Ref<VectorXd> u_dot)>;
+using SurfaceVelocityFn =
+    std::function<void(const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd,
+                       double t, Eigen::Ref<VectorXd> u, Eigen::Ref<VectorXd> u_dot)>;
 
 /// Coulomb friction on a constraint surface (docs/friction.md has the equations). While sliding:
 ///   C_i = −mu N v_rel,i / sqrt(|v_rel|² + eps²)  for i in `coordinates`, zero elsewhere,

@@ -19,11 +19,19 @@
 
 namespace ukdyn {
 
+// The callables below receive q and q' as `const Eigen::Ref<const VectorXd>&`: views of the
+// caller's memory (a workspace's state, a segment of a larger one), valid only during the call —
+// never keep one (or its data()) beyond it. Write the parameters with that type or as
+// `const auto&`. A callable that takes `const VectorXd&` still converts to these types, but then
+// q is copied on every call, which allocates in the hot path.
+
 /// Writes the mass matrix M(q, t) (n × n, symmetric positive definite). Must not allocate.
-using MassMatrixFn = std::function<void(const VectorXd& q, double t, Eigen::Ref<MatrixXd> M)>;
+using MassMatrixFn =
+    std::function<void(const Eigen::Ref<const VectorXd>& q, double t, Eigen::Ref<MatrixXd> M)>;
 /// Writes one diagonal block M_kk(q, t) (size × size, symmetric positive definite) of a
 /// block-diagonal mass matrix. Must not allocate.
-using MassBlockFn = std::function<void(const VectorXd& q, double t, Eigen::Ref<MatrixXd> Mk)>;
+using MassBlockFn =
+    std::function<void(const Eigen::Ref<const VectorXd>& q, double t, Eigen::Ref<MatrixXd> Mk)>;
 
 /// One diagonal block of a block-diagonal mass matrix: the coordinates [offset, offset + size)
 /// (one body's, in absolute coordinates). Constant (value) or state-dependent (fn).
@@ -43,16 +51,18 @@ struct MassBlock {
 
 /// Potential energy V(q, t) of the forces in Q that derive from one (for energy reports only:
 /// Q must already contain −dV/dq).
-using PotentialFn = std::function<double(const VectorXd& q, double t)>;
+using PotentialFn = std::function<double(const Eigen::Ref<const VectorXd>& q, double t)>;
 /// The external power P_ext(q, q', t) (W): the rate at which the forces in Q that do not derive
 /// from the potential V do work, plus the explicit time dependence of the energy:
 ///   P_ext = q'ᵀ Q_np + ∂V/∂t − ½ q'ᵀ (∂M/∂t) q'   (Lagrangian Q, Q_np its non-potential part),
 /// in general P_ext = q'ᵀ (Q + ∂V/∂q) + ½ q'ᵀ Ṁ q' + ∂V/∂t. Integrated into `work_external`
 /// (docs/simulation.md, "Energy balance"). Must not allocate.
-using PowerFn = std::function<double(const VectorXd& q, const VectorXd& qd, double t)>;
+using PowerFn = std::function<double(const Eigen::Ref<const VectorXd>& q,
+                                     const Eigen::Ref<const VectorXd>& qd, double t)>;
 /// Writes the impressed force Q(q, q', t) (n). Must not allocate.
 using ForceFn =
-    std::function<void(const VectorXd& q, const VectorXd& qd, double t, Eigen::Ref<VectorXd> Q)>;
+    std::function<void(const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd,
+                       double t, Eigen::Ref<VectorXd> Q)>;
 
 /// The buffers a description's callables (M, Q, V, P_ext, and the non-ideal forces' C through
 /// IdealForceInfo::scratch()) write during an evaluation, for one Workspace — what
@@ -66,16 +76,19 @@ struct CallableScratch {
 /// Makes the per-workspace scratch of a description's callables (SystemBuilder::scratch).
 using ScratchFactory = std::function<std::unique_ptr<CallableScratch>()>;
 /// M(q, t) with the workspace's scratch (nullptr when the system has no ScratchFactory).
-using MassMatrixScratchFn =
-    std::function<void(const VectorXd& q, double t, CallableScratch* s, Eigen::Ref<MatrixXd> M)>;
+using MassMatrixScratchFn = std::function<void(const Eigen::Ref<const VectorXd>& q, double t,
+                                               CallableScratch* s, Eigen::Ref<MatrixXd> M)>;
 /// Q(q, q', t) with the workspace's scratch (see MassMatrixScratchFn).
-using ForceScratchFn = std::function<void(const VectorXd& q, const VectorXd& qd, double t,
-                                          CallableScratch* s, Eigen::Ref<VectorXd> Q)>;
+using ForceScratchFn =
+    std::function<void(const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd,
+                       double t, CallableScratch* s, Eigen::Ref<VectorXd> Q)>;
 /// V(q, t) with the workspace's scratch (see MassMatrixScratchFn).
-using PotentialScratchFn = std::function<double(const VectorXd& q, double t, CallableScratch* s)>;
+using PotentialScratchFn =
+    std::function<double(const Eigen::Ref<const VectorXd>& q, double t, CallableScratch* s)>;
 /// P_ext(q, q', t) with the workspace's scratch (see MassMatrixScratchFn).
 using PowerScratchFn =
-    std::function<double(const VectorXd& q, const VectorXd& qd, double t, CallableScratch* s)>;
+    std::function<double(const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd,
+                         double t, CallableScratch* s)>;
 
 /// A Coulomb friction contact, for the simulation's stick/slip switching (see CoulombFriction).
 struct FrictionContact {
@@ -124,22 +137,24 @@ class System {
   /// need none. A Workspace calls it once, when constructed.
   std::unique_ptr<CallableScratch> make_scratch() const { return scratch_ ? scratch_() : nullptr; }
   /// Writes M(q, t) into M (n × n); `s` is the workspace's scratch (make_scratch()).
-  void mass_matrix(const VectorXd& q, double t, CallableScratch* s, Eigen::Ref<MatrixXd> M) const {
+  void mass_matrix(const Eigen::Ref<const VectorXd>& q, double t, CallableScratch* s,
+                   Eigen::Ref<MatrixXd> M) const {
     mass_(q, t, s, M);
   }
   /// M(q, t) with a scratch of its own: allocates when the system has a ScratchFactory (for
   /// reports and tests; the engines pass their workspace's scratch).
-  void mass_matrix(const VectorXd& q, double t, Eigen::Ref<MatrixXd> M) const {
+  void mass_matrix(const Eigen::Ref<const VectorXd>& q, double t, Eigen::Ref<MatrixXd> M) const {
     const auto s = make_scratch();
     mass_(q, t, s.get(), M);
   }
   /// Writes Q(q, q', t) into Q (n); `s` is the workspace's scratch.
-  void forces(const VectorXd& q, const VectorXd& qd, double t, CallableScratch* s,
-              Eigen::Ref<VectorXd> Q) const {
+  void forces(const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd, double t,
+              CallableScratch* s, Eigen::Ref<VectorXd> Q) const {
     forces_(q, qd, t, s, Q);
   }
   /// Q(q, q', t) with a scratch of its own (allocates when the system has a ScratchFactory).
-  void forces(const VectorXd& q, const VectorXd& qd, double t, Eigen::Ref<VectorXd> Q) const {
+  void forces(const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd, double t,
+              Eigen::Ref<VectorXd> Q) const {
     const auto s = make_scratch();
     forces_(q, qd, t, s.get(), Q);
   }
@@ -147,11 +162,11 @@ class System {
   /// True when a potential energy was given.
   bool has_potential() const { return bool(potential_); }
   /// V(q, t), or 0 when none was given; `s` is the workspace's scratch.
-  double potential_energy(const VectorXd& q, double t, CallableScratch* s) const {
+  double potential_energy(const Eigen::Ref<const VectorXd>& q, double t, CallableScratch* s) const {
     return potential_ ? potential_(q, t, s) : 0.0;
   }
   /// V(q, t) with a scratch of its own (allocates when the system has a ScratchFactory).
-  double potential_energy(const VectorXd& q, double t) const {
+  double potential_energy(const Eigen::Ref<const VectorXd>& q, double t) const {
     if (!potential_) return 0.0;
     const auto s = make_scratch();
     return potential_(q, t, s.get());
@@ -161,11 +176,13 @@ class System {
   /// forces in Q are taken to be conservative (−∂V/∂q and velocity terms that do no work).
   bool has_external_power() const { return bool(external_power_); }
   /// P_ext(q, q', t) (see PowerFn), or 0 when none was given; `s` is the workspace's scratch.
-  double external_power(const VectorXd& q, const VectorXd& qd, double t, CallableScratch* s) const {
+  double external_power(const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd,
+                        double t, CallableScratch* s) const {
     return external_power_ ? external_power_(q, qd, t, s) : 0.0;
   }
   /// P_ext(q, q', t) with a scratch of its own (allocates when the system has a ScratchFactory).
-  double external_power(const VectorXd& q, const VectorXd& qd, double t) const {
+  double external_power(const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd,
+                        double t) const {
     if (!external_power_) return 0.0;
     const auto s = make_scratch();
     return external_power_(q, qd, t, s.get());
@@ -230,11 +247,11 @@ class SystemBuilder {
   /// M(q, t) as a callable of the workspace's scratch (SystemBuilder::scratch).
   SystemBuilder& mass_matrix(MassMatrixScratchFn fn);
   /// A constant mass matrix (n × n); factorized once per workspace.
-  SystemBuilder& mass_matrix(const MatrixXd& M);
+  SystemBuilder& mass_matrix(const Eigen::Ref<const MatrixXd>& M);
   /// A constant diagonal block of M on the coordinates [offset, offset + M_kk.rows()). Blocks
   /// (of either kind, in any order) must tile [0, n) exactly; M is zero outside them. Replaces
   /// mass_matrix(); the sparse engine factorizes M block by block. Checked in build().
-  SystemBuilder& mass_block(Index offset, const MatrixXd& Mkk);
+  SystemBuilder& mass_block(Index offset, const Eigen::Ref<const MatrixXd>& Mkk);
   /// A state-dependent diagonal block M_kk(q, t) (size × size) on [offset, offset + size).
   SystemBuilder& mass_block(Index offset, Index size, MassBlockFn fn);
   /// A state-dependent diagonal block that is singular and positive semi-definite for every

@@ -34,18 +34,22 @@ namespace ukdyn {
 /// @throws std::invalid_argument if q or qd does not have n entries or ws belongs to another
 /// system or is empty (moved from). Cost O(n³/3 + m n² + m² n) for a state-dependent M; O(m n² + m²
 /// n) for a constant M.
-Status forward_dynamics(const System& sys, Workspace& ws, const VectorXd& q, const VectorXd& qd,
-                        double t);
+/// q and qd (n each), here and in every entry point of ukdyn, are `Eigen::Ref<const VectorXd>`:
+/// a VectorXd, a segment of a larger vector, an Eigen::Map or a fixed-size vector is passed
+/// without a copy, down to the system's callables; any other expression (a matrix row, q + dq)
+/// is first evaluated into a temporary, which allocates.
+Status forward_dynamics(const System& sys, Workspace& ws, const Eigen::Ref<const VectorXd>& q,
+                        const Eigen::Ref<const VectorXd>& qd, double t);
 
 /// Stage 1: M(q,t), Q(q,q',t), the Cholesky factor of M (skipped after the first call when M
 /// is constant) and a = M⁻¹ Q. Checks finiteness and symmetry. Cost O(n³/3).
-Status evaluate_unconstrained(const System& sys, Workspace& ws, const VectorXd& q,
-                              const VectorXd& qd, double t);
+Status evaluate_unconstrained(const System& sys, Workspace& ws, const Eigen::Ref<const VectorXd>& q,
+                              const Eigen::Ref<const VectorXd>& qd, double t);
 
 /// Stage 2: A and b of every constraint active at t (rows of inactive ones are zero).
 /// Cost: the constraints' own evaluation, O(n m) besides.
-Status assemble_constraints(const System& sys, Workspace& ws, const VectorXd& q, const VectorXd& qd,
-                            double t);
+Status assemble_constraints(const System& sys, Workspace& ws, const Eigen::Ref<const VectorXd>& q,
+                            const Eigen::Ref<const VectorXd>& qd, double t);
 
 /// Stage 3: e = b − A a, the decomposition of A L⁻ᵀ, q'' = a + L⁻ᵀ W⁺ e, Qc_ideal = L W⁺ e and
 /// lambda = G⁺ e (eqs. 9, 11). Needs stages 1–2. Cost O(m n² + m² n).
@@ -57,8 +61,8 @@ void compute_shares(const System& sys, Workspace& ws);
 /// Stage 4: C from the system's non-ideal forces (which may read the ideal force), then
 /// Qc_nonideal, lambda_nonideal, Qc and the non-ideal part of q'' (eqs. 9, 12). Needs stage 3.
 /// Cost O(n² + n m) plus the forces' own.
-Status apply_nonideal(const System& sys, Workspace& ws, const VectorXd& q, const VectorXd& qd,
-                      double t);
+Status apply_nonideal(const System& sys, Workspace& ws, const Eigen::Ref<const VectorXd>& q,
+                      const Eigen::Ref<const VectorXd>& qd, double t);
 
 /// Stage 5: residuals (see Residuals), the consistency test of A q'' = b and the finiteness of
 /// the results. Cost O(n m), plus O(n² + n m) when options().compute_residuals.

@@ -26,8 +26,8 @@ namespace ukdyn {
 /// level: d phi/dt = A q' + phi_t for holonomic rows, psi for nonholonomic rows) at (q, q', t).
 /// Rows of inactive and of acceleration-form constraints are zero. Cost: one second-order pass
 /// per holonomic constraint, one first-order pass per nonholonomic one.
-void evaluate_violations(const System& sys, Workspace& ws, const VectorXd& q, const VectorXd& qd,
-                         double t);
+void evaluate_violations(const System& sys, Workspace& ws, const Eigen::Ref<const VectorXd>& q,
+                         const Eigen::Ref<const VectorXd>& qd, double t);
 
 /// Largest |phi| (holonomic) and |psi| or |phi'| (velocity level) of constraint k in ws.phi,
 /// ws.phi_dot (after evaluate_violations). Cost O(rows).
@@ -84,8 +84,10 @@ struct ConstraintConflict {
 /// it asks for grow like 1/sigma_min as the lock-up is approached). A diagnosis, not a proof: at a
 /// singular point of a consistent set the linearized test may also fire, so call it where the
 /// projection has failed. Cost: one evaluation of the constraints and a QR of A, O(m n min(m, n)).
-ConstraintConflict find_constraint_conflict(const System& sys, Workspace& ws, const VectorXd& q,
-                                            const VectorXd& qd, double t, double tolerance);
+ConstraintConflict find_constraint_conflict(const System& sys, Workspace& ws,
+                                            const Eigen::Ref<const VectorXd>& q,
+                                            const Eigen::Ref<const VectorXd>& qd, double t,
+                                            double tolerance);
 
 /// The largest violations a projection would start from (see measure_violations).
 struct Violations {
@@ -105,8 +107,9 @@ struct Violations {
 /// cheap test the simulation makes after every step before projecting. Writes ws.phi and
 /// ws.phi_dot on the rows taking part. Cost: one violation pass per constraint, O(n).
 /// @throws std::invalid_argument as project_velocities.
-Violations measure_violations(const System& sys, Workspace& ws, const VectorXd& q,
-                              const VectorXd& qd, double t, const ProjectionOptions& options = {});
+Violations measure_violations(const System& sys, Workspace& ws, const Eigen::Ref<const VectorXd>& q,
+                              const Eigen::Ref<const VectorXd>& qd, double t,
+                              const ProjectionOptions& options = {});
 
 /// q ← q − M⁻¹ Aᵀ (A M⁻¹ Aᵀ)⁺ phi(q, t) over the holonomic constraints (active at t and in the
 /// mask), iterated until converged. Cost per iteration O(n³/3 + m n² + m² n) and the constraints'.
@@ -120,8 +123,9 @@ ProjectionResult project_positions(const System& sys, Workspace& ws, VectorXd& q
 /// constraints (active at t and in the mask), q fixed; iterated, since psi may be nonlinear in
 /// q'. Cost as project_positions. Throws and reports non-finite inputs (t, q, q') as
 /// project_positions does.
-ProjectionResult project_velocities(const System& sys, Workspace& ws, const VectorXd& q,
-                                    VectorXd& qd, double t, const ProjectionOptions& options = {});
+ProjectionResult project_velocities(const System& sys, Workspace& ws,
+                                    const Eigen::Ref<const VectorXd>& q, VectorXd& qd, double t,
+                                    const ProjectionOptions& options = {});
 
 /// Removes from a perturbation (dq, dq') of the state (q, q') at t the components that
 /// project_positions and project_velocities at (q, t) remove, to first order:
@@ -134,8 +138,10 @@ ProjectionResult project_velocities(const System& sys, Workspace& ws, const Vect
 /// configurations"). Overwrites the workspace's evaluation buffers as a projection does.
 /// Cost: one evaluation of M and of the rows' Jacobians, one decomposition (two when
 /// nonholonomic rows take part), O(n m) per vector. Allocates nothing.
-Status remove_normal_components(const System& sys, Workspace& ws, const VectorXd& q,
-                                const VectorXd& qd, double t, const ProjectionOptions& options,
-                                Eigen::Ref<VectorXd> dq, Eigen::Ref<VectorXd> dqd);
+Status remove_normal_components(const System& sys, Workspace& ws,
+                                const Eigen::Ref<const VectorXd>& q,
+                                const Eigen::Ref<const VectorXd>& qd, double t,
+                                const ProjectionOptions& options, Eigen::Ref<VectorXd> dq,
+                                Eigen::Ref<VectorXd> dqd);
 
 }  // namespace ukdyn

@@ -163,7 +163,7 @@ Example shared_P2();
 ///  - "shared_P2": phi of the crank, atan2(yB, xB), on the branch [5 pi/12, 5 pi/12 + 2 pi) (the
 ///    energy of the start confines the crank to [150°, 359.6°]; phi(0) = 150° = 2.618 rad).
 /// @throws std::invalid_argument for any other name or a q of the wrong size. Cost O(1).
-double reported_coordinate(const std::string& name, const VectorXd& q);
+double reported_coordinate(const std::string& name, const Eigen::Ref<const VectorXd>& q);
 
 /// The loop-closure violation of the problem (metres), as a joint-coordinate simulator measures
 /// it from body poses: every link is placed from its proximal point along the direction of
@@ -173,7 +173,7 @@ double reported_coordinate(const std::string& name, const VectorXd& q);
 /// exactly when the three distance constraints hold, and is of the order of their violation.
 /// "shared_P1" has no loop: 0. @throws std::invalid_argument for any other name or a q of
 /// the wrong size. Cost O(1).
-double closure_violation(const std::string& name, const VectorXd& q);
+double closure_violation(const std::string& name, const Eigen::Ref<const VectorXd>& q);
 
 /// Facts of a shared benchmark problem (bench/data/README.md, problems.json).
 struct SharedProblem {

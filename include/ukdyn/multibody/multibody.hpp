@@ -168,7 +168,8 @@ struct Wrench {
   Vector3d torque = Vector3d::Zero();  ///< tau (N m) about the body's centre of mass (planar: z)
 };
 /// Callable of an applied wrench. Must not allocate.
-using WrenchFn = std::function<Wrench(const VectorXd& q, const VectorXd& qd, double t)>;
+using WrenchFn = std::function<Wrench(const Eigen::Ref<const VectorXd>& q,
+                                      const Eigen::Ref<const VectorXd>& qd, double t)>;
 
 /// The kinds of force element.
 enum class ForceType {
@@ -286,19 +287,24 @@ struct Pose {
   Quaterniond R_WB = Quaterniond::Identity();
 };
 /// The pose of body b at q (the quaternion normalized). Cost O(1).
-Pose body_pose(const MultibodyModel& mb, const VectorXd& q, BodyId b);
+Pose body_pose(const MultibodyModel& mb, const Eigen::Ref<const VectorXd>& q, BodyId b);
 /// Velocity of the centre of mass and angular velocity (world) of body b. Cost O(1).
-std::pair<Vector3d, Vector3d> body_velocity(const MultibodyModel& mb, const VectorXd& q,
-                                            const VectorXd& qd, BodyId b);
+std::pair<Vector3d, Vector3d> body_velocity(const MultibodyModel& mb,
+                                            const Eigen::Ref<const VectorXd>& q,
+                                            const Eigen::Ref<const VectorXd>& qd, BodyId b);
 /// Kinetic energy of body b: ½ m v² + ½ ω_Bᵀ J ω_B. Cost O(1).
-double kinetic_energy(const MultibodyModel& mb, const VectorXd& q, const VectorXd& qd, BodyId b);
+double kinetic_energy(const MultibodyModel& mb, const Eigen::Ref<const VectorXd>& q,
+                      const Eigen::Ref<const VectorXd>& qd, BodyId b);
 /// Total mechanical energy: kinetic energies + potential of gravity and springs. Cost O(bodies).
-double total_energy(const MultibodyModel& mb, const VectorXd& q, const VectorXd& qd, double t);
+double total_energy(const MultibodyModel& mb, const Eigen::Ref<const VectorXd>& q,
+                    const Eigen::Ref<const VectorXd>& qd, double t);
 /// Linear momentum Σ m v and angular momentum about the world origin Σ (r × m v + R J ω_B).
-std::pair<Vector3d, Vector3d> momentum(const MultibodyModel& mb, const VectorXd& q,
-                                       const VectorXd& qd);
+std::pair<Vector3d, Vector3d> momentum(const MultibodyModel& mb,
+                                       const Eigen::Ref<const VectorXd>& q,
+                                       const Eigen::Ref<const VectorXd>& qd);
 /// The world position of body point p (body coordinates) at q.
-Vector3d world_point(const MultibodyModel& mb, const VectorXd& q, BodyId b, const Vector3d& p);
+Vector3d world_point(const MultibodyModel& mb, const Eigen::Ref<const VectorXd>& q, BodyId b,
+                     const Vector3d& p);
 
 /// Reaction of a joint on its child body (on its parent when the child is the ground), reduced
 /// to the joint point (the origin of F_C, at its world position):
@@ -317,16 +323,19 @@ struct JointReaction {
 /// The reaction of joint j at (q, q', t) given the multipliers lambda (m) of an evaluation
 /// (ws.lambda, or a Trajectory sample's lambda). The non-ideal part is zero in this overload.
 /// Allocates (a report, not for the hot path). Cost O(rows · columns of the joint).
-JointReaction joint_reaction(const MultibodyModel& mb, const VectorXd& q, const VectorXd& qd,
-                             double t, const VectorXd& lambda, Index j);
+JointReaction joint_reaction(const MultibodyModel& mb, const Eigen::Ref<const VectorXd>& q,
+                             const Eigen::Ref<const VectorXd>& qd, double t,
+                             const Eigen::Ref<const VectorXd>& lambda, Index j);
 /// As above, after forward_dynamics(mb.system, ws, q, qd, t): also the joint friction's force.
-JointReaction joint_reaction(const MultibodyModel& mb, Workspace& ws, const VectorXd& q,
-                             const VectorXd& qd, double t, Index j);
+JointReaction joint_reaction(const MultibodyModel& mb, Workspace& ws,
+                             const Eigen::Ref<const VectorXd>& q,
+                             const Eigen::Ref<const VectorXd>& qd, double t, Index j);
 /// The driving torque (revolute) or force (prismatic) of joint j's prescribed motion: the
 /// generalized force of "<joint>.drive" along the driven coordinate. @throws std::invalid_argument
 /// when the joint has no drive.
-double drive_effort(const MultibodyModel& mb, const VectorXd& q, const VectorXd& qd, double t,
-                    const VectorXd& lambda, Index j);
+double drive_effort(const MultibodyModel& mb, const Eigen::Ref<const VectorXd>& q,
+                    const Eigen::Ref<const VectorXd>& qd, double t,
+                    const Eigen::Ref<const VectorXd>& lambda, Index j);
 
 /// Writes every body's pose at every sample of tr as CSV for animation: a header
 /// `t,<b>.x,<b>.y,<b>.z,<b>.qw,<b>.qx,<b>.qy,<b>.qz,…` then one line per sample.

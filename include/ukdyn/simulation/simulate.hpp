@@ -334,8 +334,8 @@ struct Trajectory {
 /// project_initial is false (the message names each violated constraint and by how much), and
 /// on a sample grid above kMaxStreamedSamples (with a sample_sink) or kMaxStoredValues (in
 /// memory), refused before anything is integrated.
-Trajectory simulate(const System& sys, const VectorXd& q0, const VectorXd& qd0,
-                    const SimulationOptions& options = {});
+Trajectory simulate(const System& sys, const Eigen::Ref<const VectorXd>& q0,
+                    const Eigen::Ref<const VectorXd>& qd0, const SimulationOptions& options = {});
 
 /// The energy balance of a trajectory from its energies and work channels: fills
 /// traj.energy_balance_residual and traj.stats.energy_balance, energy_exchanged and
@@ -350,7 +350,9 @@ void compute_energy_balance(Trajectory& traj,
 
 /// Consistency of a state with each constraint: one line per violated constraint, naming it
 /// and giving the position and velocity violation; empty when every |row| <= tolerance.
-std::vector<std::string> check_initial_conditions(const System& sys, const VectorXd& q,
-                                                  const VectorXd& qd, double t, double tolerance);
+std::vector<std::string> check_initial_conditions(const System& sys,
+                                                  const Eigen::Ref<const VectorXd>& q,
+                                                  const Eigen::Ref<const VectorXd>& qd, double t,
+                                                  double tolerance);
 
 }  // namespace ukdyn
