@@ -943,8 +943,7 @@ void Reader::read_initial(const YAML::Node& root, Model& model) {
   } else if (project) {
     bool value = false;
     if (!project.IsScalar() || !YAML::convert<bool>::decode(project, value))
-      fail(project, "initial project must be true or false, or {keep: [names]}",
-           "project: true");
+      fail(project, "initial project must be true or false, or {keep: [names]}", "project: true");
     model.project_initial = value;
   }
 }

@@ -5,21 +5,8 @@
 #   cmake -DBUILD_DIR=... -DCONSUMER_DIR=... -DWORK_DIR=... -DGENERATOR=... -DCXX=...
 #         [-DLAUNCHER=ccache] -P run.cmake
 cmake_minimum_required(VERSION 3.25)  # the policies of today (CMP0054: quoted arguments)
-foreach(var BUILD_DIR CONSUMER_DIR WORK_DIR GENERATOR CXX)
-  if(NOT DEFINED ${var})
-    message(FATAL_ERROR "run.cmake: -D${var}=... is required")
-  endif()
-endforeach()
-
-# run(STEP COMMAND...): runs the command, prints its output, fails the test on a non-zero exit
-function(run step)
-  execute_process(COMMAND ${ARGN} RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE out)
-  message("--- ${step}: ${ARGN}\n${out}")
-  if(NOT rc EQUAL 0)
-    message(FATAL_ERROR "${step} failed (exit ${rc})")
-  endif()
-  set(last_output "${out}" PARENT_SCOPE)
-endfunction()
+include(${CMAKE_CURRENT_LIST_DIR}/../packaging/common.cmake)
+require(run.cmake BUILD_DIR CONSUMER_DIR WORK_DIR GENERATOR CXX)
 
 file(REMOVE_RECURSE ${WORK_DIR})
 set(prefix ${WORK_DIR}/prefix)

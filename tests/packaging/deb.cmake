@@ -4,20 +4,8 @@
 #
 #   cmake -DBUILD_DIR=... -DWORK_DIR=... -DVERSION=... -P deb.cmake
 cmake_minimum_required(VERSION 3.25)  # the policies of today (CMP0054: quoted arguments)
-foreach(var BUILD_DIR WORK_DIR VERSION)
-  if(NOT DEFINED ${var})
-    message(FATAL_ERROR "deb.cmake: -D${var}=... is required")
-  endif()
-endforeach()
-
-function(run step)
-  execute_process(COMMAND ${ARGN} RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE out)
-  message("--- ${step}: ${ARGN}\n${out}")
-  if(NOT rc EQUAL 0)
-    message(FATAL_ERROR "${step} failed (exit ${rc})")
-  endif()
-  set(last_output "${out}" PARENT_SCOPE)
-endfunction()
+include(${CMAKE_CURRENT_LIST_DIR}/common.cmake)
+require(deb.cmake BUILD_DIR WORK_DIR VERSION)
 
 file(REMOVE_RECURSE ${WORK_DIR})
 get_filename_component(cmake_bin ${CMAKE_COMMAND} DIRECTORY)

@@ -5,20 +5,8 @@
 #
 #   cmake -DSOURCE_DIR=... -DBUILD_DIR=... -DWORK_DIR=... -P pip.cmake
 cmake_minimum_required(VERSION 3.25)  # the policies of today (CMP0054: quoted arguments)
-foreach(var SOURCE_DIR BUILD_DIR WORK_DIR)
-  if(NOT DEFINED ${var})
-    message(FATAL_ERROR "pip.cmake: -D${var}=... is required")
-  endif()
-endforeach()
-
-function(run step)
-  execute_process(COMMAND ${ARGN} RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE out
-                  WORKING_DIRECTORY ${SOURCE_DIR})
-  message("--- ${step}: ${ARGN}\n${out}")
-  if(NOT rc EQUAL 0)
-    message(FATAL_ERROR "${step} failed (exit ${rc})")
-  endif()
-endfunction()
+include(${CMAKE_CURRENT_LIST_DIR}/common.cmake)
+require(pip.cmake SOURCE_DIR BUILD_DIR WORK_DIR)
 
 file(REMOVE_RECURSE ${WORK_DIR})
 set(venv ${WORK_DIR}/venv)
