@@ -71,6 +71,13 @@ std::string solve_level(const System& sys, Workspace& ws, VectorXd& q, VectorXd&
     const double violation = r.cwiseAbs().maxCoeff();
     // converged at the roundoff floor (three corrections that do not halve it) or below 1e-15
     if (violation <= 1e-15) return "";
+    // everything kept: nothing is left to move, and the values given do not satisfy the rows
+    if (f == 0) {
+      return std::string("keeping ") + join(kept_names) + " leaves no " +
+             (velocity_level ? "velocity" : "coordinate") +
+             " free, and the values given violate the constraints' " + level + " rows by " +
+             format_number(violation, 3);
+    }
     stalled = violation > 0.5 * last ? stalled + 1 : 0;
     if (stalled >= 3 && violation <= kTolerance) return "";
     last = violation;

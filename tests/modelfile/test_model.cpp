@@ -381,6 +381,26 @@ TEST(ModelErrors, InitialProjectionKeepingTooMuchOrTheImpossible) {
   text.replace(text.find("keep: [th]"), 10, "kept: [th]");
   e = error_of(text);
   EXPECT_TRUE(contains(e, "m.yaml:10:13: error: unknown key 'kept' in initial: project")) << e;
+  // every coordinate (or every velocity) kept, and the values violate the constraint: an error
+  // at keep: (the solve over no free coordinate crashed)
+  const std::string line =
+      "coordinates: [x, y]\nkinetic_energy: 0.5*(x_dot^2 + y_dot^2)\nconstraints:\n"
+      "  - {name: line, holonomic: x - y}\n";
+  e = error_of(line + "initial: {q: {x: 1, y: 0}, project: {keep: [x, y]}}\n");
+  EXPECT_TRUE(contains(e,
+                       "m.yaml:5:44: error: initial: project: keeping x, y leaves no coordinate "
+                       "free, and the values given violate the constraints' positions rows by 1"))
+      << e;
+  e = error_of(line +
+               "initial: {q: {x: 1, y: 1}, q_dot: {x: 1}, project: {keep: [x_dot, y_dot]}}\n");
+  EXPECT_TRUE(contains(e,
+                       "keeping x_dot, y_dot leaves no velocity free, and the values given "
+                       "violate the constraints' velocities rows by 1"))
+      << e;
+  // all kept and already consistent: nothing to do
+  EXPECT_EQ(
+      error_of(line + "initial: {q: {x: 1, y: 1}, q_dot: {x: 2, y: 2}, project: {keep: [x, y]}}\n"),
+      "");
 }
 
 TEST(ModelErrors, YamlSyntaxHasLineAndColumn) {
