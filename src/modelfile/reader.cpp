@@ -175,6 +175,12 @@ std::vector<YAML::Node> Reader::rows_of(const YAML::Node& node, const std::strin
 // the parameter's value where it is defined, whether the file gives a number or an expression
 // (the override wins), and the parameters after it are evaluated with the new value.
 void Reader::read_parameters(const YAML::Node& root) {
+  // an override that is not finite is refused first: the parameters after it would otherwise
+  // fail to evaluate and be blamed
+  for (const auto& [name, value] : overrides_) {
+    if (!std::isfinite(value))
+      throw OverrideError(file_, 0, 0, "--set " + name + ": the value must be a finite number");
+  }
   const YAML::Node p = root["parameters"];
   if (p) {
     if (!p.IsMap()) fail(p, "parameters must be a mapping name: value", "e.g. {m: 1, g: 9.81}");
@@ -223,8 +229,6 @@ void Reader::read_parameters(const YAML::Node& root) {
     }
   }
   for (const auto& [name, value] : overrides_) {
-    if (!std::isfinite(value))
-      throw OverrideError(file_, 0, 0, "--set " + name + ": the value must be a finite number");
     if (!parameters_.count(name)) {
       std::vector<std::string> known;
       for (const auto& kv : parameters_) known.push_back(kv.first);

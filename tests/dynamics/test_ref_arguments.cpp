@@ -178,7 +178,10 @@ TEST(RefArguments, MultibodyReports) {
   const Views<3> vq(q), vqd(qd);
   const double E = mb::total_energy(m, q, qd, 0.0);
   const mb::Pose P = mb::body_pose(m, q, rod);
-  const auto [p, L] = mb::momentum(m, q, qd);
+  // (not a structured binding: clang 14 does not let a lambda capture one)
+  const auto momentum = mb::momentum(m, q, qd);
+  const auto& p = momentum.first;
+  const auto& L = momentum.second;
   auto check = [&](const auto& qv, const auto& qdv) {
     const double Ev = mb::total_energy(m, qv, qdv, 0.0);
     EXPECT_EQ(0, std::memcmp(&Ev, &E, sizeof(double)));

@@ -220,6 +220,17 @@ potential_energy: -m*g*(L/2)*cos(th)
   EXPECT_DOUBLE_EQ(c.parameters.at("I"), 5.0);
   EXPECT_NEAR(c.parameters.at("Ip"), 8.0, 1e-15);
   EXPECT_NEAR(c.parameters.at("w"), std::sqrt(3 * kG / 8.0), 1e-15);
+  // a value that is not finite is the override's fault, not the parameters' after it
+  for (const double bad : {std::nan(""), HUGE_VAL}) {
+    try {
+      parse_model(text, "m.yaml", {{"m", bad}});
+      ADD_FAILURE() << "a non-finite override was accepted";
+    } catch (const ModelError& e) {
+      EXPECT_NE(std::string(e.what()).find("--set m: the value must be a finite number"),
+                std::string::npos)
+          << e.what();
+    }
+  }
 }
 
 TEST(Model, DerivedParametersInAMultibodyModel) {
