@@ -87,17 +87,17 @@ bool complete_singular_mass_locally(Workspace& ws, bool forces, bool regularize)
       add_local_row<0>(Mo, n, a, m, size, sb, ws.b[i], Qo);
     }
   }
-  // factorized, with pivots L_kk² within kSingularPivotRatio of each other: on all of M_A the
+  // factorized, with regular pivots (SparseDecomposition::pivot_is_regular): on all of M_A the
   // first time, then on each completed block
   if (ws.decomposition.compute_mass(ws.M_aux).info() == Eigen::Success) {
     const auto& L = ws.decomposition.matrix_llt();
     const auto regular = [&](Index o, Index size) {
-      double lo = L(o, o), hi = lo;  // L_kk > 0
-      for (Index k = o + 1; k < o + size; ++k) {
-        lo = std::min(lo, L(k, k));
-        hi = std::max(hi, L(k, k));
+      for (Index k = o; k < o + size; ++k) {
+        if (!SparseDecomposition::pivot_is_regular(L(k, k) * L(k, k), ws.M_aux(k, k))) {
+          return false;
+        }
       }
-      return lo * lo >= SparseDecomposition::kSingularPivotRatio * hi * hi;
+      return true;
     };
     bool ok = ws.singular_completion == 1 || regular(0, n);
     for (std::size_t r = 0; ok && ws.singular_completion == 1 && r < rows.size(); r += 3) {

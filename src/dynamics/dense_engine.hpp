@@ -173,14 +173,16 @@ class DenseEngine final : public EngineOps {
   }
 
  private:
-  // Whether the factor just computed is that of a regular M: Cholesky succeeded and its pivots
-  // L_kk² lie within kSingularPivotRatio of each other (else M is treated as singular).
+  // Whether the factor just computed is that of a regular M: Cholesky succeeded and every pivot
+  // is regular (SparseDecomposition::pivot_is_regular; else M is treated as singular).
   static bool regular_factor(const Workspace& ws, Eigen::ComputationInfo info) {
     if (info != Eigen::Success) return false;
     if constexpr (std::is_same_v<D, FundamentalDecomposition>) {
       const auto d = ws.decomposition.matrix_llt().diagonal();
-      const double lo = d.cwiseAbs().minCoeff(), hi = d.cwiseAbs().maxCoeff();
-      return lo * lo >= SparseDecomposition::kSingularPivotRatio * hi * hi;
+      for (Index k = 0; k < d.size(); ++k) {
+        if (!SparseDecomposition::pivot_is_regular(d[k] * d[k], ws.M(k, k))) return false;
+      }
+      return true;
     } else {
       return true;
     }

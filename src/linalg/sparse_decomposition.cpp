@@ -100,6 +100,34 @@ void augment_forces_kernel(double* Q, Index size, const int* r0, const int* r1, 
   }
 }
 
+// y = L x, L the lower triangle: y_i = Σ_{k <= i} L_ik x_k
+template <Index S>
+inline void lower_multiply_kernel(const double* L, const double* x, double* y, Index size) {
+  const Index s = S > 0 ? S : size;
+  for (Index i = 0; i < s; ++i) y[i] = 0.0;
+  for (Index k = 0; k < s; ++k) {
+    const double xk = x[k];
+    for (Index i = k; i < s; ++i) y[i] += L[k * s + i] * xk;
+  }
+}
+
+// v + Σ_t w_t x_t over one segment of a row of W (a whole block's columns)
+template <Index S>
+inline double dot_kernel(const double* w, const double* x, Index size, double v) {
+  const Index s = S > 0 ? S : size;
+  for (Index t = 0; t < s; ++t) v += w[t] * x[t];
+  return v;
+}
+inline double segment_dot(const double* w, const double* x, Index s, double v) {
+  switch (s) {
+    case 3:
+      return dot_kernel<3>(w, x, s, v);
+    case 4:
+      return dot_kernel<4>(w, x, s, v);
+    default:
+      return dot_kernel<0>(w, x, s, v);
+  }
+}
 bool block_cholesky(double* A, Index s, double* inv) {
   switch (s) {
     case 3:
@@ -111,6 +139,15 @@ bool block_cholesky(double* A, Index s, double* inv) {
   }
 }
 
+// whether every pivot of the block's factor is regular (SparseDecomposition::pivot_is_regular):
+// M the block (s × s, column-major), inv its 1 / L_kk
+bool regular_pivots(const double* M, const double* inv, Index s) {
+  for (Index k = 0; k < s; ++k) {
+    if (!SparseDecomposition::pivot_is_regular(1.0 / (inv[k] * inv[k]), M[k * s + k])) return false;
+  }
+  return true;
+}
+
 inline void block_lower_solve(const double* L, const double* inv, double* x, Index s) {
   switch (s) {
     case 3:
@@ -119,6 +156,17 @@ inline void block_lower_solve(const double* L, const double* inv, double* x, Ind
       return lower_solve_kernel<4>(L, inv, x, s);
     default:
       return lower_solve_kernel<0>(L, inv, x, s);
+  }
+}
+
+inline void block_lower_multiply(const double* L, const double* x, double* y, Index s) {
+  switch (s) {
+    case 3:
+      return lower_multiply_kernel<3>(L, x, y, s);
+    case 4:
+      return lower_multiply_kernel<4>(L, x, y, s);
+    default:
+      return lower_multiply_kernel<0>(L, x, y, s);
   }
 }
 
@@ -183,14 +231,9 @@ SparseDecomposition& SparseDecomposition::compute_mass() {
     // a block found singular before skips the regular attempt (M_A serves any PSD block)
     if (!blk_sing_[bs]) {
       std::copy(Mv_.begin() + v0, Mv_.begin() + v0 + s * s, Lv_.begin() + v0);
-      if (block_cholesky(Lv_.data() + v0, s, inv_ldiag_.data() + o)) {
-        double lo = inv_ldiag_[std::size_t(o)], hi = lo;  // 1 / L_kk
-        for (Index k = o; k < o + s; ++k) {
-          lo = std::min(lo, inv_ldiag_[std::size_t(k)]);
-          hi = std::max(hi, inv_ldiag_[std::size_t(k)]);
-        }
-        // pivots L_kk² within kSingularPivotRatio of each other: regular
-        if (lo * lo >= kSingularPivotRatio * hi * hi) continue;
+      if (block_cholesky(Lv_.data() + v0, s, inv_ldiag_.data() + o) &&
+          regular_pivots(Mv_.data() + v0, inv_ldiag_.data() + o, s)) {
+        continue;
       }
     }
     // positive semi-definite: M_bb + 1e-10 max|M_bb| I is positive definite (a zero block is)
@@ -310,13 +353,8 @@ void SparseDecomposition::mass_upper_solve(double* x) const {
 void SparseDecomposition::mass_lower_multiply(const double* x, double* y) const {
   // y_i = Σ_{k <= i} L_ik x_k, block by block
   for (Index b = 0; b < block_count(); ++b) {
-    const Index o = block_offset(b), s = block_size(b);
-    const double* L = Lv_.data() + blk_val_[std::size_t(b)];
-    for (Index i = 0; i < s; ++i) y[o + i] = 0.0;
-    for (Index k = 0; k < s; ++k) {
-      const double xk = x[o + k];
-      for (Index i = k; i < s; ++i) y[o + i] += L[k * s + i] * xk;
-    }
+    const Index o = block_offset(b);
+    block_lower_multiply(Lv_.data() + blk_val_[std::size_t(b)], x + o, y + o, block_size(b));
   }
 }
 
@@ -484,11 +522,7 @@ SparseDecomposition& SparseDecomposition::compute_constraints() {
   std::fill(Gx_.begin(), Gx_.end(), 0.0);
   const double* W = Wv_.data();
   for (const Product& pr : program_) {
-    const double* x = W + pr.wi;
-    const double* y = W + pr.wj;
-    double s = 0.0;
-    for (int t = 0; t < pr.len; ++t) s += x[t] * y[t];
-    Gx_[std::size_t(pr.target)] += s;
+    Gx_[std::size_t(pr.target)] += segment_dot(W + pr.wi, W + pr.wj, pr.len, 0.0);
   }
   factor_G();
   null_basis();

@@ -103,16 +103,24 @@ class SparseDecomposition {
   Eigen::ComputationInfo info() const { return info_; }
 
   // --- singular M (docs/singular-mass.md) --------------------------------------------------
-  /// A block whose Cholesky factorization fails, or whose pivots span more than
-  /// kSingularPivotRatio, is singular. It is accepted when it is positive semi-definite
+  /// A block whose Cholesky factorization fails, or one of whose pivots is not regular
+  /// (pivot_is_regular), is singular. It is accepted when it is positive semi-definite
   /// (M_bb + 1e-10 max|M_bb| I is positive definite) and then factorized by
   /// compute_augmented_mass, once A is written. The ratio is generous: the last pivot of an
   /// exactly singular matrix carries roundoff of order eps · cond of its regular part (a rod's
-  /// quaternion block, axial inertia 1e-4 of the transverse: ~1e-12), and an M that is merely
-  /// that ill-conditioned is also better served by M_A (which is then always positive definite).
+  /// quaternion block, axial inertia 1e-4 of the transverse: ~1e-12 of its diagonal).
   /// A block singular by construction (MassBlock::singular) is singular from the start and
   /// checked at the first compute_mass only: later ones leave it to compute_augmented_mass.
   static constexpr double kSingularPivotRatio = 1e-8;
+  /// Whether a pivot of the Cholesky factor of a block of M is that of a regular block: L_kk² is
+  /// at least kSingularPivotRatio · M_kk, i.e. coordinate k keeps at least that share of its own
+  /// inertia once the coordinates before it are eliminated. Relative to the coordinate's own
+  /// diagonal, so invariant under a change of units (a diagonal scaling D M D): a point mass's
+  /// body block diag(m, m, 1e-9 m L²) is regular, an exactly singular block (a zero axial
+  /// inertia) is not. Cost O(1).
+  static bool pivot_is_regular(double L_kk_squared, double M_kk) {
+    return L_kk_squared >= kSingularPivotRatio * M_kk;
+  }
   /// Whether the last compute_mass found a singular (positive semi-definite) block.
   bool mass_singular() const { return singular_blocks_ > 0; }
   /// Number of singular blocks, and whether block b is one.
