@@ -77,15 +77,14 @@ std::optional<fs::path> write_viewer(const Model& model, const fs::path& csv, co
                        write_text(work / "three.min.js", kThreeJs) &&
                        write_text(work / "OrbitControls.js", kOrbitControlsJs) &&
                        write_text(work / "scene.json", viewer_scene_json(model).c_str());
-  const int code =
-      written ? run_program({python, (work / "viewer.py").string(), csv.string(),
-                             (work / "scene.json").string(), page.string()})
-              : -1;
+  const int code = written ? run_program({python, (work / "viewer.py").string(), csv.string(),
+                                          (work / "scene.json").string(), page.string()})
+                           : -1;
   std::error_code ec;
   fs::remove_all(work, ec);
   if (code != 0) {
-    std::fprintf(stderr, "warning: the viewer's page generator failed (exit %d): no animation.html\n",
-                 code);
+    std::fprintf(
+        stderr, "warning: the viewer's page generator failed (exit %d): no animation.html\n", code);
     return std::nullopt;
   }
   return page;

@@ -174,6 +174,11 @@ def scene_data(scene, names, columns, fps=FPS, max_frames=MAX_FRAMES, digits=DIG
     for name in names:
         if name.startswith("error."):
             data["requirements"].append({"name": name[len("error."):], "error": p.pack(name)})
+    # a kind of force that is zero throughout (no friction, no control) draws no arrows
+    for item in data["joints"] + data["points"] + data["bodies"]:
+        for key in ("ideal", "nonideal", "control"):
+            if key in item and not any(v for c in item[key] if c for v in c):
+                del item[key]
     # the scales of the force arrows: the largest of each kind over the run
     for key in ("ideal", "nonideal", "control"):
         vectors = []

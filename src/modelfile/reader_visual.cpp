@@ -12,18 +12,18 @@ namespace {
 
 // the colour names a model file may use besides #rrggbb (matplotlib's tab10 shades)
 const std::array<std::pair<const char*, const char*>, 13> kColours = {{{"blue", "#1f77b4"},
-                                                                        {"orange", "#ff7f0e"},
-                                                                        {"green", "#2ca02c"},
-                                                                        {"red", "#d62728"},
-                                                                        {"purple", "#9467bd"},
-                                                                        {"brown", "#8c564b"},
-                                                                        {"pink", "#e377c2"},
-                                                                        {"grey", "#7f7f7f"},
-                                                                        {"gray", "#7f7f7f"},
-                                                                        {"olive", "#bcbd22"},
-                                                                        {"cyan", "#17becf"},
-                                                                        {"black", "#000000"},
-                                                                        {"white", "#ffffff"}}};
+                                                                       {"orange", "#ff7f0e"},
+                                                                       {"green", "#2ca02c"},
+                                                                       {"red", "#d62728"},
+                                                                       {"purple", "#9467bd"},
+                                                                       {"brown", "#8c564b"},
+                                                                       {"pink", "#e377c2"},
+                                                                       {"grey", "#7f7f7f"},
+                                                                       {"gray", "#7f7f7f"},
+                                                                       {"olive", "#bcbd22"},
+                                                                       {"cyan", "#17becf"},
+                                                                       {"black", "#000000"},
+                                                                       {"white", "#ffffff"}}};
 
 std::string colour_names() {
   std::string s;
@@ -43,18 +43,25 @@ void Reader::read_visual(const YAML::Node& root, Model& model, std::vector<Expr>
       }
     }
   };
-  // "#rrggbb" or a name; a bare #… is a YAML comment, which leaves the value empty
-  const auto colour = [&](const YAML::Node& node, const std::string& what) -> std::string {
-    const std::string hint = "color: \"#d62728\" (quoted: # starts a YAML comment) or one of " +
-                             colour_names();
-    if (!node.IsScalar() || node.Scalar().empty()) fail(node, what + ": the colour is empty", hint);
+  // map's color: "#rrggbb" or a name; a bare #… is a YAML comment, which leaves the value
+  // empty (located at the key then: the empty value has no place of its own)
+  const auto colour = [&](const YAML::Node& map, const std::string& what) -> std::string {
+    const std::string hint =
+        "color: \"#d62728\" (quoted: # starts a YAML comment) or one of " + colour_names();
+    const YAML::Node node = map["color"];
+    if (!node.IsScalar() || node.Scalar().empty()) {
+      for (const auto& kv : map) {
+        if (kv.first.Scalar() == "color") fail(kv.first, what + ": the colour is empty", hint);
+      }
+    }
     const std::string s = node.Scalar();
     for (const auto& [name, hex] : kColours) {
       if (s == name) return hex;
     }
-    const bool hex = s.size() == 7 && s[0] == '#' &&
-                     std::all_of(s.begin() + 1, s.end(),
-                                 [](char c) { return std::isxdigit(static_cast<unsigned char>(c)); });
+    const bool hex =
+        s.size() == 7 && s[0] == '#' && std::all_of(s.begin() + 1, s.end(), [](char c) {
+          return std::isxdigit(static_cast<unsigned char>(c));
+        });
     if (!hex) fail(node, what + ": unknown colour '" + s + "'", hint);
     return s;
   };
@@ -124,7 +131,7 @@ void Reader::read_visual(const YAML::Node& root, Model& model, std::vector<Expr>
           for (std::size_t i = 0; i < o.size(); ++i)
             shape.offset[Index(i)] = number(o[i], what + " offset");
         }
-        if (s["color"]) shape.color = colour(s["color"], what);
+        if (s["color"]) shape.color = colour(s, what);
         shapes.push_back(shape);
       }
       model.visual.bodies.emplace_back(name, std::move(shapes));
@@ -152,9 +159,10 @@ void Reader::read_visual(const YAML::Node& root, Model& model, std::vector<Expr>
       YAML::Node at = kv.second;
       if (at.IsMap()) {
         check_keys(at, {"at", "color", "radius"}, what);
-        if (at["color"]) p.color = colour(at["color"], what);
+        if (at["color"]) p.color = colour(at, what);
         if (at["radius"]) p.radius = positive(at["radius"], what + " radius");
-        if (!at["at"]) fail(at, what + " needs at: [x, y] or [x, y, z]", "{at: [x, y], color: red}");
+        if (!at["at"])
+          fail(at, what + " needs at: [x, y] or [x, y, z]", "{at: [x, y], color: red}");
         at = at["at"];
       }
       if (!at.IsSequence() || at.size() < 2 || at.size() > 3)
@@ -192,11 +200,12 @@ void Reader::read_visual(const YAML::Node& root, Model& model, std::vector<Expr>
     }
     for (const auto& t : ts) {
       if (!t.IsScalar() || !known.count(t.Scalar()))
-        fail(t, "visual: the trail names '" + (t.IsScalar() ? t.Scalar() : std::string()) +
-                    "', which is not a point" + (model.multibody ? " or a body" : ""),
-             known.empty() ? "declare it under visual: points:"
-                           : "the names are " +
-                                 join(std::vector<std::string>(known.begin(), known.end())));
+        fail(t,
+             "visual: the trail names '" + (t.IsScalar() ? t.Scalar() : std::string()) +
+                 "', which is not a point" + (model.multibody ? " or a body" : ""),
+             known.empty()
+                 ? "declare it under visual: points:"
+                 : "the names are " + join(std::vector<std::string>(known.begin(), known.end())));
       model.visual.trails.push_back(t.Scalar());
     }
   }

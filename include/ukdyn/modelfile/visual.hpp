@@ -16,13 +16,13 @@ struct Model;
 
 /// One solid drawn with a body (`visual:` of a body entry), in body coordinates.
 struct VisualShape {
-  std::string shape;   ///< "box", "cylinder", "capsule" or "sphere"
+  std::string shape;  ///< "box", "cylinder", "capsule" or "sphere"
   /// box: the edges along the body's x, y, z; cylinder, capsule: (radius, length, 0) with the
   /// length along `axis`; sphere: (radius, 0, 0)
   Eigen::Vector3d size = Eigen::Vector3d::Zero();
-  char axis = 'x';                                  ///< cylinder, capsule: 'x', 'y' or 'z'
+  char axis = 'x';                                   ///< cylinder, capsule: 'x', 'y' or 'z'
   Eigen::Vector3d offset = Eigen::Vector3d::Zero();  ///< its centre in body coordinates
-  std::string color;                                ///< "#rrggbb"; empty: the viewer's choice
+  std::string color;                                 ///< "#rrggbb"; empty: the viewer's choice
 };
 
 /// A point of a model in coordinates (`visual: points:`): its position is the output columns
