@@ -185,6 +185,21 @@ def test_command_draws_every_body_and_the_slider_moves_them(browser, cli, tmp_pa
     assert page.errors() == []
 
 
+@pytest.mark.parametrize("example, flags, written", [
+    ("pendulum", [], True),                   # a visual: section: on by default
+    ("control_duffing", [], False),           # coordinates without visual: off by default
+    ("control_duffing", ["--viewer"], True),  # asked for: the requirement's error chart
+])
+def test_viewer_default_and_flag(cli, tmp_path, example, flags, written):
+    out = tmp_path / "run"
+    proc = subprocess.run([cli, "run", "--example", example, "--t-end", "0.2", "-o", str(out),
+                           "--no-plots", *flags], capture_output=True, text=True, timeout=120)
+    assert proc.returncode == 0, proc.stderr
+    assert (out / "animation.html").exists() == written
+    assert ("wrote %s" % (out / "animation.html") in proc.stdout) == written
+    assert "warning" not in proc.stderr
+
+
 def test_no_viewer_flag(cli, tmp_path):
     out = tmp_path / "none"
     proc = subprocess.run([cli, "run", "--example", "double_four_bar_bodies", "--t-end", "0.05",
@@ -196,7 +211,8 @@ def test_no_viewer_flag(cli, tmp_path):
 
 @pytest.mark.parametrize("example, t_end", [("heavy_top", 1.0), ("rolling_disk_bodies", 1.0),
                                             ("bricard", 0.5), ("spherical_pendulum", 1.0),
-                                            ("double_pendulum", 1.0)])
+                                            ("double_pendulum", 1.0), ("chaplygin_sleigh", 10.0),
+                                            ("bead_on_rotating_wire", 2.0)])
 def test_gallery_screenshots(browser, tmp_path, example, t_end):
     """The gallery's spatial (and two planar) examples draw without errors; screenshots kept."""
     result = ukdyn.load(example).simulate(t_end=t_end)
@@ -209,6 +225,35 @@ def test_gallery_screenshots(browser, tmp_path, example, t_end):
     coloured = (img.max(axis=2) - img.min(axis=2) > 60).sum()
     assert coloured > 200, "nothing coloured drawn"
     page.save(example + ".png")
+    assert page.errors() == []
+
+
+def test_frame_axes_turn_with_the_angle(browser, tmp_path):
+    """A visual: frame is drawn as three axes: its x axis (red) points along the angle."""
+    result = ukdyn.parse(
+        "coordinates: [th]\nkinetic_energy: th_dot^2/2\ninitial: {q_dot: {th: 1}}\n"
+        "simulate: {t_end: 3}\noutput: {every: 0.01}\n"
+        "visual: {points: {o: [0, 0], far: [1, 1]}, frames: {f: {at: [0, 0], angle: th, size: 1}}}\n",
+        "frame.yaml").simulate()
+    path = tmp_path / "frame.html"
+    result.save_animation(path)
+    page = Page(browser, path)
+    camera = page.js("return ukdyn.camera()")
+    t_page = page.js("return ukdyn.data.t")
+    for frame in (0, len(t_page) // 2):
+        page.js("ukdyn.setFrame(arguments[0])", frame)
+        th = t_page[frame]  # th = t
+        red = _mask(page.pixels(), "#cc0000", tolerance=0.1)
+        ys, xs = np.nonzero(red)
+        assert red.sum() > 20
+        # the red pixels lie along the projected x axis (cos th, sin th): their mean is on it
+        # (the arrow's head weighs more than its shaft, so not at the middle)
+        o = np.array(_project(camera, (0.0, 0.0, 0.0)))
+        tip = np.array(_project(camera, (math.cos(th), math.sin(th), 0.0))) - o
+        c = np.array([xs.mean(), ys.mean()]) - o
+        along = c @ tip / (tip @ tip)
+        across = abs(c[0] * tip[1] - c[1] * tip[0]) / np.linalg.norm(tip)
+        assert 0.3 < along < 1.0 and across < 3, (frame, th, along, across)
     assert page.errors() == []
 
 

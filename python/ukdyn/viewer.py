@@ -128,7 +128,7 @@ def scene_data(scene, names, columns, fps=FPS, max_frames=MAX_FRAMES, digits=DIG
         "t": p.pack("t", 7) if keep else [],
         "energy": p.pack("energy", 6) if p.has("energy") else None,
         "bodies": [], "joints": [], "points": [], "links": scene.get("links", []),
-        "trails": scene.get("trails", []), "requirements": [],
+        "trails": scene.get("trails", []), "frames": [], "requirements": [],
     }
     # bodies: planar (x, y, theta), rigid (x, y, z, u0..u3), particle (x, y, z)
     for b in scene.get("bodies", []):
@@ -170,6 +170,14 @@ def scene_data(scene, names, columns, fps=FPS, max_frames=MAX_FRAMES, digits=DIG
                 if all(p.has(prefix + q) for q in same):
                     point[key] = [p.pack(prefix + q) for q in same]
         data["points"].append(point)
+    # frames of a visual: section: origin, and angle about z or quaternion
+    for fr in scene.get("frames", []):
+        frame = dict(fr)
+        axes = ("x", "y", "z")[: fr.get("dimensions", 2)]
+        frame["q"] = [p.pack("visual.%s.%s" % (fr["name"], a)) for a in axes]
+        parts = ("qw", "qx", "qy", "qz") if fr.get("quaternion") else ("angle",)
+        frame["r"] = [p.pack("visual.%s.%s" % (fr["name"], c)) for c in parts]
+        data["frames"].append(frame)
     # the control's requirements: the error of each (desired minus actual path), over time
     for name in names:
         if name.startswith("error."):
@@ -223,15 +231,46 @@ def write_page(path, page):
             os.remove(temporary)
 
 
-def read_csv(path):
-    """The CSV's column names and columns (lists of floats)."""
+def read_csv(path, fps=FPS, max_frames=MAX_FRAMES):
+    """The CSV's column names and the columns (lists of floats) of the rows shown only: those
+    _frames() picks, found in two passes over the file, so that memory stays O(frames × columns)
+    however long the run (ukdyn run streams any number of rows to trajectory.csv)."""
+    # pass 1: the number of rows, the first and the last time
+    n, t0, t1 = 0, None, None
+    with open(path, newline="") as f:
+        header = next(csv.reader([f.readline()]))
+        for line in f:
+            if not line.strip():
+                continue
+            t1 = float(line.split(",", 1)[0])
+            if t0 is None:
+                t0 = t1
+            n += 1
+    data = [[] for _ in header]
+    if n == 0:
+        return header, data
+    span = t1 - t0
+    wanted = min(max_frames, max(2, int(math.ceil(span * fps)) + 1)) if span > 0 else 1
+    # pass 2: row j is shown when a target time lies in [t_j, t_(j+1)) (as _frames), or is last
+    def keep(row):
+        for j, value in enumerate(row):
+            data[j].append(float(value))
+    k, previous = 0, None
     with open(path, newline="") as f:
         rows = csv.reader(f)
-        header = next(rows)
-        data = [[] for _ in header]
+        next(rows)
         for row in rows:
-            for j, value in enumerate(row):
-                data[j].append(float(value))
+            if not row:
+                continue
+            t = float(row[0])
+            if previous is not None:
+                shown = wanted >= n
+                while k < wanted and t0 + span * k / max(wanted - 1, 1) < t:
+                    shown, k = True, k + 1
+                if shown:
+                    keep(previous)
+            previous = row
+    keep(previous)
     return header, data
 
 
@@ -239,7 +278,7 @@ def main(argv):
     if len(argv) != 4:
         sys.stderr.write("usage: viewer.py TRAJECTORY.csv SCENE.json OUTPUT.html\n")
         return 2
-    names, columns = read_csv(argv[1])
+    names, columns = read_csv(argv[1])  # already decimated: build_page keeps every row
     with open(argv[2], encoding="utf-8") as f:
         scene = json.load(f)
     write_page(argv[3], build_page(scene, names, columns))

@@ -144,7 +144,7 @@ void Reader::read_visual(const YAML::Node& root, Model& model, std::vector<Expr>
   if (!v) return;
   const std::string example = "{points: {pivot: [0, 0], bob: [x, y]}, links: [[pivot, bob]]}";
   if (!v.IsMap()) fail(v, "visual must be a mapping", example);
-  check_keys(v, {"points", "links", "trails"}, "visual");
+  check_keys(v, {"points", "links", "trails", "frames"}, "visual");
   std::set<std::string> names;
   if (const YAML::Node ps = v["points"]) {
     if (!ps.IsMap()) fail(ps, "visual: points must map names to positions", example);
@@ -175,6 +175,50 @@ void Reader::read_visual(const YAML::Node& root, Model& model, std::vector<Expr>
         outputs.push_back(expression(at[i], what + " " + axes[i]));
       }
       model.visual.points.push_back(p);
+    }
+  }
+  // frames: {hoop: {at: [x, y], angle: theta, size: 0.3}} or {at: [x, y, z], quaternion: [...]}
+  if (const YAML::Node fs = v["frames"]) {
+    const std::string frame_example = "{hoop: {at: [x, y], angle: theta, size: 0.3}}";
+    if (!fs.IsMap()) fail(fs, "visual: frames must map names to frames", frame_example);
+    for (const auto& kv : fs) {
+      VisualFrame f;
+      f.name = kv.first.Scalar();
+      const std::string what = "visual frame '" + f.name + "'";
+      if (!is_identifier(f.name))
+        fail(kv.first, what + ": the name is not an identifier",
+             "letters, digits and _, not starting with a digit");
+      if (!names.insert(f.name).second) fail(kv.first, what + ": the name is given twice");
+      const YAML::Node m = kv.second;
+      if (!m.IsMap()) fail(m, what + " must be a mapping", frame_example);
+      check_keys(m, {"at", "angle", "quaternion", "size"}, what);
+      const YAML::Node at = m["at"];
+      if (!at || !at.IsSequence() || at.size() < 2 || at.size() > 3)
+        fail(at ? at : m, what + ": at must be [x, y] or [x, y, z] (its origin)", frame_example);
+      if (bool(m["angle"]) == bool(m["quaternion"]))
+        fail(m, what + " needs either angle (about z) or quaternion [w, x, y, z]", frame_example);
+      if (m["size"]) f.size = positive(m["size"], what + " size");
+      f.dimensions = int(at.size());
+      f.quaternion = bool(m["quaternion"]);
+      const char* axes[] = {"x", "y", "z"};
+      for (std::size_t i = 0; i < at.size(); ++i) {
+        model.visual.columns.push_back("visual." + f.name + "." + axes[i]);
+        outputs.push_back(expression(at[i], what + " " + axes[i]));
+      }
+      if (f.quaternion) {
+        const YAML::Node q = m["quaternion"];
+        if (!q.IsSequence() || q.size() != 4)
+          fail(q, what + ": quaternion must be [w, x, y, z] (expressions)", "[u0, u1, u2, u3]");
+        const char* parts[] = {"qw", "qx", "qy", "qz"};
+        for (std::size_t i = 0; i < 4; ++i) {
+          model.visual.columns.push_back("visual." + f.name + "." + parts[i]);
+          outputs.push_back(expression(q[i], what + " quaternion"));
+        }
+      } else {
+        model.visual.columns.push_back("visual." + f.name + ".angle");
+        outputs.push_back(expression(m["angle"], what + " angle"));
+      }
+      model.visual.frames.push_back(f);
     }
   }
   if (const YAML::Node ls = v["links"]) {

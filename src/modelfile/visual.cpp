@@ -93,6 +93,15 @@ std::string viewer_scene_json(const Model& model) {
     points.push_back(point);
   }
   for (const auto& [a, b] : model.visual.links) links.push_back({a, b});
+  nlohmann::json frames = nlohmann::json::array();
+  for (const VisualFrame& f : model.visual.frames) {
+    nlohmann::json frame = {
+        {"name", f.name}, {"dimensions", f.dimensions}, {"quaternion", f.quaternion}};
+    if (f.dimensions == 3 || f.quaternion) planar = false;
+    if (f.size > 0.0) frame["size"] = f.size;
+    frames.push_back(frame);
+  }
+  scene["frames"] = frames;
   scene["points"] = points;
   scene["links"] = links;
   scene["trails"] = model.visual.trails;

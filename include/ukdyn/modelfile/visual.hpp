@@ -35,6 +35,16 @@ struct VisualPoint {
   std::string color;    ///< "#rrggbb"; empty: the viewer's choice
 };
 
+/// A frame of a model in coordinates (`visual: frames:`), drawn as three axes: its origin is
+/// the columns `visual.<name>.x`, `.y` (, `.z`), its orientation `visual.<name>.angle` (about z,
+/// planar) or `visual.<name>.qw`, `.qx`, `.qy`, `.qz` (a quaternion, normalized by the viewer).
+struct VisualFrame {
+  std::string name;
+  int dimensions = 2;       ///< of the origin: 2 (z = 0) or 3
+  bool quaternion = false;  ///< orientation by quaternion (else by angle about z)
+  double size = 0.0;        ///< the axes' length; 0: the viewer's choice
+};
+
 /// The `visual:` information of a model. Immutable after the reader fills it.
 struct ModelVisual {
   /// multibody models: each body's solids by body name (none: drawn as its equivalent box)
@@ -42,8 +52,9 @@ struct ModelVisual {
   /// models in coordinates: the points, and the links (pairs of point names) drawn between them
   std::vector<VisualPoint> points;
   std::vector<std::pair<std::string, std::string>> links;
-  /// the points' columns, `visual.<point>.x` …: the outputs of Model::output_program after
-  /// the output expressions (the last columns of trajectory.csv)
+  std::vector<VisualFrame> frames;
+  /// the points' and frames' columns, `visual.<name>.x` …: the outputs of Model::output_program
+  /// after the output expressions (the last columns of trajectory.csv)
   std::vector<std::string> columns;
   /// the points (coordinate models) or bodies (multibody models) whose paths are drawn
   std::vector<std::string> trails;
