@@ -65,7 +65,9 @@ int main(int argc, char** argv) {
   bool no_plots = false;
   bool viewer = false, no_viewer = false;
   CLI::App* run_cmd = app.add_subcommand(
-      "run", "simulate a model; write DIR/trajectory.csv, DIR/summary.json and PNG plots");
+      "run",
+      "simulate a model; write DIR/trajectory.csv, DIR/summary.json, PNG plots and "
+      "animation.html");
   add_source_options(run_cmd, run.source);
   run_cmd
       ->add_option("-o,--output", run.out_dir,

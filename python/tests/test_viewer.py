@@ -155,6 +155,29 @@ def test_toggling_the_force_arrows_changes_the_picture(browser, pendulum_page):
     assert page.errors() == []
 
 
+def test_friction_arrows_are_the_non_ideal_colour_and_toggle(browser, tmp_path):
+    """four_bar_coulomb: the rocker's Coulomb friction is a non-ideal force at C (its
+    coordinates xC, yC), drawn in the non-ideal colour and turned off by its own check box,
+    apart from the ideal arrows."""
+    result = ukdyn.load("four_bar_coulomb").simulate(t_end=0.5)
+    assert np.max(np.abs(result["Qc_nonideal.xC"])) > 0
+    path = tmp_path / "four_bar_coulomb.html"
+    result.save_animation(path)
+    page = Page(browser, path)
+    # the frame of the largest friction force
+    force = np.array(page.js("return ukdyn.data.points.find((p) => p.name === 'C').nonideal"))
+    page.js("ukdyn.setFrame(arguments[0])", int(np.argmax(np.hypot(force[0], force[1]))))
+    both = page.pixels()
+    nonideal, ideal = _mask(both, "#ff2a00").sum(), _mask(both, "#e6007e").sum()
+    assert nonideal > 30 and ideal > 30, (nonideal, ideal)
+    page.js("ukdyn.show('nonideal', false)")
+    only_ideal = page.pixels()
+    assert _mask(only_ideal, "#ff2a00").sum() < 0.05 * nonideal
+    assert _mask(only_ideal, "#e6007e").sum() > 0.8 * ideal  # the ideal arrows stay
+    page.save("four_bar_coulomb.png")
+    assert page.errors() == []
+
+
 # the body colours of the page (viewer_template.html PALETTE), in body order
 PALETTE = ["#1f77b4", "#ff7f0e", "#2ca02c", "#9467bd", "#8c564b", "#bcbd22", "#17becf"]
 
