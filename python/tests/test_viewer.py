@@ -347,3 +347,14 @@ def test_unquoted_hash_colour_is_explained():
                                                r"\(hint: color: \"#d62728\" \(quoted"):
         ukdyn.parse("coordinates: [x]\nkinetic_energy: x_dot^2/2\nvisual:\n"
                     "  points:\n    p: {at: [x, 0], color: #f00\n      }\n", "t.yaml")
+
+
+def test_nothing_to_draw_is_said():
+    """A model in coordinates without visual: has nothing to draw: show() says how to add it."""
+    assert ukdyn.load("control_duffing").simulate(t_end=0.1).animation_html()  # its chart
+    result = ukdyn.load("incline_friction").simulate(t_end=0.1)
+    with pytest.raises(ValueError, match="nothing to draw: the model has no bodies and no visual:"):
+        result.show()
+    result.scene = None  # e.g. a Result read back from a file
+    with pytest.raises(ValueError, match="this result has no scene"):
+        result.save_animation("never.html")

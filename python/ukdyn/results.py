@@ -249,10 +249,12 @@ class Result:
         """The viewer page of this run (the ``animation.html`` of ``ukdyn run --viewer``): one
         self-contained HTML file with three.js and the samples decimated to ``fps`` frames per
         simulated second. Raises ValueError when there is nothing to draw (a run not made by
-        Model.simulate, or a model in coordinates without a ``visual:`` section)."""
+        Model.simulate, or a model in coordinates without a ``visual:`` section or a control
+        whose requirements' errors it could chart)."""
         from . import viewer
         scene = self.scene
-        if scene is None or not (scene.get("bodies") or scene.get("points")):
+        if scene is None or not any(scene.get(k) for k in ("bodies", "points", "frames",
+                                                            "controlled")):
             raise ValueError(
                 "Result.show: nothing to draw: the model has no bodies and no visual: section "
                 "(add visual: {points: {...}, links: [...]}; docs/viewer.md)"
