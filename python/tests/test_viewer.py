@@ -235,7 +235,8 @@ def test_no_viewer_flag(cli, tmp_path):
 @pytest.mark.parametrize("example, t_end", [("heavy_top", 1.0), ("rolling_disk_bodies", 1.0),
                                             ("bricard", 0.5), ("spherical_pendulum", 1.0),
                                             ("double_pendulum", 1.0), ("chaplygin_sleigh", 10.0),
-                                            ("bead_on_rotating_wire", 2.0)])
+                                            ("bead_on_rotating_wire", 2.0),
+                                            ("control_triple_pendulum_tip", 3.0)])
 def test_gallery_screenshots(browser, tmp_path, example, t_end):
     """The gallery's spatial (and two planar) examples draw without errors; screenshots kept."""
     result = ukdyn.load(example).simulate(t_end=t_end)
