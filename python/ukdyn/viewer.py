@@ -212,9 +212,10 @@ def build_page(scene, names, columns, title=None, **options):
     payload = payload.replace("</", "<\\/")
     three = three.replace("</script", "<\\/script")
     title = title or ("ukdyn: " + str(data["model"]))
-    page = template.replace("<!--UKDYN_TITLE-->", _escape(title))
-    page = page.replace("/*UKDYN_DATA*/null", payload, 1)
-    return page.replace("/*UKDYN_THREE*/", three, 1)
+    # three.js before the data: the model's name in the data cannot be taken for a placeholder
+    page = template.replace("<!--UKDYN_TITLE-->", _escape(title), 1)
+    page = page.replace("/*UKDYN_THREE*/", three, 1)
+    return page.replace("/*UKDYN_DATA*/null", payload, 1)
 
 
 def _escape(text):
