@@ -66,6 +66,8 @@ struct RunArguments {
   /// the model's simulate: setting of that name
   std::vector<FlagSetting> settings;
   bool plots = true;  ///< false with --no-plots
+  /// --viewer / --no-viewer: write animation.html (unset: for models with bodies or visual:)
+  std::optional<bool> viewer;
   /// --format: the trajectory's files, "csv" (trajectory.csv) and/or "hdf5" (trajectory.h5)
   std::vector<std::string> formats = {"csv"};
   /// --from-summary FILE: the summary.json of an earlier run to make again (its model, parameter

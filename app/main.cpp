@@ -63,8 +63,11 @@ int main(int argc, char** argv) {
 
   RunArguments run;
   bool no_plots = false;
+  bool viewer = false, no_viewer = false;
   CLI::App* run_cmd = app.add_subcommand(
-      "run", "simulate a model; write DIR/trajectory.csv, DIR/summary.json and PNG plots");
+      "run",
+      "simulate a model; write DIR/trajectory.csv, DIR/summary.json, PNG plots and "
+      "animation.html");
   add_source_options(run_cmd, run.source);
   run_cmd
       ->add_option("-o,--output", run.out_dir,
@@ -114,6 +117,10 @@ int main(int argc, char** argv) {
   run_cmd->add_flag("--no-plots", no_plots,
                     "write no plots (plots need /usr/bin/python3 "
                     "with matplotlib, or $UKDYN_PYTHON)");
+  run_cmd->add_flag("--viewer", viewer,
+                    "write animation.html, the run in a browser (the default for models with "
+                    "bodies or a visual: section; needs /usr/bin/python3 or $UKDYN_PYTHON)");
+  run_cmd->add_flag("--no-viewer", no_viewer, "write no animation.html")->excludes("--viewer");
 
   ModelSource check;
   CLI::App* check_cmd =
@@ -159,6 +166,7 @@ int main(int argc, char** argv) {
         }
       }
       run.plots = !no_plots;
+      if (viewer || no_viewer) run.viewer = viewer;
       run.arguments.assign(argv, argv + argc);
       return run_command(run);
     }

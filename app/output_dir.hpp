@@ -11,9 +11,10 @@ namespace ukdyn::cli {
 
 /// The files `ukdyn run` writes into its directory, in the order it writes them (the plots only
 /// those that apply to the model).
-inline constexpr std::array<const char*, 10> kRunOutputs = {
-    "trajectory.csv", "summary.json", "coordinates.png", "constraint_forces.png", "violation.png",
-    "energy.png",     "control.png",  "bodies.png",      "outputs.png",           "trajectory.h5"};
+inline constexpr std::array<const char*, 11> kRunOutputs = {
+    "trajectory.csv", "summary.json",  "coordinates.png", "constraint_forces.png",
+    "violation.png",  "energy.png",    "control.png",     "bodies.png",
+    "outputs.png",    "trajectory.h5", "animation.html"};
 
 /// Another run holds the directory: the message names it and the other run's pid.
 class DirectoryBusy : public std::runtime_error {

@@ -32,6 +32,7 @@
 #include "output_dir.hpp"
 #include "progress.hpp"
 #include "stop_signals.hpp"
+#include "viewer.hpp"
 
 extern char** environ;
 
@@ -319,6 +320,9 @@ int run_command(const RunArguments& given) {
   files.push_back(summary_path);
   if (args.plots && csv) {
     for (const auto& f : make_plots(csv_path, dir)) files.push_back(f);
+  }
+  if (args.viewer.value_or(viewer_by_default(model)) && csv) {
+    if (const auto page = write_viewer(model, csv_path, dir)) files.push_back(*page);
   }
 
   // what happened

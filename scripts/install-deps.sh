@@ -28,6 +28,9 @@ packages=(
   libmujoco-dev                        # bench_mujoco: MuJoCo 2.2.2 on the shared problems (optional)
   clang libclang-rt-14-dev             # fuzz/: libFuzzer and the sanitizer runtimes of clang
   clang-format                         # scripts/format.sh: the house style, checked by CI
+  libjs-three                          # three.js, embedded in animation.html (ukdyn run --viewer)
+  chromium chromium-driver python3-selenium  # the viewer's tests in a headless browser
+  python3-pil                          # the viewer's tests read the canvas's pixels
 )
 
 missing=()

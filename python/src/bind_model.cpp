@@ -7,6 +7,7 @@
 #include "embedded.hpp"  // app/embedded.hpp: the example models, embedded at build time
 #include "ukdyn/core/format.hpp"
 #include "ukdyn/io/trajectory_files.hpp"
+#include "ukdyn/modelfile/visual.hpp"
 
 namespace ukdyn::python {
 namespace {
@@ -125,6 +126,10 @@ ukdyn.parse() or ukdyn.from_sympy(). Model.simulate() runs it exactly as `ukdyn 
             return py::cast(ControllerHandle{md.controller, nullptr});
           },
           "The Controller of the `control:` section, or None.")
+      .def_property_readonly(
+          "_scene_json", [](const Model& md) { return viewer_scene_json(md); },
+          "The scene the browser viewer draws (modelfile/visual.hpp), as JSON text; "
+          "Result.show() uses it.")
       .def_property_readonly(
           "is_multibody", [](const Model& md) { return bool(md.multibody); },
           "True for a model written with bodies:/joints:/forces:.")

@@ -20,6 +20,7 @@ Ctrl-C during a run raises :class:`Interrupted` (a KeyboardInterrupt) with the p
 
 from __future__ import annotations
 
+import json
 import os
 from typing import Any, Optional
 
@@ -122,6 +123,7 @@ def _model_simulate(self: Model, *, t_end: Optional[float] = None, q0: Any = Non
     with _interrupt.guard() as interrupt:
         names, columns, stats, control, raised = self._run(settings, q0, qd0, interrupt.stop)
     result = Result(names, columns, stats, control, self.coordinates)
+    result.scene = json.loads(self._scene_json)  # what Result.show() draws
     interrupt.raise_if_interrupted(result, raised)
     return _finish(result, check)
 

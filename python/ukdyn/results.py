@@ -56,6 +56,8 @@ class Result:
         self.control: Optional[Dict[str, Any]] = control
         self.coordinates: List[str] = list(coordinates)
         self._alias: Dict[str, int] = self._spellings()
+        #: the scene the browser viewer draws (Model.simulate sets it; None otherwise)
+        self.scene: Optional[Dict[str, Any]] = None
 
     def _spellings(self) -> Dict[str, int]:
         """The other spelling of the columns of a body's coordinates: ``crank_x``, ``crank_x_dot``,
@@ -241,6 +243,45 @@ class Result:
         _ukdyn._write_table_hdf5(os.fspath(path), self.names,
                                  [np.asarray(c, dtype=np.float64) for c in self._columns],
                                  json.dumps(summary))
+
+    # --- the browser viewer (docs/viewer.md) --------------------------------------------------
+    def animation_html(self, fps: float = 30.0) -> str:
+        """The viewer page of this run (the ``animation.html`` of ``ukdyn run --viewer``): one
+        self-contained HTML file with three.js and the samples decimated to ``fps`` frames per
+        simulated second. Raises ValueError when there is nothing to draw (a run not made by
+        Model.simulate, or a model in coordinates without a ``visual:`` section or a control
+        whose requirements' errors it could chart)."""
+        from . import viewer
+        scene = self.scene
+        if scene is None or not any(scene.get(k) for k in ("bodies", "points", "frames",
+                                                            "controlled")):
+            raise ValueError(
+                "Result.show: nothing to draw: the model has no bodies and no visual: section "
+                "(add visual: {points: {...}, links: [...]}; docs/viewer.md)"
+                if scene is not None else
+                "Result.show: this result has no scene (only Model.simulate() records one)")
+        return viewer.build_page(scene, self.names, self._columns, fps=fps)
+
+    def save_animation(self, path: "str | os.PathLike[str]", fps: float = 30.0) -> None:
+        """Writes the viewer page (:meth:`animation_html`) to ``path``; it opens from disk."""
+        from . import viewer
+        viewer.write_page(os.fspath(path), self.animation_html(fps=fps))
+
+    def show(self, height: int = 480, fps: float = 30.0) -> Any:
+        """The viewer, inline in a Jupyter notebook (an IPython HTML object holding the page in
+        an iframe ``height`` pixels tall); outside IPython the same object's ``.data`` is the
+        HTML text."""
+        import html
+        srcdoc = html.escape(self.animation_html(fps=fps), quote=True)
+        frame = ('<iframe srcdoc="%s" style="width:100%%;height:%dpx;border:1px solid #ccc" '
+                 'sandbox="allow-scripts"></iframe>' % (srcdoc, int(height)))
+        try:
+            from IPython.display import HTML
+        except ImportError:  # pragma: no cover - IPython comes with Jupyter
+            class HTML:  # type: ignore[no-redef]
+                def __init__(self, data: str) -> None:
+                    self.data = data
+        return HTML(frame)
 
     # --- plots -------------------------------------------------------------------------------
     def plot(self, *columns: str, ax: Any = None, x: str = "t", **kwargs: Any) -> Any:

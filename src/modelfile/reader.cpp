@@ -1127,6 +1127,7 @@ void Reader::read_output(const YAML::Node& root, Model& model) {
       }
     }
   }
+  read_visual(root, model, exprs);
   model.output_program = compile(exprs, out ? out : root, "the output expressions");
 }
 

@@ -443,7 +443,7 @@ void MultibodyReader::read_bodies() {
     const std::string what = "body '" + d.name + "'";
     switch (d.kind) {
       case BodyKind::kParticle: {
-        check_keys(b, {"name", "type", "mass", "position", "velocity"},
+        check_keys(b, {"name", "type", "mass", "position", "velocity", "visual"},
                    "particle '" + d.name + "'");
         const double m = positive(require(b, "mass", what, "mass: 1"), what + " mass");
         const Vector3d p =
@@ -456,7 +456,7 @@ void MultibodyReader::read_bodies() {
       case BodyKind::kPlanar: {
         check_keys(b,
                    {"name", "type", "mass", "inertia", "position", "angle", "velocity",
-                    "angular_velocity"},
+                    "angular_velocity", "visual"},
                    "planar body '" + d.name + "'");
         const double m = positive(require(b, "mass", what, "mass: 1"), what + " mass");
         const double I = positive(require(b, "inertia", what, "inertia: m*L^2/12"),
@@ -484,7 +484,7 @@ void MultibodyReader::read_bodies() {
         }
         check_keys(b,
                    {"name", "type", "mass", "inertia", "position", "orientation", "velocity",
-                    "angular_velocity"},
+                    "angular_velocity", "visual"},
                    "rigid body '" + d.name + "'");
         const double m = positive(require(b, "mass", what, "mass: 1"), what + " mass");
         const YAML::Node In = require(b, "inertia", what, "inertia: [A, A, C]");

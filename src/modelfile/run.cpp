@@ -56,7 +56,7 @@ void add_model_columns(const Model& model, const Trajectory& traj, std::vector<C
   }
   const auto values = evaluate_output_expressions(model, traj);
   for (std::size_t k = 0; k < values.size(); ++k) {
-    out.push_back(CsvColumn{model.output_names[k], values[k]});
+    out.push_back(CsvColumn{output_column_name(model, k), values[k]});
   }
 }
 
@@ -158,7 +158,7 @@ ModelRun run_model(const Model& model, const SimulationOptions& options) {
   }
   const auto values = evaluate_output_expressions(model, run.trajectory);
   for (std::size_t k = 0; k < values.size(); ++k) {
-    run.extra_columns.push_back(CsvColumn{model.output_names[k], values[k]});
+    run.extra_columns.push_back(CsvColumn{output_column_name(model, k), values[k]});
   }
   return run;
 }

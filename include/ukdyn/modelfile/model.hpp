@@ -14,6 +14,7 @@
 
 #include "ukdyn/core/system.hpp"
 #include "ukdyn/modelfile/expression.hpp"
+#include "ukdyn/modelfile/visual.hpp"
 #include "ukdyn/simulation/simulate.hpp"
 
 namespace ukdyn {
@@ -81,7 +82,8 @@ struct Model {
   bool project_initial = false;              ///< `initial: project:`
   SimulationOptions options;                 ///< `simulate:` and `output:`
   /// `output: expressions:` by name, compiled over (q, q_dot, t): evaluate with
-  /// evaluate_output_expressions().
+  /// evaluate_output_expressions(). The program's outputs are these, then the `visual:`
+  /// points' coordinates (visual.columns); output_column_name() names them all.
   std::vector<std::string> output_names;
   expr::Program output_program;
   /// `control:` — the controller (with its nominal model) that run_model() applies to the
@@ -91,6 +93,8 @@ struct Model {
   /// (its poses and joint reactions are reported); null for a model in generalized coordinates
   /// (multibody/multibody.hpp).
   std::shared_ptr<const mb::MultibodyModel> multibody;
+  /// `visual:` — how the browser viewer draws the model (modelfile/visual.hpp).
+  ModelVisual visual;
   /// Where the file gave the settings, the initial state and the constraints (all unknown for
   /// a model not read from text).
   ModelPositions positions;
@@ -136,6 +140,9 @@ struct CheckReport {
 /// Checks a model at its initial state: sizes, rank and redundancy of the constraints, initial
 /// consistency (against initial_tolerance of its options), and M. Cost: a few evaluations.
 CheckReport check_model(const Model& model);
+
+/// The name of output k of model.output_program: output_names[k], then visual.columns.
+const std::string& output_column_name(const Model& model, std::size_t k);
 
 /// The values of the model's output expressions at every sample of a trajectory: one vector per
 /// name, in output_names order.

@@ -1,0 +1,93 @@
+// `ukdyn run --viewer`: the embedded page generator, run with the system's python (app/viewer.hpp).
+#include "viewer.hpp"
+
+#include <cerrno>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <fstream>
+#include <string>
+#include <system_error>
+#include <vector>
+
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <ukdyn/modelfile/model.hpp>
+#include <ukdyn/modelfile/visual.hpp>
+
+extern char** environ;
+
+namespace ukdyn::cli {
+namespace fs = std::filesystem;
+namespace {
+
+// runs argv[0] with argv; its exit status, or −1 when it could not start
+int run_program(std::vector<std::string> args) {
+  std::vector<char*> argv;
+  for (auto& a : args) argv.push_back(a.data());
+  argv.push_back(nullptr);
+  pid_t pid = 0;
+  if (posix_spawn(&pid, argv[0], nullptr, nullptr, argv.data(), environ) != 0) return -1;
+  int status = 0;
+  while (waitpid(pid, &status, 0) < 0) {
+    if (errno != EINTR) return -1;
+  }
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+bool write_text(const fs::path& path, const char* text) {
+  std::ofstream out(path, std::ios::binary);
+  out << text;
+  return bool(out);
+}
+
+}  // namespace
+
+bool viewer_by_default(const Model& model) {
+  return model.multibody || !model.visual.points.empty();
+}
+
+std::optional<fs::path> write_viewer(const Model& model, const fs::path& csv, const fs::path& dir) {
+  if (*kThreeJs == '\0') {
+    std::fprintf(stderr,
+                 "warning: this ukdyn was built without three.js (Debian's libjs-three): no "
+                 "animation.html\n");
+    return std::nullopt;
+  }
+  const char* env = std::getenv("UKDYN_PYTHON");
+  const std::string python = env && *env ? env : "/usr/bin/python3";
+  if (::access(python.c_str(), X_OK) != 0) {
+    std::fprintf(stderr,
+                 "warning: %s not found: no animation.html (set UKDYN_PYTHON, or pass "
+                 "--no-viewer)\n",
+                 python.c_str());
+    return std::nullopt;
+  }
+  // the generator, its assets and the scene go to a private temporary directory
+  std::string temp = (fs::temp_directory_path() / "ukdyn-viewer-XXXXXX").string();
+  if (::mkdtemp(temp.data()) == nullptr) {
+    std::fprintf(stderr, "warning: cannot create a temporary directory: no animation.html\n");
+    return std::nullopt;
+  }
+  const fs::path work(temp), page = dir / "animation.html";
+  const bool written = write_text(work / "viewer.py", kViewerScript) &&
+                       write_text(work / "viewer_template.html", kViewerTemplate) &&
+                       write_text(work / "three.min.js", kThreeJs) &&
+                       write_text(work / "OrbitControls.js", kOrbitControlsJs) &&
+                       write_text(work / "scene.json", viewer_scene_json(model).c_str());
+  const int code = written ? run_program({python, (work / "viewer.py").string(), csv.string(),
+                                          (work / "scene.json").string(), page.string()})
+                           : -1;
+  std::error_code ec;
+  fs::remove_all(work, ec);
+  if (code != 0) {
+    std::fprintf(
+        stderr, "warning: the viewer's page generator failed (exit %d): no animation.html\n", code);
+    return std::nullopt;
+  }
+  return page;
+}
+
+}  // namespace ukdyn::cli

@@ -1,0 +1,33 @@
+// `ukdyn run --viewer`: animation.html, the browser viewer of the run (docs/viewer.md), written
+// by the page generator python/ukdyn/viewer.py, embedded in the program with its template and
+// three.js (app/embed_viewer.cmake writes viewer_embedded.cpp in the build tree).
+#pragma once
+
+#include <filesystem>
+#include <optional>
+
+namespace ukdyn {
+struct Model;
+}
+
+namespace ukdyn::cli {
+
+/// python/ukdyn/viewer.py, its page template, and Debian's three.js and OrbitControls (empty
+/// when the program was built without libjs-three).
+extern const char* const kViewerScript;
+extern const char* const kViewerTemplate;
+extern const char* const kThreeJs;
+extern const char* const kOrbitControlsJs;
+
+/// Whether `ukdyn run` writes the viewer when neither --viewer nor --no-viewer is given: for
+/// models with bodies or a `visual:` section.
+bool viewer_by_default(const Model& model);
+
+/// Writes dir/animation.html from the run's trajectory.csv and the model's scene
+/// (viewer_scene_json) with /usr/bin/python3 (or $UKDYN_PYTHON). Returns its path, or nothing
+/// after a warning on stderr when it could not be written (no python, no three.js).
+std::optional<std::filesystem::path> write_viewer(const Model& model,
+                                                  const std::filesystem::path& csv,
+                                                  const std::filesystem::path& dir);
+
+}  // namespace ukdyn::cli

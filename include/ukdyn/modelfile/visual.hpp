@@ -1,0 +1,68 @@
+/// @file modelfile/visual.hpp
+/// How a model is drawn by the browser viewer (`ukdyn run --viewer`, Python's Result.show();
+/// docs/viewer.md): the `visual:` entries of a model file, and the scene description the page
+/// generator (python/ukdyn/viewer.py) reads beside trajectory.csv.
+#pragma once
+
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <Eigen/Core>
+
+namespace ukdyn {
+
+struct Model;
+
+/// One solid drawn with a body (`visual:` of a body entry), in body coordinates.
+struct VisualShape {
+  std::string shape;  ///< "box", "cylinder", "capsule" or "sphere"
+  /// box: the edges along the body's x, y, z; cylinder, capsule: (radius, length, 0) with the
+  /// length along `axis`; sphere: (radius, 0, 0)
+  Eigen::Vector3d size = Eigen::Vector3d::Zero();
+  char axis = 'x';                                   ///< cylinder, capsule: 'x', 'y' or 'z'
+  Eigen::Vector3d offset = Eigen::Vector3d::Zero();  ///< its centre in body coordinates
+  std::string color;                                 ///< "#rrggbb"; empty: the viewer's choice
+};
+
+/// A point of a model in coordinates (`visual: points:`): its position is the output columns
+/// `visual.<name>.x`, `.y` (and `.z` when three expressions are given), which the reader adds
+/// after the model's output expressions.
+struct VisualPoint {
+  std::string name;
+  int dimensions = 2;   ///< 2 (z = 0) or 3
+  double radius = 0.0;  ///< of its sphere; 0: the viewer's choice
+  std::string color;    ///< "#rrggbb"; empty: the viewer's choice
+};
+
+/// A frame of a model in coordinates (`visual: frames:`), drawn as three axes: its origin is
+/// the columns `visual.<name>.x`, `.y` (, `.z`), its orientation `visual.<name>.angle` (about z,
+/// planar) or `visual.<name>.qw`, `.qx`, `.qy`, `.qz` (a quaternion, normalized by the viewer).
+struct VisualFrame {
+  std::string name;
+  int dimensions = 2;       ///< of the origin: 2 (z = 0) or 3
+  bool quaternion = false;  ///< orientation by quaternion (else by angle about z)
+  double size = 0.0;        ///< the axes' length; 0: the viewer's choice
+};
+
+/// The `visual:` information of a model. Immutable after the reader fills it.
+struct ModelVisual {
+  /// multibody models: each body's solids by body name (none: drawn as its equivalent box)
+  std::vector<std::pair<std::string, std::vector<VisualShape>>> bodies;
+  /// models in coordinates: the points, and the links (pairs of point names) drawn between them
+  std::vector<VisualPoint> points;
+  std::vector<std::pair<std::string, std::string>> links;
+  std::vector<VisualFrame> frames;
+  /// the points' and frames' columns, `visual.<name>.x` …: the outputs of Model::output_program
+  /// after the output expressions (the last columns of trajectory.csv)
+  std::vector<std::string> columns;
+  /// the points (coordinate models) or bodies (multibody models) whose paths are drawn
+  std::vector<std::string> trails;
+};
+
+/// The scene description of `model` as JSON text, for the page generator: the bodies (kind,
+/// mass, principal inertias, solids), the joints (type, parent, child and their points), the
+/// points, links and trails of `visual:`, the control's requirements. Cost O(bodies + joints).
+std::string viewer_scene_json(const Model& model);
+
+}  // namespace ukdyn

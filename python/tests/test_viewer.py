@@ -1,0 +1,361 @@
+"""The browser viewer (docs/viewer.md) in a real browser: headless Chromium through Selenium
+(Debian's chromium, chromium-driver, python3-selenium), software-rendered WebGL (SwiftShader).
+
+What is checked comes from analysis, not from the page: the pendulum's bob is drawn where the
+perspective projection of (L sin θ, −L cos θ) falls (the camera read from the page, the
+projection done here); every body of a mechanism shows in its own colour; moving the slider moves
+the drawing; turning the force arrows off removes their colour. Screenshots of the gallery's
+spatial examples are kept in $UKDYN_TEST_OUTPUT/viewer/ (CI's artefacts).
+"""
+
+import base64
+import io
+import math
+import os
+import pathlib
+import shutil
+import subprocess
+import time
+
+import numpy as np
+import pytest
+
+import ukdyn
+
+CHROMEDRIVER = "/usr/bin/chromedriver"
+
+
+def _artefacts() -> pathlib.Path:
+    base = os.environ.get("UKDYN_TEST_OUTPUT")
+    root = pathlib.Path(base) if base else pathlib.Path(__file__).resolve().parents[2] / "build"
+    path = root / "viewer"
+    path.mkdir(parents=True, exist_ok=True)
+    return path
+
+
+@pytest.fixture(scope="module")
+def browser():
+    """Headless Chromium (as root in CI: --no-sandbox), 900 × 600, WebGL by SwiftShader."""
+    webdriver = pytest.importorskip("selenium.webdriver", reason="python3-selenium is not installed")
+    from selenium.webdriver.chrome.service import Service
+    if not os.access(CHROMEDRIVER, os.X_OK) or not shutil.which("chromium"):
+        pytest.skip("chromium and chromium-driver are not installed (scripts/install-deps.sh)")
+    options = webdriver.ChromeOptions()
+    for a in ("--headless=new", "--no-sandbox", "--disable-dev-shm-usage", "--use-gl=swiftshader",
+              "--enable-unsafe-swiftshader", "--ignore-gpu-blocklist", "--window-size=900,700",
+              "--force-device-scale-factor=1"):
+        options.add_argument(a)
+    options.set_capability("goog:loggingPrefs", {"browser": "ALL"})
+    driver = webdriver.Chrome(service=Service(CHROMEDRIVER), options=options)
+    yield driver
+    driver.quit()
+
+
+class Page:
+    """A viewer page open in the browser."""
+
+    def __init__(self, driver, path: pathlib.Path) -> None:
+        self.driver = driver
+        driver.get_log("browser")  # drop what earlier pages said
+        driver.get(path.resolve().as_uri())
+        for _ in range(100):
+            if driver.execute_script("return !!(window.ukdyn && window.ukdyn.ready)"):
+                break
+            time.sleep(0.05)
+        assert driver.execute_script("return !!(window.ukdyn && window.ukdyn.ready)"), \
+            "the viewer did not start: %s" % driver.get_log("browser")
+
+    def errors(self):
+        return [e for e in self.driver.get_log("browser") if e["level"] == "SEVERE"]
+
+    def js(self, code, *args):
+        return self.driver.execute_script(code, *args)
+
+    def pixels(self) -> np.ndarray:
+        """The canvas as an H × W × 3 array of 0..255."""
+        from PIL import Image
+        url = self.js("return ukdyn.snapshot()")
+        image = Image.open(io.BytesIO(base64.b64decode(url.split(",", 1)[1]))).convert("RGB")
+        return np.asarray(image).astype(int)
+
+    def save(self, name: str) -> pathlib.Path:
+        path = _artefacts() / name
+        self.driver.save_screenshot(str(path))
+        return path
+
+
+def _mask(img: np.ndarray, hex_colour: str, tolerance: float = 0.06) -> np.ndarray:
+    """Pixels of the colour's chromaticity (its shade under the lights may differ), saturated."""
+    target = np.array([int(hex_colour[i:i + 2], 16) for i in (1, 3, 5)], float)
+    total = img.sum(axis=2)
+    chroma = img / np.maximum(total, 1)[..., None]
+    want = target / max(target.sum(), 1)
+    spread = img.max(axis=2) - img.min(axis=2)
+    return (np.abs(chroma - want).max(axis=2) < tolerance) & (spread > 35)
+
+
+def _project(camera, point):
+    """The pixel of a world point for the page's perspective camera (computed here: the camera
+    looks from `position` at `target` with the `up` vector and vertical field of view `fov`)."""
+    eye, target, up = (np.array(camera[k], float) for k in ("position", "target", "up"))
+    forward = target - eye
+    forward /= np.linalg.norm(forward)
+    right = np.cross(forward, up)
+    right /= np.linalg.norm(right)
+    true_up = np.cross(right, forward)
+    d = np.array(point, float) - eye
+    depth = d @ forward
+    focal = camera["height"] / 2 / math.tan(math.radians(camera["fov"]) / 2)
+    return (camera["width"] / 2 + focal * (d @ right) / depth,
+            camera["height"] / 2 - focal * (d @ true_up) / depth)
+
+
+@pytest.fixture(scope="module")
+def pendulum_page(tmp_path_factory):
+    """The pendulum example (its visual: bob at (x, y)), 1.2 s."""
+    result = ukdyn.load("pendulum").simulate(t_end=1.2)
+    path = tmp_path_factory.mktemp("viewer") / "pendulum.html"
+    result.save_animation(path)
+    return result, path
+
+
+def test_pendulum_bob_is_drawn_where_the_projection_says(browser, pendulum_page):
+    result, path = pendulum_page
+    page = Page(browser, path)
+    page.js("ukdyn.show('trails', false); ukdyn.show('ideal', false)")
+    camera = page.js("return ukdyn.camera()")
+    t_page = page.js("return ukdyn.data.t")
+    L = 1.0
+    for frame in (0, len(t_page) // 3, 2 * len(t_page) // 3, len(t_page) - 1):
+        page.js("ukdyn.setFrame(arguments[0])", frame)
+        # the angle at the frame's time, from the run (theta = atan2(x, -y))
+        theta = float(np.interp(t_page[frame], result.t, result["theta"]))
+        expected = _project(camera, (L * math.sin(theta), -L * math.cos(theta), 0.0))
+        mask = _mask(page.pixels(), "#d62728")
+        assert mask.sum() > 50, "the bob is not drawn at frame %d" % frame
+        ys, xs = np.nonzero(mask)
+        assert abs(xs.mean() - expected[0]) < 3 and abs(ys.mean() - expected[1]) < 3, \
+            (frame, theta, (xs.mean(), ys.mean()), expected)
+    assert page.errors() == []
+
+
+def test_toggling_the_force_arrows_changes_the_picture(browser, pendulum_page):
+    _, path = pendulum_page
+    page = Page(browser, path)
+    page.js("ukdyn.setFrame(10)")
+    with_arrows = page.pixels()
+    arrow = _mask(with_arrows, "#e6007e").sum()
+    page.js("ukdyn.show('ideal', false)")
+    without = page.pixels()
+    assert arrow > 30  # the rod's tension, drawn at the bob
+    assert _mask(without, "#e6007e").sum() < 0.05 * arrow
+    assert (np.abs(with_arrows - without).sum(axis=2) > 30).sum() > 30
+    page.js("ukdyn.show('ideal', true)")
+    assert _mask(page.pixels(), "#e6007e").sum() == arrow
+    assert page.errors() == []
+
+
+def test_friction_arrows_are_the_non_ideal_colour_and_toggle(browser, tmp_path):
+    """four_bar_coulomb: the rocker's Coulomb friction is a non-ideal force at C (its
+    coordinates xC, yC), drawn in the non-ideal colour and turned off by its own check box,
+    apart from the ideal arrows."""
+    result = ukdyn.load("four_bar_coulomb").simulate(t_end=0.5)
+    assert np.max(np.abs(result["Qc_nonideal.xC"])) > 0
+    path = tmp_path / "four_bar_coulomb.html"
+    result.save_animation(path)
+    page = Page(browser, path)
+    # the frame of the largest friction force
+    force = np.array(page.js("return ukdyn.data.points.find((p) => p.name === 'C').nonideal"))
+    page.js("ukdyn.setFrame(arguments[0])", int(np.argmax(np.hypot(force[0], force[1]))))
+    both = page.pixels()
+    nonideal, ideal = _mask(both, "#ff2a00").sum(), _mask(both, "#e6007e").sum()
+    assert nonideal > 30 and ideal > 30, (nonideal, ideal)
+    page.js("ukdyn.show('nonideal', false)")
+    only_ideal = page.pixels()
+    assert _mask(only_ideal, "#ff2a00").sum() < 0.05 * nonideal
+    assert _mask(only_ideal, "#e6007e").sum() > 0.8 * ideal  # the ideal arrows stay
+    page.save("four_bar_coulomb.png")
+    assert page.errors() == []
+
+
+# the body colours of the page (viewer_template.html PALETTE), in body order
+PALETTE = ["#1f77b4", "#ff7f0e", "#2ca02c", "#9467bd", "#8c564b", "#bcbd22", "#17becf"]
+
+
+def test_command_draws_every_body_and_the_slider_moves_them(browser, cli, tmp_path):
+    """ukdyn run writes animation.html by default for a model with bodies: the five bars of the
+    double four-bar show in five colours (and no sixth), and the slider moves them."""
+    out = tmp_path / "four_bar"
+    proc = subprocess.run([cli, "run", "--example", "double_four_bar_bodies", "--t-end", "1",
+                           "-o", str(out), "--no-plots"], capture_output=True, text=True,
+                          timeout=120)
+    assert proc.returncode == 0, proc.stderr
+    assert "animation.html" in proc.stdout
+    page = Page(browser, out / "animation.html")
+    first = page.pixels()
+    counts = [int(_mask(first, c).sum()) for c in PALETTE]
+    assert all(c > 100 for c in counts[:5]), counts
+    assert all(c < 5 for c in counts[5:]), counts
+    page.save("double_four_bar_bodies.png")
+    frames = page.js("return ukdyn.frames")
+    assert frames == 31  # 1 s at 30 frames per second, both ends
+    page.js("ukdyn.setFrame(arguments[0])", frames - 1)
+    last = page.pixels()
+    # each body moved: its colour left some of the pixels it covered
+    for c in PALETTE[:5]:
+        before, after = _mask(first, c), _mask(last, c)
+        assert (before & ~after).sum() > 20, c
+    assert page.errors() == []
+
+
+@pytest.mark.parametrize("example, flags, written", [
+    ("pendulum", [], True),                   # a visual: section: on by default
+    ("control_duffing", [], False),           # coordinates without visual: off by default
+    ("control_duffing", ["--viewer"], True),  # asked for: the requirement's error chart
+])
+def test_viewer_default_and_flag(cli, tmp_path, example, flags, written):
+    out = tmp_path / "run"
+    proc = subprocess.run([cli, "run", "--example", example, "--t-end", "0.2", "-o", str(out),
+                           "--no-plots", *flags], capture_output=True, text=True, timeout=120)
+    assert proc.returncode == 0, proc.stderr
+    assert (out / "animation.html").exists() == written
+    assert ("wrote %s" % (out / "animation.html") in proc.stdout) == written
+    assert "warning" not in proc.stderr
+
+
+def test_no_viewer_flag(cli, tmp_path):
+    out = tmp_path / "none"
+    proc = subprocess.run([cli, "run", "--example", "double_four_bar_bodies", "--t-end", "0.05",
+                           "-o", str(out), "--no-plots", "--no-viewer"], capture_output=True,
+                          text=True, timeout=120)
+    assert proc.returncode == 0, proc.stderr
+    assert not (out / "animation.html").exists()
+
+
+@pytest.mark.parametrize("example, t_end", [("heavy_top", 1.0), ("rolling_disk_bodies", 1.0),
+                                            ("bricard", 0.5), ("spherical_pendulum", 1.0),
+                                            ("double_pendulum", 1.0), ("chaplygin_sleigh", 10.0),
+                                            ("bead_on_rotating_wire", 2.0),
+                                            ("control_triple_pendulum_tip", 3.0)])
+def test_gallery_screenshots(browser, tmp_path, example, t_end):
+    """The gallery's spatial (and two planar) examples draw without errors; screenshots kept."""
+    result = ukdyn.load(example).simulate(t_end=t_end)
+    path = tmp_path / (example + ".html")
+    result.save_animation(path)
+    assert path.stat().st_size < 2_000_000
+    page = Page(browser, path)
+    page.js("ukdyn.setFrame(ukdyn.frames - 1)")
+    img = page.pixels()
+    coloured = (img.max(axis=2) - img.min(axis=2) > 60).sum()
+    assert coloured > 200, "nothing coloured drawn"
+    page.save(example + ".png")
+    assert page.errors() == []
+
+
+def test_frame_axes_turn_with_the_angle(browser, tmp_path):
+    """A visual: frame is drawn as three axes: its x axis (red) points along the angle."""
+    result = ukdyn.parse(
+        "coordinates: [th]\nkinetic_energy: th_dot^2/2\ninitial: {q_dot: {th: 1}}\n"
+        "simulate: {t_end: 3}\noutput: {every: 0.01}\n"
+        "visual: {points: {o: [0, 0], far: [1, 1]}, frames: {f: {at: [0, 0], angle: th, size: 1}}}\n",
+        "frame.yaml").simulate()
+    path = tmp_path / "frame.html"
+    result.save_animation(path)
+    page = Page(browser, path)
+    camera = page.js("return ukdyn.camera()")
+    t_page = page.js("return ukdyn.data.t")
+    for frame in (0, len(t_page) // 2):
+        page.js("ukdyn.setFrame(arguments[0])", frame)
+        th = t_page[frame]  # th = t
+        red = _mask(page.pixels(), "#cc0000", tolerance=0.1)
+        ys, xs = np.nonzero(red)
+        assert red.sum() > 20
+        # the red pixels lie along the projected x axis (cos th, sin th): their mean is on it
+        # (the arrow's head weighs more than its shaft, so not at the middle)
+        o = np.array(_project(camera, (0.0, 0.0, 0.0)))
+        tip = np.array(_project(camera, (math.cos(th), math.sin(th), 0.0))) - o
+        c = np.array([xs.mean(), ys.mean()]) - o
+        along = c @ tip / (tip @ tip)
+        across = abs(c[0] * tip[1] - c[1] * tip[0]) / np.linalg.norm(tip)
+        assert 0.3 < along < 1.0 and across < 3, (frame, th, along, across)
+    assert page.errors() == []
+
+
+def _chain(bodies: int) -> str:
+    """A planar chain of `bodies` bars (a pendulum of many links)."""
+    lines = ["name: chain of %d bars" % bodies, "parameters: {m: 1, L: 0.5, g: 9.81}", "bodies:"]
+    for k in range(bodies):
+        lines.append("  - {name: b%d, type: planar, mass: m, inertia: m*L^2/12, position: [%g*L, 0]}"
+                     % (k, k + 0.5))
+    lines.append("joints:")
+    lines.append("  - {name: j0, type: revolute, parent: ground, child: b0, parent_point: [0, 0], "
+                 "child_point: [-L/2, 0]}")
+    for k in range(1, bodies):
+        lines.append("  - {name: j%d, type: revolute, parent: b%d, child: b%d, parent_point: [L/2, 0],"
+                     " child_point: [-L/2, 0]}" % (k, k - 1, k))
+    lines += ["forces:", "  - {type: gravity, g: [0, -g]}",
+              "simulate: {t_end: 10, integrator: dopri5, rtol: 1e-6, atol: 1e-8}", "output: {every: 0.01}"]
+    return "\n".join(lines) + "\n"
+
+
+def test_ten_bodies_ten_seconds_under_2_mb():
+    result = ukdyn.parse(_chain(10), "chain.yaml").simulate()
+    html = result.animation_html()
+    assert len(html.encode()) < 2_000_000
+    # 10 s at 30 frames per simulated second: 301 frames, whatever the run's sample rate
+    assert '"t":[0,' in html
+
+
+def test_declared_solids_and_colours():
+    model = ukdyn.parse(
+        "name: box\n"
+        "bodies:\n"
+        "  - {name: b, type: rigid, mass: 1, inertia: [1, 1, 1],\n"
+        "     visual: [{shape: box, size: [1, 0.2, 0.1], color: \"#123456\"},\n"
+        "              {shape: capsule, radius: 0.1, length: 1, axis: z, offset: [0, 0, 0.5]}]}\n"
+        "simulate: {t_end: 0.1}\n", "box.yaml")
+    result = model.simulate()
+    body = result.scene["bodies"][0]
+    assert body["visual"][0] == {"shape": "box", "size": [1, 0.2, 0.1], "offset": [0, 0, 0],
+                                 "color": "#123456"}
+    assert body["visual"][1]["axis"] == "z" and body["visual"][1]["length"] == 1
+
+
+@pytest.mark.parametrize("text, line, marker, message", [
+    ("bodies:\n  - {name: b, type: particle, mass: 1, visual: {shape: cone, radius: 1}}\n",
+     2, "cone", "unknown shape 'cone'"),
+    ("bodies:\n  - {name: b, type: particle, mass: 1, visual: {shape: box, color: red}}\n",
+     2, "{shape", "a box needs size: [x, y, z]"),
+    ("coordinates: [x]\nkinetic_energy: x_dot^2/2\nvisual:\n  points: {p: [x, 0]}\n"
+     "  links: [[p, q]]\n", 5, "q]", "the link names 'q', which is not a point"),
+    ("coordinates: [x]\nkinetic_energy: x_dot^2/2\nvisual:\n  points: {p: [x, 0]}\n"
+     "  trails: [r]\n", 5, "r]", "the trail names 'r', which is not a point"),
+    ("coordinates: [x]\nkinetic_energy: x_dot^2/2\nvisual:\n  points: {p: {at: [x, 0], color: teal}}\n",
+     4, "teal", "unknown colour 'teal'"),
+])
+def test_visual_errors_are_located(text, line, marker, message):
+    """Errors in visual: name the file, line and column of the entry at fault."""
+    with pytest.raises(ukdyn.ModelError) as e:
+        ukdyn.parse(text, "t.yaml")
+    column = text.splitlines()[line - 1].index(marker) + 1
+    assert str(e.value).startswith("t.yaml:%d:%d: error: " % (line, column)), str(e.value)
+    assert message in str(e.value), str(e.value)
+
+
+def test_unquoted_hash_colour_is_explained():
+    """color: #f00 is a YAML comment: the value is empty, and the hint says to quote it."""
+    with pytest.raises(ukdyn.ModelError, match=r"t\.yaml:5:21: error: .*the colour is empty "
+                                               r"\(hint: color: \"#d62728\" \(quoted"):
+        ukdyn.parse("coordinates: [x]\nkinetic_energy: x_dot^2/2\nvisual:\n"
+                    "  points:\n    p: {at: [x, 0], color: #f00\n      }\n", "t.yaml")
+
+
+def test_nothing_to_draw_is_said():
+    """A model in coordinates without visual: has nothing to draw: show() says how to add it."""
+    assert ukdyn.load("control_duffing").simulate(t_end=0.1).animation_html()  # its chart
+    result = ukdyn.load("incline_friction").simulate(t_end=0.1)
+    with pytest.raises(ValueError, match="nothing to draw: the model has no bodies and no visual:"):
+        result.show()
+    result.scene = None  # e.g. a Result read back from a file
+    with pytest.raises(ValueError, match="this result has no scene"):
+        result.save_animation("never.html")

@@ -1,0 +1,293 @@
+#!/usr/bin/python3
+"""The browser viewer of a ukdyn run: one self-contained HTML page (docs/viewer.md).
+
+The one implementation of the page, used by ``ukdyn run --viewer`` (which embeds this file,
+the page template and three.js, and runs it with /usr/bin/python3) and by Python's
+``Result.show()`` / ``Result.save_animation()``.
+
+usage: viewer.py TRAJECTORY.csv SCENE.json OUTPUT.html
+
+The scene (modelfile/visual.hpp, ``viewer_scene_json``) says what to draw: bodies (kind, mass,
+principal inertias, declared solids), joints (parent, child and their points), the points,
+links and trails of a ``visual:`` section. The trajectory's columns say where: a planar body's
+``<b>.x, <b>.y, <b>.theta``; a rigid body's ``<b>.x, <b>.y, <b>.z, <b>.u0 … <b>.u3``; a point's
+``visual.<p>.x, .y (, .z)``; a joint's reaction ``reaction.<j>.fx, fy (, fz)`` (ideal) and
+``reaction.<j>.friction_fx …`` (non-ideal), drawn at the joint's point on its child; the control
+force ``Qc_control.<c>``; the energy ``energy``. The samples are decimated to the display rate
+(``fps`` frames per simulated second) and rounded to what a screen shows (``digits`` significant
+digits), and the page holds three.js itself: it opens from disk, without a server or network.
+
+Pure Python (no NumPy needed): the command runs it with whatever /usr/bin/python3 has.
+"""
+import csv
+import json
+import math
+import os
+import sys
+
+# where three.js is found when it is not beside this file (Debian's libjs-three)
+DEBIAN_THREE = "/usr/share/javascript/three"
+THREE_FILES = ("three.min.js", "OrbitControls.js")
+TEMPLATE = "viewer_template.html"
+
+# the frames per simulated second, the most frames a page holds, the significant digits
+FPS = 30.0
+MAX_FRAMES = 3000
+DIGITS = 4
+
+
+def _asset(name, here):
+    """The text of an asset: beside this file, else in Debian's libjs-three."""
+    places = [os.path.join(here, name), os.path.join(here, "_viewer", name)]
+    if name == "three.min.js":
+        places.append(os.path.join(DEBIAN_THREE, name))
+    elif name == "OrbitControls.js":
+        places.append(os.path.join(DEBIAN_THREE, "examples", "js", "controls", name))
+    for p in places:
+        if os.path.exists(p):
+            with open(p, encoding="utf-8") as f:
+                return f.read()
+    raise FileNotFoundError(
+        "viewer: %s not found (looked in %s; install Debian's libjs-three)" % (name, ", ".join(places)))
+
+
+def _frames(t, fps, max_frames):
+    """The indices of the samples shown: about fps per simulated second (every sample when they
+    are sparser), at most max_frames, always the first and the last."""
+    n = len(t)
+    if n == 0:
+        return []
+    span = t[-1] - t[0]
+    wanted = min(max_frames, max(2, int(math.ceil(span * fps)) + 1)) if span > 0 else 1
+    if wanted >= n:
+        return list(range(n))
+    out, k = [], 0
+    for i in range(wanted):
+        target = t[0] + span * i / (wanted - 1)
+        while k + 1 < n and t[k + 1] <= target:
+            k += 1
+        if not out or out[-1] != k:
+            out.append(k)
+    if out[-1] != n - 1:
+        out.append(n - 1)
+    return out
+
+
+def _round(v, digits):
+    """v with `digits` significant digits, as a short JSON number (null when not finite)."""
+    if v is None or not math.isfinite(v):
+        return None
+    if v == 0:
+        return 0
+    r = float("%.*g" % (digits, v))
+    return int(r) if r.is_integer() and abs(r) < 1e15 else r
+
+
+class _Packer:
+    """Columns of the decimated samples as compact JSON arrays, rounded."""
+
+    def __init__(self, names, columns, keep, digits):
+        self.index = {}
+        for k, name in enumerate(names):
+            self.index.setdefault(name, k)
+        self.columns, self.keep, self.digits = columns, keep, digits
+
+    def has(self, name):
+        return name in self.index
+
+    def raw(self, name):
+        column = self.columns[self.index[name]]
+        return [float(column[i]) for i in self.keep]
+
+    def pack(self, name, digits=None):
+        d = self.digits if digits is None else digits
+        return [_round(v, d) for v in self.raw(name)]
+
+
+def _scale(values):
+    """The magnitude drawn a quarter of the scene long: the 90th percentile of the vectors'
+    finite magnitudes over the run (a peak, an impact, does not shrink every other frame's
+    arrows to nothing; the viewer caps what is longer); 1 when there is none."""
+    norms = sorted(math.sqrt(sum(c * c for c in v if c is not None and math.isfinite(c)))
+                   for v in values)
+    norms = [n for n in norms if n > 0]
+    if not norms:
+        return 1.0
+    return norms[min(len(norms) - 1, int(0.9 * len(norms)))]
+
+
+def scene_data(scene, names, columns, fps=FPS, max_frames=MAX_FRAMES, digits=DIGITS):
+    """The page's data: the scene with each body's, joint's and point's decimated samples.
+
+    scene: the dict of viewer_scene_json; names, columns: the trajectory's columns (any
+    sequences of floats, e.g. a Result's arrays or the CSV's lists).
+    """
+    t_all = [float(v) for v in columns[names.index("t")]] if "t" in names else []
+    keep = _frames(t_all, fps, max_frames)
+    p = _Packer(names, columns, keep, digits)
+    data = {
+        "model": scene.get("model", ""),
+        "planar": bool(scene.get("planar", True)),
+        "t": p.pack("t", 7) if keep else [],
+        "energy": p.pack("energy", 6) if p.has("energy") else None,
+        "bodies": [], "joints": [], "points": [], "links": scene.get("links", []),
+        "trails": scene.get("trails", []), "frames": [], "requirements": [],
+    }
+    # bodies: planar (x, y, theta), rigid (x, y, z, u0..u3), particle (x, y, z)
+    for b in scene.get("bodies", []):
+        name, kind = b["name"], b["kind"]
+        keys = {"planar": ("x", "y", "theta"), "rigid": ("x", "y", "z", "u0", "u1", "u2", "u3"),
+                "particle": ("x", "y", "z")}[kind]
+        body = dict(b)
+        body["q"] = [p.pack(name + "." + k) for k in keys]
+        control = ["Qc_control.%s.%s" % (name, k) for k in ("x", "y", "z")]
+        if any(p.has(c) for c in control):
+            body["control"] = [p.pack(c) if p.has(c) else None for c in control]
+        data["bodies"].append(body)
+    # joints: the reaction force at the child's point, ideal and non-ideal (friction)
+    for j in scene.get("joints", []):
+        joint = dict(j)
+        base = "reaction.%s." % j["name"]
+        for key, prefix in (("ideal", ""), ("nonideal", "friction_")):
+            cols = [base + prefix + c for c in ("fx", "fy", "fz")]
+            if any(p.has(c) for c in cols):
+                joint[key] = [p.pack(c) if p.has(c) else None for c in cols]
+        data["joints"].append(joint)
+    # points of a visual: section; a point whose components are coordinates carries the
+    # generalized constraint (and control) forces of those coordinates
+    coordinates = scene.get("coordinates", [])
+    for pt in scene.get("points", []):
+        point = dict(pt)
+        axes = ("x", "y", "z")[: pt.get("dimensions", 2)]
+        cols = ["visual.%s.%s" % (pt["name"], a) for a in axes]
+        point["q"] = [p.pack(c) for c in cols]
+        same = []
+        for c in cols:
+            values = p.raw(c)
+            match = next((q for q in coordinates if p.has(q) and p.raw(q) == values
+                          and len(set(values)) > 1), None)
+            same.append(match)
+        if all(same):
+            for key, prefix in (("ideal", "Qc_ideal."), ("nonideal", "Qc_nonideal."),
+                                ("control", "Qc_control.")):
+                if all(p.has(prefix + q) for q in same):
+                    point[key] = [p.pack(prefix + q) for q in same]
+        data["points"].append(point)
+    # frames of a visual: section: origin, and angle about z or quaternion
+    for fr in scene.get("frames", []):
+        frame = dict(fr)
+        axes = ("x", "y", "z")[: fr.get("dimensions", 2)]
+        frame["q"] = [p.pack("visual.%s.%s" % (fr["name"], a)) for a in axes]
+        parts = ("qw", "qx", "qy", "qz") if fr.get("quaternion") else ("angle",)
+        frame["r"] = [p.pack("visual.%s.%s" % (fr["name"], c)) for c in parts]
+        data["frames"].append(frame)
+    # the control's requirements: the error of each (desired minus actual path), over time
+    for name in names:
+        if name.startswith("error."):
+            data["requirements"].append({"name": name[len("error."):], "error": p.pack(name)})
+    # a kind of force that is zero throughout (no friction, no control) draws no arrows
+    for item in data["joints"] + data["points"] + data["bodies"]:
+        for key in ("ideal", "nonideal", "control"):
+            if key in item and not any(v for c in item[key] if c for v in c):
+                del item[key]
+    # the scales of the force arrows: the largest of each kind over the run
+    for key in ("ideal", "nonideal", "control"):
+        vectors = []
+        for item in data["joints"] + data["points"] + data["bodies"]:
+            if item.get(key):
+                comps = [c for c in item[key] if c is not None]
+                vectors.extend(zip(*comps))
+        data.setdefault("force_scale", {})[key] = _scale(vectors)
+    return data
+
+
+def build_page(scene, names, columns, title=None, **options):
+    """The HTML page (a str) of a run: its scene (dict) and its columns (see scene_data)."""
+    here = os.path.dirname(os.path.abspath(__file__))
+    data = scene_data(scene, names, columns, **options)
+    template = _asset(TEMPLATE, here)
+    three = "\n".join(_asset(n, here) for n in THREE_FILES)
+    payload = json.dumps(data, separators=(",", ":"), allow_nan=False)
+    # no "</script" inside the script elements
+    payload = payload.replace("</", "<\\/")
+    three = three.replace("</script", "<\\/script")
+    title = title or ("ukdyn: " + str(data["model"]))
+    # three.js before the data: the model's name in the data cannot be taken for a placeholder
+    page = template.replace("<!--UKDYN_TITLE-->", _escape(title), 1)
+    page = page.replace("/*UKDYN_THREE*/", three, 1)
+    return page.replace("/*UKDYN_DATA*/null", payload, 1)
+
+
+def _escape(text):
+    return (text.replace("&", "&amp;").replace("<", "&lt;").replace(">", "&gt;"))
+
+
+def write_page(path, page):
+    """Writes the page whole or not at all: a hidden temporary beside path, then renamed."""
+    directory, name = os.path.split(os.path.abspath(path))
+    temporary = os.path.join(directory, ".%s.tmp-%d" % (name, os.getpid()))
+    try:
+        with open(temporary, "w", encoding="utf-8") as f:
+            f.write(page)
+        os.replace(temporary, path)
+    finally:
+        if os.path.exists(temporary):
+            os.remove(temporary)
+
+
+def read_csv(path, fps=FPS, max_frames=MAX_FRAMES):
+    """The CSV's column names and the columns (lists of floats) of the rows shown only: those
+    _frames() picks, found in two passes over the file, so that memory stays O(frames × columns)
+    however long the run (ukdyn run streams any number of rows to trajectory.csv)."""
+    # pass 1: the number of rows, the first and the last time
+    n, t0, t1 = 0, None, None
+    with open(path, newline="") as f:
+        header = next(csv.reader([f.readline()]))
+        for line in f:
+            if not line.strip():
+                continue
+            t1 = float(line.split(",", 1)[0])
+            if t0 is None:
+                t0 = t1
+            n += 1
+    data = [[] for _ in header]
+    if n == 0:
+        return header, data
+    span = t1 - t0
+    wanted = min(max_frames, max(2, int(math.ceil(span * fps)) + 1)) if span > 0 else 1
+    # pass 2: row j is shown when a target time lies in [t_j, t_(j+1)) (as _frames), or is last
+    def keep(row):
+        for j, value in enumerate(row):
+            data[j].append(float(value))
+    k, previous = 0, None
+    with open(path, newline="") as f:
+        rows = csv.reader(f)
+        next(rows)
+        for row in rows:
+            if not row:
+                continue
+            t = float(row[0])
+            if previous is not None:
+                shown = wanted >= n
+                while k < wanted and t0 + span * k / max(wanted - 1, 1) < t:
+                    shown, k = True, k + 1
+                if shown:
+                    keep(previous)
+            previous = row
+    keep(previous)
+    return header, data
+
+
+def main(argv):
+    if len(argv) != 4:
+        sys.stderr.write("usage: viewer.py TRAJECTORY.csv SCENE.json OUTPUT.html\n")
+        return 2
+    names, columns = read_csv(argv[1])  # already decimated: build_page keeps every row
+    with open(argv[2], encoding="utf-8") as f:
+        scene = json.load(f)
+    write_page(argv[3], build_page(scene, names, columns))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv))

@@ -1,0 +1,113 @@
+// The scene description of a model for the browser viewer (modelfile/visual.hpp): what the page
+// generator (python/ukdyn/viewer.py) needs beside trajectory.csv to draw the model.
+#include "ukdyn/modelfile/visual.hpp"
+
+#include <nlohmann/json.hpp>
+
+#include "ukdyn/modelfile/model.hpp"
+#include "ukdyn/multibody/multibody.hpp"
+
+namespace ukdyn {
+namespace {
+
+nlohmann::json vector3(const Eigen::Vector3d& v) { return {v.x(), v.y(), v.z()}; }
+
+const char* kind_name(mb::BodyKind kind) {
+  switch (kind) {
+    case mb::BodyKind::kParticle:
+      return "particle";
+    case mb::BodyKind::kPlanar:
+      return "planar";
+    case mb::BodyKind::kRigid:
+      return "rigid";
+  }
+  return "particle";
+}
+
+nlohmann::json shape_json(const VisualShape& s) {
+  nlohmann::json j = {{"shape", s.shape}, {"offset", vector3(s.offset)}};
+  if (s.shape == "box") {
+    j["size"] = vector3(s.size);
+  } else {
+    j["radius"] = s.size[0];
+    if (s.shape != "sphere") {
+      j["length"] = s.size[1];
+      j["axis"] = std::string(1, s.axis);
+    }
+  }
+  if (!s.color.empty()) j["color"] = s.color;
+  return j;
+}
+
+}  // namespace
+
+const std::string& output_column_name(const Model& model, std::size_t k) {
+  return k < model.output_names.size() ? model.output_names[k]
+                                       : model.visual.columns.at(k - model.output_names.size());
+}
+
+std::string viewer_scene_json(const Model& model) {
+  nlohmann::json scene = {{"model", model.name}, {"coordinates", model.system.coordinate_names()}};
+  // bodies: kind, mass, principal inertias (the equivalent box when no solid is declared)
+  nlohmann::json bodies = nlohmann::json::array(), joints = nlohmann::json::array();
+  bool planar = true;
+  if (model.multibody) {
+    const mb::MultibodyModel& m = *model.multibody;
+    for (const mb::BodyInfo& b : m.bodies) {
+      nlohmann::json body = {{"name", b.name},
+                             {"kind", kind_name(b.kind)},
+                             {"mass", b.mass},
+                             {"inertia", vector3(b.inertia)}};
+      if (b.kind != mb::BodyKind::kPlanar) planar = false;
+      for (const auto& [name, shapes] : model.visual.bodies) {
+        if (name != b.name) continue;
+        nlohmann::json list = nlohmann::json::array();
+        for (const VisualShape& s : shapes) list.push_back(shape_json(s));
+        body["visual"] = list;
+      }
+      bodies.push_back(body);
+    }
+    // joints: the points of its frames on the parent and the child (body coordinates); the
+    // reaction columns reaction.<joint>.* are the force at the child's point
+    const auto body_name = [&](mb::BodyId id) {
+      return id == mb::kGround ? std::string("ground") : m.bodies.at(std::size_t(id)).name;
+    };
+    for (const mb::JointInfo& j : m.joints) {
+      joints.push_back({{"name", j.name},
+                        {"type", mb::to_string(j.type)},
+                        {"parent", body_name(j.parent)},
+                        {"child", body_name(j.child)},
+                        {"parent_point", vector3(j.frame_parent.p)},
+                        {"child_point", vector3(j.frame_child.p)},
+                        {"planar", j.planar}});
+    }
+  }
+  scene["bodies"] = bodies;
+  scene["joints"] = joints;
+  nlohmann::json points = nlohmann::json::array(), links = nlohmann::json::array();
+  for (const VisualPoint& p : model.visual.points) {
+    nlohmann::json point = {{"name", p.name}, {"dimensions", p.dimensions}};
+    if (p.dimensions == 3) planar = false;
+    if (p.radius > 0.0) point["radius"] = p.radius;
+    if (!p.color.empty()) point["color"] = p.color;
+    points.push_back(point);
+  }
+  for (const auto& [a, b] : model.visual.links) links.push_back({a, b});
+  nlohmann::json frames = nlohmann::json::array();
+  for (const VisualFrame& f : model.visual.frames) {
+    nlohmann::json frame = {
+        {"name", f.name}, {"dimensions", f.dimensions}, {"quaternion", f.quaternion}};
+    if (f.dimensions == 3 || f.quaternion) planar = false;
+    if (f.size > 0.0) frame["size"] = f.size;
+    frames.push_back(frame);
+  }
+  scene["frames"] = frames;
+  scene["points"] = points;
+  scene["links"] = links;
+  scene["trails"] = model.visual.trails;
+  scene["planar"] = planar;
+  scene["controlled"] = bool(model.controller);
+  return scene.dump();
+}
+
+}  // namespace ukdyn
