@@ -116,6 +116,10 @@ RunProvenance provenance_of(const ModelSource& source, const Model& model,
     p.parameters.push_back({name, value, overrides.count(name) > 0});
   }
   p.arguments = arguments;
+  const auto& names = model.system.coordinate_names();
+  for (std::size_t i = 0; i < names.size() && i < model.coordinate_units.size(); ++i) {
+    p.units.emplace_back(names[i], model.coordinate_units[i]);
+  }
   return p;
 }
 

@@ -31,9 +31,9 @@ using expr::Program;
 
 // the keys of a model file
 inline const std::vector<std::string> kTopLevelKeys = {
-    "name",        "parameters", "coordinates", "kinetic_energy", "potential_energy",
-    "mass_matrix", "forces",     "constraints", "nonideal",       "initial",
-    "simulate",    "output",     "bodies",      "joints",         "control"};
+    "name",   "parameters",  "coordinates", "kinetic_energy", "potential_energy", "mass_matrix",
+    "forces", "constraints", "nonideal",    "initial",        "simulate",         "output",
+    "bodies", "joints",      "control",     "units"};
 
 inline bool is_identifier(const std::string& s) {
   if (s.empty() || !(std::isalpha(static_cast<unsigned char>(s[0])) || s[0] == '_')) return false;
@@ -334,6 +334,8 @@ class Reader {
   void read_initial(const YAML::Node& root, Model& model);
   void read_simulate(const YAML::Node& root, Model& model);
   void read_output(const YAML::Node& root, Model& model);
+  // units: {x: m, theta: rad} (each coordinate's unit, for the plots' labels)
+  void read_units(const YAML::Node& root, Model& model);
   void check_mass_matrix(const YAML::Node& root, const Model& model);
   void check_settings(const YAML::Node& root, Model& model);
   Index coordinate(const YAML::Node& node);

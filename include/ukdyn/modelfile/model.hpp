@@ -84,6 +84,10 @@ struct Model {
   /// evaluate_output_expressions().
   std::vector<std::string> output_names;
   expr::Program output_program;
+  /// Each coordinate's unit (n, in coordinate order), for labels only (nothing computes with
+  /// it): `units:` of the file, else `m`, `rad` and `1` (quaternion components) for the
+  /// bodies' coordinates of a multibody model, else "" (not known).
+  std::vector<std::string> coordinate_units;
   /// `control:` — the controller (with its nominal model) that run_model() applies to the
   /// plant `system`; null when the model has no control section (control/control.hpp).
   std::shared_ptr<const Controller> controller;
