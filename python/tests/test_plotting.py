@@ -68,24 +68,41 @@ def close_figures():
 
 
 def test_units_come_from_the_file_and_the_bodies(pendulum, top):
-    assert ukdyn.load("pendulum").units == {"x": "m", "y": "m"}
+    assert ukdyn.load("pendulum").units == {"x": "m", "y": "m", "theta": "rad", "r": "m"}
     units = ukdyn.load("heavy_top").units
-    assert {units[c] for c in units if c.rsplit(".", 1)[1] in "xyz"} == {"m"}
+    assert {units[c] for c in units if c[-2:] in (".x", ".y", ".z")} == {"m"}
+    assert units["tilt"] == "rad"  # an output expression's, from the file
     assert [units[c] for c in units if ".u" in c] == ["1"] * 4
     assert set(ukdyn.load("slider_crank").units.values()) == {"m", "rad"}
     # a model that says nothing: no unit, never a guessed one
     assert set(ukdyn.load("incline_friction").units.values()) == {""}
-    assert pendulum.units == {"x": "m", "y": "m"}
     assert pendulum.model_name == "pendulum"
 
 
 def test_units_errors_are_located():
-    with pytest.raises(ukdyn.ModelError, match=r"<string>:4:9: error: unknown coordinate 'q'"):
+    with pytest.raises(ukdyn.ModelError,
+                       match=r"<string>:4:9: error: units: 'q' is neither a coordinate nor an "
+                             r"output expression \(hint: the coordinates are s, phi\)"):
         ukdyn.parse(FREE.replace("units: {s: m,", "units: {q: m,"))
     with pytest.raises(ukdyn.ModelError, match=r":4:12: error: the unit of 's' must be a short"):
         ukdyn.parse(FREE.replace("{s: m,", "{s: [m],"))
-    with pytest.raises(ukdyn.ModelError, match=r":4:8: error: units must map coordinates"):
+    with pytest.raises(ukdyn.ModelError, match=r":4:8: error: units must map coordinates \(or"):
         ukdyn.parse(FREE.replace("units: {s: m, phi: rad}", "units: [m, rad]"))
+
+
+def test_output_expressions_have_the_units_the_file_gives(pendulum, top):
+    assert pendulum.units == {"x": "m", "y": "m", "theta": "rad", "r": "m"}
+    fig = pendulum.figures()["outputs"]
+    assert ylabels(fig) == ["value [rad]", "value [m]"]
+    assert [[line.get_label() for line in data_lines(ax)] for ax in fig.axes] == [["theta"], ["r"]]
+    text = FREE + "output: {expressions: {turns: phi/(2*pi), e: 0.5*m*s_dot^2}}\n"
+    model = ukdyn.parse(text.replace("phi: rad}", "phi: rad, e: J}"))
+    assert model.units == {"s": "m", "phi": "rad", "turns": "", "e": "J"}
+    fig = model.simulate().figures()["outputs"]
+    assert ylabels(fig) == ["value (no unit given)", "value [J]"]
+    with pytest.raises(ukdyn.ModelError, match=r"the coordinates are s, phi, the output "
+                                               r"expressions turns, e"):
+        ukdyn.parse(text.replace("phi: rad}", "phi: rad, E: J}"))
 
 
 def test_coordinates_are_grouped_by_unit(top, free):

@@ -23,13 +23,13 @@ figures:
 * ``coordinates``: the coordinate names, in order;
 * ``units``: coordinate name → its unit (``m``, ``rad``, ``1`` for a quaternion component, or
   what the model file's ``units:`` declares; ``""`` or absent: not known, and then no unit is
-  drawn, never a guessed one).
+  drawn, never a guessed one); output expressions may have theirs too.
 
 Units of derived quantities: velocities ``u/s``, accelerations ``u/s²``; generalized forces
 ``N`` for a coordinate in ``m``, ``N·m`` for one in ``rad`` (or a quaternion component, whose
 conjugate force is an energy), none otherwise; energies and works ``J``; power ``W``.
-Multipliers, constraint violations, tracking errors and output expressions carry no unit (their
-unit depends on how the constraint or expression is written).
+Multipliers, constraint violations and tracking errors carry no unit (it depends on how the
+constraint is written); output expressions have the one ``units:`` gives them, if any.
 
 Needs only NumPy and matplotlib (no import of the rest of ukdyn), so that the command can run it
 with /usr/bin/python3.
@@ -151,8 +151,9 @@ def metadata(table, meta=None):
     meta.setdefault("model", "")
     if not meta.get("coordinates"):
         meta["coordinates"] = _coordinates_of(table.names)
-    units = dict(meta.get("units") or {})
-    meta["units"] = {c: str(units.get(c) or "") for c in meta["coordinates"]}
+    units = {str(k): str(v or "") for k, v in dict(meta.get("units") or {}).items()}
+    meta["units"] = {c: units.get(c, "") for c in meta["coordinates"]}
+    meta["units"].update((k, v) for k, v in units.items() if k not in meta["units"])
     return meta
 
 
@@ -334,7 +335,9 @@ def draw_violation(ax, table, meta, prefix="violation."):
         values = _positive(table[h])
         zeros = zeros or bool(np.any(np.isnan(values)))
         style = line_style(drawn)
-        style.update(marker=style.get("marker") or ".", markersize=2.5, markevery=None)
+        # points: a sample between two exact zeros has no line to either neighbour
+        style.update(marker=style.get("marker") or ".", markersize=2.5, markevery=None,
+                     rasterized=len(values) > 5000)  # (PDF, SVG: no 10⁵ vector markers)
         ax.plot(table["t"], values, label=label, **style)
         drawn += 1
     ax.set_yscale("log")
@@ -574,7 +577,8 @@ def bodies_figure(table, meta=None):
 
 def outputs_figure(table, meta=None):
     """The model's output expressions (the columns after the standard and control ones named by
-    identifiers); their units are not known. None when the model has none."""
+    identifiers), one panel per unit (the model file's ``units:`` may give them). None when the
+    model has none."""
     meta = metadata(table, meta)
     if "energy_balance_residual" not in table:
         return None
@@ -583,10 +587,12 @@ def outputs_figure(table, meta=None):
              if "." not in h and h not in CONTROL_SCALARS]
     if not extra:
         return None
-    fig, axes = _figure("output expressions", meta, 1)
-    for i, h in enumerate(extra):
-        axes[0].plot(table["t"], table[h], label=h, **line_style(i))
-    axes[0].set_ylabel("value (unit not known)")
+    groups = _groups(meta, extra, lambda h: column_unit(meta, h))
+    fig, axes = _figure("output expressions", meta, len(groups))
+    for ax, (unit, members) in zip(axes, groups):
+        for i, h in enumerate(members):
+            ax.plot(table["t"], table[h], label=h, **line_style(i))
+        ax.set_ylabel("value [%s]" % unit if unit else "value (no unit given)")
     _finish(axes)
     return fig
 

@@ -43,8 +43,9 @@ class Result:
             is ``"energy_balance"`` when the run ended but its balance failed.
         control: the controller's statistics for a controlled run (evaluations, not_met,
             max_residual, first_not_met, not_met_message, max_kappa), else None.
-        units: each coordinate's unit by name (``Model.units``: the file's ``units:``, m, rad
-            or 1 for a body's coordinates; "" when not known), for the plots' labels.
+        units: each coordinate's (and output expression's) unit by name (``Model.units``: the
+            file's ``units:``, m, rad or 1 for a body's coordinates; "" when not known), for
+            the plots' labels.
         model_name: the model's name (the plots' titles), or "".
     """
 
@@ -60,8 +61,9 @@ class Result:
         self.stats: Dict[str, Any] = dict(stats)
         self.control: Optional[Dict[str, Any]] = control
         self.coordinates: List[str] = list(coordinates)
-        given = dict(units or {})
-        self.units: Dict[str, str] = {c: str(given.get(c) or "") for c in self.coordinates}
+        given = {str(k): str(v or "") for k, v in dict(units or {}).items()}
+        self.units: Dict[str, str] = {c: given.get(c, "") for c in self.coordinates}
+        self.units.update((k, v) for k, v in given.items() if k not in self.units)
         self.model_name: str = str(model_name or "")
         self._alias: Dict[str, int] = self._spellings()
 

@@ -141,7 +141,9 @@ std::string summary_json(const Trajectory& traj, const SimulationOptions& option
   // each coordinate's unit ("" not known), for the plots' labels (ukdyn/plotting.py)
   if (provenance && !provenance->units.empty()) {
     json units = json::object();
-    for (const auto& [name, unit] : provenance->units) units[name] = unit;
+    for (const auto& [name, unit] : provenance->units) {
+      if (!units.contains(name)) units[name] = unit;  // (a name twice: the first)
+    }
     j["units"] = std::move(units);
   }
 

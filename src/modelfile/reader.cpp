@@ -1149,14 +1149,28 @@ void Reader::read_units(const YAML::Node& root, Model& model) {
       }
     }
   }
-  // units: {x: m, theta: rad}: each named coordinate's unit, a short text
+  model.output_units.assign(model.output_names.size(), "");
+  // units: {x: m, theta: rad, s: m}: each named coordinate's or output expression's unit, a
+  // short text
   const YAML::Node u = root["units"];
   if (!u) return;
   if (!u.IsMap() || u.size() == 0) {
-    fail(u, "units must map coordinates to their units", "units: {x: m, theta: rad}");
+    fail(u, "units must map coordinates (or output expressions) to their units",
+         "units: {x: m, theta: rad}");
   }
   for (const auto& kv : u) {
-    const Index i = coordinate(kv.first);
+    const std::string& name = kv.first.Scalar();
+    const auto output = std::find(model.output_names.begin(), model.output_names.end(), name);
+    const bool is_coordinate =
+        std::any_of(coordinates_.begin(), coordinates_.end(),
+                    [&](const std::string& c) { return c == name || names_coordinate(name, c); });
+    if (!is_coordinate && output == model.output_names.end()) {
+      fail(kv.first, "units: '" + name + "' is neither a coordinate nor an output expression",
+           "the coordinates are " + join(coordinates_) +
+               (model.output_names.empty()
+                    ? std::string()
+                    : ", the output expressions " + join(model.output_names)));
+    }
     const YAML::Node& value = kv.second;
     const std::string text = value.IsScalar() ? value.Scalar() : std::string();
     const bool printable = std::none_of(text.begin(), text.end(), [](char ch) {
@@ -1168,7 +1182,11 @@ void Reader::read_units(const YAML::Node& root, Model& model) {
            "units: {x: m, theta: rad, s: mm} (the unit labels the plots' axes; it does not change "
            "any number)");
     }
-    model.coordinate_units[std::size_t(i)] = text;
+    if (is_coordinate) {
+      model.coordinate_units[std::size_t(coordinate(kv.first))] = text;
+    } else {
+      model.output_units[std::size_t(output - model.output_names.begin())] = text;
+    }
   }
 }
 
