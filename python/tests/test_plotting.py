@@ -205,7 +205,8 @@ def test_save_plots_formats(free, tmp_path):
     written = free.save_plots(tmp_path, formats="svg")
     assert sorted(os.path.basename(p) for p in written) == ["coordinates.svg", "energy.svg"]
     assert all(os.path.getsize(p) > 0 for p in written)
-    with pytest.raises(ValueError, match="unknown plot format 'gif': the formats are png, pdf, svg"):
+    with pytest.raises(ValueError,
+                       match="unknown plot format 'gif': the formats are png, pdf, svg"):
         free.save_plots(tmp_path, formats=["png", "gif"])
 
 

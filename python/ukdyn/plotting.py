@@ -45,7 +45,8 @@ import sys
 import numpy as np
 
 __all__ = [
-    "FORMATS", "metadata", "read_csv", "read_summary", "coordinate_unit", "force_unit",
+    "FORMATS", "Table", "metadata", "read_csv", "read_summary", "coordinate_unit",
+    "column_unit", "force_unit",
     "line_style", "coordinates_figure", "forces_figure", "violation_figure", "energy_figure",
     "control_figure", "bodies_figure", "outputs_figure", "figures", "save", "write_figures",
     "parse_formats", "draw_columns", "draw_forces", "draw_violation", "draw_energy", "main",
@@ -196,7 +197,7 @@ def _is_quaternion(table, meta, c):
 
 
 def _groups(meta, coords, unit_of):
-    """The coordinates grouped by unit_of(c), in the order of first appearance."""
+    """The names grouped by unit_of(name), in the order of first appearance: [(unit, names)]."""
     groups = {}
     for c in coords:
         groups.setdefault(unit_of(c), []).append(c)
@@ -205,8 +206,8 @@ def _groups(meta, coords, unit_of):
 
 # --- style -----------------------------------------------------------------------------------
 def line_style(i):
-    """The style of the i-th line of a panel: 10 colours × 4 dash patterns, then markers, so that
-    every line of any panel is told apart from the others."""
+    """The style of the i-th line of a panel: 10 colours × 4 dash patterns × 8 marker choices
+    (none, then seven shapes), so that the first 320 lines of a panel all differ."""
     style = {"color": _COLOURS[i % len(_COLOURS)],
              "linestyle": _DASHES[(i // len(_COLOURS)) % len(_DASHES)]}
     marker = _MARKERS[(i // (len(_COLOURS) * len(_DASHES))) % len(_MARKERS)]
@@ -477,7 +478,8 @@ def control_figure(table, meta=None):
     coords = meta["coordinates"]
     rows = [h[len("error."):] for h in table.names if h.startswith("error.")]
     desired = [(r, d) for r, d in ((r, _desired(table, r)) for r in rows) if d is not None]
-    actuated = [c for c in coords if "Qc_control." + c in table and _nonzero(table["Qc_control." + c])]
+    actuated = [c for c in coords
+                if "Qc_control." + c in table and _nonzero(table["Qc_control." + c])]
     force_groups = _groups(meta, actuated, lambda c: force_unit(coordinate_unit(meta, c)))
     panels = (1 if rows else 0) + (1 if desired else 0) + len(force_groups) + 3
     fig, axes = _figure("control", meta, panels, height=2.2)
@@ -627,7 +629,8 @@ def parse_formats(formats):
     for f in formats:
         f = str(f).strip().lower()
         if f not in FORMATS:
-            raise ValueError("unknown plot format '%s': the formats are %s" % (f, ", ".join(FORMATS)))
+            raise ValueError("unknown plot format '%s': the formats are %s"
+                             % (f, ", ".join(FORMATS)))
         if f not in out:
             out.append(f)
     if not out:
