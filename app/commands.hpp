@@ -68,6 +68,8 @@ struct RunArguments {
   bool plots = true;  ///< false with --no-plots
   /// --viewer / --no-viewer: write animation.html (unset: for models with bodies or visual:)
   std::optional<bool> viewer;
+  /// --plot-format: the plots' file formats, "png", "pdf" and/or "svg"
+  std::vector<std::string> plot_formats = {"png"};
   /// --format: the trajectory's files, "csv" (trajectory.csv) and/or "hdf5" (trajectory.h5)
   std::vector<std::string> formats = {"csv"};
   /// --from-summary FILE: the summary.json of an earlier run to make again (its model, parameter

@@ -12,7 +12,7 @@ struct EmbeddedFile {
   const char* text;  ///< its contents
 };
 
-/// app/plot_trajectory.py.
+/// python/ukdyn/plotting.py (the Python module's plotting, run by `ukdyn run` as a script).
 extern const char* const kPlotScript;
 
 /// examples/models/*.yaml, sorted by name.

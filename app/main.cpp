@@ -66,7 +66,7 @@ int main(int argc, char** argv) {
   bool viewer = false, no_viewer = false;
   CLI::App* run_cmd = app.add_subcommand(
       "run",
-      "simulate a model; write DIR/trajectory.csv, DIR/summary.json, PNG plots and "
+      "simulate a model; write DIR/trajectory.csv, DIR/summary.json, the plots and "
       "animation.html");
   add_source_options(run_cmd, run.source);
   run_cmd
@@ -114,6 +114,12 @@ int main(int argc, char** argv) {
                    "make an earlier run again from its summary.json: the same model (checked "
                    "unchanged), parameter overrides and settings; --set and flags apply on top")
       ->type_name("FILE");
+  run_cmd
+      ->add_option("--plot-format", run.plot_formats,
+                   "the plots' file formats: png, pdf, svg or a list (--plot-format png,pdf; "
+                   "default png)")
+      ->delimiter(',')
+      ->type_name("LIST");
   run_cmd->add_flag("--no-plots", no_plots,
                     "write no plots (plots need /usr/bin/python3 "
                     "with matplotlib, or $UKDYN_PYTHON)");

@@ -40,7 +40,7 @@ namespace ukdyn::cli {
 namespace fs = std::filesystem;
 namespace {
 
-// the exit code plot_trajectory.py uses when matplotlib cannot be imported
+// the exit code plotting.py uses when matplotlib cannot be imported
 constexpr int kPlotNoMatplotlib = 3;
 
 // warns about an output expression named like a standard column (the CSV then has two)
@@ -56,10 +56,10 @@ void warn_duplicate_columns(const ModelRun& run) {
   }
 }
 
-// runs `python script csv dir`; returns its exit status, or −1 when it could not start
+// runs `python script csv dir formats`; returns its exit status, or −1 when it could not start
 int run_python(const std::string& python, const std::string& script, const std::string& csv,
-               const std::string& dir) {
-  std::vector<std::string> args = {python, script, csv, dir};
+               const std::string& dir, const std::string& formats) {
+  std::vector<std::string> args = {python, script, csv, dir, formats};
   std::vector<char*> argv;
   argv.reserve(args.size() + 1);
   for (auto& a : args) argv.push_back(a.data());
@@ -73,9 +73,11 @@ int run_python(const std::string& python, const std::string& script, const std::
   return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
 }
 
-// writes the plots with plot_trajectory.py (embedded) and /usr/bin/python3 (or $UKDYN_PYTHON);
-// returns the files written; a missing python or matplotlib is a warning, not an error
-std::vector<fs::path> make_plots(const fs::path& csv, const fs::path& dir) {
+// writes the plots in `formats` (png, pdf, svg) with python/ukdyn/plotting.py (embedded) and
+// /usr/bin/python3 (or $UKDYN_PYTHON); returns the files written; a missing python or
+// matplotlib is a warning, not an error
+std::vector<fs::path> make_plots(const fs::path& csv, const fs::path& dir,
+                                 const std::vector<std::string>& formats) {
   const char* env = std::getenv("UKDYN_PYTHON");
   const std::string python = env && *env ? env : "/usr/bin/python3";
   if (::access(python.c_str(), X_OK) != 0) {
@@ -95,7 +97,9 @@ std::vector<fs::path> make_plots(const fs::path& csv, const fs::path& dir) {
   const std::string_view text(kPlotScript);
   const bool written = ::write(fd, text.data(), text.size()) == ssize_t(text.size());
   ::close(fd);
-  const int code = written ? run_python(python, script, csv.string(), dir.string()) : -1;
+  std::string list;
+  for (const std::string& f : formats) list += (list.empty() ? "" : ",") + f;
+  const int code = written ? run_python(python, script, csv.string(), dir.string(), list) : -1;
   fs::remove(script);
   if (code == kPlotNoMatplotlib) {
     std::fprintf(stderr,
@@ -109,9 +113,11 @@ std::vector<fs::path> make_plots(const fs::path& csv, const fs::path& dir) {
     return {};
   }
   std::vector<fs::path> files;
-  for (const char* name : kRunOutputs) {
-    if (fs::path(name).extension() == ".png" && fs::exists(dir / name)) {
-      files.push_back(dir / name);
+  for (const std::string& f : formats) {
+    for (const char* name : kRunOutputs) {
+      if (fs::path(name).extension() == "." + f && fs::exists(dir / name)) {
+        files.push_back(dir / name);
+      }
     }
   }
   return files;
@@ -182,6 +188,13 @@ int run_command(const RunArguments& given) {
     }
   }
   if (!want_csv && !want_hdf5) throw UsageError("--format: give csv, hdf5 or both");
+  for (const std::string& f : args.plot_formats) {
+    if (f != "png" && f != "pdf" && f != "svg") {
+      throw UsageError("--plot-format " + f +
+                       ": the plot formats are png, pdf and svg (--plot-format png,pdf,svg)");
+    }
+  }
+  if (args.plot_formats.empty()) throw UsageError("--plot-format: give png, pdf, svg or a list");
   Model model = load_source(args.source);
   const RunProvenance provenance = provenance_of(args.source, model, args.arguments);
 
@@ -319,7 +332,7 @@ int run_command(const RunArguments& given) {
   write_summary_json(run.trajectory, options, summary_path.string(), provenance, control);
   files.push_back(summary_path);
   if (args.plots && csv) {
-    for (const auto& f : make_plots(csv_path, dir)) files.push_back(f);
+    for (const auto& f : make_plots(csv_path, dir, args.plot_formats)) files.push_back(f);
   }
   if (args.viewer.value_or(viewer_by_default(model)) && csv) {
     if (const auto page = write_viewer(model, csv_path, dir)) files.push_back(*page);

@@ -116,6 +116,16 @@ RunProvenance provenance_of(const ModelSource& source, const Model& model,
     p.parameters.push_back({name, value, overrides.count(name) > 0});
   }
   p.arguments = arguments;
+  const auto& names = model.system.coordinate_names();
+  for (std::size_t i = 0; i < names.size() && i < model.coordinate_units.size(); ++i) {
+    p.units.emplace_back(names[i], model.coordinate_units[i]);
+  }
+  // the output expressions' (one named like a coordinate keeps the coordinate's)
+  for (std::size_t i = 0; i < model.output_names.size() && i < model.output_units.size(); ++i) {
+    if (std::find(names.begin(), names.end(), model.output_names[i]) == names.end()) {
+      p.units.emplace_back(model.output_names[i], model.output_units[i]);
+    }
+  }
   return p;
 }
 

@@ -94,6 +94,26 @@ ukdyn.parse() or ukdyn.from_sympy(). Model.simulate() runs it exactly as `ukdyn 
           "coordinates", [](const Model& md) { return md.system.coordinate_names(); },
           "The coordinate names (n).")
       .def_property_readonly(
+          "units",
+          [](const Model& md) {
+            py::dict out;
+            const auto& names = md.system.coordinate_names();
+            for (std::size_t i = 0; i < names.size(); ++i) {
+              out[py::str(names[i])] =
+                  i < md.coordinate_units.size() ? md.coordinate_units[i] : std::string();
+            }
+            for (std::size_t i = 0; i < md.output_names.size(); ++i) {
+              const py::str name(md.output_names[i]);
+              if (!out.contains(name)) {
+                out[name] = i < md.output_units.size() ? md.output_units[i] : std::string();
+              }
+            }
+            return out;
+          },
+          "Each coordinate's and output expression's unit, as a new dict name -> unit: the "
+          "file's `units:`, else m, rad and 1 (quaternion components) for the bodies' "
+          "coordinates, else \"\" (not known).")
+      .def_property_readonly(
           "constraints",
           [](const Model& md) {
             py::list out;

@@ -47,7 +47,10 @@ def read_hdf5(path: str) -> "tuple[Result, dict]":
     summary = _json.loads(summary_text) if summary_text else {}
     coordinates = [n for n in names if n + "_dot" in names and n + "_ddot" in names]
     stats = {k: v for k, v in summary.items() if not isinstance(v, (dict, list))}
-    return Result(names, columns, stats, summary.get("control"), coordinates), summary
+    units = summary.get("units") if isinstance(summary.get("units"), dict) else None
+    name = (summary.get("provenance") or {}).get("model_name") or ""
+    return Result(names, columns, stats, summary.get("control"), coordinates, units,
+                  name), summary
 
 
 __all__ = [
@@ -122,7 +125,7 @@ def _model_simulate(self: Model, *, t_end: Optional[float] = None, q0: Any = Non
     from .callables import _finish
     with _interrupt.guard() as interrupt:
         names, columns, stats, control, raised = self._run(settings, q0, qd0, interrupt.stop)
-    result = Result(names, columns, stats, control, self.coordinates)
+    result = Result(names, columns, stats, control, self.coordinates, self.units, self.name)
     result.scene = json.loads(self._scene_json)  # what Result.show() draws
     interrupt.raise_if_interrupted(result, raised)
     return _finish(result, check)

@@ -27,7 +27,8 @@ class Result:
     ``result["x"]`` is the column ``x`` (a 1-D float64 NumPy array with one value per sample, the
     array the C++ run filled: no copy was made); ``result.t`` the sample times;
     ``result.names`` the column names in CSV order; ``result.to_dataframe()`` a pandas
-    DataFrame; ``result.plot()`` and its siblings draw with matplotlib. Columns whose names are
+    DataFrame; ``result.plot()`` and its siblings draw with matplotlib, ``result.figures()`` and
+    ``result.save_plots(dir)`` give the figures of ``ukdyn run`` (ukdyn/plotting.py). Columns whose names are
     Python identifiers are also attributes (``result.theta``).
 
     Attributes:
@@ -42,11 +43,16 @@ class Result:
             is ``"energy_balance"`` when the run ended but its balance failed.
         control: the controller's statistics for a controlled run (evaluations, not_met,
             max_residual, first_not_met, not_met_message, max_kappa), else None.
+        units: each coordinate's (and output expression's) unit by name (``Model.units``: the
+            file's ``units:``, m, rad or 1 for a body's coordinates; "" when not known), for
+            the plots' labels.
+        model_name: the model's name (the plots' titles), or "".
     """
 
     def __init__(self, names: Sequence[str], columns: Sequence[np.ndarray],
                  stats: Dict[str, Any], control: Optional[Dict[str, Any]],
-                 coordinates: Sequence[str]) -> None:
+                 coordinates: Sequence[str], units: Optional[Dict[str, str]] = None,
+                 model_name: str = "") -> None:
         self.names: List[str] = list(names)
         self._columns: List[np.ndarray] = list(columns)
         self._index: Dict[str, int] = {}
@@ -55,6 +61,10 @@ class Result:
         self.stats: Dict[str, Any] = dict(stats)
         self.control: Optional[Dict[str, Any]] = control
         self.coordinates: List[str] = list(coordinates)
+        given = {str(k): str(v or "") for k, v in dict(units or {}).items()}
+        self.units: Dict[str, str] = {c: given.get(c, "") for c in self.coordinates}
+        self.units.update((k, v) for k, v in given.items() if k not in self.units)
+        self.model_name: str = str(model_name or "")
         self._alias: Dict[str, int] = self._spellings()
         #: the scene the browser viewer draws (Model.simulate sets it; None otherwise)
         self.scene: Optional[Dict[str, Any]] = None
@@ -239,7 +249,9 @@ class Result:
         summary = dict(plain(self.stats))
         if self.control is not None:
             summary["control"] = plain(self.control)
-        summary["provenance"] = {"ukdyn_version": __version__, "written_by": "Result.to_hdf5"}
+        summary["provenance"] = {"ukdyn_version": __version__, "written_by": "Result.to_hdf5",
+                                 "model_name": self.model_name}
+        summary["units"] = dict(self.units)
         _ukdyn._write_table_hdf5(os.fspath(path), self.names,
                                  [np.asarray(c, dtype=np.float64) for c in self._columns],
                                  json.dumps(summary))
@@ -284,83 +296,76 @@ class Result:
         return HTML(frame)
 
     # --- plots -------------------------------------------------------------------------------
+    # --- plots (ukdyn/plotting.py, the plots of `ukdyn run` too) ------------------------------
+    @property
+    def plot_metadata(self) -> Dict[str, Any]:
+        """What the plots know about the run besides its columns: the model's name, the
+        coordinates and their units (ukdyn/plotting.py, ``metadata``)."""
+        return {"model": self.model_name, "coordinates": list(self.coordinates),
+                "units": dict(self.units)}
+
+    def figures(self) -> Dict[str, Any]:
+        """Every figure ``ukdyn run`` draws for this run, as matplotlib Figures by file stem:
+        ``coordinates``, ``constraint_forces``, ``violation``, ``energy``, ``control``,
+        ``bodies``, ``outputs`` — those that apply (a figure without data is left out).
+        Panels are grouped by unit, titles name the model (ukdyn/plotting.py)."""
+        from . import plotting
+        return plotting.figures(self, self.plot_metadata)
+
+    def save_plots(self, directory: str, formats: Any = ("png",)) -> List[str]:
+        """Writes :meth:`figures` into ``directory`` as ``ukdyn run`` does: STEM.FORMAT for each
+        of ``formats`` (``"png"``, ``"pdf"``, ``"svg"``, a list or ``"png,pdf"``), each file
+        whole or not at all. Returns the paths written. Raises ValueError naming the formats
+        for an unknown one."""
+        from . import plotting
+        formats = plotting.parse_formats(formats)
+        return plotting.write_figures(self, self.plot_metadata, os.fspath(directory), formats)
+
     def plot(self, *columns: str, ax: Any = None, x: str = "t", **kwargs: Any) -> Any:
         """Plots columns against time (or against column ``x``) with matplotlib; without
-        columns, the coordinates. Returns the Axes. Extra keyword arguments go to ``ax.plot``."""
-        import matplotlib.pyplot as plt
+        columns, the coordinates. The y label names the unit when the columns share one.
+        Returns the Axes. Extra keyword arguments go to ``ax.plot``."""
+        from . import plotting
         if ax is None:
-            _, ax = plt.subplots()
+            _, ax = plotting._plt().subplots(layout="constrained")
         names = list(columns) or self.coordinates
-        for name in names:
-            ax.plot(self[x], self[name], label=name, **kwargs)
-        ax.set_xlabel("t [s]" if x == "t" else x)
-        ax.legend()
-        ax.grid(True, alpha=0.3)
-        return ax
+        return plotting.draw_columns(ax, self, self.plot_metadata, names, x=x, **kwargs)
 
     def plot_forces(self, ax: Any = None) -> Any:
-        """The ideal and non-ideal constraint forces per coordinate (``Qc_ideal.*`` solid,
-        ``Qc_nonideal.*`` dashed). Returns the Axes."""
-        import matplotlib.pyplot as plt
+        """The ideal and non-ideal constraint forces per coordinate on one Axes
+        (``Qc_ideal.*`` solid, ``Qc_nonideal.*`` dashed when not zero), with units.
+        Returns the Axes. ``figures()["constraint_forces"]`` has one panel per unit."""
+        from . import plotting
         if ax is None:
-            _, ax = plt.subplots()
-        for c in self.coordinates:
-            line, = ax.plot(self.t, self["Qc_ideal." + c], label="Qc_ideal." + c)
-            if np.any(self["Qc_nonideal." + c]):
-                ax.plot(self.t, self["Qc_nonideal." + c], "--", color=line.get_color(),
-                        label="Qc_nonideal." + c)
-        ax.set_xlabel("t [s]")
-        ax.set_ylabel("generalized force")
-        ax.legend()
-        ax.grid(True, alpha=0.3)
-        return ax
+            _, ax = plotting._plt().subplots(layout="constrained")
+        return plotting.draw_forces(ax, self, self.plot_metadata)
 
     def plot_violation(self, ax: Any = None) -> Any:
-        """The constraint violations ``violation.*`` on a log scale. Returns the Axes."""
-        import matplotlib.pyplot as plt
+        """The constraint violations ``violation.*`` on a log scale (exact zeros are not
+        drawn). Returns the Axes."""
+        from . import plotting
         if ax is None:
-            _, ax = plt.subplots()
-        for name, values in self.group("violation").items():
-            ax.semilogy(self.t, np.maximum(np.abs(values), 1e-17), label=name)
-        ax.set_xlabel("t [s]")
-        ax.set_ylabel("|violation|")
-        if ax.get_legend_handles_labels()[0]:
-            ax.legend()
-        ax.grid(True, alpha=0.3)
-        return ax
+            _, ax = plotting._plt().subplots(layout="constrained")
+        return plotting.draw_violation(ax, self, self.plot_metadata)
 
     def plot_energy(self, ax: Any = None) -> Any:
         """The energy balance: E(t) − E(0), each work channel that is not zero (non-ideal,
         ideal, drive, external, control) and the residual E(t) − E(0) − Σ W, which stays at the
         integration error when the balance holds. Returns the Axes."""
-        import matplotlib.pyplot as plt
+        from . import plotting
         if ax is None:
-            _, ax = plt.subplots()
-        E = self["energy"]
-        dE = E - E[0]
-        ax.plot(self.t, dE, "k", lw=1.6, label="E − E(0)")
-        # the channels that carry more than the drift (1e-9 of the energy exchanged)
-        works = [n for n in ("work_nonideal", "work_ideal", "work_drive", "work_external",
-                             "work_control") if n in self]
-        scale = max([float(np.max(np.abs(dE), initial=0.0))] +
-                    [float(np.max(np.abs(self[n]), initial=0.0)) for n in works])
-        for name in works:
-            if np.max(np.abs(self[name]), initial=0.0) > 1e-9 * scale:
-                ax.plot(self.t, self[name], label=name.replace("_", " "))
-        ax.plot(self.t, self["energy_balance_residual"], "--", label="residual E − E(0) − ΣW")
-        ax.set_xlabel("t [s]")
-        ax.set_ylabel("J")
-        ax.legend()
-        ax.grid(True, alpha=0.3)
-        return ax
+            _, ax = plotting._plt().subplots(layout="constrained")
+        return plotting.draw_energy(ax, self, self.plot_metadata)
 
     def plot_all(self) -> Any:
-        """Coordinates, constraint forces, violation and energy in a 2 × 2 figure. Returns the
-        Figure."""
-        import matplotlib.pyplot as plt
-        fig, axes = plt.subplots(2, 2, figsize=(11, 7), constrained_layout=True)
+        """Coordinates, constraint forces, violation and energy in a 2 × 2 figure titled with
+        the model's name. Returns the Figure."""
+        from . import plotting
+        fig, axes = plotting._plt().subplots(2, 2, figsize=(13, 7), layout="constrained")
         self.plot(ax=axes[0, 0])
         self.plot_forces(ax=axes[0, 1])
         self.plot_violation(ax=axes[1, 0])
         self.plot_energy(ax=axes[1, 1])
+        if self.model_name:
+            fig.suptitle(self.model_name)
         return fig

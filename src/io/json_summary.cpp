@@ -138,6 +138,14 @@ std::string summary_json(const Trajectory& traj, const SimulationOptions& option
     made["arguments"] = p.arguments;
   }
   j["provenance"] = std::move(made);
+  // each coordinate's unit ("" not known), for the plots' labels (ukdyn/plotting.py)
+  if (provenance && !provenance->units.empty()) {
+    json units = json::object();
+    for (const auto& [name, unit] : provenance->units) {
+      if (!units.contains(name)) units[name] = unit;  // (a name twice: the first)
+    }
+    j["units"] = std::move(units);
+  }
 
   // names are user text: invalid UTF-8 is replaced (U+FFFD) rather than refused
   std::string text = j.dump(2, ' ', false, json::error_handler_t::replace);

@@ -1131,6 +1131,66 @@ void Reader::read_output(const YAML::Node& root, Model& model) {
   model.output_program = compile(exprs, out ? out : root, "the output expressions");
 }
 
+void Reader::read_units(const YAML::Node& root, Model& model) {
+  const std::vector<std::string>& names = model.system.coordinate_names();
+  model.coordinate_units.assign(names.size(), "");
+  // a body's coordinates: its centre of mass in m, its angle in rad, its quaternion's
+  // components without unit (the multibody layer's conventions, docs/multibody.md)
+  if (model.multibody) {
+    for (std::size_t i = 0; i < names.size(); ++i) {
+      const std::string& c = names[i];
+      const std::string suffix =
+          c.substr(c.rfind('.') == std::string::npos ? c.size() : c.rfind('.'));
+      if (suffix == ".x" || suffix == ".y" || suffix == ".z") {
+        model.coordinate_units[i] = "m";
+      } else if (suffix == ".theta") {
+        model.coordinate_units[i] = "rad";
+      } else if (suffix == ".u0" || suffix == ".u1" || suffix == ".u2" || suffix == ".u3") {
+        model.coordinate_units[i] = "1";
+      }
+    }
+  }
+  model.output_units.assign(model.output_names.size(), "");
+  // units: {x: m, theta: rad, s: m}: each named coordinate's or output expression's unit, a
+  // short text
+  const YAML::Node u = root["units"];
+  if (!u) return;
+  if (!u.IsMap() || u.size() == 0) {
+    fail(u, "units must map coordinates (or output expressions) to their units",
+         "units: {x: m, theta: rad}");
+  }
+  for (const auto& kv : u) {
+    const std::string& name = kv.first.Scalar();
+    const auto output = std::find(model.output_names.begin(), model.output_names.end(), name);
+    const bool is_coordinate =
+        std::any_of(coordinates_.begin(), coordinates_.end(),
+                    [&](const std::string& c) { return c == name || names_coordinate(name, c); });
+    if (!is_coordinate && output == model.output_names.end()) {
+      fail(kv.first, "units: '" + name + "' is neither a coordinate nor an output expression",
+           "the coordinates are " + join(coordinates_) +
+               (model.output_names.empty()
+                    ? std::string()
+                    : ", the output expressions " + join(model.output_names)));
+    }
+    const YAML::Node& value = kv.second;
+    const std::string text = value.IsScalar() ? value.Scalar() : std::string();
+    const bool printable = std::none_of(text.begin(), text.end(), [](char ch) {
+      return static_cast<unsigned char>(ch) < 0x20 || ch == 0x7f;
+    });
+    if (!value.IsScalar() || text.empty() || text.size() > 32 || !printable) {
+      fail(value,
+           "the unit of '" + kv.first.Scalar() + "' must be a short text (at most 32 characters)",
+           "units: {x: m, theta: rad, s: mm} (the unit labels the plots' axes; it does not change "
+           "any number)");
+    }
+    if (is_coordinate) {
+      model.coordinate_units[std::size_t(coordinate(kv.first))] = text;
+    } else {
+      model.output_units[std::size_t(output - model.output_names.begin())] = text;
+    }
+  }
+}
+
 Model Reader::read(const std::string& text) {
   // not YAML at all: an XML robot description (URDF, MJCF, SDF)
   const std::size_t first = text.find_first_not_of(" \t\r\n");
@@ -1190,6 +1250,7 @@ Model Reader::read_plant(const YAML::Node& root) {
   read_simulate(root, model);
   check_mass_matrix(root, model);
   read_output(root, model);
+  read_units(root, model);
   // initial: project: true, or simulate: project_initial: true
   model.project_initial = model.project_initial || model.options.project_initial;
   model.options.project_initial = model.project_initial;

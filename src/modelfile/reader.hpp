@@ -33,7 +33,7 @@ using expr::Program;
 inline const std::vector<std::string> kTopLevelKeys = {
     "name",   "parameters",  "coordinates", "kinetic_energy", "potential_energy", "mass_matrix",
     "forces", "constraints", "nonideal",    "initial",        "simulate",         "output",
-    "bodies", "joints",      "control",     "visual"};
+    "bodies", "joints",      "control",     "visual",    "units"};
 
 inline bool is_identifier(const std::string& s) {
   if (s.empty() || !(std::isalpha(static_cast<unsigned char>(s[0])) || s[0] == '_')) return false;
@@ -337,6 +337,8 @@ class Reader {
   // visual: and the bodies' visual: entries (modelfile/reader_visual.cpp); the points'
   // expressions are appended to `outputs` (their columns follow the output expressions)
   void read_visual(const YAML::Node& root, Model& model, std::vector<Expr>& outputs);
+  // units: {x: m, theta: rad} (each coordinate's unit, for the plots' labels)
+  void read_units(const YAML::Node& root, Model& model);
   void check_mass_matrix(const YAML::Node& root, const Model& model);
   void check_settings(const YAML::Node& root, Model& model);
   Index coordinate(const YAML::Node& node);

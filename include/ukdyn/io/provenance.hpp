@@ -7,6 +7,7 @@
 #include <map>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 namespace ukdyn {
@@ -37,6 +38,10 @@ struct RunProvenance {
   std::string model_sha256;  ///< sha256_hex of the model's text
   std::vector<ProvenanceParameter> parameters;  ///< every parameter, in name order
   std::vector<std::string> arguments;           ///< the command line, argv[0] first
+  /// each coordinate's and output expression's unit (Model::coordinate_units, output_units;
+  /// "" not known), by column name: summary.json's `units`, which the plots label their axes
+  /// with; empty: not written
+  std::vector<std::pair<std::string, std::string>> units;
 };
 
 }  // namespace ukdyn

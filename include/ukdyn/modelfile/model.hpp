@@ -86,6 +86,12 @@ struct Model {
   /// points' coordinates (visual.columns); output_column_name() names them all.
   std::vector<std::string> output_names;
   expr::Program output_program;
+  /// Each coordinate's unit (n, in coordinate order), for labels only (nothing computes with
+  /// it): `units:` of the file, else `m`, `rad` and `1` (quaternion components) for the
+  /// bodies' coordinates of a multibody model, else "" (not known).
+  std::vector<std::string> coordinate_units;
+  /// Each output expression's unit (output_names order): `units:` of the file, else "".
+  std::vector<std::string> output_units;
   /// `control:` — the controller (with its nominal model) that run_model() applies to the
   /// plant `system`; null when the model has no control section (control/control.hpp).
   std::shared_ptr<const Controller> controller;

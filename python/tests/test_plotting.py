@@ -1,0 +1,238 @@
+"""The plots (ukdyn/plotting.py, the one implementation behind `ukdyn run` and Result): the
+figures' objects are inspected — panels, axis labels and their units, line counts, titles —
+never their pixels."""
+
+import os
+import subprocess
+
+import matplotlib
+
+matplotlib.use("Agg")
+
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+import pytest  # noqa: E402
+
+import ukdyn  # noqa: E402
+from ukdyn import plotting  # noqa: E402
+
+FREE = """
+name: free spinning slider
+coordinates: [s, phi]
+units: {s: m, phi: rad}
+parameters: {m: 2, J: 0.5}
+kinetic_energy: 0.5*m*s_dot^2 + 0.5*J*phi_dot^2
+initial: {q: {s: 0, phi: 0}, q_dot: {s: 1, phi: 3}}
+simulate: {t_end: 0.2}
+"""
+
+
+def data_lines(ax):
+    """The lines of an Axes that have a legend entry (not the start dots, bounds' mirrors)."""
+    return [line for line in ax.get_lines() if not line.get_label().startswith("_")]
+
+
+def ylabels(fig):
+    return [ax.get_ylabel() for ax in fig.axes]
+
+
+@pytest.fixture(scope="module")
+def pendulum():
+    return ukdyn.load("pendulum").simulate(t_end=0.5)
+
+
+@pytest.fixture(scope="module")
+def top():
+    return ukdyn.load("heavy_top").simulate(t_end=0.1)
+
+
+@pytest.fixture(scope="module")
+def crank():
+    return ukdyn.load("slider_crank").simulate(t_end=0.1)
+
+
+@pytest.fixture(scope="module")
+def tip():
+    return ukdyn.load("control_triple_pendulum_tip").simulate(t_end=0.5)
+
+
+@pytest.fixture(scope="module")
+def free():
+    return ukdyn.parse(FREE).simulate()
+
+
+@pytest.fixture(autouse=True)
+def close_figures():
+    yield
+    plt.close("all")
+
+
+def test_units_come_from_the_file_and_the_bodies(pendulum, top):
+    assert ukdyn.load("pendulum").units == {"x": "m", "y": "m", "theta": "rad", "r": "m"}
+    units = ukdyn.load("heavy_top").units
+    assert {units[c] for c in units if c[-2:] in (".x", ".y", ".z")} == {"m"}
+    assert units["tilt"] == "rad"  # an output expression's, from the file
+    assert [units[c] for c in units if ".u" in c] == ["1"] * 4
+    assert set(ukdyn.load("slider_crank").units.values()) == {"m", "rad"}
+    # a model that says nothing: no unit, never a guessed one
+    assert set(ukdyn.load("incline_friction").units.values()) == {""}
+    assert pendulum.model_name == "pendulum"
+
+
+def test_units_errors_are_located():
+    with pytest.raises(ukdyn.ModelError,
+                       match=r"<string>:4:9: error: units: 'q' is neither a coordinate nor an "
+                             r"output expression \(hint: the coordinates are s, phi\)"):
+        ukdyn.parse(FREE.replace("units: {s: m,", "units: {q: m,"))
+    with pytest.raises(ukdyn.ModelError, match=r":4:12: error: the unit of 's' must be a short"):
+        ukdyn.parse(FREE.replace("{s: m,", "{s: [m],"))
+    with pytest.raises(ukdyn.ModelError, match=r":4:8: error: units must map coordinates \(or"):
+        ukdyn.parse(FREE.replace("units: {s: m, phi: rad}", "units: [m, rad]"))
+
+
+def test_output_expressions_have_the_units_the_file_gives(pendulum, top):
+    assert pendulum.units == {"x": "m", "y": "m", "theta": "rad", "r": "m"}
+    fig = pendulum.figures()["outputs"]
+    assert ylabels(fig) == ["value [rad]", "value [m]"]
+    assert [[line.get_label() for line in data_lines(ax)] for ax in fig.axes] == [["theta"], ["r"]]
+    text = FREE + "output: {expressions: {turns: phi/(2*pi), e: 0.5*m*s_dot^2}}\n"
+    model = ukdyn.parse(text.replace("phi: rad}", "phi: rad, e: J}"))
+    assert model.units == {"s": "m", "phi": "rad", "turns": "", "e": "J"}
+    fig = model.simulate().figures()["outputs"]
+    assert ylabels(fig) == ["value (no unit given)", "value [J]"]
+    with pytest.raises(ukdyn.ModelError, match=r"the coordinates are s, phi, the output "
+                                               r"expressions turns, e"):
+        ukdyn.parse(text.replace("phi: rad}", "phi: rad, E: J}"))
+
+
+def test_coordinates_are_grouped_by_unit(top, free):
+    fig = top.figures()["coordinates"]
+    assert ylabels(fig) == ["position [m]", "quaternion components [1]"]
+    assert [len(data_lines(ax)) for ax in fig.axes] == [3, 4]
+    assert "heavy top" in fig._suptitle.get_text().lower() or top.model_name in \
+        fig._suptitle.get_text()
+    assert fig.axes[-1].get_xlabel() == "t [s]"
+    fig = free.figures()["coordinates"]
+    assert ylabels(fig) == ["position [m]", "angle [rad]"]
+    assert fig._suptitle.get_text() == "free spinning slider: coordinates"
+
+
+def test_unconstrained_model_has_no_constraint_figures(free):
+    figs = free.figures()
+    assert set(figs) == {"coordinates", "energy"}
+
+
+def test_no_empty_panels(pendulum, top, crank, tip, free):
+    for result in (pendulum, top, crank, tip, free):
+        for stem, fig in result.figures().items():
+            for ax in fig.axes:
+                assert data_lines(ax), (result.model_name, stem, ax.get_ylabel())
+            assert result.model_name in fig._suptitle.get_text()
+        plt.close("all")
+
+
+def test_constraint_forces_and_violation(pendulum):
+    figs = pendulum.figures()
+    forces = figs["constraint_forces"]
+    assert ylabels(forces) == ["ideal constraint force [N]"]
+    assert [line.get_label() for line in data_lines(forces.axes[0])] == ["x", "y"]
+    violation = figs["violation"]
+    for ax in violation.axes:
+        assert ax.get_yscale() == "log"
+        for line in data_lines(ax):
+            y = np.asarray(line.get_ydata(), dtype=float)
+            assert np.all(np.isnan(y) | (y > 0))  # exact zeros are not drawn at a floor
+    assert ylabels(violation)[0] == "|position violation|"
+    # one Axes (Result.plot_*): the same drawing code
+    ax = pendulum.plot_forces()
+    assert ax.get_ylabel() == "generalized constraint force [N]"
+    assert pendulum.plot("x", "y").get_ylabel() == "[m]"
+    assert pendulum.plot("x_dot").get_ylabel() == "[m/s]"
+
+
+def test_energy_labels(pendulum):
+    fig = pendulum.figures()["energy"]
+    assert ylabels(fig) == ["energy [J]", "balance residual [J]"]
+    labels = [line.get_label() for ax in fig.axes for line in data_lines(ax)]
+    assert not any("_" in label for label in labels)
+
+
+def test_line_styles_are_distinct_for_many_lines():
+    styles = {tuple(sorted((k, str(v)) for k, v in plotting.line_style(i).items()))
+              for i in range(300)}
+    assert len(styles) == 300
+
+
+def test_spatial_bodies_three_views(top):
+    fig = top.figures()["bodies"]
+    assert len(fig.axes) == 3
+    assert [(ax.get_xlabel(), ax.get_ylabel()) for ax in fig.axes] == [
+        ("x [m]", "y [m]"), ("x [m]", "z [m]"), ("y [m]", "z [m]")]
+    legend = fig.axes[-1].get_legend()
+    assert "start" in [t.get_text() for t in legend.get_texts()]
+
+
+def test_planar_bodies_one_view(crank):
+    fig = crank.figures()["bodies"]
+    assert len(fig.axes) == 1
+    ax = fig.axes[0]
+    assert (ax.get_xlabel(), ax.get_ylabel()) == ("x [m]", "y [m]")
+    assert ax.get_aspect() == 1.0
+    assert "start" in [t.get_text() for t in ax.get_legend().get_texts()]
+    coords = crank.figures()["coordinates"]
+    assert ylabels(coords) == ["position [m]", "angle [rad]"]
+
+
+def test_control_desired_against_actual(tip):
+    fig = tip.figures()["control"]
+    assert ylabels(fig) == ["tracking error", "requirement\n(desired, actual)",
+                            "control force [N·m]", "power [W]", "work [J]", "effort [N²·m²·s]"]
+    panel = fig.axes[1]
+    lines = {line.get_label(): np.asarray(line.get_ydata()) for line in data_lines(panel)}
+    assert sorted(lines) == ["tip.0 actual", "tip.0 desired", "tip.1 actual", "tip.1 desired"]
+    # actual: the tip's position from the coordinates (L1, L2, L3 = 1, 0.9, 0.8)
+    L = (1.0, 0.9, 0.8)
+    x = sum(Li * np.sin(tip[c]) for Li, c in zip(L, "abc"))
+    y = -sum(Li * np.cos(tip[c]) for Li, c in zip(L, "abc"))
+    np.testing.assert_allclose(lines["tip.0 actual"], x, rtol=0, atol=1e-9)
+    np.testing.assert_allclose(lines["tip.1 actual"], y, rtol=0, atol=1e-9)
+    np.testing.assert_allclose(lines["tip.0 desired"], 0.8 + 0.3 * np.sin(tip.t), rtol=0,
+                               atol=1e-12)
+    assert len(data_lines(fig.axes[0])) == 2 and len(data_lines(fig.axes[2])) == 3
+
+
+def test_save_plots_formats(free, tmp_path):
+    written = free.save_plots(tmp_path, formats="svg")
+    assert sorted(os.path.basename(p) for p in written) == ["coordinates.svg", "energy.svg"]
+    assert all(os.path.getsize(p) > 0 for p in written)
+    with pytest.raises(ValueError,
+                       match="unknown plot format 'gif': the formats are png, pdf, svg"):
+        free.save_plots(tmp_path, formats=["png", "gif"])
+
+
+def test_command_writes_the_formats_asked_for(cli, out_dir):
+    model = out_dir / "free.yaml"
+    model.write_text(FREE)
+    run = subprocess.run([cli, "run", str(model), "-o", str(out_dir / "run"),
+                          "--plot-format", "pdf,svg"], capture_output=True, text=True)
+    assert run.returncode == 0, run.stderr
+    files = set(os.listdir(out_dir / "run")) - {".ukdyn.lock"}
+    assert files == {"trajectory.csv", "summary.json", "coordinates.pdf", "energy.pdf",
+                     "coordinates.svg", "energy.svg"}
+    assert "wrote %s" % (out_dir / "run" / "coordinates.svg") in run.stdout
+    # the script's figures from the CSV and summary.json: units and the model's name
+    table = plotting.read_csv(str(out_dir / "run" / "trajectory.csv"))
+    meta = plotting.read_summary(str(out_dir / "run" / "summary.json"))
+    assert meta == {"model": "free spinning slider", "units": {"s": "m", "phi": "rad"}}
+    fig = plotting.coordinates_figure(table, meta)
+    assert ylabels(fig) == ["position [m]", "angle [rad]"]
+    assert fig._suptitle.get_text() == "free spinning slider: coordinates"
+
+
+def test_command_refuses_an_unknown_plot_format(cli, out_dir):
+    run = subprocess.run([cli, "run", "--example", "pendulum", "--t-end", "0.3", "-o",
+                          str(out_dir), "--plot-format", "png,gif"],
+                         capture_output=True, text=True)
+    assert run.returncode == 2
+    assert "--plot-format gif: the plot formats are png, pdf and svg" in run.stderr
+    assert not os.path.exists(out_dir / "trajectory.csv")

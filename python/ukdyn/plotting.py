@@ -1,0 +1,700 @@
+#!/usr/bin/python3
+"""The plots of a ukdyn run: the one plotting implementation of the ``ukdyn`` command and of
+the Python module.
+
+The command embeds this file and runs it as a script on the run's directory::
+
+    plotting.py TRAJECTORY.csv OUTPUT_DIR [FORMATS]
+
+(``FORMATS``: ``png``, ``pdf``, ``svg`` or a comma-separated list of them; ``png`` by default).
+It reads ``summary.json`` beside the CSV for the model's name and the coordinates' units, and
+writes, for each format, ``coordinates``, ``constraint_forces`` and ``violation`` (only when the
+model has constraints), ``energy``, and when the run has them ``control``, ``bodies`` (multibody
+models) and ``outputs`` (the model's output expressions). Each file is written under a
+temporary name and renamed when complete. Exit codes: 0 written, 2 bad arguments, 3 no
+matplotlib.
+
+The Python module uses the same functions through :class:`ukdyn.Result` (``Result.figures()``,
+``Result.save_plots()``, ``Result.plot_*``). Everything works from column names and a small
+metadata dict (:func:`metadata`), so that a CSV with its summary and a Result give the same
+figures:
+
+* ``model``: the model's name (in every title);
+* ``coordinates``: the coordinate names, in order;
+* ``units``: coordinate name → its unit (``m``, ``rad``, ``1`` for a quaternion component, or
+  what the model file's ``units:`` declares; ``""`` or absent: not known, and then no unit is
+  drawn, never a guessed one); output expressions may have theirs too.
+
+Units of derived quantities: velocities ``u/s``, accelerations ``u/s²``; generalized forces
+``N`` for a coordinate in ``m``, ``N·m`` for one in ``rad`` (or a quaternion component, whose
+conjugate force is an energy), none otherwise; energies and works ``J``; power ``W``.
+Multipliers, constraint violations and tracking errors carry no unit (it depends on how the
+constraint is written); output expressions have the one ``units:`` gives them, if any.
+
+Needs only NumPy and matplotlib (no import of the rest of ukdyn), so that the command can run it
+with /usr/bin/python3.
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+import os
+import sys
+
+import numpy as np
+
+__all__ = [
+    "FORMATS", "Table", "metadata", "read_csv", "read_summary", "coordinate_unit",
+    "column_unit", "force_unit",
+    "line_style", "coordinates_figure", "forces_figure", "violation_figure", "energy_figure",
+    "control_figure", "bodies_figure", "outputs_figure", "figures", "save", "write_figures",
+    "parse_formats", "draw_columns", "draw_forces", "draw_violation", "draw_energy", "main",
+]
+
+#: the file formats the figures can be written in (``--plot-format``)
+FORMATS = ("png", "pdf", "svg")
+
+#: the work channels of the energy balance (io/trajectory_files.hpp), in CSV order, with labels
+WORKS = (("work_nonideal", "work of the non-ideal forces"),
+         ("work_ideal", "work of the ideal constraint forces"),
+         ("work_drive", "work of the drives"),
+         ("work_external", "work of the external forces"),
+         ("work_control", "work of the control"))
+
+#: the control's scalar columns (control/control.hpp, control_csv_columns)
+CONTROL_SCALARS = ("control_power", "control_effort", "control_work_abs", "control_work")
+
+#: the most rows read from a CSV: a longer run is thinned to every k-th row and the last, so that
+#: the plots' memory does not grow with the run
+MAX_ROWS = 200000
+
+#: violations below this are not drawn on the log axis (exact zeros, and the roundoff floor
+#: under it, would fill the axis with a comb)
+VIOLATION_FLOOR = 1e-300
+
+_COLOURS = ("#1f77b4", "#ff7f0e", "#2ca02c", "#d62728", "#9467bd", "#8c564b", "#e377c2",
+            "#7f7f7f", "#bcbd22", "#17becf")
+_DASHES = ("-", "--", ":", "-.")
+_MARKERS = (None, "o", "s", "^", "v", "D", "x", "+")
+
+
+# --- data ------------------------------------------------------------------------------------
+class Table:
+    """Columns by name: ``names`` in order, ``table[name]`` a float array, ``name in table``.
+
+    Anything with ``names``, ``__getitem__`` and ``__contains__`` (a :class:`ukdyn.Result`)
+    can stand in for it.
+    """
+
+    def __init__(self, names, columns):
+        self.names = list(names)
+        self._columns = {}
+        for name, values in zip(self.names, columns):
+            self._columns.setdefault(name, np.asarray(values, dtype=float))
+
+    def __getitem__(self, name):
+        return self._columns[name]
+
+    def __contains__(self, name):
+        return name in self._columns
+
+
+def read_csv(path):
+    """Reads a trajectory.csv into a :class:`Table` (at most about MAX_ROWS rows: every k-th one
+    and the last)."""
+    with open(path, newline="") as f:
+        total = max(0, sum(1 for _ in f) - 1)
+    stride = max(1, -(-total // MAX_ROWS))
+    with open(path, newline="") as f:
+        rows = csv.reader(f)
+        header = next(rows)
+        data = [[] for _ in header]
+        for i, row in enumerate(rows):
+            if i % stride and i != total - 1:
+                continue
+            for j, value in enumerate(row):
+                data[j].append(float(value))
+    return Table(header, data)
+
+
+def _coordinates_of(names):
+    """The coordinates of a CSV header: the columns between t and the first velocity column."""
+    coords = []
+    for name in names[1:]:
+        if name.endswith("_dot") and name[: -len("_dot")] in coords:
+            break
+        coords.append(name)
+    return coords
+
+
+def read_summary(path):
+    """The metadata (:func:`metadata`) that a run's summary.json gives: the model's name and
+    the coordinates' units. A missing or unreadable file gives an empty dict."""
+    try:
+        with open(path, encoding="utf-8") as f:
+            summary = json.load(f)
+    except (OSError, ValueError):
+        return {}
+    meta = {}
+    name = (summary.get("provenance") or {}).get("model_name")
+    if name:
+        meta["model"] = name
+    if isinstance(summary.get("units"), dict):
+        meta["units"] = dict(summary["units"])
+    return meta
+
+
+def metadata(table, meta=None):
+    """The metadata of a run completed from its columns: ``model`` (""), ``coordinates`` (from
+    the columns when not given), ``units`` (each coordinate's, "" when not known)."""
+    meta = dict(meta or {})
+    meta.setdefault("model", "")
+    if not meta.get("coordinates"):
+        meta["coordinates"] = _coordinates_of(table.names)
+    units = {str(k): str(v or "") for k, v in dict(meta.get("units") or {}).items()}
+    meta["units"] = {c: units.get(c, "") for c in meta["coordinates"]}
+    meta["units"].update((k, v) for k, v in units.items() if k not in meta["units"])
+    return meta
+
+
+# --- units -----------------------------------------------------------------------------------
+def coordinate_unit(meta, c):
+    """The unit of coordinate c ("" when not known)."""
+    return (meta.get("units") or {}).get(c, "") or ""
+
+
+def force_unit(unit):
+    """The unit of the generalized force conjugate to a coordinate in `unit`: N for m, N·m for
+    rad and for a dimensionless coordinate (a quaternion component); "" otherwise."""
+    return {"m": "N", "rad": "N·m", "1": "N·m"}.get(unit, "")
+
+
+def _rate(unit, order):
+    """The unit of the order-th time derivative of a quantity in `unit`."""
+    if not unit:
+        return ""
+    if unit == "1":
+        return "1/s" if order == 1 else "1/s²"
+    return unit + ("/s" if order == 1 else "/s²")
+
+
+def _label(text, unit):
+    """An axis label with its unit in brackets (none when unknown)."""
+    return "%s [%s]" % (text, unit) if unit else text
+
+
+def _kind(unit, quaternion):
+    if quaternion:
+        return "quaternion components"
+    return {"m": "position", "rad": "angle"}.get(unit, "coordinate")
+
+
+def _is_quaternion(table, meta, c):
+    """A rigid body's rotation coordinate <b>.u0 … <b>.u3."""
+    body, _, last = c.rpartition(".")
+    return bool(body) and last in ("u0", "u1", "u2", "u3") and (body + ".qw") in table
+
+
+def _groups(meta, coords, unit_of):
+    """The names grouped by unit_of(name), in the order of first appearance: [(unit, names)]."""
+    groups = {}
+    for c in coords:
+        groups.setdefault(unit_of(c), []).append(c)
+    return list(groups.items())
+
+
+# --- style -----------------------------------------------------------------------------------
+def line_style(i):
+    """The style of the i-th line of a panel: 10 colours × 4 dash patterns × 8 marker choices
+    (none, then seven shapes), so that the first 320 lines of a panel all differ."""
+    style = {"color": _COLOURS[i % len(_COLOURS)],
+             "linestyle": _DASHES[(i // len(_COLOURS)) % len(_DASHES)]}
+    marker = _MARKERS[(i // (len(_COLOURS) * len(_DASHES))) % len(_MARKERS)]
+    if marker:
+        style.update(marker=marker, markevery=0.1, markersize=4)
+    return style
+
+
+def _plt():
+    import matplotlib.pyplot as plt
+    return plt
+
+
+def _figure(title, meta, rows, height=2.6, width=9.0):
+    """A figure of `rows` panels over a shared time axis, titled with the model's name."""
+    plt = _plt()
+    fig, axes = plt.subplots(rows, 1, figsize=(width, height * rows + 0.8), sharex=True,
+                             squeeze=False, layout="constrained")
+    fig.suptitle(_title(title, meta))
+    return fig, [a[0] for a in axes]
+
+
+def _title(title, meta):
+    return "%s: %s" % (meta["model"], title) if meta.get("model") else title
+
+
+def _legend(ax, title=None):
+    """A legend beside the panel (outside the data), in columns when it is long."""
+    handles, labels = ax.get_legend_handles_labels()
+    if handles:
+        ax.legend(handles, labels, loc="upper left", bbox_to_anchor=(1.01, 1.0),
+                  fontsize="small", ncol=1 + len(handles) // 16, title=title,
+                  title_fontsize="small", borderaxespad=0.0)
+
+
+def _finish(axes):
+    axes[-1].set_xlabel("t [s]")
+    for ax in axes:
+        ax.grid(True, alpha=0.3)
+        _legend(ax)
+
+
+# --- panels (also Result.plot_* on one Axes) ---------------------------------------------------
+def draw_columns(ax, table, meta, columns, x="t", **kwargs):
+    """Draws `columns` against column `x` on `ax`, one style per line; the y label names the
+    unit when every column has the same known one (coordinates, their velocities and
+    accelerations, generalized forces). Extra keyword arguments go to ``ax.plot``."""
+    meta = metadata(table, meta)
+    units = set()
+    for i, name in enumerate(columns):
+        style = {} if ("color" in kwargs or "c" in kwargs) else line_style(i)
+        style.update(kwargs)
+        ax.plot(table[x], table[name], label=name, **style)
+        units.add(column_unit(meta, name))
+    unit = units.pop() if len(units) == 1 else ""
+    ax.set_xlabel("t [s]" if x == "t" else _label(x, column_unit(meta, x)))
+    if unit:
+        ax.set_ylabel("[%s]" % unit)
+    ax.grid(True, alpha=0.3)
+    _legend(ax)
+    return ax
+
+
+def column_unit(meta, name):
+    """The unit of a column of trajectory.csv ("" when not known)."""
+    units = meta.get("units") or {}
+    if name == "t":
+        return "s"
+    if name in units:
+        return units[name] or ""
+    for suffix, order in (("_ddot", 2), ("_dot", 1)):
+        if name.endswith(suffix) and name[: -len(suffix)] in units:
+            return _rate(units[name[: -len(suffix)]], order)
+    prefix, _, rest = name.partition(".")
+    if prefix in ("Qc_ideal", "Qc_nonideal", "Qc_control", "Qc_robust") and rest in units:
+        return force_unit(units[rest])
+    if name in ("kinetic_energy", "potential_energy", "energy", "energy_balance_residual",
+                "control_work", "control_work_abs") or name.startswith("work_"):
+        return "J"
+    if name == "control_power":
+        return "W"
+    return ""
+
+
+def draw_forces(ax, table, meta):
+    """The ideal and non-ideal constraint forces per coordinate on one Axes (ideal solid,
+    non-ideal dashed in the same colour, only when not zero); the y label names the unit when
+    all coordinates have the same force unit, the line labels otherwise."""
+    meta = metadata(table, meta)
+    coords = meta["coordinates"]
+    units = {force_unit(coordinate_unit(meta, c)) for c in coords}
+    common = units.pop() if len(units) == 1 else None
+    for i, c in enumerate(coords):
+        unit = force_unit(coordinate_unit(meta, c))
+        suffix = "" if common is not None or not unit else " [%s]" % unit
+        colour = line_style(i)["color"]
+        ax.plot(table["t"], table["Qc_ideal." + c], color=colour,
+                linestyle=_DASHES[(i // len(_COLOURS)) % 2 * 2], label="Qc_ideal." + c + suffix)
+        if np.any(table["Qc_nonideal." + c]):
+            ax.plot(table["t"], table["Qc_nonideal." + c], "--", color=colour,
+                    label="Qc_nonideal." + c + suffix)
+    ax.set_xlabel("t [s]")
+    ax.set_ylabel(_label("generalized constraint force", common or ""))
+    ax.grid(True, alpha=0.3)
+    _legend(ax)
+    return ax
+
+
+def _positive(values):
+    """|values| with those below VIOLATION_FLOOR (exact zeros) masked out (NaN: not drawn)."""
+    a = np.abs(np.asarray(values, dtype=float))
+    return np.where(a > VIOLATION_FLOOR, a, np.nan)
+
+
+def _violation_columns(table, prefix):
+    return [(h[len(prefix):], h) for h in table.names if h.startswith(prefix)]
+
+
+def draw_violation(ax, table, meta, prefix="violation."):
+    """|violation| per constraint on a log scale; exact zeros are not drawn (a short note on the
+    panel says so) rather than put at an arbitrary floor. `prefix` ``violation_velocity.``
+    draws the velocity-level violations."""
+    drawn = 0
+    zeros = False
+    for i, (label, h) in enumerate(_violation_columns(table, prefix)):
+        values = _positive(table[h])
+        zeros = zeros or bool(np.any(np.isnan(values)))
+        style = line_style(drawn)
+        # points: a sample between two exact zeros has no line to either neighbour
+        style.update(marker=style.get("marker") or ".", markersize=2.5, markevery=None,
+                     rasterized=len(values) > 5000)  # (PDF, SVG: no 10⁵ vector markers)
+        ax.plot(table["t"], values, label=label, **style)
+        drawn += 1
+    ax.set_yscale("log")
+    what = "position" if prefix == "violation." else "velocity"
+    ax.set_ylabel("|%s violation|" % what)
+    ax.set_xlabel("t [s]")
+    if zeros:
+        ax.text(0.01, 0.02, "exact zeros not drawn", transform=ax.transAxes, fontsize="x-small",
+                color="0.35")
+    ax.grid(True, alpha=0.3)
+    _legend(ax)
+    return ax
+
+
+def draw_energy(ax, table, meta, residual=True):
+    """E(t) − E(0) and each work channel that carries more than 1e-9 of the energy exchanged
+    (J); with `residual`, the balance residual E(t) − E(0) − ΣW too (dashed)."""
+    t = table["t"]
+    E = table["energy"]
+    dE = E - E[0] if len(E) else E
+    ax.plot(t, dE, color="k", lw=1.6, label="E(t) − E(0)")
+    works = [(h, label) for h, label in WORKS if h in table]
+    scale = max([float(np.max(np.abs(dE), initial=0.0))] +
+                [float(np.max(np.abs(table[h]), initial=0.0)) for h, _ in works])
+    i = 0
+    for h, label in works:
+        if np.max(np.abs(table[h]), initial=0.0) > 1e-9 * scale:
+            ax.plot(t, table[h], label=label, **line_style(i))
+            i += 1
+    if residual and "energy_balance_residual" in table:
+        ax.plot(t, table["energy_balance_residual"], "--", color="0.4",
+                label="residual E(t) − E(0) − ΣW")
+    ax.set_xlabel("t [s]")
+    ax.set_ylabel("energy [J]")
+    ax.grid(True, alpha=0.3)
+    _legend(ax)
+    return ax
+
+
+# --- figures ---------------------------------------------------------------------------------
+def coordinates_figure(table, meta=None):
+    """The coordinates, one panel per unit (metres, radians, quaternion components, each unit
+    the model declares, and the coordinates of unknown unit)."""
+    meta = metadata(table, meta)
+    coords = meta["coordinates"]
+    groups = _groups(meta, coords, lambda c: (coordinate_unit(meta, c),
+                                                _is_quaternion(table, meta, c)))
+    fig, axes = _figure("coordinates", meta, len(groups))
+    for ax, ((unit, quaternion), members) in zip(axes, groups):
+        for i, c in enumerate(members):
+            ax.plot(table["t"], table[c], label=c, **line_style(i))
+        ax.set_ylabel(_label(_kind(unit, quaternion), unit))
+    _finish(axes)
+    return fig
+
+
+def _nonzero(values):
+    return bool(np.any(np.asarray(values) != 0))
+
+
+def forces_figure(table, meta=None):
+    """The constraint forces: the ideal part, one panel per force unit, and the non-ideal part
+    (friction) likewise when it is not zero. None when the model has no constraint force."""
+    meta = metadata(table, meta)
+    coords = meta["coordinates"]
+    panels = []
+    for part, name in (("Qc_ideal.", "ideal constraint force"),
+                       ("Qc_nonideal.", "non-ideal constraint force")):
+        present = [c for c in coords if part + c in table]
+        if not any(_nonzero(table[part + c]) for c in present):
+            continue
+        for unit, members in _groups(meta, present,
+                                     lambda c: force_unit(coordinate_unit(meta, c))):
+            if part == "Qc_nonideal.":
+                members = [c for c in members if _nonzero(table[part + c])]
+                if not members:
+                    continue
+            panels.append((part, name, unit, members))
+    if not panels:
+        return None
+    fig, axes = _figure("constraint forces (generalized)", meta, len(panels))
+    for ax, (part, name, unit, members) in zip(axes, panels):
+        for i, c in enumerate(members):
+            ax.plot(table["t"], table[part + c], label=c, **line_style(i))
+        ax.set_ylabel(_label(name, unit))
+    _finish(axes)
+    return fig
+
+
+def violation_figure(table, meta=None):
+    """The constraint violations on a log scale: position level, then velocity level, each
+    panel only when some violation is not exactly zero. None when there is nothing to draw
+    (no constraint, or every violation exactly zero)."""
+    meta = metadata(table, meta)
+    panels = [p for p in ("violation.", "violation_velocity.")
+              if any(np.any(np.abs(table[h]) > VIOLATION_FLOOR)
+                     for _, h in _violation_columns(table, p))]
+    if not panels:
+        return None
+    fig, axes = _figure("constraint violation", meta, len(panels))
+    for ax, prefix in zip(axes, panels):
+        draw_violation(ax, table, meta, prefix)
+        ax.set_xlabel("")
+    _finish(axes)
+    return fig
+
+
+def energy_figure(table, meta=None):
+    """The energy balance: E(t) − E(0) with each work channel, then the residual
+    E(t) − E(0) − ΣW (the integration error that the run's certificate bounds)."""
+    meta = metadata(table, meta)
+    fig, axes = _figure("energy balance", meta, 2)
+    draw_energy(axes[0], table, meta, residual=False)
+    axes[0].set_xlabel("")
+    axes[1].plot(table["t"], table["energy_balance_residual"], color="k",
+                 label="E(t) − E(0) − ΣW\n(ΣW: every work channel)")
+    axes[1].set_ylabel("balance residual [J]")
+    _finish(axes)
+    return fig
+
+
+def _common(units):
+    units = set(units)
+    return units.pop() if len(units) == 1 else ""
+
+
+def control_figure(table, meta=None):
+    """The control: tracking error per requirement row (with the robust bound), desired against
+    actual for the rows whose desired value the run has (an output expression
+    ``desired_<row>`` or ``actual_<row>``, the row's ``.`` written ``_``: actual = desired +
+    error), the control force per coordinate (one panel per unit), the power, the
+    work (∫P dt, ∫|P| dt) and the effort ∫Qcᵀ Qc dt, each on its own axis. None for a run
+    without control."""
+    if "control_power" not in table:
+        return None
+    meta = metadata(table, meta)
+    coords = meta["coordinates"]
+    rows = [h[len("error."):] for h in table.names if h.startswith("error.")]
+    desired = [(r, d) for r, d in ((r, _desired(table, r)) for r in rows) if d is not None]
+    actuated = [c for c in coords
+                if "Qc_control." + c in table and _nonzero(table["Qc_control." + c])]
+    force_groups = _groups(meta, actuated, lambda c: force_unit(coordinate_unit(meta, c)))
+    panels = (1 if rows else 0) + (1 if desired else 0) + len(force_groups) + 3
+    fig, axes = _figure("control", meta, panels, height=2.2)
+    t = table["t"]
+    k = 0
+    if rows:
+        ax = axes[k]
+        k += 1
+        for i, r in enumerate(rows):
+            style = line_style(i)
+            ax.plot(t, table["error." + r], label=r, **style)
+            if "error_bound." + r in table:
+                bound = table["error_bound." + r]
+                ax.plot(t, bound, ":", color=style["color"], lw=0.8,
+                        label="±bound " + r if i == 0 else "_")
+                ax.plot(t, -bound, ":", color=style["color"], lw=0.8, label="_")
+        ax.set_ylabel("tracking error")
+    if desired:
+        ax = axes[k]
+        k += 1
+        for i, (r, d) in enumerate(desired):
+            colour = line_style(i)["color"]
+            ax.plot(t, d + table["error." + r], "-", color=colour, label=r + " actual")
+            ax.plot(t, d, "--", color=colour, label=r + " desired")
+        ax.set_ylabel("requirement\n(desired, actual)")
+    for unit, members in force_groups:
+        ax = axes[k]
+        k += 1
+        for i, c in enumerate(members):
+            ax.plot(t, table["Qc_control." + c], label=c, **line_style(i))
+        ax.set_ylabel(_label("control force", unit))
+    axes[k].plot(t, table["control_power"], color="k", label="P = Qcᵀ q̇")
+    axes[k].set_ylabel("power [W]")
+    axes[k + 1].plot(t, table["control_work"], label="∫ P dt", **line_style(0))
+    axes[k + 1].plot(t, table["control_work_abs"], label="∫ |P| dt", **line_style(1))
+    axes[k + 1].set_ylabel("work [J]")
+    fu = _common(force_unit(coordinate_unit(meta, c)) for c in actuated)
+    axes[k + 2].plot(t, table["control_effort"], color="k", label="∫ Qcᵀ Qc dt")
+    axes[k + 2].set_ylabel(_label("effort", {"N": "N²·s", "N·m": "N²·m²·s"}.get(fu, "")))
+    _finish(axes)
+    return fig
+
+
+def _desired(table, row):
+    """The desired value of requirement row `row` (its error φ written as actual − desired):
+    the column ``desired.<row>``, or the output expression ``desired_<row>`` (``.`` written
+    ``_``), or actual − error from an output expression ``actual_<row>``; None when the run has
+    none of them."""
+    spelled = row.replace(".", "_")
+    for name in ("desired." + row, "desired_" + spelled):
+        if name in table:
+            return np.asarray(table[name], dtype=float)
+    if "actual_" + spelled in table:
+        return np.asarray(table["actual_" + spelled], dtype=float) - table["error." + row]
+    return None
+
+
+def _bodies(table):
+    """The bodies of a multibody run (those with pose columns <b>.qw), each with whether it is
+    planar (a <b>.theta coordinate)."""
+    return [(h[: -len(".qw")], (h[: -len(".qw")] + ".theta") in table)
+            for h in table.names if h.endswith(".qw")]
+
+
+def bodies_figure(table, meta=None):
+    """The paths of the bodies' centres of mass: planar models in the x–y plane, spatial models
+    in three orthogonal views (x–y from above, x–z and y–z from the side); equal axes, the start
+    of each path marked. None for a model without bodies."""
+    bodies = _bodies(table)
+    if not bodies:
+        return None
+    meta = metadata(table, meta)
+    planar = all(p for _, p in bodies)
+    views = [("x", "y")] if planar else [("x", "y"), ("x", "z"), ("y", "z")]
+    plt = _plt()
+    if planar:
+        fig, axes = plt.subplots(1, 1, figsize=(7.5, 6.0), squeeze=False, layout="constrained")
+    else:
+        fig, axes = plt.subplots(1, 3, figsize=(14.0, 5.0), squeeze=False, layout="constrained")
+    axes = list(axes[0])
+    fig.suptitle(_title("paths of the centres of mass", meta))
+    for ax, (a, b) in zip(axes, views):
+        for i, (body, _) in enumerate(bodies):
+            style = line_style(i)
+            x, y = table[body + "." + a], table[body + "." + b]
+            ax.plot(x, y, label=body, lw=1.0, **style)
+            ax.plot(x[:1], y[:1], "o", color=style["color"], ms=5, label="_")
+        ax.plot([], [], "o", color="0.3", ms=5, label="start")
+        ax.set_aspect("equal", "datalim")
+        ax.set_xlabel(_label(a, coordinate_unit(meta, bodies[0][0] + "." + a) or "m"))
+        ax.set_ylabel(_label(b, coordinate_unit(meta, bodies[0][0] + "." + b) or "m"))
+        ax.set_title("%s–%s view" % (a, b), fontsize="medium")
+        ax.grid(True, alpha=0.3)
+    _legend(axes[-1])
+    return fig
+
+
+def outputs_figure(table, meta=None):
+    """The model's output expressions (the columns after the standard and control ones named by
+    identifiers), one panel per unit (the model file's ``units:`` may give them). None when the
+    model has none."""
+    meta = metadata(table, meta)
+    if "energy_balance_residual" not in table:
+        return None
+    names = table.names
+    extra = [h for h in names[names.index("energy_balance_residual") + 1:]
+             if "." not in h and h not in CONTROL_SCALARS]
+    if not extra:
+        return None
+    groups = _groups(meta, extra, lambda h: column_unit(meta, h))
+    fig, axes = _figure("output expressions", meta, len(groups))
+    for ax, (unit, members) in zip(axes, groups):
+        for i, h in enumerate(members):
+            ax.plot(table["t"], table[h], label=h, **line_style(i))
+        ax.set_ylabel("value [%s]" % unit if unit else "value (no unit given)")
+    _finish(axes)
+    return fig
+
+
+#: the figures by file stem, in the order they are written
+FIGURES = (("coordinates", coordinates_figure), ("constraint_forces", forces_figure),
+           ("violation", violation_figure), ("energy", energy_figure),
+           ("control", control_figure), ("bodies", bodies_figure),
+           ("outputs", outputs_figure))
+
+
+def figures(table, meta=None):
+    """Every figure that applies to the run, by file stem (coordinates, constraint_forces,
+    violation, energy, control, bodies, outputs): a dict of matplotlib Figures; a figure
+    without data is left out, never drawn empty."""
+    meta = metadata(table, meta)
+    out = {}
+    for stem, make in FIGURES:
+        fig = make(table, meta)
+        if fig is not None:
+            out[stem] = fig
+    return out
+
+
+# --- files -----------------------------------------------------------------------------------
+def parse_formats(formats):
+    """The formats of `formats` (a list, or comma-separated text) in order, each once.
+    Raises ValueError naming the allowed formats for an unknown one or an empty list."""
+    if isinstance(formats, str):
+        formats = formats.split(",")
+    out = []
+    for f in formats:
+        f = str(f).strip().lower()
+        if f not in FORMATS:
+            raise ValueError("unknown plot format '%s': the formats are %s"
+                             % (f, ", ".join(FORMATS)))
+        if f not in out:
+            out.append(f)
+    if not out:
+        raise ValueError("no plot format given: the formats are %s" % ", ".join(FORMATS))
+    return out
+
+
+def save(fig, path, fmt=None):
+    """Writes the figure whole or not at all: a hidden temporary beside `path`, then renamed
+    over it. The format is `fmt`, or `path`'s extension."""
+    fmt = fmt or os.path.splitext(path)[1][1:]
+    directory, name = os.path.split(path)
+    temporary = os.path.join(directory, ".%s.tmp-%d" % (name, os.getpid()))
+    try:
+        fig.savefig(temporary, dpi=110, format=fmt)
+        os.replace(temporary, path)
+    finally:
+        if os.path.exists(temporary):
+            os.remove(temporary)
+
+
+def write_figures(table, meta, directory, formats=("png",), close=True):
+    """Writes every figure of :func:`figures` into `directory` as STEM.FORMAT for each format
+    (``png``, ``pdf``, ``svg``); returns the paths written. With `close`, the figures are closed
+    afterwards."""
+    formats = parse_formats(formats)
+    written = []
+    for stem, fig in figures(table, meta).items():
+        try:
+            for fmt in formats:
+                path = os.path.join(directory, "%s.%s" % (stem, fmt))
+                save(fig, path, fmt)
+                written.append(path)
+        finally:
+            if close:
+                _plt().close(fig)
+    return written
+
+
+def main(argv=None):
+    """The command: plotting.py TRAJECTORY.csv OUTPUT_DIR [FORMATS]."""
+    argv = sys.argv[1:] if argv is None else argv
+    if len(argv) not in (2, 3):
+        sys.stderr.write("usage: plotting.py TRAJECTORY.csv OUTPUT_DIR [png,pdf,svg]\n")
+        return 2
+    try:
+        formats = parse_formats(argv[2] if len(argv) == 3 else "png")
+    except ValueError as e:
+        sys.stderr.write("plotting.py: %s\n" % e)
+        return 2
+    try:
+        import matplotlib
+        matplotlib.use("Agg")
+        import matplotlib.pyplot  # noqa: F401
+    except ImportError:
+        sys.stderr.write("plotting.py: matplotlib is not installed\n")
+        return 3
+    table = read_csv(argv[0])
+    if "t" not in table or len(table["t"]) == 0:
+        return 0  # a run that recorded no sample: nothing to draw
+    meta = read_summary(os.path.join(os.path.dirname(os.path.abspath(argv[0])), "summary.json"))
+    write_figures(table, meta, argv[1], formats)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,110 @@
+// units: of a model file (modelfile/reader.cpp, read_units): each coordinate's and output
+// expression's unit for the plots' labels, the multibody defaults (m, rad, 1), the errors at
+// file:line:column, and summary.json's `units` (io/json_summary.cpp).
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <ukdyn/io/provenance.hpp>
+#include <ukdyn/io/trajectory_files.hpp>
+#include <ukdyn/modelfile/model.hpp>
+#include <ukdyn/modelfile/run.hpp>
+
+namespace ukdyn {
+namespace {
+
+const std::string kSlider = R"(coordinates: [s, phi]
+kinetic_energy: 0.5*s_dot^2 + 0.5*phi_dot^2
+output: {expressions: {turns: phi/(2*pi), e: 0.5*s_dot^2}}
+)";
+
+// the ModelError of parsing `text`: its line, column and message
+struct Failure {
+  int line = 0, column = 0;
+  std::string what;
+};
+Failure failure_of(const std::string& text) {
+  try {
+    parse_model(text, "units.yaml");
+  } catch (const ModelError& e) {
+    return {e.line(), e.column(), e.what()};
+  }
+  ADD_FAILURE() << "no error for:\n" << text;
+  return {};
+}
+
+TEST(ModelUnits, NoneGivenIsNoneKnown) {
+  const Model m = parse_model(kSlider);
+  EXPECT_EQ(m.coordinate_units, (std::vector<std::string>{"", ""}));
+  EXPECT_EQ(m.output_units, (std::vector<std::string>{"", ""}));
+}
+
+TEST(ModelUnits, TheFileGivesCoordinatesAndOutputsTheirs) {
+  const Model m = parse_model(kSlider + "units: {phi: rad, s: m, e: J}\n");
+  EXPECT_EQ(m.coordinate_units, (std::vector<std::string>{"m", "rad"}));
+  EXPECT_EQ(m.output_units, (std::vector<std::string>{"", "J"}));
+}
+
+TEST(ModelUnits, BodiesHaveMetresRadiansAndUnitlessQuaternions) {
+  const Model planar = parse_model(R"(units: {crank_theta: deg}
+bodies:
+  - {name: crank, type: planar, mass: 1, inertia: 0.1}
+  - {name: rod, type: planar, mass: 1, inertia: 0.1, position: [1, 0]}
+)");
+  EXPECT_EQ(planar.coordinate_units,
+            (std::vector<std::string>{"m", "m", "deg", "m", "m", "rad"}));  // crank_theta given
+  const Model spatial = parse_model(R"(units: {top.z: mm}
+bodies:
+  - {name: top, type: rigid, mass: 1, inertia: [1, 1, 1]}
+  - {name: bead, type: particle, mass: 1, position: [1, 0, 0]}
+)");
+  EXPECT_EQ(spatial.coordinate_units,
+            (std::vector<std::string>{"m", "m", "mm", "1", "1", "1", "1", "m", "m", "m"}));
+}
+
+TEST(ModelUnits, ErrorsNameTheEntryAndWhereItIs) {
+  Failure f = failure_of(kSlider + "units: {q: m}\n");
+  EXPECT_EQ(f.line, 4);
+  EXPECT_EQ(f.column, 9);
+  EXPECT_NE(f.what.find("units: 'q' is neither a coordinate nor an output expression (hint: the "
+                        "coordinates are s, phi, the output expressions turns, e)"),
+            std::string::npos)
+      << f.what;
+  f = failure_of(kSlider + "units: {s: [m]}\n");
+  EXPECT_EQ(f.line, 4);
+  EXPECT_EQ(f.column, 12);
+  EXPECT_NE(f.what.find("the unit of 's' must be a short text (at most 32 characters)"),
+            std::string::npos)
+      << f.what;
+  f = failure_of(kSlider + "units: {s: " + std::string(33, 'm') + "}\n");
+  EXPECT_NE(f.what.find("the unit of 's' must be a short text"), std::string::npos) << f.what;
+  f = failure_of(kSlider + "units: [m, rad]\n");
+  EXPECT_EQ(f.line, 4);
+  EXPECT_EQ(f.column, 8);
+  EXPECT_NE(f.what.find("units must map coordinates (or output expressions) to their units"),
+            std::string::npos)
+      << f.what;
+  f = failure_of(kSlider + "unit: {s: m}\n");  // a misspelt key is never ignored
+  EXPECT_NE(f.what.find("unknown key 'unit'"), std::string::npos) << f.what;
+}
+
+TEST(ModelUnits, SummaryWritesTheUnitsByColumnName) {
+  Model m = parse_model(kSlider + "units: {s: m, e: J}\n");
+  m.options.t_end = 0.01;
+  const ModelRun run = run_model(m, m.options);
+  RunProvenance p;
+  p.model_name = "slider";
+  p.units = {{"s", "m"}, {"phi", ""}, {"e", "J"}};
+  const auto j = nlohmann::json::parse(summary_json(run.trajectory, m.options, &p));
+  EXPECT_EQ(j.at("units"), nlohmann::json({{"s", "m"}, {"phi", ""}, {"e", "J"}}));
+  // without units (or without provenance): no key
+  p.units.clear();
+  EXPECT_FALSE(
+      nlohmann::json::parse(summary_json(run.trajectory, m.options, &p)).contains("units"));
+  EXPECT_FALSE(nlohmann::json::parse(summary_json(run.trajectory, m.options)).contains("units"));
+}
+
+}  // namespace
+}  // namespace ukdyn
