@@ -121,3 +121,20 @@ def test_command_line_sigint_keeps_the_finished_samples(cli, out_dir):
     assert list(frame["status"]) == ["ok", "ok", "interrupted", "not run"]
     assert list(frame["t_reached"][:2]) == [0.5, 1.0]
     assert 0 < frame["t_reached"][2] < 5e4
+
+
+def test_ctrl_c_raises_interrupted_with_the_finished_samples():
+    import os
+    import signal
+    import threading
+    long_model = str(ROOT / "tests" / "data" / "interrupt_pendulum.yaml")
+    timer = threading.Timer(1.5, lambda: os.kill(os.getpid(), signal.SIGINT))
+    timer.start()
+    try:
+        with pytest.raises(ukdyn.Interrupted) as caught:
+            ukdyn.sweep(long_model, grid={"t_end": [0.5, 1.0, 5e4, 5e4]}, workers=1)
+    finally:
+        timer.cancel()
+    frame = caught.value.result
+    assert list(frame["status"]) == ["ok", "ok", "interrupted", "not run"]
+    assert 0 < frame["t_reached"].iloc[2] < 5e4
