@@ -163,8 +163,10 @@ int main(int argc, char** argv) {
   sweep_cmd->add_flag("--no-plots", sweep_no_plots, "write no plot");
   for (const ukdyn::OptionInfo& info : ukdyn::option_table()) {
     sweep_flags.emplace_back(&info,
-                             sweep_cmd->add_option(ukdyn::option_flag(info), sweep_texts[info.name],
-                                                   info.doc + " (every sample)"));
+                             sweep_cmd
+                                 ->add_option(ukdyn::option_flag(info), sweep_texts[info.name],
+                                              info.doc + " (every sample)")
+                                 ->type_name("VALUE"));
   }
 
   ModelSource check;
