@@ -18,7 +18,7 @@ namespace ukdyn {
 namespace {
 
 // the most samples a design may have
-constexpr double kMaxSamples = 1e9;
+constexpr double kMaxSamples = 1e7;
 
 // a uniform variate in (0, 1) from the top 53 bits of one output: (k + 0.5) 2⁻⁵³
 double uniform01(std::mt19937_64& rng) {
@@ -177,8 +177,9 @@ DesignTable make_design(const Design& design) {
   }
   const std::size_t draws = design.random.empty() ? 1 : design.draws;
   if (points * double(draws) > kMaxSamples) {
-    throw std::invalid_argument("ukdyn::make_design: the design has " +
-                                format_number(points * double(draws)) + " samples, more than 1e9");
+    throw std::invalid_argument(
+        "ukdyn::make_design: the design has " + format_number(points * double(draws)) +
+        " samples, more than 1e7 (each sample is a run, and its row is kept in memory)");
   }
 
   // the draws: draws × variables, each variable's u in (0, 1), then the laws
@@ -251,7 +252,7 @@ GridAxis parse_grid_axis(std::string_view text) {
     const double count = number(rest.substr(c2 + 1), text, form);
     if (!(count >= 1.0) || count != std::floor(count) || count > kMaxSamples) {
       throw std::invalid_argument("'" + std::string(text) +
-                                  "': COUNT must be a whole number from 1 to 1e9");
+                                  "': COUNT must be a whole number from 1 to 1e7");
     }
     const std::size_t n = std::size_t(count);
     for (std::size_t i = 0; i < n; ++i) {

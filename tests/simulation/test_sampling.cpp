@@ -159,6 +159,16 @@ TEST(Sampling, BadDesignsNameTheVariable) {
   d.draws = 2;
   d.grid = {{"x", {1}}};
   EXPECT_THROW(make_design(d), std::invalid_argument);  // x twice
+  // more than 1e7 samples: refused before anything is drawn
+  d.grid = {{"a", {1, 2}}};
+  d.draws = 6'000'000;
+  try {
+    make_design(d);
+    FAIL();
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("1.2e+07 samples, more than 1e7"), std::string::npos)
+        << e.what();
+  }
 }
 
 }  // namespace

@@ -64,7 +64,7 @@ struct DesignTable {
 /// @throws std::invalid_argument naming the variable: an axis without values, a value that is not
 /// finite, a name given twice, random variables without draws (or draws without random
 /// variables), b < a (uniform, log-uniform), a <= 0 (log-uniform), sd < 0 (normal), or more than
-/// 10⁹ samples. Cost O(samples × variables).
+/// 10⁷ samples (each is a run, with its row in memory). Cost O(samples × variables).
 DesignTable make_design(const Design& design);
 
 /// An axis from the command line's text: `name=start:stop:count` (count >= 1 values evenly
