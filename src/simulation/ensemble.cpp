@@ -5,6 +5,7 @@
 // scheduling without work stealing. The standard library does that in a few lines, adds no
 // dependency to libukdyn.a's consumers (find_package(ukdyn) would have to find TBB), and keeps the
 // threads the ensemble's own, so that ThreadSanitizer sees every one and cancellation is a flag.
+// parse_model serializes the readings of the samples that change parameters (GiNaC).
 #include "ukdyn/simulation/ensemble.hpp"
 
 #include <algorithm>
@@ -109,13 +110,6 @@ struct Pool {
   }
 };
 
-// parse_model is serialized: GiNaC's expressions share reference-counted objects without atomic
-// counts, so two threads must not read model files at once
-std::mutex& parse_mutex() {
-  static std::mutex m;
-  return m;
-}
-
 // Runs sample i into pool.results[i].
 void run_sample(Pool& pool, std::size_t i) {
   const EnsembleSample& sample = pool.samples[i];
@@ -133,7 +127,7 @@ void run_sample(Pool& pool, std::size_t i) {
     if (!sample.parameters.empty()) {
       std::map<std::string, double> overrides = pool.model.overrides;
       for (const auto& kv : sample.parameters) overrides[kv.first] = kv.second;
-      const std::lock_guard<std::mutex> lock(parse_mutex());
+      // (parse_model serializes the readings: GiNaC is not thread-safe)
       own.emplace(parse_model(pool.model.text, pool.model.file, overrides));
     }
     if (!sample.initial.empty()) {
@@ -294,10 +288,7 @@ EnsembleResult run_ensemble(const EnsembleModel& model, const std::vector<Ensemb
                             const EnsembleOptions& options) {
   // the model with the ensemble's overrides, read once: its errors are the caller's
   std::optional<Model> base;
-  {
-    const std::lock_guard<std::mutex> lock(parse_mutex());
-    base.emplace(parse_model(model.text, model.file, model.overrides));
-  }
+  base.emplace(parse_model(model.text, model.file, model.overrides));
   SimulationOptions base_options = base->options;
   for (const auto& kv : model.settings) set_option(base_options, kv.first, kv.second);
   check_sample_names(*base, samples);
@@ -410,12 +401,7 @@ std::vector<EnsembleSample> samples_of_design(const Model& model, const DesignTa
 
 std::vector<EnsembleSample> samples_of_design(const EnsembleModel& model,
                                               const DesignTable& design) {
-  std::optional<Model> base;
-  {
-    const std::lock_guard<std::mutex> lock(parse_mutex());
-    base.emplace(parse_model(model.text, model.file, model.overrides));
-  }
-  return samples_of_design(*base, design);
+  return samples_of_design(parse_model(model.text, model.file, model.overrides), design);
 }
 
 EnsembleTable ensemble_table(const EnsembleResult& result,

@@ -8,8 +8,8 @@
 /// Parameters are folded into the compiled expressions when a model file is read (constant
 /// folding: modelfile/expression.hpp), so a sample that changes parameters reads the model's text
 /// again with its overrides (parse_model); a sample that changes only the initial state or
-/// options shares the model read once. parse_model is serialized (GiNaC, which it uses, is not
-/// thread-safe); the runs are not.
+/// options shares the model read once. parse_model serializes its calls (GiNaC, which it uses, is
+/// not thread-safe); the runs are not.
 #pragma once
 
 #include <cstddef>
@@ -138,9 +138,8 @@ EnsembleResult run_ensemble(const EnsembleModel& model, const std::vector<Ensemb
 /// that is none of these (and listing the model's parameters). Cost O(samples × names).
 std::vector<EnsembleSample> samples_of_design(const Model& model, const DesignTable& design);
 
-/// The same for the model of an ensemble (read with model.overrides, serialized with the
-/// ensembles' own reading). @throws ModelError when it cannot be read; std::invalid_argument as
-/// above.
+/// The same for the model of an ensemble (read with model.overrides). @throws ModelError when it
+/// cannot be read; std::invalid_argument as above.
 std::vector<EnsembleSample> samples_of_design(const EnsembleModel& model,
                                               const DesignTable& design);
 
