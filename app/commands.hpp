@@ -2,6 +2,7 @@
 // returns the process exit code. No physics here: everything is a library call.
 #pragma once
 
+#include <cstdint>
 #include <map>
 #include <optional>
 #include <stdexcept>
@@ -94,6 +95,29 @@ RunProvenance provenance_of(const ModelSource& source, const Model& model,
 
 /// `ukdyn run`: simulate, write trajectory.csv, summary.json and the plots.
 int run_command(const RunArguments& args);
+
+/// Settings of `ukdyn sweep` (docs/ensembles.md).
+struct SweepArguments {
+  ModelSource source;
+  std::vector<std::string> grid;    ///< --grid NAME=START:STOP:COUNT or NAME=V1,V2,… (repeatable)
+  std::vector<std::string> random;  ///< --random NAME~LAW(A,B) (repeatable)
+  std::size_t samples = 0;          ///< --samples N: random draws per grid point
+  std::uint64_t seed = 0;           ///< --seed S
+  bool lhs = false;                 ///< --lhs: Latin hypercube draws
+  std::string at;                   ///< --at T1,T2,…: recording times ("": the run's end)
+  std::vector<std::string> outputs;            ///< --record NAME (repeatable): recorded columns
+  unsigned jobs = 0;                           ///< --jobs N: threads (0: every core)
+  std::string out_dir;                         ///< -o DIR (empty: ukdyn-sweep-<model>)
+  std::vector<FlagSetting> settings;           ///< option flags for every sample (as `ukdyn run`'s)
+  std::vector<std::string> formats = {"csv"};  ///< --format csv,hdf5
+  bool plots = true;                           ///< false with --no-plots
+  std::vector<std::string> arguments;          ///< the command line, for summary.json
+};
+
+/// `ukdyn sweep`: run_ensemble over a design; write DIR/ensemble.csv (ensemble.h5), summary.json
+/// and sweep.png. kExitRunFailed when a sample failed, 128 + signal when interrupted (the
+/// finished samples are written).
+int sweep_command(const SweepArguments& args);
 
 /// `ukdyn check`: print check_model()'s report; kExitCheck when it found problems.
 int check_command(const ModelSource& source);

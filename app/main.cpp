@@ -128,6 +128,60 @@ int main(int argc, char** argv) {
                     "bodies or a visual: section; needs /usr/bin/python3 or $UKDYN_PYTHON)");
   run_cmd->add_flag("--no-viewer", no_viewer, "write no animation.html")->excludes("--viewer");
 
+  // sweep: a design over the model's parameters, initial values and options (docs/ensembles.md)
+  SweepArguments sweep;
+  bool sweep_no_plots = false;
+  std::map<std::string, std::string> sweep_texts;
+  std::vector<std::pair<const ukdyn::OptionInfo*, CLI::Option*>> sweep_flags;
+  CLI::App* sweep_cmd = app.add_subcommand(
+      "sweep",
+      "run a model over a grid of parameters and/or random draws on every core; write "
+      "DIR/ensemble.csv (one row per sample), summary.json and sweep.png");
+  add_source_options(sweep_cmd, sweep.source);
+  sweep_cmd
+      ->add_option("--grid", sweep.grid, "a grid axis: NAME=START:STOP:COUNT or NAME=V1,V2,...")
+      ->type_name("AXIS")
+      ->expected(1)
+      ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
+  sweep_cmd
+      ->add_option("--random", sweep.random,
+                   "a random variable: NAME~uniform(A,B), NAME~normal(MEAN,SD) or "
+                   "NAME~loguniform(A,B)")
+      ->type_name("VAR")
+      ->expected(1)
+      ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
+  sweep_cmd->add_option("--samples", sweep.samples, "random draws (per grid point)")
+      ->type_name("N");
+  sweep_cmd->add_option("--seed", sweep.seed, "the random draws' seed (default 0)")->type_name("S");
+  sweep_cmd->add_flag("--lhs", sweep.lhs, "Latin hypercube draws");
+  sweep_cmd
+      ->add_option("--at", sweep.at,
+                   "record the state and outputs at these times "
+                   "(default: the run's end)")
+      ->type_name("T1,T2,...");
+  sweep_cmd
+      ->add_option("--record", sweep.outputs,
+                   "a column of trajectory.csv to record (repeatable; default the model's output "
+                   "expressions)")
+      ->type_name("NAME")
+      ->expected(1)
+      ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
+  sweep_cmd->add_option("-j,--jobs", sweep.jobs, "threads (default: every core)")->type_name("N");
+  sweep_cmd
+      ->add_option("-o,--output", sweep.out_dir, "output directory (default ukdyn-sweep-<model>)")
+      ->type_name("DIR");
+  sweep_cmd->add_option("--format", sweep.formats, "csv, hdf5 or csv,hdf5 (default csv)")
+      ->delimiter(',')
+      ->type_name("LIST");
+  sweep_cmd->add_flag("--no-plots", sweep_no_plots, "write no plot");
+  for (const ukdyn::OptionInfo& info : ukdyn::option_table()) {
+    sweep_flags.emplace_back(&info,
+                             sweep_cmd
+                                 ->add_option(ukdyn::option_flag(info), sweep_texts[info.name],
+                                              info.doc + " (every sample)")
+                                 ->type_name("VALUE"));
+  }
+
   ModelSource check;
   CLI::App* check_cmd =
       app.add_subcommand("check",
@@ -143,10 +197,11 @@ int main(int argc, char** argv) {
     bool known = false;
     for (const CLI::App* sub : app.get_subcommands({})) known = known || sub->check_name(first);
     if (!known) {
-      std::fprintf(stderr,
-                   "error: unknown subcommand '%s' (the subcommands are run, check, examples)\n"
-                   "Run with --help for more information.\n",
-                   first.c_str());
+      std::fprintf(
+          stderr,
+          "error: unknown subcommand '%s' (the subcommands are run, sweep, check, examples)\n"
+          "Run with --help for more information.\n",
+          first.c_str());
       return kExitUsage;
     }
   }
@@ -175,6 +230,16 @@ int main(int argc, char** argv) {
       if (viewer || no_viewer) run.viewer = viewer;
       run.arguments.assign(argv, argv + argc);
       return run_command(run);
+    }
+    if (sweep_cmd->parsed()) {
+      for (const auto& [info, opt] : sweep_flags) {
+        if (opt->count() > 0) {
+          sweep.settings.push_back({info->name, opt->get_name(), sweep_texts[info->name]});
+        }
+      }
+      sweep.plots = !sweep_no_plots;
+      sweep.arguments.assign(argv, argv + argc);
+      return sweep_command(sweep);
     }
     if (check_cmd->parsed()) return check_command(check);
     return examples_command();

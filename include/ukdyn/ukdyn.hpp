@@ -19,5 +19,7 @@
 #include "ukdyn/modelfile/model.hpp"
 #include "ukdyn/modelfile/run.hpp"
 #include "ukdyn/multibody/multibody.hpp"
+#include "ukdyn/simulation/ensemble.hpp"
 #include "ukdyn/simulation/options.hpp"
+#include "ukdyn/simulation/sampling.hpp"
 #include "ukdyn/simulation/simulate.hpp"

@@ -11,7 +11,9 @@ The C++ library (README.md) behind a thin module (docs/python.md):
 * :meth:`Model.solver` / :meth:`System.solver` → :class:`Solver`, one evaluation at a time
   (``solve(q, q_dot, t)`` → q'', forces, multipliers, rank, residuals);
 * :attr:`Model.controller` / :func:`controller` → :class:`Controller`, exact tracking control,
-  ``controller.solver().compute(q, q_dot, t)``.
+  ``controller.solver().compute(q, q_dot, t)``;
+* :func:`sweep` → a ``pandas.DataFrame`` of many runs (grids, Monte Carlo) on every core or on a
+  Dask cluster (docs/ensembles.md).
 
 Errors: :class:`ModelError`, :class:`SolveError`, :class:`InconsistentInitialState` (a
 ValueError), ValueError, RuntimeError (:mod:`ukdyn.errors`);
@@ -30,6 +32,7 @@ from ._ukdyn import (ControlSolution, ControlSolver, Controller, Model, Solution
                      System, example_text, examples)
 from .callables import (coulomb, constraint, controller, from_callables, nonideal, simulate,
                         viscous)
+from .ensemble import sweep, to_dataset
 from .errors import (EnergyBalanceWarning, InconsistentInitialState, Interrupted, ModelError,
                      SolveError)
 from .results import Result
@@ -59,7 +62,8 @@ __all__ = [
     "Model", "ModelError", "Result",
     "Solution", "SolveError", "Solver", "System", "constraint", "controller", "coulomb",
     "example_text", "examples", "from_callables", "from_sympy", "load", "nonideal", "options",
-    "parse", "read_hdf5", "simulate", "simulation_options", "sympy_to_yaml", "velocities", "viscous",
+    "parse", "read_hdf5", "simulate", "simulation_options", "sweep", "sympy_to_yaml", "to_dataset",
+    "velocities", "viscous",
 ]
 
 

@@ -11,6 +11,7 @@
 #include <filesystem>
 #include <fstream>
 #include <limits>
+#include <mutex>
 #include <set>
 #include <sstream>
 
@@ -1340,6 +1341,12 @@ Model Reader::read_generalized(const YAML::Node& root) {
 
 Model parse_model(const std::string& text, const std::string& file,
                   const std::map<std::string, double>& overrides) {
+  // one model is read at a time, whichever thread asks (an ensemble's workers, Python threads
+  // with the GIL released): GiNaC, which the reader differentiates with, shares reference-counted
+  // objects whose counts are not atomic. The reader's GiNaC objects all die before the lock is
+  // released; the Model holds none (its expressions are compiled programs)
+  static std::mutex mutex;
+  const std::lock_guard<std::mutex> lock(mutex);
   return model_reader::Reader(file, overrides).read(text);
 }
 

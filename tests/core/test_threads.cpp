@@ -12,6 +12,7 @@
 
 #include <ukdyn/modelfile/model.hpp>
 #include <ukdyn/modelfile/run.hpp>
+#include <ukdyn/simulation/ensemble.hpp>
 #include <ukdyn/ukdyn.hpp>
 
 namespace ukdyn {
@@ -165,6 +166,42 @@ TEST(Threads, OneControlledSystemRunsOnFourThreadsAsSerially) {
   o.t_end = 0.5;
   // (the control's work is no work channel of this System: its energy balance is a warning)
   check_system(sys, m.q0, m.qd0, o, Status::kEnergyBalance);
+}
+
+TEST(Threads, EnsembleOnFourThreadsAsOnOne) {
+  // run_ensemble (simulation/ensemble.hpp): samples that read the model again (parameters, under
+  // the reader's lock) and samples that share it (initial values), on a pool of four threads,
+  // bitwise as on one; under ThreadSanitizer in CI (tests/simulation/test_ensemble.cpp has the
+  // rest)
+  EnsembleModel model;
+  model.text = R"(
+parameters: {m: 1, L: 1, g: 9.81}
+coordinates: [x, y]
+kinetic_energy: 0.5*m*(x_dot^2 + y_dot^2)
+potential_energy: m*g*y
+constraints:
+  - {name: rod, holonomic: (x^2 + y^2 - L^2)/(2*L)}
+initial: {q: {x: L, y: 0}}
+simulate: {t_end: 0.3}
+output: {every: 0.05, expressions: {r: sqrt(x^2 + y^2)}}
+)";
+  std::vector<EnsembleSample> samples(8);
+  for (std::size_t i = 0; i < samples.size(); ++i) {
+    if (i % 2 == 0) samples[i].parameters["L"] = 0.5 + 0.1 * double(i);
+    if (i % 2 == 1) samples[i].initial["y_dot"] = -0.1 * double(i);
+  }
+  EnsembleOptions o;
+  o.at = {0.1, 0.2};
+  o.threads = 1;
+  const EnsembleResult one = run_ensemble(model, samples, o);
+  o.threads = kThreads;
+  const EnsembleResult four = run_ensemble(model, samples, o);
+  ASSERT_EQ(one.samples.size(), four.samples.size());
+  for (std::size_t i = 0; i < samples.size(); ++i) {
+    ASSERT_TRUE(one.samples[i].ok()) << one.samples[i].message;
+    EXPECT_EQ(one.samples[i].values, four.samples[i].values);
+    EXPECT_EQ(one.samples[i].stats.steps, four.samples[i].stats.steps);
+  }
 }
 
 }  // namespace

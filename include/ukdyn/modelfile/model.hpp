@@ -107,7 +107,9 @@ struct Model {
 };
 
 /// Reads a model from YAML text. `file` names it in errors; `overrides` replace parameter
-/// values (as --set name=value does). @throws ModelError with file:line:column and a hint.
+/// values (as --set name=value does). Thread-safe: calls from several threads are serialized
+/// (the symbolic algebra it uses, GiNaC, is not thread-safe); the Models it returns are
+/// independent. @throws ModelError with file:line:column and a hint.
 Model parse_model(const std::string& text, const std::string& file = "<string>",
                   const std::map<std::string, double>& overrides = {});
 

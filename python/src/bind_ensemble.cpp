@@ -1,0 +1,157 @@
+// Ensembles for ukdyn.sweep (python/ukdyn/ensemble.py): the design (simulation/sampling.hpp) and
+// run_ensemble (simulation/ensemble.hpp) of a model's text, on threads here or, called once per
+// chunk of samples, on Dask's workers.
+#include <mutex>
+
+#include "common.hpp"
+#include "ukdyn/simulation/ensemble.hpp"
+
+namespace ukdyn::python {
+namespace {
+
+// the options of a settings dict, checked by the table's setter, as (name, value) pairs
+std::map<std::string, OptionValue> settings_of(const py::dict& given) {
+  SimulationOptions o;
+  apply_simulation_options(o, given, "sweep");
+  std::map<std::string, OptionValue> out;
+  for (auto [k, v] : given) {
+    if (v.is_none()) continue;
+    const std::string key = py::str(k);
+    out[find_option(key)->name] = get_option(o, key);
+  }
+  return out;
+}
+
+// the design's table from ukdyn.sweep's arguments: grid [(name, values)], random [(name, law,
+// a, b)] with law "uniform", "normal" or "loguniform"
+py::tuple design(const std::vector<std::pair<std::string, std::vector<double>>>& grid,
+                 const std::vector<std::tuple<std::string, std::string, double, double>>& random,
+                 std::size_t draws, std::uint64_t seed, bool lhs) {
+  Design d;
+  for (const auto& [name, values] : grid) d.grid.push_back({name, values});
+  for (const auto& [name, law, a, b] : random) {
+    RandomVariable v = parse_random_variable(name + "~" + law + "(0,1)");
+    v.a = a;
+    v.b = b;
+    d.random.push_back(v);
+  }
+  d.draws = draws;
+  d.seed = seed;
+  d.latin_hypercube = lhs;
+  DesignTable t;
+  {
+    py::gil_scoped_release release;
+    t = make_design(d);
+  }
+  py::array_t<double> rows({py::ssize_t(t.rows.size()), py::ssize_t(t.names.size())});
+  auto r = rows.mutable_unchecked<2>();
+  for (std::size_t i = 0; i < t.rows.size(); ++i) {
+    for (std::size_t k = 0; k < t.names.size(); ++k)
+      r(py::ssize_t(i), py::ssize_t(k)) = t.rows[i][k];
+  }
+  return py::make_tuple(t.names, rows);
+}
+
+// run_ensemble of the samples `rows` (one per row, a value per name) → a dict: names (the
+// table's numeric columns), columns (arrays), status, message, trajectories (list of dicts, or
+// None), interrupted, exception (what a signal handler raised, or None)
+py::dict run(const std::string& text, const std::string& file,
+             const std::map<std::string, double>& overrides, const py::dict& settings,
+             const std::vector<std::string>& names, const py::array_t<double>& rows,
+             const std::vector<double>& at, const std::vector<std::string>& outputs, bool keep,
+             unsigned threads, py::object stop) {
+  EnsembleModel model;
+  model.text = text;
+  model.file = file;
+  model.overrides = overrides;
+  model.settings = settings_of(settings);
+  if (rows.ndim() != 2 || std::size_t(rows.shape(1)) != names.size()) {
+    throw std::invalid_argument("_run_ensemble: rows must be samples x names");
+  }
+  DesignTable table;
+  table.names = names;
+  const auto r = rows.unchecked<2>();
+  for (py::ssize_t i = 0; i < r.shape(0); ++i) {
+    std::vector<double> row;
+    for (py::ssize_t k = 0; k < r.shape(1); ++k) row.push_back(r(i, k));
+    table.rows.push_back(std::move(row));
+  }
+  EnsembleOptions o;
+  o.threads = threads;
+  o.at = at;
+  o.outputs = outputs;
+  o.keep_trajectories = keep;
+  // Ctrl-C: the module's check (Python's signal handlers, every 20 ms), one thread at a time
+  const InterruptCheck interrupt(stop);
+  SimulationOptions holder;
+  interrupt.attach(holder);
+  std::mutex stop_mutex;
+  o.should_stop = [&] {
+    const std::lock_guard<std::mutex> lock(stop_mutex);
+    return holder.should_stop();
+  };
+  std::vector<EnsembleSample> samples;
+  EnsembleResult result;
+  EnsembleTable out;
+  {
+    py::gil_scoped_release release;
+    samples = samples_of_design(model, table);
+    result = run_ensemble(model, samples, o);
+    out = ensemble_table(result, samples, names);
+  }
+  py::dict d;
+  py::list cols, col_names;
+  for (CsvColumn& c : out.numbers) {
+    col_names.append(c.name);
+    cols.append(take(std::move(c.values)));
+  }
+  d["names"] = col_names;
+  d["columns"] = cols;
+  d["status"] = out.status;
+  d["message"] = out.message;
+  if (keep) {
+    py::list trajectories;
+    for (SampleResult& s : result.samples) {
+      py::dict t;
+      for (CsvColumn& c : s.trajectory) t[py::str(c.name)] = take(std::move(c.values));
+      trajectories.append(t);
+    }
+    d["trajectories"] = trajectories;
+  } else {
+    d["trajectories"] = py::none();
+  }
+  d["interrupted"] = result.interrupted;
+  d["exception"] = interrupt.exception();
+  return d;
+}
+
+}  // namespace
+
+void bind_ensemble(py::module_& m) {
+  m.def("_design", &design, py::arg("grid"), py::arg("random"), py::arg("draws"), py::arg("seed"),
+        py::arg("lhs"),
+        "make_design (simulation/sampling.hpp): (names, rows as a samples x names array).");
+  m.def(
+      "_parse_grid",
+      [](const std::string& text) {
+        const GridAxis a = parse_grid_axis(text);
+        return py::make_tuple(a.name, a.values);
+      },
+      py::arg("text"), "parse_grid_axis: 'mu=0:0.5:11' or 'omega=1,2,4' -> (name, values).");
+  m.def(
+      "_parse_random",
+      [](const std::string& text) {
+        static const char* const laws[] = {"uniform", "normal", "loguniform"};
+        const RandomVariable v = parse_random_variable(text);
+        return py::make_tuple(v.name, laws[int(v.distribution)], v.a, v.b);
+      },
+      py::arg("text"), "parse_random_variable: 'k~normal(1,0.1)' -> (name, law, a, b).");
+  m.def("_run_ensemble", &run, py::arg("text"), py::arg("file"), py::arg("overrides"),
+        py::arg("settings"), py::arg("names"), py::arg("rows"), py::arg("at"), py::arg("outputs"),
+        py::arg("keep"), py::arg("threads"), py::arg("stop") = py::none(),
+        "run_ensemble (simulation/ensemble.hpp) with the GIL released: a dict of the table "
+        "(names, columns, status, message), trajectories, interrupted, exception. Use "
+        "ukdyn.sweep().");
+}
+
+}  // namespace ukdyn::python

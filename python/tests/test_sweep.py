@@ -1,0 +1,140 @@
+"""ukdyn.sweep (docs/ensembles.md): a small pendulum over L against its closed form, failing samples
+recorded, the same numbers bit for bit on 1 and 2 threads, on a Dask LocalCluster of two worker
+processes and from the command line (``ukdyn sweep``), grids as xarray Datasets."""
+
+import math
+import pathlib
+import subprocess
+
+import numpy as np
+import pandas as pd
+import pytest
+
+import ukdyn
+
+ROOT = pathlib.Path(__file__).resolve().parents[2]
+PENDULUM = str(ROOT / "tests" / "data" / "ensemble_pendulum.yaml")
+
+
+def assert_same_frames(a: pd.DataFrame, b: pd.DataFrame) -> None:
+    """Every column equal bit for bit (NaN where the other has NaN)."""
+    assert list(a.columns) == list(b.columns)
+    assert len(a) == len(b)
+    for name in a.columns:
+        x, y = a[name].to_numpy(), b[name].to_numpy()
+        if x.dtype.kind == "f":
+            assert np.array_equal(x, y, equal_nan=True), name
+            assert np.array_equal(x.view(np.int64), y.view(np.int64)), name
+        else:
+            assert list(x) == list(y), name
+
+
+def test_small_pendulum_over_length():
+    # theta(t) = theta0 cos(sqrt(g/L) t) to a phase error of omega t theta0^2 / 16
+    frame = ukdyn.sweep(PENDULUM, grid={"L": [0.5, 1.0, 2.0]}, at=[0.3, 0.7], workers=2)
+    assert list(frame["L"]) == [0.5, 1.0, 2.0]
+    assert list(frame["status"]) == ["ok"] * 3
+    theta0 = 0.01
+    for _, row in frame.iterrows():
+        w = math.sqrt(9.81 / row["L"])
+        for t in (0.3, 0.7):
+            tol = 1.5 * theta0 ** 3 * (w * t / 16 + 0.01)
+            assert row[f"theta@{t:g}"] == pytest.approx(theta0 * math.cos(w * t), abs=tol)
+    assert frame["t_reached"].tolist() == [1.0] * 3
+
+
+def test_failing_samples_are_recorded():
+    frame = ukdyn.sweep(PENDULUM, grid={"L": [0.0, 1.0]}, workers=2)
+    assert list(frame["status"]) == ["refused", "ok"]
+    assert "ensemble_pendulum.yaml" in frame["message"].iloc[0]
+    assert list(frame["ok"]) == [False, True]
+    assert math.isnan(frame["x@end"].iloc[0])
+
+
+def test_random_draws_same_on_one_and_two_threads():
+    kw = dict(random={"theta0": "uniform(0.01,0.2)", "L": ("loguniform", 0.5, 2.0)}, n=6, seed=7,
+              at=[0.5], t_end=0.5)
+    one = ukdyn.sweep(PENDULUM, workers=1, **kw)
+    two = ukdyn.sweep(PENDULUM, workers=2, **kw)
+    assert_same_frames(one, two)
+    assert (one["theta0"] > 0.01).all() and (one["theta0"] < 0.2).all()
+    # a sample is `Model.simulate` of the model read with its parameters (and `at` as output_at)
+    row = one.iloc[3]
+    model = ukdyn.load(PENDULUM, theta0=row["theta0"], L=row["L"])
+    result = model.simulate(t_end=0.5, output_at=[0.5])
+    assert result["theta"][-1] == row["theta@0.5"]
+
+
+def test_grid_as_dataset():
+    ds = ukdyn.sweep(PENDULUM, grid={"L": "0.5:1.5:3", "theta0": [0.01, 0.02]}, at=[0.2],
+                     t_end=0.2, dataset=True)
+    assert dict(ds.sizes) == {"L": 3, "theta0": 2}
+    assert ds["theta@0.2"].sel(L=1.0, theta0=0.02).item() == pytest.approx(
+        0.02 * math.cos(math.sqrt(9.81) * 0.2), abs=1e-6)
+
+
+def test_dask_local_cluster_equals_threads():
+    distributed = pytest.importorskip("distributed")
+    kw = dict(grid={"L": [0.5, 1.0, 0.0]}, random={"theta0": "normal(0.05,0.01)"}, n=3, seed=3,
+              at=[0.25], t_end=0.25)
+    threaded = ukdyn.sweep(PENDULUM, workers=2, **kw)
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+                                  dashboard_address=None, silence_logs=50) as cluster, \
+            distributed.Client(cluster) as client:
+        on_dask = ukdyn.sweep(PENDULUM, client=client, chunk_size=2, **kw)
+    assert_same_frames(threaded, on_dask)
+    assert list(on_dask["status"]).count("refused") == 3  # L = 0
+
+
+def test_command_line_writes_the_same_table(cli, out_dir):
+    subprocess.run([cli, "sweep", PENDULUM, "--grid", "L=0.5:1.5:3", "--random",
+                    "theta0~uniform(0.01,0.1)", "--samples", "2", "--seed", "5", "--at", "0.25",
+                    "--t-end", "0.25", "--jobs", "2", "-o", str(out_dir), "--no-plots"],
+                   check=True, capture_output=True)
+    from_cli = pd.read_csv(out_dir / "ensemble.csv", keep_default_na=False,
+                           na_values=["nan"], float_precision="round_trip")
+    from_python = ukdyn.sweep(PENDULUM, grid={"L": "0.5:1.5:3"},
+                              random={"theta0": "uniform(0.01,0.1)"}, n=2, seed=5, at=[0.25],
+                              t_end=0.25, workers=2)
+    for name in ("L", "theta0", "steps", "theta@0.25", "x_dot@0.25", "energy_balance"):
+        assert np.array_equal(from_cli[name].to_numpy(dtype=float),
+                              from_python[name].to_numpy(dtype=float)), name
+
+
+def test_command_line_sigint_keeps_the_finished_samples(cli, out_dir):
+    # two short samples, then two long ones (the interrupt tests' pendulum over 5e4 s) on one
+    # thread: SIGINT stops the third at its next step; the fourth is not run
+    import signal
+    import time
+    long_model = str(ROOT / "tests" / "data" / "interrupt_pendulum.yaml")
+    proc = subprocess.Popen([cli, "sweep", long_model, "--grid", "t_end=0.5,1,5e4,5e4",
+                             "--jobs", "1", "-o", str(out_dir), "--no-plots"],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    deadline = time.monotonic() + 60
+    # (the first two samples take milliseconds; give the third time to start)
+    time.sleep(1.5)
+    proc.send_signal(signal.SIGINT)
+    out, err = proc.communicate(timeout=max(1, deadline - time.monotonic()))
+    assert proc.returncode == 130, out + err
+    assert "interrupted by SIGINT" in err
+    frame = pd.read_csv(out_dir / "ensemble.csv", keep_default_na=False, na_values=["nan"])
+    assert list(frame["status"]) == ["ok", "ok", "interrupted", "not run"]
+    assert list(frame["t_reached"][:2]) == [0.5, 1.0]
+    assert 0 < frame["t_reached"][2] < 5e4
+
+
+def test_ctrl_c_raises_interrupted_with_the_finished_samples():
+    import os
+    import signal
+    import threading
+    long_model = str(ROOT / "tests" / "data" / "interrupt_pendulum.yaml")
+    timer = threading.Timer(1.5, lambda: os.kill(os.getpid(), signal.SIGINT))
+    timer.start()
+    try:
+        with pytest.raises(ukdyn.Interrupted) as caught:
+            ukdyn.sweep(long_model, grid={"t_end": [0.5, 1.0, 5e4, 5e4]}, workers=1)
+    finally:
+        timer.cancel()
+    frame = caught.value.result
+    assert list(frame["status"]) == ["ok", "ok", "interrupted", "not run"]
+    assert 0 < frame["t_reached"].iloc[2] < 5e4
