@@ -31,6 +31,8 @@ packages=(
   libjs-three                          # three.js, embedded in animation.html (ukdyn run --viewer)
   chromium chromium-driver python3-selenium  # the viewer's tests in a headless browser
   python3-pil                          # the viewer's tests read the canvas's pixels
+  python3-xarray                       # ukdyn.sweep: a grid as an xarray.Dataset
+  python3-dask python3-distributed     # ukdyn.sweep(client=...): ensembles on Dask workers (tested on a LocalCluster)
 )
 
 missing=()

@@ -11,6 +11,7 @@ import pandas as pd
 import pytest
 
 import ukdyn
+from conftest import import_or_missing
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]
 PENDULUM = str(ROOT / "tests" / "data" / "ensemble_pendulum.yaml")
@@ -74,7 +75,7 @@ def test_grid_as_dataset():
 
 
 def test_dask_local_cluster_equals_threads():
-    distributed = pytest.importorskip("distributed")
+    distributed = import_or_missing("distributed", "python3-distributed is not installed")
     kw = dict(grid={"L": [0.5, 1.0, 0.0]}, random={"theta0": "normal(0.05,0.01)"}, n=3, seed=3,
               at=[0.25], t_end=0.25)
     threaded = ukdyn.sweep(PENDULUM, workers=2, **kw)

@@ -21,6 +21,7 @@ import numpy as np
 import pytest
 
 import ukdyn
+from conftest import import_or_missing, missing_dependency
 
 CHROMEDRIVER = "/usr/bin/chromedriver"
 
@@ -36,10 +37,10 @@ def _artefacts() -> pathlib.Path:
 @pytest.fixture(scope="module")
 def browser():
     """Headless Chromium (as root in CI: --no-sandbox), 900 × 600, WebGL by SwiftShader."""
-    webdriver = pytest.importorskip("selenium.webdriver", reason="python3-selenium is not installed")
+    webdriver = import_or_missing("selenium.webdriver", "python3-selenium is not installed")
     from selenium.webdriver.chrome.service import Service
     if not os.access(CHROMEDRIVER, os.X_OK) or not shutil.which("chromium"):
-        pytest.skip("chromium and chromium-driver are not installed (scripts/install-deps.sh)")
+        missing_dependency("chromium and chromium-driver are not installed (scripts/install-deps.sh)")
     options = webdriver.ChromeOptions()
     for a in ("--headless=new", "--no-sandbox", "--disable-dev-shm-usage", "--use-gl=swiftshader",
               "--enable-unsafe-swiftshader", "--ignore-gpu-blocklist", "--window-size=900,700",
