@@ -128,9 +128,8 @@ forces: [-abs(k)*x + sign(k)]
 // tie rule takes the one-sided derivative nearer 0 (0 when they have opposite signs), as abs does.
 // (The tie rule b′ gave max(x, −x)'s force +2 and the run chattered, dopri5 at h ≈ 4e-10.)
 TEST(SwitchEvents, MassAtRestAtAKinkStaysAtRest) {
-  for (const char* energy :
-       {"2*max(x, -x)", "-2*min(x, -x)", "2*if(x, x, -x)", "2*abs(x)", "3*max(x, 0)",
-        "-3*min(x, 0)", "if(x - 0, x^2, 0) + 2*max(x, -x)"}) {
+  for (const char* energy : {"2*max(x, -x)", "-2*min(x, -x)", "2*if(x, x, -x)", "2*abs(x)",
+                             "3*max(x, 0)", "-3*min(x, 0)", "if(x - 0, x^2, 0) + 2*max(x, -x)"}) {
     const Model m = parse_model(std::string(R"(
 coordinates: [x]
 kinetic_energy: 0.5*x_dot^2
@@ -165,10 +164,9 @@ simulate: {t_end: 3.5}
 output: {every: 0, at: [1.5, 2]}
 )yaml");
   const double pi = std::acos(-1.0), t_out = 1.0 + pi / 2;
-  for (const MethodCase c :
-       {MethodCase{Integrator::kRK4, 1e-3, 1e-6, 1e-9, 1e-9},
-        MethodCase{Integrator::kDopri5, 0.01, 1e-12, 1e-14, 1e-9},
-        MethodCase{Integrator::kRKF78, 0.01, 1e-12, 1e-14, 1e-9}}) {
+  for (const MethodCase c : {MethodCase{Integrator::kRK4, 1e-3, 1e-6, 1e-9, 1e-9},
+                             MethodCase{Integrator::kDopri5, 0.01, 1e-12, 1e-14, 1e-9},
+                             MethodCase{Integrator::kRKF78, 0.01, 1e-12, 1e-14, 1e-9}}) {
     SimulationOptions o = m.options;
     o.integrator = c.method;
     o.step = c.step;
