@@ -231,12 +231,13 @@ const std::vector<std::string>& ExpressionSet::input_names() const { return impl
 
 std::vector<Expr> ExpressionSet::switching_functions(const std::vector<Expr>& exprs) {
   std::vector<GiNaC::ex> found;
-  // g once: neither g nor −g found before, and not a number
+  // g once: neither g nor −g found before (GiNaC distributes −1 over a sum, so −(a − b) is b − a),
+  // and not a number
+  std::unordered_set<GiNaC::ex, std::hash<GiNaC::ex>, GiNaC::ex_is_equal> known;
   const auto note = [&](const GiNaC::ex& g) {
-    if (GiNaC::is_a<GiNaC::numeric>(g)) return;
-    for (const GiNaC::ex& h : found) {
-      if (h.is_equal(g) || (h + g).expand().is_zero()) return;
-    }
+    if (GiNaC::is_a<GiNaC::numeric>(g) || known.count(g) != 0) return;
+    known.insert(g);
+    known.insert(-g);
     found.push_back(g);
   };
   // each shared subexpression visited once (GiNaC shares subtrees: a derivative repeats its

@@ -150,7 +150,7 @@ class ExpressionSet {
   /// so are the conditions of the tie rule inside a derivative (expression_parse.cpp, kink),
   /// which act only at their if's own switch. Adds the functions to the set and returns their
   /// handles. @throws std::invalid_argument on a handle not from this set. Cost O(size of the
-  /// expressions + switches²).
+  /// expressions).
   std::vector<Expr> switching_functions(const std::vector<Expr>& exprs);
 
   /// The input names, in order.

@@ -107,9 +107,10 @@ struct SimulationOptions {
   /// Locate the sign changes of the system's switching functions (System::switch_count: the
   /// non-smooth calls of a model file's sign, abs, heaviside, min, max and if) as events: the
   /// step that crosses one stops there and the method restarts on the other side, so every
-  /// method keeps its order across the switch (docs/simulation.md, "Switch events"). A switch
-  /// that fires kSwitchBurst times within 1e-9 of the run's time span (a sliding mode) ends the
-  /// run as chattering. false: the switches are stepped across (the adaptive methods shrink
+  /// method keeps its order across the switch (docs/simulation.md, "Switch events"). 1000
+  /// switch events, or 1000 accepted steps after one, within 1e-6 of the run's time span (a
+  /// sliding mode) end the run as chattering (Status::kIntegratorFailure, the message names the
+  /// switch). false: the switches are stepped across (the adaptive methods shrink
   /// their steps there; rk4 and rk5 lose their order). A system without switching functions
   /// pays nothing either way.
   bool switch_events = true;
