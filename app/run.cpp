@@ -367,6 +367,9 @@ int run_command(const RunArguments& given) {
     std::printf("  friction: %ld stick/slip events, %ld stops where sticking was refused\n",
                 s.events, s.stick_refusals);
   }
+  if (s.switch_events > 0) {
+    std::printf("  switches: %ld sign changes of non-smooth functions located\n", s.switch_events);
+  }
   for (std::size_t i = 0; i < s.notes.size() && i < 3; ++i) {
     std::printf("  note: %s\n", s.notes[i].c_str());
   }

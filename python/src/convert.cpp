@@ -341,6 +341,7 @@ py::dict statistics_dict(const RunStatistics& s) {
   d["projected_stage_steps"] = s.projected_stage_steps;
   d["projections"] = s.projections;
   d["events"] = s.events;
+  d["switch_events"] = s.switch_events;
   d["stick_refusals"] = s.stick_refusals;
   d["notes"] = s.notes;
   d["stiff_switches"] = s.stiff_switches;

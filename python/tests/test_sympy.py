@@ -159,10 +159,54 @@ def test_translation_text():
 
 
 def test_unsupported_function_is_a_value_error():
-    with pytest.raises(ValueError, match="no function 'sign'"):
-        to_expression(sp.sign(x))
-    with pytest.raises(ValueError, match="Piecewise"):
-        ukdyn.from_sympy([x], T=xd**2 / 2, V=sp.Piecewise((x, x > 0), (0, True)))
+    with pytest.raises(ValueError, match="no function 'floor'"):
+        to_expression(sp.floor(x))
+    with pytest.raises(ValueError, match="is not a comparison"):
+        ukdyn.from_sympy([x], T=xd**2 / 2, V=sp.Piecewise((x, sp.Eq(x, 0)), (0, True)))
+    with pytest.raises(ValueError, match="otherwise piece"):
+        to_expression(sp.Piecewise((x, x > 0)))
+
+
+@pytest.mark.parametrize("expr", [
+    sp.sign(x - y) * x + sp.Abs(y),
+    sp.Heaviside(x - 0.5) + 2 * sp.Heaviside(y, 0),
+    sp.Min(x, y, 0.1) - sp.Max(x**2, y, -1),
+    sp.Piecewise((x**2, x > 0.5), (y, x <= 0.4), (x + y, True)),
+    sp.Piecewise((1, sp.And(x > 0.2, y >= -0.3)), (2, sp.Or(y < -0.35, sp.Not(x < 0.8))),
+                 (3, True)),
+])
+def test_non_smooth_functions_evaluate_like_sympy(expr):
+    """sign, Heaviside, Min, Max and Piecewise become sign, heaviside, min, max and nested if:
+    read back as output expressions along a motion that crosses their switches, they have the
+    values SymPy computes."""
+    text = ("coordinates: [x, y]\nkinetic_energy: 0.5*(x_dot^2 + y_dot^2)\n"
+            f"initial: {{q: {{x: 0.1, y: -0.5}}, q_dot: {{x: 1.3, y: 0.45}}}}\n"
+            f"simulate: {{t_end: 1}}\noutput: {{every: 0.0625, expressions: "
+            f"{{f: \"{to_expression(expr)}\"}}}}\n")
+    r = ukdyn.parse(text).simulate()
+    expected = [float(expr.subs({x: a, y: b})) for a, b in zip(r.x, r.y)]
+    np.testing.assert_allclose(r.f, expected, rtol=1e-13, atol=1e-15)
+
+
+def test_sympy_bang_bang_with_piecewise_is_the_model_file():
+    """x'' = -sign(x) from SymPy (the force as a Piecewise and as sign) is the YAML model: the
+    same switch events, the same numbers, and the closed form (period 4 for amplitude 1/2)."""
+    yaml = ukdyn.parse("coordinates: [x]\nmass_matrix: [[1]]\nforces: [-sign(x)]\n"
+                       "initial: {q: {x: 0.5}}\n")
+    settings = dict(t_end=4.0, integrator="rkf78", rtol=1e-10, atol=1e-12)
+    ref = yaml.simulate(**settings)
+    for force in (-sp.sign(x), sp.Piecewise((-1, x > 0), (1, x < 0), (0, True))):
+        model = ukdyn.from_sympy([x], M=sp.Matrix([[1]]), Q=[force], initial={"q": {x: 0.5}})
+        r = model.simulate(**settings)
+        assert r.stats["switch_events"] == ref.stats["switch_events"] == 2
+        np.testing.assert_allclose(r.x, ref.x, rtol=0, atol=1e-12)
+        assert r.x[-1] == pytest.approx(0.5, abs=1e-8)
+        assert r.x_dot[-1] == pytest.approx(0.0, abs=1e-8)
+    # stepped across, the switches cost rkf78 its accuracy: the energy balance says so
+    with pytest.warns(Warning, match="energy balance"):
+        off = yaml.simulate(switch_events=False, **settings)
+    assert off.stats["switch_events"] == 0
+    assert abs(off.x[-1] - 0.5) > 1e-6
 
 
 def test_unknown_symbol_is_a_model_error_pointing_into_the_generated_text():

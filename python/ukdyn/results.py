@@ -35,7 +35,8 @@ class Result:
         names: the column names, in the order of ``trajectory.csv``.
         coordinates: the coordinate names.
         stats: the run's statistics (steps, rejected_steps, evaluations, least_squares,
-            projections, events,
+            projections, events (stick/slip), switch_events (sign changes of non-smooth
+            functions),
             stiff_switches, stiff_switch_time, stiff_steps,
             wall_time, max_position_violation, max_velocity_violation, energy_balance (the
             balance residual relative to the energy exchanged), energy_exchanged,

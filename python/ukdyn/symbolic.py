@@ -14,7 +14,11 @@ symbols given values in ``parameters={m: 1.0}``; they stay symbols in the model,
 overridden (``from_sympy(..., m=2.0)``).
 
 Functions the language has: sin cos tan asin acos atan atan2 sinh cosh tanh exp log sqrt Abs,
-powers, pi and E; anything else (Piecewise, sign, Heaviside, ...) raises ValueError naming it.
+powers, pi and E, and the non-smooth sign, Heaviside (½ at 0, or its H0), Min, Max (of any number
+of arguments) and Piecewise, whose conditions are comparisons (<, <=, >, >=) joined by And, Or
+and Not: ``Piecewise((a, x > 1), (b, True))`` becomes ``if(x - 1, a, b)`` (docs/model-format.md;
+their switches are located as integrator events). Anything else (an Eq condition, a Piecewise
+without a last ``True`` piece, other functions) raises ValueError naming it.
 """
 
 from __future__ import annotations
@@ -30,7 +34,7 @@ _IDENT = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
 # the language's functions, by SymPy class name
 _FUNCTIONS = {"sin": "sin", "cos": "cos", "tan": "tan", "asin": "asin", "acos": "acos",
               "atan": "atan", "sinh": "sinh", "cosh": "cosh", "tanh": "tanh", "exp": "exp",
-              "log": "log", "Abs": "abs", "atan2": "atan2"}
+              "log": "log", "Abs": "abs", "atan2": "atan2", "sign": "sign"}
 _ADD, _MUL, _POW, _ATOM = 1, 2, 3, 4
 
 
@@ -168,6 +172,22 @@ def to_expression(expr: Any, time: Any = None) -> str:
             else:
                 x = "(" + go(ex, 0) + ")"
             return wrap(f"{b}^{x}", _POW, needed)
+        if isinstance(e, sp.Heaviside):
+            h0 = e.args[1] if len(e.args) > 1 else sp.Rational(1, 2)
+            x = go(e.args[0], 0)
+            if h0 == sp.Rational(1, 2):
+                return f"heaviside({x})"
+            # another value at 0: picked there (if(x, 1, 0) is the value at x > 0, x < 0)
+            return f"if({x}, 1, if(-({x}), 0, {go(h0, 0)}))"
+        if isinstance(e, (sp.Min, sp.Max)):
+            fn = "min" if isinstance(e, sp.Min) else "max"
+            args = [go(a, 0) for a in e.args]
+            out = args[-1]
+            for a in reversed(args[:-1]):
+                out = f"{fn}({a}, {out})"
+            return out
+        if isinstance(e, sp.Piecewise):
+            return piecewise(list(e.args), e)
         if isinstance(e, sp.Function):
             name = type(e).__name__
             if name in _FUNCTIONS:
@@ -175,9 +195,48 @@ def to_expression(expr: Any, time: Any = None) -> str:
                 return f"{_FUNCTIONS[name]}({args})"
             raise ValueError(f"from_sympy: the model language has no function '{name}' (in {e}); "
                              "it has sin cos tan asin acos atan atan2 sinh cosh tanh exp log "
-                             "sqrt abs")
+                             "sqrt abs sign Heaviside Min Max Piecewise")
         raise ValueError(f"from_sympy: cannot translate {e!r} ({type(e).__name__}) into the model "
                          "language")
+
+    def condition(c: Any, yes: str, no: str, whole: Any) -> str:
+        # the text that is `yes` where c holds and `no` elsewhere: if(g, a, b) is a where g > 0
+        if c is sp.true or c == True:  # noqa: E712 (SymPy's true)
+            return yes
+        if c is sp.false or c == False:  # noqa: E712
+            return no
+        if isinstance(c, (sp.StrictGreaterThan, sp.StrictLessThan)):
+            g = c.lhs - c.rhs if isinstance(c, sp.StrictGreaterThan) else c.rhs - c.lhs
+            return f"if({go(g, 0)}, {yes}, {no})"
+        if isinstance(c, (sp.GreaterThan, sp.LessThan)):
+            # a >= b holds where b - a > 0 does not
+            g = c.rhs - c.lhs if isinstance(c, sp.GreaterThan) else c.lhs - c.rhs
+            return f"if({go(g, 0)}, {no}, {yes})"
+        if isinstance(c, sp.Not):
+            return condition(c.args[0], no, yes, whole)
+        if isinstance(c, sp.And):
+            out = yes
+            for a in reversed(c.args):
+                out = condition(a, out, no, whole)
+            return out
+        if isinstance(c, sp.Or):
+            out = no
+            for a in reversed(c.args):
+                out = condition(a, yes, out, whole)
+            return out
+        raise ValueError(f"from_sympy: the condition {c} (in {whole}) is not a comparison "
+                         "<, <=, >, >= (or And, Or, Not of them); the model language's if(c, a, b) "
+                         "takes a where c > 0")
+
+    def piecewise(pieces: List[Any], whole: Any) -> str:
+        # (e1, c1), (e2, c2), …, (en, True): if(c1, e1, if(c2, e2, … en))
+        if not pieces or not (pieces[-1][1] is sp.true or pieces[-1][1] == True):  # noqa: E712
+            raise ValueError(f"from_sympy: {whole} is undefined where no condition holds; end it "
+                             "with an otherwise piece (expr, True)")
+        out = go(pieces[-1][0], 0)
+        for value, c in reversed(pieces[:-1]):
+            out = condition(c, go(value, 0), out, whole)
+        return out
 
     return go(sp.sympify(expr), 0)
 

@@ -202,6 +202,13 @@ SystemBuilder& SystemBuilder::accounts_for_energy(bool accounts) {
   return *this;
 }
 
+SystemBuilder& SystemBuilder::switching_functions(std::vector<std::string> names,
+                                                  SwitchScratchFn fn) {
+  switch_names_ = fn ? std::move(names) : std::vector<std::string>();
+  switches_ = std::move(fn);
+  return *this;
+}
+
 SystemBuilder& SystemBuilder::add(Constraint c) {
   constraints_.push_back(std::move(c));
   return *this;
@@ -320,6 +327,8 @@ System SystemBuilder::build() const {
   }
   s.potential_ = potential_;
   s.external_power_ = external_power_;
+  s.switch_names_ = switch_names_;
+  s.switches_ = switches_;
   s.accounts_for_energy_ = accounts_for_energy_ || potential_ || external_power_ || !forces_;
   s.constraints_ = all;
   s.user_constraints_ = constraints_.size();

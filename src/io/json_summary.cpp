@@ -53,6 +53,7 @@ std::string summary_json(const Trajectory& traj, const SimulationOptions& option
   j["projected_stage_steps"] = s.projected_stage_steps;
   j["projections"] = s.projections;
   j["events"] = s.events;
+  j["switch_events"] = s.switch_events;
   j["stick_refusals"] = s.stick_refusals;
   j["notes"] = s.notes;
   j["stiff_switches"] = s.stiff_switches;

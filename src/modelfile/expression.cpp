@@ -229,4 +229,55 @@ std::string ExpressionSet::to_string(Expr e) const {
 
 const std::vector<std::string>& ExpressionSet::input_names() const { return impl_->input_names; }
 
+std::vector<Expr> ExpressionSet::switching_functions(const std::vector<Expr>& exprs) {
+  std::vector<GiNaC::ex> found;
+  // g once: neither g nor −g found before (GiNaC distributes −1 over a sum, so −(a − b) is b − a),
+  // and not a number
+  std::unordered_set<GiNaC::ex, std::hash<GiNaC::ex>, GiNaC::ex_is_equal> known;
+  const auto note = [&](const GiNaC::ex& g) {
+    if (GiNaC::is_a<GiNaC::numeric>(g) || known.count(g) != 0) return;
+    known.insert(g);
+    known.insert(-g);
+    found.push_back(g);
+  };
+  // each shared subexpression visited once (GiNaC shares subtrees: a derivative repeats its
+  // argument's pieces)
+  std::unordered_set<GiNaC::ex, std::hash<GiNaC::ex>, GiNaC::ex_is_equal> seen;
+  std::vector<GiNaC::ex> stack;
+  for (const Expr e : exprs) stack.push_back(impl_->at(e, "switching_functions"));
+  while (!stack.empty()) {
+    const GiNaC::ex x = stack.back();
+    stack.pop_back();
+    if (GiNaC::is_a<GiNaC::numeric>(x) || GiNaC::is_a<GiNaC::symbol>(x)) continue;
+    if (!seen.insert(x).second) continue;
+    if (GiNaC::is_a<GiNaC::function>(x)) {
+      const std::string name = GiNaC::ex_to<GiNaC::function>(x).get_name();
+      if (name == "lang_abs" || name == "sign" || name == "heaviside") {
+        note(x.op(0));
+      } else if (name == "min" || name == "max") {
+        note(x.op(0) - x.op(1));
+      } else if (name == "if") {
+        note(x.op(0));
+        // a derivative's tie rule if(c, da, if(kink_tie(c), minmod(da, db), db))
+        // (expression_parse.cpp, kink): its inner condition switches with c, and minmod's min
+        // and max act only at c = 0
+        const GiNaC::ex& rest = x.op(2);
+        if (GiNaC::is_a<GiNaC::function>(rest) &&
+            GiNaC::ex_to<GiNaC::function>(rest).get_name() == "if" &&
+            rest.op(0).is_equal(kink_tie(x.op(0)))) {
+          stack.push_back(x.op(0));
+          stack.push_back(x.op(1));
+          stack.push_back(rest.op(2));
+          continue;
+        }
+      }
+    }
+    for (std::size_t i = 0; i < x.nops(); ++i) stack.push_back(x.op(i));
+  }
+  std::vector<Expr> out;
+  out.reserve(found.size());
+  for (GiNaC::ex& g : found) out.push_back(impl_->add(std::move(g)));
+  return out;
+}
+
 }  // namespace ukdyn::expr

@@ -53,6 +53,10 @@ struct FunctionInfo {
 const FunctionInfo* find_function(const std::string& name);
 // the GiNaC expression of a call of a language function (args: f.arity of them)
 GiNaC::ex call(const FunctionInfo& f, const GiNaC::exvector& args);
+// 1 − abs(sign(c)): 1 where c = 0, else 0 (NaN for a NaN c) — the condition of the tie branch
+// in the derivative of a kink, if(c, da, if(kink_tie(c), minmod(da, db), db))
+// (expression_parse.cpp, kink)
+GiNaC::ex kink_tie(const GiNaC::ex& c);
 // a letter or '_', then letters, digits, '_'
 bool is_identifier(const std::string& s);
 // "a, b, c" (at most 20, then "…")

@@ -12,6 +12,7 @@
 #include <charconv>
 #include <cmath>
 #include <cstdint>
+#include <cstdlib>
 #include <cstring>
 #include <limits>
 #include <map>
@@ -38,13 +39,15 @@ namespace ukdyn::expr::detail {
 // which cannot be compiled). Each folds when its arguments are real numbers (if(c, a, b) when c is)
 // and has the derivative where it exists: sign(x) for abs (GiNaC's own abs has x/abs(x), NaN at 0,
 // where a potential F·abs(x) has the force 0 by symmetry), 0 for sign and heaviside, and the
-// derivative of the branch taken for max, min (if(a − b, da, db)) and if (if(c, da, db)).
+// derivative of the branch taken for max, min and if, with abs's rule at a tie (kink below).
 DECLARE_FUNCTION_1P(lang_abs)
 DECLARE_FUNCTION_1P(lang_sign)
 DECLARE_FUNCTION_1P(lang_heaviside)
 DECLARE_FUNCTION_2P(lang_min)
 DECLARE_FUNCTION_2P(lang_max)
 DECLARE_FUNCTION_3P(lang_if)
+
+GiNaC::ex kink_tie(const GiNaC::ex& c) { return 1 - lang_abs(lang_sign(c)); }
 
 namespace {
 
@@ -84,6 +87,22 @@ GiNaC::ex heaviside_eval(const GiNaC::ex& x) {
 GiNaC::ex heaviside_evalf(const GiNaC::ex& x) { return heaviside_eval(x); }
 GiNaC::ex heaviside_deriv(const GiNaC::ex&, unsigned) { return 0; }
 
+// The derivative of a function that is a where c > 0 and b where c < 0, from the one-sided
+// derivatives da and db:
+//   kink(c, da, db) = if(c, da, if(1 − abs(sign(c)), minmod(da, db), db)),
+//   minmod(u, v) = max(min(u, v), 0) + min(max(u, v), 0)
+// At the tie c = 0 (where 1 − abs(sign(c)) = 1, and only there: a NaN c gives db, as if(c, …)
+// does) it is the one-sided derivative nearer 0, and 0 when they have opposite signs (the
+// least-norm subgradient): abs's rule (d abs = sign, 0 at 0), so a mass at rest at the kink of
+// max(x, −x), if(x, x, −x) or F·max(x, 0) sees the force 0 and stays at rest — the tie rule b′
+// gave it ±F and it chattered. Elsewhere the value is exactly da or db (picked, adding exact
+// zeros). When da and db are the same expression (a smooth join) it folds to da.
+GiNaC::ex kink(const GiNaC::ex& c, const GiNaC::ex& da, const GiNaC::ex& db) {
+  if (da.is_equal(db)) return da;
+  const GiNaC::ex minmod = lang_max(lang_min(da, db), 0) + lang_min(lang_max(da, db), 0);
+  return lang_if(c, da, lang_if(kink_tie(c), minmod, db));
+}
+
 GiNaC::ex min_eval(const GiNaC::ex& a, const GiNaC::ex& b) {
   const auto *na = real_number(a), *nb = real_number(b);
   if (na != nullptr && nb != nullptr) return *nb < *na ? b : a;
@@ -91,10 +110,10 @@ GiNaC::ex min_eval(const GiNaC::ex& a, const GiNaC::ex& b) {
   return lang_min(a, b).hold();
 }
 GiNaC::ex min_evalf(const GiNaC::ex& a, const GiNaC::ex& b) { return min_eval(a, b); }
-// d min(a, b) = if(b − a, da, db): the derivative of the branch taken (b's at a tie), picked
-// like if's value, so a derivative that is infinite where its branch is not taken does not leak
+// d min(a, b) = kink(b − a, da, db): the derivative of the branch taken, picked like if's value,
+// so a derivative that is infinite where its branch is not taken does not leak
 GiNaC::ex min_deriv(const GiNaC::ex& a, const GiNaC::ex& b, const GiNaC::symbol& s) {
-  return lang_if(b - a, a.diff(s), b.diff(s));
+  return kink(b - a, a.diff(s), b.diff(s));
 }
 
 GiNaC::ex max_eval(const GiNaC::ex& a, const GiNaC::ex& b) {
@@ -104,8 +123,9 @@ GiNaC::ex max_eval(const GiNaC::ex& a, const GiNaC::ex& b) {
   return lang_max(a, b).hold();
 }
 GiNaC::ex max_evalf(const GiNaC::ex& a, const GiNaC::ex& b) { return max_eval(a, b); }
+// d max(a, b) = kink(a − b, da, db)
 GiNaC::ex max_deriv(const GiNaC::ex& a, const GiNaC::ex& b, const GiNaC::symbol& s) {
-  return lang_if(a - b, a.diff(s), b.diff(s));
+  return kink(a - b, a.diff(s), b.diff(s));
 }
 
 GiNaC::ex if_eval(const GiNaC::ex& c, const GiNaC::ex& a, const GiNaC::ex& b) {
@@ -116,10 +136,10 @@ GiNaC::ex if_eval(const GiNaC::ex& c, const GiNaC::ex& a, const GiNaC::ex& b) {
 GiNaC::ex if_evalf(const GiNaC::ex& c, const GiNaC::ex& a, const GiNaC::ex& b) {
   return if_eval(c, a, b);
 }
-// d if(c, a, b) = if(c, da, db): the condition contributes nothing where it is differentiable
+// d if(c, a, b) = kink(c, da, db): the condition contributes nothing where it is differentiable
 GiNaC::ex if_deriv(const GiNaC::ex& c, const GiNaC::ex& a, const GiNaC::ex& b,
                    const GiNaC::symbol& s) {
-  return lang_if(c, a.diff(s), b.diff(s));
+  return kink(c, a.diff(s), b.diff(s));
 }
 
 }  // namespace
@@ -789,6 +809,11 @@ class Parser {
       for (; k < s.size() && e <= 400; ++k) e = 10 * e + (s[k] - '0');
       if (e > 400) fail("number '" + s + "' is out of range", t.position);
       exponent += negative ? -e : e;
+    }
+    // a number no double holds is refused where it is written (it would evaluate to inf)
+    if (!std::isfinite(std::strtod(s.c_str(), nullptr))) {
+      fail("number '" + s + "' is too large: it exceeds the largest double (about 1.8e308)",
+           t.position);
     }
     return decimal(digits, exponent);
   }

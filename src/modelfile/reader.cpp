@@ -123,6 +123,8 @@ Expr Reader::expression(const YAML::Node& node, const std::string& what, bool in
                   "its own line (block style)"
         : message.find("the parameters' values") != std::string::npos
             ? "change the parameter's value, or write the expression for it"
+        : message.find("exceeds the largest double") != std::string::npos
+            ? "write a number a double holds (|x| < 1.8e308), or change the model's units"
             : "expressions use the coordinates, their velocities (x_dot), t and the parameters");
   }
   compile({e}, node, what);  // defined with the parameters' values? (errors point here)
@@ -457,6 +459,8 @@ void Reader::read_dynamics(const YAML::Node& root, SystemBuilder& builder) {
   }
   const InputLayout layout = layout_;
   const YAML::Node dynamics = T ? T : Mnode;
+  note_switches(entries);
+  note_switches(Q);
   const Program Mp = compile(entries, dynamics,
                              T ? "the derivatives of kinetic_energy" : "mass_matrix"),
                 Qp = compile(Q, dynamics, "the generalized forces");
@@ -663,6 +667,8 @@ Constraint Reader::read_constraint(const YAML::Node& c, const std::string& name,
       for (const Index k : set_->inputs_of(e)) read.insert(k);
     }
   }
+  note_switches(accel);
+  note_switches(levels);
   Constraint constraint(name, kind, rows,
                         std::make_shared<CompiledConstraint>(
                             kind, rows, n, layout_, compile(accel, c, "the derivatives of " + what),
@@ -838,6 +844,7 @@ void Reader::read_nonideal(const YAML::Node& root, SystemBuilder& builder) {
       std::vector<Expr> C;
       C.reserve(rows.size());
       for (const auto& r : rows) C.push_back(expression(r, "C", true));
+      note_switches(C);
       const Program Cp = compile(C, f["C"], "C");
       const InputLayout layout = layout_;
       const std::vector<std::string> names = constraint_names_;
@@ -1314,6 +1321,33 @@ void Reader::make_expression_set(const YAML::Node& root, const std::vector<std::
   layout_.extra = Index(2 * cnames.size());
 }
 
+void Reader::add_switches(SystemBuilder& builder) {
+  if (switch_sources_.empty()) return;
+  // (one traversal of every expression of the dynamics; a switch of N_c or lambda_c, which the
+  // state alone does not give, is left to the step-size control)
+  std::vector<Expr> g;
+  std::vector<std::string> names;
+  for (const Expr e : set_->switching_functions(switch_sources_)) {
+    const std::vector<Index> in = set_->inputs_of(e);
+    if (in.empty() || in.back() > 2 * layout_.n) continue;
+    g.push_back(e);
+    names.push_back(set_->to_string(e));
+  }
+  switch_sources_.clear();
+  if (g.empty()) return;
+  const Program p = set_->compile(g);
+  sizes_->fit(layout_.size(), p);
+  const InputLayout layout = layout_;
+  builder.switching_functions(
+      std::move(names),
+      [p, layout](const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd,
+                  double t, CallableScratch* s, Eigen::Ref<VectorXd> out) {
+        ModelBuffers& b = model_buffers(s);
+        layout.fill(b.in, q, qd, t);
+        p.evaluate(b.in.data(), out.data(), b.scratch.data());
+      });
+}
+
 Model Reader::read_generalized(const YAML::Node& root) {
   read_coordinates(root);
   // the named constraints (a name given twice is refused by read_constraints)
@@ -1330,6 +1364,7 @@ Model Reader::read_generalized(const YAML::Node& root) {
   read_dynamics(root, builder);
   read_constraints(root, builder);
   read_nonideal(root, builder);
+  add_switches(builder);
   try {
     return Model{.system = builder.build()};
   } catch (const std::invalid_argument& e) {

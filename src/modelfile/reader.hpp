@@ -380,6 +380,15 @@ class Reader {
   std::vector<std::pair<std::string, std::string>> chain_;
   // the sizes of the model's ModelBuffers (the plant's callables')
   std::shared_ptr<BufferSizes> sizes_ = std::make_shared<BufferSizes>();
+  // the expressions of the dynamics (M, Q, the constraints' programs, C) whose non-smooth calls
+  // are the model's switches (note_switches, add_switches)
+  std::vector<Expr> switch_sources_;
+  void note_switches(const std::vector<Expr>& exprs) {
+    switch_sources_.insert(switch_sources_.end(), exprs.begin(), exprs.end());
+  }
+  // the switching functions of switch_sources_ that q, q' and t determine, compiled into the
+  // builder's SystemBuilder::switching_functions (none: no callable, so no event hook)
+  void add_switches(SystemBuilder& builder);
 };
 
 }  // namespace ukdyn::model_reader

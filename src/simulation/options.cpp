@@ -142,6 +142,9 @@ std::vector<OptionInfo> make_table() {
                    UKDYN_FIELD(max_steps, long)));
   t.push_back(with(boolean("stiff_switch", "dopri5 goes on with bdf once the problem turns stiff"),
                    UKDYN_FIELD(stiff_switch, bool)));
+  t.push_back(with(
+      boolean("switch_events", "sign changes of sign, abs, heaviside, min, max and if are events"),
+      UKDYN_FIELD(switch_events, bool)));
   // samples
   t.push_back(with(number("output_every", 0.0, false, kInf, true, "0.05",
                           "sample spacing (0: only t_start and t_end)"),

@@ -85,6 +85,13 @@ namespace {
 constexpr long kMaxEvents = 100000;
 // notes a run keeps (RunStatistics::notes)
 constexpr std::size_t kMaxNotes = 20;
+// a run is declared chattering at a switch (SimulationOptions::switch_events) when kSwitchBurst
+// switch events, or kSwitchBurst accepted steps after one, fall within kSwitchBurstSpan of the
+// run's time span
+constexpr std::size_t kSwitchBurst = 1000;
+constexpr double kSwitchBurstSpan = 1e-6;
+// the step into a switch below which the run restarts at the switch (see Run::find_event)
+constexpr double kSwitchApproach = 1e-10;
 
 // What a Coulomb contact does: slides (friction acts), sticks (the stick constraint acts), or
 // slides through a zero of v_rel at which it could not stick (the zero is its next event).
@@ -374,7 +381,188 @@ class Run {
         switching_ = Index(c);
       }
     }
+    // the first sign change of a switching function, when it comes before the contacts' event
+    switch_event_ = false;
+    if (!locates_switches()) return first;
+    double hi = t1;
+    const double ts = find_switch(t0, x0, t1, x1, dense, hi);
+    approach_ = false;
+    if (!std::isnan(ts) && (std::isnan(first) || ts < first)) {
+      switch_event_ = true;
+      // the approach: the restart state at ts comes from one step [t0, ts] whose last stages
+      // lie at ts, within their own error of the switch, on either side (rkf78's end-node
+      // stages are not exact even for a quadratic motion: an error h·b·jump). So the run first
+      // restarts 3/4 of the way, where every stage is clearly on the old side, and finds the
+      // switch again from there, until the step to it is below kSwitchApproach (|t| ≥ 1)
+      if (ts - t0 > kSwitchApproach * std::max(1.0, std::abs(ts))) {
+        approach_ = true;
+        return ts - 0.25 * (ts - t0);
+      }
+      switch_width_ = hi - ts;
+      steps_since_switch_ = 0;
+      // the functions across their side just past the switch take their new side (the run
+      // restarts just before it, at ts: every stage of the step to ts on the old side)
+      dense(hi, event_x_.data());
+      evaluate_switches(hi, event_x_.data());
+      double furthest = std::numeric_limits<double>::infinity();
+      for (std::size_t k = 0; k < crossing_count_; ++k) {
+        const std::size_t i = crossing_[k];
+        const double m = double(side_[i]) * g_[Index(i)];
+        if (m < furthest) {
+          furthest = m;
+          switch_fired_ = i;
+        }
+        const bool flip = m <= 0.0 || landed_;
+        flipped_[i] = flip ? 1 : 0;
+        if (flip) side_[i] = static_cast<signed char>(-side_[i]);
+      }
+      return ts;
+    }
+    if (std::isnan(first)) {
+      // no event: a function that was 0 takes the side where the step leaves it
+      for (Index i = 0; i < g1_.size(); ++i) {
+        if (side_[std::size_t(i)] == 0 && g1_[i] != 0.0)
+          side_[std::size_t(i)] = g1_[i] > 0 ? 1 : -1;
+      }
+      // a crawl after a switch: kSwitchBurst steps within kSwitchBurstSpan of the run (the step
+      // size control rejects every step that crosses the switch again)
+      if (burst_next_ > 0 && ++steps_since_switch_ >= kSwitchBurst) {
+        if (t1 - last_switch_ <= kSwitchBurstSpan * (o_.t_end - o_.t_start)) {
+          crawl_ = true;
+          switch_event_ = true;
+          return t1;
+        }
+        steps_since_switch_ = 0;
+        last_switch_ = t1;
+      }
+    }
     return first;
+  }
+
+  // drift control at a restart after a switch event (the state there is a step's, not yet
+  // projected)
+  Status project_drift(double t, double* x) {
+    bool changed = false;
+    return projecting_ ? project(t, x, projection_, changed) : Status::kOk;
+  }
+
+  // --- switches of the non-smooth functions (System::switch_count, docs/simulation.md) -------
+  // the width of the last switch's bracket (the restart is at its old end)
+  double switch_width() const { return switch_width_; }
+  // true when every function that switched at the last switch event is on its new side at
+  // (t, x): side_i g_i > 0
+  bool switch_settled(double t, const double* x) {
+    evaluate_switches(t, x);
+    for (std::size_t k = 0; k < crossing_count_; ++k) {
+      const std::size_t i = crossing_[k];
+      if (side_[i] != 0 && double(side_[i]) * g_[Index(i)] <= 0.0 && flipped(i)) return false;
+    }
+    return true;
+  }
+
+  // true when the run locates them (SimulationOptions::switch_events and switching functions)
+  bool locates_switches() const { return g_.size() > 0; }
+  // the last event found by find_event is a switch (not a contact's)
+  bool switch_event() const { return switch_event_; }
+  // ... or the report of steps that crawl after a switch (no switch: see switch_chatters)
+  bool switch_crawls() const { return crawl_; }
+  // ... or a restart on the way to a switch (no switch yet: see find_event)
+  bool switch_approach() const { return approach_; }
+
+  // g = the switching functions at (t, x)
+  void evaluate_switches(double t, const double* x) {
+    q_ = Eigen::Map<const VectorXd>(x, n_);
+    qd_ = Eigen::Map<const VectorXd>(x + n_, n_);
+    sys_.switching_functions(q_, qd_, t, ws_.callables.get(), g_);
+  }
+
+  // each function's side: the sign of g at (t, x) (0: at its switch)
+  void initial_switch_sides(double t, const double* x) {
+    if (!locates_switches()) return;
+    evaluate_switches(t, x);
+    for (Index i = 0; i < g_.size(); ++i) {
+      side_[std::size_t(i)] = static_cast<signed char>(g_[i] > 0.0 ? 1 : g_[i] < 0.0 ? -1 : 0);
+    }
+  }
+
+  // The time just before the first switch in (t0, t1], or NaN: the functions whose value at t1
+  // lies across their side (side_i g_i(t1) < 0) are the crossing ones, and the switch is
+  // located by bisection on min over them of side_i g_i on the dense output: the bracket
+  // [s, hi] of width 1e-14 |t|, s on the old side (returned: a restart there takes every stage
+  // on the old side; from hi the last stage of rk4 would see the new one), hi past it. A step
+  // that starts across the side already (a restart that the dynamics turns straight back: a
+  // sliding mode) switches back at t0. (A function that leaves its side and comes back within
+  // one step is not seen.)
+  double find_switch(double t0, const double* x0, double t1, const double* x1,
+                     const detail::SegmentHooks::Dense& dense, double& hi) {
+    evaluate_switches(t1, x1);
+    g1_ = g_;
+    crossing_count_ = 0;
+    landed_ = false;
+    for (Index i = 0; i < g_.size(); ++i) {
+      if (double(side_[std::size_t(i)]) * g_[i] < 0.0)
+        crossing_[crossing_count_++] = std::size_t(i);
+    }
+    if (crossing_count_ == 0) {
+      // a step that lands on a switch (an output time there: g(t1) within 1e-12 of g(t0) of 0,
+      // on the old side) took its last stages at the tie, on either side: a switch at t1
+      evaluate_switches(t0, x0);
+      for (Index i = 0; i < g_.size(); ++i) {
+        const double s0 = double(side_[std::size_t(i)]) * g_[i],
+                     s1 = double(side_[std::size_t(i)]) * g1_[i];
+        if (s0 > 0.0 && s1 >= 0.0 && s1 <= 1e-12 * s0)
+          crossing_[crossing_count_++] = std::size_t(i);
+      }
+      if (crossing_count_ == 0) return std::numeric_limits<double>::quiet_NaN();
+      landed_ = true;
+      hi = t1;
+      return t1;
+    }
+    auto margin = [&](double t, const double* x) {
+      evaluate_switches(t, x);
+      double m = std::numeric_limits<double>::infinity();
+      for (std::size_t k = 0; k < crossing_count_; ++k) {
+        const std::size_t i = crossing_[k];
+        m = std::min(m, double(side_[i]) * g_[Index(i)]);
+      }
+      return m;
+    };
+    if (margin(t0, x0) <= 0.0) {
+      hi = t0;
+      return t0;
+    }
+    double lo = t0;
+    hi = locate(t0, t1, x1, dense, margin, &lo);
+    return lo;
+  }
+
+  // After a switch event at t (or the crawl find_event reports): true when the run chatters —
+  // the last kSwitchBurst switch events fell within kSwitchBurstSpan of the run's time span, or
+  // the steps after one crawled (a sliding mode: the dynamics turns the motion back at the switch
+  // from either side, and no step crosses it); `message` then says so.
+  bool switch_chatters(double t, std::string& message) {
+    const double span = kSwitchBurstSpan * (o_.t_end - o_.t_start);
+    const std::string name = "'" + sys_.switch_names()[switch_fired_] + "'";
+    const std::string advice =
+        " (chattering: a sliding mode, where the dynamics turns the motion back at the switch "
+        "from either side, and no step can cross it). Regularize the switch (tanh(v/eps) for "
+        "sign(v)), or set switch_events to false to step across it unlocated";
+    if (crawl_) {
+      message = "switch events: " + format_number(long(kSwitchBurst)) +
+                " steps after the switch of " + name + " at t = " + format(last_switch_) +
+                " advanced only to t = " + format(t) + advice;
+      return true;
+    }
+    last_switch_ = t;
+    burst_[burst_next_ % kSwitchBurst] = t;
+    ++burst_next_;
+    if (burst_next_ < kSwitchBurst) return false;
+    const double oldest = burst_[burst_next_ % kSwitchBurst];
+    if (!(t - oldest <= span)) return false;
+    message = "switch events: " + format_number(long(kSwitchBurst)) +
+              " sign changes (the last of " + name + ") between t = " + format(oldest) + " and " +
+              format(t) + advice;
+    return true;
   }
 
   // switches the contact found by the last find_event at (t, x)
@@ -644,9 +832,10 @@ class Run {
 
   // the first s in (t0, t1] with g(s) <= 0, by bisection on the dense output (g(t0) > 0 is
   // assumed), or NaN when g(t1) > 0
+  // (the last time found with g > 0 into *last_positive when given)
   template <class G>
   double locate(double t0, double t1, const double* x1, const detail::SegmentHooks::Dense& dense,
-                G&& g) {
+                G&& g, double* last_positive = nullptr) {
     if (g(t1, x1) > 0.0) return std::numeric_limits<double>::quiet_NaN();
     double lo = t0, hi = t1;
     while (hi - lo > 1e-14 * std::max(1.0, std::abs(hi))) {
@@ -654,6 +843,7 @@ class Run {
       dense(mid, event_x_.data());
       (g(mid, event_x_.data()) > 0.0 ? lo : hi) = mid;
     }
+    if (last_positive) *last_positive = lo;
     return hi;
   }
 
@@ -837,6 +1027,27 @@ class Run {
   VectorXd direction_ = VectorXd::Zero(n_);      // (n) sliding direction at the step's start (head)
   std::vector<double> event_x_ = std::vector<double>(sample_.size());  // dense state
   Index switching_ = -1;  // the contact of the last event found
+  // the switching functions (System::switch_count, none unless SimulationOptions::switch_events):
+  // their values (g_ scratch, g1_ at the end of the step), the side each is on (sign of g,
+  // flipped at its event: the restart state may lie within roundoff on the old side), the ones
+  // crossing in the step being checked, and the times of the last kSwitchBurst switch events
+  Index switches_ = o_.switch_events ? sys_.switch_count() : 0;
+  VectorXd g_ = VectorXd::Zero(switches_), g1_ = VectorXd::Zero(switches_);
+  std::vector<signed char> side_ = std::vector<signed char>(std::size_t(switches_), 0);
+  std::vector<std::size_t> crossing_ = std::vector<std::size_t>(std::size_t(switches_), 0);
+  std::size_t crossing_count_ = 0;
+  std::size_t switch_fired_ = 0;
+  bool switch_event_ = false;
+  std::vector<double> burst_ = std::vector<double>(switches_ > 0 ? kSwitchBurst : 0, 0.0);
+  std::size_t burst_next_ = 0;
+  std::vector<unsigned char> flipped_ = std::vector<unsigned char>(std::size_t(switches_), 0);
+  bool flipped(std::size_t i) const { return flipped_[i] != 0; }  // at the last switch event
+  double switch_width_ = 0.0;           // hi − lo of the last switch event's bracket
+  double last_switch_ = 0.0;            // time of the last switch event
+  std::size_t steps_since_switch_ = 0;  // accepted steps since then (up to kSwitchBurst)
+  bool crawl_ = false;                  // the steps after a switch crawl (find_event)
+  bool approach_ = false;               // the last event is a restart before a switch
+  bool landed_ = false;                 // the last switch found is a step landing on it
   std::string failure_;
   std::string refusal_;      // why the last refused stick was refused (empty: friction cannot hold)
   ProgressReport progress_;  // what the last progress report said
@@ -1075,7 +1286,7 @@ Trajectory detail::simulate_observed(const System& sys, const Eigen::Ref<const V
     };
     hooks.project_stage = [&](double t, double* xs) { return run.project_stage(t, xs); };
   }
-  if (!sys.friction_contacts().empty()) {
+  if (!sys.friction_contacts().empty() || run.locates_switches()) {
     hooks.find_event = [&](double t0, const double* x0, double t1, const double* x1,
                            const detail::SegmentHooks::Dense& dense) {
       return run.find_event(t0, x0, t1, x1, dense);
@@ -1116,9 +1327,11 @@ Trajectory detail::simulate_observed(const System& sys, const Eigen::Ref<const V
 
   // (CVODE estimates its own first step, which on stiff problems can be far below o.step)
   double first_step = o.integrator == Integrator::kBDF ? 0.0 : o.step;
-  std::vector<double> x_start;  // (2n + 1) the state where the integrator last started
+  std::vector<double> x_start;       // (2n + 1) the state where the integrator last started
+  std::vector<double> nudge, trial;  // (size of x) f and the state past a switch event
   std::size_t next_sample = 0;
   run.initial_contact_modes(o.t_start, x.data());
+  run.initial_switch_sides(o.t_start, x.data());
   for (std::size_t seg = 0; seg + 1 < ends.size(); ++seg) {
     double a = ends[seg];
     const double b = ends[seg + 1], mid = 0.5 * (a + b);
@@ -1225,6 +1438,55 @@ Trajectory detail::simulate_observed(const System& sys, const Eigen::Ref<const V
       }
       if (!r.event) break;
       method = o.integrator;
+      if (run.switch_event() && run.switch_approach()) {
+        // on the way to a switch: restarted clearly before it, the next step finds it again
+        a = r.t_reached;
+        continue;
+      }
+      if (run.switch_event()) {
+        // a non-smooth function switches: go on from there, on its other side (drift control
+        // first: the state at the event is a step's, not yet projected)
+        if (!run.switch_crawls()) ++traj.stats.switch_events;
+        std::string chatter;
+        if (run.switch_chatters(r.t_reached, chatter)) {
+          return finish(Status::kIntegratorFailure, chatter, r.t_reached);
+        }
+        if (const Status s = run.project_drift(r.t_reached, x.data()); s != Status::kOk) {
+          return finish(s, run.failure().empty() ? describe_status(sys, ws) : run.failure(),
+                        r.t_reached);
+        }
+        a = r.t_reached;
+        // the restart state lies just before the switch (every stage of the step to it on the
+        // old side); the next step's first stage must see the new side: x ← x + δ f(a, x), δ
+        // from the bracket's width, doubled until the switched functions are across (an error
+        // O(δ · jump), δ ~ 1e-14 |t|)
+        if (!run.switch_settled(a, x.data())) {
+          nudge.resize(x.size());
+          trial.resize(x.size());
+          if (ode(x.data(), nudge.data(), a)) {
+            double delta = std::max(run.switch_width(), 1e-15 * std::max(1.0, std::abs(a)));
+            for (int k = 0; k < 40 && a + delta < b; ++k, delta *= 2.0) {
+              for (std::size_t i = 0; i < x.size(); ++i) trial[i] = x[i] + delta * nudge[i];
+              if (run.switch_settled(a + delta, trial.data())) {
+                x.swap(trial);
+                a += delta;
+                break;
+              }
+            }
+          } else {
+            ode.clear_failure();
+          }
+          // samples stepped over by the nudge, from its state
+          for (; next_sample < samples.size() && samples[next_sample] <= a; ++next_sample) {
+            if (samples[next_sample] <= r.t_reached) continue;
+            if (const Status s = run.record(samples[next_sample], x.data()); s != Status::kOk) {
+              return finish(s, run.failure(), samples[next_sample]);
+            }
+          }
+        }
+        if (!(a < b)) break;
+        continue;
+      }
       // a contact sticks or slips: switch it and go on from there (but not forever)
       if (traj.stats.events >= kMaxEvents) {
         return finish(Status::kIntegratorFailure,

@@ -129,11 +129,12 @@ TEST(ModelFuzzRegressions, ParameterNamedLikeAFunctionOrAnInput) {
   }
 }
 
-// Numbers that overflow a double: t_end: 1e400 was read as inf, and a run would never end.
+// Numbers that overflow a double: t_end: 1e400 was read as inf, and a run would never end (now
+// the literal itself is refused, as in every expression)
 TEST(ModelFuzzRegressions, NumberThatOverflowsADouble) {
   const std::string head = "coordinates: [x]\nmass_matrix: [[1]]\n";
   ModelError e = error_of(head + "simulate: {t_end: 1e400}\n");
-  EXPECT_TRUE(contains(e.what(), "f.yaml:3:19: error: t_end must be a finite number, but is inf"))
+  EXPECT_TRUE(contains(e.what(), "f.yaml:3:19: error: in t_end: number '1e400' is too large"))
       << e.what();
   e = error_of(head + "initial:\n  q: {x: -exp(1000)}\n");
   // refused where the overflow is: at exp (issue #14, D12)
@@ -210,7 +211,22 @@ TEST(ModelFuzzRegressions, NumberWithAnExponentBeyondALong) {
         contains(e.what(), "f.yaml:3:10: error: in forces: number '" + n + "' is out of range"))
         << e.what();
   }
-  EXPECT_NO_THROW(parse_model(head + "forces: [1e400*x - 1e-400 + 0.5E+0]\n"));
+  EXPECT_NO_THROW(parse_model(head + "forces: [1e300*x - 1e-400 + 0.5E+0]\n"));
+}
+
+// A literal beyond the largest double (issue #16 item 6): it evaluated to inf, and an output
+// expression with one passed `ukdyn check`; now an error at the literal, in every expression
+TEST(ModelFuzzRegressions, NumberBeyondTheLargestDouble) {
+  const std::string head = "coordinates: [x]\nmass_matrix: [[1]]\n";
+  ModelError e = error_of(head + "forces: [2*1e400*x]\n");
+  EXPECT_TRUE(contains(e.what(),
+                       "f.yaml:3:12: error: in forces: number '1e400' is too large: it "
+                       "exceeds the largest double (about 1.8e308)"))
+      << e.what();
+  e = error_of(head + "output: {expressions: {y: x + 2e308}}\n");
+  EXPECT_TRUE(contains(e.what(), "f.yaml:3:31: error:")) << e.what();
+  EXPECT_TRUE(contains(e.what(), "number '2e308' is too large")) << e.what();
+  EXPECT_NO_THROW(parse_model(head + "output: {expressions: {y: x + 1.7e308}}\n"));
 }
 
 // More than 20 coordinates (FundamentalDecomposition's blocked path) and no constraint:

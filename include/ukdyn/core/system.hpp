@@ -90,6 +90,14 @@ using PowerScratchFn =
     std::function<double(const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd,
                          double t, CallableScratch* s)>;
 
+/// The switching functions g(q, q', t) of a description's non-smooth terms, written into g (one
+/// entry per function), with the workspace's scratch (see MassMatrixScratchFn): the dynamics
+/// (M, Q, the constraints, C) is smooth while no g_i changes sign, and jumps (or has a kink)
+/// where one does (docs/simulation.md, "Switch events"). Must not allocate.
+using SwitchScratchFn =
+    std::function<void(const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd,
+                       double t, CallableScratch* s, Eigen::Ref<VectorXd> g)>;
+
 /// A Coulomb friction contact, for the simulation's stick/slip switching (see CoulombFriction).
 struct FrictionContact {
   Index force = -1;                    ///< index of the friction's non-ideal force
@@ -201,6 +209,18 @@ class System {
   /// The bound callable of non-ideal force i.
   const NonIdealFn& nonideal(Index i) const { return nonideal_fns_.at(std::size_t(i)); }
 
+  /// Number of switching functions (SystemBuilder::switching_functions); 0 for a smooth system.
+  Index switch_count() const { return Index(switch_names_.size()); }
+  /// The switching functions' names (a model file's: the expression g, as text), for messages.
+  const std::vector<std::string>& switch_names() const { return switch_names_; }
+  /// g(q, q', t) (switch_count()) into g; `s` is the workspace's scratch. Nothing when the
+  /// system has no switching functions. Cost: one evaluation of the functions.
+  void switching_functions(const Eigen::Ref<const VectorXd>& q,
+                           const Eigen::Ref<const VectorXd>& qd, double t, CallableScratch* s,
+                           Eigen::Ref<VectorXd> g) const {
+    if (switches_) switches_(q, qd, t, s, g);
+  }
+
   /// The Coulomb friction contacts (one per coulomb_friction force).
   const std::vector<FrictionContact>& friction_contacts() const { return contacts_; }
 
@@ -228,6 +248,8 @@ class System {
   std::vector<std::string> nonideal_names_;
   std::vector<NonIdealFn> nonideal_fns_;
   std::vector<FrictionContact> contacts_;
+  std::vector<std::string> switch_names_;
+  SwitchScratchFn switches_;
   std::uint64_t id_ = 0;
 };
 
@@ -280,6 +302,10 @@ class SystemBuilder {
   /// checks the energy balance (System::accounts_for_energy). Implied by potential_energy(),
   /// external_power(), and by giving no forces().
   SystemBuilder& accounts_for_energy(bool accounts = true);
+  /// The switching functions of the system's non-smooth terms (see SwitchScratchFn), one name
+  /// each: simulate() locates their sign changes as events (SimulationOptions::switch_events).
+  /// Default: none.
+  SystemBuilder& switching_functions(std::vector<std::string> names, SwitchScratchFn fn);
   /// Adds a constraint (names must be unique).
   SystemBuilder& add(Constraint c);
   /// Adds a non-ideal force (its C is summed with the others').
@@ -305,6 +331,8 @@ class SystemBuilder {
   bool accounts_for_energy_ = false;
   std::vector<Constraint> constraints_;
   std::vector<NonIdealForce> nonideal_;
+  std::vector<std::string> switch_names_;
+  SwitchScratchFn switches_;
 };
 
 }  // namespace ukdyn

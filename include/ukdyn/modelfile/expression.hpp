@@ -6,8 +6,10 @@
 /// ^ (power), parentheses, and the functions sin, cos, tan, asin, acos, atan, atan2(y, x), sinh,
 /// cosh, tanh, exp, log, sqrt, abs, and the non-smooth sign (0 at 0), heaviside (½ at 0),
 /// min(a, b), max(a, b) and if(c, a, b) (a where c > 0, else b), differentiated where they are
-/// differentiable (d abs(x) = sign(x) dx, d sign = d heaviside = 0, d max(a, b) = if(a − b, da,
-/// db), d min(a, b) = if(b − a, da, db), d if(c, a, b) = if(c, da, db); docs/model-format.md).
+/// differentiable (d abs(x) = sign(x) dx, d sign = d heaviside = 0, d max(a, b) = da where
+/// a > b and db where a < b, d min likewise, d if(c, a, b) = da where c > 0 and db where c < 0;
+/// at a tie the one-sided derivative nearer 0, and 0 between derivatives of opposite signs, as
+/// abs has: docs/model-format.md, "Tie rule").
 /// Precedence as in Python: `-x^2` is −(x²), `x^-2*y` is
 /// (x⁻²)·y; `a^b^c` is refused as ambiguous. Names are the inputs declared when the set is made
 /// (coordinates, their velocities `x_dot`, time `t`, …) and constants (parameters) whose values
@@ -140,6 +142,16 @@ class ExpressionSet {
   /// cos of one argument share a sincos call. @throws std::invalid_argument when an output has
   /// a complex constant (sqrt(-4)) or a function outside the language.
   Program compile(const std::vector<Expr>& outputs) const;
+
+  /// The switching functions of the non-smooth calls in `exprs`, each once (g and −g are one):
+  /// the argument x of abs(x), sign(x) and heaviside(x), a − b of min(a, b) and max(a, b), and
+  /// the condition c of if(c, a, b) — where the value or a derivative of the expression jumps
+  /// when g changes sign (docs/simulation.md, "Switch events"). Constant ones are left out, and
+  /// so are the conditions of the tie rule inside a derivative (expression_parse.cpp, kink),
+  /// which act only at their if's own switch. Adds the functions to the set and returns their
+  /// handles. @throws std::invalid_argument on a handle not from this set. Cost O(size of the
+  /// expressions).
+  std::vector<Expr> switching_functions(const std::vector<Expr>& exprs);
 
   /// The input names, in order.
   const std::vector<std::string>& input_names() const;

@@ -104,6 +104,16 @@ struct SimulationOptions {
   /// trajectory is bit for bit that of plain dopri5. false: dopri5 throughout, however slow
   /// (docs/simulation.md, "Stiffness").
   bool stiff_switch = true;
+  /// Locate the sign changes of the system's switching functions (System::switch_count: the
+  /// non-smooth calls of a model file's sign, abs, heaviside, min, max and if) as events: the
+  /// step that crosses one stops there and the method restarts on the other side, so every
+  /// method keeps its order across the switch (docs/simulation.md, "Switch events"). 1000
+  /// switch events, or 1000 accepted steps after one, within 1e-6 of the run's time span (a
+  /// sliding mode) end the run as chattering (Status::kIntegratorFailure, the message names the
+  /// switch). false: the switches are stepped across (the adaptive methods shrink
+  /// their steps there; rk4 and rk5 lose their order). A system without switching functions
+  /// pays nothing either way.
+  bool switch_events = true;
 
   double output_every = 0.01;       ///< sample spacing (0: only t_start and t_end)
   std::vector<double> output_at;    ///< further sample times (merged, sorted)
@@ -238,6 +248,8 @@ struct RunStatistics {
   long projections = 0;  ///< projections that moved the state (with BDF, CVODE
                          ///< projects before its error test, so rejected attempts count)
   long events = 0;       ///< stick/slip events of Coulomb contacts
+  /// sign changes of switching functions located as events (SimulationOptions::switch_events)
+  long switch_events = 0;
   /// stops of a Coulomb contact where sticking was refused as not admissible (it would have
   /// removed kinetic energy, or left the constraints without solution): the contact slid on
   long stick_refusals = 0;
