@@ -17,10 +17,9 @@
 
 #include <csignal>
 
-#include <spawn.h>
-#include <sys/wait.h>
 #include <unistd.h>
 
+#include <ukdyn/core/format.hpp>
 #include <ukdyn/io/trajectory_files.hpp>
 #include <ukdyn/modelfile/model.hpp>
 #include <ukdyn/modelfile/run.hpp>
@@ -31,10 +30,9 @@
 #include "embedded.hpp"
 #include "output_dir.hpp"
 #include "progress.hpp"
+#include "python_process.hpp"
 #include "stop_signals.hpp"
 #include "viewer.hpp"
-
-extern char** environ;
 
 namespace ukdyn::cli {
 namespace fs = std::filesystem;
@@ -56,31 +54,13 @@ void warn_duplicate_columns(const ModelRun& run) {
   }
 }
 
-// runs `python script csv dir formats`; returns its exit status, or −1 when it could not start
-int run_python(const std::string& python, const std::string& script, const std::string& csv,
-               const std::string& dir, const std::string& formats) {
-  std::vector<std::string> args = {python, script, csv, dir, formats};
-  std::vector<char*> argv;
-  argv.reserve(args.size() + 1);
-  for (auto& a : args) argv.push_back(a.data());
-  argv.push_back(nullptr);
-  pid_t pid = 0;
-  if (posix_spawn(&pid, python.c_str(), nullptr, nullptr, argv.data(), environ) != 0) return -1;
-  int status = 0;
-  while (waitpid(pid, &status, 0) < 0) {
-    if (errno != EINTR) return -1;
-  }
-  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-}
-
 // writes the plots in `formats` (png, pdf, svg) with python/ukdyn/plotting.py (embedded) and
 // /usr/bin/python3 (or $UKDYN_PYTHON); returns the files written; a missing python or
 // matplotlib is a warning, not an error
 std::vector<fs::path> make_plots(const fs::path& csv, const fs::path& dir,
                                  const std::vector<std::string>& formats) {
-  const char* env = std::getenv("UKDYN_PYTHON");
-  const std::string python = env && *env ? env : "/usr/bin/python3";
-  if (::access(python.c_str(), X_OK) != 0) {
+  const std::string python = python_interpreter();
+  if (!is_executable(python)) {
     std::fprintf(stderr,
                  "warning: %s not found: no plots (set UKDYN_PYTHON to a python with "
                  "matplotlib, or pass --no-plots)\n",
@@ -97,9 +77,8 @@ std::vector<fs::path> make_plots(const fs::path& csv, const fs::path& dir,
   const std::string_view text(kPlotScript);
   const bool written = ::write(fd, text.data(), text.size()) == ssize_t(text.size());
   ::close(fd);
-  std::string list;
-  for (const std::string& f : formats) list += (list.empty() ? "" : ",") + f;
-  const int code = written ? run_python(python, script, csv.string(), dir.string(), list) : -1;
+  const int code =
+      written ? run_program({python, script, csv.string(), dir.string(), join(formats, ",")}) : -1;
   fs::remove(script);
   if (code == kPlotNoMatplotlib) {
     std::fprintf(stderr,

@@ -13,8 +13,6 @@
 #include <thread>
 #include <vector>
 
-#include <spawn.h>
-#include <sys/wait.h>
 #include <unistd.h>
 
 #include <nlohmann/json.hpp>
@@ -28,9 +26,8 @@
 #include "commands.hpp"
 #include "output_dir.hpp"
 #include "progress.hpp"
+#include "python_process.hpp"
 #include "stop_signals.hpp"
-
-extern char** environ;
 
 namespace ukdyn::cli {
 namespace fs = std::filesystem;
@@ -134,22 +131,6 @@ class EnsembleLine {
   Clock::time_point start_, next_;
   bool drawn_ = false;
 };
-
-// runs `python -c script args…`; its exit status, or −1 when it could not start
-int run_python(const std::string& python, const std::vector<std::string>& script_args) {
-  std::vector<std::string> args = {python, "-c", kSweepPlot};
-  args.insert(args.end(), script_args.begin(), script_args.end());
-  std::vector<char*> argv;
-  for (auto& a : args) argv.push_back(a.data());
-  argv.push_back(nullptr);
-  pid_t pid = 0;
-  if (posix_spawn(&pid, python.c_str(), nullptr, nullptr, argv.data(), environ) != 0) return -1;
-  int status = 0;
-  while (waitpid(pid, &status, 0) < 0) {
-    if (errno != EINTR) return -1;
-  }
-  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-}
 
 // `text` without its leading `prefix` (the C++ function's name)
 std::string without_prefix(std::string_view text, std::string_view prefix) {
@@ -321,8 +302,7 @@ int sweep_command(const SweepArguments& args) {
     }
   }
   if (args.plots && want_csv) {
-    const char* env = std::getenv("UKDYN_PYTHON");
-    const std::string python = env && *env ? env : "/usr/bin/python3";
+    const std::string python = python_interpreter();
     std::string grid, rand, outs;
     for (const auto& g : design.grid) grid += (grid.empty() ? "" : ",") + g.name;
     for (const auto& r : design.random) rand += (rand.empty() ? "" : ",") + r.name;
@@ -334,9 +314,9 @@ int sweep_command(const SweepArguments& args) {
       outs += (outs.empty() ? "" : ",") + o + "@" +
               (options.at.empty() ? std::string("end") : format_number(options.at.back()));
     }
-    const int code = ::access(python.c_str(), X_OK) == 0
-                         ? run_python(python, {csv_path.string(), (dir / "sweep.png").string(),
-                                               grid, rand, outs})
+    const int code = is_executable(python)
+                         ? run_program({python, "-c", kSweepPlot, csv_path.string(),
+                                        (dir / "sweep.png").string(), grid, rand, outs})
                          : -1;
     if (code != 0) {
       std::fprintf(stderr, "warning: no summary plot (%s)\n",

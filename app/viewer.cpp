@@ -1,7 +1,8 @@
 // `ukdyn run --viewer`: the embedded page generator, run with the system's python (app/viewer.hpp).
 #include "viewer.hpp"
 
-#include <cerrno>
+#include "python_process.hpp"
+
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -10,32 +11,14 @@
 #include <system_error>
 #include <vector>
 
-#include <spawn.h>
-#include <sys/wait.h>
 #include <unistd.h>
 
 #include <ukdyn/modelfile/model.hpp>
 #include <ukdyn/modelfile/visual.hpp>
 
-extern char** environ;
-
 namespace ukdyn::cli {
 namespace fs = std::filesystem;
 namespace {
-
-// runs argv[0] with argv; its exit status, or −1 when it could not start
-int run_program(std::vector<std::string> args) {
-  std::vector<char*> argv;
-  for (auto& a : args) argv.push_back(a.data());
-  argv.push_back(nullptr);
-  pid_t pid = 0;
-  if (posix_spawn(&pid, argv[0], nullptr, nullptr, argv.data(), environ) != 0) return -1;
-  int status = 0;
-  while (waitpid(pid, &status, 0) < 0) {
-    if (errno != EINTR) return -1;
-  }
-  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-}
 
 bool write_text(const fs::path& path, const char* text) {
   std::ofstream out(path, std::ios::binary);
@@ -56,9 +39,8 @@ std::optional<fs::path> write_viewer(const Model& model, const fs::path& csv, co
                  "animation.html\n");
     return std::nullopt;
   }
-  const char* env = std::getenv("UKDYN_PYTHON");
-  const std::string python = env && *env ? env : "/usr/bin/python3";
-  if (::access(python.c_str(), X_OK) != 0) {
+  const std::string python = python_interpreter();
+  if (!is_executable(python)) {
     std::fprintf(stderr,
                  "warning: %s not found: no animation.html (set UKDYN_PYTHON, or pass "
                  "--no-viewer)\n",

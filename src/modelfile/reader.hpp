@@ -31,9 +31,10 @@ using expr::Program;
 
 // the keys of a model file
 inline const std::vector<std::string> kTopLevelKeys = {
-    "name",   "parameters",  "coordinates", "kinetic_energy", "potential_energy", "mass_matrix",
-    "forces", "constraints", "nonideal",    "initial",        "simulate",         "output",
-    "bodies", "joints",      "control",     "visual",    "units"};
+    "name",        "parameters", "coordinates", "kinetic_energy", "potential_energy",
+    "mass_matrix", "forces",     "constraints", "nonideal",       "initial",
+    "simulate",    "output",     "bodies",      "joints",         "control",
+    "visual",      "units"};
 
 inline bool is_identifier(const std::string& s) {
   if (s.empty() || !(std::isalpha(static_cast<unsigned char>(s[0])) || s[0] == '_')) return false;
