@@ -505,8 +505,8 @@ TEST(Cli, ARunKilledWhileWritingLeavesNoTruncatedFileUnderAFinalName) {
   const Csv csv = read_csv(out / "trajectory.csv");
   EXPECT_EQ(long(csv.rows.size()), read_summary(out / "summary.json")["samples"].get<long>());
   // (the pendulum draws itself: its viewer page, written whole like the rest, comes last)
-  EXPECT_EQ(listing(out), (std::vector<std::string>{".ukdyn.lock", "animation.html",
-                                                    "summary.json", "trajectory.csv"}));
+  EXPECT_EQ(listing(out), (std::vector<std::string>{".ukdyn.lock", "animation.html", "summary.json",
+                                                    "trajectory.csv"}));
   fs::remove_all(dir);  // (the dead run's 80 MB are gone already; the rest is small)
 }
 
