@@ -1,5 +1,6 @@
 // The model file's `visual:` section and the bodies' `visual:` entries: how the browser viewer
 // draws the model (modelfile/visual.hpp, docs/viewer.md). Nothing here changes the dynamics.
+#include <algorithm>
 #include <array>
 #include <cctype>
 #include <set>
@@ -173,6 +174,10 @@ void Reader::read_visual(const YAML::Node& root, Model& model, std::vector<Expr>
       for (std::size_t i = 0; i < at.size(); ++i) {
         model.visual.columns.push_back("visual." + p.name + "." + axes[i]);
         outputs.push_back(expression(at[i], what + " " + axes[i]));
+        const std::string text = at[i].IsScalar() ? at[i].Scalar() : std::string();
+        const auto c = std::find(coordinates_.begin(), coordinates_.end(), text);
+        p.coordinates.push_back(c == coordinates_.end() ? -1 : int(c - coordinates_.begin()));
+        p.expressions.push_back(text);
       }
       model.visual.points.push_back(p);
     }

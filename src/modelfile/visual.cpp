@@ -90,6 +90,18 @@ std::string viewer_scene_json(const Model& model) {
     if (p.dimensions == 3) planar = false;
     if (p.radius > 0.0) point["radius"] = p.radius;
     if (!p.color.empty()) point["color"] = p.color;
+    // the coordinate each component is exactly (null: an expression), and the expressions
+    const std::vector<std::string>& names = model.system.coordinate_names();
+    nlohmann::json coordinates = nlohmann::json::array();
+    for (const int c : p.coordinates) {
+      if (c >= 0 && std::size_t(c) < names.size()) {
+        coordinates.push_back(names[std::size_t(c)]);
+      } else {
+        coordinates.push_back(nullptr);
+      }
+    }
+    point["coordinates"] = coordinates;
+    point["expressions"] = p.expressions;
     points.push_back(point);
   }
   for (const auto& [a, b] : model.visual.links) links.push_back({a, b});

@@ -80,6 +80,10 @@ TEST(ModelVisual, SceneOfAModelInCoordinates) {
   EXPECT_DOUBLE_EQ(scene["points"][1]["radius"].get<double>(), 0.1);  // L/20
   EXPECT_EQ(scene["links"], nlohmann::json::parse(R"([["pivot", "bob"]])"));
   EXPECT_EQ(scene["trails"], nlohmann::json::parse(R"(["bob"])"));
+  // the coordinate each component is exactly (the viewer draws its forces there), else null
+  EXPECT_EQ(scene["points"][0]["coordinates"], nlohmann::json::parse("[null, null]"));
+  EXPECT_EQ(scene["points"][1]["coordinates"], nlohmann::json::parse(R"(["x", null])"));
+  EXPECT_EQ(scene["points"][1]["expressions"], nlohmann::json::parse(R"(["x", "y + L"])"));
 }
 
 TEST(ModelVisual, FramesAreColumns) {

@@ -33,6 +33,10 @@ struct VisualPoint {
   int dimensions = 2;   ///< 2 (z = 0) or 3
   double radius = 0.0;  ///< of its sphere; 0: the viewer's choice
   std::string color;    ///< "#rrggbb"; empty: the viewer's choice
+  /// per component: the index of the coordinate the expression is exactly (`bob: [x, y]`), or
+  /// -1 (an expression of the coordinates); the viewer draws that coordinate's forces there
+  std::vector<int> coordinates;
+  std::vector<std::string> expressions;  ///< per component: the expression's text
 };
 
 /// A frame of a model in coordinates (`visual: frames:`), drawn as three axes: its origin is
