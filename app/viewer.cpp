@@ -33,6 +33,14 @@ bool viewer_by_default(const Model& model) {
 }
 
 std::optional<fs::path> write_viewer(const Model& model, const fs::path& csv, const fs::path& dir) {
+  // as Python's Result.show(): a page with only the grid is not written
+  if (!model.multibody && model.visual.points.empty() && model.visual.frames.empty() &&
+      !model.controller) {
+    std::fprintf(stderr,
+                 "warning: nothing to draw: the model has no bodies and no visual: section (add "
+                 "visual: {points: {...}, links: [...]}; docs/viewer.md): no animation.html\n");
+    return std::nullopt;
+  }
   if (*kThreeJs == '\0') {
     std::fprintf(stderr,
                  "warning: this ukdyn was built without three.js (Debian's libjs-three): no "
