@@ -360,3 +360,205 @@ def test_nothing_to_draw_is_said():
     result.scene = None  # e.g. a Result read back from a file
     with pytest.raises(ValueError, match="this result has no scene"):
         result.save_animation("never.html")
+
+
+PIN_FRICTION = """name: planar pendulum with pin friction
+parameters: {m: 1, L: 1, g: 9.81}
+bodies:
+  - {name: bar, type: planar, mass: m, inertia: m*L^2/12, position: [L/2, 0], angle: 0}
+joints:
+  - {name: pin, type: revolute, parent: ground, child: bar, parent_point: [0, 0],
+     child_point: [-L/2, 0], friction: {mu: 0.3, radius: 0.05}}
+forces:
+  - {type: gravity, g: [0, -g]}
+simulate: {t_end: 1}
+output: {every: 0.01}
+"""
+
+
+def test_pin_friction_torque_is_drawn_and_toggles(browser, tmp_path):
+    """A revolute joint's friction is a torque (reaction.pin.friction_tz; its friction forces are
+    0): the page has a non-ideal check box, and turning it off changes the pixels around the pin
+    (at the origin) and removes the non-ideal colour."""
+    result = ukdyn.parse(PIN_FRICTION, "pin.yaml").simulate()
+    assert np.max(np.abs(result["reaction.pin.friction_tz"])) > 0
+    assert np.max(np.abs(result["reaction.pin.friction_fx"])) == 0
+    path = tmp_path / "pin.html"
+    result.save_animation(path)
+    page = Page(browser, path)
+    assert page.js("return document.getElementById('show-nonideal').parentNode.style.display") \
+        != "none"
+    assert "torque" in page.js("return document.getElementById('legend').textContent")
+    torque = page.js("return ukdyn.data.joints[0].nonideal_torque")
+    assert torque[0] is None or not any(torque[0])  # planar: about z only
+    frame = int(np.argmax(np.abs(torque[2])))
+    page.js("ukdyn.setFrame(arguments[0])", frame)
+    page.js("ukdyn.show('ideal', false)")
+    both = page.pixels()
+    page.save("pin_friction.png")
+    page.js("ukdyn.show('nonideal', false)")
+    without = page.pixels()
+    camera = page.js("return ukdyn.camera()")
+    px, py = _project(camera, (0.0, 0.0, 0.0))
+    near = np.zeros(both.shape[:2], bool)
+    r = 60
+    near[max(0, int(py) - r):int(py) + r, max(0, int(px) - r):int(px) + r] = True
+    changed = (np.abs(both - without).sum(axis=2) > 30) & near
+    assert changed.sum() > 30, changed.sum()
+    assert (_mask(both, "#ff2a00") & near).sum() > 30
+    assert _mask(without, "#ff2a00").sum() < 5
+    assert page.errors() == []
+
+
+FLOOR = """name: block on rough floor
+parameters: {m: 1, g: 9.81, mu: 0.3, v0: 2}
+coordinates: [x, y]
+kinetic_energy: 0.5*m*(x_dot^2 + y_dot^2)
+potential_energy: m*g*y
+constraints:
+  - {name: floor, holonomic: y}
+nonideal:
+  - {friction: coulomb, constraint: floor, mu: mu}
+initial: {q: {x: 0, y: 0}, q_dot: {x: v0, y: 0}}
+simulate: {t_end: 0.5}
+output: {every: 0.01}
+visual:
+  points:
+    block: {at: [x, y], color: red, radius: 0.05}
+    mark: [x + 0.1, y]
+"""
+
+
+def test_point_on_a_constant_coordinate_has_its_forces(browser, tmp_path):
+    """A block on a rough floor (y ≡ 0): the point block: [x, y] is matched to its coordinates by
+    the scene, not by its values, so the normal force (ideal, up, m g) and the friction
+    (non-ideal, against the motion, μ m g) are drawn there; mark: [x + 0.1, y] has none."""
+    result = ukdyn.parse(FLOOR, "floor.yaml").simulate()
+    assert np.all(result["y"] == 0)
+    points = {p["name"]: p for p in result.scene["points"]}
+    assert points["block"]["coordinates"] == ["x", "y"]
+    assert points["mark"]["coordinates"] == [None, "y"]
+    assert points["mark"]["expressions"] == ["x + 0.1", "y"]
+    path = tmp_path / "floor.html"
+    result.save_animation(path)
+    page = Page(browser, path)
+    block = page.js("return ukdyn.data.points.find((p) => p.name === 'block')")
+    mark = page.js("return ukdyn.data.points.find((p) => p.name === 'mark')")
+    assert "ideal" not in mark and "nonideal" not in mark
+    m, g, mu = 1.0, 9.81, 0.3
+    assert block["ideal"][1][5] == pytest.approx(m * g, rel=1e-3)
+    assert block["nonideal"][0][5] == pytest.approx(-mu * m * g, rel=1e-3)
+    page.js("ukdyn.setFrame(5)")
+    img = page.pixels()
+    assert _mask(img, "#e6007e").sum() > 30 and _mask(img, "#ff2a00").sum() > 30
+    page.save("floor.png")
+    assert page.errors() == []
+
+
+GAP_FAR = """name: gap oscillator far from the origin
+parameters: {m: 1, k: 100, d: 0.1, v0: 1}
+coordinates: [x]
+kinetic_energy: 0.5*m*x_dot^2
+potential_energy: if(x - d, 0.5*k*(x - d)^2, if(-x - d, 0.5*k*(x + d)^2, 0))
+initial: {q: {x: 0}, q_dot: {x: v0}}
+simulate: {t_end: 5, rtol: 1e-10, atol: 1e-12}
+output: {every: 0.001}
+visual:
+  points:
+    left: {at: [1000 - d, 0], color: grey, radius: 0.02}
+    right: {at: [1000 + d, 0], color: grey, radius: 0.02}
+    mass: {at: [1000 + x, 0], color: red, radius: 0.03}
+"""
+
+
+def _page_data(html: str):
+    import json
+    start = html.index("const data = ") + len("const data = ")
+    return json.JSONDecoder().raw_decode(html[start:])[0]
+
+
+def test_positions_are_kept_to_the_scenes_extent(cli, tmp_path):
+    """A motion drawn about 1000 m from the origin (1000 + x, |x| ≲ 0.2): the page's positions
+    are the CSV's to 1e-4 of the motion's range, not to 4 significant digits (999.8, 999.9)."""
+    (tmp_path / "gap_far.yaml").write_text(GAP_FAR)
+    out = tmp_path / "run"
+    proc = subprocess.run([cli, "run", str(tmp_path / "gap_far.yaml"), "-o", str(out),
+                           "--no-plots"], capture_output=True, text=True, timeout=120)
+    assert proc.returncode == 0, proc.stderr
+    import csv
+    with open(out / "trajectory.csv", newline="") as f:
+        rows = list(csv.reader(f))
+    names, values = rows[0], np.array(rows[1:], float)
+    t, x = values[:, names.index("t")], values[:, names.index("visual.mass.x")]
+    span = x.max() - x.min()
+    assert 0.2 < span < 0.5, span
+    data = _page_data((out / "animation.html").read_text())
+    mass = next(p for p in data["points"] if p["name"] == "mass")
+    stored = np.array(mass["q"][0], float)
+    expected = np.interp(np.array(data["t"], float), t, x)
+    assert len(set(mass["q"][0])) > 100
+    assert np.max(np.abs(stored - expected)) < 1e-4 * span
+    left = next(p for p in data["points"] if p["name"] == "left")
+    assert left["q"][0][0] == pytest.approx(999.9, abs=1e-9)
+
+
+def test_nothing_to_draw_writes_no_page(cli, tmp_path):
+    """--viewer for a model in coordinates without visual: (and no control): the command says
+    there is nothing to draw, as Result.show() does, and writes no page (the run still succeeds)."""
+    (tmp_path / "gap.yaml").write_text(GAP_FAR.split("visual:")[0])
+    out = tmp_path / "run"
+    proc = subprocess.run([cli, "run", str(tmp_path / "gap.yaml"), "-o", str(out), "--no-plots",
+                           "--viewer", "--t-end", "0.1"], capture_output=True, text=True,
+                          timeout=120)
+    assert proc.returncode == 0, proc.stderr
+    assert "warning: nothing to draw: the model has no bodies and no visual: section" \
+        in proc.stderr
+    assert not (out / "animation.html").exists()
+    assert (out / "trajectory.csv").exists()
+
+
+NOT_FINITE = """name: a point that stops being finite
+coordinates: [th]
+kinetic_energy: th_dot^2/2
+initial: {q: {th: 0}, q_dot: {th: 1}}
+simulate: {t_end: 1}
+output: {every: 0.01}
+visual:
+  points:
+    o: {at: [0, 0], color: grey}
+    far: {at: [-2, -1], color: grey}
+    p: {at: [log(0.5 - th) + 1, 0.5], color: red, radius: 0.1}
+  links: [[o, p]]
+  trails: [p]
+"""
+
+
+def test_a_point_not_finite_is_said_and_hidden(browser, cli, tmp_path):
+    """p's x is log(0.5 − t) + 1: finite until t = 0.5, then not. The command warns, naming the
+    point, the first time and the expression; the page draws p where it is finite and hides it
+    (not at 0) after, with no console error."""
+    (tmp_path / "nan.yaml").write_text(NOT_FINITE)
+    out = tmp_path / "run"
+    proc = subprocess.run([cli, "run", str(tmp_path / "nan.yaml"), "-o", str(out), "--no-plots"],
+                          capture_output=True, text=True, timeout=120)
+    assert proc.returncode == 0, proc.stderr
+    import re
+    match = re.search(r"warning: visual point 'p' is not finite from t = ([0-9.e+-]+) "
+                      r"\(its expression x: log\(0\.5 - th\) \+ 1\)", proc.stderr)
+    assert match, proc.stderr
+    assert 0.5 - 1e-9 <= float(match.group(1)) <= 0.51 + 1e-9
+    assert "visual point 'o'" not in proc.stderr
+    page = Page(browser, out / "animation.html")
+    t = np.array(page.js("return ukdyn.data.t"), float)
+    camera = page.js("return ukdyn.camera()")
+    before = int(np.searchsorted(t, 0.3))
+    page.js("ukdyn.setFrame(arguments[0])", before)
+    red = _mask(page.pixels(), "#d62728")
+    assert red.sum() > 50
+    ys, xs = np.nonzero(red)
+    expected = _project(camera, (math.log(0.5 - t[before]) + 1, 0.5, 0.0))
+    assert abs(xs.mean() - expected[0]) < 4 and abs(ys.mean() - expected[1]) < 4
+    page.js("ukdyn.show('trails', false)")
+    page.js("ukdyn.setFrame(arguments[0])", len(t) - 1)
+    assert _mask(page.pixels(), "#d62728").sum() < 5
+    assert page.errors() == []

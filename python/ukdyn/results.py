@@ -14,6 +14,7 @@ from __future__ import annotations
 import json
 import math
 import os
+import warnings
 from typing import Any, Dict, Iterator, List, Optional, Sequence
 
 import numpy as np
@@ -273,6 +274,16 @@ class Result:
                 "(add visual: {points: {...}, links: [...]}; docs/viewer.md)"
                 if scene is not None else
                 "Result.show: this result has no scene (only Model.simulate() records one)")
+        # a visual point that is not finite (NaN, ±inf) is hidden while so: say where it starts
+        first = {}
+        for c in viewer._point_columns(scene):
+            if c in self.names:
+                column = self._columns[self.names.index(c)]
+                k = next((k for k, v in enumerate(column) if not math.isfinite(v)), None)
+                if k is not None:
+                    first[c] = float(self.t[k])
+        for line in viewer.nonfinite_warnings(scene, first):
+            warnings.warn(line[len("warning: "):], RuntimeWarning, stacklevel=2)
         return viewer.build_page(scene, self.names, self._columns, fps=fps)
 
     def save_animation(self, path: "str | os.PathLike[str]", fps: float = 30.0) -> None:

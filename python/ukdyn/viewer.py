@@ -12,10 +12,12 @@ principal inertias, declared solids), joints (parent, child and their points), t
 links and trails of a ``visual:`` section. The trajectory's columns say where: a planar body's
 ``<b>.x, <b>.y, <b>.theta``; a rigid body's ``<b>.x, <b>.y, <b>.z, <b>.u0 … <b>.u3``; a point's
 ``visual.<p>.x, .y (, .z)``; a joint's reaction ``reaction.<j>.fx, fy (, fz)`` (ideal) and
-``reaction.<j>.friction_fx …`` (non-ideal), drawn at the joint's point on its child; the control
+``reaction.<j>.friction_fx …`` (non-ideal), drawn at the joint's point on its child, and its
+torque ``reaction.<j>.tx …``, ``reaction.<j>.friction_tx …`` (a revolute joint's friction); the control
 force ``Qc_control.<c>``; the energy ``energy``. The samples are decimated to the display rate
-(``fps`` frames per simulated second) and rounded to what a screen shows (``digits`` significant
-digits), and the page holds three.js itself: it opens from disk, without a server or network.
+(``fps`` frames per simulated second) and rounded to what a screen shows: positions to 1e-4 of
+the scene's extent, angles and quaternions to 1e-4, forces to ``digits`` significant digits;
+and the page holds three.js itself: it opens from disk, without a server or network.
 
 Pure Python (no NumPy needed): the command runs it with whatever /usr/bin/python3 has.
 """
@@ -83,6 +85,30 @@ def _round(v, digits):
     return int(r) if r.is_integer() and abs(r) < 1e15 else r
 
 
+def _fixed(v, decimals):
+    """v rounded to `decimals` decimal places (negative: to tens, hundreds …), as a short JSON
+    number (null when not finite)."""
+    if v is None or not math.isfinite(v):
+        return None
+    r = round(v, decimals)
+    return int(r) if r.is_integer() and abs(r) < 1e15 else r
+
+
+def _position_decimals(axes):
+    """The decimal places that keep positions to 1e-4 of the scene's extent (the largest spread
+    of the positions along x, y or z, over every position shown; their largest magnitude when
+    nothing moves): a motion about 1000 m away is as sharp as one about the origin, not 4
+    significant digits. axes: the values along each axis."""
+    extent, largest = 0.0, 0.0
+    for values in axes:
+        finite = [v for v in values if v is not None and math.isfinite(v)]
+        if finite:
+            extent = max(extent, max(finite) - min(finite))
+            largest = max(largest, max(abs(v) for v in finite))
+    extent = extent if extent > 0 else (largest or 1.0)
+    return 4 - int(math.floor(math.log10(extent)))
+
+
 class _Packer:
     """Columns of the decimated samples as compact JSON arrays, rounded."""
 
@@ -102,6 +128,9 @@ class _Packer:
     def pack(self, name, digits=None):
         d = self.digits if digits is None else digits
         return [_round(v, d) for v in self.raw(name)]
+
+    def pack_fixed(self, name, decimals):
+        return [_fixed(v, decimals) for v in self.raw(name)]
 
 
 def _scale(values):
@@ -133,41 +162,55 @@ def scene_data(scene, names, columns, fps=FPS, max_frames=MAX_FRAMES, digits=DIG
         "bodies": [], "joints": [], "points": [], "links": scene.get("links", []),
         "trails": scene.get("trails", []), "frames": [], "requirements": [],
     }
+    # positions to 1e-4 of the scene's extent, angles and quaternions to 1e-4
+    along = {"x": [], "y": [], "z": []}
+    for b in scene.get("bodies", []):
+        for a in along:
+            along[a].append(b["name"] + "." + a)
+    for pt in scene.get("points", []) + scene.get("frames", []):
+        for a in ("x", "y", "z")[: pt.get("dimensions", 2)]:
+            along[a].append("visual.%s.%s" % (pt["name"], a))
+    decimals = _position_decimals(
+        [[v for c in cols if p.has(c) for v in p.raw(c)] for cols in along.values()]) if keep else 4
+
+    def position(column):
+        return p.pack_fixed(column, decimals)
+
+    def angle(column):
+        return p.pack_fixed(column, 4)
+
     # bodies: planar (x, y, theta), rigid (x, y, z, u0..u3), particle (x, y, z)
     for b in scene.get("bodies", []):
         name, kind = b["name"], b["kind"]
         keys = {"planar": ("x", "y", "theta"), "rigid": ("x", "y", "z", "u0", "u1", "u2", "u3"),
                 "particle": ("x", "y", "z")}[kind]
         body = dict(b)
-        body["q"] = [p.pack(name + "." + k) for k in keys]
+        body["q"] = [(position if k in ("x", "y", "z") else angle)(name + "." + k) for k in keys]
         control = ["Qc_control.%s.%s" % (name, k) for k in ("x", "y", "z")]
         if any(p.has(c) for c in control):
             body["control"] = [p.pack(c) if p.has(c) else None for c in control]
         data["bodies"].append(body)
-    # joints: the reaction force at the child's point, ideal and non-ideal (friction)
+    # joints: the reaction force at the child's point, ideal and non-ideal (friction), and the
+    # reaction torque, ideal and non-ideal (a revolute joint's friction torque)
     for j in scene.get("joints", []):
         joint = dict(j)
         base = "reaction.%s." % j["name"]
         for key, prefix in (("ideal", ""), ("nonideal", "friction_")):
-            cols = [base + prefix + c for c in ("fx", "fy", "fz")]
-            if any(p.has(c) for c in cols):
-                joint[key] = [p.pack(c) if p.has(c) else None for c in cols]
+            for suffix, parts in (("", ("fx", "fy", "fz")), ("_torque", ("tx", "ty", "tz"))):
+                cols = [base + prefix + c for c in parts]
+                if any(p.has(c) for c in cols):
+                    joint[key + suffix] = [p.pack(c) if p.has(c) else None for c in cols]
         data["joints"].append(joint)
-    # points of a visual: section; a point whose components are coordinates carries the
-    # generalized constraint (and control) forces of those coordinates
-    coordinates = scene.get("coordinates", [])
+    # points of a visual: section; a point whose components are each exactly a coordinate
+    # (the scene says which: `bob: [x, y]`) carries the generalized constraint (and control)
+    # forces of those coordinates
     for pt in scene.get("points", []):
         point = dict(pt)
         axes = ("x", "y", "z")[: pt.get("dimensions", 2)]
         cols = ["visual.%s.%s" % (pt["name"], a) for a in axes]
-        point["q"] = [p.pack(c) for c in cols]
-        same = []
-        for c in cols:
-            values = p.raw(c)
-            match = next((q for q in coordinates if p.has(q) and p.raw(q) == values
-                          and len(set(values)) > 1), None)
-            same.append(match)
-        if all(same):
+        point["q"] = [position(c) for c in cols]
+        same = list(pt.get("coordinates") or [None] * len(cols))
+        if same and all(same):
             for key, prefix in (("ideal", "Qc_ideal."), ("nonideal", "Qc_nonideal."),
                                 ("control", "Qc_control.")):
                 if all(p.has(prefix + q) for q in same):
@@ -177,21 +220,22 @@ def scene_data(scene, names, columns, fps=FPS, max_frames=MAX_FRAMES, digits=DIG
     for fr in scene.get("frames", []):
         frame = dict(fr)
         axes = ("x", "y", "z")[: fr.get("dimensions", 2)]
-        frame["q"] = [p.pack("visual.%s.%s" % (fr["name"], a)) for a in axes]
+        frame["q"] = [position("visual.%s.%s" % (fr["name"], a)) for a in axes]
         parts = ("qw", "qx", "qy", "qz") if fr.get("quaternion") else ("angle",)
-        frame["r"] = [p.pack("visual.%s.%s" % (fr["name"], c)) for c in parts]
+        frame["r"] = [angle("visual.%s.%s" % (fr["name"], c)) for c in parts]
         data["frames"].append(frame)
     # the control's requirements: the error of each (desired minus actual path), over time
     for name in names:
         if name.startswith("error."):
             data["requirements"].append({"name": name[len("error."):], "error": p.pack(name)})
     # a kind of force that is zero throughout (no friction, no control) draws no arrows
+    kinds = ("ideal", "nonideal", "control", "ideal_torque", "nonideal_torque")
     for item in data["joints"] + data["points"] + data["bodies"]:
-        for key in ("ideal", "nonideal", "control"):
+        for key in kinds:
             if key in item and not any(v for c in item[key] if c for v in c):
                 del item[key]
-    # the scales of the force arrows: the largest of each kind over the run
-    for key in ("ideal", "nonideal", "control"):
+    # the scales of the force (and torque) arrows: the largest of each kind over the run
+    for key in kinds:
         vectors = []
         for item in data["joints"] + data["points"] + data["bodies"]:
             if item.get(key):
@@ -199,6 +243,30 @@ def scene_data(scene, names, columns, fps=FPS, max_frames=MAX_FRAMES, digits=DIG
                 vectors.extend(zip(*comps))
         data.setdefault("force_scale", {})[key] = _scale(vectors)
     return data
+
+
+def _point_columns(scene):
+    return ["visual.%s.%s" % (pt["name"], a) for pt in scene.get("points", [])
+            for a in ("x", "y", "z")[: pt.get("dimensions", 2)]]
+
+
+def nonfinite_warnings(scene, first):
+    """The warnings for the visual points that are not finite (NaN or infinite: log of a
+    negative number, …), which the page hides while so: first maps a point's column to the
+    first time it is not finite."""
+    out = []
+    for pt in scene.get("points", []):
+        axes = ("x", "y", "z")[: pt.get("dimensions", 2)]
+        bad = [(first[c], a, k) for k, a in enumerate(axes)
+               for c in ["visual.%s.%s" % (pt["name"], a)] if c in first]
+        if not bad:
+            continue
+        t, axis, k = min(bad)
+        expressions = pt.get("expressions") or []
+        what = "%s: %s" % (axis, expressions[k]) if k < len(expressions) else axis
+        out.append("warning: visual point '%s' is not finite from t = %.9g (its expression %s); "
+                   "the viewer hides it while so" % (pt["name"], t, what))
+    return out
 
 
 def build_page(scene, names, columns, title=None, **options):
@@ -235,14 +303,17 @@ def write_page(path, page):
             os.remove(temporary)
 
 
-def read_csv(path, fps=FPS, max_frames=MAX_FRAMES):
+def read_csv(path, fps=FPS, max_frames=MAX_FRAMES, watch=(), first_nonfinite=None):
     """The CSV's column names and the columns (lists of floats) of the rows shown only: those
     _frames() picks, found in two passes over the file, so that memory stays O(frames × columns)
-    however long the run (ukdyn run streams any number of rows to trajectory.csv)."""
-    # pass 1: the number of rows, the first and the last time
+    however long the run (ukdyn run streams any number of rows to trajectory.csv).
+    first_nonfinite (a dict), when given, gets the first time each column named in `watch` is
+    not finite, over every row."""
+    # pass 1: the number of rows, the first and the last time (and where watched columns fail)
     n, t0, t1 = 0, None, None
     with open(path, newline="") as f:
         header = next(csv.reader([f.readline()]))
+        watched = [(header.index(c), c) for c in watch if c in header]
         for line in f:
             if not line.strip():
                 continue
@@ -250,6 +321,11 @@ def read_csv(path, fps=FPS, max_frames=MAX_FRAMES):
             if t0 is None:
                 t0 = t1
             n += 1
+            if watched:
+                fields = line.split(",")
+                for k, c in watched:
+                    if c not in first_nonfinite and not math.isfinite(float(fields[k])):
+                        first_nonfinite[c] = t1
     data = [[] for _ in header]
     if n == 0:
         return header, data
@@ -282,9 +358,13 @@ def main(argv):
     if len(argv) != 4:
         sys.stderr.write("usage: viewer.py TRAJECTORY.csv SCENE.json OUTPUT.html\n")
         return 2
-    names, columns = read_csv(argv[1])  # already decimated: build_page keeps every row
     with open(argv[2], encoding="utf-8") as f:
         scene = json.load(f)
+    # already decimated: build_page keeps every row
+    first = {}
+    names, columns = read_csv(argv[1], watch=_point_columns(scene), first_nonfinite=first)
+    for line in nonfinite_warnings(scene, first):
+        sys.stderr.write(line + "\n")
     write_page(argv[3], build_page(scene, names, columns))
     return 0
 
