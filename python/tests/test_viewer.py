@@ -562,3 +562,14 @@ def test_a_point_not_finite_is_said_and_hidden(browser, cli, tmp_path):
     page.js("ukdyn.setFrame(arguments[0])", len(t) - 1)
     assert _mask(page.pixels(), "#d62728").sum() < 5
     assert page.errors() == []
+
+
+def test_round_off_torques_draw_nothing():
+    """A planar revolute joint's ideal torque about z is 0 up to round-off (1e-14 N m): no arc;
+    the Bricard mechanism's hinges carry real ideal torques (a spatial revolute joint resists
+    turning about two axes): arcs."""
+    from ukdyn import viewer
+    for example, t_end, torques in (("double_four_bar_bodies", 1.0, False), ("bricard", 0.5, True)):
+        result = ukdyn.load(example).simulate(t_end=t_end)
+        data = viewer.scene_data(result.scene, result.names, result._columns)
+        assert all(("ideal_torque" in j) == torques for j in data["joints"]), example

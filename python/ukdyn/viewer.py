@@ -170,8 +170,8 @@ def scene_data(scene, names, columns, fps=FPS, max_frames=MAX_FRAMES, digits=DIG
     for pt in scene.get("points", []) + scene.get("frames", []):
         for a in ("x", "y", "z")[: pt.get("dimensions", 2)]:
             along[a].append("visual.%s.%s" % (pt["name"], a))
-    decimals = _position_decimals(
-        [[v for c in cols if p.has(c) for v in p.raw(c)] for cols in along.values()]) if keep else 4
+    positions = [[v for c in cols if p.has(c) for v in p.raw(c)] for cols in along.values()]
+    decimals = _position_decimals(positions) if keep else 4
 
     def position(column):
         return p.pack_fixed(column, decimals)
@@ -228,11 +228,19 @@ def scene_data(scene, names, columns, fps=FPS, max_frames=MAX_FRAMES, digits=DIG
     for name in names:
         if name.startswith("error."):
             data["requirements"].append({"name": name[len("error."):], "error": p.pack(name)})
-    # a kind of force that is zero throughout (no friction, no control) draws no arrows
+    # a kind of force that is zero throughout (no friction, no control) draws no arrows; nor
+    # does a torque that is round-off (a planar revolute joint's ideal torque about z, 1e-14 N m):
+    # at most 1e-9 of the largest joint force times the scene's extent
     kinds = ("ideal", "nonideal", "control", "ideal_torque", "nonideal_torque")
+    largest_force = max([abs(v) for j in data["joints"] for key in ("ideal", "nonideal")
+                         for c in j.get(key) or [] if c for v in c if v is not None] or [0.0])
+    extent = 10.0 ** (4 - decimals)  # the scene's extent, to its power of ten
     for item in data["joints"] + data["points"] + data["bodies"]:
         for key in kinds:
-            if key in item and not any(v for c in item[key] if c for v in c):
+            if key not in item:
+                continue
+            floor = 1e-9 * largest_force * extent if key.endswith("_torque") else 0.0
+            if not any(abs(v) > floor for c in item[key] if c for v in c if v is not None):
                 del item[key]
     # the scales of the force (and torque) arrows: the largest of each kind over the run
     for key in kinds:
