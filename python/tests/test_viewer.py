@@ -573,3 +573,14 @@ def test_round_off_torques_draw_nothing():
         result = ukdyn.load(example).simulate(t_end=t_end)
         data = viewer.scene_data(result.scene, result.names, result._columns)
         assert all(("ideal_torque" in j) == torques for j in data["joints"]), example
+
+
+def test_a_point_not_finite_warns_in_python():
+    """Result.animation_html() says the same as the command, as a RuntimeWarning, and stores
+    the point as null (hidden) where it is not finite."""
+    result = ukdyn.parse(NOT_FINITE, "nan.yaml").simulate()
+    with pytest.warns(RuntimeWarning, match=r"visual point 'p' is not finite from t = 0\.5"):
+        html = result.animation_html()
+    p = next(q for q in _page_data(html)["points"] if q["name"] == "p")
+    t = _page_data(html)["t"]
+    assert all((x is None) == (tt > 0.5 + 1e-9) for x, tt in zip(p["q"][0], t) if abs(tt - 0.5) > 0.02)
