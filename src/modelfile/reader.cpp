@@ -1185,7 +1185,12 @@ void Reader::read_units(const YAML::Node& root, Model& model) {
     const bool printable = std::none_of(text.begin(), text.end(), [](char ch) {
       return static_cast<unsigned char>(ch) < 0x20 || ch == 0x7f;
     });
-    if (!value.IsScalar() || text.empty() || text.size() > 32 || !printable) {
+    if (value.IsNull() || (value.IsScalar() && text.empty())) {
+      fail(value, "the unit of '" + kv.first.Scalar() + "' is empty",
+           "give its unit (units: {x: m, theta: rad}; 1 for a number without a unit), or leave '" +
+               kv.first.Scalar() + "' out of units:");
+    }
+    if (!value.IsScalar() || text.size() > 32 || !printable) {
       fail(value,
            "the unit of '" + kv.first.Scalar() + "' must be a short text (at most 32 characters)",
            "units: {x: m, theta: rad, s: mm} (the unit labels the plots' axes; it does not change "
