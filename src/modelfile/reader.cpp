@@ -75,6 +75,48 @@ const std::string* velocity_in(const ExpressionSet& set, Expr e,
   return nullptr;
 }
 
+// When YAML has split an expression of the flow list `list` (`key: [if(t - 0.5, F, 0), 0]`) at
+// the commas inside its parentheses: the hint to quote it, with the list as it should be written
+// (`forces: ["if(t - 0.5, F, 0)", 0]`); else "". An unquoted entry with more '(' than ')' is
+// joined with the entries after it until they balance; a list with no such entry, or any
+// unbalanced entry left, is said to be cut too.
+std::string cut_flow_list_hint(const YAML::Node& list, const std::string& key) {
+  if (!list.IsSequence() || list.Style() != YAML::EmitterStyle::Flow) return "";
+  std::vector<std::string> groups;
+  std::vector<bool> joined;
+  std::ptrdiff_t depth = 0;
+  bool unbalanced = false;
+  for (const auto& entry : list) {
+    if (!entry.IsScalar()) return "";
+    const std::string& text = entry.Scalar();
+    const bool quoted = entry.Tag() == "!";
+    const std::ptrdiff_t opened = std::count(text.begin(), text.end(), '('),
+                         closed = std::count(text.begin(), text.end(), ')');
+    if (depth > 0 && !quoted) {
+      groups.back() += ", " + text;
+      joined.back() = true;
+    } else {
+      depth = 0;
+      groups.push_back(quoted ? "\"" + text + "\"" : text);
+      joined.push_back(false);
+      if (opened != closed && !quoted) unbalanced = true;
+    }
+    if (!quoted) depth += opened - closed;
+  }
+  bool any_joined = false;
+  std::string written = key + ": [";
+  for (std::size_t i = 0; i < groups.size(); ++i) {
+    any_joined = any_joined || joined[i];
+    written += (i > 0 ? ", " : "") + (joined[i] ? "\"" + groups[i] + "\"" : groups[i]);
+  }
+  written += "]";
+  if (!any_joined && !unbalanced) return "";
+  return "inside YAML brackets [...] a comma ends an entry, so the commas inside an expression's "
+         "parentheses split it: quote the expression (" +
+         (any_joined ? written : std::string("\"atan2(y, x)\"")) +
+         ") or write the list in block style, one entry per line";
+}
+
 }  // namespace
 
 double Reader::number(const YAML::Node& node, const std::string& what) {
@@ -437,7 +479,8 @@ void Reader::read_dynamics(const YAML::Node& root, SystemBuilder& builder) {
   if (F) {
     const auto rows = rows_of(F, "forces");
     if (Index(rows.size()) != n)
-      fail(F, "forces must have " + format_number(n) + " entries, one per coordinate");
+      fail(F, "forces must have " + format_number(n) + " entries, one per coordinate",
+           cut_flow_list_hint(F, "forces"));
     Expr P = P_time;
     for (Index i = 0; i < n; ++i) {
       const Expr f = expression(rows[std::size_t(i)], "forces");
@@ -840,7 +883,8 @@ void Reader::read_nonideal(const YAML::Node& root, SystemBuilder& builder) {
       const auto rows = rows_of(f["C"], "C");
       const Index n = Index(coordinates_.size());
       if (Index(rows.size()) != n)
-        fail(f["C"], "C must have " + format_number(n) + " entries, one per coordinate");
+        fail(f["C"], "C must have " + format_number(n) + " entries, one per coordinate",
+             cut_flow_list_hint(f["C"], "C"));
       std::vector<Expr> C;
       C.reserve(rows.size());
       for (const auto& r : rows) C.push_back(expression(r, "C", true));
