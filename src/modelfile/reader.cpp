@@ -712,6 +712,9 @@ Constraint Reader::read_constraint(const YAML::Node& c, const std::string& name,
   }
   note_switches(accel);
   note_switches(levels);
+  constraint_switch_sources_.emplace_back(name, accel);
+  constraint_switch_sources_.back().second.insert(constraint_switch_sources_.back().second.end(),
+                                                  levels.begin(), levels.end());
   Constraint constraint(name, kind, rows,
                         std::make_shared<CompiledConstraint>(
                             kind, rows, n, layout_, compile(accel, c, "the derivatives of " + what),
@@ -1374,15 +1377,30 @@ void Reader::add_switches(SystemBuilder& builder) {
   if (switch_sources_.empty()) return;
   // (one traversal of every expression of the dynamics; a switch of N_c or lambda_c, which the
   // state alone does not give, is left to the step-size control)
+  // a switch of a constraint's expressions is named "g in the constraint 'NAME'" (simulate()
+  // then reports a kink of that constraint, not a sliding mode, when it chatters)
+  // (by their text, g and -g alike: each call of switching_functions makes new expressions)
+  std::map<std::string, std::string> of_constraint;
+  const Expr zero = set_->constant(0.0);
+  for (const auto& [cname, exprs] : constraint_switch_sources_) {
+    for (const Expr e : set_->switching_functions(exprs)) {
+      of_constraint.emplace(set_->to_string(e), cname);
+      of_constraint.emplace(set_->to_string(set_->subtract(zero, e)), cname);
+    }
+  }
   std::vector<Expr> g;
   std::vector<std::string> names;
   for (const Expr e : set_->switching_functions(switch_sources_)) {
     const std::vector<Index> in = set_->inputs_of(e);
     if (in.empty() || in.back() > 2 * layout_.n) continue;
     g.push_back(e);
-    names.push_back(set_->to_string(e));
+    const std::string text = set_->to_string(e);
+    const auto c = of_constraint.find(text);
+    names.push_back(text +
+                    (c == of_constraint.end() ? "" : " in the constraint '" + c->second + "'"));
   }
   switch_sources_.clear();
+  constraint_switch_sources_.clear();
   if (g.empty()) return;
   const Program p = set_->compile(g);
   sizes_->fit(layout_.size(), p);
