@@ -1,7 +1,9 @@
 // ukdyn: the command-line front end. Argument parsing and dispatch only; the subcommands live in
 // run.cpp, check.cpp and source.cpp, the physics in the library.
+#include <cstdint>
 #include <cstdio>
 #include <exception>
+#include <limits>
 #include <map>
 #include <optional>
 #include <string>
@@ -48,6 +50,24 @@ void add_source_options(CLI::App* cmd, ukdyn::cli::ModelSource& source) {
       ->type_name("NAME=VALUE")
       ->expected(1)
       ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
+}
+
+// the whole number a flag was given, >= min: a text such as -3, 2.5 or 1e3 is refused with the flag
+// named (CLI11 would wrap -3 of an unsigned option to 2^64 - 3)
+std::uint64_t whole_number_of(const std::string& flag, const std::string& text, std::uint64_t min) {
+  std::uint64_t value = 0;
+  bool ok = !text.empty() && text.size() <= 20;
+  for (const char c : text) {
+    if (!ok) break;
+    const auto digit = static_cast<std::uint64_t>(c - '0');
+    ok = c >= '0' && c <= '9' && value <= (std::numeric_limits<std::uint64_t>::max() - digit) / 10;
+    if (ok) value = value * 10 + digit;
+  }
+  if (!ok || value < min) {
+    throw ukdyn::cli::UsageError(flag + " " + text +
+                                 ": must be a whole number >= " + std::to_string(min));
+  }
+  return value;
 }
 
 }  // namespace
@@ -150,9 +170,14 @@ int main(int argc, char** argv) {
       ->type_name("VAR")
       ->expected(1)
       ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
-  sweep_cmd->add_option("--samples", sweep.samples, "random draws (per grid point)")
-      ->type_name("N");
-  sweep_cmd->add_option("--seed", sweep.seed, "the random draws' seed (default 0)")->type_name("S");
+  // read as text and converted below, so that a negative number is refused by name
+  std::string samples_text, seed_text;
+  CLI::Option* samples_opt =
+      sweep_cmd->add_option("--samples", samples_text, "random draws (per grid point)")
+          ->type_name("N");
+  CLI::Option* seed_opt =
+      sweep_cmd->add_option("--seed", seed_text, "the random draws' seed (default 0)")
+          ->type_name("S");
   sweep_cmd->add_flag("--lhs", sweep.lhs, "Latin hypercube draws");
   sweep_cmd
       ->add_option("--at", sweep.at,
@@ -237,6 +262,8 @@ int main(int argc, char** argv) {
           sweep.settings.push_back({info->name, opt->get_name(), sweep_texts[info->name]});
         }
       }
+      if (samples_opt->count() > 0) sweep.samples = whole_number_of("--samples", samples_text, 1);
+      if (seed_opt->count() > 0) sweep.seed = whole_number_of("--seed", seed_text, 0);
       sweep.plots = !sweep_no_plots;
       sweep.arguments.assign(argv, argv + argc);
       return sweep_command(sweep);

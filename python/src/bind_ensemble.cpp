@@ -4,6 +4,7 @@
 #include <mutex>
 
 #include "common.hpp"
+#include "ukdyn/core/format.hpp"
 #include "ukdyn/simulation/ensemble.hpp"
 
 namespace ukdyn::python {
@@ -22,6 +23,20 @@ std::map<std::string, OptionValue> settings_of(const py::dict& given) {
   return out;
 }
 
+// runs f; a std::invalid_argument whose text begins with "ukdyn::<function>: " is thrown again
+// with "sweep: " (the Python call) in place of that C++ name: a ValueError in Python
+template <class F>
+auto without_function_name(const char* function, F&& f) {
+  try {
+    return f();
+  } catch (const std::invalid_argument& e) {
+    const std::string prefix = std::string("ukdyn::") + function + ": ";
+    const std::string text = e.what();
+    if (text.rfind(prefix, 0) != 0) throw;
+    throw std::invalid_argument("sweep: " + text.substr(prefix.size()));
+  }
+}
+
 // the design's table from ukdyn.sweep's arguments: grid [(name, values)], random [(name, law,
 // a, b)] with law "uniform", "normal" or "loguniform"
 py::tuple design(const std::vector<std::pair<std::string, std::vector<double>>>& grid,
@@ -30,7 +45,21 @@ py::tuple design(const std::vector<std::pair<std::string, std::vector<double>>>&
   Design d;
   for (const auto& [name, values] : grid) d.grid.push_back({name, values});
   for (const auto& [name, law, a, b] : random) {
-    RandomVariable v = parse_random_variable(name + "~" + law + "(0,1)");
+    // the law is checked on a stand-in text; its messages show the numbers given
+    const std::string probe = name + "~" + law + "(0,1)";
+    RandomVariable v;
+    try {
+      v = parse_random_variable(probe);
+    } catch (const std::invalid_argument& e) {
+      std::string text = e.what();
+      const std::string quoted = "'" + probe + "'";
+      if (text.rfind(quoted, 0) == 0) {
+        text.replace(
+            0, quoted.size(),
+            "'" + name + "~" + law + "(" + format_number(a) + ", " + format_number(b) + ")'");
+      }
+      throw std::invalid_argument("sweep: " + text);
+    }
     v.a = a;
     v.b = b;
     d.random.push_back(v);
@@ -41,7 +70,7 @@ py::tuple design(const std::vector<std::pair<std::string, std::vector<double>>>&
   DesignTable t;
   {
     py::gil_scoped_release release;
-    t = make_design(d);
+    t = without_function_name("make_design", [&] { return make_design(d); });
   }
   py::array_t<double> rows({py::ssize_t(t.rows.size()), py::ssize_t(t.names.size())});
   auto r = rows.mutable_unchecked<2>();
@@ -95,7 +124,8 @@ py::dict run(const std::string& text, const std::string& file,
   EnsembleTable out;
   {
     py::gil_scoped_release release;
-    samples = samples_of_design(model, table);
+    samples =
+        without_function_name("samples_of_design", [&] { return samples_of_design(model, table); });
     result = run_ensemble(model, samples, o);
     out = ensemble_table(result, samples, names);
   }

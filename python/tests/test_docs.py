@@ -49,3 +49,29 @@ def test_stubs_name_every_class_member_and_function_of_the_compiled_module():
             assert not missing, f"{name}: {missing} missing from the stub"
         elif callable(obj):
             assert name in stubbed, f"function {name} missing from the stub"
+
+
+def test_the_readme_counts_the_examples():
+    """README's count of examples/models/ is the directory's and ukdyn.examples()' (it said 23
+    when there were 32: review 2026-11-27)."""
+    import re
+    root = pathlib.Path(__file__).resolve().parents[2]
+    files = sorted(p.stem for p in (root / "examples" / "models").glob("*.yaml"))
+    readme = (root / "README.md").read_text()
+    said = re.search(r"`examples/models/` holds (\d+)", readme)
+    assert said and int(said.group(1)) == len(files), said and said.group(0)
+    assert sorted(ukdyn.examples()) == files
+
+
+def test_python_md_says_from_sympy_translates_the_non_smooth_functions():
+    """docs/python.md said Piecewise, sign and Heaviside raise ValueError; from_sympy translates
+    them (symbolic.py)."""
+    root = pathlib.Path(__file__).resolve().parents[2]
+    text = (root / "docs" / "python.md").read_text()
+    assert "(Piecewise, sign, Heaviside, …) raise" not in text
+    import sympy as sp
+    x = sp.Symbol("x")
+    model = ukdyn.from_sympy([x], T=sp.Rational(1, 2) * sp.Symbol("x_dot") ** 2,
+                             V=sp.Piecewise((x ** 2, x > 0), (0, True)) + sp.sign(x)
+                             + sp.Heaviside(x))
+    assert model is not None

@@ -210,6 +210,14 @@ def test_save_plots_formats(free, tmp_path):
         free.save_plots(tmp_path, formats=["png", "gif"])
 
 
+def test_save_plots_creates_the_directory(free, tmp_path):
+    """A missing directory (nested too) is created, as by ``ukdyn run -o`` (it was a
+    FileNotFoundError on the temporary file)."""
+    written = free.save_plots(tmp_path / "missing" / "dir", formats="svg")
+    assert sorted(os.path.relpath(p, tmp_path) for p in written) == [
+        os.path.join("missing", "dir", "coordinates.svg"), os.path.join("missing", "dir", "energy.svg")]
+
+
 def test_command_writes_the_formats_asked_for(cli, out_dir):
     model = out_dir / "free.yaml"
     model.write_text(FREE)

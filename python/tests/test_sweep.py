@@ -139,3 +139,35 @@ def test_ctrl_c_raises_interrupted_with_the_finished_samples():
     frame = caught.value.result
     assert list(frame["status"]) == ["ok", "ok", "interrupted", "not run"]
     assert 0 < frame["t_reached"].iloc[2] < 5e4
+
+
+@pytest.mark.parametrize("kw, message", [
+    (dict(n=-1), "sweep: n=-1: must be a whole number >= 1"),
+    (dict(n=2.5), "sweep: n=2.5: must be a whole number >= 1"),
+    (dict(n=3, seed=-1), "sweep: seed=-1: must be a whole number >= 0"),
+])
+def test_sweep_refuses_bad_counts_by_name(kw, message):
+    """A negative or fractional n or seed: a ValueError naming it (not pybind11's TypeError, not
+    truncated to 2)."""
+    with pytest.raises(ValueError) as err:
+        ukdyn.sweep(PENDULUM, random={"theta0": "uniform(0.01,0.1)"}, **kw)
+    assert str(err.value) == message
+
+
+def test_sweep_random_errors_say_what_was_given():
+    """The law's numbers as given (not the stand-in 0,1), the form of a short tuple, and no C++
+    function names (review 2026-11-27)."""
+    with pytest.raises(ValueError) as err:
+        ukdyn.sweep(PENDULUM, random={"mu": ("beta", 1, 2)}, n=2)
+    assert str(err.value).startswith("sweep: 'mu~beta(1, 2)': unknown law 'beta'")
+    with pytest.raises(ValueError) as err:
+        ukdyn.sweep(PENDULUM, random={"mu": ("uniform", 1)}, n=2)
+    assert str(err.value).startswith("sweep: random['mu'] = ('uniform', 1): give a law and its "
+                                     "two numbers, ('uniform', A, B)")
+    with pytest.raises(ValueError) as err:
+        ukdyn.sweep(PENDULUM, random={"L": ("uniform", 2, 1)}, n=2)
+    assert str(err.value) == "sweep: L~uniform(2, 1): the upper bound is below the lower one"
+    with pytest.raises(ValueError) as err:
+        ukdyn.sweep(PENDULUM, grid={"nosuch": [1, 2]})
+    assert str(err.value).startswith("sweep: 'nosuch' is not a parameter, coordinate")
+    assert "ukdyn::" not in str(err.value)

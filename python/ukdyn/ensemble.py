@@ -79,9 +79,32 @@ def _random_variables(random: Optional[RandomSpec]) -> List[Tuple[str, str, floa
         if isinstance(spec, str):
             out.append(tuple(_ukdyn._parse_random(f"{name}~{spec}")))
         else:
-            law, a, b = spec
+            try:
+                law, a, b = spec
+            except (TypeError, ValueError):
+                raise ValueError(
+                    f"sweep: random['{name}'] = {spec!r}: give a law and its two numbers, "
+                    f"('uniform', A, B), ('normal', MEAN, SD) or ('loguniform', A, B), or the "
+                    f"same as a text: 'uniform(A,B)'") from None
             out.append((str(name), str(law), float(a), float(b)))
     return out
+
+
+def _whole_number(name: str, value: Any, minimum: int) -> int:
+    """`value` as an int >= minimum (an int, or a float that is whole), else ValueError naming
+    the argument: 2.5 is refused, not truncated, and -1 named, not a pybind11 TypeError."""
+    whole: Optional[int] = None
+    if not isinstance(value, bool):
+        if isinstance(value, float):
+            whole = int(value) if math.isfinite(value) and value.is_integer() else None
+        else:
+            try:
+                whole = int(value.__index__())
+            except (AttributeError, TypeError):
+                whole = None
+    if whole is None or whole < minimum or whole >= 2 ** 64:
+        raise ValueError(f"sweep: {name}={value!r}: must be a whole number >= {minimum}")
+    return whole
 
 
 def _frame(parts: List[dict], offsets: List[int]):
@@ -165,10 +188,11 @@ def sweep(model: Any, *, grid: Optional[GridSpec] = None, random: Optional[Rando
     text, file = _model_source(model, overrides)
     axes = _grid_axes(grid)
     variables = _random_variables(random)
-    draws = int(n) if n is not None else 0
+    draws = _whole_number("n", n, 1) if n is not None else 0
     if variables and draws == 0:
         raise ValueError("sweep: random variables need n, the number of draws (n=1000)")
-    names, rows = _ukdyn._design(axes, variables, draws, int(seed), bool(lhs))
+    names, rows = _ukdyn._design(axes, variables, draws, _whole_number("seed", seed, 0),
+                                 bool(lhs))
     at_list = [float(t) for t in (at if at is not None else [])]
     outputs_list = [str(o) for o in (outputs or [])]
     settings = {k: v for k, v in settings.items()}

@@ -327,11 +327,13 @@ class Result:
     def save_plots(self, directory: str, formats: Any = ("png",)) -> List[str]:
         """Writes :meth:`figures` into ``directory`` as ``ukdyn run`` does: STEM.FORMAT for each
         of ``formats`` (``"png"``, ``"pdf"``, ``"svg"``, a list or ``"png,pdf"``), each file
-        whole or not at all. Returns the paths written. Raises ValueError naming the formats
-        for an unknown one."""
+        whole or not at all; ``directory`` is created if missing (as by ``ukdyn run -o``).
+        Returns the paths written. Raises ValueError naming the formats for an unknown one."""
         from . import plotting
         formats = plotting.parse_formats(formats)
-        return plotting.write_figures(self, self.plot_metadata, os.fspath(directory), formats)
+        directory = os.fspath(directory)
+        os.makedirs(directory, exist_ok=True)
+        return plotting.write_figures(self, self.plot_metadata, directory, formats)
 
     def plot(self, *columns: str, ax: Any = None, x: str = "t", **kwargs: Any) -> Any:
         """Plots columns against time (or against column ``x``) with matplotlib; without

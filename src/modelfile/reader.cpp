@@ -75,6 +75,48 @@ const std::string* velocity_in(const ExpressionSet& set, Expr e,
   return nullptr;
 }
 
+// When YAML has split an expression of the flow list `list` (`key: [if(t - 0.5, F, 0), 0]`) at
+// the commas inside its parentheses: the hint to quote it, with the list as it should be written
+// (`forces: ["if(t - 0.5, F, 0)", 0]`); else "". An unquoted entry with more '(' than ')' is
+// joined with the entries after it until they balance; a list with no such entry, or any
+// unbalanced entry left, is said to be cut too.
+std::string cut_flow_list_hint(const YAML::Node& list, const std::string& key) {
+  if (!list.IsSequence() || list.Style() != YAML::EmitterStyle::Flow) return "";
+  std::vector<std::string> groups;
+  std::vector<bool> joined;
+  std::ptrdiff_t depth = 0;
+  bool unbalanced = false;
+  for (const auto& entry : list) {
+    if (!entry.IsScalar()) return "";
+    const std::string& text = entry.Scalar();
+    const bool quoted = entry.Tag() == "!";
+    const std::ptrdiff_t opened = std::count(text.begin(), text.end(), '('),
+                         closed = std::count(text.begin(), text.end(), ')');
+    if (depth > 0 && !quoted) {
+      groups.back() += ", " + text;
+      joined.back() = true;
+    } else {
+      depth = 0;
+      groups.push_back(quoted ? "\"" + text + "\"" : text);
+      joined.push_back(false);
+      if (opened != closed && !quoted) unbalanced = true;
+    }
+    if (!quoted) depth += opened - closed;
+  }
+  bool any_joined = false;
+  std::string written = key + ": [";
+  for (std::size_t i = 0; i < groups.size(); ++i) {
+    any_joined = any_joined || joined[i];
+    written += (i > 0 ? ", " : "") + (joined[i] ? "\"" + groups[i] + "\"" : groups[i]);
+  }
+  written += "]";
+  if (!any_joined && !unbalanced) return "";
+  return "inside YAML brackets [...] a comma ends an entry, so the commas inside an expression's "
+         "parentheses split it: quote the expression (" +
+         (any_joined ? written : std::string("\"atan2(y, x)\"")) +
+         ") or write the list in block style, one entry per line";
+}
+
 }  // namespace
 
 double Reader::number(const YAML::Node& node, const std::string& what) {
@@ -437,7 +479,8 @@ void Reader::read_dynamics(const YAML::Node& root, SystemBuilder& builder) {
   if (F) {
     const auto rows = rows_of(F, "forces");
     if (Index(rows.size()) != n)
-      fail(F, "forces must have " + format_number(n) + " entries, one per coordinate");
+      fail(F, "forces must have " + format_number(n) + " entries, one per coordinate",
+           cut_flow_list_hint(F, "forces"));
     Expr P = P_time;
     for (Index i = 0; i < n; ++i) {
       const Expr f = expression(rows[std::size_t(i)], "forces");
@@ -669,6 +712,9 @@ Constraint Reader::read_constraint(const YAML::Node& c, const std::string& name,
   }
   note_switches(accel);
   note_switches(levels);
+  constraint_switch_sources_.emplace_back(name, accel);
+  constraint_switch_sources_.back().second.insert(constraint_switch_sources_.back().second.end(),
+                                                  levels.begin(), levels.end());
   Constraint constraint(name, kind, rows,
                         std::make_shared<CompiledConstraint>(
                             kind, rows, n, layout_, compile(accel, c, "the derivatives of " + what),
@@ -840,7 +886,8 @@ void Reader::read_nonideal(const YAML::Node& root, SystemBuilder& builder) {
       const auto rows = rows_of(f["C"], "C");
       const Index n = Index(coordinates_.size());
       if (Index(rows.size()) != n)
-        fail(f["C"], "C must have " + format_number(n) + " entries, one per coordinate");
+        fail(f["C"], "C must have " + format_number(n) + " entries, one per coordinate",
+             cut_flow_list_hint(f["C"], "C"));
       std::vector<Expr> C;
       C.reserve(rows.size());
       for (const auto& r : rows) C.push_back(expression(r, "C", true));
@@ -1185,7 +1232,12 @@ void Reader::read_units(const YAML::Node& root, Model& model) {
     const bool printable = std::none_of(text.begin(), text.end(), [](char ch) {
       return static_cast<unsigned char>(ch) < 0x20 || ch == 0x7f;
     });
-    if (!value.IsScalar() || text.empty() || text.size() > 32 || !printable) {
+    if (value.IsNull() || (value.IsScalar() && text.empty())) {
+      fail(value, "the unit of '" + kv.first.Scalar() + "' is empty",
+           "give its unit (units: {x: m, theta: rad}; 1 for a number without a unit), or leave '" +
+               kv.first.Scalar() + "' out of units:");
+    }
+    if (!value.IsScalar() || text.size() > 32 || !printable) {
       fail(value,
            "the unit of '" + kv.first.Scalar() + "' must be a short text (at most 32 characters)",
            "units: {x: m, theta: rad, s: mm} (the unit labels the plots' axes; it does not change "
@@ -1325,15 +1377,30 @@ void Reader::add_switches(SystemBuilder& builder) {
   if (switch_sources_.empty()) return;
   // (one traversal of every expression of the dynamics; a switch of N_c or lambda_c, which the
   // state alone does not give, is left to the step-size control)
+  // a switch of a constraint's expressions is named "g in the constraint 'NAME'" (simulate()
+  // then reports a kink of that constraint, not a sliding mode, when it chatters)
+  // (by their text, g and -g alike: each call of switching_functions makes new expressions)
+  std::map<std::string, std::string> of_constraint;
+  const Expr zero = set_->constant(0.0);
+  for (const auto& [cname, exprs] : constraint_switch_sources_) {
+    for (const Expr e : set_->switching_functions(exprs)) {
+      of_constraint.emplace(set_->to_string(e), cname);
+      of_constraint.emplace(set_->to_string(set_->subtract(zero, e)), cname);
+    }
+  }
   std::vector<Expr> g;
   std::vector<std::string> names;
   for (const Expr e : set_->switching_functions(switch_sources_)) {
     const std::vector<Index> in = set_->inputs_of(e);
     if (in.empty() || in.back() > 2 * layout_.n) continue;
     g.push_back(e);
-    names.push_back(set_->to_string(e));
+    const std::string text = set_->to_string(e);
+    const auto c = of_constraint.find(text);
+    names.push_back(text +
+                    (c == of_constraint.end() ? "" : " in the constraint '" + c->second + "'"));
   }
   switch_sources_.clear();
+  constraint_switch_sources_.clear();
   if (g.empty()) return;
   const Program p = set_->compile(g);
   sizes_->fit(layout_.size(), p);

@@ -387,6 +387,9 @@ class Reader {
   void note_switches(const std::vector<Expr>& exprs) {
     switch_sources_.insert(switch_sources_.end(), exprs.begin(), exprs.end());
   }
+  // the constraints' expressions among switch_sources_, by constraint name: a switch of one is a
+  // kink of the constraint (its name in System::switch_names says so: see add_switches)
+  std::vector<std::pair<std::string, std::vector<Expr>>> constraint_switch_sources_;
   // the switching functions of switch_sources_ that q, q' and t determine, compiled into the
   // builder's SystemBuilder::switching_functions (none: no callable, so no event hook)
   void add_switches(SystemBuilder& builder);

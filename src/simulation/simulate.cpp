@@ -542,15 +542,29 @@ class Run {
   // from either side, and no step crosses it); `message` then says so.
   bool switch_chatters(double t, std::string& message) {
     const double span = kSwitchBurstSpan * (o_.t_end - o_.t_start);
-    const std::string name = "'" + sys_.switch_names()[switch_fired_] + "'";
+    const std::string& fired = sys_.switch_names()[switch_fired_];
+    const std::string name = "'" + fired + "'";
     const std::string advice =
         " (chattering: a sliding mode, where the dynamics turns the motion back at the switch "
         "from either side, and no step can cross it). Regularize the switch (tanh(v/eps) for "
         "sign(v)), or set switch_events to false to step across it unlocated";
+    // a switch of a constraint (a model file names it "g in the constraint 'NAME'") is a kink of
+    // it, where the velocity would have to jump: said so, not a sliding mode
+    const std::string marker = " in the constraint '";
+    const std::size_t at = fired.rfind(marker);
+    auto kink = [&](double t_kink) {
+      return "the constraint '" + fired.substr(at + marker.size()) +
+             " has a kink at t = " + format(t_kink) + " (where " + fired.substr(0, at) +
+             " changes sign): the motion cannot continue across it without an impact (ukdyn does "
+             "not model impacts); smooth the constraint or stop the run before it";
+    };
+    const bool of_constraint = at != std::string::npos && fired.back() == '\'';
     if (crawl_) {
-      message = "switch events: " + format_number(long(kSwitchBurst)) +
-                " steps after the switch of " + name + " at t = " + format(last_switch_) +
-                " advanced only to t = " + format(t) + advice;
+      message = of_constraint
+                    ? kink(last_switch_)
+                    : "switch events: " + format_number(long(kSwitchBurst)) +
+                          " steps after the switch of " + name + " at t = " + format(last_switch_) +
+                          " advanced only to t = " + format(t) + advice;
       return true;
     }
     last_switch_ = t;
@@ -559,9 +573,10 @@ class Run {
     if (burst_next_ < kSwitchBurst) return false;
     const double oldest = burst_[burst_next_ % kSwitchBurst];
     if (!(t - oldest <= span)) return false;
-    message = "switch events: " + format_number(long(kSwitchBurst)) +
-              " sign changes (the last of " + name + ") between t = " + format(oldest) + " and " +
-              format(t) + advice;
+    message = of_constraint ? kink(oldest)
+                            : "switch events: " + format_number(long(kSwitchBurst)) +
+                                  " sign changes (the last of " + name +
+                                  ") between t = " + format(oldest) + " and " + format(t) + advice;
     return true;
   }
 

@@ -171,6 +171,32 @@ TEST(ModelDiagnoses, FlowMappingCommaSuggestsQuoting) {
   EXPECT_TRUE(contains(e, "quote the expression")) << e;
 }
 
+// an expression of a flow list split at its commas into more entries than coordinates
+// (review 2026-11-27: push.yaml, push3.yaml): the count's error says to quote it, and how
+TEST(ModelDiagnoses, FlowListCommaSuggestsQuotingWhenTheCountIsWrong) {
+  std::string e = error_of_file(kData + "flow_list_cut.yaml");
+  EXPECT_TRUE(contains(e,
+                       "flow_list_cut.yaml:7:9: error: forces must have 2 entries, one per "
+                       "coordinate (hint: inside YAML brackets [...] a comma ends an entry, so "
+                       "the commas inside an expression's parentheses split it: quote the "
+                       "expression (forces: [\"if(t - 0.5, F, 0)\", 0]) or write the list in "
+                       "block style, one entry per line)"))
+      << e;
+  e = error_of_file(kData + "flow_list_cut_short.yaml");
+  EXPECT_TRUE(contains(e, "quote the expression (forces: [\"if(t - 0.5, F, 0)\"])")) << e;
+  // quoted, or a list of the wrong length with balanced entries: no such hint
+  e = error_of(
+      "coordinates: [x, y]\nkinetic_energy: 0.5*(x_dot^2 + y_dot^2)\n"
+      "forces: [\"if(t - 0.5, 1, 0)\", 0, 1]\n");
+  EXPECT_TRUE(contains(e, "forces must have 2 entries, one per coordinate")) << e;
+  EXPECT_FALSE(contains(e, "hint")) << e;
+  e = error_of(
+      "coordinates: [x, y]\nkinetic_energy: 0.5*(x_dot^2 + y_dot^2)\n"
+      "nonideal:\n  - {C: [max(x, 0), 0, y]}\n");
+  EXPECT_TRUE(contains(e, "C must have 2 entries")) << e;
+  EXPECT_TRUE(contains(e, "quote the expression (C: [\"max(x, 0)\", 0, y])")) << e;
+}
+
 TEST(ModelDiagnoses, RegularizationVelocityZeroIsLocatedAtItsEntry) {
   const std::string e = error_of_file(kData + "coulomb_regularization_zero.yaml");
   EXPECT_TRUE(contains(e,

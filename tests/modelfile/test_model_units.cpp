@@ -80,6 +80,16 @@ TEST(ModelUnits, ErrorsNameTheEntryAndWhereItIs) {
       << f.what;
   f = failure_of(kSlider + "units: {s: " + std::string(33, 'm') + "}\n");
   EXPECT_NE(f.what.find("the unit of 's' must be a short text"), std::string::npos) << f.what;
+  // an empty unit is said to be empty, not too long (review 2026-11-27)
+  f = failure_of(kSlider + "units: {s: ''}\n");
+  EXPECT_EQ(f.line, 4);
+  EXPECT_EQ(f.column, 12);
+  EXPECT_NE(f.what.find("the unit of 's' is empty (hint: give its unit (units: {x: m, theta: "
+                        "rad}; 1 for a number without a unit), or leave 's' out of units:)"),
+            std::string::npos)
+      << f.what;
+  f = failure_of(kSlider + "units: {s: }\n");
+  EXPECT_NE(f.what.find("the unit of 's' is empty"), std::string::npos) << f.what;
   f = failure_of(kSlider + "units: [m, rad]\n");
   EXPECT_EQ(f.line, 4);
   EXPECT_EQ(f.column, 8);

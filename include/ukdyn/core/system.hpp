@@ -211,7 +211,8 @@ class System {
 
   /// Number of switching functions (SystemBuilder::switching_functions); 0 for a smooth system.
   Index switch_count() const { return Index(switch_names_.size()); }
-  /// The switching functions' names (a model file's: the expression g, as text), for messages.
+  /// The switching functions' names (a model file's: the expression g, as text, with " in the
+  /// constraint 'NAME'" when a constraint holds it: a kink), for messages.
   const std::vector<std::string>& switch_names() const { return switch_names_; }
   /// g(q, q', t) (switch_count()) into g; `s` is the workspace's scratch. Nothing when the
   /// system has no switching functions. Cost: one evaluation of the functions.
