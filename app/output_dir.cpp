@@ -2,11 +2,14 @@
 // files before this one's are written (output_dir.hpp).
 #include "output_dir.hpp"
 
+#include "commands.hpp"
+
 #include <fcntl.h>
 #include <sys/file.h>
 #include <unistd.h>
 
 #include <cerrno>
+#include <cstdio>
 #include <cstring>
 #include <string>
 #include <string_view>
@@ -85,6 +88,19 @@ void OutputDirectory::remove_previous_outputs() const {
       if (std::string_view(file).substr(0, prefix.size()) == prefix) remove(entry.path());
     }
   }
+}
+
+int hold_output_directory(const std::filesystem::path& dir, std::optional<OutputDirectory>& out) {
+  try {
+    out.emplace(dir);
+  } catch (const DirectoryBusy& e) {
+    std::fprintf(stderr, "error: %s\n", e.what());
+    return kExitBusy;
+  } catch (const std::runtime_error& e) {
+    std::fprintf(stderr, "error: %s\n", e.what());
+    return kExitRunFailed;
+  }
+  return 0;
 }
 
 }  // namespace ukdyn::cli

@@ -4,6 +4,7 @@
 
 #include <array>
 #include <filesystem>
+#include <optional>
 #include <stdexcept>
 #include <string>
 
@@ -54,5 +55,10 @@ class OutputDirectory {
   std::filesystem::path dir_;
   int lock_fd_ = -1;
 };
+
+/// Holds `dir` for a run of `ukdyn run` or `ukdyn sweep`: constructs `out`, or prints
+/// "error: …" and returns the command's exit status — kExitBusy when another run holds the
+/// directory, kExitRunFailed when it cannot be created or locked; 0 when `out` holds it.
+int hold_output_directory(const std::filesystem::path& dir, std::optional<OutputDirectory>& out);
 
 }  // namespace ukdyn::cli

@@ -199,15 +199,7 @@ int run_command(const RunArguments& given) {
   // the directory, held for the run: a second run into it is refused now, before it computes
   // anything, and this one's files are never mixed with another's
   std::optional<OutputDirectory> out;
-  try {
-    out.emplace(dir);
-  } catch (const DirectoryBusy& e) {
-    std::fprintf(stderr, "error: %s\n", e.what());
-    return kExitBusy;
-  } catch (const std::runtime_error& e) {
-    std::fprintf(stderr, "error: %s\n", e.what());
-    return kExitRunFailed;
-  }
+  if (const int status = hold_output_directory(dir, out); status != 0) return status;
 
   std::printf("ukdyn run: %s (%s), t = %g … %g s\n", model.name.c_str(), model.file.c_str(),
               options.t_start, options.t_end);

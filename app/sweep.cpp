@@ -232,12 +232,7 @@ int sweep_command(const SweepArguments& args) {
                                            : args.source.example))
           : fs::path(args.out_dir);
   std::optional<OutputDirectory> out;
-  try {
-    out.emplace(dir);
-  } catch (const DirectoryBusy& e) {
-    std::fprintf(stderr, "error: %s\n", e.what());
-    return kExitBusy;
-  }
+  if (const int status = hold_output_directory(dir, out); status != 0) return status;
   const unsigned threads =
       args.jobs != 0 ? args.jobs : std::max(1u, std::thread::hardware_concurrency());
   std::printf("ukdyn sweep: %s (%s), %zu samples on %u thread%s\n", base.name.c_str(),

@@ -468,7 +468,8 @@ def _common(units):
 def control_figure(table, meta=None):
     """The control: tracking error per requirement row (with the robust bound), desired against
     actual for the rows whose desired value the run has (an output expression
-    ``desired_<row>`` or ``actual_<row>``, the row's ``.`` written ``_``: actual = desired +
+    ``desired_<row>``, which the model reader derives from a holonomic requirement written as
+    actual − desired(t), or ``actual_<row>``, the row's ``.`` written ``_``: actual = desired +
     error), the control force per coordinate (one panel per unit), the power, the
     work (∫P dt, ∫|P| dt) and the effort ∫Qcᵀ Qc dt, each on its own axis. None for a run
     without control."""

@@ -19,13 +19,6 @@ void require_size(const Eigen::Ref<const VectorXd>& v, Index n, const char* what
                                 " entries, expected n = " + format_number(n));
   }
 }
-// index of the first non-finite entry, or −1
-Index first_non_finite(const Eigen::Ref<const VectorXd>& v) {
-  for (Index i = 0; i < v.size(); ++i) {
-    if (!std::isfinite(v[i])) return i;
-  }
-  return -1;
-}
 
 // A failure before the results were computed (non-finite input, M, A, b or C): q'', the forces
 // and the multipliers hold NaN rather than the previous evaluation's values, which a caller
@@ -58,10 +51,10 @@ Status forward_dynamics(const System& sys, Workspace& ws, const Eigen::Ref<const
   if (!std::isfinite(t)) {
     return invalidate_results(ws, detail::fail(ws, Status::kNonFiniteInput, "t", -1, t));
   }
-  if (Index i = first_non_finite(q); i >= 0) {
+  if (Index i = detail::first_non_finite(q); i >= 0) {
     return invalidate_results(ws, detail::fail(ws, Status::kNonFiniteInput, "q", i, t));
   }
-  if (Index i = first_non_finite(qd); i >= 0) {
+  if (Index i = detail::first_non_finite(qd); i >= 0) {
     return invalidate_results(ws, detail::fail(ws, Status::kNonFiniteInput, "q_dot", i, t));
   }
   // M, Q, a → A, b → ideal → non-ideal → checks

@@ -1,6 +1,7 @@
 // Internal helpers shared by the stages (not installed).
 #pragma once
 
+#include <cmath>
 #include <functional>
 #include <stdexcept>
 #include <string>
@@ -24,6 +25,14 @@ Trajectory simulate_observed(const System& sys, const Eigen::Ref<const VectorXd>
                              const Eigen::Ref<const VectorXd>& qd0,
                              const SimulationOptions& options,
                              const std::function<void(const Workspace&)>& finished);
+
+// Index of the first non-finite entry of v, or −1. Cost O(n).
+inline Index first_non_finite(const Eigen::Ref<const VectorXd>& v) {
+  for (Index i = 0; i < v.size(); ++i) {
+    if (!std::isfinite(v[i])) return i;
+  }
+  return -1;
+}
 
 // Records a failing status in the workspace (tier 3) and returns it.
 inline Status fail(Workspace& ws, Status s, const char* quantity, Index index, double t) {

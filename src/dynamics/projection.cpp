@@ -28,14 +28,6 @@ void require_tolerance(const ProjectionOptions& o, const char* who) {
   }
 }
 
-// index of the first non-finite entry, or −1
-Index first_non_finite(const Eigen::Ref<const VectorXd>& v) {
-  for (Index i = 0; i < v.size(); ++i) {
-    if (!std::isfinite(v[i])) return i;
-  }
-  return -1;
-}
-
 // Tier 1: the sizes; then the inputs, as forward_dynamics checks them: a non-finite t, q (or
 // q') is recorded in the workspace as kNonFiniteInput naming the coordinate (describe_status,
 // throw_if_failed) and returned, so that a NaN state is never reported converged.
@@ -43,11 +35,11 @@ Status check_inputs(const System& sys, Workspace& ws, const Eigen::Ref<const Vec
                     const Eigen::Ref<const VectorXd>* qd, double t, const char* who) {
   detail::require_state_size(sys, q, qd, who);
   if (!std::isfinite(t)) return detail::fail(ws, Status::kNonFiniteInput, "t", -1, t);
-  if (const Index i = first_non_finite(q); i >= 0) {
+  if (const Index i = detail::first_non_finite(q); i >= 0) {
     return detail::fail(ws, Status::kNonFiniteInput, "q", i, t);
   }
   if (qd) {
-    if (const Index i = first_non_finite(*qd); i >= 0) {
+    if (const Index i = detail::first_non_finite(*qd); i >= 0) {
       return detail::fail(ws, Status::kNonFiniteInput, "q_dot", i, t);
     }
   }
@@ -203,7 +195,8 @@ Violations measure_violations(const System& sys, Workspace& ws, const Eigen::Ref
   require_tolerance(options, "ukdyn::measure_violations");
   detail::require_state_size(sys, q, &qd, "ukdyn::measure_violations");
   Violations v;
-  v.finite = std::isfinite(t) && first_non_finite(q) < 0 && first_non_finite(qd) < 0;
+  v.finite =
+      std::isfinite(t) && detail::first_non_finite(q) < 0 && detail::first_non_finite(qd) < 0;
   if (!v.finite) return v;
   for (Index k = 0; k < sys.constraint_count(); ++k) {
     const bool position = takes_part(sys, ws, options, k, t, Level::kPosition);
@@ -248,7 +241,7 @@ ProjectionResult project_positions(const System& sys, Workspace& ws, VectorXd& q
     if (res.status != Status::kOk) return res;
     correct(ws, q);
     ++res.iterations;
-    if (const Index i = first_non_finite(q); i >= 0) {
+    if (const Index i = detail::first_non_finite(q); i >= 0) {
       detail::fail(ws, Status::kNonFiniteResult, "q", i, t);
       return failed(res, Status::kNonFiniteResult);
     }
@@ -285,7 +278,7 @@ ProjectionResult project_velocities(const System& sys, Workspace& ws,
     }
     correct(ws, qd);
     ++res.iterations;
-    if (const Index i = first_non_finite(qd); i >= 0) {
+    if (const Index i = detail::first_non_finite(qd); i >= 0) {
       detail::fail(ws, Status::kNonFiniteResult, "q_dot", i, t);
       return failed(res, Status::kNonFiniteResult);
     }

@@ -86,8 +86,10 @@ void AtomicFile::commit() {
   committed_ = true;
 }
 
-void AtomicFile::fail(const char* doing, int err) const {
-  throw std::runtime_error(std::string(who_) + ": cannot " + doing + " '" + path_ +
+void AtomicFile::fail(const char* doing, int err) const { throw_io_error(who_, path_, doing, err); }
+
+void throw_io_error(const char* who, const std::string& path, const char* doing, int err) {
+  throw std::runtime_error(std::string(who) + ": cannot " + doing + " '" + path +
                            "': " + (err != 0 ? std::strerror(err) : "unknown reason"));
 }
 

@@ -48,4 +48,13 @@ class AtomicFile {
   bool committed_ = false;
 };
 
+// Closes a stdio stream owned by a std::unique_ptr<std::FILE, FileCloser>.
+struct FileCloser {
+  void operator()(std::FILE* f) const { std::fclose(f); }
+};
+
+// "WHO: cannot DOING 'path': strerror(err)" as std::runtime_error (AtomicFile::fail's message)
+[[noreturn]] void throw_io_error(const char* who, const std::string& path, const char* doing,
+                                 int err);
+
 }  // namespace ukdyn::detail

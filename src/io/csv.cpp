@@ -19,7 +19,7 @@
 namespace ukdyn {
 namespace {
 
-constexpr const char* kWho = "ukdyn::write_csv";
+constexpr const char* kCsvWho = "ukdyn::write_csv";
 
 // A header field, quoted as RFC 4180 asks when it holds a comma, a quote or a line break.
 void append_field(std::string& out, const std::string& name) {
@@ -46,15 +46,6 @@ void append_number(std::string& out, double x) {
   const auto [end, ec] = std::to_chars(buf, buf + sizeof buf, x);
   UKDYN_CHECK(ec == std::errc(), "std::to_chars needs at most 24 characters for a double");
   out.append(buf, end);
-}
-
-struct FileCloser {
-  void operator()(std::FILE* f) const { std::fclose(f); }
-};
-
-[[noreturn]] void throw_io_error(const std::string& path, const char* doing, int err) {
-  throw std::runtime_error(std::string(kWho) + ": cannot " + doing + " '" + path +
-                           "': " + (err != 0 ? std::strerror(err) : "unknown reason"));
 }
 
 // One standard column: its header name and where its values are, field[i · width + index] for
@@ -151,21 +142,21 @@ std::vector<CsvColumn> csv_table(const Trajectory& traj) {
 void write_csv(const Trajectory& traj, const std::string& path) { write_csv(traj, path, {}); }
 
 struct CsvWriter::Impl {
-  explicit Impl(const std::string& p) : path(p), out(p, kWho), file(out.open_stdio()) {
+  explicit Impl(const std::string& p) : path(p), out(p, kCsvWho), file(out.open_stdio()) {
     buf.reserve(kFlushAt + 4096);
   }
   // rows are built in one buffer, written out whenever it passes kFlushAt bytes
   static constexpr std::size_t kFlushAt = std::size_t(1) << 18;
   void flush() {
     if (!buf.empty() && std::fwrite(buf.data(), 1, buf.size(), file.get()) != buf.size()) {
-      throw_io_error(path, "write", errno);
+      detail::throw_io_error(kCsvWho, path, "write", errno);
     }
     buf.clear();
   }
   std::string path;
   // a temporary beside `path`, renamed over it when complete (io/atomic_file.hpp)
   detail::AtomicFile out;
-  std::unique_ptr<std::FILE, FileCloser> file;
+  std::unique_ptr<std::FILE, detail::FileCloser> file;
   std::string buf;
   std::vector<std::string> header;  // empty until the first append
 };
@@ -175,12 +166,12 @@ CsvWriter::CsvWriter(const std::string& path) : impl_(new Impl(path)) {}
 CsvWriter::~CsvWriter() { delete impl_; }
 
 void CsvWriter::append(const Trajectory& traj, const std::vector<CsvColumn>& extra) {
-  traj.check_consistent(kWho);
+  traj.check_consistent(kCsvWho);
   std::vector<ColumnRef> cols = column_refs(traj);
   const std::size_t N = traj.t.size();
   for (const CsvColumn& e : extra) {
     if (e.values.size() != N) {
-      throw std::invalid_argument(std::string(kWho) + ": extra column '" + e.name + "' has " +
+      throw std::invalid_argument(std::string(kCsvWho) + ": extra column '" + e.name + "' has " +
                                   format_number(e.values.size()) +
                                   " values, expected N = " + format_number(N));
     }
@@ -201,7 +192,7 @@ void CsvWriter::append(const Trajectory& traj, const std::vector<CsvColumn>& ext
     bool same = w.header.size() == cols.size();
     for (std::size_t c = 0; same && c < cols.size(); ++c) same = w.header[c] == cols[c].name;
     if (!same) {
-      throw std::invalid_argument(std::string(kWho) + ": '" + w.path +
+      throw std::invalid_argument(std::string(kCsvWho) + ": '" + w.path +
                                   "': the columns differ from those of the rows written before");
     }
   }
@@ -224,17 +215,17 @@ void CsvWriter::commit() {
   // fclose writes what stdio still holds: its failure (a full disk) is a write error too
   errno = 0;
   if (std::fclose(w.file.release()) != 0) {
-    throw_io_error(w.path, "write", errno);
+    detail::throw_io_error(kCsvWho, w.path, "write", errno);
   }
   w.out.commit();
 }
 
 void write_csv(const Trajectory& traj, const std::string& path,
                const std::vector<CsvColumn>& extra) {
-  traj.check_consistent(kWho);
+  traj.check_consistent(kCsvWho);
   for (const CsvColumn& e : extra) {
     if (e.values.size() != traj.t.size()) {
-      throw std::invalid_argument(std::string(kWho) + ": extra column '" + e.name + "' has " +
+      throw std::invalid_argument(std::string(kCsvWho) + ": extra column '" + e.name + "' has " +
                                   format_number(e.values.size()) +
                                   " values, expected N = " + format_number(traj.t.size()));
     }

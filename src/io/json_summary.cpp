@@ -19,16 +19,7 @@
 namespace ukdyn {
 namespace {
 
-constexpr const char* kWho = "ukdyn::write_summary_json";
-
-struct FileCloser {
-  void operator()(std::FILE* f) const { std::fclose(f); }
-};
-
-[[noreturn]] void throw_io_error(const std::string& path, const char* doing, int err) {
-  throw std::runtime_error(std::string(kWho) + ": cannot " + doing + " '" + path +
-                           "': " + (err != 0 ? std::strerror(err) : "unknown reason"));
-}
+constexpr const char* kSummaryWho = "ukdyn::write_summary_json";
 
 void write_summary_json_text(const std::string& text, const std::string& path);
 
@@ -168,14 +159,14 @@ void write_summary_json(const Trajectory& traj, const SimulationOptions& options
 namespace {
 void write_summary_json_text(const std::string& text, const std::string& path) {
   // a temporary beside `path`, renamed over it when complete (io/atomic_file.hpp)
-  detail::AtomicFile out(path, kWho);
-  std::unique_ptr<std::FILE, FileCloser> file(out.open_stdio());
+  detail::AtomicFile out(path, kSummaryWho);
+  std::unique_ptr<std::FILE, detail::FileCloser> file(out.open_stdio());
   if (std::fwrite(text.data(), 1, text.size(), file.get()) != text.size()) {
-    throw_io_error(path, "write", errno);
+    detail::throw_io_error(kSummaryWho, path, "write", errno);
   }
   errno = 0;
   if (std::fclose(file.release()) != 0) {
-    throw_io_error(path, "write", errno);
+    detail::throw_io_error(kSummaryWho, path, "write", errno);
   }
   out.commit();
 }

@@ -216,6 +216,15 @@ Expr ExpressionSet::sum(const std::vector<Expr>& terms) {
   return impl_->add(GiNaC::dynallocate<GiNaC::add>(v));
 }
 
+std::vector<Expr> ExpressionSet::terms(Expr e) {
+  const GiNaC::ex x = impl_->at(e, "terms");
+  if (!GiNaC::is_exactly_a<GiNaC::add>(x)) return {e};
+  std::vector<Expr> out;
+  out.reserve(x.nops());
+  for (std::size_t i = 0; i < x.nops(); ++i) out.push_back(impl_->add(x.op(i)));
+  return out;
+}
+
 bool ExpressionSet::is_zero(Expr e) const {
   const GiNaC::ex x = impl_->at(e, "is_zero").expand();
   return x.is_zero() || GiNaC::normal(x).is_zero();

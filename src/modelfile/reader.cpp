@@ -792,12 +792,7 @@ SurfaceVelocityFn Reader::surface_velocity(const YAML::Node& node, std::size_t c
   return [p, layout, k](const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd,
                         double t, Eigen::Ref<VectorXd> uo, Eigen::Ref<VectorXd> udo) {
     evaluate_local(
-        p, layout.size(),
-        [&](double* in) {
-          std::copy(q.data(), q.data() + layout.n, in);
-          std::copy(qd.data(), qd.data() + layout.n, in + layout.n);
-          in[2 * layout.n] = t;
-        },
+        p, layout.size(), [&](double* in) { layout.fill(in, q, qd, t); },
         [&](const double* out) {
           for (Index r = 0; r < k; ++r) {
             uo[r] = out[r];
@@ -894,7 +889,7 @@ void Reader::read_nonideal(const YAML::Node& root, SystemBuilder& builder) {
       note_switches(C);
       const Program Cp = compile(C, f["C"], "C");
       const InputLayout layout = layout_;
-      const std::vector<std::string> names = constraint_names_;
+      const std::vector<std::string> names = input_constraints_;
       sizes_->fit(layout.size(), Cp);
       NonIdealForce force(
           "C." + format_number(index),
@@ -1182,6 +1177,14 @@ void Reader::read_output(const YAML::Node& root, Model& model) {
       }
     }
   }
+  note_desired(root);
+  for (const auto& [name, e] : desired_outputs_) {
+    if (std::find(model.output_names.begin(), model.output_names.end(), name) !=
+        model.output_names.end())
+      continue;
+    model.output_names.push_back(name);
+    exprs.push_back(e);
+  }
   read_visual(root, model, exprs);
   model.output_program = compile(exprs, out ? out : root, "the output expressions");
 }
@@ -1337,6 +1340,7 @@ void Reader::make_expression_set(const YAML::Node& root, const std::vector<std::
   std::vector<std::string> inputs = coordinates_;
   inputs.insert(inputs.end(), velocities_.begin(), velocities_.end());
   inputs.push_back("t");
+  input_constraints_ = cnames;
   for (const auto& c : cnames) constraint_inputs_.push_back("N_" + c);
   for (const auto& c : cnames) constraint_inputs_.push_back("lambda_" + c);
   inputs.insert(inputs.end(), constraint_inputs_.begin(), constraint_inputs_.end());
@@ -1373,8 +1377,9 @@ void Reader::make_expression_set(const YAML::Node& root, const std::vector<std::
   layout_.extra = Index(2 * cnames.size());
 }
 
-void Reader::add_switches(SystemBuilder& builder) {
-  if (switch_sources_.empty()) return;
+bool Reader::switches(std::vector<std::string>& names, Program& program) {
+  names.clear();
+  if (switch_sources_.empty()) return false;
   // (one traversal of every expression of the dynamics; a switch of N_c or lambda_c, which the
   // state alone does not give, is left to the step-size control)
   // a switch of a constraint's expressions is named "g in the constraint 'NAME'" (simulate()
@@ -1389,7 +1394,6 @@ void Reader::add_switches(SystemBuilder& builder) {
     }
   }
   std::vector<Expr> g;
-  std::vector<std::string> names;
   for (const Expr e : set_->switching_functions(switch_sources_)) {
     const std::vector<Index> in = set_->inputs_of(e);
     if (in.empty() || in.back() > 2 * layout_.n) continue;
@@ -1401,8 +1405,15 @@ void Reader::add_switches(SystemBuilder& builder) {
   }
   switch_sources_.clear();
   constraint_switch_sources_.clear();
-  if (g.empty()) return;
-  const Program p = set_->compile(g);
+  if (g.empty()) return false;
+  program = set_->compile(g);
+  return true;
+}
+
+void Reader::add_switches(SystemBuilder& builder) {
+  std::vector<std::string> names;
+  Program p;
+  if (!switches(names, p)) return;
   sizes_->fit(layout_.size(), p);
   const InputLayout layout = layout_;
   builder.switching_functions(

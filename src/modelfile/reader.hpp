@@ -78,11 +78,16 @@ struct Evaluator {
 struct InputLayout {
   Index n = 0, extra = 0;
   Index size() const { return 2 * n + 1 + extra; }
+  // in[0, 2n] = [q; q'; t] (`in` holds at least size() doubles)
+  void fill(double* in, const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd,
+            double t) const {
+    std::copy(q.data(), q.data() + n, in);
+    std::copy(qd.data(), qd.data() + n, in + n);
+    in[2 * n] = t;
+  }
   void fill(std::vector<double>& in, const Eigen::Ref<const VectorXd>& q,
             const Eigen::Ref<const VectorXd>& qd, double t) const {
-    std::copy(q.data(), q.data() + n, in.begin());
-    std::copy(qd.data(), qd.data() + n, in.begin() + n);
-    in[std::size_t(2 * n)] = t;
+    fill(in.data(), q, qd, t);
   }
 };
 
@@ -373,8 +378,17 @@ class Reader {
   std::vector<std::string> kept_names_;
   // makes the initial state consistent keeping keep_q_, keep_qd_ (initial_keep.hpp)
   void apply_keep(Model& model);
+  // the desired values of the holonomic requirements' rows, as output expressions
+  // (desired_<row>: note_desired, added by read_output unless the file declares that name)
+  std::vector<std::pair<std::string, Expr>> desired_outputs_;
+  void note_desired(const YAML::Node& root);
+  void note_desired_rows(const YAML::Node& holonomic, const std::string& name,
+                         const std::string& what);
   std::vector<std::string> constraint_names_;   // in declaration order
   std::vector<std::string> constraint_inputs_;  // N_c and lambda_c of each named constraint
+  // the constraints whose N_c and lambda_c are inputs (those named by an identifier), in the
+  // order of constraint_inputs_; a subset of constraint_names_
+  std::vector<std::string> input_constraints_;
   std::vector<Index> constraint_rows_;
   std::unique_ptr<ExpressionSet> set_;
   InputLayout layout_;
@@ -390,8 +404,11 @@ class Reader {
   // the constraints' expressions among switch_sources_, by constraint name: a switch of one is a
   // kink of the constraint (its name in System::switch_names says so: see add_switches)
   std::vector<std::pair<std::string, std::vector<Expr>>> constraint_switch_sources_;
-  // the switching functions of switch_sources_ that q, q' and t determine, compiled into the
-  // builder's SystemBuilder::switching_functions (none: no callable, so no event hook)
+  // the switching functions of switch_sources_ that q, q' and t determine, named, compiled into
+  // `program` (over layout_); false when there are none. Clears the sources.
+  bool switches(std::vector<std::string>& names, Program& program);
+  // switches() into the builder's SystemBuilder::switching_functions (none: no callable, so no
+  // event hook)
   void add_switches(SystemBuilder& builder);
 };
 

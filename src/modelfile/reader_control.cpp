@@ -165,18 +165,54 @@ WeightFn Reader::read_weight(const YAML::Node& N, bool& constant, MatrixXd& valu
   return [p, layout, n](const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd,
                         double t, Eigen::Ref<MatrixXd> W) {
     evaluate_local(
-        p, layout.size(),
-        [&](double* in) {
-          std::copy(q.data(), q.data() + layout.n, in);
-          std::copy(qd.data(), qd.data() + layout.n, in + layout.n);
-          in[2 * layout.n] = t;
-        },
+        p, layout.size(), [&](double* in) { layout.fill(in, q, qd, t); },
         [&](const double* out) {
           for (Index i = 0; i < n; ++i) {
             for (Index j = 0; j < n; ++j) W(i, j) = out[i * n + j];
           }
         });
   };
+}
+
+// The desired value of each row of a holonomic requirement written as φ = actual(q) − desired(t):
+// minus the terms of φ (as written, not expanded) that depend on t and the parameters alone. It
+// becomes the output expression desired_<row>, which the plots draw against actual = φ + desired
+// (python/ukdyn/plotting.py). A row whose terms all depend on q, or none does, has none. Called
+// by read_output, before read_control checks the requirements (which are skipped here when not
+// even named: read_control says what is wrong with them).
+void Reader::note_desired(const YAML::Node& root) {
+  const YAML::Node c = root["control"];
+  if (!c || !c.IsMap() || !c["requirements"] || !c["requirements"].IsSequence()) return;
+  for (const auto& r : c["requirements"]) {
+    if (!r.IsMap() || !r["name"] || !r["name"].IsScalar() || !is_identifier(r["name"].Scalar()))
+      continue;
+    if (const YAML::Node h = r["holonomic"]) {
+      const std::string name = r["name"].Scalar();
+      note_desired_rows(h, name, "requirement '" + name + "'");
+    }
+  }
+}
+
+void Reader::note_desired_rows(const YAML::Node& h, const std::string& name,
+                               const std::string& what) {
+  const auto phis = rows_of(h, what);
+  const Index time = 2 * layout_.n;  // t's input
+  for (std::size_t i = 0; i < phis.size(); ++i) {
+    std::vector<Expr> of_time;
+    bool of_state = false;
+    for (const Expr term : set_->terms(expression(phis[i], what))) {
+      const std::vector<Index> in = set_->inputs_of(term);
+      if (std::all_of(in.begin(), in.end(), [&](Index k) { return k == time; })) {
+        of_time.push_back(term);
+      } else {
+        of_state = true;
+      }
+    }
+    if (of_time.empty() || !of_state) continue;
+    desired_outputs_.emplace_back(
+        "desired_" + (phis.size() == 1 ? name : name + "_" + format_number(i)),
+        set_->negate(set_->sum(of_time)));
+  }
 }
 
 void Reader::read_control(const YAML::Node& root, Model& model) {

@@ -134,6 +134,7 @@ class MultibodyReader {
                  const std::string& what);
   mb::MotionFn drive(const YAML::Node& node, const std::string& what);
   mb::WrenchFn wrench(const YAML::Node& f, bool planar_body, const std::string& what);
+  void add_switches();
   mb::JointFriction friction(const YAML::Node& node, const std::string& what);
 
   Reader& r_;
@@ -303,6 +304,7 @@ mb::MotionFn MultibodyReader::drive(const YAML::Node& node, const std::string& w
               "write the prescribed angle or slide with t and the parameters, e.g. 2*pi*t");
     }
   }
+  r_.note_switches({f});
   const Expr fd = set.diff(f, "t"), fdd = set.diff(fd, "t");
   const Program p = r_.compile({f, fd, fdd}, node, what + " drive and its derivatives");
   const InputLayout layout = r_.layout_;
@@ -340,6 +342,7 @@ mb::WrenchFn MultibodyReader::wrench(const YAML::Node& f, bool planar_body,
       for (int i = 0; i < 3; ++i) out[3 + std::size_t(i)] = r_.expression(T[i], what + " torque");
     }
   }
+  r_.note_switches(out);
   const Program p = r_.compile(out, f, what);
   const InputLayout layout = r_.layout_;
   // (its signature carries no scratch: buffers of the call, evaluate_local)
@@ -347,12 +350,7 @@ mb::WrenchFn MultibodyReader::wrench(const YAML::Node& f, bool planar_body,
                      double t) {
     mb::Wrench w;
     evaluate_local(
-        p, layout.size(),
-        [&](double* in) {
-          std::copy(q.data(), q.data() + layout.n, in);
-          std::copy(qd.data(), qd.data() + layout.n, in + layout.n);
-          in[2 * layout.n] = t;
-        },
+        p, layout.size(), [&](double* in) { layout.fill(in, q, qd, t); },
         [&](const double* v) {
           w.force = Vector3d(v[0], v[1], v[2]);
           w.torque = Vector3d(v[3], v[4], v[5]);
@@ -784,6 +782,23 @@ void MultibodyReader::read_forces() {
   }
 }
 
+// the switches of the applied forces' and the drives' sign, abs, min, max, heaviside and if
+// (Reader::switches), evaluated in buffers of the call as the forces are
+void MultibodyReader::add_switches() {
+  std::vector<std::string> names;
+  Program p;
+  if (!r_.switches(names, p)) return;
+  const InputLayout layout = r_.layout_;
+  builder_.set_switching_functions(
+      std::move(names),
+      [p, layout](const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd,
+                  double t, CallableScratch*, Eigen::Ref<VectorXd> out) {
+        evaluate_local(
+            p, layout.size(), [&](double* in) { layout.fill(in, q, qd, t); },
+            [&](const double* v) { std::copy(v, v + out.size(), out.data()); });
+      });
+}
+
 Model MultibodyReader::read() {
   refuse_generalized_keys();
   declare_bodies();
@@ -792,6 +807,7 @@ Model MultibodyReader::read() {
   declare_joints();
   read_joints();
   read_forces();
+  add_switches();
   const auto build = [&]() -> mb::MultibodyModel {
     try {
       return builder_.build();

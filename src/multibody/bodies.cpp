@@ -179,6 +179,8 @@ struct Multibody::Impl {
   std::vector<Force> forces;
   Vector3d g = Vector3d::Zero();
   Index n = 0;
+  std::vector<std::string> switch_names;
+  SwitchScratchFn switches;
 };
 
 Multibody::Multibody() : impl_(std::make_unique<Impl>()) {}
@@ -260,6 +262,12 @@ Multibody& Multibody::set_gravity(const Vector3d& g) {
   return *this;
 }
 
+Multibody& Multibody::set_switching_functions(std::vector<std::string> names, SwitchScratchFn fn) {
+  impl_->switch_names = std::move(names);
+  impl_->switches = std::move(fn);
+  return *this;
+}
+
 BodyId MultibodyModel::body(std::string_view name) const {
   std::string list;
   for (std::size_t i = 0; i < bodies.size(); ++i) {
@@ -335,6 +343,7 @@ MultibodyModel Multibody::build() const {
   if (PowerScratchFn power = detail::make_external_power(out.bodies, d.forces)) {
     sb.external_power(std::move(power));
   }
+  if (d.switches) sb.switching_functions(d.switch_names, d.switches);
   Index k = 0;  // constraint count
   // unit quaternions
   for (const BodyInfo& b : out.bodies) {

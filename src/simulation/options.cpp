@@ -502,7 +502,10 @@ std::string options_markdown() {
   for (const OptionInfo& i : option_table()) {
     std::string name = "`" + i.name + "`";
     for (const auto& a : i.aliases) name += " (also `" + a + "`)";
-    std::string flag = "`" + option_flag(i) + "`";
+    // (appended piece by piece: GCC 12 warns, wrongly, of a memcpy bound on "`" + std::string&&)
+    std::string flag = "`";
+    flag += option_flag(i);
+    flag += '`';
     if (i.type == OptionType::kBool) flag += ", `--no-" + option_flag(i).substr(2) + "`";
     out += "| " + name + " | " + type_name(i.type) + (i.solver ? " (solver)" : "") + " | " +
            option_text(i.get(defaults)) + " | " + option_rule(i) + " | " + flag + " | " + i.doc +

@@ -82,6 +82,34 @@ TEST(ModelControl, DuffingErrorIsOnePlusTTimesExpMinusTwoT) {
   EXPECT_NEAR(effort.back(), trapezoid, 1e-3 * trapezoid);
 }
 
+// A holonomic requirement written as actual − desired(t) gets its desired value as the output
+// expression desired_<row> (the plots draw it against actual = desired + error): for the Duffing
+// oscillator desired_track = sin(t), and x − desired_track is error.track
+TEST(ModelControl, DesiredValueOfARequirementIsAnOutput) {
+  const ModelRun r = run_ok(load_example("control_duffing"));
+  const auto d = column(r, "desired_track"), x = column(r, "x"), e = column(r, "error.track");
+  ASSERT_EQ(d.size(), x.size());
+  for (std::size_t i = 0; i < d.size(); ++i) {
+    const double t = r.trajectory.t[i];
+    EXPECT_NEAR(d[i], std::sin(t), 1e-15) << t;
+    EXPECT_NEAR(x[i] - d[i], e[i], 1e-14) << t;
+  }
+  // rows of several, a term of the parameters, a row with no term of t alone (none), a row of t
+  // alone (none), and a name the file gives itself (the file's expression, once)
+  const Model m = parse_model(R"(
+parameters: {a: 2}
+coordinates: [x, y]
+mass_matrix: [[1, 0], [0, 1]]
+control:
+  requirements:
+    - {name: p, holonomic: [x - a - 0.5*t^2, x*y], dynamics: {omega: 1, zeta: 1}}
+    - {name: s, holonomic: y - cos(t), dynamics: {omega: 1, zeta: 1}}
+output:
+  expressions: {desired_s: 7}
+)");
+  EXPECT_EQ(m.output_names, (std::vector<std::string>{"desired_s", "desired_p_0"}));
+}
+
 TEST(ModelControl, TriplePendulumJointsFollowTheirErrorDynamics) {
   const Model m = load_example("control_triple_pendulum");
   const ModelRun r = run_ok(m);

@@ -6,6 +6,8 @@
 
 #include <string>
 
+#include "ukdyn/dynamics/forward.hpp"
+#include "ukdyn/dynamics/workspace.hpp"
 #include "ukdyn/modelfile/model.hpp"
 
 namespace ukdyn {
@@ -290,6 +292,36 @@ TEST(ModelFuzzRegressions, ConstraintNameThatIsEmptyOrNotAText) {
                          "text"))
         << e.what();
   }
+}
+
+// A constraint named by a text that is not an identifier ("my pin") has no N_c or lambda_c
+// input; a C that read the others' wrote past the end of the input buffer (found by CI's fuzzer:
+// heap-buffer-overflow in the C of a non-ideal force). The C must read each constraint's own
+// normal force: a pendulum at rest at the bottom, N_rod = m g, and C = [k N_rod, 0, 0] along the
+// tangent gives x'' = k g.
+TEST(ModelFuzzRegressions, ConstraintNamedByATextThatIsNotAnIdentifier) {
+  const Model m = parse_model(
+      "parameters: {g: 9.81, k: 0.5}\n"
+      "coordinates: [x, y, z]\n"
+      "mass_matrix: [[1, 0, 0], [0, 1, 0], [0, 0, 1]]\n"
+      "forces: [0, -g, 0]\n"
+      "constraints:\n"
+      "  - {name: my pin, holonomic: z}\n"
+      "  - {name: \"2nd\", holonomic: z + 0*x}\n"
+      "  - {name: rod, holonomic: (x^2 + y^2 - 1)/2}\n"
+      "nonideal:\n  - C: [k*N_rod, 0, 0]\n"
+      "initial: {q: {x: 0, y: -1, z: 0}}\n",
+      "f.yaml");
+  Workspace ws(m.system);
+  const VectorXd q = (VectorXd(3) << 0.0, -1.0, 0.0).finished();
+  ASSERT_EQ(forward_dynamics(m.system, ws, q, VectorXd::Zero(3), 0.0), Status::kOk);
+  EXPECT_NEAR(ws.qdd[0], 0.5 * 9.81, 1e-12);
+  EXPECT_NEAR(ws.qdd[1], 0.0, 1e-12);
+  EXPECT_NEAR(ws.qdd[2], 0.0, 1e-12);
+  const ModelError e = error_of(
+      "coordinates: [x]\nmass_matrix: [[1]]\n"
+      "constraints:\n  - {name: my pin, holonomic: x}\nnonideal:\n  - C: [N_my]\n");
+  EXPECT_TRUE(contains(e.what(), "f.yaml:6:9: error: in C")) << e.what();
 }
 
 }  // namespace

@@ -130,6 +130,9 @@ class ExpressionSet {
   /// The sum of `terms` (0 when empty), built at once: the same expression as adding them one
   /// by one with add(), in time O(k log k) for k terms rather than O(k²).
   Expr sum(const std::vector<Expr>& terms);
+  /// The terms of e as written at its top level: the summands of a sum, else e itself (not
+  /// expanded: x*(1 - t) is one term). Cost O(terms).
+  std::vector<Expr> terms(Expr e);
 
   /// True when e is identically zero (after GiNaC's normalization).
   bool is_zero(Expr e) const;

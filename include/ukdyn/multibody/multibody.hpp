@@ -265,6 +265,11 @@ class Multibody {
   Multibody& add_force(Force force);
   /// Uniform gravity g (world; e.g. (0, −9.81, 0) for planar, (0, 0, −9.81) for spatial).
   Multibody& set_gravity(const Vector3d& g);
+  /// The switching functions g(q, q', t) of non-smooth terms in the applied forces and the
+  /// drives, one name each (SystemBuilder::switching_functions): simulate() locates their sign
+  /// changes as events (SimulationOptions::switch_events). `fn` gets the bodies' scratch (a
+  /// PoseCache), which it must not use. Default: none.
+  Multibody& set_switching_functions(std::vector<std::string> names, SwitchScratchFn fn);
 
   /// Builds the System: coordinates named "<body>.x" … "<body>.u3"; one constant mass block per
   /// particle, planar body and rigid translation, one state-dependent 4 × 4 block per quaternion;
