@@ -174,8 +174,9 @@ WeightFn Reader::read_weight(const YAML::Node& N, bool& constant, MatrixXd& valu
   };
 }
 
-// The desired value of each row of a holonomic requirement written as φ = actual(q) − desired(t):
-// minus the terms of φ (as written, not expanded) that depend on t and the parameters alone. It
+// The desired value of each row of a holonomic or nonholonomic requirement written as
+// φ = actual(q) − desired(t) (ψ = actual(q, q') − desired(t)): minus the terms of φ (as written,
+// not expanded) that depend on t and the parameters alone. It
 // becomes the output expression desired_<row>, which the plots draw against actual = φ + desired
 // (python/ukdyn/plotting.py). A row whose terms all depend on q, or none does, has none. Called
 // by read_output, before read_control checks the requirements (which are skipped here when not
@@ -186,7 +187,8 @@ void Reader::note_desired(const YAML::Node& root) {
   for (const auto& r : c["requirements"]) {
     if (!r.IsMap() || !r["name"] || !r["name"].IsScalar() || !is_identifier(r["name"].Scalar()))
       continue;
-    if (const YAML::Node h = r["holonomic"]) {
+    const YAML::Node h = r["holonomic"] ? r["holonomic"] : r["nonholonomic"];
+    if (h) {
       const std::string name = r["name"].Scalar();
       note_desired_rows(h, name, "requirement '" + name + "'");
     }

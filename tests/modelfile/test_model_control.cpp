@@ -104,10 +104,22 @@ control:
   requirements:
     - {name: p, holonomic: [x - a - 0.5*t^2, x*y], dynamics: {omega: 1, zeta: 1}}
     - {name: s, holonomic: y - cos(t), dynamics: {omega: 1, zeta: 1}}
+    - {name: v, nonholonomic: x_dot + y_dot - 3*t, dynamics: {rate: 2}}
 output:
   expressions: {desired_s: 7}
 )");
-  EXPECT_EQ(m.output_names, (std::vector<std::string>{"desired_s", "desired_p_0"}));
+  EXPECT_EQ(m.output_names, (std::vector<std::string>{"desired_s", "desired_p_0", "desired_v"}));
+  // their values at t = 2, x = 0.3, y = 0.4: 7 (the file's), a + t²/2 = 4, 3 t = 6
+  Trajectory tr;
+  tr.n = 2;
+  tr.t = {2.0};
+  tr.q = {0.3, 0.4};
+  tr.qd = {0.1, 0.2};
+  const auto values = evaluate_output_expressions(m, tr);
+  ASSERT_EQ(values.size(), 3u);
+  EXPECT_NEAR(values[0][0], 7.0, 1e-15);
+  EXPECT_NEAR(values[1][0], 4.0, 1e-15);
+  EXPECT_NEAR(values[2][0], 6.0, 1e-15);
 }
 
 TEST(ModelControl, TriplePendulumJointsFollowTheirErrorDynamics) {
