@@ -1,0 +1,376 @@
+// Model files, the run's part: the initial state (initial:, with keep), the run settings
+// (simulate:, output:) and their check, the mass matrix at the initial state, the output
+// expressions and the units. The reader's other stages are in reader.cpp (parameters,
+// coordinates, dynamics, constraints, non-ideal forces), reader_multibody.cpp, reader_control.cpp
+// and reader_visual.cpp.
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <set>
+#include <string>
+
+#include <yaml-cpp/yaml.h>
+#include <Eigen/Cholesky>
+
+#include "ukdyn/core/format.hpp"
+#include "ukdyn/dynamics/forward.hpp"
+#include "ukdyn/modelfile/model.hpp"
+#include "ukdyn/modelfile/run.hpp"
+#include "ukdyn/simulation/options.hpp"
+
+#include "modelfile/initial_keep.hpp"
+#include "modelfile/reader.hpp"
+
+namespace ukdyn::model_reader {
+
+void Reader::read_initial(const YAML::Node& root, Model& model) {
+  const Index n = Index(coordinates_.size());
+  // a multibody model's bodies give the initial state; initial: overrides it by name
+  if (model.q0.size() != n) model.q0 = VectorXd::Zero(n);
+  if (model.qd0.size() != n) model.qd0 = VectorXd::Zero(n);
+  const YAML::Node init = root["initial"];
+  if (!init) return;
+  if (!init.IsMap()) fail(init, "initial must be a mapping with q, q_dot and project");
+  positions_.initial = position(init);
+  // a coordinate's value written straight under initial: (initial: {x: 1}) would otherwise be
+  // ignored: every key is checked, and a coordinate's name gets a hint to its place
+  for (const auto& kv : init) {
+    const std::string key = kv.first.Scalar();
+    if (key == "q" || key == "q_dot" || key == "project") continue;
+    const std::string base = key.size() > 4 && key.compare(key.size() - 4, 4, "_dot") == 0
+                                 ? key.substr(0, key.size() - 4)
+                                 : key;
+    const bool coordinate_name =
+        std::find(coordinates_.begin(), coordinates_.end(), base) != coordinates_.end();
+    fail(kv.first, "unknown key '" + key + "' in initial",
+         coordinate_name ? "positions go under q and velocities under q_dot: initial: {q: {" +
+                               base + ": 1}, q_dot: {" + base + ": 0}}"
+                         : "initial has q, q_dot and project");
+  }
+  auto read_map = [&](const char* key, VectorXd& v) {
+    const YAML::Node m = init[key];
+    if (!m) return;
+    if (!m.IsMap())
+      fail(m, std::string("initial ") + key + " must map coordinate names to values",
+           "q: {x: 0, y: 1}");
+    for (const auto& kv : m)
+      v[coordinate(kv.first)] = number(kv.second, std::string("initial ") + key);
+  };
+  read_map("q", model.q0);
+  read_map("q_dot", model.qd0);
+  const YAML::Node project = init["project"];
+  if (project && project.IsMap()) {
+    // project: {keep: [x, y_dot, …]}: x keeps its position and its velocity, y_dot the velocity
+    for (const auto& kv : project) {
+      if (kv.first.Scalar() != "keep")
+        fail(kv.first, "unknown key '" + kv.first.Scalar() + "' in initial: project",
+             "project: true, or project: {keep: [names]}");
+    }
+    const YAML::Node keep = project["keep"];
+    if (!keep || !keep.IsSequence() || keep.size() == 0) {
+      fail(keep ? keep : project, "keep must be a list of coordinates (x) or velocities (x_dot)",
+           "project: {keep: [crank_theta]} keeps the crank's angle and rate");
+    }
+    keep_node_ = keep;
+    keep_q_.assign(std::size_t(n), 0);
+    keep_qd_.assign(std::size_t(n), 0);
+    for (const auto& k : keep) {
+      const std::string name = k.Scalar();
+      bool velocity_only = false;
+      Index j = -1;
+      for (std::size_t i = 0; i < coordinates_.size() && j < 0; ++i) {
+        if (names_coordinate(name, coordinates_[i])) j = Index(i);
+      }
+      for (std::size_t i = 0; i < velocities_.size() && j < 0; ++i) {
+        if (names_coordinate(name, velocities_[i])) {
+          j = Index(i);
+          velocity_only = true;
+        }
+      }
+      if (!k.IsScalar() || j < 0) {
+        fail(k, "keep: '" + name + "' is not a coordinate or a velocity",
+             "the coordinates are " + join(coordinates_) +
+                 " (x keeps x and x_dot, x_dot only the velocity)");
+      }
+      if ((velocity_only ? keep_qd_ : keep_q_)[std::size_t(j)])
+        fail(k, "keep: '" + name + "' is listed twice");
+      if (!velocity_only) keep_q_[std::size_t(j)] = 1;
+      keep_qd_[std::size_t(j)] = 1;
+      kept_names_.push_back(name);
+    }
+    model.project_initial = true;
+  } else if (project) {
+    bool value = false;
+    if (!project.IsScalar() || !YAML::convert<bool>::decode(project, value))
+      fail(project, "initial project must be true or false, or {keep: [names]}", "project: true");
+    model.project_initial = value;
+  }
+}
+
+void Reader::apply_keep(Model& model) {
+  if (keep_q_.empty()) return;
+  const std::string why = project_keeping(model.system, model.q0, model.qd0, model.options.t_start,
+                                          keep_q_, keep_qd_, kept_names_);
+  if (!why.empty()) {
+    fail(keep_node_, "initial: project: " + why,
+         "keep fewer coordinates, or give values that the constraints allow");
+  }
+}
+
+void Reader::read_simulate(const YAML::Node& root, Model& model) {
+  SimulationOptions& o = model.options;
+  o.t_end = 1.0;
+  const YAML::Node s = root["simulate"];
+  if (!s) return;
+  if (!s.IsMap()) fail(s, "simulate must be a mapping", "{t_end: 2, integrator: dopri5}");
+  positions_.simulate = position(s);
+  // every key is an option of the table (simulation/options.hpp), set by its one validating setter
+  for (const auto& kv : s) {
+    const std::string key = kv.first.Scalar();
+    const YAML::Node v = kv.second;
+    const OptionInfo* info = find_option(key);
+    if (!info) fail(kv.first, "unknown key '" + key + "' in simulate", option_names());
+    positions_.settings[info->name] = position(v);
+    try {
+      switch (info->type) {
+        case OptionType::kNumber:
+        case OptionType::kInteger:
+          // a number, or an expression of the parameters
+          set_option(o, key, number(v, key));
+          break;
+        case OptionType::kNumbers: {
+          if (!v.IsSequence()) fail(v, key + " must be a list of numbers", "[0.5, 1.5]");
+          std::vector<double> list;
+          for (const auto& x : v) list.push_back(number(x, key));
+          set_option(o, key, list);
+          break;
+        }
+        case OptionType::kBool:
+        case OptionType::kChoice:
+          if (!v.IsScalar()) fail(v, key + " must be " + option_rule(*info));
+          set_option_text(o, key, v.Scalar());
+          break;
+      }
+    } catch (const OptionError& e) {
+      fail(v, e.problem(), e.hint());
+    }
+  }
+  if (!(o.t_end > o.t_start)) fail(s, "t_end must be greater than t_start");
+  // solver options that this system cannot use (engine: sparse with a dense M, …) are refused
+  // here, at their key, as the workspace a run makes would refuse them
+  std::vector<YAML::Node> solver_keys;
+  for (const auto& kv : s) {
+    if (find_option(kv.first.Scalar())->solver) solver_keys.push_back(kv.first);
+  }
+  if (!solver_keys.empty()) {
+    try {
+      Workspace ws(model.system, o.solver);
+    } catch (const std::invalid_argument& e) {
+      std::string message = e.what();
+      if (const auto k = message.find(": "); k != std::string::npos) message.erase(0, k + 2);
+      YAML::Node at = solver_keys.front();
+      for (const YAML::Node& key : solver_keys) {
+        if (message.find(key.Scalar()) != std::string::npos) at = key;
+      }
+      fail(at, message);
+    }
+  }
+}
+
+// M(q0, t_start) must be symmetric positive semi-definite, and where it is singular the
+// constraints must determine the coordinates it gives no inertia ([M; A] of full column rank):
+// a model that fails here cannot start, so the error points at the declaration of M (or T)
+// rather than at the run.
+void Reader::check_mass_matrix(const YAML::Node& root, const Model& model) {
+  const Index n = model.system.coordinate_count();
+  // M given by constant blocks is symmetric positive definite when they are (read_dynamics
+  // gives blocks only then; a dense M of many coordinates would not fit)
+  if (model.system.mass_is_block_diagonal() &&
+      std::all_of(model.system.mass_blocks().begin(), model.system.mass_blocks().end(),
+                  [](const MassBlock& b) {
+                    return b.constant() && !b.singular && b.value.allFinite() &&
+                           b.value == b.value.transpose() &&
+                           Eigen::LLT<MatrixXd>(b.value).info() == Eigen::Success;
+                  })) {
+    return;
+  }
+  MatrixXd M(n, n);
+  model.system.mass_matrix(model.q0, model.options.t_start, M);
+  const YAML::Node at = root["mass_matrix"] ? root["mass_matrix"] : root["kinetic_energy"];
+  const std::string where = " at the initial state (t = " + brief(model.options.t_start) + ")";
+  const std::string source = root["mass_matrix"] ? "mass_matrix" : "kinetic_energy";
+  if (!M.allFinite()) {
+    fail(at, "the mass matrix is not finite" + where,
+         "check " + source + " for divisions by zero or logarithms of non-positive values at q0");
+  }
+  const double scale = M.cwiseAbs().maxCoeff();
+  if ((M - M.transpose()).cwiseAbs().maxCoeff() > 1e-12 * scale) {
+    fail(at, "the mass matrix is not symmetric" + where, "M(i, j) must equal M(j, i)");
+  }
+  if (scale > 0.0 && Eigen::LLT<MatrixXd>(M).info() == Eigen::Success) return;
+  // the names of the coordinates i with pred(i), comma-separated
+  const auto coordinates_where = [&](auto pred) {
+    std::string names;
+    for (Index i = 0; i < n; ++i) {
+      if (pred(i)) names += (names.empty() ? "" : ", ") + coordinates_[std::size_t(i)];
+    }
+    return names;
+  };
+  // a singular M is accepted when it is positive semi-definite (M + 1e-10 max|M| I positive
+  // definite) and the constraints determine the coordinates it gives no inertia
+  MatrixXd shifted = M;
+  shifted.diagonal().array() += 1e-10 * (scale > 0.0 ? scale : 1.0);
+  const bool from_T = source == "kinetic_energy";
+  if (Eigen::LLT<MatrixXd>(shifted).info() != Eigen::Success) {
+    const std::string negative = coordinates_where([&](Index i) { return M(i, i) < 0; });
+    fail(at, "the mass matrix is not positive semi-definite" + where,
+         !negative.empty()
+             ? "negative inertia for " + negative +
+                   (from_T ? ": the kinetic energy must not decrease with any velocity"
+                           : ": every diagonal entry of M must be >= 0")
+             : (from_T ? "the kinetic energy must be >= 0 for every velocity"
+                       : "M must be positive semi-definite: check the off-diagonal entries"));
+  }
+  Workspace ws(model.system, model.options.solver);
+  if (forward_dynamics(model.system, ws, model.q0, model.qd0, model.options.t_start) ==
+      Status::kMotionUndetermined) {
+    const std::string lacking = coordinates_where([&](Index i) { return !(M(i, i) > 0); });
+    fail(at,
+         "the mass matrix is singular" + where +
+             " and the constraints do not determine "
+             "every coordinate: " +
+             describe_status(model.system, ws),
+         (lacking.empty() ? std::string("give the coordinates inertia")
+                          : "no inertia for " + lacking) +
+             (from_T ? ": the kinetic energy must involve every velocity that no constraint fixes"
+                     : ": a zero row of M needs constraints that fix its coordinate"));
+  }
+}
+
+void Reader::read_output(const YAML::Node& root, Model& model) {
+  SimulationOptions& o = model.options;
+  const YAML::Node out = root["output"];
+  std::vector<Expr> exprs;
+  if (out) {
+    if (!out.IsMap())
+      fail(out, "output must be a mapping", "{every: 0.01, at: [1], expressions: {s: x + y}}");
+    for (const auto& kv : out) {
+      const std::string key = kv.first.Scalar();
+      if (key == "every") {
+        o.output_every = number(kv.second, "every");
+        if (o.output_every < 0) fail(kv.second, "every must be >= 0");
+        positions_.settings["output_every"] = position(kv.second);
+      } else if (key == "at") {
+        if (!kv.second.IsSequence()) fail(kv.second, "at must be a list of times");
+        positions_.settings["output_at"] = position(kv.second);
+        for (const auto& tn : kv.second) {
+          const double t = number(tn, "output time");
+          if (t < o.t_start || t > o.t_end) {
+            fail(tn, "output time " + tn.Scalar() + " is outside the run [" + brief(o.t_start) +
+                         ", " + brief(o.t_end) + "]");
+          }
+          o.output_at.push_back(t);
+        }
+      } else if (key == "expressions") {
+        if (!kv.second.IsMap()) fail(kv.second, "expressions must map names to expressions");
+        for (const auto& e : kv.second) {
+          model.output_names.push_back(e.first.Scalar());
+          exprs.push_back(expression(e.second, "output expression '" + e.first.Scalar() + "'"));
+        }
+      } else {
+        fail(kv.first, "unknown key '" + key + "' in output", "every, at, expressions");
+      }
+    }
+  }
+  note_desired(root);
+  for (const auto& [name, e] : desired_outputs_) {
+    if (std::find(model.output_names.begin(), model.output_names.end(), name) !=
+        model.output_names.end())
+      continue;
+    model.output_names.push_back(name);
+    exprs.push_back(e);
+  }
+  read_visual(root, model, exprs);
+  model.output_program = compile(exprs, out ? out : root, "the output expressions");
+}
+
+void Reader::read_units(const YAML::Node& root, Model& model) {
+  const std::vector<std::string>& names = model.system.coordinate_names();
+  model.coordinate_units.assign(names.size(), "");
+  // a body's coordinates: its centre of mass in m, its angle in rad, its quaternion's
+  // components without unit (the multibody layer's conventions, docs/multibody.md)
+  if (model.multibody) {
+    for (std::size_t i = 0; i < names.size(); ++i) {
+      const std::string& c = names[i];
+      const std::string suffix =
+          c.substr(c.rfind('.') == std::string::npos ? c.size() : c.rfind('.'));
+      if (suffix == ".x" || suffix == ".y" || suffix == ".z") {
+        model.coordinate_units[i] = "m";
+      } else if (suffix == ".theta") {
+        model.coordinate_units[i] = "rad";
+      } else if (suffix == ".u0" || suffix == ".u1" || suffix == ".u2" || suffix == ".u3") {
+        model.coordinate_units[i] = "1";
+      }
+    }
+  }
+  model.output_units.assign(model.output_names.size(), "");
+  // units: {x: m, theta: rad, s: m}: each named coordinate's or output expression's unit, a
+  // short text
+  const YAML::Node u = root["units"];
+  if (!u) return;
+  if (!u.IsMap() || u.size() == 0) {
+    fail(u, "units must map coordinates (or output expressions) to their units",
+         "units: {x: m, theta: rad}");
+  }
+  for (const auto& kv : u) {
+    const std::string& name = kv.first.Scalar();
+    const auto output = std::find(model.output_names.begin(), model.output_names.end(), name);
+    const bool is_coordinate =
+        std::any_of(coordinates_.begin(), coordinates_.end(),
+                    [&](const std::string& c) { return c == name || names_coordinate(name, c); });
+    if (!is_coordinate && output == model.output_names.end()) {
+      fail(kv.first, "units: '" + name + "' is neither a coordinate nor an output expression",
+           "the coordinates are " + join(coordinates_) +
+               (model.output_names.empty()
+                    ? std::string()
+                    : ", the output expressions " + join(model.output_names)));
+    }
+    const YAML::Node& value = kv.second;
+    const std::string text = value.IsScalar() ? value.Scalar() : std::string();
+    const bool printable = std::none_of(text.begin(), text.end(), [](char ch) {
+      return static_cast<unsigned char>(ch) < 0x20 || ch == 0x7f;
+    });
+    if (value.IsNull() || (value.IsScalar() && text.empty())) {
+      fail(value, "the unit of '" + kv.first.Scalar() + "' is empty",
+           "give its unit (units: {x: m, theta: rad}; 1 for a number without a unit), or leave '" +
+               kv.first.Scalar() + "' out of units:");
+    }
+    if (!value.IsScalar() || text.size() > 32 || !printable) {
+      fail(value,
+           "the unit of '" + kv.first.Scalar() + "' must be a short text (at most 32 characters)",
+           "units: {x: m, theta: rad, s: mm} (the unit labels the plots' axes; it does not change "
+           "any number)");
+    }
+    if (is_coordinate) {
+      model.coordinate_units[std::size_t(coordinate(kv.first))] = text;
+    } else {
+      model.output_units[std::size_t(output - model.output_names.begin())] = text;
+    }
+  }
+}
+
+// the run's settings as `ukdyn run` checks them (check_run_settings, modelfile/run.hpp: the same
+// check_settings a run makes), located at the key that gave the setting at fault
+// (locate_run_error: simulate: KEY, output: every / at, or the simulate: mapping when the setting
+// is a default that the others make unusable, e.g. rk4's step over a longer t_end)
+void Reader::check_settings(const YAML::Node& root, Model& model) {
+  positions_.start = position(root);
+  model.positions = positions_;
+  try {
+    check_run_settings(model, model.options);
+  } catch (const SettingError& e) {
+    throw locate_run_error(model, e);
+  }
+}
+
+}  // namespace ukdyn::model_reader
