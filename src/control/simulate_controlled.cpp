@@ -288,6 +288,16 @@ System build_controlled(const std::shared_ptr<const ControlledPlant>& st,
   b.forces([st, scratch](const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd,
                          double t, CallableScratch* s,
                          Eigen::Ref<VectorXd> Q) { st->force(scratch(s), q, qd, t, Q); });
+  // the plant's switching functions (the sign changes of its non-smooth terms): located as
+  // events as in the plant's own runs
+  if (plant.switch_count() > 0) {
+    b.switching_functions(
+        plant.switch_names(),
+        [st, n, scratch](const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd,
+                         double t, CallableScratch* s, Eigen::Ref<VectorXd> g) {
+          st->plant.switching_functions(q.head(n), qd.head(n), t, scratch(s).plant.get(), g);
+        });
+  }
   if (plant.has_potential()) {
     if (aux == 0) {
       b.potential_energy(

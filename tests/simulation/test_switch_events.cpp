@@ -10,6 +10,7 @@
 
 #include "ukdyn/dynamics/forward.hpp"
 #include "ukdyn/modelfile/model.hpp"
+#include "ukdyn/modelfile/run.hpp"
 #include "ukdyn/simulation/simulate.hpp"
 
 namespace ukdyn {
@@ -125,6 +126,36 @@ joints:
 )");
   ASSERT_EQ(driven.system.switch_count(), 1);
   EXPECT_EQ(driven.system.switch_names()[0], "-1+t");
+}
+
+// A controlled plant keeps its switches: the controlled system (the plant plus the control force)
+// used to drop them, so a switch went unlocated under control. x is made to follow sin(t) against
+// the force −sign(x − 0.3); the error still follows e'' + 4e' + 4e = 0, e = (1 + t) e^(−2t), and x
+// crosses 0.3 once on [0, 3]
+TEST(SwitchEvents, AControlledPlantKeepsItsSwitches) {
+  const Model m = parse_model(R"(
+coordinates: [x]
+mass_matrix: [[1]]
+forces: [-sign(x - 0.3)]
+control:
+  requirements:
+    - {name: track, holonomic: x - sin(t), dynamics: {omega: 2, zeta: 1}}
+initial: {q: {x: 1}}
+simulate: {t_end: 3}
+)");
+  const ModelRun r = run_model(m);
+  EXPECT_EQ(r.trajectory.stats.status, Status::kOk) << r.trajectory.stats.message;
+  EXPECT_EQ(r.trajectory.stats.switch_events, 1);
+  bool found = false;
+  for (const auto& c : r.columns()) {
+    if (c.name != "error.track") continue;
+    found = true;
+    for (std::size_t i = 0; i < c.values.size(); ++i) {
+      const double t = r.trajectory.t[i];
+      EXPECT_NEAR(c.values[i], (1 + t) * std::exp(-2 * t), 1e-8) << t;
+    }
+  }
+  EXPECT_TRUE(found);
 }
 
 // switch_events: false steps across the switches (the old behaviour): no event is counted, and
