@@ -584,3 +584,94 @@ def test_a_point_not_finite_warns_in_python():
     p = next(q for q in _page_data(html)["points"] if q["name"] == "p")
     t = _page_data(html)["t"]
     assert all((x is None) == (tt > 0.5 + 1e-9) for x, tt in zip(p["q"][0], t) if abs(tt - 0.5) > 0.02)
+
+
+def _desired_tip(t):
+    """control_triple_pendulum_tip's requirement: the tip on the circle (0.8 + 0.3 sin t,
+    -2 + 0.3 cos t)."""
+    return 0.8 + 0.3 * math.sin(t), -2 + 0.3 * math.cos(t)
+
+
+def test_a_requirement_on_a_point_draws_its_desired_path(browser, cli, tmp_path):
+    """control_triple_pendulum_tip declares no target: the requirement's rows are the point
+    tip's coordinates, so the page draws the desired circle (dashed, green, with a ring where the
+    tip should be now) and the tip's trail (its actual path); the chart shows each row's desired
+    and actual value. The numbers come from the requirement's own formula and the CSV."""
+    out = tmp_path / "tip"
+    proc = subprocess.run([cli, "run", "--example", "control_triple_pendulum_tip", "--t-end", "3",
+                           "-o", str(out), "--no-plots"], capture_output=True, text=True,
+                          timeout=120)
+    assert proc.returncode == 0, proc.stderr
+    data = _page_data((out / "animation.html").read_text())
+    [path] = data["desired_paths"]
+    assert (path["requirement"], path["of"]) == ("tip", "tip")
+    assert "tip" in data["trails"]
+    t = np.array(data["t"], float)
+    want = np.array([_desired_tip(s) for s in t]).T
+    assert np.max(np.abs(np.array(path["q"], float) - want)) < 1e-3
+    # each row's actual value is the tip's coordinate (desired + error)
+    import csv
+    with open(out / "trajectory.csv", newline="") as f:
+        rows = list(csv.reader(f))
+    names, values = rows[0], np.array(rows[1:], float)
+    rows_of = {r["name"]: r for r in data["requirements"]}
+    for k, axis in enumerate("xy"):
+        actual = np.interp(t, values[:, 0], values[:, names.index("visual.tip." + axis)])
+        desired = np.array([_desired_tip(s)[k] for s in t])
+        row = rows_of["tip.%d" % k]
+        assert np.max(np.abs(np.array(row["actual"], float) - actual)) < 1e-3 * (1 + abs(actual).max())
+        assert np.max(np.abs(np.array(row["desired"], float) - desired)) < 1e-3
+    # the tip starts 0.83 from where the requirement wants it: the ring is drawn at the desired
+    # point, not at the tip
+    page = Page(browser, out / "animation.html")
+    page.js("ukdyn.show('trails', false)")
+    camera = page.js("return ukdyn.camera()")
+    page.js("ukdyn.setFrame(0)")
+    img = page.pixels()
+    green = _mask(img, "#00a651")
+    ys, xs = np.nonzero(green)
+    target = _project(camera, (*_desired_tip(0.0), 0.0))
+    tip = _project(camera, (actual_x := float(values[0, names.index("visual.tip.x")]),
+                            float(values[0, names.index("visual.tip.y")]), 0.0))
+    assert actual_x == pytest.approx(0.8253, abs=1e-3)
+
+    def near(p, r):
+        return int(((xs - p[0]) ** 2 + (ys - p[1]) ** 2 < r * r).sum())
+    assert near(target, 25) > 60, (near(target, 25), target)
+    assert near(tip, 10) == 0
+    # the chart of desired and actual values is shown; turning "desired" off removes the green
+    assert page.js("return getComputedStyle(document.getElementById('paths')).display") == "block"
+    page.js("ukdyn.show('desired', false)")
+    assert _mask(page.pixels(), "#00a651").sum() < 0.05 * green.sum()
+    page.save("control_triple_pendulum_tip_desired.png")
+    assert page.errors() == []
+
+
+ARM_WITH_TIP = """
+visual:
+  points:
+    tip: [link2_x + L2/2*cos(link2_theta), link2_y + L2/2*sin(link2_theta)]
+  trails: [tip]
+"""
+
+
+def test_a_requirement_of_a_bodies_model_draws_its_desired_path(tmp_path):
+    """A bodies/joints model under control (tests/data/arm_circle_bodies.yaml, the arm's tip on
+    a circle) with a visual point at the tip: the requirement's rows are that point's
+    coordinates, and the page draws the circle (cx + R cos Wt, cy + R sin Wt). A requirement on
+    joint angles (control_triple_pendulum) is no path in the scene: only the chart."""
+    root = pathlib.Path(__file__).resolve().parents[2]
+    text = (root / "tests" / "data" / "arm_circle_bodies.yaml").read_text() + ARM_WITH_TIP
+    result = ukdyn.parse(text).simulate()
+    path = tmp_path / "arm.html"
+    result.save_animation(path)
+    data = _page_data(path.read_text())
+    [desired] = data["desired_paths"]
+    assert (desired["requirement"], desired["of"]) == ("tip", "tip")
+    t = np.array(data["t"], float)
+    want = np.array([0.6 + 0.25 * np.cos(2 * t), 0.2 + 0.25 * np.sin(2 * t)])
+    assert np.max(np.abs(np.array(desired["q"], float) - want)) < 1e-3
+    page = _page_data(ukdyn.load("control_triple_pendulum").simulate(t_end=0.5).animation_html())
+    assert page["desired_paths"] == []
+    assert sorted(r["name"] for r in page["requirements"] if "desired" in r) == \
+        ["joint1", "joint2", "joint3"]

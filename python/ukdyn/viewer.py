@@ -224,10 +224,22 @@ def scene_data(scene, names, columns, fps=FPS, max_frames=MAX_FRAMES, digits=DIG
         parts = ("qw", "qx", "qy", "qz") if fr.get("quaternion") else ("angle",)
         frame["r"] = [angle("visual.%s.%s" % (fr["name"], c)) for c in parts]
         data["frames"].append(frame)
-    # the control's requirements: the error of each (desired minus actual path), over time
-    for name in names:
-        if name.startswith("error."):
-            data["requirements"].append({"name": name[len("error."):], "error": p.pack(name)})
+    # the control's requirements: the error of each row (actual minus desired), over time, and
+    # where the requirement says what is desired (desired_<row>), the desired and the actual
+    # value (actual = desired + error); a requirement whose rows are, in some order, the
+    # coordinates of a point or a body of the scene gets its desired path drawn in the scene
+    rows = _requirement_rows(names)
+    for row, error, desired in rows:
+        entry = {"name": row, "error": p.pack(error)}
+        if desired:
+            entry["desired"] = p.pack(desired)
+            entry["actual"] = [_round(d + e, digits)
+                               for d, e in zip(p.raw(desired), p.raw(error))]
+        data["requirements"].append(entry)
+    data["desired_paths"] = _desired_paths(scene, p, rows, decimals)
+    for path in data["desired_paths"]:
+        if path["of"] not in data["trails"]:
+            data["trails"] = data["trails"] + [path["of"]]
     # a kind of force that is zero throughout (no friction, no control) draws no arrows; nor
     # does a torque that is round-off (a planar revolute joint's ideal torque about z, 1e-14 N m):
     # at most 1e-9 of the largest joint force times the scene's extent
@@ -251,6 +263,64 @@ def scene_data(scene, names, columns, fps=FPS, max_frames=MAX_FRAMES, digits=DIG
                 vectors.extend(zip(*comps))
         data.setdefault("force_scale", {})[key] = _scale(vectors)
     return data
+
+
+def _requirement_rows(names):
+    """(row, error column, desired column or None) of each requirement row: error.<row> and
+    desired_<row> with the row's dots written as underscores (error.tip.0, desired_tip_0)."""
+    present = set(names)
+    out = []
+    for name in names:
+        if name.startswith("error."):
+            row = name[len("error."):]
+            desired = "desired_" + row.replace(".", "_")
+            out.append((row, name, desired if desired in present else None))
+    return out
+
+
+def _desired_paths(scene, p, rows, decimals):
+    """The requirements whose desired value is a path in the scene: a requirement whose rows
+    (error.<name>.0, .1 (, .2), each with its desired value) are, in some order, the positions
+    x, y (, z) of a visual point or of a body's centre: the actual value of each row (desired +
+    error) equals that coordinate at every sample shown, to 1e-9 of the scene's extent (the same
+    expression evaluated twice). Returns, for each, the point or body ("of") and the desired
+    position along x, y (, z) at each sample ("q")."""
+    groups = {}
+    for row, error, desired in rows:
+        base, _, k = row.rpartition(".")
+        if base and k.isdigit() and desired:
+            groups.setdefault(base, []).append((int(k), error, desired))
+    candidates = [("visual.%s." % pt["name"], pt["name"], pt.get("dimensions", 2))
+                  for pt in scene.get("points", [])]
+    candidates += [(b["name"] + ".", b["name"], 2 if b["kind"] == "planar" else 3)
+                   for b in scene.get("bodies", [])]
+    tolerance = 1e-9 * 10.0 ** (4 - decimals)
+    out = []
+    for base, parts in groups.items():
+        parts.sort()
+        if len(parts) not in (2, 3) or [k for k, _, _ in parts] != list(range(len(parts))):
+            continue
+        actual = [[d + e for d, e in zip(p.raw(desired), p.raw(error))]
+                  for _, error, desired in parts]
+        for prefix, name, dimensions in candidates:
+            axes = [prefix + a for a in ("x", "y", "z")[:dimensions]]
+            if dimensions != len(parts) or not all(p.has(c) for c in axes):
+                continue
+            # which row is which axis: each axis the one row that equals it throughout
+            order = []
+            for c in axes:
+                along = p.raw(c)
+                match = [r for r, values in enumerate(actual)
+                         if r not in order and all(math.isfinite(a) and abs(a - v) <= tolerance
+                                                   for a, v in zip(values, along))]
+                if not match:
+                    break
+                order.append(match[0])
+            if len(order) == dimensions:
+                out.append({"requirement": base, "of": name,
+                            "q": [p.pack_fixed(parts[r][2], decimals) for r in order]})
+                break
+    return out
 
 
 def _point_columns(scene):
