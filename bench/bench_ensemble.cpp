@@ -12,6 +12,7 @@
 #include <mutex>
 #include <sstream>
 #include <string>
+#include <vector>
 
 #include <sys/syscall.h>
 #include <unistd.h>
@@ -42,23 +43,36 @@ std::string read_text(const std::string& name) {
 }
 
 // `count` samples of `file` with t_end, each setting `name` (a parameter: read again; or an
-// initial value: the model shared), on state.range(0) threads
-void run(benchmark::State& state, const char* file, double t_end, const char* name, double from,
-         double step, int count) {
+// initial value: the model shared)
+struct Batch {
   ukdyn::EnsembleModel model;
-  model.text = read_text(file);
-  model.file = file;
-  model.settings["t_end"] = t_end;
-  const ukdyn::Model base = ukdyn::parse_model(model.text, model.file);
-  std::vector<ukdyn::EnsembleSample> samples(static_cast<std::size_t>(count));
+  std::vector<ukdyn::EnsembleSample> samples;
+};
+Batch batch(const char* file, double t_end, const char* name, double from, double step,
+            int count) {
+  Batch b;
+  b.model.text = read_text(file);
+  b.model.file = file;
+  b.model.settings["t_end"] = t_end;
+  const ukdyn::Model base = ukdyn::parse_model(b.model.text, b.model.file);
+  b.samples.resize(static_cast<std::size_t>(count));
   for (int i = 0; i < count; ++i) {
     const double v = from + step * i;
     if (base.parameters.count(name)) {
-      samples[std::size_t(i)].parameters[name] = v;
+      b.samples[std::size_t(i)].parameters[name] = v;
     } else {
-      samples[std::size_t(i)].initial[name] = v;
+      b.samples[std::size_t(i)].initial[name] = v;
     }
   }
+  return b;
+}
+
+// the batch on state.range(0) threads
+void run(benchmark::State& state, const char* file, double t_end, const char* name, double from,
+         double step, int count) {
+  const Batch b = batch(file, t_end, name, from, step, count);
+  const ukdyn::EnsembleModel& model = b.model;
+  const std::vector<ukdyn::EnsembleSample>& samples = b.samples;
   ukdyn::EnsembleOptions options;
   options.threads = unsigned(state.range(0));
   // each worker thread's time waiting for a core (the kernel's schedstat), read after each of
@@ -106,6 +120,48 @@ void BM_EnsemblePendulumInitial(benchmark::State& state) {
 void BM_EnsembleFourBar(benchmark::State& state) {
   run(state, "double_four_bar.yaml", 10.0, "v0", 1.0, 0.05, 4);
 }
+// The parallel efficiency t1 / (2 t2) measured in pairs: each iteration runs the batch on one
+// thread, then on two, so that both see the same machine (on a shared VM one thread's rate
+// drifts by 1.8x within a minute with the other guests' load; a pair of batches tens of
+// milliseconds apart sees the same). Counters: efficiency (total t1 / (2 total t2)) and
+// median_efficiency (the median over the iterations' pairs).
+void paired(benchmark::State& state, const char* file, double t_end, const char* name,
+            double from, double step, int count) {
+  const Batch b = batch(file, t_end, name, from, step, count);
+  auto seconds = [&](unsigned threads) {
+    ukdyn::EnsembleOptions options;
+    options.threads = threads;
+    const auto t0 = std::chrono::steady_clock::now();
+    const ukdyn::EnsembleResult r = ukdyn::run_ensemble(b.model, b.samples, options);
+    const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    if (r.failed() != 0) state.SkipWithError(r.samples[0].message.c_str());
+    benchmark::DoNotOptimize(r.samples.data());
+    return s;
+  };
+  double one = 0.0, two = 0.0;
+  std::vector<double> ratios;
+  for (auto _ : state) {
+    const double t1 = seconds(1), t2 = seconds(2);
+    one += t1;
+    two += t2;
+    ratios.push_back(t1 / (2.0 * t2));
+  }
+  std::sort(ratios.begin(), ratios.end());
+  state.counters["efficiency"] = one / (2.0 * two);
+  state.counters["median_efficiency"] = ratios[ratios.size() / 2];
+  state.counters["samples_per_s_1"] = double(state.iterations() * count) / one;
+  state.counters["samples_per_s_2"] = double(state.iterations() * count) / two;
+}
+void BM_PairedPendulumInitial(benchmark::State& state) {
+  paired(state, "pendulum.yaml", 1.0, "y_dot", 0.0, -0.01, int(state.range(0)));
+}
+void BM_PairedPendulumParameters(benchmark::State& state) {
+  paired(state, "pendulum.yaml", 1.0, "L", 0.5, 0.05 / 32, int(state.range(0)));
+}
+void BM_PairedFourBar(benchmark::State& state) {
+  paired(state, "double_four_bar.yaml", 10.0, "v0", 1.0, 0.05, 4);
+}
+
 // reading the pendulum's model file once: what a sample that changes parameters adds
 void BM_ParsePendulum(benchmark::State& state) {
   const std::string text = read_text("pendulum.yaml");
@@ -142,6 +198,11 @@ BENCHMARK(BM_EnsembleFourBar)
     ->UseRealTime()
     ->MeasureProcessCPUTime()
     ->Unit(benchmark::kMillisecond);
+// (the batch's size: 32 samples as above, and 256, a sweep's size, where the fixed cost of a
+// batch — reading the model once, starting the threads — weighs less)
+BENCHMARK(BM_PairedPendulumInitial)->Arg(32)->Arg(256)->UseRealTime()->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_PairedPendulumParameters)->Arg(32)->Arg(256)->UseRealTime()->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_PairedFourBar)->UseRealTime()->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_ParsePendulum)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_ParseFourBar)->Unit(benchmark::kMillisecond);
 BENCHMARK_MAIN();

@@ -918,11 +918,11 @@ void Reader::read_nonideal(const YAML::Node& root, SystemBuilder& builder) {
   }
 }
 
-Model Reader::read(const std::string& text) {
+YAML::Node Reader::load_yaml(const std::string& text, const std::string& file) {
   // not YAML at all: an XML robot description (URDF, MJCF, SDF)
   const std::size_t first = text.find_first_not_of(" \t\r\n");
   if (first != std::string::npos && text[first] == '<') {
-    throw ModelError(file_, 1, 1,
+    throw ModelError(file, 1, 1,
                      "this looks like an XML file (URDF, MJCF, SDF …): ukdyn reads its own YAML "
                      "model format",
                      "see docs/model-format.md; write the bodies and joints under bodies: and "
@@ -933,29 +933,33 @@ Model Reader::read(const std::string& text) {
     const std::size_t line_start =
         text.rfind('\n', nul) == std::string::npos ? 0 : text.rfind('\n', nul) + 1;
     const int line = 1 + int(std::count(text.begin(), text.begin() + long(nul), '\n'));
-    throw ModelError(file_, line, int(nul - line_start) + 1,
+    throw ModelError(file, line, int(nul - line_start) + 1,
                      "the model text holds a NUL byte (is this a binary file?)",
                      "a model file is YAML text (docs/model-format.md)");
   }
   // duplicate keys, a second document, self-referencing aliases, runaway nesting
   // (modelfile/yaml_structure.cpp)
-  check_yaml_structure(text, file_);
+  check_yaml_structure(text, file);
   YAML::Node root;
   try {
     root = YAML::Load(text);
   } catch (const YAML::ParserException& e) {
-    throw ModelError(file_, e.mark.line + 1, e.mark.column + 1, "YAML syntax: " + e.msg,
+    throw ModelError(file, e.mark.line + 1, e.mark.column + 1, "YAML syntax: " + e.msg,
                      "check the indentation, brackets and colons");
   }
   if (root.IsNull()) {
     // located where the model should begin, as every reader error is (file:line:column)
-    throw ModelError(file_, 1, 1, "the model file is empty (or holds only comments)",
+    throw ModelError(file, 1, 1, "the model file is empty (or holds only comments)",
                      "start with name:, coordinates:, … (docs/model-format.md)");
   }
   if (!root.IsMap()) {
-    throw ModelError(file_, 1, 1, "a model is a mapping of keys",
+    throw ModelError(file, 1, 1, "a model is a mapping of keys",
                      "start with name:, coordinates:, …");
   }
+  return root;
+}
+
+Model Reader::read(const YAML::Node& root) {
   for (const auto& kv : root) {
     const std::string key = kv.first.Scalar();
     if (std::find(kTopLevelKeys.begin(), kTopLevelKeys.end(), key) == kTopLevelKeys.end()) {
@@ -1104,13 +1108,16 @@ Model Reader::read_generalized(const YAML::Node& root) {
 
 Model parse_model(const std::string& text, const std::string& file,
                   const std::map<std::string, double>& overrides) {
-  // one model is read at a time, whichever thread asks (an ensemble's workers, Python threads
-  // with the GIL released): GiNaC, which the reader differentiates with, shares reference-counted
-  // objects whose counts are not atomic. The reader's GiNaC objects all die before the lock is
-  // released; the Model holds none (its expressions are compiled programs)
+  // the YAML is parsed first, by any number of threads at once (yaml-cpp shares nothing between
+  // documents; it is a third of the pendulum's reading, bench/RESULTS.md "Ensembles")
+  const YAML::Node root = model_reader::Reader::load_yaml(text, file);
+  // then one model is read at a time, whichever thread asks (an ensemble's workers, Python
+  // threads with the GIL released): GiNaC, which the reader differentiates with, shares
+  // reference-counted objects whose counts are not atomic. The reader's GiNaC objects all die
+  // before the lock is released; the Model holds none (its expressions are compiled programs)
   static std::mutex mutex;
   const std::lock_guard<std::mutex> lock(mutex);
-  return model_reader::Reader(file, overrides).read(text);
+  return model_reader::Reader(file, overrides).read(root);
 }
 
 Model load_model(const std::string& path, const std::map<std::string, double>& overrides) {

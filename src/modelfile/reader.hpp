@@ -290,8 +290,12 @@ class Reader {
   Reader(std::string file, const std::map<std::string, double>& overrides)
       : file_(std::move(file)), overrides_(overrides) {}
 
-  /// The whole file: the plant, then its controller (control:).
-  Model read(const std::string& text);
+  /// The file's YAML, parsed and checked (not XML, no NUL byte, no duplicate key …: errors
+  /// located in `file`). Uses no GiNaC: parse_model runs it outside its lock.
+  static YAML::Node load_yaml(const std::string& text, const std::string& file);
+
+  /// The whole file (`root`, from load_yaml): the plant, then its controller (control:).
+  Model read(const YAML::Node& root);
 
  private:
   // the plant (everything but control:); `root` is the parsed file

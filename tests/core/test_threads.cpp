@@ -169,8 +169,9 @@ TEST(Threads, OneControlledSystemRunsOnFourThreadsAsSerially) {
 }
 
 TEST(Threads, EnsembleOnFourThreadsAsOnOne) {
-  // run_ensemble (simulation/ensemble.hpp): samples that read the model again (parameters, under
-  // the reader's lock) and samples that share it (initial values), on a pool of four threads,
+  // run_ensemble (simulation/ensemble.hpp): samples that read the model again (parameters: their
+  // YAML parsed on four threads at once, the rest under the reader's lock) and samples that
+  // share it (initial values), on a pool of four threads,
   // bitwise as on one; under ThreadSanitizer in CI (tests/simulation/test_ensemble.cpp has the
   // rest)
   EnsembleModel model;
