@@ -43,8 +43,8 @@ struct BodyRef {
 struct CosSin {
   double c, s;
 };
-/// {std::cos(theta), std::sin(theta)}, out of line: one sincos call, whichever branch asks for
-/// it (inlined into two branches, one of them got a sincos and the other a cos and a sin).
+/// {std::cos(theta), std::sin(theta)}, bitwise, from one call of glibc's sincos (out of line:
+/// one call whichever branch asks for it).
 CosSin cos_sin_of(double theta);
 
 /// The multibody System's per-workspace scratch (its CallableScratch, made by

@@ -15,7 +15,13 @@ BodyRef body_ref(const std::vector<BodyInfo>& bodies, BodyId id) {
   return {b.kind, b.offset, 0, id};
 }
 
-CosSin cos_sin_of(double theta) { return {std::cos(theta), std::sin(theta)}; }
+CosSin cos_sin_of(double theta) {
+  // glibc's sincos: one argument reduction for both, bitwise std::cos and std::sin (the same
+  // kernels; GCC does not merge the two calls by itself without -ffast-math)
+  CosSin cs;
+  ::sincos(theta, &cs.s, &cs.c);
+  return cs;
+}
 
 PoseCache::PoseCache(Index bodies) : trig_(std::size_t(bodies)), rotation_(std::size_t(bodies)) {
   // every entry starts as a valid memo: theta = 0
