@@ -1,4 +1,5 @@
 // `ukdyn check`: the report of check_model(), readable.
+#include <cmath>
 #include <cstdio>
 #include <string>
 
@@ -89,9 +90,25 @@ int check_command(const ModelSource& source) {
                 ctrl.requirement_count() == 1 ? "" : "s",
                 ctrl.fully_actuated() ? "every coordinate actuated" : "actuated:",
                 ctrl.robust() ? ", robust term" : "");
-    if (!ctrl.fully_actuated()) {
+    if (!ctrl.fully_actuated() && !ctrl.actuated_coordinates().empty()) {
       for (Index j : ctrl.actuated_coordinates()) {
         std::printf("                        %s\n", sys.coordinate_names()[std::size_t(j)].c_str());
+      }
+    } else if (!ctrl.fully_actuated()) {
+      // an actuation matrix (joints' actuators, S given): each actuator's generalized force
+      // direction, column j of S, as a combination of the coordinates
+      const MatrixXd& S = ctrl.actuation();
+      for (Index j = 0; j < S.cols(); ++j) {
+        std::string terms;
+        for (Index i = 0; i < S.rows(); ++i) {
+          const double v = S(i, j);
+          if (v == 0.0) continue;
+          const std::string& name = sys.coordinate_names()[std::size_t(i)];
+          const std::string size = std::abs(v) == 1.0 ? "" : format_number(std::abs(v)) + " ";
+          terms += (terms.empty() ? (v < 0 ? "-" : "") : (v < 0 ? " - " : " + ")) + size + name;
+        }
+        std::printf("                        actuator %lld: %s\n", static_cast<long long>(j + 1),
+                    terms.empty() ? "0" : terms.c_str());
       }
     }
     for (Index k = 0; k < ctrl.requirement_count(); ++k) {

@@ -1,5 +1,6 @@
 // ukdyn: the command-line front end. Argument parsing and dispatch only; the subcommands live in
 // run.cpp, check.cpp and source.cpp, the physics in the library.
+#include <algorithm>
 #include <cstdint>
 #include <cstdio>
 #include <exception>
@@ -7,6 +8,7 @@
 #include <map>
 #include <optional>
 #include <string>
+#include <thread>
 #include <utility>
 #include <vector>
 
@@ -54,6 +56,9 @@ void add_source_options(CLI::App* cmd, ukdyn::cli::ModelSource& source) {
 
 // the whole number a flag was given, >= min: a text such as -3, 2.5 or 1e3 is refused with the flag
 // named (CLI11 would wrap -3 of an unsigned option to 2^64 - 3)
+// the most threads `ukdyn sweep --jobs` takes
+constexpr std::uint64_t kMaxJobs = 1024;
+
 std::uint64_t whole_number_of(const std::string& flag, const std::string& text, std::uint64_t min) {
   std::uint64_t value = 0;
   bool ok = !text.empty() && text.size() <= 20;
@@ -191,7 +196,10 @@ int main(int argc, char** argv) {
       ->type_name("NAME")
       ->expected(1)
       ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
-  sweep_cmd->add_option("-j,--jobs", sweep.jobs, "threads (default: every core)")->type_name("N");
+  std::string jobs_text;
+  CLI::Option* jobs_opt =
+      sweep_cmd->add_option("-j,--jobs", jobs_text, "threads, 1 to 1024 (default 0: every core)")
+          ->type_name("N");
   sweep_cmd
       ->add_option("-o,--output", sweep.out_dir, "output directory (default ukdyn-sweep-<model>)")
       ->type_name("DIR");
@@ -264,6 +272,17 @@ int main(int argc, char** argv) {
       }
       if (samples_opt->count() > 0) sweep.samples = whole_number_of("--samples", samples_text, 1);
       if (seed_opt->count() > 0) sweep.seed = whole_number_of("--seed", seed_text, 0);
+      if (jobs_opt->count() > 0) {
+        // (a thread per sample at most; more than 1024 is a typo, not a machine)
+        const std::uint64_t jobs = whole_number_of("--jobs", jobs_text, 0);
+        if (jobs > kMaxJobs) {
+          throw UsageError("--jobs " + jobs_text + ": at most " + std::to_string(kMaxJobs) +
+                           " threads (0: one per core, " +
+                           std::to_string(std::max(1u, std::thread::hardware_concurrency())) +
+                           " here)");
+        }
+        sweep.jobs = unsigned(jobs);
+      }
       sweep.plots = !sweep_no_plots;
       sweep.arguments.assign(argv, argv + argc);
       return sweep_command(sweep);

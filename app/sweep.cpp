@@ -45,6 +45,11 @@ try:
 except ImportError:
     sys.exit(3)
 table, out, grid, rand, outputs = sys.argv[1], sys.argv[2], sys.argv[3], sys.argv[4], sys.argv[5]
+# the model's units (name=unit, tab-separated): a column's axis is labelled "name [unit]"
+units = dict(u.split("=", 1) for u in sys.argv[6].split("\t") if "=" in u)
+def label(column):
+    unit = units.get(column.split("@", 1)[0], "")
+    return f"{column} [{unit}]" if unit else column
 grid = [g for g in grid.split(",") if g]
 rand = [r for r in rand.split(",") if r]
 outputs = [o for o in outputs.split(",") if o]
@@ -71,9 +76,9 @@ for ax, name in zip(axes[:, 0], outputs):
             if all(num(r, g) == v for g, v in first.items()):
                 z[ys.index(num(r, grid[0]))][xs.index(num(r, grid[1]))] = num(r, name)
         mesh = ax.pcolormesh(xs, ys, z, shading="nearest")
-        fig.colorbar(mesh, ax=ax, label=name)
-        ax.set_xlabel(grid[1])
-        ax.set_ylabel(grid[0])
+        fig.colorbar(mesh, ax=ax, label=label(name))
+        ax.set_xlabel(label(grid[1]))
+        ax.set_ylabel(label(grid[0]))
         for r in bad:
             ax.plot(num(r, grid[1]), num(r, grid[0]), "rx")
     else:
@@ -81,8 +86,8 @@ for ax, name in zip(axes[:, 0], outputs):
         ax.plot([num(r, x) for r in ok], [num(r, name) for r in ok],
                 "-o" if grid and not rand else ".", ms=3)
         ax.plot([num(r, x) for r in bad], [0.0 for r in bad], "rx", label="failed")
-        ax.set_xlabel(x)
-        ax.set_ylabel(name)
+        ax.set_xlabel(label(x))
+        ax.set_ylabel(label(name))
     ax.set_title(f"{name} over {', '.join(swept)} ({len(ok)} ok, {len(bad)} failed)")
     ax.grid(True, alpha=0.3)
 fig.tight_layout()
@@ -309,9 +314,23 @@ int sweep_command(const SweepArguments& args) {
       outs += (outs.empty() ? "" : ",") + o + "@" +
               (options.at.empty() ? std::string("end") : format_number(options.at.back()));
     }
+    // the units of the coordinates (their velocities: per second) and of the output expressions
+    std::string units;
+    auto add_unit = [&units](const std::string& name, const std::string& unit) {
+      if (!unit.empty()) units += (units.empty() ? "" : "\t") + name + "=" + unit;
+    };
+    const auto& coords = base.system.coordinate_names();
+    for (std::size_t i = 0; i < coords.size() && i < base.coordinate_units.size(); ++i) {
+      const std::string& u = base.coordinate_units[i];
+      add_unit(coords[i], u);
+      if (!u.empty()) add_unit(coords[i] + "_dot", u == "1" ? "1/s" : u + "/s");
+    }
+    for (std::size_t i = 0; i < base.output_names.size() && i < base.output_units.size(); ++i) {
+      add_unit(base.output_names[i], base.output_units[i]);
+    }
     const int code = is_executable(python)
                          ? run_program({python, "-c", kSweepPlot, csv_path.string(),
-                                        (dir / "sweep.png").string(), grid, rand, outs})
+                                        (dir / "sweep.png").string(), grid, rand, outs, units})
                          : -1;
     if (code != 0) {
       std::fprintf(stderr, "warning: no summary plot (%s)\n",

@@ -48,8 +48,7 @@ struct Batch {
   ukdyn::EnsembleModel model;
   std::vector<ukdyn::EnsembleSample> samples;
 };
-Batch batch(const char* file, double t_end, const char* name, double from, double step,
-            int count) {
+Batch batch(const char* file, double t_end, const char* name, double from, double step, int count) {
   Batch b;
   b.model.text = read_text(file);
   b.model.file = file;
@@ -125,8 +124,8 @@ void BM_EnsembleFourBar(benchmark::State& state) {
 // drifts by 1.8x within a minute with the other guests' load; a pair of batches tens of
 // milliseconds apart sees the same). Counters: efficiency (total t1 / (2 total t2)) and
 // median_efficiency (the median over the iterations' pairs).
-void paired(benchmark::State& state, const char* file, double t_end, const char* name,
-            double from, double step, int count) {
+void paired(benchmark::State& state, const char* file, double t_end, const char* name, double from,
+            double step, int count) {
   const Batch b = batch(file, t_end, name, from, step, count);
   auto seconds = [&](unsigned threads) {
     ukdyn::EnsembleOptions options;
@@ -200,8 +199,16 @@ BENCHMARK(BM_EnsembleFourBar)
     ->Unit(benchmark::kMillisecond);
 // (the batch's size: 32 samples as above, and 256, a sweep's size, where the fixed cost of a
 // batch — reading the model once, starting the threads — weighs less)
-BENCHMARK(BM_PairedPendulumInitial)->Arg(32)->Arg(256)->UseRealTime()->Unit(benchmark::kMillisecond);
-BENCHMARK(BM_PairedPendulumParameters)->Arg(32)->Arg(256)->UseRealTime()->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_PairedPendulumInitial)
+    ->Arg(32)
+    ->Arg(256)
+    ->UseRealTime()
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_PairedPendulumParameters)
+    ->Arg(32)
+    ->Arg(256)
+    ->UseRealTime()
+    ->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_PairedFourBar)->UseRealTime()->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_ParsePendulum)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_ParseFourBar)->Unit(benchmark::kMillisecond);

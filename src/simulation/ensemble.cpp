@@ -20,6 +20,7 @@
 #include <set>
 #include <stdexcept>
 #include <thread>
+#include <utility>
 
 #include <nlohmann/json.hpp>
 
@@ -39,14 +40,25 @@ std::string comma_list(const std::vector<std::string>& names) {
   return out;
 }
 
+// The coordinate a sample's initial value sets: its index and whether the value is its velocity,
+// by the coordinate's name or its spelling in expressions (a body's cart.x is cart_x there): x,
+// x_dot, cart.x, cart_x, cart.x_dot, cart_x_dot. {-1, false} for none. Cost O(n).
+std::pair<Index, bool> coordinate_of(const std::vector<std::string>& coords,
+                                     const std::string& name) {
+  for (std::size_t k = 0; k < coords.size(); ++k) {
+    std::string spelled = coords[k];
+    std::replace(spelled.begin(), spelled.end(), '.', '_');
+    if (name == coords[k] || name == spelled) return {Index(k), false};
+    if (name == coords[k] + "_dot" || name == spelled + "_dot") return {Index(k), true};
+  }
+  return {-1, false};
+}
+
 // What a sample's name sets, checked against the model once before any run.
 void check_sample_names(const Model& base, const std::vector<EnsembleSample>& samples) {
   const auto& coords = base.system.coordinate_names();
   auto is_coordinate = [&](const std::string& name) {
-    for (const auto& c : coords) {
-      if (name == c || name == c + "_dot") return true;
-    }
-    return false;
+    return coordinate_of(coords, name).first >= 0;
   };
   for (std::size_t i = 0; i < samples.size(); ++i) {
     const EnsembleSample& s = samples[i];
@@ -68,6 +80,14 @@ void check_sample_names(const Model& base, const std::vector<EnsembleSample>& sa
       }
       if (s.parameters.count(kv.first)) {
         throw std::invalid_argument(who + "'" + kv.first + "' is set twice");
+      }
+      // (the same coordinate by its two spellings, cart.x and cart_x)
+      for (const auto& other : s.initial) {
+        if (other.first < kv.first &&
+            coordinate_of(coords, other.first) == coordinate_of(coords, kv.first)) {
+          throw std::invalid_argument(who + "'" + other.first + "' and '" + kv.first +
+                                      "' set the same coordinate");
+        }
       }
     }
     for (const auto& kv : s.settings) {
@@ -133,13 +153,9 @@ void run_sample(Pool& pool, std::size_t i) {
     if (!sample.initial.empty()) {
       if (!own) own.emplace(pool.base);
       const auto& coords = own->system.coordinate_names();
-      for (std::size_t k = 0; k < coords.size(); ++k) {
-        if (auto it = sample.initial.find(coords[k]); it != sample.initial.end()) {
-          own->q0[Index(k)] = it->second;
-        }
-        if (auto it = sample.initial.find(coords[k] + "_dot"); it != sample.initial.end()) {
-          own->qd0[Index(k)] = it->second;
-        }
+      for (const auto& [name, value] : sample.initial) {
+        const auto [k, velocity] = coordinate_of(coords, name);  // (checked: k >= 0)
+        (velocity ? own->qd0 : own->q0)[k] = value;
       }
     }
     if (own) model = &*own;
@@ -359,9 +375,7 @@ std::vector<EnsembleSample> samples_of_design(const Model& model, const DesignTa
       kinds.push_back(Kind::kParameter);
       continue;
     }
-    bool coordinate = false;
-    for (const auto& c : coords) coordinate = coordinate || name == c || name == c + "_dot";
-    if (coordinate) {
+    if (coordinate_of(coords, name).first >= 0) {
       kinds.push_back(Kind::kInitial);
       continue;
     }

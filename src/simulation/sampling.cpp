@@ -75,10 +75,13 @@ double number(std::string_view s, std::string_view whole, const char* form) {
   return v;
 }
 
+// an identifier, or a body's coordinate: dotted identifiers (cart.x, cart.x_dot)
 bool is_name(std::string_view s) {
   if (s.empty() || !(std::isalpha(static_cast<unsigned char>(s[0])) || s[0] == '_')) return false;
-  for (char c : s) {
-    if (!(std::isalnum(static_cast<unsigned char>(c)) || c == '_')) return false;
+  for (std::size_t i = 0; i < s.size(); ++i) {
+    const char c = s[i];
+    const bool dot = c == '.' && i + 1 < s.size() && s[i - 1] != '.';
+    if (!(std::isalnum(static_cast<unsigned char>(c)) || c == '_' || dot)) return false;
   }
   return true;
 }

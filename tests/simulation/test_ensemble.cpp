@@ -15,6 +15,7 @@
 #include <ukdyn/modelfile/model.hpp>
 #include <ukdyn/modelfile/run.hpp>
 #include <ukdyn/simulation/ensemble.hpp>
+#include <ukdyn/simulation/sampling.hpp>
 
 namespace ukdyn {
 namespace {
@@ -277,6 +278,52 @@ TEST(Ensemble, MisuseNamesTheSampleAndTheName) {
   EXPECT_EQ(s[0].settings.at("rtol"), 1e-8);
   d.names[0] = "Lx";
   EXPECT_THROW(samples_of_design(model, d), std::invalid_argument);
+}
+
+TEST(Ensemble, ABodysCoordinatesAreSetByEitherSpelling) {
+  // a planar body thrown under gravity (the bodies format: its coordinates are ball.x, ball.y,
+  // ball.theta; ball_x … in expressions): a sample sets x'(0) and y'(0) as ball.x_dot or as
+  // ball_x_dot, and y(T) = vy T − g T²/2, x(T) = vx T (closed form) either way; a grid of the
+  // command line's form names the dotted coordinate
+  EnsembleModel m;
+  m.file = "ball.yaml";
+  m.text = R"(
+parameters: {g: 9.81}
+bodies:
+  - {name: ball, type: planar, mass: 1, inertia: 0.1, position: [0, 0], angle: 0}
+forces:
+  - {type: gravity, g: [0, -g]}
+simulate: {t_end: 0.5, integrator: dopri5, rtol: 1e-12, atol: 1e-14}
+)";
+  std::vector<EnsembleSample> samples(2);
+  samples[0].initial = {{"ball.x_dot", 1.5}, {"ball.y_dot", 2.0}};
+  samples[1].initial = {{"ball_x_dot", 1.5}, {"ball_y_dot", 2.0}};
+  const EnsembleResult r = run_ensemble(m, samples, {});
+  const std::size_t x = column(r, "ball.x"), y = column(r, "ball.y");
+  for (const SampleResult& s : r.samples) {
+    ASSERT_TRUE(s.ok()) << s.message;
+    EXPECT_NEAR(s.values[x], 1.5 * 0.5, 1e-10);
+    EXPECT_NEAR(s.values[y], 2.0 * 0.5 - 9.81 * 0.25 / 2, 1e-10);
+  }
+  EXPECT_EQ(r.samples[0].values, r.samples[1].values);
+  // both spellings of one coordinate in one sample: refused, naming both
+  samples[0].initial["ball_x_dot"] = 1.0;
+  try {
+    run_ensemble(m, samples, {});
+    FAIL();
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("'ball.x_dot' and 'ball_x_dot' set the same coordinate"),
+              std::string::npos)
+        << e.what();
+  }
+  // --grid ball.x_dot=0:1:3, as `ukdyn sweep` reads it
+  const GridAxis axis = parse_grid_axis("ball.x_dot=0:1:3");
+  EXPECT_EQ(axis.name, "ball.x_dot");
+  EXPECT_THROW(parse_grid_axis("ball..x=0:1:3"), std::invalid_argument);
+  EXPECT_THROW(parse_grid_axis("ball.=0:1:3"), std::invalid_argument);
+  const Model model = parse_model(m.text, m.file);
+  const auto s = samples_of_design(model, DesignTable{{"ball_y_dot"}, {{3.0}}});
+  EXPECT_EQ(s[0].initial.at("ball_y_dot"), 3.0);
 }
 
 TEST(Ensemble, TableFilesHoldEveryRow) {
