@@ -23,8 +23,8 @@ std::uint64_t next_controller_id() {
   return counter++;
 }
 
-[[noreturn]] void refuse(const std::string& what) {
-  throw std::invalid_argument("ukdyn::ControllerBuilder::build: " + what);
+[[noreturn]] void refuse(const std::string& what, const char* who = "build") {
+  throw std::invalid_argument(std::string("ukdyn::ControllerBuilder::") + who + ": " + what);
 }
 
 std::string coordinate_list(const System& sys) {
@@ -33,21 +33,23 @@ std::string coordinate_list(const System& sys) {
   return s;
 }
 
-// a symmetric positive definite n × n matrix, or a message saying why not
-void check_weight(const MatrixXd& N, Index n) {
+// a symmetric positive definite n × n matrix, or a message saying why not (from `who`)
+void check_weight(const MatrixXd& N, Index n, const char* who) {
   if (N.rows() != n || N.cols() != n) {
     refuse("the weight N must be n × n = " + format_number(n) + " × " + format_number(n) +
-           ", got " + format_number(N.rows()) + " × " + format_number(N.cols()));
+               ", got " + format_number(N.rows()) + " × " + format_number(N.cols()),
+           who);
   }
-  if (!N.allFinite()) refuse("the weight N holds NaN or Inf");
+  if (!N.allFinite()) refuse("the weight N holds NaN or Inf", who);
   const double scale = N.cwiseAbs().maxCoeff();
   if ((N - N.transpose()).cwiseAbs().maxCoeff() > 1e-12 * scale) {
     refuse("the weight N must be symmetric (max |N − Nᵀ| = " +
-           format((N - N.transpose()).cwiseAbs().maxCoeff()) + ")");
+               format((N - N.transpose()).cwiseAbs().maxCoeff()) + ")",
+           who);
   }
   Eigen::LLT<MatrixXd> llt(N);
   if (llt.info() != Eigen::Success) {
-    refuse("the weight N must be positive definite (its Cholesky factorization failed)");
+    refuse("the weight N must be positive definite (its Cholesky factorization failed)", who);
   }
 }
 
@@ -111,6 +113,8 @@ ControllerBuilder& ControllerBuilder::weighted(WeightFn N) {
 }
 
 ControllerBuilder& ControllerBuilder::weighted(const Eigen::Ref<const MatrixXd>& N) {
+  // checked here, where it is given (a model file's error then points at N:), and in build()
+  check_weight(N, model_.coordinate_count(), "weighted");
   law_ = ControlLaw::kWeighted;
   weight_constant_ = N;
   has_weight_constant_ = true;
@@ -185,7 +189,7 @@ Controller ControllerBuilder::build() const {
   c.law_ = law_;
   if (law_ == ControlLaw::kWeighted) {
     if (has_weight_constant_) {
-      check_weight(weight_constant_, n);
+      check_weight(weight_constant_, n, "build");
       const MatrixXd N = weight_constant_;
       c.weight_ = [N](const Eigen::Ref<const VectorXd>&, const Eigen::Ref<const VectorXd>&, double,
                       Eigen::Ref<MatrixXd> out) { out = N; };

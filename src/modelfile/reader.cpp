@@ -11,6 +11,7 @@
 #include <filesystem>
 #include <fstream>
 #include <limits>
+#include <map>
 #include <mutex>
 #include <set>
 #include <sstream>
@@ -807,6 +808,7 @@ void Reader::read_nonideal(const YAML::Node& root, SystemBuilder& builder) {
   if (!ns) return;
   if (!ns.IsSequence()) fail(ns, "nonideal must be a list");
   int index = 0;
+  std::map<std::string, int> coulomb_on;  // constraint → the entry that gives it Coulomb friction
   for (const auto& f : ns) {
     ++index;
     if (!f.IsMap()) fail(f, "a non-ideal force must be a mapping");
@@ -837,6 +839,14 @@ void Reader::read_nonideal(const YAML::Node& root, SystemBuilder& builder) {
             constraint_names_.end()) {
           fail(f["constraint"], "no constraint named '" + on + "'",
                "the constraints are " + join(constraint_names_));
+        }
+        // (one contact, one friction law: its stick state is the constraint's)
+        if (const auto [it, first] = coulomb_on.emplace(on, index); !first) {
+          fail(f["constraint"],
+               "constraint '" + on + "' has Coulomb friction already (non-ideal force " +
+                   std::to_string(it->second) + ")",
+               "one coulomb friction per constraint: list every sliding coordinate under its "
+               "coordinates:");
         }
         if (!f["mu"]) fail(f, "coulomb friction needs mu");
         CoulombFriction spec;

@@ -85,6 +85,15 @@ VectorXd actuation_of_joint(const mb::MultibodyModel& m, const mb::JointInfo& j,
   return {};
 }
 
+// A library message without the C++ function that gave it ("ukdyn::ControllerBuilder::build: the
+// weight N …" → "the weight N …"): a model file's reader names the file, line and key instead.
+std::string api_free(const std::string& message) {
+  if (message.rfind("ukdyn::", 0) == 0) {
+    if (const auto k = message.find(": "); k != std::string::npos) return message.substr(k + 2);
+  }
+  return message;
+}
+
 }  // namespace
 
 ErrorDynamics Reader::read_error_dynamics(const YAML::Node& r, const std::string& what,
@@ -103,9 +112,13 @@ ErrorDynamics Reader::read_error_dynamics(const YAML::Node& r, const std::string
     try {
       return make();
     } catch (const std::invalid_argument& e) {
+      // (ErrorDynamics' words for a C++ caller: its name, and its advice to use none())
       std::string message = e.what();
       if (const auto k = message.find(": "); k != std::string::npos) message.erase(0, k + 2);
-      fail(d, "the dynamics of " + what + ": " + message, "the gains must be positive numbers");
+      if (const auto k = message.find(" (for no error dynamics"); k != std::string::npos)
+        message.erase(k);
+      fail(d, "the dynamics of " + what + ": " + message,
+           "the gains must be positive numbers (omit dynamics: for none)");
     }
   };
   const bool holonomic = kind == ConstraintKind::kHolonomic;
@@ -247,7 +260,19 @@ void Reader::read_control(const YAML::Node& root, Model& model) {
       values[name] = number(kv.second, "nominal " + name);
     }
     nominal_reader = std::make_unique<Reader>(file_, values);
-    nominal = nominal_reader->read_plant(root).system;
+    try {
+      nominal = nominal_reader->read_plant(root).system;
+    } catch (const ModelError& e) {
+      // the plant read with the nominal parameters: say so (the plant itself was fine)
+      std::string given;
+      for (const auto& kv : nom) {
+        given += (given.empty() ? "" : ", ") + kv.first.Scalar() + ": " + kv.second.Scalar();
+      }
+      throw ModelError(e.file(), e.line(), e.column(),
+                       "with the controller's nominal parameters (control: nominal: {" + given +
+                           "}): " + e.message(),
+                       e.hint().empty() ? "check the values under nominal:" : e.hint());
+    }
     ctl = nominal_reader.get();
   }
   ControllerBuilder builder(nominal);
@@ -298,7 +323,8 @@ void Reader::read_control(const YAML::Node& root, Model& model) {
         builder.weighted(std::move(fn));
       }
     } catch (const std::invalid_argument& e) {
-      fail(c["N"], e.what());
+      fail(c["N"], api_free(e.what()),
+           "a weight is a symmetric positive definite n × n matrix: [[1, 0], [0, 4]]");
     }
   } else {
     fail(c["law"], "unknown law '" + law + "'", "the laws are gauss and weighted");
@@ -377,21 +403,32 @@ void Reader::read_control(const YAML::Node& root, Model& model) {
     only_keys(rb, {"bound", "relative_bound", "gain_uncertainty", "boundary_layer"}, "robust",
               failer);
     RobustControl settings;
+    // each number's range checked at its key (the builder checks them again)
+    auto in_range = [&](const char* key, bool ok, const char* range) {
+      if (!ok) fail(rb[key], std::string("robust ") + key + " must be " + range);
+    };
     if (rb["bound"]) settings.bound = number(rb["bound"], "bound");
+    in_range("bound", settings.bound >= 0.0 && std::isfinite(settings.bound), ">= 0");
     if (rb["relative_bound"])
       settings.relative_bound = number(rb["relative_bound"], "relative_bound");
+    in_range("relative_bound",
+             settings.relative_bound >= 0.0 && std::isfinite(settings.relative_bound), ">= 0");
     if (rb["gain_uncertainty"])
       settings.gain_uncertainty = number(rb["gain_uncertainty"], "gain_uncertainty");
+    in_range("gain_uncertainty",
+             settings.gain_uncertainty >= 0.0 && settings.gain_uncertainty < 1.0, "in [0, 1)");
     if (!rb["boundary_layer"])
       fail(rb, "robust needs boundary_layer (> 0)", "{bound: 0.5, boundary_layer: 0.01}");
     settings.boundary_layer = number(rb["boundary_layer"], "boundary_layer");
+    in_range("boundary_layer",
+             settings.boundary_layer > 0.0 && std::isfinite(settings.boundary_layer), "> 0");
     builder.robust(settings);
   }
 
   try {
     model.controller = std::make_shared<const Controller>(builder.build());
   } catch (const std::invalid_argument& e) {
-    fail(c, e.what());
+    fail(c, api_free(e.what()));
   }
 }
 

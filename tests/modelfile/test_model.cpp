@@ -455,6 +455,15 @@ TEST(ModelErrors, NonIdealForceNamingAMissingCoordinateOrConstraint) {
   EXPECT_TRUE(contains(e, "m.yaml:6:")) << e;
   e = error_of(base + "nonideal:\n  - {friction: coulomb, constraint: flor, mu: 0.1}\n");
   EXPECT_TRUE(contains(e, "no constraint named 'flor' (hint: the constraints are floor)")) << e;
+  // a second Coulomb friction on one constraint, located at it (it was "1:1: error:
+  // ukdyn::SystemBuilder::build: constraint 'stick.coulomb.floor' is declared twice")
+  e = error_of(base +
+               "nonideal:\n  - {friction: coulomb, constraint: floor, mu: 0.3, coordinates: [x]}\n"
+               "  - {friction: coulomb, constraint: floor, mu: 0.2, coordinates: [x]}\n");
+  EXPECT_TRUE(contains(e,
+                       "m.yaml:7:37: error: constraint 'floor' has Coulomb friction already "
+                       "(non-ideal force 1)"))
+      << e;
 }
 
 TEST(ModelErrors, OutputTimeOutsideTheRunAndUnknownParameterOverride) {

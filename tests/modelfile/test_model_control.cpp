@@ -494,11 +494,40 @@ TEST(ModelControl, BadControlSectionsAreLocatedErrors) {
                "the model has no parameter 'k'");
   expect_error("  requirements: [{name: r, holonomic: x - t}]\n  robust: {bound: 1}\n", 9, 11,
                "robust needs boundary_layer");
-  // the builder's own checks, located at the section: a weight that is not positive definite
+  // the builder's own checks, located at their keys and in the model file's words (from a new
+  // user's report: they pointed at requirements: and named ukdyn::ControllerBuilder::build)
   expect_error(
       "  requirements: [{name: r, holonomic: x - t}]\n  law: weighted\n"
       "  N: [[1, 0], [0, -1]]\n",
-      8, 3, "positive definite");
+      10, 6, "c.yaml:10:6: error: the weight N must be positive definite");
+  expect_error(
+      "  requirements: [{name: r, holonomic: x - t, dynamics: {omega: 2}}]\n"
+      "  robust: {bound: 0.1, boundary_layer: 0}\n",
+      9, 40, "robust boundary_layer must be > 0");
+  expect_error(
+      "  requirements: [{name: r, holonomic: x - t, dynamics: {omega: 2}}]\n"
+      "  robust: {bound: -1, boundary_layer: 0.1}\n",
+      9, 19, "robust bound must be >= 0");
+  expect_error(
+      "  requirements: [{name: r, holonomic: x - t, dynamics: {omega: 2}}]\n"
+      "  robust: {gain_uncertainty: 1, boundary_layer: 0.1}\n",
+      9, 30, "robust gain_uncertainty must be in [0, 1)");
+  // a plant that is fine with a nominal parameter that is not: the error says nominal
+  expect_error("  requirements: [{name: r, holonomic: x - t}]\n  nominal: {m: -1}\n", 3, 17,
+               "with the controller's nominal parameters (control: nominal: {m: -1}): ");
+  for (const char* bad : {"{omega: -1}", "{omega: 2, zeta: 0}"}) {
+    try {
+      parse_model(with_control(std::string("  requirements: [{name: r, holonomic: x - t, "
+                                           "dynamics: ") +
+                               bad + "}]\n"),
+                  "c.yaml");
+      ADD_FAILURE() << bad;
+    } catch (const ModelError& e) {
+      const std::string what = e.what();
+      EXPECT_EQ(what.find("ErrorDynamics"), std::string::npos) << what;
+      EXPECT_NE(what.find("omit dynamics: for none"), std::string::npos) << what;
+    }
+  }
 }
 
 TEST(ModelControl, NominalParametersReachTheControllerOnlyAndSetOverridesThePlant) {
