@@ -145,6 +145,8 @@ def test_ctrl_c_raises_interrupted_with_the_finished_samples():
     (dict(n=-1), "sweep: n=-1: must be a whole number >= 1"),
     (dict(n=2.5), "sweep: n=2.5: must be a whole number >= 1"),
     (dict(n=3, seed=-1), "sweep: seed=-1: must be a whole number >= 0"),
+    (dict(n=3, workers=-1), "sweep: workers=-1: must be a whole number >= 0"),
+    (dict(n=3, workers=1.5), "sweep: workers=1.5: must be a whole number >= 0"),
 ])
 def test_sweep_refuses_bad_counts_by_name(kw, message):
     """A negative or fractional n or seed: a ValueError naming it (not pybind11's TypeError, not
@@ -152,6 +154,11 @@ def test_sweep_refuses_bad_counts_by_name(kw, message):
     with pytest.raises(ValueError) as err:
         ukdyn.sweep(PENDULUM, random={"theta0": "uniform(0.01,0.1)"}, **kw)
     assert str(err.value) == message
+
+
+def test_sweep_refuses_absurd_workers():
+    with pytest.raises(ValueError, match=r"sweep: workers=5000: at most 1024 threads"):
+        ukdyn.sweep(PENDULUM, random={"theta0": "uniform(0.01,0.1)"}, n=3, workers=5000)
 
 
 def test_sweep_random_errors_say_what_was_given():

@@ -198,7 +198,12 @@ def sweep(model: Any, *, grid: Optional[GridSpec] = None, random: Optional[Rando
     settings = {k: v for k, v in settings.items()}
 
     if client is None:
-        threads = int(workers) if workers else (os.cpu_count() or 1)
+        # (0 or None: every core; as `ukdyn sweep --jobs`, at most 1024 threads)
+        threads = _whole_number("workers", workers, 0) if workers is not None else 0
+        if threads > 1024:
+            raise ValueError("sweep: workers=%d: at most 1024 threads (0 or None: one per core, "
+                             "%d here)" % (threads, os.cpu_count() or 1))
+        threads = threads or (os.cpu_count() or 1)
         with _interrupt.guard() as guard:
             out = _ukdyn._run_ensemble(text, file, overrides, settings, names, rows, at_list,
                                        outputs_list, bool(trajectories), threads, guard.stop)
