@@ -86,6 +86,29 @@ bool is_name(std::string_view s) {
   return true;
 }
 
+// A computed grid value as the decimal number it stands for, when that is short: 0.1 + 2 (0.4 −
+// 0.1)/3 is 0.30000000000000004, and a value whose 15 significant digits read as a number of at
+// most 12 (here 0.3) is taken as that number, so that --grid mu=0.1:0.4:4 runs exactly what
+// --set mu=0.3 runs. A value with no short form (1/3) is kept as computed. Cost O(1).
+double short_decimal(double v) {
+  if (!std::isfinite(v) || v == 0.0) return v;
+  char buf[40];
+  const auto [end, ec] = std::to_chars(buf, buf + sizeof buf, v, std::chars_format::scientific, 14);
+  if (ec != std::errc()) return v;
+  // the mantissa's digits (d.dddddddddddddd), without trailing zeros
+  const std::string_view text(buf, std::size_t(end - buf));
+  const std::size_t e = text.find('e');
+  std::string digits;
+  for (const char c : text.substr(0, e)) {
+    if (c >= '0' && c <= '9') digits += c;
+  }
+  while (digits.size() > 1 && digits.back() == '0') digits.pop_back();
+  if (digits.size() > 12) return v;
+  double out = v;
+  std::from_chars(buf, end, out, std::chars_format::scientific);
+  return out;
+}
+
 }  // namespace
 
 double normal_quantile(double p) {
@@ -260,9 +283,10 @@ GridAxis parse_grid_axis(std::string_view text) {
     const std::size_t n = std::size_t(count);
     for (std::size_t i = 0; i < n; ++i) {
       // the last value is stop exactly
-      axis.values.push_back(n == 1       ? start
-                            : i + 1 == n ? stop
-                                         : start + double(i) * (stop - start) / double(n - 1));
+      axis.values.push_back(
+          n == 1       ? start
+          : i + 1 == n ? stop
+                       : short_decimal(start + double(i) * (stop - start) / double(n - 1)));
     }
     return axis;
   }

@@ -31,6 +31,15 @@ TEST(Sampling, GridAxisFromText) {
   EXPECT_THROW(parse_grid_axis("mu=0:1:2.5"), std::invalid_argument);
   EXPECT_THROW(parse_grid_axis("mu=1,x"), std::invalid_argument);
   EXPECT_THROW(parse_grid_axis("2mu=1"), std::invalid_argument);
+  // interior values are the decimals they stand for when those are short (0.1 + 2 (0.4 − 0.1)/3
+  // is 0.30000000000000004 in doubles: the sweep then ran what --set mu=0.3 does not), and are
+  // kept as computed when they have no short form (1/3)
+  EXPECT_EQ(parse_grid_axis("mu=0.1:0.4:4").values, (std::vector<double>{0.1, 0.2, 0.3, 0.4}));
+  EXPECT_EQ(parse_grid_axis("mu=0:0.5:11").values[3], 0.15);
+  EXPECT_EQ(parse_grid_axis("x=-2e-7:1e-7:4").values[1], -1e-7);
+  const GridAxis thirds = parse_grid_axis("k=0:1:4");
+  EXPECT_EQ(thirds.values[1], 1.0 / 3.0);
+  EXPECT_EQ(thirds.values[2], 2.0 / 3.0);
 }
 
 TEST(Sampling, RandomVariableFromText) {
