@@ -113,8 +113,7 @@ ErrorDynamics Reader::read_error_dynamics(const YAML::Node& r, const std::string
       return make();
     } catch (const std::invalid_argument& e) {
       // (ErrorDynamics' words for a C++ caller: its name, and its advice to use none())
-      std::string message = e.what();
-      if (const auto k = message.find(": "); k != std::string::npos) message.erase(0, k + 2);
+      std::string message = api_free(e.what());
       if (const auto k = message.find(" (for no error dynamics"); k != std::string::npos)
         message.erase(k);
       fail(d, "the dynamics of " + what + ": " + message,
