@@ -229,14 +229,15 @@ def scene_data(scene, names, columns, fps=FPS, max_frames=MAX_FRAMES, digits=DIG
     # value (actual = desired + error); a requirement whose rows are, in some order, the
     # coordinates of a point or a body of the scene gets its desired path drawn in the scene
     rows = _requirement_rows(names)
+    actual = {}  # each row's actual value (desired + error) at the samples shown
     for row, error, desired in rows:
         entry = {"name": row, "error": p.pack(error)}
         if desired:
+            actual[row] = [d + e for d, e in zip(p.raw(desired), p.raw(error))]
             entry["desired"] = p.pack(desired)
-            entry["actual"] = [_round(d + e, digits)
-                               for d, e in zip(p.raw(desired), p.raw(error))]
+            entry["actual"] = [_round(v, digits) for v in actual[row]]
         data["requirements"].append(entry)
-    data["desired_paths"] = _desired_paths(scene, p, rows, decimals)
+    data["desired_paths"] = _desired_paths(scene, p, rows, actual, decimals)
     for path in data["desired_paths"]:
         if path["of"] not in data["trails"]:
             data["trails"] = data["trails"] + [path["of"]]
@@ -278,18 +279,19 @@ def _requirement_rows(names):
     return out
 
 
-def _desired_paths(scene, p, rows, decimals):
+def _desired_paths(scene, p, rows, actual, decimals):
     """The requirements whose desired value is a path in the scene: a requirement whose rows
     (error.<name>.0, .1 (, .2), each with its desired value) are, in some order, the positions
     x, y (, z) of a visual point or of a body's centre: the actual value of each row (desired +
     error) equals that coordinate at every sample shown, to 1e-9 of the scene's extent (the same
-    expression evaluated twice). Returns, for each, the point or body ("of") and the desired
+    expression evaluated twice; `actual` maps each row to those values). Returns, for each, the
+    point or body ("of") and the desired
     position along x, y (, z) at each sample ("q")."""
     groups = {}
     for row, error, desired in rows:
         base, _, k = row.rpartition(".")
         if base and k.isdigit() and desired:
-            groups.setdefault(base, []).append((int(k), error, desired))
+            groups.setdefault(base, []).append((int(k), row, desired))
     candidates = [("visual.%s." % pt["name"], pt["name"], pt.get("dimensions", 2))
                   for pt in scene.get("points", [])]
     candidates += [(b["name"] + ".", b["name"], 2 if b["kind"] == "planar" else 3)
@@ -300,8 +302,7 @@ def _desired_paths(scene, p, rows, decimals):
         parts.sort()
         if len(parts) not in (2, 3) or [k for k, _, _ in parts] != list(range(len(parts))):
             continue
-        actual = [[d + e for d, e in zip(p.raw(desired), p.raw(error))]
-                  for _, error, desired in parts]
+        values_of = [actual[row] for _, row, _ in parts]
         for prefix, name, dimensions in candidates:
             axes = [prefix + a for a in ("x", "y", "z")[:dimensions]]
             if dimensions != len(parts) or not all(p.has(c) for c in axes):
@@ -310,7 +311,7 @@ def _desired_paths(scene, p, rows, decimals):
             order = []
             for c in axes:
                 along = p.raw(c)
-                match = [r for r, values in enumerate(actual)
+                match = [r for r, values in enumerate(values_of)
                          if r not in order and all(math.isfinite(a) and abs(a - v) <= tolerance
                                                    for a, v in zip(values, along))]
                 if not match:
