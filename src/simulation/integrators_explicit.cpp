@@ -265,6 +265,15 @@ SegmentResult fixed_step(Stepper stepper, ConstrainedOde& ode, State& x, double 
   if (ode.failed()) return failed(ode, r, t0);
   std::size_t next = 0;
   double t = t0;
+  // a switch of the dynamics inside a step (from t, at x with derivative dxdt, to t_new): the
+  // state at s inside the step is one step of the method from t to s (a cubic Hermite of a step
+  // across a jump of the forces would misplace the event by O(h · jump)). Made once: it reads
+  // x, dxdt and t by reference (a std::function made in the loop would allocate every step).
+  const SegmentHooks::Dense state_at = [&](double s, double* xs) {
+    State tmp = x, d = dxdt;
+    stepper.do_step(fn, tmp, d, t, s - t);
+    std::copy(tmp.begin(), tmp.end(), xs);
+  };
   for (long k = 1; k <= N; ++k) {
     // one step; t_k from k, not by accumulation
     const double t_new = k == N ? t1 : t0 + double(k) * h;
@@ -285,14 +294,7 @@ SegmentResult fixed_step(Stepper stepper, ConstrainedOde& ode, State& x, double 
     }
     fn(x_new, dxdt_new, t_new);
     if (ode.failed()) return failed(ode, r, t_new);
-    // a switch of the dynamics inside the step: stop there. The state at s inside the step is
-    // one step of the method from t to s (a cubic Hermite of a step across a jump of the forces
-    // would misplace the event by O(h · jump))
-    const SegmentHooks::Dense state_at = [&](double s, double* xs) {
-      State tmp = x, d = dxdt;
-      stepper.do_step(fn, tmp, d, t, s - t);
-      std::copy(tmp.begin(), tmp.end(), xs);
-    };
+    // a switch of the dynamics inside the step: stop there
     if (stop_at_event(hooks, t, x, t_new, x_new, state_at, state_at, outputs, next, x, r)) {
       return r;
     }

@@ -233,5 +233,40 @@ TEST(NoAllocation, MultibodyModels) {
   }
 }
 
+// The steps of a run allocate nothing: only the samples do. Two RK4 runs of a double pendulum
+// with the same samples (t_start and t_end) and 500 against 1000 steps make the same number of
+// allocations (before, every step of the fixed-step loop allocated its std::function).
+TEST(NoAllocation, SimulationStepsOfFixedStepMethods) {
+  using mb::BodyId;
+  using mb::Frame;
+  mb::Multibody b;
+  b.set_gravity({0, -9.81, 0});
+  const BodyId l0 = b.add_planar_body("l0", 1.0, 1e-3, {1, 0, 0});
+  const BodyId l1 = b.add_planar_body("l1", 1.0, 1e-3, {2, 0, 0});
+  b.add_joint(mb::revolute("p0", mb::kGround, Frame::planar(0, 0), l0, Frame::planar(-1, 0)));
+  b.add_joint(mb::revolute("p1", l0, Frame::planar(0, 0), l1, Frame::planar(-1, 0)));
+  const mb::MultibodyModel m = b.build();
+  const auto allocations_of_run = [&](double t_end, Integrator method) {
+    SimulationOptions o;
+    o.integrator = method;
+    o.step = 1e-3;
+    o.t_end = t_end;
+    o.output_every = 0.0;  // samples at t_start and t_end only
+    start_counting_allocations();
+    const Trajectory tr = simulate(m.system, m.q0, m.qd0, o);
+    const long count = stop_counting_allocations();
+    EXPECT_EQ(tr.stats.status, Status::kOk) << tr.stats.message;
+    EXPECT_EQ(tr.t.size(), 2U);
+    return count;
+  };
+  allocations_of_run(0.1, Integrator::kRK4);  // (the first run also makes what is made once)
+  for (const Integrator method : {Integrator::kRK4, Integrator::kRK5}) {
+    const long short_run = allocations_of_run(0.5, method);
+    const long long_run = allocations_of_run(1.0, method);
+    EXPECT_GT(short_run, 0);  // the run's setup, so the counter saw it
+    EXPECT_EQ(long_run, short_run) << int(method);
+  }
+}
+
 }  // namespace
 }  // namespace ukdyn
