@@ -2,6 +2,8 @@
 // W, pattern of G = W Wᵀ and the program that assembles it, AMD ordering of G (CHOLMOD), and the
 // elimination tree and column counts of its LDLᵀ factor. Everything here may allocate.
 #include <algorithm>
+#include <cmath>
+#include <limits>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -208,20 +210,49 @@ SparseDecomposition::SparseDecomposition(const System& sys)
   }
   std::sort(program_.begin(), program_.end(),
             [](const Product& x, const Product& y) { return x.target < y.target; });
+  // the first product of each entry assigns it (compute_constraints), the rest add to it; an
+  // entry without a product (a row with no columns) stays the zero it starts as
+  {
+    std::vector<Product> rest;
+    int last = -1;
+    for (const Product& pr : program_) {
+      if (pr.target != last) {
+        program_first_.push_back(pr);
+        last = pr.target;
+      } else {
+        rest.push_back(pr);
+      }
+    }
+    program_.swap(rest);
+  }
 
-  // --- symbolic LDLᵀ of P G Pᵀ: elimination tree and column counts
+  // --- symbolic LDLᵀ of P G Pᵀ: elimination tree and column counts; the rows whose pivot is
+  // known to carry little roundoff (pivot_margin_, see factor_G): every row in the pattern of
+  // row k has an empty pattern itself, so that L_G restricted to them is the identity and
+  // d_k = G_kk − Σ_i G_ik² / G_ii with no earlier elimination in it
   parent_.assign(std::size_t(m), -1);
   flag_.assign(std::size_t(m), -1);
   Lnz_.assign(std::size_t(m), 0);
+  pivot_margin_.assign(std::size_t(m), HUGE_VAL);
+  std::vector<int> row_count(std::size_t(m), 0);
   for (int k = 0; k < m; ++k) {
     flag_[std::size_t(k)] = k;
+    bool leaves_only = true;
     for (int p = Gp_[std::size_t(k)]; p < Gp_[std::size_t(k) + 1]; ++p) {
       for (int i = Gi_[std::size_t(p)]; i < k && flag_[std::size_t(i)] != k;
            i = parent_[std::size_t(i)]) {
         if (parent_[std::size_t(i)] == -1) parent_[std::size_t(i)] = k;
         ++Lnz_[std::size_t(i)];
+        ++row_count[std::size_t(k)];
+        if (row_count[std::size_t(i)] != 0) leaves_only = false;
         flag_[std::size_t(i)] = k;
       }
+    }
+    // the error of d_k: the products G_ik (n terms at most), the quotients and the sum —
+    // (3p + 1) (n + 1) eps G_kk and (2p + 6) eps G_kk (p = row_count) — within this bound
+    if (leaves_only) {
+      pivot_margin_[std::size_t(k)] = 4.0 * double(row_count[std::size_t(k)] + 1) * double(n_ + 2) *
+                                      std::numeric_limits<double>::epsilon();
     }
   }
   Lp_.assign(std::size_t(m) + 1, 0);

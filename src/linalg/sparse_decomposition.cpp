@@ -518,9 +518,13 @@ SparseDecomposition& SparseDecomposition::compute_constraints() {
                         Wv_.data() + seg_pos_[std::size_t(s)], block_size(b));
     }
   }
-  // G = W Wᵀ (permuted, upper): G_ij = Σ_b w_ib · w_jb
-  std::fill(Gx_.begin(), Gx_.end(), 0.0);
+  // G = W Wᵀ (permuted, upper): G_ij = Σ_b w_ib · w_jb. Each entry's first product is
+  // assigned (program_first_), the others added in order (program_): the same bits as adding
+  // them all to zero (a dot started from +0 is never −0), without clearing G first
   const double* W = Wv_.data();
+  for (const Product& pr : program_first_) {
+    Gx_[std::size_t(pr.target)] = segment_dot(W + pr.wi, W + pr.wj, pr.len, 0.0);
+  }
   for (const Product& pr : program_) {
     Gx_[std::size_t(pr.target)] += segment_dot(W + pr.wi, W + pr.wj, pr.len, 0.0);
   }
@@ -574,9 +578,12 @@ void SparseDecomposition::factor_G() {
     // before k); a suspicious pivot is also estimated in the space of W: v = L_G⁻ᵀ e_k (rows
     // <= k) gives w_k − Σ_j c_j w_j = Σ_j v_j w_j, whose norm is d_k^{1/2} with an error of
     // order eps κ(G_11) ‖W‖ ‖v‖ — much smaller when the dependence is local, larger along long
-    // loops. The row is dependent when either estimate is below the threshold.
+    // loops. The row is dependent when either estimate is below the threshold. A row coupled
+    // only to rows with no coupling before them has a pivot with a known small roundoff
+    // (pivot_margin_, +inf for the others): clear of the threshold by it, it is independent.
     const double gkk = Gx_[std::size_t(Gdiag_[std::size_t(k)])];
-    if (gkk != 0.0 && d > tau2 * gkk && d <= kSuspect * gkk && recompute_pivot(k) <= tau2 * gkk) {
+    if (gkk != 0.0 && d > tau2 * gkk && d <= kSuspect * gkk &&
+        d <= (tau2 + pivot_margin_[std::size_t(k)]) * gkk && recompute_pivot(k) <= tau2 * gkk) {
       d = 0.0;
     }
     if (gkk == 0.0) {
@@ -596,9 +603,9 @@ void SparseDecomposition::factor_G() {
 }
 
 double SparseDecomposition::recompute_pivot(int k) {
-  // v = L_G⁻ᵀ e_k over the rows eliminated so far (permuted order; row k of L_G is complete)
+  // v = L_G⁻ᵀ e_k over the rows eliminated so far (permuted order; row k of L_G is complete).
+  // Column j of L_G holds rows in (j, k] only, each written before v_j is: no clearing
   double* v = wm3_.data();
-  std::fill(v, v + k + 1, 0.0);
   v[k] = 1.0;
   for (int j = k - 1; j >= 0; --j) {
     double x = 0.0;

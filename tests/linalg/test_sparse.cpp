@@ -634,5 +634,59 @@ TEST(SparseDecomposition, PatternIsLinearInTheNumberOfBodies) {
   }
 }
 
+// P1's body formulation: two point masses (inertia 1e-9 kg m² about them) on massless 1 m rods,
+// a double pendulum at the angles th0, th1, with a second copy of the first pin when `duplicate`.
+// The second row of each pin is nearly dependent on the first in the metric of M (its pivot of
+// G is ~1e-9 G_kk): suspicious. The first pin's rows are coupled to nothing before them, so its
+// pivot's roundoff is a few eps G_kk and it needs no recheck; the second pin's pivot comes after
+// those ill-conditioned rows and is rechecked in the space of W.
+System point_mass_pendulum(bool duplicate) {
+  SystemBuilder b(6);
+  for (Index i = 0; i < 2; ++i) {
+    b.mass_block(3 * i, Eigen::Vector3d(1.0, 1.0, 1e-9).asDiagonal().toDenseMatrix());
+  }
+  b.forces([](const Eigen::Ref<const VectorXd>&, const Eigen::Ref<const VectorXd>&, double,
+              Eigen::Ref<VectorXd> Q) {
+    Q.setZero();
+    Q[1] = Q[4] = -9.81;
+  });
+  const Eigen::Vector2d rod(-1.0, 0.0), origin(0.0, 0.0);
+  b.add(revolute("pin0", 0, rod, -1, origin));
+  b.add(revolute("pin1", 1, rod, 0, origin));
+  if (duplicate) b.add(revolute("pin0 again", 0, rod, -1, origin));
+  return b.build();
+}
+
+TEST(SparseDecomposition, PivotsWithASmallKnownRoundoffAreNotRechecked) {
+  const double th0 = 0.7, th1 = -0.4;
+  VectorXd q(6), qd(6);
+  q << std::cos(th0), std::sin(th0), th0, std::cos(th0) + std::cos(th1),
+      std::sin(th0) + std::sin(th1), th1;
+  // both bodies turning about the ground pin at 0.3 rad/s as one
+  qd << -0.3 * std::sin(th0), 0.3 * std::cos(th0), 0.3, -0.3 * (std::sin(th0) + std::sin(th1)),
+      0.3 * (std::cos(th0) + std::cos(th1)), 0.3;
+  {
+    const System sys = point_mass_pendulum(false);
+    Workspace ws(sys, sparse_options());
+    ASSERT_EQ(forward_dynamics(sys, ws, q, qd, 0.0), Status::kOk) << describe_status(sys, ws);
+    EXPECT_EQ(ws.rank, 4);
+    // one recheck (the second pin's) where every suspicious pivot had one before
+    EXPECT_EQ(ws.sparse->rechecked_pivots(), 1);
+    // κ(G) ≈ 1e9 (the pivots 1e-9 G_kk): the engines' multipliers agree to about eps κ(G)
+    expect_same(sys, q, qd, 1e-6);
+  }
+  {
+    // a duplicated first pin is still found dependent: its pivots are roundoff, far below the
+    // margin that would spare them the threshold test
+    const System sys = point_mass_pendulum(true);
+    Workspace ws(sys, sparse_options());
+    ASSERT_EQ(forward_dynamics(sys, ws, q, qd, 0.0), Status::kOk) << describe_status(sys, ws);
+    EXPECT_EQ(ws.active_rows, 6);
+    EXPECT_EQ(ws.rank, 4);
+    expect_same(sys, q, qd, 1e-6);
+  }
+  report_worst("point masses on rods");
+}
+
 }  // namespace
 }  // namespace ukdyn

@@ -178,7 +178,10 @@ class SparseDecomposition {
   /// recomputed in the space of W.
   Index rechecked_pivots() const { return rechecked_; }
   /// A pivot d_k <= kSuspect G_kk (sin² of the angle of w_k to the earlier rows) is recomputed
-  /// as ‖Σ_j v_j w_j‖² with v = L_G⁻ᵀ e_k before the rank decision.
+  /// as ‖Σ_j v_j w_j‖² with v = L_G⁻ᵀ e_k before the rank decision — unless row k is coupled
+  /// only to rows that are coupled to nothing before them (then d_k = G_kk − Σ_i G_ik² / G_ii,
+  /// whose roundoff is below c (p + 1) (n + 2) eps G_kk, p the rows in the sum, c = 4) and d_k
+  /// clears tau² G_kk by that bound: the recheck could not reverse the decision.
   static constexpr double kSuspect = 1e-6;
   /// Sets the relative rank threshold tau (in (0, 1)); takes effect at the next compute.
   /// @throws std::invalid_argument outside (0, 1).
@@ -240,10 +243,14 @@ class SparseDecomposition {
   std::vector<int> perm_, pinv_;  // perm_[k]: original row at position k; pinv_ its inverse
   std::vector<int> Gp_, Gi_, Gdiag_;
   std::vector<double> Gx_;
-  std::vector<Product> program_;
+  std::vector<Product> program_first_, program_;  // first product of each entry; the others
   // L_G (strictly lower, by columns) and D; work arrays of the up-looking factorization
   std::vector<int> parent_, Lp_, Lnz_, Li_, flag_, pattern_;
   std::vector<double> Lx_, D_, Y_;
+  // a bound on the roundoff of pivot d_k relative to G_kk, for rows coupled only to rows with
+  // no coupling before them (their pivots need no recheck when clear of the threshold by it);
+  // +inf for the others
+  std::vector<double> pivot_margin_;
   // singular blocks: flags (found singular, or singular by construction), the rows local to each
   // block (CSR), the weights g_i of the last augmentation (0 for rows not used)
   std::vector<unsigned char> blk_sing_, blk_known_;
