@@ -29,7 +29,7 @@ Status assemble_constraints(const System& sys, Workspace& ws, const Eigen::Ref<c
     if (const Status s = detail::write_constraint_rows(sys, ws, k, q, qd, t); s != Status::kOk) {
       return s;
     }
-    if (!bk.allFinite()) return detail::fail(ws, Status::kNonFiniteInput, "b", k, t);
+    if (!detail::all_finite(bk)) return detail::fail(ws, Status::kNonFiniteInput, "b", k, t);
     // Baumgarte: phi'' + 2α phi' + β² phi = 0, psi' + α psi = 0
     const Stabilization& st = ws.stabilization[std::size_t(k)];
     if (st.enabled() && c.kind() != ConstraintKind::kAcceleration) {
@@ -41,7 +41,7 @@ Status assemble_constraints(const System& sys, Workspace& ws, const Eigen::Ref<c
       } else {
         bk -= st.alpha * vk;
       }
-      if (!bk.allFinite()) return detail::fail(ws, Status::kNonFiniteInput, "b", k, t);
+      if (!detail::all_finite(bk)) return detail::fail(ws, Status::kNonFiniteInput, "b", k, t);
     }
   }
   // a singular M: stage 1 completes with the constraints, M_A = M + Aᵀ G A, a = M_A⁻¹ Q_A

@@ -53,7 +53,7 @@ class DenseEngine final : public EngineOps {
     if (sys.mass_is_constant() && ws.mass_factorized) return Status::kOk;
     ws.mass_factorized = false;
     sys.mass_matrix(q, t, ws.callables.get(), ws.M);
-    if (!ws.M.allFinite()) return fail(ws, Status::kNonFiniteInput, "M", -1, t);
+    if (!all_finite(ws.M)) return fail(ws, Status::kNonFiniteInput, "M", -1, t);
     const double scale = ws.M.cwiseAbs().maxCoeff();
     if (asymmetry(ws.M) > ws.options().symmetry_tolerance * scale) {
       return fail(ws, Status::kMassNotSymmetric, "M", -1, t);
@@ -106,7 +106,7 @@ class DenseEngine final : public EngineOps {
     auto Ak = ws.A.middleRows(sys.row_offset(k), c.rows());
     auto bk = ws.b.segment(sys.row_offset(k), c.rows());
     c.model().acceleration_form(q, qd, t, ws.scratch[std::size_t(k)].get(), Ak, bk);
-    if (check && !Ak.allFinite()) return fail(ws, Status::kNonFiniteInput, "A", k, t);
+    if (check && !all_finite(Ak)) return fail(ws, Status::kNonFiniteInput, "A", k, t);
     return Status::kOk;
   }
   void zero_constraint_rows(const System& sys, Workspace& ws, Index k) const override {

@@ -24,15 +24,18 @@ void require_size(const Eigen::Ref<const VectorXd>& v, Index n, const char* what
 // and the multipliers hold NaN rather than the previous evaluation's values, which a caller
 // ignoring the status would otherwise take for this one's. (A failure found by check_result —
 // inconsistent constraints, a non-finite result — keeps what was computed: the least-squares
-// q'' that describe_status reports the residual of.) No allocation.
-Status invalidate_results(Workspace& ws, Status s) {
+// q'' that describe_status reports the residual of.) The non-ideal parts of a system without
+// non-ideal forces stay zero, their value at every state. No allocation.
+Status invalidate_results(const System& sys, Workspace& ws, Status s) {
   const double nan = std::numeric_limits<double>::quiet_NaN();
   ws.qdd.setConstant(nan);
   ws.Qc.setConstant(nan);
   ws.Qc_ideal.setConstant(nan);
-  ws.Qc_nonideal.setConstant(nan);
   ws.lambda.setConstant(nan);
-  ws.lambda_nonideal.setConstant(nan);
+  if (sys.nonideal_count() > 0) {
+    ws.Qc_nonideal.setConstant(nan);
+    ws.lambda_nonideal.setConstant(nan);
+  }
   return s;
 }
 }  // namespace
@@ -49,23 +52,23 @@ Status forward_dynamics(const System& sys, Workspace& ws, const Eigen::Ref<const
   ws.failed_time = t;
   // inputs
   if (!std::isfinite(t)) {
-    return invalidate_results(ws, detail::fail(ws, Status::kNonFiniteInput, "t", -1, t));
+    return invalidate_results(sys, ws, detail::fail(ws, Status::kNonFiniteInput, "t", -1, t));
   }
   if (Index i = detail::first_non_finite(q); i >= 0) {
-    return invalidate_results(ws, detail::fail(ws, Status::kNonFiniteInput, "q", i, t));
+    return invalidate_results(sys, ws, detail::fail(ws, Status::kNonFiniteInput, "q", i, t));
   }
   if (Index i = detail::first_non_finite(qd); i >= 0) {
-    return invalidate_results(ws, detail::fail(ws, Status::kNonFiniteInput, "q_dot", i, t));
+    return invalidate_results(sys, ws, detail::fail(ws, Status::kNonFiniteInput, "q_dot", i, t));
   }
   // M, Q, a → A, b → ideal → non-ideal → checks
   Status s = evaluate_unconstrained(sys, ws, q, qd, t);
-  if (s != Status::kOk) return invalidate_results(ws, s);
+  if (s != Status::kOk) return invalidate_results(sys, ws, s);
   s = assemble_constraints(sys, ws, q, qd, t);
-  if (s != Status::kOk) return invalidate_results(ws, s);
+  if (s != Status::kOk) return invalidate_results(sys, ws, s);
   s = solve_ideal(sys, ws);
-  if (s != Status::kOk) return invalidate_results(ws, s);
+  if (s != Status::kOk) return invalidate_results(sys, ws, s);
   s = apply_nonideal(sys, ws, q, qd, t);
-  if (s != Status::kOk) return invalidate_results(ws, s);
+  if (s != Status::kOk) return invalidate_results(sys, ws, s);
   return check_result(sys, ws);
 }
 

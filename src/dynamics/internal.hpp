@@ -28,10 +28,42 @@ Trajectory simulate_observed(const System& sys, const Eigen::Ref<const VectorXd>
 
 // Index of the first non-finite entry of v, or −1. Cost O(n).
 inline Index first_non_finite(const Eigen::Ref<const VectorXd>& v) {
-  for (Index i = 0; i < v.size(); ++i) {
-    if (!std::isfinite(v[i])) return i;
+  const double* p = v.data();
+  const Index n = v.size();
+  for (Index i = 0; i < n; ++i) {
+    if (!std::isfinite(p[i])) return i;
   }
   return -1;
+}
+
+// Whether the n entries at p are all finite. Cost O(n). (A branch-free form, Σ x·0 in four
+// sums, ran more instructions on these short vectors: measured on P1/rk4, 287.4 M against
+// 285.6 M.)
+inline bool all_finite(const double* p, Index n) {
+  for (Index i = 0; i < n; ++i) {
+    if (!std::isfinite(p[i])) return false;
+  }
+  return true;
+}
+
+// Whether every entry of x is finite: a vector, or a column-major matrix or block (unit inner
+// stride). The checks of every evaluation use it: on these short vectors and small blocks it
+// costs a fraction of Eigen's allFinite() (P1/rk4: 15 M of 305 M instructions before). Cost
+// O(rows · cols).
+template <class Derived>
+inline bool all_finite(const Eigen::DenseBase<Derived>& x) {
+  static_assert(Derived::IsVectorAtCompileTime || !(Derived::Flags & Eigen::RowMajorBit),
+                "all_finite: column-major storage");
+  const Derived& d = x.derived();
+  eigen_assert(d.innerStride() == 1);
+  const Index rows = d.rows(), stride = d.outerStride();
+  if (Derived::IsVectorAtCompileTime || d.cols() == 1 || stride == rows) {
+    return all_finite(d.data(), d.size());
+  }
+  for (Index j = 0; j < d.cols(); ++j) {
+    if (!all_finite(d.data() + j * stride, rows)) return false;
+  }
+  return true;
 }
 
 // Records a failing status in the workspace (tier 3) and returns it.
@@ -44,30 +76,24 @@ inline Status fail(Workspace& ws, Status s, const char* quantity, Index index, d
   return s;
 }
 
+// The errors of require_same_system and require_state_size (out of line: the checks that pass,
+// once per stage of every evaluation, stay a compare or two).
+[[noreturn]] void throw_other_system(const Workspace& ws, const char* who);
+[[noreturn]] void throw_state_size(Index n, Index q_size, Index qd_size, const char* who);
+
 // Tier 1: refuses a workspace made for another system, or a moved-from one (system_id() 0,
 // which no System has): one compare when the workspace is right.
 inline void require_same_system(const System& sys, const Workspace& ws, const char* who) {
-  if (sys.id() == ws.system_id()) return;
-  if (ws.system_id() == 0) {
-    throw std::invalid_argument(std::string(who) +
-                                ": the workspace is empty (moved from: its buffers went to "
-                                "another Workspace); make one with Workspace(sys), or move-assign "
-                                "one to it");
-  }
-  throw std::invalid_argument(std::string(who) +
-                              ": the workspace was made for another system (make one with "
-                              "Workspace(sys))");
+  if (sys.id() != ws.system_id()) [[unlikely]]
+    throw_other_system(ws, who);
 }
 
 // Tier 1: q (and q', when given) have n entries.
 inline void require_state_size(const System& sys, const Eigen::Ref<const VectorXd>& q,
                                const Eigen::Ref<const VectorXd>* qd, const char* who) {
   const Index n = sys.coordinate_count();
-  if (q.size() == n && (!qd || qd->size() == n)) return;
-  const bool bad_q = q.size() != n;
-  throw std::invalid_argument(std::string(who) + ": " + (bad_q ? "q" : "q_dot") + " has " +
-                              format_number(bad_q ? q.size() : qd->size()) +
-                              " entries, expected n = " + format_number(n));
+  if (q.size() != n || (qd && qd->size() != n)) [[unlikely]]
+    throw_state_size(n, q.size(), qd ? qd->size() : n, who);
 }
 
 // M(q,t), its checks and its factorization into the workspace's decomposition (stage 1 without

@@ -17,14 +17,13 @@ Status apply_nonideal(const System& sys, Workspace& ws, const Eigen::Ref<const V
                       const Eigen::Ref<const VectorXd>& qd, double t) {
   detail::require_same_system(sys, ws, "ukdyn::apply_nonideal");
   detail::require_state_size(sys, q, &qd, "ukdyn::apply_nonideal");
-  ws.C.setZero();
   if (sys.nonideal_count() == 0) {
-    // ideal constraints: Qc = Qc_ideal
-    ws.Qc_nonideal.setZero();
-    ws.lambda_nonideal.setZero();
+    // ideal constraints: Qc = Qc_ideal (C, Qc_nonideal and lambda_nonideal are zero since the
+    // workspace was made, and stay so)
     ws.Qc = ws.Qc_ideal;
     return Status::kOk;
   }
+  ws.C.setZero();
   // v_rel of each Coulomb contact whose friction acts (its constraint's rows are assembled)
   const auto& contacts = sys.friction_contacts();
   for (std::size_t c = 0; c < contacts.size(); ++c) {
@@ -45,7 +44,8 @@ Status apply_nonideal(const System& sys, Workspace& ws, const Eigen::Ref<const V
       if (!ws.nonideal_enabled[std::size_t(i)]) continue;
       ws.C_term.setZero();
       sys.nonideal(i)(q, qd, t, ideal, ws.C_term);
-      if (!ws.C_term.allFinite()) return detail::fail(ws, Status::kNonFiniteInput, "C", i, t);
+      if (!detail::all_finite(ws.C_term))
+        return detail::fail(ws, Status::kNonFiniteInput, "C", i, t);
       ws.C += ws.C_term;
     }
     // Qc_nonideal, lambda_nonideal and dq = L⁻ᵀ (I − W⁺W) L⁻¹ C

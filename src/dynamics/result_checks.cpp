@@ -37,7 +37,7 @@ Status check_result(const System& sys, Workspace& ws) {
     ws.tmp_n -= ws.Q + ws.C + ws.dqdd;
     res.gauss = ws.tmp_n.norm();
   }
-  if (!ws.qdd.allFinite() || !ws.Qc.allFinite() || !ws.lambda.allFinite()) {
+  if (!detail::all_finite(ws.qdd) || !detail::all_finite(ws.Qc) || !detail::all_finite(ws.lambda)) {
     return detail::fail(ws, Status::kNonFiniteResult, "q''", -1, ws.failed_time);
   }
   // consistency: ‖A q'' − b‖ <= tol (‖A‖_F (‖q''‖ + ‖a‖) + ‖b‖)

@@ -76,7 +76,7 @@ class SparseEngine final : public EngineOps {
       c.model().acceleration_form(q, qd, t, ws.scratch[std::size_t(k)].get(), Ak, bk);
     }
     ws.sparse->set_constraint_rows(k, Ak);
-    if (check && !Ak.allFinite()) return fail(ws, Status::kNonFiniteInput, "A", k, t);
+    if (check && !all_finite(Ak)) return fail(ws, Status::kNonFiniteInput, "A", k, t);
     return Status::kOk;
   }
   void zero_constraint_rows(const System&, Workspace& ws, Index k) const override {

@@ -15,7 +15,7 @@ Status evaluate_unconstrained(const System& sys, Workspace& ws, const Eigen::Ref
   if (const Status s = detail::evaluate_mass(sys, ws, q, t); s != Status::kOk) return s;
   // Q(q,q',t)
   sys.forces(q, qd, t, ws.callables.get(), ws.Q);
-  if (!ws.Q.allFinite()) return detail::fail(ws, Status::kNonFiniteInput, "Q", -1, t);
+  if (!detail::all_finite(ws.Q)) return detail::fail(ws, Status::kNonFiniteInput, "Q", -1, t);
   // a = M⁻¹ Q; for a singular M, a = M_A⁻¹ Q_A once A is known (assemble_constraints)
   if (!ws.mass_singular) ws.engine->solve_mass(ws);
   return Status::kOk;

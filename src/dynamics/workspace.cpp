@@ -10,6 +10,7 @@
 #include <Eigen/Eigenvalues>
 
 #include "dynamics/engine.hpp"
+#include "dynamics/internal.hpp"
 #include "ukdyn/core/format.hpp"
 #include "ukdyn/core/system.hpp"
 #include "ukdyn/linalg/sparse.hpp"
@@ -195,6 +196,25 @@ std::atomic<const TextbookProvider*> g_textbook_provider{nullptr};
 const TextbookProvider* textbook_provider() { return g_textbook_provider.load(); }
 void register_textbook_provider(const TextbookProvider* provider) {
   g_textbook_provider.store(provider);
+}
+
+void throw_other_system(const Workspace& ws, const char* who) {
+  if (ws.system_id() == 0) {
+    throw std::invalid_argument(std::string(who) +
+                                ": the workspace is empty (moved from: its buffers went to "
+                                "another Workspace); make one with Workspace(sys), or move-assign "
+                                "one to it");
+  }
+  throw std::invalid_argument(std::string(who) +
+                              ": the workspace was made for another system (make one with "
+                              "Workspace(sys))");
+}
+
+void throw_state_size(Index n, Index q_size, Index qd_size, const char* who) {
+  const bool bad_q = q_size != n;
+  throw std::invalid_argument(std::string(who) + ": " + (bad_q ? "q" : "q_dot") + " has " +
+                              format_number(bad_q ? q_size : qd_size) +
+                              " entries, expected n = " + format_number(n));
 }
 }  // namespace detail
 

@@ -35,7 +35,6 @@ ConstrainedOde::ConstrainedOde(const System& sys, Workspace& ws, bool quiet,
       ws_(ws),
       n_(sys.coordinate_count()),
       works_(sys, quiet),
-      q_(sys.coordinate_count()),
       qd_(sys.coordinate_count()),
       share_(VectorXd::Zero(sys.coordinate_count())),
       violation_rows_(std::size_t(sys.constraint_rows()), 0),
@@ -47,14 +46,15 @@ ConstrainedOde::ConstrainedOde(const System& sys, Workspace& ws, bool quiet,
   }
 }
 
-bool ConstrainedOde::explained_by_violation(double t) {
+bool ConstrainedOde::explained_by_violation(const Eigen::Ref<const VectorXd>& q,
+                                            const Eigen::Ref<const VectorXd>& qd, double t) {
   if (!(off_manifold_tolerance_ > 0.0)) return false;
   // r = A q'' − b (the part of e outside range(A), the rows that cannot all hold)
   ws_.engine->constraint_residual(ws_, ws_.qdd, ws_.tmp_m);
   const double r_max = ws_.tmp_m.cwiseAbs().maxCoeff();
   if (!(r_max > 0.0)) return false;
   // phi, phi' (psi) of every row at this state
-  evaluate_violations(sys_, ws_, q_, qd_, t);
+  evaluate_violations(sys_, ws_, q, qd, t);
   // largest violation among the rows carrying r; none may be of acceleration form
   double violation = 0.0;
   for (Index i = 0; i < ws_.tmp_m.size(); ++i) {
@@ -102,12 +102,11 @@ bool ConstrainedOde::operator()(const double* x, double* dxdt, double t_in) {
   ++evaluations_;
   // one-sided at a breakpoint end of the segment
   const double t = std::min(std::max(t_in, lo_), hi_);
-  // q, q' from x
-  q_ = Eigen::Map<const VectorXd>(x, n_);
-  qd_ = Eigen::Map<const VectorXd>(x + n_, n_);
-  Status s = forward_dynamics(sys_, ws_, q_, qd_, t);
+  // q, q' from x (views: no copy)
+  const Eigen::Map<const VectorXd> q(x, n_), qd(x + n_, n_);
+  Status s = forward_dynamics(sys_, ws_, q, qd, t);
   // off the manifold, an inconsistency its violation explains: the least-squares q''
-  if (s == Status::kInconsistentConstraints && explained_by_violation(t)) {
+  if (s == Status::kInconsistentConstraints && explained_by_violation(q, qd, t)) {
     ++least_squares_;
     ws_.status = s = Status::kOk;
   }
@@ -119,21 +118,25 @@ bool ConstrainedOde::operator()(const double* x, double* dxdt, double t_in) {
     for (Index i = 0; i < size(); ++i) dxdt[i] = std::numeric_limits<double>::quiet_NaN();
     return false;
   }
-  // x' = [q'; q''; q'ᵀ Qc_nonideal; q'ᵀ Qc_ideal − P_drive; P_drive; P_ext]
-  Eigen::Map<VectorXd>(dxdt, n_) = qd_;
+  // x' = [q'; q''; q'ᵀ Qc_nonideal; q'ᵀ Qc_ideal − P_drive; P_drive; P_ext] (without non-ideal
+  // forces Qc_nonideal is zero, and so is its power)
+  Eigen::Map<VectorXd>(dxdt, n_) = qd;
   Eigen::Map<VectorXd>(dxdt + n_, n_) = ws_.qdd;
   double* w = dxdt + 2 * n_;
-  w[works_.nonideal] = qd_.dot(ws_.Qc_nonideal);
+  w[works_.nonideal] = sys_.nonideal_count() > 0 ? qd.dot(ws_.Qc_nonideal) : 0.0;
   double drive = 0.0;
-  for (Index k : works_.drives) {
-    if (ws_.active[std::size_t(k)]) drive += constraint_power(sys_, ws_, k, qd_, share_);
+  if (!works_.drives.empty()) {
+    qd_ = qd;
+    for (Index k : works_.drives) {
+      if (ws_.active[std::size_t(k)]) drive += constraint_power(sys_, ws_, k, qd_, share_);
+    }
   }
   // (the quiet channels scaled by 2⁻³², see WorkLayout)
   const double quiet = works_.quiet ? WorkLayout::kQuietScale : 1.0;
-  if (works_.ideal >= 0) w[works_.ideal] = quiet * (qd_.dot(ws_.Qc_ideal) - drive);
+  if (works_.ideal >= 0) w[works_.ideal] = quiet * (qd.dot(ws_.Qc_ideal) - drive);
   if (works_.drive >= 0) w[works_.drive] = quiet * drive;
   if (works_.external >= 0)
-    w[works_.external] = quiet * sys_.external_power(q_, qd_, t, ws_.callables.get());
+    w[works_.external] = quiet * sys_.external_power(q, qd, t, ws_.callables.get());
   return true;
 }
 

@@ -104,19 +104,20 @@ class ConstrainedOde {
   Workspace& workspace() { return ws_; }
 
  private:
-  // after forward_dynamics reported kInconsistentConstraints at (q_, qd_, t): true when the
+  // after forward_dynamics reported kInconsistentConstraints at (q, qd, t): true when the
   // rows that carry the residual A q'' − b (|r_i| >= kResidualShare max |r|) all belong to
   // holonomic or nonholonomic constraints (an acceleration-form row has no violation that could
   // explain it) and at least one of them is violated by more than off_manifold_tolerance_.
   // Overwrites ws.phi, ws.phi_dot, ws.tmp_m; allocates nothing.
-  bool explained_by_violation(double t);
+  bool explained_by_violation(const Eigen::Ref<const VectorXd>& q,
+                              const Eigen::Ref<const VectorXd>& qd, double t);
   static constexpr double kResidualShare = 1e-3;
 
   const System& sys_;
   Workspace& ws_;
   Index n_;
   WorkLayout works_;
-  VectorXd q_, qd_, share_;                    // (n) scratch
+  VectorXd qd_, share_;  // (n) scratch: q' for constraint_power, A_kᵀ lambda_k
   std::vector<unsigned char> violation_rows_;  // (m) row i has a violation (not acceleration form)
   double off_manifold_tolerance_ = 0.0;
   long evaluations_ = 0;

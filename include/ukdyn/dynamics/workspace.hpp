@@ -227,8 +227,11 @@ class Workspace {
   /// evaluates C until it settles, so that a friction law reading its normal force
   /// (IdealForceInfo::reaction) sees the whole reaction.
   MatrixXd reactions;
-  MatrixXd reactions_next;   ///< (n × K) scratch of that iteration
-  VectorXd C;                ///< non-ideal work vector, sum of the system's forces (n)
+  MatrixXd reactions_next;  ///< (n × K) scratch of that iteration
+  /// Non-ideal work vector, sum of the system's forces (n). C, Qc_nonideal and lambda_nonideal
+  /// of a system without non-ideal forces are zero from the workspace's construction on, and
+  /// are not written again (not even with NaN on a failure).
+  VectorXd C;
   VectorXd Qc_nonideal;      ///< non-ideal constraint force, eq. (12) (n)
   VectorXd lambda_nonideal;  ///< multipliers with Qc_nonideal = C + Aᵀ lambda_nonideal (m)
   VectorXd Qc;               ///< total constraint force Qc_ideal + Qc_nonideal (n)
