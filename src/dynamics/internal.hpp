@@ -54,6 +54,7 @@ template <class Derived>
 inline bool all_finite(const Eigen::DenseBase<Derived>& x) {
   static_assert(Derived::IsVectorAtCompileTime || !(Derived::Flags & Eigen::RowMajorBit),
                 "all_finite: column-major storage");
+  static_assert(Derived::InnerStrideAtCompileTime == 1, "all_finite: unit inner stride");
   const Derived& d = x.derived();
   eigen_assert(d.innerStride() == 1);
   const Index rows = d.rows(), stride = d.outerStride();

@@ -210,8 +210,8 @@ SparseDecomposition::SparseDecomposition(const System& sys)
   }
   std::sort(program_.begin(), program_.end(),
             [](const Product& x, const Product& y) { return x.target < y.target; });
-  // the first product of each entry assigns it (compute_constraints), the rest add to it; an
-  // entry without a product (a row with no columns) stays the zero it starts as
+  // the first product of each entry assigns it (compute_constraints), the rest add to it (every
+  // entry has one: a row's columns are whole blocks, and a row with no local columns is dense)
   {
     std::vector<Product> rest;
     int last = -1;

@@ -520,7 +520,9 @@ SparseDecomposition& SparseDecomposition::compute_constraints() {
   }
   // G = W Wᵀ (permuted, upper): G_ij = Σ_b w_ib · w_jb. Each entry's first product is
   // assigned (program_first_), the others added in order (program_): the same bits as adding
-  // them all to zero (a dot started from +0 is never −0), without clearing G first
+  // them all to zero (+0 + x is x except for x = −0, which a dot started from +0 is not without
+  // fused multiply-adds; with them a −0 entry would only be added to +0 or squared), without
+  // clearing G first
   const double* W = Wv_.data();
   for (const Product& pr : program_first_) {
     Gx_[std::size_t(pr.target)] = segment_dot(W + pr.wi, W + pr.wj, pr.len, 0.0);

@@ -28,9 +28,11 @@ namespace ukdyn {
 /// Evaluates the constrained motion at (q, q', t): fills every result field of ws
 /// (q'', Qc, Qc_ideal, Qc_nonideal, lambda, e, rank, residuals) and returns ws.status.
 /// When it fails before the results are computed (a non-finite t, q, q', M, Q, A, b or C; M
-/// not positive definite or not symmetric; motion not determined), q'', Qc, Qc_ideal,
-/// Qc_nonideal, lambda and lambda_nonideal are set to NaN, never left at the previous
-/// evaluation's values; kInconsistentConstraints and kNonFiniteResult keep what was computed.
+/// not positive definite or not symmetric; motion not determined), q'', Qc, Qc_ideal and
+/// lambda are set to NaN, and so are Qc_nonideal and lambda_nonideal of a system with non-ideal
+/// forces (without them they are zero at every state, and stay zero), never left at the
+/// previous evaluation's values; kInconsistentConstraints and kNonFiniteResult keep what was
+/// computed.
 /// @throws std::invalid_argument if q or qd does not have n entries or ws belongs to another
 /// system or is empty (moved from). Cost O(n³/3 + m n² + m² n) for a state-dependent M; O(m n² + m²
 /// n) for a constant M.
