@@ -141,8 +141,8 @@ class DenseEngine final : public EngineOps {
     const Index r0 = sys.row_offset(k), rows = sys.constraint(k).rows();
     out.noalias() = ws.A.middleRows(r0, rows).transpose() * lambda.segment(r0, rows);
   }
-  double constraint_power(const System& sys, const Workspace& ws, Index k, const VectorXd& qd,
-                          VectorXd&) const override {
+  double constraint_power(const System& sys, const Workspace& ws, Index k,
+                          const Eigen::Ref<const VectorXd>& qd, VectorXd&) const override {
     // q'ᵀ A_kᵀ lambda_k = Σ_rows lambda_r (A_r q')
     const Index r0 = sys.row_offset(k), rows = sys.constraint(k).rows();
     double p = 0.0;

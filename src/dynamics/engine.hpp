@@ -79,7 +79,8 @@ class EngineOps {
   /// q'ᵀ A_kᵀ lambda_k with the multipliers of the last evaluation (scratch: n), the power of
   /// constraint k's ideal force.
   virtual double constraint_power(const System& sys, const Workspace& ws, Index k,
-                                  const VectorXd& qd, VectorXd& scratch) const = 0;
+                                  const Eigen::Ref<const VectorXd>& qd,
+                                  VectorXd& scratch) const = 0;
 
   // --- stage 3 and the projections: the decomposition of W = A L⁻ᵀ --------------------------
   /// Decomposes W = A L⁻ᵀ for the A last assembled and the factor of M in force.

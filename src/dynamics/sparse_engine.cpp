@@ -112,8 +112,8 @@ class SparseEngine final : public EngineOps {
     out.setZero();
     ws.sparse->share(k, lambda, out);
   }
-  double constraint_power(const System& sys, const Workspace& ws, Index k, const VectorXd& qd,
-                          VectorXd& scratch) const override {
+  double constraint_power(const System& sys, const Workspace& ws, Index k,
+                          const Eigen::Ref<const VectorXd>& qd, VectorXd& scratch) const override {
     constraint_share(sys, ws, k, ws.lambda, scratch);  // share_k = A_kᵀ lambda_k
     return qd.dot(scratch);
   }

@@ -24,8 +24,8 @@ WorkLayout::WorkLayout(const System& sys, bool quiet_channels) : quiet(quiet_cha
   if (sys.has_external_power()) external = count++;
 }
 
-double constraint_power(const System& sys, const Workspace& ws, Index k, const VectorXd& qd,
-                        VectorXd& scratch) {
+double constraint_power(const System& sys, const Workspace& ws, Index k,
+                        const Eigen::Ref<const VectorXd>& qd, VectorXd& scratch) {
   return ws.engine->constraint_power(sys, ws, k, qd, scratch);
 }
 
@@ -35,7 +35,6 @@ ConstrainedOde::ConstrainedOde(const System& sys, Workspace& ws, bool quiet,
       ws_(ws),
       n_(sys.coordinate_count()),
       works_(sys, quiet),
-      qd_(sys.coordinate_count()),
       share_(VectorXd::Zero(sys.coordinate_count())),
       violation_rows_(std::size_t(sys.constraint_rows()), 0),
       off_manifold_tolerance_(off_manifold_tolerance) {
@@ -125,11 +124,8 @@ bool ConstrainedOde::operator()(const double* x, double* dxdt, double t_in) {
   double* w = dxdt + 2 * n_;
   w[works_.nonideal] = sys_.nonideal_count() > 0 ? qd.dot(ws_.Qc_nonideal) : 0.0;
   double drive = 0.0;
-  if (!works_.drives.empty()) {
-    qd_ = qd;
-    for (Index k : works_.drives) {
-      if (ws_.active[std::size_t(k)]) drive += constraint_power(sys_, ws_, k, qd_, share_);
-    }
+  for (Index k : works_.drives) {
+    if (ws_.active[std::size_t(k)]) drive += constraint_power(sys_, ws_, k, qd, share_);
   }
   // (the quiet channels scaled by 2⁻³², see WorkLayout)
   const double quiet = works_.quiet ? WorkLayout::kQuietScale : 1.0;

@@ -49,8 +49,8 @@ struct WorkLayout {
 
 // The power of constraint k's share of the ideal force along q', q'ᵀ A_kᵀ lambda_k, after
 // solve_ideal (either engine); scratch (n) is used by the sparse engine. Cost O(rows · n).
-double constraint_power(const System& sys, const Workspace& ws, Index k, const VectorXd& qd,
-                        VectorXd& scratch);
+double constraint_power(const System& sys, const Workspace& ws, Index k,
+                        const Eigen::Ref<const VectorXd>& qd, VectorXd& scratch);
 
 // The first-order system x' = f(t, x) of a constrained mechanical system, x = [q; q'; W]
 // (2n + WorkLayout::count), W the work channels:
@@ -117,7 +117,7 @@ class ConstrainedOde {
   Workspace& ws_;
   Index n_;
   WorkLayout works_;
-  VectorXd qd_, share_;  // (n) scratch: q' for constraint_power, A_kᵀ lambda_k
+  VectorXd share_;                             // (n) scratch: A_kᵀ lambda_k
   std::vector<unsigned char> violation_rows_;  // (m) row i has a violation (not acceleration form)
   double off_manifold_tolerance_ = 0.0;
   long evaluations_ = 0;
