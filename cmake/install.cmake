@@ -7,6 +7,8 @@
 #                                             ukdynTargets.cmake, ukdynStaticTargets.cmake
 #   P/bin/ukdyn                               the command
 #   P/lib/python3/dist-packages/ukdyn/        the Python module (UKDYN_INSTALL_PYTHONDIR)
+#   P/share/doc/ukdyn/copyright               the licence (BSD-3-Clause; Debian's format)
+#   P/share/licenses/ukdyn/LICENSE            the same, as the C++ package's licence file
 include(CMakePackageConfigHelpers)
 
 set(UKDYN_INSTALL_CMAKEDIR ${CMAKE_INSTALL_LIBDIR}/cmake/ukdyn CACHE STRING
@@ -32,6 +34,11 @@ write_basic_package_version_file(${PROJECT_BINARY_DIR}/ukdynConfigVersion.cmake
 install(FILES ${PROJECT_BINARY_DIR}/ukdynConfig.cmake ${PROJECT_BINARY_DIR}/ukdynConfigVersion.cmake
               ${CMAKE_CURRENT_LIST_DIR}/ukdynSuiteSparse.cmake
         DESTINATION ${UKDYN_INSTALL_CMAKEDIR})
+
+# the licence: Debian's machine-readable copyright file where a .deb keeps it, and LICENSE beside
+# the CMake package's other shared files
+install(FILES ${CMAKE_CURRENT_LIST_DIR}/copyright DESTINATION ${CMAKE_INSTALL_DATAROOTDIR}/doc/ukdyn)
+install(FILES ${PROJECT_SOURCE_DIR}/LICENSE DESTINATION ${CMAKE_INSTALL_DATAROOTDIR}/licenses/ukdyn)
 
 # the command links the static library: no run-time path to set, nothing to find
 install(TARGETS ukdyn_cli RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})
