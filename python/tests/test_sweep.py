@@ -226,7 +226,7 @@ def test_ctrl_c_during_a_dask_sweep_raises_interrupted_with_the_finished_chunks(
     ukdyn.Interrupted with the whole table, the finished chunks' rows as they ran and the others
     "not run" with the same figures as a threaded sweep's samples not run (no pandas
     IntCastingNaNError). Chunks of one sample: two short ones, then four long ones on two
-    workers (a Dask LocalCluster of two processes); SIGINT at 2 s."""
+    workers (a Dask LocalCluster of two processes); SIGINT at 3 s."""
     import os
     import signal
     import threading
@@ -236,7 +236,8 @@ def test_ctrl_c_during_a_dask_sweep_raises_interrupted_with_the_finished_chunks(
     with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
                                   dashboard_address=None, silence_logs=50) as cluster, \
             distributed.Client(cluster) as client:
-        timer = threading.Timer(2.0, lambda: os.kill(os.getpid(), signal.SIGINT))
+        client.run(lambda: __import__("ukdyn"))  # (the workers ready: the short chunks take ms)
+        timer = threading.Timer(3.0, lambda: os.kill(os.getpid(), signal.SIGINT))
         timer.start()
         try:
             with pytest.raises(ukdyn.Interrupted) as caught:
