@@ -18,8 +18,9 @@ constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 // poison() fills the outputs with NaN; after a stored exception nothing more is called
 template <class Body, class Poison>
 void call_python(CallbackErrors& errs, Body&& body, Poison&& poison) {
-  py::gil_scoped_acquire gil;
-  if (errs.error) {
+  // (not at interpreter exit: then the outputs are NaN, which stops the run)
+  const AcquiredGil gil;
+  if (!gil.held() || errs.error) {
     poison();
     return;
   }
@@ -110,7 +111,7 @@ SystemHandle from_callables(const std::vector<std::string>& coordinates, py::obj
     b.potential_energy([errs, V](const Eigen::Ref<const VectorXd>& q, double t) {
       double value = kNaN;
       call_python(
-          *errs, [&] { value = V(copy_vector(q), t).template cast<double>(); },
+          *errs, [&] { value = read_number(V(copy_vector(q), t), "ukdyn callable", "V(q, t)", t); },
           [&] { value = kNaN; });
       return value;
     });
@@ -120,7 +121,11 @@ SystemHandle from_callables(const std::vector<std::string>& coordinates, py::obj
                                const Eigen::Ref<const VectorXd>& qd, double t) {
       double value = kNaN;
       call_python(
-          *errs, [&] { value = P(copy_vector(q), copy_vector(qd), t).template cast<double>(); },
+          *errs,
+          [&] {
+            value = read_number(P(copy_vector(q), copy_vector(qd), t), "ukdyn callable",
+                                "P(q, q_dot, t)", t);
+          },
           [&] { value = kNaN; });
       return value;
     });
@@ -182,9 +187,17 @@ SystemHandle from_callables(const std::vector<std::string>& coordinates, py::obj
           call_python(
               *errs,
               [&] {
-                const py::tuple pair = fn(copy_vector(q), copy_vector(qd), t).cast<py::tuple>();
+                const py::object got = fn(copy_vector(q), copy_vector(qd), t);
+                if (!py::isinstance<py::tuple>(got) && !py::isinstance<py::list>(got)) {
+                  throw std::invalid_argument(
+                      "ukdyn callable: " + what + " must return (u, u_dot) (got " +
+                      std::string(py::str(got.get_type().attr("__name__"))) + ")");
+                }
+                const py::sequence pair = got;
                 if (pair.size() != 2) {
-                  throw std::invalid_argument(what + " must return (u, u_dot)");
+                  throw std::invalid_argument("ukdyn callable: " + what +
+                                              " must return (u, u_dot) (got " +
+                                              ukdyn::format_number(pair.size()) + " items)");
                 }
                 read_into(pair[0], "ukdyn callable", what.c_str(), u);
                 read_into(pair[1], "ukdyn callable", what.c_str(), u_dot);
@@ -271,7 +284,7 @@ py::tuple simulate_system(const SystemHandle& h, py::handle q0, py::handle qd0,
       controller.is_none() ? nullptr : &controller.cast<const ControllerHandle&>();
   ModelRun run;
   try {
-    py::gil_scoped_release release;
+    ReleasedGil release;
     if (ctrl) {
       ControlledTrajectory c = simulate_controlled(*ctrl->controller, h.system, q, qd, o);
       run.extra_columns = control_csv_columns(c);

@@ -1,7 +1,12 @@
 // Ensembles for ukdyn.sweep (python/ukdyn/ensemble.py): the design (simulation/sampling.hpp) and
 // run_ensemble (simulation/ensemble.hpp) of a model's text, on threads here or, called once per
 // chunk of samples, on Dask's workers.
+#include <atomic>
+#include <condition_variable>
+#include <exception>
+#include <functional>
 #include <mutex>
+#include <thread>
 
 #include "common.hpp"
 #include "ukdyn/core/format.hpp"
@@ -69,7 +74,7 @@ py::tuple design(const std::vector<std::pair<std::string, std::vector<double>>>&
   d.latin_hypercube = lhs;
   DesignTable t;
   {
-    py::gil_scoped_release release;
+    ReleasedGil release;
     t = without_function_name("make_design", [&] { return make_design(d); });
   }
   py::array_t<double> rows({py::ssize_t(t.rows.size()), py::ssize_t(t.names.size())});
@@ -79,6 +84,41 @@ py::tuple design(const std::vector<std::pair<std::string, std::vector<double>>>&
       r(py::ssize_t(i), py::ssize_t(k)) = t.rows[i][k];
   }
   return py::make_tuple(t.names, rows);
+}
+
+// Runs work() on a thread of its own while this thread (with the GIL released) asks
+// should_stop() every InterruptCheck::kInterval and sets `stop` once it says yes; work's
+// exception is thrown again here. So Python's signal handlers run: CPython runs them on the main
+// thread only, which is the caller's, never one of run_ensemble's threads.
+void run_watched(const std::function<bool()>& should_stop, std::atomic<bool>& stop,
+                 const std::function<void()>& work) {
+  // (a stop asked already: before any sample starts)
+  if (should_stop()) stop = true;
+  std::mutex mutex;
+  std::condition_variable finished;
+  bool done = false;
+  std::exception_ptr error;
+  std::thread worker([&] {
+    try {
+      work();
+    } catch (...) {
+      error = std::current_exception();
+    }
+    const std::lock_guard<std::mutex> lock(mutex);
+    done = true;
+    finished.notify_all();
+  });
+  const auto interval = std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+      std::chrono::duration<double>(InterruptCheck::kInterval));
+  std::unique_lock<std::mutex> lock(mutex);
+  while (!finished.wait_for(lock, interval, [&] { return done; })) {
+    lock.unlock();
+    if (!stop && should_stop()) stop = true;
+    lock.lock();
+  }
+  lock.unlock();
+  worker.join();
+  if (error) std::rethrow_exception(error);
 }
 
 // run_ensemble of the samples `rows` (one per row, a value per name) → a dict: names (the
@@ -110,23 +150,21 @@ py::dict run(const std::string& text, const std::string& file,
   o.at = at;
   o.outputs = outputs;
   o.keep_trajectories = keep;
-  // Ctrl-C: the module's check (Python's signal handlers, every 20 ms), one thread at a time
+  // Ctrl-C: the module's check (Python's signal handlers, then `stop`) on this thread, which
+  // run_ensemble's threads see as a flag (run_watched)
   const InterruptCheck interrupt(stop);
   SimulationOptions holder;
   interrupt.attach(holder);
-  std::mutex stop_mutex;
-  o.should_stop = [&] {
-    const std::lock_guard<std::mutex> lock(stop_mutex);
-    return holder.should_stop();
-  };
+  std::atomic<bool> stopping{false};
+  o.should_stop = [&stopping] { return stopping.load(std::memory_order_relaxed); };
   std::vector<EnsembleSample> samples;
   EnsembleResult result;
   EnsembleTable out;
   {
-    py::gil_scoped_release release;
+    ReleasedGil release;
     samples =
         without_function_name("samples_of_design", [&] { return samples_of_design(model, table); });
-    result = run_ensemble(model, samples, o);
+    run_watched(holder.should_stop, stopping, [&] { result = run_ensemble(model, samples, o); });
     out = ensemble_table(result, samples, names);
   }
   py::dict d;

@@ -48,7 +48,7 @@ py::tuple run(const Model& model, const py::dict& settings, py::object q0, py::o
   }
   ModelRun r;
   {
-    py::gil_scoped_release release;  // the run is C++ only (model files hold no Python code)
+    ReleasedGil release;  // the run is C++ only (model files hold no Python code)
     r = run_model(*m, o);
   }
   return run_tuple(std::move(r), interrupt.exception());
@@ -57,7 +57,7 @@ py::tuple run(const Model& model, const py::dict& settings, py::object q0, py::o
 py::dict check(const Model& model) {
   CheckReport r;
   {
-    py::gil_scoped_release release;
+    ReleasedGil release;
     r = check_model(model);
   }
   py::dict d;
@@ -180,14 +180,14 @@ initial_violations, mass_positive_definite, mass_singular, problems, ok.)doc")
   m.def(
       "_load_file",
       [](const std::string& path, const Overrides& overrides) {
-        py::gil_scoped_release release;
+        ReleasedGil release;
         return std::make_shared<Model>(load_model(path, overrides));
       },
       py::arg("path"), py::arg("overrides"), "load_model(path, overrides). Raises ModelError.");
   m.def(
       "_parse",
       [](const std::string& text, const std::string& file, const Overrides& overrides) {
-        py::gil_scoped_release release;
+        ReleasedGil release;
         return std::make_shared<Model>(parse_model(text, file, overrides));
       },
       py::arg("text"), py::arg("file"), py::arg("overrides"),
@@ -200,7 +200,7 @@ initial_violations, mass_positive_definite, mass_singular, problems, ok.)doc")
           throw std::invalid_argument("no model file or example called '" + name +
                                       "'; the examples are " + example_list());
         }
-        py::gil_scoped_release release;
+        ReleasedGil release;
         return std::make_shared<Model>(
             parse_model(f->text, "examples/models/" + name + ".yaml", overrides));
       },
@@ -214,7 +214,7 @@ initial_violations, mass_positive_definite, mass_singular, problems, ok.)doc")
           throw std::invalid_argument("_write_table_hdf5: names and columns differ in number");
         std::vector<CsvColumn> columns;
         for (std::size_t c = 0; c < names.size(); ++c) columns.push_back({names[c], values[c]});
-        py::gil_scoped_release release;
+        ReleasedGil release;
         write_table_hdf5(path, columns, summary);
       },
       py::arg("path"), py::arg("names"), py::arg("columns"), py::arg("summary"),
@@ -225,7 +225,7 @@ initial_violations, mass_positive_definite, mass_singular, problems, ok.)doc")
         std::vector<CsvColumn> columns;
         std::string summary;
         {
-          py::gil_scoped_release release;
+          ReleasedGil release;
           columns = read_table_hdf5(path);
           try {
             summary = read_hdf5_string_attribute(path, "summary");

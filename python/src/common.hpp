@@ -41,6 +41,10 @@ void read_vector(py::handle obj, Index n, const char* who, const char* what, Vec
 void read_into(py::handle obj, const char* who, const char* what, Eigen::Ref<VectorXd> out);
 /// Copies a rows × cols matrix into `out` (rows × cols). @throws std::invalid_argument.
 void read_matrix_into(py::handle obj, const char* who, const char* what, Eigen::Ref<MatrixXd> out);
+/// The one finite number a callable returned at time t (a float, a 0-d or 1-entry array).
+/// @throws std::invalid_argument naming `who` and `what`: None, a str, complex, several
+/// entries, or a value that is not finite (with t).
+double read_number(py::handle obj, const char* who, const char* what, double t);
 /// A matrix of any size from a 2-D sequence. @throws std::invalid_argument.
 MatrixXd read_matrix(py::handle obj, const char* who, const char* what);
 
@@ -77,6 +81,9 @@ py::tuple run_tuple(ModelRun&& run, py::object interrupt = py::none());
 /// handler or by `stop`, stops the run at its next step (Status::kInterrupted). The Python side
 /// (ukdyn/interrupt.py) gives `stop`: it reports that its SIGINT handler was called, and raises
 /// ukdyn.Interrupted (a KeyboardInterrupt) with the partial result once the run has returned.
+/// The check is for one thread at a time: a run's own, or, for an ensemble, the caller's thread,
+/// which tells run_ensemble's threads through a flag (bind_ensemble.cpp, run_watched). At
+/// interpreter exit it says stop without taking the GIL (AcquiredGil).
 class InterruptCheck {
  public:
   /// How often the run looks at Python's signals (a GIL acquisition each time).
@@ -92,6 +99,49 @@ class InterruptCheck {
   struct State;
   std::shared_ptr<State> state_;
 };
+
+// --- the GIL, at interpreter exit too (gil.cpp) -------------------------------------------------
+//
+// A thread must not take the GIL once Python has begun to finalize: CPython 3.11 then ends it with
+// pthread_exit, whose unwinding through C++ frames (a noexcept destructor, a std::thread) calls
+// std::terminate ("terminate called without an active exception"). So every place where the
+// module gives the GIL up for a long time or takes it from C++ goes through a gate, which the
+// module's atexit hook (run before finalization begins) closes: after that, a thread that would
+// take the GIL does not (AcquiredGil::held() is false: a run asked whether to stop is told yes, a
+// Python callable is not called) or, when it is a call's thread returning to Python, stays parked
+// for good, as CPython 3.14 parks daemon threads. The hook waits (at most 2 s) for the work under
+// way to stop so. The thread that runs the hook is never stopped.
+
+/// Replaces py::gil_scoped_release around C++ work: gives the GIL up and takes it back at the
+/// end of the scope, or parks the thread for good when the interpreter is exiting meanwhile.
+class ReleasedGil {
+ public:
+  ReleasedGil();  ///< with the GIL
+  ~ReleasedGil();
+  ReleasedGil(const ReleasedGil&) = delete;
+  ReleasedGil& operator=(const ReleasedGil&) = delete;
+
+ private:
+  PyThreadState* state_;
+};
+
+/// Replaces py::gil_scoped_acquire on a thread that runs C++ code (a run's check for Ctrl-C, a
+/// Python callable): takes the GIL unless the interpreter is exiting; held() says which.
+class AcquiredGil {
+ public:
+  AcquiredGil();
+  ~AcquiredGil();
+  AcquiredGil(const AcquiredGil&) = delete;
+  AcquiredGil& operator=(const AcquiredGil&) = delete;
+  /// True when the GIL is held (Python may be called).
+  bool held() const { return gil_.has_value(); }
+
+ private:
+  std::optional<py::gil_scoped_acquire> gil_;
+};
+
+/// Registers the atexit hook that closes the gate (module.cpp, once, at import).
+void register_gil_gate(py::module_& m);
 
 // --- handles
 // -----------------------------------------------------------------------------------------

@@ -117,6 +117,28 @@ void read_into(py::handle obj, const char* who, const char* what, Eigen::Ref<Vec
   }
 }
 
+double read_number(py::handle obj, const char* who, const char* what, double t) {
+  // (a str would be read by NumPy as text: say what it is, not "must be numbers")
+  if (py::isinstance<py::str>(obj) || py::isinstance<py::bytes>(obj)) {
+    throw std::invalid_argument(std::string(who) + ": " + what + " returned " +
+                                std::string(py::str(py::repr(obj))).substr(0, 40) +
+                                " (it must return a number)");
+  }
+  py::array_t<double> a = as_array(obj, who, what);
+  if (a.size() != 1) {
+    throw std::invalid_argument(
+        std::string(who) + ": " + what + " must return one number (got " +
+        (a.ndim() == 1 ? ukdyn::format_number(a.size()) + " entries" : shape_text(a)) + ")");
+  }
+  const double value = *a.data();
+  if (!std::isfinite(value)) {
+    throw std::invalid_argument(std::string(who) + ": " + what + " returned " +
+                                ukdyn::format_number(value) + " at t = " + ukdyn::format_number(t) +
+                                " (it must return a finite number)");
+  }
+  return value;
+}
+
 void read_vector(py::handle obj, Index n, const char* who, const char* what, VectorXd& out) {
   out.resize(n);
   read_into(obj, who, what, out);
@@ -380,7 +402,11 @@ void InterruptCheck::attach(SimulationOptions& o) const {
     const auto now = std::chrono::steady_clock::now();
     if (now < st->next) return false;
     st->next = now + interval;
-    py::gil_scoped_acquire gil;
+    const AcquiredGil gil;
+    if (!gil.held()) {
+      st->stopped = true;  // the interpreter is exiting
+      return true;
+    }
     // Python's handlers of the signals that arrived (KeyboardInterrupt from the default one)
     if (PyErr_CheckSignals() != 0) {
       st->error.emplace();

@@ -61,6 +61,7 @@ PYBIND11_MODULE(_ukdyn, m) {
   m.doc() =
       "ukdyn's compiled core (pybind11). Use the package `ukdyn`, which wraps it; docs/python.md.";
   pybind11::register_exception_translator(&up::translate);
+  up::register_gil_gate(m);
   up::bind_model(m);
   up::bind_solver(m);
   up::bind_control(m);

@@ -7,6 +7,10 @@ UKDYN_EXAMPLES_DIR (examples/models), UKDYN_TEST_OUTPUT (a scratch directory).
 import os
 import pathlib
 import shutil
+import signal
+import subprocess
+import sys
+import time
 
 import pytest
 
@@ -56,3 +60,24 @@ def import_or_missing(module: str, reason: str):
         return importlib.import_module(module)
     except ImportError:
         missing_dependency(reason)
+
+
+def interrupt_python(argv, delay: float):
+    """Runs Python with `argv`, waits for its line "started", sends SIGINT `delay` s later →
+    (return code, the rest of stdout, stderr, the monotonic time of the SIGINT)."""
+    child = subprocess.Popen(
+        [sys.executable] + list(argv), stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+        # SIGINT at its default in the child (the test runner may ignore it), so that Python
+        # installs its own handler there, as in an interactive session
+        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
+    try:
+        assert child.stdout.readline().strip() == "started", child.stderr.read()
+        time.sleep(delay)  # the run is well under way
+        sent = time.monotonic()
+        child.send_signal(signal.SIGINT)
+        out, err = child.communicate(timeout=120)
+    finally:
+        if child.poll() is None:
+            child.kill()
+            child.wait()
+    return child.returncode, out, err, sent

@@ -143,6 +143,44 @@ def test_wrong_shape_from_a_callable_is_a_value_error():
         ukdyn.from_callables(["x", "x"], M=np.eye(2))
 
 
+@pytest.mark.parametrize("kind, fn, message", [
+    ("P", lambda q, qd, t: np.zeros(3), r"P\(q, q_dot, t\) must return one number \(got 3 entries\)"),
+    ("P", lambda q, qd, t: None, r"P\(q, q_dot, t\) returned None"),
+    ("P", lambda q, qd, t: np.eye(2), r"P\(q, q_dot, t\) must return one number \(got shape \(2, 2\)\)"),
+    ("P", lambda q, qd, t: math.nan if t > 0.1 else 0.0,
+     r"P\(q, q_dot, t\) returned nan at t = 0\.1\d* \(it must return a finite number\)"),
+    ("V", lambda q, t: "abc", r"V\(q, t\) returned 'abc' \(it must return a number\)"),
+    ("V", lambda q, t: 1j, r"V\(q, t\) must be real numbers \(got complex\)"),
+    ("V", lambda q, t: math.inf, r"V\(q, t\) returned inf at t = 0 "),
+])
+def test_a_scalar_callable_that_returns_no_number_is_named(kind, fn, message):
+    """P and V are named in the error as Q, M, A, b and C are (issue #29; reproducer
+    py_callable_casts.py): never pybind11's "Unable to cast", never a NaN left to the energy
+    balance; a NaN is reported with the time it was returned at (after t = 0.1 here)."""
+    system = ukdyn.from_callables(["x", "y"], M=np.eye(2), Q=lambda q, qd, t: np.array([0.0, -G]),
+                                  **{kind: fn})
+    with pytest.raises(ValueError, match="ukdyn callable: " + message):
+        ukdyn.simulate(system, [1.0, 0.0], [0.0, 0.0], t_end=0.5)
+
+
+def test_a_surface_velocity_that_returns_no_pair_is_named():
+    def A(q, qd, t):
+        return [[0.0, 1.0]]
+
+    def b(q, qd, t):
+        return [0.0]
+
+    for got, message in ((lambda q, qd, t: 1.0, r"must return \(u, u_dot\) \(got float\)"),
+                         (lambda q, qd, t: [0.0], r"must return \(u, u_dot\) \(got 1 items\)")):
+        system = ukdyn.from_callables(
+            ["x", "y"], M=np.eye(2), Q=lambda q, qd, t: np.array([1.0, -G]),
+            constraints=[ukdyn.constraint("floor", A, b)],
+            nonideal=[ukdyn.coulomb("floor", 0.3, ["x"], surface_velocity=got)])
+        with pytest.raises(ValueError, match=r"ukdyn callable: coulomb friction on 'floor': "
+                                             r"surface_velocity\(q, q_dot, t\) " + message):
+            ukdyn.simulate(system, [0.0, 0.0], [1.0, 0.0], t_end=0.2)
+
+
 def test_the_gil_is_released_during_a_run():
     """Counted in GIL handoffs, not in time. The run calls stop() with the GIL every 20 ms of
     its work (Model._run's stop hook, which Model.simulate gives its Ctrl-C guard). Meanwhile a

@@ -5,17 +5,15 @@ to there — each as the uninterrupted run has it, the last at stats["t_reached"
 Result.to_csv writes whole files or none."""
 
 import json
-import os
 import pathlib
-import signal
 import subprocess
 import sys
-import time
 
 import numpy as np
 import pytest
 
 import ukdyn
+from conftest import interrupt_python
 
 LONG_MODEL = pathlib.Path(__file__).resolve().parents[2] / "tests" / "data" / "interrupt_pendulum.yaml"
 
@@ -86,24 +84,8 @@ print(json.dumps(report), flush=True)
 
 
 def run_child(mode: str, delay: float = 0.7) -> dict:
-    env = dict(os.environ)
-    child = subprocess.Popen(
-        [sys.executable, "-c", CHILD, mode, str(LONG_MODEL)], stdout=subprocess.PIPE,
-        stderr=subprocess.PIPE, text=True, env=env,
-        # SIGINT at its default in the child (the test runner may ignore it), so that Python
-        # installs its own handler there, as in an interactive session
-        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
-    try:
-        assert child.stdout.readline().strip() == "started", child.stderr.read()
-        time.sleep(delay)  # the run is well under way
-        sent = time.monotonic()
-        child.send_signal(signal.SIGINT)
-        out, err = child.communicate(timeout=120)
-    finally:
-        if child.poll() is None:
-            child.kill()
-            child.wait()
-    assert child.returncode == 0, err
+    returncode, out, err, sent = interrupt_python(["-c", CHILD, mode, str(LONG_MODEL)], delay)
+    assert returncode == 0, err
     report = json.loads(out.strip().splitlines()[-1])
     report["latency"] = report.get("caught_at", float("inf")) - sent
     return report
@@ -166,3 +148,48 @@ def test_to_csv_replaces_the_file_whole_and_leaves_no_temporary(tmp_path):
     with pytest.raises(FileNotFoundError):
         result.to_csv(str(tmp_path / "missing" / "run.csv"))
     assert sorted(p.name for p in tmp_path.iterdir()) == ["run.csv"]
+
+
+# Programs that end while a run is under way on another thread (issue #29; reproducer
+# py_thread_exit_abort.py). Each prints "main exits" and ends; the run's thread must not take
+# the GIL once Python finalizes (CPython would end it with pthread_exit, which aborts a C++
+# program: "terminate called without an active exception").
+EXITING = {
+    "simulate": """
+m = ukdyn.load(LONG)
+threading.Thread(target=lambda: m.simulate(), daemon=True).start()
+""",
+    "callables": """
+system = ukdyn.from_callables(["x", "y"], M=np.eye(2), Q=lambda q, qd, t: [0.0, -9.81],
+    constraints=[ukdyn.constraint("rod", lambda q, qd, t: [q], lambda q, qd, t: [-(qd @ qd)])])
+threading.Thread(target=lambda: ukdyn.simulate(system, [1.0, 0.0], [0.0, 0.0], t_end=1e6,
+                                                output_every=0.5),
+                 daemon=True).start()
+""",
+    "sweep on two threads": """
+threading.Thread(target=lambda: ukdyn.sweep(LONG, grid={"t_end": [5e4] * 4}, workers=2),
+                 daemon=True).start()
+""",
+}
+
+
+@pytest.mark.parametrize("mode", sorted(EXITING))
+def test_a_program_that_exits_during_a_run_on_a_thread_ends_cleanly(mode):
+    code = ("import threading, time\nimport numpy as np\nimport ukdyn\nLONG = %r\n" % str(LONG_MODEL)
+            + EXITING[mode] + "time.sleep(1.0)\nprint('main exits', flush=True)\n")
+    p = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    assert (p.returncode, p.stdout, p.stderr) == (0, "main exits\n", "")
+
+
+def test_ctrl_c_while_joining_a_sweeps_thread_then_exiting_ends_cleanly():
+    """Ctrl-C while the main thread joins a thread running ukdyn.sweep; CPython 3.11 then returns
+    at once from a second join (the thread is taken for finished), and the program ends while
+    the sweep runs. (A Python whose second join waits sees the sweep end, about 20 s.)"""
+    code = ("import threading, ukdyn\nres = {}\n"
+            "th = threading.Thread(target=lambda: res.setdefault('df', ukdyn.sweep('pendulum', "
+            "grid={'L': '1:2:6000'}, t_end=5.0, workers=1)))\n"
+            "th.start()\nprint('started', flush=True)\n"
+            "try:\n    th.join()\nexcept KeyboardInterrupt:\n    th.join()\n"
+            "    print('second join returned', flush=True)\n")
+    returncode, out, err, _ = interrupt_python(["-c", code], 1.0)
+    assert (returncode, out, err) == (0, "second join returned\n", "")

@@ -11,7 +11,7 @@ import pandas as pd
 import pytest
 
 import ukdyn
-from conftest import import_or_missing
+from conftest import import_or_missing, interrupt_python
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]
 PENDULUM = str(ROOT / "tests" / "data" / "ensemble_pendulum.yaml")
@@ -178,3 +178,81 @@ def test_sweep_random_errors_say_what_was_given():
         ukdyn.sweep(PENDULUM, grid={"nosuch": [1, 2]})
     assert str(err.value).startswith("sweep: 'nosuch' is not a parameter, coordinate")
     assert "ukdyn::" not in str(err.value)
+
+
+# a sweep in a child process that reports, as JSON, what Ctrl-C (SIGINT, sent by the parent once
+# the sweep has started) left it with
+SWEEP_CHILD = r"""
+import json, sys, time, ukdyn
+import pandas  # (imported here: its import is not part of the reaction)
+model, workers = sys.argv[1], int(sys.argv[2])
+print("started", flush=True)
+try:
+    ukdyn.sweep(model, grid={"t_end": [0.5, 1.0] + [5e4] * 4}, workers=workers)
+    print(json.dumps({"finished": True}))
+except ukdyn.Interrupted as e:
+    print(json.dumps({"caught_at": time.monotonic(), "status": list(e.result["status"]),
+                      "t_reached": [float(v) for v in e.result["t_reached"]]}))
+"""
+
+
+@pytest.mark.parametrize("workers, statuses", [
+    (2, ["ok", "ok", "interrupted", "interrupted", "not run", "not run"]),
+    (4, ["ok", "ok"] + ["interrupted"] * 4),
+])
+def test_ctrl_c_stops_a_sweep_on_several_threads(workers, statuses):
+    """Ctrl-C with two or more workers (issue #29; reproducer py_sweep_ctrl_c.py): the signal is
+    looked at on the calling (main) thread, where CPython runs handlers, and stops the samples
+    under way at their next step. Two short samples, then four of 5e4 s that no thread finishes
+    before the SIGINT at 1.5 s: each thread ran a short one and took a long one."""
+    import json
+    long_model = str(ROOT / "tests" / "data" / "interrupt_pendulum.yaml")
+    returncode, out, err, sent = interrupt_python(["-c", SWEEP_CHILD, long_model, str(workers)],
+                                                  1.5)
+    assert returncode == 0, err
+    report = json.loads(out.splitlines()[-1])
+    # within a fraction of a second (20 ms checks plus a step; generous for a loaded machine)
+    print(f"workers={workers}: Interrupted {(report['caught_at'] - sent) * 1e3:.0f} ms after SIGINT")
+    assert 0.0 < report["caught_at"] - sent < 2.0
+    assert report["status"] == statuses
+    assert report["t_reached"][:2] == [0.5, 1.0]
+    for t, status in zip(report["t_reached"], report["status"]):
+        if status == "interrupted":
+            assert 0 < t < 5e4
+
+
+def test_ctrl_c_during_a_dask_sweep_raises_interrupted_with_the_finished_chunks():
+    """Ctrl-C while a sweep waits for its Dask chunks (issue #29; reproducer py_dask_ctrl_c.py):
+    ukdyn.Interrupted with the whole table, the finished chunks' rows as they ran and the others
+    "not run" with the same figures as a threaded sweep's samples not run (no pandas
+    IntCastingNaNError). Chunks of one sample: two short ones, then four long ones on two
+    workers (a Dask LocalCluster of two processes); SIGINT at 3 s."""
+    import os
+    import signal
+    import threading
+    distributed = import_or_missing("distributed", "python3-distributed is not installed")
+    long_model = str(ROOT / "tests" / "data" / "interrupt_pendulum.yaml")
+    grid = {"t_end": [0.5, 1.0] + [5e4] * 4}
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+                                  dashboard_address=None, silence_logs=50) as cluster, \
+            distributed.Client(cluster) as client:
+        client.run(lambda: __import__("ukdyn"))  # (the workers ready: the short chunks take ms)
+        timer = threading.Timer(3.0, lambda: os.kill(os.getpid(), signal.SIGINT))
+        timer.start()
+        try:
+            with pytest.raises(ukdyn.Interrupted) as caught:
+                ukdyn.sweep(long_model, grid=grid, client=client, chunk_size=1)
+        finally:
+            timer.cancel()
+        # the workers' long samples are abandoned with the cluster
+    frame = caught.value.result
+    assert list(frame["status"]) == ["ok", "ok"] + ["not run"] * 4
+    assert list(frame["t_end"]) == grid["t_end"]
+    assert list(frame["sample"]) == list(range(6))
+    assert list(frame["t_reached"][:2]) == [0.5, 1.0]
+    # the rows not run: as a threaded sweep's samples after a stop (integer columns stay integers)
+    rest = frame.iloc[2:]
+    assert list(rest["status_code"]) == [-2] * 4 and frame["status_code"].dtype == np.int64
+    assert list(rest["steps"]) == [0] * 4 and list(rest["evaluations"]) == [0] * 4
+    assert not rest["ok"].any() and rest["t_reached"].isna().all()
+    assert set(rest["message"]) == {"not run: the ensemble was stopped before this sample"}

@@ -472,9 +472,11 @@ visual:
 
 
 def _page_data(html: str):
+    """The data of a page: the text of its <script type="application/json"> element."""
     import json
-    start = html.index("const data = ") + len("const data = ")
-    return json.JSONDecoder().raw_decode(html[start:])[0]
+    opening = '<script type="application/json" id="ukdyn-data">'
+    start = html.index(opening) + len(opening)
+    return json.loads(html[start:html.index("</script>", start)])
 
 
 def test_positions_are_kept_to_the_scenes_extent(cli, tmp_path):
@@ -675,3 +677,116 @@ def test_a_requirement_of_a_bodies_model_draws_its_desired_path(tmp_path):
     assert page["desired_paths"] == []
     assert sorted(r["name"] for r in page["requirements"] if "desired" in r) == \
         ["joint1", "joint2", "joint3"]
+
+
+# --- hostile names (issue #29 item 7): the page's data cannot break out of or confuse its script
+HOSTILE_NAMES = [
+    "</script><script>window.__pwned = 1</script>",
+    "x<!--<script>y",
+    "<!--",
+    "</title><img src=x onerror='window.__pwned = 1'>",
+    "__proto__", "constructor", "toString", "hasOwnProperty", "prototype",
+    "/*UKDYN_THREE*/", "/*UKDYN_DATA*/null", "<!--UKDYN_TITLE-->",
+    "\x1b]0;retitled\x07\x1b[2J\x1b[31m",
+    "\u202eevil\u202c \u2066x\u2069 \u200f",
+    "\u2028\u2029 & \"quoted\" 'single' `${back}` \\",
+    "a" * 100_000,
+]
+
+
+def _swinging_page(model: str, point: str) -> str:
+    """A page of a scene holding two visual points, a grey pivot at the origin and a red bob
+    named `point` (linked to the pivot, with a trail), that swings on the unit circle; the model
+    is named `model`. Built by viewer.build_page from a scene as viewer_scene_json writes it."""
+    from ukdyn import viewer
+    t = [k * 0.01 for k in range(101)]
+    theta = [1.0 + math.sin(3.0 * s) for s in t]
+    x, y = [math.sin(a) for a in theta], [-math.cos(a) for a in theta]
+    zero = [0.0] * len(t)
+    scene = {"model": model, "coordinates": ["x", "y"], "planar": True, "controlled": False,
+             "bodies": [], "joints": [], "frames": [], "links": [["pivot", point]],
+             "trails": [point],
+             "points": [{"name": "pivot", "dimensions": 2, "radius": 0.03, "color": "#7f7f7f",
+                         "coordinates": [None, None], "expressions": ["0", "0"]},
+                        {"name": point, "dimensions": 2, "radius": 0.08, "color": "#d62728",
+                         "coordinates": ["x", "y"], "expressions": ["x", "y"]}]}
+    names = ["t", "x", "y", "visual.pivot.x", "visual.pivot.y", "visual.%s.x" % point,
+             "visual.%s.y" % point]
+    return viewer.build_page(scene, names, [t, x, y, zero, zero, x, y])
+
+
+def _bob_centres(page: "Page"):
+    """The centre of the red bob (pixels) at four frames, trails and arrows hidden."""
+    page.js("ukdyn.show('trails', false)")
+    n = page.js("return ukdyn.data.t.length")
+    centres = []
+    for frame in (0, n // 3, 2 * n // 3, n - 1):
+        page.js("ukdyn.setFrame(arguments[0])", frame)
+        mask = _mask(page.pixels(), "#d62728")
+        assert mask.sum() > 50, "the bob is not drawn at frame %d" % frame
+        ys, xs = np.nonzero(mask)
+        centres.append((xs.mean(), ys.mean()))
+    return np.array(centres)
+
+
+@pytest.fixture(scope="module")
+def plain_bob(browser, tmp_path_factory):
+    """The bob's centres on the page with plain names (model "p", point "bob")."""
+    path = tmp_path_factory.mktemp("hostile") / "plain.html"
+    path.write_text(_swinging_page("p", "bob"), encoding="utf-8")
+    return _bob_centres(Page(browser, path))
+
+
+@pytest.mark.parametrize("name", HOSTILE_NAMES, ids=lambda s: repr(s[:24]))
+def test_hostile_names_neither_run_nor_break_the_page(browser, plain_bob, tmp_path, name):
+    """A name used as the model's and a visual point's: the page draws the same scene as with
+    plain names (the bob where it is drawn then), shows the name as text, and runs no script of
+    the data; the data stays inside its JSON script element (no "<" in it)."""
+    html = _swinging_page(name, name)
+    opening = '<script type="application/json" id="ukdyn-data">'
+    start = html.index(opening) + len(opening)
+    payload = html[start:html.index("</script>", start)]
+    assert not set("<>&\u2028\u2029") & set(payload)
+    assert _page_data(html)["model"] == name
+    path = tmp_path / "hostile.html"
+    path.write_text(html, encoding="utf-8")
+    page = Page(browser, path)
+    assert page.js("return window.__pwned === undefined")
+    assert page.js("return document.getElementById('name').textContent") == name
+    assert page.js("return ukdyn.data.points[1].name") == name
+    np.testing.assert_allclose(_bob_centres(page), plain_bob, atol=0.5)
+    assert page.errors() == []
+
+
+@pytest.mark.parametrize("model_name, point", [("x<!--<script>y", "bob"), ("p", "__proto__")])
+def test_hostile_names_from_a_model_file(browser, tmp_path, model_name, point):
+    """The two model files of the reproducer viewer_page_breakers.sh, read, run and saved by
+    Python as `ukdyn run` does: each page starts and draws its bob, without an error."""
+    text = f"""
+name: {json_string(model_name)}
+coordinates: [x, y]
+kinetic_energy: 0.5*(x_dot^2 + y_dot^2)
+potential_energy: 9.81*y
+constraints:
+  - {{name: rod, holonomic: (x^2 + y^2 - 1)/2}}
+initial: {{q: {{x: 1}}}}
+visual:
+  points:
+    pivot: {{at: [0, 0], color: grey, radius: 0.03}}
+    {point}: {{at: [x, y], color: red, radius: 0.08}}
+  links: [[pivot, {point}]]
+  trails: [{point}]
+"""
+    path = tmp_path / "page.html"
+    ukdyn.parse(text).simulate(t_end=0.5).save_animation(path)
+    page = Page(browser, path)
+    assert page.js("return document.getElementById('name').textContent") == model_name
+    page.js("ukdyn.show('trails', false); ukdyn.show('ideal', false)")
+    assert _mask(page.pixels(), "#d62728").sum() > 50
+    assert page.errors() == []
+
+
+def json_string(text: str) -> str:
+    """text as a double-quoted YAML (JSON) string."""
+    import json
+    return json.dumps(text)

@@ -249,29 +249,16 @@ def _run_on_dask(client: Any, chunk_size: Optional[int], text: str, file: str, o
     except KeyboardInterrupt:
         interrupted = True
         client.cancel([f for f in futures if not f.done()])
-    # chunks not run: their rows as "not run"
-    for k, part in enumerate(parts):
-        if part is None:
-            size = min(chunk_size, total - starts[k])
-            template = next(p for p in parts if p is not None) if any(parts) else None
-            if template is None:
-                raise Interrupted("sweep interrupted before any sample ran", None)
-            parts[k] = {
-                "names": template["names"],
-                "columns": [np.arange(size, dtype=float) if nm == "sample" else
-                            np.full(size, -2.0 if nm == "status_code" else
-                                    (0.0 if nm == "ok" else np.nan))
-                            for nm in template["names"]],
-                "status": ["not run"] * size,
-                "message": ["not run: the sweep was interrupted"] * size,
-                "trajectories": [{}] * size if keep else None,
-            }
-    for part, s in zip(parts, starts):
-        # the grid's and draws' values of the rows not run
-        if part["status"] and part["status"][0] == "not run":
-            for k, nm in enumerate(part["names"]):
-                if nm in names:
-                    part["columns"][k] = rows[s:s + len(part["status"]), names.index(nm)].copy()
+    # chunks not run: their rows as "not run", made by run_ensemble told to stop before any
+    # sample (the same figures as the samples a sweep on threads did not run)
+    if any(part is None for part in parts):
+        stop_now = lambda: True  # noqa: E731
+        for k, part in enumerate(parts):
+            if part is None:
+                parts[k] = _ukdyn._run_ensemble(text, file, overrides, settings, names,
+                                                rows[starts[k]:starts[k] + chunk_size], at,
+                                                outputs, keep, 1, stop_now)
+                parts[k].pop("exception", None)
     return parts, starts, interrupted
 
 

@@ -38,9 +38,12 @@ with /usr/bin/python3.
 from __future__ import annotations
 
 import csv
+import errno
 import json
 import os
+import stat
 import sys
+import tempfile
 
 import numpy as np
 
@@ -639,18 +642,55 @@ def parse_formats(formats):
     return out
 
 
-def save(fig, path, fmt=None):
-    """Writes the figure whole or not at all: a hidden temporary beside `path`, then renamed
-    over it. The format is `fmt`, or `path`'s extension."""
-    fmt = fmt or os.path.splitext(path)[1][1:]
-    directory, name = os.path.split(path)
-    temporary = os.path.join(directory, ".%s.tmp-%d" % (name, os.getpid()))
+def _umask():
+    """The process's umask (read from /proc where it can be, without changing it)."""
     try:
-        fig.savefig(temporary, dpi=110, format=fmt)
+        with open("/proc/self/status", encoding="ascii") as f:
+            for line in f:
+                if line.startswith("Umask:"):
+                    return int(line.split()[1], 8)
+    except (OSError, ValueError):
+        pass
+    mask = os.umask(0o022)
+    os.umask(mask)
+    return mask
+
+
+def write_replacing(path, write):
+    """Writes `path` whole or not at all, safe in a directory that others can write: a path
+    that exists and is not a regular file (a symbolic link, a FIFO, a directory) is refused with
+    OSError before anything is written; write(f) fills a binary file object opened on a
+    temporary of unpredictable name beside `path` (tempfile.mkstemp: O_EXCL, O_NOFOLLOW),
+    which is then renamed over `path`, with the mode that open() would have given it. (The same
+    function is in ukdyn/viewer.py, which is run on its own as a script.)"""
+    path = os.fspath(path)
+    try:
+        mode = os.lstat(path).st_mode
+    except FileNotFoundError:
+        mode = None
+    if mode is not None and not stat.S_ISREG(mode):
+        raise OSError(errno.EEXIST, "exists and is not a regular file (a symbolic link, a FIFO "
+                      "or a directory): not written over", path)
+    directory, name = os.path.split(os.path.abspath(path))
+    fd, temporary = tempfile.mkstemp(prefix="." + name + ".", suffix=".tmp", dir=directory)
+    try:
+        with os.fdopen(fd, "wb") as f:
+            os.fchmod(f.fileno(), 0o666 & ~_umask())
+            write(f)
         os.replace(temporary, path)
-    finally:
-        if os.path.exists(temporary):
+    except BaseException:
+        try:
             os.remove(temporary)
+        except OSError:
+            pass
+        raise
+
+
+def save(fig, path, fmt=None):
+    """Writes the figure to `path` whole or not at all (write_replacing). The format is `fmt`,
+    or `path`'s extension."""
+    fmt = fmt or os.path.splitext(path)[1][1:]
+    write_replacing(path, lambda f: fig.savefig(f, dpi=110, format=fmt))
 
 
 def write_figures(table, meta, directory, formats=("png",), close=True):

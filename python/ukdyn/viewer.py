@@ -22,10 +22,14 @@ and the page holds three.js itself: it opens from disk, without a server or netw
 Pure Python (no NumPy needed): the command runs it with whatever /usr/bin/python3 has.
 """
 import csv
+import errno
 import json
 import math
 import os
+import re
+import stat
 import sys
+import tempfile
 
 # where three.js is found when it is not beside this file (Debian's libjs-three)
 DEBIAN_THREE = "/usr/share/javascript/three"
@@ -354,32 +358,80 @@ def build_page(scene, names, columns, title=None, **options):
     data = scene_data(scene, names, columns, **options)
     template = _asset(TEMPLATE, here)
     three = "\n".join(_asset(n, here) for n in THREE_FILES)
-    payload = json.dumps(data, separators=(",", ":"), allow_nan=False)
-    # no "</script" inside the script elements
-    payload = payload.replace("</", "<\\/")
+    payload = _json_for_html(data)
+    # no "</script" inside three.js's script element
     three = three.replace("</script", "<\\/script")
     title = title or ("ukdyn: " + str(data["model"]))
-    # three.js before the data: the model's name in the data cannot be taken for a placeholder
-    page = template.replace("<!--UKDYN_TITLE-->", _escape(title), 1)
-    page = page.replace("/*UKDYN_THREE*/", three, 1)
-    return page.replace("/*UKDYN_DATA*/null", payload, 1)
+    # one pass over the template: what is put in (a name in the title or the data) is never
+    # searched for a placeholder
+    parts = {"<!--UKDYN_TITLE-->": _escape(title), "/*UKDYN_THREE*/": three,
+             "/*UKDYN_DATA*/null": payload}
+    return re.sub("|".join(re.escape(k) for k in parts), lambda m: parts[m.group(0)], template)
+
+
+def _json_for_html(data):
+    """`data` as JSON text that an HTML parser cannot take for anything but the text of its
+    <script type="application/json"> element: every <, > and & (only ever inside strings) and
+    U+2028/U+2029 written as \\u escapes, so that no name (</script>, <!--, <script>) can end
+    the element or change how it is parsed; the page reads it with JSON.parse."""
+    # (ensure_ascii: every character beyond ASCII, U+2028/9 among them, is a \\u escape)
+    text = json.dumps(data, separators=(",", ":"), allow_nan=False, ensure_ascii=True)
+    for c in "<>&":
+        text = text.replace(c, "\\u%04x" % ord(c))
+    return text
 
 
 def _escape(text):
     return (text.replace("&", "&amp;").replace("<", "&lt;").replace(">", "&gt;"))
 
 
-def write_page(path, page):
-    """Writes the page whole or not at all: a hidden temporary beside path, then renamed."""
-    directory, name = os.path.split(os.path.abspath(path))
-    temporary = os.path.join(directory, ".%s.tmp-%d" % (name, os.getpid()))
+def _umask():
+    """The process's umask (read from /proc where it can be, without changing it)."""
     try:
-        with open(temporary, "w", encoding="utf-8") as f:
-            f.write(page)
+        with open("/proc/self/status", encoding="ascii") as f:
+            for line in f:
+                if line.startswith("Umask:"):
+                    return int(line.split()[1], 8)
+    except (OSError, ValueError):
+        pass
+    mask = os.umask(0o022)
+    os.umask(mask)
+    return mask
+
+
+def write_replacing(path, write):
+    """Writes `path` whole or not at all, safe in a directory that others can write: a path
+    that exists and is not a regular file (a symbolic link, a FIFO, a directory) is refused with
+    OSError before anything is written; write(f) fills a binary file object opened on a
+    temporary of unpredictable name beside `path` (tempfile.mkstemp: O_EXCL, O_NOFOLLOW),
+    which is then renamed over `path`, with the mode that open() would have given it. (The same
+    function is in ukdyn/plotting.py, which is run on its own as a script.)"""
+    path = os.fspath(path)
+    try:
+        mode = os.lstat(path).st_mode
+    except FileNotFoundError:
+        mode = None
+    if mode is not None and not stat.S_ISREG(mode):
+        raise OSError(errno.EEXIST, "exists and is not a regular file (a symbolic link, a FIFO "
+                      "or a directory): not written over", path)
+    directory, name = os.path.split(os.path.abspath(path))
+    fd, temporary = tempfile.mkstemp(prefix="." + name + ".", suffix=".tmp", dir=directory)
+    try:
+        with os.fdopen(fd, "wb") as f:
+            os.fchmod(f.fileno(), 0o666 & ~_umask())
+            write(f)
         os.replace(temporary, path)
-    finally:
-        if os.path.exists(temporary):
+    except BaseException:
+        try:
             os.remove(temporary)
+        except OSError:
+            pass
+        raise
+
+
+def write_page(path, page):
+    """Writes the page (a str) to `path` whole or not at all (write_replacing)."""
+    write_replacing(path, lambda f: f.write(page.encode("utf-8")))
 
 
 def read_csv(path, fps=FPS, max_frames=MAX_FRAMES, watch=(), first_nonfinite=None):
