@@ -11,6 +11,7 @@
 //     (the thread's stack bounds, pthread_getattr_np) with a reserve that the rest of the
 //     reading needs, and refuses the file, located, when less is left.
 // One pass over the parser's events: O(size of the text), aliases are not expanded.
+#include <algorithm>
 #include <cstddef>
 #include <cstdint>
 #include <map>
@@ -38,19 +39,20 @@ struct Open {
   std::map<std::string, YAML::Mark> keys;  // a mapping: its scalar keys, where first seen
 };
 
-// The lowest address the nesting may reach on this thread's stack: its lowest address plus a
-// reserve for what reading needs beyond the nesting itself (YAML::Load's frames above the same
-// depth, the exception that reports it, the reader's and the expression parser's frames);
-// nullptr when the bounds are unknown (then only yaml-cpp's own limit applies).
+// The lowest address the nesting may reach on this thread's stack: its lowest address (the guard
+// page included) plus a reserve for what reading needs beyond the nesting itself (YAML::Load's
+// frames above the same depth, the exception that reports it, the reader's and the expression
+// parser's frames); nullptr when the bounds are unknown (then only yaml-cpp's own limit applies).
 const char* stack_floor() {
-  constexpr std::size_t kReserve = std::size_t(40) << 10;  // bytes
   pthread_attr_t attr;
   if (pthread_getattr_np(pthread_self(), &attr) != 0) return nullptr;
   void* base = nullptr;
   std::size_t size = 0;
   const bool known = pthread_attr_getstack(&attr, &base, &size) == 0 && base != nullptr;
   pthread_attr_destroy(&attr);
-  return known ? static_cast<const char*>(base) + kReserve : nullptr;
+  // the reserve: a quarter of the stack, at most 64 kB (a 64 kB stack keeps 16 kB)
+  const std::size_t reserve = std::min(size / 4, std::size_t(64) << 10);
+  return known ? static_cast<const char*>(base) + reserve : nullptr;
 }
 
 class StructureCheck final : public YAML::EventHandler {
