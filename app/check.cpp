@@ -7,6 +7,7 @@
 #include <ukdyn/modelfile/model.hpp>
 
 #include "commands.hpp"
+#include "terminal_text.hpp"
 #include "ukdyn/core/format.hpp"
 
 namespace ukdyn::cli {
@@ -31,13 +32,14 @@ int check_command(const ModelSource& source) {
   const System& sys = model.system;
   const double t = model.options.t_start;
 
-  std::printf("model: %s (%s)\n", model.name.c_str(), model.file.c_str());
+  std::printf("model: %s (%s)\n", terminal_text(model.name, false).c_str(),
+              terminal_text(model.file, false).c_str());
   std::printf("  coordinates         %lld  (%s)\n", static_cast<long long>(r.coordinates),
-              join(sys.coordinate_names()).c_str());
+              terminal_text(join(sys.coordinate_names())).c_str());
   std::printf("  constraints         %lld\n", static_cast<long long>(sys.constraint_count()));
   for (const Constraint& c : sys.constraints()) {
-    std::printf("    %-20s %s, %lld row%s%s\n", c.name().c_str(), kind_name(c.kind()),
-                static_cast<long long>(c.rows()), c.rows() == 1 ? "" : "s",
+    std::printf("    %-20s %s, %lld row%s%s\n", terminal_text(c.name(), false).c_str(),
+                kind_name(c.kind()), static_cast<long long>(c.rows()), c.rows() == 1 ? "" : "s",
                 c.is_active(t) ? "" : ", inactive at t_start");
   }
   std::printf("  constraint rows     %lld  (active at t = %g)\n",
@@ -62,13 +64,13 @@ int check_command(const ModelSource& source) {
     std::printf(
         "  redundant constraints  %s  (their rows add nothing to the rank of the ones "
         "before them; the motion is the same without them)\n",
-        join(r.redundant).c_str());
+        terminal_text(join(r.redundant)).c_str());
   }
   if (!r.contradictory.empty()) {
     std::printf(
         "  contradictory constraints  %s  (inconsistent: no state satisfies them "
         "together)\n",
-        join(r.contradictory).c_str());
+        terminal_text(join(r.contradictory)).c_str());
   }
   if (r.initial_violations.empty()) {
     std::printf("  initial state       consistent with every constraint\n");
@@ -76,7 +78,7 @@ int check_command(const ModelSource& source) {
     std::printf("  initial state       violates %zu constraint%s%s:\n", r.initial_violations.size(),
                 r.initial_violations.size() == 1 ? "" : "s",
                 model.project_initial ? " (projected before a run: initial: project: true)" : "");
-    for (const auto& v : r.initial_violations) std::printf("    %s\n", v.c_str());
+    for (const auto& v : r.initial_violations) std::printf("    %s\n", terminal_text(v).c_str());
   }
   std::printf("  mass matrix         %s\n",
               !r.mass_positive_definite ? "NOT symmetric positive (semi-)definite"
@@ -92,7 +94,8 @@ int check_command(const ModelSource& source) {
                 ctrl.robust() ? ", robust term" : "");
     if (!ctrl.fully_actuated() && !ctrl.actuated_coordinates().empty()) {
       for (Index j : ctrl.actuated_coordinates()) {
-        std::printf("                        %s\n", sys.coordinate_names()[std::size_t(j)].c_str());
+        std::printf("                        %s\n",
+                    terminal_text(sys.coordinate_names()[std::size_t(j)], false).c_str());
       }
     } else if (!ctrl.fully_actuated()) {
       // an actuation matrix (joints' actuators, S given): each actuator's generalized force
@@ -108,13 +111,13 @@ int check_command(const ModelSource& source) {
           terms += (terms.empty() ? (v < 0 ? "-" : "") : (v < 0 ? " - " : " + ")) + size + name;
         }
         std::printf("                        actuator %lld: %s\n", static_cast<long long>(j + 1),
-                    terms.empty() ? "0" : terms.c_str());
+                    terms.empty() ? "0" : terminal_text(terms, false).c_str());
       }
     }
     for (Index k = 0; k < ctrl.requirement_count(); ++k) {
       const Constraint& c = ctrl.requirement(k);
-      std::printf("    %-20s %s, %lld row%s\n", c.name().c_str(), kind_name(c.kind()),
-                  static_cast<long long>(c.rows()), c.rows() == 1 ? "" : "s");
+      std::printf("    %-20s %s, %lld row%s\n", terminal_text(c.name(), false).c_str(),
+                  kind_name(c.kind()), static_cast<long long>(c.rows()), c.rows() == 1 ? "" : "s");
     }
   }
   if (r.ok()) {
@@ -122,7 +125,7 @@ int check_command(const ModelSource& source) {
     return kExitOk;
   }
   std::printf("problems:\n");
-  for (const auto& p : r.problems) std::printf("  - %s\n", p.c_str());
+  for (const auto& p : r.problems) std::printf("  - %s\n", terminal_text(p).c_str());
   return kExitCheck;
 }
 

@@ -37,6 +37,15 @@ class UsageError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+/// The table formats of --format (run and sweep): csv and/or hdf5.
+struct TableFormats {
+  bool csv = false, hdf5 = false;
+};
+
+/// Reads --format's list. @throws UsageError naming a format that is not csv or hdf5, or an
+/// empty list — before anything runs, so that a typo costs no work.
+TableFormats parse_formats(const std::vector<std::string>& formats);
+
 /// Where a model comes from: a file or a built-in example, with parameter overrides.
 struct ModelSource {
   std::string path;              ///< MODEL.yaml, or empty

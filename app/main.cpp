@@ -18,6 +18,8 @@
 #include <ukdyn/simulation/options.hpp>
 
 #include "commands.hpp"
+#include "stop_signals.hpp"
+#include "terminal_text.hpp"
 
 namespace {
 
@@ -34,13 +36,18 @@ constexpr const char* kExitCodes = R"(Exit codes:
   5  the run reached its end, but its energy balance residual exceeds the tolerance (status
      energy_balance): energy was gained or lost that no work channel accounts for
   6  the output directory is in use by another ukdyn run (its pid is named); nothing was run
-  130, 143  interrupted by SIGINT (Ctrl-C) or SIGTERM (128 + the signal's number): the run
-     stopped at its next step and the trajectory up to there, summary.json (status
-     interrupted, t_reached) and the plots are written; a second signal ends it at once
+  129, 130, 143  interrupted by SIGHUP (the terminal or ssh session closed), SIGINT (Ctrl-C)
+     or SIGTERM (128 + the signal's number): the run stopped at its next step and the
+     trajectory up to there, summary.json (status interrupted, t_reached) and the plots are
+     written; a second signal ends it at once. SIGPIPE and SIGXFSZ are ignored: a console
+     that went away costs only the console lines, and a file-size limit is an error of the
+     file it stopped (exit 1)
 
 Output files are written under a temporary name and renamed when complete; the directory is
 locked for the run (DIR/.ukdyn.lock), and a run removes the previous run's files from it just
-before writing its own.)";
+before writing its own. An output name (or the lock) that exists and is not a regular file (a
+symbolic link, a FIFO, a directory) is refused before anything runs. Names from a model file
+are printed with control characters escaped.)";
 
 // the options shared by run and check: MODEL.yaml or --example NAME, and --set
 void add_source_options(CLI::App* cmd, ukdyn::cli::ModelSource& source) {
@@ -79,6 +86,7 @@ std::uint64_t whole_number_of(const std::string& flag, const std::string& text, 
 
 int main(int argc, char** argv) {
   using namespace ukdyn::cli;
+  ignore_output_signals();
   CLI::App app(
       "ukdyn: explicit equations of motion of constrained mechanical systems "
       "(Udwadia-Kalaba). Runs and checks model files (YAML).",
@@ -234,7 +242,7 @@ int main(int argc, char** argv) {
           stderr,
           "error: unknown subcommand '%s' (the subcommands are run, sweep, check, examples)\n"
           "Run with --help for more information.\n",
-          first.c_str());
+          terminal_text(first, false).c_str());
       return kExitUsage;
     }
   }
@@ -290,13 +298,14 @@ int main(int argc, char** argv) {
     if (check_cmd->parsed()) return check_command(check);
     return examples_command();
   } catch (const UsageError& e) {
-    std::fprintf(stderr, "error: %s\nRun with --help for more information.\n", e.what());
+    std::fprintf(stderr, "error: %s\nRun with --help for more information.\n",
+                 terminal_text(e.what()).c_str());
     return kExitUsage;
   } catch (const ukdyn::ModelError& e) {
-    std::fprintf(stderr, "%s\n", e.what());
+    std::fprintf(stderr, "%s\n", terminal_text(e.what()).c_str());
     return kExitModel;
   } catch (const std::exception& e) {
-    std::fprintf(stderr, "error: %s\n", e.what());
+    std::fprintf(stderr, "error: %s\n", terminal_text(e.what()).c_str());
     return kExitRunFailed;
   }
 }

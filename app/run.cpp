@@ -32,6 +32,7 @@
 #include "progress.hpp"
 #include "python_process.hpp"
 #include "stop_signals.hpp"
+#include "terminal_text.hpp"
 #include "viewer.hpp"
 
 namespace ukdyn::cli {
@@ -49,16 +50,16 @@ void warn_duplicate_columns(const ModelRun& run) {
       std::fprintf(stderr,
                    "warning: the output column '%s' has the name of a standard "
                    "column; the CSV holds two columns of that name\n",
-                   c.name.c_str());
+                   terminal_text(c.name, false).c_str());
     }
   }
 }
 
 // writes the plots in `formats` (png, pdf, svg) with python/ukdyn/plotting.py (embedded) and
 // /usr/bin/python3 (or $UKDYN_PYTHON); returns the files written; a missing python or
-// matplotlib is a warning, not an error
+// matplotlib is a warning, a script that ran and failed (a full disk) an error: `failed` is set
 std::vector<fs::path> make_plots(const fs::path& csv, const fs::path& dir,
-                                 const std::vector<std::string>& formats) {
+                                 const std::vector<std::string>& formats, bool& failed) {
   const std::string python = python_interpreter();
   if (!is_executable(python)) {
     std::fprintf(stderr,
@@ -88,7 +89,8 @@ std::vector<fs::path> make_plots(const fs::path& csv, const fs::path& dir,
     return {};
   }
   if (code != 0) {
-    std::fprintf(stderr, "warning: the plot script failed (exit %d): no plots\n", code);
+    std::fprintf(stderr, "error: the plot script failed (exit %d): no plots\n", code);
+    failed = true;
     return {};
   }
   std::vector<fs::path> files;
@@ -156,17 +158,8 @@ ProgressBar::Clock::duration progress_interval() {
 int run_command(const RunArguments& given) {
   RunArguments args = given;
   if (!args.from_summary.empty()) apply_summary(args);
-  bool want_csv = false, want_hdf5 = false;
-  for (const std::string& f : args.formats) {
-    if (f == "csv") {
-      want_csv = true;
-    } else if (f == "hdf5") {
-      want_hdf5 = true;
-    } else {
-      throw UsageError("--format " + f + ": the formats are csv and hdf5 (--format csv,hdf5)");
-    }
-  }
-  if (!want_csv && !want_hdf5) throw UsageError("--format: give csv, hdf5 or both");
+  const TableFormats formats = parse_formats(args.formats);
+  const bool want_csv = formats.csv, want_hdf5 = formats.hdf5;
   for (const std::string& f : args.plot_formats) {
     if (f != "png" && f != "pdf" && f != "svg") {
       throw UsageError("--plot-format " + f +
@@ -199,16 +192,20 @@ int run_command(const RunArguments& given) {
   // the directory, held for the run: a second run into it is refused now, before it computes
   // anything, and this one's files are never mixed with another's
   std::optional<OutputDirectory> out;
-  if (const int status = hold_output_directory(dir, out); status != 0) return status;
+  if (const int status = hold_output_directory(dir, kRunOutputs, out); status != 0) {
+    return status;
+  }
 
-  std::printf("ukdyn run: %s (%s), t = %g … %g s\n", model.name.c_str(), model.file.c_str(),
-              options.t_start, options.t_end);
+  std::printf("ukdyn run: %s (%s), t = %g … %g s\n", terminal_text(model.name, false).c_str(),
+              terminal_text(model.file, false).c_str(), options.t_start, options.t_end);
   std::fflush(stdout);
 
-  // SIGINT, SIGTERM: the run stops at its next step and what it computed is written; a second
-  // signal ends the program at once
+  // SIGINT, SIGTERM, SIGHUP: the run stops at its next step and what it computed is written; a
+  // second signal ends the program at once. A trajectory.csv that cannot be written (a full
+  // disk, a file-size limit) stops the run too: nothing more of it could be kept
   StopSignals signals;
-  options.should_stop = [] { return StopSignals::received() != 0; };
+  std::string csv_error;  // the write error of trajectory.csv ("": none)
+  options.should_stop = [&csv_error] { return StopSignals::received() != 0 || !csv_error.empty(); };
 
   // trajectory.csv streams to its temporary while the run goes (memory does not grow with
   // the run's length): created with the first samples — a run that cannot start leaves the
@@ -230,7 +227,13 @@ int run_command(const RunArguments& given) {
   };
   auto write_rows = [&](const ModelRun& chunk) {
     if (!started) start(chunk);
-    if (csv) csv->append(chunk.trajectory, chunk.extra_columns);
+    if (csv && csv_error.empty()) {
+      try {
+        csv->append(chunk.trajectory, chunk.extra_columns);
+      } catch (const std::runtime_error& e) {
+        csv_error = e.what();
+      }
+    }
     if (want_hdf5) {
       std::vector<CsvColumn> part = csv_table(chunk.trajectory);
       part.insert(part.end(), chunk.extra_columns.begin(), chunk.extra_columns.end());
@@ -258,17 +261,18 @@ int run_command(const RunArguments& given) {
       // at the initial: section or the constraint's entry (no hint to project when the
       // constraints contradict each other: it cannot help)
       bar.finish();
-      std::fprintf(stderr, "%s\n", locate_run_error(model, e).what());
+      std::fprintf(stderr, "%s\n", terminal_text(locate_run_error(model, e).what()).c_str());
       return kExitModel;
     } catch (const SettingError& e) {
       // (checked before the run: the file's settings when it was read, the flags' above)
       bar.finish();
-      std::fprintf(stderr, "%s\n", locate_run_error(model, e).what());
+      std::fprintf(stderr, "%s\n", terminal_text(locate_run_error(model, e).what()).c_str());
       return kExitModel;
     } catch (const std::invalid_argument& e) {
       // the model cannot be started
       bar.finish();
-      std::fprintf(stderr, "%s: error: %s\n", model.file.c_str(), user_message(e).c_str());
+      std::fprintf(stderr, "%s: error: %s\n", terminal_text(model.file, false).c_str(),
+                   terminal_text(user_message(e)).c_str());
       return kExitModel;
     }
   }
@@ -276,7 +280,7 @@ int run_command(const RunArguments& given) {
   options.should_stop = nullptr;
   const int received = StopSignals::received();
   RunStatistics& stats = run.trajectory.stats;
-  if (stats.status == Status::kInterrupted) {
+  if (stats.status == Status::kInterrupted && csv_error.empty()) {
     char text[160];
     std::snprintf(text, sizeof text,
                   "interrupted by %s at t = %g s: the samples computed up to there are written",
@@ -290,9 +294,33 @@ int run_command(const RunArguments& given) {
   // first (just its header when the run recorded no sample), summary.json second (its
   // presence says that trajectory.csv is complete), the plots last
   if (!started) write_rows(run);
-  if (csv) {
-    csv->commit();
-    files.push_back(csv_path);
+  if (csv && csv_error.empty()) {
+    try {
+      csv->commit();
+      files.push_back(csv_path);
+    } catch (const std::runtime_error& e) {
+      csv_error = e.what();
+    }
+  }
+  if (!csv_error.empty()) {
+    // the rows that reached the file are kept under its own name, said to be incomplete; the
+    // summary says why (if it can still be written)
+    const bool kept = csv->keep_partial();
+    std::fprintf(stderr, "error: %s\n", terminal_text(csv_error).c_str());
+    char text[200];
+    std::snprintf(text, sizeof text, "the run stopped at t = %g s: %s", stats.t_reached,
+                  kept ? "trajectory.csv holds the rows written before the failure (incomplete)"
+                       : "no trajectory.csv");
+    std::fprintf(stderr, "%s\n", text);
+    stats.status = Status::kInterrupted;  // (summary.json's status: the files are not whole)
+    stats.message = "trajectory.csv could not be written (" + csv_error + "); " + text;
+    try {
+      write_summary_json(run.trajectory, options, summary_path.string(), provenance,
+                         run.controlled ? &run.control : nullptr);
+    } catch (const std::runtime_error& e) {
+      std::fprintf(stderr, "error: %s\n", terminal_text(e.what()).c_str());
+    }
+    return kExitRunFailed;
   }
   const ControlStatistics* control = run.controlled ? &run.control : nullptr;
   if (want_hdf5) {
@@ -302,11 +330,15 @@ int run_command(const RunArguments& given) {
   }
   write_summary_json(run.trajectory, options, summary_path.string(), provenance, control);
   files.push_back(summary_path);
+  // (a plot or page whose generator ran and failed is a missing output: exit 1)
+  bool output_failed = false;
   if (args.plots && csv) {
-    for (const auto& f : make_plots(csv_path, dir, args.plot_formats)) files.push_back(f);
+    for (const auto& f : make_plots(csv_path, dir, args.plot_formats, output_failed)) {
+      files.push_back(f);
+    }
   }
   if (args.viewer.value_or(viewer_by_default(model)) && csv) {
-    if (const auto page = write_viewer(model, csv_path, dir)) files.push_back(*page);
+    if (const auto page = write_viewer(model, csv_path, dir, output_failed)) files.push_back(*page);
   }
 
   // what happened
@@ -342,7 +374,7 @@ int run_command(const RunArguments& given) {
     std::printf("  switches: %ld sign changes of non-smooth functions located\n", s.switch_events);
   }
   for (std::size_t i = 0; i < s.notes.size() && i < 3; ++i) {
-    std::printf("  note: %s\n", s.notes[i].c_str());
+    std::printf("  note: %s\n", terminal_text(s.notes[i]).c_str());
   }
   if (s.notes.size() > 3) {
     std::printf("  (%zu more notes in summary.json)\n", s.notes.size() - 3);
@@ -357,13 +389,13 @@ int run_command(const RunArguments& given) {
                    "warning: the control could not meet every requirement in %ld of %ld "
                    "evaluations (first at t = %g: %s); largest residual %.3g. It applied the "
                    "least-squares force: see the error.* columns for what was not met\n",
-                   c.not_met, c.evaluations, c.first_not_met, c.not_met_message.c_str(),
-                   c.max_residual);
+                   c.not_met, c.evaluations, c.first_not_met,
+                   terminal_text(c.not_met_message).c_str(), c.max_residual);
     }
   }
-  for (const auto& f : files) std::printf("  wrote %s\n", f.c_str());
+  for (const auto& f : files) std::printf("  wrote %s\n", terminal_text(f.string(), false).c_str());
   if (s.status == Status::kEnergyBalance) {
-    std::fprintf(stderr, "warning: %s\n", s.message.c_str());
+    std::fprintf(stderr, "warning: %s\n", terminal_text(s.message).c_str());
     std::printf("  status: energy_balance\n");
     return kExitEnergyBalance;
   }
@@ -373,7 +405,11 @@ int run_command(const RunArguments& given) {
   }
   if (s.status != Status::kOk) {
     std::fprintf(stderr, "error: the run failed at t = %g s: %s\n", s.t_reached,
-                 s.message.empty() ? to_string(s.status) : s.message.c_str());
+                 s.message.empty() ? to_string(s.status) : terminal_text(s.message).c_str());
+    return kExitRunFailed;
+  }
+  if (output_failed) {
+    std::printf("  status: ok, but an output file could not be written\n");
     return kExitRunFailed;
   }
   std::printf("  status: ok\n");

@@ -207,4 +207,19 @@ int examples_command() {
   return kExitOk;
 }
 
+TableFormats parse_formats(const std::vector<std::string>& formats) {
+  TableFormats out;
+  for (const std::string& f : formats) {
+    if (f == "csv") {
+      out.csv = true;
+    } else if (f == "hdf5") {
+      out.hdf5 = true;
+    } else {
+      throw UsageError("--format " + f + ": the formats are csv and hdf5 (--format csv,hdf5)");
+    }
+  }
+  if (!out.csv && !out.hdf5) throw UsageError("--format: give csv, hdf5 or both");
+  return out;
+}
+
 }  // namespace ukdyn::cli

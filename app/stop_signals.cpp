@@ -1,9 +1,9 @@
-// SIGINT and SIGTERM during `ukdyn run` (stop_signals.hpp).
+// SIGINT, SIGTERM and SIGHUP during `ukdyn run` and `ukdyn sweep`; SIGPIPE and SIGXFSZ ignored
+// (stop_signals.hpp).
 #include "stop_signals.hpp"
 
 #include <atomic>
 #include <csignal>
-#include <utility>
 
 #include <signal.h>
 
@@ -14,7 +14,9 @@ namespace {
 std::atomic<int> g_received{0};
 static_assert(std::atomic<int>::is_always_lock_free);
 
-struct sigaction g_previous_int, g_previous_term;
+// the signals that stop a run, and their dispositions before StopSignals
+constexpr int kStopSignals[] = {SIGINT, SIGTERM, SIGHUP};
+struct sigaction g_previous[std::size(kStopSignals)];
 
 // the first signal is remembered (the run stops at its next step); a second one takes the
 // default action at once: the handler runs with the signal blocked, so it is delivered again,
@@ -31,6 +33,16 @@ extern "C" void on_stop_signal(int sig) {
 
 }  // namespace
 
+void ignore_output_signals() {
+  // a console that went away (EPIPE) or a file-size limit (EFBIG) become errors of the write
+  // that met them, never the end of the process with its results unwritten
+  struct sigaction ignore {};
+  ignore.sa_handler = SIG_IGN;
+  sigemptyset(&ignore.sa_mask);
+  ::sigaction(SIGPIPE, &ignore, nullptr);
+  ::sigaction(SIGXFSZ, &ignore, nullptr);
+}
+
 StopSignals::StopSignals() {
   g_received = 0;
   struct sigaction action {};
@@ -38,15 +50,16 @@ StopSignals::StopSignals() {
   sigemptyset(&action.sa_mask);
   action.sa_flags = SA_RESTART;  // interrupted system calls (writes, waitpid) go on
   // a signal ignored when the program started (nohup, a background job of a script) stays so
-  for (auto [sig, previous] : {std::pair{SIGINT, &g_previous_int}, {SIGTERM, &g_previous_term}}) {
-    ::sigaction(sig, nullptr, previous);
-    if (previous->sa_handler != SIG_IGN) ::sigaction(sig, &action, nullptr);
+  for (std::size_t k = 0; k < std::size(kStopSignals); ++k) {
+    ::sigaction(kStopSignals[k], nullptr, &g_previous[k]);
+    if (g_previous[k].sa_handler != SIG_IGN) ::sigaction(kStopSignals[k], &action, nullptr);
   }
 }
 
 StopSignals::~StopSignals() {
-  ::sigaction(SIGINT, &g_previous_int, nullptr);
-  ::sigaction(SIGTERM, &g_previous_term, nullptr);
+  for (std::size_t k = 0; k < std::size(kStopSignals); ++k) {
+    ::sigaction(kStopSignals[k], &g_previous[k], nullptr);
+  }
 }
 
 int StopSignals::received() { return g_received.load(std::memory_order_relaxed); }
@@ -57,6 +70,8 @@ const char* StopSignals::name(int sig) {
       return "SIGINT";
     case SIGTERM:
       return "SIGTERM";
+    case SIGHUP:
+      return "SIGHUP";
     default:
       return "a signal";
   }

@@ -1,12 +1,21 @@
-// SIGINT and SIGTERM during `ukdyn run`: the first asks the simulation to stop at its next step
-// (SimulationOptions::should_stop), after which everything computed is written; a second one
-// ends the program at once (the signal's default action). README.md, "The ukdyn command".
+// SIGINT, SIGTERM and SIGHUP during `ukdyn run` and `ukdyn sweep`: the first asks the simulation
+// to stop at its next step (SimulationOptions::should_stop), after which everything computed is
+// written; a second one ends the program at once (the signal's default action). SIGPIPE and
+// SIGXFSZ are ignored for the whole program. README.md, "The ukdyn command".
 #pragma once
 
 namespace ukdyn::cli {
 
-/// Installs the handlers of SIGINT and SIGTERM for its lifetime (the previous ones come back
-/// when it is destroyed). One at a time.
+/// Ignores SIGPIPE and SIGXFSZ for the rest of the program: a console or log reader that went
+/// away (`ukdyn run … | head -1`, `| tee log` ended by Ctrl-C) gives EPIPE, and a file-size limit
+/// (`ulimit -f`) EFBIG, to the write that met it — the console line is lost, a file's write is
+/// the usual "cannot write" error — instead of killing the program before its files are written.
+/// Child processes get both back at their defaults (run_program).
+void ignore_output_signals();
+
+/// Installs the handlers of SIGINT, SIGTERM and SIGHUP (a closed terminal or ssh session) for
+/// its lifetime (the previous ones come back when it is destroyed); a signal ignored when the
+/// program started (nohup) stays ignored. One at a time.
 class StopSignals {
  public:
   StopSignals();
@@ -14,9 +23,10 @@ class StopSignals {
   StopSignals(const StopSignals&) = delete;
   StopSignals& operator=(const StopSignals&) = delete;
 
-  /// The first signal received (SIGINT or SIGTERM), 0 when none. Async-signal-safe to read.
+  /// The first signal received (SIGINT, SIGTERM or SIGHUP), 0 when none. Async-signal-safe to
+  /// read.
   static int received();
-  /// "SIGINT", "SIGTERM" ("a signal" for another).
+  /// "SIGINT", "SIGTERM", "SIGHUP" ("a signal" for another).
   static const char* name(int sig);
 };
 

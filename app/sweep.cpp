@@ -24,10 +24,12 @@
 #include <ukdyn/simulation/options.hpp>
 
 #include "commands.hpp"
+#include "io/atomic_file.hpp"
 #include "output_dir.hpp"
 #include "progress.hpp"
 #include "python_process.hpp"
 #include "stop_signals.hpp"
+#include "terminal_text.hpp"
 
 namespace ukdyn::cli {
 namespace fs = std::filesystem;
@@ -35,7 +37,8 @@ namespace {
 
 // The summary plot: each recorded output (at the last recording time) over the swept names — a
 // line over one grid axis, a map over two (the others' first values), a scatter over random
-// variables. Failed samples are marked. Exit 3 when matplotlib is missing.
+// variables. Failed samples are marked. Exit 3 when matplotlib is missing, 4 when there is
+// nothing to plot.
 constexpr const char* kSweepPlot = R"PY(
 import csv, math, sys
 try:
@@ -62,7 +65,7 @@ def num(row, name):
         return math.nan
 swept = grid + rand
 if not rows or not swept or not outputs:
-    sys.exit(0)
+    sys.exit(4)  # nothing to plot: no sweep.png
 fig, axes = plt.subplots(len(outputs), 1, figsize=(7, 3.2 * len(outputs)), squeeze=False)
 for ax, name in zip(axes[:, 0], outputs):
     ok = [r for r in rows if r["ok"] == "1"]
@@ -91,7 +94,7 @@ for ax, name in zip(axes[:, 0], outputs):
     ax.set_title(f"{name} over {', '.join(swept)} ({len(ok)} ok, {len(bad)} failed)")
     ax.grid(True, alpha=0.3)
 fig.tight_layout()
-fig.savefig(out, dpi=110)
+fig.savefig(out, dpi=110, format="png")
 )PY";
 
 // The ensemble's progress on one line: redrawn in place on a terminal, a log line every few
@@ -167,6 +170,10 @@ std::vector<double> times_of(const std::string& text) {
 }  // namespace
 
 int sweep_command(const SweepArguments& args) {
+  // the table's formats, checked before anything runs (a typo must not cost the sweep)
+  const TableFormats formats = parse_formats(args.formats);
+  const bool want_csv = formats.csv, want_hdf5 = formats.hdf5;
+
   // the design, from the command line's text
   Design design;
   for (const std::string& g : args.grid) {
@@ -237,11 +244,14 @@ int sweep_command(const SweepArguments& args) {
                                            : args.source.example))
           : fs::path(args.out_dir);
   std::optional<OutputDirectory> out;
-  if (const int status = hold_output_directory(dir, out); status != 0) return status;
+  if (const int status = hold_output_directory(dir, kSweepOutputs, out); status != 0) {
+    return status;
+  }
   const unsigned threads =
       args.jobs != 0 ? args.jobs : std::max(1u, std::thread::hardware_concurrency());
-  std::printf("ukdyn sweep: %s (%s), %zu samples on %u thread%s\n", base.name.c_str(),
-              model.file.c_str(), samples.size(), threads, threads == 1 ? "" : "s");
+  std::printf("ukdyn sweep: %s (%s), %zu samples on %u thread%s\n",
+              terminal_text(base.name, false).c_str(), terminal_text(model.file, false).c_str(),
+              samples.size(), threads, threads == 1 ? "" : "s");
   std::fflush(stdout);
 
   // SIGINT, SIGTERM: the runs under way stop at their next step, the rest are not started, and
@@ -263,13 +273,11 @@ int sweep_command(const SweepArguments& args) {
   const double wall =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 
-  // the files: the table (CSV, HDF5), summary.json, the plot
+  // the files: the table (CSV, HDF5), summary.json, the plot — after removing a previous
+  // sweep's (the directory then holds this sweep's files only: no old table beside a new
+  // summary)
   const EnsembleTable t = ensemble_table(result, samples, table.names);
-  bool want_csv = false, want_hdf5 = false;
-  for (const std::string& f : args.formats) {
-    want_csv = want_csv || f == "csv";
-    want_hdf5 = want_hdf5 || f == "hdf5";
-  }
+  out->remove_previous_outputs();
   nlohmann::json summary;
   summary["model"] = base.name;
   summary["file"] = model.file;
@@ -292,15 +300,8 @@ int sweep_command(const SweepArguments& args) {
   const fs::path csv_path = dir / "ensemble.csv";
   if (want_csv) write_ensemble_csv(t, csv_path.string());
   if (want_hdf5) write_ensemble_hdf5(t, (dir / "ensemble.h5").string(), summary.dump());
-  {
-    // summary.json, whole or not at all (written beside, then renamed)
-    const fs::path tmp = dir / ".summary.json.tmp";
-    if (std::FILE* f = std::fopen(tmp.c_str(), "wb")) {
-      const std::string text = summary.dump(2) + "\n";
-      const bool ok = std::fwrite(text.data(), 1, text.size(), f) == text.size();
-      if (std::fclose(f) == 0 && ok) fs::rename(tmp, dir / "summary.json");
-    }
-  }
+  write_text_file((dir / "summary.json").string(), summary.dump(2) + "\n");
+  bool output_failed = false;  // an output that should exist is missing (exit 1)
   if (args.plots && want_csv) {
     const std::string python = python_interpreter();
     std::string grid, rand, outs;
@@ -328,13 +329,26 @@ int sweep_command(const SweepArguments& args) {
     for (std::size_t i = 0; i < base.output_names.size() && i < base.output_units.size(); ++i) {
       add_unit(base.output_names[i], base.output_units[i]);
     }
-    const int code = is_executable(python)
-                         ? run_program({python, "-c", kSweepPlot, csv_path.string(),
-                                        (dir / "sweep.png").string(), grid, rand, outs, units})
-                         : -1;
-    if (code != 0) {
-      std::fprintf(stderr, "warning: no summary plot (%s)\n",
-                   code == 3 ? "no matplotlib" : "the plot script could not run");
+    // sweep.png: written by the script into a temporary made here (mkostemp), renamed when
+    // the script has succeeded
+    if (!is_executable(python)) {
+      std::fprintf(stderr, "warning: %s not found: no summary plot\n", python.c_str());
+    } else {
+      detail::AtomicFile png((dir / "sweep.png").string(), "ukdyn sweep");
+      png.release_descriptor();
+      const int code = run_program(
+          {python, "-c", kSweepPlot, csv_path.string(), png.write_path(), grid, rand, outs, units});
+      if (code == 0) {
+        png.commit();
+      } else if (code == 4) {
+        // nothing to plot
+      } else if (code == 3) {
+        std::fprintf(stderr, "warning: %s has no matplotlib: no summary plot\n", python.c_str());
+      } else {
+        std::fprintf(stderr, "error: the summary plot script failed (exit %d): no sweep.png\n",
+                     code);
+        output_failed = true;
+      }
     }
   }
 
@@ -343,17 +357,18 @@ int sweep_command(const SweepArguments& args) {
               double(samples.size()) / std::max(wall, 1e-9));
   for (std::size_t i = 0, shown = 0; i < t.status.size() && shown < 3; ++i) {
     if (!result.samples[i].ok() && result.samples[i].outcome != SampleOutcome::kNotRun) {
-      std::printf("  sample %zu: %s: %s\n", i, t.status[i].c_str(), t.message[i].c_str());
+      std::printf("  sample %zu: %s: %s\n", i, t.status[i].c_str(),
+                  terminal_text(t.message[i]).c_str());
       ++shown;
     }
   }
-  std::printf("  written: %s\n", dir.c_str());
+  std::printf("  written: %s\n", terminal_text(dir.string(), false).c_str());
   if (result.interrupted && StopSignals::received() != 0) {
     std::fprintf(stderr, "interrupted by %s: the finished samples are written\n",
                  StopSignals::name(StopSignals::received()));
     return kExitInterruptedBase + StopSignals::received();
   }
-  return result.failed() > 0 ? kExitRunFailed : kExitOk;
+  return result.failed() > 0 || output_failed ? kExitRunFailed : kExitOk;
 }
 
 }  // namespace ukdyn::cli

@@ -32,7 +32,8 @@ bool viewer_by_default(const Model& model) {
   return model.multibody || !model.visual.points.empty();
 }
 
-std::optional<fs::path> write_viewer(const Model& model, const fs::path& csv, const fs::path& dir) {
+std::optional<fs::path> write_viewer(const Model& model, const fs::path& csv, const fs::path& dir,
+                                     bool& failed) {
   // as Python's Result.show(): a page with only the grid is not written
   if (!model.multibody && model.visual.points.empty() && model.visual.frames.empty() &&
       !model.controller) {
@@ -58,7 +59,8 @@ std::optional<fs::path> write_viewer(const Model& model, const fs::path& csv, co
   // the generator, its assets and the scene go to a private temporary directory
   std::string temp = (fs::temp_directory_path() / "ukdyn-viewer-XXXXXX").string();
   if (::mkdtemp(temp.data()) == nullptr) {
-    std::fprintf(stderr, "warning: cannot create a temporary directory: no animation.html\n");
+    std::fprintf(stderr, "error: cannot create a temporary directory: no animation.html\n");
+    failed = true;
     return std::nullopt;
   }
   const fs::path work(temp), page = dir / "animation.html";
@@ -73,8 +75,9 @@ std::optional<fs::path> write_viewer(const Model& model, const fs::path& csv, co
   std::error_code ec;
   fs::remove_all(work, ec);
   if (code != 0) {
-    std::fprintf(
-        stderr, "warning: the viewer's page generator failed (exit %d): no animation.html\n", code);
+    std::fprintf(stderr, "error: the viewer's page generator failed (exit %d): no animation.html\n",
+                 code);
+    failed = true;
     return std::nullopt;
   }
   return page;

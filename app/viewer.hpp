@@ -25,9 +25,11 @@ bool viewer_by_default(const Model& model);
 
 /// Writes dir/animation.html from the run's trajectory.csv and the model's scene
 /// (viewer_scene_json) with /usr/bin/python3 (or $UKDYN_PYTHON). Returns its path, or nothing
-/// after a warning on stderr when it could not be written (no python, no three.js).
+/// after a message on stderr when it was not written: a warning when it cannot be made here (no
+/// python, no three.js, nothing to draw); an error, with `failed` set, when the generator ran
+/// and failed (a full disk) — a missing output, which makes the command's exit code 1.
 std::optional<std::filesystem::path> write_viewer(const Model& model,
                                                   const std::filesystem::path& csv,
-                                                  const std::filesystem::path& dir);
+                                                  const std::filesystem::path& dir, bool& failed);
 
 }  // namespace ukdyn::cli

@@ -5,6 +5,8 @@
 //   Constrained/N      N oscillators with N/2 holonomic constraints q_{2k} − q_{2k+1} = 0
 //   DistinctTerms/N    one coordinate, V = Σ_{i=1}^{N} sin(x + i)/N (N distinct terms)
 //   Chain/N            a chain of N planar bodies on revolute joints, under gravity
+//   ManyCoordinates/N  N free coordinates, T = ½ Σ q̇_i² only, as the reproducer
+//                      many_coordinates.sh writes them (issue #29: 10⁵ took 66 s); load only
 // Each reports the time per load (+ check) and, over the sizes, the scaling (BigO fit).
 #include <string>
 
@@ -62,6 +64,26 @@ void load_and_check(benchmark::State& state, const std::string& text) {
   state.counters["bytes"] = double(text.size());
 }
 
+std::string free_coordinates(int n) {
+  std::string names, T;
+  for (int i = 0; i < n; ++i) {
+    names += (i ? ", " : "") + ("q" + std::to_string(i));
+    T += (i ? "+" : "") + ("q" + std::to_string(i) + "_dot^2");
+  }
+  return "coordinates: [" + names + "]\nkinetic_energy: 0.5*(" + T +
+         ")\nsimulate: {t_end: 0.01}\noutput: {every: 0.01}\n";
+}
+
+void ManyCoordinates(benchmark::State& state) {
+  const std::string text = free_coordinates(int(state.range(0)));
+  for (auto _ : state) {
+    const ukdyn::Model m = ukdyn::parse_model(text, "generated.yaml");
+    benchmark::DoNotOptimize(m.system.coordinate_count());
+  }
+  state.SetComplexityN(state.range(0));
+  state.counters["bytes"] = double(text.size());
+}
+
 void Uncoupled(benchmark::State& state) {
   load_and_check(state, uncoupled(int(state.range(0)), 0));
 }
@@ -93,6 +115,13 @@ BENCHMARK(DistinctTerms)
     ->Arg(10000)
     ->Arg(100000)
     ->Arg(400000)
+    ->Unit(benchmark::kMillisecond)
+    ->Iterations(1)
+    ->Complexity();
+BENCHMARK(ManyCoordinates)
+    ->Arg(10000)
+    ->Arg(30000)
+    ->Arg(100000)
     ->Unit(benchmark::kMillisecond)
     ->Iterations(1)
     ->Complexity();

@@ -220,6 +220,19 @@ void CsvWriter::commit() {
   w.out.commit();
 }
 
+bool CsvWriter::keep_partial() noexcept {
+  Impl& w = *impl_;
+  // (what stdio still holds is dropped with the buffer: writing it failed, or would)
+  w.buf.clear();
+  if (w.file) std::fclose(w.file.release());
+  try {
+    w.out.commit();
+    return true;
+  } catch (...) {
+    return false;
+  }
+}
+
 void write_csv(const Trajectory& traj, const std::string& path,
                const std::vector<CsvColumn>& extra) {
   traj.check_consistent(kCsvWho);

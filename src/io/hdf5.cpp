@@ -8,7 +8,9 @@
 #include <algorithm>
 #include <cerrno>
 #include <cstdint>
+#include <cstdio>
 #include <cstring>
+#include <memory>
 #include <set>
 #include <stdexcept>
 #include <string>
@@ -91,33 +93,44 @@ void write_field(H5::H5File& file, const char* name, const std::vector<double>& 
   if (!f.empty()) ds.write(f.data(), H5::PredType::NATIVE_DOUBLE);
 }
 
-// Writes the HDF5 file `path` whole or not at all: a temporary beside it (HDF5 opens it by
-// name) that body(file, stage) fills — `stage` says what it is doing, for the error message —
-// closed (closing flushes: its failure is a write error too) and renamed over `path`.
+// Writes the HDF5 file `path` whole or not at all. The file is built in memory (HDF5's core
+// driver without a backing store) by body(file, stage) — `stage` says what it is doing, for the
+// error message — and its image is then written by an AtomicFile: a temporary beside `path`
+// (mkostemp) renamed over it when complete. HDF5 itself never writes to disk, so a full disk
+// or a file-size limit is the plain write error of the image ("No space left on device"),
+// never a failure inside HDF5's own close path (which crashed in H5Fclose), and no name is
+// opened twice. Memory: the image, about the size of the file.
 template <class Body>
 void write_whole_file(const std::string& path, const char* who, Body&& body) {
   H5::Exception::dontPrint();
-  detail::AtomicFile out(path, who);
-  out.release_descriptor();
-  errno = 0;
-  H5::H5File file = [&] {
-    try {
-      return H5::H5File(out.write_path(), H5F_ACC_TRUNC);
-    } catch (const H5::Exception& e) {
-      throw std::runtime_error(std::string(who) + ": cannot create '" + path +
-                               "': " + describe(e, errno));
-    }
-  }();
-  std::string stage;
+  std::vector<char> image;
+  std::string stage = "create the file";
   try {
+    // core driver: memory grows by 1 MiB at a time; no backing store, nothing on disk
+    H5::FileAccPropList access;
+    access.setCore(std::size_t(1) << 20, false);
+    H5::H5File file(path, H5F_ACC_TRUNC, H5::FileCreatPropList::DEFAULT, access);
     body(file, stage);
+    // the image of the complete file
     stage = "close the file";
+    file.flush(H5F_SCOPE_GLOBAL);
+    const ssize_t size = H5Fget_file_image(file.getId(), nullptr, 0);
+    if (size > 0) {
+      image.resize(std::size_t(size));
+      if (H5Fget_file_image(file.getId(), image.data(), image.size()) != size) image.clear();
+    }
     file.close();
   } catch (const H5::Exception& e) {
     throw std::runtime_error(std::string(who) + ": cannot " + stage + " in '" + path +
                              "': " + describe(e, 0));
   }
-  out.commit();
+  if (image.empty()) {
+    throw std::runtime_error(std::string(who) + ": cannot close the file in '" + path +
+                             "': HDF5 gave no file image");
+  }
+
+  // the image, whole or not at all
+  detail::write_whole_file(path, who, image.data(), image.size());
 }
 
 }  // namespace

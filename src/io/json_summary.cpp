@@ -159,16 +159,7 @@ void write_summary_json(const Trajectory& traj, const SimulationOptions& options
 namespace {
 void write_summary_json_text(const std::string& text, const std::string& path) {
   // a temporary beside `path`, renamed over it when complete (io/atomic_file.hpp)
-  detail::AtomicFile out(path, kSummaryWho);
-  std::unique_ptr<std::FILE, detail::FileCloser> file(out.open_stdio());
-  if (std::fwrite(text.data(), 1, text.size(), file.get()) != text.size()) {
-    detail::throw_io_error(kSummaryWho, path, "write", errno);
-  }
-  errno = 0;
-  if (std::fclose(file.release()) != 0) {
-    detail::throw_io_error(kSummaryWho, path, "write", errno);
-  }
-  out.commit();
+  detail::write_whole_file(path, kSummaryWho, text.data(), text.size());
 }
 }  // namespace
 

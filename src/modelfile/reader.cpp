@@ -428,7 +428,7 @@ void Reader::read_dynamics(const YAML::Node& root, SystemBuilder& builder) {
       const Expr dTq = std::binary_search(in_T.begin(), in_T.end(), i)
                            ? set_->diff(Te, coordinates_[std::size_t(i)])
                            : zero;
-      Q[std::size_t(i)] = set_->subtract(dTq, set_->total_derivative(dT, "t", chain_));
+      Q[std::size_t(i)] = set_->subtract(dTq, time_derivative(dT));
     }
     const Expr half = set_->constant(0.5);
     for (const Entry& m : M) {
@@ -459,7 +459,7 @@ void Reader::read_dynamics(const YAML::Node& root, SystemBuilder& builder) {
     // P_time + Σ ½ q̇_i D(M_ij) q̇_j, summed at once (the same expression as term by term)
     std::vector<Expr> terms{P_time};
     for (const Entry& m : M) {
-      const Expr De = set_->total_derivative(m.e, "t", chain_);
+      const Expr De = time_derivative(m.e);
       if (set_->is_literal_zero(De)) continue;
       terms.push_back(set_->multiply(
           set_->constant(0.5),
@@ -482,13 +482,15 @@ void Reader::read_dynamics(const YAML::Node& root, SystemBuilder& builder) {
     if (Index(rows.size()) != n)
       fail(F, "forces must have " + format_number(n) + " entries, one per coordinate",
            cut_flow_list_hint(F, "forces"));
-    Expr P = P_time;
+    // P = P_time + Σ q̇_i F_i, summed at once (the same expression as term by term, which was
+    // O(n²) for n forces: each add copied the growing sum)
+    std::vector<Expr> P{P_time};
     for (Index i = 0; i < n; ++i) {
       const Expr f = expression(rows[std::size_t(i)], "forces");
       Q[std::size_t(i)] = set_->add(Q[std::size_t(i)], f);
-      P = set_->add(P, set_->multiply(qdot[std::size_t(i)], f));
+      P.push_back(set_->multiply(qdot[std::size_t(i)], f));
     }
-    P_time = P;
+    P_time = set_->sum(P);
   }
   const Expr P_ext = P_time;
 
@@ -633,8 +635,8 @@ Constraint Reader::read_constraint(const YAML::Node& c, const std::string& name,
              "write it as nonholonomic: instead");
       }
       phi.push_back(e);
-      phid.push_back(set_->total_derivative(e, "t", chain_));
-      b.push_back(set_->negate(set_->total_derivative(phid.back(), "t", chain_)));
+      phid.push_back(time_derivative(e));
+      b.push_back(set_->negate(time_derivative(phid.back())));
     }
     // ∂φ/∂q_j is 0 for the q_j that no row of φ holds: A's columns are those that some row holds
     std::vector<std::vector<Index>> in_phi;
@@ -659,7 +661,7 @@ Constraint Reader::read_constraint(const YAML::Node& c, const std::string& name,
     std::vector<Expr> psi, b;
     for (const auto& node : psis) {
       psi.push_back(expression(node, what));
-      b.push_back(set_->negate(set_->total_derivative(psi.back(), "t", chain_)));
+      b.push_back(set_->negate(time_derivative(psi.back())));
     }
     // ∂ψ/∂q̇_j is 0 for the q̇_j that no row of ψ holds: A's columns are those that some row holds
     std::vector<std::vector<Index>> in_psi;
@@ -783,7 +785,7 @@ SurfaceVelocityFn Reader::surface_velocity(const YAML::Node& node, std::size_t c
            "the surface velocity may depend on the coordinates and t only");
     }
     u.push_back(e);
-    u_dot.push_back(set_->total_derivative(e, "t", chain_));
+    u_dot.push_back(time_derivative(e));
   }
   u.insert(u.end(), u_dot.begin(), u_dot.end());
   const Program p = compile(u, node, what);
@@ -926,6 +928,15 @@ void Reader::read_nonideal(const YAML::Node& root, SystemBuilder& builder) {
       fail(f, "a non-ideal force needs 'friction' (coulomb, viscous) or 'C'");
     }
   }
+}
+
+Expr Reader::time_derivative(Expr e) {
+  // the inputs: the coordinates (0 … n−1), their velocities, t (2n), the constraints' forces
+  const Index n = Index(coordinates_.size());
+  const std::vector<Index> in = set_->inputs_of(e);
+  const bool moves =
+      std::any_of(in.begin(), in.end(), [n](Index k) { return k < n || k == 2 * n; });
+  return moves ? set_->total_derivative(e, "t", chain_) : set_->constant(0.0);
 }
 
 YAML::Node Reader::load_yaml(const std::string& text, const std::string& file) {

@@ -397,6 +397,11 @@ class Reader {
   std::unique_ptr<ExpressionSet> set_;
   InputLayout layout_;
   std::vector<std::pair<std::string, std::string>> chain_;
+  // D e, the total time derivative along chain_ (ExpressionSet::total_derivative), and 0 at
+  // once when e holds no coordinate and not t (what that call gives then). Each call of the
+  // set's compares the chain it is given with the last one, O(n): called once per coordinate
+  // (∂T/∂q̇_i of a constant M), it made reading n coordinates O(n²) — 66 s for 10⁵
+  Expr time_derivative(Expr e);
   // the sizes of the model's ModelBuffers (the plant's callables')
   std::shared_ptr<BufferSizes> sizes_ = std::make_shared<BufferSizes>();
   // the expressions of the dynamics (M, Q, the constraints' programs, C) whose non-smooth calls

@@ -4,13 +4,22 @@
 //     first, while iterating sees both: the copy that wins would depend on the section);
 //   - more than one document (YAML::Load reads the first and ignores the rest);
 //   - an alias used inside the node it names (*a inside &a: a node that contains itself);
-//   - nesting deeper than yaml-cpp's reader allows (its message is "bad file").
+//   - nesting deeper than yaml-cpp's reader allows (its message is "bad file"), or deeper than
+//     the stack of the calling thread holds: yaml-cpp's parser recurses once per level (about
+//     300 bytes a level, in this check and again in YAML::Load), so under `ulimit -s 64` its
+//     own limit of 500 levels overflowed the stack. Each level's start compares the stack left
+//     (the thread's stack bounds, pthread_getattr_np) with a reserve that the rest of the
+//     reading needs, and refuses the file, located, when less is left.
 // One pass over the parser's events: O(size of the text), aliases are not expanded.
+#include <algorithm>
 #include <cstddef>
+#include <cstdint>
 #include <map>
 #include <sstream>
 #include <string>
 #include <vector>
+
+#include <pthread.h>
 
 #include <yaml-cpp/depthguard.h>
 #include <yaml-cpp/eventhandler.h>
@@ -30,9 +39,25 @@ struct Open {
   std::map<std::string, YAML::Mark> keys;  // a mapping: its scalar keys, where first seen
 };
 
+// The lowest address the nesting may reach on this thread's stack: its lowest address (the guard
+// page included) plus a reserve for what reading needs beyond the nesting itself (YAML::Load's
+// frames above the same depth, the exception that reports it, the reader's and the expression
+// parser's frames); nullptr when the bounds are unknown (then only yaml-cpp's own limit applies).
+const char* stack_floor() {
+  pthread_attr_t attr;
+  if (pthread_getattr_np(pthread_self(), &attr) != 0) return nullptr;
+  void* base = nullptr;
+  std::size_t size = 0;
+  const bool known = pthread_attr_getstack(&attr, &base, &size) == 0 && base != nullptr;
+  pthread_attr_destroy(&attr);
+  // the reserve: a quarter of the stack, at most 64 kB (a 64 kB stack keeps 16 kB)
+  const std::size_t reserve = std::min(size / 4, std::size_t(64) << 10);
+  return known ? static_cast<const char*>(base) + reserve : nullptr;
+}
+
 class StructureCheck final : public YAML::EventHandler {
  public:
-  explicit StructureCheck(const std::string& file) : file_(file) {}
+  explicit StructureCheck(const std::string& file) : file_(file), floor_(stack_floor()) {}
 
   void OnDocumentStart(const YAML::Mark& mark) override {
     if (++documents_ > 1) {
@@ -63,17 +88,34 @@ class StructureCheck final : public YAML::EventHandler {
   void OnSequenceStart(const YAML::Mark& mark, const std::string&, YAML::anchor_t anchor,
                        YAML::EmitterStyle::value) override {
     node(mark, nullptr);
+    check_stack(mark);
     open_.push_back(Open{.map = false, .anchor = anchor});
   }
   void OnSequenceEnd() override { open_.pop_back(); }
   void OnMapStart(const YAML::Mark& mark, const std::string&, YAML::anchor_t anchor,
                   YAML::EmitterStyle::value) override {
     node(mark, nullptr);
+    check_stack(mark);
     open_.push_back(Open{.map = true, .anchor = anchor});
   }
   void OnMapEnd() override { open_.pop_back(); }
 
  private:
+  // a collection starts at `mark`, one level deeper: refused when the stack left (the stack
+  // grows down, towards floor_) is below the reserve
+  void check_stack(const YAML::Mark& mark) const {
+    const char here = 0;
+    if (floor_ == nullptr ||
+        reinterpret_cast<std::uintptr_t>(&here) > reinterpret_cast<std::uintptr_t>(floor_)) {
+      return;
+    }
+    throw ModelError(file_, mark.line + 1, mark.column + 1,
+                     "the YAML nests too deep for this process's stack (" +
+                         format_number(open_.size()) + " levels of brackets or indentation here)",
+                     "a model file needs a few levels: check for unclosed or runaway brackets "
+                     "(or raise the stack limit, ulimit -s)");
+  }
+
   // a node starts at `mark`; `scalar`: its text when it is a scalar
   void node(const YAML::Mark& mark, const std::string* scalar) {
     if (open_.empty() || !open_.back().map) return;
@@ -92,6 +134,7 @@ class StructureCheck final : public YAML::EventHandler {
   }
 
   const std::string& file_;
+  const char* floor_;  // the lowest stack address the nesting may reach (stack_floor)
   int documents_ = 0;
   std::vector<Open> open_;
 };

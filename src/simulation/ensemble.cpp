@@ -13,6 +13,7 @@
 #include <charconv>
 #include <cmath>
 #include <cstdio>
+#include <exception>
 #include <limits>
 #include <memory>
 #include <mutex>
@@ -118,7 +119,17 @@ struct Pool {
   std::atomic<bool> stopping{false};  // should_stop said so, or a misuse was found
   std::mutex progress_mutex;          // progress counters and callback, misuse text
   EnsembleProgress progress;
-  std::string misuse;  // a recorded output that is not a column (found by the first run)
+  std::string misuse;         // a recorded output that is not a column (found by the first run)
+  std::exception_ptr thrown;  // the first exception that left a worker (options.progress's)
+
+  // keeps the first exception that would have left a worker thread, and stops the others
+  void keep_exception(std::exception_ptr e) {
+    {
+      const std::lock_guard<std::mutex> lock(progress_mutex);
+      if (!thrown) thrown = std::move(e);
+    }
+    stopping = true;
+  }
 
   bool stop_requested() {
     if (stopping.load(std::memory_order_relaxed)) return true;
@@ -343,11 +354,16 @@ EnsembleResult run_ensemble(const EnsembleModel& model, const std::vector<Ensemb
                         kNaN);
         continue;
       }
-      run_sample(pool, i);
-      const std::lock_guard<std::mutex> lock(pool.progress_mutex);
-      ++pool.progress.done;
-      if (!r.ok()) ++pool.progress.failed;
-      if (pool.options.progress) pool.options.progress(pool.progress);
+      // (an exception must not leave the thread: std::terminate; it is rethrown after the join)
+      try {
+        run_sample(pool, i);
+        const std::lock_guard<std::mutex> lock(pool.progress_mutex);
+        ++pool.progress.done;
+        if (!r.ok()) ++pool.progress.failed;
+        if (pool.options.progress) pool.options.progress(pool.progress);
+      } catch (...) {
+        pool.keep_exception(std::current_exception());
+      }
     }
   };
   unsigned threads =
@@ -361,6 +377,7 @@ EnsembleResult run_ensemble(const EnsembleModel& model, const std::vector<Ensemb
     for (unsigned k = 0; k < threads; ++k) pool_threads.emplace_back(work);
     for (auto& t : pool_threads) t.join();
   }
+  if (pool.thrown) std::rethrow_exception(pool.thrown);
   if (!pool.misuse.empty()) throw std::invalid_argument(pool.misuse);
   result.interrupted = pool.stopping.load();
   return result;

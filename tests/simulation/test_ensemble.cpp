@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <stdexcept>
 #include <string>
 
 #include <gtest/gtest.h>
@@ -244,6 +245,39 @@ TEST(Ensemble, StopKeepsTheFinishedSamples) {
   EXPECT_EQ(inside.samples[0].stats.status, Status::kInterrupted);
   EXPECT_LT(inside.samples[0].stats.t_reached, 1.0);
   EXPECT_EQ(inside.samples[5].outcome, SampleOutcome::kNotRun);
+}
+
+// A progress callback that throws (reproducers 2026-11-28, cpp_ensemble_progress_throws.cpp:
+// std::terminate from a worker thread): the exception comes out of run_ensemble, on one thread
+// and on several, and the ensemble stops — fewer callbacks than samples.
+TEST(Ensemble, AProgressCallbackThatThrowsPropagatesOutOfRunEnsemble) {
+  const EnsembleModel m = model_of(kPendulum);
+  std::vector<EnsembleSample> samples;
+  for (int i = 0; i < 40; ++i) samples.push_back({{{"L", 1.0 + 0.01 * i}}, {}, {}});
+  for (const unsigned threads : {1u, 2u, 4u}) {
+    SCOPED_TRACE("threads " + std::to_string(threads));
+    EnsembleOptions o;
+    o.threads = threads;
+    std::atomic<std::size_t> calls{0};
+    o.progress = [&](const EnsembleProgress& p) {
+      ++calls;
+      if (p.done == 10) throw std::runtime_error("progress failed");
+    };
+    try {
+      run_ensemble(m, samples, o);
+      ADD_FAILURE() << "no exception";
+    } catch (const std::runtime_error& e) {
+      EXPECT_STREQ(e.what(), "progress failed");
+    }
+    // the 10th sample threw; the samples under way on the other threads may still end
+    EXPECT_GE(calls.load(), 10u);
+    EXPECT_LE(calls.load(), 10u + threads - 1);
+  }
+  // an exception that is not a std::exception leaves no worker either
+  EnsembleOptions o;
+  o.threads = 2;
+  o.progress = [](const EnsembleProgress&) { throw 42; };
+  EXPECT_THROW(run_ensemble(m, samples, o), int);
 }
 
 TEST(Ensemble, MisuseNamesTheSampleAndTheName) {

@@ -79,13 +79,14 @@ class Command {
     posix_spawn_file_actions_addopen(&actions, 1, stdout_file.c_str(), O_WRONLY | O_CREAT | O_TRUNC,
                                      0644);
     posix_spawn_file_actions_adddup2(&actions, fds[1], 2);
-    // (the child's SIGINT and SIGTERM at their defaults, whatever the test runner set)
+    // (the child's SIGINT, SIGTERM and SIGHUP at their defaults, whatever the test runner set)
     posix_spawnattr_t attr;
     posix_spawnattr_init(&attr);
     sigset_t defaults;
     sigemptyset(&defaults);
     sigaddset(&defaults, SIGINT);
     sigaddset(&defaults, SIGTERM);
+    sigaddset(&defaults, SIGHUP);
     posix_spawnattr_setsigdefault(&attr, &defaults);
     posix_spawnattr_setflags(&attr, POSIX_SPAWN_SETSIGDEF);
     const int rc = posix_spawn(&pid_, argv[0], &actions, &attr, argv.data(), env.data());

@@ -76,6 +76,11 @@ class CsvWriter {
   /// Writes what is buffered, closes the file and renames it over the path (appends nothing:
   /// call append() once before, if only for the header). @throws std::runtime_error.
   void commit();
+  /// After append() or commit() failed to write (a full disk, a file-size limit): closes the
+  /// file and renames what reached it over the path — the rows written before the failure, the
+  /// last one perhaps cut — so that they are kept under the file's own name rather than lost
+  /// with the temporary. Tries nothing more; never throws (true when the file was renamed).
+  bool keep_partial() noexcept;
 
  private:
   struct Impl;

@@ -71,7 +71,11 @@ struct EnsembleOptions {
   /// keep each run's whole trajectory (every column of trajectory.csv); memory grows with it
   bool keep_trajectories = false;
   /// called after each sample ends, with the ensemble's progress (from the worker thread that
-  /// ran it, one call at a time); may be empty
+  /// ran it, one call at a time); may be empty. An exception it throws stops the ensemble (the
+  /// runs under way stop at their next step, the samples not started are not run) and, once
+  /// every worker thread has ended, propagates out of run_ensemble — the first one, if several
+  /// threads threw. The results computed so far are then lost: a callback that must not end
+  /// the ensemble catches its own exceptions.
   std::function<void(const EnsembleProgress&)> progress;
   /// a request to stop (SIGINT): asked before each sample and after every step of the runs
   /// under way (which then end with Status::kInterrupted); samples not started are reported as
@@ -122,7 +126,9 @@ struct EnsembleResult {
 /// parameters, with the file's settings, model.settings, its settings and `at` added to
 /// output_at, from its initial state; the results are those of that run in one thread, bit for
 /// bit. A sample that fails (or is refused) is recorded with its status and message and does not
-/// stop the others. Stopped by options.should_stop, it keeps every finished sample.
+/// stop the others. Stopped by options.should_stop, it keeps every finished sample. An
+/// exception thrown by options.progress (or any other that leaves a worker thread) is rethrown
+/// here after every thread has been joined — never std::terminate.
 /// @throws ModelError when the model (with model.overrides, without any sample's) cannot be
 /// read; std::invalid_argument (naming run_ensemble, the sample and the name) for a name of a
 /// sample that is not a parameter, coordinate, velocity or option of the model, an option of
