@@ -434,7 +434,11 @@ class Run {
         return ts - 0.25 * (ts - t0);
       }
       switch_width_ = hi - ts;
-      if (std::isnan(window_start_)) window_start_ = ts;
+      // (a switch opens the crawl test's window, or keeps the one a burst opened within the span)
+      if (!(ts - window_start_ <= kSwitchBurstSpan * (o_.t_end - o_.t_start))) {
+        window_start_ = ts;
+        steps_since_switch_ = 0;
+      }
       // the functions across their side just past the switch take their new side (the run
       // restarts just before it, at ts: every stage of the step to ts on the old side)
       dense(hi, event_x_.data());
