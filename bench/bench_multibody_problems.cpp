@@ -13,7 +13,8 @@
 //                                                       timed runs, median; a separate run
 //                                                       sampled at every step) written as a JSON
 //                                                       array of records
-//   --engine=dense|sparse                               the engine (default sparse)
+//   --engine=dense|sparse|auto                          the engine (default sparse; auto:
+//                                                       Engine::kAuto, what a user gets)
 //   --projection-tolerance=TOL                          drift projection tolerance (default
 //                                                       1e-10: a tenth of the closure target)
 //   --problems=PATH                                     problems.json (default:
@@ -209,6 +210,7 @@ double g_projection_tolerance =
     1e-10;  // --projection-tolerance= (joints held to 1e-10 m, under the 1e-9 target)
 
 ukdyn::Engine engine_for(const mb::MultibodyModel&) {
+  if (g_engine == "auto") return ukdyn::Engine::kAuto;
   return g_engine == "dense" ? ukdyn::Engine::kDense : ukdyn::Engine::kSparse;
 }
 
@@ -312,7 +314,7 @@ nlohmann::ordered_json record(const Problem& p, ukdyn::Integrator method) {
   const bool deterministic = timed.deterministic;
   const Accuracy a = measure_accuracy(p, m, method);
 
-  const bool sparse = opt.solver.engine == ukdyn::Engine::kSparse;
+  const bool sparse = ukdyn::Workspace(m.system, opt.solver).is_sparse();  // (kAuto decides)
   const std::string integrator = ukdyn::to_string(method);
   const auto number = [](double v) {
     return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json();
@@ -395,8 +397,8 @@ int main(int argc, char** argv) {
       json_path = argv[i] + 7;
     } else if (std::strncmp(argv[i], "--engine=", 9) == 0) {
       g_engine = argv[i] + 9;
-      if (g_engine != "dense" && g_engine != "sparse") {
-        std::cerr << "bench_multibody_problems: --engine=dense or --engine=sparse\n";
+      if (g_engine != "dense" && g_engine != "sparse" && g_engine != "auto") {
+        std::cerr << "bench_multibody_problems: --engine=dense, sparse or auto\n";
         return 2;
       }
     } else if (std::strncmp(argv[i], "--projection-tolerance=", 23) == 0) {

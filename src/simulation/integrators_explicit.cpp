@@ -210,6 +210,17 @@ class StepControl {
 // consecutive rejected steps after which an adaptive method gives up
 constexpr int kMaxRejections = 200;
 
+// The step dt towards the next stop `rest` ahead held to max_step (> 0; 0: unlimited). A
+// landing step (dt = rest) above max_step by the sliver the landing adds — or by the roundoff
+// that t gathers over T / max_step steps, which leaves it a few units short of T — is split in
+// two halves (landing with the second) instead of being refused as too large (which ended runs
+// at max_step = 1e-4 in "step size underflow" one step before t_end); any other step above
+// max_step is max_step.
+double within_max_step(double dt, double rest, double max_step) {
+  if (!(max_step > 0.0) || dt <= max_step) return dt;
+  return dt == rest && dt <= 2.0 * max_step ? 0.5 * dt : max_step;
+}
+
 // x(s) on [t0, t1] from the values and derivatives at both ends (cubic Hermite)
 void hermite(double s, double t0, double t1, const State& x0, const State& d0, const State& x1,
              const State& d1, State& out) {
@@ -338,8 +349,10 @@ SegmentResult dopri5(ConstrainedOde& ode, State& x, double t0, double t1,
   int rejections = 0;
   std::string outside_description;  // of the last trial state outside the model's domain
   while (t < t1) {
-    // land on the segment's end
+    // land on the segment's end; a landing step above max_step (by the sliver the landing
+    // adds, or the roundoff t has gathered over many steps) is split in two halves instead
     if (t + dt >= t1 || t1 - (t + dt) < 1e-12 * std::max(1.0, std::abs(t1))) dt = t1 - t;
+    dt = within_max_step(dt, t1 - t, o.max_step);
     projection.decide(dt);
     std::swap(x_old, x);
     std::swap(dxdt_old, dxdt);
@@ -470,10 +483,15 @@ SegmentResult rkf78(ConstrainedOde& ode, State& x, double t0, double t1, const S
     // the next stop: an output time or the segment's end
     const double target = next < outputs.size() ? std::min(outputs[next], t1) : t1;
     // (after an attempt outside the model's domain, the halved step is not stretched to land)
-    const bool landing =
+    bool landing =
         t + dt >= target || (outside_last == Status::kOk &&
                              target - (t + dt) < 1e-12 * std::max(1.0, std::abs(target)));
     double step = landing ? target - t : dt;
+    // (a landing step above max_step: half of it, landing with the next)
+    if (o.max_step > 0.0 && step > o.max_step) {
+      step = within_max_step(step, target - t, o.max_step);
+      landing = false;
+    }
     const double t_old = t;
     if (hooks.find_event) x_old = x;
     bool accepted = false;

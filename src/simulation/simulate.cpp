@@ -13,6 +13,7 @@
 #include <exception>
 #include <functional>
 #include <limits>
+#include <optional>
 #include <stdexcept>
 
 #include "dynamics/internal.hpp"
@@ -86,12 +87,32 @@ constexpr long kMaxEvents = 100000;
 // notes a run keeps (RunStatistics::notes)
 constexpr std::size_t kMaxNotes = 20;
 // a run is declared chattering at a switch (SimulationOptions::switch_events) when kSwitchBurst
-// switch events, or kSwitchBurst accepted steps after one, fall within kSwitchBurstSpan of the
-// run's time span
+// switch events, or kSwitchBurst accepted steps after one (any steps: into, at or between
+// switches), fall within kSwitchBurstSpan of the run's time span
 constexpr std::size_t kSwitchBurst = 1000;
 constexpr double kSwitchBurstSpan = 1e-6;
 // the step into a switch below which the run restarts at the switch (see Run::find_event)
 constexpr double kSwitchApproach = 1e-10;
+// characters of BDF's failure quoted in the note of a fallback
+constexpr std::size_t kFallbackQuote = 160;
+
+// Whether a run goes on with an explicit method after BDF failed with r (x the state BDF left,
+// its last accepted one): its Newton iteration left the model's domain, or its steps collapsed
+// (CVODE's error test or convergence failures), at a finite state. Not after a stop on request,
+// at the run's step limit (`exhausted`), or when a hook (drift control, the sample sink) failed.
+bool bdf_fallback(const detail::SegmentResult& r, const std::vector<double>& x, bool exhausted) {
+  if (exhausted || r.status == Status::kInterrupted || r.message.empty()) return false;
+  if (r.message.find("step limit") != std::string::npos) return false;
+  return std::all_of(x.begin(), x.end(), [](double v) { return std::isfinite(v); });
+}
+
+// the explicit method after a BDF failure: the run's own method when BDF came from the
+// stiffness switch; for a run asked of BDF, rkf78 at tight tolerances (rtol < 1e-7), where its
+// 8th order takes far fewer steps, dopri5 otherwise
+Integrator fallback_method(const SimulationOptions& o) {
+  if (o.integrator != Integrator::kBDF) return o.integrator;
+  return o.rtol < 1e-7 ? Integrator::kRKF78 : Integrator::kDopri5;
+}
 
 // What a Coulomb contact does: slides (friction acts), sticks (the stick constraint acts), or
 // slides through a zero of v_rel at which it could not stick (the zero is its next event).
@@ -384,6 +405,20 @@ class Run {
     // the first sign change of a switching function, when it comes before the contacts' event
     switch_event_ = false;
     if (!locates_switches()) return first;
+    // a crawl after a switch: kSwitchBurst accepted steps — those into a switch and at one
+    // included — since the switch that opened the window, within kSwitchBurstSpan of the run (a
+    // sliding mode: every step crosses the switch again, or the step size control rejects it;
+    // counting only the steps between switches missed a sliding mode entered from rest, which
+    // switched every few steps and crawled for 10⁷ steps)
+    if (!std::isnan(window_start_) && ++steps_since_switch_ >= kSwitchBurst) {
+      if (t1 - window_start_ <= kSwitchBurstSpan * (o_.t_end - o_.t_start)) {
+        crawl_ = true;
+        switch_event_ = true;
+        return t1;
+      }
+      window_start_ = std::numeric_limits<double>::quiet_NaN();
+      steps_since_switch_ = 0;
+    }
     double hi = t1;
     const double ts = find_switch(t0, x0, t1, x1, dense, hi);
     approach_ = false;
@@ -399,7 +434,11 @@ class Run {
         return ts - 0.25 * (ts - t0);
       }
       switch_width_ = hi - ts;
-      steps_since_switch_ = 0;
+      // (a switch opens the crawl test's window, or keeps the one a burst opened within the span)
+      if (!(ts - window_start_ <= kSwitchBurstSpan * (o_.t_end - o_.t_start))) {
+        window_start_ = ts;
+        steps_since_switch_ = 0;
+      }
       // the functions across their side just past the switch take their new side (the run
       // restarts just before it, at ts: every stage of the step to ts on the old side)
       dense(hi, event_x_.data());
@@ -423,17 +462,6 @@ class Run {
       for (Index i = 0; i < g1_.size(); ++i) {
         if (side_[std::size_t(i)] == 0 && g1_[i] != 0.0)
           side_[std::size_t(i)] = g1_[i] > 0 ? 1 : -1;
-      }
-      // a crawl after a switch: kSwitchBurst steps within kSwitchBurstSpan of the run (the step
-      // size control rejects every step that crosses the switch again)
-      if (burst_next_ > 0 && ++steps_since_switch_ >= kSwitchBurst) {
-        if (t1 - last_switch_ <= kSwitchBurstSpan * (o_.t_end - o_.t_start)) {
-          crawl_ = true;
-          switch_event_ = true;
-          return t1;
-        }
-        steps_since_switch_ = 0;
-        last_switch_ = t1;
       }
     }
     return first;
@@ -482,6 +510,13 @@ class Run {
     evaluate_switches(t, x);
     for (Index i = 0; i < g_.size(); ++i) {
       side_[std::size_t(i)] = static_cast<signed char>(g_[i] > 0.0 ? 1 : g_[i] < 0.0 ? -1 : 0);
+      // a function at its switch at the start is as if it had just switched: the crawl test's
+      // window opens (a sliding mode entered from rest, x'' = −sign(x') − 0.5 from x' = 0,
+      // ends every step on its start side, the crossings in between unseen, and crawls)
+      if (side_[std::size_t(i)] == 0 && std::isnan(window_start_)) {
+        window_start_ = t;
+        switch_fired_ = std::size_t(i);
+      }
     }
   }
 
@@ -560,14 +595,13 @@ class Run {
     };
     const bool of_constraint = at != std::string::npos && fired.back() == '\'';
     if (crawl_) {
-      message = of_constraint
-                    ? kink(last_switch_)
-                    : "switch events: " + format_number(long(kSwitchBurst)) +
-                          " steps after the switch of " + name + " at t = " + format(last_switch_) +
-                          " advanced only to t = " + format(t) + advice;
+      message = of_constraint ? kink(window_start_)
+                              : "switch events: " + format_number(long(kSwitchBurst)) +
+                                    " steps after the switch of " + name +
+                                    " at t = " + format(window_start_) +
+                                    " advanced only to t = " + format(t) + advice;
       return true;
     }
-    last_switch_ = t;
     burst_[burst_next_ % kSwitchBurst] = t;
     ++burst_next_;
     if (burst_next_ < kSwitchBurst) return false;
@@ -1057,12 +1091,14 @@ class Run {
   std::size_t burst_next_ = 0;
   std::vector<unsigned char> flipped_ = std::vector<unsigned char>(std::size_t(switches_), 0);
   bool flipped(std::size_t i) const { return flipped_[i] != 0; }  // at the last switch event
-  double switch_width_ = 0.0;           // hi − lo of the last switch event's bracket
-  double last_switch_ = 0.0;            // time of the last switch event
-  std::size_t steps_since_switch_ = 0;  // accepted steps since then (up to kSwitchBurst)
-  bool crawl_ = false;                  // the steps after a switch crawl (find_event)
-  bool approach_ = false;               // the last event is a restart before a switch
-  bool landed_ = false;                 // the last switch found is a step landing on it
+  double switch_width_ = 0.0;  // hi − lo of the last switch event's bracket
+  // the switch that opened the window of the crawl test (NaN: none open), and the accepted
+  // steps since then (up to kSwitchBurst)
+  double window_start_ = std::numeric_limits<double>::quiet_NaN();
+  std::size_t steps_since_switch_ = 0;
+  bool crawl_ = false;     // the steps after a switch crawl (find_event)
+  bool approach_ = false;  // the last event is a restart before a switch
+  bool landed_ = false;    // the last switch found is a step landing on it
   std::string failure_;
   std::string refusal_;      // why the last refused stick was refused (empty: friction cannot hold)
   ProgressReport progress_;  // what the last progress report said
@@ -1342,6 +1378,10 @@ Trajectory detail::simulate_observed(const System& sys, const Eigen::Ref<const V
 
   // (CVODE estimates its own first step, which on stiff problems can be far below o.step)
   double first_step = o.integrator == Integrator::kBDF ? 0.0 : o.step;
+  // after BDF failed (see bdf_fallback): the explicit method the run goes on with, and its
+  // options (no stiffness switch)
+  Integrator base_method = o.integrator;
+  std::optional<SimulationOptions> fallback_options;
   std::vector<double> x_start;       // (2n + 1) the state where the integrator last started
   std::vector<double> nudge, trial;  // (size of x) f and the state past a switch event
   std::size_t next_sample = 0;
@@ -1376,12 +1416,14 @@ Trajectory detail::simulate_observed(const System& sys, const Eigen::Ref<const V
     // [a, b], restarted after every stick/slip event and stiffness switch; the segment starts
     // with the chosen method, and goes on with BDF once dopri5 finds it stiff until the next
     // event (a switch of the dynamics) or the segment's end
-    Integrator method = o.integrator;
+    Integrator method = base_method;
     bool crossing = false;   // dopri5 across a singular configuration for BDF
     bool r_crossed = false;  // the last segment was such a crossing
     for (;;) {
       const detail::SampleTimes outputs(samples, next_sample, samples.upper_bound(b));
-      const bool switched = method != o.integrator && !crossing;
+      const bool switched =
+          method == Integrator::kBDF && base_method != Integrator::kBDF && !crossing;
+      const SimulationOptions& om = fallback_options ? *fallback_options : o;
       x_start = x;
       run.set_integrator(method);
       hooks.cross_singular = crossing;
@@ -1389,9 +1431,9 @@ Trajectory detail::simulate_observed(const System& sys, const Eigen::Ref<const V
       // (after a switch CVODE estimates its own first step: dopri5's last one is stability-bound)
       detail::SegmentResult r =
           method == Integrator::kBDF
-              ? detail::integrate_bdf(ode, x, a, b, outputs, o, hooks,
+              ? detail::integrate_bdf(ode, x, a, b, outputs, om, hooks,
                                       switched || r_crossed ? 0.0 : first_step)
-              : detail::integrate_explicit(method, ode, x, a, b, outputs, o, hooks, first_step);
+              : detail::integrate_explicit(method, ode, x, a, b, outputs, om, hooks, first_step);
       traj.stats.steps += r.steps;
       traj.stats.rejected_steps += r.rejected;
       traj.stats.tangential_steps += r.tangential_steps;
@@ -1415,6 +1457,29 @@ Trajectory detail::simulate_observed(const System& sys, const Eigen::Ref<const V
         std::string message = r.message;
         if (message.empty()) message = run.failure();
         if (message.empty()) message = describe_status(sys, ws);
+        // BDF gave up (its Newton iteration left the model's domain, or its steps collapsed):
+        // an explicit method goes on from BDF's last accepted state, once per run, and the
+        // notes say so
+        if (method == Integrator::kBDF && !fallback_options &&
+            bdf_fallback(r, x, traj.stats.steps >= o.max_steps || run.sink_error())) {
+          fallback_options = o;
+          fallback_options->stiff_switch = false;
+          base_method = fallback_method(o);
+          traj.stats.notes.push_back(
+              "t = " + format(r.t_reached) + ": bdf" +
+              (o.integrator == Integrator::kBDF ? std::string()
+                                                : " (after the stiffness switch at t = " +
+                                                      format(traj.stats.stiff_switch_time) + ")") +
+              " failed (" + message.substr(0, kFallbackQuote) +
+              (message.size() > kFallbackQuote ? "…" : "") + "); the run went on with " +
+              to_string(base_method) + " without the stiffness switch");
+          ode.clear_failure();
+          method = base_method;
+          crossing = false;
+          r_crossed = false;
+          a = r.t_reached;
+          continue;
+        }
         if (r.status == Status::kIntegratorFailure &&
             (traj.stats.steps >= o.max_steps || message.find("step limit") != std::string::npos)) {
           message += " (the run's limit max_steps = " + format_number(o.max_steps) +
@@ -1452,7 +1517,7 @@ Trajectory detail::simulate_observed(const System& sys, const Eigen::Ref<const V
         continue;
       }
       if (!r.event) break;
-      method = o.integrator;
+      method = base_method;
       if (run.switch_event() && run.switch_approach()) {
         // on the way to a switch: restarted clearly before it, the next step finds it again
         a = r.t_reached;
