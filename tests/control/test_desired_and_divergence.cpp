@@ -1,6 +1,7 @@
 // Controlled runs of issue #29, item 1: the derived desired value of a requirement row is exactly
 // its target when the kinematics has constant offsets (desired_<row>, docs/model-format.md,
 // "Control"), and a controlled run whose motion diverges stops with that cause.
+#include <algorithm>
 #include <cmath>
 #include <string>
 #include <vector>
@@ -104,6 +105,31 @@ control:
   const auto with_error = evaluate_output_expressions(error_declared, tr);
   EXPECT_NEAR(with_error[output_index(error_declared, "desired_tip_0")][0], 0.3 * std::cos(t) + 0.1,
               1e-15);
+}
+
+// The triple pendulum's tip on a circle with its redundancy resolved by the least torque norm
+// (N = I, tests/data/triple_tip_leastnorm.yaml): the null-space motion under that law is
+// unstable, the joint speeds grow without bound (1.7e9 rad/s), and the run used to end at a
+// collapsed step size blaming "forces that jump". It now stops early, at the first steps too
+// short for the rest of the 60 s run, naming the divergence: the kinetic energy beyond 1e8 times
+// T + |V| at the start (37.2 J), a joint faster than 10⁴ rad/s, after a few 10⁴ steps.
+TEST(ControlDivergence, LeastNormRedundancyResolutionThatDivergesStopsWithThatCause) {
+  const Model m = load_model(std::string(UKDYN_TEST_DATA_DIR) + "/triple_tip_leastnorm.yaml");
+  const ModelRun r = run_model(m);
+  const RunStatistics& s = r.trajectory.stats;
+  EXPECT_EQ(s.status, Status::kIntegratorFailure);
+  EXPECT_NE(s.message.find("the motion grows without bound"), std::string::npos) << s.message;
+  EXPECT_NE(s.message.find("energy scale (37.2"), std::string::npos) << s.message;
+  EXPECT_EQ(s.message.find("forces jump"), std::string::npos) << s.message;
+  EXPECT_GT(s.t_reached, 1.0);
+  EXPECT_LT(s.t_reached, 10.0);
+  EXPECT_LT(s.steps, 200000);
+  // the speeds of the last samples have left any scale of the start (at rest, 0.5 m of tip
+  // motion per second on the circle)
+  const auto b_dot = column(r, "b_dot");
+  double fastest = 0.0;
+  for (double v : b_dot) fastest = std::max(fastest, std::abs(v));
+  EXPECT_GT(fastest, 10.0);
 }
 
 }  // namespace
