@@ -386,8 +386,9 @@ class Reader {
   // (desired_<row>: note_desired, added by read_output unless the file declares that name)
   std::vector<std::pair<std::string, Expr>> desired_outputs_;
   void note_desired(const YAML::Node& root);
+  std::vector<Expr> declared_kinematics(const YAML::Node& root);
   void note_desired_rows(const YAML::Node& holonomic, const std::string& name,
-                         const std::string& what);
+                         const std::string& what, const std::vector<Expr>& declared);
   std::vector<std::string> constraint_names_;   // in declaration order
   std::vector<std::string> constraint_inputs_;  // N_c and lambda_c of each named constraint
   // the constraints whose N_c and lambda_c are inputs (those named by an identifier), in the

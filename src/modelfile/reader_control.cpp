@@ -187,45 +187,93 @@ WeightFn Reader::read_weight(const YAML::Node& N, bool& constant, MatrixXd& valu
 }
 
 // The desired value of each row of a holonomic or nonholonomic requirement written as
-// φ = actual(q) − desired(t) (ψ = actual(q, q') − desired(t)): minus the terms of φ (as written,
-// not expanded) that depend on t and the parameters alone. It
-// becomes the output expression desired_<row>, which the plots draw against actual = φ + desired
-// (python/ukdyn/plotting.py). A row whose terms all depend on q, or none does, has none. Called
+// φ = actual(q) − desired(t) (ψ = actual(q, q') − desired(t)). It becomes the output expression
+// desired_<row>, which the plots and the viewer draw against actual = φ + desired
+// (python/ukdyn/plotting.py). The actual value is known when the file declares it: an output
+// expression or a coordinate of a visual point E whose difference from the row, E − φ, depends
+// on t and the parameters alone (the state terms cancel exactly) — then desired = E − φ, the
+// constants of the kinematics (a tool point's height above its base, an offset frame) accounted
+// for. Else it is minus the terms of φ (as written, not expanded) that depend on t and the
+// parameters alone; a row whose terms all depend on the state, or none does, has none. Called
 // by read_output, before read_control checks the requirements (which are skipped here when not
 // even named: read_control says what is wrong with them).
 void Reader::note_desired(const YAML::Node& root) {
   const YAML::Node c = root["control"];
   if (!c || !c.IsMap() || !c["requirements"] || !c["requirements"].IsSequence()) return;
+  const std::vector<Expr> declared = declared_kinematics(root);
   for (const auto& r : c["requirements"]) {
     if (!r.IsMap() || !r["name"] || !r["name"].IsScalar() || !is_identifier(r["name"].Scalar()))
       continue;
     const YAML::Node h = r["holonomic"] ? r["holonomic"] : r["nonholonomic"];
     if (h) {
       const std::string name = r["name"].Scalar();
-      note_desired_rows(h, name, "requirement '" + name + "'");
+      note_desired_rows(h, name, "requirement '" + name + "'", declared);
     }
   }
 }
 
+// The kinematic quantities the file declares: its output expressions and the coordinates of its
+// visual points, in that order (those that do not read are left out here: read_output and
+// read_visual report them)
+std::vector<Expr> Reader::declared_kinematics(const YAML::Node& root) {
+  std::vector<YAML::Node> nodes;
+  const YAML::Node out = root["output"];
+  if (out && out.IsMap() && out["expressions"] && out["expressions"].IsMap()) {
+    for (const auto& kv : out["expressions"]) nodes.push_back(kv.second);
+  }
+  const YAML::Node v = root["visual"];
+  if (v && v.IsMap() && v["points"] && v["points"].IsMap()) {
+    for (const auto& kv : v["points"]) {
+      const YAML::Node at = kv.second.IsMap() ? kv.second["at"] : kv.second;
+      if (!at || !at.IsSequence()) continue;
+      for (const auto& e : at) nodes.push_back(e);
+    }
+  }
+  std::vector<Expr> found;
+  for (const YAML::Node& node : nodes) {
+    if (!node.IsScalar()) continue;
+    try {
+      found.push_back(set_->parse(node.Scalar()));
+    } catch (const std::exception&) {  // (reported where it is read)
+    }
+  }
+  return found;
+}
+
 void Reader::note_desired_rows(const YAML::Node& h, const std::string& name,
-                               const std::string& what) {
+                               const std::string& what, const std::vector<Expr>& declared) {
   const auto phis = rows_of(h, what);
   const Index time = 2 * layout_.n;  // t's input
+  const auto of_time_alone = [&](Expr e) {
+    const std::vector<Index> in = set_->inputs_of(e);
+    return std::all_of(in.begin(), in.end(), [&](Index k) { return k == time; });
+  };
   for (std::size_t i = 0; i < phis.size(); ++i) {
-    std::vector<Expr> of_time;
-    bool of_state = false;
-    for (const Expr term : set_->terms(expression(phis[i], what))) {
-      const std::vector<Index> in = set_->inputs_of(term);
-      if (std::all_of(in.begin(), in.end(), [&](Index k) { return k == time; })) {
-        of_time.push_back(term);
-      } else {
-        of_state = true;
-      }
+    const Expr phi = expression(phis[i], what);
+    if (of_time_alone(phi)) continue;  // (no actual value: not a tracking row)
+    const std::vector<Index> inputs = set_->inputs_of(phi);
+    const bool depends_on_time = std::find(inputs.begin(), inputs.end(), time) != inputs.end();
+    const std::string column =
+        "desired_" + (phis.size() == 1 ? name : name + "_" + format_number(i));
+    // the actual value declared: desired = E − φ, exactly
+    bool matched = false;
+    for (const Expr E : declared) {
+      const Expr desired = set_->subtract(E, phi);
+      if (!of_time_alone(desired)) continue;
+      // (E is the error itself, declared as an output: not the actual value)
+      if (set_->is_literal_zero(desired) && depends_on_time) continue;
+      desired_outputs_.emplace_back(column, desired);
+      matched = true;
+      break;
     }
-    if (of_time.empty() || !of_state) continue;
-    desired_outputs_.emplace_back(
-        "desired_" + (phis.size() == 1 ? name : name + "_" + format_number(i)),
-        set_->negate(set_->sum(of_time)));
+    if (matched) continue;
+    // else the terms of t and the parameters alone
+    std::vector<Expr> of_time;
+    for (const Expr term : set_->terms(phi)) {
+      if (of_time_alone(term)) of_time.push_back(term);
+    }
+    if (of_time.empty()) continue;
+    desired_outputs_.emplace_back(column, set_->negate(set_->sum(of_time)));
   }
 }
 

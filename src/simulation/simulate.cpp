@@ -113,6 +113,12 @@ Integrator fallback_method(const SimulationOptions& o) {
   if (o.integrator != Integrator::kBDF) return o.integrator;
   return o.rtol < 1e-7 ? Integrator::kRKF78 : Integrator::kDopri5;
 }
+// a run diverges when its kinetic energy exceeds kDivergence times the model's energy scale,
+// T + |V| at its start (Run::diverged): the speeds then exceed the initial ones by 10⁴ and more.
+// It stops there once kDivergentSteps steps in a row have done so at a pace that cannot reach
+// t_end within max_steps (Run::diverges).
+constexpr double kDivergence = 1e8;
+constexpr int kDivergentSteps = 3;
 
 // What a Coulomb contact does: slides (friction acts), sticks (the stick constraint acts), or
 // slides through a zero of v_rel at which it could not stick (the zero is its next event).
@@ -340,6 +346,7 @@ class Run {
     mode_.assign(contacts.size(), ContactMode::kSliding);
     apply_contact_modes();
     for (std::size_t c = 0; c < contacts.size(); ++c) {
+      if (frictionless(c)) continue;
       const Index k = relative_velocity(c, t, x, velocity_);
       if (velocity_.head(k).norm() <= contacts[c].eps && !try_stick(c, t, x)) {
         start_sliding(c, t, x);
@@ -348,6 +355,10 @@ class Run {
     apply_contact_modes();
   }
 
+  // a contact with mu = mu_static = 0 exerts no friction in any mode: it never sticks, and its
+  // stops and reversals are no events (each would restart the integrator for nothing)
+  bool frictionless(std::size_t c) const { return sys_.friction_contacts()[c].mu_static == 0.0; }
+
   // the first switch of a contact inside [t0, t1] (see SegmentHooks::find_event)
   double find_event(double t0, const double* x0, double t1, const double* x1,
                     const detail::SegmentHooks::Dense& dense) {
@@ -355,6 +366,7 @@ class Run {
     double first = std::numeric_limits<double>::quiet_NaN();
     switching_ = -1;
     for (std::size_t c = 0; c < contacts.size(); ++c) {
+      if (frictionless(c)) continue;
       double te = std::numeric_limits<double>::quiet_NaN();
       switch (mode_[c]) {
         case ContactMode::kSticking:
@@ -380,6 +392,11 @@ class Run {
             relative_velocity(c, t, x, velocity_);
             return velocity_.head(k).dot(direction_.head(k)) - v_stop;
           });
+          // (a kinematic passage at a rank drop: no restart there)
+          if (!std::isnan(te) && passes_at_rank_drop(c, te, dense)) {
+            te = std::numeric_limits<double>::quiet_NaN();
+            ++traj_.stats.stick_refusals;
+          }
           break;
         }
         case ContactMode::kPassing: {
@@ -740,6 +757,7 @@ class Run {
     if (projecting_) {
       if (const Status s = project(t, x, projection_, changed); s != Status::kOk) return s;
     }
+    if (diverges(t, x)) return Status::kIntegratorFailure;
     if (!stop_requested()) return Status::kOk;
     // a sample inside the step just taken that is not recorded yet (the fixed-step methods and
     // BDF emit the samples of a step after this call): the run stops there, in record(), so that
@@ -809,6 +827,7 @@ class Run {
     out.potential_energy.push_back(V);
     out.energy.push_back(T + V);
     peak_kinetic_ = std::max(peak_kinetic_, T);
+    if (!(energy_scale_ > 0.0)) energy_scale_ = T + std::abs(V);
     // the work channels (absent ones are zero), and the balance so far
     const auto work = [&](Index channel) {
       return channel < 0 ? 0.0 : sample_[std::size_t(2 * n_ + channel)] / works_.scale(channel);
@@ -854,6 +873,66 @@ class Run {
 
   const std::string& failure() const { return failure_; }
 
+  // --- a run that diverges (docs/simulation.md, "A run that diverges") -----------------------
+  // The motion grows without bound when the kinetic energy T at (t, x) exceeds kDivergence
+  // times the model's energy scale (T + |V| at the first sample, or at the first one after it
+  // with energy when it has none). Then `why`
+  // says so (with the fastest coordinate) and this returns true. Cost: one evaluation.
+  bool diverged(double t, const double* x, std::string& why) {
+    if (!(energy_scale_ > 0.0)) return false;
+    q_ = Eigen::Map<const VectorXd>(x, n_);
+    qd_ = Eigen::Map<const VectorXd>(x + n_, n_);
+    const Status s = forward_dynamics(sys_, ws_, q_, qd_, t);
+    if (s == Status::kNonFiniteInput || s == Status::kMassNotSymmetric ||
+        s == Status::kMassNotPositiveDefinite) {
+      return false;
+    }
+    // (a controlled run's auxiliary integrals, "ukdyn.control.*", are no coordinates of the
+    // model: their rates, the control's power and effort, are left out)
+    Index fastest = 0;
+    for (Index i = 0; i < n_; ++i) {
+      if (sys_.coordinate_names()[std::size_t(i)].rfind("ukdyn.", 0) == 0) {
+        qd_[i] = 0.0;
+      } else if (std::abs(qd_[i]) > std::abs(qd_[fastest])) {
+        fastest = i;
+      }
+    }
+    const double T = detail::kinetic_energy(ws_, qd_);
+    if (!(T > kDivergence * energy_scale_)) return false;
+    why = "the motion grows without bound: at t = " + format(t) + " the kinetic energy is " +
+          format(T) + ", " + format(T / energy_scale_) + " times the model's energy scale (" +
+          format(energy_scale_) + ", T + |V| at the start), and '" +
+          sys_.coordinate_names()[std::size_t(fastest)] + "' moves at " + format(qd_[fastest]) +
+          " per unit time: the model's motion diverges (an unstable feedback or control "
+          "law, a force that feeds energy in)";
+    return true;
+  }
+
+ private:
+  // After an accepted step to (t, x): true when the run diverges (see diverged) while its steps
+  // are so short that the rest of the run would take more than max_steps of them — a crawl
+  // that would otherwise go on for hours. The energy is evaluated only at such steps.
+  bool diverges(double t, const double* x) {
+    const double h = t - last_step_end_;
+    last_step_end_ = t;
+    if (!(h > 0.0) || !((o_.t_end - t) / h > double(o_.max_steps))) {
+      crawling_steps_ = 0;
+      return false;
+    }
+    std::string why;
+    if (!diverged(t, x, why)) {
+      crawling_steps_ = 0;
+      return false;
+    }
+    if (++crawling_steps_ < kDivergentSteps) return false;
+    failure_ = why + "; its steps (" + format(h) +
+               ") are too short for the rest of the run to fit "
+               "in max_steps = " +
+               format_number(o_.max_steps) + ", so the run stops here rather than crawl on";
+    return true;
+  }
+
+ public:
  private:
   // whether a sample time in (last recorded sample, t] has not been recorded yet
   bool sample_due(double t) const {
@@ -939,10 +1018,10 @@ class Run {
   // holds the contact lies within mu_static N.
   // `report`: a refusal for reasons 1 or 2 is counted and noted.
   bool try_stick(std::size_t c, double t, double* x, bool report = true) {
-    q_ = Eigen::Map<const VectorXd>(x, n_);
-    qd_ = Eigen::Map<const VectorXd>(x + n_, n_);
-    const bool evaluated = forward_dynamics(sys_, ws_, q_, qd_, t) == Status::kOk;
-    const double T_before = detail::kinetic_energy(ws_, qd_);
+    // (1) the velocities with the stick rows (into qd_), and the kinetic energy that takes
+    ProjectionResult rv;
+    double T_before = 0.0;
+    const double removed = stick_energy_loss(c, t, x, rv, T_before);
     mode_[c] = ContactMode::kSticking;
     apply_contact_modes();
     auto refuse = [&](const std::string& why) {
@@ -959,17 +1038,12 @@ class Run {
       }
       return false;
     };
-    // (1) the velocities with the stick rows, and the kinetic energy that takes
-    ProjectionOptions all = o_.projection;
-    const ProjectionResult rv = project_velocities(sys_, ws_, q_, qd_, t, all);
-    if (!evaluated || rv.status != Status::kOk || !rv.converged) {
+    if (std::isnan(removed)) {
       return refuse(
           "the velocities cannot be projected onto the stick rows (its tangential motion is "
           "fixed by the other constraints?)");
     }
-    const double removed = T_before - detail::kinetic_energy(ws_, qd_);
-    const double allowed = std::max(o_.rtol, 1e-14) * std::max(peak_kinetic_, T_before);
-    if (removed > allowed) {
+    if (removed > stick_allowance(T_before)) {
       return refuse("sticking would remove " + format(removed) +
                     " of kinetic energy (a zero of the sliding velocity that the mechanism passes "
                     "through)");
@@ -985,6 +1059,53 @@ class Run {
     std::copy(trial_.begin(), trial_.end(), x);
     set_slip_hint(c, VectorXd());
     return true;
+  }
+
+  // The kinetic energy that projecting the velocities of x onto contact c's stick rows (least
+  // M-norm, with every other constraint) removes; the projected velocities into qd_, the
+  // projection's result into rv, the kinetic energy before into T_before. NaN when the state
+  // cannot be evaluated or the projection fails. Leaves the contact's mode as it was.
+  double stick_energy_loss(std::size_t c, double t, const double* x, ProjectionResult& rv,
+                           double& T_before) {
+    q_ = Eigen::Map<const VectorXd>(x, n_);
+    qd_ = Eigen::Map<const VectorXd>(x + n_, n_);
+    const bool evaluated = forward_dynamics(sys_, ws_, q_, qd_, t) == Status::kOk;
+    T_before = detail::kinetic_energy(ws_, qd_);
+    const ContactMode was = mode_[c];
+    mode_[c] = ContactMode::kSticking;
+    apply_contact_modes();
+    ProjectionOptions all = o_.projection;
+    rv = project_velocities(sys_, ws_, q_, qd_, t, all);
+    mode_[c] = was;
+    apply_contact_modes();
+    if (!evaluated || rv.status != Status::kOk || !rv.converged) {
+      return std::numeric_limits<double>::quiet_NaN();
+    }
+    return T_before - detail::kinetic_energy(ws_, qd_);
+  }
+  // the kinetic energy a stick may remove (rule 1 of try_stick): rtol · the largest of the run
+  double stick_allowance(double T_before) const {
+    return std::max(o_.rtol, 1e-14) * std::max(peak_kinetic_, T_before);
+  }
+
+  // True when contact c's stop located at te (dense: the step's state there) is a passage of
+  // v_rel = 0 that the mechanism makes kinematically (a stick would remove kinetic energy) at a
+  // configuration where the constraints nearly lose rank (Workspace::rank_margin below
+  // kSingularMargin: a dead centre where two rows coincide). A restart there would start from
+  // a state whose velocities the near-dependent rows fix only to (position error) / (distance
+  // to the pose) — 1e-3 relative at the twin arms' dead centre, enough to take one arm onto the
+  // mirror branch. No stick is possible there, and the friction turns within the step by its
+  // regularized law, so the run goes on without restarting (docs/friction.md, "Dead centres").
+  bool passes_at_rank_drop(std::size_t c, double te, const detail::SegmentHooks::Dense& dense) {
+    dense(te, event_x_.data());
+    q_ = Eigen::Map<const VectorXd>(event_x_.data(), n_);
+    qd_ = Eigen::Map<const VectorXd>(event_x_.data() + n_, n_);
+    if (forward_dynamics(sys_, ws_, q_, qd_, te) != Status::kOk) return false;
+    if (!(ws_.rank_margin < detail::kSingularMargin)) return false;  // (NaN: unknown)
+    ProjectionResult rv;
+    double T_before = 0.0;
+    const double removed = stick_energy_loss(c, te, event_x_.data(), rv, T_before);
+    return std::isnan(removed) || removed > stick_allowance(T_before);
   }
 
   // contact c slides from v_rel = 0 (passing, or at the start): friction at its full magnitude
@@ -1066,9 +1187,12 @@ class Run {
       Index(sys_.friction_contacts().size()));  // (n × contacts)
                                                 // head of col c: v_rel's direction when c passes
   std::vector<double> trial_ = std::vector<double>(sample_.size());  // a trial state
-  double peak_kinetic_ = 0.0;                    // largest kinetic energy at the samples so far
-  VectorXd holding_ = VectorXd::Zero(n_);        // (n) holding force of the last stick_margin
-  VectorXd reaction_ = VectorXd::Zero(n_);       // (n) scratch of stick_margin: R
+  double peak_kinetic_ = 0.0;  // largest kinetic energy at the samples so far
+  double energy_scale_ = 0.0;  // largest T + |V| of the early samples (see diverged)
+  double last_step_end_ = -std::numeric_limits<double>::infinity();  // t of the last step
+  int crawling_steps_ = 0;                  // steps in a row, up to now, that diverged at a crawl
+  VectorXd holding_ = VectorXd::Zero(n_);   // (n) holding force of the last stick_margin
+  VectorXd reaction_ = VectorXd::Zero(n_);  // (n) scratch of stick_margin: R
   VectorXd reaction_part_ = VectorXd::Zero(n_);  // (n) scratch of stick_margin
   VectorXd normal_ = VectorXd::Zero(n_);         // (n) scratch of stick_margin: R_N
   MatrixXd normals_;                             // (rows × n) the normal constraint's rows of A
@@ -1383,6 +1507,8 @@ Trajectory detail::simulate_observed(const System& sys, const Eigen::Ref<const V
   Integrator base_method = o.integrator;
   std::optional<SimulationOptions> fallback_options;
   std::vector<double> x_start;       // (2n + 1) the state where the integrator last started
+  double a_start = o.t_start;        // its time (both: other than at an event)
+  bool after_event = false;          // the integrator restarts at an event
   std::vector<double> nudge, trial;  // (size of x) f and the state past a switch event
   std::size_t next_sample = 0;
   run.initial_contact_modes(o.t_start, x.data());
@@ -1424,7 +1550,13 @@ Trajectory detail::simulate_observed(const System& sys, const Eigen::Ref<const V
       const bool switched =
           method == Integrator::kBDF && base_method != Integrator::kBDF && !crossing;
       const SimulationOptions& om = fallback_options ? *fallback_options : o;
-      x_start = x;
+      // (a restart at an event keeps the state before it: the event may sit at the
+      // configuration that makes the steps collapse, a dead centre)
+      if (!after_event) {
+        x_start = x;
+        a_start = a;
+      }
+      after_event = false;
       run.set_integrator(method);
       hooks.cross_singular = crossing;
       hooks.max_steps = o.max_steps - traj.stats.steps;  // (> 0: checked after each segment)
@@ -1486,8 +1618,11 @@ Trajectory detail::simulate_observed(const System& sys, const Eigen::Ref<const V
                      " accepted steps; raise it: " + kRaiseMaxSteps + ")";
         }
         if (r.status == Status::kIntegratorFailure && detail::step_collapsed(r)) {
-          message +=
-              ". " + detail::diagnose_collapse(sys, ws, o, method, r, x, x_start, a, traj.stats);
+          std::string divergence;
+          message += run.diverged(r.t_reached, x.data(), divergence)
+                         ? ". Likely cause: " + divergence
+                         : ". " + detail::diagnose_collapse(sys, ws, o, method, r, x, x_start,
+                                                            a_start, traj.stats);
         }
         return finish(r.status, message, r.t_reached);
       }
@@ -1518,6 +1653,7 @@ Trajectory detail::simulate_observed(const System& sys, const Eigen::Ref<const V
       }
       if (!r.event) break;
       method = base_method;
+      after_event = true;
       if (run.switch_event() && run.switch_approach()) {
         // on the way to a switch: restarted clearly before it, the next step finds it again
         a = r.t_reached;

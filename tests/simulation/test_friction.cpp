@@ -80,7 +80,17 @@ Index sample_at(const Trajectory& tr, double t) {
 // every dead centre of the crank for kinematic reasons
 
 TEST(Friction, SliderCrankWithoutFrictionKeepsItsEnergyThroughTenDeadCentres) {
-  const Model m = load_example("slider_crank_coulomb", {{"mu", 0.0}});
+  // mu = 0: no friction in any mode, so no events at all (issue #29: the governor at mu = 0
+  // logged 48)
+  const Model frictionless = load_example("slider_crank_coulomb", {{"mu", 0.0}});
+  const Trajectory free = run(frictionless);
+  EXPECT_EQ(free.stats.events, 0);
+  EXPECT_EQ(free.stats.stick_refusals, 0);
+  double drift = 0.0;
+  for (double E : free.energy) drift = std::max(drift, std::abs(E - free.energy[0]));
+  EXPECT_NEAR(drift / std::abs(free.energy[0]), 0.0, 1e-8);
+  // mu = 1e-12: friction far below the energy's resolution, but events
+  const Model m = load_example("slider_crank_coulomb", {{"mu", 1e-12}});
   const Trajectory tr = run(m);  // dopri5, the defaults
   double worst = 0.0;
   for (double E : tr.energy) worst = std::max(worst, std::abs(E - tr.energy[0]));
@@ -630,6 +640,87 @@ TEST(Friction, SurfaceVelocityMayNotDependOnVelocities) {
   } catch (const ModelError& e) {
     EXPECT_NE(std::string(e.what()).find("depends on the velocity 'x_dot'"), std::string::npos)
         << e.what();
+  }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Coulomb events at a rank drop (issue #29, item 1): two pendulum arms joined by links to a
+// sleeve on a rod, Coulomb friction on the sleeve's sliding (tests/data/twin_arms_coulomb.yaml).
+// At the bottom (th = 0) the two link rows coincide — the constraints lose rank — and the
+// sleeve's velocity is zero kinematically: its friction turns there. The motion is symmetric,
+// th1 = th2, whatever mu; a restart at that dead centre took one arm onto the mirror branch
+// (th1 = −th2: |th1 − th2| up to 3.6 rad, kinetic energy 0.49 J → 10⁴ J under rkf78).
+
+Model twin_arms(double mu) {
+  return load_model(std::string(UKDYN_TESTS_DIR) + "/data/twin_arms_coulomb.yaml", {{"mu", mu}});
+}
+
+// max over the samples of |th1 − th2|
+double asymmetry(const Model& m, const Trajectory& tr) {
+  double worst = 0.0;
+  for (Index i = 0; i < tr.samples(); ++i) {
+    worst = std::max(worst, std::abs(coord(m, tr, tr.q, "th1", i) - coord(m, tr, tr.q, "th2", i)));
+  }
+  return worst;
+}
+
+TEST(Friction, TwinArmsStaySymmetricThroughTheDeadCentreOnEveryAdaptiveIntegrator) {
+  for (const double mu : {0.0, 0.02, 0.1}) {
+    const Model m = twin_arms(mu);
+    for (const Integrator method : {Integrator::kDopri5, Integrator::kRKF78, Integrator::kBDF}) {
+      SCOPED_TRACE("mu = " + std::to_string(mu) + ", " + to_string(method));
+      const Trajectory tr = run(m, [&](SimulationOptions& o) { o.integrator = method; });
+      // the arms pass the bottom about six times in 3 s (each a rank drop)
+      int passages = 0;
+      for (Index i = 1; i < tr.samples(); ++i) {
+        passages += coord(m, tr, tr.q, "th1", i) * coord(m, tr, tr.q, "th1", i - 1) < 0.0;
+      }
+      EXPECT_GE(passages, 4);
+      EXPECT_LT(asymmetry(m, tr), 1e-8);
+      // E − E0 = W_nonideal (0 at mu = 0), to the energy balance's tolerance
+      EXPECT_LT(balance_error(tr), 1e-6 * std::abs(tr.energy[0]));
+      if (mu == 0.0) {
+        EXPECT_EQ(tr.stats.events, 0);
+        EXPECT_LT(std::abs(tr.energy.back() - tr.energy[0]), 1e-6 * std::abs(tr.energy[0]));
+      } else {
+        // friction takes energy out: 0.145 J at mu = 0.02, 0.408 J at mu = 0.1 (dopri5, BDF
+        // and rkf78 agree to 1e-5 J)
+        EXPECT_NEAR(-tr.work_nonideal.back(), mu == 0.02 ? 0.14514 : 0.40766, 2e-4);
+      }
+    }
+  }
+}
+
+// The Watt governor of tests/data/governor_sleeve_friction.yaml (a new user's model: two fly-ball
+// arms, a sleeve with Coulomb friction, throttle feedback) at mu = 0 is the same model without
+// the friction entry: both end with th1 = th2 = −0.742 (before: −0.742 and +0.742, status ok).
+// With its own mu = 0.1 the arms stay symmetric too.
+TEST(Friction, GovernorAtMuZeroIsTheGovernorWithoutFriction) {
+  const std::string file = std::string(UKDYN_TESTS_DIR) + "/data/governor_sleeve_friction.yaml";
+  const std::map<std::string, double> set = {{"mu", 0.0}, {"th0", 0.6}, {"w0", 7.0}};
+  const Model m = load_model(file, set);
+  std::string text = read_file(file);
+  const auto entry = text.find("  - {friction: coulomb");
+  ASSERT_NE(entry, std::string::npos);
+  text.erase(entry, text.find('\n', entry) + 1 - entry);
+  const Model plain = parse_model(text, "governor without coulomb", set);
+  const Trajectory ref = run(plain);
+  for (const Integrator method : {Integrator::kDopri5, Integrator::kRKF78, Integrator::kBDF}) {
+    SCOPED_TRACE(to_string(method));
+    const Trajectory tr = run(m, [&](SimulationOptions& o) { o.integrator = method; });
+    ASSERT_EQ(tr.samples(), ref.samples());
+    EXPECT_EQ(tr.stats.events, 0);
+    EXPECT_LT(asymmetry(m, tr), 1e-8);
+    const Index last = tr.samples() - 1;
+    EXPECT_NEAR(coord(m, tr, tr.q, "th1", last), coord(plain, ref, ref.q, "th1", last), 1e-6);
+    EXPECT_NEAR(coord(m, tr, tr.q, "th2", last), coord(plain, ref, ref.q, "th2", last), 1e-6);
+    EXPECT_NEAR(coord(m, tr, tr.q, "th1", last), -0.742021, 1e-5);
+  }
+  const Model rough = load_model(file);
+  for (const Integrator method : {Integrator::kDopri5, Integrator::kBDF}) {
+    const Trajectory tr = run(rough, [&](SimulationOptions& o) { o.integrator = method; });
+    EXPECT_LT(asymmetry(rough, tr), 1e-8) << to_string(method);
+    EXPECT_GT(tr.stats.events, 0) << to_string(method);
   }
 }
 
