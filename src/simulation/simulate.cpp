@@ -1506,6 +1506,10 @@ Trajectory detail::simulate_observed(const System& sys, const Eigen::Ref<const V
   // options (no stiffness switch)
   Integrator base_method = o.integrator;
   std::optional<SimulationOptions> fallback_options;
+  // BDF's failure that the fallback started from: its status, message and time
+  Status bdf_status = Status::kOk;
+  std::string bdf_message;
+  double bdf_time = 0.0;
   std::vector<double> x_start;       // (2n + 1) the state where the integrator last started
   double a_start = o.t_start;        // its time (both: other than at an event)
   bool after_event = false;          // the integrator restarts at an event
@@ -1594,6 +1598,9 @@ Trajectory detail::simulate_observed(const System& sys, const Eigen::Ref<const V
         // notes say so
         if (method == Integrator::kBDF && !fallback_options &&
             bdf_fallback(r, x, traj.stats.steps >= o.max_steps || run.sink_error())) {
+          bdf_status = r.status;
+          bdf_message = message;
+          bdf_time = r.t_reached;
           fallback_options = o;
           fallback_options->stiff_switch = false;
           base_method = fallback_method(o);
@@ -1611,6 +1618,14 @@ Trajectory detail::simulate_observed(const System& sys, const Eigen::Ref<const V
           r_crossed = false;
           a = r.t_reached;
           continue;
+        }
+        // the explicit method got no further than BDF, out of the model's domain as BDF was
+        // (the solution reaches the domain's boundary; the two may name different checks of M):
+        // BDF's report stands, the note says the rest
+        if (fallback_options && bdf_status != Status::kIntegratorFailure &&
+            r.status != Status::kIntegratorFailure &&
+            r.t_reached - bdf_time <= 1e-9 * std::max(1.0, std::abs(bdf_time))) {
+          return finish(bdf_status, bdf_message, bdf_time);
         }
         if (r.status == Status::kIntegratorFailure &&
             (traj.stats.steps >= o.max_steps || message.find("step limit") != std::string::npos)) {
