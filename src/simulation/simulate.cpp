@@ -876,8 +876,8 @@ class Run {
   // --- a run that diverges (docs/simulation.md, "A run that diverges") -----------------------
   // The motion grows without bound when the kinetic energy T at (t, x) exceeds kDivergence
   // times the model's energy scale (T + |V| at the first sample, or at the first one after it
-  // with energy when it has none). Then `why`
-  // says so (with the fastest coordinate) and this returns true. Cost: one evaluation.
+  // with energy when it has none). Then `why` says so (with the fastest coordinate) and this
+  // returns true. Cost: one evaluation.
   bool diverged(double t, const double* x, std::string& why) {
     if (!(energy_scale_ > 0.0)) return false;
     q_ = Eigen::Map<const VectorXd>(x, n_);
@@ -932,8 +932,6 @@ class Run {
     return true;
   }
 
- public:
- private:
   // whether a sample time in (last recorded sample, t] has not been recorded yet
   bool sample_due(double t) const {
     return samples_ && next_sample_ < samples_->size() && (*samples_)[next_sample_] <= t;
