@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "linalg/safe_norm.hpp"
 #include "ukdyn/linalg/sparse.hpp"
 
 namespace ukdyn {
@@ -470,9 +471,7 @@ void SparseDecomposition::share(Index k, const Eigen::Ref<const VectorXd>& lambd
 }
 
 double SparseDecomposition::norm_A() const {
-  double s = 0.0;
-  for (double v : Av_) s += v * v;
-  return std::sqrt(s);
+  return detail::safe_norm(Av_.data(), Index(Av_.size()));
 }
 
 void SparseDecomposition::constraint_rows_dense(Index k, Eigen::Ref<MatrixXd> out) const {
@@ -516,6 +515,21 @@ SparseDecomposition& SparseDecomposition::compute_constraints() {
       const Index b = seg_blk_[std::size_t(s)], o = block_offset(b);
       block_lower_solve(Lv_.data() + blk_val_[std::size_t(b)], inv_ldiag_.data() + o,
                         Wv_.data() + seg_pos_[std::size_t(s)], block_size(b));
+    }
+  }
+  // row equilibration: w_i ← w_i / ‖w_i‖ (see linalg/sparse.hpp)
+  for (Index i = 0; i < m_; ++i) {
+    double* w = Wv_.data() + row_ptr_[std::size_t(i)];
+    const Index len = row_ptr_[std::size_t(i) + 1] - row_ptr_[std::size_t(i)];
+    const double norm = detail::safe_norm(w, len);
+    row_scale_[std::size_t(i)] = 1.0;
+    if (!(norm > 0.0) || norm == 1.0 || !std::isfinite(norm)) continue;
+    const double inv = 1.0 / norm;
+    row_scale_[std::size_t(i)] = inv;
+    if (std::isfinite(inv)) {
+      for (Index p = 0; p < len; ++p) w[p] *= inv;
+    } else {  // ‖w_i‖ subnormal
+      for (Index p = 0; p < len; ++p) w[p] /= norm;
     }
   }
   // G = W Wᵀ (permuted, upper): G_ij = Σ_b w_ib · w_jb. Each entry's first product is
@@ -698,6 +712,10 @@ void SparseDecomposition::solve_G_permuted(double* x) {
   if (d_ > 0) project_range(x);
 }
 
+void SparseDecomposition::scale_rows(const double* x, double* y) const {
+  for (Index i = 0; i < m_; ++i) y[i] = x[i] * row_scale_[std::size_t(i)];
+}
+
 void SparseDecomposition::solve_min_norm(const double* e, double* lambda, double* y) {
   // lambda = G⁺ e, y = Wᵀ lambda
   for (Index k = 0; k < m_; ++k) wm_[std::size_t(k)] = e[perm_[std::size_t(k)]];
@@ -724,8 +742,10 @@ void SparseDecomposition::solve_min_norm(const double* e, double* lambda, double
 void SparseDecomposition::solve_ideal(const Eigen::Ref<const VectorXd>& e,
                                       Eigen::Ref<VectorXd> dqdd, Eigen::Ref<VectorXd> Qc,
                                       Eigen::Ref<VectorXd> lambda) {
-  // lambda = G⁺ e;  y = Wᵀ lambda = W⁺ e
-  solve_min_norm(e.data(), lambda.data(), wn_.data());
+  // lambda = D G_D⁺ D e;  y = W_Dᵀ G_D⁺ D e = W⁺ e
+  scale_rows(e.data(), wm3_.data());
+  solve_min_norm(wm3_.data(), lambda.data(), wn_.data());
+  scale_rows(lambda.data(), lambda.data());
   // Qc = L y;  dqdd = L⁻ᵀ y
   mass_lower_multiply(wn_.data(), Qc.data());
   std::copy(wn_.begin(), wn_.end(), dqdd.data());
@@ -735,12 +755,12 @@ void SparseDecomposition::solve_ideal(const Eigen::Ref<const VectorXd>& e,
 void SparseDecomposition::project_nonideal(const Eigen::Ref<const VectorXd>& C,
                                            Eigen::Ref<VectorXd> dqdd, Eigen::Ref<VectorXd> Qc,
                                            Eigen::Ref<VectorXd> lambda) {
-  // c = L⁻¹ C;  lambda = −G⁺ W c, W⁺W c = Wᵀ G⁺ W c
+  // c = L⁻¹ C;  lambda = −D G_D⁺ W_D c, W⁺W c = W_Dᵀ G_D⁺ W_D c
   std::copy(C.data(), C.data() + n_, wn_.begin());
   mass_lower_solve(wn_.data());
   multiply_W(wn_.data(), wm3_.data());
   solve_min_norm(wm3_.data(), lambda.data(), wn3_.data());
-  lambda = -lambda;
+  for (Index i = 0; i < m_; ++i) lambda[i] *= -row_scale_[std::size_t(i)];
   // c⊥ = c − W⁺W c = (I − W⁺W) c;  Qc = L c⊥;  dqdd = L⁻ᵀ c⊥
   for (Index i = 0; i < n_; ++i) wn_[std::size_t(i)] -= wn3_[std::size_t(i)];
   mass_lower_multiply(wn_.data(), Qc.data());
@@ -749,8 +769,9 @@ void SparseDecomposition::project_nonideal(const Eigen::Ref<const VectorXd>& C,
 }
 
 void SparseDecomposition::apply_pinv(const Eigen::Ref<const VectorXd>& e, Eigen::Ref<VectorXd> y) {
-  // y = Wᵀ G⁺ e
-  solve_min_norm(e.data(), wm3_.data(), y.data());
+  // y = W_Dᵀ G_D⁺ D e
+  scale_rows(e.data(), wm4_.data());
+  solve_min_norm(wm4_.data(), wm3_.data(), y.data());
 }
 
 }  // namespace ukdyn
