@@ -8,14 +8,17 @@
 //     M~ = mu tau² M / s²,  Q~ = mu Q / s,  V~ = mu V,  P~ = mu P / tau,
 //     phi~ = c phi,  psi~ = c psi / tau,  A~ = c A / s,  b~ = c b / tau²,
 // each evaluated at the original (q, q', t) = (q~ / s, q~' tau / s, t~ / tau): its motion is
-// exactly q~(t~) = s q(t~ / tau), with energies × mu and multipliers × mu s... — so the
-// tolerances that the run compares (projection, rank, energy balance, step control) must be
-// relative to the model's own scales for the runs to agree. The coordinates are scaled all
-// together (lengths, and angles with them: a change of every coordinate's unit), which for the
-// models in Cartesian coordinates and the bodies' positions is "lengths × s".
+// exactly q~(t~) = s q(t~ / tau), with energies × mu — so the tolerances that the run compares
+// (projection, rank, energy balance, the work channels' step-size control) must be relative to
+// the model's own scales for the runs to agree. The coordinates are scaled all together
+// (lengths, and angles with them: a change of every coordinate's unit), which for the models
+// in Cartesian coordinates and the bodies' positions is "lengths × s". The integrators' atol is
+// absolute in the units of q and q' (not yet relative): the lengths' rescalings state it in
+// their units (atol × s), as a model written in those units would.
 //
-// Examples that cannot be rescaled this way are named in kNotRescaled with the reason; they
-// still run the constraint-row scaling when that applies (see there).
+// Examples that cannot be rescaled by wrapping the built System are skipped, each with its
+// reason (not_rescalable: the Coulomb contacts, the other non-ideal forces, the controlled
+// models); the slow and the sensitive ones run a shortened t_end (duration).
 #include <gtest/gtest.h>
 
 #include <algorithm>
