@@ -106,10 +106,12 @@ class Tree {
   const Link& link(Index i) const { return links_.at(std::size_t(i)); }  ///< link i
   Index parent(Index i) const { return parent_[std::size_t(i)]; }        ///< λ(i), -1 for a root
   Index offset(Index i) const { return offset_[std::size_t(i)]; }        ///< first coordinate of i
-  int dofs(Index i) const { return joint_coordinates(link(i).joint.kind); }  ///< n_i
+  int dofs(Index i) const { return dofs_[std::size_t(i)]; }              ///< n_i
   /// I_i, the spatial inertia of link i about its frame's origin ([ω; v] order).
   const Matrix6d& spatial_inertia(Index i) const { return inertia_[std::size_t(i)]; }
   const Vector3d& gravity() const { return gravity_; }  ///< g in the world (m/s²)
+  /// R_PJ of link i's joint origin as a matrix (precomputed for forward_kinematics).
+  const Matrix3d& joint_rotation(Index i) const { return R_PJ_[std::size_t(i)]; }
   /// Index of the link called `name`. @throws std::invalid_argument naming it. Cost O(links).
   Index link_index(std::string_view name) const;
   /// Coordinate names: "<joint>" for one coordinate, "<link>.x" … "<link>.u3" for a floating
@@ -124,7 +126,9 @@ class Tree {
   std::string name_;
   std::vector<Link> links_;
   std::vector<Index> parent_, offset_, floating_;
+  std::vector<int> dofs_;
   std::vector<Matrix6d, Eigen::aligned_allocator<Matrix6d>> inertia_;
+  std::vector<Matrix3d, Eigen::aligned_allocator<Matrix3d>> R_PJ_;
   std::vector<std::string> names_;
   Vector3d gravity_;
   Index n_ = 0;

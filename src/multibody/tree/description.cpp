@@ -164,6 +164,8 @@ Tree::Tree(std::string name, std::vector<Link> links, Vector3d gravity)
       names_.push_back(l.joint.name);
     }
     n_ += joint_coordinates(l.joint.kind);
+    dofs_.push_back(joint_coordinates(l.joint.kind));
+    R_PJ_.push_back(l.joint.R_PJ.toRotationMatrix());
     inertia_.push_back(detail::spatial_inertia(l.inertial.mass, l.inertial.com, l.inertial.I_com));
     links_.push_back(std::move(l));
   }

@@ -31,7 +31,7 @@ void forward_kinematics(const Tree& tree, const Eigen::Ref<const VectorXd>& q, T
   for (Index i = 0; i < tree.link_count(); ++i) {
     const std::size_t k = std::size_t(i);
     const Joint& j = tree.link(i).joint;
-    const Matrix3d R_PJ = j.R_PJ.toRotationMatrix();
+    const Matrix3d& R_PJ = tree.joint_rotation(i);
     Matrix3d R_PL = R_PJ;    // the joint's rotation λ → L
     Vector3d p_PL = j.p_PJ;  // the origin of L in λ coordinates
     auto& S = d.S[k];

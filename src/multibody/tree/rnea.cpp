@@ -27,7 +27,8 @@ void rnea(const Tree& tree, const Eigen::Ref<const VectorXd>& q,
     const Index p = tree.parent(i);
     const int ni = tree.dofs(i);
     const Index o = tree.offset(i);
-    const Vector6d vJ = d.S[k] * qd.segment(o, ni);
+    const Vector6d vJ =
+        ni == 1 ? Vector6d(d.S[k].col(0) * qd[o]) : Vector6d(d.S[k] * qd.segment(o, ni));
     if (p < 0) {
       d.v[k] = vJ;
       d.a[k] = detail::motion_to_child(d.E[k], d.r[k], a0);
@@ -36,7 +37,8 @@ void rnea(const Tree& tree, const Eigen::Ref<const VectorXd>& q,
       d.a[k] = detail::motion_to_child(d.E[k], d.r[k], d.a[std::size_t(p)]);
     }
     if (ni > 0) {
-      if (qdd) d.a[k].noalias() += d.S[k] * qdd->segment(o, ni);
+      if (qdd && ni == 1) d.a[k] += d.S[k].col(0) * (*qdd)[o];
+      if (qdd && ni > 1) d.a[k].noalias() += d.S[k] * qdd->segment(o, ni);
       d.a[k] += detail::joint_bias(tree, d, i, qd) + detail::cross_motion(d.v[k], vJ);
     }
     const Matrix6d& I = tree.spatial_inertia(i);
@@ -46,7 +48,8 @@ void rnea(const Tree& tree, const Eigen::Ref<const VectorXd>& q,
   for (Index i = tree.link_count(); i-- > 0;) {
     const std::size_t k = std::size_t(i);
     const int ni = tree.dofs(i);
-    if (ni > 0) tau.segment(tree.offset(i), ni).noalias() = d.S[k].transpose() * d.f[k];
+    if (ni == 1) tau[tree.offset(i)] = d.S[k].col(0).dot(d.f[k]);
+    if (ni > 1) tau.segment(tree.offset(i), ni).noalias() = d.S[k].transpose() * d.f[k];
     const Index p = tree.parent(i);
     if (p >= 0) d.f[std::size_t(p)] += detail::force_to_parent(d.E[k], d.r[k], d.f[k]);
   }

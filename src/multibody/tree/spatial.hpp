@@ -56,14 +56,22 @@ inline void forces_to_parent(const Matrix3d& E, const Vector3d& r, Block&& F) {
   }
 }
 
-/// Xᵀ I X: an inertia in L coordinates seen from λ's origin, in λ coordinates.
+/// Xᵀ I X: an inertia in L coordinates seen from λ's origin, in λ coordinates. With
+/// I = [A B; Bᵀ C] rotated to λ axes (A' = Eᵀ A E, …) and T = [1 0; −[r]× 1]:
+///   Tᵀ I' T = [A' − B'[r]× + [r]× (B'ᵀ − C'[r]×),  B' + [r]× C';  B'ᵀ − C'[r]×,  C'].
+/// About 300 multiplications instead of the two 6 × 6 products' 430.
 inline Matrix6d inertia_to_parent(const Matrix3d& E, const Vector3d& r, const Matrix6d& I) {
-  Matrix6d X;  // motion transform λ → L
-  X.topLeftCorner<3, 3>() = E;
-  X.topRightCorner<3, 3>().setZero();
-  X.bottomLeftCorner<3, 3>() = -E * skew(r);
-  X.bottomRightCorner<3, 3>() = E;
-  return X.transpose() * I * X;
+  const Matrix3d A = E.transpose() * I.topLeftCorner<3, 3>() * E;
+  const Matrix3d B = E.transpose() * I.topRightCorner<3, 3>() * E;
+  const Matrix3d C = E.transpose() * I.bottomRightCorner<3, 3>() * E;
+  const Matrix3d rx = skew(r);
+  const Matrix3d lower = B.transpose() - C * rx;  // B'ᵀ − C'[r]×
+  Matrix6d out;
+  out.topLeftCorner<3, 3>() = A - B * rx + rx * lower;
+  out.topRightCorner<3, 3>() = lower.transpose();
+  out.bottomLeftCorner<3, 3>() = lower;
+  out.bottomRightCorner<3, 3>() = C;
+  return out;
 }
 
 /// v ×* f, the spatial cross product of a motion with a force.
