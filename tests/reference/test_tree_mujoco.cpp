@@ -1,6 +1,6 @@
 // The kinematic tree against MuJoCo 2.2.2 (issue #30 item 3): M(q) and the bias forces
 // (qfrc_bias) at 100 random states, the forward dynamics with the URDF's damping, and 0.5 s of
-// RK4 from the same state.
+// RK4 from the same state; a branched floating-base tree's accelerations at 100 random states.
 //
 // Two routes into MuJoCo. (1) mj_loadXML on the .urdf itself (fixed links fused into their
 // parents, armature 0, the URDF's damping as dof_damping): MuJoCo's compiler diagonalizes each
@@ -30,9 +30,9 @@ namespace {
 
 const std::string kPanda = std::string(UKDYN_TEST_DATA_DIR) + "/panda_arm.urdf";
 
-// the tree as MJCF (revolute, continuous, prismatic and fixed joints), every number exact
+// the tree as MJCF (every joint kind; a floating one as a freejoint), every number exact
 std::string write_mjcf(const Tree& tree) {
-  const auto path = std::filesystem::temp_directory_path() / "ukdyn_tree_panda.xml";
+  const auto path = std::filesystem::temp_directory_path() / ("ukdyn_tree_" + tree.name() + ".xml");
   std::ofstream out(path);
   out.precision(17);
   out << "<mujoco model='" << tree.name() << "'>\n<compiler angle='radian'/>\n<worldbody>\n";
@@ -56,7 +56,9 @@ std::string write_mjcf(const Tree& tree) {
           << qi.x() << ' ' << qi.y() << ' ' << qi.z() << "' mass='" << l.inertial.mass
           << "' diaginertia='" << eig.eigenvalues().transpose() << "'/>\n";
     }
-    if (j.kind != JointKind::kFixed) {
+    if (j.kind == JointKind::kFloating) {
+      out << "<freejoint name='" << j.name << "'/>\n";
+    } else if (j.kind != JointKind::kFixed) {
       out << "<joint name='" << j.name << "' type='"
           << (j.kind == JointKind::kPrismatic ? "slide" : "hinge") << "' axis='"
           << j.axis.transpose() << "' damping='" << j.damping << "'/>\n";
@@ -183,6 +185,89 @@ TEST(TreeMuJoCo, PandaForwardDynamicsAndRk4Run) {
   // the arm did move: the comparison is not of two resting states
   EXPECT_GT(max_abs(x.head(n) - q), 0.1);
   std::printf("after 0.5 s of RK4: |q - q_MuJoCo| %.2e rad, |q' - q'_MuJoCo| %.2e rad/s\n", eq, ev);
+}
+
+// a branched floating-base tree (two arms, revolute, prismatic and fixed joints, full
+// inertias): ukdyn's constrained q'' (the unit-quaternion constraint completing the singular M)
+// against MuJoCo's qacc. MuJoCo's free joint: qvel = (p' in the world, ω in the body frame), so
+// ω_L = 2 E(u) u' and ω'_L = 2 E(u) u'' (2 E(u') u' = 0).
+Tree branched_floating_tree() {
+  std::mt19937 rng(4);
+  std::uniform_real_distribution<double> U(-1.0, 1.0);
+  const auto inertial = [&](double mass) {
+    Inertial in;
+    in.mass = mass;
+    in.com = 0.1 * Vector3d(U(rng), U(rng), U(rng));
+    const Vector3d moments(0.03 + 0.005 * U(rng), 0.03 + 0.005 * U(rng), 0.03 + 0.005 * U(rng));
+    const Matrix3d R =
+        Eigen::Quaterniond(Eigen::Vector4d::Random().normalized()).toRotationMatrix();
+    in.I_com = R * moments.asDiagonal() * R.transpose();
+    return in;
+  };
+  std::vector<Link> links;
+  const auto add = [&](const std::string& name, const std::string& parent, JointKind kind,
+                       const Vector3d& axis, const Vector3d& p) {
+    Link l;
+    l.name = name;
+    l.parent = parent;
+    l.joint.name = name + "_joint";
+    l.joint.kind = kind;
+    l.joint.axis = axis;
+    if (kind != JointKind::kFloating) {
+      l.joint.p_PJ = p;
+      l.joint.R_PJ =
+          Eigen::Quaterniond(Eigen::AngleAxisd(0.4, Vector3d(U(rng), U(rng), 1).normalized()));
+    }
+    l.inertial = inertial(1.0 + U(rng) * 0.5);
+    links.push_back(l);
+  };
+  add("base", "", JointKind::kFloating, Vector3d::UnitZ(), Vector3d::Zero());
+  add("l1", "base", JointKind::kRevolute, Vector3d(0, 1, 0.2), Vector3d(0.2, 0.1, 0));
+  add("l2", "l1", JointKind::kPrismatic, Vector3d(1, 0, 0), Vector3d(0.3, 0, 0.05));
+  add("l3", "l2", JointKind::kContinuous, Vector3d(0.1, 0.2, 1), Vector3d(0.1, 0.2, 0));
+  add("tool", "l3", JointKind::kFixed, Vector3d::UnitZ(), Vector3d(0, 0, 0.1));
+  add("r1", "base", JointKind::kRevolute, Vector3d(1, 0, 0), Vector3d(-0.2, -0.1, 0));
+  add("r2", "r1", JointKind::kRevolute, Vector3d(0, 0, 1), Vector3d(-0.3, 0, 0));
+  return Tree("floating_branched", links);
+}
+
+TEST(TreeMuJoCo, BranchedFloatingTreeAccelerations) {
+  const Tree tree = branched_floating_tree();
+  const Index n = tree.coordinate_count();  // 7 + 5
+  ASSERT_EQ(n, 12);
+  MuJoCo mj(write_mjcf(tree));
+  ASSERT_NE(mj.m, nullptr);
+  ASSERT_EQ(mj.m->nq, 12);
+  ASSERT_EQ(mj.m->nv, 11);
+  const System sys = make_system(tree);
+  Workspace ws(sys);
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> U(-1.0, 1.0);
+  double worst = 0;
+  for (int state = 0; state < 100; ++state) {
+    VectorXd q(n), qd(n);
+    for (Index i = 0; i < n; ++i) q[i] = U(rng), qd[i] = U(rng);
+    q.segment<4>(3).normalize();
+    const Eigen::Vector4d u = q.segment<4>(3);
+    qd.segment<4>(3) -= u * u.dot(qd.segment<4>(3));  // u·u' = 0
+    Eigen::Matrix<double, 3, 4> E;
+    E << -u[1], u[0], u[3], -u[2], -u[2], -u[3], u[0], u[1], -u[3], u[2], -u[1], u[0];
+    for (Index i = 0; i < n; ++i) mj.d->qpos[i] = q[i];
+    for (int i = 0; i < 3; ++i) mj.d->qvel[i] = qd[i];
+    const Vector3d w_L = 2 * E * qd.segment<4>(3);
+    for (int i = 0; i < 3; ++i) mj.d->qvel[3 + i] = w_L[i];
+    for (Index i = 7; i < n; ++i) mj.d->qvel[i - 1] = qd[i];
+    mj_forward(mj.m, mj.d);
+    ASSERT_EQ(forward_dynamics(sys, ws, q, qd, 0.0), Status::kOk);
+    VectorXd acc(n - 1);  // ukdyn's q'' in MuJoCo's velocity coordinates
+    acc << ws.qdd.head<3>(), 2 * E * ws.qdd.segment<4>(3), ws.qdd.tail(n - 7);
+    const Eigen::Map<const VectorXd> qacc(mj.d->qacc, n - 1);
+    const double e = max_abs(acc - qacc) / max_abs(qacc);
+    EXPECT_NEAR(e, 0.0, 1e-11) << "state " << state;
+    worst = std::max(worst, e);
+  }
+  std::printf("floating branched tree, 100 states: largest relative difference of q'' %.2e\n",
+              worst);
 }
 
 }  // namespace
