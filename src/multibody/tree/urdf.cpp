@@ -31,7 +31,7 @@ class MessageCapture final : public console_bridge::OutputHandler {
 };
 
 Eigen::Quaterniond rotation(const urdf::Rotation& r) { return {r.w, r.x, r.y, r.z}; }
-Vector3d vector(const urdf::Vector3& v) { return {v.x, v.y, v.z}; }
+Vector3d to_eigen(const urdf::Vector3& v) { return {v.x, v.y, v.z}; }
 
 }  // namespace
 
@@ -108,9 +108,9 @@ Tree load_urdf(const std::string& path, Vector3d gravity) {
                                       " is not supported (fixed, revolute, continuous, "
                                       "prismatic, floating are)");
       }
-      out.joint.p_PJ = vector(j->parent_to_joint_origin_transform.position);
+      out.joint.p_PJ = to_eigen(j->parent_to_joint_origin_transform.position);
       out.joint.R_PJ = rotation(j->parent_to_joint_origin_transform.rotation);
-      out.joint.axis = vector(j->axis);
+      out.joint.axis = to_eigen(j->axis);
       if (j->limits) {
         if (out.joint.kind != JointKind::kContinuous) {
           out.joint.lower = j->limits->lower;
@@ -131,7 +131,7 @@ Tree load_urdf(const std::string& path, Vector3d gravity) {
       Eigen::Matrix3d I;
       I << in.ixx, in.ixy, in.ixz, in.ixy, in.iyy, in.iyz, in.ixz, in.iyz, in.izz;
       out.inertial.mass = in.mass;
-      out.inertial.com = vector(in.origin.position);
+      out.inertial.com = to_eigen(in.origin.position);
       out.inertial.I_com = R * I * R.transpose();
       if (moving) {
         const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(I);
