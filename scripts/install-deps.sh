@@ -25,6 +25,7 @@ packages=(
   jupyter-notebook python3-nbconvert python3-ipykernel  # the notebook in examples/, run by the tests
   libgtest-dev libgmock-dev            # tests
   libbenchmark-dev                     # benchmarks
+  liburdfdom-dev                       # URDF import of kinematic trees (src/multibody/tree/urdf.cpp)
   libmujoco-dev                        # bench_mujoco: MuJoCo 2.2.2 on the shared problems (optional)
   clang libclang-rt-14-dev             # fuzz/: libFuzzer and the sanitizer runtimes of clang
   clang-format                         # scripts/format.sh: the house style, checked by CI

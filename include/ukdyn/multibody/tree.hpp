@@ -1,0 +1,212 @@
+/// @file multibody/tree.hpp
+/// A kinematic tree in joint coordinates as ukdyn's unconstrained system M(q) q'' = Q(q, q', t)
+/// (Featherstone, *Rigid Body Dynamics Algorithms*, 2008; Pinocchio's Model/Data, MuJoCo's
+/// mjModel/mjData). The description (Tree) is built once; every pass writes into a TreeData
+/// sized from it, so no pass allocates.
+///
+/// Glossary (Featherstone's symbols; frames in the names, Drake's monogram style):
+///   link i        a rigid body; its frame L_i is the child frame of its joint (URDF's
+///                 convention: L_i = parent frame · origin(xyz, rpy) · joint motion)
+///   λ(i)          the parent link of link i (-1: the world)
+///   S_i (6 × n_i) motion subspace of joint i in L_i coordinates, spatial motion [ω; v]
+///   X_i           the motion transform from λ(i) coordinates to L_i coordinates
+///   I_i (6 × 6)   spatial inertia of link i about the origin of L_i, in L_i coordinates
+///   Ic_i          composite inertia of the subtree rooted at i (CRBA)
+///   v_i, a_i, f_i spatial velocity, acceleration and force of link i (RNEA)
+///   h(q, q')      bias forces C(q, q') q' + g(q) (MuJoCo's qfrc_bias): M q'' + h = τ
+///
+/// Coordinates: per joint, in link order — revolute, continuous: the angle (rad); prismatic: the
+/// displacement (m); fixed: none; floating: (x, y, z, u0, u1, u2, u3), the position of L in the
+/// world and the unit quaternion u of R_WL (u0 the scalar part), exactly as a rigid body of
+/// multibody.hpp: its velocities are the coordinates' time derivatives, ω_L = 2 E(u) u', the
+/// unit norm kept by the constraint "<link>.unit" (u·u'' = −u'·u') that completes the then
+/// singular M (docs/singular-mass.md).
+#pragma once
+
+#include <functional>
+#include <limits>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+
+#include "ukdyn/core/system.hpp"
+#include "ukdyn/core/types.hpp"
+
+namespace ukdyn::tree {
+
+using Eigen::Matrix3d;
+using Eigen::Vector3d;
+using Vector6d = Eigen::Matrix<double, 6, 1>;
+using Matrix6d = Eigen::Matrix<double, 6, 6>;
+
+/// The joints a tree knows (URDF's, planar excepted).
+enum class JointKind {
+  kFixed,       ///< no coordinate
+  kRevolute,    ///< rotation about `axis` by q (limited)
+  kContinuous,  ///< rotation about `axis` by q (unlimited)
+  kPrismatic,   ///< translation along `axis` by q
+  kFloating,    ///< 7 coordinates: position and unit quaternion (root links only)
+};
+
+/// Name of a joint kind as URDF spells it ("revolute", …, "floating").
+const char* joint_kind_name(JointKind k);
+/// Number of coordinates of a joint kind (0, 1 or 7).
+int joint_coordinates(JointKind k);
+
+/// The joint that attaches a link to its parent: its fixed origin in the parent's frame, its
+/// kind and axis (unit, in the joint frame) and what URDF says of it. Limits, effort, velocity
+/// and friction are kept for later use (joint limits, control's effort checks, Coulomb joint
+/// friction); damping acts now (viscous, −damping · q').
+struct Joint {
+  std::string name;                                          ///< unique in the tree
+  JointKind kind = JointKind::kFixed;                        ///< what moves
+  Vector3d p_PJ = Vector3d::Zero();                          ///< origin xyz in the parent frame
+  Eigen::Quaterniond R_PJ = Eigen::Quaterniond::Identity();  ///< origin rpy as a rotation
+  Vector3d axis = Vector3d::UnitX();                         ///< unit axis in the joint frame
+  double damping = 0.0;   ///< viscous damping (N·m·s/rad or N·s/m), >= 0
+  double friction = 0.0;  ///< URDF's friction (kept, not applied yet)
+  double lower = -std::numeric_limits<double>::infinity();    ///< position limit
+  double upper = std::numeric_limits<double>::infinity();     ///< position limit
+  double effort = std::numeric_limits<double>::infinity();    ///< effort limit (kept)
+  double velocity = std::numeric_limits<double>::infinity();  ///< velocity limit (kept)
+};
+
+/// Mass properties of a link: mass, centre of mass and the 3 × 3 inertia about the centre of
+/// mass, both in the link frame (URDF's <inertial>, its rpy already applied).
+struct Inertial {
+  double mass = 0.0;                  ///< kg, >= 0
+  Vector3d com = Vector3d::Zero();    ///< centre of mass in the link frame
+  Matrix3d I_com = Matrix3d::Zero();  ///< inertia about the com, link axes (symmetric PSD)
+};
+
+/// One link of the tree and the joint to its parent.
+struct Link {
+  std::string name;    ///< unique in the tree
+  std::string parent;  ///< the parent link's name; empty for a root (attached to the world)
+  Joint joint;         ///< the joint to the parent (to the world for a root)
+  Inertial inertial;   ///< mass properties
+};
+
+/// The description of a kinematic tree: links sorted so that every parent precedes its
+/// children, coordinate offsets, spatial inertias. Immutable once built.
+class Tree {
+ public:
+  /// Builds and checks the tree. `gravity` is the world's gravitational acceleration (m/s²).
+  /// @throws std::invalid_argument naming the link or joint: duplicate or empty names, an
+  /// unknown parent, a cycle, a floating joint that is not a root's, a zero or non-finite
+  /// axis, negative mass or damping, an inertia that is not symmetric positive semi-definite
+  /// or not finite, a moving subtree without mass (M would be singular). Cost O(links²).
+  Tree(std::string name, std::vector<Link> links, Vector3d gravity = Vector3d(0, 0, -9.81));
+
+  const std::string& name() const { return name_; }                      ///< the robot's name
+  Index coordinate_count() const { return n_; }                          ///< n
+  Index link_count() const { return Index(links_.size()); }              ///< links, parents first
+  const Link& link(Index i) const { return links_.at(std::size_t(i)); }  ///< link i
+  Index parent(Index i) const { return parent_[std::size_t(i)]; }        ///< λ(i), -1 for a root
+  Index offset(Index i) const { return offset_[std::size_t(i)]; }        ///< first coordinate of i
+  int dofs(Index i) const { return dofs_[std::size_t(i)]; }              ///< n_i
+  /// I_i, the spatial inertia of link i about its frame's origin ([ω; v] order).
+  const Matrix6d& spatial_inertia(Index i) const { return inertia_[std::size_t(i)]; }
+  const Vector3d& gravity() const { return gravity_; }  ///< g in the world (m/s²)
+  /// R_PJ of link i's joint origin as a matrix (precomputed for forward_kinematics).
+  const Matrix3d& joint_rotation(Index i) const { return R_PJ_[std::size_t(i)]; }
+  /// Index of the link called `name`. @throws std::invalid_argument naming it. Cost O(links).
+  Index link_index(std::string_view name) const;
+  /// Coordinate names: "<joint>" for one coordinate, "<link>.x" … "<link>.u3" for a floating
+  /// base (the names multibody.hpp gives a rigid body).
+  const std::vector<std::string>& coordinate_names() const { return names_; }
+  /// The zero configuration: zero angles and displacements, identity quaternions (n).
+  VectorXd neutral() const;
+  /// The links whose joint is floating (each gets a unit-norm constraint in make_system).
+  const std::vector<Index>& floating_links() const { return floating_; }
+
+ private:
+  std::string name_;
+  std::vector<Link> links_;
+  std::vector<Index> parent_, offset_, floating_;
+  std::vector<int> dofs_;
+  std::vector<Matrix6d, Eigen::aligned_allocator<Matrix6d>> inertia_;
+  std::vector<Matrix3d, Eigen::aligned_allocator<Matrix3d>> R_PJ_;
+  std::vector<std::string> names_;
+  Vector3d gravity_;
+  Index n_ = 0;
+};
+
+/// Everything a pass over a Tree writes (Pinocchio's Data), sized once from the tree: no pass
+/// allocates. One TreeData per thread.
+struct TreeData {
+  /// Sizes every buffer for `tree`. Allocates (once).
+  explicit TreeData(const Tree& tree);
+
+  using S6 = Eigen::Matrix<double, 6, Eigen::Dynamic, 0, 6, 7>;  // motion subspace, n_i <= 7
+  template <class T>
+  using Aligned = std::vector<T, Eigen::aligned_allocator<T>>;
+  Aligned<Eigen::Matrix3d> R_WL;  ///< (links) orientation of L_i in the world, forward_kinematics
+  Aligned<Vector3d> p_WL;         ///< (links) origin of L_i in the world, forward_kinematics
+  Aligned<Eigen::Matrix3d> E;  ///< (links) R_λL ᵀ: λ(i) → L_i coordinates, forward_kinematics
+  Aligned<Vector3d> r;         ///< (links) origin of L_i in λ(i) coordinates, forward_kinematics
+  Aligned<S6> S;               ///< (links) S_i (6 × n_i), forward_kinematics
+  Aligned<Vector6d> v, a, f;   ///< (links) spatial velocity, acceleration, force: rnea
+  Aligned<Matrix6d> Ic;        ///< (links) composite inertias: mass_matrix
+  Index tree_size = 0;         ///< the tree's link count, to refuse another tree's data
+};
+
+/// Forward kinematics: every link's pose (R_WL, p_WL), the transforms X_i and the subspaces S_i
+/// at q (n). The quaternion of a floating joint is normalized for the pose. Cost O(links).
+/// @throws std::invalid_argument on a q or data of the wrong size.
+void forward_kinematics(const Tree& tree, const Eigen::Ref<const VectorXd>& q, TreeData& data);
+
+/// M(q) (n × n) by the composite-rigid-body algorithm (Featherstone, algorithm 6.2), exploiting
+/// branch sparsity (entries of links on different branches are zero). Runs forward_kinematics.
+/// Cost O(n · depth). @throws std::invalid_argument on wrong sizes.
+void mass_matrix(const Tree& tree, const Eigen::Ref<const VectorXd>& q, TreeData& data,
+                 Eigen::Ref<MatrixXd> M);
+
+/// Inverse dynamics τ = M(q) q'' + h(q, q') by recursive Newton–Euler (Featherstone, algorithm
+/// 5.1), gravity included, no damping. Runs forward_kinematics. Cost O(links).
+/// @throws std::invalid_argument on wrong sizes.
+void inverse_dynamics(const Tree& tree, const Eigen::Ref<const VectorXd>& q,
+                      const Eigen::Ref<const VectorXd>& qd, const Eigen::Ref<const VectorXd>& qdd,
+                      TreeData& data, Eigen::Ref<VectorXd> tau);
+
+/// The bias forces h(q, q') = C(q, q') q' + g(q) (MuJoCo's qfrc_bias): inverse_dynamics with
+/// q'' = 0. Cost O(links).
+void bias_forces(const Tree& tree, const Eigen::Ref<const VectorXd>& q,
+                 const Eigen::Ref<const VectorXd>& qd, TreeData& data, Eigen::Ref<VectorXd> h);
+
+/// The frame Jacobian of a point of link `link` (p_L in link coordinates), in world axes, after
+/// forward_kinematics: J (6 × n) with [ω_W; v_W(point)] = J q'. Columns of joints that are not
+/// ancestors of the link are zero. Cost O(n · depth).
+/// @throws std::invalid_argument on a link out of range or J of the wrong size.
+void frame_jacobian(const Tree& tree, const TreeData& data, Index link, const Vector3d& p_L,
+                    Eigen::Ref<Eigen::Matrix<double, 6, Eigen::Dynamic>> J);
+
+/// The world position of a point p_L of link `link` after forward_kinematics. Cost O(1).
+Vector3d world_point(const TreeData& data, Index link, const Vector3d& p_L);
+
+/// Joint torques τ(q, q', t) (n): the tree's named input "tau" (a floating joint's 7 entries are
+/// generalized forces on its coordinates). Must not allocate.
+using JointTorqueFn =
+    std::function<void(const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd,
+                       double t, Eigen::Ref<VectorXd> tau)>;
+
+/// The unconstrained system of a tree: M(q) from mass_matrix, Q = τ(q, q', t) − D q' − h(q, q')
+/// (D the joints' viscous damping), the potential energy of gravity, the power of τ and of the
+/// dampers (so a run's energy balance is checked), and one unit-norm constraint "<link>.unit"
+/// per floating joint. Constraints, friction, control and simulate() then apply as to any
+/// System. The tree is copied into the system's callables. @param tau the input "tau", or empty
+/// for none. Cost O(links) to build.
+System make_system(const Tree& tree, JointTorqueFn tau = {});
+
+/// Reads a URDF file (through urdfdom) into a Tree: links in depth-first order from the root;
+/// URDF's world link, if any, is the world. Joint limits, damping, friction, effort and velocity
+/// are kept. @throws std::invalid_argument naming the file and the link or joint: a malformed
+/// file (with urdfdom's message), a joint type ukdyn does not know (planar), a moving link
+/// without <inertial>, an inertia that is not positive definite, a graph that is not a tree.
+/// Cost O(links) plus the XML parse.
+Tree load_urdf(const std::string& path, Vector3d gravity = Vector3d(0, 0, -9.81));
+
+}  // namespace ukdyn::tree

@@ -1,0 +1,71 @@
+// Inverse dynamics and bias forces of a tree by recursive Newton–Euler (Featherstone 2008,
+// algorithm 5.1), gravity as a fictitious acceleration of the world.
+#include "multibody/tree/spatial.hpp"
+#include "ukdyn/multibody/tree.hpp"
+
+namespace ukdyn::tree {
+
+namespace {
+
+// τ = M q'' + h; q'' = 0 when qdd is null
+void rnea(const Tree& tree, const Eigen::Ref<const VectorXd>& q,
+          const Eigen::Ref<const VectorXd>& qd, const Eigen::Ref<const VectorXd>* qdd, TreeData& d,
+          Eigen::Ref<VectorXd> tau) {
+  const char* who = "ukdyn::tree::inverse_dynamics";
+  detail::check_sizes(who, tree, d, q.size());
+  detail::check_sizes(who, tree, d, qd.size());
+  detail::check_sizes(who, tree, d, tau.size());
+  if (qdd) detail::check_sizes(who, tree, d, qdd->size());
+  forward_kinematics(tree, q, d);
+  // the world's acceleration −g stands for gravity
+  Vector6d a0;
+  a0 << Vector3d::Zero(), -tree.gravity();
+  // outward: v_i = X_i v_λ + S_i q'_i, a_i = X_i a_λ + S_i q''_i + c_i + v_i × S_i q'_i,
+  // f_i = I_i a_i + v_i ×* I_i v_i
+  for (Index i = 0; i < tree.link_count(); ++i) {
+    const std::size_t k = std::size_t(i);
+    const Index p = tree.parent(i);
+    const int ni = tree.dofs(i);
+    const Index o = tree.offset(i);
+    const Vector6d vJ =
+        ni == 1 ? Vector6d(d.S[k].col(0) * qd[o]) : Vector6d(d.S[k] * qd.segment(o, ni));
+    if (p < 0) {
+      d.v[k] = vJ;
+      d.a[k] = detail::motion_to_child(d.E[k], d.r[k], a0);
+    } else {
+      d.v[k] = detail::motion_to_child(d.E[k], d.r[k], d.v[std::size_t(p)]) + vJ;
+      d.a[k] = detail::motion_to_child(d.E[k], d.r[k], d.a[std::size_t(p)]);
+    }
+    if (ni > 0) {
+      if (qdd && ni == 1) d.a[k] += d.S[k].col(0) * (*qdd)[o];
+      if (qdd && ni > 1) d.a[k].noalias() += d.S[k] * qdd->segment(o, ni);
+      d.a[k] += detail::joint_bias(tree, d, i, qd) + detail::cross_motion(d.v[k], vJ);
+    }
+    const Matrix6d& I = tree.spatial_inertia(i);
+    d.f[k] = I * d.a[k] + detail::cross_force(d.v[k], I * d.v[k]);
+  }
+  // inward: τ_i = S_iᵀ f_i, f_λ += X_iᵀ f_i
+  for (Index i = tree.link_count(); i-- > 0;) {
+    const std::size_t k = std::size_t(i);
+    const int ni = tree.dofs(i);
+    if (ni == 1) tau[tree.offset(i)] = d.S[k].col(0).dot(d.f[k]);
+    if (ni > 1) tau.segment(tree.offset(i), ni).noalias() = d.S[k].transpose() * d.f[k];
+    const Index p = tree.parent(i);
+    if (p >= 0) d.f[std::size_t(p)] += detail::force_to_parent(d.E[k], d.r[k], d.f[k]);
+  }
+}
+
+}  // namespace
+
+void inverse_dynamics(const Tree& tree, const Eigen::Ref<const VectorXd>& q,
+                      const Eigen::Ref<const VectorXd>& qd, const Eigen::Ref<const VectorXd>& qdd,
+                      TreeData& data, Eigen::Ref<VectorXd> tau) {
+  rnea(tree, q, qd, &qdd, data, tau);
+}
+
+void bias_forces(const Tree& tree, const Eigen::Ref<const VectorXd>& q,
+                 const Eigen::Ref<const VectorXd>& qd, TreeData& data, Eigen::Ref<VectorXd> h) {
+  rnea(tree, q, qd, nullptr, data, h);
+}
+
+}  // namespace ukdyn::tree

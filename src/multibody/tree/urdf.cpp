@@ -1,0 +1,159 @@
+// URDF import through urdfdom (Debian's liburdfdom-dev): the file's links and joints as a Tree.
+#include <filesystem>
+#include <mutex>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include <console_bridge/console.h>
+#include <urdf_parser/urdf_parser.h>
+
+#include <Eigen/Eigenvalues>
+
+#include "ukdyn/multibody/tree.hpp"
+
+namespace ukdyn::tree {
+
+namespace {
+
+// collects urdfdom's messages (it reports what is wrong only through console_bridge)
+class MessageCapture final : public console_bridge::OutputHandler {
+ public:
+  void log(const std::string& text, console_bridge::LogLevel level, const char*, int) override {
+    if (level < console_bridge::CONSOLE_BRIDGE_LOG_WARN) return;
+    if (!text_.empty()) text_ += "; ";
+    text_ += text;
+  }
+  const std::string& text() const { return text_; }
+
+ private:
+  std::string text_;
+};
+
+Eigen::Quaterniond rotation(const urdf::Rotation& r) { return {r.w, r.x, r.y, r.z}; }
+Vector3d to_eigen(const urdf::Vector3& v) { return {v.x, v.y, v.z}; }
+
+}  // namespace
+
+Tree load_urdf(const std::string& path, Vector3d gravity) {
+  const std::string who = "ukdyn::tree::load_urdf: " + path + ": ";
+  if (!std::filesystem::is_regular_file(path)) {
+    throw std::invalid_argument(who + "no such file");
+  }
+  // parse, with urdfdom's messages captured (console_bridge's handler is process-wide)
+  static std::mutex handler_mutex;
+  urdf::ModelInterfaceSharedPtr model;
+  MessageCapture capture;
+  {
+    const std::lock_guard<std::mutex> lock(handler_mutex);
+    console_bridge::useOutputHandler(&capture);
+    try {
+      model = urdf::parseURDFFile(path);
+    } catch (...) {
+      console_bridge::restorePreviousOutputHandler();
+      throw;
+    }
+    console_bridge::restorePreviousOutputHandler();
+  }
+  if (!model) {
+    throw std::invalid_argument(who + "not a valid URDF: " +
+                                (capture.text().empty() ? "urdfdom refused it" : capture.text()));
+  }
+  const urdf::LinkConstSharedPtr root = model->getRoot();
+  if (!root) throw std::invalid_argument(who + "no root link");
+  // URDF's "world" link without inertial is the world itself; any other root is welded to it
+  std::vector<Link> links;
+  std::vector<urdf::LinkConstSharedPtr> stack;
+  const bool root_is_world = root->name == "world" && !root->inertial;
+  if (root_is_world) {
+    for (auto c = root->child_links.rbegin(); c != root->child_links.rend(); ++c) {
+      stack.push_back(*c);
+    }
+  } else {
+    stack.push_back(root);
+  }
+  while (!stack.empty()) {
+    const urdf::LinkConstSharedPtr l = stack.back();
+    stack.pop_back();
+    for (auto c = l->child_links.rbegin(); c != l->child_links.rend(); ++c) stack.push_back(*c);
+    Link out;
+    out.name = l->name;
+    const urdf::JointConstSharedPtr j = l->parent_joint;
+    if (!j || l == root) {
+      out.joint.name = l->name + ".root";  // the implied weld of a fixed base
+      out.joint.kind = JointKind::kFixed;
+    } else {
+      const std::string where = who + "joint '" + j->name + "' (child link '" + l->name + "'): ";
+      out.joint.name = j->name;
+      if (!(root_is_world && j->parent_link_name == root->name)) out.parent = j->parent_link_name;
+      switch (j->type) {
+        case urdf::Joint::FIXED:
+          out.joint.kind = JointKind::kFixed;
+          break;
+        case urdf::Joint::REVOLUTE:
+          out.joint.kind = JointKind::kRevolute;
+          break;
+        case urdf::Joint::CONTINUOUS:
+          out.joint.kind = JointKind::kContinuous;
+          break;
+        case urdf::Joint::PRISMATIC:
+          out.joint.kind = JointKind::kPrismatic;
+          break;
+        case urdf::Joint::FLOATING:
+          out.joint.kind = JointKind::kFloating;
+          break;
+        default:
+          throw std::invalid_argument(where + "joint type " +
+                                      (j->type == urdf::Joint::PLANAR ? "'planar'" : "unknown") +
+                                      " is not supported (fixed, revolute, continuous, "
+                                      "prismatic, floating are)");
+      }
+      out.joint.p_PJ = to_eigen(j->parent_to_joint_origin_transform.position);
+      out.joint.R_PJ = rotation(j->parent_to_joint_origin_transform.rotation);
+      out.joint.axis = to_eigen(j->axis);
+      if (j->limits) {
+        if (out.joint.kind != JointKind::kContinuous) {
+          out.joint.lower = j->limits->lower;
+          out.joint.upper = j->limits->upper;
+        }
+        out.joint.effort = j->limits->effort;
+        out.joint.velocity = j->limits->velocity;
+      }
+      if (j->dynamics) {
+        out.joint.damping = j->dynamics->damping;
+        out.joint.friction = j->dynamics->friction;
+      }
+    }
+    const bool moving = out.joint.kind != JointKind::kFixed;
+    if (l->inertial) {
+      const urdf::Inertial& in = *l->inertial;
+      const Eigen::Matrix3d R = rotation(in.origin.rotation).normalized().toRotationMatrix();
+      Eigen::Matrix3d I;
+      I << in.ixx, in.ixy, in.ixz, in.ixy, in.iyy, in.iyz, in.ixz, in.iyz, in.izz;
+      out.inertial.mass = in.mass;
+      out.inertial.com = to_eigen(in.origin.position);
+      out.inertial.I_com = R * I * R.transpose();
+      if (moving) {
+        const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(I);
+        if (!(in.mass > 0.0) || !(eig.eigenvalues()[0] > 0.0)) {
+          throw std::invalid_argument(
+              who + "link '" + l->name + "': the inertia of a moving link must be positive " +
+              "definite (mass " + std::to_string(in.mass) + ", principal moments " +
+              std::to_string(eig.eigenvalues()[0]) + ", " + std::to_string(eig.eigenvalues()[1]) +
+              ", " + std::to_string(eig.eigenvalues()[2]) + ")");
+        }
+      }
+    } else if (moving) {
+      throw std::invalid_argument(who + "link '" + l->name + "' moves (joint '" + out.joint.name +
+                                  "') but has no <inertial>");
+    }
+    links.push_back(std::move(out));
+  }
+  try {
+    return Tree(model->getName(), std::move(links), gravity);
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument(who + e.what());
+  }
+}
+
+}  // namespace ukdyn::tree
