@@ -151,6 +151,16 @@ TEST(Tree, FrameJacobianIsTheDerivativeOfForwardKinematics) {
     EXPECT_NEAR(twist[k], w_ref[k], 1e-8);
     EXPECT_NEAR(twist[3 + k], (pp - pm)[k] / (2 * e), 1e-8);
   }
+  // J' q' by central differences of J along the motion, against frame_bias_acceleration
+  Eigen::Matrix<double, 6, Eigen::Dynamic> Jp(6, n), Jm(6, n);
+  forward_kinematics(tree, q + e * qd, d);
+  frame_jacobian(tree, d, tool, p_L, Jp);
+  forward_kinematics(tree, q - e * qd, d);
+  frame_jacobian(tree, d, tool, p_L, Jm);
+  const Eigen::Matrix<double, 6, 1> Jdqd = (Jp - Jm) / (2 * e) * qd;
+  const Vector6d bias = frame_bias_acceleration(tree, q, qd, d, tool, p_L);
+  for (int k = 0; k < 6; ++k) EXPECT_NEAR(bias[k], Jdqd[k], 1e-7 * Jdqd.norm()) << k;
+  forward_kinematics(tree, q, d);
   // columns of the joints beyond a link are zero
   frame_jacobian(tree, d, tree.link_index("panda_link3"), Vector3d::Zero(), J);
   EXPECT_EQ(J.rightCols(4).cwiseAbs().maxCoeff(), 0.0);

@@ -184,6 +184,15 @@ void bias_forces(const Tree& tree, const Eigen::Ref<const VectorXd>& q,
 void frame_jacobian(const Tree& tree, const TreeData& data, Index link, const Vector3d& p_L,
                     Eigen::Ref<Eigen::Matrix<double, 6, Eigen::Dynamic>> J);
 
+/// J'(q, q') q' of frame_jacobian, the acceleration of a point p_L of link `link` when q'' = 0
+/// (what A q'' = b of a constraint on the tree needs in b): [ω'_W; a_W(point)] in world axes,
+/// a_W the classical (not spatial) acceleration, no gravity. Runs forward_kinematics and an
+/// outward velocity pass over the link's ancestors (writes data.v and data.a). Cost O(depth).
+/// @throws std::invalid_argument on wrong sizes or a link out of range.
+Vector6d frame_bias_acceleration(const Tree& tree, const Eigen::Ref<const VectorXd>& q,
+                                 const Eigen::Ref<const VectorXd>& qd, TreeData& data, Index link,
+                                 const Vector3d& p_L);
+
 /// The world position of a point p_L of link `link` after forward_kinematics. Cost O(1).
 Vector3d world_point(const TreeData& data, Index link, const Vector3d& p_L);
 
