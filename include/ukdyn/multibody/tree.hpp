@@ -210,6 +210,11 @@ using JointTorqueFn =
 /// for none. Cost O(links) to build.
 System make_system(const Tree& tree, JointTorqueFn tau = {});
 
+/// The SystemBuilder behind make_system, with all of the above already given: add constraints
+/// on the tree (built with frame_jacobian and frame_bias_acceleration), non-ideal forces or
+/// switching functions, then build(). make_system(tree, tau) is system_builder(tree, tau).build().
+SystemBuilder system_builder(const Tree& tree, JointTorqueFn tau = {});
+
 /// Reads a URDF file (through urdfdom) into a Tree: links in depth-first order from the root;
 /// URDF's world link, if any, is the world. Joint limits, damping, friction, effort and velocity
 /// are kept. @throws std::invalid_argument naming the file and the link or joint: a malformed
