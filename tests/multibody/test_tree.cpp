@@ -416,6 +416,23 @@ TEST(Tree, ErrorsNameTheLinkOrJoint) {
   } catch (const std::invalid_argument& e) {
     EXPECT_NE(std::string(e.what()).find("not a tree: link 'b'"), std::string::npos) << e.what();
   }
+  // a TreeData of another tree (same link count, other joints) is refused
+  Link free = a;
+  free.joint.kind = JointKind::kFloating;
+  Link fixed_child = a;
+  fixed_child.name = "d";
+  fixed_child.joint.name = "jd";
+  fixed_child.parent = "a";
+  const Tree t1("t1", {a, fixed_child}), t2("t2", {free, fixed_child});
+  TreeData other(t1);
+  MatrixXd M(t2.coordinate_count(), t2.coordinate_count());
+  try {
+    mass_matrix(t2, t2.neutral(), other, M);
+    ADD_FAILURE() << "another tree's data was accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("make one TreeData per tree"), std::string::npos)
+        << e.what();
+  }
   Link bad = a;
   bad.inertial.I_com = Vector3d(1, 1, 3).asDiagonal();  // violates the triangle inequality
   try {

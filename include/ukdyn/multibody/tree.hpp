@@ -141,7 +141,9 @@ struct TreeData {
   /// Sizes every buffer for `tree`. Allocates (once).
   explicit TreeData(const Tree& tree);
 
-  using S6 = Eigen::Matrix<double, 6, Eigen::Dynamic, 0, 6, 7>;  // motion subspace, n_i <= 7
+  /// A motion subspace S_i: 6 × n_i with n_i <= 7, stored in place (no heap).
+  using S6 = Eigen::Matrix<double, 6, Eigen::Dynamic, 0, 6, 7>;
+  /// A vector of fixed-size Eigen objects (aligned storage).
   template <class T>
   using Aligned = std::vector<T, Eigen::aligned_allocator<T>>;
   Aligned<Eigen::Matrix3d> R_WL;  ///< (links) orientation of L_i in the world, forward_kinematics
@@ -152,6 +154,7 @@ struct TreeData {
   Aligned<Vector6d> v, a, f;   ///< (links) spatial velocity, acceleration, force: rnea
   Aligned<Matrix6d> Ic;        ///< (links) composite inertias: mass_matrix
   Index tree_size = 0;         ///< the tree's link count, to refuse another tree's data
+  std::vector<int> dofs;       ///< (links) n_i of the tree it was made for, likewise
 };
 
 /// Forward kinematics: every link's pose (R_WL, p_WL), the transforms X_i and the subspaces S_i
