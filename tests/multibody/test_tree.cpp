@@ -151,6 +151,16 @@ TEST(Tree, FrameJacobianIsTheDerivativeOfForwardKinematics) {
     EXPECT_NEAR(twist[k], w_ref[k], 1e-8);
     EXPECT_NEAR(twist[3 + k], (pp - pm)[k] / (2 * e), 1e-8);
   }
+  // J' q' by central differences of J along the motion, against frame_bias_acceleration
+  Eigen::Matrix<double, 6, Eigen::Dynamic> Jp(6, n), Jm(6, n);
+  forward_kinematics(tree, q + e * qd, d);
+  frame_jacobian(tree, d, tool, p_L, Jp);
+  forward_kinematics(tree, q - e * qd, d);
+  frame_jacobian(tree, d, tool, p_L, Jm);
+  const Eigen::Matrix<double, 6, 1> Jdqd = (Jp - Jm) / (2 * e) * qd;
+  const Vector6d bias = frame_bias_acceleration(tree, q, qd, d, tool, p_L);
+  for (int k = 0; k < 6; ++k) EXPECT_NEAR(bias[k], Jdqd[k], 1e-7 * Jdqd.norm()) << k;
+  forward_kinematics(tree, q, d);
   // columns of the joints beyond a link are zero
   frame_jacobian(tree, d, tree.link_index("panda_link3"), Vector3d::Zero(), J);
   EXPECT_EQ(J.rightCols(4).cwiseAbs().maxCoeff(), 0.0);
@@ -249,6 +259,73 @@ TEST(Tree, SimulatedArmClosesItsEnergyBalance) {
   EXPECT_GT(std::abs(tr.energy[std::size_t(N - 1)] - tr.energy.front()), 1e-2);
 }
 
+// a constraint on the tree written with frame_jacobian and frame_bias_acceleration (as the
+// ready-made ones of issue #30 will be): the arm's tool point held at a fixed world point,
+// 3 rows A = J_v, b = −(J' q')_v. The fundamental equation holds it; the arm still moves.
+struct ToolScratch final : ConstraintScratch {
+  explicit ToolScratch(const Tree& tree) : data(tree), J(6, tree.coordinate_count()) {}
+  TreeData data;
+  Eigen::Matrix<double, 6, Eigen::Dynamic> J;
+};
+
+class ToolPointModel final : public ConstraintModel {
+ public:
+  ToolPointModel(const Tree& tree, Index link, const Vector3d& p_L, const Vector3d& p_W)
+      : tree_(tree), link_(link), p_L_(p_L), p_W_(p_W) {}
+  std::unique_ptr<ConstraintScratch> make_scratch(Index) const override {
+    return std::make_unique<ToolScratch>(tree_);
+  }
+  void acceleration_form(const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd,
+                         double, ConstraintScratch* s, Eigen::Ref<MatrixXd> A,
+                         Eigen::Ref<VectorXd> b) const override {
+    auto& ts = *static_cast<ToolScratch*>(s);
+    b = -frame_bias_acceleration(tree_, q, qd, ts.data, link_, p_L_).tail<3>();
+    frame_jacobian(tree_, ts.data, link_, p_L_, ts.J);
+    A = ts.J.bottomRows<3>();
+  }
+  void violation(const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd, double,
+                 ConstraintScratch* s, Eigen::Ref<VectorXd> position,
+                 Eigen::Ref<VectorXd> velocity) const override {
+    auto& ts = *static_cast<ToolScratch*>(s);
+    forward_kinematics(tree_, q, ts.data);
+    position = world_point(ts.data, link_, p_L_) - p_W_;
+    frame_jacobian(tree_, ts.data, link_, p_L_, ts.J);
+    velocity = ts.J.bottomRows<3>() * qd;
+  }
+
+ private:
+  Tree tree_;
+  Index link_;
+  Vector3d p_L_, p_W_;
+};
+
+TEST(Tree, ArmWithItsToolPointHeldByTheFundamentalEquation) {
+  const Tree tree = load_urdf(kPanda);
+  const Index tool = tree.link_index("panda_tool");
+  const Vector3d p_L(0.0, 0.0, 0.05);
+  VectorXd q0(7), qd0 = VectorXd::Zero(7);
+  q0 << 0.3, -0.5, 0.8, -1.9, 0.4, 1.7, -0.6;
+  TreeData d(tree);
+  forward_kinematics(tree, q0, d);
+  const Vector3d p_W = world_point(d, tool, p_L);
+  SystemBuilder sb = system_builder(tree);
+  sb.add(Constraint("tool_point", ConstraintKind::kHolonomic, 3,
+                    std::make_shared<ToolPointModel>(tree, tool, p_L, p_W)));
+  const System held = sb.build();
+  SimulationOptions options;
+  options.t_end = 1.0;
+  const Trajectory tr = simulate(held, q0, qd0, options);
+  ASSERT_EQ(tr.stats.status, Status::kOk) << tr.stats.message;
+  EXPECT_NEAR(tr.stats.max_position_violation, 0.0, 1e-8);
+  EXPECT_NEAR(tr.stats.energy_balance, 0.0, 1e-6);  // the ideal constraint does no work
+  // the held arm swings in its 4-dimensional null space under gravity
+  const Index N = tr.samples();
+  const Eigen::Map<const VectorXd> q_end(tr.q.data() + (N - 1) * 7, 7);
+  EXPECT_GT((q_end - q0).norm(), 0.05);
+  forward_kinematics(tree, q_end, d);
+  EXPECT_NEAR((world_point(d, tool, p_L) - p_W).norm(), 0.0, 1e-8);
+}
+
 // ---- URDF errors ----
 
 std::string write_urdf(const std::string& name, const std::string& body) {
@@ -338,6 +415,23 @@ TEST(Tree, ErrorsNameTheLinkOrJoint) {
     ADD_FAILURE() << "a cycle was accepted";
   } catch (const std::invalid_argument& e) {
     EXPECT_NE(std::string(e.what()).find("not a tree: link 'b'"), std::string::npos) << e.what();
+  }
+  // a TreeData of another tree (same link count, other joints) is refused
+  Link free = a;
+  free.joint.kind = JointKind::kFloating;
+  Link fixed_child = a;
+  fixed_child.name = "d";
+  fixed_child.joint.name = "jd";
+  fixed_child.parent = "a";
+  const Tree t1("t1", {a, fixed_child}), t2("t2", {free, fixed_child});
+  TreeData other(t1);
+  MatrixXd M(t2.coordinate_count(), t2.coordinate_count());
+  try {
+    mass_matrix(t2, t2.neutral(), other, M);
+    ADD_FAILURE() << "another tree's data was accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("make one TreeData per tree"), std::string::npos)
+        << e.what();
   }
   Link bad = a;
   bad.inertial.I_com = Vector3d(1, 1, 3).asDiagonal();  // violates the triangle inequality

@@ -141,7 +141,9 @@ struct TreeData {
   /// Sizes every buffer for `tree`. Allocates (once).
   explicit TreeData(const Tree& tree);
 
-  using S6 = Eigen::Matrix<double, 6, Eigen::Dynamic, 0, 6, 7>;  // motion subspace, n_i <= 7
+  /// A motion subspace S_i: 6 × n_i with n_i <= 7, stored in place (no heap).
+  using S6 = Eigen::Matrix<double, 6, Eigen::Dynamic, 0, 6, 7>;
+  /// A vector of fixed-size Eigen objects (aligned storage).
   template <class T>
   using Aligned = std::vector<T, Eigen::aligned_allocator<T>>;
   Aligned<Eigen::Matrix3d> R_WL;  ///< (links) orientation of L_i in the world, forward_kinematics
@@ -152,6 +154,7 @@ struct TreeData {
   Aligned<Vector6d> v, a, f;   ///< (links) spatial velocity, acceleration, force: rnea
   Aligned<Matrix6d> Ic;        ///< (links) composite inertias: mass_matrix
   Index tree_size = 0;         ///< the tree's link count, to refuse another tree's data
+  std::vector<int> dofs;       ///< (links) n_i of the tree it was made for, likewise
 };
 
 /// Forward kinematics: every link's pose (R_WL, p_WL), the transforms X_i and the subspaces S_i
@@ -184,6 +187,15 @@ void bias_forces(const Tree& tree, const Eigen::Ref<const VectorXd>& q,
 void frame_jacobian(const Tree& tree, const TreeData& data, Index link, const Vector3d& p_L,
                     Eigen::Ref<Eigen::Matrix<double, 6, Eigen::Dynamic>> J);
 
+/// J'(q, q') q' of frame_jacobian, the acceleration of a point p_L of link `link` when q'' = 0
+/// (what A q'' = b of a constraint on the tree needs in b): [ω'_W; a_W(point)] in world axes,
+/// a_W the classical (not spatial) acceleration, no gravity. Runs forward_kinematics and an
+/// outward velocity pass over the link's ancestors (writes data.v and data.a). Cost O(depth).
+/// @throws std::invalid_argument on wrong sizes or a link out of range.
+Vector6d frame_bias_acceleration(const Tree& tree, const Eigen::Ref<const VectorXd>& q,
+                                 const Eigen::Ref<const VectorXd>& qd, TreeData& data, Index link,
+                                 const Vector3d& p_L);
+
 /// The world position of a point p_L of link `link` after forward_kinematics. Cost O(1).
 Vector3d world_point(const TreeData& data, Index link, const Vector3d& p_L);
 
@@ -200,6 +212,11 @@ using JointTorqueFn =
 /// System. The tree is copied into the system's callables. @param tau the input "tau", or empty
 /// for none. Cost O(links) to build.
 System make_system(const Tree& tree, JointTorqueFn tau = {});
+
+/// The SystemBuilder behind make_system, with all of the above already given: add constraints
+/// on the tree (built with frame_jacobian and frame_bias_acceleration), non-ideal forces or
+/// switching functions, then build(). make_system(tree, tau) is system_builder(tree, tau).build().
+SystemBuilder system_builder(const Tree& tree, JointTorqueFn tau = {});
 
 /// Reads a URDF file (through urdfdom) into a Tree: links in depth-first order from the root;
 /// URDF's world link, if any, is the world. Joint limits, damping, friction, effort and velocity

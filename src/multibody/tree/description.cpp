@@ -215,7 +215,10 @@ TreeData::TreeData(const Tree& tree)
       f(std::size_t(tree.link_count())),
       Ic(std::size_t(tree.link_count())),
       tree_size(tree.link_count()) {
-  for (Index i = 0; i < tree.link_count(); ++i) S[std::size_t(i)].setZero(6, tree.dofs(i));
+  for (Index i = 0; i < tree.link_count(); ++i) {
+    S[std::size_t(i)].setZero(6, tree.dofs(i));
+    dofs.push_back(tree.dofs(i));
+  }
 }
 
 }  // namespace ukdyn::tree

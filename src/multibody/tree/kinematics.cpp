@@ -28,6 +28,14 @@ void check_sizes(const char* who, const Tree& tree, const TreeData& d, Index q_s
 
 void forward_kinematics(const Tree& tree, const Eigen::Ref<const VectorXd>& q, TreeData& d) {
   detail::check_sizes("ukdyn::tree::forward_kinematics", tree, d, q.size());
+  // (every pass runs this one: the joints must be those the data was made for, too)
+  for (Index i = 0; i < tree.link_count(); ++i) {
+    if (d.dofs[std::size_t(i)] != tree.dofs(i)) {
+      throw std::invalid_argument(
+          "ukdyn::tree::forward_kinematics: the TreeData was made for a tree with other joints "
+          "(make one TreeData per tree)");
+    }
+  }
   for (Index i = 0; i < tree.link_count(); ++i) {
     const std::size_t k = std::size_t(i);
     const Joint& j = tree.link(i).joint;

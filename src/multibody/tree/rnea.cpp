@@ -1,5 +1,9 @@
 // Inverse dynamics and bias forces of a tree by recursive Newton–Euler (Featherstone 2008,
-// algorithm 5.1), gravity as a fictitious acceleration of the world.
+// algorithm 5.1), gravity as a fictitious acceleration of the world; the same outward pass
+// gives a frame's velocity-product acceleration J' q'.
+#include <stdexcept>
+#include <string>
+
 #include "multibody/tree/spatial.hpp"
 #include "ukdyn/multibody/tree.hpp"
 
@@ -56,6 +60,42 @@ void rnea(const Tree& tree, const Eigen::Ref<const VectorXd>& q,
 }
 
 }  // namespace
+
+Vector6d frame_bias_acceleration(const Tree& tree, const Eigen::Ref<const VectorXd>& q,
+                                 const Eigen::Ref<const VectorXd>& qd, TreeData& d, Index link,
+                                 const Vector3d& p_L) {
+  const char* who = "ukdyn::tree::frame_bias_acceleration";
+  detail::check_sizes(who, tree, d, q.size());
+  detail::check_sizes(who, tree, d, qd.size());
+  if (link < 0 || link >= tree.link_count()) {
+    throw std::invalid_argument(std::string(who) + ": link " + std::to_string(link) +
+                                " out of range [0, " + std::to_string(tree.link_count()) + ")");
+  }
+  forward_kinematics(tree, q, d);
+  // outward, as the RNEA's with q'' = 0 and no gravity (every link: the ancestors come first)
+  for (Index i = 0; i <= link; ++i) {
+    const std::size_t k = std::size_t(i);
+    const Index p = tree.parent(i);
+    const int ni = tree.dofs(i);
+    const Vector6d vJ = d.S[k] * qd.segment(tree.offset(i), ni);
+    if (p < 0) {
+      d.v[k] = vJ;
+      d.a[k].setZero();
+    } else {
+      d.v[k] = detail::motion_to_child(d.E[k], d.r[k], d.v[std::size_t(p)]) + vJ;
+      d.a[k] = detail::motion_to_child(d.E[k], d.r[k], d.a[std::size_t(p)]);
+    }
+    if (ni > 0) d.a[k] += detail::joint_bias(tree, d, i, qd) + detail::cross_motion(d.v[k], vJ);
+  }
+  // spatial to classical at the point: a_p = a_v + ω × v_O + ω' × p + ω × (ω × p)
+  const std::size_t k = std::size_t(link);
+  const Vector3d w = d.v[k].head<3>(), wd = d.a[k].head<3>();
+  const Vector3d a_p =
+      d.a[k].tail<3>() + w.cross(d.v[k].tail<3>()) + wd.cross(p_L) + w.cross(w.cross(p_L));
+  Vector6d out;
+  out << d.R_WL[k] * wd, d.R_WL[k] * a_p;
+  return out;
+}
 
 void inverse_dynamics(const Tree& tree, const Eigen::Ref<const VectorXd>& q,
                       const Eigen::Ref<const VectorXd>& qd, const Eigen::Ref<const VectorXd>& qdd,

@@ -23,7 +23,11 @@ TreeScratch& scratch_of(CallableScratch* s) { return *static_cast<TreeScratch*>(
 
 }  // namespace
 
-System make_system(const Tree& tree_in, JointTorqueFn tau) {
+System make_system(const Tree& tree, JointTorqueFn tau) {
+  return system_builder(tree, std::move(tau)).build();
+}
+
+SystemBuilder system_builder(const Tree& tree_in, JointTorqueFn tau) {
   const auto tree = std::make_shared<const Tree>(tree_in);
   const Index n = tree->coordinate_count();
   // D, the joints' viscous damping (n)
@@ -79,7 +83,7 @@ System make_system(const Tree& tree_in, JointTorqueFn tau) {
     sb.add(Constraint(tree->link(i).name + ".unit", ConstraintKind::kHolonomic, 1,
                       std::make_shared<mb::detail::UnitQuaternionModel>(tree->offset(i) + 3)));
   }
-  return sb.build();
+  return sb;
 }
 
 }  // namespace ukdyn::tree
