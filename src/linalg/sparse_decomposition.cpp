@@ -532,10 +532,11 @@ SparseDecomposition& SparseDecomposition::compute_constraints() {
     }
   };
   assemble_G();
-  // row equilibration where a G_kk = ‖w_k‖² under- or overflows (see linalg/sparse.hpp; the
-  // rank test d_k <= tau² G_kk is relative to each row's own norm already): w_i ← w_i / ‖w_i‖
-  // and G again. row_scale_ empty: no row scaled (the common case, one compare per row)
-  row_scale_.clear();
+  // row equilibration (see linalg/sparse.hpp): D = diag(1 / ‖w_i‖), W ← D W, G ← D G D, so
+  // that lambda splits among redundant rows as the dense engine's does. Where every G_kk lies
+  // in the range in which its square root keeps full precision, D comes from G's diagonal (one
+  // square root per row and a pass over W and G); where one would under- or overflow (a row
+  // written as 1e-170 or 1e170), from norms computed without it, and G is formed again
   const auto diagonal_in_range = [this] {
     for (Index k = 0; k < m_; ++k) {
       const double g = Gx_[std::size_t(Gdiag_[std::size_t(k)])];
@@ -550,20 +551,37 @@ SparseDecomposition& SparseDecomposition::compute_constraints() {
     }
     return true;
   };
-  if (!diagonal_in_range()) {
-    row_scale_.assign(std::size_t(m_), 1.0);  // (within its capacity: no allocation)
+  const auto scale_W = [this] {
+    for (Index i = 0; i < m_; ++i) {
+      const double d = row_scale_[std::size_t(i)];
+      for (int p = row_ptr_[std::size_t(i)]; p < row_ptr_[std::size_t(i) + 1]; ++p) {
+        Wv_[std::size_t(p)] *= d;
+      }
+    }
+  };
+  if (diagonal_in_range()) {
+    double* d = wm4_.data();  // D in the permuted order
+    for (Index k = 0; k < m_; ++k) {
+      const double g = Gx_[std::size_t(Gdiag_[std::size_t(k)])];
+      d[k] = g > 0.0 ? 1.0 / std::sqrt(g) : 1.0;
+      row_scale_[std::size_t(perm_[std::size_t(k)])] = d[k];
+    }
+    scale_W();
+    for (Index k = 0; k < m_; ++k) {
+      for (int p = Gp_[std::size_t(k)]; p < Gp_[std::size_t(k) + 1]; ++p) {
+        Gx_[std::size_t(p)] *= d[Gi_[std::size_t(p)]] * d[k];
+      }
+    }
+  } else {
     for (Index i = 0; i < m_; ++i) {
       double* w = Wv_.data() + row_ptr_[std::size_t(i)];
       const Index len = row_ptr_[std::size_t(i) + 1] - row_ptr_[std::size_t(i)];
       const double norm = detail::safe_norm(w, len);
+      row_scale_[std::size_t(i)] = 1.0;
       if (!(norm > 0.0) || !std::isfinite(norm)) continue;
-      const double inv = 1.0 / norm;
-      row_scale_[std::size_t(i)] = inv;
-      if (std::isfinite(inv)) {
-        for (Index p = 0; p < len; ++p) w[p] *= inv;
-      } else {  // ‖w_i‖ subnormal
-        for (Index p = 0; p < len; ++p) w[p] /= norm;
-      }
+      // (1 / ‖w_i‖ overflows for a subnormal norm: lambda is then not finite, and reported)
+      row_scale_[std::size_t(i)] = 1.0 / norm;
+      for (Index p = 0; p < len; ++p) w[p] /= norm;
     }
     assemble_G();
   }
@@ -765,14 +783,10 @@ void SparseDecomposition::solve_min_norm(const double* e, double* lambda, double
 void SparseDecomposition::solve_ideal(const Eigen::Ref<const VectorXd>& e,
                                       Eigen::Ref<VectorXd> dqdd, Eigen::Ref<VectorXd> Qc,
                                       Eigen::Ref<VectorXd> lambda) {
-  // lambda = G⁺ e;  y = Wᵀ lambda = W⁺ e (with scaled rows: lambda = D G_D⁺ D e)
-  if (row_scale_.empty()) {
-    solve_min_norm(e.data(), lambda.data(), wn_.data());
-  } else {
-    scale_rows(e.data(), wm3_.data());
-    solve_min_norm(wm3_.data(), lambda.data(), wn_.data());
-    scale_rows(lambda.data(), lambda.data());
-  }
+  // lambda = D G_D⁺ D e;  y = W_Dᵀ G_D⁺ D e = W⁺ e
+  scale_rows(e.data(), wm3_.data());
+  solve_min_norm(wm3_.data(), lambda.data(), wn_.data());
+  scale_rows(lambda.data(), lambda.data());
   // Qc = L y;  dqdd = L⁻ᵀ y
   mass_lower_multiply(wn_.data(), Qc.data());
   std::copy(wn_.begin(), wn_.end(), dqdd.data());
@@ -782,16 +796,12 @@ void SparseDecomposition::solve_ideal(const Eigen::Ref<const VectorXd>& e,
 void SparseDecomposition::project_nonideal(const Eigen::Ref<const VectorXd>& C,
                                            Eigen::Ref<VectorXd> dqdd, Eigen::Ref<VectorXd> Qc,
                                            Eigen::Ref<VectorXd> lambda) {
-  // c = L⁻¹ C;  lambda = −G⁺ W c, W⁺W c = Wᵀ G⁺ W c (with scaled rows W_D and D G_D⁺)
+  // c = L⁻¹ C;  lambda = −D G_D⁺ W_D c, W⁺W c = W_Dᵀ G_D⁺ W_D c
   std::copy(C.data(), C.data() + n_, wn_.begin());
   mass_lower_solve(wn_.data());
   multiply_W(wn_.data(), wm3_.data());
   solve_min_norm(wm3_.data(), lambda.data(), wn3_.data());
-  if (row_scale_.empty()) {
-    lambda = -lambda;
-  } else {
-    for (Index i = 0; i < m_; ++i) lambda[i] *= -row_scale_[std::size_t(i)];
-  }
+  for (Index i = 0; i < m_; ++i) lambda[i] *= -row_scale_[std::size_t(i)];
   // c⊥ = c − W⁺W c = (I − W⁺W) c;  Qc = L c⊥;  dqdd = L⁻ᵀ c⊥
   for (Index i = 0; i < n_; ++i) wn_[std::size_t(i)] -= wn3_[std::size_t(i)];
   mass_lower_multiply(wn_.data(), Qc.data());
@@ -800,13 +810,9 @@ void SparseDecomposition::project_nonideal(const Eigen::Ref<const VectorXd>& C,
 }
 
 void SparseDecomposition::apply_pinv(const Eigen::Ref<const VectorXd>& e, Eigen::Ref<VectorXd> y) {
-  // y = Wᵀ G⁺ e (with scaled rows W_Dᵀ G_D⁺ D e)
-  if (row_scale_.empty()) {
-    solve_min_norm(e.data(), wm3_.data(), y.data());
-  } else {
-    scale_rows(e.data(), wm4_.data());
-    solve_min_norm(wm4_.data(), wm3_.data(), y.data());
-  }
+  // y = W_Dᵀ G_D⁺ D e
+  scale_rows(e.data(), wm4_.data());
+  solve_min_norm(wm4_.data(), wm3_.data(), y.data());
 }
 
 }  // namespace ukdyn

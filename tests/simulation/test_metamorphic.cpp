@@ -240,7 +240,7 @@ std::vector<std::string> example_files() {
 // keeps several swings
 double duration(const std::string& file, const SimulationOptions& o) {
   const std::map<std::string, double> kShort = {
-      {"bricard.yaml", 2.0},
+      {"bricard.yaml", 1.0},
       {"double_pendulum.yaml", 3.0},
       {"double_four_bar.yaml", 3.0},
       {"double_four_bar_redundant.yaml", 3.0},

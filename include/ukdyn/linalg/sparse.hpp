@@ -23,12 +23,14 @@
 /// The projection of e onto range(G) makes an inconsistent e give the least-squares answer of
 /// the dense engine (W⁺ e), so inconsistency is reported the same way.
 ///
-/// Row equilibration: W is stored as D W, D = diag(1 / ‖w_i‖) (‖w_i‖ computed without overflow
-/// or underflow; zero rows stay zero), so G has a unit diagonal and no entry of G under- or
-/// overflows however a constraint is written (a row 1e-170 (x² + y² − 1) squared to zero and was
-/// dropped as a zero row before). The solves take D e and return lambda = D lambda_D: q'' and
-/// Qc are unchanged, and among redundant rows lambda minimizes Σ_i (‖w_i‖ lambda_i)² as the
-/// dense engine's does (linalg/decomposition.hpp, "Row equilibration"). Cost O(nnz(A)).
+/// Row equilibration: W is stored as D W, D = diag(1 / ‖w_i‖), and G as D G D (unit diagonal),
+/// so that lambda splits among redundant rows as the dense engine's does: it minimizes
+/// Σ_i (‖w_i‖ lambda_i)² (linalg/decomposition.hpp, "Row equilibration"); the solves take D e
+/// and return lambda = D lambda_D, and q'' and Qc are unchanged. D comes from G's diagonal (one
+/// square root per row, a pass over W and G) where every G_kk keeps full precision; where one
+/// would under- or overflow (a row written as 1e-170 (x² + y² − 1) squared to zero and was
+/// dropped as a zero row, with status ok, before), from norms computed without it, and G is
+/// formed again. Cost O(nnz(A) + nnz(G)).
 ///
 /// Rank decision (relative, documented beside the dense one in linalg/decomposition.hpp): row k
 /// counts as dependent when the part of its row w_k of W outside the span of the rows eliminated
