@@ -33,7 +33,8 @@ inline const char* stack_floor() {
 /// is unknown.
 inline std::size_t stack_left(const void* here, const char* floor) {
   if (floor == nullptr) return SIZE_MAX;
-  const auto h = reinterpret_cast<std::uintptr_t>(here), f = reinterpret_cast<std::uintptr_t>(floor);
+  const auto h = reinterpret_cast<std::uintptr_t>(here),
+             f = reinterpret_cast<std::uintptr_t>(floor);
   return h > f ? std::size_t(h - f) : 0;
 }
 

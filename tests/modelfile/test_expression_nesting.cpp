@@ -47,8 +47,7 @@ std::string model(const std::string& place, const std::string& e) {
     return "coordinates: [x, y]\nkinetic_energy: 0.5*(x_dot^2 + y_dot^2)\npotential_energy: " + e +
            "\n";
   if (place == "kinetic")
-    return "coordinates: [x, y]\nkinetic_energy: 0.5*(x_dot^2*(3 + sin(" + e +
-           ")) + y_dot^2)\n";
+    return "coordinates: [x, y]\nkinetic_energy: 0.5*(x_dot^2*(3 + sin(" + e + ")) + y_dot^2)\n";
   return "coordinates: [x, y]\nkinetic_energy: 0.5*(x_dot^2 + y_dot^2)\npotential_energy: y\n"
          "constraints:\n  - name: c\n    holonomic: \"y - " +
          e + "\"\n";
@@ -98,8 +97,7 @@ TEST(ExpressionNesting, OnAUsualStackTheFixedLimitDecides) {
       EXPECT_EQ(test::parse_on_stack(model(place, nest(kind, depth)), 8 << 20), "")
           << kind << " in the " << place;
       const std::string error = test::parse_on_stack(model(place, nest(kind, 101)), 8 << 20);
-      EXPECT_NE(error.find("the expression nests more than 100 deep"), std::string::npos)
-          << error;
+      EXPECT_NE(error.find("the expression nests more than 100 deep"), std::string::npos) << error;
     }
   }
   // the located error: line 3, the column of the operand that goes one level too deep
