@@ -24,8 +24,8 @@ std::string model(int n, bool moving_mass) {
     names += (i ? ", " : "") + q;
     const std::string m = moving_mass ? "(1 + " + q + "^2)" : std::to_string(1 + i % 3);
     T += (i ? " + " : "") + m + "*" + q + "_dot^2";
-    F += (i ? ", " : "") + ("-" + std::to_string(i % 5) + "*" + q + " - " +
-                            std::to_string(i % 3) + "/4*" + q + "_dot");
+    F += (i ? ", " : "") + ("-" + std::to_string(i % 5) + "*" + q + " - " + std::to_string(i % 3) +
+                            "/4*" + q + "_dot");
   }
   return "coordinates: [" + names + "]\nkinetic_energy: 0.5*(" + T + ")\nforces: [" + F + "]\n";
 }
