@@ -31,11 +31,14 @@ using namespace detail;
 
 ExpressionSet::ExpressionSet(std::vector<std::string> input_names)
     : impl_(std::make_unique<Impl>()) {
+  impl_->input_symbols.reserve(input_names.size());
+  impl_->input_index.reserve(input_names.size());
+  impl_->known.reserve(input_names.size());
   for (const auto& name : input_names) {
-    impl_->declare(name, "ExpressionSet");
-    impl_->input_symbols.push_back(impl_->symbols.at(name));
+    impl_->input_symbols.push_back(impl_->declare(name, "ExpressionSet"));
     impl_->input_index.emplace(name, impl_->input_symbols.size() - 1);
-    impl_->symbol_index.emplace(impl_->input_symbols.back(), impl_->input_symbols.size() - 1);
+    impl_->symbol_index.emplace_hint(impl_->symbol_index.end(), impl_->input_symbols.back(),
+                                     impl_->input_symbols.size() - 1);
   }
   impl_->input_names = std::move(input_names);
 }

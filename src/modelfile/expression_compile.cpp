@@ -529,7 +529,17 @@ class Compiler {
   std::vector<std::int32_t> input_of_;               // per value: its input's index, or −1
   std::map<std::uint64_t, std::int32_t> constants_;  // bits of a constant → value
   std::vector<Op> ops_;                              // SSA: dst is a value
-  std::map<std::tuple<Code, std::int32_t, std::int32_t>, std::int32_t> ops_memo_;
+  // (code, a, b) → the value computing it (looked up, never iterated: a hash table)
+  struct OpKeyHash {
+    std::size_t operator()(const std::tuple<Code, std::int32_t, std::int32_t>& k) const {
+      const auto [c, a, b] = k;
+      return std::hash<std::uint64_t>()((std::uint64_t(std::uint32_t(a)) << 32 | std::uint32_t(b)) *
+                                            0x9e3779b97f4a7c15ull ^
+                                        std::uint64_t(c));
+    }
+  };
+  std::unordered_map<std::tuple<Code, std::int32_t, std::int32_t>, std::int32_t, OpKeyHash>
+      ops_memo_;
   ExMemo memo_;
   std::unordered_map<GiNaC::ex, std::uint64_t, std::hash<GiNaC::ex>, GiNaC::ex_is_equal> keys_;
 };

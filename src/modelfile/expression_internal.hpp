@@ -155,10 +155,12 @@ struct ExpressionSet::Impl {
     }
   }
 
-  void declare(const std::string& name, const char* who) {
+  // declares `name` (throws unless it can be), returns its symbol
+  const GiNaC::ex& declare(const std::string& name, const char* who) {
     check_new_name(name, who);
-    symbols.emplace(name, GiNaC::realsymbol(name));
+    const GiNaC::ex& symbol = symbols.emplace(name, GiNaC::realsymbol(name)).first->second;
     known.push_back(name);
+    return symbol;
   }
 };
 
