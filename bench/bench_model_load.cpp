@@ -10,7 +10,9 @@
 //   ManyForces/N       the same with a `forces:` entry per coordinate, F_i = −q_i (issue #29:
 //                      5·10⁴ entries took 70 s, O(N²)); load only
 //   MovingMasses/N     T = ½ Σ (1 + q_i²) q̇_i²: a total derivative per coordinate (each compared
-//                      the whole chain of coordinates, O(N²)); load only
+//                      the whole chain of coordinates, O(N²)); load only. M depends on q, so
+//                      the reader checks it dense: that check (O(N³), modelfile/reader.cpp)
+//                      dominates from 10³ coordinates on, not the expressions
 // Each reports the time per load (+ check) and, over the sizes, the scaling (BigO fit).
 #include <string>
 
