@@ -7,6 +7,12 @@
 //   Chain/N            a chain of N planar bodies on revolute joints, under gravity
 //   ManyCoordinates/N  N free coordinates, T = ½ Σ q̇_i² only, as the reproducer
 //                      many_coordinates.sh writes them (issue #29: 10⁵ took 66 s); load only
+//   ManyForces/N       the same with a `forces:` entry per coordinate, F_i = −q_i (issue #29:
+//                      5·10⁴ entries took 70 s, O(N²)); load only
+//   MovingMasses/N     T = ½ Σ (1 + q_i²) q̇_i²: a total derivative per coordinate (each compared
+//                      the whole chain of coordinates, O(N²)); load only. M depends on q, so
+//                      the reader checks it dense: that check (O(N³), modelfile/reader.cpp)
+//                      dominates from 10³ coordinates on, not the expressions
 // Each reports the time per load (+ check) and, over the sizes, the scaling (BigO fit).
 #include <string>
 
@@ -64,24 +70,38 @@ void load_and_check(benchmark::State& state, const std::string& text) {
   state.counters["bytes"] = double(text.size());
 }
 
-std::string free_coordinates(int n) {
-  std::string names, T;
+// n free coordinates, T = ½ Σ q̇_i² (or ½ Σ (1 + q_i²) q̇_i² with `moving`), and with `forces`
+// an entry F_i = −q_i per coordinate
+std::string free_coordinates(int n, bool forces = false, bool moving = false) {
+  std::string names, T, F;
   for (int i = 0; i < n; ++i) {
-    names += (i ? ", " : "") + ("q" + std::to_string(i));
-    T += (i ? "+" : "") + ("q" + std::to_string(i) + "_dot^2");
+    const std::string q = "q" + std::to_string(i);
+    names += (i ? ", " : "") + q;
+    T += (i ? "+" : "") + (moving ? "(1+" + q + "^2)*" : std::string()) + q + "_dot^2";
+    F += (i ? ", " : "") + ("-" + q);
   }
-  return "coordinates: [" + names + "]\nkinetic_energy: 0.5*(" + T +
-         ")\nsimulate: {t_end: 0.01}\noutput: {every: 0.01}\n";
+  return "coordinates: [" + names + "]\nkinetic_energy: 0.5*(" + T + ")\n" +
+         (forces ? "forces: [" + F + "]\n" : "") +
+         "simulate: {t_end: 0.01}\noutput: {every: 0.01}\n";
 }
 
-void ManyCoordinates(benchmark::State& state) {
-  const std::string text = free_coordinates(int(state.range(0)));
+void load_only(benchmark::State& state, const std::string& text) {
   for (auto _ : state) {
     const ukdyn::Model m = ukdyn::parse_model(text, "generated.yaml");
     benchmark::DoNotOptimize(m.system.coordinate_count());
   }
   state.SetComplexityN(state.range(0));
   state.counters["bytes"] = double(text.size());
+}
+
+void ManyCoordinates(benchmark::State& state) {
+  load_only(state, free_coordinates(int(state.range(0))));
+}
+void ManyForces(benchmark::State& state) {
+  load_only(state, free_coordinates(int(state.range(0)), true));
+}
+void MovingMasses(benchmark::State& state) {
+  load_only(state, free_coordinates(int(state.range(0)), false, true));
 }
 
 void Uncoupled(benchmark::State& state) {
@@ -122,6 +142,20 @@ BENCHMARK(ManyCoordinates)
     ->Arg(10000)
     ->Arg(30000)
     ->Arg(100000)
+    ->Unit(benchmark::kMillisecond)
+    ->Iterations(1)
+    ->Complexity();
+BENCHMARK(ManyForces)
+    ->Arg(10000)
+    ->Arg(20000)
+    ->Arg(50000)
+    ->Unit(benchmark::kMillisecond)
+    ->Iterations(1)
+    ->Complexity();
+BENCHMARK(MovingMasses)
+    ->Arg(500)
+    ->Arg(1000)
+    ->Arg(2000)
     ->Unit(benchmark::kMillisecond)
     ->Iterations(1)
     ->Complexity();

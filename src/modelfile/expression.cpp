@@ -31,11 +31,14 @@ using namespace detail;
 
 ExpressionSet::ExpressionSet(std::vector<std::string> input_names)
     : impl_(std::make_unique<Impl>()) {
+  impl_->input_symbols.reserve(input_names.size());
+  impl_->input_index.reserve(input_names.size());
+  impl_->known.reserve(input_names.size());
   for (const auto& name : input_names) {
-    impl_->declare(name, "ExpressionSet");
-    impl_->input_symbols.push_back(impl_->symbols.at(name));
+    impl_->input_symbols.push_back(impl_->declare(name, "ExpressionSet"));
     impl_->input_index.emplace(name, impl_->input_symbols.size() - 1);
-    impl_->symbol_index.emplace(impl_->input_symbols.back(), impl_->input_symbols.size() - 1);
+    impl_->symbol_index.emplace_hint(impl_->symbol_index.end(), impl_->input_symbols.back(),
+                                     impl_->input_symbols.size() - 1);
   }
   impl_->input_names = std::move(input_names);
 }
@@ -137,6 +140,20 @@ Expr ExpressionSet::diff(Expr e, const std::string& name) {
   return impl_->add(impl_->derivative(e, f, impl_->input_index.at(name)));
 }
 
+// the chain total_derivative resolved last: at the same address, of the same length, with the
+// same entries for the inputs `in_e` holds (the only entries an expression's derivative reads);
+// a chain with a coordinate listed twice is compared whole
+bool ExpressionSet::Impl::same_chain(const std::vector<std::pair<std::string, std::string>>& chain,
+                                     const std::vector<Index>& in_e) const {
+  if (&chain != chain_address || chain.size() != chain_names.size()) return false;
+  if (velocity_of.empty()) return chain == chain_names;
+  for (const Index k : in_e) {
+    const std::ptrdiff_t at = chain_position_of[std::size_t(k)];
+    if (at >= 0 && chain[std::size_t(at)] != chain_names[std::size_t(at)]) return false;
+  }
+  return true;
+}
+
 Expr ExpressionSet::total_derivative(
     const Expr e, const std::string& time,
     const std::vector<std::pair<std::string, std::string>>& chain) {
@@ -145,27 +162,32 @@ Expr ExpressionSet::total_derivative(
   // D e = ∂e/∂t + Σ ∂e/∂q_i · q̇_i   (no ∂e/∂q̇_i · q̈_i), summed at once; the terms of the
   // q_i that e does not hold are 0 and left out (the same sum)
   // the chain by input indices, looked up once while the same chain comes back (a model passes
-  // one chain for all its expressions; comparing it is cheaper than looking its names up)
-  if (chain != impl_->chain_names) {
+  // one chain for all its expressions: the same vector, its entries for the inputs e holds
+  // unchanged; comparing the whole chain on every call was O(n) a call, O(n²) a model)
+  const std::vector<Index> in_e = inputs_of(e);
+  if (!impl_->same_chain(chain, in_e)) {
     std::vector<std::pair<std::size_t, std::size_t>> resolved;
     for (const auto& [q, qd] : chain) {
       impl_->input(q, "total_derivative");  // throws unless an input
       impl_->input(qd, "total_derivative");
       resolved.emplace_back(impl_->input_index.at(q), impl_->input_index.at(qd));
     }
+    impl_->chain_address = &chain;
     impl_->chain_names = chain;
     impl_->velocity_of.assign(impl_->input_symbols.size(), -1);
-    for (const auto& [qi, qdi] : resolved) {
+    impl_->chain_position_of.assign(impl_->input_symbols.size(), -1);
+    for (std::size_t k = 0; k < resolved.size(); ++k) {
+      const auto [qi, qdi] = resolved[k];
       // a coordinate listed twice counts twice, as the sum over the chain does
       if (impl_->velocity_of[qi] >= 0) {
         impl_->velocity_of.clear();
         break;
       }
       impl_->velocity_of[qi] = std::ptrdiff_t(qdi);
+      impl_->chain_position_of[qi] = std::ptrdiff_t(k);
     }
     impl_->chain_indices = std::move(resolved);
   }
-  const std::vector<Index> in_e = inputs_of(e);
   GiNaC::exvector d{f.diff(GiNaC::ex_to<GiNaC::symbol>(t))};
   if (!impl_->velocity_of.empty() || impl_->chain_indices.empty()) {
     // through the inputs e holds
@@ -225,9 +247,37 @@ std::vector<Expr> ExpressionSet::terms(Expr e) {
   return out;
 }
 
+namespace {
+
+// true when x holds a power whose exponent is not a number ≥ 0 (a denominator that is not a
+// number, or an exponent that is not a number): only then may normal() find a sum that expand()
+// leaves non-zero to be 0. Without one, the expanded x (function arguments included) is a
+// polynomial in its atoms (symbols, function calls with expanded arguments, powers with
+// fractional exponents) with numeric coefficients, which GiNaC keeps canonical. Iterative: no
+// recursion on the nesting.
+bool has_denominator(const GiNaC::ex& x) {
+  std::vector<GiNaC::ex> stack{x};
+  while (!stack.empty()) {
+    const GiNaC::ex y = std::move(stack.back());
+    stack.pop_back();
+    if (GiNaC::is_a<GiNaC::power>(y)) {
+      const GiNaC::ex& p = y.op(1);
+      if (!GiNaC::is_a<GiNaC::numeric>(p) || GiNaC::ex_to<GiNaC::numeric>(p).is_negative() ||
+          !GiNaC::ex_to<GiNaC::numeric>(p).is_real())
+        return true;
+    }
+    for (std::size_t k = y.nops(); k-- > 0;) stack.push_back(y.op(k));
+  }
+  return false;
+}
+
+}  // namespace
+
 bool ExpressionSet::is_zero(Expr e) const {
-  const GiNaC::ex x = impl_->at(e, "is_zero").expand();
-  return x.is_zero() || GiNaC::normal(x).is_zero();
+  // (function arguments expanded too, as normal() normalizes them)
+  const GiNaC::ex x = impl_->at(e, "is_zero").expand(GiNaC::expand_options::expand_function_args);
+  // normal() of a sum of N terms adds them one by one (O(N²)): only when it can matter
+  return x.is_zero() || (has_denominator(x) && GiNaC::normal(x).is_zero());
 }
 
 std::string ExpressionSet::to_string(Expr e) const {

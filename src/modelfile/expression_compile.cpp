@@ -85,10 +85,11 @@ using ExMemo =
 
 class Compiler {
  public:
-  // values 0 … n_inputs−1 are the inputs; `inputs` maps their symbols to them (looked up when
-  // met: a small expression of a model with many inputs does not hash them all)
+  // `inputs` maps the inputs' symbols to their indices (0 … n_inputs−1); an input becomes a
+  // value when the expression first holds it, so that compiling costs O(the expression), not
+  // O(n_inputs): a model with 10⁵ coordinates compiles 10⁵ one-input programs
   Compiler(Index n_inputs, const std::map<GiNaC::ex, std::size_t, GiNaC::ex_is_less>& inputs)
-      : n_inputs_(std::int32_t(n_inputs)), inputs_(inputs), constant_of_(std::size_t(n_inputs)) {}
+      : n_inputs_(std::int32_t(n_inputs)), inputs_(inputs) {}
 
   // the value of e (memoized on e: shared subtrees are compiled once)
   std::int32_t compile(const GiNaC::ex& e) {
@@ -105,24 +106,26 @@ class Compiler {
     fuse_sin_cos();
     const std::int32_t n_values = std::int32_t(constant_of_.size());
 
-    // physical slots: the inputs read (all of them, or those the ops and outputs read), then
-    // constants, then registers
-    std::vector<char> is_read(std::size_t(n_inputs_), 0);
+    // physical slots: the inputs read (all of them, or those the ops and outputs read), in the
+    // order of their indices, then constants, then registers
+    std::vector<char> is_read(std::size_t(n_values), 0);
     const auto mark = [&](std::int32_t v) {
-      if (v >= 0 && v < n_inputs_) is_read[std::size_t(v)] = 1;
+      if (v >= 0 && input_of_[std::size_t(v)] >= 0) is_read[std::size_t(v)] = 1;
     };
     for (const Op& op : ops_) {
       mark(op.a);
       if (!is_unary(op.code)) mark(op.b);
     }
     for (const std::int32_t v : outputs) mark(v);
+    std::vector<std::pair<std::int32_t, std::int32_t>> read;  // (input index, value)
+    for (std::int32_t v = 0; v < n_values; ++v)
+      if (is_read[std::size_t(v)]) read.emplace_back(input_of_[std::size_t(v)], v);
+    std::sort(read.begin(), read.end());
     std::vector<std::int32_t> slot(std::size_t(n_values), -1);
     std::int32_t slots_read = 0;
-    for (std::int32_t i = 0; i < n_inputs_; ++i) {
-      if (is_read[std::size_t(i)]) {
-        slot[std::size_t(i)] = slots_read++;
-        tape.read.push_back(i);
-      }
+    for (const auto& [i, v] : read) {
+      slot[std::size_t(v)] = slots_read++;
+      tape.read.push_back(i);
     }
     if (slots_read == n_inputs_) tape.read.clear();  // every input: copied at once
     tape.slots_read = slots_read;
@@ -149,7 +152,8 @@ class Compiler {
     std::vector<std::int32_t> free_registers;
     std::int32_t n_registers = 0;
     const auto release = [&](std::int32_t v, std::int32_t k) {
-      if (v >= n_inputs_ && !constant_of_[std::size_t(v)] && last_use[std::size_t(v)] == k) {
+      if (input_of_[std::size_t(v)] < 0 && !constant_of_[std::size_t(v)] &&
+          last_use[std::size_t(v)] == k) {
         free_registers.push_back(slot[std::size_t(v)]);
         last_use[std::size_t(v)] = -2;  // released
       }
@@ -189,7 +193,12 @@ class Compiler {
     using GiNaC::is_a;
     if (is_a<GiNaC::numeric>(e)) return constant(GiNaC::ex_to<GiNaC::numeric>(e));
     if (is_a<GiNaC::symbol>(e)) {
-      if (const auto it = inputs_.find(e); it != inputs_.end()) return std::int32_t(it->second);
+      if (const auto it = inputs_.find(e); it != inputs_.end()) {
+        // (memoized by compile(): one value per input)
+        const std::int32_t v = new_value();
+        input_of_[std::size_t(v)] = std::int32_t(it->second);
+        return v;
+      }
     }
     if (is_a<GiNaC::constant>(e)) return constant_of(GiNaC::evalf(e));
     if (is_a<GiNaC::add>(e)) return compile_add(e);
@@ -254,6 +263,7 @@ class Compiler {
 
   std::int32_t new_value() {
     constant_of_.emplace_back();
+    input_of_.push_back(-1);
     return std::int32_t(constant_of_.size() - 1);
   }
   bool is_constant(std::int32_t v, double value) const {
@@ -516,9 +526,20 @@ class Compiler {
   std::int32_t n_inputs_;
   const std::map<GiNaC::ex, std::size_t, GiNaC::ex_is_less>& inputs_;
   std::vector<std::optional<double>> constant_of_;   // per value: its value if constant
+  std::vector<std::int32_t> input_of_;               // per value: its input's index, or −1
   std::map<std::uint64_t, std::int32_t> constants_;  // bits of a constant → value
   std::vector<Op> ops_;                              // SSA: dst is a value
-  std::map<std::tuple<Code, std::int32_t, std::int32_t>, std::int32_t> ops_memo_;
+  // (code, a, b) → the value computing it (looked up, never iterated: a hash table)
+  struct OpKeyHash {
+    std::size_t operator()(const std::tuple<Code, std::int32_t, std::int32_t>& k) const {
+      const auto [c, a, b] = k;
+      return std::hash<std::uint64_t>()((std::uint64_t(std::uint32_t(a)) << 32 | std::uint32_t(b)) *
+                                            0x9e3779b97f4a7c15ull ^
+                                        std::uint64_t(c));
+    }
+  };
+  std::unordered_map<std::tuple<Code, std::int32_t, std::int32_t>, std::int32_t, OpKeyHash>
+      ops_memo_;
   ExMemo memo_;
   std::unordered_map<GiNaC::ex, std::uint64_t, std::hash<GiNaC::ex>, GiNaC::ex_is_equal> keys_;
 };

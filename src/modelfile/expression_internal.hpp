@@ -97,15 +97,25 @@ struct ExpressionSet::Impl {
   // of the long sums differentiated so far (by handle): input index → the terms that hold it
   std::unordered_map<Expr, std::unordered_map<std::size_t, std::vector<std::size_t>>> terms_holding;
 
-  // the last chain of total_derivative, by names and by input indices
+  // the last chain of total_derivative: where the caller keeps it (a model passes the same
+  // vector for all its expressions: recognised by its address and length, and the entries the
+  // expression uses checked, in O(inputs of the expression) rather than O(chain)), by names and
+  // by input indices
+  const void* chain_address = nullptr;
   std::vector<std::pair<std::string, std::string>> chain_names;
   std::vector<std::pair<std::size_t, std::size_t>> chain_indices;
+  // input index → its entry's position in that chain, or −1 (with velocity_of)
+  std::vector<std::ptrdiff_t> chain_position_of;
   // input index → the index of its velocity in that chain, or −1; empty when a coordinate is
   // listed twice
   std::vector<std::ptrdiff_t> velocity_of;
 
   // ∂f/∂(input i) where f is the expression of handle e (modelfile/expression.cpp)
   GiNaC::ex derivative(Expr e, const GiNaC::ex& f, std::size_t i);
+  // `chain` is the chain resolved last, as far as an expression holding `in_e` reads it
+  // (modelfile/expression.cpp)
+  bool same_chain(const std::vector<std::pair<std::string, std::string>>& chain,
+                  const std::vector<Index>& in_e) const;
 
   Expr add(GiNaC::ex e) {
     expressions.push_back(std::move(e));
@@ -145,10 +155,12 @@ struct ExpressionSet::Impl {
     }
   }
 
-  void declare(const std::string& name, const char* who) {
+  // declares `name` (throws unless it can be), returns its symbol
+  const GiNaC::ex& declare(const std::string& name, const char* who) {
     check_new_name(name, who);
-    symbols.emplace(name, GiNaC::realsymbol(name));
+    const GiNaC::ex& symbol = symbols.emplace(name, GiNaC::realsymbol(name)).first->second;
     known.push_back(name);
+    return symbol;
   }
 };
 

@@ -26,6 +26,7 @@
 #include <ginac/ginac.h>
 
 #include "modelfile/expression_internal.hpp"
+#include "modelfile/stack_floor.hpp"
 #include "ukdyn/core/format.hpp"
 #include "ukdyn/core/status.hpp"
 
@@ -392,6 +393,15 @@ class Parser {
  public:
   // Deepest nesting of parentheses, calls and signs: the parser and GiNaC recurse on it.
   static constexpr int kMaxDepth = 100;
+  // Stack a level of nesting may need below where parse() starts, while parsing (six frames a
+  // level) and after it (GiNaC differentiates, compares and destroys an expression by recursing
+  // once per level, and so does the compiler, modelfile/expression_compile.cpp). Measured by
+  // reading models with their expression nested d deep on threads of decreasing stacks (every
+  // kind of nesting of tests/modelfile/test_expression_nesting.cpp, in the potential, the kinetic
+  // energy and a constraint): the smallest stack that reads grows by at most 1.56 kB a level
+  // (function calls; 1.1 kB for parentheses). 2 kB a level are asked for, on top of the reserve
+  // that stack_floor() keeps below.
+  static constexpr std::size_t kStackPerLevel = 2048;
   // Largest exact number a power may make (GiNaC computes 10^(10^9) digit by digit); a double
   // holds at most 2^1024, so nothing of use is refused.
   static constexpr double kMaxPowerBits = 4096.0;
@@ -404,6 +414,8 @@ class Parser {
 
   GiNaC::ex parse() {
     if (token_.kind == Kind::kEnd) fail("empty expression", token_.position);
+    const char here = 0;
+    stack_at_start_ = ukdyn::detail::stack_left(&here, floor_);
     GiNaC::ex e = expression();
     if (token_.kind != Kind::kEnd) {
       fail("unexpected " + describe(token_) + " (missing operator?)", token_.position);
@@ -725,6 +737,16 @@ class Parser {
                " deep (parentheses, function calls and signs)",
            token_.position);
     }
+    // the stack the nesting needs, while parsing (what is left here) and after it (a budget per
+    // level from where parsing started), against this thread's stack
+    const char here = 0;
+    if (ukdyn::detail::stack_left(&here, floor_) == 0 ||
+        stack_at_start_ / kStackPerLevel <= std::size_t(depth_)) {
+      fail("the expression nests too deep for this process's stack (" + format_number(depth_) +
+               " levels of parentheses, function calls and signs here; raise the stack limit, "
+               "ulimit -s, or write it in steps)",
+           token_.position);
+    }
     ++depth_;
     GiNaC::ex e = signed_operand(in_exponent);
     --depth_;
@@ -876,6 +898,14 @@ class Parser {
   const GiNaC::exmap& values_;
   std::size_t pos_ = 0;
   int depth_ = 0;  // of unary() calls
+  // the lowest stack address the nesting may reach (ukdyn::detail::stack_floor, once a thread:
+  // on the main thread it reads /proc/self/maps), and the stack left above it when parse()
+  // started
+  const char* floor_ = [] {
+    thread_local const char* const floor = ukdyn::detail::stack_floor();
+    return floor;
+  }();
+  std::size_t stack_at_start_ = SIZE_MAX;
   Token token_;
 };
 

@@ -19,13 +19,12 @@
 #include <string>
 #include <vector>
 
-#include <pthread.h>
-
 #include <yaml-cpp/depthguard.h>
 #include <yaml-cpp/eventhandler.h>
 #include <yaml-cpp/parser.h>
 
 #include "modelfile/reader.hpp"
+#include "modelfile/stack_floor.hpp"
 #include "ukdyn/core/format.hpp"
 
 namespace ukdyn::model_reader {
@@ -39,25 +38,9 @@ struct Open {
   std::map<std::string, YAML::Mark> keys;  // a mapping: its scalar keys, where first seen
 };
 
-// The lowest address the nesting may reach on this thread's stack: its lowest address (the guard
-// page included) plus a reserve for what reading needs beyond the nesting itself (YAML::Load's
-// frames above the same depth, the exception that reports it, the reader's and the expression
-// parser's frames); nullptr when the bounds are unknown (then only yaml-cpp's own limit applies).
-const char* stack_floor() {
-  pthread_attr_t attr;
-  if (pthread_getattr_np(pthread_self(), &attr) != 0) return nullptr;
-  void* base = nullptr;
-  std::size_t size = 0;
-  const bool known = pthread_attr_getstack(&attr, &base, &size) == 0 && base != nullptr;
-  pthread_attr_destroy(&attr);
-  // the reserve: a quarter of the stack, at most 64 kB (a 64 kB stack keeps 16 kB)
-  const std::size_t reserve = std::min(size / 4, std::size_t(64) << 10);
-  return known ? static_cast<const char*>(base) + reserve : nullptr;
-}
-
 class StructureCheck final : public YAML::EventHandler {
  public:
-  explicit StructureCheck(const std::string& file) : file_(file), floor_(stack_floor()) {}
+  explicit StructureCheck(const std::string& file) : file_(file), floor_(detail::stack_floor()) {}
 
   void OnDocumentStart(const YAML::Mark& mark) override {
     if (++documents_ > 1) {
@@ -105,10 +88,7 @@ class StructureCheck final : public YAML::EventHandler {
   // grows down, towards floor_) is below the reserve
   void check_stack(const YAML::Mark& mark) const {
     const char here = 0;
-    if (floor_ == nullptr ||
-        reinterpret_cast<std::uintptr_t>(&here) > reinterpret_cast<std::uintptr_t>(floor_)) {
-      return;
-    }
+    if (detail::stack_left(&here, floor_) > 0) return;
     throw ModelError(file_, mark.line + 1, mark.column + 1,
                      "the YAML nests too deep for this process's stack (" +
                          format_number(open_.size()) + " levels of brackets or indentation here)",
