@@ -18,6 +18,7 @@
 
 #include "dynamics/internal.hpp"
 #include "simulation/energy_balance.hpp"
+#include "simulation/initial_check.hpp"
 #include "simulation/integrator.hpp"
 #include "simulation/sample_grid.hpp"
 #include "ukdyn/core/format.hpp"
@@ -833,7 +834,9 @@ class Run {
     out.potential_energy.push_back(V);
     out.energy.push_back(T + V);
     peak_kinetic_ = std::max(peak_kinetic_, T);
-    if (!(energy_scale_ > 0.0)) energy_scale_ = T + std::abs(V);
+    // (at least the run's energy unit, max(T + |V|, |Q| l) at its start: a body released at rest
+    // at V = 0 has no energy yet)
+    if (!(energy_scale_ > 0.0)) energy_scale_ = std::max(T + std::abs(V), ws_.energy_unit);
     // the work channels (absent ones are zero), and the balance so far
     const auto work = [&](Index channel) {
       return channel < 0
@@ -1368,13 +1371,23 @@ std::string user_message(const std::exception& e) {
   return message;
 }
 
+std::vector<std::string> detail::check_initial_conditions(const System& sys,
+                                                          const Eigen::Ref<const VectorXd>& q,
+                                                          const Eigen::Ref<const VectorXd>& qd,
+                                                          double t, double tolerance,
+                                                          double duration) {
+  Workspace ws(sys);
+  // the scales a run from this state takes (simulate's own check compares against the same)
+  set_run_scales(sys, ws, q, qd, t, duration);
+  evaluate_violations(sys, ws, q, qd, t);
+  return violated(sys, ws, tolerance);
+}
+
 std::vector<std::string> check_initial_conditions(const System& sys,
                                                   const Eigen::Ref<const VectorXd>& q,
                                                   const Eigen::Ref<const VectorXd>& qd, double t,
                                                   double tolerance) {
-  Workspace ws(sys);
-  evaluate_violations(sys, ws, q, qd, t);
-  return violated(sys, ws, tolerance);
+  return detail::check_initial_conditions(sys, q, qd, t, tolerance, 0.0);
 }
 
 Trajectory simulate(const System& sys, const Eigen::Ref<const VectorXd>& q0,
@@ -1556,6 +1569,7 @@ Trajectory detail::simulate_observed(const System& sys, const Eigen::Ref<const V
     // with the chosen method, and goes on with BDF once dopri5 finds it stiff until the next
     // event (a switch of the dynamics) or the segment's end
     Integrator method = base_method;
+    after_event = false;     // (an event at the last segment's end b does not carry over)
     bool crossing = false;   // dopri5 across a singular configuration for BDF
     bool r_crossed = false;  // the last segment was such a crossing
     for (;;) {
@@ -1623,6 +1637,11 @@ Trajectory detail::simulate_observed(const System& sys, const Eigen::Ref<const V
               to_string(base_method) + " without the stiffness switch");
           ode.clear_failure();
           method = base_method;
+          // (BDF may have failed before accepting a step: the explicit method needs a first
+          // step; and the restart keeps the reference state of the collapse diagnosis, as an
+          // event's restart does)
+          if (!(first_step > 0.0)) first_step = o.step;
+          after_event = true;
           crossing = false;
           r_crossed = false;
           a = r.t_reached;
