@@ -4,7 +4,6 @@
 #include <algorithm>
 #include <cmath>
 
-#include "linalg/safe_norm.hpp"
 #include "ukdyn/linalg/sparse.hpp"
 
 namespace ukdyn {
@@ -471,7 +470,9 @@ void SparseDecomposition::share(Index k, const Eigen::Ref<const VectorXd>& lambd
 }
 
 double SparseDecomposition::norm_A() const {
-  return detail::safe_norm(Av_.data(), Index(Av_.size()));
+  double s = 0.0;
+  for (double v : Av_) s += v * v;
+  return std::sqrt(s);
 }
 
 void SparseDecomposition::constraint_rows_dense(Index k, Eigen::Ref<MatrixXd> out) const {
@@ -522,68 +523,12 @@ SparseDecomposition& SparseDecomposition::compute_constraints() {
   // them all to zero (+0 + x is x except for x = −0, which a dot started from +0 is not without
   // fused multiply-adds; with them a −0 entry would only be added to +0 or squared), without
   // clearing G first
-  const auto assemble_G = [this] {
-    const double* W = Wv_.data();
-    for (const Product& pr : program_first_) {
-      Gx_[std::size_t(pr.target)] = segment_dot(W + pr.wi, W + pr.wj, pr.len, 0.0);
-    }
-    for (const Product& pr : program_) {
-      Gx_[std::size_t(pr.target)] += segment_dot(W + pr.wi, W + pr.wj, pr.len, 0.0);
-    }
-  };
-  assemble_G();
-  // row equilibration (see linalg/sparse.hpp): D = diag(1 / ‖w_i‖), W ← D W, G ← D G D, so
-  // that lambda splits among redundant rows as the dense engine's does. Where every G_kk lies
-  // in the range in which its square root keeps full precision, D comes from G's diagonal (one
-  // square root per row and a pass over W and G); where one would under- or overflow (a row
-  // written as 1e-170 or 1e170), from norms computed without it, and G is formed again
-  const auto diagonal_in_range = [this] {
-    for (Index k = 0; k < m_; ++k) {
-      const double g = Gx_[std::size_t(Gdiag_[std::size_t(k)])];
-      if (g >= 0x1p-900 && g <= 0x1p+900) continue;
-      // zero: a zero row (an inactive constraint), or one whose squares underflowed
-      const int i = perm_[std::size_t(k)];
-      bool zero = g == 0.0;
-      for (int p = row_ptr_[std::size_t(i)]; zero && p < row_ptr_[std::size_t(i) + 1]; ++p) {
-        zero = Wv_[std::size_t(p)] == 0.0;
-      }
-      if (!zero) return false;
-    }
-    return true;
-  };
-  const auto scale_W = [this] {
-    for (Index i = 0; i < m_; ++i) {
-      const double d = row_scale_[std::size_t(i)];
-      for (int p = row_ptr_[std::size_t(i)]; p < row_ptr_[std::size_t(i) + 1]; ++p) {
-        Wv_[std::size_t(p)] *= d;
-      }
-    }
-  };
-  if (diagonal_in_range()) {
-    double* d = wm4_.data();  // D in the permuted order
-    for (Index k = 0; k < m_; ++k) {
-      const double g = Gx_[std::size_t(Gdiag_[std::size_t(k)])];
-      d[k] = g > 0.0 ? 1.0 / std::sqrt(g) : 1.0;
-      row_scale_[std::size_t(perm_[std::size_t(k)])] = d[k];
-    }
-    scale_W();
-    for (Index k = 0; k < m_; ++k) {
-      for (int p = Gp_[std::size_t(k)]; p < Gp_[std::size_t(k) + 1]; ++p) {
-        Gx_[std::size_t(p)] *= d[Gi_[std::size_t(p)]] * d[k];
-      }
-    }
-  } else {
-    for (Index i = 0; i < m_; ++i) {
-      double* w = Wv_.data() + row_ptr_[std::size_t(i)];
-      const Index len = row_ptr_[std::size_t(i) + 1] - row_ptr_[std::size_t(i)];
-      const double norm = detail::safe_norm(w, len);
-      row_scale_[std::size_t(i)] = 1.0;
-      if (!(norm > 0.0) || !std::isfinite(norm)) continue;
-      // (1 / ‖w_i‖ overflows for a subnormal norm: lambda is then not finite, and reported)
-      row_scale_[std::size_t(i)] = 1.0 / norm;
-      for (Index p = 0; p < len; ++p) w[p] /= norm;
-    }
-    assemble_G();
+  const double* W = Wv_.data();
+  for (const Product& pr : program_first_) {
+    Gx_[std::size_t(pr.target)] = segment_dot(W + pr.wi, W + pr.wj, pr.len, 0.0);
+  }
+  for (const Product& pr : program_) {
+    Gx_[std::size_t(pr.target)] += segment_dot(W + pr.wi, W + pr.wj, pr.len, 0.0);
   }
   factor_G();
   null_basis();
@@ -753,10 +698,6 @@ void SparseDecomposition::solve_G_permuted(double* x) {
   if (d_ > 0) project_range(x);
 }
 
-void SparseDecomposition::scale_rows(const double* x, double* y) const {
-  for (Index i = 0; i < m_; ++i) y[i] = x[i] * row_scale_[std::size_t(i)];
-}
-
 void SparseDecomposition::solve_min_norm(const double* e, double* lambda, double* y) {
   // lambda = G⁺ e, y = Wᵀ lambda
   for (Index k = 0; k < m_; ++k) wm_[std::size_t(k)] = e[perm_[std::size_t(k)]];
@@ -783,10 +724,8 @@ void SparseDecomposition::solve_min_norm(const double* e, double* lambda, double
 void SparseDecomposition::solve_ideal(const Eigen::Ref<const VectorXd>& e,
                                       Eigen::Ref<VectorXd> dqdd, Eigen::Ref<VectorXd> Qc,
                                       Eigen::Ref<VectorXd> lambda) {
-  // lambda = D G_D⁺ D e;  y = W_Dᵀ G_D⁺ D e = W⁺ e
-  scale_rows(e.data(), wm3_.data());
-  solve_min_norm(wm3_.data(), lambda.data(), wn_.data());
-  scale_rows(lambda.data(), lambda.data());
+  // lambda = G⁺ e;  y = Wᵀ lambda = W⁺ e
+  solve_min_norm(e.data(), lambda.data(), wn_.data());
   // Qc = L y;  dqdd = L⁻ᵀ y
   mass_lower_multiply(wn_.data(), Qc.data());
   std::copy(wn_.begin(), wn_.end(), dqdd.data());
@@ -796,12 +735,12 @@ void SparseDecomposition::solve_ideal(const Eigen::Ref<const VectorXd>& e,
 void SparseDecomposition::project_nonideal(const Eigen::Ref<const VectorXd>& C,
                                            Eigen::Ref<VectorXd> dqdd, Eigen::Ref<VectorXd> Qc,
                                            Eigen::Ref<VectorXd> lambda) {
-  // c = L⁻¹ C;  lambda = −D G_D⁺ W_D c, W⁺W c = W_Dᵀ G_D⁺ W_D c
+  // c = L⁻¹ C;  lambda = −G⁺ W c, W⁺W c = Wᵀ G⁺ W c
   std::copy(C.data(), C.data() + n_, wn_.begin());
   mass_lower_solve(wn_.data());
   multiply_W(wn_.data(), wm3_.data());
   solve_min_norm(wm3_.data(), lambda.data(), wn3_.data());
-  for (Index i = 0; i < m_; ++i) lambda[i] *= -row_scale_[std::size_t(i)];
+  lambda = -lambda;
   // c⊥ = c − W⁺W c = (I − W⁺W) c;  Qc = L c⊥;  dqdd = L⁻ᵀ c⊥
   for (Index i = 0; i < n_; ++i) wn_[std::size_t(i)] -= wn3_[std::size_t(i)];
   mass_lower_multiply(wn_.data(), Qc.data());
@@ -810,9 +749,8 @@ void SparseDecomposition::project_nonideal(const Eigen::Ref<const VectorXd>& C,
 }
 
 void SparseDecomposition::apply_pinv(const Eigen::Ref<const VectorXd>& e, Eigen::Ref<VectorXd> y) {
-  // y = W_Dᵀ G_D⁺ D e
-  scale_rows(e.data(), wm4_.data());
-  solve_min_norm(wm4_.data(), wm3_.data(), y.data());
+  // y = Wᵀ G⁺ e
+  solve_min_norm(e.data(), wm3_.data(), y.data());
 }
 
 }  // namespace ukdyn

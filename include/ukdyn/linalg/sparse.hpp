@@ -23,15 +23,6 @@
 /// The projection of e onto range(G) makes an inconsistent e give the least-squares answer of
 /// the dense engine (W⁺ e), so inconsistency is reported the same way.
 ///
-/// Row equilibration: W is stored as D W, D = diag(1 / ‖w_i‖), and G as D G D (unit diagonal),
-/// so that lambda splits among redundant rows as the dense engine's does: it minimizes
-/// Σ_i (‖w_i‖ lambda_i)² (linalg/decomposition.hpp, "Row equilibration"); the solves take D e
-/// and return lambda = D lambda_D, and q'' and Qc are unchanged. D comes from G's diagonal (one
-/// square root per row, a pass over W and G) where every G_kk keeps full precision; where one
-/// would under- or overflow (a row written as 1e-170 (x² + y² − 1) squared to zero and was
-/// dropped as a zero row, with status ok, before), from norms computed without it, and G is
-/// formed again. Cost O(nnz(A) + nnz(G)).
-///
 /// Rank decision (relative, documented beside the dense one in linalg/decomposition.hpp): row k
 /// counts as dependent when the part of its row w_k of W outside the span of the rows eliminated
 /// before it is at most tau ‖w_k‖, i.e. d_k <= tau² G_kk. Default tau = 1e-6: G squares the
@@ -213,8 +204,6 @@ class SparseDecomposition {
   void solve_G_permuted(double* x);
   // lambda = G⁺ e and y = Wᵀ lambda (original order), with one refinement step
   void solve_min_norm(const double* e, double* lambda, double* y);
-  // y = D x (m; y may be x)
-  void scale_rows(const double* x, double* y) const;
   // x ← x − N (Nᵀ x) and the trivial (zero-row) entries zeroed, permuted order
   void project_range(double* x) const;
   // y = Wᵀ lambda (original row order)
@@ -275,9 +264,7 @@ class SparseDecomposition {
   Index d_ = 0, rank_ = 0, rechecked_ = 0;
   double threshold_ = kDefaultThreshold;
   // scratch
-  std::vector<double> wm_, wm2_, wm3_, wm4_, wn_, wn2_, wn3_;
-  // D: 1 / ‖w_i‖ of each row of W (1 for a zero row), see "Row equilibration"
-  std::vector<double> row_scale_;
+  std::vector<double> wm_, wm2_, wm3_, wn_, wn2_, wn3_;
 };
 
 }  // namespace ukdyn
