@@ -25,7 +25,7 @@
 #include "support/random_problem.hpp"
 
 namespace ukdyn {
-namespace {
+namespace UKDYN_TEST_FILE {
 
 using testing::null_space;
 using testing::rel_diff;
@@ -984,5 +984,5 @@ TEST(ControlErrors, MessagesNameTheProblem) {
             std::string::npos);
 }
 
-}  // namespace
+}  // namespace UKDYN_TEST_FILE
 }  // namespace ukdyn

@@ -13,7 +13,7 @@
 #include "support/alloc_counter.hpp"
 
 namespace ukdyn {
-namespace {
+namespace UKDYN_TEST_FILE {
 
 using testing::start_counting_allocations;
 using testing::stop_counting_allocations;
@@ -202,5 +202,5 @@ TEST(ControlNoAllocation, ControlledPlantForwardDynamics) {
   EXPECT_EQ(count, 0);
 }
 
-}  // namespace
+}  // namespace UKDYN_TEST_FILE
 }  // namespace ukdyn

@@ -12,7 +12,7 @@
 #include "ukdyn/modelfile/run.hpp"
 
 namespace ukdyn {
-namespace {
+namespace UKDYN_TEST_FILE {
 
 // the index of output `name` (fails the test when missing)
 std::size_t output_index(const Model& m, const std::string& name) {
@@ -132,5 +132,5 @@ TEST(ControlDivergence, LeastNormRedundancyResolutionThatDivergesStopsWithThatCa
   EXPECT_GT(fastest, 10.0);
 }
 
-}  // namespace
+}  // namespace UKDYN_TEST_FILE
 }  // namespace ukdyn

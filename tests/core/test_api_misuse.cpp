@@ -15,7 +15,7 @@
 #include "ukdyn/ukdyn.hpp"
 
 namespace ukdyn {
-namespace {
+namespace UKDYN_TEST_FILE {
 
 const double kNaN = std::numeric_limits<double>::quiet_NaN();
 
@@ -284,5 +284,5 @@ TEST_F(ApiMisuse, UnknownGalleryNameAndMissingFilesAreNamed) {
   EXPECT_NE(h5.find("/nonexistent-dir/x.h5"), std::string::npos) << h5;
 }
 
-}  // namespace
+}  // namespace UKDYN_TEST_FILE
 }  // namespace ukdyn

@@ -8,7 +8,7 @@
 #include "support/random_problem.hpp"
 
 namespace ukdyn {
-namespace {
+namespace UKDYN_TEST_FILE {
 
 struct Derived {
   MatrixXd A;
@@ -185,5 +185,5 @@ TEST(AutoDiff, NonholonomicAcrossSeveralChunksWithTwoRows) {
   EXPECT_NEAR(d.b[1], -qd[1] * qd[2], kTol);
 }
 
-}  // namespace
+}  // namespace UKDYN_TEST_FILE
 }  // namespace ukdyn

@@ -10,7 +10,7 @@
 #include <ukdyn/ukdyn.hpp>
 
 namespace ukdyn {
-namespace {
+namespace UKDYN_TEST_FILE {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
@@ -252,5 +252,5 @@ TEST(Errors, RecoversAfterAFailure) {
   EXPECT_EQ(ws.counters.failures, 1);
 }
 
-}  // namespace
+}  // namespace UKDYN_TEST_FILE
 }  // namespace ukdyn

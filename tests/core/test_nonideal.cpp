@@ -6,7 +6,7 @@
 #include <ukdyn/ukdyn.hpp>
 
 namespace ukdyn {
-namespace {
+namespace UKDYN_TEST_FILE {
 
 constexpr double kG = 9.81;
 
@@ -133,5 +133,5 @@ TEST(Binding, RejectsNegativeCoefficientsAndBadCoordinates) {
       std::invalid_argument);
 }
 
-}  // namespace
+}  // namespace UKDYN_TEST_FILE
 }  // namespace ukdyn

@@ -16,7 +16,7 @@
 #include <ukdyn/ukdyn.hpp>
 
 namespace ukdyn {
-namespace {
+namespace UKDYN_TEST_FILE {
 
 constexpr int kThreads = 4;
 
@@ -205,5 +205,5 @@ output: {every: 0.05, expressions: {r: sqrt(x^2 + y^2)}}
   }
 }
 
-}  // namespace
+}  // namespace UKDYN_TEST_FILE
 }  // namespace ukdyn

@@ -9,7 +9,7 @@
 #include <ukdyn/ukdyn.hpp>
 
 namespace ukdyn {
-namespace {
+namespace UKDYN_TEST_FILE {
 
 TEST(WithoutReference, TextbookAlgorithmNamesTheLibraryToLink) {
   const gallery::Example ex = gallery::pendulum(1.0, 1.0, 9.81);
@@ -34,5 +34,5 @@ TEST(WithoutReference, TextbookAlgorithmNamesTheLibraryToLink) {
   EXPECT_NEAR(ws.qdd[1], -9.81, 1e-12);
 }
 
-}  // namespace
+}  // namespace UKDYN_TEST_FILE
 }  // namespace ukdyn

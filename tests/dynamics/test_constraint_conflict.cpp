@@ -13,7 +13,7 @@
 #include "support/closed_chain.hpp"
 
 namespace ukdyn {
-namespace {
+namespace UKDYN_TEST_FILE {
 
 // The tip of the last rod pinned twice, to ground points d apart in x ('close' where the tip is,
 // 'close2' d beyond it): the two pins' x rows of A are the same row, their violations 0 and −d.
@@ -61,5 +61,5 @@ TEST(ConstraintConflict, SparseAndDenseEnginesAgreeOnAChainOf64) {
   }
 }
 
-}  // namespace
+}  // namespace UKDYN_TEST_FILE
 }  // namespace ukdyn

@@ -12,7 +12,7 @@
 #include "support/random_problem.hpp"
 
 namespace ukdyn {
-namespace {
+namespace UKDYN_TEST_FILE {
 
 using testing::make_system;
 using testing::null_space;
@@ -508,5 +508,5 @@ TEST(BlockDiagonalAndLocal, BuilderRefusesBlocksThatDoNotTileAndBadColumns) {
       << error_of(out_of_range);
 }
 
-}  // namespace
+}  // namespace UKDYN_TEST_FILE
 }  // namespace ukdyn

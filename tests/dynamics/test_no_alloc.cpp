@@ -14,7 +14,7 @@
 #include "support/random_problem.hpp"
 
 namespace ukdyn {
-namespace {
+namespace UKDYN_TEST_FILE {
 
 using testing::start_counting_allocations;
 using testing::stop_counting_allocations;
@@ -268,5 +268,5 @@ TEST(NoAllocation, SimulationStepsOfFixedStepMethods) {
   }
 }
 
-}  // namespace
+}  // namespace UKDYN_TEST_FILE
 }  // namespace ukdyn

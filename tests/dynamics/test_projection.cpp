@@ -9,7 +9,7 @@
 #include "support/random_problem.hpp"
 
 namespace ukdyn {
-namespace {
+namespace UKDYN_TEST_FILE {
 
 using testing::vec;
 
@@ -172,5 +172,5 @@ TEST(Projection, ViolationsOfEachLevel) {
   EXPECT_NEAR(velocity_violation(sys, ws, 0), 3.0, 1e-15);  // |2 (1·0.5 + 1·(−2))|
 }
 
-}  // namespace
+}  // namespace UKDYN_TEST_FILE
 }  // namespace ukdyn

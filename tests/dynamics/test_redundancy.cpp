@@ -19,7 +19,7 @@
 #include "ukdyn/ukdyn.hpp"
 
 namespace ukdyn {
-namespace {
+namespace UKDYN_TEST_FILE {
 
 using Eigen::Matrix3d;
 using Eigen::Vector3d;
@@ -308,5 +308,5 @@ TEST(Redundancy, BricardRunsOnDefaultsConservesEnergyAndFollowsItsReducedDynamic
       tr.stats.max_position_violation, worst, range, energy_change / std::abs(E0), largest_rate);
 }
 
-}  // namespace
+}  // namespace UKDYN_TEST_FILE
 }  // namespace ukdyn

@@ -17,7 +17,7 @@
 #include <ukdyn/ukdyn.hpp>
 
 namespace ukdyn {
-namespace {
+namespace UKDYN_TEST_FILE {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
@@ -223,5 +223,5 @@ TEST(RefArguments, CallablesReceiveTheCallersMemory) {
   EXPECT_DOUBLE_EQ(ws.qdd[1], -9.81);
 }
 
-}  // namespace
+}  // namespace UKDYN_TEST_FILE
 }  // namespace ukdyn

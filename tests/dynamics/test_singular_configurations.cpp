@@ -24,7 +24,7 @@
 
 #include "support/model_output.hpp"
 
-namespace {
+namespace UKDYN_TEST_FILE {
 using namespace ukdyn;
 using ukdyn::testing::output;
 
@@ -183,4 +183,4 @@ TEST(SingularConfigurations, RankMarginFallsToZeroAtTheSingularPose) {
   EXPECT_NEAR(near / nearer, 10.0, 0.5);
 }
 
-}  // namespace
+}  // namespace UKDYN_TEST_FILE

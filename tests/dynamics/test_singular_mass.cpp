@@ -46,7 +46,7 @@
 #include "ukdyn/simulation/simulate.hpp"
 
 namespace ukdyn {
-namespace {
+namespace UKDYN_TEST_FILE {
 
 using Eigen::Matrix3d;
 using Eigen::Quaterniond;
@@ -1039,5 +1039,5 @@ TEST(SingularMass, AccelerationIsTheAuxiliarySystemsForEveryG) {
   }
 }
 
-}  // namespace
+}  // namespace UKDYN_TEST_FILE
 }  // namespace ukdyn

@@ -21,7 +21,7 @@
 #include "support/hermite_root.hpp"
 
 namespace ukdyn {
-namespace {
+namespace UKDYN_TEST_FILE {
 
 constexpr double kG = 9.81;
 // 4 sqrt(L/g) K(1/2) for L = 1, g = 9.81 (mpmath, 30 digits: 2.36784194757624...)
@@ -512,5 +512,5 @@ TEST(GallerySimulateBlock, StopsAtClosedFormTimeAndDistanceThenSticks) {
   EXPECT_NEAR(tr.work_nonideal.back(), -mu * kG * std::cos(alpha) * s_stop, 1e-8);
 }
 
-}  // namespace
+}  // namespace UKDYN_TEST_FILE
 }  // namespace ukdyn

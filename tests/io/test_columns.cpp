@@ -18,7 +18,7 @@
 #include "ukdyn/ukdyn.hpp"
 
 namespace ukdyn {
-namespace {
+namespace UKDYN_TEST_FILE {
 
 namespace fs = std::filesystem;
 
@@ -142,5 +142,5 @@ TEST(Columns, BodyCoordinatesAreFoundByBothSpellings) {
   }
 }
 
-}  // namespace
+}  // namespace UKDYN_TEST_FILE
 }  // namespace ukdyn

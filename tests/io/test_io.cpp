@@ -24,7 +24,7 @@
 #include <ukdyn/io/trajectory_files.hpp>
 
 namespace ukdyn {
-namespace {
+namespace UKDYN_TEST_FILE {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 constexpr double kInf = std::numeric_limits<double>::infinity();
@@ -540,7 +540,6 @@ TEST(IoHdf5, MissingFileOrDatasetThrowsNamingThem) {
   }
 }
 
-}  // namespace
 // ---- provenance (issue #16 item 4): SHA-256, version, summary.json's provenance -----------
 
 TEST(Provenance, Sha256MatchesTheStandardVectors) {
@@ -639,4 +638,5 @@ TEST(IoHdf5, TableRoundTripsBitwiseWithTheSummaryAsAttributes) {
   EXPECT_THROW(read_table_hdf5(temp_path("no_such.h5")), std::runtime_error);
 }
 
+}  // namespace UKDYN_TEST_FILE
 }  // namespace ukdyn

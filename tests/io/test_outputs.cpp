@@ -28,7 +28,7 @@
 #include "support/cli_process.hpp"
 
 namespace ukdyn::test {
-namespace {
+namespace UKDYN_TEST_FILE {
 
 fs::path scratch(const std::string& name) { return scratch_directory("ukdyn_outputs_", name); }
 
@@ -424,5 +424,5 @@ TEST(Hdf5Writer, AFullDiskIsAnErrorNotACrash) {
   EXPECT_EQ(read_hdf5_field(h5.string(), "t"), tr.t);
 }
 
-}  // namespace
+}  // namespace UKDYN_TEST_FILE
 }  // namespace ukdyn::test

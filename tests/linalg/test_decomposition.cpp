@@ -9,7 +9,7 @@
 #include "support/random_problem.hpp"
 
 namespace ukdyn {
-namespace {
+namespace UKDYN_TEST_FILE {
 
 using testing::random_problem;
 using testing::rel_diff;
@@ -157,5 +157,5 @@ TEST(Decomposition, SolveMassInvertsM) {
   EXPECT_NEAR(rel_diff(p.M * x, p.Q), 0.0, 1e-13);
 }
 
-}  // namespace
+}  // namespace UKDYN_TEST_FILE
 }  // namespace ukdyn

@@ -25,7 +25,7 @@
 #include "support/planar_revolute.hpp"
 
 namespace ukdyn {
-namespace {
+namespace UKDYN_TEST_FILE {
 
 using testing::PlanarRevolute;
 
@@ -688,5 +688,5 @@ TEST(SparseDecomposition, PivotsWithASmallKnownRoundoffAreNotRechecked) {
   report_worst("point masses on rods");
 }
 
-}  // namespace
+}  // namespace UKDYN_TEST_FILE
 }  // namespace ukdyn

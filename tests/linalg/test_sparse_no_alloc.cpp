@@ -15,7 +15,7 @@
 #include "support/planar_revolute.hpp"
 
 namespace ukdyn {
-namespace {
+namespace UKDYN_TEST_FILE {
 
 using testing::start_counting_allocations;
 using testing::stop_counting_allocations;
@@ -129,5 +129,5 @@ TEST(SparseNoAllocation, Projections) {
   EXPECT_EQ(count, 0);
 }
 
-}  // namespace
+}  // namespace UKDYN_TEST_FILE
 }  // namespace ukdyn

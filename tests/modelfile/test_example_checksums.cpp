@@ -27,7 +27,7 @@
 #include "ukdyn/modelfile/run.hpp"
 
 namespace ukdyn {
-namespace {
+namespace UKDYN_TEST_FILE {
 
 const std::string kExamples = UKDYN_EXAMPLES_DIR;
 const std::string kStored = std::string(UKDYN_TEST_DATA_DIR) + "/example_checksums.txt";
@@ -135,5 +135,5 @@ TEST(ExampleChecksums, UpdateWhenAsked) {
   ADD_FAILURE() << "rewrote " << kStored;
 }
 
-}  // namespace
+}  // namespace UKDYN_TEST_FILE
 }  // namespace ukdyn

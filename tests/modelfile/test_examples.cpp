@@ -29,7 +29,7 @@
 #include "support/model_output.hpp"
 
 namespace ukdyn {
-namespace {
+namespace UKDYN_TEST_FILE {
 
 constexpr double kPi = std::numbers::pi;
 
@@ -696,5 +696,5 @@ TEST(ExampleModels, RedundantCrankIsNamedByCheckAndLeavesTheMotionUnchanged) {
   EXPECT_NEAR(crank4, 0.0, 1e-10);
 }
 
-}  // namespace
+}  // namespace UKDYN_TEST_FILE
 }  // namespace ukdyn

@@ -10,7 +10,7 @@
 #include <ukdyn/modelfile/expression.hpp>
 
 namespace ukdyn::expr {
-namespace {
+namespace UKDYN_TEST_FILE {
 
 constexpr double kPi = std::numbers::pi;
 constexpr double kTol = 1e-13;
@@ -548,5 +548,5 @@ TEST(ExprParseError, BadDeclarationsAreRefused) {
   EXPECT_THROW(s.set_constant("c", std::nan("")), std::invalid_argument);
 }
 
-}  // namespace
+}  // namespace UKDYN_TEST_FILE
 }  // namespace ukdyn::expr

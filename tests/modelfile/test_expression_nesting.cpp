@@ -14,7 +14,7 @@
 #include "support/small_stack.hpp"
 
 namespace ukdyn {
-namespace {
+namespace UKDYN_TEST_FILE {
 
 // `depth` levels of one kind of nesting around x (every kind depends on x, so it is
 // differentiated): sin(sin(…x…)), -(-(…x…)) written as --x, ((…x…)), and a mix of calls,
@@ -128,5 +128,5 @@ TEST(ExpressionNesting, OnAUsualStackTheFixedLimitDecides) {
   EXPECT_NE(error.find("deep.yaml:3:"), std::string::npos) << error;
 }
 
-}  // namespace
+}  // namespace UKDYN_TEST_FILE
 }  // namespace ukdyn

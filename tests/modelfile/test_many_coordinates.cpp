@@ -12,7 +12,7 @@
 #include <ukdyn/ukdyn.hpp>
 
 namespace ukdyn {
-namespace {
+namespace UKDYN_TEST_FILE {
 
 // n uncoupled oscillators of masses m_i = 1 + (i mod 3) and stiffnesses k_i = i mod 5:
 // q̈_i = -k_i q_i / m_i
@@ -45,5 +45,5 @@ TEST(ManyCoordinates, FiftyThousandOscillatorsHaveTheirOwnMassesAndSprings) {
   }
 }
 
-}  // namespace
+}  // namespace UKDYN_TEST_FILE
 }  // namespace ukdyn

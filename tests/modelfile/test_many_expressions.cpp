@@ -13,7 +13,7 @@
 #include <ukdyn/ukdyn.hpp>
 
 namespace ukdyn {
-namespace {
+namespace UKDYN_TEST_FILE {
 
 // n coordinates, T = ½ Σ m_i(q) q̇_i², forces F_i = −k_i q_i − c_i q̇_i with k_i = i mod 5,
 // c_i = (i mod 3)/4; m_i = 1 + (i mod 3) (constant) or 1 + q_i² (`moving_mass`)
@@ -59,5 +59,5 @@ TEST(ManyExpressions, AMassDependingOnEveryCoordinateGivesEachItsOwnCurvatureFor
   check(2000, true);
 }
 
-}  // namespace
+}  // namespace UKDYN_TEST_FILE
 }  // namespace ukdyn

@@ -11,7 +11,7 @@
 #include "support/random_problem.hpp"
 
 namespace ukdyn {
-namespace {
+namespace UKDYN_TEST_FILE {
 
 using testing::vec;
 constexpr double kG = 9.81;
@@ -550,11 +550,11 @@ TEST(ModelErrors, MissingFile) {
   }
 }
 
-}  // namespace
+}  // namespace UKDYN_TEST_FILE
 }  // namespace ukdyn
 
 namespace ukdyn {
-namespace {
+namespace UKDYN_TEST_FILE {
 
 // A particle in the V-shaped potential V = F |x| (issue #16 item 6d): the force −F sign(x) is
 // derived from abs (0 at x = 0, not 0/0), and with x(0) = A, x'(0) = 0 the motion is parabolic
@@ -594,5 +594,5 @@ output: {every: 0, at: [sqrt(2*m*A/F), 2*sqrt(2*m*A/F)]}
   EXPECT_NEAR(tr.energy.back(), 1.0, 1e-7);
 }
 
-}  // namespace
+}  // namespace UKDYN_TEST_FILE
 }  // namespace ukdyn

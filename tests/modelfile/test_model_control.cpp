@@ -25,7 +25,7 @@
 #include "support/error_dynamics.hpp"
 
 namespace ukdyn {
-namespace {
+namespace UKDYN_TEST_FILE {
 
 using test::second_order_error;
 
@@ -546,5 +546,5 @@ TEST(ModelControl, NominalParametersReachTheControllerOnlyAndSetOverridesThePlan
   EXPECT_EQ(Mc(0, 0), 1.2);
 }
 
-}  // namespace
+}  // namespace UKDYN_TEST_FILE
 }  // namespace ukdyn

@@ -12,7 +12,7 @@
 #include <ukdyn/ukdyn.hpp>
 
 namespace ukdyn {
-namespace {
+namespace UKDYN_TEST_FILE {
 
 const std::string kData = std::string(UKDYN_TEST_DATA_DIR) + "/diagnoses/";
 
@@ -45,7 +45,6 @@ std::string with_potential(const std::string& V) {
          "\ninitial: {q: {x: 0.5}}\n";
 }
 
-}  // namespace
 
 // ---- D12: constant sub-expressions, located at their function or operator --------------------
 
@@ -321,4 +320,5 @@ TEST(ModelDiagnoses, InitialKeysAreCheckedAndCoordinatesPointedToQ) {
   EXPECT_FALSE(m.project_initial);
 }
 
+}  // namespace UKDYN_TEST_FILE
 }  // namespace ukdyn

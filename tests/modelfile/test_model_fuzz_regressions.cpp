@@ -11,7 +11,7 @@
 #include "ukdyn/modelfile/model.hpp"
 
 namespace ukdyn {
-namespace {
+namespace UKDYN_TEST_FILE {
 
 // The ModelError `text` raises (failing the test when it loads or throws something else).
 ModelError error_of(const std::string& text) {
@@ -324,5 +324,5 @@ TEST(ModelFuzzRegressions, ConstraintNamedByATextThatIsNotAnIdentifier) {
   EXPECT_TRUE(contains(e.what(), "f.yaml:6:9: error: in C")) << e.what();
 }
 
-}  // namespace
+}  // namespace UKDYN_TEST_FILE
 }  // namespace ukdyn

@@ -13,7 +13,7 @@
 #include <ukdyn/ukdyn.hpp>
 
 namespace ukdyn {
-namespace {
+namespace UKDYN_TEST_FILE {
 
 using expr::Expr;
 using expr::ExpressionSet;
@@ -357,5 +357,5 @@ TEST(ModelLoad, ErrorsOfLargeModelsNameTheVelocityAndTheInput) {
   }
 }
 
-}  // namespace
+}  // namespace UKDYN_TEST_FILE
 }  // namespace ukdyn

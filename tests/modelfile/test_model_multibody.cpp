@@ -25,7 +25,7 @@
 #include "support/slider_crank.hpp"
 
 namespace ukdyn {
-namespace {
+namespace UKDYN_TEST_FILE {
 
 using Eigen::Vector3d;
 using mb::Frame;
@@ -605,5 +605,5 @@ TEST(ModelMultibody, GearBetweenARevoluteAndAPrismaticJointIsRefusedAtItsReferen
   }
 }
 
-}  // namespace
+}  // namespace UKDYN_TEST_FILE
 }  // namespace ukdyn

@@ -13,7 +13,7 @@
 #include <ukdyn/modelfile/run.hpp>
 
 namespace ukdyn {
-namespace {
+namespace UKDYN_TEST_FILE {
 
 const std::string kSlider = R"(coordinates: [s, phi]
 kinetic_energy: 0.5*s_dot^2 + 0.5*phi_dot^2
@@ -116,5 +116,5 @@ TEST(ModelUnits, SummaryWritesTheUnitsByColumnName) {
   EXPECT_FALSE(nlohmann::json::parse(summary_json(run.trajectory, m.options)).contains("units"));
 }
 
-}  // namespace
+}  // namespace UKDYN_TEST_FILE
 }  // namespace ukdyn

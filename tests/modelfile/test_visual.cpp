@@ -13,7 +13,7 @@
 #include "ukdyn/modelfile/visual.hpp"
 
 namespace ukdyn {
-namespace {
+namespace UKDYN_TEST_FILE {
 
 const CsvColumn& column(const ModelRun& run, const std::string& name) {
   for (const CsvColumn& c : run.extra_columns) {
@@ -150,5 +150,5 @@ TEST(ModelVisual, ErrorsAreLocated) {
       "y, z] (hint: {hoop: {at: [x, y], angle: theta, size: 0.3}})");
 }
 
-}  // namespace
+}  // namespace UKDYN_TEST_FILE
 }  // namespace ukdyn

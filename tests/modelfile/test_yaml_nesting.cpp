@@ -11,7 +11,7 @@
 #include "support/small_stack.hpp"
 
 namespace ukdyn {
-namespace {
+namespace UKDYN_TEST_FILE {
 
 // a model whose parameters: hold `depth` levels of brackets
 std::string nested(int depth) {
@@ -37,5 +37,5 @@ TEST(YamlNesting, ShallowNestingReadsOnA64kBStack) {
   EXPECT_NE(deeper.find("the YAML nests too deep (more than"), std::string::npos) << deeper;
 }
 
-}  // namespace
+}  // namespace UKDYN_TEST_FILE
 }  // namespace ukdyn

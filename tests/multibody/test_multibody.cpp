@@ -20,7 +20,7 @@
 #include "support/slider_crank.hpp"
 
 namespace ukdyn {
-namespace {
+namespace UKDYN_TEST_FILE {
 
 using Eigen::Quaterniond;
 using Eigen::Vector3d;
@@ -972,5 +972,5 @@ TEST(MultibodyErrors, BuildNamesTheProblem) {
                std::invalid_argument);
 }
 
-}  // namespace
+}  // namespace UKDYN_TEST_FILE
 }  // namespace ukdyn

@@ -17,7 +17,7 @@
 #include "ukdyn/multibody/multibody.hpp"
 
 namespace ukdyn {
-namespace {
+namespace UKDYN_TEST_FILE {
 
 using Eigen::Quaterniond;
 using Eigen::Vector3d;
@@ -227,5 +227,5 @@ TEST(MultibodyPoseCache, AJointOutsideItsSystemEvaluatesWithACacheOfItsOwn) {
   }
 }
 
-}  // namespace
+}  // namespace UKDYN_TEST_FILE
 }  // namespace ukdyn

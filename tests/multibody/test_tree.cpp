@@ -17,7 +17,7 @@
 #include "ukdyn/simulation/simulate.hpp"
 
 namespace ukdyn::tree {
-namespace {
+namespace UKDYN_TEST_FILE {
 
 const std::string kPanda = std::string(UKDYN_TEST_DATA_DIR) + "/panda_arm.urdf";
 
@@ -445,5 +445,5 @@ TEST(Tree, ErrorsNameTheLinkOrJoint) {
   }
 }
 
-}  // namespace
+}  // namespace UKDYN_TEST_FILE
 }  // namespace ukdyn::tree

@@ -9,7 +9,7 @@
 #include "ukdyn/multibody/tree.hpp"
 
 namespace ukdyn::tree {
-namespace {
+namespace UKDYN_TEST_FILE {
 
 const std::string kPanda = std::string(UKDYN_TEST_DATA_DIR) + "/panda_arm.urdf";
 
@@ -26,5 +26,5 @@ TEST(Tree, EvaluationsDoNotAllocate) {
   EXPECT_EQ(ws.status, Status::kOk);
 }
 
-}  // namespace
+}  // namespace UKDYN_TEST_FILE
 }  // namespace ukdyn::tree

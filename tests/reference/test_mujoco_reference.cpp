@@ -22,7 +22,7 @@
 #include "ukdyn/simulation/simulate.hpp"
 
 namespace ukdyn {
-namespace {
+namespace UKDYN_TEST_FILE {
 
 using Eigen::Vector3d;
 namespace mb = ukdyn::mb;
@@ -151,5 +151,5 @@ TEST(MujocoReference, P1TruncationErrorScalesAsH4) {
   EXPECT_LT(std::abs(uk.phi2 - ref.phi2), 2.0 * std::abs(e1) + kTolerance);
 }
 
-}  // namespace
+}  // namespace UKDYN_TEST_FILE
 }  // namespace ukdyn

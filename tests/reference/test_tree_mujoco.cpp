@@ -26,7 +26,7 @@
 #include "ukdyn/multibody/tree.hpp"
 
 namespace ukdyn::tree {
-namespace {
+namespace UKDYN_TEST_FILE {
 
 const std::string kPanda = std::string(UKDYN_TEST_DATA_DIR) + "/panda_arm.urdf";
 
@@ -270,5 +270,5 @@ TEST(TreeMuJoCo, BranchedFloatingTreeAccelerations) {
               worst);
 }
 
-}  // namespace
+}  // namespace UKDYN_TEST_FILE
 }  // namespace ukdyn::tree

@@ -16,7 +16,7 @@
 #include "support/random_problem.hpp"
 
 namespace ukdyn {
-namespace {
+namespace UKDYN_TEST_FILE {
 
 using testing::vec;
 
@@ -405,5 +405,5 @@ TEST(EnergyBalance, SphereOnTurntableNoFalseAlarm) {
   record("energy_balance", tr.stats.energy_balance);
 }
 
-}  // namespace
+}  // namespace UKDYN_TEST_FILE
 }  // namespace ukdyn

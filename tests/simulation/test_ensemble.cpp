@@ -19,7 +19,7 @@
 #include <ukdyn/simulation/sampling.hpp>
 
 namespace ukdyn {
-namespace {
+namespace UKDYN_TEST_FILE {
 
 std::string read_text(const std::string& path) {
   std::ifstream in(path);
@@ -392,5 +392,5 @@ TEST(Ensemble, TableFilesHoldEveryRow) {
   std::filesystem::remove_all(dir);
 }
 
-}  // namespace
+}  // namespace UKDYN_TEST_FILE
 }  // namespace ukdyn

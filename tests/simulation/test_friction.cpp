@@ -21,7 +21,7 @@
 #include "ukdyn/ukdyn.hpp"
 
 namespace ukdyn {
-namespace {
+namespace UKDYN_TEST_FILE {
 
 constexpr double kPi = std::numbers::pi;
 
@@ -724,5 +724,5 @@ TEST(Friction, GovernorAtMuZeroIsTheGovernorWithoutFriction) {
   }
 }
 
-}  // namespace
+}  // namespace UKDYN_TEST_FILE
 }  // namespace ukdyn

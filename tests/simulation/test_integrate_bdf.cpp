@@ -15,7 +15,7 @@
 #include "../src/simulation/integrator.hpp"
 
 namespace ukdyn {
-namespace {
+namespace UKDYN_TEST_FILE {
 
 using detail::ConstrainedOde;
 using detail::integrate_bdf;
@@ -455,5 +455,5 @@ TEST(BdfSimulate, ConstraintSwitchingRestartsCvodeOnEachSegment) {
   EXPECT_NEAR(x(4), 3.0, 1e-9);  // horizontal motion untouched throughout
 }
 
-}  // namespace
+}  // namespace UKDYN_TEST_FILE
 }  // namespace ukdyn

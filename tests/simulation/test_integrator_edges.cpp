@@ -16,7 +16,7 @@
 #include "support/oscillator.hpp"
 
 namespace ukdyn {
-namespace {
+namespace UKDYN_TEST_FILE {
 
 bool contains(const std::string& text, const std::string& part) {
   return text.find(part) != std::string::npos;
@@ -164,5 +164,5 @@ forces: [-sign(x_dot) - 0.5]
   EXPECT_NEAR(tr.qd.back(), 0.0, 1.5e-6);
 }
 
-}  // namespace
+}  // namespace UKDYN_TEST_FILE
 }  // namespace ukdyn

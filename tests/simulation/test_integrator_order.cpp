@@ -17,7 +17,7 @@
 #include "support/random_problem.hpp"
 
 namespace ukdyn {
-namespace {
+namespace UKDYN_TEST_FILE {
 
 constexpr double kG = 9.81;
 
@@ -217,5 +217,5 @@ TEST_P(FixedStep, LocatesAStickSlipEvent) {
 INSTANTIATE_TEST_SUITE_P(Methods, FixedStep, ::testing::Values(Integrator::kRK4, Integrator::kRK5),
                          [](const auto& p) { return std::string(to_string(p.param)); });
 
-}  // namespace
+}  // namespace UKDYN_TEST_FILE
 }  // namespace ukdyn

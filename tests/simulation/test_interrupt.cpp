@@ -50,7 +50,7 @@
 extern char** environ;
 
 namespace ukdyn {
-namespace {
+namespace UKDYN_TEST_FILE {
 
 namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
@@ -129,12 +129,12 @@ void expect_interrupted_run(const Trajectory& tr, double t_start, double t_end) 
   tr.check_consistent("test");
 }
 
-}  // namespace
+}  // namespace UKDYN_TEST_FILE
 
 // (test names and ctest lines show the method, not its bytes)
 void PrintTo(Integrator i, std::ostream* os) { *os << to_string(i); }
 
-namespace {
+namespace UKDYN_TEST_FILE {
 
 class EveryIntegrator : public ::testing::TestWithParam<Integrator> {};
 
@@ -547,5 +547,5 @@ TEST(Cli, ASecondRunIntoADirectoryInUseIsRefusedNamingItAndTheFirstRunsPid) {
   for (const auto& row : after.rows) EXPECT_NEAR(row[r], 2.0, 1e-8);
 }
 
-}  // namespace
+}  // namespace UKDYN_TEST_FILE
 }  // namespace ukdyn

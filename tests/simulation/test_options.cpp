@@ -21,7 +21,7 @@
 #include "ukdyn/modelfile/model.hpp"
 #include "ukdyn/simulation/options.hpp"
 
-namespace {
+namespace UKDYN_TEST_FILE {
 
 using namespace ukdyn;
 
@@ -305,4 +305,4 @@ TEST(OptionsTable, DocsTableIsTheGeneratedOne) {
       << options_markdown();
 }
 
-}  // namespace
+}  // namespace UKDYN_TEST_FILE

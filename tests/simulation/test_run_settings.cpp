@@ -16,7 +16,7 @@
 #include "support/oscillator.hpp"
 
 namespace ukdyn {
-namespace {
+namespace UKDYN_TEST_FILE {
 
 using test::oscillator;
 
@@ -552,5 +552,5 @@ TEST(RunSettings, ANanForceAfterHalfTimeEndsAdaptiveRunsJustBeforeIt) {
   }
 }
 
-}  // namespace
+}  // namespace UKDYN_TEST_FILE
 }  // namespace ukdyn

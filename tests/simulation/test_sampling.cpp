@@ -10,7 +10,7 @@
 #include <ukdyn/simulation/sampling.hpp>
 
 namespace ukdyn {
-namespace {
+namespace UKDYN_TEST_FILE {
 
 TEST(Sampling, GridAxisFromText) {
   const GridAxis a = parse_grid_axis("mu=0:0.5:11");
@@ -180,5 +180,5 @@ TEST(Sampling, BadDesignsNameTheVariable) {
   }
 }
 
-}  // namespace
+}  // namespace UKDYN_TEST_FILE
 }  // namespace ukdyn

@@ -11,7 +11,7 @@
 #include "support/random_problem.hpp"
 
 namespace ukdyn {
-namespace {
+namespace UKDYN_TEST_FILE {
 
 constexpr double kG = 9.81;
 
@@ -336,5 +336,5 @@ TEST(Simulate, MisuseThrows) {
   EXPECT_EQ(drift_from_string("baumgarte"), DriftControl::kBaumgarte);
 }
 
-}  // namespace
+}  // namespace UKDYN_TEST_FILE
 }  // namespace ukdyn

@@ -13,7 +13,7 @@
 #include <ukdyn/ukdyn.hpp>
 
 namespace ukdyn {
-namespace {
+namespace UKDYN_TEST_FILE {
 
 bool contains(const std::string& text, const std::string& part) {
   return text.find(part) != std::string::npos;
@@ -189,5 +189,5 @@ TEST(Stiffness, AControlledRunWhoseRequirementLostRankSaysSo) {
   EXPECT_FALSE(contains(s.message, "Likely cause: stiffness")) << s.message;
 }
 
-}  // namespace
+}  // namespace UKDYN_TEST_FILE
 }  // namespace ukdyn

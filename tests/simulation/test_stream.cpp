@@ -44,7 +44,7 @@
 extern char** environ;
 
 namespace ukdyn {
-namespace {
+namespace UKDYN_TEST_FILE {
 
 namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
@@ -626,5 +626,5 @@ TEST(Cli, AGridAboveTheBoundIsRefusedAtOnceNamingTheOption) {
   }
 }
 
-}  // namespace
+}  // namespace UKDYN_TEST_FILE
 }  // namespace ukdyn

@@ -14,7 +14,7 @@
 #include "ukdyn/simulation/simulate.hpp"
 
 namespace ukdyn {
-namespace {
+namespace UKDYN_TEST_FILE {
 
 // the sample of tr at time t (failing when there is none)
 std::size_t sample_at(const Trajectory& tr, double t) {
@@ -271,5 +271,5 @@ simulate: {t_end: 5, integrator: dopri5, rtol: 1e-10, atol: 1e-12}
   EXPECT_LE(tr.stats.steps, 100000);
 }
 
-}  // namespace
+}  // namespace UKDYN_TEST_FILE
 }  // namespace ukdyn
