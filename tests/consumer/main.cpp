@@ -11,7 +11,7 @@
 
 #include <ukdyn/ukdyn.hpp>
 
-namespace UKDYN_TEST_FILE {
+namespace {
 
 int failures = 0;
 
@@ -34,7 +34,7 @@ double elliptic_k(double k) {
   return std::numbers::pi / (2.0 * a);
 }
 
-}  // namespace UKDYN_TEST_FILE
+}  // namespace
 
 int main() {
   const double m = 1.5, L = 0.8, g = 9.81, theta0 = 1.2;  // kg, m, m/s², rad from the vertical

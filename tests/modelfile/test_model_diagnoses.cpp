@@ -45,7 +45,6 @@ std::string with_potential(const std::string& V) {
          "\ninitial: {q: {x: 0.5}}\n";
 }
 
-
 // ---- D12: constant sub-expressions, located at their function or operator --------------------
 
 TEST(ModelDiagnoses, ComplexConstantsAreLocatedAtTheirFunction) {
