@@ -56,6 +56,10 @@ struct ModelSource {
 /// Parses "name=value" pairs. @throws UsageError on a missing '=' or a value that is not a number.
 std::map<std::string, double> parse_overrides(const std::vector<std::string>& set);
 
+/// Checks --plot-format's list (png, pdf, svg). @throws UsageError naming a format that is none of
+/// them, or an empty list — before anything runs.
+void check_plot_formats(const std::vector<std::string>& formats);
+
 /// Loads the model of `source`. @throws UsageError (neither or both of path and example, an
 /// unknown example, --set of a parameter the model does not declare), ModelError (the model
 /// file).
@@ -120,7 +124,9 @@ struct SweepArguments {
   std::vector<FlagSetting> settings;           ///< option flags for every sample (as `ukdyn run`'s)
   std::vector<std::string> formats = {"csv"};  ///< --format csv,hdf5
   bool plots = true;                           ///< false with --no-plots
-  std::vector<std::string> arguments;          ///< the command line, for summary.json
+  /// --plot-format: the summary plot's file formats, "png", "pdf" and/or "svg" (sweep.png, …)
+  std::vector<std::string> plot_formats = {"png"};
+  std::vector<std::string> arguments;  ///< the command line, for summary.json
 };
 
 /// `ukdyn sweep`: run_ensemble over a design; write DIR/ensemble.csv (ensemble.h5), summary.json
@@ -131,7 +137,8 @@ int sweep_command(const SweepArguments& args);
 /// `ukdyn check`: print check_model()'s report; kExitCheck when it found problems.
 int check_command(const ModelSource& source);
 
-/// `ukdyn examples`: list the built-in examples.
-int examples_command();
+/// `ukdyn examples`: list the built-in examples; `ukdyn examples NAME`: print that example's model
+/// file (to start one's own from it). @throws UsageError on an unknown NAME (the nearest named).
+int examples_command(const std::string& name = "");
 
 }  // namespace ukdyn::cli

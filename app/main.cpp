@@ -14,11 +14,13 @@
 
 #include <CLI/CLI.hpp>
 
+#include <ukdyn/io/provenance.hpp>
 #include <ukdyn/modelfile/model.hpp>
 #include <ukdyn/simulation/options.hpp>
 
 #include "commands.hpp"
 #include "stop_signals.hpp"
+#include "suggest.hpp"
 #include "terminal_text.hpp"
 
 namespace {
@@ -82,6 +84,30 @@ std::uint64_t whole_number_of(const std::string& flag, const std::string& text, 
   return value;
 }
 
+// A long flag (--name or --name=value) that `cmd` does not have is refused here, before CLI11
+// parses: CLI11 would leave it aside and read its value as the model file ("model excludes
+// --example" for `run --example pendulum --t-edn 3`). The nearest flag is suggested. Values of
+// the flags that take one are skipped, so `--set name=--x` is not read as a flag.
+void check_long_flags(const CLI::App& cmd, int first, int argc, char** argv) {
+  std::vector<std::string> known;
+  for (const CLI::Option* opt : cmd.get_options()) {
+    for (const std::string& name : opt->get_lnames()) known.push_back("--" + name);
+  }
+  for (int i = first; i < argc; ++i) {
+    const std::string arg = argv[i];
+    if (arg == "--") return;  // the rest are positional
+    if (arg.size() < 3 || arg.compare(0, 2, "--") != 0) continue;
+    const std::string name = arg.substr(0, arg.find('='));
+    const CLI::Option* opt = cmd.get_option_no_throw(name);
+    if (opt == nullptr) {
+      throw ukdyn::cli::UsageError("unknown option '" + name + "' for ukdyn " + cmd.get_name() +
+                                   ukdyn::cli::did_you_mean(name, known));
+    }
+    // a flag that takes a value and was not given one with '=': its value is the next argument
+    if (opt->get_type_size() != 0 && name.size() == arg.size()) ++i;
+  }
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -92,6 +118,8 @@ int main(int argc, char** argv) {
       "(Udwadia-Kalaba). Runs and checks model files (YAML).",
       "ukdyn");
   app.footer(kExitCodes);
+  app.set_version_flag("--version", std::string("ukdyn ") + ukdyn::version(),
+                       "print the version and exit");
   app.require_subcommand(1);
 
   RunArguments run;
@@ -215,6 +243,12 @@ int main(int argc, char** argv) {
       ->delimiter(',')
       ->type_name("LIST");
   sweep_cmd->add_flag("--no-plots", sweep_no_plots, "write no plot");
+  sweep_cmd
+      ->add_option("--plot-format", sweep.plot_formats,
+                   "the summary plot's file formats: png, pdf, svg or a list (--plot-format "
+                   "png,pdf; default png)")
+      ->delimiter(',')
+      ->type_name("LIST");
   for (const ukdyn::OptionInfo& info : ukdyn::option_table()) {
     sweep_flags.emplace_back(&info,
                              sweep_cmd
@@ -230,19 +264,36 @@ int main(int argc, char** argv) {
                          "constraints, initial consistency and M at the initial state");
   add_source_options(check_cmd, check);
 
-  app.add_subcommand("examples", "list the built-in examples");
+  std::string example_name;
+  CLI::App* examples_cmd = app.add_subcommand(
+      "examples", "list the built-in examples; with NAME, print that example's model file");
+  examples_cmd->add_option("name", example_name, "an example's name: print its model file");
 
-  // an unknown subcommand is named (CLI11 would say only "A subcommand is required")
+  // an unknown subcommand is named, with the nearest one (CLI11 would say only "A subcommand is
+  // required"); a long flag the subcommand does not have is refused before parsing
   if (argc > 1 && argv[1][0] != '-') {
     const std::string first = argv[1];
-    bool known = false;
-    for (const CLI::App* sub : app.get_subcommands({})) known = known || sub->check_name(first);
-    if (!known) {
-      std::fprintf(
-          stderr,
-          "error: unknown subcommand '%s' (the subcommands are run, sweep, check, examples)\n"
-          "Run with --help for more information.\n",
-          terminal_text(first, false).c_str());
+    const CLI::App* chosen = nullptr;
+    std::vector<std::string> names;
+    for (const CLI::App* sub : app.get_subcommands({})) {
+      names.push_back(sub->get_name());
+      if (sub->check_name(first)) chosen = sub;
+    }
+    if (chosen == nullptr) {
+      std::string list;
+      for (const std::string& n : names) list += (list.empty() ? "" : ", ") + n;
+      std::fprintf(stderr,
+                   "error: unknown subcommand '%s'%s (the subcommands are %s)\n"
+                   "Run with --help for more information.\n",
+                   terminal_text(first, false).c_str(),
+                   terminal_text(did_you_mean(first, names), false).c_str(), list.c_str());
+      return kExitUsage;
+    }
+    try {
+      check_long_flags(*chosen, 2, argc, argv);
+    } catch (const UsageError& e) {
+      std::fprintf(stderr, "error: %s\nRun with ukdyn %s --help for more information.\n",
+                   terminal_text(e.what()).c_str(), chosen->get_name().c_str());
       return kExitUsage;
     }
   }
@@ -296,7 +347,7 @@ int main(int argc, char** argv) {
       return sweep_command(sweep);
     }
     if (check_cmd->parsed()) return check_command(check);
-    return examples_command();
+    return examples_command(example_name);
   } catch (const UsageError& e) {
     std::fprintf(stderr, "error: %s\nRun with --help for more information.\n",
                  terminal_text(e.what()).c_str());

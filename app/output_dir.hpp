@@ -27,8 +27,8 @@ inline constexpr std::array<const char*, 25> kRunOutputs = {
 // clang-format on
 
 /// The files `ukdyn sweep` writes into its directory.
-inline constexpr std::array<const char*, 4> kSweepOutputs = {"ensemble.csv", "ensemble.h5",
-                                                             "summary.json", "sweep.png"};
+inline constexpr std::array<const char*, 6> kSweepOutputs = {
+    "ensemble.csv", "ensemble.h5", "summary.json", "sweep.png", "sweep.pdf", "sweep.svg"};
 
 /// Another run holds the directory: the message names it and the other run's pid.
 class DirectoryBusy : public std::runtime_error {

@@ -160,13 +160,7 @@ int run_command(const RunArguments& given) {
   if (!args.from_summary.empty()) apply_summary(args);
   const TableFormats formats = parse_formats(args.formats);
   const bool want_csv = formats.csv, want_hdf5 = formats.hdf5;
-  for (const std::string& f : args.plot_formats) {
-    if (f != "png" && f != "pdf" && f != "svg") {
-      throw UsageError("--plot-format " + f +
-                       ": the plot formats are png, pdf and svg (--plot-format png,pdf,svg)");
-    }
-  }
-  if (args.plot_formats.empty()) throw UsageError("--plot-format: give png, pdf, svg or a list");
+  check_plot_formats(args.plot_formats);
   Model model = load_source(args.source);
   const RunProvenance provenance = provenance_of(args.source, model, args.arguments);
 

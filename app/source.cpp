@@ -17,6 +17,7 @@
 
 #include "commands.hpp"
 #include "embedded.hpp"
+#include "suggest.hpp"
 
 namespace ukdyn::cli {
 namespace {
@@ -36,6 +37,12 @@ std::string describe(const char* text) {
     s.remove_prefix(end + 1);
   }
   return "";
+}
+
+std::vector<std::string> example_list() {
+  std::vector<std::string> names;
+  for (const auto& f : example_models()) names.emplace_back(f.name);
+  return names;
 }
 
 std::string example_names() {
@@ -83,7 +90,8 @@ Model load_source(const ModelSource& source) {
     // --set of a parameter the model does not declare is a command-line mistake (exit 2)
     throw UsageError(e.message() + (e.hint().empty() ? "" : " (" + e.hint() + ")"));
   }
-  throw UsageError("no example called '" + source.example + "'; the examples are " +
+  throw UsageError("no example called '" + source.example + "'" +
+                   did_you_mean(source.example, example_list()) + "; the examples are " +
                    example_names());
 }
 
@@ -96,7 +104,8 @@ std::string source_text(const ModelSource& source) {
   for (const auto& f : example_models()) {
     if (source.example == f.name) return f.text;
   }
-  throw UsageError("no example called '" + source.example + "'; the examples are " +
+  throw UsageError("no example called '" + source.example + "'" +
+                   did_you_mean(source.example, example_list()) + "; the examples are " +
                    example_names());
 }
 
@@ -197,14 +206,36 @@ void apply_summary(RunArguments& args) {
   }
 }
 
-int examples_command() {
+int examples_command(const std::string& name) {
+  if (!name.empty()) {
+    for (const auto& f : example_models()) {
+      if (name == f.name) {
+        std::fputs(f.text, stdout);
+        return kExitOk;
+      }
+    }
+    throw UsageError("no example called '" + name + "'" + did_you_mean(name, example_list()) +
+                     "; the examples are " + example_names());
+  }
   std::size_t width = 0;
   for (const auto& f : example_models()) width = std::max(width, std::string_view(f.name).size());
   for (const auto& f : example_models()) {
     std::printf("%-*s  %s\n", int(width), f.name, describe(f.text).c_str());
   }
-  std::printf("\nrun one with: ukdyn run --example NAME [-o DIR]\n");
+  std::printf(
+      "\nrun one with: ukdyn run --example NAME [-o DIR]; print its file with: ukdyn examples "
+      "NAME\n");
   return kExitOk;
+}
+
+void check_plot_formats(const std::vector<std::string>& formats) {
+  for (const std::string& f : formats) {
+    if (f != "png" && f != "pdf" && f != "svg") {
+      throw UsageError("--plot-format " + f + ": the plot formats are png, pdf and svg" +
+                       did_you_mean(f, {"png", "pdf", "svg"}) + " (--plot-format png,pdf,svg)");
+    }
+  }
+  if (formats.empty()) throw UsageError("--plot-format: give png, pdf, svg or a list");
 }
 
 TableFormats parse_formats(const std::vector<std::string>& formats) {

@@ -48,6 +48,7 @@ try:
 except ImportError:
     sys.exit(3)
 table, out, grid, rand, outputs = sys.argv[1], sys.argv[2], sys.argv[3], sys.argv[4], sys.argv[5]
+plot_format = sys.argv[7]
 # the model's units (name=unit, tab-separated): a column's axis is labelled "name [unit]"
 units = dict(u.split("=", 1) for u in sys.argv[6].split("\t") if "=" in u)
 def label(column):
@@ -94,7 +95,7 @@ for ax, name in zip(axes[:, 0], outputs):
     ax.set_title(f"{name} over {', '.join(swept)} ({len(ok)} ok, {len(bad)} failed)")
     ax.grid(True, alpha=0.3)
 fig.tight_layout()
-fig.savefig(out, dpi=110, format="png")
+fig.savefig(out, dpi=110, format=plot_format)
 )PY";
 
 // The ensemble's progress on one line: redrawn in place on a terminal, a log line every few
@@ -173,6 +174,7 @@ int sweep_command(const SweepArguments& args) {
   // the table's formats, checked before anything runs (a typo must not cost the sweep)
   const TableFormats formats = parse_formats(args.formats);
   const bool want_csv = formats.csv, want_hdf5 = formats.hdf5;
+  check_plot_formats(args.plot_formats);
 
   // the design, from the command line's text
   Design design;
@@ -329,25 +331,29 @@ int sweep_command(const SweepArguments& args) {
     for (std::size_t i = 0; i < base.output_names.size() && i < base.output_units.size(); ++i) {
       add_unit(base.output_names[i], base.output_units[i]);
     }
-    // sweep.png: written by the script into a temporary made here (mkostemp), renamed when
-    // the script has succeeded
+    // sweep.png (and .pdf, .svg: --plot-format): written by the script into a temporary made
+    // here (mkostemp), renamed when the script has succeeded
     if (!is_executable(python)) {
       std::fprintf(stderr, "warning: %s not found: no summary plot\n", python.c_str());
     } else {
-      detail::AtomicFile png((dir / "sweep.png").string(), "ukdyn sweep");
-      png.release_descriptor();
-      const int code = run_program(
-          {python, "-c", kSweepPlot, csv_path.string(), png.write_path(), grid, rand, outs, units});
-      if (code == 0) {
-        png.commit();
-      } else if (code == 4) {
-        // nothing to plot
-      } else if (code == 3) {
-        std::fprintf(stderr, "warning: %s has no matplotlib: no summary plot\n", python.c_str());
-      } else {
-        std::fprintf(stderr, "error: the summary plot script failed (exit %d): no sweep.png\n",
-                     code);
-        output_failed = true;
+      for (const std::string& format : args.plot_formats) {
+        const std::string name = "sweep." + format;
+        detail::AtomicFile plot((dir / name).string(), "ukdyn sweep");
+        plot.release_descriptor();
+        const int code = run_program({python, "-c", kSweepPlot, csv_path.string(),
+                                      plot.write_path(), grid, rand, outs, units, format});
+        if (code == 0) {
+          plot.commit();
+        } else if (code == 4) {
+          break;  // nothing to plot
+        } else if (code == 3) {
+          std::fprintf(stderr, "warning: %s has no matplotlib: no summary plot\n", python.c_str());
+          break;
+        } else {
+          std::fprintf(stderr, "error: the summary plot script failed (exit %d): no %s\n", code,
+                       name.c_str());
+          output_failed = true;
+        }
       }
     }
   }

@@ -42,6 +42,29 @@ install(FILES ${PROJECT_SOURCE_DIR}/LICENSE DESTINATION ${CMAKE_INSTALL_DATAROOT
 
 # the command links the static library: no run-time path to set, nothing to find
 install(TARGETS ukdyn_cli RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})
+# its man page (help2man, app/CMakeLists.txt) and bash completion (app/completion.bash)
+if(UKDYN_MAN_PAGE)
+  install(FILES ${UKDYN_MAN_PAGE} DESTINATION ${CMAKE_INSTALL_MANDIR}/man1)
+endif()
+install(FILES ${PROJECT_SOURCE_DIR}/app/completion.bash RENAME ukdyn
+        DESTINATION ${CMAKE_INSTALL_DATAROOTDIR}/bash-completion/completions)
+# the documentation and examples, where Debian keeps a package's (/usr/share/doc/ukdyn), with the
+# changelog compressed as Debian wants it (gzip -9n: no name, no time stamp)
+set(UKDYN_CHANGELOG_GZ ${PROJECT_BINARY_DIR}/debian/changelog.gz)
+set_property(DIRECTORY APPEND PROPERTY CMAKE_CONFIGURE_DEPENDS ${CMAKE_CURRENT_LIST_DIR}/debian/changelog)
+file(MAKE_DIRECTORY ${PROJECT_BINARY_DIR}/debian)
+execute_process(COMMAND gzip -9n -c ${CMAKE_CURRENT_LIST_DIR}/debian/changelog
+                OUTPUT_FILE ${UKDYN_CHANGELOG_GZ} RESULT_VARIABLE ukdyn_gzip)
+if(NOT ukdyn_gzip EQUAL 0)
+  message(FATAL_ERROR "gzip of cmake/debian/changelog failed")
+endif()
+set(UKDYN_DOCDIR ${CMAKE_INSTALL_DATAROOTDIR}/doc/ukdyn)
+install(FILES ${UKDYN_CHANGELOG_GZ} ${PROJECT_SOURCE_DIR}/README.md DESTINATION ${UKDYN_DOCDIR})
+install(DIRECTORY ${PROJECT_SOURCE_DIR}/docs/ DESTINATION ${UKDYN_DOCDIR}/docs)
+install(DIRECTORY ${PROJECT_SOURCE_DIR}/examples/ DESTINATION ${UKDYN_DOCDIR}/examples
+        PATTERN "CMakeLists.txt" EXCLUDE)
+install(FILES ${CMAKE_CURRENT_LIST_DIR}/debian/lintian-overrides RENAME ukdyn
+        DESTINATION ${CMAKE_INSTALL_DATAROOTDIR}/lintian/overrides)
 
 if(UKDYN_BUILD_PYTHON)
   # Debian's layout: /usr/lib/python3/dist-packages is on /usr/bin/python3's path; for another

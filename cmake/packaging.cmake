@@ -14,7 +14,9 @@ set(CPACK_PACKAGE_NAME ukdyn)
 set(CPACK_PACKAGE_VERSION ${PROJECT_VERSION})
 set(CPACK_PACKAGE_DESCRIPTION_SUMMARY ${PROJECT_DESCRIPTION})
 set(CPACK_RESOURCE_FILE_LICENSE ${PROJECT_SOURCE_DIR}/LICENSE)  # BSD-3-Clause
-set(CPACK_PACKAGE_CONTACT "ukdyn maintainers <ukdyn@localhost>")
+set(CPACK_PACKAGE_CONTACT "ukdyn maintainers <maintainers@users.noreply.h-seed-56c80d22.example>")
+# stripped, as Debian ships binaries (lintian: unstripped-binary-or-object)
+set(CPACK_STRIP_FILES ON)
 set(CPACK_PACKAGING_INSTALL_PREFIX /usr)
 set(CPACK_DEBIAN_FILE_NAME DEB-DEFAULT)  # <name>_<version>_<arch>.deb
 set(CPACK_DEBIAN_PACKAGE_SECTION science)
@@ -23,14 +25,26 @@ set(CPACK_DEBIAN_PACKAGE_DESCRIPTION
  The C++ library (shared and static, headers, CMake package ukdyn), the\n\
  ukdyn command (model files: simulation, checks, plots) and the Python module.")
 set(CPACK_DEBIAN_PACKAGE_SHLIBDEPS ON)
-# libukdyn.so.0.1 gets a shlibs file, so that packages built against it depend on this one
-set(CPACK_DEBIAN_PACKAGE_GENERATE_SHLIBS ON)
+# libukdyn.so.0.1's shlibs file (packages built against it depend on this one) and the ldconfig
+# trigger, written here rather than by CPack, whose GENERATE_SHLIBS also adds maintainer scripts
+# that call ldconfig (lintian: maintscript-calls-ldconfig; Debian uses the trigger)
+file(WRITE ${PROJECT_BINARY_DIR}/debian/shlibs
+     "libukdyn ${PROJECT_VERSION_MAJOR}.${PROJECT_VERSION_MINOR} ukdyn (>= ${PROJECT_VERSION})\n")
+# (CPack writes postinst and postrm scripts that call ldconfig unless the package brings its own:
+# these two do nothing)
+foreach(f triggers postinst postrm)
+  configure_file(${CMAKE_CURRENT_LIST_DIR}/debian/${f} ${PROJECT_BINARY_DIR}/debian/${f} COPYONLY)
+endforeach()
+set(CPACK_DEBIAN_PACKAGE_CONTROL_EXTRA ${PROJECT_BINARY_DIR}/debian/shlibs
+    ${PROJECT_BINARY_DIR}/debian/triggers ${PROJECT_BINARY_DIR}/debian/postinst
+    ${PROJECT_BINARY_DIR}/debian/postrm)
+set(CPACK_DEBIAN_PACKAGE_CONTROL_STRICT_PERMISSION ON)
 set(_ukdyn_depends "")
 if(UKDYN_BUILD_PYTHON)
   # the extension is built for one Python (its ABI suffix, e.g. cpython-311): that version only
   math(EXPR _ukdyn_py_next "${UKDYN_PYTHON_VERSION_MINOR} + 1")
   set(_ukdyn_depends "python3 (>= ${UKDYN_PYTHON_VERSION_MAJOR}.${UKDYN_PYTHON_VERSION_MINOR}~), \
-python3 (<< ${UKDYN_PYTHON_VERSION_MAJOR}.${_ukdyn_py_next}), python3-numpy")
+python3 (<< ${UKDYN_PYTHON_VERSION_MAJOR}.${_ukdyn_py_next}), python3-numpy, libjs-three")
 endif()
 set(CPACK_DEBIAN_PACKAGE_DEPENDS "${_ukdyn_depends}")
 set(CPACK_DEBIAN_PACKAGE_RECOMMENDS "python3-matplotlib, python3-pandas, libeigen3-dev")

@@ -30,6 +30,7 @@ packages=(
   clang libclang-rt-14-dev             # fuzz/: libFuzzer and the sanitizer runtimes of clang
   clang-format                         # scripts/format.sh: the house style, checked by CI
   libjs-three                          # three.js, embedded in animation.html (ukdyn run --viewer)
+  help2man lintian                     # the man page from --help; Debian's checks of the .deb (tests/packaging)
   chromium chromium-driver python3-selenium  # the viewer's tests in a headless browser
   python3-pil                          # the viewer's tests read the canvas's pixels
   python3-xarray                       # ukdyn.sweep: a grid as an xarray.Dataset

@@ -32,6 +32,20 @@ foreach(dep "libc6" "libstdc\\+\\+6" "libsundials-cvode" "libyaml-cpp" "libginac
   endif()
 endforeach()
 
+# Debian's own checks (issue #33 item 2): no lintian error or warning; the two warnings CPack's
+# layout makes are overridden with their reasons in the package (cmake/debian/lintian-overrides)
+find_program(LINTIAN lintian)
+if(LINTIAN)
+  execute_process(COMMAND ${LINTIAN} --tag-display-limit 0 ${deb} OUTPUT_VARIABLE lint
+                  ERROR_VARIABLE lint_err RESULT_VARIABLE lint_code)
+  message("lintian (exit ${lint_code}):\n${lint}")
+  if(lint MATCHES "(^|\n)[EW]: " OR NOT lint_code EQUAL 0)
+    message(FATAL_ERROR "lintian reports errors or warnings:\n${lint}${lint_err}")
+  endif()
+else()
+  message(FATAL_ERROR "lintian not found (scripts/install-deps.sh installs it)")
+endif()
+
 # extracted, not installed: everything runs from the temporary tree
 set(root ${WORK_DIR}/root)
 run(extract dpkg -x ${deb} ${root})
@@ -44,10 +58,26 @@ file(READ ${copyright} text)
 if(NOT text MATCHES "License: BSD-3-Clause")
   message(FATAL_ERROR "${copyright} does not state the BSD-3-Clause licence")
 endif()
+# the man page, the bash completion, the changelog, the docs and the examples
+foreach(f usr/share/man/man1/ukdyn.1.gz usr/share/bash-completion/completions/ukdyn
+          usr/share/doc/ukdyn/changelog.gz usr/share/doc/ukdyn/README.md
+          usr/share/doc/ukdyn/docs/model-format.md usr/share/doc/ukdyn/examples/models/pendulum.yaml)
+  if(NOT EXISTS ${root}/${f})
+    message(FATAL_ERROR "the package has no /${f}")
+  endif()
+endforeach()
+run(man_page gzip -dc ${root}/usr/share/man/man1/ukdyn.1.gz)
+if(NOT last_output MATCHES "\\.SH NAME\nukdyn \\\\- equations of motion" OR NOT last_output MATCHES "COMMAND RUN")
+  message(FATAL_ERROR "the man page lacks its NAME or the run subcommand's section")
+endif()
 set(ukdyn ${root}/usr/bin/ukdyn)
 run(ldd ldd ${ukdyn})
 if(last_output MATCHES "not found")
   message(FATAL_ERROR "${ukdyn}: a library is not found")
+endif()
+run(version ${ukdyn} --version)
+if(NOT last_output MATCHES "^ukdyn ${VERSION}\n")
+  message(FATAL_ERROR "ukdyn --version: '${last_output}', expected 'ukdyn ${VERSION}'")
 endif()
 run(command ${ukdyn} run --example pendulum -o ${WORK_DIR}/out)
 foreach(f trajectory.csv summary.json)
