@@ -28,6 +28,27 @@ TEST(Equilibrium, FourBarHangsStraightDown) {
   EXPECT_GE(eq.iterations, 1);
 }
 
+TEST(Equilibrium, PendulumReleasedHorizontallyHangsAtTheEdgeOfItsFirstChart) {
+  // Cartesian (x, y) on a rod of length L from (L, 0): the first chart's coordinate is y, and
+  // the hanging state (0, −L) is where that chart is singular; the search changes charts
+  const Model model = load_model(std::string(UKDYN_EXAMPLES_DIR) + "/pendulum.yaml");
+  const double L = model.parameters.at("L");
+  OperatingPoint guess{model.q0, VectorXd::Zero(2), 0.0};
+  guess.q << L * std::cos(0.3), -L * std::sin(0.3);
+  const Equilibrium eq = find_equilibrium(model.system, guess);
+  EXPECT_NEAR(eq.point.q(0), 0.0, 1e-10);
+  EXPECT_NEAR(eq.point.q(1), -L, 1e-10);
+  // exactly horizontal, the reduced acceleration −g (1 − y²/L²) is stationary in y: Newton has
+  // no direction, and says so
+  guess.q << L, 0;
+  try {
+    find_equilibrium(model.system, guess);
+    ADD_FAILURE() << "no error";
+  } catch (const EquilibriumError& e) {
+    EXPECT_NE(std::string(e.what()).find("y'' = -9.81"), std::string::npos) << e.what();
+  }
+}
+
 TEST(Equilibrium, TopSpinningUprightIsARelativeEquilibrium) {
   const Model model = parse_model(test::kCardanTop);
   OperatingPoint guess{VectorXd::Zero(3), VectorXd::Zero(3), 0.0};
