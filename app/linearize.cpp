@@ -90,19 +90,11 @@ int linearize_command(const LinearizeArguments& args) {
 
   // inputs: a coordinate's name is a generalized force along it, a parameter's name the parameter
   std::vector<LinearInput> inputs;
-  for (const std::string& name : args.inputs) {
-    if (model.parameters.count(name)) {
-      inputs.push_back(model_parameter_input(source_text(args.source), model.file,
-                                             parse_overrides(args.source.set), name));
-      continue;
-    }
-    try {
-      inputs.push_back(force_input(sys, name));
-    } catch (const std::invalid_argument&) {
-      throw UsageError("--inputs " + name +
-                       ": neither a coordinate (a generalized force along it) nor a parameter "
-                       "of the model");
-    }
+  try {
+    inputs = model_inputs(model, args.inputs.empty() ? std::string() : source_text(args.source),
+                          args.inputs, "--inputs");
+  } catch (const std::invalid_argument& e) {
+    throw UsageError(e.what());
   }
   std::vector<LinearOutput> outputs;
   for (const std::string& name : args.outputs) {

@@ -87,8 +87,8 @@ using VectorFunction =
 
 /// Stage 3: J = ∂F/∂z at z0 by Ridders' method, column j from the first step h0(j); err(i, j)
 /// is the estimate of |J(i, j) − exact|: the larger of the table's last improvement at the
-/// chosen entry and the roundoff floor 4 ε |F| / h. A failed evaluation at the first level
-/// quarters the step (up to 3 times), at a later one ends the column's table. Returns false
+/// chosen entry and the roundoff floor 4 ε |F| / h, plus 16 ε |J|. A failed evaluation at the first
+/// level quarters the step (up to 3 times), at a later one ends the column's table. Returns false
 /// (message in `why`) when a column cannot be started. Cost: up to 2 · table_size
 /// evaluations per column.
 bool ridders_jacobian(const VectorFunction& F, const Eigen::Ref<const VectorXd>& z0,

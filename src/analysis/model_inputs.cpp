@@ -1,9 +1,11 @@
 /// @file analysis/model_inputs.cpp
 /// Inputs of a linear model that are model-file parameters: a family of systems, each parsed
 /// from the model text with one parameter overridden.
+#include <algorithm>
 #include <map>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 #include "ukdyn/analysis/linearize.hpp"
 #include "ukdyn/modelfile/model.hpp"
@@ -31,6 +33,24 @@ LinearInput model_parameter_input(const std::string& text, const std::string& fi
     return parse_model(text, file, changed).system;
   };
   return in;
+}
+
+std::vector<LinearInput> model_inputs(const Model& model, const std::string& text,
+                                      const std::vector<std::string>& names, const char* who) {
+  const System& sys = model.system;
+  const auto& coords = sys.coordinate_names();
+  std::vector<LinearInput> inputs;
+  for (const std::string& name : names) {
+    if (model.parameters.count(name))
+      inputs.push_back(model_parameter_input(text, model.file, model.parameters, name));
+    else if (std::find(coords.begin(), coords.end(), name) != coords.end())
+      inputs.push_back(force_input(sys, name));
+    else
+      throw std::invalid_argument(std::string(who) + " " + name +
+                                  ": neither a coordinate (a generalized force along it) nor a "
+                                  "parameter of the model");
+  }
+  return inputs;
 }
 
 }  // namespace ukdyn

@@ -85,9 +85,10 @@ bool ridders_jacobian(const VectorFunction& F, const Eigen::Ref<const VectorXd>&
       }
       if (all_done) break;
     }
-    // entries never improved on (a table of one level) keep the first difference with an
-    // unknown error
-    for (Index e = 0; e < p; ++e) err(e, col) = std::max(best_err(e), floor_at_best(e));
+    // the estimate: the table's, at least the roundoff floor, plus 16 ε |J| (the evaluation's
+    // own roundoff, a few ulps of q'' through the factorizations, carried into the result)
+    for (Index e = 0; e < p; ++e)
+      err(e, col) = std::max(best_err(e), floor_at_best(e)) + 16 * eps * std::abs(J(e, col));
   }
   return true;
 }

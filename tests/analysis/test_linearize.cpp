@@ -162,6 +162,43 @@ TEST(Linearize, ParallelogramFourBarOscillatesAtItsReducedOneDofFrequency) {
   }
 }
 
+TEST(Linearize, AlongAMotionOfTheFourBarTheReducedEquationIsPendulumLike) {
+  // the parallelogram's one-DOF motion has constant inertia: θ'' = −ω² sin θ exactly, so along
+  // any motion t1 = t3 = θ, t2 = 0: A(t) = [[0, 1], [−ω² cos θ, 0]], f0 = (θ', −ω² sin θ)
+  const Model model = parse_model(test::kParallelogram);
+  const System& sys = model.system;
+  const double w2 = 9.81 * 3 / (0.5 * (2.0 / 3 + 2));
+  std::vector<OperatingPoint> path;
+  for (double th : {0.3, 0.8, 1.2, -0.5}) {
+    OperatingPoint op{VectorXd::Zero(3), VectorXd::Zero(3), 0.1 * double(path.size())};
+    op.q << th, 0, th;
+    op.qd << 0.5, 0, 0.5;
+    path.push_back(op);
+  }
+  const auto models = linearize_along(sys, path, {}, {coordinate_output(sys, "t3")});
+  ASSERT_EQ(models.size(), path.size());
+  for (std::size_t k = 0; k < path.size(); ++k) {
+    const double th = path[k].q(0);
+    EXPECT_EQ(models[k].state_names, models[0].state_names) << k;  // one chart
+    MatrixXd A(2, 2);
+    A << 0, 1, -w2 * std::cos(th), 0;
+    expect_error_bounds(models[k].A, models[k].A_error, A, "A");
+    EXPECT_NEAR(models[k].f0(0), 0.5, 1e-12) << k;
+    EXPECT_NEAR(models[k].f0(1), -w2 * std::sin(th), 1e-10) << k;
+    // the other crank follows: C = [1, 0] whichever crank is independent
+    EXPECT_NEAR(models[k].C(0, 0), 1.0, 1e-9) << k;
+    EXPECT_NEAR(models[k].C(0, 1), 0.0, 1e-9) << k;
+  }
+  // a point off the manifold is named by its index
+  path[2].q(1) = 0.2;
+  try {
+    linearize_along(sys, path);
+    ADD_FAILURE() << "no error";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("point 2 (t = 0.2"), std::string::npos) << e.what();
+  }
+}
+
 TEST(Linearize, FourBarAtAFoldIsASingularConfigurationError) {
   // cranks straight up along the coupler's line: t1 = t3 = π/2, where loop_y's row vanishes
   // against loop_x's — the Jacobian loses rank and no silent matrix is returned
@@ -268,6 +305,21 @@ TEST(Linearize, MisuseNamesWhatIsWrong) {
     ADD_FAILURE();
   } catch (const std::invalid_argument& e) {
     EXPECT_NE(std::string(e.what()).find("no coordinate 'y'"), std::string::npos) << e.what();
+  }
+  // model_inputs: a coordinate is a force, a parameter a parameter, anything else an error
+  const auto inputs = model_inputs(model, test::kCartPendulum, {"x", "F0"}, "--inputs");
+  ASSERT_EQ(inputs.size(), 2u);
+  EXPECT_EQ(inputs[0].kind, InputKind::kForce);
+  EXPECT_EQ(inputs[0].coordinate, 0);
+  EXPECT_EQ(inputs[1].kind, InputKind::kParameter);
+  EXPECT_EQ(inputs[1].nominal, 0.0);
+  try {
+    model_inputs(model, test::kCartPendulum, {"nosuch"}, "--inputs");
+    ADD_FAILURE();
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("--inputs nosuch: neither a coordinate"),
+              std::string::npos)
+        << e.what();
   }
   LinearizeOptions o;
   o.table_size = 1;

@@ -70,6 +70,15 @@ LinearInput model_parameter_input(const std::string& text, const std::string& fi
                                   const std::map<std::string, double>& overrides,
                                   const std::string& name);
 
+struct Model;
+
+/// The inputs called `names` of a model file: a coordinate's name is a generalized force along
+/// it (force_input), a parameter's name the parameter (model_parameter_input, from `text`, the
+/// model's own, with its parameters' values kept). `who` prefixes the messages.
+/// @throws std::invalid_argument naming an input that is neither. Cost: one parse per parameter.
+std::vector<LinearInput> model_inputs(const Model& model, const std::string& text,
+                                      const std::vector<std::string>& names, const char* who);
+
 /// One output y_k of the linear model (row k of C and D): a coordinate or its rate.
 struct LinearOutput {
   std::string name;       ///< label: the coordinate's name, with "_dot" for its rate
@@ -156,6 +165,18 @@ LinearModel linearize(const System& sys, const OperatingPoint& at,
                       const std::vector<LinearInput>& inputs = {},
                       const std::vector<LinearOutput>& outputs = {},
                       const LinearizeOptions& options = {});
+
+/// Time-varying linearization along a trajectory (for tracking-error analysis): the linear
+/// model δx' = A(t) δx + B(t) u, δy = C(t) δx + D(t) u of the deviations from the motion through
+/// `path` (points on the manifold, e.g. a simulation's samples). One chart for all points: the
+/// independent coordinates of `options`, or those chosen automatically at the first point, so
+/// that δx means the same at every point (f0 is the motion's own x'). Each point as linearize().
+/// @throws std::invalid_argument as linearize(), naming the point (index and t) — also where the
+/// first point's coordinates become singular along the path. Cost: linearize() per point.
+std::vector<LinearModel> linearize_along(const System& sys, const std::vector<OperatingPoint>& path,
+                                         const std::vector<LinearInput>& inputs = {},
+                                         const std::vector<LinearOutput>& outputs = {},
+                                         const LinearizeOptions& options = {});
 
 /// Settings of find_equilibrium().
 struct EquilibriumOptions {
