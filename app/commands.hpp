@@ -140,6 +140,7 @@ struct LinearizeArguments {
   std::vector<std::string> inputs;    ///< --inputs: coordinates (forces) or parameters
   std::vector<std::string> outputs;   ///< --outputs: coordinates or NAME_dot
   bool equilibrium = false;           ///< --equilibrium: find one from the --at state first
+  bool project = false;               ///< --project: project the state onto the constraints first
   std::vector<std::string> unknowns;  ///< --unknowns of the equilibrium (default: positions)
   std::string format = "json";        ///< --format json|csv
 };

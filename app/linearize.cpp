@@ -77,6 +77,8 @@ int linearize_command(const LinearizeArguments& args) {
   const Model model = load_source(args.source);
   const System& sys = model.system;
   OperatingPoint op = operating_point(model, args.at);
+  if (args.project || (model.project_initial && args.at.empty()))
+    op = project_onto_manifold(sys, op);
 
   LinearizeOptions options;
   options.independent_positions = args.independent;

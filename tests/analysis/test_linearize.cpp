@@ -148,7 +148,9 @@ TEST(Linearize, ParallelogramFourBarOscillatesAtItsReducedOneDofFrequency) {
     EXPECT_NEAR(lm.eigenvalues(1).imag(), -lm.eigenvalues(0).imag(), 1e-12) << independent;
     // the coupler does not turn on the one-DOF motion: C = 0 for t2
     EXPECT_NEAR(lm.C(0, 0), 0.0, 1e-9);
-    if (*independent) EXPECT_EQ(lm.state_names[0], independent);
+    if (*independent) {
+      EXPECT_EQ(lm.state_names[0], independent);
+    }
   }
   // t2 cannot be independent here: the dependent pair (t1, t3) has a singular block
   LinearizeOptions o;
@@ -214,6 +216,27 @@ TEST(Linearize, FourBarAtAFoldIsASingularConfigurationError) {
   }
   op.q(0) = 0.1;  // off the manifold
   EXPECT_THROW(linearize(sys, op), std::invalid_argument);
+}
+
+TEST(Linearize, AStateProjectedOntoTheManifoldLinearizes) {
+  // a four-bar state off the loop: projected, it satisfies both loop rows, and linearizes
+  const Model model = parse_model(test::kParallelogram);
+  const System& sys = model.system;
+  OperatingPoint op{VectorXd::Zero(3), VectorXd::Zero(3), 0.0};
+  op.q << 0.3, 0.05, 0.2;
+  op.qd << 0.1, 0.0, 0.3;
+  const OperatingPoint p = project_onto_manifold(sys, op);
+  const double L = 0.5, d = 1;
+  EXPECT_NEAR(L * std::sin(p.q(0)) + d * std::cos(p.q(1)) - d - L * std::sin(p.q(2)), 0.0, 1e-12);
+  EXPECT_NEAR(-L * std::cos(p.q(0)) + d * std::sin(p.q(1)) + L * std::cos(p.q(2)), 0.0, 1e-12);
+  // the velocity rows: d/dt of both loop rows
+  EXPECT_NEAR(L * std::cos(p.q(0)) * p.qd(0) - d * std::sin(p.q(1)) * p.qd(1) -
+                  L * std::cos(p.q(2)) * p.qd(2),
+              0.0, 1e-12);
+  EXPECT_NEAR(L * std::sin(p.q(0)) * p.qd(0) + d * std::cos(p.q(1)) * p.qd(1) -
+                  L * std::sin(p.q(2)) * p.qd(2),
+              0.0, 1e-12);
+  EXPECT_EQ(linearize(sys, p).state_names.size(), 2u);
 }
 
 std::vector<std::complex<double>> sorted_eigenvalues(const LinearModel& lm) {
@@ -287,8 +310,12 @@ TEST(Linearize, RollingDiskUprightStabilityMatchesTheClassicalCriterion) {
     const double expected = std::sqrt(std::abs(lambda2));
     for (int k = 0; k < 2; ++k) {
       EXPECT_NEAR(std::abs(ev[std::size_t(k)]), expected, 1e-6 * expected) << "W " << W;
-      if (lambda2 < 0) EXPECT_NEAR(ev[std::size_t(k)].real(), 0.0, 1e-6) << "W " << W;
-      if (lambda2 > 0) EXPECT_NEAR(ev[std::size_t(k)].imag(), 0.0, 1e-6) << "W " << W;
+      if (lambda2 < 0) {
+        EXPECT_NEAR(ev[std::size_t(k)].real(), 0.0, 1e-6) << "W " << W;
+      }
+      if (lambda2 > 0) {
+        EXPECT_NEAR(ev[std::size_t(k)].imag(), 0.0, 1e-6) << "W " << W;
+      }
     }
     for (std::size_t k = 2; k < ev.size(); ++k) EXPECT_NEAR(std::abs(ev[k]), 0.0, 1e-4) << k;
   }

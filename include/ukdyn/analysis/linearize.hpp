@@ -41,6 +41,13 @@ struct OperatingPoint {
   double t = 0.0;  ///< time
 };
 
+/// `p` moved onto the constraint manifold: project_positions, then project_velocities (the
+/// M-weighted least corrections; dynamics/projection.hpp), at p.t. For a state that is meant as
+/// a guess (a model file's `initial: project: true`, `ukdyn linearize --project`).
+/// @throws SolveError (kProjectionFailed) naming the level and the violation left when a
+/// projection does not converge; std::invalid_argument on sizes. Cost: the projections'.
+OperatingPoint project_onto_manifold(const System& sys, const OperatingPoint& p);
+
 /// What an input of the linear model is.
 enum class InputKind {
   kForce,      ///< a generalized force u added to Q_j along coordinate j
