@@ -45,9 +45,10 @@ py::dict linearize_model(const Model& model, py::object q, py::object qd, py::ob
                          const std::vector<std::string>& outputs,
                          const std::vector<std::string>& independent,
                          const std::vector<std::string>& independent_velocities, bool equilibrium,
-                         const std::vector<std::string>& unknowns) {
+                         const std::vector<std::string>& unknowns, bool project) {
   const System& sys = model.system;
   OperatingPoint op = point_of(model, q, qd, t, "Model.linearize");
+  if (project) op = project_onto_manifold(sys, op);
   LinearizeOptions options;
   options.independent_positions = independent;
   options.independent_velocities = independent_velocities;
@@ -116,6 +117,7 @@ void bind_linearize(py::module_& m) {
   m.def("_linearize", &linearize_model, py::arg("model"), py::arg("q"), py::arg("q_dot"),
         py::arg("t"), py::arg("inputs"), py::arg("outputs"), py::arg("independent"),
         py::arg("independent_velocities"), py::arg("equilibrium"), py::arg("unknowns"),
+        py::arg("project"),
         "The linear model of a Model as a dict of NumPy arrays and names (Model.linearize).");
   m.def("_equilibrium", &equilibrium_of, py::arg("model"), py::arg("q"), py::arg("q_dot"),
         py::arg("t"), py::arg("unknowns"), py::arg("tolerance"), py::arg("independent"),

@@ -59,6 +59,14 @@ def test_pendulum_hangs_and_swings_at_sqrt_g_over_L(examples_dir):
     np.testing.assert_allclose(lm.eigenvalues.real, [0, 0], rtol=0, atol=1e-8)
 
 
+def test_a_state_off_the_constraints_is_refused_or_projected(examples_dir):
+    model = ukdyn.load(examples_dir / "pendulum.yaml")
+    with pytest.raises(ValueError, match="not on the constraint manifold"):
+        model.linearize(q=[0.1, -1.2], q_dot=[0, 0])
+    lm = model.linearize(q=[0.1, -1.2], q_dot=[0, 0], project=True)
+    np.testing.assert_allclose(np.hypot(*lm.q), model.parameters["L"], rtol=1e-12)
+
+
 def test_errors_name_what_is_wrong():
     model = ukdyn.parse(CART)
     with pytest.raises(ValueError, match="neither a coordinate"):

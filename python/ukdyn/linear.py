@@ -61,7 +61,8 @@ def _names(value: Any) -> List[str]:
 def linearize(model: "_ukdyn.Model", q: Any = None, q_dot: Any = None, t: Optional[float] = None,
               *, inputs: Sequence[str] = (), outputs: Sequence[str] = (),
               independent: Sequence[str] = (), independent_velocities: Sequence[str] = (),
-              equilibrium: bool = False, unknowns: Sequence[str] = ()) -> LinearModel:
+              equilibrium: bool = False, unknowns: Sequence[str] = (),
+              project: bool = False) -> LinearModel:
     """The linear model of ``model`` about (q, q_dot, t) (default: its initial state), in
     minimal coordinates of the constraint manifold.
 
@@ -70,12 +71,13 @@ def linearize(model: "_ukdyn.Model", q: Any = None, q_dot: Any = None, t: Option
     ``independent_velocities``): the independent coordinates by name (default: chosen by a
     column-pivoted QR, the best conditioned). With ``equilibrium=True`` an equilibrium or steady
     motion is first found from the state (``unknowns`` as in :meth:`Model.equilibrium`).
+    ``project=True`` first moves the state onto the constraints (least M-weighted correction).
     Raises ValueError on misuse, off the constraint manifold, or at a singular configuration;
     :class:`SolveError` when the dynamics cannot be evaluated near the point.
     """
     d = _ukdyn._linearize(model, q, q_dot, t, _names(inputs), _names(outputs),
                           _names(independent), _names(independent_velocities), bool(equilibrium),
-                          _names(unknowns))
+                          _names(unknowns), bool(project))
     return LinearModel(**d)
 
 
