@@ -137,6 +137,23 @@ int sweep_command(const SweepArguments& args);
 /// `ukdyn check`: print check_model()'s report; kExitCheck when it found problems.
 int check_command(const ModelSource& source);
 
+/// Settings of `ukdyn linearize`.
+struct LinearizeArguments {
+  ModelSource source;
+  std::vector<std::string> at;           ///< --at NAME=VALUE,… (coordinates, NAME_dot, t)
+  std::vector<std::string> independent;  ///< --independent: independent positions by name
+  std::vector<std::string> independent_velocities;  ///< --independent-velocities
+  std::vector<std::string> inputs;    ///< --inputs: coordinates (forces) or parameters
+  std::vector<std::string> outputs;   ///< --outputs: coordinates or NAME_dot
+  bool equilibrium = false;           ///< --equilibrium: find one from the --at state first
+  bool project = false;               ///< --project: project the state onto the constraints first
+  std::vector<std::string> unknowns;  ///< --unknowns of the equilibrium (default: positions)
+  std::string format = "json";        ///< --format json|csv
+};
+
+/// `ukdyn linearize`: the linear model (analysis/linearize.hpp) on standard output.
+int linearize_command(const LinearizeArguments& args);
+
 /// `ukdyn examples`: list the built-in examples; `ukdyn examples NAME`: print that example's model
 /// file (to start one's own from it). @throws UsageError on an unknown NAME (the nearest named).
 int examples_command(const std::string& name = "");

@@ -6,7 +6,7 @@ _ukdyn() {
   local cur=${COMP_WORDS[COMP_CWORD]} prev=${COMP_WORDS[COMP_CWORD - 1]}
   local cmd=${COMP_WORDS[0]}
   if ((COMP_CWORD == 1)); then
-    mapfile -t COMPREPLY < <(compgen -W "run sweep check examples --help --version" -- "$cur")
+    mapfile -t COMPREPLY < <(compgen -W "run sweep check linearize examples --help --version" -- "$cur")
     return
   fi
   local sub=${COMP_WORDS[1]}

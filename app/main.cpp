@@ -264,6 +264,36 @@ int main(int argc, char** argv) {
                          "constraints, initial consistency and M at the initial state");
   add_source_options(check_cmd, check);
 
+  LinearizeArguments lin;
+  CLI::App* lin_cmd = app.add_subcommand(
+      "linearize",
+      "the linear model x' = A x + B u, y = C x + D u in minimal coordinates of the constraint "
+      "manifold, with eigenvalues and modes (docs/linearize.md)");
+  add_source_options(lin_cmd, lin.source);
+  lin_cmd
+      ->add_option("--at", lin.at,
+                   "the state: NAME=VALUE,… (coordinates, NAME_dot, t; "
+                   "default the model's initial state)")
+      ->delimiter(',');
+  lin_cmd->add_option("--independent", lin.independent, "independent positions by name")
+      ->delimiter(',');
+  lin_cmd
+      ->add_option("--independent-velocities", lin.independent_velocities,
+                   "independent velocities by name")
+      ->delimiter(',');
+  lin_cmd
+      ->add_option("--inputs", lin.inputs,
+                   "inputs: coordinates (a generalized force) or parameters")
+      ->delimiter(',');
+  lin_cmd->add_option("--outputs", lin.outputs, "outputs: coordinates or NAME_dot")->delimiter(',');
+  lin_cmd->add_flag("--equilibrium", lin.equilibrium,
+                    "first find an equilibrium (or steady motion) from the --at state");
+  lin_cmd
+      ->add_option("--unknowns", lin.unknowns,
+                   "the equilibrium's unknowns (default: the independent positions)")
+      ->delimiter(',');
+  lin_cmd->add_option("--format", lin.format, "json (default) or csv");
+
   std::string example_name;
   CLI::App* examples_cmd = app.add_subcommand(
       "examples", "list the built-in examples; with NAME, print that example's model file");
@@ -347,6 +377,7 @@ int main(int argc, char** argv) {
       return sweep_command(sweep);
     }
     if (check_cmd->parsed()) return check_command(check);
+    if (lin_cmd->parsed()) return linearize_command(lin);
     return examples_command(example_name);
   } catch (const UsageError& e) {
     std::fprintf(stderr, "error: %s\nRun with --help for more information.\n",

@@ -2,6 +2,7 @@
 /// Everything needed to describe a constrained system, evaluate and simulate its motion.
 #pragma once
 
+#include "ukdyn/analysis/linearize.hpp"
 #include "ukdyn/control/control.hpp"
 #include "ukdyn/core/autodiff.hpp"
 #include "ukdyn/core/constraint.hpp"

@@ -183,5 +183,6 @@ void bind_solver(py::module_& m);     // bind_solver.cpp
 void bind_control(py::module_& m);    // bind_control.cpp
 void bind_callables(py::module_& m);  // bind_callables.cpp
 void bind_ensemble(py::module_& m);   // bind_ensemble.cpp
+void bind_linearize(py::module_& m);  // bind_linearize.cpp
 
 }  // namespace ukdyn::python

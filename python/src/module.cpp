@@ -67,6 +67,7 @@ PYBIND11_MODULE(_ukdyn, m) {
   up::bind_control(m);
   up::bind_callables(m);
   up::bind_ensemble(m);
+  up::bind_linearize(m);
   // the options table (simulation/options.hpp): what every simulate() accepts
   m.def("_options", &up::options_list,
         "The simulation options table: a list of dicts (name, type, default, range, choices, "

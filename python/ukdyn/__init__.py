@@ -27,6 +27,8 @@ import os
 from typing import Any, Optional
 
 from . import _ukdyn
+from . import linear as _linear
+from .linear import LinearModel
 from . import interrupt as _interrupt
 from ._ukdyn import (ControlSolution, ControlSolver, Controller, Model, Solution, Solver,
                      System, example_text, examples)
@@ -58,7 +60,7 @@ def read_hdf5(path: str) -> "tuple[Result, dict]":
 
 __all__ = [
     "ControlSolution", "ControlSolver", "Controller", "EnergyBalanceWarning",
-    "InconsistentInitialState", "Interrupted",
+    "InconsistentInitialState", "Interrupted", "LinearModel",
     "Model", "ModelError", "Result",
     "Solution", "SolveError", "Solver", "System", "constraint", "controller", "coulomb",
     "example_text", "examples", "from_callables", "from_sympy", "load", "nonideal", "options",
@@ -172,3 +174,5 @@ _model_simulate.__doc__ = (_model_simulate.__doc__ or "") + _options_doc()
 
 Model.simulate = _model_simulate  # type: ignore[attr-defined]
 Model.solve = _model_solve  # type: ignore[attr-defined]
+Model.linearize = _linear.linearize  # type: ignore[attr-defined]
+Model.equilibrium = _linear.equilibrium  # type: ignore[attr-defined]

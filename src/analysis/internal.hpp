@@ -1,0 +1,102 @@
+/// @file analysis/internal.hpp
+/// The stages of linearize() and find_equilibrium() (include/ukdyn/analysis/linearize.hpp):
+///   1. choose_coordinates   I_p, D_p, I_v, D_v from the constraint Jacobians
+///   analysis/coordinate_partition.cpp
+///   2. ReducedDynamics      x → (q, q') on the manifold (Newton) → f(x), g(x)
+///   analysis/reduced_dynamics.cpp
+///   3. ridders_jacobian     ∂F/∂z with an error estimate per entry    analysis/ridders.cpp
+///   4. linearize            assembles A, B, C, D and the modes       analysis/linearize.cpp
+#pragma once
+
+#include <functional>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "ukdyn/analysis/linearize.hpp"
+#include "ukdyn/core/system.hpp"
+#include "ukdyn/dynamics/workspace.hpp"
+
+namespace ukdyn::analysis {
+
+/// The split of the coordinates into independent and dependent ones at a point.
+struct Partition {
+  std::vector<Index> ip, dp;  ///< independent / dependent positions (increasing)
+  std::vector<Index> iv, dv;  ///< independent / dependent velocities (increasing); dv ⊇ dp
+  std::vector<Index> holonomic_rows;  ///< rows of A of the active holonomic constraints
+  std::vector<Index> velocity_rows;   ///< rows of the active holonomic and nonholonomic ones
+  double condition = 1.0;  ///< σ_min/σ_max estimate of J_v's dependent columns (1 if none)
+};
+
+/// The workspace options linearize uses: `solver` with the dense engine (M and A are read).
+SolverOptions dense_options(const SolverOptions& solver);
+
+/// Stage 1: evaluates A at `at` (ws, dense engine), checks that `at` lies on the manifold
+/// (unless check_manifold is false: a guess), and chooses the partition (automatically, or from
+/// the names in `options`). `who` prefixes the messages. @throws std::invalid_argument (see
+/// linearize()).
+Partition choose_coordinates(const System& sys, Workspace& ws, const OperatingPoint& at,
+                             const LinearizeOptions& options, const char* who,
+                             bool check_manifold = true);
+
+/// Stage 2: the reduced dynamics of one system (the nominal one, or one of a parameter
+/// family) in the chart of a partition based at a point.
+class ReducedDynamics {
+ public:
+  ReducedDynamics(const System& sys, const Partition& p, const OperatingPoint& base,
+                  const LinearizeOptions& options);
+  /// Completes x = (q_Ip, q'_Iv) to (q, q') on the manifold: Newton on Φ for q_Dp, then on the
+  /// velocity constraints for q'_Dv, each started from the base point. False when a Newton
+  /// iteration does not converge (why() says where).
+  bool complete(const Eigen::Ref<const VectorXd>& x);
+  /// complete(x), then F = (f(x), g(x)): f = (q'_Ip, q''_Iv) by forward_dynamics, g the
+  /// outputs. False on failure (why()).
+  bool evaluate(const Eigen::Ref<const VectorXd>& x, const std::vector<LinearOutput>& outputs,
+                Eigen::Ref<VectorXd> F);
+  /// x of the base point.
+  VectorXd base_state() const;
+  const VectorXd& q() const { return q_; }         ///< after complete(): positions (n)
+  const VectorXd& qd() const { return qd_; }       ///< after complete(): velocities (n)
+  Workspace& workspace() { return ws_; }           ///< after evaluate(): the forward dynamics
+  const std::string& why() const { return why_; }  ///< the last failure
+  Index state_size() const { return Index(p_.ip.size() + p_.iv.size()); }  ///< s
+
+ private:
+  bool newton(bool velocity);
+
+  const System& sys_;
+  const Partition& p_;
+  OperatingPoint base_;
+  Workspace ws_;
+  VectorXd q_, qd_;
+  std::string why_;
+};
+
+/// Settings of ridders_jacobian (from LinearizeOptions).
+struct RiddersOptions {
+  int table_size = 10;
+  double step_ratio = 1.4;
+  double safe = 2.0;  ///< stop a column's entry once the error grows by this factor
+};
+
+/// A function R^k → R^p for ridders_jacobian: writes F(z) (p) and returns false when it cannot
+/// be evaluated at z.
+using VectorFunction =
+    std::function<bool(const Eigen::Ref<const VectorXd>& z, Eigen::Ref<VectorXd> F)>;
+
+/// Stage 3: J = ∂F/∂z at z0 by Ridders' method, column j from the first step h0(j); err(i, j)
+/// is the estimate of |J(i, j) − exact|: the larger of the table's last improvement at the
+/// chosen entry and the roundoff floor 4 ε |F| / h, plus 16 ε |J|. A failed evaluation at the first
+/// level quarters the step (up to 3 times), at a later one ends the column's table. Returns false
+/// (message in `why`) when a column cannot be started. Cost: up to 2 · table_size
+/// evaluations per column.
+bool ridders_jacobian(const VectorFunction& F, const Eigen::Ref<const VectorXd>& z0,
+                      const Eigen::Ref<const VectorXd>& h0, Index p, const RiddersOptions& o,
+                      MatrixXd& J, MatrixXd& err, std::string& why);
+
+/// Coordinate index of `name`, or of `name` without "_dot" with rate = true. @throws
+/// std::invalid_argument naming `who` and the coordinates.
+Index coordinate_of(const System& sys, const std::string& name, bool& rate, const char* who);
+
+}  // namespace ukdyn::analysis

@@ -1,0 +1,195 @@
+/// @file analysis/linearize.cpp
+/// Stage 4 of linearize(): A, B, C, D about an operating point, and the modes
+/// (include/ukdyn/analysis/linearize.hpp; docs/linearize.md).
+#include "ukdyn/analysis/linearize.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
+#include <Eigen/SVD>
+
+#include "analysis/internal.hpp"
+#include "ukdyn/core/status.hpp"
+
+namespace ukdyn {
+namespace {
+constexpr const char* kWho = "linearize";
+
+// ∂q''/∂Q = N (Nᵀ M N)⁻¹ Nᵀ with N a basis of null(A): the fundamental equation's response to
+// a generalized force (Gauss's principle restricted to A δq'' = 0), exact. (n × n)
+MatrixXd force_response(const Workspace& ws, double rank_threshold) {
+  const Index n = ws.M.rows();
+  MatrixXd N = MatrixXd::Identity(n, n);
+  if (ws.A.rows() > 0) {
+    Eigen::JacobiSVD<MatrixXd> svd(ws.A, Eigen::ComputeFullV);
+    const auto& s = svd.singularValues();
+    Index r = 0;
+    while (r < s.size() && s(r) > rank_threshold * s(0)) ++r;
+    N = svd.matrixV().rightCols(n - r);
+  }
+  const MatrixXd G = N.transpose() * ws.M.selfadjointView<Eigen::Lower>() * N;
+  Eigen::LLT<MatrixXd> llt(G);
+  if (llt.info() != Eigen::Success)
+    throw SolveError(Status::kMassNotPositiveDefinite,
+                     std::string(kWho) +
+                         ": the mass matrix is not positive definite on the constraints' null "
+                         "space at the operating point; the force inputs' B is not defined");
+  return N * llt.solve(N.transpose());
+}
+
+}  // namespace
+
+LinearInput force_input(const System& sys, const std::string& coordinate) {
+  LinearInput in;
+  in.name = coordinate;
+  in.kind = InputKind::kForce;
+  in.coordinate = sys.coordinate_index(coordinate);
+  return in;
+}
+
+LinearOutput coordinate_output(const System& sys, const std::string& name) {
+  LinearOutput out;
+  out.name = name;
+  out.coordinate = analysis::coordinate_of(sys, name, out.rate, "coordinate_output");
+  return out;
+}
+
+std::vector<std::pair<std::string, std::complex<double>>> LinearModel::mode(Index k) const {
+  if (k < 0 || k >= eigenvectors.cols())
+    throw std::invalid_argument("LinearModel::mode: no mode " + std::to_string(k) + " (there are " +
+                                std::to_string(eigenvectors.cols()) + ")");
+  std::vector<std::pair<std::string, std::complex<double>>> out;
+  for (Index i = 0; i < eigenvectors.rows(); ++i)
+    out.emplace_back(state_names[std::size_t(i)], eigenvectors(i, k));
+  std::stable_sort(out.begin(), out.end(), [](const auto& a, const auto& b) {
+    return std::abs(a.second) > std::abs(b.second);
+  });
+  return out;
+}
+
+LinearModel linearize(const System& sys, const OperatingPoint& at,
+                      const std::vector<LinearInput>& inputs,
+                      const std::vector<LinearOutput>& outputs, const LinearizeOptions& options) {
+  const Index n = sys.coordinate_count();
+  for (std::size_t i = 0; i < inputs.size(); ++i) {
+    const auto& in = inputs[i];
+    if (in.kind == InputKind::kForce && (in.coordinate < 0 || in.coordinate >= n))
+      throw std::invalid_argument(std::string(kWho) + ": input " + std::to_string(i) + " ('" +
+                                  in.name + "') is a force along coordinate " +
+                                  std::to_string(in.coordinate) + ", not in [0, " +
+                                  std::to_string(n) + ")");
+    if (in.kind == InputKind::kForce && sys.nonideal_count() > 0)
+      throw std::invalid_argument(
+          std::string(kWho) + ": force input '" + in.name +
+          "': the system has non-ideal forces (which may read the reactions a force changes); "
+          "force inputs are supported for ideal constraints only");
+    if (in.kind == InputKind::kParameter && !in.family)
+      throw std::invalid_argument(std::string(kWho) + ": parameter input '" + in.name +
+                                  "' has no family of systems");
+  }
+  for (std::size_t i = 0; i < outputs.size(); ++i)
+    if (outputs[i].coordinate < 0 || outputs[i].coordinate >= n)
+      throw std::invalid_argument(std::string(kWho) + ": output '" + outputs[i].name +
+                                  "' names coordinate " + std::to_string(outputs[i].coordinate) +
+                                  ", not in [0, " + std::to_string(n) + ")");
+
+  // stage 1: the coordinates
+  Workspace ws(sys, analysis::dense_options(options.solver));
+  const analysis::Partition part = analysis::choose_coordinates(sys, ws, at, options, kWho);
+  analysis::ReducedDynamics rd(sys, part, at, options);
+  const Index s = rd.state_size(), ny = Index(outputs.size()), nu = Index(inputs.size());
+
+  LinearModel lm;
+  lm.independent_positions = part.ip;
+  lm.independent_velocities = part.iv;
+  lm.chart_condition = part.condition;
+  for (Index j : part.ip) lm.state_names.push_back(sys.coordinate_names()[std::size_t(j)]);
+  for (Index j : part.iv) lm.state_names.push_back(sys.coordinate_names()[std::size_t(j)] + "_dot");
+  for (const auto& in : inputs) lm.input_names.push_back(in.name);
+  for (const auto& y : outputs) lm.output_names.push_back(y.name);
+
+  // the point itself: f₀ (zero at an equilibrium), M and A for the force inputs
+  lm.x0 = rd.base_state();
+  VectorXd F0(s + ny);
+  if (!rd.evaluate(lm.x0, outputs, F0))
+    throw SolveError(Status::kProjectionFailed,
+                     std::string(kWho) + ": at the operating point: " + rd.why());
+  lm.f0 = F0.head(s);
+
+  // A, C: Ridders on x ↦ (f, g)
+  const analysis::RiddersOptions ro{options.table_size, options.step_ratio, 2.0};
+  std::string why;
+  VectorXd h(s);
+  for (Index k = 0; k < s; ++k) h(k) = options.initial_step * std::max(1.0, std::abs(lm.x0(k)));
+  MatrixXd J, E;
+  const analysis::VectorFunction F = [&](const Eigen::Ref<const VectorXd>& x,
+                                         Eigen::Ref<VectorXd> out) {
+    return rd.evaluate(x, outputs, out);
+  };
+  if (!analysis::ridders_jacobian(F, lm.x0, h, s + ny, ro, J, E, why))
+    throw SolveError(Status::kProjectionFailed, std::string(kWho) + ": " + why + ": " + rd.why());
+  lm.A = J.topRows(s);
+  lm.A_error = E.topRows(s);
+  lm.C = J.bottomRows(ny);
+  lm.C_error = E.bottomRows(ny);
+
+  // B, D: exact for forces, Ridders over the family for parameters
+  lm.B.setZero(s, nu);
+  lm.B_error.setZero(s, nu);
+  lm.D.setZero(ny, nu);
+  lm.D_error.setZero(ny, nu);
+  MatrixXd response;
+  for (Index c = 0; c < nu; ++c) {
+    const auto& in = inputs[std::size_t(c)];
+    if (in.kind == InputKind::kForce) {
+      // δq'' = N (Nᵀ M N)⁻¹ Nᵀ e_j u: only the velocity rows of B
+      rd.evaluate(lm.x0, outputs, F0);
+      if (response.size() == 0) response = force_response(rd.workspace(), options.rank_threshold);
+      Index k = Index(part.ip.size());
+      for (Index j : part.iv) lm.B(k++, c) = response(j, in.coordinate);
+      continue;
+    }
+    const analysis::VectorFunction Fp = [&](const Eigen::Ref<const VectorXd>& u,
+                                            Eigen::Ref<VectorXd> out) {
+      const System sp = in.family(in.nominal + u(0));
+      if (sp.coordinate_count() != n || sp.constraint_rows() != sys.constraint_rows()) {
+        why = "the system at " + in.name + " = " + std::to_string(in.nominal + u(0)) +
+              " has other coordinates or constraints";
+        return false;
+      }
+      analysis::ReducedDynamics rp(sp, part, at, options);
+      const bool ok = rp.evaluate(lm.x0, outputs, out);
+      if (!ok) why = rp.why();
+      return ok;
+    };
+    const VectorXd u0 = VectorXd::Zero(1);
+    const VectorXd hu =
+        VectorXd::Constant(1, options.initial_step * std::max(1.0, std::abs(in.nominal)));
+    std::string why_p;
+    if (!analysis::ridders_jacobian(Fp, u0, hu, s + ny, ro, J, E, why_p))
+      throw SolveError(Status::kProjectionFailed,
+                       std::string(kWho) + ": parameter '" + in.name + "': " + why_p + ": " + why);
+    lm.B.col(c) = J.col(0).head(s);
+    lm.B_error.col(c) = E.col(0).head(s);
+    lm.D.col(c) = J.col(0).tail(ny);
+    lm.D_error.col(c) = E.col(0).tail(ny);
+  }
+
+  // the modes
+  if (s > 0) {
+    Eigen::EigenSolver<MatrixXd> es(lm.A);
+    if (es.info() != Eigen::Success)
+      throw SolveError(Status::kNonFiniteResult,
+                       std::string(kWho) + ": the eigenvalues of A did not converge");
+    lm.eigenvalues = es.eigenvalues();
+    lm.eigenvectors = es.eigenvectors();
+  }
+  return lm;
+}
+
+}  // namespace ukdyn

@@ -1,0 +1,357 @@
+// Tests of linearize() (src/analysis/): textbook matrices, reduced one-DOF frequencies, the
+// sleeping top's threshold, the rolling disk's stability criterion, and Ridders' error estimate.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <complex>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+#include <Eigen/LU>
+
+#include "analysis/models.hpp"
+#include "ukdyn/analysis/linearize.hpp"
+#include "ukdyn/modelfile/model.hpp"
+
+namespace ukdyn {
+namespace UKDYN_TEST_FILE {
+
+OperatingPoint at_rest(const System& sys) {
+  const Index n = sys.coordinate_count();
+  return {VectorXd::Zero(n), VectorXd::Zero(n), 0.0};
+}
+
+// |got − want| <= tol entrywise, with the entry named on failure
+void expect_matrix_near(const MatrixXd& got, const MatrixXd& want, double tol, const char* what) {
+  ASSERT_EQ(got.rows(), want.rows()) << what;
+  ASSERT_EQ(got.cols(), want.cols()) << what;
+  for (Index i = 0; i < got.rows(); ++i)
+    for (Index j = 0; j < got.cols(); ++j)
+      EXPECT_NEAR(got(i, j), want(i, j), tol) << what << "(" << i << ", " << j << ")";
+}
+
+// the estimate bounds the true error: |got − exact| <= err (+ a roundoff allowance), and err is
+// small (the derivatives are good to 1e-7 or better)
+void expect_error_bounds(const MatrixXd& got, const MatrixXd& err, const MatrixXd& exact,
+                         const char* what) {
+  for (Index i = 0; i < got.rows(); ++i)
+    for (Index j = 0; j < got.cols(); ++j) {
+      EXPECT_NEAR(got(i, j), exact(i, j), err(i, j) + 1e-14 * (1 + std::abs(exact(i, j))))
+          << what << "(" << i << ", " << j << ")";
+      EXPECT_LE(err(i, j), 1e-7) << what << "(" << i << ", " << j << ")";
+      EXPECT_GE(err(i, j), 0.0) << what << "(" << i << ", " << j << ")";
+    }
+}
+
+// textbook A, B of the cart pendulum in (x, th, x', th')
+void cart_pendulum_textbook(MatrixXd& A, MatrixXd& B) {
+  const double M = 2, m = 0.5, l = 0.8, g = 9.81;
+  A.setZero(4, 4);
+  A(0, 2) = A(1, 3) = 1;
+  A(2, 1) = -m * g / M;
+  A(3, 1) = (M + m) * g / (M * l);
+  B.setZero(4, 1);
+  B(2, 0) = 1 / M;
+  B(3, 0) = -1 / (M * l);
+}
+
+TEST(Linearize, CartPendulumMatchesTheTextbookMatrices) {
+  const Model model = parse_model(test::kCartPendulum);
+  const System& sys = model.system;
+  const LinearModel lm = linearize(sys, at_rest(sys), {force_input(sys, "x")},
+                                   {coordinate_output(sys, "th"), coordinate_output(sys, "x_dot")});
+  MatrixXd A, B;
+  cart_pendulum_textbook(A, B);
+  EXPECT_EQ(lm.state_names, (std::vector<std::string>{"x", "th", "x_dot", "th_dot"}));
+  expect_error_bounds(lm.A, lm.A_error, A, "A");
+  expect_matrix_near(lm.B, B, 1e-14, "B");  // force inputs are exact
+  MatrixXd C = MatrixXd::Zero(2, 4);
+  C(0, 1) = C(1, 2) = 1;
+  expect_error_bounds(lm.C, lm.C_error, C, "C");
+  expect_matrix_near(lm.D, MatrixXd::Zero(2, 1), 0.0, "D");
+  expect_matrix_near(lm.f0, VectorXd::Zero(4), 1e-15, "f0");
+  // eigenvalues 0, 0, ±sqrt((M + m) g / (M l))
+  std::vector<double> re;
+  for (Index k = 0; k < 4; ++k) re.push_back(lm.eigenvalues(k).real());
+  std::sort(re.begin(), re.end());
+  const double p = std::sqrt(2.5 * 9.81 / 1.6);
+  EXPECT_NEAR(re[0], -p, 1e-7);
+  EXPECT_NEAR(re[3], p, 1e-7);
+  EXPECT_NEAR(re[1], 0, 1e-7);
+  EXPECT_NEAR(re[2], 0, 1e-7);
+}
+
+TEST(Linearize, ParameterInputAgreesWithTheExactForceColumn) {
+  // F0 enters as a generalized force on x: ∂f/∂F0 by Ridders over reloaded models = 1/M, −1/(M l)
+  const Model model = parse_model(test::kCartPendulum);
+  const System& sys = model.system;
+  const LinearModel lm =
+      linearize(sys, at_rest(sys), {model_parameter_input(test::kCartPendulum, "cart", {}, "F0")});
+  MatrixXd A, B;
+  cart_pendulum_textbook(A, B);
+  expect_error_bounds(lm.B, lm.B_error, B, "B");
+  EXPECT_THROW(model_parameter_input(test::kCartPendulum, "cart", {}, "nope"),
+               std::invalid_argument);
+}
+
+TEST(Linearize, ConstrainedCartesianCartPendulumIsTheTextbookModelInOtherCoordinates) {
+  // (xc, xb) = T (x, th) to first order with T = [[1, 0], [1, l]]: A' = T₂ A T₂⁻¹, B' = T₂ B
+  const Model model = parse_model(test::kCartPendulumCartesian);
+  const System& sys = model.system;
+  OperatingPoint op = at_rest(sys);
+  op.q(3) = 0.8;  // the bob above the cart
+  for (bool by_name : {false, true}) {
+    LinearizeOptions o;
+    if (by_name) o.independent_positions = {"xb", "xc"};
+    const LinearModel lm = linearize(sys, op, {force_input(sys, "xc")}, {}, o);
+    EXPECT_EQ(lm.state_names, (std::vector<std::string>{"xc", "xb", "xc_dot", "xb_dot"}));
+    MatrixXd A, B;
+    cart_pendulum_textbook(A, B);
+    MatrixXd T2 = MatrixXd::Zero(4, 4);
+    T2(0, 0) = T2(1, 0) = T2(2, 2) = T2(3, 2) = 1;
+    T2(1, 1) = T2(3, 3) = 0.8;
+    const MatrixXd A2 = T2 * A * T2.inverse(), B2 = T2 * B;
+    expect_error_bounds(lm.A, lm.A_error, A2, "A");
+    expect_matrix_near(lm.B, B2, 1e-13, "B");
+  }
+}
+
+TEST(Linearize, RiddersErrorEstimateBoundsTheTrueErrorAwayFromEquilibrium) {
+  // th'' = −(g/l) sin th − c th'³/(m l²): A = [[0, 1], [−(g/l) cos th0, −3 c th0'²/(m l²)]]
+  const Model model = parse_model(test::kCubicPendulum);
+  const double m = 1.5, l = 0.7, g = 9.81, c = 0.3;
+  for (double th0 : {0.3, 1.1, 2.5})
+    for (double w0 : {-2.0, 0.4, 3.0}) {
+      OperatingPoint op{VectorXd::Constant(1, th0), VectorXd::Constant(1, w0), 0.0};
+      const LinearModel lm = linearize(model.system, op);
+      MatrixXd A(2, 2);
+      A << 0, 1, -(g / l) * std::cos(th0), -3 * c * w0 * w0 / (m * l * l);
+      expect_error_bounds(lm.A, lm.A_error, A, "A");
+      EXPECT_NEAR(lm.f0(1), -(g / l) * std::sin(th0) - c * w0 * w0 * w0 / (m * l * l), 1e-12);
+    }
+}
+
+TEST(Linearize, ParallelogramFourBarOscillatesAtItsReducedOneDofFrequency) {
+  const Model model = parse_model(test::kParallelogram);
+  const System& sys = model.system;
+  const double mc = 1, mk = 2, L = 0.5, g = 9.81;
+  const double w = std::sqrt(g * (mc + mk) / (L * (2 * mc / 3 + mk)));
+  for (const char* independent : {"", "t1", "t3"}) {
+    LinearizeOptions o;
+    if (*independent) o.independent_positions = {independent};
+    const LinearModel lm = linearize(sys, at_rest(sys), {}, {coordinate_output(sys, "t2")}, o);
+    ASSERT_EQ(lm.state_names.size(), 2u) << independent;
+    EXPECT_NEAR(std::abs(lm.eigenvalues(0).imag()), w, 1e-8 * w) << independent;
+    EXPECT_NEAR(lm.eigenvalues(0).real(), 0.0, 1e-8 * w) << independent;
+    EXPECT_NEAR(lm.eigenvalues(1).imag(), -lm.eigenvalues(0).imag(), 1e-12) << independent;
+    // the coupler does not turn on the one-DOF motion: C = 0 for t2
+    EXPECT_NEAR(lm.C(0, 0), 0.0, 1e-9);
+    if (*independent) {
+      EXPECT_EQ(lm.state_names[0], independent);
+    }
+  }
+  // t2 cannot be independent here: the dependent pair (t1, t3) has a singular block
+  LinearizeOptions o;
+  o.independent_positions = {"t2"};
+  try {
+    linearize(sys, at_rest(sys), {}, {}, o);
+    ADD_FAILURE() << "no error";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("t1, t3 cannot be the dependent ones"), std::string::npos)
+        << e.what();
+  }
+}
+
+TEST(Linearize, AlongAMotionOfTheFourBarTheReducedEquationIsPendulumLike) {
+  // the parallelogram's one-DOF motion has constant inertia: θ'' = −ω² sin θ exactly, so along
+  // any motion t1 = t3 = θ, t2 = 0: A(t) = [[0, 1], [−ω² cos θ, 0]], f0 = (θ', −ω² sin θ)
+  const Model model = parse_model(test::kParallelogram);
+  const System& sys = model.system;
+  const double w2 = 9.81 * 3 / (0.5 * (2.0 / 3 + 2));
+  std::vector<OperatingPoint> path;
+  for (double th : {0.3, 0.8, 1.2, -0.5}) {
+    OperatingPoint op{VectorXd::Zero(3), VectorXd::Zero(3), 0.1 * double(path.size())};
+    op.q << th, 0, th;
+    op.qd << 0.5, 0, 0.5;
+    path.push_back(op);
+  }
+  const auto models = linearize_along(sys, path, {}, {coordinate_output(sys, "t3")});
+  ASSERT_EQ(models.size(), path.size());
+  for (std::size_t k = 0; k < path.size(); ++k) {
+    const double th = path[k].q(0);
+    EXPECT_EQ(models[k].state_names, models[0].state_names) << k;  // one chart
+    MatrixXd A(2, 2);
+    A << 0, 1, -w2 * std::cos(th), 0;
+    expect_error_bounds(models[k].A, models[k].A_error, A, "A");
+    EXPECT_NEAR(models[k].f0(0), 0.5, 1e-12) << k;
+    EXPECT_NEAR(models[k].f0(1), -w2 * std::sin(th), 1e-10) << k;
+    // the other crank follows: C = [1, 0] whichever crank is independent
+    EXPECT_NEAR(models[k].C(0, 0), 1.0, 1e-9) << k;
+    EXPECT_NEAR(models[k].C(0, 1), 0.0, 1e-9) << k;
+  }
+  // a point off the manifold is named by its index
+  path[2].q(1) = 0.2;
+  try {
+    linearize_along(sys, path);
+    ADD_FAILURE() << "no error";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("point 2 (t = 0.2"), std::string::npos) << e.what();
+  }
+}
+
+TEST(Linearize, FourBarAtAFoldIsASingularConfigurationError) {
+  // cranks straight up along the coupler's line: t1 = t3 = π/2, where loop_y's row vanishes
+  // against loop_x's — the Jacobian loses rank and no silent matrix is returned
+  const Model model = parse_model(test::kParallelogram);
+  const System& sys = model.system;
+  OperatingPoint op = at_rest(sys);
+  op.q << M_PI / 2, 0, M_PI / 2;
+  try {
+    linearize(sys, op);
+    ADD_FAILURE() << "no error";
+  } catch (const std::exception& e) {
+    EXPECT_NE(std::string(e.what()).find("singular configuration"), std::string::npos) << e.what();
+  }
+  op.q(0) = 0.1;  // off the manifold
+  EXPECT_THROW(linearize(sys, op), std::invalid_argument);
+}
+
+TEST(Linearize, AStateProjectedOntoTheManifoldLinearizes) {
+  // a four-bar state off the loop: projected, it satisfies both loop rows, and linearizes
+  const Model model = parse_model(test::kParallelogram);
+  const System& sys = model.system;
+  OperatingPoint op{VectorXd::Zero(3), VectorXd::Zero(3), 0.0};
+  op.q << 0.3, 0.05, 0.2;
+  op.qd << 0.1, 0.0, 0.3;
+  const OperatingPoint p = project_onto_manifold(sys, op);
+  const double L = 0.5, d = 1;
+  EXPECT_NEAR(L * std::sin(p.q(0)) + d * std::cos(p.q(1)) - d - L * std::sin(p.q(2)), 0.0, 1e-12);
+  EXPECT_NEAR(-L * std::cos(p.q(0)) + d * std::sin(p.q(1)) + L * std::cos(p.q(2)), 0.0, 1e-12);
+  // the velocity rows: d/dt of both loop rows
+  EXPECT_NEAR(L * std::cos(p.q(0)) * p.qd(0) - d * std::sin(p.q(1)) * p.qd(1) -
+                  L * std::cos(p.q(2)) * p.qd(2),
+              0.0, 1e-12);
+  EXPECT_NEAR(L * std::sin(p.q(0)) * p.qd(0) + d * std::cos(p.q(1)) * p.qd(1) -
+                  L * std::sin(p.q(2)) * p.qd(2),
+              0.0, 1e-12);
+  EXPECT_EQ(linearize(sys, p).state_names.size(), 2u);
+}
+
+std::vector<std::complex<double>> sorted_eigenvalues(const LinearModel& lm) {
+  std::vector<std::complex<double>> ev(lm.eigenvalues.data(),
+                                       lm.eigenvalues.data() + lm.eigenvalues.size());
+  std::sort(ev.begin(), ev.end(), [](auto a, auto b) {
+    return a.imag() != b.imag() ? a.imag() < b.imag() : a.real() < b.real();
+  });
+  return ev;
+}
+
+TEST(Linearize, SleepingTopThresholdFromTheEigenvalues) {
+  const Model model = parse_model(test::kCardanTop);
+  const System& sys = model.system;
+  const double m = 1, l = 0.5, g = 9.81, I1 = 0.05 + m * l * l, I3 = 0.08;
+  const double wc = std::sqrt(4 * m * g * l * I1) / I3;
+  auto at_spin = [&](double w) {
+    OperatingPoint op = at_rest(sys);
+    op.qd(2) = w;
+    return linearize(sys, op);
+  };
+  // above the threshold: λ = i (±I3 ω ± √(I3²ω² − 4 I1 m g l)) / (2 I1), and 0 twice
+  for (double w : {1.2 * wc, 2.0 * wc}) {
+    const LinearModel lm = at_spin(w);
+    EXPECT_EQ(lm.state_names, (std::vector<std::string>{"a", "b", "c", "a_dot", "b_dot", "c_dot"}));
+    const double root = std::sqrt(I3 * I3 * w * w - 4 * I1 * m * g * l);
+    std::vector<double> want = {-(I3 * w + root) / (2 * I1), -(I3 * w - root) / (2 * I1), 0, 0,
+                                (I3 * w - root) / (2 * I1),  (I3 * w + root) / (2 * I1)};
+    const auto ev = sorted_eigenvalues(lm);
+    for (std::size_t k = 0; k < 6; ++k) {
+      EXPECT_NEAR(ev[k].imag(), want[k], 1e-6 * wc) << k;
+      EXPECT_NEAR(ev[k].real(), 0.0, 1e-5) << k;
+    }
+  }
+  // below it a pair with real parts ±√(4 I1 m g l − I3² ω²) / (2 I1)
+  {
+    const double w = 0.8 * wc;
+    const auto ev = sorted_eigenvalues(at_spin(w));
+    double re_max = 0;
+    for (const auto& z : ev) re_max = std::max(re_max, z.real());
+    EXPECT_NEAR(re_max, std::sqrt(4 * I1 * m * g * l - I3 * I3 * w * w) / (2 * I1), 1e-6);
+  }
+  // the crossing located by bisection on "some eigenvalue has Re > 1e-3"
+  double lo = 0.5 * wc, hi = 1.5 * wc;
+  for (int i = 0; i < 40; ++i) {
+    const double mid = 0.5 * (lo + hi);
+    double re_max = 0;
+    for (const auto& z : sorted_eigenvalues(at_spin(mid))) re_max = std::max(re_max, z.real());
+    (re_max > 1e-3 ? lo : hi) = mid;
+  }
+  EXPECT_NEAR(0.5 * (lo + hi), wc, 1e-5 * wc);
+}
+
+TEST(Linearize, RollingDiskUprightStabilityMatchesTheClassicalCriterion) {
+  // upright rolling at spin rate W (lean theta = 0, straight): with A = m R²/4, C = m R²/2 the
+  // lean obeys (A + m R²) θ'' + [(C + m R²) C W²/A − m g R] θ = 0, so λ² = −0.8 (3 W² − g/R)
+  // and it is stable iff W² > g / (3 R) (v² > g R / 3)
+  const Model model = load_model(std::string(UKDYN_EXAMPLES_DIR) + "/rolling_disk.yaml");
+  const System& sys = model.system;
+  const double R = 0.5, g = 9.81;
+  for (double W : {1.5, 2.0, 4.0, 8.0}) {
+    OperatingPoint op = at_rest(sys);
+    op.qd(sys.coordinate_index("phi")) = W;
+    op.qd(sys.coordinate_index("x")) = R * W;
+    const LinearModel lm = linearize(sys, op);
+    ASSERT_EQ(lm.state_names.size(), 8u);  // 5 positions, 3 velocities (2 rolling rows)
+    EXPECT_EQ(lm.independent_velocities.size(), 3u);
+    const double lambda2 = -0.8 * (3 * W * W - g / R);
+    auto ev = sorted_eigenvalues(lm);
+    std::sort(ev.begin(), ev.end(), [](auto a, auto b) { return std::abs(a) > std::abs(b); });
+    const double expected = std::sqrt(std::abs(lambda2));
+    for (int k = 0; k < 2; ++k) {
+      EXPECT_NEAR(std::abs(ev[std::size_t(k)]), expected, 1e-6 * expected) << "W " << W;
+      if (lambda2 < 0) {
+        EXPECT_NEAR(ev[std::size_t(k)].real(), 0.0, 1e-6) << "W " << W;
+      }
+      if (lambda2 > 0) {
+        EXPECT_NEAR(ev[std::size_t(k)].imag(), 0.0, 1e-6) << "W " << W;
+      }
+    }
+    for (std::size_t k = 2; k < ev.size(); ++k) EXPECT_NEAR(std::abs(ev[k]), 0.0, 1e-4) << k;
+  }
+}
+
+TEST(Linearize, MisuseNamesWhatIsWrong) {
+  const Model model = parse_model(test::kCartPendulum);
+  const System& sys = model.system;
+  OperatingPoint op = at_rest(sys);
+  op.q.resize(3);
+  EXPECT_THROW(linearize(sys, op), std::invalid_argument);
+  try {
+    coordinate_output(sys, "y");
+    ADD_FAILURE();
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("no coordinate 'y'"), std::string::npos) << e.what();
+  }
+  // model_inputs: a coordinate is a force, a parameter a parameter, anything else an error
+  const auto inputs = model_inputs(model, test::kCartPendulum, {"x", "F0"}, "--inputs");
+  ASSERT_EQ(inputs.size(), 2u);
+  EXPECT_EQ(inputs[0].kind, InputKind::kForce);
+  EXPECT_EQ(inputs[0].coordinate, 0);
+  EXPECT_EQ(inputs[1].kind, InputKind::kParameter);
+  EXPECT_EQ(inputs[1].nominal, 0.0);
+  try {
+    model_inputs(model, test::kCartPendulum, {"nosuch"}, "--inputs");
+    ADD_FAILURE();
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("--inputs nosuch: neither a coordinate"),
+              std::string::npos)
+        << e.what();
+  }
+  LinearizeOptions o;
+  o.table_size = 1;
+  EXPECT_THROW(linearize(sys, at_rest(sys), {}, {}, o), std::invalid_argument);
+}
+
+}  // namespace UKDYN_TEST_FILE
+}  // namespace ukdyn
