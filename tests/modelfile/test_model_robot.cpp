@@ -1,0 +1,219 @@
+// Robot model files (modelfile/reader_urdf.cpp): a .urdf read alone as a model, a model file
+// that names a URDF and adds torques, a loop closure, initial state by joint name, parameters
+// and a joint-space control requirement, and the errors a user meets, located.
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+#include <gtest/gtest.h>
+
+#include <Eigen/Dense>
+
+#include "ukdyn/control/control.hpp"
+#include "ukdyn/modelfile/model.hpp"
+#include "ukdyn/modelfile/run.hpp"
+#include "ukdyn/multibody/tree.hpp"
+#include "ukdyn/simulation/simulate.hpp"
+
+namespace ukdyn {
+namespace {
+
+const std::string kData = UKDYN_TEST_DATA_DIR;
+const std::string kPanda = kData + "/panda_arm.urdf";
+
+// a model file next to the URDF (the urdf: path is relative to it)
+Model robot_model(const std::string& text) { return parse_model(text, kData + "/robot.yaml"); }
+
+// M(q) and Q(q, q', t) of a system
+MatrixXd M_of(const System& s, const VectorXd& q) {
+  MatrixXd M(s.coordinate_count(), s.coordinate_count());
+  s.mass_matrix(q, 0.0, M);
+  return M;
+}
+VectorXd Q_of(const System& s, const VectorXd& q, const VectorXd& qd, double t) {
+  VectorXd Q(s.coordinate_count());
+  s.forces(q, qd, t, Q);
+  return Q;
+}
+
+// ModelError's message and position
+struct Failure {
+  std::string text;
+  int line = -1;
+};
+Failure failure_of(const std::string& model_text) {
+  try {
+    robot_model(model_text);
+  } catch (const ModelError& e) {
+    return {e.message() + " | " + e.hint(), e.line()};
+  }
+  return {"no error", -1};
+}
+
+TEST(ModelRobot, AUrdfAloneIsARobotWithGravityAndNoTorque) {
+  const Model m = load_model(kPanda);
+  ASSERT_NE(m.robot, nullptr);
+  ASSERT_EQ(m.system.coordinate_count(), 7);
+  EXPECT_EQ(m.system.coordinate_names()[3], "panda_joint4");
+  EXPECT_EQ(m.system.constraint_count(), 0);
+  EXPECT_NEAR(m.q0.norm(), 0.0, 0.0);  // the neutral pose
+  // the same dynamics as tree::make_system of the same file: M and Q at a state
+  const tree::Tree arm = tree::load_urdf(kPanda);
+  const System direct = tree::make_system(arm);
+  VectorXd q(7), qd(7);
+  q << 0.3, -0.5, 0.8, -1.9, 0.4, 1.7, -0.6;
+  qd << 0.4, -0.3, 0.5, 0.2, -0.6, 0.3, 0.7;
+  EXPECT_NEAR((M_of(m.system, q) - M_of(direct, q)).norm(), 0.0, 0.0);
+  EXPECT_NEAR((Q_of(m.system, q, qd, 0.0) - Q_of(direct, q, qd, 0.0)).norm(), 0.0, 0.0);
+  // gravity acts: with the arm at rest Q = −g(q), nonzero on the shoulder
+  EXPECT_GT(std::abs(Q_of(m.system, q, VectorXd::Zero(7), 0.0)[1]), 1.0);
+}
+
+TEST(ModelRobot, AModelFileAddsTorquesALoopInitialStateAndParameters) {
+  // the rod's anchor 0.3 m above the tool in the initial pose
+  const tree::Tree arm = tree::load_urdf(kPanda);
+  tree::TreeData d(arm);
+  VectorXd q0(7);
+  q0 << 0.3, -0.5, 0.8, -1.9, 0.4, 1.7, -0.6;
+  tree::forward_kinematics(arm, q0, d);
+  const Eigen::Vector3d anchor =
+      tree::world_point(d, arm.link_index("panda_tool"), {0, 0, 0}) + Eigen::Vector3d(0, 0, 0.3);
+  char point[128];
+  std::snprintf(point, sizeof point, "[%.17g, %.17g, %.17g]", anchor.x(), anchor.y(), anchor.z());
+  const std::string text = R"(name: held arm
+parameters: {k: 2.5, len: 0.3}
+robot:
+  urdf: panda_arm.urdf
+  gravity: [0, 0, -9.81]
+  torques: {panda_joint1: k*sin(t), panda_joint7: -0.1*panda_joint7_dot}
+  loops:
+    - {name: rod, type: distance, link_a: panda_tool, link_b: world,
+       point_b: )" + std::string(point) +
+                           R"(, length: len}
+initial:
+  q: {panda_joint1: 0.3, panda_joint2: -0.5, panda_joint3: 0.8, panda_joint4: -1.9,
+      panda_joint5: 0.4, panda_joint6: 1.7, panda_joint7: -0.6}
+simulate: {t_end: 0.3}
+)";
+  const Model m = robot_model(text);
+  ASSERT_EQ(m.system.constraint_count(), 1);
+  EXPECT_EQ(m.system.constraint(0).name(), "rod");
+  EXPECT_NEAR(m.q0[3], -1.9, 0.0);
+  // Q = τ − D q' − h with τ = [k sin t, 0, …, −0.1 q7']
+  VectorXd qd(7), h(7), D(7);
+  qd << 0.4, -0.3, 0.5, 0.2, -0.6, 0.3, 0.7;
+  tree::bias_forces(arm, m.q0, qd, d, h);
+  for (Index j = 0; j < 7; ++j) D[j] = arm.link(j + 1).joint.damping;
+  VectorXd expected = -h - D.cwiseProduct(qd);
+  expected[0] += 2.5 * std::sin(1.0);
+  expected[6] += -0.1 * qd[6];
+  EXPECT_NEAR((Q_of(m.system, m.q0, qd, 1.0) - expected).norm(), 0.0, 1e-12);
+  // the rod holds the tool at its length from the anchor
+  const Trajectory tr = simulate(m.system, m.q0, m.qd0, m.options);
+  ASSERT_EQ(tr.stats.status, Status::kOk) << tr.stats.message;
+  for (Index s = 0; s < tr.samples(); s += 10) {
+    tree::forward_kinematics(arm, Eigen::Map<const VectorXd>(tr.q.data() + s * 7, 7), d);
+    const double len =
+        (tree::world_point(d, arm.link_index("panda_tool"), {0, 0, 0}) - anchor).norm();
+    EXPECT_NEAR(len, 0.3, 1e-9);
+  }
+  // --set of a parameter changes the loop
+  EXPECT_EQ(parse_model(text, kData + "/robot.yaml", {{"len", 0.31}}).parameters.at("len"), 0.31);
+}
+
+TEST(ModelRobot, JointSpaceControlOfARobotModelFile) {
+  const Model m = robot_model(R"(robot: {urdf: panda_arm.urdf}
+control:
+  requirements:
+    - {name: swing, holonomic: panda_joint1 - 0.5*sin(t), dynamics: {omega: 10, zeta: 1}}
+    - {name: elbow, holonomic: panda_joint4 + 1.5, dynamics: {omega: 10, zeta: 1}}
+initial:
+  q: {panda_joint4: -1.5}
+  q_dot: {panda_joint1: 0.5}
+simulate: {t_end: 0.5, rtol: 1e-11, atol: 1e-13}
+)");
+  ASSERT_NE(m.controller, nullptr);
+  const ControlledTrajectory run =
+      simulate_controlled(*m.controller, m.system, m.q0, m.qd0, m.options);
+  ASSERT_EQ(run.plant.stats.status, Status::kOk) << run.plant.stats.message;
+  for (Index s = 0; s < run.samples(); ++s) {
+    EXPECT_NEAR(run.plant.q[std::size_t(s * 7)], 0.5 * std::sin(run.plant.t[std::size_t(s)]), 1e-8);
+    EXPECT_NEAR(run.plant.q[std::size_t(s * 7 + 3)], -1.5, 1e-8);
+  }
+}
+
+std::string write_file(const std::string& name, const std::string& text) {
+  const auto path = std::filesystem::temp_directory_path() / name;
+  std::ofstream(path) << text;
+  return path.string();
+}
+
+TEST(ModelRobot, ErrorsNameTheFileTheLineAndTheLinkOrJoint) {
+  // a link the URDF lacks, located at the loop's link
+  Failure f = failure_of(
+      "robot:\n  urdf: panda_arm.urdf\n  loops:\n    - {name: a, type: point, link_a: hand,"
+      " link_b: world}\n");
+  EXPECT_NE(f.text.find("loop 'a': no link 'hand' in "), std::string::npos) << f.text;
+  EXPECT_NE(f.text.find("the links are world, panda_link0"), std::string::npos) << f.text;
+  EXPECT_EQ(f.line, 4);
+  // a missing URDF, at urdf:
+  f = failure_of("name: x\nrobot: {urdf: nothere.urdf}\n");
+  EXPECT_NE(f.text.find("nothere.urdf: no such file"), std::string::npos) << f.text;
+  EXPECT_EQ(f.line, 2);
+  // what a URDF cannot be mixed with
+  f = failure_of("robot: {urdf: panda_arm.urdf}\nbodies: {}\n");
+  EXPECT_NE(f.text.find("'bodies' does not go with 'robot:'"), std::string::npos) << f.text;
+  EXPECT_EQ(f.line, 2);
+  // a torque on a joint the robot does not have
+  f = failure_of("robot: {urdf: panda_arm.urdf, torques: {elbow: 1}}\n");
+  EXPECT_NE(f.text.find("unknown coordinate 'elbow'"), std::string::npos) << f.text;
+  f = failure_of("robot: {urdf: panda_arm.urdf, colour: red}\n");
+  EXPECT_NE(f.text.find("unknown key 'colour' in robot"), std::string::npos) << f.text;
+  f = failure_of(
+      "robot:\n  urdf: panda_arm.urdf\n  loops: [{name: r, type: distance, link_a: panda_tool,"
+      " link_b: world}]\n");
+  EXPECT_NE(f.text.find("loop 'r' needs length"), std::string::npos) << f.text;
+  // a URDF alone with an unknown joint type and a moving link without inertia: the file and the
+  // joint or link
+  const std::string planar = write_file(
+      "ukdyn_robot_planar.urdf",
+      "<robot name=\"r\"><link name=\"a\"/><link name=\"b\"><inertial><mass value=\"1\"/>"
+      "<inertia ixx=\"1\" ixy=\"0\" ixz=\"0\" iyy=\"1\" iyz=\"0\" izz=\"1\"/></inertial></link>"
+      "<joint name=\"slide\" type=\"planar\"><parent link=\"a\"/><child link=\"b\"/>"
+      "<axis xyz=\"0 0 1\"/></joint></robot>\n");
+  try {
+    load_model(planar);
+    FAIL() << "no error";
+  } catch (const ModelError& e) {
+    EXPECT_EQ(e.file(), planar);
+    EXPECT_NE(e.message().find("joint 'slide' (child link 'b'): joint type 'planar' is not "
+                               "supported"),
+              std::string::npos)
+        << e.message();
+  }
+  const std::string noinertia =
+      write_file("ukdyn_robot_noinertia.urdf",
+                 "<robot name=\"r\"><link name=\"a\"/><link name=\"b\"/>"
+                 "<joint name=\"hinge\" type=\"continuous\"><parent link=\"a\"/><child link=\"b\"/>"
+                 "<axis xyz=\"0 0 1\"/></joint></robot>\n");
+  try {
+    load_model(noinertia);
+    FAIL() << "no error";
+  } catch (const ModelError& e) {
+    EXPECT_NE(e.message().find("link 'b' moves (joint 'hinge') but has no <inertial>"),
+              std::string::npos)
+        << e.message();
+  }
+  const std::string broken = write_file("ukdyn_robot_broken.urdf", "<robot name=\"r\"><link");
+  try {
+    load_model(broken);
+    FAIL() << "no error";
+  } catch (const ModelError& e) {
+    EXPECT_NE(e.message().find("not a valid URDF"), std::string::npos) << e.message();
+  }
+}
+
+}  // namespace
+}  // namespace ukdyn
