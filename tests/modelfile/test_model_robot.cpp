@@ -144,6 +144,38 @@ simulate: {t_end: 0.5, rtol: 1e-11, atol: 1e-13}
   }
 }
 
+// a robot model's run notes the limits it left (the Panda's neutral pose is outside joint 4's
+// range [−3.0718, −0.0698]), streamed or not, from the positions and the control torques
+TEST(ModelRobot, ARunNotesTheJointAndEffortLimitsItLeaves) {
+  const Model m = load_model(kPanda);
+  SimulationOptions options = m.options;
+  options.t_end = 0.2;
+  const ModelRun run = run_model(m, options);
+  ASSERT_FALSE(run.trajectory.stats.notes.empty());
+  const std::string& first = run.trajectory.stats.notes[0];
+  EXPECT_EQ(first.rfind("joint 'panda_joint4' exceeds its upper limit -0.0698 by ", 0), 0u)
+      << first;
+  EXPECT_NE(first.find("(first at t = 0 s"), std::string::npos) << first;
+  const ModelRun streamed = run_model(
+      m, options, [](const ModelRun&) {}, 7);
+  EXPECT_EQ(streamed.trajectory.stats.notes, run.trajectory.stats.notes);
+  // under control: the torques that hold joint 4 at −1.5 against gravity exceed an effort of 12
+  // (joint 2's is 87; the Panda's forearm joints 5–7 have 12) only where the file says
+  const Model held = robot_model(R"(robot: {urdf: panda_arm.urdf, gravity: [0, 0, -60]}
+control:
+  requirements:
+    - {name: pose, holonomic: [panda_joint2 - 1, panda_joint4 + 1.5], dynamics: {omega: 10}}
+initial: {q: {panda_joint2: 1, panda_joint4: -1.5}}
+simulate: {t_end: 0.1}
+)");
+  const ModelRun c = run_model(held, held.options);
+  ASSERT_EQ(c.trajectory.stats.status, Status::kOk) << c.trajectory.stats.message;
+  bool effort_noted = false;
+  for (const std::string& note : c.trajectory.stats.notes)
+    effort_noted = effort_noted || note.find("exceeds its effort limit 87") != std::string::npos;
+  EXPECT_TRUE(effort_noted);
+}
+
 std::string write_file(const std::string& name, const std::string& text) {
   const auto path = std::filesystem::temp_directory_path() / name;
   std::ofstream(path) << text;

@@ -311,6 +311,27 @@ std::vector<LimitExcess> check_joint_limits(const Tree& tree, const std::vector<
 std::vector<LimitExcess> check_effort_limits(const Tree& tree, const std::vector<double>& t,
                                              const std::vector<double>& tau);
 
+/// The two checks above over samples that come in pieces (a streamed run): observe() each
+/// piece in time order, then excesses() lists what check_joint_limits and check_effort_limits
+/// would for all samples at once (position limits first, then efforts; per joint in link
+/// order). Cost O(n) per sample.
+class LimitWatch {
+ public:
+  /// Watches the limits of `tree` (copied: the watch may outlive it).
+  explicit LimitWatch(const Tree& tree);
+  /// N samples: times t, positions q (N × n), and generalized forces tau (N × n, or empty:
+  /// efforts are not checked for these samples). @throws std::invalid_argument on sizes.
+  void observe(const std::vector<double>& t, const std::vector<double>& q,
+               const std::vector<double>& tau);
+  /// The limits left so far.
+  std::vector<LimitExcess> excesses() const;
+
+ private:
+  std::vector<Index> offset_;                        // coordinate of each one-coordinate joint
+  std::vector<LimitExcess> lower_, upper_, effort_;  // per such joint
+  Index n_ = 0;
+};
+
 /// One line of text per excess: "joint 'j' exceeds its upper limit 2.9 by 0.03 rad (first at
 /// t = 0.41 s, worst at t = 0.52 s)". Cost O(excesses).
 std::string describe(const LimitExcess& e);
