@@ -22,6 +22,7 @@
 #include "ukdyn/core/format.hpp"
 #include "ukdyn/modelfile/expression.hpp"
 #include "ukdyn/modelfile/model.hpp"
+#include "ukdyn/multibody/tree.hpp"
 
 namespace ukdyn::model_reader {
 
@@ -371,6 +372,11 @@ class Reader {
   // The plant from the URDF's tree with the file's torques, loops and constraints; sets
   // coordinates_ (the joints' names), the expression set, model.q0 (neutral) and model.robot.
   Model read_robot(const YAML::Node& root);
+  // a control requirement's pose: {link, point, position: [3 expressions of t], orientation:
+  // [w, x, y, z] expressions of t} on the robot (tree::pose_requirement)
+  Constraint read_pose_requirement(const YAML::Node& r, const std::string& name,
+                                   const std::string& what);
+  std::shared_ptr<const tree::Tree> robot_;  // the robot read by read_robot (or null)
 
   // ---- control (modelfile/reader_control.cpp): control: ------------------------------------
   // Builds model.controller from the control: section (nothing when absent). With `nominal:` the

@@ -13,6 +13,7 @@
 // (ukdyn run arm.urdf, ukdyn.load("arm.urdf")) is read as `robot: {urdf: arm.urdf}`.
 #include <algorithm>
 #include <cctype>
+#include <cmath>
 #include <filesystem>
 #include <set>
 #include <stdexcept>
@@ -243,8 +244,108 @@ Model Reader::read_robot(const YAML::Node& root) {
   Model model{.system = build()};
   model.q0 = robot.neutral();
   model.qd0 = VectorXd::Zero(n);
-  model.robot = std::make_shared<const tree::Tree>(std::move(robot));
+  robot_ = std::make_shared<const tree::Tree>(std::move(robot));
+  model.robot = robot_;
   return model;
+}
+
+Constraint Reader::read_pose_requirement(const YAML::Node& r, const std::string& name,
+                                         const std::string& what) {
+  const YAML::Node pose = r["pose"];
+  const std::string example =
+      "pose: {link: tool, point: [0, 0, 0], position: [0.4, 0.1*sin(t), 0.5], orientation: "
+      "[cos(t/2), 0, 0, sin(t/2)]}";
+  if (!robot_) fail(pose, what + ": a pose requirement needs a robot: (a URDF)", example);
+  if (!pose.IsMap()) fail(pose, what + ": pose must be a mapping", example);
+  for (const auto& kv : pose) {
+    const std::string key = kv.first.Scalar();
+    if (key != "link" && key != "point" && key != "position" && key != "orientation")
+      fail(kv.first, "unknown key '" + key + "' in the pose of " + what,
+           "the keys are link, point, position, orientation");
+  }
+  for (const char* key : {"holonomic", "nonholonomic", "A", "b"}) {
+    if (r[key]) fail(r[key], what + ": give either pose or " + key + ", not both");
+  }
+  const tree::Tree& robot = *robot_;
+  tree::LinkPoint at;
+  const YAML::Node link = pose["link"];
+  if (!link) fail(pose, what + ": pose needs link:", example);
+  try {
+    at.link = robot.link_index(link.Scalar());
+  } catch (const std::invalid_argument&) {
+    fail(link, what + ": no link '" + link.Scalar() + "' in the robot");
+  }
+  if (const YAML::Node p = pose["point"]) {
+    if (!p.IsSequence() || p.size() != 3)
+      fail(p, what + ": point must be a list of 3 numbers", "[x, y, z] in the link's frame");
+    for (std::size_t i = 0; i < 3; ++i) at.p[Index(i)] = number(p[i], "point");
+  }
+  // [p; u] as expressions of t, and their first and second derivatives
+  const std::size_t t_input = coordinates_.size() * 2;
+  std::vector<Expr> value;
+  auto read_list = [&](const char* key, std::size_t size, const char* hint) {
+    const YAML::Node l = pose[key];
+    if (!l.IsSequence() || l.size() != size)
+      fail(l, what + ": " + key + " must be a list of " + format_number(size) + " expressions",
+           hint);
+    for (const auto& e : l) {
+      const Expr x = expression(e, what + " " + key);
+      for (const Index in : set_->inputs_of(x)) {
+        if (std::size_t(in) != t_input)
+          fail(e, what + ": " + key + " may depend on t and the parameters only, not on '" +
+                      set_->input_names()[std::size_t(in)] + "'");
+      }
+      value.push_back(x);
+    }
+  };
+  if (!pose["position"]) fail(pose, what + ": pose needs position:", example);
+  read_list("position", 3, "[x(t), y(t), z(t)] in the world");
+  const bool oriented = bool(pose["orientation"]);
+  if (oriented) read_list("orientation", 4, "a unit quaternion [w, x, y, z] of t");
+  std::vector<Expr> outputs = value;
+  for (int order = 0; order < 2; ++order) {
+    const std::size_t from = outputs.size() - value.size();
+    for (std::size_t k = 0; k < value.size(); ++k)
+      outputs.push_back(set_->diff(outputs[from + k], "t"));
+  }
+  const Program program = compile(outputs, pose, what);
+  const InputLayout layout = layout_;
+  const std::size_t w = value.size();  // 3 or 7 values per derivative order
+  // the desired pose at t: p, p', p''; R(u), ω = 2 vec(u' ⊗ u*), ω' = 2 vec(u'' ⊗ u*)
+  auto path = [program, layout, w](double t, tree::PoseSample& d) {
+    evaluate_local(
+        program, layout.size(), [&](double* in) { in[2 * layout.n] = t; },
+        [&](const double* v) {
+          d.p = tree::Vector3d(v[0], v[1], v[2]);
+          d.v = tree::Vector3d(v[w], v[w + 1], v[w + 2]);
+          d.a = tree::Vector3d(v[2 * w], v[2 * w + 1], v[2 * w + 2]);
+          if (w == 3) return;
+          const Eigen::Quaterniond u(v[3], v[4], v[5], v[6]);
+          const auto rate = [&](const double* du) {
+            // vec(du ⊗ u*) = u0 du_v − du0 u_v − du_v × u_v
+            const tree::Vector3d uv(u.x(), u.y(), u.z()), dv(du[1], du[2], du[3]);
+            return tree::Vector3d(2.0 * (u.w() * dv - du[0] * uv - dv.cross(uv)));
+          };
+          d.R = u.normalized().toRotationMatrix();
+          d.w = rate(v + w + 3);
+          d.w_dot = rate(v + 2 * w + 3);
+        });
+  };
+  if (oriented) {
+    // a quaternion of unit norm at the start (its derivatives assume it stays so)
+    double norm = 0.0;
+    evaluate_local(
+        program, layout.size(), [&](double* in) { in[2 * layout.n] = 0.0; },
+        [&](const double* v) {
+          norm = std::sqrt(v[3] * v[3] + v[4] * v[4] + v[5] * v[5] + v[6] * v[6]);
+        });
+    if (std::abs(norm - 1.0) > 1e-9)
+      fail(pose["orientation"],
+           what + ": orientation must be a unit quaternion, its norm at t = 0 is " + brief(norm),
+           "[cos(a/2), x sin(a/2), y sin(a/2), z sin(a/2)] for a rotation by a about the unit "
+           "axis (x, y, z)");
+  }
+  return tree::pose_requirement(robot, name, at, path, oriented);
 }
 
 }  // namespace ukdyn::model_reader

@@ -176,6 +176,84 @@ simulate: {t_end: 0.1}
   EXPECT_TRUE(effort_noted);
 }
 
+// task-space tracking written in a model file: the tool follows a circle while turning about
+// the world's z axis (its quaternion u(t) = rot_z(θ(t)) ⊗ u0), a posture row takes the
+// redundancy; checked against forward kinematics of the motion achieved
+TEST(ModelRobot, APoseRequirementTracksTheToolInTaskSpace) {
+  const tree::Tree arm = tree::load_urdf(kPanda);
+  tree::TreeData d(arm);
+  VectorXd q0(7);
+  q0 << 0.3, -0.5, 0.8, -1.9, 0.4, 1.7, -0.6;
+  tree::forward_kinematics(arm, q0, d);
+  const Index tool = arm.link_index("panda_tool");
+  const Eigen::Vector3d p0 = tree::world_point(d, tool, {0, 0, 0});
+  const Eigen::Quaterniond u0(d.R_WL[std::size_t(tool)]);
+  char text[2048];
+  // θ = 0.3 (1 − cos 2πt), c = cos(θ/2), s = sin(θ/2); p = p0 + 0.05 [1 − cos 2πt, sin 2πt ·
+  // (1 − cos 2πt), 0]: at rest at t = 0
+  std::snprintf(text, sizeof text, R"(parameters: {x0: %.17g, y0: %.17g, z0: %.17g,
+  w0: %.17g, a0: %.17g, b0: %.17g, c0: %.17g}
+robot: {urdf: panda_arm.urdf}
+control:
+  requirements:
+    - name: tool
+      pose:
+        link: panda_tool
+        position: [x0 + 0.05*(1 - cos(2*pi*t)), y0 + 0.05*sin(2*pi*t)*(1 - cos(2*pi*t)), z0]
+        orientation:
+          - cos(0.15*(1 - cos(2*pi*t)))*w0 - sin(0.15*(1 - cos(2*pi*t)))*c0
+          - cos(0.15*(1 - cos(2*pi*t)))*a0 - sin(0.15*(1 - cos(2*pi*t)))*b0
+          - cos(0.15*(1 - cos(2*pi*t)))*b0 + sin(0.15*(1 - cos(2*pi*t)))*a0
+          - cos(0.15*(1 - cos(2*pi*t)))*c0 + sin(0.15*(1 - cos(2*pi*t)))*w0
+      dynamics: {omega: 20, zeta: 1}
+    - {name: posture, holonomic: panda_joint3 - 0.8, dynamics: {omega: 20, zeta: 1}}
+initial:
+  q: {panda_joint1: 0.3, panda_joint2: -0.5, panda_joint3: 0.8, panda_joint4: -1.9,
+      panda_joint5: 0.4, panda_joint6: 1.7, panda_joint7: -0.6}
+simulate: {t_end: 1, rtol: 1e-11, atol: 1e-13}
+)",
+                p0.x(), p0.y(), p0.z(), u0.w(), u0.x(), u0.y(), u0.z());
+  const Model m = robot_model(text);
+  const ModelRun run = run_model(m);
+  ASSERT_EQ(run.trajectory.stats.status, Status::kOk) << run.trajectory.stats.message;
+  EXPECT_EQ(run.control.not_met, 0);
+  double worst_p = 0, worst_R = 0, travel = 0;
+  for (Index s = 0; s < run.trajectory.samples(); ++s) {
+    const double t = run.trajectory.t[std::size_t(s)], c = std::cos(2 * M_PI * t);
+    const Eigen::Vector3d want =
+        p0 + 0.05 * Eigen::Vector3d(1 - c, std::sin(2 * M_PI * t) * (1 - c), 0);
+    const Eigen::Matrix3d R_want =
+        Eigen::AngleAxisd(0.3 * (1 - c), Eigen::Vector3d::UnitZ()) * u0.toRotationMatrix();
+    tree::forward_kinematics(arm, Eigen::Map<const VectorXd>(run.trajectory.q.data() + s * 7, 7),
+                             d);
+    worst_p = std::max(worst_p, (tree::world_point(d, tool, {0, 0, 0}) - want).norm());
+    worst_R = std::max(worst_R,
+                       Eigen::AngleAxisd(R_want.transpose() * d.R_WL[std::size_t(tool)]).angle());
+    travel = std::max(travel, (want - p0).norm());
+  }
+  EXPECT_GT(travel, 0.09);
+  EXPECT_NEAR(worst_p, 0.0, 1e-8);
+  EXPECT_NEAR(worst_R, 0.0, 1e-8);
+  std::printf("model-file task-space tracking: position %.2e m, orientation %.2e rad\n", worst_p,
+              worst_R);
+  // what a pose requirement refuses
+  EXPECT_NE(failure_of("coordinates: [x]\nkinetic_energy: x_dot^2/2\ncontrol:\n  requirements:\n"
+                       "    - {name: p, pose: {link: a, position: [0, 0, t]}}\n")
+                .text.find("a pose requirement needs a robot:"),
+            std::string::npos);
+  EXPECT_NE(failure_of("robot: {urdf: panda_arm.urdf}\ncontrol:\n  requirements:\n"
+                       "    - {name: p, pose: {link: panda_tool, position: [0, 0, t],"
+                       " orientation: [1, 0, 0, 1]}}\n")
+                .text.find("orientation must be a unit quaternion, its norm at t = 0 is 1.414"),
+            std::string::npos);
+  EXPECT_NE(
+      failure_of("robot: {urdf: panda_arm.urdf}\ncontrol:\n  requirements:\n"
+                 "    - {name: p, pose: {link: panda_tool, position: [panda_joint1, 0, t]}}\n")
+          .text.find("position may depend on t and the parameters only, not on "
+                     "'panda_joint1'"),
+      std::string::npos);
+}
+
 std::string write_file(const std::string& name, const std::string& text) {
   const auto path = std::filesystem::temp_directory_path() / name;
   std::ofstream(path) << text;
