@@ -215,6 +215,54 @@ TEST(TreeTaskSpace, RedundantArmFollowsACartesianPoseExactly) {
       worst_p, worst_R, worst_tau / tau_scale, tau_scale);
 }
 
+// the weighted law with a given N and the position rows only (3 of 7 DOF): the point still
+// follows exactly, and the force is the N-weighted least one: N Qc lies in the row space of
+// X = A_r M⁻¹ (the necessary condition of min Qcᵀ N Qc subject to X Qc = e)
+TEST(TreeTaskSpace, PositionOnlyUnderTheWeightedLaw) {
+  const Tree tree = load_urdf(kPanda);
+  const Index tool = tree.link_index("panda_tool");
+  const VectorXd q0 = arm_pose();
+  TreeData d(tree);
+  forward_kinematics(tree, q0, d);
+  ToolPath path;
+  path.p0 = world_point(d, tool, Vector3d::Zero());
+  path.R0 = d.R_WL[std::size_t(tool)];
+  const System plant = make_system(tree);
+  const VectorXd weights = VectorXd::LinSpaced(7, 1.0, 7.0);
+  const MatrixXd N = weights.asDiagonal();
+  const Constraint req = pose_requirement(tree, "tool", {tool, Vector3d::Zero()}, path, false);
+  ASSERT_EQ(req.rows(), 3);
+  const Controller ctrl = ControllerBuilder(plant)
+                              .require(req, ErrorDynamics::second_order(20.0, 1.0))
+                              .weighted(N)
+                              .build();
+  SimulationOptions options;
+  options.t_end = 0.5;
+  options.rtol = 1e-11;
+  options.atol = 1e-13;
+  const ControlledTrajectory run = simulate_controlled(ctrl, plant, q0, VectorXd::Zero(7), options);
+  ASSERT_EQ(run.plant.stats.status, Status::kOk) << run.plant.stats.message;
+  double worst_p = 0, worst_opt = 0;
+  MatrixXd M(7, 7);
+  Eigen::Matrix<double, 6, Eigen::Dynamic> J(6, 7);
+  for (Index s = 0; s < run.samples(); ++s) {
+    const Eigen::Map<const VectorXd> q(run.plant.q.data() + s * 7, 7),
+        Qc(run.Qc_control.data() + s * 7, 7);
+    PoseSample want;
+    path(run.plant.t[std::size_t(s)], want);
+    mass_matrix(tree, q, d, M);
+    frame_jacobian(tree, d, tool, Vector3d::Zero(), J);
+    worst_p = std::max(worst_p, (world_point(d, tool, Vector3d::Zero()) - want.p).norm());
+    // N Qc = Xᵀ y for some y: its residual after projection on range(Xᵀ) vanishes
+    const MatrixXd Xt = M.llt().solve(J.bottomRows<3>().transpose());
+    const VectorXd NQc = N * Qc;
+    const VectorXd y = Xt.colPivHouseholderQr().solve(NQc);
+    worst_opt = std::max(worst_opt, (Xt * y - NQc).norm() / (1.0 + NQc.norm()));
+  }
+  EXPECT_NEAR(worst_p, 0.0, 1e-8);
+  EXPECT_NEAR(worst_opt, 0.0, 1e-9);
+}
+
 TEST(TreeTaskSpace, EffortAndJointLimitsAreReportedNotClipped) {
   const TrackingRun r = track_tool(0.5);
   ASSERT_EQ(r.run.plant.stats.status, Status::kOk) << r.run.plant.stats.message;
