@@ -131,7 +131,7 @@ class DistanceModel final : public FrameModel {
     // (J_a − J_b)_v into Ja's linear rows, then d' = (J_a − J_b)_v q'
     w.Ja.bottomRows<3>() -= w.Jb.bottomRows<3>();
     const Vector3d rate = w.Ja.bottomRows<3>() * qd;
-    A.row(0).noalias() = dist.transpose() * w.Ja.bottomRows<3>() / length_;
+    A.row(0).noalias() = (dist / length_).transpose() * w.Ja.bottomRows<3>();
     b[0] = -(rate.squaredNorm() + dist.dot(pa.bias.tail<3>() - pb.bias.tail<3>())) / length_;
   }
   void violation(const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd, double,
