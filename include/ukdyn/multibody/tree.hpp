@@ -58,9 +58,9 @@ const char* joint_kind_name(JointKind k);
 int joint_coordinates(JointKind k);
 
 /// The joint that attaches a link to its parent: its fixed origin in the parent's frame, its
-/// kind and axis (unit, in the joint frame) and what URDF says of it. Limits, effort, velocity
-/// and friction are kept for later use (joint limits, control's effort checks, Coulomb joint
-/// friction); damping acts now (viscous, −damping · q').
+/// kind and axis (unit, in the joint frame) and what URDF says of it. Damping (viscous,
+/// −damping · q') and friction (Coulomb, make_system) act; limits and effort are checked
+/// (check_joint_limits, check_effort_limits), velocity is kept.
 struct Joint {
   std::string name;                                          ///< unique in the tree
   JointKind kind = JointKind::kFixed;                        ///< what moves
@@ -68,7 +68,7 @@ struct Joint {
   Eigen::Quaterniond R_PJ = Eigen::Quaterniond::Identity();  ///< origin rpy as a rotation
   Vector3d axis = Vector3d::UnitX();                         ///< unit axis in the joint frame
   double damping = 0.0;   ///< viscous damping (N·m·s/rad or N·s/m), >= 0
-  double friction = 0.0;  ///< URDF's friction (kept, not applied yet)
+  double friction = 0.0;  ///< URDF's friction: Coulomb torque (N·m) or force (N), >= 0
   double lower = -std::numeric_limits<double>::infinity();    ///< position limit
   double upper = std::numeric_limits<double>::infinity();     ///< position limit
   double effort = std::numeric_limits<double>::infinity();    ///< effort limit (kept)
@@ -206,12 +206,18 @@ using JointTorqueFn =
     std::function<void(const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd,
                        double t, Eigen::Ref<VectorXd> tau)>;
 
+/// The regularization eps (rad/s or m/s) of URDF's joint friction in make_system, as the bodies'
+/// joint friction's default (mb::JointFriction::regularization).
+inline constexpr double kJointFrictionRegularization = 1e-6;
+
 /// The unconstrained system of a tree: M(q) from mass_matrix, Q = τ(q, q', t) − D q' − h(q, q')
 /// (D the joints' viscous damping), the potential energy of gravity, the power of τ and of the
-/// dampers (so a run's energy balance is checked), and one unit-norm constraint "<link>.unit"
-/// per floating joint. Constraints, friction, control and simulate() then apply as to any
-/// System. The tree is copied into the system's callables. @param tau the input "tau", or empty
-/// for none. Cost O(links) to build.
+/// dampers (so a run's energy balance is checked), one non-ideal force "<joint>.friction" per
+/// one-coordinate joint with URDF friction F > 0, C_j = −F q'_j / sqrt(q'_j² + eps²) (Coulomb
+/// friction of magnitude F, eps = kJointFrictionRegularization; its work is accounted as the
+/// non-ideal forces'), and one unit-norm constraint "<link>.unit" per floating joint. Constraints,
+/// friction, control and simulate() then apply as to any System. The tree is copied into the
+/// system's callables. @param tau the input "tau", or empty for none. Cost O(links) to build.
 System make_system(const Tree& tree, JointTorqueFn tau = {});
 
 /// The SystemBuilder behind make_system, with all of the above already given: add constraints
