@@ -83,9 +83,10 @@ def load(source: "str | os.PathLike[str]", /, **overrides: float) -> Model:
     """Reads a model file, or a built-in example by name, with parameter overrides.
 
     ``ukdyn.load("model.yaml", m=2.0)`` is ``ukdyn run model.yaml --set m=2``;
-    ``ukdyn.load("pendulum")`` reads the built-in example (:func:`examples` lists them; they are
-    compiled into the module). A path-like source, or a string that names an existing file,
-    ends in .yaml/.yml or contains a path separator, is read as a file.
+    ``ukdyn.load("arm.urdf")`` reads a URDF as a robot (gravity, zero torques, neutral pose;
+    docs/robots.md); ``ukdyn.load("pendulum")`` reads the built-in example (:func:`examples`
+    lists them; they are compiled into the module). A path-like source, or a string that names
+    an existing file, ends in .yaml/.yml/.urdf or contains a path separator, is read as a file.
 
     Raises :class:`ModelError` (file:line:column, message, hint) for a bad or unreadable model
     file and for an override of a parameter the model does not declare; ValueError for a name
@@ -94,7 +95,8 @@ def load(source: "str | os.PathLike[str]", /, **overrides: float) -> Model:
     """
     values = _overrides("load", overrides)
     path = os.fspath(source)
-    if (not isinstance(source, str) or os.path.exists(path) or path.endswith((".yaml", ".yml"))
+    if (not isinstance(source, str) or os.path.exists(path)
+            or path.endswith((".yaml", ".yml", ".urdf"))
             or os.sep in path):
         return _ukdyn._load_file(path, values)
     return _ukdyn._load_example(path, values)

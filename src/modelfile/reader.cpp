@@ -946,8 +946,8 @@ YAML::Node Reader::load_yaml(const std::string& text, const std::string& file) {
     throw ModelError(file, 1, 1,
                      "this looks like an XML file (URDF, MJCF, SDF …): ukdyn reads its own YAML "
                      "model format",
-                     "see docs/model-format.md; write the bodies and joints under bodies: and "
-                     "joints:");
+                     "a URDF is read from a .urdf file, or named by a model file's robot: {urdf: "
+                     "arm.urdf} (docs/robots.md); else write bodies: and joints:");
   }
   // a NUL byte: a binary file, or text cut by a C string (YAML's own message names an escape)
   if (const std::size_t nul = text.find('\0'); nul != std::string::npos) {
@@ -994,7 +994,9 @@ Model Reader::read(const YAML::Node& root) {
 
 Model Reader::read_plant(const YAML::Node& root) {
   read_parameters(root);
-  Model model = root["bodies"] ? read_multibody(root) : read_generalized(root);
+  Model model = root["robot"]    ? read_robot(root)
+                : root["bodies"] ? read_multibody(root)
+                                 : read_generalized(root);
   model.file = file_;
   model.name = root["name"] ? root["name"].Scalar() : file_;
   model.parameters = parameters_;
@@ -1150,6 +1152,9 @@ Model load_model(const std::string& path, const std::map<std::string, double>& o
     throw ModelError(path, 0, 0, "is a directory, not a model file",
                      "give the path of a .yaml model file");
   }
+  // a URDF alone: a robot model naming it (modelfile/reader_urdf.cpp)
+  if (model_reader::is_urdf_path(path) && std::filesystem::is_regular_file(status))
+    return parse_model(model_reader::urdf_model_text(path), path, overrides);
   std::ifstream in(path, std::ios::binary);
   if (!in) throw ModelError(path, 0, 0, "cannot read the model file", "check the path");
   std::string text;

@@ -22,6 +22,7 @@
 #include "ukdyn/core/format.hpp"
 #include "ukdyn/modelfile/expression.hpp"
 #include "ukdyn/modelfile/model.hpp"
+#include "ukdyn/multibody/tree.hpp"
 
 namespace ukdyn::model_reader {
 
@@ -34,7 +35,7 @@ inline const std::vector<std::string> kTopLevelKeys = {
     "name",        "parameters", "coordinates", "kinetic_energy", "potential_energy",
     "mass_matrix", "forces",     "constraints", "nonideal",       "initial",
     "simulate",    "output",     "bodies",      "joints",         "control",
-    "visual",      "units"};
+    "visual",      "units",      "robot"};
 
 inline bool is_identifier(const std::string& s) {
   if (s.empty() || !(std::isalpha(static_cast<unsigned char>(s[0])) || s[0] == '_')) return false;
@@ -284,6 +285,11 @@ class CompiledConstraint final : public ConstraintModel {
 // YAML syntax errors (modelfile/yaml_structure.cpp). @throws ModelError
 void check_yaml_structure(const std::string& text, const std::string& file);
 
+// A .urdf path (any case): load_model reads it as the model text urdf_model_text(path),
+// `robot: {urdf: '<its file name>'}` (modelfile/reader_urdf.cpp).
+bool is_urdf_path(const std::string& path);
+std::string urdf_model_text(const std::string& path);
+
 // The reader: one model file.
 class Reader {
  public:
@@ -361,6 +367,16 @@ class Reader {
   // the sections' reader (modelfile/reader_multibody.cpp): uses fail, number, expression and
   // compile
   friend class MultibodyReader;
+
+  // ---- robots (modelfile/reader_urdf.cpp): robot: names a URDF ------------------------------
+  // The plant from the URDF's tree with the file's torques, loops and constraints; sets
+  // coordinates_ (the joints' names), the expression set, model.q0 (neutral) and model.robot.
+  Model read_robot(const YAML::Node& root);
+  // a control requirement's pose: {link, point, position: [3 expressions of t], orientation:
+  // [w, x, y, z] expressions of t} on the robot (tree::pose_requirement)
+  Constraint read_pose_requirement(const YAML::Node& r, const std::string& name,
+                                   const std::string& what);
+  std::shared_ptr<const tree::Tree> robot_;  // the robot read by read_robot (or null)
 
   // ---- control (modelfile/reader_control.cpp): control: ------------------------------------
   // Builds model.controller from the control: section (nothing when absent). With `nominal:` the

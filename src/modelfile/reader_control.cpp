@@ -341,10 +341,12 @@ void Reader::read_control(const YAML::Node& root, Model& model) {
     if (!seen.insert(name).second) {
       fail(r["name"], "the name '" + name + "' is taken (by a constraint or a requirement)");
     }
-    only_keys(r, {"name", "holonomic", "nonholonomic", "A", "b", "active", "dynamics"},
+    only_keys(r, {"name", "holonomic", "nonholonomic", "A", "b", "active", "dynamics", "pose"},
               "requirement '" + name + "'", failer);
     const std::string what = "requirement '" + name + "'";
-    const Constraint req = ctl->read_constraint(r, name, what);
+    // pose: a robot's link point in task space (modelfile/reader_urdf.cpp)
+    const Constraint req =
+        r["pose"] ? ctl->read_pose_requirement(r, name, what) : ctl->read_constraint(r, name, what);
     const ErrorDynamics d = ctl->read_error_dynamics(r, what, req.kind());
     try {
       builder.require(req, d);

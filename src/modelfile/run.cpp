@@ -3,8 +3,10 @@
 #include "ukdyn/modelfile/run.hpp"
 
 #include <algorithm>
+#include <optional>
 
 #include "ukdyn/multibody/multibody.hpp"
+#include "ukdyn/multibody/tree.hpp"
 
 namespace ukdyn {
 
@@ -60,6 +62,12 @@ void add_model_columns(const Model& model, const Trajectory& traj, std::vector<C
   }
 }
 
+// a robot's joint and effort limits that the run left, as notes (tree::LimitWatch)
+void note_limits(const std::optional<tree::LimitWatch>& watch, RunStatistics& stats) {
+  if (!watch) return;
+  for (const tree::LimitExcess& e : watch->excesses()) stats.notes.push_back(tree::describe(e));
+}
+
 }  // namespace
 
 ModelRun run_model(const Model& model, const SimulationOptions& options,
@@ -78,8 +86,11 @@ ModelRun run_model(const Model& model, const SimulationOptions& options,
     add_model_columns(model, from.plant, cols);
     return cols;
   };
+  std::optional<tree::LimitWatch> watch;
+  if (model.robot) watch.emplace(*model.robot);
   auto pass_on = [&] {
     if (gathered.samples() == 0) return;
+    if (watch) watch->observe(gathered.plant.t, gathered.plant.q, gathered.Qc_control);
     piece.extra_columns = columns_of(gathered);
     std::swap(piece.trajectory, gathered.plant);
     chunk(piece);
@@ -123,6 +134,7 @@ ModelRun run_model(const Model& model, const SimulationOptions& options,
     run.trajectory = simulate(model.system, model.q0, model.qd0, o);
   }
   pass_on();
+  note_limits(watch, run.trajectory.stats);
 
   // the statistics, the names and the last sample with its columns
   if (last.samples() > 0) {
@@ -141,16 +153,21 @@ ModelRun run_model(const Model& model, const SimulationOptions& options,
 
 ModelRun run_model(const Model& model, const SimulationOptions& options) {
   ModelRun run;
+  std::optional<tree::LimitWatch> watch;
+  if (model.robot) watch.emplace(*model.robot);
   if (model.controller) {
     ControlledTrajectory c =
         simulate_controlled(*model.controller, model.system, model.q0, model.qd0, options);
+    if (watch) watch->observe(c.plant.t, c.plant.q, c.Qc_control);
     run.extra_columns = control_csv_columns(c);
     run.trajectory = std::move(c.plant);
     run.control = std::move(c.control);
     run.controlled = true;
   } else {
     run.trajectory = simulate(model.system, model.q0, model.qd0, options);
+    if (watch) watch->observe(run.trajectory.t, run.trajectory.q, {});
   }
+  note_limits(watch, run.trajectory.stats);
   if (model.multibody) {
     for (auto& col : mb::report_csv_columns(*model.multibody, run.trajectory)) {
       run.extra_columns.push_back(std::move(col));

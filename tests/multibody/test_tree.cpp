@@ -445,5 +445,48 @@ TEST(Tree, ErrorsNameTheLinkOrJoint) {
   }
 }
 
+// URDF's friction as Coulomb joint friction: a wheel spinning about its joint in zero gravity
+// decelerates at F / I_zz until it stops (q' = w0 − (F/I) t, q = w0 t − (F/I) t²/2), and the
+// friction's work closes the energy balance
+TEST(Tree, UrdfFrictionIsCoulombJointFriction) {
+  const std::string path = write_urdf(
+      "friction",
+      "<link name=\"base\"/><link name=\"wheel\"><inertial><mass value=\"2\"/>"
+      "<inertia ixx=\"0.1\" ixy=\"0\" ixz=\"0\" iyy=\"0.2\" iyz=\"0\" izz=\"0.3\"/></inertial>"
+      "</link><joint name=\"spin\" type=\"continuous\"><parent link=\"base\"/>"
+      "<child link=\"wheel\"/><axis xyz=\"0 0 1\"/><dynamics friction=\"0.6\"/></joint>");
+  const Tree tree = load_urdf(path, Vector3d::Zero());
+  EXPECT_EQ(tree.link(1).joint.friction, 0.6);
+  const System sys = make_system(tree);
+  SimulationOptions options;
+  options.t_end = 0.8;  // it stops at t = w0 I / F = 1
+  options.rtol = 1e-11;
+  options.atol = 1e-13;
+  VectorXd q0 = VectorXd::Zero(1), qd0 = VectorXd::Constant(1, 2.0);
+  const Trajectory tr = simulate(sys, q0, qd0, options);
+  ASSERT_EQ(tr.stats.status, Status::kOk) << tr.stats.message;
+  const double a = 0.6 / 0.3;
+  for (Index s = 0; s < tr.samples(); ++s) {
+    const double t = tr.t[std::size_t(s)];
+    EXPECT_NEAR(tr.qd[std::size_t(s)], 2.0 - a * t, 1e-9);
+    EXPECT_NEAR(tr.q[std::size_t(s)], 2.0 * t - a * t * t / 2, 1e-9);
+  }
+  EXPECT_NEAR(tr.stats.energy_balance, 0.0, 1e-8);
+  // the friction's work is the kinetic energy lost: F times the angle turned
+  const double angle = tr.q.back();
+  EXPECT_NEAR(tr.work_nonideal.back(), -0.6 * angle, 1e-8);
+  // a negative friction is refused, naming the joint
+  std::vector<Link> links = {tree.link(0), tree.link(1)};
+  links[1].joint.friction = -1;
+  try {
+    Tree("bad", links);
+    FAIL() << "no throw";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("'spin'"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("friction must be >= 0, got -1"), std::string::npos)
+        << e.what();
+  }
+}
+
 }  // namespace UKDYN_TEST_FILE
 }  // namespace ukdyn::tree

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include "support/alloc_counter.hpp"
+#include "ukdyn/control/control.hpp"
 #include "ukdyn/dynamics/forward.hpp"
 #include "ukdyn/dynamics/workspace.hpp"
 #include "ukdyn/multibody/tree.hpp"
@@ -24,6 +25,50 @@ TEST(Tree, EvaluationsDoNotAllocate) {
   for (int i = 0; i < 10; ++i) forward_dynamics(sys, ws, q, qd, 0.01 * i);
   EXPECT_EQ(testing::stop_counting_allocations(), 0);
   EXPECT_EQ(ws.status, Status::kOk);
+}
+
+// the loop closures (point, distance) and the task-space requirement, under the control law
+// whose evaluation runs them all (compute_control), and the momentum and limit passes
+TEST(Tree, FrameConstraintsAndTaskControlDoNotAllocate) {
+  const Tree tree = load_urdf(kPanda);
+  const Index tool = tree.link_index("panda_tool"), l3 = tree.link_index("panda_link3");
+  VectorXd q(7), qd(7);
+  q << 0.3, -0.5, 0.8, -1.9, 0.4, 1.7, -0.6;
+  qd << 0.5, -1.0, 0.7, 0.2, -0.9, 1.1, 0.3;
+  SystemBuilder sb = system_builder(tree);
+  sb.add(
+      distance_constraint(tree, "rod", {tool, Vector3d::Zero()}, {l3, Vector3d(0.1, 0, 0)}, 0.5));
+  const System held = sb.build();
+  const System free = make_system(tree);
+  const Controller ctrl =
+      ControllerBuilder(free)
+          .require(
+              pose_requirement(tree, "tool", {tool, Vector3d::Zero()},
+                               [](double t, PoseSample& d) {
+                                 d.p = Vector3d(0.3, 0.1 * t, 0.5);
+                                 d.v = Vector3d(0, 0.1, 0);
+                                 d.R = Eigen::AngleAxisd(t, Vector3d::UnitZ()).toRotationMatrix();
+                                 d.w = Vector3d::UnitZ();
+                               }),
+              ErrorDynamics::second_order(10.0, 1.0))
+          .require(point_constraint(tree, "ball", {l3, Vector3d::Zero()}, {-1, Vector3d::Zero()}),
+                   ErrorDynamics::second_order(10.0, 1.0))
+          .build();
+  Workspace ws(held);
+  ControlWorkspace cws(ctrl);
+  TreeData d(tree);
+  forward_dynamics(held, ws, q, qd, 0.0);
+  compute_control(ctrl, cws, q, qd, 0.0);
+  testing::start_counting_allocations();
+  Vector6d h = Vector6d::Zero();
+  for (int i = 0; i < 10; ++i) {
+    forward_dynamics(held, ws, q, qd, 0.01 * i);
+    compute_control(ctrl, cws, q, qd, 0.01 * i);
+    h += momentum(tree, q, qd, d);
+  }
+  EXPECT_EQ(testing::stop_counting_allocations(), 0);
+  EXPECT_EQ(ws.status, Status::kOk);
+  EXPECT_GT(h.norm(), 0.0);
 }
 
 }  // namespace UKDYN_TEST_FILE

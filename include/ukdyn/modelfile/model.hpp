@@ -20,6 +20,9 @@
 namespace ukdyn {
 
 class Controller;
+namespace tree {
+class Tree;
+}
 namespace mb {
 struct MultibodyModel;
 }
@@ -99,6 +102,9 @@ struct Model {
   /// (its poses and joint reactions are reported); null for a model in generalized coordinates
   /// (multibody/multibody.hpp).
   std::shared_ptr<const mb::MultibodyModel> multibody;
+  /// `robot:` (or a .urdf file read alone) — the kinematic tree that `system` was built from
+  /// (multibody/tree.hpp); null for other models.
+  std::shared_ptr<const tree::Tree> robot;
   /// `visual:` — how the browser viewer draws the model (modelfile/visual.hpp).
   ModelVisual visual;
   /// Where the file gave the settings, the initial state and the constraints (all unknown for

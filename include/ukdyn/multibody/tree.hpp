@@ -32,6 +32,7 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
+#include "ukdyn/core/constraint.hpp"
 #include "ukdyn/core/system.hpp"
 #include "ukdyn/core/types.hpp"
 
@@ -57,9 +58,9 @@ const char* joint_kind_name(JointKind k);
 int joint_coordinates(JointKind k);
 
 /// The joint that attaches a link to its parent: its fixed origin in the parent's frame, its
-/// kind and axis (unit, in the joint frame) and what URDF says of it. Limits, effort, velocity
-/// and friction are kept for later use (joint limits, control's effort checks, Coulomb joint
-/// friction); damping acts now (viscous, −damping · q').
+/// kind and axis (unit, in the joint frame) and what URDF says of it. Damping (viscous,
+/// −damping · q') and friction (Coulomb, make_system) act; limits and effort are checked
+/// (check_joint_limits, check_effort_limits), velocity is kept.
 struct Joint {
   std::string name;                                          ///< unique in the tree
   JointKind kind = JointKind::kFixed;                        ///< what moves
@@ -67,7 +68,7 @@ struct Joint {
   Eigen::Quaterniond R_PJ = Eigen::Quaterniond::Identity();  ///< origin rpy as a rotation
   Vector3d axis = Vector3d::UnitX();                         ///< unit axis in the joint frame
   double damping = 0.0;   ///< viscous damping (N·m·s/rad or N·s/m), >= 0
-  double friction = 0.0;  ///< URDF's friction (kept, not applied yet)
+  double friction = 0.0;  ///< URDF's friction: Coulomb torque (N·m) or force (N), >= 0
   double lower = -std::numeric_limits<double>::infinity();    ///< position limit
   double upper = std::numeric_limits<double>::infinity();     ///< position limit
   double effort = std::numeric_limits<double>::infinity();    ///< effort limit (kept)
@@ -205,18 +206,141 @@ using JointTorqueFn =
     std::function<void(const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd,
                        double t, Eigen::Ref<VectorXd> tau)>;
 
+/// The regularization eps (rad/s or m/s) of URDF's joint friction in make_system, as the bodies'
+/// joint friction's default (mb::JointFriction::regularization).
+inline constexpr double kJointFrictionRegularization = 1e-6;
+
 /// The unconstrained system of a tree: M(q) from mass_matrix, Q = τ(q, q', t) − D q' − h(q, q')
 /// (D the joints' viscous damping), the potential energy of gravity, the power of τ and of the
-/// dampers (so a run's energy balance is checked), and one unit-norm constraint "<link>.unit"
-/// per floating joint. Constraints, friction, control and simulate() then apply as to any
-/// System. The tree is copied into the system's callables. @param tau the input "tau", or empty
-/// for none. Cost O(links) to build.
+/// dampers (so a run's energy balance is checked), one non-ideal force "<joint>.friction" per
+/// one-coordinate joint with URDF friction F > 0, C_j = −F q'_j / sqrt(q'_j² + eps²) (Coulomb
+/// friction of magnitude F, eps = kJointFrictionRegularization; its work is accounted as the
+/// non-ideal forces'), and one unit-norm constraint "<link>.unit" per floating joint. Constraints,
+/// friction, control and simulate() then apply as to any System. The tree is copied into the
+/// system's callables. @param tau the input "tau", or empty for none. Cost O(links) to build.
 System make_system(const Tree& tree, JointTorqueFn tau = {});
 
 /// The SystemBuilder behind make_system, with all of the above already given: add constraints
 /// on the tree (built with frame_jacobian and frame_bias_acceleration), non-ideal forces or
 /// switching functions, then build(). make_system(tree, tau) is system_builder(tree, tau).build().
 SystemBuilder system_builder(const Tree& tree, JointTorqueFn tau = {});
+
+// ---- centre of mass and momentum (src/multibody/tree/momentum.cpp) -------------------------
+
+/// The tree's total mass Σ m_i (kg). Cost O(links).
+double total_mass(const Tree& tree);
+
+/// The centre of mass p_WG = Σ m_i p_W(com_i) / Σ m_i in the world, after forward_kinematics.
+/// Cost O(links). @throws std::invalid_argument on a TreeData of another tree.
+Vector3d center_of_mass(const Tree& tree, const TreeData& data);
+
+/// The centre-of-mass Jacobian J_G (3 × n), v_G = J_G q' = Σ m_i J_v(com_i) q' / Σ m_i, after
+/// forward_kinematics. Cost O(n · links). @throws std::invalid_argument on wrong sizes.
+void com_jacobian(const Tree& tree, const TreeData& data,
+                  Eigen::Ref<Eigen::Matrix<double, 3, Eigen::Dynamic>> J);
+
+/// The tree's momentum in world axes: [k_O; l], k_O = Σ (R_WL I_i,com R_WLᵀ ω_i + p_W(com_i) ×
+/// m_i v_W(com_i)) the angular momentum about the world origin, l = Σ m_i v_W(com_i) = M_tot v_G
+/// the linear momentum (the angular momentum about the centre of mass is k_O − p_WG × l).
+/// Runs forward_kinematics and an outward velocity pass (writes data.v). Cost O(links).
+/// @throws std::invalid_argument on wrong sizes.
+Vector6d momentum(const Tree& tree, const Eigen::Ref<const VectorXd>& q,
+                  const Eigen::Ref<const VectorXd>& qd, TreeData& data);
+
+// ---- constraints and requirements between tree frames (src/multibody/tree/frame_constraints.cpp)
+
+/// A point of a link, or of the world (link = -1: p is then a world point).
+struct LinkPoint {
+  Index link = -1;                ///< the link (Tree::link_index), -1 for the world
+  Vector3d p = Vector3d::Zero();  ///< the point in the link's frame (world frame for -1)
+};
+
+/// A loop closure holding two link points together: p_W(a) − p_W(b) = 0, 3 holonomic rows
+/// (a ball joint between the links). A = J_v(a) − J_v(b), b = −(J'q')_v(a) + (J'q')_v(b)
+/// (frame_jacobian, frame_bias_acceleration). Add it to system_builder(tree).
+/// @throws std::invalid_argument naming `name` on a link out of range or both points on the
+/// world. Cost per evaluation O(n · depth).
+Constraint point_constraint(const Tree& tree, std::string name, LinkPoint a, LinkPoint b);
+
+/// A loop closure keeping two link points at a distance: |p_W(a) − p_W(b)|² = length², one
+/// holonomic row (a massless rod with ball ends). @throws std::invalid_argument as
+/// point_constraint, and on a length that is not positive. Cost O(n · depth).
+Constraint distance_constraint(const Tree& tree, std::string name, LinkPoint a, LinkPoint b,
+                               double length);
+
+/// A Cartesian path in position and orientation: at time t, the point's desired position
+/// p, velocity v and acceleration a (world), the desired orientation R_WD, its angular
+/// velocity w and angular acceleration w_dot (world axes). Must not allocate.
+struct PoseSample {
+  Vector3d p = Vector3d::Zero(), v = Vector3d::Zero(), a = Vector3d::Zero();
+  Matrix3d R = Matrix3d::Identity();
+  Vector3d w = Vector3d::Zero(), w_dot = Vector3d::Zero();
+};
+/// The desired pose of a task-space requirement as a function of time.
+using PosePathFn = std::function<void(double t, PoseSample& desired)>;
+
+/// A task-space requirement (control/control.hpp) that link point `at` follow `path` in
+/// position and orientation: 6 holonomic rows
+///   e_p = p_W(at) − p_d(t),   e_R = ½ Σ_k r_d,k × r_k   (r_k, r_d,k the columns of R_WL, R_WD),
+/// e_R = 0 iff R_WL = R_WD near it (e_R = sin θ · axis of R_WD R_WLᵀ). Acceleration form
+/// A q'' = b is e'' = 0 exactly: rows 0–2 J_v, rows 3–5 L J_ω with L = −½ Σ [r_d,k]× [r_k]×
+/// (→ I at e_R = 0).
+/// Give it to ControllerBuilder::require with ErrorDynamics. `orientation` false: the 3 position
+/// rows only. @throws std::invalid_argument naming `name` on a link out of range or an empty
+/// path. Cost per evaluation O(n · depth).
+Constraint pose_requirement(const Tree& tree, std::string name, LinkPoint at, PosePathFn path,
+                            bool orientation = true);
+
+// ---- joint and effort limits (src/multibody/tree/limits.cpp) --------------------------------
+
+/// A limit that a run left: which joint, when it first did, and the largest excess (how far
+/// beyond the limit, > 0) and when.
+struct LimitExcess {
+  std::string joint;        ///< the joint's name
+  std::string limit;        ///< "lower", "upper" (position limits) or "effort"
+  double bound = 0.0;       ///< the limit's value
+  double first_time = 0.0;  ///< the first sample beyond it
+  double worst_time = 0.0;  ///< the sample of the largest excess
+  double excess = 0.0;      ///< the largest excess (rad, m, N·m or N), > 0
+};
+
+/// The samples at which joint positions leave URDF's [lower, upper] (revolute and prismatic
+/// joints): one LimitExcess per joint and side. `q` holds N samples of n coordinates one after
+/// the other (Trajectory::q), `t` the N times. Cost O(N · n).
+/// @throws std::invalid_argument when q does not hold t.size() · n values.
+std::vector<LimitExcess> check_joint_limits(const Tree& tree, const std::vector<double>& t,
+                                            const std::vector<double>& q);
+
+/// The samples at which generalized forces on one-coordinate joints exceed URDF's `effort`
+/// (|τ_j| > effort_j): `tau` holds N samples of n values (ControlledTrajectory::Qc_control).
+/// Cost O(N · n). @throws std::invalid_argument as check_joint_limits.
+std::vector<LimitExcess> check_effort_limits(const Tree& tree, const std::vector<double>& t,
+                                             const std::vector<double>& tau);
+
+/// The two checks above over samples that come in pieces (a streamed run): observe() each
+/// piece in time order, then excesses() lists what check_joint_limits and check_effort_limits
+/// would for all samples at once (position limits first, then efforts; per joint in link
+/// order). Cost O(n) per sample.
+class LimitWatch {
+ public:
+  /// Watches the limits of `tree` (copied: the watch may outlive it).
+  explicit LimitWatch(const Tree& tree);
+  /// N samples: times t, positions q (N × n), and generalized forces tau (N × n, or empty:
+  /// efforts are not checked for these samples). @throws std::invalid_argument on sizes.
+  void observe(const std::vector<double>& t, const std::vector<double>& q,
+               const std::vector<double>& tau);
+  /// The limits left so far.
+  std::vector<LimitExcess> excesses() const;
+
+ private:
+  std::vector<Index> offset_;                        // coordinate of each one-coordinate joint
+  std::vector<LimitExcess> lower_, upper_, effort_;  // per such joint
+  Index n_ = 0;
+};
+
+/// One line of text per excess: "joint 'j' exceeds its upper limit 2.9 by 0.03 rad (first at
+/// t = 0.41 s, worst at t = 0.52 s)". Cost O(excesses).
+std::string describe(const LimitExcess& e);
 
 /// Reads a URDF file (through urdfdom) into a Tree: links in depth-first order from the root;
 /// URDF's world link, if any, is the world. Joint limits, damping, friction, effort and velocity

@@ -52,6 +52,9 @@ void check_link(const Link& l) {
   if (!j.p_PJ.allFinite() || !j.R_PJ.coeffs().allFinite()) {
     throw std::invalid_argument(where + "the joint origin is not finite");
   }
+  if (!(j.friction >= 0.0)) {
+    throw std::invalid_argument(where + "friction must be >= 0, got " + std::to_string(j.friction));
+  }
   if (!(j.damping >= 0.0)) {
     throw std::invalid_argument(where + "damping must be >= 0, got " + std::to_string(j.damping));
   }

@@ -1,4 +1,5 @@
 // A tree as ukdyn's unconstrained system: M from the CRBA, Q = τ − D q' − h from the RNEA.
+#include <cmath>
 #include <memory>
 #include <utility>
 
@@ -77,6 +78,21 @@ SystemBuilder system_builder(const Tree& tree_in, JointTorqueFn tau) {
       }
       return P;
     });
+  }
+  // URDF's friction: a Coulomb torque (force) of that magnitude against the joint's rate,
+  // regularized as the bodies' joint friction is (mb::JointFriction): C_j = −F q'_j / sqrt(q'_j² +
+  // eps²), eps = kJointFrictionRegularization
+  for (Index i = 0; i < tree->link_count(); ++i) {
+    const double F = tree->link(i).joint.friction;
+    if (tree->dofs(i) != 1 || !(F > 0.0)) continue;
+    const Index j = tree->offset(i);
+    sb.add(NonIdealForce(
+        tree->link(i).joint.name + ".friction",
+        [F, j](const Eigen::Ref<const VectorXd>&, const Eigen::Ref<const VectorXd>& qd, double,
+               const IdealForceInfo&, Eigen::Ref<VectorXd> C) {
+          const double w = qd[j], eps = kJointFrictionRegularization;
+          C[j] = -F * w / std::sqrt(w * w + eps * eps);
+        }));
   }
   // the floating joints' unit quaternions, as a rigid body's (multibody.hpp)
   for (Index i : tree->floating_links()) {

@@ -1,0 +1,351 @@
+// Robot model files: robot: names a URDF (read through tree::load_urdf) and adds what URDF
+// cannot say (docs/robots.md, "Model files"):
+//   robot:
+//     urdf: panda_arm.urdf          the file, relative to the model file
+//     gravity: [0, 0, -9.81]        (default), numbers or expressions of the parameters
+//     torques: {panda_joint1: 2*sin(t), …}   joint torques, expressions of q, q_dot, t
+//     loops:                        loop closures between link points (or a link and the world)
+//       - {name: rod, type: distance, link_a: panda_tool, point_a: [0, 0, 0.05],
+//          link_b: world, point_b: [0.4, 0, 0.6], length: 0.3}
+//       - {name: ball, type: point, link_a: …, point_a: …, link_b: …, point_b: …}
+// The coordinates are the joints' names (a floating base's <link>_x … <link>_u3), so initial:,
+// constraints:, output: and control: name them as in any model file. A .urdf file given alone
+// (ukdyn run arm.urdf, ukdyn.load("arm.urdf")) is read as `robot: {urdf: arm.urdf}`.
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <filesystem>
+#include <set>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include <yaml-cpp/yaml.h>
+
+#include "ukdyn/core/format.hpp"
+#include "ukdyn/multibody/tree.hpp"
+
+#include "modelfile/reader.hpp"
+
+namespace ukdyn::model_reader {
+
+namespace {
+
+// the keys of a model file that describe the plant otherwise (a robot's is its URDF)
+const std::vector<std::string> kOtherPlantKeys = {
+    "coordinates", "kinetic_energy", "potential_energy", "mass_matrix",
+    "bodies",      "joints",         "forces",           "nonideal"};
+
+const std::vector<std::string> kRobotKeys = {"urdf", "gravity", "torques", "loops"};
+const std::vector<std::string> kLoopKeys = {"name",   "type",    "link_a", "point_a",
+                                            "link_b", "point_b", "length"};
+
+// a coordinate's name as an expression input: every character that an identifier cannot hold
+// ('.', '-', …) read as '_' (names_coordinate accepts both spellings of '.')
+std::string identifier_for(const std::string& name) {
+  std::string s = name;
+  for (char& c : s) {
+    if (!(std::isalnum(static_cast<unsigned char>(c)) || c == '_')) c = '_';
+  }
+  if (s.empty() || std::isdigit(static_cast<unsigned char>(s[0]))) s.insert(0, "_");
+  return s;
+}
+
+// load_urdf's message without its function's name (the reader says where instead)
+std::string urdf_message(const std::invalid_argument& e) {
+  std::string m = e.what();
+  const std::string prefix = "ukdyn::tree::load_urdf: ";
+  if (m.rfind(prefix, 0) == 0) m.erase(0, prefix.size());
+  return m;
+}
+
+}  // namespace
+
+bool is_urdf_path(const std::string& path) {
+  std::string ext = std::filesystem::path(path).extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(),
+                 [](unsigned char c) { return char(std::tolower(c)); });
+  return ext == ".urdf";
+}
+
+std::string urdf_model_text(const std::string& path) {
+  // the file's own name, single-quoted for YAML ('' stands for ')
+  std::string name = std::filesystem::path(path).filename().string(), quoted;
+  for (char c : name) quoted += c == '\'' ? std::string("''") : std::string(1, c);
+  return "robot: {urdf: '" + quoted + "'}\n";
+}
+
+Model Reader::read_robot(const YAML::Node& root) {
+  const YAML::Node r = root["robot"];
+  if (!r.IsMap()) {
+    fail(r, "robot must be a mapping with urdf: and optionally gravity, torques, loops",
+         "robot: {urdf: arm.urdf}");
+  }
+  for (const auto& kv : r) {
+    if (std::find(kRobotKeys.begin(), kRobotKeys.end(), kv.first.Scalar()) == kRobotKeys.end())
+      fail(kv.first, "unknown key '" + kv.first.Scalar() + "' in robot",
+           "the keys are " + join(kRobotKeys));
+  }
+  for (const auto& kv : root) {
+    const std::string key = kv.first.Scalar();
+    if (std::find(kOtherPlantKeys.begin(), kOtherPlantKeys.end(), key) != kOtherPlantKeys.end())
+      fail(kv.first, "'" + key + "' does not go with 'robot:'",
+           key == "nonideal" ? "non-ideal forces on a robot are not read yet (docs/robots.md)"
+                             : "a robot's links, joints and dynamics come from its URDF; add "
+                               "loops, torques and constraints between joints instead");
+  }
+  const YAML::Node u = r["urdf"];
+  if (!u || !u.IsScalar() || u.Scalar().empty())
+    fail(u ? u : r, "robot needs urdf: the URDF file's path (relative to the model file)",
+         "robot: {urdf: arm.urdf}");
+  // the URDF, relative to this file's directory
+  std::filesystem::path path(u.Scalar());
+  if (path.is_relative()) path = std::filesystem::path(file_).parent_path() / path;
+  const bool alone = std::filesystem::path(file_) == path;  // `ukdyn run arm.urdf`
+  tree::Tree robot = [&] {
+    try {
+      return tree::load_urdf(path.string());
+    } catch (const std::invalid_argument& e) {
+      // a URDF given alone has no line of ours to point at; urdfdom gives none
+      if (alone) throw ModelError(path.string(), 0, 0, urdf_message(e));
+      fail(u, urdf_message(e), "URDF errors name the link or joint (urdfdom reports no lines)");
+    }
+  }();
+  // coordinates: the joints' names as identifiers
+  std::set<std::string> seen;
+  for (const std::string& name : robot.coordinate_names()) {
+    const std::string id = identifier_for(name);
+    if (id == "t" || parameters_.count(id) || !seen.insert(id).second)
+      fail(u,
+           "coordinate '" + id + "' (joint '" + name + "' of " + path.string() +
+               ") clashes with time, a parameter or another joint",
+           "rename the parameter or the joint");
+    coordinates_.push_back(id);
+    velocities_.push_back(id + "_dot");
+    chain_.emplace_back(id, id + "_dot");
+  }
+  // the named constraints (between joints, written as expressions)
+  std::vector<std::string> cnames;
+  if (const YAML::Node cs = root["constraints"]; cs && cs.IsSequence()) {
+    for (const auto& c : cs) {
+      if (c.IsMap() && c["name"] && is_identifier(c["name"].Scalar()) &&
+          std::find(cnames.begin(), cnames.end(), c["name"].Scalar()) == cnames.end())
+        cnames.push_back(c["name"].Scalar());
+    }
+  }
+  make_expression_set(root, cnames);
+  // gravity: the URDF's world says nothing of it
+  if (const YAML::Node g = r["gravity"]) {
+    if (!g.IsSequence() || g.size() != 3)
+      fail(g, "robot gravity must be a list of 3 numbers (m/s²)", "gravity: [0, 0, -9.81]");
+    const tree::Vector3d gv(number(g[0], "gravity"), number(g[1], "gravity"),
+                            number(g[2], "gravity"));
+    std::vector<tree::Link> links;
+    for (Index i = 0; i < robot.link_count(); ++i) links.push_back(robot.link(i));
+    robot = tree::Tree(robot.name(), std::move(links), gv);
+  }
+  // torques: {joint: expression}, one generalized force per named coordinate
+  const Index n = robot.coordinate_count();
+  tree::JointTorqueFn tau;
+  if (const YAML::Node T = r["torques"]) {
+    if (!T.IsMap()) fail(T, "robot torques must map joint names to expressions", "{joint1: 0.5}");
+    std::vector<Expr> out(std::size_t(n), set_->constant(0.0));
+    std::set<Index> given;
+    for (const auto& kv : T) {
+      const Index k = coordinate(kv.first);
+      if (!given.insert(k).second)
+        fail(kv.first, "torque of '" + kv.first.Scalar() + "' given twice");
+      out[std::size_t(k)] = expression(kv.second, "torque of " + kv.first.Scalar());
+    }
+    const Program p = compile(out, T, "robot torques");
+    const InputLayout layout = layout_;
+    // (no scratch in its signature: buffers of the call, evaluate_local)
+    tau = [p, layout](const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd,
+                      double t, Eigen::Ref<VectorXd> out_tau) {
+      evaluate_local(
+          p, layout.size(), [&](double* in) { layout.fill(in, q, qd, t); },
+          [&](const double* v) {
+            for (Index i = 0; i < out_tau.size(); ++i) out_tau[i] = v[i];
+          });
+    };
+  }
+  SystemBuilder builder = tree::system_builder(robot, tau);
+  // loops: closures between link points
+  std::set<std::string> loop_names;
+  if (const YAML::Node L = r["loops"]) {
+    if (!L.IsSequence())
+      fail(L, "robot loops must be a list",
+           "loops: [{name: rod, type: distance, link_a: a, link_b: b, length: 0.3}]");
+    for (const auto& c : L) {
+      if (!c.IsMap()) fail(c, "a loop is a mapping", "{name: rod, type: point, link_a: a, …}");
+      for (const auto& kv : c) {
+        if (std::find(kLoopKeys.begin(), kLoopKeys.end(), kv.first.Scalar()) == kLoopKeys.end())
+          fail(kv.first, "unknown key '" + kv.first.Scalar() + "' in a loop",
+               "the keys are " + join(kLoopKeys));
+      }
+      if (!c["name"] || !is_identifier(c["name"].Scalar()))
+        fail(c, "a loop needs a name (an identifier)", "name: knee");
+      const std::string name = c["name"].Scalar();
+      if (!loop_names.insert(name).second) fail(c["name"], "loop '" + name + "' is given twice");
+      const std::string type = c["type"] ? c["type"].Scalar() : "";
+      if (type != "point" && type != "distance")
+        fail(c["type"] ? c["type"] : c, "loop '" + name + "': type must be point or distance",
+             "point: two link points held together (3 rows); distance: at a length (1 row)");
+      auto end = [&](const char* link_key, const char* point_key) {
+        tree::LinkPoint lp;
+        const YAML::Node l = c[link_key];
+        if (!l) fail(c, "loop '" + name + "' needs " + link_key, "a link's name, or world");
+        if (l.Scalar() != "world") {
+          try {
+            lp.link = robot.link_index(l.Scalar());
+          } catch (const std::invalid_argument&) {
+            std::vector<std::string> names;
+            for (Index i = 0; i < robot.link_count(); ++i) names.push_back(robot.link(i).name);
+            fail(l, "loop '" + name + "': no link '" + l.Scalar() + "' in " + path.string(),
+                 "the links are world, " + join(names));
+          }
+        }
+        if (const YAML::Node p = c[point_key]) {
+          if (!p.IsSequence() || p.size() != 3)
+            fail(p, "loop '" + name + "': " + point_key + " must be a list of 3 numbers",
+                 "[x, y, z] in the link's frame (the world's for world)");
+          for (std::size_t i = 0; i < 3; ++i) lp.p[Index(i)] = number(p[i], point_key);
+        }
+        return lp;
+      };
+      const tree::LinkPoint a = end("link_a", "point_a"), b = end("link_b", "point_b");
+      try {
+        if (type == "point") {
+          if (c["length"]) fail(c["length"], "loop '" + name + "': a point loop has no length");
+          builder.add(tree::point_constraint(robot, name, a, b));
+        } else {
+          if (!c["length"]) fail(c, "loop '" + name + "' needs length", "length: 0.3");
+          builder.add(tree::distance_constraint(robot, name, a, b, number(c["length"], "length")));
+        }
+      } catch (const std::invalid_argument& e) {
+        std::string m = e.what();
+        if (const auto k = m.find(": "); k != std::string::npos) m.erase(0, k + 2);
+        fail(c, m);
+      }
+    }
+  }
+  read_constraints(root, builder);
+  // (the expressions' switches are not located on a robot yet: the tree's callables own the
+  // system's scratch, which the compiled switching functions would need)
+  switch_sources_.clear();
+  constraint_switch_sources_.clear();
+  const auto build = [&]() -> System {
+    try {
+      return builder.build();
+    } catch (const std::invalid_argument& e) {
+      fail(r, e.what());
+    }
+  };
+  Model model{.system = build()};
+  model.q0 = robot.neutral();
+  model.qd0 = VectorXd::Zero(n);
+  robot_ = std::make_shared<const tree::Tree>(std::move(robot));
+  model.robot = robot_;
+  return model;
+}
+
+Constraint Reader::read_pose_requirement(const YAML::Node& r, const std::string& name,
+                                         const std::string& what) {
+  const YAML::Node pose = r["pose"];
+  const std::string example =
+      "pose: {link: tool, point: [0, 0, 0], position: [0.4, 0.1*sin(t), 0.5], orientation: "
+      "[cos(t/2), 0, 0, sin(t/2)]}";
+  if (!robot_) fail(pose, what + ": a pose requirement needs a robot: (a URDF)", example);
+  if (!pose.IsMap()) fail(pose, what + ": pose must be a mapping", example);
+  for (const auto& kv : pose) {
+    const std::string key = kv.first.Scalar();
+    if (key != "link" && key != "point" && key != "position" && key != "orientation")
+      fail(kv.first, "unknown key '" + key + "' in the pose of " + what,
+           "the keys are link, point, position, orientation");
+  }
+  for (const char* key : {"holonomic", "nonholonomic", "A", "b"}) {
+    if (r[key]) fail(r[key], what + ": give either pose or " + key + ", not both");
+  }
+  const tree::Tree& robot = *robot_;
+  tree::LinkPoint at;
+  const YAML::Node link = pose["link"];
+  if (!link) fail(pose, what + ": pose needs link:", example);
+  try {
+    at.link = robot.link_index(link.Scalar());
+  } catch (const std::invalid_argument&) {
+    fail(link, what + ": no link '" + link.Scalar() + "' in the robot");
+  }
+  if (const YAML::Node p = pose["point"]) {
+    if (!p.IsSequence() || p.size() != 3)
+      fail(p, what + ": point must be a list of 3 numbers", "[x, y, z] in the link's frame");
+    for (std::size_t i = 0; i < 3; ++i) at.p[Index(i)] = number(p[i], "point");
+  }
+  // [p; u] as expressions of t, and their first and second derivatives
+  const std::size_t t_input = coordinates_.size() * 2;
+  std::vector<Expr> value;
+  auto read_list = [&](const char* key, std::size_t size, const char* hint) {
+    const YAML::Node l = pose[key];
+    if (!l.IsSequence() || l.size() != size)
+      fail(l, what + ": " + key + " must be a list of " + format_number(size) + " expressions",
+           hint);
+    for (const auto& e : l) {
+      const Expr x = expression(e, what + " " + key);
+      for (const Index in : set_->inputs_of(x)) {
+        if (std::size_t(in) != t_input)
+          fail(e, what + ": " + key + " may depend on t and the parameters only, not on '" +
+                      set_->input_names()[std::size_t(in)] + "'");
+      }
+      value.push_back(x);
+    }
+  };
+  if (!pose["position"]) fail(pose, what + ": pose needs position:", example);
+  read_list("position", 3, "[x(t), y(t), z(t)] in the world");
+  const bool oriented = bool(pose["orientation"]);
+  if (oriented) read_list("orientation", 4, "a unit quaternion [w, x, y, z] of t");
+  std::vector<Expr> outputs = value;
+  for (int order = 0; order < 2; ++order) {
+    const std::size_t from = outputs.size() - value.size();
+    for (std::size_t k = 0; k < value.size(); ++k)
+      outputs.push_back(set_->diff(outputs[from + k], "t"));
+  }
+  const Program program = compile(outputs, pose, what);
+  const InputLayout layout = layout_;
+  const std::size_t w = value.size();  // 3 or 7 values per derivative order
+  // the desired pose at t: p, p', p''; R(u), ω = 2 vec(u' ⊗ u*), ω' = 2 vec(u'' ⊗ u*)
+  auto path = [program, layout, w](double t, tree::PoseSample& d) {
+    evaluate_local(
+        program, layout.size(), [&](double* in) { in[2 * layout.n] = t; },
+        [&](const double* v) {
+          d.p = tree::Vector3d(v[0], v[1], v[2]);
+          d.v = tree::Vector3d(v[w], v[w + 1], v[w + 2]);
+          d.a = tree::Vector3d(v[2 * w], v[2 * w + 1], v[2 * w + 2]);
+          if (w == 3) return;
+          const Eigen::Quaterniond u(v[3], v[4], v[5], v[6]);
+          const auto rate = [&](const double* du) {
+            // vec(du ⊗ u*) = u0 du_v − du0 u_v − du_v × u_v
+            const tree::Vector3d uv(u.x(), u.y(), u.z()), dv(du[1], du[2], du[3]);
+            return tree::Vector3d(2.0 * (u.w() * dv - du[0] * uv - dv.cross(uv)));
+          };
+          d.R = u.normalized().toRotationMatrix();
+          d.w = rate(v + w + 3);
+          d.w_dot = rate(v + 2 * w + 3);
+        });
+  };
+  if (oriented) {
+    // a quaternion of unit norm at the start (its derivatives assume it stays so)
+    double norm = 0.0;
+    evaluate_local(
+        program, layout.size(), [&](double* in) { in[2 * layout.n] = 0.0; },
+        [&](const double* v) {
+          norm = std::sqrt(v[3] * v[3] + v[4] * v[4] + v[5] * v[5] + v[6] * v[6]);
+        });
+    if (std::abs(norm - 1.0) > 1e-9)
+      fail(pose["orientation"],
+           what + ": orientation must be a unit quaternion, its norm at t = 0 is " + brief(norm),
+           "[cos(a/2), x sin(a/2), y sin(a/2), z sin(a/2)] for a rotation by a about the unit "
+           "axis (x, y, z)");
+  }
+  return tree::pose_requirement(robot, name, at, path, oriented);
+}
+
+}  // namespace ukdyn::model_reader

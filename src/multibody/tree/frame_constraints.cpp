@@ -1,0 +1,254 @@
+// Constraints and requirements between tree frames, built on frame_jacobian and
+// frame_bias_acceleration: a point loop closure (3 rows), a distance loop closure (1 row), and a
+// task-space pose requirement (6 rows) for exact tracking control.
+#include <cmath>
+#include <memory>
+#include <stdexcept>
+#include <string>
+#include <utility>
+
+#include "multibody/tree/spatial.hpp"
+#include "ukdyn/multibody/tree.hpp"
+
+namespace ukdyn::tree {
+
+namespace {
+
+using Jacobian = Eigen::Matrix<double, 6, Eigen::Dynamic>;
+
+// per workspace: the passes' links and the two points' Jacobians
+struct FrameScratch final : ConstraintScratch {
+  explicit FrameScratch(const Tree& tree)
+      : data(tree), Ja(6, tree.coordinate_count()), Jb(6, tree.coordinate_count()) {}
+  TreeData data;
+  Jacobian Ja, Jb;  // (6 × n) frame Jacobians of the points a and b
+};
+
+// the kinematics of one point at (q, q'): position, Jacobian and J' q' (zero for the world)
+struct PointState {
+  Vector3d p_W;
+  Vector6d bias;  // [ω'; a] at q'' = 0
+};
+PointState point_state(const Tree& tree, const LinkPoint& pt, const Eigen::Ref<const VectorXd>& q,
+                       const Eigen::Ref<const VectorXd>& qd, TreeData& d, Jacobian& J,
+                       bool with_bias) {
+  if (pt.link < 0) {
+    J.setZero();
+    return {pt.p, Vector6d::Zero()};
+  }
+  PointState s;
+  if (with_bias) {
+    s.bias = frame_bias_acceleration(tree, q, qd, d, pt.link, pt.p);  // runs forward_kinematics
+  } else {
+    forward_kinematics(tree, q, d);
+    s.bias.setZero();
+  }
+  frame_jacobian(tree, d, pt.link, pt.p, J);
+  s.p_W = world_point(d, pt.link, pt.p);
+  return s;
+}
+
+void check_point(const Tree& tree, const std::string& who, const std::string& name,
+                 const LinkPoint& pt, const char* which);
+
+// both points of a loop closure: in range, finite, not both on the world
+void check_points(const Tree& tree, const std::string& who, const std::string& name,
+                  const LinkPoint& a, const LinkPoint& b) {
+  check_point(tree, who, name, a, "a");
+  check_point(tree, who, name, b, "b");
+  if (a.link < 0 && b.link < 0) {
+    throw std::invalid_argument(who + ": constraint '" + name +
+                                "': both points are on the world (give a link for one)");
+  }
+}
+
+void check_point(const Tree& tree, const std::string& who, const std::string& name,
+                 const LinkPoint& pt, const char* which) {
+  if (pt.link < -1 || pt.link >= tree.link_count()) {
+    throw std::invalid_argument(
+        who + ": constraint '" + name + "': link " + std::to_string(pt.link) + " of point " +
+        which + " out of range [-1, " + std::to_string(tree.link_count()) + ") (-1: the world)");
+  }
+  if (!pt.p.allFinite()) {
+    throw std::invalid_argument(who + ": constraint '" + name + "': point " + which +
+                                " is not finite");
+  }
+}
+
+// the models' common part: the tree, shared by copies, and a FrameScratch per workspace
+class FrameModel : public ConstraintModel {
+ public:
+  explicit FrameModel(std::shared_ptr<const Tree> tree) : tree_(std::move(tree)) {}
+  std::unique_ptr<ConstraintScratch> make_scratch(Index) const override {
+    return std::make_unique<FrameScratch>(*tree_);
+  }
+
+ protected:
+  std::shared_ptr<const Tree> tree_;
+};
+
+// p_W(a) − p_W(b) = 0: A = J_v(a) − J_v(b), b = −(J' q')_v(a) + (J' q')_v(b)
+class PointModel final : public FrameModel {
+ public:
+  PointModel(std::shared_ptr<const Tree> tree, LinkPoint a, LinkPoint b)
+      : FrameModel(std::move(tree)), a_(a), b_(b) {}
+  void acceleration_form(const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd,
+                         double, ConstraintScratch* s, Eigen::Ref<MatrixXd> A,
+                         Eigen::Ref<VectorXd> b) const override {
+    auto& w = *static_cast<FrameScratch*>(s);
+    const PointState pa = point_state(*tree_, a_, q, qd, w.data, w.Ja, true);
+    const PointState pb = point_state(*tree_, b_, q, qd, w.data, w.Jb, true);
+    A = w.Ja.bottomRows<3>() - w.Jb.bottomRows<3>();
+    b = pb.bias.tail<3>() - pa.bias.tail<3>();
+  }
+  void violation(const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd, double,
+                 ConstraintScratch* s, Eigen::Ref<VectorXd> position,
+                 Eigen::Ref<VectorXd> velocity) const override {
+    auto& w = *static_cast<FrameScratch*>(s);
+    const PointState pa = point_state(*tree_, a_, q, qd, w.data, w.Ja, false);
+    const PointState pb = point_state(*tree_, b_, q, qd, w.data, w.Jb, false);
+    position = pa.p_W - pb.p_W;
+    velocity.noalias() = (w.Ja.bottomRows<3>() - w.Jb.bottomRows<3>()) * qd;
+  }
+
+ private:
+  LinkPoint a_, b_;
+};
+
+// (|d|² − ℓ²) / (2ℓ) = 0 with d = p_W(a) − p_W(b) (metres near the closure):
+// phi' = dᵀ d' / ℓ, phi'' = (d'ᵀ d' + dᵀ d'') / ℓ, d'' = (J_a − J_b) q'' + β_a − β_b
+class DistanceModel final : public FrameModel {
+ public:
+  DistanceModel(std::shared_ptr<const Tree> tree, LinkPoint a, LinkPoint b, double length)
+      : FrameModel(std::move(tree)), a_(a), b_(b), length_(length) {}
+  void acceleration_form(const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd,
+                         double, ConstraintScratch* s, Eigen::Ref<MatrixXd> A,
+                         Eigen::Ref<VectorXd> b) const override {
+    auto& w = *static_cast<FrameScratch*>(s);
+    const PointState pa = point_state(*tree_, a_, q, qd, w.data, w.Ja, true);
+    const PointState pb = point_state(*tree_, b_, q, qd, w.data, w.Jb, true);
+    const Vector3d dist = pa.p_W - pb.p_W;
+    // (J_a − J_b)_v into Ja's linear rows, then d' = (J_a − J_b)_v q'
+    w.Ja.bottomRows<3>() -= w.Jb.bottomRows<3>();
+    const Vector3d rate = w.Ja.bottomRows<3>() * qd;
+    A.row(0).noalias() = (dist / length_).transpose() * w.Ja.bottomRows<3>();
+    b[0] = -(rate.squaredNorm() + dist.dot(pa.bias.tail<3>() - pb.bias.tail<3>())) / length_;
+  }
+  void violation(const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd, double,
+                 ConstraintScratch* s, Eigen::Ref<VectorXd> position,
+                 Eigen::Ref<VectorXd> velocity) const override {
+    auto& w = *static_cast<FrameScratch*>(s);
+    const PointState pa = point_state(*tree_, a_, q, qd, w.data, w.Ja, false);
+    const PointState pb = point_state(*tree_, b_, q, qd, w.data, w.Jb, false);
+    const Vector3d dist = pa.p_W - pb.p_W;
+    position[0] = (dist.squaredNorm() - length_ * length_) / (2.0 * length_);
+    velocity[0] = dist.dot((w.Ja.bottomRows<3>() - w.Jb.bottomRows<3>()) * qd) / length_;
+  }
+
+ private:
+  LinkPoint a_, b_;
+  double length_;
+};
+
+// e = [p_W − p_d; ½ Σ r_d,k × r_k]; e'' = 0 is A q'' = b (see pose_requirement)
+class PoseModel final : public FrameModel {
+ public:
+  PoseModel(std::shared_ptr<const Tree> tree, LinkPoint at, PosePathFn path, bool orientation)
+      : FrameModel(std::move(tree)), at_(at), path_(std::move(path)), orientation_(orientation) {}
+  void acceleration_form(const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd,
+                         double t, ConstraintScratch* s, Eigen::Ref<MatrixXd> A,
+                         Eigen::Ref<VectorXd> b) const override {
+    auto& w = *static_cast<FrameScratch*>(s);
+    const PointState pt = point_state(*tree_, at_, q, qd, w.data, w.Ja, true);
+    PoseSample d;
+    path_(t, d);
+    // position: J_v q'' = a_d − (J' q')_v
+    A.topRows<3>() = w.Ja.bottomRows<3>();
+    b.head<3>() = d.a - pt.bias.tail<3>();
+    if (!orientation_) return;
+    // orientation: r_k' = ω × r_k, r_d,k' = w_d × r_d,k, r_d,k'' = w_d' × r_d,k + w_d × r_d,k';
+    // e_R'' = L ω' + ½ Σ (r_d,k'' × r_k + 2 r_d,k' × r_k' + r_d,k × (ω × r_k')) with
+    // ω' = J_ω q'' + β_ω, L = −½ Σ [r_d,k]× [r_k]×
+    const Matrix3d& R = w.data.R_WL[std::size_t(at_.link)];
+    const Vector3d omega = w.Ja.topRows<3>() * qd;
+    Matrix3d L = Matrix3d::Zero();
+    Vector3d rest = Vector3d::Zero();
+    for (int k = 0; k < 3; ++k) {
+      const Vector3d r = R.col(k), rd = d.R.col(k);
+      const Vector3d r1 = omega.cross(r), rd1 = d.w.cross(rd);
+      const Vector3d rd2 = d.w_dot.cross(rd) + d.w.cross(rd1);
+      L -= 0.5 * detail::skew(rd) * detail::skew(r);
+      rest += 0.5 * (rd2.cross(r) + 2.0 * rd1.cross(r1) + rd.cross(omega.cross(r1)));
+    }
+    A.bottomRows<3>().noalias() = L * w.Ja.topRows<3>();
+    b.tail<3>() = -rest - L * pt.bias.head<3>();
+  }
+  void violation(const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd,
+                 double t, ConstraintScratch* s, Eigen::Ref<VectorXd> position,
+                 Eigen::Ref<VectorXd> velocity) const override {
+    auto& w = *static_cast<FrameScratch*>(s);
+    const PointState pt = point_state(*tree_, at_, q, qd, w.data, w.Ja, false);
+    PoseSample d;
+    path_(t, d);
+    position.head<3>() = pt.p_W - d.p;
+    velocity.head<3>() = w.Ja.bottomRows<3>() * qd - d.v;
+    if (!orientation_) return;
+    // e_R = ½ Σ r_d,k × r_k, e_R' = ½ Σ (r_d,k' × r_k + r_d,k × r_k')
+    const Matrix3d& R = w.data.R_WL[std::size_t(at_.link)];
+    const Vector3d omega = w.Ja.topRows<3>() * qd;
+    Vector3d e = Vector3d::Zero(), e_rate = Vector3d::Zero();
+    for (int k = 0; k < 3; ++k) {
+      const Vector3d r = R.col(k), rd = d.R.col(k);
+      e += 0.5 * rd.cross(r);
+      e_rate += 0.5 * (d.w.cross(rd).cross(r) + rd.cross(omega.cross(r)));
+    }
+    position.tail<3>() = e;
+    velocity.tail<3>() = e_rate;
+  }
+
+ private:
+  LinkPoint at_;
+  PosePathFn path_;
+  bool orientation_;
+};
+
+}  // namespace
+
+Constraint point_constraint(const Tree& tree, std::string name, LinkPoint a, LinkPoint b) {
+  const std::string who = "ukdyn::tree::point_constraint";
+  check_points(tree, who, name, a, b);
+  auto model = std::make_shared<PointModel>(std::make_shared<const Tree>(tree), a, b);
+  return Constraint(std::move(name), ConstraintKind::kHolonomic, 3, std::move(model));
+}
+
+Constraint distance_constraint(const Tree& tree, std::string name, LinkPoint a, LinkPoint b,
+                               double length) {
+  const std::string who = "ukdyn::tree::distance_constraint";
+  check_points(tree, who, name, a, b);
+  if (!(length > 0.0) || !std::isfinite(length)) {
+    throw std::invalid_argument(who + ": constraint '" + name + "': the length must be a " +
+                                "positive number, got " + std::to_string(length) +
+                                " (two points held together: point_constraint)");
+  }
+  auto model = std::make_shared<DistanceModel>(std::make_shared<const Tree>(tree), a, b, length);
+  return Constraint(std::move(name), ConstraintKind::kHolonomic, 1, std::move(model));
+}
+
+Constraint pose_requirement(const Tree& tree, std::string name, LinkPoint at, PosePathFn path,
+                            bool orientation) {
+  const std::string who = "ukdyn::tree::pose_requirement";
+  if (at.link < 0 || at.link >= tree.link_count()) {
+    throw std::invalid_argument(who + ": requirement '" + name + "': link " +
+                                std::to_string(at.link) + " out of range [0, " +
+                                std::to_string(tree.link_count()) + ")");
+  }
+  if (!path) {
+    throw std::invalid_argument(who + ": requirement '" + name + "': the path is empty");
+  }
+  auto model = std::make_shared<PoseModel>(std::make_shared<const Tree>(tree), at, std::move(path),
+                                           orientation);
+  return Constraint(std::move(name), ConstraintKind::kHolonomic, orientation ? 6 : 3,
+                    std::move(model));
+}
+
+}  // namespace ukdyn::tree

@@ -1,0 +1,329 @@
+// Robot model files (modelfile/reader_urdf.cpp): a .urdf read alone as a model, a model file
+// that names a URDF and adds torques, a loop closure, initial state by joint name, parameters
+// and a joint-space control requirement, and the errors a user meets, located.
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+#include <gtest/gtest.h>
+
+#include <Eigen/Dense>
+
+#include "ukdyn/control/control.hpp"
+#include "ukdyn/modelfile/model.hpp"
+#include "ukdyn/modelfile/run.hpp"
+#include "ukdyn/multibody/tree.hpp"
+#include "ukdyn/simulation/simulate.hpp"
+
+namespace ukdyn {
+namespace UKDYN_TEST_FILE {
+
+const std::string kData = UKDYN_TEST_DATA_DIR;
+const std::string kPanda = kData + "/panda_arm.urdf";
+
+// a model file next to the URDF (the urdf: path is relative to it)
+Model robot_model(const std::string& text) { return parse_model(text, kData + "/robot.yaml"); }
+
+// M(q) and Q(q, q', t) of a system
+MatrixXd M_of(const System& s, const VectorXd& q) {
+  MatrixXd M(s.coordinate_count(), s.coordinate_count());
+  s.mass_matrix(q, 0.0, M);
+  return M;
+}
+VectorXd Q_of(const System& s, const VectorXd& q, const VectorXd& qd, double t) {
+  VectorXd Q(s.coordinate_count());
+  s.forces(q, qd, t, Q);
+  return Q;
+}
+
+// ModelError's message and position
+struct Failure {
+  std::string text;
+  int line = -1;
+};
+Failure failure_of(const std::string& model_text) {
+  try {
+    robot_model(model_text);
+  } catch (const ModelError& e) {
+    return {e.message() + " | " + e.hint(), e.line()};
+  }
+  return {"no error", -1};
+}
+
+TEST(ModelRobot, AUrdfAloneIsARobotWithGravityAndNoTorque) {
+  const Model m = load_model(kPanda);
+  ASSERT_NE(m.robot, nullptr);
+  ASSERT_EQ(m.system.coordinate_count(), 7);
+  EXPECT_EQ(m.system.coordinate_names()[3], "panda_joint4");
+  EXPECT_EQ(m.system.constraint_count(), 0);
+  EXPECT_NEAR(m.q0.norm(), 0.0, 0.0);  // the neutral pose
+  // the same dynamics as tree::make_system of the same file: M and Q at a state
+  const tree::Tree arm = tree::load_urdf(kPanda);
+  const System direct = tree::make_system(arm);
+  VectorXd q(7), qd(7);
+  q << 0.3, -0.5, 0.8, -1.9, 0.4, 1.7, -0.6;
+  qd << 0.4, -0.3, 0.5, 0.2, -0.6, 0.3, 0.7;
+  EXPECT_NEAR((M_of(m.system, q) - M_of(direct, q)).norm(), 0.0, 0.0);
+  EXPECT_NEAR((Q_of(m.system, q, qd, 0.0) - Q_of(direct, q, qd, 0.0)).norm(), 0.0, 0.0);
+  // gravity acts: with the arm at rest Q = −g(q), nonzero on the shoulder
+  EXPECT_GT(std::abs(Q_of(m.system, q, VectorXd::Zero(7), 0.0)[1]), 1.0);
+}
+
+TEST(ModelRobot, AModelFileAddsTorquesALoopInitialStateAndParameters) {
+  // the rod's anchor 0.3 m above the tool in the initial pose
+  const tree::Tree arm = tree::load_urdf(kPanda);
+  tree::TreeData d(arm);
+  VectorXd q0(7);
+  q0 << 0.3, -0.5, 0.8, -1.9, 0.4, 1.7, -0.6;
+  tree::forward_kinematics(arm, q0, d);
+  const Eigen::Vector3d anchor =
+      tree::world_point(d, arm.link_index("panda_tool"), {0, 0, 0}) + Eigen::Vector3d(0, 0, 0.3);
+  char point[128];
+  std::snprintf(point, sizeof point, "[%.17g, %.17g, %.17g]", anchor.x(), anchor.y(), anchor.z());
+  const std::string text = R"(name: held arm
+parameters: {k: 2.5, len: 0.3}
+robot:
+  urdf: panda_arm.urdf
+  gravity: [0, 0, -9.81]
+  torques: {panda_joint1: k*sin(t), panda_joint7: -0.1*panda_joint7_dot}
+  loops:
+    - {name: rod, type: distance, link_a: panda_tool, link_b: world,
+       point_b: )" + std::string(point) +
+                           R"(, length: len}
+initial:
+  q: {panda_joint1: 0.3, panda_joint2: -0.5, panda_joint3: 0.8, panda_joint4: -1.9,
+      panda_joint5: 0.4, panda_joint6: 1.7, panda_joint7: -0.6}
+simulate: {t_end: 0.3}
+)";
+  const Model m = robot_model(text);
+  ASSERT_EQ(m.system.constraint_count(), 1);
+  EXPECT_EQ(m.system.constraint(0).name(), "rod");
+  EXPECT_NEAR(m.q0[3], -1.9, 0.0);
+  // Q = τ − D q' − h with τ = [k sin t, 0, …, −0.1 q7']
+  VectorXd qd(7), h(7), D(7);
+  qd << 0.4, -0.3, 0.5, 0.2, -0.6, 0.3, 0.7;
+  tree::bias_forces(arm, m.q0, qd, d, h);
+  for (Index j = 0; j < 7; ++j) D[j] = arm.link(j + 1).joint.damping;
+  VectorXd expected = -h - D.cwiseProduct(qd);
+  expected[0] += 2.5 * std::sin(1.0);
+  expected[6] += -0.1 * qd[6];
+  EXPECT_NEAR((Q_of(m.system, m.q0, qd, 1.0) - expected).norm(), 0.0, 1e-12);
+  // the rod holds the tool at its length from the anchor
+  const Trajectory tr = simulate(m.system, m.q0, m.qd0, m.options);
+  ASSERT_EQ(tr.stats.status, Status::kOk) << tr.stats.message;
+  for (Index s = 0; s < tr.samples(); s += 10) {
+    tree::forward_kinematics(arm, Eigen::Map<const VectorXd>(tr.q.data() + s * 7, 7), d);
+    const double len =
+        (tree::world_point(d, arm.link_index("panda_tool"), {0, 0, 0}) - anchor).norm();
+    EXPECT_NEAR(len, 0.3, 1e-9);
+  }
+  // --set of a parameter changes the loop
+  EXPECT_EQ(parse_model(text, kData + "/robot.yaml", {{"len", 0.31}}).parameters.at("len"), 0.31);
+}
+
+TEST(ModelRobot, JointSpaceControlOfARobotModelFile) {
+  const Model m = robot_model(R"(robot: {urdf: panda_arm.urdf}
+control:
+  requirements:
+    - {name: swing, holonomic: panda_joint1 - 0.5*sin(t), dynamics: {omega: 10, zeta: 1}}
+    - {name: elbow, holonomic: panda_joint4 + 1.5, dynamics: {omega: 10, zeta: 1}}
+initial:
+  q: {panda_joint4: -1.5}
+  q_dot: {panda_joint1: 0.5}
+simulate: {t_end: 0.5, rtol: 1e-11, atol: 1e-13}
+)");
+  ASSERT_NE(m.controller, nullptr);
+  const ControlledTrajectory run =
+      simulate_controlled(*m.controller, m.system, m.q0, m.qd0, m.options);
+  ASSERT_EQ(run.plant.stats.status, Status::kOk) << run.plant.stats.message;
+  for (Index s = 0; s < run.samples(); ++s) {
+    EXPECT_NEAR(run.plant.q[std::size_t(s * 7)], 0.5 * std::sin(run.plant.t[std::size_t(s)]), 1e-8);
+    EXPECT_NEAR(run.plant.q[std::size_t(s * 7 + 3)], -1.5, 1e-8);
+  }
+}
+
+// a robot model's run notes the limits it left (the Panda's neutral pose is outside joint 4's
+// range [−3.0718, −0.0698]), streamed or not, from the positions and the control torques
+TEST(ModelRobot, ARunNotesTheJointAndEffortLimitsItLeaves) {
+  const Model m = load_model(kPanda);
+  SimulationOptions options = m.options;
+  options.t_end = 0.2;
+  const ModelRun run = run_model(m, options);
+  ASSERT_FALSE(run.trajectory.stats.notes.empty());
+  const std::string& first = run.trajectory.stats.notes[0];
+  EXPECT_EQ(first.rfind("joint 'panda_joint4' exceeds its upper limit -0.0698 by ", 0), 0u)
+      << first;
+  EXPECT_NE(first.find("(first at t = 0 s"), std::string::npos) << first;
+  const ModelRun streamed = run_model(
+      m, options, [](const ModelRun&) {}, 7);
+  EXPECT_EQ(streamed.trajectory.stats.notes, run.trajectory.stats.notes);
+  // under control: the torques that hold joint 4 at −1.5 against gravity exceed an effort of 12
+  // (joint 2's is 87; the Panda's forearm joints 5–7 have 12) only where the file says
+  const Model held = robot_model(R"(robot: {urdf: panda_arm.urdf, gravity: [0, 0, -60]}
+control:
+  requirements:
+    - {name: pose, holonomic: [panda_joint2 - 1, panda_joint4 + 1.5], dynamics: {omega: 10}}
+initial: {q: {panda_joint2: 1, panda_joint4: -1.5}}
+simulate: {t_end: 0.1}
+)");
+  const ModelRun c = run_model(held, held.options);
+  ASSERT_EQ(c.trajectory.stats.status, Status::kOk) << c.trajectory.stats.message;
+  bool effort_noted = false;
+  for (const std::string& note : c.trajectory.stats.notes)
+    effort_noted = effort_noted || note.find("exceeds its effort limit 87") != std::string::npos;
+  EXPECT_TRUE(effort_noted);
+}
+
+// task-space tracking written in a model file: the tool follows a circle while turning about
+// the world's z axis (its quaternion u(t) = rot_z(θ(t)) ⊗ u0), a posture row takes the
+// redundancy; checked against forward kinematics of the motion achieved
+TEST(ModelRobot, APoseRequirementTracksTheToolInTaskSpace) {
+  const tree::Tree arm = tree::load_urdf(kPanda);
+  tree::TreeData d(arm);
+  VectorXd q0(7);
+  q0 << 0.3, -0.5, 0.8, -1.9, 0.4, 1.7, -0.6;
+  tree::forward_kinematics(arm, q0, d);
+  const Index tool = arm.link_index("panda_tool");
+  const Eigen::Vector3d p0 = tree::world_point(d, tool, {0, 0, 0});
+  const Eigen::Quaterniond u0(d.R_WL[std::size_t(tool)]);
+  char text[2048];
+  // θ = 0.3 (1 − cos 2πt), c = cos(θ/2), s = sin(θ/2); p = p0 + 0.05 [1 − cos 2πt, sin 2πt ·
+  // (1 − cos 2πt), 0]: at rest at t = 0
+  std::snprintf(text, sizeof text, R"(parameters: {x0: %.17g, y0: %.17g, z0: %.17g,
+  w0: %.17g, a0: %.17g, b0: %.17g, c0: %.17g}
+robot: {urdf: panda_arm.urdf}
+control:
+  requirements:
+    - name: tool
+      pose:
+        link: panda_tool
+        position: [x0 + 0.05*(1 - cos(2*pi*t)), y0 + 0.05*sin(2*pi*t)*(1 - cos(2*pi*t)), z0]
+        orientation:
+          - cos(0.15*(1 - cos(2*pi*t)))*w0 - sin(0.15*(1 - cos(2*pi*t)))*c0
+          - cos(0.15*(1 - cos(2*pi*t)))*a0 - sin(0.15*(1 - cos(2*pi*t)))*b0
+          - cos(0.15*(1 - cos(2*pi*t)))*b0 + sin(0.15*(1 - cos(2*pi*t)))*a0
+          - cos(0.15*(1 - cos(2*pi*t)))*c0 + sin(0.15*(1 - cos(2*pi*t)))*w0
+      dynamics: {omega: 20, zeta: 1}
+    - {name: posture, holonomic: panda_joint3 - 0.8, dynamics: {omega: 20, zeta: 1}}
+initial:
+  q: {panda_joint1: 0.3, panda_joint2: -0.5, panda_joint3: 0.8, panda_joint4: -1.9,
+      panda_joint5: 0.4, panda_joint6: 1.7, panda_joint7: -0.6}
+simulate: {t_end: 1, rtol: 1e-11, atol: 1e-13}
+)",
+                p0.x(), p0.y(), p0.z(), u0.w(), u0.x(), u0.y(), u0.z());
+  const Model m = robot_model(text);
+  const ModelRun run = run_model(m);
+  ASSERT_EQ(run.trajectory.stats.status, Status::kOk) << run.trajectory.stats.message;
+  EXPECT_EQ(run.control.not_met, 0);
+  double worst_p = 0, worst_R = 0, travel = 0;
+  for (Index s = 0; s < run.trajectory.samples(); ++s) {
+    const double t = run.trajectory.t[std::size_t(s)], c = std::cos(2 * M_PI * t);
+    const Eigen::Vector3d want =
+        p0 + 0.05 * Eigen::Vector3d(1 - c, std::sin(2 * M_PI * t) * (1 - c), 0);
+    const Eigen::Matrix3d R_want =
+        Eigen::AngleAxisd(0.3 * (1 - c), Eigen::Vector3d::UnitZ()) * u0.toRotationMatrix();
+    tree::forward_kinematics(arm, Eigen::Map<const VectorXd>(run.trajectory.q.data() + s * 7, 7),
+                             d);
+    worst_p = std::max(worst_p, (tree::world_point(d, tool, {0, 0, 0}) - want).norm());
+    worst_R = std::max(worst_R,
+                       Eigen::AngleAxisd(R_want.transpose() * d.R_WL[std::size_t(tool)]).angle());
+    travel = std::max(travel, (want - p0).norm());
+  }
+  EXPECT_GT(travel, 0.09);
+  EXPECT_NEAR(worst_p, 0.0, 1e-8);
+  EXPECT_NEAR(worst_R, 0.0, 1e-8);
+  std::printf("model-file task-space tracking: position %.2e m, orientation %.2e rad\n", worst_p,
+              worst_R);
+  // what a pose requirement refuses
+  EXPECT_NE(failure_of("coordinates: [x]\nkinetic_energy: x_dot^2/2\ncontrol:\n  requirements:\n"
+                       "    - {name: p, pose: {link: a, position: [0, 0, t]}}\n")
+                .text.find("a pose requirement needs a robot:"),
+            std::string::npos);
+  EXPECT_NE(failure_of("robot: {urdf: panda_arm.urdf}\ncontrol:\n  requirements:\n"
+                       "    - {name: p, pose: {link: panda_tool, position: [0, 0, t],"
+                       " orientation: [1, 0, 0, 1]}}\n")
+                .text.find("orientation must be a unit quaternion, its norm at t = 0 is 1.414"),
+            std::string::npos);
+  EXPECT_NE(
+      failure_of("robot: {urdf: panda_arm.urdf}\ncontrol:\n  requirements:\n"
+                 "    - {name: p, pose: {link: panda_tool, position: [panda_joint1, 0, t]}}\n")
+          .text.find("position may depend on t and the parameters only, not on "
+                     "'panda_joint1'"),
+      std::string::npos);
+}
+
+std::string write_file(const std::string& name, const std::string& text) {
+  const auto path = std::filesystem::temp_directory_path() / name;
+  std::ofstream(path) << text;
+  return path.string();
+}
+
+TEST(ModelRobot, ErrorsNameTheFileTheLineAndTheLinkOrJoint) {
+  // a link the URDF lacks, located at the loop's link
+  Failure f = failure_of(
+      "robot:\n  urdf: panda_arm.urdf\n  loops:\n    - {name: a, type: point, link_a: hand,"
+      " link_b: world}\n");
+  EXPECT_NE(f.text.find("loop 'a': no link 'hand' in "), std::string::npos) << f.text;
+  EXPECT_NE(f.text.find("the links are world, panda_link0"), std::string::npos) << f.text;
+  EXPECT_EQ(f.line, 4);
+  // a missing URDF, at urdf:
+  f = failure_of("name: x\nrobot: {urdf: nothere.urdf}\n");
+  EXPECT_NE(f.text.find("nothere.urdf: no such file"), std::string::npos) << f.text;
+  EXPECT_EQ(f.line, 2);
+  // what a URDF cannot be mixed with
+  f = failure_of("robot: {urdf: panda_arm.urdf}\nbodies: {}\n");
+  EXPECT_NE(f.text.find("'bodies' does not go with 'robot:'"), std::string::npos) << f.text;
+  EXPECT_EQ(f.line, 2);
+  // a torque on a joint the robot does not have
+  f = failure_of("robot: {urdf: panda_arm.urdf, torques: {elbow: 1}}\n");
+  EXPECT_NE(f.text.find("unknown coordinate 'elbow'"), std::string::npos) << f.text;
+  f = failure_of("robot: {urdf: panda_arm.urdf, colour: red}\n");
+  EXPECT_NE(f.text.find("unknown key 'colour' in robot"), std::string::npos) << f.text;
+  f = failure_of(
+      "robot:\n  urdf: panda_arm.urdf\n  loops: [{name: r, type: distance, link_a: panda_tool,"
+      " link_b: world}]\n");
+  EXPECT_NE(f.text.find("loop 'r' needs length"), std::string::npos) << f.text;
+  // a URDF alone with an unknown joint type and a moving link without inertia: the file and the
+  // joint or link
+  const std::string planar = write_file(
+      "ukdyn_robot_planar.urdf",
+      "<robot name=\"r\"><link name=\"a\"/><link name=\"b\"><inertial><mass value=\"1\"/>"
+      "<inertia ixx=\"1\" ixy=\"0\" ixz=\"0\" iyy=\"1\" iyz=\"0\" izz=\"1\"/></inertial></link>"
+      "<joint name=\"slide\" type=\"planar\"><parent link=\"a\"/><child link=\"b\"/>"
+      "<axis xyz=\"0 0 1\"/></joint></robot>\n");
+  try {
+    load_model(planar);
+    FAIL() << "no error";
+  } catch (const ModelError& e) {
+    EXPECT_EQ(e.file(), planar);
+    EXPECT_NE(e.message().find("joint 'slide' (child link 'b'): joint type 'planar' is not "
+                               "supported"),
+              std::string::npos)
+        << e.message();
+  }
+  const std::string noinertia =
+      write_file("ukdyn_robot_noinertia.urdf",
+                 "<robot name=\"r\"><link name=\"a\"/><link name=\"b\"/>"
+                 "<joint name=\"hinge\" type=\"continuous\"><parent link=\"a\"/><child link=\"b\"/>"
+                 "<axis xyz=\"0 0 1\"/></joint></robot>\n");
+  try {
+    load_model(noinertia);
+    FAIL() << "no error";
+  } catch (const ModelError& e) {
+    EXPECT_NE(e.message().find("link 'b' moves (joint 'hinge') but has no <inertial>"),
+              std::string::npos)
+        << e.message();
+  }
+  const std::string broken = write_file("ukdyn_robot_broken.urdf", "<robot name=\"r\"><link");
+  try {
+    load_model(broken);
+    FAIL() << "no error";
+  } catch (const ModelError& e) {
+    EXPECT_NE(e.message().find("not a valid URDF"), std::string::npos) << e.message();
+  }
+}
+
+}  // namespace UKDYN_TEST_FILE
+}  // namespace ukdyn
