@@ -775,7 +775,9 @@ class Parser {
     check_power_size(base, exponent, at);
     check_power(base, exponent, at);
     GiNaC::ex e = build([&] { return GiNaC::pow(base, exponent); }, at);
-    check_constant_value(e, "the power " + brief(base) + "^" + brief(exponent), at);
+    // (the message printed only for a constant: a power of an input is not checked)
+    if (!has_input(e))
+      check_constant_value(e, "the power " + brief(base) + "^" + brief(exponent), at);
     return e;
   }
 

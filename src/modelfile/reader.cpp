@@ -958,16 +958,9 @@ YAML::Node Reader::load_yaml(const std::string& text, const std::string& file) {
                      "the model text holds a NUL byte (is this a binary file?)",
                      "a model file is YAML text (docs/model-format.md)");
   }
-  // duplicate keys, a second document, self-referencing aliases, runaway nesting
-  // (modelfile/yaml_structure.cpp)
-  check_yaml_structure(text, file);
-  YAML::Node root;
-  try {
-    root = YAML::Load(text);
-  } catch (const YAML::ParserException& e) {
-    throw ModelError(file, e.mark.line + 1, e.mark.column + 1, "YAML syntax: " + e.msg,
-                     "check the indentation, brackets and colons");
-  }
+  // the tree, refusing duplicate keys, a second document, self-referencing aliases, runaway
+  // nesting and syntax errors (modelfile/yaml_structure.cpp)
+  const YAML::Node root = load_checked_yaml(text, file);
   if (root.IsNull()) {
     // located where the model should begin, as every reader error is (file:line:column)
     throw ModelError(file, 1, 1, "the model file is empty (or holds only comments)",

@@ -279,10 +279,12 @@ class CompiledConstraint final : public ConstraintModel {
   Index width_;
 };
 
-// Refuses, located, what yaml-cpp's node tree would hide: a key given twice in a mapping, a
-// second document, an alias inside the node it names, nesting deeper than yaml-cpp allows; and
-// YAML syntax errors (modelfile/yaml_structure.cpp). @throws ModelError
-void check_yaml_structure(const std::string& text, const std::string& file);
+// The node tree of `text` (YAML::Load's, marks included; a null node when the text holds no
+// document), read in one pass that also refuses, located, what yaml-cpp's node tree would hide: a
+// key given twice in a mapping, a second document, an alias inside the node it names, nesting
+// deeper than yaml-cpp or the stack allows; and YAML syntax errors
+// (modelfile/yaml_structure.cpp). Cost: O(size of the text). @throws ModelError
+YAML::Node load_checked_yaml(const std::string& text, const std::string& file);
 
 // The reader: one model file.
 class Reader {
