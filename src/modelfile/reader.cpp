@@ -170,7 +170,9 @@ Expr Reader::expression(const YAML::Node& node, const std::string& what, bool in
             ? "write a number a double holds (|x| < 1.8e308), or change the model's units"
             : "expressions use the coordinates, their velocities (x_dot), t and the parameters");
   }
-  compile({e}, node, what);  // defined with the parameters' values? (errors point here)
+  // defined with the parameters' values? (errors point here; compiled only when it may fail:
+  // compiling a kinetic energy of 10⁵ terms just to check it was a tenth of loading it)
+  if (!set_->compile_cannot_fail(e)) compile({e}, node, what);
   // the constraints' forces are inputs of C only (nothing else is evaluated with them)
   // (they are the last inputs, in the order of constraint_inputs_)
   const Index first_force = Index(set_->input_names().size() - constraint_inputs_.size());
