@@ -88,7 +88,7 @@ class Compiler {
   // `inputs` maps the inputs' symbols to their indices (0 … n_inputs−1); an input becomes a
   // value when the expression first holds it, so that compiling costs O(the expression), not
   // O(n_inputs): a model with 10⁵ coordinates compiles 10⁵ one-input programs
-  Compiler(Index n_inputs, const std::map<GiNaC::ex, std::size_t, GiNaC::ex_is_less>& inputs)
+  Compiler(Index n_inputs, const SymbolIndex& inputs)
       : n_inputs_(std::int32_t(n_inputs)), inputs_(inputs) {}
 
   // the value of e (memoized on e: shared subtrees are compiled once)
@@ -524,7 +524,7 @@ class Compiler {
   }
 
   std::int32_t n_inputs_;
-  const std::map<GiNaC::ex, std::size_t, GiNaC::ex_is_less>& inputs_;
+  const SymbolIndex& inputs_;
   std::vector<std::optional<double>> constant_of_;   // per value: its value if constant
   std::vector<std::int32_t> input_of_;               // per value: its input's index, or −1
   std::map<std::uint64_t, std::int32_t> constants_;  // bits of a constant → value

@@ -84,12 +84,17 @@ struct Program::Tape {
   Index scratch = 0;                       // inputs read + constants + registers
 };
 
+// input symbol → its index
+using SymbolIndex =
+    std::unordered_map<GiNaC::ex, std::size_t, std::hash<GiNaC::ex>, GiNaC::ex_is_equal>;
+
 struct ExpressionSet::Impl {
   std::vector<std::string> input_names;
   std::vector<GiNaC::ex> input_symbols;                      // realsymbols, in input order
   std::unordered_map<std::string, std::size_t> input_index;  // input name → its index
-  // input symbol → its index (symbols compare by serial number, not by name)
-  std::map<GiNaC::ex, std::size_t, GiNaC::ex_is_less> symbol_index;
+  // input symbol → its index (symbols hash and compare by serial number, not by name; a hash
+  // table: looked up once per symbol of every expression traversed, never iterated)
+  SymbolIndex symbol_index;
   std::map<std::string, GiNaC::ex> symbols;  // inputs and constants by name
   std::vector<std::string> known;            // inputs then constants, in declaration order
   GiNaC::exmap constant_values;              // constant symbol → its exact value
