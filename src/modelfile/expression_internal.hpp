@@ -49,8 +49,10 @@ struct FunctionInfo {
   Code code;
 };
 
-// the function called `name`, or null
+// the function called `name`, or null (modelfile/expression_functions.cpp)
 const FunctionInfo* find_function(const std::string& name);
+// the names of the language's functions
+std::vector<std::string> function_names();
 // the GiNaC expression of a call of a language function (args: f.arity of them)
 GiNaC::ex call(const FunctionInfo& f, const GiNaC::exvector& args);
 // 1 − abs(sign(c)): 1 where c = 0, else 0 (NaN for a NaN c) — the condition of the tie branch
