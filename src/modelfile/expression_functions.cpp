@@ -3,6 +3,7 @@
 // language's functions and the GiNaC expression of a call. The parser is in
 // modelfile/expression_parse.cpp.
 
+#include <ginac/ginac.h>
 #include <algorithm>
 #include <array>
 #include <cctype>
@@ -19,7 +20,6 @@
 #include <unordered_map>
 #include <unordered_set>
 #include <utility>
-#include <ginac/ginac.h>
 #include "modelfile/expression_internal.hpp"
 #include "modelfile/stack_floor.hpp"
 #include "ukdyn/core/format.hpp"
