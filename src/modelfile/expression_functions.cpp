@@ -3,7 +3,6 @@
 // language's functions and the GiNaC expression of a call. The parser is in
 // modelfile/expression_parse.cpp.
 
-#include <ginac/ginac.h>
 #include <algorithm>
 #include <array>
 #include <cctype>
@@ -20,6 +19,9 @@
 #include <unordered_map>
 #include <unordered_set>
 #include <utility>
+
+#include <ginac/ginac.h>
+
 #include "modelfile/expression_internal.hpp"
 #include "modelfile/stack_floor.hpp"
 #include "ukdyn/core/format.hpp"
