@@ -34,6 +34,7 @@ ExpressionSet::ExpressionSet(std::vector<std::string> input_names)
   impl_->input_symbols.reserve(input_names.size());
   impl_->input_index.reserve(input_names.size());
   impl_->known.reserve(input_names.size());
+  impl_->symbol_index.reserve(input_names.size());
   for (const auto& name : input_names) {
     impl_->input_symbols.push_back(impl_->declare(name, "ExpressionSet"));
     impl_->input_index.emplace(name, impl_->input_symbols.size() - 1);
@@ -84,8 +85,7 @@ Expr ExpressionSet::negate(Expr a) { return impl_->add(-impl_->at(a, "negate"));
 namespace {
 
 // the indices of the inputs (by symbol_index) that x holds, ascending, each once
-std::vector<std::size_t> gather_inputs(
-    const GiNaC::ex& x, const std::map<GiNaC::ex, std::size_t, GiNaC::ex_is_less>& symbol_index) {
+std::vector<std::size_t> gather_inputs(const GiNaC::ex& x, const SymbolIndex& symbol_index) {
   std::vector<std::size_t> found;
   std::vector<GiNaC::ex> stack{x};
   while (!stack.empty()) {

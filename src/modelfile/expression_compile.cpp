@@ -88,7 +88,7 @@ class Compiler {
   // `inputs` maps the inputs' symbols to their indices (0 … n_inputs−1); an input becomes a
   // value when the expression first holds it, so that compiling costs O(the expression), not
   // O(n_inputs): a model with 10⁵ coordinates compiles 10⁵ one-input programs
-  Compiler(Index n_inputs, const std::map<GiNaC::ex, std::size_t, GiNaC::ex_is_less>& inputs)
+  Compiler(Index n_inputs, const SymbolIndex& inputs)
       : n_inputs_(std::int32_t(n_inputs)), inputs_(inputs) {}
 
   // the value of e (memoized on e: shared subtrees are compiled once)
@@ -524,7 +524,7 @@ class Compiler {
   }
 
   std::int32_t n_inputs_;
-  const std::map<GiNaC::ex, std::size_t, GiNaC::ex_is_less>& inputs_;
+  const SymbolIndex& inputs_;
   std::vector<std::optional<double>> constant_of_;   // per value: its value if constant
   std::vector<std::int32_t> input_of_;               // per value: its input's index, or −1
   std::map<std::uint64_t, std::int32_t> constants_;  // bits of a constant → value
@@ -572,6 +572,69 @@ void Program::evaluate(const double* in, double* out, double* scratch) const {
   for (const Op& op : t.ops) step(op, s);
   const std::size_t n_out = t.output_slots.size();
   for (std::size_t k = 0; k < n_out; ++k) out[k] = s[t.output_slots[k]];
+}
+
+// Every value the compiler makes for a part of e that holds an input is not a constant (by
+// induction: emit folds only two constants, and its shortcuts x·1, x + 0 return the operand that
+// is not); so when every part that is not a number holds an input, constants meet only numbers
+// that are real and finite (Compiler::constant cannot fail) and nothing is folded — except the
+// negation of a negative number term (finite again). Constants' symbols are excluded (they are
+// not inputs), so compile's substitution leaves e as it is.
+bool ExpressionSet::compile_cannot_fail(Expr e) const {
+  // (node, visited): a node is pushed before its operands, and judged after them
+  struct Open {
+    GiNaC::ex x;
+    bool expanded;
+  };
+  std::vector<Open> stack{{impl_->at(e, "compile_cannot_fail"), false}};
+  std::vector<char> holds;  // per operand judged and not yet taken: holds an input
+  while (!stack.empty()) {
+    Open& top = stack.back();
+    const GiNaC::ex& x = top.x;
+    // (the classes by their exact type, cheaper than is_a's dynamic_cast; symbols last: the
+    // inputs are realsymbols, a class derived from symbol)
+    if (GiNaC::is_exactly_a<GiNaC::numeric>(x)) {
+      const GiNaC::numeric& n = GiNaC::ex_to<GiNaC::numeric>(x);
+      if (!n.is_real() || !std::isfinite(n.to_double())) return false;
+      holds.push_back(0);
+      stack.pop_back();
+      continue;
+    }
+    const bool sum_product_power = GiNaC::is_exactly_a<GiNaC::add>(x) ||
+                                   GiNaC::is_exactly_a<GiNaC::mul>(x) ||
+                                   GiNaC::is_exactly_a<GiNaC::power>(x);
+    if (!sum_product_power && GiNaC::is_a<GiNaC::symbol>(x)) {
+      if (impl_->symbol_index.find(x) == impl_->symbol_index.end()) return false;
+      holds.push_back(1);
+      stack.pop_back();
+      continue;
+    }
+    const std::size_t n_ops = x.nops();
+    if (!top.expanded) {
+      if (sum_product_power) {
+        // operands below
+      } else if (GiNaC::is_a<GiNaC::function>(x)) {
+        // a function the compiler knows, with its number of arguments (Compiler::compile_new)
+        const std::string name = GiNaC::ex_to<GiNaC::function>(x).get_name();
+        const detail::FunctionInfo* f = detail::find_function(name == "lang_abs" ? "abs" : name);
+        if (f == nullptr || std::size_t(f->arity) != n_ops) return false;
+      } else {
+        return false;  // a constant such as pi, or anything else: compile to know
+      }
+      top.expanded = true;
+      const GiNaC::ex copy = x;  // (the stack grows: top is not valid after a push)
+      for (std::size_t k = n_ops; k-- > 0;) stack.push_back({copy.op(k), false});
+      continue;
+    }
+    // its operands are judged: it holds an input when one of them does
+    bool any = false;
+    for (std::size_t k = 0; k < n_ops; ++k) any = any || holds[holds.size() - 1 - k] != 0;
+    if (!any) return false;  // a constant part that is not a number
+    holds.resize(holds.size() - n_ops);
+    holds.push_back(1);
+    stack.pop_back();
+  }
+  return holds.size() == 1 && holds.front() != 0;
 }
 
 Program ExpressionSet::compile(const std::vector<Expr>& outputs) const {

@@ -49,8 +49,10 @@ struct FunctionInfo {
   Code code;
 };
 
-// the function called `name`, or null
+// the function called `name`, or null (modelfile/expression_functions.cpp)
 const FunctionInfo* find_function(const std::string& name);
+// the names of the language's functions
+std::vector<std::string> function_names();
 // the GiNaC expression of a call of a language function (args: f.arity of them)
 GiNaC::ex call(const FunctionInfo& f, const GiNaC::exvector& args);
 // 1 − abs(sign(c)): 1 where c = 0, else 0 (NaN for a NaN c) — the condition of the tie branch
@@ -84,12 +86,17 @@ struct Program::Tape {
   Index scratch = 0;                       // inputs read + constants + registers
 };
 
+// input symbol → its index
+using SymbolIndex =
+    std::unordered_map<GiNaC::ex, std::size_t, std::hash<GiNaC::ex>, GiNaC::ex_is_equal>;
+
 struct ExpressionSet::Impl {
   std::vector<std::string> input_names;
   std::vector<GiNaC::ex> input_symbols;                      // realsymbols, in input order
   std::unordered_map<std::string, std::size_t> input_index;  // input name → its index
-  // input symbol → its index (symbols compare by serial number, not by name)
-  std::map<GiNaC::ex, std::size_t, GiNaC::ex_is_less> symbol_index;
+  // input symbol → its index (symbols hash and compare by serial number, not by name; a hash
+  // table: looked up once per symbol of every expression traversed, never iterated)
+  SymbolIndex symbol_index;
   std::map<std::string, GiNaC::ex> symbols;  // inputs and constants by name
   std::vector<std::string> known;            // inputs then constants, in declaration order
   GiNaC::exmap constant_values;              // constant symbol → its exact value
@@ -141,17 +148,19 @@ struct ExpressionSet::Impl {
   }
 
   // throws unless `name` can be declared
+  // (the message's prefix is built only on failure: a model of 10⁵ coordinates declares 2·10⁵
+  // names)
   void check_new_name(const std::string& name, const char* who) const {
-    const std::string where = std::string("ukdyn::expr::ExpressionSet::") + who;
+    const auto where = [who] { return std::string("ukdyn::expr::ExpressionSet::") + who; };
     if (!detail::is_identifier(name)) {
-      throw std::invalid_argument(where + ": '" + name +
+      throw std::invalid_argument(where() + ": '" + name +
                                   "' is not a name (a letter or '_', then letters, digits, '_')");
     }
     if (detail::find_function(name) != nullptr) {
-      throw std::invalid_argument(where + ": '" + name + "' is a function of the language");
+      throw std::invalid_argument(where() + ": '" + name + "' is a function of the language");
     }
     if (symbols.count(name) != 0) {
-      throw std::invalid_argument(where + ": '" + name + "' is already declared");
+      throw std::invalid_argument(where() + ": '" + name + "' is already declared");
     }
   }
 

@@ -1,6 +1,10 @@
 // The model-file reader's internals, shared by the files that read its sections (modelfile/):
-//   reader.cpp            the file, parameters, coordinates, dynamics, constraints, non-ideal
-//                         forces, initial state, settings and outputs
+//   reader.cpp            the file, parameters, coordinates, the expressions' set and checks,
+//                         initial state, settings and outputs
+//   reader_dynamics.cpp   the generalized plant: kinetic_energy, potential_energy, mass_matrix,
+//                         forces → M, Q and the external power
+//   reader_constraints.cpp  constraints: → A and b
+//   reader_nonideal.cpp   nonideal: (friction, forces given by C)
 //   reader_multibody.cpp  bodies:, joints: and forces: (a multibody model)
 //   reader_control.cpp    control: (the controller run_model applies)
 //   yaml_structure.cpp    what yaml-cpp's node tree hides (duplicate keys, documents, aliases)
@@ -280,10 +284,21 @@ class CompiledConstraint final : public ConstraintModel {
   Index width_;
 };
 
-// Refuses, located, what yaml-cpp's node tree would hide: a key given twice in a mapping, a
-// second document, an alias inside the node it names, nesting deeper than yaml-cpp allows; and
-// YAML syntax errors (modelfile/yaml_structure.cpp). @throws ModelError
-void check_yaml_structure(const std::string& text, const std::string& file);
+// The node tree of `text` (YAML::Load's, marks included; a null node when the text holds no
+// document), read in one pass that also refuses, located, what yaml-cpp's node tree would hide: a
+// key given twice in a mapping, a second document, an alias inside the node it names, nesting
+// deeper than yaml-cpp or the stack allows; and YAML syntax errors
+// (modelfile/yaml_structure.cpp). Cost: O(size of the text). @throws ModelError
+YAML::Node load_checked_yaml(const std::string& text, const std::string& file);
+
+// The first velocity (in declaration order) that e depends on, or null: the inputs are
+// [q; q'; t; …], so the velocities are the inputs n … 2n − 1 (one traversal of e).
+const std::string* velocity_in(const ExpressionSet& set, Expr e,
+                               const std::vector<std::string>& velocities);
+
+// When YAML has split an expression of the flow list `list` at the commas inside its
+// parentheses: the hint to quote it, with the list as it should be written; else "".
+std::string cut_flow_list_hint(const YAML::Node& list, const std::string& key);
 
 // A .urdf path (any case): load_model reads it as the model text urdf_model_text(path),
 // `robot: {urdf: '<its file name>'}` (modelfile/reader_urdf.cpp).

@@ -410,6 +410,30 @@ TEST(ExprCompile, IntegerPowersAreMultiplications) {
   EXPECT_EQ(s.compile({s.parse("2*3 + 4^(1/2)")}).operations(), 0);  // folded
 }
 
+// compile_cannot_fail is true only where compiling folds no constant: every part that is not a
+// number holds an input, and the numbers are real and finite doubles; wherever it says true,
+// compiling succeeds, and the expressions whose compilation fails are among those it leaves to
+// the compiler
+TEST(ExprCompile, CannotFailOnlyWhereNoConstantIsFolded) {
+  ExpressionSet s({"x", "x_dot", "t"});
+  s.set_constant("L", 2.0);
+  const auto cannot_fail = [&](const std::string& text) {
+    return s.compile_cannot_fail(s.parse(text));
+  };
+  for (const char* text : {"0.5*(x_dot^2 + 3*x^2)", "x - 1", "sin(x)*x_dot^2 - 2^x/x",
+                           "if(x, 1, -2)*atan2(x, 1)", "abs(x)^(1/3) + x^-2"}) {
+    EXPECT_TRUE(cannot_fail(text)) << text;
+    EXPECT_NO_THROW(s.compile({s.parse(text)})) << text;
+  }
+  // a constant part that is not a number (folded by the compiler), a constant's symbol, no input
+  for (const char* text : {"x + sqrt(2)", "L*x", "sin(1)*x", "3", "x + 1.5e308*sqrt(2)",
+                           "x^2 + 1e308*sqrt(2) + 1e308*sqrt(3)"}) {
+    EXPECT_FALSE(cannot_fail(text)) << text;
+  }
+  // the compiler refuses this one (sqrt(2)·1.5e308 overflows when folded): left to it
+  EXPECT_THROW(s.compile({s.parse("x + 1.5e308*sqrt(2)")}), std::invalid_argument);
+}
+
 TEST(ExprCompile, EvaluationReusesTheScratchBuffer) {
   // evaluate() writes only `out` and `scratch`, which the caller sizes once (ukdyn_test_no_alloc
   // counts its allocations): repeated calls on one buffer give the same, right values

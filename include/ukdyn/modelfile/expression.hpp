@@ -145,6 +145,12 @@ class ExpressionSet {
   /// cos of one argument share a sincos call. @throws std::invalid_argument when an output has
   /// a complex constant (sqrt(-4)) or a function outside the language.
   Program compile(const std::vector<Expr>& outputs) const;
+  /// True when compile({e}) is sure to succeed, found without compiling: e holds inputs,
+  /// numbers that are real and finite as doubles, sums, products, powers and the language's
+  /// functions, and every part of it that is not a number holds an input — then the compiler
+  /// folds no constants (the only step, with complex numbers, that can fail). False says
+  /// nothing (compile to know). Cost: one traversal of e, about a tenth of compiling it.
+  bool compile_cannot_fail(Expr e) const;
 
   /// The switching functions of the non-smooth calls in `exprs`, each once (g and −g are one):
   /// the argument x of abs(x), sign(x) and heaviside(x), a − b of min(a, b) and max(a, b), and

@@ -1,0 +1,193 @@
+// Model files, the non-ideal forces (modelfile/reader.hpp): nonideal: → Coulomb and viscous
+// friction and the forces given by their C (Udwadia–Kalaba's non-ideal constraint forces). Every
+// error names file:line:column and gives a hint.
+#include "ukdyn/modelfile/model.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <map>
+#include <mutex>
+#include <set>
+#include <sstream>
+
+#include <yaml-cpp/yaml.h>
+#include <Eigen/Cholesky>
+
+#include "ukdyn/core/constraint.hpp"
+#include "ukdyn/core/format.hpp"
+#include "ukdyn/core/nonideal.hpp"
+#include "ukdyn/dynamics/forward.hpp"
+#include "ukdyn/modelfile/run.hpp"
+#include "ukdyn/simulation/options.hpp"
+
+#include "modelfile/initial_keep.hpp"
+#include "modelfile/reader.hpp"
+
+namespace ukdyn::model_reader {
+
+SurfaceVelocityFn Reader::surface_velocity(const YAML::Node& node, std::size_t count) {
+  const std::string what = "surface_velocity";
+  const auto rows = rows_of(node, what);
+  if (rows.size() != count) {
+    fail(node,
+         "surface_velocity needs " + format_number(count) + " entries, one per sliding coordinate",
+         "the velocity of the surface under the contact, e.g. [V, 0] for a belt moving at V");
+  }
+  // [u; u'], u' = (du/dq) q' + du/dt
+  std::vector<Expr> u, u_dot;
+  for (const auto& r : rows) {
+    const Expr e = expression(r, what);
+    if (const std::string* v = velocity_in(*set_, e, velocities_)) {
+      fail(r, "surface_velocity depends on the velocity '" + *v + "'",
+           "the surface velocity may depend on the coordinates and t only");
+    }
+    u.push_back(e);
+    u_dot.push_back(time_derivative(e));
+  }
+  u.insert(u.end(), u_dot.begin(), u_dot.end());
+  const Program p = compile(u, node, what);
+  const InputLayout layout = layout_;
+  const Index k = Index(count);
+  // (its signature carries no scratch: buffers of the call, evaluate_local)
+  return [p, layout, k](const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd,
+                        double t, Eigen::Ref<VectorXd> uo, Eigen::Ref<VectorXd> udo) {
+    evaluate_local(
+        p, layout.size(), [&](double* in) { layout.fill(in, q, qd, t); },
+        [&](const double* out) {
+          for (Index r = 0; r < k; ++r) {
+            uo[r] = out[r];
+            udo[r] = out[k + r];
+          }
+        });
+  };
+}
+
+void Reader::read_nonideal(const YAML::Node& root, SystemBuilder& builder) {
+  const YAML::Node ns = root["nonideal"];
+  if (!ns) return;
+  if (!ns.IsSequence()) fail(ns, "nonideal must be a list");
+  int index = 0;
+  std::map<std::string, int> coulomb_on;  // constraint → the entry that gives it Coulomb friction
+  for (const auto& f : ns) {
+    ++index;
+    if (!f.IsMap()) fail(f, "a non-ideal force must be a mapping");
+    for (const auto& kv : f) {
+      static const std::set<std::string> keys = {
+          "friction",         "constraint",  "mu",
+          "mu_static",        "coordinates", "regularization_velocity",
+          "surface_velocity", "c",           "C"};
+      if (!keys.count(kv.first.Scalar())) {
+        fail(kv.first, "unknown key '" + kv.first.Scalar() + "' in a non-ideal force",
+             "the keys are friction, constraint, mu, mu_static, coordinates, "
+             "regularization_velocity, surface_velocity (coulomb), c (viscous), C");
+      }
+    }
+    std::vector<Index> coords;
+    if (const YAML::Node cn = f["coordinates"]) {
+      if (!cn.IsSequence()) fail(cn, "coordinates must be a list of coordinate names");
+      for (const auto& c : cn) coords.push_back(coordinate(c));
+    }
+    if (f["friction"]) {
+      const std::string law = f["friction"].Scalar();
+      if (law == "coulomb") {
+        if (!f["constraint"])
+          fail(f, "coulomb friction needs the constraint that gives N",
+               "{friction: coulomb, constraint: plane, mu: 0.3}");
+        const std::string on = f["constraint"].Scalar();
+        if (std::find(constraint_names_.begin(), constraint_names_.end(), on) ==
+            constraint_names_.end()) {
+          fail(f["constraint"], "no constraint named '" + on + "'",
+               "the constraints are " + join(constraint_names_));
+        }
+        // (one contact, one friction law: its stick state is the constraint's)
+        if (const auto [it, first] = coulomb_on.emplace(on, index); !first) {
+          fail(f["constraint"],
+               "constraint '" + on + "' has Coulomb friction already (non-ideal force " +
+                   std::to_string(it->second) + ")",
+               "one coulomb friction per constraint: list every sliding coordinate under its "
+               "coordinates:");
+        }
+        if (!f["mu"]) fail(f, "coulomb friction needs mu");
+        CoulombFriction spec;
+        spec.constraint = on;
+        spec.mu = number(f["mu"], "mu");
+        spec.coordinates = coords;
+        if (const YAML::Node rv = f["regularization_velocity"]) {
+          spec.regularization_velocity = number(rv, "regularization_velocity");
+          if (!(spec.regularization_velocity > 0)) {
+            fail(rv, "regularization_velocity must be > 0, got " + rv.Scalar(),
+                 "the speed below which the friction force is scaled down, e.g. 1e-4; "
+                 "docs/friction.md");
+          }
+        }
+        if (spec.mu < 0) fail(f["mu"], "mu must be >= 0");
+        if (const YAML::Node ms = f["mu_static"]) {
+          spec.mu_static = number(ms, "mu_static");
+          if (!(*spec.mu_static >= spec.mu)) {
+            fail(ms, "mu_static must be >= mu (the kinetic coefficient)");
+          }
+        }
+        if (const YAML::Node un = f["surface_velocity"]) {
+          spec.surface_velocity =
+              surface_velocity(un, coords.empty() ? coordinates_.size() : coords.size());
+        }
+        builder.add(coulomb_friction(spec));
+      } else if (law == "viscous") {
+        if (!f["c"])
+          fail(f, "viscous friction needs its coefficient c", "{friction: viscous, c: 0.3}");
+        ViscousFriction spec;
+        spec.coefficient = number(f["c"], "c");
+        spec.coordinates = coords;
+        spec.name = "viscous." + format_number(index);
+        if (spec.coefficient < 0) fail(f["c"], "c must be >= 0");
+        builder.add(viscous_friction(spec));
+      } else {
+        fail(f["friction"], "unknown friction law '" + law + "'",
+             "the laws are coulomb and viscous");
+      }
+    } else if (f["C"]) {
+      // C(q, q', t, N_c, lambda_c)
+      const auto rows = rows_of(f["C"], "C");
+      const Index n = Index(coordinates_.size());
+      if (Index(rows.size()) != n)
+        fail(f["C"], "C must have " + format_number(n) + " entries, one per coordinate",
+             cut_flow_list_hint(f["C"], "C"));
+      std::vector<Expr> C;
+      C.reserve(rows.size());
+      for (const auto& r : rows) C.push_back(expression(r, "C", true));
+      note_switches(C);
+      const Program Cp = compile(C, f["C"], "C");
+      const InputLayout layout = layout_;
+      const std::vector<std::string> names = input_constraints_;
+      sizes_->fit(layout.size(), Cp);
+      NonIdealForce force(
+          "C." + format_number(index),
+          NonIdealForce::Binder([Cp, layout, names](const System& sys) -> NonIdealFn {
+            std::vector<Index> ks;
+            ks.reserve(names.size());
+            for (const auto& nm : names) ks.push_back(sys.constraint_index(nm));
+            return [Cp, layout, ks](const Eigen::Ref<const VectorXd>& q,
+                                    const Eigen::Ref<const VectorXd>& qd, double t,
+                                    const IdealForceInfo& ideal, Eigen::Ref<VectorXd> Cout) {
+              ModelBuffers& b = model_buffers(ideal.scratch());
+              layout.fill(b.in, q, qd, t);
+              // N_c, then lambda_c (first row of each constraint)
+              const std::size_t base = std::size_t(2 * layout.n + 1);
+              for (std::size_t i = 0; i < ks.size(); ++i) {
+                b.in[base + i] = ideal.normal_force(ks[i]);
+                b.in[base + ks.size() + i] = ideal.lambda(ks[i])[0];
+              }
+              Cp.evaluate(b.in.data(), Cout.data(), b.scratch.data());
+            };
+          }));
+      builder.add(force);
+    } else {
+      fail(f, "a non-ideal force needs 'friction' (coulomb, viscous) or 'C'");
+    }
+  }
+}
+
+}  // namespace ukdyn::model_reader
