@@ -797,7 +797,7 @@ class Run {
     if (projecting_) {
       if (const Status s = project(t, x, projection_, changed); s != Status::kOk) return s;
     }
-    if (diverges(t, x)) return Status::kIntegratorFailure;
+    if (diverges(t, x) || leaves_branch(t, x)) return Status::kIntegratorFailure;
     if (!stop_requested()) return Status::kOk;
     // a sample inside the step just taken that is not recorded yet (the fixed-step methods and
     // BDF emit the samples of a step after this call): the run stops there, in record(), so that
@@ -975,6 +975,50 @@ class Run {
                format_number(o_.max_steps) + ", so the run stops here rather than crawl on";
     return true;
   }
+
+  // After an accepted step to (t, x): true (with failure_ set) when the motion has left its
+  // branch at a singular configuration it just passed. A passage runs from the first step end
+  // whose last evaluation had a rank margin below kSingularMargin to the first one back above
+  // twice that. Across it q' changes by at most its duration times the accelerations, which are
+  // smooth along a branch: a change of q' (in the M-norm) beyond kBranchFactor times the
+  // duration times the larger M-norm of q'' at the two ends — and beyond 1e-3 of |q'| — is a
+  // jump onto another branch (one of the twin arms reversed: the mirror branch), which no
+  // status ok may hide. Costs two evaluations a passage; nothing elsewhere (the sparse engine,
+  // whose margin is NaN, is not checked).
+  bool leaves_branch(double t, const double* x) {
+    const double margin = ws_.rank_margin;
+    if (!in_pose_ && !(margin < detail::kSingularMargin)) return false;
+    if (in_pose_ && !(margin >= 2.0 * detail::kSingularMargin)) return false;
+    q_ = Eigen::Map<const VectorXd>(x, n_);
+    qd_ = Eigen::Map<const VectorXd>(x + n_, n_);
+    if (forward_dynamics(sys_, ws_, q_, qd_, t) != Status::kOk) return false;
+    const double acceleration = std::sqrt(2.0 * detail::kinetic_energy(ws_, ws_.qdd));
+    if (!in_pose_) {
+      in_pose_ = true;
+      pose_t_ = t;
+      pose_acceleration_ = acceleration;
+      pose_velocity_ = qd_;
+      return false;
+    }
+    in_pose_ = false;
+    // (BDF reports converged attempts: after a rejected one, t can go back; not judged then)
+    if (!(t > pose_t_)) return false;
+    const double speed = std::sqrt(2.0 * detail::kinetic_energy(ws_, pose_velocity_));
+    pose_velocity_ -= qd_;
+    const double change = std::sqrt(2.0 * detail::kinetic_energy(ws_, pose_velocity_));
+    const double bound = kBranchFactor * (t - pose_t_) * std::max(acceleration, pose_acceleration_);
+    if (!(change > bound && change > 1e-3 * speed)) return false;
+    failure_ = "the motion left its branch at the singular configuration passed between t = " +
+               format(pose_t_) + " and " + format(t) +
+               " (the constraints nearly lose rank there: a dead centre or a branch point): "
+               "the velocity changed by " +
+               format(change) + " (in the M-norm; " + format(change / speed) +
+               " of the speed) where the accelerations allow " + format(bound) +
+               ", a jump onto another branch of the mechanism. Try: a tighter rtol, another "
+               "integrator, or a fixed step (integrator: rk4, step: 1e-4) across the pose";
+    return true;
+  }
+  static constexpr double kBranchFactor = 10.0;
 
   // whether a sample time in (last recorded sample, t] has not been recorded yet
   bool sample_due(double t) const {
@@ -1284,9 +1328,14 @@ class Run {
   double peak_kinetic_ = 0.0;  // largest kinetic energy at the samples so far
   double energy_scale_ = 0.0;  // largest T + |V| of the early samples (see diverged)
   double last_step_end_ = -std::numeric_limits<double>::infinity();  // t of the last step
-  int crawling_steps_ = 0;                  // steps in a row, up to now, that diverged at a crawl
-  VectorXd holding_ = VectorXd::Zero(n_);   // (n) holding force of the last stick_margin
-  VectorXd reaction_ = VectorXd::Zero(n_);  // (n) scratch of stick_margin: R
+  int crawling_steps_ = 0;  // steps in a row, up to now, that diverged at a crawl
+  // a passage of a singular configuration (see leaves_branch): under way; its start's time, the
+  // M-norm of q'' there, and q' there (n)
+  bool in_pose_ = false;
+  double pose_t_ = 0.0, pose_acceleration_ = 0.0;
+  VectorXd pose_velocity_ = VectorXd::Zero(n_);
+  VectorXd holding_ = VectorXd::Zero(n_);        // (n) holding force of the last stick_margin
+  VectorXd reaction_ = VectorXd::Zero(n_);       // (n) scratch of stick_margin: R
   VectorXd reaction_part_ = VectorXd::Zero(n_);  // (n) scratch of stick_margin
   VectorXd normal_ = VectorXd::Zero(n_);         // (n) scratch of stick_margin: R_N
   MatrixXd normals_;                             // (rows × n) the normal constraint's rows of A

@@ -742,6 +742,27 @@ TEST(Friction, TwinArmsFollowTheSymmetricMotionForEveryMuUnderDopri5AndBdf) {
   EXPECT_LE(not_ok, 1);
 }
 
+// rkf78 still leaves the twin arms' branch at mu = 0.45 (docs/reliability.md, "Open"): one arm's
+// velocity reverses at the dead centre passed between t = 0.76 and 0.777 (a change of 0.52 in
+// the M-norm where the accelerations allow 0.01). That run now stops there with the cause
+// (Run::leaves_branch) instead of ending ok on the mirror branch (|th1 − th2| = 0.18 rad).
+TEST(Friction, TwinArmsLeavingTheirBranchStopWithThatCause) {
+  const Model m = twin_arms(0.45);
+  SimulationOptions o = m.options;
+  o.integrator = Integrator::kRKF78;
+  const Trajectory tr = simulate(m.system, m.q0, m.qd0, o);
+  EXPECT_EQ(tr.stats.status, Status::kIntegratorFailure);
+  EXPECT_NE(tr.stats.message.find("the motion left its branch at the singular configuration"),
+            std::string::npos)
+      << tr.stats.message;
+  EXPECT_GT(tr.stats.t_reached, 0.7);
+  EXPECT_LT(tr.stats.t_reached, 0.85);
+  // the samples before the passage are those of the symmetric motion
+  for (Index i = 0; i < tr.samples() && tr.t[std::size_t(i)] <= 0.75; ++i) {
+    EXPECT_LT(std::abs(coord(m, tr, tr.q, "th1", i) - coord(m, tr, tr.q, "th2", i)), 1e-8);
+  }
+}
+
 // The Watt governor of tests/data/governor_sleeve_friction.yaml (a new user's model: two fly-ball
 // arms, a sleeve with Coulomb friction, throttle feedback) at mu = 0 is the same model without
 // the friction entry: both end with th1 = th2 = −0.742 (before: −0.742 and +0.742, status ok).
