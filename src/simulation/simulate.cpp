@@ -121,7 +121,7 @@ constexpr double kDivergence = 1e8;
 constexpr int kDivergentSteps = 3;
 // a contact carried through a dead centre restarts past it where the rank margin is back to
 // this (Run::carried_past)
-constexpr double kCarriedMargin = 1e-4;
+constexpr double kCarriedMargin = 3e-5;
 // below this rank margin (Workspace::rank_margin, σ_r / σ_1 of W) growing speeds are those of a
 // configuration where the constraints lose rank, not a divergence
 constexpr double kDivergenceRankMargin = 1e-3;
