@@ -25,6 +25,9 @@ Eigen::Ref<const VectorXd> IdealForceInfo::reaction(Index k) const {
   return ws_.reactions.col(k);
 }
 Eigen::Ref<const VectorXd> IdealForceInfo::slip_hint(Index i) const { return ws_.slip_hint.col(i); }
+bool IdealForceInfo::slip_hint_held(Index i) const {
+  return ws_.slip_hint_held[std::size_t(i)] != 0;
+}
 Eigen::Ref<const VectorXd> IdealForceInfo::sliding_velocity(Index c) const {
   const auto& contacts = sys_.friction_contacts();
   return ws_.sliding.col(c).head(Index(contacts[std::size_t(c)].coordinates.size()));
@@ -104,8 +107,9 @@ NonIdealForce coulomb_friction(CoulombFriction spec) {
           if (hint.squaredNorm() > 0.0) {
             // slipping from rest: mu N along the hint while |v_rel| <= 100 eps (the speed at which
             // the simulation locates stops: a restart from v_rel ≈ 0 never sees the friction flip
-            // inside its first step), then exactly −mu N v_rel/|v_rel|
-            if (v2 <= 1e4 * eps2) {
+            // inside its first step), then exactly −mu N v_rel/|v_rel| (held: at every speed, see
+            // Workspace::slip_hint_held)
+            if (v2 <= 1e4 * eps2 || ideal.slip_hint_held(self)) {
               for (Index i : coords) C[i] = mu * N * hint[i];
             } else {
               const double scale = -mu * N / std::sqrt(v2);

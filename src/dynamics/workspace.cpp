@@ -127,6 +127,7 @@ Workspace::Workspace(const System& sys, const SolverOptions& options)
   activity_override.assign(std::size_t(K), -1);
   nonideal_enabled.assign(std::size_t(sys.nonideal_count()), 1);
   slip_hint.setZero(n, sys.nonideal_count());
+  slip_hint_held.assign(std::size_t(sys.nonideal_count()), 0);
   // Coulomb contacts: relative sliding velocities and their scratch
   Index contact_rows_max = 0, contact_width = 0;
   for (const auto& contact : sys.friction_contacts()) {

@@ -119,6 +119,9 @@ Integrator fallback_method(const SimulationOptions& o) {
 // t_end within max_steps (Run::diverges).
 constexpr double kDivergence = 1e8;
 constexpr int kDivergentSteps = 3;
+// a contact carried through a dead centre restarts past it where the rank margin is back to
+// this (Run::carried_past)
+constexpr double kCarriedMargin = 3e-5;
 // below this rank margin (Workspace::rank_margin, σ_r / σ_1 of W) growing speeds are those of a
 // configuration where the constraints lose rank, not a divergence
 constexpr double kDivergenceRankMargin = 1e-3;
@@ -368,6 +371,8 @@ class Run {
     const auto& contacts = sys_.friction_contacts();
     double first = std::numeric_limits<double>::quiet_NaN();
     switching_ = -1;
+    // the rank margin at (or within the step's last stages before) t1: the step's last evaluation
+    const double margin = ws_.rank_margin;
     for (std::size_t c = 0; c < contacts.size(); ++c) {
       if (frictionless(c)) continue;
       double te = std::numeric_limits<double>::quiet_NaN();
@@ -391,6 +396,13 @@ class Run {
           if (ws_.slip_hint.col(contacts[c].force).squaredNorm() > 0.0)
             set_slip_hint(c, VectorXd());
           direction_.head(k) /= speed;
+          // near a rank drop, still sliding clearly at t1: carried through (see carry_through)
+          // (not under rkf78, whose restarts after a carried passage still leave the branch at
+          // some mu: docs/reliability.md, "Open")
+          if (margin < detail::kSingularMargin && progress_.integrator != Integrator::kRKF78 &&
+              carry_through(c, k, t1, x1, v_stop)) {
+            continue;
+          }
           te = locate(t0, t1, x1, dense, [&](double t, const double* x) {
             relative_velocity(c, t, x, velocity_);
             return velocity_.head(k).dot(direction_.head(k)) - v_stop;
@@ -409,6 +421,17 @@ class Run {
             relative_velocity(c, t, x, velocity_);
             return velocity_.head(k).dot(passing_.col(Index(c)).head(k));
           };
+          // carried through a dead centre: the friction turns at the end of the step that
+          // crossed v_rel = 0 (switch_contact), outside the dead centre's neighbourhood
+          // (or out of the neighbourhood again, where the law takes over)
+          if (held(c)) {
+            if (along(t1, x1) <= 0.0) {
+              te = carried_past(locate(t0, t1, x1, dense, along), t1, x1, dense);
+            } else if (margin >= 2.0 * detail::kSingularMargin) {
+              te = t1;
+            }
+            break;
+          }
           if (along(t0, x0) <= 0.0) {
             mode_[c] = ContactMode::kSliding;  // passed already (within rounding of the start)
             continue;
@@ -660,6 +683,20 @@ class Run {
         return Status::kOk;
       }
       case ContactMode::kPassing:
+        // carried through a dead centre and past it: the friction turns against the new motion
+        // (at its full magnitude while |v_rel| <= 100 eps, then by the law)
+        if (held(c)) {
+          ws_.slip_hint_held[std::size_t(sys_.friction_contacts()[c].force)] = 0;
+          const Index k = relative_velocity(c, t, x, velocity_);
+          mode_[c] = ContactMode::kSliding;
+          if (velocity_.head(k).dot(passing_.col(Index(c)).head(k)) > 0.0) {
+            set_slip_hint(c, VectorXd());  // left the neighbourhood before the zero
+            return Status::kOk;
+          }
+          if (try_stick(c, t, x, false)) return Status::kOk;
+          set_slip_hint(c, carried_direction(c, 1.0));
+          return Status::kOk;
+        }
         // v_rel = 0: it sticks now if it can (a stop located early, where the velocity jump
         // was not yet tolerance-level); else the friction turns against the new motion, at
         // its full magnitude
@@ -760,7 +797,7 @@ class Run {
     if (projecting_) {
       if (const Status s = project(t, x, projection_, changed); s != Status::kOk) return s;
     }
-    if (diverges(t, x)) return Status::kIntegratorFailure;
+    if (diverges(t, x) || leaves_branch(t, x)) return Status::kIntegratorFailure;
     if (!stop_requested()) return Status::kOk;
     // a sample inside the step just taken that is not recorded yet (the fixed-step methods and
     // BDF emit the samples of a step after this call): the run stops there, in record(), so that
@@ -939,6 +976,50 @@ class Run {
     return true;
   }
 
+  // After an accepted step to (t, x): true (with failure_ set) when the motion has left its
+  // branch at a singular configuration it just passed. A passage runs from the first step end
+  // whose last evaluation had a rank margin below kSingularMargin to the first one back above
+  // twice that. Across it q' changes by at most its duration times the accelerations, which are
+  // smooth along a branch: a change of q' (in the M-norm) beyond kBranchFactor times the
+  // duration times the larger M-norm of q'' at the two ends — and beyond 1e-3 of |q'| — is a
+  // jump onto another branch (one of the twin arms reversed: the mirror branch), which no
+  // status ok may hide. Costs two evaluations a passage; nothing elsewhere (the sparse engine,
+  // whose margin is NaN, is not checked).
+  bool leaves_branch(double t, const double* x) {
+    const double margin = ws_.rank_margin;
+    if (!in_pose_ && !(margin < detail::kSingularMargin)) return false;
+    if (in_pose_ && !(margin >= 2.0 * detail::kSingularMargin)) return false;
+    q_ = Eigen::Map<const VectorXd>(x, n_);
+    qd_ = Eigen::Map<const VectorXd>(x + n_, n_);
+    if (forward_dynamics(sys_, ws_, q_, qd_, t) != Status::kOk) return false;
+    const double acceleration = std::sqrt(2.0 * detail::kinetic_energy(ws_, ws_.qdd));
+    if (!in_pose_) {
+      in_pose_ = true;
+      pose_t_ = t;
+      pose_acceleration_ = acceleration;
+      pose_velocity_ = qd_;
+      return false;
+    }
+    in_pose_ = false;
+    // (BDF reports converged attempts: after a rejected one, t can go back; not judged then)
+    if (!(t > pose_t_)) return false;
+    const double speed = std::sqrt(2.0 * detail::kinetic_energy(ws_, pose_velocity_));
+    pose_velocity_ -= qd_;
+    const double change = std::sqrt(2.0 * detail::kinetic_energy(ws_, pose_velocity_));
+    const double bound = kBranchFactor * (t - pose_t_) * std::max(acceleration, pose_acceleration_);
+    if (!(change > bound && change > 1e-3 * speed)) return false;
+    failure_ = "the motion left its branch at the singular configuration passed between t = " +
+               format(pose_t_) + " and " + format(t) +
+               " (the constraints nearly lose rank there: a dead centre or a branch point): "
+               "the velocity changed by " +
+               format(change) + " (in the M-norm; " + format(change / speed) +
+               " of the speed) where the accelerations allow " + format(bound) +
+               ", a jump onto another branch of the mechanism. Try: a tighter rtol, another "
+               "integrator, or a fixed step (integrator: rk4, step: 1e-4) across the pose";
+    return true;
+  }
+  static constexpr double kBranchFactor = 10.0;
+
   // whether a sample time in (last recorded sample, t] has not been recorded yet
   bool sample_due(double t) const {
     return samples_ && next_sample_ < samples_->size() && (*samples_)[next_sample_] <= t;
@@ -1113,6 +1194,58 @@ class Run {
     return std::isnan(removed) || removed > stick_allowance(T_before);
   }
 
+  // Contact c, sliding along direction_ (length k) near a rank drop (the step's rank margin
+  // below kSingularMargin), is carried through the dead centre when it still slides clearly
+  // along that direction at t1 (faster than v_stop): its friction keeps that direction, at every
+  // speed (Workspace::slip_hint_held: at t1 the same force as the law's), until the end of the
+  // step in which v_rel crosses zero, where it turns (switch_contact), or until the margin is
+  // back above twice kSingularMargin. At a kinematic passage (a dead centre, where the sliding
+  // coordinate is stationary) the friction's jump at v_rel = 0 is normal to the constraints and
+  // its effect on the motion vanishes with the distance to the pose: a kink. Located or
+  // resolved by the step-size control, that kink draws the steps into the neighbourhood where
+  // the near-dependent rows fix the velocities only to (position tolerance) / (distance to the
+  // pose), and there the run left its branch (one of the twin arms onto the mirror branch, with
+  // status ok). Carried, the friction is smooth along every step, and the step that crosses
+  // keeps the force of the side it started on: an error of O(mu N h²) times the rate at which
+  // the sliding coordinate's speed grows past the pose, measured in the energy balance like
+  // any force. Returns whether the contact is carried.
+  bool carry_through(std::size_t c, Index k, double t1, const double* x1, double v_stop) {
+    relative_velocity(c, t1, x1, velocity_);
+    if (!(velocity_.head(k).dot(direction_.head(k)) > v_stop)) return false;
+    mode_[c] = ContactMode::kPassing;
+    passing_.col(Index(c)).head(k) = velocity_.head(k).normalized();
+    set_slip_hint(c, carried_direction(c, -1.0));
+    ws_.slip_hint_held[std::size_t(sys_.friction_contacts()[c].force)] = 1;
+    return true;
+  }
+  // The restart after a carried contact's zero of v_rel at tz, inside the step to (t1, x1): the
+  // first time past tz where the rank margin is back to kCarriedMargin, or t1. The friction
+  // keeps its old side only that far past the pose (an error of O(mu N) times the sliding
+  // coordinate's rate squared over that stretch), and the restart lies outside the pose's
+  // neighbourhood.
+  double carried_past(double tz, double t1, const double* x1,
+                      const detail::SegmentHooks::Dense& dense) {
+    const double te = locate(tz, t1, x1, dense, [&](double t, const double* x) {
+      q_ = Eigen::Map<const VectorXd>(x, n_);
+      qd_ = Eigen::Map<const VectorXd>(x + n_, n_);
+      if (forward_dynamics(sys_, ws_, q_, qd_, t) != Status::kOk) return 1.0;
+      return ws_.rank_margin < kCarriedMargin ? 1.0 : -1.0;
+    });
+    return std::isnan(te) ? t1 : te;
+  }
+  // contact c's carried friction force is held (see carry_through)
+  bool held(std::size_t c) const {
+    return ws_.slip_hint_held[std::size_t(sys_.friction_contacts()[c].force)] != 0;
+  }
+  // sign × contact c's passing direction on its sliding coordinates, into holding_ (n)
+  const VectorXd& carried_direction(std::size_t c, double sign) {
+    const auto& coords = sys_.friction_contacts()[c].coordinates;
+    holding_.setZero();
+    for (std::size_t r = 0; r < coords.size(); ++r)
+      holding_[coords[r]] = sign * passing_(Index(r), Index(c));
+    return holding_;
+  }
+
   // contact c slides from v_rel = 0 (passing, or at the start): friction at its full magnitude
   // against the impending motion, the acceleration of v_rel without this friction. Returns
   // false when that friction would turn the motion back (it could hold the contact): then the
@@ -1195,9 +1328,14 @@ class Run {
   double peak_kinetic_ = 0.0;  // largest kinetic energy at the samples so far
   double energy_scale_ = 0.0;  // largest T + |V| of the early samples (see diverged)
   double last_step_end_ = -std::numeric_limits<double>::infinity();  // t of the last step
-  int crawling_steps_ = 0;                  // steps in a row, up to now, that diverged at a crawl
-  VectorXd holding_ = VectorXd::Zero(n_);   // (n) holding force of the last stick_margin
-  VectorXd reaction_ = VectorXd::Zero(n_);  // (n) scratch of stick_margin: R
+  int crawling_steps_ = 0;  // steps in a row, up to now, that diverged at a crawl
+  // a passage of a singular configuration (see leaves_branch): under way; its start's time, the
+  // M-norm of q'' there, and q' there (n)
+  bool in_pose_ = false;
+  double pose_t_ = 0.0, pose_acceleration_ = 0.0;
+  VectorXd pose_velocity_ = VectorXd::Zero(n_);
+  VectorXd holding_ = VectorXd::Zero(n_);        // (n) holding force of the last stick_margin
+  VectorXd reaction_ = VectorXd::Zero(n_);       // (n) scratch of stick_margin: R
   VectorXd reaction_part_ = VectorXd::Zero(n_);  // (n) scratch of stick_margin
   VectorXd normal_ = VectorXd::Zero(n_);         // (n) scratch of stick_margin: R_N
   MatrixXd normals_;                             // (rows × n) the normal constraint's rows of A

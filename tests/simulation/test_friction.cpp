@@ -691,6 +691,71 @@ TEST(Friction, TwinArmsStaySymmetricThroughTheDeadCentreOnEveryAdaptiveIntegrato
   }
 }
 
+// Every mu in [0, 0.5] under dopri5 and BDF (issue #29 item 1; rkf78: docs/reliability.md, "Open"):
+// the sleeve's friction turns at the dead centre, a kink of the motion there; resolved by the
+// step-size control it drew the steps into the dead centre's neighbourhood, and dopri5 left the
+// branch at mu = 0.2–0.5
+// (|th1 − th2| up to 0.14 rad, status ok), BDF at 0.3–0.5. Now the contact is carried through
+// the neighbourhood (Run::carry_through). The reference is the symmetric motion as a model of one
+// coordinate, without constraints and so without a dead centre
+// (tests/data/twin_arms_symmetric_reduced.yaml: the rod's normal force is P by symmetry).
+TEST(Friction, TwinArmsFollowTheSymmetricMotionForEveryMuUnderDopri5AndBdf) {
+  const std::string reduced_file =
+      std::string(UKDYN_TESTS_DIR) + "/data/twin_arms_symmetric_reduced.yaml";
+  for (int tenth = 0; tenth <= 10; ++tenth) {
+    const double mu = 0.05 * tenth;
+    const Model m = twin_arms(mu);
+    const Model reduced = load_model(reduced_file, {{"mu", mu}});
+    const Trajectory ref = run(reduced, [](SimulationOptions& o) {
+      o.integrator = Integrator::kDopri5;
+      o.rtol = 1e-12;
+      o.atol = 1e-14;
+    });
+    for (const Integrator method : {Integrator::kDopri5, Integrator::kBDF}) {
+      SCOPED_TRACE("mu = " + std::to_string(mu) + ", " + to_string(method));
+      SimulationOptions o = m.options;
+      o.integrator = method;
+      const Trajectory tr = simulate(m.system, m.q0, m.qd0, o);
+      ASSERT_EQ(tr.stats.status, Status::kOk) << tr.stats.message;
+      ASSERT_EQ(tr.samples(), ref.samples());
+      EXPECT_LT(asymmetry(m, tr), 3e-8);  // (6.7e-9 at most, dopri5 at mu = 0.45)
+      EXPECT_LT(balance_error(tr), 1e-6 * std::abs(tr.energy[0]));
+      // th1 = th of the reduced model, and the same energy (T and V are the same functions)
+      double worst = 0.0;
+      for (Index i = 0; i < tr.samples(); ++i) {
+        worst = std::max(worst, std::abs(coord(m, tr, tr.q, "th1", i) - ref.q[std::size_t(i)]));
+      }
+      // (1.04e-7 rad at most, dopri5 at mu = 0.5; the mirror branch is 0.07 rad and more away)
+      EXPECT_LT(worst, 5e-7);
+      EXPECT_NEAR(tr.energy.back(), ref.energy.back(), 2e-6 * std::abs(ref.energy[0]));
+      // the friction acts: it takes 0 J at mu = 0, about 0.49 J at mu = 0.5
+      EXPECT_NEAR(tr.energy.back() - tr.energy[0], ref.energy.back() - ref.energy[0],
+                  1e-6 + 1e-4 * std::abs(ref.energy.back() - ref.energy[0]));
+    }
+  }
+}
+
+// rkf78 still leaves the twin arms' branch at mu = 0.45 (docs/reliability.md, "Open"): one arm's
+// velocity reverses at the dead centre passed between t = 0.76 and 0.777 (a change of 0.52 in
+// the M-norm where the accelerations allow 0.01). That run now stops there with the cause
+// (Run::leaves_branch) instead of ending ok on the mirror branch (|th1 − th2| = 0.18 rad).
+TEST(Friction, TwinArmsLeavingTheirBranchStopWithThatCause) {
+  const Model m = twin_arms(0.45);
+  SimulationOptions o = m.options;
+  o.integrator = Integrator::kRKF78;
+  const Trajectory tr = simulate(m.system, m.q0, m.qd0, o);
+  EXPECT_EQ(tr.stats.status, Status::kIntegratorFailure);
+  EXPECT_NE(tr.stats.message.find("the motion left its branch at the singular configuration"),
+            std::string::npos)
+      << tr.stats.message;
+  EXPECT_GT(tr.stats.t_reached, 0.7);
+  EXPECT_LT(tr.stats.t_reached, 0.85);
+  // the samples before the passage are those of the symmetric motion
+  for (Index i = 0; i < tr.samples() && tr.t[std::size_t(i)] <= 0.75; ++i) {
+    EXPECT_LT(std::abs(coord(m, tr, tr.q, "th1", i) - coord(m, tr, tr.q, "th2", i)), 1e-8);
+  }
+}
+
 // The Watt governor of tests/data/governor_sleeve_friction.yaml (a new user's model: two fly-ball
 // arms, a sleeve with Coulomb friction, throttle feedback) at mu = 0 is the same model without
 // the friction entry: both end with th1 = th2 = −0.742 (before: −0.742 and +0.742, status ok).

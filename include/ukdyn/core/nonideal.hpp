@@ -52,6 +52,8 @@ class IdealForceInfo {
   /// The slip hint of non-ideal force i (see Workspace::slip_hint): zero unless the force is a
   /// Coulomb friction that has just started to slip from rest.
   Eigen::Ref<const VectorXd> slip_hint(Index i) const;
+  /// Whether that hint holds at every speed (see Workspace::slip_hint_held).
+  bool slip_hint_held(Index i) const;
   /// The sliding velocity of Coulomb contact c relative to its constraint, v_rel (one entry per
   /// sliding coordinate; see CoulombFriction), computed once per evaluation before the
   /// non-ideal forces are called.

@@ -218,6 +218,10 @@ class Workspace {
   /// rest, the unit direction of the friction at |v| <= eps (opposing the impending motion:
   /// along the force that held it); zero columns when unset. Set by the simulation.
   MatrixXd slip_hint;
+  /// (number of non-ideal forces) 1: force i's slip hint holds at every speed, not only at
+  /// |v| <= 100 eps (a contact carried through a dead centre of its mechanism, where the
+  /// friction turns with the step that crosses it; set by the simulation), default 0
+  std::vector<unsigned char> slip_hint_held;
   /// (largest sliding coordinates × Coulomb contacts) column c: contact c's sliding velocity
   /// relative to its constraint, v_rel (see CoulombFriction), filled before the forces are called
   MatrixXd sliding;
