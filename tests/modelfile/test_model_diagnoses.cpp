@@ -142,11 +142,18 @@ TEST(ModelDiagnoses, DirectoryEmptyFileXmlAndDevZero) {
   e = error_of_file(empty);
   EXPECT_TRUE(contains(e, "the model file is empty")) << e;
   EXPECT_TRUE(contains(e, "empty.yaml:1:1: error:")) << e;  // located, as every reader error
+  // XML where a YAML model file is expected: said so, with the way to a robot model file
+  const std::string xml = (dir / "robot.yaml").string();
+  { std::ofstream(xml) << "<?xml version=\"1.0\"?>\n<robot name=\"r\"></robot>\n"; }
+  e = error_of_file(xml);
+  EXPECT_TRUE(contains(e, "robot.yaml:1:1: error: this looks like an XML file")) << e;
+  EXPECT_TRUE(contains(e, "robot: {urdf: arm.urdf} (docs/robots.md)")) << e;
+  // a .urdf is read as a URDF (issue #30): one without links is refused, the file named
   const std::string urdf = (dir / "robot.urdf").string();
   { std::ofstream(urdf) << "<?xml version=\"1.0\"?>\n<robot name=\"r\"></robot>\n"; }
   e = error_of_file(urdf);
-  EXPECT_TRUE(contains(e, "XML")) << e;
-  EXPECT_TRUE(contains(e, "docs/model-format.md")) << e;
+  EXPECT_TRUE(contains(e, "robot.urdf: error:")) << e;
+  EXPECT_TRUE(contains(e, "not a valid URDF: No link elements")) << e;
   if (std::filesystem::exists("/dev/zero")) {
     e = error_of_file("/dev/zero");
     EXPECT_TRUE(contains(e, "larger than 64 MB")) << e;
