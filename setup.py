@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """Builds the extension ukdyn._ukdyn with CMake for setuptools (pyproject.toml).
 
 The compiled part of the package is the CMake target ukdyn_python (python/CMakeLists.txt); this

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // `ukdyn check`: the report of check_model(), readable.
 #include <cmath>
 #include <cstdio>

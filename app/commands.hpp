@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The subcommands of the ukdyn program. main.cpp parses the command line and calls these; each
 // returns the process exit code. No physics here: everything is a library call.
 #pragma once

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 cmake_minimum_required(VERSION 3.25)
 # Turns the plot script and the example model files into C++ string literals (run at build time
 # by app/CMakeLists.txt):

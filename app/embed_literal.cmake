@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 # Shared by embed.cmake and embed_viewer.cmake (included by both, at build time): a file as a C++
 # string literal, and writing a generated source only when its text changed.
 

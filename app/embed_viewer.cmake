@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 cmake_minimum_required(VERSION 3.25)
 # Turns the viewer's page generator, its template and three.js into C++ string literals (run at
 # build time by app/CMakeLists.txt), so that `ukdyn run --viewer` needs nothing from the source

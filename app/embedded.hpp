@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Files embedded in the ukdyn binary at build time (embed.cmake writes embedded.cpp in the build
 // tree), so that the program needs nothing from the source tree when it runs.
 #pragma once

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 cmake_minimum_required(VERSION 3.25)
 # Test driver: runs the command after `--` and checks its exit code and output.
 #   cmake -DEXPECT_CODE=N -DEXPECT_REGEX=RE [-DEXPECT_NO_REGEX=RE] [-DCSV=file -DCSV_HEADER=RE]

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // `ukdyn linearize`: the linear model of a model file about a state (or an equilibrium found
 // from it), as JSON or CSV on standard output. The physics is linearize() and
 // find_equilibrium() of the library (analysis/linearize.hpp; docs/linearize.md).

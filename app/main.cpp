@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // ukdyn: the command-line front end. Argument parsing and dispatch only; the subcommands live in
 // run.cpp, check.cpp and source.cpp, the physics in the library.
 #include <algorithm>

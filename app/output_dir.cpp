@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The output directory of `ukdyn run`: created, locked for the run, cleared of a previous run's
 // files before this one's are written (output_dir.hpp).
 #include "output_dir.hpp"

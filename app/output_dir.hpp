@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The output directory of `ukdyn run`: one run at a time, and the files of one run only
 // (docs/simulation.md, "Interrupts and outputs").
 #pragma once

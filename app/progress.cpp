@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The progress display of `ukdyn run`.
 #include "progress.hpp"
 

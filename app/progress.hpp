@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Progress of `ukdyn run`, fed by SimulationOptions::progress: a one-line bar on a terminal, or
 // a plain log line every few seconds when stderr is not one (batch jobs, pipes, CI logs).
 #pragma once

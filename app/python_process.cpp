@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The command's Python helpers as child processes (app/python_process.hpp).
 #include "python_process.hpp"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The command's Python helpers (the plots, the viewer's page, the sweep's summary plot) run as
 // child processes of Debian's python3: one place that finds the interpreter and runs it.
 #pragma once

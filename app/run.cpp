@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // `ukdyn run`: load a model, simulate it, write trajectory.csv (the library's columns and the
 // model's output expressions), summary.json and the plots.
 #include <algorithm>

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 cmake_minimum_required(VERSION 3.25)
 # Test driver: runs `UKDYN run --example EXAMPLE -o DIR/1 …` and again into DIR/2, in two
 # processes (two address-space layouts), and requires the same trajectory.csv byte for byte.

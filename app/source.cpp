@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Where `run` and `check` get their model: a file or an embedded example, with --set overrides.
 #include <algorithm>
 #include <charconv>

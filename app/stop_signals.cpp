@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // SIGINT, SIGTERM and SIGHUP during `ukdyn run` and `ukdyn sweep`; SIGPIPE and SIGXFSZ ignored
 // (stop_signals.hpp).
 #include "stop_signals.hpp"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // SIGINT, SIGTERM and SIGHUP during `ukdyn run` and `ukdyn sweep`: the first asks the simulation
 // to stop at its next step (SimulationOptions::should_stop), after which everything computed is
 // written; a second one ends the program at once (the signal's default action). SIGPIPE and

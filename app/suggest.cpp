@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Did-you-mean for the command line (app/suggest.hpp).
 #include "suggest.hpp"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Did-you-mean for the command line: the nearest of a list of names to a mistyped word.
 #pragma once
 

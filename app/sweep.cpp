@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // `ukdyn sweep`: a parameter sweep or Monte Carlo study of a model (run_ensemble,
 // simulation/ensemble.hpp) on a pool of threads: DIR/ensemble.csv (and ensemble.h5), summary.json
 // and a summary plot of the recorded outputs over the swept parameters (docs/ensembles.md).

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Control characters escaped for the terminal (terminal_text.hpp).
 #include "terminal_text.hpp"
 

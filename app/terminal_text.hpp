@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Text from a model file (names, messages that quote them) on the terminal: control characters
 // escaped, so that a name cannot clear the screen, retitle the window or reorder what is shown.
 #pragma once

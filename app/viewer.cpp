@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // `ukdyn run --viewer`: the embedded page generator, run with the system's python (app/viewer.hpp).
 #include "viewer.hpp"
 

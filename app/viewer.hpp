@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // `ukdyn run --viewer`: animation.html, the browser viewer of the run (docs/viewer.md), written
 // by the page generator python/ukdyn/viewer.py, embedded in the program with its template and
 // three.js (app/embed_viewer.cmake writes viewer_embedded.cpp in the build tree).

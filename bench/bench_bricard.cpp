@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The IFToMM A04 Bricard mechanism (examples/models/bricard.yaml, issue #13 item 1): an
 // overconstrained spatial loop (5 rigid bodies, 35 coordinates, 35 rows of rank 34, 1 DOF)
 // over the benchmark's 10 s, released at rest under gravity.

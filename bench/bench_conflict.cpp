@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Failures reported in proportion to the work (issue #29 item 4): the constraint-conflict
 // diagnosis (find_constraint_conflict) on closed chains of N planar rods, the models of
 // ../shared/reproducers/2026-11-28/gen_chain.py generated in memory:

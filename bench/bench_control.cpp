@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Control-force evaluations per second (compute_control, control/control.hpp) for an n-link
 // pendulum in absolute joint angles (state-dependent, dense M), n = 3, 7, 30, with
 //   - "joints": every joint angle follows a trajectory (m_r = n rows, one requirement), and

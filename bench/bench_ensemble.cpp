@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Ensembles (issue #17): samples per second of run_ensemble against the number of threads, for a
 // short run (the pendulum, 1 s) and a long one (the double four-bar, 10 s), and what a sample
 // that changes parameters pays for reading the model again (parse_model). Wall time and the

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Nanoseconds per evaluation of a compiled expression tape against the same formulas written by
 // hand in C++, on a realistic model: the double pendulum in its two angles, with M and Q derived
 // symbolically from T and V through Lagrange's equations (as a model file does), bob positions

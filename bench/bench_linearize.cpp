@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // One linearization (issue #32, item 6): the rolling disk upright (5 coordinates, 2
 // nonholonomic rows, 8 states) and the heavy symmetric top in Cardan angles spinning upright
 // (3 coordinates, 6 states), model files, with a force input. Counters:

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // A model read from a file against the same model written by hand in C++ (issue #4: "within 2x").
 //
 // Three ways to write one system:

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Loading large models (issue #14, item 7): parse_model() + check_model() of generated models,
 // the time `ukdyn check` spends before anything runs. The models are those of
 // gen_scaling.py of the bad-input defect report (not in the repository), generated in memory:

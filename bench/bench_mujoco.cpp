@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // MuJoCo on the shared benchmark problems P1 (double pendulum), P2 (crank-rocker four-bar) and P3
 // (closed chain, N = 8, 32, 128) of bench/data/README.md, on this machine, so that ukdyn's figures
 // (bench_multibody_problems) have a same-machine, same-run comparison (issue #15 item 3). MuJoCo

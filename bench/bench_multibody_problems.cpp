@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // ukdyn on the shared benchmark problems P1 (double pendulum), P2 (crank-rocker four-bar) and P3
 // (closed chain, N = 8, 32, 128) of bench/data/README.md, each built with the
 // multibody layer (multibody/multibody.hpp): one planar body (x, y, theta of its centre of mass)

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // ukdyn on the shared benchmark problems P1 (double pendulum) and P2 (crank-rocker four-bar) of
 // bench/data/README.md: RK4 at h = 1e-3 for T = 10 s with the default drift control
 // (projection), in the natural coordinates of gallery/gallery.hpp.

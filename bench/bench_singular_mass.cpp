@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Singular mass matrices (issue #13, item 6): the cost of the singular-M path against the regular
 // path on the same mechanism, per evaluation of the fundamental equation (forward_dynamics).
 //

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Nanoseconds per evaluation of the fundamental equation: the default algorithm, the textbook
 // formula and a dense KKT solve with LDLT, on random full-rank and rank-deficient problems.
 //

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The sparse engine against the dense one (#5, item 6), on planar chains of N uniform rods in
 // absolute coordinates (x, y, theta per body; revolute joints written here as local-column
 // constraints) hanging from (0, 0) with the last tip pinned back to the ground (a loop closure).

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The default integrator on a stiff phase (issue #12, item 4: "slider_crank_friction_slow.yaml
 // on defaults takes at most 3x the time of BDF"). The slider-crank with regularized slider
 // friction (eps 1e-6) slides for ~2.1 s and then rests, where the friction law's slope makes the

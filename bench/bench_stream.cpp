@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Memory of long runs (issue #14, item 3): the peak resident set of a run of N samples, its
 // samples kept in memory (a Trajectory) or streamed (SimulationOptions::sample_sink; and as
 // `ukdyn run` does, run_model's chunks appended to a CSV by CsvWriter); and a controlled model

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """Ensembles on threads and on Dask (issue #17, bench/RESULTS.md): samples per second of
 ukdyn.sweep for a short run (the pendulum, 1 s) and a long one (the double four-bar, 10 s) on 1 and
 2 threads and on a LocalCluster of 1 and 2 worker processes; Dask's overhead per task; and the

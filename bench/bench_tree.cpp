@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // One evaluation of M(q) and Q(q, q') of a 7-DOF arm as a kinematic tree (issue #30 item 4),
 // beside MuJoCo's mj_forward on the same URDF (when built with MuJoCo 2.x).
 //

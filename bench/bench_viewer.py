@@ -1,4 +1,5 @@
 #!/usr/bin/python3
+# SPDX-License-Identifier: BSD-3-Clause
 """The browser viewer's size and frame time (docs/viewer.md; a benchmark, not a test).
 
 usage: PYTHONPATH=build/python /usr/bin/python3 bench/bench_viewer.py [--frames 300]

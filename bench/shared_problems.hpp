@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The shared benchmark problems P1, P2, P3 (bench/data/README.md) as read from
 // bench/data/problems.json, for every program that builds them (bench_multibody_problems with
 // ukdyn's multibody layer, bench_mujoco with MuJoCo).

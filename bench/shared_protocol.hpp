@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The timing protocol of bench/data/README.md, shared by the benchmarks that write its
 // result records: one warm-up run, then five timed runs of the stepping loop.
 #pragma once

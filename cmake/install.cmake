@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 # cmake --install BUILD --prefix P (docs/install.md):
 #   P/include/ukdyn/...                       the public headers
 #   P/lib/libukdyn.so.0.1.0 (+ .so.0.1, .so)  ukdyn::ukdyn, the shared library

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 cmake_minimum_required(VERSION 3.25)
 # The man page ukdyn.1.gz, generated from the command's own --help and --version by help2man
 # (run at build time by app/CMakeLists.txt); each subcommand's --help becomes a section.

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 # cpack -G DEB (in the build directory, or `cpack --config build/CPackConfig.cmake`):
 # ukdyn_<version>_<arch>.deb, everything cmake/install.cmake installs, under /usr. One package
 # holds the library (shared and static), headers and CMake package, the command and the Python

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 # CHOLMOD and SuiteSparseQR, the sparse engine's factorizations, as imported targets
 # SuiteSparse::cholmod, SuiteSparse::spqr and SuiteSparse::suitesparseconfig (the names
 # SuiteSparse 7 gives its own CMake package). SuiteSparse 5, Debian 12's, ships no CMake package,

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 # Writes OUT, a C++ file defining ukdyn::commit(), from `git describe` of SOURCE_DIR — rewritten
 # only when the text changes, so an unchanged commit rebuilds nothing. Run at every build
 # (a custom target in CMakeLists.txt).

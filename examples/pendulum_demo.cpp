@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The built-in example: a pendulum in Cartesian coordinates (x, y), a rod of length L as a
 // holonomic constraint, and viscous friction in the pivot as a non-ideal constraint.
 // Prints the constrained acceleration, the ideal and non-ideal constraint forces, and the

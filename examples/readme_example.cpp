@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The example of README.md: a block sliding down a rough incline (Coulomb friction as a
 // non-ideal constraint). Kept compiling and running as a test so the README stays true.
 #include <cmath>

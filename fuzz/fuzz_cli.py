@@ -1,4 +1,5 @@
 #!/usr/bin/python3
+# SPDX-License-Identifier: BSD-3-Clause
 """Fuzzes the `ukdyn` command line: argument parsing and everything it leads to.
 
 usage: fuzz/fuzz_cli.py UKDYN [SECONDS]      (default 60; scripts/fuzz.sh runs it)

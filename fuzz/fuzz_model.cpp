@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // libFuzzer target for the model reader: the input bytes are a model file's text. Every input
 // must either load or be refused with a ukdyn::ModelError naming file:line:column; anything
 // else escaping (another exception), a crash, a hang or a sanitizer report is a bug. A model

@@ -1,4 +1,5 @@
 #!/usr/bin/python3
+# SPDX-License-Identifier: BSD-3-Clause
 """Fuzzes the Python module's entry points with hypothesis.
 
 usage: fuzz/fuzz_python.py [SECONDS]      (default 60; scripts/fuzz.sh runs it with the module of

@@ -1,4 +1,5 @@
 #!/usr/bin/python3
+# SPDX-License-Identifier: BSD-3-Clause
 """Benchmark of the Python module (issue #7, item 7; run by hand, numbers in docs/python.md):
 
 (a) a SymPy-defined model against the same model file: the run time of simulate() for each

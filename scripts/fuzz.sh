@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: BSD-3-Clause
 # Fuzzes the model reader for a bounded time: scripts/fuzz.sh [SECONDS] (default 120).
 # Builds fuzz/fuzz_model with clang (libFuzzer, AddressSanitizer, UndefinedBehaviorSanitizer) in
 # build-fuzz/, seeds a scratch corpus with examples/models/*.yaml and fuzz/corpus/*.yaml (the

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: BSD-3-Clause
 # Fuzzes the two front ends for a bounded time each: scripts/fuzz_frontends.sh [SECONDS]
 # (default 60 per front end).
 #   fuzz/fuzz_cli.py     the `ukdyn` command line (argument parsing and the runs it starts)

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: BSD-3-Clause
 # Installs the Debian packages that ukdyn needs to build, test and benchmark. Idempotent: when
 # everything is installed already it does not touch apt at all.
 set -euo pipefail

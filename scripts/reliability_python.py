@@ -1,4 +1,5 @@
 #!/usr/bin/python3
+# SPDX-License-Identifier: BSD-3-Clause
 """The Python cases of the bad-input report (D4, D5, D6, D13, D15), judged; run by
 scripts/reliability_rerun.py with build/python on the path. Prints one line per case:
 CASE<TAB>class<TAB>input<TAB>message (class C clear error, OK correct, U? not as promised)."""

@@ -1,4 +1,5 @@
 #!/usr/bin/python3
+# SPDX-License-Identifier: BSD-3-Clause
 """Re-runs every reproducer of the bad-input report and judges each outcome.
 
 usage: scripts/reliability_rerun.py [REPORT_DIR]     (from the project root, after scripts/setup.sh)

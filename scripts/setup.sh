@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: BSD-3-Clause
 # Set-up in one command: installs the Debian packages, builds ukdyn in Release (build/), installs
 # the Python module into the venv .venv/ and runs the built-in showcase: a four-bar linkage, a
 # closed loop, with friction in the crank pin, written to out/four_bar_friction (trajectory.csv,

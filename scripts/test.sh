@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: BSD-3-Clause
 # The whole test suite: installs what is missing, builds (Release, build/) and runs every test
 # through CTest.
 set -euo pipefail

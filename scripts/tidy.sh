@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: BSD-3-Clause
 # Runs clang-tidy (.clang-tidy's curated checks) over the library's and the command's sources:
 #   scripts/tidy.sh [FILES...]   (default: every .cpp of src/ and app/; needs build/ configured,
 #                                 which writes build/compile_commands.json)

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: BSD-3-Clause
 # CTest cli.completion: the bash completion (app/completion.bash) against the built command.
 #   bash test_completion.sh COMPLETION_SCRIPT UKDYN_DIR
 set -euo pipefail

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The progress display of `ukdyn run` (app/progress.cpp): the bar on a terminal and the plain
 // log line elsewhere, with step size, method and ETA.
 #include <chrono>

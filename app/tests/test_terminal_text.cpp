@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // terminal_text (app/terminal_text.hpp): what a terminal acts on is escaped, the rest unchanged.
 #include <gtest/gtest.h>
 

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """Basins of attraction of a damped pendulum under a constant torque (docs/ensembles.md).
 
 A grid sweep of driven_pendulum.yaml over the initial angle and rate: each sample ends either at

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """The stick-slip boundary of a block on a turntable over (mu, Omega) (docs/ensembles.md).
 
 A grid sweep of turntable_stick_slip.yaml: the block sticks when r0 Omega^2 <= mu g and slides

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """The robust Duffing controller over 1,000 plants of its uncertainty set (docs/ensembles.md).
 
 control_uncertain_duffing (examples/models) tracks x = sin(t) with a controller that believes the

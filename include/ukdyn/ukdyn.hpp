@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 /// @file ukdyn.hpp
 /// Everything needed to describe a constrained system, evaluate and simulate its motion.
 #pragma once

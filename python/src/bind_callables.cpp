@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Systems and controllers from Python callables (the slow, flexible path of docs/python.md):
 // M, Q, V, the constraints' A and b, and C are Python functions, called with the GIL held from
 // whatever thread runs the C++ code. A Python exception inside one is kept (CallbackErrors), the

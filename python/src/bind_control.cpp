@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // ukdyn.Controller, ukdyn.ControlSolver and ukdyn.ControlSolution: exact tracking control
 // (control/control.hpp) one evaluation at a time.
 #include "common.hpp"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Ensembles for ukdyn.sweep (python/ukdyn/ensemble.py): the design (simulation/sampling.hpp) and
 // run_ensemble (simulation/ensemble.hpp) of a model's text, on threads here or, called once per
 // chunk of samples, on Dask's workers.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // ukdyn._linearize and ukdyn._equilibrium: Model.linearize() and Model.equilibrium() of the
 // package (python/ukdyn/linear.py); the physics is analysis/linearize.hpp.
 #include <algorithm>

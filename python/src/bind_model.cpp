@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // ukdyn.Model: model files and the built-in examples (modelfile/model.hpp), run as `ukdyn run` runs
 // them (modelfile/run.hpp), and check_model.
 #include <filesystem>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // ukdyn.System, ukdyn.Solver and ukdyn.Solution: the fundamental equation one evaluation at a
 // time (forward_dynamics, dynamics/forward.hpp) for users who write their own loops.
 #include <chrono>

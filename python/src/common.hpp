@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Shared declarations of the Python module's binding files (python/src/*.cpp): conversions
 // between NumPy and Eigen, simulation settings from keyword arguments, and the handles that the
 // bound classes wrap. The module only translates; no physics lives here (docs/style.md).

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Conversions between NumPy and Eigen, simulation settings from keyword arguments, and run
 // reports as Python objects (common.hpp).
 #include <chrono>

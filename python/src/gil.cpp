@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The GIL at interpreter exit (common.hpp, "the GIL, at interpreter exit too"): the gate that
 // the module's atexit hook closes before Python finalizes, so that no thread of a run takes the
 // GIL during or after finalization (CPython would end it with pthread_exit, which terminates a

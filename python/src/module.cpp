@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The Python module ukdyn._ukdyn: exception translation and the module's entry point. The
 // classes and functions are bound in bind_*.cpp; the package ukdyn (python/ukdyn/) wraps them.
 #include "common.hpp"

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """Shared fixtures of the Python tests (run by CTest as python.pytest; see python/CMakeLists.txt).
 
 Environment (set by CTest): PYTHONPATH (the built package), UKDYN_CLI (the ukdyn command),

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """Misuse of the Python API (issue #14, items 8 and 9; reliability report D13, D15): each mistake
 gives an error naming the function and what is wrong, a failed solve leaves no stale results,
 and a model run's columns have distinct names, a body's coordinate being found by both of its

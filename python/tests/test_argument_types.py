@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """Settings and arrays of the wrong type are refused with a ValueError naming the setting (never
 pybind11's "Unable to cast", never a complex number silently cast to a real one); a failed
 control evaluation is a SolveError like a failed solve. Found by fuzz/fuzz_python.py."""

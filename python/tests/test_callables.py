@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """Systems and controllers from Python callables (the slow path), exceptions from callables, and
 the GIL released during runs."""
 

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """A model run from Python gives bit-identical results to `ukdyn run` on the same file.
 
 The command writes every number in the shortest form that reads back bit for bit (io/trajectory_files.hpp), so

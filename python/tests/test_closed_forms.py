@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """The closed-form cases of the engine and simulation issues, from Python (tests/modelfile/test_examples.cpp
 checks the same in C++). Every reference number comes from analysis, not from ukdyn."""
 

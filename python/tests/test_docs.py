@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """Docstrings on everything public, and stubs that name everything the compiled module has."""
 
 import ast

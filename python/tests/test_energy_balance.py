@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """The energy balance in Python: the stats keys, the work columns, and the warning of a run whose
 balance fails (docs/simulation.md, "Energy balance")."""
 

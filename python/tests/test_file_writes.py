@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """Result.save_animation and Result.save_plots in a directory that others can write (issue #29;
 reproducer py_temp_symlink.py): the temporary beside the target has a name nobody can guess and
 is created with O_EXCL and O_NOFOLLOW (tempfile.mkstemp), so a symbolic link planted where the

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """Coulomb friction from Python (docs/friction.md; tests/simulation/test_friction.cpp checks the same in
 C++): static and kinetic coefficients and a surface velocity, from a model file, from SymPy and
 from callables. Reference numbers from the stick-slip oscillator's closed form."""

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """Ctrl-C during a run (issue #14, item 1; docs/python.md, "Interrupts"): a Python process running
 simulate() receives SIGINT; the run stops within a fraction of a second and raises
 ukdyn.Interrupted, a KeyboardInterrupt, whose .partial (.result) holds the samples computed up

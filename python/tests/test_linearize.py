@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """Model.linearize and Model.equilibrium (python/ukdyn/linear.py, issue #32): the textbook cart
 pendulum, a parameter input, the pendulum's hanging equilibrium and its frequency, errors."""
 

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """Loading models: files, built-in examples, overrides, and the errors of bad input."""
 
 import re

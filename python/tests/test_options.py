@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """The options table (include/ukdyn/simulation/options.hpp) in Python: the keyword settings that simulate()
 takes, Model.options and simulation_options() are exactly the table's names, each value
 round-trips, an out-of-range value raises ValueError naming the option, and the docstring of

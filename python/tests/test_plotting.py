@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """The plots (ukdyn/plotting.py, the one implementation behind `ukdyn run` and Result): the
 figures' objects are inspected — panels, axis labels and their units, line counts, titles —
 never their pixels."""

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """Self-describing runs (issue #16 item 4): summary.json's provenance, trajectory.h5 with every
 column of trajectory.csv, ``ukdyn run --from-summary`` making a run again, Result.to_hdf5."""
 

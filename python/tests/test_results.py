@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """The Result object: columns, pandas view, files and plots."""
 
 import matplotlib

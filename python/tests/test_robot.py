@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """Robots from URDF (docs/robots.md): ukdyn.load of a .urdf and of a model file naming one."""
 
 import pathlib

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """Run settings in Python (issue #14, items 4 and 5): settings a run cannot use raise ValueError
 naming them; max_steps from a model file; the energy drift of a block at rest; adaptive steps
 that leave the model's domain are retried smaller (docs/simulation.md, "Settings")."""

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """Singular (positive semi-definite) mass matrices from Python (issue #13, item 3; C++:
 tests/dynamics/test_singular_mass.cpp). A pendulum in the redundant coordinates (x, y, theta) with
 T = m (x'^2 + y'^2) / 2, i.e. M = diag(m, m, 0): theta has no inertia and follows from the

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """The solver one evaluation at a time: closed forms, redundancy, failures, the fast path."""
 
 import math

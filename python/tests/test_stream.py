@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """Sample grids above the documented bound (issue #14, item 3; docs/simulation.md, "Sample grid
 and streaming"): refused with ValueError before the run, naming the options, the count and the
 bound. Python's simulate() keeps its samples in memory (kMaxStoredValues = 2^28 values)."""

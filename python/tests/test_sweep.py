@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """ukdyn.sweep (docs/ensembles.md): a small pendulum over L against its closed form, failing samples
 recorded, the same numbers bit for bit on 1 and 2 threads, on a Dask LocalCluster of two worker
 processes and from the command line (``ukdyn sweep``), grids as xarray Datasets."""

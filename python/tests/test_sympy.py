@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """Models from SymPy expressions: the translation, and the same numbers as the model file."""
 
 import math

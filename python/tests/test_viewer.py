@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """The browser viewer (docs/viewer.md) in a real browser: headless Chromium through Selenium
 (Debian's chromium, chromium-driver, python3-selenium), software-rendered WebGL (SwiftShader).
 

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """ukdyn: the Udwadia–Kalaba equations of motion of constrained mechanical systems, in Python.
 
 The C++ library (README.md) behind a thin module (docs/python.md):

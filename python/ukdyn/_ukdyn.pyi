@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """Type stubs of ukdyn's compiled core (python/src/*.cpp). Docstrings: see the C++ bindings and
 docs/python.md. Model.simulate and Model.solve are added by ukdyn/__init__.py."""
 

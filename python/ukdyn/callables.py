@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """Systems from plain Python callables: the slow, flexible path (docs/python.md).
 
 M, Q, V, each constraint's A and b, and the non-ideal work vector C are Python functions that

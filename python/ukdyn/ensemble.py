@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """Ensembles: parameter sweeps and Monte Carlo studies of a model file (docs/ensembles.md).
 
 :func:`sweep` runs many samples of one model — the points of a grid, random draws (uniform,

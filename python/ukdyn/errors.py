@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """The exceptions of ukdyn (docs/python.md, "Errors").
 
 The C++ library's errors arrive in Python as:

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """Ctrl-C during a simulation (docs/python.md, "Interrupts").
 
 A run holds no GIL and runs no Python (model files), so Python's own SIGINT handling would only

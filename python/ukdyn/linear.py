@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """Linear models of constrained systems: :meth:`Model.linearize` and :meth:`Model.equilibrium`.
 
 The reduction to minimal coordinates of the constraint manifold, the choice of independent

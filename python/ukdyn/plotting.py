@@ -1,4 +1,5 @@
 #!/usr/bin/python3
+# SPDX-License-Identifier: BSD-3-Clause
 """The plots of a ukdyn run: the one plotting implementation of the ``ukdyn`` command and of
 the Python module.
 

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """Simulation results: the columns of ``trajectory.csv`` as NumPy arrays, a pandas view, plots.
 
 A :class:`Result` holds exactly the columns that ``ukdyn run`` writes to ``trajectory.csv``, by the

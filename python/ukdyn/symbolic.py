@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """Models from SymPy expressions (docs/python.md, "SymPy").
 
 :func:`from_sympy` translates SymPy expressions into the model-file expression language

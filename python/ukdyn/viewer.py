@@ -1,4 +1,5 @@
 #!/usr/bin/python3
+# SPDX-License-Identifier: BSD-3-Clause
 """The browser viewer of a ukdyn run: one self-contained HTML page (docs/viewer.md).
 
 The one implementation of the page, used by ``ukdyn run --viewer`` (which embeds this file,

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 /// @file analysis/coordinate_partition.cpp
 /// Stage 1 of linearize(): the independent coordinates, from column-pivoted QR decompositions of
 /// the constraint Jacobians at the operating point (docs/linearize.md, "Choice of coordinates").

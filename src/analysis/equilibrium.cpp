@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 /// @file analysis/equilibrium.cpp
 /// Equilibria and steady motions: Gauss–Newton with a backtracking line search on the reduced
 /// accelerations q''_Iv(x) of the chart of linearize() (docs/linearize.md, "Equilibria").

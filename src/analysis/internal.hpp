@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 /// @file analysis/internal.hpp
 /// The stages of linearize() and find_equilibrium() (include/ukdyn/analysis/linearize.hpp):
 ///   1. choose_coordinates   I_p, D_p, I_v, D_v from the constraint Jacobians

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 /// @file analysis/linearize.cpp
 /// Stage 4 of linearize(): A, B, C, D about an operating point, and the modes
 /// (include/ukdyn/analysis/linearize.hpp; docs/linearize.md).

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 /// @file analysis/linearize_along.cpp
 /// Time-varying linearization along a trajectory: linearize() at each point in one chart
 /// (include/ukdyn/analysis/linearize.hpp; docs/linearize.md, "Along a trajectory").

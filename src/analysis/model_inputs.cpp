@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 /// @file analysis/model_inputs.cpp
 /// Inputs of a linear model that are model-file parameters: a family of systems, each parsed
 /// from the model text with one parameter overridden.

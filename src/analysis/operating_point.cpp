@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 /// @file analysis/operating_point.cpp
 /// An operating point moved onto the constraint manifold (analysis/linearize.hpp).
 #include <sstream>

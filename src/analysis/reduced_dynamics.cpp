@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 /// @file analysis/reduced_dynamics.cpp
 /// Stage 2 of linearize(): the chart x = (q_Ip, q'_Iv) → (q, q') of the constraint manifold
 /// (Newton on the dependent coordinates) and the reduced dynamics f(x) = (q'_Ip, q''_Iv) from

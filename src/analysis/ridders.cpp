@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 /// @file analysis/ridders.cpp
 /// Stage 3 of linearize(): Jacobians by Ridders' method — central differences at steps
 /// h, h/c, h/c², … extrapolated to h → 0 in a Richardson (Neville) table, each entry of the

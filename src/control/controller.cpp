@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The controller's description: ControllerBuilder collects and validates the nominal model, the
 // requirements, the law, the actuation and the robust settings; Controller freezes them.
 #include <Eigen/Cholesky>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Stage 5 of the control pipeline: the control force and its effect on the nominal model.
 //   Qc_control = Qc_nominal + Qc_robust
 //   q''        = a_p + P Qc_control,          P = L⁻ᵀ (I − W_p⁺ W_p) L⁻¹

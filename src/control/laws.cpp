@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Stage 3 of the control pipeline: the control laws. A force F meets the requirements on the
 // physically constrained nominal model iff X F = e, X = A_r P, P = L⁻ᵀ (I − W_p⁺ W_p) L⁻¹.
 // Every law is the least-cost solution (least squares when none exists), computed with the

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Stage 1 of the control pipeline: the nominal model's physically constrained motion without
 // control, a_p = a + L⁻ᵀ W_p⁺ (b_p − A_p a) (+ its non-ideal part), eq. (9) — the "unconstrained"
 // acceleration that the requirements are then imposed on.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // compute_control: the stages of the control pipeline (control/control.hpp) in order.
 #include <stdexcept>
 #include <string>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Requirements: constraints read as trajectory requirements, with their error dynamics (the
 // Baumgarte gains of Constraint::stabilize), and stage 2 of the control pipeline:
 //   A_r q'' = b_r (b_r with the error dynamics),   e = b_r − A_r a_p.

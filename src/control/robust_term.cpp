@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Stage 4 of the control pipeline: the robust term for a plant that differs from the nominal
 // model (docs/control.md, "Uncertain systems"). Per requirement row i, with the prescribed error
 // dynamics e'' + 2α e' + β² e = r (holonomic; r = 0 on the nominal model) or e' + α e = r:

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Controlled simulation: the plant (a System that may differ from the controller's nominal
 // model) under the control force, run by simulate(). The control is evaluated inside the plant's
 // force callable with the control workspace in the controlled system's per-workspace scratch

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // ControlWorkspace: every buffer of the control pipeline, sized once; the description of a
 // control status.
 #include <cmath>

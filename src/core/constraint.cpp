@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Constraint: a named, typed, possibly time-limited group of rows; the acceleration form; the
 // small helpers of the automatically differentiated kinds (core/autodiff.hpp).
 #include "ukdyn/core/constraint.hpp"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Coulomb contacts: the sliding velocity relative to the constraint (docs/friction.md),
 //   v_rel = P (v − u),  P = I − N_k⁺ N_k,
 // and the stick constraint P (v − u) = 0 that the simulation switches on while a contact sticks.

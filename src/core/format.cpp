@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The one number formatter and join of format.hpp.
 #include "ukdyn/core/format.hpp"
 

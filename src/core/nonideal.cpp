@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Non-ideal forces: the view of the ideal force they read, and the ready-made friction laws.
 #include "ukdyn/core/nonideal.hpp"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Status names and the internal check of tier-2 errors.
 #include "ukdyn/core/status.hpp"
 #include "ukdyn/core/format.hpp"

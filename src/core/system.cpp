@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // System and SystemBuilder: validation and freezing of a description.
 #include "ukdyn/core/system.hpp"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Stage 2: the constraints in acceleration form, A q'' = b (eq. 5). Rows of constraints that are
 // inactive at t are zero, so they exert no force and cost no special case downstream.
 // Stabilized constraints (Baumgarte) get b ← b − 2α phi' − β² phi, resp. b ← b − α psi.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // find_constraint_conflict: constraints that no state near (q, q') satisfies together — the
 // diagnosis of a projection that does not converge, and of inconsistent initial conditions.
 //

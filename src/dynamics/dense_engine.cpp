@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The dense engine on FundamentalDecomposition (dynamics/dense_engine.hpp), and the parts of the
 // dense singular-mass completion that do not depend on the decomposition.
 #include "dynamics/dense_engine.hpp"

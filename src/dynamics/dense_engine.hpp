@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The dense engine (not installed): dense M (n × n) and A (m × n) in the workspace, on a
 // decomposition D with FundamentalDecomposition's interface (compute_mass, compute_constraints,
 // solve_mass, solve_ideal, project_nonideal, rank). Instantiated with FundamentalDecomposition

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The engine interface (not installed): the linear algebra of the fundamental equation for one
 // kind of M and A, chosen once when a Workspace is made (Workspace::engine), so that each stage
 // makes one call and none branches on the engine.

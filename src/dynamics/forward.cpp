@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // forward_dynamics: the stages of dynamics/forward.hpp in order.
 #include "ukdyn/dynamics/forward.hpp"
 #include "ukdyn/core/format.hpp"

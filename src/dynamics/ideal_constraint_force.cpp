@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Stage 3: the ideal constrained motion (eqs. 9, 11):
 //   e = b − A a,  q'' = a + L⁻ᵀ W⁺ e,  Qc_ideal = L W⁺ e = Aᵀ lambda,  lambda = G⁺ e.
 // The engine decomposes W = A L⁻ᵀ (dynamics/engine.hpp): the dense one by a complete orthogonal

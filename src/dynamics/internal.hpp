@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Internal helpers shared by the stages (not installed).
 #pragma once
 

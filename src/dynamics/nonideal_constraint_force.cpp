@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Stage 4: non-ideal constraints (eqs. 7, 9, 12). C is summed from the system's forces, which may
 // read the ideal force (it does not depend on C) and the reactions (which do: iterated to a
 // fixed point), then projected:

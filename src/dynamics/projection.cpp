@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Constraint violations and projection onto the constraints (drift control): the correction of
 // least M-norm, dq = −L⁻ᵀ W⁺ phi, through the same decomposition as the dynamics.
 #include <algorithm>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Stage 5: checks of the result. Inconsistent constraints are detected by the constraint residual
 // ‖A q'' − b‖, which is computed only where they can occur — when A has lost row rank (the
 // decomposition of stage 3 says so) — or on request with the Gauss and virtual-work residuals.

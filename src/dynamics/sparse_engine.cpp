@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The sparse engine: block-diagonal M, sparse A in a fixed pattern, rank-revealing sparse LDLᵀ of
 // G = W Wᵀ (SparseDecomposition, linalg/sparse.hpp; docs/sparse.md). M and A of the workspace
 // stay empty; their values live in ws.sparse. Costs O(bodies) per evaluation for chains and trees

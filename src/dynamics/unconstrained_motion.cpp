@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Stage 1: the unconstrained system. M(q,t), Q(q,q',t), M = L Lᵀ, a = M⁻¹ Q (eqs. 1, 2).
 // A singular (positive semi-definite) M is factorized after stage 2 as the auxiliary
 // M_A = M + Aᵀ G A, with Q_A = Q + Aᵀ G b (complete_singular_mass; docs/singular-mass.md).

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Workspace: sizing every buffer once; describing a failed evaluation.
 #include "ukdyn/dynamics/workspace.hpp"
 

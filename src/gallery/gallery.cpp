@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The built-in example systems (gallery/gallery.hpp). Each factory writes its model in the
 // coordinates stated in the header, with constraints as automatically differentiated generic
 // callables.

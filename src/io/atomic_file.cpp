@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Files written whole or not at all: a temporary in the same directory, renamed when complete
 // (io/atomic_file.hpp).
 #include "io/atomic_file.hpp"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Internal: files written whole or not at all (the writers of io/trajectory_files.hpp). Not
 // installed.
 #pragma once

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // CSV writer of a trajectory: one header line, then one row per sample, written under a
 // temporary name and renamed when complete.
 #include "ukdyn/core/format.hpp"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // HDF5 writer and reader of trajectories (HDF5 C++ API): one dataset per field, names and
 // statistics as attributes; written under a temporary name and renamed when complete.
 #include "ukdyn/io/trajectory_files.hpp"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // JSON summary of a run: statistics, final state and the options given.
 #include "ukdyn/io/trajectory_files.hpp"
 

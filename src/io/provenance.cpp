@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // SHA-256 (FIPS 180-4) and the library's version, for the provenance of runs.
 #include "ukdyn/io/provenance.hpp"
 

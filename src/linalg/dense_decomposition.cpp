@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // FundamentalDecomposition: Cholesky of M, complete orthogonal decomposition of Wᵀ = L⁻¹ Aᵀ.
 // Notation as in linalg/decomposition.hpp: Wᵀ Π = Q [T 0; 0 0] Z, Q = H_0 ⋯ H_{r−1}, Z = Z_0 ⋯
 // Z_{r−1}.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // ‖x‖ without overflow or underflow (not installed): the row equilibration of both
 // decompositions (linalg/decomposition.hpp, linalg/sparse.hpp) and the residual norms.
 #pragma once

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // SparseDecomposition, the analysis (once per workspace): block structure of M, pattern of A and
 // W, pattern of G = W Wᵀ and the program that assembles it, AMD ordering of G (CHOLMOD), and the
 // elimination tree and column counts of its LDLᵀ factor. Everything here may allocate.

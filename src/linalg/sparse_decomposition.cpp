@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // SparseDecomposition, the numerical part (every evaluation; no allocation): block Cholesky of M,
 // W = A L⁻ᵀ, G = W Wᵀ, the rank-revealing up-looking LDLᵀ of P G Pᵀ, the null-space basis of
 // the dropped rows, and the solves of linalg/sparse.hpp.

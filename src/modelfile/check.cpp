@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // check_model: what `ukdyn check` reports about a model at its initial state — sizes, rank and
 // redundancy of the constraints, consistency of the initial state, and M.
 #include <algorithm>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // ExpressionSet: the symbolic expressions of a model (see modelfile/expression.hpp); parsing is in
 // modelfile/expression_parse.cpp, compilation in modelfile/expression_compile.cpp.
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The model language's compiler: a GiNaC expression DAG → a flat register tape with
 // common-subexpression elimination, and its evaluation (Program) — see modelfile/expression.hpp.
 

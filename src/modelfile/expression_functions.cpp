@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The model language's functions (see modelfile/expression.hpp): abs and the non-smooth
 // functions registered with GiNaC (their values, derivatives and printing), the table of the
 // language's functions and the GiNaC expression of a call. The parser is in

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Internal to the expression engine (modelfile/expression.hpp): what its parser
 // (modelfile/expression_parse.cpp), its compiler and tape (modelfile/expression_compile.cpp) and
 // ExpressionSet (modelfile/expression.cpp) share.

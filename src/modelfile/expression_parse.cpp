@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The model language's parser (see modelfile/expression.hpp): a small recursive-descent parser with
 // positions and suggestions in its errors, building GiNaC expressions directly rather than with
 // GiNaC::parser: GiNaC's parser reports no positions (line and column are always 0), lets a

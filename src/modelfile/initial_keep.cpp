@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // initial: project: {keep: [names]} — the initial state made consistent with the constraints
 // while the named coordinates (and velocities) keep the values the file gives them: the others
 // take the least M-norm change that satisfies the constraints, positions by Gauss–Newton over the

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // initial: project: {keep: [...]} (modelfile/initial_keep.cpp)
 #pragma once
 

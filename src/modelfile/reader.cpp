@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Model files: YAML with symbolic expressions → a System, an initial state and run settings.
 // Derivatives are symbolic (modelfile/expression.hpp):
 //   Lagrangian      M = ∂²T/∂q̇∂q̇,  Q = ∂L/∂q − D(∂T/∂q̇) − ∂V/∂q … (L = T − V) + forces

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The model-file reader's internals, shared by the files that read its sections (modelfile/):
 //   reader.cpp            the file, parameters, coordinates, the expressions' set and checks,
 //                         initial state, settings and outputs

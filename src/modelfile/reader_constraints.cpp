@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Model files, the constraints (modelfile/reader.hpp): constraints: → the rows of A and b,
 //   holonomic       A = ∂φ/∂q,  b = −D(D φ)          (D: total time derivative without q̈)
 //   nonholonomic    A = ∂ψ/∂q̇,  b = −D ψ

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The control: section of a model file (docs/model-format.md; the API is docs/control.md):
 //   control:
 //     requirements:

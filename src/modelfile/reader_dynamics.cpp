@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Model files, the generalized plant (modelfile/reader.hpp): kinetic_energy, potential_energy,
 // mass_matrix and forces: → M(q, t), Q(q, q', t) and the external power, by symbolic derivatives:
 //   Lagrangian      M = ∂²T/∂q̇∂q̇,  Q = ∂L/∂q − D(∂T/∂q̇) − ∂V/∂q … (L = T − V) + forces

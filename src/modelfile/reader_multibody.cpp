@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Multibody model files: bodies:, joints: and forces: (docs/model-format.md, "Multibody
 // models"). The sections are turned into calls of the multibody layer (multibody/multibody.hpp):
 //   bodies:   add_particle / add_planar_body / add_rigid_body with their initial state

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Model files, the non-ideal forces (modelfile/reader.hpp): nonideal: → Coulomb and viscous
 // friction and the forces given by their C (Udwadia–Kalaba's non-ideal constraint forces). Every
 // error names file:line:column and gives a hint.

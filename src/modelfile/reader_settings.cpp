@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Model files, the run's part: the initial state (initial:, with keep), the run settings
 // (simulate:, output:) and their check, the mass matrix at the initial state, the output
 // expressions and the units. The reader's other stages are in reader.cpp (parameters,

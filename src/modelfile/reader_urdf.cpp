@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Robot model files: robot: names a URDF (read through tree::load_urdf) and adds what URDF
 // cannot say (docs/robots.md, "Model files"):
 //   robot:

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The model file's `visual:` section and the bodies' `visual:` entries: how the browser viewer
 // draws the model (modelfile/visual.hpp, docs/viewer.md). Nothing here changes the dynamics.
 #include <algorithm>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // run_model: a model's simulation (under its controller when it has one) and its CSV columns,
 // shared by `ukdyn run` and the Python module.
 #include "ukdyn/modelfile/run.hpp"

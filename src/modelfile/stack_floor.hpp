@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // How deep a recursive reader may go on the calling thread's stack: shared by the YAML structure
 // check (modelfile/yaml_structure.cpp) and the expression parser (modelfile/expression_parse.cpp),
 // which both refuse, located, nesting the stack would not hold (under `ulimit -s 64` a model file

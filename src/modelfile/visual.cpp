@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The scene description of a model for the browser viewer (modelfile/visual.hpp): what the page
 // generator (python/ukdyn/viewer.py) needs beside trajectory.csv to draw the model.
 #include "ukdyn/modelfile/visual.hpp"

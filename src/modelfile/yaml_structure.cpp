@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The model file as YAML text, before its keys are read: what yaml-cpp's node tree hides or
 // accepts silently is refused here, located (modelfile/reader.hpp):
 //   - a key given twice in one mapping (yaml-cpp keeps both pairs and `node[key]` finds the

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The Multibody builder: bodies and their coordinates, mass blocks and initial state; joint and
 // force factories; build(), which turns bodies, joints and forces into a System.
 #include <algorithm>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Force elements: gravity, spring-dampers between body points, torsional springs, applied
 // wrenches, the quaternions' velocity terms (gyroscopic), and joint friction (non-ideal).
 #include <algorithm>

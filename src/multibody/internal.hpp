@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Private to the multibody layer: body kinematics in closed form, the joint constraint model
 // built from rows of vector expressions, and the builder's storage.
 #pragma once

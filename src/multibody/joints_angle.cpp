@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Joint-angle constraints of spatial revolute joints: a prescribed angle (rheonomic, holonomic)
 // and a gear between two joints (velocity level). The angle of F_C about z_P is
 // atan2((x_P × x_C) · z_P, x_P · x_C), not a dot product, so these rows are written once as

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Joints between planar bodies (x, y, theta): the rows of each kind, in closed form through the
 // vector rows of JointModel (docs/multibody.md, "Planar joints").
 #include <cmath>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Joints between rigid bodies and particles in space: the rows of each kind as dot products of
 // the frames' axes and of the origin difference d = o_C − o_P (docs/multibody.md, "Spatial
 // joints"). Every row is closed form (JointModel).

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Body kinematics in closed form and the joint constraint model built on it: every joint row is
 // a dot product of two vector expressions (body vectors R s, point differences), a distance, or
 // a linear combination of coordinates, whose A and b follow from the kinematics of its vectors.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Reports of a multibody model: poses, velocities, energies and momenta of the bodies; the
 // reaction of each joint (ideal and friction parts) reduced to the joint point; driving efforts;
 // and the poses of every body at every sample of a trajectory, for animation.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Rolling without slipping of a thin disk or a sphere (a rigid body) on the plane z = 0: the
 // contact height (holonomic) and the contact point's horizontal velocity (nonholonomic). A and b
 // come from forward-mode automatic differentiation of these functions on the body's seven

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The textbook formula (eqs. 9–12 with M^{±1/2} and an SVD pseudo-inverse) and the KKT solve,
 // kept as independent references for tests and benchmarks.
 #include "ukdyn/reference/reference.hpp"

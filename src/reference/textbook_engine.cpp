@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The textbook engine: the dense engine (dynamics/dense_engine.hpp) on TextbookDecomposition,
 // eqs. (9)–(12) as printed (M^{±1/2} by eigendecomposition, B⁺ by SVD). Algorithm::kTextbook;
 // a reference, not a production path (it allocates on every evaluation). It lives in the

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // ConstrainedOde: the first-order system x' = f(t, x), x = [q; q'; W], that the integrators see,
 // W the work channels of the energy balance.
 #include <algorithm>

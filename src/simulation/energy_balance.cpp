@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The energy balance of a run: E(t) − E(0) = W_nonideal + W_ideal + W_drive + W_external +
 // W_control, the works integrated in the ODE state (simulation/constrained_ode.cpp) or, for the
 // control, beside it (control/simulate_controlled.cpp). Its residual, relative to the energy the

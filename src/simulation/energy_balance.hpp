@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Internal: the energy balance of a run accumulated sample by sample
 // (simulation/energy_balance.cpp), so that a streamed run (SimulationOptions::sample_sink)
 // certifies its balance without keeping its samples. compute_energy_balance() runs the same

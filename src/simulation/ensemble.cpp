@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Ensembles (simulation/ensemble.hpp): many runs of one model file on a pool of std::threads.
 //
 // Why std::thread and not oneTBB: a sample is a whole run (milliseconds to minutes), so the pool

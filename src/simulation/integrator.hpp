@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Internal: the interface between the simulation driver (simulation/simulate.cpp) and the
 // integrators (simulation/integrators_explicit.cpp: Boost.Odeint; simulation/integrator_bdf.cpp:
 // SUNDIALS CVODE). Not installed.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // integrate_bdf: one segment with SUNDIALS CVODE (variable-order BDF, Newton iteration, dense
 // direct linear solver with CVODE's difference-quotient Jacobian), drift control through
 // CVODE's projection interface (CVodeSetProjFn) calling SegmentHooks::after_step, and events

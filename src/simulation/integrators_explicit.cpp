@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The explicit integrators, from Boost.Odeint: classical RK4 and Dormand–Prince's 5th-order
 // formula (fixed step, cubic Hermite output), Dormand–Prince 5(4) (adaptive, its own dense
 // output) and Runge–Kutta–Fehlberg 7(8) (adaptive, landing exactly on output times). Step-size

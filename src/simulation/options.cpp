@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The table of simulation options (simulation/options.hpp) and its one validating setter.
 #include "ukdyn/simulation/options.hpp"
 #include "ukdyn/core/format.hpp"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The sample times of a run on demand (simulation/sample_grid.hpp): the regular grid t_start + i ·
 // every and the few irregular times, merged as sorting them all would, without storing the grid.
 #include "simulation/sample_grid.hpp"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Internal: the sample times of a run, computed on demand (index → time) instead of stored, and
 // ranges of them handed to the integrators. Not installed.
 #pragma once

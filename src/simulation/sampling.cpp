@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The sample points of an ensemble (simulation/sampling.hpp): grids, random draws and Latin
 // hypercubes from std::mt19937_64's raw output, with ukdyn's own transforms.
 #include "ukdyn/simulation/sampling.hpp"

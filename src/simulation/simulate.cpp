@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // simulate(): the driver of a run. Splits [t_start, t_end] at breakpoints (the ends of
 // constraint intervals and those the user gives), integrates each segment with the chosen method,
 // applies drift control after every accepted step, and records samples.

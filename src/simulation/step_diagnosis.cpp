@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Step-size collapse: when an adaptive method gives up, the likely cause — a singular
 // configuration (the constraints lose rank), stiffness, or neither — and what to try.
 #include <Eigen/SVD>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Trajectory: the consistency of its names and fields (tier 1 for writers and hand-made ones).
 #include <stdexcept>
 #include <string>

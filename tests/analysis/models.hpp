@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 /// @file analysis/models.hpp
 /// Model files of the linearization tests (tests/analysis/), each with the closed-form result it
 /// is checked against.

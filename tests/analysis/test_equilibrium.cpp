@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Tests of find_equilibrium() (src/analysis/equilibrium.cpp): static equilibria of a closed
 // loop, relative equilibria (a sleeping top, a disk in steady turning) and the error when none
 // exists.

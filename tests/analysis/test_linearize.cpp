@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Tests of linearize() (src/analysis/): textbook matrices, reduced one-DOF frequencies, the
 // sleeping top's threshold, the rolling disk's stability criterion, and Ridders' error estimate.
 #include <gtest/gtest.h>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // A consumer of the installed package (tests/consumer/CMakeLists.txt): a pendulum in Cartesian
 // coordinates released at rest from theta0, simulated for a quarter period, checked against
 // analysis. Returns 1 on any failure.

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 # CTest package.consumer (tests/CMakeLists.txt): install the build to a temporary prefix, configure
 # and build tests/consumer against it twice (find_package(ukdyn 0.1 CONFIG REQUIRED), then with
 # COMPONENTS static), and run its programs, which check a simulated pendulum against analysis.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Exact tracking control (control/control.hpp): closed-form error dynamics on chaotic, multibody
 // and rotational systems, optimality of the weighted law against random admissible forces, the laws
 // against independent methods (KKT with the requirements as constraints, closed-form weighted

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // No heap allocation per control evaluation once the control workspace exists: both laws, a
 // state-dependent M and N, actuated subsets, physical constraints, nonholonomic requirements,
 // requirements that cannot be met, the robust term, and the controlled plant's forward dynamics.

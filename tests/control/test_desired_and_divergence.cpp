@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Controlled runs of issue #29, item 1: the derived desired value of a requirement row is exactly
 // its target when the kinematics has constant offsets (desired_<row>, docs/model-format.md,
 // "Control"), and a controlled run whose motion diverges stops with that cause.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Misuse of the C++ API (issue #14, item 8; reliability report D14): every entry point given a
 // workspace of another system, a moved-from workspace, vectors of the wrong size, a NaN state
 // or a NaN t either throws std::invalid_argument naming the function and the problem, or

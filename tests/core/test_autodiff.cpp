@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Automatically derived A and b against hand-derived ones.
 #include <cmath>
 

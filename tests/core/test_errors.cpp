@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Bad input: misuse throws std::invalid_argument with a useful message (tier 1); numerical
 // failures set a status that describe_status() explains and throw_if_failed() raises (tier 3).
 #include <cmath>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Non-ideal forces: the ready-made laws, custom C reading the ideal force, binding errors.
 #include <cmath>
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // One System, many threads (issue #15, item 2): a description is immutable and every buffer an
 // evaluation writes is in a Workspace, so one System simulated on several threads at once — one
 // workspace each — gives, bitwise, the serial run's trajectory. Systems from C++ (the gallery),

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The core library without ukdyn::reference (issue #15 item 1): the textbook formula is not in
 // it, and asking for it says which library to link, instead of failing to link or running
 // another algorithm. This program is the one test that does not link ukdyn::reference.

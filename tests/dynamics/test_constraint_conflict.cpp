@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // find_constraint_conflict (dynamics/constraint_conflict.cpp) on large closed chains: the sparse
 // engine's form (its rank-revealing LDLᵀ of G, linear in the chain's length; issue #29 item 4)
 // against the closed form and against the dense engine's QR of A.

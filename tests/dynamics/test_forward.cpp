@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // forward_dynamics: closed-form cases, cross-checks against independent methods (KKT, textbook
 // formula), the properties of the fundamental equation, redundancy and rank changes.
 #include <cmath>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // No heap allocation per evaluation once the workspace exists, for every kind of constraint,
 // non-ideal forces, rank-deficient and large systems.
 #include <array>

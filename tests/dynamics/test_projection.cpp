@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Projection onto the constraints (drift control) against closed forms.
 #include <cmath>
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Redundant constraints in a simulation (issue #13, item 1): off the constraint manifold an
 // inconsistency that the state's own violation explains takes the least-squares q''; a genuine
 // one is still an error naming the constraints. The IFToMM A04 Bricard mechanism

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The public entry points and the callables take their read-only vectors as
 // Eigen::Ref<const VectorXd> (issue #15, item 5): a segment of a larger vector, an Eigen::Map over
 // a std::array and a fixed-size Eigen::Vector<double, N> pass without a copy, and every result is

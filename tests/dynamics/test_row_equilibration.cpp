@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Rows whose norms under- or overflow (issue #29 item 2, in part): a row written with a factor
 // of 1e-170 or 1e170, or a state of 1e200, keeps its constraint: the rows are equilibrated where
 // their squares would under- or overflow (linalg/decomposition.hpp, "Row equilibration"), never

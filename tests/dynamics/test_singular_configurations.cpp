@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Singular configurations (issue #13, item 2): closed loops whose constraints lose rank on the
 // way run with every adaptive integrator at every tolerance down to rtol 1e-12, on their branch.
 //

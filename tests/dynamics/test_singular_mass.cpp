@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Singular (positive semi-definite) mass matrices (issue #13, item 3; the math reference,
 // docs/theory.md section 6): M may be singular as long as [M; A] has full column rank,
 // and then q'' and Qc = M q'' − Q are unique. Every expected number comes from analysis or from

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The gallery of example systems: every example builds with a consistent initial state, its
 // first evaluation matches a hand-computed quantity, and its simulation reproduces the closed
 // form or published reference it documents. Numbers come from analysis (closed forms, elliptic

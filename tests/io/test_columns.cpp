@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The columns of trajectory.csv (issue #14, item 9; reliability report D13): every example
 // model's columns have distinct names — so `ukdyn run` prints no duplicate-column warning —
 // and a body's coordinate is found by both of its spellings, crank.x (the CSV, C++ and Python

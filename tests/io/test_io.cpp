@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Writers of trajectories: CSV, JSON summary and HDF5 read back against the trajectory written.
 #include <gtest/gtest.h>
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Nothing lost, nothing hanging, untrusted names harmless (issue #29, items 6 and 7; reproducers
 // 2026-11-28): the command under SIGHUP, a console that went away (SIGPIPE) and a file-size
 // limit (SIGXFSZ); symbolic links and FIFOs planted among its outputs; --format checked before a

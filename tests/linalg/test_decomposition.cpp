@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // FundamentalDecomposition against independent linear algebra (Eigen's SVD and LLT).
 #include <gtest/gtest.h>
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The sparse engine (linalg/sparse.hpp) against the dense one (linalg/decomposition.hpp) on the
 // same System: random block-diagonal systems with random local constraints (duplicated, linearly
 // combined and rank-deficient rows, dense rows, inactive constraints, non-ideal forces), planar

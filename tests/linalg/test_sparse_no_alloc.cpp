@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // No heap allocation per evaluation with the sparse engine once the workspace exists: chains of
 // planar bodies closed to ground (also redundantly), state-dependent mass blocks, dense rows,
 // inactive constraints, non-ideal forces, the projections, and large N.

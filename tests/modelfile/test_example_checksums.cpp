@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Every example model's trajectory is bitwise what it was (issue #15 item 7): a reorganization,
 // a rename or a refactoring must not change a single bit of what users get. Each model of
 // examples/models/ runs with its own `simulate:` settings as `ukdyn run` runs it (run_model),

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The gallery of model files (examples/models/*.yaml): each model runs and meets a physical
 // invariant or a closed-form value.
 //

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Expressions: parsing, exact derivatives and the compiled tape, against values and derivatives
 // worked out by hand.
 #include <cmath>

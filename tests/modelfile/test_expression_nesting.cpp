@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Deep expressions on a small stack (reproducers 2026-11-28, limits_signals.sh: an expression
 // nested 99 deep, within the parser's limit of 100, crashed the command under `ulimit -s 128`).
 // The parser recurses once per level of parentheses, calls and signs, and so do GiNaC and the

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Many coordinates listed in a model file (reproducers 2026-11-28, many_coordinates.sh: 10^5
 // decoupled coordinates took 66 s to load; bench/bench_model_load.cpp, ManyCoordinates, times
 // it). What loads fast must load right: a model written as the reproducer writes it — a kinetic

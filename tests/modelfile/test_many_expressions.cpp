@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Loading linear in the number of coordinates (issue #29, item 6; bench/bench_model_load.cpp,
 // ManyCoordinates and ManyForces, times it): a `forces:` list of one entry per coordinate used to
 // take O(n²) (every entry compiled against all n inputs, the power's zero test adding the n

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Model files: symbolic derivation against closed forms and against the AD-derived constraints,
 // and the errors users meet (file:line:column and a hint).
 #include <algorithm>

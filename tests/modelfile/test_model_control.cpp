@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The control: section of model files (issue #6, item 5): the gallery's controlled examples run by
 // run_model() as `ukdyn run` runs them, checked against the closed-form error dynamics and the
 // optimality of the weighted law; and the located errors of bad control sections.

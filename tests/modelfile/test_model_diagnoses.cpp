@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Diagnoses that name the cause (issue #14, items 4 and 6, and D18 of the reliability report):
 // constant sub-expressions that are not finite real doubles, duplicate YAML keys and documents,
 // contradictory and locking constraints, files that are not model files.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Inputs the model-reader fuzzer (fuzz/fuzz_model.cpp) found troublesome, and their relatives
 // found while fixing them: each must give a clear ModelError, not a crash, a hang, a leak or a
 // sanitizer report. A hang fails by the CTest TIMEOUT of 60 s (tests/CMakeLists.txt), not by a

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Large models (issue #14, item 7): what loads fast must load the same. The expression engine's
 // shortcuts (inputs_of, sums built at once, derivatives skipped where they are 0) against the
 // term-by-term results, and big generated models against their closed-form dynamics.

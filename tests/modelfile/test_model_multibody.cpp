@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Multibody model files (bodies:, joints:, forces:; src/modelfile/reader_multibody.cpp): the
 // gallery's multibody examples against closed forms and against the same models built with the C++
 // API (multibody/multibody.hpp), the report columns of a run, drives and applied forces written as

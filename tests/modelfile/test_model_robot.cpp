@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Robot model files (modelfile/reader_urdf.cpp): a .urdf read alone as a model, a model file
 // that names a URDF and adds torques, a loop closure, initial state by joint name, parameters
 // and a joint-space control requirement, and the errors a user meets, located.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // units: of a model file (modelfile/reader.cpp, read_units): each coordinate's and output
 // expression's unit for the plots' labels, the multibody defaults (m, rad, 1), the errors at
 // file:line:column, and summary.json's `units` (io/json_summary.cpp).

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The model file's visual: entries and the viewer's scene (modelfile/visual.hpp,
 // src/modelfile/reader_visual.cpp, src/modelfile/visual.cpp): the points' columns are their
 // expressions' values, the scene says what the file says, and errors are located.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The YAML reader's nesting on a small stack (modelfile/yaml_structure.cpp; reproducers
 // 2026-11-28, limits_signals.sh: under `ulimit -s 64` 490 levels of brackets, below yaml-cpp's
 // own limit of 500, overflowed the stack). The model is read on a thread whose whole stack is

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Bodies, joints, force elements and reports of the multibody layer (multibody/multibody.hpp): each
 // joint's closed-form A and b against automatic differentiation of the same position-level
 // function; the quaternion equations of motion against Euler's equations and the fictitious-inertia

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The per-workspace memo of the bodies' rotations (detail::PoseCache, issue #15 item 3): each
 // body's rotation is computed once per evaluation and shared by the joints, the forces and the
 // violation checks; a cached rotation is never stale — an evaluation through a workspace that

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The kinematic tree in joint coordinates (multibody/tree.hpp): M, h, Jacobians and a floating
 // base against closed forms and independent methods (Lagrange's equations by central
 // differences of the CRBA's M and of the potential), the URDF loader's errors.

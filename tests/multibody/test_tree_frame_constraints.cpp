@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Constraints and requirements between tree frames (multibody/tree/frame_constraints.cpp) and
 // the limit checks (limits.cpp): a four-bar loop closed on an arm held exactly, a distance
 // closure, and exact task-space tracking of the 7-DOF arm (issue #30 item 4) whose control

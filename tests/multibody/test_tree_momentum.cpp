@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Centre of mass and momentum of a tree (multibody/tree/momentum.cpp): J_G against central
 // differences of the centre of mass, l = m v_G, and the momentum [k_O; l] of a free branched
 // tree in zero gravity conserved along a simulated motion (Newton and Euler for the whole).

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // No heap allocation per evaluation of a tree's system once the workspace exists.
 #include <string>
 

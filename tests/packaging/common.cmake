@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 # Shared by the packaging tests' scripts (consumer/run.cmake, packaging/deb.cmake, pip.cmake).
 
 # require(SCRIPT VAR...): fails when one of the -DVAR=... is missing

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 # CTest package.deb (tests/CMakeLists.txt): build the Debian package with CPack, extract it with
 # dpkg -x into a temporary directory, and run what it holds from there: `ukdyn run --example
 # pendulum` and `import ukdyn` in Debian's /usr/bin/python3.

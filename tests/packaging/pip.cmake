@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 # CTest package.pip (tests/CMakeLists.txt): what scripts/setup.sh does for Python — a venv that
 # sees Debian's packages, `pip install --no-build-isolation --no-index .` into it (pyproject.toml;
 # setup.py builds the extension in the project's build directory, which is up to date) — then

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // MuJoCo as an independent reference (issue #15 item 3): the shared benchmark problem P1 (double
 // pendulum of bench/data/README.md: two massless 1 m rods with a 1 kg point mass at each tip,
 // inertia 1e-9 kg m² about the tips, pivot at the origin, gravity (0, −9.81), released at rest

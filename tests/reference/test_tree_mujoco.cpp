@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The kinematic tree against MuJoCo 2.2.2 (issue #30 item 3): M(q) and the bias forces
 // (qfrc_bias) at 100 random states, the forward dynamics with the URDF's damping, and 0.5 s of
 // RK4 from the same state; a branched floating-base tree's accelerations at 100 random states.

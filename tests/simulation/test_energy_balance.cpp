@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The energy balance (simulation/energy_balance.cpp, the work channels of
 // simulation/constrained_ode.cpp): each work channel against a closed form or an independent
 // quadrature, and the warning status of a run whose balance fails.

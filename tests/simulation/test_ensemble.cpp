@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Ensembles (simulation/ensemble.hpp): sweeps checked against closed forms (a block's stopping
 // distance over mu, a small pendulum's motion over L), every result bitwise the same on 1, 2 and 4
 // threads and the same as one run_model of the model read with the sample's overrides, failing

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Coulomb friction on mechanisms beyond its own test (docs/friction.md): stick/slip that is
 // physics (no stick at a zero of the sliding velocity that the mechanism passes through
 // kinematically; static and kinetic coefficients; events under BDF too) and friction on the

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // integrate_bdf (SUNDIALS CVODE): a stiff oscillator against its closed form, a Cartesian
 // pendulum kept on its constraint by the after-step projection (period from the complete
 // elliptic integral), and every way a segment can stop early.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Integrator edges (issue #29 item 3): the adaptive methods reach t_end for any max_step (the
 // landing step is never refused for exceeding max_step by a sliver); the stiffness switch never
 // turns a run that dopri5 finishes into a failure (BDF gives up → an explicit method goes on,

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The fixed-step methods' observed order of convergence (Integrator::kRK4, kRK5) on problems with
 // closed-form solutions: halving h divides the error by ≈ 2^p. Unconstrained (harmonic
 // oscillator) and constrained (a pendulum in Cartesian coordinates with its rod as a constraint

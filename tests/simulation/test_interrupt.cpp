@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Interrupts and outputs (issue #14, items 1 and 2; docs/simulation.md, "Interrupts and
 // outputs"):
 //  1. SimulationOptions::should_stop stops a run within a step with every integrator, plain and

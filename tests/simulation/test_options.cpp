@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The options table (simulation/options.hpp): every option of the table is accepted by the model
 // file's simulate: section, echoed by the JSON summary, refused out of its range with an error that
 // names it (by the setter, and located in a model file), and documented in docs/simulation.md

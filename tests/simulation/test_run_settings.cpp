@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Run settings (issue #14, items 4 and 5): a setting a run cannot use is refused up front, naming
 // it (check_settings, SettingError; located in model files); max_steps holds for every method;
 // the energy drift of a run in which nothing moves is its roundoff; and adaptive steps that

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The sample points of ensembles (simulation/sampling.hpp): grids from text, the product's
 // order, seeded draws that do not depend on the platform's distributions, the normal quantile
 // against tabulated values, and Latin hypercube strata.

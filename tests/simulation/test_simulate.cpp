@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // simulate(): the driver and the explicit integrators on problems with exact solutions.
 #include <cmath>
 #include <limits>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The default integrator on stiff problems (SimulationOptions::stiff_switch): dopri5 detects
 // stiffness (Hairer–Wanner's test) and goes on with BDF; a non-stiff problem never switches and
 // keeps dopri5's trajectory bit for bit; a collapsed step size says why.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Bounded memory and streamed output (issue #14, item 3; docs/simulation.md, "Sample grid and
 // streaming"):
 //  1. SimulationOptions::sample_sink receives every sample, bit for bit the sample that the

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Switch events (issue #16 item 6): the sign changes of a model's non-smooth functions (sign,
 // abs, heaviside, min, max, if) located as integrator events, the tie rule at a kink, the chatter
 // guard of a sliding mode, and SimulationOptions::switch_events. The references are closed forms:

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Interposes the C allocation functions (which Eigen and operator new both end in) and counts
 // the calls made while counting is on; the memory itself comes from glibc's __libc_* functions.
 #include "alloc_counter.hpp"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Counts heap allocations made by this process while counting is on (malloc interposition;
 // see alloc_counter.cpp). Not usable under AddressSanitizer, which owns malloc itself.
 #pragma once

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Helpers of the tests that run the `ukdyn` command as a process (simulation/test_interrupt.cpp,
 // simulation/test_stream.cpp): a fresh scratch directory, a file's text, and Command, a `ukdyn`
 // process with stdout to a file and stderr read through a pipe. The including target defines

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The closed chains of ../shared/reproducers/2026-11-28/gen_chain.py as model-file text: N uniform
 // planar rods (total length 2 m, 1 kg/m) on revolute joints, pinned at (0, 0), along a gentle
 // bend (not straight), at rest under gravity; the last tip pinned to the ground where it starts

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The solution of the error dynamics e'' + 2 zeta omega e' + omega² e = 0 from e(0) = e0,
 // e'(0) = e1 (zeta <= 1): what a tracking controller must reproduce.
 #pragma once

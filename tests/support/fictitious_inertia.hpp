@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The fictitious-inertia formulation the quaternion bodies used before the singular mass matrix
 // (Udwadia & Schutte 2010): every 4 × 4 quaternion block M_u gets + 4 J0 u uᵀ and Q gets
 // − 4 J0 |u'|² u, with the system's own M, Q and constraints otherwise. It has a regular

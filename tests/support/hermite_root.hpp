@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Test support: the root of a sampled function between two samples, located on its cubic
 // Hermite interpolant (values and derivatives at both ends), as the tests find turning points
 // and crossing times of a trajectory.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Test support: the output expression `name` of a model file (`output: expressions:`) at every
 // sample of a run, evaluated by the library's own evaluate_output_expressions.
 #pragma once

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // x'' = −x (unit mass and stiffness), one coordinate: x = cos t from (1, 0), energy ½ x'² + ½ x².
 #pragma once
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The headers nearly every test source includes, precompiled once for all test programs
 // (tests/CMakeLists.txt, UKDYN_PCH): GoogleTest, Eigen's dense modules and ukdyn's public API.
 // Each test source still includes what it uses; this file only makes that cheap.

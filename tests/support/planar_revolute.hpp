@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Test and benchmark support: a planar revolute joint with local columns (the input of the
 // sparse engine), written out by hand so that the engine's tests do not depend on
 // multibody/multibody.hpp.

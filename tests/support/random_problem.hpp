@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Reproducible random constrained problems for tests and benchmarks.
 #pragma once
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The slider-crank of the multibody validation (issue #5): crank r turning at the prescribed
 // rate w, rod l, slider on the x axis; closed-form kinematics and the energy by hand, for the
 // C++ test (multibody/test_multibody.cpp) and the model-file test

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // A model file read on a thread with a stack of a given size (the readers' nesting checks against
 // the actual stack: tests/modelfile/test_yaml_nesting.cpp, test_expression_nesting.cpp).
 #pragma once

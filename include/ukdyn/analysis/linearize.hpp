@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 /// @file analysis/linearize.hpp
 /// Linear models of a constrained system on its constraint manifold, and its equilibria and
 /// steady motions (issue #32; the theory is in docs/linearize.md).

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 /// @file control/control.hpp
 /// Exact tracking control from the fundamental equation (section 7 of
 /// docs/theory.md; docs/control.md has the derivations).

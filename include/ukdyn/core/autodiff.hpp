@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 /// @file core/autodiff.hpp
 /// Holonomic and nonholonomic constraints written once as generic callables and differentiated
 /// exactly by forward-mode automatic differentiation (Eigen's AutoDiff module).

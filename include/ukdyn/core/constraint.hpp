@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 /// @file core/constraint.hpp
 /// A named constraint of any kind, and the interface its mathematics implements.
 ///

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 /// @file format.hpp
 /// Text of numbers and lists in messages: the one formatter of the library, its command line
 /// and its Python module, so that every message prints numbers the same way.

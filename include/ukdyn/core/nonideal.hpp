@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 /// @file core/nonideal.hpp
 /// Non-ideal constraints: the work vector C of eq. (7), supplied by the modeller.
 ///

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 /// @file core/status.hpp
 /// Outcome of an evaluation and the exception that front ends may turn it into.
 ///

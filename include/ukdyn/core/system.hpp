@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 /// @file core/system.hpp
 /// The description of a constrained mechanical system (MuJoCo's mjModel, Pinocchio's Model):
 /// built once by SystemBuilder, then never changed by any algorithm. Everything an evaluation

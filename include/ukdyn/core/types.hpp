@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 /// @file core/types.hpp
 /// Basic types shared by every part of ukdyn.
 ///

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 /// @file dynamics/forward.hpp
 /// Forward dynamics of a constrained system: the fundamental equation as a pipeline of stages,
 /// each callable on its own and each in its own source file:

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 /// @file dynamics/projection.hpp
 /// Constraint violations and their removal (drift control), as stages on a Workspace.
 ///

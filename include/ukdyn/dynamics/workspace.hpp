@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 /// @file dynamics/workspace.hpp
 /// Everything one evaluation of the fundamental equation writes (MuJoCo's mjData, Pinocchio's
 /// Data). Made once from a System, it owns every buffer, so evaluations never allocate.

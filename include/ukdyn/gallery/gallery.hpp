@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 /// @file gallery/gallery.hpp
 /// Built-in example systems with known answers: closed-form solutions, published benchmark
 /// values, or the shared benchmark problems of bench/data/. Each example is a ready

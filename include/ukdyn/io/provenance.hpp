@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 /// @file io/provenance.hpp
 /// What a run was made from, so that its directory says how to make it again: the model (name,
 /// file, SHA-256 of its text), every parameter with the overridden ones marked, the command line,

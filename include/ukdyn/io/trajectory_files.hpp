@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 /// @file io/trajectory_files.hpp
 /// Writers of trajectories: CSV (one row per sample), a JSON run summary, and HDF5 for long runs.
 ///

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 /// @file linalg/decomposition.hpp
 /// The decomposition behind the fundamental equation, in the shape of Eigen's decompositions.
 ///

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 /// @file linalg/sparse.hpp
 /// The sparse engine: the fundamental equation for a block-diagonal M and a sparse A (bodies in
 /// absolute coordinates joined by joints), at a cost that grows linearly with the number of

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 /// @file modelfile/expression.hpp
 /// Symbolic expressions of the model language, differentiated exactly with GiNaC and compiled
 /// once into a fast, allocation-free evaluator.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 /// @file modelfile/model.hpp
 /// Model files: a mechanical system written down in YAML with symbolic expressions (see
 /// docs/model-format.md), turned into a System, an initial state and simulation settings.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 /// @file modelfile/run.hpp
 /// Running a model as `ukdyn run` does, for every front end (the command, the Python module):
 /// the simulation — under its controller when the model file has a `control:` section — and

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 /// @file modelfile/visual.hpp
 /// How a model is drawn by the browser viewer (`ukdyn run --viewer`, Python's Result.show();
 /// docs/viewer.md): the `visual:` entries of a model file, and the scene description the page

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 /// @file multibody/multibody.hpp
 /// Bodies, joints and force elements: a modelling layer that produces an ordinary System.
 ///

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 /// @file multibody/tree.hpp
 /// A kinematic tree in joint coordinates as ukdyn's unconstrained system M(q) q'' = Q(q, q', t)
 /// (Featherstone, *Rigid Body Dynamics Algorithms*, 2008; Pinocchio's Model/Data, MuJoCo's

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 /// @file reference/reference.hpp
 /// Independent algorithms kept for tests and benchmarks: the textbook formula of the paper and
 /// a Lagrange-multiplier (KKT) solve. Neither is used by default; both allocate.

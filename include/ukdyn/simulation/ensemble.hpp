@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 /// @file simulation/ensemble.hpp
 /// Ensembles (docs/ensembles.md): many runs of one model file — a parameter sweep, a Monte Carlo
 /// study — on a pool of threads, one row of results per sample. Each sample is the run `ukdyn

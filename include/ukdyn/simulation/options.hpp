@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 /// @file simulation/options.hpp
 /// The one table of simulation options: every setting of SimulationOptions that a user can give
 /// by name (its name, type, default, range and doc line), from which the model file's

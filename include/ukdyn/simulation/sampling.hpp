@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 /// @file simulation/sampling.hpp
 /// The sample points of an ensemble (docs/ensembles.md): grids (the Cartesian product of axes),
 /// random draws (uniform, normal, log-uniform; plain or Latin hypercube) and both together, from

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 /// @file simulation/simulate.hpp
 /// Simulation over time: integrate the fundamental equation from an initial state, with drift
 /// control, switching at constraint intervals, and a trajectory of everything a user needs to

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // M(q) of a tree by the composite-rigid-body algorithm (Featherstone 2008, algorithm 6.2).
 #include <type_traits>
 

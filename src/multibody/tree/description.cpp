@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The description of a kinematic tree: checks, link order, coordinate offsets, spatial inertias.
 #include <cmath>
 #include <stdexcept>

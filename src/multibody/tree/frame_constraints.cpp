@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Constraints and requirements between tree frames, built on frame_jacobian and
 // frame_bias_acceleration: a point loop closure (3 rows), a distance loop closure (1 row), and a
 // task-space pose requirement (6 rows) for exact tracking control.

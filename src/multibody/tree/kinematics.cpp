@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Forward kinematics of a tree: joint transforms X_i(q), subspaces S_i(q), world poses; the
 // frame Jacobian of a link point.
 #include <stdexcept>

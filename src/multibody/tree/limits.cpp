@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // URDF's joint and effort limits checked over a run's samples: which joint left its limit,
 // when first, and by how much at worst (reported, never clipped).
 #include <cmath>

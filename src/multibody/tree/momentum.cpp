@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Centre of mass and momentum of a tree: p_WG, its Jacobian J_G, and [k_O; l] from an outward
 // velocity pass (Featherstone 2008, section 2.13: h_i = I_i v_i, summed in world coordinates).
 #include <stdexcept>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Inverse dynamics and bias forces of a tree by recursive Newton–Euler (Featherstone 2008,
 // algorithm 5.1), gravity as a fictitious acceleration of the world; the same outward pass
 // gives a frame's velocity-product acceleration J' q'.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Spatial (6-D) algebra of the tree passes in fixed-size Eigen types (Featherstone's notation,
 // motion [ω; v] and force [n; f]), and the joint models: X_i(q), S_i(q) and c_i = S_i' q'.
 #pragma once

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // A tree as ukdyn's unconstrained system: M from the CRBA, Q = τ − D q' − h from the RNEA.
 #include <cmath>
 #include <memory>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // URDF import through urdfdom (Debian's liburdfdom-dev): the file's links and joints as a Tree.
 #include <filesystem>
 #include <mutex>
