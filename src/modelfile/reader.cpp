@@ -513,18 +513,22 @@ void Reader::add_switches(SystemBuilder& builder) {
       });
 }
 
-Model Reader::read_generalized(const YAML::Node& root) {
-  read_coordinates(root);
-  // the named constraints (a name given twice is refused by read_constraints)
-  std::vector<std::string> cnames;
+std::vector<std::string> Reader::constraint_names(const YAML::Node& root) {
+  std::vector<std::string> names;
   if (const YAML::Node cs = root["constraints"]; cs && cs.IsSequence()) {
     for (const auto& c : cs) {
       if (c.IsMap() && c["name"] && is_identifier(c["name"].Scalar()) &&
-          std::find(cnames.begin(), cnames.end(), c["name"].Scalar()) == cnames.end())
-        cnames.push_back(c["name"].Scalar());
+          std::find(names.begin(), names.end(), c["name"].Scalar()) == names.end())
+        names.push_back(c["name"].Scalar());
     }
   }
-  make_expression_set(root, cnames);
+  return names;
+}
+
+Model Reader::read_generalized(const YAML::Node& root) {
+  read_coordinates(root);
+  // the named constraints (a name given twice is refused by read_constraints)
+  make_expression_set(root, constraint_names(root));
   SystemBuilder builder(coordinates_);
   read_dynamics(root, builder);
   read_constraints(root, builder);

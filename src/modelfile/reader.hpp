@@ -326,6 +326,9 @@ class Reader {
   Model read_generalized(const YAML::Node& root);
   // the expression inputs [q; q'; t; N_c …; lambda_c …] over coordinates_ and velocities_,
   // with the parameters (and pi) as constants; `cnames`: the named constraints
+  // the names of the constraints: section's entries, each once, in order (a name given twice is
+  // refused by read_constraints), for the expression set's constraint functions
+  static std::vector<std::string> constraint_names(const YAML::Node& root);
   void make_expression_set(const YAML::Node& root, const std::vector<std::string>& cnames);
   [[noreturn]] void fail(const YAML::Node& at, const std::string& message,
                          const std::string& hint = "") const {

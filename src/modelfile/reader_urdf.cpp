@@ -126,15 +126,7 @@ Model Reader::read_robot(const YAML::Node& root) {
     chain_.emplace_back(id, id + "_dot");
   }
   // the named constraints (between joints, written as expressions)
-  std::vector<std::string> cnames;
-  if (const YAML::Node cs = root["constraints"]; cs && cs.IsSequence()) {
-    for (const auto& c : cs) {
-      if (c.IsMap() && c["name"] && is_identifier(c["name"].Scalar()) &&
-          std::find(cnames.begin(), cnames.end(), c["name"].Scalar()) == cnames.end())
-        cnames.push_back(c["name"].Scalar());
-    }
-  }
-  make_expression_set(root, cnames);
+  make_expression_set(root, constraint_names(root));
   // gravity: the URDF's world says nothing of it
   if (const YAML::Node g = r["gravity"]) {
     if (!g.IsSequence() || g.size() != 3)
