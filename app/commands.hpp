@@ -61,6 +61,10 @@ std::map<std::string, double> parse_overrides(const std::vector<std::string>& se
 /// them, or an empty list — before anything runs.
 void check_plot_formats(const std::vector<std::string>& formats);
 
+/// Checks --plot-style (screen, paper). @throws UsageError naming the styles, with a
+/// did-you-mean.
+void check_plot_style(const std::string& style);
+
 /// Loads the model of `source`. @throws UsageError (neither or both of path and example, an
 /// unknown example, --set of a parameter the model does not declare), ModelError (the model
 /// file).
@@ -83,8 +87,11 @@ struct RunArguments {
   bool plots = true;  ///< false with --no-plots
   /// --viewer / --no-viewer: write animation.html (unset: for models with bodies or visual:)
   std::optional<bool> viewer;
-  /// --plot-format: the plots' file formats, "png", "pdf" and/or "svg"
-  std::vector<std::string> plot_formats = {"png"};
+  /// --plot-format: the plots' file formats, "png", "pdf" and/or "svg" (empty: not given — png,
+  /// or pdf for the paper style)
+  std::vector<std::string> plot_formats;
+  /// --plot-style: "screen" (the default) or "paper" (a journal's column: 3.5 in, 8 pt)
+  std::string plot_style = "screen";
   /// --format: the trajectory's files, "csv" (trajectory.csv) and/or "hdf5" (trajectory.h5)
   std::vector<std::string> formats = {"csv"};
   /// --from-summary FILE: the summary.json of an earlier run to make again (its model, parameter

@@ -1,7 +1,7 @@
 # bash completion for ukdyn, installed as /usr/share/bash-completion/completions/ukdyn.
 # Subcommands, each subcommand's flags (read from `ukdyn SUB --help`, so they are always the
-# command's own), example names (from `ukdyn examples`), the values of --format and
-# --plot-format, directories after -o, and model files (*.yaml, *.yml, *.urdf) elsewhere.
+# command's own), example names (from `ukdyn examples`), the values of --format,
+# --plot-format and --plot-style, directories after -o, and model files (*.yaml, *.yml, *.urdf) elsewhere.
 _ukdyn() {
   local cur=${COMP_WORDS[COMP_CWORD]} prev=${COMP_WORDS[COMP_CWORD - 1]}
   local cmd=${COMP_WORDS[0]}
@@ -24,6 +24,9 @@ _ukdyn() {
       return ;;
     --plot-format)
       mapfile -t COMPREPLY < <(compgen -W "png pdf svg png,pdf png,svg" -- "$cur")
+      return ;;
+    --plot-style)
+      mapfile -t COMPREPLY < <(compgen -W "screen paper" -- "$cur")
       return ;;
   esac
   if [[ $sub == examples ]]; then

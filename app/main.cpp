@@ -179,9 +179,14 @@ int main(int argc, char** argv) {
   run_cmd
       ->add_option("--plot-format", run.plot_formats,
                    "the plots' file formats: png, pdf, svg or a list (--plot-format png,pdf; "
-                   "default png)")
+                   "default png, or pdf with --plot-style paper)")
       ->delimiter(',')
       ->type_name("LIST");
+  run_cmd
+      ->add_option("--plot-style", run.plot_style,
+                   "the plots' style: screen (default) or paper (a journal's single column: "
+                   "3.5 in wide, 8 pt text, legends inside the panels)")
+      ->type_name("STYLE");
   run_cmd->add_flag("--no-plots", no_plots,
                     "write no plots (plots need /usr/bin/python3 "
                     "with matplotlib, or $UKDYN_PYTHON)");

@@ -239,6 +239,13 @@ void check_plot_formats(const std::vector<std::string>& formats) {
   if (formats.empty()) throw UsageError("--plot-format: give png, pdf, svg or a list");
 }
 
+void check_plot_style(const std::string& style) {
+  if (style != "screen" && style != "paper") {
+    throw UsageError("--plot-style " + style + ": the plot styles are screen and paper" +
+                     did_you_mean(style, {"screen", "paper"}));
+  }
+}
+
 TableFormats parse_formats(const std::vector<std::string>& formats) {
   TableFormats out;
   for (const std::string& f : formats) {

@@ -29,4 +29,5 @@ expect "pendulum pendulum_loop pendulum_on_rough_block" ukdyn run --example pend
 expect "double_four_bar double_four_bar_bodies double_four_bar_bodies_redundant double_four_bar_redundant" \
   ukdyn examples double_f
 expect "svg" ukdyn sweep --plot-format s
+expect "paper" ukdyn run --plot-style p
 echo "completion ok"

@@ -143,7 +143,19 @@ def test_constraint_forces_and_violation(pendulum):
         for line in data_lines(ax):
             y = np.asarray(line.get_ydata(), dtype=float)
             assert np.all(np.isnan(y) | (y > 0))  # exact zeros are not drawn at a floor
-    assert ylabels(violation)[0] == "|position violation|"
+    assert ylabels(violation)[0] == "max |position violation|"
+    assert "running maximum" in violation._suptitle.get_text()
+    # each line is that constraint's running maximum of |violation|: it never falls, and it is
+    # the largest |sample| so far, checked against the trajectory's own column
+    table = pendulum
+    for line in data_lines(violation.axes[0]):
+        y = np.asarray(line.get_ydata(), dtype=float)
+        drawn = ~np.isnan(y)
+        assert drawn.sum() > 10
+        assert np.all(np.diff(y[drawn]) >= 0)
+        expected = np.maximum.accumulate(np.abs(np.asarray(table["violation." + line.get_label()])))
+        np.testing.assert_array_equal(y[drawn], expected[drawn])
+        assert line.get_drawstyle() == "steps-post"
     # one Axes (Result.plot_*): the same drawing code
     ax = pendulum.plot_forces()
     assert ax.get_ylabel() == "generalized constraint force [N]"
@@ -245,3 +257,63 @@ def test_command_refuses_an_unknown_plot_format(cli, out_dir):
     assert run.returncode == 2
     assert "--plot-format gif: the plot formats are png, pdf and svg" in run.stderr
     assert not os.path.exists(out_dir / "trajectory.csv")
+
+
+def test_running_max_skips_nan_and_rises():
+    got = plotting.running_max([0.0, -2e-12, np.nan, 1e-13, -5e-12, 0.0])
+    np.testing.assert_array_equal(got, [0.0, 2e-12, 2e-12, 2e-12, 5e-12, 5e-12])
+    assert plotting.running_max([]).size == 0
+
+
+def test_paper_style_is_a_single_column_in_8_points(pendulum):
+    """``style="paper"``: every figure 3.5 in wide, its text at 8 pt or less (ticks 7, legends 6),
+    legends inside the panels; the screen style is unchanged afterwards (9 in, rc restored)."""
+    default_size = matplotlib.rcParams["font.size"]
+    figs = pendulum.figures(style="paper")
+    assert set(figs) >= {"coordinates", "violation", "energy"}
+    for stem, fig in figs.items():
+        width, height = fig.get_size_inches()
+        assert width == pytest.approx(3.5, abs=1e-12), stem
+        assert 1.0 < height < 6.0, stem
+        for ax in fig.axes:
+            assert ax.yaxis.label.get_fontsize() == pytest.approx(8.0), stem
+            assert all(t.get_fontsize() == pytest.approx(7.0) for t in ax.get_xticklabels())
+            legend = ax.get_legend()
+            if legend is not None:  # inside the panel: anchored to the Axes' own box
+                assert legend.get_bbox_to_anchor().bounds == ax.bbox.bounds, stem
+                assert all(t.get_fontsize() == pytest.approx(6.0) for t in legend.get_texts())
+    plt.close("all")
+    assert matplotlib.rcParams["font.size"] == default_size
+    screen = pendulum.figures()["coordinates"]
+    assert screen.get_size_inches()[0] == pytest.approx(9.0, abs=1e-12)
+    plt.close("all")
+    with pytest.raises(ValueError, match="unknown plot style 'papr': the styles are screen, paper"):
+        pendulum.save_plots("unused", style="papr")
+    assert not os.path.exists("unused")
+
+
+def test_paper_style_writes_vector_files(pendulum, tmp_path):
+    """save_plots(style="paper") writes PDF by default: a vector file (its text as fonts, Type 42,
+    not as pixels), and no PNG."""
+    written = pendulum.save_plots(tmp_path, style="paper")
+    assert sorted(os.path.basename(p) for p in written) == [
+        "constraint_forces.pdf", "coordinates.pdf", "energy.pdf", "outputs.pdf", "violation.pdf"]
+    pdf = (tmp_path / "coordinates.pdf").read_bytes()
+    assert pdf.startswith(b"%PDF") and b"/FontFile2" in pdf and b"/Subtype /Image" not in pdf
+
+
+def test_command_plot_style_paper(cli, out_dir):
+    run = subprocess.run([cli, "run", "--example", "pendulum", "--t-end", "0.3", "-o",
+                          str(out_dir / "paper"), "--plot-style", "paper"],
+                         capture_output=True, text=True)
+    assert run.returncode == 0, run.stderr
+    files = set(os.listdir(out_dir / "paper")) - {".ukdyn.lock"}
+    assert {"coordinates.pdf", "violation.pdf", "energy.pdf"} <= files
+    assert not any(f.endswith(".png") for f in files)
+    bad = subprocess.run([cli, "run", "--example", "pendulum", "--t-end", "0.3", "-o",
+                          str(out_dir / "bad"), "--plot-style", "papr"],
+                         capture_output=True, text=True)
+    assert bad.returncode == 2
+    assert "--plot-style papr: the plot styles are screen and paper (did you mean 'paper'?)" \
+        in bad.stderr
+    assert not os.path.exists(out_dir / "bad" / "trajectory.csv")

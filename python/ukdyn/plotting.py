@@ -5,9 +5,10 @@ the Python module.
 
 The command embeds this file and runs it as a script on the run's directory::
 
-    plotting.py TRAJECTORY.csv OUTPUT_DIR [FORMATS]
+    plotting.py TRAJECTORY.csv OUTPUT_DIR [FORMATS [STYLE]]
 
-(``FORMATS``: ``png``, ``pdf``, ``svg`` or a comma-separated list of them; ``png`` by default).
+(``FORMATS``: ``png``, ``pdf``, ``svg`` or a comma-separated list of them; ``png`` by default;
+``STYLE``: ``screen``, the default, or ``paper`` — see :data:`STYLES`).
 It reads ``summary.json`` beside the CSV for the model's name and the coordinates' units, and
 writes, for each format, ``coordinates``, ``constraint_forces`` and ``violation`` (only when the
 model has constraints), ``energy``, and when the run has them ``control``, ``bodies`` (multibody
@@ -54,10 +55,52 @@ __all__ = [
     "line_style", "coordinates_figure", "forces_figure", "violation_figure", "energy_figure",
     "control_figure", "bodies_figure", "outputs_figure", "figures", "save", "write_figures",
     "parse_formats", "draw_columns", "draw_forces", "draw_violation", "draw_energy", "main",
+    "STYLES", "style",
 ]
 
 #: the file formats the figures can be written in (``--plot-format``)
 FORMATS = ("png", "pdf", "svg")
+
+#: the figure styles (``--plot-style``, ``style=``): ``screen`` (9 in wide, matplotlib's fonts,
+#: legends beside the panels) and ``paper``, a journal's single column: 3.5 in wide, 8 pt text,
+#: thin lines, legends inside the panels; pick a vector format with it (``pdf``, ``svg``: the
+#: command writes PDF for ``paper`` unless ``--plot-format`` says otherwise)
+STYLES = {
+    "screen": {"width": 9.0, "row_height": 2.6, "legend_outside": True, "rc": {}},
+    "paper": {"width": 3.5, "row_height": 1.55, "legend_outside": False,
+              "rc": {"font.size": 8, "axes.titlesize": 8, "axes.labelsize": 8,
+                     "xtick.labelsize": 7, "ytick.labelsize": 7, "legend.fontsize": 6,
+                     "figure.titlesize": 8, "lines.linewidth": 0.8, "lines.markersize": 2.5,
+                     "axes.linewidth": 0.5, "grid.linewidth": 0.4, "pdf.fonttype": 42,
+                     "svg.fonttype": "none"}},
+}
+_style = STYLES["screen"]
+
+
+class style:
+    """``with style("paper"): ...`` draws the figures made inside in that style (:data:`STYLES`);
+    raises ValueError naming the styles for an unknown one."""
+
+    def __init__(self, name):
+        if name not in STYLES:
+            raise ValueError("unknown plot style '%s': the styles are %s"
+                             % (name, ", ".join(STYLES)))
+        self.name = name
+
+    def __enter__(self):
+        global _style
+        import matplotlib
+        self._saved = _style
+        self._rc = matplotlib.rc_context(STYLES[self.name]["rc"])
+        self._rc.__enter__()
+        _style = STYLES[self.name]
+        return self
+
+    def __exit__(self, *exc):
+        global _style
+        _style = self._saved
+        return self._rc.__exit__(*exc)
+
 
 #: the work channels of the energy balance (io/trajectory_files.hpp), in CSV order, with labels
 WORKS = (("work_nonideal", "work of the non-ideal forces"),
@@ -225,10 +268,14 @@ def _plt():
     return plt
 
 
-def _figure(title, meta, rows, height=2.6, width=9.0):
-    """A figure of `rows` panels over a shared time axis, titled with the model's name."""
+def _figure(title, meta, rows, height=None, width=None):
+    """A figure of `rows` panels over a shared time axis, titled with the model's name, in the
+    current style's size unless `height` (per panel) and `width` are given."""
     plt = _plt()
-    fig, axes = plt.subplots(rows, 1, figsize=(width, height * rows + 0.8), sharex=True,
+    width = width or _style["width"]
+    height = height or _style["row_height"]
+    fig, axes = plt.subplots(rows, 1, figsize=(width, height * rows + 0.8 * height / 2.6),
+                             sharex=True,
                              squeeze=False, layout="constrained")
     fig.suptitle(_title(title, meta))
     return fig, [a[0] for a in axes]
@@ -241,7 +288,10 @@ def _title(title, meta):
 def _legend(ax, title=None):
     """A legend beside the panel (outside the data), in columns when it is long."""
     handles, labels = ax.get_legend_handles_labels()
-    if handles:
+    if handles and not _style["legend_outside"]:
+        ax.legend(handles, labels, loc="best", ncol=1 + len(handles) // 6, title=title,
+                  frameon=False, handlelength=1.5, borderaxespad=0.2, columnspacing=0.8)
+    elif handles:
         ax.legend(handles, labels, loc="upper left", bbox_to_anchor=(1.01, 1.0),
                   fontsize="small", ncol=1 + len(handles) // 16, title=title,
                   title_fontsize="small", borderaxespad=0.0)
@@ -330,28 +380,37 @@ def _violation_columns(table, prefix):
     return [(h[len(prefix):], h) for h in table.names if h.startswith(prefix)]
 
 
+def running_max(values):
+    """max(|v₀|, …, |v_k|) at each sample k (NaN samples skipped): the largest violation so far,
+    a staircase that only rises, where the samples themselves jump over decades at each step."""
+    a = np.abs(np.asarray(values, dtype=float))
+    return np.fmax.accumulate(np.where(np.isnan(a), -np.inf, a)) if a.size else a
+
+
 def draw_violation(ax, table, meta, prefix="violation."):
-    """|violation| per constraint on a log scale; exact zeros are not drawn (a short note on the
-    panel says so) rather than put at an arbitrary floor. `prefix` ``violation_velocity.``
-    draws the velocity-level violations."""
+    """The running maximum of |violation| per constraint (:func:`running_max`) on a log scale,
+    one line each; while it is exactly zero it is not drawn (a short note on the panel says so)
+    rather than put at an arbitrary floor. `prefix` ``violation_velocity.`` draws the
+    velocity-level violations."""
     drawn = 0
     zeros = False
     for i, (label, h) in enumerate(_violation_columns(table, prefix)):
-        values = _positive(table[h])
+        values = running_max(table[h])
+        values = np.where(values > VIOLATION_FLOOR, values, np.nan)
         zeros = zeros or bool(np.any(np.isnan(values)))
+        if np.all(np.isnan(values)):
+            continue
         style = line_style(drawn)
-        # points: a sample between two exact zeros has no line to either neighbour
-        style.update(marker=style.get("marker") or ".", markersize=2.5, markevery=None,
-                     rasterized=len(values) > 5000)  # (PDF, SVG: no 10⁵ vector markers)
+        style.update(drawstyle="steps-post", markevery=0.1 if style.get("marker") else None)
         ax.plot(table["t"], values, label=label, **style)
         drawn += 1
     ax.set_yscale("log")
     what = "position" if prefix == "violation." else "velocity"
-    ax.set_ylabel("|%s violation|" % what)
+    ax.set_ylabel("max |%s violation|" % what)  # so far: the title says running maximum
     ax.set_xlabel("t [s]")
     if zeros:
-        ax.text(0.01, 0.02, "exact zeros not drawn", transform=ax.transAxes, fontsize="x-small",
-                color="0.35")
+        ax.text(0.01, 0.02, "exactly zero where not drawn", transform=ax.transAxes,
+                fontsize="x-small", color="0.35")
     ax.grid(True, alpha=0.3)
     _legend(ax)
     return ax
@@ -442,7 +501,7 @@ def violation_figure(table, meta=None):
                      for _, h in _violation_columns(table, p))]
     if not panels:
         return None
-    fig, axes = _figure("constraint violation", meta, len(panels))
+    fig, axes = _figure("constraint violation (running maximum)", meta, len(panels))
     for ax, prefix in zip(axes, panels):
         draw_violation(ax, table, meta, prefix)
         ax.set_xlabel("")
@@ -487,7 +546,7 @@ def control_figure(table, meta=None):
                 if "Qc_control." + c in table and _nonzero(table["Qc_control." + c])]
     force_groups = _groups(meta, actuated, lambda c: force_unit(coordinate_unit(meta, c)))
     panels = (1 if rows else 0) + (1 if desired else 0) + len(force_groups) + 3
-    fig, axes = _figure("control", meta, panels, height=2.2)
+    fig, axes = _figure("control", meta, panels, height=2.2 * _style["row_height"] / 2.6)
     t = table["t"]
     k = 0
     if rows:
@@ -560,8 +619,14 @@ def bodies_figure(table, meta=None):
     planar = all(p for _, p in bodies)
     views = [("x", "y")] if planar else [("x", "y"), ("x", "z"), ("y", "z")]
     plt = _plt()
+    k = _style["width"] / 9.0  # the screen sizes below, scaled to the style's width
     if planar:
-        fig, axes = plt.subplots(1, 1, figsize=(7.5, 6.0), squeeze=False, layout="constrained")
+        fig, axes = plt.subplots(1, 1, figsize=(7.5 * k, 6.0 * k), squeeze=False,
+                                 layout="constrained")
+    elif k < 1:  # a column: the three views one above the other
+        fig, axes = plt.subplots(3, 1, figsize=(_style["width"], 3 * _style["width"]),
+                                 squeeze=False, layout="constrained")
+        axes = axes.T
     else:
         fig, axes = plt.subplots(1, 3, figsize=(14.0, 5.0), squeeze=False, layout="constrained")
     axes = list(axes[0])
@@ -611,16 +676,17 @@ FIGURES = (("coordinates", coordinates_figure), ("constraint_forces", forces_fig
            ("outputs", outputs_figure))
 
 
-def figures(table, meta=None):
+def figures(table, meta=None, style_name="screen"):
     """Every figure that applies to the run, by file stem (coordinates, constraint_forces,
     violation, energy, control, bodies, outputs): a dict of matplotlib Figures; a figure
-    without data is left out, never drawn empty."""
+    without data is left out, never drawn empty. `style_name`: one of :data:`STYLES`."""
     meta = metadata(table, meta)
     out = {}
-    for stem, make in FIGURES:
-        fig = make(table, meta)
-        if fig is not None:
-            out[stem] = fig
+    with style(style_name):
+        for stem, make in FIGURES:
+            fig = make(table, meta)
+            if fig is not None:
+                out[stem] = fig
     return out
 
 
@@ -694,32 +760,37 @@ def save(fig, path, fmt=None):
     write_replacing(path, lambda f: fig.savefig(f, dpi=110, format=fmt))
 
 
-def write_figures(table, meta, directory, formats=("png",), close=True):
+def write_figures(table, meta, directory, formats=("png",), close=True, style_name="screen"):
     """Writes every figure of :func:`figures` into `directory` as STEM.FORMAT for each format
-    (``png``, ``pdf``, ``svg``); returns the paths written. With `close`, the figures are closed
-    afterwards."""
+    (``png``, ``pdf``, ``svg``) in the style `style_name` (:data:`STYLES`); returns the paths
+    written. With `close`, the figures are closed afterwards."""
     formats = parse_formats(formats)
     written = []
-    for stem, fig in figures(table, meta).items():
-        try:
-            for fmt in formats:
-                path = os.path.join(directory, "%s.%s" % (stem, fmt))
-                save(fig, path, fmt)
-                written.append(path)
-        finally:
-            if close:
-                _plt().close(fig)
+    with style(style_name):  # (savefig reads some rc settings too: the fonts' types)
+        for stem, fig in figures(table, meta, style_name).items():
+            try:
+                for fmt in formats:
+                    path = os.path.join(directory, "%s.%s" % (stem, fmt))
+                    save(fig, path, fmt)
+                    written.append(path)
+            finally:
+                if close:
+                    _plt().close(fig)
     return written
 
 
 def main(argv=None):
-    """The command: plotting.py TRAJECTORY.csv OUTPUT_DIR [FORMATS]."""
+    """The command: plotting.py TRAJECTORY.csv OUTPUT_DIR [FORMATS [STYLE]]."""
     argv = sys.argv[1:] if argv is None else argv
-    if len(argv) not in (2, 3):
-        sys.stderr.write("usage: plotting.py TRAJECTORY.csv OUTPUT_DIR [png,pdf,svg]\n")
+    if len(argv) not in (2, 3, 4):
+        sys.stderr.write("usage: plotting.py TRAJECTORY.csv OUTPUT_DIR [png,pdf,svg [screen|paper]]\n")
         return 2
+    style_name = argv[3] if len(argv) == 4 else "screen"
     try:
-        formats = parse_formats(argv[2] if len(argv) == 3 else "png")
+        formats = parse_formats(argv[2] if len(argv) >= 3 else "png")
+        if style_name not in STYLES:
+            raise ValueError("unknown plot style '%s': the styles are %s"
+                             % (style_name, ", ".join(STYLES)))
     except ValueError as e:
         sys.stderr.write("plotting.py: %s\n" % e)
         return 2
@@ -734,7 +805,7 @@ def main(argv=None):
     if "t" not in table or len(table["t"]) == 0:
         return 0  # a run that recorded no sample: nothing to draw
     meta = read_summary(os.path.join(os.path.dirname(os.path.abspath(argv[0])), "summary.json"))
-    write_figures(table, meta, argv[1], formats)
+    write_figures(table, meta, argv[1], formats, style_name=style_name)
     return 0
 
 

@@ -317,24 +317,29 @@ class Result:
         return {"model": self.model_name, "coordinates": list(self.coordinates),
                 "units": dict(self.units)}
 
-    def figures(self) -> Dict[str, Any]:
+    def figures(self, style: str = "screen") -> Dict[str, Any]:
         """Every figure ``ukdyn run`` draws for this run, as matplotlib Figures by file stem:
         ``coordinates``, ``constraint_forces``, ``violation``, ``energy``, ``control``,
         ``bodies``, ``outputs`` — those that apply (a figure without data is left out).
-        Panels are grouped by unit, titles name the model (ukdyn/plotting.py)."""
+        Panels are grouped by unit, titles name the model (ukdyn/plotting.py). ``style``:
+        ``"screen"`` or ``"paper"`` (a single journal column: 3.5 in wide, 8 pt text; as
+        ``ukdyn run --plot-style paper``)."""
         from . import plotting
-        return plotting.figures(self, self.plot_metadata)
+        return plotting.figures(self, self.plot_metadata, style)
 
-    def save_plots(self, directory: str, formats: Any = ("png",)) -> List[str]:
+    def save_plots(self, directory: str, formats: Any = None, style: str = "screen") -> List[str]:
         """Writes :meth:`figures` into ``directory`` as ``ukdyn run`` does: STEM.FORMAT for each
-        of ``formats`` (``"png"``, ``"pdf"``, ``"svg"``, a list or ``"png,pdf"``), each file
-        whole or not at all; ``directory`` is created if missing (as by ``ukdyn run -o``).
-        Returns the paths written. Raises ValueError naming the formats for an unknown one."""
+        of ``formats`` (``"png"``, ``"pdf"``, ``"svg"``, a list or ``"png,pdf"``; by default
+        ``png``, or ``pdf`` for the ``paper`` style), each file whole or not at all;
+        ``directory`` is created if missing (as by ``ukdyn run -o``). Returns the paths written.
+        Raises ValueError naming the formats or styles for an unknown one."""
         from . import plotting
-        formats = plotting.parse_formats(formats)
+        formats = plotting.parse_formats(formats or ("pdf" if style == "paper" else "png"))
+        plotting.style(style)  # checks the name before any file is written
         directory = os.fspath(directory)
         os.makedirs(directory, exist_ok=True)
-        return plotting.write_figures(self, self.plot_metadata, directory, formats)
+        return plotting.write_figures(self, self.plot_metadata, directory, formats,
+                                      style_name=style)
 
     def plot(self, *columns: str, ax: Any = None, x: str = "t", **kwargs: Any) -> Any:
         """Plots columns against time (or against column ``x``) with matplotlib; without
@@ -356,8 +361,8 @@ class Result:
         return plotting.draw_forces(ax, self, self.plot_metadata)
 
     def plot_violation(self, ax: Any = None) -> Any:
-        """The constraint violations ``violation.*`` on a log scale (exact zeros are not
-        drawn). Returns the Axes."""
+        """The running maximum of each constraint's violation ``violation.*`` on a log scale
+        (while it is exactly zero it is not drawn). Returns the Axes."""
         from . import plotting
         if ax is None:
             _, ax = plotting._plt().subplots(layout="constrained")
