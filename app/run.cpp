@@ -60,8 +60,8 @@ void warn_duplicate_columns(const ModelRun& run) {
 // /usr/bin/python3 (or $UKDYN_PYTHON); returns the files written; a missing python or
 // matplotlib is a warning, a script that ran and failed (a full disk) an error: `failed` is set
 std::vector<fs::path> make_plots(const fs::path& csv, const fs::path& dir,
-                                 const std::vector<std::string>& formats,
-                                 const std::string& style, bool& failed) {
+                                 const std::vector<std::string>& formats, const std::string& style,
+                                 bool& failed) {
   const std::string python = python_interpreter();
   if (!is_executable(python)) {
     std::fprintf(stderr,
@@ -81,7 +81,8 @@ std::vector<fs::path> make_plots(const fs::path& csv, const fs::path& dir,
   const bool written = ::write(fd, text.data(), text.size()) == ssize_t(text.size());
   ::close(fd);
   const int code =
-      written ? run_program({python, script, csv.string(), dir.string(), join(formats, ","), style}) : -1;
+      written ? run_program({python, script, csv.string(), dir.string(), join(formats, ","), style})
+              : -1;
   fs::remove(script);
   if (code == kPlotNoMatplotlib) {
     std::fprintf(stderr,
@@ -331,7 +332,8 @@ int run_command(const RunArguments& given) {
   // (a plot or page whose generator ran and failed is a missing output: exit 1)
   bool output_failed = false;
   if (args.plots && csv) {
-    for (const auto& f : make_plots(csv_path, dir, args.plot_formats, args.plot_style, output_failed)) {
+    for (const auto& f :
+         make_plots(csv_path, dir, args.plot_formats, args.plot_style, output_failed)) {
       files.push_back(f);
     }
   }
