@@ -14,7 +14,7 @@ import sympy as sp
 from sympy import Matrix, cos, sin, sqrt
 
 # the benchmark's parameters, as the paper writes them (x forward, y right, z down)
-PARAMETERS = """w: 1.02, c: 0.08, lam: pi/10, g: 9.81, v: 5,
+PARAMETERS = """w: 1.02, c: 0.08, lam: pi/10, g: 9.81, v: 5, push: 0.5,
              rR: 0.3, mR: 2, IRxx: 0.0603, IRyy: 0.12,
              xB: 0.3, zB: -0.9, mB: 85, IBxx: 9.2, IByy: 11, IBzz: 2.8, IBxz: 2.4,
              xH: 0.9, zH: -0.7, mH: 4, IHxx: 0.05892, IHyy: 0.06, IHzz: 0.00708, IHxz: -0.00756,
@@ -118,7 +118,6 @@ def block(e, indent=4):
     return "\n".join(" " * indent + l for l in lines)
 
 
-HEADER = open(__file__.replace("_generate.py", "_header.txt")).read() if False else None
 print(f"""# SPDX-License-Identifier: BSD-3-Clause
 # Whipple bicycle benchmark (Meijaard, Papadopoulos, Ruina, Schwab 2007): nonlinear, rolling
 name: Whipple bicycle
@@ -137,11 +136,12 @@ name: Whipple bicycle
 # is a steady motion; its lean and steer (phi, delta, phi', delta') decouple from the cyclic
 # coordinates, and their four eigenvalues are those of Table 2 of the paper: self-stable for
 # 4.29238253634111 < v < 6.02426201538837 m/s (tests/analysis/test_whipple_bicycle.cpp):
-#   ukdyn linearize examples/models/whipple_bicycle.yaml --set v=5 \\
-#       --independent phi,delta,theta_R,x,y,psi,theta_F --states phi,delta,phi_dot,delta_dot
-# The run: at v = 5 m/s (inside the stable range) pushed sideways (lean rate 0.5 rad/s), the
-# weave decays (eigenvalues -0.775 ± 4.465i, -0.323, -14.08) and the bicycle runs on upright on
-# a new heading.
+#   ukdyn linearize examples/models/whipple_bicycle.yaml --set v=5 --set push=0 \\
+#       --independent x,y,psi,phi,delta,theta_R,theta_F \\
+#       --independent-velocities phi,delta,theta_R --states phi,delta,phi_dot,delta_dot
+# (push = 0: the initial state is the straight run). The run: at v = 5 m/s (inside the stable
+# range) pushed sideways (lean rate `push`, 0.5 rad/s), the weave decays (eigenvalues
+# -0.775 ± 4.465i, -0.323, -14.08) and the bicycle runs on upright on a new heading.
 parameters: {{{PARAMETERS}}}
 coordinates: [{", ".join(NAMES)}]
 units: {{x: m, y: m, psi: rad, phi: rad, theta: rad, delta: rad, theta_R: rad, theta_F: rad}}
@@ -165,7 +165,7 @@ constraints:
 {block(vPF[1], 8)}
 initial:
   q: {{}}
-  q_dot: {{x: v, theta_R: v/rR, theta_F: v/rF, phi: 0.5}}
+  q_dot: {{x: v, theta_R: v/rR, theta_F: v/rF, phi: push}}
   project: {{keep: [x_dot, phi_dot, theta_R_dot]}}
 simulate: {{t_end: 5, integrator: dopri5, rtol: 1e-10, atol: 1e-12}}
 output:
