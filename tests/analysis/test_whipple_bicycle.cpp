@@ -87,13 +87,14 @@ const std::vector<Published> kTable2 = {
       {0.16105338653172, 0}}},
 };
 
-TEST(WhippleBicycle, EigenvaluesMatchTable2ToEightDigits) {
+TEST(WhippleBicycle, EigenvaluesMatchTable2ToElevenDigits) {
   for (const auto& row : kTable2) {
     const std::vector<cd> got = eigenvalues_at(row.v);
     ASSERT_EQ(got.size(), 4u) << "v = " << row.v;
     for (std::size_t k = 0; k < 4; ++k) {
-      // 8 significant digits of each eigenvalue: |got − published| <= 5e-9 |published|
-      const double tol = 5e-9 * std::abs(row.lambda[k]);
+      // the issue asks for 8 significant digits; they agree to 11 or better (measured: 1.6e-13
+      // relative at worst): |got − published| <= 1e-11 |published|
+      const double tol = 1e-11 * std::abs(row.lambda[k]);
       EXPECT_NEAR(got[k].real(), row.lambda[k].real(), tol) << "v = " << row.v << ", k = " << k;
       EXPECT_NEAR(got[k].imag(), row.lambda[k].imag(), tol) << "v = " << row.v << ", k = " << k;
     }
@@ -134,8 +135,9 @@ TEST(WhippleBicycle, WeaveAndCapsizeSpeedsBoundTheSelfStableRange) {
   // the weave pair's real part crosses 0 at v_w, the capsize root at v_c (the paper's digits)
   const double vw = root(spectral_abscissa, 4.0, 5.0, 1e-12);
   const double vc = root(spectral_abscissa, 5.5, 7.0, 1e-12);
-  EXPECT_NEAR(vw, 4.29238253634111, 1e-8);
-  EXPECT_NEAR(vc, 6.02426201538837, 1e-8);
+  // (the issue asks for 1e-8; measured 1.6e-14 and 2.0e-13 m/s)
+  EXPECT_NEAR(vw, 4.29238253634111, 1e-10);
+  EXPECT_NEAR(vc, 6.02426201538837, 1e-10);
   // stable inside, unstable on either side
   EXPECT_LT(spectral_abscissa(5.0), -0.3);
   EXPECT_GT(spectral_abscissa(4.0), 0.4);
