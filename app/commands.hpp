@@ -152,7 +152,9 @@ struct LinearizeArguments {
   std::vector<std::string> independent;  ///< --independent: independent positions by name
   std::vector<std::string> independent_velocities;  ///< --independent-velocities
   std::vector<std::string> inputs;    ///< --inputs: coordinates (forces) or parameters
-  std::vector<std::string> outputs;   ///< --outputs: coordinates or NAME_dot
+  std::vector<std::string> outputs;   ///< --outputs: coordinates, NAME_dot or output expressions
+  std::vector<std::string> states;    ///< --states: keep these states (a subsystem)
+  bool along = false;                 ///< --along: along the model's run, at every sample
   bool equilibrium = false;           ///< --equilibrium: find one from the --at state first
   bool project = false;               ///< --project: project the state onto the constraints first
   std::vector<std::string> unknowns;  ///< --unknowns of the equilibrium (default: positions)

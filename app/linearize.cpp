@@ -10,7 +10,10 @@
 
 #include <nlohmann/json.hpp>
 #include <ukdyn/analysis/linearize.hpp>
+#include <ukdyn/analysis/model_linearize.hpp>
+#include <ukdyn/core/status.hpp>
 #include <ukdyn/modelfile/model.hpp>
+#include <ukdyn/modelfile/run.hpp>
 
 #include "commands.hpp"
 
@@ -70,65 +73,9 @@ void print_csv_matrix(const char* title, const MatrixXd& M, const std::vector<st
   }
 }
 
-}  // namespace
-
-int linearize_command(const LinearizeArguments& args) {
-  if (args.format != "json" && args.format != "csv")
-    throw UsageError("--format " + args.format + ": must be json or csv");
-  const Model model = load_source(args.source);
-  const System& sys = model.system;
-  OperatingPoint op = operating_point(model, args.at);
-  if (args.project || (model.project_initial && args.at.empty()))
-    op = project_onto_manifold(sys, op);
-
-  LinearizeOptions options;
-  options.independent_positions = args.independent;
-  options.independent_velocities = args.independent_velocities;
-  if (args.equilibrium) {
-    EquilibriumOptions eo;
-    eo.unknowns = args.unknowns;
-    eo.linearize = options;
-    op = find_equilibrium(sys, op, eo).point;
-  }
-
-  // inputs: a coordinate's name is a generalized force along it, a parameter's name the parameter
-  std::vector<LinearInput> inputs;
-  try {
-    inputs = model_inputs(model, args.inputs.empty() ? std::string() : source_text(args.source),
-                          args.inputs, "--inputs");
-  } catch (const std::invalid_argument& e) {
-    throw UsageError(e.what());
-  }
-  std::vector<LinearOutput> outputs;
-  for (const std::string& name : args.outputs) {
-    try {
-      outputs.push_back(coordinate_output(sys, name));
-    } catch (const std::invalid_argument& e) {
-      throw UsageError(std::string("--outputs: ") + e.what());
-    }
-  }
-
-  const LinearModel lm = linearize(sys, op, inputs, outputs, options);
-  std::vector<std::string> derivative_names;
-  for (const auto& s : lm.state_names) derivative_names.push_back(s + "'");
-
-  if (args.format == "csv") {
-    print_csv_matrix("A", lm.A, derivative_names, lm.state_names);
-    print_csv_matrix("B", lm.B, derivative_names, lm.input_names);
-    print_csv_matrix("C", lm.C, lm.output_names, lm.state_names);
-    print_csv_matrix("D", lm.D, lm.output_names, lm.input_names);
-    print_csv_matrix("A_error", lm.A_error, derivative_names, lm.state_names);
-    std::printf("# eigenvalues\nre,im\n");
-    for (Index k = 0; k < lm.eigenvalues.size(); ++k)
-      std::printf("%.17g,%.17g\n", lm.eigenvalues(k).real(), lm.eigenvalues(k).imag());
-    return kExitOk;
-  }
+// the linear model as JSON (the callers add the operating point)
+nlohmann::json model_json(const LinearModel& lm) {
   nlohmann::json j;
-  j["model"] = model.name;
-  j["t"] = op.t;
-  j["q"] = std::vector<double>(op.q.data(), op.q.data() + op.q.size());
-  j["qd"] = std::vector<double>(op.qd.data(), op.qd.data() + op.qd.size());
-  j["coordinates"] = sys.coordinate_names();
   j["states"] = lm.state_names;
   j["inputs"] = lm.input_names;
   j["outputs"] = lm.output_names;
@@ -155,6 +102,90 @@ int linearize_command(const LinearizeArguments& args) {
     modes.push_back(mode);
   }
   j["modes"] = modes;
+  return j;
+}
+
+// --along: the model run with its own settings, linearized at every sample, as JSON
+int linearize_along_command(const Model& model, const LinearizeArguments& args,
+                            const ModelLinearizeRequest& request) {
+  if (args.equilibrium || args.project || !args.at.empty())
+    throw UsageError(
+        "--along linearizes along the model's own run: it takes no --at, --project "
+        "or --equilibrium");
+  if (args.format != "json") throw UsageError("--along writes JSON only (--format json)");
+  const ModelRun run = run_model(model);
+  if (run.trajectory.stats.status != Status::kOk)
+    throw UsageError("--along: the run failed: " + run.trajectory.stats.message);
+  const std::vector<OperatingPoint> path = trajectory_points(run.trajectory);
+  const auto models = linearize_model_along(
+      model, path, request, [&] { return source_text(args.source); }, "--along");
+  nlohmann::json j;
+  j["model"] = model.name;
+  j["coordinates"] = model.system.coordinate_names();
+  nlohmann::json points = nlohmann::json::array();
+  for (std::size_t k = 0; k < models.size(); ++k) {
+    nlohmann::json p = model_json(models[k]);
+    p["t"] = path[k].t;
+    points.push_back(p);
+  }
+  j["points"] = points;
+  std::printf("%s\n", j.dump(2).c_str());
+  return kExitOk;
+}
+
+}  // namespace
+
+int linearize_command(const LinearizeArguments& args) {
+  if (args.format != "json" && args.format != "csv")
+    throw UsageError("--format " + args.format + ": must be json or csv");
+  const Model model = load_source(args.source);
+  ModelLinearizeRequest request;
+  request.inputs = args.inputs;
+  request.outputs = args.outputs;
+  request.options.independent_positions = args.independent;
+  request.options.independent_velocities = args.independent_velocities;
+  request.options.states = args.states;
+  request.equilibrium = args.equilibrium;
+  request.unknowns = args.unknowns;
+  request.project = args.project || (model.project_initial && args.at.empty());
+  if (args.along) {
+    try {
+      return linearize_along_command(model, args, request);
+    } catch (const LinearizeNameError& e) {
+      throw UsageError(e.what());
+    }
+  }
+  ModelLinearization result;
+  try {
+    result = linearize_model(
+        model, operating_point(model, args.at), request, [&] { return source_text(args.source); },
+        "ukdyn linearize");
+  } catch (const LinearizeNameError& e) {
+    throw UsageError(e.what());
+  }
+  const OperatingPoint& op = result.point;
+  const LinearModel& lm = result.linear;
+  const System& sys = model.system;
+  std::vector<std::string> derivative_names;
+  for (const auto& s : lm.state_names) derivative_names.push_back(s + "'");
+
+  if (args.format == "csv") {
+    print_csv_matrix("A", lm.A, derivative_names, lm.state_names);
+    print_csv_matrix("B", lm.B, derivative_names, lm.input_names);
+    print_csv_matrix("C", lm.C, lm.output_names, lm.state_names);
+    print_csv_matrix("D", lm.D, lm.output_names, lm.input_names);
+    print_csv_matrix("A_error", lm.A_error, derivative_names, lm.state_names);
+    std::printf("# eigenvalues\nre,im\n");
+    for (Index k = 0; k < lm.eigenvalues.size(); ++k)
+      std::printf("%.17g,%.17g\n", lm.eigenvalues(k).real(), lm.eigenvalues(k).imag());
+    return kExitOk;
+  }
+  nlohmann::json j = model_json(lm);
+  j["model"] = model.name;
+  j["t"] = op.t;
+  j["q"] = std::vector<double>(op.q.data(), op.q.data() + op.q.size());
+  j["qd"] = std::vector<double>(op.qd.data(), op.qd.data() + op.qd.size());
+  j["coordinates"] = sys.coordinate_names();
   std::printf("%s\n", j.dump(2).c_str());
   return kExitOk;
 }

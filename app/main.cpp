@@ -291,7 +291,16 @@ int main(int argc, char** argv) {
       ->add_option("--inputs", lin.inputs,
                    "inputs: coordinates (a generalized force) or parameters")
       ->delimiter(',');
-  lin_cmd->add_option("--outputs", lin.outputs, "outputs: coordinates or NAME_dot")->delimiter(',');
+  lin_cmd
+      ->add_option("--outputs", lin.outputs,
+                   "outputs: coordinates, NAME_dot or the model's output expressions")
+      ->delimiter(',');
+  lin_cmd
+      ->add_option("--states", lin.states,
+                   "keep only these states (a subsystem the others do not act on)")
+      ->delimiter(',');
+  lin_cmd->add_flag("--along", lin.along,
+                    "linearize along the model's own run, at every output sample (JSON)");
   lin_cmd->add_flag("--equilibrium", lin.equilibrium,
                     "first find an equilibrium (or steady motion) from the --at state");
   lin_cmd

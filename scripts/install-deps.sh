@@ -21,6 +21,7 @@ packages=(
   python3-venv python3-setuptools python3-wheel  # pip install . into .venv/ (pyproject.toml: setuptools drives CMake)
   python3-numpy python3-pandas         # its arrays and DataFrames
   python3-sympy                        # SymPy-defined models
+  python3-scipy                        # the LQR example's Riccati solver (python/examples/lqr_cart_pendulum.py)
   python3-pytest                       # its tests
   python3-hypothesis                   # the front ends' fuzzing (fuzz/fuzz_cli.py, fuzz_python.py)
   jupyter-notebook python3-nbconvert python3-ipykernel  # the notebook in examples/, run by the tests

@@ -15,6 +15,7 @@
 #include "common.hpp"
 #include "embedded.hpp"  // app/embedded.hpp: the example models, embedded at build time
 #include "ukdyn/analysis/linearize.hpp"
+#include "ukdyn/analysis/model_linearize.hpp"
 
 namespace ukdyn::python {
 namespace {
@@ -41,33 +42,9 @@ std::string model_text(const Model& model) {
                               model.file + "' cannot be read (load the model from a file)");
 }
 
-py::dict linearize_model(const Model& model, py::object q, py::object qd, py::object t,
-                         const std::vector<std::string>& inputs,
-                         const std::vector<std::string>& outputs,
-                         const std::vector<std::string>& independent,
-                         const std::vector<std::string>& independent_velocities, bool equilibrium,
-                         const std::vector<std::string>& unknowns, bool project) {
-  const System& sys = model.system;
-  OperatingPoint op = point_of(model, q, qd, t, "Model.linearize");
-  if (project) op = project_onto_manifold(sys, op);
-  LinearizeOptions options;
-  options.independent_positions = independent;
-  options.independent_velocities = independent_velocities;
-  if (equilibrium) {
-    EquilibriumOptions eo;
-    eo.unknowns = unknowns;
-    eo.linearize = options;
-    op = find_equilibrium(sys, op, eo).point;
-  }
-  // a coordinate's name is a generalized force along it, a parameter's name the parameter
-  bool parameters = false;
-  for (const auto& name : inputs) parameters = parameters || model.parameters.count(name) > 0;
-  const std::vector<LinearInput> in = model_inputs(
-      model, parameters ? model_text(model) : std::string(), inputs, "Model.linearize: input");
-  std::vector<LinearOutput> out;
-  for (const auto& name : outputs) out.push_back(coordinate_output(sys, name));
-  const LinearModel lm = linearize(sys, op, in, out, options);
-
+// the linear model as a dict of NumPy arrays and names (LinearModel of linear.py, without the
+// operating point)
+py::dict model_dict(const LinearModel& lm) {
   py::dict d;
   d["A"] = copy_matrix(lm.A);
   d["B"] = copy_matrix(lm.B);
@@ -82,9 +59,6 @@ py::dict linearize_model(const Model& model, py::object q, py::object qd, py::ob
   d["outputs"] = lm.output_names;
   d["x0"] = copy_vector(lm.x0);
   d["f0"] = copy_vector(lm.f0);
-  d["q"] = copy_vector(op.q);
-  d["q_dot"] = copy_vector(op.qd);
-  d["t"] = op.t;
   d["chart_condition"] = lm.chart_condition;
   // eigenvalues (s) and eigenvectors (s × s) as complex arrays
   const Index s = lm.eigenvalues.size();
@@ -97,6 +71,83 @@ py::dict linearize_model(const Model& model, py::object q, py::object qd, py::ob
   d["eigenvalues"] = ev;
   d["eigenvectors"] = vec;
   return d;
+}
+
+// the request of Model.linearize / Model.linearize_along
+ModelLinearizeRequest request_of(const std::vector<std::string>& inputs,
+                                 const std::vector<std::string>& outputs,
+                                 const std::vector<std::string>& independent,
+                                 const std::vector<std::string>& independent_velocities,
+                                 const std::vector<std::string>& states) {
+  ModelLinearizeRequest r;
+  r.inputs = inputs;
+  r.outputs = outputs;
+  r.options.independent_positions = independent;
+  r.options.independent_velocities = independent_velocities;
+  r.options.states = states;
+  return r;
+}
+
+py::dict linearize_model_py(const Model& model, py::object q, py::object qd, py::object t,
+                            const std::vector<std::string>& inputs,
+                            const std::vector<std::string>& outputs,
+                            const std::vector<std::string>& independent,
+                            const std::vector<std::string>& independent_velocities,
+                            const std::vector<std::string>& states, bool equilibrium,
+                            const std::vector<std::string>& unknowns, bool project) {
+  ModelLinearizeRequest r =
+      request_of(inputs, outputs, independent, independent_velocities, states);
+  r.equilibrium = equilibrium;
+  r.unknowns = unknowns;
+  r.project = project;
+  const ModelLinearization result = linearize_model(
+      model, point_of(model, q, qd, t, "Model.linearize"), r, [&] { return model_text(model); },
+      "Model.linearize");
+  py::dict d = model_dict(result.linear);
+  d["q"] = copy_vector(result.point.q);
+  d["q_dot"] = copy_vector(result.point.qd);
+  d["t"] = result.point.t;
+  return d;
+}
+
+// the points (t: N, q and q_dot: N × n) of a motion, linearized in one chart
+py::list linearize_along_py(const Model& model, py::object t, py::object q, py::object qd,
+                            const std::vector<std::string>& inputs,
+                            const std::vector<std::string>& outputs,
+                            const std::vector<std::string>& independent,
+                            const std::vector<std::string>& independent_velocities,
+                            const std::vector<std::string>& states) {
+  const char* who = "Model.linearize_along";
+  const Index n = model.system.coordinate_count();
+  const auto ts = t.cast<std::vector<double>>();
+  const auto qs = q.cast<std::vector<std::vector<double>>>();
+  const auto qds = qd.cast<std::vector<std::vector<double>>>();
+  if (qs.size() != ts.size() || qds.size() != ts.size())
+    throw std::invalid_argument(std::string(who) + ": t has " + std::to_string(ts.size()) +
+                                " samples, q " + std::to_string(qs.size()) + " and q_dot " +
+                                std::to_string(qds.size()) + " rows; they must agree");
+  std::vector<OperatingPoint> path;
+  for (std::size_t k = 0; k < ts.size(); ++k) {
+    if (Index(qs[k].size()) != n || Index(qds[k].size()) != n)
+      throw std::invalid_argument(std::string(who) + ": row " + std::to_string(k) +
+                                  " of q or q_dot has " + std::to_string(qs[k].size()) + " / " +
+                                  std::to_string(qds[k].size()) + " entries, expected " +
+                                  std::to_string(n) + " (the coordinates)");
+    path.push_back({Eigen::Map<const VectorXd>(qs[k].data(), n),
+                    Eigen::Map<const VectorXd>(qds[k].data(), n), ts[k]});
+  }
+  const auto models = linearize_model_along(
+      model, path, request_of(inputs, outputs, independent, independent_velocities, states),
+      [&] { return model_text(model); }, who);
+  py::list out;
+  for (std::size_t k = 0; k < models.size(); ++k) {
+    py::dict d = model_dict(models[k]);
+    d["q"] = copy_vector(path[k].q);
+    d["q_dot"] = copy_vector(path[k].qd);
+    d["t"] = path[k].t;
+    out.append(d);
+  }
+  return out;
 }
 
 py::tuple equilibrium_of(const Model& model, py::object q, py::object qd, py::object t,
@@ -115,11 +166,15 @@ py::tuple equilibrium_of(const Model& model, py::object q, py::object qd, py::ob
 }  // namespace
 
 void bind_linearize(py::module_& m) {
-  m.def("_linearize", &linearize_model, py::arg("model"), py::arg("q"), py::arg("q_dot"),
+  m.def("_linearize", &linearize_model_py, py::arg("model"), py::arg("q"), py::arg("q_dot"),
         py::arg("t"), py::arg("inputs"), py::arg("outputs"), py::arg("independent"),
-        py::arg("independent_velocities"), py::arg("equilibrium"), py::arg("unknowns"),
-        py::arg("project"),
+        py::arg("independent_velocities"), py::arg("states"), py::arg("equilibrium"),
+        py::arg("unknowns"), py::arg("project"),
         "The linear model of a Model as a dict of NumPy arrays and names (Model.linearize).");
+  m.def("_linearize_along", &linearize_along_py, py::arg("model"), py::arg("t"), py::arg("q"),
+        py::arg("q_dot"), py::arg("inputs"), py::arg("outputs"), py::arg("independent"),
+        py::arg("independent_velocities"), py::arg("states"),
+        "The linear models along a motion, one dict per point (Model.linearize_along).");
   m.def("_equilibrium", &equilibrium_of, py::arg("model"), py::arg("q"), py::arg("q_dot"),
         py::arg("t"), py::arg("unknowns"), py::arg("tolerance"), py::arg("independent"),
         "(q, q_dot, residual, iterations) of an equilibrium found from a guess "

@@ -178,4 +178,5 @@ _model_simulate.__doc__ = (_model_simulate.__doc__ or "") + _options_doc()
 Model.simulate = _model_simulate  # type: ignore[attr-defined]
 Model.solve = _model_solve  # type: ignore[attr-defined]
 Model.linearize = _linear.linearize  # type: ignore[attr-defined]
+Model.linearize_along = _linear.linearize_along  # type: ignore[attr-defined]
 Model.equilibrium = _linear.equilibrium  # type: ignore[attr-defined]

@@ -7,6 +7,7 @@
 ///   analysis/reduced_dynamics.cpp
 ///   3. ridders_jacobian     ∂F/∂z with an error estimate per entry    analysis/ridders.cpp
 ///   4. linearize            assembles A, B, C, D and the modes       analysis/linearize.cpp
+///   5. keep_states          the subsystem of LinearizeOptions::states analysis/state_subset.cpp
 #pragma once
 
 #include <functional>
@@ -95,6 +96,12 @@ using VectorFunction =
 bool ridders_jacobian(const VectorFunction& F, const Eigen::Ref<const VectorXd>& z0,
                       const Eigen::Ref<const VectorXd>& h0, Index p, const RiddersOptions& o,
                       MatrixXd& J, MatrixXd& err, std::string& why);
+
+/// Stage 5: restricts `lm` (A, B, C and their errors, x0, f0, state_names) to the states called
+/// `names`, in that order. @throws std::invalid_argument (prefixed `who`) naming a state that
+/// does not exist or is named twice, or a dropped state whose column of A enters a kept row
+/// beyond its error estimate. Cost O(s²).
+void keep_states(LinearModel& lm, const std::vector<std::string>& names, const char* who);
 
 /// Coordinate index of `name`, or of `name` without "_dot" with rate = true. @throws
 /// std::invalid_argument naming `who` and the coordinates.

@@ -94,7 +94,7 @@ LinearModel linearize(const System& sys, const OperatingPoint& at,
                                   "' has no family of systems");
   }
   for (std::size_t i = 0; i < outputs.size(); ++i)
-    if (outputs[i].coordinate < 0 || outputs[i].coordinate >= n)
+    if (!outputs[i].expression && (outputs[i].coordinate < 0 || outputs[i].coordinate >= n))
       throw std::invalid_argument(std::string(kWho) + ": output '" + outputs[i].name +
                                   "' names coordinate " + std::to_string(outputs[i].coordinate) +
                                   ", not in [0, " + std::to_string(n) + ")");
@@ -181,8 +181,9 @@ LinearModel linearize(const System& sys, const OperatingPoint& at,
     lm.D_error.col(c) = E.col(0).tail(ny);
   }
 
-  // the modes
-  if (s > 0) {
+  // the subsystem asked for, then its modes
+  if (!options.states.empty()) analysis::keep_states(lm, options.states, kWho);
+  if (lm.A.rows() > 0) {
     Eigen::EigenSolver<MatrixXd> es(lm.A);
     if (es.info() != Eigen::Success)
       throw SolveError(Status::kNonFiniteResult,

@@ -104,7 +104,9 @@ bool ReducedDynamics::evaluate(const Eigen::Ref<const VectorXd>& x,
   Index k = 0;
   for (Index j : p_.ip) F(k++) = qd_(j);
   for (Index j : p_.iv) F(k++) = ws_.qdd(j);
-  for (const auto& y : outputs) F(k++) = y.rate ? qd_(y.coordinate) : q_(y.coordinate);
+  for (const auto& y : outputs)
+    F(k++) = y.expression ? y.expression(q_, qd_, base_.t)
+                          : (y.rate ? qd_(y.coordinate) : q_(y.coordinate));
   return true;
 }
 

@@ -87,11 +87,15 @@ struct Model;
 std::vector<LinearInput> model_inputs(const Model& model, const std::string& text,
                                       const std::vector<std::string>& names, const char* who);
 
-/// One output y_k of the linear model (row k of C and D): a coordinate or its rate.
+/// One output y_k of the linear model (row k of C and D): a coordinate, its rate, or a function
+/// of the state (a model file's output expression).
 struct LinearOutput {
   std::string name;       ///< label: the coordinate's name, with "_dot" for its rate
-  Index coordinate = -1;  ///< which coordinate
+  Index coordinate = -1;  ///< which coordinate (unused when `expression` is set)
   bool rate = false;      ///< q'_j instead of q_j
+  /// y = expression(q, q', t) instead of a coordinate, when set (e.g. model_outputs()); it is
+  /// evaluated at the completed state (q, q') on the manifold.
+  std::function<double(const VectorXd& q, const VectorXd& qd, double t)> expression;
 };
 
 /// The output called `name`: a coordinate's name (its position) or the name followed by "_dot"
@@ -123,6 +127,13 @@ struct LinearizeOptions {
   /// The operating point must satisfy |Φ|, |ψ| (and |Φ'|) <= manifold_tolerance · max(1, ‖q‖,
   /// ‖q'‖). Must be > 0.
   double manifold_tolerance = 1e-8;
+  /// The states to keep, by name (LinearModel::state_names, e.g. {"phi", "delta", "phi_dot",
+  /// "delta_dot"}); empty: all. The kept states must form a subsystem the others do not act on
+  /// (A's entries from a dropped state into a kept row zero to within their error estimate:
+  /// cyclic coordinates, the rates they are ignorable in); then the kept block's eigenvalues are
+  /// eigenvalues of the whole A. A bicycle's lean and steer about its straight run, without
+  /// its position, heading and wheel angles. B keeps the kept rows, C the kept columns.
+  std::vector<std::string> states;
   /// The solver's settings for the forward dynamics (the dense engine is always used).
   SolverOptions solver;
 };
@@ -139,7 +150,7 @@ struct LinearModel {
   MatrixXd C_error;  ///< … of C
   MatrixXd D_error;  ///< … of D
   /// The state's names: the independent positions' coordinate names, then the independent
-  /// velocities' with "_dot".
+  /// velocities' with "_dot" (only those of LinearizeOptions::states when it is given).
   std::vector<std::string> state_names;
   std::vector<std::string> input_names;       ///< the inputs' names (columns of B, D)
   std::vector<std::string> output_names;      ///< the outputs' names (rows of C, D)
