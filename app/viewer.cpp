@@ -1,33 +1,25 @@
 // SPDX-License-Identifier: BSD-3-Clause
-// `ukdyn run --viewer`: the embedded page generator, run with the system's python (app/viewer.hpp).
+// `ukdyn run --viewer`: animation.html, written by the command itself (app/viewer.hpp,
+// app/viewer_page.hpp): no Python process.
 #include "viewer.hpp"
 
-#include "python_process.hpp"
-
 #include <cstdio>
-#include <cstdlib>
-#include <cstring>
-#include <fstream>
+#include <map>
+#include <stdexcept>
 #include <string>
-#include <system_error>
 #include <vector>
 
-#include <unistd.h>
+#include <nlohmann/json.hpp>
 
+#include <io/atomic_file.hpp>
 #include <ukdyn/modelfile/model.hpp>
 #include <ukdyn/modelfile/visual.hpp>
 
+#include "terminal_text.hpp"
+#include "viewer_page.hpp"
+
 namespace ukdyn::cli {
 namespace fs = std::filesystem;
-namespace {
-
-bool write_text(const fs::path& path, const char* text) {
-  std::ofstream out(path, std::ios::binary);
-  out << text;
-  return bool(out);
-}
-
-}  // namespace
 
 bool viewer_by_default(const Model& model) {
   return model.multibody || !model.visual.points.empty();
@@ -49,35 +41,24 @@ std::optional<fs::path> write_viewer(const Model& model, const fs::path& csv, co
                  "animation.html\n");
     return std::nullopt;
   }
-  const std::string python = python_interpreter();
-  if (!is_executable(python)) {
-    std::fprintf(stderr,
-                 "warning: %s not found: no animation.html (set UKDYN_PYTHON, or pass "
-                 "--no-viewer)\n",
-                 python.c_str());
-    return std::nullopt;
-  }
-  // the generator, its assets and the scene go to a private temporary directory
-  std::string temp = (fs::temp_directory_path() / "ukdyn-viewer-XXXXXX").string();
-  if (::mkdtemp(temp.data()) == nullptr) {
-    std::fprintf(stderr, "error: cannot create a temporary directory: no animation.html\n");
-    failed = true;
-    return std::nullopt;
-  }
-  const fs::path work(temp), page = dir / "animation.html";
-  const bool written = write_text(work / "viewer.py", kViewerScript) &&
-                       write_text(work / "viewer_template.html", kViewerTemplate) &&
-                       write_text(work / "three.min.js", kThreeJs) &&
-                       write_text(work / "OrbitControls.js", kOrbitControlsJs) &&
-                       write_text(work / "scene.json", viewer_scene_json(model).c_str());
-  const int code = written ? run_program({python, (work / "viewer.py").string(), csv.string(),
-                                          (work / "scene.json").string(), page.string()})
-                           : -1;
-  std::error_code ec;
-  fs::remove_all(work, ec);
-  if (code != 0) {
-    std::fprintf(stderr, "error: the viewer's page generator failed (exit %d): no animation.html\n",
-                 code);
+  const fs::path page = dir / "animation.html";
+  try {
+    // the scene, the rows shown (a visual point that is not finite is said, and hidden while
+    // so), the data, the page; written whole or not at all (mkostemp, O_NOFOLLOW, rename)
+    const auto scene = nlohmann::ordered_json::parse(viewer_scene_json(model));
+    const ViewerOptions options;
+    std::map<std::string, double> first_nonfinite;
+    const ViewerColumns run = read_viewer_csv(csv, options, point_columns(scene), first_nonfinite);
+    for (const std::string& line : nonfinite_warnings(scene, first_nonfinite)) {
+      std::fprintf(stderr, "%s\n", terminal_text(line).c_str());
+    }
+    const std::string three = std::string(kThreeJs) + "\n" + kOrbitControlsJs;
+    const std::string html =
+        fill_viewer_template(kViewerTemplate, three, viewer_page_data(scene, run, options));
+    detail::write_whole_file(page.string(), "ukdyn run --viewer", html.data(), html.size());
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "error: the viewer's page: %s: no animation.html\n",
+                 terminal_text(e.what()).c_str());
     failed = true;
     return std::nullopt;
   }

@@ -1,7 +1,8 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // `ukdyn run --viewer`: animation.html, the browser viewer of the run (docs/viewer.md), written
-// by the page generator python/ukdyn/viewer.py, embedded in the program with its template and
-// three.js (app/embed_viewer.cmake writes viewer_embedded.cpp in the build tree).
+// by the command itself (app/viewer_page.hpp: the same page as Python's Result.save_animation,
+// by the same rules, with no Python process) from the page template and three.js embedded in
+// the program (app/embed_viewer.cmake writes viewer_embedded.cpp in the build tree).
 #pragma once
 
 #include <filesystem>
@@ -13,9 +14,8 @@ struct Model;
 
 namespace ukdyn::cli {
 
-/// python/ukdyn/viewer.py, its page template, and Debian's three.js and OrbitControls (empty
-/// when the program was built without libjs-three).
-extern const char* const kViewerScript;
+/// The page template (python/ukdyn/viewer_template.html), and Debian's three.js and
+/// OrbitControls (empty when the program was built without libjs-three).
 extern const char* const kViewerTemplate;
 extern const char* const kThreeJs;
 extern const char* const kOrbitControlsJs;
@@ -25,10 +25,11 @@ extern const char* const kOrbitControlsJs;
 bool viewer_by_default(const Model& model);
 
 /// Writes dir/animation.html from the run's trajectory.csv and the model's scene
-/// (viewer_scene_json) with /usr/bin/python3 (or $UKDYN_PYTHON). Returns its path, or nothing
-/// after a message on stderr when it was not written: a warning when it cannot be made here (no
-/// python, no three.js, nothing to draw); an error, with `failed` set, when the generator ran
-/// and failed (a full disk) — a missing output, which makes the command's exit code 1.
+/// (viewer_scene_json), whole or not at all (a mkostemp temporary renamed over it). Returns its
+/// path, or nothing after a message on stderr when it was not written: a warning when it cannot
+/// be made here (no three.js, nothing to draw); an error, with `failed` set, when writing it
+/// failed (an unreadable trajectory, a full disk) — a missing output, which makes the command's
+/// exit code 1. Cost: two passes over trajectory.csv; memory O(frames shown × columns).
 std::optional<std::filesystem::path> write_viewer(const Model& model,
                                                   const std::filesystem::path& csv,
                                                   const std::filesystem::path& dir, bool& failed);

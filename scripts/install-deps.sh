@@ -37,6 +37,7 @@ packages=(
   python3-pil                          # the viewer's tests read the canvas's pixels
   python3-xarray                       # ukdyn.sweep: a grid as an xarray.Dataset
   python3-dask python3-distributed     # ukdyn.sweep(client=...): ensembles on Dask workers (tested on a LocalCluster)
+  doxygen python3-sphinx               # the API reference, C++ and Python (scripts/build-docs.sh)
 )
 
 missing=()

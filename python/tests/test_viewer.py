@@ -763,7 +763,20 @@ def test_hostile_names_neither_run_nor_break_the_page(browser, plain_bob, tmp_pa
 def test_hostile_names_from_a_model_file(browser, tmp_path, model_name, point):
     """The two model files of the reproducer viewer_page_breakers.sh, read, run and saved by
     Python as `ukdyn run` does: each page starts and draws its bob, without an error."""
-    text = f"""
+    text = hostile_model(model_name, point)
+    path = tmp_path / "page.html"
+    ukdyn.parse(text).simulate(t_end=0.5).save_animation(path)
+    page = Page(browser, path)
+    assert page.js("return document.getElementById('name').textContent") == model_name
+    page.js("ukdyn.show('trails', false); ukdyn.show('ideal', false)")
+    assert _mask(page.pixels(), "#d62728").sum() > 50
+    assert page.errors() == []
+
+
+def hostile_model(model_name: str, point: str) -> str:
+    """A pendulum model file whose model and bob are called model_name and point (the model
+    files of viewer_page_breakers.sh; test_viewer_page.py runs them with the command)."""
+    return f"""
 name: {json_string(model_name)}
 coordinates: [x, y]
 kinetic_energy: 0.5*(x_dot^2 + y_dot^2)
@@ -778,13 +791,6 @@ visual:
   links: [[pivot, {point}]]
   trails: [{point}]
 """
-    path = tmp_path / "page.html"
-    ukdyn.parse(text).simulate(t_end=0.5).save_animation(path)
-    page = Page(browser, path)
-    assert page.js("return document.getElementById('name').textContent") == model_name
-    page.js("ukdyn.show('trails', false); ukdyn.show('ideal', false)")
-    assert _mask(page.pixels(), "#d62728").sum() > 50
-    assert page.errors() == []
 
 
 def json_string(text: str) -> str:

@@ -184,13 +184,80 @@ class Result:
         """What failed, where and when ("" when ok)."""
         return str(self.stats.get("message", ""))
 
+    # --- units -------------------------------------------------------------------------------
+    def column_units(self) -> Dict[str, str]:
+        """Each column's unit by name, "" when not known: ``t`` in s; a coordinate's from
+        :attr:`units`, its ``_dot`` and ``_ddot`` per s and s²; ``Qc_ideal.<c>`` (and the
+        non-ideal, control and robust forces) N for a coordinate in m, N·m for one in rad or 1;
+        energies and works J, ``control_power`` W; the output expressions' from ``units:`` (the
+        rules of the plots' labels, ukdyn/plotting.py ``column_unit``)."""
+        from .plotting import column_unit
+        meta = {"units": self.units}
+        return {name: column_unit(meta, name) for name in self._index}
+
     # --- pandas and files ---------------------------------------------------------------------
     def to_dataframe(self, index: Optional[str] = None) -> "Any":
         """A pandas DataFrame of every column (CSV order; duplicate names keep their first
-        column). ``index="t"`` makes the time the index. Needs pandas (python3-pandas)."""
+        column). ``index="t"`` makes the time the index. ``frame.attrs`` carries the units
+        (``attrs["units"]``: :meth:`column_units`, the known ones), the model's name
+        (``attrs["model"]``) and the run's status (``attrs["status"]``). Needs pandas
+        (python3-pandas)."""
         import pandas as pd
         frame = pd.DataFrame(self.columns(), copy=False)
-        return frame.set_index(index) if index else frame
+        frame = frame.set_index(index) if index else frame
+        frame.attrs.update(self._attributes())
+        return frame
+
+    def _attributes(self) -> Dict[str, Any]:
+        """What a DataFrame's or a Dataset's attrs say of the run."""
+        return {"units": {k: v for k, v in self.column_units().items() if v},
+                "model": self.model_name, "status": self.status}
+
+    def to_xarray(self) -> "Any":
+        """An ``xarray.Dataset`` over the dimension ``t``: every other column a variable whose
+        ``attrs["units"]`` is its unit (:meth:`column_units`; absent when not known), ``t``'s
+        ``attrs["units"]`` "s"; the Dataset's attrs name the model and the status. Needs xarray
+        (python3-xarray)."""
+        import xarray as xr
+        units = self.column_units()
+        t = xr.Variable("t", self.t, attrs={"units": "s"})
+        variables = {name: xr.Variable("t", self._columns[k],
+                                       attrs={"units": units[name]} if units[name] else {})
+                     for name, k in self._index.items() if name != "t"}
+        return xr.Dataset(variables, coords={"t": t},
+                          attrs={"model": self.model_name, "status": self.status})
+
+    def _repr_html_(self) -> str:
+        """A summary for Jupyter: the model, the status (and message), the samples and the time
+        span, the steps and the largest violations, and a table of the coordinates with their
+        units and first and last values. Names are HTML-escaped."""
+        import html
+        e = html.escape
+        n = len(self)
+        t0, t1 = (float(self.t[0]), float(self.t[-1])) if n else (math.nan, math.nan)
+        status = e(self.status) + (": " + e(self.message) if self.message else "")
+        rows = [("model", e(self.model_name) or "&mdash;"), ("status", status),
+                ("samples", "%d, t = %.6g &hellip; %.6g s" % (n, t0, t1))]
+        if "steps" in self.stats:
+            rows.append(("steps", "%s (%s rejected)" % (self.stats.get("steps"),
+                                                       self.stats.get("rejected_steps", 0))))
+        for key, what in (("max_position_violation", "max violation (position)"),
+                          ("max_velocity_violation", "max violation (velocity)"),
+                          ("energy_balance", "energy balance (relative)")):
+            if isinstance(self.stats.get(key), (int, float)):
+                rows.append((what, "%.3g" % self.stats[key]))
+        head = "".join("<tr><th style=\"text-align:left\">%s</th><td style=\"text-align:left\">"
+                       "%s</td></tr>" % row for row in rows)
+        units = self.column_units()
+        body = "".join(
+            "<tr><td>%s</td><td>%s</td><td>%.6g</td><td>%.6g</td></tr>"
+            % (e(c), e(units.get(c, "")), self[c][0] if n else math.nan,
+               self[c][-1] if n else math.nan)
+            for c in self.coordinates if c in self)
+        return ("<div class=\"ukdyn-result\"><table>%s</table><table><thead><tr><th>coordinate"
+                "</th><th>unit</th><th>first</th><th>last</th></tr></thead><tbody>%s</tbody>"
+                "</table><p>%d columns: result.names; result.to_dataframe(), "
+                "result.to_xarray()</p></div>" % (head, body, len(self.names)))
 
     @property
     def df(self) -> "Any":

@@ -2,9 +2,11 @@
 # SPDX-License-Identifier: BSD-3-Clause
 """The browser viewer of a ukdyn run: one self-contained HTML page (docs/viewer.md).
 
-The one implementation of the page, used by ``ukdyn run --viewer`` (which embeds this file,
-the page template and three.js, and runs it with /usr/bin/python3) and by Python's
-``Result.show()`` / ``Result.save_animation()``.
+The page of Python's ``Result.show()`` / ``Result.save_animation()``. ``ukdyn run --viewer``
+writes the same page itself, without Python (app/viewer_page.hpp, app/viewer_data.cpp): it
+follows these functions rule for rule (decimation, rounding, the data's keys in this order, the
+JSON in json.dumps's form, the template filled in one pass), so that for the same trajectory the
+two pages are the same bytes (python/tests/test_viewer_page.py); a change here is made there too.
 
 usage: viewer.py TRAJECTORY.csv SCENE.json OUTPUT.html
 

@@ -77,7 +77,7 @@ struct Joint {
 };
 
 /// Mass properties of a link: mass, centre of mass and the 3 × 3 inertia about the centre of
-/// mass, both in the link frame (URDF's <inertial>, its rpy already applied).
+/// mass, both in the link frame (URDF's `<inertial>`, its rpy already applied).
 struct Inertial {
   double mass = 0.0;                  ///< kg, >= 0
   Vector3d com = Vector3d::Zero();    ///< centre of mass in the link frame
@@ -218,7 +218,8 @@ inline constexpr double kJointFrictionRegularization = 1e-6;
 /// friction of magnitude F, eps = kJointFrictionRegularization; its work is accounted as the
 /// non-ideal forces'), and one unit-norm constraint "<link>.unit" per floating joint. Constraints,
 /// friction, control and simulate() then apply as to any System. The tree is copied into the
-/// system's callables. @param tau the input "tau", or empty for none. Cost O(links) to build.
+/// system's callables. @param tree the tree; @param tau the input "tau", or empty for none.
+/// Cost O(links) to build.
 System make_system(const Tree& tree, JointTorqueFn tau = {});
 
 /// The SystemBuilder behind make_system, with all of the above already given: add constraints
@@ -347,7 +348,7 @@ std::string describe(const LimitExcess& e);
 /// URDF's world link, if any, is the world. Joint limits, damping, friction, effort and velocity
 /// are kept. @throws std::invalid_argument naming the file and the link or joint: a malformed
 /// file (with urdfdom's message), a joint type ukdyn does not know (planar), a moving link
-/// without <inertial>, an inertia that is not positive definite, a graph that is not a tree.
+/// without `<inertial>`, an inertia that is not positive definite, a graph that is not a tree.
 /// Cost O(links) plus the XML parse.
 Tree load_urdf(const std::string& path, Vector3d gravity = Vector3d(0, 0, -9.81));
 
