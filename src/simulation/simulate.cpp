@@ -372,6 +372,7 @@ class Run {
     const auto& contacts = sys_.friction_contacts();
     double first = std::numeric_limits<double>::quiet_NaN();
     switching_ = -1;
+    Index handover = -1;  // the contact whose passage rkf78 hands to dopri5 (see hands_over)
     // the rank margin at (or within the step's last stages before) t1: the step's last evaluation
     const double margin = ws_.rank_margin;
     for (std::size_t c = 0; c < contacts.size(); ++c) {
@@ -397,11 +398,14 @@ class Run {
           if (ws_.slip_hint.col(contacts[c].force).squaredNorm() > 0.0)
             set_slip_hint(c, VectorXd());
           direction_.head(k) /= speed;
-          // near a rank drop, still sliding clearly at t1: carried through (see carry_through)
-          // (not under rkf78, whose restarts after a carried passage still leave the branch at
-          // some mu: docs/reliability.md, "Open")
-          if (margin < detail::kSingularMargin && progress_.integrator != Integrator::kRKF78 &&
-              carry_through(c, k, t1, x1, v_stop)) {
+          // near a rank drop: rkf78 hands the run to dopri5 before the step (see hands_over);
+          // still sliding clearly at t1: carried through (see carry_through)
+          if (margin < detail::kSingularMargin && progress_.integrator == Integrator::kRKF78) {
+            te = t0;
+            handover = Index(c);
+            break;
+          }
+          if (margin < detail::kSingularMargin && carry_through(c, k, t1, x1, v_stop)) {
             continue;
           }
           te = locate(t0, t1, x1, dense, [&](double t, const double* x) {
@@ -410,6 +414,11 @@ class Run {
           });
           // (a kinematic passage at a rank drop: no restart there)
           if (!std::isnan(te) && passes_at_rank_drop(c, te, dense)) {
+            if (progress_.integrator == Integrator::kRKF78) {
+              te = t0;
+              handover = Index(c);
+              break;
+            }
             te = std::numeric_limits<double>::quiet_NaN();
             ++traj_.stats.stick_refusals;
           }
@@ -446,6 +455,7 @@ class Run {
         switching_ = Index(c);
       }
     }
+    hands_over_ = handover >= 0 && switching_ == handover;
     // the first sign change of a switching function, when it comes before the contacts' event
     switch_event_ = false;
     if (!locates_switches()) return first;
@@ -468,6 +478,7 @@ class Run {
     approach_ = false;
     if (!std::isnan(ts) && (std::isnan(first) || ts < first)) {
       switch_event_ = true;
+      hands_over_ = false;
       // the approach: the restart state at ts comes from one step [t0, ts] whose last stages
       // lie at ts, within their own error of the switch, on either side (rkf78's end-node
       // stages are not exact even for a quadratic motion: an error h·b·jump). So the run first
@@ -510,6 +521,16 @@ class Run {
     }
     return first;
   }
+
+  // The last event found by find_event is no switch but rkf78 handing the run to dopri5 at the
+  // start of the step just taken, which it discards: in that step a Coulomb contact slides into
+  // a rank drop (the rank margin at its end below kSingularMargin), or stops where the
+  // mechanism passes a dead centre (passes_at_rank_drop). dopri5 and BDF carry such a contact
+  // through the dead centre (carry_through); under rkf78 the same treatment, and the earlier one
+  // (the stop no restart point), still left the branch at some mu — the twin arms at mu = 0.4–0.5,
+  // the governor's swing at 0.3 and 0.5, once with status ok (docs/reliability.md) — so the run
+  // goes on with dopri5 from the step's start, before the dead centre, and the notes say so.
+  bool hands_over() const { return hands_over_; }
 
   // drift control at a restart after a switch event (the state there is a step's, not yet
   // projected)
@@ -1364,9 +1385,10 @@ class Run {
   // steps since then (up to kSwitchBurst)
   double window_start_ = std::numeric_limits<double>::quiet_NaN();
   std::size_t steps_since_switch_ = 0;
-  bool crawl_ = false;     // the steps after a switch crawl (find_event)
-  bool approach_ = false;  // the last event is a restart before a switch
-  bool landed_ = false;    // the last switch found is a step landing on it
+  bool crawl_ = false;       // the steps after a switch crawl (find_event)
+  bool approach_ = false;    // the last event is a restart before a switch
+  bool hands_over_ = false;  // the last event is rkf78 handing the run to dopri5
+  bool landed_ = false;      // the last switch found is a step landing on it
   std::string failure_;
   std::string refusal_;      // why the last refused stick was refused (empty: friction cannot hold)
   ProgressReport progress_;  // what the last progress report said
@@ -1817,6 +1839,21 @@ Trajectory detail::simulate_observed(const System& sys, const Eigen::Ref<const V
         continue;
       }
       if (!r.event) break;
+      if (run.hands_over()) {
+        // rkf78 at a dead centre where a Coulomb contact slides: dopri5 from here, which carries
+        // the contact through it (Run::hands_over)
+        base_method = Integrator::kDopri5;
+        if (traj.stats.notes.size() < kMaxNotes) {
+          traj.stats.notes.push_back(
+              "t = " + format(r.t_reached) +
+              ": rkf78 handed the run to dopri5 at a dead centre, where a Coulomb contact slides "
+              "while the constraints nearly lose rank (rkf78's restarts there can leave the "
+              "mechanism's branch; docs/friction.md, \"Dead centres\")");
+        }
+        method = base_method;
+        a = r.t_reached;
+        continue;
+      }
       method = base_method;
       after_event = true;
       if (run.switch_event() && run.switch_approach()) {

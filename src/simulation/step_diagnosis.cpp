@@ -19,6 +19,10 @@ namespace ukdyn::detail {
 std::string format_short(double v) { return format_number(v, 3); }
 
 namespace {
+// the fall of the gap sigma_r / sigma_1 since the segment's start that says the constraints
+// are about to lose rank (with the gap below kSingularMargin)
+constexpr double kGapFall = 1e2;
+
 // rank of A and the gap sigma_r / sigma_1 of W = L⁻¹ Aᵀ (r = r_ref, the rank to compare with;
 // NaN with the sparse engine or without constraints) at state x (2n + 1) and t. Cost O(n m²).
 struct ConstraintRank {
@@ -77,7 +81,10 @@ std::string diagnose_collapse(const System& sys, Workspace& ws, const Simulation
     const ConstraintRank from = constraint_rank(sys, ws, x0, t0, start.rank);
     const ConstraintRank now = constraint_rank(sys, ws, x, r.t_reached, start.rank);
     const bool lost = start.valid && now.valid && now.rank < start.rank;
-    const bool closing = now.gap < 1e-6 && !(from.gap < 1e3 * now.gap);
+    // (closing: within the neighbourhood where the integrators treat the pose as singular,
+    // kSingularMargin, after a fall by two orders since t0; the bound was 1e-6, and a collapse
+    // at a dead centre, 1e-4 from the pose, was blamed on nothing)
+    const bool closing = now.gap < kSingularMargin && !(from.gap < kGapFall * now.gap);
     if (lost || closing) {
       return "Likely cause: a singular configuration " + where + ": the constraints " +
              (lost ? "lost rank (rank of A " + format_number(now.rank) + " of " +
