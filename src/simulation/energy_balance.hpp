@@ -15,7 +15,7 @@ class EnergyBalance {
  public:
   // the next sample: its time, energies and the five work channels (nonideal, ideal, drive,
   // external, control); returns its residual E − E(0) − ΣW
-  double add(double t, double T, double V, double E, const double (&works)[5]);
+  double add(double t, double T, double V, double E, const double (&works)[6]);
   // the balance's figures into s (energy_balance, energy_exchanged, energy_drift,
   // energy_balance_checked = tolerance finite) and, when s.status is kOk and the balance
   // exceeds the tolerance (or is NaN), Status::kEnergyBalance with its warning
