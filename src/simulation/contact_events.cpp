@@ -166,7 +166,10 @@ bool ContactEvents::resolve(double t, double* x, Index event, RunStatistics& sta
     approaching = approaching || (gd < 0.0 && !closed_[i]);
   }
   const Index m = Index(set.size());
-  if (m == 0) return true;
+  if (m == 0) {
+    apply();
+    return true;
+  }
   const double v_scale =
       std::max(1e-300, Eigen::Map<const VectorXd>(v_minus.data(), m).cwiseAbs().maxCoeff());
   // the release of a closed contact: only the closed set changes
