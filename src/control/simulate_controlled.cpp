@@ -625,6 +625,7 @@ std::vector<std::vector<double>*> sample_fields(ControlledTrajectory& run) {
           &run.plant.work_drive,
           &run.plant.work_external,
           &run.plant.work_control,
+          &run.plant.work_impact,
           &run.plant.energy_balance_residual,
           &run.error,
           &run.error_rate,
