@@ -34,6 +34,7 @@ write_basic_package_version_file(${PROJECT_BINARY_DIR}/ukdynConfigVersion.cmake
   VERSION ${PROJECT_VERSION} COMPATIBILITY SameMinorVersion)
 install(FILES ${PROJECT_BINARY_DIR}/ukdynConfig.cmake ${PROJECT_BINARY_DIR}/ukdynConfigVersion.cmake
               ${CMAKE_CURRENT_LIST_DIR}/ukdynSuiteSparse.cmake
+              ${CMAKE_CURRENT_LIST_DIR}/ukdynSiconos.cmake
         DESTINATION ${UKDYN_INSTALL_CMAKEDIR})
 
 # the licence: Debian's machine-readable copyright file where a .deb keeps it, and LICENSE beside

@@ -50,5 +50,5 @@ endif()
 set(CPACK_DEBIAN_PACKAGE_DEPENDS "${_ukdyn_depends}")
 set(CPACK_DEBIAN_PACKAGE_RECOMMENDS "python3-matplotlib, python3-pandas, libeigen3-dev")
 set(CPACK_DEBIAN_PACKAGE_SUGGESTS "python3-sympy, libsundials-dev, libyaml-cpp-dev, libginac-dev, \
-libhdf5-dev, libsuitesparse-dev")
+libhdf5-dev, libsuitesparse-dev, libsiconos-numerics-dev")
 include(CPack)

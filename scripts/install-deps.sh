@@ -14,6 +14,7 @@ packages=(
   nlohmann-json3-dev                   # JSON run summaries
   libginac-dev                         # symbolic expressions of model files
   libsuitesparse-dev                   # CHOLMOD / SuiteSparseQR: the sparse engine
+  libsiconos-numerics-dev              # Siconos Numerics: the LCP of unilateral contacts (docs/contact.md)
   libyaml-cpp-dev                      # model files
   libcli11-dev                         # the ukdyn command line
   python3-matplotlib                   # plots of ukdyn run

@@ -366,6 +366,20 @@ py::dict statistics_dict(const RunStatistics& s) {
   d["events"] = s.events;
   d["switch_events"] = s.switch_events;
   d["stick_refusals"] = s.stick_refusals;
+  // the impacts and releases of unilateral contacts (docs/contact.md), one dict each
+  py::list contacts;
+  for (const ContactEvent& e : s.contact_events) {
+    py::dict c;
+    c["t"] = e.t;
+    c["constraint"] = e.constraint;
+    c["kind"] = to_string(e.kind);
+    c["speed_before"] = e.speed_before;
+    c["speed_after"] = e.speed_after;
+    c["impulse"] = e.impulse;
+    c["energy_change"] = e.energy_change;
+    contacts.append(c);
+  }
+  d["contact_events"] = contacts;
   d["notes"] = s.notes;
   d["stiff_switches"] = s.stiff_switches;
   d["stiff_switch_time"] = s.stiff_switch_time;

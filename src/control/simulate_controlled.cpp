@@ -525,8 +525,8 @@ ControlledTrajectory simulate_controlled(
     p.kinetic_energy.push_back(T);
     p.energy.push_back(T + V);
     p.work_control.push_back(z_dot[kWork]);
-    const double works[5] = {s.work_nonideal[0], s.work_ideal[0], s.work_drive[0],
-                             s.work_external[0], z_dot[kWork]};
+    const double works[6] = {s.work_nonideal[0], s.work_ideal[0], s.work_drive[0],
+                             s.work_external[0], z_dot[kWork],    0.0};
     p.energy_balance_residual.push_back(balance.add(t, T, V, T + V, works));
 
     // the control at the sample (evaluated afresh at the sample's state)
@@ -625,6 +625,7 @@ std::vector<std::vector<double>*> sample_fields(ControlledTrajectory& run) {
           &run.plant.work_drive,
           &run.plant.work_external,
           &run.plant.work_control,
+          &run.plant.work_impact,
           &run.plant.energy_balance_residual,
           &run.error,
           &run.error_rate,

@@ -115,6 +115,7 @@ std::vector<ColumnRef> column_refs(const Trajectory& traj) {
   scalar("work_drive", traj.work_drive);
   scalar("work_external", traj.work_external);
   scalar("work_control", traj.work_control);
+  if (!traj.work_impact.empty()) scalar("work_impact", traj.work_impact);  // (unilateral contacts)
   scalar("energy_balance_residual", traj.energy_balance_residual);
   return cols;
 }

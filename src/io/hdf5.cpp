@@ -175,6 +175,10 @@ void write_hdf5(const Trajectory& traj, const std::string& path) {
       stage = std::string("write dataset '") + f.name + "'";
       write_field(file, f.name, f.values, N, f.width, f.vector);
     }
+    if (!traj.work_impact.empty()) {  // (unilateral contacts, docs/contact.md)
+      stage = "write dataset 'work_impact'";
+      write_field(file, "work_impact", traj.work_impact, N, 1, true);
+    }
 
     // names, rows and kinds (so that the columns of lambda and the violations can be told apart)
     stage = "write the name attributes";

@@ -12,6 +12,7 @@
 
 #include <Eigen/QR>
 
+#include "dynamics/contact_dynamics.hpp"
 #include "dynamics/internal.hpp"
 #include "ukdyn/core/format.hpp"
 #include "ukdyn/dynamics/forward.hpp"
@@ -59,6 +60,8 @@ CheckReport check_model(const Model& model) {
 
   Workspace ws(sys, o.solver);
   const double threshold = o.solver.rank_threshold;
+  // unilateral contacts open at the start are not constraints there (docs/contact.md)
+  detail::release_open_contacts(sys, ws, model.q0, model.qd0, t);
 
   // M(q0, t), Q(q0, q'0, t): M is positive definite when stage 1 got past its factorization
   const Status s_mass = evaluate_unconstrained(sys, ws, model.q0, model.qd0, t);

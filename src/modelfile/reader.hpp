@@ -362,6 +362,8 @@ class Reader {
   void read_constraints(const YAML::Node& root, SystemBuilder& builder);
   // one constraint's rows (holonomic:, nonholonomic: or A: with b:) and active:, compiled
   Constraint read_constraint(const YAML::Node& c, const std::string& name, const std::string& what);
+  // unilateral: and restitution: of a constraint entry (reader_constraints.cpp, docs/contact.md)
+  void read_unilateral(const YAML::Node& c, const std::string& name, Constraint& constraint);
   void read_nonideal(const YAML::Node& root, SystemBuilder& builder);
   // a Coulomb friction's surface_velocity: `count` expressions of q and t, compiled with their
   // rates along the motion

@@ -175,6 +175,37 @@ Constraint Reader::read_constraint(const YAML::Node& c, const std::string& name,
   return constraint;
 }
 
+void Reader::read_unilateral(const YAML::Node& c, const std::string& name, Constraint& constraint) {
+  // unilateral: true (a gap g >= 0 whose force only pushes), restitution: e in [0, 1]
+  // (docs/contact.md)
+  const YAML::Node u = c["unilateral"], e = c["restitution"];
+  bool unilateral = false;
+  if (u && (!u.IsScalar() || !YAML::convert<bool>::decode(u, unilateral)))
+    fail(u, "unilateral in constraint '" + name + "' must be true or false", "unilateral: true");
+  if (e && !unilateral) {
+    fail(e, "constraint '" + name + "' gives a restitution but is not unilateral",
+         "unilateral: true, restitution: 0.5");
+  }
+  if (!unilateral) return;
+  if (constraint.kind() != ConstraintKind::kHolonomic || constraint.rows() != 1) {
+    fail(u,
+         "constraint '" + name + "' cannot be unilateral: it is " +
+             (constraint.kind() != ConstraintKind::kHolonomic
+                  ? std::string(to_string(constraint.kind()))
+                  : "holonomic with " + format_number(constraint.rows()) + " rows") +
+             ", and a unilateral constraint is one holonomic gap g(q, t) >= 0",
+         "holonomic: y - r   (one row: the gap)");
+  }
+  const double restitution = e ? number(e, "restitution") : 0.0;
+  if (!(restitution >= 0.0 && restitution <= 1.0)) {
+    fail(e,
+         "the restitution of constraint '" + name + "' must lie in [0, 1], got " +
+             format_number(restitution, 3),
+         "restitution: 0.5");
+  }
+  constraint.unilateral(restitution);
+}
+
 void Reader::read_constraints(const YAML::Node& root, SystemBuilder& builder) {
   const YAML::Node cs = root["constraints"];
   if (!cs) return;
@@ -189,11 +220,13 @@ void Reader::read_constraints(const YAML::Node& root, SystemBuilder& builder) {
     const std::string name = c["name"].Scalar();
     if (!seen.insert(name).second) fail(c["name"], "constraint '" + name + "' is declared twice");
     for (const auto& kv : c) {
-      static const std::set<std::string> keys = {"name", "holonomic", "nonholonomic", "A",
-                                                 "b",    "active",    "stabilization"};
+      static const std::set<std::string> keys = {
+          "name",   "holonomic",     "nonholonomic", "A",          "b",
+          "active", "stabilization", "unilateral",   "restitution"};
       if (!keys.count(kv.first.Scalar())) {
         fail(kv.first, "unknown key '" + kv.first.Scalar() + "' in constraint '" + name + "'",
-             "a constraint has name, holonomic | nonholonomic | A and b, active, stabilization");
+             "a constraint has name, holonomic | nonholonomic | A and b, active, stabilization, "
+             "unilateral, restitution");
       }
     }
     Constraint constraint = read_constraint(c, name, "constraint '" + name + "'");
@@ -204,6 +237,7 @@ void Reader::read_constraints(const YAML::Node& root, SystemBuilder& builder) {
       if (alpha < 0 || beta < 0) fail(s, "stabilization gains must be >= 0");
       constraint.stabilize(alpha, beta);
     }
+    read_unilateral(c, name, constraint);
     builder.add(constraint);
     positions_.constraints[name] = position(c);
     constraint_names_.push_back(name);

@@ -38,6 +38,7 @@ std::vector<std::vector<double>*> fields(Trajectory& t) {
           &t.work_drive,
           &t.work_external,
           &t.work_control,
+          &t.work_impact,
           &t.energy_balance_residual};
 }
 

@@ -1,8 +1,9 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // The energy balance of a run: E(t) − E(0) = W_nonideal + W_ideal + W_drive + W_external +
-// W_control, the works integrated in the ODE state (simulation/constrained_ode.cpp) or, for the
-// control, beside it (control/simulate_controlled.cpp). Its residual, relative to the energy the
-// run exchanged, is the run's certificate (docs/simulation.md, "Energy balance").
+// W_control + W_impact (docs/contact.md), the works integrated in the ODE state
+// (simulation/constrained_ode.cpp) or, for the control, beside it
+// (control/simulate_controlled.cpp). Its residual, relative to the energy the run exchanged, is the
+// run's certificate (docs/simulation.md, "Energy balance").
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -33,11 +34,11 @@ std::string warning(double worst_r, double worst_t, double balance, double toler
 
 namespace detail {
 
-double EnergyBalance::add(double t, double T, double V, double E, const double (&works)[5]) {
+double EnergyBalance::add(double t, double T, double V, double E, const double (&works)[6]) {
   // r_i = E_i − E_0 − ΣW_i;  exchanged = Σ_channels Σ_i |W_i − W_{i−1}|
   if (count_ == 0) E0_ = E;
   double sum = 0.0;
-  for (int c = 0; c < 5; ++c) {
+  for (int c = 0; c < 6; ++c) {
     sum += works[c];
     if (count_ > 0) exchanged_ += std::abs(works[c] - previous_[c]);
     previous_[c] = works[c];
@@ -85,8 +86,10 @@ void compute_energy_balance(Trajectory& traj, double tolerance) {
   traj.check_consistent("ukdyn::compute_energy_balance");
   detail::EnergyBalance balance;
   for (std::size_t i = 0; i < N; ++i) {
-    const double works[5] = {traj.work_nonideal[i], traj.work_ideal[i], traj.work_drive[i],
-                             traj.work_external[i], traj.work_control[i]};
+    const double works[6] = {
+        traj.work_nonideal[i], traj.work_ideal[i],
+        traj.work_drive[i],    traj.work_external[i],
+        traj.work_control[i],  traj.work_impact.empty() ? 0.0 : traj.work_impact[i]};
     traj.energy_balance_residual[i] = balance.add(traj.t[i], traj.kinetic_energy[i],
                                                   traj.potential_energy[i], traj.energy[i], works);
   }

@@ -13,9 +13,9 @@ namespace ukdyn::detail {
 
 class EnergyBalance {
  public:
-  // the next sample: its time, energies and the five work channels (nonideal, ideal, drive,
-  // external, control); returns its residual E − E(0) − ΣW
-  double add(double t, double T, double V, double E, const double (&works)[5]);
+  // the next sample: its time, energies and the six work channels (nonideal, ideal, drive,
+  // external, control, impact); returns its residual E − E(0) − ΣW
+  double add(double t, double T, double V, double E, const double (&works)[6]);
   // the balance's figures into s (energy_balance, energy_exchanged, energy_drift,
   // energy_balance_checked = tolerance finite) and, when s.status is kOk and the balance
   // exceeds the tolerance (or is NaN), Status::kEnergyBalance with its warning
@@ -25,7 +25,7 @@ class EnergyBalance {
   std::size_t count_ = 0;
   double E0_ = 0.0, largest_ = 0.0, T_max_ = 0.0, level_ = 0.0, exchanged_ = 0.0;
   bool finite_ = true;
-  double previous_[5] = {};
+  double previous_[6] = {};               // (the six work channels)
   double worst_r_ = 0.0, worst_t_ = 0.0;  // the sample of largest |residual|
 };
 

@@ -18,6 +18,7 @@
 #include <stdexcept>
 
 #include "dynamics/internal.hpp"
+#include "simulation/contact_events.hpp"
 #include "simulation/energy_balance.hpp"
 #include "simulation/integrator.hpp"
 #include "simulation/sample_grid.hpp"
@@ -869,7 +870,7 @@ class Run {
                       &one_.lambda, &one_.position_violation, &one_.velocity_violation,
                       &one_.kinetic_energy, &one_.potential_energy, &one_.energy,
                       &one_.work_nonideal, &one_.work_ideal, &one_.work_drive, &one_.work_external,
-                      &one_.work_control, &one_.energy_balance_residual}) {
+                      &one_.work_control, &one_.work_impact, &one_.energy_balance_residual}) {
         f->clear();
       }
     }
@@ -894,13 +895,18 @@ class Run {
     const auto work = [&](Index channel) {
       return channel < 0 ? 0.0 : sample_[std::size_t(2 * n_ + channel)] / works_.scale(channel);
     };
-    const double works[5] = {work(works_.nonideal), work(works_.ideal), work(works_.drive),
-                             work(works_.external), 0.0};
+    const double works[6] = {work(works_.nonideal),
+                             work(works_.ideal),
+                             work(works_.drive),
+                             work(works_.external),
+                             0.0,
+                             contacts_ ? contacts_->impact_work() : 0.0};
     out.work_nonideal.push_back(works[0]);
     out.work_ideal.push_back(works[1]);
     out.work_drive.push_back(works[2]);
     out.work_external.push_back(works[3]);
     out.work_control.push_back(works[4]);
+    if (contacts_) out.work_impact.push_back(works[5]);
     out.energy_balance_residual.push_back(balance_.add(t, T, V, T + V, works));
     // violations of each constraint
     evaluate_violations(sys_, ws_, q_, qd_, t);
@@ -934,6 +940,8 @@ class Run {
   }
 
   const std::string& failure() const { return failure_; }
+  // the unilateral contacts, whose impacts' work record() writes (docs/contact.md)
+  void set_contacts(const detail::ContactEvents* contacts) { contacts_ = contacts; }
 
   // --- a run that diverges (docs/simulation.md, "A run that diverges") -----------------------
   // The motion grows without bound when the kinetic energy T at (t, x) exceeds kDivergence
@@ -1390,6 +1398,7 @@ class Run {
   bool hands_over_ = false;  // the last event is rkf78 handing the run to dopri5
   bool landed_ = false;      // the last switch found is a step landing on it
   std::string failure_;
+  const detail::ContactEvents* contacts_ = nullptr;  // (see set_contacts)
   std::string refusal_;      // why the last refused stick was refused (empty: friction cannot hold)
   ProgressReport progress_;  // what the last progress report said
   // a requested stop (SimulationOptions::should_stop): asked for; accepted steps since, waiting
@@ -1533,6 +1542,7 @@ std::vector<std::string> check_initial_conditions(const System& sys,
                                                   const Eigen::Ref<const VectorXd>& qd, double t,
                                                   double tolerance) {
   Workspace ws(sys);
+  detail::release_open_contacts(sys, ws, q, qd, t);  // (an open gap is no violation)
   evaluate_violations(sys, ws, q, qd, t);
   return violated(sys, ws, tolerance);
 }
@@ -1576,8 +1586,13 @@ Trajectory detail::simulate_observed(const System& sys, const Eigen::Ref<const V
   const Index n = sys.coordinate_count();
 
   // initial conditions: consistent, or projected on request (constraints that contradict each
-  // other are named: no projection helps)
+  // other are named: no projection helps); the unilateral contacts open or closed first
   VectorXd q = q0, qd = qd0;
+  detail::ContactEvents contacts(sys, ws, std::size_t(2 * n + detail::WorkLayout(sys).count));
+  if (contacts.any()) {
+    contacts.start(o.t_start, q, qd, o.initial_tolerance, traj.stats);
+    run.set_contacts(&contacts);
+  }
   evaluate_violations(sys, ws, q, qd, o.t_start);
   std::vector<std::string> bad_names;
   if (auto bad = violated(sys, ws, o.initial_tolerance, &bad_names); !bad.empty()) {
@@ -1631,6 +1646,26 @@ Trajectory detail::simulate_observed(const System& sys, const Eigen::Ref<const V
     hooks.find_event = [&](double t0, const double* x0, double t1, const double* x1,
                            const detail::SegmentHooks::Dense& dense) {
       return run.find_event(t0, x0, t1, x1, dense);
+    };
+  }
+  // unilateral contacts (docs/contact.md): their first impact or release, and the other events
+  // up to it
+  bool contact_event = false;
+  std::vector<double> x_contact(x.size());
+  if (contacts.any()) {
+    hooks.find_event = [&, others = hooks.find_event](double t0, const double* x0, double t1,
+                                                      const double* x1,
+                                                      const detail::SegmentHooks::Dense& dense) {
+      contact_event = false;
+      const double tc = contacts.find(t0, x0, t1, x1, dense);
+      if (std::isnan(tc)) return others ? others(t0, x0, t1, x1, dense) : tc;
+      if (others) {
+        dense(tc, x_contact.data());
+        if (const double te = others(t0, x0, tc, x_contact.data(), dense); !std::isnan(te))
+          return te;
+      }
+      contact_event = true;
+      return tc;
     };
   }
 
@@ -1691,6 +1726,7 @@ Trajectory detail::simulate_observed(const System& sys, const Eigen::Ref<const V
       ws.activity_override[std::size_t(k)] = sys.constraint(k).is_active(mid) ? 1 : 0;
     }
     run.apply_contact_modes();
+    if (contacts.any()) contacts.apply();
     // a constraint that switches on finds the state inconsistent: project onto it
     bool changed = false;
     if (seg > 0 && sys.constraint_count() > 0) {
@@ -1856,6 +1892,19 @@ Trajectory detail::simulate_observed(const System& sys, const Eigen::Ref<const V
       }
       method = base_method;
       after_event = true;
+      if (contact_event) {
+        // a unilateral contact's impact or release: the velocity jump and the closed set
+        if (!contacts.handle(r.t_reached, x.data(), traj.stats)) {
+          return finish(Status::kIntegratorFailure, contacts.failure(), r.t_reached);
+        }
+        if (const Status s = run.project_drift(r.t_reached, x.data()); s != Status::kOk) {
+          return finish(s, run.failure().empty() ? describe_status(sys, ws) : run.failure(),
+                        r.t_reached);
+        }
+        a = r.t_reached;
+        if (!(a < b)) break;
+        continue;
+      }
       if (run.switch_event() && run.switch_approach()) {
         // on the way to a switch: restarted clearly before it, the next step finds it again
         a = r.t_reached;

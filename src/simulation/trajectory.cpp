@@ -56,6 +56,7 @@ void Trajectory::check_consistent(const char* who) const {
   field("work_drive", traj.work_drive, 1, "1");
   field("work_external", traj.work_external, 1, "1");
   field("work_control", traj.work_control, 1, "1");
+  if (!traj.work_impact.empty()) field("work_impact", traj.work_impact, 1, "1");
   field("energy_balance_residual", traj.energy_balance_residual, 1, "1");
 }
 

@@ -137,6 +137,19 @@ class Constraint {
   /// True for a drive (mark_drive).
   bool is_drive() const { return drive_; }
 
+  /// Makes the constraint unilateral (docs/contact.md): its one holonomic row is a gap
+  /// g(q, t) = phi >= 0 whose force only pushes (multiplier lambda >= 0 in Qc = Aᵀ lambda, A =
+  /// dg/dq). The simulation keeps it as an ordinary row of A while it is closed and pushes,
+  /// releases it where lambda would pull, and re-engages it at an impact, where the approach
+  /// speed −g' jumps to e·(−g') the other way (Newton's law with restitution e). Cost O(1).
+  /// @throws std::invalid_argument naming the constraint unless it is holonomic with one row and
+  /// 0 <= restitution <= 1.
+  Constraint& unilateral(double restitution = 0.0);
+  /// True for a unilateral constraint (see unilateral()).
+  bool is_unilateral() const { return unilateral_; }
+  /// Newton's coefficient of restitution e in [0, 1] of a unilateral constraint (0 otherwise).
+  double restitution() const { return restitution_; }
+
   const std::string& name() const { return name_; }                ///< its unique name
   ConstraintKind kind() const { return kind_; }                    ///< declared form
   Index rows() const { return rows_; }                             ///< number of scalar rows
@@ -151,6 +164,8 @@ class Constraint {
   TimeInterval active_;
   Stabilization stabilization_;
   bool drive_ = false;
+  bool unilateral_ = false;
+  double restitution_ = 0.0;
   std::shared_ptr<const ConstraintModel> model_;
 };
 

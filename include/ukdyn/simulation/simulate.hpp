@@ -27,6 +27,7 @@
 
 #include "ukdyn/core/status.hpp"
 #include "ukdyn/core/system.hpp"
+#include "ukdyn/dynamics/contact.hpp"
 #include "ukdyn/dynamics/projection.hpp"
 #include "ukdyn/dynamics/workspace.hpp"
 
@@ -254,6 +255,9 @@ struct RunStatistics {
   /// stops of a Coulomb contact where sticking was refused as not admissible (it would have
   /// removed kinetic energy, or left the constraints without solution): the contact slid on
   long stick_refusals = 0;
+  /// impacts and releases of unilateral constraints (Constraint::unilateral, docs/contact.md),
+  /// in time order
+  std::vector<ContactEvent> contact_events;
   /// what the run decided on its own, one line each with its time (at most 20): a refused stick
   std::vector<std::string> notes;
   /// switches from dopri5 to BDF because the problem became stiff (SimulationOptions::
@@ -319,7 +323,10 @@ struct Trajectory {
   std::vector<double> work_drive;     ///< N: work done by the drives' share of Qc_ideal
   std::vector<double> work_external;  ///< N: ∫ P_ext dt (System::external_power), else 0
   std::vector<double> work_control;   ///< N: work of a controller (simulate_controlled), else 0
-  /// N: E(t) − E(0) − (the sum of the five works above): the balance's failure
+  /// N: the work of the impacts of unilateral constraints since t_start, Σ (T⁺ − T⁻) <= 0
+  /// (docs/contact.md); empty when the system has none (then it counts as zero)
+  std::vector<double> work_impact;
+  /// N: E(t) − E(0) − (the sum of the works above): the balance's failure
   std::vector<double> energy_balance_residual;
   RunStatistics stats;  ///< of the whole run
 

@@ -1,0 +1,77 @@
+// SPDX-License-Identifier: BSD-3-Clause
+/// @file dynamics/contact.hpp
+/// Unilateral contacts (docs/contact.md): the linear complementarity problem (LCP) that decides
+/// which contacts push, and the record of a run's contact events.
+///
+/// Glossary (docs/contact.md): g the gaps of the unilateral constraints (g >= 0), A_c their rows
+/// of A, A_b the rows of the bilateral constraints, P = M⁻¹ − M⁻¹A_bᵀ (A_b M⁻¹ A_bᵀ)⁺ A_b M⁻¹ the
+/// inverse mass with the bilateral rows eliminated, W = A_c P A_cᵀ the Delassus matrix.
+#pragma once
+
+#include <memory>
+#include <string>
+
+#include <Eigen/Core>
+
+#include "ukdyn/core/types.hpp"
+
+namespace ukdyn {
+
+/// The linear complementarity problem w = W z + r, w >= 0, z >= 0, wᵀz = 0 (W k × k, r k), solved
+/// by Siconos Numerics' lexicographic Lemke method (lcp_lexicolemke: a direct pivoting method
+/// that terminates on degenerate problems too, exact for the few contacts of an event; see
+/// docs/contact.md, "The LCP solver"). Shaped like an Eigen decomposition: constructed with the
+/// largest size (its vectors reserved once; Siconos allocates its own
+/// copy of W and its pivoting tableau in each solve: at events only, never in a step), solve(),
+/// info(), z(), w().
+class ContactLcp {
+ public:
+  /// Reserves the buffers of problems up to max_size × max_size. @throws std::invalid_argument
+  /// when max_size < 0.
+  explicit ContactLcp(Index max_size = 0);
+  ~ContactLcp();
+  ContactLcp(ContactLcp&&) noexcept;
+  ContactLcp& operator=(ContactLcp&&) noexcept;
+
+  /// Solves the LCP of W (k × k, k <= max_size; copied) and r (k). Returns true when Siconos
+  /// reports success and the solution satisfies w = W z + r, z >= 0, w >= 0, wᵀz = 0 to
+  /// tolerance · (‖W‖ ‖z‖ + ‖r‖). A solution with z = 0 (r >= 0) is found without Siconos.
+  /// @throws std::invalid_argument on sizes that do not match or exceed max_size. Cost O(k³)
+  /// per Lemke pivot sequence (at most 2^k pivots in theory, k to 2k in practice).
+  bool solve(const Eigen::Ref<const MatrixXd>& W, const Eigen::Ref<const VectorXd>& r,
+             double tolerance = 1e-9);
+  /// Siconos's info of the last solve (0: success), or −1 when its solution failed the check.
+  int info() const { return info_; }
+  /// The multipliers z (size k) of the last solve.
+  Eigen::Ref<const VectorXd> z() const { return z_.head(size_); }
+  /// The slacks w = W z + r (size k) of the last solve.
+  Eigen::Ref<const VectorXd> w() const { return w_.head(size_); }
+
+ private:
+  Index max_size_ = 0, size_ = 0;
+  VectorXd r_, z_, w_;  // (max_size) r, z, w handed to Siconos
+  int info_ = 0;
+};
+
+/// What happened at a unilateral contact during a run (RunStatistics::contact_events).
+struct ContactEvent {
+  /// The kind of event.
+  enum class Kind : unsigned char {
+    kImpact,   ///< the gap closed with approaching speed: a velocity jump
+    kRelease,  ///< a closed contact's multiplier would pull: it opens
+    kRest,     ///< an impact below the rest speed closed the contact (an accumulation point)
+  };
+  double t = 0.0;         ///< time of the event
+  Index constraint = -1;  ///< the unilateral constraint (System::constraint index)
+  Kind kind = Kind::kImpact;
+  double speed_before = 0.0;  ///< g' just before (impacts: < 0, approaching)
+  double speed_after = 0.0;   ///< g' just after
+  double impulse = 0.0;       ///< the contact's impulse Λ >= 0 (impacts)
+  /// the kinetic energy the event changed, T⁺ − T⁻ (<= 0: an impact never creates energy)
+  double energy_change = 0.0;
+};
+
+/// "impact", "release" or "rest". Cost O(1).
+const char* to_string(ContactEvent::Kind kind);
+
+}  // namespace ukdyn

@@ -1,0 +1,285 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// ContactEvents: impacts and releases of unilateral contacts, located and applied
+// (docs/contact.md, "In a run").
+#include "simulation/contact_events.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "ukdyn/core/format.hpp"
+#include "ukdyn/dynamics/forward.hpp"
+
+namespace ukdyn::detail {
+
+namespace {
+std::string format(double v) { return format_short(v); }
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+}  // namespace
+
+ContactEvents::ContactEvents(const System& sys, Workspace& ws, std::size_t x_size)
+    : sys_(sys),
+      ws_(ws),
+      dyn_(sys),
+      n_(sys.coordinate_count()),
+      closed_(dyn_.contacts().size(), 0),
+      pushes_(dyn_.contacts().size(), 0),
+      fastest_(dyn_.contacts().size(), 0.0),
+      impacts_(dyn_.contacts().size(), 0),
+      q_(n_),
+      qd_(n_),
+      xs_(Index(x_size)) {}
+
+void ContactEvents::apply() const {
+  for (std::size_t i = 0; i < closed_.size(); ++i) {
+    ws_.activity_override[std::size_t(dyn_.contacts()[i])] = closed_[i] ? 1 : 0;
+  }
+}
+
+double ContactEvents::value(Index i, bool gap, double t, const double* x) {
+  q_ = Eigen::Map<const VectorXd>(x, n_);
+  qd_ = Eigen::Map<const VectorXd>(x + n_, n_);
+  const Index k = dyn_.contacts()[std::size_t(i)];
+  if (gap) {
+    double g = 0.0, gd = 0.0;
+    dyn_.gap(sys_, ws_, k, q_, qd_, t, g, gd);
+    return g;
+  }
+  // the multiplier of the closed contact (Qc = Aᵀ lambda; pushes when > 0)
+  if (forward_dynamics(sys_, ws_, q_, qd_, t) != Status::kOk) return kNaN;
+  return ws_.lambda[sys_.row_offset(k)];
+}
+
+double ContactEvents::locate(double t0, double t1, const SegmentHooks::Dense& dense, Index i,
+                             bool gap, double level) {
+  // bisection to a bracket of 1e-14 |t|: lo on the old side (f >= level), hi across
+  double lo = t0, hi = t1;
+  const double width = 1e-14 * std::max(1.0, std::abs(t1));
+  for (int it = 0; it < 200 && hi - lo > width; ++it) {
+    const double mid = 0.5 * (lo + hi);
+    dense(mid, xs_.data());
+    const double f = value(i, gap, mid, xs_.data());
+    if (f >= level) {
+      lo = mid;
+    } else {
+      hi = mid;  // (NaN too: treated as across)
+    }
+  }
+  // an impact restarts on the old side (g >= 0: the jump then sends it back); a release just
+  // across (lambda < 0: the LCP there opens it)
+  return gap ? (lo > t0 ? lo : hi) : hi;
+}
+
+double ContactEvents::find(double t0, const double* x0, double t1, const double* x1,
+                           const SegmentHooks::Dense& dense) {
+  double first = kNaN;
+  event_ = -1;
+  // the closed contacts that still push in the step's last evaluation (read before any
+  // evaluation here overwrites it)
+  for (std::size_t i = 0; i < closed_.size(); ++i) {
+    pushes_[i] = closed_[i] && ws_.status == Status::kOk &&
+                         ws_.lambda[sys_.row_offset(dyn_.contacts()[i])] > 0.0
+                     ? 1
+                     : 0;
+  }
+  for (std::size_t i = 0; i < closed_.size(); ++i) {
+    double te = kNaN;
+    if (!closed_[i]) {
+      // an impact: the gap falls below 0 (below −kTouchGap when the step starts at a gap
+      // within roundoff below 0, after a release)
+      const double g0 = value(Index(i), true, t0, x0);
+      const double level = g0 >= 0.0 ? 0.0 : -kTouchGap;
+      if (!(value(Index(i), true, t1, x1) < level)) continue;
+      te = g0 < level ? t0 : locate(t0, t1, dense, Index(i), true, level);
+    } else {
+      // a release: the multiplier turns negative. The step's last evaluation screens (no
+      // evaluation while it pushes); then the state at t1 decides, and bisection locates it.
+      if (pushes_[i]) continue;
+      if (!(value(Index(i), false, t1, x1) < 0.0)) continue;
+      te = value(Index(i), false, t0, x0) < 0.0 ? t0 : locate(t0, t1, dense, Index(i), false, 0.0);
+    }
+    if (std::isnan(first) || te < first) {
+      first = te;
+      event_ = Index(i);
+    }
+  }
+  return first;
+}
+
+bool ContactEvents::handle(double t, double* x, RunStatistics& stats) {
+  if (long(stats.contact_events.size()) >= kMaxEvents) {
+    failure_ = "contacts: more than " + format_number(kMaxEvents) +
+               " impacts and releases (chattering) by t = " + format(t);
+    return false;
+  }
+  return resolve(t, x, event_, stats);
+}
+
+void ContactEvents::start(double t, VectorXd& q, VectorXd& qd, double tolerance,
+                          RunStatistics& stats) {
+  q_ = q;
+  qd_ = qd;
+  std::vector<std::string> penetrated;
+  std::string lines;
+  for (std::size_t i = 0; i < closed_.size(); ++i) {
+    const Index k = dyn_.contacts()[i];
+    double g = 0.0, gd = 0.0;
+    dyn_.gap(sys_, ws_, k, q_, qd_, t, g, gd);
+    if (g < -std::max(tolerance, kTouchGap)) {
+      penetrated.push_back(sys_.constraint(k).name());
+      lines += (lines.empty() ? "" : "; ") + std::string("the unilateral constraint '") +
+               sys_.constraint(k).name() + "' is penetrated: its gap is " + format(g);
+    }
+  }
+  if (!penetrated.empty()) {
+    throw InconsistentInitialState(
+        InconsistentInitialState::Cause::kNotProjected,
+        "ukdyn::simulate: inconsistent initial conditions at t = " + format(t) + ": " + lines +
+            " (a unilateral constraint needs a gap >= 0)",
+        penetrated);
+  }
+  std::fill(closed_.begin(), closed_.end(), 0);
+  xs_.head(n_) = q;
+  xs_.segment(n_, n_) = qd;
+  if (!resolve(t, xs_.data(), -1, stats)) {
+    throw std::invalid_argument("ukdyn::simulate: the initial state's contacts: " + failure_);
+  }
+  qd = xs_.segment(n_, n_);
+}
+
+bool ContactEvents::resolve(double t, double* x, Index event, RunStatistics& stats) {
+  Eigen::Map<VectorXd> q(x, n_), qd(x + n_, n_);
+  const std::size_t K = closed_.size();
+  // the touching contacts (closed, the event's, or an open gap within kTouchGap) and their g'
+  std::vector<Index> touching, set;
+  std::vector<std::size_t> which;
+  std::vector<double> v_minus;
+  bool approaching = false;
+  for (std::size_t i = 0; i < K; ++i) {
+    const Index k = dyn_.contacts()[i];
+    double g = 0.0, gd = 0.0;
+    dyn_.gap(sys_, ws_, k, q, qd, t, g, gd);
+    if (!closed_[i] && Index(i) != event && g > kTouchGap) continue;
+    which.push_back(i);
+    set.push_back(k);
+    v_minus.push_back(gd);
+    approaching = approaching || (gd < 0.0 && !closed_[i]);
+  }
+  const Index m = Index(set.size());
+  if (m == 0) {
+    apply();
+    return true;
+  }
+  const double v_scale =
+      std::max(1e-300, Eigen::Map<const VectorXd>(v_minus.data(), m).cwiseAbs().maxCoeff());
+  // the release of a closed contact: only the closed set changes
+  const bool release = event >= 0 && closed_[std::size_t(event)];
+  if (!dyn_.prepare(sys_, ws_, q, qd, t, set)) {
+    failure_ = "contacts at t = " + format(t) + ": the mass matrix is not positive definite";
+    return false;
+  }
+  if (approaching && !release) {
+    // the impact: Newton's restitution per contact; e = 0 below the rest speed
+    VectorXd e(m);
+    std::vector<bool> rests(std::size_t(m), false);
+    for (Index j = 0; j < m; ++j) {
+      const std::size_t i = which[std::size_t(j)];
+      const double speed = -v_minus[std::size_t(j)];
+      e[j] = sys_.constraint(set[std::size_t(j)]).restitution();
+      if (speed > 0.0 && !closed_[i]) {
+        fastest_[i] = std::max(fastest_[i], speed);
+        if (e[j] > 0.0 && speed < kRestFraction * fastest_[i]) {
+          e[j] = 0.0;
+          rests[std::size_t(j)] = true;
+        }
+      }
+    }
+    const VectorXd vm = Eigen::Map<const VectorXd>(v_minus.data(), m);
+    const VectorXd qd_minus = qd;
+    const double T_minus = dyn_.kinetic_energy(qd);
+    if (!dyn_.impact(qd, vm, e)) {
+      failure_ = "contacts at t = " + format(t) + ": the impact's LCP has no solution (Siconos " +
+                 "lcp_lexicolemke)";
+      return false;
+    }
+    // energy is never created: an impact that would (Newton's law with several contacts can)
+    // is redone fully plastic (e = 0), which dissipates
+    double dT = dyn_.kinetic_energy(qd) - T_minus;
+    if (dT > 1e-12 * std::max(T_minus, 1e-300)) {
+      qd = qd_minus;
+      e.setZero();
+      if (!dyn_.impact(qd, vm, e)) return false;
+      dT = dyn_.kinetic_energy(qd) - T_minus;
+      if (stats.notes.size() < 20) {
+        stats.notes.push_back("t = " + format(t) +
+                              ": an impact with restitution would have created energy; it was "
+                              "made plastic (e = 0), docs/contact.md");
+      }
+    }
+    impact_work_ += dT;
+    bool first = true;
+    for (Index j = 0; j < m; ++j) {
+      const std::size_t i = which[std::size_t(j)];
+      if (!(dyn_.lambda()[j] > 0.0)) continue;
+      ContactEvent ev;
+      ev.t = t;
+      ev.constraint = set[std::size_t(j)];
+      ev.kind = rests[std::size_t(j)] ? ContactEvent::Kind::kRest : ContactEvent::Kind::kImpact;
+      ev.speed_before = vm[j];
+      ev.speed_after = dyn_.v_after()[j];
+      ev.impulse = dyn_.lambda()[j];
+      ev.energy_change = first ? dT : 0.0;
+      first = false;
+      stats.contact_events.push_back(ev);
+      ++impacts_[i];
+      if (rests[std::size_t(j)] && stats.notes.size() < 20) {
+        stats.notes.push_back("t = " + format(t) + ": contact '" +
+                              sys_.constraint(ev.constraint).name() + "' came to rest after " +
+                              format_number(impacts_[i]) +
+                              " impacts (an accumulation point: impact speed " + format(-vm[j]) +
+                              " below " + format(kRestFraction) + " of its fastest, " +
+                              format(fastest_[i]) + "; docs/contact.md, \"Rest\")");
+      }
+    }
+    for (Index j = 0; j < m; ++j) v_minus[std::size_t(j)] = dyn_.v_after()[j];
+  }
+  // the closed set: the touching contacts that do not separate (g' ≈ 0) and push (the LCP of
+  // the accelerations)
+  std::vector<Index> candidates;
+  std::vector<std::size_t> cand_which;
+  const std::vector<unsigned char> was_closed = closed_;
+  for (Index j = 0; j < m; ++j) {
+    const std::size_t i = which[std::size_t(j)];
+    closed_[i] = 0;
+    if (v_minus[std::size_t(j)] <= 1e-9 * std::max(1.0, v_scale)) {
+      candidates.push_back(set[std::size_t(j)]);
+      cand_which.push_back(i);
+    }
+  }
+  if (!candidates.empty()) {
+    if (!dyn_.prepare(sys_, ws_, q, qd, t, candidates) ||
+        !dyn_.accelerations(sys_, ws_, q, qd, t)) {
+      failure_ = "contacts at t = " + format(t) +
+                 ": the LCP of the closed contacts has no solution (Siconos lcp_lexicolemke)";
+      return false;
+    }
+    for (std::size_t j = 0; j < candidates.size(); ++j) {
+      closed_[cand_which[j]] = dyn_.lambda()[Index(j)] > 0.0 ? 1 : 0;
+    }
+  }
+  // a closed contact that opens: a release
+  for (Index j = 0; j < m; ++j) {
+    const std::size_t i = which[std::size_t(j)];
+    if (!was_closed[i] || closed_[i]) continue;
+    ContactEvent ev;
+    ev.t = t;
+    ev.constraint = set[std::size_t(j)];
+    ev.kind = ContactEvent::Kind::kRelease;
+    ev.speed_before = ev.speed_after = v_minus[std::size_t(j)];
+    stats.contact_events.push_back(ev);
+  }
+  apply();
+  return true;
+}
+
+}  // namespace ukdyn::detail

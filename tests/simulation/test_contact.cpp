@@ -1,0 +1,413 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// Unilateral contacts and impacts (issue #31, docs/contact.md), each against a closed form: a
+// bouncing ball (impact times, apex heights e^(2k) h0, its finite rest time), the ladder leaving
+// the wall at sin θ = (2/3) sin θ0, Newton's cradle with 3 and 5 balls, a block lifted off a table
+// by a growing force; the LCP solver; and the errors users meet.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "dynamics/internal.hpp"
+#include "ukdyn/core/autodiff.hpp"
+#include "ukdyn/dynamics/contact.hpp"
+#include "ukdyn/modelfile/model.hpp"
+#include "ukdyn/simulation/simulate.hpp"
+
+namespace ukdyn {
+namespace UKDYN_TEST_FILE {
+
+constexpr double kG = 9.81;
+
+// the events of kind `kind` at constraint k
+std::vector<ContactEvent> events_of(const Trajectory& tr, Index k, ContactEvent::Kind kind) {
+  std::vector<ContactEvent> out;
+  for (const auto& e : tr.stats.contact_events) {
+    if (e.constraint == k && e.kind == kind) out.push_back(e);
+  }
+  return out;
+}
+
+// the sample of tr at time t (failing when there is none)
+std::size_t sample_at(const Trajectory& tr, double t) {
+  for (std::size_t i = 0; i < tr.t.size(); ++i) {
+    if (std::abs(tr.t[i] - t) <= 1e-12 * std::max(1.0, std::abs(t))) return i;
+  }
+  ADD_FAILURE() << "no sample at t = " << t;
+  return 0;
+}
+
+// ---- the LCP solver (Siconos lcp_lexicolemke) -------------------------------------------------
+
+TEST(ContactLcp, SolvesSmallProblemsWithKnownSolutions) {
+  ContactLcp lcp(3);
+  Eigen::Matrix2d W;
+  W << 2, 1, 1, 2;
+  // r = (−1, 1): z = (1/2, 0), w = (0, 3/2)
+  ASSERT_TRUE(lcp.solve(W, Eigen::Vector2d(-1, 1)));
+  EXPECT_NEAR(lcp.z()[0], 0.5, 1e-14);
+  EXPECT_NEAR(lcp.z()[1], 0.0, 1e-14);
+  EXPECT_NEAR(lcp.w()[0], 0.0, 1e-14);
+  EXPECT_NEAR(lcp.w()[1], 1.5, 1e-14);
+  // r = (−1, −1): both push, z = W⁻¹ (1, 1) = (1/3, 1/3)
+  ASSERT_TRUE(lcp.solve(W, Eigen::Vector2d(-1, -1)));
+  EXPECT_NEAR(lcp.z()[0], 1.0 / 3.0, 1e-14);
+  EXPECT_NEAR(lcp.z()[1], 1.0 / 3.0, 1e-14);
+  // r >= 0: z = 0, w = r
+  ASSERT_TRUE(lcp.solve(W, Eigen::Vector2d(2, 0)));
+  EXPECT_EQ(lcp.z().norm(), 0.0);
+  EXPECT_NEAR(lcp.w()[0], 2.0, 1e-15);
+  // a singular W (two equal contacts): a solution still, w = W z + r with z >= 0
+  Eigen::Matrix2d S;
+  S << 1, 1, 1, 1;
+  ASSERT_TRUE(lcp.solve(S, Eigen::Vector2d(-1, -1)));
+  EXPECT_NEAR(lcp.z().sum(), 1.0, 1e-12);
+  EXPECT_NEAR(lcp.w().norm(), 0.0, 1e-12);
+  // sizes beyond the reserved ones are refused
+  EXPECT_THROW(lcp.solve(Eigen::Matrix4d::Identity(), Eigen::Vector4d::Ones()),
+               std::invalid_argument);
+}
+
+// ---- a bouncing ball ----------------------------------------------------------------------------
+
+// A ball dropped from rest at height h0 on a floor with restitution e: it reaches the floor at
+// t0 = √(2 h0 / g) with speed v0 = g t0; the k-th impact (k = 0, 1, …) at
+// t_k = t0 + (2 v0 / g) Σ_{j=1..k} e^j, with speed e^k v0 before and e^(k+1) v0 after, so the apex
+// after it is e^(2(k+1)) h0; the impacts accumulate at t∞ = t0 (1 + e) / (1 − e).
+constexpr const char* kBall = R"(
+parameters: {m: 0.5, g: 9.81, h0: 1, e: 0.5}
+coordinates: [y]
+kinetic_energy: 0.5*m*y_dot^2
+potential_energy: m*g*y
+constraints:
+  - {name: floor, holonomic: y, unilateral: true, restitution: e}
+initial: {q: {y: h0}}
+simulate: {t_end: 2, integrator: dopri5, rtol: 1e-11, atol: 1e-13}
+output: {every: 0}
+)";
+
+TEST(Contact, BouncingBallImpactTimesApexHeightsAndRestTime) {
+  const double e = 0.5, h0 = 1.0;
+  Model m = parse_model(kBall);
+  const double t0 = std::sqrt(2.0 * h0 / kG), v0 = kG * t0;
+  const double t_inf = t0 * (1.0 + e) / (1.0 - e);
+  // samples at the first apexes: t_k + e^(k+1) v0 / g
+  double tk = t0;
+  std::vector<double> apex_t;
+  for (int k = 0; k < 4; ++k) {
+    apex_t.push_back(tk + std::pow(e, k + 1) * v0 / kG);
+    tk += 2.0 * std::pow(e, k + 1) * v0 / kG;
+  }
+  m.options.output_at = apex_t;
+  m.options.output_at.push_back(1.9);
+  const Trajectory tr = simulate(m.system, m.q0, m.qd0, m.options);
+  ASSERT_EQ(tr.stats.status, Status::kOk) << tr.stats.message;
+  const auto impacts = events_of(tr, 0, ContactEvent::Kind::kImpact);
+  const auto rests = events_of(tr, 0, ContactEvent::Kind::kRest);
+  // the impacts until the speed falls below 1e-6 of the first: e^k < 1e-6, k = 20
+  ASSERT_EQ(impacts.size(), 20u);
+  ASSERT_EQ(rests.size(), 1u);
+  tk = t0;
+  for (std::size_t k = 0; k < impacts.size(); ++k) {
+    const double ek = std::pow(e, double(k));
+    EXPECT_NEAR(impacts[k].t, tk, 1e-9) << "impact " << k;
+    EXPECT_NEAR(impacts[k].speed_before, -ek * v0, 1e-8 * v0) << "impact " << k;
+    EXPECT_NEAR(impacts[k].speed_after, e * ek * v0, 1e-8 * v0) << "impact " << k;
+    // the impulse m (1 + e) e^k v0 and the energy lost ½ m (1 − e²) (e^k v0)²
+    EXPECT_NEAR(impacts[k].impulse, 0.5 * (1 + e) * ek * v0, 1e-8);
+    EXPECT_NEAR(impacts[k].energy_change, -0.25 * (1 - e * e) * ek * ek * v0 * v0, 1e-8);
+    tk += 2.0 * e * ek * v0 / kG;
+  }
+  // the apexes e^(2(k+1)) h0, from the trajectory's samples
+  for (std::size_t k = 0; k < apex_t.size(); ++k) {
+    const std::size_t i = sample_at(tr, apex_t[k]);
+    EXPECT_NEAR(tr.q[i], std::pow(e, 2.0 * double(k + 1)) * h0, 1e-8) << "apex " << k;
+    EXPECT_NEAR(tr.qd[i], 0.0, 1e-7) << "apex " << k;
+  }
+  // the rest: within 1e-6 t∞ of the accumulation point (the flights left out are e^20 of them)
+  EXPECT_NEAR(rests[0].t, t_inf, 2e-6 * t_inf);
+  EXPECT_NEAR(rests[0].speed_after, 0.0, 1e-12);
+  // at rest on the floor: y = 0, no velocity, the floor carries m g (lambda = m g)
+  const std::size_t last = sample_at(tr, 1.9);
+  EXPECT_NEAR(tr.q[last], 0.0, 1e-10);
+  EXPECT_NEAR(tr.qd[last], 0.0, 1e-10);
+  EXPECT_NEAR(tr.lambda[last], 0.5 * kG, 1e-8);
+  // the energy balance, with the impacts' work: all of m g h0 is lost, and the run is certified
+  EXPECT_TRUE(tr.stats.energy_balance_checked);
+  ASSERT_EQ(tr.work_impact.size(), tr.t.size());
+  EXPECT_NEAR(tr.work_impact.back(), -0.5 * kG * h0, 1e-8);
+  EXPECT_NEAR(tr.energy.back() - tr.energy.front(), tr.work_impact.back(), 1e-8);
+  // the note of the accumulation point
+  bool noted = false;
+  for (const auto& note : tr.stats.notes)
+    noted = noted || note.find("came to rest") != std::string::npos;
+  EXPECT_TRUE(noted);
+}
+
+TEST(Contact, PerfectlyElasticBallKeepsItsEnergyAndPlasticBallStops) {
+  // e = 1: every apex is h0 again, and no energy is lost
+  Model m = parse_model(kBall, "<string>", {{"e", 1.0}});
+  m.options.t_end = 2.5;
+  const double t0 = std::sqrt(2.0 / kG), v0 = kG * t0;
+  m.options.output_at = {2.0 * t0};  // the first apex after the first bounce
+  const Trajectory tr = simulate(m.system, m.q0, m.qd0, m.options);
+  ASSERT_EQ(tr.stats.status, Status::kOk) << tr.stats.message;
+  const auto impacts = events_of(tr, 0, ContactEvent::Kind::kImpact);
+  ASSERT_EQ(impacts.size(), 3u);  // at t0, 3 t0, 5 t0 (t0 = 0.4515, t_end = 2.5)
+  for (std::size_t k = 0; k < 3; ++k) {
+    EXPECT_NEAR(impacts[k].t, (2.0 * double(k) + 1.0) * t0, 1e-9);
+    EXPECT_NEAR(impacts[k].speed_after, v0, 1e-8);
+    EXPECT_NEAR(impacts[k].energy_change, 0.0, 1e-12);
+  }
+  EXPECT_NEAR(tr.q[sample_at(tr, 2.0 * t0)], 1.0, 1e-8);
+  EXPECT_NEAR(tr.work_impact.back(), 0.0, 1e-12);
+  // e = 0: one impact, then at rest
+  Model p = parse_model(kBall, "<string>", {{"e", 0.0}});
+  const Trajectory tp = simulate(p.system, p.q0, p.qd0, p.options);
+  ASSERT_EQ(tp.stats.status, Status::kOk) << tp.stats.message;
+  ASSERT_EQ(tp.stats.contact_events.size(), 1u);
+  EXPECT_NEAR(tp.stats.contact_events[0].t, t0, 1e-9);
+  EXPECT_NEAR(tp.stats.contact_events[0].speed_after, 0.0, 1e-12);
+  EXPECT_NEAR(tp.q.back(), 0.0, 1e-10);
+  EXPECT_NEAR(tp.work_impact.back(), -0.5 * kG, 1e-8);
+}
+
+// ---- the ladder --------------------------------------------------------------------------------
+
+// A uniform rod (mass m, length L; centre (x, y), angle th from the horizontal) leaning on a
+// frictionless wall x = 0 and floor y = 0, released from rest at th0. While both contacts hold,
+// the centre moves on the circle of radius L/2: th'² = 3 g (sin th0 − sin th) / L, and the wall
+// pushes with N = m x'' = (3/2) m g cos th ((3/2) sin th − sin th0), which vanishes at
+// sin th = (2/3) sin th0: there the ladder leaves the wall.
+constexpr const char* kLadder = R"(
+parameters: {m: 2, L: 2, g: 9.81, th0: 1.0471975511965976}
+coordinates: [x, y, th]
+kinetic_energy: 0.5*m*(x_dot^2 + y_dot^2) + 0.5*m*L^2/12*th_dot^2
+potential_energy: m*g*y
+constraints:
+  - {name: wall, holonomic: x - L/2*cos(th), unilateral: true}
+  - {name: floor, holonomic: y - L/2*sin(th), unilateral: true}
+initial: {q: {x: L/2*cos(th0), y: L/2*sin(th0), th: th0}}
+simulate: {t_end: 1.2, integrator: dopri5, rtol: 1e-11, atol: 1e-13}
+output: {every: 0.05}
+)";
+
+TEST(Contact, LadderLeavesTheWallAtTwoThirdsOfItsInitialHeight) {
+  const double m_ = 2.0, th0 = M_PI / 3.0;
+  Model m = parse_model(kLadder);
+  const Trajectory first = simulate(m.system, m.q0, m.qd0, m.options);
+  ASSERT_EQ(first.stats.status, Status::kOk) << first.stats.message;
+  const auto releases = events_of(first, 0, ContactEvent::Kind::kRelease);
+  ASSERT_EQ(releases.size(), 1u);
+  // the floor holds throughout (no event of the floor), the wall releases once
+  EXPECT_TRUE(events_of(first, 1, ContactEvent::Kind::kRelease).empty());
+  const double tr_ = releases[0].t;
+  // the state at the release: the same run with a sample there
+  m.options.output_at = {tr_};
+  const Trajectory tr = simulate(m.system, m.q0, m.qd0, m.options);
+  ASSERT_EQ(tr.stats.status, Status::kOk) << tr.stats.message;
+  const std::size_t i = sample_at(tr, tr_);
+  const double th = tr.q[3 * i + 2];
+  EXPECT_NEAR(std::sin(th), 2.0 / 3.0 * std::sin(th0), 1e-8);
+  // before the release, the wall's force against its closed form (samples every 0.05 s)
+  for (std::size_t s = 0; s < tr.t.size() && tr.t[s] < tr_ - 0.01; ++s) {
+    const double a = tr.q[3 * s + 2];
+    const double N = 1.5 * m_ * kG * std::cos(a) * (1.5 * std::sin(a) - std::sin(th0));
+    EXPECT_NEAR(tr.lambda[2 * s], N, 1e-7 * m_ * kG) << "t = " << tr.t[s];
+    // th'² = 3 g (sin th0 − sin th) / L
+    EXPECT_NEAR(tr.qd[3 * s + 2] * tr.qd[3 * s + 2], 3.0 * kG * (std::sin(th0) - std::sin(a)) / 2.0,
+                1e-8);
+  }
+  // after it the wall's gap opens and its force is zero; energy is conserved (no impact)
+  EXPECT_GT(tr.q[tr.q.size() - 3] - std::cos(tr.q.back()), 1e-3);
+  EXPECT_NEAR(tr.lambda[tr.lambda.size() - 2], 0.0, 1e-12);
+  EXPECT_NEAR(tr.energy.back(), tr.energy.front(), 1e-8 * m_ * kG);
+  EXPECT_TRUE(tr.stats.energy_balance_checked);
+}
+
+// ---- Newton's cradle ---------------------------------------------------------------------------
+
+// N equal balls (diameter 1) on a line, gaps of 1e-3 between them; the first moves at v = 1
+// towards the others at rest. With e = 1 each impact exchanges the velocities of the pair, so
+// the last ball leaves at v and the others are at rest; momentum m v and energy ½ m v² are kept.
+std::string cradle(int N) {
+  std::string coords, T, contacts, q;
+  for (int i = 1; i <= N; ++i) {
+    const std::string x = "x" + std::to_string(i);
+    coords += (i > 1 ? ", " : "") + x;
+    T += (i > 1 ? " + " : "") + std::string("0.5*m*") + x + "_dot^2";
+    q += (i > 1 ? ", " : "") + x + ": " + std::to_string(i - 1) + "*1.001";
+    if (i < N) {
+      contacts += "  - {name: c" + std::to_string(i) + ", holonomic: x" + std::to_string(i + 1) +
+                  " - x" + std::to_string(i) + " - 1, unilateral: true, restitution: 1}\n";
+    }
+  }
+  return "parameters: {m: 0.2}\ncoordinates: [" + coords + "]\nkinetic_energy: " + T +
+         "\nconstraints:\n" + contacts + "initial: {q: {" + q + "}, q_dot: {x1: 1}}\n" +
+         "simulate: {t_end: 0.1, integrator: dopri5, rtol: 1e-11, atol: 1e-13}\n"
+         "output: {every: 0}\n";
+}
+
+TEST(Contact, NewtonsCradleWithThreeAndFiveBalls) {
+  for (int N : {3, 5}) {
+    const Model m = parse_model(cradle(N));
+    const Trajectory tr = simulate(m.system, m.q0, m.qd0, m.options);
+    ASSERT_EQ(tr.stats.status, Status::kOk) << tr.stats.message;
+    // N − 1 impacts, one per pair, in order, the first after the gap 1e-3 at v = 1
+    ASSERT_EQ(tr.stats.contact_events.size(), std::size_t(N - 1)) << "N = " << N;
+    EXPECT_NEAR(tr.stats.contact_events[0].t, 1e-3, 1e-12);
+    for (int k = 0; k + 1 < N; ++k) {
+      EXPECT_EQ(tr.stats.contact_events[std::size_t(k)].constraint, k);
+      EXPECT_NEAR(tr.stats.contact_events[std::size_t(k)].speed_after, 1.0, 1e-12);
+    }
+    // the last ball at v = 1, the others at rest
+    const std::size_t last = tr.t.size() - 1;
+    double p = 0.0, T = 0.0;
+    for (int i = 0; i < N; ++i) {
+      const double v = tr.qd[last * std::size_t(N) + std::size_t(i)];
+      EXPECT_NEAR(v, i + 1 == N ? 1.0 : 0.0, 1e-12) << "N = " << N << ", ball " << i + 1;
+      p += 0.2 * v;
+      T += 0.1 * v * v;
+    }
+    EXPECT_NEAR(p, 0.2, 1e-12);
+    EXPECT_NEAR(T, 0.1, 1e-12);
+    EXPECT_NEAR(tr.work_impact.back(), 0.0, 1e-12);
+  }
+}
+
+// ---- a block lifted off a table
+// ------------------------------------------------------------------
+
+// A block (mass m) on a table, pulled up by F = k t: the table pushes with m g − k t until
+// t* = m g / k, where the block lifts off; after it y = k (t − t*)³ / (6 m).
+constexpr const char* kLift = R"(
+parameters: {m: 2, g: 9.81, k: 9.81}
+coordinates: [y]
+mass_matrix: [[m]]
+forces: [k*t - m*g]
+constraints:
+  - {name: table, holonomic: y, unilateral: true}
+simulate: {t_end: 3, integrator: dopri5, rtol: 1e-11, atol: 1e-13}
+output: {every: 0, at: [1, 3]}
+)";
+
+TEST(Contact, BlockLiftsOffWhenThePullExceedsItsWeight) {
+  const Model m = parse_model(kLift);
+  const Trajectory tr = simulate(m.system, m.q0, m.qd0, m.options);
+  ASSERT_EQ(tr.stats.status, Status::kOk) << tr.stats.message;
+  ASSERT_EQ(tr.stats.contact_events.size(), 1u);
+  EXPECT_EQ(tr.stats.contact_events[0].kind, ContactEvent::Kind::kRelease);
+  const double t_star = 2.0;  // m g / k
+  EXPECT_NEAR(tr.stats.contact_events[0].t, t_star, 1e-9);
+  // at t = 1: on the table, pushed with m g − k t
+  const std::size_t i1 = sample_at(tr, 1.0);
+  EXPECT_NEAR(tr.q[i1], 0.0, 1e-12);
+  EXPECT_NEAR(tr.lambda[i1], 2.0 * kG - kG, 1e-9);
+  // at t = 3: y = k (t − t*)³ / (6 m)
+  const std::size_t i3 = sample_at(tr, 3.0);
+  EXPECT_NEAR(tr.q[i3], kG / 12.0, 1e-8);
+  EXPECT_NEAR(tr.qd[i3], kG / 4.0, 1e-8);
+  EXPECT_NEAR(tr.lambda[i3], 0.0, 1e-12);
+}
+
+// ---- cost: a closed contact costs what its bilateral row costs
+
+// A block pushed along a table (x'' = F/m, y = 0): with the table unilateral (closed all along) the
+// run takes the same steps and ODE evaluations as with the table bilateral, and evaluates the
+// fundamental equation only once more (the LCP at the start): no LCP, no evaluation for the
+// contact while it pushes.
+TEST(Contact, ClosedContactCostsWhatItsBilateralRowCosts) {
+  const std::string base = R"(
+parameters: {m: 2, g: 9.81}
+coordinates: [x, y]
+mass_matrix: [[m, 0], [0, m]]
+forces: [1 + 0.5*sin(t), -m*g]
+simulate: {t_end: 5, integrator: dopri5, rtol: 1e-10, atol: 1e-12}
+output: {every: 0.5}
+constraints:
+)";
+  std::int64_t evaluations[2] = {0, 0};
+  Trajectory runs[2];
+  for (int unilateral = 0; unilateral < 2; ++unilateral) {
+    const Model m =
+        parse_model(base + (unilateral ? "  - {name: table, holonomic: y, unilateral: true}\n"
+                                       : "  - {name: table, holonomic: y}\n"));
+    runs[unilateral] = detail::simulate_observed(
+        m.system, m.q0, m.qd0, m.options,
+        [&](const Workspace& ws) { evaluations[unilateral] = ws.counters.evaluations; });
+    ASSERT_EQ(runs[unilateral].stats.status, Status::kOk) << runs[unilateral].stats.message;
+  }
+  EXPECT_TRUE(runs[1].stats.contact_events.empty());
+  EXPECT_EQ(runs[1].stats.steps, runs[0].stats.steps);
+  EXPECT_EQ(runs[1].stats.evaluations, runs[0].stats.evaluations);
+  EXPECT_EQ(evaluations[1], evaluations[0] + 1);
+  // the same motion, bit for bit, and the same force m g
+  ASSERT_EQ(runs[1].q.size(), runs[0].q.size());
+  for (std::size_t i = 0; i < runs[0].q.size(); ++i) EXPECT_EQ(runs[1].q[i], runs[0].q[i]);
+  EXPECT_NEAR(runs[1].lambda.back(), 2 * kG, 1e-12);
+}
+
+// ---- errors
+// ----------------------------------------------------------------------------------------
+
+TEST(Contact, BadInputGetsAClearErrorNamingTheConstraint) {
+  auto message = [](const std::string& text) {
+    try {
+      parse_model(text);
+    } catch (const std::exception& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  const std::string base = "coordinates: [x, y]\nmass_matrix: [[1, 0], [0, 1]]\nconstraints:\n";
+  const std::string r =
+      message(base + "  - {name: floor, holonomic: y, unilateral: true, restitution: 1.5}\n");
+  EXPECT_NE(r.find("restitution of constraint 'floor' must lie in [0, 1], got 1.5"),
+            std::string::npos)
+      << r;
+  const std::string nh =
+      message(base + "  - {name: knife, nonholonomic: x_dot, unilateral: true}\n");
+  EXPECT_NE(nh.find("constraint 'knife' cannot be unilateral: it is nonholonomic"),
+            std::string::npos)
+      << nh;
+  const std::string rows =
+      message(base + "  - {name: both, holonomic: [x, y], unilateral: true}\n");
+  EXPECT_NE(rows.find("constraint 'both' cannot be unilateral: it is holonomic with 2 rows"),
+            std::string::npos)
+      << rows;
+  const std::string lone = message(base + "  - {name: floor, holonomic: y, restitution: 0.5}\n");
+  EXPECT_NE(lone.find("constraint 'floor' gives a restitution but is not unilateral"),
+            std::string::npos)
+      << lone;
+  // in C++
+  auto knife = nonholonomic(
+      "knife", 1, [](const auto&, const auto& qd, const auto&, auto& psi) { psi[0] = qd[0]; });
+  EXPECT_THROW(knife.unilateral(0.5), std::invalid_argument);
+  auto floor = holonomic("floor", 1, [](const auto& q, const auto&, auto& phi) { phi[0] = q[1]; });
+  try {
+    floor.unilateral(-0.1);
+    ADD_FAILURE() << "no error";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("constraint 'floor': the restitution must lie in [0, 1]"),
+              std::string::npos)
+        << e.what();
+  }
+  // a penetrated initial state names the contact
+  Model m = parse_model(std::string(kBall), "<string>", {{"h0", -0.25}});
+  try {
+    simulate(m.system, m.q0, m.qd0, m.options);
+    ADD_FAILURE() << "no error";
+  } catch (const InconsistentInitialState& e) {
+    EXPECT_NE(std::string(e.what()).find(
+                  "the unilateral constraint 'floor' is penetrated: its gap is -0.25"),
+              std::string::npos)
+        << e.what();
+    ASSERT_EQ(e.constraints().size(), 1u);
+    EXPECT_EQ(e.constraints()[0], "floor");
+  }
+}
+
+}  // namespace UKDYN_TEST_FILE
+}  // namespace ukdyn
