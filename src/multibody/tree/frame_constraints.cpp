@@ -1,7 +1,8 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // Constraints and requirements between tree frames, built on frame_jacobian and
-// frame_bias_acceleration: a point loop closure (3 rows), a distance loop closure (1 row), and a
-// task-space pose requirement (6 rows) for exact tracking control.
+// frame_bias_acceleration: a point loop closure (3 rows), a distance loop closure (1 row), a weld
+// (6 rows) and a revolute closure (5 rows), and a task-space pose requirement (6 rows) for exact
+// tracking control.
 #include <cmath>
 #include <memory>
 #include <stdexcept>
@@ -10,6 +11,7 @@
 
 #include "multibody/tree/spatial.hpp"
 #include "ukdyn/multibody/tree.hpp"
+#include "ukdyn/multibody/tree_closures.hpp"
 
 namespace ukdyn::tree {
 
@@ -151,6 +153,126 @@ class DistanceModel final : public FrameModel {
   double length_;
 };
 
+// the world orientation of a link's frame (the world's own for link −1), after
+// forward_kinematics
+Matrix3d world_rotation(const TreeData& d, Index link, const Matrix3d& R_L) {
+  return link < 0 ? R_L : Matrix3d(d.R_WL[std::size_t(link)] * R_L);
+}
+
+// e = [p_W(a) − p_W(b); ½ Σ r_b,k × r_a,k]; e'' = 0 is A q'' = b (see weld_constraint)
+class WeldModel final : public FrameModel {
+ public:
+  WeldModel(std::shared_ptr<const Tree> tree, const LinkFrame& a, const LinkFrame& b)
+      : FrameModel(std::move(tree)), a_(a), b_(b) {}
+  void acceleration_form(const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd,
+                         double, ConstraintScratch* s, Eigen::Ref<MatrixXd> A,
+                         Eigen::Ref<VectorXd> b) const override {
+    auto& w = *static_cast<FrameScratch*>(s);
+    const PointState pa = point_state(*tree_, {a_.link, a_.p}, q, qd, w.data, w.Ja, true);
+    const PointState pb = point_state(*tree_, {b_.link, b_.p}, q, qd, w.data, w.Jb, true);
+    // position: (J_v(a) − J_v(b)) q'' = β_v(b) − β_v(a)
+    A.topRows<3>() = w.Ja.bottomRows<3>() - w.Jb.bottomRows<3>();
+    b.head<3>() = pb.bias.tail<3>() - pa.bias.tail<3>();
+    // orientation: r' = ω × r; e_R'' = L ω_a' − Lᵀ ω_b' + ½ Σ ((ω_b × r_b') × r_a + 2 r_b' × r_a'
+    // + r_b × (ω_a × r_a')) with ω' = J_ω q'' + β_ω
+    const Matrix3d Ra = world_rotation(w.data, a_.link, a_.R);
+    const Matrix3d Rb = world_rotation(w.data, b_.link, b_.R);
+    const Vector3d wa = w.Ja.topRows<3>() * qd, wb = w.Jb.topRows<3>() * qd;
+    Matrix3d L = Matrix3d::Zero();
+    Vector3d rest = Vector3d::Zero();
+    for (int k = 0; k < 3; ++k) {
+      const Vector3d ra = Ra.col(k), rb = Rb.col(k);
+      const Vector3d ra1 = wa.cross(ra), rb1 = wb.cross(rb);
+      L -= 0.5 * detail::skew(rb) * detail::skew(ra);
+      rest += 0.5 * (wb.cross(rb1).cross(ra) + 2.0 * rb1.cross(ra1) + rb.cross(wa.cross(ra1)));
+    }
+    A.bottomRows<3>().noalias() = L * w.Ja.topRows<3>();
+    A.bottomRows<3>().noalias() -= L.transpose() * w.Jb.topRows<3>();
+    b.tail<3>() = -rest - L * pa.bias.head<3>() + L.transpose() * pb.bias.head<3>();
+  }
+  void violation(const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd, double,
+                 ConstraintScratch* s, Eigen::Ref<VectorXd> position,
+                 Eigen::Ref<VectorXd> velocity) const override {
+    auto& w = *static_cast<FrameScratch*>(s);
+    const PointState pa = point_state(*tree_, {a_.link, a_.p}, q, qd, w.data, w.Ja, false);
+    const PointState pb = point_state(*tree_, {b_.link, b_.p}, q, qd, w.data, w.Jb, false);
+    position.head<3>() = pa.p_W - pb.p_W;
+    velocity.head<3>() = (w.Ja.bottomRows<3>() - w.Jb.bottomRows<3>()) * qd;
+    // e_R = ½ Σ r_b,k × r_a,k, e_R' = ½ Σ ((ω_b × r_b) × r_a + r_b × (ω_a × r_a))
+    const Matrix3d Ra = world_rotation(w.data, a_.link, a_.R);
+    const Matrix3d Rb = world_rotation(w.data, b_.link, b_.R);
+    const Vector3d wa = w.Ja.topRows<3>() * qd, wb = w.Jb.topRows<3>() * qd;
+    Vector3d e = Vector3d::Zero(), e_rate = Vector3d::Zero();
+    for (int k = 0; k < 3; ++k) {
+      const Vector3d ra = Ra.col(k), rb = Rb.col(k);
+      e += 0.5 * rb.cross(ra);
+      e_rate += 0.5 * (wb.cross(rb).cross(ra) + rb.cross(wa.cross(ra)));
+    }
+    position.tail<3>() = e;
+    velocity.tail<3>() = e_rate;
+  }
+
+ private:
+  LinkFrame a_, b_;
+};
+
+// [p_W(a) − p_W(b); u_a · x_b; u_a · y_b] = 0 (see revolute_constraint)
+class RevoluteModel final : public FrameModel {
+ public:
+  RevoluteModel(std::shared_ptr<const Tree> tree, LinkPoint a, const Vector3d& axis_a, LinkPoint b,
+                const Vector3d& axis_b)
+      : FrameModel(std::move(tree)), a_(a), b_(b), u_a_(axis_a.normalized()) {
+    // x_b, y_b: an orthonormal pair ⊥ u_b in b's link frame
+    const Vector3d u = axis_b.normalized();
+    const Vector3d seed = std::abs(u.x()) < 0.9 ? Vector3d::UnitX() : Vector3d::UnitY();
+    x_b_ = (seed - u * u.dot(seed)).normalized();
+    y_b_ = u.cross(x_b_);
+  }
+  void acceleration_form(const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd,
+                         double, ConstraintScratch* s, Eigen::Ref<MatrixXd> A,
+                         Eigen::Ref<VectorXd> b) const override {
+    auto& w = *static_cast<FrameScratch*>(s);
+    const PointState pa = point_state(*tree_, a_, q, qd, w.data, w.Ja, true);
+    const PointState pb = point_state(*tree_, b_, q, qd, w.data, w.Jb, true);
+    A.topRows<3>() = w.Ja.bottomRows<3>() - w.Jb.bottomRows<3>();
+    b.head<3>() = pb.bias.tail<3>() - pa.bias.tail<3>();
+    // φ = u_a · x: φ'' = (u_a × x) · (ω_a' − ω_b') + ((ω_a × u_a) × x + u_a × (ω_b × x)) · (ω_a −
+    // ω_b)
+    const Vector3d u = world_rotation(w.data, a_.link, Matrix3d::Identity()) * u_a_;
+    const Matrix3d Rb = world_rotation(w.data, b_.link, Matrix3d::Identity());
+    const Vector3d wa = w.Ja.topRows<3>() * qd, wb = w.Jb.topRows<3>() * qd;
+    const Vector3d dw = wa - wb, dbias = pa.bias.head<3>() - pb.bias.head<3>();
+    for (int k = 0; k < 2; ++k) {
+      const Vector3d x = Rb * (k == 0 ? x_b_ : y_b_);
+      const Vector3d g = u.cross(x);
+      A.row(3 + k).noalias() = g.transpose() * (w.Ja.topRows<3>() - w.Jb.topRows<3>());
+      b[3 + k] = -g.dot(dbias) - (wa.cross(u).cross(x) + u.cross(wb.cross(x))).dot(dw);
+    }
+  }
+  void violation(const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd, double,
+                 ConstraintScratch* s, Eigen::Ref<VectorXd> position,
+                 Eigen::Ref<VectorXd> velocity) const override {
+    auto& w = *static_cast<FrameScratch*>(s);
+    const PointState pa = point_state(*tree_, a_, q, qd, w.data, w.Ja, false);
+    const PointState pb = point_state(*tree_, b_, q, qd, w.data, w.Jb, false);
+    position.head<3>() = pa.p_W - pb.p_W;
+    velocity.head<3>() = (w.Ja.bottomRows<3>() - w.Jb.bottomRows<3>()) * qd;
+    // φ = u_a · x, φ' = (u_a × x) · (ω_a − ω_b)
+    const Vector3d u = world_rotation(w.data, a_.link, Matrix3d::Identity()) * u_a_;
+    const Matrix3d Rb = world_rotation(w.data, b_.link, Matrix3d::Identity());
+    const Vector3d dw = (w.Ja.topRows<3>() - w.Jb.topRows<3>()) * qd;
+    for (int k = 0; k < 2; ++k) {
+      const Vector3d x = Rb * (k == 0 ? x_b_ : y_b_);
+      position[3 + k] = u.dot(x);
+      velocity[3 + k] = u.cross(x).dot(dw);
+    }
+  }
+
+ private:
+  LinkPoint a_, b_;
+  Vector3d u_a_, x_b_, y_b_;  // unit axis in a's link frame; the pair ⊥ u_b in b's
+};
+
 // e = [p_W − p_d; ½ Σ r_d,k × r_k]; e'' = 0 is A q'' = b (see pose_requirement)
 class PoseModel final : public FrameModel {
  public:
@@ -233,6 +355,40 @@ Constraint distance_constraint(const Tree& tree, std::string name, LinkPoint a, 
   }
   auto model = std::make_shared<DistanceModel>(std::make_shared<const Tree>(tree), a, b, length);
   return Constraint(std::move(name), ConstraintKind::kHolonomic, 1, std::move(model));
+}
+
+Constraint weld_constraint(const Tree& tree, std::string name, const LinkFrame& a,
+                           const LinkFrame& b) {
+  const std::string who = "ukdyn::tree::weld_constraint";
+  check_points(tree, who, name, {a.link, a.p}, {b.link, b.p});
+  for (const auto* f : {&a, &b}) {
+    const Matrix3d& R = f->R;
+    if (!R.allFinite() || !(R.transpose() * R).isApprox(Matrix3d::Identity(), 1e-9) ||
+        !(R.determinant() > 0.0)) {
+      throw std::invalid_argument(who + ": constraint '" + name + "': the orientation of frame " +
+                                  (f == &a ? "a" : "b") +
+                                  " is not a rotation (R must be orthonormal with det R = 1)");
+    }
+  }
+  auto model = std::make_shared<WeldModel>(std::make_shared<const Tree>(tree), a, b);
+  return Constraint(std::move(name), ConstraintKind::kHolonomic, 6, std::move(model));
+}
+
+Constraint revolute_constraint(const Tree& tree, std::string name, LinkPoint a,
+                               const Vector3d& axis_a, LinkPoint b, const Vector3d& axis_b) {
+  const std::string who = "ukdyn::tree::revolute_constraint";
+  check_points(tree, who, name, a, b);
+  for (const auto* u : {&axis_a, &axis_b}) {
+    if (!u->allFinite() || !(u->norm() > 1e-12)) {
+      throw std::invalid_argument(who + ": constraint '" + name + "': axis " +
+                                  (u == &axis_a ? "a" : "b") +
+                                  " must be a finite, nonzero vector (the hinge's axis in the "
+                                  "link's frame)");
+    }
+  }
+  auto model =
+      std::make_shared<RevoluteModel>(std::make_shared<const Tree>(tree), a, axis_a, b, axis_b);
+  return Constraint(std::move(name), ConstraintKind::kHolonomic, 5, std::move(model));
 }
 
 Constraint pose_requirement(const Tree& tree, std::string name, LinkPoint at, PosePathFn path,

@@ -22,6 +22,14 @@ void rnea(const Tree& tree, const Eigen::Ref<const VectorXd>& q,
   detail::check_sizes(who, tree, d, tau.size());
   if (qdd) detail::check_sizes(who, tree, d, qdd->size());
   forward_kinematics(tree, q, d);
+  detail::rnea_from_kinematics(tree, qd, qdd, d, tau);
+}
+
+}  // namespace
+
+void detail::rnea_from_kinematics(const Tree& tree, const Eigen::Ref<const VectorXd>& qd,
+                                  const Eigen::Ref<const VectorXd>* qdd, TreeData& d,
+                                  Eigen::Ref<VectorXd> tau) {
   // the world's acceleration −g stands for gravity
   Vector6d a0;
   a0 << Vector3d::Zero(), -tree.gravity();
@@ -59,8 +67,6 @@ void rnea(const Tree& tree, const Eigen::Ref<const VectorXd>& q,
     if (p >= 0) d.f[std::size_t(p)] += detail::force_to_parent(d.E[k], d.r[k], d.f[k]);
   }
 }
-
-}  // namespace
 
 Vector6d frame_bias_acceleration(const Tree& tree, const Eigen::Ref<const VectorXd>& q,
                                  const Eigen::Ref<const VectorXd>& qd, TreeData& d, Index link,
