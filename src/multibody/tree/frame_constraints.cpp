@@ -4,6 +4,7 @@
 // (6 rows) and a revolute closure (5 rows), and a task-space pose requirement (6 rows) for exact
 // tracking control.
 #include <cmath>
+#include <cstring>
 #include <memory>
 #include <stdexcept>
 #include <string>
@@ -22,10 +23,29 @@ using Jacobian = Eigen::Matrix<double, 6, Eigen::Dynamic>;
 // per workspace: the passes' links and the two points' Jacobians
 struct FrameScratch final : ConstraintScratch {
   explicit FrameScratch(const Tree& tree)
-      : data(tree), Ja(6, tree.coordinate_count()), Jb(6, tree.coordinate_count()) {}
+      : data(tree),
+        Ja(6, tree.coordinate_count()),
+        Jb(6, tree.coordinate_count()),
+        q_kinematics(tree.coordinate_count()) {}
   TreeData data;
-  Jacobian Ja, Jb;  // (6 × n) frame Jacobians of the points a and b
+  Jacobian Ja, Jb;        // (6 × n) frame Jacobians of the points a and b
+  VectorXd q_kinematics;  // (n) the q of data's kinematics, filled by kinematics_at
+  bool kinematics_valid = false;
+  bool Ja_valid = false, Jb_valid = false;  // Ja, Jb are those of data's kinematics
 };
+
+// forward kinematics at q into the scratch's data once per state: both points of a closure, and
+// the acceleration form and the violation of one evaluation, share it (the same q, bit for bit,
+// gives the same kinematics)
+void kinematics_at(const Tree& tree, const Eigen::Ref<const VectorXd>& q, FrameScratch& w) {
+  if (w.kinematics_valid && q.size() == w.q_kinematics.size() &&
+      std::memcmp(q.data(), w.q_kinematics.data(), sizeof(double) * std::size_t(q.size())) == 0)
+    return;
+  w.kinematics_valid = w.Ja_valid = w.Jb_valid = false;  // (forward_kinematics may throw)
+  forward_kinematics(tree, q, w.data);
+  w.q_kinematics = q;
+  w.kinematics_valid = true;
+}
 
 // the kinematics of one point at (q, q'): position, Jacobian and J' q' (zero for the world)
 struct PointState {
@@ -33,20 +53,29 @@ struct PointState {
   Vector6d bias;  // [ω'; a] at q'' = 0
 };
 PointState point_state(const Tree& tree, const LinkPoint& pt, const Eigen::Ref<const VectorXd>& q,
-                       const Eigen::Ref<const VectorXd>& qd, TreeData& d, Jacobian& J,
+                       const Eigen::Ref<const VectorXd>& qd, FrameScratch& w, Jacobian& J,
                        bool with_bias) {
   if (pt.link < 0) {
     J.setZero();
     return {pt.p, Vector6d::Zero()};
   }
+  TreeData& d = w.data;
+  kinematics_at(tree, q, w);
+  if (qd.size() != tree.coordinate_count()) {
+    throw std::invalid_argument("ukdyn::tree: a constraint between tree frames got " +
+                                std::to_string(qd.size()) + " velocities, expected " +
+                                std::to_string(tree.coordinate_count()));
+  }
   PointState s;
   if (with_bias) {
-    s.bias = frame_bias_acceleration(tree, q, qd, d, pt.link, pt.p);  // runs forward_kinematics
+    s.bias = detail::frame_bias_from_kinematics(tree, qd, d, pt.link, pt.p);
   } else {
-    forward_kinematics(tree, q, d);
     s.bias.setZero();
   }
-  frame_jacobian(tree, d, pt.link, pt.p, J);
+  // (the acceleration form and the violation at one state need the Jacobian once)
+  bool& J_valid = &J == &w.Ja ? w.Ja_valid : w.Jb_valid;
+  if (!J_valid) frame_jacobian(tree, d, pt.link, pt.p, J);
+  J_valid = true;
   s.p_W = world_point(d, pt.link, pt.p);
   return s;
 }
@@ -99,8 +128,8 @@ class PointModel final : public FrameModel {
                          double, ConstraintScratch* s, Eigen::Ref<MatrixXd> A,
                          Eigen::Ref<VectorXd> b) const override {
     auto& w = *static_cast<FrameScratch*>(s);
-    const PointState pa = point_state(*tree_, a_, q, qd, w.data, w.Ja, true);
-    const PointState pb = point_state(*tree_, b_, q, qd, w.data, w.Jb, true);
+    const PointState pa = point_state(*tree_, a_, q, qd, w, w.Ja, true);
+    const PointState pb = point_state(*tree_, b_, q, qd, w, w.Jb, true);
     A = w.Ja.bottomRows<3>() - w.Jb.bottomRows<3>();
     b = pb.bias.tail<3>() - pa.bias.tail<3>();
   }
@@ -108,8 +137,8 @@ class PointModel final : public FrameModel {
                  ConstraintScratch* s, Eigen::Ref<VectorXd> position,
                  Eigen::Ref<VectorXd> velocity) const override {
     auto& w = *static_cast<FrameScratch*>(s);
-    const PointState pa = point_state(*tree_, a_, q, qd, w.data, w.Ja, false);
-    const PointState pb = point_state(*tree_, b_, q, qd, w.data, w.Jb, false);
+    const PointState pa = point_state(*tree_, a_, q, qd, w, w.Ja, false);
+    const PointState pb = point_state(*tree_, b_, q, qd, w, w.Jb, false);
     position = pa.p_W - pb.p_W;
     velocity.noalias() = (w.Ja.bottomRows<3>() - w.Jb.bottomRows<3>()) * qd;
   }
@@ -128,11 +157,12 @@ class DistanceModel final : public FrameModel {
                          double, ConstraintScratch* s, Eigen::Ref<MatrixXd> A,
                          Eigen::Ref<VectorXd> b) const override {
     auto& w = *static_cast<FrameScratch*>(s);
-    const PointState pa = point_state(*tree_, a_, q, qd, w.data, w.Ja, true);
-    const PointState pb = point_state(*tree_, b_, q, qd, w.data, w.Jb, true);
+    const PointState pa = point_state(*tree_, a_, q, qd, w, w.Ja, true);
+    const PointState pb = point_state(*tree_, b_, q, qd, w, w.Jb, true);
     const Vector3d dist = pa.p_W - pb.p_W;
     // (J_a − J_b)_v into Ja's linear rows, then d' = (J_a − J_b)_v q'
     w.Ja.bottomRows<3>() -= w.Jb.bottomRows<3>();
+    w.Ja_valid = false;  // (Ja now holds J_a − J_b)
     const Vector3d rate = w.Ja.bottomRows<3>() * qd;
     A.row(0).noalias() = (dist / length_).transpose() * w.Ja.bottomRows<3>();
     b[0] = -(rate.squaredNorm() + dist.dot(pa.bias.tail<3>() - pb.bias.tail<3>())) / length_;
@@ -141,8 +171,8 @@ class DistanceModel final : public FrameModel {
                  ConstraintScratch* s, Eigen::Ref<VectorXd> position,
                  Eigen::Ref<VectorXd> velocity) const override {
     auto& w = *static_cast<FrameScratch*>(s);
-    const PointState pa = point_state(*tree_, a_, q, qd, w.data, w.Ja, false);
-    const PointState pb = point_state(*tree_, b_, q, qd, w.data, w.Jb, false);
+    const PointState pa = point_state(*tree_, a_, q, qd, w, w.Ja, false);
+    const PointState pb = point_state(*tree_, b_, q, qd, w, w.Jb, false);
     const Vector3d dist = pa.p_W - pb.p_W;
     position[0] = (dist.squaredNorm() - length_ * length_) / (2.0 * length_);
     velocity[0] = dist.dot((w.Ja.bottomRows<3>() - w.Jb.bottomRows<3>()) * qd) / length_;
@@ -168,8 +198,8 @@ class WeldModel final : public FrameModel {
                          double, ConstraintScratch* s, Eigen::Ref<MatrixXd> A,
                          Eigen::Ref<VectorXd> b) const override {
     auto& w = *static_cast<FrameScratch*>(s);
-    const PointState pa = point_state(*tree_, {a_.link, a_.p}, q, qd, w.data, w.Ja, true);
-    const PointState pb = point_state(*tree_, {b_.link, b_.p}, q, qd, w.data, w.Jb, true);
+    const PointState pa = point_state(*tree_, {a_.link, a_.p}, q, qd, w, w.Ja, true);
+    const PointState pb = point_state(*tree_, {b_.link, b_.p}, q, qd, w, w.Jb, true);
     // position: (J_v(a) − J_v(b)) q'' = β_v(b) − β_v(a)
     A.topRows<3>() = w.Ja.bottomRows<3>() - w.Jb.bottomRows<3>();
     b.head<3>() = pb.bias.tail<3>() - pa.bias.tail<3>();
@@ -194,8 +224,8 @@ class WeldModel final : public FrameModel {
                  ConstraintScratch* s, Eigen::Ref<VectorXd> position,
                  Eigen::Ref<VectorXd> velocity) const override {
     auto& w = *static_cast<FrameScratch*>(s);
-    const PointState pa = point_state(*tree_, {a_.link, a_.p}, q, qd, w.data, w.Ja, false);
-    const PointState pb = point_state(*tree_, {b_.link, b_.p}, q, qd, w.data, w.Jb, false);
+    const PointState pa = point_state(*tree_, {a_.link, a_.p}, q, qd, w, w.Ja, false);
+    const PointState pb = point_state(*tree_, {b_.link, b_.p}, q, qd, w, w.Jb, false);
     position.head<3>() = pa.p_W - pb.p_W;
     velocity.head<3>() = (w.Ja.bottomRows<3>() - w.Jb.bottomRows<3>()) * qd;
     // e_R = ½ Σ r_b,k × r_a,k, e_R' = ½ Σ ((ω_b × r_b) × r_a + r_b × (ω_a × r_a))
@@ -232,8 +262,8 @@ class RevoluteModel final : public FrameModel {
                          double, ConstraintScratch* s, Eigen::Ref<MatrixXd> A,
                          Eigen::Ref<VectorXd> b) const override {
     auto& w = *static_cast<FrameScratch*>(s);
-    const PointState pa = point_state(*tree_, a_, q, qd, w.data, w.Ja, true);
-    const PointState pb = point_state(*tree_, b_, q, qd, w.data, w.Jb, true);
+    const PointState pa = point_state(*tree_, a_, q, qd, w, w.Ja, true);
+    const PointState pb = point_state(*tree_, b_, q, qd, w, w.Jb, true);
     A.topRows<3>() = w.Ja.bottomRows<3>() - w.Jb.bottomRows<3>();
     b.head<3>() = pb.bias.tail<3>() - pa.bias.tail<3>();
     // φ = u_a · x: φ'' = (u_a × x) · (ω_a' − ω_b') + ((ω_a × u_a) × x + u_a × (ω_b × x)) · (ω_a −
@@ -253,8 +283,8 @@ class RevoluteModel final : public FrameModel {
                  ConstraintScratch* s, Eigen::Ref<VectorXd> position,
                  Eigen::Ref<VectorXd> velocity) const override {
     auto& w = *static_cast<FrameScratch*>(s);
-    const PointState pa = point_state(*tree_, a_, q, qd, w.data, w.Ja, false);
-    const PointState pb = point_state(*tree_, b_, q, qd, w.data, w.Jb, false);
+    const PointState pa = point_state(*tree_, a_, q, qd, w, w.Ja, false);
+    const PointState pb = point_state(*tree_, b_, q, qd, w, w.Jb, false);
     position.head<3>() = pa.p_W - pb.p_W;
     velocity.head<3>() = (w.Ja.bottomRows<3>() - w.Jb.bottomRows<3>()) * qd;
     // φ = u_a · x, φ' = (u_a × x) · (ω_a − ω_b)
@@ -282,7 +312,7 @@ class PoseModel final : public FrameModel {
                          double t, ConstraintScratch* s, Eigen::Ref<MatrixXd> A,
                          Eigen::Ref<VectorXd> b) const override {
     auto& w = *static_cast<FrameScratch*>(s);
-    const PointState pt = point_state(*tree_, at_, q, qd, w.data, w.Ja, true);
+    const PointState pt = point_state(*tree_, at_, q, qd, w, w.Ja, true);
     PoseSample d;
     path_(t, d);
     // position: J_v q'' = a_d − (J' q')_v
@@ -310,7 +340,7 @@ class PoseModel final : public FrameModel {
                  double t, ConstraintScratch* s, Eigen::Ref<VectorXd> position,
                  Eigen::Ref<VectorXd> velocity) const override {
     auto& w = *static_cast<FrameScratch*>(s);
-    const PointState pt = point_state(*tree_, at_, q, qd, w.data, w.Ja, false);
+    const PointState pt = point_state(*tree_, at_, q, qd, w, w.Ja, false);
     PoseSample d;
     path_(t, d);
     position.head<3>() = pt.p_W - d.p;

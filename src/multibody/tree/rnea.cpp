@@ -79,6 +79,11 @@ Vector6d frame_bias_acceleration(const Tree& tree, const Eigen::Ref<const Vector
                                 " out of range [0, " + std::to_string(tree.link_count()) + ")");
   }
   forward_kinematics(tree, q, d);
+  return detail::frame_bias_from_kinematics(tree, qd, d, link, p_L);
+}
+
+Vector6d detail::frame_bias_from_kinematics(const Tree& tree, const Eigen::Ref<const VectorXd>& qd,
+                                            TreeData& d, Index link, const Vector3d& p_L) {
   // outward, as the RNEA's with q'' = 0 and no gravity (every link: the ancestors come first)
   for (Index i = 0; i <= link; ++i) {
     const std::size_t k = std::size_t(i);

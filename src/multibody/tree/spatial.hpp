@@ -23,6 +23,11 @@ void rnea_from_kinematics(const Tree& tree, const Eigen::Ref<const VectorXd>& qd
                           const Eigen::Ref<const VectorXd>* qdd, TreeData& d,
                           Eigen::Ref<VectorXd> tau);
 
+/// frame_bias_acceleration from the kinematics in d (forward_kinematics at q already run): its
+/// outward pass after its checks. Cost O(depth).
+Vector6d frame_bias_from_kinematics(const Tree& tree, const Eigen::Ref<const VectorXd>& qd,
+                                    TreeData& d, Index link, const Vector3d& p_L);
+
 /// [x]×, the cross-product matrix.
 inline Matrix3d skew(const Vector3d& x) {
   Matrix3d m;
