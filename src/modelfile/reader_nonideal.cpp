@@ -164,23 +164,34 @@ void Reader::read_nonideal(const YAML::Node& root, SystemBuilder& builder) {
       const InputLayout layout = layout_;
       const std::vector<std::string> names = input_constraints_;
       sizes_->fit(layout.size(), Cp);
+      // a robot's system scratch is its tree's: C then evaluates with buffers of the call
+      const bool own_buffers = robot_ != nullptr;
       NonIdealForce force(
           "C." + format_number(index),
-          NonIdealForce::Binder([Cp, layout, names](const System& sys) -> NonIdealFn {
+          NonIdealForce::Binder([Cp, layout, names, own_buffers](const System& sys) -> NonIdealFn {
             std::vector<Index> ks;
             ks.reserve(names.size());
             for (const auto& nm : names) ks.push_back(sys.constraint_index(nm));
-            return [Cp, layout, ks](const Eigen::Ref<const VectorXd>& q,
-                                    const Eigen::Ref<const VectorXd>& qd, double t,
-                                    const IdealForceInfo& ideal, Eigen::Ref<VectorXd> Cout) {
-              ModelBuffers& b = model_buffers(ideal.scratch());
-              layout.fill(b.in, q, qd, t);
-              // N_c, then lambda_c (first row of each constraint)
+            return [Cp, layout, ks, own_buffers](
+                       const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd,
+                       double t, const IdealForceInfo& ideal, Eigen::Ref<VectorXd> Cout) {
+              // [q; q'; t], then N_c and lambda_c (first row of each constraint)
               const std::size_t base = std::size_t(2 * layout.n + 1);
-              for (std::size_t i = 0; i < ks.size(); ++i) {
-                b.in[base + i] = ideal.normal_force(ks[i]);
-                b.in[base + ks.size() + i] = ideal.lambda(ks[i])[0];
+              const auto fill = [&](double* in) {
+                layout.fill(in, q, qd, t);
+                for (std::size_t i = 0; i < ks.size(); ++i) {
+                  in[base + i] = ideal.normal_force(ks[i]);
+                  in[base + ks.size() + i] = ideal.lambda(ks[i])[0];
+                }
+              };
+              if (own_buffers) {
+                evaluate_local(Cp, layout.size(), fill, [&](const double* v) {
+                  for (Index i = 0; i < Cout.size(); ++i) Cout[i] = v[i];
+                });
+                return;
               }
+              ModelBuffers& b = model_buffers(ideal.scratch());
+              fill(b.in.data());
               Cp.evaluate(b.in.data(), Cout.data(), b.scratch.data());
             };
           }));

@@ -9,6 +9,9 @@
 //       - {name: rod, type: distance, link_a: panda_tool, point_a: [0, 0, 0.05],
 //          link_b: world, point_b: [0.4, 0, 0.6], length: 0.3}
 //       - {name: ball, type: point, link_a: …, point_a: …, link_b: …, point_b: …}
+//       - {name: hinge, type: revolute, …, axis_a: [0, 0, 1], axis_b: [0, 0, 1]}
+//       - {name: glue, type: weld, …, rpy_a: [0, 0, 0], rpy_b: [0, 0, 1.57]}
+//     nonideal: as in any model file (viscous, Coulomb friction on a constraint or loop, C)
 // The coordinates are the joints' names (a floating base's <link>_x … <link>_u3), so initial:,
 // constraints:, output: and control: name them as in any model file. A .urdf file given alone
 // (ukdyn run arm.urdf, ukdyn.load("arm.urdf")) is read as `robot: {urdf: arm.urdf}`.
@@ -25,6 +28,7 @@
 
 #include "ukdyn/core/format.hpp"
 #include "ukdyn/multibody/tree.hpp"
+#include "ukdyn/multibody/tree_closures.hpp"
 
 #include "modelfile/reader.hpp"
 
@@ -34,12 +38,13 @@ namespace {
 
 // the keys of a model file that describe the plant otherwise (a robot's is its URDF)
 const std::vector<std::string> kOtherPlantKeys = {
-    "coordinates", "kinetic_energy", "potential_energy", "mass_matrix",
-    "bodies",      "joints",         "forces",           "nonideal"};
+    "coordinates", "kinetic_energy", "potential_energy", "mass_matrix", "bodies",
+    "joints",      "forces"};
 
 const std::vector<std::string> kRobotKeys = {"urdf", "gravity", "torques", "loops"};
-const std::vector<std::string> kLoopKeys = {"name",   "type",    "link_a", "point_a",
-                                            "link_b", "point_b", "length"};
+const std::vector<std::string> kLoopKeys = {"name",  "type",   "link_a", "point_a",
+                                            "rpy_a", "axis_a", "link_b", "point_b",
+                                            "rpy_b", "axis_b", "length"};
 
 // a coordinate's name as an expression input: every character that an identifier cannot hold
 // ('.', '-', …) read as '_' (names_coordinate accepts both spellings of '.')
@@ -91,9 +96,8 @@ Model Reader::read_robot(const YAML::Node& root) {
     const std::string key = kv.first.Scalar();
     if (std::find(kOtherPlantKeys.begin(), kOtherPlantKeys.end(), key) != kOtherPlantKeys.end())
       fail(kv.first, "'" + key + "' does not go with 'robot:'",
-           key == "nonideal" ? "non-ideal forces on a robot are not read yet (docs/robots.md)"
-                             : "a robot's links, joints and dynamics come from its URDF; add "
-                               "loops, torques and constraints between joints instead");
+           "a robot's links, joints and dynamics come from its URDF; add loops, torques, "
+           "constraints between joints and non-ideal forces instead");
   }
   const YAML::Node u = r["urdf"];
   if (!u || !u.IsScalar() || u.Scalar().empty())
@@ -181,9 +185,33 @@ Model Reader::read_robot(const YAML::Node& root) {
       const std::string name = c["name"].Scalar();
       if (!loop_names.insert(name).second) fail(c["name"], "loop '" + name + "' is given twice");
       const std::string type = c["type"] ? c["type"].Scalar() : "";
-      if (type != "point" && type != "distance")
-        fail(c["type"] ? c["type"] : c, "loop '" + name + "': type must be point or distance",
-             "point: two link points held together (3 rows); distance: at a length (1 row)");
+      if (type != "point" && type != "distance" && type != "weld" && type != "revolute")
+        fail(c["type"] ? c["type"] : c,
+             "loop '" + name + "': type must be point, distance, revolute or weld",
+             "point: two link points held together (3 rows); distance: at a length (1 row); "
+             "revolute: a hinge, point and axis_a ∥ axis_b (5 rows); weld: two frames held "
+             "together (6 rows)");
+      // keys that belong to other types
+      const auto refuse = [&](const char* key, const char* types) {
+        if (c[key])
+          fail(c[key], "loop '" + name + "': " + key + " is for " + types + " loops only",
+               "the keys of a " + type + " loop: name, type, link_a, point_a, link_b, point_b" +
+                   (type == "distance"   ? ", length"
+                    : type == "revolute" ? ", axis_a, axis_b"
+                    : type == "weld"     ? ", rpy_a, rpy_b"
+                                         : ""));
+      };
+      if (type != "weld") refuse("rpy_a", "weld"), refuse("rpy_b", "weld");
+      if (type != "revolute") refuse("axis_a", "revolute"), refuse("axis_b", "revolute");
+      if (type != "distance") refuse("length", "distance");
+      // a list of 3 numbers
+      const auto vector3 = [&](const YAML::Node& v, const char* key, const char* hint) {
+        if (!v.IsSequence() || v.size() != 3)
+          fail(v, "loop '" + name + "': " + key + " must be a list of 3 numbers", hint);
+        tree::Vector3d x;
+        for (std::size_t i = 0; i < 3; ++i) x[Index(i)] = number(v[i], key);
+        return x;
+      };
       auto end = [&](const char* link_key, const char* point_key) {
         tree::LinkPoint lp;
         const YAML::Node l = c[link_key];
@@ -198,23 +226,41 @@ Model Reader::read_robot(const YAML::Node& root) {
                  "the links are world, " + join(names));
           }
         }
-        if (const YAML::Node p = c[point_key]) {
-          if (!p.IsSequence() || p.size() != 3)
-            fail(p, "loop '" + name + "': " + point_key + " must be a list of 3 numbers",
-                 "[x, y, z] in the link's frame (the world's for world)");
-          for (std::size_t i = 0; i < 3; ++i) lp.p[Index(i)] = number(p[i], point_key);
-        }
+        if (const YAML::Node p = c[point_key])
+          lp.p = vector3(p, point_key, "[x, y, z] in the link's frame (the world's for world)");
         return lp;
       };
       const tree::LinkPoint a = end("link_a", "point_a"), b = end("link_b", "point_b");
+      // a weld's frame: the point and URDF's roll, pitch, yaw (R = Rz(yaw) Ry(pitch) Rx(roll))
+      const auto frame = [&](const tree::LinkPoint& lp, const char* rpy_key) {
+        tree::LinkFrame f{lp.link, lp.p, tree::Matrix3d::Identity()};
+        if (const YAML::Node v = c[rpy_key]) {
+          const tree::Vector3d rpy = vector3(v, rpy_key, "[roll, pitch, yaw] (rad), as URDF's");
+          f.R = (Eigen::AngleAxisd(rpy.z(), tree::Vector3d::UnitZ()) *
+                 Eigen::AngleAxisd(rpy.y(), tree::Vector3d::UnitY()) *
+                 Eigen::AngleAxisd(rpy.x(), tree::Vector3d::UnitX()))
+                    .toRotationMatrix();
+        }
+        return f;
+      };
       try {
         if (type == "point") {
-          if (c["length"]) fail(c["length"], "loop '" + name + "': a point loop has no length");
           builder.add(tree::point_constraint(robot, name, a, b));
-        } else {
+        } else if (type == "distance") {
           if (!c["length"]) fail(c, "loop '" + name + "' needs length", "length: 0.3");
           builder.add(tree::distance_constraint(robot, name, a, b, number(c["length"], "length")));
+        } else if (type == "weld") {
+          builder.add(tree::weld_constraint(robot, name, frame(a, "rpy_a"), frame(b, "rpy_b")));
+        } else {
+          // the hinge's axis in each link's frame; axis_b defaults to axis_a
+          if (!c["axis_a"])
+            fail(c, "loop '" + name + "' needs axis_a", "axis_a: [0, 0, 1] in link_a's frame");
+          const tree::Vector3d ua = vector3(c["axis_a"], "axis_a", "[x, y, z] in link_a's frame");
+          const tree::Vector3d ub =
+              c["axis_b"] ? vector3(c["axis_b"], "axis_b", "[x, y, z] in link_b's frame") : ua;
+          builder.add(tree::revolute_constraint(robot, name, a, ua, b, ub));
         }
+        constraint_names_.push_back(name);
       } catch (const std::invalid_argument& e) {
         std::string m = e.what();
         if (const auto k = m.find(": "); k != std::string::npos) m.erase(0, k + 2);
@@ -223,6 +269,10 @@ Model Reader::read_robot(const YAML::Node& root) {
     }
   }
   read_constraints(root, builder);
+  // non-ideal forces: robot_ set first, so that their compiled C evaluates with buffers of its
+  // own (the tree's callables own the system's scratch)
+  robot_ = std::make_shared<const tree::Tree>(robot);
+  read_nonideal(root, builder);
   // (the expressions' switches are not located on a robot yet: the tree's callables own the
   // system's scratch, which the compiled switching functions would need)
   switch_sources_.clear();
@@ -237,7 +287,6 @@ Model Reader::read_robot(const YAML::Node& root) {
   Model model{.system = build()};
   model.q0 = robot.neutral();
   model.qd0 = VectorXd::Zero(n);
-  robot_ = std::make_shared<const tree::Tree>(std::move(robot));
   model.robot = robot_;
   return model;
 }

@@ -1,11 +1,14 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // Robot model files (modelfile/reader_urdf.cpp): a .urdf read alone as a model, a model file
 // that names a URDF and adds torques, a loop closure, initial state by joint name, parameters
-// and a joint-space control requirement, and the errors a user meets, located.
+// and a joint-space control requirement, weld and revolute loops, non-ideal forces, the example
+// robots (a closed-chain leg under task-space control with friction on several threads, a
+// humanoid, a mobile manipulator), and the errors a user meets, located.
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 #include <string>
 
 #include <gtest/gtest.h>
@@ -13,9 +16,13 @@
 #include <Eigen/Dense>
 
 #include "ukdyn/control/control.hpp"
+#include "ukdyn/dynamics/forward.hpp"
+#include "ukdyn/dynamics/workspace.hpp"
 #include "ukdyn/modelfile/model.hpp"
 #include "ukdyn/modelfile/run.hpp"
 #include "ukdyn/multibody/tree.hpp"
+#include "ukdyn/multibody/tree_closures.hpp"
+#include "ukdyn/simulation/ensemble.hpp"
 #include "ukdyn/simulation/simulate.hpp"
 
 namespace ukdyn {
@@ -259,6 +266,249 @@ std::string write_file(const std::string& name, const std::string& text) {
   const auto path = std::filesystem::temp_directory_path() / name;
   std::ofstream(path) << text;
   return path.string();
+}
+
+// A q'' = b of every constraint of a system at a state (rows stacked)
+std::pair<MatrixXd, VectorXd> acceleration_forms(const System& s, const VectorXd& q,
+                                                 const VectorXd& qd) {
+  Index m = 0;
+  for (Index k = 0; k < s.constraint_count(); ++k) m += s.constraint(k).rows();
+  MatrixXd A(m, q.size());
+  VectorXd b(m);
+  Index row = 0;
+  for (Index k = 0; k < s.constraint_count(); ++k) {
+    const Constraint& c = s.constraint(k);
+    auto scratch = c.model().make_scratch(q.size());
+    c.model().acceleration_form(q, qd, 0.0, scratch.get(), A.middleRows(row, c.rows()),
+                                b.segment(row, c.rows()));
+    row += c.rows();
+  }
+  return {A, b};
+}
+
+// weld and revolute loops in a model file are the C++ closures (tree::weld_constraint,
+// tree::revolute_constraint) with the frames the file gives: rpy as URDF's, axis_b = axis_a
+TEST(ModelRobot, WeldAndRevoluteLoops) {
+  const Model m = robot_model(R"(robot:
+  urdf: panda_arm.urdf
+  loops:
+    - {name: glue, type: weld, link_a: panda_tool, point_a: [0, 0, 0.05], rpy_a: [0.1, 0.2, 0.3],
+       link_b: panda_link3, point_b: [0.1, 0, 0.2]}
+    - {name: hinge, type: revolute, link_a: panda_link5, point_a: [0, 0.1, 0], axis_a: [0, 1, 1],
+       link_b: world, point_b: [0.3, 0.1, 0.4]}
+)");
+  ASSERT_EQ(m.system.constraint_count(), 2);
+  EXPECT_EQ(m.system.constraint(0).rows(), 6);
+  EXPECT_EQ(m.system.constraint(1).rows(), 5);
+  const tree::Tree arm = tree::load_urdf(kPanda);
+  const Eigen::Matrix3d R = (Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitZ()) *
+                             Eigen::AngleAxisd(0.2, Eigen::Vector3d::UnitY()) *
+                             Eigen::AngleAxisd(0.1, Eigen::Vector3d::UnitX()))
+                                .toRotationMatrix();
+  SystemBuilder sb = tree::system_builder(arm);
+  sb.add(tree::weld_constraint(arm, "glue", {arm.link_index("panda_tool"), {0, 0, 0.05}, R},
+                               {arm.link_index("panda_link3"), {0.1, 0, 0.2}}));
+  sb.add(tree::revolute_constraint(arm, "hinge", {arm.link_index("panda_link5"), {0, 0.1, 0}},
+                                   {0, 1, 1}, {-1, {0.3, 0.1, 0.4}}, {0, 1, 1}));
+  const System direct = sb.build();
+  VectorXd q(7), qd(7);
+  q << 0.3, -0.5, 0.8, -1.9, 0.4, 1.7, -0.6;
+  qd << 0.4, -0.3, 0.5, 0.2, -0.6, 0.3, 0.7;
+  const auto [A, b] = acceleration_forms(m.system, q, qd);
+  const auto [A_direct, b_direct] = acceleration_forms(direct, q, qd);
+  EXPECT_NEAR((A - A_direct).norm(), 0.0, 0.0);
+  EXPECT_NEAR((b - b_direct).norm(), 0.0, 0.0);
+  EXPECT_GT(A.norm(), 1.0);
+  // keys of another type, a hinge without its axis
+  Failure f = failure_of(
+      "robot:\n  urdf: panda_arm.urdf\n  loops:\n    - {name: a, type: revolute, link_a: "
+      "panda_tool,\n       link_b: world, rpy_a: [0, 0, 1]}\n");
+  EXPECT_NE(f.text.find("loop 'a': rpy_a is for weld loops only"), std::string::npos) << f.text;
+  EXPECT_EQ(f.line, 5);
+  f = failure_of(
+      "robot:\n  urdf: panda_arm.urdf\n  loops:\n    - {name: a, type: revolute, link_a: "
+      "panda_tool, link_b: world}\n");
+  EXPECT_NE(f.text.find("loop 'a' needs axis_a"), std::string::npos) << f.text;
+  f = failure_of(
+      "robot:\n  urdf: panda_arm.urdf\n  loops:\n    - {name: a, type: hinge, link_a: "
+      "panda_tool, link_b: world}\n");
+  EXPECT_NE(f.text.find("type must be point, distance, revolute or weld"), std::string::npos)
+      << f.text;
+}
+
+// nonideal: on a robot, as in any model file: a viscous friction on joint 1 and a force given by
+// its C on joint 2 act as joint dampers of the same coefficients would (an independent route:
+// the tree's own damping), and the run's energy balance accounts for their work
+TEST(ModelRobot, NonIdealForcesOnARobot) {
+  const Model m = robot_model(R"(robot: {urdf: panda_arm.urdf}
+parameters: {c2: 0.3}
+nonideal:
+  - {friction: viscous, c: 0.7, coordinates: [panda_joint1]}
+  - {C: [0, -c2*panda_joint2_dot, 0, 0, 0, 0, 0]}
+initial:
+  q: {panda_joint4: -1.5}
+  q_dot: {panda_joint1: 1.0, panda_joint2: -0.5}
+simulate: {t_end: 0.3}
+)");
+  ASSERT_EQ(m.system.nonideal_count(), 2);
+  std::vector<tree::Link> links;
+  const tree::Tree arm = tree::load_urdf(kPanda);
+  for (Index i = 0; i < arm.link_count(); ++i) links.push_back(arm.link(i));
+  links[1].joint.damping += 0.7;
+  links[2].joint.damping += 0.3;
+  const System damped = tree::make_system(tree::Tree("damped", links, arm.gravity()));
+  Workspace ws(m.system), ws_damped(damped);
+  VectorXd q(7), qd(7);
+  q << 0.3, -0.5, 0.8, -1.9, 0.4, 1.7, -0.6;
+  qd << 0.4, -0.3, 0.5, 0.2, -0.6, 0.3, 0.7;
+  ASSERT_EQ(forward_dynamics(m.system, ws, q, qd, 0.0), Status::kOk);
+  ASSERT_EQ(forward_dynamics(damped, ws_damped, q, qd, 0.0), Status::kOk);
+  EXPECT_NEAR((ws.qdd - ws_damped.qdd).cwiseAbs().maxCoeff(), 0.0,
+              1e-12 * ws_damped.qdd.cwiseAbs().maxCoeff());
+  EXPECT_NEAR(ws.Qc_nonideal[0], -0.7 * qd[0], 1e-15);
+  EXPECT_NEAR(ws.Qc_nonideal[1], -0.3 * qd[1], 1e-15);
+  const Trajectory tr = simulate(m.system, m.q0, m.qd0, m.options);
+  ASSERT_EQ(tr.stats.status, Status::kOk) << tr.stats.message;
+  EXPECT_LT(tr.work_nonideal.back(), -1e-3);  // the friction did work
+  EXPECT_NEAR(tr.stats.energy_balance, 0.0, 1e-6);
+}
+
+// ---- the example robots (examples/models/, their URDFs in examples/robots/) ----------------
+
+const std::string kExamples = UKDYN_EXAMPLES_DIR;
+
+std::string read_text(const std::string& path) {
+  std::ifstream in(path);
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+// issue #30 item 6, combined: a closed chain (the four-bar knee, a revolute loop) with joint
+// friction (URDF's Coulomb friction on the hip, viscous friction from nonideal: on the knee)
+// under exact task-space control of the foot, as an ensemble over the path's size on 1 and on 3
+// threads: the same bits whichever thread ran a sample, each sample's foot on its path and its
+// loop closed; and one run checked against the path and the loop independently (forward
+// kinematics of the tree)
+TEST(ModelRobot, ClosedChainLegWithFrictionUnderTaskSpaceControlOnSeveralThreads) {
+  const std::string file = kExamples + "/leg_four_bar_knee.yaml";
+  const EnsembleModel em{read_text(file), file, {}, {}};
+  std::vector<EnsembleSample> samples;
+  for (double r : {0.02, 0.03, 0.04, 0.05}) samples.push_back({{{"r", r}}, {}, {}});
+  EnsembleOptions one, three;
+  one.threads = 1;
+  three.threads = 3;
+  one.at = three.at = {0.5, 1.0, 2.0};
+  const EnsembleResult a = run_ensemble(em, samples, one), b = run_ensemble(em, samples, three);
+  ASSERT_EQ(a.samples.size(), 4u);
+  ASSERT_EQ(b.samples.size(), 4u);
+  for (std::size_t k = 0; k < samples.size(); ++k) {
+    SCOPED_TRACE("sample " + std::to_string(k));
+    ASSERT_TRUE(a.samples[k].ok()) << a.samples[k].message;
+    ASSERT_TRUE(b.samples[k].ok()) << b.samples[k].message;
+    EXPECT_TRUE(a.samples[k].controlled);
+    EXPECT_EQ(a.samples[k].values, b.samples[k].values);  // bit for bit
+    EXPECT_EQ(a.samples[k].stats.steps, b.samples[k].stats.steps);
+    EXPECT_EQ(a.samples[k].control.not_met, 0);
+    EXPECT_NEAR(a.samples[k].stats.max_position_violation, 0.0, 1e-9);
+  }
+  // samples differ (the parameter reached the runs)
+  EXPECT_NE(a.samples[0].values, a.samples[3].values);
+  // one run, checked independently
+  const Model m = load_model(file);
+  ASSERT_NE(m.controller, nullptr);
+  ASSERT_NE(m.robot, nullptr);
+  EXPECT_EQ(m.system.nonideal_count(), 2);  // the hip's (URDF) and the knee's (nonideal:)
+  const ControlledTrajectory run =
+      simulate_controlled(*m.controller, m.system, m.q0, m.qd0, m.options);
+  ASSERT_EQ(run.plant.stats.status, Status::kOk) << run.plant.stats.message;
+  const tree::Tree& leg = *m.robot;
+  tree::TreeData d(leg);
+  const Index n = leg.coordinate_count(), foot = leg.link_index("foot"),
+              back = leg.link_index("back_bar"), shin = leg.link_index("shin");
+  double worst_foot = 0, worst_loop = 0, travel = 0, friction_work = 0;
+  const double r = 0.04, h = 0.03, w = M_PI;
+  for (Index s = 0; s < run.samples(); ++s) {
+    const double t = run.plant.t[std::size_t(s)];
+    tree::forward_kinematics(leg, Eigen::Map<const VectorXd>(run.plant.q.data() + s * n, n), d);
+    const Eigen::Vector3d want(-0.29 + r * (1 - std::cos(w * t)), 0,
+                               0.313 + h * std::pow(std::sin(w * t), 2));
+    const Eigen::Vector3d foot_W = tree::world_point(d, foot, Eigen::Vector3d::Zero());
+    worst_foot = std::max(worst_foot, (foot_W - want).norm());
+    travel = std::max(travel, (want - Eigen::Vector3d(-0.29, 0, 0.313)).norm());
+    worst_loop = std::max(worst_loop, (tree::world_point(d, back, {0.03, 0, -0.074}) -
+                                       tree::world_point(d, shin, {-0.01, 0, -0.037}))
+                                          .norm());
+  }
+  friction_work = run.plant.work_nonideal.back();
+  EXPECT_GT(travel, 0.05);
+  EXPECT_NEAR(worst_foot, 0.0, 1e-8);
+  EXPECT_NEAR(worst_loop, 0.0, 1e-10);
+  EXPECT_LT(friction_work, -1e-3);  // the friction took energy, which the control supplied
+  std::printf("leg: foot on its path to %.2e m, loop closed to %.2e m, friction work %.4f J\n",
+              worst_foot, worst_loop, friction_work);
+}
+
+// the humanoid in zero gravity: its momentum stays zero (it starts at rest and only internal
+// torques act), so its centre of mass stays put, while the pelvis turns
+TEST(ModelRobot, HumanoidInZeroGravityKeepsItsMomentumAndTurns) {
+  const Model m = load_model(kExamples + "/humanoid_zero_gravity.yaml");
+  ASSERT_NE(m.robot, nullptr);
+  const tree::Tree& body = *m.robot;
+  ASSERT_EQ(body.coordinate_count(), 33);
+  const Trajectory tr = simulate(m.system, m.q0, m.qd0, m.options);
+  ASSERT_EQ(tr.stats.status, Status::kOk) << tr.stats.message;
+  tree::TreeData d(body);
+  const Index n = 33;
+  tree::forward_kinematics(body, m.q0, d);
+  const Eigen::Vector3d g0 = tree::center_of_mass(body, d);
+  double worst_p = 0, worst_g = 0, scale = 0;
+  for (Index s = 0; s < tr.samples(); ++s) {
+    const Eigen::Map<const VectorXd> q(tr.q.data() + s * n, n), qd(tr.qd.data() + s * n, n);
+    const tree::Vector6d p = tree::momentum(body, q, qd, d);
+    worst_p = std::max(worst_p, p.cwiseAbs().maxCoeff());
+    worst_g = std::max(worst_g, (tree::center_of_mass(body, d) - g0).norm());
+    scale = std::max(scale, qd.tail(26).cwiseAbs().maxCoeff());
+  }
+  const Eigen::Map<const VectorXd> q_end(tr.q.data() + (tr.samples() - 1) * n, n);
+  const Eigen::Quaterniond u(q_end[3], q_end[4], q_end[5], q_end[6]);
+  EXPECT_GT(scale, 1.0);  // the limbs moved fast
+  EXPECT_NEAR(worst_p, 0.0, 1e-6);
+  EXPECT_NEAR(worst_g, 0.0, 1e-7);
+  EXPECT_GT(Eigen::AngleAxisd(u).angle(), 0.01);  // yet the body turned
+  std::printf("humanoid: |momentum| <= %.2e, centre of mass moved %.2e m, pelvis turned %.3f rad\n",
+              worst_p, worst_g, Eigen::AngleAxisd(u).angle());
+}
+
+// the mobile manipulator's wheels roll without slipping: each wheel's contact point (its centre
+// − R z) has zero velocity, computed from the tree's frame Jacobian, not from the constraints
+TEST(ModelRobot, MobileManipulatorWheelsRollWithoutSlipping) {
+  const Model m = load_model(kExamples + "/mobile_manipulator.yaml");
+  ASSERT_NE(m.robot, nullptr);
+  const tree::Tree& robot = *m.robot;
+  const Index n = robot.coordinate_count();
+  ASSERT_EQ(n, 8);
+  const Trajectory tr = simulate(m.system, m.q0, m.qd0, m.options);
+  ASSERT_EQ(tr.stats.status, Status::kOk) << tr.stats.message;
+  tree::TreeData d(robot);
+  Eigen::Matrix<double, 6, Eigen::Dynamic> J(6, n);
+  double worst = 0, speed = 0, turned = 0;
+  for (Index s = 0; s < tr.samples(); ++s) {
+    const Eigen::Map<const VectorXd> q(tr.q.data() + s * n, n), qd(tr.qd.data() + s * n, n);
+    tree::forward_kinematics(robot, q, d);
+    for (const char* wheel : {"wheel_left", "wheel_right"}) {
+      const Index l = robot.link_index(wheel);
+      // the contact point, R below the wheel's centre, in the wheel's frame
+      const Eigen::Vector3d down = d.R_WL[std::size_t(l)].transpose() * Eigen::Vector3d(0, 0, -0.1);
+      tree::frame_jacobian(robot, d, l, down, J);
+      worst = std::max(worst, (J.bottomRows<3>() * qd).norm());
+    }
+    speed = std::max(speed, qd.head<2>().norm());
+    turned = std::max(turned, std::abs(q[2]));
+  }
+  EXPECT_GT(speed, 0.3);   // it drove
+  EXPECT_GT(turned, 0.3);  // and turned
+  EXPECT_NEAR(worst, 0.0, 1e-7);
 }
 
 TEST(ModelRobot, ErrorsNameTheFileTheLineAndTheLinkOrJoint) {

@@ -1,9 +1,12 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // Constraints and requirements between tree frames (multibody/tree/frame_constraints.cpp) and
 // the limit checks (limits.cpp): a four-bar loop closed on an arm held exactly, a distance
-// closure, and exact task-space tracking of the 7-DOF arm (issue #30 item 4) whose control
-// torques equal inverse dynamics (RNEA) of the motion achieved; effort-limit excess reported.
+// closure, weld and revolute closures (a weld moving as the tree without the joint it spans, the
+// shared four-bar P2 as a tree closed by a hinge), and exact task-space tracking of the 7-DOF arm
+// (issue #30 item 4) whose control torques equal inverse dynamics (RNEA) of the motion achieved;
+// effort-limit excess reported.
 #include <cmath>
+#include <random>
 #include <string>
 #include <vector>
 
@@ -13,7 +16,10 @@
 
 #include "ukdyn/control/control.hpp"
 #include "ukdyn/core/autodiff.hpp"
+#include "ukdyn/dynamics/forward.hpp"
+#include "ukdyn/dynamics/workspace.hpp"
 #include "ukdyn/multibody/tree.hpp"
+#include "ukdyn/multibody/tree_closures.hpp"
 #include "ukdyn/simulation/simulate.hpp"
 
 namespace ukdyn::tree {
@@ -113,6 +119,189 @@ TEST(TreeFrameConstraints, RefusesBadPointsNamingTheConstraint) {
   }
   EXPECT_THROW(distance_constraint(tree, "rod", {2, Vector3d::Zero()}, {-1, Vector3d::Zero()}, 0),
                std::invalid_argument);
+}
+
+// ---- weld and revolute loop closures ---------------------------------------------------------
+
+TEST(TreeFrameConstraints, WeldAndRevoluteAccelerationFormsAgreeWithDifferences) {
+  const Tree tree = load_urdf(kPanda);
+  const Index tool = tree.link_index("panda_tool"), l3 = tree.link_index("panda_link3");
+  const Matrix3d Ra = Eigen::AngleAxisd(0.7, Vector3d(1, 2, 3).normalized()).toRotationMatrix();
+  const Matrix3d Rb = Eigen::AngleAxisd(-0.4, Vector3d(0, 1, 1).normalized()).toRotationMatrix();
+  const VectorXd q = arm_pose();
+  VectorXd qd(7);
+  qd << 0.4, -0.3, 0.5, 0.2, -0.6, 0.3, 0.7;
+  SystemBuilder sb = system_builder(tree);
+  sb.add(weld_constraint(tree, "glue", {tool, Vector3d(0.01, 0.02, 0.05), Ra},
+                         {l3, Vector3d(0.1, 0, 0.2), Rb}));
+  sb.add(weld_constraint(tree, "fix", {-1, Vector3d(0.3, 0.1, 0.4), Rb},
+                         {tool, Vector3d(0, 0, 0.1), Ra}));
+  sb.add(revolute_constraint(tree, "hinge", {tool, Vector3d(0.01, 0.02, 0.05)},
+                             Vector3d(0.2, 1, 0.3), {l3, Vector3d(0.1, 0, 0.2)},
+                             Vector3d(1, 0, 0)));
+  sb.add(revolute_constraint(tree, "pin", {-1, Vector3d(0.3, 0.1, 0.4)}, Vector3d(0, 0, 1),
+                             {tool, Vector3d(0, 0.05, 0)}, Vector3d(0, 1, 1)));
+  const System sys = sb.build();
+  ASSERT_EQ(sys.constraint(0).rows(), 6);
+  ASSERT_EQ(sys.constraint(2).rows(), 5);
+  for (Index k = 0; k < 4; ++k) expect_acceleration_form_consistent(sys, k, q, qd);
+}
+
+// the arm with joint 4 welded where it starts (fixed origin R_PJ · Rot(axis, q4)): the tree the
+// weld closure must reproduce
+Tree arm_with_joint4_fixed(const Tree& arm, double q4) {
+  std::vector<Link> links;
+  for (Index i = 0; i < arm.link_count(); ++i) links.push_back(arm.link(i));
+  Joint& j = links[std::size_t(arm.link_index("panda_link4"))].joint;
+  j.R_PJ = j.R_PJ * Eigen::Quaterniond(Eigen::AngleAxisd(q4, j.axis));
+  j.kind = JointKind::kFixed;
+  return Tree("arm6", links, arm.gravity());
+}
+
+// a weld between link 4 and link 3 at their initial relative pose closes a loop around joint 4:
+// the constrained arm moves as the 6-joint arm with joint 4 fixed, at every state (q'') and
+// along 0.5 s of motion
+TEST(TreeFrameConstraints, AWeldClosureMovesAsTheTreeWithTheJointRemoved) {
+  const Tree arm = load_urdf(kPanda);
+  const Index l3 = arm.link_index("panda_link3"), l4 = arm.link_index("panda_link4");
+  const VectorXd q0 = arm_pose();
+  TreeData d(arm);
+  forward_kinematics(arm, q0, d);
+  // link 4's frame in link 3's frame
+  const Matrix3d& R3 = d.R_WL[std::size_t(l3)];
+  const LinkFrame at3{l3, R3.transpose() * (d.p_WL[std::size_t(l4)] - d.p_WL[std::size_t(l3)]),
+                      R3.transpose() * d.R_WL[std::size_t(l4)]};
+  SystemBuilder sb = system_builder(arm);
+  sb.add(weld_constraint(arm, "elbow_lock", {l4, Vector3d::Zero(), Matrix3d::Identity()}, at3));
+  const System welded = sb.build();
+  const Tree arm6 = arm_with_joint4_fixed(arm, q0[3]);
+  ASSERT_EQ(arm6.coordinate_count(), 6);
+  const System reduced = make_system(arm6);
+  Workspace ws(welded), ws6(reduced);
+  const auto full = [&](const VectorXd& x6) {  // 6 coordinates → 7, joint 4 at q0[3]
+    VectorXd x(7);
+    x << x6.head<3>(), 0.0, x6.tail<3>();
+    return x;
+  };
+  std::mt19937 rng(30);
+  std::uniform_real_distribution<double> U(-1.0, 1.0);
+  double worst = 0;
+  for (int state = 0; state < 20; ++state) {
+    VectorXd q6(6), qd6(6);
+    for (Index i = 0; i < 6; ++i) q6[i] = 1.5 * U(rng), qd6[i] = U(rng);
+    VectorXd q = full(q6);
+    q[3] = q0[3];
+    ASSERT_EQ(forward_dynamics(welded, ws, q, full(qd6), 0.0), Status::kOk);
+    ASSERT_EQ(forward_dynamics(reduced, ws6, q6, qd6, 0.0), Status::kOk);
+    const VectorXd expected = full(ws6.qdd);
+    const double e = (ws.qdd - expected).cwiseAbs().maxCoeff() / expected.cwiseAbs().maxCoeff();
+    EXPECT_NEAR(e, 0.0, 1e-10) << "state " << state;
+    worst = std::max(worst, e);
+  }
+  // 0.5 s from the same state, both at tight tolerances
+  VectorXd qd0(7);
+  qd0 << 0.4, -0.3, 0.5, 0.0, -0.6, 0.3, 0.7;
+  VectorXd q6(6), qd6(6);
+  q6 << q0.head<3>(), q0.tail<3>();
+  qd6 << qd0.head<3>(), qd0.tail<3>();
+  SimulationOptions options;
+  options.t_end = 0.5;
+  options.rtol = 1e-11;
+  options.atol = 1e-13;
+  const Trajectory a = simulate(welded, q0, qd0, options);
+  const Trajectory b = simulate(reduced, q6, qd6, options);
+  ASSERT_EQ(a.stats.status, Status::kOk) << a.stats.message;
+  ASSERT_EQ(b.stats.status, Status::kOk) << b.stats.message;
+  const Eigen::Map<const VectorXd> qa(a.q.data() + (a.samples() - 1) * 7, 7),
+      qb(b.q.data() + (b.samples() - 1) * 6, 6);
+  VectorXd qb7 = full(qb);
+  qb7[3] = q0[3];
+  EXPECT_NEAR((qa - qb7).cwiseAbs().maxCoeff(), 0.0, 1e-8);
+  EXPECT_GT((qa - q0).cwiseAbs().maxCoeff(), 0.1);  // the arm did move
+  EXPECT_NEAR(a.stats.energy_balance, 0.0, 1e-8);
+  std::printf("weld closure vs the tree with joint 4 fixed: q'' %.2e, q(0.5 s) %.2e rad\n", worst,
+              (qa - qb7).cwiseAbs().maxCoeff());
+}
+
+// the shared benchmark problem P2 (bench/data/README.md: crank-rocker four-bar, thin rods of
+// 1 kg/m, released at rest with the crank at 150°) written as a tree of three hinges about z —
+// crank and coupler in series from A = (0, 0), the rocker from D = (1, 0) — closed by a revolute
+// loop at the coupler's tip: RK4 at h = 1e-3 as the shared protocol reaches the reference crank
+// angle 3.1507615 rad at T = 10 s, with the loop held exactly
+TEST(TreeFrameConstraints, ARevoluteClosureMakesTheSharedFourBarP2) {
+  const double phi_crank = 2.6179938779914944, phi_coupler = 0.5636248679942388,
+               phi_rocker = 2.1154295795750078;
+  const auto rod = [](const std::string& name, const std::string& parent, const Vector3d& at,
+                      double turn, double length) {
+    Link l;
+    l.name = name;
+    l.parent = parent;
+    l.joint.name = name;
+    l.joint.kind = JointKind::kRevolute;
+    l.joint.axis = Vector3d::UnitZ();
+    l.joint.p_PJ = at;
+    l.joint.R_PJ = Eigen::Quaterniond(Eigen::AngleAxisd(turn, Vector3d::UnitZ()));
+    l.inertial.mass = length;  // 1 kg/m
+    l.inertial.com = Vector3d(length / 2, 0, 0);
+    const double I = length * length * length / 12;
+    l.inertial.I_com = Vector3d(1e-9, I, I).asDiagonal();
+    return l;
+  };
+  const Tree four_bar("P2",
+                      {rod("crank", "", Vector3d::Zero(), phi_crank, 0.3),
+                       rod("coupler", "crank", Vector3d(0.3, 0, 0), phi_coupler - phi_crank, 1.0),
+                       rod("rocker", "", Vector3d(1, 0, 0), phi_rocker, 0.8)},
+                      Vector3d(0, -9.81, 0));
+  const Index coupler = four_bar.link_index("coupler"), rocker = four_bar.link_index("rocker");
+  SystemBuilder sb = system_builder(four_bar);
+  sb.add(revolute_constraint(four_bar, "tip", {coupler, Vector3d(1, 0, 0)}, Vector3d::UnitZ(),
+                             {rocker, Vector3d(0.8, 0, 0)}, Vector3d::UnitZ()));
+  const System sys = sb.build();
+  SimulationOptions options;
+  options.integrator = Integrator::kRK4;
+  options.step = 1e-3;
+  options.t_end = 10.0;
+  options.output_every = 0.1;
+  const Trajectory tr = simulate(sys, VectorXd::Zero(3), VectorXd::Zero(3), options);
+  ASSERT_EQ(tr.stats.status, Status::kOk) << tr.stats.message;
+  TreeData d(four_bar);
+  double worst_gap = 0;
+  for (Index s = 0; s < tr.samples(); ++s) {
+    forward_kinematics(four_bar, Eigen::Map<const VectorXd>(tr.q.data() + s * 3, 3), d);
+    const Vector3d gap =
+        world_point(d, coupler, Vector3d(1, 0, 0)) - world_point(d, rocker, Vector3d(0.8, 0, 0));
+    worst_gap = std::max(worst_gap, gap.norm());
+  }
+  const double crank_T = phi_crank + tr.q[std::size_t((tr.samples() - 1) * 3)];
+  EXPECT_NEAR(crank_T, 3.1507615, 1e-6);
+  EXPECT_NEAR(worst_gap, 0.0, 1e-10);
+  EXPECT_NEAR(tr.stats.energy_balance, 0.0, 1e-6);
+  std::printf(
+      "P2 as a tree + revolute closure: crank at T %.10f rad (reference 3.1507615), loop "
+      "%.2e m\n",
+      crank_T, worst_gap);
+}
+
+TEST(TreeFrameConstraints, RefusesABadWeldFrameOrHingeAxis) {
+  const Tree tree = load_urdf(kPanda);
+  Matrix3d shear = Matrix3d::Identity();
+  shear(0, 1) = 0.1;
+  try {
+    weld_constraint(tree, "glue", {2, Vector3d::Zero(), shear}, {-1});
+    FAIL() << "no throw";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("'glue': the orientation of frame a is not a rotation"),
+              std::string::npos)
+        << e.what();
+  }
+  try {
+    revolute_constraint(tree, "hinge", {2}, Vector3d::UnitZ(), {-1}, Vector3d::Zero());
+    FAIL() << "no throw";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("'hinge': axis b must be a finite, nonzero vector"),
+              std::string::npos)
+        << e.what();
+  }
 }
 
 // ---- exact task-space tracking of the redundant arm -----------------------------------------

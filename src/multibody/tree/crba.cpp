@@ -14,6 +14,10 @@ void mass_matrix(const Tree& tree, const Eigen::Ref<const VectorXd>& q, TreeData
   detail::check_sizes(who, tree, d, M.rows());
   detail::check_sizes(who, tree, d, M.cols());
   forward_kinematics(tree, q, d);
+  detail::mass_matrix_from_kinematics(tree, d, M);
+}
+
+void detail::mass_matrix_from_kinematics(const Tree& tree, TreeData& d, Eigen::Ref<MatrixXd> M) {
   // composite inertias, leaves first: Ic_λ += X_iᵀ Ic_i X_i
   for (Index i = 0; i < tree.link_count(); ++i) d.Ic[std::size_t(i)] = tree.spatial_inertia(i);
   for (Index i = tree.link_count(); i-- > 0;) {

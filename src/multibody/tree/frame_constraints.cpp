@@ -1,8 +1,10 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // Constraints and requirements between tree frames, built on frame_jacobian and
-// frame_bias_acceleration: a point loop closure (3 rows), a distance loop closure (1 row), and a
-// task-space pose requirement (6 rows) for exact tracking control.
+// frame_bias_acceleration: a point loop closure (3 rows), a distance loop closure (1 row), a weld
+// (6 rows) and a revolute closure (5 rows), and a task-space pose requirement (6 rows) for exact
+// tracking control.
 #include <cmath>
+#include <cstring>
 #include <memory>
 #include <stdexcept>
 #include <string>
@@ -10,6 +12,7 @@
 
 #include "multibody/tree/spatial.hpp"
 #include "ukdyn/multibody/tree.hpp"
+#include "ukdyn/multibody/tree_closures.hpp"
 
 namespace ukdyn::tree {
 
@@ -20,10 +23,29 @@ using Jacobian = Eigen::Matrix<double, 6, Eigen::Dynamic>;
 // per workspace: the passes' links and the two points' Jacobians
 struct FrameScratch final : ConstraintScratch {
   explicit FrameScratch(const Tree& tree)
-      : data(tree), Ja(6, tree.coordinate_count()), Jb(6, tree.coordinate_count()) {}
+      : data(tree),
+        Ja(6, tree.coordinate_count()),
+        Jb(6, tree.coordinate_count()),
+        q_kinematics(tree.coordinate_count()) {}
   TreeData data;
-  Jacobian Ja, Jb;  // (6 × n) frame Jacobians of the points a and b
+  Jacobian Ja, Jb;        // (6 × n) frame Jacobians of the points a and b
+  VectorXd q_kinematics;  // (n) the q of data's kinematics, filled by kinematics_at
+  bool kinematics_valid = false;
+  bool Ja_valid = false, Jb_valid = false;  // Ja, Jb are those of data's kinematics
 };
+
+// forward kinematics at q into the scratch's data once per state: both points of a closure, and
+// the acceleration form and the violation of one evaluation, share it (the same q, bit for bit,
+// gives the same kinematics)
+void kinematics_at(const Tree& tree, const Eigen::Ref<const VectorXd>& q, FrameScratch& w) {
+  if (w.kinematics_valid && q.size() == w.q_kinematics.size() &&
+      std::memcmp(q.data(), w.q_kinematics.data(), sizeof(double) * std::size_t(q.size())) == 0)
+    return;
+  w.kinematics_valid = w.Ja_valid = w.Jb_valid = false;  // (forward_kinematics may throw)
+  forward_kinematics(tree, q, w.data);
+  w.q_kinematics = q;
+  w.kinematics_valid = true;
+}
 
 // the kinematics of one point at (q, q'): position, Jacobian and J' q' (zero for the world)
 struct PointState {
@@ -31,20 +53,29 @@ struct PointState {
   Vector6d bias;  // [ω'; a] at q'' = 0
 };
 PointState point_state(const Tree& tree, const LinkPoint& pt, const Eigen::Ref<const VectorXd>& q,
-                       const Eigen::Ref<const VectorXd>& qd, TreeData& d, Jacobian& J,
+                       const Eigen::Ref<const VectorXd>& qd, FrameScratch& w, Jacobian& J,
                        bool with_bias) {
   if (pt.link < 0) {
     J.setZero();
     return {pt.p, Vector6d::Zero()};
   }
+  TreeData& d = w.data;
+  kinematics_at(tree, q, w);
+  if (qd.size() != tree.coordinate_count()) {
+    throw std::invalid_argument("ukdyn::tree: a constraint between tree frames got " +
+                                std::to_string(qd.size()) + " velocities, expected " +
+                                std::to_string(tree.coordinate_count()));
+  }
   PointState s;
   if (with_bias) {
-    s.bias = frame_bias_acceleration(tree, q, qd, d, pt.link, pt.p);  // runs forward_kinematics
+    s.bias = detail::frame_bias_from_kinematics(tree, qd, d, pt.link, pt.p);
   } else {
-    forward_kinematics(tree, q, d);
     s.bias.setZero();
   }
-  frame_jacobian(tree, d, pt.link, pt.p, J);
+  // (the acceleration form and the violation at one state need the Jacobian once)
+  bool& J_valid = &J == &w.Ja ? w.Ja_valid : w.Jb_valid;
+  if (!J_valid) frame_jacobian(tree, d, pt.link, pt.p, J);
+  J_valid = true;
   s.p_W = world_point(d, pt.link, pt.p);
   return s;
 }
@@ -97,8 +128,8 @@ class PointModel final : public FrameModel {
                          double, ConstraintScratch* s, Eigen::Ref<MatrixXd> A,
                          Eigen::Ref<VectorXd> b) const override {
     auto& w = *static_cast<FrameScratch*>(s);
-    const PointState pa = point_state(*tree_, a_, q, qd, w.data, w.Ja, true);
-    const PointState pb = point_state(*tree_, b_, q, qd, w.data, w.Jb, true);
+    const PointState pa = point_state(*tree_, a_, q, qd, w, w.Ja, true);
+    const PointState pb = point_state(*tree_, b_, q, qd, w, w.Jb, true);
     A = w.Ja.bottomRows<3>() - w.Jb.bottomRows<3>();
     b = pb.bias.tail<3>() - pa.bias.tail<3>();
   }
@@ -106,8 +137,8 @@ class PointModel final : public FrameModel {
                  ConstraintScratch* s, Eigen::Ref<VectorXd> position,
                  Eigen::Ref<VectorXd> velocity) const override {
     auto& w = *static_cast<FrameScratch*>(s);
-    const PointState pa = point_state(*tree_, a_, q, qd, w.data, w.Ja, false);
-    const PointState pb = point_state(*tree_, b_, q, qd, w.data, w.Jb, false);
+    const PointState pa = point_state(*tree_, a_, q, qd, w, w.Ja, false);
+    const PointState pb = point_state(*tree_, b_, q, qd, w, w.Jb, false);
     position = pa.p_W - pb.p_W;
     velocity.noalias() = (w.Ja.bottomRows<3>() - w.Jb.bottomRows<3>()) * qd;
   }
@@ -126,11 +157,12 @@ class DistanceModel final : public FrameModel {
                          double, ConstraintScratch* s, Eigen::Ref<MatrixXd> A,
                          Eigen::Ref<VectorXd> b) const override {
     auto& w = *static_cast<FrameScratch*>(s);
-    const PointState pa = point_state(*tree_, a_, q, qd, w.data, w.Ja, true);
-    const PointState pb = point_state(*tree_, b_, q, qd, w.data, w.Jb, true);
+    const PointState pa = point_state(*tree_, a_, q, qd, w, w.Ja, true);
+    const PointState pb = point_state(*tree_, b_, q, qd, w, w.Jb, true);
     const Vector3d dist = pa.p_W - pb.p_W;
     // (J_a − J_b)_v into Ja's linear rows, then d' = (J_a − J_b)_v q'
     w.Ja.bottomRows<3>() -= w.Jb.bottomRows<3>();
+    w.Ja_valid = false;  // (Ja now holds J_a − J_b)
     const Vector3d rate = w.Ja.bottomRows<3>() * qd;
     A.row(0).noalias() = (dist / length_).transpose() * w.Ja.bottomRows<3>();
     b[0] = -(rate.squaredNorm() + dist.dot(pa.bias.tail<3>() - pb.bias.tail<3>())) / length_;
@@ -139,8 +171,8 @@ class DistanceModel final : public FrameModel {
                  ConstraintScratch* s, Eigen::Ref<VectorXd> position,
                  Eigen::Ref<VectorXd> velocity) const override {
     auto& w = *static_cast<FrameScratch*>(s);
-    const PointState pa = point_state(*tree_, a_, q, qd, w.data, w.Ja, false);
-    const PointState pb = point_state(*tree_, b_, q, qd, w.data, w.Jb, false);
+    const PointState pa = point_state(*tree_, a_, q, qd, w, w.Ja, false);
+    const PointState pb = point_state(*tree_, b_, q, qd, w, w.Jb, false);
     const Vector3d dist = pa.p_W - pb.p_W;
     position[0] = (dist.squaredNorm() - length_ * length_) / (2.0 * length_);
     velocity[0] = dist.dot((w.Ja.bottomRows<3>() - w.Jb.bottomRows<3>()) * qd) / length_;
@@ -149,6 +181,126 @@ class DistanceModel final : public FrameModel {
  private:
   LinkPoint a_, b_;
   double length_;
+};
+
+// the world orientation of a link's frame (the world's own for link −1), after
+// forward_kinematics
+Matrix3d world_rotation(const TreeData& d, Index link, const Matrix3d& R_L) {
+  return link < 0 ? R_L : Matrix3d(d.R_WL[std::size_t(link)] * R_L);
+}
+
+// e = [p_W(a) − p_W(b); ½ Σ r_b,k × r_a,k]; e'' = 0 is A q'' = b (see weld_constraint)
+class WeldModel final : public FrameModel {
+ public:
+  WeldModel(std::shared_ptr<const Tree> tree, const LinkFrame& a, const LinkFrame& b)
+      : FrameModel(std::move(tree)), a_(a), b_(b) {}
+  void acceleration_form(const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd,
+                         double, ConstraintScratch* s, Eigen::Ref<MatrixXd> A,
+                         Eigen::Ref<VectorXd> b) const override {
+    auto& w = *static_cast<FrameScratch*>(s);
+    const PointState pa = point_state(*tree_, {a_.link, a_.p}, q, qd, w, w.Ja, true);
+    const PointState pb = point_state(*tree_, {b_.link, b_.p}, q, qd, w, w.Jb, true);
+    // position: (J_v(a) − J_v(b)) q'' = β_v(b) − β_v(a)
+    A.topRows<3>() = w.Ja.bottomRows<3>() - w.Jb.bottomRows<3>();
+    b.head<3>() = pb.bias.tail<3>() - pa.bias.tail<3>();
+    // orientation: r' = ω × r; e_R'' = L ω_a' − Lᵀ ω_b' + ½ Σ ((ω_b × r_b') × r_a + 2 r_b' × r_a'
+    // + r_b × (ω_a × r_a')) with ω' = J_ω q'' + β_ω
+    const Matrix3d Ra = world_rotation(w.data, a_.link, a_.R);
+    const Matrix3d Rb = world_rotation(w.data, b_.link, b_.R);
+    const Vector3d wa = w.Ja.topRows<3>() * qd, wb = w.Jb.topRows<3>() * qd;
+    Matrix3d L = Matrix3d::Zero();
+    Vector3d rest = Vector3d::Zero();
+    for (int k = 0; k < 3; ++k) {
+      const Vector3d ra = Ra.col(k), rb = Rb.col(k);
+      const Vector3d ra1 = wa.cross(ra), rb1 = wb.cross(rb);
+      L -= 0.5 * detail::skew(rb) * detail::skew(ra);
+      rest += 0.5 * (wb.cross(rb1).cross(ra) + 2.0 * rb1.cross(ra1) + rb.cross(wa.cross(ra1)));
+    }
+    A.bottomRows<3>().noalias() = L * w.Ja.topRows<3>();
+    A.bottomRows<3>().noalias() -= L.transpose() * w.Jb.topRows<3>();
+    b.tail<3>() = -rest - L * pa.bias.head<3>() + L.transpose() * pb.bias.head<3>();
+  }
+  void violation(const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd, double,
+                 ConstraintScratch* s, Eigen::Ref<VectorXd> position,
+                 Eigen::Ref<VectorXd> velocity) const override {
+    auto& w = *static_cast<FrameScratch*>(s);
+    const PointState pa = point_state(*tree_, {a_.link, a_.p}, q, qd, w, w.Ja, false);
+    const PointState pb = point_state(*tree_, {b_.link, b_.p}, q, qd, w, w.Jb, false);
+    position.head<3>() = pa.p_W - pb.p_W;
+    velocity.head<3>() = (w.Ja.bottomRows<3>() - w.Jb.bottomRows<3>()) * qd;
+    // e_R = ½ Σ r_b,k × r_a,k, e_R' = ½ Σ ((ω_b × r_b) × r_a + r_b × (ω_a × r_a))
+    const Matrix3d Ra = world_rotation(w.data, a_.link, a_.R);
+    const Matrix3d Rb = world_rotation(w.data, b_.link, b_.R);
+    const Vector3d wa = w.Ja.topRows<3>() * qd, wb = w.Jb.topRows<3>() * qd;
+    Vector3d e = Vector3d::Zero(), e_rate = Vector3d::Zero();
+    for (int k = 0; k < 3; ++k) {
+      const Vector3d ra = Ra.col(k), rb = Rb.col(k);
+      e += 0.5 * rb.cross(ra);
+      e_rate += 0.5 * (wb.cross(rb).cross(ra) + rb.cross(wa.cross(ra)));
+    }
+    position.tail<3>() = e;
+    velocity.tail<3>() = e_rate;
+  }
+
+ private:
+  LinkFrame a_, b_;
+};
+
+// [p_W(a) − p_W(b); u_a · x_b; u_a · y_b] = 0 (see revolute_constraint)
+class RevoluteModel final : public FrameModel {
+ public:
+  RevoluteModel(std::shared_ptr<const Tree> tree, LinkPoint a, const Vector3d& axis_a, LinkPoint b,
+                const Vector3d& axis_b)
+      : FrameModel(std::move(tree)), a_(a), b_(b), u_a_(axis_a.normalized()) {
+    // x_b, y_b: an orthonormal pair ⊥ u_b in b's link frame
+    const Vector3d u = axis_b.normalized();
+    const Vector3d seed = std::abs(u.x()) < 0.9 ? Vector3d::UnitX() : Vector3d::UnitY();
+    x_b_ = (seed - u * u.dot(seed)).normalized();
+    y_b_ = u.cross(x_b_);
+  }
+  void acceleration_form(const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd,
+                         double, ConstraintScratch* s, Eigen::Ref<MatrixXd> A,
+                         Eigen::Ref<VectorXd> b) const override {
+    auto& w = *static_cast<FrameScratch*>(s);
+    const PointState pa = point_state(*tree_, a_, q, qd, w, w.Ja, true);
+    const PointState pb = point_state(*tree_, b_, q, qd, w, w.Jb, true);
+    A.topRows<3>() = w.Ja.bottomRows<3>() - w.Jb.bottomRows<3>();
+    b.head<3>() = pb.bias.tail<3>() - pa.bias.tail<3>();
+    // φ = u_a · x: φ'' = (u_a × x) · (ω_a' − ω_b') + ((ω_a × u_a) × x + u_a × (ω_b × x)) · (ω_a −
+    // ω_b)
+    const Vector3d u = world_rotation(w.data, a_.link, Matrix3d::Identity()) * u_a_;
+    const Matrix3d Rb = world_rotation(w.data, b_.link, Matrix3d::Identity());
+    const Vector3d wa = w.Ja.topRows<3>() * qd, wb = w.Jb.topRows<3>() * qd;
+    const Vector3d dw = wa - wb, dbias = pa.bias.head<3>() - pb.bias.head<3>();
+    for (int k = 0; k < 2; ++k) {
+      const Vector3d x = Rb * (k == 0 ? x_b_ : y_b_);
+      const Vector3d g = u.cross(x);
+      A.row(3 + k).noalias() = g.transpose() * (w.Ja.topRows<3>() - w.Jb.topRows<3>());
+      b[3 + k] = -g.dot(dbias) - (wa.cross(u).cross(x) + u.cross(wb.cross(x))).dot(dw);
+    }
+  }
+  void violation(const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd, double,
+                 ConstraintScratch* s, Eigen::Ref<VectorXd> position,
+                 Eigen::Ref<VectorXd> velocity) const override {
+    auto& w = *static_cast<FrameScratch*>(s);
+    const PointState pa = point_state(*tree_, a_, q, qd, w, w.Ja, false);
+    const PointState pb = point_state(*tree_, b_, q, qd, w, w.Jb, false);
+    position.head<3>() = pa.p_W - pb.p_W;
+    velocity.head<3>() = (w.Ja.bottomRows<3>() - w.Jb.bottomRows<3>()) * qd;
+    // φ = u_a · x, φ' = (u_a × x) · (ω_a − ω_b)
+    const Vector3d u = world_rotation(w.data, a_.link, Matrix3d::Identity()) * u_a_;
+    const Matrix3d Rb = world_rotation(w.data, b_.link, Matrix3d::Identity());
+    const Vector3d dw = (w.Ja.topRows<3>() - w.Jb.topRows<3>()) * qd;
+    for (int k = 0; k < 2; ++k) {
+      const Vector3d x = Rb * (k == 0 ? x_b_ : y_b_);
+      position[3 + k] = u.dot(x);
+      velocity[3 + k] = u.cross(x).dot(dw);
+    }
+  }
+
+ private:
+  LinkPoint a_, b_;
+  Vector3d u_a_, x_b_, y_b_;  // unit axis in a's link frame; the pair ⊥ u_b in b's
 };
 
 // e = [p_W − p_d; ½ Σ r_d,k × r_k]; e'' = 0 is A q'' = b (see pose_requirement)
@@ -160,7 +312,7 @@ class PoseModel final : public FrameModel {
                          double t, ConstraintScratch* s, Eigen::Ref<MatrixXd> A,
                          Eigen::Ref<VectorXd> b) const override {
     auto& w = *static_cast<FrameScratch*>(s);
-    const PointState pt = point_state(*tree_, at_, q, qd, w.data, w.Ja, true);
+    const PointState pt = point_state(*tree_, at_, q, qd, w, w.Ja, true);
     PoseSample d;
     path_(t, d);
     // position: J_v q'' = a_d − (J' q')_v
@@ -188,7 +340,7 @@ class PoseModel final : public FrameModel {
                  double t, ConstraintScratch* s, Eigen::Ref<VectorXd> position,
                  Eigen::Ref<VectorXd> velocity) const override {
     auto& w = *static_cast<FrameScratch*>(s);
-    const PointState pt = point_state(*tree_, at_, q, qd, w.data, w.Ja, false);
+    const PointState pt = point_state(*tree_, at_, q, qd, w, w.Ja, false);
     PoseSample d;
     path_(t, d);
     position.head<3>() = pt.p_W - d.p;
@@ -233,6 +385,40 @@ Constraint distance_constraint(const Tree& tree, std::string name, LinkPoint a, 
   }
   auto model = std::make_shared<DistanceModel>(std::make_shared<const Tree>(tree), a, b, length);
   return Constraint(std::move(name), ConstraintKind::kHolonomic, 1, std::move(model));
+}
+
+Constraint weld_constraint(const Tree& tree, std::string name, const LinkFrame& a,
+                           const LinkFrame& b) {
+  const std::string who = "ukdyn::tree::weld_constraint";
+  check_points(tree, who, name, {a.link, a.p}, {b.link, b.p});
+  for (const auto* f : {&a, &b}) {
+    const Matrix3d& R = f->R;
+    if (!R.allFinite() || !(R.transpose() * R).isApprox(Matrix3d::Identity(), 1e-9) ||
+        !(R.determinant() > 0.0)) {
+      throw std::invalid_argument(who + ": constraint '" + name + "': the orientation of frame " +
+                                  (f == &a ? "a" : "b") +
+                                  " is not a rotation (R must be orthonormal with det R = 1)");
+    }
+  }
+  auto model = std::make_shared<WeldModel>(std::make_shared<const Tree>(tree), a, b);
+  return Constraint(std::move(name), ConstraintKind::kHolonomic, 6, std::move(model));
+}
+
+Constraint revolute_constraint(const Tree& tree, std::string name, LinkPoint a,
+                               const Vector3d& axis_a, LinkPoint b, const Vector3d& axis_b) {
+  const std::string who = "ukdyn::tree::revolute_constraint";
+  check_points(tree, who, name, a, b);
+  for (const auto* u : {&axis_a, &axis_b}) {
+    if (!u->allFinite() || !(u->norm() > 1e-12)) {
+      throw std::invalid_argument(who + ": constraint '" + name + "': axis " +
+                                  (u == &axis_a ? "a" : "b") +
+                                  " must be a finite, nonzero vector (the hinge's axis in the "
+                                  "link's frame)");
+    }
+  }
+  auto model =
+      std::make_shared<RevoluteModel>(std::make_shared<const Tree>(tree), a, axis_a, b, axis_b);
+  return Constraint(std::move(name), ConstraintKind::kHolonomic, 5, std::move(model));
 }
 
 Constraint pose_requirement(const Tree& tree, std::string name, LinkPoint at, PosePathFn path,

@@ -22,6 +22,14 @@ void rnea(const Tree& tree, const Eigen::Ref<const VectorXd>& q,
   detail::check_sizes(who, tree, d, tau.size());
   if (qdd) detail::check_sizes(who, tree, d, qdd->size());
   forward_kinematics(tree, q, d);
+  detail::rnea_from_kinematics(tree, qd, qdd, d, tau);
+}
+
+}  // namespace
+
+void detail::rnea_from_kinematics(const Tree& tree, const Eigen::Ref<const VectorXd>& qd,
+                                  const Eigen::Ref<const VectorXd>* qdd, TreeData& d,
+                                  Eigen::Ref<VectorXd> tau) {
   // the world's acceleration −g stands for gravity
   Vector6d a0;
   a0 << Vector3d::Zero(), -tree.gravity();
@@ -60,8 +68,6 @@ void rnea(const Tree& tree, const Eigen::Ref<const VectorXd>& q,
   }
 }
 
-}  // namespace
-
 Vector6d frame_bias_acceleration(const Tree& tree, const Eigen::Ref<const VectorXd>& q,
                                  const Eigen::Ref<const VectorXd>& qd, TreeData& d, Index link,
                                  const Vector3d& p_L) {
@@ -73,6 +79,11 @@ Vector6d frame_bias_acceleration(const Tree& tree, const Eigen::Ref<const Vector
                                 " out of range [0, " + std::to_string(tree.link_count()) + ")");
   }
   forward_kinematics(tree, q, d);
+  return detail::frame_bias_from_kinematics(tree, qd, d, link, p_L);
+}
+
+Vector6d detail::frame_bias_from_kinematics(const Tree& tree, const Eigen::Ref<const VectorXd>& qd,
+                                            TreeData& d, Index link, const Vector3d& p_L) {
   // outward, as the RNEA's with q'' = 0 and no gravity (every link: the ancestors come first)
   for (Index i = 0; i <= link; ++i) {
     const std::size_t k = std::size_t(i);

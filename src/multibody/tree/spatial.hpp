@@ -13,6 +13,21 @@ namespace ukdyn::tree::detail {
 /// Refuses a TreeData of another tree and vectors of the wrong size, naming `who`.
 void check_sizes(const char* who, const Tree& tree, const TreeData& d, Index q_size);
 
+/// M(q) by the CRBA from the kinematics in d (forward_kinematics at q already run): the passes
+/// of mass_matrix after its checks. Cost O(n · depth).
+void mass_matrix_from_kinematics(const Tree& tree, TreeData& d, Eigen::Ref<MatrixXd> M);
+
+/// τ = M q'' + h by the RNEA from the kinematics in d (forward_kinematics at q already run);
+/// q'' = 0 when qdd is null: the passes of inverse_dynamics after its checks. Cost O(links).
+void rnea_from_kinematics(const Tree& tree, const Eigen::Ref<const VectorXd>& qd,
+                          const Eigen::Ref<const VectorXd>* qdd, TreeData& d,
+                          Eigen::Ref<VectorXd> tau);
+
+/// frame_bias_acceleration from the kinematics in d (forward_kinematics at q already run): its
+/// outward pass after its checks. Cost O(depth).
+Vector6d frame_bias_from_kinematics(const Tree& tree, const Eigen::Ref<const VectorXd>& qd,
+                                    TreeData& d, Index link, const Vector3d& p_L);
+
 /// [x]×, the cross-product matrix.
 inline Matrix3d skew(const Vector3d& x) {
   Matrix3d m;
@@ -60,11 +75,18 @@ inline void forces_to_parent(const Matrix3d& E, const Vector3d& r, Block&& F) {
 /// Xᵀ I X: an inertia in L coordinates seen from λ's origin, in λ coordinates. With
 /// I = [A B; Bᵀ C] rotated to λ axes (A' = Eᵀ A E, …) and T = [1 0; −[r]× 1]:
 ///   Tᵀ I' T = [A' − B'[r]× + [r]× (B'ᵀ − C'[r]×),  B' + [r]× C';  B'ᵀ − C'[r]×,  C'].
-/// About 300 multiplications instead of the two 6 × 6 products' 430.
+/// About 250 multiplications instead of the two 6 × 6 products' 430: the blocks are copied to
+/// fixed 3 × 3 matrices (Eigen then multiplies them inline), and C' = C, since the lower right
+/// block of a rigid body's spatial inertia (and of a composite one) is m 1.
 inline Matrix6d inertia_to_parent(const Matrix3d& E, const Vector3d& r, const Matrix6d& I) {
-  const Matrix3d A = E.transpose() * I.topLeftCorner<3, 3>() * E;
-  const Matrix3d B = E.transpose() * I.topRightCorner<3, 3>() * E;
-  const Matrix3d C = E.transpose() * I.bottomRightCorner<3, 3>() * E;
+  const Matrix3d Et = E.transpose();
+  const Matrix3d I_A = I.topLeftCorner<3, 3>(), I_B = I.topRightCorner<3, 3>();
+  Matrix3d t, A, B;
+  t.noalias() = Et * I_A;
+  A.noalias() = t * E;
+  t.noalias() = Et * I_B;
+  B.noalias() = t * E;
+  const Matrix3d C = I.bottomRightCorner<3, 3>();
   const Matrix3d rx = skew(r);
   const Matrix3d lower = B.transpose() - C * rx;  // B'ᵀ − C'[r]×
   Matrix6d out;

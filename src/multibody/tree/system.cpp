@@ -1,8 +1,10 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // A tree as ukdyn's unconstrained system: M from the CRBA, Q = τ − D q' − h from the RNEA.
 #include <cmath>
+#include <cstring>
 #include <memory>
 #include <utility>
+#include <vector>
 
 #include "multibody/internal.hpp"
 #include "multibody/tree/spatial.hpp"
@@ -15,13 +17,31 @@ namespace {
 // the per-workspace buffers of the tree's callables
 struct TreeScratch final : CallableScratch {
   explicit TreeScratch(const Tree& tree)
-      : data(tree), h(tree.coordinate_count()), tau(tree.coordinate_count()) {}
-  TreeData data;  // the passes' links
-  VectorXd h;     // (n) bias forces, filled by Q
-  VectorXd tau;   // (n) the input τ, filled by Q and P_ext
+      : data(tree),
+        h(tree.coordinate_count()),
+        tau(tree.coordinate_count()),
+        q_kinematics(tree.coordinate_count()) {}
+  TreeData data;          // the passes' links
+  VectorXd h;             // (n) bias forces, filled by Q
+  VectorXd tau;           // (n) the input τ, filled by Q and P_ext
+  VectorXd q_kinematics;  // (n) the q of data's kinematics, filled by kinematics_at
+  bool kinematics_valid = false;
 };
 
 TreeScratch& scratch_of(CallableScratch* s) { return *static_cast<TreeScratch*>(s); }
+
+// forward kinematics at q into the scratch's data, once per state: M and Q of one evaluation
+// (and V of a sample) share it. The same q, bit for bit, gives the same kinematics, so the
+// results are those of running it in each callable.
+void kinematics_at(const Tree& tree, const Eigen::Ref<const VectorXd>& q, TreeScratch& ts) {
+  if (ts.kinematics_valid && q.size() == ts.q_kinematics.size() &&
+      std::memcmp(q.data(), ts.q_kinematics.data(), sizeof(double) * std::size_t(q.size())) == 0)
+    return;
+  ts.kinematics_valid = false;  // (forward_kinematics throws on a q of the wrong size)
+  forward_kinematics(tree, q, ts.data);
+  ts.q_kinematics = q;
+  ts.kinematics_valid = true;
+}
 
 }  // namespace
 
@@ -38,28 +58,64 @@ SystemBuilder system_builder(const Tree& tree_in, JointTorqueFn tau) {
     if (tree->dofs(i) == 1) D[tree->offset(i)] = tree->link(i).joint.damping;
   }
   const bool damped = D.any();
+  // each floating link's quaternion block of M, 4 E(u)ᵀ J E(u), is singular along u; it is
+  // completed with c u uᵀ and Q with c u b of its unit-norm row (u·u'' = b = −u'·u'), c = tr/3 of
+  // the block at the neutral pose: M + c AᵀA, Q + c Aᵀ b has the same constrained q'' and Qc as
+  // M, Q (Qc ∈ range Aᵀ; docs/robots.md), and the engine factorizes a regular M once per
+  // evaluation instead of completing a singular one
+  struct Completion {
+    Index offset;  // the quaternion's first coordinate
+    double c;      // the completion's scale (kg·m²)
+  };
+  std::vector<Completion> completions;
+  if (!tree->floating_links().empty()) {
+    TreeData d0(*tree);
+    MatrixXd M0(n, n);
+    mass_matrix(*tree, tree->neutral(), d0, M0);
+    for (Index i : tree->floating_links()) {
+      const Index o = tree->offset(i) + 3;
+      const double c = M0.block<4, 4>(o, o).trace() / 3.0;
+      completions.push_back({o, c > 0.0 ? c : 1.0});
+    }
+  }
   SystemBuilder sb(tree->coordinate_names());
   sb.scratch([tree]() -> std::unique_ptr<CallableScratch> {
     return std::make_unique<TreeScratch>(*tree);
   });
-  sb.mass_matrix([tree](const Eigen::Ref<const VectorXd>& q, double, CallableScratch* s,
-                        Eigen::Ref<MatrixXd> M) { mass_matrix(*tree, q, scratch_of(s).data, M); });
-  // Q = τ − D q' − h(q, q')
-  sb.forces([tree, D, tau](const Eigen::Ref<const VectorXd>& q,
-                           const Eigen::Ref<const VectorXd>& qd, double t, CallableScratch* s,
-                           Eigen::Ref<VectorXd> Q) {
+  sb.mass_matrix([tree, completions](const Eigen::Ref<const VectorXd>& q, double,
+                                     CallableScratch* s, Eigen::Ref<MatrixXd> M) {
     TreeScratch& ts = scratch_of(s);
-    bias_forces(*tree, q, qd, ts.data, ts.h);
+    kinematics_at(*tree, q, ts);
+    detail::mass_matrix_from_kinematics(*tree, ts.data, M);
+    // M_uu += c u uᵀ
+    for (const Completion& k : completions) {
+      const Eigen::Vector4d u = q.segment<4>(k.offset);
+      M.block<4, 4>(k.offset, k.offset).noalias() += k.c * u * u.transpose();
+    }
+  });
+  // Q = τ − D q' − h(q, q') (+ c u b per floating link)
+  sb.forces([tree, D, tau, completions](const Eigen::Ref<const VectorXd>& q,
+                                        const Eigen::Ref<const VectorXd>& qd, double t,
+                                        CallableScratch* s, Eigen::Ref<VectorXd> Q) {
+    TreeScratch& ts = scratch_of(s);
+    kinematics_at(*tree, q, ts);
+    detail::rnea_from_kinematics(*tree, qd, nullptr, ts.data, ts.h);
     Q = -ts.h - D.cwiseProduct(qd);
     if (tau) {
       tau(q, qd, t, ts.tau);
       Q += ts.tau;
     }
+    // Q_u −= c u (u'·u')
+    for (const Completion& k : completions) {
+      Q.segment<4>(k.offset) -=
+          (k.c * qd.segment<4>(k.offset).squaredNorm()) * q.segment<4>(k.offset);
+    }
   });
   // V = −Σ m_i g · p_W(com_i)
   sb.potential_energy([tree](const Eigen::Ref<const VectorXd>& q, double, CallableScratch* s) {
-    TreeData& d = scratch_of(s).data;
-    forward_kinematics(*tree, q, d);
+    TreeScratch& ts = scratch_of(s);
+    kinematics_at(*tree, q, ts);
+    const TreeData& d = ts.data;
     double V = 0.0;
     for (Index i = 0; i < tree->link_count(); ++i) {
       const Inertial& in = tree->link(i).inertial;

@@ -1,0 +1,42 @@
+// SPDX-License-Identifier: BSD-3-Clause
+/// @file multibody/tree_closures.hpp
+/// Weld and revolute loop closures between the frames of a kinematic tree (multibody/tree.hpp),
+/// beside its point and distance closures: constraints to add to tree::system_builder, built on
+/// frame_jacobian and frame_bias_acceleration (src/multibody/tree/frame_constraints.cpp).
+#pragma once
+
+#include <string>
+
+#include "ukdyn/core/constraint.hpp"
+#include "ukdyn/multibody/tree.hpp"
+
+namespace ukdyn::tree {
+
+/// A frame fixed on a link, or on the world (link = -1): origin p and orientation R (columns: the
+/// frame's axes) in the link's frame (the world's for -1).
+struct LinkFrame {
+  Index link = -1;                    ///< the link (Tree::link_index), -1 for the world
+  Vector3d p = Vector3d::Zero();      ///< origin in the link's frame
+  Matrix3d R = Matrix3d::Identity();  ///< orientation in the link's frame (a rotation)
+};
+
+/// A weld loop closure: frame a held at frame b, 6 holonomic rows
+///   e_p = p_W(a) − p_W(b),   e_R = ½ Σ_k r_b,k × r_a,k   (r_a,k, r_b,k the columns of R_Wa, R_Wb;
+/// e_R = sin θ · axis of the relative rotation, zero at R_Wa = R_Wb). A q'' = b is e'' = 0 exactly:
+/// rows 0–2 J_v(a) − J_v(b); rows 3–5 L J_ω(a) − Lᵀ J_ω(b), L = −½ Σ [r_b,k]× [r_a,k]× (the
+/// identity at the closure). @throws std::invalid_argument naming `name` as point_constraint, and
+/// on an R that is not a rotation (to 1e-9). Cost per evaluation O(n · depth).
+Constraint weld_constraint(const Tree& tree, std::string name, const LinkFrame& a,
+                           const LinkFrame& b);
+
+/// A revolute loop closure (a hinge closing the chain): points a and b held together and the
+/// unit axis u_a (in a's link frame) kept parallel to u_b (in b's link frame), 5 holonomic rows:
+/// the 3 of point_constraint, then u_a · x_b = 0 and u_a · y_b = 0 with x_b, y_b ⊥ u_b fixed in
+/// b's link. Each axis row φ = u_a · x has φ' = (u_a × x) · (ω_a − ω_b); A q'' = b is φ'' = 0
+/// exactly. In a planar mechanism 3 of the 5 rows are identically zero (A rank deficient, which
+/// the fundamental equation allows). @throws std::invalid_argument as point_constraint, and on a
+/// zero or non-finite axis. Cost per evaluation O(n · depth).
+Constraint revolute_constraint(const Tree& tree, std::string name, LinkPoint a,
+                               const Vector3d& axis_a, LinkPoint b, const Vector3d& axis_b);
+
+}  // namespace ukdyn::tree
