@@ -13,6 +13,7 @@
 
 #include <algorithm>
 #include <cctype>
+#include <filesystem>
 #include <map>
 #include <memory>
 #include <sstream>
@@ -305,6 +306,14 @@ std::string cut_flow_list_hint(const YAML::Node& list, const std::string& key);
 // `robot: {urdf: '<its file name>'}` (modelfile/reader_urdf.cpp).
 bool is_urdf_path(const std::string& path);
 std::string urdf_model_text(const std::string& path);
+
+// A file named in the model file `model_file` (a URDF, a table): `path` as written, relative to
+// the model file's directory. A built-in example (`model_file` "examples/models/NAME.yaml", its
+// text embedded in the program) finds its files in the first examples directory that holds them:
+// $UKDYN_EXAMPLES_DIR, the installed one (share/doc/ukdyn/examples/models), the source tree's;
+// so `ukdyn run --example leg_four_bar_knee` works from any directory
+// (modelfile/example_files.cpp).
+std::filesystem::path model_relative_path(const std::string& model_file, const std::string& path);
 
 // The reader: one model file.
 class Reader {

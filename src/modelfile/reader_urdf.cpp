@@ -104,8 +104,7 @@ Model Reader::read_robot(const YAML::Node& root) {
     fail(u ? u : r, "robot needs urdf: the URDF file's path (relative to the model file)",
          "robot: {urdf: arm.urdf}");
   // the URDF, relative to this file's directory
-  std::filesystem::path path(u.Scalar());
-  if (path.is_relative()) path = std::filesystem::path(file_).parent_path() / path;
+  const std::filesystem::path path = model_relative_path(file_, u.Scalar());
   const bool alone = std::filesystem::path(file_) == path;  // `ukdyn run arm.urdf`
   tree::Tree robot = [&] {
     try {
