@@ -20,7 +20,8 @@ fs::path model_relative_path(const std::string& model_file, const std::string& p
   const fs::path beside = fs::path(model_file).parent_path() / given;
   // a built-in example is named "examples/models/NAME.yaml" (app/source.cpp, python's load)
   constexpr std::string_view kExamples = "examples/models/";
-  if (model_file.rfind(kExamples, 0) != 0 || model_file.find('/', kExamples.size()) != std::string::npos)
+  if (model_file.rfind(kExamples, 0) != 0 ||
+      model_file.find('/', kExamples.size()) != std::string::npos)
     return beside;
   std::error_code ec;
   if (fs::exists(beside, ec)) return beside;  // run from the source tree's root
