@@ -15,6 +15,7 @@
 
 #include "dynamics/engine.hpp"
 #include "dynamics/internal.hpp"
+#include "linalg/safe_norm.hpp"
 #include "ukdyn/linalg/sparse.hpp"
 
 namespace ukdyn::detail {
@@ -135,7 +136,7 @@ class DenseEngine final : public EngineOps {
   void multiply_mass(const Workspace& ws, const VectorXd& x, VectorXd& out) const override {
     out.noalias() = ws.M * x;
   }
-  double norm_A(const Workspace& ws) const override { return ws.A.norm(); }
+  double norm_A(const Workspace& ws) const override { return safe_norm(ws.A.data(), ws.A.size()); }
   void constraint_share(const System& sys, const Workspace& ws, Index k, const VectorXd& lambda,
                         Eigen::Ref<VectorXd> out) const override {
     const Index r0 = sys.row_offset(k), rows = sys.constraint(k).rows();

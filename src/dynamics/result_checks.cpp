@@ -5,6 +5,7 @@
 
 #include "dynamics/engine.hpp"
 #include "dynamics/internal.hpp"
+#include "linalg/safe_norm.hpp"
 #include "ukdyn/dynamics/forward.hpp"
 
 namespace ukdyn {
@@ -22,7 +23,7 @@ Status check_result(const System& sys, Workspace& ws) {
   if (requested || !full_rank) {
     // r = A q'' − b
     engine.constraint_residual(ws, ws.qdd, ws.tmp_m);
-    res.constraint = ws.tmp_m.norm();
+    res.constraint = detail::safe_norm(ws.tmp_m.data(), ws.tmp_m.size());
   }
   if (requested) {
     // lambda_total = lambda + lambda_nonideal, so that Qc = C + Aᵀ lambda_total; its force
@@ -31,18 +32,20 @@ Status check_result(const System& sys, Workspace& ws) {
     engine.multiply_At(ws, ws.tmp_m, ws.dqdd);
     // virtual work: ‖Qc − C − Aᵀ lambda_total‖
     ws.tmp_n = ws.Qc - ws.C - ws.dqdd;
-    res.virtual_work = ws.tmp_n.norm();
+    res.virtual_work = detail::safe_norm(ws.tmp_n.data(), ws.tmp_n.size());
     // Gauss: ‖M q'' − Q − C − Aᵀ lambda_total‖
     engine.multiply_mass(ws, ws.qdd, ws.tmp_n);
     ws.tmp_n -= ws.Q + ws.C + ws.dqdd;
-    res.gauss = ws.tmp_n.norm();
+    res.gauss = detail::safe_norm(ws.tmp_n.data(), ws.tmp_n.size());
   }
   if (!detail::all_finite(ws.qdd) || !detail::all_finite(ws.Qc) || !detail::all_finite(ws.lambda)) {
     return detail::fail(ws, Status::kNonFiniteResult, "q''", -1, ws.failed_time);
   }
   // consistency: ‖A q'' − b‖ <= tol (‖A‖_F (‖q''‖ + ‖a‖) + ‖b‖)
   if (full_rank) return Status::kOk;
-  const double scale = engine.norm_A(ws) * (ws.qdd.norm() + ws.a.norm()) + ws.b.norm();
+  // (norms without overflow or underflow: A of 1e200 or of 1e-170 is still a scale)
+  const auto norm = [](const VectorXd& v) { return detail::safe_norm(v.data(), v.size()); };
+  const double scale = engine.norm_A(ws) * (norm(ws.qdd) + norm(ws.a)) + norm(ws.b);
   if (res.constraint > ws.options().consistency_tolerance * scale) {
     return detail::fail(ws, Status::kInconsistentConstraints, "A q'' = b", -1, ws.failed_time);
   }

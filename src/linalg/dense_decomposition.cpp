@@ -9,6 +9,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "linalg/safe_norm.hpp"
 #include "ukdyn/core/format.hpp"
 #include "ukdyn/core/status.hpp"
 
@@ -114,6 +115,7 @@ void FundamentalDecomposition::resize(Index n, Index m) {
   wn_.resize(n);
   inv_ldiag_.resize(n);
   inv_tdiag_.resize(m);
+  row_scale_.setOnes(m);
   rank_ = 0;
   max_pivot_ = 0.0;
   info_ = Eigen::InvalidInput;
@@ -160,6 +162,37 @@ FundamentalDecomposition& FundamentalDecomposition::compute_constraints(
   } else if (m_ > 0) {  // (Eigen's solve takes &X(0, 0) even when X is empty)
     L_.triangularView<Eigen::Lower>().solveInPlace(X_);
   }
+  // the column norms for pivoting; where one leaves [2⁻⁴⁵⁰, 2⁴⁵⁰] (its square under- or
+  // overflows: a row written as 1e-170 (x² + y² − 1), or q of 1e200), row equilibration: every
+  // row j of W (column j of Wᵀ) scaled to unit norm, D = diag(1 / ‖w_j‖), so that no pivot's
+  // square under- or overflows and the rank decision compares directions; the solves then take
+  // D e and return D λ_D. Otherwise nothing is scaled (every ordinary model: the same bits as
+  // without equilibration, one compare per row)
+  equilibrated_ = false;
+  for (Index j = 0; j < m_; ++j) {
+    norm_[j] = X_.col(j).norm();
+    // (a zero row, an inactive constraint, needs no scaling; a zero norm of a non-zero row is
+    // an underflow)
+    bool zero = norm_[j] == 0.0;
+    for (Index i = 0; zero && i < n_; ++i) zero = X_(i, j) == 0.0;
+    if (!(norm_[j] >= 0x1p-450 && norm_[j] <= 0x1p+450) && !zero) equilibrated_ = true;
+  }
+  if (equilibrated_) {
+    for (Index j = 0; j < m_; ++j) {
+      double* x = X_.col(j).data();
+      const double norm = detail::safe_norm(x, n_);
+      norm_[j] = norm > 0.0 ? 1.0 : norm;  // (inf or NaN stay: reported as such)
+      row_scale_[j] = 1.0;
+      if (!(norm > 0.0) || !std::isfinite(norm)) continue;
+      const double inv = 1.0 / norm;
+      row_scale_[j] = inv;
+      if (std::isfinite(inv)) {
+        for (Index i = 0; i < n_; ++i) x[i] *= inv;
+      } else {  // ‖w_j‖ subnormal
+        for (Index i = 0; i < n_; ++i) x[i] /= norm;
+      }
+    }
+  }
   // Wᵀ Π = Q [R11 R12; 0 0], then [R11 R12] = [T 0] Z when rank-deficient
   factor_qr();
   if (rank_ < m_) factor_rz();
@@ -172,8 +205,8 @@ void FundamentalDecomposition::factor_qr() {
   const Index n = n_, m = m_, kmax = std::min(n, m);
   // sqrt(eps): below it a downdated column norm is recomputed (LAPACK dlaqp2)
   const double tol3z = std::sqrt(std::numeric_limits<double>::epsilon());
+  // (norm_ holds the column norms, from compute_constraints)
   for (Index j = 0; j < m; ++j) {
-    norm_[j] = X_.col(j).norm();
     norm_ref_[j] = norm_[j];
     perm_[j] = int(j);
   }
@@ -305,8 +338,12 @@ void FundamentalDecomposition::apply_pinv(const Eigen::Ref<const VectorXd>& e,
                                           Eigen::Ref<VectorXd> y) {
   UKDYN_CHECK(e.size() == m_ && y.size() == n_, "apply_pinv: wrong sizes");
   const Index r = rank_;
-  // w = Z Πᵀ e
-  for (Index k = 0; k < m_; ++k) wm_[k] = e[perm_[k]];
+  // w = Z Πᵀ D e
+  if (equilibrated_) {
+    for (Index k = 0; k < m_; ++k) wm_[k] = e[perm_[k]] * row_scale_[perm_[k]];
+  } else {
+    for (Index k = 0; k < m_; ++k) wm_[k] = e[perm_[k]];
+  }
   apply_z(wm_, false);
   // u = T⁻ᵀ w_{1:r}
   upper_transpose_solve(X_.data(), n_, inv_tdiag_.data(), wm_.data(), r);
@@ -329,11 +366,15 @@ void FundamentalDecomposition::solve_ideal(const Eigen::Ref<const VectorXd>& e,
   lower_multiply(L.data(), n_, wn_.data(), Qc.data(), n_);
   dqdd = wn_;
   lower_transpose_solve(L.data(), n_, inv_ldiag_.data(), dqdd.data(), n_);
-  // lambda = Π Zᵀ [T⁻¹ u; 0]
+  // lambda = D Π Zᵀ [T⁻¹ u; 0]
   upper_solve(X_.data(), n_, inv_tdiag_.data(), wm_.data(), r);
   wm_.tail(m_ - r).setZero();
   apply_z(wm_, true);
-  for (Index k = 0; k < m_; ++k) lambda[perm_[k]] = wm_[k];
+  if (equilibrated_) {
+    for (Index k = 0; k < m_; ++k) lambda[perm_[k]] = wm_[k] * row_scale_[perm_[k]];
+  } else {
+    for (Index k = 0; k < m_; ++k) lambda[perm_[k]] = wm_[k];
+  }
 }
 
 void FundamentalDecomposition::project_nonideal(const Eigen::Ref<const VectorXd>& C,
@@ -347,12 +388,16 @@ void FundamentalDecomposition::project_nonideal(const Eigen::Ref<const VectorXd>
   const MatrixXd& L = L_;
   lower_solve(L.data(), n_, inv_ldiag_.data(), wn_.data(), n_);
   apply_q(wn_, true);
-  // lambda = −G⁺ A M⁻¹ C = −Π Zᵀ [T⁻¹ v_{1:r}; 0]
+  // lambda = −D G_D⁺ D A M⁻¹ C = −D Π Zᵀ [T⁻¹ v_{1:r}; 0]
   wm_.head(r) = wn_.head(r);
   upper_solve(X_.data(), n_, inv_tdiag_.data(), wm_.data(), r);
   wm_.tail(m_ - r).setZero();
   apply_z(wm_, true);
-  for (Index k = 0; k < m_; ++k) lambda[perm_[k]] = -wm_[k];
+  if (equilibrated_) {
+    for (Index k = 0; k < m_; ++k) lambda[perm_[k]] = -wm_[k] * row_scale_[perm_[k]];
+  } else {
+    for (Index k = 0; k < m_; ++k) lambda[perm_[k]] = -wm_[k];
+  }
   // c⊥ = (I − W⁺W) L⁻¹ C = Q [0; v_{r+1:n}]
   wn_.head(r).setZero();
   apply_q(wn_, false);

@@ -268,6 +268,8 @@ SparseDecomposition::SparseDecomposition(const System& sys)
   wm_.assign(std::size_t(m), 0.0);
   wm2_.assign(std::size_t(m), 0.0);
   wm3_.assign(std::size_t(m), 0.0);
+  wm4_.assign(std::size_t(m), 0.0);
+  row_scale_.assign(std::size_t(m), 1.0);
   wn_.assign(std::size_t(n_), 0.0);
   wn2_.assign(std::size_t(n_), 0.0);
   wn3_.assign(std::size_t(n_), 0.0);

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "linalg/safe_norm.hpp"
 #include "ukdyn/linalg/sparse.hpp"
 
 namespace ukdyn {
@@ -472,7 +473,9 @@ void SparseDecomposition::share(Index k, const Eigen::Ref<const VectorXd>& lambd
 double SparseDecomposition::norm_A() const {
   double s = 0.0;
   for (double v : Av_) s += v * v;
-  return std::sqrt(s);
+  // (without under- or overflow where the squares leave the range: A of 1e-170 or 1e200)
+  if (s >= 0x1p-900 && s <= 0x1p+900) return std::sqrt(s);
+  return detail::safe_norm(Av_.data(), Index(Av_.size()));
 }
 
 void SparseDecomposition::constraint_rows_dense(Index k, Eigen::Ref<MatrixXd> out) const {
@@ -523,12 +526,51 @@ SparseDecomposition& SparseDecomposition::compute_constraints() {
   // them all to zero (+0 + x is x except for x = −0, which a dot started from +0 is not without
   // fused multiply-adds; with them a −0 entry would only be added to +0 or squared), without
   // clearing G first
-  const double* W = Wv_.data();
-  for (const Product& pr : program_first_) {
-    Gx_[std::size_t(pr.target)] = segment_dot(W + pr.wi, W + pr.wj, pr.len, 0.0);
-  }
-  for (const Product& pr : program_) {
-    Gx_[std::size_t(pr.target)] += segment_dot(W + pr.wi, W + pr.wj, pr.len, 0.0);
+  const auto assemble_G = [this] {
+    const double* W = Wv_.data();
+    for (const Product& pr : program_first_) {
+      Gx_[std::size_t(pr.target)] = segment_dot(W + pr.wi, W + pr.wj, pr.len, 0.0);
+    }
+    for (const Product& pr : program_) {
+      Gx_[std::size_t(pr.target)] += segment_dot(W + pr.wi, W + pr.wj, pr.len, 0.0);
+    }
+  };
+  assemble_G();
+  // row equilibration where a G_kk = ‖w_k‖² under- or overflows (see linalg/sparse.hpp; the
+  // rank test d_k <= tau² G_kk is relative to each row's own norm already): w_i ← w_i / ‖w_i‖
+  // and G again. Otherwise nothing is scaled (the common case, one compare per row): lambda is
+  // G⁺ e, bit for bit as without equilibration
+  const auto diagonal_in_range = [this] {
+    for (Index k = 0; k < m_; ++k) {
+      const double g = Gx_[std::size_t(Gdiag_[std::size_t(k)])];
+      if (g >= 0x1p-900 && g <= 0x1p+900) continue;
+      // zero: a zero row (an inactive constraint), or one whose squares underflowed
+      const int i = perm_[std::size_t(k)];
+      bool zero = g == 0.0;
+      for (int p = row_ptr_[std::size_t(i)]; zero && p < row_ptr_[std::size_t(i) + 1]; ++p) {
+        zero = Wv_[std::size_t(p)] == 0.0;
+      }
+      if (!zero) return false;
+    }
+    return true;
+  };
+  equilibrated_ = !diagonal_in_range();
+  if (equilibrated_) {
+    for (Index i = 0; i < m_; ++i) {
+      double* w = Wv_.data() + row_ptr_[std::size_t(i)];
+      const Index len = row_ptr_[std::size_t(i) + 1] - row_ptr_[std::size_t(i)];
+      const double norm = detail::safe_norm(w, len);
+      row_scale_[std::size_t(i)] = 1.0;
+      if (!(norm > 0.0) || !std::isfinite(norm)) continue;
+      const double inv = 1.0 / norm;
+      row_scale_[std::size_t(i)] = inv;
+      if (std::isfinite(inv)) {
+        for (Index p = 0; p < len; ++p) w[p] *= inv;
+      } else {  // ‖w_i‖ subnormal: lambda = D lambda_D is then not finite, and reported
+        for (Index p = 0; p < len; ++p) w[p] /= norm;
+      }
+    }
+    assemble_G();
   }
   factor_G();
   null_basis();
@@ -698,6 +740,10 @@ void SparseDecomposition::solve_G_permuted(double* x) {
   if (d_ > 0) project_range(x);
 }
 
+void SparseDecomposition::scale_rows(const double* x, double* y) const {
+  for (Index i = 0; i < m_; ++i) y[i] = x[i] * row_scale_[std::size_t(i)];
+}
+
 void SparseDecomposition::solve_min_norm(const double* e, double* lambda, double* y) {
   // lambda = G⁺ e, y = Wᵀ lambda
   for (Index k = 0; k < m_; ++k) wm_[std::size_t(k)] = e[perm_[std::size_t(k)]];
@@ -724,8 +770,14 @@ void SparseDecomposition::solve_min_norm(const double* e, double* lambda, double
 void SparseDecomposition::solve_ideal(const Eigen::Ref<const VectorXd>& e,
                                       Eigen::Ref<VectorXd> dqdd, Eigen::Ref<VectorXd> Qc,
                                       Eigen::Ref<VectorXd> lambda) {
-  // lambda = G⁺ e;  y = Wᵀ lambda = W⁺ e
-  solve_min_norm(e.data(), lambda.data(), wn_.data());
+  // lambda = G⁺ e;  y = Wᵀ lambda = W⁺ e (with equilibrated rows: lambda = D G_D⁺ D e)
+  if (!equilibrated_) {
+    solve_min_norm(e.data(), lambda.data(), wn_.data());
+  } else {
+    scale_rows(e.data(), wm3_.data());
+    solve_min_norm(wm3_.data(), lambda.data(), wn_.data());
+    scale_rows(lambda.data(), lambda.data());
+  }
   // Qc = L y;  dqdd = L⁻ᵀ y
   mass_lower_multiply(wn_.data(), Qc.data());
   std::copy(wn_.begin(), wn_.end(), dqdd.data());
@@ -735,12 +787,16 @@ void SparseDecomposition::solve_ideal(const Eigen::Ref<const VectorXd>& e,
 void SparseDecomposition::project_nonideal(const Eigen::Ref<const VectorXd>& C,
                                            Eigen::Ref<VectorXd> dqdd, Eigen::Ref<VectorXd> Qc,
                                            Eigen::Ref<VectorXd> lambda) {
-  // c = L⁻¹ C;  lambda = −G⁺ W c, W⁺W c = Wᵀ G⁺ W c
+  // c = L⁻¹ C;  lambda = −G⁺ W c, W⁺W c = Wᵀ G⁺ W c (equilibrated: −D G_D⁺ W_D c, W_D)
   std::copy(C.data(), C.data() + n_, wn_.begin());
   mass_lower_solve(wn_.data());
   multiply_W(wn_.data(), wm3_.data());
   solve_min_norm(wm3_.data(), lambda.data(), wn3_.data());
-  lambda = -lambda;
+  if (!equilibrated_) {
+    lambda = -lambda;
+  } else {
+    for (Index i = 0; i < m_; ++i) lambda[i] *= -row_scale_[std::size_t(i)];
+  }
   // c⊥ = c − W⁺W c = (I − W⁺W) c;  Qc = L c⊥;  dqdd = L⁻ᵀ c⊥
   for (Index i = 0; i < n_; ++i) wn_[std::size_t(i)] -= wn3_[std::size_t(i)];
   mass_lower_multiply(wn_.data(), Qc.data());
@@ -749,8 +805,13 @@ void SparseDecomposition::project_nonideal(const Eigen::Ref<const VectorXd>& C,
 }
 
 void SparseDecomposition::apply_pinv(const Eigen::Ref<const VectorXd>& e, Eigen::Ref<VectorXd> y) {
-  // y = Wᵀ G⁺ e
-  solve_min_norm(e.data(), wm3_.data(), y.data());
+  // y = Wᵀ G⁺ e (equilibrated: W_Dᵀ G_D⁺ D e)
+  if (!equilibrated_) {
+    solve_min_norm(e.data(), wm3_.data(), y.data());
+  } else {
+    scale_rows(e.data(), wm4_.data());
+    solve_min_norm(wm4_.data(), wm3_.data(), y.data());
+  }
 }
 
 }  // namespace ukdyn

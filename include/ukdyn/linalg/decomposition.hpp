@@ -15,14 +15,27 @@
 ///     c = L⁻¹ C,  c⊥ = c − Q_r Q_rᵀ c:   Qc_nonideal = L c⊥,   q''_nonideal = L⁻ᵀ c⊥
 ///
 /// Cost: compute_mass O(n³/3); compute_constraints O(m n² + 2 m² n); each solve O(n² + n m).
+/// (When the rows are equilibrated, every quantity below is that of D W, see "Row
+/// equilibration".)
 /// Memory is reserved by the constructor; no method allocates afterwards.
+///
+/// Row equilibration, only where needed: when the norm of some row w_j of W leaves
+/// [2⁻⁴⁵⁰, 2⁴⁵⁰] (its square, a pivot's, would under- or overflow: a row written as
+/// 1e-170 (x² + y² − 1) was dropped as zero, with status ok, before; so was q = (1e200, 1e200)),
+/// every row is scaled to unit norm, W_D = D W with D = diag(1 / ‖w_j‖) (‖w_j‖ computed without
+/// overflow or underflow; a zero row, an inactive constraint, stays zero). A q'' = b is invariant
+/// under row scaling, so q'', Qc and the least-squares answer of consistent constraints are
+/// unchanged; the solves take D e and return lambda = D lambda_D. Otherwise (every ordinary
+/// model) nothing is scaled and the results are bit for bit those without equilibration — the
+/// minimum-norm lambda of redundant rows and a control law's least squares are unweighted.
 ///
 /// Rank decision: pivot k counts as non-zero when |R_kk| > threshold · |R_00|, where R_00 is the
 /// largest pivot (column pivoting makes |R_kk| non-increasing). The threshold is relative, so
-/// the rank does not change when all constraints are scaled together; rows of very different
-/// scale should be normalized by the modeller. Default 1e-10: exactly redundant rows (whose
-/// pivots are of order 1e-16) are dropped, and a configuration-dependent loss of rank is
-/// detected once it is within 1e-10 of singular.
+/// the rank does not change when all constraints are scaled together (and with equilibrated
+/// rows, |R_00| = 1, when each row is scaled separately); rows of ordinary norms but very
+/// different scales are not equilibrated and should be normalized by the modeller.
+/// Default 1e-10: exactly redundant rows (whose pivots are of order 1e-16) are dropped, and a
+/// configuration-dependent loss of rank is detected once it is within 1e-10 of singular.
 #pragma once
 #include <cmath>
 
@@ -68,10 +81,12 @@ class FundamentalDecomposition {
   FundamentalDecomposition& set_threshold(double threshold);
   /// The relative rank threshold.
   double threshold() const { return threshold_; }
-  /// Largest pivot |R_00| of the last decomposition (an estimate of ‖W‖₂).
+  /// Largest pivot |R_00| of the last decomposition (an estimate of ‖W‖₂; of ‖D W‖₂, 1 with a
+  /// non-zero row, when the rows were equilibrated, see the file comment).
   double max_pivot() const { return max_pivot_; }
   /// Smallest kept pivot |R_{r−1,r−1}| of the last decomposition (an estimate of σ_r(W), the
-  /// smallest non-zero singular value); 0 when r = 0. Cost O(1).
+  /// smallest non-zero singular value; of D W when the rows were equilibrated); 0 when r = 0.
+  /// Cost O(1).
   double min_pivot() const { return rank_ > 0 ? 1.0 / std::abs(inv_tdiag_[rank_ - 1]) : 0.0; }
   /// Number of coordinates n and constraint rows m this object was sized for.
   Index coordinate_count() const { return n_; }
@@ -115,8 +130,10 @@ class FundamentalDecomposition {
   VectorXd norm_, norm_ref_;  // (m) partial column norms for pivoting
   VectorXd inv_ldiag_;        // (n) 1 / L_kk
   VectorXd inv_tdiag_;        // (m) 1 / T_kk, first rank_ entries
-  VectorXd wm_;               // (m) scratch
-  VectorXd wn_;               // (n) scratch
+  VectorXd row_scale_;  // (m) D: 1 / ‖w_j‖ of the last compute_constraints (1 for a zero row)
+  bool equilibrated_ = false;  // whether the last compute_constraints scaled the rows by D
+  VectorXd wm_;                // (m) scratch
+  VectorXd wn_;                // (n) scratch
   Index rank_ = 0;
   double max_pivot_ = 0.0;
   double threshold_ = kDefaultThreshold;

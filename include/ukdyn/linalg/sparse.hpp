@@ -23,6 +23,15 @@
 /// The projection of e onto range(G) makes an inconsistent e give the least-squares answer of
 /// the dense engine (W⁺ e), so inconsistency is reported the same way.
 ///
+/// Row equilibration, only where needed: when some G_kk = ‖w_k‖² lies outside [2⁻⁹⁰⁰, 2⁹⁰⁰]
+/// (a row written as 1e-170 (x² + y² − 1) squared to zero and was dropped as a zero row, with
+/// status ok, before), W is stored as D W, D = diag(1 / ‖w_i‖) (norms computed without under-
+/// or overflow), and G formed again from it; the solves take D e and return lambda = D lambda_D,
+/// so q'' and Qc are unchanged and lambda minimizes Σ_i (‖w_i‖ lambda_i)² among redundant rows.
+/// Otherwise (every ordinary model) nothing is scaled: one compare per row, lambda = G⁺ e bit
+/// for bit, the dense engine's split among redundant rows. The rank test below is relative to
+/// each row's own norm in either case. Cost O(m) checks; O(nnz(A) + nnz(G)) when scaling.
+///
 /// Rank decision (relative, documented beside the dense one in linalg/decomposition.hpp): row k
 /// counts as dependent when the part of its row w_k of W outside the span of the rows eliminated
 /// before it is at most tau ‖w_k‖, i.e. d_k <= tau² G_kk. Default tau = 1e-6: G squares the
@@ -204,6 +213,8 @@ class SparseDecomposition {
   void solve_G_permuted(double* x);
   // lambda = G⁺ e and y = Wᵀ lambda (original order), with one refinement step
   void solve_min_norm(const double* e, double* lambda, double* y);
+  // y = D x (m; y may be x)
+  void scale_rows(const double* x, double* y) const;
   // x ← x − N (Nᵀ x) and the trivial (zero-row) entries zeroed, permuted order
   void project_range(double* x) const;
   // y = Wᵀ lambda (original row order)
@@ -264,7 +275,10 @@ class SparseDecomposition {
   Index d_ = 0, rank_ = 0, rechecked_ = 0;
   double threshold_ = kDefaultThreshold;
   // scratch
-  std::vector<double> wm_, wm2_, wm3_, wn_, wn2_, wn3_;
+  std::vector<double> wm_, wm2_, wm3_, wm4_, wn_, wn2_, wn3_;
+  // D: 1 / ‖w_i‖ of each row of W (1 for a zero row), see "Row equilibration"
+  std::vector<double> row_scale_;
+  bool equilibrated_ = false;  // whether the last compute_constraints scaled the rows by D
 };
 
 }  // namespace ukdyn
