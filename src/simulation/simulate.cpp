@@ -837,9 +837,12 @@ class Run {
     out.potential_energy.push_back(V);
     out.energy.push_back(T + V);
     peak_kinetic_ = std::max(peak_kinetic_, T);
-    // (at least the run's energy unit, max(T + |V|, |Q| l) at its start: a body released at rest
-    // at V = 0 has no energy yet)
-    if (!(energy_scale_ > 0.0)) energy_scale_ = std::max(T + std::abs(V), ws_.energy_unit);
+    // (T + |V| at the start, as the divergence message says; the run's energy unit, the power of
+    // two nearest to max(T + |V|, |Q| l), where that is 0: a body released at rest at V = 0 has
+    // no energy yet)
+    if (!(energy_scale_ > 0.0)) {
+      energy_scale_ = T + std::abs(V) > 0.0 ? T + std::abs(V) : ws_.energy_unit;
+    }
     // the work channels (absent ones are zero), and the balance so far
     const auto work = [&](Index channel) {
       return channel < 0
