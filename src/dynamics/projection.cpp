@@ -92,7 +92,7 @@ Worst measure_violation(const System& sys, Workspace& ws, const Eigen::Ref<const
   const bool position = level == Level::kPosition;
   const VectorXd& scale = position ? ws.phi_scale : ws.phi_dot_scale;
   const double factor =
-      position ? state_factor(q, ws.length_scale) : 1.0;  // (velocities: see below)
+      position ? state_factor(q, ws.length_scale) : state_factor(qd, ws.speed_scale);
   for (Index k = 0; k < sys.constraint_count(); ++k) {
     const Index r0 = sys.row_offset(k), rows = sys.constraint(k).rows();
     auto ek = ws.e.segment(r0, rows);
@@ -225,10 +225,7 @@ Violations measure_violations(const System& sys, Workspace& ws, const Eigen::Ref
   if (!v.finite) return v;
   // the tolerances of each row (see Workspace::phi_scale)
   const double tol_q = options.tolerance * state_factor(q, ws.length_scale);
-  // (velocities take no state factor: speeds that grow without bound as a driven mechanism
-  // locks up must leave the velocity projection failing, for find_constraint_conflict to name
-  // the lock-up, as with the absolute tolerance before; cli.run_lockup)
-  const double tol_v = options.tolerance;
+  const double tol_v = options.tolerance * state_factor(qd, ws.speed_scale);
   for (Index k = 0; k < sys.constraint_count(); ++k) {
     const bool position = takes_part(sys, ws, options, k, t, Level::kPosition);
     if (!position && !takes_part(sys, ws, options, k, t, Level::kVelocity)) continue;
