@@ -92,8 +92,10 @@ Worst measure_violation(const System& sys, Workspace& ws, const Eigen::Ref<const
   Worst worst;
   const bool position = level == Level::kPosition;
   const VectorXd& scale = position ? ws.phi_scale : ws.phi_dot_scale;
-  const double factor =
-      position ? state_factor(q, ws.length_scale) : state_factor(qd, ws.speed_scale);
+  // (velocities take no factor of the state: their scale v comes from the run's energy, and
+  // speeds that grow without bound as a driven mechanism locks up must leave the velocity
+  // projection failing, for find_constraint_conflict to name the lock-up; cli.run_lockup)
+  const double factor = position ? state_factor(q, ws.length_scale) : 1.0;
   for (Index k = 0; k < sys.constraint_count(); ++k) {
     const Index r0 = sys.row_offset(k), rows = sys.constraint(k).rows();
     auto ek = ws.e.segment(r0, rows);
@@ -226,7 +228,7 @@ Violations measure_violations(const System& sys, Workspace& ws, const Eigen::Ref
   if (!v.finite) return v;
   // the tolerances of each row (see Workspace::phi_scale)
   const double tol_q = options.tolerance * state_factor(q, ws.length_scale);
-  const double tol_v = options.tolerance * state_factor(qd, ws.speed_scale);
+  const double tol_v = options.tolerance;  // (no factor of the state: see measure_violation)
   for (Index k = 0; k < sys.constraint_count(); ++k) {
     const bool position = takes_part(sys, ws, options, k, t, Level::kPosition);
     if (!position && !takes_part(sys, ws, options, k, t, Level::kVelocity)) continue;
@@ -255,31 +257,41 @@ void set_run_scales(const System& sys, Workspace& ws, const Eigen::Ref<const Vec
   detail::require_same_system(sys, ws, "ukdyn::set_run_scales");
   detail::require_state_size(sys, q, &qd, "ukdyn::set_run_scales");
   const Index n = sys.coordinate_count();
-  // ℓ = ‖q‖∞ (1 when every coordinate is 0: the model gives no length); v = ‖q'‖∞, at least
-  // ℓ / duration (a run from rest covers its lengths in its duration)
+  // ℓ = ‖q‖∞ (1 when every coordinate is 0: the model gives no length)
   double length = q.size() > 0 ? q.cwiseAbs().maxCoeff() : 0.0;
   if (!(length > 0.0) || !std::isfinite(length)) length = 1.0;
-  double speed = qd.size() > 0 ? qd.cwiseAbs().maxCoeff() : 0.0;
-  if (!std::isfinite(speed)) speed = 0.0;
-  if (duration > 0.0 && std::isfinite(duration)) speed = std::max(speed, length / duration);
-  if (!(speed > 0.0)) speed = length;
-  ws.length_scale = length;
-  ws.speed_scale = speed;
   ws.phi_scale.setOnes();
   ws.phi_dot_scale.setOnes();
   // E = max(T + |V|, ‖Q‖∞ ℓ) at the state: the energy the run's forces exchange over its
   // lengths (a pendulum released at rest at V = 0 has T + |V| = 0 but m g ℓ); the unit of the
-  // work channels is the power of two nearest to it (1 when there is none)
-  double energy = 0.0;
+  // work channels is the power of two nearest to it (1 when there is none). The mass scale
+  // m = 1ᵀ M 1 / n, a Rayleigh quotient of M (between its least and largest eigenvalue)
+  double energy = 0.0, mass = 0.0;
   if (evaluate_unconstrained(sys, ws, q, qd, t) == Status::kOk) {
     const double T = ws.mass_singular ? 0.0 : detail::kinetic_energy(ws, qd);
     const double V = sys.potential_energy(q, t, ws.callables.get());
     const double Q = ws.Q.size() > 0 ? ws.Q.cwiseAbs().maxCoeff() : 0.0;
     energy = std::max(std::abs(T) + std::abs(V), Q * length);
+    if (n > 0 && !ws.mass_singular) {
+      ws.tmp_n.setOnes();
+      mass = 2.0 * detail::kinetic_energy(ws, ws.tmp_n) / double(n);
+    }
   }
   ws.status = Status::kOk;
-  ws.energy_unit =
-      energy > 0.0 && std::isfinite(energy) ? std::exp2(std::round(std::log2(energy))) : 1.0;
+  if (!std::isfinite(energy)) energy = 0.0;
+  ws.energy_unit = energy > 0.0 ? std::exp2(std::round(std::log2(energy))) : 1.0;
+  // v = the largest of ‖q'‖∞, the speed √(2E/m) the run's energy gives its mass scale, and
+  // ℓ / duration (a run from rest covers its lengths in its duration); ℓ per unit time when
+  // none of them is > 0
+  double speed = qd.size() > 0 ? qd.cwiseAbs().maxCoeff() : 0.0;
+  if (!std::isfinite(speed)) speed = 0.0;
+  if (const double v = std::sqrt(2.0 * energy / mass); mass > 0.0 && std::isfinite(v)) {
+    speed = std::max(speed, v);
+  }
+  if (duration > 0.0 && std::isfinite(duration)) speed = std::max(speed, length / duration);
+  if (!(speed > 0.0)) speed = length;
+  ws.length_scale = length;
+  ws.speed_scale = speed;
   MatrixXd Ak;  // (once per run)
   for (Index k = 0; k < sys.constraint_count(); ++k) {
     const Constraint& c = sys.constraint(k);

@@ -153,5 +153,50 @@ TEST(Scales, CheckJudgesTheInitialStateInTheRunsScales) {
   EXPECT_TRUE(check_model(mm).initial_violations.empty());
 }
 
+// The speed scale comes from the run's energy, v = √(2E / m) (set_run_scales): the pendulum
+// released at rest has E = m g ℓ = 9.81 J, m = 1 kg, v = √(2 g) = 4.43 m/s whatever the
+// duration; with masses × 1e6 the same v, with lengths × 1000 (and g in mm/s²) v × 1000. A
+// mechanism with neither energy nor speed keeps ℓ / duration.
+TEST(Scales, SpeedScaleIsThatOfTheRunsEnergy) {
+  for (const double duration : {1.0, 5e4}) {
+    for (const auto& [L, m] : {std::pair{1.0, 1.0}, std::pair{1.0, 1e6}, std::pair{1000.0, 1.0}}) {
+      SCOPED_TRACE(std::to_string(duration) + " s, L " + num(L) + ", m " + num(m));
+      const Model model = parse_model(pendulum_text(L, 9.81 * L, m), "m.yaml");
+      Workspace ws(model.system);
+      set_run_scales(model.system, ws, model.q0, model.qd0, 0.0, duration);
+      EXPECT_NEAR(ws.speed_scale, std::sqrt(2.0 * 9.81) * L, 1e-12 * L);
+      EXPECT_EQ(ws.length_scale, L);
+      // the rod x² + y² − L², ‖a‖ = 2 L at (L, 0)
+      EXPECT_NEAR(ws.phi_dot_scale[0], 2.0 * L * ws.speed_scale, 1e-12 * L * L);
+    }
+  }
+  const Model still = parse_model(
+      "coordinates: [x]\nkinetic_energy: 0.5*x_dot^2\nconstraints:\n"
+      "  - {name: c, holonomic: x - 2}\ninitial: {q: {x: 2}}\n",
+      "still.yaml");
+  Workspace ws(still.system);
+  set_run_scales(still.system, ws, still.q0, still.qd0, 0.0, 4.0);
+  EXPECT_EQ(ws.speed_scale, 0.5);
+}
+
+// tests/data/interrupt_pendulum.yaml, released at rest for 5e4 s: with v = ℓ / duration =
+// 2e-5 m/s the velocity tolerance was beyond roundoff and the projection failed at t = 0.36 s;
+// the energy's speed keeps it meetable (stopped on request after 3 s of its motion, the rod's
+// length held to 1e-10 at every sample)
+TEST(Scales, LongRunFromRestKeepsAMeetableVelocityTolerance) {
+  Model m = load_model(std::string(UKDYN_TEST_DATA_DIR) + "/interrupt_pendulum.yaml");
+  double reached = 0.0;
+  m.options.progress = [&](const ProgressReport& r) { reached = r.t; };
+  m.options.should_stop = [&] { return reached > 3.0; };
+  const Trajectory tr = simulate(m.system, m.q0, m.qd0, m.options);
+  ASSERT_EQ(tr.stats.status, Status::kInterrupted) << tr.stats.message;
+  EXPECT_GT(tr.stats.t_reached, 3.0);
+  EXPECT_LT(tr.stats.t_reached, 4.0);
+  ASSERT_GE(tr.t.size(), 7u);
+  for (std::size_t i = 0; i < tr.t.size(); ++i) {
+    EXPECT_NEAR(std::hypot(tr.q[2 * i], tr.q[2 * i + 1]), 1.0, 1e-10) << "t = " << tr.t[i];
+  }
+}
+
 }  // namespace UKDYN_TEST_FILE
 }  // namespace ukdyn

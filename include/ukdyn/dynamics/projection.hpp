@@ -109,13 +109,15 @@ struct Violations {
   bool within_tolerance = true;
 };
 /// The scales of a run (docs/simulation.md, "Scales and tolerances"), from the state it starts
-/// at: ℓ = ‖q‖∞ (1 when q = 0), v = ‖q'‖∞ but at least ℓ / duration (when duration > 0; ℓ per
-/// unit time when both are 0), and with a_i the row of A at (q, q', t) (the largest of its
+/// at: ℓ = ‖q‖∞ (1 when q = 0); E = max(T + |V|, ‖Q‖∞ ℓ); v the largest of ‖q'‖∞, √(2E/m)
+/// (m = 1ᵀ M 1 / n, a Rayleigh quotient of M: the speed the run's energy gives its masses) and
+/// ℓ / duration (when duration > 0; ℓ per unit time when all are 0); and with a_i the row of A
+/// at (q, q', t) (the largest of its
 /// constraint's rows where it vanishes, 1 when all do) the violation scales
 /// ws.phi_scale_i = ‖a_i‖ ℓ, ws.phi_dot_scale_i = ‖a_i‖ v (a row's violation over its scale
 /// is the relative distance of the state from the constraint, to first order, whatever units
 /// and factor the row is written in), ws.length_scale = ℓ, ws.speed_scale = v, and
-/// ws.energy_unit, the power of two nearest to max(T + |V|, ‖Q‖∞ ℓ) (1 when that is 0 or not
+/// ws.energy_unit, the power of two nearest to E (1 when that is 0 or not
 /// finite): the unit in which the simulation integrates the work channels of the energy
 /// balance, so that their step-size control is relative to the run's energies. Overwrites M,
 /// Q, A and b. Allocates (once per run). Cost: one evaluation of M, Q, V and every
