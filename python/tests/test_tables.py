@@ -1,0 +1,94 @@
+# SPDX-License-Identifier: BSD-3-Clause
+"""Measured data in models (docs/model-format.md, "Tables"): a model file whose table is a CSV
+beside it, tables given from Python (NumPy arrays), the range error and the errors of bad data.
+Every reference comes from a closed form."""
+
+import math
+
+import numpy as np
+import pytest
+
+import ukdyn
+
+# u'' + k/m u = -a_g(t) from rest, a relative displacement on a shaken base
+OSCILLATOR = """
+parameters: {m: 3, k: 3*(2*pi)^2}
+coordinates: [u]
+kinetic_energy: 0.5*m*u_dot^2
+potential_energy: 0.5*k*u^2
+forces: [-m*ground.acc(t)]
+tables:
+  ground: %s
+simulate: {t_end: %s, rtol: 1e-11, atol: 1e-13}
+output: {every: 0.05}
+"""
+
+
+def shaken(t, A, omega, Omega):
+    """The closed form of u'' + omega^2 u = -A sin(Omega t), u(0) = u'(0) = 0."""
+    return -A / (omega**2 - Omega**2) * (np.sin(Omega * t) - Omega / omega * np.sin(omega * t))
+
+
+def test_a_model_file_reads_its_csv_table_and_follows_the_closed_form(tmp_path):
+    t = np.round(np.arange(0, 501) * 0.01, 10)
+    lines = ["time,acc"] + [f"{x!r},{1.5 * math.sin(2 * x)!r}" for x in t]
+    (tmp_path / "ground.csv").write_text("\n".join(lines) + "\n")
+    model = tmp_path / "shaken.yaml"
+    model.write_text(OSCILLATOR % ("{file: ground.csv, x: time, interpolation: cubic}", 5))
+    r = ukdyn.load(model).simulate()
+    assert r.ok
+    assert len(r.t) == 101
+    exact = shaken(r.t, 1.5, 2 * math.pi, 2.0)
+    assert np.max(np.abs(r.u - exact)) < 1e-8
+    assert np.max(np.abs(exact)) > 0.03
+
+
+def test_a_table_given_from_numpy_replaces_the_files_data():
+    # the file declares the table with data of its own; the NumPy arrays replace them
+    t = np.linspace(0.0, 5.0, 501)
+    text = OSCILLATOR % ("{x: t, interpolation: cubic, data: {t: [0, 5], acc: [0, 0]}}", 5)
+    m = ukdyn.parse(text, tables={"ground": {"t": t, "acc": 1.5 * np.sin(2 * t)}})
+    r = m.simulate()
+    assert r.ok
+    assert np.max(np.abs(r.u - shaken(r.t, 1.5, 2 * math.pi, 2.0))) < 1e-8
+    # the file's own data: no excitation at all
+    assert np.max(np.abs(ukdyn.parse(text).simulate().u)) == 0.0
+
+
+def test_the_shaken_frame_example_with_a_record_of_ones_own():
+    # a constant ground acceleration a = 2 on the example's frame, given from NumPy: the output
+    # a_g is that record, and the floors start from rest with the acceleration -a; to order t³
+    # (the first floor's damper and spring act as it moves, c/m = 2, k/m = 400)
+    #   u1' = -a t + (c/m) a t²/2 + (k/m) a t³/6,  u2' = -a t
+    t = np.linspace(0.0, 10.0, 11)
+    m = ukdyn.load("shaken_frame", tables={"ground": {"t": t, "acc": np.full(11, 2.0)}})
+    r = m.simulate(t_end=0.02)
+    assert r.ok
+    np.testing.assert_array_equal(r["a_g"], 2.0)
+    a, T = 2.0, 0.02
+    assert r.u1_dot[-1] == pytest.approx(-a * T + 2.0 * a * T**2 / 2 + 400.0 * a * T**3 / 6,
+                                         rel=2e-3)
+    assert r.u2_dot[-1] == pytest.approx(-2.0 * 0.02, rel=2e-3)
+
+
+def test_outside_the_range_the_run_stops_naming_the_column_value_and_range():
+    t = np.linspace(0.0, 1.0, 11)
+    text = OSCILLATOR % ("{x: t}", 2)
+    m = ukdyn.parse(text, tables={"ground": {"t": t, "acc": np.sin(t)}})
+    with pytest.raises(ValueError, match=r"table column 'ground\.acc' \(from the table given\) "
+                                         r"evaluated at 1\.\d+, outside its rows' range \[0, 1\]"):
+        m.simulate()
+
+
+def test_bad_tables_are_clear_errors():
+    text = OSCILLATOR % ("{x: t}", 1)
+    with pytest.raises(ukdyn.ModelError, match="the table 'groun' given is not declared"):
+        ukdyn.parse(text, tables={"groun": {"t": [0, 1], "acc": [0, 1]}})
+    with pytest.raises(ukdyn.ModelError, match="row 2: the abscissa 't' is not strictly"):
+        ukdyn.parse(text, tables={"ground": {"t": [1, 0], "acc": [0, 1]}})
+    with pytest.raises(ValueError, match=r"column ground\.acc must be one-dimensional"):
+        ukdyn.parse(text, tables={"ground": {"t": [0, 1], "acc": [[0, 1]]}})
+    with pytest.raises(TypeError, match="tables must be a dict"):
+        ukdyn.parse(text, tables=[1, 2])
+    with pytest.raises(ukdyn.ModelError, match="table 'ground' has no data"):
+        ukdyn.parse(text)
