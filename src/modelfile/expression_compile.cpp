@@ -75,7 +75,7 @@ inline void step(const Op& op, double* s, const TableCall* tables) {
     case Code::kPickIf: s[op.dst] = s[op.a] > 0.0 ? s[op.b] : 0.0; break;
     case Code::kPickElse: s[op.dst] = s[op.a] > 0.0 ? 0.0 : s[op.b]; break;
     case Code::kIf: break;  // compiled as kPickIf + kPickElse
-    case Code::kTable: s[op.dst] = tables[op.b](s[op.a]); break;
+    case Code::kTable: if (tables != nullptr) s[op.dst] = tables[op.b](s[op.a]); break;  // (never folded)
   }
 }
 // clang-format on
@@ -256,7 +256,7 @@ class Compiler {
     const std::int32_t x = compile(e.op(3));
     if (const auto& cx = constant_of_[std::size_t(x)]) {
       try {
-        return constant(call(*cx));
+        return constant(call.column->evaluate(*cx, call.order));
       } catch (const TableRangeError& error) {
         throw std::invalid_argument(std::string("ukdyn::expr::ExpressionSet::compile: ") +
                                     error.what());

@@ -98,7 +98,7 @@ namespace detail {
 struct TableCall {
   std::shared_ptr<const TableColumn> column;
   int order = 0;
-  double operator()(double x) const { return column->evaluate(x, order); }
+  double operator()(double x) const { return column->evaluate_in_run(x, order); }
 };
 }  // namespace detail
 

@@ -199,4 +199,23 @@ double TableColumn::evaluate(double x, int order) const {
                         "to extend it)");
 }
 
+namespace {
+thread_local std::string range_error;
+}  // namespace
+
+const std::string& table_range_error() { return range_error; }
+void clear_table_range_error() { range_error.clear(); }
+
+double TableColumn::evaluate_in_run(double x, int order) const noexcept {
+  try {
+    return evaluate(x, order);
+  } catch (const std::exception& e) {
+    try {
+      if (range_error.empty()) range_error = e.what();
+    } catch (...) {  // (no memory for the message: the NaN says enough)
+    }
+    return std::numeric_limits<double>::quiet_NaN();
+  }
+}
+
 }  // namespace ukdyn::expr

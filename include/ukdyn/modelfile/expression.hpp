@@ -98,10 +98,10 @@ class ExpressionSet {
   /// Declares a table column callable in expressions parsed afterwards as `name(x)`, `name`
   /// being `table.column` (two identifiers joined by a '.'; modelfile/table.hpp). Its
   /// derivatives are the interpolant's (a linear column's slope is a step, a step's is 0); a
-  /// compiled program evaluates it with a binary search (O(log rows), no allocation) and
-  /// throws TableRangeError outside its range when its extrapolation is kError. The column is
-  /// shared, never copied. @throws std::invalid_argument on a malformed or repeated name or a
-  /// null column.
+  /// compiled program evaluates it with a binary search (O(log rows), no allocation); outside
+  /// its range, when its extrapolation is kError, the value is NaN and the message is recorded
+  /// (expr::table_range_error(), modelfile/table.hpp). The column is shared, never copied. @throws
+  /// std::invalid_argument on a malformed or repeated name or a null column.
   void add_table_column(const std::string& name, std::shared_ptr<const TableColumn> column);
 
   /// Parses `text`. @throws ParseError (syntax errors, unknown names — the message names the

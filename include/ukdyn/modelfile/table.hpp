@@ -55,6 +55,12 @@ class TableColumn {
   /// @throws TableRangeError outside [x_0, x_{n−1}] with Extrapolation::kError.
   double evaluate(double x, int order = 0) const;
 
+  /// evaluate() as a compiled Program calls it: outside the range with Extrapolation::kError,
+  /// NaN — the run then stops with a non-finite force, the samples before it kept — and the
+  /// TableRangeError's message recorded for this thread (table_range_error()). No allocation
+  /// but the message's, once.
+  double evaluate_in_run(double x, int order) const noexcept;
+
   /// The degree of the pieces: 0 (step), 1 (linear), 3 (cubic).
   int degree() const;
   const std::string& name() const { return name_; }  ///< "table.column"
@@ -76,5 +82,11 @@ class TableColumn {
   Interpolation interpolation_;
   Extrapolation extrapolation_;
 };
+
+/// The message of the first range error a Program met on this thread since
+/// clear_table_range_error() (TableColumn::evaluate_in_run), or "". run_model() clears it
+/// before a run and puts it first in the failed run's message.
+const std::string& table_range_error();
+void clear_table_range_error();
 
 }  // namespace ukdyn::expr
