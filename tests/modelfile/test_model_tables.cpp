@@ -12,6 +12,7 @@
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <iterator>
 #include <memory>
 #include <numbers>
 #include <sstream>
@@ -373,6 +374,54 @@ simulate: {t_end: )" +
          R"(, rtol: 1e-11, atol: 1e-13}
 output: {every: 0.05}
 )";
+}
+
+TEST(ModelTables, AControlRequirementAndAJointDriveFollowATable) {
+  // data on a cubic, p(t) = t − t³/10, which the spline reproduces exactly: a control
+  // requirement x − rec.p(t) from a consistent start keeps x = p, and a multibody joint's drive
+  // th0 + rec.p(t) turns the crank by p (the slider-crank example's drive replaced)
+  const auto x = grid(0.0, 2.0, 0.25);
+  std::ostringstream data;
+  data.precision(17);
+  data << "{interpolation: cubic, data: {t: [";
+  for (std::size_t k = 0; k < x.size(); ++k) data << (k ? ", " : "") << x[k];
+  data << "], p: [";
+  for (std::size_t k = 0; k < x.size(); ++k)
+    data << (k ? ", " : "") << x[k] - x[k] * x[k] * x[k] / 10.0;
+  data << "]}}";
+  const auto p = [](double t) { return t - t * t * t / 10.0; };
+  const Trajectory controlled = run_model(parse_model(R"(
+coordinates: [x]
+kinetic_energy: 0.5*x_dot^2
+tables: {rec: )" + data.str() + R"(}
+control:
+  requirements:
+    - {name: track, holonomic: x - rec.p(t), dynamics: {omega: 5}}
+initial: {q_dot: {x: 1}}
+simulate: {t_end: 2, rtol: 1e-11, atol: 1e-12}
+output: {every: 0.1}
+)"))
+                                    .trajectory;
+  ASSERT_EQ(controlled.stats.status, Status::kOk) << controlled.stats.message;
+  ASSERT_EQ(controlled.t.size(), 21u);
+  for (std::size_t k = 0; k < controlled.t.size(); ++k)
+    EXPECT_NEAR(controlled.q[k], p(controlled.t[k]), 1e-8) << controlled.t[k];
+
+  std::ifstream in(std::string(UKDYN_EXAMPLES_DIR) + "/slider_crank.yaml");
+  std::string crank((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::string drive = "drive: th0 + w*t}";
+  ASSERT_NE(crank.find(drive), std::string::npos);
+  crank.replace(crank.find(drive), drive.size(), "drive: th0 + rec.p(t)}");
+  crank += "tables: {rec: " + data.str() + "}\n";
+  const Trajectory driven = run_model(parse_model(crank, "crank.yaml")).trajectory;
+  ASSERT_EQ(driven.stats.status, Status::kOk) << driven.stats.message;
+  const auto& names = driven.coordinate_names;
+  const std::size_t theta =
+      std::size_t(std::find(names.begin(), names.end(), "crank.theta") - names.begin());
+  ASSERT_LT(theta, names.size());
+  for (std::size_t k = 0; k < driven.t.size(); ++k) {
+    EXPECT_NEAR(driven.q[k * names.size() + theta], 0.3 + p(driven.t[k]), 1e-9) << driven.t[k];
+  }
 }
 
 TEST(ModelTables, AnOscillatorShakenByARecordedGroundAcceleration) {
