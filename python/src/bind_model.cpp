@@ -180,22 +180,24 @@ initial_violations, mass_positive_definite, mass_singular, problems, ok.)doc")
 
   m.def(
       "_load_file",
-      [](const std::string& path, const Overrides& overrides) {
+      [](const std::string& path, const Overrides& overrides, const GivenTables& tables) {
         ReleasedGil release;
-        return std::make_shared<Model>(load_model(path, overrides));
+        return std::make_shared<Model>(load_model(path, overrides, tables));
       },
-      py::arg("path"), py::arg("overrides"), "load_model(path, overrides). Raises ModelError.");
+      py::arg("path"), py::arg("overrides"), py::arg("tables") = GivenTables{},
+      "load_model(path, overrides, tables). Raises ModelError.");
   m.def(
       "_parse",
-      [](const std::string& text, const std::string& file, const Overrides& overrides) {
+      [](const std::string& text, const std::string& file, const Overrides& overrides,
+         const GivenTables& tables) {
         ReleasedGil release;
-        return std::make_shared<Model>(parse_model(text, file, overrides));
+        return std::make_shared<Model>(parse_model(text, file, overrides, tables));
       },
-      py::arg("text"), py::arg("file"), py::arg("overrides"),
-      "parse_model(text, file, overrides). Raises ModelError.");
+      py::arg("text"), py::arg("file"), py::arg("overrides"), py::arg("tables") = GivenTables{},
+      "parse_model(text, file, overrides, tables). Raises ModelError.");
   m.def(
       "_load_example",
-      [](const std::string& name, const Overrides& overrides) {
+      [](const std::string& name, const Overrides& overrides, const GivenTables& tables) {
         const cli::EmbeddedFile* f = find_example(name);
         if (!f) {
           throw std::invalid_argument("no model file or example called '" + name +
@@ -203,9 +205,9 @@ initial_violations, mass_positive_definite, mass_singular, problems, ok.)doc")
         }
         ReleasedGil release;
         return std::make_shared<Model>(
-            parse_model(f->text, "examples/models/" + name + ".yaml", overrides));
+            parse_model(f->text, "examples/models/" + name + ".yaml", overrides, tables));
       },
-      py::arg("name"), py::arg("overrides"),
+      py::arg("name"), py::arg("overrides"), py::arg("tables") = GivenTables{},
       "The built-in example `name`. Raises ValueError listing the examples for another name.");
   m.def(
       "_write_table_hdf5",

@@ -80,7 +80,36 @@ def _overrides(who: str, overrides: dict) -> dict:
     return out
 
 
-def load(source: "str | os.PathLike[str]", /, **overrides: float) -> Model:
+def _tables(who: str, tables: Any) -> dict:
+    """`tables` ({table: {column: 1-D array-like}}) as the module's GivenTables."""
+    if tables is None:
+        return {}
+    if not isinstance(tables, dict):
+        raise TypeError(f"{who}: tables must be a dict {{table: {{column: values}}}}, "
+                        f"got {type(tables).__name__}")
+    import numpy as np
+    out = {}
+    for name, columns in tables.items():
+        if not isinstance(columns, dict):
+            raise TypeError(f"{who}: tables[{name!r}] must be a dict {{column: values}}, "
+                            f"got {type(columns).__name__}")
+        given = []
+        for column, values in columns.items():
+            try:
+                a = np.asarray(values, dtype=float)
+            except (TypeError, ValueError):
+                raise ValueError(f"{who}: column {name}.{column} is not an array of numbers") \
+                    from None
+            if a.ndim != 1:
+                raise ValueError(f"{who}: column {name}.{column} must be one-dimensional "
+                                 f"(got shape {a.shape})")
+            given.append((str(column), a.tolist()))
+        out[str(name)] = given
+    return out
+
+
+def load(source: "str | os.PathLike[str]", /, *, tables: Optional[dict] = None,
+         **overrides: float) -> Model:
     """Reads a model file, or a built-in example by name, with parameter overrides.
 
     ``ukdyn.load("model.yaml", m=2.0)`` is ``ukdyn run model.yaml --set m=2``;
@@ -93,22 +122,31 @@ def load(source: "str | os.PathLike[str]", /, **overrides: float) -> Model:
     file and for an override of a parameter the model does not declare; ValueError for a name
     that is neither a file nor an example (the message lists the examples) or an override that
     is not a number.
+
+    ``tables`` gives measured data for the model's ``tables:`` ({table: {column: 1-D array}},
+    the columns in order; docs/model-format.md, "Tables"): each table must be declared by the
+    file, and the data given replace any it has there, as overrides replace parameters —
+    ``ukdyn.load("shaken_frame", tables={"ground": {"t": t, "acc": record}})``. (So a
+    parameter called ``tables`` cannot be overridden here: use ``--set`` or rename it.)
     """
     values = _overrides("load", overrides)
+    given = _tables("load", tables)
     path = os.fspath(source)
     if (not isinstance(source, str) or os.path.exists(path)
             or path.endswith((".yaml", ".yml", ".urdf"))
             or os.sep in path):
-        return _ukdyn._load_file(path, values)
-    return _ukdyn._load_example(path, values)
+        return _ukdyn._load_file(path, values, given)
+    return _ukdyn._load_example(path, values, given)
 
 
-def parse(text: str, file: str = "<string>", **overrides: float) -> Model:
-    """Reads a model from YAML text (docs/model-format.md); ``file`` names it in errors.
+def parse(text: str, file: str = "<string>", *, tables: Optional[dict] = None,
+          **overrides: float) -> Model:
+    """Reads a model from YAML text (docs/model-format.md); ``file`` names it in errors (and a
+    table's relative ``file:`` is read from its directory); ``tables`` as :func:`load`'s.
 
     Raises :class:`ModelError` as :func:`load`.
     """
-    return _ukdyn._parse(text, file, _overrides("parse", overrides))
+    return _ukdyn._parse(text, file, _overrides("parse", overrides), _tables("parse", tables))
 
 
 def _model_simulate(self: Model, *, t_end: Optional[float] = None, q0: Any = None,

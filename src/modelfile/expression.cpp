@@ -59,7 +59,25 @@ void ExpressionSet::set_constant(const std::string& name, double value) {
 }
 
 Expr ExpressionSet::parse(const std::string& text) {
-  return impl_->add(parse_expression(text, impl_->symbols, impl_->known, impl_->constant_values));
+  return impl_->add(parse_expression(text, impl_->symbols, impl_->known, impl_->constant_values,
+                                     impl_->table_names));
+}
+
+void ExpressionSet::add_table_column(const std::string& name,
+                                     std::shared_ptr<const TableColumn> column) {
+  const std::string where = "ukdyn::expr::ExpressionSet::add_table_column: ";
+  const std::size_t dot = name.find('.');
+  if (dot == std::string::npos || !is_identifier(name.substr(0, dot)) ||
+      !is_identifier(name.substr(dot + 1))) {
+    throw std::invalid_argument(where + "'" + name +
+                                "' is not a table column's name (table.column, two names)");
+  }
+  if (column == nullptr) throw std::invalid_argument(where + "no column for '" + name + "'");
+  if (impl_->table_names.count(name) != 0) {
+    throw std::invalid_argument(where + "'" + name + "' is already declared");
+  }
+  impl_->table_names.emplace(name, TableCallee{GiNaC::realsymbol(name), column->degree()});
+  impl_->table_columns.emplace(name, std::move(column));
 }
 
 Expr ExpressionSet::constant(double value) {

@@ -29,6 +29,7 @@ namespace ukdyn::expr {
 namespace {
 using namespace detail;
 
+// (kTable reads a only: its b is the index of a table call)
 bool is_unary(Code c) {
   return !(c == Code::kAdd || c == Code::kSub || c == Code::kMul || c == Code::kDiv ||
            c == Code::kPow || c == Code::kAtan2 || c == Code::kMin || c == Code::kMax ||
@@ -36,9 +37,9 @@ bool is_unary(Code c) {
 }
 bool is_commutative(Code c) { return c == Code::kAdd || c == Code::kMul; }
 
-// executes one operation on the register file s
+// executes one operation on the register file s (`tables`: the tape's table calls)
 // clang-format off
-inline void step(const Op& op, double* s) {
+inline void step(const Op& op, double* s, const TableCall* tables) {
   switch (op.code) {
     case Code::kAdd: s[op.dst] = s[op.a] + s[op.b]; break;
     case Code::kSub: s[op.dst] = s[op.a] - s[op.b]; break;
@@ -74,6 +75,7 @@ inline void step(const Op& op, double* s) {
     case Code::kPickIf: s[op.dst] = s[op.a] > 0.0 ? s[op.b] : 0.0; break;
     case Code::kPickElse: s[op.dst] = s[op.a] > 0.0 ? 0.0 : s[op.b]; break;
     case Code::kIf: break;  // compiled as kPickIf + kPickElse
+    case Code::kTable: if (tables != nullptr) s[op.dst] = tables[op.b](s[op.a]); break;  // (never folded)
   }
 }
 // clang-format on
@@ -89,8 +91,10 @@ class Compiler {
   // `inputs` maps the inputs' symbols to their indices (0 … n_inputs−1); an input becomes a
   // value when the expression first holds it, so that compiling costs O(the expression), not
   // O(n_inputs): a model with 10⁵ coordinates compiles 10⁵ one-input programs
-  Compiler(Index n_inputs, const SymbolIndex& inputs)
-      : n_inputs_(std::int32_t(n_inputs)), inputs_(inputs) {}
+  // `tables`: the set's table columns by name (table.column)
+  Compiler(Index n_inputs, const SymbolIndex& inputs,
+           const std::map<std::string, std::shared_ptr<const TableColumn>>& tables)
+      : n_inputs_(std::int32_t(n_inputs)), inputs_(inputs), tables_(tables) {}
 
   // the value of e (memoized on e: shared subtrees are compiled once)
   std::int32_t compile(const GiNaC::ex& e) {
@@ -172,7 +176,9 @@ class Compiler {
       const Op& op = ops_[std::size_t(k)];
       Op out = op;
       out.a = slot[std::size_t(op.a)];
-      out.b = op.code == Code::kSinCos ? 0 : slot[std::size_t(op.b)];
+      out.b = op.code == Code::kSinCos  ? 0
+              : op.code == Code::kTable ? op.b
+                                        : slot[std::size_t(op.b)];
       release(op.a, k);
       if (!is_unary(op.code)) release(op.b, k);
       assign(op.dst);
@@ -187,6 +193,7 @@ class Compiler {
     }
     for (const std::int32_t v : outputs) tape.output_slots.push_back(slot[std::size_t(v)]);
     tape.scratch = Index(first_register) + n_registers;
+    tape.tables = table_calls_;
   }
 
  private:
@@ -205,6 +212,7 @@ class Compiler {
     if (is_a<GiNaC::add>(e)) return compile_add(e);
     if (is_a<GiNaC::mul>(e)) return compile_mul(e);
     if (is_a<GiNaC::power>(e)) return compile_power(e.op(0), e.op(1));
+    if (is_table_call(e)) return compile_table(e);
     if (is_a<GiNaC::function>(e)) {
       const std::string name = GiNaC::ex_to<GiNaC::function>(e).get_name();
       // (the language's abs is registered with GiNaC as lang_abs: expression_parse.cpp)
@@ -233,6 +241,43 @@ class Compiler {
     std::ostringstream os;
     os << e;
     return os.str();
+  }
+
+  // table(c, d, p, x): a kTable op calling the column c's derivative d (each call once on the
+  // tape's list), folded when x is constant (then a range error is a compile error)
+  std::int32_t compile_table(const GiNaC::ex& e) {
+    const std::string& name = GiNaC::ex_to<GiNaC::symbol>(e.op(0)).get_name();
+    const auto column = tables_.find(name);
+    if (column == tables_.end()) {
+      throw std::invalid_argument("ukdyn::expr::ExpressionSet::compile: the table column '" + name +
+                                  "' is not of this set");
+    }
+    const TableCall call{column->second, GiNaC::ex_to<GiNaC::numeric>(e.op(1)).to_int()};
+    const std::int32_t x = compile(e.op(3));
+    if (const auto& cx = constant_of_[std::size_t(x)]) {
+      try {
+        return constant(call.column->evaluate(*cx, call.order));
+      } catch (const TableRangeError& error) {
+        throw std::invalid_argument(std::string("ukdyn::expr::ExpressionSet::compile: ") +
+                                    error.what());
+      }
+    }
+    std::int32_t index = -1;
+    for (std::size_t k = 0; k < table_calls_.size(); ++k) {
+      if (table_calls_[k].column == call.column && table_calls_[k].order == call.order)
+        index = std::int32_t(k);
+    }
+    if (index < 0) {
+      index = std::int32_t(table_calls_.size());
+      table_calls_.push_back(call);
+    }
+    const auto key = std::make_tuple(Code::kTable, x, index);
+    const auto hit = ops_memo_.find(key);
+    if (hit != ops_memo_.end()) return hit->second;
+    const std::int32_t v = new_value();
+    ops_.push_back(Op{Code::kTable, v, x, index});
+    ops_memo_.emplace(key, v);
+    return v;
   }
 
   // a constant value (deduplicated)
@@ -279,7 +324,7 @@ class Compiler {
     const auto& cb = constant_of_[std::size_t(b)];
     if (ca && cb) {
       double s[3] = {*ca, *cb, 0.0};
-      step(Op{code, 2, 0, 1}, s);
+      step(Op{code, 2, 0, 1}, s, nullptr);
       // a constant part the evaluation would compute as NaN or Inf (the parser refuses those it
       // sees where they are written; this catches what only the rounding to double makes so)
       if (!std::isfinite(s[2])) {
@@ -526,6 +571,8 @@ class Compiler {
 
   std::int32_t n_inputs_;
   const SymbolIndex& inputs_;
+  const std::map<std::string, std::shared_ptr<const TableColumn>>& tables_;
+  std::vector<TableCall> table_calls_;               // the tape's (kTable's b)
   std::vector<std::optional<double>> constant_of_;   // per value: its value if constant
   std::vector<std::int32_t> input_of_;               // per value: its input's index, or −1
   std::map<std::uint64_t, std::int32_t> constants_;  // bits of a constant → value
@@ -570,7 +617,8 @@ void Program::evaluate(const double* in, double* out, double* scratch) const {
     for (std::size_t i = 0; i < t.read.size(); ++i) s[i] = in[t.read[i]];
   }
   std::copy(t.constants.begin(), t.constants.end(), s + t.slots_read);
-  for (const Op& op : t.ops) step(op, s);
+  const TableCall* const tables = t.tables.data();
+  for (const Op& op : t.ops) step(op, s, tables);
   const std::size_t n_out = t.output_slots.size();
   for (std::size_t k = 0; k < n_out; ++k) out[k] = s[t.output_slots[k]];
 }
@@ -639,7 +687,7 @@ bool ExpressionSet::compile_cannot_fail(Expr e) const {
 }
 
 Program ExpressionSet::compile(const std::vector<Expr>& outputs) const {
-  Compiler compiler(Index(impl_->input_names.size()), impl_->symbol_index);
+  Compiler compiler(Index(impl_->input_names.size()), impl_->symbol_index, impl_->table_columns);
   std::vector<std::int32_t> values;
   values.reserve(outputs.size());
   for (const Expr o : outputs) {

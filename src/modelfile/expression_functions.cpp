@@ -45,6 +45,7 @@ DECLARE_FUNCTION_1P(lang_heaviside)
 DECLARE_FUNCTION_2P(lang_min)
 DECLARE_FUNCTION_2P(lang_max)
 DECLARE_FUNCTION_3P(lang_if)
+DECLARE_FUNCTION_4P(lang_table)
 
 GiNaC::ex kink_tie(const GiNaC::ex& c) { return 1 - lang_abs(lang_sign(c)); }
 
@@ -141,6 +142,29 @@ GiNaC::ex if_deriv(const GiNaC::ex& c, const GiNaC::ex& a, const GiNaC::ex& b,
   return kink(c, a.diff(s), b.diff(s));
 }
 
+// table(c, d, p, x) (expression_internal.hpp): held (a constant x is evaluated by the compiler,
+// which has the column); its derivative in x is the next order's, 0 beyond the degree p; c, d
+// and p are numbers or the column's symbol, whose derivative is 0
+GiNaC::ex table_eval(const GiNaC::ex& c, const GiNaC::ex& d, const GiNaC::ex& p,
+                     const GiNaC::ex& x) {
+  return lang_table(c, d, p, x).hold();
+}
+GiNaC::ex table_deriv(const GiNaC::ex& c, const GiNaC::ex& d, const GiNaC::ex& p,
+                      const GiNaC::ex& x, unsigned param) {
+  if (param != 3) return 0;
+  const int next = GiNaC::ex_to<GiNaC::numeric>(d).to_int() + 1;
+  if (next > GiNaC::ex_to<GiNaC::numeric>(p).to_int()) return 0;
+  return lang_table(c, next, p, x);
+}
+// table.column(x), its derivatives with primes: table.column'(x), table.column''(x), …
+void table_print(const GiNaC::ex& c, const GiNaC::ex& d, const GiNaC::ex&, const GiNaC::ex& x,
+                 const GiNaC::print_context& pc) {
+  pc.s << GiNaC::ex_to<GiNaC::symbol>(c).get_name()
+       << std::string(std::size_t(GiNaC::ex_to<GiNaC::numeric>(d).to_int()), '\'') << "(";
+  x.print(pc);
+  pc.s << ")";
+}
+
 }  // namespace
 
 // registered as "lang_abs" (GiNaC has its own "abs", and warns on a second function of that
@@ -173,6 +197,21 @@ unsigned lang_max_SERIAL::serial =
 unsigned lang_if_SERIAL::serial = GiNaC::function::register_new(
     GiNaC::function_options("if", 3).eval_func(if_eval).evalf_func(if_evalf).expl_derivative_func(
         if_deriv));
+
+unsigned lang_table_SERIAL::serial =
+    GiNaC::function::register_new(GiNaC::function_options("table", 4)
+                                      .eval_func(table_eval)
+                                      .derivative_func(table_deriv)
+                                      .print_func<GiNaC::print_context>(table_print));
+
+GiNaC::ex table_call(const TableCallee& callee, int order, const GiNaC::ex& x) {
+  return lang_table(callee.symbol, order, callee.degree, x);
+}
+
+bool is_table_call(const GiNaC::ex& e) {
+  return GiNaC::is_a<GiNaC::function>(e) &&
+         GiNaC::ex_to<GiNaC::function>(e).get_serial() == lang_table_SERIAL::serial;
+}
 
 constexpr std::array<FunctionInfo, 19> kFunctions{{
     {"sin", 1, Code::kSin},     {"cos", 1, Code::kCos},

@@ -15,6 +15,7 @@
 
 #include "ukdyn/core/format.hpp"
 #include "ukdyn/modelfile/expression.hpp"
+#include "ukdyn/modelfile/table.hpp"
 
 namespace ukdyn::expr {
 namespace detail {
@@ -28,13 +29,15 @@ namespace detail {
 // is compiled as kPickIf(c, a) + kPickElse(c, b), where kPickIf is s[b] when s[a] > 0 and 0
 // otherwise, kPickElse the other way round: exactly a or b (a sum with an exact 0), and an
 // infinite or NaN value of the branch not taken does not leak into the result.
-// kIf is the language function (three arguments), never on a tape.
+// kIf is the language function (three arguments), never on a tape. kTable evaluates a table
+// column: s[dst] = the tape's table call b (a column and a derivative order) at s[a]; its b is
+// that call's index, not a register.
 // clang-format off
 enum class Code : std::uint8_t {
   kAdd, kSub, kMul, kDiv, kNeg, kRecip, kSqrt, kPow,
   kSin, kCos, kSinCos, kTan, kAsin, kAcos, kAtan, kAtan2,
   kSinh, kCosh, kTanh, kExp, kLog, kAbs,
-  kSign, kHeaviside, kMin, kMax, kPickIf, kPickElse, kIf,
+  kSign, kHeaviside, kMin, kMax, kPickIf, kPickElse, kIf, kTable,
 };
 // clang-format on
 
@@ -66,12 +69,37 @@ bool is_identifier(const std::string& s);
 std::string listing(const std::vector<std::string>& names);
 // the shortest decimal that reads back as v, as an exact rational
 GiNaC::numeric exact(double v);
-// `text` parsed into GiNaC over `names` (known: the names in declaration order, for
-// suggestions; values: the constants' values, which must leave every operation defined). Throws
-// ParseError.
-GiNaC::ex parse_expression(const std::string& text, const std::map<std::string, GiNaC::ex>& names,
-                           const std::vector<std::string>& known, const GiNaC::exmap& values);
+// A table column's call `table.column(x)` is the GiNaC function table(c, d, p, x)
+// (modelfile/expression_functions.cpp): c is the column's symbol (a realsymbol named
+// "table.column", which is neither an input nor a constant), d the order of the derivative, p
+// the degree of the interpolant's pieces; d table(c, d, p, x) = table(c, d + 1, p, x) dx, and 0
+// once d + 1 > p.
+struct TableCallee {
+  GiNaC::ex symbol;  // c
+  int degree = 0;    // p
+};
+using TableNames = std::map<std::string, TableCallee>;  // "table.column" → its callee
+// the expression table(c, d, p, x)
+GiNaC::ex table_call(const TableCallee& callee, int order, const GiNaC::ex& x);
+// true when e is a call of a table column (then e.op(0) is c, e.op(1) d, e.op(3) x)
+bool is_table_call(const GiNaC::ex& e);
 
+// `text` parsed into GiNaC over `names` (known: the names in declaration order, for
+// suggestions; values: the constants' values, which must leave every operation defined; tables:
+// the table columns callable by name). Throws ParseError.
+GiNaC::ex parse_expression(const std::string& text, const std::map<std::string, GiNaC::ex>& names,
+                           const std::vector<std::string>& known, const GiNaC::exmap& values,
+                           const TableNames& tables);
+
+}  // namespace detail
+
+namespace detail {
+// a table column's derivative of some order, as a tape calls it (kTable)
+struct TableCall {
+  std::shared_ptr<const TableColumn> column;
+  int order = 0;
+  double operator()(double x) const { return column->evaluate_in_run(x, order); }
+};
 }  // namespace detail
 
 struct Program::Tape {
@@ -85,6 +113,7 @@ struct Program::Tape {
   std::vector<detail::Op> ops;             // in execution order, on physical slots
   std::vector<std::int32_t> output_slots;  // out[k] = scratch[output_slots[k]]
   Index scratch = 0;                       // inputs read + constants + registers
+  std::vector<detail::TableCall> tables;   // what the kTable ops call (by their b)
 };
 
 // input symbol → its index
@@ -102,6 +131,9 @@ struct ExpressionSet::Impl {
   std::vector<std::string> known;            // inputs then constants, in declaration order
   GiNaC::exmap constant_values;              // constant symbol → its exact value
   std::vector<GiNaC::ex> expressions;        // by handle
+  // the table columns (add_table_column): callable by name, and by their symbol (the compiler)
+  detail::TableNames table_names;
+  std::map<std::string, std::shared_ptr<const TableColumn>> table_columns;
   // of the long sums differentiated so far (by handle): input index → the terms that hold it
   std::unordered_map<Expr, std::unordered_map<std::size_t, std::vector<std::size_t>>> terms_holding;
 

@@ -189,8 +189,9 @@ class Parser {
   static constexpr double kMaxPowerBits = 4096.0;
 
   Parser(const std::string& text, const std::map<std::string, GiNaC::ex>& names,
-         const std::vector<std::string>& known, const GiNaC::exmap& values)
-      : text_(text), names_(names), known_(known), values_(values) {
+         const std::vector<std::string>& known, const GiNaC::exmap& values,
+         const TableNames& tables)
+      : text_(text), names_(names), known_(known), values_(values), tables_(tables) {
     next();
   }
 
@@ -255,9 +256,16 @@ class Parser {
       return;
     }
     if (std::isalpha(static_cast<unsigned char>(c)) || c == '_') {
-      while (pos_ < text_.size() &&
-             (std::isalnum(static_cast<unsigned char>(text_[pos_])) || text_[pos_] == '_')) {
+      const auto name_char = [&](std::size_t i) {
+        return i < text_.size() &&
+               (std::isalnum(static_cast<unsigned char>(text_[i])) || text_[i] == '_');
+      };
+      while (name_char(pos_)) ++pos_;
+      // a table column: table.column (one '.', a name on either side)
+      if (pos_ + 1 < text_.size() && text_[pos_] == '.' &&
+          (std::isalpha(static_cast<unsigned char>(text_[pos_ + 1])) || text_[pos_ + 1] == '_')) {
         ++pos_;
+        while (name_char(pos_)) ++pos_;
       }
       token_ = Token{Kind::kName, text_.substr(start, pos_ - start), start};
       return;
@@ -624,9 +632,40 @@ class Parser {
     return decimal(digits, exponent);
   }
 
+  // the table columns' names (for suggestions)
+  std::vector<std::string> table_names() const {
+    std::vector<std::string> out;
+    for (const auto& [name, callee] : tables_) out.push_back(name);
+    return out;
+  }
+
+  // a name with a '.' that is not a table column
+  [[noreturn]] void unknown_column(const Token& t) const {
+    std::string underscored = t.text;
+    std::replace(underscored.begin(), underscored.end(), '.', '_');
+    if (names_.count(underscored) != 0) {
+      fail("unknown table column '" + t.text + "' (did you mean '" + underscored +
+               "'? a body's coordinates are written with '_' in expressions)",
+           t.position);
+    }
+    const auto names = table_names();
+    const auto close = close_matches(t.text, names);
+    fail("unknown table column '" + t.text + "' (" +
+             (!close.empty()  ? "did you mean " + quoted_alternatives(close) + "?"
+              : names.empty() ? std::string("the model has no tables: section")
+                              : "the tables' columns are " + listing(names)) +
+             ")",
+         t.position);
+  }
+
   GiNaC::ex name(const Token& t) const {
     const auto it = names_.find(t.text);
     if (it != names_.end()) return it->second;
+    if (tables_.count(t.text) != 0) {
+      fail("'" + t.text + "' is a table column: write " + t.text + "(x), x its argument (t, …)",
+           t.position);
+    }
+    if (t.text.find('.') != std::string::npos) unknown_column(t);
     if (find_function(t.text) != nullptr) {
       fail("'" + t.text + "' is a function: write " + t.text + "(...)", t.position);
     }
@@ -638,7 +677,28 @@ class Parser {
     fail("unknown name '" + t.text + "' (known names: " + listing(known_) + ")", t.position);
   }
 
+  // table.column(x)
+  GiNaC::ex table_call_of(const Token& t) {
+    const auto callee = tables_.find(t.text);
+    if (callee == tables_.end()) unknown_column(t);
+    const std::size_t open = token_.position;
+    next();  // '('
+    if (is(")")) fail(t.text + " takes 1 argument, got 0", t.position);
+    const GiNaC::ex x = expression();
+    if (!is(")")) {
+      fail(is(",") ? t.text + " takes 1 argument, got more"
+                   : "expected ')' to close the '(' of " + t.text + " at position " +
+                         format_number(open) + ", got " + describe(token_),
+           token_.position);
+    }
+    next();  // ')'
+    return table_call(callee->second, 0, x);
+  }
+
   GiNaC::ex function_call(const Token& t) {
+    if (t.text.find('.') != std::string::npos || tables_.count(t.text) != 0) {
+      return table_call_of(t);
+    }
     const FunctionInfo* f = find_function(t.text);
     if (f == nullptr) {
       if (names_.count(t.text) != 0) {
@@ -680,6 +740,7 @@ class Parser {
   const std::map<std::string, GiNaC::ex>& names_;
   const std::vector<std::string>& known_;
   const GiNaC::exmap& values_;
+  const TableNames& tables_;
   std::size_t pos_ = 0;
   int depth_ = 0;  // of unary() calls
   // the lowest stack address the nesting may reach (ukdyn::detail::stack_floor, once a thread:
@@ -694,8 +755,9 @@ class Parser {
 };
 
 GiNaC::ex parse_expression(const std::string& text, const std::map<std::string, GiNaC::ex>& names,
-                           const std::vector<std::string>& known, const GiNaC::exmap& values) {
-  return Parser(text, names, known, values).parse();
+                           const std::vector<std::string>& known, const GiNaC::exmap& values,
+                           const TableNames& tables) {
+  return Parser(text, names, known, values, tables).parse();
 }
 
 }  // namespace ukdyn::expr::detail

@@ -462,6 +462,7 @@ void Reader::make_expression_set(const YAML::Node& root, const std::vector<std::
   }
   layout_.n = Index(coordinates_.size());
   layout_.extra = Index(2 * cnames.size());
+  read_tables(root);
 }
 
 bool Reader::switches(std::vector<std::string>& names, Program& program) {
@@ -545,6 +546,11 @@ Model Reader::read_generalized(const YAML::Node& root) {
 
 Model parse_model(const std::string& text, const std::string& file,
                   const std::map<std::string, double>& overrides) {
+  return parse_model(text, file, overrides, GivenTables{});
+}
+
+Model parse_model(const std::string& text, const std::string& file,
+                  const std::map<std::string, double>& overrides, const GivenTables& tables) {
   // the YAML is parsed first, by any number of threads at once (yaml-cpp shares nothing between
   // documents; it is a third of the pendulum's reading, bench/RESULTS.md "Ensembles")
   const YAML::Node root = model_reader::Reader::load_yaml(text, file);
@@ -554,10 +560,15 @@ Model parse_model(const std::string& text, const std::string& file,
   // before the lock is released; the Model holds none (its expressions are compiled programs)
   static std::mutex mutex;
   const std::lock_guard<std::mutex> lock(mutex);
-  return model_reader::Reader(file, overrides).read(root);
+  return model_reader::Reader(file, overrides, &tables).read(root);
 }
 
 Model load_model(const std::string& path, const std::map<std::string, double>& overrides) {
+  return load_model(path, overrides, GivenTables{});
+}
+
+Model load_model(const std::string& path, const std::map<std::string, double>& overrides,
+                 const GivenTables& tables) {
   // a directory, a device or a stream is not a model file; a regular file is read whole, up to
   // kMaxModelFileBytes (a bounded read: /dev/zero or a runaway file never fills the memory)
   std::error_code ec;
@@ -568,7 +579,7 @@ Model load_model(const std::string& path, const std::map<std::string, double>& o
   }
   // a URDF alone: a robot model naming it (modelfile/reader_urdf.cpp)
   if (model_reader::is_urdf_path(path) && std::filesystem::is_regular_file(status))
-    return parse_model(model_reader::urdf_model_text(path), path, overrides);
+    return parse_model(model_reader::urdf_model_text(path), path, overrides, tables);
   std::ifstream in(path, std::ios::binary);
   if (!in) throw ModelError(path, 0, 0, "cannot read the model file", "check the path");
   std::string text;
@@ -585,7 +596,7 @@ Model load_model(const std::string& path, const std::map<std::string, double>& o
     }
   }
   if (in.bad()) throw ModelError(path, 0, 0, "cannot read the model file", "check the path");
-  return parse_model(text, path, overrides);
+  return parse_model(text, path, overrides, tables);
 }
 
 std::vector<std::vector<double>> evaluate_output_expressions(const Model& model,

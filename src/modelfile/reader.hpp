@@ -41,7 +41,15 @@ inline const std::vector<std::string> kTopLevelKeys = {
     "name",        "parameters", "coordinates", "kinetic_energy", "potential_energy",
     "mass_matrix", "forces",     "constraints", "nonideal",       "initial",
     "simulate",    "output",     "bodies",      "joints",         "control",
-    "visual",      "units",      "robot"};
+    "visual",      "units",      "robot",       "tables"};
+
+// a table's columns as read (tables:, modelfile/reader_tables.cpp): names in the order given,
+// values per column, and per row its CSV line (1-based; 0 for data written in the model file)
+struct TableColumns {
+  std::vector<std::string> names;
+  std::vector<std::vector<double>> values;
+  std::vector<int> lines;
+};
 
 inline bool is_identifier(const std::string& s) {
   if (s.empty() || !(std::isalpha(static_cast<unsigned char>(s[0])) || s[0] == '_')) return false;
@@ -318,8 +326,10 @@ std::filesystem::path model_relative_path(const std::string& model_file, const s
 // The reader: one model file.
 class Reader {
  public:
-  Reader(std::string file, const std::map<std::string, double>& overrides)
-      : file_(std::move(file)), overrides_(overrides) {}
+  // `tables`: the tables the caller gives (load_model's), or null; kept by the caller
+  Reader(std::string file, const std::map<std::string, double>& overrides,
+         const GivenTables* tables = nullptr)
+      : file_(std::move(file)), overrides_(overrides), given_tables_(tables) {}
 
   /// The file's YAML, parsed and checked (not XML, no NUL byte, no duplicate key …: errors
   /// located in `file`). Uses no GiNaC: parse_model runs it outside its lock.
@@ -339,6 +349,17 @@ class Reader {
   // refused by read_constraints), for the expression set's constraint functions
   static std::vector<std::string> constraint_names(const YAML::Node& root);
   void make_expression_set(const YAML::Node& root, const std::vector<std::string>& cnames);
+  // tables: → the set's table columns (modelfile/reader_tables.cpp); `where` is the file: or
+  // data: node, `what` names the table
+  void read_tables(const YAML::Node& root);
+  TableColumns read_csv(const YAML::Node& where, const std::string& what);
+  TableColumns read_hdf5_table(const YAML::Node& where, const YAML::Node& table,
+                               const std::string& what);
+  // the file named at `where`, relative to the model file's directory; located errors when it is
+  // not a regular file or too large
+  std::filesystem::path table_path(const YAML::Node& where, const std::string& what);
+  TableColumns read_data(const YAML::Node& data, const std::string& what);
+  TableColumns given_data(const YAML::Node& table, const TableData& data, const std::string& what);
   [[noreturn]] void fail(const YAML::Node& at, const std::string& message,
                          const std::string& hint = "") const {
     const YAML::Mark m = at.Mark();
@@ -418,6 +439,7 @@ class Reader {
 
   std::string file_;
   std::map<std::string, double> overrides_;
+  const GivenTables* given_tables_ = nullptr;  // the caller's tables (or none)
   std::map<std::string, double> parameters_;
   std::vector<std::string> coordinates_, velocities_;
   ModelPositions positions_;  // where the file gives what a run may refuse (Model::positions)

@@ -307,7 +307,7 @@ void Reader::read_control(const YAML::Node& root, Model& model) {
       }
       values[name] = number(kv.second, "nominal " + name);
     }
-    nominal_reader = std::make_unique<Reader>(file_, values);
+    nominal_reader = std::make_unique<Reader>(file_, values, given_tables_);
     try {
       nominal = nominal_reader->read_plant(root).system;
     } catch (const ModelError& e) {

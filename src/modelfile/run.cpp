@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <optional>
 
+#include "ukdyn/modelfile/table.hpp"
 #include "ukdyn/multibody/multibody.hpp"
 #include "ukdyn/multibody/tree.hpp"
 
@@ -70,11 +71,22 @@ void note_limits(const std::optional<tree::LimitWatch>& watch, RunStatistics& st
   for (const tree::LimitExcess& e : watch->excesses()) stats.notes.push_back(tree::describe(e));
 }
 
+// A failed run whose model met a table column outside its range (the value NaN there,
+// expr::table_range_error): the table's message first
+void note_table_range(RunStatistics& stats) {
+  const std::string& error = expr::table_range_error();
+  if (error.empty() || stats.status == Status::kOk || stats.status == Status::kEnergyBalance ||
+      stats.status == Status::kInterrupted)
+    return;
+  stats.message = error + "; " + stats.message;
+}
+
 }  // namespace
 
 ModelRun run_model(const Model& model, const SimulationOptions& options,
                    const std::function<void(const ModelRun& chunk)>& chunk,
                    std::size_t chunk_samples) {
+  expr::clear_table_range_error();
   // the samples gather in `gathered` (plant and control; its capacity kept), passed on as a
   // ModelRun every chunk_samples; `last` holds the last sample
   const bool controlled = bool(model.controller);
@@ -137,6 +149,7 @@ ModelRun run_model(const Model& model, const SimulationOptions& options,
   }
   pass_on();
   note_limits(watch, run.trajectory.stats);
+  note_table_range(run.trajectory.stats);
 
   // the statistics, the names and the last sample with its columns
   if (last.samples() > 0) {
@@ -154,6 +167,7 @@ ModelRun run_model(const Model& model, const SimulationOptions& options,
 }
 
 ModelRun run_model(const Model& model, const SimulationOptions& options) {
+  expr::clear_table_range_error();
   ModelRun run;
   std::optional<tree::LimitWatch> watch;
   if (model.robot) watch.emplace(*model.robot);
@@ -170,6 +184,7 @@ ModelRun run_model(const Model& model, const SimulationOptions& options) {
     if (watch) watch->observe(run.trajectory.t, run.trajectory.q, {});
   }
   note_limits(watch, run.trajectory.stats);
+  note_table_range(run.trajectory.stats);
   if (model.multibody) {
     for (auto& col : mb::report_csv_columns(*model.multibody, run.trajectory)) {
       run.extra_columns.push_back(std::move(col));

@@ -6,7 +6,8 @@
 /// The language: numbers (`2`, `0.5`, `.5`, `1e-3`; read as exact rationals), names, + − * /
 /// ^ (power), parentheses, and the functions sin, cos, tan, asin, acos, atan, atan2(y, x), sinh,
 /// cosh, tanh, exp, log, sqrt, abs, and the non-smooth sign (0 at 0), heaviside (½ at 0),
-/// min(a, b), max(a, b) and if(c, a, b) (a where c > 0, else b), differentiated where they are
+/// min(a, b), max(a, b) and if(c, a, b) (a where c > 0, else b), the columns of tables
+/// `table.column(x)` (add_table_column), differentiated where they are
 /// differentiable (d abs(x) = sign(x) dx, d sign = d heaviside = 0, d max(a, b) = da where
 /// a > b and db where a < b, d min likewise, d if(c, a, b) = da where c > 0 and db where c < 0;
 /// at a tie the one-sided derivative nearer 0, and 0 between derivatives of opposite signs, as
@@ -28,6 +29,8 @@
 #include "ukdyn/core/types.hpp"
 
 namespace ukdyn::expr {
+
+class TableColumn;
 
 /// A syntax error or an unknown name in an expression: `position` is the 0-based character
 /// offset in the expression text of the offending token (the end of the text when it ended too
@@ -91,6 +94,15 @@ class ExpressionSet {
   /// use it, and it is replaced by its value when compiling. @throws std::invalid_argument on a
   /// name that is already an input or constant (or malformed), or a value that is not finite.
   void set_constant(const std::string& name, double value);
+
+  /// Declares a table column callable in expressions parsed afterwards as `name(x)`, `name`
+  /// being `table.column` (two identifiers joined by a '.'; modelfile/table.hpp). Its
+  /// derivatives are the interpolant's (a linear column's slope is a step, a step's is 0); a
+  /// compiled program evaluates it with a binary search (O(log rows), no allocation); outside
+  /// its range, when its extrapolation is kError, the value is NaN and the message is recorded
+  /// (expr::table_range_error(), modelfile/table.hpp). The column is shared, never copied. @throws
+  /// std::invalid_argument on a malformed or repeated name or a null column.
+  void add_table_column(const std::string& name, std::shared_ptr<const TableColumn> column);
 
   /// Parses `text`. @throws ParseError (syntax errors, unknown names — the message names the
   /// name and lists close matches or the known names —, unknown functions or wrong numbers of

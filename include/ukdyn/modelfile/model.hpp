@@ -9,6 +9,7 @@
 #include <memory>
 #include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Core>
@@ -113,12 +114,25 @@ struct Model {
   ModelPositions positions;
 };
 
+/// Measured data given by the program that loads a model, rather than written in its file: by
+/// table name, the table's columns (name, values) in order. The model file declares each such
+/// table under `tables:` (its x:, interpolation:, extrapolation:; file: and data: may be left
+/// out), and the data given replace any it has there, as overrides replace parameters
+/// (docs/model-format.md, "Tables"; Python's `ukdyn.load(..., tables={...})`).
+using TableData = std::vector<std::pair<std::string, std::vector<double>>>;
+using GivenTables = std::map<std::string, TableData>;
+
 /// Reads a model from YAML text. `file` names it in errors; `overrides` replace parameter
 /// values (as --set name=value does). Thread-safe: calls from several threads are serialized
 /// (the symbolic algebra it uses, GiNaC, is not thread-safe); the Models it returns are
 /// independent. @throws ModelError with file:line:column and a hint.
 Model parse_model(const std::string& text, const std::string& file = "<string>",
                   const std::map<std::string, double>& overrides = {});
+/// parse_model with tables given by the caller (GivenTables): a table the file does not declare
+/// is a ModelError, as are the given data's errors (too few rows, an abscissa not increasing,
+/// columns of different lengths), located at the table's entry.
+Model parse_model(const std::string& text, const std::string& file,
+                  const std::map<std::string, double>& overrides, const GivenTables& tables);
 
 /// The largest model file load_model() reads: 64 MB (a model file is a few kB; this bounds the
 /// memory a wrong path such as /dev/zero can take).
@@ -127,6 +141,9 @@ inline constexpr std::size_t kMaxModelFileBytes = std::size_t(64) << 20;
 /// Reads a model file. @throws ModelError (including when the file cannot be read, is a
 /// directory, is empty, or is larger than kMaxModelFileBytes).
 Model load_model(const std::string& path, const std::map<std::string, double>& overrides = {});
+/// load_model with tables given by the caller (as parse_model's).
+Model load_model(const std::string& path, const std::map<std::string, double>& overrides,
+                 const GivenTables& tables);
 
 /// What `ukdyn check` reports about a model at its initial state.
 struct CheckReport {
