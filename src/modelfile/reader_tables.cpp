@@ -203,8 +203,7 @@ void Reader::read_tables(const YAML::Node& root) {
 }
 
 std::filesystem::path Reader::table_path(const YAML::Node& where, const std::string& what) {
-  std::filesystem::path path(where.Scalar());
-  if (path.is_relative()) path = std::filesystem::path(file_).parent_path() / path;
+  const std::filesystem::path path = model_relative_path(file_, where.Scalar());
   std::error_code ec;
   if (!std::filesystem::is_regular_file(path, ec)) {
     fail(where, "cannot read " + path.string() + ", the file of " + what,
