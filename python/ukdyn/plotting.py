@@ -107,7 +107,8 @@ WORKS = (("work_nonideal", "work of the non-ideal forces"),
          ("work_ideal", "work of the ideal constraint forces"),
          ("work_drive", "work of the drives"),
          ("work_external", "work of the external forces"),
-         ("work_control", "work of the control"))
+         ("work_control", "work of the control"),
+         ("work_impact", "work of the impacts"))  # (only with unilateral contacts)
 
 #: the control's scalar columns (control/control.hpp, control_csv_columns)
 CONTROL_SCALARS = ("control_power", "control_effort", "control_work_abs", "control_work")

@@ -412,6 +412,17 @@ ControlledTrajectory simulate_controlled(
                                 " entries, got " + format_number(q0.size()) + " and " +
                                 format_number(qd0.size()));
   }
+  // a unilateral contact's release and impacts are not carried through the control's augmented
+  // system yet (its rows would hold as two-sided ones): refused, never a contact that pulls
+  for (const Constraint& c : plant.constraints()) {
+    if (c.is_unilateral()) {
+      throw std::invalid_argument(
+          std::string(who) + ": the constraint '" + c.name() +
+          "' is unilateral; contacts under control are not supported yet "
+          "(docs/contact.md, \"Not done yet\"): simulate the plant alone, or "
+          "write the contact as a two-sided constraint");
+    }
+  }
   const bool robust = ctrl.robust().has_value();
   const Index aux = kBounds + (robust ? m_r : 0);
   std::vector<std::string> aux_names = {"ukdyn.control.work", "ukdyn.control.effort",

@@ -106,15 +106,18 @@ bool ContactDynamics::prepare(const System& sys, Workspace& ws, const Eigen::Ref
 bool ContactDynamics::accelerations(const System& sys, Workspace& ws,
                                     const Eigen::Ref<const VectorXd>& q,
                                     const Eigen::Ref<const VectorXd>& qd, double t) {
-  // q''_free: the run's own evaluation with the contacts of the set released
-  std::vector<signed char> saved(set_.size());
-  for (std::size_t i = 0; i < set_.size(); ++i) {
-    saved[i] = ws.activity_override[std::size_t(set_[i])];
-    ws.activity_override[std::size_t(set_[i])] = 0;
+  // q''_free: the run's own evaluation with EVERY contact released — those of the set get their
+  // forces from the LCP below, the others are open (at the start no contact's mode is set yet,
+  // and after an impact a contact that separates may still be marked closed: left as they are,
+  // they would act as two-sided rows in q''_free)
+  std::vector<signed char> saved(contacts_.size());
+  for (std::size_t i = 0; i < contacts_.size(); ++i) {
+    saved[i] = ws.activity_override[std::size_t(contacts_[i])];
+    ws.activity_override[std::size_t(contacts_[i])] = 0;
   }
   const Status s = forward_dynamics(sys, ws, q, qd, t);
-  for (std::size_t i = 0; i < set_.size(); ++i) {
-    ws.activity_override[std::size_t(set_[i])] = saved[i];
+  for (std::size_t i = 0; i < contacts_.size(); ++i) {
+    ws.activity_override[std::size_t(contacts_[i])] = saved[i];
   }
   if (s != Status::kOk) return false;
   // w = W lambda + (A_c q''_free − b_c)

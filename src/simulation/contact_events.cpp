@@ -145,6 +145,10 @@ void ContactEvents::start(double t, VectorXd& q, VectorXd& qd, double tolerance,
     throw std::invalid_argument("ukdyn::simulate: the initial state's contacts: " + failure_);
   }
   qd = xs_.segment(n_, n_);
+  // an impact at the start changes the initial state itself: the energy balance starts from the
+  // state after it (the event keeps its energy_change), with no impact work before the first
+  // sample — else E(0) after the impact and W = ΔT leave a residual −ΔT for the whole run
+  impact_work_ = 0.0;
 }
 
 bool ContactEvents::resolve(double t, double* x, Index event, RunStatistics& stats) {
@@ -208,7 +212,11 @@ bool ContactEvents::resolve(double t, double* x, Index event, RunStatistics& sta
     if (dT > 1e-12 * std::max(T_minus, 1e-300)) {
       qd = qd_minus;
       e.setZero();
-      if (!dyn_.impact(qd, vm, e)) return false;
+      if (!dyn_.impact(qd, vm, e)) {
+        failure_ = "contacts at t = " + format(t) + ": the plastic impact's LCP has no solution " +
+                   "(Siconos lcp_lexicolemke)";
+        return false;
+      }
       dT = dyn_.kinetic_energy(qd) - T_minus;
       if (stats.notes.size() < 20) {
         stats.notes.push_back("t = " + format(t) +

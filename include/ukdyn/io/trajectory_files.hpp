@@ -7,9 +7,10 @@
 /// `violation.<constraint>` (position level for holonomic constraints, velocity level for
 /// nonholonomic ones, 0 for the acceleration kind); `violation_velocity.<constraint>` for the
 /// holonomic ones; `kinetic_energy`, `potential_energy`, `energy`; the energy balance:
-/// `work_nonideal`, `work_ideal`, `work_drive`, `work_external`, `work_control`,
-/// `energy_balance_residual` (simulation/simulate.hpp, Trajectory; docs/simulation.md). Numbers are
-/// written by std::to_chars in the shortest form that reads back bit for bit (`0.1`, `1e-300`,
+/// `work_nonideal`, `work_ideal`, `work_drive`, `work_external`, `work_control`, `work_impact`
+/// (only for a system with unilateral contacts), `energy_balance_residual`
+/// (simulation/simulate.hpp, Trajectory; docs/simulation.md). Numbers are written by std::to_chars
+/// in the shortest form that reads back bit for bit (`0.1`, `1e-300`,
 /// `-2.5e+17`; independent of the locale); NaN as `nan`, infinities as `inf` and `-inf`.
 ///
 /// Every writer writes whole files or none: it writes a hidden temporary `.NAME.tmp-PID-N` in
@@ -117,7 +118,8 @@ std::string summary_json(const Trajectory& traj, const SimulationOptions& option
 /// Writes the trajectory to an HDF5 file: one dataset per field (`t`, `q`, `q_dot`, `q_ddot`,
 /// `Qc_ideal`, `Qc_nonideal`, `lambda`, `position_violation`, `velocity_violation`,
 /// `kinetic_energy`, `potential_energy`, `energy`, `work_nonideal`, `work_ideal`, `work_drive`,
-/// `work_external`, `work_control`, `energy_balance_residual`; matrices N × width,
+/// `work_external`, `work_control`, `work_impact` (with unilateral contacts),
+/// `energy_balance_residual`; matrices N × width,
 /// chunked and compressed), the names as string attributes (`coordinate_names`,
 /// `constraint_names`) and the statistics as attributes of the root group.
 /// @throws std::runtime_error naming the path.
