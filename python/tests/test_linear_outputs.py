@@ -82,3 +82,30 @@ def test_the_command_linearizes_along_the_models_run(cli, tmp_path):
     bad = subprocess.run([cli, "linearize", str(path), "--outputs", "nosuch"],
                          capture_output=True, text=True)
     assert bad.returncode == 2 and "output nosuch: neither a coordinate" in bad.stderr
+
+
+CART_FREE = """
+name: a free cart beside a pendulum
+parameters: {m: 2, L: 0.7, g: 9.81}
+coordinates: [x, th]
+kinetic_energy: 0.5*m*x_dot^2 + 0.5*m*L^2*th_dot^2
+potential_energy: -m*g*L*cos(th)
+initial: {q: {x: 0, th: 0.3}, q_dot: {x: 1, th: 0}}
+output:
+  expressions:
+    height: -L*cos(th)
+    position: x + L*sin(th)
+"""
+
+
+def test_kept_states_refuse_an_output_of_a_dropped_state():
+    """states= keeps th, th_dot (x is cyclic: a subsystem of its own); an output that reads the
+    dropped x would be silently wrong without it, so it is refused, naming both."""
+    model = ukdyn.parse(CART_FREE)
+    lm = model.linearize(q=[0.0, 0.3], q_dot=[1.0, 0.0], outputs=["height"],
+                         states=["th", "th_dot"])
+    assert lm.states == ["th", "th_dot"]
+    np.testing.assert_allclose(lm.C, [[L * math.sin(0.3), 0]], rtol=0, atol=1e-10)
+    with pytest.raises(ValueError, match="the output 'position' depends on the dropped state 'x'"):
+        model.linearize(q=[0.0, 0.3], q_dot=[1.0, 0.0], outputs=["position"],
+                        states=["th", "th_dot"])

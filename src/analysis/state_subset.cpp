@@ -60,6 +60,21 @@ void keep_states(LinearModel& lm, const std::vector<std::string>& names, const c
           << "' too, or drop only states the others do not depend on (cyclic coordinates)";
       throw std::invalid_argument(msg.str());
     }
+  // nor on an output: its C column within its error estimate, or the output would be silently
+  // wrong without it (a bicycle's heading, its contact point)
+  const double c_scale = std::max(1.0, lm.C.size() > 0 ? lm.C.cwiseAbs().maxCoeff() : 0.0);
+  for (Index o = 0; o < lm.C.rows(); ++o)
+    for (Index j = 0; j < s; ++j) {
+      if (std::find(keep.begin(), keep.end(), j) != keep.end()) continue;
+      const double c = lm.C(o, j), e = lm.C_error.size() > 0 ? lm.C_error(o, j) : 0.0;
+      if (std::abs(c) <= 10 * e + 1e-9 * c_scale) continue;
+      std::ostringstream msg;
+      msg << who << ": states: the output '"
+          << (std::size_t(o) < lm.output_names.size() ? lm.output_names[std::size_t(o)] : "?")
+          << "' depends on the dropped state '" << all[std::size_t(j)] << "' (C = " << c << " ± "
+          << e << "); keep '" << all[std::size_t(j)] << "' too, or leave that output out";
+      throw std::invalid_argument(msg.str());
+    }
   // A, B rows and columns; C columns; x0, f0, names
   lm.A = pick(lm.A, &keep, &keep);
   lm.A_error = pick(lm.A_error, &keep, &keep);
