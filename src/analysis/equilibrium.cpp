@@ -17,13 +17,13 @@
 
 namespace ukdyn {
 namespace {
-constexpr const char* kWho = "find_equilibrium";
+constexpr const char* kEquilibriumWho = "find_equilibrium";
 }  // namespace
 
 Equilibrium find_equilibrium(const System& sys, const OperatingPoint& guess,
                              const EquilibriumOptions& o) {
   if (!(o.tolerance > 0) || o.max_iterations < 1)
-    throw std::invalid_argument(std::string(kWho) +
+    throw std::invalid_argument(std::string(kEquilibriumWho) +
                                 ": EquilibriumOptions out of range (tolerance > 0, "
                                 "max_iterations >= 1)");
   Workspace ws(sys, analysis::dense_options(o.linearize.solver));
@@ -39,7 +39,7 @@ Equilibrium find_equilibrium(const System& sys, const OperatingPoint& guess,
   auto chart_at = [&](const OperatingPoint& point) {
     rd.reset();
     part = std::make_unique<analysis::Partition>(
-        analysis::choose_coordinates(sys, ws, point, o.linearize, kWho, false));
+        analysis::choose_coordinates(sys, ws, point, o.linearize, kEquilibriumWho, false));
     rd = std::make_unique<analysis::ReducedDynamics>(sys, *part, point, o.linearize);
     sp = Index(part->ip.size());
     sv = Index(part->iv.size());
@@ -51,11 +51,11 @@ Equilibrium find_equilibrium(const System& sys, const OperatingPoint& guess,
     // the unknowns: positions among I_p, rates among I_v
     for (const auto& name : o.unknowns) {
       bool rate = false;
-      const Index j = analysis::coordinate_of(sys, name, rate, kWho);
+      const Index j = analysis::coordinate_of(sys, name, rate, kEquilibriumWho);
       const auto& set = rate ? part->iv : part->ip;
       const auto it = std::find(set.begin(), set.end(), j);
       if (it == set.end())
-        throw std::invalid_argument(std::string(kWho) + ": the unknown '" + name +
+        throw std::invalid_argument(std::string(kEquilibriumWho) + ": the unknown '" + name +
                                     "' is a dependent " + (rate ? "velocity" : "position") +
                                     " (the constraints fix it); name an independent one");
       unknown.push_back((rate ? sp : 0) + Index(it - set.begin()));
@@ -81,7 +81,7 @@ Equilibrium find_equilibrium(const System& sys, const OperatingPoint& guess,
   };
   start_chart();
   if (!residual(z, r))
-    throw EquilibriumError(std::string(kWho) +
+    throw EquilibriumError(std::string(kEquilibriumWho) +
                            ": the guess cannot be completed to a state on "
                            "the constraint manifold: " +
                            rd->why());
@@ -144,7 +144,7 @@ Equilibrium find_equilibrium(const System& sys, const OperatingPoint& guess,
     Index worst = 0;
     r_final.cwiseAbs().maxCoeff(&worst);
     std::ostringstream msg;
-    msg << kWho << ": no equilibrium found from the guess after " << it
+    msg << kEquilibriumWho << ": no equilibrium found from the guess after " << it
         << " Newton steps: " << stuck << "; the reduced accelerations have norm " << r_final.norm()
         << " (tolerance " << o.tolerance << "), the largest "
         << sys.coordinate_names()[std::size_t(part->iv[std::size_t(worst)])]

@@ -72,7 +72,7 @@ bool ContactLcp::solve(const Eigen::Ref<const MatrixXd>& W, const Eigen::Ref<con
   problem.size = int(k);
   problem.M = M;
   problem.q = r_.data();
-  SolverOptions* options = solver_options_create(SICONOS_LCP_LEMKE);
+  ::SolverOptions* options = solver_options_create(SICONOS_LCP_LEMKE);
   z.setZero();
   w.setZero();
   lcp_lexicolemke(&problem, z_.data(), w_.data(), &info_, options);

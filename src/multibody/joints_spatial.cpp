@@ -9,7 +9,7 @@
 namespace ukdyn::mb::detail {
 namespace {
 
-Row dot(const VecExpr& a, const VecExpr& b) {
+Row dot_rows(const VecExpr& a, const VecExpr& b) {
   Row r;
   r.kind = Row::kDot;
   r.a = a;
@@ -28,11 +28,11 @@ std::vector<Row> spatial_joint_rows(const Joint& j, const BodyRef&, const BodyRe
   const VecExpr xP = axis(0, 0), yP = axis(0, 1), zP = axis(0, 2);
   const VecExpr xC = axis(1, 0), yC = axis(1, 1), zC = axis(1, 2);
   // d = 0 (3 rows, world components)
-  const std::vector<Row> point = {dot(d, VecExpr::constant(Vector3d::UnitX())),
-                                  dot(d, VecExpr::constant(Vector3d::UnitY())),
-                                  dot(d, VecExpr::constant(Vector3d::UnitZ()))};
+  const std::vector<Row> point = {dot_rows(d, VecExpr::constant(Vector3d::UnitX())),
+                                  dot_rows(d, VecExpr::constant(Vector3d::UnitY())),
+                                  dot_rows(d, VecExpr::constant(Vector3d::UnitZ()))};
   // z_C ∥ z_P: z_P · x_C = 0, z_P · y_C = 0
-  const std::vector<Row> parallel = {dot(zP, xC), dot(zP, yC)};
+  const std::vector<Row> parallel = {dot_rows(zP, xC), dot_rows(zP, yC)};
   std::vector<Row> rows;
   const auto add = [&rows](const std::vector<Row>& more) {
     rows.insert(rows.end(), more.begin(), more.end());
@@ -47,25 +47,25 @@ std::vector<Row> spatial_joint_rows(const Joint& j, const BodyRef&, const BodyRe
       break;
     case JointType::kUniversal:  // common point, z_P ⊥ z_C
       add(point);
-      rows.push_back(dot(zP, zC));
+      rows.push_back(dot_rows(zP, zC));
       break;
     case JointType::kCylindrical:  // common z axis: parallel, o_C on the z line of F_P
       add(parallel);
-      add({dot(d, xP), dot(d, yP)});
+      add({dot_rows(d, xP), dot_rows(d, yP)});
       break;
     case JointType::kPrismatic:  // cylindrical without the turn: x_P · y_C = 0
       add(parallel);
-      rows.push_back(dot(xP, yC));
-      add({dot(d, xP), dot(d, yP)});
+      rows.push_back(dot_rows(xP, yC));
+      add({dot_rows(d, xP), dot_rows(d, yP)});
       break;
     case JointType::kPlanar:  // parallel planes, o_C in the xy plane of F_P
       add(parallel);
-      rows.push_back(dot(d, zP));
+      rows.push_back(dot_rows(d, zP));
       break;
     case JointType::kWeld:
       add(point);
       add(parallel);
-      rows.push_back(dot(xP, yC));
+      rows.push_back(dot_rows(xP, yC));
       break;
     case JointType::kDistance: {
       Row r;
@@ -76,10 +76,10 @@ std::vector<Row> spatial_joint_rows(const Joint& j, const BodyRef&, const BodyRe
       break;
     }
     case JointType::kPointOnLine:
-      add({dot(d, xP), dot(d, yP)});
+      add({dot_rows(d, xP), dot_rows(d, yP)});
       break;
     case JointType::kPointOnPlane:
-      rows.push_back(dot(d, zP));
+      rows.push_back(dot_rows(d, zP));
       break;
     default:
       throw std::invalid_argument(std::string("ukdyn::mb::Multibody::build: joint '") + j.name +

@@ -13,7 +13,7 @@
 namespace ukdyn::detail {
 
 namespace {
-std::string format(double v) { return format_short(v); }
+std::string format_t(double v) { return format_short(v); }
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 }  // namespace
 
@@ -109,7 +109,7 @@ double ContactEvents::find(double t0, const double* x0, double t1, const double*
 bool ContactEvents::handle(double t, double* x, RunStatistics& stats) {
   if (long(stats.contact_events.size()) >= kMaxEvents) {
     failure_ = "contacts: more than " + format_number(kMaxEvents) +
-               " impacts and releases (chattering) by t = " + format(t);
+               " impacts and releases (chattering) by t = " + format_t(t);
     return false;
   }
   return resolve(t, x, event_, stats);
@@ -128,13 +128,13 @@ void ContactEvents::start(double t, VectorXd& q, VectorXd& qd, double tolerance,
     if (g < -std::max(tolerance, kTouchGap)) {
       penetrated.push_back(sys_.constraint(k).name());
       lines += (lines.empty() ? "" : "; ") + std::string("the unilateral constraint '") +
-               sys_.constraint(k).name() + "' is penetrated: its gap is " + format(g);
+               sys_.constraint(k).name() + "' is penetrated: its gap is " + format_t(g);
     }
   }
   if (!penetrated.empty()) {
     throw InconsistentInitialState(
         InconsistentInitialState::Cause::kNotProjected,
-        "ukdyn::simulate: inconsistent initial conditions at t = " + format(t) + ": " + lines +
+        "ukdyn::simulate: inconsistent initial conditions at t = " + format_t(t) + ": " + lines +
             " (a unilateral constraint needs a gap >= 0)",
         penetrated);
   }
@@ -179,7 +179,7 @@ bool ContactEvents::resolve(double t, double* x, Index event, RunStatistics& sta
   // the release of a closed contact: only the closed set changes
   const bool release = event >= 0 && closed_[std::size_t(event)];
   if (!dyn_.prepare(sys_, ws_, q, qd, t, set)) {
-    failure_ = "contacts at t = " + format(t) + ": the mass matrix is not positive definite";
+    failure_ = "contacts at t = " + format_t(t) + ": the mass matrix is not positive definite";
     return false;
   }
   if (approaching && !release) {
@@ -202,7 +202,7 @@ bool ContactEvents::resolve(double t, double* x, Index event, RunStatistics& sta
     const VectorXd qd_minus = qd;
     const double T_minus = dyn_.kinetic_energy(qd);
     if (!dyn_.impact(qd, vm, e)) {
-      failure_ = "contacts at t = " + format(t) + ": the impact's LCP has no solution (Siconos " +
+      failure_ = "contacts at t = " + format_t(t) + ": the impact's LCP has no solution (Siconos " +
                  "lcp_lexicolemke)";
       return false;
     }
@@ -213,13 +213,13 @@ bool ContactEvents::resolve(double t, double* x, Index event, RunStatistics& sta
       qd = qd_minus;
       e.setZero();
       if (!dyn_.impact(qd, vm, e)) {
-        failure_ = "contacts at t = " + format(t) + ": the plastic impact's LCP has no solution " +
-                   "(Siconos lcp_lexicolemke)";
+        failure_ = "contacts at t = " + format_t(t) +
+                   ": the plastic impact's LCP has no solution " + "(Siconos lcp_lexicolemke)";
         return false;
       }
       dT = dyn_.kinetic_energy(qd) - T_minus;
       if (stats.notes.size() < 20) {
-        stats.notes.push_back("t = " + format(t) +
+        stats.notes.push_back("t = " + format_t(t) +
                               ": an impact with restitution would have created energy; it was "
                               "made plastic (e = 0), docs/contact.md");
       }
@@ -241,12 +241,12 @@ bool ContactEvents::resolve(double t, double* x, Index event, RunStatistics& sta
       stats.contact_events.push_back(ev);
       ++impacts_[i];
       if (rests[std::size_t(j)] && stats.notes.size() < 20) {
-        stats.notes.push_back("t = " + format(t) + ": contact '" +
+        stats.notes.push_back("t = " + format_t(t) + ": contact '" +
                               sys_.constraint(ev.constraint).name() + "' came to rest after " +
                               format_number(impacts_[i]) +
-                              " impacts (an accumulation point: impact speed " + format(-vm[j]) +
-                              " below " + format(kRestFraction) + " of its fastest, " +
-                              format(fastest_[i]) + "; docs/contact.md, \"Rest\")");
+                              " impacts (an accumulation point: impact speed " + format_t(-vm[j]) +
+                              " below " + format_t(kRestFraction) + " of its fastest, " +
+                              format_t(fastest_[i]) + "; docs/contact.md, \"Rest\")");
       }
     }
     for (Index j = 0; j < m; ++j) v_minus[std::size_t(j)] = dyn_.v_after()[j];
@@ -267,7 +267,7 @@ bool ContactEvents::resolve(double t, double* x, Index event, RunStatistics& sta
   if (!candidates.empty()) {
     if (!dyn_.prepare(sys_, ws_, q, qd, t, candidates) ||
         !dyn_.accelerations(sys_, ws_, q, qd, t)) {
-      failure_ = "contacts at t = " + format(t) +
+      failure_ = "contacts at t = " + format_t(t) +
                  ": the LCP of the closed contacts has no solution (Siconos lcp_lexicolemke)";
       return false;
     }

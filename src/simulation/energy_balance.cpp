@@ -18,13 +18,13 @@ namespace ukdyn {
 
 namespace {
 
-std::string format(double v) { return format_number(v, 3); }
+std::string format3(double v) { return format_number(v, 3); }
 
 // the warning of a run whose balance fails: the worst sample and what may cause it
 std::string warning(double worst_r, double worst_t, double balance, double tolerance) {
-  return "energy balance: E(t) - E(0) - (sum of the works) = " + format(worst_r) +
-         " J at t = " + format(worst_t) + " s, " + format(balance) +
-         " of the energy exchanged, above the tolerance " + format(tolerance) +
+  return "energy balance: E(t) - E(0) - (sum of the works) = " + format3(worst_r) +
+         " J at t = " + format3(worst_t) + " s, " + format3(balance) +
+         " of the energy exchanged, above the tolerance " + format3(tolerance) +
          " (energy_balance_tolerance): energy was gained or lost that no work channel accounts "
          "for (integration error, a jump of the state, or forces in Q that neither the potential "
          "nor an external power describes)";

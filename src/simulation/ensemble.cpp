@@ -280,7 +280,7 @@ std::string at_name(const std::string& column, const std::vector<double>& at, st
   return column + "@" + (at.empty() ? std::string("end") : format_number(at[k]));
 }
 
-void append_number(std::string& out, double x) {
+void append_csv_number(std::string& out, double x) {
   if (std::isnan(x)) {
     out += "nan";
     return;
@@ -541,7 +541,7 @@ void write_ensemble_csv(const EnsembleTable& table, const std::string& path) {
   const std::size_t N = table.status.size();
   for (std::size_t i = 0; i < N; ++i) {
     for (const CsvColumn& c : table.numbers) {
-      append_number(line, i < c.values.size() ? c.values[i] : kNaN);
+      append_csv_number(line, i < c.values.size() ? c.values[i] : kNaN);
       line += ',';
     }
     append_text(line, table.status[i]);
