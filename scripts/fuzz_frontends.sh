@@ -23,7 +23,18 @@ if [ ! -x build/app/ukdyn ] || [ ! -d build/python/ukdyn ]; then
   exit 2
 fi
 
-echo "=== fuzz: the command line, ${seconds} s ==="
-/usr/bin/python3 fuzz/fuzz_cli.py build/app/ukdyn "$seconds"
-echo "=== fuzz: the Python module, ${seconds} s ==="
-PYTHONPATH="$PWD/build/python" /usr/bin/python3 fuzz/fuzz_python.py "$seconds"
+# the two fuzzers are one process each: they run side by side, each into its own log, printed in
+# turn when both have ended; the script fails if either does
+cli_log=$(mktemp) && py_log=$(mktemp)
+trap 'rm -f "$cli_log" "$py_log"' EXIT
+/usr/bin/python3 fuzz/fuzz_cli.py build/app/ukdyn "$seconds" >"$cli_log" 2>&1 &
+cli=$!
+PYTHONPATH="$PWD/build/python" /usr/bin/python3 fuzz/fuzz_python.py "$seconds" >"$py_log" 2>&1 &
+py=$!
+cli_status=0 && wait "$cli" || cli_status=$?
+py_status=0 && wait "$py" || py_status=$?
+echo "=== fuzz: the command line, ${seconds} s (exit $cli_status) ==="
+cat "$cli_log"
+echo "=== fuzz: the Python module, ${seconds} s (exit $py_status) ==="
+cat "$py_log"
+[ "$cli_status" -eq 0 ] && [ "$py_status" -eq 0 ]
