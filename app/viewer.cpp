@@ -22,14 +22,15 @@ namespace ukdyn::cli {
 namespace fs = std::filesystem;
 
 bool viewer_by_default(const Model& model) {
-  return model.multibody || !model.visual.points.empty();
+  return model.multibody || model.robot || !model.visual.points.empty() ||
+         !model.visual.contacts.empty();
 }
 
 std::optional<fs::path> write_viewer(const Model& model, const fs::path& csv, const fs::path& dir,
                                      bool& failed) {
   // as Python's Result.show(): a page with only the grid is not written
   if (!model.multibody && model.visual.points.empty() && model.visual.frames.empty() &&
-      !model.controller) {
+      model.visual.contacts.empty() && !model.robot && !model.controller) {
     std::fprintf(stderr,
                  "warning: nothing to draw: the model has no bodies and no visual: section (add "
                  "visual: {points: {...}, links: [...]}; docs/viewer.md): no animation.html\n");
@@ -53,8 +54,9 @@ std::optional<fs::path> write_viewer(const Model& model, const fs::path& csv, co
       std::fprintf(stderr, "%s\n", terminal_text(line).c_str());
     }
     const std::string three = std::string(kThreeJs) + "\n" + kOrbitControlsJs;
-    const std::string html =
-        fill_viewer_template(kViewerTemplate, three, viewer_page_data(scene, run, options));
+    const std::string html = fill_viewer_template(
+        kViewerTemplate, three,
+        viewer_page_data(scene, run, options, read_contact_events(dir / "summary.json")));
     detail::write_whole_file(page.string(), "ukdyn run --viewer", html.data(), html.size());
   } catch (const std::exception& e) {
     std::fprintf(stderr, "error: the viewer's page: %s: no animation.html\n",

@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
+#include <fstream>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -361,6 +362,19 @@ json round_fixed(double v, int decimals) {
   return number(std::strtod(text.c_str(), nullptr));
 }
 
+json read_contact_events(const std::filesystem::path& summary) {
+  std::ifstream in(summary);
+  if (!in) return json::array();
+  const json j = json::parse(in, nullptr, false);
+  if (!j.is_object()) return json::array();
+  const json events = list_of(j, "contact_events");
+  json out = json::array();
+  for (const json& e : events) {
+    if (e.is_object()) out.push_back(e);
+  }
+  return out;
+}
+
 std::vector<std::string> point_columns(const json& scene) {
   std::vector<std::string> out;
   for (const json& pt : list_of(scene, "points")) {
@@ -403,7 +417,8 @@ std::vector<std::string> nonfinite_warnings(const json& scene,
   return out;
 }
 
-json viewer_page_data(const json& scene, const ViewerColumns& run, const ViewerOptions& options) {
+json viewer_page_data(const json& scene, const ViewerColumns& run, const ViewerOptions& options,
+                      const json& contact_events) {
   const auto t_column = std::find(run.names.begin(), run.names.end(), "t");
   const std::vector<double> no_t;
   const std::vector<double>& t_all = t_column != run.names.end()
@@ -536,6 +551,53 @@ json viewer_page_data(const json& scene, const ViewerColumns& run, const ViewerO
     frame["r"] = r;
     data["frames"].push_back(frame);
   }
+  // a robot's links: each link's joint with its coordinates' samples, to 1e-4 (the page
+  // computes the frames)
+  if (scene.contains("robot") && truthy(scene["robot"])) {
+    json robot = scene["robot"];
+    robot["links"] = json::array();
+    for (const json& l : list_of(scene["robot"], "links")) {
+      json link = l;
+      json q = json::array();
+      for (const json& c : list_of(l, "coordinates"))
+        q.push_back(p.pack_fixed(c.is_string() ? c.get<std::string>() : c.dump(), 4));
+      link["q"] = q;
+      robot["links"].push_back(link);
+    }
+    data["robot"] = robot;
+  }
+  // contacts of visual: contacts: the contact point, the direction its force pushes, the
+  // force's magnitude (lambda.<name>), and the impacts (time and contact)
+  if (truthy(list_of(scene, "contacts"))) {
+    data["contacts"] = json::array();
+    std::vector<std::string> drawn;
+    for (const json& c : list_of(scene, "contacts")) {
+      json contact = c;
+      const std::string name = text_of(c, "name"), base = "visual.contact." + name + ".";
+      json q = json::array(), n = json::array();
+      for (int a = 0; a < dimensions_of(c); ++a) {
+        q.push_back(p.pack_fixed(base + kAxes[a], decimals));
+        n.push_back(p.pack_fixed(base + "n" + kAxes[a], 4));
+      }
+      contact["q"] = q;
+      contact["n"] = n;
+      contact["force"] = p.pack("lambda." + name);
+      data["contacts"].push_back(contact);
+      drawn.push_back(name);
+    }
+    json impacts = json::array();
+    for (const json& e : contact_events.is_array() ? contact_events : json::array()) {
+      if (!e.is_object()) continue;
+      const std::string kind = text_of(e, "kind"), contact = text_of(e, "contact");
+      const auto t = e.find("t");
+      if ((kind != "impact" && kind != "rest") || t == e.end() || !t->is_number() ||
+          !e["contact"].is_string() ||
+          std::find(drawn.begin(), drawn.end(), contact) == drawn.end())
+        continue;
+      impacts.push_back({{"t", round_significant(t->get<double>(), 7)}, {"contact", contact}});
+    }
+    data["impacts"] = impacts;
+  }
   // the control's requirements: each row's error, and where the requirement says what is
   // desired, the desired and the actual value (actual = desired + error)
   const std::vector<RequirementRow> rows = requirement_rows(run.names);
@@ -612,6 +674,13 @@ json viewer_page_data(const json& scene, const ViewerColumns& run, const ViewerO
       }
     }
     scales[key] = arrow_scale(std::move(norms));
+  }
+  if (data.contains("contacts")) {
+    std::vector<double> norms;
+    for (const json& c : data["contacts"]) {
+      for (const json& v : c["force"]) norms.push_back(magnitude({&v}));
+    }
+    scales["contact"] = arrow_scale(std::move(norms));
   }
   data["force_scale"] = scales;
   return data;

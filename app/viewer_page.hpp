@@ -50,12 +50,19 @@ nlohmann::ordered_json round_fixed(double v, int decimals);
 
 /// The page's data (viewer.py's scene_data): the scene of viewer_scene_json (parsed) with each
 /// body's, joint's, point's and frame's samples decimated (shown_frames) and rounded, the
-/// control's requirements, the desired paths and the scales of the force arrows. Throws
-/// std::runtime_error naming a column the scene needs and the trajectory lacks. Cost:
-/// O(columns × frames shown).
-nlohmann::ordered_json viewer_page_data(const nlohmann::ordered_json& scene,
-                                        const ViewerColumns& run,
-                                        const ViewerOptions& options = {});
+/// control's requirements, the desired paths, the contacts of `visual: contacts:` with their
+/// impacts (from `contact_events`, summary.json's list of the run's contact events) and the
+/// scales of the force arrows. Throws std::runtime_error naming a column the scene needs and
+/// the trajectory lacks. Cost: O(columns × frames shown + contact events).
+nlohmann::ordered_json viewer_page_data(
+    const nlohmann::ordered_json& scene, const ViewerColumns& run,
+    const ViewerOptions& options = {},
+    const nlohmann::ordered_json& contact_events = nlohmann::ordered_json::array());
+
+/// The contact events of a run's summary.json (viewer.py's read_contact_events): its
+/// `contact_events` list, or an empty list when the file is missing, not JSON or has none.
+/// Cost: one read of the file.
+nlohmann::ordered_json read_contact_events(const std::filesystem::path& summary);
 
 /// The columns visual.<point>.<axis> of the scene's points (viewer.py's _point_columns).
 std::vector<std::string> point_columns(const nlohmann::ordered_json& scene);

@@ -39,6 +39,7 @@ FRAGMENTS = {
     ("docs/install.md", "venv"): "a pip install of the source tree (a build, minutes)",
     ("docs/contact.md", "constraint"): "the constraints: entry alone",
     ("docs/contact.md", "cpp"): "C++ statements without a program around them",
+    ("docs/contact.md", "visual"): "the visual: section alone",
     ("docs/linearize.md", "python"): "cart.yaml, model and guess stand for the reader's",
     ("docs/linearize.md", "bicycle-sweep"): "bike and straight_run stand for the block before",
     ("docs/model-format.md", "tables"): "the tables: section alone",

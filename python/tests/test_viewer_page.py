@@ -34,7 +34,8 @@ def _python_page(model_path: pathlib.Path, csv: pathlib.Path) -> str:
     """viewer.py's page of the command's trajectory.csv, with the model's scene."""
     scene = json.loads(ukdyn.load(model_path)._scene_json)
     names, columns = viewer.read_csv(csv)
-    return viewer.build_page(scene, names, columns)
+    events = viewer.read_contact_events(csv.parent / "summary.json")
+    return viewer.build_page(scene, names, columns, contact_events=events)
 
 
 @pytest.mark.parametrize("example, t_end", [
@@ -43,6 +44,8 @@ def _python_page(model_path: pathlib.Path, csv: pathlib.Path) -> str:
     ("heavy_top", "2"),                     # a rigid body (quaternion)
     ("slider_crank_coulomb", "1"),          # Coulomb friction: the non-ideal reactions
     ("control_triple_pendulum_tip", "3"),   # requirements, a desired path
+    ("bouncing_ball", "2"),                 # a contact: its force and impacts
+    ("ladder_leaves_wall", "0.8"),          # two contacts, one released
 ])
 def test_the_commands_page_is_pythons_byte_for_byte(cli, examples_dir, tmp_path, example, t_end):
     out = tmp_path / "run"
@@ -68,6 +71,21 @@ def test_the_commands_data_is_save_animations(cli, examples_dir, tmp_path):
     theirs = _page_data((tmp_path / "python.html").read_text(encoding="utf-8"))
     assert len(ours["t"]) == 31
     assert ours == theirs
+
+
+def test_the_commands_impacts_are_save_animations(cli, examples_dir, tmp_path):
+    """A run with contacts made by Python (Result.save_animation, its stats' contact events):
+    the same contacts and impacts as the command's page (from its summary.json)."""
+    out = tmp_path / "run"
+    proc = _run(cli, ["--example", "bouncing_ball"], out)
+    assert proc.returncode == 0, proc.stderr
+    ukdyn.load(examples_dir / "bouncing_ball.yaml").simulate().save_animation(
+        tmp_path / "python.html")
+    ours = _page_data((out / "animation.html").read_text(encoding="utf-8"))
+    theirs = _page_data((tmp_path / "python.html").read_text(encoding="utf-8"))
+    assert len(ours["impacts"]) > 10
+    assert ours["impacts"] == theirs["impacts"]
+    assert ours["contacts"] == theirs["contacts"]
 
 
 def test_no_python_is_run(cli, tmp_path):

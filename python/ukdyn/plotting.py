@@ -11,8 +11,9 @@ The command embeds this file and runs it as a script on the run's directory::
 ``STYLE``: ``screen``, the default, or ``paper`` — see :data:`STYLES`).
 It reads ``summary.json`` beside the CSV for the model's name and the coordinates' units, and
 writes, for each format, ``coordinates``, ``constraint_forces`` and ``violation`` (only when the
-model has constraints), ``energy``, and when the run has them ``control``, ``bodies`` (multibody
-models) and ``outputs`` (the model's output expressions). Each file is written under a
+model has constraints), ``energy``, and when the run has them ``contacts`` (unilateral contacts:
+normal forces and gaps, impacts marked), ``control``, ``bodies`` (multibody models) and
+``outputs`` (the model's output expressions). Each file is written under a
 temporary name and renamed when complete. Exit codes: 0 written, 2 bad arguments, 3 no
 matplotlib.
 
@@ -23,6 +24,8 @@ figures:
 
 * ``model``: the model's name (in every title);
 * ``coordinates``: the coordinate names, in order;
+* ``contact_events``: the run's contact events (summary.json's list: ``t``, ``contact``,
+  ``kind``, …), whose impacts the contacts figure marks;
 * ``units``: coordinate name → its unit (``m``, ``rad``, ``1`` for a quaternion component, or
   what the model file's ``units:`` declares; ``""`` or absent: not known, and then no unit is
   drawn, never a guessed one); output expressions may have theirs too.
@@ -53,7 +56,8 @@ __all__ = [
     "FORMATS", "Table", "metadata", "read_csv", "read_summary", "coordinate_unit",
     "column_unit", "force_unit",
     "line_style", "coordinates_figure", "forces_figure", "violation_figure", "energy_figure",
-    "control_figure", "bodies_figure", "outputs_figure", "figures", "save", "write_figures",
+    "control_figure", "bodies_figure", "outputs_figure", "contacts_figure", "figures", "save",
+    "write_figures",
     "parse_formats", "draw_columns", "draw_forces", "draw_violation", "draw_energy", "main",
     "STYLES", "style",
 ]
@@ -190,6 +194,8 @@ def read_summary(path):
         meta["model"] = name
     if isinstance(summary.get("units"), dict):
         meta["units"] = dict(summary["units"])
+    if isinstance(summary.get("contact_events"), list):
+        meta["contact_events"] = [e for e in summary["contact_events"] if isinstance(e, dict)]
     return meta
 
 
@@ -648,6 +654,50 @@ def bodies_figure(table, meta=None):
     return fig
 
 
+#: the kinds of contact event marked as impacts (an impact that closed a contact at rest too)
+IMPACT_KINDS = ("impact", "rest")
+
+
+def _contacts(table):
+    """The unilateral contacts of a run: those with a gap column ``gap.<name>`` (model files
+    write one per unilateral constraint) and a multiplier ``lambda.<name>``, in column order."""
+    return [h[len("gap."):] for h in table.names
+            if h.startswith("gap.") and "lambda." + h[len("gap."):] in table]
+
+
+def contacts_figure(table, meta=None):
+    """The unilateral contacts (docs/contact.md): each contact's normal force (its multiplier
+    ``lambda.<name>``, which pushes when positive: the force itself when the gap is a
+    distance) and its gap ``gap.<name>`` over time, the impacts marked (the ``contact_events``
+    of summary.json or of Result.stats: a dotted line across both panels and a triangle on the
+    gap's zero at each). None for a run without contacts."""
+    contacts = _contacts(table)
+    if not contacts:
+        return None
+    meta = metadata(table, meta)
+    t = table["t"]
+    impacts = {c: [] for c in contacts}
+    for e in meta.get("contact_events") or []:
+        if e.get("kind") in IMPACT_KINDS and e.get("contact") in impacts and e.get("t") is not None:
+            impacts[e["contact"]].append(float(e["t"]))
+    fig, axes = _figure("contacts: normal forces and gaps", meta, 2)
+    for i, c in enumerate(contacts):
+        style = line_style(i)
+        axes[0].plot(t, table["lambda." + c], label=c, gid="force." + c, **style)
+        axes[1].plot(t, table["gap." + c], label=c, gid="gap." + c, **style)
+        times = impacts[c]
+        if times:
+            axes[1].plot(times, np.zeros(len(times)), "v", color=style["color"], ms=5,
+                         label="impacts (%s): %d" % (c, len(times)), gid="impacts." + c)
+            for ax in axes:
+                ax.vlines(times, 0, 1, transform=ax.get_xaxis_transform(), colors=style["color"],
+                          linestyles=":", lw=0.7, label="_")
+    axes[0].set_ylabel("normal force λ")
+    axes[1].set_ylabel("gap g")
+    _finish(axes)
+    return fig
+
+
 def outputs_figure(table, meta=None):
     """The model's output expressions (the columns after the standard and control ones named by
     identifiers), one panel per unit (the model file's ``units:`` may give them). None when the
@@ -672,7 +722,8 @@ def outputs_figure(table, meta=None):
 
 #: the figures by file stem, in the order they are written
 FIGURES = (("coordinates", coordinates_figure), ("constraint_forces", forces_figure),
-           ("violation", violation_figure), ("energy", energy_figure),
+           ("violation", violation_figure), ("contacts", contacts_figure),
+           ("energy", energy_figure),
            ("control", control_figure), ("bodies", bodies_figure),
            ("outputs", outputs_figure))
 

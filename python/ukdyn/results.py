@@ -336,6 +336,7 @@ class Result:
         from . import viewer
         scene = self.scene
         if scene is None or not any(scene.get(k) for k in ("bodies", "points", "frames",
+                                                            "contacts", "robot",
                                                             "controlled")):
             raise ValueError(
                 "Result.show: nothing to draw: the model has no bodies and no visual: section "
@@ -352,7 +353,8 @@ class Result:
                     first[c] = float(self.t[k])
         for line in viewer.nonfinite_warnings(scene, first):
             warnings.warn(line[len("warning: "):], RuntimeWarning, stacklevel=2)
-        return viewer.build_page(scene, self.names, self._columns, fps=fps)
+        return viewer.build_page(scene, self.names, self._columns, fps=fps,
+                                 contact_events=self.contact_events)
 
     def save_animation(self, path: "str | os.PathLike[str]", fps: float = 30.0) -> None:
         """Writes the viewer page (:meth:`animation_html`) to ``path``; it opens from disk."""
@@ -378,11 +380,29 @@ class Result:
     # --- plots -------------------------------------------------------------------------------
     # --- plots (ukdyn/plotting.py, the plots of `ukdyn run` too) ------------------------------
     @property
+    def contact_events(self) -> List[Dict[str, Any]]:
+        """The impacts, releases and rests of the run's unilateral contacts (docs/contact.md)
+        as summary.json's ``contact_events`` lists them: dicts with ``t``, ``contact`` (the
+        constraint's name), ``kind`` (``impact``, ``release``, ``rest``), ``speed_before``,
+        ``speed_after``, ``impulse``, ``energy_change``; empty without contacts."""
+        # the constraints in order: one violation.<name> column each
+        constraints = [h[len("violation."):] for h in self.names if h.startswith("violation.")]
+        out = []
+        for e in self.stats.get("contact_events") or []:
+            event = dict(e)
+            k = event.pop("constraint", None)
+            event = {"t": event.pop("t", None),
+                     "contact": constraints[k] if isinstance(k, int) and 0 <= k < len(
+                         constraints) else None, **event}
+            out.append(event)
+        return out
+
+    @property
     def plot_metadata(self) -> Dict[str, Any]:
         """What the plots know about the run besides its columns: the model's name, the
-        coordinates and their units (ukdyn/plotting.py, ``metadata``)."""
+        coordinates and their units, the contact events (ukdyn/plotting.py, ``metadata``)."""
         return {"model": self.model_name, "coordinates": list(self.coordinates),
-                "units": dict(self.units)}
+                "units": dict(self.units), "contact_events": self.contact_events}
 
     def figures(self, style: str = "screen") -> Dict[str, Any]:
         """Every figure ``ukdyn run`` draws for this run, as matplotlib Figures by file stem:

@@ -39,6 +39,9 @@ DEBIAN_THREE = "/usr/share/javascript/three"
 THREE_FILES = ("three.min.js", "OrbitControls.js")
 TEMPLATE = "viewer_template.html"
 
+# the kinds of contact event the page marks as impacts (an impact closing a contact at rest too)
+IMPACT_KINDS = ("impact", "rest")
+
 # the frames per simulated second, the most frames a page holds, the significant digits
 FPS = 30.0
 MAX_FRAMES = 3000
@@ -152,11 +155,14 @@ def _scale(values):
     return norms[min(len(norms) - 1, int(0.9 * len(norms)))]
 
 
-def scene_data(scene, names, columns, fps=FPS, max_frames=MAX_FRAMES, digits=DIGITS):
+def scene_data(scene, names, columns, fps=FPS, max_frames=MAX_FRAMES, digits=DIGITS,
+               contact_events=None):
     """The page's data: the scene with each body's, joint's and point's decimated samples.
 
     scene: the dict of viewer_scene_json; names, columns: the trajectory's columns (any
-    sequences of floats, e.g. a Result's arrays or the CSV's lists).
+    sequences of floats, e.g. a Result's arrays or the CSV's lists); contact_events: the run's
+    contact events (summary.json's ``contact_events``: dicts with ``t``, ``contact``, ``kind``),
+    whose impacts the page marks at the contacts of ``visual: contacts:``.
     """
     t_all = [float(v) for v in columns[names.index("t")]] if "t" in names else []
     keep = _frames(t_all, fps, max_frames)
@@ -231,6 +237,36 @@ def scene_data(scene, names, columns, fps=FPS, max_frames=MAX_FRAMES, digits=DIG
         parts = ("qw", "qx", "qy", "qz") if fr.get("quaternion") else ("angle",)
         frame["r"] = [angle("visual.%s.%s" % (fr["name"], c)) for c in parts]
         data["frames"].append(frame)
+    # a robot's links (robot: or a .urdf, docs/robots.md): each link's joint with its
+    # coordinates' samples (angles, displacements, a floating base's position and quaternion,
+    # to 1e-4); the page computes the frames (forward kinematics) and draws the links between
+    # them and the joint axes
+    if scene.get("robot"):
+        robot = dict(scene["robot"])
+        robot["links"] = []
+        for link in scene["robot"].get("links", []):
+            link = dict(link)
+            link["q"] = [p.pack_fixed(c, 4) for c in link.get("coordinates", [])]
+            robot["links"].append(link)
+        data["robot"] = robot
+    # contacts of visual: contacts: (docs/contact.md): the contact point, the direction its
+    # force pushes (normalized by the page), the force's magnitude (the multiplier
+    # lambda.<name>: the normal force when the gap is a distance), and the impacts (their time
+    # and contact; the page finds the place at that time)
+    if scene.get("contacts"):
+        data["contacts"] = []
+        for c in scene["contacts"]:
+            contact = dict(c)
+            base = "visual.contact.%s." % c["name"]
+            axes = ("x", "y", "z")[: c.get("dimensions", 2)]
+            contact["q"] = [position(base + a) for a in axes]
+            contact["n"] = [angle(base + "n" + a) for a in axes]
+            contact["force"] = p.pack("lambda." + c["name"])
+            data["contacts"].append(contact)
+        drawn = set(c["name"] for c in scene["contacts"])
+        data["impacts"] = [{"t": _round(float(e["t"]), 7), "contact": e["contact"]}
+                           for e in contact_events or []
+                           if e.get("kind") in IMPACT_KINDS and e.get("contact") in drawn]
     # the control's requirements: the error of each row (actual minus desired), over time, and
     # where the requirement says what is desired (desired_<row>), the desired and the actual
     # value (actual = desired + error); a requirement whose rows are, in some order, the
@@ -270,6 +306,9 @@ def scene_data(scene, names, columns, fps=FPS, max_frames=MAX_FRAMES, digits=DIG
                 comps = [c for c in item[key] if c is not None]
                 vectors.extend(zip(*comps))
         data.setdefault("force_scale", {})[key] = _scale(vectors)
+    if "contacts" in data:
+        data["force_scale"]["contact"] = _scale([[v] for c in data["contacts"]
+                                                 for v in c["force"]])
     return data
 
 
@@ -353,6 +392,18 @@ def nonfinite_warnings(scene, first):
         out.append("warning: visual point '%s' is not finite from t = %.9g (its expression %s); "
                    "the viewer hides it while so" % (pt["name"], t, what))
     return out
+
+
+def read_contact_events(summary_path):
+    """The contact events of a run's summary.json (a list; empty when the file is missing, not
+    JSON, or has none)."""
+    try:
+        with open(summary_path, encoding="utf-8") as f:
+            summary = json.load(f)
+    except (OSError, ValueError):
+        return []
+    events = summary.get("contact_events") if isinstance(summary, dict) else None
+    return [e for e in events if isinstance(e, dict)] if isinstance(events, list) else []
 
 
 def build_page(scene, names, columns, title=None, **options):
@@ -499,7 +550,10 @@ def main(argv):
     names, columns = read_csv(argv[1], watch=_point_columns(scene), first_nonfinite=first)
     for line in nonfinite_warnings(scene, first):
         sys.stderr.write(line + "\n")
-    write_page(argv[3], build_page(scene, names, columns))
+    # the impacts: from summary.json beside the trajectory, as the command reads them
+    events = read_contact_events(os.path.join(os.path.dirname(os.path.abspath(argv[1])),
+                                              "summary.json"))
+    write_page(argv[3], build_page(scene, names, columns, contact_events=events))
     return 0
 
 

@@ -48,6 +48,24 @@ std::string summary_json(const Trajectory& traj, const SimulationOptions& option
   j["switch_events"] = s.switch_events;
   j["stick_refusals"] = s.stick_refusals;
   j["notes"] = s.notes;
+  // the unilateral contacts' events (docs/contact.md), by constraint name: the plots and the
+  // viewer mark the impacts (present when the system has contacts: work_impact is then kept)
+  if (!traj.work_impact.empty()) {
+    json contacts = json::array();
+    for (const ContactEvent& e : s.contact_events) {
+      const auto k = std::size_t(e.constraint);
+      contacts.push_back(
+          {{"t", e.t},
+           {"contact",
+            k < traj.constraint_names.size() ? json(traj.constraint_names[k]) : json(nullptr)},
+           {"kind", to_string(e.kind)},
+           {"speed_before", e.speed_before},
+           {"speed_after", e.speed_after},
+           {"impulse", e.impulse},
+           {"energy_change", e.energy_change}});
+    }
+    j["contact_events"] = std::move(contacts);
+  }
   j["stiff_switches"] = s.stiff_switches;
   j["stiff_switch_time"] =
       std::isfinite(s.stiff_switch_time) ? json(s.stiff_switch_time) : json(nullptr);

@@ -404,6 +404,8 @@ class Reader {
   // visual: and the bodies' visual: entries (modelfile/reader_visual.cpp); the points'
   // expressions are appended to `outputs` (their columns follow the output expressions)
   void read_visual(const YAML::Node& root, Model& model, std::vector<Expr>& outputs);
+  // gap.<name>: the gap of each unilateral constraint, an output column (docs/contact.md)
+  void add_gap_outputs(const YAML::Node& root, Model& model, std::vector<Expr>& outputs);
   // units: {x: m, theta: rad} (each coordinate's unit, for the plots' labels)
   void read_units(const YAML::Node& root, Model& model);
   void check_mass_matrix(const YAML::Node& root, const Model& model);

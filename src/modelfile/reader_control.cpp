@@ -210,6 +210,18 @@ void Reader::note_desired(const YAML::Node& root) {
       const std::string name = r["name"].Scalar();
       note_desired_rows(h, name, "requirement '" + name + "'", declared);
     }
+    // a pose requirement's rows 0..2 are the point's position minus `position`: that is the
+    // desired path (desired_<name>_0 … _2; the viewer draws it, docs/robots.md)
+    const YAML::Node pose = r["pose"];
+    if (pose && pose.IsMap() && pose["position"] && pose["position"].IsSequence() &&
+        pose["position"].size() == 3) {
+      const std::string name = r["name"].Scalar();
+      for (std::size_t i = 0; i < 3; ++i) {
+        desired_outputs_.emplace_back(
+            "desired_" + name + "_" + format_number(i),
+            expression(pose["position"][i], "requirement '" + name + "' position"));
+      }
+    }
   }
 }
 

@@ -291,6 +291,7 @@ void Reader::read_output(const YAML::Node& root, Model& model) {
     model.output_names.push_back(name);
     exprs.push_back(e);
   }
+  add_gap_outputs(root, model, exprs);
   read_visual(root, model, exprs);
   model.output_program = compile(exprs, out ? out : root, "the output expressions");
 }

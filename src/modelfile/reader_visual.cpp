@@ -33,7 +33,32 @@ std::string colour_names() {
   return s;
 }
 
+// the names of the unilateral constraints of the file's constraints: (the gaps)
+std::vector<std::pair<std::string, YAML::Node>> unilateral_gaps(const YAML::Node& root) {
+  std::vector<std::pair<std::string, YAML::Node>> out;
+  const YAML::Node cs = root["constraints"];
+  if (!cs || !cs.IsSequence()) return out;
+  for (const auto& c : cs) {
+    bool unilateral = false;
+    if (!c.IsMap() || !c["unilateral"] || !c["holonomic"] || !c["name"]) continue;
+    if (!YAML::convert<bool>::decode(c["unilateral"], unilateral) || !unilateral) continue;
+    out.emplace_back(c["name"].Scalar(), c["holonomic"]);
+  }
+  return out;
+}
+
 }  // namespace
+
+void Reader::add_gap_outputs(const YAML::Node& root, Model& model, std::vector<Expr>& outputs) {
+  for (const auto& [name, holonomic] : unilateral_gaps(root)) {
+    const std::string column = "gap." + name;
+    if (std::find(model.output_names.begin(), model.output_names.end(), column) !=
+        model.output_names.end())
+      continue;  // (the file's own output of that name)
+    model.output_names.push_back(column);
+    outputs.push_back(expression(holonomic, "the gap of constraint '" + name + "'"));
+  }
+}
 
 void Reader::read_visual(const YAML::Node& root, Model& model, std::vector<Expr>& outputs) {
   const auto check_keys = [&](const YAML::Node& map, const std::set<std::string>& keys,
@@ -146,7 +171,7 @@ void Reader::read_visual(const YAML::Node& root, Model& model, std::vector<Expr>
   if (!v) return;
   const std::string example = "{points: {pivot: [0, 0], bob: [x, y]}, links: [[pivot, bob]]}";
   if (!v.IsMap()) fail(v, "visual must be a mapping", example);
-  check_keys(v, {"points", "links", "trails", "frames"}, "visual");
+  check_keys(v, {"points", "links", "trails", "frames", "contacts"}, "visual");
   std::set<std::string> names;
   if (const YAML::Node ps = v["points"]) {
     if (!ps.IsMap()) fail(ps, "visual: points must map names to positions", example);
@@ -225,6 +250,51 @@ void Reader::read_visual(const YAML::Node& root, Model& model, std::vector<Expr>
         outputs.push_back(expression(m["angle"], what + " angle"));
       }
       model.visual.frames.push_back(f);
+    }
+  }
+  // contacts: {floor: {at: [0, y - r], normal: [0, 1]}}: a unilateral constraint's contact
+  // point and the direction its force pushes
+  if (const YAML::Node cs = v["contacts"]) {
+    const std::string contact_example = "{floor: {at: [x, y - r], normal: [0, 1]}}";
+    if (!cs.IsMap())
+      fail(cs, "visual: contacts must map constraint names to contacts", contact_example);
+    std::vector<std::string> unilateral;
+    for (const auto& [name, holonomic] : unilateral_gaps(root)) unilateral.push_back(name);
+    std::set<std::string> seen;
+    for (const auto& kv : cs) {
+      VisualContact c;
+      c.name = kv.first.Scalar();
+      const std::string what = "visual contact '" + c.name + "'";
+      if (std::find(unilateral.begin(), unilateral.end(), c.name) == unilateral.end())
+        fail(kv.first, what + ": there is no unilateral constraint of that name",
+             unilateral.empty() ? "declare it under constraints: with unilateral: true"
+                                : "the unilateral constraints are " + join(unilateral));
+      if (!seen.insert(c.name).second) fail(kv.first, what + " is given twice");
+      const YAML::Node m = kv.second;
+      if (!m.IsMap()) fail(m, what + " must be a mapping", contact_example);
+      check_keys(m, {"at", "normal"}, what);
+      const YAML::Node at = m["at"], normal = m["normal"];
+      if (!at || !at.IsSequence() || at.size() < 2 || at.size() > 3)
+        fail(at ? at : m, what + ": at must be [x, y] or [x, y, z] (the contact point)",
+             contact_example);
+      if (!normal || !normal.IsSequence() || normal.size() != at.size())
+        fail(normal ? normal : m,
+             what +
+                 ": normal must have as many components as at (the direction the contact "
+                 "pushes)",
+             contact_example);
+      c.dimensions = int(at.size());
+      const char* axes[] = {"x", "y", "z"};
+      const char* normals[] = {"nx", "ny", "nz"};
+      for (std::size_t i = 0; i < at.size(); ++i) {
+        model.visual.columns.push_back("visual.contact." + c.name + "." + axes[i]);
+        outputs.push_back(expression(at[i], what + " " + axes[i]));
+      }
+      for (std::size_t i = 0; i < normal.size(); ++i) {
+        model.visual.columns.push_back("visual.contact." + c.name + "." + normals[i]);
+        outputs.push_back(expression(normal[i], what + " normal"));
+      }
+      model.visual.contacts.push_back(c);
     }
   }
   if (const YAML::Node ls = v["links"]) {

@@ -7,6 +7,7 @@
 
 #include "ukdyn/modelfile/model.hpp"
 #include "ukdyn/multibody/multibody.hpp"
+#include "ukdyn/multibody/tree.hpp"
 
 namespace ukdyn {
 namespace {
@@ -115,9 +116,40 @@ std::string viewer_scene_json(const Model& model) {
     frames.push_back(frame);
   }
   scene["frames"] = frames;
+  nlohmann::json contacts = nlohmann::json::array();
+  for (const VisualContact& c : model.visual.contacts) {
+    if (c.dimensions == 3) planar = false;
+    contacts.push_back({{"name", c.name}, {"dimensions", c.dimensions}});
+  }
   scene["points"] = points;
   scene["links"] = links;
   scene["trails"] = model.visual.trails;
+  if (!contacts.empty()) scene["contacts"] = contacts;
+  // a robot (robot: or a .urdf): each link's joint, parents first — its origin in the parent's
+  // frame (xyz, quaternion w x y z), kind, axis and coordinates — from which the page computes
+  // the links' frames (the same forward kinematics as tree::forward_kinematics)
+  if (model.robot) {
+    const tree::Tree& tr = *model.robot;
+    const std::vector<std::string>& names = tr.coordinate_names();
+    nlohmann::json links = nlohmann::json::array();
+    for (Index i = 0; i < tr.link_count(); ++i) {
+      const tree::Link& l = tr.link(i);
+      const Eigen::Quaterniond& r = l.joint.R_PJ;
+      nlohmann::json coordinates = nlohmann::json::array();
+      for (int k = 0; k < tr.dofs(i); ++k)
+        coordinates.push_back(names[std::size_t(tr.offset(i) + k)]);
+      links.push_back({{"name", l.name},
+                       {"parent", tr.parent(i)},
+                       {"joint", l.joint.name},
+                       {"kind", tree::joint_kind_name(l.joint.kind)},
+                       {"p", vector3(l.joint.p_PJ)},
+                       {"r", {r.w(), r.x(), r.y(), r.z()}},
+                       {"axis", vector3(l.joint.axis)},
+                       {"coordinates", coordinates}});
+    }
+    scene["robot"] = {{"name", tr.name()}, {"links", links}};
+    planar = false;
+  }
   scene["planar"] = planar;
   scene["controlled"] = bool(model.controller);
   return scene.dump();

@@ -50,6 +50,16 @@ struct VisualFrame {
   double size = 0.0;        ///< the axes' length; 0: the viewer's choice
 };
 
+/// A unilateral contact drawn by the viewer (`visual: contacts:`, docs/contact.md): its point
+/// is the columns `visual.contact.<name>.x`, `.y` (, `.z`), the direction its force pushes the
+/// system `visual.contact.<name>.nx`, `.ny` (, `.nz`; normalized by the viewer); the force's
+/// magnitude is the constraint's multiplier `lambda.<name>` (the normal force when the gap is a
+/// distance), and its impacts are marked there.
+struct VisualContact {
+  std::string name;    ///< the unilateral constraint's name
+  int dimensions = 2;  ///< 2 (z = 0) or 3
+};
+
 /// The `visual:` information of a model. Immutable after the reader fills it.
 struct ModelVisual {
   /// multibody models: each body's solids by body name (none: drawn as its equivalent box)
@@ -58,6 +68,7 @@ struct ModelVisual {
   std::vector<VisualPoint> points;
   std::vector<std::pair<std::string, std::string>> links;
   std::vector<VisualFrame> frames;
+  std::vector<VisualContact> contacts;  ///< the unilateral contacts drawn (`visual: contacts:`)
   /// the points' and frames' columns, `visual.<name>.x` …: the outputs of Model::output_program
   /// after the output expressions (the last columns of trajectory.csv)
   std::vector<std::string> columns;

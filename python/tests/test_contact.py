@@ -1,0 +1,260 @@
+# SPDX-License-Identifier: BSD-3-Clause
+"""Unilateral contacts as users see them (issue #31 item 5, docs/contact.md), from Python: the
+bouncing ball of examples/models against its closed forms, the work_impact channel, the gap
+columns, the contacts plot's data and the viewer page with its contacts in headless Chromium.
+
+Closed forms (h0 = 1, g = 9.81, e = 0.5, m = 0.5): the first impact at t0 = sqrt(2 h0 / g) with
+v0 = sqrt(2 g h0); the k-th rebound leaves at e^k v0, so the k-th apex is e^(2k) h0 and the
+flight between impacts k and k + 1 lasts 2 e^k v0 / g; the impacts accumulate at
+t_inf = t0 (1 + e) / (1 - e), where the ball comes to rest with the floor carrying m g. Each
+impact takes (1 - e^2) of the kinetic energy: after k impacts work_impact = -m g h0 (1 - e^(2k)),
+and at rest all of m g h0.
+"""
+
+import json
+import math
+import pathlib
+import subprocess
+
+import numpy as np
+import pytest
+
+import ukdyn
+from test_viewer import Page, browser  # noqa: F401 (the browser fixture)
+from ukdyn import plotting, viewer
+
+H0, G, E, M = 1.0, 9.81, 0.5, 0.5
+T0 = math.sqrt(2 * H0 / G)
+V0 = math.sqrt(2 * G * H0)
+T_INF = T0 * (1 + E) / (1 - E)
+
+
+def impact_time(k):
+    """The time of the k-th impact (k = 1, 2, …)."""
+    return T0 + sum(2 * E ** j * V0 / G for j in range(1, k))
+
+
+@pytest.fixture(scope="module")
+def ball():
+    return ukdyn.load("bouncing_ball").simulate()
+
+
+def _impacts(result):
+    return [e for e in result.contact_events if e["kind"] == "impact"]
+
+
+def test_impact_times_and_speeds_are_the_closed_forms(ball):
+    impacts = _impacts(ball)
+    # the rest criterion (approach below 1e-6 of the first) ends the sequence near k = 20
+    assert 15 <= len(impacts) <= 25
+    for k, e in enumerate(impacts, start=1):
+        assert e["contact"] == "floor"
+        assert e["t"] == pytest.approx(impact_time(k), rel=1e-9, abs=1e-11)
+        assert e["speed_before"] == pytest.approx(-E ** (k - 1) * V0, rel=1e-8)
+        assert e["speed_after"] == pytest.approx(E ** k * V0, rel=1e-8)
+
+
+def test_apex_heights_are_e_to_the_2k_h0(ball):
+    """Between impacts k and k + 1 the flight keeps y + y'^2 / (2 g) = e^(2k) h0 (its apex), at
+    every sample; the highest sample of the flight is within (g/2) (dt/2)^2 below it."""
+    t, y, v = ball["t"], ball["y"], ball["y_dot"]
+    times = [e["t"] for e in _impacts(ball)]
+    for k in range(1, 5):
+        inside = (t > times[k - 1] + 1e-9) & (t < times[k] - 1e-9)
+        assert inside.sum() >= 3
+        apex = E ** (2 * k) * H0
+        np.testing.assert_allclose(y[inside] + v[inside] ** 2 / (2 * G), apex, rtol=1e-8)
+        assert apex - 0.5 * G * 0.005 ** 2 - 1e-9 <= y[inside].max() <= apex + 1e-9
+
+
+def test_rest_time_and_the_floor_carrying_the_ball(ball):
+    rest = [e for e in ball.contact_events if e["kind"] == "rest"]
+    assert len(rest) == 1
+    # early by the flights left out, about 1e-6 t_inf (docs/contact.md)
+    assert rest[0]["t"] == pytest.approx(T_INF, rel=1e-5)
+    assert rest[0]["t"] < T_INF
+    after = ball["t"] > rest[0]["t"] + 0.01
+    assert after.sum() > 50
+    np.testing.assert_allclose(ball["y"][after], 0.0, atol=1e-9)
+    np.testing.assert_allclose(ball["lambda.floor"][after], M * G, rtol=1e-8)
+    assert any("came to rest" in n for n in ball.stats["notes"])
+
+
+def test_work_impact_is_the_energy_the_impacts_took(ball):
+    t, w = ball["t"], ball["work_impact"]
+    times = [e["t"] for e in _impacts(ball)]
+    for k in range(0, 6):  # between impacts k and k + 1 (before the first: none taken)
+        lo = times[k - 1] if k else 0.0
+        inside = (t > lo + 1e-9) & (t < times[k] - 1e-9)
+        np.testing.assert_allclose(w[inside], -M * G * H0 * (1 - E ** (2 * k)), rtol=1e-9,
+                                   atol=1e-12)
+    assert w[-1] == pytest.approx(-M * G * H0, rel=1e-9)
+    # the energy balance closes with it: E(t) - E(0) = W_impact (nothing else does work)
+    energy = ball["energy"]
+    np.testing.assert_allclose(energy - energy[0], w, atol=1e-8)
+
+
+def test_gap_column_is_the_constraints_expression(ball):
+    """gap.floor is the gap g = y: positive in flight, zero at the impacts and at rest."""
+    np.testing.assert_array_equal(ball["gap.floor"], ball["y"])
+    assert ball["gap.floor"].min() >= -1e-9
+    assert ball["gap.floor"][0] == H0
+
+
+def test_contacts_plot_draws_the_forces_gaps_and_impacts(ball):
+    pytest.importorskip("matplotlib")
+    import matplotlib
+    matplotlib.use("Agg")
+    fig = ball.figures()["contacts"]
+    lines = {line.get_gid(): line for ax in fig.axes for line in ax.get_lines()}
+    np.testing.assert_array_equal(lines["force.floor"].get_ydata(), ball["lambda.floor"])
+    np.testing.assert_array_equal(lines["gap.floor"].get_xdata(), ball["t"])
+    np.testing.assert_array_equal(lines["gap.floor"].get_ydata(), ball["y"])
+    marked = lines["impacts.floor"].get_xdata()
+    kinds = [e["kind"] for e in ball.contact_events]
+    assert len(marked) == kinds.count("impact") + kinds.count("rest")
+    np.testing.assert_allclose(marked[:5], [impact_time(k) for k in range(1, 6)], rtol=1e-9)
+    np.testing.assert_array_equal(lines["impacts.floor"].get_ydata(), 0.0)
+    matplotlib.pyplot.close(fig)
+
+
+def test_a_run_without_contacts_has_no_contacts_plot():
+    pytest.importorskip("matplotlib")
+    import matplotlib
+    matplotlib.use("Agg")
+    figures = ukdyn.load("pendulum").simulate(t_end=0.2).figures()
+    try:
+        assert "contacts" not in figures
+    finally:
+        for f in figures.values():
+            matplotlib.pyplot.close(f)
+
+
+def test_the_commands_contacts_plot_reads_summary_json(cli, tmp_path):
+    """ukdyn run writes contacts.png, and its data (read back as the command's script reads
+    it: trajectory.csv with summary.json) marks the impacts of summary.json's contact_events."""
+    pytest.importorskip("matplotlib")
+    out = tmp_path / "run"
+    proc = subprocess.run([cli, "run", "--example", "bouncing_ball", "-o", str(out),
+                           "--no-viewer"], capture_output=True, text=True, timeout=180)
+    assert proc.returncode == 0, proc.stderr
+    assert (out / "contacts.png").stat().st_size > 5000
+    summary = json.loads((out / "summary.json").read_text())
+    events = summary["contact_events"]
+    assert [e["contact"] for e in events] == ["floor"] * len(events)
+    assert events[0]["kind"] == "impact"
+    assert events[0]["t"] == pytest.approx(T0, rel=1e-9)
+    assert events[-1]["kind"] == "rest"
+    import matplotlib
+    matplotlib.use("Agg")
+    table = plotting.read_csv(str(out / "trajectory.csv"))
+    fig = plotting.contacts_figure(table, plotting.read_summary(str(out / "summary.json")))
+    marked = [line for ax in fig.axes for line in ax.get_lines()
+              if line.get_gid() == "impacts.floor"][0].get_xdata()
+    np.testing.assert_allclose(marked, [e["t"] for e in events], rtol=1e-15)
+    matplotlib.pyplot.close(fig)
+
+
+def test_viewer_data_of_the_contacts(ball):
+    """The page's data: the contact's point and normal, its force lambda.floor (rounded to 4
+    digits), and every impact of the run with its time."""
+    data = viewer.scene_data(ball.scene, ball.names, ball._columns,
+                             contact_events=ball.contact_events)
+    (contact,) = data["contacts"]
+    assert contact["name"] == "floor"
+    shown = np.array(data["t"])
+    y = np.interp(shown, ball["t"], ball["y"])
+    np.testing.assert_allclose(contact["q"][1], y, atol=1e-4)
+    assert set(contact["n"][0]) == {0} and set(contact["n"][1]) == {1}
+    at_rest = shown > T_INF + 0.01
+    np.testing.assert_allclose(np.array(contact["force"])[at_rest], M * G, rtol=1e-3)
+    kinds = [e["kind"] for e in ball.contact_events]
+    assert len(data["impacts"]) == kinds.count("impact") + kinds.count("rest")
+    assert data["impacts"][0] == {"t": round(T0, 7 - 1 - math.floor(math.log10(T0))),
+                                  "contact": "floor"}
+    assert data["force_scale"]["contact"] == pytest.approx(M * G, rel=1e-3)
+
+
+def test_visual_contact_errors_name_the_contact():
+    base = ("name: b\ncoordinates: [y]\nkinetic_energy: 0.5*y_dot^2\npotential_energy: y\n"
+            "constraints:\n  - {name: floor, holonomic: y, unilateral: true}\n"
+            "  - {name: rod, holonomic: y - 2}\ninitial: {q: {y: 1}}\nvisual:\n  contacts:\n")
+    cases = [("    wall: {at: [0, y], normal: [0, 1]}\n", "no unilateral constraint of that name"),
+             ("    rod: {at: [0, y], normal: [0, 1]}\n", "no unilateral constraint of that name"),
+             ("    floor: {at: [0, y], normal: [1]}\n", "normal must have as many components"),
+             ("    floor: {at: [0], normal: [0, 1]}\n", "at must be [x, y] or [x, y, z]"),
+             ("    floor: {at: [0, y], normal: [0, 1], size: 2}\n", "unknown key 'size'")]
+    for text, message in cases:
+        with pytest.raises(ukdyn.ModelError) as info:
+            ukdyn.parse(base + text)
+        assert message in str(info.value)
+        assert "visual contact" in str(info.value)
+
+
+def test_the_viewer_draws_the_contact_and_flashes_the_impacts(browser, ball, tmp_path):  # noqa: F811
+    path = tmp_path / "bouncing_ball.html"
+    ball.save_animation(path)
+    page = Page(browser, path)
+    assert page.errors() == []
+    t = page.js("return ukdyn.data.t")
+    # the frame just after the first impact: a ring flashes; long before it, none
+    after = next(i for i, v in enumerate(t) if v >= T0)
+    page.js("ukdyn.setFrame(arguments[0])", after)
+    assert page.js("return ukdyn.impactsShown()") == 1
+    from test_viewer import _mask
+    ring = _mask(page.pixels(), "#ffb000", tolerance=0.08).sum()
+    assert ring > 20
+    page.js("ukdyn.setFrame(arguments[0])", 2)
+    assert page.js("return ukdyn.impactsShown()") == 0
+    assert _mask(page.pixels(), "#ffb000", tolerance=0.08).sum() == 0
+    # at rest the floor's force m g is drawn: the contact colour shows, and goes when turned off
+    page.js("ukdyn.setFrame(arguments[0])", len(t) - 1)
+    assert _mask(page.pixels(), "#0050ff").sum() > 30
+    page.js("ukdyn.show('contact', false)")
+    assert _mask(page.pixels(), "#0050ff").sum() == 0
+    page.js("ukdyn.show('contact', true)")
+    assert page.errors() == []
+    page.save("bouncing_ball.png")
+
+
+def test_cam_follower_jumps_at_the_closed_form():
+    """examples/models/cam_follower_jump.yaml: the cam h(t) = a (1 - cos w t) pushes with
+    N = m (a w^2 cos w t + g) until that is zero, at cos w t* = -g / (a w^2); the follower leaves
+    at the cam's speed a w sin w t*, flies freely, lands where its parabola meets h(t) (found
+    here by bisection) with a plastic impact, and leaves again one cam period after t*."""
+    m, g, a, w = 0.2, 9.81, 0.02, 30.0
+    result = ukdyn.load("cam_follower_jump").simulate()
+    events = result.contact_events
+    assert events[0]["kind"] == "release" and events[0]["contact"] == "cam"
+    t_star = math.acos(-g / (a * w * w)) / w
+    assert events[0]["t"] == pytest.approx(t_star, abs=1e-9)
+    y_star, v_star = a * (1 - math.cos(w * t_star)), a * w * math.sin(w * t_star)
+    assert v_star == pytest.approx(0.5031, abs=1e-4)
+
+    def lift(t):
+        return a * (1 - math.cos(w * t))
+
+    def flight(t):
+        return y_star + v_star * (t - t_star) - 0.5 * g * (t - t_star) ** 2
+
+    lo, hi = t_star + 1e-3, t_star + 0.19  # the parabola is above the cam, then below
+    assert flight(lo) > lift(lo) and flight(hi) < lift(hi)
+    for _ in range(200):
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if flight(mid) > lift(mid) else (lo, mid)
+    landing = [ev for ev in events if ev["kind"] == "impact"][0]
+    assert landing["t"] == pytest.approx(lo, abs=1e-8)
+    approach = (v_star - g * (lo - t_star)) - a * w * math.sin(w * lo)
+    assert landing["speed_before"] == pytest.approx(approach, rel=1e-6)
+    assert landing["speed_after"] == pytest.approx(0.0, abs=1e-9)
+    again = [ev for ev in events if ev["kind"] == "release"][1]
+    assert again["t"] == pytest.approx(t_star + 2 * math.pi / w, abs=1e-9)
+    t, y, lam = result["t"], result["y"], result["lambda.cam"]
+    before = t < t_star - 1e-9
+    np.testing.assert_allclose(lam[before], m * (a * w * w * np.cos(w * t[before]) + g),
+                               rtol=1e-7, atol=1e-9)
+    flying = (t > t_star + 1e-9) & (t < landing["t"] - 1e-9)
+    assert flying.sum() > 10
+    np.testing.assert_allclose(y[flying], [flight(s) for s in t[flying]], atol=1e-9)
+    np.testing.assert_allclose(lam[flying], 0.0, atol=1e-12)
+    assert result["gap.cam"][flying].min() > 0
