@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // Events at a rank drop (issue #29 item 1): a switch of a non-smooth force located at a dead
-// centre of a linkage never ends ok off the branch the motion is on, the governor's swing
+// centre of a linkage, a constraint released and another activated there, and a slow passage
+// of it never end ok off the branch the motion is on, the governor's swing
 // through its dead centre is right on every adaptive integrator, and a step size that
 // collapses near a dead centre is blamed on the singular configuration. The mechanism is the twin
 // arms of tests/data/twin_arms_coulomb.yaml: at the bottom (th1 = th2 = 0) the two link rows
