@@ -24,6 +24,7 @@
 #include <stdexcept>
 #include <string>
 #include <utility>
+#include <vector>
 
 #include "control/internal.hpp"
 #include "dynamics/internal.hpp"
@@ -117,14 +118,22 @@ struct ControlledPlant {
 
 // The controlled system's per-workspace scratch (its CallableScratch): the control workspace,
 // the plant's own scratch, and the run's control statistics. (The plant's callables get the
-// plant part of the state, x.head(n), as a view: nothing is copied.)
+// plant part of the state, x.head(n), as a view: nothing is copied.) When the plant is the
+// controller's model (the same description, as when no mismatch is simulated), the plant's
+// callables use the model workspace's scratch: the plant's evaluation and the model's, at the
+// same state, then share what the callables keep per state (a tree's kinematics, M and Q).
 struct ControlledScratch final : CallableScratch {
   explicit ControlledScratch(const ControlledPlant& p)
-      : cws(p.ctrl), plant(p.plant.make_scratch()), q_last(p.n), qd_last(p.n) {
+      : cws(p.ctrl),
+        own_plant(p.plant.id() == p.ctrl.model().id() ? nullptr : p.plant.make_scratch()),
+        plant(own_plant ? own_plant.get() : cws.model.callables.get()),
+        q_last(p.n),
+        qd_last(p.n) {
     stats.first_not_met = std::numeric_limits<double>::quiet_NaN();
   }
   ControlWorkspace cws;
-  std::unique_ptr<CallableScratch> plant;  // the plant's callables' scratch (may be null)
+  std::unique_ptr<CallableScratch> own_plant;  // the plant's callables' scratch (may be null)
+  CallableScratch* plant;                      // own_plant, or the model workspace's
   VectorXd q_last, qd_last;  // (n) the state of the last control evaluation, at t_last
   double t_last = 0.0;
   ControlStatistics stats;
@@ -133,7 +142,7 @@ struct ControlledScratch final : CallableScratch {
 
 CallableScratch* plant_scratch(CallableScratch* controlled) {
   auto* w = dynamic_cast<ControlledScratch*>(controlled);
-  return w != nullptr ? w->plant.get() : nullptr;
+  return w != nullptr ? w->plant : nullptr;
 }
 
 void ControlledPlant::force(ControlledScratch& w, const Eigen::Ref<const VectorXd>& xq,
@@ -143,7 +152,7 @@ void ControlledPlant::force(ControlledScratch& w, const Eigen::Ref<const VectorX
   ControlStatistics& stats = w.stats;
   // the plant's part of the state, as views (no copy)
   const Eigen::Ref<const VectorXd> q = xq.head(n), qd = xqd.head(n);
-  plant.forces(q, qd, t, w.plant.get(), Q.head(n));
+  plant.forces(q, qd, t, w.plant, Q.head(n));
   const ControlStatus s = compute_control(ctrl, cws, q, qd, t);
   ++stats.evaluations;
   // where the control was last evaluated (a failed run's diagnosis looks there)
@@ -266,7 +275,13 @@ System build_controlled(const std::shared_ptr<const ControlledPlant>& st,
   const auto scratch = [](CallableScratch* s) -> ControlledScratch& {
     return static_cast<ControlledScratch&>(*s);
   };
-  // M = diag(M_plant, I)
+  // M = diag(M_plant, I), factorized along the plant's mass tree (if any) with the auxiliary
+  // coordinates as roots
+  if (!plant.mass_tree().empty()) {
+    std::vector<Index> parent = plant.mass_tree();
+    parent.resize(std::size_t(n + aux), -1);
+    b.mass_tree(std::move(parent));
+  }
   if (plant.mass_is_constant()) {
     MatrixXd M = MatrixXd::Identity(n + aux, n + aux);
     plant.mass_matrix(VectorXd::Zero(n), 0.0, M.topLeftCorner(n, n));
@@ -274,12 +289,12 @@ System build_controlled(const std::shared_ptr<const ControlledPlant>& st,
   } else if (aux == 0) {
     b.mass_matrix([st, scratch](const Eigen::Ref<const VectorXd>& q, double t, CallableScratch* s,
                                 Eigen::Ref<MatrixXd> M) {
-      st->plant.mass_matrix(q, t, scratch(s).plant.get(), M);
+      st->plant.mass_matrix(q, t, scratch(s).plant, M);
     });
   } else {
     b.mass_matrix([st, n, aux, scratch](const Eigen::Ref<const VectorXd>& x, double t,
                                         CallableScratch* s, Eigen::Ref<MatrixXd> M) {
-      st->plant.mass_matrix(x.head(n), t, scratch(s).plant.get(), M.topLeftCorner(n, n));
+      st->plant.mass_matrix(x.head(n), t, scratch(s).plant, M.topLeftCorner(n, n));
       M.topRightCorner(n, aux).setZero();
       M.bottomLeftCorner(aux, n).setZero();
       M.bottomRightCorner(aux, aux).setIdentity();
@@ -296,19 +311,19 @@ System build_controlled(const std::shared_ptr<const ControlledPlant>& st,
         plant.switch_names(),
         [st, n, scratch](const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd,
                          double t, CallableScratch* s, Eigen::Ref<VectorXd> g) {
-          st->plant.switching_functions(q.head(n), qd.head(n), t, scratch(s).plant.get(), g);
+          st->plant.switching_functions(q.head(n), qd.head(n), t, scratch(s).plant, g);
         });
   }
   if (plant.has_potential()) {
     if (aux == 0) {
       b.potential_energy(
           [st, scratch](const Eigen::Ref<const VectorXd>& q, double t, CallableScratch* s) {
-            return st->plant.potential_energy(q, t, scratch(s).plant.get());
+            return st->plant.potential_energy(q, t, scratch(s).plant);
           });
     } else {
       b.potential_energy(
           [st, n, scratch](const Eigen::Ref<const VectorXd>& x, double t, CallableScratch* s) {
-            return st->plant.potential_energy(x.head(n), t, scratch(s).plant.get());
+            return st->plant.potential_energy(x.head(n), t, scratch(s).plant);
           });
     }
   }
@@ -318,13 +333,13 @@ System build_controlled(const std::shared_ptr<const ControlledPlant>& st,
       b.external_power([st, scratch](const Eigen::Ref<const VectorXd>& q,
                                      const Eigen::Ref<const VectorXd>& qd, double t,
                                      CallableScratch* s) {
-        return st->plant.external_power(q, qd, t, scratch(s).plant.get());
+        return st->plant.external_power(q, qd, t, scratch(s).plant);
       });
     } else {
       b.external_power([st, n, scratch](const Eigen::Ref<const VectorXd>& x,
                                         const Eigen::Ref<const VectorXd>& xd, double t,
                                         CallableScratch* s) {
-        return st->plant.external_power(x.head(n), xd.head(n), t, scratch(s).plant.get());
+        return st->plant.external_power(x.head(n), xd.head(n), t, scratch(s).plant);
       });
     }
   }
@@ -376,7 +391,7 @@ System build_controlled(const std::shared_ptr<const ControlledPlant>& st,
           NonIdealFn([fn, scratch](const Eigen::Ref<const VectorXd>& q,
                                    const Eigen::Ref<const VectorXd>& qd, double t,
                                    const IdealForceInfo& ideal, Eigen::Ref<VectorXd> C) {
-            const IdealForceInfo plant_ideal(ideal, scratch(ideal.scratch()).plant.get());
+            const IdealForceInfo plant_ideal(ideal, scratch(ideal.scratch()).plant);
             fn(q, qd, t, plant_ideal, C);
           })));
       continue;
@@ -386,7 +401,7 @@ System build_controlled(const std::shared_ptr<const ControlledPlant>& st,
         NonIdealFn([fn, n, scratch](const Eigen::Ref<const VectorXd>& x,
                                     const Eigen::Ref<const VectorXd>& xd, double t,
                                     const IdealForceInfo& ideal, Eigen::Ref<VectorXd> C) {
-          const IdealForceInfo plant_ideal(ideal, scratch(ideal.scratch()).plant.get());
+          const IdealForceInfo plant_ideal(ideal, scratch(ideal.scratch()).plant);
           fn(x.head(n), xd.head(n), t, plant_ideal, C.head(n));
         })));
   }

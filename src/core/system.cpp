@@ -198,6 +198,11 @@ SystemBuilder& SystemBuilder::external_power(PowerScratchFn fn) {
   return *this;
 }
 
+SystemBuilder& SystemBuilder::mass_tree(std::vector<Index> parent) {
+  mass_tree_ = std::move(parent);
+  return *this;
+}
+
 SystemBuilder& SystemBuilder::accounts_for_energy(bool accounts) {
   accounts_for_energy_ = accounts;
   return *this;
@@ -231,10 +236,25 @@ System SystemBuilder::build() const {
         "ukdyn::SystemBuilder::build: give either mass_matrix or "
         "mass_block, not both");
   }
+  // the mass tree: a parent before each coordinate (or none)
+  if (!mass_tree_.empty() && Index(mass_tree_.size()) != n_) {
+    throw std::invalid_argument("ukdyn::SystemBuilder::build: mass_tree gives " +
+                                format_number(Index(mass_tree_.size())) +
+                                " parents, the system has " + format_number(n_) + " coordinates");
+  }
+  for (std::size_t k = 0; k < mass_tree_.size(); ++k) {
+    if (mass_tree_[k] < -1 || mass_tree_[k] >= Index(k)) {
+      throw std::invalid_argument("ukdyn::SystemBuilder::build: mass_tree gives coordinate " +
+                                  format_number(Index(k)) + " the parent " +
+                                  format_number(mass_tree_[k]) +
+                                  "; it must be -1 (a root) or a coordinate before it");
+    }
+  }
   System s;
   s.n_ = n_;
   s.names_ = names_;
   s.mass_ = mass_;
+  s.mass_tree_ = mass_tree_;
   s.mass_constant_ = has_constant_mass_;
   if (!mass_blocks_.empty()) {
     // blocks tile [0, n): sorted by offset, each starting where the previous one ended

@@ -71,6 +71,10 @@ class DenseEngine final : public EngineOps {
     if (scale > 0.0 && !positive_semidefinite(sys, ws, 1e-10 * scale)) {
       return fail(ws, Status::kMassNotPositiveDefinite, "M", -1, t);
     }
+    // (the completions M + Aᵀ G A leave a tree's pattern: dense Cholesky from now on)
+    if constexpr (std::is_same_v<D, FundamentalDecomposition>) {
+      ws.decomposition.set_mass_tree({});
+    }
     ws.mass_singular = true;
     ws.mass_factorized = true;
     return Status::kOk;

@@ -10,6 +10,13 @@
 //   textbook  the dense engine on TextbookDecomposition (eqs. 9–12 as printed):
 //             reference/textbook_engine.cpp
 //
+// A system may declare its M's branch-induced sparsity (SystemBuilder::mass_tree, given by a
+// kinematic tree's System): the workspace then hands the tree to the dense engine's
+// decomposition once, when it is made (FundamentalDecomposition::set_mass_tree), and the same
+// dense engine factorizes M = Lᵀ L along the branches (Featherstone's LTL, linalg/tree_ltl.hpp:
+// O(Σ d_k²) instead of O(n³/3), no fill-in) with every product of the fundamental equation
+// taken with F = Lᵀ; a singular M falls back to the dense completion.
+//
 // An engine holds no state: its buffers are the workspace's (M, A or ws.sparse, the
 // decompositions), so one engine object serves every workspace and thread. Each operation is
 // what one stage, the projections or the simulation needs; its cost is that of the engine's

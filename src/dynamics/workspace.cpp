@@ -148,6 +148,8 @@ Workspace::Workspace(const System& sys, const SolverOptions& options)
   lambda_tmp.setZero(m);
   decomposition.resize(use_sparse ? 0 : n, use_sparse ? 0 : m);
   decomposition.set_threshold(options.rank_threshold);
+  // a tree's M factorized along its branches (SystemBuilder::mass_tree; dense engine)
+  if (!use_sparse) decomposition.set_mass_tree(sys.mass_tree());
   e.setZero(m);
   lambda.setZero(m);
   Qc_ideal.setZero(n);

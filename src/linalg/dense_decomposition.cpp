@@ -11,6 +11,7 @@
 #include <string>
 
 #include "linalg/safe_norm.hpp"
+#include "linalg/tree_ltl.hpp"
 #include "ukdyn/core/format.hpp"
 #include "ukdyn/core/status.hpp"
 
@@ -117,6 +118,7 @@ void FundamentalDecomposition::resize(Index n, Index m) {
   inv_ldiag_.resize(n);
   inv_tdiag_.resize(m);
   row_scale_.setOnes(m);
+  if (Index(parent_.size()) != n) parent_.clear();
   rank_ = 0;
   max_pivot_ = 0.0;
   info_ = Eigen::InvalidInput;
@@ -133,9 +135,35 @@ FundamentalDecomposition& FundamentalDecomposition::set_threshold(double thresho
   return *this;
 }
 
+FundamentalDecomposition& FundamentalDecomposition::set_mass_tree(
+    const std::vector<Index>& parent) {
+  const char* who = "ukdyn::FundamentalDecomposition::set_mass_tree";
+  if (!parent.empty() && Index(parent.size()) != n_) {
+    throw std::invalid_argument(std::string(who) + ": expected a parent for each of the " +
+                                format_number(n_) + " coordinates (or none), got " +
+                                format_number(Index(parent.size())));
+  }
+  for (std::size_t k = 0; k < parent.size(); ++k) {
+    if (parent[k] < -1 || parent[k] >= Index(k)) {
+      throw std::invalid_argument(std::string(who) + ": the parent of coordinate " +
+                                  format_number(Index(k)) + " is " + format_number(parent[k]) +
+                                  "; it must be -1 (a root) or a coordinate before it");
+    }
+  }
+  parent_ = parent;  // (an empty parent keeps the capacity: no allocation)
+  return *this;
+}
+
 FundamentalDecomposition& FundamentalDecomposition::compute_mass(
     const Eigen::Ref<const MatrixXd>& M) {
   UKDYN_CHECK(M.rows() == n_ && M.cols() == n_, "compute_mass: M has the wrong size");
+  if (!parent_.empty()) {
+    // M = Lᵀ L along the tree's branches (linalg/tree_ltl.hpp), 1 / L_kk for the solves
+    L_ = M;
+    const bool ok = detail::tree_ltl_in_place(L_.data(), parent_.data(), inv_ldiag_.data(), n_);
+    info_ = ok ? Eigen::Success : Eigen::NumericalIssue;
+    return *this;
+  }
   // M = L Lᵀ, in place on the lower triangle of L_. Large n: Eigen's blocked kernel (the one
   // behind Eigen::LLT, called directly: an LLT object leaves its info member uninitialized until
   // compute(), so moving an unused one is undefined behaviour, and it also computes a norm we do
@@ -154,9 +182,11 @@ FundamentalDecomposition& FundamentalDecomposition::compute_constraints(
     const Eigen::Ref<const MatrixXd>& A) {
   UKDYN_CHECK(A.rows() == m_ && A.cols() == n_, "compute_constraints: A has the wrong size");
   UKDYN_CHECK(info_ == Eigen::Success, "compute_constraints: M is not factorized");
-  // Wᵀ = L⁻¹ Aᵀ
+  // Wᵀ = L⁻¹ Aᵀ (F⁻¹ Aᵀ along a mass tree)
   X_ = A.transpose();
-  if (n_ <= kSmall) {
+  if (!parent_.empty()) {
+    for (Index j = 0; j < m_; ++j) factor_solve(X_.col(j).data());
+  } else if (n_ <= kSmall) {
     for (Index j = 0; j < m_; ++j) {
       lower_solve(L_.data(), n_, inv_ldiag_.data(), X_.col(j).data(), n_);
     }
@@ -325,14 +355,42 @@ void FundamentalDecomposition::apply_z(Eigen::Ref<VectorXd> x, bool transpose) c
   }
 }
 
+void FundamentalDecomposition::factor_solve(double* x) const {
+  if (parent_.empty()) {
+    lower_solve(L_.data(), n_, inv_ldiag_.data(), x, n_);
+  } else {
+    detail::tree_lt_solve(L_.data(), parent_.data(), inv_ldiag_.data(), x, n_);
+  }
+}
+
+void FundamentalDecomposition::factor_transpose_solve(double* x) const {
+  if (parent_.empty()) {
+    lower_transpose_solve(L_.data(), n_, inv_ldiag_.data(), x, n_);
+  } else {
+    detail::tree_l_solve(L_.data(), parent_.data(), inv_ldiag_.data(), x, n_);
+  }
+}
+
+void FundamentalDecomposition::factor_multiply(const double* x, double* y) const {
+  if (parent_.empty()) {
+    lower_multiply(L_.data(), n_, x, y, n_);
+  } else {
+    detail::tree_lt_multiply(L_.data(), parent_.data(), x, y, n_);
+  }
+}
+
+void FundamentalDecomposition::solve_factor(Eigen::Ref<MatrixXd> X) const {
+  UKDYN_CHECK(X.rows() == n_ && info_ == Eigen::Success, "solve_factor: wrong size or no factor");
+  for (Index j = 0; j < X.cols(); ++j) factor_solve(X.col(j).data());  // (columns contiguous)
+}
+
 void FundamentalDecomposition::solve_mass(const Eigen::Ref<const VectorXd>& f,
                                           Eigen::Ref<VectorXd> x) const {
   UKDYN_CHECK(f.size() == n_ && x.size() == n_, "solve_mass: wrong sizes");
   // x = L⁻ᵀ L⁻¹ f
   x = f;
-  const MatrixXd& L = L_;
-  lower_solve(L.data(), n_, inv_ldiag_.data(), x.data(), n_);
-  lower_transpose_solve(L.data(), n_, inv_ldiag_.data(), x.data(), n_);
+  factor_solve(x.data());
+  factor_transpose_solve(x.data());
 }
 
 void FundamentalDecomposition::apply_pinv(const Eigen::Ref<const VectorXd>& e,
@@ -363,10 +421,9 @@ void FundamentalDecomposition::solve_ideal(const Eigen::Ref<const VectorXd>& e,
   // y = W⁺ e (leaves u = T⁻ᵀ w_{1:r} in wm_)
   apply_pinv(e, wn_);
   // Qc_ideal = L y;  q'' − a = L⁻ᵀ y
-  const MatrixXd& L = L_;
-  lower_multiply(L.data(), n_, wn_.data(), Qc.data(), n_);
+  factor_multiply(wn_.data(), Qc.data());
   dqdd = wn_;
-  lower_transpose_solve(L.data(), n_, inv_ldiag_.data(), dqdd.data(), n_);
+  factor_transpose_solve(dqdd.data());
   // lambda = D Π Zᵀ [T⁻¹ u; 0]
   upper_solve(X_.data(), n_, inv_tdiag_.data(), wm_.data(), r);
   wm_.tail(m_ - r).setZero();
@@ -386,8 +443,7 @@ void FundamentalDecomposition::project_nonideal(const Eigen::Ref<const VectorXd>
   const Index r = rank_;
   // v = Qᵀ L⁻¹ C
   wn_ = C;
-  const MatrixXd& L = L_;
-  lower_solve(L.data(), n_, inv_ldiag_.data(), wn_.data(), n_);
+  factor_solve(wn_.data());
   apply_q(wn_, true);
   // lambda = −D G_D⁺ D A M⁻¹ C = −D Π Zᵀ [T⁻¹ v_{1:r}; 0]
   wm_.head(r) = wn_.head(r);
@@ -403,9 +459,9 @@ void FundamentalDecomposition::project_nonideal(const Eigen::Ref<const VectorXd>
   wn_.head(r).setZero();
   apply_q(wn_, false);
   // Qc_nonideal = L c⊥;  q''_nonideal = L⁻ᵀ c⊥
-  lower_multiply(L.data(), n_, wn_.data(), Qc.data(), n_);
+  factor_multiply(wn_.data(), Qc.data());
   dqdd = wn_;
-  lower_transpose_solve(L.data(), n_, inv_ldiag_.data(), dqdd.data(), n_);
+  factor_transpose_solve(dqdd.data());
 }
 
 }  // namespace ukdyn

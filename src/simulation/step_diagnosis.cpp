@@ -44,9 +44,9 @@ ConstraintRank constraint_rank(const System& sys, Workspace& ws, const std::vect
   c.rank = ws.rank;
   c.rows = ws.active_rows;
   if (ws.is_sparse() || ws.active_rows == 0 || r_ref <= 0) return c;
-  // W = L⁻¹ Aᵀ: its singular values are those of B = A M^{-1/2}
-  const MatrixXd W =
-      ws.decomposition.matrix_llt().triangularView<Eigen::Lower>().solve(ws.A.transpose());
+  // Wᵀ = F⁻¹ Aᵀ (M = F Fᵀ): its singular values are those of B = A M^{-1/2}
+  MatrixXd W = ws.A.transpose();
+  ws.decomposition.solve_factor(W);
   const VectorXd sv = Eigen::JacobiSVD<MatrixXd>(W).singularValues();
   if (sv.size() > 0 && sv[0] > 0) c.gap = sv[std::min(r_ref, Index(sv.size())) - 1] / sv[0];
   return c;

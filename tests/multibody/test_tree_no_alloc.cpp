@@ -1,5 +1,6 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // No heap allocation per evaluation of a tree's system once the workspace exists.
+#include <cmath>
 #include <string>
 
 #include <gtest/gtest.h>
@@ -26,6 +27,29 @@ TEST(Tree, EvaluationsDoNotAllocate) {
   for (int i = 0; i < 10; ++i) forward_dynamics(sys, ws, q, qd, 0.01 * i);
   EXPECT_EQ(testing::stop_counting_allocations(), 0);
   EXPECT_EQ(ws.status, Status::kOk);
+}
+
+// the floating-base humanoid, whose M the engine factorizes along the tree's branches
+// (SystemBuilder::mass_tree) with its unit quaternion's row: no allocation either
+TEST(Tree, HumanoidEvaluationsDoNotAllocate) {
+  const Tree tree =
+      load_urdf(std::string(UKDYN_TEST_DATA_DIR) + "/../../examples/robots/humanoid.urdf");
+  const System sys = make_system(tree);
+  ASSERT_FALSE(sys.mass_tree().empty());
+  Workspace ws(sys);
+  const Index n = tree.coordinate_count();
+  VectorXd q = tree.neutral(), qd = VectorXd::Zero(n);
+  qd.segment<4>(3) << 0, 0.15, -0.1, 0.25;
+  for (Index i = 7; i < n; ++i) {
+    q[i] = 0.3 * std::sin(double(i));
+    qd[i] = 0.8 * std::cos(double(3 * i));
+  }
+  forward_dynamics(sys, ws, q, qd, 0.0);
+  testing::start_counting_allocations();
+  for (int i = 0; i < 10; ++i) forward_dynamics(sys, ws, q, qd, 0.01 * i);
+  EXPECT_EQ(testing::stop_counting_allocations(), 0);
+  EXPECT_EQ(ws.status, Status::kOk);
+  EXPECT_GT(ws.qdd.norm(), 0.1);
 }
 
 // the loop closures (point, distance) and the task-space requirement, under the control law

@@ -142,6 +142,9 @@ class System {
   /// The diagonal blocks of M, by increasing offset, tiling [0, n) (empty unless
   /// mass_is_block_diagonal()).
   const std::vector<MassBlock>& mass_blocks() const { return mass_blocks_; }
+  /// The tree of M's sparsity (SystemBuilder::mass_tree): parent[k] of each coordinate, or
+  /// empty when M is factorized densely.
+  const std::vector<Index>& mass_tree() const { return mass_tree_; }
   /// The per-workspace scratch of the callables (SystemBuilder::scratch), or nullptr when they
   /// need none. A Workspace calls it once, when constructed.
   std::unique_ptr<CallableScratch> make_scratch() const { return scratch_ ? scratch_() : nullptr; }
@@ -240,6 +243,7 @@ class System {
   MassMatrixScratchFn mass_;
   bool mass_constant_ = false;
   std::vector<MassBlock> mass_blocks_;
+  std::vector<Index> mass_tree_;
   ForceScratchFn forces_;
   PotentialScratchFn potential_;
   PowerScratchFn external_power_;
@@ -284,6 +288,15 @@ class SystemBuilder {
   /// evaluation of a workspace the block is no longer checked, and the evaluations skip the
   /// regular factorization attempt and the semi-definiteness check (docs/singular-mass.md).
   SystemBuilder& singular_mass_block(Index offset, Index size, MassBlockFn fn);
+  /// Declares M's branch-induced sparsity: parent[k] is coordinate k's parent in a tree of the
+  /// coordinates (-1 for a root, else a coordinate before k), and M_ij = 0 for every (q, t)
+  /// unless one of i, j is an ancestor of the other — a kinematic tree's M in joint
+  /// coordinates, the coordinates of one multi-DOF joint a chain (tree::system_builder gives
+  /// it). The dense engine then factorizes M along the branches, M = Lᵀ L with no fill-in,
+  /// O(Σ_k d_k²) instead of O(n³/3) (Featherstone's LTL; linalg/decomposition.hpp). The caller
+  /// guarantees the pattern (entries outside it are not read). An empty parent (the default)
+  /// is the dense Cholesky. Checked in build().
+  SystemBuilder& mass_tree(std::vector<Index> parent);
   /// Q(q, q', t) as a callable (default: zero).
   SystemBuilder& forces(ForceFn fn);
   /// Q(q, q', t) as a callable of the workspace's scratch (SystemBuilder::scratch).
@@ -327,6 +340,7 @@ class SystemBuilder {
   MatrixXd mass_constant_;
   bool has_constant_mass_ = false;
   std::vector<MassBlock> mass_blocks_;
+  std::vector<Index> mass_tree_;
   ForceScratchFn forces_;
   PotentialScratchFn potential_;
   PowerScratchFn external_power_;

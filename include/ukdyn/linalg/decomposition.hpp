@@ -16,6 +16,12 @@
 ///     c = L⁻¹ C,  c⊥ = c − Q_r Q_rᵀ c:   Qc_nonideal = L c⊥,   q''_nonideal = L⁻ᵀ c⊥
 ///
 /// Cost: compute_mass O(n³/3); compute_constraints O(m n² + 2 m² n); each solve O(n² + n m).
+///
+/// A kinematic tree's M (set_mass_tree): M_ij = 0 unless one of i, j is an ancestor of the other
+/// in a tree of the coordinates. Then the factor is Featherstone's M = Lᵀ L along the branches
+/// (linalg/tree_ltl.hpp) and every "L" above reads F = Lᵀ (any F with M = F Fᵀ gives the same
+/// results): no fill-in, compute_mass O(Σ_k d_k²) and each product with F, F⁻¹ or F⁻ᵀ
+/// O(Σ_k d_k), d_k the number of ancestors of coordinate k.
 /// (When the rows are equilibrated, every quantity below is that of D W, see "Row
 /// equilibration".)
 /// Memory is reserved by the constructor; no method allocates afterwards.
@@ -39,6 +45,7 @@
 /// configuration-dependent loss of rank is detected once it is within 1e-10 of singular.
 #pragma once
 #include <cmath>
+#include <vector>
 
 #include <Eigen/Cholesky>
 #include <Eigen/Core>
@@ -60,9 +67,21 @@ class FundamentalDecomposition {
   /// Reserves memory for n coordinates and m constraint rows (allocates).
   void resize(Index n, Index m);
 
-  /// Factorizes M = L Lᵀ (reads the lower triangle). On failure info() is NumericalIssue.
-  /// Cost O(n³/3).
+  /// Factorizes M = L Lᵀ (reads the lower triangle), or M = F Fᵀ along the tree of
+  /// set_mass_tree(). On failure info() is NumericalIssue. Cost O(n³/3), or O(Σ_k d_k²).
   FundamentalDecomposition& compute_mass(const Eigen::Ref<const MatrixXd>& M);
+  /// Declares the sparsity of the M's to come: parent[k] is coordinate k's parent in a tree of
+  /// the coordinates (−1 for a root, else 0 <= parent[k] < k), and M_ij = 0 unless one of i, j
+  /// is an ancestor of the other — a kinematic tree's M in joint coordinates, the coordinates
+  /// of one multi-DOF joint a chain (SystemBuilder::mass_tree). compute_mass then factorizes M
+  /// = F Fᵀ, F = Lᵀ, along the branches (see the file comment); entries of M outside the pattern
+  /// are ignored (the caller guarantees there are none). An empty parent goes back to the dense
+  /// Cholesky (without allocating). Takes effect at the next compute_mass.
+  /// @throws std::invalid_argument when parent has neither n nor 0 entries or an entry is out
+  /// of range, naming it. Allocates (once).
+  FundamentalDecomposition& set_mass_tree(const std::vector<Index>& parent);
+  /// The tree of set_mass_tree (empty: dense Cholesky).
+  const std::vector<Index>& mass_tree() const { return parent_; }
   /// Decomposes Wᵀ = L⁻¹ Aᵀ for A (m × n) with the last factorized M. Cost O(m n² + 2 m² n).
   FundamentalDecomposition& compute_constraints(const Eigen::Ref<const MatrixXd>& A);
   /// Both of the above.
@@ -92,8 +111,12 @@ class FundamentalDecomposition {
   /// Number of coordinates n and constraint rows m this object was sized for.
   Index coordinate_count() const { return n_; }
   Index rows() const { return m_; }
-  /// The Cholesky factor L (lower triangle of the returned matrix; the upper is unspecified).
+  /// The Cholesky factor L (lower triangle of the returned matrix; the upper is unspecified);
+  /// with a mass tree, the L of M = Lᵀ L (see the file comment and solve_factor).
   const MatrixXd& matrix_llt() const { return L_; }
+  /// X ← F⁻¹ X for the factor in force, M = F Fᵀ (F = L, or Lᵀ with a mass tree), column by
+  /// column (X has n rows): W = A F⁻ᵀ = (F⁻¹ Aᵀ)ᵀ. Cost O(n² k), or O(k Σ_k d_k).
+  void solve_factor(Eigen::Ref<MatrixXd> X) const;
 
   /// x = M⁻¹ f. Cost O(n²).
   void solve_mass(const Eigen::Ref<const VectorXd>& f, Eigen::Ref<VectorXd> x) const;
@@ -113,6 +136,11 @@ class FundamentalDecomposition {
   void apply_pinv(const Eigen::Ref<const VectorXd>& e, Eigen::Ref<VectorXd> y);
 
  private:
+  // x ← F⁻¹ x, x ← F⁻ᵀ x and y ← F x for the factor in force (M = F Fᵀ: F = L, or Lᵀ along
+  // the mass tree)
+  void factor_solve(double* x) const;
+  void factor_transpose_solve(double* x) const;
+  void factor_multiply(const double* x, double* y) const;
   // x ← Q x (forward = true) or x ← Qᵀ x, with the first rank_ reflectors of the QR step
   void apply_q(Eigen::Ref<VectorXd> x, bool transpose) const;
   // x ← Z x or x ← Zᵀ x (identity when rank_ == m_)
@@ -123,7 +151,9 @@ class FundamentalDecomposition {
   void factor_rz();
 
   Index n_ = 0, m_ = 0;
-  MatrixXd L_;            // (n × n) Cholesky factor M = L Lᵀ in the lower triangle
+  MatrixXd L_;                 // (n × n) Cholesky factor M = L Lᵀ in the lower triangle (or the
+                               // L of M = Lᵀ L along parent_)
+  std::vector<Index> parent_;  // (n or 0) the mass tree of set_mass_tree; empty: dense
   MatrixXd X_;            // (n × m) Wᵀ, then R/T above the diagonal, reflectors below / right
   VectorXd tau_;          // (m) QR reflector coefficients
   VectorXd ztau_;         // (m) RZ reflector coefficients
