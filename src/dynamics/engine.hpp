@@ -95,8 +95,8 @@ class EngineOps {
   virtual void decompose_constraints(Workspace& ws) const = 0;
   /// Numerical rank of A from the last decompose_constraints.
   virtual Index rank(const Workspace& ws) const = 0;
-  /// σ_r / σ_1 estimate of W from the last decompose_constraints (NaN where the engine has
-  /// none; see Workspace::rank_margin).
+  /// σ_r / σ_1 estimate of W from the last decompose_constraints (or the sparse engine's margin;
+  /// NaN where the engine has none; see Workspace::rank_margin).
   virtual double rank_margin(const Workspace& ws) const = 0;
   /// dq = L⁻ᵀ W⁺ e, Qc = L W⁺ e, lambda = G⁺ e.
   virtual void solve_ideal(Workspace& ws, const VectorXd& e, VectorXd& dq, VectorXd& Qc,

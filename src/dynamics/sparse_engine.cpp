@@ -3,8 +3,6 @@
 // G = W Wᵀ (SparseDecomposition, linalg/sparse.hpp; docs/sparse.md). M and A of the workspace
 // stay empty; their values live in ws.sparse. Costs O(bodies) per evaluation for chains and trees
 // with loop closures.
-#include <limits>
-
 #include "dynamics/engine.hpp"
 #include "dynamics/internal.hpp"
 #include "ukdyn/linalg/sparse.hpp"
@@ -121,9 +119,7 @@ class SparseEngine final : public EngineOps {
 
   void decompose_constraints(Workspace& ws) const override { ws.sparse->compute_constraints(); }
   Index rank(const Workspace& ws) const override { return ws.sparse->rank(); }
-  double rank_margin(const Workspace&) const override {
-    return std::numeric_limits<double>::quiet_NaN();
-  }
+  double rank_margin(const Workspace& ws) const override { return ws.sparse->rank_margin(); }
   void solve_ideal(Workspace& ws, const VectorXd& e, VectorXd& dq, VectorXd& Qc,
                    VectorXd& lambda) const override {
     ws.sparse->solve_ideal(e, dq, Qc, lambda);

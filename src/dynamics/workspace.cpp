@@ -18,6 +18,30 @@
 
 namespace ukdyn {
 
+namespace {
+
+// Engine::kAuto's choice, by the measured cost of one evaluation (callgrind; docs/sparse.md,
+// "Choice of engine"): the sparse engine for a block-diagonal M under Algorithm::kDefault with
+// at most kAutoMaxDenseRows rows from constraints without columns() (each couples every body),
+// when either n >= sparse_threshold (cheaper on every structure tried) or M has two or more
+// blocks and m <= n (several bodies without more rows than coordinates: 0.6–0.8× the dense
+// engine's instructions from two bodies on; with m > n the null-space basis of the redundant
+// rows dominates and the dense engine stays). Cost O(constraints).
+bool auto_picks_sparse(const System& sys, const SolverOptions& options) {
+  if (options.algorithm != Algorithm::kDefault || !sys.mass_is_block_diagonal()) return false;
+  // rows of constraints without columns() are dense rows of the sparse A: each couples every
+  // body, so many of them make G dense and the sparse engine slower than the dense one
+  Index dense_rows = 0;
+  for (const auto& c : sys.constraints()) {
+    if (c.model().columns().empty()) dense_rows += c.rows();
+  }
+  if (dense_rows > kAutoMaxDenseRows) return false;
+  if (sys.coordinate_count() >= options.sparse_threshold) return true;
+  return sys.mass_blocks().size() >= 2 && sys.constraint_rows() <= sys.coordinate_count();
+}
+
+}  // namespace
+
 Workspace::Workspace(const System& sys, const SolverOptions& options)
     : options_(options),
       system_id_(sys.id()),
@@ -53,7 +77,7 @@ Workspace::Workspace(const System& sys, const SolverOptions& options)
         "got " +
         format_number(options.sparse_threshold));
   }
-  // the engine: sparse for a block-diagonal M from sparse_threshold coordinates on (kAuto)
+  // the engine (kAuto: auto_picks_sparse)
   bool use_sparse = false;
   switch (options.engine) {
     case Engine::kDense:
@@ -71,18 +95,9 @@ Workspace::Workspace(const System& sys, const SolverOptions& options)
       }
       use_sparse = true;
       break;
-    case Engine::kAuto: {
-      // rows of constraints without columns() are dense rows of the sparse A: each couples every
-      // body, so many of them make G dense and the sparse engine slower than the dense one
-      Index dense_rows = 0;
-      for (const auto& c : sys.constraints()) {
-        if (c.model().columns().empty()) dense_rows += c.rows();
-      }
-      use_sparse = options.algorithm == Algorithm::kDefault && sys.mass_is_block_diagonal() &&
-                   sys.coordinate_count() >= options.sparse_threshold &&
-                   dense_rows <= kAutoMaxDenseRows;
+    case Engine::kAuto:
+      use_sparse = auto_picks_sparse(sys, options);
       break;
-    }
   }
   const Index n = n_, m = m_, K = sys.constraint_count();
   if (use_sparse) {

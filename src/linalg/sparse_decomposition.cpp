@@ -586,6 +586,8 @@ void SparseDecomposition::factor_G() {
   const double tau2 = threshold_ * threshold_;
   Index dropped = 0;
   rechecked_ = 0;
+  // the smallest d_k / G_kk of the kept rows (sin² of the angle of w_k to the rows before it)
+  double min_ratio = 1.0;
   for (int k = 0; k < m; ++k) {
     double* Y = Y_.data();
     int top = m;
@@ -627,9 +629,11 @@ void SparseDecomposition::factor_G() {
     // only to rows with no coupling before them has a pivot with a known small roundoff
     // (pivot_margin_, +inf for the others): clear of the threshold by it, it is independent.
     const double gkk = Gx_[std::size_t(Gdiag_[std::size_t(k)])];
+    double d_margin = d;  // the pivot for the rank margin: the recomputed one where there is one
     if (gkk != 0.0 && d > tau2 * gkk && d <= kSuspect * gkk &&
-        d <= (tau2 + pivot_margin_[std::size_t(k)]) * gkk && recompute_pivot(k) <= tau2 * gkk) {
-      d = 0.0;
+        d <= (tau2 + pivot_margin_[std::size_t(k)]) * gkk) {
+      d_margin = recompute_pivot(k);
+      if (d_margin <= tau2 * gkk) d = 0.0;
     }
     if (gkk == 0.0) {
       dropped_[std::size_t(k)] = 2;  // zero row of A (an inactive constraint)
@@ -642,9 +646,12 @@ void SparseDecomposition::factor_G() {
     } else {
       dropped_[std::size_t(k)] = 0;
       D_[std::size_t(k)] = 1.0 / d;
+      min_ratio = std::min(min_ratio, d_margin / gkk);
     }
   }
   rank_ = m_ - dropped;
+  // rank margin: min over the kept rows of ‖w_k⊥‖ / ‖w_k‖ (1 without kept rows)
+  rank_margin_ = std::sqrt(min_ratio);
 }
 
 double SparseDecomposition::recompute_pivot(int k) {

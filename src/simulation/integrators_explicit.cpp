@@ -55,8 +55,8 @@ struct StageProbe {
 // the motion is smooth through the pose: the method integrates x' = f(π(x)), whose solution
 // from a consistent state is the same. It is on for a step when Workspace::rank_margin (σ_r/σ_1
 // estimated by the decomposition) at the step's start, or extrapolated to its end from the
-// last two steps, is below kMargin; where the margin is unknown (NaN: the sparse engine,
-// kTextbook), for the retry of a rejected step and the kAfterRejection steps after it.
+// last two steps, is below kMargin; where the margin is unknown (NaN: Algorithm::kTextbook),
+// for the retry of a rejected step and the kAfterRejection steps after it.
 struct StageProjection {
   static constexpr double kMargin = kSingularMargin;
   static constexpr int kAfterRejection = 3;

@@ -1013,7 +1013,7 @@ class Run {
   // smooth along a branch: a change of q' (in the M-norm) beyond kBranchFactor times the
   // duration times the larger M-norm of q'' at the two ends — and beyond 1e-3 of |q'| — is a
   // jump onto another branch (one of the twin arms reversed: the mirror branch), which no
-  // status ok may hide. Costs two evaluations a passage; nothing elsewhere (the sparse engine,
+  // status ok may hide. Costs two evaluations a passage; nothing elsewhere (Algorithm::kTextbook,
   // whose margin is NaN, is not checked).
   bool leaves_branch(double t, const double* x) {
     const double margin = ws_.rank_margin;

@@ -550,17 +550,22 @@ TEST(SparseEngine, CoulombStickSlipEqualsDense) {
 }
 
 TEST(SparseEngine, ChoiceOfEngine) {
-  const Chain small = closed_chain(wavy_angles(4, 0.1), 1);   // n = 12
-  const Chain large = closed_chain(wavy_angles(40, 0.1), 1);  // n = 120
-  const Chain at = closed_chain(wavy_angles(8, 0.1), 1);      // n = 24, the default threshold
+  const Chain small = closed_chain(wavy_angles(4, 0.1), 1);      // n = 12, m = 10
+  const Chain redundant = closed_chain(wavy_angles(4, 0.1), 3);  // n = 12, m = 14 > n
+  const Chain large = closed_chain(wavy_angles(40, 0.1), 1);     // n = 120
+  const Chain at = closed_chain(wavy_angles(8, 0.1), 1);         // n = 24, the default threshold
   EXPECT_TRUE(Workspace(at.sys).is_sparse());
-  EXPECT_FALSE(Workspace(closed_chain(wavy_angles(7, 0.1), 1).sys).is_sparse());
-  EXPECT_FALSE(Workspace(small.sys).is_sparse());
+  // below the threshold: sparse for two or more bodies with m <= n (measured cheaper, issue #29
+  // item 5); dense for more rows than coordinates and for a single body
+  EXPECT_TRUE(Workspace(closed_chain(wavy_angles(7, 0.1), 1).sys).is_sparse());
+  EXPECT_TRUE(Workspace(small.sys).is_sparse());
+  EXPECT_FALSE(Workspace(redundant.sys).is_sparse());
+  EXPECT_FALSE(Workspace(closed_chain(wavy_angles(1, 0.1), 0).sys).is_sparse());
   EXPECT_TRUE(Workspace(large.sys).is_sparse());
   EXPECT_FALSE(Workspace(large.sys, dense_options()).is_sparse());
-  EXPECT_TRUE(Workspace(small.sys, sparse_options()).is_sparse());
-  EXPECT_TRUE(Workspace(small.sys, SolverOptions{.sparse_threshold = 12}).is_sparse());
-  EXPECT_FALSE(Workspace(small.sys, SolverOptions{.sparse_threshold = 13}).is_sparse());
+  EXPECT_TRUE(Workspace(redundant.sys, sparse_options()).is_sparse());
+  EXPECT_TRUE(Workspace(redundant.sys, SolverOptions{.sparse_threshold = 12}).is_sparse());
+  EXPECT_FALSE(Workspace(redundant.sys, SolverOptions{.sparse_threshold = 13}).is_sparse());
   // the textbook algorithm is dense
   EXPECT_FALSE(Workspace(large.sys, SolverOptions{.algorithm = Algorithm::kTextbook}).is_sparse());
   const auto error_of = [](const System& sys, const SolverOptions& o) -> std::string {

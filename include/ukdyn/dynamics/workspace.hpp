@@ -48,9 +48,9 @@ inline constexpr Index kAutoMaxDenseRows = 8;
 
 /// Which engine carries the default algorithm (docs/sparse.md).
 enum class Engine {
-  /// kSparse when M is block-diagonal (SystemBuilder::mass_block), the algorithm is kDefault,
-  /// n >= SolverOptions::sparse_threshold and at most kAutoMaxDenseRows constraint rows come
-  /// from constraints without columns(); kDense otherwise.
+  /// kSparse when M is block-diagonal (SystemBuilder::mass_block), the algorithm is kDefault, at
+  /// most kAutoMaxDenseRows rows come from constraints without columns(), and n >= sparse_threshold
+  /// or M has two or more blocks and m <= n (docs/sparse.md, "Choice of engine"); else kDense.
   kAuto,
   kDense,  ///< dense M and A: FundamentalDecomposition (linalg/decomposition.hpp), O(n³) per
            ///< evaluation
@@ -63,10 +63,10 @@ enum class Engine {
 struct SolverOptions {
   Algorithm algorithm = Algorithm::kDefault;  ///< see Algorithm
   Engine engine = Engine::kAuto;              ///< see Engine
-  /// With Engine::kAuto, the sparse engine is used from this many coordinates on. Measured
-  /// (docs/sparse.md): from n = 24 on it was faster on every structure tried (chains: 3.9× at
-  /// n = 24; densely coupled bodies: 1.4–2.6×) except heavily redundant ones (m > n); below,
-  /// both take a few µs and the dense engine keeps its tighter rank decision. Must be >= 0.
+  /// With Engine::kAuto, the sparse engine is used from this many coordinates on (below, for two
+  /// or more mass blocks with m <= n). Measured (docs/sparse.md): from n = 24 on it was faster on
+  /// every structure tried (chains: 3.9× at n = 24; densely coupled bodies: 1.4–2.6×) except
+  /// heavily redundant ones (m > n), and below from two bodies on when m <= n. Must be >= 0.
   Index sparse_threshold = 24;
   /// Pivot k of the decomposition of A L⁻ᵀ counts as zero when |R_kk| <= rank_threshold · |R_00|
   /// (see linalg/decomposition.hpp). Must lie in (0, 1).
@@ -207,9 +207,9 @@ class Workspace {
                       ///< compute_shares)
   Index rank = 0;     ///< numerical rank of A
   /// How far A is from losing rank: the smallest kept pivot of W = A L⁻ᵀ over the largest
-  /// (FundamentalDecomposition::min_pivot() / max_pivot(), an estimate of σ_r / σ_1), 1 without
-  /// constraint rows; NaN with the sparse engine and Algorithm::kTextbook. It falls to 0 as a
-  /// closed loop approaches a singular configuration.
+  /// (FundamentalDecomposition::min_pivot() / max_pivot(), an estimate of σ_r / σ_1; the sparse
+  /// engine's: SparseDecomposition::rank_margin()), 1 without constraint rows; NaN with
+  /// Algorithm::kTextbook. It falls to 0 as a closed loop approaches a singular configuration.
   double rank_margin = 1.0;
   // --- stage 4, apply_nonideal ------------------------------------------------------------
   /// (number of non-ideal forces) force i takes part (default 1); the simulation switches a

@@ -184,6 +184,16 @@ class SparseDecomposition {
   SparseDecomposition& compute_constraints();
   /// rank A = m − d after compute_constraints.
   Index rank() const { return rank_; }
+  /// How far A is from losing rank, after compute_constraints: min over the kept rows k of
+  /// ‖w_k⊥‖ / ‖w_k‖ = (d_k / G_kk)^{1/2}, the sine of the angle between row w_k of W (of D W when
+  /// equilibrated) and the span of the rows eliminated before it (the recomputed pivot where
+  /// there is one); 1 without kept rows. The dense engine's counterpart is
+  /// FundamentalDecomposition::min_pivot() / max_pivot() (σ_r / σ_1 of W, estimated): for rows
+  /// of comparable norms both are of the order of the smallest singular value of the row-
+  /// normalized W, and both fall linearly to 0 as two rows come to coincide (a dead centre);
+  /// this one does not depend on the rows' scales. At least tau for rank() > 0. Cost O(1): the
+  /// pivots are those of the factorization.
+  double rank_margin() const { return rank_margin_; }
   /// Pivots of the last compute_constraints that were suspicious (d_k <= kSuspect G_kk) and
   /// recomputed in the space of W.
   Index rechecked_pivots() const { return rechecked_; }
@@ -274,6 +284,7 @@ class SparseDecomposition {
   MatrixXd N_;
   std::vector<int> null_rows_;  // (d_) the dropped position behind each column
   Index d_ = 0, rank_ = 0, rechecked_ = 0;
+  double rank_margin_ = 1.0;  // see rank_margin(), filled by factor_G
   double threshold_ = kDefaultThreshold;
   // scratch
   std::vector<double> wm_, wm2_, wm3_, wm4_, wn_, wn2_, wn3_;
