@@ -381,18 +381,24 @@ class Run {
   void contacts_changed(double t, double* x) {
     const auto& contacts = sys_.friction_contacts();
     separated_before_.resize(contacts.size(), 0);
+    const std::vector<unsigned char> was_open = separated_before_;
+    // the open ones first: a stick constraint left on an open contact would make the others'
+    // stick rows inconsistent (a rocking block's corner that leaves holds its x while the
+    // landing one tries to stick)
     for (std::size_t c = 0; c < contacts.size(); ++c) {
       if (!sys_.constraint(contacts[c].normal_constraint).is_unilateral()) continue;
-      const bool open = separated(c), was_open = separated_before_[c] != 0;
-      separated_before_[c] = open ? 1 : 0;
-      if (open || frictionless(c)) {
-        if (mode_[c] != ContactMode::kSliding) ++traj_.stats.events;
-        mode_[c] = ContactMode::kSliding;
-        set_slip_hint(c, VectorXd());
-        ws_.slip_hint_held[std::size_t(contacts[c].force)] = 0;
-        apply_contact_modes();
+      separated_before_[c] = separated(c) ? 1 : 0;
+      if (!separated(c) && !frictionless(c)) continue;
+      if (mode_[c] != ContactMode::kSliding) ++traj_.stats.events;
+      mode_[c] = ContactMode::kSliding;
+      set_slip_hint(c, VectorXd());
+      ws_.slip_hint_held[std::size_t(contacts[c].force)] = 0;
+    }
+    apply_contact_modes();
+    for (std::size_t c = 0; c < contacts.size(); ++c) {
+      if (!sys_.constraint(contacts[c].normal_constraint).is_unilateral() || separated(c) ||
+          frictionless(c))
         continue;
-      }
       const Index k = relative_velocity(c, t, x, velocity_);
       const bool at_rest = velocity_.head(k).norm() <= contacts[c].eps;
       if (mode_[c] == ContactMode::kSticking) {
@@ -403,7 +409,7 @@ class Run {
         apply_contact_modes();
         continue;
       }
-      if (at_rest && (was_open || mode_[c] == ContactMode::kSliding) && !try_stick(c, t, x)) {
+      if (at_rest && (was_open[c] || mode_[c] == ContactMode::kSliding) && !try_stick(c, t, x)) {
         start_sliding(c, t, x);
       }
     }
