@@ -5,6 +5,7 @@
 // events are rare, and nothing here runs in a step.
 #pragma once
 
+#include <string>
 #include <vector>
 
 #include <Eigen/Cholesky>
@@ -40,22 +41,39 @@ class ContactDynamics {
   // factor, their rows A_c, the bilateral rows A_b (the active constraints that are not
   // unilateral), X = P A_cᵀ (n × k) with P the inverse mass with A_b eliminated, and the
   // Delassus matrix W = A_c P A_cᵀ (k × k). False when M is not positive definite. O(n³).
+  // for_impact: the stick constraints of the Coulomb contacts on the set's contacts are left out
+  // of A_b (the impact's friction acts there instead: a contact that sticks may slip or leave).
   bool prepare(const System& sys, Workspace& ws, const Eigen::Ref<const VectorXd>& q,
-               const Eigen::Ref<const VectorXd>& qd, double t, const std::vector<Index>& set);
+               const Eigen::Ref<const VectorXd>& qd, double t, const std::vector<Index>& set,
+               bool for_impact = false);
 
-  // The contacts of the last prepare() that push: the LCP w = W lambda + (A_c q''_free − b_c),
-  // lambda, w >= 0, wᵀlambda = 0, q''_free the acceleration with the bilateral rows only
-  // (forward_dynamics with `set` released: it sees the run's forces, drift control and C).
-  // lambda into lambda() (k). False when the evaluation or the LCP fails.
+  // The contacts of the last prepare() that push: the LCP w = (W + F) lambda + (A_c q''_free −
+  // b_c), lambda, w >= 0, wᵀlambda = 0, q''_free the acceleration with the bilateral rows only
+  // (forward_dynamics with `set` released: it sees the run's forces, drift control and C), F the
+  // gap accelerations of the sliding friction of the contacts (column i: A_c P f_i, f_i the
+  // friction per unit lambda_i of the Coulomb contacts on contact i that slide: −mu |A_i| v_rel /
+  // |v_rel|, or along their slip hint). lambda into lambda() (k). False when the evaluation or the
+  // LCP fails, or when the friction makes W + F lose the P-property (a principal minor < 0:
+  // Painlevé's paradox, no solution or several), with failure() naming the contacts and mu.
+  // O(n k + 2^k k³) with friction (k <= kMinorsUpTo; the diagonal only beyond), O(n k) without.
   bool accelerations(const System& sys, Workspace& ws, const Eigen::Ref<const VectorXd>& q,
                      const Eigen::Ref<const VectorXd>& qd, double t);
+  // why the last accelerations() failed, when it was Painlevé's paradox (empty otherwise)
+  const std::string& failure() const { return failure_; }
+  // contacts up to which every principal minor of W + F is checked (2^k minors)
+  static constexpr Index kMinorsUpTo = 10;
 
-  // The impact of the contacts of the last prepare() at velocities qd (n, replaced by q'⁺),
+  // The impact of the contacts of the last prepare() at (q, q'⁻ = qd, t) (qd replaced by q'⁺),
   // v⁻ = their g' (k) and restitutions e (k): the LCP w = W Λ + (1 + e) v⁻ (w = v⁺ + e v⁻),
   // Λ, w >= 0, wᵀΛ = 0, and q'⁺ = q'⁻ + X Λ (A_b q'⁺ = A_b q'⁻: the bilateral constraints
-  // keep their velocities). The impulses into lambda(), g'⁺ into v_after(). False when the LCP
-  // fails.
-  bool impact(Eigen::Ref<VectorXd> qd, const Eigen::Ref<const VectorXd>& v_minus,
+  // keep their velocities). With Coulomb friction (mu > 0) on contacts of the set, the impulse
+  // D β along ±their tangents joins it (Anitescu–Potra: Σ β <= mu |A_i| Λ_i, β > 0 only against
+  // the tangential velocity after, which vanishes when the contact sticks): q'⁺ = q'⁻ + X Λ +
+  // P D β. The normal impulses into lambda(), the friction impulses' magnitudes into
+  // friction_impulse(), g'⁺ into v_after(). False when the LCP fails. O(n² (k + d)) for d
+  // directions, plus Lemke on k + d + cones variables.
+  bool impact(const System& sys, Workspace& ws, const Eigen::Ref<const VectorXd>& q,
+              Eigen::Ref<VectorXd> qd, double t, const Eigen::Ref<const VectorXd>& v_minus,
               const Eigen::Ref<const VectorXd>& e);
 
   // ½ q'ᵀ M q' with the M of the last prepare()
@@ -65,15 +83,39 @@ class ContactDynamics {
   const VectorXd& lambda() const { return lambda_; }    // (k) multipliers or impulses
   const VectorXd& slack() const { return w_; }          // (k) w of the LCP
   const VectorXd& v_after() const { return v_after_; }  // (k) g' after an impact
+  // (k) |friction impulse| of each contact in the last impact
+  const VectorXd& friction_impulse() const { return friction_impulse_; }
 
  private:
+  // P f (f an n-vector of generalized force): the acceleration it causes with the bilateral rows
+  // of the last prepare() held. O(n²) per column.
+  VectorXd apply_p(const VectorXd& f) const;
+  // the gap accelerations of the contacts' sliding friction per unit multiplier (k × k, into F_),
+  // and into mu_ each contact's coefficient (0 without sliding friction). False when none slides.
+  bool sliding_friction(const System& sys, Workspace& ws, const Eigen::Ref<const VectorXd>& q,
+                        const Eigen::Ref<const VectorXd>& qd, double t);
+  // true when constraint c is the stick constraint of a Coulomb contact on a contact of the set
+  bool stick_of_set(const System& sys, Index c) const;
+  // the tangent directions of the set's Coulomb contacts at (q, q', t) for the impact's friction
+  // (D_, their cones, v_rel⁻ along them); false when none has friction
+  bool impact_friction(const System& sys, Workspace& ws, const Eigen::Ref<const VectorXd>& q,
+                       const Eigen::Ref<const VectorXd>& qd, double t);
+  // "" when every principal minor of Mlcp is >= 0 (to roundoff), else the Painlevé message
+  std::string painleve(const System& sys, const MatrixXd& Mlcp) const;
+
   std::vector<Index> contacts_;
   std::vector<Index> set_;  // the contacts of the last prepare()
   Index n_ = 0, rows_b_ = 0;
-  MatrixXd M_, A_, A_c_, A_b_, X_, W_;
-  VectorXd b_, b_c_, lambda_, w_, v_after_;
+  MatrixXd M_, A_, A_c_, A_b_, X_, W_, Y_, F_, D_;
+  VectorXd b_, b_c_, lambda_, w_, v_after_, mu_, vt_minus_, friction_impulse_;
+  std::vector<Index> direction_cone_;  // (directions) the cone of each friction direction
+  std::vector<Index> cone_contact_;    // (cones) the contact (position in the set) of each cone
+  std::vector<double> cone_mu_;        // (cones) its coefficient
   Eigen::LLT<MatrixXd> llt_;
+  Eigen::CompleteOrthogonalDecomposition<MatrixXd> cod_;  // of G_b = A_b M⁻¹ A_bᵀ
+  std::string failure_;
   ContactLcp lcp_;
+  ContactLcp friction_lcp_;  // (the impacts' LCP with friction)
 };
 
 }  // namespace ukdyn::detail

@@ -4,11 +4,19 @@
 //   W = A_c P A_cᵀ                                 the Delassus matrix of the contacts
 //   accelerations:  w = W lambda + (A_c q''_free − b_c),  0 <= lambda ⊥ w >= 0
 //   impact:         w = W Λ + (1 + e) v⁻,             0 <= Λ ⊥ w >= 0,  q'⁺ = q'⁻ + P A_cᵀ Λ
+// and with Coulomb friction on the contacts (docs/contact.md, "Friction at contacts"): the
+// sliding friction's columns F in the accelerations' LCP (W + F not a P-matrix: Painlevé's
+// paradox, an error), the friction impulse D β in the impact's (Anitescu–Potra).
 #include <algorithm>
+#include <cmath>
+#include <string>
 #include <vector>
+
+#include <Eigen/LU>
 
 #include "dynamics/contact_dynamics.hpp"
 #include "dynamics/internal.hpp"
+#include "ukdyn/core/format.hpp"
 #include "ukdyn/dynamics/forward.hpp"
 
 namespace ukdyn::detail {
@@ -18,6 +26,16 @@ Index count_unilateral(const System& sys) {
   Index k = 0;
   for (const auto& c : sys.constraints()) k += c.is_unilateral() ? 1 : 0;
   return k;
+}
+// the friction variables of the impacts' LCP at most: ±each sliding coordinate and one cone per
+// Coulomb contact on a unilateral constraint
+Index friction_variables(const System& sys) {
+  Index count = 0;
+  for (const FrictionContact& fc : sys.friction_contacts()) {
+    if (sys.constraint(fc.normal_constraint).is_unilateral())
+      count += 2 * Index(fc.coordinates.size()) + 1;
+  }
+  return count;
 }
 }  // namespace
 
@@ -37,7 +55,9 @@ Index release_open_contacts(const System& sys, Workspace& ws, const Eigen::Ref<c
 }
 
 ContactDynamics::ContactDynamics(const System& sys)
-    : n_(sys.coordinate_count()), lcp_(count_unilateral(sys)) {
+    : n_(sys.coordinate_count()),
+      lcp_(count_unilateral(sys)),
+      friction_lcp_(count_unilateral(sys) + friction_variables(sys)) {
   for (Index k = 0; k < sys.constraint_count(); ++k) {
     if (sys.constraint(k).is_unilateral()) contacts_.push_back(k);
   }
@@ -58,8 +78,9 @@ void ContactDynamics::gap(const System& sys, Workspace& ws, Index k,
 
 bool ContactDynamics::prepare(const System& sys, Workspace& ws, const Eigen::Ref<const VectorXd>& q,
                               const Eigen::Ref<const VectorXd>& qd, double t,
-                              const std::vector<Index>& set) {
+                              const std::vector<Index>& set, bool for_impact) {
   set_ = set;
+  failure_.clear();
   const Index k = Index(set.size());
   // M and its Cholesky factor
   sys.mass_matrix(q, t, ws.callables.get(), M_);
@@ -70,6 +91,7 @@ bool ContactDynamics::prepare(const System& sys, Workspace& ws, const Eigen::Ref
   for (Index c = 0; c < sys.constraint_count(); ++c) {
     const Constraint& con = sys.constraint(c);
     if (con.is_unilateral() || !is_active(sys, ws, c, t)) continue;
+    if (for_impact && stick_of_set(sys, c)) continue;  // (the impact's friction replaces it)
     con.model().acceleration_form(q, qd, t, ws.scratch[std::size_t(c)].get(),
                                   A_.middleRows(rows_b_, con.rows()),
                                   b_.segment(rows_b_, con.rows()));
@@ -87,13 +109,12 @@ bool ContactDynamics::prepare(const System& sys, Workspace& ws, const Eigen::Ref
   }
   // X = P A_cᵀ = M⁻¹A_cᵀ − Y G_b⁺ A_b M⁻¹A_cᵀ,  Y = M⁻¹A_bᵀ, G_b = A_b Y (least squares: redundant
   // bilateral rows are allowed)
-  X_ = llt_.solve(A_c_.transpose());
   if (rows_b_ > 0) {
-    const MatrixXd Y = llt_.solve(A_b_.transpose());
-    const MatrixXd G = A_b_ * Y;
-    Eigen::CompleteOrthogonalDecomposition<MatrixXd> cod(G);
-    X_ -= Y * cod.solve(A_b_ * X_);
+    Y_ = llt_.solve(A_b_.transpose());
+    cod_.compute(A_b_ * Y_);
   }
+  X_ = A_c_.transpose();
+  for (Index i = 0; i < k; ++i) X_.col(i) = apply_p(X_.col(i));
   // W = A_c P A_cᵀ, symmetrized against roundoff
   W_ = A_c_ * X_;
   W_ = 0.5 * (W_ + W_.transpose()).eval();
@@ -120,24 +141,240 @@ bool ContactDynamics::accelerations(const System& sys, Workspace& ws,
     ws.activity_override[std::size_t(contacts_[i])] = saved[i];
   }
   if (s != Status::kOk) return false;
-  // w = W lambda + (A_c q''_free − b_c)
+  // w = (W + F) lambda + (A_c q''_free − b_c)
   const VectorXd r = A_c_ * ws.qdd - b_c_;
-  if (!lcp_.solve(W_, r)) return false;
+  failure_.clear();
+  if (sliding_friction(sys, ws, q, qd, t)) {
+    const MatrixXd Mlcp = W_ + F_;
+    failure_ = painleve(sys, Mlcp);
+    if (!failure_.empty() || !lcp_.solve(Mlcp, r)) return false;
+  } else if (!lcp_.solve(W_, r)) {
+    return false;
+  }
   lambda_ = lcp_.z();
   w_ = lcp_.w();
   return true;
 }
 
-bool ContactDynamics::impact(Eigen::Ref<VectorXd> qd, const Eigen::Ref<const VectorXd>& v_minus,
+VectorXd ContactDynamics::apply_p(const VectorXd& f) const {
+  // P f = M⁻¹f − Y G_b⁺ A_b M⁻¹f,  Y = M⁻¹A_bᵀ, G_b = A_b Y (least squares: redundant bilateral
+  // rows are allowed)
+  VectorXd x = llt_.solve(f);
+  if (rows_b_ > 0) x -= Y_ * cod_.solve(A_b_ * x);
+  return x;
+}
+
+bool ContactDynamics::sliding_friction(const System& sys, Workspace& ws,
+                                       const Eigen::Ref<const VectorXd>& q,
+                                       const Eigen::Ref<const VectorXd>& qd, double t) {
+  const Index k = Index(set_.size());
+  const auto& fcs = sys.friction_contacts();
+  bool any = false;
+  for (std::size_t c = 0; c < fcs.size(); ++c) {
+    const FrictionContact& fc = fcs[c];
+    const auto at = std::find(set_.begin(), set_.end(), fc.normal_constraint);
+    // (a sticking contact's friction is its stick constraint's rows, among the bilateral ones)
+    if (at == set_.end() || fc.mu <= 0.0 || !ws.nonideal_enabled[std::size_t(fc.force)]) continue;
+    const Index i = Index(at - set_.begin());
+    // v_rel with the contact's rows (it counts as closed here)
+    signed char& override_k = ws.activity_override[std::size_t(fc.normal_constraint)];
+    const signed char saved = override_k;
+    override_k = 1;
+    sliding_velocity(sys, ws, Index(c), q, qd, t, false);
+    override_k = saved;
+    const Index nc = Index(fc.coordinates.size());
+    const auto v = ws.sliding.col(Index(c)).head(nc);
+    const auto hint = ws.slip_hint.col(fc.force);
+    const double v2 = v.squaredNorm(), eps2 = fc.eps * fc.eps;
+    // the friction per unit N, as the law (CoulombFriction) applies it; none at rest, where the
+    // stick/slip events decide
+    VectorXd f = VectorXd::Zero(n_);
+    if (hint.squaredNorm() > 0.0 &&
+        (v2 <= 1e4 * eps2 || ws.slip_hint_held[std::size_t(fc.force)])) {
+      for (Index j : fc.coordinates) f[j] = fc.mu * hint[j];
+    } else if (v2 > 1e4 * eps2) {
+      const double scale = -fc.mu / std::sqrt(v2 + eps2);
+      for (Index r = 0; r < nc; ++r) f[fc.coordinates[std::size_t(r)]] = scale * v[r];
+    } else {
+      continue;
+    }
+    if (!any) {
+      F_.setZero(k, k);
+      mu_.setZero(k);
+    }
+    any = true;
+    // N = |A_iᵀ lambda_i| = |A_i| lambda_i for lambda_i >= 0
+    F_.col(i) += A_c_ * apply_p(A_c_.row(i).norm() * f);
+    mu_[i] = std::max(mu_[i], fc.mu);
+  }
+  return any;
+}
+
+std::string ContactDynamics::painleve(const System& sys, const MatrixXd& Mlcp) const {
+  const Index k = Mlcp.rows();
+  const double scale = std::max(W_.cwiseAbs().maxCoeff(), 1e-300);
+  // the smallest set of contacts whose principal minor is negative (beyond roundoff)
+  const Index subsets = k <= kMinorsUpTo ? (Index(1) << k) : 0;
+  std::vector<Index> worst;
+  double worst_minor = 0.0;
+  auto consider = [&](const std::vector<Index>& J) {
+    MatrixXd S(Index(J.size()), Index(J.size()));
+    for (std::size_t a = 0; a < J.size(); ++a)
+      for (std::size_t b = 0; b < J.size(); ++b) S(Index(a), Index(b)) = Mlcp(J[a], J[b]);
+    const double minor = S.determinant() / std::pow(scale, double(J.size()));
+    if (minor < -1e-10 && (worst.empty() || J.size() < worst.size())) {
+      worst = J;
+      worst_minor = minor;
+    }
+  };
+  for (Index i = 0; i < k; ++i) consider({i});
+  for (Index mask = 1; worst.empty() && mask < subsets; ++mask) {
+    std::vector<Index> J;
+    for (Index i = 0; i < k; ++i)
+      if (mask & (Index(1) << i)) J.push_back(i);
+    if (J.size() > 1) consider(J);
+  }
+  if (worst.empty()) return {};
+  std::string names;
+  for (Index i : worst) {
+    names += (names.empty() ? "'" : ", '") + sys.constraint(set_[std::size_t(i)]).name() +
+             "' (mu = " + format_number(mu_[i], 4) + ")";
+  }
+  std::string critical;
+  if (worst.size() == 1) {
+    // W_ii + mu F_ii/mu: the coefficient at which its effective compliance vanishes
+    const Index i = worst[0];
+    if (mu_[i] > 0.0 && F_(i, i) < 0.0)
+      critical = "; for this contact's angle the critical mu is " +
+                 format_number(-W_(i, i) * mu_[i] / F_(i, i), 4);
+  }
+  return "Painlevé's paradox at the contact" + std::string(worst.size() > 1 ? "s " : " ") + names +
+         ": with its sliding friction the contact problem (the LCP of the normal forces) has no "
+         "solution or several — the friction turns the contact's effective normal compliance "
+         "negative (principal minor " +
+         format_number(worst_minor, 3) + " of the normalized W + F)" + critical +
+         ". Rigid-body contact with Coulomb friction is inconsistent or indeterminate here: lower "
+         "mu, or model the contact as compliant (docs/contact.md, \"Painlevé\")";
+}
+
+bool ContactDynamics::stick_of_set(const System& sys, Index c) const {
+  for (const FrictionContact& fc : sys.friction_contacts()) {
+    if (fc.stick_constraint == c &&
+        std::find(set_.begin(), set_.end(), fc.normal_constraint) != set_.end())
+      return true;
+  }
+  return false;
+}
+
+bool ContactDynamics::impact(const System& sys, Workspace& ws, const Eigen::Ref<const VectorXd>& q,
+                             Eigen::Ref<VectorXd> qd, double t,
+                             const Eigen::Ref<const VectorXd>& v_minus,
                              const Eigen::Ref<const VectorXd>& e) {
+  const Index k = Index(set_.size());
+  friction_impulse_.setZero(k);
   // w = W Λ + (1 + e) v⁻ = v⁺ + e v⁻
   const VectorXd r = (VectorXd::Ones(e.size()) + e).cwiseProduct(v_minus);
-  if (!lcp_.solve(W_, r)) return false;
-  lambda_ = lcp_.z();
-  w_ = lcp_.w();
-  // q'⁺ = q'⁻ + P A_cᵀ Λ;  g'⁺ = g'⁻ + W Λ
-  qd += X_ * lambda_;
-  v_after_ = v_minus + W_ * lambda_;
+  if (!impact_friction(sys, ws, q, qd, t)) {
+    if (!lcp_.solve(W_, r)) return false;
+    lambda_ = lcp_.z();
+    w_ = lcp_.w();
+    // q'⁺ = q'⁻ + P A_cᵀ Λ;  g'⁺ = g'⁻ + W Λ
+    qd += X_ * lambda_;
+    v_after_ = v_minus + W_ * lambda_;
+    return true;
+  }
+  // with friction (Anitescu–Potra): z = (Λ, β, γ), the friction impulse D β along the ±tangents
+  //   w_Λ = W Λ + A_c P D β + (1 + e) v⁻              (= g'⁺ + e g'⁻)
+  //   w_β = Dᵀ P A_cᵀ Λ + Dᵀ P D β + E γ + Dᵀ v_rel⁻    (γ: the sliding speed after)
+  //   w_γ = μ̃ Λ − Eᵀ β                                  (the cone: Σ β <= mu |A_i| Λ_i)
+  const Index nb = D_.cols(), nf = Index(cone_mu_.size()), size = k + nb + nf;
+  MatrixXd Mlcp = MatrixXd::Zero(size, size);
+  VectorXd rr = VectorXd::Zero(size);
+  MatrixXd PD(n_, nb);
+  for (Index b = 0; b < nb; ++b) PD.col(b) = apply_p(D_.col(b));
+  Mlcp.topLeftCorner(k, k) = W_;
+  Mlcp.block(0, k, k, nb) = A_c_ * PD;
+  Mlcp.block(k, 0, nb, k) = D_.transpose() * X_;
+  Mlcp.block(k, k, nb, nb) = D_.transpose() * PD;
+  for (Index b = 0; b < nb; ++b) {
+    const Index f = direction_cone_[std::size_t(b)];
+    Mlcp(k + b, k + nb + f) = 1.0;
+    Mlcp(k + nb + f, k + b) = -1.0;
+  }
+  for (Index f = 0; f < nf; ++f) {
+    const Index i = cone_contact_[std::size_t(f)];
+    Mlcp(k + nb + f, i) = cone_mu_[std::size_t(f)] * A_c_.row(i).norm();
+  }
+  rr.head(k) = r;
+  rr.segment(k, nb) = vt_minus_;
+  if (!friction_lcp_.solve(Mlcp, rr)) return false;
+  lambda_ = friction_lcp_.z().head(k);
+  w_ = friction_lcp_.w().head(k);
+  const VectorXd beta = friction_lcp_.z().segment(k, nb);
+  qd += X_ * lambda_ + PD * beta;
+  v_after_ = v_minus + W_ * lambda_ + A_c_ * (PD * beta);
+  // each contact's friction impulse |D β| (on its sliding coordinates)
+  for (Index f = 0; f < nf; ++f) {
+    VectorXd sum = VectorXd::Zero(n_);
+    for (Index b = 0; b < nb; ++b)
+      if (direction_cone_[std::size_t(b)] == f) sum += beta[b] * D_.col(b);
+    friction_impulse_[cone_contact_[std::size_t(f)]] += sum.norm();
+  }
+  return true;
+}
+
+bool ContactDynamics::impact_friction(const System& sys, Workspace& ws,
+                                      const Eigen::Ref<const VectorXd>& q,
+                                      const Eigen::Ref<const VectorXd>& qd, double t) {
+  const auto& fcs = sys.friction_contacts();
+  std::vector<VectorXd> directions;
+  std::vector<double> vt;
+  direction_cone_.clear();
+  cone_contact_.clear();
+  cone_mu_.clear();
+  for (std::size_t c = 0; c < fcs.size(); ++c) {
+    const FrictionContact& fc = fcs[c];
+    const auto at = std::find(set_.begin(), set_.end(), fc.normal_constraint);
+    if (at == set_.end() || !(fc.mu > 0.0)) continue;
+    // v_rel and the contact's normals on its sliding coordinates (it counts as closed here)
+    signed char& override_k = ws.activity_override[std::size_t(fc.normal_constraint)];
+    const signed char saved = override_k;
+    override_k = 1;
+    const Index normals = sliding_velocity(sys, ws, Index(c), q, qd, t, false);
+    override_k = saved;
+    const Index nc = Index(fc.coordinates.size());
+    const VectorXd v = ws.sliding.col(Index(c)).head(nc);
+    // an orthonormal basis of the tangent space (the sliding coordinates less the normals);
+    // ±each: the friction cone exactly for one tangent, a pyramid for two
+    std::vector<VectorXd> tangents;
+    for (Index j = 0; j < nc; ++j) {
+      VectorXd e = VectorXd::Unit(nc, j);
+      remove_normals(ws, normals, e);
+      for (int pass = 0; pass < 2; ++pass)
+        for (const auto& u : tangents) e -= e.dot(u) * u;
+      if (e.norm() > 1e-10) tangents.push_back(e / e.norm());
+    }
+    if (tangents.empty()) continue;
+    const Index f = Index(cone_mu_.size());
+    cone_mu_.push_back(fc.mu);
+    cone_contact_.push_back(Index(at - set_.begin()));
+    for (const auto& u : tangents) {
+      for (const double sign : {1.0, -1.0}) {
+        VectorXd d = VectorXd::Zero(n_);
+        for (Index r = 0; r < nc; ++r) d[fc.coordinates[std::size_t(r)]] = sign * u[r];
+        directions.push_back(std::move(d));
+        vt.push_back(sign * u.dot(v));
+        direction_cone_.push_back(f);
+      }
+    }
+  }
+  if (directions.empty()) return false;
+  D_.resize(n_, Index(directions.size()));
+  vt_minus_.resize(Index(vt.size()));
+  for (std::size_t b = 0; b < directions.size(); ++b) {
+    D_.col(Index(b)) = directions[b];
+    vt_minus_[Index(b)] = vt[b];
+  }
   return true;
 }
 

@@ -47,7 +47,14 @@ double ContactEvents::value(Index i, bool gap, double t, const double* x) {
   }
   // the multiplier of the closed contact (Qc = Aᵀ lambda; pushes when > 0)
   if (forward_dynamics(sys_, ws_, q_, qd_, t) != Status::kOk) return kNaN;
-  return ws_.lambda[sys_.row_offset(k)];
+  return multiplier(k);
+}
+
+double ContactEvents::multiplier(Index k) const {
+  // the whole reaction: the ideal share and what non-ideal forces (friction pressing on the
+  // contact: a rod on a rough floor) add to it (docs/contact.md, "Friction")
+  const Index row = sys_.row_offset(k);
+  return ws_.lambda[row] + ws_.lambda_nonideal[row];
 }
 
 double ContactEvents::locate(double t0, double t1, const SegmentHooks::Dense& dense, Index i,
@@ -77,10 +84,8 @@ double ContactEvents::find(double t0, const double* x0, double t1, const double*
   // the closed contacts that still push in the step's last evaluation (read before any
   // evaluation here overwrites it)
   for (std::size_t i = 0; i < closed_.size(); ++i) {
-    pushes_[i] = closed_[i] && ws_.status == Status::kOk &&
-                         ws_.lambda[sys_.row_offset(dyn_.contacts()[i])] > 0.0
-                     ? 1
-                     : 0;
+    pushes_[i] =
+        closed_[i] && ws_.status == Status::kOk && multiplier(dyn_.contacts()[i]) > 0.0 ? 1 : 0;
   }
   for (std::size_t i = 0; i < closed_.size(); ++i) {
     double te = kNaN;
@@ -178,7 +183,7 @@ bool ContactEvents::resolve(double t, double* x, Index event, RunStatistics& sta
       std::max(1e-300, Eigen::Map<const VectorXd>(v_minus.data(), m).cwiseAbs().maxCoeff());
   // the release of a closed contact: only the closed set changes
   const bool release = event >= 0 && closed_[std::size_t(event)];
-  if (!dyn_.prepare(sys_, ws_, q, qd, t, set)) {
+  if (!dyn_.prepare(sys_, ws_, q, qd, t, set, approaching && !release)) {
     failure_ = "contacts at t = " + format_t(t) + ": the mass matrix is not positive definite";
     return false;
   }
@@ -201,7 +206,7 @@ bool ContactEvents::resolve(double t, double* x, Index event, RunStatistics& sta
     const VectorXd vm = Eigen::Map<const VectorXd>(v_minus.data(), m);
     const VectorXd qd_minus = qd;
     const double T_minus = dyn_.kinetic_energy(qd);
-    if (!dyn_.impact(qd, vm, e)) {
+    if (!dyn_.impact(sys_, ws_, q, qd, t, vm, e)) {
       failure_ = "contacts at t = " + format_t(t) + ": the impact's LCP has no solution (Siconos " +
                  "lcp_lexicolemke)";
       return false;
@@ -212,16 +217,18 @@ bool ContactEvents::resolve(double t, double* x, Index event, RunStatistics& sta
     if (dT > 1e-12 * std::max(T_minus, 1e-300)) {
       qd = qd_minus;
       e.setZero();
-      if (!dyn_.impact(qd, vm, e)) {
+      if (!dyn_.impact(sys_, ws_, q, qd, t, vm, e)) {
         failure_ = "contacts at t = " + format_t(t) +
                    ": the plastic impact's LCP has no solution " + "(Siconos lcp_lexicolemke)";
         return false;
       }
       dT = dyn_.kinetic_energy(qd) - T_minus;
       if (stats.notes.size() < 20) {
-        stats.notes.push_back("t = " + format_t(t) +
-                              ": an impact with restitution would have created energy; it was "
-                              "made plastic (e = 0), docs/contact.md");
+        stats.notes.push_back(
+            "t = " + format_t(t) + ": an impact with restitution" +
+            std::string(dyn_.friction_impulse().sum() > 0.0 ? " and friction" : "") +
+            " would have created energy; it was made plastic (e = 0), "
+            "docs/contact.md");
       }
     }
     impact_work_ += dT;
@@ -267,8 +274,10 @@ bool ContactEvents::resolve(double t, double* x, Index event, RunStatistics& sta
   if (!candidates.empty()) {
     if (!dyn_.prepare(sys_, ws_, q, qd, t, candidates) ||
         !dyn_.accelerations(sys_, ws_, q, qd, t)) {
-      failure_ = "contacts at t = " + format_t(t) +
-                 ": the LCP of the closed contacts has no solution (Siconos lcp_lexicolemke)";
+      failure_ = "contacts at t = " + format_t(t) + ": " +
+                 (dyn_.failure().empty() ? std::string("the LCP of the closed contacts has no "
+                                                       "solution (Siconos lcp_lexicolemke)")
+                                         : dyn_.failure());
       return false;
     }
     for (std::size_t j = 0; j < candidates.size(); ++j) {

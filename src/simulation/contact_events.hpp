@@ -57,6 +57,9 @@ class ContactEvents {
                 double level);
   // f of contact k at (t, x): its gap, or its multiplier in the run's evaluation
   double value(Index k, bool gap, double t, const double* x);
+  // the whole multiplier lambda + lambda_nonideal of the unilateral constraint k (a System index)
+  // in the last evaluation (pushes when > 0)
+  double multiplier(Index k) const;
 
   const System& sys_;
   Workspace& ws_;

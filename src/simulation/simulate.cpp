@@ -354,9 +354,62 @@ class Run {
     mode_.assign(contacts.size(), ContactMode::kSliding);
     apply_contact_modes();
     for (std::size_t c = 0; c < contacts.size(); ++c) {
-      if (frictionless(c)) continue;
+      if (frictionless(c) || separated(c)) continue;
       const Index k = relative_velocity(c, t, x, velocity_);
       if (velocity_.head(k).norm() <= contacts[c].eps && !try_stick(c, t, x)) {
+        start_sliding(c, t, x);
+      }
+    }
+    apply_contact_modes();
+    separated_before_.assign(contacts.size(), 0);
+    for (std::size_t c = 0; c < contacts.size(); ++c) separated_before_[c] = separated(c) ? 1 : 0;
+  }
+
+  // a Coulomb contact whose normal constraint is a unilateral contact that is open: no normal
+  // force, so no friction (N = 0), no stick and no stop events (docs/contact.md, "Friction")
+  bool separated(std::size_t c) const {
+    const Index k = sys_.friction_contacts()[c].normal_constraint;
+    return sys_.constraint(k).is_unilateral() && ws_.activity_override[std::size_t(k)] == 0;
+  }
+
+  // after an impact or release of unilateral contacts at (t, x): a Coulomb contact whose contact
+  // is open slides (its friction is zero while open: a stick constraint would hold it in the
+  // air); a closed one that an impact set sliding (|v_rel| > eps while it stuck) slides against
+  // its motion; a closed one at rest (|v_rel| <= eps: it closed, or an impact's friction stopped
+  // it) sticks when that is admissible, else starts to slide against its impending motion, as at
+  // the start of a run
+  void contacts_changed(double t, double* x) {
+    const auto& contacts = sys_.friction_contacts();
+    separated_before_.resize(contacts.size(), 0);
+    const std::vector<unsigned char> was_open = separated_before_;
+    // the open ones first: a stick constraint left on an open contact would make the others'
+    // stick rows inconsistent (a rocking block's corner that leaves holds its x while the
+    // landing one tries to stick)
+    for (std::size_t c = 0; c < contacts.size(); ++c) {
+      if (!sys_.constraint(contacts[c].normal_constraint).is_unilateral()) continue;
+      separated_before_[c] = separated(c) ? 1 : 0;
+      if (!separated(c) && !frictionless(c)) continue;
+      if (mode_[c] != ContactMode::kSliding) ++traj_.stats.events;
+      mode_[c] = ContactMode::kSliding;
+      set_slip_hint(c, VectorXd());
+      ws_.slip_hint_held[std::size_t(contacts[c].force)] = 0;
+    }
+    apply_contact_modes();
+    for (std::size_t c = 0; c < contacts.size(); ++c) {
+      if (!sys_.constraint(contacts[c].normal_constraint).is_unilateral() || separated(c) ||
+          frictionless(c))
+        continue;
+      const Index k = relative_velocity(c, t, x, velocity_);
+      const bool at_rest = velocity_.head(k).norm() <= contacts[c].eps;
+      if (mode_[c] == ContactMode::kSticking) {
+        if (at_rest) continue;
+        ++traj_.stats.events;
+        mode_[c] = ContactMode::kSliding;
+        set_slip_hint(c, VectorXd());
+        apply_contact_modes();
+        continue;
+      }
+      if (at_rest && (was_open[c] || mode_[c] == ContactMode::kSliding) && !try_stick(c, t, x)) {
         start_sliding(c, t, x);
       }
     }
@@ -377,7 +430,7 @@ class Run {
     // the rank margin at (or within the step's last stages before) t1: the step's last evaluation
     const double margin = ws_.rank_margin;
     for (std::size_t c = 0; c < contacts.size(); ++c) {
-      if (frictionless(c)) continue;
+      if (frictionless(c) || separated(c)) continue;
       double te = std::numeric_limits<double>::quiet_NaN();
       switch (mode_[c]) {
         case ContactMode::kSticking:
@@ -1349,7 +1402,8 @@ class Run {
   std::vector<double> sample_ = std::vector<double>(std::size_t(2 * n_ + works_.count));
   ProjectionOptions projection_;
   bool projecting_ = false;
-  std::vector<ContactMode> mode_;  // (contacts) what contact c does
+  std::vector<ContactMode> mode_;                // (contacts) what contact c does
+  std::vector<unsigned char> separated_before_;  // (contacts) normal contact open before an event
   MatrixXd passing_ = MatrixXd::Zero(
       n_,
       Index(sys_.friction_contacts().size()));  // (n × contacts)
@@ -1897,6 +1951,7 @@ Trajectory detail::simulate_observed(const System& sys, const Eigen::Ref<const V
         if (!contacts.handle(r.t_reached, x.data(), traj.stats)) {
           return finish(Status::kIntegratorFailure, contacts.failure(), r.t_reached);
         }
+        run.contacts_changed(r.t_reached, x.data());
         if (const Status s = run.project_drift(r.t_reached, x.data()); s != Status::kOk) {
           return finish(s, run.failure().empty() ? describe_status(sys, ws) : run.failure(),
                         r.t_reached);
