@@ -141,7 +141,11 @@ std::string project_keeping(const System& sys, VectorXd& q, VectorXd& qd, double
                             const std::vector<unsigned char>& keep_qd,
                             const std::vector<std::string>& kept_names) {
   const Index n = sys.coordinate_count();
-  Workspace ws(sys);
+  // the dense engine, whose stages fill ws.A and ws.M (the sparse one, kAuto's choice for body
+  // models, keeps them sparse): a Newton iteration once at load time
+  SolverOptions dense_engine;
+  dense_engine.engine = Engine::kDense;
+  Workspace ws(sys, dense_engine);
   std::vector<Index> free_q, free_qd;
   for (Index j = 0; j < n; ++j) {
     if (!keep_q[std::size_t(j)]) free_q.push_back(j);

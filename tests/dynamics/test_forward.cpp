@@ -471,14 +471,22 @@ TEST(BlockDiagonalAndLocal, SameMotionAsTheDenseDescription) {
   EXPECT_EQ(a.mass_blocks()[1].offset, 2);  // sorted by offset
   const VectorXd q = vec({0.3, -0.95, 0.9, -1.6, 0.2, -1.9});
   const VectorXd qd = vec({0.4, -0.2, 1.1, 0.3, -0.5, 0.7});
-  Workspace wa(a), wb(b);
+  // the dense engine on both (it fills the workspace's M, A and b), then kAuto's choice for the
+  // blocks (the sparse engine: three blocks, m <= n)
+  SolverOptions dense_engine;
+  dense_engine.engine = Engine::kDense;
+  Workspace wa(a, dense_engine), wb(b, dense_engine), wauto(a);
   ASSERT_EQ(forward_dynamics(a, wa, q, qd, 0.0), Status::kOk);
   ASSERT_EQ(forward_dynamics(b, wb, q, qd, 0.0), Status::kOk);
+  ASSERT_EQ(forward_dynamics(a, wauto, q, qd, 0.0), Status::kOk);
+  ASSERT_EQ(wa.M.rows(), wb.M.rows());
   EXPECT_NEAR((wa.M - wb.M).norm(), 0.0, 1e-15);
   EXPECT_NEAR((wa.A - wb.A).norm(), 0.0, 1e-14);  // the scatter of the local columns
   EXPECT_NEAR((wa.b - wb.b).norm(), 0.0, 1e-14);
-  EXPECT_NEAR((wa.qdd - wb.qdd).norm(), 0.0, 1e-12 * wb.qdd.norm());
-  EXPECT_NEAR((wa.Qc - wb.Qc).norm(), 0.0, 1e-12 * wb.Qc.norm());
+  for (const Workspace* w : {&wa, &wauto}) {
+    EXPECT_NEAR((w->qdd - wb.qdd).norm(), 0.0, 1e-12 * wb.qdd.norm());
+    EXPECT_NEAR((w->Qc - wb.Qc).norm(), 0.0, 1e-12 * wb.Qc.norm());
+  }
 }
 
 TEST(BlockDiagonalAndLocal, BuilderRefusesBlocksThatDoNotTileAndBadColumns) {

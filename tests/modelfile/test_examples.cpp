@@ -115,8 +115,9 @@ TEST(ExampleModels, EveryFileLoadsAndChecksClean) {
       EXPECT_TRUE(r.initial_violations.empty());
     }
     EXPECT_TRUE(r.mass_positive_definite);
-    // (a fully driven mechanism has none)
-    if (entry.path().stem() != "slider_crank") {
+    // (a fully driven mechanism has none, and so has the cam's follower while its contact is
+    // closed: its one coordinate is the cam's lift until the contact opens)
+    if (entry.path().stem() != "slider_crank" && entry.path().stem() != "cam_follower_jump") {
       EXPECT_GE(r.degrees_of_freedom, 1);
     }
   }

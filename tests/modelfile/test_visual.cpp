@@ -142,8 +142,8 @@ TEST(ModelVisual, ErrorsAreLocated) {
             "v.yaml:3:22: error: visual point 'p' must be [x, y] or [x, y, z] (expressions of the "
             "coordinates and t) (hint: bob: [L*sin(theta), -L*cos(theta)])");
   EXPECT_EQ(error_of("coordinates: [x]\nkinetic_energy: x_dot^2/2\nvisual: {meshes: []}\n"),
-            "v.yaml:3:10: error: unknown key 'meshes' in visual (hint: the keys are frames, links, "
-            "points, trails)");
+            "v.yaml:3:10: error: unknown key 'meshes' in visual (hint: the keys are contacts, frames, "
+            "links, points, trails)");
   EXPECT_EQ(
       error_of("coordinates: [x]\nkinetic_energy: x_dot^2/2\n"
                "visual: {frames: {f: {at: [x, 0]}}}\n"),

@@ -141,8 +141,9 @@ SystemBuilder system_builder(const Tree& tree_in, JointTorqueFn tau) {
                                         CallableScratch* s, Eigen::Ref<VectorXd> Q) {
     TreeScratch& ts = scratch_of(s);
     kinematics_at(*tree, q, ts);
-    // (the Q of this q, q' and t, bit for bit, is the one kept: τ is a function of them)
-    if (ts.Q_valid && t == ts.t_Q &&
+    // (the Q of this q, q' and t, bit for bit, is the one kept — only without an input τ: a
+    // user's τ may depend on more than q, q' and t, e.g. a sweep's parameters or its own state)
+    if (!tau && ts.Q_valid && t == ts.t_Q &&
         std::memcmp(qd.data(), ts.qd_Q.data(), sizeof(double) * std::size_t(qd.size())) == 0) {
       Q = ts.Q;
       return;
