@@ -12,6 +12,7 @@
 #include "dynamics/engine.hpp"
 #include "dynamics/internal.hpp"
 #include "linalg/safe_norm.hpp"
+#include "linalg/scale_class.hpp"
 #include "ukdyn/core/format.hpp"
 #include "ukdyn/dynamics/forward.hpp"
 #include "ukdyn/dynamics/projection.hpp"
@@ -57,6 +58,10 @@ ProjectionResult failed(ProjectionResult res, Status s = Status::kOk) {
   return res;
 }
 
+// a row of a constraint whose ‖a_i‖ is below this share of the constraint's largest takes the
+// largest as its scale (set_run_scales)
+constexpr double kRowFloor = 1e-3;
+
 // which rows a projection works on
 enum class Level { kPosition, kVelocity };
 
@@ -69,12 +74,16 @@ bool takes_part(const System& sys, const Workspace& ws, const ProjectionOptions&
           (level == Level::kVelocity && kind == ConstraintKind::kNonholonomic));
 }
 
-// max(1, ‖x‖∞ / reference) (1 without a reference): the state's share of a violation's scale,
-// so that the tolerance follows the roundoff floor of a state that has grown since the scales
-// were set (a body falling far from where it started)
+// max(1, class(‖x‖∞) / reference) (1 without a reference; reference the class of the run's
+// length ℓ, detail::scale_class: both 10 · 1000^k): the state's share of a violation's scale, so
+// that the tolerance follows the roundoff floor of a state that has grown out of the class of its
+// length since the scales were set (a body falling far from where it started); a comparison
+// only while the state stays in that class
 double state_factor(const Eigen::Ref<const VectorXd>& x, double reference) {
   if (!(reference > 0.0) || x.size() == 0) return 1.0;
-  return std::max(1.0, x.cwiseAbs().maxCoeff() / reference);
+  const double big = x.cwiseAbs().maxCoeff();
+  if (!(big >= detail::kScaleClassHalfStep * reference)) return 1.0;
+  return std::max(1.0, detail::scale_class(big) / reference);
 }
 
 // the violation of a projection: the largest |row| in the constraints' own units (reported) and
@@ -260,12 +269,12 @@ void set_run_scales(const System& sys, Workspace& ws, const Eigen::Ref<const Vec
   // ℓ = ‖q‖∞ (1 when every coordinate is 0: the model gives no length)
   double length = q.size() > 0 ? q.cwiseAbs().maxCoeff() : 0.0;
   if (!(length > 0.0) || !std::isfinite(length)) length = 1.0;
-  ws.phi_scale.setOnes();
-  ws.phi_dot_scale.setOnes();
+  ws.phi_scale.setConstant(10.0);  // (rows of acceleration constraints: never compared)
+  ws.phi_dot_scale.setConstant(10.0);
   // E = max(T + |V|, ‖Q‖∞ ℓ) at the state: the energy the run's forces exchange over its
   // lengths (a pendulum released at rest at V = 0 has T + |V| = 0 but m g ℓ); the unit of the
-  // work channels is the power of two nearest to it (1 when there is none). The mass scale
-  // m = 1ᵀ M 1 / n, a Rayleigh quotient of M (between its least and largest eigenvalue)
+  // work channels is its unit as a power of two (1 when there is none). The mass scale m =
+  // 1ᵀ M 1 / n, a Rayleigh quotient of M (between its least and largest eigenvalue)
   double energy = 0.0, mass = 0.0;
   if (evaluate_unconstrained(sys, ws, q, qd, t) == Status::kOk) {
     const double T = ws.mass_singular ? 0.0 : detail::kinetic_energy(ws, qd);
@@ -279,7 +288,9 @@ void set_run_scales(const System& sys, Workspace& ws, const Eigen::Ref<const Vec
   }
   ws.status = Status::kOk;
   if (!std::isfinite(energy)) energy = 0.0;
-  ws.energy_unit = energy > 0.0 ? std::exp2(std::round(std::log2(energy))) : 1.0;
+  // (the power of two nearest to its unit, detail::energy_class_unit, so that W / unit · unit
+  // is W bit for bit; 1 for a model in SI units)
+  ws.energy_unit = std::exp2(std::round(std::log2(detail::energy_class_unit(energy))));
   // v = the largest of ‖q'‖∞, the speed √(2E/m) the run's energy gives its mass scale, and
   // ℓ / duration (a run from rest covers its lengths in its duration); ℓ per unit time when
   // none of them is > 0
@@ -290,8 +301,11 @@ void set_run_scales(const System& sys, Workspace& ws, const Eigen::Ref<const Vec
   }
   if (duration > 0.0 && std::isfinite(duration)) speed = std::max(speed, length / duration);
   if (!(speed > 0.0)) speed = length;
-  ws.length_scale = length;
-  ws.speed_scale = speed;
+  // (every scale kept is a class, detail::scale_class: 10 for a model in SI units, which so
+  // keeps the tolerances in its own units, and a change of units by powers of 1000 moves each
+  // by exactly its factor)
+  ws.length_scale = detail::scale_class(length);
+  ws.speed_scale = detail::scale_class(speed);
   MatrixXd Ak;  // (once per run)
   for (Index k = 0; k < sys.constraint_count(); ++k) {
     const Constraint& c = sys.constraint(k);
@@ -305,12 +319,16 @@ void set_run_scales(const System& sys, Workspace& ws, const Eigen::Ref<const Vec
       const double a = detail::safe_norm(Ak.row(i).eval().data(), n);
       if (std::isfinite(a)) largest = std::max(largest, a);
     }
+    if (!(largest > 0.0)) largest = 1.0;
     for (Index i = 0; i < c.rows(); ++i) {
       double a = detail::safe_norm(Ak.row(i).eval().data(), n);
-      // a row that vanishes here takes its constraint's largest, or the unit
-      if (!(a > 0.0) || !std::isfinite(a)) a = largest > 0.0 ? largest : 1.0;
-      ws.phi_scale[sys.row_offset(k) + i] = a * length;
-      ws.phi_dot_scale[sys.row_offset(k) + i] = a * speed;
+      // a row that vanishes here, or nearly — below kRowFloor of its constraint's largest (a
+      // weld's rotation row about an axis its loop does not turn: ‖a_i‖ of roundoff, 1e-17) —
+      // takes that largest (the unit when all vanish): its violation is the roundoff of terms of
+      // its constraint's size, which a scale of its own ‖a_i‖ would ask a projection to go below
+      if (!(a >= kRowFloor * largest) || !std::isfinite(a)) a = largest;
+      ws.phi_scale[sys.row_offset(k) + i] = detail::scale_class(a * length);
+      ws.phi_dot_scale[sys.row_offset(k) + i] = detail::scale_class(a * speed);
     }
   }
 }

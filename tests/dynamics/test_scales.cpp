@@ -15,6 +15,7 @@
 #include <ukdyn/modelfile/model.hpp>
 #include <ukdyn/ukdyn.hpp>
 
+#include "support/closed_chain.hpp"
 #include "support/random_problem.hpp"
 
 namespace ukdyn {
@@ -35,6 +36,10 @@ System pendulum(double factor) {
                      }))
       .build();
 }
+
+// the class of a scale (src/linalg/scale_class.hpp): 10 times the power of 1000 nearest to x on
+// a logarithmic scale, computed here from its definition
+double scale_class(double x) { return 10.0 * std::pow(1e3, std::round(std::log10(x) / 3.0)); }
 
 // (the rank decision for rows of extreme factors and states of extreme size, and
 // solve_overflow_rank0.py's states: RowEquilibration.*, tests/dynamics/test_row_equilibration.cpp)
@@ -119,8 +124,9 @@ TEST(Scales, ProjectionIsRelativeToTheRowsScale) {
     const System sys = pendulum(f);
     Workspace ws(sys);
     set_run_scales(sys, ws, vec({1.0, 0.0}), vec({0.0, 0.0}), 0.0, 1.0);
-    EXPECT_NEAR(ws.phi_scale[0], 2.0 * f, 1e-15 * f);
-    EXPECT_EQ(ws.length_scale, 1.0);
+    // ‖a‖ ℓ = 2 f: its class (10 for f = 1; 1e-170 and 1e172 for 1e∓170)
+    EXPECT_NEAR(ws.phi_scale[0], scale_class(2.0 * f), 1e-15 * ws.phi_scale[0]);
+    EXPECT_EQ(ws.length_scale, 10.0);
     VectorXd q = vec({1.1, 0.2});
     const ProjectionResult r = project_positions(sys, ws, q, 0.0);
     EXPECT_TRUE(r.converged);
@@ -129,15 +135,16 @@ TEST(Scales, ProjectionIsRelativeToTheRowsScale) {
 }
 
 // `ukdyn check` judges the initial state in the scales of the run it describes (its duration
-// included), as simulate does: at q = (1, 0), q' = (5e-8, 1) the rod's phi' = 1e-7 against
-// ‖a‖ v = 2 v. Over the model's run of 1 ms, v = ℓ / duration = 1000: relative 5e-11, within
-// initial_tolerance (1e-10 and above), and the run starts; the public check without a duration
-// takes v = ‖q'‖∞ = 1: relative 5e-8, reported
+// included), as simulate does: at q = (1, 0), q' = (2e-8, 1) the rod's phi' = 4e-8 against
+// initial_tolerance (1e-10) · class(‖a‖ v) = class(2 v). Over the model's run of 1 ms, v =
+// ℓ / duration = 1000, class(2000) = 1e4: within 1e-6, and the run starts; the public check
+// without a duration takes v = max(‖q'‖∞, √(2E/m)) = 4.43, class(8.86) = 10: beyond 1e-9,
+// reported
 TEST(Scales, CheckJudgesTheInitialStateInTheRunsScales) {
   const std::string text =
       "coordinates: [x, y]\nkinetic_energy: 0.5*(x_dot^2 + y_dot^2)\npotential_energy: 9.81*y\n"
       "constraints:\n  - {name: rod, holonomic: x^2 + y^2 - 1}\n"
-      "initial: {q: {x: 1}, q_dot: {x: 5e-8, y: 1}}\nsimulate: {t_end: 0.001}\n";
+      "initial: {q: {x: 1}, q_dot: {x: 2e-8, y: 1}}\nsimulate: {t_end: 0.001}\n";
   const Model model = parse_model(text, "short.yaml");
   const CheckReport report = check_model(model);
   EXPECT_TRUE(report.initial_violations.empty())
@@ -155,8 +162,9 @@ TEST(Scales, CheckJudgesTheInitialStateInTheRunsScales) {
 
 // The speed scale comes from the run's energy, v = √(2E / m) (set_run_scales): the pendulum
 // released at rest has E = m g ℓ = 9.81 J, m = 1 kg, v = √(2 g) = 4.43 m/s whatever the
-// duration; with masses × 1e6 the same v, with lengths × 1000 (and g in mm/s²) v × 1000. A
-// mechanism with neither energy nor speed keeps ℓ / duration.
+// duration, in the class of 10; with masses × 1e6 the same v, with lengths × 1000 (and g in
+// mm/s²) v × 1000, in the class of 1e4. A mechanism with neither energy nor speed keeps
+// ℓ / duration (0.5, class 10; 0.002 for a run of 1000 s, class 0.01).
 TEST(Scales, SpeedScaleIsThatOfTheRunsEnergy) {
   for (const double duration : {1.0, 5e4}) {
     for (const auto& [L, m] : {std::pair{1.0, 1.0}, std::pair{1.0, 1e6}, std::pair{1000.0, 1.0}}) {
@@ -164,10 +172,14 @@ TEST(Scales, SpeedScaleIsThatOfTheRunsEnergy) {
       const Model model = parse_model(pendulum_text(L, 9.81 * L, m), "m.yaml");
       Workspace ws(model.system);
       set_run_scales(model.system, ws, model.q0, model.qd0, 0.0, duration);
-      EXPECT_NEAR(ws.speed_scale, std::sqrt(2.0 * 9.81) * L, 1e-12 * L);
-      EXPECT_EQ(ws.length_scale, L);
-      // the rod x² + y² − L², ‖a‖ = 2 L at (L, 0)
-      EXPECT_NEAR(ws.phi_dot_scale[0], 2.0 * L * ws.speed_scale, 1e-12 * L * L);
+      EXPECT_EQ(ws.speed_scale, 10.0 * L);  // (the class of 4.43 L)
+      EXPECT_EQ(ws.length_scale, 10.0 * L);
+      // the rod x² + y² − L², ‖a‖ = 2 L at (L, 0): the classes of 2 L² and 8.86 L² (10, 1e7)
+      EXPECT_EQ(ws.phi_scale[0], 10.0 * L * L);
+      EXPECT_EQ(ws.phi_dot_scale[0], 10.0 * L * L);
+      // the work channels' unit: E = m g L = 9.81 m L² J, the power of two nearest to the power
+      // of 1000 nearest to E / 10 (1 or 1e6)
+      EXPECT_EQ(ws.energy_unit, m * L * L == 1.0 ? 1.0 : 0x1p20);
     }
   }
   const Model still = parse_model(
@@ -176,7 +188,48 @@ TEST(Scales, SpeedScaleIsThatOfTheRunsEnergy) {
       "still.yaml");
   Workspace ws(still.system);
   set_run_scales(still.system, ws, still.q0, still.qd0, 0.0, 4.0);
-  EXPECT_EQ(ws.speed_scale, 0.5);
+  EXPECT_EQ(ws.speed_scale, 10.0);
+  set_run_scales(still.system, ws, still.q0, still.qd0, 0.0, 1000.0);
+  EXPECT_NEAR(ws.speed_scale, 0.01, 1e-18);
+}
+
+// A model in SI units keeps the tolerances in its own units: every scale of the double four-bar
+// of bodies (‖a_i‖ ℓ up to about 30 m) is in the class of 10, so that the projections' 1e-13
+// relative is the former absolute 1e-12 and its runs are those of main, bit for bit; a weld
+// closure's rotation rows about axes its loop does not turn (‖a_i‖ of roundoff) take their
+// constraint's largest row, not a scale of 1e-17 (a weld of the arm was refused as a lock-up at t =
+// 0 on a residual of 6.25e-17: TreeFrameConstraints.*)
+TEST(Scales, SIModelsKeepTheirOwnUnits) {
+  const Model m = load_model(std::string(UKDYN_EXAMPLES_DIR) + "/double_four_bar_bodies.yaml");
+  Workspace ws(m.system);
+  set_run_scales(m.system, ws, m.q0, m.qd0, 0.0, m.options.t_end - m.options.t_start);
+  EXPECT_EQ(ws.length_scale, 10.0);
+  EXPECT_EQ(ws.speed_scale, 10.0);
+  EXPECT_EQ(ws.energy_unit, 1.0);
+  for (Index i = 0; i < m.system.constraint_rows(); ++i) {
+    EXPECT_EQ(ws.phi_scale[i], 10.0) << "row " << i;
+    EXPECT_EQ(ws.phi_dot_scale[i], 10.0) << "row " << i;
+  }
+}
+
+// gen_chain.py 100 closed, run for 1 ms (mass_scale.sh's companion in the reproducers): the
+// run exited 5 ("energy balance") on a residual of 5e-11 J of its 20 J, with 7e-11 J exchanged:
+// the check had no floor in the run's energy. Now a residual below 1e-10 of the energy level
+// passes (docs/simulation.md, "Energy balance"); the residual itself stays at roundoff
+TEST(Scales, EnergyBalanceHasAFloorInTheRunsEnergy) {
+  const Model m = parse_model(test::closed_chain(100), "chain100.yaml");
+  SimulationOptions o = m.options;
+  o.t_end = 1e-3;
+  o.step = 1e-3;
+  const Trajectory tr = simulate(m.system, m.q0, m.qd0, o);
+  ASSERT_EQ(tr.stats.status, Status::kOk) << tr.stats.message;
+  ASSERT_TRUE(tr.stats.energy_balance_checked);
+  EXPECT_LE(tr.stats.energy_balance, o.energy_balance_tolerance);
+  const double level = std::abs(tr.kinetic_energy.back()) + std::abs(tr.potential_energy.back());
+  double residual = 0.0;
+  for (const double r : tr.energy_balance_residual) residual = std::max(residual, std::abs(r));
+  EXPECT_GT(level, 1.0);  // (the chain's 2 kg, about 0.3 m below the pin: some J)
+  EXPECT_LE(residual, 1e-10 * level);
 }
 
 // tests/data/interrupt_pendulum.yaml, released at rest for 5e4 s: with v = ℓ / duration =

@@ -353,11 +353,9 @@ TEST(GallerySimulatePendulum, EnergyHeldOverOneHundredPeriods) {
   // integrand λ A q' carries the velocity drift of each step (zero in exact arithmetic): 2.0e-10
   EXPECT_NEAR(tr.stats.energy_drift, 0.0, 3e-10);
   EXPECT_NEAR(tr.stats.energy_balance, 0.0, 3e-10);
-  // |E| / (m g L): 6.5e-11 before, 1.4e-10 since the projections' tolerances are relative to
-  // each row's scale (issue #29 item 2: the velocity level here ‖a‖ v with v = L / duration)
   double worst = 0.0;
   for (double e : tr.energy) worst = std::max(worst, std::abs(e));
-  EXPECT_NEAR(worst / kG, 0.0, 2e-10);
+  EXPECT_NEAR(worst / kG, 0.0, 1e-10);
   EXPECT_NEAR(tr.stats.max_position_violation, 0.0, 1e-12);
   EXPECT_NEAR(tr.stats.max_velocity_violation, 0.0, 1e-12);
   // after 100 periods the particle is back at (1, 0)

@@ -204,6 +204,7 @@ System rescaled(std::shared_ptr<const System> o, const Scaling& f) {
       scaled.stabilize(c.stabilization().alpha / f.tau, c.stabilization().beta / f.tau);
     }
     scaled.mark_drive(c.is_drive());
+    if (c.is_unilateral()) scaled.unilateral(c.restitution());
     b.add(std::move(scaled));
   }
   return b.build();
