@@ -39,14 +39,14 @@ double velocity_violation(const System& sys, const Workspace& ws, Index k);
 struct ProjectionOptions {
   /// Converged when every projected row satisfies |phi_i| <= tolerance · s_i (position) or
   /// |phi'_i| <= tolerance · s'_i (velocity), s_i and s'_i the row's scales in the workspace
-  /// (Workspace::phi_scale: ‖a_i‖ ℓ and ‖a_i‖ v after set_run_scales, as every
-  /// simulation sets them, so that the tolerance is relative and unit-free; 1 before, the
+  /// (Workspace::phi_scale: the classes of ‖a_i‖ ℓ and ‖a_i‖ v after set_run_scales, as every
+  /// simulation sets them, so that the tolerance is relative and unit-free; 10 before, the
   /// constraint's own units), or when the violation
   /// has stalled at the roundoff floor of the rows, below 100 · tolerance (three corrections
   /// in a row that do not halve it: near a singular configuration, or with redundant rows, the
-  /// floor can sit just above the tolerance). Must be > 0. The default 1e-13 (relative) keeps
-  /// models in SI units as tight as the former absolute 1e-12: their ‖a_i‖ ℓ lie between about
-  /// 1 and 30 (the bodies' double four-bar, whose singular poses need it, about 30).
+  /// floor can sit just above the tolerance). Must be > 0. The default 1e-13 (relative) is the
+  /// former absolute 1e-12 for models in SI units: their ‖a_i‖ ℓ and ‖a_i‖ v (0.04 to 24 over
+  /// the examples) are in the class of 10 (10 · the power of 1000 nearest to a scale).
   double tolerance = 1e-13;
   /// Gauss–Newton iterations at most (each one evaluation of M and the constraints).
   int max_iterations = 20;
@@ -112,15 +112,15 @@ struct Violations {
 /// at: ℓ = ‖q‖∞ (1 when q = 0); E = max(T + |V|, ‖Q‖∞ ℓ); v the largest of ‖q'‖∞, √(2E/m)
 /// (m = 1ᵀ M 1 / n, a Rayleigh quotient of M: the speed the run's energy gives its masses) and
 /// ℓ / duration (when duration > 0; ℓ per unit time when all are 0); and with a_i the row of A
-/// at (q, q', t) (the largest of its
-/// constraint's rows where it vanishes, 1 when all do) the violation scales
-/// ws.phi_scale_i = ‖a_i‖ ℓ, ws.phi_dot_scale_i = ‖a_i‖ v (a row's violation over its scale
-/// is the relative distance of the state from the constraint, to first order, whatever units
-/// and factor the row is written in), ws.length_scale = ℓ, ws.speed_scale = v, and
-/// ws.energy_unit, the power of two nearest to E (1 when that is 0 or not
-/// finite): the unit in which the simulation integrates the work channels of the energy
-/// balance, so that their step-size control is relative to the run's energies. Overwrites M,
-/// Q, A and b. Allocates (once per run). Cost: one evaluation of M, Q, V and every
+/// at (q, q', t) (its constraint's largest row where below 1e-3 of
+/// that largest, 1 when all vanish) the violation scales, classes (10 · the power of 1000
+/// nearest): ws.phi_scale_i = class(‖a_i‖ ℓ), ws.phi_dot_scale_i = class(‖a_i‖ v) (a row's
+/// violation over ‖a_i‖ ℓ is the state's relative distance from the constraint, to first order,
+/// in any units and for any factor of the row), ws.length_scale = class(ℓ), ws.speed_scale =
+/// class(v), and ws.energy_unit, the power of two nearest to the power of 1000 nearest to E / 10
+/// (1 when E is 0 or not finite): the unit in which the simulation integrates the work channels
+/// of the energy balance, so their step-size control is relative to the run's energies.
+/// Overwrites M, Q, A and b. Allocates (once per run). Cost: one evaluation of M, Q, V and every
 /// non-acceleration constraint's rows, O(n³ + m n).
 /// @throws std::invalid_argument when q or q' does not have n entries or the workspace is of
 /// another system.
