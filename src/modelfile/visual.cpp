@@ -131,23 +131,23 @@ std::string viewer_scene_json(const Model& model) {
   if (model.robot) {
     const tree::Tree& tr = *model.robot;
     const std::vector<std::string>& names = tr.coordinate_names();
-    nlohmann::json links = nlohmann::json::array();
+    nlohmann::json robot_links = nlohmann::json::array();
     for (Index i = 0; i < tr.link_count(); ++i) {
       const tree::Link& l = tr.link(i);
       const Eigen::Quaterniond& r = l.joint.R_PJ;
       nlohmann::json coordinates = nlohmann::json::array();
       for (int k = 0; k < tr.dofs(i); ++k)
         coordinates.push_back(names[std::size_t(tr.offset(i) + k)]);
-      links.push_back({{"name", l.name},
-                       {"parent", tr.parent(i)},
-                       {"joint", l.joint.name},
-                       {"kind", tree::joint_kind_name(l.joint.kind)},
-                       {"p", vector3(l.joint.p_PJ)},
-                       {"r", {r.w(), r.x(), r.y(), r.z()}},
-                       {"axis", vector3(l.joint.axis)},
-                       {"coordinates", coordinates}});
+      robot_links.push_back({{"name", l.name},
+                             {"parent", tr.parent(i)},
+                             {"joint", l.joint.name},
+                             {"kind", tree::joint_kind_name(l.joint.kind)},
+                             {"p", vector3(l.joint.p_PJ)},
+                             {"r", {r.w(), r.x(), r.y(), r.z()}},
+                             {"axis", vector3(l.joint.axis)},
+                             {"coordinates", coordinates}});
     }
-    scene["robot"] = {{"name", tr.name()}, {"links", links}};
+    scene["robot"] = {{"name", tr.name()}, {"links", robot_links}};
     planar = false;
   }
   scene["planar"] = planar;

@@ -141,9 +141,10 @@ TEST(ModelVisual, ErrorsAreLocated) {
   EXPECT_EQ(error_of("coordinates: [x]\nkinetic_energy: x_dot^2/2\nvisual: {points: {p: [x]}}\n"),
             "v.yaml:3:22: error: visual point 'p' must be [x, y] or [x, y, z] (expressions of the "
             "coordinates and t) (hint: bob: [L*sin(theta), -L*cos(theta)])");
-  EXPECT_EQ(error_of("coordinates: [x]\nkinetic_energy: x_dot^2/2\nvisual: {meshes: []}\n"),
-            "v.yaml:3:10: error: unknown key 'meshes' in visual (hint: the keys are contacts, frames, "
-            "links, points, trails)");
+  EXPECT_EQ(
+      error_of("coordinates: [x]\nkinetic_energy: x_dot^2/2\nvisual: {meshes: []}\n"),
+      "v.yaml:3:10: error: unknown key 'meshes' in visual (hint: the keys are contacts, frames, "
+      "links, points, trails)");
   EXPECT_EQ(
       error_of("coordinates: [x]\nkinetic_energy: x_dot^2/2\n"
                "visual: {frames: {f: {at: [x, 0]}}}\n"),
