@@ -46,7 +46,9 @@ Index release_open_contacts(const System& sys, Workspace& ws, const Eigen::Ref<c
     if (!sys.constraint(k).is_unilateral()) continue;
     Eigen::Matrix<double, 1, 1> p, v;
     sys.constraint(k).model().violation(q, qd, t, ws.scratch[std::size_t(k)].get(), p, v);
-    if (p[0] > 1e-9) {  // (ContactEvents::kTouchGap)
+    // (ContactEvents::kTouchGap, relative to the unit of the row's scale's class: 1 for a model
+    // in SI units, Workspace::phi_scale / 10)
+    if (p[0] > 1e-9 * (0.1 * ws.phi_scale[sys.row_offset(k)])) {
       ws.activity_override[std::size_t(k)] = 0;
       ++released;
     }

@@ -11,7 +11,10 @@
 #include <cstdlib>
 #include "dynamics/engine.hpp"
 #include "dynamics/internal.hpp"
+#include "linalg/safe_norm.hpp"
+#include "linalg/scale_class.hpp"
 #include "ukdyn/core/format.hpp"
+#include "ukdyn/dynamics/forward.hpp"
 #include "ukdyn/dynamics/projection.hpp"
 
 namespace ukdyn {
@@ -55,6 +58,10 @@ ProjectionResult failed(ProjectionResult res, Status s = Status::kOk) {
   return res;
 }
 
+// a row of a constraint whose ‖a_i‖ is below this share of the constraint's largest takes the
+// largest as its scale (set_run_scales)
+constexpr double kRowFloor = 1e-3;
+
 // which rows a projection works on
 enum class Level { kPosition, kVelocity };
 
@@ -67,12 +74,37 @@ bool takes_part(const System& sys, const Workspace& ws, const ProjectionOptions&
           (level == Level::kVelocity && kind == ConstraintKind::kNonholonomic));
 }
 
-// e = −violation on the rows of the constraints that take part (zero elsewhere); returns the
-// largest |violation|, or −1 when no row takes part
-double measure_violation(const System& sys, Workspace& ws, const Eigen::Ref<const VectorXd>& q,
-                         const Eigen::Ref<const VectorXd>& qd, double t, const ProjectionOptions& o,
-                         Level level) {
-  double worst = -1.0;
+// max(1, class(‖x‖∞) / reference) (1 without a reference; reference the class of the run's
+// length ℓ, detail::scale_class: both 10 · 1000^k): the state's share of a violation's scale, so
+// that the tolerance follows the roundoff floor of a state that has grown out of the class of its
+// length since the scales were set (a body falling far from where it started); a comparison
+// only while the state stays in that class
+double state_factor(const Eigen::Ref<const VectorXd>& x, double reference) {
+  if (!(reference > 0.0) || x.size() == 0) return 1.0;
+  const double big = x.cwiseAbs().maxCoeff();
+  if (!(big >= detail::kScaleClassHalfStep * reference)) return 1.0;
+  return std::max(1.0, detail::scale_class(big) / reference);
+}
+
+// the violation of a projection: the largest |row| in the constraints' own units (reported) and
+// the largest |row| / its scale over the tolerance's factor of the state (compared with the
+// tolerance: ws.phi_scale, see Workspace)
+struct Worst {
+  double raw = -1.0;       // −1 when no row takes part; NaN when a row is not finite
+  double relative = -1.0;  // max_i |row_i| / (scale_i · state factor)
+};
+
+// e = −violation on the rows of the constraints that take part (zero elsewhere)
+Worst measure_violation(const System& sys, Workspace& ws, const Eigen::Ref<const VectorXd>& q,
+                        const Eigen::Ref<const VectorXd>& qd, double t, const ProjectionOptions& o,
+                        Level level) {
+  Worst worst;
+  const bool position = level == Level::kPosition;
+  const VectorXd& scale = position ? ws.phi_scale : ws.phi_dot_scale;
+  // (velocities take no factor of the state: their scale v comes from the run's energy, and
+  // speeds that grow without bound as a driven mechanism locks up must leave the velocity
+  // projection failing, for find_constraint_conflict to name the lock-up; cli.run_lockup)
+  const double factor = position ? state_factor(q, ws.length_scale) : 1.0;
   for (Index k = 0; k < sys.constraint_count(); ++k) {
     const Index r0 = sys.row_offset(k), rows = sys.constraint(k).rows();
     auto ek = ws.e.segment(r0, rows);
@@ -83,7 +115,7 @@ double measure_violation(const System& sys, Workspace& ws, const Eigen::Ref<cons
     auto pk = ws.phi.segment(r0, rows);
     auto vk = ws.phi_dot.segment(r0, rows);
     sys.constraint(k).model().violation(q, qd, t, ws.scratch[std::size_t(k)].get(), pk, vk);
-    if (level == Level::kPosition) {
+    if (position) {
       ek = -pk;
     } else {
       ek = -vk;
@@ -91,11 +123,15 @@ double measure_violation(const System& sys, Workspace& ws, const Eigen::Ref<cons
     // (a NaN row must not vanish in the max: it is reported, see check_violation)
     const double row = ek.cwiseAbs().maxCoeff();
     if (!std::isfinite(row)) {
-      detail::fail(ws, Status::kNonFiniteInput, level == Level::kPosition ? "phi" : "phi_dot", k,
-                   t);
-      return std::numeric_limits<double>::quiet_NaN();
+      detail::fail(ws, Status::kNonFiniteInput, position ? "phi" : "phi_dot", k, t);
+      worst.raw = worst.relative = std::numeric_limits<double>::quiet_NaN();
+      return worst;
     }
-    worst = std::max(worst, row);
+    worst.raw = std::max(worst.raw, row);
+    const auto sk = scale.segment(r0, rows);
+    for (Index i = 0; i < rows; ++i) {
+      worst.relative = std::max(worst.relative, std::abs(ek[i]) / (sk[i] * factor));
+    }
   }
   return worst;
 }
@@ -199,6 +235,9 @@ Violations measure_violations(const System& sys, Workspace& ws, const Eigen::Ref
   v.finite =
       std::isfinite(t) && detail::first_non_finite(q) < 0 && detail::first_non_finite(qd) < 0;
   if (!v.finite) return v;
+  // the tolerances of each row (see Workspace::phi_scale)
+  const double tol_q = options.tolerance * state_factor(q, ws.length_scale);
+  const double tol_v = options.tolerance;  // (no factor of the state: see measure_violation)
   for (Index k = 0; k < sys.constraint_count(); ++k) {
     const bool position = takes_part(sys, ws, options, k, t, Level::kPosition);
     if (!position && !takes_part(sys, ws, options, k, t, Level::kVelocity)) continue;
@@ -214,8 +253,84 @@ Violations measure_violations(const System& sys, Workspace& ws, const Eigen::Ref
     }
     v.position = std::max(v.position, p);
     v.velocity = std::max(v.velocity, d);
+    for (Index i = 0; i < rows && v.within_tolerance; ++i) {
+      v.within_tolerance = (!position || std::abs(pk[i]) <= tol_q * ws.phi_scale[r0 + i]) &&
+                           std::abs(vk[i]) <= tol_v * ws.phi_dot_scale[r0 + i];
+    }
   }
   return v;
+}
+
+void set_run_scales(const System& sys, Workspace& ws, const Eigen::Ref<const VectorXd>& q,
+                    const Eigen::Ref<const VectorXd>& qd, double t, double duration) {
+  detail::require_same_system(sys, ws, "ukdyn::set_run_scales");
+  detail::require_state_size(sys, q, &qd, "ukdyn::set_run_scales");
+  const Index n = sys.coordinate_count();
+  // ℓ = ‖q‖∞ (1 when every coordinate is 0: the model gives no length)
+  double length = q.size() > 0 ? q.cwiseAbs().maxCoeff() : 0.0;
+  if (!(length > 0.0) || !std::isfinite(length)) length = 1.0;
+  ws.phi_scale.setConstant(10.0);  // (rows of acceleration constraints: never compared)
+  ws.phi_dot_scale.setConstant(10.0);
+  // E = max(T + |V|, ‖Q‖∞ ℓ) at the state: the energy the run's forces exchange over its
+  // lengths (a pendulum released at rest at V = 0 has T + |V| = 0 but m g ℓ); the unit of the
+  // work channels is its unit as a power of two (1 when there is none). The mass scale m =
+  // 1ᵀ M 1 / n, a Rayleigh quotient of M (between its least and largest eigenvalue)
+  double energy = 0.0, mass = 0.0;
+  if (evaluate_unconstrained(sys, ws, q, qd, t) == Status::kOk) {
+    const double T = ws.mass_singular ? 0.0 : detail::kinetic_energy(ws, qd);
+    const double V = sys.potential_energy(q, t, ws.callables.get());
+    const double Q = ws.Q.size() > 0 ? ws.Q.cwiseAbs().maxCoeff() : 0.0;
+    energy = std::max(std::abs(T) + std::abs(V), Q * length);
+    if (n > 0 && !ws.mass_singular) {
+      ws.tmp_n.setOnes();
+      mass = 2.0 * detail::kinetic_energy(ws, ws.tmp_n) / double(n);
+    }
+  }
+  ws.status = Status::kOk;
+  if (!std::isfinite(energy)) energy = 0.0;
+  // (the power of two nearest to its unit, detail::energy_class_unit, so that W / unit · unit
+  // is W bit for bit; 1 for a model in SI units)
+  ws.energy_unit = std::exp2(std::round(std::log2(detail::energy_class_unit(energy))));
+  // v = the largest of ‖q'‖∞, the speed √(2E/m) the run's energy gives its mass scale, and
+  // ℓ / duration (a run from rest covers its lengths in its duration); ℓ per unit time when
+  // none of them is > 0
+  double speed = qd.size() > 0 ? qd.cwiseAbs().maxCoeff() : 0.0;
+  if (!std::isfinite(speed)) speed = 0.0;
+  if (const double v = std::sqrt(2.0 * energy / mass); mass > 0.0 && std::isfinite(v)) {
+    speed = std::max(speed, v);
+  }
+  if (duration > 0.0 && std::isfinite(duration)) speed = std::max(speed, length / duration);
+  if (!(speed > 0.0)) speed = length;
+  // (every scale kept is a class, detail::scale_class: 10 for a model in SI units, which so
+  // keeps the tolerances in its own units, and a change of units by powers of 1000 moves each
+  // by exactly its factor)
+  ws.length_scale = detail::scale_class(length);
+  ws.speed_scale = detail::scale_class(speed);
+  MatrixXd Ak;  // (once per run)
+  for (Index k = 0; k < sys.constraint_count(); ++k) {
+    const Constraint& c = sys.constraint(k);
+    if (c.kind() == ConstraintKind::kAcceleration) continue;
+    // ‖a_i‖ at (q, q', t), whether or not the constraint acts yet
+    detail::write_constraint_rows(sys, ws, k, q, qd, t, /*check=*/false);
+    Ak.resize(c.rows(), n);
+    detail::copy_constraint_rows(sys, ws, k, Ak);
+    double largest = 0.0;
+    for (Index i = 0; i < c.rows(); ++i) {
+      const double a = detail::safe_norm(Ak.row(i).eval().data(), n);
+      if (std::isfinite(a)) largest = std::max(largest, a);
+    }
+    if (!(largest > 0.0)) largest = 1.0;
+    for (Index i = 0; i < c.rows(); ++i) {
+      double a = detail::safe_norm(Ak.row(i).eval().data(), n);
+      // a row that vanishes here, or nearly — below kRowFloor of its constraint's largest (a
+      // weld's rotation row about an axis its loop does not turn: ‖a_i‖ of roundoff, 1e-17) —
+      // takes that largest (the unit when all vanish): its violation is the roundoff of terms of
+      // its constraint's size, which a scale of its own ‖a_i‖ would ask a projection to go below
+      if (!(a >= kRowFloor * largest) || !std::isfinite(a)) a = largest;
+      ws.phi_scale[sys.row_offset(k) + i] = detail::scale_class(a * length);
+      ws.phi_dot_scale[sys.row_offset(k) + i] = detail::scale_class(a * speed);
+    }
+  }
 }
 
 ProjectionResult project_positions(const System& sys, Workspace& ws, VectorXd& q, double t,
@@ -228,10 +343,10 @@ ProjectionResult project_positions(const System& sys, Workspace& ws, VectorXd& q
   Settling settling;
   for (;;) {
     // phi(q)
-    const double worst = measure_violation(sys, ws, q, ws.zero_n, t, options, Level::kPosition);
-    if (std::isnan(worst)) return failed(res, ws.status);
-    res.violation = std::max(worst, 0.0);
-    if (settling.done(worst, options.tolerance)) {
+    const Worst worst = measure_violation(sys, ws, q, ws.zero_n, t, options, Level::kPosition);
+    if (std::isnan(worst.raw)) return failed(res, ws.status);
+    res.violation = std::max(worst.raw, 0.0);
+    if (settling.done(worst.relative, options.tolerance)) {
       res.converged = true;
       return res;
     }
@@ -262,10 +377,10 @@ ProjectionResult project_velocities(const System& sys, Workspace& ws,
   bool factorized = false;
   for (;;) {
     // phi'(q, q')
-    const double worst = measure_violation(sys, ws, q, qd, t, options, Level::kVelocity);
-    if (std::isnan(worst)) return failed(res, ws.status);
-    res.violation = std::max(worst, 0.0);
-    if (settling.done(worst, options.tolerance)) {
+    const Worst worst = measure_violation(sys, ws, q, qd, t, options, Level::kVelocity);
+    if (std::isnan(worst.raw)) return failed(res, ws.status);
+    res.violation = std::max(worst.raw, 0.0);
+    if (settling.done(worst.relative, options.tolerance)) {
       res.converged = true;
       return res;
     }

@@ -159,6 +159,8 @@ Workspace::Workspace(const System& sys, const SolverOptions& options)
   for (const auto& c : sys.constraints()) stabilization.push_back(c.stabilization());
   phi.setZero(m);
   phi_dot.setZero(m);
+  phi_scale.setConstant(m, 10.0);  // (the class of a model in SI units: set_run_scales)
+  phi_dot_scale.setConstant(m, 10.0);
   zero_n.setZero(n);
   lambda_tmp.setZero(m);
   decomposition.resize(use_sparse ? 0 : n, use_sparse ? 0 : m);

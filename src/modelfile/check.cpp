@@ -14,6 +14,7 @@
 
 #include "dynamics/contact_dynamics.hpp"
 #include "dynamics/internal.hpp"
+#include "simulation/initial_check.hpp"
 #include "ukdyn/core/format.hpp"
 #include "ukdyn/dynamics/forward.hpp"
 #include "ukdyn/dynamics/projection.hpp"
@@ -132,8 +133,11 @@ CheckReport check_model(const Model& model) {
   }
 
   // initial consistency, and whether projection finds a consistent state near
+  // (in the scales of the run from q0 that `ukdyn run` makes: set_run_scales, docs/simulation.md
+  // "Scales and tolerances")
+  const double duration = o.t_end - t;
   report.initial_violations =
-      check_initial_conditions(sys, model.q0, model.qd0, t, o.initial_tolerance);
+      detail::check_initial_conditions(sys, model.q0, model.qd0, t, o.initial_tolerance, duration);
   // constraints that contradict each other (x = 0 and x = 1, 1 = 0): where the position
   // projection from q0 stalls, the violation no correction removes (find_constraint_conflict);
   // such constraints are not "redundant", and projecting cannot help
@@ -141,6 +145,7 @@ CheckReport check_model(const Model& model) {
     try {
       VectorXd q = model.q0, qd = model.qd0;
       Workspace wc(sys, o.solver);
+      set_run_scales(sys, wc, q, qd, t, duration);
       detail::release_open_contacts(sys, wc, q, qd, t);  // (an open gap is no violation)
       const ProjectionResult rp = project_positions(sys, wc, q, t, o.projection);
       ProjectionResult rv;
@@ -179,10 +184,12 @@ CheckReport check_model(const Model& model) {
       VectorXd q = model.q0, qd = model.qd0;
       Workspace wp(sys, o.solver);
       try {
+        set_run_scales(sys, wp, q, qd, t, duration);
         detail::release_open_contacts(sys, wp, q, qd, t);  // (an open gap is no violation)
         const ProjectionResult rp = project_positions(sys, wp, q, t, o.projection);
         const ProjectionResult rv = project_velocities(sys, wp, q, qd, t, o.projection);
-        const auto left = check_initial_conditions(sys, q, qd, t, o.initial_tolerance);
+        const auto left =
+            detail::check_initial_conditions(sys, q, qd, t, o.initial_tolerance, duration);
         if (!rp.converged || !rv.converged || !left.empty()) {
           report.problems.push_back(
               "no consistent initial state near the given one: projection left a violation of " +

@@ -60,7 +60,9 @@ bool ConstrainedOde::explained_by_violation(const Eigen::Ref<const VectorXd>& q,
   for (Index i = 0; i < ws_.tmp_m.size(); ++i) {
     if (std::abs(ws_.tmp_m[i]) < kResidualShare * r_max) continue;
     if (!violation_rows_[std::size_t(i)]) return false;
-    violation = std::max({violation, std::abs(ws_.phi[i]), std::abs(ws_.phi_dot[i])});
+    // (relative to each row's scale, as the projections measure it)
+    violation = std::max({violation, std::abs(ws_.phi[i]) / ws_.phi_scale[i],
+                          std::abs(ws_.phi_dot[i]) / ws_.phi_dot_scale[i]});
   }
   return violation > off_manifold_tolerance_;
 }
@@ -123,17 +125,23 @@ bool ConstrainedOde::operator()(const double* x, double* dxdt, double t_in) {
   Eigen::Map<VectorXd>(dxdt, n_) = qd;
   Eigen::Map<VectorXd>(dxdt + n_, n_) = ws_.qdd;
   double* w = dxdt + 2 * n_;
-  w[works_.nonideal] = sys_.nonideal_count() > 0 ? qd.dot(ws_.Qc_nonideal) : 0.0;
+  const double unit = ws_.energy_unit;
+  w[works_.nonideal] = sys_.nonideal_count() > 0
+                           ? works_.scale(works_.nonideal, unit) * qd.dot(ws_.Qc_nonideal)
+                           : 0.0;
   double drive = 0.0;
   for (Index k : works_.drives) {
     if (ws_.active[std::size_t(k)]) drive += constraint_power(sys_, ws_, k, qd, share_);
   }
-  // (the quiet channels scaled by 2⁻³², see WorkLayout)
-  const double quiet = works_.quiet ? WorkLayout::kQuietScale : 1.0;
-  if (works_.ideal >= 0) w[works_.ideal] = quiet * (qd.dot(ws_.Qc_ideal) - drive);
-  if (works_.drive >= 0) w[works_.drive] = quiet * drive;
-  if (works_.external >= 0)
-    w[works_.external] = quiet * sys_.external_power(q, qd, t, ws_.callables.get());
+  // (in the energy unit, the quiet channels scaled by 2⁻³², see WorkLayout)
+  if (works_.ideal >= 0) {
+    w[works_.ideal] = works_.scale(works_.ideal, unit) * (qd.dot(ws_.Qc_ideal) - drive);
+  }
+  if (works_.drive >= 0) w[works_.drive] = works_.scale(works_.drive, unit) * drive;
+  if (works_.external >= 0) {
+    w[works_.external] =
+        works_.scale(works_.external, unit) * sys_.external_power(q, qd, t, ws_.callables.get());
+  }
   return true;
 }
 

@@ -15,6 +15,17 @@ namespace ukdyn::detail {
 namespace {
 std::string format_t(double v) { return format_short(v); }
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+// the units of contact k's gap and gap rate: the units of the classes of its row's scales
+// (Workspace::phi_scale, set_run_scales: the classes of ‖a‖ ℓ and ‖a‖ v, 10 for a model in SI
+// units; their unit class / 10 is 1 there), so that kTouchGap and the closing speed below are
+// relative to the model's lengths and speeds (docs/simulation.md, "Scales and tolerances")
+double gap_scale(const System& sys, const Workspace& ws, Index k) {
+  return 0.1 * ws.phi_scale[sys.row_offset(k)];
+}
+double gap_rate_scale(const System& sys, const Workspace& ws, Index k) {
+  return 0.1 * ws.phi_dot_scale[sys.row_offset(k)];
+}
 }  // namespace
 
 ContactEvents::ContactEvents(const System& sys, Workspace& ws, std::size_t x_size)
@@ -93,7 +104,7 @@ double ContactEvents::find(double t0, const double* x0, double t1, const double*
       // an impact: the gap falls below 0 (below −kTouchGap when the step starts at a gap
       // within roundoff below 0, after a release)
       const double g0 = value(Index(i), true, t0, x0);
-      const double level = g0 >= 0.0 ? 0.0 : -kTouchGap;
+      const double level = g0 >= 0.0 ? 0.0 : -kTouchGap * gap_scale(sys_, ws_, dyn_.contacts()[i]);
       if (!(value(Index(i), true, t1, x1) < level)) continue;
       te = g0 < level ? t0 : locate(t0, t1, dense, Index(i), true, level);
     } else {
@@ -130,7 +141,7 @@ void ContactEvents::start(double t, VectorXd& q, VectorXd& qd, double tolerance,
     const Index k = dyn_.contacts()[i];
     double g = 0.0, gd = 0.0;
     dyn_.gap(sys_, ws_, k, q_, qd_, t, g, gd);
-    if (g < -std::max(tolerance, kTouchGap)) {
+    if (g < -std::max(tolerance, kTouchGap) * gap_scale(sys_, ws_, k)) {
       penetrated.push_back(sys_.constraint(k).name());
       lines += (lines.empty() ? "" : "; ") + std::string("the unilateral constraint '") +
                sys_.constraint(k).name() + "' is penetrated: its gap is " + format_t(g);
@@ -168,7 +179,7 @@ bool ContactEvents::resolve(double t, double* x, Index event, RunStatistics& sta
     const Index k = dyn_.contacts()[i];
     double g = 0.0, gd = 0.0;
     dyn_.gap(sys_, ws_, k, q, qd, t, g, gd);
-    if (!closed_[i] && Index(i) != event && g > kTouchGap) continue;
+    if (!closed_[i] && Index(i) != event && g > kTouchGap * gap_scale(sys_, ws_, k)) continue;
     which.push_back(i);
     set.push_back(k);
     v_minus.push_back(gd);
@@ -266,7 +277,8 @@ bool ContactEvents::resolve(double t, double* x, Index event, RunStatistics& sta
   for (Index j = 0; j < m; ++j) {
     const std::size_t i = which[std::size_t(j)];
     closed_[i] = 0;
-    if (v_minus[std::size_t(j)] <= 1e-9 * std::max(1.0, v_scale)) {
+    const double rate_scale = gap_rate_scale(sys_, ws_, set[std::size_t(j)]);
+    if (v_minus[std::size_t(j)] <= 1e-9 * std::max(rate_scale, v_scale)) {
       candidates.push_back(set[std::size_t(j)]);
       cand_which.push_back(i);
     }

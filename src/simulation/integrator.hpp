@@ -26,7 +26,9 @@ namespace ukdyn::detail {
 //   drive     W_drive'    = Σ over drives k of q'ᵀ A_kᵀ lambda_k      (a constraint is_drive())
 //   external  W_external' = P_ext(q, q', t)                          (System::has_external_power)
 //
-// The channels after W_nonideal are stored scaled by kQuietScale = 2⁻³² (x holds W · 2⁻³²), so
+// Every channel is stored in the run's energy unit (a power of two near its energy scale,
+// Workspace::energy_unit). The channels after W_nonideal are stored scaled by kQuietScale = 2⁻³²
+// as well (x holds W · 2⁻³² / unit), so
 // that the step-size control, which weighs every component of x, follows the motion (and
 // W_nonideal, as it always has) alone: a power that carries noise — q'ᵀ Qc_ideal of scleronomic
 // constraints near a singular configuration, where the multipliers are large and A q' is
@@ -40,8 +42,14 @@ struct WorkLayout {
   static constexpr double kQuietScale = 0x1p-32;
   // quiet: scale the channels after W_nonideal (the explicit integrators)
   explicit WorkLayout(const System& sys, bool quiet = true);
-  // the scale of channel c in x (1 for W_nonideal, and for every channel when not quiet)
-  double scale(Index c) const { return c == nonideal || !quiet ? 1.0 : kQuietScale; }
+  // the scale of channel c in x: 1 / unit for W_nonideal, and for every channel when not
+  // quiet, kQuietScale / unit for the others; unit the run's energy unit (a power of two,
+  // Workspace::energy_unit from set_run_scales), so that the step-size control weighs the
+  // work channels relative to the run's energies (a pendulum of 1e20 kg took 726,143 steps
+  // instead of 205 under atol in joules)
+  double scale(Index c, double unit) const {
+    return (c == nonideal || !quiet ? 1.0 : kQuietScale) / unit;
+  }
   bool quiet = true;
   Index nonideal = 0, ideal = -1, drive = -1, external = -1;
   Index count = 1;            // number of channels

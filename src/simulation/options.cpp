@@ -174,9 +174,11 @@ std::vector<OptionInfo> make_table() {
   t.push_back(with(number("baumgarte_beta", 0.0, false, kInf, true, "5",
                           "Baumgarte gain beta (1/s) of drift: baumgarte"),
                    UKDYN_FIELD(baumgarte_beta, double)));
-  t.push_back(with(number("projection_tolerance", 0.0, true, kInf, true, "1e-11",
-                          "violation the projection leaves, in each constraint's units"),
-                   UKDYN_FIELD(projection.tolerance, double)));
+  t.push_back(
+      with(number("projection_tolerance", 0.0, true, kInf, true, "1e-11",
+                  "violation the projection leaves, relative to each row's scale (Scales and "
+                  "tolerances)"),
+           UKDYN_FIELD(projection.tolerance, double)));
   {
     OptionInfo i = integer("projection_max_iterations", 1.0, 2147483647.0, "30",
                            "Gauss-Newton iterations of a projection at most");
@@ -188,9 +190,11 @@ std::vector<OptionInfo> make_table() {
                            "project an inconsistent initial state onto the constraints instead "
                            "of refusing it"),
                    UKDYN_FIELD(project_initial, bool)));
-  t.push_back(with(number("initial_tolerance", 0.0, false, kInf, true, "1e-08",
-                          "largest constraint violation of a consistent initial state"),
-                   UKDYN_FIELD(initial_tolerance, double)));
+  t.push_back(
+      with(number("initial_tolerance", 0.0, false, kInf, true, "1e-08",
+                  "largest constraint violation of a consistent initial state, relative to each "
+                  "row's scale"),
+           UKDYN_FIELD(initial_tolerance, double)));
   {
     OptionInfo i = number("energy_balance_tolerance", 0.0, true, kInf, false, "0.001",
                           "energy balance residual a run may end with (inf: no check)");

@@ -20,6 +20,7 @@
 #include "dynamics/internal.hpp"
 #include "simulation/contact_events.hpp"
 #include "simulation/energy_balance.hpp"
+#include "simulation/initial_check.hpp"
 #include "simulation/integrator.hpp"
 #include "simulation/sample_grid.hpp"
 #include "ukdyn/core/format.hpp"
@@ -187,7 +188,13 @@ std::vector<std::string> violated(const System& sys, const Workspace& ws, double
   std::vector<std::string> lines;
   for (Index k = 0; k < sys.constraint_count(); ++k) {
     const double p = position_violation(sys, ws, k), v = velocity_violation(sys, ws, k);
-    if (p > tol || v > tol) {
+    // each row against the tolerance times its scale (Workspace::phi_scale)
+    bool bad = false;
+    for (Index i = sys.row_offset(k); i < sys.row_offset(k) + sys.constraint(k).rows(); ++i) {
+      bad = bad || std::abs(ws.phi[i]) > tol * ws.phi_scale[i] ||
+            std::abs(ws.phi_dot[i]) > tol * ws.phi_dot_scale[i];
+    }
+    if (bad) {
       if (names) names->push_back(sys.constraint(k).name());
       lines.push_back("constraint '" + sys.constraint(k).name() + "' (" +
                       to_string(sys.constraint(k).kind()) + "): position violation " + format(p) +
@@ -816,7 +823,7 @@ class Run {
       q_ = Eigen::Map<const VectorXd>(x, n_);
       qd_ = Eigen::Map<const VectorXd>(x + n_, n_);
       if (const Violations v = measure_violations(sys_, ws_, q_, qd_, t, p);
-          v.finite && v.position <= p.tolerance && v.velocity <= p.tolerance) {
+          v.finite && v.within_tolerance) {
         note_violation(std::max(v.position, 0.0), std::max(v.velocity, 0.0));
         changed = false;
         return Status::kOk;
@@ -943,10 +950,17 @@ class Run {
     out.potential_energy.push_back(V);
     out.energy.push_back(T + V);
     peak_kinetic_ = std::max(peak_kinetic_, T);
-    if (!(energy_scale_ > 0.0)) energy_scale_ = T + std::abs(V);
+    // (T + |V| at the start, as the divergence message says; the run's energy unit, the power of
+    // two nearest to max(T + |V|, |Q| l), where that is 0: a body released at rest at V = 0 has
+    // no energy yet)
+    if (!(energy_scale_ > 0.0)) {
+      energy_scale_ = T + std::abs(V) > 0.0 ? T + std::abs(V) : ws_.energy_unit;
+    }
     // the work channels (absent ones are zero), and the balance so far
     const auto work = [&](Index channel) {
-      return channel < 0 ? 0.0 : sample_[std::size_t(2 * n_ + channel)] / works_.scale(channel);
+      return channel < 0
+                 ? 0.0
+                 : sample_[std::size_t(2 * n_ + channel)] / works_.scale(channel, ws_.energy_unit);
     };
     const double works[6] = {work(works_.nonideal),
                              work(works_.ideal),
@@ -1591,14 +1605,24 @@ std::string user_message(const std::exception& e) {
   return message;
 }
 
+std::vector<std::string> detail::check_initial_conditions(const System& sys,
+                                                          const Eigen::Ref<const VectorXd>& q,
+                                                          const Eigen::Ref<const VectorXd>& qd,
+                                                          double t, double tolerance,
+                                                          double duration) {
+  Workspace ws(sys);
+  // the scales a run from this state takes (simulate's own check compares against the same)
+  set_run_scales(sys, ws, q, qd, t, duration);
+  detail::release_open_contacts(sys, ws, q, qd, t);  // (an open gap is no violation)
+  evaluate_violations(sys, ws, q, qd, t);
+  return violated(sys, ws, tolerance);
+}
+
 std::vector<std::string> check_initial_conditions(const System& sys,
                                                   const Eigen::Ref<const VectorXd>& q,
                                                   const Eigen::Ref<const VectorXd>& qd, double t,
                                                   double tolerance) {
-  Workspace ws(sys);
-  detail::release_open_contacts(sys, ws, q, qd, t);  // (an open gap is no violation)
-  evaluate_violations(sys, ws, q, qd, t);
-  return violated(sys, ws, tolerance);
+  return detail::check_initial_conditions(sys, q, qd, t, tolerance, 0.0);
 }
 
 Trajectory simulate(const System& sys, const Eigen::Ref<const VectorXd>& q0,
@@ -1642,6 +1666,9 @@ Trajectory detail::simulate_observed(const System& sys, const Eigen::Ref<const V
   // initial conditions: consistent, or projected on request (constraints that contradict each
   // other are named: no projection helps); the unilateral contacts open or closed first
   VectorXd q = q0, qd = qd0;
+  // the scales of the tolerances on the constraints' violations and of the work channels
+  // (relative, unit-free)
+  set_run_scales(sys, ws, q, qd, o.t_start, o.t_end - o.t_start);
   detail::ContactEvents contacts(sys, ws, std::size_t(2 * n + detail::WorkLayout(sys).count));
   if (contacts.any()) {
     contacts.start(o.t_start, q, qd, o.initial_tolerance, traj.stats);

@@ -37,12 +37,17 @@ double velocity_violation(const System& sys, const Workspace& ws, Index k);
 
 /// Settings of a projection.
 struct ProjectionOptions {
-  /// Converged when every projected row satisfies |phi_i| <= tolerance (position) or
-  /// |phi'_i| <= tolerance (velocity), in the constraint's own units, or when the violation
+  /// Converged when every projected row satisfies |phi_i| <= tolerance · s_i (position) or
+  /// |phi'_i| <= tolerance · s'_i (velocity), s_i and s'_i the row's scales in the workspace
+  /// (Workspace::phi_scale: the classes of ‖a_i‖ ℓ and ‖a_i‖ v after set_run_scales, as every
+  /// simulation sets them, so that the tolerance is relative and unit-free; 10 before, the
+  /// constraint's own units), or when the violation
   /// has stalled at the roundoff floor of the rows, below 100 · tolerance (three corrections
   /// in a row that do not halve it: near a singular configuration, or with redundant rows, the
-  /// floor can sit just above 1e-12). Must be > 0.
-  double tolerance = 1e-12;
+  /// floor can sit just above the tolerance). Must be > 0. The default 1e-13 (relative) is the
+  /// former absolute 1e-12 for models in SI units: their ‖a_i‖ ℓ and ‖a_i‖ v (0.04 to 24 over
+  /// the examples) are in the class of 10 (10 · the power of 1000 nearest to a scale).
+  double tolerance = 1e-13;
   /// Gauss–Newton iterations at most (each one evaluation of M and the constraints).
   int max_iterations = 20;
   /// (K) constraints to project (non-zero entries), or empty for every constraint.
@@ -99,7 +104,28 @@ struct Violations {
   /// t, q and q' are finite and so is every violation measured; else the entries above are
   /// unspecified and the projections, which report the cause, must run
   bool finite = true;
+  /// every row measured is within options.tolerance times its scale (Workspace::phi_scale):
+  /// neither projection would change the state
+  bool within_tolerance = true;
 };
+/// The scales of a run (docs/simulation.md, "Scales and tolerances"), from the state it starts
+/// at: ℓ = ‖q‖∞ (1 when q = 0); E = max(T + |V|, ‖Q‖∞ ℓ); v the largest of ‖q'‖∞, √(2E/m)
+/// (m = 1ᵀ M 1 / n, a Rayleigh quotient of M: the speed the run's energy gives its masses) and
+/// ℓ / duration (when duration > 0; ℓ per unit time when all are 0); and with a_i the row of A
+/// at (q, q', t) (its constraint's largest row where below 1e-3 of
+/// that largest, 1 when all vanish) the violation scales, classes (10 · the power of 1000
+/// nearest): ws.phi_scale_i = class(‖a_i‖ ℓ), ws.phi_dot_scale_i = class(‖a_i‖ v) (a row's
+/// violation over ‖a_i‖ ℓ is the state's relative distance from the constraint, to first order,
+/// in any units and for any factor of the row), ws.length_scale = class(ℓ), ws.speed_scale =
+/// class(v), and ws.energy_unit, the power of two nearest to the power of 1000 nearest to E / 10
+/// (1 when E is 0 or not finite): the unit in which the simulation integrates the work channels
+/// of the energy balance, so their step-size control is relative to the run's energies.
+/// Overwrites M, Q, A and b. Allocates (once per run). Cost: one evaluation of M, Q, V and every
+/// non-acceleration constraint's rows, O(n³ + m n).
+/// @throws std::invalid_argument when q or q' does not have n entries or the workspace is of
+/// another system.
+void set_run_scales(const System& sys, Workspace& ws, const Eigen::Ref<const VectorXd>& q,
+                    const Eigen::Ref<const VectorXd>& qd, double t, double duration);
 
 /// The violations that project_positions and project_velocities would measure first at
 /// (q, q', t) with these options, each constraint's violation() evaluated once for both

@@ -193,6 +193,19 @@ class Workspace {
   // --- violations, evaluate_violations (dynamics/projection.hpp) and stabilized assembly ---
   VectorXd phi;      ///< position-level violation per row (m)
   VectorXd phi_dot;  ///< velocity-level violation per row (m)
+  /// (m) the scale of each row's violation that the projections compare with their tolerance,
+  /// |phi_i| <= tolerance · phi_scale_i · max(1, class(‖q‖∞) / length_scale) and
+  /// |phi'_i| <= tolerance · phi_dot_scale_i (no factor of the state: speeds that grow without
+  /// bound as a mechanism locks up must leave the projection failing): the classes of ‖a_i‖ ℓ
+  /// and ‖a_i‖ v, filled by set_run_scales (dynamics/projection.hpp; the simulation calls it
+  /// at the start of a run); 10 until then (the tolerance in each constraint's own units)
+  VectorXd phi_scale;
+  VectorXd phi_dot_scale;     ///< (m) see phi_scale
+  double length_scale = 0.0;  ///< class of ℓ (set_run_scales), 0 until then (no state factor)
+  double speed_scale = 0.0;   ///< class of v (set_run_scales), 0 until then
+  /// the power of two nearest to the unit of the run's energy (set_run_scales), 1 until then: the
+  /// simulation integrates the work channels in this unit
+  double energy_unit = 1.0;
   // --- stage 3, solve_ideal ---------------------------------------------------------------
   FundamentalDecomposition decomposition;  ///< Cholesky of M, COD of A L⁻ᵀ (dense engine; sized
                                            ///< 0 × 0 with the sparse engine)

@@ -369,9 +369,11 @@ void compute_energy_balance(Trajectory& traj,
                             double tolerance = std::numeric_limits<double>::infinity());
 
 /// Consistency of a state with each constraint: one line per violated constraint, naming it
-/// and giving the position and velocity violation; empty when every |row| <= tolerance. An open
-/// unilateral contact (gap > 0) is no violation. Cost: one Workspace, one evaluation of every
-/// constraint's rows.
+/// and giving the position and velocity violation; empty when every row i meets
+/// |φ_i| <= tolerance · ‖a_i‖ ℓ and |ψ_i| <= tolerance · ‖a_i‖ v, in the scales a run from this
+/// state takes (ℓ the model's length scale, v the speed scale from the state alone — a run also
+/// counts ℓ/duration; docs/simulation.md, "Scales and tolerances"). An open unilateral contact
+/// (gap > 0) is no violation. Cost: one Workspace, one evaluation of every constraint's rows.
 std::vector<std::string> check_initial_conditions(const System& sys,
                                                   const Eigen::Ref<const VectorXd>& q,
                                                   const Eigen::Ref<const VectorXd>& qd, double t,
