@@ -1074,39 +1074,65 @@ class Run {
   }
 
   // After an accepted step to (t, x): true (with failure_ set) when the motion has left its
-  // branch at a singular configuration it just passed. A passage runs from the first step end
+  // branch at a singular configuration it is passing. A passage runs from the first step end
   // whose last evaluation had a rank margin below kSingularMargin to the first one back above
-  // twice that. Across it q' changes by at most its duration times the accelerations, which are
-  // smooth along a branch: a change of q' (in the M-norm) beyond kBranchFactor times the
-  // duration times the larger M-norm of q'' at the two ends — and beyond 1e-3 of |q'| — is a
-  // jump onto another branch (one of the twin arms reversed: the mirror branch), which no
-  // status ok may hide. Costs two evaluations a passage; nothing elsewhere (Algorithm::kTextbook,
-  // whose margin is NaN, is not checked).
+  // twice that, and each step of it is judged (a slow passage may never leave the pose: the
+  // twin arms swinging 0.005 rad about their dead centre). Across a step q' changes by at most
+  // its duration times the accelerations, which are smooth along a branch: a change of q' (in
+  // the M-norm) beyond kBranchFactor times the step times the larger M-norm of q'' at its two
+  // ends — and beyond 1e-3 of |q'| — is a jump onto another branch (one of the twin arms
+  // reversed: the mirror branch), which no status ok may hide. Costs one evaluation per step
+  // end inside a passage; nothing elsewhere (Algorithm::kTextbook, whose margin is NaN, is not
+  // checked).
   bool leaves_branch(double t, const double* x) {
     const double margin = ws_.rank_margin;
     if (!in_pose_ && !(margin < detail::kSingularMargin)) return false;
-    if (in_pose_ && !(margin >= 2.0 * detail::kSingularMargin)) return false;
     q_ = Eigen::Map<const VectorXd>(x, n_);
     qd_ = Eigen::Map<const VectorXd>(x + n_, n_);
-    if (forward_dynamics(sys_, ws_, q_, qd_, t) != Status::kOk) return false;
-    const double acceleration = std::sqrt(2.0 * detail::kinetic_energy(ws_, ws_.qdd));
-    if (!in_pose_) {
-      in_pose_ = true;
-      pose_t_ = t;
-      pose_acceleration_ = acceleration;
-      pose_velocity_ = qd_;
+    Workspace& w = branch_workspace();
+    if (forward_dynamics(sys_, w, q_, qd_, t) != Status::kOk) return false;
+    const double acceleration = std::sqrt(2.0 * detail::kinetic_energy(w, w.qdd));
+    const bool entering = !in_pose_;
+    const bool leaving = in_pose_ && margin >= 2.0 * detail::kSingularMargin;
+    in_pose_ = !leaving;
+    if (entering) {
+      pose_t_ = step_t_ = t;
+      pose_acceleration_ = step_acceleration_ = acceleration;
+      pose_velocity_ = step_velocity_ = qd_;
       return false;
     }
-    in_pose_ = false;
-    // (BDF reports converged attempts: after a rejected one, t can go back; not judged then)
-    if (!(t > pose_t_)) return false;
-    const double speed = std::sqrt(2.0 * detail::kinetic_energy(ws_, pose_velocity_));
-    pose_velocity_ -= qd_;
-    const double change = std::sqrt(2.0 * detail::kinetic_energy(ws_, pose_velocity_));
-    const double bound = kBranchFactor * (t - pose_t_) * std::max(acceleration, pose_acceleration_);
-    if (!(change > bound && change > 1e-3 * speed)) return false;
+    // a jump across the last step, or (leaving) across the whole passage; (BDF reports converged
+    // attempts: after a rejected one, t can go back; not judged then)
+    double t_from = step_t_, change = 0.0, bound = 0.0, speed = 0.0;
+    const auto jumped = [&](double t0, double a0, VectorXd& v0, bool whole) {
+      if (!(t > t0)) return false;
+      t_from = t0;
+      speed = std::sqrt(2.0 * detail::kinetic_energy(w, v0));
+      v0 -= qd_;
+      change = std::sqrt(2.0 * detail::kinetic_energy(w, v0));
+      // (inside the passage, the part of the change that turns q' rather than stretching it:
+      // the speeds of a driven mechanism that locks up grow along their direction, while a
+      // jump onto the mirror branch reverses an arm at the same speed)
+      if (!whole) {
+        const double stretch = std::sqrt(2.0 * detail::kinetic_energy(w, qd_)) - speed;
+        change = std::sqrt(std::max(0.0, change * change - stretch * stretch));
+      }
+      bound = (whole ? kBranchFactor * std::max(acceleration, a0) : kStepFactor * a0) * (t - t0);
+      return change > bound && change > 1e-3 * speed;
+    };
+    // (inside the passage the accelerations at the step ends are those of states a roundoff
+    // off the branch, amplified by the inverse margin: a step is held to the accelerations at
+    // the passage's ends, where the rank is clear)
+    const double regular = leaving ? acceleration : 0.0;
+    const bool jump =
+        jumped(step_t_, std::max(pose_acceleration_, regular), step_velocity_, false) ||
+        (leaving && jumped(pose_t_, pose_acceleration_, pose_velocity_, true));
+    step_t_ = t;
+    step_acceleration_ = acceleration;
+    step_velocity_ = qd_;
+    if (!jump) return false;
     failure_ = "the motion left its branch at the singular configuration passed between t = " +
-               format(pose_t_) + " and " + format(t) +
+               format(t_from) + " and " + format(t) +
                " (the constraints nearly lose rank there: a dead centre or a branch point): "
                "the velocity changed by " +
                format(change) + " (in the M-norm; " + format(change / speed) +
@@ -1115,7 +1141,31 @@ class Run {
                "integrator, or a fixed step (integrator: rk4, step: 1e-4) across the pose";
     return true;
   }
+
+  // the branch check's own workspace, in the run's modes (contacts held open or closed, stick or
+  // slip, drift control, scales): its evaluations at step ends leave the run's workspace as the
+  // integrator and the events left it. Copies of equal sizes: no allocation.
+  Workspace& branch_workspace() {
+    if (!branch_ws_) branch_ws_ = std::make_unique<Workspace>(sys_, ws_.options());
+    Workspace& w = *branch_ws_;
+    w.activity_override = ws_.activity_override;
+    w.stabilization = ws_.stabilization;
+    w.nonideal_enabled = ws_.nonideal_enabled;
+    w.slip_hint = ws_.slip_hint;
+    w.slip_hint_held = ws_.slip_hint_held;
+    w.sliding = ws_.sliding;
+    w.phi_scale = ws_.phi_scale;
+    w.phi_dot_scale = ws_.phi_dot_scale;
+    w.length_scale = ws_.length_scale;
+    w.speed_scale = ws_.speed_scale;
+    w.energy_unit = ws_.energy_unit;
+    return w;
+  }
   static constexpr double kBranchFactor = 10.0;
+  // (a step inside the passage, held to the accelerations at its entry: an order of magnitude
+  // more room, as the accelerations along the branch may grow inside; the twin arms' slow
+  // passage jumps by 18 times this bound, a governor's Coulomb passage peaks at 0.1 of it)
+  static constexpr double kStepFactor = 100.0;
 
   // whether a sample time in (last recorded sample, t] has not been recorded yet
   bool sample_due(double t) const {
@@ -1429,9 +1479,10 @@ class Run {
   int crawling_steps_ = 0;  // steps in a row, up to now, that diverged at a crawl
   // a passage of a singular configuration (see leaves_branch): under way; its start's time, the
   // M-norm of q'' there, and q' there (n)
+  std::unique_ptr<Workspace> branch_ws_;  // (branch_workspace)
   bool in_pose_ = false;
-  double pose_t_ = 0.0, pose_acceleration_ = 0.0;
-  VectorXd pose_velocity_ = VectorXd::Zero(n_);
+  double pose_t_ = 0.0, pose_acceleration_ = 0.0, step_t_ = 0.0, step_acceleration_ = 0.0;
+  VectorXd pose_velocity_ = VectorXd::Zero(n_), step_velocity_ = VectorXd::Zero(n_);
   VectorXd holding_ = VectorXd::Zero(n_);        // (n) holding force of the last stick_margin
   VectorXd reaction_ = VectorXd::Zero(n_);       // (n) scratch of stick_margin: R
   VectorXd reaction_part_ = VectorXd::Zero(n_);  // (n) scratch of stick_margin
