@@ -1,0 +1,112 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// Unilateral contacts in any units (issues #31 item 3 and #29 item 2): the bouncing ball of the
+// examples, written in metres, in millimetres (h0 = 1000, g = 9810) and with masses from 1e-6 to
+// 1e6, against the closed forms of its impacts on the default settings of its file. The contact's
+// gap and closing-speed thresholds and the rest criterion are relative to the run's scales
+// (docs/simulation.md, "Scales and tolerances"), so the impact times are the same in every unit
+// system and the speeds scale with the lengths.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "ukdyn/dynamics/contact.hpp"
+#include "ukdyn/modelfile/model.hpp"
+#include "ukdyn/modelfile/run.hpp"
+#include "ukdyn/simulation/simulate.hpp"
+
+namespace ukdyn {
+namespace UKDYN_TEST_FILE {
+
+const std::string kBall = std::string(UKDYN_EXAMPLES_DIR) + "/bouncing_ball.yaml";
+
+std::vector<ContactEvent> impacts_of(const Trajectory& tr) {
+  std::vector<ContactEvent> out;
+  for (const ContactEvent& e : tr.stats.contact_events) {
+    if (e.kind == ContactEvent::Kind::kImpact) out.push_back(e);
+  }
+  return out;
+}
+
+// The k-th impact (k = 0, 1, …) of a ball dropped from h0 with restitution e: at
+// t_k = t0 (1 + 2 (e + … + e^k)), t0 = sqrt(2 h0 / g), arriving at e^k v0 (v0 = g t0) and
+// leaving at e^(k+1) v0. The impacts accumulate at t_inf = t0 (1 + e) / (1 − e).
+struct Bounces {
+  double t0, v0, e;
+  double time(int k) const {
+    double sum = 1.0, ek = 1.0;
+    for (int j = 1; j <= k; ++j) {
+      ek *= e;
+      sum += 2.0 * ek;
+    }
+    return t0 * sum;
+  }
+  double arrival(int k) const { return v0 * std::pow(e, k); }
+  double t_inf() const { return t0 * (1.0 + e) / (1.0 - e); }
+};
+
+TEST(ContactUnits, TheBouncingBallsImpactsAreTheSameInEveryUnitSystem) {
+  struct Case {
+    const char* what;
+    double length;  // metres per unit of length
+    double mass;    // kg per unit of mass
+  };
+  for (const double e : {0.3, 0.5, 0.8}) {
+    const Trajectory si = run_model(load_model(kBall, {{"e", e}})).trajectory;
+    ASSERT_EQ(si.stats.status, Status::kOk) << si.stats.message;
+    const std::vector<ContactEvent> si_impacts = impacts_of(si);
+    for (const Case c : {Case{"metres", 1.0, 1.0}, Case{"millimetres", 1e-3, 1.0},
+                         Case{"kilometres", 1e3, 1.0}, Case{"milligrams", 1.0, 1e-6},
+                         Case{"tonnes", 1.0, 1e3}, Case{"millimetres and megagrams", 1e-3, 1e6}}) {
+      SCOPED_TRACE(std::string(c.what) + ", e = " + std::to_string(e));
+      const double h0 = 1.0 / c.length, g = 9.81 / c.length, m = 0.5 / c.mass;
+      const Model model = load_model(kBall, {{"e", e}, {"h0", h0}, {"g", g}, {"m", m}});
+      const Trajectory tr = run_model(model).trajectory;
+      ASSERT_EQ(tr.stats.status, Status::kOk) << tr.stats.message;
+      const std::vector<ContactEvent> impacts = impacts_of(tr);
+      const Bounces b{std::sqrt(2.0 * h0 / g), std::sqrt(2.0 * h0 * g), e};
+      // (the closed forms for the first four impacts, well above the rest speed, that fall
+      // before t_end = 2 s: three at e = 0.8)
+      int checked = 0;
+      while (checked < 4 && b.time(checked) < 2.0) ++checked;
+      ASSERT_GE(impacts.size(), std::size_t(checked));
+      for (int k = 0; k < checked; ++k) {
+        const ContactEvent& ik = impacts[std::size_t(k)];
+        EXPECT_NEAR(ik.t, b.time(k), 5e-8 * b.time(k)) << "impact " << k;
+        EXPECT_NEAR(-ik.speed_before, b.arrival(k), 1e-7 * b.v0) << "impact " << k;
+        EXPECT_NEAR(ik.speed_after, b.arrival(k + 1), 1e-7 * b.v0) << "impact " << k;
+        // (times to 5e-8, speeds to 1e-7 of v0: the fourth impact at e = 0.3 arrives at 2.7 %
+        // of v0, its time 1.0e-8 and its speed 1.9e-8 v0 from the closed form)
+        // the kinetic energy lost, (1 − e²) m (e^k v0)² / 2, in the file's units
+        const double lost = 0.5 * m * (1.0 - e * e) * b.arrival(k) * b.arrival(k);
+        EXPECT_NEAR(-ik.energy_change, lost, 1e-7 * 0.5 * m * b.v0 * b.v0);
+      }
+      // the same impacts as in metres, to 5e-8 of their time (the late, slow impacts of a Zeno
+      // sequence differ by up to 1.6e-8), and as many of them (the rest criterion is relative to
+      // the fastest impact)
+      EXPECT_EQ(impacts.size(), si_impacts.size());
+      for (std::size_t k = 0; k < std::min(impacts.size(), si_impacts.size()); ++k) {
+        EXPECT_NEAR(impacts[k].t, si_impacts[k].t, 5e-8 * si_impacts[k].t) << "impact " << k;
+      }
+      // a comparable number of steps (the metamorphic suite's bound: within 2x)
+      EXPECT_LE(tr.stats.steps, 2 * si.stats.steps);
+      EXPECT_GE(2 * tr.stats.steps, si.stats.steps);
+      // the rest where the impacts accumulate (e = 0.3 and 0.5 within t_end = 2 s): the ball
+      // then lies on the floor, y = 0 to the projection's tolerance in the file's lengths
+      if (b.t_inf() < 2.0) {
+        const ContactEvent& last = tr.stats.contact_events.back();
+        EXPECT_EQ(last.kind, ContactEvent::Kind::kRest);
+        EXPECT_NEAR(last.t, b.t_inf(), 1e-4 * b.t_inf());
+        EXPECT_NEAR(tr.q.back(), 0.0, 1e-9 * h0);
+        EXPECT_NEAR(tr.qd.back(), 0.0, 1e-9 * b.v0);
+      } else {
+        EXPECT_GT(tr.q.back(), 0.0);  // (e = 0.8: still bouncing at t = 2 s, t_inf = 4.06 s)
+      }
+    }
+  }
+}
+
+}  // namespace UKDYN_TEST_FILE
+}  // namespace ukdyn
