@@ -1,0 +1,386 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// Internal (not installed): the Run of simulate(), everything a run shares between the
+// integrator's callbacks, and what the files of the simulation driver share. The driver
+// (simulate.cpp) splits [t_start, t_end] into segments, integrates each and restarts at events;
+// the Run's members are defined one job per file:
+//   run_drift.cpp       construction, drift control after each step (projection), and the checks
+//                       that stop a run that diverges or leaves its branch (docs/simulation.md,
+//                       "Drift control", "A run that diverges", "Singular configurations")
+//   run_events.cpp      the first event inside a step (Coulomb contacts' and switches') and the
+//                       switches of the non-smooth functions (docs/simulation.md, "Switch events")
+//   run_stick_slip.cpp  Coulomb contacts: stick, slide, or slide through v_rel = 0
+//                       (docs/friction.md, "Stick and slip, as events")
+//   run_output.cpp      the samples (recorded or streamed) and the progress report
+//   settings_check.cpp  the run's settings: check_settings, validate, sample times, segment ends
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+#include <cstddef>
+#include <exception>
+#include <functional>
+#include <limits>
+#include <string>
+#include <vector>
+
+#include "dynamics/internal.hpp"
+#include "simulation/contact_events.hpp"
+#include "simulation/energy_balance.hpp"
+#include "simulation/initial_check.hpp"
+#include "simulation/integrator.hpp"
+#include "simulation/sample_grid.hpp"
+#include "ukdyn/core/format.hpp"
+#include "ukdyn/dynamics/forward.hpp"
+#include "ukdyn/dynamics/projection.hpp"
+#include "ukdyn/simulation/options.hpp"
+#include "ukdyn/simulation/simulate.hpp"
+
+namespace ukdyn::detail {
+
+// notes a run keeps (RunStatistics::notes)
+inline constexpr std::size_t kMaxNotes = 20;
+// a run is declared chattering at a switch (SimulationOptions::switch_events) when kSwitchBurst
+// switch events, or kSwitchBurst accepted steps after one (any steps: into, at or between
+// switches), fall within kSwitchBurstSpan of the run's time span
+inline constexpr std::size_t kSwitchBurst = 1000;
+inline constexpr double kSwitchBurstSpan = 1e-6;
+// the step into a switch below which the run restarts at the switch (see Run::find_event)
+inline constexpr double kSwitchApproach = 1e-10;
+// a run diverges when its kinetic energy exceeds kDivergence times the model's energy scale,
+// T + |V| at its start (Run::diverged): the speeds then exceed the initial ones by 10⁴ and more.
+// It stops there once kDivergentSteps steps in a row have done so at a pace that cannot reach
+// t_end within max_steps (Run::diverges).
+inline constexpr double kDivergence = 1e8;
+inline constexpr int kDivergentSteps = 3;
+// a contact carried through a dead centre restarts past it where the rank margin is back to
+// this (Run::carried_past)
+inline constexpr double kCarriedMargin = 3e-5;
+// below this rank margin (Workspace::rank_margin, σ_r / σ_1 of W) growing speeds are those of a
+// configuration where the constraints lose rank, not a divergence
+inline constexpr double kDivergenceRankMargin = 1e-3;
+
+// What a Coulomb contact does: slides (friction acts), sticks (the stick constraint acts), or
+// slides through a zero of v_rel at which it could not stick (the zero is its next event).
+enum class ContactMode : unsigned char { kSliding, kSticking, kPassing };
+
+// three significant digits, for messages
+inline std::string format(double v) { return detail::format_short(v); }
+
+// where each front end sets max_steps (the end of every message about the step limit)
+inline const std::string kRaiseMaxSteps =
+    "simulate: max_steps in a model file, --max-steps on the command line, max_steps= in Python";
+
+// "the constraints … contradict each other …" / "… the mechanism locks up …" (run messages;
+// run_drift.cpp)
+std::string describe_conflict(const ConstraintConflict& c, double t);
+
+// the run's settings (settings_check.cpp): the sizes of q0, qd0 and the per-constraint drift
+// settings (the others: check_settings); the run's sample times; the segments' ends (t_start,
+// breakpoints inside, t_end)
+void validate(const System& sys, const Eigen::Ref<const VectorXd>& q0,
+              const Eigen::Ref<const VectorXd>& qd0, const SimulationOptions& o);
+detail::SampleGrid sample_grid(const System& sys, const SimulationOptions& o);
+std::vector<double> segment_ends(const System& sys, const SimulationOptions& o);
+
+// Everything a run shares between the integrator's callbacks.
+class Run {
+ public:
+  // a Run is neither copied nor moved (its members refer to each other)
+  Run(const Run&) = delete;
+  Run& operator=(const Run&) = delete;
+  ~Run() {
+    if (!finished_) return;
+    try {
+      finished_(ws_);
+    } catch (...) {  // (an observer's failure must not end the program in a destructor)
+    }
+  }
+  // `finished`: called with the workspace when the run ends (detail::simulate_observed)
+  Run(const System& sys, const SimulationOptions& o, Trajectory& traj,
+      std::function<void(const Workspace&)> finished = {});
+
+  Workspace& workspace() { return ws_; }
+  bool projecting() const { return projecting_; }
+
+  // --- drift control (run_drift.cpp; docs/simulation.md, "Drift control") ------------------
+  // q_, q'_ ← x projected onto the constraints of p (positions, then velocities)
+  Status project_into(double t, const double* x, const ProjectionOptions& p, ProjectionResult& rp,
+                      ProjectionResult& rv);
+  // drift control of x at t onto the constraints of p; `changed`: x was projected
+  Status project(double t, double* x, const ProjectionOptions& p, bool& changed);
+  // removes from a step's error estimate err what project() after the step removes
+  bool project_error(double t, const double* x, double* err);
+  // projects a stage state x in place onto the projected constraints; false when it failed
+  bool project_stage(double t, double* x);
+  // drift control after an accepted step; then a requested stop (see stop_requested)
+  Status after_step(double t, double* x, bool& changed);
+  // drift control at a restart after a switch event (the state there is a step's, not yet
+  // projected)
+  Status project_drift(double t, double* x) {
+    bool changed = false;
+    return projecting_ ? project(t, x, projection_, changed) : Status::kOk;
+  }
+  // --- a run that diverges (docs/simulation.md, "A run that diverges") -----------------------
+  // the kinetic energy at (t, x) exceeds kDivergence times the model's energy scale (`why`)
+  bool diverged(double t, const double* x, std::string& why);
+
+  // --- events inside a step, and switches (run_events.cpp; docs/simulation.md, "Switch events")
+  // the first switch of a contact or a switching function inside [t0, t1] (see
+  // SegmentHooks::find_event), or NaN
+  double find_event(double t0, const double* x0, double t1, const double* x1,
+                    const detail::SegmentHooks::Dense& dense);
+
+  // The last event found by find_event is no switch but rkf78 handing the run to dopri5 at the
+  // start of the step just taken, which it discards: in that step a Coulomb contact slides into
+  // a rank drop (the rank margin at its end below kSingularMargin), or stops where the
+  // mechanism passes a dead centre (passes_at_rank_drop). dopri5 and BDF carry such a contact
+  // through the dead centre (carry_through); under rkf78 the same treatment, and the earlier one
+  // (the stop no restart point), still left the branch at some mu — the twin arms at mu = 0.4–0.5,
+  // the governor's swing at 0.3 and 0.5, once with status ok (docs/reliability.md) — so the run
+  // goes on with dopri5 from the step's start, before the dead centre, and the notes say so.
+  bool hands_over() const { return hands_over_; }
+  // the width of the last switch's bracket (the restart is at its old end)
+  double switch_width() const { return switch_width_; }
+  // true when every function that switched at the last switch event is on its new side
+  bool switch_settled(double t, const double* x);
+  // true when the run locates them (SimulationOptions::switch_events and switching functions)
+  bool locates_switches() const { return g_.size() > 0; }
+  // the last event found by find_event is a switch (not a contact's)
+  bool switch_event() const { return switch_event_; }
+  // ... or the report of steps that crawl after a switch (no switch: see switch_chatters)
+  bool switch_crawls() const { return crawl_; }
+  // ... or a restart on the way to a switch (no switch yet: see find_event)
+  bool switch_approach() const { return approach_; }
+  // g = the switching functions at (t, x)
+  void evaluate_switches(double t, const double* x) {
+    q_ = Eigen::Map<const VectorXd>(x, n_);
+    qd_ = Eigen::Map<const VectorXd>(x + n_, n_);
+    sys_.switching_functions(q_, qd_, t, ws_.callables.get(), g_);
+  }
+  // each function's side: the sign of g at (t, x) (0: at its switch)
+  void initial_switch_sides(double t, const double* x);
+  // the time just before the first switch in (t0, t1], or NaN (bracket end into hi)
+  double find_switch(double t0, const double* x0, double t1, const double* x1,
+                     const detail::SegmentHooks::Dense& dense, double& hi);
+  // after a switch event at t: true when the run chatters (`message` then says so)
+  bool switch_chatters(double t, std::string& message);
+
+  // --- Coulomb contacts: stick, slide, or slide through v_rel = 0 (run_stick_slip.cpp;
+  // docs/friction.md) ---------------------------------------------------------------------------
+  // the friction force while sliding, the stick constraint while sticking
+  void apply_contact_modes();
+  // initial modes: a contact at rest sticks when sticking is admissible, else slides
+  void initial_contact_modes(double t, double* x);
+  // a Coulomb contact whose normal constraint is a unilateral contact that is open: no normal
+  // force, so no friction (N = 0), no stick and no stop events (docs/contact.md, "Friction")
+  bool separated(std::size_t c) const {
+    const Index k = sys_.friction_contacts()[c].normal_constraint;
+    return sys_.constraint(k).is_unilateral() && ws_.activity_override[std::size_t(k)] == 0;
+  }
+  // the modes after an impact or release of unilateral contacts at (t, x)
+  void contacts_changed(double t, double* x);
+  // a contact with mu = mu_static = 0 exerts no friction in any mode: it never sticks, and its
+  // stops and reversals are no events (each would restart the integrator for nothing)
+  bool frictionless(std::size_t c) const { return sys_.friction_contacts()[c].mu_static == 0.0; }
+  // switches the contact found by the last find_event at (t, x)
+  Status switch_contact(double t, double* x);
+
+  // --- samples and progress (run_output.cpp) ---------------------------------------------------
+  // SimulationOptions::should_stop, asked once a step until it says yes (then remembered)
+  bool stop_requested() {
+    if (!stop_requested_ && o_.should_stop && o_.should_stop()) stop_requested_ = true;
+    return stop_requested_;
+  }
+
+  // the run's sample times (sorted), which record() marks off as they are recorded
+  void set_samples(const detail::SampleGrid& samples) { samples_ = &samples; }
+
+  // samples recorded so far, and the time of the last one
+  long recorded() const { return traj_.stats.samples; }
+  double last_time() const { return last_time_; }
+  // the energy balance of the samples recorded
+  const detail::EnergyBalance& balance() const { return balance_; }
+  // what the sample sink threw (null when nothing)
+  const std::exception_ptr& sink_error() const { return sink_error_; }
+
+  // the method taking the steps from now on (for the progress report)
+  void set_integrator(Integrator method) { progress_.integrator = method; }
+  // records a sample at t from the state x (projected first, when projecting); returns
+  // kInterrupted after recording it when a stop was requested, unless it is the `last` one
+  Status record(double t, const double* x, bool last = false);
+
+  const std::string& failure() const { return failure_; }
+  // the unilateral contacts, whose impacts' work record() writes (docs/contact.md)
+  void set_contacts(const detail::ContactEvents* contacts) { contacts_ = contacts; }
+
+ private:
+  // (run_drift.cpp)
+  // after an accepted step: the run diverges (see diverged) at a crawl
+  bool diverges(double t, const double* x);
+  // after an accepted step: the motion left its branch at a singular configuration
+  bool leaves_branch(double t, const double* x);
+  // the branch check's own workspace, in the run's modes (see leaves_branch)
+  Workspace& branch_workspace();
+  static constexpr double kBranchFactor = 10.0;
+  // (a step inside the passage, held to the accelerations at its entry: an order of magnitude
+  // more room, as the accelerations along the branch may grow inside; the twin arms' slow
+  // passage jumps by 18 times this bound, a governor's Coulomb passage peaks at 0.1 of it)
+  static constexpr double kStepFactor = 100.0;
+
+  // (run_output.cpp)
+  // whether a sample time in (last recorded sample, t] has not been recorded yet
+  bool sample_due(double t) const {
+    return samples_ && next_sample_ < samples_->size() && (*samples_)[next_sample_] <= t;
+  }
+  // reports the progress of a step to t (SimulationOptions::progress)
+  void report_progress(double t);
+
+  // (run_stick_slip.cpp; relative_velocity and locate also serve run_events.cpp)
+  // contact c's v_rel at (t, x) into the head of v; returns its length
+  Index relative_velocity(std::size_t c, double t, const double* x, VectorXd& v) {
+    q_ = Eigen::Map<const VectorXd>(x, n_);
+    qd_ = Eigen::Map<const VectorXd>(x + n_, n_);
+    detail::sliding_velocity(sys_, ws_, Index(c), q_, qd_, t, false);
+    const Index k = Index(sys_.friction_contacts()[c].coordinates.size());
+    v.head(k) = ws_.sliding.col(Index(c)).head(k);
+    return k;
+  }
+
+  // the first s in (t0, t1] with g(s) <= 0, by bisection on the dense output (g(t0) > 0 is
+  // assumed), or NaN when g(t1) > 0
+  // (the last time found with g > 0 into *last_positive when given)
+  template <class G>
+  double locate(double t0, double t1, const double* x1, const detail::SegmentHooks::Dense& dense,
+                G&& g, double* last_positive = nullptr) {
+    if (g(t1, x1) > 0.0) return std::numeric_limits<double>::quiet_NaN();
+    double lo = t0, hi = t1;
+    while (hi - lo > 1e-14 * std::max(1.0, std::abs(hi))) {
+      const double mid = 0.5 * (lo + hi);
+      dense(mid, event_x_.data());
+      (g(mid, event_x_.data()) > 0.0 ? lo : hi) = mid;
+    }
+    if (last_positive) *last_positive = lo;
+    return hi;
+  }
+
+  // mu_static N − |holding force|, with the contact sticking, at (t, x); NaN when the
+  // constraints with the stick rows have no solution there
+  double stick_margin(std::size_t c, double t, const double* x);
+  // sticks contact c at (t, x) when sticking is admissible; else false
+  bool try_stick(std::size_t c, double t, double* x, bool report = true);
+  // the kinetic energy that projecting the velocities of x onto contact c's stick rows removes
+  double stick_energy_loss(std::size_t c, double t, const double* x, ProjectionResult& rv,
+                           double& T_before);
+  // the kinetic energy a stick may remove (rule 1 of try_stick): rtol · the largest of the run
+  double stick_allowance(double T_before) const {
+    return std::max(o_.rtol, 1e-14) * std::max(peak_kinetic_, T_before);
+  }
+  // contact c's stop at te is a kinematic passage at a rank drop (no restart there)
+  bool passes_at_rank_drop(std::size_t c, double te, const detail::SegmentHooks::Dense& dense);
+  // contact c, sliding near a rank drop, is carried through the dead centre
+  bool carry_through(std::size_t c, Index k, double t1, const double* x1, double v_stop);
+  // the restart after a carried contact's zero of v_rel at tz
+  double carried_past(double tz, double t1, const double* x1,
+                      const detail::SegmentHooks::Dense& dense);
+  // contact c's carried friction force is held (see carry_through)
+  bool held(std::size_t c) const {
+    return ws_.slip_hint_held[std::size_t(sys_.friction_contacts()[c].force)] != 0;
+  }
+  // sign × contact c's passing direction on its sliding coordinates, into holding_ (n)
+  const VectorXd& carried_direction(std::size_t c, double sign);
+  // contact c slides from v_rel = 0 against its impending motion; false when friction could
+  // hold it
+  bool start_sliding(std::size_t c, double t, const double* x);
+  // a_rel = P (q''_c − u') of contact c from the last evaluation into velocity_
+  void relative_acceleration(std::size_t c, double t);
+  // the direction of the friction at |v_rel| <= eps (the contact's slip hint)
+  void set_slip_hint(std::size_t c, const Eigen::Ref<const VectorXd>& along);
+
+  // the largest violations of the run so far (RunStatistics) take in (p, v)
+  void note_violation(double p, double v) {
+    traj_.stats.max_position_violation = std::max(traj_.stats.max_position_violation, p);
+    traj_.stats.max_velocity_violation = std::max(traj_.stats.max_velocity_violation, v);
+  }
+
+  std::function<void(const Workspace&)> finished_;
+  bool projected_last_ = false;  // the last project() changed the state
+  const System& sys_;
+  const SimulationOptions& o_;
+  Workspace ws_;
+  Trajectory& traj_;
+  Index n_;
+  VectorXd q_, qd_;
+  // the work channels after q, q' in x (quiet unless BDF, see WorkLayout)
+  detail::WorkLayout works_ = detail::WorkLayout(sys_, o_.integrator != Integrator::kBDF);
+  std::vector<double> sample_ = std::vector<double>(std::size_t(2 * n_ + works_.count));
+  ProjectionOptions projection_;
+  bool projecting_ = false;
+  std::vector<ContactMode> mode_;                // (contacts) what contact c does
+  std::vector<unsigned char> separated_before_;  // (contacts) normal contact open before an event
+  MatrixXd passing_ = MatrixXd::Zero(
+      n_,
+      Index(sys_.friction_contacts().size()));  // (n × contacts)
+                                                // head of col c: v_rel's direction when c passes
+  std::vector<double> trial_ = std::vector<double>(sample_.size());  // a trial state
+  double peak_kinetic_ = 0.0;  // largest kinetic energy at the samples so far
+  double energy_scale_ = 0.0;  // largest T + |V| of the early samples (see diverged)
+  double last_step_end_ = -std::numeric_limits<double>::infinity();  // t of the last step
+  int crawling_steps_ = 0;  // steps in a row, up to now, that diverged at a crawl
+  // a passage of a singular configuration (see leaves_branch): under way; its start's time, the
+  // M-norm of q'' there, and q' there (n)
+  std::unique_ptr<Workspace> branch_ws_;  // (branch_workspace)
+  bool in_pose_ = false;
+  double pose_t_ = 0.0, pose_acceleration_ = 0.0, step_t_ = 0.0, step_acceleration_ = 0.0;
+  VectorXd pose_velocity_ = VectorXd::Zero(n_), step_velocity_ = VectorXd::Zero(n_);
+  VectorXd holding_ = VectorXd::Zero(n_);        // (n) holding force of the last stick_margin
+  VectorXd reaction_ = VectorXd::Zero(n_);       // (n) scratch of stick_margin: R
+  VectorXd reaction_part_ = VectorXd::Zero(n_);  // (n) scratch of stick_margin
+  VectorXd normal_ = VectorXd::Zero(n_);         // (n) scratch of stick_margin: R_N
+  MatrixXd normals_;                             // (rows × n) the normal constraint's rows of A
+  VectorXd velocity_ = VectorXd::Zero(n_);       // (n) sliding velocities (head)
+  VectorXd direction_ = VectorXd::Zero(n_);      // (n) sliding direction at the step's start (head)
+  std::vector<double> event_x_ = std::vector<double>(sample_.size());  // dense state
+  Index switching_ = -1;  // the contact of the last event found
+  // the switching functions (System::switch_count, none unless SimulationOptions::switch_events):
+  // their values (g_ scratch, g1_ at the end of the step), the side each is on (sign of g,
+  // flipped at its event: the restart state may lie within roundoff on the old side), the ones
+  // crossing in the step being checked, and the times of the last kSwitchBurst switch events
+  Index switches_ = o_.switch_events ? sys_.switch_count() : 0;
+  VectorXd g_ = VectorXd::Zero(switches_), g1_ = VectorXd::Zero(switches_);
+  std::vector<signed char> side_ = std::vector<signed char>(std::size_t(switches_), 0);
+  std::vector<std::size_t> crossing_ = std::vector<std::size_t>(std::size_t(switches_), 0);
+  std::size_t crossing_count_ = 0;
+  std::size_t switch_fired_ = 0;
+  bool switch_event_ = false;
+  std::vector<double> burst_ = std::vector<double>(switches_ > 0 ? kSwitchBurst : 0, 0.0);
+  std::size_t burst_next_ = 0;
+  std::vector<unsigned char> flipped_ = std::vector<unsigned char>(std::size_t(switches_), 0);
+  bool flipped(std::size_t i) const { return flipped_[i] != 0; }  // at the last switch event
+  double switch_width_ = 0.0;  // hi − lo of the last switch event's bracket
+  // the switch that opened the window of the crawl test (NaN: none open), and the accepted
+  // steps since then (up to kSwitchBurst)
+  double window_start_ = std::numeric_limits<double>::quiet_NaN();
+  std::size_t steps_since_switch_ = 0;
+  bool crawl_ = false;       // the steps after a switch crawl (find_event)
+  bool approach_ = false;    // the last event is a restart before a switch
+  bool hands_over_ = false;  // the last event is rkf78 handing the run to dopri5
+  bool landed_ = false;      // the last switch found is a step landing on it
+  std::string failure_;
+  const detail::ContactEvents* contacts_ = nullptr;  // (see set_contacts)
+  std::string refusal_;      // why the last refused stick was refused (empty: friction cannot hold)
+  ProgressReport progress_;  // what the last progress report said
+  // a requested stop (SimulationOptions::should_stop): asked for; accepted steps since, waiting
+  // for a sample due inside the step; the sample times and the first one not recorded yet
+  bool stop_requested_ = false;
+  long stop_wait_ = 0;
+  static constexpr long kMaxStopWait = 1000;
+  const detail::SampleGrid* samples_ = nullptr;
+  std::size_t next_sample_ = 0;
+  // streamed runs (SimulationOptions::sample_sink): the sample being recorded; what the sink threw
+  Trajectory one_;
+  std::exception_ptr sink_error_;
+  double last_time_ = 0.0;         // time of the last sample recorded
+  detail::EnergyBalance balance_;  // of the samples recorded
+};
+
+}  // namespace ukdyn::detail

@@ -1,0 +1,289 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// Event location inside a step (SegmentHooks::find_event): the first stop, release or passage of
+// a Coulomb contact (its modes: run_stick_slip.cpp), or the first switch of a non-smooth function
+// (System::switch_count), located by bisection on the step's dense output; the sides of the
+// switching functions, and the chattering test at a switch (docs/simulation.md, "Switch events").
+// The class: simulation/run.hpp.
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <string>
+
+#include "simulation/run.hpp"
+
+namespace ukdyn::detail {
+
+// the first switch of a contact inside [t0, t1] (see SegmentHooks::find_event)
+double Run::find_event(double t0, const double* x0, double t1, const double* x1,
+                       const detail::SegmentHooks::Dense& dense) {
+  const auto& contacts = sys_.friction_contacts();
+  double first = std::numeric_limits<double>::quiet_NaN();
+  switching_ = -1;
+  Index handover = -1;  // the contact whose passage rkf78 hands to dopri5 (see hands_over)
+  // the rank margin at (or within the step's last stages before) t1: the step's last evaluation
+  const double margin = ws_.rank_margin;
+  for (std::size_t c = 0; c < contacts.size(); ++c) {
+    if (frictionless(c) || separated(c)) continue;
+    double te = std::numeric_limits<double>::quiet_NaN();
+    switch (mode_[c]) {
+      case ContactMode::kSticking:
+        // the holding force reaches mu_static N: mu_static N − |holding force| falls to zero
+        te = locate(t0, t1, x1, dense,
+                    [&](double t, const double* x) { return stick_margin(c, t, x); });
+        break;
+      case ContactMode::kSliding: {
+        // the sliding speed along the step's initial direction falls to v_stop = 100 eps: the
+        // contact stops, or would have to, whether its velocity would reverse or decay to
+        // rest (where the regularized law would only creep); the stop is then early by
+        // v_stop / deceleration, the position off by v_stop² / (2 deceleration)
+        const double v_stop = 100.0 * contacts[c].eps;
+        const Index k = relative_velocity(c, t0, x0, direction_);
+        const double speed = direction_.head(k).norm();
+        if (speed <= v_stop) continue;
+        // sliding clearly: the start direction of a release or passage has served (on a
+        // curved path it would no longer oppose the motion when the contact next slows down)
+        if (ws_.slip_hint.col(contacts[c].force).squaredNorm() > 0.0) set_slip_hint(c, VectorXd());
+        direction_.head(k) /= speed;
+        // near a rank drop: rkf78 hands the run to dopri5 before the step (see hands_over);
+        // still sliding clearly at t1: carried through (see carry_through)
+        if (margin < detail::kSingularMargin && progress_.integrator == Integrator::kRKF78) {
+          te = t0;
+          handover = Index(c);
+          break;
+        }
+        if (margin < detail::kSingularMargin && carry_through(c, k, t1, x1, v_stop)) {
+          continue;
+        }
+        te = locate(t0, t1, x1, dense, [&](double t, const double* x) {
+          relative_velocity(c, t, x, velocity_);
+          return velocity_.head(k).dot(direction_.head(k)) - v_stop;
+        });
+        // (a kinematic passage at a rank drop: no restart there)
+        if (!std::isnan(te) && passes_at_rank_drop(c, te, dense)) {
+          if (progress_.integrator == Integrator::kRKF78) {
+            te = t0;
+            handover = Index(c);
+            break;
+          }
+          te = std::numeric_limits<double>::quiet_NaN();
+          ++traj_.stats.stick_refusals;
+        }
+        break;
+      }
+      case ContactMode::kPassing: {
+        // a contact that could not stick: the zero of v_rel along its direction then
+        const Index k = Index(contacts[c].coordinates.size());
+        auto along = [&](double t, const double* x) {
+          relative_velocity(c, t, x, velocity_);
+          return velocity_.head(k).dot(passing_.col(Index(c)).head(k));
+        };
+        // carried through a dead centre: the friction turns at the end of the step that
+        // crossed v_rel = 0 (switch_contact), outside the dead centre's neighbourhood
+        // (or out of the neighbourhood again, where the law takes over)
+        if (held(c)) {
+          if (along(t1, x1) <= 0.0) {
+            te = carried_past(locate(t0, t1, x1, dense, along), t1, x1, dense);
+          } else if (margin >= 2.0 * detail::kSingularMargin) {
+            te = t1;
+          }
+          break;
+        }
+        if (along(t0, x0) <= 0.0) {
+          mode_[c] = ContactMode::kSliding;  // passed already (within rounding of the start)
+          continue;
+        }
+        te = locate(t0, t1, x1, dense, along);
+        break;
+      }
+    }
+    if (!std::isnan(te) && (std::isnan(first) || te < first)) {
+      first = te;
+      switching_ = Index(c);
+    }
+  }
+  hands_over_ = handover >= 0 && switching_ == handover;
+  // the first sign change of a switching function, when it comes before the contacts' event
+  switch_event_ = false;
+  if (!locates_switches()) return first;
+  // a crawl after a switch: kSwitchBurst accepted steps — those into a switch and at one
+  // included — since the switch that opened the window, within kSwitchBurstSpan of the run (a
+  // sliding mode: every step crosses the switch again, or the step size control rejects it;
+  // counting only the steps between switches missed a sliding mode entered from rest, which
+  // switched every few steps and crawled for 10⁷ steps)
+  if (!std::isnan(window_start_) && ++steps_since_switch_ >= kSwitchBurst) {
+    if (t1 - window_start_ <= kSwitchBurstSpan * (o_.t_end - o_.t_start)) {
+      crawl_ = true;
+      switch_event_ = true;
+      return t1;
+    }
+    window_start_ = std::numeric_limits<double>::quiet_NaN();
+    steps_since_switch_ = 0;
+  }
+  double hi = t1;
+  const double ts = find_switch(t0, x0, t1, x1, dense, hi);
+  approach_ = false;
+  if (!std::isnan(ts) && (std::isnan(first) || ts < first)) {
+    switch_event_ = true;
+    hands_over_ = false;
+    // the approach: the restart state at ts comes from one step [t0, ts] whose last stages
+    // lie at ts, within their own error of the switch, on either side (rkf78's end-node
+    // stages are not exact even for a quadratic motion: an error h·b·jump). So the run first
+    // restarts 3/4 of the way, where every stage is clearly on the old side, and finds the
+    // switch again from there, until the step to it is below kSwitchApproach (|t| ≥ 1)
+    if (ts - t0 > kSwitchApproach * std::max(1.0, std::abs(ts))) {
+      approach_ = true;
+      return ts - 0.25 * (ts - t0);
+    }
+    switch_width_ = hi - ts;
+    // (a switch opens the crawl test's window, or keeps the one a burst opened within the span)
+    if (!(ts - window_start_ <= kSwitchBurstSpan * (o_.t_end - o_.t_start))) {
+      window_start_ = ts;
+      steps_since_switch_ = 0;
+    }
+    // the functions across their side just past the switch take their new side (the run
+    // restarts just before it, at ts: every stage of the step to ts on the old side)
+    dense(hi, event_x_.data());
+    evaluate_switches(hi, event_x_.data());
+    double furthest = std::numeric_limits<double>::infinity();
+    for (std::size_t k = 0; k < crossing_count_; ++k) {
+      const std::size_t i = crossing_[k];
+      const double m = double(side_[i]) * g_[Index(i)];
+      if (m < furthest) {
+        furthest = m;
+        switch_fired_ = i;
+      }
+      const bool flip = m <= 0.0 || landed_;
+      flipped_[i] = flip ? 1 : 0;
+      if (flip) side_[i] = static_cast<signed char>(-side_[i]);
+    }
+    return ts;
+  }
+  if (std::isnan(first)) {
+    // no event: a function that was 0 takes the side where the step leaves it
+    for (Index i = 0; i < g1_.size(); ++i) {
+      if (side_[std::size_t(i)] == 0 && g1_[i] != 0.0) side_[std::size_t(i)] = g1_[i] > 0 ? 1 : -1;
+    }
+  }
+  return first;
+}
+
+// true when every function that switched at the last switch event is on its new side at
+// (t, x): side_i g_i > 0
+bool Run::switch_settled(double t, const double* x) {
+  evaluate_switches(t, x);
+  for (std::size_t k = 0; k < crossing_count_; ++k) {
+    const std::size_t i = crossing_[k];
+    if (side_[i] != 0 && double(side_[i]) * g_[Index(i)] <= 0.0 && flipped(i)) return false;
+  }
+  return true;
+}
+
+// each function's side: the sign of g at (t, x) (0: at its switch)
+void Run::initial_switch_sides(double t, const double* x) {
+  if (!locates_switches()) return;
+  evaluate_switches(t, x);
+  for (Index i = 0; i < g_.size(); ++i) {
+    side_[std::size_t(i)] = static_cast<signed char>(g_[i] > 0.0 ? 1 : g_[i] < 0.0 ? -1 : 0);
+    // a function at its switch at the start is as if it had just switched: the crawl test's
+    // window opens (a sliding mode entered from rest, x'' = −sign(x') − 0.5 from x' = 0,
+    // ends every step on its start side, the crossings in between unseen, and crawls)
+    if (side_[std::size_t(i)] == 0 && std::isnan(window_start_)) {
+      window_start_ = t;
+      switch_fired_ = std::size_t(i);
+    }
+  }
+}
+
+// The time just before the first switch in (t0, t1], or NaN: the functions whose value at t1
+// lies across their side (side_i g_i(t1) < 0) are the crossing ones, and the switch is
+// located by bisection on min over them of side_i g_i on the dense output: the bracket
+// [s, hi] of width 1e-14 |t|, s on the old side (returned: a restart there takes every stage
+// on the old side; from hi the last stage of rk4 would see the new one), hi past it. A step
+// that starts across the side already (a restart that the dynamics turns straight back: a
+// sliding mode) switches back at t0. (A function that leaves its side and comes back within
+// one step is not seen.)
+double Run::find_switch(double t0, const double* x0, double t1, const double* x1,
+                        const detail::SegmentHooks::Dense& dense, double& hi) {
+  evaluate_switches(t1, x1);
+  g1_ = g_;
+  crossing_count_ = 0;
+  landed_ = false;
+  for (Index i = 0; i < g_.size(); ++i) {
+    if (double(side_[std::size_t(i)]) * g_[i] < 0.0) crossing_[crossing_count_++] = std::size_t(i);
+  }
+  if (crossing_count_ == 0) {
+    // a step that lands on a switch (an output time there: g(t1) within 1e-12 of g(t0) of 0,
+    // on the old side) took its last stages at the tie, on either side: a switch at t1
+    evaluate_switches(t0, x0);
+    for (Index i = 0; i < g_.size(); ++i) {
+      const double s0 = double(side_[std::size_t(i)]) * g_[i],
+                   s1 = double(side_[std::size_t(i)]) * g1_[i];
+      if (s0 > 0.0 && s1 >= 0.0 && s1 <= 1e-12 * s0) crossing_[crossing_count_++] = std::size_t(i);
+    }
+    if (crossing_count_ == 0) return std::numeric_limits<double>::quiet_NaN();
+    landed_ = true;
+    hi = t1;
+    return t1;
+  }
+  auto margin = [&](double t, const double* x) {
+    evaluate_switches(t, x);
+    double m = std::numeric_limits<double>::infinity();
+    for (std::size_t k = 0; k < crossing_count_; ++k) {
+      const std::size_t i = crossing_[k];
+      m = std::min(m, double(side_[i]) * g_[Index(i)]);
+    }
+    return m;
+  };
+  if (margin(t0, x0) <= 0.0) {
+    hi = t0;
+    return t0;
+  }
+  double lo = t0;
+  hi = locate(t0, t1, x1, dense, margin, &lo);
+  return lo;
+}
+
+// After a switch event at t (or the crawl find_event reports): true when the run chatters —
+// the last kSwitchBurst switch events fell within kSwitchBurstSpan of the run's time span, or
+// the steps after one crawled (a sliding mode: the dynamics turns the motion back at the switch
+// from either side, and no step crosses it); `message` then says so.
+bool Run::switch_chatters(double t, std::string& message) {
+  const double span = kSwitchBurstSpan * (o_.t_end - o_.t_start);
+  const std::string& fired = sys_.switch_names()[switch_fired_];
+  const std::string name = "'" + fired + "'";
+  const std::string advice =
+      " (chattering: a sliding mode, where the dynamics turns the motion back at the switch "
+      "from either side, and no step can cross it). Regularize the switch (tanh(v/eps) for "
+      "sign(v)), or set switch_events to false to step across it unlocated";
+  // a switch of a constraint (a model file names it "g in the constraint 'NAME'") is a kink of
+  // it, where the velocity would have to jump: said so, not a sliding mode
+  const std::string marker = " in the constraint '";
+  const std::size_t at = fired.rfind(marker);
+  auto kink = [&](double t_kink) {
+    return "the constraint '" + fired.substr(at + marker.size()) +
+           " has a kink at t = " + format(t_kink) + " (where " + fired.substr(0, at) +
+           " changes sign): the motion cannot continue across it without an impact (ukdyn does "
+           "not model impacts); smooth the constraint or stop the run before it";
+  };
+  const bool of_constraint = at != std::string::npos && fired.back() == '\'';
+  if (crawl_) {
+    message = of_constraint
+                  ? kink(window_start_)
+                  : "switch events: " + format_number(long(kSwitchBurst)) +
+                        " steps after the switch of " + name + " at t = " + format(window_start_) +
+                        " advanced only to t = " + format(t) + advice;
+    return true;
+  }
+  burst_[burst_next_ % kSwitchBurst] = t;
+  ++burst_next_;
+  if (burst_next_ < kSwitchBurst) return false;
+  const double oldest = burst_[burst_next_ % kSwitchBurst];
+  if (!(t - oldest <= span)) return false;
+  message = of_constraint ? kink(oldest)
+                          : "switch events: " + format_number(long(kSwitchBurst)) +
+                                " sign changes (the last of " + name +
+                                ") between t = " + format(oldest) + " and " + format(t) + advice;
+  return true;
+}
+
+}  // namespace ukdyn::detail

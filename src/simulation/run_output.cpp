@@ -1,0 +1,119 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// The run's output: each sample (q, q', q'', the forces, energies, works, violations) recorded
+// into the trajectory or handed to the sample sink, and the progress report (docs/simulation.md,
+// "Interrupts and outputs", "Sample grid and streaming"). The class: simulation/run.hpp.
+#include <algorithm>
+#include <cmath>
+#include <exception>
+#include <string>
+
+#include "simulation/run.hpp"
+
+namespace ukdyn::detail {
+
+// records a sample at t from the state x (projected first, when projecting); returns
+// kInterrupted after recording it when a stop was requested, unless it is the `last` one
+Status Run::record(double t, const double* x, bool last) {
+  std::copy(x, x + sample_.size(), sample_.begin());
+  if (projecting_) {
+    bool changed = false;
+    ProjectionOptions quiet = projection_;
+    if (const Status s = project(t, sample_.data(), quiet, changed); s != Status::kOk) return s;
+  }
+  q_ = Eigen::Map<const VectorXd>(sample_.data(), n_);
+  qd_ = Eigen::Map<const VectorXd>(sample_.data() + n_, n_);
+  const Status s = forward_dynamics(sys_, ws_, q_, qd_, t);
+  // into the trajectory kept, or into one_ for the sink
+  const bool streamed = bool(o_.sample_sink);
+  Trajectory& out = streamed ? one_ : traj_;
+  if (streamed) {
+    for (auto* f : {&one_.t, &one_.q, &one_.qd, &one_.qdd, &one_.Qc_ideal, &one_.Qc_nonideal,
+                    &one_.lambda, &one_.position_violation, &one_.velocity_violation,
+                    &one_.kinetic_energy, &one_.potential_energy, &one_.energy, &one_.work_nonideal,
+                    &one_.work_ideal, &one_.work_drive, &one_.work_external, &one_.work_control,
+                    &one_.work_impact, &one_.energy_balance_residual}) {
+      f->clear();
+    }
+  }
+  auto push = [](std::vector<double>& f, const Eigen::Ref<const VectorXd>& v) {
+    f.insert(f.end(), v.data(), v.data() + v.size());
+  };
+  out.t.push_back(t);
+  push(out.q, q_);
+  push(out.qd, qd_);
+  push(out.qdd, ws_.qdd);
+  push(out.Qc_ideal, ws_.Qc_ideal);
+  push(out.Qc_nonideal, ws_.Qc_nonideal);
+  push(out.lambda, ws_.lambda);
+  const double T = detail::kinetic_energy(ws_, qd_),
+               V = sys_.potential_energy(q_, t, ws_.callables.get());
+  out.kinetic_energy.push_back(T);
+  out.potential_energy.push_back(V);
+  out.energy.push_back(T + V);
+  peak_kinetic_ = std::max(peak_kinetic_, T);
+  // (T + |V| at the start, as the divergence message says; the run's energy unit, the power of
+  // two nearest to max(T + |V|, |Q| l), where that is 0: a body released at rest at V = 0 has
+  // no energy yet)
+  if (!(energy_scale_ > 0.0)) {
+    energy_scale_ = T + std::abs(V) > 0.0 ? T + std::abs(V) : ws_.energy_unit;
+  }
+  // the work channels (absent ones are zero), and the balance so far
+  const auto work = [&](Index channel) {
+    return channel < 0
+               ? 0.0
+               : sample_[std::size_t(2 * n_ + channel)] / works_.scale(channel, ws_.energy_unit);
+  };
+  const double works[6] = {work(works_.nonideal),
+                           work(works_.ideal),
+                           work(works_.drive),
+                           work(works_.external),
+                           0.0,
+                           contacts_ ? contacts_->impact_work() : 0.0};
+  out.work_nonideal.push_back(works[0]);
+  out.work_ideal.push_back(works[1]);
+  out.work_drive.push_back(works[2]);
+  out.work_external.push_back(works[3]);
+  out.work_control.push_back(works[4]);
+  if (contacts_) out.work_impact.push_back(works[5]);
+  out.energy_balance_residual.push_back(balance_.add(t, T, V, T + V, works));
+  // violations of each constraint
+  evaluate_violations(sys_, ws_, q_, qd_, t);
+  for (Index k = 0; k < sys_.constraint_count(); ++k) {
+    const double p = position_violation(sys_, ws_, k), v = velocity_violation(sys_, ws_, k);
+    out.position_violation.push_back(p);
+    out.velocity_violation.push_back(v);
+    note_violation(p, v);
+  }
+  ++traj_.stats.samples;
+  last_time_ = t;
+  // the sample to the sink; what it throws stops the run (the driver rethrows it)
+  if (streamed) {
+    try {
+      o_.sample_sink(one_);
+    } catch (...) {
+      sink_error_ = std::current_exception();
+      failure_ = "the sample sink failed at t = " + format(t);
+      return Status::kInterrupted;
+    }
+  }
+  // the samples recorded (or passed) by now
+  while (samples_ && next_sample_ < samples_->size() && (*samples_)[next_sample_] <= t) {
+    ++next_sample_;
+  }
+  if (s != Status::kOk) {
+    failure_ = describe_status(sys_, ws_);
+    return s;
+  }
+  return !last && stop_requested() ? Status::kInterrupted : Status::kOk;
+}
+
+// step size from the times the steps reach (BDF reports converged attempts, so a rejected
+// attempt can make t go back: then the step is unknown and the last one is kept)
+void Run::report_progress(double t) {
+  if (progress_.steps > 0 && t > progress_.t) progress_.step = t - progress_.t;
+  progress_.t = t;
+  ++progress_.steps;
+  o_.progress(progress_);
+}
+
+}  // namespace ukdyn::detail
