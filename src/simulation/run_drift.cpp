@@ -289,9 +289,8 @@ bool Run::leaves_branch(double t, const double* x) {
   // off the branch, amplified by the inverse margin: a step is held to the accelerations at
   // the passage's ends, where the rank is clear)
   const double regular = leaving ? acceleration : 0.0;
-  const bool jump =
-      jumped(step_t_, std::max(pose_acceleration_, regular), step_velocity_, false) ||
-      (leaving && jumped(pose_t_, pose_acceleration_, pose_velocity_, true));
+  const bool jump = jumped(step_t_, std::max(pose_acceleration_, regular), step_velocity_, false) ||
+                    (leaving && jumped(pose_t_, pose_acceleration_, pose_velocity_, true));
   step_t_ = t;
   step_acceleration_ = acceleration;
   step_velocity_ = qd_;
