@@ -23,6 +23,26 @@ double asymmetry(const MatrixXd& M) {
   return worst;
 }
 
+bool check_mass_entries(const MatrixXd& M, double& scale, double& asym) {
+  // finite: Σ 0·M_ij is 0 unless an entry is NaN or ±Inf (Eigen's packed reductions)
+  if (!((M.array() * 0.0).sum() == 0.0)) return false;
+  scale = M.cwiseAbs().maxCoeff();
+  // each pair (M_ij, M_ji), i < j
+  const Index n = M.rows();
+  const double* p = M.data();
+  double worst = 0.0;
+  for (Index j = 1; j < n; ++j) {
+    const double* col = p + j * n;  // M_ij, i < j
+    const double* row = p + j;      // M_ji = row[i n]
+    for (Index i = 0; i < j; ++i) {
+      const double d = std::abs(col[i] - row[i * n]);
+      worst = d > worst ? d : worst;
+    }
+  }
+  asym = worst;
+  return true;
+}
+
 bool positive_semidefinite(const System& sys, Workspace& ws, double shift) {
   using Llt = Eigen::internal::llt_inplace<double, Eigen::Lower>;
   if (sys.mass_is_block_diagonal()) {

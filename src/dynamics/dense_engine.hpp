@@ -29,6 +29,11 @@ D& decomposition_of(Workspace& ws);
 /// max |M_ij − M_ji| over i < j.
 double asymmetry(const MatrixXd& M);
 
+/// The checks of an evaluated M in one pass over its pairs (M_ij, M_ji): false unless every
+/// entry is finite; else scale = max |M_ij| and asym = max over i < j of |M_ij − M_ji|, the
+/// values of M.cwiseAbs().maxCoeff() and asymmetry(M). O(n²), one read of each entry.
+bool check_mass_entries(const MatrixXd& M, double& scale, double& asym);
+
 /// Whether M + shift I is positive definite (M positive semi-definite to within shift), block
 /// by block when the system gives M as diagonal blocks (O(Σ size³) instead of O(n³)); uses the
 /// lower triangle of ws.M_aux as scratch. Once M was found singular, the constant blocks and
@@ -55,9 +60,11 @@ class DenseEngine final : public EngineOps {
     if (sys.mass_is_constant() && ws.mass_factorized) return Status::kOk;
     ws.mass_factorized = false;
     sys.mass_matrix(q, t, ws.callables.get(), ws.M);
-    if (!all_finite(ws.M)) return fail(ws, Status::kNonFiniteInput, "M", -1, t);
-    const double scale = ws.M.cwiseAbs().maxCoeff();
-    if (asymmetry(ws.M) > ws.options().symmetry_tolerance * scale) {
+    double scale = 0.0, asym = 0.0;
+    if (!check_mass_entries(ws.M, scale, asym)) {
+      return fail(ws, Status::kNonFiniteInput, "M", -1, t);
+    }
+    if (asym > ws.options().symmetry_tolerance * scale) {
       return fail(ws, Status::kMassNotSymmetric, "M", -1, t);
     }
     if (!ws.mass_singular &&

@@ -262,7 +262,32 @@ SparseDecomposition::SparseDecomposition(const System& sys)
   Lx_.assign(std::size_t(Lp_[std::size_t(m)]), 0.0);
   D_.assign(std::size_t(m), 0.0);
   Y_.assign(std::size_t(m), 0.0);
-  pattern_.assign(std::size_t(m), 0);
+  // the pattern of each row k of L_G in the order factor_G eliminates it: the union of the
+  // elimination-tree paths from the entries of column k of G, each path pushed in reverse (a
+  // topological order). It is structural, so it is found here once and factor_G only reads it.
+  // pattern_ holds the m + 1 starts (indices into pattern_), then the rows (nnz(L_G) entries)
+  {
+    const std::size_t ms = static_cast<std::size_t>(m);
+    std::vector<int> mark(ms, -1), path(ms), row(ms);
+    std::vector<int> starts(std::size_t(m) + 1, 0), rows;
+    for (int k = 0; k < m; ++k) {
+      mark[std::size_t(k)] = k;
+      int top = m;
+      for (int p = Gp_[std::size_t(k)]; p < Gp_[std::size_t(k) + 1]; ++p) {
+        int len = 0;
+        for (int i = Gi_[std::size_t(p)]; mark[std::size_t(i)] != k; i = parent_[std::size_t(i)]) {
+          path[std::size_t(len++)] = i;
+          mark[std::size_t(i)] = k;
+        }
+        while (len > 0) row[std::size_t(--top)] = path[std::size_t(--len)];
+      }
+      rows.insert(rows.end(), row.begin() + top, row.end());
+      starts[std::size_t(k) + 1] = int(rows.size());
+    }
+    pattern_.assign(starts.begin(), starts.end());
+    for (int& s : pattern_) s += m + 1;
+    pattern_.insert(pattern_.end(), rows.begin(), rows.end());
+  }
   dropped_.assign(std::size_t(m), 0);
   N_.setZero(m_, std::min<Index>(m_, kReservedNullity));
   null_rows_.assign(std::size_t(N_.cols()), 0);

@@ -590,25 +590,18 @@ void SparseDecomposition::factor_G() {
   double min_ratio = 1.0;
   for (int k = 0; k < m; ++k) {
     double* Y = Y_.data();
-    int top = m;
-    flag_[std::size_t(k)] = k;
     Lnz_[std::size_t(k)] = 0;
     Y[k] = 0.0;
-    // scatter column k of G; the pattern of row k of L_G is the union of the tree paths
+    // scatter column k of G
     for (int p = Gp_[std::size_t(k)]; p < Gp_[std::size_t(k) + 1]; ++p) {
-      int i = Gi_[std::size_t(p)];
-      Y[i] += Gx_[std::size_t(p)];
-      int len = 0;
-      for (; flag_[std::size_t(i)] != k; i = parent_[std::size_t(i)]) {
-        pattern_[std::size_t(len++)] = i;
-        flag_[std::size_t(i)] = k;
-      }
-      while (len > 0) pattern_[std::size_t(--top)] = pattern_[std::size_t(--len)];
+      Y[Gi_[std::size_t(p)]] += Gx_[std::size_t(p)];
     }
-    // d_k = G_kk − Σ l_ki² d_i
+    // d_k = G_kk − Σ l_ki² d_i over the pattern of row k of L_G (the union of the elimination
+    // tree's paths from column k's entries, in topological order: structural, found once by the
+    // analysis, at pattern_[pattern_[k] .. pattern_[k + 1]))
     double d = Y[k];
     Y[k] = 0.0;
-    for (; top < m; ++top) {
+    for (int top = pattern_[std::size_t(k)]; top < pattern_[std::size_t(k) + 1]; ++top) {
       const int i = pattern_[std::size_t(top)];
       const double yi = Y[i];
       Y[i] = 0.0;

@@ -49,6 +49,14 @@ void detail::mass_matrix_from_kinematics(const Tree& tree, TreeData& d, Eigen::R
           M(oi, oj) = M(oj, oi) = F.dot(d.S[std::size_t(j)].col(0));
           continue;
         }
+        if (nj == 7) {
+          // a floating base: a fixed-size 1 × 7 row (every link of a floating robot gets here)
+          const Eigen::Matrix<double, 1, 7> row =
+              F.transpose() * detail::floating_subspace(d.S[std::size_t(j)]);
+          M.block<1, 7>(oi, oj) = row;
+          M.block<7, 1>(oj, oi) = row.transpose();
+          continue;
+        }
       }
       M.block(oi, oj, ni, nj).noalias() = F.transpose() * d.S[std::size_t(j)];
       M.block(oj, oi, nj, ni) = M.block(oi, oj, ni, nj).transpose();
@@ -57,7 +65,10 @@ void detail::mass_matrix_from_kinematics(const Tree& tree, TreeData& d, Eigen::R
   for (Index i = 0; i < tree.link_count(); ++i) {
     const int ni = tree.dofs(i);
     if (ni == 1) {
-      Vector6d F = d.Ic[std::size_t(i)] * d.S[std::size_t(i)].col(0);
+      // (S_i = e_k: F is column k of Ic_i, the same bits as the product)
+      const int k = detail::subspace_pick(tree, i);
+      Vector6d F = k >= 0 ? Vector6d(d.Ic[std::size_t(i)].col(k))
+                          : Vector6d(d.Ic[std::size_t(i)] * d.S[std::size_t(i)].col(0));
       branch(i, F);
     } else if (ni > 1) {
       TreeData::S6 F = d.Ic[std::size_t(i)] * d.S[std::size_t(i)];

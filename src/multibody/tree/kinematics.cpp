@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // Forward kinematics of a tree: joint transforms X_i(q), subspaces S_i(q), world poses; the
 // frame Jacobian of a link point.
+#include <cmath>
 #include <stdexcept>
 #include <string>
 
@@ -51,7 +52,17 @@ void forward_kinematics(const Tree& tree, const Eigen::Ref<const VectorXd>& q, T
       case JointKind::kRevolute:
       case JointKind::kContinuous:
         // rotation by q about the axis; S = [axis; 0]
-        R_PL = R_PJ * Eigen::AngleAxisd(q[o], j.axis).toRotationMatrix();
+        if (const int a = detail::subspace_pick(tree, i); a >= 0) {
+          // about the joint frame's axis a: columns b, c = the next two of R_PJ turn by q
+          // (R_PJ R_a(q), without forming R_a)
+          double s, c;
+          ::sincos(q[o], &s, &c);
+          const int b = (a + 1) % 3, e = (a + 2) % 3;
+          R_PL.col(b) = c * R_PJ.col(b) + s * R_PJ.col(e);
+          R_PL.col(e) = c * R_PJ.col(e) - s * R_PJ.col(b);
+        } else {
+          R_PL = R_PJ * Eigen::AngleAxisd(q[o], j.axis).toRotationMatrix();
+        }
         S.col(0) << j.axis, Vector3d::Zero();
         break;
       case JointKind::kPrismatic:

@@ -40,8 +40,7 @@ void detail::rnea_from_kinematics(const Tree& tree, const Eigen::Ref<const Vecto
     const Index p = tree.parent(i);
     const int ni = tree.dofs(i);
     const Index o = tree.offset(i);
-    const Vector6d vJ =
-        ni == 1 ? Vector6d(d.S[k].col(0) * qd[o]) : Vector6d(d.S[k] * qd.segment(o, ni));
+    const Vector6d vJ = detail::joint_velocity(d.S[k], qd, o, ni);
     if (p < 0) {
       d.v[k] = vJ;
       d.a[k] = detail::motion_to_child(d.E[k], d.r[k], a0);
@@ -55,14 +54,20 @@ void detail::rnea_from_kinematics(const Tree& tree, const Eigen::Ref<const Vecto
       d.a[k] += detail::joint_bias(tree, d, i, qd) + detail::cross_motion(d.v[k], vJ);
     }
     const Matrix6d& I = tree.spatial_inertia(i);
-    d.f[k] = I * d.a[k] + detail::cross_force(d.v[k], I * d.v[k]);
+    d.f[k] = detail::inertia_times(I, d.a[k]) +
+             detail::cross_force(d.v[k], detail::inertia_times(I, d.v[k]));
   }
   // inward: τ_i = S_iᵀ f_i, f_λ += X_iᵀ f_i
   for (Index i = tree.link_count(); i-- > 0;) {
     const std::size_t k = std::size_t(i);
     const int ni = tree.dofs(i);
     if (ni == 1) tau[tree.offset(i)] = d.S[k].col(0).dot(d.f[k]);
-    if (ni > 1) tau.segment(tree.offset(i), ni).noalias() = d.S[k].transpose() * d.f[k];
+    if (ni == 7) {
+      tau.segment<7>(tree.offset(i)).noalias() =
+          detail::floating_subspace(d.S[k]).transpose() * d.f[k];
+    } else if (ni > 1) {
+      tau.segment(tree.offset(i), ni).noalias() = d.S[k].transpose() * d.f[k];
+    }
     const Index p = tree.parent(i);
     if (p >= 0) d.f[std::size_t(p)] += detail::force_to_parent(d.E[k], d.r[k], d.f[k]);
   }
@@ -89,7 +94,7 @@ Vector6d detail::frame_bias_from_kinematics(const Tree& tree, const Eigen::Ref<c
     const std::size_t k = std::size_t(i);
     const Index p = tree.parent(i);
     const int ni = tree.dofs(i);
-    const Vector6d vJ = d.S[k] * qd.segment(tree.offset(i), ni);
+    const Vector6d vJ = detail::joint_velocity(d.S[k], qd, tree.offset(i), ni);
     if (p < 0) {
       d.v[k] = vJ;
       d.a[k].setZero();
