@@ -298,8 +298,8 @@ bool ContactDynamics::impact(const System& sys, Workspace& ws, const Eigen::Ref<
   if (!e_poisson.isZero()) {
     // restitution (Poisson): each Poisson contact's impulse e Λ_c (Λ_c its compression impulse),
     // and more where a gap would still close or a Newton contact's law asks for it:
-    //   Λ = e_P Λ_c + Λ',  w = W Λ' + (g'₀ + e_N g'⁻) >= 0,  the cone Σ β <= mu |A_i| (e_P Λ_c +
-    //   Λ')
+    //   Λ = e_P Λ_c + Λ',  w = W Λ' + (g'₀ + e_N g'⁻) >= 0,
+    //   the cone Σ β <= mu |A_i| (e_P Λ_c + Λ')
     // with g'₀, v_rel₀ the velocities after the impulse e_P Λ_c
     const VectorXd lambda_c = lambda_, extra = e_poisson.cwiseProduct(lambda_c);
     qd += X_ * extra;
@@ -309,8 +309,13 @@ bool ContactDynamics::impact(const System& sys, Workspace& ws, const Eigen::Ref<
     if (!impulse(qd, r, vt, extra)) return false;
     lambda_ += lambda_c + extra;
   }
-  // g'⁺ = g'⁻ + A_c (q'⁺ − q'⁻)
-  v_after_ = v_minus + A_c_ * (qd - qd_minus);
+  // g'⁺ = g'⁻ + A_c (q'⁺ − q'⁻) (one phase: g'⁻ + W Λ + A_c P D β, as ever)
+  if (e_poisson.isZero()) {
+    v_after_ = v_minus + W_ * lambda_;
+    if (nb > 0) v_after_ += A_c_ * (PD_ * beta_);
+  } else {
+    v_after_ = v_minus + A_c_ * (qd - qd_minus);
+  }
   // each contact's friction impulse |D β| (on its sliding coordinates)
   for (Index f = 0; f < Index(cone_mu_.size()); ++f) {
     VectorXd sum = VectorXd::Zero(n_);
