@@ -86,6 +86,9 @@ class Packer {
     return out;
   }
 
+  // v rounded as pack() rounds
+  json rounded(double v) const { return round_significant(v, digits_); }
+
   json pack_fixed(const std::string& name, int decimals) const {
     json out = json::array();
     for (const double v : raw(name)) out.push_back(round_fixed(v, decimals));
@@ -286,6 +289,40 @@ json desired_paths(const json& scene, const Packer& p, const std::vector<Require
         break;
       }
     }
+  }
+  return out;
+}
+
+// The friction force at a contact in the scene's axes, per frame shown: F = map Q_f, Q_f each
+// sliding coordinate's generalized friction force (the sum of its columns: the sliding law's
+// Qc_nonideal.<coordinate> and the stick constraint's multiplier; the scene's "friction",
+// src/modelfile/visual.cpp). The page draws its part across the normal. (viewer.py's
+// _friction_force)
+json friction_force(const Packer& p, const json& friction) {
+  std::vector<std::vector<double>> sums;
+  for (const json& columns : list_of(friction, "columns")) {
+    std::vector<double> total;
+    for (const json& column : columns) {
+      const std::vector<double> values = p.raw(column.get<std::string>());
+      if (total.empty()) {
+        total = values;
+      } else {
+        for (std::size_t i = 0; i < total.size() && i < values.size(); ++i) total[i] += values[i];
+      }
+    }
+    sums.push_back(std::move(total));
+  }
+  json out = json::array();
+  for (const json& row : list_of(friction, "map")) {
+    json comp = json::array();
+    const std::size_t frames = sums.empty() ? 0 : sums.front().size();
+    for (std::size_t i = 0; i < frames; ++i) {
+      double f = 0.0;
+      for (std::size_t j = 0; j < row.size() && j < sums.size(); ++j)
+        f += row[j].get<double>() * sums[j][i];
+      comp.push_back(p.rounded(f));
+    }
+    out.push_back(comp);
   }
   return out;
 }
@@ -582,6 +619,8 @@ json viewer_page_data(const json& scene, const ViewerColumns& run, const ViewerO
       contact["q"] = q;
       contact["n"] = n;
       contact["force"] = p.pack("lambda." + name);
+      if (c.contains("friction") && truthy(c["friction"]))
+        contact["friction_force"] = friction_force(p, c["friction"]);
       data["contacts"].push_back(contact);
       drawn.push_back(name);
     }

@@ -258,3 +258,138 @@ def test_cam_follower_jumps_at_the_closed_form():
     np.testing.assert_allclose(y[flying], [flight(s) for s in t[flying]], atol=1e-9)
     np.testing.assert_allclose(lam[flying], 0.0, atol=1e-12)
     assert result["gap.cam"][flying].min() > 0
+
+
+# the rod of tests/contact/test_impact_restitution.cpp: a rod (m = 1, length 2l = 2, at 45°) in
+# the coordinates of its lower end A, translating at (u, -1) onto a floor with friction mu
+ROD = """coordinates: [xa, ya, phi]
+kinetic_energy: >-
+  0.5*((xa_dot - sin(phi)*phi_dot)^2 + (ya_dot + cos(phi)*phi_dot)^2) + 0.5/3*phi_dot^2
+constraints:
+  - {{name: floor, holonomic: ya, unilateral: true, restitution: 0.5, restitution_law: {law}}}
+{friction}initial:
+  q: {{xa: 0, ya: 0.1, phi: 0.7853981633974483}}
+  q_dot: {{xa: 0.5, ya: -1, phi: 0}}
+simulate: {{t_end: 0.15, integrator: dopri5, rtol: 1e-11, atol: 1e-13}}
+output: {{every: 0}}
+"""
+
+
+def _rod_impact(law, mu):
+    friction = (f"nonideal:\n  - {{friction: coulomb, constraint: floor, mu: {mu}, "
+                f"coordinates: [xa]}}\n" if mu else "")
+    result = ukdyn.parse(ROD.format(law=law, friction=friction)).simulate()
+    return [e for e in result.contact_events if e["kind"] == "impact"][0]
+
+
+def test_poisson_restitution_from_a_model_file():
+    """docs/contact.md, "Poisson's restitution" (in C++: tests/contact/test_impact_restitution.cpp).
+    At A, W = [[2.5, -1.5], [-1.5, 2.5]] (n, t). Smooth floor: both laws give g'+ = e v = 0.5
+    with the impulse (1 + e) v / W_nn = 0.6. Rough floor (mu = 2, A ends stuck): Newton's
+    g'+ = 0.5, Poisson's e (det W / W_tt) P_c = 0.35 with P_c = [-W^-1 v-]_n = 0.4375 and the
+    whole impulse (1 + e) P_c; T+ - T- = -0.16484375."""
+    for law in ("newton", "poisson"):
+        smooth = _rod_impact(law, 0)
+        assert smooth["speed_after"] == pytest.approx(0.5, abs=1e-12)
+        assert smooth["impulse"] == pytest.approx(0.6, abs=1e-12)
+    newton, poisson = _rod_impact("newton", 2), _rod_impact("poisson", 2)
+    assert newton["speed_after"] == pytest.approx(0.5, abs=1e-12)
+    assert poisson["speed_after"] == pytest.approx(0.35, abs=1e-12)
+    assert poisson["impulse"] == pytest.approx(1.5 * 0.4375, abs=1e-12)
+    assert poisson["energy_change"] == pytest.approx(-0.16484375, abs=1e-12)
+    with pytest.raises(ukdyn.ModelError) as info:
+        ukdyn.parse(ROD.format(law="posson", friction=""))
+    assert "<string>:5:87: error: the restitution_law" in str(info.value)
+    assert "must be newton or poisson, got 'posson'" in str(info.value)
+
+
+# a block on a rough incline pulled off it along the normal (tests/simulation/
+# test_contact_friction.cpp, docs/contact.md "Friction at contacts"), with its contact drawn
+INCLINE = """parameters: {m: 2, g: 9.81, alpha: 0.3, mu: 0.25, k: 10, v0: 0.2}
+coordinates: [x, y]
+mass_matrix: [[m, 0], [0, m]]
+forces: [k*t*sin(alpha), k*t*cos(alpha) - m*g]
+constraints:
+  - {name: plane, holonomic: x*sin(alpha) + y*cos(alpha), unilateral: true}
+nonideal:
+  - {friction: coulomb, constraint: plane, mu: mu}
+initial:
+  q: {x: 0, y: 0}
+  q_dot: {x: v0*cos(alpha), y: -v0*sin(alpha)}
+simulate: {t_end: 2.4, integrator: dopri5, rtol: 1e-10, atol: 1e-12}
+output: {every: 0.01}
+visual:
+  points:
+    block: {at: [x, y], radius: 0.05}
+  contacts:
+    plane: {at: [x, y], normal: [sin(alpha), cos(alpha)]}
+"""
+ALPHA, MU, K, MASS = 0.3, 0.25, 10.0, 2.0
+T_OFF = MASS * G * math.cos(ALPHA) / K  # where N = m g cos(alpha) - k t reaches 0
+
+
+@pytest.fixture(scope="module")
+def incline():
+    return ukdyn.parse(INCLINE).simulate()
+
+
+def test_viewer_data_of_the_friction_at_a_contact(incline):
+    """While the block slides down the slope s = (cos a, -sin a) the plane's friction is
+    mu N up the slope, -mu (m g cos a - k t) s; off the plane (t > t*) there is none. The scene
+    maps the sliding coordinates (x, y) to the page's axes by the identity."""
+    (c,) = incline.scene["contacts"]
+    assert c["friction"]["map"] == [[1, 0], [0, 1]]
+    assert c["friction"]["mu"] == MU
+    data = viewer.scene_data(incline.scene, incline.names, incline._columns,
+                             contact_events=incline.contact_events)
+    (contact,) = data["contacts"]
+    t = np.array(data["t"])
+    fx, fy = (np.array(v, dtype=float) for v in contact["friction_force"])
+    on = (t > 0.05) & (t < T_OFF - 0.05)
+    assert on.sum() > 20
+    N = MASS * G * math.cos(ALPHA) - K * t[on]
+    np.testing.assert_allclose(fx[on], -MU * N * math.cos(ALPHA), rtol=1e-3, atol=1e-6)
+    np.testing.assert_allclose(fy[on], MU * N * math.sin(ALPHA), rtol=1e-3, atol=1e-6)
+    off = t > T_OFF + 0.05
+    assert off.sum() > 10
+    np.testing.assert_allclose(fx[off], 0.0, atol=1e-9)
+    np.testing.assert_allclose(fy[off], 0.0, atol=1e-9)
+
+
+def test_the_viewer_draws_the_friction_at_a_contact(browser, incline, tmp_path):  # noqa: F811
+    """The friction arrow in its colour (purple) while the block slides, none once it is off;
+    the contacts box hides it with the normal force."""
+    from test_viewer import _mask
+    path = tmp_path / "incline.html"
+    incline.save_animation(path)
+    page = Page(browser, path)
+    assert page.errors() == []
+    t = page.js("return ukdyn.data.t")
+    sliding = next(i for i, v in enumerate(t) if v >= 0.3 * T_OFF)
+    page.js("ukdyn.setFrame(arguments[0])", sliding)
+    assert _mask(page.pixels(), "#9b30ff").sum() > 30
+    assert _mask(page.pixels(), "#0050ff").sum() > 30
+    page.save("incline_friction.png")
+    page.js("ukdyn.show('contact', false)")
+    assert _mask(page.pixels(), "#9b30ff").sum() == 0
+    page.js("ukdyn.show('contact', true)")
+    flying = next(i for i, v in enumerate(t) if v >= T_OFF + 0.3)
+    page.js("ukdyn.setFrame(arguments[0])", flying)
+    assert _mask(page.pixels(), "#9b30ff").sum() == 0
+    assert page.errors() == []
+
+
+def test_the_commands_friction_at_a_contact_is_pythons(cli, tmp_path):
+    """The command's page (app/viewer_data.cpp) carries the same friction arrows as viewer.py's
+    from the same trajectory, byte for byte."""
+    from test_viewer_page import _page_data, _python_page, _run
+    model = tmp_path / "incline.yaml"
+    model.write_text(INCLINE, encoding="utf-8")
+    out = tmp_path / "run"
+    proc = _run(cli, [str(model)], out)
+    assert proc.returncode == 0, proc.stderr
+    page = (out / "animation.html").read_text(encoding="utf-8")
+    expected = _python_page(model, out / "trajectory.csv")
+    assert _page_data(page)["contacts"][0]["friction_force"] == \
+        _page_data(expected)["contacts"][0]["friction_force"]
+    assert page == expected

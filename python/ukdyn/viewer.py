@@ -262,6 +262,8 @@ def scene_data(scene, names, columns, fps=FPS, max_frames=MAX_FRAMES, digits=DIG
             contact["q"] = [position(base + a) for a in axes]
             contact["n"] = [angle(base + "n" + a) for a in axes]
             contact["force"] = p.pack("lambda." + c["name"])
+            if c.get("friction"):
+                contact["friction_force"] = _friction_force(p, c["friction"])
             data["contacts"].append(contact)
         drawn = set(c["name"] for c in scene["contacts"])
         data["impacts"] = [{"t": _round(float(e["t"]), 7), "contact": e["contact"]}
@@ -310,6 +312,30 @@ def scene_data(scene, names, columns, fps=FPS, max_frames=MAX_FRAMES, digits=DIG
         data["force_scale"]["contact"] = _scale([[v] for c in data["contacts"]
                                                  for v in c["force"]])
     return data
+
+
+def _friction_force(p, friction):
+    """The friction force at a contact in the scene's axes, per frame shown: F = map Q_f, Q_f
+    each sliding coordinate's generalized friction force (the sum of its columns: the sliding
+    law's Qc_nonideal.<coordinate> and the stick constraint's multiplier; the scene's
+    ``friction``, src/modelfile/visual.cpp). The page draws its part across the normal."""
+    sums = []
+    for columns in friction["columns"]:
+        total = None
+        for column in columns:
+            values = p.raw(column)
+            total = values if total is None else [a + b for a, b in zip(total, values)]
+        sums.append(total)
+    out = []
+    for row in friction["map"]:
+        comp = []
+        for i in range(len(sums[0])):
+            f = 0.0
+            for j, weight in enumerate(row):
+                f += weight * sums[j][i]
+            comp.append(_round(f, p.digits))
+        out.append(comp)
+    return out
 
 
 def _requirement_rows(names):

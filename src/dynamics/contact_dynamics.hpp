@@ -72,6 +72,11 @@ class ContactDynamics {
   // P D β. The normal impulses into lambda(), the friction impulses' magnitudes into
   // friction_impulse(), g'⁺ into v_after(). False when the LCP fails. O(n² (k + d)) for d
   // directions, plus Lemke on k + d + cones variables.
+  // Contacts whose constraint follows Poisson's law (restitution_law(), contact_restitution.hpp)
+  // with e > 0
+  // take two phases: compression (e = 0: the impulse Λ_c that stops the approach), then
+  // restitution, the impulse e Λ_c at once and whatever more the LCP from there needs (w = g'⁺
+  // >= 0, the cone on the total normal impulse). lambda() is then the whole normal impulse.
   bool impact(const System& sys, Workspace& ws, const Eigen::Ref<const VectorXd>& q,
               Eigen::Ref<VectorXd> qd, double t, const Eigen::Ref<const VectorXd>& v_minus,
               const Eigen::Ref<const VectorXd>& e);
@@ -94,6 +99,12 @@ class ContactDynamics {
   // and into mu_ each contact's coefficient (0 without sliding friction). False when none slides.
   bool sliding_friction(const System& sys, Workspace& ws, const Eigen::Ref<const VectorXd>& q,
                         const Eigen::Ref<const VectorXd>& qd, double t);
+  // one impulsive LCP at the contacts of the last prepare(), from qd (qd += X Λ + P D β): the
+  // normal rows w = W Λ + A_c P D β + r (r k); with friction (vt: v_rel along D, else empty) the
+  // tangents and the cones Σ β <= mu |A_i| (Λ_i + offset_i). Λ into lambda_ and w_, β added into
+  // beta_. False when the LCP fails.
+  bool impulse(Eigen::Ref<VectorXd> qd, const VectorXd& r, const VectorXd& vt,
+               const VectorXd& offset);
   // true when constraint c is the stick constraint of a Coulomb contact on a contact of the set
   bool stick_of_set(const System& sys, Index c) const;
   // the tangent directions of the set's Coulomb contacts at (q, q', t) for the impact's friction
@@ -106,8 +117,9 @@ class ContactDynamics {
   std::vector<Index> contacts_;
   std::vector<Index> set_;  // the contacts of the last prepare()
   Index n_ = 0, rows_b_ = 0;
-  MatrixXd M_, A_, A_c_, A_b_, X_, W_, Y_, F_, D_;
+  MatrixXd M_, A_, A_c_, A_b_, X_, W_, Y_, F_, D_, PD_;  // PD_ = P D (n × directions)
   VectorXd b_, b_c_, lambda_, w_, v_after_, mu_, vt_minus_, friction_impulse_;
+  VectorXd beta_;  // (directions) the friction impulses of the last impact, both phases
   std::vector<Index> direction_cone_;  // (directions) the cone of each friction direction
   std::vector<Index> cone_contact_;    // (cones) the contact (position in the set) of each cone
   std::vector<double> cone_mu_;        // (cones) its coefficient

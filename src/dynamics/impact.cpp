@@ -4,6 +4,8 @@
 //   W = A_c P A_cᵀ                                 the Delassus matrix of the contacts
 //   accelerations:  w = W lambda + (A_c q''_free − b_c),  0 <= lambda ⊥ w >= 0
 //   impact:         w = W Λ + (1 + e) v⁻,             0 <= Λ ⊥ w >= 0,  q'⁺ = q'⁻ + P A_cᵀ Λ
+//                   (Newton's law; Poisson's: a compression phase with e = 0, then a restitution
+//                   phase whose impulse is at least e times the compression's)
 // and with Coulomb friction on the contacts (docs/contact.md, "Friction at contacts"): the
 // sliding friction's columns F in the accelerations' LCP (W + F not a P-matrix: Painlevé's
 // paradox, an error), the friction impulse D β in the impact's (Anitescu–Potra).
@@ -17,6 +19,7 @@
 #include "dynamics/contact_dynamics.hpp"
 #include "dynamics/internal.hpp"
 #include "ukdyn/core/format.hpp"
+#include "ukdyn/dynamics/contact_restitution.hpp"
 #include "ukdyn/dynamics/forward.hpp"
 
 namespace ukdyn::detail {
@@ -274,30 +277,79 @@ bool ContactDynamics::impact(const System& sys, Workspace& ws, const Eigen::Ref<
                              const Eigen::Ref<const VectorXd>& e) {
   const Index k = Index(set_.size());
   friction_impulse_.setZero(k);
-  // w = W Λ + (1 + e) v⁻ = v⁺ + e v⁻
-  const VectorXd r = (VectorXd::Ones(e.size()) + e).cwiseProduct(v_minus);
-  if (!impact_friction(sys, ws, q, qd, t)) {
+  const bool friction = impact_friction(sys, ws, q, qd, t);
+  const Index nb = friction ? D_.cols() : 0;
+  PD_.resize(n_, nb);
+  for (Index b = 0; b < nb; ++b) PD_.col(b) = apply_p(D_.col(b));
+  beta_.setZero(nb);
+  // the laws: a Newton contact keeps w = g'⁺ + e g'⁻ >= 0 throughout, a Poisson contact takes
+  // e = 0 in the compression phase and e times its compression impulse in the restitution phase
+  VectorXd e_newton = e, e_poisson = VectorXd::Zero(k);
+  for (Index i = 0; i < k; ++i) {
+    if (e[i] > 0.0 &&
+        restitution_law(sys.constraint(set_[std::size_t(i)])) == RestitutionLaw::kPoisson) {
+      e_poisson[i] = e[i];
+      e_newton[i] = 0.0;
+    }
+  }
+  const VectorXd qd_minus = qd;
+  // compression (the whole impact when no contact follows Poisson):
+  //   w = W Λ + (1 + e_N) v⁻  (= g'⁺ + e_N g'⁻),  with friction from v_rel⁻
+  VectorXd r = (VectorXd::Ones(k) + e_newton).cwiseProduct(v_minus);
+  if (!impulse(qd, r, friction ? VectorXd(vt_minus_) : VectorXd(), VectorXd::Zero(k))) return false;
+  if (!e_poisson.isZero()) {
+    // restitution (Poisson): each Poisson contact's impulse e Λ_c (Λ_c its compression impulse),
+    // and more where a gap would still close or a Newton contact's law asks for it:
+    //   Λ = e_P Λ_c + Λ',  w = W Λ' + (g'₀ + e_N g'⁻) >= 0,
+    //   the cone Σ β <= mu |A_i| (e_P Λ_c + Λ')
+    // with g'₀, v_rel₀ the velocities after the impulse e_P Λ_c
+    const VectorXd lambda_c = lambda_, extra = e_poisson.cwiseProduct(lambda_c);
+    qd += X_ * extra;
+    r = v_minus + A_c_ * (qd - qd_minus) + e_newton.cwiseProduct(v_minus);
+    VectorXd vt;
+    if (friction) vt = vt_minus_ + D_.transpose() * (qd - qd_minus);
+    if (!impulse(qd, r, vt, extra)) return false;
+    lambda_ += lambda_c + extra;
+  }
+  // g'⁺ = g'⁻ + A_c (q'⁺ − q'⁻) (one phase: g'⁻ + W Λ + A_c P D β, as ever)
+  if (e_poisson.isZero()) {
+    v_after_ = v_minus + W_ * lambda_;
+    if (nb > 0) v_after_ += A_c_ * (PD_ * beta_);
+  } else {
+    v_after_ = v_minus + A_c_ * (qd - qd_minus);
+  }
+  // each contact's friction impulse |D β| (on its sliding coordinates)
+  for (Index f = 0; f < Index(cone_mu_.size()); ++f) {
+    VectorXd sum = VectorXd::Zero(n_);
+    for (Index b = 0; b < nb; ++b)
+      if (direction_cone_[std::size_t(b)] == f) sum += beta_[b] * D_.col(b);
+    friction_impulse_[cone_contact_[std::size_t(f)]] += sum.norm();
+  }
+  return true;
+}
+
+bool ContactDynamics::impulse(Eigen::Ref<VectorXd> qd, const VectorXd& r, const VectorXd& vt,
+                              const VectorXd& offset) {
+  const Index k = Index(set_.size());
+  if (vt.size() == 0) {
+    // frictionless: w = W Λ + r, 0 <= Λ ⊥ w >= 0;  q' += P A_cᵀ Λ
     if (!lcp_.solve(W_, r)) return false;
     lambda_ = lcp_.z();
     w_ = lcp_.w();
-    // q'⁺ = q'⁻ + P A_cᵀ Λ;  g'⁺ = g'⁻ + W Λ
     qd += X_ * lambda_;
-    v_after_ = v_minus + W_ * lambda_;
     return true;
   }
   // with friction (Anitescu–Potra): z = (Λ, β, γ), the friction impulse D β along the ±tangents
-  //   w_Λ = W Λ + A_c P D β + (1 + e) v⁻              (= g'⁺ + e g'⁻)
-  //   w_β = Dᵀ P A_cᵀ Λ + Dᵀ P D β + E γ + Dᵀ v_rel⁻    (γ: the sliding speed after)
-  //   w_γ = μ̃ Λ − Eᵀ β                                  (the cone: Σ β <= mu |A_i| Λ_i)
+  //   w_Λ = W Λ + A_c P D β + r                          (r = (1 + e) v⁻ for Newton's law)
+  //   w_β = Dᵀ P A_cᵀ Λ + Dᵀ P D β + E γ + v_rel         (γ: the sliding speed after)
+  //   w_γ = μ̃ (Λ + offset) − Eᵀ β                        (the cone: Σ β <= mu |A_i| Λ_i)
   const Index nb = D_.cols(), nf = Index(cone_mu_.size()), size = k + nb + nf;
   MatrixXd Mlcp = MatrixXd::Zero(size, size);
   VectorXd rr = VectorXd::Zero(size);
-  MatrixXd PD(n_, nb);
-  for (Index b = 0; b < nb; ++b) PD.col(b) = apply_p(D_.col(b));
   Mlcp.topLeftCorner(k, k) = W_;
-  Mlcp.block(0, k, k, nb) = A_c_ * PD;
+  Mlcp.block(0, k, k, nb) = A_c_ * PD_;
   Mlcp.block(k, 0, nb, k) = D_.transpose() * X_;
-  Mlcp.block(k, k, nb, nb) = D_.transpose() * PD;
+  Mlcp.block(k, k, nb, nb) = D_.transpose() * PD_;
   for (Index b = 0; b < nb; ++b) {
     const Index f = direction_cone_[std::size_t(b)];
     Mlcp(k + b, k + nb + f) = 1.0;
@@ -305,23 +357,18 @@ bool ContactDynamics::impact(const System& sys, Workspace& ws, const Eigen::Ref<
   }
   for (Index f = 0; f < nf; ++f) {
     const Index i = cone_contact_[std::size_t(f)];
-    Mlcp(k + nb + f, i) = cone_mu_[std::size_t(f)] * A_c_.row(i).norm();
+    const double mu_i = cone_mu_[std::size_t(f)] * A_c_.row(i).norm();
+    Mlcp(k + nb + f, i) = mu_i;
+    rr[k + nb + f] = mu_i * offset[i];
   }
   rr.head(k) = r;
-  rr.segment(k, nb) = vt_minus_;
+  rr.segment(k, nb) = vt;
   if (!friction_lcp_.solve(Mlcp, rr)) return false;
   lambda_ = friction_lcp_.z().head(k);
   w_ = friction_lcp_.w().head(k);
-  const VectorXd beta = friction_lcp_.z().segment(k, nb);
-  qd += X_ * lambda_ + PD * beta;
-  v_after_ = v_minus + W_ * lambda_ + A_c_ * (PD * beta);
-  // each contact's friction impulse |D β| (on its sliding coordinates)
-  for (Index f = 0; f < nf; ++f) {
-    VectorXd sum = VectorXd::Zero(n_);
-    for (Index b = 0; b < nb; ++b)
-      if (direction_cone_[std::size_t(b)] == f) sum += beta[b] * D_.col(b);
-    friction_impulse_[cone_contact_[std::size_t(f)]] += sum.norm();
-  }
+  const auto beta = friction_lcp_.z().segment(k, nb);
+  beta_ += beta;
+  qd += X_ * lambda_ + PD_ * beta;
   return true;
 }
 

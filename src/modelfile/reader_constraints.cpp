@@ -21,6 +21,7 @@
 #include "ukdyn/core/constraint.hpp"
 #include "ukdyn/core/format.hpp"
 #include "ukdyn/core/nonideal.hpp"
+#include "ukdyn/dynamics/contact_restitution.hpp"
 #include "ukdyn/dynamics/forward.hpp"
 #include "ukdyn/modelfile/run.hpp"
 #include "ukdyn/simulation/options.hpp"
@@ -178,13 +179,18 @@ Constraint Reader::read_constraint(const YAML::Node& c, const std::string& name,
 void Reader::read_unilateral(const YAML::Node& c, const std::string& name, Constraint& constraint) {
   // unilateral: true (a gap g >= 0 whose force only pushes), restitution: e in [0, 1]
   // (docs/contact.md)
-  const YAML::Node u = c["unilateral"], e = c["restitution"];
+  // restitution_law: newton (the default) or poisson
+  const YAML::Node u = c["unilateral"], e = c["restitution"], law = c["restitution_law"];
   bool unilateral = false;
   if (u && (!u.IsScalar() || !YAML::convert<bool>::decode(u, unilateral)))
     fail(u, "unilateral in constraint '" + name + "' must be true or false", "unilateral: true");
   if (e && !unilateral) {
     fail(e, "constraint '" + name + "' gives a restitution but is not unilateral",
          "unilateral: true, restitution: 0.5");
+  }
+  if (law && !unilateral) {
+    fail(law, "constraint '" + name + "' gives a restitution_law but is not unilateral",
+         "unilateral: true, restitution: 0.5, restitution_law: poisson");
   }
   if (!unilateral) return;
   if (constraint.kind() != ConstraintKind::kHolonomic || constraint.rows() != 1) {
@@ -203,7 +209,23 @@ void Reader::read_unilateral(const YAML::Node& c, const std::string& name, Const
              format_number(restitution, 3),
          "restitution: 0.5");
   }
+  RestitutionLaw restitution_law = RestitutionLaw::kNewton;
+  if (law) {
+    const std::string text = law.IsScalar() ? law.Scalar() : std::string();
+    if (text == "poisson") {
+      restitution_law = RestitutionLaw::kPoisson;
+    } else if (text != "newton") {
+      fail(law,
+           "the restitution_law of constraint '" + name + "' must be newton or poisson, got " +
+               (law.IsScalar() ? "'" + text + "'"
+                               : std::string("a ") + (law.IsMap() ? "mapping" : "list")),
+           "restitution_law: poisson   (Poisson's: the restitution impulse is e times the "
+           "compression impulse; newton: g'⁺ = −e g'⁻)");
+    }
+  }
   constraint.unilateral(restitution);
+  if (restitution_law != RestitutionLaw::kNewton)
+    constraint = with_restitution_law(constraint, restitution_law);
 }
 
 void Reader::read_constraints(const YAML::Node& root, SystemBuilder& builder) {
@@ -221,12 +243,12 @@ void Reader::read_constraints(const YAML::Node& root, SystemBuilder& builder) {
     if (!seen.insert(name).second) fail(c["name"], "constraint '" + name + "' is declared twice");
     for (const auto& kv : c) {
       static const std::set<std::string> keys = {
-          "name",   "holonomic",     "nonholonomic", "A",          "b",
-          "active", "stabilization", "unilateral",   "restitution"};
+          "name",   "holonomic",     "nonholonomic", "A",           "b",
+          "active", "stabilization", "unilateral",   "restitution", "restitution_law"};
       if (!keys.count(kv.first.Scalar())) {
         fail(kv.first, "unknown key '" + kv.first.Scalar() + "' in constraint '" + name + "'",
              "a constraint has name, holonomic | nonholonomic | A and b, active, stabilization, "
-             "unilateral, restitution");
+             "unilateral, restitution, restitution_law");
       }
     }
     Constraint constraint = read_constraint(c, name, "constraint '" + name + "'");

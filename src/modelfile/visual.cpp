@@ -3,6 +3,12 @@
 // generator (python/ukdyn/viewer.py) needs beside trajectory.csv to draw the model.
 #include "ukdyn/modelfile/visual.hpp"
 
+#include <algorithm>
+#include <cmath>
+#include <string>
+#include <vector>
+
+#include <Eigen/QR>
 #include <nlohmann/json.hpp>
 
 #include "ukdyn/modelfile/model.hpp"
@@ -39,6 +45,78 @@ nlohmann::json shape_json(const VisualShape& s) {
   }
   if (!s.color.empty()) j["color"] = s.color;
   return j;
+}
+
+// the output program's outputs at (q, q' = 0, t) (evaluate_output_expressions' inputs)
+std::vector<double> outputs_at(const Model& model, const VectorXd& q, double t) {
+  const expr::Program& p = model.output_program;
+  const std::size_t n = std::size_t(q.size());
+  std::vector<double> in(std::size_t(p.inputs()), 0.0), out(std::size_t(p.outputs())),
+      scratch(std::size_t(p.scratch_size()));
+  std::copy_n(q.data(), n, in.begin());
+  in[2 * n] = t;
+  p.evaluate(in.data(), out.data(), scratch.data());
+  return out;
+}
+
+// The friction drawn at visual contact c (docs/viewer.md, "`visual:` in a model file"): the
+// Coulomb contact on its constraint, the columns whose sums are the generalized friction force
+// Q_f on each sliding coordinate (Qc_nonideal.<coordinate> while it slides, the stick
+// constraint's multiplier while it sticks), and the map F = (J_cᵀ)⁺ Q_f to the contact point's
+// axes, J_c = ∂(at)/∂(sliding coordinates) by central differences at the initial state (constant
+// for the Cartesian sliding coordinates that docs/friction.md asks for). Null when no Coulomb
+// contact sits on c.
+nlohmann::json contact_friction(const Model& model, const VisualContact& c) {
+  const System& sys = model.system;
+  Index constraint = -1;
+  for (Index k = 0; k < sys.constraint_count(); ++k)
+    if (sys.constraint(k).name() == c.name) constraint = k;
+  const FrictionContact* fc = nullptr;
+  for (const FrictionContact& f : sys.friction_contacts())
+    if (f.normal_constraint == constraint && f.mu > 0.0) fc = &f;
+  if (!fc) return nullptr;
+  const std::string stick = sys.constraint(fc->stick_constraint).name();
+  const std::size_t nc = fc->coordinates.size();
+  // the outputs of the contact point's axes
+  static const char* axes[] = {"x", "y", "z"};
+  std::vector<std::size_t> at;
+  for (int a = 0; a < c.dimensions; ++a) {
+    const std::string column = "visual.contact." + c.name + "." + axes[a];
+    const auto& vc = model.visual.columns;
+    at.push_back(model.output_names.size() +
+                 std::size_t(std::find(vc.begin(), vc.end(), column) - vc.begin()));
+  }
+  // J_c (dimensions × nc) by central differences
+  MatrixXd J(c.dimensions, Index(nc));
+  const double t0 = model.options.t_start;
+  for (std::size_t j = 0; j < nc; ++j) {
+    const Index i = fc->coordinates[j];
+    const double h = 1e-6 * std::max(1.0, std::abs(model.q0[i]));
+    VectorXd plus = model.q0, minus = model.q0;
+    plus[i] += h;
+    minus[i] -= h;
+    const std::vector<double> up = outputs_at(model, plus, t0), down = outputs_at(model, minus, t0);
+    for (int a = 0; a < c.dimensions; ++a)
+      J(a, Index(j)) = (up[at[std::size_t(a)]] - down[at[std::size_t(a)]]) / (2 * h);
+  }
+  // F = (J_cᵀ)⁺ Q_f, rounded to 8 digits (a Cartesian coordinate maps by exactly 1)
+  const MatrixXd F =
+      Eigen::CompleteOrthogonalDecomposition<MatrixXd>(J.transpose()).pseudoInverse();
+  nlohmann::json map = nlohmann::json::array(), columns = nlohmann::json::array();
+  for (int a = 0; a < c.dimensions; ++a) {
+    nlohmann::json row = nlohmann::json::array();
+    for (std::size_t j = 0; j < nc; ++j) row.push_back(std::round(F(a, Index(j)) * 1e8) / 1e8);
+    map.push_back(row);
+  }
+  for (std::size_t j = 0; j < nc; ++j) {
+    const std::string coordinate = sys.coordinate_names()[std::size_t(fc->coordinates[j])];
+    columns.push_back({"Qc_nonideal." + coordinate,
+                       "lambda." + stick + (nc == 1 ? "" : "." + std::to_string(j))});
+  }
+  return {{"name", stick.substr(std::string("stick.").size())},
+          {"mu", fc->mu},
+          {"columns", columns},
+          {"map", map}};
 }
 
 }  // namespace
@@ -119,7 +197,10 @@ std::string viewer_scene_json(const Model& model) {
   nlohmann::json contacts = nlohmann::json::array();
   for (const VisualContact& c : model.visual.contacts) {
     if (c.dimensions == 3) planar = false;
-    contacts.push_back({{"name", c.name}, {"dimensions", c.dimensions}});
+    nlohmann::json contact = {{"name", c.name}, {"dimensions", c.dimensions}};
+    if (nlohmann::json friction = contact_friction(model, c); !friction.is_null())
+      contact["friction"] = std::move(friction);
+    contacts.push_back(contact);
   }
   scene["points"] = points;
   scene["links"] = links;

@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "contact/incline_model.hpp"
 #include "ukdyn/dynamics/contact.hpp"
 #include "ukdyn/modelfile/model.hpp"
 #include "ukdyn/simulation/simulate.hpp"
@@ -37,21 +38,9 @@ std::size_t sample_at(const Trajectory& tr, double t) {
 // k, where the block lifts off. While it slides down the slope (s = x cos alpha − y sin alpha),
 // s'' = g (sin alpha − mu cos alpha) + mu k t / m; once off, s'' = g sin alpha and
 // n = k (t − t*)³ / (6 m).
-constexpr const char* kIncline = R"(
-parameters: {m: 2, g: 9.81, alpha: 0.5, mu: 0.3, k: 4, v0: 1}
-coordinates: [x, y]
-mass_matrix: [[m, 0], [0, m]]
-forces: [k*t*sin(alpha), k*t*cos(alpha) - m*g]
-constraints:
-  - {name: plane, holonomic: x*sin(alpha) + y*cos(alpha), unilateral: true}
-nonideal:
-  - {friction: coulomb, constraint: plane, mu: mu}
-initial:
-  q: {x: 0, y: 0}
-  q_dot: {x: v0*cos(alpha), y: -v0*sin(alpha)}
-simulate: {t_end: 5, integrator: dopri5, rtol: 1e-11, atol: 1e-13}
-output: {every: 0}
-)";
+const std::string kIncline = std::string(incline::kModel) +
+                             "simulate: {t_end: 5, integrator: dopri5, rtol: 1e-11, atol: 1e-13}\n"
+                             "output: {every: 0}\n";
 
 struct Incline {
   double m = 2, alpha = 0.5, mu = 0.3, k = 4, v0 = 1;
