@@ -222,10 +222,12 @@ class Run {
   // the branch check's own workspace, in the run's modes (see leaves_branch)
   Workspace& branch_workspace();
   static constexpr double kBranchFactor = 10.0;
-  // (a step inside the passage, held to the accelerations at its entry: an order of magnitude
-  // more room, as the accelerations along the branch may grow inside; the twin arms' slow
-  // passage jumps by 18 times this bound, a governor's Coulomb passage peaks at 0.1 of it)
-  static constexpr double kStepFactor = 100.0;
+  // (a step inside the passage, held to the accelerations at its entry, with room for their
+  // growth inside: of the suite's runs that keep their branch, the largest step change is 0.085
+  // of this bound (the twin arms with friction), the four-bars' 0.03; the twin arms' slow passage
+  // under rkf78 and BDF reaches 1.1-1.5 at its first step off the branch, a switch or release at
+  // a dead centre 7e3 and beyond)
+  static constexpr double kStepFactor = 30.0;
 
   // (run_output.cpp)
   // whether a sample time in (last recorded sample, t] has not been recorded yet
@@ -330,8 +332,9 @@ class Run {
   // M-norm of q'' there, and q' there (n)
   std::unique_ptr<Workspace> branch_ws_;  // (branch_workspace)
   bool in_pose_ = false;
-  double pose_t_ = 0.0, pose_acceleration_ = 0.0, step_t_ = 0.0, step_acceleration_ = 0.0;
+  double pose_t_ = 0.0, pose_acceleration_ = 0.0, pose_margin_ = 0.0, step_t_ = 0.0;
   VectorXd pose_velocity_ = VectorXd::Zero(n_), step_velocity_ = VectorXd::Zero(n_);
+  VectorXd change_ = VectorXd::Zero(n_);         // (n) scratch of leaves_branch
   VectorXd holding_ = VectorXd::Zero(n_);        // (n) holding force of the last stick_margin
   VectorXd reaction_ = VectorXd::Zero(n_);       // (n) scratch of stick_margin: R
   VectorXd reaction_part_ = VectorXd::Zero(n_);  // (n) scratch of stick_margin

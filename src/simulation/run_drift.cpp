@@ -241,60 +241,75 @@ bool Run::diverges(double t, const double* x) {
 // After an accepted step to (t, x): true (with failure_ set) when the motion has left its
 // branch at a singular configuration it is passing. A passage runs from the first step end
 // whose last evaluation had a rank margin below kSingularMargin to the first one back above
-// twice that, and each step of it is judged (a slow passage may never leave the pose: the
-// twin arms swinging 0.005 rad about their dead centre). Across a step q' changes by at most
-// its duration times the accelerations, which are smooth along a branch: a change of q' (in
-// the M-norm) beyond kBranchFactor times the step times the larger M-norm of q'' at its two
-// ends — and beyond 1e-3 of |q'| — is a jump onto another branch (one of the twin arms
-// reversed: the mirror branch), which no status ok may hide. Costs one evaluation per step
-// end inside a passage; nothing elsewhere (Algorithm::kTextbook, whose margin is NaN, is not
-// checked).
+// twice that. Across it q' changes by at most its duration times the accelerations, which are
+// smooth along a branch: a change of q' (in the M-norm) beyond kBranchFactor times the duration
+// times the larger M-norm of q'' at its two ends — and beyond 1e-3 of |q'| — is a jump onto
+// another branch (one of the twin arms reversed: the mirror branch), which no status ok may
+// hide. A slow passage may never end (the twin arms swinging 0.005 rad about their dead
+// centre): under the adaptive methods, whose steps can close in on the pose, each step is also
+// judged once the margin has fallen an order below its entry's — against the accelerations at
+// the entry (the ones inside are a roundoff off the branch times the inverse margin), times
+// kStepFactor, on the part of the change that turns q' rather than stretches it (the speeds of
+// a driven mechanism that locks up grow along their direction; a jump onto the mirror branch
+// reverses an arm at the same speed). Costs an evaluation at a passage's two ends (in a
+// workspace of its own, so that the run's is left as the integrator left it) and two M-norms
+// for each step judged inside; nothing elsewhere (Algorithm::kTextbook, whose margin is NaN, is
+// not checked).
 bool Run::leaves_branch(double t, const double* x) {
   const double margin = ws_.rank_margin;
   if (!in_pose_ && !(margin < detail::kSingularMargin)) return false;
-  q_ = Eigen::Map<const VectorXd>(x, n_);
-  qd_ = Eigen::Map<const VectorXd>(x + n_, n_);
-  Workspace& w = branch_workspace();
-  if (forward_dynamics(sys_, w, q_, qd_, t) != Status::kOk) return false;
-  const double acceleration = std::sqrt(2.0 * detail::kinetic_energy(w, w.qdd));
-  const bool entering = !in_pose_;
+  const Eigen::Map<const VectorXd> qd(x + n_, n_);
   const bool leaving = in_pose_ && margin >= 2.0 * detail::kSingularMargin;
-  in_pose_ = !leaving;
-  if (entering) {
-    pose_t_ = step_t_ = t;
-    pose_acceleration_ = step_acceleration_ = acceleration;
-    pose_velocity_ = step_velocity_ = qd_;
-    return false;
-  }
-  // a jump across the last step, or (leaving) across the whole passage; (BDF reports converged
-  // attempts: after a rejected one, t can go back; not judged then)
   double t_from = step_t_, change = 0.0, bound = 0.0, speed = 0.0;
-  const auto jumped = [&](double t0, double a0, VectorXd& v0, bool whole) {
-    if (!(t > t0)) return false;
-    t_from = t0;
+  // the change of q' from v0 (M-norm), and q's speed at v0
+  const auto changed = [&](const Workspace& w, const VectorXd& v0) {
     speed = std::sqrt(2.0 * detail::kinetic_energy(w, v0));
-    v0 -= qd_;
-    change = std::sqrt(2.0 * detail::kinetic_energy(w, v0));
-    // (inside the passage, the part of the change that turns q' rather than stretching it:
-    // the speeds of a driven mechanism that locks up grow along their direction, while a
-    // jump onto the mirror branch reverses an arm at the same speed)
-    if (!whole) {
-      const double stretch = std::sqrt(2.0 * detail::kinetic_energy(w, qd_)) - speed;
-      change = std::sqrt(std::max(0.0, change * change - stretch * stretch));
-    }
-    bound = (whole ? kBranchFactor * std::max(acceleration, a0) : kStepFactor * a0) * (t - t0);
-    return change > bound && change > 1e-3 * speed;
+    change_ = v0 - qd;
+    change = std::sqrt(2.0 * detail::kinetic_energy(w, change_));
   };
-  // (inside the passage the accelerations at the step ends are those of states a roundoff
-  // off the branch, amplified by the inverse margin: a step is held to the accelerations at
-  // the passage's ends, where the rank is clear)
-  const double regular = leaving ? acceleration : 0.0;
-  const bool jump = jumped(step_t_, std::max(pose_acceleration_, regular), step_velocity_, false) ||
-                    (leaving && jumped(pose_t_, pose_acceleration_, pose_velocity_, true));
-  step_t_ = t;
-  step_acceleration_ = acceleration;
-  step_velocity_ = qd_;
-  if (!jump) return false;
+  if (in_pose_ && !leaving) {
+    // a step inside the passage: judged (without an evaluation: the norms in the run's
+    // workspace, its last evaluation within this step) where the margin is an order below the
+    // entry's, under an adaptive method; (BDF reports converged attempts: after a rejected one,
+    // t can go back; not judged then)
+    const Integrator method = progress_.integrator;
+    const bool adaptive =
+        method == Integrator::kDopri5 || method == Integrator::kRKF78 || method == Integrator::kBDF;
+    if (!adaptive || !(margin < 0.1 * pose_margin_)) return false;
+    if (!(t > step_t_)) {
+      step_t_ = t;
+      step_velocity_ = qd;
+      return false;
+    }
+    changed(ws_, step_velocity_);
+    change_ = qd;
+    const double stretch = std::sqrt(2.0 * detail::kinetic_energy(ws_, change_)) - speed;
+    change = std::sqrt(std::max(0.0, change * change - stretch * stretch));
+    bound = kStepFactor * pose_acceleration_ * (t - step_t_);
+    step_t_ = t;
+    step_velocity_ = qd;
+  } else {
+    // a passage's entry or exit: the accelerations there, in the branch check's workspace
+    q_ = Eigen::Map<const VectorXd>(x, n_);
+    qd_ = qd;
+    Workspace& w = branch_workspace();
+    if (forward_dynamics(sys_, w, q_, qd_, t) != Status::kOk) return false;
+    const double acceleration = std::sqrt(2.0 * detail::kinetic_energy(w, w.qdd));
+    if (!in_pose_) {
+      in_pose_ = true;
+      pose_t_ = step_t_ = t;
+      pose_margin_ = margin;
+      pose_acceleration_ = acceleration;
+      pose_velocity_ = step_velocity_ = qd_;
+      return false;
+    }
+    in_pose_ = false;
+    if (!(t > pose_t_)) return false;
+    t_from = pose_t_;
+    changed(w, pose_velocity_);
+    bound = kBranchFactor * (t - pose_t_) * std::max(acceleration, pose_acceleration_);
+  }
+  if (!(change > bound && change > 1e-3 * speed)) return false;
   failure_ = "the motion left its branch at the singular configuration passed between t = " +
              format(t_from) + " and " + format(t) +
              " (the constraints nearly lose rank there: a dead centre or a branch point): "

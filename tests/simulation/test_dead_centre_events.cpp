@@ -145,7 +145,7 @@ TEST(DeadCentreEvents, AReleaseAndAnActivationAtADeadCentreKeepTheBranchOrStopWi
 // BDF reverse one arm at the dead centre (onto the mirror branch, |th1 − th2| = 0.01, at the
 // same energy: the energy balance cannot see it) and are stopped there with that cause
 // (rkf78 at t = 0.602, the first passage; BDF at 2.61, the fifth), the velocity change of one
-// step 1.8 times what the accelerations at the passage's entry allow, growing to 18 times.
+// step 1.1 to 1.5 times kStepFactor times the accelerations at the passage's entry.
 TEST(DeadCentreEvents, ASlowPassageNeverEndsOkOffItsBranch) {
   const Model m = load_model(kData + "twin_arms_coulomb.yaml", {{"mu", 0.0}, {"th0", 0.005}});
   const Trajectory ref = reduced_motion(0.0, 0.005);
