@@ -37,6 +37,8 @@ import tempfile
 # where three.js is found when it is not beside this file (Debian's libjs-three)
 DEBIAN_THREE = "/usr/share/javascript/three"
 THREE_FILES = ("three.min.js", "OrbitControls.js")
+# the mesh loaders of a robot's URDF visuals, put in a page whose data holds meshes of the format
+MESH_LOADERS = (("stl", "STLLoader.js"), ("obj", "OBJLoader.js"), ("dae", "ColladaLoader.js"))
 TEMPLATE = "viewer_template.html"
 
 # the kinds of contact event the page marks as impacts (an impact closing a contact at rest too)
@@ -55,6 +57,8 @@ def _asset(name, here):
         places.append(os.path.join(DEBIAN_THREE, name))
     elif name == "OrbitControls.js":
         places.append(os.path.join(DEBIAN_THREE, "examples", "js", "controls", name))
+    elif name.endswith("Loader.js"):
+        places.append(os.path.join(DEBIAN_THREE, "examples", "js", "loaders", name))
     for p in places:
         if os.path.exists(p):
             with open(p, encoding="utf-8") as f:
@@ -406,12 +410,24 @@ def read_contact_events(summary_path):
     return [e for e in events if isinstance(e, dict)] if isinstance(events, list) else []
 
 
+def _three_text(scene, here):
+    """three.js and OrbitControls, then the loader of each mesh format the robot's visuals embed
+    (in MESH_LOADERS' order), joined by newlines (app/viewer.cpp's viewer_three_text)."""
+    files = list(THREE_FILES)
+    robot = scene.get("robot")
+    visuals = robot.get("visuals", []) if isinstance(robot, dict) else []
+    for fmt, loader in MESH_LOADERS:
+        if any("data" in v and v.get("format") == fmt for v in visuals):
+            files.append(loader)
+    return "\n".join(_asset(n, here) for n in files)
+
+
 def build_page(scene, names, columns, title=None, **options):
     """The HTML page (a str) of a run: its scene (dict) and its columns (see scene_data)."""
     here = os.path.dirname(os.path.abspath(__file__))
     data = scene_data(scene, names, columns, **options)
     template = _asset(TEMPLATE, here)
-    three = "\n".join(_asset(n, here) for n in THREE_FILES)
+    three = _three_text(scene, here)
     payload = _json_for_html(data)
     # no "</script" inside three.js's script element
     three = three.replace("</script", "<\\/script")
