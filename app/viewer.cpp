@@ -36,7 +36,7 @@ std::string viewer_three_text(const nlohmann::ordered_json& scene) {
       {"stl", kStlLoaderJs}, {"obj", kObjLoaderJs}, {"dae", kColladaLoaderJs}};
   for (const auto& [format, text] : loaders) {
     for (const auto& v : robot->at("visuals")) {
-      if (v.contains("data") && v.value("format", "") == format) {
+      if (v.contains("file") && v.value("format", "") == format) {
         three += std::string("\n") + text;
         break;
       }

@@ -32,6 +32,7 @@ EXPECTED = [
     ("hand", "sphere", ELBOW + [0, 0.1, 0], ["SphereBufferGeometry"]),   # x of the hand is y
     ("hand", "mesh", ELBOW + [0.05 * S, 0, 0.05 * C], ["BufferGeometry"]),  # 0.05 up the hand
     ("hand", "mesh", ELBOW, ["BoxBufferGeometry"]),                     # its placeholder
+    ("hand", "mesh", ELBOW - [0.05 * S, 0, 0.05 * C], ["BufferGeometry"]),  # the STL again
 ]
 
 
@@ -56,8 +57,9 @@ def test_the_shapes_are_drawn_where_the_urdf_puts_them(browser, page_path):  # n
     np.testing.assert_allclose(drawn[3]["axis"], [S, 0, C], atol=1e-6, rtol=0)
     # the OBJ's two triangles, COLLADA's one and the STL's four are drawn; the mesh not found
     # is a placeholder
-    assert [d["vertices"] for d in drawn[1:3]] == [6, 3] and drawn[5]["vertices"] == 12
-    assert [d["placeholder"] for d in drawn] == [False] * 6 + [True]
+    assert [d["vertices"] for d in drawn[1:3]] == [6, 3]
+    assert drawn[5]["vertices"] == drawn[7]["vertices"] == 12
+    assert [d["placeholder"] for d in drawn] == [False] * 6 + [True, False]
     # the OBJ square (0.1 m, in the plane z = 0.1); the COLLADA triangle in the (x, z) plane as
     # its Z_UP file says (not turned to y up), 10 cm long in x, twice that (scale 1 1 2) in z
     np.testing.assert_allclose(drawn[1]["bounds"], [[0.15, 0, 0.1], [0.25, 0.1, 0.1]], atol=1e-6)
@@ -103,9 +105,12 @@ def test_the_page_holds_the_meshes_and_their_loaders(page_path):
         assert html.count(loader % name) == 1
     data = _page_data(html)
     visuals = data["robot"]["visuals"]
-    assert [v.get("format") for v in visuals] == [None, "obj", "dae", None, None, "stl", None]
-    assert visuals[5]["data"].startswith("c29saWQgdGV0cmE")  # "solid tetra"
-    assert "data" not in visuals[6] and visuals[6]["mesh"] == HOSTILE
+    assert [v.get("format") for v in visuals] == [None, "obj", "dae", None, None, "stl", None, "stl"]
+    # each file once: the STL shown twice is embedded once
+    assert [v.get("file") for v in visuals] == [None, 0, 1, None, None, 2, None, 2]
+    assert len(data["robot"]["meshes"]) == 3
+    assert data["robot"]["meshes"][2].startswith("c29saWQgdGV0cmE")  # "solid tetra"
+    assert visuals[6]["mesh"] == HOSTILE
     assert str(DATA) not in html  # no path of this machine in the page
 
 

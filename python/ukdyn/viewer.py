@@ -417,7 +417,7 @@ def _three_text(scene, here):
     robot = scene.get("robot")
     visuals = robot.get("visuals", []) if isinstance(robot, dict) else []
     for fmt, loader in MESH_LOADERS:
-        if any("data" in v and v.get("format") == fmt for v in visuals):
+        if any("file" in v and v.get("format") == fmt for v in visuals):
             files.append(loader)
     return "\n".join(_asset(n, here) for n in files)
 

@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <map>
 #include <string>
 
 #include "ukdyn/modelfile/model.hpp"
@@ -38,8 +39,11 @@ std::string base64(const std::string& bytes) {
   return out;
 }
 
-// the mesh's format ("stl", "obj", "dae") and its file as base64, or the problem
-void embed_mesh(const tree::LinkVisual& v, nlohmann::json& j) {
+// the mesh's format ("stl", "obj", "dae") and its file: the index of its base64 text in
+// `meshes` (each file once, however many visuals show it; `index` maps a file to its place), or
+// the problem
+void embed_mesh(const tree::LinkVisual& v, nlohmann::json& j, nlohmann::json& meshes,
+                std::map<std::string, std::size_t>& index) {
   if (v.mesh_file.empty()) {
     j["problem"] = v.mesh_problem;
     return;
@@ -51,20 +55,28 @@ void embed_mesh(const tree::LinkVisual& v, nlohmann::json& j) {
     j["problem"] = "its format (" + ext + ") is not one the viewer reads (STL, OBJ, COLLADA)";
     return;
   }
+  j["format"] = ext.substr(1);
+  if (const auto known = index.find(v.mesh_file); known != index.end()) {
+    j["file"] = known->second;
+    return;
+  }
   std::error_code ec;
   const auto bytes = std::filesystem::file_size(v.mesh_file, ec);
   if (ec || bytes > kMaxMeshBytes) {
+    j.erase("format");
     j["problem"] = ec ? "it cannot be read" : "it is larger than the viewer embeds (16 MiB)";
     return;
   }
   std::ifstream in(v.mesh_file, std::ios::binary);
   const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   if (!in.good() && !in.eof()) {
+    j.erase("format");
     j["problem"] = "it cannot be read";
     return;
   }
-  j["format"] = ext.substr(1);
-  j["data"] = base64(text);
+  index[v.mesh_file] = meshes.size();
+  j["file"] = meshes.size();
+  meshes.push_back(base64(text));
 }
 
 }  // namespace
@@ -97,7 +109,8 @@ nlohmann::json robot_scene(const Model& model) {
     return -1;
   };
   // the URDF's visual geometry, in its link's frame
-  nlohmann::json visuals = nlohmann::json::array();
+  nlohmann::json visuals = nlohmann::json::array(), meshes = nlohmann::json::array();
+  std::map<std::string, std::size_t> mesh_index;
   for (const tree::LinkVisual& v : model.visual.robot) {
     nlohmann::json j = {{"link", link_index(v.link)},
                         {"link_name", v.link},
@@ -119,7 +132,7 @@ nlohmann::json robot_scene(const Model& model) {
       case tree::LinkVisual::Shape::kMesh:
         j["mesh"] = v.mesh;
         j["scale"] = vector3(v.size);
-        embed_mesh(v, j);
+        embed_mesh(v, j, meshes, mesh_index);
         break;
     }
     if (!v.color.empty()) {
@@ -129,6 +142,7 @@ nlohmann::json robot_scene(const Model& model) {
     visuals.push_back(j);
   }
   if (!visuals.empty()) robot["visuals"] = visuals;
+  if (!meshes.empty()) robot["meshes"] = meshes;
   // the loops: the page draws each from link_a's frame through the points to link_b's
   nlohmann::json loops = nlohmann::json::array();
   for (const VisualLoop& l : model.visual.loops) {

@@ -43,7 +43,7 @@ Eigen::Vector3d json_vector(const nlohmann::json& j) {
 
 TEST(UrdfVisuals, EachShapeHasTheFilesOriginSizeAndMaterial) {
   const std::vector<LinkVisual> v = tree::load_urdf_visuals(kUrdf);
-  ASSERT_EQ(v.size(), 7u);
+  ASSERT_EQ(v.size(), 8u);
   // base: the box of the red material (a material given by name), at z = 0.05
   EXPECT_EQ(v[0].link, "base");
   EXPECT_EQ(v[0].name, "plinth");
@@ -132,7 +132,7 @@ TEST(UrdfVisuals, TheScenePlacesEachShapeWhereTheUrdfSays) {
   const auto scene = nlohmann::json::parse(viewer_scene_json(model));
   const nlohmann::json& robot = scene["robot"];
   const nlohmann::json& visuals = robot["visuals"];
-  ASSERT_EQ(visuals.size(), 7u);
+  ASSERT_EQ(visuals.size(), 8u);
   // the link of each visual by its index in the scene's links
   const auto link_of = [&](const nlohmann::json& v) {
     return robot["links"][v["link"].get<std::size_t>()]["name"].get<std::string>();
@@ -176,14 +176,22 @@ TEST(UrdfVisuals, TheScenePlacesEachShapeWhereTheUrdfSays) {
   // the STL mesh embedded (base64 of its bytes, "solid tetra" first); the other one named
   // as the URDF names it, with the reason it is not drawn, and no file
   EXPECT_EQ(visuals[5]["format"], "stl");
-  EXPECT_EQ(visuals[5]["data"].get<std::string>().substr(0, 12), "c29saWQgdGV0");  // "solid tet"
+  // square.obj, triangle.dae, tetra.stl: each file once, the tetrahedron shown twice
+  ASSERT_EQ(robot["meshes"].size(), 3u);
+  EXPECT_EQ(visuals[7]["file"], 2);
+  EXPECT_EQ(visuals[1]["file"], 0);
+  EXPECT_EQ(visuals[2]["file"], 1);
+  ASSERT_EQ(visuals[5]["file"], 2);
+  const std::string tetra = robot["meshes"][2].get<std::string>();
+  EXPECT_EQ(tetra.substr(0, 12), "c29saWQgdGV0");  // "solid tet"
   std::ifstream in(kDir + "/meshes/tetra.stl", std::ios::binary);
   const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  EXPECT_EQ(visuals[5]["data"].get<std::string>().size(), (bytes.size() + 2) / 3 * 4);
+  EXPECT_EQ(tetra.size(), (bytes.size() + 2) / 3 * 4);
   expect_vector(json_vector(visuals[5]["scale"]), 2, 2, 2);
   EXPECT_EQ(visuals[6]["mesh"], "meshes/</script><script>window.pwned=1</script><!--.stl");
   EXPECT_EQ(visuals[6]["problem"], "no such file beside the URDF");
-  EXPECT_FALSE(visuals[6].contains("data"));
+  EXPECT_FALSE(visuals[6].contains("file"));
+  EXPECT_FALSE(visuals[6].contains("format"));
   // the loop: the hand's sphere centre to the floor point below it, the world's index -1
   ASSERT_EQ(robot["loops"].size(), 1u);
   const nlohmann::json& loop = robot["loops"][0];

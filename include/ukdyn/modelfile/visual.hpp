@@ -95,8 +95,8 @@ struct ModelVisual {
 /// The scene description of `model` as JSON text, for the page generator: the bodies (kind,
 /// mass, principal inertias, solids), the joints (type, parent, child and their points), the
 /// points, links and trails of `visual:`, the control's requirements; a robot's links (their
-/// joints), their URDF visuals (a mesh's file embedded, base64, when it is found and is STL,
-/// OBJ or COLLADA of at most kMaxMeshBytes; else the reason it is not drawn) and its loops.
+/// joints), their URDF visuals (a mesh's file embedded once, base64, when it is found and is
+/// STL, OBJ or COLLADA of at most kMaxMeshBytes; else the reason it is not drawn) and its loops.
 /// Cost O(bodies + joints + bytes of the meshes).
 std::string viewer_scene_json(const Model& model);
 
