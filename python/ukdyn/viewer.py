@@ -12,7 +12,8 @@ usage: viewer.py TRAJECTORY.csv SCENE.json OUTPUT.html
 
 The scene (modelfile/visual.hpp, ``viewer_scene_json``) says what to draw: bodies (kind, mass,
 principal inertias, declared solids), joints (parent, child and their points), the points,
-links and trails of a ``visual:`` section. The trajectory's columns say where: a planar body's
+links and trails of a ``visual:`` section; a robot's links (their joints), URDF visuals, mesh
+files (base64, each once) and loops. The trajectory's columns say where: a planar body's
 ``<b>.x, <b>.y, <b>.theta``; a rigid body's ``<b>.x, <b>.y, <b>.z, <b>.u0 … <b>.u3``; a point's
 ``visual.<p>.x, .y (, .z)``; a joint's reaction ``reaction.<j>.fx, fy (, fz)`` (ideal) and
 ``reaction.<j>.friction_fx …`` (non-ideal), drawn at the joint's point on its child, and its
@@ -20,7 +21,8 @@ torque ``reaction.<j>.tx …``, ``reaction.<j>.friction_tx …`` (a revolute joi
 force ``Qc_control.<c>``; the energy ``energy``. The samples are decimated to the display rate
 (``fps`` frames per simulated second) and rounded to what a screen shows: positions to 1e-4 of
 the scene's extent, angles and quaternions to 1e-4, forces to ``digits`` significant digits;
-and the page holds three.js itself: it opens from disk, without a server or network.
+and the page holds three.js itself (and the loader of each mesh format it embeds): it opens
+from disk, without a server or network.
 
 Pure Python (no NumPy needed): the command runs it with whatever /usr/bin/python3 has.
 """
