@@ -4,7 +4,8 @@ cmake_minimum_required(VERSION 3.25)
 # app/CMakeLists.txt), so that `ukdyn run --viewer` needs nothing from the source tree, Python
 # or libjs-three when it runs (app/viewer_page.cpp fills the template):
 #   cmake -DOUTPUT=viewer_embedded.cpp -DTEMPLATE=viewer_template.html
-#         "-DTHREE=three.min.js;OrbitControls.js" -P embed_viewer.cmake
+#         "-DTHREE=three.min.js;OrbitControls.js;STLLoader.js;OBJLoader.js;ColladaLoader.js"
+#         -P embed_viewer.cmake
 # THREE may be empty (libjs-three not installed): the command then says it cannot write the page.
 # Each file becomes string literals (embed_literal.cmake).
 include(${CMAKE_CURRENT_LIST_DIR}/embed_literal.cmake)
@@ -14,17 +15,18 @@ string(APPEND body "// and Debian's libjs-three. Do not edit: edit those files a
 string(APPEND body "#include \"viewer.hpp\"\n\nnamespace ukdyn::cli {\n\n")
 ukdyn_literal("${TEMPLATE}" text)
 string(APPEND body "const char* const kViewerTemplate = ${text};\n\n")
-set(three "\"\"")
-set(orbit "\"\"")
+# three.js, OrbitControls and the mesh loaders (STL, OBJ, COLLADA): all five, or none
+set(names kThreeJs kOrbitControlsJs kStlLoaderJs kObjLoaderJs kColladaLoaderJs)
 list(LENGTH THREE count)
-if(count EQUAL 2)
-  list(GET THREE 0 path)
-  ukdyn_literal("${path}" three)
-  list(GET THREE 1 path)
-  ukdyn_literal("${path}" orbit)
-endif()
-string(APPEND body "const char* const kThreeJs = ${three};\n\n")
-string(APPEND body "const char* const kOrbitControlsJs = ${orbit};\n\n")
+foreach(k RANGE 4)
+  list(GET names ${k} name)
+  set(text "\"\"")
+  if(count EQUAL 5)
+    list(GET THREE ${k} path)
+    ukdyn_literal("${path}" text)
+  endif()
+  string(APPEND body "const char* const ${name} = ${text};\n\n")
+endforeach()
 string(APPEND body "}  // namespace ukdyn::cli\n")
 
 ukdyn_write_if_changed("${OUTPUT}" "${body}")

@@ -7,6 +7,7 @@
 #include <map>
 #include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <nlohmann/json.hpp>
@@ -24,6 +25,24 @@ namespace fs = std::filesystem;
 bool viewer_by_default(const Model& model) {
   return model.multibody || model.robot || !model.visual.points.empty() ||
          !model.visual.contacts.empty();
+}
+
+std::string viewer_three_text(const nlohmann::ordered_json& scene) {
+  std::string three = std::string(kThreeJs) + "\n" + kOrbitControlsJs;
+  // the loaders of the meshes embedded
+  const auto robot = scene.find("robot");
+  if (robot == scene.end() || !robot->is_object() || !robot->contains("visuals")) return three;
+  const std::pair<const char*, const char*> loaders[] = {
+      {"stl", kStlLoaderJs}, {"obj", kObjLoaderJs}, {"dae", kColladaLoaderJs}};
+  for (const auto& [format, text] : loaders) {
+    for (const auto& v : robot->at("visuals")) {
+      if (v.contains("file") && v.value("format", "") == format) {
+        three += std::string("\n") + text;
+        break;
+      }
+    }
+  }
+  return three;
 }
 
 std::optional<fs::path> write_viewer(const Model& model, const fs::path& csv, const fs::path& dir,
@@ -53,7 +72,7 @@ std::optional<fs::path> write_viewer(const Model& model, const fs::path& csv, co
     for (const std::string& line : nonfinite_warnings(scene, first_nonfinite)) {
       std::fprintf(stderr, "%s\n", terminal_text(line).c_str());
     }
-    const std::string three = std::string(kThreeJs) + "\n" + kOrbitControlsJs;
+    const std::string three = viewer_three_text(scene);
     const std::string html = fill_viewer_template(
         kViewerTemplate, three,
         viewer_page_data(scene, run, options, read_contact_events(dir / "summary.json")));

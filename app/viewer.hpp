@@ -7,6 +7,9 @@
 
 #include <filesystem>
 #include <optional>
+#include <string>
+
+#include <nlohmann/json.hpp>
 
 namespace ukdyn {
 struct Model;
@@ -14,11 +17,19 @@ struct Model;
 
 namespace ukdyn::cli {
 
-/// The page template (python/ukdyn/viewer_template.html), and Debian's three.js and
-/// OrbitControls (empty when the program was built without libjs-three).
+/// The page template (python/ukdyn/viewer_template.html), and Debian's three.js, OrbitControls
+/// and mesh loaders (empty when the program was built without libjs-three).
 extern const char* const kViewerTemplate;
 extern const char* const kThreeJs;
 extern const char* const kOrbitControlsJs;
+extern const char* const kStlLoaderJs;
+extern const char* const kObjLoaderJs;
+extern const char* const kColladaLoaderJs;
+
+/// The scripts of three.js a page of `scene` needs: three.js and OrbitControls, then the
+/// loader of each mesh format ("stl", "obj", "dae") its robot's visuals embed, in that order,
+/// joined by newlines (viewer.py's _three_text). Cost O(visuals).
+std::string viewer_three_text(const nlohmann::ordered_json& scene);
 
 /// Whether `ukdyn run` writes the viewer when neither --viewer nor --no-viewer is given: for
 /// models with bodies or a `visual:` section.

@@ -12,7 +12,8 @@ usage: viewer.py TRAJECTORY.csv SCENE.json OUTPUT.html
 
 The scene (modelfile/visual.hpp, ``viewer_scene_json``) says what to draw: bodies (kind, mass,
 principal inertias, declared solids), joints (parent, child and their points), the points,
-links and trails of a ``visual:`` section. The trajectory's columns say where: a planar body's
+links and trails of a ``visual:`` section; a robot's links (their joints), URDF visuals, mesh
+files (base64, each once) and loops. The trajectory's columns say where: a planar body's
 ``<b>.x, <b>.y, <b>.theta``; a rigid body's ``<b>.x, <b>.y, <b>.z, <b>.u0 … <b>.u3``; a point's
 ``visual.<p>.x, .y (, .z)``; a joint's reaction ``reaction.<j>.fx, fy (, fz)`` (ideal) and
 ``reaction.<j>.friction_fx …`` (non-ideal), drawn at the joint's point on its child, and its
@@ -20,7 +21,8 @@ torque ``reaction.<j>.tx …``, ``reaction.<j>.friction_tx …`` (a revolute joi
 force ``Qc_control.<c>``; the energy ``energy``. The samples are decimated to the display rate
 (``fps`` frames per simulated second) and rounded to what a screen shows: positions to 1e-4 of
 the scene's extent, angles and quaternions to 1e-4, forces to ``digits`` significant digits;
-and the page holds three.js itself: it opens from disk, without a server or network.
+and the page holds three.js itself (and the loader of each mesh format it embeds): it opens
+from disk, without a server or network.
 
 Pure Python (no NumPy needed): the command runs it with whatever /usr/bin/python3 has.
 """
@@ -37,6 +39,8 @@ import tempfile
 # where three.js is found when it is not beside this file (Debian's libjs-three)
 DEBIAN_THREE = "/usr/share/javascript/three"
 THREE_FILES = ("three.min.js", "OrbitControls.js")
+# the mesh loaders of a robot's URDF visuals, put in a page whose data holds meshes of the format
+MESH_LOADERS = (("stl", "STLLoader.js"), ("obj", "OBJLoader.js"), ("dae", "ColladaLoader.js"))
 TEMPLATE = "viewer_template.html"
 
 # the kinds of contact event the page marks as impacts (an impact closing a contact at rest too)
@@ -55,6 +59,8 @@ def _asset(name, here):
         places.append(os.path.join(DEBIAN_THREE, name))
     elif name == "OrbitControls.js":
         places.append(os.path.join(DEBIAN_THREE, "examples", "js", "controls", name))
+    elif name.endswith("Loader.js"):
+        places.append(os.path.join(DEBIAN_THREE, "examples", "js", "loaders", name))
     for p in places:
         if os.path.exists(p):
             with open(p, encoding="utf-8") as f:
@@ -432,12 +438,24 @@ def read_contact_events(summary_path):
     return [e for e in events if isinstance(e, dict)] if isinstance(events, list) else []
 
 
+def _three_text(scene, here):
+    """three.js and OrbitControls, then the loader of each mesh format the robot's visuals embed
+    (in MESH_LOADERS' order), joined by newlines (app/viewer.cpp's viewer_three_text)."""
+    files = list(THREE_FILES)
+    robot = scene.get("robot")
+    visuals = robot.get("visuals", []) if isinstance(robot, dict) else []
+    for fmt, loader in MESH_LOADERS:
+        if any("file" in v and v.get("format") == fmt for v in visuals):
+            files.append(loader)
+    return "\n".join(_asset(n, here) for n in files)
+
+
 def build_page(scene, names, columns, title=None, **options):
     """The HTML page (a str) of a run: its scene (dict) and its columns (see scene_data)."""
     here = os.path.dirname(os.path.abspath(__file__))
     data = scene_data(scene, names, columns, **options)
     template = _asset(TEMPLATE, here)
-    three = "\n".join(_asset(n, here) for n in THREE_FILES)
+    three = _three_text(scene, here)
     payload = _json_for_html(data)
     # no "</script" inside three.js's script element
     three = three.replace("</script", "<\\/script")

@@ -29,6 +29,7 @@
 #include "ukdyn/core/format.hpp"
 #include "ukdyn/multibody/tree.hpp"
 #include "ukdyn/multibody/tree_closures.hpp"
+#include "ukdyn/multibody/tree_visual.hpp"
 
 #include "modelfile/reader.hpp"
 
@@ -166,8 +167,9 @@ Model Reader::read_robot(const YAML::Node& root) {
     };
   }
   SystemBuilder builder = tree::system_builder(robot, tau);
-  // loops: closures between link points
+  // loops: closures between link points (each kept for the viewer too)
   std::set<std::string> loop_names;
+  std::vector<VisualLoop> drawn_loops;
   if (const YAML::Node L = r["loops"]) {
     if (!L.IsSequence())
       fail(L, "robot loops must be a list",
@@ -230,6 +232,10 @@ Model Reader::read_robot(const YAML::Node& root) {
         return lp;
       };
       const tree::LinkPoint a = end("link_a", "point_a"), b = end("link_b", "point_b");
+      const auto link_name = [&](const tree::LinkPoint& lp) {
+        return lp.link < 0 ? std::string("world") : robot.link(lp.link).name;
+      };
+      drawn_loops.push_back({name, type, link_name(a), link_name(b), a.p, b.p});
       // a weld's frame: the point and URDF's roll, pitch, yaw (R = Rz(yaw) Ry(pitch) Rx(roll))
       const auto frame = [&](const tree::LinkPoint& lp, const char* rpy_key) {
         tree::LinkFrame f{lp.link, lp.p, tree::Matrix3d::Identity()};
@@ -287,6 +293,9 @@ Model Reader::read_robot(const YAML::Node& root) {
   model.q0 = robot.neutral();
   model.qd0 = VectorXd::Zero(n);
   model.robot = robot_;
+  // what the viewer draws: the URDF's visual geometry and the loops
+  model.visual.robot = tree::load_urdf_visuals(path.string());
+  model.visual.loops = std::move(drawn_loops);
   return model;
 }
 

@@ -15,6 +15,8 @@
 #include "ukdyn/multibody/multibody.hpp"
 #include "ukdyn/multibody/tree.hpp"
 
+#include "modelfile/visual_robot.hpp"
+
 namespace ukdyn {
 namespace {
 
@@ -206,29 +208,9 @@ std::string viewer_scene_json(const Model& model) {
   scene["links"] = links;
   scene["trails"] = model.visual.trails;
   if (!contacts.empty()) scene["contacts"] = contacts;
-  // a robot (robot: or a .urdf): each link's joint, parents first — its origin in the parent's
-  // frame (xyz, quaternion w x y z), kind, axis and coordinates — from which the page computes
-  // the links' frames (the same forward kinematics as tree::forward_kinematics)
+  // a robot (robot: or a .urdf): its links, visuals and loops (modelfile/visual_robot.cpp)
   if (model.robot) {
-    const tree::Tree& tr = *model.robot;
-    const std::vector<std::string>& names = tr.coordinate_names();
-    nlohmann::json robot_links = nlohmann::json::array();
-    for (Index i = 0; i < tr.link_count(); ++i) {
-      const tree::Link& l = tr.link(i);
-      const Eigen::Quaterniond& r = l.joint.R_PJ;
-      nlohmann::json coordinates = nlohmann::json::array();
-      for (int k = 0; k < tr.dofs(i); ++k)
-        coordinates.push_back(names[std::size_t(tr.offset(i) + k)]);
-      robot_links.push_back({{"name", l.name},
-                             {"parent", tr.parent(i)},
-                             {"joint", l.joint.name},
-                             {"kind", tree::joint_kind_name(l.joint.kind)},
-                             {"p", vector3(l.joint.p_PJ)},
-                             {"r", {r.w(), r.x(), r.y(), r.z()}},
-                             {"axis", vector3(l.joint.axis)},
-                             {"coordinates", coordinates}});
-    }
-    scene["robot"] = {{"name", tr.name()}, {"links", robot_links}};
+    scene["robot"] = detail::robot_scene(model);
     planar = false;
   }
   scene["planar"] = planar;

@@ -5,11 +5,14 @@
 /// generator (python/ukdyn/viewer.py) reads beside trajectory.csv.
 #pragma once
 
+#include <cstddef>
 #include <string>
 #include <utility>
 #include <vector>
 
 #include <Eigen/Core>
+
+#include "ukdyn/multibody/tree_visual.hpp"
 
 namespace ukdyn {
 
@@ -60,6 +63,16 @@ struct VisualContact {
   int dimensions = 2;  ///< 2 (z = 0) or 3
 };
 
+/// A loop closure of a robot (`robot: loops:`), drawn by the viewer as a dashed line from
+/// link_a's frame through its point and link_b's point to link_b's frame (docs/robots.md).
+struct VisualLoop {
+  std::string name;                                   ///< the loop's (the constraint's) name
+  std::string type;                                   ///< "point", "distance", "revolute" or "weld"
+  std::string link_a, link_b;                         ///< the links' names; "world" for the world
+  Eigen::Vector3d point_a = Eigen::Vector3d::Zero();  ///< in link_a's frame
+  Eigen::Vector3d point_b = Eigen::Vector3d::Zero();  ///< in link_b's frame
+};
+
 /// The `visual:` information of a model. Immutable after the reader fills it.
 struct ModelVisual {
   /// multibody models: each body's solids by body name (none: drawn as its equivalent box)
@@ -74,11 +87,20 @@ struct ModelVisual {
   std::vector<std::string> columns;
   /// the points (coordinate models) or bodies (multibody models) whose paths are drawn
   std::vector<std::string> trails;
+  /// a robot's URDF visual geometry (tree::load_urdf_visuals) and its loop closures
+  std::vector<tree::LinkVisual> robot;
+  std::vector<VisualLoop> loops;
 };
 
 /// The scene description of `model` as JSON text, for the page generator: the bodies (kind,
 /// mass, principal inertias, solids), the joints (type, parent, child and their points), the
-/// points, links and trails of `visual:`, the control's requirements. Cost O(bodies + joints).
+/// points, links and trails of `visual:`, the control's requirements; a robot's links (their
+/// joints), their URDF visuals (a mesh's file embedded once, base64, when it is found and is
+/// STL, OBJ or COLLADA of at most kMaxMeshBytes; else the reason it is not drawn) and its loops.
+/// Cost O(bodies + joints + bytes of the meshes).
 std::string viewer_scene_json(const Model& model);
+
+/// The largest mesh file the viewer embeds in its page (bytes).
+inline constexpr std::size_t kMaxMeshBytes = 16u << 20;
 
 }  // namespace ukdyn

@@ -13,6 +13,8 @@
 
 #include "ukdyn/multibody/tree.hpp"
 
+#include "urdf_parse.hpp"
+
 namespace ukdyn::tree {
 
 namespace {
@@ -36,8 +38,8 @@ Vector3d to_eigen(const urdf::Vector3& v) { return {v.x, v.y, v.z}; }
 
 }  // namespace
 
-Tree load_urdf(const std::string& path, Vector3d gravity) {
-  const std::string who = "ukdyn::tree::load_urdf: " + path + ": ";
+urdf::ModelInterfaceSharedPtr detail::parse_urdf_file(const std::string& path,
+                                                      const std::string& who) {
   if (!std::filesystem::is_regular_file(path)) {
     throw std::invalid_argument(who + "no such file");
   }
@@ -60,6 +62,12 @@ Tree load_urdf(const std::string& path, Vector3d gravity) {
     throw std::invalid_argument(who + "not a valid URDF: " +
                                 (capture.text().empty() ? "urdfdom refused it" : capture.text()));
   }
+  return model;
+}
+
+Tree load_urdf(const std::string& path, Vector3d gravity) {
+  const std::string who = "ukdyn::tree::load_urdf: " + path + ": ";
+  const urdf::ModelInterfaceSharedPtr model = detail::parse_urdf_file(path, who);
   const urdf::LinkConstSharedPtr root = model->getRoot();
   if (!root) throw std::invalid_argument(who + "no root link");
   // URDF's "world" link without inertial is the world itself; any other root is welded to it
