@@ -1,9 +1,10 @@
 // SPDX-License-Identifier: BSD-3-Clause
-// Exact tracking control (control/control.hpp): closed-form error dynamics on chaotic, multibody
-// and rotational systems, optimality of the weighted law against random admissible forces, the laws
+// Exact tracking control (control/control.hpp): closed-form error dynamics on chaotic and
+// multibody systems, optimality of the weighted law against random admissible forces, the laws
 // against independent methods (KKT with the requirements as constraints, closed-form weighted
-// least norm, least squares), physical constraints with requirements, the robust term under a
-// 20 % mass error, and the messages users meet.
+// least norm, least squares), the robust term under a 20 % mass error, and the messages users
+// meet. (Physical constraints with requirements, spacecraft attitude and gyroscopes:
+// test_control_physical.cpp.)
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -14,7 +15,6 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Cholesky>
-#include <Eigen/Geometry>
 #include <Eigen/LU>
 #include <Eigen/QR>
 
@@ -22,42 +22,28 @@
 #include <ukdyn/reference/reference.hpp>
 #include <ukdyn/ukdyn.hpp>
 
+#include "support/cartesian_pendulum.hpp"
+#include "support/control_runs.hpp"
 #include "support/error_dynamics.hpp"
 #include "support/random_problem.hpp"
 
 namespace ukdyn {
 namespace UKDYN_TEST_FILE {
 
+using test::cartesian_pendulum;  // (a plant with other coordinates, ControlErrors)
+using test::record;
+using test::second_order_error;  // e(t) of e'' + 2 zeta omega e' + omega² e = 0
+using test::tight;
 using testing::null_space;
 using testing::rel_diff;
 using testing::vec;
 
 constexpr double kG = 9.81;
 
-// records a measured value in the test report (--gtest_output=xml)
-void record(const std::string& name, double value) {
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%.3e", value);
-  ::testing::Test::RecordProperty(name, buf);
-}
-
 // sample j of an N × width field
 Eigen::Map<const VectorXd> sample(const std::vector<double>& f, Index width, Index j) {
   return {f.data() + j * width, width};
 }
-
-// a tight integration (the error dynamics are then checked to 1e-8)
-SimulationOptions tight(double t_end, double every = 0.05) {
-  SimulationOptions o;
-  o.t_end = t_end;
-  o.output_every = every;
-  o.rtol = 1e-11;
-  o.atol = 1e-12;
-  return o;
-}
-
-// e(t) of e'' + 2 zeta omega e' + omega² e = 0 from e(0) = e0, e'(0) = e1
-using test::second_order_error;
 
 // ---------------------------------------------------------------------------------------------
 // models
@@ -196,28 +182,6 @@ void tip_acceleration_form(const Eigen::Ref<const VectorXd>& th,
   // x'' = A th'' + xc = ax − 2α (x' − vx) − β² (x − px)
   b[0] = ax - 2 * alpha * (xd - vx) - beta * beta * (x - px) - xc;
   b[1] = ay - 2 * alpha * (yd - vy) - beta * beta * (y - py) - yc;
-}
-
-// A particle pendulum in Cartesian coordinates (x, y): the rod is a physical constraint
-System cartesian_pendulum(double m, double L) {
-  return SystemBuilder({"x", "y"})
-      .mass_matrix(m * MatrixXd::Identity(2, 2))
-      .forces([m](const Eigen::Ref<const VectorXd>&, const Eigen::Ref<const VectorXd>&, double,
-                  Eigen::Ref<VectorXd> Q) { Q << 0.0, -m * kG; })
-      .potential_energy([m](const Eigen::Ref<const VectorXd>& q, double) { return m * kG * q[1]; })
-      .add(holonomic("rod", 1,
-                     [L](const auto& q, const auto&, auto& phi) {
-                       phi[0] = (q[0] * q[0] + q[1] * q[1] - L * L) / (2 * L);
-                     }))
-      .build();
-}
-
-// x − 0.3 sin t
-Constraint track_x() {
-  return holonomic("x_track", 1, [](const auto& q, const auto& t, auto& e) {
-    using std::sin;
-    e[0] = q[0] - 0.3 * sin(t);
-  });
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -552,307 +516,6 @@ TEST(ControlLaws, ActuatedSubsetThatCannotMeetTheRequirementsIsReported) {
   EXPECT_EQ(compute_control(ok, wo, q, qd, 0.7), ControlStatus::kOk);
   EXPECT_EQ(wo.Qc_control[0], 0.0);
   EXPECT_EQ(wo.Qc_control[1], 0.0);
-}
-
-// ---------------------------------------------------------------------------------------------
-// physical constraints and requirements together
-
-TEST(ControlPhysical, PendulumRodAndTrackedAbscissa) {
-  const double m = 1.3, L = 1.0, omega = 3.0;
-  const System sys = cartesian_pendulum(m, L);
-  const Controller ctrl =
-      ControllerBuilder(sys).require(track_x(), ErrorDynamics::second_order(omega)).build();
-  ControlWorkspace ws(ctrl);
-  const double th = 0.35, w = -0.7, t = 0.4;
-  const VectorXd q = vec({L * std::sin(th), -L * std::cos(th)});
-  const VectorXd qd = vec({L * std::cos(th) * w, L * std::sin(th) * w});
-  ASSERT_EQ(compute_control(ctrl, ws, q, qd, t), ControlStatus::kOk);
-  // the Gauss control loads no physical constraint: A_p M⁻¹ Q_c = 0 (M = m I: Q_c ⊥ the rod)
-  EXPECT_NEAR(q.dot(ws.Qc_control), 0.0, 1e-12 * ws.Qc_control.norm());
-  // so the rod's reaction is that of the uncontrolled pendulum, m (g cos θ + L θ'²) inward
-  const double tension = m * (kG * std::cos(th) + L * w * w);
-  EXPECT_NEAR(rel_diff(ws.Qc_physical, -tension * q / L), 0.0, 1e-12);
-  // and reaction + control = the constraint force with rod and requirement stacked (KKT)
-  MatrixXd A(2, 2);
-  VectorXd b(2);
-  A << q[0] / L, q[1] / L, 1.0, 0.0;
-  const double e = q[0] - 0.3 * std::sin(t), ed = qd[0] - 0.3 * std::cos(t);
-  b << -qd.squaredNorm() / L, -0.3 * std::sin(t) - 2 * omega * ed - omega * omega * e;
-  KktSolver kkt(2, 2);
-  VectorXd qdd(2), lambda(2);
-  ASSERT_EQ(kkt.solve(m * MatrixXd::Identity(2, 2), vec({0.0, -m * kG}), A, b, qdd, lambda),
-            Eigen::Success);
-  EXPECT_NEAR(rel_diff(ws.Qc_physical + ws.Qc_control, A.transpose() * lambda), 0.0, 1e-12);
-  record("rel_diff_stacked_kkt", rel_diff(ws.Qc_physical + ws.Qc_control, A.transpose() * lambda));
-  EXPECT_NEAR(rel_diff(ws.qdd, qdd), 0.0, 1e-12);
-
-  // only x actuated: the rod now reacts to the control too, and the motion is still right
-  const Controller act = ControllerBuilder(sys)
-                             .require(track_x(), ErrorDynamics::second_order(omega))
-                             .actuated({"x"})
-                             .build();
-  ControlWorkspace wa(act);
-  ASSERT_EQ(compute_control(act, wa, q, qd, t), ControlStatus::kOk);
-  EXPECT_EQ(wa.Qc_control[1], 0.0);
-  EXPECT_NEAR(rel_diff(wa.qdd, qdd), 0.0, 1e-11);  // both constraints hold: the same q''
-  // the reaction: KKT of the rod alone with Q + Q_c
-  KktSolver rod(2, 1);
-  VectorXd qdd_rod(2), lambda_rod(1);
-  ASSERT_EQ(rod.solve(m * MatrixXd::Identity(2, 2), vec({wa.Qc_control[0], -m * kG}), A.topRows(1),
-                      b.head(1), qdd_rod, lambda_rod),
-            Eigen::Success);
-  EXPECT_NEAR(rel_diff(wa.Qc_physical, A.topRows(1).transpose() * lambda_rod), 0.0, 1e-11);
-  EXPECT_GT(rel_diff(wa.Qc_physical, ws.Qc_physical), 1e-3);
-
-  // simulated: the rod holds, the abscissa error follows e'' + 6 e' + 9 e = 0
-  const double th0 = 0.2;
-  const VectorXd q0 = vec({L * std::sin(th0), -L * std::cos(th0)}), qd0 = vec({0.0, 0.0});
-  const ControlledTrajectory run = simulate_controlled(ctrl, sys, q0, qd0, tight(4));
-  ASSERT_EQ(run.plant.stats.status, Status::kOk) << run.plant.stats.message;
-  double worst = 0.0;
-  for (Index j = 0; j < run.samples(); ++j) {
-    const double tj = run.plant.t[std::size_t(j)];
-    const double expected = second_order_error(1.0, omega, q0[0], -0.3, tj);
-    EXPECT_NEAR(run.error[std::size_t(j)], expected, 1e-8) << tj;
-    EXPECT_NEAR(run.plant.position_violation[std::size_t(j)], 0.0, 1e-11);
-    worst = std::max(worst, std::abs(run.error[std::size_t(j)] - expected));
-  }
-  EXPECT_NEAR(run.plant.stats.energy_drift, 0.0, 1e-8);  // E − E0 = ∫ Q_cᵀ q' dt
-  record("max_error_deviation", worst);
-  record("energy_drift", run.plant.stats.energy_drift);
-}
-
-TEST(ControlPhysical, NonIdealPlantForcesAndEnergyBalance) {
-  // the rod pendulum with viscous damping C = −c q' (a non-ideal force of the plant): the Gauss
-  // control still gives the prescribed error (C does not read the reaction), and
-  // E(t) − E(0) = W_nonideal(t) + W_control(t)
-  const double m = 1.0, L = 1.0, omega = 3.0;
-  const System sys =
-      SystemBuilder({"x", "y"})
-          .mass_matrix(m * MatrixXd::Identity(2, 2))
-          .forces([m](const Eigen::Ref<const VectorXd>&, const Eigen::Ref<const VectorXd>&, double,
-                      Eigen::Ref<VectorXd> Q) { Q << 0.0, -m * kG; })
-          .potential_energy(
-              [m](const Eigen::Ref<const VectorXd>& q, double) { return m * kG * q[1]; })
-          .add(holonomic("rod", 1,
-                         [L](const auto& q, const auto&, auto& phi) {
-                           phi[0] = (q[0] * q[0] + q[1] * q[1] - L * L) / (2 * L);
-                         }))
-          .add(viscous_friction({.coefficient = 0.4}))
-          .build();
-  const Controller ctrl =
-      ControllerBuilder(sys).require(track_x(), ErrorDynamics::second_order(omega)).build();
-  const VectorXd q0 = vec({L * std::sin(0.2), -L * std::cos(0.2)}), qd0 = vec({0.0, 0.0});
-  const ControlledTrajectory run = simulate_controlled(ctrl, sys, q0, qd0, tight(4));
-  ASSERT_EQ(run.plant.stats.status, Status::kOk) << run.plant.stats.message;
-  double worst = 0.0;
-  for (Index j = 0; j < run.samples(); ++j) {
-    const double t = run.plant.t[std::size_t(j)];
-    const double expected = second_order_error(1.0, omega, q0[0], -0.3, t);
-    EXPECT_NEAR(run.error[std::size_t(j)], expected, 1e-8) << t;
-    worst = std::max(worst, std::abs(run.error[std::size_t(j)] - expected));
-  }
-  record("max_error_deviation", worst);
-  EXPECT_LT(run.plant.work_nonideal.back(), -1e-3);  // the damper dissipates
-  EXPECT_NEAR(run.plant.stats.energy_drift, 0.0, 1e-8);
-  record("energy_drift", run.plant.stats.energy_drift);
-}
-
-// ---------------------------------------------------------------------------------------------
-// spacecraft attitude tracking with a unit quaternion u = (u0, u1, u2, u3) in generalized
-// coordinates (docs/control.md): body rates [0; ω] = 2 E(u) u', T = 2 u'ᵀ Eᵀ J̄ E u' with
-// J̄ = diag(J0, J1, J2, J3) (J0 > 0 arbitrary: it only weighs u'ᵀu, zero on the constraint), so
-//   M = 4 Eᵀ J̄ E,  Q = −8 E(u')ᵀ diag(0, J1, J2, J3) E(u) u' − 4 J0 |u'|² u + 2 Eᵀ [0; τ],
-// and the unit norm (uᵀu − 1)/2 = 0 is a physical constraint.
-
-Eigen::Matrix4d E_of(const Eigen::Vector4d& u) {
-  Eigen::Matrix4d E;
-  E << u[0], u[1], u[2], u[3],   //
-      -u[1], u[0], u[3], -u[2],  //
-      -u[2], -u[3], u[0], u[1],  //
-      -u[3], u[2], -u[1], u[0];
-  return E;
-}
-
-const Eigen::Vector4d kJbar(1.0, 1.0, 2.0, 3.0);  // J0, J1, J2, J3
-
-System spacecraft() {
-  return SystemBuilder({"u0", "u1", "u2", "u3"})
-      .mass_matrix([](const Eigen::Ref<const VectorXd>& u, double, Eigen::Ref<MatrixXd> M) {
-        const Eigen::Matrix4d E = E_of(u);
-        M = 4.0 * E.transpose() * kJbar.asDiagonal() * E;
-      })
-      .forces([](const Eigen::Ref<const VectorXd>& u, const Eigen::Ref<const VectorXd>& ud, double,
-                 Eigen::Ref<VectorXd> Q) {
-        const Eigen::Vector4d J(0.0, kJbar[1], kJbar[2], kJbar[3]);
-        Q = -8.0 * E_of(ud).transpose() * J.asDiagonal() * E_of(u) * ud -
-            4.0 * kJbar[0] * ud.squaredNorm() * u;
-      })
-      .add(holonomic("unit", 1,
-                     [](const auto& u, const auto&, auto& phi) {
-                       phi[0] = (u[0] * u[0] + u[1] * u[1] + u[2] * u[2] + u[3] * u[3] - 1.0) / 2.0;
-                     }))
-      .build();
-}
-
-// desired attitude: angle 0.4 t + 0.2 sin t about n = (1, 2, 2)/3
-template <class S>
-void desired_attitude(const S& t, S d[4]) {
-  using std::cos;
-  using std::sin;
-  const S half = (0.4 * t + 0.2 * sin(t)) / 2.0;
-  d[0] = cos(half);
-  d[1] = sin(half) / 3.0;
-  d[2] = 2.0 * sin(half) / 3.0;
-  d[3] = 2.0 * sin(half) / 3.0;
-}
-
-// the vector part of conj(q_d) ⊗ u: d0 u_v − u0 d − d × u_v
-Constraint attitude_requirement() {
-  return holonomic("attitude", 3, [](const auto& u, const auto& t, auto& e) {
-    using S = std::decay_t<decltype(t)>;
-    S d[4];
-    desired_attitude(t, d);
-    e[0] = d[0] * u[1] - u[0] * d[1] - (d[2] * u[3] - d[3] * u[2]);
-    e[1] = d[0] * u[2] - u[0] * d[2] - (d[3] * u[1] - d[1] * u[3]);
-    e[2] = d[0] * u[3] - u[0] * d[3] - (d[1] * u[2] - d[2] * u[1]);
-  });
-}
-
-Eigen::Vector4d quat_mul(const Eigen::Vector4d& a, const Eigen::Vector4d& b) {
-  const Eigen::Vector3d av = a.tail<3>(), bv = b.tail<3>();
-  Eigen::Vector4d c;
-  c[0] = a[0] * b[0] - av.dot(bv);
-  c.tail<3>() = a[0] * bv + b[0] * av + av.cross(bv);
-  return c;
-}
-
-Eigen::Vector4d conj(const Eigen::Vector4d& a) { return {a[0], -a[1], -a[2], -a[3]}; }
-
-TEST(ControlSpacecraft, TorqueFreeQuaternionModelConservesAngularMomentum) {
-  // the model itself: H = R(u) J ω (inertial) and T are constant without torque
-  const System sys = spacecraft();
-  const Eigen::Vector4d u0(std::cos(0.25), 0.0, 0.0, std::sin(0.25));
-  const Eigen::Vector4d ud0 = 0.5 * quat_mul(u0, Eigen::Vector4d(0.0, 0.3, -0.5, 0.8));
-  SimulationOptions o = tight(3.0, 0.5);
-  const Trajectory tr = simulate(sys, u0, ud0, o);
-  ASSERT_EQ(tr.stats.status, Status::kOk) << tr.stats.message;
-  auto momentum = [&](Index j) {
-    const Eigen::Vector4d u = sample(tr.q, 4, j), ud = sample(tr.qd, 4, j);
-    const Eigen::Vector3d w = (2.0 * E_of(u) * ud).tail<3>();
-    const Eigen::Vector3d Jw = kJbar.tail<3>().asDiagonal() * w;
-    // R(u) v = u ⊗ (0, v) ⊗ u*
-    return Eigen::Vector3d(
-        quat_mul(quat_mul(u, Eigen::Vector4d(0, Jw[0], Jw[1], Jw[2])), conj(u)).tail<3>());
-  };
-  const Eigen::Vector3d H0 = momentum(0);
-  double worst = 0.0;
-  for (Index j = 1; j < tr.samples(); ++j) {
-    EXPECT_NEAR((momentum(j) - H0).norm(), 0.0, 1e-8 * H0.norm()) << tr.t[std::size_t(j)];
-    worst = std::max(worst, (momentum(j) - H0).norm() / H0.norm());
-  }
-  record("max_rel_momentum_drift", worst);
-  EXPECT_NEAR(tr.stats.energy_drift, 0.0, 1e-9);
-}
-
-TEST(ControlSpacecraft, AttitudeErrorDecaysAsPrescribedAndNormHolds) {
-  const System sys = spacecraft();
-  const double omega = 2.0;
-  const Controller ctrl = ControllerBuilder(sys)
-                              .require(attitude_requirement(), ErrorDynamics::second_order(omega))
-                              .build();
-  // start 0.5 rad about z, tumbling at ω = (0.1, −0.2, 0.3)
-  const Eigen::Vector4d u0(std::cos(0.25), 0.0, 0.0, std::sin(0.25));
-  const Eigen::Vector4d ud0 = 0.5 * quat_mul(u0, Eigen::Vector4d(0.0, 0.1, -0.2, 0.3));
-  // e(0) and e'(0) by hand: vec(conj(q_d) ⊗ u) and its rate, q_d' = (θ'/2)(−sin, n cos)(θ/2)
-  const Eigen::Vector4d d0(1.0, 0.0, 0.0, 0.0);
-  const double theta_rate = 0.4 + 0.2;  // θ'(0)
-  const Eigen::Vector4d dd0 = 0.5 * theta_rate * Eigen::Vector4d(0.0, 1.0 / 3, 2.0 / 3, 2.0 / 3);
-  const Eigen::Vector3d e0 = quat_mul(conj(d0), u0).tail<3>();
-  const Eigen::Vector3d e1 = (quat_mul(conj(dd0), u0) + quat_mul(conj(d0), ud0)).tail<3>();
-  const ControlledTrajectory run = simulate_controlled(ctrl, sys, u0, ud0, tight(5));
-  ASSERT_EQ(run.plant.stats.status, Status::kOk) << run.plant.stats.message;
-  EXPECT_EQ(run.control.not_met, 0);
-  double worst = 0.0;
-  for (Index j = 0; j < run.samples(); ++j) {
-    const double t = run.plant.t[std::size_t(j)];
-    for (Index i = 0; i < 3; ++i) {
-      const double expected = second_order_error(1.0, omega, e0[i], e1[i], t);
-      EXPECT_NEAR(sample(run.error, 3, j)[i], expected, 1e-8) << i << " t = " << t;
-      worst = std::max(worst, std::abs(sample(run.error, 3, j)[i] - expected));
-    }
-    // the unit norm holds
-    EXPECT_NEAR(sample(run.plant.q, 4, j).norm(), 1.0, 1e-11);
-    // the Gauss control is a pure body torque: Q_c = 2 Eᵀ [0; τ]
-    const Eigen::Vector4d Qc = sample(run.Qc_control, 4, j);
-    const Eigen::Vector4d u = sample(run.plant.q, 4, j);
-    EXPECT_NEAR((E_of(u) * Qc)[0], 0.0, 1e-10 * (1 + Qc.norm()));
-  }
-  record("max_error_deviation", worst);
-  // at the end the attitude is that desired, to the decayed error
-  const Eigen::Vector4d uT = sample(run.plant.q, 4, run.samples() - 1);
-  Eigen::Vector4d dT;
-  double d[4];
-  desired_attitude(5.0, d);
-  dT << d[0], d[1], d[2], d[3];
-  EXPECT_NEAR(std::abs(quat_mul(conj(dT), uT)[0]), 1.0, 1e-4);
-}
-
-// ---------------------------------------------------------------------------------------------
-// synchronization of two chaotic gyroscopes (symmetric gyro with linear-plus-cubic damping):
-//   th'' + a² (1 − cos th)² / sin³ th − b sin th + c1 th' + c2 th'³ = f sin th sin(w t),
-// written with (1 − cos th)² / sin³ th = sin(th/2) / (2 cos³(th/2)) (regular at th = 0)
-
-double gyro_force(double th, double w, double t) {
-  const double a2 = 100.0, b = 1.0, c1 = 0.5, c2 = 0.05, f = 35.5, om = 2.0;
-  const double h = 0.5 * th;
-  return -a2 * std::sin(h) / (2.0 * std::pow(std::cos(h), 3)) + b * std::sin(th) - c1 * w -
-         c2 * w * w * w + f * std::sin(th) * std::sin(om * t);
-}
-
-TEST(ControlGyroscopes, SlaveSynchronizesWithPrescribedErrorDynamics) {
-  const System pair =
-      SystemBuilder({"master", "slave"})
-          .mass_matrix(MatrixXd::Identity(2, 2))
-          .forces([](const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd,
-                     double t, Eigen::Ref<VectorXd> Q) {
-            Q << gyro_force(q[0], qd[0], t), gyro_force(q[1], qd[1], t);
-          })
-          .build();
-  const double zeta = 0.8, omega = 4.0;
-  const Controller ctrl =
-      ControllerBuilder(pair)
-          .require(
-              holonomic("sync", 1, [](const auto& q, const auto&, auto& e) { e[0] = q[1] - q[0]; }),
-              ErrorDynamics::second_order(omega, zeta))
-          .actuated({"slave"})
-          .build();
-  const VectorXd q0 = vec({1.0, -0.3}), qd0 = vec({-0.5, 0.8});
-  const ControlledTrajectory run = simulate_controlled(ctrl, pair, q0, qd0, tight(6));
-  ASSERT_EQ(run.plant.stats.status, Status::kOk) << run.plant.stats.message;
-  EXPECT_EQ(run.control.not_met, 0);
-  // the master runs free: compare with it simulated alone
-  const System master =
-      SystemBuilder({"master"})
-          .mass_matrix(MatrixXd::Identity(1, 1))
-          .forces([](const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd,
-                     double t, Eigen::Ref<VectorXd> Q) { Q[0] = gyro_force(q[0], qd[0], t); })
-          .build();
-  const Trajectory alone = simulate(master, vec({1.0}), vec({-0.5}), tight(6));
-  ASSERT_EQ(alone.samples(), run.samples());
-  double worst = 0.0, master_dev = 0.0;
-  for (Index j = 0; j < run.samples(); ++j) {
-    const double t = run.plant.t[std::size_t(j)];
-    const double expected = second_order_error(zeta, omega, -1.3, 1.3, t);
-    EXPECT_NEAR(run.error[std::size_t(j)], expected, 1e-8) << t;
-    worst = std::max(worst, std::abs(run.error[std::size_t(j)] - expected));
-    EXPECT_EQ(sample(run.Qc_control, 2, j)[0], 0.0);
-    EXPECT_NEAR(sample(run.plant.q, 2, j)[0], alone.q[std::size_t(j)], 1e-6) << t;
-    master_dev =
-        std::max(master_dev, std::abs(sample(run.plant.q, 2, j)[0] - alone.q[std::size_t(j)]));
-  }
-  record("max_master_deviation", master_dev);
-  record("max_error_deviation", worst);
 }
 
 // ---------------------------------------------------------------------------------------------
