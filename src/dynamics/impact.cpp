@@ -366,7 +366,8 @@ bool ContactDynamics::impulse(Eigen::Ref<VectorXd> qd, const VectorXd& r, const 
   if (!friction_lcp_.solve(Mlcp, rr)) return false;
   lambda_ = friction_lcp_.z().head(k);
   w_ = friction_lcp_.w().head(k);
-  const auto beta = friction_lcp_.z().segment(k, nb);
+  // (a copy: z() is a Ref made for this expression, which a Block of it would outlive)
+  const VectorXd beta = friction_lcp_.z().segment(k, nb);
   beta_ += beta;
   qd += X_ * lambda_ + PD_ * beta;
   return true;
