@@ -26,7 +26,6 @@
 #include "dynamics/internal.hpp"
 #include "simulation/contact_events.hpp"
 #include "simulation/energy_balance.hpp"
-#include "simulation/initial_check.hpp"
 #include "simulation/integrator.hpp"
 #include "simulation/sample_grid.hpp"
 #include "ukdyn/core/format.hpp"

@@ -22,6 +22,7 @@
 #include "dynamics/internal.hpp"
 #include "simulation/contact_events.hpp"
 #include "simulation/energy_balance.hpp"
+#include "simulation/initial_check.hpp"
 #include "simulation/integrator.hpp"
 #include "simulation/run.hpp"
 #include "simulation/sample_grid.hpp"
