@@ -109,15 +109,15 @@ def test_rod_figure_file_and_command(rod, cli, tmp_path):
     assert "joint_reactions" not in ukdyn.load("pendulum").simulate(t_end=0.2).figures()
 
 
-def test_components_per_joint_and_drive_row():
+def test_drive_row():
     crank = ukdyn.load("slider_crank").simulate(t_end=0.25)
     fig = crank.figures()["joint_reactions"]
     labels = [ax.get_ylabel() for ax in fig.axes]
-    assert labels == ["pin: force [N]", "crank_rod: force [N]", "rod_slider: force [N]",
-                      "slide: force [N]", "drive effort\n[N·m; N prismatic]"]
+    assert labels == ["|reaction force| [N]", "drive effort\n[N·m; N prismatic]"]
     drive = line(fig, "drive.pin")
     assert np.array_equal(drive.get_ydata(), crank["drive.pin"])
     assert np.max(np.abs(crank["drive.pin"])) > 1.0
+    assert fig.axes[-1].get_xlabel() == "t [s]" and fig.axes[0].get_xlabel() == ""
 
 
 def test_many_joints_drawn_as_magnitudes():

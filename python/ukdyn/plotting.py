@@ -793,15 +793,15 @@ FIGURES = (("coordinates", coordinates_figure), ("constraint_forces", forces_fig
            ("joint_reactions", joint_reactions_figure), ("outputs", outputs_figure))
 
 
-def figures(table, meta=None, style_name="screen", share=(0, 1)):
+def figures(table, meta=None, style_name="screen"):
     """Every figure that applies to the run, by file stem (coordinates, constraint_forces,
-    violation, energy, control, bodies, outputs): a dict of matplotlib Figures; a figure
-    without data is left out, never drawn empty. `style_name`: one of :data:`STYLES`.
-    `share` (k, m): only the figures k, k + m, k + 2m, … of FIGURES (one process's share)."""
+    violation, energy, control, bodies, joint_reactions, outputs): a dict of matplotlib
+    Figures; a figure without data is left out, never drawn empty. `style_name`: one of
+    :data:`STYLES`."""
     meta = metadata(table, meta)
     out = {}
     with style(style_name):
-        for stem, make in FIGURES[share[0]::share[1]]:
+        for stem, make in FIGURES:
             fig = make(table, meta)
             if fig is not None:
                 out[stem] = fig
@@ -883,21 +883,27 @@ def write_figures(table, meta, directory, formats=("png",), close=True, style_na
                   processes=1):
     """Writes every figure of :func:`figures` into `directory` as STEM.FORMAT for each format
     (``png``, ``pdf``, ``svg``) in the style `style_name` (:data:`STYLES`); returns the paths
-    written. With `close`, the figures are closed afterwards. With `processes` 2 (the command:
-    a forked child, made after the imports, draws every other figure; only where os.fork is
-    safe, a process without threads), the figures are drawn on two cores; a child that fails
-    raises RuntimeError here."""
+    written. With `close`, the figures are closed afterwards. With `processes` > 1 (the
+    command, whose process has no threads: os.fork is safe there), forked copies of this
+    process, made after the imports, draw figures too, each taking the next one from a shared
+    queue; a copy that fails raises RuntimeError here."""
     formats = parse_formats(formats)
+    meta = metadata(table, meta)
+    if processes <= 1 or not hasattr(os, "fork"):
+        return _write(table, meta, directory, formats, close, style_name, FIGURES)
+    # the queue: a pipe holding the figures' indices, one byte each (a read of one byte from a
+    # pipe is atomic: each index goes to one process); end of file when all are taken
+    taken, queue = os.pipe()
+    os.write(queue, bytes(range(len(FIGURES))))
+    os.close(queue)
     children = []
-    share = (0, 1)
-    if processes > 1 and hasattr(os, "fork"):
-        for k in range(1, processes):
+    try:
+        for _ in range(processes - 1):
             pid = os.fork()
-            if pid == 0:  # the child: its share, then out without running the parent's exits
+            if pid == 0:  # a copy: its figures, then out without running the parent's exits
                 code = 1
                 try:
-                    _write_share(table, meta, directory, formats, close, style_name,
-                                 (k, processes))
+                    _write(table, meta, directory, formats, close, style_name, _queued(taken))
                     code = 0
                 except BaseException:
                     import traceback
@@ -906,25 +912,35 @@ def write_figures(table, meta, directory, formats=("png",), close=True, style_na
                     sys.stderr.flush()
                     os._exit(code)
             children.append(pid)
-        share = (0, processes)
-    try:
-        written = _write_share(table, meta, directory, formats, close, style_name, share)
+        _write(table, meta, directory, formats, close, style_name, _queued(taken))
     finally:
+        os.close(taken)
         failed = [pid for pid in children if os.waitpid(pid, 0)[1] != 0]
     if failed:
         raise RuntimeError("plotting: %d of the %d processes drawing the figures failed"
                            % (len(failed), processes))
-    if children:  # the paths of every share, in FIGURES order
-        names = [os.path.join(directory, "%s.%s" % (stem, fmt))
-                 for stem, _ in FIGURES for fmt in formats]
-        written = [p for p in names if os.path.exists(p)]
-    return written
+    names = [os.path.join(directory, "%s.%s" % (stem, fmt)) for stem, _ in FIGURES
+             for fmt in formats]
+    return [p for p in names if os.path.exists(p)]
 
 
-def _write_share(table, meta, directory, formats, close, style_name, share):
+def _queued(fd):
+    """The entries of FIGURES this process takes from the queue `fd`, one at a time."""
+    while True:
+        index = os.read(fd, 1)
+        if not index:
+            return
+        yield FIGURES[index[0]]
+
+
+def _write(table, meta, directory, formats, close, style_name, makers):
+    """Draws and writes the figures of `makers` ((stem, function) pairs); the paths written."""
     written = []
     with style(style_name):  # (savefig reads some rc settings too: the fonts' types)
-        for stem, fig in figures(table, meta, style_name, share).items():
+        for stem, make in makers:
+            fig = make(table, meta)
+            if fig is None:
+                continue
             try:
                 for fmt in formats:
                     path = os.path.join(directory, "%s.%s" % (stem, fmt))

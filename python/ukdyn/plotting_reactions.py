@@ -26,8 +26,10 @@ import numpy as np
 #: zero, the roundoff of a joint that transmits none (a planar revolute joint's tz): not drawn
 ZERO_TORQUE = 1e-9
 
-#: the most joints drawn a row each (components); more are drawn as magnitudes, a line each
-MAX_JOINT_ROWS = 4
+#: the most joints drawn a row each (components); more are drawn as magnitudes, a line each (a
+#: panel costs about 30 ms to lay out and draw: a slider-crank's four joints in a row each made
+#: its joint_reactions figure the slowest of its plots)
+MAX_JOINT_ROWS = 3
 
 _FORCES = ("fx", "fy", "fz")
 _TORQUES = ("tx", "ty", "tz")
