@@ -16,9 +16,9 @@ struct EmbeddedFile {
 /// python/ukdyn/plotting.py (the Python module's plotting, run by `ukdyn run` as a script).
 extern const char* const kPlotScript;
 
-/// python/ukdyn/plotting_reactions.py (the joint reactions figure), which kPlotScript imports:
-/// written beside it, as plotting_reactions.py.
-extern const char* const kPlotReactionsScript;
+/// python/ukdyn/plotting_*.py (the control and joint reactions figures), which kPlotScript
+/// imports: each written beside it as <name>.py; sorted by name.
+std::span<const EmbeddedFile> plot_modules();
 
 /// examples/models/*.yaml, sorted by name.
 std::span<const EmbeddedFile> example_models();

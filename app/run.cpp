@@ -70,7 +70,7 @@ std::vector<fs::path> make_plots(const fs::path& csv, const fs::path& dir,
                  python.c_str());
     return {};
   }
-  // the script and the module it imports go to a private temporary directory (mkdtemp: mode
+  // the script and the modules it imports go to a private temporary directory (mkdtemp: mode
   // 0700), removed afterwards
   std::string scripts = (fs::temp_directory_path() / "ukdyn-plot-XXXXXX").string();
   if (::mkdtemp(scripts.data()) == nullptr) {
@@ -80,10 +80,11 @@ std::vector<fs::path> make_plots(const fs::path& csv, const fs::path& dir,
   }
   const fs::path script = fs::path(scripts) / "plotting.py";
   bool written = true;
-  for (const auto& [name, text] :
-       {std::pair{"plotting.py", std::string_view(kPlotScript)},
-        std::pair{"plotting_reactions.py", std::string_view(kPlotReactionsScript)}}) {
-    std::ofstream out(fs::path(scripts) / name, std::ios::binary);
+  std::vector<EmbeddedFile> sources = {{"plotting", kPlotScript}};
+  sources.insert(sources.end(), plot_modules().begin(), plot_modules().end());
+  for (const EmbeddedFile& f : sources) {
+    const std::string_view text(f.text);
+    std::ofstream out(fs::path(scripts) / (std::string(f.name) + ".py"), std::ios::binary);
     out.write(text.data(), std::streamsize(text.size()));
     written = written && out.flush().good();
   }

@@ -13,8 +13,10 @@ It reads ``summary.json`` beside the CSV for the model's name and the coordinate
 writes, for each format, ``coordinates``, ``constraint_forces`` and ``violation`` (only when the
 model has constraints), ``energy``, and when the run has them ``contacts`` (unilateral contacts:
 normal forces and gaps, impacts marked), ``control``, ``bodies`` and ``joint_reactions``
-(multibody models: ukdyn/plotting_reactions.py, which the command writes beside this script)
-and ``outputs`` (the model's output expressions). Each file is written under a
+(multibody models)
+and ``outputs`` (the model's output expressions); the control and joint reactions figures are
+drawn by plotting_control.py and plotting_reactions.py, which the command writes beside this
+script. Each file is written under a
 temporary name and renamed when complete. Exit codes: 0 written, 2 bad arguments, 3 no
 matplotlib.
 
@@ -576,75 +578,12 @@ def _common(units):
 
 def control_figure(table, meta=None):
     """The control: tracking error per requirement row (with the robust bound), desired against
-    actual for the rows whose desired value the run has (an output expression
-    ``desired_<row>``, which the model reader derives from a holonomic requirement written as
-    actual − desired(t), or ``actual_<row>``, the row's ``.`` written ``_``: actual = desired +
-    error), the control force per coordinate (one panel per unit), the power, the
-    work (∫P dt, ∫|P| dt) and the effort ∫Qcᵀ Qc dt, each on its own axis. None for a run
-    without control."""
+    actual, the control force per coordinate (one panel per unit), the power, the work and the
+    effort (ukdyn/plotting_control.py). None for a run without control."""
     if "control_power" not in table:
         return None
-    meta = metadata(table, meta)
-    coords = meta["coordinates"]
-    rows = [h[len("error."):] for h in table.names if h.startswith("error.")]
-    desired = [(r, d) for r, d in ((r, _desired(table, r)) for r in rows) if d is not None]
-    actuated = [c for c in coords
-                if "Qc_control." + c in table and _nonzero(table["Qc_control." + c])]
-    force_groups = _groups(meta, actuated, lambda c: force_unit(coordinate_unit(meta, c)))
-    panels = (1 if rows else 0) + (1 if desired else 0) + len(force_groups) + 3
-    fig, axes = _figure("control", meta, panels, height=2.2 * _style["row_height"] / 2.6)
-    t = table["t"]
-    k = 0
-    if rows:
-        ax = axes[k]
-        k += 1
-        for i, r in enumerate(rows):
-            style = line_style(i)
-            ax.plot(t, table["error." + r], label=r, **style)
-            if "error_bound." + r in table:
-                bound = table["error_bound." + r]
-                ax.plot(t, bound, ":", color=style["color"], lw=0.8,
-                        label="±bound " + r if i == 0 else "_")
-                ax.plot(t, -bound, ":", color=style["color"], lw=0.8, label="_")
-        ax.set_ylabel("tracking error")
-    if desired:
-        ax = axes[k]
-        k += 1
-        for i, (r, d) in enumerate(desired):
-            colour = line_style(i)["color"]
-            ax.plot(t, d + table["error." + r], "-", color=colour, label=r + " actual")
-            ax.plot(t, d, "--", color=colour, label=r + " desired")
-        ax.set_ylabel("requirement\n(desired, actual)")
-    for unit, members in force_groups:
-        ax = axes[k]
-        k += 1
-        for i, c in enumerate(members):
-            ax.plot(t, table["Qc_control." + c], label=c, **line_style(i))
-        ax.set_ylabel(_label("control force", unit))
-    axes[k].plot(t, table["control_power"], color="k", label="P = Qcᵀ q̇")
-    axes[k].set_ylabel("power [W]")
-    axes[k + 1].plot(t, table["control_work"], label="∫ P dt", **line_style(0))
-    axes[k + 1].plot(t, table["control_work_abs"], label="∫ |P| dt", **line_style(1))
-    axes[k + 1].set_ylabel("work [J]")
-    fu = _common(force_unit(coordinate_unit(meta, c)) for c in actuated)
-    axes[k + 2].plot(t, table["control_effort"], color="k", label="∫ Qcᵀ Qc dt")
-    axes[k + 2].set_ylabel(_label("effort", {"N": "N²·s", "N·m": "N²·m²·s"}.get(fu, "")))
-    _finish(axes)
-    return fig
-
-
-def _desired(table, row):
-    """The desired value of requirement row `row` (its error φ written as actual − desired):
-    the column ``desired.<row>``, or the output expression ``desired_<row>`` (``.`` written
-    ``_``), or actual − error from an output expression ``actual_<row>``; None when the run has
-    none of them."""
-    spelled = row.replace(".", "_")
-    for name in ("desired." + row, "desired_" + spelled):
-        if name in table:
-            return np.asarray(table[name], dtype=float)
-    if "actual_" + spelled in table:
-        return np.asarray(table["actual_" + spelled], dtype=float) - table["error." + row]
-    return None
+    return _module("plotting_control").control_figure(table, metadata(table, meta),
+                                                      sys.modules[__name__])
 
 
 def _bodies(table):
@@ -694,6 +633,24 @@ def bodies_figure(table, meta=None):
     return fig
 
 
+def _module(name):
+    """The figure module `name` (plotting_control, plotting_reactions): ukdyn's, or when this
+    file runs as the command's script, the copy beside it (whatever sys.path says). Each takes
+    this module as its `kit` (its styles and helpers), so that neither imports the other."""
+    if __package__:
+        import importlib
+        return importlib.import_module("%s.%s" % (__package__, name))
+    module = sys.modules.get(name)
+    if module is None:
+        import importlib.util
+        path = os.path.join(os.path.dirname(os.path.abspath(__file__)), name + ".py")
+        spec = importlib.util.spec_from_file_location(name, path)
+        module = importlib.util.module_from_spec(spec)
+        spec.loader.exec_module(module)
+        sys.modules[name] = module
+    return module
+
+
 def current_style():
     """The style the figures are being drawn in (:data:`STYLES`' entry; ``screen`` outside a
     :class:`style` block)."""
@@ -704,19 +661,8 @@ def joint_reactions_figure(table, meta=None):
     """Each joint's reaction force and torque on its child, ideal and non-ideal (friction), and
     the drives' efforts, against time (ukdyn/plotting_reactions.py). None for a model without
     joints."""
-    try:
-        from . import plotting_reactions as reactions  # the package
-    except ImportError:  # the command's copy, beside this script (whatever sys.path says)
-        reactions = sys.modules.get("plotting_reactions")
-        if reactions is None:
-            import importlib.util
-            path = os.path.join(os.path.dirname(os.path.abspath(__file__)),
-                                "plotting_reactions.py")
-            spec = importlib.util.spec_from_file_location("plotting_reactions", path)
-            reactions = importlib.util.module_from_spec(spec)
-            spec.loader.exec_module(reactions)
-            sys.modules["plotting_reactions"] = reactions
-    return reactions.joint_reactions_figure(table, metadata(table, meta), sys.modules[__name__])
+    return _module("plotting_reactions").joint_reactions_figure(table, metadata(table, meta),
+                                                                sys.modules[__name__])
 
 
 #: the kinds of contact event marked as impacts (an impact that closed a contact at rest too)
