@@ -133,8 +133,9 @@ VIOLATION_FLOOR = 1e-300
 #: is laid out once for both (matplotlib caches the text metrics per dpi), not again at savefig
 DPI = 110
 
-#: the PNG encoder's zlib level: 1 writes a figure in a third of the time of the default 6, and
-#: the file (large flat areas of colour) is about a tenth larger
+#: the PNG encoder's zlib level: 1 encodes in three quarters of the time of the default 6, the
+#: files an eighth larger (slider_crank's 7 figures: 0.134 s and 482 kB against 0.177 s and
+#: 428 kB, the least of 8 encodings on a loaded machine)
 PNG_COMPRESS_LEVEL = 1
 
 _COLOURS = ("#1f77b4", "#ff7f0e", "#2ca02c", "#d62728", "#9467bd", "#8c564b", "#e377c2",
