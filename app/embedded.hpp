@@ -16,6 +16,10 @@ struct EmbeddedFile {
 /// python/ukdyn/plotting.py (the Python module's plotting, run by `ukdyn run` as a script).
 extern const char* const kPlotScript;
 
+/// python/ukdyn/plotting_*.py (the control and joint reactions figures), which kPlotScript
+/// imports: each written beside it as <name>.py; sorted by name.
+std::span<const EmbeddedFile> plot_modules();
+
 /// examples/models/*.yaml, sorted by name.
 std::span<const EmbeddedFile> example_models();
 

@@ -15,15 +15,15 @@ namespace ukdyn::cli {
 /// The files `ukdyn run` writes into its directory, in the order it writes them (the plots only
 /// those that apply to the model, in the formats of --plot-format; the viewer's page last).
 // clang-format off
-inline constexpr std::array<const char*, 28> kRunOutputs = {
+inline constexpr std::array<const char*, 31> kRunOutputs = {
     "trajectory.csv", "summary.json",
     "coordinates.png", "constraint_forces.png", "violation.png", "contacts.png", "energy.png",
-    "control.png", "bodies.png", "outputs.png",
+    "control.png", "bodies.png", "joint_reactions.png", "outputs.png",
     "trajectory.h5",
     "coordinates.pdf", "constraint_forces.pdf", "violation.pdf", "contacts.pdf", "energy.pdf",
-    "control.pdf", "bodies.pdf", "outputs.pdf",
+    "control.pdf", "bodies.pdf", "joint_reactions.pdf", "outputs.pdf",
     "coordinates.svg", "constraint_forces.svg", "violation.svg", "contacts.svg", "energy.svg",
-    "control.svg", "bodies.svg", "outputs.svg",
+    "control.svg", "bodies.svg", "joint_reactions.svg", "outputs.svg",
     "animation.html"};
 // clang-format on
 

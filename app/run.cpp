@@ -70,20 +70,29 @@ std::vector<fs::path> make_plots(const fs::path& csv, const fs::path& dir,
                  python.c_str());
     return {};
   }
-  // the script goes to a private temporary file, removed afterwards
-  std::string script = (fs::temp_directory_path() / "ukdyn-plot-XXXXXX.py").string();
-  const int fd = ::mkstemps(script.data(), 3);
-  if (fd < 0) {
-    std::fprintf(stderr, "warning: cannot create a temporary file for the plot script: no plots\n");
+  // the script and the modules it imports go to a private temporary directory (mkdtemp: mode
+  // 0700), removed afterwards
+  std::string scripts = (fs::temp_directory_path() / "ukdyn-plot-XXXXXX").string();
+  if (::mkdtemp(scripts.data()) == nullptr) {
+    std::fprintf(stderr,
+                 "warning: cannot create a temporary directory for the plot script: no plots\n");
     return {};
   }
-  const std::string_view text(kPlotScript);
-  const bool written = ::write(fd, text.data(), text.size()) == ssize_t(text.size());
-  ::close(fd);
-  const int code =
-      written ? run_program({python, script, csv.string(), dir.string(), join(formats, ","), style})
-              : -1;
-  fs::remove(script);
+  const fs::path script = fs::path(scripts) / "plotting.py";
+  bool written = true;
+  std::vector<EmbeddedFile> sources = {{"plotting", kPlotScript}};
+  sources.insert(sources.end(), plot_modules().begin(), plot_modules().end());
+  for (const EmbeddedFile& f : sources) {
+    const std::string_view text(f.text);
+    std::ofstream out(fs::path(scripts) / (std::string(f.name) + ".py"), std::ios::binary);
+    out.write(text.data(), std::streamsize(text.size()));
+    written = written && out.flush().good();
+  }
+  const int code = written ? run_program({python, script.string(), csv.string(), dir.string(),
+                                          join(formats, ","), style})
+                           : -1;
+  std::error_code ignored;
+  fs::remove_all(scripts, ignored);
   if (code == kPlotNoMatplotlib) {
     std::fprintf(stderr,
                  "warning: %s has no matplotlib: no plots (install python3-matplotlib, "

@@ -12,8 +12,11 @@ The command embeds this file and runs it as a script on the run's directory::
 It reads ``summary.json`` beside the CSV for the model's name and the coordinates' units, and
 writes, for each format, ``coordinates``, ``constraint_forces`` and ``violation`` (only when the
 model has constraints), ``energy``, and when the run has them ``contacts`` (unilateral contacts:
-normal forces and gaps, impacts marked), ``control``, ``bodies`` (multibody models) and
-``outputs`` (the model's output expressions). Each file is written under a
+normal forces and gaps, impacts marked), ``control``, ``bodies`` and ``joint_reactions``
+(multibody models)
+and ``outputs`` (the model's output expressions); the control and joint reactions figures are
+drawn by plotting_control.py and plotting_reactions.py, which the command writes beside this
+script. Each file is written under a
 temporary name and renamed when complete. Exit codes: 0 written, 2 bad arguments, 3 no
 matplotlib.
 
@@ -56,10 +59,11 @@ __all__ = [
     "FORMATS", "Table", "metadata", "read_csv", "read_summary", "coordinate_unit",
     "column_unit", "force_unit",
     "line_style", "coordinates_figure", "forces_figure", "violation_figure", "energy_figure",
-    "control_figure", "bodies_figure", "outputs_figure", "contacts_figure", "figures", "save",
+    "control_figure", "bodies_figure", "joint_reactions_figure", "outputs_figure",
+    "contacts_figure", "figures", "save",
     "write_figures",
     "parse_formats", "draw_columns", "draw_forces", "draw_violation", "draw_energy", "main",
-    "STYLES", "style",
+    "STYLES", "style", "current_style", "power_label", "DPI",
 ]
 
 #: the file formats the figures can be written in (``--plot-format``)
@@ -125,6 +129,15 @@ MAX_ROWS = 200000
 #: under it, would fill the axis with a comb)
 VIOLATION_FLOOR = 1e-300
 
+#: the figures' resolution (dots per inch), given when they are made and when they are saved: text
+#: is laid out once for both (matplotlib caches the text metrics per dpi), not again at savefig
+DPI = 110
+
+#: the PNG encoder's zlib level: 1 encodes in three quarters of the time of the default 6, the
+#: files an eighth larger (slider_crank's 7 figures: 0.134 s and 482 kB against 0.177 s and
+#: 428 kB, the least of 8 encodings on a loaded machine)
+PNG_COMPRESS_LEVEL = 1
+
 _COLOURS = ("#1f77b4", "#ff7f0e", "#2ca02c", "#d62728", "#9467bd", "#8c564b", "#e377c2",
             "#7f7f7f", "#bcbd22", "#17becf")
 _DASHES = ("-", "--", ":", "-.")
@@ -154,20 +167,18 @@ class Table:
 
 def read_csv(path):
     """Reads a trajectory.csv into a :class:`Table` (at most about MAX_ROWS rows: every k-th one
-    and the last)."""
+    and the last), with NumPy's C parser (numpy.loadtxt): a tenth of the time of Python's csv
+    module on a wide multibody CSV."""
     with open(path, newline="") as f:
         total = max(0, sum(1 for _ in f) - 1)
     stride = max(1, -(-total // MAX_ROWS))
     with open(path, newline="") as f:
-        rows = csv.reader(f)
-        header = next(rows)
-        data = [[] for _ in header]
-        for i, row in enumerate(rows):
-            if i % stride and i != total - 1:
-                continue
-            for j, value in enumerate(row):
-                data[j].append(float(value))
-    return Table(header, data)
+        header = next(csv.reader([f.readline()]))
+        if total == 0:
+            return Table(header, [[] for _ in header])
+        rows = (line for i, line in enumerate(f) if not i % stride or i == total - 1)
+        data = np.loadtxt(rows, delimiter=",", dtype=float, ndmin=2)
+    return Table(header, data.T)
 
 
 def _coordinates_of(names):
@@ -282,8 +293,7 @@ def _figure(title, meta, rows, height=None, width=None):
     width = width or _style["width"]
     height = height or _style["row_height"]
     fig, axes = plt.subplots(rows, 1, figsize=(width, height * rows + 0.8 * height / 2.6),
-                             sharex=True,
-                             squeeze=False, layout="constrained")
+                             sharex=True, squeeze=False, layout="constrained", dpi=DPI)
     fig.suptitle(_title(title, meta))
     return fig, [a[0] for a in axes]
 
@@ -394,6 +404,34 @@ def running_max(values):
     return np.fmax.accumulate(np.where(np.isnan(a), -np.inf, a)) if a.size else a
 
 
+_SUPERSCRIPTS = str.maketrans("-0123456789", "⁻⁰¹²³⁴⁵⁶⁷⁸⁹")
+
+
+def power_label(value, pos=None):
+    """A tick label of a log axis in plain text, ``10⁻⁶`` or ``2×10⁻⁶`` (Unicode superscripts:
+    the look of matplotlib's default labels without its mathtext parser, which took a third of
+    the time of the violation figure)."""
+    if not value > 0 or not np.isfinite(value):
+        return ""
+    exponent = int(np.floor(np.log10(value) + 1e-9))
+    mantissa = value / 10.0 ** exponent
+    power = "10" + str(exponent).translate(_SUPERSCRIPTS)
+    if abs(mantissa - round(mantissa)) > 1e-6 * mantissa:
+        return "%.3g×%s" % (mantissa, power)
+    return power if round(mantissa) == 1 else "%d×%s" % (round(mantissa), power)
+
+
+def _log_ticks(axis, low, high):
+    """Major ticks of a log axis at the decades (and at 2 and 5 times them when the data span
+    less than two decades, so that a narrow axis has labels), labelled by power_label; no minor
+    ticks (each of the dozens a log axis makes is an object laid out and drawn, for no label)."""
+    from matplotlib.ticker import FuncFormatter, LogLocator, NullLocator
+    narrow = np.isfinite(low) and high > 0 and high < 100.0 * low
+    axis.set_major_locator(LogLocator(10.0, subs=(1.0, 2.0, 5.0) if narrow else (1.0,)))
+    axis.set_major_formatter(FuncFormatter(power_label))
+    axis.set_minor_locator(NullLocator())
+
+
 def draw_violation(ax, table, meta, prefix="violation."):
     """The running maximum of |violation| per constraint (:func:`running_max`) on a log scale,
     one line each; while it is exactly zero it is not drawn (a short note on the panel says so)
@@ -401,6 +439,7 @@ def draw_violation(ax, table, meta, prefix="violation."):
     velocity-level violations."""
     drawn = 0
     zeros = False
+    low, high = np.inf, 0.0
     for i, (label, h) in enumerate(_violation_columns(table, prefix)):
         values = running_max(table[h])
         values = np.where(values > VIOLATION_FLOOR, values, np.nan)
@@ -411,7 +450,10 @@ def draw_violation(ax, table, meta, prefix="violation."):
         style.update(drawstyle="steps-post", markevery=0.1 if style.get("marker") else None)
         ax.plot(table["t"], values, label=label, **style)
         drawn += 1
+        finite = values[np.isfinite(values)]
+        low, high = min(low, float(finite.min())), max(high, float(finite.max()))
     ax.set_yscale("log")
+    _log_ticks(ax.yaxis, low, high)
     what = "position" if prefix == "violation." else "velocity"
     ax.set_ylabel("max |%s violation|" % what)  # so far: the title says running maximum
     ax.set_xlabel("t [s]")
@@ -537,75 +579,12 @@ def _common(units):
 
 def control_figure(table, meta=None):
     """The control: tracking error per requirement row (with the robust bound), desired against
-    actual for the rows whose desired value the run has (an output expression
-    ``desired_<row>``, which the model reader derives from a holonomic requirement written as
-    actual − desired(t), or ``actual_<row>``, the row's ``.`` written ``_``: actual = desired +
-    error), the control force per coordinate (one panel per unit), the power, the
-    work (∫P dt, ∫|P| dt) and the effort ∫Qcᵀ Qc dt, each on its own axis. None for a run
-    without control."""
+    actual, the control force per coordinate (one panel per unit), the power, the work and the
+    effort (ukdyn/plotting_control.py). None for a run without control."""
     if "control_power" not in table:
         return None
-    meta = metadata(table, meta)
-    coords = meta["coordinates"]
-    rows = [h[len("error."):] for h in table.names if h.startswith("error.")]
-    desired = [(r, d) for r, d in ((r, _desired(table, r)) for r in rows) if d is not None]
-    actuated = [c for c in coords
-                if "Qc_control." + c in table and _nonzero(table["Qc_control." + c])]
-    force_groups = _groups(meta, actuated, lambda c: force_unit(coordinate_unit(meta, c)))
-    panels = (1 if rows else 0) + (1 if desired else 0) + len(force_groups) + 3
-    fig, axes = _figure("control", meta, panels, height=2.2 * _style["row_height"] / 2.6)
-    t = table["t"]
-    k = 0
-    if rows:
-        ax = axes[k]
-        k += 1
-        for i, r in enumerate(rows):
-            style = line_style(i)
-            ax.plot(t, table["error." + r], label=r, **style)
-            if "error_bound." + r in table:
-                bound = table["error_bound." + r]
-                ax.plot(t, bound, ":", color=style["color"], lw=0.8,
-                        label="±bound " + r if i == 0 else "_")
-                ax.plot(t, -bound, ":", color=style["color"], lw=0.8, label="_")
-        ax.set_ylabel("tracking error")
-    if desired:
-        ax = axes[k]
-        k += 1
-        for i, (r, d) in enumerate(desired):
-            colour = line_style(i)["color"]
-            ax.plot(t, d + table["error." + r], "-", color=colour, label=r + " actual")
-            ax.plot(t, d, "--", color=colour, label=r + " desired")
-        ax.set_ylabel("requirement\n(desired, actual)")
-    for unit, members in force_groups:
-        ax = axes[k]
-        k += 1
-        for i, c in enumerate(members):
-            ax.plot(t, table["Qc_control." + c], label=c, **line_style(i))
-        ax.set_ylabel(_label("control force", unit))
-    axes[k].plot(t, table["control_power"], color="k", label="P = Qcᵀ q̇")
-    axes[k].set_ylabel("power [W]")
-    axes[k + 1].plot(t, table["control_work"], label="∫ P dt", **line_style(0))
-    axes[k + 1].plot(t, table["control_work_abs"], label="∫ |P| dt", **line_style(1))
-    axes[k + 1].set_ylabel("work [J]")
-    fu = _common(force_unit(coordinate_unit(meta, c)) for c in actuated)
-    axes[k + 2].plot(t, table["control_effort"], color="k", label="∫ Qcᵀ Qc dt")
-    axes[k + 2].set_ylabel(_label("effort", {"N": "N²·s", "N·m": "N²·m²·s"}.get(fu, "")))
-    _finish(axes)
-    return fig
-
-
-def _desired(table, row):
-    """The desired value of requirement row `row` (its error φ written as actual − desired):
-    the column ``desired.<row>``, or the output expression ``desired_<row>`` (``.`` written
-    ``_``), or actual − error from an output expression ``actual_<row>``; None when the run has
-    none of them."""
-    spelled = row.replace(".", "_")
-    for name in ("desired." + row, "desired_" + spelled):
-        if name in table:
-            return np.asarray(table[name], dtype=float)
-    if "actual_" + spelled in table:
-        return np.asarray(table["actual_" + spelled], dtype=float) - table["error." + row]
-    return None
+    return _module("plotting_control").control_figure(table, metadata(table, meta),
+                                                      sys.modules[__name__])
 
 
 def _bodies(table):
@@ -629,13 +608,14 @@ def bodies_figure(table, meta=None):
     k = _style["width"] / 9.0  # the screen sizes below, scaled to the style's width
     if planar:
         fig, axes = plt.subplots(1, 1, figsize=(7.5 * k, 6.0 * k), squeeze=False,
-                                 layout="constrained")
+                                 layout="constrained", dpi=DPI)
     elif k < 1:  # a column: the three views one above the other
         fig, axes = plt.subplots(3, 1, figsize=(_style["width"], 3 * _style["width"]),
-                                 squeeze=False, layout="constrained")
+                                 squeeze=False, layout="constrained", dpi=DPI)
         axes = axes.T
     else:
-        fig, axes = plt.subplots(1, 3, figsize=(14.0, 5.0), squeeze=False, layout="constrained")
+        fig, axes = plt.subplots(1, 3, figsize=(14.0, 5.0), squeeze=False, layout="constrained",
+                                 dpi=DPI)
     axes = list(axes[0])
     fig.suptitle(_title("paths of the centres of mass", meta))
     for ax, (a, b) in zip(axes, views):
@@ -652,6 +632,38 @@ def bodies_figure(table, meta=None):
         ax.grid(True, alpha=0.3)
     _legend(axes[-1])
     return fig
+
+
+def _module(name):
+    """The figure module `name` (plotting_control, plotting_reactions): ukdyn's, or when this
+    file runs as the command's script, the copy beside it (whatever sys.path says). Each takes
+    this module as its `kit` (its styles and helpers), so that neither imports the other."""
+    if __package__:
+        import importlib
+        return importlib.import_module("%s.%s" % (__package__, name))
+    module = sys.modules.get(name)
+    if module is None:
+        import importlib.util
+        path = os.path.join(os.path.dirname(os.path.abspath(__file__)), name + ".py")
+        spec = importlib.util.spec_from_file_location(name, path)
+        module = importlib.util.module_from_spec(spec)
+        spec.loader.exec_module(module)
+        sys.modules[name] = module
+    return module
+
+
+def current_style():
+    """The style the figures are being drawn in (:data:`STYLES`' entry; ``screen`` outside a
+    :class:`style` block)."""
+    return _style
+
+
+def joint_reactions_figure(table, meta=None):
+    """Each joint's reaction force and torque on its child, ideal and non-ideal (friction), and
+    the drives' efforts, against time (ukdyn/plotting_reactions.py). None for a model without
+    joints."""
+    return _module("plotting_reactions").joint_reactions_figure(table, metadata(table, meta),
+                                                                sys.modules[__name__])
 
 
 #: the kinds of contact event marked as impacts (an impact that closed a contact at rest too)
@@ -725,13 +737,14 @@ FIGURES = (("coordinates", coordinates_figure), ("constraint_forces", forces_fig
            ("violation", violation_figure), ("contacts", contacts_figure),
            ("energy", energy_figure),
            ("control", control_figure), ("bodies", bodies_figure),
-           ("outputs", outputs_figure))
+           ("joint_reactions", joint_reactions_figure), ("outputs", outputs_figure))
 
 
 def figures(table, meta=None, style_name="screen"):
     """Every figure that applies to the run, by file stem (coordinates, constraint_forces,
-    violation, energy, control, bodies, outputs): a dict of matplotlib Figures; a figure
-    without data is left out, never drawn empty. `style_name`: one of :data:`STYLES`."""
+    violation, energy, control, bodies, joint_reactions, outputs): a dict of matplotlib
+    Figures; a figure without data is left out, never drawn empty. `style_name`: one of
+    :data:`STYLES`."""
     meta = metadata(table, meta)
     out = {}
     with style(style_name):
@@ -809,17 +822,72 @@ def save(fig, path, fmt=None):
     """Writes the figure to `path` whole or not at all (write_replacing). The format is `fmt`,
     or `path`'s extension."""
     fmt = fmt or os.path.splitext(path)[1][1:]
-    write_replacing(path, lambda f: fig.savefig(f, dpi=110, format=fmt))
+    extra = {"pil_kwargs": {"compress_level": PNG_COMPRESS_LEVEL}} if fmt == "png" else {}
+    write_replacing(path, lambda f: fig.savefig(f, dpi=DPI, format=fmt, **extra))
 
 
-def write_figures(table, meta, directory, formats=("png",), close=True, style_name="screen"):
+def write_figures(table, meta, directory, formats=("png",), close=True, style_name="screen",
+                  processes=1):
     """Writes every figure of :func:`figures` into `directory` as STEM.FORMAT for each format
     (``png``, ``pdf``, ``svg``) in the style `style_name` (:data:`STYLES`); returns the paths
-    written. With `close`, the figures are closed afterwards."""
+    written. With `close`, the figures are closed afterwards. With `processes` > 1 (the
+    command, whose process has no threads: os.fork is safe there), forked copies of this
+    process, made after the imports, draw figures too, each taking the next one from a shared
+    queue; a copy that fails raises RuntimeError here."""
     formats = parse_formats(formats)
+    meta = metadata(table, meta)
+    if processes <= 1 or not hasattr(os, "fork"):
+        return _write(table, meta, directory, formats, close, style_name, FIGURES)
+    # the queue: a pipe holding the figures' indices, one byte each (a read of one byte from a
+    # pipe is atomic: each index goes to one process); end of file when all are taken
+    taken, queue = os.pipe()
+    os.write(queue, bytes(range(len(FIGURES))))
+    os.close(queue)
+    children = []
+    try:
+        for _ in range(processes - 1):
+            pid = os.fork()
+            if pid == 0:  # a copy: its figures, then out without running the parent's exits
+                code = 1
+                try:
+                    _write(table, meta, directory, formats, close, style_name, _queued(taken))
+                    code = 0
+                except BaseException:
+                    import traceback
+                    traceback.print_exc()
+                finally:
+                    sys.stderr.flush()
+                    os._exit(code)
+            children.append(pid)
+        _write(table, meta, directory, formats, close, style_name, _queued(taken))
+    finally:
+        os.close(taken)
+        failed = [pid for pid in children if os.waitpid(pid, 0)[1] != 0]
+    if failed:
+        raise RuntimeError("plotting: %d of the %d processes drawing the figures failed"
+                           % (len(failed), processes))
+    names = [os.path.join(directory, "%s.%s" % (stem, fmt)) for stem, _ in FIGURES
+             for fmt in formats]
+    return [p for p in names if os.path.exists(p)]
+
+
+def _queued(fd):
+    """The entries of FIGURES this process takes from the queue `fd`, one at a time."""
+    while True:
+        index = os.read(fd, 1)
+        if not index:
+            return
+        yield FIGURES[index[0]]
+
+
+def _write(table, meta, directory, formats, close, style_name, makers):
+    """Draws and writes the figures of `makers` ((stem, function) pairs); the paths written."""
     written = []
     with style(style_name):  # (savefig reads some rc settings too: the fonts' types)
-        for stem, fig in figures(table, meta, style_name).items():
+        for stem, make in makers:
+            fig = make(table, meta)
+            if fig is None:
+                continue
             try:
                 for fmt in formats:
                     path = os.path.join(directory, "%s.%s" % (stem, fmt))
@@ -857,7 +925,8 @@ def main(argv=None):
     if "t" not in table or len(table["t"]) == 0:
         return 0  # a run that recorded no sample: nothing to draw
     meta = read_summary(os.path.join(os.path.dirname(os.path.abspath(argv[0])), "summary.json"))
-    write_figures(table, meta, argv[1], formats, style_name=style_name)
+    write_figures(table, meta, argv[1], formats, style_name=style_name,
+                  processes=min(2, os.cpu_count() or 1))
     return 0
 
 
