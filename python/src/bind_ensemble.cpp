@@ -122,14 +122,14 @@ void run_watched(const std::function<bool()>& should_stop, std::atomic<bool>& st
   if (error) std::rethrow_exception(error);
 }
 
-// run_samples: run_ensemble of the samples `rows` (one per row, a value per name) → a dict: names (the
-// table's numeric columns), columns (arrays), status, message, trajectories (list of dicts, or
+// run_samples: run_ensemble of the samples `rows` (one per row, a value per name) → a dict: names
+// (the table's numeric columns), columns (arrays), status, message, trajectories (list of dicts, or
 // None), interrupted, exception (what a signal handler raised, or None)
 py::dict run_samples(const std::string& text, const std::string& file,
                      const std::map<std::string, double>& overrides, const py::dict& settings,
                      const std::vector<std::string>& names, const py::array_t<double>& rows,
-                     const std::vector<double>& at, const std::vector<std::string>& outputs, bool keep,
-                     unsigned threads, py::object stop) {
+                     const std::vector<double>& at, const std::vector<std::string>& outputs,
+                     bool keep, unsigned threads, py::object stop) {
   EnsembleModel model;
   model.text = text;
   model.file = file;
