@@ -122,14 +122,14 @@ void run_watched(const std::function<bool()>& should_stop, std::atomic<bool>& st
   if (error) std::rethrow_exception(error);
 }
 
-// run_ensemble of the samples `rows` (one per row, a value per name) → a dict: names (the
-// table's numeric columns), columns (arrays), status, message, trajectories (list of dicts, or
+// run_samples: run_ensemble of the samples `rows` (one per row, a value per name) → a dict: names
+// (the table's numeric columns), columns (arrays), status, message, trajectories (list of dicts, or
 // None), interrupted, exception (what a signal handler raised, or None)
-py::dict run(const std::string& text, const std::string& file,
-             const std::map<std::string, double>& overrides, const py::dict& settings,
-             const std::vector<std::string>& names, const py::array_t<double>& rows,
-             const std::vector<double>& at, const std::vector<std::string>& outputs, bool keep,
-             unsigned threads, py::object stop) {
+py::dict run_samples(const std::string& text, const std::string& file,
+                     const std::map<std::string, double>& overrides, const py::dict& settings,
+                     const std::vector<std::string>& names, const py::array_t<double>& rows,
+                     const std::vector<double>& at, const std::vector<std::string>& outputs,
+                     bool keep, unsigned threads, py::object stop) {
   EnsembleModel model;
   model.text = text;
   model.file = file;
@@ -215,7 +215,7 @@ void bind_ensemble(py::module_& m) {
         return py::make_tuple(v.name, laws[int(v.distribution)], v.a, v.b);
       },
       py::arg("text"), "parse_random_variable: 'k~normal(1,0.1)' -> (name, law, a, b).");
-  m.def("_run_ensemble", &run, py::arg("text"), py::arg("file"), py::arg("overrides"),
+  m.def("_run_ensemble", &run_samples, py::arg("text"), py::arg("file"), py::arg("overrides"),
         py::arg("settings"), py::arg("names"), py::arg("rows"), py::arg("at"), py::arg("outputs"),
         py::arg("keep"), py::arg("threads"), py::arg("stop") = py::none(),
         "run_ensemble (simulation/ensemble.hpp) with the GIL released: a dict of the table "
