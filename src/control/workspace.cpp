@@ -45,6 +45,14 @@ ControlWorkspace::ControlWorkspace(const Controller& ctrl)
       req(ctrl.requirements(), model_options(ctrl.options().solver)),
       controller_id_(ctrl.id()) {
   const Index n = ctrl.coordinate_count(), m_r = ctrl.requirement_rows(), k = ctrl.actuators();
+  // the requirements are evaluated at the model's state right after the model: their scratch
+  // shares the model's callables' (a pose requirement on the model's tree then reads the
+  // forward kinematics of the model's evaluation instead of running its own)
+  const System& reqs = ctrl.requirements();
+  for (Index c = 0; c < reqs.constraint_count(); ++c) {
+    req.scratch[std::size_t(c)] =
+        reqs.constraint(c).model().make_scratch_sharing(n, model.callables.get());
+  }
   const Index m_p = ctrl.model().constraint_rows();
   const bool direct = control_detail::gauss_direct(ctrl);
   e.setZero(m_r);

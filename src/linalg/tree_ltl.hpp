@@ -21,10 +21,14 @@
 namespace ukdyn::detail {
 
 /// M = Lᵀ L in place on the lower triangle of H (n × n, column-major, leading dimension n), the
-/// upper triangle untouched; inv[k] = 1 / L_kk. False (H partly overwritten) unless every pivot
-/// is positive. Cost O(Σ_k d_k²).
+/// strict upper triangle holding each row of L packed (its entries at the ancestors, nearest
+/// first, in the upper part of its column: read by the solves below);
+/// inv[k] = 1 / L_kk. False (H partly overwritten) unless every pivot is positive. Cost
+/// O(Σ_k d_k²).
 bool tree_ltl_in_place(double* H, const Index* parent, double* inv, Index n);
 
+/// The solves and the product take the L that tree_ltl_in_place left (they read the rows it
+/// packed in the upper triangle).
 /// x ← L⁻ᵀ x (= F⁻¹ x, the role of L⁻¹ in a dense M = L Lᵀ). Cost O(Σ_k d_k).
 void tree_lt_solve(const double* L, const Index* parent, const double* inv, double* x, Index n);
 

@@ -6,12 +6,14 @@
 #include <cmath>
 #include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <gtest/gtest.h>
 
 #include <Eigen/Dense>
 
+#include "linalg/tree_ltl.hpp"
 #include "ukdyn/core/autodiff.hpp"
 #include "ukdyn/dynamics/forward.hpp"
 #include "ukdyn/dynamics/workspace.hpp"
@@ -141,6 +143,90 @@ TEST(TreeLtl, FactorAndProductsEqualTheDenseCholeskyOnTheHumanoid) {
 
 // the coordinate tree of a floating base and a branch: the base's 7 coordinates a chain, each
 // limb's first joint below the base's last coordinate
+// The LTL as Featherstone's algorithm 6.3 walks it, along the lower triangle (the factorization
+// before the packed rows): the reference for the packed one, which must give the same bits.
+bool walked_ltl(MatrixXd& H, const std::vector<Index>& parent) {
+  const Index n = H.rows();
+  for (Index k = n - 1; k >= 0; --k) {
+    if (!(H(k, k) > 0.0)) return false;
+    const double d = std::sqrt(H(k, k)), r = 1.0 / d;
+    H(k, k) = d;
+    for (Index i = parent[std::size_t(k)]; i >= 0; i = parent[std::size_t(i)]) H(k, i) *= r;
+    for (Index i = parent[std::size_t(k)]; i >= 0; i = parent[std::size_t(i)]) {
+      const double a = H(k, i);
+      for (Index j = i; j >= 0; j = parent[std::size_t(j)]) H(i, j) -= a * H(k, j);
+    }
+  }
+  return true;
+}
+
+// the packed factorization (rows of L packed in the upper triangle) against the walk, bit for
+// bit, on the humanoid's M (a deep branched tree: base, legs, arms) and the Panda's (a chain),
+// and a random tree; a matrix that is not positive definite refused by both
+TEST(TreeLtl, PackedRowsGiveTheBitsOfTheWalk) {
+  std::vector<std::pair<MatrixXd, std::vector<Index>>> cases;
+  for (const std::string& file : {kHumanoid, kPanda}) {
+    const Tree tree = load_urdf(file);
+    const System sys = make_system(tree);
+    Workspace ws(sys);
+    VectorXd q, qd;
+    random_state(tree, 7, q, qd);
+    MatrixXd M(sys.coordinate_count(), sys.coordinate_count());
+    sys.mass_matrix(q, 0.0, ws.callables.get(), M);
+    cases.emplace_back(M, mass_tree_of(sys));
+  }
+  // a random tree of 40 coordinates and an M in its pattern: Bᵀ B + I, B in the pattern of L
+  std::srand(3u);
+  std::vector<Index> parent{-1};
+  for (Index k = 1; k < 40; ++k) parent.push_back(std::rand() % 4 == 0 ? -1 : std::rand() % k);
+  MatrixXd B = MatrixXd::Zero(40, 40);
+  for (Index k = 0; k < 40; ++k) {
+    for (Index j = k; j >= 0; j = parent[std::size_t(j)]) B(k, j) = VectorXd::Random(1)[0];
+  }
+  cases.emplace_back(B.transpose() * B + MatrixXd::Identity(40, 40), parent);
+  for (auto& [M, tree_parent] : cases) {
+    const Index n = M.rows();
+    MatrixXd packed = M, walked = M;
+    VectorXd inv(n);
+    ASSERT_TRUE(detail::tree_ltl_in_place(packed.data(), tree_parent.data(), inv.data(), n));
+    ASSERT_TRUE(walked_ltl(walked, tree_parent));
+    const MatrixXd Lp = packed.triangularView<Eigen::Lower>(),
+                   Lw = walked.triangularView<Eigen::Lower>();
+    EXPECT_EQ(Lp, Lw);
+    EXPECT_EQ(inv, Lw.diagonal().cwiseInverse());
+    EXPECT_LE((Lp.transpose() * Lp - M).norm(), 1e-13 * M.norm());
+    // the solves and the product on the packed rows: the bits of the walks along Lw
+    const VectorXd x = VectorXd::LinSpaced(n, -1.0, 2.0);
+    VectorXd lt = x, l = x, mult(n), lt_ref = x, l_ref = x, mult_ref(n);
+    detail::tree_lt_solve(packed.data(), tree_parent.data(), inv.data(), lt.data(), n);
+    detail::tree_l_solve(packed.data(), tree_parent.data(), inv.data(), l.data(), n);
+    detail::tree_lt_multiply(packed.data(), tree_parent.data(), x.data(), mult.data(), n);
+    const auto up = [&](Index j) { return tree_parent[std::size_t(j)]; };
+    for (Index k = n - 1; k >= 0; --k) {
+      lt_ref[k] *= inv[k];
+      for (Index j = up(k); j >= 0; j = up(j)) lt_ref[j] -= Lw(k, j) * lt_ref[k];
+    }
+    for (Index k = 0; k < n; ++k) {
+      for (Index j = up(k); j >= 0; j = up(j)) l_ref[k] -= Lw(k, j) * l_ref[j];
+      l_ref[k] *= inv[k];
+    }
+    for (Index k = 0; k < n; ++k) mult_ref[k] = Lw(k, k) * x[k];
+    for (Index k = 0; k < n; ++k) {
+      for (Index j = up(k); j >= 0; j = up(j)) mult_ref[j] += Lw(k, j) * x[k];
+    }
+    EXPECT_EQ(lt, lt_ref);
+    EXPECT_EQ(l, l_ref);
+    EXPECT_EQ(mult, mult_ref);
+    EXPECT_LE((Lp.transpose() * lt - x).norm(), 1e-12 * x.norm());
+    // and a pivot that is not positive: refused
+    MatrixXd bad = M;
+    bad(n / 2, n / 2) = -1.0;
+    MatrixXd bad_walked = bad;
+    EXPECT_FALSE(detail::tree_ltl_in_place(bad.data(), tree_parent.data(), inv.data(), n));
+    EXPECT_FALSE(walked_ltl(bad_walked, tree_parent));
+  }
+}
+
 TEST(TreeLtl, CoordinateTreeFollowsTheLinks) {
   const Tree tree = load_urdf(kHumanoid);
   const System sys = make_system(tree);

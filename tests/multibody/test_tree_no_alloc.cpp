@@ -94,6 +94,21 @@ TEST(Tree, FrameConstraintsAndTaskControlDoNotAllocate) {
   EXPECT_EQ(testing::stop_counting_allocations(), 0);
   EXPECT_EQ(ws.status, Status::kOk);
   EXPECT_GT(h.norm(), 0.0);
+  // the arm under the control (controlled_system: the plant is the model, whose scratch the
+  // plant's evaluation and the control's share: one forward kinematics, M kept for the second
+  // caller) at changing states
+  const System controlled = controlled_system(ctrl, free);
+  Workspace cs(controlled);
+  VectorXd qi = q;
+  forward_dynamics(controlled, cs, q, qd, 0.0);
+  testing::start_counting_allocations();
+  for (int i = 0; i < 10; ++i) {
+    qi[1] = q[1] + 0.01 * i;  // (a new state each time: M, Q and the kinematics recomputed)
+    forward_dynamics(controlled, cs, qi, qd, 0.01 * i);
+  }
+  EXPECT_EQ(testing::stop_counting_allocations(), 0);
+  EXPECT_EQ(cs.status, Status::kOk);
+  EXPECT_GT(cs.qdd.norm(), 0.1);
 }
 
 }  // namespace UKDYN_TEST_FILE

@@ -4,12 +4,13 @@
 // (6 rows) and a revolute closure (5 rows), and a task-space pose requirement (6 rows) for exact
 // tracking control.
 #include <cmath>
-#include <cstring>
+#include <cstdint>
 #include <memory>
 #include <stdexcept>
 #include <string>
 #include <utility>
 
+#include "multibody/tree/kinematics_cache.hpp"
 #include "multibody/tree/spatial.hpp"
 #include "ukdyn/multibody/tree.hpp"
 #include "ukdyn/multibody/tree_closures.hpp"
@@ -20,31 +21,33 @@ namespace {
 
 using Jacobian = Eigen::Matrix<double, 6, Eigen::Dynamic>;
 
-// per workspace: the passes' links and the two points' Jacobians
+// per workspace: the forward kinematics (its own, or those of the tree system's workspace it is
+// evaluated with: detail::shared_kinematics) and the two points' Jacobians
 struct FrameScratch final : ConstraintScratch {
-  explicit FrameScratch(const Tree& tree)
-      : data(tree),
+  // shared: the kinematics cache of a tree system's scratch (same kinematics), or null
+  FrameScratch(const Tree& tree, detail::KinematicsCache* shared)
+      : own(shared != nullptr ? nullptr : std::make_unique<detail::KinematicsCache>(tree)),
+        kinematics(shared != nullptr ? *shared : *own),
+        data(kinematics.data),
         Ja(6, tree.coordinate_count()),
-        Jb(6, tree.coordinate_count()),
-        q_kinematics(tree.coordinate_count()) {}
-  TreeData data;
-  Jacobian Ja, Jb;        // (6 × n) frame Jacobians of the points a and b
-  VectorXd q_kinematics;  // (n) the q of data's kinematics, filled by kinematics_at
-  bool kinematics_valid = false;
-  bool Ja_valid = false, Jb_valid = false;  // Ja, Jb are those of data's kinematics
+        Jb(6, tree.coordinate_count()) {}
+  std::unique_ptr<detail::KinematicsCache> own;  // (null when shared)
+  detail::KinematicsCache& kinematics;           // *own or the shared one
+  TreeData& data;                                // kinematics.data
+  Jacobian Ja, Jb;                               // (6 × n) frame Jacobians of the points a and b
+  std::uint64_t version = 0;                     // kinematics.version of Ja and Jb
+  bool Ja_valid = false, Jb_valid = false;       // Ja, Jb are those of data's kinematics
 };
 
-// forward kinematics at q into the scratch's data once per state: both points of a closure, and
-// the acceleration form and the violation of one evaluation, share it (the same q, bit for bit,
-// gives the same kinematics)
+// forward kinematics at q once per state: both points of a closure, and the acceleration form
+// and the violation of one evaluation, share it (the same q, bit for bit, gives the same
+// kinematics); the Jacobians kept are dropped when the kinematics changed
 void kinematics_at(const Tree& tree, const Eigen::Ref<const VectorXd>& q, FrameScratch& w) {
-  if (w.kinematics_valid && q.size() == w.q_kinematics.size() &&
-      std::memcmp(q.data(), w.q_kinematics.data(), sizeof(double) * std::size_t(q.size())) == 0)
-    return;
-  w.kinematics_valid = w.Ja_valid = w.Jb_valid = false;  // (forward_kinematics may throw)
-  forward_kinematics(tree, q, w.data);
-  w.q_kinematics = q;
-  w.kinematics_valid = true;
+  w.kinematics.at(tree, q);
+  if (w.version != w.kinematics.version) {
+    w.Ja_valid = w.Jb_valid = false;
+    w.version = w.kinematics.version;
+  }
 }
 
 // the kinematics of one point at (q, q'): position, Jacobian and J' q' (zero for the world)
@@ -112,7 +115,15 @@ class FrameModel : public ConstraintModel {
  public:
   explicit FrameModel(std::shared_ptr<const Tree> tree) : tree_(std::move(tree)) {}
   std::unique_ptr<ConstraintScratch> make_scratch(Index) const override {
-    return std::make_unique<FrameScratch>(*tree_);
+    return std::make_unique<FrameScratch>(*tree_, nullptr);
+  }
+  // evaluated with a workspace of a system on the same tree (the tree's own closures, or a
+  // controller's requirements with its model's workspace): that workspace's kinematics
+  std::unique_ptr<ConstraintScratch> make_scratch_sharing(Index n,
+                                                          CallableScratch* shared) const override {
+    detail::KinematicsCache* k = detail::shared_kinematics(shared, *tree_);
+    if (k == nullptr) return make_scratch(n);
+    return std::make_unique<FrameScratch>(*tree_, k);
   }
 
  protected:

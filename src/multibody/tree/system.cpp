@@ -1,12 +1,14 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // A tree as ukdyn's unconstrained system: M from the CRBA, Q = τ − D q' − h from the RNEA.
 #include <cmath>
+#include <cstdint>
 #include <cstring>
 #include <memory>
 #include <utility>
 #include <vector>
 
 #include "multibody/internal.hpp"
+#include "multibody/tree/kinematics_cache.hpp"
 #include "multibody/tree/spatial.hpp"
 #include "ukdyn/multibody/tree.hpp"
 
@@ -16,42 +18,49 @@ namespace {
 
 // the per-workspace buffers of the tree's callables
 struct TreeScratch final : CallableScratch {
-  explicit TreeScratch(const Tree& tree)
-      : data(tree),
-        h(tree.coordinate_count()),
-        tau(tree.coordinate_count()),
-        q_kinematics(tree.coordinate_count()),
-        M(tree.coordinate_count(), tree.coordinate_count()),
-        Q(tree.coordinate_count()),
-        qd_Q(tree.coordinate_count()) {}
-  TreeData data;          // the passes' links
-  VectorXd h;             // (n) bias forces, filled by Q
-  VectorXd tau;           // (n) the input τ, filled by Q and P_ext
-  VectorXd q_kinematics;  // (n) the q of data's kinematics, filled by kinematics_at
-  bool kinematics_valid = false;
-  // the last M and Q at data's kinematics (an evaluation that shares this scratch at the same
-  // state, a controller's model evaluated with its plant, copies them), filled by M and Q
+  explicit TreeScratch(std::shared_ptr<const Tree> t)
+      : tree(std::move(t)),
+        kinematics(*tree),
+        h(tree->coordinate_count()),
+        tau(tree->coordinate_count()),
+        M(tree->coordinate_count(), tree->coordinate_count()),
+        Q(tree->coordinate_count()),
+        qd_Q(tree->coordinate_count()) {}
+  std::shared_ptr<const Tree> tree;  // the system's tree (for shared_kinematics)
+  // the forward kinematics at the last q: M, Q and V of one evaluation (and the frame
+  // constraints evaluated with this workspace, detail::shared_kinematics) share it
+  detail::KinematicsCache kinematics;
+  VectorXd h;    // (n) bias forces, filled by Q
+  VectorXd tau;  // (n) the input τ, filled by Q and P_ext
+  // the last M and Q at the kinematics of version `version` (an evaluation that shares this
+  // scratch at the same state, a controller's model evaluated with its plant, copies them),
+  // filled by M and Q
   MatrixXd M;     // (n × n) M(q)
   VectorXd Q;     // (n) Q(q, q_Q, t_Q)
   VectorXd qd_Q;  // (n) the q' of Q
   double t_Q = 0.0;
+  std::uint64_t version = 0;  // kinematics.version of M and Q
   bool M_valid = false, Q_valid = false;
+  // M is kept only once two callers (two workspaces sharing this scratch: a controller's model
+  // and its plant) have asked for it, told apart by their output buffers: a workspace of its own
+  // asks at each state once and would only pay for the copy (n² doubles, 3 % of the humanoid's
+  // evaluation)
+  const double* M_out = nullptr;  // the output buffer of the last M
+  bool keep_M = false;
 };
 
 TreeScratch& scratch_of(CallableScratch* s) { return *static_cast<TreeScratch*>(s); }
 
 // forward kinematics at q into the scratch's data, once per state: M and Q of one evaluation
-// (and V of a sample) share it. The same q, bit for bit, gives the same kinematics, so the
-// results are those of running it in each callable.
+// (and V of a sample, and the frame constraints sharing the scratch) share it. The same q, bit
+// for bit, gives the same kinematics, so the results are those of running it in each callable.
+// M and Q kept are dropped when the kinematics changed (here or by a constraint sharing them).
 void kinematics_at(const Tree& tree, const Eigen::Ref<const VectorXd>& q, TreeScratch& ts) {
-  if (ts.kinematics_valid && q.size() == ts.q_kinematics.size() &&
-      std::memcmp(q.data(), ts.q_kinematics.data(), sizeof(double) * std::size_t(q.size())) == 0)
-    return;
-  ts.kinematics_valid = ts.M_valid = ts.Q_valid = false;  // (forward_kinematics throws on a q
-                                                          // of the wrong size)
-  forward_kinematics(tree, q, ts.data);
-  ts.q_kinematics = q;
-  ts.kinematics_valid = true;
+  ts.kinematics.at(tree, q);
+  if (ts.version != ts.kinematics.version) {
+    ts.M_valid = ts.Q_valid = false;
+    ts.version = ts.kinematics.version;
+  }
 }
 
 // each coordinate's parent in the tree of coordinates: the one before it in its joint, else the
@@ -114,26 +123,31 @@ SystemBuilder system_builder(const Tree& tree_in, JointTorqueFn tau) {
   bool chain = true;
   for (std::size_t k = 0; k < parent.size(); ++k) chain = chain && parent[k] == Index(k) - 1;
   if (!chain) sb.mass_tree(std::move(parent));
-  sb.scratch([tree]() -> std::unique_ptr<CallableScratch> {
-    return std::make_unique<TreeScratch>(*tree);
-  });
+  sb.scratch(
+      [tree]() -> std::unique_ptr<CallableScratch> { return std::make_unique<TreeScratch>(tree); });
   sb.mass_matrix([tree, completions](const Eigen::Ref<const VectorXd>& q, double,
                                      CallableScratch* s, Eigen::Ref<MatrixXd> M) {
     TreeScratch& ts = scratch_of(s);
     kinematics_at(*tree, q, ts);
+    if (M.data() != ts.M_out) {
+      ts.keep_M = ts.keep_M || ts.M_out != nullptr;
+      ts.M_out = M.data();
+    }
     // (the M of this q, bit for bit, is the one kept)
     if (ts.M_valid) {
       M = ts.M;
       return;
     }
-    detail::mass_matrix_from_kinematics(*tree, ts.data, M);
+    detail::mass_matrix_from_kinematics(*tree, ts.kinematics.data, M);
     // M_uu += c u uᵀ
     for (const Completion& k : completions) {
       const Eigen::Vector4d u = q.segment<4>(k.offset);
       M.block<4, 4>(k.offset, k.offset).noalias() += k.c * u * u.transpose();
     }
-    ts.M = M;
-    ts.M_valid = true;
+    if (ts.keep_M) {
+      ts.M = M;
+      ts.M_valid = true;
+    }
   });
   // Q = τ − D q' − h(q, q') (+ c u b per floating link)
   sb.forces([tree, D, tau, completions](const Eigen::Ref<const VectorXd>& q,
@@ -148,7 +162,7 @@ SystemBuilder system_builder(const Tree& tree_in, JointTorqueFn tau) {
       Q = ts.Q;
       return;
     }
-    detail::rnea_from_kinematics(*tree, qd, nullptr, ts.data, ts.h);
+    detail::rnea_from_kinematics(*tree, qd, nullptr, ts.kinematics.data, ts.h);
     Q = -ts.h - D.cwiseProduct(qd);
     if (tau) {
       tau(q, qd, t, ts.tau);
@@ -168,7 +182,7 @@ SystemBuilder system_builder(const Tree& tree_in, JointTorqueFn tau) {
   sb.potential_energy([tree](const Eigen::Ref<const VectorXd>& q, double, CallableScratch* s) {
     TreeScratch& ts = scratch_of(s);
     kinematics_at(*tree, q, ts);
-    const TreeData& d = ts.data;
+    const TreeData& d = ts.kinematics.data;
     double V = 0.0;
     for (Index i = 0; i < tree->link_count(); ++i) {
       const Inertial& in = tree->link(i).inertial;
@@ -210,6 +224,28 @@ SystemBuilder system_builder(const Tree& tree_in, JointTorqueFn tau) {
                       std::make_shared<mb::detail::UnitQuaternionModel>(tree->offset(i) + 3)));
   }
   return sb;
+}
+
+bool detail::same_kinematics(const Tree& a, const Tree& b) {
+  if (&a == &b) return true;
+  if (a.link_count() != b.link_count() || a.coordinate_count() != b.coordinate_count()) {
+    return false;
+  }
+  for (Index i = 0; i < a.link_count(); ++i) {
+    const Joint &ja = a.link(i).joint, &jb = b.link(i).joint;
+    if (a.parent(i) != b.parent(i) || a.offset(i) != b.offset(i) || a.dofs(i) != b.dofs(i) ||
+        ja.kind != jb.kind || ja.p_PJ != jb.p_PJ || ja.axis != jb.axis ||
+        a.joint_rotation(i) != b.joint_rotation(i)) {
+      return false;
+    }
+  }
+  return true;
+}
+
+detail::KinematicsCache* detail::shared_kinematics(CallableScratch* shared, const Tree& tree) {
+  auto* ts = dynamic_cast<TreeScratch*>(shared);
+  if (ts == nullptr || !same_kinematics(*ts->tree, tree)) return nullptr;
+  return &ts->kinematics;
 }
 
 }  // namespace ukdyn::tree
