@@ -509,6 +509,8 @@ ControlledTrajectory simulate_controlled(
   detail::EnergyBalance balance;  // the plant's, with the control's work
   ControlWorkspace cws(ctrl);
   VectorXd q(n), qd(n), qdd(n);
+  // the plant's own workspace, for its kinetic energy at each sample (below)
+  Workspace plant_ws(plant);
   o.sample_sink = [&](const Trajectory& s) {
     // the plant's sample: strip z, and z'ᵀz'/2 from the energies
     if (streamed) {
@@ -545,8 +547,18 @@ ControlledTrajectory simulate_controlled(
       to->insert(to->end(), from->begin(), from->end());
     }
     const double* z_dot = s.qd.data() + n;
-    const double T =
-        s.kinetic_energy[0] - 0.5 * Eigen::Map<const VectorXd>(z_dot, aux).squaredNorm();
+    // T = q'ᵀ M q' / 2 of the plant, evaluated on its own: the augmented run's T holds
+    // z'ᵀ z' / 2 besides, and z' (the control's work and effort, ∫ |Qc|² dt) grows with the
+    // square of the model's forces — subtracting it lost the plant's T entirely for a
+    // Duffing oscillator of 1e6 kg (T of −2³⁰ J, an energy balance off by all the energy
+    // exchanged; issue #29 item 2, the metamorphic suite)
+    q = Eigen::Map<const VectorXd>(s.q.data(), n);
+    qd = Eigen::Map<const VectorXd>(s.qd.data(), n);
+    double T = s.kinetic_energy[0] - 0.5 * Eigen::Map<const VectorXd>(z_dot, aux).squaredNorm();
+    if (evaluate_unconstrained(plant, plant_ws, q, qd, t) == Status::kOk &&
+        !plant_ws.mass_singular) {
+      T = detail::kinetic_energy(plant_ws, qd);
+    }
     const double V = s.potential_energy[0];
     p.kinetic_energy.push_back(T);
     p.energy.push_back(T + V);
@@ -556,8 +568,6 @@ ControlledTrajectory simulate_controlled(
     p.energy_balance_residual.push_back(balance.add(t, T, V, T + V, works));
 
     // the control at the sample (evaluated afresh at the sample's state)
-    q = Eigen::Map<const VectorXd>(s.q.data(), n);
-    qd = Eigen::Map<const VectorXd>(s.qd.data(), n);
     qdd = Eigen::Map<const VectorXd>(s.qdd.data(), n);
     compute_control(ctrl, cws, q, qd, t);
     // errors: phi (holonomic), psi (nonholonomic), A_r q'' − b_r (acceleration form)
