@@ -29,8 +29,8 @@ void ContactModes::mirror(const std::vector<signed char>* run_modes, ControlWork
   }
 }
 
-double ContactModes::gap_acceleration(const Controller& ctrl, ControlWorkspace& cws,
-                                      std::size_t i, const Eigen::Ref<const VectorXd>& q,
+double ContactModes::gap_acceleration(const Controller& ctrl, ControlWorkspace& cws, std::size_t i,
+                                      const Eigen::Ref<const VectorXd>& q,
                                       const Eigen::Ref<const VectorXd>& qd, double t,
                                       double& scale) {
   const Index k = contacts_[i];

@@ -46,8 +46,8 @@ class ContactModes {
  private:
   // g'' = A_k q'' − b_k of contact i under the control in cws (its row evaluated afresh)
   double gap_acceleration(const Controller& ctrl, ControlWorkspace& cws, std::size_t i,
-                          const Eigen::Ref<const VectorXd>& q,
-                          const Eigen::Ref<const VectorXd>& qd, double t, double& scale);
+                          const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd,
+                          double t, double& scale);
 
   std::vector<Index> contacts_;       // (contacts) System indices of the unilateral constraints
   std::vector<signed char> saved_;    // (contacts) the mirrored overrides, restored after a trial
