@@ -173,6 +173,12 @@ Controller ControllerBuilder::build() const {
   rb.mass_matrix(MatrixXd::Identity(n, n));
   for (const Constraint& r : requirements_) {
     if (!seen.insert(r.name()).second) refuse("requirement '" + r.name() + "' is declared twice");
+    if (r.is_unilateral()) {
+      refuse("requirement '" + r.name() +
+             "' is unilateral: a requirement is met as an equality; contacts belong to the "
+             "model (its constraints), where the control holds them as the plant does "
+             "(docs/contact.md, \"Contacts under control\")");
+    }
     rb.add(r);
   }
   Controller c(model_, rb.build());

@@ -26,11 +26,14 @@
 #include <utility>
 #include <vector>
 
+#include "control/contact_modes.hpp"
 #include "control/internal.hpp"
 #include "dynamics/internal.hpp"
 #include "simulation/energy_balance.hpp"
+#include "simulation/observed_run.hpp"
 #include "simulation/sample_grid.hpp"
 #include "ukdyn/core/format.hpp"
+#include "ukdyn/dynamics/contact_restitution.hpp"
 #include "ukdyn/dynamics/forward.hpp"
 #include "ukdyn/dynamics/projection.hpp"
 
@@ -95,6 +98,12 @@ Constraint on_head(const Constraint& c, Index n) {
   }
   if (c.stabilization().enabled()) out.stabilize(c.stabilization().alpha, c.stabilization().beta);
   out.mark_drive(c.is_drive());
+  // a contact stays one, with its law of restitution
+  if (c.is_unilateral()) {
+    out.unilateral(c.restitution());
+    if (restitution_law(c) != RestitutionLaw::kNewton)
+      out = with_restitution_law(out, restitution_law(c));
+  }
   return out;
 }
 
@@ -127,6 +136,7 @@ struct ControlledScratch final : CallableScratch {
       : cws(p.ctrl),
         own_plant(p.plant.id() == p.ctrl.model().id() ? nullptr : p.plant.make_scratch()),
         plant(own_plant ? own_plant.get() : cws.model.callables.get()),
+        contacts(p.ctrl),
         q_last(p.n),
         qd_last(p.n) {
     stats.first_not_met = std::numeric_limits<double>::quiet_NaN();
@@ -134,10 +144,15 @@ struct ControlledScratch final : CallableScratch {
   ControlWorkspace cws;
   std::unique_ptr<CallableScratch> own_plant;  // the plant's callables' scratch (may be null)
   CallableScratch* plant;                      // own_plant, or the model workspace's
+  // the unilateral contacts: the run's modes (its workspace's activity_override, set when the
+  // run starts; null outside simulate_controlled) mirrored into the model's
+  control_detail::ContactModes contacts;
+  const std::vector<signed char>* run_modes = nullptr;
   VectorXd q_last, qd_last;  // (n) the state of the last control evaluation, at t_last
   double t_last = 0.0;
   ControlStatistics stats;
-  std::string failure;  // describe_control_status() of the first failure
+  std::string failure;       // describe_control_status() of the first failure
+  std::string pull_failure;  // (ContactModes::settle) a requirement that needs a contact to pull
 };
 
 CallableScratch* plant_scratch(CallableScratch* controlled) {
@@ -153,12 +168,20 @@ void ControlledPlant::force(ControlledScratch& w, const Eigen::Ref<const VectorX
   // the plant's part of the state, as views (no copy)
   const Eigen::Ref<const VectorXd> q = xq.head(n), qd = xqd.head(n);
   plant.forces(q, qd, t, w.plant, Q.head(n));
-  const ControlStatus s = compute_control(ctrl, cws, q, qd, t);
+  // the controller's model holds the contacts the run holds
+  w.contacts.mirror(w.run_modes, cws);
+  ControlStatus s = compute_control(ctrl, cws, q, qd, t);
   ++stats.evaluations;
   // where the control was last evaluated (a failed run's diagnosis looks there)
   w.q_last = q;
   w.qd_last = qd;
   w.t_last = t;
+  // a requirement that lifts a contact opens it; one that needs it to pull stops the run
+  if (!w.contacts.settle(ctrl, cws, q, qd, t, s, w.pull_failure)) {
+    if (w.failure.empty()) w.failure = w.pull_failure;
+    Q.setConstant(std::numeric_limits<double>::quiet_NaN());
+    return;
+  }
   if (s != ControlStatus::kOk && s != ControlStatus::kRequirementsNotMet) {
     if (w.failure.empty()) w.failure = describe_control_status(ctrl, cws);
     Q.setConstant(std::numeric_limits<double>::quiet_NaN());
@@ -256,6 +279,10 @@ void require_same_plant(const Controller& ctrl, const System& plant, const char*
         plant.constraint(k).rows() != model.constraint(k).rows()) {
       fail("differ in constraint " + format_number(k) + " ('" + plant.constraint(k).name() +
            "' and '" + model.constraint(k).name() + "')");
+    }
+    if (plant.constraint(k).is_unilateral() != model.constraint(k).is_unilateral()) {
+      fail("differ in constraint '" + plant.constraint(k).name() + "': it is unilateral in " +
+           (plant.constraint(k).is_unilateral() ? "the plant" : "the model") + " only");
     }
   }
 }
@@ -412,6 +439,17 @@ System build_controlled(const std::shared_ptr<const ControlledPlant>& st,
 
 System controlled_system(const Controller& ctrl, const System& plant) {
   require_same_plant(ctrl, plant, "ukdyn::controlled_system");
+  // the controller's model follows the run's contact modes, which only simulate_controlled
+  // hands it
+  for (const Constraint& c : plant.constraints()) {
+    if (c.is_unilateral()) {
+      throw std::invalid_argument(
+          "ukdyn::controlled_system: the constraint '" + c.name() +
+          "' is unilateral; a controlled plant with contacts runs in simulate_controlled, whose "
+          "controller holds the contacts the run holds (docs/contact.md, \"Contacts under "
+          "control\")");
+    }
+  }
   return build_controlled(std::make_shared<ControlledPlant>(ctrl, plant, 0), {});
 }
 
@@ -426,17 +464,6 @@ ControlledTrajectory simulate_controlled(
     throw std::invalid_argument(std::string(who) + ": q0 and qd0 need n = " + format_number(n) +
                                 " entries, got " + format_number(q0.size()) + " and " +
                                 format_number(qd0.size()));
-  }
-  // a unilateral contact's release and impacts are not carried through the control's augmented
-  // system yet (its rows would hold as two-sided ones): refused, never a contact that pulls
-  for (const Constraint& c : plant.constraints()) {
-    if (c.is_unilateral()) {
-      throw std::invalid_argument(
-          std::string(who) + ": the constraint '" + c.name() +
-          "' is unilateral; contacts under control are not supported yet "
-          "(docs/contact.md, \"Not done yet\"): simulate the plant alone, or "
-          "write the contact as a two-sided constraint");
-    }
   }
   const bool robust = ctrl.robust().has_value();
   const Index aux = kBounds + (robust ? m_r : 0);
@@ -508,6 +535,9 @@ ControlledTrajectory simulate_controlled(
   ControlledTrajectory& out = streamed ? one : run;
   detail::EnergyBalance balance;  // the plant's, with the control's work
   ControlWorkspace cws(ctrl);
+  control_detail::ContactModes sample_contacts(ctrl);
+  const std::vector<signed char>* run_modes = nullptr;  // the run's, once it starts
+  std::string pull;
   VectorXd q(n), qd(n), qdd(n);
   // the plant's own workspace, for its kinetic energy at each sample (below)
   Workspace plant_ws(plant);
@@ -563,13 +593,19 @@ ControlledTrajectory simulate_controlled(
     p.kinetic_energy.push_back(T);
     p.energy.push_back(T + V);
     p.work_control.push_back(z_dot[kWork]);
+    // the impacts' work Σ (T⁺ − T⁻), kept when the plant has contacts (their jumps leave z')
+    const double impact = s.work_impact.empty() ? 0.0 : s.work_impact[0];
+    if (!s.work_impact.empty()) p.work_impact.push_back(impact);
     const double works[6] = {s.work_nonideal[0], s.work_ideal[0], s.work_drive[0],
-                             s.work_external[0], z_dot[kWork],    0.0};
+                             s.work_external[0], z_dot[kWork],    impact};
     p.energy_balance_residual.push_back(balance.add(t, T, V, T + V, works));
 
     // the control at the sample (evaluated afresh at the sample's state)
     qdd = Eigen::Map<const VectorXd>(s.qdd.data(), n);
-    compute_control(ctrl, cws, q, qd, t);
+    // (with the run's contact modes, as in the run's evaluations)
+    sample_contacts.mirror(run_modes, cws);
+    ControlStatus cs = compute_control(ctrl, cws, q, qd, t);
+    sample_contacts.settle(ctrl, cws, q, qd, t, cs, pull);
     // errors: phi (holonomic), psi (nonholonomic), A_r q'' − b_r (acceleration form)
     const VectorXd accel_residual = cws.req.A * qdd - cws.req.b;
     evaluate_violations(ctrl.requirements(), cws.req, q, qd, t);
@@ -603,15 +639,23 @@ ControlledTrajectory simulate_controlled(
   };
   // the control statistics, read from the run's workspace (its ControlledScratch) at the end
   std::optional<ControlledScratch> after;
-  const Trajectory full = detail::simulate_observed(sys, x0, xd0, o, [&](const Workspace& ws) {
-    after.emplace(*st);
-    const auto& w = static_cast<const ControlledScratch&>(*ws.callables);
-    after->stats = w.stats;
-    after->failure = w.failure;
-    after->q_last = w.q_last;
-    after->qd_last = w.qd_last;
-    after->t_last = w.t_last;
-  });
+  const Trajectory full = detail::simulate_observed(
+      sys, x0, xd0, o,
+      [&](const Workspace& ws) {
+        after.emplace(*st);
+        const auto& w = static_cast<const ControlledScratch&>(*ws.callables);
+        after->stats = w.stats;
+        after->failure = w.failure;
+        after->q_last = w.q_last;
+        after->qd_last = w.qd_last;
+        after->t_last = w.t_last;
+      },
+      [&](Workspace& ws) {
+        // the contacts' modes of the run (the plant's constraint indices: the augmented system
+        // keeps them), for the control's model in the run's evaluations and at the samples
+        run_modes = &ws.activity_override;
+        static_cast<ControlledScratch&>(*ws.callables).run_modes = run_modes;
+      });
   const ControlledScratch& w = *after;
 
   // the names, the statistics and the plant's energy balance

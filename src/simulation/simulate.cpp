@@ -24,6 +24,7 @@
 #include "simulation/energy_balance.hpp"
 #include "simulation/initial_check.hpp"
 #include "simulation/integrator.hpp"
+#include "simulation/observed_run.hpp"
 #include "simulation/run.hpp"
 #include "simulation/sample_grid.hpp"
 #include "ukdyn/core/format.hpp"
@@ -138,6 +139,14 @@ Trajectory detail::simulate_observed(const System& sys, const Eigen::Ref<const V
                                      const Eigen::Ref<const VectorXd>& qd0,
                                      const SimulationOptions& given,
                                      const std::function<void(const Workspace&)>& finished) {
+  return simulate_observed(sys, q0, qd0, given, finished, {});
+}
+
+Trajectory detail::simulate_observed(const System& sys, const Eigen::Ref<const VectorXd>& q0,
+                                     const Eigen::Ref<const VectorXd>& qd0,
+                                     const SimulationOptions& given,
+                                     const std::function<void(const Workspace&)>& finished,
+                                     const std::function<void(Workspace&)>& started) {
   validate(sys, q0, qd0, given);
   check_settings(sys, given);
   // an rtol below roundoff is raised to the smallest one that means anything (with a note)
@@ -165,6 +174,7 @@ Trajectory detail::simulate_observed(const System& sys, const Eigen::Ref<const V
   if (!rtol_note.empty()) traj.stats.notes.push_back(rtol_note);
   Run run(sys, o, traj, finished);
   Workspace& ws = run.workspace();
+  if (started) started(ws);
   const Index n = sys.coordinate_count();
 
   // initial conditions: consistent, or projected on request (constraints that contradict each

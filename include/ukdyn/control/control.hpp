@@ -462,7 +462,9 @@ std::string describe_control_status(const Controller& ctrl, const ControlWorkspa
 /// carried over (the sliding law applies throughout). Requirements active on intervals switch
 /// the force: give their ends as SimulationOptions::breakpoints (simulate_controlled does).
 /// @throws std::invalid_argument unless the plant and the controller's model have the same
-/// coordinates (names) and constraints (names and rows). Cost O(n² + n m_r) once.
+/// coordinates (names) and constraints (names, rows, unilateral or not), and when the plant has
+/// unilateral contacts (they run in simulate_controlled, whose controller holds the contacts the
+/// run holds). Cost O(n² + n m_r) once.
 System controlled_system(const Controller& ctrl, const System& plant);
 
 /// Statistics of the controller over a controlled run.
@@ -511,7 +513,11 @@ struct ControlledTrajectory {
 /// result). Ends of requirement activity intervals become breakpoints.
 /// A controller failure stops the run (plant.stats.status, .message say why); requirements not
 /// met are not a failure (control.not_met counts them).
-/// @throws std::invalid_argument as controlled_system() and simulate().
+/// Unilateral contacts (docs/contact.md, "Contacts under control") close, hold, release and
+/// impact as in simulate(); the controller's model holds the contacts the run holds, a
+/// requirement that lifts a contact off releases it, and one that could be met only with a
+/// contact pulling stops the run, naming the contact, the requirement row and the time.
+/// @throws std::invalid_argument as controlled_system() (contacts aside) and simulate().
 /// The samples are kept in the result, bounded as simulate() bounds its own (kMaxStoredValues,
 /// counting the control's values too); with options.sample_sink set, each sample's plant part
 /// goes there instead (the overload below, which also passes the control's values).

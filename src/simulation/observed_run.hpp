@@ -1,0 +1,20 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// detail::simulate_observed (dynamics/internal.hpp) with a second observer, `started`, called
+// with the run's workspace once it is made, before the first evaluation: the controlled plant's
+// scratch then points at the run's contact modes (ws.activity_override), which its controller's
+// model mirrors (control/simulate_controlled.cpp, docs/contact.md "Contacts under control").
+#pragma once
+
+#include <functional>
+
+#include "dynamics/internal.hpp"
+
+namespace ukdyn::detail {
+
+Trajectory simulate_observed(const System& sys, const Eigen::Ref<const VectorXd>& q0,
+                             const Eigen::Ref<const VectorXd>& qd0,
+                             const SimulationOptions& options,
+                             const std::function<void(const Workspace&)>& finished,
+                             const std::function<void(Workspace&)>& started);
+
+}  // namespace ukdyn::detail
