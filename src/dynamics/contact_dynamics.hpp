@@ -85,6 +85,14 @@ class ContactDynamics {
   double kinetic_energy(const Eigen::Ref<const VectorXd>& qd) const {
     return 0.5 * qd.dot(M_ * qd);
   }
+  // T(q'⁺) − T(q'⁻) = ½ (q'⁺ − q'⁻)ᵀ M (q'⁺ + q'⁻), with the M of the last prepare(): from the
+  // jump itself, so that coordinates the impact leaves alone add exactly nothing (a controlled
+  // run's auxiliary z', whose ½ z'ᵀz' outgrows the plant's T at large forces, cancelled the
+  // difference of the two totals: issue #29 item 2's metamorphic suite, masses × 10⁶). O(n²).
+  double kinetic_energy_change(const Eigen::Ref<const VectorXd>& qd_plus,
+                               const Eigen::Ref<const VectorXd>& qd_minus) const {
+    return 0.5 * (qd_plus - qd_minus).dot(M_ * (qd_plus + qd_minus));
+  }
   const VectorXd& lambda() const { return lambda_; }    // (k) multipliers or impulses
   const VectorXd& slack() const { return w_; }          // (k) w of the LCP
   const VectorXd& v_after() const { return v_after_; }  // (k) g' after an impact

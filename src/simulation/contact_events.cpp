@@ -224,7 +224,7 @@ bool ContactEvents::resolve(double t, double* x, Index event, RunStatistics& sta
     }
     // energy is never created: an impact that would (Newton's law with several contacts can)
     // is redone fully plastic (e = 0), which dissipates
-    double dT = dyn_.kinetic_energy(qd) - T_minus;
+    double dT = dyn_.kinetic_energy_change(qd, qd_minus);
     if (dT > 1e-12 * std::max(T_minus, 1e-300)) {
       qd = qd_minus;
       e.setZero();
@@ -233,7 +233,7 @@ bool ContactEvents::resolve(double t, double* x, Index event, RunStatistics& sta
                    ": the plastic impact's LCP has no solution " + "(Siconos lcp_lexicolemke)";
         return false;
       }
-      dT = dyn_.kinetic_energy(qd) - T_minus;
+      dT = dyn_.kinetic_energy_change(qd, qd_minus);
       if (stats.notes.size() < 20) {
         stats.notes.push_back(
             "t = " + format_t(t) + ": an impact with restitution" +
