@@ -201,7 +201,9 @@ TEST(TreeLtl, PackedRowsGiveTheBitsOfTheWalk) {
     detail::tree_lt_solve(packed.data(), tree_parent.data(), inv.data(), lt.data(), n);
     detail::tree_l_solve(packed.data(), tree_parent.data(), inv.data(), l.data(), n);
     detail::tree_lt_multiply(packed.data(), tree_parent.data(), x.data(), mult.data(), n);
-    const auto up = [&](Index j) { return tree_parent[std::size_t(j)]; };
+    // (a reference, not the structured binding itself: clang 14 cannot capture one)
+    const auto& parents = tree_parent;
+    const auto up = [&](Index j) { return parents[std::size_t(j)]; };
     for (Index k = n - 1; k >= 0; --k) {
       lt_ref[k] *= inv[k];
       for (Index j = up(k); j >= 0; j = up(j)) lt_ref[j] -= Lw(k, j) * lt_ref[k];
