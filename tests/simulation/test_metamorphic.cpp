@@ -366,12 +366,6 @@ std::string limitation(const std::string& file, const std::string& label, bool f
     return "its control force differs by 1.4e-8 to 3.5e-7 in five rescalings while its motion "
            "agrees to 1e-8, and rtol x (1 + 1e-6) moves the force by 3.2e-9 only: open";
   }
-  if (label == "rows x1e8" && file == "rocking_block.yaml") {
-    return "its impacts with friction solve one LCP (Anitescu-Potra) whose blocks mix the "
-           "contact rows' scale (W ~ rows squared, 1e16 here) with the unit friction directions, "
-           "and Lemke finds no solution at t = 1.8 (the run stops there, kIntegratorFailure after "
-           "4433 steps; the original takes 326): the impact's LCP is not equilibrated, open";
-  }
   if (label == "time x10" && file == "slider_crank_coulomb.yaml") {
     return "the integrators' atol is absolute in q' (docs/simulation.md, not yet relative): "
            "ten times looser on the slower velocities, it leaves 1.58e-8 (measured; the stick "
