@@ -467,19 +467,20 @@ TEST_P(Metamorphic, SameMotionInRescaledUnits) {
     fine.atol /= 100.0;
     const RunResult ref = run(model.system, ctrl, model.q0, model.qd0, fine);
     ASSERT_EQ(ref.plant.stats.status, Status::kOk) << ref.plant.stats.message;
-    if (!motion_why.empty()) {
-      const double d_ref = motion_difference(base.plant, ref.plant, 1.0);
-      EXPECT_GT(d_ref, 1e-8) << file << " is accurate now: compare it at 1e-8";
-      motion_tolerance = kAccuracyFactor * d_ref;
-      std::cout << file << ": motion compared at " << motion_tolerance << ": " << motion_why
+    // 5 d_ref, d_ref the difference from the reference, which must be above 1e-8
+    auto own_accuracy = [&](const char* what, const std::string& why, double d_ref) {
+      EXPECT_GT(d_ref, 1e-8) << file << "'s " << what << " is accurate now: compare it at 1e-8";
+      std::cout << file << ": " << what << " compared at " << kAccuracyFactor * d_ref << ": " << why
                 << "\n";
+      return kAccuracyFactor * d_ref;
+    };
+    if (!motion_why.empty()) {
+      motion_tolerance =
+          own_accuracy("motion", motion_why, motion_difference(base.plant, ref.plant, 1.0));
     }
     if (!force_why.empty()) {
-      const double d_ref = relative_difference(base.Qc_control, ref.Qc_control, 1.0);
-      EXPECT_GT(d_ref, 1e-8) << file << "'s control force is accurate now: compare it at 1e-8";
-      force_tolerance = kAccuracyFactor * d_ref;
-      std::cout << file << ": control force compared at " << force_tolerance << ": " << force_why
-                << "\n";
+      force_tolerance = own_accuracy("control force", force_why,
+                                     relative_difference(base.Qc_control, ref.Qc_control, 1.0));
     }
   }
   const auto original = std::make_shared<const System>(model.system);
