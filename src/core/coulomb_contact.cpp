@@ -11,6 +11,8 @@
 #include <utility>
 
 #include "dynamics/internal.hpp"
+#include "linalg/safe_norm.hpp"
+#include "linalg/scale_class.hpp"
 #include "ukdyn/core/system.hpp"
 #include "ukdyn/dynamics/workspace.hpp"
 
@@ -31,6 +33,7 @@ class StickScratch final : public ConstraintScratch {
         rate(VectorXd::Zero(size)),
         rate2(VectorXd::Zero(size)),
         shifted(VectorXd::Zero(n)),
+        row(VectorXd::Zero(n)),
         rows_n(MatrixXd::Zero(std::max<Index>(rows, 1), n)),
         b_n(VectorXd::Zero(std::max<Index>(rows, 1))),
         basis(MatrixXd::Zero(std::max<Index>(rows, 1), size)),
@@ -41,6 +44,7 @@ class StickScratch final : public ConstraintScratch {
   VectorXd rate;      // (size) dP/dt w, central difference at h
   VectorXd rate2;     // (size) the same at 2h
   VectorXd shifted;   // (n) q + s q'
+  VectorXd row;       // (n) a row of the normal constraint, for its norm (row_unit)
   MatrixXd rows_n;    // (rows × n) the normal constraint's rows of A
   VectorXd b_n;       // (rows) its b (unused)
   MatrixXd basis;     // (rows × size) orthonormal basis of its rows on the sliding coordinates
@@ -59,6 +63,16 @@ class StickScratch final : public ConstraintScratch {
 // with P' (v − u) the derivative of s ↦ P(q + s q', t + s)(v − u) at 0 (Richardson-extrapolated
 // central differences: P depends on the rows of A only, which models do not differentiate).
 // Without a normal constraint (none found) P = I: psi = v − u.
+//
+// Scale: the rows are stated in the unit of the normal constraint's rows beside which they
+// stand in one rank decision and one projection, kappa P (v − u) = 0 with kappa =
+// class(max_i ‖n_i‖) / 10 (detail::scale_class; n_i the normal constraint's rows of A at (q, t),
+// whole), so that a normal constraint written × 1e8 brings stick rows × 1e9, not rows of 1 that
+// its rank decision (relative to the largest pivot) would take for roundoff. kappa is 1 for
+// rows of norm in [0.0316, 31.6] (every example in SI units: the same bits as unscaled), and a
+// change of units by 1000^j moves it by exactly that factor (docs/simulation.md, "Scales and
+// tolerances"). kappa is constant within a class: the rows' zero set is P (v − u) = 0 whatever
+// it is, and on it d(kappa psi)/dt = kappa dpsi/dt.
 class StickModel final : public ConstraintModel {
  public:
   StickModel(std::vector<Index> coordinates, SurfaceVelocityFn surface,
@@ -127,6 +141,11 @@ class StickModel final : public ConstraintModel {
     // b = P (u' − P' w)
     b = s.u_dot - s.rate;
     project(s, b);
+    // both × kappa, the normal rows' unit
+    if (const double kappa = row_unit(s); kappa != 1.0) {
+      A_local *= kappa;
+      b *= kappa;
+    }
   }
 
   void violation(const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd,
@@ -142,6 +161,7 @@ class StickModel final : public ConstraintModel {
     if (normal_) {
       basis_at(q, qd, t, 0.0, s);
       project(s, velocity);
+      velocity *= row_unit(s);
     }
   }
 
@@ -173,6 +193,20 @@ class StickModel final : public ConstraintModel {
       ++basis;
     }
     s.basis_size = basis;
+  }
+
+  // kappa = class(max_i ‖n_i‖) / 10, the unit of the normal constraint's rows n_i in s.rows_n
+  // (as basis_at at step 0 left them; 1 without a normal constraint or when every row vanishes
+  // or is not finite)
+  double row_unit(StickScratch& s) const {
+    if (normal_ == nullptr) return 1.0;
+    double largest = 0.0;
+    for (Index i = 0; i < normal_rows_; ++i) {
+      s.row = s.rows_n.row(i).transpose();
+      const double a = detail::safe_norm(s.row.data(), s.row.size());
+      if (std::isfinite(a)) largest = std::max(largest, a);
+    }
+    return detail::scale_class(largest) / 10.0;
   }
 
   // v ← P v with the basis in s

@@ -18,6 +18,7 @@
 
 #include "dynamics/contact_dynamics.hpp"
 #include "dynamics/internal.hpp"
+#include "linalg/scale_class.hpp"
 #include "ukdyn/core/format.hpp"
 #include "ukdyn/dynamics/contact_restitution.hpp"
 #include "ukdyn/dynamics/forward.hpp"
@@ -331,11 +332,24 @@ bool ContactDynamics::impact(const System& sys, Workspace& ws, const Eigen::Ref<
 bool ContactDynamics::impulse(Eigen::Ref<VectorXd> qd, const VectorXd& r, const VectorXd& vt,
                               const VectorXd& offset) {
   const Index k = Index(set_.size());
+  // each contact's impulse in the unit of its row, Λ_i = d_i Λ'_i, d_i = 10 / class(‖A_c,i‖): the
+  // LCP in Λ' (S M S, S r with S = diag(d, 1…), w = S⁻¹ w') has blocks of comparable size
+  // whatever the rows' factor (a gap row × 1e8 gave W of 1e16 beside the unit friction
+  // directions, where Lemke found no solution); d = 1 in SI units, and then nothing is scaled
+  VectorXd d = VectorXd::Ones(k);
+  for (Index i = 0; i < k; ++i) d[i] = 10.0 / scale_class(A_c_.row(i).norm());
+  const bool scaled = (d.array() != 1.0).any();
   if (vt.size() == 0) {
     // frictionless: w = W Λ + r, 0 <= Λ ⊥ w >= 0;  q' += P A_cᵀ Λ
-    if (!lcp_.solve(W_, r)) return false;
-    lambda_ = lcp_.z();
-    w_ = lcp_.w();
+    if (scaled) {
+      if (!lcp_.solve(d.asDiagonal() * W_ * d.asDiagonal(), d.cwiseProduct(r))) return false;
+      lambda_ = d.cwiseProduct(lcp_.z());
+      w_ = lcp_.w().cwiseQuotient(d);
+    } else {
+      if (!lcp_.solve(W_, r)) return false;
+      lambda_ = lcp_.z();
+      w_ = lcp_.w();
+    }
     qd += X_ * lambda_;
     return true;
   }
@@ -363,9 +377,18 @@ bool ContactDynamics::impulse(Eigen::Ref<VectorXd> qd, const VectorXd& r, const 
   }
   rr.head(k) = r;
   rr.segment(k, nb) = vt;
+  if (scaled) {
+    Mlcp.topRows(k) = d.asDiagonal() * Mlcp.topRows(k);
+    Mlcp.leftCols(k) = Mlcp.leftCols(k) * d.asDiagonal();
+    rr.head(k) = d.cwiseProduct(rr.head(k));
+  }
   if (!friction_lcp_.solve(Mlcp, rr)) return false;
   lambda_ = friction_lcp_.z().head(k);
   w_ = friction_lcp_.w().head(k);
+  if (scaled) {
+    lambda_ = d.cwiseProduct(lambda_);
+    w_ = w_.cwiseQuotient(d);
+  }
   // (a copy: z() is a Ref made for this expression, which a Block of it would outlive)
   const VectorXd beta = friction_lcp_.z().segment(k, nb);
   beta_ += beta;
