@@ -43,6 +43,32 @@ bool check_mass_entries(const MatrixXd& M, double& scale, double& asym) {
   return true;
 }
 
+bool check_mass_entries_tree(const MatrixXd& M, const std::vector<Index>& parent, double& scale,
+                             double& asym) {
+  const Index n = M.rows();
+  const double* p = M.data();
+  const Index* up = parent.data();
+  // Σ 0·x is 0 unless an x is NaN or ±Inf; the maxima by compares (maxsd); one pass
+  double zero = 0.0, big = 0.0, worst = 0.0;
+  for (Index k = 0; k < n; ++k) {
+    const double* col = p + k * n;  // M_ak = col[a]
+    const double dk = std::abs(col[k]);
+    zero += col[k] * 0.0;
+    big = dk > big ? dk : big;
+    for (Index a = up[k]; a >= 0; a = up[a]) {
+      const double lower = p[a * n + k], upper = col[a];
+      const double d = std::abs(lower - upper), e = std::max(std::abs(lower), std::abs(upper));
+      zero += lower * 0.0 + upper * 0.0;
+      big = e > big ? e : big;
+      worst = d > worst ? d : worst;
+    }
+  }
+  if (!(zero == 0.0)) return false;
+  scale = big;
+  asym = worst;
+  return true;
+}
+
 bool positive_semidefinite(const System& sys, Workspace& ws, double shift) {
   using Llt = Eigen::internal::llt_inplace<double, Eigen::Lower>;
   if (sys.mass_is_block_diagonal()) {
