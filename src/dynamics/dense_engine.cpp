@@ -48,22 +48,24 @@ bool check_mass_entries_tree(const MatrixXd& M, const std::vector<Index>& parent
   const Index n = M.rows();
   const double* p = M.data();
   const Index* up = parent.data();
-  // Σ 0·x is 0 unless an x is NaN or ±Inf; the maxima by compares (maxsd); one pass
-  double zero = 0.0, big = 0.0, worst = 0.0;
+  // one pass: Σ (M_ka − M_ak) + Σ 0·M_kk is finite unless an entry read is NaN or ±Inf (or the
+  // sum overflows: an asymmetry of order 1e308); the maxima by compares (maxsd). The scale is
+  // max |M_kk|, |M_ka| (the lower entries; the upper ones differ by at most the asymmetry)
+  double sum = 0.0, big = 0.0, worst = 0.0;
   for (Index k = 0; k < n; ++k) {
     const double* col = p + k * n;  // M_ak = col[a]
-    const double dk = std::abs(col[k]);
-    zero += col[k] * 0.0;
-    big = dk > big ? dk : big;
+    const double dk = col[k], ak = std::abs(dk);
+    sum += dk * 0.0;
+    big = ak > big ? ak : big;
     for (Index a = up[k]; a >= 0; a = up[a]) {
-      const double lower = p[a * n + k], upper = col[a];
-      const double d = std::abs(lower - upper), e = std::max(std::abs(lower), std::abs(upper));
-      zero += lower * 0.0 + upper * 0.0;
-      big = e > big ? e : big;
-      worst = d > worst ? d : worst;
+      const double lower = p[a * n + k], d = lower - col[a];
+      const double al = std::abs(lower), ad = std::abs(d);
+      sum += d;
+      big = al > big ? al : big;
+      worst = ad > worst ? ad : worst;
     }
   }
-  if (!(zero == 0.0)) return false;
+  if (!std::isfinite(sum)) return false;
   scale = big;
   asym = worst;
   return true;

@@ -35,10 +35,10 @@ double asymmetry(const MatrixXd& M);
 bool check_mass_entries(const MatrixXd& M, double& scale, double& asym);
 
 /// check_mass_entries for an M declared sparse along the tree `parent` (SystemBuilder::mass_tree:
-/// M_ij = 0 unless one of i, j is an ancestor of the other): the same checks over the diagonal
-/// and the pairs (k, ancestor of k) only — the entries the tree's factorization reads; the others
-/// are zero by the declaration. O(n + Σ_k d_k) instead of O(n²) (the humanoid's 33 × 33 M: 33 +
-/// 285 entries and pairs of 1089, 528).
+/// M_ij = 0 unless one of i, j is an ancestor of the other) over the diagonal and the pairs (k,
+/// ancestor a) only, the entries the tree's factorization reads (scale: max |M_kk|, |M_ka|; an
+/// asymmetry of order 1e308 overflows and reads as non-finite). Cost O(n + Σ_k d_k), d_k the
+/// number of ancestors of k, instead of O(n²).
 bool check_mass_entries_tree(const MatrixXd& M, const std::vector<Index>& parent, double& scale,
                              double& asym);
 
