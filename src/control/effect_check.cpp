@@ -11,7 +11,12 @@ namespace ukdyn {
 ControlStatus check_control(const Controller& ctrl, ControlWorkspace& ws,
                             const Eigen::Ref<const VectorXd>& qd) {
   control_detail::require_same_controller(ctrl, ws, "ukdyn::check_control");
-  FundamentalDecomposition& dp = ws.model.decomposition;
+  return control_detail::check_control_on(ctrl, ws, qd, ws.model.decomposition);
+}
+
+ControlStatus control_detail::check_control_on(const Controller&, ControlWorkspace& ws,
+                                               const Eigen::Ref<const VectorXd>& qd,
+                                               FundamentalDecomposition& dp) {
   // Qc_control = Qc_nominal + Qc_robust
   ws.Qc_control = ws.Qc_nominal + ws.Qc_robust;
   if (ws.model.active_rows > 0) {

@@ -47,6 +47,35 @@ inline void require_same_controller(const Controller& ctrl, const ControlWorkspa
 void apply_law(const Controller& ctrl, ControlWorkspace& ws, const Eigen::Ref<const VectorXd>& r,
                Eigen::Ref<VectorXd> u, Eigen::Ref<VectorXd> Q, Eigen::Ref<VectorXd> minv_Q);
 
+// Stage 3 (solve_law) with mass_factorized: the law's decomposition already holds the factor of
+// this evaluation's M (evaluate_model_fused did it), for the Gauss law fully actuated.
+ControlStatus solve_law_on(const Controller& ctrl, ControlWorkspace& ws,
+                           const Eigen::Ref<const VectorXd>& q,
+                           const Eigen::Ref<const VectorXd>& qd, double t, bool mass_factorized);
+
+// Stage 5 (check_control) with dp, the decomposition that holds the model's M = L Lᵀ (and, with
+// physical constraints, the model's W_p): ws.model.decomposition, or the law's after
+// evaluate_model_fused.
+ControlStatus check_control_on(const Controller& ctrl, ControlWorkspace& ws,
+                               const Eigen::Ref<const VectorXd>& qd, FundamentalDecomposition& dp);
+
+// Whether stage 1 and the law's factorization can be fused (evaluate_model_fused): the Gauss law
+// fully actuated, on a model without constraints and non-ideal forces whose M is factorized
+// densely (no mass tree). Then the law's "mass" is the model's M, a_p = a = M⁻¹ Q, and one
+// Cholesky factor serves the model, the law and the control's effect. Cost O(1).
+bool fused_model(const Controller& ctrl);
+
+// Stage 1 fused with the law's factorization, for fused_model(ctrl): M, Q into ws.model (M,
+// Q, a, qdd = a; model.Qc stays zero), M = L Lᵀ in ws.decomposition, with the dense engine's
+// checks. The same bits as evaluate_model followed by solve_law's own factorization, one
+// Cholesky and no empty constraint stage fewer. False when it does not apply, or when the
+// input or M is one the dense engine would report or complete (non-finite, not symmetric,
+// singular): then the caller runs evaluate_model, which does. Cost O(n³/3) (O(n²) for a
+// constant M after the first). No allocation.
+bool evaluate_model_fused(const Controller& ctrl, ControlWorkspace& ws,
+                          const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd,
+                          double t);
+
 // True when the law runs on (M, X M) — Gauss, fully actuated — rather than on (cost, X S).
 inline bool gauss_direct(const Controller& ctrl) {
   return ctrl.law() == ControlLaw::kGauss && ctrl.fully_actuated();

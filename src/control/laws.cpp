@@ -47,14 +47,21 @@ ControlStatus solve_law(const Controller& ctrl, ControlWorkspace& ws,
                         const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd,
                         double t) {
   control_detail::require_same_controller(ctrl, ws, "ukdyn::solve_law");
+  return control_detail::solve_law_on(ctrl, ws, q, qd, t, false);
+}
+
+ControlStatus control_detail::solve_law_on(const Controller& ctrl, ControlWorkspace& ws,
+                                           const Eigen::Ref<const VectorXd>& q,
+                                           const Eigen::Ref<const VectorXd>& qd, double t,
+                                           bool mass_factorized) {
   const Index m_r = ctrl.requirement_rows();
   const bool physical = ws.model.active_rows > 0;
   FundamentalDecomposition& dp = ws.model.decomposition;  // M = L Lᵀ and W_p of the model
   const MatrixXd& A = ws.req.A;
   double solution_norm = 0.0;  // ‖M⁻¹ Q_c‖ resp. ‖u‖, for the feasibility test
   if (control_detail::gauss_direct(ctrl)) {
-    // mass M (a constant M is factorized once)
-    if (!(ctrl.model().mass_is_constant() && ws.cost_factorized)) {
+    // mass M (a constant M is factorized once; the fused stage 1 factorized it already)
+    if (!mass_factorized && !(ctrl.model().mass_is_constant() && ws.cost_factorized)) {
       ws.decomposition.compute_mass(ws.model.M);
       if (ws.decomposition.info() != Eigen::Success) {
         return control_detail::fail(ws, ControlStatus::kModelFailed, "M", -1, t);

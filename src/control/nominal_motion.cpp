@@ -2,8 +2,13 @@
 // Stage 1 of the control pipeline: the nominal model's physically constrained motion without
 // control, a_p = a + L⁻ᵀ W_p⁺ (b_p − A_p a) (+ its non-ideal part), eq. (9) — the "unconstrained"
 // acceleration that the requirements are then imposed on.
+#include <cmath>
+
 #include "control/internal.hpp"
+#include "dynamics/dense_engine.hpp"
+#include "dynamics/internal.hpp"
 #include "ukdyn/dynamics/forward.hpp"
+#include "ukdyn/linalg/sparse.hpp"
 
 namespace ukdyn {
 
@@ -17,5 +22,52 @@ ControlStatus evaluate_model(const Controller& ctrl, ControlWorkspace& ws,
   }
   return ControlStatus::kOk;
 }
+
+namespace control_detail {
+
+bool fused_model(const Controller& ctrl) {
+  const System& model = ctrl.model();
+  return gauss_direct(ctrl) && model.constraint_count() == 0 && model.nonideal_count() == 0 &&
+         model.mass_tree().empty();
+}
+
+bool evaluate_model_fused(const Controller& ctrl, ControlWorkspace& ws,
+                          const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd,
+                          double t) {
+  if (!fused_model(ctrl)) return false;
+  // (non-finite input: forward_dynamics says which)
+  if (!std::isfinite(t) || detail::first_non_finite(q) >= 0 || detail::first_non_finite(qd) >= 0) {
+    return false;
+  }
+  const System& model = ctrl.model();
+  Workspace& m = ws.model;
+  FundamentalDecomposition& d = ws.decomposition;
+  // M(q, t) and M = L Lᵀ in the law's decomposition, with the dense engine's checks (a constant
+  // M once); anything the dense engine would not factorize as it is (non-finite, not symmetric,
+  // singular) goes to forward_dynamics, which reports or completes it
+  if (!(model.mass_is_constant() && ws.cost_factorized)) {
+    ws.cost_factorized = false;
+    model.mass_matrix(q, t, m.callables.get(), m.M);
+    double scale = 0.0, asym = 0.0;
+    if (!detail::check_mass_entries(m.M, scale, asym) ||
+        asym > m.options().symmetry_tolerance * scale) {
+      return false;
+    }
+    if (d.compute_mass(m.M).info() != Eigen::Success) return false;
+    const auto L = d.matrix_llt().diagonal();
+    for (Index k = 0; k < L.size(); ++k) {
+      if (!SparseDecomposition::pivot_is_regular(L[k] * L[k], m.M(k, k))) return false;
+    }
+    ws.cost_factorized = true;
+  }
+  // Q(q, q', t), a = M⁻¹ Q = a_p (no physical constraints: model.Qc stays zero)
+  model.forces(q, qd, t, m.callables.get(), m.Q);
+  if (!detail::all_finite(m.Q)) return false;
+  d.solve_mass(m.Q, m.a);
+  m.qdd = m.a;
+  return true;
+}
+
+}  // namespace control_detail
 
 }  // namespace ukdyn

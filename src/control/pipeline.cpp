@@ -30,16 +30,19 @@ ControlStatus compute_control(const Controller& ctrl, ControlWorkspace& ws,
   ws.failed_index = -1;
   ws.failed_time = t;
   // a_p → A_r, b_r, e → law → robust term → control force, q'', physical reaction
-  ControlStatus s = evaluate_model(ctrl, ws, q, qd, t);
+  // (stage 1 and the law's factorization of M fused where they factorize the same M)
+  const bool fused = control_detail::evaluate_model_fused(ctrl, ws, q, qd, t);
+  ControlStatus s = fused ? ControlStatus::kOk : evaluate_model(ctrl, ws, q, qd, t);
   if (s != ControlStatus::kOk) return s;
   s = assemble_requirements(ctrl, ws, q, qd, t);
   if (s != ControlStatus::kOk) return s;
-  s = solve_law(ctrl, ws, q, qd, t);
+  s = control_detail::solve_law_on(ctrl, ws, q, qd, t, fused);
   const bool not_met = s == ControlStatus::kRequirementsNotMet;
   if (s != ControlStatus::kOk && !not_met) return s;
   s = apply_robust(ctrl, ws);
   if (s != ControlStatus::kOk && s != ControlStatus::kRequirementsNotMet) return s;
-  s = check_control(ctrl, ws, qd);
+  s = control_detail::check_control_on(ctrl, ws, qd,
+                                       fused ? ws.decomposition : ws.model.decomposition);
   if (s != ControlStatus::kOk && s != ControlStatus::kRequirementsNotMet) return s;
   if (not_met) {
     // a valid least-squares force; the rows missed are in ws.met and ws.residual

@@ -18,6 +18,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <limits>
 #include <memory>
 #include <optional>
@@ -150,6 +151,7 @@ struct ControlledScratch final : CallableScratch {
   const std::vector<signed char>* run_modes = nullptr;
   VectorXd q_last, qd_last;  // (n) the state of the last control evaluation, at t_last
   double t_last = 0.0;
+  bool evaluated = false;  // q_last, qd_last, t_last and cws hold an evaluation
   ControlStatistics stats;
   std::string failure;       // describe_control_status() of the first failure
   std::string pull_failure;  // (ContactModes::settle) a requirement that needs a contact to pull
@@ -169,9 +171,19 @@ void ControlledPlant::force(ControlledScratch& w, const Eigen::Ref<const VectorX
   const Eigen::Ref<const VectorXd> q = xq.head(n), qd = xqd.head(n);
   plant.forces(q, qd, t, w.plant, Q.head(n));
   // the controller's model holds the contacts the run holds
-  w.contacts.mirror(w.run_modes, cws);
-  ControlStatus s = compute_control(ctrl, cws, q, qd, t);
+  // the control at (q, q', t). A run evaluates the state of each sample twice, for the sample
+  // and for the next step's first stage: without contacts (whose modes the run may have changed
+  // in between) the control there is the last one, bit for bit, and is not evaluated again
+  ControlStatus s = cws.status;
+  const bool again = w.evaluated && !w.contacts.any() && t == w.t_last &&
+                     std::memcmp(q.data(), w.q_last.data(), sizeof(double) * std::size_t(n)) == 0 &&
+                     std::memcmp(qd.data(), w.qd_last.data(), sizeof(double) * std::size_t(n)) == 0;
+  if (!again) {
+    w.contacts.mirror(w.run_modes, cws);
+    s = compute_control(ctrl, cws, q, qd, t);
+  }
   ++stats.evaluations;
+  w.evaluated = true;
   // where the control was last evaluated (a failed run's diagnosis looks there)
   w.q_last = q;
   w.qd_last = qd;
@@ -537,6 +549,7 @@ ControlledTrajectory simulate_controlled(
   ControlWorkspace cws(ctrl);
   control_detail::ContactModes sample_contacts(ctrl);
   const std::vector<signed char>* run_modes = nullptr;  // the run's, once it starts
+  const ControlledScratch* run_scratch = nullptr;       // the run's control, once it starts
   std::string pull;
   VectorXd q(n), qd(n), qdd(n);
   // the plant's own workspace, for its kinetic energy at each sample (below)
@@ -602,12 +615,25 @@ ControlledTrajectory simulate_controlled(
 
     // the control at the sample (evaluated afresh at the sample's state)
     qdd = Eigen::Map<const VectorXd>(s.qdd.data(), n);
-    // (with the run's contact modes, as in the run's evaluations)
-    sample_contacts.mirror(run_modes, cws);
-    ControlStatus cs = compute_control(ctrl, cws, q, qd, t);
-    sample_contacts.settle(ctrl, cws, q, qd, t, cs, pull);
+    // (with the run's contact modes, as in the run's evaluations). The run evaluated the
+    // control at the sample's state just before (the sample's q''): without contacts, whose
+    // modes the sample settles on its own, its results are this evaluation's, bit for bit
+    const ControlWorkspace* at_sample = nullptr;
+    if (run_scratch != nullptr && !sample_contacts.any() && run_scratch->t_last == t &&
+        std::memcmp(q.data(), run_scratch->q_last.data(), sizeof(double) * std::size_t(n)) == 0 &&
+        std::memcmp(qd.data(), run_scratch->qd_last.data(), sizeof(double) * std::size_t(n)) == 0 &&
+        (run_scratch->cws.status == ControlStatus::kOk ||
+         run_scratch->cws.status == ControlStatus::kRequirementsNotMet)) {
+      at_sample = &run_scratch->cws;
+    } else {
+      sample_contacts.mirror(run_modes, cws);
+      ControlStatus cs = compute_control(ctrl, cws, q, qd, t);
+      sample_contacts.settle(ctrl, cws, q, qd, t, cs, pull);
+      at_sample = &cws;
+    }
+    const ControlWorkspace& c = *at_sample;
     // errors: phi (holonomic), psi (nonholonomic), A_r q'' − b_r (acceleration form)
-    const VectorXd accel_residual = cws.req.A * qdd - cws.req.b;
+    const VectorXd accel_residual = c.req.A * qdd - c.req.b;
     evaluate_violations(ctrl.requirements(), cws.req, q, qd, t);
     for (Index i = 0; i < m_r; ++i) {
       switch (ctrl.requirement(ctrl.row_requirement(i)).kind()) {
@@ -625,9 +651,9 @@ ControlledTrajectory simulate_controlled(
           break;
       }
     }
-    out.Qc_control.insert(out.Qc_control.end(), cws.Qc_control.data(), cws.Qc_control.data() + n);
-    out.Qc_robust.insert(out.Qc_robust.end(), cws.Qc_robust.data(), cws.Qc_robust.data() + n);
-    out.control_power.push_back(cws.Qc_control.dot(qd));
+    out.Qc_control.insert(out.Qc_control.end(), c.Qc_control.data(), c.Qc_control.data() + n);
+    out.Qc_robust.insert(out.Qc_robust.end(), c.Qc_robust.data(), c.Qc_robust.data() + n);
+    out.control_power.push_back(c.Qc_control.dot(qd));
     out.control_work.push_back(z_dot[kWork]);
     out.control_effort.push_back(z_dot[kEffort]);
     out.control_work_abs.push_back(z_dot[kWorkAbs]);
@@ -655,6 +681,7 @@ ControlledTrajectory simulate_controlled(
         // keeps them), for the control's model in the run's evaluations and at the samples
         run_modes = &ws.activity_override;
         static_cast<ControlledScratch&>(*ws.callables).run_modes = run_modes;
+        run_scratch = &static_cast<ControlledScratch&>(*ws.callables);
       });
   const ControlledScratch& w = *after;
 

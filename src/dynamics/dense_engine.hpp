@@ -34,6 +34,14 @@ double asymmetry(const MatrixXd& M);
 /// values of M.cwiseAbs().maxCoeff() and asymmetry(M). O(n²), one read of each entry.
 bool check_mass_entries(const MatrixXd& M, double& scale, double& asym);
 
+/// check_mass_entries for an M declared sparse along the tree `parent` (SystemBuilder::mass_tree:
+/// M_ij = 0 unless one of i, j is an ancestor of the other) over the diagonal and the pairs (k,
+/// ancestor a) only, the entries the tree's factorization reads (scale: max |M_kk|, |M_ka|; an
+/// asymmetry of order 1e308 overflows and reads as non-finite). Cost O(n + Σ_k d_k), d_k the
+/// number of ancestors of k, instead of O(n²).
+bool check_mass_entries_tree(const MatrixXd& M, const std::vector<Index>& parent, double& scale,
+                             double& asym);
+
 /// Whether M + shift I is positive definite (M positive semi-definite to within shift), block
 /// by block when the system gives M as diagonal blocks (O(Σ size³) instead of O(n³)); uses the
 /// lower triangle of ws.M_aux as scratch. Once M was found singular, the constant blocks and
@@ -61,7 +69,15 @@ class DenseEngine final : public EngineOps {
     ws.mass_factorized = false;
     sys.mass_matrix(q, t, ws.callables.get(), ws.M);
     double scale = 0.0, asym = 0.0;
-    if (!check_mass_entries(ws.M, scale, asym)) {
+    bool finite = false;
+    if constexpr (std::is_same_v<D, FundamentalDecomposition>) {
+      const auto& tree = ws.decomposition.mass_tree();
+      finite = tree.empty() ? check_mass_entries(ws.M, scale, asym)
+                            : check_mass_entries_tree(ws.M, tree, scale, asym);
+    } else {
+      finite = check_mass_entries(ws.M, scale, asym);
+    }
+    if (!finite) {
       return fail(ws, Status::kNonFiniteInput, "M", -1, t);
     }
     if (asym > ws.options().symmetry_tolerance * scale) {

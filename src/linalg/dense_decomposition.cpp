@@ -119,6 +119,7 @@ void FundamentalDecomposition::resize(Index n, Index m) {
   inv_tdiag_.resize(m);
   row_scale_.setOnes(m);
   if (Index(parent_.size()) != n) parent_.clear();
+  if (!parent_.empty()) L_.setZero();  // (the tree's factor writes only its pattern)
   rank_ = 0;
   max_pivot_ = 0.0;
   info_ = Eigen::InvalidInput;
@@ -151,6 +152,8 @@ FundamentalDecomposition& FundamentalDecomposition::set_mass_tree(
     }
   }
   parent_ = parent;  // (an empty parent keeps the capacity: no allocation)
+  // the tree's factor writes L only on its pattern: the rest of its lower triangle stays zero
+  if (!parent_.empty()) L_.setZero();
   return *this;
 }
 
@@ -158,9 +161,10 @@ FundamentalDecomposition& FundamentalDecomposition::compute_mass(
     const Eigen::Ref<const MatrixXd>& M) {
   UKDYN_CHECK(M.rows() == n_ && M.cols() == n_, "compute_mass: M has the wrong size");
   if (!parent_.empty()) {
-    // M = Lᵀ L along the tree's branches (linalg/tree_ltl.hpp), 1 / L_kk for the solves
-    L_ = M;
-    const bool ok = detail::tree_ltl_in_place(L_.data(), parent_.data(), inv_ldiag_.data(), n_);
+    // M = Lᵀ L along the tree's branches (linalg/tree_ltl.hpp), 1 / L_kk for the solves; M is
+    // read on its pattern only (no copy of all n² entries)
+    const bool ok = detail::tree_ltl(M.data(), M.outerStride(), L_.data(), parent_.data(),
+                                     inv_ldiag_.data(), n_);
     info_ = ok ? Eigen::Success : Eigen::NumericalIssue;
     return *this;
   }

@@ -15,6 +15,10 @@ inline void axmy(double a, const double* __restrict x, double* __restrict y, Ind
 }  // namespace
 
 bool tree_ltl_in_place(double* H, const Index* parent, double* inv, Index n) {
+  return tree_ltl(H, n, H, parent, inv, n);
+}
+
+bool tree_ltl(const double* M, Index ldm, double* H, const Index* parent, double* inv, Index n) {
   // Row k of L has entries only at k and at its ancestors a_0 = λ(k), a_1 = λ(a_0), …, a_{d−1}
   // (d = d_k < k + 1): they are packed, nearest ancestor first, into the upper part of column k
   // (H[0 … d−1 + k n], which the factor does not use), so that row i = a_m, whose ancestors are
@@ -22,10 +26,12 @@ bool tree_ltl_in_place(double* H, const Index* parent, double* inv, Index n) {
   // i by row k is one contiguous axpy (MuJoCo's layout; the walks along the strided lower
   // triangle were pointer chases). The same operations in the same order as walking the lower
   // triangle: the same bits.
+  // (from M: its diagonal and the entries M_k,a_m; the factor reads no other)
   for (Index k = 0; k < n; ++k) {
     double* row = H + k * n;
     Index m = 0;
-    for (Index i = parent[k]; i >= 0; i = parent[i]) row[m++] = H[k + i * n];
+    for (Index i = parent[k]; i >= 0; i = parent[i]) row[m++] = M[k + i * ldm];
+    H[k + k * n] = M[k + k * ldm];
   }
   // leaves first: L_kk = sqrt(H_kk), L_ki = H_ki / L_kk for the ancestors i of k, then
   // H_ij −= L_ki L_kj for the ancestors i of k and j of i (j = i included)

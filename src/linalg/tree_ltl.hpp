@@ -27,6 +27,13 @@ namespace ukdyn::detail {
 /// O(Σ_k d_k²).
 bool tree_ltl_in_place(double* H, const Index* parent, double* inv, Index n);
 
+/// tree_ltl_in_place reading M from another matrix M (n × n, column-major, leading dimension
+/// ldm): only its diagonal and its entries M_ka at the ancestors a of k are read, and only the
+/// diagonal, the packed rows and the factor's entries of H are written — the rest of H's lower
+/// triangle is left as it is (zero, for a factor L). The same bits as copying M into H and
+/// factorizing in place, without the O(n²) copy. Cost O(n + Σ_k d_k²).
+bool tree_ltl(const double* M, Index ldm, double* H, const Index* parent, double* inv, Index n);
+
 /// The solves and the product take the L that tree_ltl_in_place left (they read the rows it
 /// packed in the upper triangle).
 /// x ← L⁻ᵀ x (= F⁻¹ x, the role of L⁻¹ in a dense M = L Lᵀ). Cost O(Σ_k d_k).

@@ -4,6 +4,7 @@
 // product of the fundamental equation equals the dense Cholesky path's to 1e-12 on the Panda
 // and on the floating-base humanoid; bad trees are refused with their coordinate named.
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -316,6 +317,67 @@ TEST(TreeLtl, SingularMassFallsBackToTheDenseCompletion) {
   ASSERT_EQ(forward_dynamics(sys, ws, q, qd, 0.1), Status::kOk);
   EXPECT_NEAR(ws.qdd[0], 2.5, 1e-12);
   EXPECT_NEAR(ws.qdd[1], 3.0, 1e-12);
+}
+
+// the dense engine checks a mass tree's M over its pattern (the diagonal and each coordinate's
+// pairs with its ancestors, the entries the factorization reads): an asymmetric pair or a NaN
+// there is reported as for a dense M; the scale of the symmetry test is the largest entry
+TEST(TreeLtl, MassChecksReadTheTreesPattern) {
+  // coordinates 0 ← 1, 0 ← 2 (1 and 2 on different branches: M_12 = 0)
+  const auto run = [](const MatrixXd& M) {
+    const System sys =
+        SystemBuilder(3)
+            .mass_matrix([M](const Eigen::Ref<const VectorXd>&, double, Eigen::Ref<MatrixXd> out) {
+              out = M;
+            })
+            .forces([](const Eigen::Ref<const VectorXd>&, const Eigen::Ref<const VectorXd>&, double,
+                       Eigen::Ref<VectorXd> Q) { Q << 1.0, 2.0, 3.0; })
+            .mass_tree({-1, 0, 0})
+            .build();
+    SolverOptions o;
+    o.engine = Engine::kDense;
+    Workspace ws(sys, o);
+    const Status s = forward_dynamics(sys, ws, VectorXd::Zero(3), VectorXd::Zero(3), 0.0);
+    return std::make_pair(s, std::string(ws.failed_quantity) + " ");
+  };
+  MatrixXd M(3, 3);
+  M << 4.0, 1.0, 2.0, 1.0, 3.0, 0.0, 2.0, 0.0, 5.0;
+  {
+    const auto [s, what] = run(M);
+    EXPECT_EQ(s, Status::kOk) << what;
+  }
+  // q'' = M⁻¹ Q, against Eigen's LLT
+  {
+    const System sys =
+        SystemBuilder(3)
+            .mass_matrix(M)
+            .forces([](const Eigen::Ref<const VectorXd>&, const Eigen::Ref<const VectorXd>&, double,
+                       Eigen::Ref<VectorXd> Q) { Q << 1.0, 2.0, 3.0; })
+            .mass_tree({-1, 0, 0})
+            .build();
+    SolverOptions o;
+    o.engine = Engine::kDense;
+    Workspace ws(sys, o);
+    ASSERT_EQ(forward_dynamics(sys, ws, VectorXd::Zero(3), VectorXd::Zero(3), 0.0), Status::kOk);
+    const VectorXd expected = M.llt().solve(Vector3d(1.0, 2.0, 3.0));
+    EXPECT_LT((ws.qdd - expected).norm(), 1e-15 * expected.norm());
+  }
+  // an asymmetric pair on a branch (M_20 against M_02): 1e-11 of the largest entry, 5
+  MatrixXd A = M;
+  A(2, 0) += 5e-11;
+  EXPECT_EQ(run(A).first, Status::kMassNotSymmetric) << run(A).second;
+  // below the tolerance (1e-12 · 5)
+  A = M;
+  A(2, 0) += 4e-12;
+  EXPECT_EQ(run(A).first, Status::kOk) << run(A).second;
+  // a NaN on the diagonal and above it on a branch
+  for (const auto& [i, j] : {std::pair<Index, Index>{1, 1}, {0, 2}}) {
+    A = M;
+    A(i, j) = std::numeric_limits<double>::quiet_NaN();
+    const auto [s, what] = run(A);
+    EXPECT_EQ(s, Status::kNonFiniteInput) << i << j;
+    EXPECT_EQ(what.substr(0, 2), "M ") << what;
+  }
 }
 
 TEST(TreeLtl, BadTreesAreRefusedNamingTheCoordinate) {

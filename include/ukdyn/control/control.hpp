@@ -338,9 +338,9 @@ class ControlWorkspace {
   std::uint64_t controller_id() const { return controller_id_; }
 
   // --- stage 1, evaluate_model -----------------------------------------------------------
-  /// The nominal model's own evaluation (forward_dynamics): M, its Cholesky factor, a_p =
-  /// model.qdd (physically constrained, without control), model.Qc (physical reaction without
-  /// control), the decomposition of A_p.
+  /// The nominal model's evaluation (forward_dynamics): M, Q, a_p = model.qdd (constrained,
+  /// without control), model.Qc, M's factor and A_p's decomposition — under the Gauss law on a
+  /// model without constraints M = L Lᵀ is in `decomposition` below (stages 1, 3 share it).
   Workspace model;
   // --- stage 2, assemble_requirements ----------------------------------------------------
   /// The requirements' evaluation: req.A = A_r (m_r × n), req.b = b_r (m_r, with the error
