@@ -164,6 +164,31 @@ class Run {
   // after a switch event at t: true when the run chatters (`message` then says so)
   bool switch_chatters(double t, std::string& message);
 
+  // --- a restart at a dead centre (run_events.cpp; docs/reliability.md, "Open") -------------
+  // The rank margin (Workspace::rank_margin) of the constraints active now at (t, x), from an
+  // evaluation in the branch check's workspace; NaN when none (Algorithm::kTextbook). Cost: one
+  // evaluation.
+  double rank_margin_at(double t, const double* x);
+  // A restart at (t, x) — a switch event, a release or an activation — where the constraints
+  // nearly lose rank is bridged past the pose: near it the
+  // constraints hold the branch only to the position tolerance ε (the twin arms' θ₁² − θ₂²),
+  // and a state within about √ε of it is as near the mirror branch as its own, so a restart
+  // there — its projection, or its first short steps — can take the mirror branch. Below
+  // kCarriedMargin (where a contact carried through a dead centre restarts) the bridge
+  // keeps q' (the branch is fixed by the velocity, which the degenerate velocity constraint
+  // cannot fix) and steps over the pose to t + h, the first h (doubled from 1e-12 |t|) where the
+  // margin is back to kCarriedMargin, by q(t+h) = q + h q' + h²/2 q''(t+h), q'(t+h) = q' + h
+  // q''(t+h) (W likewise), q'' evaluated at the landing only (projected onto the constraints
+  // there), then projected: its error O(h² q''') in q'. Returns t + h with x the state there, or
+  // t (x unchanged) when the restart is not at a rank drop or no h ≤ h_max (and < b − t)
+  // reaches the margin. `status` is the landing projection's (kOk otherwise). Cost: about
+  // 25 evaluations at a bridged restart, one otherwise.
+  double bridge_dead_centre(double t, double b, double h_max, double* x, ConstrainedOde& ode,
+                            Status& status);
+  // the state of the last bridge at s in [its start, its end] (by the bridge's formula) into
+  // out (size of x): the samples it steps over
+  void bridged_state(double s, double* out) const;
+
   // --- Coulomb contacts: stick, slide, or slide through v_rel = 0 (run_stick_slip.cpp;
   // docs/friction.md) ---------------------------------------------------------------------------
   // the friction force while sliding, the stick constraint while sticking
@@ -359,6 +384,11 @@ class Run {
   std::vector<unsigned char> flipped_ = std::vector<unsigned char>(std::size_t(switches_), 0);
   bool flipped(std::size_t i) const { return flipped_[i] != 0; }  // at the last switch event
   double switch_width_ = 0.0;  // hi − lo of the last switch event's bracket
+  // the last bridge over a dead centre (bridge_dead_centre): its start time and state, and the
+  // rate x' at its landing (size of x)
+  double bridge_t_ = 0.0;
+  std::vector<double> bridge_x_ = std::vector<double>(sample_.size());
+  std::vector<double> bridge_rate_ = std::vector<double>(sample_.size());
   // the switch that opened the window of the crawl test (NaN: none open), and the accepted
   // steps since then (up to kSwitchBurst)
   double window_start_ = std::numeric_limits<double>::quiet_NaN();

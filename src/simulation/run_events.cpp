@@ -120,7 +120,7 @@ double Run::find_event(double t0, const double* x0, double t1, const double* x1,
     steps_since_switch_ = 0;
   }
   double hi = t1;
-  const double ts = find_switch(t0, x0, t1, x1, dense, hi);
+  double ts = find_switch(t0, x0, t1, x1, dense, hi);
   approach_ = false;
   if (!std::isnan(ts) && (std::isnan(first) || ts < first)) {
     switch_event_ = true;
@@ -130,9 +130,21 @@ double Run::find_event(double t0, const double* x0, double t1, const double* x1,
     // stages are not exact even for a quadratic motion: an error h·b·jump). So the run first
     // restarts 3/4 of the way, where every stage is clearly on the old side, and finds the
     // switch again from there, until the step to it is below kSwitchApproach (|t| ≥ 1)
+    // (not at a dead centre, where the constraints nearly lose rank: restarts closing in on
+    // the pose can take the mirror branch; the restart at ts is bridged past the pose
+    // instead, see bridge_dead_centre)
+    bool at_rank_drop = false;
     if (ts - t0 > kSwitchApproach * std::max(1.0, std::abs(ts))) {
-      approach_ = true;
-      return ts - 0.25 * (ts - t0);
+      dense(ts, event_x_.data());
+      at_rank_drop = rank_margin_at(ts, event_x_.data()) < kCarriedMargin;
+      if (!at_rank_drop) {
+        approach_ = true;
+        return ts - 0.25 * (ts - t0);
+      }
+      // the step crossed the pose to where the margin is back: the switch takes effect at its
+      // end (the step's stages on both sides, its error accepted: at a dead centre the
+      // switch's lever on the motion vanishes), no restart inside the pose's neighbourhood
+      if (rank_margin_at(t1, x1) >= kCarriedMargin) ts = hi = t1;
     }
     switch_width_ = hi - ts;
     // (a switch opens the crawl test's window, or keeps the one a burst opened within the span)
@@ -152,7 +164,7 @@ double Run::find_event(double t0, const double* x0, double t1, const double* x1,
         furthest = m;
         switch_fired_ = i;
       }
-      const bool flip = m <= 0.0 || landed_;
+      const bool flip = m <= 0.0 || landed_ || (at_rank_drop && hi == t1);
       flipped_[i] = flip ? 1 : 0;
       if (flip) side_[i] = static_cast<signed char>(-side_[i]);
     }
@@ -284,6 +296,66 @@ bool Run::switch_chatters(double t, std::string& message) {
                                 " sign changes (the last of " + name +
                                 ") between t = " + format(oldest) + " and " + format(t) + advice;
   return true;
+}
+
+// the rank margin of the constraints active now at (t, x) (see run.hpp)
+double Run::rank_margin_at(double t, const double* x) {
+  q_ = Eigen::Map<const VectorXd>(x, n_);
+  qd_ = Eigen::Map<const VectorXd>(x + n_, n_);
+  Workspace& w = branch_workspace();
+  forward_dynamics(sys_, w, q_, qd_, t);  // (the margin is that of A, whatever the status)
+  // (a rank already dropped: the margin is that of the rows kept, as if none were about to go)
+  return w.rank < w.active_rows ? 0.0 : w.rank_margin;
+}
+
+// A restart at a dead centre, bridged past the pose (see run.hpp)
+double Run::bridge_dead_centre(double t, double b, double h_max, double* x, ConstrainedOde& ode,
+                               Status& status) {
+  status = Status::kOk;
+  if (!(rank_margin_at(t, x) < kCarriedMargin)) return t;
+  const Index size = ode.size();
+  bridge_x_.assign(x, x + size);
+  bridge_rate_.resize(std::size_t(size));
+  trial_.resize(std::size_t(size));
+  const Eigen::Map<const VectorXd> q0(bridge_x_.data(), n_), qd0(bridge_x_.data() + n_, n_);
+  ProjectionOptions all = o_.projection;
+  // the landing: the first h (doubled) where q + h q', projected, has the margin back to
+  // kCarriedMargin
+  h_max = std::min(h_max, 0.5 * (b - t));
+  double h = 1e-12 * std::max(1.0, std::abs(t));
+  for (; h <= h_max; h *= 2.0) {
+    std::copy(bridge_x_.begin(), bridge_x_.end(), trial_.begin());
+    q_ = q0 + h * qd0;
+    // (the margin on the constraints: off them, the rows of a dead centre need not coincide)
+    if (project_positions(sys_, ws_, q_, t + h, all).status != Status::kOk) continue;
+    Eigen::Map<VectorXd>(trial_.data(), n_) = q_;
+    if (rank_margin_at(t + h, trial_.data()) >= kCarriedMargin) break;
+  }
+  if (!(h <= h_max)) return t;
+  // q'' at the landing, on the constraints there
+  bool changed = false;
+  if ((status = project(t + h, trial_.data(), all, changed)) != Status::kOk) return t;
+  if (!ode(trial_.data(), bridge_rate_.data(), t + h)) {
+    ode.clear_failure();
+    return t;
+  }
+  // the bridge: q' kept, q'' from the landing
+  bridge_t_ = t;
+  bridged_state(t + h, x);
+  if ((status = project(t + h, x, all, changed)) != Status::kOk) return t;
+  return t + h;
+}
+
+// the state of the last bridge at s (see run.hpp)
+void Run::bridged_state(double s, double* out) const {
+  const double tau = s - bridge_t_;
+  const std::size_t n = std::size_t(n_);
+  for (std::size_t i = 0; i < n; ++i) {
+    out[i] = bridge_x_[i] + tau * bridge_x_[n + i] + 0.5 * tau * tau * bridge_rate_[n + i];
+  }
+  for (std::size_t i = n; i < bridge_x_.size(); ++i) {
+    out[i] = bridge_x_[i] + tau * bridge_rate_[i];
+  }
 }
 
 }  // namespace ukdyn::detail

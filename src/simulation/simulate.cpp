@@ -311,6 +311,25 @@ Trajectory detail::simulate_observed(const System& sys, const Eigen::Ref<const V
   bool after_event = false;          // the integrator restarts at an event
   std::vector<double> nudge, trial;  // (size of x) f and the state past a switch event
   std::size_t next_sample = 0;
+  // a restart at a dead centre bridged past it (Run::bridge_dead_centre): at most this long;
+  // the samples it steps over, in (from, to], from the bridge's formula (false: recording failed,
+  // with the status and time)
+  const double bridge_limit = 1e-3 * (o.t_end - o.t_start);
+  Status bridge_status = Status::kOk;
+  double bridge_time = 0.0;
+  std::vector<double> x_bridged(x.size());
+  auto record_bridged = [&](double from, double to) {
+    for (; next_sample < samples.size() && samples[next_sample] <= to; ++next_sample) {
+      if (samples[next_sample] <= from) continue;
+      run.bridged_state(samples[next_sample], x_bridged.data());
+      if (const Status s = run.record(samples[next_sample], x_bridged.data()); s != Status::kOk) {
+        bridge_status = s;
+        bridge_time = samples[next_sample];
+        return false;
+      }
+    }
+    return true;
+  };
   run.initial_contact_modes(o.t_start, x.data());
   run.initial_switch_sides(o.t_start, x.data());
   for (std::size_t seg = 0; seg + 1 < ends.size(); ++seg) {
@@ -322,11 +341,23 @@ Trajectory detail::simulate_observed(const System& sys, const Eigen::Ref<const V
     }
     run.apply_contact_modes();
     if (contacts.any()) contacts.apply();
-    // a constraint that switches on finds the state inconsistent: project onto it
+    // evaluations at a breakpoint end are one-sided (the run's own ends are not breakpoints)
+    const double inf = std::numeric_limits<double>::infinity();
+    ode.set_window(seg == 0 ? -inf : a, seg + 2 == ends.size() ? inf : b);
+    // a constraint that switches on finds the state inconsistent: project onto it (at a dead
+    // centre, bridged past it instead: Run::bridge_dead_centre)
     bool changed = false;
     if (seg > 0 && sys.constraint_count() > 0) {
-      ProjectionOptions all = o.projection;
-      if (const Status s = run.project(a, x.data(), all, changed); s != Status::kOk) {
+      Status s = Status::kOk;
+      if (const double past = run.bridge_dead_centre(a, b, bridge_limit, x.data(), ode, s);
+          s == Status::kOk && past > a) {
+        if (!record_bridged(a, past)) return finish(bridge_status, run.failure(), bridge_time);
+        a = past;
+      } else if (s == Status::kOk) {
+        ProjectionOptions all = o.projection;
+        s = run.project(a, x.data(), all, changed);
+      }
+      if (s != Status::kOk) {
         return finish(s, run.failure().empty() ? describe_status(sys, ws) : run.failure(), a);
       }
     }
@@ -337,9 +368,6 @@ Trajectory detail::simulate_observed(const System& sys, const Eigen::Ref<const V
       }
       ++next_sample;
     }
-    // evaluations at a breakpoint end are one-sided (the run's own ends are not breakpoints)
-    const double inf = std::numeric_limits<double>::infinity();
-    ode.set_window(seg == 0 ? -inf : a, seg + 2 == ends.size() ? inf : b);
     // [a, b], restarted after every stick/slip event and stiffness switch; the segment starts
     // with the chosen method, and goes on with BDF once dopri5 finds it stiff until the next
     // event (a switch of the dynamics) or the segment's end
@@ -514,11 +542,20 @@ Trajectory detail::simulate_observed(const System& sys, const Eigen::Ref<const V
         if (run.switch_chatters(r.t_reached, chatter)) {
           return finish(Status::kIntegratorFailure, chatter, r.t_reached);
         }
-        if (const Status s = run.project_drift(r.t_reached, x.data()); s != Status::kOk) {
+        // (at a dead centre: bridged past it, Run::bridge_dead_centre)
+        Status s = Status::kOk;
+        a = run.bridge_dead_centre(r.t_reached, b, bridge_limit, x.data(), ode, s);
+        if (s == Status::kOk && a > r.t_reached) {
+          if (!record_bridged(r.t_reached, a)) {
+            return finish(bridge_status, run.failure(), bridge_time);
+          }
+        } else if (s == Status::kOk) {
+          s = run.project_drift(r.t_reached, x.data());
+        }
+        if (s != Status::kOk) {
           return finish(s, run.failure().empty() ? describe_status(sys, ws) : run.failure(),
                         r.t_reached);
         }
-        a = r.t_reached;
         // the restart state lies just before the switch (every stage of the step to it on the
         // old side); the next step's first stage must see the new side: x ← x + δ f(a, x), δ
         // from the bracket's width, doubled until the switched functions are across (an error

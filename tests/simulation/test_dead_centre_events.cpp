@@ -45,8 +45,9 @@ Trajectory reduced_motion(double mu, double th0, double t_end = 3.0, double ever
 }
 
 // The twin arms' run tr follows the reduced model's motion ref (the same samples): |th1 − th2|
-// below 3e-8 and th1 within 5e-7 of th at every sample
-void expect_follows(const Model& m, const Trajectory& tr, const Trajectory& ref) {
+// below 3e-8 and th1 within `tolerance` of th at every sample
+void expect_follows(const Model& m, const Trajectory& tr, const Trajectory& ref,
+                    double tolerance = 5e-7) {
   ASSERT_EQ(tr.samples(), ref.samples());
   double asymmetry = 0.0, worst = 0.0;
   for (Index i = 0; i < tr.samples(); ++i) {
@@ -54,7 +55,7 @@ void expect_follows(const Model& m, const Trajectory& tr, const Trajectory& ref)
     worst = std::max(worst, std::abs(coord(m, tr, "th1", i) - ref.q[std::size_t(i)]));
   }
   EXPECT_LT(asymmetry, 3e-8);
-  EXPECT_LT(worst, 5e-7);
+  EXPECT_LT(worst, tolerance);
 }
 
 // tr stopped with the cause named: it left its branch at a singular configuration
@@ -67,17 +68,20 @@ void expect_stopped_off_the_branch(const Trajectory& tr) {
 }
 
 // The sleeve's friction as the force −mu P sign(zs_dot): its switch events fall at the dead
-// centre (zs_dot = Z'(th) th_dot vanishes with Z'(0) = 0) and at the turning points. A restart
-// at the dead centre takes one arm onto the mirror branch (|th1 − th2| 5.5e-3 to 0.53 rad) on
-// every adaptive integrator; not restarting there (the switch stepped across, as with
-// switch_events: false) still leaves the branch at mu = 0.5 with status ok (0.039 rad), since
-// the switch's kink, resolved by the step-size control, draws the steps into the dead centre's
-// neighbourhood — a Coulomb contact is carried through it instead, which a switch of an
-// expression cannot be yet (docs/reliability.md, "Open"). What holds: no such run ends ok off
-// its branch. Each either follows the symmetric motion or stops with the cause, at the first
-// passages of the bottom (Run::leaves_branch).
+// centre (zs_dot = Z'(th) th_dot vanishes with Z'(0) = 0) and at the turning points. Restarts
+// at the dead centre — the approach to the switch closing in on the pose, then the restart at
+// it — took one arm onto the mirror branch (|th1 − th2| 5.5e-3 to 0.53 rad) on every adaptive
+// integrator. Now a switch where the rank margin is below kCarriedMargin is not approached: it
+// takes effect at the end of the step that crossed it when the margin is back there, else the
+// restart is bridged past the pose (Run::bridge_dead_centre). At mu = 0 (the switch changes no
+// force; before, all three stopped with the cause at the first passage) every adaptive
+// integrator now keeps the branch with its energy conserved, and rkf78 keeps it at every mu
+// (BDF at mu = 0.3 too, not pinned). What remains open
+// (docs/reliability.md): at mu > 0 the switch's kink draws dopri5's and BDF's steps into the
+// pose's neighbourhood on the slower passages (dopri5 at mu = 0.1 from t = 1.04 s, 0.5 from
+// 1.75 s); such a run stops there with the cause, never ok off its branch.
 TEST(DeadCentreEvents, ASwitchAtADeadCentreKeepsTheBranchOrStopsWithTheCause) {
-  for (const double mu : {0.1, 0.3, 0.5}) {
+  for (const double mu : {0.0, 0.1, 0.3, 0.5}) {
     const Model m = load_model(kData + "twin_arms_sign_force.yaml", {{"mu", mu}});
     const Trajectory ref = reduced_motion(mu, 0.3);
     for (const Integrator method : {Integrator::kDopri5, Integrator::kRKF78, Integrator::kBDF}) {
@@ -85,13 +89,24 @@ TEST(DeadCentreEvents, ASwitchAtADeadCentreKeepsTheBranchOrStopsWithTheCause) {
       SimulationOptions o = m.options;
       o.integrator = method;
       const Trajectory tr = simulate(m.system, m.q0, m.qd0, o);
-      if (tr.stats.status != Status::kOk) {
+      // (kept: mu = 0 on every adaptive integrator, rkf78 at every mu)
+      const bool kept = mu == 0.0 || method == Integrator::kRKF78;
+      if (!kept && tr.stats.status != Status::kOk) {
         expect_stopped_off_the_branch(tr);
-        // (at a passage of the bottom: t = 0.22 … 0.33 s, rkf78 at mu = 0.1 1.86 s)
-        EXPECT_LT(tr.stats.t_reached, 2.0);
+        // (at a passage of the bottom after the first: t = 1.04 … 2.38 s)
+        EXPECT_GT(tr.stats.t_reached, 0.2);
+        EXPECT_LT(tr.stats.t_reached, 3.0);
         continue;
       }
-      expect_follows(m, tr, ref);
+      ASSERT_EQ(tr.stats.status, Status::kOk) << tr.stats.message;
+      EXPECT_EQ(tr.stats.t_reached, 3.0);
+      // (a switch at each passage of the bottom and each turning point: 14 in 3 s)
+      EXPECT_GE(tr.stats.switch_events, 10);
+      // (th within 5e-7 of the reduced model at mu = 0; at mu > 0 within 3.7e-6: the step that
+      // crosses the switch at the pose takes its stages on both sides)
+      expect_follows(m, tr, ref, mu == 0.0 ? 5e-7 : 5e-6);
+      EXPECT_LT(std::abs(tr.stats.energy_balance), 1e-6);
+      if (mu == 0.0) EXPECT_NEAR(tr.energy.back(), tr.energy[0], 1e-6 * std::abs(tr.energy[0]));
     }
   }
 }
