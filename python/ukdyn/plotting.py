@@ -655,4 +655,9 @@ def main(argv=None):
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    # out without the interpreter's teardown of matplotlib's objects, which took 0.2 s of the
+    # pendulum's 1.1 s (every file is closed and renamed by now)
+    code = main()
+    sys.stdout.flush()
+    sys.stderr.flush()
+    os._exit(code)
