@@ -1,12 +1,14 @@
 # SPDX-License-Identifier: BSD-3-Clause
 """The plots' layout (part of ukdyn/plotting.py; imports nothing of ukdyn: the command runs it as
 a script beside plotting.py): :class:`FixedLayout`, a matplotlib layout engine that places a
-figure's grid of panels from one measurement of what sticks out of each panel — tick labels,
-axis labels, titles, a legend beside it — instead of matplotlib's constrained layout, which
-measures twice and solves a constraint system at every draw (about half of each savefig of the
-plots; bench/RESULTS.md, "Plotting time of `ukdyn run`").
+figure's grid of panels from what sticks out of each panel — tick labels, axis labels,
+titles, a legend beside it — measured, placed, and measured and placed again; :func:`settle`
+does it once before the figure is saved and takes the engine away, so that savefig draws the
+figure once. matplotlib's constrained layout, in its place before, ran in both of the draws that
+savefig makes with a layout engine, measuring every panel twice in each (about half of each
+savefig of the plots; bench/RESULTS.md, "Plotting time of `ukdyn run`").
 
-The result is the constrained layout's: every label inside the canvas, the panels of a column
+The result is like the constrained layout's: every label inside the canvas, the panels of a column
 as wide as each other and aligned, the rows as high as each other (or in the grid's height
 ratios), the figure's title above them. What it does not do: colour bars, nested grids, figure
 legends (the plots have none)."""
@@ -26,9 +28,10 @@ SLACK = 2.0 / 72.0
 
 class FixedLayout(LayoutEngine):
     """Places the panels of a figure made on one grid (plt.subplots, fig.add_gridspec): margins
-    measured once per draw from each panel's tight box (``get_tightbbox``, for layout only) at
-    its present position, then the columns and rows share what is left. Cost: one tight box per
-    panel, about a third of the constrained layout's."""
+    measured from each panel's tight box (``get_tightbbox``, for layout only) at its present
+    position, then the columns and rows share what is left; two rounds. Cost: two tight boxes
+    per panel, the second cheap (the ticks exist by then); the constrained layout made four per
+    saved file."""
 
     _adjust_compatible = False
     _colorbar_gridspec = False
