@@ -109,7 +109,7 @@ def joint_reactions_figure(table, meta, kit):
     style = kit.current_style()
     plt = kit._plt()
     fig = plt.figure(figsize=(style["width"], style["row_height"] * rows + 0.3),
-                     layout="constrained", dpi=kit.DPI)
+                     layout=kit._layout(), dpi=kit.DPI)
     grid = fig.add_gridspec(rows, width)
     first = None
 
