@@ -5,7 +5,7 @@ the Python module.
 
 The command embeds this file and runs it as a script on the run's directory::
 
-    plotting.py TRAJECTORY.csv OUTPUT_DIR [FORMATS [STYLE]]
+    plotting.py [--wait] TRAJECTORY.csv OUTPUT_DIR [FORMATS [STYLE]]
 
 (``FORMATS``: ``png``, ``pdf``, ``svg`` or a comma-separated list of them; ``png`` by default;
 ``STYLE``: ``screen``, the default, or ``paper`` — see :data:`STYLES`).
@@ -636,10 +636,17 @@ def write_figures(table, meta, directory, formats=("png",), close=True, style_na
 
 
 def main(argv=None):
-    """The command: plotting.py TRAJECTORY.csv OUTPUT_DIR [FORMATS [STYLE]]."""
+    """The command: plotting.py [--wait] TRAJECTORY.csv OUTPUT_DIR [FORMATS [STYLE]]. With
+    ``--wait`` (the command, which starts the script before its simulation so that the imports
+    overlap the run), the script imports what it needs, then reads a line from its standard
+    input: ``go``, the files are written, draw them; end of input (the run failed), leave
+    without drawing (exit 0)."""
     argv = sys.argv[1:] if argv is None else argv
+    wait = bool(argv) and argv[0] == "--wait"
+    argv = argv[1:] if wait else argv
     if len(argv) not in (2, 3, 4):
-        sys.stderr.write("usage: plotting.py TRAJECTORY.csv OUTPUT_DIR [png,pdf,svg [screen|paper]]\n")
+        sys.stderr.write("usage: plotting.py [--wait] TRAJECTORY.csv OUTPUT_DIR "
+                         "[png,pdf,svg [screen|paper]]\n")
         return 2
     style_name = argv[3] if len(argv) == 4 else "screen"
     try:
@@ -657,6 +664,11 @@ def main(argv=None):
     except ImportError:
         sys.stderr.write("plotting.py: matplotlib is not installed\n")
         return 3
+    if wait:
+        for part in ("plotting_layout", "plotting_control", "plotting_reactions"):
+            _module(part)  # (imported now, while the run goes on)
+        if sys.stdin.readline().strip() != "go":
+            return 0  # the run wrote no files to draw
     table = read_csv(argv[0])
     if "t" not in table or len(table["t"]) == 0:
         return 0  # a run that recorded no sample: nothing to draw
