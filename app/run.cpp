@@ -10,6 +10,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <memory>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -56,28 +57,43 @@ void warn_duplicate_columns(const ModelRun& run) {
   }
 }
 
-// writes the plots in `formats` (png, pdf, svg) with python/ukdyn/plotting.py (embedded) and
-// /usr/bin/python3 (or $UKDYN_PYTHON); returns the files written; a missing python or
-// matplotlib is a warning, a script that ran and failed (a full disk) an error: `failed` is set
-std::vector<fs::path> make_plots(const fs::path& csv, const fs::path& dir,
-                                 const std::vector<std::string>& formats, const std::string& style,
-                                 bool& failed) {
+// the plots of a run: python/ukdyn/plotting.py (embedded) and the modules it imports in a
+// private temporary directory (mkdtemp: mode 0700), run by /usr/bin/python3 (or $UKDYN_PYTHON),
+// started before the simulation (start_plots) so that its imports overlap the run, and told to
+// go on when the run's files are written (finish_plots); destroyed without that, the script
+// leaves without drawing (the end of its input), and the directory is removed
+struct PlotJob {
+  std::string scripts;                    // the temporary directory
+  std::optional<StartedProgram> program;  // the script, waiting for its go-ahead
+
+  ~PlotJob() {
+    program.reset();  // (waited for before its files are removed)
+    std::error_code ignored;
+    fs::remove_all(scripts, ignored);
+  }
+};
+
+// starts the plot script on the run's files-to-be; nullptr (with a warning) when python is
+// missing or the script cannot be written
+std::unique_ptr<PlotJob> start_plots(const fs::path& csv, const fs::path& dir,
+                                     const std::vector<std::string>& formats,
+                                     const std::string& style) {
   const std::string python = python_interpreter();
   if (!is_executable(python)) {
     std::fprintf(stderr,
                  "warning: %s not found: no plots (set UKDYN_PYTHON to a python with "
                  "matplotlib, or pass --no-plots)\n",
                  python.c_str());
-    return {};
+    return nullptr;
   }
-  // the script and the modules it imports go to a private temporary directory (mkdtemp: mode
-  // 0700), removed afterwards
   std::string scripts = (fs::temp_directory_path() / "ukdyn-plot-XXXXXX").string();
   if (::mkdtemp(scripts.data()) == nullptr) {
     std::fprintf(stderr,
                  "warning: cannot create a temporary directory for the plot script: no plots\n");
-    return {};
+    return nullptr;
   }
+  auto job = std::make_unique<PlotJob>();
+  job->scripts = scripts;
   const fs::path script = fs::path(scripts) / "plotting.py";
   bool written = true;
   std::vector<EmbeddedFile> sources = {{"plotting", kPlotScript}};
@@ -88,16 +104,25 @@ std::vector<fs::path> make_plots(const fs::path& csv, const fs::path& dir,
     out.write(text.data(), std::streamsize(text.size()));
     written = written && out.flush().good();
   }
-  const int code = written ? run_program({python, script.string(), csv.string(), dir.string(),
-                                          join(formats, ","), style})
-                           : -1;
-  std::error_code ignored;
-  fs::remove_all(scripts, ignored);
+  if (written) {
+    // --wait: the script imports what it needs, then waits for "go" on its input
+    job->program.emplace(std::vector<std::string>{python, script.string(), "--wait", csv.string(),
+                                                  dir.string(), join(formats, ","), style});
+  }
+  return job;
+}
+
+// lets the started plot script draw the run's files and waits for it; returns the files
+// written; a missing matplotlib is a warning, a script that ran and failed (a full disk) an
+// error: `failed` is set
+std::vector<fs::path> finish_plots(PlotJob& job, const fs::path& dir,
+                                   const std::vector<std::string>& formats, bool& failed) {
+  const int code = job.program ? job.program->finish("go") : -1;
   if (code == kPlotNoMatplotlib) {
     std::fprintf(stderr,
                  "warning: %s has no matplotlib: no plots (install python3-matplotlib, "
                  "or pass --no-plots)\n",
-                 python.c_str());
+                 python_interpreter().c_str());
     return {};
   }
   if (code != 0) {
@@ -257,6 +282,12 @@ int run_command(const RunArguments& given) {
     rows += chunk.trajectory.samples();
   };
 
+  // the plot script, started now: its imports overlap the simulation
+  std::unique_ptr<PlotJob> plots;
+  if (args.plots && want_csv) {
+    plots = start_plots(csv_path, dir, args.plot_formats, args.plot_style);
+  }
+
   // simulate, with a progress bar on a terminal
   ModelRun run;
   {
@@ -340,9 +371,8 @@ int run_command(const RunArguments& given) {
   files.push_back(summary_path);
   // (a plot or page whose generator ran and failed is a missing output: exit 1)
   bool output_failed = false;
-  if (args.plots && csv) {
-    for (const auto& f :
-         make_plots(csv_path, dir, args.plot_formats, args.plot_style, output_failed)) {
+  if (plots && csv) {
+    for (const auto& f : finish_plots(*plots, dir, args.plot_formats, output_failed)) {
       files.push_back(f);
     }
   }

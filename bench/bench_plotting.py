@@ -5,14 +5,17 @@ benchmark, not a test).
 
 usage: /usr/bin/python3 bench/bench_plotting.py [--ukdyn build/app/ukdyn] [--repeat 3]
                                                 [--script python/ukdyn/plotting.py
-                                                 [--baseline OLD/plotting.py]] [NAME ...]
+                                                 [--baseline OLD/plotting.py]]
+                                                [--baseline-python OLD_PYTHON] [NAME ...]
 
 For each built-in example (or those NAMEd): `ukdyn run --example NAME` with and without its
 plots (--no-plots), `--repeat` times each, alternating; the plots' time is the difference of the
 wall times. With --script, the plot script itself is timed instead (python3 SCRIPT CSV DIR png on
 the run's directory: the same work without the simulation, for comparing two versions of the
 script; with --baseline, a second script is timed the same way, alternating with the first, so
-that both see the same load). Prints a Markdown table for bench/RESULTS.md: the minimum and the
+that both see the same load; with --baseline-python, the command is timed a second time the same
+way with UKDYN_PYTHON=OLD_PYTHON, a wrapper that runs an older plot script). Prints a Markdown
+table for bench/RESULTS.md: the minimum and the
 median wall time over the repeats (on a loaded machine the minimum is the better estimate of
 the work; the median says what a user sees), the median CPU time (user + system, every process
 of the plots: the work, which another program's load changes little), the number of figures,
@@ -35,9 +38,10 @@ def cpu():
     return r.ru_utime + r.ru_stime
 
 
-def wall(args, cpu_times=None):
+def wall(args, cpu_times=None, env=None):
     start, used = time.perf_counter(), cpu()
-    done = subprocess.run(args, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    done = subprocess.run(args, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True,
+                          env=env)
     elapsed = time.perf_counter() - start
     if cpu_times is not None:
         cpu_times.append(cpu() - used)
@@ -58,11 +62,18 @@ def main():
     parser.add_argument("--repeat", type=int, default=3)
     parser.add_argument("--script", help="time this plot script on the run's files instead")
     parser.add_argument("--baseline", help="with --script: time this one too, alternately")
+    parser.add_argument("--baseline-python",
+                        help="without --script: time the command with UKDYN_PYTHON set to this "
+                             "too, alternately")
     parser.add_argument("names", nargs="*")
     args = parser.parse_args()
     names = args.names or examples(args.ukdyn)
     python = os.environ.get("UKDYN_PYTHON") or "/usr/bin/python3"
     scripts = [args.script] + ([args.baseline] if args.baseline and args.script else [])
+    envs = [None] * len(scripts)
+    if args.baseline_python and not args.script:
+        scripts.append(None)
+        envs.append(dict(os.environ, UKDYN_PYTHON=args.baseline_python))
     rows = []
     with tempfile.TemporaryDirectory() as tmp:
         for name in names:
@@ -70,7 +81,7 @@ def main():
             run = [args.ukdyn, "run", "--example", name, "-o", out]
             times = [([], []) for _ in scripts]
             for _ in range(args.repeat):
-                for script, (walls, cpus) in zip(scripts, times):
+                for script, env, (walls, cpus) in zip(scripts, envs, times):
                     if script:
                         wall(run + ["--no-plots"])
                         csv = os.path.join(out, "trajectory.csv")
@@ -78,7 +89,7 @@ def main():
                     else:
                         bare_cpu = []
                         bare = wall(run + ["--no-plots"], bare_cpu)
-                        walls.append(wall(run, cpus) - bare)
+                        walls.append(wall(run, cpus, env) - bare)
                         cpus[-1] -= bare_cpu[0]
             figures = len([f for f in os.listdir(out) if f.endswith(".png")])
             row = [name, figures]

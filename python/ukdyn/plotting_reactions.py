@@ -177,4 +177,5 @@ def joint_reactions_figure(table, meta, kit):
     if reacting and not torqued:
         title += "; no torque (at roundoff)"
     fig.suptitle(kit._title(title, meta))
+    kit.untitled(fig.axes)
     return fig
