@@ -224,8 +224,8 @@ void Reader::read_dynamics(const YAML::Node& root, SystemBuilder& builder) {
     }
   } else {
     sizes_->fit(layout.size(), Mp);
-    builder.mass_matrix([Mp, at, layout, n](const Eigen::Ref<const VectorXd>& q, double t,
-                                            CallableScratch* s, Eigen::Ref<MatrixXd> Mout) {
+    builder.mass_matrix([Mp, at, n](const Eigen::Ref<const VectorXd>& q, double t,
+                                    CallableScratch* s, Eigen::Ref<MatrixXd> Mout) {
       ModelBuffers& b = model_buffers(s);
       std::copy(q.data(), q.data() + n, b.in.begin());
       b.in[std::size_t(2 * n)] = t;

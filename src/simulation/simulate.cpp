@@ -579,8 +579,8 @@ Trajectory detail::simulate_observed(const System& sys, const Eigen::Ref<const V
           // samples stepped over by the nudge, from its state
           for (; next_sample < samples.size() && samples[next_sample] <= a; ++next_sample) {
             if (samples[next_sample] <= r.t_reached) continue;
-            if (const Status s = run.record(samples[next_sample], x.data()); s != Status::kOk) {
-              return finish(s, run.failure(), samples[next_sample]);
+            if (const Status rs = run.record(samples[next_sample], x.data()); rs != Status::kOk) {
+              return finish(rs, run.failure(), samples[next_sample]);
             }
           }
         }
