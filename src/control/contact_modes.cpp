@@ -191,8 +191,26 @@ void ContactModes::anticipate(const Controller& ctrl, ControlWorkspace& cws,
     // (the model has them open: the run's modes are mirrored)
     if (cws.model.active[std::size_t(contacts_[std::size_t(i)])]) return;
   }
-  const Index k = Index(closed_.size());
   contact_rows(ctrl, cws, q, qd, t);
+  // only those that stay touching, g' <= 1e-9 (‖A_i‖ ‖q'‖ + |∂g/∂t|), as the run's LCP takes
+  // them (a contact that an impact sends off with g' > 0 is not in it)
+  Index k = 0;
+  for (std::size_t j = 0; j < closed_.size(); ++j) {
+    const Index c = contacts_[std::size_t(closed_[j])];
+    Eigen::Matrix<double, 1, 1> g, gd;
+    ctrl.model().constraint(c).model().violation(q, qd, t, cws.model.scratch[std::size_t(c)].get(),
+                                                 g, gd);
+    const double Aqd = A_c_.row(Index(j)).dot(qd);
+    if (gd[0] > kSignificant * (A_c_.row(Index(j)).norm() * qd.norm() + std::abs(gd[0] - Aqd))) {
+      continue;
+    }
+    closed_[std::size_t(k)] = closed_[j];
+    A_c_.row(k) = A_c_.row(Index(j));
+    b_c_[k] = b_c_[Index(j)];
+    ++k;
+  }
+  closed_.resize(std::size_t(k));
+  if (k == 0) return;
   controlled_delassus(ctrl, cws);
   for (Index i : closed_) decided_.push_back(contacts_[std::size_t(i)]);
   if (!lcp_.solve(W_.topLeftCorner(k, k), r_.head(k), kLcpTolerance)) {
