@@ -1,25 +1,51 @@
 // SPDX-License-Identifier: BSD-3-Clause
-// Unilateral contacts under control: the controller's model holds the run's closed contacts, and
-// a requirement that lifts a contact off opens it, one that would need it to pull is reported
-// (control/contact_modes.hpp; docs/contact.md, "Contacts under control").
+// Unilateral contacts under control: the controller's model holds the run's closed contacts;
+// when the requirements are not met with them held, the LCP of the closed contacts with the
+// requirement rows as equalities decides which stay held, and one that has no solution (a
+// requirement that needs a contact to pull) is reported (control/contact_modes.hpp;
+// docs/contact.md, "Contacts under control").
 #include "control/contact_modes.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 #include "control/internal.hpp"
 
 namespace ukdyn::control_detail {
 
-ContactModes::ContactModes(const Controller& ctrl) {
+namespace {
+// a g'' within this fraction of its scale is zero (the requirement neither lifts nor presses)
+constexpr double kSignificant = 1e-9;
+// an entry of W̃ within this fraction of the largest W_ii = A_i P A_iᵀ is roundoff of a
+// direction the requirements remove (W̃ = 0 there: a block whose height is required)
+constexpr double kRoundoff = 1e-10;
+// the LCP's solution is checked to this fraction of its scale (ContactLcp::solve)
+constexpr double kLcpTolerance = 1e-9;
+}  // namespace
+
+ContactModes::ContactModes(const Controller& ctrl) : lcp_(0) {
   const System& model = ctrl.model();
   for (Index k = 0; k < model.constraint_count(); ++k) {
     if (model.constraint(k).is_unilateral()) contacts_.push_back(k);
   }
+  const Index n = model.coordinate_count(), K = Index(contacts_.size());
   saved_.assign(contacts_.size(), -1);
-  open_.assign(contacts_.size(), 0);
-  pulls_.assign(contacts_.size(), 0);
-  row_A_ = MatrixXd::Zero(1, model.coordinate_count());
+  last_.assign(contacts_.size(), -1);
+  closed_.reserve(contacts_.size());
+  decided_.reserve(contacts_.size());
+  row_A_ = MatrixXd::Zero(1, n);
   row_b_ = VectorXd::Zero(1);
+  A_c_ = MatrixXd::Zero(K, n);
+  b_c_ = VectorXd::Zero(K);
+  PAt_ = MatrixXd::Zero(n, K);
+  W_ = MatrixXd::Zero(K, K);
+  r_ = VectorXd::Zero(K);
+  lambda_ = VectorXd::Zero(K);
+  req_ = VectorXd::Zero(ctrl.requirement_rows());
+  Kf_ = VectorXd::Zero(n);
+  minv_Kf_ = VectorXd::Zero(n);
+  scratch_n_ = VectorXd::Zero(n);
+  lcp_ = ContactLcp(K);
 }
 
 void ContactModes::mirror(const std::vector<signed char>* run_modes, ControlWorkspace& cws) const {
@@ -29,93 +55,212 @@ void ContactModes::mirror(const std::vector<signed char>* run_modes, ControlWork
   }
 }
 
-double ContactModes::gap_acceleration(const Controller& ctrl, ControlWorkspace& cws, std::size_t i,
-                                      const Eigen::Ref<const VectorXd>& q,
-                                      const Eigen::Ref<const VectorXd>& qd, double t,
-                                      double& scale) {
-  const Index k = contacts_[i];
-  ctrl.model().constraint(k).model().acceleration_form(
-      q, qd, t, cws.model.scratch[std::size_t(k)].get(), row_A_, row_b_);
-  // the class of the accelerations involved: the free one, the controlled one and b
-  scale = row_A_.row(0).norm() * (cws.model.a.norm() + cws.qdd.norm()) + std::abs(row_b_[0]);
-  return row_A_.row(0).dot(cws.qdd) - row_b_[0];
+void ContactModes::contact_rows(const Controller& ctrl, ControlWorkspace& cws,
+                                const Eigen::Ref<const VectorXd>& q,
+                                const Eigen::Ref<const VectorXd>& qd, double t) {
+  for (std::size_t j = 0; j < closed_.size(); ++j) {
+    const Index k = contacts_[std::size_t(closed_[j])];
+    ctrl.model().constraint(k).model().acceleration_form(
+        q, qd, t, cws.model.scratch[std::size_t(k)].get(), row_A_, row_b_);
+    A_c_.row(Index(j)) = row_A_.row(0);
+    b_c_[Index(j)] = row_b_[0];
+  }
+}
+
+void ContactModes::controlled_delassus(const Controller& ctrl, ControlWorkspace& cws) {
+  const Index k = Index(closed_.size());
+  FundamentalDecomposition& dp = cws.model.decomposition;  // the model with the contacts open
+  const bool physical = cws.model.active_rows > 0;
+  // x = P f (the model's compliance: its bilateral constraints held, the contacts open)
+  auto apply_p = [&](const Eigen::Ref<const VectorXd>& f, Eigen::Ref<VectorXd> x) {
+    if (physical) {
+      dp.project_nonideal(f, x, cws.tmp_n2, cws.lambda_p);
+    } else {
+      dp.solve_mass(f, x);
+    }
+  };
+  if (u_.size() != cws.u.size()) u_.setZero(cws.u.size());  // (once: the actuator count)
+  double diag = 0.0;
+  for (Index j = 0; j < k; ++j) {
+    // P A_jᵀ: the contact force's effect without control
+    scratch_n_ = A_c_.row(j).transpose();
+    apply_p(scratch_n_, PAt_.col(j));
+    diag = std::max(diag, A_c_.row(j).dot(PAt_.col(j)));
+    // the control's answer to it: K (−A_r P A_jᵀ), whose effect P K … is taken off
+    req_.noalias() = cws.req.A * PAt_.col(j);
+    apply_law(ctrl, cws, req_, u_, Kf_, minv_Kf_);
+    apply_p(Kf_, scratch_n_);
+    PAt_.col(j) -= scratch_n_;
+  }
+  // W̃ = A_c P (I − K A_r P) A_cᵀ, its roundoff removed
+  auto W = W_.topLeftCorner(k, k);
+  W.noalias() = A_c_.topRows(k) * PAt_.leftCols(k);
+  W = W.unaryExpr([&](double v) { return std::abs(v) <= kRoundoff * diag ? 0.0 : v; });
+  // r̃ = A_c q''₀ − b_c (q''₀: cws.qdd, the control with the contacts open)
+  r_.head(k).noalias() = A_c_.topRows(k) * cws.qdd;
+  r_.head(k) -= b_c_.head(k);
 }
 
 bool ContactModes::settle(const Controller& ctrl, ControlWorkspace& cws,
                           const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd,
                           double t, ControlStatus& s, std::string& failure) {
-  // a g'' within this fraction of its scale is zero (the requirement neither lifts nor presses)
-  constexpr double kSignificant = 1e-9;
   if (contacts_.empty() || s != ControlStatus::kRequirementsNotMet) return true;
+  decided_.clear();
   // the closed contacts, and the first requirement row not met with them held
   std::vector<signed char>& modes = cws.model.activity_override;
-  bool any_closed = false;
+  closed_.clear();
   for (std::size_t i = 0; i < contacts_.size(); ++i) {
     const Index k = contacts_[i];
     saved_[i] = modes[std::size_t(k)];
-    open_[i] = cws.model.active[std::size_t(k)];
-    pulls_[i] = 0;
-    any_closed = any_closed || open_[i] != 0;
+    if (cws.model.active[std::size_t(k)]) closed_.push_back(Index(i));
   }
-  if (!any_closed) return true;
+  if (closed_.empty()) return true;
   Index row = 0;
   while (row + 1 < Index(cws.met.size()) && cws.met[std::size_t(row)]) ++row;
   const double held_residual = cws.residual[row];
   auto restore = [&] {
     for (std::size_t i = 0; i < contacts_.size(); ++i) modes[std::size_t(contacts_[i])] = saved_[i];
   };
-  // open the closed contacts; hold again those the requirements drive shut, until none is
-  bool pulled = false;
-  for (std::size_t round = 0; round <= contacts_.size(); ++round) {
-    for (std::size_t i = 0; i < contacts_.size(); ++i) {
-      if (open_[i]) modes[std::size_t(contacts_[i])] = 0;
-    }
-    const ControlStatus trial = compute_control(ctrl, cws, q, qd, t);
-    if (trial != ControlStatus::kOk) break;  // not met with them open either: not theirs
-    bool shut = false;
-    for (std::size_t i = 0; i < contacts_.size(); ++i) {
-      if (!open_[i]) continue;
-      double scale = 0.0;
-      if (gap_acceleration(ctrl, cws, i, q, qd, t, scale) < -kSignificant * scale) {
-        open_[i] = 0;
-        modes[std::size_t(contacts_[i])] = saved_[i];
-        pulls_[i] = 1;
-        shut = true;
-      }
-    }
-    if (!shut) {
-      // met, and no gap driven shut: the plant releases the contacts the control lifts off
-      // (their multiplier under this control pulls); the model keeps them open for this
-      // evaluation only
-      restore();
-      s = ControlStatus::kOk;
-      return true;
-    }
-    pulled = true;
-    bool any_open = false;
-    for (unsigned char o : open_) any_open = any_open || o != 0;
-    if (!any_open) break;
+  // q''₀: the control with the closed contacts open
+  for (Index i : closed_) modes[std::size_t(contacts_[std::size_t(i)])] = 0;
+  if (compute_control(ctrl, cws, q, qd, t) != ControlStatus::kOk) {
+    // not met with them open either: not theirs, the held control stands
+    restore();
+    s = compute_control(ctrl, cws, q, qd, t);
+    return true;
   }
-  restore();
-  if (pulled) {
-    std::string names;
-    for (std::size_t i = 0; i < contacts_.size(); ++i) {
-      if (pulls_[i]) {
-        names += (names.empty() ? "'" : ", '") + ctrl.model().constraint(contacts_[i]).name() + "'";
-      }
-    }
-    failure = "at t = " + format(t) + " the requirement row '" +
-              ctrl.row_names()[std::size_t(row)] + "' can be met only if the contact " + names +
-              " pulls: with the contact open the control that meets it drives the gap shut "
-              "(g'' < 0), and with it closed the requirement is missed by " +
-              format(std::abs(held_residual)) +
-              " (docs/contact.md, \"Contacts under control\"). Try: a requirement that stays on "
-              "the open side of the contact, or the contact written as a two-sided constraint";
+  const Index k = Index(closed_.size());
+  contact_rows(ctrl, cws, q, qd, t);
+  // no gap driven shut (g'' >= −1e-9 of its scale ‖A_i‖ (‖a‖ + ‖q''‖) + |b_i|): λ = 0, every
+  // closed contact opens, and the control with them open is the one (nothing more to solve)
+  bool shut = false;
+  for (Index j = 0; j < k; ++j) {
+    const double g2 = A_c_.row(j).dot(cws.qdd) - b_c_[j];
+    const double scale =
+        A_c_.row(j).norm() * (cws.model.a.norm() + cws.qdd.norm()) + std::abs(b_c_[j]);
+    shut = shut || g2 < -kSignificant * scale;
+  }
+  if (!shut) {
+    // the plant releases the contacts the control lifts off (their multiplier under this control
+    // pulls); the model keeps them open for this evaluation only
+    restore();
+    s = ControlStatus::kOk;
+    return true;
+  }
+  // the LCP w = W̃ λ + r̃ of the closed contacts with the requirements as equalities
+  controlled_delassus(ctrl, cws);
+  for (Index i : closed_) decided_.push_back(contacts_[std::size_t(i)]);
+  if (!lcp_.solve(W_.topLeftCorner(k, k), r_.head(k), kLcpTolerance)) {
+    // no λ >= 0 meets the requirements with every gap g'' >= 0: a contact would have to pull
+    lambda_.head(k).setZero();
+    restore();
+    failure = pull_message(ctrl, t, row, std::abs(held_residual));
     return false;
   }
-  // the requirements are not met with the contacts open either: the held control stands
+  lambda_.head(k) = lcp_.z();
+  // hold the contacts that push (λ > 0), open the others, and compute that control
+  for (Index j = 0; j < k; ++j) {
+    const std::size_t i = std::size_t(closed_[std::size_t(j)]);
+    modes[std::size_t(contacts_[i])] = lambda_[j] > 0.0 ? saved_[i] : 0;
+  }
   s = compute_control(ctrl, cws, q, qd, t);
+  restore();
+  if (s != ControlStatus::kOk) {
+    // (a law whose answer to the contact forces is not the requirements' exact elimination —
+    // never the Gauss law): the held control stands
+    s = compute_control(ctrl, cws, q, qd, t);
+  }
   return true;
+}
+
+void ContactModes::anticipate(const Controller& ctrl, ControlWorkspace& cws,
+                              const std::vector<signed char>* run_modes,
+                              const Eigen::Ref<const VectorXd>& q,
+                              const Eigen::Ref<const VectorXd>& qd, double t, ControlStatus s) {
+  if (run_modes == nullptr) return;
+  // the contacts the run held at the previous evaluation and releases in this one
+  closed_.clear();
+  for (std::size_t i = 0; i < contacts_.size(); ++i) {
+    const signed char now = (*run_modes)[std::size_t(contacts_[i])];
+    if (last_[i] == 1 && now == 0) closed_.push_back(Index(i));
+    last_[i] = now;
+  }
+  decided_.clear();
+  if (closed_.empty() || s != ControlStatus::kOk) return;
+  for (Index i : closed_) {
+    // (the model has them open: the run's modes are mirrored)
+    if (cws.model.active[std::size_t(contacts_[std::size_t(i)])]) return;
+  }
+  contact_rows(ctrl, cws, q, qd, t);
+  // only those that stay touching, g' <= 1e-9 (‖A_i‖ ‖q'‖ + |∂g/∂t|), as the run's LCP takes
+  // them (a contact that an impact sends off with g' > 0 is not in it)
+  Index k = 0;
+  for (std::size_t j = 0; j < closed_.size(); ++j) {
+    const Index c = contacts_[std::size_t(closed_[j])];
+    Eigen::Matrix<double, 1, 1> g, gd;
+    ctrl.model().constraint(c).model().violation(q, qd, t, cws.model.scratch[std::size_t(c)].get(),
+                                                 g, gd);
+    const double Aqd = A_c_.row(Index(j)).dot(qd);
+    if (gd[0] > kSignificant * (A_c_.row(Index(j)).norm() * qd.norm() + std::abs(gd[0] - Aqd))) {
+      continue;
+    }
+    closed_[std::size_t(k)] = closed_[j];
+    A_c_.row(k) = A_c_.row(Index(j));
+    b_c_[k] = b_c_[Index(j)];
+    ++k;
+  }
+  closed_.resize(std::size_t(k));
+  if (k == 0) return;
+  controlled_delassus(ctrl, cws);
+  for (Index i : closed_) decided_.push_back(contacts_[std::size_t(i)]);
+  if (!lcp_.solve(W_.topLeftCorner(k, k), r_.head(k), kLcpTolerance)) {
+    lambda_.head(k).setZero();
+    return;
+  }
+  lambda_.head(k) = lcp_.z();
+  if (!(lambda_.head(k).maxCoeff() > 0.0)) return;
+  // ΔF = −K A_r P A_cᵀ λ: the control's answer to the contact forces A_cᵀ λ
+  Kf_.noalias() = A_c_.topRows(k).transpose() * lambda_.head(k);
+  if (cws.model.active_rows > 0) {
+    cws.model.decomposition.project_nonideal(Kf_, scratch_n_, cws.tmp_n2, cws.lambda_p);
+  } else {
+    cws.model.decomposition.solve_mass(Kf_, scratch_n_);
+  }
+  req_.noalias() = cws.req.A * scratch_n_;
+  apply_law(ctrl, cws, req_, u_, Kf_, minv_Kf_);
+  cws.Qc_nominal -= Kf_;
+  cws.Qc_control -= Kf_;
+  cws.u -= u_;
+  // the model's acceleration under it (contacts open), the physical reaction
+  // model.Qc + (M P − I) F, and the power
+  if (cws.model.active_rows > 0) {
+    cws.model.decomposition.project_nonideal(Kf_, scratch_n_, cws.tmp_n2, cws.lambda_p);
+    cws.Qc_physical -= cws.tmp_n2 - Kf_;
+  } else {
+    cws.model.decomposition.solve_mass(Kf_, scratch_n_);
+  }
+  cws.qdd -= scratch_n_;
+  cws.power = cws.Qc_control.dot(qd);
+}
+
+std::string ContactModes::pull_message(const Controller& ctrl, double t, Index row,
+                                       double missed) const {
+  // the contacts the control with them open drives shut (r̃_i < 0)
+  std::string names;
+  for (std::size_t j = 0; j < closed_.size(); ++j) {
+    if (!(r_[Index(j)] < 0.0)) continue;
+    const Index k = contacts_[std::size_t(closed_[j])];
+    names += (names.empty() ? "'" : ", '") + ctrl.model().constraint(k).name() + "'";
+  }
+  return "at t = " + format(t) + " the requirement row '" + ctrl.row_names()[std::size_t(row)] +
+         "' can be met only if the contact " + names +
+         " pulls: with the contact open the control that meets it drives the gap shut "
+         "(g'' < 0), no pushing contact force lets it be met (the LCP of the closed contacts "
+         "with the requirements as equalities has no solution), and with the contacts closed the "
+         "requirement is missed by " +
+         format(missed) +
+         " (docs/contact.md, \"Contacts under control\"). Try: a requirement that stays on "
+         "the open side of the contact, or the contact written as a two-sided constraint";
 }
 
 }  // namespace ukdyn::control_detail

@@ -3,17 +3,29 @@
 // The contacts are the plant's rows: the run decides which are closed (impacts, releases, the LCP
 // of the accelerations) and the controller's model holds the same ones closed, so that the
 // control force is computed with the closed contacts' reactions in it. When the requirements
-// cannot be met with the closed contacts held, the contacts that the requirements lift off are
-// opened in the model (the plant then releases them: their multiplier under that control pulls),
-// and when meeting the requirements would drive a closed contact's gap shut — it would have to
-// pull to hold — the control reports it (a run stops there, naming the contact, the requirement
-// and the time).
+// cannot be met with the closed contacts held, which of them stay closed is decided jointly with
+// the requirements: the linear complementarity problem of the closed contacts in which the
+// requirement rows are equalities (the control makes them hold), eliminated through the
+// controlled system's closed form,
+//
+//   w = W̃ λ + r̃,  λ >= 0, w >= 0, wᵀλ = 0,   W̃ = A_c P (I − K A_r P) A_cᵀ,   r̃ = A_c q''₀ − b_c
+//
+// (P the model's compliance with the contacts open, K the law's generalized inverse of X = A_r P,
+// q''₀ the controlled acceleration with the contacts open), solved by Siconos Numerics' Lemke
+// (ContactLcp). The contacts with λ > 0 stay held in the model, the others are opened (the plant
+// then releases them: their multiplier under that control pulls). When the problem has no
+// solution — the requirements can be met only if a closed contact pulls — the control reports it
+// (a run stops there, naming the contacts, the requirement and the time).
+//
+// Glossary: A_c (k × n), b_c (k) the closed contacts' rows; A_r the requirement rows; λ (k) the
+// contacts' multipliers (push when > 0); w (k) their gap accelerations g''.
 #pragma once
 
 #include <string>
 #include <vector>
 
 #include "ukdyn/control/control.hpp"
+#include "ukdyn/dynamics/contact.hpp"
 
 namespace ukdyn::control_detail {
 
@@ -32,29 +44,65 @@ class ContactModes {
   void mirror(const std::vector<signed char>* run_modes, ControlWorkspace& cws) const;
 
   // After compute_control gave `s` at (q, q', t) with the mirrored modes: when the requirements
-  // are not met and contacts are closed, the contacts whose gap the requirements open
-  // (g'' > 0 under the control computed with them open) are opened in the model and the control
-  // is recomputed (cws then holds it, and s its status); those the requirements would drive shut
-  // are held. Returns false, with `failure` describing it, when a requirement can be met only if
-  // a closed contact pulls: met with the contact open, it drives the contact's gap shut
-  // (g'' < 0), and not met with it closed. Cost: nothing while the requirements are met; else up
-  // to contacts + 2 evaluations of compute_control.
+  // are not met and contacts are closed, the control is recomputed with the contacts open
+  // (q''₀); if it meets the requirements, the LCP above decides which closed contacts stay held
+  // (λ > 0) and the control is recomputed with those held and the others open (cws then holds
+  // it, s its status; the model's overrides are restored to the run's afterwards). Returns false,
+  // with `failure` describing it, when the LCP has no solution: a requirement can be met only if
+  // a closed contact pulls. When the requirements are not met with the contacts open either, the
+  // held control stands. Cost: nothing while the requirements are met; else 2 or 3 evaluations of
+  // compute_control, k solves with P and with the law (O(k n² + k² n)) and, when a gap is driven
+  // shut, one Lemke solve (O(k³); Siconos allocates its tableau then).
   bool settle(const Controller& ctrl, ControlWorkspace& cws, const Eigen::Ref<const VectorXd>& q,
               const Eigen::Ref<const VectorXd>& qd, double t, ControlStatus& s,
               std::string& failure);
 
- private:
-  // g'' = A_k q'' − b_k of contact i under the control in cws (its row evaluated afresh)
-  double gap_acceleration(const Controller& ctrl, ControlWorkspace& cws, std::size_t i,
-                          const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd,
-                          double t, double& scale);
+  // The run's LCP of the accelerations at an event (docs/contact.md, "In a run") evaluates its
+  // q''_free with every contact released and treats the control in it as a given force. Its
+  // contacts would then push against the control that ignores them. In that evaluation — the
+  // run's modes open contacts it held at the previous evaluation — the control anticipates the
+  // contact forces: with λ the solution of the LCP above over those contacts, the control force
+  // becomes F₀ − K A_r P A_cᵀ λ (the control with them open, answering their forces), so that the
+  // run's LCP, which sees W = A_c P A_cᵀ and this force, has the same solution λ. Call after
+  // settle with the run's modes (null: nothing). Cost O(contacts) when no contact was released;
+  // else the LCP above (O(k n² + k³)). Leaves the control unchanged when λ = 0 or there is no
+  // solution (the run's LCP then decides alone).
+  void anticipate(const Controller& ctrl, ControlWorkspace& cws,
+                  const std::vector<signed char>* run_modes, const Eigen::Ref<const VectorXd>& q,
+                  const Eigen::Ref<const VectorXd>& qd, double t, ControlStatus s);
 
-  std::vector<Index> contacts_;       // (contacts) System indices of the unilateral constraints
-  std::vector<signed char> saved_;    // (contacts) the mirrored overrides, restored after a trial
-  std::vector<unsigned char> open_;   // (contacts) opened in the trial
-  std::vector<unsigned char> pulls_;  // (contacts) driven shut by the requirements
-  MatrixXd row_A_;                    // (1 × n) a contact's row
-  VectorXd row_b_;                    // (1)
+  // The multipliers λ of the closed contacts (k, in the order of the model's unilateral
+  // constraints that were closed) of the last LCP settle solved, and which contacts they are
+  // (System indices). Empty when the last settle solved none.
+  const std::vector<Index>& decided_contacts() const { return decided_; }
+  Eigen::Ref<const VectorXd> decided_lambda() const { return lambda_.head(Index(decided_.size())); }
+
+ private:
+  // the closed contacts' rows A_c, b_c at (q, q', t) into A_c_, b_c_ (closed_ of them)
+  void contact_rows(const Controller& ctrl, ControlWorkspace& cws,
+                    const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd,
+                    double t);
+  // W̃ and r̃ of the closed contacts under the control in cws (computed with them open)
+  void controlled_delassus(const Controller& ctrl, ControlWorkspace& cws);
+  // the failure text: `names` pull, the requirement `row` missed by `missed` with them held
+  std::string pull_message(const Controller& ctrl, double t, Index row, double missed) const;
+
+  std::vector<Index> contacts_;      // (contacts) System indices of the unilateral constraints
+  std::vector<signed char> saved_;   // (contacts) the mirrored overrides, restored after a trial
+  std::vector<signed char> last_;    // (contacts) the run's modes at the previous anticipate()
+  std::vector<Index> closed_;        // (≤ contacts) positions in contacts_ of the closed ones
+  std::vector<Index> decided_;       // (≤ contacts) System indices of the last LCP's contacts
+  MatrixXd row_A_;                   // (1 × n) a contact's row
+  VectorXd row_b_;                   // (1)
+  MatrixXd A_c_;                     // (contacts × n) the closed contacts' rows
+  VectorXd b_c_;                     // (contacts)
+  MatrixXd PAt_;                     // (n × contacts) P A_cᵀ, then P (I − K A_r P) A_cᵀ
+  MatrixXd W_;                       // (contacts × contacts) W̃
+  VectorXd r_;                       // (contacts) r̃
+  VectorXd lambda_;                  // (contacts) λ of the last LCP
+  VectorXd req_, Kf_, minv_Kf_, u_;  // (m_r), (n), (n), (actuators) the law's response
+  VectorXd scratch_n_;               // (n)
+  ContactLcp lcp_;                   // Siconos's Lemke (docs/contact.md, "The LCP solver")
 };
 
 }  // namespace ukdyn::control_detail

@@ -194,6 +194,9 @@ void ControlledPlant::force(ControlledScratch& w, const Eigen::Ref<const VectorX
     Q.setConstant(std::numeric_limits<double>::quiet_NaN());
     return;
   }
+  // an event's q''_free (contacts the run held, released for its LCP): the control answers
+  // their forces
+  w.contacts.anticipate(ctrl, cws, w.run_modes, q, qd, t, s);
   if (s != ControlStatus::kOk && s != ControlStatus::kRequirementsNotMet) {
     if (w.failure.empty()) w.failure = describe_control_status(ctrl, cws);
     Q.setConstant(std::numeric_limits<double>::quiet_NaN());

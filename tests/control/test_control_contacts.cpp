@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "control/contact_modes.hpp"
 #include "ukdyn/control/control.hpp"
 #include "ukdyn/dynamics/contact.hpp"
 #include "ukdyn/modelfile/model.hpp"
@@ -206,6 +207,175 @@ TEST(ControlContacts, BallBouncingUnderHorizontalControlKeepsTheUncontrolledBoun
   EXPECT_NEAR(p.q[2 * (apex_t.size() + 1) + 1], 0.0, 1e-10);
   EXPECT_NEAR(p.q.back(), 0.0, 1e-10);
   EXPECT_NEAR(p.lambda.back(), mass * kG, 1e-8);
+}
+
+// ---- two coupled contacts: the release decided jointly with the requirements -------------------
+
+// A bar (mass m, length L, J = m L²/12; centre (x, y), angle th) lying on a frictionless floor on
+// both ends, gaps y ∓ (L/2) sin th, its tilt required to follow th_d = c t²/2 from rest (th'' = c).
+std::string bar_model(double c, const std::string& requirement, const std::string& name = "tilt") {
+  return "parameters: {m: 2, g: 9.81, L: 2, c: " + std::to_string(c) +
+         "}\n"
+         "coordinates: [x, y, th]\n"
+         "kinetic_energy: 0.5*m*(x_dot^2 + y_dot^2) + 0.5*(m*L^2/12)*th_dot^2\n"
+         "potential_energy: m*g*y\n"
+         "constraints:\n"
+         "  - {name: left, holonomic: y - L/2*sin(th), unilateral: true}\n"
+         "  - {name: right, holonomic: y + L/2*sin(th), unilateral: true}\n"
+         "control:\n"
+         "  requirements:\n"
+         "    - {name: " +
+         name + ", holonomic: " + requirement +
+         ", dynamics: {omega: 10, zeta: 1}}\n"
+         "  law: gauss\n"
+         "initial: {q: {x: 0, y: 0, th: 0}}\n";
+}
+
+constexpr double kBarM = 2.0, kBarL = 2.0, kTilt = 3.0;
+
+// The controller's model at rest (q = q' = 0, t = 0) with both ends closed, as the run holds them.
+struct BarAtRest {
+  explicit BarAtRest(const std::string& text)
+      : model(parse_model(text)), ctrl(*model.controller), cws(ctrl), modes(ctrl) {
+    run.assign(std::size_t(ctrl.model().constraint_count()), 1);
+    modes.mirror(&run, cws);
+  }
+  ControlStatus held() { return compute_control(ctrl, cws, q, qd, 0.0); }
+  Model model;
+  const Controller& ctrl;
+  ControlWorkspace cws;
+  control_detail::ContactModes modes;
+  std::vector<signed char> run;
+  VectorXd q = VectorXd::Zero(3), qd = VectorXd::Zero(3);
+};
+
+// Tilting the bar from rest needs one end lifted: th'' = c > 0 lifts the right end (the bar
+// pivots on its left one), c < 0 the left. Under the control with both ends open (the bar free)
+// y'' = −g and th'' = c drive BOTH gaps shut, g''_(left,right) = −g ∓ (L/2) c < 0 for |c| < 2g/L:
+// the one-at-a-time rule held both back, missed the tilt with them held and reported a pulling
+// contact. The joint problem: the requirement removes th from the contacts' compliance, so
+// W̃ = (1/m) [1 1; 1 1] (the common normal y only) and r̃ = (−g − (L/2)c, −g + (L/2)c); its
+// solution holds the pivot end with λ = m (g + (L/2)|c|) — the vertical balance of the bar whose
+// centre rises with y'' = (L/2)|c| — and lets the other end rise with g'' = L |c|.
+TEST(ControlContacts, TiltedBarKeepsThePivotEndAndLiftsTheOtherJointly) {
+  for (const double c : {kTilt, -kTilt}) {
+    BarAtRest bar(bar_model(c, "th - c*t^2/2"));
+    const Index left = 0, right = 1, pivot = c > 0.0 ? left : right, lifted = 1 - pivot;
+    // held on both ends the tilt is missed
+    ControlStatus s = bar.held();
+    ASSERT_EQ(s, ControlStatus::kRequirementsNotMet);
+    // the premise: with both open the control drives both gaps shut
+    {
+      std::vector<signed char> open(2, 0);
+      BarAtRest free(bar_model(c, "th - c*t^2/2"));
+      free.modes.mirror(&open, free.cws);
+      ASSERT_EQ(free.held(), ControlStatus::kOk);
+      EXPECT_NEAR(free.cws.qdd[1], -kG, 1e-12);
+      EXPECT_NEAR(free.cws.qdd[2], c, 1e-12);
+      EXPECT_LT(free.cws.qdd[1] - 0.5 * kBarL * free.cws.qdd[2], -1.0);  // left shut
+      EXPECT_LT(free.cws.qdd[1] + 0.5 * kBarL * free.cws.qdd[2], -1.0);  // right shut
+    }
+    std::string failure;
+    ASSERT_TRUE(bar.modes.settle(bar.ctrl, bar.cws, bar.q, bar.qd, 0.0, s, failure)) << failure;
+    EXPECT_EQ(s, ControlStatus::kOk);
+    EXPECT_TRUE(failure.empty()) << failure;
+    // the LCP's multipliers: the pivot pushes with m (g + (L/2)|c|), the lifted end none
+    ASSERT_EQ(bar.modes.decided_contacts().size(), 2u);
+    const VectorXd lambda = bar.modes.decided_lambda();
+    EXPECT_NEAR(lambda[pivot], kBarM * (kG + 0.5 * kBarL * std::abs(c)), 1e-9) << "c = " << c;
+    EXPECT_NEAR(lambda[lifted], 0.0, 1e-12) << "c = " << c;
+    // the control computed with the pivot held: x'' = 0, y'' = (L/2)|c|, th'' = c
+    EXPECT_NEAR(bar.cws.qdd[0], 0.0, 1e-12);
+    EXPECT_NEAR(bar.cws.qdd[1], 0.5 * kBarL * std::abs(c), 1e-9) << "c = " << c;
+    EXPECT_NEAR(bar.cws.qdd[2], c, 1e-9) << "c = " << c;
+    EXPECT_EQ(bar.cws.model.active[std::size_t(pivot)], 1) << "c = " << c;
+    EXPECT_EQ(bar.cws.model.active[std::size_t(lifted)], 0) << "c = " << c;
+    // the lifted end rises: g'' = y'' ± (L/2) th'' = L |c|
+    const double sign = lifted == right ? 1.0 : -1.0;
+    EXPECT_NEAR(bar.cws.qdd[1] + sign * 0.5 * kBarL * bar.cws.qdd[2], kBarL * std::abs(c), 1e-9);
+    // (under the Gauss law the model's own reaction is the uncontrolled one, which the control
+    // does not load: the pivot of a bar at rest carries m g / (1 + 3 cos² th) = m g / 4)
+    EXPECT_NEAR(bar.cws.model.lambda[pivot], kBarM * kG / 4.0, 1e-9) << "c = " << c;
+    // the run's modes are left as they were
+    EXPECT_EQ(bar.cws.model.activity_override[0], 1);
+    EXPECT_EQ(bar.cws.model.activity_override[1], 1);
+  }
+}
+
+// The same bar in a run, its tilt required from t1 = 0.5 on to follow th_d = c (t − t1)³
+// (th_d'' = 6 c (t − t1) starts from 0): the run releases the right end at t1 — an event whose LCP
+// sees the control answer the contact forces (ContactModes::anticipate) — and the bar pivots on
+// its left end, which stays on the floor: y = (L/2) sin th, x = 0. Under the Gauss law the control
+// loads no closed contact, so the left end carries the uncontrolled pivot's reaction
+// N = m (g − (L/2) sin th th'²) / (1 + 3 cos² th) (m y'' = N − m g, J th'' = −(L/2) cos th N), and
+// the control force is M (q'' − a_p): F_th = J (th_d'' − th''_p), F_y = m (L/2) cos th (th_d'' −
+// th''_p), th''_p = −(L/2) cos th N / J.
+TEST(ControlContacts, TiltedBarRunReleasesTheRightEndAndPivotsOnTheLeft) {
+  std::string text = bar_model(1.0, "th - c*(t - 0.5)^3");
+  const std::string dyn = ", dynamics: {omega: 10, zeta: 1}}";
+  text.replace(text.find(dyn), dyn.size(), ", active: [0.5, 100]" + dyn);
+  text +=
+      "simulate: {t_end: 1.0, integrator: dopri5, rtol: 1e-11, atol: 1e-13}\n"
+      "output: {every: 0.1}\n";
+  const Model m = parse_model(text);
+  const ControlledTrajectory r = run(m);
+  const Trajectory& p = r.plant;
+  ASSERT_EQ(p.stats.status, Status::kOk) << p.stats.message;
+  EXPECT_EQ(r.control.not_met, 0);
+  // one event: the right end's release, at t1
+  ASSERT_EQ(p.stats.contact_events.size(), 1u);
+  EXPECT_EQ(p.stats.contact_events[0].kind, ContactEvent::Kind::kRelease);
+  EXPECT_EQ(p.stats.contact_events[0].constraint, 1);
+  EXPECT_NEAR(p.stats.contact_events[0].t, 0.5, 1e-9);
+  ASSERT_EQ(p.samples(), 11);
+  const double J = kBarM * kBarL * kBarL / 12.0, h = 0.5 * kBarL;
+  for (Index j = 0; j < p.samples(); ++j) {
+    const double t = p.t[std::size_t(j)], s = std::max(t - 0.5, 0.0);
+    const double th = s * s * s, thd = 3.0 * s * s, thdd = 6.0 * s;
+    const std::size_t i = std::size_t(3 * j), l = std::size_t(2 * j);
+    if (std::abs(t - 0.5) < 1e-12) continue;  // (the event's instant: before or after it)
+    EXPECT_NEAR(p.q[i], 0.0, 1e-12) << "t = " << t;
+    EXPECT_NEAR(p.q[i + 2], th, 1e-9) << "t = " << t;
+    // the left end on the floor, the right one above it by L sin th
+    EXPECT_NEAR(p.q[i + 1], h * std::sin(th), 1e-9) << "t = " << t;
+    if (t > 0.55) {
+      EXPECT_GT(p.q[i + 1] + h * std::sin(p.q[i + 2]), 1e-4) << "t = " << t;
+    }
+    if (t < 0.5) {
+      // both ends carry m g / 2, no control
+      EXPECT_NEAR(p.lambda[l], 0.5 * kBarM * kG, 1e-9) << "t = " << t;
+      EXPECT_NEAR(p.lambda[l + 1], 0.5 * kBarM * kG, 1e-9) << "t = " << t;
+      for (std::size_t c = 0; c < 3; ++c)
+        EXPECT_NEAR(r.Qc_control[i + c], 0.0, 1e-9) << "t = " << t;
+      continue;
+    }
+    const double c2 = std::cos(th) * std::cos(th);
+    const double N = kBarM * (kG - h * std::sin(th) * thd * thd) / (1.0 + 3.0 * c2);
+    const double thdd_p = -h * std::cos(th) * N / J;
+    EXPECT_NEAR(p.lambda[l], N, 1e-8) << "t = " << t;
+    EXPECT_NEAR(p.lambda[l + 1], 0.0, 1e-12) << "t = " << t;
+    EXPECT_NEAR(r.Qc_control[i], 0.0, 1e-9) << "t = " << t;
+    EXPECT_NEAR(r.Qc_control[i + 1], kBarM * h * std::cos(th) * (thdd - thdd_p), 1e-8)
+        << "t = " << t;
+    EXPECT_NEAR(r.Qc_control[i + 2], J * (thdd - thdd_p), 1e-8) << "t = " << t;
+  }
+}
+
+// Lowering the bar's centre below the floor (y'' = −1) with both ends on it: every pushing
+// contact force only raises it, so no λ >= 0 meets the requirement (W̃ = (3/m) [1 −1; −1 1],
+// r̃ = (−1, −1): the two rows sum to −2 >= 0) — both ends would have to pull, and the control
+// says so, naming them, the requirement row and the time.
+TEST(ControlContacts, BarPushedIntoTheFloorNamesBothEndsThatWouldPull) {
+  BarAtRest bar(bar_model(0.0, "y + t^2/2", "sink"));
+  ControlStatus s = bar.held();
+  ASSERT_EQ(s, ControlStatus::kRequirementsNotMet);
+  std::string failure;
+  EXPECT_FALSE(bar.modes.settle(bar.ctrl, bar.cws, bar.q, bar.qd, 0.0, s, failure));
+  EXPECT_NE(failure.find("at t = 0 the requirement row 'sink'"), std::string::npos) << failure;
+  EXPECT_NE(failure.find("contact 'left', 'right' pulls"), std::string::npos) << failure;
+  EXPECT_NE(failure.find("missed by 1 "), std::string::npos) << failure;
+  EXPECT_EQ(bar.cws.model.activity_override[0], 1);
+  EXPECT_EQ(bar.cws.model.activity_override[1], 1);
 }
 
 // ---- errors -------------------------------------------------------------------------------------
