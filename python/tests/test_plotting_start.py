@@ -10,17 +10,8 @@ import subprocess
 
 import pytest
 
+from test_plotting import FREE  # (a free slider, 0.2 s: two figures)
 from ukdyn import plotting
-
-FREE = """
-name: free spinning slider
-coordinates: [s, phi]
-units: {s: m, phi: rad}
-parameters: {m: 2, J: 0.5}
-kinetic_energy: 0.5*m*s_dot^2 + 0.5*J*phi_dot^2
-initial: {q: {s: 0, phi: 0}, q_dot: {s: 1, phi: 3}}
-simulate: {t_end: 0.2}
-"""
 
 #: contradicting constraints: the run cannot start (exit 3), after the plot script was started
 CONTRADICTING = """
