@@ -233,7 +233,7 @@ bool Run::near_dead_centre() {
 }
 
 // find_event: the step from (t0, x0) to (t1, x1), near a rank drop, crossed the pose onto
-// another branch: its change of q' (turning it, as a jump onto the mirror branch reverses an
+// another branch: its change of q' that turns it (a jump onto the mirror branch reverses an
 // arm) beyond kStepFactor times the accelerations at its start (the test of leaves_branch),
 // where the rank margin is below kSingularMargin; the run is bridged from t0, once from there
 // (a step that jumps again from the bridge's start is left to leaves_branch). Costs one
@@ -250,7 +250,12 @@ bool Run::jumps_branch(double t0, const double* x0, double t1, const double* x1)
   const double acceleration = std::sqrt(2.0 * detail::kinetic_energy(w, w.qdd));
   const double speed = std::sqrt(2.0 * detail::kinetic_energy(w, qd_));
   change_ = Eigen::Map<const VectorXd>(x1 + n_, n_) - qd_;
-  const double change = std::sqrt(2.0 * detail::kinetic_energy(w, change_));
+  double change = std::sqrt(2.0 * detail::kinetic_energy(w, change_));
+  // (the part that turns q' rather than stretches it: the speeds of a driven mechanism that
+  // locks up grow along their direction, as in leaves_branch)
+  change_ = Eigen::Map<const VectorXd>(x1 + n_, n_);
+  const double stretch = std::sqrt(2.0 * detail::kinetic_energy(w, change_)) - speed;
+  change = std::sqrt(std::max(0.0, change * change - stretch * stretch));
   if (!(change > kStepFactor * acceleration * (t1 - t0) && change > 1e-3 * speed)) return false;
   entry_failed_ = t0;
   return true;
