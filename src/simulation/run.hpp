@@ -54,6 +54,9 @@ inline constexpr int kDivergentSteps = 3;
 // a contact carried through a dead centre restarts past it where the rank margin is back to
 // this (Run::carried_past)
 inline constexpr double kCarriedMargin = 3e-5;
+// a switch located where the rank margin is below this (and above kCarriedMargin) under dopri5
+// or BDF restarts there, bridged past the pose (Run::entered_dead_centre)
+inline constexpr double kBridgedSwitchMargin = 1e-3;
 // below this rank margin (Workspace::rank_margin, σ_r / σ_1 of W) growing speeds are those of a
 // configuration where the constraints lose rank, not a divergence
 inline constexpr double kDivergenceRankMargin = 1e-3;
@@ -183,11 +186,38 @@ class Run {
   // t (x unchanged) when the restart is not at a rank drop or no h ≤ h_max (and < b − t)
   // reaches the margin. `status` is the landing projection's (kOk otherwise). Cost: about
   // 25 evaluations at a bridged restart, one otherwise.
+  // `ahead`: (t, x) lies outside the neighbourhood (its margin below kSingularMargin), the
+  // pose ahead (an entry, see entered_dead_centre): the landing is the first h where the
+  // margin, after falling below half its start's, is back to it, and q'' varies linearly
+  // from the start's to the landing's (exact for q'' linear in t; the error O(h³ q'''')).
+  // `after`: the landing lies past it (a bridge across a breakpoint, with the constraints of
+  // the segment after it).
   double bridge_dead_centre(double t, double b, double h_max, double* x, ConstrainedOde& ode,
-                            Status& status);
+                            Status& status, bool ahead = false,
+                            double after = -std::numeric_limits<double>::infinity());
   // the state of the last bridge at s in [its start, its end] (by the bridge's formula) into
   // out (size of x): the samples it steps over
   void bridged_state(double s, double* out) const;
+  // The last event found by find_event is no switch but a restart of dopri5 or BDF
+  // (bridging_entries) to be bridged past a dead centre (bridge_dead_centre with `ahead`), from
+  // outside the pose's neighbourhood where the constraints nearly lose rank: at the end of a
+  // step that entered it (the rank margin there, rank_margin_at, below kCarriedMargin, at the
+  // last step end judged above); at the start of a step that jumped onto another branch near
+  // it (q' turned by more than kStepFactor times the accelerations at the start allow, the test
+  // of leaves_branch); at the start of a step in which a switch is located at the pose and
+  // that ends inside it; or just before a switch located where the margin is below
+  // kBridgedSwitchMargin. Restarts inside the neighbourhood, and steps that go on there, left
+  // the branch: a state within about √ε of the pose is as near the mirror branch as its own,
+  // and q' at the pose is fixed only to roundoff (docs/reliability.md, "Open"). Each start is
+  // tried once: a failed bridge leaves the run to go on (and Run::leaves_branch to judge it).
+  bool entered_dead_centre() const { return entered_; }
+  // whether find_event ends a step at such an entry: a run whose switches it locates, or a
+  // segment whose end is a breakpoint (a constraint released or activated there, at a pose);
+  // set by the driver for each segment
+  void set_bridging_entries(bool on) { bridging_entries_ = on; }
+  // after a bridge to (t, x): each switching function that is across its side there takes its
+  // new side (the bridge stepped over its switch); returns how many did
+  std::size_t sides_after_bridge(double t, const double* x);
 
   // --- Coulomb contacts: stick, slide, or slide through v_rel = 0 (run_stick_slip.cpp;
   // docs/friction.md) ---------------------------------------------------------------------------
@@ -386,7 +416,8 @@ class Run {
   double switch_width_ = 0.0;  // hi − lo of the last switch event's bracket
   // the last bridge over a dead centre (bridge_dead_centre): its start time and state, and the
   // rate x' at its landing (size of x)
-  double bridge_t_ = 0.0;
+  double bridge_t_ = 0.0, bridge_h_ = 1.0;  // (its start and length)
+  std::vector<double> bridge_rate0_;        // (size of x) x' at its start
   std::vector<double> bridge_x_ = std::vector<double>(sample_.size());
   std::vector<double> bridge_rate_ = std::vector<double>(sample_.size());
   // the switch that opened the window of the crawl test (NaN: none open), and the accepted
@@ -397,6 +428,20 @@ class Run {
   bool approach_ = false;    // the last event is a restart before a switch
   bool hands_over_ = false;  // the last event is rkf78 handing the run to dopri5
   bool landed_ = false;      // the last switch found is a step landing on it
+  // dead-centre entries (see entered_dead_centre): located for this segment; the last event is
+  // one; a step ended outside the neighbourhood since the last one (an entry may fire)
+  bool bridging_entries_ = false;
+  bool entered_ = false;
+  bool entry_armed_ = true;
+  // the rank margin at the last step end judged, and the step start where the last jump was
+  // found (a step that jumps again from there is left to leaves_branch)
+  double entry_margin_ = std::numeric_limits<double>::infinity();
+  double entry_failed_ = std::numeric_limits<double>::quiet_NaN();
+  // find_event (see entered_dead_centre): the step is near a rank drop; it jumped onto another
+  // branch (bridged from t0); it ends an entry into the neighbourhood (bridged from t1)
+  bool near_dead_centre();
+  bool jumps_branch(double t0, const double* x0, double t1, const double* x1);
+  bool enters_dead_centre(double t1, const double* x1);
   std::string failure_;
   const detail::ContactEvents* contacts_ = nullptr;  // (see set_contacts)
   std::string refusal_;      // why the last refused stick was refused (empty: friction cannot hold)

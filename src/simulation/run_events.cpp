@@ -19,6 +19,7 @@ double Run::find_event(double t0, const double* x0, double t1, const double* x1,
   const auto& contacts = sys_.friction_contacts();
   double first = std::numeric_limits<double>::quiet_NaN();
   switching_ = -1;
+  entered_ = false;
   Index handover = -1;  // the contact whose passage rkf78 hands to dopri5 (see hands_over)
   // the rank margin at (or within the step's last stages before) t1: the step's last evaluation
   const double margin = ws_.rank_margin;
@@ -104,7 +105,19 @@ double Run::find_event(double t0, const double* x0, double t1, const double* x1,
   hands_over_ = handover >= 0 && switching_ == handover;
   // the first sign change of a switching function, when it comes before the contacts' event
   switch_event_ = false;
-  if (!locates_switches()) return first;
+  // (no event: the step may end inside a dead centre's neighbourhood, see entered_dead_centre)
+  // (a step near a rank drop that jumped onto another branch: bridged from its start instead,
+  // see entered_dead_centre)
+  const bool near = near_dead_centre();
+  if (near && jumps_branch(t0, x0, t1, x1)) {
+    entered_ = true;
+    hands_over_ = false;
+    return t0;
+  }
+  if (!locates_switches()) {
+    if (std::isnan(first) && near && (entered_ = enters_dead_centre(t1, x1))) return t1;
+    return first;
+  }
   // a crawl after a switch: kSwitchBurst accepted steps — those into a switch and at one
   // included — since the switch that opened the window, within kSwitchBurstSpan of the run (a
   // sliding mode: every step crosses the switch again, or the step size control rejects it;
@@ -136,10 +149,32 @@ double Run::find_event(double t0, const double* x0, double t1, const double* x1,
     bool at_rank_drop = false;
     if (ts - t0 > kSwitchApproach * std::max(1.0, std::abs(ts))) {
       dense(ts, event_x_.data());
-      at_rank_drop = rank_margin_at(ts, event_x_.data()) < kCarriedMargin;
+      const double margin_ts = rank_margin_at(ts, event_x_.data());
+      at_rank_drop = margin_ts < kCarriedMargin;
+      // (near a dead centre under dopri5 or BDF: the restart just before the switch is bridged
+      // past the pose, see entered_dead_centre; the approach's restarts and the nudge past the
+      // switch there took the mirror branch; once from a step's start)
+      if (!at_rank_drop && margin_ts < kBridgedSwitchMargin && near && t0 != entry_failed_) {
+        entry_failed_ = ts;
+        entered_ = true;
+        switch_event_ = false;
+        return ts;
+      }
       if (!at_rank_drop) {
         approach_ = true;
         return ts - 0.25 * (ts - t0);
+      }
+      // (a switch at the pose in a step that ends inside its neighbourhood, under dopri5 or
+      // BDF: the run restarts at the step's start, outside it, bridged past the pose — a
+      // restart at the pose took the mirror branch; once from there)
+      if (at_rank_drop && near && t0 != entry_failed_ && rank_margin_at(t1, x1) < kCarriedMargin) {
+        const double m0 = rank_margin_at(t0, x0);
+        if (m0 >= kCarriedMargin && m0 < detail::kSingularMargin) {
+          entry_failed_ = t0;
+          entered_ = true;
+          switch_event_ = false;
+          return t0;
+        }
       }
       // the step crossed the pose to where the margin is back: the switch takes effect at its
       // end (the step's stages on both sides, its error accepted: at a dead centre the
@@ -175,8 +210,86 @@ double Run::find_event(double t0, const double* x0, double t1, const double* x1,
     for (Index i = 0; i < g1_.size(); ++i) {
       if (side_[std::size_t(i)] == 0 && g1_[i] != 0.0) side_[std::size_t(i)] = g1_[i] > 0 ? 1 : -1;
     }
+    if (near && (entered_ = enters_dead_centre(t1, x1))) return t1;
   }
   return first;
+}
+
+// find_event: the step from (t0, x0) to (t1, x1) is near a rank drop — the last evaluation's
+// rank margin, or the last step end's, below kSingularMargin, or a rank dropped — under dopri5
+// or BDF in a run that bridges entries (see run.hpp)
+bool Run::near_dead_centre() {
+  const Integrator method = progress_.integrator;
+  if (!bridging_entries_ || (method != Integrator::kDopri5 && method != Integrator::kBDF) ||
+      std::isnan(ws_.rank_margin)) {
+    return false;
+  }
+  if (ws_.rank_margin >= detail::kSingularMargin && ws_.rank == ws_.active_rows &&
+      !(entry_margin_ < detail::kSingularMargin)) {
+    entry_armed_ = true;
+    return false;
+  }
+  return true;
+}
+
+// find_event: the step from (t0, x0) to (t1, x1), near a rank drop, crossed the pose onto
+// another branch: its change of q' that turns it (a jump onto the mirror branch reverses an
+// arm) beyond kStepFactor times the accelerations at its start (the test of leaves_branch),
+// where the rank margin is below kSingularMargin; the run is bridged from t0, once from there
+// (a step that jumps again from the bridge's start is left to leaves_branch). Costs one
+// evaluation.
+bool Run::jumps_branch(double t0, const double* x0, double t1, const double* x1) {
+  if (t0 == entry_failed_) return false;
+  q_ = Eigen::Map<const VectorXd>(x0, n_);
+  qd_ = Eigen::Map<const VectorXd>(x0 + n_, n_);
+  Workspace& w = branch_workspace();
+  if (forward_dynamics(sys_, w, q_, qd_, t0) != Status::kOk ||
+      !(w.rank_margin < detail::kSingularMargin) || w.rank < w.active_rows) {
+    return false;
+  }
+  const double acceleration = std::sqrt(2.0 * detail::kinetic_energy(w, w.qdd));
+  const double speed = std::sqrt(2.0 * detail::kinetic_energy(w, qd_));
+  change_ = Eigen::Map<const VectorXd>(x1 + n_, n_) - qd_;
+  double change = std::sqrt(2.0 * detail::kinetic_energy(w, change_));
+  // (the part that turns q' rather than stretches it: the speeds of a driven mechanism that
+  // locks up grow along their direction, as in leaves_branch)
+  change_ = Eigen::Map<const VectorXd>(x1 + n_, n_);
+  const double stretch = std::sqrt(2.0 * detail::kinetic_energy(w, change_)) - speed;
+  change = std::sqrt(std::max(0.0, change * change - stretch * stretch));
+  if (!(change > kStepFactor * acceleration * (t1 - t0) && change > 1e-3 * speed)) return false;
+  entry_failed_ = t0;
+  return true;
+}
+
+// find_event: the step to (t1, x1), near a rank drop, ends inside a dead centre's
+// neighbourhood (the rank margin there below kCarriedMargin), entered from outside it: the run
+// is bridged from t1 (see run.hpp). Costs one evaluation.
+bool Run::enters_dead_centre(double t1, const double* x1) {
+  const double margin = entry_margin_ = rank_margin_at(t1, x1);
+  if (!(margin < kCarriedMargin)) {
+    if (!std::isnan(margin)) entry_armed_ = true;
+    return false;
+  }
+  if (!entry_armed_) return false;
+  entry_armed_ = false;
+  return true;
+}
+
+// after a bridge to (t, x): the functions across their side take the new one (see run.hpp)
+std::size_t Run::sides_after_bridge(double t, const double* x) {
+  if (!locates_switches()) return 0;
+  evaluate_switches(t, x);
+  std::size_t flips = 0;
+  for (Index i = 0; i < g_.size(); ++i) {
+    signed char& side = side_[std::size_t(i)];
+    if (double(side) * g_[i] < 0.0) {
+      side = static_cast<signed char>(-side);
+      ++flips;
+    } else if (side == 0 && g_[i] != 0.0) {
+      side = g_[i] > 0.0 ? 1 : -1;
+    }
+  }
+  return flips;
 }
 
 // true when every function that switched at the last switch event is on its new side at
@@ -310,28 +423,52 @@ double Run::rank_margin_at(double t, const double* x) {
 
 // A restart at a dead centre, bridged past the pose (see run.hpp)
 double Run::bridge_dead_centre(double t, double b, double h_max, double* x, ConstrainedOde& ode,
-                               Status& status) {
+                               Status& status, bool ahead, double after) {
   status = Status::kOk;
-  if (!(rank_margin_at(t, x) < kCarriedMargin)) return t;
+  const double m0 = rank_margin_at(t, x);
+  // (a pose ahead: from outside its neighbourhood, to where the margin is back to m0's)
+  if (!(m0 < kCarriedMargin) && !(ahead && m0 < detail::kSingularMargin)) return t;
+  const double target = std::max(m0, kCarriedMargin);
   const Index size = ode.size();
   bridge_x_.assign(x, x + size);
   bridge_rate_.resize(std::size_t(size));
+  bridge_rate0_.resize(std::size_t(size));
   trial_.resize(std::size_t(size));
   const Eigen::Map<const VectorXd> q0(bridge_x_.data(), n_), qd0(bridge_x_.data() + n_, n_);
   ProjectionOptions all = o_.projection;
   // the landing: the first h (doubled) where q + h q', projected, has the margin back to
-  // kCarriedMargin
+  // the target (from outside: after it fell below half the start's, past the pose)
   h_max = std::min(h_max, 0.5 * (b - t));
   double h = 1e-12 * std::max(1.0, std::abs(t));
+  bool dipped = m0 < kCarriedMargin;
   for (; h <= h_max; h *= 2.0) {
     std::copy(bridge_x_.begin(), bridge_x_.end(), trial_.begin());
     q_ = q0 + h * qd0;
     // (the margin on the constraints: off them, the rows of a dead centre need not coincide)
     if (project_positions(sys_, ws_, q_, t + h, all).status != Status::kOk) continue;
     Eigen::Map<VectorXd>(trial_.data(), n_) = q_;
-    if (rank_margin_at(t + h, trial_.data()) >= kCarriedMargin) break;
+    const double m = rank_margin_at(t + h, trial_.data());
+    if (dipped && m >= target && t + h > after) break;
+    if (m < 0.5 * m0) dipped = true;
   }
   if (!(h <= h_max)) return t;
+  // (from outside: the landing refined to where the margin is back to the start's, within
+  // 1/64 of the bridge: its length nearly the passage's own)
+  if (!(m0 < kCarriedMargin)) {
+    double lo = std::max(0.5 * h, after - t);
+    for (int k = 0; k < 6; ++k) {
+      const double mid = 0.5 * (lo + h);
+      q_ = q0 + mid * qd0;
+      if (project_positions(sys_, ws_, q_, t + mid, all).status != Status::kOk) break;
+      std::copy(bridge_x_.begin(), bridge_x_.end(), trial_.begin());
+      Eigen::Map<VectorXd>(trial_.data(), n_) = q_;
+      (rank_margin_at(t + mid, trial_.data()) >= target ? h : lo) = mid;
+    }
+    std::copy(bridge_x_.begin(), bridge_x_.end(), trial_.begin());
+    q_ = q0 + h * qd0;
+    if (project_positions(sys_, ws_, q_, t + h, all).status != Status::kOk) return t;
+    Eigen::Map<VectorXd>(trial_.data(), n_) = q_;
+  }
   // q'' at the landing, on the constraints there
   bool changed = false;
   if ((status = project(t + h, trial_.data(), all, changed)) != Status::kOk) return t;
@@ -339,8 +476,16 @@ double Run::bridge_dead_centre(double t, double b, double h_max, double* x, Cons
     ode.clear_failure();
     return t;
   }
-  // the bridge: q' kept, q'' from the landing
+  // and at the start, where the rank margin is clear of the pose's (inside its neighbourhood
+  // q'' there is a roundoff off the branch times the inverse margin: the landing's serves)
+  bridge_rate0_ = bridge_rate_;
+  if (m0 >= kCarriedMargin && !ode(bridge_x_.data(), bridge_rate0_.data(), t)) {
+    ode.clear_failure();
+    bridge_rate0_ = bridge_rate_;
+  }
+  // the bridge: q' kept, q'' linear between the two ends
   bridge_t_ = t;
+  bridge_h_ = h;
   bridged_state(t + h, x);
   if ((status = project(t + h, x, all, changed)) != Status::kOk) return t;
   return t + h;
@@ -348,13 +493,16 @@ double Run::bridge_dead_centre(double t, double b, double h_max, double* x, Cons
 
 // the state of the last bridge at s (see run.hpp)
 void Run::bridged_state(double s, double* out) const {
-  const double tau = s - bridge_t_;
+  const double tau = s - bridge_t_, slope = tau / bridge_h_;
   const std::size_t n = std::size_t(n_);
   for (std::size_t i = 0; i < n; ++i) {
-    out[i] = bridge_x_[i] + tau * bridge_x_[n + i] + 0.5 * tau * tau * bridge_rate_[n + i];
+    const double a0 = bridge_rate0_[n + i], a1 = bridge_rate_[n + i];
+    out[i] =
+        bridge_x_[i] + tau * bridge_x_[n + i] + tau * tau * (0.5 * a0 + (a1 - a0) * slope / 6.0);
   }
   for (std::size_t i = n; i < bridge_x_.size(); ++i) {
-    out[i] = bridge_x_[i] + tau * bridge_rate_[i];
+    const double r0 = bridge_rate0_[i], r1 = bridge_rate_[i];
+    out[i] = bridge_x_[i] + tau * (r0 + 0.5 * (r1 - r0) * slope);
   }
 }
 

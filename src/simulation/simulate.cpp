@@ -237,7 +237,19 @@ Trajectory detail::simulate_observed(const System& sys, const Eigen::Ref<const V
     };
     hooks.project_stage = [&](double t, double* xs) { return run.project_stage(t, xs); };
   }
-  if (!sys.friction_contacts().empty() || run.locates_switches()) {
+  const std::vector<double> ends = segment_ends(sys, o);
+  // (constraints released or activated inside the run: a step into a dead centre at such a
+  // breakpoint is bridged across it, see Run::entered_dead_centre)
+  bool activity_changes = false;
+  for (std::size_t i = 0; i + 2 < ends.size(); ++i) {
+    const double m0 = 0.5 * (ends[i] + ends[i + 1]), m1 = 0.5 * (ends[i + 1] + ends[i + 2]);
+    for (Index k = 0; k < sys.constraint_count(); ++k) {
+      if (sys.constraint(k).is_active(m0) != sys.constraint(k).is_active(m1)) {
+        activity_changes = true;
+      }
+    }
+  }
+  if (!sys.friction_contacts().empty() || run.locates_switches() || activity_changes) {
     hooks.find_event = [&](double t0, const double* x0, double t1, const double* x1,
                            const detail::SegmentHooks::Dense& dense) {
       return run.find_event(t0, x0, t1, x1, dense);
@@ -264,7 +276,6 @@ Trajectory detail::simulate_observed(const System& sys, const Eigen::Ref<const V
     };
   }
 
-  const std::vector<double> ends = segment_ends(sys, o);
   run.set_samples(samples);
   auto finish = [&](Status status, const std::string& message, double t_reached) {
     // the sink's exception, once the integrator has returned
@@ -332,22 +343,33 @@ Trajectory detail::simulate_observed(const System& sys, const Eigen::Ref<const V
   };
   run.initial_contact_modes(o.t_start, x.data());
   run.initial_switch_sides(o.t_start, x.data());
-  for (std::size_t seg = 0; seg + 1 < ends.size(); ++seg) {
-    double a = ends[seg];
-    const double b = ends[seg + 1], mid = 0.5 * (a + b);
-    // the constraints of this segment: those active in its interior
+  // where the next segment starts when a bridge crossed its start (else -inf)
+  double resume = -std::numeric_limits<double>::infinity();
+  // the constraints of segment seg: those active in its interior
+  auto activate = [&](std::size_t seg) {
+    const double mid = 0.5 * (ends[seg] + ends[seg + 1]);
     for (Index k = 0; k < sys.constraint_count(); ++k) {
       ws.activity_override[std::size_t(k)] = sys.constraint(k).is_active(mid) ? 1 : 0;
     }
     run.apply_contact_modes();
     if (contacts.any()) contacts.apply();
-    // evaluations at a breakpoint end are one-sided (the run's own ends are not breakpoints)
     const double inf = std::numeric_limits<double>::infinity();
-    ode.set_window(seg == 0 ? -inf : a, seg + 2 == ends.size() ? inf : b);
+    ode.set_window(seg == 0 ? -inf : ends[seg], seg + 2 == ends.size() ? inf : ends[seg + 1]);
+  };
+  for (std::size_t seg = 0; seg + 1 < ends.size(); ++seg) {
+    double a = ends[seg];
+    const double b = ends[seg + 1];
+    // its constraints, contact modes and evaluation window (evaluations at a breakpoint end
+    // are one-sided; the run's own ends are not breakpoints)
+    activate(seg);
+    run.set_bridging_entries(run.locates_switches() || activity_changes);
     // a constraint that switches on finds the state inconsistent: project onto it (at a dead
     // centre, bridged past it instead: Run::bridge_dead_centre)
     bool changed = false;
-    if (seg > 0 && sys.constraint_count() > 0) {
+    if (resume > a) {
+      // (a bridge across this segment's start from inside the one before: landed here)
+      a = resume;
+    } else if (seg > 0 && sys.constraint_count() > 0) {
       Status s = Status::kOk;
       if (const double past = run.bridge_dead_centre(a, b, bridge_limit, x.data(), ode, s);
           s == Status::kOk && past > a) {
@@ -526,6 +548,43 @@ Trajectory detail::simulate_observed(const System& sys, const Eigen::Ref<const V
                         r.t_reached);
         }
         a = r.t_reached;
+        if (!(a < b)) break;
+        continue;
+      }
+      if (run.entered_dead_centre()) {
+        // a step of dopri5 or BDF ended inside a dead centre's neighbourhood: bridged past the
+        // pose from there (Run::entered_dead_centre), the switches it steps over take their
+        // new sides; else (no landing within reach) the run goes on from there
+        Status s = Status::kOk;
+        a = run.bridge_dead_centre(r.t_reached, b, bridge_limit, x.data(), ode, s, true);
+        // (at a breakpoint where constraints are released or activated: across it, with the
+        // next segment's constraints, landing past it)
+        if (s == Status::kOk && a == r.t_reached && activity_changes && seg + 2 < ends.size() &&
+            b - a < bridge_limit) {
+          activate(seg + 1);
+          a = run.bridge_dead_centre(r.t_reached, ends[seg + 2], bridge_limit, x.data(), ode, s,
+                                     true, b);
+          if (s == Status::kOk && a > b) {
+            if (!record_bridged(r.t_reached, a)) {
+              return finish(bridge_status, run.failure(), bridge_time);
+            }
+            resume = a;
+            break;
+          }
+          activate(seg);
+        }
+        if (s == Status::kOk && a > r.t_reached) {
+          if (!record_bridged(r.t_reached, a)) {
+            return finish(bridge_status, run.failure(), bridge_time);
+          }
+          traj.stats.switch_events += long(run.sides_after_bridge(a, x.data()));
+        } else if (s == Status::kOk) {
+          s = run.project_drift(r.t_reached, x.data());
+        }
+        if (s != Status::kOk) {
+          return finish(s, run.failure().empty() ? describe_status(sys, ws) : run.failure(),
+                        r.t_reached);
+        }
         if (!(a < b)) break;
         continue;
       }

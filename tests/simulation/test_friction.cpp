@@ -743,7 +743,7 @@ TEST(Friction, TwinArmsFollowTheSymmetricMotionForEveryMuOnEveryAdaptiveIntegrat
 // ended ok on the mirror branch, |th1 − th2| = 0.18 rad). It now hands the run to dopri5 before
 // the first dead centre its sliding contact enters (Run::hands_over), says so in the notes, and
 // the run is the symmetric motion (the sweep above checks it against the reduced model). The
-// check itself is pinned by DeadCentreEvents.ASwitchAtADeadCentreKeepsTheBranchOrStopsWithTheCause.
+// check itself is pinned by DeadCentreEvents.ASlowPassageNeverEndsOkOffItsBranch.
 TEST(Friction, TwinArmsUnderRkf78HandTheDeadCentreToDopri5) {
   const Model m = twin_arms(0.45);
   SimulationOptions o = m.options;
