@@ -5,6 +5,7 @@
 // tracking control.
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 #include <memory>
 #include <stdexcept>
 #include <string>
@@ -37,7 +38,24 @@ struct FrameScratch final : ConstraintScratch {
   Jacobian Ja, Jb;                               // (6 × n) frame Jacobians of the points a and b
   std::uint64_t version = 0;                     // kinematics.version of Ja and Jb
   bool Ja_valid = false, Jb_valid = false;       // Ja, Jb are those of data's kinematics
+  PoseSample desired;                            // a pose requirement's path at t_desired
+  double t_desired = 0.0;
+  bool desired_valid = false;  // desired holds the path at t_desired
 };
+
+// a pose requirement's path at t, once per time: the acceleration form and the violation of
+// one evaluation ask for the same t (the path is a function of t: the same t, bit for bit,
+// gives the same sample)
+const PoseSample& desired_at(const PosePathFn& path, double t, FrameScratch& w) {
+  if (!w.desired_valid || std::memcmp(&t, &w.t_desired, sizeof t) != 0) {
+    w.desired_valid = false;   // (a path that throws leaves no sample)
+    w.desired = PoseSample{};  // (the fields a path leaves unset keep their defaults)
+    path(t, w.desired);
+    w.t_desired = t;
+    w.desired_valid = true;
+  }
+  return w.desired;
+}
 
 // forward kinematics at q once per state: both points of a closure, and the acceleration form
 // and the violation of one evaluation, share it (the same q, bit for bit, gives the same
@@ -71,7 +89,11 @@ PointState point_state(const Tree& tree, const LinkPoint& pt, const Eigen::Ref<c
   }
   PointState s;
   if (with_bias) {
-    s.bias = detail::frame_bias_from_kinematics(tree, qd, d, pt.link, pt.p);
+    // the link velocities of the RNEA at this state, when it ran on these kinematics (the
+    // controller's model or the plant evaluated with the scratch this one shares)
+    const bool v_known = w.kinematics.velocities_at(qd);
+    s.bias = detail::frame_bias_from_kinematics(tree, qd, d, pt.link, pt.p, v_known);
+    if (!v_known) w.kinematics.clear_velocities();  // (written on links 0 … pt.link only)
   } else {
     s.bias.setZero();
   }
@@ -324,8 +346,7 @@ class PoseModel final : public FrameModel {
                          Eigen::Ref<VectorXd> b) const override {
     auto& w = *static_cast<FrameScratch*>(s);
     const PointState pt = point_state(*tree_, at_, q, qd, w, w.Ja, true);
-    PoseSample d;
-    path_(t, d);
+    const PoseSample& d = desired_at(path_, t, w);
     // position: J_v q'' = a_d − (J' q')_v
     A.topRows<3>() = w.Ja.bottomRows<3>();
     b.head<3>() = d.a - pt.bias.tail<3>();
@@ -352,8 +373,7 @@ class PoseModel final : public FrameModel {
                  Eigen::Ref<VectorXd> velocity) const override {
     auto& w = *static_cast<FrameScratch*>(s);
     const PointState pt = point_state(*tree_, at_, q, qd, w, w.Ja, false);
-    PoseSample d;
-    path_(t, d);
+    const PoseSample& d = desired_at(path_, t, w);
     position.head<3>() = pt.p_W - d.p;
     velocity.head<3>() = w.Ja.bottomRows<3>() * qd - d.v;
     if (!orientation_) return;
