@@ -43,6 +43,19 @@ struct FrameScratch final : ConstraintScratch {
   bool desired_valid = false;  // desired holds the path at t_desired
 };
 
+// L −= ½ [x]× [y]× = ½ (y xᵀ − (x · y) I), entry by entry: the products and sums of the 3 × 3
+// product of the two cross-product matrices without its terms that are zero (at most two terms
+// per entry, so the same bits as the product in any order). The orientation rows' L.
+void subtract_half_skew_product(const Vector3d& x, const Vector3d& y, Matrix3d& L) {
+  for (int j = 0; j < 3; ++j) {
+    for (int i = 0; i < 3; ++i) {
+      const int a = (i + 1) % 3, c = (i + 2) % 3;
+      const double p = i == j ? -(x[a] * y[a]) - x[c] * y[c] : y[i] * x[j];
+      L(i, j) -= 0.5 * p;
+    }
+  }
+}
+
 // a pose requirement's path at t, once per time: the acceleration form and the violation of
 // one evaluation ask for the same t (the path is a function of t: the same t, bit for bit,
 // gives the same sample)
@@ -246,7 +259,7 @@ class WeldModel final : public FrameModel {
     for (int k = 0; k < 3; ++k) {
       const Vector3d ra = Ra.col(k), rb = Rb.col(k);
       const Vector3d ra1 = wa.cross(ra), rb1 = wb.cross(rb);
-      L -= 0.5 * detail::skew(rb) * detail::skew(ra);
+      subtract_half_skew_product(rb, ra, L);
       rest += 0.5 * (wb.cross(rb1).cross(ra) + 2.0 * rb1.cross(ra1) + rb.cross(wa.cross(ra1)));
     }
     A.bottomRows<3>().noalias() = L * w.Ja.topRows<3>();
@@ -362,7 +375,7 @@ class PoseModel final : public FrameModel {
       const Vector3d r = R.col(k), rd = d.R.col(k);
       const Vector3d r1 = omega.cross(r), rd1 = d.w.cross(rd);
       const Vector3d rd2 = d.w_dot.cross(rd) + d.w.cross(rd1);
-      L -= 0.5 * detail::skew(rd) * detail::skew(r);
+      subtract_half_skew_product(rd, r, L);
       rest += 0.5 * (rd2.cross(r) + 2.0 * rd1.cross(r1) + rd.cross(omega.cross(r1)));
     }
     A.bottomRows<3>().noalias() = L * w.Ja.topRows<3>();
