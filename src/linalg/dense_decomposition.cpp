@@ -88,16 +88,21 @@ inline void upper_transpose_solve(const double* T, Index ld, const double* inv, 
 constexpr Index kSmall = 20;
 
 // A = L Lᵀ in place on the lower triangle of A (n × n), right-looking; false unless every pivot
-// is positive
+// is positive. Column k's trailing update stops at its last non-zero entry e: the rows below
+// it add L(j, k) L(i, k) = ±0, which leaves a finite entry as it is, so the result is bit for
+// bit that of the full update for a finite A. A block-diagonal A (a controlled system's
+// diag(M, I)) then costs what its blocks cost, a dense one a compare per column more.
 inline bool cholesky_in_place(double* A, Index ld, Index n) {
   for (Index k = 0; k < n; ++k) {
     double* Ak = A + k * ld;
     if (!(Ak[k] > 0.0)) return false;
     const double d = std::sqrt(Ak[k]), inv = 1.0 / d;
     Ak[k] = d;
-    for (Index i = k + 1; i < n; ++i) Ak[i] *= inv;
-    // trailing columns: A(j:n, j) −= L(j, k) L(j:n, k)
-    for (Index j = k + 1; j < n; ++j) axpy(-Ak[j], Ak + j, A + j * ld + j, n - j);
+    Index e = n - 1;  // the last non-zero entry of column k below the diagonal (k: none)
+    while (e > k && Ak[e] == 0.0) --e;
+    for (Index i = k + 1; i <= e; ++i) Ak[i] *= inv;
+    // trailing columns: A(j:e, j) −= L(j, k) L(j:e, k)
+    for (Index j = k + 1; j <= e; ++j) axpy(-Ak[j], Ak + j, A + j * ld + j, e + 1 - j);
   }
   return true;
 }

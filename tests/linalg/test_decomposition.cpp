@@ -1,5 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // FundamentalDecomposition against independent linear algebra (Eigen's SVD and LLT).
+#include <cmath>
+
 #include <gtest/gtest.h>
 
 #include <Eigen/Cholesky>
@@ -156,6 +158,48 @@ TEST(Decomposition, SolveMassInvertsM) {
   VectorXd x(9);
   d.solve_mass(p.Q, x);
   EXPECT_NEAR(rel_diff(p.M * x, p.Q), 0.0, 1e-13);
+}
+
+// The small Cholesky stops each column's update at its last non-zero entry, found after the
+// earlier columns' updates: with zero tails that fill in (column 2 of M is zero below row 2
+// until column 0's update writes L_42), interior zeros and a block-diagonal diag(M, I) (a
+// controlled system's), L is Eigen's LLT's to roundoff, and the block-diagonal factor is bit for
+// bit the factor of M alone in its block and the identity in the other
+TEST(Decomposition, CholeskyOfSparseColumnsMatchesEigen) {
+  const Index n = 9;
+  MatrixXd S = MatrixXd::Zero(n, n);
+  for (Index k = 0; k < n; ++k) S(k, k) = 4.0 + 0.5 * double(k);
+  const auto pair = [&](Index i, Index j, double v) { S(i, j) = S(j, i) = v; };
+  pair(2, 0, 1.0);
+  pair(4, 0, 1.5);  // fill-in at (4, 2)
+  pair(6, 5, 0.4);
+  pair(8, 1, 0.9);  // column 1: zeros between rows 2 and 7
+  FundamentalDecomposition d(n, 0);
+  ASSERT_EQ(d.compute_mass(S).info(), Eigen::Success);
+  const MatrixXd L = d.matrix_llt().triangularView<Eigen::Lower>();
+  const MatrixXd L_eigen = Eigen::LLT<MatrixXd>(S).matrixL();
+  EXPECT_NEAR(rel_diff(L, L_eigen), 0.0, 1e-15);
+  // the fill-in and the far entry are there: L_42 = −L_20 L_40 / L_22
+  EXPECT_NEAR(L(4, 2), -(L(2, 0) * L(4, 0)) / L(2, 2), 1e-15);
+  EXPECT_LT(L(4, 2), -0.05);
+  EXPECT_NEAR(L(8, 1), 0.9 / std::sqrt(4.5), 1e-15);
+  // diag(M, I): the block's factor is that of M alone, bit for bit; the identity stays
+  const auto p = random_problem(6, 2, 2, 11u, false);
+  MatrixXd big = MatrixXd::Identity(9, 9);
+  big.topLeftCorner(6, 6) = p.M;
+  FundamentalDecomposition d6(6, 0), d9(9, 0);
+  ASSERT_EQ(d6.compute_mass(p.M).info(), Eigen::Success);
+  ASSERT_EQ(d9.compute_mass(big).info(), Eigen::Success);
+  const MatrixXd L9 = d9.matrix_llt().triangularView<Eigen::Lower>();
+  EXPECT_EQ(MatrixXd(L9.topLeftCorner(6, 6)),
+            MatrixXd(d6.matrix_llt().triangularView<Eigen::Lower>()));
+  EXPECT_EQ(MatrixXd(L9.bottomRows(3)), MatrixXd(MatrixXd::Identity(9, 9).bottomRows(3)));
+  EXPECT_NEAR(rel_diff(L9, MatrixXd(Eigen::LLT<MatrixXd>(big).matrixL())), 0.0, 1e-15);
+  // a pivot that the trimmed update makes zero is still found (M_44 = L_40² + L_42² exactly
+  // would leave 0; a little less, a negative pivot)
+  MatrixXd singular = S;
+  singular(4, 4) = L(4, 0) * L(4, 0) + L(4, 2) * L(4, 2) - 1e-3;
+  EXPECT_EQ(d.compute_mass(singular).info(), Eigen::NumericalIssue);
 }
 
 }  // namespace UKDYN_TEST_FILE

@@ -204,5 +204,46 @@ TEST(TreeSharedKinematics, ControlRequirementsReadTheModelsKinematics) {
   }
 }
 
+// The link velocities the tree's RNEA leaves in the shared kinematics are read by a frame
+// requirement's J' q' pass at that very state only: at the same q and another q', after the
+// closure wrote them at another q', and after the kinematics moved, the closure's rows are bit
+// for bit those of a closure with kinematics of its own
+TEST(TreeSharedKinematics, RneaVelocitiesReadOnlyAtTheirState) {
+  const Tree tree = load_urdf(kPanda);
+  SystemBuilder sb = system_builder(tree);
+  sb.add(rod(tree));
+  const System sys = sb.build();
+  const Constraint& c = sys.constraint(0);
+  const auto scratch = sys.make_scratch();
+  const auto closure = c.model().make_scratch_sharing(7, scratch.get());
+  const auto own = c.model().make_scratch(7);
+  detail::KinematicsCache* k = detail::shared_kinematics(scratch.get(), tree);
+  ASSERT_NE(k, nullptr);
+  const VectorXd q1 = pose(0.0), q2 = pose(0.3), qd1 = rates(), qd2 = -2.0 * rates();
+  VectorXd Q(7), b(1), b_own(1);
+  MatrixXd A(1, 7), A_own(1, 7);
+  const auto check = [&](const VectorXd& q, const VectorXd& qd, bool reused) {
+    k->at(tree, q);  // (what the closure does first: the kinematics at q)
+    EXPECT_EQ(k->velocities_at(qd), reused);
+    c.model().acceleration_form(q, qd, 0.0, closure.get(), A, b);
+    c.model().acceleration_form(q, qd, 0.0, own.get(), A_own, b_own);
+    EXPECT_EQ(A, A_own);
+    EXPECT_EQ(b, b_own);
+  };
+  sys.forces(q1, qd1, 0.0, scratch.get(), Q);  // the RNEA at (q1, q1'): v marked
+  check(q1, qd1, true);                        // read
+  check(q1, qd2, false);                       // another q': computed (and the mark cleared)
+  check(q1, qd1, false);                       // v written at q2': not read
+  sys.forces(q1, qd2, 0.0, scratch.get(), Q);  // the RNEA at (q1, q2')
+  check(q1, qd2, true);
+  check(q2, qd2, false);  // the kinematics moved
+  sys.forces(q2, qd1, 0.0, scratch.get(), Q);
+  check(q2, qd1, true);
+  // (b depends on q': the comparisons can fail)
+  VectorXd b2(1);
+  c.model().acceleration_form(q2, qd2, 0.0, own.get(), A_own, b2);
+  EXPECT_GT(std::abs(b2[0] - b_own[0]), 1e-3);
+}
+
 }  // namespace UKDYN_TEST_FILE
 }  // namespace ukdyn::tree

@@ -5,6 +5,7 @@
 // tracking control.
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 #include <memory>
 #include <stdexcept>
 #include <string>
@@ -37,7 +38,37 @@ struct FrameScratch final : ConstraintScratch {
   Jacobian Ja, Jb;                               // (6 × n) frame Jacobians of the points a and b
   std::uint64_t version = 0;                     // kinematics.version of Ja and Jb
   bool Ja_valid = false, Jb_valid = false;       // Ja, Jb are those of data's kinematics
+  PoseSample desired;                            // a pose requirement's path at t_desired
+  double t_desired = 0.0;
+  bool desired_valid = false;  // desired holds the path at t_desired
 };
+
+// L −= ½ [x]× [y]× = ½ (y xᵀ − (x · y) I), entry by entry: the products and sums of the 3 × 3
+// product of the two cross-product matrices without its terms that are zero (at most two terms
+// per entry, so the same bits as the product in any order). The orientation rows' L.
+void subtract_half_skew_product(const Vector3d& x, const Vector3d& y, Matrix3d& L) {
+  for (int j = 0; j < 3; ++j) {
+    for (int i = 0; i < 3; ++i) {
+      const int a = (i + 1) % 3, c = (i + 2) % 3;
+      const double p = i == j ? -(x[a] * y[a]) - x[c] * y[c] : y[i] * x[j];
+      L(i, j) -= 0.5 * p;
+    }
+  }
+}
+
+// a pose requirement's path at t, once per time: the acceleration form and the violation of
+// one evaluation ask for the same t (the path is a function of t: the same t, bit for bit,
+// gives the same sample)
+const PoseSample& desired_at(const PosePathFn& path, double t, FrameScratch& w) {
+  if (!w.desired_valid || std::memcmp(&t, &w.t_desired, sizeof t) != 0) {
+    w.desired_valid = false;   // (a path that throws leaves no sample)
+    w.desired = PoseSample{};  // (the fields a path leaves unset keep their defaults)
+    path(t, w.desired);
+    w.t_desired = t;
+    w.desired_valid = true;
+  }
+  return w.desired;
+}
 
 // forward kinematics at q once per state: both points of a closure, and the acceleration form
 // and the violation of one evaluation, share it (the same q, bit for bit, gives the same
@@ -71,7 +102,11 @@ PointState point_state(const Tree& tree, const LinkPoint& pt, const Eigen::Ref<c
   }
   PointState s;
   if (with_bias) {
-    s.bias = detail::frame_bias_from_kinematics(tree, qd, d, pt.link, pt.p);
+    // the link velocities of the RNEA at this state, when it ran on these kinematics (the
+    // controller's model or the plant evaluated with the scratch this one shares)
+    const bool v_known = w.kinematics.velocities_at(qd);
+    s.bias = detail::frame_bias_from_kinematics(tree, qd, d, pt.link, pt.p, v_known);
+    if (!v_known) w.kinematics.clear_velocities();  // (written on links 0 … pt.link only)
   } else {
     s.bias.setZero();
   }
@@ -224,7 +259,7 @@ class WeldModel final : public FrameModel {
     for (int k = 0; k < 3; ++k) {
       const Vector3d ra = Ra.col(k), rb = Rb.col(k);
       const Vector3d ra1 = wa.cross(ra), rb1 = wb.cross(rb);
-      L -= 0.5 * detail::skew(rb) * detail::skew(ra);
+      subtract_half_skew_product(rb, ra, L);
       rest += 0.5 * (wb.cross(rb1).cross(ra) + 2.0 * rb1.cross(ra1) + rb.cross(wa.cross(ra1)));
     }
     A.bottomRows<3>().noalias() = L * w.Ja.topRows<3>();
@@ -324,8 +359,7 @@ class PoseModel final : public FrameModel {
                          Eigen::Ref<VectorXd> b) const override {
     auto& w = *static_cast<FrameScratch*>(s);
     const PointState pt = point_state(*tree_, at_, q, qd, w, w.Ja, true);
-    PoseSample d;
-    path_(t, d);
+    const PoseSample& d = desired_at(path_, t, w);
     // position: J_v q'' = a_d − (J' q')_v
     A.topRows<3>() = w.Ja.bottomRows<3>();
     b.head<3>() = d.a - pt.bias.tail<3>();
@@ -341,7 +375,7 @@ class PoseModel final : public FrameModel {
       const Vector3d r = R.col(k), rd = d.R.col(k);
       const Vector3d r1 = omega.cross(r), rd1 = d.w.cross(rd);
       const Vector3d rd2 = d.w_dot.cross(rd) + d.w.cross(rd1);
-      L -= 0.5 * detail::skew(rd) * detail::skew(r);
+      subtract_half_skew_product(rd, r, L);
       rest += 0.5 * (rd2.cross(r) + 2.0 * rd1.cross(r1) + rd.cross(omega.cross(r1)));
     }
     A.bottomRows<3>().noalias() = L * w.Ja.topRows<3>();
@@ -352,8 +386,7 @@ class PoseModel final : public FrameModel {
                  Eigen::Ref<VectorXd> velocity) const override {
     auto& w = *static_cast<FrameScratch*>(s);
     const PointState pt = point_state(*tree_, at_, q, qd, w, w.Ja, false);
-    PoseSample d;
-    path_(t, d);
+    const PoseSample& d = desired_at(path_, t, w);
     position.head<3>() = pt.p_W - d.p;
     velocity.head<3>() = w.Ja.bottomRows<3>() * qd - d.v;
     if (!orientation_) return;

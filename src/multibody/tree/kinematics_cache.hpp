@@ -19,12 +19,33 @@ namespace ukdyn::tree::detail {
 /// remembers `version` and drops them when it changed.
 struct KinematicsCache {
   /// Sizes the buffers for `tree`. Allocates (once).
-  explicit KinematicsCache(const Tree& tree) : data(tree), q(tree.coordinate_count()) {}
+  explicit KinematicsCache(const Tree& tree)
+      : data(tree), q(tree.coordinate_count()), qd_v(tree.coordinate_count()) {}
 
   TreeData data;              ///< the passes' links; the kinematics are those of q when valid
   VectorXd q;                 ///< (n) the q of data's kinematics
   bool valid = false;         ///< data holds the kinematics of q
   std::uint64_t version = 0;  ///< incremented by every forward kinematics run here
+  /// The link velocities data.v: every link's, at the kinematics of v_version (0: none) and
+  /// q' = qd_v, as an RNEA leaves them (mark_velocities). A pass that writes data.v at another
+  /// q' clears them (clear_velocities); one at the same q' writes the same bits.
+  VectorXd qd_v;                ///< (n) the q' of data.v
+  std::uint64_t v_version = 0;  ///< the version of data.v's kinematics; 0: data.v unknown
+
+  /// Whether data.v holds every link's velocity at the current kinematics and q' = qd (bit for
+  /// bit). Cost O(n).
+  bool velocities_at(const Eigen::Ref<const VectorXd>& qd) const {
+    return valid && v_version == version && qd.size() == qd_v.size() &&
+           std::memcmp(qd.data(), qd_v.data(), sizeof(double) * std::size_t(qd.size())) == 0;
+  }
+  /// Records that a pass over every link (the RNEA) just wrote data.v at the current kinematics
+  /// and q' = qd. Cost O(n).
+  void mark_velocities(const Eigen::Ref<const VectorXd>& qd) {
+    qd_v = qd;
+    v_version = version;
+  }
+  /// Records that data.v was written at another q' (or on some links only). Cost O(1).
+  void clear_velocities() { v_version = 0; }
 
   /// forward_kinematics(tree, q_in, data) unless data already holds it (q_in equal to q bit for
   /// bit, which gives the same kinematics bit for bit). Cost O(n) when kept, O(links) otherwise.

@@ -88,18 +88,20 @@ Vector6d frame_bias_acceleration(const Tree& tree, const Eigen::Ref<const Vector
 }
 
 Vector6d detail::frame_bias_from_kinematics(const Tree& tree, const Eigen::Ref<const VectorXd>& qd,
-                                            TreeData& d, Index link, const Vector3d& p_L) {
-  // outward, as the RNEA's with q'' = 0 and no gravity (every link: the ancestors come first)
+                                            TreeData& d, Index link, const Vector3d& p_L,
+                                            bool v_known) {
+  // outward, as the RNEA's with q'' = 0 and no gravity (every link: the ancestors come first);
+  // v_i as the RNEA's, unless d.v holds them already
   for (Index i = 0; i <= link; ++i) {
     const std::size_t k = std::size_t(i);
     const Index p = tree.parent(i);
     const int ni = tree.dofs(i);
     const Vector6d vJ = detail::joint_velocity(d.S[k], qd, tree.offset(i), ni);
     if (p < 0) {
-      d.v[k] = vJ;
+      if (!v_known) d.v[k] = vJ;
       d.a[k].setZero();
     } else {
-      d.v[k] = detail::motion_to_child(d.E[k], d.r[k], d.v[std::size_t(p)]) + vJ;
+      if (!v_known) d.v[k] = detail::motion_to_child(d.E[k], d.r[k], d.v[std::size_t(p)]) + vJ;
       d.a[k] = detail::motion_to_child(d.E[k], d.r[k], d.a[std::size_t(p)]);
     }
     if (ni > 0) d.a[k] += detail::joint_bias(tree, d, i, qd) + detail::cross_motion(d.v[k], vJ);

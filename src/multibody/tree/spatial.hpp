@@ -24,9 +24,13 @@ void rnea_from_kinematics(const Tree& tree, const Eigen::Ref<const VectorXd>& qd
                           Eigen::Ref<VectorXd> tau);
 
 /// frame_bias_acceleration from the kinematics in d (forward_kinematics at q already run): its
-/// outward pass after its checks. Cost O(depth).
+/// outward pass after its checks. v_known: d.v already holds every link's velocity at this q
+/// and q' (an RNEA at this state ran on d: KinematicsCache::velocities_at), so only the
+/// accelerations are computed (the same bits: the same expression); otherwise d.v of the links
+/// 0 … link is written. Cost O(depth).
 Vector6d frame_bias_from_kinematics(const Tree& tree, const Eigen::Ref<const VectorXd>& qd,
-                                    TreeData& d, Index link, const Vector3d& p_L);
+                                    TreeData& d, Index link, const Vector3d& p_L,
+                                    bool v_known = false);
 
 /// [x]×, the cross-product matrix.
 inline Matrix3d skew(const Vector3d& x) {

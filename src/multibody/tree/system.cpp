@@ -24,8 +24,7 @@ struct TreeScratch final : CallableScratch {
         h(tree->coordinate_count()),
         tau(tree->coordinate_count()),
         M(tree->coordinate_count(), tree->coordinate_count()),
-        Q(tree->coordinate_count()),
-        qd_Q(tree->coordinate_count()) {}
+        Q(tree->coordinate_count()) {}
   std::shared_ptr<const Tree> tree;  // the system's tree (for shared_kinematics)
   // the forward kinematics at the last q: M, Q and V of one evaluation (and the frame
   // constraints evaluated with this workspace, detail::shared_kinematics) share it
@@ -35,9 +34,8 @@ struct TreeScratch final : CallableScratch {
   // the last M and Q at the kinematics of version `version` (an evaluation that shares this
   // scratch at the same state, a controller's model evaluated with its plant, copies them),
   // filled by M and Q
-  MatrixXd M;     // (n × n) M(q)
-  VectorXd Q;     // (n) Q(q, q_Q, t_Q)
-  VectorXd qd_Q;  // (n) the q' of Q
+  MatrixXd M;  // (n × n) M(q)
+  VectorXd Q;  // (n) Q(q, q', t_Q), q' = kinematics.qd_v (the RNEA's, which marks it)
   double t_Q = 0.0;
   std::uint64_t version = 0;  // kinematics.version of M and Q
   bool M_valid = false, Q_valid = false;
@@ -158,11 +156,16 @@ SystemBuilder system_builder(const Tree& tree_in, JointTorqueFn tau) {
     // (the Q of this q, q' and t, bit for bit, is the one kept — only without an input τ: a
     // user's τ may depend on more than q, q' and t, e.g. a sweep's parameters or its own state)
     if (!tau && ts.Q_valid && t == ts.t_Q &&
-        std::memcmp(qd.data(), ts.qd_Q.data(), sizeof(double) * std::size_t(qd.size())) == 0) {
+        std::memcmp(qd.data(), ts.kinematics.qd_v.data(),
+                    sizeof(double) * std::size_t(qd.size())) == 0) {
       Q = ts.Q;
       return;
     }
     detail::rnea_from_kinematics(*tree, qd, nullptr, ts.kinematics.data, ts.h);
+    // data.v are the velocities at q' (a frame requirement's J' q' pass sharing these
+    // kinematics reads them), and qd_v the q' of the Q kept once it is complete
+    ts.Q_valid = false;
+    ts.kinematics.mark_velocities(qd);
     Q = -ts.h - D.cwiseProduct(qd);
     if (tau) {
       tau(q, qd, t, ts.tau);
@@ -174,7 +177,6 @@ SystemBuilder system_builder(const Tree& tree_in, JointTorqueFn tau) {
           (k.c * qd.segment<4>(k.offset).squaredNorm()) * q.segment<4>(k.offset);
     }
     ts.Q = Q;
-    ts.qd_Q = qd;
     ts.t_Q = t;
     ts.Q_valid = true;
   });
