@@ -49,6 +49,13 @@ Constraint rod(const Tree& tree) {
                              {tree.link_index("panda_link3"), Vector3d(0.1, 0, 0)}, 0.5);
 }
 
+// the Panda's tree with the rod closing a loop from its tool to its third link
+System with_rod(const Tree& tree) {
+  SystemBuilder sb = system_builder(tree);
+  sb.add(rod(tree));
+  return sb.build();
+}
+
 TEST(TreeSharedKinematics, SharedOnlyWithTheSameKinematics) {
   const Tree tree = load_urdf(kPanda);
   const System sys = make_system(tree);
@@ -70,9 +77,7 @@ TEST(TreeSharedKinematics, SharedOnlyWithTheSameKinematics) {
 // M, Q and a closure's rows at one state: one forward kinematics between them
 TEST(TreeSharedKinematics, OneForwardKinematicsPerState) {
   const Tree tree = load_urdf(kPanda);
-  SystemBuilder sb = system_builder(tree);
-  sb.add(rod(tree));
-  const System sys = sb.build();
+  const System sys = with_rod(tree);
   Workspace ws(sys);
   detail::KinematicsCache* k = detail::shared_kinematics(ws.callables.get(), tree);
   ASSERT_NE(k, nullptr);
@@ -92,9 +97,7 @@ TEST(TreeSharedKinematics, OneForwardKinematicsPerState) {
 // whose closure has kinematics of its own (the kept M, Q and Jacobians dropped when stale)
 TEST(TreeSharedKinematics, InterleavedStatesGiveTheUnsharedResults) {
   const Tree tree = load_urdf(kPanda);
-  SystemBuilder sb = system_builder(tree);
-  sb.add(rod(tree));
-  const System sys = sb.build();
+  const System sys = with_rod(tree);
   const Constraint& c = sys.constraint(0);
   Workspace shared(sys), own(sys);
   own.scratch[0] = c.model().make_scratch(7);
@@ -132,9 +135,7 @@ TEST(TreeSharedKinematics, InterleavedStatesGiveTheUnsharedResults) {
 // Q are always those of the state asked for, bit for bit those of a scratch of their own
 TEST(TreeSharedKinematics, KeptMassMatrixAndForcesFollowTheKinematics) {
   const Tree tree = load_urdf(kPanda);
-  SystemBuilder sb = system_builder(tree);
-  sb.add(rod(tree));
-  const System sys = sb.build();
+  const System sys = with_rod(tree);
   const Constraint& c = sys.constraint(0);
   const auto scratch = sys.make_scratch();
   const auto closure = c.model().make_scratch_sharing(7, scratch.get());
@@ -210,9 +211,7 @@ TEST(TreeSharedKinematics, ControlRequirementsReadTheModelsKinematics) {
 // for bit those of a closure with kinematics of its own
 TEST(TreeSharedKinematics, RneaVelocitiesReadOnlyAtTheirState) {
   const Tree tree = load_urdf(kPanda);
-  SystemBuilder sb = system_builder(tree);
-  sb.add(rod(tree));
-  const System sys = sb.build();
+  const System sys = with_rod(tree);
   const Constraint& c = sys.constraint(0);
   const auto scratch = sys.make_scratch();
   const auto closure = c.model().make_scratch_sharing(7, scratch.get());
