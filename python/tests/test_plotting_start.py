@@ -92,3 +92,35 @@ def test_a_run_that_cannot_start_draws_nothing_and_leaves_nothing(cli, tmp_path)
     run = tmp_path / "run"
     assert not os.path.exists(run) or pngs(run) == []
     assert not [f for f in os.listdir(tmp_path) if f.startswith("ukdyn-plot-")]
+
+
+@pytest.mark.parametrize("missing", ["numpy", "matplotlib"])
+def test_a_python_without_the_plotting_modules_gets_one_warning_not_a_traceback(cli, tmp_path,
+                                                                                missing):
+    """A python whose plotting modules are missing (here: Debian's /usr/bin/python3 with a
+    sitecustomize that hides NumPy, and with it matplotlib, or matplotlib alone): the run's files
+    are written, the command warns in one line (exit 0: a documented warning, docs/simulation.md,
+    the plots' paragraph) and no traceback is printed."""
+    hide = tmp_path / "hide"
+    hide.mkdir()
+    (hide / "sitecustomize.py").write_text(
+        "import sys\n"
+        "class Hide:\n"
+        "    def find_spec(self, name, path=None, target=None):\n"
+        "        if name.split('.')[0] in (%r, 'matplotlib'):\n"
+        "            raise ImportError('hidden: ' + name)\n"
+        "sys.meta_path.insert(0, Hide())\n" % missing)
+    python = tmp_path / "python-without"
+    python.write_text('#!/bin/sh\nPYTHONPATH="%s" exec /usr/bin/python3 "$@"\n' % hide)
+    python.chmod(python.stat().st_mode | stat.S_IXUSR)
+    model = tmp_path / "free.yaml"
+    model.write_text(FREE)
+    env = dict(os.environ, UKDYN_PYTHON=str(python), TMPDIR=str(tmp_path))
+    done = subprocess.run([cli, "run", str(model), "-o", str(tmp_path / "run")],
+                          capture_output=True, text=True, env=env)
+    assert done.returncode == 0, done.stderr
+    assert "Traceback" not in done.stderr
+    assert ("warning: %s has no matplotlib: no plots" % python) in done.stderr
+    assert {"summary.json", "trajectory.csv"} <= set(os.listdir(tmp_path / "run"))
+    assert pngs(tmp_path / "run") == []
+    assert not [f for f in os.listdir(tmp_path) if f.startswith("ukdyn-plot-")]

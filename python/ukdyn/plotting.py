@@ -50,7 +50,15 @@ from __future__ import annotations
 import os
 import sys
 
-import numpy as np
+try:
+    import numpy as np
+except ImportError:
+    if __name__ != "__main__":
+        raise
+    # run as the command's script by a python without NumPy (which matplotlib needs too): the
+    # command's one-line "no matplotlib" warning (exit 3, as below), not a traceback
+    sys.stderr.write("plotting.py: NumPy is not installed\n")
+    sys.exit(3)
 
 
 def _module(name):
