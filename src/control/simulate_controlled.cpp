@@ -680,11 +680,16 @@ ControlledTrajectory simulate_controlled(
         after->t_last = w.t_last;
       },
       [&](Workspace& ws) {
-        // the contacts' modes of the run (the plant's constraint indices: the augmented system
-        // keeps them), for the control's model in the run's evaluations and at the samples
-        run_modes = &ws.activity_override;
-        static_cast<ControlledScratch&>(*ws.callables).run_modes = run_modes;
-        run_scratch = &static_cast<ControlledScratch&>(*ws.callables);
+        // the contacts' modes of each workspace of the run (the plant's constraint indices: the
+        // augmented system keeps them), for the control's model in its evaluations: the run's
+        // own (the first; also the samples'), then the branch check's, whose modes are a copy
+        // of the run's (it used to evaluate the control with every contact held)
+        auto& scratch = static_cast<ControlledScratch&>(*ws.callables);
+        scratch.run_modes = &ws.activity_override;
+        if (run_scratch == nullptr) {
+          run_modes = &ws.activity_override;
+          run_scratch = &scratch;
+        }
       });
   const ControlledScratch& w = *after;
 

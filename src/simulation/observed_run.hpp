@@ -1,8 +1,10 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // detail::simulate_observed (dynamics/internal.hpp) with a second observer, `started`, called
-// with the run's workspace once it is made, before the first evaluation: the controlled plant's
-// scratch then points at the run's contact modes (ws.activity_override), which its controller's
-// model mirrors (control/simulate_controlled.cpp, docs/contact.md "Contacts under control").
+// with the run's workspace once it is made, before the first evaluation, and with each workspace
+// the run makes later (the branch check's, Run::branch_workspace): the controlled plant's scratch
+// of each then points at that workspace's contact modes (ws.activity_override; the branch
+// check's copies the run's), which its controller's model mirrors
+// (control/simulate_controlled.cpp, docs/contact.md "Contacts under control").
 #pragma once
 
 #include <functional>

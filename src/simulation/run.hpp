@@ -102,6 +102,10 @@ class Run {
       std::function<void(const Workspace&)> finished = {});
 
   Workspace& workspace() { return ws_; }
+  // `started` is called with every workspace the run makes besides its own (the branch check's,
+  // when it is made), as detail::simulate_observed calls it with the run's: a controlled plant's
+  // scratch then mirrors that workspace's contact modes (control/simulate_controlled.cpp)
+  void set_started(std::function<void(Workspace&)> started) { started_ = std::move(started); }
   bool projecting() const { return projecting_; }
 
   // --- drift control (run_drift.cpp; docs/simulation.md, "Drift control") ------------------
@@ -384,7 +388,8 @@ class Run {
   int crawling_steps_ = 0;  // steps in a row, up to now, that diverged at a crawl
   // a passage of a singular configuration (see leaves_branch): under way; its start's time, the
   // M-norm of q'' there, and q' there (n)
-  std::unique_ptr<Workspace> branch_ws_;  // (branch_workspace)
+  std::unique_ptr<Workspace> branch_ws_;     // (branch_workspace)
+  std::function<void(Workspace&)> started_;  // (set_started)
   bool in_pose_ = false;
   double pose_t_ = 0.0, pose_acceleration_ = 0.0, pose_margin_ = 0.0, step_t_ = 0.0;
   VectorXd pose_velocity_ = VectorXd::Zero(n_), step_velocity_ = VectorXd::Zero(n_);

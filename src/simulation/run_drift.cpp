@@ -323,9 +323,13 @@ bool Run::leaves_branch(double t, const double* x) {
 
 // the branch check's own workspace, in the run's modes (contacts held open or closed, stick or
 // slip, drift control, scales): its evaluations at step ends leave the run's workspace as the
-// integrator and the events left it. Copies of equal sizes: no allocation.
+// integrator and the events left it. Copies of equal sizes: no allocation. Made at its first
+// use, and then handed to `started_` (a controlled plant's control mirrors its modes).
 Workspace& Run::branch_workspace() {
-  if (!branch_ws_) branch_ws_ = std::make_unique<Workspace>(sys_, ws_.options());
+  if (!branch_ws_) {
+    branch_ws_ = std::make_unique<Workspace>(sys_, ws_.options());
+    if (started_) started_(*branch_ws_);
+  }
   Workspace& w = *branch_ws_;
   w.activity_override = ws_.activity_override;
   w.stabilization = ws_.stabilization;

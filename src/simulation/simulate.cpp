@@ -174,7 +174,10 @@ Trajectory detail::simulate_observed(const System& sys, const Eigen::Ref<const V
   if (!rtol_note.empty()) traj.stats.notes.push_back(rtol_note);
   Run run(sys, o, traj, finished);
   Workspace& ws = run.workspace();
-  if (started) started(ws);
+  if (started) {
+    started(ws);
+    run.set_started(started);  // (and the workspaces the run makes later)
+  }
   const Index n = sys.coordinate_count();
 
   // initial conditions: consistent, or projected on request (constraints that contradict each

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "control/contact_modes.hpp"
+#include "simulation/observed_run.hpp"
 #include "ukdyn/control/control.hpp"
 #include "ukdyn/dynamics/contact.hpp"
 #include "ukdyn/modelfile/model.hpp"
@@ -436,6 +437,32 @@ TEST(ControlContacts, BadCombinationsAreRefusedByName) {
   } catch (const std::exception& ex) {
     EXPECT_NE(std::string(ex.what()).find("unilateral"), std::string::npos) << ex.what();
   }
+}
+
+// The workspaces a run makes besides its own reach the `started` observer too: the branch
+// check's (made at the first step judged near a dead centre), whose controlled-plant scratch
+// then mirrors its own contact modes (a copy of the run's) instead of holding every contact
+// (simulate_controlled). The twin arms' slow passage of their dead centre under dopri5
+// (tests/data/twin_arms_coulomb.yaml, mu = 0, from th = 0.005): the run's workspace first, then
+// one other; the motion is bit for bit that of `simulate`.
+TEST(ControlContacts, TheBranchChecksWorkspaceReachesTheStartedObserver) {
+  const Model m = load_model(std::string(UKDYN_TESTS_DIR) + "/data/twin_arms_coulomb.yaml",
+                             {{"mu", 0.0}, {"th0", 0.005}});
+  SimulationOptions o = m.options;
+  o.integrator = Integrator::kDopri5;
+  std::vector<const Workspace*> started;
+  std::vector<std::size_t> modes;
+  const Trajectory tr = detail::simulate_observed(m.system, m.q0, m.qd0, o, {}, [&](Workspace& ws) {
+    started.push_back(&ws);
+    modes.push_back(ws.activity_override.size());
+  });
+  ASSERT_EQ(tr.stats.status, Status::kOk) << tr.stats.message;
+  ASSERT_EQ(started.size(), 2u);
+  EXPECT_NE(started[0], started[1]);
+  EXPECT_EQ(modes[0], modes[1]);
+  const Trajectory plain = simulate(m.system, m.q0, m.qd0, o);
+  EXPECT_EQ(tr.q, plain.q);
+  EXPECT_EQ(tr.stats.steps, plain.stats.steps);
 }
 
 }  // namespace UKDYN_TEST_FILE
