@@ -507,7 +507,9 @@ def bodies_figure(table, meta=None):
         ax.set_aspect("equal", "datalim")
         ax.set_xlabel(_label(a, coordinate_unit(meta, bodies[0][0] + "." + a) or "m"))
         ax.set_ylabel(_label(b, coordinate_unit(meta, bodies[0][0] + "." + b) or "m"))
-        ax.set_title("%s–%s view" % (a, b), fontsize="medium")
+        # (an explicit y, as untitled's: no search for the title's place, which laid out the
+        # panel's y axis in every layout round and draw; the ticks are below, the title at 1.0)
+        ax.set_title("%s–%s view" % (a, b), fontsize="medium", y=1.0)
         ax.grid(True, alpha=0.3)
     _legend(axes[-1])
     return fig
@@ -599,6 +601,16 @@ FIGURES = (("coordinates", coordinates_figure), ("constraint_forces", forces_fig
            ("energy", energy_figure),
            ("control", control_figure), ("bodies", bodies_figure),
            ("joint_reactions", joint_reactions_figure), ("outputs", outputs_figure))
+
+#: the CPU time a figure typically takes to make, lay out and write as PNG (seconds, one
+#: process on the 2-core machine of bench/RESULTS.md, "Plotting time, fourth step"): about
+#: 0.1 s and 0.08 s a panel. The forked processes of write_figures take the figures dearest
+#: first, so that the last one taken is a cheap one and the two finish together (in FIGURES'
+#: order the control figure, six panels, came sixth of seven: one process drew it alone at the
+#: end)
+COST = {"control": 0.55, "bodies": 0.35, "constraint_forces": 0.3, "coordinates": 0.3,
+        "violation": 0.27, "joint_reactions": 0.25, "energy": 0.24, "contacts": 0.21,
+        "outputs": 0.15}
 
 
 def figures(table, meta=None, style_name="screen"):
