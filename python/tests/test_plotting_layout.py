@@ -123,3 +123,28 @@ def test_a_draw_lays_out_each_axis_twice_not_for_empty_titles(runs, monkeypatch)
             checked += 1
             plt.close(fig)
     assert checked >= 16
+
+
+def test_linear_axes_have_at_most_tick_bins_intervals(runs):
+    """plotting.few_ticks: every linear axis of the plots has between 2 and TICK_BINS + 1 major
+    ticks in its view (matplotlib's default fitted eight or nine on a panel's y axis: each tick
+    five objects laid out and drawn); a log axis keeps its decades."""
+    from matplotlib.ticker import LogLocator, MaxNLocator
+    checked = logs = 0
+    for name in ("slider_crank", "heavy_top", "control_triple_pendulum_tip"):
+        for stem, fig in runs[name].figures().items():
+            fig.canvas.draw()
+            for ax in fig.axes:
+                for axis, (low, high) in ((ax.xaxis, ax.get_xlim()), (ax.yaxis, ax.get_ylim())):
+                    locator = axis.get_major_locator()
+                    if isinstance(locator, LogLocator):
+                        logs += 1
+                        continue
+                    assert isinstance(locator, MaxNLocator), (name, stem)
+                    low, high = min(low, high), max(low, high)
+                    inside = [v for v in axis.get_majorticklocs()
+                              if low - 1e-9 * (high - low) <= v <= high + 1e-9 * (high - low)]
+                    assert 2 <= len(inside) <= plotting.TICK_BINS + 1, (name, stem, inside)
+                    checked += 1
+            plt.close(fig)
+    assert checked >= 40 and logs >= 2
