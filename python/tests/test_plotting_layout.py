@@ -148,3 +148,30 @@ def test_linear_axes_have_at_most_tick_bins_intervals(runs):
                     checked += 1
             plt.close(fig)
     assert checked >= 40 and logs >= 2
+
+
+def test_one_layout_round_when_the_ticks_do_not_change(runs, monkeypatch):
+    """FixedLayout measures a second time only when placing the panels changed their ticks or
+    views (plotting_layout._ticks): the plots' linear axes (few_ticks) keep theirs, so one round;
+    the bodies' equal-aspect views always take two. One round places the panels within a pixel
+    of where a second would (plotting.LEGEND_GAP: a legend beside a panel keeps its distance
+    when the panel is resized)."""
+    rounds = []
+    place = plotting_layout._place
+    monkeypatch.setattr(plotting_layout, "_place",
+                        lambda fig, *a: rounds.append(fig) or place(fig, *a))
+    counted = {}
+    for name in ("slider_crank", "heavy_top"):
+        for stem, fig in runs[name].figures().items():
+            del rounds[:]
+            plotting_layout.settle(fig)
+            counted[name, stem] = len(rounds)
+            before = [ax.bbox.extents.copy() for ax in fig.axes]
+            place(fig, [ax for ax in fig.axes], fig._get_renderer())  # a further round
+            for a, ax in zip(before, fig.axes):
+                assert abs(a - ax.bbox.extents).max() < 1.0, (name, stem, a, ax.bbox.extents)
+            plt.close(fig)
+    for key, n in counted.items():  # (a log axis's decades may thin out on a shorter axis)
+        assert n in ({2} if key[1] == "bodies" else {1, 2} if key[1] == "violation" else {1}), \
+            (key, n)
+    assert len(counted) >= 12

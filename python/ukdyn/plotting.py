@@ -221,6 +221,10 @@ def _title(title, meta):
     return "%s: %s" % (meta["model"], title) if meta.get("model") else title
 
 
+#: the gap between a panel and its legend beside it (points; about 1 % of a screen panel's width)
+LEGEND_GAP = 5.0
+
+
 def _legend(ax, title=None):
     """A legend beside the panel (outside the data), in columns when it is long."""
     handles, labels = ax.get_legend_handles_labels()
@@ -228,9 +232,13 @@ def _legend(ax, title=None):
         ax.legend(handles, labels, loc="best", ncol=1 + len(handles) // 6, title=title,
                   frameon=False, handlelength=1.5, borderaxespad=0.2, columnspacing=0.8)
     elif handles:
-        ax.legend(handles, labels, loc="upper left", bbox_to_anchor=(1.01, 1.0),
-                  fontsize="small", ncol=1 + len(handles) // 16, title=title,
-                  title_fontsize="small", borderaxespad=0.0)
+        # LEGEND_GAP points right of the panel (not a fraction of its width, which would move the
+        # legend when the layout resizes the panel, after it was measured)
+        from matplotlib.transforms import offset_copy
+        beside = offset_copy(ax.transAxes, fig=ax.figure, x=LEGEND_GAP, y=0.0, units="points")
+        ax.legend(handles, labels, loc="upper left", bbox_to_anchor=(1.0, 1.0),
+                  bbox_transform=beside, fontsize="small", ncol=1 + len(handles) // 16,
+                  title=title, title_fontsize="small", borderaxespad=0.0)
 
 
 def _finish(axes):
