@@ -191,8 +191,8 @@ def _figure(title, meta, rows, height=None, width=None):
 
 #: the most intervals between the major ticks of a linear axis (matplotlib's default, "auto",
 #: fits as many as the axis has room for: eight or nine on a panel's y axis). Each tick is five
-#: objects made, laid out twice and drawn: with five, a figure of the plots takes about an eighth
-#: less CPU (bench/RESULTS.md, "Plotting time, fourth step")
+#: objects made, laid out and drawn: with five, the figures take about 7 % fewer instructions,
+#: and need one layout round, not two (bench/RESULTS.md, "Plotting time ..., fourth step")
 TICK_BINS = 5
 
 
@@ -631,7 +631,7 @@ FIGURES = (("coordinates", coordinates_figure), ("constraint_forces", forces_fig
            ("joint_reactions", joint_reactions_figure), ("outputs", outputs_figure))
 
 #: the CPU time a figure typically takes to make, lay out and write as PNG (seconds, one
-#: process on the 2-core machine of bench/RESULTS.md, "Plotting time, fourth step"): about
+#: process on the 2-core machine of bench/RESULTS.md, "Plotting time ..., fourth step"): about
 #: 0.1 s and 0.08 s a panel. The forked processes of write_figures take the figures dearest
 #: first, so that the last one taken is a cheap one and the two finish together (in FIGURES'
 #: order the control figure, six panels, came sixth of seven: one process drew it alone at the
