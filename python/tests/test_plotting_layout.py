@@ -100,24 +100,78 @@ def test_a_draw_lays_out_each_axis_twice_not_for_empty_titles(runs, monkeypatch)
     axis (its tick labels hidden) three more times in every draw — a third of a figure's CPU.
     Counted: matplotlib's tick updates in one draw of each figure after its layout, two per axis
     (the axis itself, its label's place); four to six per axis without untitled. The titles are
-    empty and where they were, at the panels' top."""
+    empty and where they were, at the panels' top; the bodies figure's views have titles, set at
+    the same place (y = 1.0) so that their place is not searched for either."""
     import matplotlib.axis
     updates = []
     update = matplotlib.axis.Axis._update_ticks
     monkeypatch.setattr(matplotlib.axis.Axis, "_update_ticks",
                         lambda self: updates.append(self) or update(self))
     checked = 0
-    for name in ("slider_crank", "control_triple_pendulum_tip"):
+    for name in ("slider_crank", "control_triple_pendulum_tip", "heavy_top"):
         for stem, fig in runs[name].figures().items():
-            if stem == "bodies":  # (titled views: their titles' place is still searched for)
-                continue
             plotting_layout.settle(fig)
             del updates[:]
             fig.canvas.draw()
             axes = 2 * len(fig.axes)
             assert axes * 2 - 2 <= len(updates) <= axes * 2, (name, stem, len(updates))
             for ax in fig.axes:
-                assert ax.get_title() == "" and ax.title.get_position()[1] == 1.0
+                title = ("%s–%s view" % (ax.get_xlabel()[0], ax.get_ylabel()[0])
+                         if stem == "bodies" else "")
+                assert ax.get_title() == title, (name, stem)
+                assert ax.title.get_position()[1] == 1.0
             checked += 1
             plt.close(fig)
-    assert checked >= 9
+    assert checked >= 16
+
+
+def test_linear_axes_have_at_most_tick_bins_intervals(runs):
+    """plotting.few_ticks: every linear axis of the plots has between 2 and TICK_BINS + 1 major
+    ticks in its view (matplotlib's default fitted eight or nine on a panel's y axis: each tick
+    five objects laid out and drawn); a log axis keeps its decades."""
+    from matplotlib.ticker import LogLocator, MaxNLocator
+    checked = logs = 0
+    for name in ("slider_crank", "heavy_top", "control_triple_pendulum_tip"):
+        for stem, fig in runs[name].figures().items():
+            fig.canvas.draw()
+            for ax in fig.axes:
+                for axis, (low, high) in ((ax.xaxis, ax.get_xlim()), (ax.yaxis, ax.get_ylim())):
+                    locator = axis.get_major_locator()
+                    if isinstance(locator, LogLocator):
+                        logs += 1
+                        continue
+                    assert isinstance(locator, MaxNLocator), (name, stem)
+                    low, high = min(low, high), max(low, high)
+                    inside = [v for v in axis.get_majorticklocs()
+                              if low - 1e-9 * (high - low) <= v <= high + 1e-9 * (high - low)]
+                    assert 2 <= len(inside) <= plotting.TICK_BINS + 1, (name, stem, inside)
+                    checked += 1
+            plt.close(fig)
+    assert checked >= 40 and logs >= 2
+
+
+def test_one_layout_round_when_the_ticks_do_not_change(runs, monkeypatch):
+    """FixedLayout measures a second time only when placing the panels changed their ticks or
+    views (plotting_layout._ticks): the plots' linear axes (few_ticks) keep theirs, so one round;
+    the bodies' equal-aspect views always take two. One round places the panels within a pixel
+    of where a second would (plotting.LEGEND_GAP: a legend beside a panel keeps its distance
+    when the panel is resized)."""
+    rounds = []
+    place = plotting_layout._place
+    monkeypatch.setattr(plotting_layout, "_place",
+                        lambda fig, *a: rounds.append(fig) or place(fig, *a))
+    counted = {}
+    for name in ("slider_crank", "heavy_top"):
+        for stem, fig in runs[name].figures().items():
+            del rounds[:]
+            plotting_layout.settle(fig)
+            counted[name, stem] = len(rounds)
+            before = [ax.bbox.extents.copy() for ax in fig.axes]
+            place(fig, [ax for ax in fig.axes], fig._get_renderer())  # a further round
+            for a, ax in zip(before, fig.axes):
+                assert abs(a - ax.bbox.extents).max() < 1.0, (name, stem, a, ax.bbox.extents)
+            plt.close(fig)
+    for key, n in counted.items():  # (a log axis's decades may thin out on a shorter axis)
+        assert n in ({2} if key[1] == "bodies" else {1, 2} if key[1] == "violation" else {1}), \
+            (key, n)
+    assert len(counted) >= 12

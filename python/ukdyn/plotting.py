@@ -193,7 +193,26 @@ def _figure(title, meta, rows, height=None, width=None):
     fig.suptitle(_title(title, meta))
     axes = [a[0] for a in axes]
     untitled(axes)
+    few_ticks(axes)
     return fig, axes
+
+
+#: the most intervals between the major ticks of a linear axis (matplotlib's default, "auto",
+#: fits as many as the axis has room for: eight or nine on a panel's y axis). Each tick is five
+#: objects made, laid out and drawn: with five, the figures take about 7 % fewer instructions,
+#: and need one layout round, not two (bench/RESULTS.md, "Plotting time ..., fourth step")
+TICK_BINS = 5
+
+
+def few_ticks(axes):
+    """Gives each linear axis of `axes` matplotlib's own tick choice (AutoLocator: steps of 1, 2,
+    2.5 and 5 times a power of ten) with at most :data:`TICK_BINS` intervals; a log axis, or one
+    with a locator of its own, keeps it."""
+    from matplotlib.ticker import AutoLocator, MaxNLocator
+    for ax in axes:
+        for axis in (ax.xaxis, ax.yaxis):
+            if type(axis.get_major_locator()) is AutoLocator:
+                axis.set_major_locator(MaxNLocator(TICK_BINS, steps=[1, 2, 2.5, 5, 10]))
 
 
 def untitled(axes):
@@ -210,6 +229,10 @@ def _title(title, meta):
     return "%s: %s" % (meta["model"], title) if meta.get("model") else title
 
 
+#: the gap between a panel and its legend beside it (points; about 1 % of a screen panel's width)
+LEGEND_GAP = 5.0
+
+
 def _legend(ax, title=None):
     """A legend beside the panel (outside the data), in columns when it is long."""
     handles, labels = ax.get_legend_handles_labels()
@@ -217,9 +240,13 @@ def _legend(ax, title=None):
         ax.legend(handles, labels, loc="best", ncol=1 + len(handles) // 6, title=title,
                   frameon=False, handlelength=1.5, borderaxespad=0.2, columnspacing=0.8)
     elif handles:
-        ax.legend(handles, labels, loc="upper left", bbox_to_anchor=(1.01, 1.0),
-                  fontsize="small", ncol=1 + len(handles) // 16, title=title,
-                  title_fontsize="small", borderaxespad=0.0)
+        # LEGEND_GAP points right of the panel (not a fraction of its width, which would move the
+        # legend when the layout resizes the panel, after it was measured)
+        from matplotlib.transforms import offset_copy
+        beside = offset_copy(ax.transAxes, fig=ax.figure, x=LEGEND_GAP, y=0.0, units="points")
+        ax.legend(handles, labels, loc="upper left", bbox_to_anchor=(1.0, 1.0),
+                  bbox_transform=beside, fontsize="small", ncol=1 + len(handles) // 16,
+                  title=title, title_fontsize="small", borderaxespad=0.0)
 
 
 def _finish(axes):
@@ -504,6 +531,7 @@ def bodies_figure(table, meta=None):
         fig, axes = plt.subplots(1, 3, figsize=(14.0, 5.0), squeeze=False, layout=_layout(),
                                  dpi=DPI)
     axes = list(axes[0])
+    few_ticks(axes)
     fig.suptitle(_title("paths of the centres of mass", meta))
     for ax, (a, b) in zip(axes, views):
         for i, (body, _) in enumerate(bodies):
@@ -515,7 +543,9 @@ def bodies_figure(table, meta=None):
         ax.set_aspect("equal", "datalim")
         ax.set_xlabel(_label(a, coordinate_unit(meta, bodies[0][0] + "." + a) or "m"))
         ax.set_ylabel(_label(b, coordinate_unit(meta, bodies[0][0] + "." + b) or "m"))
-        ax.set_title("%s–%s view" % (a, b), fontsize="medium")
+        # (an explicit y, as untitled's: no search for the title's place, which laid out the
+        # panel's y axis in every layout round and draw; the ticks are below, the title at 1.0)
+        ax.set_title("%s–%s view" % (a, b), fontsize="medium", y=1.0)
         ax.grid(True, alpha=0.3)
     _legend(axes[-1])
     return fig
@@ -607,6 +637,16 @@ FIGURES = (("coordinates", coordinates_figure), ("constraint_forces", forces_fig
            ("energy", energy_figure),
            ("control", control_figure), ("bodies", bodies_figure),
            ("joint_reactions", joint_reactions_figure), ("outputs", outputs_figure))
+
+#: the CPU time a figure typically takes to make, lay out and write as PNG (seconds, one
+#: process on the 2-core machine of bench/RESULTS.md, "Plotting time ..., fourth step"): about
+#: 0.1 s and 0.08 s a panel. The forked processes of write_figures take the figures dearest
+#: first, so that the last one taken is a cheap one and the two finish together (in FIGURES'
+#: order the control figure, six panels, came sixth of seven: one process drew it alone at the
+#: end)
+COST = {"control": 0.55, "bodies": 0.35, "constraint_forces": 0.3, "coordinates": 0.3,
+        "violation": 0.27, "joint_reactions": 0.25, "energy": 0.24, "contacts": 0.21,
+        "outputs": 0.15}
 
 
 def figures(table, meta=None, style_name="screen"):

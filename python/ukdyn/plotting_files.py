@@ -107,9 +107,10 @@ def write_figures(kit, table, meta, directory, formats=("png",), close=True, sty
     if processes <= 1 or not hasattr(os, "fork"):
         return _write(kit, table, meta, directory, formats, close, style_name, figures)
     # the queue: a pipe holding the figures' indices, one byte each (a read of one byte from a
-    # pipe is atomic: each index goes to one process); end of file when all are taken
+    # pipe is atomic: each index goes to one process), dearest first (kit.COST: the longest
+    # first, so that the processes finish together); end of file when all are taken
     taken, queue = os.pipe()
-    os.write(queue, bytes(range(len(figures))))
+    os.write(queue, bytes(queue_order(figures, getattr(kit, "COST", {}))))
     os.close(queue)
     children = []
     try:
@@ -138,6 +139,13 @@ def write_figures(kit, table, meta, directory, formats=("png",), close=True, sty
     names = [os.path.join(directory, "%s.%s" % (stem, fmt)) for stem, _ in figures
              for fmt in formats]
     return [p for p in names if os.path.exists(p)]
+
+
+def queue_order(figures, cost):
+    """The indices of `figures` ((stem, function) pairs) dearest first by `cost` (stem → the
+    typical seconds; 0 for one not in it), the order of FIGURES among equals: the order the
+    processes of write_figures take them in."""
+    return sorted(range(len(figures)), key=lambda i: -cost.get(figures[i][0], 0.0))
 
 
 def _queued(fd, figures):

@@ -178,4 +178,5 @@ def joint_reactions_figure(table, meta, kit):
         title += "; no torque (at roundoff)"
     fig.suptitle(kit._title(title, meta))
     kit.untitled(fig.axes)
+    kit.few_ticks(fig.axes)
     return fig
