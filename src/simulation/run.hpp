@@ -211,9 +211,9 @@ class Run {
   // and q' at the pose is fixed only to roundoff (docs/reliability.md, "Open"). Each start is
   // tried once: a failed bridge leaves the run to go on (and Run::leaves_branch to judge it).
   bool entered_dead_centre() const { return entered_; }
-  // whether find_event ends a step at such an entry: a run whose switches it locates, or a
-  // segment whose end is a breakpoint (a constraint released or activated there, at a pose);
-  // set by the driver for each segment
+  // whether find_event ends a step at such an entry (set by the driver for each segment):
+  // a run whose switches it locates, or a segment whose end is a breakpoint (a constraint
+  // released or activated there, at a pose)
   void set_bridging_entries(bool on) { bridging_entries_ = on; }
   // after a bridge to (t, x): each switching function that is across its side there takes its
   // new side (the bridge stepped over its switch); returns how many did
@@ -441,7 +441,10 @@ class Run {
   // branch (bridged from t0); it ends an entry into the neighbourhood (bridged from t1)
   bool near_dead_centre();
   bool jumps_branch(double t0, const double* x0, double t1, const double* x1);
-  bool enters_dead_centre(double t1, const double* x1);
+  bool enters_dead_centre(double t0, const double* x0, double t1, const double* x1);
+  // the start of the step whose end an entry bridges from (NaN: none), and its state
+  double entry_t0_ = std::numeric_limits<double>::quiet_NaN();
+  std::vector<double> entry_x0_ = std::vector<double>(sample_.size());
   std::string failure_;
   const detail::ContactEvents* contacts_ = nullptr;  // (see set_contacts)
   std::string refusal_;      // why the last refused stick was refused (empty: friction cannot hold)
