@@ -151,9 +151,9 @@ double Run::find_event(double t0, const double* x0, double t1, const double* x1,
       dense(ts, event_x_.data());
       const double margin_ts = rank_margin_at(ts, event_x_.data());
       at_rank_drop = margin_ts < kCarriedMargin;
-      // (near a dead centre under dopri5 or BDF: the restart just before the switch is bridged
-      // past the pose, see entered_dead_centre; the approach's restarts and the nudge past the
-      // switch there took the mirror branch; once from a step's start)
+      // (near a dead centre under dopri5, rkf78 or BDF: the restart just before the switch is
+      // bridged past the pose, see entered_dead_centre; the approach's restarts and the nudge past
+      // the switch there took the mirror branch; once from a step's start)
       if (!at_rank_drop && margin_ts < kBridgedSwitchMargin && near && t0 != entry_failed_) {
         entry_failed_ = ts;
         entered_ = true;
@@ -164,8 +164,8 @@ double Run::find_event(double t0, const double* x0, double t1, const double* x1,
         approach_ = true;
         return ts - 0.25 * (ts - t0);
       }
-      // (a switch at the pose in a step that ends inside its neighbourhood, under dopri5 or
-      // BDF: the run restarts at the step's start, outside it, bridged past the pose — a
+      // (a switch at the pose in a step that ends inside its neighbourhood, under an adaptive
+      // method: the run restarts at the step's start, outside it, bridged past the pose — a
       // restart at the pose took the mirror branch; once from there)
       if (at_rank_drop && near && t0 != entry_failed_ && rank_margin_at(t1, x1) < kCarriedMargin) {
         const double m0 = rank_margin_at(t0, x0);
