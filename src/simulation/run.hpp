@@ -54,8 +54,8 @@ inline constexpr int kDivergentSteps = 3;
 // a contact carried through a dead centre restarts past it where the rank margin is back to
 // this (Run::carried_past)
 inline constexpr double kCarriedMargin = 3e-5;
-// a switch located where the rank margin is below this (and above kCarriedMargin) under dopri5
-// or BDF restarts there, bridged past the pose (Run::entered_dead_centre)
+// a switch located where the rank margin is below this (and above kCarriedMargin) under dopri5,
+// rkf78 or BDF restarts there, bridged past the pose (Run::entered_dead_centre)
 inline constexpr double kBridgedSwitchMargin = 1e-3;
 // below this rank margin (Workspace::rank_margin, σ_r / σ_1 of W) growing speeds are those of a
 // configuration where the constraints lose rank, not a divergence
@@ -193,7 +193,10 @@ class Run {
   // `ahead`: (t, x) lies outside the neighbourhood (its margin below kSingularMargin), the
   // pose ahead (an entry, see entered_dead_centre): the landing is the first h where the
   // margin, after falling below half its start's, is back to it, and q'' varies linearly
-  // from the start's to the landing's (exact for q'' linear in t; the error O(h³ q'''')).
+  // from the start's to the landing's (exact for q'' linear in t; the error O(h³ q'''')); from
+  // an entry's end inside the neighbourhood, the start's on the line through the entering
+  // step's start and the landing (inside, q'' is a roundoff off the branch times the inverse
+  // margin).
   // `after`: the landing lies past it (a bridge across a breakpoint, with the constraints of
   // the segment after it).
   double bridge_dead_centre(double t, double b, double h_max, double* x, ConstrainedOde& ode,
@@ -202,7 +205,7 @@ class Run {
   // the state of the last bridge at s in [its start, its end] (by the bridge's formula) into
   // out (size of x): the samples it steps over
   void bridged_state(double s, double* out) const;
-  // The last event found by find_event is no switch but a restart of dopri5 or BDF
+  // The last event found by find_event is no switch but a restart of dopri5, rkf78 or BDF
   // (bridging_entries) to be bridged past a dead centre (bridge_dead_centre with `ahead`), from
   // outside the pose's neighbourhood where the constraints nearly lose rank: at the end of a
   // step that entered it (the rank margin there, rank_margin_at, below kCarriedMargin, at the
@@ -215,9 +218,10 @@ class Run {
   // and q' at the pose is fixed only to roundoff (docs/reliability.md, "Open"). Each start is
   // tried once: a failed bridge leaves the run to go on (and Run::leaves_branch to judge it).
   bool entered_dead_centre() const { return entered_; }
-  // whether find_event ends a step at such an entry: a run whose switches it locates, or a
-  // segment whose end is a breakpoint (a constraint released or activated there, at a pose);
-  // set by the driver for each segment
+  // whether find_event ends a step at such an entry (set by the driver for each segment):
+  // a run whose switches it locates, or whose Coulomb contacts all have mu = 0 (no
+  // carry-through of theirs), or a segment whose end is a breakpoint (a constraint released or
+  // activated there, at a pose)
   void set_bridging_entries(bool on) { bridging_entries_ = on; }
   // after a bridge to (t, x): each switching function that is across its side there takes its
   // new side (the bridge stepped over its switch); returns how many did
@@ -446,7 +450,10 @@ class Run {
   // branch (bridged from t0); it ends an entry into the neighbourhood (bridged from t1)
   bool near_dead_centre();
   bool jumps_branch(double t0, const double* x0, double t1, const double* x1);
-  bool enters_dead_centre(double t1, const double* x1);
+  bool enters_dead_centre(double t0, const double* x0, double t1, const double* x1);
+  // the start of the step whose end an entry bridges from (NaN: none), and its state
+  double entry_t0_ = std::numeric_limits<double>::quiet_NaN();
+  std::vector<double> entry_x0_ = std::vector<double>(sample_.size());
   std::string failure_;
   const detail::ContactEvents* contacts_ = nullptr;  // (see set_contacts)
   std::string refusal_;      // why the last refused stick was refused (empty: friction cannot hold)

@@ -115,7 +115,7 @@ double Run::find_event(double t0, const double* x0, double t1, const double* x1,
     return t0;
   }
   if (!locates_switches()) {
-    if (std::isnan(first) && near && (entered_ = enters_dead_centre(t1, x1))) return t1;
+    if (std::isnan(first) && near && (entered_ = enters_dead_centre(t0, x0, t1, x1))) return t1;
     return first;
   }
   // a crawl after a switch: kSwitchBurst accepted steps — those into a switch and at one
@@ -151,9 +151,9 @@ double Run::find_event(double t0, const double* x0, double t1, const double* x1,
       dense(ts, event_x_.data());
       const double margin_ts = rank_margin_at(ts, event_x_.data());
       at_rank_drop = margin_ts < kCarriedMargin;
-      // (near a dead centre under dopri5 or BDF: the restart just before the switch is bridged
-      // past the pose, see entered_dead_centre; the approach's restarts and the nudge past the
-      // switch there took the mirror branch; once from a step's start)
+      // (near a dead centre under dopri5, rkf78 or BDF: the restart just before the switch is
+      // bridged past the pose, see entered_dead_centre; the approach's restarts and the nudge past
+      // the switch there took the mirror branch; once from a step's start)
       if (!at_rank_drop && margin_ts < kBridgedSwitchMargin && near && t0 != entry_failed_) {
         entry_failed_ = ts;
         entered_ = true;
@@ -164,8 +164,8 @@ double Run::find_event(double t0, const double* x0, double t1, const double* x1,
         approach_ = true;
         return ts - 0.25 * (ts - t0);
       }
-      // (a switch at the pose in a step that ends inside its neighbourhood, under dopri5 or
-      // BDF: the run restarts at the step's start, outside it, bridged past the pose — a
+      // (a switch at the pose in a step that ends inside its neighbourhood, under an adaptive
+      // method: the run restarts at the step's start, outside it, bridged past the pose — a
       // restart at the pose took the mirror branch; once from there)
       if (at_rank_drop && near && t0 != entry_failed_ && rank_margin_at(t1, x1) < kCarriedMargin) {
         const double m0 = rank_margin_at(t0, x0);
@@ -210,17 +210,19 @@ double Run::find_event(double t0, const double* x0, double t1, const double* x1,
     for (Index i = 0; i < g1_.size(); ++i) {
       if (side_[std::size_t(i)] == 0 && g1_[i] != 0.0) side_[std::size_t(i)] = g1_[i] > 0 ? 1 : -1;
     }
-    if (near && (entered_ = enters_dead_centre(t1, x1))) return t1;
+    if (near && (entered_ = enters_dead_centre(t0, x0, t1, x1))) return t1;
   }
   return first;
 }
 
 // find_event: the step from (t0, x0) to (t1, x1) is near a rank drop — the last evaluation's
-// rank margin, or the last step end's, below kSingularMargin, or a rank dropped — under dopri5
-// or BDF in a run that bridges entries (see run.hpp)
+// rank margin, or the last step end's, below kSingularMargin, or a rank dropped — under dopri5,
+// rkf78 or BDF in a run that bridges entries (see run.hpp)
 bool Run::near_dead_centre() {
   const Integrator method = progress_.integrator;
-  if (!bridging_entries_ || (method != Integrator::kDopri5 && method != Integrator::kBDF) ||
+  if (!bridging_entries_ ||
+      (method != Integrator::kDopri5 && method != Integrator::kRKF78 &&
+       method != Integrator::kBDF) ||
       std::isnan(ws_.rank_margin)) {
     return false;
   }
@@ -264,7 +266,7 @@ bool Run::jumps_branch(double t0, const double* x0, double t1, const double* x1)
 // find_event: the step to (t1, x1), near a rank drop, ends inside a dead centre's
 // neighbourhood (the rank margin there below kCarriedMargin), entered from outside it: the run
 // is bridged from t1 (see run.hpp). Costs one evaluation.
-bool Run::enters_dead_centre(double t1, const double* x1) {
+bool Run::enters_dead_centre(double t0, const double* x0, double t1, const double* x1) {
   const double margin = entry_margin_ = rank_margin_at(t1, x1);
   if (!(margin < kCarriedMargin)) {
     if (!std::isnan(margin)) entry_armed_ = true;
@@ -272,6 +274,9 @@ bool Run::enters_dead_centre(double t1, const double* x1) {
   }
   if (!entry_armed_) return false;
   entry_armed_ = false;
+  // (its q'' from the step's start, see bridge_dead_centre)
+  entry_t0_ = t0;
+  std::copy(x0, x0 + entry_x0_.size(), entry_x0_.begin());
   return true;
 }
 
@@ -483,6 +488,20 @@ double Run::bridge_dead_centre(double t, double b, double h_max, double* x, Cons
     ode.clear_failure();
     bridge_rate0_ = bridge_rate_;
   }
+  // (an entry's end inside: q'' there on the line through the entering step's start, outside,
+  // and the landing — exact for q'' linear in t, as the landing's alone is not for a passage
+  // whose q'' turns with the pose: the twin arms' slow passage lost 1e-5 of its energy)
+  if (ahead && m0 < kCarriedMargin && entry_t0_ < t) {
+    if (ode(entry_x0_.data(), trial_.data(), entry_t0_)) {
+      const double f = (t - entry_t0_) / (t + h - entry_t0_);
+      for (std::size_t i = 0; i < bridge_rate0_.size(); ++i) {
+        bridge_rate0_[i] = trial_[i] + (bridge_rate_[i] - trial_[i]) * f;
+      }
+    } else {
+      ode.clear_failure();
+    }
+  }
+  entry_t0_ = std::numeric_limits<double>::quiet_NaN();
   // the bridge: q' kept, q'' linear between the two ends
   bridge_t_ = t;
   bridge_h_ = h;

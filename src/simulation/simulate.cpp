@@ -252,6 +252,12 @@ Trajectory detail::simulate_observed(const System& sys, const Eigen::Ref<const V
       }
     }
   }
+  // (Coulomb contacts, all with mu = 0: no carry-through of theirs at a dead centre, whose
+  // entries are bridged as a run with switches bridges them, see Run::entered_dead_centre)
+  const bool frictionless =
+      !sys.friction_contacts().empty() &&
+      std::all_of(sys.friction_contacts().begin(), sys.friction_contacts().end(),
+                  [](const auto& c) { return c.mu_static == 0.0; });
   if (!sys.friction_contacts().empty() || run.locates_switches() || activity_changes) {
     hooks.find_event = [&](double t0, const double* x0, double t1, const double* x1,
                            const detail::SegmentHooks::Dense& dense) {
@@ -329,6 +335,9 @@ Trajectory detail::simulate_observed(const System& sys, const Eigen::Ref<const V
   // the samples it steps over, in (from, to], from the bridge's formula (false: recording failed,
   // with the status and time)
   const double bridge_limit = 1e-3 * (o.t_end - o.t_start);
+  // (from outside the pose's neighbourhood, q'' linear between the bridge's ends: a slow
+  // passage's, as the twin arms' swing of 0.005 rad, takes up to 5e-3 s of 3 s)
+  const double entry_limit = 1e-2 * (o.t_end - o.t_start);
   Status bridge_status = Status::kOk;
   double bridge_time = 0.0;
   std::vector<double> x_bridged(x.size());
@@ -365,7 +374,7 @@ Trajectory detail::simulate_observed(const System& sys, const Eigen::Ref<const V
     // its constraints, contact modes and evaluation window (evaluations at a breakpoint end
     // are one-sided; the run's own ends are not breakpoints)
     activate(seg);
-    run.set_bridging_entries(run.locates_switches() || activity_changes);
+    run.set_bridging_entries(run.locates_switches() || activity_changes || frictionless);
     // a constraint that switches on finds the state inconsistent: project onto it (at a dead
     // centre, bridged past it instead: Run::bridge_dead_centre)
     bool changed = false;
@@ -559,7 +568,7 @@ Trajectory detail::simulate_observed(const System& sys, const Eigen::Ref<const V
         // pose from there (Run::entered_dead_centre), the switches it steps over take their
         // new sides; else (no landing within reach) the run goes on from there
         Status s = Status::kOk;
-        a = run.bridge_dead_centre(r.t_reached, b, bridge_limit, x.data(), ode, s, true);
+        a = run.bridge_dead_centre(r.t_reached, b, entry_limit, x.data(), ode, s, true);
         // (at a breakpoint where constraints are released or activated: across it, with the
         // next segment's constraints, landing past it)
         if (s == Status::kOk && a == r.t_reached && activity_changes && seg + 2 < ends.size() &&

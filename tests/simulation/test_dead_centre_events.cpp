@@ -58,15 +58,6 @@ void expect_follows(const Model& m, const Trajectory& tr, const Trajectory& ref,
   EXPECT_LT(worst, tolerance);
 }
 
-// tr stopped with the cause named: it left its branch at a singular configuration
-// (Run::leaves_branch)
-void expect_stopped_off_the_branch(const Trajectory& tr) {
-  EXPECT_EQ(tr.stats.status, Status::kIntegratorFailure);
-  EXPECT_NE(tr.stats.message.find("the motion left its branch at the singular configuration"),
-            std::string::npos)
-      << tr.stats.message;
-}
-
 // The sleeve's friction as the force −mu P sign(zs_dot): its switch events fall at the dead
 // centre (zs_dot = Z'(th) th_dot vanishes with Z'(0) = 0) and at the turning points. Restarts
 // at the dead centre — the approach to the switch closing in on the pose, then the restart at
@@ -153,13 +144,18 @@ TEST(DeadCentreEvents, AReleaseAndAnActivationAtADeadCentreKeepTheBranchOnEveryA
 
 // A slow passage of the dead centre, no event (issue #29 item 1): the twin arms at mu = 0
 // released at rest from th = 0.005, so that the whole swing lies where the constraints nearly
-// lose rank (the rank margin 0.875 |th| below 1e-2): the passage never ends, and
-// Run::leaves_branch judges each of its steps. dopri5 follows the symmetric motion; rkf78 and
-// BDF reverse one arm at the dead centre (onto the mirror branch, |th1 − th2| = 0.01, at the
-// same energy: the energy balance cannot see it) and are stopped there with that cause
-// (rkf78 at t = 0.602, the first passage; BDF at 2.61, the fifth), the velocity change of one
-// step 1.1 to 1.5 times kStepFactor times the accelerations at the passage's entry.
-TEST(DeadCentreEvents, ASlowPassageNeverEndsOkOffItsBranch) {
+// lose rank (the rank margin 1.75 |th| below 1e-2): the passage never ends, and
+// Run::leaves_branch judges each of its steps. rkf78 and BDF reversed one arm at the dead
+// centre (onto the mirror branch, |th1 − th2| = 0.01, at the same energy: the energy balance
+// cannot see it) and were stopped there with that cause (rkf78 at t = 0.602, the first
+// passage; BDF at 2.61, the fifth). Now the step that enters the pose's neighbourhood (rank
+// margin below kCarriedMargin) or jumps off the branch near it is bridged over the pose, q''
+// linear between the bridge's ends, on dopri5, rkf78 and BDF (Run::entered_dead_centre; the
+// arms' sleeve friction at mu = 0 has no carry-through of its own). dopri5 and BDF follow the
+// symmetric motion, status ok; rkf78 keeps the branch too, but its steps across the pose
+// (stages on both sides) leave an energy residual of 5.2e-6 of the 1.3e-3 J exchanged, and the
+// energy balance (tolerance 1e-6) says so.
+TEST(DeadCentreEvents, ASlowPassageKeepsItsBranchOnEveryAdaptiveIntegrator) {
   const Model m = load_model(kData + "twin_arms_coulomb.yaml", {{"mu", 0.0}, {"th0", 0.005}});
   const Trajectory ref = reduced_motion(0.0, 0.005);
   for (const Integrator method : {Integrator::kDopri5, Integrator::kRKF78, Integrator::kBDF}) {
@@ -167,17 +163,22 @@ TEST(DeadCentreEvents, ASlowPassageNeverEndsOkOffItsBranch) {
     SimulationOptions o = m.options;
     o.integrator = method;
     const Trajectory tr = simulate(m.system, m.q0, m.qd0, o);
-    if (method != Integrator::kDopri5 && tr.stats.status != Status::kOk) {
-      expect_stopped_off_the_branch(tr);
-      // (at a passage of the dead centre: th1 ≈ th2 ≈ 0 half a period on from the last)
-      EXPECT_GT(tr.stats.t_reached, 0.5);
-      EXPECT_LT(tr.stats.t_reached, 3.0);
+    EXPECT_EQ(tr.t.back(), 3.0);
+    EXPECT_NEAR(tr.energy.back(), tr.energy[0], 1e-6 * std::abs(tr.energy[0]));
+    if (method == Integrator::kRKF78) {
+      ASSERT_EQ(tr.stats.status, Status::kEnergyBalance) << tr.stats.message;
+      EXPECT_EQ(tr.stats.t_reached, 3.0);
+      EXPECT_GT(std::abs(tr.stats.energy_balance), 1e-6);
+      EXPECT_LT(std::abs(tr.stats.energy_balance), 1e-4);
+      expect_follows(m, tr, ref);
       continue;
     }
     ASSERT_EQ(tr.stats.status, Status::kOk) << tr.stats.message;
     EXPECT_EQ(tr.stats.t_reached, 3.0);
-    expect_follows(m, tr, ref);  // (dopri5: |th1 − th2| 1.3e-10)
-    EXPECT_NEAR(tr.energy.back(), tr.energy[0], 1e-6 * std::abs(tr.energy[0]));
+    // (|th1 − th2| 1.3e-10 dopri5, 7.5e-9 BDF; th1 within 1.7e-10, 4.4e-9 of the reference;
+    // rkf78: 2.0e-8 and 1.2e-7; the energy balance 9.9e-9, 2.1e-7)
+    expect_follows(m, tr, ref);
+    EXPECT_LT(std::abs(tr.stats.energy_balance), 1e-6);
   }
 }
 

@@ -743,7 +743,8 @@ TEST(Friction, TwinArmsFollowTheSymmetricMotionForEveryMuOnEveryAdaptiveIntegrat
 // ended ok on the mirror branch, |th1 − th2| = 0.18 rad). It now hands the run to dopri5 before
 // the first dead centre its sliding contact enters (Run::hands_over), says so in the notes, and
 // the run is the symmetric motion (the sweep above checks it against the reduced model). The
-// check itself is pinned by DeadCentreEvents.ASlowPassageNeverEndsOkOffItsBranch.
+// slow passage that check once stopped keeps its branch now
+// (DeadCentreEvents.ASlowPassageKeepsItsBranchOnEveryAdaptiveIntegrator).
 TEST(Friction, TwinArmsUnderRkf78HandTheDeadCentreToDopri5) {
   const Model m = twin_arms(0.45);
   SimulationOptions o = m.options;
