@@ -187,6 +187,18 @@ FundamentalDecomposition& FundamentalDecomposition::compute_mass(
   return *this;
 }
 
+bool FundamentalDecomposition::adopt_mass(const FundamentalDecomposition& other) {
+  if (other.info_ != Eigen::Success || !other.parent_.empty() || !parent_.empty() ||
+      other.n_ < n_ || other.n_ > kSmall) {
+    return false;
+  }
+  // the leading block of a block-diagonal factor is the block's own factor (cholesky_in_place)
+  L_ = other.L_.topLeftCorner(n_, n_);
+  inv_ldiag_ = other.inv_ldiag_.head(n_);
+  info_ = Eigen::Success;
+  return true;
+}
+
 FundamentalDecomposition& FundamentalDecomposition::compute_constraints(
     const Eigen::Ref<const MatrixXd>& A) {
   UKDYN_CHECK(A.rows() == m_ && A.cols() == n_, "compute_constraints: A has the wrong size");
