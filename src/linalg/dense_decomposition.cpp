@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <stdexcept>
 #include <string>
@@ -193,8 +194,12 @@ bool FundamentalDecomposition::adopt_mass(const FundamentalDecomposition& other)
     return false;
   }
   // the leading block of a block-diagonal factor is the block's own factor (cholesky_in_place)
-  L_ = other.L_.topLeftCorner(n_, n_);
-  inv_ldiag_ = other.inv_ldiag_.head(n_);
+  // (its lower triangle, column by column: the upper one is unspecified)
+  for (Index j = 0; j < n_; ++j) {
+    std::memcpy(L_.data() + j * n_ + j, other.L_.data() + j * other.n_ + j,
+                sizeof(double) * std::size_t(n_ - j));
+  }
+  std::memcpy(inv_ldiag_.data(), other.inv_ldiag_.data(), sizeof(double) * std::size_t(n_));
   info_ = Eigen::Success;
   return true;
 }
