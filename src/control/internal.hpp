@@ -70,11 +70,26 @@ bool fused_model(const Controller& ctrl);
 // checks. The same bits as evaluate_model followed by solve_law's own factorization, one
 // Cholesky and no empty constraint stage fewer. False when it does not apply, or when the
 // input or M is one the dense engine would report or complete (non-finite, not symmetric,
-// singular): then the caller runs evaluate_model, which does. Cost O(n³/3) (O(n²) for a
-// constant M after the first). No allocation.
+// singular): then the caller runs evaluate_model, which does. With plant (a controlled
+// system's workspace whose evaluation has just factorized its M_p = diag(M, I)), the factor of
+// M is adopted from the plant's when M is M_p's leading block bit for bit (adopt_plant_factor):
+// the same bits without the checks and the Cholesky. Cost O(n³/3) (O(n²) for a constant M
+// after the first, or an adopted factor). No allocation.
 bool evaluate_model_fused(const Controller& ctrl, ControlWorkspace& ws,
                           const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd,
-                          double t);
+                          double t, const Workspace* plant = nullptr);
+
+// d ← the factor of M taken from plant's decomposition (FundamentalDecomposition::adopt_mass),
+// when plant (may be null) ran the dense engine on a regular M_p whose leading n × n block is M
+// bit for bit, and M is exactly symmetric; else false, d unchanged. Cost O(n²).
+bool adopt_plant_factor(const MatrixXd& M, const Workspace* plant, FundamentalDecomposition& d);
+
+// compute_control, offering the controlled system's workspace plant (may be null) to
+// evaluate_model_fused. The same results as compute_control.
+ControlStatus compute_control_in(const Controller& ctrl, ControlWorkspace& ws,
+                                 const Eigen::Ref<const VectorXd>& q,
+                                 const Eigen::Ref<const VectorXd>& qd, double t,
+                                 const Workspace* plant);
 
 // True when the law runs on (M, X M) — Gauss, fully actuated — rather than on (cost, X S).
 inline bool gauss_direct(const Controller& ctrl) {

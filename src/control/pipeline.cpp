@@ -21,6 +21,13 @@ void require_size(const Eigen::Ref<const VectorXd>& v, Index n, const char* what
 ControlStatus compute_control(const Controller& ctrl, ControlWorkspace& ws,
                               const Eigen::Ref<const VectorXd>& q,
                               const Eigen::Ref<const VectorXd>& qd, double t) {
+  return control_detail::compute_control_in(ctrl, ws, q, qd, t, nullptr);
+}
+
+ControlStatus control_detail::compute_control_in(const Controller& ctrl, ControlWorkspace& ws,
+                                                 const Eigen::Ref<const VectorXd>& q,
+                                                 const Eigen::Ref<const VectorXd>& qd, double t,
+                                                 const Workspace* plant) {
   control_detail::require_same_controller(ctrl, ws, "ukdyn::compute_control");
   require_size(q, ctrl.coordinate_count(), "q");
   require_size(qd, ctrl.coordinate_count(), "q_dot");
@@ -31,7 +38,7 @@ ControlStatus compute_control(const Controller& ctrl, ControlWorkspace& ws,
   ws.failed_time = t;
   // a_p → A_r, b_r, e → law → robust term → control force, q'', physical reaction
   // (stage 1 and the law's factorization of M fused where they factorize the same M)
-  const bool fused = control_detail::evaluate_model_fused(ctrl, ws, q, qd, t);
+  const bool fused = control_detail::evaluate_model_fused(ctrl, ws, q, qd, t, plant);
   ControlStatus s = fused ? ControlStatus::kOk : evaluate_model(ctrl, ws, q, qd, t);
   if (s != ControlStatus::kOk) return s;
   s = assemble_requirements(ctrl, ws, q, qd, t);

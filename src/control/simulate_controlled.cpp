@@ -149,6 +149,10 @@ struct ControlledScratch final : CallableScratch {
   // run starts; null outside simulate_controlled) mirrored into the model's
   control_detail::ContactModes contacts;
   const std::vector<signed char>* run_modes = nullptr;
+  // the run's workspace of the controlled system, whose callables are this scratch (set when
+  // the run starts, cleared when it ends; null outside simulate_controlled): its evaluation
+  // factorizes diag(M, I) before it asks for Q, and the control adopts the factor of M
+  const Workspace* run_ws = nullptr;
   VectorXd q_last, qd_last;  // (n) the state of the last control evaluation, at t_last
   double t_last = 0.0;
   bool evaluated = false;  // q_last, qd_last, t_last and cws hold an evaluation
@@ -180,7 +184,8 @@ void ControlledPlant::force(ControlledScratch& w, const Eigen::Ref<const VectorX
                      std::memcmp(qd.data(), w.qd_last.data(), sizeof(double) * std::size_t(n)) == 0;
   if (!again) {
     w.contacts.mirror(w.run_modes, cws);
-    s = compute_control(ctrl, cws, q, qd, t);
+    const bool own = w.run_ws != nullptr && w.run_ws->callables.get() == &w;
+    s = control_detail::compute_control_in(ctrl, cws, q, qd, t, own ? w.run_ws : nullptr);
   }
   ++stats.evaluations;
   w.evaluated = true;
@@ -672,7 +677,8 @@ ControlledTrajectory simulate_controlled(
       sys, x0, xd0, o,
       [&](const Workspace& ws) {
         after.emplace(*st);
-        const auto& w = static_cast<const ControlledScratch&>(*ws.callables);
+        auto& w = static_cast<ControlledScratch&>(*ws.callables);
+        w.run_ws = nullptr;
         after->stats = w.stats;
         after->failure = w.failure;
         after->q_last = w.q_last;
@@ -686,6 +692,7 @@ ControlledTrajectory simulate_controlled(
         // of the run's (it used to evaluate the control with every contact held)
         auto& scratch = static_cast<ControlledScratch&>(*ws.callables);
         scratch.run_modes = &ws.activity_override;
+        scratch.run_ws = &ws;  // (its own evaluation, whose factor of M the control may adopt)
         if (run_scratch == nullptr) {
           run_modes = &ws.activity_override;
           run_scratch = &scratch;

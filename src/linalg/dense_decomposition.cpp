@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <stdexcept>
 #include <string>
@@ -185,6 +186,22 @@ FundamentalDecomposition& FundamentalDecomposition::compute_mass(
   // 1 / L_kk for the solves
   if (ok) inv_ldiag_ = L_.diagonal().cwiseInverse();
   return *this;
+}
+
+bool FundamentalDecomposition::adopt_mass(const FundamentalDecomposition& other) {
+  if (other.info_ != Eigen::Success || !other.parent_.empty() || !parent_.empty() ||
+      other.n_ < n_ || other.n_ > kSmall) {
+    return false;
+  }
+  // the leading block of a block-diagonal factor is the block's own factor (cholesky_in_place)
+  // (its lower triangle, column by column: the upper one is unspecified)
+  for (Index j = 0; j < n_; ++j) {
+    std::memcpy(L_.data() + j * n_ + j, other.L_.data() + j * other.n_ + j,
+                sizeof(double) * std::size_t(n_ - j));
+  }
+  std::memcpy(inv_ldiag_.data(), other.inv_ldiag_.data(), sizeof(double) * std::size_t(n_));
+  info_ = Eigen::Success;
+  return true;
 }
 
 FundamentalDecomposition& FundamentalDecomposition::compute_constraints(
