@@ -23,8 +23,8 @@ Ctrl-C during a run raises :class:`Interrupted` (a KeyboardInterrupt) with the p
 
 from __future__ import annotations
 
-import json
-import os
+import json as _json
+import os as _os
 from typing import Any, Optional
 
 from . import _ukdyn
@@ -47,9 +47,7 @@ __version__ = "0.1.0"
 def read_hdf5(path: str) -> "tuple[Result, dict]":
     """Reads a ``trajectory.h5`` (``ukdyn run --format hdf5``, :meth:`Result.to_hdf5`): its
     columns as a :class:`Result` and its summary (``summary.json``'s content) as a dict."""
-    import json as _json
-
-    names, columns, summary_text = _ukdyn._read_table_hdf5(os.fspath(path))
+    names, columns, summary_text = _ukdyn._read_table_hdf5(_os.fspath(path))
     summary = _json.loads(summary_text) if summary_text else {}
     coordinates = [n for n in names if n + "_dot" in names and n + "_ddot" in names]
     stats = {k: v for k, v in summary.items() if not isinstance(v, (dict, list))}
@@ -131,10 +129,10 @@ def load(source: "str | os.PathLike[str]", /, *, tables: Optional[dict] = None,
     """
     values = _overrides("load", overrides)
     given = _tables("load", tables)
-    path = os.fspath(source)
-    if (not isinstance(source, str) or os.path.exists(path)
+    path = _os.fspath(source)
+    if (not isinstance(source, str) or _os.path.exists(path)
             or path.endswith((".yaml", ".yml", ".urdf"))
-            or os.sep in path):
+            or _os.sep in path):
         return _ukdyn._load_file(path, values, given)
     return _ukdyn._load_example(path, values, given)
 
@@ -173,7 +171,7 @@ def _model_simulate(self: Model, *, t_end: Optional[float] = None, q0: Any = Non
     with _interrupt.guard() as interrupt:
         names, columns, stats, control, raised = self._run(settings, q0, qd0, interrupt.stop)
     result = Result(names, columns, stats, control, self.coordinates, self.units, self.name)
-    result.scene = json.loads(self._scene_json)  # what Result.show() draws
+    result.scene = _json.loads(self._scene_json)  # what Result.show() draws
     interrupt.raise_if_interrupted(result, raised)
     return _finish(result, check)
 
@@ -218,3 +216,7 @@ Model.solve = _model_solve  # type: ignore[attr-defined]
 Model.linearize = _linear.linearize  # type: ignore[attr-defined]
 Model.linearize_along = _linear.linearize_along  # type: ignore[attr-defined]
 Model.equilibrium = _linear.equilibrium  # type: ignore[attr-defined]
+
+# `dir(ukdyn)` lists the API and the submodules, not the helpers this file uses: the annotations
+# are strings (PEP 563), so the typing names are not needed once the functions are defined
+del annotations, Any, Optional

@@ -367,8 +367,12 @@ class Result:
         HTML text."""
         import html
         srcdoc = html.escape(self.animation_html(fps=fps), quote=True)
-        frame = ('<iframe srcdoc="%s" style="width:100%%;height:%dpx;border:1px solid #ccc" '
-                 'sandbox="allow-scripts"></iframe>' % (srcdoc, int(height)))
+        # (the iframe inside a div: IPython's HTML warns "Consider using IPython.display.IFrame
+        # instead" for text that starts with <iframe and ends with </iframe>, a red box in a
+        # notebook; IFrame cannot hold the page itself, it loads a URL)
+        frame = ('<div class="ukdyn-viewer"><iframe srcdoc="%s" '
+                 'style="width:100%%;height:%dpx;border:1px solid #ccc" '
+                 'sandbox="allow-scripts"></iframe></div>' % (srcdoc, int(height)))
         try:
             from IPython.display import HTML
         except ImportError:  # pragma: no cover - IPython comes with Jupyter
