@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 # bash completion for ukdyn, installed as /usr/share/bash-completion/completions/ukdyn.
 # Subcommands, each subcommand's flags (read from `ukdyn SUB --help`, so they are always the
 # command's own), example names (from `ukdyn examples`), the values of --format,
