@@ -23,42 +23,18 @@ std::string python_interpreter() {
 
 bool is_executable(const std::string& program) { return ::access(program.c_str(), X_OK) == 0; }
 
-int run_program(std::vector<std::string> args) {
-  std::vector<char*> argv;
-  argv.reserve(args.size() + 1);
-  for (auto& a : args) argv.push_back(a.data());
-  argv.push_back(nullptr);
-  // the child gets SIGPIPE and SIGXFSZ at their defaults (the command ignores them; an ignored
-  // signal stays ignored across exec)
-  posix_spawnattr_t attr;
-  posix_spawnattr_init(&attr);
-  sigset_t defaults;
-  sigemptyset(&defaults);
-  sigaddset(&defaults, SIGPIPE);
-  sigaddset(&defaults, SIGXFSZ);
-  posix_spawnattr_setsigdefault(&attr, &defaults);
-  posix_spawnattr_setflags(&attr, POSIX_SPAWN_SETSIGDEF);
-  pid_t pid = 0;
-  const int rc = posix_spawn(&pid, argv[0], nullptr, &attr, argv.data(), environ);
-  posix_spawnattr_destroy(&attr);
-  if (rc != 0) return -1;
-  int status = 0;
-  while (waitpid(pid, &status, 0) < 0) {
-    if (errno != EINTR) return -1;
-  }
-  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-}
+namespace {
 
-StartedProgram::StartedProgram(std::vector<std::string> args) {
-  int ends[2];
-  if (::pipe2(ends, O_CLOEXEC) != 0) return;  // (close-on-exec: no other child inherits them)
+// Starts args[0] with the arguments args (posix_spawn, the environment inherited), SIGPIPE and
+// SIGXFSZ at their defaults in the child (the command ignores them; an ignored signal stays
+// ignored across exec) and, with `block_stops`, SIGINT, SIGTERM and SIGHUP blocked; the child's
+// pid, or −1 when it could not start.
+pid_t spawn(std::vector<std::string>& args, const posix_spawn_file_actions_t* files,
+            bool block_stops) {
   std::vector<char*> argv;
   argv.reserve(args.size() + 1);
   for (auto& a : args) argv.push_back(a.data());
   argv.push_back(nullptr);
-  posix_spawn_file_actions_t files;
-  posix_spawn_file_actions_init(&files);
-  posix_spawn_file_actions_adddup2(&files, ends[0], STDIN_FILENO);  // (dup2 clears cloexec)
   posix_spawnattr_t attr;
   posix_spawnattr_init(&attr);
   sigset_t defaults, blocked;
@@ -70,14 +46,45 @@ StartedProgram::StartedProgram(std::vector<std::string> args) {
   sigaddset(&blocked, SIGTERM);
   sigaddset(&blocked, SIGHUP);
   posix_spawnattr_setsigdefault(&attr, &defaults);
-  posix_spawnattr_setsigmask(&attr, &blocked);
-  posix_spawnattr_setflags(&attr, POSIX_SPAWN_SETSIGDEF | POSIX_SPAWN_SETSIGMASK);
+  short flags = POSIX_SPAWN_SETSIGDEF;
+  if (block_stops) {
+    posix_spawnattr_setsigmask(&attr, &blocked);
+    flags |= POSIX_SPAWN_SETSIGMASK;
+  }
+  posix_spawnattr_setflags(&attr, flags);
   pid_t pid = 0;
-  const int rc = posix_spawn(&pid, argv[0], &files, &attr, argv.data(), environ);
+  const int rc = posix_spawn(&pid, argv[0], files, &attr, argv.data(), environ);
   posix_spawnattr_destroy(&attr);
+  return rc == 0 ? pid : -1;
+}
+
+// Waits for the child `pid` (through EINTR): its exit status, or −1 when it did not exit
+// normally or could not be waited for.
+int wait_exit(pid_t pid) {
+  int status = 0;
+  while (waitpid(pid, &status, 0) < 0) {
+    if (errno != EINTR) return -1;
+  }
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+}  // namespace
+
+int run_program(std::vector<std::string> args) {
+  const pid_t pid = spawn(args, nullptr, false);
+  return pid > 0 ? wait_exit(pid) : -1;
+}
+
+StartedProgram::StartedProgram(std::vector<std::string> args) {
+  int ends[2];
+  if (::pipe2(ends, O_CLOEXEC) != 0) return;  // (close-on-exec: no other child inherits them)
+  posix_spawn_file_actions_t files;
+  posix_spawn_file_actions_init(&files);
+  posix_spawn_file_actions_adddup2(&files, ends[0], STDIN_FILENO);  // (dup2 clears cloexec)
+  const pid_t pid = spawn(args, &files, true);
   posix_spawn_file_actions_destroy(&files);
   ::close(ends[0]);
-  if (rc != 0) {
+  if (pid <= 0) {
     ::close(ends[1]);
     return;
   }
@@ -109,13 +116,9 @@ int StartedProgram::finish(std::string_view line) {
 
 int StartedProgram::wait() {
   if (pid_ <= 0) return -1;
-  int status = 0;
   const pid_t pid = pid_;
   pid_ = -1;
-  while (waitpid(pid, &status, 0) < 0) {
-    if (errno != EINTR) return -1;
-  }
-  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return wait_exit(pid);
 }
 
 }  // namespace ukdyn::cli
