@@ -12,10 +12,12 @@
 //
 // (P the model's compliance with the contacts open, K the law's generalized inverse of X = A_r P,
 // q''₀ the controlled acceleration with the contacts open), solved by Siconos Numerics' Lemke
-// (ContactLcp). The contacts with λ > 0 stay held in the model, the others are opened (the plant
-// then releases them: their multiplier under that control pulls). When the problem has no
-// solution — the requirements can be met only if a closed contact pulls — the control reports it
-// (a run stops there, naming the contacts, the requirement and the time).
+// (ContactLcp), or by its enumeration where Lemke misses a solution (W̃ need be neither symmetric
+// nor positive semi-definite under a weighted or actuated law). The contacts with λ > 0 stay held
+// in the model, the others are opened (the plant then releases them: their multiplier under that
+// control pulls). When the problem has no solution — the requirements can be met only if a closed
+// contact pulls — the control reports it (a run stops there, naming the contacts, the requirement
+// and the time).
 //
 // Glossary: A_c (k × n), b_c (k) the closed contacts' rows; A_r the requirement rows; λ (k) the
 // contacts' multipliers (push when > 0); w (k) their gap accelerations g''.
@@ -52,7 +54,8 @@ class ContactModes {
   // a closed contact pulls. When the requirements are not met with the contacts open either, the
   // held control stands. Cost: nothing while the requirements are met; else 2 or 3 evaluations of
   // compute_control, k solves with P and with the law (O(k n² + k² n)) and, when a gap is driven
-  // shut, one Lemke solve (O(k³); Siconos allocates its tableau then).
+  // shut, one LCP solve (Lemke, O(k³), or where it misses, the enumeration, O(2^k k³); Siconos
+  // allocates its tableau then).
   bool settle(const Controller& ctrl, ControlWorkspace& cws, const Eigen::Ref<const VectorXd>& q,
               const Eigen::Ref<const VectorXd>& qd, double t, ControlStatus& s,
               std::string& failure);

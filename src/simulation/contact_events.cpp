@@ -295,6 +295,10 @@ bool ContactEvents::resolve(double t, double* x, Index event, RunStatistics& sta
     for (std::size_t j = 0; j < candidates.size(); ++j) {
       closed_[cand_which[j]] = dyn_.lambda()[Index(j)] > 0.0 ? 1 : 0;
     }
+    if (release && closed_[std::size_t(event)] &&
+        !hold_pushes(t, q, qd, candidates, dyn_.contacts()[std::size_t(event)])) {
+      return false;
+    }
   }
   // a closed contact that opens: a release
   for (Index j = 0; j < m; ++j) {
@@ -309,6 +313,34 @@ bool ContactEvents::resolve(double t, double* x, Index event, RunStatistics& sta
   }
   apply();
   return true;
+}
+
+bool ContactEvents::hold_pushes(double t, const Eigen::Ref<const VectorXd>& q,
+                                const Eigen::Ref<const VectorXd>& qd,
+                                const std::vector<Index>& candidates, Index k) {
+  // the LCP holds the contact whose multiplier located the release: with the decided modes its
+  // multiplier in the plant must push again (another contact's change can make it), or the
+  // same release fires again at this instant, for ever — the plant's multiplier and the LCP's λ
+  // disagree in sign (under control: the control computed with the contact held loads it
+  // differently from the control's answer to its force that the LCP anticipates)
+  apply();
+  if (forward_dynamics(sys_, ws_, q, qd, t) != Status::kOk) return true;
+  const double held = multiplier(k);
+  if (!(held < 0.0)) return true;
+  double lcp = 0.0;
+  for (std::size_t j = 0; j < candidates.size(); ++j) {
+    if (candidates[j] == k) lcp = dyn_.lambda()[Index(j)];
+  }
+  failure_ = "contacts at t = " + format_t(t) + ": the contact '" + sys_.constraint(k).name() +
+             "' is released by its multiplier in the plant, " + format_t(held) +
+             " (pulling, with the contact held), but held by the LCP of the accelerations, " +
+             "lambda = " + format_t(lcp) +
+             " (pushing): the two disagree in sign, so the release and the hold alternate at "
+             "this instant (docs/contact.md, \"Contacts under control\": the control computed "
+             "with the contact held loads it otherwise than the control's answer to its force "
+             "that the LCP anticipates; a law other than Gauss, or the Gauss law where the "
+             "uncontrolled reaction pulls)";
+  return false;
 }
 
 }  // namespace ukdyn::detail

@@ -51,6 +51,12 @@ class ContactEvents {
   // resolves the contacts at (t, x): the impact of the touching ones when `event` (a contact
   // index, or −1) or any touching one approaches, then the closed set
   bool resolve(double t, double* x, Index event, RunStatistics& stats);
+  // after the LCP of a release event at t kept the event's contact k (a System index) closed
+  // (candidates: the LCP's contacts): true when k's multiplier with the decided modes pushes
+  // (one evaluation); else false with failure_ naming the contact, t, and both signs
+  bool hold_pushes(double t, const Eigen::Ref<const VectorXd>& q,
+                   const Eigen::Ref<const VectorXd>& qd, const std::vector<Index>& candidates,
+                   Index k);
   // the first s in [t0, t1] where f(s) < level, by bisection on dense output (f(t0) >= level),
   // to 1e-14 |t|: for a gap the last s found with f >= level, for a multiplier the first < 0
   double locate(double t0, double t1, const SegmentHooks::Dense& dense, Index k, bool gap,

@@ -303,6 +303,23 @@ TEST(ControlContacts, TiltedBarKeepsThePivotEndAndLiftsTheOtherJointly) {
   }
 }
 
+// the bar model `text` (its requirement th_d = c (t − 0.5)^3) as a run to t = 1: the tilt
+// required from t1 = 0.5 on, samples every `every`
+std::string tilt_run(std::string text, const std::string& every) {
+  const std::string dyn = ", dynamics: {omega: 10, zeta: 1}}";
+  text.replace(text.find(dyn), dyn.size(), ", active: [0.5, 100]" + dyn);
+  return text +
+         "simulate: {t_end: 1.0, integrator: dopri5, rtol: 1e-11, atol: 1e-13}\n"
+         "output: {every: " +
+         every + "}\n";
+}
+
+// the bar model `text` under the weighted law with cost matrix N (a YAML matrix)
+std::string with_weighted_law(std::string text, const std::string& N) {
+  const std::string gauss = "  law: gauss\n";
+  return text.replace(text.find(gauss), gauss.size(), "  law: weighted\n  N: " + N + "\n");
+}
+
 // The same bar in a run, its tilt required from t1 = 0.5 on to follow th_d = c (t − t1)³
 // (th_d'' = 6 c (t − t1) starts from 0): the run releases the right end at t1 — an event whose LCP
 // sees the control answer the contact forces (ContactModes::anticipate) — and the bar pivots on
@@ -312,13 +329,7 @@ TEST(ControlContacts, TiltedBarKeepsThePivotEndAndLiftsTheOtherJointly) {
 // the control force is M (q'' − a_p): F_th = J (th_d'' − th''_p), F_y = m (L/2) cos th (th_d'' −
 // th''_p), th''_p = −(L/2) cos th N / J.
 TEST(ControlContacts, TiltedBarRunReleasesTheRightEndAndPivotsOnTheLeft) {
-  std::string text = bar_model(1.0, "th - c*(t - 0.5)^3");
-  const std::string dyn = ", dynamics: {omega: 10, zeta: 1}}";
-  text.replace(text.find(dyn), dyn.size(), ", active: [0.5, 100]" + dyn);
-  text +=
-      "simulate: {t_end: 1.0, integrator: dopri5, rtol: 1e-11, atol: 1e-13}\n"
-      "output: {every: 0.1}\n";
-  const Model m = parse_model(text);
+  const Model m = parse_model(tilt_run(bar_model(1.0, "th - c*(t - 0.5)^3"), "0.1"));
   const ControlledTrajectory r = run(m);
   const Trajectory& p = r.plant;
   ASSERT_EQ(p.stats.status, Status::kOk) << p.stats.message;
@@ -377,6 +388,115 @@ TEST(ControlContacts, BarPushedIntoTheFloorNamesBothEndsThatWouldPull) {
   EXPECT_NE(failure.find("missed by 1 "), std::string::npos) << failure;
   EXPECT_EQ(bar.cws.model.activity_override[0], 1);
   EXPECT_EQ(bar.cws.model.activity_override[1], 1);
+}
+
+// ---- a weighted law: W̃ neither symmetric nor positive semi-definite ---------------------------
+
+// The bar of the tilt above under the weighted law with N = [1 0 0; 0 1 −2; 0 −2 5] (N⁻¹'s
+// (y, th) block [5 2; 2 1]): with both ends open (X = [0 0 1/J]) the least Q_cᵀ N Q_c with
+// X Q_c = c is Q_c = J c v / v_3, v = N⁻¹ e_th = (0, 2, 1), so the control also pushes y up with
+// 2 J c (ρ = v_2 / v_3 = 2): q''₀ = (0, −g + ρ J c / m, c). K = J v / v_3, and with h = L/2 and
+// the rows A_left,right = (0, 1, ∓h):
+//   W̃ = A_c M⁻¹ (I − v e_thᵀ / v_3) A_cᵀ = (1/m) [1 + hρ  1 − hρ; 1 + hρ  1 − hρ] = [1.5 −0.5; 1.5
+//   −0.5],
+// not symmetric and not positive semi-definite; r̃ = (y''₀ − h c, y''₀ + h c) = (−10.81, −4.81).
+// Its solution by hand: the rows of W̃ λ are equal, so w_right − w_left = 2 h c > 0, λ_right = 0,
+// and w_left = 0 gives λ_left = m (h c − y''₀) / (1 + hρ) = 2 · 10.81 / 3. The pivot then holds
+// and the bar tilts on it: q'' = (0, h c, c). With N = [1 0 0; 0 1 2; 0 2 5] (ρ = −2: the
+// control's answer to a contact force pushes the bar down more than the force lifts it),
+// W̃ = (1/m) [−1 3; −1 3] and r̃ = (−14.81, −8.81): λ_right > 0 would need w_right = 0 and then
+// w_left = −2 h c < 0, λ_right = 0 leaves w_left = r̃_left − λ_left / m < 0 — no solution, both
+// ends named.
+std::string weighted_bar(double c, const std::string& n23) {
+  return with_weighted_law(bar_model(c, "th - c*t^2/2"),
+                           "[[1, 0, 0], [0, 1, " + n23 + "], [0, " + n23 + ", 5]]");
+}
+
+TEST(ControlContacts, WeightedLawsNonSymmetricLcpHoldsThePivotOrNamesBothEnds) {
+  const double h = 0.5 * kBarL, J = kBarM * kBarL * kBarL / 12.0, c = kTilt;
+  {
+    BarAtRest bar(weighted_bar(c, "-2"));
+    ControlStatus s = bar.held();
+    ASSERT_EQ(s, ControlStatus::kRequirementsNotMet);
+    std::string failure;
+    ASSERT_TRUE(bar.modes.settle(bar.ctrl, bar.cws, bar.q, bar.qd, 0.0, s, failure)) << failure;
+    EXPECT_EQ(s, ControlStatus::kOk);
+    const double rho = 2.0, y0 = -kG + rho * J * c / kBarM;
+    ASSERT_EQ(bar.modes.decided_contacts().size(), 2u);
+    const VectorXd lambda = bar.modes.decided_lambda();
+    EXPECT_NEAR(lambda[0], kBarM * (h * c - y0) / (1.0 + h * rho), 1e-9);
+    EXPECT_NEAR(lambda[1], 0.0, 1e-12);
+    // the left end held, the right one open, and the bar tilts on the left: q'' = (0, h c, c)
+    EXPECT_EQ(bar.cws.model.active[0], 1);
+    EXPECT_EQ(bar.cws.model.active[1], 0);
+    EXPECT_NEAR(bar.cws.qdd[0], 0.0, 1e-12);
+    EXPECT_NEAR(bar.cws.qdd[1], h * c, 1e-9);
+    EXPECT_NEAR(bar.cws.qdd[2], c, 1e-9);
+  }
+  {
+    BarAtRest bar(weighted_bar(c, "2"));
+    ControlStatus s = bar.held();
+    ASSERT_EQ(s, ControlStatus::kRequirementsNotMet);
+    std::string failure;
+    EXPECT_FALSE(bar.modes.settle(bar.ctrl, bar.cws, bar.q, bar.qd, 0.0, s, failure));
+    EXPECT_NE(failure.find("at t = 0 the requirement row 'tilt'"), std::string::npos) << failure;
+    EXPECT_NE(failure.find("contact 'left', 'right' pulls"), std::string::npos) << failure;
+    EXPECT_EQ(bar.cws.model.activity_override[0], 1);
+    EXPECT_EQ(bar.cws.model.activity_override[1], 1);
+  }
+}
+
+// The bar's run of the tilt th_d = c (t − t1)³ from t1 = 0.5 (c = 10) under the weighted law with
+// N = diag(1, 1/20, 1): N⁻¹ couples nothing, so the release LCP is the Gauss one (W̃ symmetric)
+// and holds the left end from t1 on, while the control computed with it held (the least
+// Q_cᵀ N Q_c among the forces with F_th + h cos th F_y = s₀ = (J + m h² cos² th) th'' +
+// h cos th (m g − m h sin th th'²), which is what meeting th'' takes on the pivot) pushes y with
+// F_y = 20 h cos th s₀ / (20 h² cos² th + 1), so the pivot's reaction in the plant
+//   N_left = m (h cos th th'' − h sin th th'²) + m g − F_y
+// falls from 0.93 at t1 to zero at the t* found below. There the plant releases the left end,
+// but the run's LCP (with the control answering the contact force) holds it again: the two
+// disagree in sign, and the run stops at t*, naming the contact, the time and both signs, with
+// the samples before kept (before: the run never got past t*, alternating without end).
+TEST(ControlContacts, PivotWhoseHeldControlPullsStopsTheRunNamingTheContactAndBothSigns) {
+  const Model m = parse_model(tilt_run(with_weighted_law(bar_model(10.0, "th - c*(t - 0.5)^3"),
+                                                         "[[1, 0, 0], [0, 0.05, 0], [0, 0, 1]]"),
+                                       "0.01"));
+  const ControlledTrajectory r = run(m);
+  const Trajectory& p = r.plant;
+  // t*: the closed form's root, by bisection
+  const double h = 0.5 * kBarL, J = kBarM * kBarL * kBarL / 12.0, c = 10.0;
+  auto pivot = [&](double t) {
+    const double s = t - 0.5, th = c * s * s * s, thd = 3.0 * c * s * s, thdd = 6.0 * c * s;
+    const double co = std::cos(th), si = std::sin(th);
+    const double s0 =
+        (J + kBarM * h * h * co * co) * thdd + h * co * kBarM * (kG - h * si * thd * thd);
+    const double Fy = 20.0 * h * co * s0 / (20.0 * h * h * co * co + 1.0);
+    return kBarM * (h * co * thdd - h * si * thd * thd) + kBarM * kG - Fy;
+  };
+  double lo = 0.5, hi = 0.6;
+  ASSERT_GT(pivot(lo), 0.9);
+  ASSERT_LT(pivot(hi), 0.0);
+  for (int i = 0; i < 100; ++i) (pivot(0.5 * (lo + hi)) > 0.0 ? lo : hi) = 0.5 * (lo + hi);
+  const double t_star = 0.5 * (lo + hi);
+  EXPECT_NE(p.stats.status, Status::kOk);
+  EXPECT_NEAR(p.stats.t_reached, t_star, 1e-6);
+  const std::string& msg = p.stats.message;
+  EXPECT_NE(msg.find("the contact 'left' is released by its multiplier in the plant, -"),
+            std::string::npos)
+      << msg;
+  EXPECT_NE(msg.find("(pulling, with the contact held), but held by the LCP of the "
+                     "accelerations, lambda = "),
+            std::string::npos)
+      << msg;
+  EXPECT_NE(msg.find("(pushing)"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("contacts at t = 0.52"), std::string::npos) << msg;
+  // the samples before it kept: the bar pivots on its left end, th = th_d, y = h sin th
+  ASSERT_GE(p.samples(), 52);
+  for (Index j = 0; j < 52; ++j) {
+    const double t = p.t[std::size_t(j)], s = std::max(t - 0.5, 0.0), th = c * s * s * s;
+    EXPECT_NEAR(p.q[std::size_t(3 * j + 2)], th, 1e-8) << "t = " << t;
+    EXPECT_NEAR(p.q[std::size_t(3 * j + 1)], h * std::sin(th), 1e-8) << "t = " << t;
+  }
 }
 
 // ---- errors -------------------------------------------------------------------------------------

@@ -70,6 +70,38 @@ TEST(ContactLcp, SolvesSmallProblemsWithKnownSolutions) {
                std::invalid_argument);
 }
 
+// A W that is neither symmetric nor positive semi-definite (the controlled W̃ of a weighted law
+// can be such), W = [−2 3; 1 −1], r = (−1, 0). Its only solution, by hand over the four
+// complementary bases: z = 0 gives w_1 = −1; z_2 = 0 < z_1 needs −2 z_1 − 1 = 0; z_1 = 0 < z_2
+// needs −z_2 = 0; both positive, −2 z_1 + 3 z_2 = 1 and z_1 − z_2 = 0: z = (1, 1), w = 0. Siconos's
+// Lemke ends on a ray here (it reports success with z = 0, w_1 = −1: the check refuses it); the
+// enumeration finds z = (1, 1). W = [0 1; −1 −2], r = (−1, −1) has no solution (w_2 = −z_1 −
+// 2 z_2 − 1 < 0 for every z >= 0): still false, after both.
+TEST(ContactLcp, EnumerationSolvesWhatLemkeMissesOnANonPsdMatrix) {
+  ContactLcp lcp(2);
+  Eigen::Matrix2d W;
+  W << -2, 3, 1, -1;
+  ASSERT_TRUE(lcp.solve(W, Eigen::Vector2d(-1, 0)));
+  EXPECT_EQ(lcp.solver(), ContactLcp::Solver::kEnumeration);
+  EXPECT_EQ(lcp.info(), 0);
+  EXPECT_NEAR(lcp.z()[0], 1.0, 1e-14);
+  EXPECT_NEAR(lcp.z()[1], 1.0, 1e-14);
+  EXPECT_NEAR(lcp.w()[0], 0.0, 1e-14);
+  EXPECT_NEAR(lcp.w()[1], 0.0, 1e-14);
+  // an infeasible one
+  Eigen::Matrix2d V;
+  V << 0, 1, -1, -2;
+  EXPECT_FALSE(lcp.solve(V, Eigen::Vector2d(-1, -1)));
+  EXPECT_EQ(lcp.solver(), ContactLcp::Solver::kEnumeration);
+  EXPECT_NE(lcp.info(), 0);
+  // a symmetric positive definite W stays Lemke's: z = W⁻¹ (1, 1) = (1/3, 1/3)
+  W << 2, 1, 1, 2;
+  ASSERT_TRUE(lcp.solve(W, Eigen::Vector2d(-1, -1)));
+  EXPECT_EQ(lcp.solver(), ContactLcp::Solver::kLemke);
+  EXPECT_NEAR(lcp.z()[0], 1.0 / 3.0, 1e-14);
+  EXPECT_NEAR(lcp.z()[1], 1.0 / 3.0, 1e-14);
+}
+
 // ---- a bouncing ball ----------------------------------------------------------------------------
 
 // A ball dropped from rest at height h0 on a floor with restitution e: it reaches the floor at

@@ -10,6 +10,7 @@
 
 #include <memory>
 #include <string>
+#include <vector>
 
 #include <Eigen/Core>
 
@@ -20,37 +21,60 @@ namespace ukdyn {
 /// The linear complementarity problem w = W z + r, w >= 0, z >= 0, wᵀz = 0 (W k × k, r k), solved
 /// by Siconos Numerics' lexicographic Lemke method (lcp_lexicolemke: a direct pivoting method
 /// that terminates on degenerate problems too, exact for the few contacts of an event; see
-/// docs/contact.md, "The LCP solver"). Shaped like an Eigen decomposition: constructed with the
-/// largest size (its vectors reserved once; Siconos allocates its own
-/// copy of W and its pivoting tableau in each solve: at events only, never in a step), solve(),
-/// info(), z(), w().
+/// docs/contact.md, "The LCP solver"). Lemke finds a solution whenever one exists for a
+/// copositive-plus W (symmetric positive semi-definite: every uncontrolled Delassus matrix); for
+/// other W (the controlled W̃ of a weighted or actuated law) it may end on a ray, and then, for
+/// k <= kMaxEnumerated, Siconos's enumeration of the 2^k complementary bases (lcp_enum) decides:
+/// false only when no solution exists. Shaped like an Eigen decomposition: constructed with the
+/// largest size (its vectors and the enumeration's workspace reserved once; Siconos allocates its
+/// own copy of W and its pivoting tableau in each solve: at events only, never in a step),
+/// solve(), info(), solver(), z(), w().
 class ContactLcp {
  public:
   /// Reserves the buffers of problems up to max_size × max_size. @throws std::invalid_argument
   /// when max_size < 0.
   explicit ContactLcp(Index max_size = 0);
+  /// The largest k the enumeration is tried for (2^k bases of O(k³) each: 4096 for 12 contacts).
+  static constexpr Index kMaxEnumerated = 12;
+  /// Which method gave the last solve's answer (z = 0 when r >= 0 is reported as kLemke).
+  enum class Solver : unsigned char {
+    kLemke,        ///< lcp_lexicolemke
+    kEnumeration,  ///< lcp_enum, after Lemke found no solution
+  };
   ~ContactLcp();
   ContactLcp(ContactLcp&&) noexcept;
   ContactLcp& operator=(ContactLcp&&) noexcept;
 
   /// Solves the LCP of W (k × k, k <= max_size; copied) and r (k). Returns true when Siconos
   /// reports success and the solution satisfies w = W z + r, z >= 0, w >= 0, wᵀz = 0 to
-  /// tolerance · (‖W‖ ‖z‖ + ‖r‖). A solution with z = 0 (r >= 0) is found without Siconos.
-  /// @throws std::invalid_argument on sizes that do not match or exceed max_size. Cost O(k³)
-  /// per Lemke pivot sequence (at most 2^k pivots in theory, k to 2k in practice).
+  /// tolerance · (‖W‖ ‖z‖ + ‖r‖); when Lemke's answer fails that, the enumeration's is taken
+  /// (k <= kMaxEnumerated), so false means no solution exists (or k is larger). A solution with
+  /// z = 0 (r >= 0) is found without Siconos. @throws std::invalid_argument on sizes that do not
+  /// match or exceed max_size. Cost O(k³) per Lemke pivot sequence (at most 2^k pivots in theory,
+  /// k to 2k in practice); where Lemke fails, up to 2^k LU solves of k × k (O(2^k k³)).
   bool solve(const Eigen::Ref<const MatrixXd>& W, const Eigen::Ref<const VectorXd>& r,
              double tolerance = 1e-9);
-  /// Siconos's info of the last solve (0: success), or −1 when its solution failed the check.
+  /// Siconos's info of the last solve (0: success; the enumeration's when Lemke failed), or −1
+  /// when a solution Siconos reported failed the check.
   int info() const { return info_; }
+  /// The method of the last solve's answer (or of its last attempt when it failed).
+  Solver solver() const { return solver_; }
   /// The multipliers z (size k) of the last solve.
   Eigen::Ref<const VectorXd> z() const { return z_.head(size_); }
   /// The slacks w = W z + r (size k) of the last solve.
   Eigen::Ref<const VectorXd> w() const { return w_.head(size_); }
 
  private:
+  // true when z_, w_ (k) satisfy the LCP of W, r to tolerance (w_ recomputed as W z + r)
+  bool check(const Eigen::Ref<const MatrixXd>& W, const Eigen::Ref<const VectorXd>& r,
+             double tolerance);
+
   Index max_size_ = 0, size_ = 0;
-  VectorXd r_, z_, w_;  // (max_size) r, z, w handed to Siconos
+  VectorXd r_, z_, w_;              // (max_size) r, z, w handed to Siconos
+  std::vector<double> enum_dwork_;  // (3 m + m², m = min(max_size, kMaxEnumerated)) lcp_enum's
+  std::vector<int> enum_iwork_;     // (2 m) lcp_enum's pivots and basis flags
   int info_ = 0;
+  Solver solver_ = Solver::kLemke;
 };
 
 /// What happened at a unilateral contact during a run (RunStatistics::contact_events).
