@@ -27,7 +27,9 @@
 namespace {
 
 constexpr const char* kExitCodes = R"(Exit codes:
-  0  ok
+  0  ok; also when a plot or the viewer cannot be made on this machine (no python, a python
+     without matplotlib or NumPy, a program built without three.js): one warning line on
+     stderr, and every other file written (--no-plots, --no-viewer: no warning)
   1  the run failed numerically (status not ok); the trajectory up to the failure is still
      written (also: the output files could not be written)
   2  bad command line (also --set of a parameter the model does not declare, an unknown
@@ -85,26 +87,33 @@ std::uint64_t whole_number_of(const std::string& flag, const std::string& text, 
   return value;
 }
 
-// A long flag (--name or --name=value) that `cmd` does not have is refused here, before CLI11
-// parses: CLI11 would leave it aside and read its value as the model file ("model excludes
-// --example" for `run --example pendulum --t-edn 3`). The nearest flag is suggested. Values of
-// the flags that take one are skipped, so `--set name=--x` is not read as a flag.
-void check_long_flags(const CLI::App& cmd, int first, int argc, char** argv) {
+// A flag (--name, --name=value, -x or -xVALUE) that `cmd` does not have is refused here, before
+// CLI11 parses: CLI11 would leave it aside and read its value as the model file ("model excludes
+// --example" for `run --example pendulum --t-edn 3` or `-Z 3`). The nearest long flag is
+// suggested (a short one has no near neighbour: any other letter is one edit away). Values of
+// the flags that take one are skipped, so `--set name=--x` is not read as a flag, and a
+// negative number (-3, -.5) is a value, not a flag.
+void check_flags(const CLI::App& cmd, int first, int argc, char** argv) {
   std::vector<std::string> known;
   for (const CLI::Option* opt : cmd.get_options()) {
     for (const std::string& name : opt->get_lnames()) known.push_back("--" + name);
   }
+  const std::string command = cmd.get_parent() == nullptr ? "ukdyn" : "ukdyn " + cmd.get_name();
   for (int i = first; i < argc; ++i) {
     const std::string arg = argv[i];
     if (arg == "--") return;  // the rest are positional
-    if (arg.size() < 3 || arg.compare(0, 2, "--") != 0) continue;
-    const std::string name = arg.substr(0, arg.find('='));
+    const bool is_long = arg.size() >= 3 && arg.compare(0, 2, "--") == 0;
+    const bool is_short = arg.size() >= 2 && arg[0] == '-' && arg[1] != '-' && arg[1] != '.' &&
+                          (arg[1] < '0' || arg[1] > '9');
+    if (!is_long && !is_short) continue;
+    // --name[=value], or -x[VALUE]
+    const std::string name = is_long ? arg.substr(0, arg.find('=')) : arg.substr(0, 2);
     const CLI::Option* opt = cmd.get_option_no_throw(name);
     if (opt == nullptr) {
-      throw ukdyn::cli::UsageError("unknown option '" + name + "' for ukdyn " + cmd.get_name() +
-                                   ukdyn::cli::did_you_mean(name, known));
+      throw ukdyn::cli::UsageError("unknown option '" + name + "' for " + command +
+                                   (is_long ? ukdyn::cli::did_you_mean(name, known) : ""));
     }
-    // a flag that takes a value and was not given one with '=': its value is the next argument
+    // a flag that takes a value and was not given one with it: its value is the next argument
     if (opt->get_type_size() != 0 && name.size() == arg.size()) ++i;
   }
 }
@@ -315,7 +324,7 @@ int main(int argc, char** argv) {
   examples_cmd->add_option("name", example_name, "an example's name: print its model file");
 
   // an unknown subcommand is named, with the nearest one (CLI11 would say only "A subcommand is
-  // required"); a long flag the subcommand does not have is refused before parsing
+  // required"); a flag the subcommand does not have is refused before parsing
   if (argc > 1 && argv[1][0] != '-') {
     const std::string first = argv[1];
     const CLI::App* chosen = nullptr;
@@ -335,10 +344,20 @@ int main(int argc, char** argv) {
       return kExitUsage;
     }
     try {
-      check_long_flags(*chosen, 2, argc, argv);
+      check_flags(*chosen, 2, argc, argv);
     } catch (const UsageError& e) {
       std::fprintf(stderr, "error: %s\nRun with ukdyn %s --help for more information.\n",
                    terminal_text(e.what()).c_str(), chosen->get_name().c_str());
+      return kExitUsage;
+    }
+  } else if (argc > 1) {
+    // a flag before any subcommand: --help or --version, or named with the nearest (`ukdyn
+    // --verison`: CLI11 would say only "A subcommand is required")
+    try {
+      check_flags(app, 1, 2, argv);
+    } catch (const UsageError& e) {
+      std::fprintf(stderr, "error: %s\nRun with --help for more information.\n",
+                   terminal_text(e.what()).c_str());
       return kExitUsage;
     }
   }

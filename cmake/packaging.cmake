@@ -8,7 +8,8 @@
 # libsundials-cvode6, libyaml-cpp0.7, libginac11, libcln6, libhdf5-103-1, libhdf5-cpp-103-1,
 # libcholmod3, libstdc++6, libgcc-s1, libc6; it needs `file` and dpkg-dev), and
 # what the Python module imports (python3 of the version it was built for, python3-numpy).
-# Recommends: what the plots and DataFrames use and what C++ consumers need (Eigen's headers and
+# Recommends: what the plots, DataFrames and Datasets use (the pip extras of pyproject.toml) and
+# what C++ consumers need (Eigen's headers and
 # CMake package: find_dependency(Eigen3) in ukdynConfig.cmake).
 set(CPACK_GENERATOR DEB)
 set(CPACK_PACKAGE_NAME ukdyn)
@@ -48,7 +49,8 @@ if(UKDYN_BUILD_PYTHON)
 python3 (<< ${UKDYN_PYTHON_VERSION_MAJOR}.${_ukdyn_py_next}), python3-numpy, libjs-three")
 endif()
 set(CPACK_DEBIAN_PACKAGE_DEPENDS "${_ukdyn_depends}")
-set(CPACK_DEBIAN_PACKAGE_RECOMMENDS "python3-matplotlib, python3-pandas, libeigen3-dev")
+set(CPACK_DEBIAN_PACKAGE_RECOMMENDS
+    "python3-matplotlib, python3-pandas, python3-xarray, libeigen3-dev")
 set(CPACK_DEBIAN_PACKAGE_SUGGESTS "python3-sympy, libsundials-dev, libyaml-cpp-dev, libginac-dev, \
 libhdf5-dev, libsuitesparse-dev, libsiconos-numerics-dev")
 include(CPack)

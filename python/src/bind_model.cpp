@@ -6,6 +6,7 @@
 
 #include "common.hpp"
 #include "embedded.hpp"  // app/embedded.hpp: the example models, embedded at build time
+#include "suggest.hpp"   // app/suggest.hpp: did-you-mean, as the command's
 #include "ukdyn/core/format.hpp"
 #include "ukdyn/io/trajectory_files.hpp"
 #include "ukdyn/modelfile/visual.hpp"
@@ -15,11 +16,17 @@ namespace {
 
 using Overrides = std::map<std::string, double>;
 
-std::string example_list() {
-  std::string names;
-  for (const auto& f : cli::example_models())
-    names += (names.empty() ? "" : ", ") + std::string(f.name);
-  return names;
+// "<what> called 'name' (did you mean 'X'?); the examples are A, B, ...": the nearest example
+// suggested by the command's rule (app/suggest.cpp), so both suggest the same name
+std::invalid_argument unknown_example(const std::string& what, const std::string& name) {
+  std::vector<std::string> names;
+  std::string list;
+  for (const auto& f : cli::example_models()) {
+    names.emplace_back(f.name);
+    list += (list.empty() ? "" : ", ") + names.back();
+  }
+  return std::invalid_argument(what + " called '" + name + "'" + cli::did_you_mean(name, names) +
+                               "; the examples are " + list);
 }
 
 const cli::EmbeddedFile* find_example(const std::string& name) {
@@ -199,10 +206,7 @@ initial_violations, mass_positive_definite, mass_singular, problems, ok.)doc")
       "_load_example",
       [](const std::string& name, const Overrides& overrides, const GivenTables& tables) {
         const cli::EmbeddedFile* f = find_example(name);
-        if (!f) {
-          throw std::invalid_argument("no model file or example called '" + name +
-                                      "'; the examples are " + example_list());
-        }
+        if (!f) throw unknown_example("no model file or example", name);
         ReleasedGil release;
         return std::make_shared<Model>(
             parse_model(f->text, "examples/models/" + name + ".yaml", overrides, tables));
@@ -256,10 +260,7 @@ initial_violations, mass_positive_definite, mass_singular, problems, ok.)doc")
       "example_text",
       [](const std::string& name) {
         const cli::EmbeddedFile* f = find_example(name);
-        if (!f) {
-          throw std::invalid_argument("no example called '" + name + "'; the examples are " +
-                                      example_list());
-        }
+        if (!f) throw unknown_example("no example", name);
         return std::string(f->text);
       },
       py::arg("name"),

@@ -5,6 +5,8 @@
 
 #include <ukdyn/core/format.hpp>
 
+#include "viewer.hpp"  // app/: the viewer's embedded three.js (viewer_embedded.cpp)
+
 namespace ukdyn::python {
 namespace {
 
@@ -54,6 +56,20 @@ void translate(std::exception_ptr p) {
   }
 }
 
+// Debian's three.js file `name` embedded at build time (python/CMakeLists.txt), as bytes; None
+// for another name or when the module was built without libjs-three
+py::object viewer_script(const std::string& name) {
+  static const std::pair<const char*, const char* const*> scripts[] = {
+      {"three.min.js", &cli::kThreeJs},
+      {"OrbitControls.js", &cli::kOrbitControlsJs},
+      {"STLLoader.js", &cli::kStlLoaderJs},
+      {"OBJLoader.js", &cli::kObjLoaderJs},
+      {"ColladaLoader.js", &cli::kColladaLoaderJs}};
+  for (const auto& [file, text] : scripts)
+    if (name == file && **text != '\0') return py::bytes(*text);
+  return py::none();
+}
+
 }  // namespace
 }  // namespace ukdyn::python
 
@@ -73,6 +89,10 @@ PYBIND11_MODULE(_ukdyn, m) {
   m.def("_options", &up::options_list,
         "The simulation options table: a list of dicts (name, type, default, range, choices, "
         "aliases, solver, flag, example, doc).");
+  m.def("_viewer_script", &up::viewer_script, pybind11::arg("name"),
+        "Debian's three.js file `name` (three.min.js, OrbitControls.js, STLLoader.js, "
+        "OBJLoader.js, ColladaLoader.js) as embedded at build time: bytes, or None when the "
+        "module was built without libjs-three. viewer.py's fallback.");
   m.def(
       "_simulation_options",
       [](const pybind11::dict& settings) {

@@ -61,6 +61,24 @@ def test_unknown_example_lists_the_examples():
         assert name in str(err.value)
 
 
+@pytest.mark.parametrize("typo", ["pendlum", "pendullum", "Pendulum"])
+def test_unknown_example_suggests_the_nearest(typo):
+    """A typo of an example's name: the nearest is suggested, as `ukdyn run --example` does
+    (app/suggest.cpp's rule, one or two edits here), by load and example_text alike."""
+    with pytest.raises(ValueError, match=r"^no model file or example called '%s' \(did you mean "
+                       r"'pendulum'\?\); the examples are " % typo):
+        ukdyn.load(typo)
+    with pytest.raises(ValueError, match=r"^no example called '%s' \(did you mean 'pendulum'\?\)"
+                       % typo):
+        ukdyn.example_text(typo)
+
+
+def test_unknown_example_far_from_all_suggests_none():
+    with pytest.raises(ValueError) as err:
+        ukdyn.load("zzzzzzzzzzzz")
+    assert str(err.value).startswith("no model file or example called 'zzzzzzzzzzzz'; the examples")
+
+
 def test_missing_file_is_a_model_error(out_dir):
     with pytest.raises(ukdyn.ModelError) as err:
         ukdyn.load(out_dir / "nosuch.yaml")

@@ -99,8 +99,8 @@ def test_a_python_without_the_plotting_modules_gets_one_warning_not_a_traceback(
                                                                                 missing):
     """A python whose plotting modules are missing (here: Debian's /usr/bin/python3 with a
     sitecustomize that hides NumPy, and with it matplotlib, or matplotlib alone): the run's files
-    are written, the command warns in one line (exit 0: a documented warning, docs/simulation.md,
-    the plots' paragraph) and no traceback is printed."""
+    are written, the command warns in one line (exit 0: a documented warning, `ukdyn --help`'s exit
+    codes, docs/simulation.md, the plots' paragraph) and no traceback is printed."""
     hide = tmp_path / "hide"
     hide.mkdir()
     (hide / "sitecustomize.py").write_text(

@@ -75,6 +75,33 @@ def test_grid_as_dataset():
         0.02 * math.cos(math.sqrt(9.81) * 0.2), abs=1e-6)
 
 
+def test_sweep_frames_and_datasets_carry_the_units():
+    """The units of pendulum.yaml (x, y, r: m; theta: rad) reach the frame's attrs["units"] and
+    each variable of the Dataset, as a Result's (test_results_units.py): a swept velocity per s,
+    t_end and t_reached in s, energy_exchanged in J, a recorded value in its column's unit; a
+    parameter (g) and the counts have none (issue #33 item 5)."""
+    frame = ukdyn.sweep("pendulum", grid={"g": [9.81, 1.62], "y_dot": [0.0, 0.5],
+                                          "t_end": [0.2, 0.3]},
+                        at=[0.2], outputs=["theta", "r"], workers=2)
+    assert list(frame["status"]) == ["ok"] * 8
+    assert frame.attrs["units"] == {
+        "y_dot": "m/s", "t_end": "s", "t_reached": "s", "energy_exchanged": "J",
+        "x@0.2": "m", "y@0.2": "m", "x_dot@0.2": "m/s", "y_dot@0.2": "m/s", "theta@0.2": "rad",
+        "r@0.2": "m"}
+    xr = import_or_missing("xarray", "xarray is not installed (python3-xarray)")
+    ds = ukdyn.to_dataset(frame)
+    assert isinstance(ds, xr.Dataset)
+    assert dict(ds.sizes) == {"g": 2, "y_dot": 2, "t_end": 2}
+    assert ds["x@0.2"].attrs["units"] == "m" and ds["theta@0.2"].attrs["units"] == "rad"
+    assert ds["x_dot@0.2"].attrs["units"] == "m/s" and ds["t_reached"].attrs["units"] == "s"
+    assert ds["y_dot"].attrs["units"] == "m/s" and ds["t_end"].attrs["units"] == "s"
+    assert "units" not in ds["g"].attrs and "units" not in ds["steps"].attrs
+    assert "units" not in ds["status"].attrs
+    assert ds.attrs["model"] == "examples/models/pendulum.yaml"
+    # the rod's length stays 1 m: r is in m and equals 1 to the run's tolerance
+    np.testing.assert_allclose(ds["r@0.2"].values, 1.0, rtol=0, atol=1e-8)
+
+
 def test_dask_local_cluster_equals_threads():
     distributed = import_or_missing("distributed", "python3-distributed is not installed")
     kw = dict(grid={"L": [0.5, 1.0, 0.0]}, random={"theta0": "normal(0.05,0.01)"}, n=3, seed=3,

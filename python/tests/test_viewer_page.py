@@ -88,6 +88,34 @@ def test_the_commands_impacts_are_save_animations(cli, examples_dir, tmp_path):
     assert ours["contacts"] == theirs["contacts"]
 
 
+def test_three_js_without_libjs_three(monkeypatch, tmp_path):
+    """A pip or venv install on a machine without Debian's libjs-three: save_animation falls back
+    to the copy of it the extension embedded at build time, and the page is the one made with
+    libjs-three, byte for byte: three.js is Debian's file, and so is each loader."""
+    debian = pathlib.Path(viewer.DEBIAN_THREE)
+    result = ukdyn.load("pendulum").simulate(t_end=0.5)
+    result.save_animation(tmp_path / "debian.html")
+    monkeypatch.setattr(viewer, "DEBIAN_THREE", str(tmp_path / "no-libjs-three"))
+    result.save_animation(tmp_path / "embedded.html")
+    page = (tmp_path / "embedded.html").read_bytes()
+    three = (debian / "three.min.js").read_bytes().replace(b"</script", b"<\\/script")
+    assert len(three) > 100000
+    assert three in page
+    assert page == (tmp_path / "debian.html").read_bytes()
+    # each file as embedded is the Debian file's bytes
+    from ukdyn import _ukdyn
+    for name, folder in [("three.min.js", ""), ("OrbitControls.js", "examples/js/controls"),
+                         ("STLLoader.js", "examples/js/loaders"),
+                         ("OBJLoader.js", "examples/js/loaders"),
+                         ("ColladaLoader.js", "examples/js/loaders")]:
+        assert _ukdyn._viewer_script(name) == (debian / folder / name).read_bytes(), name
+    assert _ukdyn._viewer_script("GLTFLoader.js") is None
+    # without the embedded copy either, the error names the file
+    monkeypatch.setattr(viewer, "_embedded_script", lambda name: None)
+    with pytest.raises(FileNotFoundError, match="three.min.js not found"):
+        result.save_animation(tmp_path / "none.html")
+
+
 def test_no_python_is_run(cli, tmp_path):
     """With no python3 to be found (UKDYN_PYTHON names none, PATH is empty) the page is still
     written, and the same."""

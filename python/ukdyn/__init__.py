@@ -118,8 +118,8 @@ def load(source: "str | os.PathLike[str]", /, *, tables: Optional[dict] = None,
 
     Raises :class:`ModelError` (file:line:column, message, hint) for a bad or unreadable model
     file and for an override of a parameter the model does not declare; ValueError for a name
-    that is neither a file nor an example (the message lists the examples) or an override that
-    is not a number.
+    that is neither a file nor an example (the message suggests the nearest example, as the
+    command does, and lists them) or an override that is not a number.
 
     ``tables`` gives measured data for the model's ``tables:`` ({table: {column: 1-D array}},
     the columns in order; docs/model-format.md, "Tables"): each table must be declared by the

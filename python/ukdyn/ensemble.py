@@ -130,6 +130,34 @@ def _frame(parts: List[dict], offsets: List[int]):
     return frame.set_index("sample", drop=False)
 
 
+# the units of the summary figures that have one (the others are counts, flags or ratios, or in
+# the constraints' own units)
+FIGURE_UNITS = {"t_reached": "s", "energy_exchanged": "J"}
+
+
+def _column_units(frame: Any, text: str, file: str, overrides: dict) -> Dict[str, str]:
+    """Each column's unit, for the known ones (``frame.attrs["units"]``): a swept coordinate's
+    (``units:`` of the file, m/rad for bodies; ``_dot`` per s) and a recorded value's
+    (``x@5``: x's, by the rules of ``Result.column_units``), ``t_start``/``t_end`` s, and the
+    figures' (FIGURE_UNITS). Parameters have none (a model file gives them no units)."""
+    from . import parse
+    from .plotting_data import column_unit
+
+    meta = {"units": parse(text, file, **overrides).units}
+    swept = list(frame.attrs["grid"]) + list(frame.attrs["random"])
+    units = {}
+    for name in frame.columns:
+        if name in swept:
+            unit = "s" if name in ("t_start", "t_end") else column_unit(meta, name)
+        elif "@" in name:
+            unit = column_unit(meta, name.split("@", 1)[0])
+        else:
+            unit = FIGURE_UNITS.get(name, "")
+        if unit:
+            units[name] = unit
+    return units
+
+
 def _run_chunk(text: str, file: str, overrides: dict, settings: dict, names: List[str],
                rows: np.ndarray, at: List[float], outputs: List[str], keep: bool) -> dict:
     """One Dask task: the samples `rows` in this worker's process, on one thread."""
@@ -218,6 +246,7 @@ def sweep(model: Any, *, grid: Optional[GridSpec] = None, random: Optional[Rando
     frame.attrs["grid"] = [a[0] for a in axes]
     frame.attrs["random"] = [v[0] for v in variables]
     frame.attrs["model"] = file
+    frame.attrs["units"] = _column_units(frame, text, file, overrides)
     if trajectories:
         frame.attrs["trajectories"] = [t for p in parts for t in p["trajectories"]]
     if interrupted:
@@ -265,7 +294,9 @@ def _run_on_dask(client: Any, chunk_size: Optional[int], text: str, file: str, o
 
 def to_dataset(frame: Any):
     """A grid sweep's DataFrame as an ``xarray.Dataset``: one dimension per grid axis (in the
-    grid's order), each other column a variable over them (``status`` and ``message`` too).
+    grid's order), each other column a variable over them (``status`` and ``message`` too);
+    each variable's and axis's ``attrs["units"]`` is the frame's (``frame.attrs["units"]``;
+    absent when not known), the Dataset's ``attrs["model"]`` the model file.
     Raises ValueError for a frame with random draws (no grid structure to follow)."""
     import xarray as xr
 
@@ -276,4 +307,10 @@ def to_dataset(frame: Any):
     if not grid:
         raise ValueError("to_dataset: the sweep has no grid")
     indexed = frame.drop(columns=["sample"]).set_index(list(grid))
-    return xr.Dataset.from_dataframe(indexed)
+    ds = xr.Dataset.from_dataframe(indexed)
+    for name, unit in (frame.attrs.get("units") or {}).items():
+        if name in ds.variables:
+            ds[name].attrs["units"] = unit
+    if "model" in frame.attrs:
+        ds.attrs["model"] = frame.attrs["model"]
+    return ds

@@ -36,7 +36,8 @@ import stat
 import sys
 import tempfile
 
-# where three.js is found when it is not beside this file (Debian's libjs-three)
+# where three.js is found when it is not beside this file (Debian's libjs-three); without it
+# (a pip or venv install), the copy the extension _ukdyn embedded from there at build time
 DEBIAN_THREE = "/usr/share/javascript/three"
 THREE_FILES = ("three.min.js", "OrbitControls.js")
 # the mesh loaders of a robot's URDF visuals, put in a page whose data holds meshes of the format
@@ -52,8 +53,20 @@ MAX_FRAMES = 3000
 DIGITS = 4
 
 
+def _embedded_script(name):
+    """Debian's three.js file `name` as the extension _ukdyn embedded it at build time (a str),
+    or None: built without libjs-three, or run as a script, without the package."""
+    try:
+        from ukdyn import _ukdyn
+    except ImportError:
+        return None
+    data = _ukdyn._viewer_script(name)
+    return None if data is None else data.decode("utf-8")
+
+
 def _asset(name, here):
-    """The text of an asset: beside this file, else in Debian's libjs-three."""
+    """The text of an asset: beside this file, else in Debian's libjs-three, else (three.js's
+    files) the copy of it embedded in the extension."""
     places = [os.path.join(here, name), os.path.join(here, "_viewer", name)]
     if name == "three.min.js":
         places.append(os.path.join(DEBIAN_THREE, name))
@@ -65,8 +78,12 @@ def _asset(name, here):
         if os.path.exists(p):
             with open(p, encoding="utf-8") as f:
                 return f.read()
+    text = _embedded_script(name) if name != TEMPLATE else None
+    if text is not None:
+        return text
     raise FileNotFoundError(
-        "viewer: %s not found (looked in %s; install Debian's libjs-three)" % (name, ", ".join(places)))
+        "viewer: %s not found (looked in %s and the module; install Debian's libjs-three)"
+        % (name, ", ".join(places)))
 
 
 def _frames(t, fps, max_frames):

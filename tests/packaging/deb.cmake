@@ -32,6 +32,12 @@ foreach(dep "libc6" "libstdc\\+\\+6" "libsundials-cvode" "libyaml-cpp" "libginac
     message(FATAL_ERROR "Depends lacks ${dep}")
   endif()
 endforeach()
+# and Recommends what the module's optional functions import (pyproject.toml's extras)
+foreach(rec "python3-matplotlib" "python3-pandas" "python3-xarray")
+  if(NOT last_output MATCHES "Recommends:[^\n]*${rec}")
+    message(FATAL_ERROR "Recommends lacks ${rec}")
+  endif()
+endforeach()
 
 # Debian's own checks (issue #33 item 2): no lintian error or warning; the two warnings CPack's
 # layout makes are overridden with their reasons in the package (cmake/debian/lintian-overrides)
