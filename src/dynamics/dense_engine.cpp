@@ -49,20 +49,22 @@ bool check_mass_entries_tree(const MatrixXd& M, const std::vector<Index>& parent
   const double* p = M.data();
   const Index* up = parent.data();
   // one pass: Σ (M_ka − M_ak) + Σ 0·M_kk is finite unless an entry read is NaN or ±Inf (or the
-  // sum overflows: an asymmetry of order 1e308); the maxima by compares (maxsd). The scale is
-  // max |M_kk|, |M_ka| (the lower entries; the upper ones differ by at most the asymmetry)
+  // sum overflows: an asymmetry of order 1e308); the maxima by compares (maxsd, written
+  // `big > x ? big : x` so that the compiler keeps each maximum in its register: the same
+  // maxima whenever the sum is finite, i.e. whenever they are used). The scale is max |M_kk|,
+  // |M_ka| (the lower entries; the upper ones differ by at most the asymmetry)
   double sum = 0.0, big = 0.0, worst = 0.0;
   for (Index k = 0; k < n; ++k) {
     const double* col = p + k * n;  // M_ak = col[a]
     const double dk = col[k], ak = std::abs(dk);
     sum += dk * 0.0;
-    big = ak > big ? ak : big;
+    big = big > ak ? big : ak;
     for (Index a = up[k]; a >= 0; a = up[a]) {
       const double lower = p[a * n + k], d = lower - col[a];
       const double al = std::abs(lower), ad = std::abs(d);
       sum += d;
-      big = al > big ? al : big;
-      worst = ad > worst ? ad : worst;
+      big = big > al ? big : al;
+      worst = worst > ad ? worst : ad;
     }
   }
   if (!std::isfinite(sum)) return false;

@@ -63,6 +63,31 @@ inline void lower_transpose_solve(const double* L, Index ld, const double* inv, 
   }
 }
 
+// Y = A L⁻ᵀ for A (m × n, leading dimension lda) into Y (m × n, leading dimension m): each row's
+// lower_solve, y_jᵀ = L⁻¹ a_jᵀ, with the same operations in the same order (x_i += (−x_k) L_ik for
+// k < i, then x_i *= 1 / L_ii), so the same bits, but each step one contiguous loop over the m
+// rows instead of m short loops down a column of L (the first step reads A: no copy of it)
+inline void lower_solve_rows(const double* L, Index ld, const double* inv,
+                             const double* __restrict A, Index lda, double* __restrict Y, Index m,
+                             Index n) {
+  if (n == 0) return;
+  // k = 0: y_0 = a_0 / L_00,  y_i = a_i − L_i0 y_0
+  for (Index j = 0; j < m; ++j) Y[j] = A[j] * inv[0];
+  for (Index i = 1; i < n; ++i) {
+    const double l = -L[i];
+    const double* a = A + i * lda;
+    double* y = Y + i * m;
+    for (Index j = 0; j < m; ++j) y[j] = a[j] + l * Y[j];
+  }
+  // k = 1 … n − 1
+  for (Index k = 1; k < n; ++k) {
+    double* yk = Y + k * m;
+    const double d = inv[k];
+    for (Index j = 0; j < m; ++j) yk[j] *= d;
+    for (Index i = k + 1; i < n; ++i) axpy(-L[k * ld + i], yk, Y + i * m, m);
+  }
+}
+
 // y ← L x, L lower triangular
 inline void lower_multiply(const double* L, Index ld, const double* x, double* y, Index n) {
   for (Index i = 0; i < n; ++i) y[i] = 0.0;
@@ -113,7 +138,7 @@ void FundamentalDecomposition::resize(Index n, Index m) {
   n_ = n;
   m_ = m;
   L_.resize(n, n);
-  X_.resize(n, m);
+  X_.resize(n, 2 * m);  // (columns m … 2m − 1: the scratch of lower_solve_rows)
   tau_.resize(m);
   ztau_.resize(m);
   perm_.resize(m);
@@ -209,15 +234,21 @@ FundamentalDecomposition& FundamentalDecomposition::compute_constraints(
   UKDYN_CHECK(A.rows() == m_ && A.cols() == n_, "compute_constraints: A has the wrong size");
   UKDYN_CHECK(info_ == Eigen::Success, "compute_constraints: M is not factorized");
   // Wᵀ = L⁻¹ Aᵀ (F⁻¹ Aᵀ along a mass tree)
-  X_ = A.transpose();
+  auto Wt = X_.leftCols(m_);
   if (!parent_.empty()) {
+    Wt = A.transpose();
     for (Index j = 0; j < m_; ++j) factor_solve(X_.col(j).data());
-  } else if (n_ <= kSmall) {
+  } else if (n_ <= kSmall && m_ > 0) {
+    // all rows at once on A's own layout (W = A L⁻ᵀ), then transposed into place
+    double* Y = X_.data() + n_ * m_;  // (m × n) the scratch half of X_
+    lower_solve_rows(L_.data(), n_, inv_ldiag_.data(), A.data(), A.outerStride(), Y, m_, n_);
     for (Index j = 0; j < m_; ++j) {
-      lower_solve(L_.data(), n_, inv_ldiag_.data(), X_.col(j).data(), n_);
+      double* x = X_.col(j).data();
+      for (Index i = 0; i < n_; ++i) x[i] = Y[j + i * m_];
     }
-  } else if (m_ > 0) {  // (Eigen's solve takes &X(0, 0) even when X is empty)
-    L_.triangularView<Eigen::Lower>().solveInPlace(X_);
+  } else if (n_ > kSmall && m_ > 0) {  // (Eigen's solve takes &X(0, 0) even when X is empty)
+    Wt = A.transpose();
+    L_.triangularView<Eigen::Lower>().solveInPlace(Wt);
   }
   // the column norms for pivoting; where one leaves [2⁻⁴⁵⁰, 2⁴⁵⁰] (its square under- or
   // overflows: a row written as 1e-170 (x² + y² − 1), or q of 1e200), row equilibration: every
@@ -269,14 +300,17 @@ void FundamentalDecomposition::factor_qr() {
   }
   rank_ = 0;
   max_pivot_ = 0.0;
+  double* const X = X_.data();  // (column j at X + j n)
+  double* const norm = norm_.data();
+  double* const norm_ref = norm_ref_.data();
   for (Index k = 0; k < kmax; ++k) {
     // pivot: bring the remaining column of largest norm to position k
     Index p = k;
     for (Index j = k + 1; j < m; ++j) {
-      if (norm_[j] > norm_[p]) p = j;
+      if (norm[j] > norm[p]) p = j;
     }
     if (p != k) {
-      X_.col(k).swap(X_.col(p));
+      std::swap_ranges(X + k * n, X + (k + 1) * n, X + p * n);
       std::swap(norm_[k], norm_[p]);
       std::swap(norm_ref_[k], norm_ref_[p]);
       std::swap(perm_[k], perm_[p]);
@@ -307,21 +341,23 @@ void FundamentalDecomposition::factor_qr() {
         axpy(-s, vk, xj + 1, n - k - 1);
       }
     }
-    // downdate the partial norms of the trailing columns
+    rank_ = k + 1;
+    // downdate the partial norms of the trailing columns (only a later pivot search among two
+    // or more columns reads them)
+    if (k + 1 >= kmax || m - (k + 1) < 2) continue;
     for (Index j = k + 1; j < m; ++j) {
-      if (norm_[j] == 0.0) continue;
-      const double ratio = std::abs(X_(k, j)) / norm_[j];
+      if (norm[j] == 0.0) continue;
+      const double* xj = X + j * n + k;
+      const double ratio = std::abs(xj[0]) / norm[j];
       const double temp = std::max(0.0, 1.0 - ratio * ratio);
-      const double rel = norm_[j] / norm_ref_[j];
+      const double rel = norm[j] / norm_ref[j];
       if (temp * rel * rel <= tol3z) {
-        const double* xj = X_.col(j).data() + k + 1;
-        norm_[j] = std::sqrt(dot(xj, xj, n - k - 1));
-        norm_ref_[j] = norm_[j];
+        norm[j] = std::sqrt(dot(xj + 1, xj + 1, n - k - 1));
+        norm_ref[j] = norm[j];
       } else {
-        norm_[j] *= std::sqrt(temp);
+        norm[j] *= std::sqrt(temp);
       }
     }
-    rank_ = k + 1;
   }
 }
 

@@ -162,7 +162,9 @@ class FundamentalDecomposition {
   MatrixXd L_;                 // (n × n) Cholesky factor M = L Lᵀ in the lower triangle (or the
                                // L of M = Lᵀ L along parent_)
   std::vector<Index> parent_;  // (n or 0) the mass tree of set_mass_tree; empty: dense
-  MatrixXd X_;            // (n × m) Wᵀ, then R/T above the diagonal, reflectors below / right
+  // (n × 2m) Wᵀ, then R/T above the diagonal, reflectors below / right; its columns m … 2m − 1
+  // are scratch (compute_constraints' W by rows)
+  MatrixXd X_;
   VectorXd tau_;          // (m) QR reflector coefficients
   VectorXd ztau_;         // (m) RZ reflector coefficients
   Eigen::VectorXi perm_;  // (m) column permutation: column k of Wᵀ Π is column perm_[k] of Wᵀ
