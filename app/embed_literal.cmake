@@ -9,6 +9,12 @@ set(delim "ukdyn_embed")
 # none, but a single 850 kB literal is slow to compile); adjacent literals are concatenated.
 function(ukdyn_literal path out_var)
   file(READ "${path}" text)
+  ukdyn_text_literal("${text}" "${path}" pieces)
+  set(${out_var} "${pieces}" PARENT_SCOPE)
+endfunction()
+
+# ukdyn_text_literal(TEXT WHAT OUT_VAR): TEXT as ukdyn_literal's literals (WHAT names it in errors).
+function(ukdyn_text_literal text path out_var)
   string(FIND "${text}" ")${delim}\"" clash)
   if(NOT clash EQUAL -1)
     message(FATAL_ERROR "${path} contains the raw-string delimiter ')${delim}\"'")

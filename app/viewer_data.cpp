@@ -2,6 +2,7 @@
 // The viewer page's data from a run's samples (app/viewer_page.hpp): python/ukdyn/viewer.py's
 // scene_data, rule for rule, so that the command's page and Python's are the same.
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -50,7 +51,9 @@ bool truthy(const json& j) {
   if (j.is_null()) return false;
   if (j.is_boolean()) return j.get<bool>();
   if (j.is_number()) return j.get<double>() != 0.0;
-  if (j.is_string() || j.is_array() || j.is_object()) return !j.empty();
+  // (nlohmann's empty() is false for every string: a string's emptiness is its text's)
+  if (j.is_string()) return !j.get_ref<const std::string&>().empty();
+  if (j.is_array() || j.is_object()) return !j.empty();
   return true;
 }
 
@@ -293,6 +296,23 @@ json desired_paths(const json& scene, const Packer& p, const std::vector<Require
   return out;
 }
 
+// The torque (world axes) of the generalized forces Q = (Q0, Qx, Qy, Qz) on a unit quaternion
+// u = (w, x, y, z), per sample: tau = 1/2 E(u) Q, E(u) = [-v | w I + [v]x] (omega = 2 E(u) u',
+// so tau . omega = Q . u'), viewer.py's _quaternion_torque operation for operation.
+std::array<std::vector<double>, 3> quaternion_torque(const std::array<std::vector<double>, 4>& u,
+                                                     const std::array<std::vector<double>, 4>& Q) {
+  std::array<std::vector<double>, 3> out;
+  const std::size_t n = std::min(u[0].size(), Q[0].size());
+  for (std::size_t i = 0; i < n; ++i) {
+    const double w = u[0][i], x = u[1][i], y = u[2][i], z = u[3][i];
+    const double q0 = Q[0][i], qx = Q[1][i], qy = Q[2][i], qz = Q[3][i];
+    out[0].push_back(0.5 * (w * qx - x * q0 + (y * qz - z * qy)));
+    out[1].push_back(0.5 * (w * qy - y * q0 + (z * qx - x * qz)));
+    out[2].push_back(0.5 * (w * qz - z * q0 + (x * qy - y * qx)));
+  }
+  return out;
+}
+
 // The friction force at a contact in the scene's axes, per frame shown: F = map Q_f, Q_f each
 // sliding coordinate's generalized friction force (the sum of its columns: the sliding law's
 // Qc_nonideal.<coordinate> and the stick constraint's multiplier; the scene's "friction",
@@ -475,6 +495,14 @@ json viewer_page_data(const json& scene, const ViewerColumns& run, const ViewerO
   data["trails"] = list_of(scene, "trails");
   data["frames"] = json::array();
   data["requirements"] = json::array();
+  // each coordinate's unit, where known (the page labels forces by them)
+  data["units"] = json::object();
+  const json coordinates = list_of(scene, "coordinates");
+  const json coordinate_units = list_of(scene, "coordinate_units");
+  for (std::size_t k = 0; k < std::min(coordinates.size(), coordinate_units.size()); ++k) {
+    if (truthy(coordinate_units[k]))
+      data["units"][coordinates[k].get<std::string>()] = coordinate_units[k];
+  }
 
   // positions to 1e-4 of the scene's extent, angles and quaternions to 1e-4
   std::vector<std::vector<std::string>> along(3);
@@ -522,6 +550,29 @@ json viewer_page_data(const json& scene, const ViewerColumns& run, const ViewerO
     const std::vector<std::string> control = {
         "Qc_control." + name + ".x", "Qc_control." + name + ".y", "Qc_control." + name + ".z"};
     if (p.has_any(control)) body["control"] = p.pack_or_null(control);
+    // the control torque: a planar body's about z (Qc_control.<b>.theta); a rigid body's from
+    // the generalized forces on its quaternion (quaternion_torque)
+    const std::string theta = "Qc_control." + name + ".theta";
+    std::vector<std::string> quaternion;
+    for (const char* k : {"u0", "u1", "u2", "u3"})
+      quaternion.push_back("Qc_control." + name + "." + k);
+    if (kind == "planar" && p.has(theta)) {
+      body["control_torque"] = json::array({nullptr, nullptr, p.pack(theta)});
+    } else if (kind == "rigid" && std::all_of(quaternion.begin(), quaternion.end(),
+                                              [&](const std::string& c) { return p.has(c); })) {
+      std::array<std::vector<double>, 4> u, Q;
+      for (std::size_t k = 0; k < 4; ++k) {
+        u[k] = p.raw(name + ".u" + std::to_string(k));
+        Q[k] = p.raw(quaternion[k]);
+      }
+      json torque = json::array();
+      for (const std::vector<double>& c : quaternion_torque(u, Q)) {
+        json values = json::array();
+        for (const double v : c) values.push_back(p.rounded(v));
+        torque.push_back(values);
+      }
+      body["control_torque"] = torque;
+    }
     data["bodies"].push_back(body);
   }
   // joints: the reaction force at the child's point, ideal and non-ideal (friction), and the
@@ -663,7 +714,8 @@ json viewer_page_data(const json& scene, const ViewerColumns& run, const ViewerO
   }
   // a kind of force that is zero throughout draws no arrows; nor does a torque that is
   // round-off: at most 1e-9 of the largest joint force times the scene's extent
-  const char* const kinds[] = {"ideal", "nonideal", "control", "ideal_torque", "nonideal_torque"};
+  const char* const kinds[] = {"ideal",        "nonideal",        "control",
+                               "ideal_torque", "nonideal_torque", "control_torque"};
   double largest_force = 0.0;
   for (const json& j : data["joints"]) {
     for (const char* key : {"ideal", "nonideal"}) {

@@ -76,5 +76,5 @@ if(UKDYN_BUILD_PYTHON)
       "Where the Python package ukdyn/ is installed, relative to the prefix")
   install(TARGETS ukdyn_python LIBRARY DESTINATION ${UKDYN_INSTALL_PYTHONDIR}/ukdyn)
   install(DIRECTORY ${PROJECT_SOURCE_DIR}/python/ukdyn/ DESTINATION ${UKDYN_INSTALL_PYTHONDIR}/ukdyn
-          FILES_MATCHING PATTERN "*.py" PATTERN "*.pyi" PATTERN "py.typed" PATTERN "*.html" PATTERN "__pycache__" EXCLUDE)
+          FILES_MATCHING PATTERN "*.py" PATTERN "*.pyi" PATTERN "py.typed" PATTERN "*.html" PATTERN "*.js" PATTERN "__pycache__" EXCLUDE)
 endif()

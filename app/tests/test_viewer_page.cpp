@@ -163,6 +163,64 @@ TEST(ViewerPage, ThePageDataPrunesZeroForcesAndScalesTheArrows) {
   }
 }
 
+TEST(ViewerPage, ABodysControlTorqueIsDrawnAndARigidBodysDoesTheQuaternionForcesWork) {
+  // a planar body's control torque is Qc_control.<b>.theta about z; a rigid body's the torque
+  // tau whose power tau . omega equals the quaternion forces' Q . u' for every angular velocity
+  // omega (u' = 1/2 (0, omega) u, the quaternion product: an independent formula), checked for
+  // the three axes, which pins tau; the page's 4 significant digits allowed
+  const json scene = json::parse(R"({"bodies": [{"kind": "planar", "mass": 1.0, "name": "bar"},
+    {"kind": "rigid", "mass": 1.0, "name": "top"}], "model": "m", "planar": false,
+    "coordinates": ["bar.x", "bar.theta"], "coordinate_units": ["m", "rad"]})");
+  const double n = std::sqrt(0.3 * 0.3 + 0.5 * 0.5 + 0.7 * 0.7 + 0.4 * 0.4);
+  const double u[4] = {0.3 / n, -0.5 / n, 0.7 / n, 0.4 / n}, Q[4] = {1.3, -0.4, 2.2, 0.9};
+  ViewerColumns run;
+  run.names = {"t",
+               "bar.x",
+               "bar.y",
+               "bar.theta",
+               "Qc_control.bar.theta",
+               "top.x",
+               "top.y",
+               "top.z",
+               "top.u0",
+               "top.u1",
+               "top.u2",
+               "top.u3",
+               "Qc_control.top.u0",
+               "Qc_control.top.u1",
+               "Qc_control.top.u2",
+               "Qc_control.top.u3"};
+  for (int k = 0; k <= 1; ++k) {
+    const double values[] = {double(k), 0,    0,    0,    -10.4368, 0,    0,    0,
+                             u[0],      u[1], u[2], u[3], Q[0],     Q[1], Q[2], Q[3]};
+    run.columns.resize(run.names.size());
+    for (std::size_t c = 0; c < run.names.size(); ++c) run.columns[c].push_back(values[c]);
+  }
+  const json data = viewer_page_data(scene, run);
+  const json& bar = data["bodies"][0]["control_torque"];
+  ASSERT_EQ(bar.size(), 3u);
+  EXPECT_TRUE(bar[0].is_null() && bar[1].is_null());
+  EXPECT_DOUBLE_EQ(bar[2][1].get<double>(), -10.44);  // 4 significant digits
+  EXPECT_FALSE(data["bodies"][0].contains("control"));
+  EXPECT_EQ(data["units"], json::parse(R"({"bar.x": "m", "bar.theta": "rad"})"));
+  const json& top = data["bodies"][1]["control_torque"];
+  ASSERT_EQ(top.size(), 3u);
+  for (int axis = 0; axis < 3; ++axis) {
+    // omega along the axis: u' = 1/2 (0, omega) u = 1/2 (-omega . v, w omega + omega x v)
+    double omega[3] = {0, 0, 0};
+    omega[axis] = 1.0;
+    const double w = u[0], v[3] = {u[1], u[2], u[3]};
+    const double cross[3] = {omega[1] * v[2] - omega[2] * v[1], omega[2] * v[0] - omega[0] * v[2],
+                             omega[0] * v[1] - omega[1] * v[0]};
+    const double ud[4] = {-0.5 * (omega[0] * v[0] + omega[1] * v[1] + omega[2] * v[2]),
+                          0.5 * (w * omega[0] + cross[0]), 0.5 * (w * omega[1] + cross[1]),
+                          0.5 * (w * omega[2] + cross[2])};
+    const double power = Q[0] * ud[0] + Q[1] * ud[1] + Q[2] * ud[2] + Q[3] * ud[3];
+    EXPECT_NEAR(top[axis][0].get<double>(), power, 5e-4 * std::fabs(power)) << axis;
+  }
+  EXPECT_GT(data["force_scale"]["control_torque"].get<double>(), 1.0);
+}
+
 TEST(ViewerPage, TheCsvIsReadWithItsQuotedNamesAndFirstNonFiniteTimes) {
   const std::filesystem::path csv =
       std::filesystem::temp_directory_path() / "ukdyn_test_viewer_page.csv";

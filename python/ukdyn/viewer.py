@@ -43,6 +43,9 @@ THREE_FILES = ("three.min.js", "OrbitControls.js")
 # the mesh loaders of a robot's URDF visuals, put in a page whose data holds meshes of the format
 MESH_LOADERS = (("stl", "STLLoader.js"), ("obj", "OBJLoader.js"), ("dae", "ColladaLoader.js"))
 TEMPLATE = "viewer_template.html"
+# the page's script, put in order in place of the template's /*UKDYN_SCRIPT*/ (no file over ~900
+# lines; app/embed_viewer.cmake does the same)
+SCRIPTS = ("viewer_template.js", "viewer_panels.js")
 
 # the kinds of contact event the page marks as impacts (an impact closing a contact at rest too)
 IMPACT_KINDS = ("impact", "rest")
@@ -197,6 +200,9 @@ def scene_data(scene, names, columns, fps=FPS, max_frames=MAX_FRAMES, digits=DIG
         "energy": p.pack("energy", 6) if p.has("energy") else None,
         "bodies": [], "joints": [], "points": [], "links": scene.get("links", []),
         "trails": scene.get("trails", []), "frames": [], "requirements": [],
+        # each coordinate's unit, where known (the page labels forces by them)
+        "units": {c: u for c, u in zip(scene.get("coordinates", []),
+                                       scene.get("coordinate_units", [])) if u},
     }
     # positions to 1e-4 of the scene's extent, angles and quaternions to 1e-4
     along = {"x": [], "y": [], "z": []}
@@ -225,6 +231,16 @@ def scene_data(scene, names, columns, fps=FPS, max_frames=MAX_FRAMES, digits=DIG
         control = ["Qc_control.%s.%s" % (name, k) for k in ("x", "y", "z")]
         if any(p.has(c) for c in control):
             body["control"] = [p.pack(c) if p.has(c) else None for c in control]
+        # the control torque: a planar body's about z (Qc_control.<b>.theta); a rigid body's
+        # from the generalized forces on its quaternion (_quaternion_torque)
+        theta = "Qc_control.%s.theta" % name
+        quaternion = ["Qc_control.%s.u%d" % (name, k) for k in range(4)]
+        if kind == "planar" and p.has(theta):
+            body["control_torque"] = [None, None, p.pack(theta)]
+        elif kind == "rigid" and all(p.has(c) for c in quaternion):
+            torque = _quaternion_torque([p.raw("%s.u%d" % (name, k)) for k in range(4)],
+                                        [p.raw(c) for c in quaternion])
+            body["control_torque"] = [[_round(v, digits) for v in c] for c in torque]
         data["bodies"].append(body)
     # joints: the reaction force at the child's point, ideal and non-ideal (friction), and the
     # reaction torque, ideal and non-ideal (a revolute joint's friction torque)
@@ -312,7 +328,7 @@ def scene_data(scene, names, columns, fps=FPS, max_frames=MAX_FRAMES, digits=DIG
     # a kind of force that is zero throughout (no friction, no control) draws no arrows; nor
     # does a torque that is round-off (a planar revolute joint's ideal torque about z, 1e-14 N m):
     # at most 1e-9 of the largest joint force times the scene's extent
-    kinds = ("ideal", "nonideal", "control", "ideal_torque", "nonideal_torque")
+    kinds = ("ideal", "nonideal", "control", "ideal_torque", "nonideal_torque", "control_torque")
     largest_force = max([abs(v) for j in data["joints"] for key in ("ideal", "nonideal")
                          for c in j.get(key) or [] if c for v in c if v is not None] or [0.0])
     extent = 10.0 ** (4 - decimals)  # the scene's extent, to its power of ten
@@ -335,6 +351,19 @@ def scene_data(scene, names, columns, fps=FPS, max_frames=MAX_FRAMES, digits=DIG
         data["force_scale"]["contact"] = _scale([[v] for c in data["contacts"]
                                                  for v in c["force"]])
     return data
+
+
+def _quaternion_torque(u, Q):
+    """The torque (world axes) of the generalized forces Q = (Q0, Qx, Qy, Qz) on a unit
+    quaternion u = (w, x, y, z), per sample: tau = 1/2 E(u) Q with E(u) = [-v | w I + [v]x]
+    (omega = 2 E(u) u', so tau . omega = Q . u' for every motion; Q's part along u does no
+    work). app/viewer_data.cpp's quaternion_torque, operation for operation."""
+    out = [[], [], []]
+    for w, x, y, z, q0, qx, qy, qz in zip(*u, *Q):
+        out[0].append(0.5 * (w * qx - x * q0 + (y * qz - z * qy)))
+        out[1].append(0.5 * (w * qy - y * q0 + (z * qx - x * qz)))
+        out[2].append(0.5 * (w * qz - z * q0 + (x * qy - y * qx)))
+    return out
 
 
 def _friction_force(p, friction):
@@ -471,7 +500,7 @@ def build_page(scene, names, columns, title=None, **options):
     """The HTML page (a str) of a run: its scene (dict) and its columns (see scene_data)."""
     here = os.path.dirname(os.path.abspath(__file__))
     data = scene_data(scene, names, columns, **options)
-    template = _asset(TEMPLATE, here)
+    template = page_template(here)
     three = _three_text(scene, here)
     payload = _json_for_html(data)
     # no "</script" inside three.js's script element
@@ -482,6 +511,13 @@ def build_page(scene, names, columns, title=None, **options):
     parts = {"<!--UKDYN_TITLE-->": _escape(title), "/*UKDYN_THREE*/": three,
              "/*UKDYN_DATA*/null": payload}
     return re.sub("|".join(re.escape(k) for k in parts), lambda m: parts[m.group(0)], template)
+
+
+def page_template(here):
+    """The page's template: viewer_template.html with the script files (SCRIPTS, concatenated)
+    in place of its /*UKDYN_SCRIPT*/, as app/embed_viewer.cmake embeds it in the command."""
+    template = _asset(TEMPLATE, here)
+    return template.replace("/*UKDYN_SCRIPT*/", "".join(_asset(n, here) for n in SCRIPTS), 1)
 
 
 def _json_for_html(data):

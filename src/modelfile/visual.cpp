@@ -130,6 +130,8 @@ const std::string& output_column_name(const Model& model, std::size_t k) {
 
 std::string viewer_scene_json(const Model& model) {
   nlohmann::json scene = {{"model", model.name}, {"coordinates", model.system.coordinate_names()}};
+  // each coordinate's unit (m, rad, 1, a file's units:; "" when not known): the page's units
+  scene["coordinate_units"] = model.coordinate_units;
   // bodies: kind, mass, principal inertias (the equivalent box when no solid is declared)
   nlohmann::json bodies = nlohmann::json::array(), joints = nlohmann::json::array();
   bool planar = true;
@@ -162,6 +164,17 @@ std::string viewer_scene_json(const Model& model) {
                         {"parent_point", vector3(j.frame_parent.p)},
                         {"child_point", vector3(j.frame_child.p)},
                         {"planar", j.planar}});
+      // the joint's axis, for the page's joint axes: a revolute joint's about the child frame's
+      // z, a prismatic's along the parent frame's x (planar) or z, a cylindrical's the parent z;
+      // in the coordinates of the body named by "axis_on"
+      if (j.type == mb::JointType::kRevolute) {
+        joints.back()["axis"] = vector3(j.frame_child.R.col(2));
+        joints.back()["axis_on"] = "child";
+      } else if (j.type == mb::JointType::kPrismatic || j.type == mb::JointType::kCylindrical) {
+        const bool along_x = j.planar && j.type == mb::JointType::kPrismatic;
+        joints.back()["axis"] = vector3(j.frame_parent.R.col(along_x ? 0 : 2));
+        joints.back()["axis_on"] = "parent";
+      }
     }
   }
   scene["bodies"] = bodies;

@@ -128,6 +128,11 @@ TEST(ModelVisual, SceneOfBodiesAndJoints) {
   EXPECT_EQ(scene["joints"][0]["parent"], "ground");
   EXPECT_EQ(scene["joints"][0]["child"], "top");
   EXPECT_DOUBLE_EQ(scene["joints"][0]["child_point"][2].get<double>(), -0.5);  // -l
+  EXPECT_FALSE(scene["joints"][0].contains("axis"));  // a spherical joint has no axis
+  // each coordinate's unit (the page labels forces by them): m for x, y, z; 1 for u0 … u3
+  EXPECT_EQ(scene["coordinates"][0], "top.x");
+  EXPECT_EQ(scene["coordinate_units"],
+            nlohmann::json::parse(R"(["m", "m", "m", "1", "1", "1", "1"])"));
   EXPECT_EQ(scene["trails"], nlohmann::json::parse(R"(["top"])"));
 }
 
