@@ -213,7 +213,10 @@ class Run {
   // it (q' turned by more than kStepFactor times the accelerations at the start allow, the test
   // of leaves_branch); at the start of a step in which a switch is located at the pose and
   // that ends inside it; or just before a switch located where the margin is below
-  // kBridgedSwitchMargin. Restarts inside the neighbourhood, and steps that go on there, left
+  // kBridgedSwitchMargin. Under rkf78 an entry, and a step that passes through the
+  // neighbourhood and ends outside, are bridged from outside instead: from the step's start or
+  // the last point of its dense output checked whose margin is kCrossingRestartMargin
+  // (enters_dead_centre). Restarts inside the neighbourhood, and steps that go on there, left
   // the branch: a state within about √ε of the pose is as near the mirror branch as its own,
   // and q' at the pose is fixed only to roundoff (docs/reliability.md, "Open"). Each start is
   // tried once: a failed bridge leaves the run to go on (and Run::leaves_branch to judge it).
