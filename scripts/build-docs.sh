@@ -5,8 +5,9 @@
 #   Python  Sphinx autodoc on the built module (docs/api)                 -> OUT/python
 # usage: scripts/build-docs.sh [BUILD_DIR [OUT]]   (BUILD_DIR default build, with the Python
 # module built: cmake --build build --target ukdyn_python; OUT default BUILD_DIR/docs)
-# Debian's doxygen and python3-sphinx (scripts/install-deps.sh). UKDYN_DOXYGEN_STRICT=1 also
-# lists the public members without a doc comment of their own (docs/Doxyfile, EXTRACT_ALL).
+# Debian's doxygen and python3-sphinx (scripts/install-deps.sh). UKDYN_DOXYGEN_STRICT=1 (the
+# test docs.api_reference) also fails on a public member without a doc comment of its own
+# (docs/Doxyfile, EXTRACT_ALL).
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 build=$(realpath -m "${1:-$root/build}")

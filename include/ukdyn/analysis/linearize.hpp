@@ -57,9 +57,9 @@ enum class InputKind {
 
 /// One input u_k of the linear model (column k of B and D).
 struct LinearInput {
-  std::string name;  ///< label (the coordinate's or the parameter's name)
-  InputKind kind = InputKind::kForce;
-  Index coordinate = -1;  ///< kForce: the coordinate j whose Q_j receives u
+  std::string name;                    ///< label (the coordinate's or the parameter's name)
+  InputKind kind = InputKind::kForce;  ///< a generalized force or a parameter
+  Index coordinate = -1;               ///< kForce: the coordinate j whose Q_j receives u
   /// kParameter: the system at parameter value p (called with p₀ + u, u small); must describe
   /// the same coordinates and constraints as the nominal system
   std::function<System(double p)> family;

@@ -45,8 +45,8 @@ std::vector<LinearOutput> model_outputs(const Model& model, const std::vector<st
 /// The result of linearize_model: the operating point used (after projection or the
 /// equilibrium search) and the linear model there.
 struct ModelLinearization {
-  OperatingPoint point;
-  LinearModel linear;
+  OperatingPoint point;  ///< the operating point (q, q', t) the model was linearized at
+  LinearModel linear;    ///< the linear model at that point
 };
 
 /// The request carried out at `at`: projection (request.project), the equilibrium search

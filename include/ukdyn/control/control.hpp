@@ -390,11 +390,13 @@ class ControlWorkspace {
   ControlCounters counters;                   ///< accumulated over the workspace's life
 
   // --- scratch ---------------------------------------------------------------------------
-  VectorXd tmp_n, tmp_n2, tmp_n3;  ///< (n)
-  VectorXd tmp_k;                  ///< (k)
-  VectorXd lambda_r;               ///< (m_r) multipliers of the law's decomposition (unused)
-  VectorXd lambda_p;               ///< (m_p) multipliers of a physical projection (unused)
-  bool cost_factorized = false;    ///< a constant cost matrix is already factorized
+  VectorXd tmp_n;                ///< (n)
+  VectorXd tmp_n2;               ///< (n)
+  VectorXd tmp_n3;               ///< (n)
+  VectorXd tmp_k;                ///< (k)
+  VectorXd lambda_r;             ///< (m_r) multipliers of the law's decomposition (unused)
+  VectorXd lambda_p;             ///< (m_p) multipliers of a physical projection (unused)
+  bool cost_factorized = false;  ///< a constant cost matrix is already factorized
 
  private:
   MovedFromZero<std::uint64_t> controller_id_;

@@ -34,6 +34,8 @@
 #include "ukdyn/core/constraint.hpp"
 
 namespace ukdyn {
+/// Constraints written as generic callables and differentiated by forward-mode automatic
+/// differentiation (this file).
 namespace ad {
 
 /// Number of derivative directions carried by one pass of forward mode.
@@ -50,15 +52,21 @@ using Vec = Eigen::Matrix<S, Eigen::Dynamic, 1>;
 
 /// Buffers of a holonomic constraint (sized once).
 struct HolonomicScratch final : ConstraintScratch {
+  /// Sized for n coordinates and `rows` constraint rows. Allocates; the passes do not.
   HolonomicScratch(Index n, Index rows) : qj(n), outj(rows), q2(n), out2(rows) {}
-  Vec<Jet> qj, outj;
-  Vec<Dual2> q2, out2;
+  Vec<Jet> qj;      ///< (n) q seeded with kChunk Jacobian directions, first-order pass
+  Vec<Jet> outj;    ///< (rows) phi and its derivatives along those directions
+  Vec<Dual2> q2;    ///< (n) q + s q' to second order in s, second-order pass
+  Vec<Dual2> out2;  ///< (rows) phi(q + s q', t + s): value, d/ds, d²/ds²
 };
 
 /// Buffers of a nonholonomic constraint (sized once).
 struct NonholonomicScratch final : ConstraintScratch {
+  /// Sized for n coordinates and `rows` constraint rows. Allocates; the passes do not.
   NonholonomicScratch(Index n, Index rows) : qj(n), qdj(n), outj(rows) {}
-  Vec<Jet> qj, qdj, outj;
+  Vec<Jet> qj;    ///< (n) q, seeded along the direction (q', 0, 1) of (q, q', t)
+  Vec<Jet> qdj;   ///< (n) q', seeded with the unit directions e_{q'_j}
+  Vec<Jet> outj;  ///< (rows) psi and its derivatives along the seeded directions
 };
 
 /// Fills x with values v and zero derivatives. Cost O(n kChunk).
@@ -73,6 +81,8 @@ Dual2 seed_time_second_order(double t);
 template <class F>
 class HolonomicModel final : public ConstraintModel {
  public:
+  /// A constraint of `rows` rows: f(q, t, out) writes phi(q, t) into out (rows); it is called
+  /// with the scalar types Jet and Dual2 (a generic callable, see the file's comment).
   HolonomicModel(Index rows, F f) : rows_(rows), f_(std::move(f)) {}
 
   std::unique_ptr<ConstraintScratch> make_scratch(Index n) const override {
@@ -130,6 +140,8 @@ class HolonomicModel final : public ConstraintModel {
 template <class F>
 class NonholonomicModel final : public ConstraintModel {
  public:
+  /// A constraint of `rows` rows: f(q, qd, t, out) writes psi(q, q', t) into out (rows); it is
+  /// called with the scalar type Jet (a generic callable, see the file's comment).
   NonholonomicModel(Index rows, F f) : rows_(rows), f_(std::move(f)) {}
 
   std::unique_ptr<ConstraintScratch> make_scratch(Index n) const override {

@@ -123,6 +123,7 @@ class System {
   Index constraint_count() const { return Index(constraints_.size()); }        ///< K constraints
   const std::vector<std::string>& coordinate_names() const { return names_; }  ///< n names
   const std::vector<Constraint>& constraints() const { return constraints_; }  ///< K
+  /// Constraint k (0 <= k < K). @throws std::out_of_range otherwise. Cost O(1).
   const Constraint& constraint(Index k) const { return constraints_.at(std::size_t(k)); }
   /// First row of constraint k in A and b (rows k..k+rows−1 belong to it).
   Index row_offset(Index k) const { return offsets_.at(std::size_t(k)); }

@@ -21,8 +21,11 @@
 #include <Eigen/Core>
 #include <limits>
 
+/// The Udwadia–Kalaba fundamental equation: constrained multibody dynamics, exact tracking
+/// control and unilateral contacts (the glossary of symbols: this file's comment).
 namespace ukdyn {
 
+/// Sizes and indices (Eigen's signed std::ptrdiff_t), as in every Eigen object.
 using Index = Eigen::Index;
 using Eigen::MatrixXd;
 using Eigen::VectorXd;

@@ -42,7 +42,9 @@ class ContactLcp {
     kEnumeration,  ///< lcp_enum, after Lemke found no solution
   };
   ~ContactLcp();
+  /// Moves the buffers, member by member (no allocation).
   ContactLcp(ContactLcp&&) noexcept;
+  /// Moves the buffers, member by member (no allocation).
   ContactLcp& operator=(ContactLcp&&) noexcept;
 
   /// Solves the LCP of W (k × k, k <= max_size; copied) and r (k). Returns true when Siconos
@@ -85,9 +87,9 @@ struct ContactEvent {
     kRelease,  ///< a closed contact's multiplier would pull: it opens
     kRest,     ///< an impact below the rest speed closed the contact (an accumulation point)
   };
-  double t = 0.0;         ///< time of the event
-  Index constraint = -1;  ///< the unilateral constraint (System::constraint index)
-  Kind kind = Kind::kImpact;
+  double t = 0.0;             ///< time of the event
+  Index constraint = -1;      ///< the unilateral constraint (System::constraint index)
+  Kind kind = Kind::kImpact;  ///< impact, release or rest
   double speed_before = 0.0;  ///< g' just before (impacts: < 0, approaching)
   double speed_after = 0.0;   ///< g' just after
   double impulse = 0.0;       ///< the contact's impulse Λ >= 0 (impacts)

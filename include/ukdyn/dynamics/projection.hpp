@@ -33,6 +33,8 @@ void evaluate_violations(const System& sys, Workspace& ws, const Eigen::Ref<cons
 /// Largest |phi| (holonomic) and |psi| or |phi'| (velocity level) of constraint k in ws.phi,
 /// ws.phi_dot (after evaluate_violations). Cost O(rows).
 double position_violation(const System& sys, const Workspace& ws, Index k);
+/// Largest |psi| or |phi'| of constraint k in ws.phi_dot (after evaluate_violations); see
+/// position_violation. Cost O(rows).
 double velocity_violation(const System& sys, const Workspace& ws, Index k);
 
 /// Settings of a projection.

@@ -116,15 +116,21 @@ template <class T>
 class MovedFromZero {
  public:
   MovedFromZero() = default;
+  /// Holds v (implicit: it stands for a T).
   MovedFromZero(T v) : v_(v) {}  // NOLINT: implicit, it stands for a T
+  /// Copies the value; the source keeps it.
   MovedFromZero(const MovedFromZero&) = default;
+  /// Copies the value; the source keeps it.
   MovedFromZero& operator=(const MovedFromZero&) = default;
+  /// Takes the value and leaves T{} (0) in o.
   MovedFromZero(MovedFromZero&& o) noexcept : v_(o.v_) { o.v_ = T{}; }
+  /// Takes the value and leaves T{} (0) in o (self-assignment keeps it).
   MovedFromZero& operator=(MovedFromZero&& o) noexcept {
     v_ = o.v_;
     if (this != &o) o.v_ = T{};
     return *this;
   }
+  /// The value (implicit: it stands for a T).
   operator T() const { return v_; }  // NOLINT: implicit, it stands for a T
 
  private:
@@ -143,6 +149,7 @@ class Workspace {
   /// and rows() 0, and every entry point given it throws std::invalid_argument ("the workspace is
   /// empty (moved from)") until a workspace is move-assigned into it.
   Workspace(Workspace&&) noexcept;
+  /// Moves every buffer, as the move constructor: the moved-from workspace is left empty.
   Workspace& operator=(Workspace&&) noexcept;
 
   /// Options in force (set at construction).
@@ -151,6 +158,7 @@ class Workspace {
   std::uint64_t system_id() const { return system_id_; }
   /// Index n and m of the system.
   Index coordinate_count() const { return n_; }
+  /// The system's constraint row count m (0 for a moved-from workspace).
   Index rows() const { return m_; }
 
   /// True when this workspace runs the sparse engine (see Engine); then M and A below are

@@ -25,6 +25,7 @@
 #include "ukdyn/core/system.hpp"
 #include "ukdyn/core/types.hpp"
 
+/// Built-in example systems with known answers (this file).
 namespace ukdyn::gallery {
 
 /// Standard gravity used by every example unless a parameter says otherwise (m/s²).
@@ -35,7 +36,8 @@ struct Example {
   std::string name;         ///< the name make() knows it by
   std::string description;  ///< one paragraph: model, coordinates, constraints, reference facts
   System system;            ///< the constrained system
-  VectorXd q0, qd0;         ///< initial state (n each), consistent with every constraint at t = 0
+  VectorXd q0;              ///< initial coordinates (n), consistent with every constraint at t = 0
+  VectorXd qd0;             ///< initial velocities (n), consistent with every constraint at t = 0
   double t_end = 1.0;       ///< suggested duration (s), from t = 0
 };
 

@@ -118,6 +118,7 @@ class FundamentalDecomposition {
   double min_pivot() const { return rank_ > 0 ? 1.0 / std::abs(inv_tdiag_[rank_ - 1]) : 0.0; }
   /// Number of coordinates n and constraint rows m this object was sized for.
   Index coordinate_count() const { return n_; }
+  /// Number of constraint rows m this object was sized for.
   Index rows() const { return m_; }
   /// The Cholesky factor L (lower triangle of the returned matrix; the upper is unspecified);
   /// with a mass tree, the L of M = Lᵀ L (see the file comment and solve_factor).

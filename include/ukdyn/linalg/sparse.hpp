@@ -77,23 +77,31 @@ class SparseDecomposition {
   /// @throws std::invalid_argument unless sys.mass_is_block_diagonal().
   explicit SparseDecomposition(const System& sys);
   ~SparseDecomposition();
+  /// Moves the analysis and the factors, member by member (no allocation).
   SparseDecomposition(SparseDecomposition&&) noexcept;
+  /// Moves the analysis and the factors, member by member (no allocation).
   SparseDecomposition& operator=(SparseDecomposition&&) noexcept;
 
   /// n, m, number of mass blocks, non-zeros of A's pattern and of the factor L_G (strictly
   /// lower part).
   Index coordinate_count() const { return n_; }
+  /// m, the constraint rows (rows of A).
   Index rows() const { return m_; }
+  /// Number of diagonal blocks M_bb of M.
   Index block_count() const { return Index(blk_off_.size()) - 1; }
+  /// Non-zeros of A's (fixed) pattern.
   Index nonzeros() const { return Index(col_.size()); }
+  /// Non-zeros of the factor L_G of G (strictly lower part), from the symbolic factorization.
   Index factor_nonzeros() const { return Index(Li_.size()); }
 
   // --- M = blockdiag(M_bb) = L Lᵀ -------------------------------------------------------
   /// Storage of block b of M (size × size), to be written before compute_mass. Cost O(1).
   Eigen::Map<MatrixXd> mass_block(Index b);
+  /// Block b of M (size × size), read-only. Cost O(1).
   Eigen::Map<const MatrixXd> mass_block(Index b) const;
   /// First coordinate and size of block b.
   Index block_offset(Index b) const { return blk_off_[std::size_t(b)]; }
+  /// Size (rows = columns) of block b.
   Index block_size(Index b) const {
     return blk_off_[std::size_t(b) + 1] - blk_off_[std::size_t(b)];
   }
@@ -102,7 +110,9 @@ class SparseDecomposition {
   /// max |M_ij| and max |M_ij − M_ji| over the blocks, and whether every entry is finite.
   /// Cost O(Σ size²).
   double mass_max_abs() const;
+  /// max |M_ij − M_ji| over the blocks (0 for a symmetric M). Cost O(Σ size²).
   double mass_asymmetry() const;
+  /// Whether every entry of every block is finite. Cost O(Σ size²).
   bool mass_finite() const;
   /// Factorizes every block M_bb = L_b L_bᵀ (reads the lower triangles). On failure info() is
   /// NumericalIssue. Cost O(Σ size³ / 3), i.e. O(N) for N bodies.
@@ -135,6 +145,7 @@ class SparseDecomposition {
   bool mass_singular() const { return singular_blocks_ > 0; }
   /// Number of singular blocks, and whether block b is one.
   Index singular_blocks() const { return singular_blocks_; }
+  /// Whether block b is singular (positive semi-definite only), after compute_mass.
   bool block_is_singular(Index b) const { return blk_sing_[std::size_t(b)] != 0; }
   /// The auxiliary mass matrix of Udwadia & Schutte for the singular blocks: each singular block
   /// b is factorized as M_bb + Σ_i g_i a_i a_iᵀ over the rows i of A local to b (rows touching
@@ -154,7 +165,10 @@ class SparseDecomposition {
   void solve_mass(const Eigen::Ref<const VectorXd>& f, Eigen::Ref<VectorXd> x) const;
   /// x ← M⁻¹ x (M_A⁻¹ x for a singular M). Cost O(Σ size²).
   void solve_mass_in_place(Eigen::Ref<VectorXd> x) const;
+  /// y = M x (n), block by block from the stored blocks of M. Cost O(Σ size²).
   void multiply_mass(const Eigen::Ref<const VectorXd>& x, Eigen::Ref<VectorXd> y) const;
+  /// xᵀ M x = ‖Lᵀ x‖² from the factors of the last compute_mass (xᵀ M_bb x on a singular
+  /// block). Cost O(Σ size²).
   double mass_norm_squared(const Eigen::Ref<const VectorXd>& x) const;
 
   // --- A (m × n, sparse, fixed pattern) ---------------------------------------------------
@@ -172,8 +186,13 @@ class SparseDecomposition {
   /// pattern, other entries of y untouched (lambda has m entries); ‖A‖_F. Cost O(nnz(A)), resp.
   /// O(nnz of the rows of k).
   void multiply_A(const Eigen::Ref<const VectorXd>& x, Eigen::Ref<VectorXd> y) const;
+  /// y = Aᵀ lambda (n), lambda (m). Cost O(nnz(A)).
   void multiply_At(const Eigen::Ref<const VectorXd>& lambda, Eigen::Ref<VectorXd> y) const;
+  /// Constraint k's share y = A_kᵀ lambda_k, written on the columns of k's pattern only (other
+  /// entries of y untouched; lambda has m entries). Cost O(nnz of the rows of k).
   void share(Index k, const Eigen::Ref<const VectorXd>& lambda, Eigen::Ref<VectorXd> y) const;
+  /// ‖A‖_F, the Frobenius norm of the stored values (without overflow or underflow).
+  /// Cost O(nnz(A)).
   double norm_A() const;
   /// Copies the rows of constraint k into out (rows × n, dense). Cost O(rows · n).
   void constraint_rows_dense(Index k, Eigen::Ref<MatrixXd> out) const;
@@ -206,6 +225,7 @@ class SparseDecomposition {
   /// Sets the relative rank threshold tau (in (0, 1)); takes effect at the next compute.
   /// @throws std::invalid_argument outside (0, 1).
   SparseDecomposition& set_threshold(double threshold);
+  /// The relative rank threshold tau in force (default kDefaultThreshold).
   double threshold() const { return threshold_; }
 
   /// The ideal part (eqs. 9, 11) for error signal e (m): dqdd = L⁻ᵀ W⁺ e, Qc = L W⁺ e,

@@ -28,6 +28,7 @@
 
 #include "ukdyn/core/types.hpp"
 
+/// The model language's expressions (this file) and interpolated tables (modelfile/table.hpp).
 namespace ukdyn::expr {
 
 class TableColumn;
@@ -38,6 +39,7 @@ class TableColumn;
 /// `unknown name 'thta' (did you mean 'theta'?)`.
 class ParseError : public std::runtime_error {
  public:
+  /// The message `what` (without the position) and the 0-based character offset `position`.
   ParseError(const std::string& what, std::size_t position)
       : std::runtime_error(what), position_(position) {}
   /// 0-based character offset into the expression text.
@@ -55,9 +57,13 @@ class Program {
  public:
   Program();
   ~Program();
+  /// Shares the other's immutable tape (no copy of it). Cost O(1).
   Program(const Program&);
+  /// Shares the other's immutable tape (no copy of it). Cost O(1).
   Program& operator=(const Program&);
+  /// Takes the other's tape; the moved-from program is left empty (as default-constructed).
   Program(Program&&) noexcept;
+  /// Takes the other's tape; the moved-from program is left empty.
   Program& operator=(Program&&) noexcept;
 
   Index inputs() const;        ///< number of inputs (the ExpressionSet's inputs)
@@ -87,7 +93,9 @@ class ExpressionSet {
   /// function of the language.
   explicit ExpressionSet(std::vector<std::string> input_names);
   ~ExpressionSet();
+  /// Takes over the other's inputs, constants, tables and expressions.
   ExpressionSet(ExpressionSet&&) noexcept;
+  /// Takes over the other's inputs, constants, tables and expressions.
   ExpressionSet& operator=(ExpressionSet&&) noexcept;
 
   /// Declares a named constant (a parameter) with its value; expressions parsed afterwards may
@@ -114,8 +122,11 @@ class ExpressionSet {
   Expr constant(double value);
   /// Arithmetic on expressions. @throws std::invalid_argument on a handle not from this set.
   Expr add(Expr a, Expr b);
+  /// a − b. @throws std::invalid_argument on a handle not from this set.
   Expr subtract(Expr a, Expr b);
+  /// a · b. @throws std::invalid_argument on a handle not from this set.
   Expr multiply(Expr a, Expr b);
+  /// −a. @throws std::invalid_argument on a handle not from this set.
   Expr negate(Expr a);
 
   /// d e / d (input `name`), exactly. @throws std::invalid_argument if name is not an input.

@@ -33,6 +33,8 @@ struct MultibodyModel;
 /// "FILE:LINE:COLUMN: error: MESSAGE (hint: HINT)".
 class ModelError : public std::runtime_error {
  public:
+  /// The error `message` at `file`:`line`:`column` (1-based; 0: no position) with an optional
+  /// `hint`; what() is composed from them as above.
   ModelError(const std::string& file, int line, int column, const std::string& message,
              const std::string& hint = "");
   const std::string& file() const { return file_; }        ///< the file (or "<string>")
@@ -52,12 +54,14 @@ class ModelError : public std::runtime_error {
 /// whose message starts with "--set NAME:". Front ends treat it as a mistake of their caller.
 class OverrideError : public ModelError {
  public:
+  /// ModelError's constructor (file, line, column, message, hint).
   using ModelError::ModelError;
 };
 
 /// A place in a model file: 1-based line and column (0: unknown, e.g. a default).
 struct FilePosition {
-  int line = 0, column = 0;
+  int line = 0;                            ///< 1-based line (0: unknown)
+  int column = 0;                          ///< 1-based column (0: unknown)
   bool known() const { return line > 0; }  ///< given in the file
 };
 
@@ -83,13 +87,16 @@ struct Model {
   std::string file;                          ///< where it came from
   std::map<std::string, double> parameters;  ///< `parameters:` after overrides
   System system;                             ///< the description
-  VectorXd q0, qd0;                          ///< `initial:` (not yet projected)
+  VectorXd q0;                               ///< `initial:` coordinates (n; not yet projected)
+  VectorXd qd0;                              ///< `initial:` velocities (n; not yet projected)
   bool project_initial = false;              ///< `initial: project:`
   SimulationOptions options;                 ///< `simulate:` and `output:`
   /// `output: expressions:` by name, compiled over (q, q_dot, t): evaluate with
   /// evaluate_output_expressions(). The program's outputs are these, then the `visual:`
   /// points' coordinates (visual.columns); output_column_name() names them all.
   std::vector<std::string> output_names;
+  /// The compiled outputs over (q, q_dot, t): output_names' expressions, then the `visual:`
+  /// columns (see output_names).
   expr::Program output_program;
   /// Each coordinate's unit (n, in coordinate order), for labels only (nothing computes with
   /// it): `units:` of the file, else `m`, `rad` and `1` (quaternion components) for the
@@ -120,6 +127,7 @@ struct Model {
 /// out), and the data given replace any it has there, as overrides replace parameters
 /// (docs/model-format.md, "Tables"; Python's `ukdyn.load(..., tables={...})`).
 using TableData = std::vector<std::pair<std::string, std::vector<double>>>;
+/// The tables given to load_model: TableData by table name (see TableData).
 using GivenTables = std::map<std::string, TableData>;
 
 /// Reads a model from YAML text. `file` names it in errors; `overrides` replace parameter

@@ -26,6 +26,7 @@ enum class Extrapolation { kError, kHold, kLinear };
 
 /// The name used in model files ("step", "linear", "cubic"; "error", "hold", "linear").
 const char* to_string(Interpolation i);
+/// The name used in model files ("error", "hold", "linear").
 const char* to_string(Extrapolation e);
 
 /// A table column evaluated outside its range with Extrapolation::kError: what() names the
@@ -64,10 +65,12 @@ class TableColumn {
   /// The degree of the pieces: 0 (step), 1 (linear), 3 (cubic).
   int degree() const;
   const std::string& name() const { return name_; }  ///< "table.column"
+  /// The rows' abscissae x_i (strictly increasing).
   const std::vector<double>& x() const { return x_; }
+  /// The rows' values y_i.
   const std::vector<double>& y() const { return y_; }
-  Interpolation interpolation() const { return interpolation_; }
-  Extrapolation extrapolation() const { return extrapolation_; }
+  Interpolation interpolation() const { return interpolation_; }  ///< between the rows
+  Extrapolation extrapolation() const { return extrapolation_; }  ///< outside the rows' range
 
  private:
   // the interval i with x_i <= x < x_{i+1} (x within the range; the last row: n − 2)
@@ -87,6 +90,7 @@ class TableColumn {
 /// clear_table_range_error() (TableColumn::evaluate_in_run), or "". run_model() clears it
 /// before a run and puts it first in the failed run's message.
 const std::string& table_range_error();
+/// Forgets this thread's recorded range error: table_range_error() reads "" until the next.
 void clear_table_range_error();
 
 }  // namespace ukdyn::expr

@@ -33,7 +33,7 @@ struct VisualShape {
 /// `visual.<name>.x`, `.y` (and `.z` when three expressions are given), which the reader adds
 /// after the model's output expressions.
 struct VisualPoint {
-  std::string name;
+  std::string name;     ///< its name under `visual: points:` (columns `visual.<name>.x` …)
   int dimensions = 2;   ///< 2 (z = 0) or 3
   double radius = 0.0;  ///< of its sphere; 0: the viewer's choice
   std::string color;    ///< "#rrggbb"; empty: the viewer's choice
@@ -47,7 +47,7 @@ struct VisualPoint {
 /// the columns `visual.<name>.x`, `.y` (, `.z`), its orientation `visual.<name>.angle` (about z,
 /// planar) or `visual.<name>.qw`, `.qx`, `.qy`, `.qz` (a quaternion, normalized by the viewer).
 struct VisualFrame {
-  std::string name;
+  std::string name;         ///< its name under `visual: frames:` (columns `visual.<name>.x` …)
   int dimensions = 2;       ///< of the origin: 2 (z = 0) or 3
   bool quaternion = false;  ///< orientation by quaternion (else by angle about z)
   double size = 0.0;        ///< the axes' length; 0: the viewer's choice
@@ -66,9 +66,10 @@ struct VisualContact {
 /// A loop closure of a robot (`robot: loops:`), drawn by the viewer as a dashed line from
 /// link_a's frame through its point and link_b's point to link_b's frame (docs/robots.md).
 struct VisualLoop {
-  std::string name;                                   ///< the loop's (the constraint's) name
-  std::string type;                                   ///< "point", "distance", "revolute" or "weld"
-  std::string link_a, link_b;                         ///< the links' names; "world" for the world
+  std::string name;    ///< the loop's (the constraint's) name
+  std::string type;    ///< "point", "distance", "revolute" or "weld"
+  std::string link_a;  ///< the first link's name ("world": the world)
+  std::string link_b;  ///< the second link's name ("world": the world)
   Eigen::Vector3d point_a = Eigen::Vector3d::Zero();  ///< in link_a's frame
   Eigen::Vector3d point_b = Eigen::Vector3d::Zero();  ///< in link_b's frame
 };
@@ -79,7 +80,9 @@ struct ModelVisual {
   std::vector<std::pair<std::string, std::vector<VisualShape>>> bodies;
   /// models in coordinates: the points, and the links (pairs of point names) drawn between them
   std::vector<VisualPoint> points;
+  /// models in coordinates: the links drawn between the points, as pairs of point names
   std::vector<std::pair<std::string, std::string>> links;
+  /// models in coordinates: the frames drawn (`visual: frames:`)
   std::vector<VisualFrame> frames;
   std::vector<VisualContact> contacts;  ///< the unilateral contacts drawn (`visual: contacts:`)
   /// the points' and frames' columns, `visual.<name>.x` …: the outputs of Model::output_program
@@ -89,6 +92,7 @@ struct ModelVisual {
   std::vector<std::string> trails;
   /// a robot's URDF visual geometry (tree::load_urdf_visuals) and its loop closures
   std::vector<tree::LinkVisual> robot;
+  /// a robot's loop closures (`robot: loops:`), drawn as dashed lines
   std::vector<VisualLoop> loops;
 };
 

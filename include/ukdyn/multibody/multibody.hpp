@@ -44,6 +44,8 @@
 #include "ukdyn/io/trajectory_files.hpp"
 #include "ukdyn/simulation/simulate.hpp"
 
+/// Multibody models in absolute coordinates: particles, planar and rigid bodies, joints and
+/// force elements, built into a System (this file).
 namespace ukdyn::mb {
 
 using Eigen::Matrix3d;
@@ -119,14 +121,17 @@ const char* to_string(JointType type);
 
 /// A joint between a parent and a child body. Use the factory functions below.
 struct Joint {
-  std::string name;  ///< unique; names its constraints
-  JointType type = JointType::kRevolute;
-  BodyId parent = kGround, child = kGround;
-  Frame frame_parent, frame_child;  ///< F_P on the parent, F_C on the child
-  double length = 0.0;              ///< kDistance: the distance (m), > 0
-  double radius = 0.0;              ///< rolling: the radius (m), > 0
-  std::string gear_a, gear_b;       ///< kGear: names of two planar revolute joints
-  double ratio = 1.0;               ///< kGear: angle_a − ratio · angle_b = const
+  std::string name;                       ///< unique; names its constraints
+  JointType type = JointType::kRevolute;  ///< what it constrains (its rows: JointType)
+  BodyId parent = kGround;                ///< the parent body P (kGround: the world)
+  BodyId child = kGround;                 ///< the child body C (kGround: the world)
+  Frame frame_parent;                     ///< F_P on the parent (body coordinates)
+  Frame frame_child;                      ///< F_C on the child (body coordinates)
+  double length = 0.0;                    ///< kDistance: the distance (m), > 0
+  double radius = 0.0;                    ///< rolling: the radius (m), > 0
+  std::string gear_a;                     ///< kGear: name of the first revolute joint (a)
+  std::string gear_b;                     ///< kGear: name of the second revolute joint (b)
+  double ratio = 1.0;                     ///< kGear: angle_a − ratio · angle_b = const
   /// Prescribed motion of the joint's relative coordinate: revolute: the angle of F_C's x axis
   /// from F_P's x axis about the axis (planar: a linear row; spatial: the angle error by
   /// automatic differentiation); prismatic, cylindrical: the slide of F_C's origin along the
@@ -138,18 +143,35 @@ struct Joint {
 
 /// @name Joint factories (frames in body coordinates)
 /// @{
+
+/// A revolute joint: F_P and F_C share their origin (planar: 2 rows); spatial: also their z axes
+/// aligned, the axis of rotation (5 rows).
 Joint revolute(std::string name, BodyId parent, const Frame& fp, BodyId child, const Frame& fc);
+/// A prismatic joint: F_C slides along F_P's x axis (planar, 2 rows) or z axis (spatial, 5 rows)
+/// without relative rotation.
 Joint prismatic(std::string name, BodyId parent, const Frame& fp, BodyId child, const Frame& fc);
+/// A weld: F_C held on F_P, no relative motion (planar 3 rows, spatial 6).
 Joint weld(std::string name, BodyId parent, const Frame& fp, BodyId child, const Frame& fc);
+/// A distance constraint (massless rod): |p_C − p_P| = length (m, > 0) between the parent's
+/// point p_parent and the child's point p_child (body coordinates); 1 row.
 Joint distance(std::string name, BodyId parent, const Vector3d& p_parent, BodyId child,
                const Vector3d& p_child, double length);
+/// The child's point p_child (body coordinates) on the line through F_P's origin along its x axis
+/// (planar, 1 row) or z axis (spatial, 2 rows).
 Joint point_on_line(std::string name, BodyId parent, const Frame& fp, BodyId child,
                     const Vector3d& p_child);
+/// A ball joint: the parent's point p_parent and the child's point p_child (body coordinates)
+/// coincide; 3 rows.
 Joint spherical(std::string name, BodyId parent, const Vector3d& p_parent, BodyId child,
                 const Vector3d& p_child);
+/// A cylindrical joint: F_C slides along and turns about F_P's z axis; 4 rows.
 Joint cylindrical(std::string name, BodyId parent, const Frame& fp, BodyId child, const Frame& fc);
+/// A universal (Cardan) joint: F_P and F_C share their origin, and F_P's z axis stays
+/// perpendicular to F_C's z axis; 4 rows.
 Joint universal(std::string name, BodyId parent, const Frame& fp, BodyId child, const Frame& fc);
+/// A planar joint (JointType::kPlanar, spatial): F_C's xy plane slides in F_P's xy plane; 3 rows.
 Joint planar_joint(std::string name, BodyId parent, const Frame& fp, BodyId child, const Frame& fc);
+/// The child's point p_child (body coordinates) in F_P's xy plane; 1 row.
 Joint point_on_plane(std::string name, BodyId parent, const Frame& fp, BodyId child,
                      const Vector3d& p_child);
 /// A gear between revolute joints a and b: planar, angle(a) − ratio · angle(b) = its initial
@@ -182,12 +204,16 @@ enum class ForceType {
 
 /// A force element (gravity is Multibody::set_gravity).
 struct Force {
-  std::string name;
-  ForceType type = ForceType::kApplied;
-  BodyId body_a = kGround, body_b = kGround;  ///< the two bodies (kApplied: body_a)
-  Vector3d point_a = Vector3d::Zero(), point_b = Vector3d::Zero();  ///< body points
-  double stiffness = 0.0, damping = 0.0, rest = 0.0;                ///< k, c and l0 (or theta0)
-  WrenchFn wrench;                                                  ///< kApplied
+  std::string name;                      ///< unique; names the force in reports
+  ForceType type = ForceType::kApplied;  ///< the kind of element
+  BodyId body_a = kGround;               ///< the first body (kApplied: the body acted on)
+  BodyId body_b = kGround;               ///< the second body (unused by kApplied)
+  Vector3d point_a = Vector3d::Zero();   ///< the point on body_a (body coordinates, m)
+  Vector3d point_b = Vector3d::Zero();   ///< the point on body_b (body coordinates, m)
+  double stiffness = 0.0;                ///< k (N/m, or N m/rad for a torsion spring)
+  double damping = 0.0;                  ///< c (N s/m, or N m s/rad for a torsion spring)
+  double rest = 0.0;                     ///< l0 (m), or theta0 (rad) for a torsion spring
+  WrenchFn wrench;                       ///< kApplied
 };
 
 /// Spring-damper between body points (l0 = rest length). Potential ½ k (l − l0)².
@@ -205,34 +231,37 @@ Force applied(std::string name, BodyId body, const Vector3d& p, WrenchFn fn);
 
 /// Metadata of a body in a built model.
 struct BodyInfo {
-  std::string name;
-  BodyKind kind = BodyKind::kParticle;
-  Index offset = 0;  ///< first coordinate
-  Index size = 0;    ///< 3 or 7
-  double mass = 0.0;
+  std::string name;                     ///< as given to Multibody::add_*
+  BodyKind kind = BodyKind::kParticle;  ///< which coordinates it carries
+  Index offset = 0;                     ///< first coordinate
+  Index size = 0;                       ///< 3 or 7
+  double mass = 0.0;                    ///< m (kg)
   Vector3d inertia = Vector3d::Zero();  ///< principal moments about the centre of mass (planar: z)
 };
 
 /// Metadata of a joint in a built model.
 struct JointInfo {
-  std::string name;
-  JointType type = JointType::kRevolute;
-  BodyId parent = kGround, child = kGround;
-  Frame frame_parent, frame_child;
-  bool planar = false;             ///< between planar bodies
-  std::vector<Index> constraints;  ///< indices in System of its constraints (joint, drive)
-  Index drive = -1;                ///< index of the "<name>.drive" constraint, or −1
-  Index friction = -1;             ///< index of its non-ideal force, or −1
-  JointFriction friction_law;      ///< its friction parameters (for the reports)
+  std::string name;                       ///< as given to the factory
+  JointType type = JointType::kRevolute;  ///< the joint's kind
+  BodyId parent = kGround;                ///< the parent body P (kGround: the world)
+  BodyId child = kGround;                 ///< the child body C (kGround: the world)
+  Frame frame_parent;                     ///< F_P on the parent (body coordinates)
+  Frame frame_child;                      ///< F_C on the child (body coordinates)
+  bool planar = false;                    ///< between planar bodies
+  std::vector<Index> constraints;         ///< indices in System of its constraints (joint, drive)
+  Index drive = -1;                       ///< index of the "<name>.drive" constraint, or −1
+  Index friction = -1;                    ///< index of its non-ideal force, or −1
+  JointFriction friction_law;             ///< its friction parameters (for the reports)
 };
 
 /// The result of Multibody::build(): the System, a consistent initial state and metadata.
 struct MultibodyModel {
   System system;                  ///< ready for Workspace, forward_dynamics, simulate
-  VectorXd q0, qd0;               ///< initial state from the bodies' initial poses and velocities
+  VectorXd q0;                    ///< initial coordinates (n), from the bodies' initial poses
+  VectorXd qd0;                   ///< initial velocities (n), from the bodies' initial velocities
   std::vector<BodyInfo> bodies;   ///< by BodyId
   std::vector<JointInfo> joints;  ///< in the order added
-  Vector3d gravity = Vector3d::Zero();
+  Vector3d gravity = Vector3d::Zero();  ///< g (m/s², world), as set by Multibody::set_gravity
   /// Index of a body by name. @throws std::invalid_argument listing the names.
   BodyId body(std::string_view name) const;
   /// Index of a joint by name. @throws std::invalid_argument listing the names.
@@ -244,7 +273,9 @@ class Multibody {
  public:
   Multibody();
   ~Multibody();
+  /// A deep copy: the copy's bodies, joints and forces are independent of the original's.
   Multibody(const Multibody&);
+  /// A deep copy, as the copy constructor.
   Multibody& operator=(const Multibody&);
 
   /// A particle of mass m > 0 at p0 with velocity v0 (world).
@@ -289,8 +320,8 @@ class Multibody {
 /// Pose of a body at q: position of its centre of mass and orientation (planar: rotation about z
 /// by theta; particle: identity).
 struct Pose {
-  Vector3d p_WB = Vector3d::Zero();
-  Quaterniond R_WB = Quaterniond::Identity();
+  Vector3d p_WB = Vector3d::Zero();            ///< centre of mass in world coordinates (m)
+  Quaterniond R_WB = Quaterniond::Identity();  ///< orientation: rotates body B to world W
 };
 /// The pose of body b at q (the quaternion normalized). Cost O(1).
 Pose body_pose(const MultibodyModel& mb, const Eigen::Ref<const VectorXd>& q, BodyId b);
@@ -320,10 +351,13 @@ Vector3d world_point(const MultibodyModel& mb, const Eigen::Ref<const VectorXd>&
 /// For a planar joint the torque is along z. From the joint's share A_kᵀ lambda_k of the ideal
 /// generalized force (the drive's share is reported separately, see drive_effort).
 struct JointReaction {
-  BodyId body = kGround;  ///< the body the reaction acts on
-  Vector3d force_W = Vector3d::Zero(), torque_W = Vector3d::Zero();
-  Vector3d force_B = Vector3d::Zero(), torque_B = Vector3d::Zero();
-  Vector3d nonideal_force_W = Vector3d::Zero(), nonideal_torque_W = Vector3d::Zero();
+  BodyId body = kGround;                          ///< the body the reaction acts on
+  Vector3d force_W = Vector3d::Zero();            ///< ideal reaction force (N), world frame
+  Vector3d torque_W = Vector3d::Zero();           ///< ideal reaction torque (N m), world frame
+  Vector3d force_B = Vector3d::Zero();            ///< force_W in the body's frame
+  Vector3d torque_B = Vector3d::Zero();           ///< torque_W in the body's frame
+  Vector3d nonideal_force_W = Vector3d::Zero();   ///< joint friction force (N), world frame
+  Vector3d nonideal_torque_W = Vector3d::Zero();  ///< joint friction torque (N m), world frame
 };
 
 /// The reaction of joint j at (q, q', t) given the multipliers lambda (m) of an evaluation

@@ -37,11 +37,14 @@
 #include "ukdyn/core/system.hpp"
 #include "ukdyn/core/types.hpp"
 
+/// Kinematic trees in joint coordinates (URDF robots): Featherstone's recursions (this file).
 namespace ukdyn::tree {
 
 using Eigen::Matrix3d;
 using Eigen::Vector3d;
+/// A spatial vector (Featherstone): motion (angular; linear) or force (moment; force), 6 × 1.
 using Vector6d = Eigen::Matrix<double, 6, 1>;
+/// A spatial matrix (an inertia or a transform), 6 × 6.
 using Matrix6d = Eigen::Matrix<double, 6, 6>;
 
 /// The joints a tree knows (URDF's, planar excepted).
@@ -153,7 +156,9 @@ struct TreeData {
   Aligned<Eigen::Matrix3d> E;  ///< (links) R_λL ᵀ: λ(i) → L_i coordinates, forward_kinematics
   Aligned<Vector3d> r;         ///< (links) origin of L_i in λ(i) coordinates, forward_kinematics
   Aligned<S6> S;               ///< (links) S_i (6 × n_i), forward_kinematics
-  Aligned<Vector6d> v, a, f;   ///< (links) spatial velocity, acceleration, force: rnea
+  Aligned<Vector6d> v;         ///< (links) spatial velocity of L_i (L_i coordinates), rnea
+  Aligned<Vector6d> a;         ///< (links) spatial acceleration of L_i, gravity as −g, rnea
+  Aligned<Vector6d> f;         ///< (links) spatial force across joint i (L_i coordinates), rnea
   Aligned<Matrix6d> Ic;        ///< (links) composite inertias: mass_matrix
   Index tree_size = 0;         ///< the tree's link count, to refuse another tree's data
   std::vector<int> dofs;       ///< (links) n_i of the tree it was made for, likewise
@@ -274,9 +279,12 @@ Constraint distance_constraint(const Tree& tree, std::string name, LinkPoint a, 
 /// p, velocity v and acceleration a (world), the desired orientation R_WD, its angular
 /// velocity w and angular acceleration w_dot (world axes). Must not allocate.
 struct PoseSample {
-  Vector3d p = Vector3d::Zero(), v = Vector3d::Zero(), a = Vector3d::Zero();
-  Matrix3d R = Matrix3d::Identity();
-  Vector3d w = Vector3d::Zero(), w_dot = Vector3d::Zero();
+  Vector3d p = Vector3d::Zero();      ///< desired position of the point (world, m)
+  Vector3d v = Vector3d::Zero();      ///< its velocity p' (world, m/s)
+  Vector3d a = Vector3d::Zero();      ///< its acceleration p'' (world, m/s²)
+  Matrix3d R = Matrix3d::Identity();  ///< desired orientation R_WD (rotates D to W)
+  Vector3d w = Vector3d::Zero();      ///< its angular velocity (world axes, rad/s)
+  Vector3d w_dot = Vector3d::Zero();  ///< its angular acceleration (world axes, rad/s²)
 };
 /// The desired pose of a task-space requirement as a function of time.
 using PosePathFn = std::function<void(double t, PoseSample& desired)>;

@@ -21,9 +21,9 @@ struct LinkVisual {
   /// `<mesh>`.
   enum class Shape { kBox, kCylinder, kSphere, kMesh };
 
-  std::string link;  ///< the link's name (the tree's, or the URDF's "world" root)
-  std::string name;  ///< the visual's `name` attribute; may be empty
-  Shape shape = Shape::kBox;
+  std::string link;           ///< the link's name (the tree's, or the URDF's "world" root)
+  std::string name;           ///< the visual's `name` attribute; may be empty
+  Shape shape = Shape::kBox;  ///< which geometry (its size: `size`)
   Eigen::Vector3d p_LV = Eigen::Vector3d::Zero();  ///< `<origin xyz>`: the visual's origin in L
   Eigen::Quaterniond R_LV = Eigen::Quaterniond::Identity();  ///< `<origin rpy>`: V to L
   /// box: its edges along the visual's x, y, z; cylinder: (radius, length, 0); sphere:

@@ -53,7 +53,9 @@ struct EnsembleSample {
 /// Where an ensemble stands: `done` of `total` samples ended (`failed` of them not ok, i.e. a
 /// run whose status is neither kOk nor kEnergyBalance, or refused).
 struct EnsembleProgress {
-  std::size_t done = 0, failed = 0, total = 0;
+  std::size_t done = 0;    ///< samples ended so far (ok or not)
+  std::size_t failed = 0;  ///< of those, the ones not ok (or refused)
+  std::size_t total = 0;   ///< samples in the ensemble
 };
 
 /// How an ensemble runs and what it keeps of each sample.

@@ -43,8 +43,10 @@ struct OptionInfo {
   OptionType type = OptionType::kNumber;  ///< the value's type
   /// the numbers' range [min, max] (kNumber, kInteger, each entry of kNumbers); ±infinity: no
   /// bound
-  double min = -HUGE_VAL, max = HUGE_VAL;
-  bool min_open = false, max_open = false;  ///< strict bound (> min, < max)
+  double min = -HUGE_VAL;
+  double max = HUGE_VAL;  ///< upper end of the range (see min)
+  bool min_open = false;  ///< strict lower bound (> min)
+  bool max_open = false;  ///< strict upper bound (< max)
   /// kNumber: ±inf accepted when inside the bounds; kNumbers: entries not checked here (output_at:
   /// check_settings refuses a time outside the run, naming the run's interval)
   bool allow_infinite = false;

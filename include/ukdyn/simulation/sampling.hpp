@@ -34,7 +34,8 @@ enum class Distribution {
 struct RandomVariable {
   std::string name;                                    ///< what it sets (as GridAxis::name)
   Distribution distribution = Distribution::kUniform;  ///< its law
-  double a = 0.0, b = 1.0;                             ///< the law's two numbers
+  double a = 0.0;  ///< the law's first number (uniform, log-uniform: lower end; normal: mean)
+  double b = 1.0;  ///< the law's second number (uniform, log-uniform: upper end; normal: sd)
 };
 
 /// What to sample: the Cartesian product of `grid` (the first axis varies slowest), each point

@@ -65,7 +65,8 @@ DriftControl drift_from_string(const std::string& name);
 /// Per-constraint drift control (overrides SimulationOptions::drift for that constraint).
 struct ConstraintDrift {
   DriftControl method = DriftControl::kProjection;  ///< the method
-  double alpha = 0.0, beta = 0.0;  ///< Baumgarte gains when method is kBaumgarte (0: defaults)
+  double alpha = 0.0;  ///< Baumgarte gain alpha (1/s) when method is kBaumgarte (0: default)
+  double beta = 0.0;   ///< Baumgarte gain beta (1/s) when method is kBaumgarte (0: default)
 };
 
 struct Trajectory;
@@ -92,6 +93,7 @@ struct SimulationOptions {
   /// An rtol below kMinimumRtol (the roundoff of double) is raised to it, with a note in
   /// RunStatistics::notes, as CVODE does with tolerances it cannot meet.
   double rtol = 1e-9;
+  /// Absolute tolerance of the adaptive methods (units of each state component); see rtol.
   double atol = 1e-11;
   double max_step = 0.0;  ///< largest step of adaptive methods (0: unlimited)
   /// Give up after this many accepted steps in the whole run, with every method: the adaptive
@@ -124,14 +126,16 @@ struct SimulationOptions {
 
   DriftControl drift = DriftControl::kProjection;  ///< for every constraint, unless overridden
   std::map<std::string, ConstraintDrift> drift_per_constraint;  ///< overrides, by name
-  double baumgarte_alpha = 10.0;  ///< default gains of kBaumgarte (1/s)
-  double baumgarte_beta = 10.0;
-  ProjectionOptions projection;  ///< tolerance and iterations of kProjection
+  double baumgarte_alpha = 10.0;  ///< default gain alpha of kBaumgarte (1/s)
+  double baumgarte_beta = 10.0;   ///< default gain beta of kBaumgarte (1/s)
+  ProjectionOptions projection;   ///< tolerance and iterations of kProjection
 
   /// Initial state: checked against every constraint (position and velocity level, tolerance
   /// initial_tolerance); when inconsistent, projected if project_initial, else an error naming
   /// the constraints.
   bool project_initial = false;
+  /// Largest violation of the initial state (|phi|, and |phi'| or |psi|) accepted as consistent;
+  /// see project_initial.
   double initial_tolerance = 1e-10;
 
   SolverOptions solver;  ///< settings of the fundamental-equation solver
@@ -264,7 +268,9 @@ struct RunStatistics {
   /// stiff_switch), the time of the first (NaN when none), and the steps BDF took after them
   /// (included in steps)
   long stiff_switches = 0;
+  /// the time of the first switch from dopri5 to BDF (NaN when none; see stiff_switches)
   double stiff_switch_time = std::numeric_limits<double>::quiet_NaN();
+  /// the steps BDF took after the switches (included in steps; see stiff_switches)
   long stiff_steps = 0;
   double wall_time = 0.0;               ///< seconds
   double max_position_violation = 0.0;  ///< largest |phi| seen after a step or at a sample
@@ -306,15 +312,21 @@ struct Trajectory {
   std::vector<std::string> constraint_names;     ///< K
   std::vector<Index> constraint_rows;            ///< K, rows of each constraint
   std::vector<ConstraintKind> constraint_kinds;  ///< K
-  Index n = 0, m = 0;
+  Index n = 0;                                   ///< number of coordinates
+  Index m = 0;  ///< number of constraint rows (the length of lambda)
 
-  std::vector<double> t;                      ///< sample times (N)
-  std::vector<double> q, qd, qdd;             ///< N × n each
-  std::vector<double> Qc_ideal, Qc_nonideal;  ///< N × n each
+  std::vector<double> t;                   ///< sample times (N)
+  std::vector<double> q;                   ///< N × n: coordinates
+  std::vector<double> qd;                  ///< N × n: velocities q'
+  std::vector<double> qdd;                 ///< N × n: constrained accelerations q''
+  std::vector<double> Qc_ideal;            ///< N × n: ideal constraint force Aᵀ lambda, eq. (11)
+  std::vector<double> Qc_nonideal;         ///< N × n: non-ideal constraint force, eq. (12)
   std::vector<double> lambda;              ///< N × m: minimum-norm multipliers of the ideal force
   std::vector<double> position_violation;  ///< N × K: max |phi| of each constraint (0 if none)
   std::vector<double> velocity_violation;  ///< N × K: max |phi'| or |psi| of each constraint
-  std::vector<double> kinetic_energy, potential_energy, energy;  ///< N each
+  std::vector<double> kinetic_energy;      ///< N: T = ½ q'ᵀ M q'
+  std::vector<double> potential_energy;    ///< N: V (System's potential; 0 when it has none)
+  std::vector<double> energy;              ///< N: E = T + V
   // the energy balance (docs/simulation.md): E(t) − E(0) = the sum of these works
   std::vector<double> work_nonideal;  ///< N: work done by Qc_nonideal since t_start
   /// N: work done by Qc_ideal since t_start, without the drives' share: zero (up to the drift)
