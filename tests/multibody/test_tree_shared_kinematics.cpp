@@ -244,5 +244,41 @@ TEST(TreeSharedKinematics, RneaVelocitiesReadOnlyAtTheirState) {
   EXPECT_GT(std::abs(b2[0] - b_own[0]), 1e-3);
 }
 
+// The velocity products c_i + v_i × S_i q'_i the RNEA keeps for a frame pass sharing its
+// kinematics: kept only once such a pass shares them (an RNEA before leaves velocities without
+// them, and the pass computes them, the same bits), then added instead of recomputed — the
+// closure's rows bit for bit those of a closure with kinematics of its own either way
+TEST(TreeSharedKinematics, RneaVelocityProductsKeptOnlyForASharingPass) {
+  const Tree tree = load_urdf(kPanda);
+  const System sys = with_rod(tree);
+  const Constraint& c = sys.constraint(0);
+  const auto scratch = sys.make_scratch();
+  detail::KinematicsCache* k = detail::shared_kinematics(scratch.get(), tree);
+  ASSERT_NE(k, nullptr);
+  const VectorXd q = pose(0.2), qd = rates();
+  VectorXd Q(7), b(1), b_own(1);
+  MatrixXd A(1, 7), A_own(1, 7);
+  sys.forces(q, qd, 0.0, scratch.get(), Q);  // no sharing pass yet: v marked, c not kept
+  EXPECT_FALSE(k->keep_c);
+  EXPECT_FALSE(k->c_valid);
+  const auto closure = c.model().make_scratch_sharing(7, scratch.get());
+  const auto own = c.model().make_scratch(7);
+  EXPECT_TRUE(k->keep_c);
+  EXPECT_TRUE(k->velocities_at(qd));
+  c.model().acceleration_form(q, qd, 0.0, own.get(), A_own, b_own);
+  c.model().acceleration_form(q, qd, 0.0, closure.get(), A, b);  // v read, c computed
+  EXPECT_EQ(A, A_own);
+  EXPECT_EQ(b, b_own);
+  EXPECT_TRUE(k->velocities_at(qd));  // (v written again at the same q': still marked)
+  sys.forces(q, -qd, 0.0, scratch.get(), Q);
+  sys.forces(q, qd, 0.0, scratch.get(), Q);  // the RNEA at (q, q') again: c kept
+  EXPECT_TRUE(k->c_valid);
+  c.model().acceleration_form(q, qd, 0.0, closure.get(), A, b);  // v and c read
+  EXPECT_EQ(A, A_own);
+  EXPECT_EQ(b, b_own);
+  // (the velocity products are not zero: the comparison can fail)
+  EXPECT_GT(k->c[std::size_t(tree.link_index("panda_link3"))].norm(), 1e-2);
+}
+
 }  // namespace UKDYN_TEST_FILE
 }  // namespace ukdyn::tree

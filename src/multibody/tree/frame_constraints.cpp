@@ -31,7 +31,10 @@ struct FrameScratch final : ConstraintScratch {
         kinematics(shared != nullptr ? *shared : *own),
         data(kinematics.data),
         Ja(6, tree.coordinate_count()),
-        Jb(6, tree.coordinate_count()) {}
+        Jb(6, tree.coordinate_count()) {
+    // (the RNEA of the system sharing it keeps the velocity products for the J' q' pass)
+    kinematics.keep_c = true;
+  }
   std::unique_ptr<detail::KinematicsCache> own;  // (null when shared)
   detail::KinematicsCache& kinematics;           // *own or the shared one
   TreeData& data;                                // kinematics.data
@@ -102,10 +105,13 @@ PointState point_state(const Tree& tree, const LinkPoint& pt, const Eigen::Ref<c
   }
   PointState s;
   if (with_bias) {
-    // the link velocities of the RNEA at this state, when it ran on these kinematics (the
-    // controller's model or the plant evaluated with the scratch this one shares)
+    // the link velocities and velocity products of the RNEA at this state, when it ran on
+    // these kinematics (the controller's model or the plant evaluated with the scratch this one
+    // shares); v known without c (an RNEA before this scratch set keep_c): v is written again,
+    // the same bits, and stays marked
     const bool v_known = w.kinematics.velocities_at(qd);
-    s.bias = detail::frame_bias_from_kinematics(tree, qd, d, pt.link, pt.p, v_known);
+    s.bias = detail::frame_bias_from_kinematics(
+        tree, qd, d, pt.link, pt.p, v_known && w.kinematics.c_valid ? &w.kinematics.c : nullptr);
     if (!v_known) w.kinematics.clear_velocities();  // (written on links 0 … pt.link only)
   } else {
     s.bias.setZero();
