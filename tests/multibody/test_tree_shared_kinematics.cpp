@@ -280,5 +280,40 @@ TEST(TreeSharedKinematics, RneaVelocityProductsKeptOnlyForASharingPass) {
   EXPECT_GT(k->c[std::size_t(tree.link_index("panda_link3"))].norm(), 1e-2);
 }
 
+// A pose requirement's ω = J_ω q', formed by its acceleration form, is read again by its
+// violation only at the same state: at another q' or q the violation is bit for bit that of a
+// fresh scratch, and at the same one too
+TEST(TreeSharedKinematics, PoseAngularVelocityReadOnlyAtItsState) {
+  const Tree tree = load_urdf(kPanda);
+  const Constraint req =
+      pose_requirement(tree, "tool", {tree.link_index("panda_tool"), Vector3d(0, 0, 0.1)},
+                       [](double t, PoseSample& d) {
+                         d.p = Vector3d(0.3, 0.1 * t, 0.5);
+                         d.R = Eigen::AngleAxisd(t, Vector3d::UnitZ()).toRotationMatrix();
+                         d.w = Vector3d::UnitZ();
+                       });
+  const auto kept = req.model().make_scratch(7);
+  MatrixXd A(6, 7);
+  VectorXd b(6), pos(6), vel(6), pos_fresh(6), vel_fresh(6);
+  const VectorXd q1 = pose(0.0), q2 = pose(0.3), qd1 = rates(), qd2 = -2.0 * rates();
+  const auto check = [&](const VectorXd& q, const VectorXd& qd) {
+    req.model().violation(q, qd, 0.1, kept.get(), pos, vel);
+    const auto fresh = req.model().make_scratch(7);
+    req.model().violation(q, qd, 0.1, fresh.get(), pos_fresh, vel_fresh);
+    EXPECT_EQ(pos, pos_fresh);
+    EXPECT_EQ(vel, vel_fresh);
+  };
+  req.model().acceleration_form(q1, qd1, 0.1, kept.get(), A, b);
+  check(q1, qd1);  // ω read
+  check(q1, qd2);  // another q': formed again
+  req.model().acceleration_form(q1, qd1, 0.1, kept.get(), A, b);
+  check(q2, qd1);  // the kinematics moved
+  // (the orientation error's rate depends on ω: the comparisons can fail)
+  VectorXd vel2(6);
+  req.model().violation(q1, qd2, 0.1, kept.get(), pos, vel2);
+  req.model().violation(q1, qd1, 0.1, kept.get(), pos, vel);
+  EXPECT_GT((vel2.tail<3>() - vel.tail<3>()).norm(), 1e-3);
+}
+
 }  // namespace UKDYN_TEST_FILE
 }  // namespace ukdyn::tree
