@@ -244,5 +244,76 @@ TEST(TreeSharedKinematics, RneaVelocitiesReadOnlyAtTheirState) {
   EXPECT_GT(std::abs(b2[0] - b_own[0]), 1e-3);
 }
 
+// The velocity products c_i + v_i × S_i q'_i the RNEA keeps for a frame pass sharing its
+// kinematics: kept only once such a pass shares them (an RNEA before leaves velocities without
+// them, and the pass computes them, the same bits), then added instead of recomputed — the
+// closure's rows bit for bit those of a closure with kinematics of its own either way
+TEST(TreeSharedKinematics, RneaVelocityProductsKeptOnlyForASharingPass) {
+  const Tree tree = load_urdf(kPanda);
+  const System sys = with_rod(tree);
+  const Constraint& c = sys.constraint(0);
+  const auto scratch = sys.make_scratch();
+  detail::KinematicsCache* k = detail::shared_kinematics(scratch.get(), tree);
+  ASSERT_NE(k, nullptr);
+  const VectorXd q = pose(0.2), qd = rates();
+  VectorXd Q(7), b(1), b_own(1);
+  MatrixXd A(1, 7), A_own(1, 7);
+  sys.forces(q, qd, 0.0, scratch.get(), Q);  // no sharing pass yet: v marked, c not kept
+  EXPECT_FALSE(k->keep_c);
+  EXPECT_FALSE(k->c_valid);
+  const auto closure = c.model().make_scratch_sharing(7, scratch.get());
+  const auto own = c.model().make_scratch(7);
+  EXPECT_TRUE(k->keep_c);
+  EXPECT_TRUE(k->velocities_at(qd));
+  c.model().acceleration_form(q, qd, 0.0, own.get(), A_own, b_own);
+  c.model().acceleration_form(q, qd, 0.0, closure.get(), A, b);  // v read, c computed
+  EXPECT_EQ(A, A_own);
+  EXPECT_EQ(b, b_own);
+  EXPECT_TRUE(k->velocities_at(qd));  // (v written again at the same q': still marked)
+  sys.forces(q, -qd, 0.0, scratch.get(), Q);
+  sys.forces(q, qd, 0.0, scratch.get(), Q);  // the RNEA at (q, q') again: c kept
+  EXPECT_TRUE(k->c_valid);
+  c.model().acceleration_form(q, qd, 0.0, closure.get(), A, b);  // v and c read
+  EXPECT_EQ(A, A_own);
+  EXPECT_EQ(b, b_own);
+  // (the velocity products are not zero: the comparison can fail)
+  EXPECT_GT(k->c[std::size_t(tree.link_index("panda_link3"))].norm(), 1e-2);
+}
+
+// A pose requirement's ω = J_ω q', formed by its acceleration form, is read again by its
+// violation only at the same state: at another q' or q the violation is bit for bit that of a
+// fresh scratch, and at the same one too
+TEST(TreeSharedKinematics, PoseAngularVelocityReadOnlyAtItsState) {
+  const Tree tree = load_urdf(kPanda);
+  const Constraint req =
+      pose_requirement(tree, "tool", {tree.link_index("panda_tool"), Vector3d(0, 0, 0.1)},
+                       [](double t, PoseSample& d) {
+                         d.p = Vector3d(0.3, 0.1 * t, 0.5);
+                         d.R = Eigen::AngleAxisd(t, Vector3d::UnitZ()).toRotationMatrix();
+                         d.w = Vector3d::UnitZ();
+                       });
+  const auto kept = req.model().make_scratch(7);
+  MatrixXd A(6, 7);
+  VectorXd b(6), pos(6), vel(6), pos_fresh(6), vel_fresh(6);
+  const VectorXd q1 = pose(0.0), q2 = pose(0.3), qd1 = rates(), qd2 = -2.0 * rates();
+  const auto check = [&](const VectorXd& q, const VectorXd& qd) {
+    req.model().violation(q, qd, 0.1, kept.get(), pos, vel);
+    const auto fresh = req.model().make_scratch(7);
+    req.model().violation(q, qd, 0.1, fresh.get(), pos_fresh, vel_fresh);
+    EXPECT_EQ(pos, pos_fresh);
+    EXPECT_EQ(vel, vel_fresh);
+  };
+  req.model().acceleration_form(q1, qd1, 0.1, kept.get(), A, b);
+  check(q1, qd1);  // ω read
+  check(q1, qd2);  // another q': formed again
+  req.model().acceleration_form(q1, qd1, 0.1, kept.get(), A, b);
+  check(q2, qd1);  // the kinematics moved
+  // (the orientation error's rate depends on ω: the comparisons can fail)
+  VectorXd vel2(6);
+  req.model().violation(q1, qd2, 0.1, kept.get(), pos, vel2);
+  req.model().violation(q1, qd1, 0.1, kept.get(), pos, vel);
+  EXPECT_GT((vel2.tail<3>() - vel.tail<3>()).norm(), 1e-3);
+}
+
 }  // namespace UKDYN_TEST_FILE
 }  // namespace ukdyn::tree

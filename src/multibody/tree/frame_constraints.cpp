@@ -31,7 +31,11 @@ struct FrameScratch final : ConstraintScratch {
         kinematics(shared != nullptr ? *shared : *own),
         data(kinematics.data),
         Ja(6, tree.coordinate_count()),
-        Jb(6, tree.coordinate_count()) {}
+        Jb(6, tree.coordinate_count()),
+        qd_omega(tree.coordinate_count()) {
+    // (the RNEA of the system sharing it keeps the velocity products for the J' q' pass)
+    kinematics.keep_c = true;
+  }
   std::unique_ptr<detail::KinematicsCache> own;  // (null when shared)
   detail::KinematicsCache& kinematics;           // *own or the shared one
   TreeData& data;                                // kinematics.data
@@ -41,6 +45,11 @@ struct FrameScratch final : ConstraintScratch {
   PoseSample desired;                            // a pose requirement's path at t_desired
   double t_desired = 0.0;
   bool desired_valid = false;  // desired holds the path at t_desired
+  // a pose requirement's ω = J_ω q' (Ja's) at q' = qd_omega: the acceleration form's, read
+  // again by the violation at the same state
+  Vector3d omega = Vector3d::Zero();
+  VectorXd qd_omega;         // (n)
+  bool omega_valid = false;  // omega is that of the Ja kept and qd_omega
 };
 
 // L −= ½ [x]× [y]× = ½ (y xᵀ − (x · y) I), entry by entry: the products and sums of the 3 × 3
@@ -76,7 +85,7 @@ const PoseSample& desired_at(const PosePathFn& path, double t, FrameScratch& w) 
 void kinematics_at(const Tree& tree, const Eigen::Ref<const VectorXd>& q, FrameScratch& w) {
   w.kinematics.at(tree, q);
   if (w.version != w.kinematics.version) {
-    w.Ja_valid = w.Jb_valid = false;
+    w.Ja_valid = w.Jb_valid = w.omega_valid = false;
     w.version = w.kinematics.version;
   }
 }
@@ -102,17 +111,23 @@ PointState point_state(const Tree& tree, const LinkPoint& pt, const Eigen::Ref<c
   }
   PointState s;
   if (with_bias) {
-    // the link velocities of the RNEA at this state, when it ran on these kinematics (the
-    // controller's model or the plant evaluated with the scratch this one shares)
+    // the link velocities and velocity products of the RNEA at this state, when it ran on
+    // these kinematics (the controller's model or the plant evaluated with the scratch this one
+    // shares); v known without c (an RNEA before this scratch set keep_c): v is written again,
+    // the same bits, and stays marked
     const bool v_known = w.kinematics.velocities_at(qd);
-    s.bias = detail::frame_bias_from_kinematics(tree, qd, d, pt.link, pt.p, v_known);
+    s.bias = detail::frame_bias_from_kinematics(
+        tree, qd, d, pt.link, pt.p, v_known && w.kinematics.c_valid ? &w.kinematics.c : nullptr);
     if (!v_known) w.kinematics.clear_velocities();  // (written on links 0 … pt.link only)
   } else {
     s.bias.setZero();
   }
   // (the acceleration form and the violation at one state need the Jacobian once)
   bool& J_valid = &J == &w.Ja ? w.Ja_valid : w.Jb_valid;
-  if (!J_valid) frame_jacobian(tree, d, pt.link, pt.p, J);
+  if (!J_valid) {
+    frame_jacobian(tree, d, pt.link, pt.p, J);
+    if (&J == &w.Ja) w.omega_valid = false;
+  }
   J_valid = true;
   s.p_W = world_point(d, pt.link, pt.p);
   return s;
@@ -120,6 +135,18 @@ PointState point_state(const Tree& tree, const LinkPoint& pt, const Eigen::Ref<c
 
 void check_point(const Tree& tree, const std::string& who, const std::string& name,
                  const LinkPoint& pt, const char* which);
+
+// ω = J_ω q' of the point a (point_state ran: Ja valid), once per state (the same q', bit for
+// bit, gives the same product)
+const Vector3d& angular_velocity(FrameScratch& w, const Eigen::Ref<const VectorXd>& qd) {
+  if (!w.omega_valid ||
+      std::memcmp(qd.data(), w.qd_omega.data(), sizeof(double) * std::size_t(qd.size())) != 0) {
+    w.omega = w.Ja.topRows<3>() * qd;
+    w.qd_omega = qd;
+    w.omega_valid = true;
+  }
+  return w.omega;
+}
 
 // both points of a loop closure: in range, finite, not both on the world
 void check_points(const Tree& tree, const std::string& who, const std::string& name,
@@ -368,7 +395,7 @@ class PoseModel final : public FrameModel {
     // e_R'' = L ω' + ½ Σ (r_d,k'' × r_k + 2 r_d,k' × r_k' + r_d,k × (ω × r_k')) with
     // ω' = J_ω q'' + β_ω, L = −½ Σ [r_d,k]× [r_k]×
     const Matrix3d& R = w.data.R_WL[std::size_t(at_.link)];
-    const Vector3d omega = w.Ja.topRows<3>() * qd;
+    const Vector3d& omega = angular_velocity(w, qd);
     Matrix3d L = Matrix3d::Zero();
     Vector3d rest = Vector3d::Zero();
     for (int k = 0; k < 3; ++k) {
@@ -392,7 +419,7 @@ class PoseModel final : public FrameModel {
     if (!orientation_) return;
     // e_R = ½ Σ r_d,k × r_k, e_R' = ½ Σ (r_d,k' × r_k + r_d,k × r_k')
     const Matrix3d& R = w.data.R_WL[std::size_t(at_.link)];
-    const Vector3d omega = w.Ja.topRows<3>() * qd;
+    const Vector3d& omega = angular_velocity(w, qd);
     Vector3d e = Vector3d::Zero(), e_rate = Vector3d::Zero();
     for (int k = 0; k < 3; ++k) {
       const Vector3d r = R.col(k), rd = d.R.col(k);

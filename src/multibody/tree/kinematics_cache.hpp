@@ -20,7 +20,10 @@ namespace ukdyn::tree::detail {
 struct KinematicsCache {
   /// Sizes the buffers for `tree`. Allocates (once).
   explicit KinematicsCache(const Tree& tree)
-      : data(tree), q(tree.coordinate_count()), qd_v(tree.coordinate_count()) {}
+      : data(tree),
+        q(tree.coordinate_count()),
+        qd_v(tree.coordinate_count()),
+        c(std::size_t(tree.link_count()), Vector6d::Zero()) {}
 
   TreeData data;              ///< the passes' links; the kinematics are those of q when valid
   VectorXd q;                 ///< (n) the q of data's kinematics
@@ -31,6 +34,12 @@ struct KinematicsCache {
   /// q' clears them (clear_velocities); one at the same q' writes the same bits.
   VectorXd qd_v;                ///< (n) the q' of data.v
   std::uint64_t v_version = 0;  ///< the version of data.v's kinematics; 0: data.v unknown
+  /// (links) the velocity products c_i + v_i × S_i q'_i the same RNEA left (its argument c):
+  /// valid with data.v when c_valid, so a J' q' pass at this state adds them instead of
+  /// recomputing them
+  TreeData::Aligned<Vector6d> c;
+  bool keep_c = false;   ///< a frame constraint or requirement shares this cache: the RNEA fills c
+  bool c_valid = false;  ///< c is the RNEA's of data.v (set by mark_velocities from keep_c)
 
   /// Whether data.v holds every link's velocity at the current kinematics and q' = qd (bit for
   /// bit). Cost O(n).
@@ -38,11 +47,12 @@ struct KinematicsCache {
     return valid && v_version == version && qd.size() == qd_v.size() &&
            std::memcmp(qd.data(), qd_v.data(), sizeof(double) * std::size_t(qd.size())) == 0;
   }
-  /// Records that a pass over every link (the RNEA) just wrote data.v at the current kinematics
-  /// and q' = qd. Cost O(n).
+  /// Records that a pass over every link (the RNEA) just wrote data.v (and c when keep_c) at
+  /// the current kinematics and q' = qd. Cost O(n).
   void mark_velocities(const Eigen::Ref<const VectorXd>& qd) {
     qd_v = qd;
     v_version = version;
+    c_valid = keep_c;
   }
   /// Records that data.v was written at another q' (or on some links only). Cost O(1).
   void clear_velocities() { v_version = 0; }

@@ -25,11 +25,12 @@ void rnea(const Tree& tree, const Eigen::Ref<const VectorXd>& q,
   detail::rnea_from_kinematics(tree, qd, qdd, d, tau);
 }
 
-}  // namespace
-
-void detail::rnea_from_kinematics(const Tree& tree, const Eigen::Ref<const VectorXd>& qd,
-                                  const Eigen::Ref<const VectorXd>* qdd, TreeData& d,
-                                  Eigen::Ref<VectorXd> tau) {
+// the outward pass of rnea_from_kinematics; kKeepC: c_i + v_i × vJ also into *c (a template
+// parameter, so that the RNEA without c is the same loop as before it existed)
+template <bool kKeepC>
+void rnea_outward(const Tree& tree, const Eigen::Ref<const VectorXd>& qd,
+                  const Eigen::Ref<const VectorXd>* qdd, TreeData& d,
+                  TreeData::Aligned<Vector6d>* c) {
   // the world's acceleration −g stands for gravity
   Vector6d a0;
   a0 << Vector3d::Zero(), -tree.gravity();
@@ -51,11 +52,30 @@ void detail::rnea_from_kinematics(const Tree& tree, const Eigen::Ref<const Vecto
     if (ni > 0) {
       if (qdd && ni == 1) d.a[k] += d.S[k].col(0) * (*qdd)[o];
       if (qdd && ni > 1) d.a[k].noalias() += d.S[k] * qdd->segment(o, ni);
-      d.a[k] += detail::joint_bias(tree, d, i, qd) + detail::cross_motion(d.v[k], vJ);
+      if constexpr (kKeepC) {
+        // (a += c_i, c_i kept: the same sums as a += joint bias + v × vJ)
+        Vector6d& ck = (*c)[k];
+        ck = detail::joint_bias(tree, d, i, qd) + detail::cross_motion(d.v[k], vJ);
+        d.a[k] += ck;
+      } else {
+        d.a[k] += detail::joint_bias(tree, d, i, qd) + detail::cross_motion(d.v[k], vJ);
+      }
     }
     const Matrix6d& I = tree.spatial_inertia(i);
     d.f[k] = detail::inertia_times(I, d.a[k]) +
              detail::cross_force(d.v[k], detail::inertia_times(I, d.v[k]));
+  }
+}
+
+}  // namespace
+
+void detail::rnea_from_kinematics(const Tree& tree, const Eigen::Ref<const VectorXd>& qd,
+                                  const Eigen::Ref<const VectorXd>* qdd, TreeData& d,
+                                  Eigen::Ref<VectorXd> tau, TreeData::Aligned<Vector6d>* c) {
+  if (c != nullptr) {
+    rnea_outward<true>(tree, qd, qdd, d, c);
+  } else {
+    rnea_outward<false>(tree, qd, qdd, d, nullptr);
   }
   // inward: τ_i = S_iᵀ f_i, f_λ += X_iᵀ f_i
   for (Index i = tree.link_count(); i-- > 0;) {
@@ -89,20 +109,27 @@ Vector6d frame_bias_acceleration(const Tree& tree, const Eigen::Ref<const Vector
 
 Vector6d detail::frame_bias_from_kinematics(const Tree& tree, const Eigen::Ref<const VectorXd>& qd,
                                             TreeData& d, Index link, const Vector3d& p_L,
-                                            bool v_known) {
+                                            const TreeData::Aligned<Vector6d>* c_known) {
   // outward, as the RNEA's with q'' = 0 and no gravity (every link: the ancestors come first);
-  // v_i as the RNEA's, unless d.v holds them already
+  // v_i and c_i + v_i × vJ as the RNEA's, unless it left them in d.v and c_known
   for (Index i = 0; i <= link; ++i) {
     const std::size_t k = std::size_t(i);
     const Index p = tree.parent(i);
     const int ni = tree.dofs(i);
-    const Vector6d vJ = detail::joint_velocity(d.S[k], qd, tree.offset(i), ni);
     if (p < 0) {
-      if (!v_known) d.v[k] = vJ;
       d.a[k].setZero();
     } else {
-      if (!v_known) d.v[k] = detail::motion_to_child(d.E[k], d.r[k], d.v[std::size_t(p)]) + vJ;
       d.a[k] = detail::motion_to_child(d.E[k], d.r[k], d.a[std::size_t(p)]);
+    }
+    if (c_known) {
+      if (ni > 0) d.a[k] += (*c_known)[k];
+      continue;
+    }
+    const Vector6d vJ = detail::joint_velocity(d.S[k], qd, tree.offset(i), ni);
+    if (p < 0) {
+      d.v[k] = vJ;
+    } else {
+      d.v[k] = detail::motion_to_child(d.E[k], d.r[k], d.v[std::size_t(p)]) + vJ;
     }
     if (ni > 0) d.a[k] += detail::joint_bias(tree, d, i, qd) + detail::cross_motion(d.v[k], vJ);
   }

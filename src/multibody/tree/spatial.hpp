@@ -18,19 +18,23 @@ void check_sizes(const char* who, const Tree& tree, const TreeData& d, Index q_s
 void mass_matrix_from_kinematics(const Tree& tree, TreeData& d, Eigen::Ref<MatrixXd> M);
 
 /// τ = M q'' + h by the RNEA from the kinematics in d (forward_kinematics at q already run);
-/// q'' = 0 when qdd is null: the passes of inverse_dynamics after its checks. Cost O(links).
+/// q'' = 0 when qdd is null: the passes of inverse_dynamics after its checks. c, when not null
+/// ((links), sized): receives each moving link's velocity-product acceleration c_i + v_i × S_i
+/// q'_i (the term a J' q' pass adds to X_i a_λ; a link without joint coordinates keeps its
+/// entry). Cost O(links).
 void rnea_from_kinematics(const Tree& tree, const Eigen::Ref<const VectorXd>& qd,
                           const Eigen::Ref<const VectorXd>* qdd, TreeData& d,
-                          Eigen::Ref<VectorXd> tau);
+                          Eigen::Ref<VectorXd> tau, TreeData::Aligned<Vector6d>* c = nullptr);
 
 /// frame_bias_acceleration from the kinematics in d (forward_kinematics at q already run): its
-/// outward pass after its checks. v_known: d.v already holds every link's velocity at this q
-/// and q' (an RNEA at this state ran on d: KinematicsCache::velocities_at), so only the
-/// accelerations are computed (the same bits: the same expression); otherwise d.v of the links
+/// outward pass after its checks. c_known, when not null: an RNEA at this q and q' ran on d and
+/// left every link's velocity in d.v and its velocity products in *c_known (the c of
+/// rnea_from_kinematics; KinematicsCache::velocities_at), so only a_i = X_i a_λ + c_i is
+/// computed (the same bits: the same sums of the same terms); otherwise d.v of the links
 /// 0 … link is written. Cost O(depth).
 Vector6d frame_bias_from_kinematics(const Tree& tree, const Eigen::Ref<const VectorXd>& qd,
                                     TreeData& d, Index link, const Vector3d& p_L,
-                                    bool v_known = false);
+                                    const TreeData::Aligned<Vector6d>* c_known = nullptr);
 
 /// [x]×, the cross-product matrix.
 inline Matrix3d skew(const Vector3d& x) {

@@ -161,9 +161,10 @@ SystemBuilder system_builder(const Tree& tree_in, JointTorqueFn tau) {
       Q = ts.Q;
       return;
     }
-    detail::rnea_from_kinematics(*tree, qd, nullptr, ts.kinematics.data, ts.h);
-    // data.v are the velocities at q' (a frame requirement's J' q' pass sharing these
-    // kinematics reads them), and qd_v the q' of the Q kept once it is complete
+    detail::rnea_from_kinematics(*tree, qd, nullptr, ts.kinematics.data, ts.h,
+                                 ts.kinematics.keep_c ? &ts.kinematics.c : nullptr);
+    // data.v and c are the velocities and velocity products at q' (a frame requirement's J' q'
+    // pass sharing these kinematics adds them), and qd_v the q' of the Q kept once complete
     ts.Q_valid = false;
     ts.kinematics.mark_velocities(qd);
     Q = -ts.h - D.cwiseProduct(qd);
