@@ -16,6 +16,7 @@
 #include <filesystem>
 #include <map>
 #include <memory>
+#include <set>
 #include <sstream>
 #include <string>
 #include <utility>
@@ -41,7 +42,7 @@ inline const std::vector<std::string> kTopLevelKeys = {
     "name",        "parameters", "coordinates", "kinetic_energy", "potential_energy",
     "mass_matrix", "forces",     "constraints", "nonideal",       "initial",
     "simulate",    "output",     "bodies",      "joints",         "control",
-    "visual",      "units",      "robot",       "tables"};
+    "visual",      "units",      "robot",       "tables",         "contacts"};
 
 // a table's columns as read (tables:, modelfile/reader_tables.cpp): names in the order given,
 // values per column, and per row its CSV line (1-based; 0 for data written in the model file)
@@ -430,6 +431,11 @@ class Reader {
   Constraint read_pose_requirement(const YAML::Node& r, const std::string& name,
                                    const std::string& what);
   std::shared_ptr<const tree::Tree> robot_;  // the robot read by read_robot (or null)
+  // contacts: of a robot model (modelfile/reader_robot_contacts.cpp): one unilateral
+  // tree::contact_constraint per entry, added to `builder`; `names` holds the loops' names and
+  // gets the contacts'; `urdf` names the file in errors
+  void read_robot_contacts(const YAML::Node& root, const tree::Tree& robot, const std::string& urdf,
+                           std::set<std::string>& names, SystemBuilder& builder);
 
   // ---- control (modelfile/reader_control.cpp): control: ------------------------------------
   // Builds model.controller from the control: section (nothing when absent). With `nominal:` the

@@ -12,6 +12,8 @@
 //       - {name: hinge, type: revolute, …, axis_a: [0, 0, 1], axis_b: [0, 0, 1]}
 //       - {name: glue, type: weld, …, rpy_a: [0, 0, 0], rpy_b: [0, 0, 1.57]}
 //     nonideal: as in any model file (viscous, Coulomb friction on a constraint or loop, C)
+//   contacts: unilateral contacts of link points and spheres with planes (top level, the syntax
+//     of bodies models with link: for body:; modelfile/reader_robot_contacts.cpp)
 // The coordinates are the joints' names (a floating base's <link>_x … <link>_u3), so initial:,
 // constraints:, output: and control: name them as in any model file. A .urdf file given alone
 // (ukdyn run arm.urdf, ukdyn.load("arm.urdf")) is read as `robot: {urdf: arm.urdf}`.
@@ -273,6 +275,8 @@ Model Reader::read_robot(const YAML::Node& root) {
       }
     }
   }
+  // contacts: unilateral gaps of link points and spheres with planes
+  read_robot_contacts(root, robot, path.string(), loop_names, builder);
   read_constraints(root, builder);
   // non-ideal forces: robot_ set first, so that their compiled C evaluates with buffers of its
   // own (the tree's callables own the system's scratch)

@@ -1,8 +1,9 @@
 // SPDX-License-Identifier: BSD-3-Clause
 /// @file multibody/tree_closures.hpp
 /// Weld and revolute loop closures between the frames of a kinematic tree (multibody/tree.hpp),
-/// beside its point and distance closures: constraints to add to tree::system_builder, built on
-/// frame_jacobian and frame_bias_acceleration (src/multibody/tree/frame_constraints.cpp).
+/// beside its point and distance closures, and unilateral contacts of link points or spheres
+/// with a plane: constraints to add to tree::system_builder, built on frame_jacobian and
+/// frame_bias_acceleration (src/multibody/tree/frame_constraints.cpp).
 #pragma once
 
 #include <string>
@@ -38,5 +39,22 @@ Constraint weld_constraint(const Tree& tree, std::string name, const LinkFrame& 
 /// zero or non-finite axis. Cost per evaluation O(n · depth).
 Constraint revolute_constraint(const Tree& tree, std::string name, LinkPoint a,
                                const Vector3d& axis_a, LinkPoint b, const Vector3d& axis_b);
+
+/// A unilateral contact of a sphere (radius r, centre `at`) or a point (r = 0) of a link with a
+/// plane fixed on the world (plane.link = -1) or on another link: one holonomic gap row
+///   g = n_W · (p_W(at) − o_W) − r >= 0,
+/// o_W the plane's origin plane.p, n_W its z axis (plane.R's third column, the side the contact
+/// stays on) in the world. With d = p_W(at) − o_W and the plane's link angular velocity ω_o:
+///   A = n_Wᵀ (J_v(at) − J_v(o)) + (n_W × d)ᵀ J_ω(o)    (n_W' = ω_o × n_W),
+///   b = −n_W · (β_v(at) − β_v(o)) − (n_W × d) · β_ω(o) − 2 (ω_o × n_W) · d'
+///       − (ω_o × (ω_o × n_W)) · d,
+/// β = J' q' (frame_bias_acceleration), d' = (J_v(at) − J_v(o)) q'. The constraint is made
+/// unilateral with Newton's coefficient `restitution` (Constraint::unilateral; docs/contact.md:
+/// events, impacts, releases; Poisson's law: with_restitution_law). Add it to
+/// system_builder(tree). @throws std::invalid_argument naming `name` on a link out of range, both
+/// on the world, a point not finite, a radius negative or not finite, plane.R not a rotation, or
+/// a restitution outside [0, 1]. Cost per evaluation O(n · depth), as distance_constraint's row.
+Constraint contact_constraint(const Tree& tree, std::string name, LinkPoint at, double radius,
+                              const LinkFrame& plane, double restitution = 0.0);
 
 }  // namespace ukdyn::tree

@@ -1,8 +1,8 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // Constraints and requirements between tree frames, built on frame_jacobian and
 // frame_bias_acceleration: a point loop closure (3 rows), a distance loop closure (1 row), a weld
-// (6 rows) and a revolute closure (5 rows), and a task-space pose requirement (6 rows) for exact
-// tracking control.
+// (6 rows) and a revolute closure (5 rows), a unilateral contact with a plane (1 row), and a
+// task-space pose requirement (6 rows) for exact tracking control.
 #include <cmath>
 #include <cstdint>
 #include <cstring>
@@ -376,6 +376,52 @@ class RevoluteModel final : public FrameModel {
   Vector3d u_a_, x_b_, y_b_;  // unit axis in a's link frame; the pair ⊥ u_b in b's
 };
 
+// g = n_W · (p_W(at) − o_W) − r with n_W = R_Wo n_o: g'' = 0 is A q'' = b (see
+// contact_constraint); n_W' = ω_o × n_W, n_W'' = ω_o' × n_W + ω_o × (ω_o × n_W)
+class ContactModel final : public FrameModel {
+ public:
+  ContactModel(std::shared_ptr<const Tree> tree, LinkPoint at, double radius, LinkPoint origin,
+               const Vector3d& normal)
+      : FrameModel(std::move(tree)), at_(at), origin_(origin), n_o_(normal), radius_(radius) {}
+  void acceleration_form(const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd,
+                         double, ConstraintScratch* s, Eigen::Ref<MatrixXd> A,
+                         Eigen::Ref<VectorXd> b) const override {
+    auto& w = *static_cast<FrameScratch*>(s);
+    const PointState pa = point_state(*tree_, at_, q, qd, w, w.Ja, true);
+    const PointState po = point_state(*tree_, origin_, q, qd, w, w.Jb, true);
+    const Vector3d n = world_rotation(w.data, origin_.link, Matrix3d::Identity()) * n_o_;
+    const Vector3d dist = pa.p_W - po.p_W, n_x_d = n.cross(dist);
+    // (J_v(at) − J_v(o)) into Ja's linear rows, then d' = (J_v(at) − J_v(o)) q'
+    w.Ja.bottomRows<3>() -= w.Jb.bottomRows<3>();
+    w.Ja_valid = false;  // (Ja now holds J_v(at) − J_v(o))
+    const Vector3d rate = w.Ja.bottomRows<3>() * qd;
+    A.row(0).noalias() = n.transpose() * w.Ja.bottomRows<3>();
+    b[0] = -n.dot(pa.bias.tail<3>() - po.bias.tail<3>());
+    if (origin_.link < 0) return;  // (a world plane: n_W fixed)
+    const Vector3d wo = w.Jb.topRows<3>() * qd, n1 = wo.cross(n);
+    A.row(0).noalias() += n_x_d.transpose() * w.Jb.topRows<3>();
+    b[0] -= n_x_d.dot(po.bias.head<3>()) + 2.0 * n1.dot(rate) + wo.cross(n1).dot(dist);
+  }
+  void violation(const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd, double,
+                 ConstraintScratch* s, Eigen::Ref<VectorXd> position,
+                 Eigen::Ref<VectorXd> velocity) const override {
+    auto& w = *static_cast<FrameScratch*>(s);
+    const PointState pa = point_state(*tree_, at_, q, qd, w, w.Ja, false);
+    const PointState po = point_state(*tree_, origin_, q, qd, w, w.Jb, false);
+    const Vector3d n = world_rotation(w.data, origin_.link, Matrix3d::Identity()) * n_o_;
+    const Vector3d dist = pa.p_W - po.p_W;
+    // g' = n_W · d' + (n_W × d) · ω_o
+    position[0] = n.dot(dist) - radius_;
+    velocity[0] = n.dot((w.Ja.bottomRows<3>() - w.Jb.bottomRows<3>()) * qd);
+    if (origin_.link >= 0) velocity[0] += n.cross(dist).dot(w.Jb.topRows<3>() * qd);
+  }
+
+ private:
+  LinkPoint at_, origin_;  // the sphere's centre; the plane's origin
+  Vector3d n_o_;           // the plane's unit normal in its link's frame (the world's for -1)
+  double radius_;
+};
+
 // e = [p_W − p_d; ½ Σ r_d,k × r_k]; e'' = 0 is A q'' = b (see pose_requirement)
 class PoseModel final : public FrameModel {
  public:
@@ -490,6 +536,29 @@ Constraint revolute_constraint(const Tree& tree, std::string name, LinkPoint a,
   auto model =
       std::make_shared<RevoluteModel>(std::make_shared<const Tree>(tree), a, axis_a, b, axis_b);
   return Constraint(std::move(name), ConstraintKind::kHolonomic, 5, std::move(model));
+}
+
+Constraint contact_constraint(const Tree& tree, std::string name, LinkPoint at, double radius,
+                              const LinkFrame& plane, double restitution) {
+  const std::string who = "ukdyn::tree::contact_constraint";
+  check_points(tree, who, name, at, {plane.link, plane.p});
+  if (!(radius >= 0.0) || !std::isfinite(radius)) {
+    throw std::invalid_argument(who + ": constraint '" + name + "': the radius must be a " +
+                                "finite number >= 0, got " + std::to_string(radius) +
+                                " (0: a point)");
+  }
+  const Matrix3d& R = plane.R;
+  if (!R.allFinite() || !(R.transpose() * R).isApprox(Matrix3d::Identity(), 1e-9) ||
+      !(R.determinant() > 0.0)) {
+    throw std::invalid_argument(who + ": constraint '" + name +
+                                "': the plane's orientation is not a rotation (R must be "
+                                "orthonormal with det R = 1; its z axis is the normal)");
+  }
+  auto model = std::make_shared<ContactModel>(std::make_shared<const Tree>(tree), at, radius,
+                                              LinkPoint{plane.link, plane.p}, R.col(2));
+  Constraint c(std::move(name), ConstraintKind::kHolonomic, 1, std::move(model));
+  c.unilateral(restitution);
+  return c;
 }
 
 Constraint pose_requirement(const Tree& tree, std::string name, LinkPoint at, PosePathFn path,

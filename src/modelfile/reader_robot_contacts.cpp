@@ -1,0 +1,193 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// contacts: in a robot model file (docs/robots.md, "Contacts"; the syntax shared with bodies
+// models, docs/contact.md): each entry one unilateral gap between a link's point or sphere and a
+// plane on the world or on another link (tree::contact_constraint):
+//   contacts:
+//     - name: tip                  required, unique among the constraints and loops
+//       link: fore                 the link the point or sphere is fixed on
+//       point: [0.4, 0, 0]         in the link's frame (default its origin)
+//       shape: sphere              point (default) | sphere (disk: refused on robot links)
+//       radius: 0.03               sphere: required, > 0; point: not allowed
+//       plane: {link: base, point: [0, 0, 0], normal: [0, 0, 1]}   default: the world's z = 0,
+//                                  normal +z (body: ground or link: world for the world)
+//       restitution: 0.5           Newton's e in [0, 1] (default 0)
+//       restitution_law: newton    or poisson
+#include <algorithm>
+#include <cmath>
+#include <set>
+#include <string>
+#include <vector>
+
+#include <yaml-cpp/yaml.h>
+
+#include "ukdyn/core/format.hpp"
+#include "ukdyn/dynamics/contact_restitution.hpp"
+#include "ukdyn/multibody/tree.hpp"
+#include "ukdyn/multibody/tree_closures.hpp"
+
+#include "modelfile/reader.hpp"
+
+namespace ukdyn::model_reader {
+
+namespace {
+
+const std::vector<std::string> kRobotContactKeys = {
+    "name", "link",  "point",       "shape",           "radius",
+    "axis", "plane", "restitution", "restitution_law", "body"};
+const std::vector<std::string> kRobotPlaneKeys = {"link", "body", "point", "normal"};
+
+constexpr const char* kRobotContactExample =
+    "{name: tip, link: fore, point: [0.4, 0, 0], shape: sphere, radius: 0.03, restitution: 0.5}";
+
+}  // namespace
+
+void Reader::read_robot_contacts(const YAML::Node& root, const tree::Tree& robot,
+                                 const std::string& urdf, std::set<std::string>& names,
+                                 SystemBuilder& builder) {
+  const YAML::Node cs = root["contacts"];
+  if (!cs) return;
+  if (!cs.IsSequence())
+    fail(cs, "contacts must be a list", std::string("contacts: [") + kRobotContactExample + "]");
+  // the names of the constraints: section's entries (a contact's name must differ)
+  std::set<std::string> constraints;
+  for (const std::string& c : constraint_names(root)) constraints.insert(c);
+  const auto link_of = [&](const YAML::Node& l, const std::string& what) -> Index {
+    if (!l.IsScalar()) fail(l, what + ": a link is named by a string", "link: fore");
+    if (l.Scalar() == "world") return -1;
+    try {
+      return robot.link_index(l.Scalar());
+    } catch (const std::invalid_argument&) {
+      std::vector<std::string> links;
+      for (Index i = 0; i < robot.link_count(); ++i) links.push_back(robot.link(i).name);
+      fail(l, what + ": no link '" + l.Scalar() + "' in " + urdf,
+           "the links are world, " + join(links));
+    }
+  };
+  for (const auto& c : cs) {
+    if (!c.IsMap()) fail(c, "a contact is a mapping", std::string("e.g. ") + kRobotContactExample);
+    const YAML::Node nm = c["name"];
+    if (!nm || !nm.IsScalar() || !is_identifier(nm.Scalar()))
+      fail(nm ? nm : c, "a contact needs a name (an identifier)", "name: tip");
+    const std::string name = nm.Scalar(), what = "contact '" + name + "'";
+    for (const auto& kv : c) {
+      const std::string key = kv.first.Scalar();
+      if (std::find(kRobotContactKeys.begin(), kRobotContactKeys.end(), key) ==
+          kRobotContactKeys.end())
+        fail(kv.first, "unknown key '" + key + "' in " + what,
+             "the keys are " + join(kRobotContactKeys));
+    }
+    if (constraints.count(name) || !names.insert(name).second)
+      fail(nm, what + ": the name is taken by another constraint, loop or contact",
+           "each contact names its own unilateral constraint");
+    // a list of 3 numbers
+    const auto vector3 = [&](const YAML::Node& v, const std::string& key, const char* hint) {
+      if (!v.IsSequence() || v.size() != 3)
+        fail(v, what + ": " + key + " must be a list of 3 numbers", hint);
+      tree::Vector3d x;
+      for (std::size_t i = 0; i < 3; ++i) x[Index(i)] = number(v[i], key);
+      return x;
+    };
+    // the point or sphere on its link
+    if (c["body"])
+      fail(c["body"], what + ": a robot's contact names its link, not a body", "link: fore");
+    if (!c["link"]) fail(c, what + " needs link: the link its point is fixed on", "link: fore");
+    tree::LinkPoint at{link_of(c["link"], what), tree::Vector3d::Zero()};
+    if (at.link < 0)
+      fail(c["link"], what + ": the contact's point must be on a link, not the world",
+           "link: fore (the plane may be on the world: plane: {body: ground})");
+    if (const YAML::Node p = c["point"])
+      at.p = vector3(p, "point", "[x, y, z] in the link's frame");
+    const std::string shape = c["shape"] ? c["shape"].Scalar() : "point";
+    if (shape == "disk")
+      fail(c["shape"], what + ": disk contacts on robot links are not supported yet; use a sphere",
+           "shape: sphere, radius: 0.05 (or a point)");
+    if (shape != "point" && shape != "sphere")
+      fail(c["shape"], what + ": shape must be point or sphere, got '" + shape + "'",
+           "shape: sphere, radius: 0.05");
+    if (const YAML::Node a = c["axis"])
+      fail(a, what + ": axis is for disks only", "a sphere or a point has no axis");
+    double radius = 0.0;
+    if (shape == "point" && c["radius"])
+      fail(c["radius"], what + ": a point has no radius", "shape: sphere, radius: 0.05");
+    if (shape == "sphere") {
+      if (!c["radius"]) fail(c, what + ": a sphere needs radius:", "radius: 0.05");
+      radius = number(c["radius"], "radius");
+      if (!(radius > 0.0) || !std::isfinite(radius))
+        fail(c["radius"], what + ": radius must be > 0, got " + format_number(radius, 3),
+             "radius: 0.05");
+    }
+    // the plane: the world's z = 0 by default
+    tree::LinkFrame plane;
+    tree::Vector3d normal = tree::Vector3d::UnitZ();
+    if (const YAML::Node pl = c["plane"]) {
+      if (!pl.IsMap())
+        fail(pl, what + ": plane must be a mapping",
+             "plane: {body: ground, point: [0, 0, 0], normal: [0, 0, 1]}");
+      for (const auto& kv : pl) {
+        const std::string key = kv.first.Scalar();
+        if (std::find(kRobotPlaneKeys.begin(), kRobotPlaneKeys.end(), key) == kRobotPlaneKeys.end())
+          fail(kv.first, "unknown key '" + key + "' in the plane of " + what,
+               "the keys are " + join(kRobotPlaneKeys));
+      }
+      if (pl["link"] && pl["body"])
+        fail(pl["body"], what + ": the plane names link: or body:, not both", "link: base");
+      if (const YAML::Node b = pl["body"]) {
+        if (b.Scalar() != "ground" && b.Scalar() != "world")
+          fail(b,
+               what + ": a robot's plane is on the ground or on a link, got body '" + b.Scalar() +
+                   "'",
+               "body: ground, or link: <a link of the URDF>");
+      }
+      if (const YAML::Node l = pl["link"]) plane.link = link_of(l, what + "'s plane");
+      if (const YAML::Node p = pl["point"])
+        plane.p = vector3(p, "point", "[x, y, z] of the plane, in its link's frame");
+      if (const YAML::Node n = pl["normal"]) {
+        normal = vector3(n, "normal", "[0, 0, 1]: the side the contact stays on");
+        if (!(normal.norm() > 1e-12))
+          fail(n, what + ": the plane's normal is zero",
+               "normal: [0, 0, 1], the side the contact stays on");
+      }
+    }
+    if (plane.link >= 0 && plane.link == at.link)
+      fail(c["plane"], what + ": the plane is on the contact's own link (the gap never changes)",
+           "put the plane on another link or the world");
+    // the plane's frame: z along the normal
+    const tree::Vector3d z = normal.normalized();
+    const tree::Vector3d seed =
+        std::abs(z.x()) < 0.9 ? tree::Vector3d::UnitX() : tree::Vector3d::UnitY();
+    const tree::Vector3d x = (seed - z * z.dot(seed)).normalized();
+    plane.R << x, z.cross(x), z;
+    // Newton's e and the law
+    double e = 0.0;
+    if (const YAML::Node r = c["restitution"]) {
+      e = number(r, "restitution");
+      if (!(e >= 0.0 && e <= 1.0))
+        fail(r, "the restitution of " + what + " must lie in [0, 1], got " + format_number(e, 3),
+             "restitution: 0.5");
+    }
+    RestitutionLaw law = RestitutionLaw::kNewton;
+    if (const YAML::Node l = c["restitution_law"]) {
+      if (l.Scalar() == "poisson") {
+        law = RestitutionLaw::kPoisson;
+      } else if (l.Scalar() != "newton") {
+        fail(l,
+             "the restitution_law of " + what + " must be newton or poisson, got '" + l.Scalar() +
+                 "'",
+             "restitution_law: poisson   (Poisson's: the restitution impulse is e times the "
+             "compression's)");
+      }
+    }
+    try {
+      Constraint k = tree::contact_constraint(robot, name, at, radius, plane, e);
+      if (law != RestitutionLaw::kNewton) k = with_restitution_law(k, law);
+      builder.add(std::move(k));
+      constraint_names_.push_back(name);
+    } catch (const std::invalid_argument& err) {
+      std::string m = err.what();
+      if (const auto k = m.find(": "); k != std::string::npos) m.erase(0, k + 2);
+      fail(c, m);
+    }
+  }
+}
+
+}  // namespace ukdyn::model_reader
