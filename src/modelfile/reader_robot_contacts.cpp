@@ -188,6 +188,26 @@ void Reader::read_robot_contacts(const YAML::Node& root, const tree::Tree& robot
       fail(c, m);
     }
   }
+  // Coulomb friction at a contact: the generalized models' law slides the constraint's own
+  // coordinates (Cartesian ones), which a robot's joint angles are not: not exact, refused
+  if (const YAML::Node ns = root["nonideal"]; ns && ns.IsSequence()) {
+    for (const auto& f : ns) {
+      if (!f.IsMap() || !f["friction"] || f["friction"].Scalar() != "coulomb" || !f["constraint"] ||
+          !names.count(f["constraint"].Scalar()))
+        continue;
+      const bool contact = std::any_of(cs.begin(), cs.end(), [&](const YAML::Node& c) {
+        return c.IsMap() && c["name"] && c["name"].Scalar() == f["constraint"].Scalar();
+      });
+      if (contact)
+        fail(f["constraint"],
+             "Coulomb friction at contact '" + f["constraint"].Scalar() +
+                 "' of a robot is not supported yet: the coulomb law slides the constraint's "
+                 "coordinates, and a robot's are its joint angles, not the contact point's "
+                 "velocity",
+             "leave the contact frictionless, or write the mechanism with bodies: and joints: "
+             "(docs/multibody.md), whose contacts take Coulomb friction");
+    }
+  }
 }
 
 }  // namespace ukdyn::model_reader

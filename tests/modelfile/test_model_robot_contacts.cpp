@@ -192,6 +192,19 @@ TEST(ModelRobotContacts, ErrorsNameTheContactAndTheKey) {
         << e.message();
     EXPECT_EQ(e.line(), 5);
   }
+  // Coulomb friction at a robot's contact: refused, saying what to do
+  try {
+    robot_model(
+        "robot: {urdf: contact_pendulum.urdf}\ncontacts:\n  - {name: tip, link: rod}\nnonideal:\n"
+        "  - {friction: coulomb, constraint: tip, mu: 0.3}\n");
+    ADD_FAILURE() << "no error";
+  } catch (const ModelError& e) {
+    EXPECT_NE(e.message().find("Coulomb friction at contact 'tip' of a robot is not supported"),
+              std::string::npos)
+        << e.message();
+    EXPECT_NE(e.hint().find("bodies:"), std::string::npos) << e.hint();
+    EXPECT_EQ(e.line(), 5);
+  }
   // an initial state that penetrates: the run names the contact and its gap 0.5 − 0.8 sin 1.2
   const Model m = robot_model(
       "robot: {urdf: contact_pendulum.urdf}\ncontacts:\n  - {name: tip, link: rod, point: "
