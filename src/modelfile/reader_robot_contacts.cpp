@@ -39,6 +39,27 @@ const std::vector<std::string> kRobotPlaneKeys = {"link", "body", "point", "norm
 constexpr const char* kRobotContactExample =
     "{name: tip, link: fore, point: [0.4, 0, 0], shape: sphere, radius: 0.03, restitution: 0.5}";
 
+// "did you mean 'radius'? " for a key within two edits of a known one (Levenshtein), else ""
+std::string robot_contact_key_hint(const std::string& key, const std::vector<std::string>& known) {
+  std::string best;
+  std::size_t best_d = 3;
+  for (const std::string& k : known) {
+    std::vector<std::size_t> row(k.size() + 1);
+    for (std::size_t j = 0; j <= k.size(); ++j) row[j] = j;
+    for (std::size_t i = 1; i <= key.size(); ++i) {
+      std::size_t diag = row[0];
+      row[0] = i;
+      for (std::size_t j = 1; j <= k.size(); ++j) {
+        const std::size_t up = row[j];
+        row[j] = std::min({row[j] + 1, row[j - 1] + 1, diag + (key[i - 1] == k[j - 1] ? 0 : 1)});
+        diag = up;
+      }
+    }
+    if (row[k.size()] < best_d && row[k.size()] < key.size()) best_d = row[k.size()], best = k;
+  }
+  return best.empty() ? std::string() : "did you mean '" + best + "'? ";
+}
+
 }  // namespace
 
 void Reader::read_robot_contacts(const YAML::Node& root, const tree::Tree& robot,
@@ -74,7 +95,8 @@ void Reader::read_robot_contacts(const YAML::Node& root, const tree::Tree& robot
       if (std::find(kRobotContactKeys.begin(), kRobotContactKeys.end(), key) ==
           kRobotContactKeys.end())
         fail(kv.first, "unknown key '" + key + "' in " + what,
-             "the keys are " + join(kRobotContactKeys));
+             robot_contact_key_hint(key, kRobotContactKeys) + "the keys are " +
+                 join(kRobotContactKeys));
     }
     if (constraints.count(name) || !names.insert(name).second)
       fail(nm, what + ": the name is taken by another constraint, loop or contact",
@@ -127,7 +149,8 @@ void Reader::read_robot_contacts(const YAML::Node& root, const tree::Tree& robot
         const std::string key = kv.first.Scalar();
         if (std::find(kRobotPlaneKeys.begin(), kRobotPlaneKeys.end(), key) == kRobotPlaneKeys.end())
           fail(kv.first, "unknown key '" + key + "' in the plane of " + what,
-               "the keys are " + join(kRobotPlaneKeys));
+               robot_contact_key_hint(key, kRobotPlaneKeys) + "the keys are " +
+                   join(kRobotPlaneKeys));
       }
       if (pl["link"] && pl["body"])
         fail(pl["body"], what + ": the plane names link: or body:, not both", "link: base");

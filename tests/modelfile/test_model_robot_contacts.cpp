@@ -166,6 +166,10 @@ TEST(ModelRobotContacts, ErrorsNameTheContactAndTheKey) {
   };
   expect("{name: tip, link: rod, colour: red}", "unknown key 'colour' in contact 'tip'");
   expect("{name: tip, link: shin}", "contact 'tip': no link 'shin'");
+  expect("{name: tip, link: rod, shape: sphere, radus: 0.1}",
+         "unknown key 'radus' in contact 'tip' | did you mean 'radius'?");
+  expect("{name: tip, link: rod, plane: {normals: [0, 0, 1]}}",
+         "unknown key 'normals' in the plane of contact 'tip' | did you mean 'normal'?");
   expect("{name: tip, body: rod}", "names its link, not a body");
   expect("{name: tip, link: rod, shape: sphere}", "contact 'tip': a sphere needs radius");
   expect("{name: tip, link: rod, radius: 0.1}", "contact 'tip': a point has no radius");
