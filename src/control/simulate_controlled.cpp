@@ -175,6 +175,20 @@ bool plant_mass_from_run(const ControlledScratch& w, Index n, Workspace& plant_w
   return true;
 }
 
+// Whether the last assembly of the requirements in c evaluated every violation the samples
+// report (phi, psi of each holonomic or nonholonomic requirement: active and stabilized, so that
+// assemble_constraints called its violation(); an inactive one's would be stale). O(K).
+bool violations_assembled(const Controller& ctrl, const ControlWorkspace& c) {
+  const System& req = ctrl.requirements();
+  for (Index k = 0; k < req.constraint_count(); ++k) {
+    if (req.constraint(k).kind() == ConstraintKind::kAcceleration) continue;
+    if (!c.req.active[std::size_t(k)] || !c.req.stabilization[std::size_t(k)].enabled()) {
+      return false;
+    }
+  }
+  return true;
+}
+
 CallableScratch* plant_scratch(CallableScratch* controlled) {
   auto* w = dynamic_cast<ControlledScratch*>(controlled);
   return w != nullptr ? w->plant : nullptr;
@@ -667,17 +681,21 @@ ControlledTrajectory simulate_controlled(
     p.energy_balance_residual.push_back(balance.add(t, T, V, T + V, works));
 
     const ControlWorkspace& c = *at_sample;
-    // errors: phi (holonomic), psi (nonholonomic), A_r q'' − b_r (acceleration form)
+    // errors: phi (holonomic), psi (nonholonomic), A_r q'' − b_r (acceleration form); phi and
+    // psi are those the run's assembly of the requirements just evaluated at this state (the
+    // same violation() call) when every such requirement was active and stabilized there
     const VectorXd accel_residual = c.req.A * qdd - c.req.b;
-    evaluate_violations(ctrl.requirements(), cws.req, q, qd, t);
+    const bool assembled = &c != &cws && violations_assembled(ctrl, c);
+    if (!assembled) evaluate_violations(ctrl.requirements(), cws.req, q, qd, t);
+    const Workspace& v = assembled ? c.req : cws.req;
     for (Index i = 0; i < m_r; ++i) {
       switch (ctrl.requirement(ctrl.row_requirement(i)).kind()) {
         case ConstraintKind::kHolonomic:
-          out.error.push_back(cws.req.phi[i]);
-          out.error_rate.push_back(cws.req.phi_dot[i]);
+          out.error.push_back(v.phi[i]);
+          out.error_rate.push_back(v.phi_dot[i]);
           break;
         case ConstraintKind::kNonholonomic:
-          out.error.push_back(cws.req.phi_dot[i]);
+          out.error.push_back(v.phi_dot[i]);
           out.error_rate.push_back(0.0);
           break;
         case ConstraintKind::kAcceleration:
