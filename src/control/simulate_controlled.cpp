@@ -161,6 +161,34 @@ struct ControlledScratch final : CallableScratch {
   std::string pull_failure;  // (ContactModes::settle) a requirement that needs a contact to pull
 };
 
+// The plant's M at the state where the run last evaluated the control (w.q_last, w.qd_last),
+// copied into plant_ws.M from the run's diag(M, I): true when that evaluation stands (the run's
+// workspace regular, dense like plant_ws, its Q finite: the plant's Q then is too), false when
+// the plant must be evaluated on its own. O(n²).
+bool plant_mass_from_run(const ControlledScratch& w, Index n, Workspace& plant_ws) {
+  const Workspace* run = w.run_ws;
+  if (run == nullptr || run->is_sparse() || plant_ws.is_sparse() || run->mass_singular ||
+      !run->mass_factorized || !run->Q.head(n).allFinite()) {
+    return false;
+  }
+  plant_ws.M = run->M.topLeftCorner(n, n);
+  return true;
+}
+
+// Whether the last assembly of the requirements in c evaluated every violation the samples
+// report (phi, psi of each holonomic or nonholonomic requirement: active and stabilized, so that
+// assemble_constraints called its violation(); an inactive one's would be stale). O(K).
+bool violations_assembled(const Controller& ctrl, const ControlWorkspace& c) {
+  const System& req = ctrl.requirements();
+  for (Index k = 0; k < req.constraint_count(); ++k) {
+    if (req.constraint(k).kind() == ConstraintKind::kAcceleration) continue;
+    if (!c.req.active[std::size_t(k)] || !c.req.stabilization[std::size_t(k)].enabled()) {
+      return false;
+    }
+  }
+  return true;
+}
+
 CallableScratch* plant_scratch(CallableScratch* controlled) {
   auto* w = dynamic_cast<ControlledScratch*>(controlled);
   return w != nullptr ? w->plant : nullptr;
@@ -342,9 +370,16 @@ System build_controlled(const std::shared_ptr<const ControlledPlant>& st,
     b.mass_matrix([st, n, aux, scratch](const Eigen::Ref<const VectorXd>& x, double t,
                                         CallableScratch* s, Eigen::Ref<MatrixXd> M) {
       st->plant.mass_matrix(x.head(n), t, scratch(s).plant, M.topLeftCorner(n, n));
-      M.topRightCorner(n, aux).setZero();
-      M.bottomLeftCorner(aux, n).setZero();
-      M.bottomRightCorner(aux, aux).setIdentity();
+      // the zero blocks and I by columns (plain loops: Eigen's setZero and setIdentity of
+      // runtime-sized blocks of a strided M cost ~700 instructions per evaluation for 51 entries)
+      const Index ld = M.outerStride();
+      double* p = M.data();
+      for (Index j = 0; j < n; ++j) std::fill_n(p + j * ld + n, aux, 0.0);
+      for (Index j = n; j < n + aux; ++j) {
+        double* col = p + j * ld;
+        std::fill_n(col, n + aux, 0.0);
+        col[j] = 1.0;
+      }
     });
   }
   // Q = Q_plant + Qc_control (+ the auxiliary integrands)
@@ -598,31 +633,10 @@ ControlledTrajectory simulate_controlled(
       to->insert(to->end(), from->begin(), from->end());
     }
     const double* z_dot = s.qd.data() + n;
-    // T = q'ᵀ M q' / 2 of the plant, evaluated on its own: the augmented run's T holds
-    // z'ᵀ z' / 2 besides, and z' (the control's work and effort, ∫ |Qc|² dt) grows with the
-    // square of the model's forces — subtracting it lost the plant's T entirely for a
-    // Duffing oscillator of 1e6 kg (T of −2³⁰ J, an energy balance off by all the energy
-    // exchanged; issue #29 item 2, the metamorphic suite)
     q = Eigen::Map<const VectorXd>(s.q.data(), n);
     qd = Eigen::Map<const VectorXd>(s.qd.data(), n);
-    double T = s.kinetic_energy[0] - 0.5 * Eigen::Map<const VectorXd>(z_dot, aux).squaredNorm();
-    if (evaluate_unconstrained(plant, plant_ws, q, qd, t) == Status::kOk &&
-        !plant_ws.mass_singular) {
-      T = detail::kinetic_energy(plant_ws, qd);
-    }
-    const double V = s.potential_energy[0];
-    p.kinetic_energy.push_back(T);
-    p.energy.push_back(T + V);
-    p.work_control.push_back(z_dot[kWork]);
-    // the impacts' work Σ (T⁺ − T⁻), kept when the plant has contacts (their jumps leave z')
-    const double impact = s.work_impact.empty() ? 0.0 : s.work_impact[0];
-    if (!s.work_impact.empty()) p.work_impact.push_back(impact);
-    const double works[6] = {s.work_nonideal[0], s.work_ideal[0], s.work_drive[0],
-                             s.work_external[0], z_dot[kWork],    impact};
-    p.energy_balance_residual.push_back(balance.add(t, T, V, T + V, works));
-
-    // the control at the sample (evaluated afresh at the sample's state)
     qdd = Eigen::Map<const VectorXd>(s.qdd.data(), n);
+    // the control at the sample (evaluated afresh at the sample's state)
     // (with the run's contact modes, as in the run's evaluations). The run evaluated the
     // control at the sample's state just before (the sample's q''): without contacts, whose
     // modes the sample settles on its own, its results are this evaluation's, bit for bit
@@ -639,18 +653,49 @@ ControlledTrajectory simulate_controlled(
       sample_contacts.settle(ctrl, cws, q, qd, t, cs, pull);
       at_sample = &cws;
     }
+    // T = q'ᵀ M q' / 2 of the plant, evaluated on its own: the augmented run's T holds
+    // z'ᵀ z' / 2 besides, and z' (the control's work and effort, ∫ |Qc|² dt) grows with the
+    // square of the model's forces — subtracting it lost the plant's T entirely for a
+    // Duffing oscillator of 1e6 kg (T of −2³⁰ J, an energy balance off by all the energy
+    // exchanged; issue #29 item 2, the metamorphic suite)
+    // — with the plant's M from the run where the run evaluated diag(M, I) at this state just
+    // before (the sample's q'', whose control the sample reuses): its leading block is the
+    // plant's M, bit for bit (the same callable at the same state), and the plant's own
+    // evaluation would repeat M, Q and their factor (~20 k instructions per sample, 7 DOF)
+    double T = s.kinetic_energy[0] - 0.5 * Eigen::Map<const VectorXd>(z_dot, aux).squaredNorm();
+    if (at_sample != &cws && plant_mass_from_run(*run_scratch, n, plant_ws)) {
+      T = detail::kinetic_energy(plant_ws, qd);
+    } else if (evaluate_unconstrained(plant, plant_ws, q, qd, t) == Status::kOk &&
+               !plant_ws.mass_singular) {
+      T = detail::kinetic_energy(plant_ws, qd);
+    }
+    const double V = s.potential_energy[0];
+    p.kinetic_energy.push_back(T);
+    p.energy.push_back(T + V);
+    p.work_control.push_back(z_dot[kWork]);
+    // the impacts' work Σ (T⁺ − T⁻), kept when the plant has contacts (their jumps leave z')
+    const double impact = s.work_impact.empty() ? 0.0 : s.work_impact[0];
+    if (!s.work_impact.empty()) p.work_impact.push_back(impact);
+    const double works[6] = {s.work_nonideal[0], s.work_ideal[0], s.work_drive[0],
+                             s.work_external[0], z_dot[kWork],    impact};
+    p.energy_balance_residual.push_back(balance.add(t, T, V, T + V, works));
+
     const ControlWorkspace& c = *at_sample;
-    // errors: phi (holonomic), psi (nonholonomic), A_r q'' − b_r (acceleration form)
+    // errors: phi (holonomic), psi (nonholonomic), A_r q'' − b_r (acceleration form); phi and
+    // psi are those the run's assembly of the requirements just evaluated at this state (the
+    // same violation() call) when every such requirement was active and stabilized there
     const VectorXd accel_residual = c.req.A * qdd - c.req.b;
-    evaluate_violations(ctrl.requirements(), cws.req, q, qd, t);
+    const bool assembled = &c != &cws && violations_assembled(ctrl, c);
+    if (!assembled) evaluate_violations(ctrl.requirements(), cws.req, q, qd, t);
+    const Workspace& v = assembled ? c.req : cws.req;
     for (Index i = 0; i < m_r; ++i) {
       switch (ctrl.requirement(ctrl.row_requirement(i)).kind()) {
         case ConstraintKind::kHolonomic:
-          out.error.push_back(cws.req.phi[i]);
-          out.error_rate.push_back(cws.req.phi_dot[i]);
+          out.error.push_back(v.phi[i]);
+          out.error_rate.push_back(v.phi_dot[i]);
           break;
         case ConstraintKind::kNonholonomic:
-          out.error.push_back(cws.req.phi_dot[i]);
+          out.error.push_back(v.phi_dot[i]);
           out.error_rate.push_back(0.0);
           break;
         case ConstraintKind::kAcceleration:

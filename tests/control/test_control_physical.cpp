@@ -352,5 +352,56 @@ TEST(ControlGyroscopes, SlaveSynchronizesWithPrescribedErrorDynamics) {
   record("max_error_deviation", worst);
 }
 
+// The plant's kinetic energy at each sample of a controlled run is ½ q'ᵀ M(q) q' of the plant
+// alone (not the augmented run's, which holds ½ z'ᵀz' of the control's integrals besides), also
+// where the sample takes M from the run's own evaluation of diag(M, I) at that state: a planar
+// two-link arm, M(q) in closed form (M_11 = a + 2 b cos q2, M_12 = d + b cos q2, M_22 = d).
+TEST(ControlPhysical, SampleKineticEnergyIsThePlantsAtEverySample) {
+  const double a = 2.5, b = 0.6, d = 0.4;
+  const auto mass = [a, b, d](double q2, Eigen::Ref<MatrixXd> M) {
+    const double c = std::cos(q2);
+    M(0, 0) = a + 2.0 * b * c;
+    M(0, 1) = M(1, 0) = d + b * c;
+    M(1, 1) = d;
+  };
+  SystemBuilder builder({"q1", "q2"});
+  builder.mass_matrix([mass](const Eigen::Ref<const VectorXd>& q, double, Eigen::Ref<MatrixXd> M) {
+    mass(q[1], M);
+  });
+  // the Coriolis and centrifugal terms of that M (no gravity): Q = b sin q2 (2 q1' q2' + q2'²,
+  // −q1'²)
+  builder.forces([b](const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd,
+                     double, Eigen::Ref<VectorXd> Q) {
+    const double s = b * std::sin(q[1]);
+    Q[0] = s * (2.0 * qd[0] * qd[1] + qd[1] * qd[1]);
+    Q[1] = -s * qd[0] * qd[0];
+  });
+  const System arm = builder.build();
+  const Controller ctrl = ControllerBuilder(arm)
+                              .require(holonomic("shoulder", 1,
+                                                 [](const auto& q, const auto& t, auto& e) {
+                                                   using std::sin;
+                                                   e[0] = q[0] - 0.4 * sin(2.0 * t);
+                                                 }),
+                                       ErrorDynamics::second_order(8.0))
+                              .build();
+  const ControlledTrajectory run =
+      simulate_controlled(ctrl, arm, vec({0.3, 0.8}), vec({0.0, 1.5}), tight(2.0));
+  ASSERT_EQ(run.plant.stats.status, Status::kOk) << run.plant.stats.message;
+  ASSERT_GT(run.samples(), 30);
+  MatrixXd M(2, 2);
+  double worst = 0.0;
+  for (Index j = 0; j < run.samples(); ++j) {
+    const VectorXd q = Eigen::Map<const VectorXd>(run.plant.q.data() + 2 * j, 2);
+    const VectorXd qd = Eigen::Map<const VectorXd>(run.plant.qd.data() + 2 * j, 2);
+    mass(q[1], M);
+    const double T = 0.5 * qd.dot(M * qd);
+    const double got = run.plant.kinetic_energy[std::size_t(j)];
+    EXPECT_NEAR(got, T, 1e-14 * T) << run.plant.t[std::size_t(j)];
+    worst = std::max(worst, std::abs(got - T) / T);
+  }
+  record("max_rel_diff_kinetic_energy", worst);
+}
+
 }  // namespace UKDYN_TEST_FILE
 }  // namespace ukdyn

@@ -6,6 +6,7 @@
 // (issue #30 item 4) whose control torques equal inverse dynamics (RNEA) of the motion achieved;
 // effort-limit excess reported.
 #include <cmath>
+#include <memory>
 #include <random>
 #include <string>
 #include <vector>
@@ -333,6 +334,7 @@ struct TrackingRun {
   ControlledTrajectory run;
   ToolPath path;
   Index tool = -1;
+  std::shared_ptr<const Controller> ctrl;
 };
 
 TrackingRun track_tool(double t_end) {
@@ -347,20 +349,46 @@ TrackingRun track_tool(double t_end) {
   const System plant = make_system(tree);
   // 6 task rows and 1 posture row (joint 3, the arm's redundancy, held at its start) = 7 DOF
   const double q3 = q0[2];
-  const Controller ctrl =
+  out.ctrl = std::make_shared<const Controller>(
       ControllerBuilder(plant)
           .require(pose_requirement(tree, "tool", {out.tool, Vector3d::Zero()}, out.path),
                    ErrorDynamics::second_order(20.0, 1.0))
           .require(holonomic("posture", 1,
                              [q3](const auto& q, const auto&, auto& e) { e[0] = q[2] - q3; }),
                    ErrorDynamics::second_order(20.0, 1.0))
-          .build();
+          .build());
   SimulationOptions options;
   options.t_end = t_end;
   options.rtol = 1e-11;
   options.atol = 1e-13;
-  out.run = simulate_controlled(ctrl, plant, q0, VectorXd::Zero(7), options);
+  out.run = simulate_controlled(*out.ctrl, plant, q0, VectorXd::Zero(7), options);
   return out;
+}
+
+// The errors a controlled run reports at its samples are the requirements' violations at the
+// sample's state, bit for bit as a workspace of their own evaluates them (the run takes them
+// from its assembly of the requirements there, which called the same violation()).
+TEST(TreeTaskSpace, SampleErrorsAreTheRequirementsViolationsBitForBit) {
+  const TrackingRun r = track_tool(0.2);
+  const ControlledTrajectory& run = r.run;
+  ASSERT_EQ(run.plant.stats.status, Status::kOk) << run.plant.stats.message;
+  const System& req = r.ctrl->requirements();
+  Workspace ws(req);
+  const Index N = run.samples(), n = 7, m = req.constraint_rows();
+  ASSERT_EQ(m, 7);
+  ASSERT_GT(N, 10);
+  double largest = 0.0;
+  for (Index s = 0; s < N; ++s) {
+    const Eigen::Map<const VectorXd> q(run.plant.q.data() + s * n, n),
+        qd(run.plant.qd.data() + s * n, n);
+    evaluate_violations(req, ws, q, qd, run.plant.t[std::size_t(s)]);
+    for (Index i = 0; i < m; ++i) {
+      EXPECT_EQ(run.error[std::size_t(s * m + i)], ws.phi[i]) << s << ' ' << i;
+      EXPECT_EQ(run.error_rate[std::size_t(s * m + i)], ws.phi_dot[i]) << s << ' ' << i;
+      largest = std::max(largest, std::abs(ws.phi_dot[i]));
+    }
+  }
+  EXPECT_GT(largest, 0.0);  // (not all zero: the comparison is not trivially met)
 }
 
 TEST(TreeTaskSpace, RedundantArmFollowsACartesianPoseExactly) {
