@@ -41,7 +41,7 @@ inline const std::vector<std::string> kTopLevelKeys = {
     "name",        "parameters", "coordinates", "kinetic_energy", "potential_energy",
     "mass_matrix", "forces",     "constraints", "nonideal",       "initial",
     "simulate",    "output",     "bodies",      "joints",         "control",
-    "visual",      "units",      "robot",       "tables"};
+    "visual",      "units",      "robot",       "tables",         "contacts"};
 
 // a table's columns as read (tables:, modelfile/reader_tables.cpp): names in the order given,
 // values per column, and per row its CSV line (1-based; 0 for data written in the model file)

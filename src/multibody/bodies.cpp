@@ -62,6 +62,10 @@ const char* to_string(JointType type) {
       return "rolling_disk";
     case JointType::kRollingSphere:
       return "rolling_sphere";
+    case JointType::kContact:
+      return "contact";
+    case JointType::kContactDisk:
+      return "contact_disk";
   }
   return "unknown";
 }
@@ -459,6 +463,12 @@ MultibodyModel Multibody::build() const {
                                   "' joins a planar body to a spatial one");
     }
     info.planar = p_planar || c_planar;
+    if (j.type == JointType::kContact || j.type == JointType::kContactDisk) {
+      sb.add(detail::contact_constraint(j, P, C, info.planar, out.q0));
+      info.constraints.push_back(k++);
+      out.joints.push_back(std::move(info));
+      continue;
+    }
     const bool has_particle = (!P.ground() && P.kind == BodyKind::kParticle) ||
                               (!C.ground() && C.kind == BodyKind::kParticle);
     if (has_particle && j.type != JointType::kSpherical && j.type != JointType::kDistance &&
