@@ -137,6 +137,22 @@ Joint rolling_sphere(std::string n, BodyId sphere, double radius) {
   return j;
 }
 
+Joint contact(std::string n, BodyId plane_body, const Frame& plane, BodyId body,
+              const Vector3d& p_body, double radius, double restitution) {
+  Joint j =
+      make_joint(std::move(n), JointType::kContact, plane_body, plane, body, Frame::at(p_body));
+  j.radius = radius;
+  j.restitution = restitution;
+  return j;
+}
+Joint contact_disk(std::string n, BodyId plane_body, const Frame& plane, BodyId body,
+                   const Frame& disk, double radius, double restitution) {
+  Joint j = make_joint(std::move(n), JointType::kContactDisk, plane_body, plane, body, disk);
+  j.radius = radius;
+  j.restitution = restitution;
+  return j;
+}
+
 Force spring_damper(std::string name, BodyId a, const Vector3d& pa, BodyId b, const Vector3d& pb,
                     double k, double c, double rest_length) {
   Force f;

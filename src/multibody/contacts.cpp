@@ -2,38 +2,13 @@
 // Unilateral contacts of bodies with a plane (docs/contact.md, "Contacts on bodies"): the gap
 // row of a point or sphere (the point_on_plane / point_on_line row with the offset c0 = radius)
 // and of a thin disk (a row of its own, Row::kDisk, in closed form in kinematics.cpp), and the
-// checks build() makes before it adds them as unilateral constraints.
+// checks build() makes before it adds them as unilateral constraints (the factories mb::contact
+// and mb::contact_disk: bodies.cpp, with the other joints').
 #include <cmath>
 #include <stdexcept>
 
 #include "multibody/internal.hpp"
 #include "ukdyn/core/format.hpp"
-
-namespace ukdyn::mb {
-
-Joint contact(std::string name, BodyId plane_body, const Frame& plane, BodyId body,
-              const Vector3d& p_body, double radius, double restitution) {
-  Joint j;
-  j.name = std::move(name);
-  j.type = JointType::kContact;
-  j.parent = plane_body;
-  j.child = body;
-  j.frame_parent = plane;
-  j.frame_child = Frame::at(p_body);
-  j.radius = radius;
-  j.restitution = restitution;
-  return j;
-}
-
-Joint contact_disk(std::string name, BodyId plane_body, const Frame& plane, BodyId body,
-                   const Frame& disk, double radius, double restitution) {
-  Joint j = contact(std::move(name), plane_body, plane, body, disk.p, radius, restitution);
-  j.type = JointType::kContactDisk;
-  j.frame_child = disk;
-  return j;
-}
-
-}  // namespace ukdyn::mb
 
 namespace ukdyn::mb::detail {
 

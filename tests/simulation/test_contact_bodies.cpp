@@ -17,27 +17,16 @@
 #include "ukdyn/multibody/multibody.hpp"
 #include "ukdyn/simulation/simulate.hpp"
 
+#include "support/contact_runs.hpp"
+
 namespace ukdyn {
 namespace UKDYN_TEST_FILE {
 
 using mb::Vector3d;
 constexpr double kG = 9.81;
 
-std::vector<ContactEvent> events_of(const Trajectory& tr, Index k, ContactEvent::Kind kind) {
-  std::vector<ContactEvent> out;
-  for (const auto& e : tr.stats.contact_events) {
-    if (e.constraint == k && e.kind == kind) out.push_back(e);
-  }
-  return out;
-}
-
-std::size_t sample_at(const Trajectory& tr, double t) {
-  for (std::size_t i = 0; i < tr.t.size(); ++i) {
-    if (std::abs(tr.t[i] - t) <= 1e-12 * std::max(1.0, std::abs(t))) return i;
-  }
-  ADD_FAILURE() << "no sample at t = " << t;
-  return 0;
-}
+using testing::events_of;
+using testing::sample_at;
 
 // the energy balance of a run holds, and its impacts' work is the sum of their T⁺ − T⁻
 void expect_energy_balance(const Trajectory& tr, double tol) {
@@ -74,14 +63,9 @@ TEST(ContactBodies, SphereDroppedOnTheGroundBouncesAsTheClosedFormSays) {
   const Index floor = m.system.constraint_index("floor");
   EXPECT_TRUE(m.system.constraint(floor).is_unilateral());
   EXPECT_EQ(m.system.constraint(floor).restitution(), e);
-  const double t0 = std::sqrt(2.0 * H / kG), v0 = kG * t0;
+  const double t0 = std::sqrt(2.0 * H / kG);
   const double t_inf = t0 * (1.0 + e) / (1.0 - e);
-  double tk = t0;
-  std::vector<double> apex_t;
-  for (int k = 0; k < 4; ++k) {
-    apex_t.push_back(tk + std::pow(e, k + 1) * v0 / kG);
-    tk += 2.0 * std::pow(e, k + 1) * v0 / kG;
-  }
+  const std::vector<double> apex_t = testing::bounce_apex_times(e, t0, kG, 4);
   m.options.output_at = apex_t;
   m.options.output_at.push_back(1.9);
   const Trajectory tr = simulate(m.system, m.q0, m.qd0, m.options);
@@ -90,16 +74,7 @@ TEST(ContactBodies, SphereDroppedOnTheGroundBouncesAsTheClosedFormSays) {
   const auto rests = events_of(tr, floor, ContactEvent::Kind::kRest);
   ASSERT_GE(impacts.size(), 10u);
   ASSERT_EQ(rests.size(), 1u);
-  tk = t0;
-  for (std::size_t k = 0; k < 10; ++k) {
-    const double ek = std::pow(e, double(k));
-    EXPECT_NEAR(impacts[k].t, tk, 1e-9) << "impact " << k;
-    EXPECT_NEAR(impacts[k].speed_before, -ek * v0, 1e-8 * v0) << "impact " << k;
-    EXPECT_NEAR(impacts[k].speed_after, e * ek * v0, 1e-8 * v0) << "impact " << k;
-    EXPECT_NEAR(impacts[k].impulse, m_ * (1 + e) * ek * v0, 1e-8);
-    EXPECT_NEAR(impacts[k].energy_change, -0.5 * m_ * (1 - e * e) * ek * ek * v0 * v0, 1e-8);
-    tk += 2.0 * e * ek * v0 / kG;
-  }
+  testing::expect_bounces(impacts, e, t0, kG, m_, 10);
   const std::size_t nq = 7;  // ball.x, y, z, u0..u3
   for (std::size_t k = 0; k < apex_t.size(); ++k) {
     const std::size_t i = sample_at(tr, apex_t[k]);
