@@ -490,5 +490,27 @@ output: {every: 0}
   expect_energy_balance(tr, 1e-8);
 }
 
+// The viewer's contacts: (visual:) name a bodies model's contacts as a generalized model's
+// unilateral constraints: the contact point and normal become the run's visual.contact.* columns.
+TEST(ContactBodies, TheViewerDrawsABodysContact) {
+  const Model m = parse_model(std::string(kSphere) +
+                              "visual: {contacts: {floor: {at: [ball_x, ball_y, ball_z - r], "
+                              "normal: [0, 0, 1]}}}\n");
+  ASSERT_EQ(m.visual.contacts.size(), 1u);
+  EXPECT_EQ(m.visual.contacts[0].name, "floor");
+  EXPECT_EQ(m.visual.contacts[0].dimensions, 3);
+  try {
+    parse_model(std::string(kSphere) +
+                "visual: {contacts: {wall: {at: [0, 0, 0], normal: [1, 0, "
+                "0]}}}\n");
+    ADD_FAILURE() << "no error";
+  } catch (const ModelError& e) {
+    EXPECT_NE(e.message().find("visual contact 'wall': there is no unilateral constraint"),
+              std::string::npos)
+        << e.message();
+    EXPECT_NE(e.hint().find("the unilateral constraints are floor"), std::string::npos) << e.hint();
+  }
+}
+
 }  // namespace UKDYN_TEST_FILE
 }  // namespace ukdyn
