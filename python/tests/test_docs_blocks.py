@@ -40,6 +40,7 @@ FRAGMENTS = {
     ("docs/contact.md", "constraint"): "the constraints: entry alone",
     ("docs/contact.md", "cpp"): "C++ statements without a program around them",
     ("docs/contact.md", "visual"): "the visual: section alone",
+    ("docs/contact.md", "contacts"): "the contacts: section alone",
     ("docs/linearize.md", "python"): "cart.yaml, model and guess stand for the reader's",
     ("docs/linearize.md", "bicycle-sweep"): "bike and straight_run stand for the block before",
     ("docs/model-format.md", "tables"): "the tables: section alone",

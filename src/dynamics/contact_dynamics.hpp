@@ -126,6 +126,7 @@ class ContactDynamics {
   std::vector<Index> set_;  // the contacts of the last prepare()
   Index n_ = 0, rows_b_ = 0;
   MatrixXd M_, A_, A_c_, A_b_, X_, W_, Y_, F_, D_, PD_;  // PD_ = P D (n × directions)
+  MatrixXd M_augmented_;  // M + s NᵀN (n × n) when M is singular (quaternions), by prepare()
   VectorXd b_, b_c_, lambda_, w_, v_after_, mu_, vt_minus_, friction_impulse_;
   VectorXd beta_;  // (directions) the friction impulses of the last impact, both phases
   std::vector<Index> direction_cone_;  // (directions) the cone of each friction direction

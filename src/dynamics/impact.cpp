@@ -88,10 +88,7 @@ bool ContactDynamics::prepare(const System& sys, Workspace& ws, const Eigen::Ref
   set_ = set;
   failure_.clear();
   const Index k = Index(set.size());
-  // M and its Cholesky factor
   sys.mass_matrix(q, t, ws.callables.get(), M_);
-  llt_.compute(M_);
-  if (llt_.info() != Eigen::Success) return false;
   // the rows of the active bilateral constraints (A_b) and of the contacts in the set (A_c)
   rows_b_ = 0;
   for (Index c = 0; c < sys.constraint_count(); ++c) {
@@ -104,6 +101,27 @@ bool ContactDynamics::prepare(const System& sys, Workspace& ws, const Eigen::Ref
     rows_b_ += con.rows();
   }
   A_b_ = A_.topRows(rows_b_);
+  // the Cholesky factor of M, or, when M has singular blocks (a quaternion's: singular along u,
+  // which its unit-norm row of A_b determines), of M + s NᵀN, N the rows of A_b normalized (s:
+  // M's mean diagonal, for the scale). P, the inverse mass with the bilateral rows removed, is the
+  // same with either: it maps f to the x of [M A_bᵀ; A_b 0] [x; mu] = [f; 0], where A_b x = 0 makes
+  // A_bᵀ A_b x vanish.
+  const bool singular = std::any_of(sys.mass_blocks().begin(), sys.mass_blocks().end(),
+                                    [](const MassBlock& b) { return b.singular; });
+  if (!singular) llt_.compute(M_);
+  if (singular || llt_.info() != Eigen::Success) {
+    if (rows_b_ == 0) return false;
+    // (the rows normalized: a row's scale, the rescaled models' 1e±8, must not swamp M)
+    const VectorXd norms = A_b_.rowwise().norm();
+    MatrixXd N = A_b_;
+    for (Index r = 0; r < rows_b_; ++r) {
+      if (norms[r] > 0.0) N.row(r) /= norms[r];
+    }
+    M_augmented_ = M_;
+    M_augmented_.noalias() += M_.diagonal().mean() * (N.transpose() * N);
+    llt_.compute(M_augmented_);
+    if (llt_.info() != Eigen::Success) return false;
+  }
   A_c_.resize(k, n_);
   b_c_.resize(k);
   MatrixXd row(1, n_);

@@ -404,6 +404,15 @@ Model Reader::read(const YAML::Node& root) {
 
 Model Reader::read_plant(const YAML::Node& root) {
   read_parameters(root);
+  if (root["contacts"] && !root["bodies"] && !root["robot"]) {
+    YAML::Node at = root["contacts"];
+    for (const auto& kv : root) {
+      if (kv.first.Scalar() == "contacts") at = kv.first;
+    }
+    fail(at, "'contacts' goes with bodies: or robot:",
+         "in generalized coordinates a contact is a constraint with unilateral: true (its gap as "
+         "holonomic:, docs/contact.md)");
+  }
   Model model = root["robot"]    ? read_robot(root)
                 : root["bodies"] ? read_multibody(root)
                                  : read_generalized(root);

@@ -18,17 +18,11 @@
 #include "ukdyn/core/format.hpp"
 #include "ukdyn/multibody/multibody.hpp"
 
-#include "modelfile/reader.hpp"
+#include "modelfile/reader_multibody.hpp"
 
 namespace ukdyn::model_reader {
 
 namespace {
-
-using mb::BodyId;
-using mb::BodyKind;
-using mb::Frame;
-using mb::kGround;
-using mb::Vector3d;
 
 // the keys of a generalized-coordinate model that a multibody model replaces
 const std::vector<std::string> kGeneralizedKeys = {
@@ -86,72 +80,6 @@ std::string joint_kind_list() {
 }
 
 }  // namespace
-
-// Reads the three sections for one Reader (which owns the expression set and the errors).
-class MultibodyReader {
- public:
-  MultibodyReader(Reader& reader, const YAML::Node& root) : r_(reader), root_(root) {}
-  Model read();
-
- private:
-  struct BodyDecl {
-    std::string name;
-    BodyKind kind;
-    YAML::Node node;
-  };
-  struct JointDecl {
-    std::string name;
-    mb::JointType type;
-    YAML::Node node;
-  };
-
-  // the file's structure
-  void refuse_generalized_keys();
-  void declare_bodies();
-  void declare_joints();
-  void read_bodies();
-  void read_joints();
-  void read_forces();
-
-  // pieces
-  const YAML::Node& check_map(const YAML::Node& node, const std::string& what,
-                              const std::string& example);
-  void check_keys(const YAML::Node& map, const std::set<std::string>& keys,
-                  const std::string& what);
-  YAML::Node require(const YAML::Node& map, const std::string& key, const std::string& what,
-                     const std::string& example);
-  std::string name_of(const YAML::Node& map, const std::string& what, const std::string& fallback);
-  double positive(const YAML::Node& node, const std::string& what);
-  double non_negative(const YAML::Node& node, const std::string& what);
-  Vector3d vec(const YAML::Node& node, const std::string& what, int min_entries, int max_entries);
-  Eigen::Quaterniond orientation(const YAML::Node& node, const std::string& what);
-  BodyId body(const YAML::Node& node, const std::string& what);
-  bool planar(BodyId b) const {
-    return b != kGround && bodies_[std::size_t(b)].kind == BodyKind::kPlanar;
-  }
-  Frame frame(const YAML::Node& j, const std::string& side, bool planar_joint,
-              const std::string& what);
-  Vector3d point(const YAML::Node& j, const std::string& key, bool planar_joint,
-                 const std::string& what);
-  mb::MotionFn drive(const YAML::Node& node, const std::string& what);
-  mb::WrenchFn wrench(const YAML::Node& f, bool planar_body, const std::string& what);
-  void add_switches();
-  mb::JointFriction friction(const YAML::Node& node, const std::string& what);
-
-  Reader& r_;
-  YAML::Node root_;
-  std::vector<BodyDecl> bodies_;
-  std::vector<JointDecl> joints_;
-  // the spring-dampers' entries and points, checked at the initial pose after the build
-  struct SpringDecl {
-    YAML::Node node;
-    std::string what;
-    BodyId a, b;
-    Vector3d pa, pb;
-  };
-  std::vector<SpringDecl> springs_;
-  mb::Multibody builder_;
-};
 
 const YAML::Node& MultibodyReader::check_map(const YAML::Node& node, const std::string& what,
                                              const std::string& example) {
@@ -380,6 +308,13 @@ void MultibodyReader::refuse_generalized_keys() {
     const std::string key = kv.first.Scalar();
     if (std::find(kGeneralizedKeys.begin(), kGeneralizedKeys.end(), key) !=
         kGeneralizedKeys.end()) {
+      if (key == "nonideal" && root_["contacts"])
+        r_.fail(kv.first,
+                "'nonideal' does not go with 'bodies:': Coulomb friction at a contact "
+                "of a bodies model is not supported yet",
+                "friction at a body's contact acts at the contact point, which the body's "
+                "rotation moves: write the model in generalized coordinates (constraints: with "
+                "unilateral: true, nonideal: with friction: coulomb; docs/contact.md)");
       r_.fail(kv.first, "'" + key + "' does not go with 'bodies:'",
               "a multibody model's coordinates, mass matrix and constraints come from its "
               "bodies and joints; write the model either with bodies: or with coordinates:");
@@ -808,6 +743,7 @@ Model MultibodyReader::read() {
   declare_joints();
   read_joints();
   read_forces();
+  read_contacts();
   add_switches();
   const auto build = [&]() -> mb::MultibodyModel {
     try {
@@ -820,6 +756,9 @@ Model MultibodyReader::read() {
       YAML::Node at = root_["joints"] ? root_["joints"] : root_["bodies"];
       for (const auto& d : joints_) {
         if (message.find("'" + d.name + "'") != std::string::npos) at = d.node;
+      }
+      for (const auto& d : contacts_) {
+        if (message.find("contact '" + d.name + "'") != std::string::npos) at = d.node;
       }
       r_.fail(at, message);
     }

@@ -258,8 +258,11 @@ void Reader::read_visual(const YAML::Node& root, Model& model, std::vector<Expr>
     const std::string contact_example = "{floor: {at: [x, y - r], normal: [0, 1]}}";
     if (!cs.IsMap())
       fail(cs, "visual: contacts must map constraint names to contacts", contact_example);
+    // (the system's: a bodies model's contacts: are unilateral constraints too)
     std::vector<std::string> unilateral;
-    for (const auto& [name, holonomic] : unilateral_gaps(root)) unilateral.push_back(name);
+    for (const Constraint& c : model.system.constraints()) {
+      if (c.is_unilateral()) unilateral.push_back(c.name());
+    }
     std::set<std::string> seen;
     for (const auto& kv : cs) {
       VisualContact c;
@@ -267,7 +270,8 @@ void Reader::read_visual(const YAML::Node& root, Model& model, std::vector<Expr>
       const std::string what = "visual contact '" + c.name + "'";
       if (std::find(unilateral.begin(), unilateral.end(), c.name) == unilateral.end())
         fail(kv.first, what + ": there is no unilateral constraint of that name",
-             unilateral.empty() ? "declare it under constraints: with unilateral: true"
+             unilateral.empty() ? "declare it under constraints: with unilateral: true (bodies "
+                                  "models: under contacts:)"
                                 : "the unilateral constraints are " + join(unilateral));
       if (!seen.insert(c.name).second) fail(kv.first, what + " is given twice");
       const YAML::Node m = kv.second;

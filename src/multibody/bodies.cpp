@@ -62,6 +62,10 @@ const char* to_string(JointType type) {
       return "rolling_disk";
     case JointType::kRollingSphere:
       return "rolling_sphere";
+    case JointType::kContact:
+      return "contact";
+    case JointType::kContactDisk:
+      return "contact_disk";
   }
   return "unknown";
 }
@@ -130,6 +134,22 @@ Joint rolling_disk(std::string n, BodyId disk, double radius, const Frame& axis_
 Joint rolling_sphere(std::string n, BodyId sphere, double radius) {
   Joint j = make_joint(std::move(n), JointType::kRollingSphere, kGround, {}, sphere, {});
   j.radius = radius;
+  return j;
+}
+
+Joint contact(std::string n, BodyId plane_body, const Frame& plane, BodyId body,
+              const Vector3d& p_body, double radius, double restitution) {
+  Joint j =
+      make_joint(std::move(n), JointType::kContact, plane_body, plane, body, Frame::at(p_body));
+  j.radius = radius;
+  j.restitution = restitution;
+  return j;
+}
+Joint contact_disk(std::string n, BodyId plane_body, const Frame& plane, BodyId body,
+                   const Frame& disk, double radius, double restitution) {
+  Joint j = make_joint(std::move(n), JointType::kContactDisk, plane_body, plane, body, disk);
+  j.radius = radius;
+  j.restitution = restitution;
   return j;
 }
 
@@ -459,6 +479,12 @@ MultibodyModel Multibody::build() const {
                                   "' joins a planar body to a spatial one");
     }
     info.planar = p_planar || c_planar;
+    if (j.type == JointType::kContact || j.type == JointType::kContactDisk) {
+      sb.add(detail::contact_constraint(j, P, C, info.planar, out.q0));
+      info.constraints.push_back(k++);
+      out.joints.push_back(std::move(info));
+      continue;
+    }
     const bool has_particle = (!P.ground() && P.kind == BodyKind::kParticle) ||
                               (!C.ground() && C.kind == BodyKind::kParticle);
     if (has_particle && j.type != JointType::kSpherical && j.type != JointType::kDistance &&

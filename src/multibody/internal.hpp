@@ -197,9 +197,12 @@ struct Offset {
 ///  kDot       phi = a · b − c(t)
 ///  kDistance  phi = (a · a − L²) / (2 L), a a point difference
 ///  kLinear    phi = Σ coef_i q[column_i] − c(t)   (global coordinates, local columns)
+///  kDisk      phi = a · b − L sqrt(1 − (b · axis)²): a thin disk's gap (a = centre − plane
+///             point, b = the plane's normal, axis = the disk's axis, L = its radius)
 struct Row {
-  enum Kind { kDot, kDistance, kLinear } kind = kDot;
+  enum Kind { kDot, kDistance, kLinear, kDisk } kind = kDot;
   VecExpr a, b;
+  VecExpr axis;  // kDisk: the disk's axis (a body vector)
   double length = 0.0;
   std::vector<std::pair<Index, double>> terms;  // kLinear: (global coordinate, coefficient)
   std::vector<Index> local;                     // kLinear: local column of each term
@@ -256,6 +259,10 @@ class JointModel final : public ConstraintModel {
                                            const Eigen::Ref<const VectorXd>& qd, double t,
                                            PoseCache* cache, Eigen::Ref<VectorXd> position,
                                            Eigen::Ref<VectorXd> velocity) const;
+  // a kDisk row's A row i and b[i] (kd, kn: scratch for the centre difference and the normal)
+  void disk_form(const Row& row, Index i, const Eigen::Ref<const VectorXd>& q,
+                 const Eigen::Ref<const VectorXd>& qd, PoseCache* cache, VecKin& kd, VecKin& kn,
+                 Eigen::Ref<MatrixXd> A, Eigen::Ref<VectorXd> b) const;
   // the kinematics of e into k (x and v only when !second_order: the violations)
   void eval(const VecExpr& e, const Eigen::Ref<const VectorXd>& q,
             const Eigen::Ref<const VectorXd>& qd, PoseCache* cache, VecKin& k,
@@ -436,6 +443,15 @@ void joint_phi_generic(const JointModel& jm, const V& q, const S& t, double t0, 
         for (const auto& [i, coef] : row.terms) out += coef * q[i];
         break;
       }
+      case Row::kDisk: {
+        using std::sqrt;
+        const Vec3<S> a = vec_expr_generic<S>(jm.slots(), row.a, q);
+        const Vec3<S> n = vec_expr_generic<S>(jm.slots(), row.b, q);
+        const Vec3<S> ax = vec_expr_generic<S>(jm.slots(), row.axis, q);
+        const S s = n.dot(ax);
+        out = a.dot(n) - row.length * sqrt(1.0 - s * s);
+        break;
+      }
     }
     phi[Index(r)] = out;
   }
@@ -471,6 +487,14 @@ std::vector<Row> spatial_joint_rows(const Joint& j, const BodyRef& P, const Body
 Row spatial_drive_row(const Joint& j, const BodyRef& P, const BodyRef& C);
 /// "<name>.drive" of a spatial revolute joint: its angle = f(t) (holonomic, AD on the bodies).
 Constraint spatial_revolute_drive(const Joint& j, const BodyRef& P, const BodyRef& C);
+/// "<name>" of a contact (kContact, kContactDisk): its gap row (parent slot 0 = the plane's
+/// body, child slot 1 = the contact's body), planar or spatial.
+Row contact_row(const Joint& j, bool planar);
+/// The unilateral constraint "<name>" of a contact, after the checks of its parameters (radius,
+/// restitution, body kinds, no drive or friction, a disk not flat at q0).
+/// @throws std::invalid_argument naming the contact.
+Constraint contact_constraint(const Joint& j, const BodyRef& P, const BodyRef& C, bool planar,
+                              const VectorXd& q0);
 /// A gear between two spatial revolute joints at velocity level (nonholonomic, AD).
 Constraint spatial_gear(const Joint& gear, const Joint& a, const BodyRef& Pa, const BodyRef& Ca,
                         const Joint& b, const BodyRef& Pb, const BodyRef& Cb);

@@ -334,8 +334,35 @@ void JointModel::general_form(const Eigen::Ref<const VectorXd>& q,
         b[i] = row.c.motion ? row.c.at(t)[2] : 0.0;
         break;
       }
+      case Row::kDisk:
+        disk_form(row, i, q, qd, cache, ka, kb, A, b);
+        break;
     }
   }
+}
+
+void JointModel::disk_form(const Row& row, Index i, const Eigen::Ref<const VectorXd>& q,
+                           const Eigen::Ref<const VectorXd>& qd, PoseCache* cache, VecKin& kd,
+                           VecKin& kn, Eigen::Ref<MatrixXd> A, Eigen::Ref<VectorXd> b) const {
+  // phi = n·d − r h, h = sqrt(1 − s²), s = n·a:
+  //   phi'' = [n·d]'' + (r s / h) s'' + r s'² / h³
+  // with [n·d]'' = A_nd q'' − b_nd and s'' = A_s q'' − b_s (the dot rows), so
+  //   A = A_nd + (r s / h) A_s,  b = b_nd + (r s / h) b_s − r s'² / h³
+  // (h = 0, a disk lying flat: infinite entries, which stop the run; docs/contact.md)
+  const Index k = local_count();
+  VecKin ku{VecKin::Unset{}};
+  eval(row.a, q, qd, cache, kd);
+  eval(row.b, q, qd, cache, kn);
+  eval(row.axis, q, qd, cache, ku);
+  const double s = kn.x.dot(ku.x);
+  const double sd = kn.v.dot(ku.x) + kn.x.dot(ku.v);
+  const double h = std::sqrt(std::max(1.0 - s * s, 0.0));
+  const double r = row.length;
+  const double f = r * s / h;
+  A.row(i) = kn.x.transpose() * kd.J.leftCols(k) + kd.x.transpose() * kn.J.leftCols(k) +
+             f * (ku.x.transpose() * kn.J.leftCols(k) + kn.x.transpose() * ku.J.leftCols(k));
+  b[i] = -(kd.g.dot(kn.x) + 2.0 * kd.v.dot(kn.v) + kd.x.dot(kn.g)) -
+         f * (kn.g.dot(ku.x) + 2.0 * kn.v.dot(ku.v) + kn.x.dot(ku.g)) - r * sd * sd / (h * h * h);
 }
 
 void JointModel::violation(const Eigen::Ref<const VectorXd>& q,
@@ -400,6 +427,19 @@ void JointModel::general_violation(const Eigen::Ref<const VectorXd>& q,
           velocity[i] += coef * qd[z];
         }
         break;
+      case Row::kDisk: {
+        // phi = n·d − r h,  phi' = [n·d]' + r s s' / h
+        VecKin ku{VecKin::Unset{}};
+        eval(row.a, q, qd, cache, ka, false);
+        eval(row.b, q, qd, cache, kb, false);
+        eval(row.axis, q, qd, cache, ku, false);
+        const double s = kb.x.dot(ku.x);
+        const double h = std::sqrt(std::max(1.0 - s * s, 0.0));
+        position[i] = ka.x.dot(kb.x) - row.length * h;
+        velocity[i] = ka.v.dot(kb.x) + ka.x.dot(kb.v) +
+                      row.length * s * (kb.v.dot(ku.x) + kb.x.dot(ku.v)) / h;
+        break;
+      }
     }
   }
 }

@@ -102,9 +102,18 @@ double ContactEvents::find(double t0, const double* x0, double t1, const double*
     double te = kNaN;
     if (!closed_[i]) {
       // an impact: the gap falls below 0 (below −kTouchGap when the step starts at a gap
-      // within roundoff below 0, after a release)
+      // within roundoff below 0, after a release; below where it started when that gap opens,
+      // g' > 0, after an impact: else each flight of an accumulation of impacts would fall up
+      // to kTouchGap further than it rose, and never come to rest — a sphere's gap z − r has
+      // the roundoff of z)
       const double g0 = value(Index(i), true, t0, x0);
-      const double level = g0 >= 0.0 ? 0.0 : -kTouchGap * gap_scale(sys_, ws_, dyn_.contacts()[i]);
+      double level = 0.0;
+      if (g0 < 0.0) {
+        double g = 0.0, gd = 0.0;
+        dyn_.gap(sys_, ws_, dyn_.contacts()[i], q_, qd_, t0, g, gd);
+        const double touch = kTouchGap * gap_scale(sys_, ws_, dyn_.contacts()[i]);
+        level = gd > 0.0 ? std::max(g0, -touch) : -touch;
+      }
       if (!(value(Index(i), true, t1, x1) < level)) continue;
       te = g0 < level ? t0 : locate(t0, t1, dense, Index(i), true, level);
     } else {

@@ -16,28 +16,15 @@
 #include "ukdyn/modelfile/model.hpp"
 #include "ukdyn/simulation/simulate.hpp"
 
+#include "support/contact_runs.hpp"
+
 namespace ukdyn {
 namespace UKDYN_TEST_FILE {
 
 constexpr double kG = 9.81;
 
-// the events of kind `kind` at constraint k
-std::vector<ContactEvent> events_of(const Trajectory& tr, Index k, ContactEvent::Kind kind) {
-  std::vector<ContactEvent> out;
-  for (const auto& e : tr.stats.contact_events) {
-    if (e.constraint == k && e.kind == kind) out.push_back(e);
-  }
-  return out;
-}
-
-// the sample of tr at time t (failing when there is none)
-std::size_t sample_at(const Trajectory& tr, double t) {
-  for (std::size_t i = 0; i < tr.t.size(); ++i) {
-    if (std::abs(tr.t[i] - t) <= 1e-12 * std::max(1.0, std::abs(t))) return i;
-  }
-  ADD_FAILURE() << "no sample at t = " << t;
-  return 0;
-}
+using testing::events_of;
+using testing::sample_at;
 
 // ---- the LCP solver (Siconos lcp_lexicolemke) -------------------------------------------------
 
@@ -123,15 +110,10 @@ output: {every: 0}
 TEST(Contact, BouncingBallImpactTimesApexHeightsAndRestTime) {
   const double e = 0.5, h0 = 1.0;
   Model m = parse_model(kBall);
-  const double t0 = std::sqrt(2.0 * h0 / kG), v0 = kG * t0;
+  const double t0 = std::sqrt(2.0 * h0 / kG);
   const double t_inf = t0 * (1.0 + e) / (1.0 - e);
   // samples at the first apexes: t_k + e^(k+1) v0 / g
-  double tk = t0;
-  std::vector<double> apex_t;
-  for (int k = 0; k < 4; ++k) {
-    apex_t.push_back(tk + std::pow(e, k + 1) * v0 / kG);
-    tk += 2.0 * std::pow(e, k + 1) * v0 / kG;
-  }
+  const std::vector<double> apex_t = testing::bounce_apex_times(e, t0, kG, 4);
   m.options.output_at = apex_t;
   m.options.output_at.push_back(1.9);
   const Trajectory tr = simulate(m.system, m.q0, m.qd0, m.options);
@@ -141,17 +123,8 @@ TEST(Contact, BouncingBallImpactTimesApexHeightsAndRestTime) {
   // the impacts until the speed falls below 1e-6 of the first: e^k < 1e-6, k = 20
   ASSERT_EQ(impacts.size(), 20u);
   ASSERT_EQ(rests.size(), 1u);
-  tk = t0;
-  for (std::size_t k = 0; k < impacts.size(); ++k) {
-    const double ek = std::pow(e, double(k));
-    EXPECT_NEAR(impacts[k].t, tk, 1e-9) << "impact " << k;
-    EXPECT_NEAR(impacts[k].speed_before, -ek * v0, 1e-8 * v0) << "impact " << k;
-    EXPECT_NEAR(impacts[k].speed_after, e * ek * v0, 1e-8 * v0) << "impact " << k;
-    // the impulse m (1 + e) e^k v0 and the energy lost ½ m (1 − e²) (e^k v0)²
-    EXPECT_NEAR(impacts[k].impulse, 0.5 * (1 + e) * ek * v0, 1e-8);
-    EXPECT_NEAR(impacts[k].energy_change, -0.25 * (1 - e * e) * ek * ek * v0 * v0, 1e-8);
-    tk += 2.0 * e * ek * v0 / kG;
-  }
+  // times, speeds, impulses m (1 + e) e^k v0 and energies lost ½ m (1 − e²) (e^k v0)²
+  testing::expect_bounces(impacts, e, t0, kG, 0.5, impacts.size());
   // the apexes e^(2(k+1)) h0, from the trajectory's samples
   for (std::size_t k = 0; k < apex_t.size(); ++k) {
     const std::size_t i = sample_at(tr, apex_t[k]);

@@ -40,6 +40,7 @@
 
 #include "ukdyn/core/system.hpp"
 #include "ukdyn/core/types.hpp"
+#include "ukdyn/dynamics/contact_restitution.hpp"
 #include "ukdyn/dynamics/workspace.hpp"
 #include "ukdyn/io/trajectory_files.hpp"
 #include "ukdyn/simulation/simulate.hpp"
@@ -114,6 +115,10 @@ enum class JointType {
                    ///< spatial: rate(a) − ratio · rate(b) = 0 (1, nonholonomic)
   kRollingDisk,    ///< thin disk (child, axis = child frame z, radius) rolls on z = 0 (1 + 2)
   kRollingSphere,  ///< sphere (child, radius) rolls on z = 0 (1 + 2)
+  kContact,        ///< unilateral: a point or sphere (child) above a plane or line of the
+                   ///< parent, g = n·d − radius >= 0 (1 row; see contact())
+  kContactDisk,    ///< unilateral: a thin disk (child) above a plane of the parent,
+                   ///< g = n·d − radius sqrt(1 − (n·a)²) >= 0 (1 row; see contact_disk())
 };
 
 /// Short name of a joint type ("revolute", …). Cost O(1).
@@ -139,6 +144,10 @@ struct Joint {
   /// torque or force (drive_effort).
   MotionFn drive;
   JointFriction friction;  ///< adds a non-ideal force "<name>.friction"
+  /// kContact, kContactDisk: Newton's (or Poisson's) coefficient of restitution e in [0, 1].
+  double restitution = 0.0;
+  /// kContact, kContactDisk: the law of the impacts (contact_restitution.hpp).
+  RestitutionLaw restitution_law = RestitutionLaw::kNewton;
 };
 
 /// @name Joint factories (frames in body coordinates)
@@ -183,6 +192,34 @@ Joint gear(std::string name, std::string joint_a, std::string joint_b, double ra
 Joint rolling_disk(std::string name, BodyId disk, double radius, const Frame& axis_frame = {});
 /// A sphere of `radius` (centre = centre of mass) rolling without slipping on z = 0.
 Joint rolling_sphere(std::string name, BodyId sphere, double radius);
+/// A unilateral contact (JointType::kContact, docs/contact.md, "Contacts on bodies"): the point
+/// p_body of `body` (body coordinates), or a sphere of `radius` centred there, stays on the
+/// positive side of a plane fixed on `plane_body` (kGround: the world). The plane is the frame
+/// `plane`'s xy plane with normal n = its z axis (spatial models), or its x line with normal
+/// n = its y axis (planar models). One holonomic row, made Constraint::unilateral(restitution):
+///   g = n_W · (c_W − o_W) − radius >= 0,
+/// c_W the world position of p_body, o_W of the plane frame's origin — the row of
+/// point_on_plane (point_on_line in a planar model) with the offset c0 = radius, so it costs
+/// what that bilateral joint costs: O(columns) for A and b in closed form. A particle takes it
+/// (its point does not rotate). Checked by build(): radius >= 0, restitution in [0, 1], and the
+/// usual body checks.
+Joint contact(std::string name, BodyId plane_body, const Frame& plane, BodyId body,
+              const Vector3d& p_body, double radius = 0.0, double restitution = 0.0);
+/// A unilateral contact of a thin disk with a plane (JointType::kContactDisk; spatial models):
+/// the disk of `radius` centred at disk.p on `body` with axis a = disk's z axis (body
+/// coordinates) stays above the xy plane of `plane` on `plane_body`, normal n its z axis. Its
+/// lowest point towards the plane is at distance radius · sqrt(1 − s²), s = n_W · a_W, from the
+/// centre c_W along −n, so the gap row is
+///   g = n_W · (c_W − o_W) − radius sqrt(1 − s²) >= 0,
+/// in closed form: with h = sqrt(1 − s²), A = A_{n·d} + (radius s / h) A_s and
+/// b = b_{n·d} + (radius s / h) b_s − radius s'² / h³ (A_s, b_s the dot row of s = n·a).
+/// O(columns) for A and b, about twice the point contact's. A disk lying flat on the plane
+/// (|s| = 1: no single lowest point, h = 0) is refused by build() at the initial pose; in a
+/// run the row's entries become infinite there, which stops the run with a non-finite status
+/// (never a wrong number). Needs rigid bodies (a planar model's disk is a circle: use contact()
+/// with the radius).
+Joint contact_disk(std::string name, BodyId plane_body, const Frame& plane, BodyId body,
+                   const Frame& disk, double radius, double restitution = 0.0);
 /// @}
 
 /// Applied force at a body point and torque (world frame W), from (q, q', t).
@@ -306,8 +343,8 @@ class Multibody {
   /// Builds the System: coordinates named "<body>.x" … "<body>.u3"; one constant mass block per
   /// particle, planar body and rigid translation, one state-dependent 4 × 4 block per quaternion;
   /// the constraints "<body>.unit", then per joint "<joint>" (and "<joint>.drive",
-  /// "<joint>.contact" for rolling height); forces Q = gravity + springs + applied + the
-  /// quaternion's velocity terms; potential energy of gravity and springs.
+  /// "<joint>.contact" for rolling height; unilateral for a contact); forces Q = gravity +
+  /// springs + applied + the quaternion's velocity terms; potential energy of gravity and springs.
   /// @throws std::invalid_argument naming the problem (unknown body, joint between bodies of
   /// different kinds, bad parameter, a gear on a non-planar-revolute joint, duplicate names).
   MultibodyModel build() const;

@@ -1,0 +1,83 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// Unilateral contacts of bodies with a plane (docs/contact.md, "Contacts on bodies"): the gap
+// row of a point or sphere (the point_on_plane / point_on_line row with the offset c0 = radius)
+// and of a thin disk (a row of its own, Row::kDisk, in closed form in kinematics.cpp), and the
+// checks build() makes before it adds them as unilateral constraints (the factories mb::contact
+// and mb::contact_disk: bodies.cpp, with the other joints').
+#include <cmath>
+#include <stdexcept>
+
+#include "multibody/internal.hpp"
+#include "ukdyn/core/format.hpp"
+
+namespace ukdyn::mb::detail {
+
+Row contact_row(const Joint& j, bool planar) {
+  // d = c − o (the contact's point, or the disk's centre, relative to the plane's point) and the
+  // plane's normal n: F_P's z axis (spatial) or y axis (planar)
+  Row r;
+  r.a = VecExpr::diff(0, j.frame_parent.p, 1, j.frame_child.p);
+  r.b = VecExpr::body_vector(0, j.frame_parent.R.col(planar ? 1 : 2));
+  if (j.type == JointType::kContactDisk && !planar) {
+    // g = n·d − r sqrt(1 − (n·a)²), a the disk's axis
+    r.kind = Row::kDisk;
+    r.axis = VecExpr::body_vector(1, j.frame_child.R.col(2));
+    r.length = j.radius;
+    return r;
+  }
+  // g = n·d − r
+  r.kind = Row::kDot;
+  r.c.c0 = j.radius;
+  return r;
+}
+
+}  // namespace ukdyn::mb::detail
+
+namespace ukdyn::mb::detail {
+
+Constraint contact_constraint(const Joint& j, const BodyRef& P, const BodyRef& C, bool planar,
+                              const VectorXd& q0) {
+  const std::string who = "ukdyn::mb::Multibody::build: contact '" + j.name + "'";
+  const bool disk = j.type == JointType::kContactDisk;
+  if (C.ground()) {
+    throw std::invalid_argument(who + ": its body is the ground (a contact holds a body)");
+  }
+  if (!(j.radius >= 0.0) || !std::isfinite(j.radius) || (disk && !(j.radius > 0.0))) {
+    throw std::invalid_argument(who + ": the radius must be " + (disk ? "> 0" : ">= 0") + ", got " +
+                                format_number(j.radius, 3));
+  }
+  if (!(j.restitution >= 0.0 && j.restitution <= 1.0)) {
+    throw std::invalid_argument(who + ": the restitution must lie in [0, 1], got " +
+                                format_number(j.restitution, 3));
+  }
+  if (j.drive || j.friction.enabled()) {
+    throw std::invalid_argument(who +
+                                ": a contact takes no drive and no joint friction (Coulomb "
+                                "friction at a contact: docs/contact.md)");
+  }
+  if (disk && !planar && C.kind != BodyKind::kRigid) {
+    throw std::invalid_argument(who + ": a disk has an axis, so its body must be rigid, not a " +
+                                "particle (a particle takes a point or sphere contact)");
+  }
+  Row row = contact_row(j, planar);
+  if (row.kind == Row::kDisk) {
+    // a disk lying flat has no single lowest point (h = 0): refused at the start
+    const Vector3d n = rotation_WB(P, q0) * j.frame_parent.R.col(2);
+    const Vector3d a = rotation_WB(C, q0) * j.frame_child.R.col(2);
+    const double s = n.dot(a);
+    if (std::abs(s) > 1.0 - 1e-6) {
+      throw std::invalid_argument(
+          who + ": the disk lies flat on its plane at the start (|n·a| = " +
+          format_number(std::abs(s), 9) +
+          "): it has no single lowest point there; tilt it (orientation:) or model it as a "
+          "point contact at each of a few rim points");
+    }
+  }
+  Constraint c(j.name, ConstraintKind::kHolonomic, 1,
+               std::make_shared<JointModel>(std::vector<BodyRef>{P, C}, std::vector<Row>{row}));
+  c.unilateral(j.restitution);
+  if (j.restitution_law != RestitutionLaw::kNewton) c = with_restitution_law(c, j.restitution_law);
+  return c;
+}
+
+}  // namespace ukdyn::mb::detail
