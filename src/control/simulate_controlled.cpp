@@ -718,6 +718,15 @@ ControlledTrajectory simulate_controlled(
   };
   // the control statistics, read from the run's workspace (its ControlledScratch) at the end
   std::optional<ControlledScratch> after;
+  // the run's rate decade (the integrators' atol on q', Workspace::rate_unit): the plant's own,
+  // from its state; the augmented system's would count the auxiliary coordinates' unit masses
+  // and integrands, which move with the model's units
+  double plant_rate = 1.0;
+  {
+    Workspace scales(plant);
+    set_run_scales(plant, scales, q0, qd0, o.t_start, o.t_end - o.t_start);
+    plant_rate = scales.rate_unit;
+  }
   const Trajectory full = detail::simulate_observed(
       sys, x0, xd0, o,
       [&](const Workspace& ws) {
@@ -742,7 +751,8 @@ ControlledTrajectory simulate_controlled(
           run_modes = &ws.activity_override;
           run_scratch = &scratch;
         }
-      });
+      },
+      plant_rate);
   const ControlledScratch& w = *after;
 
   // the names, the statistics and the plant's energy balance

@@ -268,7 +268,8 @@ void set_run_scales(const System& sys, Workspace& ws, const Eigen::Ref<const Vec
   const Index n = sys.coordinate_count();
   // ℓ = ‖q‖∞ (1 when every coordinate is 0: the model gives no length)
   double length = q.size() > 0 ? q.cwiseAbs().maxCoeff() : 0.0;
-  if (!(length > 0.0) || !std::isfinite(length)) length = 1.0;
+  const bool has_length = length > 0.0 && std::isfinite(length);
+  if (!has_length) length = 1.0;
   ws.phi_scale.setConstant(10.0);  // (rows of acceleration constraints: never compared)
   ws.phi_dot_scale.setConstant(10.0);
   // E = max(T + |V|, ‖Q‖∞ ℓ) at the state: the energy the run's forces exchange over its
@@ -306,6 +307,10 @@ void set_run_scales(const System& sys, Workspace& ws, const Eigen::Ref<const Vec
   // by exactly its factor)
   ws.length_scale = detail::scale_class(length);
   ws.speed_scale = detail::scale_class(speed);
+  // the decade of v / ℓ, at most 1 (the user's atol is never loosened: a run faster than 10
+  // per unit time keeps it), and 1 when the state gives no length (ℓ = 1 is then a unit's, and
+  // v / ℓ would move with the lengths' unit)
+  ws.rate_unit = has_length ? std::min(1.0, detail::rate_decade(speed / length)) : 1.0;
   MatrixXd Ak;  // (once per run)
   for (Index k = 0; k < sys.constraint_count(); ++k) {
     const Constraint& c = sys.constraint(k);

@@ -34,4 +34,15 @@ inline double energy_class_unit(double E) {
   return k == 0.0 ? 1.0 : std::pow(1e3, k);
 }
 
+// The decade of a rate r > 0 (a speed over a length: the inverse of a run's time scale),
+// 10^⌊log10 r⌋: 1 for r in [1, 10), where most examples in SI units lie (a 1 m pendulum's
+// √(g / ℓ) = 3.1 per second; 0.1 to 43 over the examples). Unlike a class, it moves with every
+// change of the time unit by a power of ten (time × 10: exactly / 10). 1 when r is not finite
+// or not > 0. Cost: a logarithm and a power.
+inline double rate_decade(double r) {
+  if (!(r > 0.0) || !std::isfinite(r)) return 1.0;
+  const double k = std::floor(std::log10(r));
+  return k == 0.0 ? 1.0 : std::pow(10.0, k);
+}
+
 }  // namespace ukdyn::detail

@@ -161,12 +161,18 @@ SegmentResult& stop(SegmentResult& r, Status s, double t, std::string message = 
 // there (docs/simulation.md, "Singular configurations").
 class StepControl {
  public:
-  StepControl(const SimulationOptions& o, SegmentHooks& hooks, std::size_t size)
-      : checker_(o.atol, o.rtol),
+  // x = [q; q'; W] with n coordinates; rate: the run's rate decade (Workspace::rate_unit), the
+  // atol on q' being o.atol · rate (docs/simulation.md, "Scales and tolerances")
+  StepControl(const SimulationOptions& o, SegmentHooks& hooks, std::size_t size, Index n,
+              double rate)
+      : rtol_(o.rtol),
+        atol_(size, o.atol),
         adjuster_(o.max_step > 0 ? o.max_step : 0.0),
         hooks_(hooks),
         err_(size),
-        err_normal_(size) {}
+        err_normal_(size) {
+    for (Index i = n; i < 2 * n; ++i) atol_[std::size_t(i)] = o.atol * rate;
+  }
 
   // the local error estimate the next attempt writes
   State& error() { return err_; }
@@ -185,9 +191,9 @@ class StepControl {
              bool tangential_control, long& tangential) {
     const bool retry = tangential_control && hooks_.project_error;
     if (retry) err_normal_ = err_;
-    double e = checker_.error(algebra_, in, dxdt_in, err_, dt);
+    double e = error(in, dxdt_in, err_, dt);
     if (e > 1.0 && retry && hooks_.project_error(t + dt, out.data(), err_normal_.data())) {
-      const double e_tangential = checker_.error(algebra_, in, dxdt_in, err_normal_, dt);
+      const double e_tangential = error(in, dxdt_in, err_normal_, dt);
       if (e_tangential <= 1.0) ++tangential;
       e = std::min(e, e_tangential);
     }
@@ -201,9 +207,20 @@ class StepControl {
   }
 
  private:
-  odeint::default_error_checker<double, odeint::range_algebra, odeint::default_operations> checker_;
+  // Odeint's default_error_checker with an atol per component: max_i |err_i| /
+  // (atol_i + rtol (|x_i| + |dt| |x'_i|)), bit for bit Odeint's where every atol_i is atol
+  double error(const State& x, const State& dxdt, State& err, double dt) const {
+    const double h = std::abs(dt);
+    double e = 0.0;
+    for (std::size_t i = 0; i < err.size(); ++i) {
+      err[i] = std::abs(err[i]) / (atol_[i] + rtol_ * (std::abs(x[i]) + h * std::abs(dxdt[i])));
+      e = std::max(e, err[i]);
+    }
+    return e;
+  }
+  double rtol_;
+  State atol_;  // per component of x
   odeint::default_step_adjuster<double, double> adjuster_;
-  odeint::range_algebra algebra_;
   SegmentHooks& hooks_;
   State err_, err_normal_;  // the estimate; its copy for project_error
 };
@@ -339,7 +356,7 @@ SegmentResult dopri5(ConstrainedOde& ode, State& x, double t0, double t1,
   const OdeFn fn{&ode, &probe, &projection};
   using Stepper = odeint::runge_kutta_dopri5<State>;
   Stepper stepper;
-  StepControl control(o, hooks, x.size());
+  StepControl control(o, hooks, x.size(), ode.coordinate_count(), ode.workspace().rate_unit);
   State dxdt(x.size()), x_old(x.size()), dxdt_old(x.size()), out(x.size());
   fn(x, dxdt, t0);
   if (ode.failed()) return failed(ode, r, t0);
@@ -471,7 +488,7 @@ SegmentResult rkf78(ConstrainedOde& ode, State& x, double t0, double t1, const S
   const OdeFn fn{&ode, nullptr, &projection};
   using Stepper = odeint::runge_kutta_fehlberg78<State>;
   Stepper stepper;
-  StepControl control(o, hooks, x.size());
+  StepControl control(o, hooks, x.size(), ode.coordinate_count(), ode.workspace().rate_unit);
   std::size_t next = 0;
   double t = t0;
   int rejections = 0;

@@ -341,6 +341,7 @@ Workspace& Run::branch_workspace() {
   w.phi_dot_scale = ws_.phi_dot_scale;
   w.length_scale = ws_.length_scale;
   w.speed_scale = ws_.speed_scale;
+  w.rate_unit = ws_.rate_unit;
   w.energy_unit = ws_.energy_unit;
   return w;
 }

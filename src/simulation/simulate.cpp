@@ -146,7 +146,8 @@ Trajectory detail::simulate_observed(const System& sys, const Eigen::Ref<const V
                                      const Eigen::Ref<const VectorXd>& qd0,
                                      const SimulationOptions& given,
                                      const std::function<void(const Workspace&)>& finished,
-                                     const std::function<void(Workspace&)>& started) {
+                                     const std::function<void(Workspace&)>& started,
+                                     double rate_unit) {
   validate(sys, q0, qd0, given);
   check_settings(sys, given);
   // an rtol below roundoff is raised to the smallest one that means anything (with a note)
@@ -186,6 +187,7 @@ Trajectory detail::simulate_observed(const System& sys, const Eigen::Ref<const V
   // the scales of the tolerances on the constraints' violations and of the work channels
   // (relative, unit-free)
   set_run_scales(sys, ws, q, qd, o.t_start, o.t_end - o.t_start);
+  if (rate_unit > 0.0) ws.rate_unit = rate_unit;  // (a controlled plant's: observed_run.hpp)
   detail::ContactEvents contacts(sys, ws, std::size_t(2 * n + detail::WorkLayout(sys).count));
   if (contacts.any()) {
     contacts.start(o.t_start, q, qd, o.initial_tolerance, traj.stats);

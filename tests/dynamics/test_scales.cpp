@@ -180,8 +180,20 @@ TEST(Scales, SpeedScaleIsThatOfTheRunsEnergy) {
       // the work channels' unit: E = m g L = 9.81 m L² J, the power of two nearest to the power
       // of 1000 nearest to E / 10 (1 or 1e6)
       EXPECT_EQ(ws.energy_unit, m * L * L == 1.0 ? 1.0 : 0x1p20);
+      // the rate decade of v / ℓ = 4.43 per second (the integrators' atol on q')
+      EXPECT_EQ(ws.rate_unit, 1.0);
     }
   }
+  // the same pendulum in a time unit of 10 s (g / 100): v / ℓ = 0.443, a decade down
+  const Model slow = parse_model(pendulum_text(1.0, 0.0981, 1.0), "slow.yaml");
+  Workspace ws_slow(slow.system);
+  set_run_scales(slow.system, ws_slow, slow.q0, slow.qd0, 0.0, 10.0);
+  EXPECT_EQ(ws_slow.rate_unit, 0.1);
+  // and in a time unit of 0.1 s (g × 100): v / ℓ = 44, the user's atol kept (at most 1)
+  const Model fast = parse_model(pendulum_text(1.0, 981.0, 1.0), "fast.yaml");
+  Workspace ws_fast(fast.system);
+  set_run_scales(fast.system, ws_fast, fast.q0, fast.qd0, 0.0, 0.2);
+  EXPECT_EQ(ws_fast.rate_unit, 1.0);
   const Model still = parse_model(
       "coordinates: [x]\nkinetic_energy: 0.5*x_dot^2\nconstraints:\n"
       "  - {name: c, holonomic: x - 2}\ninitial: {q: {x: 2}}\n",
@@ -189,13 +201,19 @@ TEST(Scales, SpeedScaleIsThatOfTheRunsEnergy) {
   Workspace ws(still.system);
   set_run_scales(still.system, ws, still.q0, still.qd0, 0.0, 4.0);
   EXPECT_EQ(ws.speed_scale, 10.0);
+  EXPECT_EQ(ws.rate_unit, 0.1);  // (v / ℓ = 0.25 per second)
   set_run_scales(still.system, ws, still.q0, still.qd0, 0.0, 1000.0);
   EXPECT_NEAR(ws.speed_scale, 0.01, 1e-18);
+  EXPECT_NEAR(ws.rate_unit, 1e-3, 1e-19);  // (5e-4)
 }
 
 // A model in SI units keeps the tolerances in its own units: every scale of the double four-bar
 // of bodies (‖a_i‖ ℓ up to about 30 m) is in the class of 10, so that the projections' 1e-13
-// relative is the former absolute 1e-12 and its runs are those of main, bit for bit; a weld
+// relative is the former absolute 1e-12, and its rate v / ℓ = 5.1 per second is in the decade
+// of 1, so that the integrators' atol on q' is atol, as before: its runs are unchanged, bit for
+// bit. (Not every SI model's: the atol on q' follows the rate's decade up to 1, and 3 of the 44
+// examples, whose v / ℓ lies below 1 per second, run with atol / 10 on q' since;
+// docs/simulation.md, "Scales and tolerances".) A weld
 // closure's rotation rows about axes its loop does not turn (‖a_i‖ of roundoff) take their
 // constraint's largest row, not a scale of 1e-17 (a weld of the arm was refused as a lock-up at t =
 // 0 on a residual of 6.25e-17: TreeFrameConstraints.*)
@@ -206,6 +224,7 @@ TEST(Scales, SIModelsKeepTheirOwnUnits) {
   EXPECT_EQ(ws.length_scale, 10.0);
   EXPECT_EQ(ws.speed_scale, 10.0);
   EXPECT_EQ(ws.energy_unit, 1.0);
+  EXPECT_EQ(ws.rate_unit, 1.0);
   for (Index i = 0; i < m.system.constraint_rows(); ++i) {
     EXPECT_EQ(ws.phi_scale[i], 10.0) << "row " << i;
     EXPECT_EQ(ws.phi_dot_scale[i], 10.0) << "row " << i;

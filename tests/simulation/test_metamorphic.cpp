@@ -14,8 +14,10 @@
 // the model's own scales for the runs to agree. The coordinates are scaled all together
 // (lengths, and angles with them: a change of every coordinate's unit), which for the models
 // in Cartesian coordinates and the bodies' positions is "lengths × s". The integrators' atol is
-// absolute in the units of q and q' (not yet relative): the lengths' rescalings state it in
-// their units (atol × s), as a model written in those units would.
+// absolute in the units of q (not yet relative): the lengths' rescalings state it in their units
+// (atol × s), as a model written in those units would; on q' it is atol times the run's rate
+// decade min(1, 10^⌊log10(v / ℓ)⌋) (Workspace::rate_unit), which time × 10 divides by exactly 10
+// where v / ℓ < 10.
 //
 // The non-ideal forces are generalized forces, C~ = mu C / s: a Coulomb contact is made anew
 // from its law (same mu, mu_static and normal constraint, whose rescaled rows give
@@ -270,8 +272,9 @@ System rescaled(std::shared_ptr<const System> o, const Scaling& f,
 }
 
 // the options of a run in the units of f. The integrators' atol is absolute in the units of q
-// and q' (docs/simulation.md, "Scales and tolerances": not yet relative), so a model written in
-// other length units states it in those: atol × s
+// (docs/simulation.md, "Scales and tolerances": not yet relative), so a model written in other
+// length units states it in those: atol × s (on q', atol × s times the run's rate decade, which
+// the lengths' rescalings leave and time × 10 divides by 10)
 SimulationOptions rescaled(SimulationOptions o, const Scaling& f) {
   o.atol *= f.s;
   o.t_start *= f.tau;
@@ -371,18 +374,6 @@ std::string inaccurate(const std::string& file, bool force = false) {
 }
 constexpr double kAccuracyFactor = 5.0;  // two runs within d_ref each, with a margin
 
-// What the suite cannot compare in one rescaling of one example, by file and rescaling
-// label, with the reason (a limitation of the library or of the example, measured), or "".
-std::string limitation(const std::string& file, const std::string& label) {
-  if (label == "time x10" && file == "slider_crank_coulomb.yaml") {
-    return "the integrators' atol is absolute in q' (docs/simulation.md, not yet relative): "
-           "ten times looser on the slower velocities, it leaves 1.58e-8 (measured; the stick "
-           "rows' scale does not enter: the other six rescalings agree to 6.8e-9). A relative "
-           "atol in the design's classes would not change it: the speeds / 10 stay in their class";
-  }
-  return "";
-}
-
 std::vector<std::string> example_files() {
   std::vector<std::string> files;
   for (const auto& e : std::filesystem::directory_iterator(kExamples)) {
@@ -404,12 +395,12 @@ double duration(const std::string& file, const SimulationOptions& o) {
       {"double_four_bar_redundant.yaml", 3.0},
       {"double_four_bar_bodies.yaml", 3.0},
       {"double_four_bar_bodies_redundant.yaml", 3.0},
-      // half a revolution: under time × 10 the integrators' atol, absolute in q' (not yet
-      // relative, docs/simulation.md), is ten times looser on the slower velocities, which
-      // over the whole revolution left 1.09e-8
+      // half a revolution: under time × 10 the integrators' atol, when it was absolute in q'
+      // (now times the run's rate decade, docs/simulation.md), was ten times looser on the
+      // slower velocities, which over the whole revolution left 1.09e-8
       {"rolling_disk_bodies.yaml", 0.5 * (o.t_end - o.t_start)},
       // a quarter of a second of its 2: the 33-coordinate humanoid's eight runs took 64 s,
-      // and under time × 10 the atol absolute in q' (as above) left 6.0e-8 at 2 s
+      // and under time × 10 the atol then absolute in q' (as above) left 6.0e-8 at 2 s
       {"humanoid_zero_gravity.yaml", 0.25},
       // half of its 12 s: over the whole run four rescalings (rows x 1e±8 among them, which
       // change no tolerance) left 1.3e-8 to 1.4e-8, the spin-up's amplified roundoff
@@ -484,10 +475,6 @@ TEST_P(Metamorphic, SameMotionInRescaledUnits) {
   const auto original = std::make_shared<const System>(model.system);
   for (const Scaling& f : kScalings) {
     SCOPED_TRACE(std::string(file) + ", " + f.label);
-    if (const std::string why_not = limitation(file, f.label); !why_not.empty()) {
-      std::cout << file << ", " << f.label << ": not compared: " << why_not << "\n";
-      continue;
-    }
     const System sys = rescaled(original, f, o.solver);
     const VectorXd q0 = model.q0 * f.s, qd0 = model.qd0 * (f.s / f.tau);
     std::optional<Controller> scaled_ctrl;

@@ -121,7 +121,9 @@ struct Violations {
 /// in any units and for any factor of the row), ws.length_scale = class(ℓ), ws.speed_scale =
 /// class(v), and ws.energy_unit, the power of two nearest to the power of 1000 nearest to E / 10
 /// (1 when E is 0 or not finite): the unit in which the simulation integrates the work channels
-/// of the energy balance, so their step-size control is relative to the run's energies.
+/// of the energy balance, so their step-size control is relative to the run's energies; and
+/// ws.rate_unit = min(1, 10^⌊log10(v / ℓ)⌋), the decade of the run's rate at most 1 (1 when
+/// q = 0), which the adaptive integrators' atol on q' is multiplied by.
 /// Overwrites M, Q, A and b. Allocates (once per run). Cost: one evaluation of M, Q, V and every
 /// non-acceleration constraint's rows, O(n³ + m n).
 /// @throws std::invalid_argument when q or q' does not have n entries or the workspace is of

@@ -93,7 +93,9 @@ struct SimulationOptions {
   /// An rtol below kMinimumRtol (the roundoff of double) is raised to it, with a note in
   /// RunStatistics::notes, as CVODE does with tolerances it cannot meet.
   double rtol = 1e-9;
-  /// Absolute tolerance of the adaptive methods (units of each state component); see rtol.
+  /// Absolute tolerance of the adaptive methods, in the units of q on q, and on q' times the
+  /// run's rate decade min(1, 10^⌊log10(v / ℓ)⌋) (Workspace::rate_unit; 1 for rates of 1 per
+  /// unit time and above; docs/simulation.md, "Scales and tolerances"); see rtol.
   double atol = 1e-11;
   double max_step = 0.0;  ///< largest step of adaptive methods (0: unlimited)
   /// Give up after this many accepted steps in the whole run, with every method: the adaptive
