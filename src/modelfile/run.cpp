@@ -53,12 +53,39 @@ void copy_header(Trajectory& to, const Trajectory& from) {
   to.m = from.m;
 }
 
+// `gap.<name>` of each unilateral constraint whose gap is not an output expression (the
+// contacts: of bodies and robot models; a generalized model's gap is its constraint's
+// expression, an output): the constraint's violation phi at each sample, which is its gap g
+// (docs/contact.md). Cost O(N × one violation per contact).
+void add_gap_columns(const Model& model, const Trajectory& traj, std::vector<CsvColumn>& out) {
+  const System& sys = model.system;
+  const Index N = traj.samples(), n = traj.n;
+  VectorXd phi(1), phi_dot(1);
+  for (Index k = 0; k < sys.constraint_count(); ++k) {
+    const Constraint& c = sys.constraint(k);
+    if (!c.is_unilateral()) continue;
+    const std::string name = "gap." + c.name();
+    if (std::find(model.output_names.begin(), model.output_names.end(), name) !=
+        model.output_names.end())
+      continue;
+    const auto scratch = c.model().make_scratch(n);
+    CsvColumn col{name, std::vector<double>(std::size_t(N))};
+    for (Index i = 0; i < N; ++i) {
+      const Eigen::Map<const VectorXd> q(traj.q.data() + i * n, n), qd(traj.qd.data() + i * n, n);
+      c.model().violation(q, qd, traj.t[std::size_t(i)], scratch.get(), phi, phi_dot);
+      col.values[std::size_t(i)] = phi[0];
+    }
+    out.push_back(std::move(col));
+  }
+}
+
 // the model's columns after the standard ones, for the samples of traj: the bodies' poses
-// (multibody models), then the output expressions (not the control's)
+// (multibody models), the contacts' gaps, then the output expressions (not the control's)
 void add_model_columns(const Model& model, const Trajectory& traj, std::vector<CsvColumn>& out) {
   if (model.multibody) {
     for (auto& col : mb::report_csv_columns(*model.multibody, traj)) out.push_back(std::move(col));
   }
+  add_gap_columns(model, traj, out);
   const auto values = evaluate_output_expressions(model, traj);
   for (std::size_t k = 0; k < values.size(); ++k) {
     out.push_back(CsvColumn{output_column_name(model, k), values[k]});
@@ -185,15 +212,7 @@ ModelRun run_model(const Model& model, const SimulationOptions& options) {
   }
   note_limits(watch, run.trajectory.stats);
   note_table_range(run.trajectory.stats);
-  if (model.multibody) {
-    for (auto& col : mb::report_csv_columns(*model.multibody, run.trajectory)) {
-      run.extra_columns.push_back(std::move(col));
-    }
-  }
-  const auto values = evaluate_output_expressions(model, run.trajectory);
-  for (std::size_t k = 0; k < values.size(); ++k) {
-    run.extra_columns.push_back(CsvColumn{output_column_name(model, k), values[k]});
-  }
+  add_model_columns(model, run.trajectory, run.extra_columns);
   return run;
 }
 

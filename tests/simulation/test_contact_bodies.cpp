@@ -8,12 +8,14 @@
 // formula), and the errors of the contacts: section.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <string>
 #include <vector>
 
 #include "ukdyn/dynamics/contact.hpp"
 #include "ukdyn/modelfile/model.hpp"
+#include "ukdyn/modelfile/run.hpp"
 #include "ukdyn/multibody/multibody.hpp"
 #include "ukdyn/simulation/simulate.hpp"
 
@@ -91,6 +93,16 @@ TEST(ContactBodies, SphereDroppedOnTheGroundBouncesAsTheClosedFormSays) {
   // all of m g H is lost in the impacts
   EXPECT_NEAR(tr.work_impact.back(), -m_ * kG * H, 1e-8);
   expect_energy_balance(tr, 1e-8);
+  // the run's columns (`ukdyn run`, Python): gap.floor = z − r at every sample, beside
+  // lambda.floor, as a generalized model's unilateral constraint has
+  const ModelRun run = run_model(m);
+  const auto& cols = run.extra_columns;
+  const auto gap = std::find_if(cols.begin(), cols.end(),
+                                [](const CsvColumn& c) { return c.name == "gap.floor"; });
+  ASSERT_NE(gap, cols.end());
+  ASSERT_EQ(gap->values.size(), run.trajectory.t.size());
+  for (std::size_t i = 0; i < run.trajectory.t.size(); ++i)
+    EXPECT_NEAR(gap->values[i], run.trajectory.q[nq * i + 2] - r, 1e-12) << "sample " << i;
 }
 
 // ---- a planar rod falling flat on two contacts
