@@ -121,6 +121,9 @@ class ContactDynamics {
                        const Eigen::Ref<const VectorXd>& qd, double t);
   // "" when every principal minor of Mlcp is >= 0 (to roundoff), else the Painlevé message
   std::string painleve(const System& sys, const MatrixXd& Mlcp) const;
+  // "" when W and r are finite, else the message naming the set's contacts (a gap row that is
+  // not finite at this state: a disk lying flat on its plane is one)
+  std::string non_finite(const System& sys, const VectorXd& r) const;
 
   std::vector<Index> contacts_;
   std::vector<Index> set_;  // the contacts of the last prepare()

@@ -167,7 +167,8 @@ bool ContactDynamics::accelerations(const System& sys, Workspace& ws,
   if (s != Status::kOk) return false;
   // w = (W + F) lambda + (A_c q''_free − b_c)
   const VectorXd r = A_c_ * ws.qdd - b_c_;
-  failure_.clear();
+  failure_ = non_finite(sys, r);
+  if (!failure_.empty()) return false;
   if (sliding_friction(sys, ws, q, qd, t)) {
     const MatrixXd Mlcp = W_ + F_;
     failure_ = painleve(sys, Mlcp);
@@ -232,6 +233,17 @@ bool ContactDynamics::sliding_friction(const System& sys, Workspace& ws,
     mu_[i] = std::max(mu_[i], fc.mu);
   }
   return any;
+}
+
+std::string ContactDynamics::non_finite(const System& sys, const VectorXd& r) const {
+  if (W_.allFinite() && r.allFinite()) return "";
+  std::string names;
+  for (Index c : set_) names += (names.empty() ? "'" : ", '") + sys.constraint(c).name() + "'";
+  return "the contact rows of " + names +
+         " are not finite (NaN or Inf) at this state, so no contact force can be found; a disk "
+         "contact whose disk lies flat on its plane (|n·a| = 1) has no single lowest point there "
+         "(docs/contact.md, \"Contacts on bodies\"): model a disk that may land flat with point "
+         "contacts on its rim";
 }
 
 std::string ContactDynamics::painleve(const System& sys, const MatrixXd& Mlcp) const {
@@ -315,6 +327,8 @@ bool ContactDynamics::impact(const System& sys, Workspace& ws, const Eigen::Ref<
   // compression (the whole impact when no contact follows Poisson):
   //   w = W Λ + (1 + e_N) v⁻  (= g'⁺ + e_N g'⁻),  with friction from v_rel⁻
   VectorXd r = (VectorXd::Ones(k) + e_newton).cwiseProduct(v_minus);
+  failure_ = non_finite(sys, r);
+  if (!failure_.empty()) return false;
   if (!impulse(qd, r, friction ? VectorXd(vt_minus_) : VectorXd(), VectorXd::Zero(k))) return false;
   if (!e_poisson.isZero()) {
     // restitution (Poisson): each Poisson contact's impulse e Λ_c (Λ_c its compression impulse),

@@ -227,8 +227,10 @@ bool ContactEvents::resolve(double t, double* x, Index event, RunStatistics& sta
     const VectorXd qd_minus = qd;
     const double T_minus = dyn_.kinetic_energy(qd);
     if (!dyn_.impact(sys_, ws_, q, qd, t, vm, e)) {
-      failure_ = "contacts at t = " + format_t(t) + ": the impact's LCP has no solution (Siconos " +
-                 "lcp_lexicolemke)";
+      failure_ = "contacts at t = " + format_t(t) + ": " +
+                 (dyn_.failure().empty()
+                      ? std::string("the impact's LCP has no solution (Siconos lcp_lexicolemke)")
+                      : dyn_.failure());
       return false;
     }
     // energy is never created: an impact that would (Newton's law with several contacts can)

@@ -302,6 +302,38 @@ TEST(ContactBodies, DiskGapRowMatchesItsFormulaAndFiniteDifferences) {
 // Dropped tilted without spin, the disk touches at t0 = √(2 (z0 − R sin beta) / g). The impulse
 // P n at the lowest point rho gives g'⁺ = −e g'⁻: P = −(1 + e) g'⁻ / (1/m + (rho × n)ᵀ I_W⁻¹
 // (rho × n)), and T⁺ − T⁻ from the velocities it sets.
+// A frictionless coin dropped tilted lands on its rim (a plastic impact), then turns flat
+// within about 10 ms: a disk lying flat on its plane (|n·a| = 1) has no single lowest point, and
+// its gap row's A and b grow without bound (r s / h, r s'² / h³ with h → 0). The run stops
+// there, keeps its samples, and names the contact and why — it once said only that "the LCP of
+// the closed contacts has no solution".
+TEST(ContactBodies, CoinThatTurnsFlatStopsNamingTheDiskContact) {
+  const Model m = parse_model(R"(
+bodies:
+  - {name: coin, type: rigid, mass: 0.01, inertia: [2e-6, 2e-6, 4e-6], position: [0, 0, 0.05],
+     orientation: {axis: [1, 0, 0], angle: 0.3}}
+forces:
+  - {type: gravity, g: [0, 0, -9.81]}
+contacts:
+  - {name: rim, body: coin, shape: disk, radius: 0.02}
+simulate: {t_end: 0.5}
+)");
+  const Trajectory tr = simulate(m.system, m.q0, m.qd0, m.options);
+  EXPECT_NE(tr.stats.status, Status::kOk);
+  EXPECT_NE(tr.stats.message.find("'rim'"), std::string::npos) << tr.stats.message;
+  EXPECT_NE(tr.stats.message.find("lies flat"), std::string::npos) << tr.stats.message;
+  // the impact: the rim's lowest point, 0.02 sin 0.3 above the centre's height at contact,
+  // reached after a free fall from 0.05: t = sqrt(2 (0.05 − 0.02 sin 0.3) / g)
+  const auto impacts = events_of(tr, m.system.constraint_index("rim"), ContactEvent::Kind::kImpact);
+  ASSERT_GE(impacts.size(), 1u);
+  const double t_impact = std::sqrt(2.0 * (0.05 - 0.02 * std::sin(0.3)) / kG);
+  EXPECT_NEAR(impacts[0].t, t_impact, 1e-9);
+  // the samples up to the failure are kept
+  ASSERT_GE(tr.t.size(), 2u);
+  EXPECT_GT(tr.t.back(), t_impact);
+  EXPECT_LT(tr.t.back(), 0.12);
+}
+
 TEST(ContactBodies, TiltedDiskDroppedOnTheGroundMeetsTheImpulseClosedForm) {
   const double beta = 0.6, R = 0.2, z0 = 0.5, e = 0.3, m_ = 1.5;
   const Disk d = tilted_disk(beta, z0, e, Vector3d::Zero(), Vector3d::Zero());
