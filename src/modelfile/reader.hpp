@@ -27,6 +27,7 @@
 #include "ukdyn/control/control.hpp"
 #include "ukdyn/core/constraint.hpp"
 #include "ukdyn/core/format.hpp"
+#include "ukdyn/dynamics/contact_restitution.hpp"
 #include "ukdyn/modelfile/expression.hpp"
 #include "ukdyn/modelfile/model.hpp"
 #include "ukdyn/multibody/tree.hpp"
@@ -395,6 +396,10 @@ class Reader {
   Constraint read_constraint(const YAML::Node& c, const std::string& name, const std::string& what);
   // unilateral: and restitution: of a constraint entry (reader_constraints.cpp, docs/contact.md)
   void read_unilateral(const YAML::Node& c, const std::string& name, Constraint& constraint);
+  // restitution: e in [0, 1] (default 0) and restitution_law: newton | poisson of a constraint
+  // or contact entry (either node may be absent); errors name `what` ("constraint 'floor'")
+  std::pair<double, RestitutionLaw> read_restitution(const YAML::Node& e, const YAML::Node& law,
+                                                     const std::string& what);
   void read_nonideal(const YAML::Node& root, SystemBuilder& builder);
   // a Coulomb friction's surface_velocity: `count` expressions of q and t, compiled with their
   // rates along the motion

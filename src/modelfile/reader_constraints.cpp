@@ -176,6 +176,32 @@ Constraint Reader::read_constraint(const YAML::Node& c, const std::string& name,
   return constraint;
 }
 
+std::pair<double, RestitutionLaw> Reader::read_restitution(const YAML::Node& e,
+                                                           const YAML::Node& law,
+                                                           const std::string& what) {
+  const double restitution = e ? number(e, "restitution") : 0.0;
+  if (!(restitution >= 0.0 && restitution <= 1.0)) {
+    fail(e,
+         "the restitution of " + what + " must lie in [0, 1], got " + format_number(restitution, 3),
+         "restitution: 0.5");
+  }
+  RestitutionLaw restitution_law = RestitutionLaw::kNewton;
+  if (law) {
+    const std::string text = law.IsScalar() ? law.Scalar() : std::string();
+    if (text == "poisson") {
+      restitution_law = RestitutionLaw::kPoisson;
+    } else if (text != "newton") {
+      fail(law,
+           "the restitution_law of " + what + " must be newton or poisson, got " +
+               (law.IsScalar() ? "'" + text + "'"
+                               : std::string("a ") + (law.IsMap() ? "mapping" : "list")),
+           "restitution_law: poisson   (Poisson's: the restitution impulse is e times the "
+           "compression impulse; newton: g'⁺ = −e g'⁻)");
+    }
+  }
+  return {restitution, restitution_law};
+}
+
 void Reader::read_unilateral(const YAML::Node& c, const std::string& name, Constraint& constraint) {
   // unilateral: true (a gap g >= 0 whose force only pushes), restitution: e in [0, 1]
   // (docs/contact.md)
@@ -202,27 +228,7 @@ void Reader::read_unilateral(const YAML::Node& c, const std::string& name, Const
              ", and a unilateral constraint is one holonomic gap g(q, t) >= 0",
          "holonomic: y - r   (one row: the gap)");
   }
-  const double restitution = e ? number(e, "restitution") : 0.0;
-  if (!(restitution >= 0.0 && restitution <= 1.0)) {
-    fail(e,
-         "the restitution of constraint '" + name + "' must lie in [0, 1], got " +
-             format_number(restitution, 3),
-         "restitution: 0.5");
-  }
-  RestitutionLaw restitution_law = RestitutionLaw::kNewton;
-  if (law) {
-    const std::string text = law.IsScalar() ? law.Scalar() : std::string();
-    if (text == "poisson") {
-      restitution_law = RestitutionLaw::kPoisson;
-    } else if (text != "newton") {
-      fail(law,
-           "the restitution_law of constraint '" + name + "' must be newton or poisson, got " +
-               (law.IsScalar() ? "'" + text + "'"
-                               : std::string("a ") + (law.IsMap() ? "mapping" : "list")),
-           "restitution_law: poisson   (Poisson's: the restitution impulse is e times the "
-           "compression impulse; newton: g'⁺ = −e g'⁻)");
-    }
-  }
+  const auto [restitution, restitution_law] = read_restitution(e, law, "constraint '" + name + "'");
   constraint.unilateral(restitution);
   if (restitution_law != RestitutionLaw::kNewton)
     constraint = with_restitution_law(constraint, restitution_law);

@@ -22,6 +22,7 @@
 
 #include "ukdyn/core/format.hpp"
 #include "ukdyn/dynamics/contact_restitution.hpp"
+#include "ukdyn/multibody/multibody.hpp"
 #include "ukdyn/multibody/tree.hpp"
 #include "ukdyn/multibody/tree_closures.hpp"
 
@@ -175,31 +176,9 @@ void Reader::read_robot_contacts(const YAML::Node& root, const tree::Tree& robot
       fail(c["plane"], what + ": the plane is on the contact's own link (the gap never changes)",
            "put the plane on another link or the world");
     // the plane's frame: z along the normal
-    const tree::Vector3d z = normal.normalized();
-    const tree::Vector3d seed =
-        std::abs(z.x()) < 0.9 ? tree::Vector3d::UnitX() : tree::Vector3d::UnitY();
-    const tree::Vector3d x = (seed - z * z.dot(seed)).normalized();
-    plane.R << x, z.cross(x), z;
+    plane.R = mb::Frame::with_z(plane.p, normal).R;
     // Newton's e and the law
-    double e = 0.0;
-    if (const YAML::Node r = c["restitution"]) {
-      e = number(r, "restitution");
-      if (!(e >= 0.0 && e <= 1.0))
-        fail(r, "the restitution of " + what + " must lie in [0, 1], got " + format_number(e, 3),
-             "restitution: 0.5");
-    }
-    RestitutionLaw law = RestitutionLaw::kNewton;
-    if (const YAML::Node l = c["restitution_law"]) {
-      if (l.Scalar() == "poisson") {
-        law = RestitutionLaw::kPoisson;
-      } else if (l.Scalar() != "newton") {
-        fail(l,
-             "the restitution_law of " + what + " must be newton or poisson, got '" + l.Scalar() +
-                 "'",
-             "restitution_law: poisson   (Poisson's: the restitution impulse is e times the "
-             "compression's)");
-      }
-    }
+    const auto [e, law] = read_restitution(c["restitution"], c["restitution_law"], what);
     try {
       Constraint k = tree::contact_constraint(robot, name, at, radius, plane, e);
       if (law != RestitutionLaw::kNewton) k = with_restitution_law(k, law);
@@ -227,8 +206,9 @@ void Reader::read_robot_contacts(const YAML::Node& root, const tree::Tree& robot
                  "' of a robot is not supported yet: the coulomb law slides the constraint's "
                  "coordinates, and a robot's are its joint angles, not the contact point's "
                  "velocity",
-             "leave the contact frictionless, or write the mechanism with bodies: and joints: "
-             "(docs/multibody.md), whose contacts take Coulomb friction");
+             "leave the contact frictionless, or write the mechanism in generalized coordinates "
+             "with a unilateral constraint whose sliding coordinates are Cartesian "
+             "(docs/friction.md, docs/contact.md)");
     }
   }
 }
