@@ -93,6 +93,23 @@ class ContactDynamics {
                                const Eigen::Ref<const VectorXd>& qd_minus) const {
     return 0.5 * (qd_plus - qd_minus).dot(M_ * (qd_plus + qd_minus));
   }
+  // The work of the last impact's contact impulses on the velocities relative to the contacts'
+  // surfaces, with v⁻ = the contacts' g' before (k) and q'⁻, q'⁺ the velocities around it:
+  //   W_c = ½ Λᵀ (g'⁻ + g'⁺) + ½ βᵀ (v_t⁻ + v_t⁺),  v_t⁺ = v_t⁻ + Dᵀ (q'⁺ − q'⁻),
+  // what the contacts dissipate (<= 0 for an admissible impact: ½ Λ g'⁻ (1 − e) for one
+  // frictionless contact). T⁺ − T⁻ = W_c + the impulsive work of moving surfaces (the gaps' and
+  // the friction's explicit time dependence) and of rheonomic bilateral constraints (drives):
+  // on fixed surfaces without drives the two agree; a ball hit by a rising table gains kinetic
+  // energy while its contact dissipates. O(k + n · directions).
+  double contact_work(const Eigen::Ref<const VectorXd>& v_minus,
+                      const Eigen::Ref<const VectorXd>& qd_plus,
+                      const Eigen::Ref<const VectorXd>& qd_minus) const {
+    double w = 0.5 * lambda_.dot(v_minus + v_after_);
+    if (beta_.size() > 0 && beta_.size() == D_.cols())
+      w += 0.5 * beta_.dot(2.0 * vt_minus_ + D_.transpose() * (qd_plus - qd_minus));
+    return w;
+  }
+
   const VectorXd& lambda() const { return lambda_; }    // (k) multipliers or impulses
   const VectorXd& slack() const { return w_; }          // (k) w of the LCP
   const VectorXd& v_after() const { return v_after_; }  // (k) g' after an impact

@@ -1,7 +1,8 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // The contacts: section of a multibody model (docs/model-format.md, "Contacts"; docs/contact.md,
 // "Contacts on bodies"): each entry is one unilateral gap of a point, sphere or disk of a body
-// with a plane fixed on the ground or on another body, added as mb::contact / mb::contact_disk.
+// with a plane fixed on the ground or on another body, added as mb::contact / mb::contact_disk,
+// or of a point or sphere outside a sphere of another body or of the ground (mb::contact_spheres).
 // Every error names the contact and the key (file:line:column) and gives a hint.
 #include <cmath>
 #include <set>
@@ -41,8 +42,8 @@ void MultibodyReader::read_contacts() {
                 "a contact names its constraint: make the names unique");
     }
     check_keys(c,
-               {"name", "body", "point", "shape", "radius", "axis", "plane", "restitution",
-                "restitution_law"},
+               {"name", "body", "point", "shape", "radius", "axis", "plane", "sphere",
+                "restitution", "restitution_law"},
                what);
     // the body, its point and its shape
     const YAML::Node bn = require(c, "body", what, "body: ball");
@@ -81,7 +82,33 @@ void MultibodyReader::read_contacts() {
       if (!(a.norm() > 0.0)) r_.fail(an, what + ": the axis is zero", "axis: [0, 0, 1]");
       disk_frame = Frame::with_z(p, a);
     }
-    // the plane: a point and a normal on a body (default the ground through the origin)
+    // the other surface: a sphere of another body (or of the ground), or a plane
+    const YAML::Node sp = c["sphere"];
+    if (sp && c["plane"])
+      r_.fail(sp, what + ": a contact is with a plane or with a sphere, not both",
+              "leave out plane: or sphere:");
+    if (sp && disk)
+      r_.fail(sp, what + ": a disk against a sphere is not supported",
+              "shape: sphere (or point) for a contact with a sphere");
+    BodyId other = kGround;
+    Vector3d o_sphere = Vector3d::Zero();
+    double other_radius = 0.0;
+    if (sp) {
+      const std::string sw = what + " sphere";
+      check_map(sp, sw, "{body: ball2, point: [0, 0, 0], radius: 0.1}");
+      check_keys(sp, {"body", "point", "radius"}, sw);
+      if (sp["body"]) other = body(sp["body"], sw + " body");
+      if (other == b)
+        r_.fail(sp["body"], sw + ": the sphere is on the contact's own body",
+                "a sphere of another body, or of the ground");
+      if (other != kGround && planar(other) != planar(b))
+        r_.fail(sp["body"], what +
+                                ": the sphere's body and the contact's body are not both "
+                                "planar or both spatial");
+      if (sp["point"]) o_sphere = vec(sp["point"], sw + " point", dims, dims);
+      other_radius = positive(require(sp, "radius", sw, "radius: 0.1"), sw + " radius");
+    }
+    // or the plane: a point and a normal on a body (default the ground through the origin)
     BodyId plane_body = kGround;
     Vector3d o = Vector3d::Zero(), n = planar_model ? Vector3d::UnitY() : Vector3d::UnitZ();
     if (const YAML::Node pl = c["plane"]) {
@@ -125,11 +152,12 @@ void MultibodyReader::read_contacts() {
                 "restitution_law: poisson   (Poisson's: the restitution impulse is e times the "
                 "compression's)");
     }
-    mb::Joint j = disk ? mb::contact_disk(name, plane_body, plane, b, disk_frame, radius, e)
-                       : mb::contact(name, plane_body, plane, b, p, radius, e);
+    mb::Joint j = sp     ? mb::contact_spheres(name, other, o_sphere, other_radius, b, p, radius, e)
+                  : disk ? mb::contact_disk(name, plane_body, plane, b, disk_frame, radius, e)
+                         : mb::contact(name, plane_body, plane, b, p, radius, e);
     j.restitution_law = law;
+    contacts_.push_back({name, j.type, c});
     builder_.add_joint(std::move(j));
-    contacts_.push_back({name, disk ? mb::JointType::kContactDisk : mb::JointType::kContact, c});
     r_.positions_.constraints[name] = Reader::position(c);
   }
 }

@@ -66,6 +66,8 @@ const char* to_string(JointType type) {
       return "contact";
     case JointType::kContactDisk:
       return "contact_disk";
+    case JointType::kContactSpheres:
+      return "contact_spheres";
   }
   return "unknown";
 }
@@ -149,6 +151,16 @@ Joint contact_disk(std::string n, BodyId plane_body, const Frame& plane, BodyId 
                    const Frame& disk, double radius, double restitution) {
   Joint j = make_joint(std::move(n), JointType::kContactDisk, plane_body, plane, body, disk);
   j.radius = radius;
+  j.restitution = restitution;
+  return j;
+}
+Joint contact_spheres(std::string n, BodyId other_body, const Vector3d& p_other,
+                      double other_radius, BodyId body, const Vector3d& p_body, double radius,
+                      double restitution) {
+  Joint j = make_joint(std::move(n), JointType::kContactSpheres, other_body, Frame::at(p_other),
+                       body, Frame::at(p_body));
+  j.radius = radius;
+  j.other_radius = other_radius;
   j.restitution = restitution;
   return j;
 }
@@ -479,7 +491,8 @@ MultibodyModel Multibody::build() const {
                                   "' joins a planar body to a spatial one");
     }
     info.planar = p_planar || c_planar;
-    if (j.type == JointType::kContact || j.type == JointType::kContactDisk) {
+    if (j.type == JointType::kContact || j.type == JointType::kContactDisk ||
+        j.type == JointType::kContactSpheres) {
       sb.add(detail::contact_constraint(j, P, C, info.planar, out.q0));
       info.constraints.push_back(k++);
       out.joints.push_back(std::move(info));

@@ -1,9 +1,12 @@
 // SPDX-License-Identifier: BSD-3-Clause
-// Unilateral contacts of bodies with a plane (docs/contact.md, "Contacts on bodies"): the gap
-// row of a point or sphere (the point_on_plane / point_on_line row with the offset c0 = radius)
-// and of a thin disk (a row of its own, Row::kDisk, in closed form in kinematics.cpp), and the
-// checks build() makes before it adds them as unilateral constraints (the factories mb::contact
-// and mb::contact_disk: bodies.cpp, with the other joints').
+// Unilateral contacts of bodies with a plane or a sphere (docs/contact.md, "Contacts on
+// bodies"): the gap row of a point or sphere on a plane (the point_on_plane / point_on_line row
+// with the offset c0 = radius), of a thin disk on a plane (a row of its own, Row::kDisk), of a
+// sphere outside a sphere (Row::kNorm, |c − o| − (r1 + r2)) — both in closed form in
+// kinematics.cpp — and the checks build() makes before it adds them as unilateral constraints
+// (the factories mb::contact, mb::contact_disk and mb::contact_spheres: bodies.cpp, with the
+// other joints').
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 
@@ -13,6 +16,14 @@
 namespace ukdyn::mb::detail {
 
 Row contact_row(const Joint& j, bool planar) {
+  if (j.type == JointType::kContactSpheres) {
+    // g = |c − o| − (r_C + r_P), c and o the spheres' centres
+    Row r;
+    r.kind = Row::kNorm;
+    r.a = VecExpr::diff(0, j.frame_parent.p, 1, j.frame_child.p);
+    r.length = j.radius + j.other_radius;
+    return r;
+  }
   // d = c − o (the contact's point, or the disk's centre, relative to the plane's point) and the
   // plane's normal n: F_P's z axis (spatial) or y axis (planar)
   Row r;
@@ -39,12 +50,20 @@ Constraint contact_constraint(const Joint& j, const BodyRef& P, const BodyRef& C
                               const VectorXd& q0) {
   const std::string who = "ukdyn::mb::Multibody::build: contact '" + j.name + "'";
   const bool disk = j.type == JointType::kContactDisk;
+  const bool spheres = j.type == JointType::kContactSpheres;
   if (C.ground()) {
     throw std::invalid_argument(who + ": its body is the ground (a contact holds a body)");
   }
   if (!(j.radius >= 0.0) || !std::isfinite(j.radius) || (disk && !(j.radius > 0.0))) {
     throw std::invalid_argument(who + ": the radius must be " + (disk ? "> 0" : ">= 0") + ", got " +
                                 format_number(j.radius, 3));
+  }
+  if (spheres && (!(j.other_radius >= 0.0) || !std::isfinite(j.other_radius))) {
+    throw std::invalid_argument(who + ": the other sphere's radius must be >= 0, got " +
+                                format_number(j.other_radius, 3));
+  }
+  if (spheres && P.id == C.id) {
+    throw std::invalid_argument(who + ": both spheres are on one body (a contact is between two)");
   }
   if (!(j.restitution >= 0.0 && j.restitution <= 1.0)) {
     throw std::invalid_argument(who + ": the restitution must lie in [0, 1], got " +
@@ -71,6 +90,17 @@ Constraint contact_constraint(const Joint& j, const BodyRef& P, const BodyRef& C
           format_number(std::abs(s), 9) +
           "): it has no single lowest point there; tilt it (orientation:) or model it as a "
           "point contact at each of a few rim points");
+    }
+  }
+  if (row.kind == Row::kNorm) {
+    // coincident centres have no normal: refused at the start
+    const Vector3d d = body_vector_generic<double>(C, q0, j.frame_child.p, true) -
+                       body_vector_generic<double>(P, q0, j.frame_parent.p, true);
+    if (!(d.norm() > 1e-12 * std::max(row.length, 1e-300))) {
+      throw std::invalid_argument(
+          who +
+          ": the spheres' centres coincide at the start: the contact has no normal there; "
+          "place the spheres apart (their gap |c − o| − (r1 + r2) must be >= 0)");
     }
   }
   Constraint c(j.name, ConstraintKind::kHolonomic, 1,

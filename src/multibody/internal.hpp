@@ -199,8 +199,11 @@ struct Offset {
 ///  kLinear    phi = Σ coef_i q[column_i] − c(t)   (global coordinates, local columns)
 ///  kDisk      phi = a · b − L sqrt(1 − (b · axis)²): a thin disk's gap (a = centre − plane
 ///             point, b = the plane's normal, axis = the disk's axis, L = its radius)
+///  kNorm      phi = |a| − L: the gap of two spheres (a = the difference of their centres, L =
+///             the sum of their radii), a true distance (unlike kDistance's), so that the gap
+///             and its rate are in length and speed units wherever the spheres are
 struct Row {
-  enum Kind { kDot, kDistance, kLinear, kDisk } kind = kDot;
+  enum Kind { kDot, kDistance, kLinear, kDisk, kNorm } kind = kDot;
   VecExpr a, b;
   VecExpr axis;  // kDisk: the disk's axis (a body vector)
   double length = 0.0;
@@ -441,6 +444,12 @@ void joint_phi_generic(const JointModel& jm, const V& q, const S& t, double t0, 
       case Row::kLinear: {
         out = -c_t;
         for (const auto& [i, coef] : row.terms) out += coef * q[i];
+        break;
+      }
+      case Row::kNorm: {
+        using std::sqrt;
+        const Vec3<S> a = vec_expr_generic<S>(jm.slots(), row.a, q);
+        out = sqrt(a.dot(a)) - row.length;
         break;
       }
       case Row::kDisk: {

@@ -325,6 +325,17 @@ void JointModel::general_form(const Eigen::Ref<const VectorXd>& q,
         b[i] = -(ka.x.dot(ka.g) + ka.v.squaredNorm()) / row.length;
         break;
       }
+      case Row::kNorm: {
+        // phi = |a| − L, u = a/|a|:  A = uᵀ J_a,  b = −(u·g_a + (|v_a|² − (u·v_a)²) / |a|)
+        // (|a| = 0, coincident centres: non-finite entries, which stop the run)
+        if (!reuses_a_[r]) eval(row.a, q, qd, cache, ka);
+        const double len = ka.x.norm();
+        const Vector3d u = ka.x / len;
+        const double un = u.dot(ka.v);
+        A.row(i) = u.transpose() * ka.J.leftCols(k);
+        b[i] = -(u.dot(ka.g) + (ka.v.squaredNorm() - un * un) / len);
+        break;
+      }
       case Row::kLinear: {
         // phi = Σ coef q_i − c:  A = coef,  b = c''
         A.row(i).setZero();
@@ -419,6 +430,14 @@ void JointModel::general_violation(const Eigen::Ref<const VectorXd>& q,
         position[i] = (ka.x.squaredNorm() - row.length * row.length) * (0.5 / row.length);
         velocity[i] = ka.x.dot(ka.v) / row.length;
         break;
+      case Row::kNorm: {
+        // phi = |a| − L,  phi' = a·v_a / |a|
+        if (!reuses_a_[r]) eval(row.a, q, qd, cache, ka, false);
+        const double len = ka.x.norm();
+        position[i] = len - row.length;
+        velocity[i] = ka.x.dot(ka.v) / len;
+        break;
+      }
       case Row::kLinear:
         position[i] = -c[0];
         velocity[i] = -c[1];

@@ -233,10 +233,14 @@ bool ContactEvents::resolve(double t, double* x, Index event, RunStatistics& sta
                       : dyn_.failure());
       return false;
     }
-    // energy is never created: an impact that would (Newton's law with several contacts can)
-    // is redone fully plastic (e = 0), which dissipates
+    // energy is never created: an impact whose contacts would put energy in (Newton's law with
+    // several contacts can, and friction with restitution) is redone fully plastic (e = 0), which
+    // dissipates. The test is on the contacts' own work W_c, on the velocities relative to their
+    // surfaces (ContactDynamics::contact_work), not on T⁺ − T⁻: a moving surface (a vibrating
+    // table, a driven paddle) may give the body kinetic energy by an admissible impact.
     double dT = dyn_.kinetic_energy_change(qd, qd_minus);
-    if (dT > 1e-12 * std::max(T_minus, 1e-300)) {
+    const double W_c = dyn_.contact_work(vm, qd, qd_minus);
+    if (W_c > 1e-12 * std::max({T_minus, T_minus + dT, 1e-300})) {
       qd = qd_minus;
       e.setZero();
       if (!dyn_.impact(sys_, ws_, q, qd, t, vm, e)) {

@@ -291,3 +291,99 @@ TEST(ImpactRestitution, BadLawOrCoefficientGetsAnErrorWithItsPosition) {
 
 }  // namespace UKDYN_TEST_FILE
 }  // namespace ukdyn
+
+namespace ukdyn {
+namespace UKDYN_TEST_FILE {
+
+// ---- impacts on a moving surface
+// ------------------------------------------------------------------
+
+// A ball (m = 0.1) dropped from h = 5 cm at rest onto a table moving as y_p = A sin(w t)
+// (A = 1 cm, 10 Hz: up to 0.628 m/s). The first impact is at the root t₁ of
+// h − ½ g t² = A sin(w t) (found here by bisection), the ball at −g t₁, the table at
+// A w cos(w t₁); Newton's law on the relative speed gives the ball y'⁺ = u − e (y'⁻ − u),
+// u the table's speed. The table's motion does work: T⁺ > T⁻ although the contact dissipates
+// ½ Λ g'⁻ (1 − e) — once taken for energy created and made plastic (the ball stayed on the table).
+struct Table {
+  double m = 0.1, g = 9.81, e = 0.5, A = 0.01, w = 20 * M_PI, h = 0.05;
+  double t1() const {
+    double lo = 0.05, hi = 0.11;  // h − ½ g t² − A sin(w t): > 0 at lo, < 0 at hi
+    for (int i = 0; i < 200; ++i) {
+      const double mid = 0.5 * (lo + hi);
+      (h - 0.5 * g * mid * mid - A * std::sin(w * mid) > 0 ? lo : hi) = mid;
+    }
+    return 0.5 * (lo + hi);
+  }
+  double u(double t) const { return A * w * std::cos(w * t); }
+};
+
+void expect_table_impact(const Trajectory& tr, Index k, Index ball_rate, std::size_t n,
+                         const Table& tb) {
+  ASSERT_EQ(tr.stats.status, Status::kOk) << tr.stats.message;
+  for (const auto& note : tr.stats.notes)
+    EXPECT_EQ(note.find("made plastic"), std::string::npos) << note;
+  ASSERT_GE(tr.stats.contact_events.size(), 1u);
+  const ContactEvent& hit = tr.stats.contact_events[0];
+  const double t1 = tb.t1(), v = -tb.g * t1, u = tb.u(t1);
+  EXPECT_NEAR(t1, 0.100589306, 1e-9);  // the reproducer's figure (/work/u12, 07)
+  EXPECT_EQ(hit.constraint, k);
+  EXPECT_EQ(hit.kind, ContactEvent::Kind::kImpact);
+  EXPECT_NEAR(hit.t, t1, 1e-10);
+  EXPECT_NEAR(hit.speed_before, v - u, 1e-8);
+  EXPECT_NEAR(hit.speed_after, -tb.e * (v - u), 1e-8);
+  const double v_plus = u - tb.e * (v - u);
+  EXPECT_NEAR(v_plus, 1.435222, 1e-6);
+  EXPECT_NEAR(hit.energy_change, 0.5 * tb.m * (v_plus * v_plus - v * v), 1e-8);
+  EXPECT_GT(hit.energy_change, 0.05);  // the table gave the ball energy
+  // the ball's velocity just after (the first sample after t₁ is 1 ms later: − g · 1 ms)
+  std::size_t i = 0;
+  while (tr.t[i] <= t1) ++i;
+  EXPECT_NEAR(tr.qd[n * i + std::size_t(ball_rate)], v_plus - tb.g * (tr.t[i] - t1), 1e-7);
+}
+
+TEST(ImpactRestitution, BallHitByAVibratingTableLeavesAtNewtonsRelativeSpeed) {
+  const Table tb;
+  Model m = parse_model(R"(
+parameters: {m: 0.1, g: 9.81, e: 0.5, A: 0.01, w: 62.83185307179586, h: 0.05}
+coordinates: [y]
+kinetic_energy: 0.5*m*y_dot^2
+potential_energy: m*g*y
+constraints:
+  - {name: table, holonomic: y - A*sin(w*t), unilateral: true, restitution: e}
+initial:
+  q: {y: h}
+simulate: {t_end: 0.2, integrator: dopri5, rtol: 1e-11, atol: 1e-13}
+output: {every: 0.001}
+)");
+  const Trajectory tr = simulate(m.system, m.q0, m.qd0, m.options);
+  expect_table_impact(tr, m.system.constraint_index("table"), 0, 1, tb);
+}
+
+// The same table as a driven body: a paddle on a prismatic joint with drive A sin(w t), the ball
+// a particle with a sphere contact on the paddle's plane (a plane of a moving body, a rheonomic
+// bilateral drive: the impulse's work on the drive is the table's).
+TEST(ImpactRestitution, BallHitByADrivenPaddleLeavesAtNewtonsRelativeSpeed) {
+  const Table tb;
+  Model m = parse_model(R"(
+parameters: {A: 0.01, w: 62.83185307179586}
+bodies:
+  - {name: paddle, type: rigid, mass: 1, inertia: 0.01, position: [0, 0, 0],
+     velocity: [0, 0, 0.6283185307179586]}
+  - {name: ball, type: particle, mass: 0.1, position: [0, 0, 0.07]}
+joints:
+  - {type: prismatic, name: slide, parent: ground, child: paddle, drive: A*sin(w*t)}
+forces:
+  - {type: gravity, g: [0, 0, -9.81]}
+contacts:
+  - {name: hit, body: ball, shape: sphere, radius: 0.02, restitution: 0.5,
+     plane: {body: paddle, point: [0, 0, 0], normal: [0, 0, 1]}}
+simulate: {t_end: 0.2, integrator: dopri5, rtol: 1e-11, atol: 1e-13}
+output: {every: 0.001}
+)");
+  const Trajectory tr = simulate(m.system, m.q0, m.qd0, m.options);
+  // the ball's z rate: coordinate 7 + 2 (the paddle's 7 first)
+  expect_table_impact(tr, m.system.constraint_index("hit"), 9, 10, tb);
+}
+
+}  // namespace UKDYN_TEST_FILE
+}  // namespace ukdyn

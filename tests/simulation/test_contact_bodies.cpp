@@ -27,7 +27,9 @@ namespace UKDYN_TEST_FILE {
 using mb::Vector3d;
 constexpr double kG = 9.81;
 
+using testing::check_form_by_differences;
 using testing::events_of;
+using testing::gap_of;
 using testing::sample_at;
 
 // the energy balance of a run holds, and its impacts' work is the sum of their T⁺ − T⁻
@@ -221,57 +223,6 @@ Disk tilted_disk(double beta, double z0, double e, const Vector3d& v0, const Vec
   Disk out{b.build(), d, -1};
   out.row = out.model.system.constraint_index("floor");
   return out;
-}
-
-// g and g' of constraint k at (q, q')
-Eigen::Vector2d gap_of(const System& sys, Index k, const VectorXd& q, const VectorXd& qd) {
-  const ConstraintModel& cm = sys.constraint(k).model();
-  auto scratch = cm.make_scratch(sys.coordinate_count());
-  VectorXd p(1), v(1);
-  cm.violation(q, qd, 0.0, scratch.get(), p, v);
-  return {p[0], v[0]};
-}
-
-// A and b of constraint k at (q, q')
-std::pair<Eigen::RowVectorXd, double> form_of(const System& sys, Index k, const VectorXd& q,
-                                              const VectorXd& qd) {
-  const ConstraintModel& cm = sys.constraint(k).model();
-  auto scratch = cm.make_scratch(sys.coordinate_count());
-  MatrixXd A(1, sys.coordinate_count());
-  VectorXd b(1);
-  cm.acceleration_form(q, qd, 0.0, scratch.get(), A, b);
-  return {A.row(0), b[0]};
-}
-
-// Checks A = dg/dq along directions tangent to |u| = 1 (where the row's quaternion form and the
-// normalized rotation agree) and b by g'' = A q'' − b, g'' the central difference of g' along
-// q(t) = q + t q' + ½ t² q'', q'(t) = q' + t q'' with u·u'' = −|u'|² (|u(t)| = 1 + O(t³)).
-void check_form_by_differences(const System& sys, Index k, const VectorXd& q, const VectorXd& qd,
-                               const std::vector<Index>& quaternions, double tol_A, double tol_b) {
-  const Index n = sys.coordinate_count();
-  const auto [A, b] = form_of(sys, k, q, qd);
-  const double h = 1e-6;
-  for (Index trial = 0; trial < 4; ++trial) {
-    VectorXd dq = VectorXd::Random(n);
-    for (Index o : quaternions) {
-      const Eigen::Vector4d u = q.segment<4>(o);
-      dq.segment<4>(o) -= u.dot(dq.segment<4>(o)) * u;
-    }
-    const double fd =
-        (gap_of(sys, k, q + h * dq, qd)[0] - gap_of(sys, k, q - h * dq, qd)[0]) / (2 * h);
-    EXPECT_NEAR(A.dot(dq), fd, tol_A) << "trial " << trial;
-  }
-  VectorXd qdd = VectorXd::Random(n);
-  for (Index o : quaternions) {
-    const Eigen::Vector4d u = q.segment<4>(o), ud = qd.segment<4>(o);
-    qdd.segment<4>(o) += (-ud.squaredNorm() - u.dot(qdd.segment<4>(o))) * u;
-  }
-  const double ht = 1e-5;
-  const auto gd = [&](double t) {
-    return gap_of(sys, k, q + t * qd + 0.5 * t * t * qdd, qd + t * qdd)[1];
-  };
-  const double gdd = (gd(ht) - gd(-ht)) / (2 * ht);
-  EXPECT_NEAR(A.dot(qdd) - b, gdd, tol_b);
 }
 
 TEST(ContactBodies, DiskGapRowMatchesItsFormulaAndFiniteDifferences) {

@@ -100,25 +100,28 @@ struct JointFriction {
 /// The kinds of joint. Planar kinds apply between planar bodies (and the ground); spatial kinds
 /// between rigid bodies, particles and the ground. Rows per kind: docs/multibody.md.
 enum class JointType {
-  kRevolute,       ///< planar: common point (2 rows); spatial: + z axes aligned (5 rows)
-  kPrismatic,      ///< planar: slide along the parent frame's x, no rotation (2);
-                   ///< spatial: slide along the parent frame's z, no rotation (5)
-  kWeld,           ///< no relative motion (planar 3, spatial 6)
-  kDistance,       ///< |p_C − p_P| = length (1)
-  kPointOnLine,    ///< child origin on the parent frame's x line (planar 1) or z line (spatial 2)
-  kSpherical,      ///< common point (3)
-  kCylindrical,    ///< slide along and turn about the parent z axis (4)
-  kUniversal,      ///< common point, parent z ⊥ child z (4)
-  kPlanar,         ///< child frame's xy plane slides in the parent's xy plane (3)
-  kPointOnPlane,   ///< child origin in the parent frame's xy plane (1)
-  kGear,           ///< planar: angle(a) − ratio · angle(b) = its initial value (1, holonomic);
-                   ///< spatial: rate(a) − ratio · rate(b) = 0 (1, nonholonomic)
-  kRollingDisk,    ///< thin disk (child, axis = child frame z, radius) rolls on z = 0 (1 + 2)
-  kRollingSphere,  ///< sphere (child, radius) rolls on z = 0 (1 + 2)
-  kContact,        ///< unilateral: a point or sphere (child) above a plane or line of the
-                   ///< parent, g = n·d − radius >= 0 (1 row; see contact())
-  kContactDisk,    ///< unilateral: a thin disk (child) above a plane of the parent,
-                   ///< g = n·d − radius sqrt(1 − (n·a)²) >= 0 (1 row; see contact_disk())
+  kRevolute,        ///< planar: common point (2 rows); spatial: + z axes aligned (5 rows)
+  kPrismatic,       ///< planar: slide along the parent frame's x, no rotation (2);
+                    ///< spatial: slide along the parent frame's z, no rotation (5)
+  kWeld,            ///< no relative motion (planar 3, spatial 6)
+  kDistance,        ///< |p_C − p_P| = length (1)
+  kPointOnLine,     ///< child origin on the parent frame's x line (planar 1) or z line (spatial 2)
+  kSpherical,       ///< common point (3)
+  kCylindrical,     ///< slide along and turn about the parent z axis (4)
+  kUniversal,       ///< common point, parent z ⊥ child z (4)
+  kPlanar,          ///< child frame's xy plane slides in the parent's xy plane (3)
+  kPointOnPlane,    ///< child origin in the parent frame's xy plane (1)
+  kGear,            ///< planar: angle(a) − ratio · angle(b) = its initial value (1, holonomic);
+                    ///< spatial: rate(a) − ratio · rate(b) = 0 (1, nonholonomic)
+  kRollingDisk,     ///< thin disk (child, axis = child frame z, radius) rolls on z = 0 (1 + 2)
+  kRollingSphere,   ///< sphere (child, radius) rolls on z = 0 (1 + 2)
+  kContact,         ///< unilateral: a point or sphere (child) above a plane or line of the
+                    ///< parent, g = n·d − radius >= 0 (1 row; see contact())
+  kContactDisk,     ///< unilateral: a thin disk (child) above a plane of the parent,
+                    ///< g = n·d − radius sqrt(1 − (n·a)²) >= 0 (1 row; see contact_disk())
+  kContactSpheres,  ///< unilateral: a sphere or point (child) outside a sphere of the parent,
+                    ///< g = |c_C − c_P| − (radius + other_radius) >= 0 (1 row; see
+                    ///< contact_spheres())
 };
 
 /// Short name of a joint type ("revolute", …). Cost O(1).
@@ -134,6 +137,7 @@ struct Joint {
   Frame frame_child;                      ///< F_C on the child (body coordinates)
   double length = 0.0;                    ///< kDistance: the distance (m), > 0
   double radius = 0.0;                    ///< rolling: the radius (m), > 0
+  double other_radius = 0.0;              ///< kContactSpheres: the parent's sphere's radius
   std::string gear_a;                     ///< kGear: name of the first revolute joint (a)
   std::string gear_b;                     ///< kGear: name of the second revolute joint (b)
   double ratio = 1.0;                     ///< kGear: angle_a − ratio · angle_b = const
@@ -144,9 +148,10 @@ struct Joint {
   /// torque or force (drive_effort).
   MotionFn drive;
   JointFriction friction;  ///< adds a non-ideal force "<name>.friction"
-  /// kContact, kContactDisk: Newton's (or Poisson's) coefficient of restitution e in [0, 1].
+  /// kContact, kContactDisk, kContactSpheres: Newton's (or Poisson's) coefficient of
+  /// restitution e in [0, 1].
   double restitution = 0.0;
-  /// kContact, kContactDisk: the law of the impacts (contact_restitution.hpp).
+  /// kContact, kContactDisk, kContactSpheres: the law of the impacts (contact_restitution.hpp).
   RestitutionLaw restitution_law = RestitutionLaw::kNewton;
 };
 
@@ -220,6 +225,20 @@ Joint contact(std::string name, BodyId plane_body, const Frame& plane, BodyId bo
 /// with the radius).
 Joint contact_disk(std::string name, BodyId plane_body, const Frame& plane, BodyId body,
                    const Frame& disk, double radius, double restitution = 0.0);
+/// A unilateral contact of two spheres (JointType::kContactSpheres; docs/contact.md, "Contacts
+/// on bodies"): the sphere of `radius` centred at p_body on `body` stays outside the sphere of
+/// `other_radius` centred at p_other on `other_body` (kGround: a fixed sphere). Either radius
+/// may be 0 (a point). One holonomic row, made Constraint::unilateral(restitution):
+///   g = |c_W − o_W| − (radius + other_radius) >= 0,
+/// c_W, o_W the world positions of the centres, with u = (c_W − o_W)/|c_W − o_W|:
+///   A = uᵀ (J_c − J_o),  b = −(u·(J'q')_(c−o) + (|v|² − (u·v)²) / |c_W − o_W|),
+/// v = c_W' − o_W' (the normal is the line of centres; the second term is its turning).
+/// O(columns) for A and b, about the point contact's. Planar models: circles in the plane.
+/// Coincident centres (no normal) are refused by build() at the initial pose; in a run the
+/// row's entries become non-finite there, which stops the run (never a wrong number).
+Joint contact_spheres(std::string name, BodyId other_body, const Vector3d& p_other,
+                      double other_radius, BodyId body, const Vector3d& p_body, double radius,
+                      double restitution = 0.0);
 /// @}
 
 /// Applied force at a body point and torque (world frame W), from (q, q', t).

@@ -337,8 +337,9 @@ struct Trajectory {
   std::vector<double> work_drive;     ///< N: work done by the drives' share of Qc_ideal
   std::vector<double> work_external;  ///< N: ∫ P_ext dt (System::external_power), else 0
   std::vector<double> work_control;   ///< N: work of a controller (simulate_controlled), else 0
-  /// N: the work of the impacts of unilateral constraints since t_start, Σ (T⁺ − T⁻) <= 0
-  /// (docs/contact.md); empty when the system has none (then it counts as zero)
+  /// N: the work of the impacts of unilateral constraints since t_start, Σ (T⁺ − T⁻), <= 0 on
+  /// fixed surfaces (a moving surface may do work at an impact; docs/contact.md); empty when the
+  /// system has none (then it counts as zero)
   std::vector<double> work_impact;
   /// N: E(t) − E(0) − (the sum of the works above): the balance's failure
   std::vector<double> energy_balance_residual;
