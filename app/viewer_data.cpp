@@ -669,7 +669,9 @@ json viewer_page_data(const json& scene, const ViewerColumns& run, const ViewerO
       }
       contact["q"] = q;
       contact["n"] = n;
-      contact["force"] = p.pack("lambda." + name);
+      // the contact's whole multiplier (lambda_total: with its share of the non-ideal forces)
+      contact["force"] =
+          p.pack(p.has("lambda_total." + name) ? "lambda_total." + name : "lambda." + name);
       if (c.contains("friction") && truthy(c["friction"]))
         contact["friction_force"] = friction_force(p, c["friction"]);
       data["contacts"].push_back(contact);

@@ -576,10 +576,18 @@ def _contacts(table):
             if h.startswith("gap.") and "lambda." + h[len("gap."):] in table]
 
 
+def _contact_force(table, c):
+    """Contact c's force: its whole multiplier ``lambda_total.<c>`` (lambda + lambda_nonideal,
+    with its share of the non-ideal forces: joint friction, friction at other contacts), or
+    ``lambda.<c>`` where a table has no such column (older runs)."""
+    total = "lambda_total." + c
+    return table[total] if total in table else table["lambda." + c]
+
+
 def contacts_figure(table, meta=None):
-    """The unilateral contacts (docs/contact.md): each contact's normal force (its multiplier
-    ``lambda.<name>``, which pushes when positive: the force itself when the gap is a
-    distance) and its gap ``gap.<name>`` over time, the impacts marked (the ``contact_events``
+    """The unilateral contacts (docs/contact.md): each contact's normal force (its whole
+    multiplier ``lambda_total.<name>``, which pushes when positive: the force itself when the gap
+    is a distance) and its gap ``gap.<name>`` over time, the impacts marked (the ``contact_events``
     of summary.json or of Result.stats: a dotted line across both panels and a triangle on the
     gap's zero at each). None for a run without contacts."""
     contacts = _contacts(table)
@@ -594,7 +602,7 @@ def contacts_figure(table, meta=None):
     fig, axes = _figure("contacts: normal forces and gaps", meta, 2)
     for i, c in enumerate(contacts):
         style = line_style(i)
-        axes[0].plot(t, table["lambda." + c], label=c, gid="force." + c, **style)
+        axes[0].plot(t, _contact_force(table, c), label=c, gid="force." + c, **style)
         axes[1].plot(t, table["gap." + c], label=c, gid="gap." + c, **style)
         times = impacts[c]
         if times:

@@ -300,7 +300,9 @@ def scene_data(scene, names, columns, fps=FPS, max_frames=MAX_FRAMES, digits=DIG
             axes = ("x", "y", "z")[: c.get("dimensions", 2)]
             contact["q"] = [position(base + a) for a in axes]
             contact["n"] = [angle(base + "n" + a) for a in axes]
-            contact["force"] = p.pack("lambda." + c["name"])
+            # the whole multiplier (lambda_total: with the share of the non-ideal forces)
+            total = "lambda_total." + c["name"]
+            contact["force"] = p.pack(total if p.has(total) else "lambda." + c["name"])
             if c.get("friction"):
                 contact["friction_force"] = _friction_force(p, c["friction"])
             data["contacts"].append(contact)

@@ -605,6 +605,7 @@ ControlledTrajectory simulate_controlled(
         one.plant.constraint_names = s.constraint_names;
         one.plant.constraint_rows = s.constraint_rows;
         one.plant.constraint_kinds = s.constraint_kinds;
+        one.plant.unilateral = s.unilateral;
         one.plant.n = n;
         one.plant.m = s.m;
         one.row_names = run.row_names;
@@ -623,6 +624,7 @@ ControlledTrajectory simulate_controlled(
       to->insert(to->end(), from->begin(), from->begin() + n);
     }
     for (auto [to, from] : {std::pair{&p.lambda, &s.lambda},
+                            {&p.lambda_total, &s.lambda_total},
                             {&p.position_violation, &s.position_violation},
                             {&p.velocity_violation, &s.velocity_violation},
                             {&p.potential_energy, &s.potential_energy},
@@ -759,6 +761,7 @@ ControlledTrajectory simulate_controlled(
   tr.constraint_names = full.constraint_names;
   tr.constraint_rows = full.constraint_rows;
   tr.constraint_kinds = full.constraint_kinds;
+  tr.unilateral = full.unilateral;
   tr.n = n;
   tr.m = full.m;
   tr.stats = full.stats;
@@ -792,6 +795,7 @@ std::vector<std::vector<double>*> sample_fields(ControlledTrajectory& run) {
           &run.plant.Qc_ideal,
           &run.plant.Qc_nonideal,
           &run.plant.lambda,
+          &run.plant.lambda_total,
           &run.plant.position_violation,
           &run.plant.velocity_violation,
           &run.plant.kinetic_energy,

@@ -64,7 +64,7 @@ std::vector<ColumnRef> column_refs(const Trajectory& traj) {
   const std::size_t n = x.size(), m = std::size_t(traj.m);
   const std::size_t K = traj.constraint_names.size();
   std::vector<ColumnRef> cols;
-  cols.reserve(1 + 5 * n + m + 2 * K + 9);
+  cols.reserve(1 + 5 * n + m + traj.unilateral.size() + 2 * K + 9);
   const auto scalar = [&](std::string name, const std::vector<double>& f) {
     cols.push_back(ColumnRef{std::move(name), &f, 1, 0});
   };
@@ -90,6 +90,12 @@ std::vector<ColumnRef> column_refs(const Trajectory& traj) {
       cols.push_back(
           ColumnRef{rows == 1 ? base : base + "." + format_number(r), &traj.lambda, m, row++});
     }
+  }
+  // the unilateral constraints' whole multipliers lambda + lambda_nonideal (their contact force)
+  for (std::size_t u = 0; u < traj.unilateral.size(); ++u) {
+    cols.push_back(
+        ColumnRef{"lambda_total." + traj.constraint_names[std::size_t(traj.unilateral[u])],
+                  &traj.lambda_total, traj.unilateral.size(), u});
   }
 
   // violations: one per constraint (position level if holonomic, else velocity level; 0 for

@@ -179,6 +179,13 @@ void write_hdf5(const Trajectory& traj, const std::string& path) {
       stage = "write dataset 'work_impact'";
       write_field(file, "work_impact", traj.work_impact, N, 1, true);
     }
+    if (!traj.unilateral.empty()) {  // their whole multipliers, by unilateral constraint
+      stage = "write dataset 'lambda_total'";
+      write_field(file, "lambda_total", traj.lambda_total, N, traj.unilateral.size(), false);
+      std::vector<std::string> names;
+      for (Index k : traj.unilateral) names.push_back(traj.constraint_names[std::size_t(k)]);
+      write_strings_attribute(file, "unilateral_names", names);
+    }
 
     // names, rows and kinds (so that the columns of lambda and the violations can be told apart)
     stage = "write the name attributes";

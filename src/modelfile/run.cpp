@@ -29,6 +29,7 @@ std::vector<std::vector<double>*> fields(Trajectory& t) {
           &t.Qc_ideal,
           &t.Qc_nonideal,
           &t.lambda,
+          &t.lambda_total,
           &t.position_violation,
           &t.velocity_violation,
           &t.kinetic_energy,
@@ -49,6 +50,7 @@ void copy_header(Trajectory& to, const Trajectory& from) {
   to.constraint_names = from.constraint_names;
   to.constraint_rows = from.constraint_rows;
   to.constraint_kinds = from.constraint_kinds;
+  to.unilateral = from.unilateral;
   to.n = from.n;
   to.m = from.m;
 }

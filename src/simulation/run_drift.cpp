@@ -66,6 +66,7 @@ Run::Run(const System& sys, const SimulationOptions& o, Trajectory& traj,
     one_.constraint_names = traj.constraint_names;
     one_.constraint_rows = traj.constraint_rows;
     one_.constraint_kinds = traj.constraint_kinds;
+    one_.unilateral = traj.unilateral;
     one_.n = traj.n;
     one_.m = traj.m;
   }

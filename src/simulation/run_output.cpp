@@ -27,11 +27,26 @@ Status Run::record(double t, const double* x, bool last) {
   const bool streamed = bool(o_.sample_sink);
   Trajectory& out = streamed ? one_ : traj_;
   if (streamed) {
-    for (auto* f : {&one_.t, &one_.q, &one_.qd, &one_.qdd, &one_.Qc_ideal, &one_.Qc_nonideal,
-                    &one_.lambda, &one_.position_violation, &one_.velocity_violation,
-                    &one_.kinetic_energy, &one_.potential_energy, &one_.energy, &one_.work_nonideal,
-                    &one_.work_ideal, &one_.work_drive, &one_.work_external, &one_.work_control,
-                    &one_.work_impact, &one_.energy_balance_residual}) {
+    for (auto* f : {&one_.t,
+                    &one_.q,
+                    &one_.qd,
+                    &one_.qdd,
+                    &one_.Qc_ideal,
+                    &one_.Qc_nonideal,
+                    &one_.lambda,
+                    &one_.lambda_total,
+                    &one_.position_violation,
+                    &one_.velocity_violation,
+                    &one_.kinetic_energy,
+                    &one_.potential_energy,
+                    &one_.energy,
+                    &one_.work_nonideal,
+                    &one_.work_ideal,
+                    &one_.work_drive,
+                    &one_.work_external,
+                    &one_.work_control,
+                    &one_.work_impact,
+                    &one_.energy_balance_residual}) {
       f->clear();
     }
   }
@@ -45,6 +60,12 @@ Status Run::record(double t, const double* x, bool last) {
   push(out.Qc_ideal, ws_.Qc_ideal);
   push(out.Qc_nonideal, ws_.Qc_nonideal);
   push(out.lambda, ws_.lambda);
+  // the unilateral constraints' whole multipliers (their contact forces)
+  const bool nonideal = ws_.lambda_nonideal.size() == ws_.lambda.size();
+  for (Index k : traj_.unilateral) {
+    const Index r = sys_.row_offset(k);
+    out.lambda_total.push_back(ws_.lambda[r] + (nonideal ? ws_.lambda_nonideal[r] : 0.0));
+  }
   const double T = detail::kinetic_energy(ws_, qd_),
                V = sys_.potential_energy(q_, t, ws_.callables.get());
   out.kinetic_energy.push_back(T);

@@ -166,6 +166,7 @@ Trajectory detail::simulate_observed(const System& sys, const Eigen::Ref<const V
   Trajectory traj;
   traj.coordinate_names = sys.coordinate_names();
   for (const auto& c : sys.constraints()) {
+    if (c.is_unilateral()) traj.unilateral.push_back(Index(traj.constraint_names.size()));
     traj.constraint_names.push_back(c.name());
     traj.constraint_rows.push_back(c.rows());
     traj.constraint_kinds.push_back(c.kind());

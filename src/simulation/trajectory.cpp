@@ -46,6 +46,12 @@ void Trajectory::check_consistent(const char* who) const {
   field("Qc_ideal", traj.Qc_ideal, nq, "n");
   field("Qc_nonideal", traj.Qc_nonideal, nq, "n");
   field("lambda", traj.lambda, mr, "m");
+  for (Index k : traj.unilateral) {
+    if (k < 0 || std::size_t(k) >= K || traj.constraint_rows[std::size_t(k)] != 1)
+      fail("unilateral constraint index " + format_number(k) + " is not a one-row constraint");
+  }
+  if (!traj.lambda_total.empty() || !traj.unilateral.empty())
+    field("lambda_total", traj.lambda_total, traj.unilateral.size(), "u");
   field("position_violation", traj.position_violation, K, "K");
   field("velocity_violation", traj.velocity_violation, K, "K");
   field("kinetic_energy", traj.kinetic_energy, 1, "1");

@@ -5,14 +5,18 @@
 // by a growing force; the LCP solver; and the errors users meet.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
+#include <Eigen/LU>
+
 #include "dynamics/internal.hpp"
 #include "ukdyn/core/autodiff.hpp"
 #include "ukdyn/dynamics/contact.hpp"
+#include "ukdyn/io/trajectory_files.hpp"
 #include "ukdyn/modelfile/model.hpp"
 #include "ukdyn/simulation/simulate.hpp"
 
@@ -412,6 +416,73 @@ TEST(Contact, BadInputGetsAClearErrorNamingTheConstraint) {
     ASSERT_EQ(e.constraints().size(), 1u);
     EXPECT_EQ(e.constraints()[0], "floor");
   }
+}
+
+// ---- the contact force: the whole multiplier ----------------------------------------------------
+
+// A ladder (m = 2, L = 2) released from rest at 1 rad with its foot A on a rough floor (Coulomb,
+// mu = 0.2, on the floor's unilateral constraint) and its top B on a smooth unilateral wall.
+// Newton–Euler at each sample's (θ, θ'), with the floor's normal force N_f, its friction
+// −mu N_f (A slides away from the wall) and the wall's N_w, G = (L/2)(cos θ, sin θ):
+//   m ẍ_G = N_w − mu N_f,   m ÿ_G = N_f − m g,
+//   −(m L²/12) θ'' = (L/2) (N_f (cos θ − mu sin θ) − N_w sin θ)   (the rod turns by −θ),
+// ẍ_G = −(L/2)(sin θ θ'' + cos θ θ'²), ÿ_G = (L/2)(cos θ θ'' − sin θ θ'²): three linear
+// equations in θ'', N_f, N_w. Each gap (y_A, x_B) has a unit gradient, so lambda_total.<c> must be
+// the normal force itself; lambda.<c> alone is only the ideal share (15.155 N at t = 0.1 for the
+// floor's 17.570: the friction's constrained part is missing there; /work/u12 reproducer 02).
+TEST(Contact, TheContactForceColumnIsTheWholeMultiplierThatNewtonEulerGives) {
+  Model model = parse_model(R"(
+parameters: {m: 2, L: 2, g: 9.81, mu: 0.2, th0: 1.0}
+coordinates: [xA, yA, xB, yB]
+kinetic_energy: m/6*(xA_dot^2 + yA_dot^2 + xA_dot*xB_dot + yA_dot*yB_dot + xB_dot^2 + yB_dot^2)
+potential_energy: m*g*(yA + yB)/2
+constraints:
+  - {name: rod, holonomic: ((xA - xB)^2 + (yA - yB)^2 - L^2)/(2*L)}
+  - {name: floor, holonomic: yA, unilateral: true}
+  - {name: wall, holonomic: xB, unilateral: true}
+nonideal:
+  - {friction: coulomb, constraint: floor, mu: mu, coordinates: [xA]}
+initial:
+  q: {xA: L*cos(th0), yA: 0, xB: 0, yB: L*sin(th0)}
+simulate: {t_end: 0.6, integrator: dopri5, rtol: 1e-11, atol: 1e-13}
+output: {every: 0.01}
+)");
+  const Trajectory tr = simulate(model.system, model.q0, model.qd0, model.options);
+  ASSERT_EQ(tr.stats.status, Status::kOk) << tr.stats.message;
+  const Index floor = model.system.constraint_index("floor"),
+              wall = model.system.constraint_index("wall");
+  ASSERT_EQ(tr.unilateral, (std::vector<Index>{floor, wall}));
+  ASSERT_EQ(tr.lambda_total.size(), 2 * tr.t.size());
+  const double m = 2, L = 2, g = 9.81, mu = 0.2;
+  for (std::size_t i = 1; i < tr.t.size(); ++i) {  // (from the first sample after the start)
+    const double* q = &tr.q[4 * i];
+    const double* v = &tr.qd[4 * i];
+    const double dx = q[0] - q[2], dy = q[3] - q[1];
+    const double th = std::atan2(dy, dx);
+    const double w = ((v[3] - v[1]) * dx - dy * (v[0] - v[2])) / (L * L);
+    const double c = std::cos(th), s = std::sin(th);
+    // unknowns (θ'', N_f, N_w)
+    Eigen::Matrix3d K;
+    Eigen::Vector3d r;
+    K << -m * L / 2 * s, mu, -1, m * L / 2 * c, -1, 0, -m * L * L / 12, -L / 2 * (c - mu * s),
+        L / 2 * s;
+    r << m * L / 2 * c * w * w, -m * g + m * L / 2 * s * w * w, 0;
+    const Eigen::Vector3d x = K.partialPivLu().solve(r);
+    EXPECT_NEAR(tr.lambda_total[2 * i], x[1], 1e-7 * m * g) << "floor, t = " << tr.t[i];
+    EXPECT_NEAR(tr.lambda_total[2 * i + 1], x[2], 1e-7 * m * g) << "wall, t = " << tr.t[i];
+    EXPECT_GT(tr.lambda_total[2 * i + 1], 0.0) << "the wall pushes while held, t = " << tr.t[i];
+  }
+  // at t = 0.1 the reproducer's figures: N_f 17.570, N_w 6.532; the ideal share alone differs
+  const std::size_t i = testing::sample_at(tr, 0.1);
+  EXPECT_NEAR(tr.lambda_total[2 * i], 17.5699, 1e-3);
+  EXPECT_NEAR(tr.lambda_total[2 * i + 1], 6.5325, 1e-3);
+  const std::size_t nc = std::size_t(model.system.constraint_rows());
+  EXPECT_GT(std::abs(tr.lambda[nc * i + std::size_t(floor)] - 17.5699), 1.0);
+  // the CSV's columns
+  const std::vector<std::string> cols = csv_columns(tr);
+  EXPECT_NE(std::find(cols.begin(), cols.end(), "lambda_total.floor"), cols.end());
+  EXPECT_NE(std::find(cols.begin(), cols.end(), "lambda_total.wall"), cols.end());
+  EXPECT_EQ(std::find(cols.begin(), cols.end(), "lambda_total.rod"), cols.end());
 }
 
 }  // namespace UKDYN_TEST_FILE

@@ -270,14 +270,14 @@ TEST(ContactSpheres, NewtonsCradleOfFiveRigidSpheresSendsTheLastOneOff) { expect
 // (r1 + r2) against the world points, and A and b against differences of g along the motion.
 TEST(ContactSpheres, GapRowMatchesItsFormulaAndFiniteDifferences) {
   mb::Multibody b;
-  const mb::BodyId p = b.add_rigid_body(
-      "p", 2.0, Vector3d(0.1, 0.2, 0.3), Vector3d(0.1, 0.2, -0.3),
-      Eigen::Quaterniond(Eigen::AngleAxisd(0.4, Vector3d(1, 2, 3).normalized())),
-      Vector3d(0.3, -0.2, 0.1), Vector3d(1.0, 0.5, -2.0));
-  const mb::BodyId c = b.add_rigid_body(
-      "c", 1.0, Vector3d(0.2, 0.1, 0.3), Vector3d(1.1, -0.4, 0.5),
-      Eigen::Quaterniond(Eigen::AngleAxisd(-0.7, Vector3d(-1, 0, 2).normalized())),
-      Vector3d(-0.4, 0.6, 0.2), Vector3d(-1.5, 2.0, 0.7));
+  const mb::BodyId p =
+      b.add_rigid_body("p", 2.0, Vector3d(0.1, 0.2, 0.3), Vector3d(0.1, 0.2, -0.3),
+                       Eigen::Quaterniond(Eigen::AngleAxisd(0.4, Vector3d(1, 2, 3).normalized())),
+                       Vector3d(0.3, -0.2, 0.1), Vector3d(1.0, 0.5, -2.0));
+  const mb::BodyId c =
+      b.add_rigid_body("c", 1.0, Vector3d(0.2, 0.1, 0.3), Vector3d(1.1, -0.4, 0.5),
+                       Eigen::Quaterniond(Eigen::AngleAxisd(-0.7, Vector3d(-1, 0, 2).normalized())),
+                       Vector3d(-0.4, 0.6, 0.2), Vector3d(-1.5, 2.0, 0.7));
   const Vector3d po(0.2, -0.1, 0.05), pc(-0.1, 0.3, 0.2);
   b.add_joint(mb::contact_spheres("pc", p, po, 0.2, c, pc, 0.1, 0.5));
   const mb::MultibodyModel model = b.build();
@@ -299,8 +299,8 @@ TEST(ContactSpheres, GapRowMatchesItsFormulaAndFiniteDifferences) {
   mb::Multibody same;
   const mb::BodyId s1 = same.add_particle("s1", 1.0, Vector3d(0, 0, 1));
   const mb::BodyId s2 = same.add_particle("s2", 1.0, Vector3d(0, 0, 1));
-  same.add_joint(mb::contact_spheres("touch", s1, Vector3d::Zero(), 0.1, s2, Vector3d::Zero(),
-                                     0.1));
+  same.add_joint(
+      mb::contact_spheres("touch", s1, Vector3d::Zero(), 0.1, s2, Vector3d::Zero(), 0.1));
   try {
     (void)same.build();
     ADD_FAILURE() << "no error";
@@ -336,8 +336,9 @@ TEST(ContactSpheres, BadSphereContactsGetAClearErrorWithItsPlace) {
     EXPECT_EQ(got.rfind(where + " ", 0), 0u) << got;
     EXPECT_NE(got.find(text), std::string::npos) << got;
   };
-  expect("{name: c, body: a, shape: sphere, radius: 0.1, sphere: {body: b, radius: 0.1}, plane: {}}",
-         "5:60", "contact 'c': a contact is with a plane or with a sphere, not both");
+  expect(
+      "{name: c, body: a, shape: sphere, radius: 0.1, sphere: {body: b, radius: 0.1}, plane: {}}",
+      "5:60", "contact 'c': a contact is with a plane or with a sphere, not both");
   expect("{name: c, body: a, shape: disk, radius: 0.1, sphere: {body: b, radius: 0.1}}", "5:58",
          "contact 'c': a disk against a sphere is not supported");
   expect("{name: c, body: a, shape: sphere, radius: 0.1, sphere: {body: a, radius: 0.1}}", "5:67",
@@ -346,9 +347,10 @@ TEST(ContactSpheres, BadSphereContactsGetAClearErrorWithItsPlace) {
          "contact 'c' sphere needs 'radius'");
   expect("{name: c, body: a, shape: sphere, radius: 0.1, sphere: {body: b, radius: -1}}", "5:78",
          "contact 'c' sphere radius must be > 0");
-  expect("{name: c, body: a, shape: sphere, radius: 0.1, sphere: {body: b, radius: 1, normal: [0, "
-         "0, 1]}}",
-         "5:81", "unknown key 'normal' in contact 'c' sphere");
+  expect(
+      "{name: c, body: a, shape: sphere, radius: 0.1, sphere: {body: b, radius: 1, normal: [0, "
+      "0, 1]}}",
+      "5:81", "unknown key 'normal' in contact 'c' sphere");
   expect("{name: c, body: a, shape: sphere, radius: 0.1, sphere: {body: nobody, radius: 1}}",
          "5:67", "unknown body 'nobody'");
   expect("{name: c, body: a, shape: sphere, radius: 0.1, sphere: [b, 1]}", "5:60",
@@ -365,9 +367,9 @@ TEST(ContactSpheres, BadSphereContactsGetAClearErrorWithItsPlace) {
     simulate(m.system, m.q0, m.qd0, m.options);
     ADD_FAILURE() << "no error";
   } catch (const InconsistentInitialState& e) {
-    EXPECT_NE(std::string(e.what()).find(
-                  "the unilateral constraint 'c' is penetrated: its gap is -0.05"),
-              std::string::npos)
+    EXPECT_NE(
+        std::string(e.what()).find("the unilateral constraint 'c' is penetrated: its gap is -0.05"),
+        std::string::npos)
         << e.what();
   }
 }

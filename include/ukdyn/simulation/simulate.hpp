@@ -316,14 +316,24 @@ struct Trajectory {
   std::vector<ConstraintKind> constraint_kinds;  ///< K
   Index n = 0;                                   ///< number of coordinates
   Index m = 0;  ///< number of constraint rows (the length of lambda)
+  /// The unilateral constraints (indices into constraint_names, increasing; one row each), the
+  /// columns of lambda_total.
+  std::vector<Index> unilateral;
 
-  std::vector<double> t;                   ///< sample times (N)
-  std::vector<double> q;                   ///< N × n: coordinates
-  std::vector<double> qd;                  ///< N × n: velocities q'
-  std::vector<double> qdd;                 ///< N × n: constrained accelerations q''
-  std::vector<double> Qc_ideal;            ///< N × n: ideal constraint force Aᵀ lambda, eq. (11)
-  std::vector<double> Qc_nonideal;         ///< N × n: non-ideal constraint force, eq. (12)
-  std::vector<double> lambda;              ///< N × m: minimum-norm multipliers of the ideal force
+  std::vector<double> t;            ///< sample times (N)
+  std::vector<double> q;            ///< N × n: coordinates
+  std::vector<double> qd;           ///< N × n: velocities q'
+  std::vector<double> qdd;          ///< N × n: constrained accelerations q''
+  std::vector<double> Qc_ideal;     ///< N × n: ideal constraint force Aᵀ lambda, eq. (11)
+  std::vector<double> Qc_nonideal;  ///< N × n: non-ideal constraint force, eq. (12)
+  std::vector<double> lambda;       ///< N × m: minimum-norm multipliers of the ideal force
+  /// N × u (u = unilateral.size()): each unilateral constraint's whole multiplier
+  /// lambda + lambda_nonideal — the force its contact pushes with along its gap's gradient (the
+  /// normal force for a gap of unit gradient), which decides its release (docs/contact.md);
+  /// lambda alone is only the ideal share, and misses what the contact carries of the non-ideal
+  /// forces (joint friction, Coulomb friction at other contacts). Empty without unilateral
+  /// constraints.
+  std::vector<double> lambda_total;
   std::vector<double> position_violation;  ///< N × K: max |phi| of each constraint (0 if none)
   std::vector<double> velocity_violation;  ///< N × K: max |phi'| or |psi| of each constraint
   std::vector<double> kinetic_energy;      ///< N: T = ½ q'ᵀ M q'
