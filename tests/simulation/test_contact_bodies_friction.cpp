@@ -3,7 +3,8 @@
 // "Friction at a body's contact"): the sliding velocity is the contact point's (ContactKinematics),
 // each case against its closed form — a sphere launched without spin on a rough floor (slides,
 // then rolls from t* = 2 v0 / (7 mu g) at 5/7 v0), a planar rod sliding flat on two point contacts
-// (stops at v0² / (2 mu g) and sticks, each end carrying m g / 2), the errors of the model file.
+// (stops at v0² / (2 mu g) and sticks, each end carrying m g / 2), Painlevé's rod on its end, an
+// oblique impact that sticks or slides, a robot wheel in joint coordinates, the errors.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -212,6 +213,59 @@ TEST(ContactBodiesFriction, ObliqueImpactSticksOrSlidesAsTheClosedFormSays) {
                       0.5 * mass * (u_after * u_after - u * u) + 0.5 * I * w_after * w_after;
     EXPECT_LT(dT, 0.0);
     EXPECT_NEAR(hit.energy_change, dT, 1e-8) << "mu = " << mu;
+  }
+}
+
+// ---- Painlevé's rod on its end
+// --------------------------------------------------------------------
+
+// A planar rod (m = 1, length 2l = 2, I = m l² / 3) standing at tan θ = 2 on its end A (a point
+// contact) and sliding away from itself at v: A's normal acceleration is
+// (N / m)(1 + 3c² − 3 mu s c) − g (θ' = 0), so below mu_c = (1 + 3c²) / (3 s c) = 4/3 the start
+// has N = m g / (1 + 3c² − 3 mu s c), and above it the contact problem has no solution or
+// several: the run stops naming the contact, mu and mu_c (docs/contact.md, "Painlevé") — the
+// contact-point law's columns in the LCP of the accelerations, as the coordinate law's.
+constexpr const char* kPainleve = R"(
+parameters: {th0: 1.1071487177940904, mu: 0.5, v: 1}
+bodies:
+  - {name: rod, type: planar, mass: 1, inertia: 1/3, position: [cos(th0), sin(th0)], angle: th0,
+     velocity: [-v, 0]}
+forces:
+  - {type: gravity, g: [0, -9.81]}
+contacts:
+  - {name: floor, body: rod, point: [-1, 0]}
+nonideal:
+  - {friction: coulomb, constraint: floor, mu: mu}
+simulate: {t_end: 0.01, integrator: dopri5, rtol: 1e-10, atol: 1e-12}
+output: {every: 0}
+)";
+
+TEST(ContactBodiesFriction, PainleveRodOnItsEndMeetsTheCriticalMu) {
+  const double th = std::atan(2.0), c = std::cos(th), s = std::sin(th), l = 1.0, m = 1.0;
+  const double mu = 0.5;
+  Model model = parse_model(kPainleve, "<string>", {{"mu", mu}});
+  const Trajectory tr = run_at(model, {});
+  ASSERT_FALSE(tr.t.empty());
+  // at the start: N, and Newton–Euler with friction F = +mu N on A
+  const double N = m * kG / (1.0 + 3.0 * c * c - 3.0 * mu * s * c), F = mu * N;
+  const double thdd = (-l * c * N + l * s * F) / (m * l * l / 3.0);
+  // (N is the whole reaction: the ideal multiplier m g / (1 + 3c²) plus the friction's share)
+  EXPECT_NEAR(at(tr, tr.Qc_ideal, "rod.y", 0) + at(tr, tr.Qc_nonideal, "rod.y", 0), N, 1e-8);
+  EXPECT_NEAR(lambda_of(tr, "floor", 0), m * kG / (1.0 + 3.0 * c * c), 1e-8);
+  EXPECT_NEAR(at(tr, tr.Qc_nonideal, "rod.x", 0), F, 1e-8);
+  EXPECT_NEAR(at(tr, tr.qdd, "rod.x", 0), F / m, 1e-8);
+  EXPECT_NEAR(at(tr, tr.qdd, "rod.y", 0), N / m - kG, 1e-8);
+  EXPECT_NEAR(at(tr, tr.qdd, "rod.theta", 0), thdd, 1e-8);
+  for (const double above : {1.4, 2.0}) {
+    const Model bad = parse_model(kPainleve, "<string>", {{"mu", above}});
+    try {
+      simulate(bad.system, bad.q0, bad.qd0, bad.options);
+      ADD_FAILURE() << "no error at mu = " << above;
+    } catch (const std::invalid_argument& e) {
+      const std::string what = e.what();
+      EXPECT_NE(what.find("Painlevé's paradox at the contact 'floor'"), std::string::npos) << what;
+      EXPECT_NE(what.find("the critical mu is 1.333"), std::string::npos) << what;
+    }
   }
 }
 
