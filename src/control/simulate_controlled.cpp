@@ -449,6 +449,17 @@ System build_controlled(const std::shared_ptr<const ControlledPlant>& st,
       spec.mu = c->mu;
       spec.mu_static = c->mu_static;
       spec.coordinates = c->coordinates;
+      if (c->kinematics) {
+        // a contact point's friction: its kinematics on the plant's part of the state
+        if (aux > 0) {
+          throw std::invalid_argument(
+              "ukdyn::simulate_controlled: Coulomb friction at contact point '" +
+              plant.nonideal_name(i) +
+              "' with a controller that has a state of its own is not supported yet");
+        }
+        spec.coordinates.clear();
+        spec.kinematics = c->kinematics;
+      }
       spec.regularization_velocity = c->eps;
       spec.name = plant.nonideal_name(i);
       if (c->surface_velocity && aux > 0) {

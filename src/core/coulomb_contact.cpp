@@ -19,6 +19,16 @@
 namespace ukdyn {
 namespace detail {
 
+double normal_row_unit(const Eigen::Ref<const MatrixXd>& rows_n, Index rows, VectorXd& row) {
+  double largest = 0.0;
+  for (Index i = 0; i < rows; ++i) {
+    row = rows_n.row(i).transpose();
+    const double a = detail::safe_norm(row.data(), row.size());
+    if (std::isfinite(a)) largest = std::max(largest, a);
+  }
+  return detail::scale_class(largest) / 10.0;
+}
+
 namespace {
 
 // u and u' on the sliding coordinates; the normal constraint's scratch and buffers for the
@@ -200,13 +210,7 @@ class StickModel final : public ConstraintModel {
   // or is not finite)
   double row_unit(StickScratch& s) const {
     if (normal_ == nullptr) return 1.0;
-    double largest = 0.0;
-    for (Index i = 0; i < normal_rows_; ++i) {
-      s.row = s.rows_n.row(i).transpose();
-      const double a = detail::safe_norm(s.row.data(), s.row.size());
-      if (std::isfinite(a)) largest = std::max(largest, a);
-    }
-    return detail::scale_class(largest) / 10.0;
+    return normal_row_unit(s.rows_n, normal_rows_, s.row);
   }
 
   // v ← P v with the basis in s
@@ -240,7 +244,111 @@ class StickModel final : public ConstraintModel {
   Index normal_rows_;
 };
 
+// The stick constraint of a Coulomb contact on the contact-point path (ContactKinematics):
+// the contact point's material velocity has no tangential part,
+//   psi = T q' = 0,   T = (t_iᵀ J_P)_i  (d rows on the kinematics' columns),
+// with the acceleration form T q'' = −T' q' (the bias rows of the kinematics). The normal part is
+// the contact constraint's. Scale: × kappa, the unit of the normal constraint's rows as
+// StickModel's (normal_row_unit; 1 for a contact in SI units, and a change of units of the rows
+// moves the stick rows with them).
+class PointStickModel final : public ConstraintModel {
+ public:
+  struct Scratch final : public ConstraintScratch {
+    Scratch(Index n, Index rows, Index cols, Index normal_rows,
+            std::unique_ptr<ConstraintScratch> own, std::unique_ptr<ConstraintScratch> normal)
+        : J(MatrixXd::Zero(rows, cols)),
+          bias(VectorXd::Zero(rows)),
+          rows_n(MatrixXd::Zero(std::max<Index>(normal_rows, 1), n)),
+          b_n(VectorXd::Zero(std::max<Index>(normal_rows, 1))),
+          row(VectorXd::Zero(n)),
+          kinematics(std::move(own)),
+          normal_scratch(std::move(normal)) {}
+    MatrixXd J;       // (1 + d) × |columns|
+    VectorXd bias;    // (1 + d)
+    MatrixXd rows_n;  // (normal rows × n) the normal constraint's rows of A
+    VectorXd b_n;     // (normal rows) its b (unused)
+    VectorXd row;     // (n) one of them, for its norm
+    std::unique_ptr<ConstraintScratch> kinematics;
+    std::unique_ptr<ConstraintScratch> normal_scratch;
+  };
+  PointStickModel(ContactKinematics kinematics, std::optional<Constraint> normal)
+      : kin_(std::move(kinematics)),
+        normal_constraint_(std::move(normal)),
+        normal_(normal_constraint_ ? &normal_constraint_->model() : nullptr),
+        normal_rows_(normal_constraint_ ? normal_constraint_->rows() : 0) {}
+
+  std::unique_ptr<ConstraintScratch> make_scratch(Index n) const override {
+    return std::make_unique<Scratch>(n, 1 + kin_.tangents, Index(kin_.columns.size()), normal_rows_,
+                                     kin_.make_scratch ? kin_.make_scratch(n) : nullptr,
+                                     normal_ ? normal_->make_scratch(n) : nullptr);
+  }
+  const std::vector<Index>& columns() const override { return kin_.columns; }
+
+  void acceleration_form_local(const Eigen::Ref<const VectorXd>& q,
+                               const Eigen::Ref<const VectorXd>& qd, double t,
+                               ConstraintScratch* scratch, Eigen::Ref<MatrixXd> A_local,
+                               Eigen::Ref<VectorXd> b) const override {
+    auto& s = static_cast<Scratch&>(*scratch);
+    kin_.evaluate(q, qd, t, s.kinematics.get(), s.J, s.bias);
+    const double kappa = unit(q, qd, t, s);
+    A_local = kappa * s.J.bottomRows(kin_.tangents);
+    b = -kappa * s.bias.tail(kin_.tangents);
+  }
+
+  void violation(const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd,
+                 double t, ConstraintScratch* scratch, Eigen::Ref<VectorXd> position,
+                 Eigen::Ref<VectorXd> velocity) const override {
+    auto& s = static_cast<Scratch&>(*scratch);
+    kin_.evaluate(q, qd, t, s.kinematics.get(), s.J, s.bias);
+    position.setZero();
+    velocity.setZero();
+    for (std::size_t j = 0; j < kin_.columns.size(); ++j)
+      velocity += s.J.col(Index(j)).tail(kin_.tangents) * qd[kin_.columns[j]];
+    velocity *= unit(q, qd, t, s);
+  }
+
+ private:
+  // kappa of the normal constraint's rows at (q, t) (1 without one)
+  double unit(const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd, double t,
+              Scratch& s) const {
+    if (normal_ == nullptr) return 1.0;
+    normal_->acceleration_form(q, qd, t, s.normal_scratch.get(), s.rows_n,
+                               s.b_n.head(normal_rows_));
+    return normal_row_unit(s.rows_n, normal_rows_, s.row);
+  }
+  ContactKinematics kin_;
+  std::optional<Constraint> normal_constraint_;  // the contact's normal constraint, if known
+  const ConstraintModel* normal_;                // its model, or null
+  Index normal_rows_;
+};
+
 }  // namespace
+
+Constraint point_stick_constraint(const std::string& name, const ContactKinematics& kinematics,
+                                  const Constraint* normal) {
+  std::optional<Constraint> copy;
+  if (normal != nullptr) copy = *normal;
+  return Constraint(name, ConstraintKind::kNonholonomic, kinematics.tangents,
+                    std::make_shared<const PointStickModel>(kinematics, std::move(copy)));
+}
+
+double contact_normal_force(const System& sys, const Workspace& ws, Index c,
+                            const Eigen::Ref<const VectorXd>& reaction) {
+  const auto& cols = sys.friction_contacts()[std::size_t(c)].kinematics.columns;
+  const auto& J = ws.contact_jacobian[std::size_t(c)];
+  double wr = 0.0;
+  for (std::size_t j = 0; j < cols.size(); ++j) wr += J(0, Index(j)) * reaction[cols[j]];
+  const double ww = J.row(0).squaredNorm();
+  return ww > 0.0 ? std::abs(wr) / ww : 0.0;
+}
+
+void add_contact_force(const System& sys, const Workspace& ws, Index c, double scale,
+                       const Eigen::Ref<const VectorXd>& f, Eigen::Ref<VectorXd> C) {
+  const auto& kin = sys.friction_contacts()[std::size_t(c)].kinematics;
+  const auto& J = ws.contact_jacobian[std::size_t(c)];
+  for (std::size_t j = 0; j < kin.columns.size(); ++j)
+    C[kin.columns[j]] += scale * J.col(Index(j)).tail(kin.tangents).dot(f);
+}
 
 Constraint stick_constraint(const std::string& name, const std::vector<Index>& coordinates,
                             const SurfaceVelocityFn& surface, const Constraint* normal) {
@@ -254,6 +362,17 @@ Index sliding_velocity(const System& sys, Workspace& ws, Index c,
                        const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd,
                        double t, bool rows_assembled) {
   const FrictionContact& contact = sys.friction_contacts()[std::size_t(c)];
+  if (const ContactKinematics& kin = contact.kinematics) {
+    // the contact-point path: v_rel = T q' (no normal to remove: T is tangential already)
+    auto& J = ws.contact_jacobian[std::size_t(c)];
+    auto bias = ws.contact_bias.col(c).head(1 + kin.tangents);
+    kin.evaluate(q, qd, t, ws.contact_scratch[std::size_t(c)].get(), J, bias);
+    auto v = ws.sliding.col(c).head(kin.tangents);
+    v.setZero();
+    for (std::size_t j = 0; j < kin.columns.size(); ++j)
+      v += J.col(Index(j)).tail(kin.tangents) * qd[kin.columns[j]];
+    return 0;
+  }
   const std::vector<Index>& coords = contact.coordinates;
   const Index nc = Index(coords.size()), k = contact.normal_constraint;
   auto v = ws.sliding.col(c).head(nc);

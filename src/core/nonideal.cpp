@@ -7,6 +7,7 @@
 #include <stdexcept>
 #include <utility>
 
+#include "dynamics/internal.hpp"
 #include "ukdyn/core/format.hpp"
 #include "ukdyn/core/system.hpp"
 #include "ukdyn/dynamics/workspace.hpp"
@@ -31,7 +32,17 @@ bool IdealForceInfo::slip_hint_held(Index i) const {
 }
 Eigen::Ref<const VectorXd> IdealForceInfo::sliding_velocity(Index c) const {
   const auto& contacts = sys_.friction_contacts();
-  return ws_.sliding.col(c).head(Index(contacts[std::size_t(c)].coordinates.size()));
+  return ws_.sliding.col(c).head(contacts[std::size_t(c)].size());
+}
+Eigen::Ref<const MatrixXd> IdealForceInfo::contact_jacobian(Index c) const {
+  return ws_.contact_jacobian[std::size_t(c)];
+}
+double IdealForceInfo::contact_normal_force(Index c, Index k) const {
+  return detail::contact_normal_force(sys_, ws_, c, reaction(k));
+}
+void IdealForceInfo::add_contact_force(Index c, double scale, const Eigen::Ref<const VectorXd>& f,
+                                       Eigen::Ref<VectorXd> C) const {
+  detail::add_contact_force(sys_, ws_, c, scale, f, C);
 }
 Index IdealForceInfo::constraint_index(std::string_view name) const {
   return sys_.constraint_index(name);
@@ -72,6 +83,56 @@ std::vector<Index> resolve_coordinates(const std::vector<Index>& listed, Index n
 }
 }  // namespace
 
+namespace {
+// The law on the contact-point path (ContactKinematics): v_rel = T q' (sliding_velocity),
+//   C = Tᵀ f,  f = −mu N v_rel / sqrt(|v_rel|² + eps²),  N = |w·R_k| / |w|² (physical),
+// with the slip hint (d tangential components) as the coordinate path's.
+NonIdealFn contact_point_law(const CoulombFriction& spec, const System& sys, Index k,
+                             const std::string& who) {
+  const ContactKinematics& kin = spec.kinematics;
+  if (!spec.coordinates.empty())
+    throw std::invalid_argument(who +
+                                ": a friction at a contact point slides the point, not "
+                                "listed coordinates: leave coordinates empty");
+  if (spec.surface_velocity)
+    throw std::invalid_argument(who +
+                                ": a surface velocity under a contact point is not "
+                                "supported yet");
+  if (kin.tangents != 1 && kin.tangents != 2)
+    throw std::invalid_argument(who + ": the contact kinematics' tangents must be 1 or 2, got " +
+                                format_number(kin.tangents));
+  for (std::size_t j = 0; j < kin.columns.size(); ++j) {
+    const Index i = kin.columns[j];
+    if (i < 0 || i >= sys.coordinate_count() || (j > 0 && !(kin.columns[j - 1] < i)))
+      throw std::invalid_argument(who +
+                                  ": the contact kinematics' columns must be strictly "
+                                  "increasing coordinate indices in [0, " +
+                                  format_number(sys.coordinate_count()) + ")");
+  }
+  const double mu = spec.mu, eps2 = spec.regularization_velocity * spec.regularization_velocity;
+  const Index self = sys.nonideal_count(), contact = Index(sys.friction_contacts().size());
+  return [k, mu, eps2, self, contact](const Eigen::Ref<const VectorXd>&,
+                                      const Eigen::Ref<const VectorXd>&, double,
+                                      const IdealForceInfo& ideal, Eigen::Ref<VectorXd> C) {
+    const auto v = ideal.sliding_velocity(contact);
+    const double v2 = v.squaredNorm();
+    const double N = ideal.contact_normal_force(contact, k);
+    const auto hint = ideal.slip_hint(self).head(v.size());
+    if (hint.squaredNorm() > 0.0) {
+      // slipping from rest: mu N along the hint (see the coordinate path)
+      if (v2 <= 1e4 * eps2 || ideal.slip_hint_held(self)) {
+        ideal.add_contact_force(contact, mu * N, hint, C);
+      } else {
+        ideal.add_contact_force(contact, -mu * N / std::sqrt(v2), v, C);
+      }
+      return;
+    }
+    // f = −mu N v_rel / sqrt(|v_rel|² + eps²)
+    ideal.add_contact_force(contact, -mu * N / std::sqrt(v2 + eps2), v, C);
+  };
+}
+}  // namespace
+
 NonIdealForce coulomb_friction(CoulombFriction spec) {
   std::string name = spec.name.empty() ? "coulomb." + spec.constraint : spec.name;
   spec.name = name;
@@ -91,6 +152,7 @@ NonIdealForce coulomb_friction(CoulombFriction spec) {
                                       ", got " + format_number(*spec.mu_static));
         }
         const Index k = sys.constraint_index(spec.constraint);
+        if (spec.kinematics) return contact_point_law(spec, sys, k, who);
         const std::vector<Index> coords =
             resolve_coordinates(spec.coordinates, sys.coordinate_count(), who);
         const double mu = spec.mu,

@@ -306,6 +306,25 @@ System SystemBuilder::build() const {
   for (const auto& f : nonideal_) {
     const CoulombFriction* spec = f.coulomb();
     if (spec == nullptr) continue;
+    if (spec->kinematics) {
+      // the contact-point path: T q' = 0 (its columns are checked with the other constraints',
+      // its tangents when the force is bound)
+      if (spec->kinematics.tangents < 1 || spec->kinematics.tangents > 2) {
+        throw std::invalid_argument("ukdyn::coulomb_friction '" + f.name() +
+                                    "': the contact kinematics' tangents must be 1 or 2, got " +
+                                    format_number(spec->kinematics.tangents));
+      }
+      const Constraint* normal = nullptr;
+      for (const auto& c : constraints_) {
+        if (c.name() == spec->constraint) normal = &c;
+      }
+      Constraint stick =
+          detail::point_stick_constraint("stick." + f.name(), spec->kinematics, normal);
+      const double never = std::numeric_limits<double>::infinity();
+      stick.active_between(never, never);
+      all.push_back(stick);
+      continue;
+    }
     std::vector<Index> coords = spec->coordinates;
     if (coords.empty()) {
       for (Index i = 0; i < n_; ++i) coords.push_back(i);
@@ -369,7 +388,8 @@ System SystemBuilder::build() const {
       contact.normal_constraint = s.constraint_index(spec->constraint);
       contact.stick_constraint = s.constraint_index("stick." + f.name());
       contact.coordinates = spec->coordinates;
-      if (contact.coordinates.empty()) {
+      contact.kinematics = spec->kinematics;
+      if (contact.coordinates.empty() && !contact.kinematics) {
         for (Index i = 0; i < n_; ++i) contact.coordinates.push_back(i);
       }
       contact.mu = spec->mu;

@@ -152,6 +152,9 @@ class ContactDynamics {
   std::vector<Index> direction_cone_;  // (directions) the cone of each friction direction
   std::vector<Index> cone_contact_;    // (cones) the contact (position in the set) of each cone
   std::vector<double> cone_mu_;        // (cones) its coefficient
+  // (cones) the normal force per unit of its contact's impulse: |A_i| (a Cartesian constraint's
+  // sliding coordinates), |A_i·w| / |w|² at a contact point (contact_normal_force)
+  std::vector<double> cone_normal_;
   Eigen::LLT<MatrixXd> llt_;
   Eigen::CompleteOrthogonalDecomposition<MatrixXd> cod_;  // of G_b = A_b M⁻¹ A_bᵀ
   std::string failure_;

@@ -36,8 +36,7 @@ Index count_unilateral(const System& sys) {
 Index friction_variables(const System& sys) {
   Index count = 0;
   for (const FrictionContact& fc : sys.friction_contacts()) {
-    if (sys.constraint(fc.normal_constraint).is_unilateral())
-      count += 2 * Index(fc.coordinates.size()) + 1;
+    if (sys.constraint(fc.normal_constraint).is_unilateral()) count += 2 * fc.size() + 1;
   }
   return count;
 }
@@ -207,29 +206,41 @@ bool ContactDynamics::sliding_friction(const System& sys, Workspace& ws,
     override_k = 1;
     sliding_velocity(sys, ws, Index(c), q, qd, t, false);
     override_k = saved;
-    const Index nc = Index(fc.coordinates.size());
+    const Index nc = fc.size();
     const auto v = ws.sliding.col(Index(c)).head(nc);
     const auto hint = ws.slip_hint.col(fc.force);
     const double v2 = v.squaredNorm(), eps2 = fc.eps * fc.eps;
     // the friction per unit N, as the law (CoulombFriction) applies it; none at rest, where the
     // stick/slip events decide
     VectorXd f = VectorXd::Zero(n_);
-    if (hint.squaredNorm() > 0.0 &&
-        (v2 <= 1e4 * eps2 || ws.slip_hint_held[std::size_t(fc.force)])) {
-      for (Index j : fc.coordinates) f[j] = fc.mu * hint[j];
-    } else if (v2 > 1e4 * eps2) {
-      const double scale = -fc.mu / std::sqrt(v2 + eps2);
-      for (Index r = 0; r < nc; ++r) f[fc.coordinates[std::size_t(r)]] = scale * v[r];
+    const bool hinted =
+        hint.squaredNorm() > 0.0 && (v2 <= 1e4 * eps2 || ws.slip_hint_held[std::size_t(fc.force)]);
+    if (!hinted && !(v2 > 1e4 * eps2)) continue;
+    // N per unit lambda_i: |A_iᵀ lambda_i| = |A_i| lambda_i (Cartesian sliding coordinates), or
+    // |A_i·w| / |w|² lambda_i at a contact point (f = Tᵀ f_t there)
+    double per_unit = 0.0;
+    if (fc.kinematics) {
+      if (hinted) {
+        add_contact_force(sys, ws, Index(c), fc.mu, hint.head(nc), f);
+      } else {
+        add_contact_force(sys, ws, Index(c), -fc.mu / std::sqrt(v2 + eps2), v, f);
+      }
+      per_unit = contact_normal_force(sys, ws, Index(c), A_c_.row(i).transpose());
     } else {
-      continue;
+      if (hinted) {
+        for (Index j : fc.coordinates) f[j] = fc.mu * hint[j];
+      } else {
+        const double scale = -fc.mu / std::sqrt(v2 + eps2);
+        for (Index r = 0; r < nc; ++r) f[fc.coordinates[std::size_t(r)]] = scale * v[r];
+      }
+      per_unit = A_c_.row(i).norm();
     }
     if (!any) {
       F_.setZero(k, k);
       mu_.setZero(k);
     }
     any = true;
-    // N = |A_iᵀ lambda_i| = |A_i| lambda_i for lambda_i >= 0
-    F_.col(i) += A_c_ * apply_p(A_c_.row(i).norm() * f);
+    F_.col(i) += A_c_ * apply_p(per_unit * f);
     mu_[i] = std::max(mu_[i], fc.mu);
   }
   return any;
@@ -403,7 +414,7 @@ bool ContactDynamics::impulse(Eigen::Ref<VectorXd> qd, const VectorXd& r, const 
   }
   for (Index f = 0; f < nf; ++f) {
     const Index i = cone_contact_[std::size_t(f)];
-    const double mu_i = cone_mu_[std::size_t(f)] * A_c_.row(i).norm();
+    const double mu_i = cone_mu_[std::size_t(f)] * cone_normal_[std::size_t(f)];
     Mlcp(k + nb + f, i) = mu_i;
     rr[k + nb + f] = mu_i * offset[i];
   }
@@ -437,6 +448,7 @@ bool ContactDynamics::impact_friction(const System& sys, Workspace& ws,
   direction_cone_.clear();
   cone_contact_.clear();
   cone_mu_.clear();
+  cone_normal_.clear();
   for (std::size_t c = 0; c < fcs.size(); ++c) {
     const FrictionContact& fc = fcs[c];
     const auto at = std::find(set_.begin(), set_.end(), fc.normal_constraint);
@@ -447,8 +459,27 @@ bool ContactDynamics::impact_friction(const System& sys, Workspace& ws,
     override_k = 1;
     const Index normals = sliding_velocity(sys, ws, Index(c), q, qd, t, false);
     override_k = saved;
-    const Index nc = Index(fc.coordinates.size());
+    const Index nc = fc.size();
     const VectorXd v = ws.sliding.col(Index(c)).head(nc);
+    if (fc.kinematics) {
+      // the contact point's: ±each tangent t_j of the contact plane, D = Tᵀ (±e_j) (a pyramid
+      // of 4 directions for a spatial contact), the cone's N per unit impulse |A_i·w| / |w|²
+      const Index f = Index(cone_mu_.size());
+      const Index i = Index(at - set_.begin());
+      cone_mu_.push_back(fc.mu);
+      cone_normal_.push_back(contact_normal_force(sys, ws, Index(c), A_c_.row(i).transpose()));
+      cone_contact_.push_back(i);
+      for (Index j = 0; j < nc; ++j) {
+        for (const double sign : {1.0, -1.0}) {
+          VectorXd d = VectorXd::Zero(n_);
+          add_contact_force(sys, ws, Index(c), sign, VectorXd::Unit(nc, j), d);
+          directions.push_back(std::move(d));
+          vt.push_back(sign * v[j]);
+          direction_cone_.push_back(f);
+        }
+      }
+      continue;
+    }
     // an orthonormal basis of the tangent space (the sliding coordinates less the normals);
     // ±each: the friction cone exactly for one tangent, a pyramid for two
     std::vector<VectorXd> tangents;
@@ -462,6 +493,7 @@ bool ContactDynamics::impact_friction(const System& sys, Workspace& ws,
     if (tangents.empty()) continue;
     const Index f = Index(cone_mu_.size());
     cone_mu_.push_back(fc.mu);
+    cone_normal_.push_back(A_c_.row(Index(at - set_.begin())).norm());
     cone_contact_.push_back(Index(at - set_.begin()));
     for (const auto& u : tangents) {
       for (const double sign : {1.0, -1.0}) {

@@ -146,6 +146,23 @@ Index sliding_velocity(const System& sys, Workspace& ws, Index c,
                        const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd,
                        double t, bool rows_assembled);
 
+// The stick constraint of a Coulomb contact on the contact-point path: T q' = 0, T the
+// kinematics' tangential rows (ContactKinematics), nonholonomic, on its columns
+// (core/coulomb_contact.cpp).
+Constraint point_stick_constraint(const std::string& name, const ContactKinematics& kinematics,
+                                  const Constraint* normal);
+// kappa = class(max_i ‖n_i‖) / 10 over the first `rows` rows n_i of rows_n (the unit of a
+// contact's normal rows, in which its stick rows are stated; `row` (n) a buffer): 1 in SI units.
+double normal_row_unit(const Eigen::Ref<const MatrixXd>& rows_n, Index rows, VectorXd& row);
+// Contact c's physical normal force on the contact-point path from a reaction R (n) of its
+// normal constraint: N = |w·R| / |w|², w = J_Pᵀ n_W the row 0 of ws.contact_jacobian[c] (as
+// sliding_velocity last evaluated it). O(|columns|), no allocation.
+double contact_normal_force(const System& sys, const Workspace& ws, Index c,
+                            const Eigen::Ref<const VectorXd>& reaction);
+// C += scale · Tᵀ f on the contact-point path: f (d) the tangential force components, T the
+// tangential rows of ws.contact_jacobian[c]. O(d · |columns|), no allocation.
+void add_contact_force(const System& sys, const Workspace& ws, Index c, double scale,
+                       const Eigen::Ref<const VectorXd>& f, Eigen::Ref<VectorXd> C);
 // v −= Σ_j (v·e_j) e_j over the first `basis` rows e_j of ws.contact_basis (orthonormal, from
 // sliding_velocity): the part of v (|coordinates|) tangent to the contact's constraint.
 void remove_normals(const Workspace& ws, Index basis, Eigen::Ref<VectorXd> v);

@@ -142,14 +142,25 @@ Workspace::Workspace(const System& sys, const SolverOptions& options)
   active.assign(std::size_t(K), 0);
   activity_override.assign(std::size_t(K), -1);
   nonideal_enabled.assign(std::size_t(sys.nonideal_count()), 1);
-  slip_hint.setZero(n, sys.nonideal_count());
   slip_hint_held.assign(std::size_t(sys.nonideal_count()), 0);
-  // Coulomb contacts: relative sliding velocities and their scratch
-  Index contact_rows_max = 0, contact_width = 0;
+  // Coulomb contacts: relative sliding velocities and their scratch (the contact-point path's
+  // Jacobian rows, bias and kinematics buffers)
+  Index contact_rows_max = 0, contact_width = 0, tangents_max = 0;
+  contact_jacobian.clear();
+  contact_scratch.clear();
   for (const auto& contact : sys.friction_contacts()) {
     contact_rows_max = std::max(contact_rows_max, sys.constraint(contact.normal_constraint).rows());
-    contact_width = std::max(contact_width, Index(contact.coordinates.size()));
+    contact_width = std::max(contact_width, contact.size());
+    const ContactKinematics& kin = contact.kinematics;
+    tangents_max = std::max(tangents_max, kin ? kin.tangents : Index(0));
+    contact_jacobian.push_back(kin ? MatrixXd::Zero(1 + kin.tangents, Index(kin.columns.size()))
+                                   : MatrixXd());
+    contact_scratch.push_back(kin && kin.make_scratch ? kin.make_scratch(n) : nullptr);
   }
+  contact_bias.setZero(tangents_max > 0 ? 1 + tangents_max : 0,
+                       Index(sys.friction_contacts().size()));
+  // (a slip hint on the contact-point path holds the d tangential components)
+  slip_hint.setZero(std::max(n, tangents_max), sys.nonideal_count());
   sliding.setZero(contact_width, Index(sys.friction_contacts().size()));
   contact_rows.setZero(contact_rows_max, n);
   contact_b.setZero(contact_rows_max);

@@ -14,6 +14,7 @@
 #include <algorithm>
 #include <cctype>
 #include <filesystem>
+#include <functional>
 #include <map>
 #include <memory>
 #include <set>
@@ -27,6 +28,7 @@
 #include "ukdyn/control/control.hpp"
 #include "ukdyn/core/constraint.hpp"
 #include "ukdyn/core/format.hpp"
+#include "ukdyn/core/nonideal.hpp"
 #include "ukdyn/dynamics/contact_restitution.hpp"
 #include "ukdyn/modelfile/expression.hpp"
 #include "ukdyn/modelfile/model.hpp"
@@ -441,6 +443,10 @@ class Reader {
   // gets the contacts'; `urdf` names the file in errors
   void read_robot_contacts(const YAML::Node& root, const tree::Tree& robot, const std::string& urdf,
                            std::set<std::string>& names, SystemBuilder& builder);
+  // the contacts whose Coulomb friction slides the contact point (a robot's, set by
+  // read_robot_contacts), by name: the maker of their ContactKinematics, which read_nonideal
+  // calls (std::invalid_argument: not supported, reported at the friction's entry)
+  std::map<std::string, std::function<ContactKinematics()>> point_contacts_;
 
   // ---- control (modelfile/reader_control.cpp): control: ------------------------------------
   // Builds model.controller from the control: section (nothing when absent). With `nominal:` the

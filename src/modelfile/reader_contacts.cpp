@@ -4,7 +4,9 @@
 // with a plane fixed on the ground or on another body, added as mb::contact / mb::contact_disk,
 // or of a point or sphere outside a sphere of another body or of the ground (mb::contact_spheres).
 // Every error names the contact and the key (file:line:column) and gives a hint.
+#include <algorithm>
 #include <cmath>
+#include <optional>
 #include <set>
 #include <string>
 #include <vector>
@@ -159,6 +161,76 @@ void MultibodyReader::read_contacts() {
     contacts_.push_back({name, j.type, c});
     builder_.add_joint(std::move(j));
     r_.positions_.constraints[name] = Reader::position(c);
+  }
+}
+
+// nonideal: of a bodies model — Coulomb friction at its contacts (docs/contact.md, "Friction at a
+// body's contact"): each entry {friction: coulomb, constraint: <contact>, mu, mu_static,
+// regularization_velocity} slides the contact point (mb::Multibody::add_contact_friction). What
+// is not supported is refused where it is written: coordinates: (the contact point is the
+// sliding velocity), surface_velocity:, viscous or given C, a disk contact, a plane on a body.
+void MultibodyReader::read_contact_frictions() {
+  const YAML::Node ns = root_["nonideal"];
+  if (!ns) return;
+  const std::string example = "- {friction: coulomb, constraint: floor, mu: 0.3}";
+  if (!ns.IsSequence()) r_.fail(ns, "nonideal must be a list", example);
+  std::set<std::string> seen;
+  for (const auto& f : ns) {
+    check_map(f, "a non-ideal force", example);
+    if (f["coordinates"])
+      r_.fail(f["coordinates"],
+              "a bodies model's contact friction slides the contact point itself: it takes no "
+              "coordinates",
+              "leave coordinates out: the sliding velocity is the velocity of the body's point "
+              "at the contact, tangent to the plane (docs/contact.md)");
+    if (f["surface_velocity"])
+      r_.fail(f["surface_velocity"],
+              "a surface velocity under a body's contact is not supported yet",
+              "leave surface_velocity out (a moving plane: a plane on a body is not supported "
+              "yet either)");
+    const YAML::Node law = require(f, "friction", "a non-ideal force", "friction: coulomb");
+    if (!law.IsScalar() || law.Scalar() != "coulomb")
+      r_.fail(law,
+              "a bodies model's nonideal: takes Coulomb friction at its contacts only, not '" +
+                  (law.IsScalar() ? law.Scalar() : std::string("?")) + "'",
+              "friction: coulomb, constraint: <a contact>; a joint's friction goes under the "
+              "joint (friction: {mu: ..}), a damper under forces:");
+    check_keys(f, {"friction", "constraint", "mu", "mu_static", "regularization_velocity"},
+               "a contact's friction");
+    const YAML::Node cn = require(f, "constraint", "a contact's friction", "constraint: floor");
+    const std::string name = cn.IsScalar() ? cn.Scalar() : std::string();
+    const auto c = std::find_if(contacts_.begin(), contacts_.end(),
+                                [&](const JointDecl& d) { return d.name == name; });
+    if (c == contacts_.end())
+      r_.fail(cn, "Coulomb friction on '" + name + "', which is no contact",
+              "constraint: the name of an entry of contacts:");
+    const std::string what = "the friction at contact '" + name + "'";
+    if (!seen.insert(name).second)
+      r_.fail(cn, what + " is declared twice", "one coulomb friction per contact");
+    if (c->type == mb::JointType::kContactSpheres)
+      r_.fail(cn, what + ": friction between two spheres is not supported yet",
+              "a point or sphere contact with a plane of the ground takes friction");
+    if (c->type == mb::JointType::kContactDisk)
+      r_.fail(cn, what + ": friction at a disk contact is not supported yet",
+              "a point or sphere contact takes friction (a disk rolling on its rim: a sphere "
+              "contact of the rim's radius at the rim point, or rolling_disk: for no slip)");
+    if (const YAML::Node pl = c->node["plane"];
+        pl && pl["body"] && pl["body"].IsScalar() && pl["body"].Scalar() != "ground")
+      r_.fail(cn, what + ": friction on a plane of a moving body is not supported yet",
+              "a plane of the ground takes friction");
+    const double mu = non_negative(require(f, "mu", what, "mu: 0.3"), what + " mu");
+    std::optional<double> mu_static;
+    if (const YAML::Node ms = f["mu_static"]) {
+      mu_static = r_.number(ms, what + " mu_static");
+      if (!(*mu_static >= mu))
+        r_.fail(ms,
+                what + ": mu_static must be >= mu = " + brief(mu) + ", got " + brief(*mu_static),
+                "the static coefficient is at least the kinetic one");
+    }
+    double eps = 1e-9;
+    if (const YAML::Node en = f["regularization_velocity"])
+      eps = positive(en, what + " regularization_velocity");
+    builder_.add_contact_friction(name, mu, mu_static, eps);
   }
 }
 

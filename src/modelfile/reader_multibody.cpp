@@ -308,13 +308,8 @@ void MultibodyReader::refuse_generalized_keys() {
     const std::string key = kv.first.Scalar();
     if (std::find(kGeneralizedKeys.begin(), kGeneralizedKeys.end(), key) !=
         kGeneralizedKeys.end()) {
-      if (key == "nonideal" && root_["contacts"])
-        r_.fail(kv.first,
-                "'nonideal' does not go with 'bodies:': Coulomb friction at a contact "
-                "of a bodies model is not supported yet",
-                "friction at a body's contact acts at the contact point, which the body's "
-                "rotation moves: write the model in generalized coordinates (constraints: with "
-                "unilateral: true, nonideal: with friction: coulomb; docs/contact.md)");
+      // (nonideal: with the contacts' Coulomb friction: read_contact_frictions)
+      if (key == "nonideal" && root_["contacts"]) continue;
       r_.fail(kv.first, "'" + key + "' does not go with 'bodies:'",
               "a multibody model's coordinates, mass matrix and constraints come from its "
               "bodies and joints; write the model either with bodies: or with coordinates:");
@@ -744,6 +739,7 @@ Model MultibodyReader::read() {
   read_joints();
   read_forces();
   read_contacts();
+  read_contact_frictions();
   add_switches();
   const auto build = [&]() -> mb::MultibodyModel {
     try {

@@ -47,7 +47,8 @@ class MultibodyReader {
   void read_bodies();
   void read_joints();
   void read_forces();
-  void read_contacts();  // reader_contacts.cpp
+  void read_contacts();           // reader_contacts.cpp
+  void read_contact_frictions();  // reader_contacts.cpp: nonideal: at the contacts
 
   // pieces
   const YAML::Node& check_map(const YAML::Node& node, const std::string& what,

@@ -116,6 +116,25 @@ void Reader::read_nonideal(const YAML::Node& root, SystemBuilder& builder) {
         spec.constraint = on;
         spec.mu = number(f["mu"], "mu");
         spec.coordinates = coords;
+        if (const auto pc = point_contacts_.find(on); pc != point_contacts_.end()) {
+          // a robot's contact: the friction slides the contact point (ContactKinematics)
+          if (const YAML::Node cn = f["coordinates"])
+            fail(cn,
+                 "the friction at contact '" + on +
+                     "' slides the contact point itself: it takes no coordinates",
+                 "leave coordinates out: the sliding velocity is the velocity of the link's "
+                 "point at the contact, tangent to the plane (docs/contact.md)");
+          if (const YAML::Node un = f["surface_velocity"])
+            fail(un, "a surface velocity under a robot's contact is not supported yet",
+                 "leave surface_velocity out");
+          try {
+            spec.kinematics = pc->second();
+          } catch (const std::invalid_argument& e) {
+            std::string m = e.what();
+            if (const auto k = m.find(": "); k != std::string::npos) m.erase(0, k + 2);
+            fail(f["constraint"], m);
+          }
+        }
         if (const YAML::Node rv = f["regularization_velocity"]) {
           spec.regularization_velocity = number(rv, "regularization_velocity");
           if (!(spec.regularization_velocity > 0)) {

@@ -181,6 +181,10 @@ void Reader::read_robot_contacts(const YAML::Node& root, const tree::Tree& robot
     const auto [e, law] = read_restitution(c["restitution"], c["restitution_law"], what);
     try {
       Constraint k = tree::contact_constraint(robot, name, at, radius, plane, e);
+      // (Coulomb friction there slides the contact point: read_nonideal)
+      point_contacts_[name] = [robot_copy = robot, name, at, radius, plane]() {
+        return tree::contact_kinematics(robot_copy, name, at, radius, plane);
+      };
       if (law != RestitutionLaw::kNewton) k = with_restitution_law(k, law);
       builder.add(std::move(k));
       constraint_names_.push_back(name);
@@ -188,27 +192,6 @@ void Reader::read_robot_contacts(const YAML::Node& root, const tree::Tree& robot
       std::string m = err.what();
       if (const auto k = m.find(": "); k != std::string::npos) m.erase(0, k + 2);
       fail(c, m);
-    }
-  }
-  // Coulomb friction at a contact: the generalized models' law slides the constraint's own
-  // coordinates (Cartesian ones), which a robot's joint angles are not: not exact, refused
-  if (const YAML::Node ns = root["nonideal"]; ns && ns.IsSequence()) {
-    for (const auto& f : ns) {
-      if (!f.IsMap() || !f["friction"] || f["friction"].Scalar() != "coulomb" || !f["constraint"] ||
-          !names.count(f["constraint"].Scalar()))
-        continue;
-      const bool contact = std::any_of(cs.begin(), cs.end(), [&](const YAML::Node& c) {
-        return c.IsMap() && c["name"] && c["name"].Scalar() == f["constraint"].Scalar();
-      });
-      if (contact)
-        fail(f["constraint"],
-             "Coulomb friction at contact '" + f["constraint"].Scalar() +
-                 "' of a robot is not supported yet: the coulomb law slides the constraint's "
-                 "coordinates, and a robot's are its joint angles, not the contact point's "
-                 "velocity",
-             "leave the contact frictionless, or write the mechanism in generalized coordinates "
-             "with a unilateral constraint whose sliding coordinates are Cartesian "
-             "(docs/friction.md, docs/contact.md)");
     }
   }
 }

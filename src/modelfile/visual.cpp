@@ -76,7 +76,9 @@ nlohmann::json contact_friction(const Model& model, const VisualContact& c) {
   const FrictionContact* fc = nullptr;
   for (const FrictionContact& f : sys.friction_contacts())
     if (f.normal_constraint == constraint && f.mu > 0.0) fc = &f;
-  if (!fc) return nullptr;
+  // (a contact point's friction, ContactKinematics, is not drawn yet: its generalized force is
+  // J_Pᵀ f on the body's coordinates, which this map from the coordinates does not invert)
+  if (!fc || fc->kinematics) return nullptr;
   const std::string stick = sys.constraint(fc->stick_constraint).name();
   const std::size_t nc = fc->coordinates.size();
   // the outputs of the contact point's axes

@@ -214,6 +214,13 @@ struct Multibody::Impl {
   Index n = 0;
   std::vector<std::string> switch_names;
   SwitchScratchFn switches;
+  struct ContactFriction {
+    std::string contact;
+    double mu;
+    std::optional<double> mu_static;
+    double eps;
+  };
+  std::vector<ContactFriction> contact_frictions;
 };
 
 Multibody::Multibody() : impl_(std::make_unique<Impl>()) {}
@@ -233,6 +240,13 @@ void require_positive(double x, const std::string& who, const char* what) {
   }
 }
 }  // namespace
+
+Multibody& Multibody::add_contact_friction(std::string contact, double mu,
+                                           std::optional<double> mu_static,
+                                           double regularization_velocity) {
+  impl_->contact_frictions.push_back({std::move(contact), mu, mu_static, regularization_velocity});
+  return *this;
+}
 
 BodyId Multibody::add_particle(std::string name, double mass, const Vector3d& p0,
                                const Vector3d& v0) {
@@ -567,6 +581,38 @@ MultibodyModel Multibody::build() const {
                                     "bodies' aligned frames (theta0 must be 0)");
       }
     }
+  }
+  // Coulomb friction at contacts: the contact point's kinematics (after the joints' frictions,
+  // whose indices among the non-ideal forces stay theirs)
+  for (const Impl::ContactFriction& cf : d.contact_frictions) {
+    const std::string what = who + "friction at contact '" + cf.contact + "'";
+    const auto j = std::find_if(d.joints.begin(), d.joints.end(),
+                                [&](const Joint& x) { return x.name == cf.contact; });
+    if (j == d.joints.end() ||
+        (j->type != JointType::kContact && j->type != JointType::kContactDisk &&
+         j->type != JointType::kContactSpheres))
+      throw std::invalid_argument(what + ": there is no contact of that name");
+    if (j->type == JointType::kContactSpheres)
+      throw std::invalid_argument(what +
+                                  ": friction between two spheres is not supported yet (a "
+                                  "point or sphere contact with a plane of the ground takes it)");
+    if (j->type == JointType::kContactDisk)
+      throw std::invalid_argument(what +
+                                  ": friction at a disk contact is not supported yet (a "
+                                  "point or sphere contact takes it)");
+    if (j->parent != kGround)
+      throw std::invalid_argument(what +
+                                  ": friction on a plane of a moving body is not "
+                                  "supported yet (a plane of the ground takes it)");
+    const BodyRef C = detail::body_ref(out.bodies, j->child);
+    const bool planar = C.kind == BodyKind::kPlanar;
+    CoulombFriction spec;
+    spec.constraint = cf.contact;
+    spec.mu = cf.mu;
+    spec.mu_static = cf.mu_static;
+    spec.regularization_velocity = cf.eps;
+    spec.kinematics = detail::contact_kinematics(*j, C, planar);
+    sb.add(coulomb_friction(spec));
   }
   return MultibodyModel{sb.build(),
                         std::move(out.q0),

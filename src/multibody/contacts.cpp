@@ -111,3 +111,67 @@ Constraint contact_constraint(const Joint& j, const BodyRef& P, const BodyRef& C
 }
 
 }  // namespace ukdyn::mb::detail
+
+namespace ukdyn::mb::detail {
+
+ContactKinematics contact_kinematics(const Joint& j, const BodyRef& C, bool planar) {
+  // the plane's unit normal n and tangents t_i in the world (a ground plane: constant)
+  const Matrix3d& R = j.frame_parent.R;
+  const Vector3d n = R.col(planar ? 1 : 2).normalized();
+  const Vector3d t1 = R.col(0).normalized(), t2 = planar ? Vector3d::Zero() : R.col(1).normalized();
+  const Vector3d p = j.frame_child.p;  // the sphere's centre (or the point) on the body
+  const Vector3d a = -j.radius * n;    // from the centre to the contact point
+  ContactKinematics kin;
+  kin.tangents = planar ? 1 : 2;
+  for (Index i = 0; i < C.size(); ++i) kin.columns.push_back(C.offset + i);
+  const BodyRef body = C;
+  // J = [n; t_i]ᵀ J_P and bias = [n; t_i]ᵀ J_P' q' with v_P = v(centre) + ω × a:
+  //   particle: J_P = I, bias 0 (its point does not turn);
+  //   planar:   J_P = [e_x, e_y, e_z × (R p + a)], bias −θ'² R p (ω' = 0 at θ'' = 0);
+  //   rigid:    J_P = [I, D(u, p) − 2 [a]× G_v(u)], bias 2 R(u') p (ω' = 2 G_v(u') u' = 0)
+  kin.evaluate = [body, n, t1, t2, p, a, planar](const Eigen::Ref<const VectorXd>& q,
+                                                 const Eigen::Ref<const VectorXd>& qd, double,
+                                                 ConstraintScratch*, Eigen::Ref<MatrixXd> J,
+                                                 Eigen::Ref<VectorXd> bias) {
+    Eigen::Matrix<double, 3, 7> JP = Eigen::Matrix<double, 3, 7>::Zero();
+    Vector3d g = Vector3d::Zero();
+    const Index o = body.offset;
+    switch (body.kind) {
+      case BodyKind::kParticle:
+        JP.leftCols<3>().setIdentity();
+        break;
+      case BodyKind::kPlanar: {
+        const double th = q[o + 2], w = qd[o + 2], c = std::cos(th), sn = std::sin(th);
+        const Vector3d rp(c * p.x() - sn * p.y(), sn * p.x() + c * p.y(), 0.0);
+        const Vector3d arm = rp + a;
+        JP(0, 0) = 1.0;
+        JP(1, 1) = 1.0;
+        JP(0, 2) = -arm.y();
+        JP(1, 2) = arm.x();
+        g = -w * w * rp;
+        break;
+      }
+      case BodyKind::kRigid: {
+        const Vector4d u = q.segment<4>(o + 3), ud = qd.segment<4>(o + 3);
+        Matrix3d A;  // [a]×
+        A << 0, -a.z(), a.y(), a.z(), 0, -a.x(), -a.y(), a.x(), 0;
+        JP.leftCols<3>().setIdentity();
+        JP.rightCols<4>() = rotate_jacobian(u, p) - 2.0 * A * G_v(u);
+        g = 2.0 * rotate(ud, p);
+        break;
+      }
+    }
+    const Index cols = J.cols();
+    J.row(0) = n.transpose() * JP.leftCols(cols);
+    J.row(1) = t1.transpose() * JP.leftCols(cols);
+    bias[0] = n.dot(g);
+    bias[1] = t1.dot(g);
+    if (!planar) {
+      J.row(2) = t2.transpose() * JP.leftCols(cols);
+      bias[2] = t2.dot(g);
+    }
+  };
+  return kin;
+}
+
+}  // namespace ukdyn::mb::detail

@@ -510,6 +510,11 @@ Constraint spatial_gear(const Joint& gear, const Joint& a, const BodyRef& Pa, co
 /// The constraints of a rolling contact of rigid body C on z = 0: "<name>.contact" (holonomic
 /// height, 1 row) and "<name>" (nonholonomic, 2 rows: the contact point's horizontal velocity).
 std::vector<Constraint> rolling_constraints(const Joint& j, const BodyRef& C);
+/// The contact-point kinematics of contact j (JointType::kContact, a point or sphere of body C
+/// on a plane fixed on the ground; contacts.cpp) for Coulomb friction there (ContactKinematics):
+/// rows n, t_1 (, t_2) of the Jacobian of the body's material point at the contact, v_P =
+/// v(centre) + ω × (−r n), and their bias J_P' q'. Cost O(1) per evaluation, no allocation.
+ContactKinematics contact_kinematics(const Joint& j, const BodyRef& C, bool planar);
 /// The joint friction of a revolute or prismatic joint whose constraint is `constraint`.
 NonIdealForce joint_friction_force(const Joint& j, const BodyRef& P, const BodyRef& C,
                                    const std::string& constraint, bool planar);

@@ -61,6 +61,14 @@ inline constexpr double kBridgedSwitchMargin = 1e-3;
 // configuration where the constraints lose rank, not a divergence
 inline constexpr double kDivergenceRankMargin = 1e-3;
 
+// the rows a Coulomb contact's sliding velocity and directions take: n, or the largest d of a
+// contact-point contact (ContactKinematics) when larger
+inline Index sliding_width(const System& sys, Index n) {
+  Index w = n;
+  for (const auto& c : sys.friction_contacts()) w = std::max(w, c.size());
+  return w;
+}
+
 // What a Coulomb contact does: slides (friction acts), sticks (the stick constraint acts), or
 // slides through a zero of v_rel at which it could not stick (the zero is its next event).
 enum class ContactMode : unsigned char { kSliding, kSticking, kPassing };
@@ -308,7 +316,7 @@ class Run {
     q_ = Eigen::Map<const VectorXd>(x, n_);
     qd_ = Eigen::Map<const VectorXd>(x + n_, n_);
     detail::sliding_velocity(sys_, ws_, Index(c), q_, qd_, t, false);
-    const Index k = Index(sys_.friction_contacts()[c].coordinates.size());
+    const Index k = sys_.friction_contacts()[c].size();
     v.head(k) = ws_.sliding.col(Index(c)).head(k);
     return k;
   }
@@ -333,6 +341,8 @@ class Run {
   // mu_static N − |holding force|, with the contact sticking, at (t, x); NaN when the
   // constraints with the stick rows have no solution there
   double stick_margin(std::size_t c, double t, const double* x);
+  // stick_margin's split of the reaction on the contact-point path (ContactKinematics)
+  double point_stick_margin(std::size_t c, const FrictionContact& contact, double t);
   // sticks contact c at (t, x) when sticking is admissible; else false
   bool try_stick(std::size_t c, double t, double* x, bool report = true);
   // the kinetic energy that projecting the velocities of x onto contact c's stick rows removes
@@ -385,8 +395,8 @@ class Run {
   std::vector<ContactMode> mode_;                // (contacts) what contact c does
   std::vector<unsigned char> separated_before_;  // (contacts) normal contact open before an event
   MatrixXd passing_ = MatrixXd::Zero(
-      n_,
-      Index(sys_.friction_contacts().size()));  // (n × contacts)
+      sliding_width(sys_, n_),
+      Index(sys_.friction_contacts().size()));  // (sliding width × contacts)
                                                 // head of col c: v_rel's direction when c passes
   std::vector<double> trial_ = std::vector<double>(sample_.size());  // a trial state
   double peak_kinetic_ = 0.0;  // largest kinetic energy at the samples so far
@@ -406,8 +416,8 @@ class Run {
   VectorXd reaction_part_ = VectorXd::Zero(n_);  // (n) scratch of stick_margin
   VectorXd normal_ = VectorXd::Zero(n_);         // (n) scratch of stick_margin: R_N
   MatrixXd normals_;                             // (rows × n) the normal constraint's rows of A
-  VectorXd velocity_ = VectorXd::Zero(n_);       // (n) sliding velocities (head)
-  VectorXd direction_ = VectorXd::Zero(n_);      // (n) sliding direction at the step's start (head)
+  VectorXd velocity_ = VectorXd::Zero(sliding_width(sys_, n_));        // (width) sliding velocities
+  VectorXd direction_ = VectorXd::Zero(sliding_width(sys_, n_));       // (width) the step's start's
   std::vector<double> event_x_ = std::vector<double>(sample_.size());  // dense state
   Index switching_ = -1;  // the contact of the last event found
   // the switching functions (System::switch_count, none unless SimulationOptions::switch_events):

@@ -73,7 +73,7 @@ double Run::find_event(double t0, const double* x0, double t1, const double* x1,
       }
       case ContactMode::kPassing: {
         // a contact that could not stick: the zero of v_rel along its direction then
-        const Index k = Index(contacts[c].coordinates.size());
+        const Index k = contacts[c].size();
         auto along = [&](double t, const double* x) {
           relative_velocity(c, t, x, velocity_);
           return velocity_.head(k).dot(passing_.col(Index(c)).head(k));

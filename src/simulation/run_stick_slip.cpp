@@ -168,6 +168,7 @@ double Run::stick_margin(std::size_t c, double t, const double* x) {
     detail::constraint_share(sys_, ws_, k, ws_.lambda_nonideal, reaction_part_);
     reaction_ += reaction_part_;
   }
+  if (contact.kinematics) return point_stick_margin(c, contact, t);
   const Index k = contact.normal_constraint, rows = sys_.constraint(k).rows();
   if (normals_.rows() != rows) normals_.resize(rows, n_);  // (once per contact size)
   detail::copy_constraint_rows(sys_, ws_, k, normals_);
@@ -182,6 +183,30 @@ double Run::stick_margin(std::size_t c, double t, const double* x) {
   }
   holding_ = reaction_ - normal_;
   return contact.mu_static * normal_.norm() - holding_.norm();
+}
+
+// stick_margin on the contact-point path, after the evaluation with the contact sticking:
+// N from the normal constraint's whole reaction (contact_normal_force), the holding force
+// f_t = kappa (lambda_stick + lambda_nonideal,stick) in the tangent basis (the stick rows are
+// kappa T, so their share is Tᵀ f_t), into holding_.head(d)
+double Run::point_stick_margin(std::size_t c, const FrictionContact& contact, double t) {
+  reaction_ = ws_.shares.col(contact.normal_constraint);
+  detail::constraint_share(sys_, ws_, contact.normal_constraint, ws_.lambda_nonideal,
+                           reaction_part_);
+  reaction_ += reaction_part_;
+  // (the contact's Jacobian rows at this state, for N)
+  detail::sliding_velocity(sys_, ws_, Index(c), q_, qd_, t, false);
+  const double N = detail::contact_normal_force(sys_, ws_, Index(c), reaction_);
+  // kappa: the unit of the normal rows as assembled (that of the stick rows, PointStickModel)
+  const Index d = contact.kinematics.tangents, s = contact.stick_constraint;
+  const Index k = contact.normal_constraint, rows = sys_.constraint(k).rows();
+  if (normals_.rows() != rows) normals_.resize(rows, n_);  // (once per contact size)
+  detail::copy_constraint_rows(sys_, ws_, k, normals_);
+  const double kappa = detail::normal_row_unit(normals_, rows, reaction_part_);
+  holding_.setZero(std::max(n_, d));
+  holding_.head(d) =
+      kappa * (ws_.lambda_of(sys_, s) + ws_.lambda_nonideal.segment(sys_.row_offset(s), d));
+  return contact.mu_static * N - holding_.head(d).norm();
 }
 
 // Sticks contact c at (t, x) when sticking is admissible, projecting the velocities of x onto
@@ -321,7 +346,14 @@ double Run::carried_past(double tz, double t1, const double* x1,
 
 // sign × contact c's passing direction on its sliding coordinates, into holding_ (n)
 const VectorXd& Run::carried_direction(std::size_t c, double sign) {
-  const auto& coords = sys_.friction_contacts()[c].coordinates;
+  const FrictionContact& contact = sys_.friction_contacts()[c];
+  if (contact.kinematics) {
+    const Index d = contact.kinematics.tangents;
+    holding_.setZero(std::max(n_, d));
+    holding_.head(d) = sign * passing_.col(Index(c)).head(d);
+    return holding_;
+  }
+  const auto& coords = contact.coordinates;
   holding_.setZero();
   for (std::size_t r = 0; r < coords.size(); ++r)
     holding_[coords[r]] = sign * passing_(Index(r), Index(c));
@@ -345,14 +377,19 @@ bool Run::start_sliding(std::size_t c, double t, const double* x) {
   if (!evaluated) return true;  // (the regularized law then decides)
   // a_rel = P (q''_c − u') without this friction: the impending motion
   relative_acceleration(c, t);
-  holding_.setZero();
-  const auto& coords = contact.coordinates;
-  for (std::size_t r = 0; r < coords.size(); ++r) holding_[coords[r]] = -velocity_[Index(r)];
+  const Index k = contact.size();
+  if (contact.kinematics) {
+    holding_.setZero(std::max(n_, k));
+    holding_.head(k) = -velocity_.head(k);
+  } else {
+    holding_.setZero();
+    const auto& coords = contact.coordinates;
+    for (std::size_t r = 0; r < coords.size(); ++r) holding_[coords[r]] = -velocity_[Index(r)];
+  }
   set_slip_hint(c, holding_);
   // with the friction at its full magnitude against it, does the contact still move that way?
   // If not, friction could hold it although the stick was not admissible (a stick constraint
   // that the model cannot express): no hint then, the regularized law holds it near rest
-  const Index k = Index(coords.size());
   direction_.head(k) = velocity_.head(k);
   if (forward_dynamics(sys_, ws_, q_, qd_, t) != Status::kOk) return true;
   relative_acceleration(c, t);
@@ -365,6 +402,16 @@ bool Run::start_sliding(std::size_t c, double t, const double* x) {
 // velocity_, P the tangential projector of sliding_velocity
 void Run::relative_acceleration(std::size_t c, double t) {
   const FrictionContact& contact = sys_.friction_contacts()[c];
+  if (const ContactKinematics& kin = contact.kinematics) {
+    // a_rel = T q'' + T' q'
+    detail::sliding_velocity(sys_, ws_, Index(c), q_, qd_, t, false);
+    const Index d = kin.tangents;
+    const auto& J = ws_.contact_jacobian[c];
+    velocity_.head(d) = ws_.contact_bias.col(Index(c)).segment(1, d);
+    for (std::size_t j = 0; j < kin.columns.size(); ++j)
+      velocity_.head(d) += J.col(Index(j)).tail(d) * ws_.qdd[kin.columns[j]];
+    return;
+  }
   const Index k = Index(contact.coordinates.size());
   for (Index r = 0; r < k; ++r) velocity_[r] = ws_.qdd[contact.coordinates[std::size_t(r)]];
   const Index basis = detail::sliding_velocity(sys_, ws_, Index(c), q_, qd_, t, false);
@@ -379,7 +426,11 @@ void Run::set_slip_hint(std::size_t c, const Eigen::Ref<const VectorXd>& along) 
   auto hint = ws_.slip_hint.col(contact.force);
   hint.setZero();
   if (along.size() == 0) return;
-  for (Index i : contact.coordinates) hint[i] = along[i];
+  if (contact.kinematics) {
+    hint.head(contact.kinematics.tangents) = along.head(contact.kinematics.tangents);
+  } else {
+    for (Index i : contact.coordinates) hint[i] = along[i];
+  }
   if (hint.norm() > 0.0) hint.normalize();
 }
 

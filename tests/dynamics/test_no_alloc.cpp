@@ -199,6 +199,26 @@ TEST(NoAllocation, MultibodyModels) {
     const mb::MultibodyModel m = b.build();
     EXPECT_EQ(allocations_of(m.system, m.q0, m.qd0, 3), 0);
   }
+  {  // Coulomb friction at a sphere's contact point, sliding (ContactKinematics)
+    mb::Multibody b;
+    const double r = 0.1;
+    const BodyId ball = b.add_rigid_body("ball", 1.0, {0.004, 0.004, 0.004}, {0, 0, r},
+                                         Quaterniond::Identity(), {1, 0.5, 0}, {0, 2, 0});
+    b.add_joint(mb::contact("floor", kGround, Frame{}, ball, Vector3d::Zero(), r));
+    b.add_contact_friction("floor", 0.3);
+    b.set_gravity({0, 0, -9.81});
+    const mb::MultibodyModel m = b.build();
+    EXPECT_EQ(allocations_of(m.system, m.q0, m.qd0, 3), 0);
+    // and its stick constraint's rows (evaluated by a projection's assembly)
+    const Index stick = m.system.constraint_index("stick.coulomb.floor");
+    Workspace ws(m.system);
+    MatrixXd A = MatrixXd::Zero(2, m.system.coordinate_count());
+    VectorXd bb = VectorXd::Zero(2);
+    start_counting_allocations();
+    m.system.constraint(stick).model().acceleration_form(
+        m.q0, m.qd0, 0.0, ws.scratch[std::size_t(stick)].get(), A, bb);
+    EXPECT_EQ(stop_counting_allocations(), 0);
+  }
   {  // a driven crank with pin friction, and a long planar chain closed to ground (sparse)
     mb::Multibody b;
     b.set_gravity({0, -9.81, 0});

@@ -7,9 +7,11 @@
 
 #include "support/alloc_counter.hpp"
 #include "ukdyn/control/control.hpp"
+#include "ukdyn/core/nonideal.hpp"
 #include "ukdyn/dynamics/forward.hpp"
 #include "ukdyn/dynamics/workspace.hpp"
 #include "ukdyn/multibody/tree.hpp"
+#include "ukdyn/multibody/tree_closures.hpp"
 
 namespace ukdyn::tree {
 namespace UKDYN_TEST_FILE {
@@ -109,6 +111,39 @@ TEST(Tree, FrameConstraintsAndTaskControlDoNotAllocate) {
   EXPECT_EQ(testing::stop_counting_allocations(), 0);
   EXPECT_EQ(cs.status, Status::kOk);
   EXPECT_GT(cs.qdd.norm(), 0.1);
+}
+
+// Coulomb friction at a link's contact point (tree::contact_kinematics): the friction's
+// evaluation and its stick constraint's rows allocate nothing
+TEST(Tree, ContactPointFrictionDoesNotAllocate) {
+  const Tree tree = load_urdf(kPanda);
+  const Index tool = tree.link_index("panda_tool");
+  VectorXd q(7), qd(7);
+  q << 0.3, -0.5, 0.8, -1.9, 0.4, 1.7, -0.6;
+  qd << 0.5, -1.0, 0.7, 0.2, -0.9, 1.1, 0.3;
+  SystemBuilder sb = system_builder(tree);
+  const LinkFrame floor{-1, Vector3d::Zero(), Matrix3d::Identity()};
+  sb.add(contact_constraint(tree, "floor", {tool, Vector3d::Zero()}, 0.02, floor));
+  CoulombFriction spec;
+  spec.constraint = "floor";
+  spec.mu = 0.3;
+  spec.kinematics = contact_kinematics(tree, "floor", {tool, Vector3d::Zero()}, 0.02, floor);
+  sb.add(coulomb_friction(spec));
+  const System sys = sb.build();
+  Workspace ws(sys);
+  forward_dynamics(sys, ws, q, qd, 0.0);
+  const Index stick = sys.constraint_index("stick.coulomb.floor");
+  MatrixXd A = MatrixXd::Zero(2, 7);
+  VectorXd b = VectorXd::Zero(2);
+  testing::start_counting_allocations();
+  for (int i = 0; i < 5; ++i) {
+    forward_dynamics(sys, ws, q, qd, 0.01 * i);
+    sys.constraint(stick).model().acceleration_form(q, qd, 0.0,
+                                                    ws.scratch[std::size_t(stick)].get(), A, b);
+  }
+  EXPECT_EQ(testing::stop_counting_allocations(), 0);
+  EXPECT_EQ(ws.status, Status::kOk);
+  EXPECT_GT(A.norm(), 0.0);
 }
 
 }  // namespace UKDYN_TEST_FILE

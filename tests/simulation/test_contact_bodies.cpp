@@ -400,16 +400,18 @@ TEST(ContactBodies, BadContactsGetAClearErrorWithItsPlace) {
          "a particle has no orientation");
   expect("  - {name: f, body: ball, shape: disk, radius: 1}\n", "7:5",
          "contact 'f': the disk lies flat on its plane at the start");
-  // friction at a body's contact: refused, saying why
+  // friction at a body's contact slides the contact point: coordinates: refused there
+  // (test_contact_bodies_friction.cpp has the motion and the other errors)
   try {
-    parse_model(std::string(kSphere) + "nonideal: []\n");
+    parse_model(std::string(kSphere) +
+                "nonideal:\n  - {friction: coulomb, constraint: floor, mu: 0.3, coordinates: "
+                "[ball_x]}\n");
     ADD_FAILURE() << "no error";
   } catch (const ModelError& e) {
-    EXPECT_EQ(e.line(), 12);
-    EXPECT_NE(e.message().find("Coulomb friction at a contact of a bodies model is not supported"),
+    EXPECT_EQ(e.line(), 13);
+    EXPECT_NE(e.message().find("a bodies model's contact friction slides the contact point"),
               std::string::npos)
         << e.message();
-    EXPECT_NE(e.hint().find("the body's rotation moves"), std::string::npos) << e.hint();
   }
   // generalized coordinates: a contact is a constraint
   try {

@@ -175,8 +175,22 @@ NonIdealForce rescaled_nonideal(const std::shared_ptr<const System>& o, Index i,
     law.constraint = o->constraint(contact.normal_constraint).name();
     law.mu = contact.mu;
     law.mu_static = contact.mu_static;
-    law.coordinates = contact.coordinates;
     law.regularization_velocity = contact.eps * f.s / f.tau;
+    if (const ContactKinematics& kin = contact.kinematics) {
+      // at a contact point: v_P~ = (s / tau) v_P = J q~', so J~(q~) = J(q~ / s) and its bias
+      // J~' q~' = (s / tau²) J' q' (N~ = |w·R~| / |w|² = mu N / s follows)
+      law.kinematics = kin;
+      law.kinematics.evaluate = [kin, f](const Eigen::Ref<const VectorXd>& q,
+                                         const Eigen::Ref<const VectorXd>& qd, double t,
+                                         ConstraintScratch* s, Eigen::Ref<MatrixXd> J,
+                                         Eigen::Ref<VectorXd> bias) {
+        const Original x(f, q, qd, t);
+        kin.evaluate(x.q, x.qd, x.t, s, J, bias);
+        bias *= f.s / (f.tau * f.tau);
+      };
+      return coulomb_friction(law);
+    }
+    law.coordinates = contact.coordinates;
     law.surface_velocity = rescaled(contact.surface_velocity, f);
     return coulomb_friction(law);
   }

@@ -24,6 +24,7 @@ namespace ukdyn {
 
 class System;
 class Workspace;
+class ConstraintScratch;
 struct CallableScratch;
 struct CoulombFriction;
 
@@ -59,6 +60,18 @@ class IdealForceInfo {
   /// sliding coordinate; see CoulombFriction), computed once per evaluation before the
   /// non-ideal forces are called.
   Eigen::Ref<const VectorXd> sliding_velocity(Index c) const;
+  /// The contact Jacobian of Coulomb contact c on the contact-point path (see
+  /// ContactKinematics): rows n_Wᵀ J_P and t_iᵀ J_P ((1 + d) × |columns|), evaluated with
+  /// sliding_velocity; empty (0 × 0) on the coordinate path.
+  Eigen::Ref<const MatrixXd> contact_jacobian(Index c) const;
+  /// The physical normal force of Coulomb contact c on the contact-point path, whose normal
+  /// constraint is k: N = |w·R_k| / |w|², w = J_Pᵀ n_W (row 0 of contact_jacobian(c)), R_k =
+  /// reaction(k), whatever the scale of the contact's row. Cost O(n).
+  double contact_normal_force(Index c, Index k) const;
+  /// C += scale · Tᵀ f on contact c's columns (contact-point path): f (d) the force's tangential
+  /// components, T the tangential rows of contact_jacobian(c). Cost O(d · |columns|).
+  void add_contact_force(Index c, double scale, const Eigen::Ref<const VectorXd>& f,
+                         Eigen::Ref<VectorXd> C) const;
   /// Constraint k's whole reaction: its share of the ideal force plus the reaction that the
   /// non-ideal forces themselves cause on it, A_kᵀ lambda_nonideal,k (friction at one contact
   /// changes the normal force at another: a ladder against a rough wall and a rough floor).
@@ -123,6 +136,35 @@ using SurfaceVelocityFn =
     std::function<void(const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd,
                        double t, Eigen::Ref<VectorXd> u, Eigen::Ref<VectorXd> u_dot)>;
 
+/// The kinematics of a contact point, for Coulomb friction that slides the contact point itself
+/// rather than listed coordinates (a body that turns, a robot link in joint angles;
+/// docs/friction.md, "At a contact point"). At (q, t) it writes, on the coordinates `columns`
+/// (strictly increasing, local: column j of J is coordinate columns[j]):
+///   J    ((1 + d) × |columns|)  row 0: n_Wᵀ J_P, rows 1..d: t_iᵀ J_P,
+///   bias (1 + d)                the same rows of J_P' q' (the contact point's velocity rate at
+///                               q'' = 0, for the stick constraint's acceleration form),
+/// J_P = ∂v_P/∂q' the Jacobian of the velocity v_P of the body's material point at the contact,
+/// n_W the contact's unit normal and t_1..t_d (d = 2 spatial, 1 planar) unit tangents with
+/// (n_W, t_i) orthonormal. The sliding velocity is then v_rel = (t_iᵀ J_P q')_i (its components
+/// in the tangent plane: P = I − n nᵀ applied and read in the tangent basis), the friction
+/// C = J_Pᵀ f with f = Σ f_i t_i, and N the physical normal force, N = |w·R_k| / |w|² with
+/// w = J_Pᵀ n_W the unit-normal row and R_k the contact constraint's reaction (whatever the
+/// row's scale). `scratch` is made by make_scratch (null when that is empty). Must not allocate.
+using ContactKinematicsFn = std::function<void(
+    const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd, double t,
+    ConstraintScratch* scratch, Eigen::Ref<MatrixXd> J, Eigen::Ref<VectorXd> bias)>;
+
+/// A contact point's kinematics (see ContactKinematicsFn); empty (no evaluate) on the coordinate
+/// path.
+struct ContactKinematics {
+  Index tangents = 0;            ///< d: 2 for a spatial contact, 1 for a planar one
+  std::vector<Index> columns;    ///< the coordinates J_P acts on, strictly increasing
+  ContactKinematicsFn evaluate;  ///< J and bias at (q, q', t)
+  /// buffers of evaluate, one per workspace (empty: none, evaluate gets null). Allocates.
+  std::function<std::unique_ptr<ConstraintScratch>(Index n)> make_scratch;
+  explicit operator bool() const { return bool(evaluate); }  ///< on the contact-point path
+};
+
 /// Coulomb friction on a constraint surface (docs/friction.md has the equations). While sliding:
 ///   C_i = −mu N v_rel,i / sqrt(|v_rel|² + eps²)  for i in `coordinates`, zero elsewhere,
 /// where N = |A_kᵀ (lambda_k + lambda_nonideal,k)| is the norm of constraint k's whole reaction
@@ -166,6 +208,11 @@ struct CoulombFriction {
   double regularization_velocity = 1e-9;  ///< eps above, > 0, in velocity units
   SurfaceVelocityFn surface_velocity;     ///< u above; empty: the surface has no tangential motion
   std::string name;                       ///< force name (default "coulomb.<constraint>")
+  /// the contact point's kinematics: when set, the friction slides the contact point
+  /// (v_rel = T q', C = Tᵀ f, N the physical normal force; see ContactKinematicsFn) instead of
+  /// `coordinates`, which must then be empty, and `surface_velocity` too (a moving surface under
+  /// a contact point is not supported yet); the stick constraint is T q' = 0, T q'' = −T' q'
+  ContactKinematics kinematics;
 };
 
 /// The non-ideal force of a CoulombFriction law. Binding throws std::invalid_argument if the

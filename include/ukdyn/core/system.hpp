@@ -109,6 +109,9 @@ struct FrictionContact {
   double mu_static = 0.0;              ///< static friction coefficient (>= mu)
   double eps = 0.0;                    ///< regularization velocity: below it the contact is at rest
   SurfaceVelocityFn surface_velocity;  ///< the surface's tangential velocity, or empty
+  ContactKinematics kinematics;        ///< the contact point's, or empty (coordinate path)
+  /// the length of the sliding velocity: |coordinates|, or d on the contact-point path
+  Index size() const { return kinematics ? kinematics.tangents : Index(coordinates.size()); }
 };
 
 /// An immutable constrained mechanical system M(q,t) q'' = Q(q,q',t) + Qc with constraints

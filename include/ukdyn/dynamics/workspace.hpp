@@ -290,6 +290,13 @@ class Workspace {
   MatrixXd contact_basis;  ///< (largest normal rows × largest sliding coordinates) orthonormal N_k
   VectorXd surface_u;      ///< (largest sliding coordinates) a contact's surface velocity u
   VectorXd surface_u_dot;  ///< (largest sliding coordinates) its rate u' = du/dt
+  /// (Coulomb contacts) contact c's Jacobian rows on the contact-point path, (1 + d) × |columns|
+  /// (ContactKinematics; 0 × 0 on the coordinate path), filled by sliding_velocity
+  std::vector<MatrixXd> contact_jacobian;
+  /// (1 + largest d × Coulomb contacts) column c: contact c's bias J_P' q' on those rows
+  MatrixXd contact_bias;
+  /// (Coulomb contacts) the buffers of contact c's ContactKinematics (null when it has none)
+  std::vector<std::unique_ptr<ConstraintScratch>> contact_scratch;
   /// (largest rows × widest constraint) one constraint's rows of A before they go into the
   /// sparse engine's pattern (width: its columns(), n for dense rows); 0 × 0 with the dense one
   MatrixXd A_rows;

@@ -31,6 +31,7 @@
 
 #include <functional>
 #include <memory>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -351,6 +352,17 @@ class Multibody {
   Multibody& add_joint(Joint joint);
   /// Adds a force element (checked in build()).
   Multibody& add_force(Force force);
+  /// Coulomb friction at contact `contact` (a point or sphere contact(), on a plane of the
+  /// ground; docs/contact.md, "Friction at a body's contact"): a CoulombFriction named
+  /// "coulomb.<contact>" whose sliding velocity is the contact point's (ContactKinematics,
+  /// made by build()): v_rel = T q' with T the tangent rows of the Jacobian of the body's material
+  /// point at the contact, v_P = v(centre) + ω × (−r n); friction C = Tᵀ f, |f| = mu N with N the
+  /// physical normal force; sticking T q' = 0 while |holding force| <= mu_static N. build()
+  /// @throws std::invalid_argument on an unknown contact, a disk contact, a plane on a moving
+  /// body (not supported yet), mu < 0, mu_static < mu or regularization_velocity <= 0.
+  Multibody& add_contact_friction(std::string contact, double mu,
+                                  std::optional<double> mu_static = {},
+                                  double regularization_velocity = 1e-9);
   /// Uniform gravity g (world; e.g. (0, −9.81, 0) for planar, (0, 0, −9.81) for spatial).
   Multibody& set_gravity(const Vector3d& g);
   /// The switching functions g(q, q', t) of non-smooth terms in the applied forces and the

@@ -9,6 +9,7 @@
 #include <string>
 
 #include "ukdyn/core/constraint.hpp"
+#include "ukdyn/core/nonideal.hpp"
 #include "ukdyn/multibody/tree.hpp"
 
 namespace ukdyn::tree {
@@ -56,5 +57,15 @@ Constraint revolute_constraint(const Tree& tree, std::string name, LinkPoint a,
 /// a restitution outside [0, 1]. Cost per evaluation O(n · depth), as distance_constraint's row.
 Constraint contact_constraint(const Tree& tree, std::string name, LinkPoint at, double radius,
                               const LinkFrame& plane, double restitution = 0.0);
+
+/// The contact-point kinematics of that contact (sphere of radius r centred at `at`, or a point),
+/// for Coulomb friction there (CoulombFriction::kinematics; docs/contact.md, "Friction at a
+/// robot's contact"): rows n_Wᵀ J_P, t_1ᵀ J_P, t_2ᵀ J_P (t_1, t_2 = plane.R's x and y axes) of
+/// the Jacobian of the link's material point at the contact, v_P = v(at) + ω × (−r n_W),
+///   J_P = J_v(at) − [−r n_W]× J_ω,   J_P' q' = β_v(at) + β_ω × (−r n_W),
+/// on all n coordinates. @throws std::invalid_argument naming `name` on a link out of range or
+/// a plane on a link (not supported yet: its normal turns). Cost per evaluation O(n · depth).
+ContactKinematics contact_kinematics(const Tree& tree, const std::string& name, LinkPoint at,
+                                     double radius, const LinkFrame& plane);
 
 }  // namespace ukdyn::tree

@@ -561,6 +561,44 @@ Constraint contact_constraint(const Tree& tree, std::string name, LinkPoint at, 
   return c;
 }
 
+ContactKinematics contact_kinematics(const Tree& tree, const std::string& name, LinkPoint at,
+                                     double radius, const LinkFrame& plane) {
+  const std::string who = "ukdyn::tree::contact_kinematics";
+  check_points(tree, who, name, at, {plane.link, plane.p});
+  if (plane.link >= 0) {
+    throw std::invalid_argument(who + ": contact '" + name +
+                                "': friction on a plane of a link is not supported yet (a plane "
+                                "of the world takes it)");
+  }
+  auto shared = std::make_shared<const Tree>(tree);
+  const Vector3d n = plane.R.col(2), t1 = plane.R.col(0), t2 = plane.R.col(1);
+  const Vector3d a = -radius * n;  // from the sphere's centre to the contact point
+  ContactKinematics kin;
+  kin.tangents = 2;
+  for (Index i = 0; i < tree.coordinate_count(); ++i) kin.columns.push_back(i);
+  kin.make_scratch = [shared](Index) -> std::unique_ptr<ConstraintScratch> {
+    return std::make_unique<FrameScratch>(*shared, nullptr);
+  };
+  // v_P = v(centre) + ω × a: J_P = J_v − [a]× J_ω, J_P' q' = β_v + β_ω × a (a fixed: a plane of
+  // the world)
+  kin.evaluate = [shared, at, n, t1, t2, a](const Eigen::Ref<const VectorXd>& q,
+                                            const Eigen::Ref<const VectorXd>& qd, double,
+                                            ConstraintScratch* s, Eigen::Ref<MatrixXd> J,
+                                            Eigen::Ref<VectorXd> bias) {
+    auto& w = *static_cast<FrameScratch*>(s);
+    const PointState pc = point_state(*shared, at, q, qd, w, w.Ja, true);
+    const Vector3d g = pc.bias.tail<3>() + pc.bias.head<3>().cross(a);
+    const Vector3d rows[3] = {n, t1, t2};
+    for (int i = 0; i < 3; ++i) {
+      // rᵀ (J_v − [a]× J_ω) = rᵀ J_v + (a × r)ᵀ J_ω   (−rᵀ [a]× = (a × r)ᵀ)
+      J.row(i).noalias() = rows[i].transpose() * w.Ja.bottomRows<3>();
+      J.row(i).noalias() += a.cross(rows[i]).transpose() * w.Ja.topRows<3>();
+      bias[i] = rows[i].dot(g);
+    }
+  };
+  return kin;
+}
+
 Constraint pose_requirement(const Tree& tree, std::string name, LinkPoint at, PosePathFn path,
                             bool orientation) {
   const std::string who = "ukdyn::tree::pose_requirement";

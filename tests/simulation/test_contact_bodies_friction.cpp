@@ -1,0 +1,381 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// Coulomb friction at the contacts of bodies models and robots (issue #31 item 3; docs/contact.md,
+// "Friction at a body's contact"): the sliding velocity is the contact point's (ContactKinematics),
+// each case against its closed form — a sphere launched without spin on a rough floor (slides,
+// then rolls from t* = 2 v0 / (7 mu g) at 5/7 v0), a planar rod sliding flat on two point contacts
+// (stops at v0² / (2 mu g) and sticks, each end carrying m g / 2), Painlevé's rod on its end, an
+// oblique impact that sticks or slides, a robot wheel in joint coordinates, the errors.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "ukdyn/dynamics/contact.hpp"
+#include "ukdyn/modelfile/model.hpp"
+#include "ukdyn/simulation/simulate.hpp"
+
+namespace ukdyn {
+namespace UKDYN_TEST_FILE {
+
+constexpr double kG = 9.81;
+
+// column `name` of field f (width n) at sample i
+double at(const Trajectory& tr, const std::vector<double>& f, const std::string& name,
+          std::size_t i) {
+  const auto& names = tr.coordinate_names;
+  const auto c = std::size_t(std::find(names.begin(), names.end(), name) - names.begin());
+  EXPECT_LT(c, names.size()) << name;
+  return f[i * std::size_t(tr.n) + c];
+}
+// the multiplier of constraint `name`'s first row at sample i
+double lambda_of(const Trajectory& tr, const std::string& name, std::size_t i) {
+  Index row = 0;
+  for (std::size_t k = 0; k < tr.constraint_names.size(); ++k) {
+    if (tr.constraint_names[k] == name) return tr.lambda[i * std::size_t(tr.m) + std::size_t(row)];
+    row += tr.constraint_rows[k];
+  }
+  ADD_FAILURE() << "no constraint " << name;
+  return 0.0;
+}
+
+// the run of m sampled at `times` (and its ends); it must end ok, refusing no stick
+Trajectory run_at(Model& m, std::vector<double> times) {
+  m.options.output_at = std::move(times);
+  Trajectory tr = simulate(m.system, m.q0, m.qd0, m.options);
+  EXPECT_EQ(tr.stats.status, Status::kOk) << tr.stats.message;
+  EXPECT_EQ(tr.stats.stick_refusals, 0);
+  return tr;
+}
+// the friction's work is `work` (closed form) and closes the run's energy balance
+void expect_friction_work(const Trajectory& tr, double work) {
+  EXPECT_TRUE(tr.stats.energy_balance_checked);
+  EXPECT_NEAR(tr.work_nonideal.back(), work, 1e-7);
+  EXPECT_NEAR(tr.energy.back() - tr.energy.front(), tr.work_nonideal.back(), 1e-8);
+}
+// parsing `text` (read as `file`) fails at `where` (line:column) with `what` in the message
+void expect_model_error(const std::string& text, const std::string& file, const std::string& where,
+                        const std::string& what) {
+  try {
+    parse_model(text, file);
+    ADD_FAILURE() << "no error for " << text;
+  } catch (const ModelError& e) {
+    EXPECT_EQ(std::to_string(e.line()) + ":" + std::to_string(e.column()), where) << text;
+    EXPECT_NE(e.message().find(what), std::string::npos) << e.message();
+  }
+}
+
+// ---- a sphere launched without spin on a rough floor -------------------------------------------
+
+// Sphere (m, r, I = 2/5 m r²) at rest height on z = 0, launched along x at v0 without spin:
+// it slides with v = v0 − mu g t while ω_y = 5 mu g t / (2 r) grows, until the contact point's
+// speed v − r ω_y vanishes at t* = 2 v0 / (7 mu g), v* = 5/7 v0; then it rolls at v* (stuck:
+// no friction). N = m g throughout; the friction's work is −m v0² / 7.
+constexpr const char* kBall = R"(
+parameters: {m: 0.5, r: 0.1, v0: 2, mu: 0.2}
+bodies:
+  - {name: ball, type: rigid, mass: m, inertia: [0.4*m*r^2, 0.4*m*r^2, 0.4*m*r^2],
+     position: [0, 0, r], velocity: [v0, 0, 0]}
+forces:
+  - {type: gravity, g: [0, 0, -9.81]}
+contacts:
+  - {name: floor, body: ball, shape: sphere, radius: r}
+nonideal:
+  - {friction: coulomb, constraint: floor, mu: mu}
+simulate: {t_end: 0.6, integrator: dopri5, rtol: 1e-11, atol: 1e-13}
+output: {every: 0}
+)";
+
+// ω_y of a rigid body from its quaternion and rates: 2 (u0 u2' − u0' u2 + u3 u1' − u1 u3')
+double omega_y(const Trajectory& tr, std::size_t i) {
+  const double u0 = at(tr, tr.q, "ball.u0", i), u1 = at(tr, tr.q, "ball.u1", i),
+               u2 = at(tr, tr.q, "ball.u2", i), u3 = at(tr, tr.q, "ball.u3", i);
+  const double d0 = at(tr, tr.qd, "ball.u0", i), d1 = at(tr, tr.qd, "ball.u1", i),
+               d2 = at(tr, tr.qd, "ball.u2", i), d3 = at(tr, tr.qd, "ball.u3", i);
+  return 2.0 * (u0 * d2 - d0 * u2 + u3 * d1 - u1 * d3);
+}
+
+TEST(ContactBodiesFriction, SphereLaunchedWithoutSpinRollsFromTheClosedFormInstant) {
+  Model m = parse_model(kBall);
+  const double mass = 0.5, r = 0.1, v0 = 2.0, mu = 0.2;
+  const double t_star = 2.0 * v0 / (7.0 * mu * kG), v_star = 5.0 / 7.0 * v0;
+  const Trajectory tr = run_at(m, {0.05, 0.15, t_star - 1e-4, t_star + 1e-4, 0.45, 0.6});
+  // one located event: the stick at t*
+  EXPECT_EQ(tr.stats.events, 1);
+  for (std::size_t i = 0; i < tr.t.size(); ++i) {
+    const double t = tr.t[i];
+    const bool sliding = t < t_star;
+    const double v = sliding ? v0 - mu * kG * t : v_star;
+    const double w = sliding ? 5.0 * mu * kG * t / (2.0 * r) : v_star / r;
+    const double x = sliding
+                         ? v0 * t - 0.5 * mu * kG * t * t
+                         : v0 * t_star - 0.5 * mu * kG * t_star * t_star + v_star * (t - t_star);
+    EXPECT_NEAR(at(tr, tr.qd, "ball.x", i), v, 1e-8) << "t = " << t;
+    EXPECT_NEAR(omega_y(tr, i), w, 1e-7) << "t = " << t;
+    EXPECT_NEAR(at(tr, tr.q, "ball.x", i), x, 1e-8) << "t = " << t;
+    EXPECT_NEAR(at(tr, tr.q, "ball.z", i), r, 1e-9) << "t = " << t;
+    // N = m g (the gap row n·(c − o) − r has |A| = 1 on the centre's z: lambda is N)
+    EXPECT_NEAR(lambda_of(tr, "floor", i), mass * kG, 1e-7) << "t = " << t;
+    // the friction: −mu m g along x while sliding, none while rolling (stuck)
+    EXPECT_NEAR(at(tr, tr.Qc_nonideal, "ball.x", i), sliding ? -mu * mass * kG : 0.0, 1e-7)
+        << "t = " << t;
+    if (!sliding) EXPECT_NEAR(at(tr, tr.Qc_ideal, "ball.x", i), 0.0, 1e-7) << "t = " << t;
+  }
+  // the energy balance closes with the friction's work −m v0² / 7
+  expect_friction_work(tr, -mass * v0 * v0 / 7.0);
+}
+
+// ---- a planar rod sliding flat on two point contacts --------------------------------------------
+
+// Rod (m, L) lying on the floor on its ends, launched along x at v0: each end carries m g / 2,
+// the rod decelerates at mu g, stops at x = v0² / (2 mu g) at t = v0 / (mu g), and sticks there
+// (no force pulls it on). The friction's work is −½ m v0².
+constexpr const char* kRod = R"(
+parameters: {m: 2, L: 1, v0: 1.5, mu: 0.3}
+bodies:
+  - {name: rod, type: planar, mass: m, inertia: m*L^2/12, position: [0, 0], velocity: [v0, 0]}
+forces:
+  - {type: gravity, g: [0, -9.81]}
+contacts:
+  - {name: left, body: rod, point: [-L/2, 0]}
+  - {name: right, body: rod, point: [L/2, 0]}
+nonideal:
+  - {friction: coulomb, constraint: left, mu: mu}
+  - {friction: coulomb, constraint: right, mu: mu}
+simulate: {t_end: 1, integrator: dopri5, rtol: 1e-11, atol: 1e-13}
+output: {every: 0}
+)";
+
+TEST(ContactBodiesFriction, RodSlidingFlatStopsWhereTheClosedFormSaysAndSticks) {
+  Model m = parse_model(kRod);
+  const double mass = 2.0, v0 = 1.5, mu = 0.3;
+  const double t_stop = v0 / (mu * kG), x_stop = v0 * v0 / (2.0 * mu * kG);
+  const Trajectory tr = run_at(m, {0.1, 0.3, t_stop - 1e-4, t_stop + 1e-4, 0.8, 1.0});
+  EXPECT_GE(tr.stats.events, 1);
+  for (std::size_t i = 0; i < tr.t.size(); ++i) {
+    const double t = tr.t[i];
+    const bool sliding = t < t_stop;
+    const double x = sliding ? v0 * t - 0.5 * mu * kG * t * t : x_stop;
+    EXPECT_NEAR(at(tr, tr.q, "rod.x", i), x, 1e-8) << "t = " << t;
+    EXPECT_NEAR(at(tr, tr.qd, "rod.x", i), sliding ? v0 - mu * kG * t : 0.0, 1e-8) << "t = " << t;
+    EXPECT_NEAR(at(tr, tr.q, "rod.theta", i), 0.0, 1e-10) << "t = " << t;
+    EXPECT_NEAR(lambda_of(tr, "left", i), 0.5 * mass * kG, 1e-7) << "t = " << t;
+    EXPECT_NEAR(lambda_of(tr, "right", i), 0.5 * mass * kG, 1e-7) << "t = " << t;
+    EXPECT_NEAR(at(tr, tr.Qc_nonideal, "rod.x", i), sliding ? -mu * mass * kG : 0.0, 1e-7)
+        << "t = " << t;
+  }
+  expect_friction_work(tr, -0.5 * mass * v0 * v0);
+}
+
+// ---- an oblique impact with friction -----------------------------------------------------------
+
+// The sphere of kBall dropped without spin from centre height h0 with horizontal speed u on a
+// floor of restitution e: at the impact v_z⁻ = −√(2 g (h0 − r)), the normal impulse is
+// P_n = m (1 + e) |v_z⁻| (the tangential impulse does not change the normal speed), and the
+// contact point's tangential speed u − r ω changes by −P_t (1/m + r²/I) = −7 P_t / (2 m). It
+// sticks when 2 m u / 7 <= mu P_n: then u⁺ = 5/7 u, ω⁺ = u⁺ / r; else it slides through the
+// impact with P_t = mu P_n: u⁺ = u − mu (1 + e) |v_z⁻|, ω⁺ = 5 mu (1 + e) |v_z⁻| / (2 r). It
+// then flies with these velocities (no friction in the air); the impact never creates energy.
+TEST(ContactBodiesFriction, ObliqueImpactSticksOrSlidesAsTheClosedFormSays) {
+  const double mass = 0.5, r = 0.1, h0 = 0.5, u = 1.0, e = 0.5;
+  const double vz = std::sqrt(2.0 * kG * (h0 - r)), Pn = mass * (1.0 + e) * vz;
+  for (const double mu : {1.0, 0.05}) {
+    std::string text = kBall;
+    text.replace(text.find("position: [0, 0, r], velocity: [v0, 0, 0]"),
+                 std::string("position: [0, 0, r], velocity: [v0, 0, 0]").size(),
+                 "position: [0, 0, 0.5], velocity: [1, 0, 0]");
+    text.replace(text.find("radius: r}"), std::string("radius: r}").size(),
+                 "radius: r, restitution: 0.5}");
+    text.replace(text.find("t_end: 0.6"), std::string("t_end: 0.6").size(), "t_end: 0.5");
+    Model m = parse_model(text, "<string>", {{"mu", mu}});
+    // the first impact at √(2 (h0 − r) / g), the apex of the first bounce e v_z / g later
+    const double t1 = std::sqrt(2.0 * (h0 - r) / kG);
+    const Trajectory tr = run_at(m, {t1 + 0.5 * e * vz / kG});
+    ASSERT_FALSE(tr.stats.contact_events.empty());
+    const ContactEvent& hit = tr.stats.contact_events.front();
+    EXPECT_EQ(hit.kind, ContactEvent::Kind::kImpact);
+    EXPECT_NEAR(hit.t, t1, 1e-9);
+    EXPECT_NEAR(hit.impulse, Pn, 1e-8);
+    const bool sticks = 2.0 * mass * u / 7.0 <= mu * Pn;
+    EXPECT_EQ(sticks, mu == 1.0);
+    const double u_after = sticks ? 5.0 / 7.0 * u : u - mu * (1.0 + e) * vz;
+    const double w_after = sticks ? u_after / r : 5.0 * mu * (1.0 + e) * vz / (2.0 * r);
+    const auto apex = std::find(tr.t.begin(), tr.t.end(), m.options.output_at[0]);
+    ASSERT_NE(apex, tr.t.end());
+    const std::size_t i = std::size_t(apex - tr.t.begin());
+    EXPECT_NEAR(at(tr, tr.qd, "ball.x", i), u_after, 1e-8) << "mu = " << mu;
+    EXPECT_NEAR(omega_y(tr, i), w_after, 1e-7) << "mu = " << mu;
+    // T⁺ − T⁻: the normal part −½ m (1 − e²) v_z² and the tangential part
+    const double I = 0.4 * mass * r * r;
+    const double dT = -0.5 * mass * (1.0 - e * e) * vz * vz +
+                      0.5 * mass * (u_after * u_after - u * u) + 0.5 * I * w_after * w_after;
+    EXPECT_LT(dT, 0.0);
+    EXPECT_NEAR(hit.energy_change, dT, 1e-8) << "mu = " << mu;
+  }
+}
+
+// ---- Painlevé's rod on its end
+// --------------------------------------------------------------------
+
+// A planar rod (m = 1, length 2l = 2, I = m l² / 3) standing at tan θ = 2 on its end A (a point
+// contact) and sliding away from itself at v: A's normal acceleration is
+// (N / m)(1 + 3c² − 3 mu s c) − g (θ' = 0), so below mu_c = (1 + 3c²) / (3 s c) = 4/3 the start
+// has N = m g / (1 + 3c² − 3 mu s c), and above it the contact problem has no solution or
+// several: the run stops naming the contact, mu and mu_c (docs/contact.md, "Painlevé") — the
+// contact-point law's columns in the LCP of the accelerations, as the coordinate law's.
+constexpr const char* kPainleve = R"(
+parameters: {th0: 1.1071487177940904, mu: 0.5, v: 1}
+bodies:
+  - {name: rod, type: planar, mass: 1, inertia: 1/3, position: [cos(th0), sin(th0)], angle: th0,
+     velocity: [-v, 0]}
+forces:
+  - {type: gravity, g: [0, -9.81]}
+contacts:
+  - {name: floor, body: rod, point: [-1, 0]}
+nonideal:
+  - {friction: coulomb, constraint: floor, mu: mu}
+simulate: {t_end: 0.01, integrator: dopri5, rtol: 1e-10, atol: 1e-12}
+output: {every: 0}
+)";
+
+TEST(ContactBodiesFriction, PainleveRodOnItsEndMeetsTheCriticalMu) {
+  const double th = std::atan(2.0), c = std::cos(th), s = std::sin(th), l = 1.0, m = 1.0;
+  const double mu = 0.5;
+  Model model = parse_model(kPainleve, "<string>", {{"mu", mu}});
+  const Trajectory tr = run_at(model, {});
+  ASSERT_FALSE(tr.t.empty());
+  // at the start: N, and Newton–Euler with friction F = +mu N on A
+  const double N = m * kG / (1.0 + 3.0 * c * c - 3.0 * mu * s * c), F = mu * N;
+  const double thdd = (-l * c * N + l * s * F) / (m * l * l / 3.0);
+  // (N is the whole reaction: the ideal multiplier m g / (1 + 3c²) plus the friction's share)
+  EXPECT_NEAR(at(tr, tr.Qc_ideal, "rod.y", 0) + at(tr, tr.Qc_nonideal, "rod.y", 0), N, 1e-8);
+  EXPECT_NEAR(lambda_of(tr, "floor", 0), m * kG / (1.0 + 3.0 * c * c), 1e-8);
+  EXPECT_NEAR(at(tr, tr.Qc_nonideal, "rod.x", 0), F, 1e-8);
+  EXPECT_NEAR(at(tr, tr.qdd, "rod.x", 0), F / m, 1e-8);
+  EXPECT_NEAR(at(tr, tr.qdd, "rod.y", 0), N / m - kG, 1e-8);
+  EXPECT_NEAR(at(tr, tr.qdd, "rod.theta", 0), thdd, 1e-8);
+  for (const double above : {1.4, 2.0}) {
+    const Model bad = parse_model(kPainleve, "<string>", {{"mu", above}});
+    try {
+      simulate(bad.system, bad.q0, bad.qd0, bad.options);
+      ADD_FAILURE() << "no error at mu = " << above;
+    } catch (const std::invalid_argument& e) {
+      const std::string what = e.what();
+      EXPECT_NE(what.find("Painlevé's paradox at the contact 'floor'"), std::string::npos) << what;
+      EXPECT_NE(what.find("the critical mu is 1.333"), std::string::npos) << what;
+    }
+  }
+}
+
+// ---- a wheel on a robot in joint coordinates
+// -----------------------------------------------------
+
+// tests/data/rolling_wheel.urdf: prismatic x (carriage 1 kg), prismatic z (carriage 1 kg), pitch
+// about y of a wheel (2 kg, r = 0.1, I = ½ m r² = 0.01), a sphere contact of radius r at the
+// wheel's centre on the floor. Launched along x at v0 without spin: N = (m_z + m_w) g = 3 g (the
+// x carriage does not move in z), the carriages and the wheel decelerate at a = mu N / 4, the
+// wheel spins up at phi'' = r mu N / I, and the contact point's speed v − r phi' vanishes at
+// t* = v0 / (a + r² mu N / I) = v0 / (3.75 mu g), v* = 0.8 v0; then it rolls (stuck, no friction).
+constexpr const char* kWheel = R"(
+robot: {urdf: rolling_wheel.urdf}
+parameters: {v0: 1.2, mu: 0.25}
+contacts:
+  - {name: floor, link: wheel, shape: sphere, radius: 0.1}
+nonideal:
+  - {friction: coulomb, constraint: floor, mu: mu}
+initial:
+  q_dot: {x: v0}
+simulate: {t_end: 0.5, integrator: dopri5, rtol: 1e-11, atol: 1e-13}
+output: {every: 0}
+)";
+
+TEST(ContactBodiesFriction, RobotWheelInJointCoordinatesRollsFromTheClosedFormInstant) {
+  Model m = parse_model(kWheel, std::string(UKDYN_TEST_DATA_DIR) + "/robot.yaml");
+  const double v0 = 1.2, mu = 0.25, r = 0.1, I = 0.01, N = 3.0 * kG, M = 4.0;
+  const double a = mu * N / M, alpha = r * mu * N / I;
+  const double t_star = v0 / (a + r * alpha), v_star = v0 - a * t_star;
+  EXPECT_NEAR(t_star, v0 / (3.75 * mu * kG), 1e-15);
+  const Trajectory tr = run_at(m, {0.02, 0.08, t_star - 1e-4, t_star + 1e-4, 0.3, 0.5});
+  EXPECT_EQ(tr.stats.events, 1);
+  for (std::size_t i = 0; i < tr.t.size(); ++i) {
+    const double t = tr.t[i];
+    const bool sliding = t < t_star;
+    const double v = sliding ? v0 - a * t : v_star;
+    const double w = sliding ? alpha * t : v_star / r;
+    EXPECT_NEAR(at(tr, tr.qd, "x", i), v, 1e-8) << "t = " << t;
+    EXPECT_NEAR(at(tr, tr.qd, "pitch", i), w, 1e-7) << "t = " << t;
+    EXPECT_NEAR(at(tr, tr.q, "z", i), 0.0, 1e-9) << "t = " << t;
+    // the physical normal force N = 3 g; the gap row's A is e_z on z: lambda = N
+    EXPECT_NEAR(lambda_of(tr, "floor", i), N, 1e-7) << "t = " << t;
+    // the friction: −mu N on x and its moment r mu N on the pitch while sliding; none after
+    EXPECT_NEAR(at(tr, tr.Qc_nonideal, "x", i), sliding ? -mu * N : 0.0, 1e-7) << "t = " << t;
+    EXPECT_NEAR(at(tr, tr.Qc_nonideal, "pitch", i), sliding ? r * mu * N : 0.0, 1e-8)
+        << "t = " << t;
+  }
+  // the friction's work: ½ M v0² − ½ M v*² − ½ I (v*/r)²
+  const double loss =
+      0.5 * M * v0 * v0 - 0.5 * M * v_star * v_star - 0.5 * I * (v_star / r) * (v_star / r);
+  expect_friction_work(tr, -loss);
+}
+
+TEST(ContactBodiesFriction, RobotContactFrictionRefusesCoordinatesAndALinksPlane) {
+  const std::string head = R"(
+robot: {urdf: rolling_wheel.urdf}
+contacts:
+  - {name: floor, link: wheel, shape: sphere, radius: 0.1}
+  - {name: side, link: wheel, plane: {link: carriage_x, normal: [1, 0, 0], point: [-1, 0, 0]}}
+nonideal:
+)";
+  auto expect = [&](const std::string& entry, const std::string& where, const std::string& what) {
+    expect_model_error(head + entry, std::string(UKDYN_TEST_DATA_DIR) + "/robot.yaml", where, what);
+  };
+
+  expect("  - {friction: coulomb, constraint: floor, mu: 0.3, coordinates: [x]}\n", "7:66",
+         "it takes no coordinates");
+  expect("  - {friction: coulomb, constraint: side, mu: 0.3}\n", "7:37",
+         "friction on a plane of a link is not supported yet");
+  expect("  - {friction: coulomb, constraint: floor, mu: -1}\n", "7:48", "mu must be >= 0");
+}
+
+// ---- errors, located
+// -----------------------------------------------------------------------------
+
+TEST(ContactBodiesFriction, UnsupportedOrBadFrictionGetsAClearErrorWithItsPlace) {
+  const std::string head = R"(parameters: {r: 0.1}
+bodies:
+  - {name: ball, type: rigid, mass: 1, inertia: [1, 1, 1], position: [0, 0, r]}
+  - {name: plate, type: rigid, mass: 1, inertia: [1, 1, 1], position: [0, 0, -1]}
+contacts:
+  - {name: floor, body: ball, shape: sphere, radius: r}
+  - {name: coin, body: ball, shape: disk, radius: r, axis: [1, 0, 0]}
+  - {name: top, body: ball, plane: {body: plate}}
+joints:
+  - {name: hold, type: weld, parent: ground, child: plate}
+nonideal:
+)";
+  auto expect = [&](const std::string& entry, const std::string& where, const std::string& what) {
+    expect_model_error(head + entry, "<string>", where, what);
+  };
+
+  expect("  - {friction: coulomb, constraint: floor, mu: 0.3, coordinates: [ball_x]}\n", "12:66",
+         "it takes no coordinates");
+  expect("  - {friction: coulomb, constraint: floor, mu: -0.3}\n", "12:48", "mu");
+  expect("  - {friction: coulomb, constraint: floor, mu: 0.3, mu_static: 0.2}\n", "12:64",
+         "mu_static must be >= mu");
+  expect("  - {friction: coulomb, constraint: hold, mu: 0.3}\n", "12:37", "which is no contact");
+  expect("  - {friction: coulomb, constraint: coin, mu: 0.3}\n", "12:37",
+         "friction at a disk contact is not supported yet");
+  expect("  - {friction: coulomb, constraint: top, mu: 0.3}\n", "12:37",
+         "friction on a plane of a moving body is not supported yet");
+  expect("  - {friction: viscous, constraint: floor, c: 1}\n", "12:16",
+         "takes Coulomb friction at its contacts only");
+  expect(
+      "  - {friction: coulomb, constraint: floor, mu: 0.3}\n"
+      "  - {friction: coulomb, constraint: floor, mu: 0.2}\n",
+      "13:37", "is declared twice");
+}
+
+}  // namespace UKDYN_TEST_FILE
+}  // namespace ukdyn
