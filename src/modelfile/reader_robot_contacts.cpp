@@ -1,13 +1,16 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // contacts: in a robot model file (docs/robots.md, "Contacts"; the syntax shared with bodies
-// models, docs/contact.md): each entry one unilateral gap between a link's point or sphere and a
-// plane on the world or on another link (tree::contact_constraint):
+// models, docs/contact.md): each entry one unilateral gap between a link's point, sphere or disk
+// and a plane on the world or on another link (tree::contact_constraint,
+// tree::disk_contact_constraint):
 //   contacts:
 //     - name: tip                  required, unique among the constraints and loops
 //       link: fore                 the link the point or sphere is fixed on
-//       point: [0.4, 0, 0]         in the link's frame (default its origin)
-//       shape: sphere              point (default) | sphere (disk: refused on robot links)
-//       radius: 0.03               sphere: required, > 0; point: not allowed
+//       point: [0.4, 0, 0]         in the link's frame (default its origin); a disk's centre
+//       shape: sphere              point (default) | sphere | disk
+//       radius: 0.03               sphere, disk: required, > 0; point: not allowed
+//       axis: [0, 0, 1]            disk only: the normal of its face in the link's frame
+//                                  (default the link's z axis); not flat on its plane at q0
 //       plane: {link: base, point: [0, 0, 0], normal: [0, 0, 1]}   default: the world's z = 0,
 //                                  normal +z (body: ground or link: world for the world)
 //       restitution: 0.5           Newton's e in [0, 1] (default 0)
@@ -85,6 +88,16 @@ void Reader::read_robot_contacts(const YAML::Node& root, const tree::Tree& robot
            "the links are world, " + join(links));
     }
   };
+  // the start a disk must not lie flat at: the neutral pose, with initial: q's values (read
+  // again, with the same checks, by read_initial)
+  const auto initial_q = [&]() {
+    VectorXd q = robot.neutral();
+    const YAML::Node init = root["initial"];
+    if (init && init.IsMap() && init["q"] && init["q"].IsMap()) {
+      for (const auto& kv : init["q"]) q[coordinate(kv.first)] = number(kv.second, "initial q");
+    }
+    return q;
+  };
   for (const auto& c : cs) {
     if (!c.IsMap()) fail(c, "a contact is a mapping", std::string("e.g. ") + kRobotContactExample);
     const YAML::Node nm = c["name"];
@@ -121,19 +134,22 @@ void Reader::read_robot_contacts(const YAML::Node& root, const tree::Tree& robot
     if (const YAML::Node p = c["point"])
       at.p = vector3(p, "point", "[x, y, z] in the link's frame");
     const std::string shape = c["shape"] ? c["shape"].Scalar() : "point";
-    if (shape == "disk")
-      fail(c["shape"], what + ": disk contacts on robot links are not supported yet; use a sphere",
-           "shape: sphere, radius: 0.05 (or a point)");
-    if (shape != "point" && shape != "sphere")
-      fail(c["shape"], what + ": shape must be point or sphere, got '" + shape + "'",
+    if (shape != "point" && shape != "sphere" && shape != "disk")
+      fail(c["shape"], what + ": shape must be point, sphere or disk, got '" + shape + "'",
            "shape: sphere, radius: 0.05");
-    if (const YAML::Node a = c["axis"])
-      fail(a, what + ": axis is for disks only", "a sphere or a point has no axis");
+    tree::Vector3d axis = tree::Vector3d::UnitZ();
+    if (const YAML::Node a = c["axis"]) {
+      if (shape != "disk")
+        fail(a, what + ": axis is for disks only", "a sphere or a point has no axis");
+      axis = vector3(a, "axis", "[0, 0, 1]: the normal of the disk's face in the link's frame");
+      if (!(axis.norm() > 1e-12))
+        fail(a, what + ": the disk's axis is zero", "axis: [0, 0, 1] in the link's frame");
+    }
     double radius = 0.0;
     if (shape == "point" && c["radius"])
       fail(c["radius"], what + ": a point has no radius", "shape: sphere, radius: 0.05");
-    if (shape == "sphere") {
-      if (!c["radius"]) fail(c, what + ": a sphere needs radius:", "radius: 0.05");
+    if (shape != "point") {
+      if (!c["radius"]) fail(c, what + ": a " + shape + " needs radius:", "radius: 0.05");
       radius = number(c["radius"], "radius");
       if (!(radius > 0.0) || !std::isfinite(radius))
         fail(c["radius"], what + ": radius must be > 0, got " + format_number(radius, 3),
@@ -180,7 +196,10 @@ void Reader::read_robot_contacts(const YAML::Node& root, const tree::Tree& robot
     // Newton's e and the law
     const auto [e, law] = read_restitution(c["restitution"], c["restitution_law"], what);
     try {
-      Constraint k = tree::contact_constraint(robot, name, at, radius, plane, e);
+      Constraint k = shape == "disk"
+                         ? tree::disk_contact_constraint(robot, name, {at.link, at.p, axis, radius},
+                                                         plane, initial_q(), e)
+                         : tree::contact_constraint(robot, name, at, radius, plane, e);
       if (law != RestitutionLaw::kNewton) k = with_restitution_law(k, law);
       builder.add(std::move(k));
       constraint_names_.push_back(name);
