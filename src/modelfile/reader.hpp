@@ -437,10 +437,12 @@ class Reader {
                                    const std::string& what);
   std::shared_ptr<const tree::Tree> robot_;  // the robot read by read_robot (or null)
   // contacts: of a robot model (modelfile/reader_robot_contacts.cpp): one unilateral
-  // tree::contact_constraint (disk_contact_constraint) per entry, added to `builder`; `names`
-  // holds the loops' names and gets the contacts'; `urdf` names the file in errors
+  // tree::contact_constraint (disk_contact_constraint) per entry, added to `builder`, and its
+  // drawn contact to `drawn`; `names` holds the loops' names and gets the contacts'; `urdf`
+  // names the file in errors
   void read_robot_contacts(const YAML::Node& root, const tree::Tree& robot, const std::string& urdf,
-                           std::set<std::string>& names, SystemBuilder& builder);
+                           std::set<std::string>& names, SystemBuilder& builder,
+                           std::vector<VisualContact>& drawn);
 
   // ---- control (modelfile/reader_control.cpp): control: ------------------------------------
   // Builds model.controller from the control: section (nothing when absent). With `nominal:` the

@@ -129,7 +129,8 @@ void MultibodyReader::read_contacts() {
                        : mb::contact(name, plane_body, plane, b, p, radius, e);
     j.restitution_law = law;
     builder_.add_joint(std::move(j));
-    contacts_.push_back({name, disk ? mb::JointType::kContactDisk : mb::JointType::kContact, c});
+    contacts_.push_back(
+        {name, disk ? mb::JointType::kContactDisk : mb::JointType::kContact, c, radius});
     r_.positions_.constraints[name] = Reader::position(c);
   }
 }

@@ -17,6 +17,7 @@
 //       restitution_law: newton    or poisson
 #include <algorithm>
 #include <cmath>
+#include <memory>
 #include <set>
 #include <string>
 #include <vector>
@@ -30,6 +31,7 @@
 #include "ukdyn/multibody/tree_closures.hpp"
 
 #include "modelfile/reader.hpp"
+#include "modelfile/visual_contacts.hpp"
 
 namespace ukdyn::model_reader {
 
@@ -68,7 +70,7 @@ std::string robot_contact_key_hint(const std::string& key, const std::vector<std
 
 void Reader::read_robot_contacts(const YAML::Node& root, const tree::Tree& robot,
                                  const std::string& urdf, std::set<std::string>& names,
-                                 SystemBuilder& builder) {
+                                 SystemBuilder& builder, std::vector<VisualContact>& drawn) {
   const YAML::Node cs = root["contacts"];
   if (!cs) return;
   if (!cs.IsSequence())
@@ -88,6 +90,7 @@ void Reader::read_robot_contacts(const YAML::Node& root, const tree::Tree& robot
            "the links are world, " + join(links));
     }
   };
+  std::shared_ptr<const tree::Tree> shared;  // the robot, for the drawn contacts
   // the start a disk must not lie flat at: the neutral pose, with initial: q's values (read
   // again, with the same checks, by read_initial)
   const auto initial_q = [&]() {
@@ -203,6 +206,10 @@ void Reader::read_robot_contacts(const YAML::Node& root, const tree::Tree& robot
       if (law != RestitutionLaw::kNewton) k = with_restitution_law(k, law);
       builder.add(std::move(k));
       constraint_names_.push_back(name);
+      // the viewer draws it (modelfile/visual_contacts.cpp)
+      if (!shared) shared = std::make_shared<const tree::Tree>(robot);
+      drawn.push_back(detail::robot_visual_contact(
+          name, shared, at, shape == "disk" ? &axis : nullptr, radius, plane));
     } catch (const std::invalid_argument& err) {
       std::string m = err.what();
       if (const auto k = m.find(": "); k != std::string::npos) m.erase(0, k + 2);
