@@ -1,7 +1,10 @@
 # SPDX-License-Identifier: BSD-3-Clause
 """Unilateral contacts as users see them (issue #31 item 5, docs/contact.md), from Python: the
 bouncing ball of examples/models against its closed forms, the work_impact channel, the gap
-columns, the contacts plot's data and the viewer page with its contacts in headless Chromium.
+columns, the contacts plot's data and the viewer page with its contacts in headless Chromium —
+a robot's contacts too, drawn without a visual: section (arm_hits_floor: the marker and the
+impact ring where the camera projects the fingertip's contact point; a pendulum resting on the
+floor: its force m g L_c / L read out).
 
 Closed forms (h0 = 1, g = 9.81, e = 0.5, m = 0.5): the first impact at t0 = sqrt(2 h0 / g) with
 v0 = sqrt(2 g h0); the k-th rebound leaves at e^k v0, so the k-th apex is e^(2k) h0 and the
@@ -393,3 +396,104 @@ def test_the_commands_friction_at_a_contact_is_pythons(cli, tmp_path):
     assert _page_data(page)["contacts"][0]["friction_force"] == \
         _page_data(expected)["contacts"][0]["friction_force"]
     assert page == expected
+
+
+@pytest.fixture(scope="module")
+def arm():
+    """examples/models/arm_hits_floor.yaml: no visual: section; its fingertip contact is drawn
+    from the robot's forward kinematics (src/modelfile/visual_contacts.cpp)."""
+    return ukdyn.load("arm_hits_floor").simulate()
+
+
+def test_viewer_data_of_a_robots_contact(arm):
+    """The scene carries the robot's contact; the page's data puts it at the fingertip ball's
+    lowest point, whose height is the gap (to the page's rounding), with the floor's normal."""
+    assert [c["name"] for c in arm.scene["contacts"]] == ["fingertip"]
+    data = viewer.scene_data(arm.scene, arm.names, arm._columns, contact_events=arm.contact_events)
+    (contact,) = data["contacts"]
+    shown = np.array(data["t"])
+    gap = np.interp(shown, arm["t"], arm["gap.fingertip"])
+    np.testing.assert_allclose(contact["q"][2], gap, atol=1e-4)
+    assert set(contact["n"][0]) == {0} and set(contact["n"][2]) == {1}
+    impacts = [e for e in arm.contact_events if e["kind"] == "impact"]
+    assert len(impacts) >= 2
+    assert len(data["impacts"]) >= len(impacts)
+    assert data["impacts"][0]["contact"] == "fingertip"
+
+
+def test_the_viewer_draws_a_robots_contact_and_its_impacts(browser, arm, tmp_path):  # noqa: F811
+    """The contact's marker is drawn where the camera projects the fingertip's contact point,
+    and the first impact's ring flashes there at that time; the contacts box hides them."""
+    from test_viewer import _mask, _project
+    path = tmp_path / "arm_hits_floor.html"
+    arm.save_animation(path)
+    page = Page(browser, path)
+    assert page.errors() == []
+    page.js("ukdyn.show('trails', false)")
+    camera = page.js("return ukdyn.camera()")
+    t = page.js("return ukdyn.data.t")
+
+    def contact_at(time):
+        return [float(np.interp(time, arm["t"], arm["visual.contact.fingertip." + a]))
+                for a in ("x", "y", "z")]
+
+    # the marker (the arm falls freely until the first impact: no force, no arrow)
+    for frame in (0, 10):
+        page.js("ukdyn.setFrame(arguments[0])", frame)
+        assert page.js("return ukdyn.impactsShown()") == 0
+        assert _mask(page.pixels(), "#ffb000", tolerance=0.08).sum() == 0
+        marker = _mask(page.pixels(), "#0050ff")
+        assert marker.sum() > 30
+        expected = _project(camera, contact_at(t[frame]))
+        ys, xs = np.nonzero(marker)
+        assert abs(xs.mean() - expected[0]) < 3 and abs(ys.mean() - expected[1]) < 3, \
+            (frame, (xs.mean(), ys.mean()), expected)
+    # the first impact's ring, centred on the contact point at the impact
+    first = next(e for e in arm.contact_events if e["kind"] == "impact")["t"]
+    after = next(i for i, v in enumerate(t) if v >= first)
+    page.js("ukdyn.setFrame(arguments[0])", after)
+    assert page.js("return ukdyn.impactsShown()") == 1
+    ring = _mask(page.pixels(), "#ffb000", tolerance=0.08)
+    assert ring.sum() > 20
+    expected = _project(camera, contact_at(first))
+    ys, xs = np.nonzero(ring)
+    assert abs(xs.mean() - expected[0]) < 6 and abs(ys.mean() - expected[1]) < 6, \
+        ((xs.mean(), ys.mean()), expected)
+    page.save("arm_hits_floor.png")
+    page.js("ukdyn.show('contact', false)")
+    assert _mask(page.pixels(), "#0050ff").sum() == 0
+    assert _mask(page.pixels(), "#ffb000", tolerance=0.08).sum() == 0
+    page.js("ukdyn.show('contact', true)")
+    assert page.errors() == []
+
+
+def test_the_viewer_draws_a_resting_robots_contact_force(browser, tmp_path):  # noqa: F811
+    """A robot pendulum (tests/data/contact_pendulum.urdf: m = 2 kg at L_c = 0.6 m, its tip
+    sphere at L = 0.8 m) resting on the floor: the page draws its contact, with no visual:
+    section, and reads out the floor's force m g L_c / L = 14.715 N."""
+    from test_viewer import _mask
+    data = pathlib.Path(__file__).resolve().parents[2] / "tests" / "data"
+    (tmp_path / "contact_pendulum.urdf").write_text(
+        (data / "contact_pendulum.urdf").read_text(encoding="utf-8"), encoding="utf-8")
+    model = tmp_path / "resting.yaml"
+    model.write_text("robot: {urdf: contact_pendulum.urdf}\ncontacts:\n"
+                     "  - {name: tip, link: rod, point: [0.8, 0, 0], shape: sphere,"
+                     " radius: 0.05}\n"
+                     "initial: {q: {hinge: asin(0.5625)}}\nsimulate: {t_end: 0.5}\n",
+                     encoding="utf-8")
+    result = ukdyn.load(str(model)).simulate()
+    np.testing.assert_allclose(result["lambda.tip"], 2 * 9.81 * 0.6 / 0.8, rtol=1e-9)
+    path = tmp_path / "resting.html"
+    result.save_animation(path)
+    page = Page(browser, path)
+    assert page.errors() == []
+    page.js("ukdyn.setFrame(arguments[0])", 5)
+    readout = {m["name"]: m for m in page.js("return ukdyn.magnitudes()")}
+    force = readout["normal force at tip"]
+    assert (force["kind"], force["unit"]) == ("contact", "N")
+    assert force["value"] == pytest.approx(14.715, rel=5e-4)  # (4 significant digits)
+    page.save("resting_robot_contact.png")
+    assert _mask(page.pixels(), "#0050ff").sum() > 30
+    page.js("ukdyn.show('contact', false)")
+    assert _mask(page.pixels(), "#0050ff").sum() == 0
+    assert page.errors() == []

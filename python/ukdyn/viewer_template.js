@@ -177,6 +177,8 @@ const box = new T.Box3(), centres = new T.Box3();
     for (const p of data.points) if (pointAt(p, i, pos)) box.expandByPoint(pos);
     for (const f of data.frames) if (pointAt(f, i, pos)) box.expandByPoint(pos);
     for (const f of (robotAt[i] || [])) box.expandByPoint(f.pos);
+    // (a contact's point: a robot's tip beyond its last link's frame)
+    for (const c of CONTACTS) if (pointAt(c, i, pos)) box.expandByPoint(pos);
   }
   if (box.isEmpty()) box.set(new T.Vector3(-1, -1, 0), new T.Vector3(1, 1, 0));
 }

@@ -439,10 +439,12 @@ class Reader {
                                    const std::string& what);
   std::shared_ptr<const tree::Tree> robot_;  // the robot read by read_robot (or null)
   // contacts: of a robot model (modelfile/reader_robot_contacts.cpp): one unilateral
-  // tree::contact_constraint per entry, added to `builder`; `names` holds the loops' names and
-  // gets the contacts'; `urdf` names the file in errors
+  // tree::contact_constraint (disk_contact_constraint) per entry, added to `builder`, and its
+  // drawn contact to `drawn`; `names` holds the loops' names and gets the contacts'; `urdf`
+  // names the file in errors
   void read_robot_contacts(const YAML::Node& root, const tree::Tree& robot, const std::string& urdf,
-                           std::set<std::string>& names, SystemBuilder& builder);
+                           std::set<std::string>& names, SystemBuilder& builder,
+                           std::vector<VisualContact>& drawn);
   // the contacts whose Coulomb friction slides the contact point (a robot's, set by
   // read_robot_contacts), by name: the maker of their ContactKinematics, which read_nonideal
   // calls (std::invalid_argument: not supported, reported at the friction's entry)

@@ -158,7 +158,7 @@ void MultibodyReader::read_contacts() {
                   : disk ? mb::contact_disk(name, plane_body, plane, b, disk_frame, radius, e)
                          : mb::contact(name, plane_body, plane, b, p, radius, e);
     j.restitution_law = law;
-    contacts_.push_back({name, j.type, c});
+    contacts_.push_back({name, j.type, c, radius});
     builder_.add_joint(std::move(j));
     r_.positions_.constraints[name] = Reader::position(c);
   }

@@ -19,6 +19,7 @@
 #include "ukdyn/multibody/multibody.hpp"
 
 #include "modelfile/reader_multibody.hpp"
+#include "modelfile/visual_contacts.hpp"
 
 namespace ukdyn::model_reader {
 
@@ -782,6 +783,11 @@ Model MultibodyReader::read() {
   Model model{.system = built->system};
   model.q0 = built->q0;
   model.qd0 = built->qd0;
+  // the contacts drawn by the viewer: each contacts: entry's point and normal at q
+  for (const JointDecl& d : contacts_) {
+    model.visual.contacts.push_back(detail::bodies_visual_contact(
+        built, built->joints.at(std::size_t(built->joint(d.name))), d.radius));
+  }
   model.multibody = std::move(built);
   return model;
 }

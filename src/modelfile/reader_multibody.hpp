@@ -38,6 +38,7 @@ class MultibodyReader {
     std::string name;
     mb::JointType type;
     YAML::Node node;
+    double radius = 0.0;  // a contact's (its drawn point: modelfile/visual_contacts.cpp)
   };
 
   // the file's structure

@@ -1,19 +1,23 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // contacts: in a robot model file (docs/robots.md, "Contacts"; the syntax shared with bodies
-// models, docs/contact.md): each entry one unilateral gap between a link's point or sphere and a
-// plane on the world or on another link (tree::contact_constraint):
+// models, docs/contact.md): each entry one unilateral gap between a link's point, sphere or disk
+// and a plane on the world or on another link (tree::contact_constraint,
+// tree::disk_contact_constraint):
 //   contacts:
 //     - name: tip                  required, unique among the constraints and loops
 //       link: fore                 the link the point or sphere is fixed on
-//       point: [0.4, 0, 0]         in the link's frame (default its origin)
-//       shape: sphere              point (default) | sphere (disk: refused on robot links)
-//       radius: 0.03               sphere: required, > 0; point: not allowed
+//       point: [0.4, 0, 0]         in the link's frame (default its origin); a disk's centre
+//       shape: sphere              point (default) | sphere | disk
+//       radius: 0.03               sphere, disk: required, > 0; point: not allowed
+//       axis: [0, 0, 1]            disk only: the normal of its face in the link's frame
+//                                  (default the link's z axis); not flat on its plane at q0
 //       plane: {link: base, point: [0, 0, 0], normal: [0, 0, 1]}   default: the world's z = 0,
 //                                  normal +z (body: ground or link: world for the world)
 //       restitution: 0.5           Newton's e in [0, 1] (default 0)
 //       restitution_law: newton    or poisson
 #include <algorithm>
 #include <cmath>
+#include <memory>
 #include <set>
 #include <string>
 #include <vector>
@@ -27,6 +31,7 @@
 #include "ukdyn/multibody/tree_closures.hpp"
 
 #include "modelfile/reader.hpp"
+#include "modelfile/visual_contacts.hpp"
 
 namespace ukdyn::model_reader {
 
@@ -65,7 +70,7 @@ std::string robot_contact_key_hint(const std::string& key, const std::vector<std
 
 void Reader::read_robot_contacts(const YAML::Node& root, const tree::Tree& robot,
                                  const std::string& urdf, std::set<std::string>& names,
-                                 SystemBuilder& builder) {
+                                 SystemBuilder& builder, std::vector<VisualContact>& drawn) {
   const YAML::Node cs = root["contacts"];
   if (!cs) return;
   if (!cs.IsSequence())
@@ -84,6 +89,17 @@ void Reader::read_robot_contacts(const YAML::Node& root, const tree::Tree& robot
       fail(l, what + ": no link '" + l.Scalar() + "' in " + urdf,
            "the links are world, " + join(links));
     }
+  };
+  std::shared_ptr<const tree::Tree> shared;  // the robot, for the drawn contacts
+  // the start a disk must not lie flat at: the neutral pose, with initial: q's values (read
+  // again, with the same checks, by read_initial)
+  const auto initial_q = [&]() {
+    VectorXd q = robot.neutral();
+    const YAML::Node init = root["initial"];
+    if (init && init.IsMap() && init["q"] && init["q"].IsMap()) {
+      for (const auto& kv : init["q"]) q[coordinate(kv.first)] = number(kv.second, "initial q");
+    }
+    return q;
   };
   for (const auto& c : cs) {
     if (!c.IsMap()) fail(c, "a contact is a mapping", std::string("e.g. ") + kRobotContactExample);
@@ -121,19 +137,22 @@ void Reader::read_robot_contacts(const YAML::Node& root, const tree::Tree& robot
     if (const YAML::Node p = c["point"])
       at.p = vector3(p, "point", "[x, y, z] in the link's frame");
     const std::string shape = c["shape"] ? c["shape"].Scalar() : "point";
-    if (shape == "disk")
-      fail(c["shape"], what + ": disk contacts on robot links are not supported yet; use a sphere",
-           "shape: sphere, radius: 0.05 (or a point)");
-    if (shape != "point" && shape != "sphere")
-      fail(c["shape"], what + ": shape must be point or sphere, got '" + shape + "'",
+    if (shape != "point" && shape != "sphere" && shape != "disk")
+      fail(c["shape"], what + ": shape must be point, sphere or disk, got '" + shape + "'",
            "shape: sphere, radius: 0.05");
-    if (const YAML::Node a = c["axis"])
-      fail(a, what + ": axis is for disks only", "a sphere or a point has no axis");
+    tree::Vector3d axis = tree::Vector3d::UnitZ();
+    if (const YAML::Node a = c["axis"]) {
+      if (shape != "disk")
+        fail(a, what + ": axis is for disks only", "a sphere or a point has no axis");
+      axis = vector3(a, "axis", "[0, 0, 1]: the normal of the disk's face in the link's frame");
+      if (!(axis.norm() > 1e-12))
+        fail(a, what + ": the disk's axis is zero", "axis: [0, 0, 1] in the link's frame");
+    }
     double radius = 0.0;
     if (shape == "point" && c["radius"])
       fail(c["radius"], what + ": a point has no radius", "shape: sphere, radius: 0.05");
-    if (shape == "sphere") {
-      if (!c["radius"]) fail(c, what + ": a sphere needs radius:", "radius: 0.05");
+    if (shape != "point") {
+      if (!c["radius"]) fail(c, what + ": a " + shape + " needs radius:", "radius: 0.05");
       radius = number(c["radius"], "radius");
       if (!(radius > 0.0) || !std::isfinite(radius))
         fail(c["radius"], what + ": radius must be > 0, got " + format_number(radius, 3),
@@ -180,14 +199,29 @@ void Reader::read_robot_contacts(const YAML::Node& root, const tree::Tree& robot
     // Newton's e and the law
     const auto [e, law] = read_restitution(c["restitution"], c["restitution_law"], what);
     try {
-      Constraint k = tree::contact_constraint(robot, name, at, radius, plane, e);
-      // (Coulomb friction there slides the contact point: read_nonideal)
-      point_contacts_[name] = [robot_copy = robot, name, at, radius, plane]() {
-        return tree::contact_kinematics(robot_copy, name, at, radius, plane);
-      };
+      Constraint k = shape == "disk"
+                         ? tree::disk_contact_constraint(robot, name, {at.link, at.p, axis, radius},
+                                                         plane, initial_q(), e)
+                         : tree::contact_constraint(robot, name, at, radius, plane, e);
+      // (Coulomb friction there slides the contact point: read_nonideal; not yet at a disk)
+      if (shape == "disk") {
+        point_contacts_[name] = []() -> ContactKinematics {
+          throw std::invalid_argument(
+              "x: friction at a disk contact is not supported yet (a point or sphere contact "
+              "takes it)");
+        };
+      } else {
+        point_contacts_[name] = [robot_copy = robot, name, at, radius, plane]() {
+          return tree::contact_kinematics(robot_copy, name, at, radius, plane);
+        };
+      }
       if (law != RestitutionLaw::kNewton) k = with_restitution_law(k, law);
       builder.add(std::move(k));
       constraint_names_.push_back(name);
+      // the viewer draws it (modelfile/visual_contacts.cpp)
+      if (!shared) shared = std::make_shared<const tree::Tree>(robot);
+      drawn.push_back(detail::robot_visual_contact(
+          name, shared, at, shape == "disk" ? &axis : nullptr, radius, plane));
     } catch (const std::invalid_argument& err) {
       std::string m = err.what();
       if (const auto k = m.find(": "); k != std::string::npos) m.erase(0, k + 2);

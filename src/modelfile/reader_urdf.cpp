@@ -275,8 +275,9 @@ Model Reader::read_robot(const YAML::Node& root) {
       }
     }
   }
-  // contacts: unilateral gaps of link points and spheres with planes
-  read_robot_contacts(root, robot, path.string(), loop_names, builder);
+  // contacts: unilateral gaps of link points, spheres and disks with planes (each drawn)
+  std::vector<VisualContact> drawn_contacts;
+  read_robot_contacts(root, robot, path.string(), loop_names, builder, drawn_contacts);
   read_constraints(root, builder);
   // non-ideal forces: robot_ set first, so that their compiled C evaluates with buffers of its
   // own (the tree's callables own the system's scratch)
@@ -300,6 +301,7 @@ Model Reader::read_robot(const YAML::Node& root) {
   // what the viewer draws: the URDF's visual geometry and the loops
   model.visual.robot = tree::load_urdf_visuals(path.string());
   model.visual.loops = std::move(drawn_loops);
+  model.visual.contacts = std::move(drawn_contacts);
   return model;
 }
 

@@ -253,7 +253,8 @@ void Reader::read_visual(const YAML::Node& root, Model& model, std::vector<Expr>
     }
   }
   // contacts: {floor: {at: [0, y - r], normal: [0, 1]}}: a unilateral constraint's contact
-  // point and the direction its force pushes
+  // point and the direction its force pushes (a bodies or robot model's contacts: entries are
+  // drawn already: an entry here replaces that of its name)
   if (const YAML::Node cs = v["contacts"]) {
     const std::string contact_example = "{floor: {at: [x, y - r], normal: [0, 1]}}";
     if (!cs.IsMap())
@@ -298,6 +299,11 @@ void Reader::read_visual(const YAML::Node& root, Model& model, std::vector<Expr>
         model.visual.columns.push_back("visual.contact." + c.name + "." + normals[i]);
         outputs.push_back(expression(normal[i], what + " normal"));
       }
+      // (it replaces the drawn contact of a contacts: entry of its name)
+      auto& drawn = model.visual.contacts;
+      drawn.erase(std::remove_if(drawn.begin(), drawn.end(),
+                                 [&](const VisualContact& d) { return d.name == c.name; }),
+                  drawn.end());
       model.visual.contacts.push_back(c);
     }
   }

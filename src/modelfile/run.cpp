@@ -10,6 +10,8 @@
 #include "ukdyn/multibody/multibody.hpp"
 #include "ukdyn/multibody/tree.hpp"
 
+#include "modelfile/visual_contacts.hpp"
+
 namespace ukdyn {
 
 std::vector<CsvColumn> ModelRun::columns() const {
@@ -82,7 +84,8 @@ void add_gap_columns(const Model& model, const Trajectory& traj, std::vector<Csv
 }
 
 // the model's columns after the standard ones, for the samples of traj: the bodies' poses
-// (multibody models), the contacts' gaps, then the output expressions (not the control's)
+// (multibody models), the contacts' gaps, the output expressions (not the control's), then the
+// points and normals of the contacts: entries drawn (modelfile/visual_contacts.hpp)
 void add_model_columns(const Model& model, const Trajectory& traj, std::vector<CsvColumn>& out) {
   if (model.multibody) {
     for (auto& col : mb::report_csv_columns(*model.multibody, traj)) out.push_back(std::move(col));
@@ -92,6 +95,7 @@ void add_model_columns(const Model& model, const Trajectory& traj, std::vector<C
   for (std::size_t k = 0; k < values.size(); ++k) {
     out.push_back(CsvColumn{output_column_name(model, k), values[k]});
   }
+  detail::add_contact_columns(model, traj, out);
 }
 
 // a robot's joint and effort limits that the run left, as notes (tree::LimitWatch)

@@ -66,8 +66,8 @@ std::vector<double> outputs_at(const Model& model, const VectorXd& q, double t) 
 // Q_f on each sliding coordinate (Qc_nonideal.<coordinate> while it slides, the stick
 // constraint's multiplier while it sticks), and the map F = (J_cᵀ)⁺ Q_f to the contact point's
 // axes, J_c = ∂(at)/∂(sliding coordinates) by central differences at the initial state (constant
-// for the Cartesian sliding coordinates that docs/friction.md asks for). Null when no Coulomb
-// contact sits on c.
+// for the Cartesian sliding coordinates that docs/friction.md asks for) of the point's
+// expressions, or of its geometry (a contacts: entry's). Null when no Coulomb contact sits on c.
 nlohmann::json contact_friction(const Model& model, const VisualContact& c) {
   const System& sys = model.system;
   Index constraint = -1;
@@ -90,18 +90,28 @@ nlohmann::json contact_friction(const Model& model, const VisualContact& c) {
     at.push_back(model.output_names.size() +
                  std::size_t(std::find(vc.begin(), vc.end(), column) - vc.begin()));
   }
+  // the contact point at q: its geometry (a contacts: entry), or its output expressions
+  const double t0 = model.options.t_start;
+  const auto point_at = [&](const VectorXd& q) {
+    Eigen::Vector3d p = Eigen::Vector3d::Zero(), n;
+    if (c.geometry) {
+      c.geometry(q, p, n);
+    } else {
+      const std::vector<double> out = outputs_at(model, q, t0);
+      for (int a = 0; a < c.dimensions; ++a) p[a] = out[at[std::size_t(a)]];
+    }
+    return p;
+  };
   // J_c (dimensions × nc) by central differences
   MatrixXd J(c.dimensions, Index(nc));
-  const double t0 = model.options.t_start;
   for (std::size_t j = 0; j < nc; ++j) {
     const Index i = fc->coordinates[j];
     const double h = 1e-6 * std::max(1.0, std::abs(model.q0[i]));
     VectorXd plus = model.q0, minus = model.q0;
     plus[i] += h;
     minus[i] -= h;
-    const std::vector<double> up = outputs_at(model, plus, t0), down = outputs_at(model, minus, t0);
-    for (int a = 0; a < c.dimensions; ++a)
-      J(a, Index(j)) = (up[at[std::size_t(a)]] - down[at[std::size_t(a)]]) / (2 * h);
+    const Eigen::Vector3d up = point_at(plus), down = point_at(minus);
+    for (int a = 0; a < c.dimensions; ++a) J(a, Index(j)) = (up[a] - down[a]) / (2 * h);
   }
   // F = (J_cᵀ)⁺ Q_f, rounded to 8 digits (a Cartesian coordinate maps by exactly 1)
   const MatrixXd F =

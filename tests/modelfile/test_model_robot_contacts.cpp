@@ -6,7 +6,11 @@
 // θ'⁺ = −e θ'⁻ at every impact, the kinetic energy at the k-th impact e^(2k) T₁ with
 // T₁ = m g L_c sin θ* (from the contact pose), the energy balance certified; resting on the floor
 // its contact force is m g L_c / L, and a torque −k t lifts it off at t = m g L_c cos θ* / k (a
-// located release); and the errors a user meets, located.
+// located release); and the errors a user meets, located. A disk (contact_slider_disk.urdf: a
+// wheel of radius 0.2 tilted by initial: q about x on a vertical slider from 0.5 m) hits the
+// floor at t₀ = √(2 (0.5 − 0.2 sin β) / g) (the impulse at the rim turns it towards flat, which
+// it reaches near 0.378 s: the run ends before); one with no bounce whose impact turns it flat
+// stops the run naming the contact, as a bodies model's coin does.
 #include <algorithm>
 #include <cmath>
 #include <string>
@@ -224,8 +228,15 @@ TEST(ModelRobotContacts, ErrorsNameTheContactAndTheKey) {
   expect("{name: tip, link: rod, shape: sphere}", "contact 'tip': a sphere needs radius");
   expect("{name: tip, link: rod, radius: 0.1}", "contact 'tip': a point has no radius");
   expect("{name: tip, link: rod, shape: sphere, radius: -1}", "radius must be > 0");
+  // (the rod's z axis, a disk's default axis, is the floor's normal at q = 0)
   expect("{name: tip, link: rod, shape: disk, radius: 0.1}",
-         "disk contacts on robot links are not supported yet; use a sphere");
+         "constraint 'tip': the disk lies flat on its plane at the start (|n·a| = 1)");
+  expect("{name: tip, link: rod, shape: disk}", "contact 'tip': a disk needs radius");
+  expect("{name: tip, link: rod, shape: disk, radius: 0.1, axis: [0, 0, 0]}",
+         "contact 'tip': the disk's axis is zero");
+  expect("{name: tip, link: rod, shape: disk, radius: 0.1, axis: [1, 0]}",
+         "contact 'tip': axis must be a list of 3 numbers");
+  expect("{name: tip, link: rod, shape: cube}", "shape must be point, sphere or disk, got 'cube'");
   expect("{name: tip, link: rod, shape: sphere, radius: 0.1, axis: [0, 0, 1]}",
          "axis is for disks only");
   expect("{name: tip, link: rod, plane: {normal: [0, 0, 0]}}", "the plane's normal is zero");
@@ -273,6 +284,68 @@ TEST(ModelRobotContacts, ErrorsNameTheContactAndTheKey) {
     ASSERT_EQ(e.constraints().size(), 1u);
     EXPECT_EQ(e.constraints()[0], "tip");
   }
+}
+
+constexpr const char* kSliderDisk = R"(
+robot: {urdf: contact_slider_disk.urdf}
+contacts:
+  - {name: rim, link: wheel, shape: disk, radius: 0.2, axis: [0, 0, 1], restitution: 0.4}
+initial: {q: {tilt: 0.5}}
+simulate: {t_end: 0.35, integrator: dopri5, rtol: 1e-11, atol: 1e-13}
+output: {every: 0.01}
+)";
+
+TEST(ModelRobotContacts, DiskOnASliderHitsTheFloorAtTheFreeFallTime) {
+  const double beta = 0.5, r = 0.2, e = 0.4;
+  const Model m = robot_model(kSliderDisk);
+  ASSERT_EQ(m.system.constraint_count(), 1);
+  EXPECT_TRUE(m.system.constraint(0).is_unilateral());
+  EXPECT_EQ(m.system.constraint(0).restitution(), e);
+  EXPECT_NEAR(m.q0[1], beta, 0.0);
+  const Trajectory tr = simulate(m.system, m.q0, m.qd0, m.options);
+  ASSERT_EQ(tr.stats.status, Status::kOk) << tr.stats.message;
+  const auto impacts = events_of(tr, ContactEvent::Kind::kImpact);
+  ASSERT_GE(impacts.size(), 1u);
+  const double t0 = std::sqrt(2.0 * (0.5 - r * std::sin(beta)) / kG);
+  EXPECT_NEAR(impacts[0].t, t0, 1e-9);
+  EXPECT_NEAR(impacts[0].speed_before, -kG * t0, 1e-8);
+  EXPECT_NEAR(impacts[0].speed_after, e * kG * t0, 1e-8);
+  // the gap at the start: the rim's lowest point r sin β below the centre
+  auto scratch = m.system.constraint(0).model().make_scratch(2);
+  VectorXd g(1), gd(1);
+  m.system.constraint(0).model().violation(m.q0, m.qd0, 0.0, scratch.get(), g, gd);
+  EXPECT_NEAR(g[0], 0.5 - r * std::sin(beta), 1e-15);
+}
+
+TEST(ModelRobotContacts, DiskFlatAtTheStartOrTurnedFlatIsAClearError) {
+  // flat at the start (tilt 0): located at the contact, naming it
+  try {
+    robot_model(std::string(kSliderDisk)
+                    .replace(std::string(kSliderDisk).find("tilt: 0.5"), 9, "tilt: 0.0"));
+    ADD_FAILURE() << "no error";
+  } catch (const ModelError& e) {
+    EXPECT_NE(e.message().find("'rim': the disk lies flat on its plane at the start"),
+              std::string::npos)
+        << e.message();
+    EXPECT_EQ(e.line(), 4);
+  }
+  // a slight tilt and no bounce: the impact spins the wheel towards flat, q_tilt' < 0, and the
+  // closed contact carries it there; the run stops naming the contact and the cause, keeping
+  // the samples before
+  std::string text = kSliderDisk;
+  text.replace(text.find("tilt: 0.5"), 9, "tilt: 0.1");
+  text.replace(text.find("restitution: 0.4"), 16, "restitution: 0.0");
+  text.replace(text.find("every: 0.01"), 11, "every: 0.001");
+  const Model m = robot_model(text);
+  const Trajectory tr = simulate(m.system, m.q0, m.qd0, m.options);
+  EXPECT_NE(tr.stats.status, Status::kOk);
+  EXPECT_NE(tr.stats.message.find("'rim'"), std::string::npos) << tr.stats.message;
+  EXPECT_NE(tr.stats.message.find("lies flat"), std::string::npos) << tr.stats.message;
+  const auto impacts = events_of(tr, ContactEvent::Kind::kImpact);
+  ASSERT_GE(impacts.size(), 1u);
+  EXPECT_NEAR(impacts[0].t, std::sqrt(2.0 * (0.5 - 0.2 * std::sin(0.1)) / kG), 1e-9);
+  ASSERT_GE(tr.t.size(), 2u);
+  EXPECT_GT(tr.t.back(), impacts[0].t);
 }
 
 }  // namespace UKDYN_TEST_FILE

@@ -6,6 +6,7 @@
 #pragma once
 
 #include <cstddef>
+#include <functional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -57,10 +58,20 @@ struct VisualFrame {
 /// is the columns `visual.contact.<name>.x`, `.y` (, `.z`), the direction its force pushes the
 /// system `visual.contact.<name>.nx`, `.ny` (, `.nz`; normalized by the viewer); the force's
 /// magnitude is the constraint's multiplier `lambda.<name>` (the normal force when the gap is a
-/// distance), and its impacts are marked there.
+/// distance), and its impacts are marked there. A bodies or robot model's `contacts:` entry is
+/// drawn without `visual: contacts:` (a hand-written entry of its name replaces it): the reader
+/// knows its point, and run_model computes the same columns from `geometry` at each sample.
 struct VisualContact {
+  /// The contact's point (a point's; a sphere's point nearest the plane, c − r n; a disk's
+  /// rim's lowest point, c − r (n − s a) / |n − s a|, s = n · a) and the plane's unit normal n,
+  /// world frame, at q (n). Must not change anything (a description's).
+  using Geometry = std::function<void(const Eigen::Ref<const Eigen::VectorXd>& q,
+                                      Eigen::Vector3d& point, Eigen::Vector3d& normal)>;
   std::string name;    ///< the unilateral constraint's name
   int dimensions = 2;  ///< 2 (z = 0) or 3
+  /// a `contacts:` entry's point and normal, from which run_model computes the columns; null:
+  /// they are `visual: contacts:` expressions (outputs of Model::output_program)
+  Geometry geometry;
 };
 
 /// A loop closure of a robot (`robot: loops:`), drawn by the viewer as a dashed line from
@@ -84,7 +95,9 @@ struct ModelVisual {
   std::vector<std::pair<std::string, std::string>> links;
   /// models in coordinates: the frames drawn (`visual: frames:`)
   std::vector<VisualFrame> frames;
-  std::vector<VisualContact> contacts;  ///< the unilateral contacts drawn (`visual: contacts:`)
+  /// the unilateral contacts drawn: a bodies or robot model's `contacts:` (with their
+  /// geometry), then `visual: contacts:`
+  std::vector<VisualContact> contacts;
   /// the points' and frames' columns, `visual.<name>.x` …: the outputs of Model::output_program
   /// after the output expressions (the last columns of trajectory.csv)
   std::vector<std::string> columns;

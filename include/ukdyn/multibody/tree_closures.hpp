@@ -1,8 +1,8 @@
 // SPDX-License-Identifier: BSD-3-Clause
 /// @file multibody/tree_closures.hpp
 /// Weld and revolute loop closures between the frames of a kinematic tree (multibody/tree.hpp),
-/// beside its point and distance closures, and unilateral contacts of link points or spheres
-/// with a plane: constraints to add to tree::system_builder, built on frame_jacobian and
+/// beside its point and distance closures, and unilateral contacts of link points, spheres or
+/// thin disks with a plane: constraints to add to tree::system_builder, built on frame_jacobian and
 /// frame_bias_acceleration (src/multibody/tree/frame_constraints.cpp).
 #pragma once
 
@@ -67,5 +67,34 @@ Constraint contact_constraint(const Tree& tree, std::string name, LinkPoint at, 
 /// a plane on a link (not supported yet: its normal turns). Cost per evaluation O(n · depth).
 ContactKinematics contact_kinematics(const Tree& tree, const std::string& name, LinkPoint at,
                                      double radius, const LinkFrame& plane);
+
+/// A thin disk fixed on a link (or on the world, link = -1): its centre and the normal of its
+/// face (the axis, any length > 0) in the link's frame, and its radius.
+struct LinkDisk {
+  Index link = -1;                     ///< the link (Tree::link_index), -1 for the world
+  Vector3d centre = Vector3d::Zero();  ///< the disk's centre c in the link's frame
+  Vector3d axis = Vector3d::UnitZ();   ///< its axis a in the link's frame (normalized here)
+  double radius = 0.0;                 ///< r > 0
+};
+
+/// A unilateral contact of a thin disk's rim with a plane fixed on the world or on another link
+/// (docs/contact.md: the disk row of bodies models, on a tree): one holonomic gap row
+///   g = n_W · d − r h,   h = √(1 − s²),   s = n_W · a_W,   d = p_W(c) − o_W,
+/// h the distance along the plane's normal from the centre down to the rim's lowest point over
+/// r (a_W the disk's axis in the world, n_W and o_W as in contact_constraint). With the disk
+/// link's and the plane link's angular velocities ω_l, ω_o (s' = (n_W × a_W) · (ω_o − ω_l)):
+///   g'' = [n_W · d]'' + (r s / h) s'' + r s'² / h³, so
+///   A = A_nd + (r s / h) (n_W × a_W)ᵀ (J_ω(o) − J_ω(c)),
+///   b = b_nd − (r s / h) ((n_W × a_W) · (β_ω(o) − β_ω(c)) + (n_W' × a_W + n_W × a_W') ·
+///       (ω_o − ω_l)) − r s'² / h³,
+/// A_nd, b_nd contact_constraint's row of the centre (with r = 0). A disk lying flat (h = 0) has
+/// no single lowest point: refused at q0 (|s| > 1 − 1e-6), and met during a run it makes the
+/// row infinite, which stops the run naming the contact (docs/contact.md). Made unilateral with
+/// Newton's `restitution`. @throws std::invalid_argument naming `name` as contact_constraint,
+/// and on a radius not > 0, an axis zero or not finite, q0 of the wrong size or not finite, or
+/// the disk flat on its plane at q0. Cost per evaluation O(n · depth).
+Constraint disk_contact_constraint(const Tree& tree, std::string name, const LinkDisk& disk,
+                                   const LinkFrame& plane, const Eigen::Ref<const VectorXd>& q0,
+                                   double restitution = 0.0);
 
 }  // namespace ukdyn::tree

@@ -1,8 +1,9 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // Constraints and requirements between tree frames, built on frame_jacobian and
 // frame_bias_acceleration: a point loop closure (3 rows), a distance loop closure (1 row), a weld
-// (6 rows) and a revolute closure (5 rows), a unilateral contact with a plane (1 row), and a
-// task-space pose requirement (6 rows) for exact tracking control.
+// (6 rows) and a revolute closure (5 rows), a unilateral contact of a point, sphere or disk with
+// a plane (1 row), and a task-space pose requirement (6 rows) for exact tracking control.
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
@@ -13,6 +14,7 @@
 
 #include "multibody/tree/kinematics_cache.hpp"
 #include "multibody/tree/spatial.hpp"
+#include "ukdyn/core/format.hpp"
 #include "ukdyn/multibody/tree.hpp"
 #include "ukdyn/multibody/tree_closures.hpp"
 
@@ -377,12 +379,19 @@ class RevoluteModel final : public FrameModel {
 };
 
 // g = n_W · (p_W(at) − o_W) − r with n_W = R_Wo n_o: g'' = 0 is A q'' = b (see
-// contact_constraint); n_W' = ω_o × n_W, n_W'' = ω_o' × n_W + ω_o × (ω_o × n_W)
+// contact_constraint); n_W' = ω_o × n_W, n_W'' = ω_o' × n_W + ω_o × (ω_o × n_W). A disk (axis a
+// in at's link): g = n_W · d − r h, h = √(1 − s²), s = n_W · a_W (see disk_contact_constraint)
 class ContactModel final : public FrameModel {
  public:
   ContactModel(std::shared_ptr<const Tree> tree, LinkPoint at, double radius, LinkPoint origin,
-               const Vector3d& normal)
-      : FrameModel(std::move(tree)), at_(at), origin_(origin), n_o_(normal), radius_(radius) {}
+               const Vector3d& normal, const Vector3d* axis = nullptr)
+      : FrameModel(std::move(tree)),
+        at_(at),
+        origin_(origin),
+        n_o_(normal),
+        a_l_(axis != nullptr ? axis->normalized() : Vector3d::Zero()),
+        radius_(radius),
+        disk_(axis != nullptr) {}
   void acceleration_form(const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd,
                          double, ConstraintScratch* s, Eigen::Ref<MatrixXd> A,
                          Eigen::Ref<VectorXd> b) const override {
@@ -397,10 +406,29 @@ class ContactModel final : public FrameModel {
     const Vector3d rate = w.Ja.bottomRows<3>() * qd;
     A.row(0).noalias() = n.transpose() * w.Ja.bottomRows<3>();
     b[0] = -n.dot(pa.bias.tail<3>() - po.bias.tail<3>());
-    if (origin_.link < 0) return;  // (a world plane: n_W fixed)
-    const Vector3d wo = w.Jb.topRows<3>() * qd, n1 = wo.cross(n);
-    A.row(0).noalias() += n_x_d.transpose() * w.Jb.topRows<3>();
-    b[0] -= n_x_d.dot(po.bias.head<3>()) + 2.0 * n1.dot(rate) + wo.cross(n1).dot(dist);
+    // a plane on a link: n_W turns with ω_o (a world plane's n_W is fixed, ω_o = 0)
+    const bool moving = origin_.link >= 0;
+    const Vector3d wo = moving ? Vector3d(w.Jb.topRows<3>() * qd) : Vector3d::Zero();
+    const Vector3d n1 = wo.cross(n);  // n_W'
+    if (moving) {
+      A.row(0).noalias() += n_x_d.transpose() * w.Jb.topRows<3>();
+      b[0] -= n_x_d.dot(po.bias.head<3>()) + 2.0 * n1.dot(rate) + wo.cross(n1).dot(dist);
+    }
+    if (!disk_) return;
+    // the disk: s'' = A_s q'' − b_s with m = n_W × a_W, A_s = mᵀ (J_ω(o) − J_ω(at)),
+    // b_s = −m · (β_ω(o) − β_ω(at)) − (n_W' × a_W + n_W × a_W') · (ω_o − ω_l);
+    // A += f A_s, b += f b_s − r s'² / h³ with f = r s / h (h = 0, a disk lying flat: infinite
+    // entries, which stop the run naming the contact)
+    const Vector3d a = world_rotation(w.data, at_.link, Matrix3d::Identity()) * a_l_;
+    const Vector3d wl = w.Ja.topRows<3>() * qd, dw = wo - wl, m = n.cross(a);
+    const double sn = n.dot(a), sd = m.dot(dw);
+    const double h = std::sqrt(std::max(1.0 - sn * sn, 0.0));
+    const double f = radius_ * sn / h;
+    A.row(0).noalias() -= (f * m).transpose() * w.Ja.topRows<3>();
+    if (moving) A.row(0).noalias() += (f * m).transpose() * w.Jb.topRows<3>();
+    b[0] -= f * (m.dot(po.bias.head<3>() - pa.bias.head<3>()) +
+                 (n1.cross(a) + n.cross(wl.cross(a))).dot(dw)) +
+            radius_ * sd * sd / (h * h * h);
   }
   void violation(const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd, double,
                  ConstraintScratch* s, Eigen::Ref<VectorXd> position,
@@ -413,13 +441,22 @@ class ContactModel final : public FrameModel {
     // g' = n_W · d' + (n_W × d) · ω_o
     position[0] = n.dot(dist) - radius_;
     velocity[0] = n.dot((w.Ja.bottomRows<3>() - w.Jb.bottomRows<3>()) * qd);
-    if (origin_.link >= 0) velocity[0] += n.cross(dist).dot(w.Jb.topRows<3>() * qd);
+    const Vector3d wo = origin_.link >= 0 ? Vector3d(w.Jb.topRows<3>() * qd) : Vector3d::Zero();
+    if (origin_.link >= 0) velocity[0] += n.cross(dist).dot(wo);
+    if (!disk_) return;
+    // the disk: g = n_W · d − r h, g' = [n_W · d]' + r s s' / h, s' = (n_W × a_W) · (ω_o − ω_l)
+    const Vector3d a = world_rotation(w.data, at_.link, Matrix3d::Identity()) * a_l_;
+    const double sn = n.dot(a), h = std::sqrt(std::max(1.0 - sn * sn, 0.0));
+    position[0] = n.dot(dist) - radius_ * h;
+    velocity[0] += radius_ * sn * n.cross(a).dot(wo - w.Ja.topRows<3>() * qd) / h;
   }
 
  private:
-  LinkPoint at_, origin_;  // the sphere's centre; the plane's origin
+  LinkPoint at_, origin_;  // the sphere's or disk's centre; the plane's origin
   Vector3d n_o_;           // the plane's unit normal in its link's frame (the world's for -1)
+  Vector3d a_l_;           // a disk's unit axis in at's link frame (zero: a sphere or point)
   double radius_;
+  bool disk_;
 };
 
 // e = [p_W − p_d; ½ Σ r_d,k × r_k]; e'' = 0 is A q'' = b (see pose_requirement)
@@ -538,6 +575,21 @@ Constraint revolute_constraint(const Tree& tree, std::string name, LinkPoint a,
   return Constraint(std::move(name), ConstraintKind::kHolonomic, 5, std::move(model));
 }
 
+namespace {
+
+// a contact's plane: a rotation (its z axis the normal)
+void check_plane(const std::string& who, const std::string& name, const LinkFrame& plane) {
+  const Matrix3d& R = plane.R;
+  if (!R.allFinite() || !(R.transpose() * R).isApprox(Matrix3d::Identity(), 1e-9) ||
+      !(R.determinant() > 0.0)) {
+    throw std::invalid_argument(who + ": constraint '" + name +
+                                "': the plane's orientation is not a rotation (R must be "
+                                "orthonormal with det R = 1; its z axis is the normal)");
+  }
+}
+
+}  // namespace
+
 Constraint contact_constraint(const Tree& tree, std::string name, LinkPoint at, double radius,
                               const LinkFrame& plane, double restitution) {
   const std::string who = "ukdyn::tree::contact_constraint";
@@ -547,15 +599,52 @@ Constraint contact_constraint(const Tree& tree, std::string name, LinkPoint at, 
                                 "finite number >= 0, got " + std::to_string(radius) +
                                 " (0: a point)");
   }
-  const Matrix3d& R = plane.R;
-  if (!R.allFinite() || !(R.transpose() * R).isApprox(Matrix3d::Identity(), 1e-9) ||
-      !(R.determinant() > 0.0)) {
-    throw std::invalid_argument(who + ": constraint '" + name +
-                                "': the plane's orientation is not a rotation (R must be "
-                                "orthonormal with det R = 1; its z axis is the normal)");
-  }
+  check_plane(who, name, plane);
   auto model = std::make_shared<ContactModel>(std::make_shared<const Tree>(tree), at, radius,
-                                              LinkPoint{plane.link, plane.p}, R.col(2));
+                                              LinkPoint{plane.link, plane.p}, plane.R.col(2));
+  Constraint c(std::move(name), ConstraintKind::kHolonomic, 1, std::move(model));
+  c.unilateral(restitution);
+  return c;
+}
+
+Constraint disk_contact_constraint(const Tree& tree, std::string name, const LinkDisk& disk,
+                                   const LinkFrame& plane, const Eigen::Ref<const VectorXd>& q0,
+                                   double restitution) {
+  const std::string who = "ukdyn::tree::disk_contact_constraint";
+  const LinkPoint at{disk.link, disk.centre};
+  check_points(tree, who, name, at, {plane.link, plane.p});
+  if (!(disk.radius > 0.0) || !std::isfinite(disk.radius)) {
+    throw std::invalid_argument(who + ": constraint '" + name +
+                                "': the disk's radius must be a finite number > 0, got " +
+                                std::to_string(disk.radius));
+  }
+  if (!disk.axis.allFinite() || !(disk.axis.norm() > 1e-12)) {
+    throw std::invalid_argument(who + ": constraint '" + name +
+                                "': the disk's axis must be a finite, nonzero vector (the normal "
+                                "of its face in the link's frame)");
+  }
+  check_plane(who, name, plane);
+  if (q0.size() != tree.coordinate_count() || !q0.allFinite()) {
+    throw std::invalid_argument(who + ": constraint '" + name + "': q0 must hold " +
+                                std::to_string(tree.coordinate_count()) +
+                                " finite coordinates (the start), got " +
+                                std::to_string(q0.size()));
+  }
+  // a disk lying flat on its plane at the start has no single lowest point (h = 0): refused
+  TreeData d(tree);
+  forward_kinematics(tree, q0, d);
+  const Vector3d n = world_rotation(d, plane.link, plane.R).col(2);
+  const Vector3d a = world_rotation(d, disk.link, Matrix3d::Identity()) * disk.axis.normalized();
+  if (const double s = std::abs(n.dot(a)); s > 1.0 - 1e-6) {
+    throw std::invalid_argument(
+        who + ": constraint '" + name +
+        "': the disk lies flat on its plane at the start (|n·a| = " + format_number(s, 9) +
+        "): it has no single lowest point there; tilt it (initial: q) or model it as a point "
+        "contact at each of a few rim points");
+  }
+  auto model =
+      std::make_shared<ContactModel>(std::make_shared<const Tree>(tree), at, disk.radius,
+                                     LinkPoint{plane.link, plane.p}, plane.R.col(2), &disk.axis);
   Constraint c(std::move(name), ConstraintKind::kHolonomic, 1, std::move(model));
   c.unilateral(restitution);
   return c;

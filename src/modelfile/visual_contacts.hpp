@@ -1,0 +1,46 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// The contacts the viewer draws without `visual: contacts:` (modelfile/visual.hpp,
+// VisualContact::geometry): a robot's or a bodies model's `contacts:` entry's point and normal
+// at q, and their columns visual.contact.<name>.* at a run's samples.
+#pragma once
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "ukdyn/io/trajectory_files.hpp"
+#include "ukdyn/modelfile/visual.hpp"
+#include "ukdyn/multibody/multibody.hpp"
+#include "ukdyn/multibody/tree.hpp"
+#include "ukdyn/multibody/tree_closures.hpp"
+
+namespace ukdyn {
+
+struct Model;
+
+namespace detail {
+
+/// The drawn contact of a robot's contact (tree::contact_constraint, disk_contact_constraint):
+/// the point or the centre `at` of a sphere of `radius` (a disk's when `axis`, in at's link
+/// frame, is given) and the plane on the world or a link; its geometry runs the forward
+/// kinematics of `tree` at q. Cost per call O(links) (it allocates its TreeData).
+VisualContact robot_visual_contact(std::string name, std::shared_ptr<const tree::Tree> tree,
+                                   const tree::LinkPoint& at, const Eigen::Vector3d* axis,
+                                   double radius, const tree::LinkFrame& plane);
+
+/// The drawn contact of a bodies model's contact joint `joint` (mb::contact, mb::contact_disk:
+/// the plane is its parent frame's xy plane, z the normal, or its x axis in a planar model,
+/// y the normal; the point or centre its child frame's origin, a disk's axis the child frame's
+/// z) of `radius`, from the bodies' poses at q. Cost per call O(1).
+VisualContact bodies_visual_contact(std::shared_ptr<const mb::MultibodyModel> model,
+                                    const mb::JointInfo& joint, double radius);
+
+/// The columns visual.contact.<name>.x, .y (, .z), .nx, .ny (, .nz) of every drawn contact with
+/// a geometry, at the samples of `traj`, appended to `out` in the order of model.visual.contacts.
+/// Cost O(samples · contacts · links).
+void add_contact_columns(const Model& model, const Trajectory& traj, std::vector<CsvColumn>& out);
+
+}  // namespace detail
+}  // namespace ukdyn
