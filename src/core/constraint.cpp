@@ -87,6 +87,12 @@ Constraint& Constraint::active_between(double begin, double end) {
                                 "'): need begin <= end, got [" + format_number(begin) + ", " +
                                 format_number(end) + "]");
   }
+  if (unilateral_) {
+    throw std::invalid_argument("ukdyn::Constraint::active_between('" + name_ +
+                                "'): the constraint is unilateral, and a unilateral constraint "
+                                "with an interval of activity is not supported (a contact acts "
+                                "for the whole run)");
+  }
   active_ = TimeInterval{begin, end};
   return *this;
 }

@@ -24,6 +24,13 @@ Constraint& Constraint::unilateral(double restitution) {
     throw std::invalid_argument(who + ": the restitution must lie in [0, 1], got " +
                                 format_number(restitution, 3));
   }
+  // (a contact exists for the whole run: an interval would be ignored by its events)
+  if (active_.begin != TimeInterval{}.begin || active_.end != TimeInterval{}.end) {
+    throw std::invalid_argument(who + " is active on [" + format_number(active_.begin) + ", " +
+                                format_number(active_.end) +
+                                "] only: a unilateral constraint with an interval of activity is "
+                                "not supported (a contact acts for the whole run)");
+  }
   unilateral_ = true;
   restitution_ = restitution;
   return *this;

@@ -207,9 +207,21 @@ void Reader::read_unilateral(const YAML::Node& c, const std::string& name, Const
   // (docs/contact.md)
   // restitution_law: newton (the default) or poisson
   const YAML::Node u = c["unilateral"], e = c["restitution"], law = c["restitution_law"];
+  // (a YAML boolean only: true or false unquoted; not yes, on, 1, or a quoted "true")
   bool unilateral = false;
-  if (u && (!u.IsScalar() || !YAML::convert<bool>::decode(u, unilateral)))
-    fail(u, "unilateral in constraint '" + name + "' must be true or false", "unilateral: true");
+  if (u) {
+    const std::string text = u.IsScalar() ? u.Scalar() : std::string();
+    const bool plain = u.Tag() != "!";
+    if (plain && (text == "true" || text == "True" || text == "TRUE")) {
+      unilateral = true;
+    } else if (!plain || !(text == "false" || text == "False" || text == "FALSE")) {
+      fail(u,
+           "unilateral in constraint '" + name + "' must be true or false, got " +
+               (u.IsScalar() ? (plain ? "" : "the quoted text ") + std::string("'") + text + "'"
+                             : std::string("a ") + (u.IsMap() ? "mapping" : "list")),
+           "unilateral: true   (unquoted)");
+    }
+  }
   if (e && !unilateral) {
     fail(e, "constraint '" + name + "' gives a restitution but is not unilateral",
          "unilateral: true, restitution: 0.5");
@@ -227,6 +239,14 @@ void Reader::read_unilateral(const YAML::Node& c, const std::string& name, Const
                   : "holonomic with " + format_number(constraint.rows()) + " rows") +
              ", and a unilateral constraint is one holonomic gap g(q, t) >= 0",
          "holonomic: y - r   (one row: the gap)");
+  }
+  // (a contact acts for the whole run: its events would ignore an interval, docs/contact.md)
+  if (const YAML::Node a = c["active"]) {
+    fail(a,
+         "active: is not supported on a unilateral constraint: the contact '" + name +
+             "' would act for the whole run",
+         "remove active:; for a surface that comes or goes, run the parts separately, each "
+         "starting from the last one's final state");
   }
   const auto [restitution, restitution_law] = read_restitution(e, law, "constraint '" + name + "'");
   constraint.unilateral(restitution);

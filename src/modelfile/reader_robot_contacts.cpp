@@ -123,7 +123,7 @@ void Reader::read_robot_contacts(const YAML::Node& root, const tree::Tree& robot
       if (!v.IsSequence() || v.size() != 3)
         fail(v, what + ": " + key + " must be a list of 3 numbers", hint);
       tree::Vector3d x;
-      for (std::size_t i = 0; i < 3; ++i) x[Index(i)] = number(v[i], key);
+      for (std::size_t i = 0; i < 3; ++i) x[Index(i)] = number(v[i], what + " " + key);
       return x;
     };
     // the point or sphere on its link
@@ -153,7 +153,7 @@ void Reader::read_robot_contacts(const YAML::Node& root, const tree::Tree& robot
       fail(c["radius"], what + ": a point has no radius", "shape: sphere, radius: 0.05");
     if (shape != "point") {
       if (!c["radius"]) fail(c, what + ": a " + shape + " needs radius:", "radius: 0.05");
-      radius = number(c["radius"], "radius");
+      radius = number(c["radius"], what + " radius");
       if (!(radius > 0.0) || !std::isfinite(radius))
         fail(c["radius"], what + ": radius must be > 0, got " + format_number(radius, 3),
              "radius: 0.05");

@@ -278,6 +278,13 @@ Model Reader::read_robot(const YAML::Node& root) {
   // contacts: unilateral gaps of link points, spheres and disks with planes (each drawn)
   std::vector<VisualContact> drawn_contacts;
   read_robot_contacts(root, robot, path.string(), loop_names, builder, drawn_contacts);
+  // (their entries locate their errors at run time: a contact penetrated at the start)
+  if (const YAML::Node cs = root["contacts"]; cs && cs.IsSequence()) {
+    for (const auto& c : cs) {
+      if (c.IsMap() && c["name"] && c["name"].IsScalar())
+        positions_.constraints.emplace(c["name"].Scalar(), position(c));
+    }
+  }
   read_constraints(root, builder);
   // non-ideal forces: robot_ set first, so that their compiled C evaluates with buffers of its
   // own (the tree's callables own the system's scratch)

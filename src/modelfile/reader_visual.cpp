@@ -295,10 +295,15 @@ void Reader::read_visual(const YAML::Node& root, Model& model, std::vector<Expr>
         model.visual.columns.push_back("visual.contact." + c.name + "." + axes[i]);
         outputs.push_back(expression(at[i], what + " " + axes[i]));
       }
+      bool zero = true;  // (every component identically 0: no direction to draw)
       for (std::size_t i = 0; i < normal.size(); ++i) {
         model.visual.columns.push_back("visual.contact." + c.name + "." + normals[i]);
         outputs.push_back(expression(normal[i], what + " normal"));
+        zero = zero && set_->is_zero(outputs.back());
       }
+      if (zero)
+        fail(normal, what + ": normal is zero; it must give the direction the contact pushes",
+             contact_example);
       // (it replaces the drawn contact of a contacts: entry of its name)
       auto& drawn = model.visual.contacts;
       drawn.erase(std::remove_if(drawn.begin(), drawn.end(),

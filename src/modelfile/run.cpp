@@ -280,16 +280,30 @@ ModelError locate_run_error(const Model& model, const InconsistentInitialState& 
   using Cause = InconsistentInitialState::Cause;
   const FilePosition constraint =
       e.constraints().empty() ? FilePosition{} : constraint_position(model, e.constraints()[0]);
+  // penetrated contacts (unilateral constraints with a gap < 0 at the start): projection does
+  // not act on a unilateral gap, so the hint is to move the state, at the first contact's entry
+  bool penetrated = e.cause() == Cause::kNotProjected && !e.constraints().empty();
+  for (const std::string& name : e.constraints()) {
+    const auto& cs = model.system.constraints();
+    penetrated = penetrated && std::any_of(cs.begin(), cs.end(), [&](const Constraint& c) {
+                   return c.name() == name && c.is_unilateral();
+                 });
+  }
   FilePosition at;
-  if (e.cause() == Cause::kContradictory) {
+  if (e.cause() == Cause::kContradictory || penetrated) {
     at = constraint.known() ? constraint : model.positions.initial;
   } else {
     at = model.positions.initial.known() ? model.positions.initial : constraint;
   }
-  return error_at(model, at, user_message(e),
-                  e.cause() == Cause::kNotProjected
-                      ? "add `project: true` under `initial:` in the model file"
-                      : "");
+  std::string hint;
+  if (penetrated) {
+    hint =
+        "start with the contact open or touching: change the initial q so that its gap is >= 0 "
+        "(`project: true` does not act on a unilateral gap)";
+  } else if (e.cause() == Cause::kNotProjected) {
+    hint = "add `project: true` under `initial:` in the model file";
+  }
+  return error_at(model, at, user_message(e), hint);
 }
 
 void write_csv(const ModelRun& run, const std::string& path) {

@@ -66,8 +66,8 @@ VisualContact bodies_visual_contact(std::shared_ptr<const mb::MultibodyModel> mo
   if (joint.type == mb::JointType::kContactSpheres) {
     // two spheres: the normal is the line of the centres o → c, the point the contact sphere's
     // nearest to the other, c − r n
-    c.geometry = [model, P, C, fp, fc, radius](const Eigen::Ref<const VectorXd>& q,
-                                               Vector3d& point, Vector3d& normal) {
+    c.geometry = [model, P, C, fp, fc, radius](const Eigen::Ref<const VectorXd>& q, Vector3d& point,
+                                               Vector3d& normal) {
       const Vector3d o = mb::world_point(*model, q, P, fp.p),
                      centre = mb::world_point(*model, q, C, fc.p);
       normal = (centre - o).normalized();

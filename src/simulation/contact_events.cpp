@@ -26,9 +26,23 @@ double gap_scale(const System& sys, const Workspace& ws, Index k) {
 double gap_rate_scale(const System& sys, const Workspace& ws, Index k) {
   return 0.1 * ws.phi_dot_scale[sys.row_offset(k)];
 }
+
+// the message of contact k's gap g, or else its rate gd, not finite at t: `whose` gap is …
+// `where` (…) `after` — status, time, constraint and value, as describe_status says them
+std::string nonfinite_gap(const System& sys, Index k, double t, double g, double gd,
+                          const char* whose, const char* where, const char* after) {
+  const bool gap = !std::isfinite(g);
+  const double v = gap ? g : gd;
+  return std::string(to_string(Status::kNonFiniteInput)) + " at t = " + format_t(t) +
+         " in phi of constraint '" + sys.constraint(k).name() + "': " + whose + " gap" +
+         (gap ? "" : " rate") + " is " + (std::isnan(v) ? "nan" : format_t(v)) + where +
+         " (its expression outside its domain: the square root or logarithm of a negative "
+         "number, a division by zero)" +
+         after;
+}
 }  // namespace
 
-ContactEvents::ContactEvents(const System& sys, Workspace& ws, std::size_t x_size)
+ContactEvents::ContactEvents(const System& sys, Workspace& ws, std::size_t x_size, double span)
     : sys_(sys),
       ws_(ws),
       dyn_(sys),
@@ -39,7 +53,8 @@ ContactEvents::ContactEvents(const System& sys, Workspace& ws, std::size_t x_siz
       impacts_(dyn_.contacts().size(), 0),
       q_(n_),
       qd_(n_),
-      xs_(Index(x_size)) {}
+      xs_(Index(x_size)),
+      span_(span) {}
 
 void ContactEvents::apply() const {
   for (std::size_t i = 0; i < closed_.size(); ++i) {
@@ -92,30 +107,45 @@ double ContactEvents::find(double t0, const double* x0, double t1, const double*
                            const SegmentHooks::Dense& dense) {
   double first = kNaN;
   event_ = -1;
+  nonfinite_event_.clear();
   // the closed contacts that still push in the step's last evaluation (read before any
   // evaluation here overwrites it)
   for (std::size_t i = 0; i < closed_.size(); ++i) {
     pushes_[i] =
         closed_[i] && ws_.status == Status::kOk && multiplier(dyn_.contacts()[i]) > 0.0 ? 1 : 0;
   }
+  std::string nonfinite;
   for (std::size_t i = 0; i < closed_.size(); ++i) {
     double te = kNaN;
+    nonfinite.clear();
     if (!closed_[i]) {
       // an impact: the gap falls below 0 (below −kTouchGap when the step starts at a gap
       // within roundoff below 0, after a release; below where it started when that gap opens,
       // g' > 0, after an impact: else each flight of an accumulation of impacts would fall up
       // to kTouchGap further than it rose, and never come to rest — a sphere's gap z − r has
       // the roundoff of z)
-      const double g0 = value(Index(i), true, t0, x0);
+      double g0 = 0.0, gd0 = 0.0, g1 = 0.0, gd1 = 0.0;
+      finite_gap(Index(i), t0, x0, g0, gd0);
       double level = 0.0;
       if (g0 < 0.0) {
-        double g = 0.0, gd = 0.0;
-        dyn_.gap(sys_, ws_, dyn_.contacts()[i], q_, qd_, t0, g, gd);
         const double touch = kTouchGap * gap_scale(sys_, ws_, dyn_.contacts()[i]);
-        level = gd > 0.0 ? std::max(g0, -touch) : -touch;
+        level = gd0 > 0.0 ? std::max(g0, -touch) : -touch;
       }
-      if (!(value(Index(i), true, t1, x1) < level)) continue;
-      te = g0 < level ? t0 : locate(t0, t1, dense, Index(i), true, level);
+      // (an open gap or rate that turns non-finite — its expression out of its domain — is no
+      // row of the evaluation, so nothing else sees it: the impacts up to the last finite time
+      // are located, else the run stops there)
+      double tf = t1;
+      if (!finite_gap(Index(i), t1, x1, g1, gd1)) {
+        tf = last_finite(t0, x0, t1, x1, dense, Index(i), g1, nonfinite);
+      }
+      if (g1 < level) {
+        te = g0 < level ? t0 : locate(t0, tf, dense, Index(i), true, level);
+        nonfinite.clear();
+      } else if (!nonfinite.empty()) {
+        te = tf;
+      } else {
+        continue;
+      }
     } else {
       // a release: the multiplier turns negative. The step's last evaluation screens (no
       // evaluation while it pushes); then the state at t1 decides, and bisection locates it.
@@ -126,21 +156,77 @@ double ContactEvents::find(double t0, const double* x0, double t1, const double*
     if (std::isnan(first) || te < first) {
       first = te;
       event_ = Index(i);
+      nonfinite_event_ = nonfinite;
     }
   }
   return first;
 }
 
+bool ContactEvents::finite_gap(Index i, double t, const double* x, double& g, double& gd) {
+  q_ = Eigen::Map<const VectorXd>(x, n_);
+  qd_ = Eigen::Map<const VectorXd>(x + n_, n_);
+  dyn_.gap(sys_, ws_, dyn_.contacts()[std::size_t(i)], q_, qd_, t, g, gd);
+  return std::isfinite(g) && std::isfinite(gd);
+}
+
+double ContactEvents::last_finite(double t0, const double* x0, double t1, const double* x1,
+                                  const SegmentHooks::Dense& dense, Index i, double& g,
+                                  std::string& message) {
+  // bisection to a bracket of 1e-14 |t|: lo finite (or t0), hi not
+  double lo = t0, hi = t1, gd = 0.0, g_hi = 0.0, gd_hi = 0.0;
+  if (!finite_gap(i, t0, x0, g_hi, gd_hi)) {
+    hi = t0;
+  } else {
+    finite_gap(i, t1, x1, g_hi, gd_hi);
+    const double width = 1e-14 * std::max(1.0, std::abs(t1));
+    for (int it = 0; it < 200 && hi - lo > width; ++it) {
+      const double mid = 0.5 * (lo + hi);
+      dense(mid, xs_.data());
+      double gm = 0.0, gdm = 0.0;
+      if (finite_gap(i, mid, xs_.data(), gm, gdm)) {
+        lo = mid;
+      } else {
+        hi = mid;
+        g_hi = gm;
+        gd_hi = gdm;
+      }
+    }
+  }
+  if (lo > t0) {
+    dense(lo, xs_.data());
+    finite_gap(i, lo, xs_.data(), g, gd);
+  } else {
+    finite_gap(i, t0, x0, g, gd);
+  }
+  message = nonfinite_gap(sys_, dyn_.contacts()[std::size_t(i)], hi, g_hi, gd_hi,
+                          "the open unilateral contact's", " there",
+                          ", so its impacts cannot be found: the run stops just before it, the "
+                          "samples up to there kept");
+  return lo;
+}
+
 bool ContactEvents::handle(double t, double* x, RunStatistics& stats) {
-  if (long(stats.contact_events.size()) >= kMaxEvents) {
-    failure_ = "contacts: more than " + format_number(kMaxEvents) +
-               " impacts and releases (chattering) by t = " + format_t(t);
+  if (!nonfinite_event_.empty()) {
+    failure_ = nonfinite_event_;
+    nonfinite_ = true;
     return false;
+  }
+  // chattering: the last kChatterEvents events within kChatterSpan of the run's span
+  const std::size_t count = stats.contact_events.size();
+  if (count >= std::size_t(kChatterEvents)) {
+    const double since = stats.contact_events[count - std::size_t(kChatterEvents)].t;
+    if (t - since <= kChatterSpan * span_) {
+      failure_ = "contacts: " + format_number(kChatterEvents) +
+                 " impacts and releases between t = " + format_t(since) + " and " + format_t(t) +
+                 ", within " + format_t(kChatterSpan) +
+                 " of the run's time span (chattering; docs/contact.md, \"In a run\")";
+      return false;
+    }
   }
   return resolve(t, x, event_, stats);
 }
 
-void ContactEvents::start(double t, VectorXd& q, VectorXd& qd, double tolerance,
+bool ContactEvents::start(double t, VectorXd& q, VectorXd& qd, double tolerance,
                           RunStatistics& stats) {
   q_ = q;
   qd_ = qd;
@@ -150,6 +236,15 @@ void ContactEvents::start(double t, VectorXd& q, VectorXd& qd, double tolerance,
     const Index k = dyn_.contacts()[i];
     double g = 0.0, gd = 0.0;
     dyn_.gap(sys_, ws_, k, q_, qd_, t, g, gd);
+    if (!std::isfinite(g) || !std::isfinite(gd)) {
+      // (the run stops before its first sample, as for a bilateral constraint's)
+      failure_ =
+          nonfinite_gap(sys_, k, t, g, gd, "the unilateral contact's", " at the initial state", "");
+      nonfinite_ = true;
+      std::fill(closed_.begin(), closed_.end(), 0);
+      apply();
+      return false;
+    }
     if (g < -std::max(tolerance, kTouchGap) * gap_scale(sys_, ws_, k)) {
       penetrated.push_back(sys_.constraint(k).name());
       lines += (lines.empty() ? "" : "; ") + std::string("the unilateral constraint '") +
@@ -174,6 +269,7 @@ void ContactEvents::start(double t, VectorXd& q, VectorXd& qd, double tolerance,
   // state after it (the event keeps its energy_change), with no impact work before the first
   // sample — else E(0) after the impact and W = ΔT leave a residual −ΔT for the whole run
   impact_work_ = 0.0;
+  return true;
 }
 
 bool ContactEvents::resolve(double t, double* x, Index event, RunStatistics& stats) {

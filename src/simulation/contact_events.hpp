@@ -23,11 +23,14 @@ class ContactEvents {
   static constexpr double kRestFraction = 1e-6;
   // an open gap at most this far from zero takes part in an impact (simultaneous contacts)
   static constexpr double kTouchGap = 1e-9;
-  // impacts and releases after which a run is declared chattering
-  static constexpr long kMaxEvents = 100000;
+  // a run is declared chattering when kChatterEvents impacts and releases fall within
+  // kChatterSpan of its time span (a rate, not a count: an elastic ball bouncing every 0.09 s
+  // for 10⁴ s makes 110 700 regular impacts)
+  static constexpr long kChatterEvents = 10000;
+  static constexpr double kChatterSpan = 1e-4;
 
-  // x_size: the size of the run's state x = [q; q'; W]
-  ContactEvents(const System& sys, Workspace& ws, std::size_t x_size);
+  // x_size: the size of the run's state x = [q; q'; W]; span: the run's t_end − t_start
+  ContactEvents(const System& sys, Workspace& ws, std::size_t x_size, double span);
 
   // true when the system has unilateral constraints
   bool any() const { return !dyn_.contacts().empty(); }
@@ -35,17 +38,25 @@ class ContactEvents {
   void apply() const;
   // the initial modes at (t, x = [q; q'; …]): an open gap, a closed contact that pushes, or an
   // impact at the start (x's velocities jump). @throws InconsistentInitialState naming a
-  // penetrated contact (g < −tolerance).
-  void start(double t, VectorXd& q, VectorXd& qd, double tolerance, RunStatistics& stats);
-  // the first impact or release in (t0, t1] (see SegmentHooks::find_event), NaN for none
+  // penetrated contact (g < −tolerance). False, with failure() set and every contact open, when
+  // a gap or gap rate is not finite there (failure_status(): kNonFiniteInput)
+  bool start(double t, VectorXd& q, VectorXd& qd, double tolerance, RunStatistics& stats);
+  // the first impact or release in (t0, t1] (see SegmentHooks::find_event), NaN for none; or
+  // the last time before an open contact's gap or gap rate turns non-finite (NaN, Inf: its
+  // expression left its domain), where handle() then stops the run
   double find(double t0, const double* x0, double t1, const double* x1,
               const SegmentHooks::Dense& dense);
   // applies the event find() located, at (t, x) (x's velocities may jump); false with
-  // failure() set when the contacts' dynamics cannot be solved there
+  // failure() set when the contacts' dynamics cannot be solved there, or the event is a
+  // non-finite gap
   bool handle(double t, double* x, RunStatistics& stats);
   // the work of the impacts so far: Σ (T⁺ − T⁻) <= 0
   double impact_work() const { return impact_work_; }
   const std::string& failure() const { return failure_; }
+  // the status of failure(): kNonFiniteInput for a non-finite gap, else kIntegratorFailure
+  Status failure_status() const {
+    return nonfinite_ ? Status::kNonFiniteInput : Status::kIntegratorFailure;
+  }
 
  private:
   // resolves the contacts at (t, x): the impact of the touching ones when `event` (a contact
@@ -63,6 +74,13 @@ class ContactEvents {
                 double level);
   // f of contact k at (t, x): its gap, or its multiplier in the run's evaluation
   double value(Index k, bool gap, double t, const double* x);
+  // contact k's gap g and gap rate gd at (t, x); true when both are finite
+  bool finite_gap(Index k, double t, const double* x, double& g, double& gd);
+  // the last time in [t0, t1] where open contact k's gap and rate are finite, by bisection on
+  // dense output (to 1e-14 |t|; t0 when they are not finite there), with its gap there in g,
+  // and the message naming the contact, the first non-finite time and value
+  double last_finite(double t0, const double* x0, double t1, const double* x1,
+                     const SegmentHooks::Dense& dense, Index k, double& g, std::string& message);
   // the whole multiplier lambda + lambda_nonideal of the unilateral constraint k (a System index)
   // in the last evaluation (pushes when > 0)
   double multiplier(Index k) const;
@@ -76,7 +94,10 @@ class ContactEvents {
   std::vector<double> fastest_;        // (contacts) fastest impact speed so far
   std::vector<long> impacts_;          // (contacts) impacts so far
   Index event_ = -1;                   // the contact of the event find() located
+  bool nonfinite_ = false;             // failure_ is a non-finite gap
+  std::string nonfinite_event_;        // the message when that event is a non-finite gap
   VectorXd q_, qd_, xs_;               // (n, n, size of x) scratch
+  double span_;                        // the run's t_end − t_start
   double impact_work_ = 0.0;
   std::string failure_;
 };

@@ -348,9 +348,15 @@ class Run {
   // the kinetic energy that projecting the velocities of x onto contact c's stick rows removes
   double stick_energy_loss(std::size_t c, double t, const double* x, ProjectionResult& rv,
                            double& T_before);
-  // the kinetic energy a stick may remove (rule 1 of try_stick): rtol · the largest of the run
-  double stick_allowance(double T_before) const {
-    return std::max(o_.rtol, 1e-14) * std::max(peak_kinetic_, T_before);
+  // the kinetic energy a stick of contact c may remove (rule 1 of try_stick), at a state just
+  // evaluated: rtol · the largest of the run, and at least ½ m (10 v_stop)², m = 1ᵀ M 1 / n the
+  // mass scale of M there — a slide stops at v_stop = 100 eps whatever its speed before, so a
+  // slow one (2 mm/s, or 2 m/s written in km) removes ½ m v_stop², which rtol · its small
+  // kinetic energy refused (docs/friction.md, "Stick and slip")
+  double stick_allowance(std::size_t c, double T_before) {
+    change_.setConstant(10.0 * 100.0 * sys_.friction_contacts()[c].eps);
+    const double stop = detail::kinetic_energy(ws_, change_) / double(n_);
+    return std::max(std::max(o_.rtol, 1e-14) * std::max(peak_kinetic_, T_before), stop);
   }
   // contact c's stop at te is a kinematic passage at a rank drop (no restart there)
   bool passes_at_rank_drop(std::size_t c, double te, const detail::SegmentHooks::Dense& dense);

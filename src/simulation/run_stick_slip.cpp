@@ -242,7 +242,7 @@ bool Run::try_stick(std::size_t c, double t, double* x, bool report) {
         "the velocities cannot be projected onto the stick rows (its tangential motion is "
         "fixed by the other constraints?)");
   }
-  if (removed > stick_allowance(T_before)) {
+  if (removed > stick_allowance(c, T_before)) {
     return refuse("sticking would remove " + format(removed) +
                   " of kinetic energy (a zero of the sliding velocity that the mechanism passes "
                   "through)");
@@ -300,7 +300,7 @@ bool Run::passes_at_rank_drop(std::size_t c, double te, const detail::SegmentHoo
   ProjectionResult rv;
   double T_before = 0.0;
   const double removed = stick_energy_loss(c, te, event_x_.data(), rv, T_before);
-  return std::isnan(removed) || removed > stick_allowance(T_before);
+  return std::isnan(removed) || removed > stick_allowance(c, T_before);
 }
 
 // Contact c, sliding along direction_ (length k) near a rank drop (the step's rank margin

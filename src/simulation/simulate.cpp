@@ -189,9 +189,12 @@ Trajectory detail::simulate_observed(const System& sys, const Eigen::Ref<const V
   // (relative, unit-free)
   set_run_scales(sys, ws, q, qd, o.t_start, o.t_end - o.t_start);
   if (rate_unit > 0.0) ws.rate_unit = rate_unit;  // (a controlled plant's: observed_run.hpp)
-  detail::ContactEvents contacts(sys, ws, std::size_t(2 * n + detail::WorkLayout(sys).count));
+  detail::ContactEvents contacts(sys, ws, std::size_t(2 * n + detail::WorkLayout(sys).count),
+                                 o.t_end - o.t_start);
+  // (false: a gap not finite at the start, reported below as the run's status)
+  bool contacts_started = true;
   if (contacts.any()) {
-    contacts.start(o.t_start, q, qd, o.initial_tolerance, traj.stats);
+    contacts_started = contacts.start(o.t_start, q, qd, o.initial_tolerance, traj.stats);
     run.set_contacts(&contacts);
   }
   evaluate_violations(sys, ws, q, qd, o.t_start);
@@ -318,6 +321,8 @@ Trajectory detail::simulate_observed(const System& sys, const Eigen::Ref<const V
     std::fill(ws.activity_override.begin(), ws.activity_override.end(), -1);
     return traj;
   };
+
+  if (!contacts_started) return finish(contacts.failure_status(), contacts.failure(), o.t_start);
 
   // (CVODE estimates its own first step, which on stiff problems can be far below o.step)
   double first_step = o.integrator == Integrator::kBDF ? 0.0 : o.step;
@@ -555,7 +560,7 @@ Trajectory detail::simulate_observed(const System& sys, const Eigen::Ref<const V
       if (contact_event) {
         // a unilateral contact's impact or release: the velocity jump and the closed set
         if (!contacts.handle(r.t_reached, x.data(), traj.stats)) {
-          return finish(Status::kIntegratorFailure, contacts.failure(), r.t_reached);
+          return finish(contacts.failure_status(), contacts.failure(), r.t_reached);
         }
         run.contacts_changed(r.t_reached, x.data());
         if (const Status s = run.project_drift(r.t_reached, x.data()); s != Status::kOk) {

@@ -155,6 +155,19 @@ TEST(ModelVisual, ErrorsAreLocated) {
                "visual: {frames: {f: {at: [x, 0]}}}\n"),
       "v.yaml:3:22: error: visual frame 'f' needs either angle (about z) or quaternion [w, x, "
       "y, z] (hint: {hoop: {at: [x, y], angle: theta, size: 0.3}})");
+  // a contact's normal that is zero (it gives no direction to draw the force along), at its
+  // list; one that only vanishes somewhere is kept (0*x + x is not identically 0)
+  const std::string ball =
+      "coordinates: [x, y]\nkinetic_energy: (x_dot^2 + y_dot^2)/2\n"
+      "constraints:\n  - {name: floor, holonomic: y, unilateral: true}\n";
+  EXPECT_EQ(error_of(ball + "visual: {contacts: {floor: {at: [x, y], normal: [0, 0]}}}\n"),
+            "v.yaml:5:49: error: visual contact 'floor': normal is zero; it must give the "
+            "direction the contact pushes (hint: {floor: {at: [x, y - r], normal: [0, 1]}})");
+  EXPECT_EQ(error_of(ball + "visual: {contacts: {floor: {at: [x, y], normal: [0*x, x - x]}}}\n"),
+            "v.yaml:5:49: error: visual contact 'floor': normal is zero; it must give the "
+            "direction the contact pushes (hint: {floor: {at: [x, y - r], normal: [0, 1]}})");
+  EXPECT_EQ(error_of(ball + "visual: {contacts: {floor: {at: [x, y], normal: [0, x]}}}\n"),
+            "no error");
 }
 
 }  // namespace UKDYN_TEST_FILE

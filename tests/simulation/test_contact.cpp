@@ -15,6 +15,7 @@
 
 #include "dynamics/internal.hpp"
 #include "ukdyn/core/autodiff.hpp"
+#include "ukdyn/core/format.hpp"
 #include "ukdyn/dynamics/contact.hpp"
 #include "ukdyn/io/trajectory_files.hpp"
 #include "ukdyn/modelfile/model.hpp"
@@ -483,6 +484,171 @@ output: {every: 0.01}
   EXPECT_NE(std::find(cols.begin(), cols.end(), "lambda_total.floor"), cols.end());
   EXPECT_NE(std::find(cols.begin(), cols.end(), "lambda_total.wall"), cols.end());
   EXPECT_EQ(std::find(cols.begin(), cols.end(), "lambda_total.rod"), cols.end());
+}
+
+// A unilateral constraint is refused with an interval of activity (a contact acts for the whole
+// run: its events ignored the interval, and a floor active on [0, 1] held a ball until t_end),
+// in the file at the interval and in C++ in either order; `unilateral:` is an unquoted boolean.
+TEST(Contact, ActiveIntervalAndNonBooleanUnilateralAreRefused) {
+  auto error = [](const std::string& text) {
+    try {
+      parse_model(text, "c.yaml");
+    } catch (const ModelError& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  const std::string base = "coordinates: [y]\nmass_matrix: [[1]]\nconstraints:\n";
+  EXPECT_EQ(error(base + "  - {name: floor, holonomic: y, unilateral: true, active: [0, 1]}\n"),
+            "c.yaml:4:59: error: active: is not supported on a unilateral constraint: the contact "
+            "'floor' would act for the whole run (hint: remove active:; for a surface that comes "
+            "or goes, run the parts separately, each starting from the last one's final state)");
+  // (a bilateral constraint keeps its interval)
+  EXPECT_EQ(error(base + "  - {name: floor, holonomic: y, active: [0, 1]}\n"), "no error");
+  auto floor = [] {
+    return holonomic("floor", 1, [](const auto& q, const auto&, auto& phi) { phi[0] = q[0]; });
+  };
+  EXPECT_THROW(floor().active_between(0.0, 1.0).unilateral(0.5), std::invalid_argument);
+  EXPECT_THROW(floor().unilateral(0.5).active_between(0.0, 1.0), std::invalid_argument);
+  // booleans: true and false unquoted; "yes" was taken for true while 1 was refused
+  for (const auto& [value, got] :
+       std::vector<std::pair<std::string, std::string>>{{"\"yes\"", "the quoted text 'yes'"},
+                                                        {"\"true\"", "the quoted text 'true'"},
+                                                        {"yes", "'yes'"},
+                                                        {"1", "'1'"}}) {
+    EXPECT_EQ(error(base + "  - {name: floor, holonomic: y, unilateral: " + value + "}\n"),
+              "c.yaml:4:45: error: unilateral in constraint 'floor' must be true or false, got " +
+                  got + " (hint: unilateral: true   (unquoted))");
+  }
+  for (const char* b : {"true", "True", "false", "FALSE"}) {
+    const Model m = parse_model(base + "  - {name: floor, holonomic: y, unilateral: " + b + "}\n");
+    EXPECT_EQ(m.system.constraint(0).is_unilateral(), b[0] == 't' || b[0] == 'T') << b;
+  }
+}
+
+// ---- a gap that is not finite --------------------------------------------------------------
+
+// A ball (m = 0.5) thrown at x' = 2 from (0, 1) onto the floor g = y − 0.2 √(1 − x) (e = 0.5),
+// whose gap is finite for x < 1 only. Closed form: the impact where 1 − g t²/2 = 0.2 √(1 − 2t),
+// t* = 0.43493; Newton's law along a = ∇g = (0.1 / √(1 − x*), 1) (equal masses): v⁺ = v⁻ −
+// (1 + e) (a·v⁻) / (a·a) a; then free flight, above the floor, to x = 1 at t* + (1 − x*) / x'⁺,
+// where the gap's rate is infinite and beyond it the gap NaN. The run stops there with status
+// non-finite input naming the floor (it ran on to t_end with status ok, no impact at all: each
+// step's end had a NaN gap, which is not < 0).
+TEST(Contact, NonFiniteGapStopsTheRunNamingTheContact) {
+  const Model m = parse_model(R"(
+parameters: {m: 0.5, g: 9.81, e: 0.5}
+coordinates: [x, y]
+kinetic_energy: 0.5*m*(x_dot^2 + y_dot^2)
+potential_energy: m*g*y
+initial: {q: {x: 0, y: 1}, q_dot: {x: 2}}
+simulate: {t_end: 1}
+constraints:
+  - {name: floor, holonomic: y - 0.2*sqrt(1 - x), unilateral: true, restitution: e}
+)");
+  // t*: the root of f(t) = 1 − g t²/2 − 0.2 √(1 − 2t) in (0.4, 0.45), by bisection
+  auto f = [](double t) { return 1.0 - 0.5 * kG * t * t - 0.2 * std::sqrt(1.0 - 2.0 * t); };
+  double lo = 0.4, hi = 0.45;
+  for (int i = 0; i < 100; ++i) (f(0.5 * (lo + hi)) > 0.0 ? lo : hi) = 0.5 * (lo + hi);
+  const double ts = 0.5 * (lo + hi), xs = 2.0 * ts;
+  EXPECT_NEAR(ts, 0.43493, 1e-5);
+  const Eigen::Vector2d a(0.1 / std::sqrt(1.0 - xs), 1.0), vm(2.0, -kG * ts);
+  const Eigen::Vector2d vp = vm - 1.5 * a.dot(vm) / a.dot(a) * a;
+  const double t_nan = ts + (1.0 - xs) / vp.x();
+  const Trajectory tr = simulate(m.system, m.q0, m.qd0, m.options);
+  EXPECT_EQ(tr.stats.status, Status::kNonFiniteInput) << tr.stats.message;
+  ASSERT_EQ(tr.stats.contact_events.size(), 1u);
+  EXPECT_NEAR(tr.stats.contact_events[0].t, ts, 1e-8);
+  EXPECT_NEAR(tr.stats.t_reached, t_nan, 1e-7);
+  const std::string& message = tr.stats.message;
+  EXPECT_EQ(message.rfind("non-finite input (NaN or Inf) at t = " + format_number(t_nan, 3), 0), 0u)
+      << message;
+  EXPECT_NE(message.find("in phi of constraint 'floor': the open unilateral contact's gap"),
+            std::string::npos)
+      << message;
+  EXPECT_TRUE(message.find(" is nan there") != std::string::npos ||
+              message.find(" is inf there") != std::string::npos)
+      << message;
+  // the samples up to there are kept (every 0.01 s), the ball above the floor at the last
+  ASSERT_FALSE(tr.t.empty());
+  EXPECT_NEAR(tr.t.back(), 0.01 * std::floor(t_nan / 0.01), 1e-12);
+  const std::size_t last = tr.t.size() - 1;
+  const double dt = tr.t[last] - ts;
+  EXPECT_NEAR(tr.q[2 * last], xs + vp.x() * dt, 1e-7);
+  EXPECT_NEAR(tr.q[2 * last + 1], 1.0 - 0.5 * kG * ts * ts + vp.y() * dt - 0.5 * kG * dt * dt,
+              1e-7);
+  // NaN at the start (√(y − 2) at y = 1): refused before the first sample, as a bilateral
+  // constraint's NaN is, naming the contact and the value
+  const Model s = parse_model(R"(
+coordinates: [y]
+kinetic_energy: 0.5*y_dot^2
+potential_energy: 9.81*y
+initial: {q: {y: 1}}
+simulate: {t_end: 1}
+constraints:
+  - {name: floor, holonomic: sqrt(y - 2), unilateral: true}
+)");
+  const Trajectory ts0 = simulate(s.system, s.q0, s.qd0, s.options);
+  EXPECT_EQ(ts0.stats.status, Status::kNonFiniteInput) << ts0.stats.message;
+  EXPECT_TRUE(ts0.t.empty());
+  EXPECT_EQ(ts0.stats.t_reached, 0.0);
+  EXPECT_EQ(ts0.stats.message.rfind("non-finite input (NaN or Inf) at t = 0 in phi of constraint "
+                                    "'floor': the unilateral contact's gap is nan at the initial "
+                                    "state",
+                                    0),
+            0u)
+      << ts0.stats.message;
+}
+
+// ---- chattering --------------------------------------------------------------------------------
+
+// A run is declared chattering at a rate of contact events, not a count: a ball (e = 1) between
+// two walls 1e-6 apart at 100 m/s makes an impact every 1e-8 s, the first at 0.5e-8; the
+// 10 000th after it, at 1e-4 + 0.5e-8 s, ends the run (10 000 events within 1e-4 of the 10 s span;
+// 100 000 events, at 1e-3 s, before). The regular bouncer: see the test below.
+TEST(Contact, ChatteringIsARateOfEvents) {
+  const Model m = parse_model(R"(
+coordinates: [y]
+kinetic_energy: 0.5*y_dot^2
+constraints:
+  - {name: low, holonomic: y, unilateral: true, restitution: 1}
+  - {name: high, holonomic: 1e-6 - y, unilateral: true, restitution: 1}
+initial: {q: {y: 0.5e-6}, q_dot: {y: 100}}
+simulate: {t_end: 10}
+output: {every: 1}
+)");
+  const Trajectory tr = simulate(m.system, m.q0, m.qd0, m.options);
+  EXPECT_EQ(tr.stats.status, Status::kIntegratorFailure);
+  EXPECT_EQ(tr.stats.contact_events.size(), 10000u);
+  // (each impact located to 1e-14 s: 1.1e-10 s after 10 000 of them)
+  EXPECT_NEAR(tr.stats.t_reached, 1e-4 + 0.5e-8, 1e-9);
+  EXPECT_EQ(tr.stats.message.rfind("contacts: 10000 impacts and releases between t = 5e-09 and "
+                                   "0.0001, within 0.0001 of the run's time span (chattering",
+                                   0),
+            0u)
+      << tr.stats.message;
+}
+
+// An elastic ball (e = 1) dropped from h0 = 0.01 m bounces every 2 √(2 h0 / g) = 0.0903 s, for
+// ever: 110 729 impacts in 10 000 s, each at speed √(2 g h0) = 0.443 m/s. It used to stop at
+// t = 9030 s, "more than 100000 impacts and releases (chattering)"; it runs to the end, its
+// energy kept.
+TEST(Contact, ElasticBallBouncesPastTheOldEventLimit) {
+  const double h0 = 0.01, period = 2.0 * std::sqrt(2.0 * h0 / kG), v0 = std::sqrt(2.0 * kG * h0);
+  Model m = parse_model(kBall, "<string>", {{"e", 1.0}, {"h0", h0}});
+  m.options.t_end = 1e4;
+  m.options.output_every = 100.0;
+  m.options.rtol = 1e-9;
+  m.options.atol = 1e-11;
+  const Trajectory tr = simulate(m.system, m.q0, m.qd0, m.options);
+  ASSERT_EQ(tr.stats.status, Status::kOk) << tr.stats.message;
+  // impacts at (k + ½) period
+  const auto impacts = events_of(tr, 0, ContactEvent::Kind::kImpact);
+  ASSERT_EQ(double(impacts.size()), std::floor(1e4 / period + 0.5));
+  EXPECT_GT(impacts.size(), 100000u);
+  EXPECT_NEAR(impacts.back().t, (double(impacts.size()) - 0.5) * period, 1e-6 * 1e4);
+  EXPECT_NEAR(impacts.back().speed_after, v0, 1e-6 * v0);
+  EXPECT_NEAR(tr.energy.back(), tr.energy.front(), 1e-6 * 0.5 * kG * h0);
 }
 
 }  // namespace UKDYN_TEST_FILE

@@ -108,5 +108,68 @@ TEST(ContactUnits, TheBouncingBallsImpactsAreTheSameInEveryUnitSystem) {
   }
 }
 
+// A block (m = 2) released sliding down a rough incline (α = 0.3, μ = 0.35 > tan α, μ_s = 0.6,
+// a unilateral slope with Coulomb friction) at v0; from t = 6 s a force k (t − 6), k = 10 N/s,
+// pushes it down the slope. Closed form: it decelerates at d = g (μ cos α − sin α) = 0.3811 m/s²,
+// sticks at s* = v0² / (2 d), and breaks away where m g sin α + k (t − 6) = μ_s m g cos α,
+// t_b = 6.5448 s, whatever v0; then s'' = (μ_s − μ) g cos α + k (t − t_b) / m, so
+// s(t) − s* = A τ² / 2 + k τ³ / (6 m), τ = t − t_b, A = (μ_s − μ) g cos α. The stick used to
+// be refused for removing 1e-14 J (the block at v_stop = 100 eps) against rtol times the run's
+// largest kinetic energy, 4e-6 J for v0 = 2 mm/s: the block crept on the regularized law and
+// broke away at μ, at 6.076 s, as did the 2 m/s run written in km (g = 9.81e-3 km/s²).
+TEST(ContactUnits, SlowSlideOnARoughInclineSticksInAnyUnits) {
+  const std::string text = R"(
+parameters: {m: 2, g: 9.81, mu: 0.35, mus: 0.6, a: 0.3, v0: 2, k: 10, t1: 6}
+coordinates: [x, y]
+kinetic_energy: 0.5*m*(x_dot^2 + y_dot^2)
+potential_energy: m*g*y
+forces: [k*(t - t1)*heaviside(t - t1)*cos(a), -k*(t - t1)*heaviside(t - t1)*sin(a)]
+constraints:
+  - {name: slope, holonomic: y*cos(a) + x*sin(a), unilateral: true}
+nonideal:
+  - {friction: coulomb, constraint: slope, mu: mu, mu_static: mus, coordinates: [x, y]}
+initial:
+  q: {x: 0, y: 0}
+  q_dot: {x: v0*cos(a), y: -v0*sin(a)}
+simulate: {t_end: 7}
+output: {every: 0, at: [6, 6.5, 7]}
+)";
+  const double m = 2.0, a = 0.3, mu = 0.35, mus = 0.6, k_si = 10.0;
+  struct Case {
+    const char* what;
+    double v0_si;   // m/s
+    double length;  // metres per unit of length
+  };
+  for (const Case c : {Case{"2 m/s", 2.0, 1.0}, Case{"2 cm/s", 0.02, 1.0},
+                       Case{"2 mm/s", 0.002, 1.0}, Case{"2 m/s in km", 2.0, 1e3}}) {
+    SCOPED_TRACE(c.what);
+    const double g = 9.81 / c.length, v0 = c.v0_si / c.length, k = k_si / c.length;
+    const Model model = parse_model(text, "<string>", {{"g", g}, {"v0", v0}, {"k", k}});
+    const Trajectory tr = simulate(model.system, model.q0, model.qd0, model.options);
+    ASSERT_EQ(tr.stats.status, Status::kOk) << tr.stats.message;
+    EXPECT_EQ(tr.stats.stick_refusals, 0);
+    // the samples at t = 0, 6, 6.5 and 7 (t_end); s(j): the distance down the slope at the
+    // (j + 1)-th
+    ASSERT_EQ(tr.t.size(), 4u);
+    EXPECT_EQ(tr.t[1], 6.0);
+    EXPECT_EQ(tr.t[2], 6.5);
+    EXPECT_EQ(tr.t[3], 7.0);
+    auto s = [&](std::size_t j) {
+      return tr.q[2 * (j + 1)] * std::cos(a) - tr.q[2 * (j + 1) + 1] * std::sin(a);
+    };
+    const double d = g * (mu * std::cos(a) - std::sin(a)), s_stick = v0 * v0 / (2.0 * d);
+    const double tb = 6.0 + m * g * (mus * std::cos(a) - std::sin(a)) / k;
+    EXPECT_NEAR(tb, 6.5448, 1e-4);
+    const double tau = 7.0 - tb, A = (mus - mu) * g * std::cos(a);
+    // at rest where it stopped, at t = 6 and 6.5 (s* = 5.2 m down to 5.2 µm)
+    EXPECT_NEAR(s(0), s_stick, 1e-6 * s_stick + 1e-9 / c.length);
+    EXPECT_NEAR(s(1), s_stick, 1e-6 * s_stick + 1e-9 / c.length);
+    // and sliding from t_b on: 0.3213 m by t = 7
+    const double slid = A * tau * tau / 2.0 + k * tau * tau * tau / (6.0 * m);
+    EXPECT_NEAR(slid * c.length, 0.3213, 1e-4);
+    EXPECT_NEAR(s(2) - s(1), slid, 1e-6 * slid);
+  }
+}
+
 }  // namespace UKDYN_TEST_FILE
 }  // namespace ukdyn

@@ -442,6 +442,62 @@ TEST(RunSettings, InconsistentInitialStatesAreLocatedAtInitialOrTheConstraint) {
   EXPECT_EQ(e.column(), 5);
 }
 
+// A penetrated contact (a unilateral gap < 0 at the start) is located at the contact's entry,
+// with or without `project: true`, and its hint is one that can help: projection does not act on
+// a unilateral gap (the hint was to add `project: true`, also where it was there already). A
+// robot's contact likewise (it was located at 1:1 of the file), and its reader's errors in an
+// expression name the contact.
+TEST(RunSettings, PenetratedContactsAreLocatedAtTheirEntryWithAHintThatCanHelp) {
+  const std::string ball =
+      "coordinates: [x, y]\nkinetic_energy: 0.5*(x_dot^2+y_dot^2)\nconstraints:\n"
+      "  - {name: floor, holonomic: y, unilateral: true}\n";
+  const std::string hint =
+      "start with the contact open or touching: change the initial q so that its gap is >= 0 "
+      "(`project: true` does not act on a unilateral gap)";
+  for (const std::string initial :
+       {"initial:\n  q: {y: -1}\n", "initial:\n  q: {y: -1}\n  project: true\n"}) {
+    const ModelError e = start_error(ball + initial);
+    EXPECT_EQ(e.line(), 4) << e.what();
+    EXPECT_EQ(e.column(), 5) << e.what();
+    EXPECT_EQ(e.message().rfind("inconsistent initial conditions at t = 0: the unilateral "
+                                "constraint 'floor' is penetrated: its gap is -1",
+                                0),
+              0u)
+        << e.message();
+    EXPECT_EQ(e.hint(), hint);
+  }
+  // the pendulum of tests/data/contact_pendulum.urdf, its tip (z = 0.5, r = 0.05) below the
+  // plane z = 0.7: gap −0.25
+  const std::string robot =
+      "robot: {urdf: contact_pendulum.urdf}\ncontacts:\n"
+      "  - {name: tip, link: rod, point: [0.8, 0, 0], shape: sphere, radius: 0.05,\n"
+      "     plane: {body: ground, point: [0, 0, 0.7], normal: [0, 0, 1]}}\n";
+  const std::string path = std::string(UKDYN_TEST_DATA_DIR) + "/robot.yaml";
+  const Model m = parse_model(robot, path);
+  try {
+    run_model(m);
+    ADD_FAILURE() << "the run started";
+  } catch (const InconsistentInitialState& x) {
+    const ModelError e = locate_run_error(m, x);
+    EXPECT_EQ(e.line(), 3) << e.what();
+    EXPECT_EQ(e.column(), 5) << e.what();
+    EXPECT_NE(e.message().find("the unilateral constraint 'tip' is penetrated: its gap is -0.25"),
+              std::string::npos)
+        << e.message();
+    EXPECT_EQ(e.hint(), hint);
+  }
+  std::string radius = robot;
+  radius.replace(radius.find("radius: 0.05"), 12, "radius: 0/0");
+  try {
+    parse_model(radius, path);
+    ADD_FAILURE() << "no error";
+  } catch (const ModelError& e) {
+    EXPECT_EQ(e.line(), 3) << e.what();
+    EXPECT_EQ(e.message(), "in contact 'tip' radius: cannot evaluate: division by zero")
+        << e.what();
+  }
+}
+
 // --- energy drift of a run in which nothing moves ------------------------------------------
 
 TEST(RunSettings, EnergyDriftOfABlockAtRestIsItsRoundoff) {

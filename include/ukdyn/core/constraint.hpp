@@ -114,7 +114,7 @@ class Constraint {
              std::shared_ptr<const ConstraintModel> model);
 
   /// Makes the constraint active on [begin, end] only; outside it its rows of A and b are zero
-  /// (so it exerts no force). @throws std::invalid_argument unless begin <= end.
+  /// (no force). @throws std::invalid_argument unless begin <= end, or if it is unilateral.
   Constraint& active_between(double begin, double end);
 
   /// Baumgarte stabilization: the constraint is imposed as phi'' + 2 alpha phi' + beta² phi = 0
@@ -142,8 +142,8 @@ class Constraint {
   /// dg/dq). The simulation keeps it as an ordinary row of A while it is closed and pushes,
   /// releases it where lambda would pull, and re-engages it at an impact, where the approach
   /// speed −g' jumps to e·(−g') the other way (Newton's law with restitution e). Cost O(1).
-  /// @throws std::invalid_argument naming the constraint unless it is holonomic with one row and
-  /// 0 <= restitution <= 1.
+  /// @throws std::invalid_argument naming the constraint unless it is holonomic with one row,
+  /// 0 <= restitution <= 1, and active for the whole run (no active_between: not supported).
   Constraint& unilateral(double restitution = 0.0);
   /// True for a unilateral constraint (see unilateral()).
   bool is_unilateral() const { return unilateral_; }

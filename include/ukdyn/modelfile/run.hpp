@@ -75,11 +75,11 @@ void check_run_settings(const Model& model, const SimulationOptions& options);
 /// The message is user_message(e) (no C++ function name).
 ModelError locate_run_error(const Model& model, const SettingError& e);
 
-/// An InconsistentInitialState of a run of `model`, as a ModelError: a state that violates the
-/// constraints (not projected, or the projection failed) at the `initial:` section, or at the
-/// first constraint it violates when the file has no `initial:`; constraints that contradict
-/// each other at the first one's entry. A hint says to add `project: true` under `initial:`
-/// when projecting may help (Cause::kNotProjected).
+/// An InconsistentInitialState of a run of `model`, as a ModelError: a violated state (not
+/// projected, or the projection failed) at `initial:`, or at the first violated constraint without
+/// it; contradicting constraints, or a penetrated contact, at the first one's entry. The hint:
+/// add `project: true` under `initial:` where projecting may help (Cause::kNotProjected), and
+/// for a penetrated contact, which no projection opens, change the initial state.
 ModelError locate_run_error(const Model& model, const InconsistentInitialState& e);
 
 /// Writes trajectory.csv: the standard columns then run.extra_columns (write_csv of
