@@ -78,8 +78,18 @@ void Reader::read_robot_contacts(const YAML::Node& root, const tree::Tree& robot
   // the names of the constraints: section's entries (a contact's name must differ)
   std::set<std::string> constraints;
   for (const std::string& c : constraint_names(root)) constraints.insert(c);
+  // a hint naming a link of this robot (its last: most often the tip), not an example's
+  const std::string link_hint = robot.link_count() > 0
+                                    ? "link: " + robot.link(robot.link_count() - 1).name
+                                    : "link: <a link>";
+  // a link welded to the world: fixed joints only between it and the world (or the world itself)
+  const auto welded = [&](Index i) {
+    for (; i >= 0; i = robot.parent(i))
+      if (robot.link(i).joint.kind != tree::JointKind::kFixed) return false;
+    return true;
+  };
   const auto link_of = [&](const YAML::Node& l, const std::string& what) -> Index {
-    if (!l.IsScalar()) fail(l, what + ": a link is named by a string", "link: fore");
+    if (!l.IsScalar()) fail(l, what + ": a link is named by a string", link_hint);
     if (l.Scalar() == "world") return -1;
     try {
       return robot.link_index(l.Scalar());
@@ -128,12 +138,13 @@ void Reader::read_robot_contacts(const YAML::Node& root, const tree::Tree& robot
     };
     // the point or sphere on its link
     if (c["body"])
-      fail(c["body"], what + ": a robot's contact names its link, not a body", "link: fore");
-    if (!c["link"]) fail(c, what + " needs link: the link its point is fixed on", "link: fore");
+      fail(c["body"], what + ": a robot's contact names its link, not a body",
+           c["body"].IsScalar() ? "link: " + c["body"].Scalar() : link_hint);
+    if (!c["link"]) fail(c, what + " needs link: the link its point is fixed on", link_hint);
     tree::LinkPoint at{link_of(c["link"], what), tree::Vector3d::Zero()};
     if (at.link < 0)
       fail(c["link"], what + ": the contact's point must be on a link, not the world",
-           "link: fore (the plane may be on the world: plane: {body: ground})");
+           link_hint + " (the plane may be on the world: plane: {body: ground})");
     if (const YAML::Node p = c["point"])
       at.p = vector3(p, "point", "[x, y, z] in the link's frame");
     const std::string shape = c["shape"] ? c["shape"].Scalar() : "point";
@@ -194,6 +205,11 @@ void Reader::read_robot_contacts(const YAML::Node& root, const tree::Tree& robot
     if (plane.link >= 0 && plane.link == at.link)
       fail(c["plane"], what + ": the plane is on the contact's own link (the gap never changes)",
            "put the plane on another link or the world");
+    if (welded(at.link) && welded(plane.link))
+      fail(c["link"],
+           what + ": link '" + robot.link(at.link).name + "' and the plane are both welded to " +
+               "the world (only fixed joints between them and it): the gap never changes",
+           "put the contact on a link that moves, or the plane on one");
     // the plane's frame: z along the normal
     plane.R = mb::Frame::with_z(plane.p, normal).R;
     // Newton's e and the law

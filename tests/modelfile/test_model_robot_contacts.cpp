@@ -224,7 +224,12 @@ TEST(ModelRobotContacts, ErrorsNameTheContactAndTheKey) {
          "unknown key 'radus' in contact 'tip' | did you mean 'radius'?");
   expect("{name: tip, link: rod, plane: {normals: [0, 0, 1]}}",
          "unknown key 'normals' in the plane of contact 'tip' | did you mean 'normal'?");
-  expect("{name: tip, body: rod}", "names its link, not a body");
+  expect("{name: tip, body: rod}", "names its link, not a body | link: rod");
+  // the hints name this robot's links (its last), not an example's
+  expect("{name: tip}", "contact 'tip' needs link: the link its point is fixed on | link: rod");
+  // a contact on a link welded to the world against a plane of the world: its gap never changes
+  expect("{name: tip, link: base}",
+         "contact 'tip': link 'base' and the plane are both welded to the world");
   expect("{name: tip, link: rod, shape: sphere}", "contact 'tip': a sphere needs radius");
   expect("{name: tip, link: rod, radius: 0.1}", "contact 'tip': a point has no radius");
   expect("{name: tip, link: rod, shape: sphere, radius: -1}", "radius must be > 0");
