@@ -8,11 +8,14 @@
 //
 // simulate_controlled integrates, besides the plant, the control's work ∫ Qcᵀq' dt, effort
 // ∫ QcᵀQc dt and absolute work ∫ |Qcᵀq'| dt — and with the robust term each row's Lyapunov
-// bound V_i' = −gamma_i V_i + kappa_i epsilon / 2 — exactly, with the integrator's own error
-// control: the plant is augmented with unit-mass auxiliary coordinates z whose "force" is the
-// integrand, so z' is the integral. M stays block diagonal, the physical constraints have zero
-// columns on z (so projections leave z alone), and the auxiliary coordinates are stripped from
-// the result (their kinetic energy ½ z'ᵀz' removed from the energies).
+// bound V_i' = −gamma_i V_i + kappa_i epsilon / 2 — exactly, with the integrator's own stages
+// and error control: as first-order quadratures z' = g beside the plant's state
+// (detail::Quadratures, x = [q; q'; W; z]), g read from the control the force evaluation has
+// just computed. (They were unit-mass auxiliary coordinates of an augmented system once, whose
+// diag(M, I) every evaluation checked, factorized and solved with: 9 k instructions per RK4
+// step of the 7-DOF Panda, bench/RESULTS.md. Their integrals ∫ z dt, those coordinates'
+// positions, are integrated as well, so that the adaptive methods' error control weighs what
+// it weighed then and takes the same steps.)
 #include <Eigen/SVD>
 
 #include <algorithm>
@@ -42,48 +45,46 @@ namespace ukdyn {
 
 namespace {
 
-// auxiliary coordinates: work, effort, absolute work, then one bound state per requirement row
+// the quadratures z: work, effort, absolute work, then one bound state per requirement row
 constexpr Index kWork = 0, kEffort = 1, kWorkAbs = 2, kBounds = 3;
 
 struct ControlledScratch;
 CallableScratch* plant_scratch(CallableScratch* controlled);
 
-// --- plant constraints on the augmented coordinates [q; z] -------------------------------------
+// --- plant constraints with the plant's scratch ------------------------------------------------
 
-struct HeadScratch final : ConstraintScratch {
-  explicit HeadScratch(std::unique_ptr<ConstraintScratch> in) : inner(std::move(in)) {}
+struct PlantConstraintScratch final : ConstraintScratch {
+  explicit PlantConstraintScratch(std::unique_ptr<ConstraintScratch> in) : inner(std::move(in)) {}
   std::unique_ptr<ConstraintScratch> inner;
 };
 
-// The plant's constraint evaluated on q = x.head(n): its own rows, zero columns for z.
-class HeadConstraintModel final : public ConstraintModel {
+// The plant's constraint, its scratch sharing the plant's (inside the controlled system's).
+class PlantConstraintModel final : public ConstraintModel {
  public:
-  HeadConstraintModel(Constraint inner, Index n) : inner_(std::move(inner)), n_(n) {}
+  PlantConstraintModel(Constraint inner, Index n) : inner_(std::move(inner)), n_(n) {}
 
   std::unique_ptr<ConstraintScratch> make_scratch(Index) const override {
-    return std::make_unique<HeadScratch>(inner_.model().make_scratch(n_));
+    return std::make_unique<PlantConstraintScratch>(inner_.model().make_scratch(n_));
   }
   // the plant's constraint shares the plant's scratch (inside the controlled system's)
   std::unique_ptr<ConstraintScratch> make_scratch_sharing(Index,
                                                           CallableScratch* shared) const override {
-    return std::make_unique<HeadScratch>(
+    return std::make_unique<PlantConstraintScratch>(
         inner_.model().make_scratch_sharing(n_, plant_scratch(shared)));
   }
 
   void acceleration_form(const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd,
                          double t, ConstraintScratch* s, Eigen::Ref<MatrixXd> A,
                          Eigen::Ref<VectorXd> b) const override {
-    // the plant's part of the state, as views (no copy)
-    auto& w = static_cast<HeadScratch&>(*s);
-    inner_.model().acceleration_form(q.head(n_), qd.head(n_), t, w.inner.get(), A.leftCols(n_), b);
-    A.rightCols(A.cols() - n_).setZero();
+    auto& w = static_cast<PlantConstraintScratch&>(*s);
+    inner_.model().acceleration_form(q, qd, t, w.inner.get(), A, b);
   }
 
   void violation(const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd,
                  double t, ConstraintScratch* s, Eigen::Ref<VectorXd> position,
                  Eigen::Ref<VectorXd> velocity) const override {
-    auto& w = static_cast<HeadScratch&>(*s);
-    inner_.model().violation(q.head(n_), qd.head(n_), t, w.inner.get(), position, velocity);
+    auto& w = static_cast<PlantConstraintScratch&>(*s);
+    inner_.model().violation(q, qd, t, w.inner.get(), position, velocity);
   }
 
  private:
@@ -91,8 +92,8 @@ class HeadConstraintModel final : public ConstraintModel {
   Index n_;
 };
 
-Constraint on_head(const Constraint& c, Index n) {
-  Constraint out(c.name(), c.kind(), c.rows(), std::make_shared<HeadConstraintModel>(c, n));
+Constraint on_plant_scratch(const Constraint& c, Index n) {
+  Constraint out(c.name(), c.kind(), c.rows(), std::make_shared<PlantConstraintModel>(c, n));
   const TimeInterval& iv = c.active_interval();
   if (iv.begin != TimeInterval{}.begin || iv.end != TimeInterval{}.end) {
     out.active_between(iv.begin, iv.end);
@@ -111,14 +112,19 @@ Constraint on_head(const Constraint& c, Index n) {
 // --- the control inside the plant's force ------------------------------------------------------
 
 // The controlled plant's description (immutable, shared by the controlled system's callables):
-// the controller and the plant, n plant coordinates and aux auxiliary ones.
+// the controller and the plant, n plant coordinates and aux quadratures (simulate_controlled's;
+// 0 for controlled_system).
 struct ControlledPlant {
   ControlledPlant(const Controller& c, const System& p, Index aux_count)
       : ctrl(c), plant(p), n(p.coordinate_count()), aux(aux_count) {}
 
-  // Q ← Q_plant(q, q', t) + Qc_control and the auxiliary integrands; NaN when the control fails
-  void force(ControlledScratch& w, const Eigen::Ref<const VectorXd>& xq,
-             const Eigen::Ref<const VectorXd>& xqd, double t, Eigen::Ref<VectorXd> Q) const;
+  // Q ← Q_plant(q, q', t) + Qc_control; NaN when the control fails
+  void force(ControlledScratch& w, const Eigen::Ref<const VectorXd>& q,
+             const Eigen::Ref<const VectorXd>& qd, double t, Eigen::Ref<VectorXd> Q) const;
+  // z' = (Qcᵀq', QcᵀQc, |Qcᵀq'|, −gamma_i V_i + kappa_i epsilon / 2) of the control that the
+  // last force() computed (z: the aux quadratures, V_i = z[kBounds + i]), then y' = z for
+  // their integrals y (the aux quadratures after them). O(n + m_r).
+  void rates(const ControlledScratch& w, const double* z, double* z_rate) const;
   void note_not_met(ControlledScratch& w, double t) const;
 
   Controller ctrl;
@@ -127,8 +133,7 @@ struct ControlledPlant {
 };
 
 // The controlled system's per-workspace scratch (its CallableScratch): the control workspace,
-// the plant's own scratch, and the run's control statistics. (The plant's callables get the
-// plant part of the state, x.head(n), as a view: nothing is copied.) When the plant is the
+// the plant's own scratch, and the run's control statistics. When the plant is the
 // controller's model (the same description, as when no mismatch is simulated), the plant's
 // callables use the model workspace's scratch: the plant's evaluation and the model's, at the
 // same state, then share what the callables keep per state (a tree's kinematics, M and Q).
@@ -151,7 +156,7 @@ struct ControlledScratch final : CallableScratch {
   const std::vector<signed char>* run_modes = nullptr;
   // the run's workspace of the controlled system, whose callables are this scratch (set when
   // the run starts, cleared when it ends; null outside simulate_controlled): its evaluation
-  // factorizes diag(M, I) before it asks for Q, and the control adopts the factor of M
+  // factorizes M before it asks for Q, and the control adopts that factor
   const Workspace* run_ws = nullptr;
   VectorXd q_last, qd_last;  // (n) the state of the last control evaluation, at t_last
   double t_last = 0.0;
@@ -160,20 +165,6 @@ struct ControlledScratch final : CallableScratch {
   std::string failure;       // describe_control_status() of the first failure
   std::string pull_failure;  // (ContactModes::settle) a requirement that needs a contact to pull
 };
-
-// The plant's M at the state where the run last evaluated the control (w.q_last, w.qd_last),
-// copied into plant_ws.M from the run's diag(M, I): true when that evaluation stands (the run's
-// workspace regular, dense like plant_ws, its Q finite: the plant's Q then is too), false when
-// the plant must be evaluated on its own. O(n²).
-bool plant_mass_from_run(const ControlledScratch& w, Index n, Workspace& plant_ws) {
-  const Workspace* run = w.run_ws;
-  if (run == nullptr || run->is_sparse() || plant_ws.is_sparse() || run->mass_singular ||
-      !run->mass_factorized || !run->Q.head(n).allFinite()) {
-    return false;
-  }
-  plant_ws.M = run->M.topLeftCorner(n, n);
-  return true;
-}
 
 // Whether the last assembly of the requirements in c evaluated every violation the samples
 // report (phi, psi of each holonomic or nonholonomic requirement: active and stabilized, so that
@@ -194,14 +185,12 @@ CallableScratch* plant_scratch(CallableScratch* controlled) {
   return w != nullptr ? w->plant : nullptr;
 }
 
-void ControlledPlant::force(ControlledScratch& w, const Eigen::Ref<const VectorXd>& xq,
-                            const Eigen::Ref<const VectorXd>& xqd, double t,
+void ControlledPlant::force(ControlledScratch& w, const Eigen::Ref<const VectorXd>& q,
+                            const Eigen::Ref<const VectorXd>& qd, double t,
                             Eigen::Ref<VectorXd> Q) const {
   ControlWorkspace& cws = w.cws;
   ControlStatistics& stats = w.stats;
-  // the plant's part of the state, as views (no copy)
-  const Eigen::Ref<const VectorXd> q = xq.head(n), qd = xqd.head(n);
-  plant.forces(q, qd, t, w.plant, Q.head(n));
+  plant.forces(q, qd, t, w.plant, Q);
   // the controller's model holds the contacts the run holds
   // the control at (q, q', t). A run evaluates the state of each sample twice, for the sample
   // and for the next step's first stage: without contacts (whose modes the run may have changed
@@ -239,18 +228,24 @@ void ControlledPlant::force(ControlledScratch& w, const Eigen::Ref<const VectorX
   for (Index i = 0; i < cws.kappa.size(); ++i)
     stats.max_kappa = std::max(stats.max_kappa, cws.kappa[i]);
   // Q += Qc_control
-  Q.head(n) += cws.Qc_control;
-  if (aux == 0) return;
-  // z'' = (Qcᵀq', QcᵀQc, |Qcᵀq'|, −gamma_i V_i + kappa_i epsilon / 2)
-  Q[n + kWork] = cws.power;
-  Q[n + kEffort] = cws.Qc_control.squaredNorm();
-  Q[n + kWorkAbs] = std::abs(cws.power);
+  Q += cws.Qc_control;
+}
+
+void ControlledPlant::rates(const ControlledScratch& w, const double* z, double* z_rate) const {
+  const ControlWorkspace& cws = w.cws;
+  // z' = (Qcᵀq', QcᵀQc, |Qcᵀq'|, −gamma_i V_i + kappa_i epsilon / 2)
+  z_rate[kWork] = cws.power;
+  z_rate[kEffort] = cws.Qc_control.squaredNorm();
+  z_rate[kWorkAbs] = std::abs(cws.power);
   if (const auto& r = ctrl.robust(); r && aux > kBounds) {
     for (Index i = 0; i < ctrl.requirement_rows(); ++i) {
-      Q[n + kBounds + i] =
-          -ctrl.robust_rate(i) * xqd[n + kBounds + i] + 0.5 * cws.kappa[i] * r->boundary_layer;
+      z_rate[kBounds + i] =
+          -ctrl.robust_rate(i) * z[kBounds + i] + 0.5 * cws.kappa[i] * r->boundary_layer;
     }
   }
+  // y' = z: the positions of the auxiliary coordinates that z once were (see the top), for
+  // the error control alone
+  for (Index i = 0; i < aux; ++i) z_rate[aux + i] = z[i];
 }
 
 void ControlledPlant::note_not_met(ControlledScratch& w, double t) const {
@@ -335,14 +330,13 @@ void require_same_plant(const Controller& ctrl, const System& plant, const char*
   }
 }
 
-// The plant with the control in its force; aux > 0 appends the auxiliary coordinates.
-System build_controlled(const std::shared_ptr<const ControlledPlant>& st,
-                        const std::vector<std::string>& aux_names) {
+// The plant with the control in its force. shared: the plant's constraints evaluate with the
+// plant's scratch (simulate_controlled's run: a tree's kinematics shared with the plant's M and
+// Q); else with their own, as controlled_system has always made them.
+System build_controlled(const std::shared_ptr<const ControlledPlant>& st, bool shared) {
   const System& plant = st->plant;
-  const Index n = plant.coordinate_count(), aux = st->aux;
-  std::vector<std::string> names = plant.coordinate_names();
-  names.insert(names.end(), aux_names.begin(), aux_names.end());
-  SystemBuilder b(names);
+  const Index n = plant.coordinate_count();
+  SystemBuilder b(plant.coordinate_names());
   // every workspace of the controlled system gets its own control workspace and plant scratch
   b.scratch([st]() -> std::unique_ptr<CallableScratch> {
     return std::make_unique<ControlledScratch>(*st);
@@ -350,39 +344,19 @@ System build_controlled(const std::shared_ptr<const ControlledPlant>& st,
   const auto scratch = [](CallableScratch* s) -> ControlledScratch& {
     return static_cast<ControlledScratch&>(*s);
   };
-  // M = diag(M_plant, I), factorized along the plant's mass tree (if any) with the auxiliary
-  // coordinates as roots
-  if (!plant.mass_tree().empty()) {
-    std::vector<Index> parent = plant.mass_tree();
-    parent.resize(std::size_t(n + aux), -1);
-    b.mass_tree(std::move(parent));
-  }
+  // the plant's M, factorized along its mass tree (if any)
+  if (!plant.mass_tree().empty()) b.mass_tree(plant.mass_tree());
   if (plant.mass_is_constant()) {
-    MatrixXd M = MatrixXd::Identity(n + aux, n + aux);
-    plant.mass_matrix(VectorXd::Zero(n), 0.0, M.topLeftCorner(n, n));
+    MatrixXd M = MatrixXd::Identity(n, n);
+    plant.mass_matrix(VectorXd::Zero(n), 0.0, M);
     b.mass_matrix(M);
-  } else if (aux == 0) {
+  } else {
     b.mass_matrix([st, scratch](const Eigen::Ref<const VectorXd>& q, double t, CallableScratch* s,
                                 Eigen::Ref<MatrixXd> M) {
       st->plant.mass_matrix(q, t, scratch(s).plant, M);
     });
-  } else {
-    b.mass_matrix([st, n, aux, scratch](const Eigen::Ref<const VectorXd>& x, double t,
-                                        CallableScratch* s, Eigen::Ref<MatrixXd> M) {
-      st->plant.mass_matrix(x.head(n), t, scratch(s).plant, M.topLeftCorner(n, n));
-      // the zero blocks and I by columns (plain loops: Eigen's setZero and setIdentity of
-      // runtime-sized blocks of a strided M cost ~700 instructions per evaluation for 51 entries)
-      const Index ld = M.outerStride();
-      double* p = M.data();
-      for (Index j = 0; j < n; ++j) std::fill_n(p + j * ld + n, aux, 0.0);
-      for (Index j = n; j < n + aux; ++j) {
-        double* col = p + j * ld;
-        std::fill_n(col, n + aux, 0.0);
-        col[j] = 1.0;
-      }
-    });
   }
-  // Q = Q_plant + Qc_control (+ the auxiliary integrands)
+  // Q = Q_plant + Qc_control
   b.forces([st, scratch](const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd,
                          double t, CallableScratch* s,
                          Eigen::Ref<VectorXd> Q) { st->force(scratch(s), q, qd, t, Q); });
@@ -391,39 +365,24 @@ System build_controlled(const std::shared_ptr<const ControlledPlant>& st,
   if (plant.switch_count() > 0) {
     b.switching_functions(
         plant.switch_names(),
-        [st, n, scratch](const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd,
-                         double t, CallableScratch* s, Eigen::Ref<VectorXd> g) {
-          st->plant.switching_functions(q.head(n), qd.head(n), t, scratch(s).plant, g);
+        [st, scratch](const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd,
+                      double t, CallableScratch* s, Eigen::Ref<VectorXd> g) {
+          st->plant.switching_functions(q, qd, t, scratch(s).plant, g);
         });
   }
   if (plant.has_potential()) {
-    if (aux == 0) {
-      b.potential_energy(
-          [st, scratch](const Eigen::Ref<const VectorXd>& q, double t, CallableScratch* s) {
-            return st->plant.potential_energy(q, t, scratch(s).plant);
-          });
-    } else {
-      b.potential_energy(
-          [st, n, scratch](const Eigen::Ref<const VectorXd>& x, double t, CallableScratch* s) {
-            return st->plant.potential_energy(x.head(n), t, scratch(s).plant);
-          });
-    }
+    b.potential_energy(
+        [st, scratch](const Eigen::Ref<const VectorXd>& q, double t, CallableScratch* s) {
+          return st->plant.potential_energy(q, t, scratch(s).plant);
+        });
   }
   // the plant's external power (the control's work is integrated apart, in z)
   if (plant.has_external_power()) {
-    if (aux == 0) {
-      b.external_power([st, scratch](const Eigen::Ref<const VectorXd>& q,
-                                     const Eigen::Ref<const VectorXd>& qd, double t,
-                                     CallableScratch* s) {
-        return st->plant.external_power(q, qd, t, scratch(s).plant);
-      });
-    } else {
-      b.external_power([st, n, scratch](const Eigen::Ref<const VectorXd>& x,
-                                        const Eigen::Ref<const VectorXd>& xd, double t,
-                                        CallableScratch* s) {
-        return st->plant.external_power(x.head(n), xd.head(n), t, scratch(s).plant);
-      });
-    }
+    b.external_power([st, scratch](const Eigen::Ref<const VectorXd>& q,
+                                   const Eigen::Ref<const VectorXd>& qd, double t,
+                                   CallableScratch* s) {
+      return st->plant.external_power(q, qd, t, scratch(s).plant);
+    });
   }
   // the physical constraints; the stick constraints of Coulomb contacts come again with their
   // contacts below (last, in the same order, so every index stays the plant's)
@@ -438,7 +397,7 @@ System build_controlled(const std::shared_ptr<const ControlledPlant>& st,
     const bool stick = std::any_of(contacts.begin(), contacts.end(), [k](const FrictionContact& c) {
       return c.stick_constraint == k;
     });
-    if (!stick) b.add(aux == 0 ? plant.constraint(k) : on_head(plant.constraint(k), n));
+    if (!stick) b.add(shared ? on_plant_scratch(plant.constraint(k), n) : plant.constraint(k));
   }
   // the non-ideal forces, with the same indices; a Coulomb contact stays one (its sliding
   // velocity, sticking and slipping need the system to know it)
@@ -462,40 +421,19 @@ System build_controlled(const std::shared_ptr<const ControlledPlant>& st,
       }
       spec.regularization_velocity = c->eps;
       spec.name = plant.nonideal_name(i);
-      if (c->surface_velocity && aux > 0) {
-        // the plant's part of the state, as views (no copy)
-        spec.surface_velocity = [u = c->surface_velocity, n](const Eigen::Ref<const VectorXd>& x,
-                                                             const Eigen::Ref<const VectorXd>& xd,
-                                                             double t, Eigen::Ref<VectorXd> uo,
-                                                             Eigen::Ref<VectorXd> udo) {
-          u(x.head(n), xd.head(n), t, uo, udo);
-        };
-      } else {
-        spec.surface_velocity = c->surface_velocity;
-      }
+      spec.surface_velocity = c->surface_velocity;
       b.add(coulomb_friction(spec));
       continue;
     }
     // the plant's force, with the plant's scratch (IdealForceInfo::scratch)
     NonIdealFn fn = plant.nonideal(i);
-    if (aux == 0) {
-      b.add(NonIdealForce(
-          plant.nonideal_name(i),
-          NonIdealFn([fn, scratch](const Eigen::Ref<const VectorXd>& q,
-                                   const Eigen::Ref<const VectorXd>& qd, double t,
-                                   const IdealForceInfo& ideal, Eigen::Ref<VectorXd> C) {
-            const IdealForceInfo plant_ideal(ideal, scratch(ideal.scratch()).plant);
-            fn(q, qd, t, plant_ideal, C);
-          })));
-      continue;
-    }
     b.add(NonIdealForce(
         plant.nonideal_name(i),
-        NonIdealFn([fn, n, scratch](const Eigen::Ref<const VectorXd>& x,
-                                    const Eigen::Ref<const VectorXd>& xd, double t,
-                                    const IdealForceInfo& ideal, Eigen::Ref<VectorXd> C) {
+        NonIdealFn([fn, scratch](const Eigen::Ref<const VectorXd>& q,
+                                 const Eigen::Ref<const VectorXd>& qd, double t,
+                                 const IdealForceInfo& ideal, Eigen::Ref<VectorXd> C) {
           const IdealForceInfo plant_ideal(ideal, scratch(ideal.scratch()).plant);
-          fn(x.head(n), xd.head(n), t, plant_ideal, C.head(n));
+          fn(q, qd, t, plant_ideal, C);
         })));
   }
   return b.build();
@@ -516,7 +454,7 @@ System controlled_system(const Controller& ctrl, const System& plant) {
           "control\")");
     }
   }
-  return build_controlled(std::make_shared<ControlledPlant>(ctrl, plant, 0), {});
+  return build_controlled(std::make_shared<ControlledPlant>(ctrl, plant, 0), false);
 }
 
 ControlledTrajectory simulate_controlled(
@@ -533,26 +471,20 @@ ControlledTrajectory simulate_controlled(
   }
   const bool robust = ctrl.robust().has_value();
   const Index aux = kBounds + (robust ? m_r : 0);
-  std::vector<std::string> aux_names = {"ukdyn.control.work", "ukdyn.control.effort",
-                                        "ukdyn.control.work_abs"};
-  for (Index i = 0; robust && i < m_r; ++i) {
-    aux_names.push_back("ukdyn.control.bound." + ctrl.row_names()[std::size_t(i)]);
-  }
-  for (const auto& name : aux_names) {
-    for (const auto& c : plant.coordinate_names()) {
-      if (c == name) {
-        throw std::invalid_argument(std::string(who) + ": the plant has a coordinate named '" +
-                                    name + "', which the controlled simulation reserves");
-      }
-    }
-  }
   const auto st = std::make_shared<const ControlledPlant>(ctrl, plant, aux);
-  const System sys = build_controlled(st, aux_names);
+  const System sys = build_controlled(st, true);
 
-  // initial state [q0; 0], [qd0; 0, 0, 0, V_i(0)]
-  VectorXd x0 = VectorXd::Zero(n + aux), xd0 = VectorXd::Zero(n + aux);
-  x0.head(n) = q0;
-  xd0.head(n) = qd0;
+  // the quadratures z (work, effort, absolute work, bounds), from (0, 0, 0, V_i(0)), their
+  // rates from the control of the run's evaluation at each stage; then their integrals y from
+  // 0 (weighed as positions by the error control, z as velocities: as when they were
+  // coordinates; a run's steps then stay what they were where its scales did not count them)
+  detail::Quadratures quad;
+  quad.count = 2 * aux;
+  quad.velocities = aux;
+  quad.z0.assign(std::size_t(2 * aux), 0.0);
+  quad.rate = [&st = *st](const Workspace& ws, double, const double* z, double* z_rate) {
+    st.rates(static_cast<const ControlledScratch&>(*ws.callables), z, z_rate);
+  };
   if (robust) {
     ControlWorkspace cws(ctrl);
     evaluate_violations(ctrl.requirements(), cws.req, q0, qd0, options.t_start);
@@ -561,7 +493,7 @@ ControlledTrajectory simulate_controlled(
           ctrl.requirement(ctrl.row_requirement(i)).kind() == ConstraintKind::kHolonomic;
       const double e = holonomic ? cws.req.phi[i] : cws.req.phi_dot[i];
       const double e_dot = holonomic ? cws.req.phi_dot[i] : 0.0;
-      xd0[n + kBounds + i] = ctrl.lyapunov(i, e, e_dot);
+      quad.z0[std::size_t(kBounds + i)] = ctrl.lyapunov(i, e, e_dot);
     }
   }
   // the requirements' switching times are breakpoints of the dynamics
@@ -571,7 +503,7 @@ ControlledTrajectory simulate_controlled(
       if (std::isfinite(t)) o.breakpoints.push_back(t);
     }
   }
-  // (the augmented system's balance includes z: the plant's is checked below)
+  // (the run's own balance misses the control's work: the plant's is checked below)
   o.energy_balance_tolerance = std::numeric_limits<double>::infinity();
   const double tolerance = plant.accounts_for_energy() ? checked_energy_balance_tolerance(options)
                                                        : std::numeric_limits<double>::infinity();
@@ -586,7 +518,7 @@ ControlledTrajectory simulate_controlled(
   ControlledTrajectory one;
   if (!streamed) {
     // kept in memory: the plant's values and the control's per sample, bounded as simulate()
-    // bounds its own (the augmented run itself streams into `run`, one sample at a time)
+    // bounds its own (the controlled run itself streams into `run`, one sample at a time)
     const double per_sample =
         double(1 + 5 * n + plant.constraint_rows() + 2 * plant.constraint_count() + 9 + 2 * n +
                (robust ? 3 : 2) * m_r + 4);
@@ -606,10 +538,8 @@ ControlledTrajectory simulate_controlled(
   const ControlledScratch* run_scratch = nullptr;       // the run's control, once it starts
   std::string pull;
   VectorXd q(n), qd(n), qdd(n);
-  // the plant's own workspace, for its kinetic energy at each sample (below)
-  Workspace plant_ws(plant);
   o.sample_sink = [&](const Trajectory& s) {
-    // the plant's sample: strip z, and z'ᵀz'/2 from the energies
+    // the plant's sample, and the quadratures z at it
     if (streamed) {
       if (one.plant.coordinate_names.empty()) {
         one.plant.coordinate_names = tr.coordinate_names;
@@ -645,7 +575,7 @@ ControlledTrajectory simulate_controlled(
                             {&p.work_external, &s.work_external}}) {
       to->insert(to->end(), from->begin(), from->end());
     }
-    const double* z_dot = s.qd.data() + n;
+    const double* z = quad.sample.data();
     q = Eigen::Map<const VectorXd>(s.q.data(), n);
     qd = Eigen::Map<const VectorXd>(s.qd.data(), n);
     qdd = Eigen::Map<const VectorXd>(s.qdd.data(), n);
@@ -666,31 +596,17 @@ ControlledTrajectory simulate_controlled(
       sample_contacts.settle(ctrl, cws, q, qd, t, cs, pull);
       at_sample = &cws;
     }
-    // T = q'ᵀ M q' / 2 of the plant, evaluated on its own: the augmented run's T holds
-    // z'ᵀ z' / 2 besides, and z' (the control's work and effort, ∫ |Qc|² dt) grows with the
-    // square of the model's forces — subtracting it lost the plant's T entirely for a
-    // Duffing oscillator of 1e6 kg (T of −2³⁰ J, an energy balance off by all the energy
-    // exchanged; issue #29 item 2, the metamorphic suite)
-    // — with the plant's M from the run where the run evaluated diag(M, I) at this state just
-    // before (the sample's q'', whose control the sample reuses): its leading block is the
-    // plant's M, bit for bit (the same callable at the same state), and the plant's own
-    // evaluation would repeat M, Q and their factor (~20 k instructions per sample, 7 DOF)
-    double T = s.kinetic_energy[0] - 0.5 * Eigen::Map<const VectorXd>(z_dot, aux).squaredNorm();
-    if (at_sample != &cws && plant_mass_from_run(*run_scratch, n, plant_ws)) {
-      T = detail::kinetic_energy(plant_ws, qd);
-    } else if (evaluate_unconstrained(plant, plant_ws, q, qd, t) == Status::kOk &&
-               !plant_ws.mass_singular) {
-      T = detail::kinetic_energy(plant_ws, qd);
-    }
+    // T = q'ᵀ M q' / 2 of the plant: the run's (its M is the plant's, z not being coordinates)
+    const double T = s.kinetic_energy[0];
     const double V = s.potential_energy[0];
     p.kinetic_energy.push_back(T);
     p.energy.push_back(T + V);
-    p.work_control.push_back(z_dot[kWork]);
+    p.work_control.push_back(z[kWork]);
     // the impacts' work Σ (T⁺ − T⁻), kept when the plant has contacts (their jumps leave z')
     const double impact = s.work_impact.empty() ? 0.0 : s.work_impact[0];
     if (!s.work_impact.empty()) p.work_impact.push_back(impact);
     const double works[6] = {s.work_nonideal[0], s.work_ideal[0], s.work_drive[0],
-                             s.work_external[0], z_dot[kWork],    impact};
+                             s.work_external[0], z[kWork],        impact};
     p.energy_balance_residual.push_back(balance.add(t, T, V, T + V, works));
 
     const ControlWorkspace& c = *at_sample;
@@ -720,20 +636,19 @@ ControlledTrajectory simulate_controlled(
     out.Qc_control.insert(out.Qc_control.end(), c.Qc_control.data(), c.Qc_control.data() + n);
     out.Qc_robust.insert(out.Qc_robust.end(), c.Qc_robust.data(), c.Qc_robust.data() + n);
     out.control_power.push_back(c.Qc_control.dot(qd));
-    out.control_work.push_back(z_dot[kWork]);
-    out.control_effort.push_back(z_dot[kEffort]);
-    out.control_work_abs.push_back(z_dot[kWorkAbs]);
+    out.control_work.push_back(z[kWork]);
+    out.control_effort.push_back(z[kEffort]);
+    out.control_work_abs.push_back(z[kWorkAbs]);
     for (Index i = 0; robust && i < m_r; ++i) {
-      out.error_bound.push_back(
-          std::sqrt(std::max(z_dot[kBounds + i], 0.0) / ctrl.robust_scale(i)));
+      out.error_bound.push_back(std::sqrt(std::max(z[kBounds + i], 0.0) / ctrl.robust_scale(i)));
     }
     if (streamed) sample_sink(one);
   };
   // the control statistics, read from the run's workspace (its ControlledScratch) at the end
   std::optional<ControlledScratch> after;
-  // the run's rate decade (the integrators' atol on q', Workspace::rate_unit): the plant's own,
-  // from its state; the augmented system's would count the auxiliary coordinates' unit masses
-  // and integrands, which move with the model's units
+  // the run's rate decade (the integrators' atol on q' and on z, Workspace::rate_unit): the
+  // plant's own, from its state, as when z were auxiliary coordinates of an augmented system
+  // (whose unit masses and integrands, which move with the model's units, it must not count)
   double plant_rate = 1.0;
   {
     Workspace scales(plant);
@@ -741,7 +656,7 @@ ControlledTrajectory simulate_controlled(
     plant_rate = scales.rate_unit;
   }
   const Trajectory full = detail::simulate_observed(
-      sys, x0, xd0, o,
+      sys, q0, qd0, o,
       [&](const Workspace& ws) {
         after.emplace(*st);
         auto& w = static_cast<ControlledScratch&>(*ws.callables);
@@ -754,7 +669,7 @@ ControlledTrajectory simulate_controlled(
       },
       [&](Workspace& ws) {
         // the contacts' modes of each workspace of the run (the plant's constraint indices: the
-        // augmented system keeps them), for the control's model in its evaluations: the run's
+        // controlled system keeps them), for the control's model in its evaluations: the run's
         // own (the first; also the samples'), then the branch check's, whose modes are a copy
         // of the run's (it used to evaluate the control with every contact held)
         auto& scratch = static_cast<ControlledScratch&>(*ws.callables);
@@ -765,7 +680,7 @@ ControlledTrajectory simulate_controlled(
           run_scratch = &scratch;
         }
       },
-      plant_rate);
+      plant_rate, &quad);
   const ControlledScratch& w = *after;
 
   // the names, the statistics and the plant's energy balance

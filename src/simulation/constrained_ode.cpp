@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: BSD-3-Clause
-// ConstrainedOde: the first-order system x' = f(t, x), x = [q; q'; W], that the integrators see,
-// W the work channels of the energy balance.
+// ConstrainedOde: the first-order system x' = f(t, x), x = [q; q'; W; z], that the integrators
+// see, W the work channels of the energy balance, z a caller's quadratures.
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -16,13 +16,19 @@
 
 namespace ukdyn::detail {
 
-WorkLayout::WorkLayout(const System& sys, bool quiet_channels) : quiet(quiet_channels) {
+WorkLayout::WorkLayout(const System& sys, bool quiet_channels, const Quadratures* quad)
+    : quiet(quiet_channels) {
   for (Index k = 0; k < sys.constraint_count(); ++k) {
     if (sys.constraint(k).is_drive()) drives.push_back(k);
   }
   if (sys.constraint_count() > 0) ideal = count++;
   if (!drives.empty()) drive = count++;
   if (sys.has_external_power()) external = count++;
+  if (quad != nullptr && quad->count > 0) {
+    quadrature = count;
+    quadrature_velocities = quad->velocities;
+    count += quad->count;
+  }
 }
 
 double constraint_power(const System& sys, const Workspace& ws, Index k,
@@ -31,11 +37,13 @@ double constraint_power(const System& sys, const Workspace& ws, Index k,
 }
 
 ConstrainedOde::ConstrainedOde(const System& sys, Workspace& ws, bool quiet,
-                               double off_manifold_tolerance)
+                               double off_manifold_tolerance, const Quadratures* quad)
     : sys_(sys),
       ws_(ws),
       n_(sys.coordinate_count()),
-      works_(sys, quiet),
+      works_(sys, quiet, quad),
+      quad_(works_.quadrature >= 0 ? quad : nullptr),
+      rare_(works_.drive >= 0 || quad_ != nullptr),
       share_(VectorXd::Zero(sys.coordinate_count())),
       violation_rows_(std::size_t(sys.constraint_rows()), 0),
       off_manifold_tolerance_(off_manifold_tolerance) {
@@ -100,6 +108,14 @@ void ConstrainedOde::set_window(double a, double b) {
   hi_ = std::isfinite(b) ? b - delta(b) : b;
 }
 
+// (out of line: a run without drives and quadratures, the common one, pays only for the test)
+void ConstrainedOde::rare_channels(const double* x, double* dxdt, double t, double drive) const {
+  double* w = dxdt + 2 * n_;
+  if (works_.drive >= 0) w[works_.drive] = works_.scale(works_.drive, ws_.energy_unit) * drive;
+  // z' = g(q, q', t, z), after the evaluation that g reads
+  if (quad_ != nullptr) quad_->rate(ws_, t, x + 2 * n_ + works_.quadrature, w + works_.quadrature);
+}
+
 bool ConstrainedOde::operator()(const double* x, double* dxdt, double t_in) {
   ++evaluations_;
   // one-sided at a breakpoint end of the segment
@@ -120,8 +136,8 @@ bool ConstrainedOde::operator()(const double* x, double* dxdt, double t_in) {
     for (Index i = 0; i < size(); ++i) dxdt[i] = std::numeric_limits<double>::quiet_NaN();
     return false;
   }
-  // x' = [q'; q''; q'ᵀ Qc_nonideal; q'ᵀ Qc_ideal − P_drive; P_drive; P_ext] (without non-ideal
-  // forces Qc_nonideal is zero, and so is its power)
+  // x' = [q'; q''; q'ᵀ Qc_nonideal; q'ᵀ Qc_ideal − P_drive; P_drive; P_ext; g] (without
+  // non-ideal forces Qc_nonideal is zero, and so is its power)
   Eigen::Map<VectorXd>(dxdt, n_) = qd;
   Eigen::Map<VectorXd>(dxdt + n_, n_) = ws_.qdd;
   double* w = dxdt + 2 * n_;
@@ -137,11 +153,13 @@ bool ConstrainedOde::operator()(const double* x, double* dxdt, double t_in) {
   if (works_.ideal >= 0) {
     w[works_.ideal] = works_.scale(works_.ideal, unit) * (qd.dot(ws_.Qc_ideal) - drive);
   }
-  if (works_.drive >= 0) w[works_.drive] = works_.scale(works_.drive, unit) * drive;
   if (works_.external >= 0) {
     w[works_.external] =
         works_.scale(works_.external, unit) * sys_.external_power(q, qd, t, ws_.callables.get());
   }
+  // P_drive and the quadratures z' = g(q, q', t, z) (one test for both: most runs have neither)
+  if (rare_) [[unlikely]]
+    rare_channels(x, dxdt, t, drive);
   return true;
 }
 

@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "simulation/observed_run.hpp"
 #include "simulation/sample_grid.hpp"
 #include "ukdyn/core/status.hpp"
 #include "ukdyn/core/system.hpp"
@@ -40,8 +41,9 @@ namespace ukdyn::detail {
 // components, which a component of negligible error would loosen (by √((N+1)/N)).
 struct WorkLayout {
   static constexpr double kQuietScale = 0x1p-32;
-  // quiet: scale the channels after W_nonideal (the explicit integrators)
-  explicit WorkLayout(const System& sys, bool quiet = true);
+  // quiet: scale the channels after W_nonideal (the explicit integrators); quad: integrals
+  // after the work channels (channels quadrature … count − 1), or null
+  explicit WorkLayout(const System& sys, bool quiet = true, const Quadratures* quad = nullptr);
   // the scale of channel c in x: 1 / unit for W_nonideal, and for every channel when not
   // quiet, kQuietScale / unit for the others; unit the run's energy unit (a power of two,
   // Workspace::energy_unit from set_run_scales), so that the step-size control weighs the
@@ -52,8 +54,10 @@ struct WorkLayout {
   }
   bool quiet = true;
   Index nonideal = 0, ideal = -1, drive = -1, external = -1;
-  Index count = 1;            // number of channels
-  std::vector<Index> drives;  // indices of the drive constraints
+  Index quadrature = -1;            // the first of the quadratures' channels (Quadratures), or −1
+  Index quadrature_velocities = 0;  // how many of them the error control weighs as q'
+  Index count = 1;                  // number of channels (the quadratures' included)
+  std::vector<Index> drives;        // indices of the drive constraints
 };
 
 // The power of constraint k's share of the ideal force along q', q'ᵀ A_kᵀ lambda_k, after
@@ -61,10 +65,10 @@ struct WorkLayout {
 double constraint_power(const System& sys, const Workspace& ws, Index k,
                         const Eigen::Ref<const VectorXd>& qd, VectorXd& scratch);
 
-// The first-order system x' = f(t, x) of a constrained mechanical system, x = [q; q'; W]
-// (2n + WorkLayout::count), W the work channels:
-//   f = [q'; q''; q'ᵀ Qc_nonideal; q'ᵀ Qc_ideal − P_drive; P_drive; P_ext],  q'' from
-//   forward_dynamics (absent channels left out).
+// The first-order system x' = f(t, x) of a constrained mechanical system, x = [q; q'; W; z]
+// (2n + WorkLayout::count), W the work channels, z the caller's quadratures (if any):
+//   f = [q'; q''; q'ᵀ Qc_nonideal; q'ᵀ Qc_ideal − P_drive; P_drive; P_ext; g],  q'' from
+//   forward_dynamics (absent channels left out), g = Quadratures::rate.
 // A failed evaluation (status not kOk) fills dxdt with NaN, is remembered, and makes
 // operator() return false; integrators must stop at once when it does.
 //
@@ -81,8 +85,9 @@ class ConstrainedOde {
   // quiet: see WorkLayout (true for the explicit integrators, false for BDF);
   // off_manifold_tolerance: a row violated by more than this (|phi| or |phi'|, |psi|; the
   // projection tolerance) puts the state off the manifold; 0 or NaN: never accept
+  // quad: integrals integrated after the work channels (Quadratures), or null
   ConstrainedOde(const System& sys, Workspace& ws, bool quiet = true,
-                 double off_manifold_tolerance = 0.0);
+                 double off_manifold_tolerance = 0.0, const Quadratures* quad = nullptr);
 
   // dxdt = f(t, x) for x, dxdt of size(); false when the evaluation failed
   bool operator()(const double* x, double* dxdt, double t);
@@ -120,12 +125,17 @@ class ConstrainedOde {
   // Overwrites ws.phi, ws.phi_dot, ws.tmp_m; allocates nothing.
   bool explained_by_violation(const Eigen::Ref<const VectorXd>& q,
                               const Eigen::Ref<const VectorXd>& qd, double t);
+  // dxdt's P_drive (`drive`) and quadratures z' = g at x (Quadratures::rate), after the
+  // evaluation at (x, t)
+  [[gnu::noinline]] void rare_channels(const double* x, double* dxdt, double t, double drive) const;
   static constexpr double kResidualShare = 1e-3;
 
   const System& sys_;
   Workspace& ws_;
   Index n_;
   WorkLayout works_;
+  const Quadratures* quad_ = nullptr;
+  bool rare_ = false;                          // drives or quadratures: rare_channels
   VectorXd share_;                             // (n) scratch: A_kᵀ lambda_k
   std::vector<unsigned char> violation_rows_;  // (m) row i has a violation (not acceleration form)
   double off_manifold_tolerance_ = 0.0;

@@ -261,16 +261,19 @@ SegmentResult integrate_bdf(ConstrainedOde& ode, std::vector<double>& x, double 
   require(CVodeSetErrHandlerFn(mem, record_error, &cb), "CVodeSetErrHandlerFn", cb);
   require(CVodeInit(mem, rhs, t0, y.get()), "CVodeInit", cb);
   require(CVodeSetUserData(mem, &cb), "CVodeSetUserData", cb);
-  // atol on q' times the run's rate decade (Workspace::rate_unit; as the explicit methods'
-  // StepControl), a vector of tolerances only where that is not 1
+  // atol on q' (and a caller's quadratures) times the run's rate decade (Workspace::rate_unit;
+  // as the explicit methods' StepControl), a vector of tolerances only where that is not 1
   VectorPtr atol;
   if (const double rate = ode.workspace().rate_unit; rate != 1.0) {
     atol.reset(N_VNew_Serial(sunindextype(size), context.get()));
     UKDYN_CHECK(atol != nullptr, "integrate_bdf: N_VNew_Serial failed");
     double* a = N_VGetArrayPointer(atol.get());
     const Index n = ode.coordinate_count();
+    // (and on the quadratures z, as on q')
+    const Index z = ode.works().quadrature >= 0 ? 2 * n + ode.works().quadrature : size;
+    const Index z_end = z + ode.works().quadrature_velocities;
     for (Index i = 0; i < size; ++i)
-      a[i] = i >= n && i < 2 * n ? options.atol * rate : options.atol;
+      a[i] = (i >= n && i < 2 * n) || (i >= z && i < z_end) ? options.atol * rate : options.atol;
     require(CVodeSVtolerances(mem, options.rtol, atol.get()), "CVodeSVtolerances", cb);
   } else {
     require(CVodeSStolerances(mem, options.rtol, options.atol), "CVodeSStolerances", cb);

@@ -35,15 +35,19 @@ struct StageProbe {
   // h·ρ ≈ h ‖f7 − f6‖ / ‖y7 − y6‖ (0 when the two stages coincide), over [q; q'] only: W is
   // a quadrature (W' = q'ᵀ Qc_nonideal, no component depends on W, its Jacobian column is
   // zero) that adds no stiffness, but its smooth change can swamp y7 − y6 (a damper written
-  // as a non-ideal force C: W' = −c q'² is large while the stiff part of y7 − y6 is tiny)
+  // as a non-ideal force C: W' = −c q'² is large while the stiff part of y7 − y6 is tiny).
+  // (In fact over every component but the last work channel, `skip`; a caller's quadratures,
+  // after it, count as the coordinates they were once: a controlled run's integrals)
   double h_rho(double h) const {
     double num = 0.0, den = 0.0;
-    for (std::size_t i = 0; i + 1 < x_last.size(); ++i) {
+    for (std::size_t i = 0; i < x_last.size(); ++i) {
+      if (i == skip) continue;
       num += (f_last[i] - f_prev[i]) * (f_last[i] - f_prev[i]);
       den += (x_last[i] - x_prev[i]) * (x_last[i] - x_prev[i]);
     }
     return den > 0.0 ? std::abs(h) * std::sqrt(num / den) : 0.0;
   }
+  std::size_t skip = 0;  // the last work channel's index in x
 };
 
 // Projected stages near a singular configuration. Off the constraints, q'' carries a stage
@@ -161,10 +165,12 @@ SegmentResult& stop(SegmentResult& r, Status s, double t, std::string message = 
 // there (docs/simulation.md, "Singular configurations").
 class StepControl {
  public:
-  // x = [q; q'; W] with n coordinates; rate: the run's rate decade (Workspace::rate_unit), the
-  // atol on q' being o.atol · rate (docs/simulation.md, "Scales and tolerances")
+  // x = [q; q'; W; z] with n coordinates; rate: the run's rate decade (Workspace::rate_unit),
+  // the atol on q' and on the quadratures weighed as q' being o.atol · rate (docs/simulation.md,
+  // "Scales and tolerances"; a controlled run's integrals, which were q' of auxiliary
+  // coordinates once)
   StepControl(const SimulationOptions& o, SegmentHooks& hooks, std::size_t size, Index n,
-              double rate)
+              double rate, const WorkLayout& works)
       : rtol_(o.rtol),
         atol_(size, o.atol),
         adjuster_(o.max_step > 0 ? o.max_step : 0.0),
@@ -172,6 +178,12 @@ class StepControl {
         err_(size),
         err_normal_(size) {
     for (Index i = n; i < 2 * n; ++i) atol_[std::size_t(i)] = o.atol * rate;
+    if (works.quadrature >= 0) {
+      const Index z = 2 * n + works.quadrature;
+      for (Index i = z; i < z + works.quadrature_velocities; ++i) {
+        atol_[std::size_t(i)] = o.atol * rate;
+      }
+    }
   }
 
   // the local error estimate the next attempt writes
@@ -351,12 +363,18 @@ SegmentResult dopri5(ConstrainedOde& ode, State& x, double t0, double t1,
   // the stiffness test reads the last two stages of each step (for the switch, and for the
   // diagnosis of a collapsed step size when the switch is off)
   StageProbe probe;
+  {
+    const WorkLayout& w = ode.works();
+    probe.skip =
+        std::size_t(2 * ode.coordinate_count() + (w.quadrature >= 0 ? w.quadrature : w.count) - 1);
+  }
   StiffnessTest stiffness;
   StageProjection projection(hooks, x.size());
   const OdeFn fn{&ode, &probe, &projection};
   using Stepper = odeint::runge_kutta_dopri5<State>;
   Stepper stepper;
-  StepControl control(o, hooks, x.size(), ode.coordinate_count(), ode.workspace().rate_unit);
+  StepControl control(o, hooks, x.size(), ode.coordinate_count(), ode.workspace().rate_unit,
+                      ode.works());
   State dxdt(x.size()), x_old(x.size()), dxdt_old(x.size()), out(x.size());
   fn(x, dxdt, t0);
   if (ode.failed()) return failed(ode, r, t0);
@@ -488,7 +506,8 @@ SegmentResult rkf78(ConstrainedOde& ode, State& x, double t0, double t1, const S
   const OdeFn fn{&ode, nullptr, &projection};
   using Stepper = odeint::runge_kutta_fehlberg78<State>;
   Stepper stepper;
-  StepControl control(o, hooks, x.size(), ode.coordinate_count(), ode.workspace().rate_unit);
+  StepControl control(o, hooks, x.size(), ode.coordinate_count(), ode.workspace().rate_unit,
+                      ode.works());
   std::size_t next = 0;
   double t = t0;
   int rejections = 0;

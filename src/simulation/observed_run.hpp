@@ -6,21 +6,38 @@
 // check's copies the run's), which its controller's model mirrors
 // (control/simulate_controlled.cpp, docs/contact.md "Contacts under control"). rate_unit > 0
 // replaces the rate decade that set_run_scales finds (Workspace::rate_unit): a controlled plant's
-// own, which the augmented system's auxiliary coordinates (unit masses, integrands as forces)
-// would blur.
+// own. `quad`: integrals of the caller's (Quadratures, below) integrated with the run.
 #pragma once
 
 #include <functional>
+#include <vector>
 
 #include "dynamics/internal.hpp"
 
 namespace ukdyn::detail {
 
+// A caller's integrals z' = g(q, q', t, z), integrated after the work channels in
+// x = [q; q'; W; z] with the plant's own stages and error control (a controlled run's work,
+// effort and bounds of the control: control/simulate_controlled.cpp). First-order: z is not a
+// coordinate, so M, the constraints and their factor stay the system's own. Stored unscaled;
+// the step-size control weighs the first `velocities` of them as it weighs q'
+// (atol · Workspace::rate_unit), the others as q (atol).
+struct Quadratures {
+  Index count = 0;
+  Index velocities = 0;  // (<= count)
+  // g after forward_dynamics evaluated ws at (q, q', t) (the callables' scratch holds that
+  // evaluation): z (count) in, z' (count) out
+  std::function<void(const Workspace& ws, double t, const double* z, double* z_rate)> rate;
+  std::vector<double> z0;      // (count) z at the start
+  std::vector<double> sample;  // (count) z at the sample being recorded (Run::record)
+};
+
+// quad: integrals integrated beside the run (Quadratures; null: none)
 Trajectory simulate_observed(const System& sys, const Eigen::Ref<const VectorXd>& q0,
                              const Eigen::Ref<const VectorXd>& qd0,
                              const SimulationOptions& options,
                              const std::function<void(const Workspace&)>& finished,
-                             const std::function<void(Workspace&)>& started,
-                             double rate_unit = 0.0);
+                             const std::function<void(Workspace&)>& started, double rate_unit = 0.0,
+                             Quadratures* quad = nullptr);
 
 }  // namespace ukdyn::detail

@@ -106,8 +106,10 @@ class Run {
     }
   }
   // `finished`: called with the workspace when the run ends (detail::simulate_observed)
+  // `quad`: a caller's integrals after the work channels (detail::Quadratures; null: none),
+  // whose values Run::record writes into quad->sample before each sample's sink
   Run(const System& sys, const SimulationOptions& o, Trajectory& traj,
-      std::function<void(const Workspace&)> finished = {});
+      std::function<void(const Workspace&)> finished = {}, Quadratures* quad = nullptr);
 
   Workspace& workspace() { return ws_; }
   // `started` is called with every workspace the run makes besides its own (the branch check's,
@@ -393,8 +395,9 @@ class Run {
   Trajectory& traj_;
   Index n_;
   VectorXd q_, qd_;
+  Quadratures* quad_;  // a caller's integrals after the work channels (may be null)
   // the work channels after q, q' in x (quiet unless BDF, see WorkLayout)
-  detail::WorkLayout works_ = detail::WorkLayout(sys_, o_.integrator != Integrator::kBDF);
+  detail::WorkLayout works_ = detail::WorkLayout(sys_, o_.integrator != Integrator::kBDF, quad_);
   std::vector<double> sample_ = std::vector<double>(std::size_t(2 * n_ + works_.count));
   ProjectionOptions projection_;
   bool projecting_ = false;

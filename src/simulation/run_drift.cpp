@@ -51,7 +51,7 @@ std::string describe_conflict(const ConstraintConflict& c, double t) {
 
 // `finished`: called with the workspace when the run ends (detail::simulate_observed)
 Run::Run(const System& sys, const SimulationOptions& o, Trajectory& traj,
-         std::function<void(const Workspace&)> finished)
+         std::function<void(const Workspace&)> finished, Quadratures* quad)
     : finished_(std::move(finished)),
       sys_(sys),
       o_(o),
@@ -59,7 +59,8 @@ Run::Run(const System& sys, const SimulationOptions& o, Trajectory& traj,
       traj_(traj),
       n_(sys.coordinate_count()),
       q_(n_),
-      qd_(n_) {
+      qd_(n_),
+      quad_(quad) {
   // a streamed run records each sample into one_, which the sink receives
   if (o.sample_sink) {
     one_.coordinate_names = traj.coordinate_names;

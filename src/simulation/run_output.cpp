@@ -97,6 +97,11 @@ Status Run::record(double t, const double* x, bool last) {
   out.work_control.push_back(works[4]);
   if (contacts_) out.work_impact.push_back(works[5]);
   out.energy_balance_residual.push_back(balance_.add(t, T, V, T + V, works));
+  // a caller's quadratures at this sample, for its sink
+  if (works_.quadrature >= 0) {
+    const auto z = sample_.begin() + 2 * n_ + works_.quadrature;
+    std::copy(z, z + quad_->count, quad_->sample.begin());
+  }
   // violations of each constraint
   evaluate_violations(sys_, ws_, q_, qd_, t);
   for (Index k = 0; k < sys_.constraint_count(); ++k) {

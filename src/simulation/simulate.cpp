@@ -147,7 +147,7 @@ Trajectory detail::simulate_observed(const System& sys, const Eigen::Ref<const V
                                      const SimulationOptions& given,
                                      const std::function<void(const Workspace&)>& finished,
                                      const std::function<void(Workspace&)>& started,
-                                     double rate_unit) {
+                                     double rate_unit, Quadratures* quad) {
   validate(sys, q0, qd0, given);
   check_settings(sys, given);
   // an rtol below roundoff is raised to the smallest one that means anything (with a note)
@@ -174,7 +174,8 @@ Trajectory detail::simulate_observed(const System& sys, const Eigen::Ref<const V
   traj.n = sys.coordinate_count();
   traj.m = sys.constraint_rows();
   if (!rtol_note.empty()) traj.stats.notes.push_back(rtol_note);
-  Run run(sys, o, traj, finished);
+  if (quad != nullptr) quad->sample.assign(std::size_t(quad->count), 0.0);
+  Run run(sys, o, traj, finished, quad);
   Workspace& ws = run.workspace();
   if (started) {
     started(ws);
@@ -189,8 +190,9 @@ Trajectory detail::simulate_observed(const System& sys, const Eigen::Ref<const V
   // (relative, unit-free)
   set_run_scales(sys, ws, q, qd, o.t_start, o.t_end - o.t_start);
   if (rate_unit > 0.0) ws.rate_unit = rate_unit;  // (a controlled plant's: observed_run.hpp)
-  detail::ContactEvents contacts(sys, ws, std::size_t(2 * n + detail::WorkLayout(sys).count),
-                                 o.t_end - o.t_start);
+  // (x = [q; q'; W; z], WorkLayout)
+  const detail::WorkLayout layout(sys, true, quad);
+  detail::ContactEvents contacts(sys, ws, std::size_t(2 * n + layout.count), o.t_end - o.t_start);
   // (false: a gap not finite at the start, reported below as the run's status)
   bool contacts_started = true;
   if (contacts.any()) {
@@ -227,14 +229,18 @@ Trajectory detail::simulate_observed(const System& sys, const Eigen::Ref<const V
     }
   }
 
-  // x = [q; q'; W] (the work channels start at 0)
-  std::vector<double> x(std::size_t(2 * n + detail::WorkLayout(sys).count), 0.0);
+  // x = [q; q'; W; z] (the work channels start at 0, the quadratures at theirs)
+  std::vector<double> x(std::size_t(2 * n + layout.count), 0.0);
   Eigen::Map<VectorXd>(x.data(), n) = q;
   Eigen::Map<VectorXd>(x.data() + n, n) = qd;
+  if (layout.quadrature >= 0) {
+    std::copy(quad->z0.begin(), quad->z0.end(), x.begin() + 2 * n + layout.quadrature);
+  }
 
   // (quiet work channels for the explicit integrators; stage states violated beyond the
   // projection tolerance may take the least-squares q'')
-  detail::ConstrainedOde ode(sys, ws, o.integrator != Integrator::kBDF, o.projection.tolerance);
+  detail::ConstrainedOde ode(sys, ws, o.integrator != Integrator::kBDF, o.projection.tolerance,
+                             quad);
   detail::SegmentHooks hooks;
   hooks.after_step = [&](double t, double* xs, bool& changed) {
     return run.after_step(t, xs, changed);

@@ -2,7 +2,8 @@
 // Exact tracking control (control/control.hpp) of physical plants: a pendulum whose rod is a
 // physical constraint while a requirement tracks its abscissa (with non-ideal plant forces and the
 // energy balance), spacecraft attitude tracking on a unit quaternion, and the synchronization of
-// two chaotic gyroscopes. (The Duffing oscillator, the triple pendulum, the laws against
+// two chaotic gyroscopes; the control's integrals (effort, work) against closed forms under
+// every integrator. (The Duffing oscillator, the triple pendulum, the laws against
 // independent methods, the robust term and the messages: test_control.cpp.)
 #include <algorithm>
 #include <cmath>
@@ -401,6 +402,51 @@ TEST(ControlPhysical, SampleKineticEnergyIsThePlantsAtEverySample) {
     worst = std::max(worst, std::abs(got - T) / T);
   }
   record("max_rel_diff_kinetic_energy", worst);
+}
+
+// ---------------------------------------------------------------------------------------------
+// the control's integrals: quadratures beside the plant (simulate_controlled), every integrator
+
+// A free unit mass x'' = Qc held at x_d = 0 from x(0) = 1 with e'' + 4 e' + 4 e = 0:
+//   e = (1 + 2t) e^{−2t},  e' = −4t e^{−2t},  Qc = e'' = (8t − 4) e^{−2t}, so
+//   effort   ∫ Qc² dt     = 2 − e^{−4T} (16T² − 8T + 2),
+//   work     ∫ Qc e' dt   = e'(T)² / 2 = 8T² e^{−4T},
+//   |work|   ∫ |Qc e'| dt = 4 e^{−2} − 8T² e^{−4T}  (T > 1/2: ½ e'² rises to 2 e^{−2} at t = 1/2).
+TEST(ControlIntegrals, EffortAndWorkAreTheClosedFormsUnderEveryIntegrator) {
+  const System mass =
+      SystemBuilder({"x"})
+          .mass_matrix(MatrixXd::Identity(1, 1))
+          .forces([](const Eigen::Ref<const VectorXd>&, const Eigen::Ref<const VectorXd>&, double,
+                     Eigen::Ref<VectorXd> Q) { Q.setZero(); })
+          .build();
+  const Controller ctrl =
+      ControllerBuilder(mass)
+          .require(holonomic("hold", 1, [](const auto& q, const auto&, auto& e) { e[0] = q[0]; }),
+                   ErrorDynamics::second_order(2.0, 1.0))
+          .build();
+  const double T = 2.0, decay = std::exp(-4.0 * T);
+  const double effort = 2.0 - decay * (16 * T * T - 8 * T + 2), work = 8 * T * T * decay,
+               work_abs = 4 * std::exp(-2.0) - 8 * T * T * decay;
+  for (const Integrator method :
+       {Integrator::kRK4, Integrator::kDopri5, Integrator::kRKF78, Integrator::kBDF}) {
+    SimulationOptions o = tight(T, 0.25);
+    o.integrator = method;
+    o.step = 1e-3;  // (rk4: a local error of order h⁵ per step)
+    const ControlledTrajectory run = simulate_controlled(ctrl, mass, vec({1.0}), vec({0.0}), o);
+    ASSERT_EQ(run.plant.stats.status, Status::kOk) << run.plant.stats.message;
+    ASSERT_EQ(run.plant.n, 1);  // (the integrals are no coordinates of the run)
+    const std::size_t last = std::size_t(run.samples() - 1);
+    ASSERT_DOUBLE_EQ(run.plant.t[last], T);
+    const double tol = method == Integrator::kBDF ? 1e-6 : 1e-9;
+    EXPECT_NEAR(run.control_effort[last], effort, tol * effort) << to_string(method);
+    EXPECT_NEAR(run.control_work[last], work, tol * effort) << to_string(method);
+    EXPECT_NEAR(run.plant.work_control[last], work, tol * effort) << to_string(method);
+    EXPECT_NEAR(run.control_work_abs[last], work_abs, tol * effort) << to_string(method);
+    EXPECT_NEAR(run.error[last], (1 + 2 * T) * std::exp(-2.0 * T), 1e-8) << to_string(method);
+    // the plant's energy balance with the control's work: T(t) − T(0) = W_control(t)
+    EXPECT_NEAR(run.plant.kinetic_energy[last], 0.5 * 16 * T * T * decay, tol * effort);
+    EXPECT_NEAR(run.plant.kinetic_energy[last], run.control_work[last], tol * effort);
+  }
 }
 
 }  // namespace UKDYN_TEST_FILE

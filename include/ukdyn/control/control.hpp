@@ -511,8 +511,8 @@ struct ControlledTrajectory {
 /// under the control force of `ctrl`, with simulate() and every option it has (integrators,
 /// drift control, outputs). The control's work, effort and absolute work, and with robust
 /// settings each row's Lyapunov bound V_i, are integrated with the motion as further states
-/// (unit-mass auxiliary coordinates driven by those integrands; they are stripped from the
-/// result). Ends of requirement activity intervals become breakpoints.
+/// (first-order quadratures beside q and q', under the integrator's error control; M stays the
+/// plant's). Ends of requirement activity intervals become breakpoints.
 /// A controller failure stops the run (plant.stats.status, .message say why); requirements not
 /// met are not a failure (control.not_met counts them).
 /// Unilateral contacts (docs/contact.md, "Contacts under control") close, hold, release and
