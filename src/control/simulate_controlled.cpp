@@ -409,15 +409,11 @@ System build_controlled(const std::shared_ptr<const ControlledPlant>& st, bool s
       spec.mu_static = c->mu_static;
       spec.coordinates = c->coordinates;
       if (c->kinematics) {
-        // a contact point's friction: its kinematics on the plant's part of the state
-        if (aux > 0) {
-          throw std::invalid_argument(
-              "ukdyn::simulate_controlled: Coulomb friction at contact point '" +
-              plant.nonideal_name(i) +
-              "' with a controller that has a state of its own is not supported yet");
-        }
-        spec.coordinates.clear();
-        spec.kinematics = c->kinematics;
+        // a contact point's friction: not under control yet (a sphere rolling under a pace
+        // requirement ran right, but its stuck phase took steps of ~5e-6 s: not understood)
+        throw std::invalid_argument(
+            "ukdyn::simulate_controlled: Coulomb friction at contact point '" +
+            plant.nonideal_name(i) + "' under a controller is not supported yet");
       }
       spec.regularization_velocity = c->eps;
       spec.name = plant.nonideal_name(i);
