@@ -117,7 +117,10 @@ NonIdealFn contact_point_law(const CoulombFriction& spec, const System& sys, Ind
     const auto v = ideal.sliding_velocity(contact);
     const double v2 = v.squaredNorm();
     const double N = ideal.contact_normal_force(contact, k);
-    const auto hint = ideal.slip_hint(self).head(v.size());
+    // (the column, named: a Block of the temporary Ref would outlive it — ASan, stack use
+    // after scope)
+    const Eigen::Ref<const VectorXd> hint_column = ideal.slip_hint(self);
+    const auto hint = hint_column.head(v.size());
     if (hint.squaredNorm() > 0.0) {
       // slipping from rest: mu N along the hint (see the coordinate path)
       if (v2 <= 1e4 * eps2 || ideal.slip_hint_held(self)) {
