@@ -3,6 +3,7 @@
 #include <cmath>
 #include <cstdio>
 #include <string>
+#include <vector>
 
 #include <ukdyn/control/control.hpp>
 #include <ukdyn/modelfile/model.hpp>
@@ -38,13 +39,22 @@ int check_command(const ModelSource& source) {
   std::printf("  coordinates         %lld  (%s)\n", static_cast<long long>(r.coordinates),
               terminal_text(join(sys.coordinate_names())).c_str());
   std::printf("  constraints         %lld\n", static_cast<long long>(sys.constraint_count()));
+  bool contacts = false;
   for (const Constraint& c : sys.constraints()) {
+    if (c.is_unilateral()) {
+      // a contact (docs/contact.md): one-sided, its gap >= 0, with its restitution
+      contacts = true;
+      std::printf("    %-20s unilateral contact (gap >= 0, pushes only), restitution %s\n",
+                  terminal_text(c.name(), false).c_str(), format_number(c.restitution()).c_str());
+      continue;
+    }
     std::printf("    %-20s %s, %lld row%s%s\n", terminal_text(c.name(), false).c_str(),
                 kind_name(c.kind()), static_cast<long long>(c.rows()), c.rows() == 1 ? "" : "s",
                 c.is_active(t) ? "" : ", inactive at t_start");
   }
-  std::printf("  constraint rows     %lld  (active at t = %g)\n",
-              static_cast<long long>(r.constraint_rows), t);
+  std::printf("  constraint rows     %lld  (active at t = %g%s)\n",
+              static_cast<long long>(r.constraint_rows), t,
+              contacts ? "; the contacts that touch, not the open ones" : "");
   std::printf("  rank of A           %lld\n", static_cast<long long>(r.rank));
   std::printf("  degrees of freedom  %lld\n", static_cast<long long>(r.degrees_of_freedom));
   if (r.redundant.empty()) {
@@ -62,10 +72,23 @@ int check_command(const ModelSource& source) {
       std::printf("  redundant constraints  none\n");
     }
   } else {
-    std::printf(
-        "  redundant constraints  %s  (their rows add nothing to the rank of the ones "
-        "before them; the motion is the same without them)\n",
-        terminal_text(join(r.redundant)).c_str());
+    // a contact's row can be redundant where it touches (a box on four corners) and still not
+    // be removable: a one-sided support matters as soon as the motion would lift another one
+    std::vector<std::string> bilateral, unilateral;
+    for (const std::string& name : r.redundant)
+      (sys.constraint(sys.constraint_index(name)).is_unilateral() ? unilateral : bilateral)
+          .push_back(name);
+    if (!bilateral.empty())
+      std::printf(
+          "  redundant constraints  %s  (their rows add nothing to the rank of the ones "
+          "before them; the motion is the same without them)\n",
+          terminal_text(join(bilateral)).c_str());
+    if (!unilateral.empty())
+      std::printf(
+          "  redundant contacts  %s  (touching, their rows add nothing to the rank of the ones "
+          "before them here; a one-sided contact still matters once another would lift, and "
+          "how the redundant contacts share the load is not determined: docs/contact.md)\n",
+          terminal_text(join(unilateral)).c_str());
   }
   if (!r.contradictory.empty()) {
     std::printf(

@@ -57,6 +57,21 @@ def test_impact_times_and_speeds_are_the_closed_forms(ball):
         assert e["speed_after"] == pytest.approx(E ** k * V0, rel=1e-8)
 
 
+def test_read_hdf5_gives_the_contact_events_of_the_run(ball, tmp_path):
+    """A Result read back from its HDF5 file (ukdyn.read_hdf5) has the run's impacts and rest,
+    the same as the live one's (before, its contact_events was empty: a silent "no impact")."""
+    path = tmp_path / "ball.h5"
+    ball.to_hdf5(path)
+    back, summary = ukdyn.read_hdf5(path)
+    assert len(summary["contact_events"]) == len(ball.contact_events) > 15
+    assert len(back.contact_events) == len(ball.contact_events)
+    for a, b in zip(back.contact_events, ball.contact_events):
+        assert a["contact"] == b["contact"] == "floor"
+        assert a["kind"] == b["kind"]
+        assert a["t"] == b["t"]
+    assert _impacts(back)[0]["t"] == pytest.approx(T0, rel=1e-9)
+
+
 def test_apex_heights_are_e_to_the_2k_h0(ball):
     """Between impacts k and k + 1 the flight keeps y + y'^2 / (2 g) = e^(2k) h0 (its apex), at
     every sample; the highest sample of the flight is within (g/2) (dt/2)^2 below it."""
@@ -378,6 +393,56 @@ def test_the_viewer_draws_the_friction_at_a_contact(browser, incline, tmp_path):
     page.js("ukdyn.show('contact', true)")
     flying = next(i for i, v in enumerate(t) if v >= T_OFF + 0.3)
     page.js("ukdyn.setFrame(arguments[0])", flying)
+    assert _mask(page.pixels(), "#9b30ff").sum() == 0
+    assert page.errors() == []
+
+
+@pytest.fixture(scope="module")
+def rolling_ball():
+    return ukdyn.load("ball_rolls_after_sliding").simulate()
+
+
+ROLL_T = 2 * 4.0 / (7 * 0.2 * G)  # the ball (v0 = 4, mu = 0.2, m = 6) rolls from t* = 2 v0/(7 mu g)
+
+
+def test_viewer_data_of_the_friction_at_a_contact_point(rolling_ball):
+    """Friction at a body's contact point (docs/viewer.md): the run's own columns
+    visual.contact.floor.fx, fy, fz, read with the identity map — -mu m g along x while the ball
+    slides, none once it rolls."""
+    (c,) = rolling_ball.scene["contacts"]
+    assert c["friction"]["columns"] == [["visual.contact.floor.f" + a] for a in "xyz"]
+    assert c["friction"]["map"] == [[1, 0, 0], [0, 1, 0], [0, 0, 1]]
+    data = viewer.scene_data(rolling_ball.scene, rolling_ball.names, rolling_ball._columns,
+                             contact_events=rolling_ball.contact_events)
+    (contact,) = data["contacts"]
+    t = np.array(data["t"])
+    fx, fy, fz = (np.array(v, dtype=float) for v in contact["friction_force"])
+    sliding, rolling = t < ROLL_T - 0.01, t > ROLL_T + 0.01
+    assert sliding.sum() > 10 and rolling.sum() > 10
+    np.testing.assert_allclose(fx[sliding], -0.2 * 6 * G, rtol=1e-3)
+    np.testing.assert_allclose(fx[rolling], 0.0, atol=1e-3)
+    np.testing.assert_allclose(fy, 0.0, atol=1e-9)
+    np.testing.assert_allclose(fz, 0.0, atol=1e-9)
+    # one force per contact: the contact is not also drawn as a joint
+    assert data["joints"] == []
+
+
+def test_the_viewer_draws_the_friction_at_a_contact_point(browser, rolling_ball,  # noqa: F811
+                                                           tmp_path):
+    """The purple friction arrow at the ball's contact point while it slides, none once it
+    rolls."""
+    from test_viewer import _mask
+    path = tmp_path / "rolling.html"
+    rolling_ball.save_animation(path)
+    page = Page(browser, path)
+    assert page.errors() == []
+    t = page.js("return ukdyn.data.t")
+    page.js("ukdyn.setFrame(arguments[0])", next(i for i, v in enumerate(t) if v >= 0.2))
+    page.save("rolling_ball_friction.png")
+    # (a short arrow, mu = 0.2 of the normal force's, partly behind the ball)
+    assert _mask(page.pixels(), "#9b30ff").sum() > 5
+    assert "friction force at floor: 11.77 N" in page.js("return document.body.innerText")
+    page.js("ukdyn.setFrame(arguments[0])", next(i for i, v in enumerate(t) if v >= ROLL_T + 0.3))
     assert _mask(page.pixels(), "#9b30ff").sum() == 0
     assert page.errors() == []
 

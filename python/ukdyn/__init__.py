@@ -51,6 +51,10 @@ def read_hdf5(path: str) -> "tuple[Result, dict]":
     summary = _json.loads(summary_text) if summary_text else {}
     coordinates = [n for n in names if n + "_dot" in names and n + "_ddot" in names]
     stats = {k: v for k, v in summary.items() if not isinstance(v, (dict, list))}
+    # the lists a live run's statistics hold too (Result.contact_events reads them)
+    for key in ("contact_events", "notes"):
+        if isinstance(summary.get(key), list):
+            stats[key] = summary[key]
     units = summary.get("units") if isinstance(summary.get("units"), dict) else None
     name = (summary.get("provenance") or {}).get("model_name") or ""
     return Result(names, columns, stats, summary.get("control"), coordinates, units,

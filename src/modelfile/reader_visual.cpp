@@ -304,8 +304,11 @@ void Reader::read_visual(const YAML::Node& root, Model& model, std::vector<Expr>
       if (zero)
         fail(normal, what + ": normal is zero; it must give the direction the contact pushes",
              contact_example);
-      // (it replaces the drawn contact of a contacts: entry of its name)
+      // (it replaces the drawn contact of a contacts: entry of its name, whose friction axes it
+      // keeps: the friction at a contact point is drawn from them)
       auto& drawn = model.visual.contacts;
+      for (const VisualContact& d : drawn)
+        if (d.name == c.name) c.axes = d.axes;
       drawn.erase(std::remove_if(drawn.begin(), drawn.end(),
                                  [&](const VisualContact& d) { return d.name == c.name; }),
                   drawn.end());

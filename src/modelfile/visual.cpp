@@ -76,13 +76,28 @@ nlohmann::json contact_friction(const Model& model, const VisualContact& c) {
   const FrictionContact* fc = nullptr;
   for (const FrictionContact& f : sys.friction_contacts())
     if (f.normal_constraint == constraint && f.mu > 0.0) fc = &f;
-  // (a contact point's friction, ContactKinematics, is not drawn yet: its generalized force is
-  // J_Pᵀ f on the body's coordinates, which this map from the coordinates does not invert)
-  if (!fc || fc->kinematics) return nullptr;
+  if (!fc) return nullptr;
   const std::string stick = sys.constraint(fc->stick_constraint).name();
+  static const char* axes[] = {"x", "y", "z"};
+  if (fc->kinematics) {
+    // a contact point's friction (ContactKinematics): its force J_Pᵀ f on the coordinates does
+    // not map back from them; run_model writes f itself, visual.contact.<name>.fx, ... (the
+    // contact's axes known, VisualContact::axes)
+    if (!c.axes) return nullptr;
+    nlohmann::json map = nlohmann::json::array(), columns = nlohmann::json::array();
+    for (int a = 0; a < c.dimensions; ++a) {
+      nlohmann::json row = nlohmann::json::array();
+      for (int b = 0; b < c.dimensions; ++b) row.push_back(a == b ? 1.0 : 0.0);
+      map.push_back(row);
+      columns.push_back({"visual.contact." + c.name + ".f" + axes[a]});
+    }
+    return {{"name", stick.substr(std::string("stick.").size())},
+            {"mu", fc->mu},
+            {"columns", columns},
+            {"map", map}};
+  }
   const std::size_t nc = fc->coordinates.size();
   // the outputs of the contact point's axes
-  static const char* axes[] = {"x", "y", "z"};
   std::vector<std::size_t> at;
   for (int a = 0; a < c.dimensions; ++a) {
     const std::string column = "visual.contact." + c.name + "." + axes[a];
@@ -169,6 +184,11 @@ std::string viewer_scene_json(const Model& model) {
       return id == mb::kGround ? std::string("ground") : m.bodies.at(std::size_t(id)).name;
     };
     for (const mb::JointInfo& j : m.joints) {
+      // (a contact is drawn as a contact, with its whole normal force lambda_total and its
+      // friction, not as a joint with its ideal share reaction.<contact>.*)
+      if (j.type == mb::JointType::kContact || j.type == mb::JointType::kContactDisk ||
+          j.type == mb::JointType::kContactSpheres)
+        continue;
       joints.push_back({{"name", j.name},
                         {"type", mb::to_string(j.type)},
                         {"parent", body_name(j.parent)},

@@ -6,10 +6,12 @@
 // and the plane's normal, in the world at q.
 #include "modelfile/visual_contacts.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <string>
 #include <utility>
 
+#include "ukdyn/core/system.hpp"
 #include "ukdyn/modelfile/model.hpp"
 
 namespace ukdyn::detail {
@@ -25,6 +27,63 @@ Vector3d contact_point(const Vector3d& c, const Vector3d& n, double r, const Vec
   const Vector3d down = n - n.dot(*a) * *a;
   const double h = down.norm();
   return h > 0.0 ? Vector3d(c - (r / h) * down) : c;
+}
+
+// The columns visual.contact.<name>.fx, .fy (, .fz) of contact c's Coulomb friction at a
+// contact point (VisualContact::axes), at the samples of traj: f_W = Σ f_i t_i with, in the
+// contact's tangent axes, f = the stick constraint's multipliers while it holds (at a sliding
+// speed |v| = |T q'| within the located stop speed 100 eps), else the sliding law
+// f = −mu N v / sqrt(|v|² + eps²) with N = |lambda_total.<name>| (a contact's gap has a unit
+// normal: its multiplier is the normal force). Cost O(samples · cost of the kinematics).
+void add_friction_columns(const Model& model, const Trajectory& traj, const VisualContact& c,
+                          std::vector<CsvColumn>& out) {
+  if (!c.axes) return;
+  const System& sys = model.system;
+  const FrictionContact* fc = nullptr;
+  for (const FrictionContact& f : sys.friction_contacts())
+    if (f.kinematics && sys.constraint(f.normal_constraint).name() == c.name) fc = &f;
+  if (fc == nullptr) return;
+  const auto u = std::find(traj.unilateral.begin(), traj.unilateral.end(), fc->normal_constraint);
+  if (u == traj.unilateral.end()) return;
+  const std::size_t un = traj.unilateral.size(), ui = std::size_t(u - traj.unilateral.begin());
+  const Index N = traj.samples(), n = traj.n, d = fc->kinematics.tangents,
+              stick = sys.row_offset(fc->stick_constraint);
+  const std::vector<Index>& columns = fc->kinematics.columns;
+  std::unique_ptr<ConstraintScratch> scratch;
+  if (fc->kinematics.make_scratch) scratch = fc->kinematics.make_scratch(n);
+  // the stick rows are kappa T (the unit of the contact's gap row: 1 in SI units), so the
+  // holding force is kappa lambda.stick: kappa from the stick constraint's own rows
+  const ConstraintModel& stick_rows = sys.constraint(fc->stick_constraint).model();
+  const std::unique_ptr<ConstraintScratch> stick_scratch = stick_rows.make_scratch(n);
+  MatrixXd J(1 + d, Index(columns.size())), A_stick(d, Index(stick_rows.columns().size()));
+  VectorXd bias(1 + d), b_stick(d), qd_c(Index(columns.size()));
+  static const char* const kParts[] = {"fx", "fy", "fz"};
+  std::vector<CsvColumn> cols;
+  for (int k = 0; k < c.dimensions; ++k)
+    cols.push_back(
+        {"visual.contact." + c.name + "." + kParts[k], std::vector<double>(std::size_t(N))});
+  Matrix3d axes;
+  for (Index i = 0; i < N; ++i) {
+    const Eigen::Map<const VectorXd> q(traj.q.data() + i * n, n), qd(traj.qd.data() + i * n, n);
+    const double t = traj.t[std::size_t(i)];
+    fc->kinematics.evaluate(q, qd, t, scratch.get(), J, bias);
+    for (std::size_t j = 0; j < columns.size(); ++j) qd_c[Index(j)] = qd[columns[j]];
+    Vector3d v = Vector3d::Zero(), f = Vector3d::Zero();  // in the tangent axes
+    for (Index a = 0; a < d; ++a) v[a] = J.row(1 + a).dot(qd_c);
+    if (v.norm() <= 100.0 * fc->eps) {
+      for (Index a = 0; a < d; ++a) f[a] = traj.lambda[std::size_t(i * traj.m + stick + a)];
+      stick_rows.acceleration_form_local(q, qd, t, stick_scratch.get(), A_stick, b_stick);
+      const double row = J.row(1).norm();
+      f *= row > 0.0 ? A_stick.row(0).norm() / row : 1.0;
+    } else {
+      const double normal = std::abs(traj.lambda_total[std::size_t(i) * un + ui]);
+      f = -fc->mu * normal / std::sqrt(v.squaredNorm() + fc->eps * fc->eps) * v;
+    }
+    c.axes(q, axes);
+    const Vector3d fw = f[0] * axes.col(1) + f[1] * axes.col(2);
+    for (int k = 0; k < c.dimensions; ++k) cols[std::size_t(k)].values[std::size_t(i)] = fw[k];
+  }
+  for (CsvColumn& col : cols) out.push_back(std::move(col));
 }
 
 }  // namespace
@@ -49,6 +108,16 @@ VisualContact robot_visual_contact(std::string name, std::shared_ptr<const tree:
     const Vector3d centre = at.link < 0 ? at.p : tree::world_point(d, at.link, at.p);
     const Vector3d a_W = R_W(at.link) * a_L;
     point = contact_point(centre, normal, radius, disk ? &a_W : nullptr);
+  };
+  // the friction's axes (tree::contact_kinematics): the plane's z, x, y in the world
+  c.axes = [tree, plane](const Eigen::Ref<const VectorXd>& q, Matrix3d& axes) {
+    Matrix3d R = plane.R;
+    if (plane.link >= 0) {
+      tree::TreeData d(*tree);
+      tree::forward_kinematics(*tree, q, d);
+      R = d.R_WL[std::size_t(plane.link)] * plane.R;
+    }
+    axes << R.col(2), R.col(0), R.col(1);
   };
   return c;
 }
@@ -87,6 +156,19 @@ VisualContact bodies_visual_contact(std::shared_ptr<const mb::MultibodyModel> mo
     const Vector3d a_W = rotation(C) * a_C;
     point = contact_point(centre, normal, radius, disk ? &a_W : nullptr);
   };
+  // the friction's axes (mb::detail::contact_kinematics): the plane's normal and its frame's x
+  // (and y) axes, turned with the plane's body
+  const bool planar = joint.planar;
+  c.axes = [model, P, fp, planar](const Eigen::Ref<const VectorXd>& q, Matrix3d& axes) {
+    const Matrix3d R = P == mb::kGround
+                           ? fp.R
+                           : Matrix3d(mb::body_pose(*model, q, P).R_WB.toRotationMatrix() * fp.R);
+    if (planar) {
+      axes << R.col(1).normalized(), R.col(0).normalized(), Vector3d::Zero();
+    } else {
+      axes << R.col(2).normalized(), R.col(0).normalized(), R.col(1).normalized();
+    }
+  };
   return c;
 }
 
@@ -94,6 +176,7 @@ void add_contact_columns(const Model& model, const Trajectory& traj, std::vector
   const Index N = traj.samples(), n = traj.n;
   static const char* const kParts[] = {"x", "y", "z", "nx", "ny", "nz"};
   for (const VisualContact& c : model.visual.contacts) {
+    add_friction_columns(model, traj, c, out);
     if (!c.geometry) continue;
     // the point's components, then the normal's (as visual: contacts: orders them)
     const int dims = c.dimensions;

@@ -143,6 +143,10 @@ double ContactEvents::find(double t0, const double* x0, double t1, const double*
         nonfinite.clear();
       } else if (!nonfinite.empty()) {
         te = tf;
+      } else if (const double tm = dip(t0, gd0, t1, gd1, dense, Index(i), level); !std::isnan(tm)) {
+        // a gap that closes and opens again within the step (two spheres passing through each
+        // other in free flight, where one smooth step spans the whole overlap)
+        te = g0 < level ? t0 : locate(t0, tm, dense, Index(i), true, level);
       } else {
         continue;
       }
@@ -160,6 +164,23 @@ double ContactEvents::find(double t0, const double* x0, double t1, const double*
     }
   }
   return first;
+}
+
+double ContactEvents::dip(double t0, double gd0, double t1, double gd1,
+                          const SegmentHooks::Dense& dense, Index i, double level) {
+  // the gap falls at t0 and rises at t1: bisection on the sign of its rate g' along the dense
+  // output for the minimum in between (to 1e-10 of the step: the gap is flat there)
+  if (!(gd0 < 0.0 && gd1 > 0.0)) return kNaN;
+  double lo = t0, hi = t1, g = 0.0, gd = 0.0;
+  for (int it = 0; it < 40 && hi - lo > 1e-10 * (t1 - t0); ++it) {
+    const double mid = 0.5 * (lo + hi);
+    dense(mid, xs_.data());
+    if (!finite_gap(i, mid, xs_.data(), g, gd)) return kNaN;
+    (gd < 0.0 ? lo : hi) = mid;
+  }
+  dense(lo, xs_.data());
+  if (!finite_gap(i, lo, xs_.data(), g, gd)) return kNaN;
+  return g < level ? lo : kNaN;
 }
 
 bool ContactEvents::finite_gap(Index i, double t, const double* x, double& g, double& gd) {

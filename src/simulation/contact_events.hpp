@@ -74,6 +74,12 @@ class ContactEvents {
                 double level);
   // f of contact k at (t, x): its gap, or its multiplier in the run's evaluation
   double value(Index k, bool gap, double t, const double* x);
+  // a dip of open contact k's gap within a step that ends open: when its rate falls at t0
+  // (gd0 < 0) and rises at t1 (gd1 > 0), the time of the gap's minimum in between (bisection
+  // on the rate's sign along the dense output) if the gap there is below level, else NaN.
+  // Cost ≤ 41 gap evaluations, only for such steps
+  double dip(double t0, double gd0, double t1, double gd1, const SegmentHooks::Dense& dense,
+             Index k, double level);
   // contact k's gap g and gap rate gd at (t, x); true when both are finite
   bool finite_gap(Index k, double t, const double* x, double& g, double& gd);
   // the last time in [t0, t1] where open contact k's gap and rate are finite, by bisection on

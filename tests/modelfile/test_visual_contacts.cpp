@@ -158,5 +158,158 @@ output: {every: 0.01}
   }
 }
 
+// Coulomb friction at a contact point (ContactKinematics) is drawn from the columns
+// visual.contact.<name>.fx, .fy (, .fz) that run_model writes: the friction force in the world,
+// f = −mu N v/|v| while the contact slides, the stick constraint's multipliers along the
+// contact's tangents while it holds. The scene's friction entry reads them with the identity map.
+double friction_column(const ModelRun& run, const std::string& contact, const char* part,
+                       std::size_t i) {
+  return column(run, "visual.contact." + contact + ".f" + part).values[i];
+}
+
+void expect_identity_friction(const Model& m, const std::string& contact, int dims) {
+  const nlohmann::json scene = nlohmann::json::parse(viewer_scene_json(m));
+  for (const auto& c : scene.at("contacts")) {
+    if (c.at("name") != contact) continue;
+    ASSERT_TRUE(c.contains("friction")) << contact;
+    const auto& f = c.at("friction");
+    ASSERT_EQ(f.at("columns").size(), std::size_t(dims));
+    for (int a = 0; a < dims; ++a) {
+      EXPECT_EQ(f.at("columns")[std::size_t(a)],
+                nlohmann::json::array({"visual.contact." + contact + ".f" + "xyz"[a]}));
+      for (int b = 0; b < dims; ++b)
+        EXPECT_EQ(f.at("map")[std::size_t(a)][std::size_t(b)].get<double>(), a == b ? 1.0 : 0.0);
+    }
+    return;
+  }
+  ADD_FAILURE() << "no contact " << contact << " in the scene";
+}
+
+TEST(VisualContacts, FrictionAtAContactPointIsItsWorldForceSlidingAndHeld) {
+  constexpr double g = 9.81;
+  {
+    // examples/models/ball_rolls_after_sliding.yaml (m = 6, v0 = 4, mu = 0.2; its hand-written
+    // visual: contacts: entry keeps the friction's axes): f = (−mu m g, 0, 0) until the sphere
+    // rolls at t* = 2 v0 / (7 mu g), then (nearly) none
+    const Model m = load_model(kExamples + "/ball_rolls_after_sliding.yaml");
+    expect_identity_friction(m, "floor", 3);
+    // drawn once, as a contact (not also as a joint with its ideal share reaction.floor.*)
+    EXPECT_TRUE(nlohmann::json::parse(viewer_scene_json(m)).at("joints").empty());
+    const ModelRun run = run_model(m);
+    ASSERT_EQ(run.trajectory.stats.status, Status::kOk) << run.trajectory.stats.message;
+    const double t_star = 2.0 * 4.0 / (7.0 * 0.2 * g);
+    int sliding = 0, rolling = 0;
+    for (std::size_t i = 0; i < run.trajectory.t.size(); ++i) {
+      const double t = run.trajectory.t[i];
+      if (std::abs(t - t_star) < 1e-3) continue;
+      const double fx = t < t_star ? -0.2 * 6.0 * g : 0.0;
+      (t < t_star ? sliding : rolling)++;
+      EXPECT_NEAR(friction_column(run, "floor", "x", i), fx, 1e-9) << "t = " << t;
+      EXPECT_NEAR(friction_column(run, "floor", "y", i), 0.0, 1e-12) << "t = " << t;
+      EXPECT_NEAR(friction_column(run, "floor", "z", i), 0.0, 1e-12) << "t = " << t;
+    }
+    EXPECT_GT(sliding, 20);
+    EXPECT_GT(rolling, 20);
+  }
+  {
+    // a solid sphere (m = 1, r = 0.1) at rest, pushed at its centre by F = 2: it rolls, held
+    // by the stick constraint, x'' = 5 F / (7 m), and the floor's friction is −2 F / 7 — in
+    // metres and in millimetres (L = 1000: the stick rows' unit kappa is not 1 there)
+    for (const double L : {1.0, 1000.0}) {
+      const std::string l = std::to_string(L);
+      const Model m = parse_model(R"(
+parameters: {m: 1, r: 0.1*)" + l + R"(, F: 2*)" +
+                                  l + R"(}
+bodies:
+  - {name: ball, type: rigid, mass: m, inertia: [0.4*m*r^2, 0.4*m*r^2, 0.4*m*r^2], position: [0, 0, r]}
+forces:
+  - {type: gravity, g: [0, 0, -9.81*)" +
+                                  l + R"(]}
+  - {name: push, type: applied, body: ball, point: [0, 0, 0], force: [F, 0, 0], torque: [0, 0, 0]}
+contacts:
+  - {name: floor, body: ball, shape: sphere, radius: r}
+nonideal:
+  - {friction: coulomb, constraint: floor, mu: 0.3}
+simulate: {t_end: 1, rtol: 1e-10, atol: 1e-12}
+output: {every: 0.1}
+)");
+      expect_identity_friction(m, "floor", 3);
+      const ModelRun run = run_model(m);
+      ASSERT_EQ(run.trajectory.stats.status, Status::kOk) << run.trajectory.stats.message;
+      ASSERT_GT(run.trajectory.t.size(), 5u);
+      for (std::size_t i = 0; i < run.trajectory.t.size(); ++i) {
+        EXPECT_NEAR(friction_column(run, "floor", "x", i), -2.0 * 2.0 * L / 7.0, 1e-9 * L)
+            << "L = " << L << ", sample " << i;
+        EXPECT_NEAR(friction_column(run, "floor", "y", i), 0.0, 1e-12 * L) << i;
+        EXPECT_NEAR(friction_column(run, "floor", "z", i), 0.0, 1e-12 * L) << i;
+        EXPECT_NEAR(run.trajectory.qd[i * std::size_t(run.trajectory.n)],
+                    5.0 * 2.0 * L / 7.0 * run.trajectory.t[i], 1e-9 * L);
+      }
+    }
+  }
+  {
+    // a planar rod (m = 2) sliding flat on its two ends: each end's friction is −mu m g / 2
+    // along x until it stops at v0 / (mu g), two components (a planar contact)
+    const Model m = parse_model(R"(
+parameters: {m: 2, L: 1, v0: 1.5, mu: 0.3}
+bodies:
+  - {name: rod, type: planar, mass: m, inertia: m*L^2/12, position: [0, 0], velocity: [v0, 0]}
+forces:
+  - {type: gravity, g: [0, -9.81]}
+contacts:
+  - {name: left, body: rod, point: [-L/2, 0]}
+  - {name: right, body: rod, point: [L/2, 0]}
+nonideal:
+  - {friction: coulomb, constraint: left, mu: mu}
+  - {friction: coulomb, constraint: right, mu: mu}
+simulate: {t_end: 1, rtol: 1e-11, atol: 1e-13}
+output: {every: 0.01}
+)");
+    expect_identity_friction(m, "left", 2);
+    const ModelRun run = run_model(m);
+    ASSERT_EQ(run.trajectory.stats.status, Status::kOk) << run.trajectory.stats.message;
+    EXPECT_EQ(count_columns(run, "visual.contact.left.fz"), 0);
+    const double t_stop = 1.5 / (0.3 * g);
+    for (std::size_t i = 0; i < run.trajectory.t.size(); ++i) {
+      const double t = run.trajectory.t[i];
+      if (std::abs(t - t_stop) < 1e-3) continue;
+      for (const char* end : {"left", "right"}) {
+        EXPECT_NEAR(friction_column(run, end, "x", i), t < t_stop ? -0.3 * g : 0.0, 1e-9)
+            << end << ", t = " << t;
+        EXPECT_NEAR(friction_column(run, end, "y", i), 0.0, 1e-12) << end << ", t = " << t;
+      }
+    }
+  }
+  {
+    // tests/data/rolling_wheel.urdf in joint coordinates (test_contact_bodies_friction.cpp):
+    // N = 3 g, f = −mu N along x until it rolls at t* = v0 / (3.75 mu g)
+    const Model m = parse_model(R"(
+robot: {urdf: rolling_wheel.urdf}
+parameters: {v0: 1.2, mu: 0.25}
+contacts:
+  - {name: floor, link: wheel, shape: sphere, radius: 0.1}
+nonideal:
+  - {friction: coulomb, constraint: floor, mu: mu}
+initial:
+  q_dot: {x: v0}
+simulate: {t_end: 0.5, rtol: 1e-11, atol: 1e-13}
+output: {every: 0.01}
+)",
+                                kData + "/robot.yaml");
+    expect_identity_friction(m, "floor", 3);
+    const ModelRun run = run_model(m);
+    ASSERT_EQ(run.trajectory.stats.status, Status::kOk) << run.trajectory.stats.message;
+    const double t_star = 1.2 / (3.75 * 0.25 * g);
+    for (std::size_t i = 0; i < run.trajectory.t.size(); ++i) {
+      const double t = run.trajectory.t[i];
+      if (std::abs(t - t_star) < 1e-3) continue;
+      EXPECT_NEAR(friction_column(run, "floor", "x", i), t < t_star ? -0.25 * 3.0 * g : 0.0, 1e-9)
+          << "t = " << t;
+      EXPECT_NEAR(friction_column(run, "floor", "y", i), 0.0, 1e-12) << "t = " << t;
+      EXPECT_NEAR(friction_column(run, "floor", "z", i), 0.0, 1e-12) << "t = " << t;
+    }
+  }
+}
+
 }  // namespace UKDYN_TEST_FILE
 }  // namespace ukdyn

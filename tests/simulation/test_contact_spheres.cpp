@@ -121,6 +121,39 @@ TEST(ContactSpheres, HeadOnCollisionMeetsMomentumAndRestitution) {
   }
 }
 
+// A cue ball (r = 0.05) at 1 m/s toward an equal ball X away, no gravity, e = 1: they meet at
+// t = (X − 2r)/v0 and exchange their velocities. Free flight is so smooth that one step spans
+// the whole overlap for X = 2 or 10 (9 steps to t = 20): the gap dips below 0 and back within
+// a step, which the run finds at the gap's minimum (its rate turning from falling to rising),
+// not only at the steps' ends (a new user's reproducer: the balls passed through each other).
+TEST(ContactSpheres, BallsInFreeFlightDoNotPassThroughEachOtherWithinAStep) {
+  for (const double X : {0.5, 2.0, 10.0}) {
+    Model m = parse_model(R"(
+parameters: {X: )" + std::to_string(X) +
+                          R"(, m: 0.17, r: 0.05, v0: 1}
+bodies:
+  - {name: cue, type: rigid, mass: m, inertia: 0.4*m*r^2, position: [0, 0, 0], velocity: [v0, 0, 0]}
+  - {name: obj, type: rigid, mass: m, inertia: 0.4*m*r^2, position: [X, 0, 0]}
+contacts:
+  - {name: hit, body: cue, shape: sphere, radius: r, sphere: {body: obj, radius: r}, restitution: 1}
+simulate: {t_end: 20, rtol: 1e-10, atol: 1e-12}
+output: {every: 0.01}
+)");
+    const ModelRun run = run_model(m);
+    const Trajectory& tr = run.trajectory;
+    ASSERT_EQ(tr.stats.status, Status::kOk) << tr.stats.message;
+    const auto impacts =
+        events_of(tr, m.system.constraint_index("hit"), ContactEvent::Kind::kImpact);
+    ASSERT_EQ(impacts.size(), 1u) << "X = " << X;
+    EXPECT_NEAR(impacts[0].t, X - 0.1, 1e-9) << "X = " << X;
+    const std::size_t last = tr.t.size() - 1;
+    EXPECT_NEAR(tr.qd[14 * last], 0.0, 1e-10) << "X = " << X;      // the cue stops
+    EXPECT_NEAR(tr.qd[14 * last + 7], 1.0, 1e-10) << "X = " << X;  // the other goes on
+    const CsvColumn& gap = column(run, "gap.hit");
+    EXPECT_GE(*std::min_element(gap.values.begin(), gap.values.end()), -1e-9) << "X = " << X;
+  }
+}
+
 TEST(ContactSpheres, ObliqueCollisionTurnsOnlyTheVelocityAlongTheLineOfCentres) {
   const double e = 0.8;
   Model m = parse_model(two_spheres("0.15", "0.1", e));

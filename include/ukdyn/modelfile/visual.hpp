@@ -72,6 +72,13 @@ struct VisualContact {
   /// a `contacts:` entry's point and normal, from which run_model computes the columns; null:
   /// they are `visual: contacts:` expressions (outputs of Model::output_program)
   Geometry geometry;
+  /// The world axes of the contact's Coulomb friction at a contact point at q: columns n_W,
+  /// t_1, t_2 of ContactKinematicsFn (a planar contact: n_W, t_1 and a zero third column), from
+  /// which run_model writes the friction force f_W = Σ f_i t_i as the columns
+  /// `visual.contact.<name>.fx`, `.fy` (, `.fz`). Null: no friction arrow at this contact.
+  using Axes =
+      std::function<void(const Eigen::Ref<const Eigen::VectorXd>& q, Eigen::Matrix3d& axes)>;
+  Axes axes;
 };
 
 /// A loop closure of a robot (`robot: loops:`), drawn by the viewer as a dashed line from
