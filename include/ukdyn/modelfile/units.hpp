@@ -23,9 +23,11 @@ struct UnitSystem {
   std::string mass = "kg";   ///< unit of mass (kMasses)
   std::string time = "s";    ///< unit of time (kTimes)
 
-  /// The accepted units of length, mass and time (`units:` refuses others, naming these).
+  /// The accepted units of length (`units:` refuses others, naming these).
   static constexpr std::array<std::string_view, 6> kLengths{"m", "mm", "cm", "km", "um", "nm"};
+  /// The accepted units of mass.
   static constexpr std::array<std::string_view, 3> kMasses{"kg", "g", "mg"};
+  /// The accepted units of time.
   static constexpr std::array<std::string_view, 5> kTimes{"s", "ms", "us", "min", "h"};
 
   /// True when length, mass and time are m, kg and s.
