@@ -87,10 +87,10 @@ void ProgressBar::draw(const ProgressReport& p, Clock::time_point now) {
   const std::string eta_text = duration_text(eta(p.t, now));
   if (mode_ == Mode::kLog) {
     std::fprintf(stream_,
-                 "ukdyn: t = %.6g of %.6g s (%d%%), step %.3g s (%s), %ld steps, %.1f s "
+                 "ukdyn: t = %.6g of %.6g %s (%d%%), step %.3g %s (%s), %ld steps, %.1f s "
                  "elapsed, ETA %s\n",
-                 p.t, t_end_, int(fraction * 100.0), p.step, to_string(p.integrator), p.steps,
-                 elapsed, eta_text.c_str());
+                 p.t, t_end_, time_unit_.c_str(), int(fraction * 100.0), p.step, time_unit_.c_str(),
+                 to_string(p.integrator), p.steps, elapsed, eta_text.c_str());
     std::fflush(stream_);
     return;
   }
@@ -100,9 +100,9 @@ void ProgressBar::draw(const ProgressReport& p, Clock::time_point now) {
   std::fill_n(bar.begin(), filled, '=');
   if (filled < kWidth) bar[std::size_t(filled)] = '>';
   // \r returns to the start of the line, \033[K clears what a longer line left
-  std::fprintf(stream_, "\r[%s] %3d%%  t = %.4g of %.4g s  h = %.2g s %s  (%.1f s, ETA %s)\033[K",
-               bar.c_str(), int(fraction * 100.0), p.t, t_end_, p.step, to_string(p.integrator),
-               elapsed, eta_text.c_str());
+  std::fprintf(stream_, "\r[%s] %3d%%  t = %.4g of %.4g %s  h = %.2g %s %s  (%.1f s, ETA %s)\033[K",
+               bar.c_str(), int(fraction * 100.0), p.t, t_end_, time_unit_.c_str(), p.step,
+               time_unit_.c_str(), to_string(p.integrator), elapsed, eta_text.c_str());
   std::fflush(stream_);
   drawn_ = true;
 }

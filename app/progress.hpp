@@ -6,6 +6,7 @@
 #include <chrono>
 #include <cstdio>
 #include <string>
+#include <utility>
 
 #include <ukdyn/simulation/simulate.hpp>
 
@@ -44,6 +45,9 @@ class ProgressBar {
   void update(const ProgressReport& p, Clock::time_point now);
   /// Erases the bar (if it was drawn). Called by the destructor too.
   void finish();
+  /// The unit of the simulated time t and the step h ("s" unless set: the model's, UnitSystem;
+  /// the wall times stay in s).
+  void set_time_unit(std::string unit) { time_unit_ = std::move(unit); }
 
   /// kBar when `stream` is a terminal, else kLog.
   static Mode mode_for(std::FILE* stream);
@@ -56,6 +60,7 @@ class ProgressBar {
   double eta(double t, Clock::time_point now);
 
   double t_start_, t_end_;
+  std::string time_unit_ = "s";  // the simulated time's unit (set_time_unit)
   Mode mode_;
   std::FILE* stream_;
   Clock::time_point start_, next_draw_;

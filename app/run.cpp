@@ -229,8 +229,11 @@ int run_command(const RunArguments& given) {
     return status;
   }
 
-  std::printf("ukdyn run: %s (%s), t = %g … %g s\n", terminal_text(model.name, false).c_str(),
-              terminal_text(model.file, false).c_str(), options.t_start, options.t_end);
+  // (every unit printed is the model's: UnitSystem, docs/model-format.md "Units")
+  const UnitSystem& units = model.unit_system;
+  const char* tu = units.time.c_str();
+  std::printf("ukdyn run: %s (%s), t = %g … %g %s\n", terminal_text(model.name, false).c_str(),
+              terminal_text(model.file, false).c_str(), options.t_start, options.t_end, tu);
   std::fflush(stdout);
 
   // SIGINT, SIGTERM, SIGHUP: the run stops at its next step and what it computed is written; a
@@ -293,6 +296,7 @@ int run_command(const RunArguments& given) {
   {
     ProgressBar bar(options.t_start, options.t_end, ProgressBar::mode_for(stderr), stderr,
                     progress_interval(), progress_interval());
+    bar.set_time_unit(units.time);
     options.progress = [&bar](const ProgressReport& p) { bar.update(p); };
     try {
       run = run_model(model, options, write_rows);
@@ -322,11 +326,11 @@ int run_command(const RunArguments& given) {
   if (stats.status == Status::kInterrupted && csv_error.empty()) {
     char text[160];
     std::snprintf(text, sizeof text,
-                  "interrupted by %s at t = %g s: the samples computed up to there are written",
-                  StopSignals::name(received), stats.t_reached);
+                  "interrupted by %s at t = %g %s: the samples computed up to there are written",
+                  StopSignals::name(received), stats.t_reached, tu);
     stats.message = text;
-    std::fprintf(stderr, "interrupted by %s at t = %g s; writing what was computed\n",
-                 StopSignals::name(received), stats.t_reached);
+    std::fprintf(stderr, "interrupted by %s at t = %g %s; writing what was computed\n",
+                 StopSignals::name(received), stats.t_reached, tu);
   }
 
   // files: each is written under a temporary name and renamed when complete, trajectory.csv
@@ -347,7 +351,7 @@ int run_command(const RunArguments& given) {
     const bool kept = csv->keep_partial();
     std::fprintf(stderr, "error: %s\n", terminal_text(csv_error).c_str());
     char text[200];
-    std::snprintf(text, sizeof text, "the run stopped at t = %g s: %s", stats.t_reached,
+    std::snprintf(text, sizeof text, "the run stopped at t = %g %s: %s", stats.t_reached, tu,
                   kept ? "trajectory.csv holds the rows written before the failure (incomplete)"
                        : "no trajectory.csv");
     std::fprintf(stderr, "%s\n", text);
@@ -382,12 +386,12 @@ int run_command(const RunArguments& given) {
 
   // what happened
   const RunStatistics& s = run.trajectory.stats;
-  std::printf("  %lld samples to t = %g s: %ld steps (%ld rejected), %ld evaluations, %.3g s\n",
-              static_cast<long long>(rows), s.t_reached, s.steps, s.rejected_steps, s.evaluations,
-              s.wall_time);
+  std::printf("  %lld samples to t = %g %s: %ld steps (%ld rejected), %ld evaluations, %.3g s\n",
+              static_cast<long long>(rows), s.t_reached, tu, s.steps, s.rejected_steps,
+              s.evaluations, s.wall_time);
   if (s.stiff_switches > 0) {
-    std::printf("  stiff from t = %g s: %s switched to bdf %ld time%s (%ld of the steps by bdf)\n",
-                s.stiff_switch_time, to_string(options.integrator), s.stiff_switches,
+    std::printf("  stiff from t = %g %s: %s switched to bdf %ld time%s (%ld of the steps by bdf)\n",
+                s.stiff_switch_time, tu, to_string(options.integrator), s.stiff_switches,
                 s.stiff_switches == 1 ? "" : "s", s.stiff_steps);
   }
   if (s.least_squares > 0) {
@@ -399,11 +403,12 @@ int run_command(const RunArguments& given) {
   std::printf("  max violation %.3g (position), %.3g (velocity)\n", s.max_position_violation,
               s.max_velocity_violation);
   if (s.energy_balance_checked) {
-    std::printf("  energy balance %.3g relative (energy exchanged %.3g J; tolerance %.3g)\n",
-                s.energy_balance, s.energy_exchanged, options.energy_balance_tolerance);
+    std::printf("  energy balance %.3g relative (energy exchanged %.3g %s; tolerance %.3g)\n",
+                s.energy_balance, s.energy_exchanged, units.energy().c_str(),
+                options.energy_balance_tolerance);
   } else {
-    std::printf("  energy balance %.3g relative (energy exchanged %.3g J; not checked)\n",
-                s.energy_balance, s.energy_exchanged);
+    std::printf("  energy balance %.3g relative (energy exchanged %.3g %s; not checked)\n",
+                s.energy_balance, s.energy_exchanged, units.energy().c_str());
   }
   if (s.events > 0 || s.stick_refusals > 0) {
     std::printf("  friction: %ld stick/slip events, %ld stops where sticking was refused\n",
@@ -443,7 +448,7 @@ int run_command(const RunArguments& given) {
     return kExitInterruptedBase + (received != 0 ? received : SIGINT);
   }
   if (s.status != Status::kOk) {
-    std::fprintf(stderr, "error: the run failed at t = %g s: %s\n", s.t_reached,
+    std::fprintf(stderr, "error: the run failed at t = %g %s: %s\n", s.t_reached, tu,
                  s.message.empty() ? to_string(s.status) : terminal_text(s.message).c_str());
     return kExitRunFailed;
   }

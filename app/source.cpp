@@ -127,6 +127,8 @@ RunProvenance provenance_of(const ModelSource& source, const Model& model,
   }
   p.arguments = arguments;
   const auto& names = model.system.coordinate_names();
+  // the time's (column t), then the coordinates'
+  p.units.emplace_back("t", model.unit_system.time);
   for (std::size_t i = 0; i < names.size() && i < model.coordinate_units.size(); ++i) {
     p.units.emplace_back(names[i], model.coordinate_units[i]);
   }
@@ -136,6 +138,10 @@ RunProvenance provenance_of(const ModelSource& source, const Model& model,
       p.units.emplace_back(model.output_names[i], model.output_units[i]);
     }
   }
+  const UnitSystem& u = model.unit_system;
+  p.unit_system = {{"length", u.length},       {"mass", u.mass},     {"time", u.time},
+                   {"velocity", u.velocity()}, {"force", u.force()}, {"energy", u.energy()},
+                   {"power", u.power()}};
   return p;
 }
 

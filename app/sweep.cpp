@@ -318,7 +318,8 @@ int sweep_command(const SweepArguments& args) {
       outs += (outs.empty() ? "" : ",") + o + "@" +
               (options.at.empty() ? std::string("end") : format_number(options.at.back()));
     }
-    // the units of the coordinates (their velocities: per second) and of the output expressions
+    // the units of the coordinates (their velocities: per the model's time unit), of the output
+    // expressions and of the times (UnitSystem)
     std::string units;
     auto add_unit = [&units](const std::string& name, const std::string& unit) {
       if (!unit.empty()) units += (units.empty() ? "" : "\t") + name + "=" + unit;
@@ -327,11 +328,13 @@ int sweep_command(const SweepArguments& args) {
     for (std::size_t i = 0; i < coords.size() && i < base.coordinate_units.size(); ++i) {
       const std::string& u = base.coordinate_units[i];
       add_unit(coords[i], u);
-      if (!u.empty()) add_unit(coords[i] + "_dot", u == "1" ? "1/s" : u + "/s");
+      if (!u.empty()) add_unit(coords[i] + "_dot", base.unit_system.rate(u));
     }
     for (std::size_t i = 0; i < base.output_names.size() && i < base.output_units.size(); ++i) {
       add_unit(base.output_names[i], base.output_units[i]);
     }
+    for (const char* time : {"t_start", "t_end", "t_reached"})
+      add_unit(time, base.unit_system.time);
     // sweep.png (and .pdf, .svg: --plot-format): written by the script into a temporary made
     // here (mkostemp), renamed when the script has succeeded
     if (!is_executable(python)) {

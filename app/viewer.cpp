@@ -73,9 +73,15 @@ std::optional<fs::path> write_viewer(const Model& model, const fs::path& csv, co
       std::fprintf(stderr, "%s\n", terminal_text(line).c_str());
     }
     const std::string three = viewer_three_text(scene);
-    const std::string html = fill_viewer_template(
-        kViewerTemplate, three,
-        viewer_page_data(scene, run, options, read_contact_events(dir / "summary.json")));
+    auto data = viewer_page_data(scene, run, options, read_contact_events(dir / "summary.json"));
+    // the model's units, when not SI (docs/model-format.md, "Units": the page's labels; the
+    // same as ukdyn/viewer.py's scene_data)
+    if (!model.unit_system.is_si()) {
+      const UnitSystem& u = model.unit_system;
+      data["unit_system"] = {
+          {"length", u.length}, {"time", u.time}, {"force", u.force()}, {"energy", u.energy()}};
+    }
+    const std::string html = fill_viewer_template(kViewerTemplate, three, data);
     detail::write_whole_file(page.string(), "ukdyn run --viewer", html.data(), html.size());
   } catch (const std::exception& e) {
     std::fprintf(stderr, "error: the viewer's page: %s: no animation.html\n",

@@ -119,8 +119,26 @@ ukdyn.parse() or ukdyn.from_sympy(). Model.simulate() runs it exactly as `ukdyn 
             return out;
           },
           "Each coordinate's and output expression's unit, as a new dict name -> unit: the "
-          "file's `units:`, else m, rad and 1 (quaternion components) for the bodies' "
-          "coordinates, else \"\" (not known).")
+          "file's `units:`, else the length unit (m), rad and 1 (quaternion components) for the "
+          "bodies' coordinates, else \"\" (not known).")
+      .def_property_readonly(
+          "unit_system",
+          [](const Model& md) {
+            const UnitSystem& u = md.unit_system;
+            py::dict out;
+            out["length"] = u.length;
+            out["mass"] = u.mass;
+            out["time"] = u.time;
+            out["velocity"] = u.velocity();
+            out["force"] = u.force();
+            out["energy"] = u.energy();
+            out["power"] = u.power();
+            return out;
+          },
+          "The model's units (`units: {length: mm, mass: g, time: ms}`, SI when not given) and "
+          "the labels derived from them, as a new dict: length, mass, time, velocity, force, "
+          "energy, power (N, J, W only in SI units; g·mm²/ms² in g, mm, ms). Labels only: no "
+          "number is converted.")
       .def_property_readonly(
           "constraints",
           [](const Model& md) {

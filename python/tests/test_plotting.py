@@ -244,7 +244,9 @@ def test_command_writes_the_formats_asked_for(cli, out_dir):
     # the script's figures from the CSV and summary.json: units and the model's name
     table = plotting.read_csv(str(out_dir / "run" / "trajectory.csv"))
     meta = plotting.read_summary(str(out_dir / "run" / "summary.json"))
-    assert meta == {"model": "free spinning slider", "units": {"s": "m", "phi": "rad"}}
+    # (and the time's, t, and the model's unit system: SI here)
+    assert meta == {"model": "free spinning slider", "units": {"s": "m", "phi": "rad", "t": "s"},
+                    "unit_system": plotting._data.SI_UNITS}
     fig = plotting.coordinates_figure(table, meta)
     assert ylabels(fig) == ["position [m]", "angle [rad]"]
     assert fig._suptitle.get_text() == "free spinning slider: coordinates"
@@ -317,3 +319,53 @@ def test_command_plot_style_paper(cli, out_dir):
     assert "--plot-style papr: the plot styles are screen and paper (did you mean 'paper'?)" \
         in bad.stderr
     assert not os.path.exists(out_dir / "bad" / "trajectory.csv")
+
+
+# the repro's ball in mm, g and ms (docs/model-format.md, "Units"): every label in them, never in
+# s, J or N (4.41e3 g·mm²/ms² is 4.41 J); an SI model's labels are the tests' above
+BALL_MM = """
+name: ball mm g ms
+parameters: {m: 500, r: 100, g: 9.81e-3, h0: 1000, e: 0.7}
+bodies:
+  - {name: ball, type: rigid, mass: m, inertia: 0.4*m*r^2, position: [0, 0, h0],
+     velocity: [0.5, 0, 0]}
+forces:
+  - {type: gravity, g: [0, 0, -g]}
+contacts:
+  - {name: floor, body: ball, shape: sphere, radius: r, restitution: e}
+units: {length: mm, mass: g, time: ms}
+simulate: {t_end: 500}
+"""
+
+
+def test_labels_follow_the_models_units():
+    model = ukdyn.parse(BALL_MM)
+    assert model.unit_system == {
+        "length": "mm", "mass": "g", "time": "ms", "velocity": "mm/ms", "force": "g·mm/ms²",
+        "energy": "g·mm²/ms²", "power": "g·mm²/ms³"}
+    assert model.units["ball.x"] == "mm" and model.units["ball.u0"] == "1"
+    r = model.simulate()
+    units = r.column_units()
+    assert units["t"] == "ms"
+    assert units["ball.x"] == "mm" and units["ball.x_dot"] == "mm/ms"
+    assert units["ball.z_ddot"] == "mm/ms²" and units["ball.u0_dot"] == "1/ms"
+    assert units["energy"] == "g·mm²/ms²" and units["work_impact"] == "g·mm²/ms²"
+    figures = r.figures()
+    energy = figures["energy"]
+    assert ylabels(energy) == ["energy [g·mm²/ms²]", "balance residual [g·mm²/ms²]"]
+    assert energy.axes[-1].get_xlabel() == "t [ms]"
+    coords = figures["coordinates"]
+    assert ylabels(coords)[0] == "position [mm]" and coords.axes[-1].get_xlabel() == "t [ms]"
+    assert r.plot("ball.x_dot").get_ylabel() == "[mm/ms]"
+    assert [(ax.get_xlabel(), ax.get_ylabel()) for ax in figures["bodies"].axes][0] == (
+        "x [mm]", "y [mm]")
+    page = r._repr_html_()
+    assert "t = 0 &hellip; 500 ms" in page
+    # nowhere an SI label
+    for fig in figures.values():
+        if fig is None:
+            continue
+        for ax in fig.axes:
+            for text in (ax.get_xlabel(), ax.get_ylabel()):
+                assert "[J]" not in text and "[N]" not in text and "[s]" not in text, text
+                assert "/s]" not in text and "N·m" not in text, text

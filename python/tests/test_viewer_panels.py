@@ -172,6 +172,22 @@ def test_a_points_forces_are_in_its_coordinates_units(tmp_path):
     assert data["points"][0]["ideal"] == [[3, 3], [4, 4]]
 
 
+def test_the_page_carries_the_models_units_when_not_si():
+    """units: {length: mm, mass: g, time: ms}: the page's time, energy and forces are labelled
+    in them (data["unit_system"], which the page's script reads; docs/model-format.md, "Units");
+    an SI model's page carries none and keeps its SI labels."""
+    scene = {"model": "m", "coordinates": ["x"], "coordinate_units": ["mm"]}
+    names, columns = ["t", "x"], [[0.0, 1.0], [0.0, 0.1]]
+    mm = {"length": "mm", "mass": "g", "time": "ms", "velocity": "mm/ms", "force": "g·mm/ms²",
+          "energy": "g·mm²/ms²", "power": "g·mm²/ms³"}
+    data = viewer.scene_data(scene, names, columns, unit_system=mm)
+    assert data["unit_system"] == {"length": "mm", "time": "ms", "force": "g·mm/ms²",
+                                   "energy": "g·mm²/ms²"}
+    si = dict(mm, length="m", mass="kg", time="s", force="N", energy="J")
+    assert "unit_system" not in viewer.scene_data(scene, names, columns, unit_system=si)
+    assert "unit_system" not in viewer.scene_data(scene, names, columns)
+
+
 def _rotate(q, v):
     """v turned by the unit quaternion q = (w, x, y, z) (normalized here): R(q) v."""
     w, x, y, z = np.array(q, float) / np.linalg.norm(q)

@@ -57,8 +57,9 @@ def read_hdf5(path: str) -> "tuple[Result, dict]":
             stats[key] = summary[key]
     units = summary.get("units") if isinstance(summary.get("units"), dict) else None
     name = (summary.get("provenance") or {}).get("model_name") or ""
+    system = summary.get("unit_system") if isinstance(summary.get("unit_system"), dict) else None
     return Result(names, columns, stats, summary.get("control"), coordinates, units,
-                  name), summary
+                  name, system), summary
 
 
 __all__ = [
@@ -174,7 +175,8 @@ def _model_simulate(self: Model, *, t_end: Optional[float] = None, q0: Any = Non
     from .callables import _finish
     with _interrupt.guard() as interrupt:
         names, columns, stats, control, raised = self._run(settings, q0, qd0, interrupt.stop)
-    result = Result(names, columns, stats, control, self.coordinates, self.units, self.name)
+    result = Result(names, columns, stats, control, self.coordinates, self.units, self.name,
+                    self.unit_system)
     result.scene = _json.loads(self._scene_json)  # what Result.show() draws
     interrupt.raise_if_interrupted(result, raised)
     return _finish(result, check)

@@ -131,28 +131,31 @@ def _frame(parts: List[dict], offsets: List[int]):
 
 
 # the units of the summary figures that have one (the others are counts, flags or ratios, or in
-# the constraints' own units)
-FIGURE_UNITS = {"t_reached": "s", "energy_exchanged": "J"}
+# the constraints' own units): the model's time and energy (summary.json's unit_system keys)
+FIGURE_UNITS = {"t_reached": "time", "energy_exchanged": "energy"}
 
 
 def _column_units(frame: Any, text: str, file: str, overrides: dict) -> Dict[str, str]:
     """Each column's unit, for the known ones (``frame.attrs["units"]``): a swept coordinate's
     (``units:`` of the file, m/rad for bodies; ``_dot`` per s) and a recorded value's
-    (``x@5``: x's, by the rules of ``Result.column_units``), ``t_start``/``t_end`` s, and the
-    figures' (FIGURE_UNITS). Parameters have none (a model file gives them no units)."""
+    (``x@5``: x's, by the rules of ``Result.column_units``), ``t_start``/``t_end`` in the
+    model's time unit, and the figures' (FIGURE_UNITS). Parameters have none (a model file gives
+    them no units)."""
     from . import parse
-    from .plotting_data import column_unit
+    from .plotting_data import column_unit, system_unit
 
-    meta = {"units": parse(text, file, **overrides).units}
+    model = parse(text, file, **overrides)
+    meta = {"units": model.units, "unit_system": model.unit_system}
     swept = list(frame.attrs["grid"]) + list(frame.attrs["random"])
     units = {}
     for name in frame.columns:
         if name in swept:
-            unit = "s" if name in ("t_start", "t_end") else column_unit(meta, name)
+            unit = (system_unit(meta, "time") if name in ("t_start", "t_end")
+                    else column_unit(meta, name))
         elif "@" in name:
             unit = column_unit(meta, name.split("@", 1)[0])
         else:
-            unit = FIGURE_UNITS.get(name, "")
+            unit = system_unit(meta, FIGURE_UNITS[name]) if name in FIGURE_UNITS else ""
         if unit:
             units[name] = unit
     return units

@@ -33,11 +33,16 @@ figures:
   ``kind``, …), whose impacts the contacts figure marks;
 * ``units``: coordinate name → its unit (``m``, ``rad``, ``1`` for a quaternion component, or
   what the model file's ``units:`` declares; ``""`` or absent: not known, and then no unit is
-  drawn, never a guessed one); output expressions may have theirs too.
+  drawn, never a guessed one); output expressions may have theirs too; ``t`` the time's;
+* ``unit_system``: the model's units (summary.json's ``unit_system``: ``length``, ``mass``,
+  ``time``, ``velocity``, ``force``, ``energy``, ``power``); SI when absent.
 
-Units of derived quantities: velocities ``u/s``, accelerations ``u/s²``; generalized forces
-``N`` for a coordinate in ``m``, ``N·m`` for one in ``rad`` (or a quaternion component, whose
-conjugate force is an energy), none otherwise; energies and works ``J``; power ``W``.
+Units of derived quantities, per the model's time unit ``T`` (``s`` in SI units): velocities
+``u/T``, accelerations ``u/T²``; generalized forces: the force (``N`` in SI units) for a
+coordinate in the model's length unit, the torque (``N·m``) for one in ``rad`` (or a quaternion
+component, whose conjugate force is an energy), none otherwise; energies and works the energy's
+(``J``); power the power's (``W``). N, J and W only in SI units: in g, mm and ms an energy is
+``g·mm²/ms²``.
 Multipliers, constraint violations and tracking errors carry no unit (it depends on how the
 constraint is written); output expressions have the one ``units:`` gives them, if any.
 
@@ -249,8 +254,13 @@ def _legend(ax, title=None):
                   title=title, title_fontsize="small", borderaxespad=0.0)
 
 
-def _finish(axes):
-    axes[-1].set_xlabel("t [s]")
+def _time_label(meta):
+    """The time axis' label, in the model's time unit ("t [s]" in SI units)."""
+    return _label("t", _data.system_unit(meta, "time"))
+
+
+def _finish(axes, meta=None):
+    axes[-1].set_xlabel(_time_label(meta))
     for ax in axes:
         ax.grid(True, alpha=0.3)
         _legend(ax)
@@ -269,7 +279,7 @@ def draw_columns(ax, table, meta, columns, x="t", **kwargs):
         ax.plot(table[x], table[name], label=name, **style)
         units.add(column_unit(meta, name))
     unit = units.pop() if len(units) == 1 else ""
-    ax.set_xlabel("t [s]" if x == "t" else _label(x, column_unit(meta, x)))
+    ax.set_xlabel(_label(x, column_unit(meta, x)))
     if unit:
         ax.set_ylabel("[%s]" % unit)
     ax.grid(True, alpha=0.3)
@@ -283,10 +293,10 @@ def draw_forces(ax, table, meta):
     all coordinates have the same force unit, the line labels otherwise."""
     meta = metadata(table, meta)
     coords = meta["coordinates"]
-    units = {force_unit(coordinate_unit(meta, c)) for c in coords}
+    units = {force_unit(coordinate_unit(meta, c), meta) for c in coords}
     common = units.pop() if len(units) == 1 else None
     for i, c in enumerate(coords):
-        unit = force_unit(coordinate_unit(meta, c))
+        unit = force_unit(coordinate_unit(meta, c), meta)
         suffix = "" if common is not None or not unit else " [%s]" % unit
         colour = line_style(i)["color"]
         ax.plot(table["t"], table["Qc_ideal." + c], color=colour,
@@ -294,7 +304,7 @@ def draw_forces(ax, table, meta):
         if np.any(table["Qc_nonideal." + c]):
             ax.plot(table["t"], table["Qc_nonideal." + c], "--", color=colour,
                     label="Qc_nonideal." + c + suffix)
-    ax.set_xlabel("t [s]")
+    ax.set_xlabel(_time_label(meta))
     ax.set_ylabel(_label("generalized constraint force", common or ""))
     ax.grid(True, alpha=0.3)
     _legend(ax)
@@ -370,7 +380,7 @@ def draw_violation(ax, table, meta, prefix="violation."):
     _log_ticks(ax.yaxis, low, high)
     what = "position" if prefix == "violation." else "velocity"
     ax.set_ylabel("max |%s violation|" % what)  # so far: the title says running maximum
-    ax.set_xlabel("t [s]")
+    ax.set_xlabel(_time_label(meta))
     if zeros:
         ax.text(0.01, 0.02, "exactly zero where not drawn", transform=ax.transAxes,
                 fontsize="x-small", color="0.35")
@@ -397,8 +407,8 @@ def draw_energy(ax, table, meta, residual=True):
     if residual and "energy_balance_residual" in table:
         ax.plot(t, table["energy_balance_residual"], "--", color="0.4",
                 label="residual E(t) − E(0) − ΣW")
-    ax.set_xlabel("t [s]")
-    ax.set_ylabel("energy [J]")
+    ax.set_xlabel(_time_label(meta))
+    ax.set_ylabel(_label("energy", _data.system_unit(meta, "energy")))
     ax.grid(True, alpha=0.3)
     _legend(ax)
     return ax
@@ -416,8 +426,8 @@ def coordinates_figure(table, meta=None):
     for ax, ((unit, quaternion), members) in zip(axes, groups):
         for i, c in enumerate(members):
             ax.plot(table["t"], table[c], label=c, **line_style(i))
-        ax.set_ylabel(_label(_kind(unit, quaternion), unit))
-    _finish(axes)
+        ax.set_ylabel(_label(_kind(unit, quaternion, meta), unit))
+    _finish(axes, meta)
     return fig
 
 
@@ -437,7 +447,7 @@ def forces_figure(table, meta=None):
         if not any(_nonzero(table[part + c]) for c in present):
             continue
         for unit, members in _groups(meta, present,
-                                     lambda c: force_unit(coordinate_unit(meta, c))):
+                                     lambda c: force_unit(coordinate_unit(meta, c), meta)):
             if part == "Qc_nonideal.":
                 members = [c for c in members if _nonzero(table[part + c])]
                 if not members:
@@ -450,7 +460,7 @@ def forces_figure(table, meta=None):
         for i, c in enumerate(members):
             ax.plot(table["t"], table[part + c], label=c, **line_style(i))
         ax.set_ylabel(_label(name, unit))
-    _finish(axes)
+    _finish(axes, meta)
     return fig
 
 
@@ -468,7 +478,7 @@ def violation_figure(table, meta=None):
     for ax, prefix in zip(axes, panels):
         draw_violation(ax, table, meta, prefix)
         ax.set_xlabel("")
-    _finish(axes)
+    _finish(axes, meta)
     return fig
 
 
@@ -481,8 +491,8 @@ def energy_figure(table, meta=None):
     axes[0].set_xlabel("")
     axes[1].plot(table["t"], table["energy_balance_residual"], color="k",
                  label="E(t) − E(0) − ΣW\n(ΣW: every work channel)")
-    axes[1].set_ylabel("balance residual [J]")
-    _finish(axes)
+    axes[1].set_ylabel(_label("balance residual", _data.system_unit(meta, "energy")))
+    _finish(axes, meta)
     return fig
 
 
@@ -541,8 +551,10 @@ def bodies_figure(table, meta=None):
             ax.plot(x[:1], y[:1], "o", color=style["color"], ms=5, label="_")
         ax.plot([], [], "o", color="0.3", ms=5, label="start")
         ax.set_aspect("equal", "datalim")
-        ax.set_xlabel(_label(a, coordinate_unit(meta, bodies[0][0] + "." + a) or "m"))
-        ax.set_ylabel(_label(b, coordinate_unit(meta, bodies[0][0] + "." + b) or "m"))
+        ax.set_xlabel(_label(a, coordinate_unit(meta, bodies[0][0] + "." + a)
+                                or _data.system_unit(meta, "length")))
+        ax.set_ylabel(_label(b, coordinate_unit(meta, bodies[0][0] + "." + b)
+                                or _data.system_unit(meta, "length")))
         # (an explicit y, as untitled's: no search for the title's place, which laid out the
         # panel's y axis in every layout round and draw; the ticks are below, the title at 1.0)
         ax.set_title("%s–%s view" % (a, b), fontsize="medium", y=1.0)
@@ -613,7 +625,7 @@ def contacts_figure(table, meta=None):
                           linestyles=":", lw=0.7, label="_")
     axes[0].set_ylabel("normal force λ")
     axes[1].set_ylabel("gap g")
-    _finish(axes)
+    _finish(axes, meta)
     return fig
 
 
@@ -635,7 +647,7 @@ def outputs_figure(table, meta=None):
         for i, h in enumerate(members):
             ax.plot(table["t"], table[h], label=h, **line_style(i))
         ax.set_ylabel("value [%s]" % unit if unit else "value (no unit given)")
-    _finish(axes)
+    _finish(axes, meta)
     return fig
 
 

@@ -24,7 +24,7 @@ def control_figure(table, meta, kit):
     actuated = [c for c in coords
                 if "Qc_control." + c in table and kit._nonzero(table["Qc_control." + c])]
     force_groups = kit._groups(meta, actuated,
-                               lambda c: kit.force_unit(kit.coordinate_unit(meta, c)))
+                               lambda c: kit.force_unit(kit.coordinate_unit(meta, c), meta))
     panels = (1 if rows else 0) + (1 if desired else 0) + len(force_groups) + 3
     height = 2.2 * kit.current_style()["row_height"] / 2.6
     fig, axes = kit._figure("control", meta, panels, height=height)
@@ -57,14 +57,18 @@ def control_figure(table, meta, kit):
             ax.plot(t, table["Qc_control." + c], label=c, **kit.line_style(i))
         ax.set_ylabel(kit._label("control force", unit))
     axes[k].plot(t, table["control_power"], color="k", label="P = Qcᵀ q̇")
-    axes[k].set_ylabel("power [W]")
+    axes[k].set_ylabel(kit._label("power", kit._data.system_unit(meta, "power")))
     axes[k + 1].plot(t, table["control_work"], label="∫ P dt", **kit.line_style(0))
     axes[k + 1].plot(t, table["control_work_abs"], label="∫ |P| dt", **kit.line_style(1))
-    axes[k + 1].set_ylabel("work [J]")
-    fu = kit._common(kit.force_unit(kit.coordinate_unit(meta, c)) for c in actuated)
+    axes[k + 1].set_ylabel(kit._label("work", kit._data.system_unit(meta, "energy")))
+    fu = kit._common(kit.force_unit(kit.coordinate_unit(meta, c), meta) for c in actuated)
     axes[k + 2].plot(t, table["control_effort"], color="k", label="∫ Qcᵀ Qc dt")
-    axes[k + 2].set_ylabel(kit._label("effort", {"N": "N²·s", "N·m": "N²·m²·s"}.get(fu, "")))
-    kit._finish(axes)
+    # (the effort's unit: the force's squared times the time's; (g·mm/ms²)²·ms in g, mm, ms)
+    time = kit._data.system_unit(meta, "time")
+    effort = {"N": "N²·s", "N·m": "N²·m²·s"}.get(fu) if time == "s" else None
+    effort = effort or ("(%s)²·%s" % (fu, time) if fu else "")
+    axes[k + 2].set_ylabel(kit._label("effort", effort))
+    kit._finish(axes, meta)
     return fig
 
 

@@ -86,6 +86,8 @@ def read_summary(path):
         meta["model"] = name
     if isinstance(summary.get("units"), dict):
         meta["units"] = dict(summary["units"])
+    if isinstance(summary.get("unit_system"), dict):
+        meta["unit_system"] = {str(k): str(v) for k, v in summary["unit_system"].items()}
     if isinstance(summary.get("contact_events"), list):
         meta["contact_events"] = [e for e in summary["contact_events"] if isinstance(e, dict)]
     return meta
@@ -105,24 +107,45 @@ def metadata(table, meta=None):
 
 
 # --- units -----------------------------------------------------------------------------------
+# the SI labels, which a model's declared units replace (summary.json's unit_system, written
+# from ukdyn::UnitSystem: N, J, W only when length, mass and time are m, kg and s)
+SI_UNITS = {"length": "m", "mass": "kg", "time": "s", "velocity": "m/s", "force": "N",
+            "energy": "J", "power": "W"}
+
+
+def system_unit(meta, quantity):
+    """The label of `quantity` (length, mass, time, velocity, force, energy, power) in the
+    model's unit system (meta["unit_system"], from summary.json), SI when not given."""
+    return ((meta or {}).get("unit_system") or {}).get(quantity) or SI_UNITS[quantity]
+
+
+def torque_unit(meta):
+    """N·m in SI units, else the energy's label (mass·length²/time²)."""
+    energy = system_unit(meta, "energy")
+    return "N·m" if energy == "J" else energy
+
+
 def coordinate_unit(meta, c):
     """The unit of coordinate c ("" when not known)."""
     return (meta.get("units") or {}).get(c, "") or ""
 
 
-def force_unit(unit):
-    """The unit of the generalized force conjugate to a coordinate in `unit`: N for m, N·m for
-    rad and for a dimensionless coordinate (a quaternion component); "" otherwise."""
-    return {"m": "N", "rad": "N·m", "1": "N·m"}.get(unit, "")
+def force_unit(unit, meta=None):
+    """The unit of the generalized force conjugate to a coordinate in `unit`: the force (N in SI
+    units) for the model's length unit, the torque (N·m) for rad and for a dimensionless
+    coordinate (a quaternion component); "" otherwise."""
+    if unit and unit == system_unit(meta, "length"):
+        return system_unit(meta, "force")
+    return torque_unit(meta) if unit in ("rad", "1") else ""
 
 
-def _rate(unit, order):
-    """The unit of the order-th time derivative of a quantity in `unit`."""
+def _rate(unit, order, meta=None):
+    """The unit of the order-th time derivative of a quantity in `unit` (per the model's time
+    unit)."""
     if not unit:
         return ""
-    if unit == "1":
-        return "1/s" if order == 1 else "1/s²"
-    return unit + ("/s" if order == 1 else "/s²")
+    per = system_unit(meta, "time") + ("" if order == 1 else "²")
+    return "1/" + per if unit == "1" else unit + "/" + per
 
 
 def _label(text, unit):
@@ -130,10 +153,12 @@ def _label(text, unit):
     return "%s [%s]" % (text, unit) if unit else text
 
 
-def _kind(unit, quaternion):
+def _kind(unit, quaternion, meta=None):
     if quaternion:
         return "quaternion components"
-    return {"m": "position", "rad": "angle"}.get(unit, "coordinate")
+    if unit and unit == system_unit(meta, "length"):
+        return "position"
+    return "angle" if unit == "rad" else "coordinate"
 
 
 def _is_quaternion(table, meta, c):
@@ -154,18 +179,18 @@ def column_unit(meta, name):
     """The unit of a column of trajectory.csv ("" when not known)."""
     units = meta.get("units") or {}
     if name == "t":
-        return "s"
+        return system_unit(meta, "time")
     if name in units:
         return units[name] or ""
     for suffix, order in (("_ddot", 2), ("_dot", 1)):
         if name.endswith(suffix) and name[: -len(suffix)] in units:
-            return _rate(units[name[: -len(suffix)]], order)
+            return _rate(units[name[: -len(suffix)]], order, meta)
     prefix, _, rest = name.partition(".")
     if prefix in ("Qc_ideal", "Qc_nonideal", "Qc_control", "Qc_robust") and rest in units:
-        return force_unit(units[rest])
+        return force_unit(units[rest], meta)
     if name in ("kinetic_energy", "potential_energy", "energy", "energy_balance_residual",
                 "control_work", "control_work_abs") or name.startswith("work_"):
-        return "J"
+        return system_unit(meta, "energy")
     if name == "control_power":
-        return "W"
+        return system_unit(meta, "power")
     return ""

@@ -121,15 +121,18 @@ def joint_reactions_figure(table, meta, kit):
         ax.grid(True, alpha=0.3)
         return ax
 
+    # the model's units (N and N·m in SI units)
+    force = kit._data.system_unit(meta, "force")
+    torque = kit._data.torque_unit(meta)
     row = 0
     if few:
         for j, columns in reacting:
             left = panel(row, 0)
             _draw_components(kit, left, table, j, _parts(columns, _FORCES))
-            left.set_ylabel("%s: force [N]" % j)
+            left.set_ylabel("%s: force [%s]" % (j, force))
             if torqued:
                 right = panel(row, 1)
-                right.set_ylabel("%s: torque [N·m]" % j)
+                right.set_ylabel("%s: torque [%s]" % (j, torque))
                 if j not in torqued:
                     right.text(0.5, 0.5, "no torque (at roundoff)", transform=right.transAxes,
                                ha="center", va="center", color="0.35")
@@ -157,19 +160,19 @@ def joint_reactions_figure(table, meta, kit):
                 if ts and right is not None:
                     right.plot(table["t"], _magnitude(table, ts), label=j,
                                gid="|reaction.%s.%st|" % (j, part), **style_i)
-            left.set_ylabel("|%s force| [N]" % name)
+            left.set_ylabel("|%s force| [%s]" % (name, force))
             if right is not None:
-                right.set_ylabel("|%s torque| [N·m]" % name)
+                right.set_ylabel("|%s torque| [%s]" % (name, torque))
             row += 1
     if drives:
         ax = panel(row, 0, span=True)
         for i, (j, h) in enumerate(drives):
             ax.plot(table["t"], table[h], label=j, gid=h, **kit.line_style(i))
-        ax.set_ylabel("drive effort\n[N·m; N prismatic]")
+        ax.set_ylabel("drive effort\n[%s; %s prismatic]" % (torque, force))
     for ax in fig.axes:
         _legend(ax)
     for ax in fig.axes[-width if not drives else -1:]:
-        ax.set_xlabel("t [s]")
+        ax.set_xlabel(kit._time_label(meta))
     for ax in fig.axes:
         if not ax.get_xlabel():
             ax.tick_params(labelbottom=False)

@@ -50,12 +50,15 @@ class Result:
             file's ``units:``, m, rad or 1 for a body's coordinates; "" when not known), for
             the plots' labels.
         model_name: the model's name (the plots' titles), or "".
+        unit_system: the model's units (``Model.unit_system``: length, mass, time and the
+            labels of velocity, force, energy, power; SI when None), which every derived label
+            follows (``t`` in the time's, energies in the energy's: J only in SI units).
     """
 
     def __init__(self, names: Sequence[str], columns: Sequence[np.ndarray],
                  stats: Dict[str, Any], control: Optional[Dict[str, Any]],
                  coordinates: Sequence[str], units: Optional[Dict[str, str]] = None,
-                 model_name: str = "") -> None:
+                 model_name: str = "", unit_system: Optional[Dict[str, str]] = None) -> None:
         self.names: List[str] = list(names)
         self._columns: List[np.ndarray] = list(columns)
         self._index: Dict[str, int] = {}
@@ -68,6 +71,9 @@ class Result:
         self.units: Dict[str, str] = {c: given.get(c, "") for c in self.coordinates}
         self.units.update((k, v) for k, v in given.items() if k not in self.units)
         self.model_name: str = str(model_name or "")
+        from .plotting_data import SI_UNITS
+        self.unit_system: Dict[str, str] = dict(SI_UNITS)
+        self.unit_system.update((str(k), str(v)) for k, v in dict(unit_system or {}).items())
         self._alias: Dict[str, int] = self._spellings()
         #: the scene the browser viewer draws (Model.simulate sets it; None otherwise)
         self.scene: Optional[Dict[str, Any]] = None
@@ -186,13 +192,14 @@ class Result:
 
     # --- units -------------------------------------------------------------------------------
     def column_units(self) -> Dict[str, str]:
-        """Each column's unit by name, "" when not known: ``t`` in s; a coordinate's from
-        :attr:`units`, its ``_dot`` and ``_ddot`` per s and s²; ``Qc_ideal.<c>`` (and the
-        non-ideal, control and robust forces) N for a coordinate in m, N·m for one in rad or 1;
-        energies and works J, ``control_power`` W; the output expressions' from ``units:`` (the
-        rules of the plots' labels, ukdyn/plotting.py ``column_unit``)."""
+        """Each column's unit by name, "" when not known, in the model's units
+        (:attr:`unit_system`; here in SI): ``t`` in s; a coordinate's from :attr:`units`, its
+        ``_dot`` and ``_ddot`` per s and s²; ``Qc_ideal.<c>`` (and the non-ideal, control and
+        robust forces) N for a coordinate in m, N·m for one in rad or 1; energies and works J,
+        ``control_power`` W; the output expressions' from ``units:`` (the rules of the plots'
+        labels, ukdyn/plotting.py ``column_unit``)."""
         from .plotting import column_unit
-        meta = {"units": self.units}
+        meta = {"units": self.units, "unit_system": self.unit_system}
         return {name: column_unit(meta, name) for name in self._index}
 
     # --- pandas and files ---------------------------------------------------------------------
@@ -220,7 +227,7 @@ class Result:
         (python3-xarray)."""
         import xarray as xr
         units = self.column_units()
-        t = xr.Variable("t", self.t, attrs={"units": "s"})
+        t = xr.Variable("t", self.t, attrs={"units": self.unit_system["time"]})
         variables = {name: xr.Variable("t", self._columns[k],
                                        attrs={"units": units[name]} if units[name] else {})
                      for name, k in self._index.items() if name != "t"}
@@ -236,8 +243,9 @@ class Result:
         n = len(self)
         t0, t1 = (float(self.t[0]), float(self.t[-1])) if n else (math.nan, math.nan)
         status = e(self.status) + (": " + e(self.message) if self.message else "")
+        time = e(self.unit_system["time"])
         rows = [("model", e(self.model_name) or "&mdash;"), ("status", status),
-                ("samples", "%d, t = %.6g &hellip; %.6g s" % (n, t0, t1))]
+                ("samples", "%d, t = %.6g &hellip; %.6g %s" % (n, t0, t1, time))]
         if "steps" in self.stats:
             rows.append(("steps", "%s (%s rejected)" % (self.stats.get("steps"),
                                                        self.stats.get("rejected_steps", 0))))
@@ -322,6 +330,7 @@ class Result:
         summary["provenance"] = {"ukdyn_version": __version__, "written_by": "Result.to_hdf5",
                                  "model_name": self.model_name}
         summary["units"] = dict(self.units)
+        summary["unit_system"] = dict(self.unit_system)
         _ukdyn._write_table_hdf5(os.fspath(path), self.names,
                                  [np.asarray(c, dtype=np.float64) for c in self._columns],
                                  json.dumps(summary))
@@ -354,7 +363,8 @@ class Result:
         for line in viewer.nonfinite_warnings(scene, first):
             warnings.warn(line[len("warning: "):], RuntimeWarning, stacklevel=2)
         return viewer.build_page(scene, self.names, self._columns, fps=fps,
-                                 contact_events=self.contact_events)
+                                 contact_events=self.contact_events,
+                                 unit_system=self.unit_system)
 
     def save_animation(self, path: "str | os.PathLike[str]", fps: float = 30.0) -> None:
         """Writes the viewer page (:meth:`animation_html`) to ``path``; it opens from disk."""
@@ -406,7 +416,8 @@ class Result:
         """What the plots know about the run besides its columns: the model's name, the
         coordinates and their units, the contact events (ukdyn/plotting.py, ``metadata``)."""
         return {"model": self.model_name, "coordinates": list(self.coordinates),
-                "units": dict(self.units), "contact_events": self.contact_events}
+                "units": dict(self.units), "unit_system": dict(self.unit_system),
+                "contact_events": self.contact_events}
 
     def figures(self, style: str = "screen") -> Dict[str, Any]:
         """Every figure ``ukdyn run`` draws for this run, as matplotlib Figures by file stem:

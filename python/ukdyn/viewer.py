@@ -182,13 +182,15 @@ def _scale(values):
 
 
 def scene_data(scene, names, columns, fps=FPS, max_frames=MAX_FRAMES, digits=DIGITS,
-               contact_events=None):
+               contact_events=None, unit_system=None):
     """The page's data: the scene with each body's, joint's and point's decimated samples.
 
     scene: the dict of viewer_scene_json; names, columns: the trajectory's columns (any
     sequences of floats, e.g. a Result's arrays or the CSV's lists); contact_events: the run's
     contact events (summary.json's ``contact_events``: dicts with ``t``, ``contact``, ``kind``),
-    whose impacts the page marks at the contacts of ``visual: contacts:``.
+    whose impacts the page marks at the contacts of ``visual: contacts:``; unit_system: the
+    model's units (summary.json's ``unit_system``), which label the page's time, energy and
+    forces; None or SI: the page's SI labels.
     """
     t_all = [float(v) for v in columns[names.index("t")]] if "t" in names else []
     keep = _frames(t_all, fps, max_frames)
@@ -352,6 +354,11 @@ def scene_data(scene, names, columns, fps=FPS, max_frames=MAX_FRAMES, digits=DIG
     if "contacts" in data:
         data["force_scale"]["contact"] = _scale([[v] for c in data["contacts"]
                                                  for v in c["force"]])
+    # the model's units when not SI, last as app/viewer.cpp adds them (the page's labels:
+    # docs/model-format.md, "Units")
+    if unit_system and unit_system.get("energy", "J") != "J":
+        data["unit_system"] = {k: unit_system[k] for k in ("length", "time", "force", "energy")
+                               if k in unit_system}
     return data
 
 
@@ -484,6 +491,17 @@ def read_contact_events(summary_path):
         return []
     events = summary.get("contact_events") if isinstance(summary, dict) else None
     return [e for e in events if isinstance(e, dict)] if isinstance(events, list) else []
+
+
+def read_unit_system(summary_path):
+    """The model's units of a run's summary.json (``unit_system``: a dict), or None."""
+    try:
+        with open(summary_path, encoding="utf-8") as f:
+            summary = json.load(f)
+    except (OSError, ValueError):
+        return None
+    system = summary.get("unit_system") if isinstance(summary, dict) else None
+    return system if isinstance(system, dict) else None
 
 
 def _three_text(scene, here):
@@ -650,9 +668,10 @@ def main(argv):
     for line in nonfinite_warnings(scene, first):
         sys.stderr.write(line + "\n")
     # the impacts: from summary.json beside the trajectory, as the command reads them
-    events = read_contact_events(os.path.join(os.path.dirname(os.path.abspath(argv[1])),
-                                              "summary.json"))
-    write_page(argv[3], build_page(scene, names, columns, contact_events=events))
+    summary = os.path.join(os.path.dirname(os.path.abspath(argv[1])), "summary.json")
+    events = read_contact_events(summary)
+    write_page(argv[3], build_page(scene, names, columns, contact_events=events,
+                                   unit_system=read_unit_system(summary)))
     return 0
 
 

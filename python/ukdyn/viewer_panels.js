@@ -84,7 +84,7 @@ function drawChart() {
   const X = (t) => 30 + (W - 36) * (t - t0) / (t1 - t0), Y = (v) => H - 14 - (H - 28) * (v - lo) / (hi - lo);
   g.fillStyle = "#222"; g.font = "11px sans-serif";
   g.fillText("requirements' error (0 when met)", 30, 11);
-  g.fillText("t [s]", W - 30, H - 2);
+  g.fillText("t [" + UNITS.time + "]", W - 30, H - 2);
   g.strokeStyle = "#bbb"; g.beginPath(); g.moveTo(30, Y(0)); g.lineTo(W - 6, Y(0)); g.stroke();
   data.requirements.forEach((r, k) => {
     g.strokeStyle = PALETTE[k % PALETTE.length]; g.beginPath();
@@ -100,9 +100,9 @@ function drawChart() {
 const pathsChart = document.getElementById("paths");
 const tracked = data.requirements.filter((r) => r.desired);
 const valueAxis = axisLabel("value", tracked.map((r) => rowUnit(r.name)));
-if (data.requirements.length) fillLegend("chart-legend", data.requirements, "x: t [s], y: " + errorAxis);
+if (data.requirements.length) fillLegend("chart-legend", data.requirements, "x: t [" + UNITS.time + "], y: " + errorAxis);
 if (tracked.length) {
-  fillLegend("paths-legend", tracked, "x: t [s], y: " + valueAxis,
+  fillLegend("paths-legend", tracked, "x: t [" + UNITS.time + "], y: " + valueAxis,
              "dashed: desired, solid: actual");
 }
 function drawPaths() {
@@ -121,7 +121,7 @@ function drawPaths() {
   const X = (t) => 30 + (W - 36) * (t - t0) / (t1 - t0), Y = (v) => H - 14 - (H - 28) * (v - lo) / (hi - lo);
   g.fillStyle = "#222"; g.font = "11px sans-serif";
   g.fillText("desired (dashed) and actual", 30, 11);
-  g.fillText("t [s]", W - 30, H - 2);
+  g.fillText("t [" + UNITS.time + "]", W - 30, H - 2);
   const line = (values) => {
     g.beginPath();
     let up = false;

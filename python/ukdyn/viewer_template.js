@@ -471,13 +471,18 @@ const arrows = { ideal: [], nonideal: [], control: [] };
 const KIND_NAME = { ideal: "constraint", nonideal: "non-ideal", control: "control", contact: "normal",
                     friction: "friction" };
 const arrowName = (kind, torque, where) => KIND_NAME[kind] + (torque ? " torque " : " force ") + where;
-// the unit of the generalized force of coordinates (N for m, N·m for rad and 1: their units in the
-// data), else SI's N or N·m: a joint's reaction, a contact's force
-const FORCE_UNIT = { m: "N", rad: "N\u00b7m", 1: "N\u00b7m" };
+// the model's units (data.unit_system when not SI: docs/model-format.md, "Units"); a torque's
+// is N·m in SI units, else the energy's
+const UNITS = Object.assign({ length: "m", time: "s", force: "N", energy: "J" }, data.unit_system || {});
+const TORQUE_UNIT = UNITS.energy === "J" ? "N\u00b7m" : UNITS.energy;
+// the unit of the generalized force of coordinates (the force for the length unit, the torque for
+// rad and 1: their units in the data), else the force or the torque: a joint's reaction, a
+// contact's force
+const FORCE_UNIT = { [UNITS.length]: UNITS.force, rad: TORQUE_UNIT, 1: TORQUE_UNIT };
 function forceUnit(coordinates, torque) {
   const units = (coordinates || []).map((c) => FORCE_UNIT[data.units[c]]);
   if (units.length && units.every((u) => u && u === units[0])) return units[0];
-  return torque ? "N\u00b7m" : "N";
+  return torque ? TORQUE_UNIT : UNITS.force;
 }
 function addArrow(kind, vectors, where, name, unit) {
   const a = new T.ArrowHelper(new T.Vector3(1, 0, 0), new T.Vector3(), 1, ARROW[kind]);
@@ -751,8 +756,8 @@ function setFrame(i) {
   slider.value = frame;
   const e = data.energy ? data.energy[frame] : null;
   const hits = IMPACTS.filter((h) => h.t <= data.t[frame]).length;
-  readout.textContent = "t = " + data.t[frame].toFixed(3) + " s" +
-                        (e !== null && e !== undefined ? "   E = " + e.toPrecision(6) + " J" : "") +
+  readout.textContent = "t = " + data.t[frame].toFixed(3) + " " + UNITS.time +
+                        (e !== null && e !== undefined ? "   E = " + e.toPrecision(6) + " " + UNITS.energy : "") +
                         (IMPACTS.length ? "   impacts: " + hits : "");
   drawChart();
   drawPaths();

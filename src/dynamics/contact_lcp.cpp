@@ -79,6 +79,7 @@ ContactLcp::ContactLcp(Index max_size) : max_size_(max_size) {
                                 format_number(max_size));
   }
   r_.resize(max_size);
+  d_.setOnes(max_size);
   z_.setZero(max_size);
   w_.setZero(max_size);
   // lcp_enum's workspace: the k × k system, its right-hand side and two k-vectors; k pivots and
@@ -110,9 +111,24 @@ bool ContactLcp::solve(const Eigen::Ref<const MatrixXd>& W, const Eigen::Ref<con
     w = r;
     return true;
   }
+  // the scaled problem W̃ = D W D, r̃ = D r (w̃ = D w, z = D z̃): d_i a power of two near
+  // |W_ii|^(−1/2), so that Lemke's pivots and the enumeration's signs meet diagonals of order one
+  // whatever the rows' factor (a gap 1e-90 y gave W ~ 1e-180, where Lemke found no solution);
+  // exact in binary, and d_i = 1 for |W_ii| in [2^-10, 2^10] (every model in SI units: then
+  // nothing is scaled, bit for bit), and for a zero diagonal (the friction cone's rows)
+  auto d = d_.head(k);
+  for (Index i = 0; i < k; ++i) d[i] = row_scale(W(i, i));
+  const bool scaled = (d.array() != 1.0).any();
   // lexicographic Lemke on a column-major copy (Siconos reads W as a Fortran array), quiet
-  MatrixXd dense = W;  // (Siconos's copy: allocated at events only, never in a step)
-  r_.head(k) = r;
+  MatrixXd scaled_W = W;  // (the copies: allocated at events only, never in a step)
+  if (scaled) scaled_W = d.asDiagonal() * W * d.asDiagonal();
+  MatrixXd dense = scaled_W;  // (Siconos's)
+  if (scaled) {
+    r_.head(k) = d.cwiseProduct(r);
+  } else {
+    r_.head(k) = r;
+  }
+  const auto rs = r_.head(k);
   numerics_set_verbose(0);
   NumericsMatrix* M = NM_create_from_data(NM_DENSE, int(k), int(k), dense.data());
   LinearComplementarityProblem problem{};
@@ -122,29 +138,41 @@ bool ContactLcp::solve(const Eigen::Ref<const MatrixXd>& W, const Eigen::Ref<con
   solver_ = Solver::kLemke;
   info_ =
       run_siconos(problem, SICONOS_LCP_LEMKE, 0.0, z_.data(), w_.data(), enum_dwork_, enum_iwork_);
-  bool ok = info_ == 0 && check(W, r, tolerance);
-  const double W_norm = W.norm();
+  bool ok = info_ == 0 && check(scaled_W, rs, tolerance);
+  const double W_norm = scaled_W.norm();
   if (!ok && k <= kMaxEnumerated && W_norm > 0.0) {
     // Lemke may end on a ray where a solution exists unless W is copositive-plus (a symmetric
     // PSD W is): enumerate the complementary bases, exact for the few contacts of an event.
     // Its sign test on the basic variables (w_i or z_i) is absolute: tolerance times the larger
     // of their scales ‖r‖ and ‖r‖ / ‖W‖ (the solution is checked as Lemke's after)
-    dense = W;
+    dense = scaled_W;
     solver_ = Solver::kEnumeration;
     info_ =
-        run_siconos(problem, SICONOS_LCP_ENUM, tolerance * r.norm() * std::max(1.0, 1.0 / W_norm),
+        run_siconos(problem, SICONOS_LCP_ENUM, tolerance * rs.norm() * std::max(1.0, 1.0 / W_norm),
                     z_.data(), w_.data(), enum_dwork_, enum_iwork_);
-    ok = info_ == 0 && check(W, r, tolerance);
+    ok = info_ == 0 && check(scaled_W, rs, tolerance);
   }
   NM_free_not_dense(M);  // (the data is dense's)
   if (!ok) {
     if (info_ == 0) info_ = -1;
     return false;
   }
-  // (roundoff below the tolerance: exact signs)
+  // (roundoff below the tolerance: exact signs); z = D z̃, w = D⁻¹ w̃
   z = z.cwiseMax(0.0);
   w = w.cwiseMax(0.0);
+  if (scaled) {
+    z = z.cwiseProduct(d);
+    w = w.cwiseQuotient(d);
+  }
   return true;
+}
+
+double ContactLcp::row_scale(double W_ii) {
+  // 2^(−10 j) with j the nearest whole number to log2 |W_ii| / 20: |W_ii| d² in [2^-10, 2^10]
+  const double a = std::abs(W_ii);
+  if (!(a > 0.0) || !std::isfinite(a)) return 1.0;
+  const double j = std::round(std::log2(a) / 20.0);
+  return j == 0.0 ? 1.0 : std::ldexp(1.0, -10 * int(j));
 }
 
 bool ContactLcp::check(const Eigen::Ref<const MatrixXd>& W, const Eigen::Ref<const VectorXd>& r,

@@ -157,6 +157,12 @@ std::string summary_json(const Trajectory& traj, const SimulationOptions& option
     }
     j["units"] = std::move(units);
   }
+  // the base units and the derived labels (UnitSystem: J, N, W only in SI units)
+  if (provenance && !provenance->unit_system.empty()) {
+    json system = json::object();
+    for (const auto& [name, unit] : provenance->unit_system) system[name] = unit;
+    j["unit_system"] = std::move(system);
+  }
 
   // names are user text: invalid UTF-8 is replaced (U+FFFD) rather than refused
   std::string text = j.dump(2, ' ', false, json::error_handler_t::replace);

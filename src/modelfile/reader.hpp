@@ -416,6 +416,8 @@ class Reader {
   void add_gap_outputs(const YAML::Node& root, Model& model, std::vector<Expr>& outputs);
   // units: {x: m, theta: rad} (each coordinate's unit, for the plots' labels)
   void read_units(const YAML::Node& root, Model& model);
+  // units: {length: mm, mass: g, time: ms} (the base units, from their accepted lists)
+  void read_unit_system(const YAML::Node& units_node, UnitSystem& units);
   void check_mass_matrix(const YAML::Node& root, const Model& model);
   void check_settings(const YAML::Node& root, Model& model);
   Index coordinate(const YAML::Node& node);

@@ -9,6 +9,7 @@
 #include <limits>
 #include <set>
 #include <string>
+#include <string_view>
 
 #include <yaml-cpp/yaml.h>
 #include <Eigen/Cholesky>
@@ -296,18 +297,66 @@ void Reader::read_output(const YAML::Node& root, Model& model) {
   model.output_program = compile(exprs, out ? out : root, "the output expressions");
 }
 
+namespace {
+bool is_base_unit_key(const std::string& key) {
+  return key == "length" || key == "mass" || key == "time";
+}
+}  // namespace
+
+// units: {length: mm, mass: g, time: ms}: the model's base units, each from its accepted list
+// (UnitSystem::kLengths, kMasses, kTimes); with a coordinate named like one of the keys the key
+// is refused, since it names the base unit
+void Reader::read_unit_system(const YAML::Node& u, UnitSystem& units) {
+  auto one = [&](const char* key, const auto& accepted, std::string& out) {
+    const YAML::Node v = u[key];
+    if (!v) return;
+    const bool taken =
+        std::any_of(coordinates_.begin(), coordinates_.end(),
+                    [&](const std::string& c) { return c == key || names_coordinate(key, c); });
+    if (taken) {
+      fail(v,
+           std::string("units: '") + key + "' is the unit of " + key +
+               " of the model, but a coordinate is also named '" + key + "'",
+           "rename the coordinate (its unit can then be given by its name)");
+    }
+    std::string list;
+    for (std::string_view a : accepted) list += (list.empty() ? "" : ", ") + std::string(a);
+    const std::string text = v.IsScalar() ? v.Scalar() : std::string();
+    if (std::find(accepted.begin(), accepted.end(), text) == accepted.end()) {
+      fail(
+          v,
+          std::string("units: unknown unit of ") + key + " '" + text + "' (accepted: " + list + ")",
+          std::string("units: {") + key + ": " + std::string(accepted[1]) +
+              "} (the unit labels the console, the summary and the plots; it changes no "
+              "number: write the model's numbers in it)");
+    }
+    out = text;
+  };
+  one("length", UnitSystem::kLengths, units.length);
+  one("mass", UnitSystem::kMasses, units.mass);
+  one("time", UnitSystem::kTimes, units.time);
+}
+
 void Reader::read_units(const YAML::Node& root, Model& model) {
   const std::vector<std::string>& names = model.system.coordinate_names();
   model.coordinate_units.assign(names.size(), "");
-  // a body's coordinates: its centre of mass in m, its angle in rad, its quaternion's
-  // components without unit (the multibody layer's conventions, docs/multibody.md)
+  model.output_units.assign(model.output_names.size(), "");
+  const YAML::Node u = root["units"];
+  if (u && (!u.IsMap() || u.size() == 0)) {
+    fail(u, "units must map coordinates (or output expressions) to their units",
+         "units: {x: m, theta: rad}, or the base units: units: {length: mm, mass: g, time: ms}");
+  }
+  // the base units: length, mass, time (SI unless given), from the accepted lists
+  if (u) read_unit_system(u, model.unit_system);
+  // a body's coordinates: its centre of mass in the length unit, its angle in rad, its
+  // quaternion's components without unit (the multibody layer's conventions, docs/multibody.md)
   if (model.multibody) {
     for (std::size_t i = 0; i < names.size(); ++i) {
       const std::string& c = names[i];
       const std::string suffix =
           c.substr(c.rfind('.') == std::string::npos ? c.size() : c.rfind('.'));
       if (suffix == ".x" || suffix == ".y" || suffix == ".z") {
-        model.coordinate_units[i] = "m";
+        model.coordinate_units[i] = model.unit_system.length;
       } else if (suffix == ".theta") {
         model.coordinate_units[i] = "rad";
       } else if (suffix == ".u0" || suffix == ".u1" || suffix == ".u2" || suffix == ".u3") {
@@ -315,17 +364,12 @@ void Reader::read_units(const YAML::Node& root, Model& model) {
       }
     }
   }
-  model.output_units.assign(model.output_names.size(), "");
   // units: {x: m, theta: rad, s: m}: each named coordinate's or output expression's unit, a
   // short text
-  const YAML::Node u = root["units"];
   if (!u) return;
-  if (!u.IsMap() || u.size() == 0) {
-    fail(u, "units must map coordinates (or output expressions) to their units",
-         "units: {x: m, theta: rad}");
-  }
   for (const auto& kv : u) {
     const std::string& name = kv.first.Scalar();
+    if (is_base_unit_key(name)) continue;  // (read_unit_system)
     const auto output = std::find(model.output_names.begin(), model.output_names.end(), name);
     const bool is_coordinate =
         std::any_of(coordinates_.begin(), coordinates_.end(),

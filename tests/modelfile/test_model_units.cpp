@@ -117,5 +117,75 @@ TEST(ModelUnits, SummaryWritesTheUnitsByColumnName) {
   EXPECT_FALSE(nlohmann::json::parse(summary_json(run.trajectory, m.options)).contains("units"));
 }
 
+// units: {length: mm, mass: g, time: ms} (the repro's ball): the bodies' coordinates in mm, and
+// every derived label from the base units — never N, J, W outside SI (4.41e3 g·mm²/ms² is
+// 4.41 J, not 4.41e3 J); a unit changes no number
+const std::string kBallMm = R"(name: ball mm g ms
+parameters: {m: 500, r: 100, g: 9.81e-3, h0: 1000, e: 0.7}
+bodies:
+  - {name: ball, type: rigid, mass: m, inertia: 0.4*m*r^2, position: [0, 0, h0]}
+forces:
+  - {type: gravity, g: [0, 0, -g]}
+contacts:
+  - {name: floor, body: ball, shape: sphere, radius: r, restitution: e}
+)";
+
+// the labels derived from u: velocity, acceleration, force, energy, torque, power, and the rates
+// of an angle and of a number
+std::vector<std::string> derived_labels(const UnitSystem& u) {
+  return {u.velocity(), u.acceleration(), u.force(),     u.energy(),
+          u.torque(),   u.power(),        u.rate("rad"), u.rate("1", 2)};
+}
+
+TEST(ModelUnits, BaseUnitsLabelEveryDerivedQuantity) {
+  const Model si = parse_model(kBallMm);
+  EXPECT_TRUE(si.unit_system.is_si());
+  EXPECT_EQ(si.unit_system.time, "s");
+  EXPECT_EQ(derived_labels(si.unit_system),
+            (std::vector<std::string>{"m/s", "m/s²", "N", "J", "N·m", "W", "rad/s", "1/s²"}));
+  EXPECT_EQ(si.coordinate_units.front(), "m");  // ball.x
+
+  const Model mm = parse_model(kBallMm + "units: {length: mm, mass: g, time: ms, ball.z: mm}\n");
+  EXPECT_FALSE(mm.unit_system.is_si());
+  EXPECT_EQ(mm.unit_system.length, "mm");
+  EXPECT_EQ(mm.unit_system.mass, "g");
+  EXPECT_EQ(mm.unit_system.time, "ms");
+  EXPECT_EQ(derived_labels(mm.unit_system),
+            (std::vector<std::string>{"mm/ms", "mm/ms²", "g·mm/ms²", "g·mm²/ms²", "g·mm²/ms²",
+                                      "g·mm²/ms³", "rad/ms", "1/ms²"}));
+  // the body's centre in mm, its rotation's components without unit
+  EXPECT_EQ(mm.coordinate_units, (std::vector<std::string>{"mm", "mm", "mm", "1", "1", "1", "1"}));
+  // one base unit given: the others SI, and no N or J (kg·mm/s² is 1e-3 N)
+  const Model km = parse_model(kBallMm + "units: {length: mm}\n");
+  EXPECT_EQ(km.unit_system.force(), "kg·mm/s²");
+  EXPECT_EQ(km.unit_system.energy(), "kg·mm²/s²");
+  EXPECT_EQ(km.unit_system.velocity(), "mm/s");
+  // no number changes: the same parameters and initial state, bit for bit
+  EXPECT_EQ(mm.q0, si.q0);
+  EXPECT_EQ(mm.parameters, si.parameters);
+}
+
+// the error of parsing `text`: at line:column, its text holding `message`
+void expect_error(const std::string& text, int line, int column, const std::string& message) {
+  const Failure f = failure_of(text);
+  EXPECT_EQ(f.line, line) << f.what;
+  EXPECT_EQ(f.column, column) << f.what;
+  EXPECT_NE(f.what.find(message), std::string::npos) << f.what;
+}
+
+TEST(ModelUnits, UnknownBaseUnitsAreRefusedWithTheAcceptedList) {
+  expect_error(kSlider + "units: {time: sec}\n", 4, 15,
+               "units: unknown unit of time 'sec' (accepted: s, ms, us, min, h) (hint: units: "
+               "{time: ms}");
+  expect_error(kSlider + "units: {s: m, length: inch}\n", 4, 23,
+               "unknown unit of length 'inch' (accepted: m, mm, cm, km, um, nm)");
+  expect_error(kSlider + "units: {mass: [g]}\n", 4, 15,
+               "unknown unit of mass '' (accepted: kg, g, mg)");
+  // a coordinate named like a base unit: the key is the base unit's, said so
+  expect_error("coordinates: [time]\nkinetic_energy: time_dot^2\nunits: {time: s}\n", 3, 15,
+               "units: 'time' is the unit of time of the model, but a coordinate is also named "
+               "'time' (hint: rename the coordinate");
+}
+
 }  // namespace UKDYN_TEST_FILE
 }  // namespace ukdyn

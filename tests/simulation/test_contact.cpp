@@ -94,6 +94,36 @@ TEST(ContactLcp, EnumerationSolvesWhatLemkeMissesOnANonPsdMatrix) {
   EXPECT_NEAR(lcp.z()[1], 1.0 / 3.0, 1e-14);
 }
 
+// W = s [2 1; 1 2], r = −√s (1, 1): the problem of the same contacts with each row scaled by √s
+// (a gap written as √s g), whose solution is z = (1/3, 1/3) / √s, w = 0, for any s. Lemke on the
+// unscaled W found none at s = 1e-180 (its pivots compared with absolute tolerances): the
+// solvers see W̃ = D W D with d_i a power of two near W_ii^(−1/2) (row_scale), 1 in SI units.
+TEST(ContactLcp, SolvesTheSameProblemAtAnyRowScale) {
+  ContactLcp lcp(2);
+  Eigen::Matrix2d W0;
+  W0 << 2, 1, 1, 2;
+  for (const double s : {1e-180, 1e-60, 1e-16, 1.0, 1e16, 1e60}) {
+    SCOPED_TRACE("s = " + format_number(s));
+    ASSERT_TRUE(lcp.solve(s * W0, -std::sqrt(s) * Eigen::Vector2d(1, 1)));
+    EXPECT_EQ(lcp.solver(), ContactLcp::Solver::kLemke);
+    const double z = 1.0 / (3.0 * std::sqrt(s));
+    EXPECT_NEAR(lcp.z()[0], z, 1e-14 * z);
+    EXPECT_NEAR(lcp.z()[1], z, 1e-14 * z);
+    EXPECT_NEAR(lcp.w()[0], 0.0, 1e-14 * std::sqrt(s));
+    EXPECT_NEAR(lcp.w()[1], 0.0, 1e-14 * std::sqrt(s));
+  }
+  // the scales: powers of two that bring W_ii within [2^-10, 2^10], 1 there (SI units)
+  EXPECT_EQ(ContactLcp::row_scale(2.0), 1.0);
+  EXPECT_EQ(ContactLcp::row_scale(1e-3), 1.0);
+  EXPECT_EQ(ContactLcp::row_scale(0.0), 1.0);
+  EXPECT_EQ(ContactLcp::row_scale(-4.0), 1.0);
+  EXPECT_EQ(ContactLcp::row_scale(2e-180), std::ldexp(1.0, 300));  // log2 = −597, j = −30
+  EXPECT_EQ(ContactLcp::row_scale(2e16), std::ldexp(1.0, -30));    // log2 = 54.2, j = 3
+  const double d = ContactLcp::row_scale(2e-180);
+  EXPECT_GE(2e-180 * d * d, std::ldexp(1.0, -10));
+  EXPECT_LE(2e-180 * d * d, std::ldexp(1.0, 10));
+}
+
 // ---- a bouncing ball ----------------------------------------------------------------------------
 
 // A ball dropped from rest at height h0 on a floor with restitution e: it reaches the floor at

@@ -171,5 +171,58 @@ output: {every: 0, at: [6, 6.5, 7]}
   }
 }
 
+// The bouncing ball of the repro (e = 0.5, h0 = 1, g = 9.81, default settings) with its gap
+// written as 10^k y: the same zero set and motion, a row scale of 10^k, the contact's W of
+// 10^(2k) / m. Closed form: impacts at t_j = t0 (3 − 2 e^j), t0 = √(2 h0 / g), until the speed
+// e^j v0 falls below 1e-6 of the first, j = 20, where the ball rests: 21 contact events, 20
+// impacts and the rest at t_20 = 1.3545701. With k = −90 and below the rest stopped the run ("the
+// LCP of the closed contacts has no solution (Siconos lcp_lexicolemke)", W ~ 1e-180): the LCP is
+// now solved scaled (ContactLcp::row_scale), and every factor gives the run of y.
+TEST(ContactUnits, TheBallsGapMayCarryAnyFactor) {
+  auto run = [](const std::string& gap) {
+    const Model m = parse_model(R"(
+parameters: {m: 0.5, g: 9.81, h0: 1.0, e: 0.5}
+coordinates: [y]
+kinetic_energy: 0.5*m*y_dot^2
+potential_energy: m*g*y
+constraints:
+  - {name: floor, holonomic: )" +
+                                gap + R"(, unilateral: true, restitution: e}
+initial: {q: {y: h0}}
+simulate: {t_end: 2.0}
+output: {every: 0.01}
+)");
+    return simulate(m.system, m.q0, m.qd0, m.options);
+  };
+  const double t0 = std::sqrt(2.0 / 9.81), t20 = t0 * (3.0 - 2.0 * std::pow(0.5, 20));
+  EXPECT_NEAR(t20, 1.3545701, 1e-7);
+  const Trajectory y = run("y");
+  ASSERT_EQ(y.stats.status, Status::kOk) << y.stats.message;
+  const std::vector<ContactEvent> y_impacts = impacts_of(y);
+  ASSERT_EQ(y_impacts.size(), 20u);
+  ASSERT_EQ(y.stats.contact_events.size(), 21u);
+  ASSERT_EQ(y.stats.contact_events.back().kind, ContactEvent::Kind::kRest);
+  const double y_rest = y.stats.contact_events.back().t;
+  EXPECT_NEAR(y_rest, t20, 1e-7 * t20);
+  for (const int k : {-150, -90, -8, 0, 8}) {
+    SCOPED_TRACE("gap 1e" + std::to_string(k) + " y");
+    const Trajectory tr = run("1e" + std::to_string(k) + "*y");
+    ASSERT_EQ(tr.stats.status, Status::kOk) << tr.stats.message;
+    const std::vector<ContactEvent> impacts = impacts_of(tr);
+    ASSERT_EQ(impacts.size(), 20u);
+    ASSERT_EQ(tr.stats.contact_events.size(), 21u);
+    for (std::size_t j = 0; j < impacts.size(); ++j) {
+      EXPECT_NEAR(impacts[j].t, y_impacts[j].t, 1e-9 * y_impacts[j].t) << "impact " << j;
+    }
+    ASSERT_EQ(tr.stats.contact_events.back().kind, ContactEvent::Kind::kRest);
+    EXPECT_NEAR(tr.stats.contact_events.back().t, y_rest, 1e-9 * y_rest);
+    EXPECT_NEAR(tr.stats.contact_events.back().t, t20, 1e-7 * t20);
+    // at rest on the floor at t_end, carrying m g (λ per unit of the row: m g / 10^k)
+    EXPECT_NEAR(tr.q.back(), 0.0, 1e-9);
+    EXPECT_NEAR(tr.qd.back(), 0.0, 1e-9);
+    EXPECT_NEAR(tr.lambda.back() * std::pow(10.0, k), 0.5 * 9.81, 1e-8 * 0.5 * 9.81);
+  }
+}
+
 }  // namespace UKDYN_TEST_FILE
 }  // namespace ukdyn

@@ -28,7 +28,9 @@ namespace ukdyn {
 /// false only when no solution exists. Shaped like an Eigen decomposition: constructed with the
 /// largest size (its vectors and the enumeration's workspace reserved once; Siconos allocates its
 /// own copy of W and its pivoting tableau in each solve: at events only, never in a step),
-/// solve(), info(), solver(), z(), w().
+/// solve(), info(), solver(), z(), w(). The solvers see the problem scaled to diagonals of order
+/// one (row_scale), so that any factor on a contact's row (docs/simulation.md, "Scales and
+/// tolerances": 1e-170 to 1e8) gives the same solution.
 class ContactLcp {
  public:
   /// Reserves the buffers of problems up to max_size × max_size. @throws std::invalid_argument
@@ -49,11 +51,12 @@ class ContactLcp {
 
   /// Solves the LCP of W (k × k, k <= max_size; copied) and r (k). Returns true when Siconos
   /// reports success and the solution satisfies w = W z + r, z >= 0, w >= 0, wᵀz = 0 to
-  /// tolerance · (‖W‖ ‖z‖ + ‖r‖); when Lemke's answer fails that, the enumeration's is taken
-  /// (k <= kMaxEnumerated), so false means no solution exists (or k is larger). A solution with
-  /// z = 0 (r >= 0) is found without Siconos. @throws std::invalid_argument on sizes that do not
-  /// match or exceed max_size. Cost O(k³) per Lemke pivot sequence (at most 2^k pivots in theory,
-  /// k to 2k in practice); where Lemke fails, up to 2^k LU solves of k × k (O(2^k k³)).
+  /// tolerance · (‖W̃‖ ‖z̃‖ + ‖r̃‖) in the scaled problem (row_scale); when Lemke's answer fails that,
+  /// the enumeration's is taken (k <= kMaxEnumerated), so false means no solution exists (or k is
+  /// larger). A solution with z = 0 (r >= 0) is found without Siconos. @throws
+  /// std::invalid_argument on sizes that do not match or exceed max_size. Cost O(k³) per Lemke
+  /// pivot sequence (at most 2^k pivots in theory, k to 2k in practice); where Lemke fails, up to
+  /// 2^k LU solves of k × k (O(2^k k³)).
   bool solve(const Eigen::Ref<const MatrixXd>& W, const Eigen::Ref<const VectorXd>& r,
              double tolerance = 1e-9);
   /// Siconos's info of the last solve (0: success; the enumeration's when Lemke failed), or −1
@@ -65,6 +68,12 @@ class ContactLcp {
   Eigen::Ref<const VectorXd> z() const { return z_.head(size_); }
   /// The slacks w = W z + r (size k) of the last solve.
   Eigen::Ref<const VectorXd> w() const { return w_.head(size_); }
+  /// The factor d_i of row and column i in the scaled problem the solvers see, W̃ = D W D,
+  /// r̃ = D r (z = D z̃, w = D⁻¹ w̃): a power of two near |W_ii|^(−1/2), 2^(−10 j) with j the
+  /// whole number nearest to log2 |W_ii| / 20, so that |W_ii| d_i² lies in [2^−10, 2^10]; 1 for
+  /// |W_ii| there (every model in SI units), and for W_ii zero or not finite. Exact in binary:
+  /// the scaled problem is the same problem. Cost: a logarithm.
+  static double row_scale(double W_ii);
 
  private:
   // true when z_, w_ (k) satisfy the LCP of W, r to tolerance (w_ recomputed as W z + r)
@@ -72,7 +81,8 @@ class ContactLcp {
              double tolerance);
 
   Index max_size_ = 0, size_ = 0;
-  VectorXd r_, z_, w_;              // (max_size) r, z, w handed to Siconos
+  VectorXd r_, z_, w_;              // (max_size) r̃, z̃, w̃ handed to Siconos, then z, w
+  VectorXd d_;                      // (max_size) the scale D of the last solve (row_scale)
   std::vector<double> enum_dwork_;  // (3 m + m², m = min(max_size, kMaxEnumerated)) lcp_enum's
   std::vector<int> enum_iwork_;     // (2 m) lcp_enum's pivots and basis flags
   int info_ = 0;

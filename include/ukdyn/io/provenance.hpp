@@ -39,10 +39,14 @@ struct RunProvenance {
   std::string model_sha256;  ///< sha256_hex of the model's text
   std::vector<ProvenanceParameter> parameters;  ///< every parameter, in name order
   std::vector<std::string> arguments;           ///< the command line, argv[0] first
-  /// each coordinate's and output expression's unit (Model::coordinate_units, output_units;
-  /// "" not known), by column name: summary.json's `units`, which the plots label their axes
-  /// with; empty: not written
+  /// the time's unit (column `t`), each coordinate's and output expression's unit
+  /// (Model::coordinate_units, output_units; "" not known), by column name: summary.json's
+  /// `units`, which the plots label their axes with; empty: not written
   std::vector<std::pair<std::string, std::string>> units;
+  /// the model's base units and the labels derived from them (Model::units, UnitSystem):
+  /// length, mass, time, velocity, force, energy, power, by name: summary.json's
+  /// `unit_system`, which the plots derive every other label from; empty: not written
+  std::vector<std::pair<std::string, std::string>> unit_system;
 };
 
 }  // namespace ukdyn

@@ -16,6 +16,7 @@
 
 #include "ukdyn/core/system.hpp"
 #include "ukdyn/modelfile/expression.hpp"
+#include "ukdyn/modelfile/units.hpp"
 #include "ukdyn/modelfile/visual.hpp"
 #include "ukdyn/simulation/simulate.hpp"
 
@@ -99,9 +100,13 @@ struct Model {
   /// columns (see output_names).
   expr::Program output_program;
   /// Each coordinate's unit (n, in coordinate order), for labels only (nothing computes with
-  /// it): `units:` of the file, else `m`, `rad` and `1` (quaternion components) for the
-  /// bodies' coordinates of a multibody model, else "" (not known).
+  /// it): `units:` of the file, else the length unit (`m`), `rad` and `1` (quaternion
+  /// components) for the bodies' coordinates of a multibody model, else "" (not known).
   std::vector<std::string> coordinate_units;
+  /// The base units (`units: {length: mm, mass: g, time: ms}`; SI when not given) and the
+  /// labels derived from them: the console's, summary.json's `unit_system`, the plots'. Labels
+  /// only: the model's numbers are in these units, nothing converts them.
+  UnitSystem unit_system;
   /// Each output expression's unit (output_names order): `units:` of the file, else "".
   std::vector<std::string> output_units;
   /// `control:` — the controller (with its nominal model) that run_model() applies to the
