@@ -28,9 +28,11 @@ ContactModes::ContactModes(const Controller& ctrl) : lcp_(0) {
   for (Index k = 0; k < model.constraint_count(); ++k) {
     if (model.constraint(k).is_unilateral()) contacts_.push_back(k);
   }
+  frictions_ = model.friction_contacts();
   const Index n = model.coordinate_count(), K = Index(contacts_.size());
   saved_.assign(contacts_.size(), -1);
   last_.assign(contacts_.size(), -1);
+  first_.assign(contacts_.size(), 0);
   closed_.reserve(contacts_.size());
   decided_.reserve(contacts_.size());
   row_A_ = MatrixXd::Zero(1, n);
@@ -52,6 +54,21 @@ void ContactModes::mirror(const std::vector<signed char>* run_modes, ControlWork
   if (run_modes == nullptr) return;
   for (Index k : contacts_) {
     cws.model.activity_override[std::size_t(k)] = (*run_modes)[std::size_t(k)];
+  }
+}
+
+void ContactModes::mirror(const Workspace* run, ControlWorkspace& cws) const {
+  if (run == nullptr) return;
+  Workspace& model = cws.model;
+  mirror(&run->activity_override, cws);
+  // each Coulomb contact sticks (its stick constraint held, its friction off) or slides (with
+  // the run's slip hint) in the model as in the run
+  for (const FrictionContact& c : frictions_) {
+    const auto k = std::size_t(c.stick_constraint), i = std::size_t(c.force);
+    model.activity_override[k] = run->activity_override[k];
+    model.nonideal_enabled[i] = run->nonideal_enabled[i];
+    model.slip_hint.col(c.force) = run->slip_hint.col(c.force);
+    model.slip_hint_held[i] = run->slip_hint_held[i];
   }
 }
 
@@ -178,11 +195,14 @@ void ContactModes::anticipate(const Controller& ctrl, ControlWorkspace& cws,
                               const Eigen::Ref<const VectorXd>& q,
                               const Eigen::Ref<const VectorXd>& qd, double t, ControlStatus s) {
   if (run_modes == nullptr) return;
-  // the contacts the run held at the previous evaluation and releases in this one
+  // the contacts the run held at the previous evaluation (1, or −1: its time interval's, as
+  // before the run's first modes) and releases in this one; first_ marks those seen open for the
+  // first time (the start's LCP: they count when they touch, below)
   closed_.clear();
   for (std::size_t i = 0; i < contacts_.size(); ++i) {
     const signed char now = (*run_modes)[std::size_t(contacts_[i])];
-    if (last_[i] == 1 && now == 0) closed_.push_back(Index(i));
+    if (last_[i] != 0 && now == 0) closed_.push_back(Index(i));
+    first_[i] = last_[i] == -1 ? 1 : 0;
     last_[i] = now;
   }
   decided_.clear();
@@ -204,6 +224,11 @@ void ContactModes::anticipate(const Controller& ctrl, ControlWorkspace& cws,
     if (gd[0] > kSignificant * (A_c_.row(Index(j)).norm() * qd.norm() + std::abs(gd[0] - Aqd))) {
       continue;
     }
+    // (at the start: only a closed gap, g <= 1e-9 ‖A_i‖ max(1, ‖q‖))
+    if (first_[std::size_t(closed_[j])] &&
+        g[0] > kSignificant * A_c_.row(Index(j)).norm() * std::max(1.0, q.norm())) {
+      continue;
+    }
     closed_[std::size_t(k)] = closed_[j];
     A_c_.row(k) = A_c_.row(Index(j));
     b_c_[k] = b_c_[Index(j)];
@@ -218,6 +243,7 @@ void ContactModes::anticipate(const Controller& ctrl, ControlWorkspace& cws,
     return;
   }
   lambda_.head(k) = lcp_.z();
+  held_reactions(ctrl, cws, q, qd, t, k);
   if (!(lambda_.head(k).maxCoeff() > 0.0)) return;
   // ΔF = −K A_r P A_cᵀ λ: the control's answer to the contact forces A_cᵀ λ
   Kf_.noalias() = A_c_.topRows(k).transpose() * lambda_.head(k);
@@ -241,6 +267,43 @@ void ContactModes::anticipate(const Controller& ctrl, ControlWorkspace& cws,
   }
   cws.qdd -= scratch_n_;
   cws.power = cws.Qc_control.dot(qd);
+}
+
+void ContactModes::held_reactions(const Controller& ctrl, ControlWorkspace& cws,
+                                  const Eigen::Ref<const VectorXd>& q,
+                                  const Eigen::Ref<const VectorXd>& qd, double t, Index k) {
+  // the contacts whose force the requirements decide nothing of: W̃'s row and column zero (the
+  // requirements remove their direction: a requirement row that duplicates the contact's) and
+  // r̃ at roundoff of its terms, so that any λ_j >= 0 solves the LCP
+  std::vector<signed char>& modes = cws.model.activity_override;
+  bool any = false;
+  for (Index j = 0; j < k; ++j) {
+    const double scale =
+        A_c_.row(j).norm() * (cws.model.a.norm() + cws.qdd.norm()) + std::abs(b_c_[j]);
+    const bool free = W_.row(j).head(k).isZero(0.0) && W_.col(j).head(k).isZero(0.0) &&
+                      std::abs(r_[j]) <= kSignificant * scale;
+    const std::size_t i = std::size_t(closed_[std::size_t(j)]);
+    saved_[i] = modes[std::size_t(contacts_[i])];
+    if (free) modes[std::size_t(contacts_[i])] = 1;
+    any = any || free;
+  }
+  if (!any) return;
+  // they carry what they carry held under the control computed with them held: what the
+  // uncontrolled constrained system carries (the Gauss law loads no held contact; docs/contact.md,
+  // "Contacts under control"); the control with them open is then computed again
+  if (compute_control(ctrl, cws, q, qd, t) == ControlStatus::kOk) {
+    for (Index j = 0; j < k; ++j) {
+      const std::size_t i = std::size_t(closed_[std::size_t(j)]);
+      if (modes[std::size_t(contacts_[i])] == saved_[i]) continue;
+      const Index row = ctrl.model().row_offset(contacts_[i]);
+      lambda_[j] = std::max(0.0, cws.model.lambda[row] + cws.model.lambda_nonideal[row]);
+    }
+  }
+  for (Index j = 0; j < k; ++j) {
+    const std::size_t i = std::size_t(closed_[std::size_t(j)]);
+    modes[std::size_t(contacts_[i])] = saved_[i];
+  }
+  compute_control(ctrl, cws, q, qd, t);
 }
 
 std::string ContactModes::pull_message(const Controller& ctrl, double t, Index row,

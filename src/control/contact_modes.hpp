@@ -36,13 +36,22 @@ class ContactModes {
   // the unilateral constraints of the controller's model (their System indices)
   explicit ContactModes(const Controller& ctrl);
 
-  // true when the model has unilateral constraints
-  bool any() const { return !contacts_.empty(); }
+  // true when the model has unilateral constraints or Coulomb contacts: modes that the run
+  // switches and the model follows (mirror)
+  bool any() const { return !contacts_.empty() || !frictions_.empty(); }
 
-  // the controller's model holds the contacts as the run does: run_modes (the run's
+  // the controller's model holds the contacts as the run does: the run's modes (its
   // Workspace::activity_override, K entries, the plant's constraint indices) copied into the
-  // model workspace's overrides for each contact. A null run_modes leaves them as they are.
-  // O(contacts).
+  // model workspace's overrides for each contact; and each Coulomb contact sticks or slides in
+  // the model as in the run: its stick constraint's override, its force's nonideal_enabled,
+  // slip_hint column and slip_hint_held (the plant's non-ideal indices: the controlled system
+  // keeps them). A stuck contact is then a physical constraint of the model, whose control is
+  // computed with it held (a rolling sphere pushed at its centre: F = 7/5 m a), not against the
+  // sliding law's regularized friction at v_rel ~ 0, whose slope mu N / eps made the controlled
+  // run stiff. A null run leaves them as they are. O(contacts + n · frictions).
+  void mirror(const Workspace* run, ControlWorkspace& cws) const;
+  // the contacts' part of mirror: run_modes (K entries, the run's activity_override) into the
+  // model's overrides for each contact (null: nothing). O(contacts).
   void mirror(const std::vector<signed char>* run_modes, ControlWorkspace& cws) const;
 
   // After compute_control gave `s` at (q, q', t) with the mirrored modes: when the requirements
@@ -69,7 +78,11 @@ class ContactModes {
   // run's LCP, which sees W = A_c P A_cᵀ and this force, has the same solution λ. Call after
   // settle with the run's modes (null: nothing). Cost O(contacts) when no contact was released;
   // else the LCP above (O(k n² + k³)). Leaves the control unchanged when λ = 0 or there is no
-  // solution (the run's LCP then decides alone).
+  // solution (the run's LCP then decides alone). The start's LCP counts as such an evaluation
+  // for the contacts that touch (g and g' at roundoff) when the run's modes first open them.
+  // Where λ_j is free (a requirement row duplicates contact j's: W̃'s row and column zero, r̃_j
+  // = 0), the contact takes its multiplier under the control computed with it held
+  // (held_reactions): it carries what the uncontrolled constrained system carries.
   void anticipate(const Controller& ctrl, ControlWorkspace& cws,
                   const std::vector<signed char>* run_modes, const Eigen::Ref<const VectorXd>& q,
                   const Eigen::Ref<const VectorXd>& qd, double t, ControlStatus s);
@@ -87,12 +100,23 @@ class ContactModes {
                     double t);
   // W̃ and r̃ of the closed contacts under the control in cws (computed with them open)
   void controlled_delassus(const Controller& ctrl, ControlWorkspace& cws);
+  // anticipate's tie-break: the contacts among the k closed_ ones whose λ the LCP leaves free
+  // (W̃'s row and column zero, r̃ at roundoff: a requirement row duplicates the contact's) get
+  // their multiplier held under the control computed with them held (the uncontrolled
+  // reaction, Gauss law) in lambda_; cws holds the control with them open again afterwards.
+  // Cost: nothing unless one is free; else two evaluations of compute_control.
+  void held_reactions(const Controller& ctrl, ControlWorkspace& cws,
+                      const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd,
+                      double t, Index k);
   // the failure text: `names` pull, the requirement `row` missed by `missed` with them held
   std::string pull_message(const Controller& ctrl, double t, Index row, double missed) const;
 
+  // the model's Coulomb contacts (System::friction_contacts)
+  std::vector<FrictionContact> frictions_;
   std::vector<Index> contacts_;      // (contacts) System indices of the unilateral constraints
   std::vector<signed char> saved_;   // (contacts) the mirrored overrides, restored after a trial
   std::vector<signed char> last_;    // (contacts) the run's modes at the previous anticipate()
+  std::vector<signed char> first_;   // (contacts) anticipate() sees its run mode 0 first
   std::vector<Index> closed_;        // (≤ contacts) positions in contacts_ of the closed ones
   std::vector<Index> decided_;       // (≤ contacts) System indices of the last LCP's contacts
   MatrixXd row_A_;                   // (1 × n) a contact's row

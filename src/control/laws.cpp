@@ -17,6 +17,12 @@
 
 namespace ukdyn {
 
+namespace {
+// a requirement row the control cannot move: its row of X (S) within this fraction of the
+// largest, relative to the rows of A_r (solve_law_on's feasibility test)
+constexpr double kUnmoved = 1e-10;
+}  // namespace
+
 namespace control_detail {
 
 void apply_law(const Controller& ctrl, ControlWorkspace& ws, const Eigen::Ref<const VectorXd>& r,
@@ -145,12 +151,28 @@ ControlStatus control_detail::solve_law_on(const Controller& ctrl, ControlWorksp
     ws.residual -= ws.e;
     solution_norm = ws.u.norm();
   }
-  // row i met when |residual_i| <= tol (‖row_i‖ ‖solution‖ + |e_i|)
+  // row i met when |residual_i| <= tol (‖row_i‖ ‖solution‖ + |e_i| + ‖A_r,i‖ ‖a_p‖ + |b_r,i|):
+  // the last two are the terms of e_i = b_r,i − A_r,i a_p, whose roundoff they bound. A row that
+  // the control cannot move (row_i = 0 to roundoff, 1e-10 of the largest ‖row_j‖ / ‖A_r,j‖:
+  // a requirement that duplicates a held contact or a joint) is decided by the physical
+  // constraints, and met when they hold it to 100 tol of those terms: at a run's stage states,
+  // off the constraints' manifold by the step's error, the requirement's stabilization turns
+  // that drift into e_i ~ 1e-8 of its terms, which no control can meet (it was "not met", the
+  // contact was let go, or the step failed; tests/control/test_control_contacts.cpp)
   const MatrixXd& rows = control_detail::gauss_direct(ctrl) ? ws.X : ws.XS;
   const double tol = ctrl.options().feasibility_tolerance;
+  const double qdd_p = ws.model.qdd.norm();
+  double moved = 0.0;  // the largest ‖row_j‖ / ‖A_r,j‖
+  for (Index i = 0; i < m_r; ++i) {
+    const double a = A.row(i).norm();
+    if (a > 0.0) moved = std::max(moved, rows.row(i).norm() / a);
+  }
   ws.rows_not_met = 0;
   for (Index i = 0; i < m_r; ++i) {
-    const double scale = rows.row(i).norm() * solution_norm + std::abs(ws.e[i]);
+    const double a = A.row(i).norm(), x = rows.row(i).norm();
+    const double terms = a * qdd_p + std::abs(ws.req.b[i]);
+    const bool decided = a > 0.0 && x <= kUnmoved * moved * a;
+    const double scale = x * solution_norm + std::abs(ws.e[i]) + (decided ? 100.0 : 1.0) * terms;
     const bool ok = std::abs(ws.residual[i]) <= tol * scale;
     ws.met[std::size_t(i)] = ok ? 1 : 0;
     if (!ok) ++ws.rows_not_met;

@@ -200,7 +200,7 @@ void ControlledPlant::force(ControlledScratch& w, const Eigen::Ref<const VectorX
                      std::memcmp(q.data(), w.q_last.data(), sizeof(double) * std::size_t(n)) == 0 &&
                      std::memcmp(qd.data(), w.qd_last.data(), sizeof(double) * std::size_t(n)) == 0;
   if (!again) {
-    w.contacts.mirror(w.run_modes, cws);
+    w.contacts.mirror(w.run_ws, cws);
     const bool own = w.run_ws != nullptr && w.run_ws->callables.get() == &w;
     s = control_detail::compute_control_in(ctrl, cws, q, qd, t, own ? w.run_ws : nullptr);
   }
@@ -408,13 +408,7 @@ System build_controlled(const std::shared_ptr<const ControlledPlant>& st, bool s
       spec.mu = c->mu;
       spec.mu_static = c->mu_static;
       spec.coordinates = c->coordinates;
-      if (c->kinematics) {
-        // a contact point's friction: not under control yet (a sphere rolling under a pace
-        // requirement ran right, but its stuck phase took steps of ~5e-6 s: not understood)
-        throw std::invalid_argument(
-            "ukdyn::simulate_controlled: Coulomb friction at contact point '" +
-            plant.nonideal_name(i) + "' under a controller is not supported yet");
-      }
+      spec.kinematics = c->kinematics;
       spec.regularization_velocity = c->eps;
       spec.name = plant.nonideal_name(i);
       spec.surface_velocity = c->surface_velocity;
@@ -530,8 +524,8 @@ ControlledTrajectory simulate_controlled(
   detail::EnergyBalance balance;  // the plant's, with the control's work
   ControlWorkspace cws(ctrl);
   control_detail::ContactModes sample_contacts(ctrl);
-  const std::vector<signed char>* run_modes = nullptr;  // the run's, once it starts
-  const ControlledScratch* run_scratch = nullptr;       // the run's control, once it starts
+  const Workspace* run_ws = nullptr;               // the run's (its modes), once it starts
+  const ControlledScratch* run_scratch = nullptr;  // the run's control, once it starts
   std::string pull;
   VectorXd q(n), qd(n), qdd(n);
   o.sample_sink = [&](const Trajectory& s) {
@@ -587,7 +581,7 @@ ControlledTrajectory simulate_controlled(
          run_scratch->cws.status == ControlStatus::kRequirementsNotMet)) {
       at_sample = &run_scratch->cws;
     } else {
-      sample_contacts.mirror(run_modes, cws);
+      sample_contacts.mirror(run_ws, cws);
       ControlStatus cs = compute_control(ctrl, cws, q, qd, t);
       sample_contacts.settle(ctrl, cws, q, qd, t, cs, pull);
       at_sample = &cws;
@@ -672,7 +666,7 @@ ControlledTrajectory simulate_controlled(
         scratch.run_modes = &ws.activity_override;
         scratch.run_ws = &ws;  // (its own evaluation, whose factor of M the control may adopt)
         if (run_scratch == nullptr) {
-          run_modes = &ws.activity_override;
+          run_ws = &ws;
           run_scratch = &scratch;
         }
       },
