@@ -168,7 +168,9 @@ void MultibodyReader::read_contacts() {
 // body's contact"): each entry {friction: coulomb, constraint: <contact>, mu, mu_static,
 // regularization_velocity} slides the contact point (mb::Multibody::add_contact_friction). What
 // is not supported is refused where it is written: coordinates: (the contact point is the
-// sliding velocity), surface_velocity:, viscous or given C, a disk contact, a plane on a body.
+// sliding velocity), surface_velocity:, viscous or given C. A plane of a moving body, a disk's
+// rim point and two spheres take friction too: the sliding velocity is then the relative
+// velocity of the two material points at the contact point.
 void MultibodyReader::read_contact_frictions() {
   const YAML::Node ns = root_["nonideal"];
   if (!ns) return;
@@ -186,8 +188,8 @@ void MultibodyReader::read_contact_frictions() {
     if (f["surface_velocity"])
       r_.fail(f["surface_velocity"],
               "a surface velocity under a body's contact is not supported yet",
-              "leave surface_velocity out (a moving plane: a plane on a body is not supported "
-              "yet either)");
+              "leave surface_velocity out (a moving surface: put the plane on a driven body, "
+              "plane: {body: <it>}; docs/contact.md)");
     const YAML::Node law = require(f, "friction", "a non-ideal force", "friction: coulomb");
     if (!law.IsScalar() || law.Scalar() != "coulomb")
       r_.fail(law,
@@ -207,17 +209,6 @@ void MultibodyReader::read_contact_frictions() {
     const std::string what = "the friction at contact '" + name + "'";
     if (!seen.insert(name).second)
       r_.fail(cn, what + " is declared twice", "one coulomb friction per contact");
-    if (c->type == mb::JointType::kContactSpheres)
-      r_.fail(cn, what + ": friction between two spheres is not supported yet",
-              "a point or sphere contact with a plane of the ground takes friction");
-    if (c->type == mb::JointType::kContactDisk)
-      r_.fail(cn, what + ": friction at a disk contact is not supported yet",
-              "a point or sphere contact takes friction (a disk rolling on its rim: a sphere "
-              "contact of the rim's radius at the rim point, or rolling_disk: for no slip)");
-    if (const YAML::Node pl = c->node["plane"];
-        pl && pl["body"] && pl["body"].IsScalar() && pl["body"].Scalar() != "ground")
-      r_.fail(cn, what + ": friction on a plane of a moving body is not supported yet",
-              "a plane of the ground takes friction");
     const double mu = non_negative(require(f, "mu", what, "mu: 0.3"), what + " mu");
     std::optional<double> mu_static;
     if (const YAML::Node ms = f["mu_static"]) {

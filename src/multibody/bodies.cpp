@@ -592,26 +592,21 @@ MultibodyModel Multibody::build() const {
         (j->type != JointType::kContact && j->type != JointType::kContactDisk &&
          j->type != JointType::kContactSpheres))
       throw std::invalid_argument(what + ": there is no contact of that name");
-    if (j->type == JointType::kContactSpheres)
-      throw std::invalid_argument(what +
-                                  ": friction between two spheres is not supported yet (a "
-                                  "point or sphere contact with a plane of the ground takes it)");
-    if (j->type == JointType::kContactDisk)
-      throw std::invalid_argument(what +
-                                  ": friction at a disk contact is not supported yet (a "
-                                  "point or sphere contact takes it)");
-    if (j->parent != kGround)
-      throw std::invalid_argument(what +
-                                  ": friction on a plane of a moving body is not "
-                                  "supported yet (a plane of the ground takes it)");
+    const BodyRef P = detail::body_ref(out.bodies, j->parent);
     const BodyRef C = detail::body_ref(out.bodies, j->child);
-    const bool planar = C.kind == BodyKind::kPlanar;
+    const bool planar = C.kind == BodyKind::kPlanar || (!P.ground() && P.kind == BodyKind::kPlanar);
     CoulombFriction spec;
     spec.constraint = cf.contact;
     spec.mu = cf.mu;
     spec.mu_static = cf.mu_static;
     spec.regularization_velocity = cf.eps;
-    spec.kinematics = detail::contact_kinematics(*j, C, planar);
+    // a point or sphere (or a planar model's disk, a circle) on a plane of the ground: the
+    // contact point's own velocity; on a plane of a moving body, a spatial disk's rim point,
+    // two spheres: the relative velocity of the material points there
+    const bool ground_plane = P.ground() && j->type != JointType::kContactSpheres &&
+                              (j->type == JointType::kContact || planar);
+    spec.kinematics = ground_plane ? detail::contact_kinematics(*j, C, planar)
+                                   : detail::relative_contact_kinematics(*j, P, C, planar, out.q0);
     sb.add(coulomb_friction(spec));
   }
   return MultibodyModel{sb.build(),

@@ -5,7 +5,9 @@
 // sphere outside a sphere (Row::kNorm, |c − o| − (r1 + r2)) — both in closed form in
 // kinematics.cpp — and the checks build() makes before it adds them as unilateral constraints
 // (the factories mb::contact, mb::contact_disk and mb::contact_spheres: bodies.cpp, with the
-// other joints').
+// other joints'); and the contact point's kinematics for Coulomb friction there
+// (ContactKinematics, docs/contact.md, "Friction at a body's contact"): of a point or sphere on
+// a plane of the ground, and relative to the other body's material point otherwise.
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
@@ -169,6 +171,145 @@ ContactKinematics contact_kinematics(const Joint& j, const BodyRef& C, bool plan
     if (!planar) {
       J.row(2) = t2.transpose() * JP.leftCols(cols);
       bias[2] = t2.dot(g);
+    }
+  };
+  return kin;
+}
+
+}  // namespace ukdyn::mb::detail
+
+namespace ukdyn::mb::detail {
+
+namespace {
+// J_ω (3 × 7) of body b's angular velocity ω = J_ω q' (the body's coordinates): planar e_z on
+// θ, rigid 2 G_v(u) (as the ground-plane kinematics take it), none for a particle or the ground
+Eigen::Matrix<double, 3, 7> omega_jacobian(const BodyRef& b, const Eigen::Ref<const VectorXd>& q) {
+  Eigen::Matrix<double, 3, 7> Jw = Eigen::Matrix<double, 3, 7>::Zero();
+  if (b.ground()) return Jw;
+  if (b.kind == BodyKind::kPlanar) Jw(2, 2) = 1.0;
+  if (b.kind == BodyKind::kRigid) Jw.rightCols<4>() = 2.0 * G_v(q.segment<4>(b.offset + 3));
+  return Jw;
+}
+}  // namespace
+
+ContactKinematics relative_contact_kinematics(const Joint& j, const BodyRef& P, const BodyRef& C,
+                                              bool planar, const VectorXd& q0) {
+  // the plane's normal and tangents on P, the plane's point on P, the centre (and a disk's axis)
+  // on C
+  const Matrix3d& R = j.frame_parent.R;
+  const Vector3d nP = R.col(planar ? 1 : 2).normalized();
+  const Vector3d t1P = R.col(0).normalized(),
+                 t2P = planar ? Vector3d::Zero() : R.col(1).normalized();
+  const Vector3d pP = j.frame_parent.p, pC = j.frame_child.p, kC = j.frame_child.R.col(2);
+  const bool disk = j.type == JointType::kContactDisk && !planar;
+  const bool spheres = j.type == JointType::kContactSpheres;
+  const double r = j.radius;
+  // two spheres: n = d/|d| and t_1 = e × n/|e × n|, t_2 = n × t_1 from the world axis e least
+  // aligned with n at the start (planar: t_1 = n × e_z); singular only where n passes along e
+  Vector3d e = Vector3d::UnitZ();
+  if (spheres && !planar) {
+    const Vector3d d0 =
+        body_vector_generic<double>(C, q0, pC, true) - body_vector_generic<double>(P, q0, pP, true);
+    Index axis = 0;
+    d0.cwiseAbs().minCoeff(&axis);
+    e = Vector3d::Unit(axis);
+  }
+  // columns: the two bodies' coordinates, increasing; each body's first local column
+  ContactKinematics kin;
+  kin.tangents = planar ? 1 : 2;
+  const bool p_first = P.offset < C.offset;
+  for (const BodyRef* b : {p_first ? &P : &C, p_first ? &C : &P})
+    for (Index i = 0; i < b->size(); ++i) kin.columns.push_back(b->offset + i);
+  BodyRef Pl = P, Cl = C;
+  Pl.local = p_first ? 0 : C.size();
+  Cl.local = p_first ? P.size() : 0;
+  kin.evaluate = [Pl, Cl, nP, t1P, t2P, pP, pC, kC, e, r, planar, disk, spheres](
+                     const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd,
+                     double, ConstraintScratch*, Eigen::Ref<MatrixXd> J,
+                     Eigen::Ref<VectorXd> bias) {
+    // n, t_i (vectors of P), p (P's point), c (C's centre), k (the disk's axis): value, rate,
+    // Jacobian and bias
+    VecKin n, t1, t2, p, c, k;
+    add_body_vector(Pl, q, qd, pP, true, 1.0, p);
+    add_body_vector(Cl, q, qd, pC, true, 1.0, c);
+    if (disk) add_body_vector(Cl, q, qd, kC, false, 1.0, k);
+    if (spheres) {
+      // n = d/|d| and its rate; t_i from e (values and rates; their J and g are not needed)
+      const Vector3d d = c.x - p.x, dd = c.v - p.v;
+      const double len = d.norm();
+      n.x = d / len;
+      n.v = (dd - n.x.dot(dd) * n.x) / len;
+      if (planar) {
+        t1.x = n.x.cross(Vector3d::UnitZ());
+        t1.v = n.v.cross(Vector3d::UnitZ());
+      } else {
+        const Vector3d w = e.cross(n.x), wd = e.cross(n.v);
+        const double wl = w.norm();
+        t1.x = w / wl;
+        t1.v = (wd - t1.x.dot(wd) * t1.x) / wl;
+        t2.x = n.x.cross(t1.x);
+        t2.v = n.v.cross(t1.x) + n.x.cross(t1.v);
+      }
+    } else {
+      add_body_vector(Pl, q, qd, nP, false, 1.0, n);
+      add_body_vector(Pl, q, qd, t1P, false, 1.0, t1);
+      if (!planar) add_body_vector(Pl, q, qd, t2P, false, 1.0, t2);
+    }
+    // the two bodies' J_ω on the local columns and their ω
+    JacobianRow JwP = JacobianRow::Zero(), JwC = JacobianRow::Zero();
+    Eigen::Matrix<double, kMaxCols, 1> v = Eigen::Matrix<double, kMaxCols, 1>::Zero();
+    if (!Pl.ground()) {
+      JwP.middleCols(Pl.local, Pl.size()) = omega_jacobian(Pl, q).leftCols(Pl.size());
+      v.segment(Pl.local, Pl.size()) = qd.segment(Pl.offset, Pl.size());
+    }
+    JwC.middleCols(Cl.local, Cl.size()) = omega_jacobian(Cl, q).leftCols(Cl.size());
+    v.segment(Cl.local, Cl.size()) = qd.segment(Cl.offset, Cl.size());
+    const Vector3d wP = JwP * v, wC = JwC * v;
+    // a: the centre to the contact point, −r n (point, sphere) or −r m/|m| with m = n − s k,
+    // s = n·k (a disk's rim point most opposed to n), and its rate a' along q'
+    const Vector3d d = c.x - p.x, dd = c.v - p.v;
+    Vector3d a = -r * n.x, ad = -r * n.v;
+    double s = 0.0, sd = 0.0;
+    if (disk) {
+      s = n.x.dot(k.x);
+      sd = n.v.dot(k.x) + n.x.dot(k.v);
+      const Vector3d m = n.x - s * k.x, md = n.v - sd * k.x - s * k.v;
+      const double len = m.norm();
+      const Vector3d m_hat = m / len;
+      a = -r * m_hat;
+      ad = -r * (md - m_hat.dot(md) * m_hat) / len;
+    }
+    // v_rel = c' + ω_C × a − p' − ω_P × (d + a), its Jacobian and its rate at q'' = 0 (ω' = 0
+    // there: planar θ'' = 0, rigid 2 G_v(u') u' = 0)
+    const Vector3d arm = d + a;
+    const Vector3d v_rel = dd + wC.cross(a) - wP.cross(arm);
+    Matrix3d Ac, Arm;  // [a]×, [d + a]×
+    Ac << 0, -a.z(), a.y(), a.z(), 0, -a.x(), -a.y(), a.x(), 0;
+    Arm << 0, -arm.z(), arm.y(), arm.z(), 0, -arm.x(), -arm.y(), arm.x(), 0;
+    const JacobianRow Jrel = c.J - p.J - Ac * JwC + Arm * JwP;
+    const Vector3d a_rel = c.g - p.g + wC.cross(ad) - wP.cross(dd + ad);
+    // row 0: the gap's gradient, g = n·d − r (point, sphere), n·d − r sqrt(1 − s²) (disk) or
+    // |d| − (r + r_P) (two spheres: n = d/|d|, ∂n/∂q d = 0), and its bias g'' at q'' = 0
+    const Index cols = J.cols();
+    Eigen::Matrix<double, 1, kMaxCols> g_q = n.x.transpose() * (c.J - p.J);
+    bias[0] = n.x.dot(c.g - p.g) + n.v.dot(dd);
+    if (!spheres) {
+      g_q += d.transpose() * n.J;
+      bias[0] += n.g.dot(d) + n.v.dot(dd);
+    }
+    if (disk) {
+      // f(s) = −r sqrt(1 − s²): f' = r s / sqrt(1 − s²), f'' = r / (1 − s²)^(3/2)
+      const double h = std::sqrt(1.0 - s * s), f1 = r * s / h, f2 = r / (h * h * h);
+      const double sdd = n.g.dot(k.x) + 2.0 * n.v.dot(k.v) + n.x.dot(k.g);
+      g_q += f1 * (k.x.transpose() * n.J + n.x.transpose() * k.J);
+      bias[0] += f2 * sd * sd + f1 * sdd;
+    }
+    J.row(0) = g_q.leftCols(cols);
+    J.row(1) = (t1.x.transpose() * Jrel).leftCols(cols);
+    bias[1] = t1.v.dot(v_rel) + t1.x.dot(a_rel);
+    if (!planar) {
+      J.row(2) = (t2.x.transpose() * Jrel).leftCols(cols);
+      bias[2] = t2.v.dot(v_rel) + t2.x.dot(a_rel);
     }
   };
   return kin;

@@ -515,6 +515,23 @@ std::vector<Constraint> rolling_constraints(const Joint& j, const BodyRef& C);
 /// rows n, t_1 (, t_2) of the Jacobian of the body's material point at the contact, v_P =
 /// v(centre) + ω × (−r n), and their bias J_P' q'. Cost O(1) per evaluation, no allocation.
 ContactKinematics contact_kinematics(const Joint& j, const BodyRef& C, bool planar);
+/// The same for a point or sphere of body C on a plane of a moving body P, a disk of C on a
+/// plane of the ground or of a moving body, or a sphere of C on a sphere of P (contacts.cpp):
+/// the sliding velocity is the relative velocity of the two bodies' material points at the
+/// contact point x = c + a,
+///   v_rel = c' + ω_C × a − p' − ω_P × (d + a),   d = c − p,
+/// (c the centre on C, p the plane's point or the other sphere's centre on P, ω = J_ω q' with
+/// J_ω = 2 G_v(u) or e_z on θ; a = −r n, or for a disk of axis k a = −r m/|m|, m = n − (n·k) k,
+/// the rim point most opposed to n, which moves on the disk as it rolls), rows t_iᵀ J_rel. On a
+/// plane n = R_P n_P, t_i = R_P t_i,P; on a sphere n = d/|d|, t_1 = e × n/|e × n|, t_2 = n × t_1
+/// with e the world axis least aligned with n at q0 (planar: t_1 = n × e_z), continuous in time
+/// but singular (NaN) where n passes along e. Row 0 is the gap's gradient ∂g/∂q, g = n·d − r,
+/// n·d − r sqrt(1 − (n·k)²) or |d| − (r + r_P) (equal to nᵀ J_rel on the motion: N is then
+/// exact). Bias: t_i'·v_rel + t_i·(v_rel)' at q'' = 0, (v_rel)' = c'' − p'' + ω_C × a' −
+/// ω_P × (d' + a') (ω' = 0 at q'' = 0), and g'' for row 0. Columns: both bodies'. Cost O(1), no
+/// allocation.
+ContactKinematics relative_contact_kinematics(const Joint& j, const BodyRef& P, const BodyRef& C,
+                                              bool planar, const VectorXd& q0);
 /// The joint friction of a revolute or prismatic joint whose constraint is `constraint`.
 NonIdealForce joint_friction_force(const Joint& j, const BodyRef& P, const BodyRef& C,
                                    const std::string& constraint, bool planar);

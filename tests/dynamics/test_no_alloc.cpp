@@ -199,6 +199,17 @@ TEST(NoAllocation, MultibodyModels) {
     const mb::MultibodyModel m = b.build();
     EXPECT_EQ(allocations_of(m.system, m.q0, m.qd0, 3), 0);
   }
+  // the allocations of one evaluation of a spatial contact's stick rows (2 × n)
+  const auto stick_rows_allocations = [](const mb::MultibodyModel& m, const char* name) {
+    const Index stick = m.system.constraint_index(name);
+    Workspace ws(m.system);
+    MatrixXd A = MatrixXd::Zero(2, m.system.coordinate_count());
+    VectorXd bb = VectorXd::Zero(2);
+    start_counting_allocations();
+    m.system.constraint(stick).model().acceleration_form(
+        m.q0, m.qd0, 0.0, ws.scratch[std::size_t(stick)].get(), A, bb);
+    return stop_counting_allocations();
+  };
   {  // Coulomb friction at a sphere's contact point, sliding (ContactKinematics)
     mb::Multibody b;
     const double r = 0.1;
@@ -210,14 +221,27 @@ TEST(NoAllocation, MultibodyModels) {
     const mb::MultibodyModel m = b.build();
     EXPECT_EQ(allocations_of(m.system, m.q0, m.qd0, 3), 0);
     // and its stick constraint's rows (evaluated by a projection's assembly)
-    const Index stick = m.system.constraint_index("stick.coulomb.floor");
-    Workspace ws(m.system);
-    MatrixXd A = MatrixXd::Zero(2, m.system.coordinate_count());
-    VectorXd bb = VectorXd::Zero(2);
-    start_counting_allocations();
-    m.system.constraint(stick).model().acceleration_form(
-        m.q0, m.qd0, 0.0, ws.scratch[std::size_t(stick)].get(), A, bb);
-    EXPECT_EQ(stop_counting_allocations(), 0);
+    EXPECT_EQ(stick_rows_allocations(m, "stick.coulomb.floor"), 0);
+  }
+  {  // Coulomb friction between moving bodies (relative ContactKinematics): a sphere on a
+     // plane of a turning deck, a disk's rim point on it, a sphere on a sphere of the deck
+    mb::Multibody b;
+    const double r = 0.1;
+    const BodyId deck = b.add_rigid_body("deck", 5.0, {1, 2, 3}, {0, 0, 0},
+                                         about(0.2, Vector3d::UnitX()), {0.1, 0, 0}, {0.3, 0, 0.5});
+    const BodyId ball = b.add_rigid_body("ball", 1.0, {0.004, 0.004, 0.004}, {0, 0, 1},
+                                         Quaterniond::Identity(), {1, 0.5, 0}, {0, 2, 0});
+    const BodyId coin = b.add_rigid_body("coin", 1.0, {0.004, 0.008, 0.004}, {1, 0, 1},
+                                         about(1.2, Vector3d::UnitX()), {0.5, 0, 0}, {0, 3, 0});
+    b.add_joint(mb::contact("top", deck, Frame{}, ball, Vector3d::Zero(), r));
+    b.add_joint(mb::contact_disk("rim", deck, Frame{}, coin, Frame{}, r));
+    b.add_joint(mb::contact_spheres("dome", deck, {0, 0, 0.5}, 0.3, ball, Vector3d::Zero(), r));
+    for (const char* c : {"top", "rim", "dome"}) b.add_contact_friction(c, 0.3);
+    b.set_gravity({0, 0, -9.81});
+    const mb::MultibodyModel m = b.build();
+    EXPECT_EQ(allocations_of(m.system, m.q0, m.qd0, 3), 0);
+    for (const char* c : {"stick.coulomb.top", "stick.coulomb.rim", "stick.coulomb.dome"})
+      EXPECT_EQ(stick_rows_allocations(m, c), 0) << c;
   }
   {  // a driven crank with pin friction, and a long planar chain closed to ground (sparse)
     mb::Multibody b;

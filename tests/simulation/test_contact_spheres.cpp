@@ -388,25 +388,20 @@ TEST(ContactSpheres, BadSphereContactsGetAClearErrorWithItsPlace) {
          "5:67", "unknown body 'nobody'");
   expect("{name: c, body: a, shape: sphere, radius: 0.1, sphere: [b, 1]}", "5:60",
          "contact 'c' sphere must be a mapping");
-  // friction between two spheres: refused, located at its constraint's name
+  // friction between two spheres: taken (its stick rows on both bodies' 14 coordinates;
+  // tests/simulation/test_contact_bodies_friction.cpp checks it)
   {
-    const std::string text =
+    const Model m = parse_model(
         "bodies:\n"
         "  - {name: a, type: rigid, mass: 1, inertia: [1, 1, 1], position: [0, 0, 1]}\n"
         "  - {name: b, type: rigid, mass: 1, inertia: [1, 1, 1], position: [0, 0, 3]}\n"
         "contacts:\n"
         "  - {name: c, body: a, shape: sphere, radius: 0.1, sphere: {body: b, radius: 0.1}}\n"
         "nonideal:\n"
-        "  - {friction: coulomb, constraint: c, mu: 0.3}\n";
-    try {
-      parse_model(text);
-      ADD_FAILURE() << "no error";
-    } catch (const ModelError& e) {
-      EXPECT_EQ(e.line(), 7);
-      EXPECT_NE(e.message().find("friction between two spheres is not supported yet"),
-                std::string::npos)
-          << e.message();
-    }
+        "  - {friction: coulomb, constraint: c, mu: 0.3}\n");
+    const Constraint& stick = m.system.constraint(m.system.constraint_index("stick.coulomb.c"));
+    EXPECT_EQ(stick.rows(), 2);
+    EXPECT_EQ(stick.model().columns().size(), 14u);
   }
   // the spheres overlap at the start: the run's inconsistent initial state names the contact
   Model m = parse_model(

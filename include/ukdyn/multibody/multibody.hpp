@@ -352,14 +352,16 @@ class Multibody {
   Multibody& add_joint(Joint joint);
   /// Adds a force element (checked in build()).
   Multibody& add_force(Force force);
-  /// Coulomb friction at contact `contact` (a point or sphere contact(), on a plane of the
-  /// ground; docs/contact.md, "Friction at a body's contact"): a CoulombFriction named
-  /// "coulomb.<contact>" whose sliding velocity is the contact point's (ContactKinematics,
-  /// made by build()): v_rel = T q' with T the tangent rows of the Jacobian of the body's material
-  /// point at the contact, v_P = v(centre) + ω × (−r n); friction C = Tᵀ f, |f| = mu N with N the
-  /// physical normal force; sticking T q' = 0 while |holding force| <= mu_static N. build()
-  /// @throws std::invalid_argument on an unknown contact, a disk contact, a plane on a moving
-  /// body (not supported yet), mu < 0, mu_static < mu or regularization_velocity <= 0.
+  /// Coulomb friction at contact `contact` (a point, sphere or disk contact() / contact_disk()
+  /// on a plane of the ground or of a moving body, or contact_spheres(); docs/contact.md,
+  /// "Friction at a body's contact"): a CoulombFriction named "coulomb.<contact>" whose sliding
+  /// velocity is the contact point's (ContactKinematics, made by build()): v_rel = T q' with T the
+  /// tangent rows of the Jacobian of the body's material point at the contact, v_P = v(centre) + ω
+  /// × a (a = −r n, or a disk's rim point most opposed to n), less that of the plane body's
+  /// material point there, p' + ω_P × (x − p), with n and t_i turning with the plane body;
+  /// friction C = Tᵀ f, |f| = mu N with N the physical normal force; sticking T q' = 0 while
+  /// |holding force| <= mu_static N. build() @throws std::invalid_argument on an unknown
+  /// contact, mu < 0, mu_static < mu or regularization_velocity <= 0.
   Multibody& add_contact_friction(std::string contact, double mu,
                                   std::optional<double> mu_static = {},
                                   double regularization_velocity = 1e-9);
