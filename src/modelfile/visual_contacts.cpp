@@ -142,6 +142,24 @@ VisualContact bodies_visual_contact(std::shared_ptr<const mb::MultibodyModel> mo
       normal = (centre - o).normalized();
       point = centre - radius * normal;
     };
+    // the friction's axes (mb::detail::relative_contact_kinematics): n, t_1 = e × n/|e × n|,
+    // t_2 = n × t_1 with e the world axis least aligned with n at the start (planar:
+    // t_1 = n × e_z)
+    const bool planar = joint.planar;
+    Vector3d e = Vector3d::UnitZ();
+    if (!planar) {
+      const Vector3d d0 = mb::world_point(*model, model->q0, C, fc.p) -
+                          mb::world_point(*model, model->q0, P, fp.p);
+      Eigen::Index axis = 0;
+      d0.cwiseAbs().minCoeff(&axis);
+      e = Vector3d::Unit(axis);
+    }
+    c.axes = [model, P, C, fp, fc, e, planar](const Eigen::Ref<const VectorXd>& q, Matrix3d& axes) {
+      const Vector3d n = (mb::world_point(*model, q, C, fc.p) - mb::world_point(*model, q, P, fp.p))
+                             .normalized();
+      const Vector3d t1 = planar ? Vector3d(n.cross(Vector3d::UnitZ())) : e.cross(n).normalized();
+      axes << n, t1, planar ? Vector3d::Zero() : Vector3d(n.cross(t1));
+    };
     return c;
   }
   c.geometry = [model, P, C, fp, fc, n_P, a_C, disk, radius](const Eigen::Ref<const VectorXd>& q,

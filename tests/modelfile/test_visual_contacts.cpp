@@ -311,5 +311,112 @@ output: {every: 0.01}
   }
 }
 
+// The same columns at the contacts whose friction slides two bodies' material points against
+// each other (mb::detail::relative_contact_kinematics): the plane of a driven belt, a disk's
+// rim, and a ball on a fixed ball, whose axes turn with the plane's body or the line of centres.
+TEST(VisualContacts, FrictionOnMovingPlanesDisksAndSpheresIsDrawnInTheWorld) {
+  constexpr double g = 9.81;
+  {
+    // a box (m = 2) dropped on a belt driven at V = 1.2: each corner's friction pushes it on at
+    // mu m g / 2 until it rides at t* = V / (mu g), then none
+    const Model m = parse_model(R"(
+parameters: {m: 2, L: 0.4, h: 0.1, V: 1.2, mu: 0.3}
+bodies:
+  - {name: belt, type: planar, mass: 5, inertia: 1, position: [0, 0], velocity: [V, 0]}
+  - {name: box, type: planar, mass: m, inertia: m*(L^2 + 4*h^2)/12, position: [0, h]}
+joints:
+  - {name: slide, type: prismatic, parent: ground, child: belt, drive: V*t}
+forces:
+  - {type: gravity, g: [0, -9.81]}
+contacts:
+  - {name: rear, body: box, point: [-L/2, -h], plane: {body: belt, normal: [0, 1]}}
+  - {name: front, body: box, point: [L/2, -h], plane: {body: belt, normal: [0, 1]}}
+nonideal:
+  - {friction: coulomb, constraint: rear, mu: mu}
+  - {friction: coulomb, constraint: front, mu: mu}
+simulate: {t_end: 0.8, rtol: 1e-11, atol: 1e-13}
+output: {every: 0.01}
+)");
+    expect_identity_friction(m, "front", 2);
+    const ModelRun run = run_model(m);
+    ASSERT_EQ(run.trajectory.stats.status, Status::kOk) << run.trajectory.stats.message;
+    const double t_star = 1.2 / (0.3 * g);
+    for (std::size_t i = 0; i < run.trajectory.t.size(); ++i) {
+      const double t = run.trajectory.t[i];
+      if (std::abs(t - t_star) < 1e-3) continue;
+      // (the friction's moment shifts the corners' normal forces by ± h mu m g / L, but their
+      // frictions sum to mu m g)
+      const double sum =
+          friction_column(run, "rear", "x", i) + friction_column(run, "front", "x", i);
+      EXPECT_NEAR(sum, t < t_star ? 0.3 * 2.0 * g : 0.0, 1e-7) << "t = " << t;
+      EXPECT_NEAR(friction_column(run, "front", "y", i), 0.0, 1e-12) << "t = " << t;
+    }
+  }
+  {
+    // a coin (m = 0.4) on its rim launched at v0 = 1.5: −mu m g along x until it rolls at
+    // t* = v0 / (3 mu g)
+    const Model m = parse_model(R"(
+parameters: {m: 0.4, r: 0.12, v0: 1.5, mu: 0.2}
+bodies:
+  - {name: coin, type: rigid, mass: m, inertia: [m*r^2/4, m*r^2/2, m*r^2/4],
+     position: [0, 0, r], velocity: [v0, 0, 0]}
+forces:
+  - {type: gravity, g: [0, 0, -9.81]}
+contacts:
+  - {name: floor, body: coin, shape: disk, radius: r, axis: [0, 1, 0]}
+nonideal:
+  - {friction: coulomb, constraint: floor, mu: mu}
+simulate: {t_end: 0.5, rtol: 1e-11, atol: 1e-13}
+output: {every: 0.01}
+)");
+    expect_identity_friction(m, "floor", 3);
+    const ModelRun run = run_model(m);
+    ASSERT_EQ(run.trajectory.stats.status, Status::kOk) << run.trajectory.stats.message;
+    const double t_star = 1.5 / (3.0 * 0.2 * g);
+    for (std::size_t i = 0; i < run.trajectory.t.size(); ++i) {
+      const double t = run.trajectory.t[i];
+      if (std::abs(t - t_star) < 1e-3) continue;
+      EXPECT_NEAR(friction_column(run, "floor", "x", i), t < t_star ? -0.2 * 0.4 * g : 0.0, 1e-8)
+          << "t = " << t;
+      EXPECT_NEAR(friction_column(run, "floor", "y", i), 0.0, 1e-10) << "t = " << t;
+      EXPECT_NEAR(friction_column(run, "floor", "z", i), 0.0, 1e-10) << "t = " << t;
+    }
+  }
+  {
+    // a small ball (m = 0.2, r = 0.05) rolling off a fixed ball (R = 0.5) while held: at the
+    // angle θ from the top the friction is 2/7 m g sin θ up the slope, −(cos θ, −sin θ), across
+    // the line of centres
+    const Model m = parse_model(R"(
+parameters: {m: 0.2, r: 0.05, R: 0.5, w0: 0.05, mu: 0.3}
+bodies:
+  - {name: ball, type: planar, mass: m, inertia: 0.4*m*r^2, position: [0, R + r],
+     velocity: [(R + r)*w0, 0], angular_velocity: -(R + r)*w0/r}
+forces:
+  - {type: gravity, g: [0, -9.81]}
+contacts:
+  - {name: dome, body: ball, shape: sphere, radius: r, sphere: {body: ground, radius: R}}
+nonideal:
+  - {friction: coulomb, constraint: dome, mu: mu}
+simulate: {t_end: 0.6, rtol: 1e-11, atol: 1e-13}
+output: {every: 0.01}
+)");
+    expect_identity_friction(m, "dome", 2);
+    const ModelRun run = run_model(m);
+    ASSERT_EQ(run.trajectory.stats.status, Status::kOk) << run.trajectory.stats.message;
+    const Index n = run.trajectory.n;
+    int held = 0;
+    for (std::size_t i = 0; i < run.trajectory.t.size(); ++i) {
+      const double* q = run.trajectory.q.data() + std::ptrdiff_t(i) * n;
+      const double th = std::atan2(q[0], q[1]);
+      if (th > 0.55) break;  // (it slips near 0.617 rad at mu = 0.3)
+      ++held;
+      const double f = 2.0 / 7.0 * 0.2 * g * std::sin(th);
+      EXPECT_NEAR(friction_column(run, "dome", "x", i), -f * std::cos(th), 1e-7) << "θ = " << th;
+      EXPECT_NEAR(friction_column(run, "dome", "y", i), f * std::sin(th), 1e-7) << "θ = " << th;
+    }
+    EXPECT_GT(held, 20);
+  }
+}
+
 }  // namespace UKDYN_TEST_FILE
 }  // namespace ukdyn
