@@ -160,8 +160,8 @@ TEST(StickSeveralContacts, PlanarBoxStopsAgainstAPushAndBothCornersHold) {
 
 TEST(StickSeveralContacts, SpatialBoxOnFourCornersStopsAgainstAPushAndHolds) {
   const double F = 10.0, t_s = kMass / (F + kMu * kMass * kG);
-  const Trajectory tr = run_at(spatial_box("10", "[0, 0, -c]", -1.0, 1.0),
-                               {0.05, t_s - 1e-4, t_s + 1e-4, 0.5, 1.0});
+  const Trajectory tr =
+      run_at(spatial_box("10", "[0, 0, -c]", -1.0, 1.0), {0.05, t_s - 1e-4, t_s + 1e-4, 0.5, 1.0});
   expect_stops_and_sticks(tr, F, {"c1", "c2", "c3", "c4"});
 }
 
@@ -171,9 +171,8 @@ void expect_breakaway(const Trajectory& tr, const std::vector<std::string>& cont
   const double k = 10.0, t_b = kMuS * kMass * kG / k;
   for (std::size_t i = 0; i < tr.t.size(); ++i) {
     const double t = tr.t[i];
-    const double v = t <= t_b ? 0.0
-                              : (0.5 * k * (t * t - t_b * t_b) - kMu * kMass * kG * (t - t_b)) /
-                                    kMass;
+    const double v =
+        t <= t_b ? 0.0 : (0.5 * k * (t * t - t_b * t_b) - kMu * kMass * kG * (t - t_b)) / kMass;
     if (std::abs(t - t_b) <= 1e-6) {
       // within 1e-6 of t_b: at rest before, moving after (x' = (k t_b − mu m g) / m · 1e-6)
       if (t < t_b) {
@@ -214,6 +213,75 @@ TEST(StickSeveralContacts, SpatialBoxPushedAtItsCentreBreaksAwayAtMuStaticMg) {
   const Trajectory tr = run_at(spatial_box("k*t", "[0, 0, 0]", 0.0, 1.6),
                                {0.6, 1.2, 1.35, 1.45, t_b - 1e-6, t_b + 1e-6, 1.55});
   expect_breakaway(tr, {"c1", "c2", "c3", "c4"});
+}
+
+// ---- the coordinate path: a bar in natural coordinates on two rough coordinate contacts --------
+
+// A uniform bar (m = 3, L = 0.4) with its ends A, B on the floor (yA = 0, yB = 0), friction on
+// xA and xB (coordinates:), pushed along x by `push` at its centre (half on each end's x), B
+// loaded by W downwards: N_A = m g / 2, N_B = m g / 2 + W.
+std::string bar(const std::string& push, double v0, double W, double t_end) {
+  return "parameters: {m: 3, L: 0.4, g: 9.81, k: 10, mu: 0.3, mus: 0.5, W: " + std::to_string(W) +
+         "}\n"
+         "coordinates: [xA, yA, xB, yB]\n"
+         "kinetic_energy: m/6*(xA_dot^2 + yA_dot^2 + xA_dot*xB_dot + yA_dot*yB_dot + xB_dot^2 +"
+         " yB_dot^2)\n"
+         "potential_energy: m*g*(yA + yB)/2\n"
+         "forces: [(" +
+         push + ")/2, 0, (" + push +
+         ")/2, -W]\n"
+         "constraints:\n"
+         "  - {name: rod, holonomic: ((xA - xB)^2 + (yA - yB)^2 - L^2)/(2*L)}\n"
+         "  - {name: floor_a, holonomic: yA}\n"
+         "  - {name: floor_b, holonomic: yB}\n"
+         "nonideal:\n"
+         "  - {friction: coulomb, constraint: floor_a, mu: mu, mu_static: mus, coordinates: [xA]}\n"
+         "  - {friction: coulomb, constraint: floor_b, mu: mu, mu_static: mus, coordinates: [xB]}\n"
+         "initial:\n"
+         "  q: {xA: -L/2, yA: 0, xB: L/2, yB: 0}\n"
+         "  q_dot: {xA: " +
+         std::to_string(v0) + ", yA: 0, xB: " + std::to_string(v0) +
+         ", yB: 0}\n"
+         "simulate: {t_end: " +
+         std::to_string(t_end) + ", rtol: 1e-10, atol: 1e-12}\noutput: {every: 0}\n";
+}
+
+TEST(StickSeveralContacts, CoordinatePathBarStopsAgainstAPushAndBreaksAwayUnderARamp) {
+  // launched at -1 m/s against F = 10 (mu m g < F < mu_s m g): stops at t_s, both ends hold
+  const double F = 10.0, t_s = kMass / (F + kMu * kMass * kG), a = 1.0 / t_s;
+  const Trajectory stop = run_at(bar("10", -1.0, 0.0, 1.5), {0.05, t_s - 1e-4, t_s + 1e-4, 1.0});
+  for (std::size_t i = 0; i < stop.t.size(); ++i) {
+    const double t = stop.t[i];
+    EXPECT_NEAR(at(stop, stop.qd, "xA", i), t < t_s ? -1.0 + a * t : 0.0, 1e-7) << "t = " << t;
+    if (t < t_s) continue;
+    const double fa = multipliers(stop, "stick.coulomb.floor_a", i)[0],
+                 fb = multipliers(stop, "stick.coulomb.floor_b", i)[0];
+    EXPECT_NEAR(fa + fb, -F, 1e-7) << "t = " << t;
+    EXPECT_LE(std::abs(fa), kMuS * 0.5 * kMass * kG + 1e-6) << "t = " << t;
+    EXPECT_LE(std::abs(fb), kMuS * 0.5 * kMass * kG + 1e-6) << "t = " << t;
+  }
+  // at rest under F = k t with B loaded by W = 10: breakaway at mu_s (m g + W) / k (the
+  // minimum-norm split, equal, left A's cone at mu_s m g / k = 1.4715 s)
+  const double W = 10.0, k = 10.0, load = kMass * kG + W, t_b = kMuS * load / k;
+  const Trajectory ramp =
+      run_at(bar("k*t", 0.0, W, 2.1), {1.0, 1.5, 1.9, t_b - 1e-6, t_b + 1e-6, 2.1});
+  for (std::size_t i = 0; i < ramp.t.size(); ++i) {
+    const double t = ramp.t[i], v = at(ramp, ramp.qd, "xA", i);
+    if (t < t_b) {
+      EXPECT_LT(std::abs(v), 1e-9) << "t = " << t;
+      const double fa = multipliers(ramp, "stick.coulomb.floor_a", i)[0],
+                   fb = multipliers(ramp, "stick.coulomb.floor_b", i)[0];
+      EXPECT_NEAR(fa + fb, -k * t, 1e-7) << "t = " << t;
+      EXPECT_LE(std::abs(fa), kMuS * 0.5 * kMass * kG + 1e-6) << "t = " << t;
+      EXPECT_LE(std::abs(fb), kMuS * (0.5 * kMass * kG + W) + 1e-6) << "t = " << t;
+    } else {
+      const double closed = (0.5 * k * (t * t - t_b * t_b) - kMu * load * (t - t_b)) / kMass;
+      EXPECT_NEAR(v, closed, 1e-6 + 1e-6 * closed) << "t = " << t;
+      if (t < t_b + 1e-5) {
+        EXPECT_GT(v, 1e-7) << "t = " << t;
+      }
+    }
+  }
 }
 
 }  // namespace UKDYN_TEST_FILE
