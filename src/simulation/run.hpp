@@ -347,6 +347,26 @@ class Run {
   double point_stick_margin(std::size_t c, const FrictionContact& contact, double t);
   // sticks contact c at (t, x) when sticking is admissible; else false
   bool try_stick(std::size_t c, double t, double* x, bool report = true);
+  // stick_margin from the evaluation just made with the contact sticking (at q_, qd_, t)
+  double stick_margin_here(std::size_t c, double t);
+  // --- several contacts sticking together (run_stick_slip.cpp, "Several contacts";
+  // docs/friction.md, "Several contacts") ---
+  // at contact c's stop: c and every other contact stopped with it stick together when that is
+  // admissible jointly, else c alone (try_stick)
+  bool try_stick_together(std::size_t c, double t, double* x, bool report = true);
+  // the release test of sticking contact c with others sticking: its stick_margin while the
+  // minimum-norm split holds in every cone; else positive while some split does, negative when
+  // none does
+  double group_margin(std::size_t c, double t, const double* x);
+  // after a release at (t, x): the contacts still sticking that no split can hold slip too
+  void release_unheld(double t, double* x);
+  // the sticking contacts, at the evaluation just made: 1 when every one's minimum-norm margin
+  // is >= 0, 0 when a split of the holding forces inside every cone exists (the correction of
+  // the multipliers into split_), -1 when none does; the most negative margin's contact into
+  // *worst when given
+  int holding_split(double t, std::size_t* worst = nullptr);
+  // the sticking contacts (not separated) into stuck_; returns their count
+  std::size_t sticking_contacts();
   // the kinetic energy that projecting the velocities of x onto contact c's stick rows removes
   double stick_energy_loss(std::size_t c, double t, const double* x, ProjectionResult& rv,
                            double& T_before);
@@ -425,6 +445,19 @@ class Run {
   VectorXd reaction_part_ = VectorXd::Zero(n_);  // (n) scratch of stick_margin
   VectorXd normal_ = VectorXd::Zero(n_);         // (n) scratch of stick_margin: R_N
   MatrixXd normals_;                             // (rows × n) the normal constraint's rows of A
+  std::vector<std::size_t> stuck_;               // (sticking_contacts) the sticking contacts
+  std::vector<ContactMode> modes_before_;        // (contacts) modes before a joint stick
+  VectorXd split_;  // (m) holding_split: the change of the multipliers to the feasible split
+  MatrixXd split_rows_, split_null_, split_G_;  // (holding_split scratch, sized at its calls)
+  VectorXd split_h_;                            // (holding_split scratch)
+  double split_lowest_ = 0.0;                   // holding_split: the lowest minimum-norm margin
+  // group_margin's last split search (not the minimum-norm case): its t, x (2n) and answer; t NaN
+  // when the modes changed since
+  double group_t_ = std::numeric_limits<double>::quiet_NaN(), group_margin_ = 0.0;
+  std::vector<double> group_x_;
+  // holding_split's rounds of cutting planes (each adds one per violated cone): the boxes'
+  // splits converge in 5 to 8 to 1e-7 of the forces, except within about that of a breakaway
+  static constexpr int kSplitRounds = 16;
   VectorXd velocity_ = VectorXd::Zero(sliding_width(sys_, n_));        // (width) sliding velocities
   VectorXd direction_ = VectorXd::Zero(sliding_width(sys_, n_));       // (width) the step's start's
   std::vector<double> event_x_ = std::vector<double>(sample_.size());  // dense state

@@ -29,8 +29,9 @@ double Run::find_event(double t0, const double* x0, double t1, const double* x1,
     switch (mode_[c]) {
       case ContactMode::kSticking:
         // the holding force reaches mu_static N: mu_static N − |holding force| falls to zero
+        // (with other contacts sticking: no split of the holding forces fits every cone)
         te = locate(t0, t1, x1, dense,
-                    [&](double t, const double* x) { return stick_margin(c, t, x); });
+                    [&](double t, const double* x) { return group_margin(c, t, x); });
         break;
       case ContactMode::kSliding: {
         // the sliding speed along the step's initial direction falls to v_stop = 100 eps: the

@@ -23,6 +23,9 @@ Status Run::record(double t, const double* x, bool last) {
   q_ = Eigen::Map<const VectorXd>(sample_.data(), n_);
   qd_ = Eigen::Map<const VectorXd>(sample_.data() + n_, n_);
   const Status s = forward_dynamics(sys_, ws_, q_, qd_, t);
+  // several contacts sticking: the split of their holding forces that every cone admits, closest
+  // to the minimum-norm one (run_stick_slip.cpp, holding_split)
+  if (s == Status::kOk && sticking_contacts() > 1 && holding_split(t) == 0) ws_.lambda += split_;
   // into the trajectory kept, or into one_ for the sink
   const bool streamed = bool(o_.sample_sink);
   Trajectory& out = streamed ? one_ : traj_;
