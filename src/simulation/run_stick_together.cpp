@@ -1,0 +1,383 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// Several Coulomb contacts of one body that stop, hold and break away together (docs/friction.md,
+// "Several contacts"): the joint stick at a located stop, the split of the holding forces that
+// fits every contact's cone when the minimum-norm one does not (cutting planes, each round a
+// small QP solved as an LCP), and the release of the contacts no split holds. The single
+// contact's stick and slip: run_stick_slip.cpp. The class: simulation/run.hpp.
+#include <Eigen/SVD>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "simulation/run.hpp"
+#include "ukdyn/dynamics/contact.hpp"
+
+namespace ukdyn::detail {
+
+// ---- Several contacts (docs/friction.md, "Several contacts") ----------------------------------
+
+// the sticking contacts (closed, with friction) into stuck_; returns their count
+std::size_t Run::sticking_contacts() {
+  stuck_.clear();
+  for (std::size_t c = 0; c < mode_.size(); ++c) {
+    if (mode_[c] == ContactMode::kSticking && !separated(c) && !frictionless(c))
+      stuck_.push_back(c);
+  }
+  return stuck_.size();
+}
+
+// Contact c stops at (t, x) (its sliding speed fell to v_stop): every other closed contact whose
+// sliding speed there is within 2 v_stop of rest (a contact of the same body, whose stick rows
+// are redundant with c's, slides at c's speed and has no stop event of its own) sticks with it
+// when that is admissible jointly, by try_stick's three rules on all of them: the velocity
+// projection onto all their stick rows removes at most the largest of their allowances, the
+// constraints with all the stick rows have a solution, and some split of the holding forces
+// lies inside every sticking contact's cone (holding_split). Else, or when none stopped with
+// it, try_stick(c) alone. Cost: one projection and two evaluations, and holding_split's.
+bool Run::try_stick_together(std::size_t c, double t, double* x, bool report) {
+  const auto& contacts = sys_.friction_contacts();
+  modes_before_ = mode_;
+  bool others = false;
+  for (std::size_t o = 0; o < contacts.size(); ++o) {
+    if (o == c || mode_[o] == ContactMode::kSticking || frictionless(o) || separated(o)) continue;
+    const Index k = relative_velocity(o, t, x, velocity_);
+    if (velocity_.head(k).norm() <= 2.0 * 100.0 * contacts[o].eps) {
+      mode_[o] = ContactMode::kSticking;
+      others = true;
+    }
+  }
+  if (!others) return try_stick(c, t, x, report);
+  mode_[c] = ContactMode::kSticking;
+  // the kinetic energy the projection onto all the stick rows removes (rule 1)
+  q_ = Eigen::Map<const VectorXd>(x, n_);
+  qd_ = Eigen::Map<const VectorXd>(x + n_, n_);
+  std::swap(mode_, modes_before_);
+  apply_contact_modes();
+  bool admissible = forward_dynamics(sys_, ws_, q_, qd_, t) == Status::kOk;
+  const double T_before = detail::kinetic_energy(ws_, qd_);
+  double allowance = 0.0;
+  for (std::size_t o = 0; o < contacts.size(); ++o) {
+    if (modes_before_[o] == ContactMode::kSticking && mode_[o] != ContactMode::kSticking)
+      allowance = std::max(allowance, stick_allowance(o, T_before));
+  }
+  std::swap(mode_, modes_before_);  // (the joint modes)
+  apply_contact_modes();
+  ProjectionOptions all = o_.projection;
+  const ProjectionResult rv = project_velocities(sys_, ws_, q_, qd_, t, all);
+  admissible = admissible && rv.status == Status::kOk && rv.converged &&
+               T_before - detail::kinetic_energy(ws_, qd_) <= allowance;
+  // (2), (3) at the projected state
+  if (admissible) {
+    std::copy(x, x + sample_.size(), trial_.begin());
+    Eigen::Map<VectorXd>(trial_.data() + n_, n_) = qd_;
+    q_ = Eigen::Map<const VectorXd>(trial_.data(), n_);
+    admissible = forward_dynamics(sys_, ws_, q_, qd_, t) == Status::kOk &&
+                 sticking_contacts() > 0 && holding_split(t) >= 0;
+  }
+  if (!admissible) {
+    mode_ = modes_before_;
+    apply_contact_modes();
+    return try_stick(c, t, x, report);
+  }
+  if (rv.iterations > 0) ++traj_.stats.projections;
+  note_violation(0.0, rv.violation);
+  std::copy(trial_.begin(), trial_.end(), x);
+  for (std::size_t o = 0; o < contacts.size(); ++o) {
+    if (mode_[o] != ContactMode::kSticking || modes_before_[o] == ContactMode::kSticking) continue;
+    set_slip_hint(o, VectorXd());
+    ws_.slip_hint_held[std::size_t(contacts[o].force)] = 0;
+  }
+  return true;
+}
+
+// The release test of sticking contact c (find_event): alone, its stick_margin; with others
+// sticking, its stick_margin while every minimum-norm margin is >= 0 (the old test, unchanged
+// where the minimum-norm split holds), else |lowest margin| while some split of the holding
+// forces lies inside every cone and the lowest margin (< 0) when none does: the release of a
+// rigid body on several contacts is the instant no split holds it, whatever the minimum-norm
+// multipliers say (they split the force of redundant stick rows equally). Its sign is what the
+// bisection reads. Cost: one evaluation, and holding_split's.
+double Run::group_margin(std::size_t c, double t, const double* x) {
+  if (sticking_contacts() < 2) return stick_margin(c, t, x);
+  // (the same state as the last split search's, for another contact: its answer)
+  if (t == group_t_ && std::equal(x, x + 2 * n_, group_x_.begin())) return group_margin_;
+  q_ = Eigen::Map<const VectorXd>(x, n_);
+  qd_ = Eigen::Map<const VectorXd>(x + n_, n_);
+  if (forward_dynamics(sys_, ws_, q_, qd_, t) != Status::kOk) {
+    return std::numeric_limits<double>::quiet_NaN();
+  }
+  const int split = holding_split(t);
+  if (split > 0) return stick_margin_here(c, t);
+  const double lowest = std::abs(split_lowest_);
+  group_t_ = t;
+  group_x_.assign(x, x + 2 * n_);
+  group_margin_ = split == 0 ? std::max(lowest, std::numeric_limits<double>::min()) : -lowest;
+  return group_margin_;
+}
+
+// After contact c's release at (t, x): while the contacts still sticking cannot be held by any
+// split of their holding forces (with the released ones' friction now acting), the one with the
+// lowest minimum-norm margin slips too, along its holding force (as a release).
+void Run::release_unheld(double t, double* x) {
+  q_ = Eigen::Map<const VectorXd>(x, n_);
+  qd_ = Eigen::Map<const VectorXd>(x + n_, n_);
+  while (sticking_contacts() > 0) {
+    if (forward_dynamics(sys_, ws_, q_, qd_, t) != Status::kOk) return;
+    std::size_t worst = 0;
+    if (holding_split(t, &worst) >= 0) return;
+    stick_margin_here(worst, t);
+    ++traj_.stats.events;
+    mode_[worst] = ContactMode::kSliding;
+    set_slip_hint(worst, holding_);
+    apply_contact_modes();
+  }
+}
+
+// Whether the sticking contacts stuck_ (at the evaluation just made, at q_, qd_, t) can hold.
+// The multipliers Λ = lambda + lambda_nonideal of the active rows are unique only up to the null
+// space Z of Aᵀ (redundant rows: the stick rows of contacts on one rigid body); Λ + Z y leaves
+// Qc and the motion unchanged. Each sticking contact's holding force f_i and normal force N_i
+// are linear in Λ (as stick_margin splits them); the split sought is the y of least norm with
+// |f_i| <= mu_static N_i for all i: a small second-order cone programme, solved by outer
+// cutting planes — for one tangent the two faces ±f_i <= mu_s N_i (exact), for two the tangent
+// planes u·f_i <= mu_s N_i at the directions u of the violating f_i, added until every cone
+// holds to 1e-7 of the forces (at most kSplitRounds rounds) — each a quadratic programme
+// min ½|y|², G y <= h, solved as the LCP w = (G Gᵀ + δ I) z + h (y = −Gᵀ z) by Siconos
+// Numerics (ContactLcp) and polished on its active planes; a plane still violated then means
+// an empty polyhedron (no split exists: the outer planes contain the cones). The sliding
+// contacts' normal forces stay as evaluated (their friction is mu N of those). Returns 1 when the
+// minimum-norm split holds (y = 0), 0 when another does (its change of the multipliers into split_,
+// m), −1 when none does (and when a sticking contact on the coordinate path has a normal constraint
+// of several rows, whose N is not linear in Λ: the minimum-norm test then). The lowest minimum-norm
+// margin into split_lowest_, its contact into *worst. Cost: an SVD of the active rows (m_a × n) and
+// a few LCPs of 2 to 3 rows per contact; allocates (at stops, releases and the samples of runs with
+// several contacts sticking where the minimum-norm split fails).
+int Run::holding_split(double t, std::size_t* worst) {
+  const auto& contacts = sys_.friction_contacts();
+  split_lowest_ = std::numeric_limits<double>::infinity();
+  for (std::size_t c : stuck_) {
+    const double margin = stick_margin_here(c, t);
+    if (!(margin >= split_lowest_)) {
+      split_lowest_ = margin;
+      if (worst) *worst = c;
+    }
+  }
+  const Index m = ws_.lambda.size();
+  split_.setZero(m);
+  if (split_lowest_ >= 0.0) return 1;
+  if (stuck_.size() < 2 || std::isnan(split_lowest_)) return -1;
+  // the active rows, compact: their rows of A, and Λ there
+  std::vector<Index> row_of, compact(std::size_t(m), -1);
+  for (Index k = 0; k < sys_.constraint_count(); ++k) {
+    if (!ws_.active[std::size_t(k)]) continue;
+    for (Index r = 0; r < sys_.constraint(k).rows(); ++r) {
+      compact[std::size_t(sys_.row_offset(k) + r)] = Index(row_of.size());
+      row_of.push_back(sys_.row_offset(k) + r);
+    }
+  }
+  const Index ma = Index(row_of.size());
+  split_rows_.setZero(ma, n_);
+  for (Index k = 0; k < sys_.constraint_count(); ++k) {
+    if (!ws_.active[std::size_t(k)] || sys_.constraint(k).rows() == 0) continue;
+    detail::copy_constraint_rows(sys_, ws_, k,
+                                 split_rows_.middleRows(compact[std::size_t(sys_.row_offset(k))],
+                                                        sys_.constraint(k).rows()));
+  }
+  VectorXd lambda0(ma);
+  const bool nonideal = ws_.lambda_nonideal.size() == m;
+  for (Index i = 0; i < ma; ++i) {
+    const Index r = row_of[std::size_t(i)];
+    lambda0[i] = ws_.lambda[r] + (nonideal ? ws_.lambda_nonideal[r] : 0.0);
+  }
+  // Z: the left null space of the active rows
+  const Eigen::JacobiSVD<MatrixXd> svd(split_rows_, Eigen::ComputeFullU);
+  const auto& sigma = svd.singularValues();
+  Index rank = 0;
+  while (rank < sigma.size() && sigma[rank] > 1e-10 * sigma[0]) ++rank;
+  if (rank == ma) return -1;
+  split_null_ = svd.matrixU().rightCols(ma - rank);
+  // N_i = g·Λ of contact c (the sign of Λ at the evaluation: N is |·|) into g; false where N is
+  // not linear in Λ (a coordinate-path normal constraint of several rows)
+  auto normal_form = [&](std::size_t c, VectorXd& g) {
+    const FrictionContact& contact = contacts[c];
+    const Index k = contact.normal_constraint, s = contact.stick_constraint;
+    const Index rows_k = sys_.constraint(k).rows(), rows_s = sys_.constraint(s).rows();
+    const Index ok = compact[std::size_t(sys_.row_offset(k))];
+    g.setZero(ma);
+    if (const ContactKinematics& kin = contact.kinematics) {
+      // N = |w·A_kᵀ Λ_k| / |w|², w = J_Pᵀ n_W (contact_normal_force)
+      detail::sliding_velocity(sys_, ws_, Index(c), q_, qd_, t, false);
+      const auto& J = ws_.contact_jacobian[c];
+      const double ww = J.row(0).squaredNorm();
+      for (Index r = 0; r < rows_k && ww > 0.0; ++r) {
+        double wa = 0.0;
+        for (std::size_t j = 0; j < kin.columns.size(); ++j)
+          wa += J(0, Index(j)) * split_rows_(ok + r, kin.columns[j]);
+        g[ok + r] = wa / ww;
+      }
+    } else {
+      // R = A_kᵀ Λ_k + A_sᵀ Λ_s (its rows while it sticks); N = |a·R| / |a| (one normal row)
+      if (rows_k != 1) return false;
+      const double aa = split_rows_.row(ok).squaredNorm();
+      if (!(aa > 0.0)) return false;
+      const Index os = compact[std::size_t(sys_.row_offset(s))];
+      const bool sticks = os >= 0 && ws_.active[std::size_t(s)];
+      for (Index r = 0; r < rows_k + (sticks ? rows_s : 0); ++r) {
+        const Index i = r < rows_k ? ok + r : os + r - rows_k;
+        g[i] = split_rows_.row(ok).dot(split_rows_.row(i)) / std::sqrt(aa);
+      }
+    }
+    if (g.dot(lambda0) < 0.0) g = -g;
+    return true;
+  };
+  // the sliding contacts' normal forces stay (their friction is μ N at the evaluation's N): Z
+  // restricted to the y that leave each one's N unchanged
+  {
+    std::vector<VectorXd> fixed;
+    VectorXd g;
+    for (std::size_t c = 0; c < contacts.size(); ++c) {
+      if (mode_[c] == ContactMode::kSticking || separated(c) || frictionless(c)) continue;
+      if (compact[std::size_t(sys_.row_offset(contacts[c].normal_constraint))] < 0) continue;
+      if (!normal_form(c, g)) return -1;
+      fixed.push_back(split_null_.transpose() * g);
+    }
+    if (!fixed.empty()) {
+      MatrixXd E(Index(fixed.size()), split_null_.cols());
+      for (std::size_t i = 0; i < fixed.size(); ++i) E.row(Index(i)) = fixed[i].transpose();
+      const Eigen::JacobiSVD<MatrixXd> keep(E, Eigen::ComputeFullV);
+      const auto& sv = keep.singularValues();
+      const double top = sv.size() > 0 ? sv[0] : 0.0;
+      Index used = 0;
+      while (used < sv.size() && sv[used] > 1e-10 * std::max(top, 1e-300)) ++used;
+      if (used == E.cols()) return -1;
+      split_null_ = (split_null_ * keep.matrixV().rightCols(E.cols() - used)).eval();
+    }
+  }
+  const Index nz = split_null_.cols();
+  // each contact's f_i = F_i Λ (d_i) and N_i = g_i·Λ on the compact rows, then on y
+  struct Cone {
+    MatrixXd F;  // (d × nz) F_i Z
+    VectorXd g;  // (nz) Zᵀ g_i
+    VectorXd f0;
+    double N0 = 0.0, mu = 0.0;
+  };
+  std::vector<Cone> cones;
+  double scale = 0.0;
+  for (std::size_t c : stuck_) {
+    const FrictionContact& contact = contacts[c];
+    const Index k = contact.normal_constraint, s = contact.stick_constraint;
+    const Index rows_k = sys_.constraint(k).rows(), rows_s = sys_.constraint(s).rows();
+    const Index ok = compact[std::size_t(sys_.row_offset(k))];
+    const Index os = compact[std::size_t(sys_.row_offset(s))];
+    MatrixXd F = MatrixXd::Zero(0, ma);
+    VectorXd g;
+    if (!normal_form(c, g)) return -1;
+    if (const ContactKinematics& kin = contact.kinematics) {
+      // f = kappa Λ_s
+      if (normals_.rows() != rows_k) normals_.resize(rows_k, n_);
+      detail::copy_constraint_rows(sys_, ws_, k, normals_);
+      const double kappa = detail::normal_row_unit(normals_, rows_k, reaction_part_);
+      F.setZero(kin.tangents, ma);
+      for (Index j = 0; j < kin.tangents; ++j) F(j, os + j) = kappa;
+    } else {
+      // f = P R in an orthonormal basis of its range, P = I − a aᵀ / |a|²
+      const VectorXd a = split_rows_.row(ok).transpose();
+      MatrixXd H = split_rows_.middleRows(os, rows_s).transpose();  // (n × rows_s)
+      H -= a * (a.transpose() * H) / a.squaredNorm();
+      const Eigen::JacobiSVD<MatrixXd> range(H, Eigen::ComputeThinU);
+      Index d = 0;
+      const double top = range.singularValues().size() ? range.singularValues()[0] : 0.0;
+      while (d < range.singularValues().size() && range.singularValues()[d] > 1e-10 * top) ++d;
+      F.setZero(d, ma);
+      F.middleCols(os, rows_s) = range.matrixU().leftCols(d).transpose() * H;
+    }
+    Cone cone;
+    cone.N0 = g.dot(lambda0);
+    cone.f0 = F * lambda0;
+    cone.F = F * split_null_;
+    cone.g = split_null_.transpose() * g;
+    cone.mu = contact.mu_static;
+    scale = std::max({scale, cone.mu * cone.N0, cone.f0.norm()});
+    cones.push_back(std::move(cone));
+  }
+  // the planes G y <= h: N_i >= 0, and faces or tangent planes of the cones
+  std::vector<VectorXd> planes;
+  std::vector<double> offsets;
+  auto add_face = [&](const Cone& cone, const VectorXd& u) {
+    planes.push_back(cone.F.transpose() * u - cone.mu * cone.g);
+    offsets.push_back(cone.mu * cone.N0 - u.dot(cone.f0));
+  };
+  for (const Cone& cone : cones) {
+    planes.push_back(-cone.g);
+    offsets.push_back(cone.N0);
+    const Index d = cone.f0.size();
+    if (d == 0) continue;
+    if (d == 1) {
+      add_face(cone, VectorXd::Constant(1, 1.0));
+      add_face(cone, VectorXd::Constant(1, -1.0));
+      continue;
+    }
+    VectorXd u = VectorXd::Zero(d);
+    if (cone.f0.norm() > 0.0)
+      u = cone.f0.normalized();
+    else
+      u[0] = 1.0;
+    add_face(cone, u);
+  }
+  const double tolerance = 1e-7 * scale;
+  VectorXd y = VectorXd::Zero(nz);
+  for (int round = 0; round < kSplitRounds; ++round) {
+    const Index rows = Index(planes.size());
+    split_G_.resize(rows, nz);
+    split_h_.resize(rows);
+    for (Index i = 0; i < rows; ++i) {
+      split_G_.row(i) = planes[std::size_t(i)].transpose();
+      split_h_[i] = offsets[std::size_t(i)];
+    }
+    // (W = G Gᵀ is singular where the planes outnumber y: Lemke then failed on feasible sets;
+    // W + δ I, δ = 1e-12 of its diagonal, is positive definite, and G y <= h + δ z: a plane
+    // violated by more than the tolerance means an empty polyhedron)
+    ContactLcp lcp(rows);
+    MatrixXd W = split_G_ * split_G_.transpose();
+    W.diagonal().array() += 1e-8 * W.diagonal().maxCoeff();
+    if (!lcp.solve(W, split_h_, 1e-9)) return -1;
+    y = -split_G_.transpose() * lcp.z();
+    // (polished on its active planes: the least-norm y with G_a y = h_a, free of δ)
+    {
+      std::vector<Index> on;
+      for (Index i = 0; i < rows; ++i)
+        if (lcp.z()[i] > 0.0) on.push_back(i);
+      if (!on.empty()) {
+        MatrixXd Ga(Index(on.size()), nz);
+        VectorXd ha(Index(on.size()));
+        for (std::size_t i = 0; i < on.size(); ++i) {
+          Ga.row(Index(i)) = split_G_.row(on[i]);
+          ha[Index(i)] = split_h_[on[i]];
+        }
+        const VectorXd polished = Ga.completeOrthogonalDecomposition().solve(ha);
+        if ((split_G_ * polished - split_h_).maxCoeff() <= tolerance) y = polished;
+      }
+    }
+    if ((split_G_ * y - split_h_).maxCoeff() > 1e-6 * scale) return -1;
+    bool held = true;
+    for (const Cone& cone : cones) {
+      const VectorXd f = cone.f0 + cone.F * y;
+      const double N = cone.N0 + cone.g.dot(y);
+      if (f.norm() <= cone.mu * N + tolerance) continue;
+      held = false;
+      if (f.size() > 1) add_face(cone, f.normalized());
+    }
+    if (held) {
+      const VectorXd change = split_null_ * y;
+      for (Index i = 0; i < ma; ++i) split_[row_of[std::size_t(i)]] = change[i];
+      return 0;
+    }
+  }
+  return -1;
+}
+
+}  // namespace ukdyn::detail
