@@ -6,7 +6,7 @@
 // (stops at v0² / (2 mu g) and sticks, each end carrying m g / 2), Painlevé's rod on its end, an
 // oblique impact that sticks or slides, a robot wheel in joint coordinates, a sphere pushed at a
 // required pace (rolling, sliding then sticking: the controller follows the contact's stick and
-// slip), the errors.
+// slip; its steps against the same motion uncontrolled), the errors.
 #include <gtest/gtest.h>
 
 #include <Eigen/Geometry>
@@ -782,6 +782,49 @@ TEST(ContactBodiesFriction, SpherePushedAtAPaceSlidesThenSticksWhereTheClosedFor
   const ControlledTrajectory smooth =
       run_controlled(paced_sphere(params, pace, "v0", false), {2.0});
   EXPECT_LE(tr.stats.steps, smooth.plant.stats.steps * 3 / 2);
+}
+
+TEST(ContactBodiesFriction, SpherePushedAtAPaceTakesTheStepsOfItsMotionAndOfItsErrorDynamics) {
+  // the rolling pace above under error dynamics slower than the motion (omega 1 < w 3), against
+  // the same motion uncontrolled (the closed-form force 7/5 m a applied): the controlled run
+  // takes about the steps of its motion (210 for 176), and its integrals (work, effort, |work|,
+  // integrated beside the plant) their closed forms. At omega 10 it takes 625: the closed loop's
+  // Jacobian (rates omega, error dynamics e'' + 2 zeta omega e' + omega^2 e = 0, not excited on
+  // the exact motion) enters dopri5's local error, so the steps grow about as omega^0.8 once
+  // omega exceeds the motion's rate (docs/control.md, "Steps of a controlled run")
+  const double mass = 6.0, A = 0.1, w = 3.0, t_end = 2.0;
+  const std::string params = "mu: 0.5, A: 0.1, w: 3";
+  std::string slow = paced_sphere(params, "A*(1 - cos(w*t))", "0", true);
+  slow.replace(slow.find("omega: 10"), 9, "omega: 1");
+  const ControlledTrajectory r = run_controlled(slow, {});
+  std::string text = paced_sphere(params, "0", "0", true);
+  text.replace(text.find("control:"), std::string::npos,
+               "simulate: {t_end: 2, integrator: dopri5, rtol: 1e-10, atol: 1e-12}\n"
+               "output: {every: 0}\n");
+  text.replace(text.find("contacts:"), 0,
+               "  - {type: applied, body: ball, point: [0, 0, 0], "
+               "force: [1.4*m*A*w^2*cos(w*t), 0, 0]}\n");
+  const Model free = parse_model(text);
+  const Trajectory open = simulate(free.system, free.q0, free.qd0, free.options);
+  ASSERT_EQ(open.stats.status, Status::kOk) << open.stats.message;
+  const Trajectory& tr = r.plant;
+  ASSERT_EQ(tr.t.size(), 2u);
+  EXPECT_NEAR(at(tr, tr.q, "ball.x", 1), at(open, open.q, "ball.x", 1), 1e-11);
+  EXPECT_GE(tr.stats.steps, open.stats.steps);
+  EXPECT_LE(tr.stats.steps, open.stats.steps * 13 / 10);
+  // the integrals against their closed forms: work 7/10 m v², effort F0² (t/2 + sin 2wt / 4w),
+  // |work| 7/10 m A² w² (4 − sin² wt) (v² rises, falls, rises, falls from its peak at 3π/2w)
+  const double v = A * w * std::sin(w * t_end), F0 = 1.4 * mass * A * w * w;
+  EXPECT_NEAR(r.control_work.back(), 0.7 * mass * v * v, 1e-10);
+  EXPECT_NEAR(r.control_effort.back(), F0 * F0 * (t_end / 2 + std::sin(2 * w * t_end) / (4 * w)),
+              1e-8);
+  const double s = std::sin(w * t_end);
+  EXPECT_NEAR(r.control_work_abs.back(), 0.7 * mass * A * A * w * w * (4.0 - s * s), 1e-7);
+  // omega 10: the error dynamics, not the motion, set the steps (625 here, 2.98 times as many)
+  const ControlledTrajectory fast =
+      run_controlled(paced_sphere(params, "A*(1 - cos(w*t))", "0", true), {});
+  EXPECT_GE(fast.plant.stats.steps, 2 * tr.stats.steps);
+  EXPECT_LE(fast.plant.stats.steps, 4 * tr.stats.steps);
 }
 
 }  // namespace UKDYN_TEST_FILE
