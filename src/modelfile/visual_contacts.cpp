@@ -148,15 +148,15 @@ VisualContact bodies_visual_contact(std::shared_ptr<const mb::MultibodyModel> mo
     const bool planar = joint.planar;
     Vector3d e = Vector3d::UnitZ();
     if (!planar) {
-      const Vector3d d0 = mb::world_point(*model, model->q0, C, fc.p) -
-                          mb::world_point(*model, model->q0, P, fp.p);
+      const Vector3d d0 =
+          mb::world_point(*model, model->q0, C, fc.p) - mb::world_point(*model, model->q0, P, fp.p);
       Eigen::Index axis = 0;
       d0.cwiseAbs().minCoeff(&axis);
       e = Vector3d::Unit(axis);
     }
     c.axes = [model, P, C, fp, fc, e, planar](const Eigen::Ref<const VectorXd>& q, Matrix3d& axes) {
-      const Vector3d n = (mb::world_point(*model, q, C, fc.p) - mb::world_point(*model, q, P, fp.p))
-                             .normalized();
+      const Vector3d n =
+          (mb::world_point(*model, q, C, fc.p) - mb::world_point(*model, q, P, fp.p)).normalized();
       const Vector3d t1 = planar ? Vector3d(n.cross(Vector3d::UnitZ())) : e.cross(n).normalized();
       axes << n, t1, planar ? Vector3d::Zero() : Vector3d(n.cross(t1));
     };

@@ -78,7 +78,7 @@ struct VisualContact {
   /// `visual.contact.<name>.fx`, `.fy` (, `.fz`). Null: no friction arrow at this contact.
   using Axes =
       std::function<void(const Eigen::Ref<const Eigen::VectorXd>& q, Eigen::Matrix3d& axes)>;
-  Axes axes;
+  Axes axes;  ///< the friction's world axes at q (see Axes); null: no friction arrow
 };
 
 /// A loop closure of a robot (`robot: loops:`), drawn by the viewer as a dashed line from
