@@ -74,11 +74,19 @@ class Page:
         return self.driver.execute_script(code, *args)
 
     def pixels(self) -> np.ndarray:
-        """The canvas as an H × W × 3 array of 0..255."""
+        """The canvas as an H × W × 3 array of 0..255. A canvas read back wholly black (its
+        drawing buffer empty: headless Chromium's WebGL, once in a fresh-clone CI run under
+        load, gave one for a page whose scene checks had all passed) is rendered and read again,
+        up to three times; a page that draws nothing stays black and fails its test."""
         from PIL import Image
-        url = self.js("return ukdyn.snapshot()")
-        image = Image.open(io.BytesIO(base64.b64decode(url.split(",", 1)[1]))).convert("RGB")
-        return np.asarray(image).astype(int)
+        for attempt in range(4):
+            url = self.js("return ukdyn.snapshot()")
+            image = Image.open(io.BytesIO(base64.b64decode(url.split(",", 1)[1]))).convert("RGB")
+            img = np.asarray(image).astype(int)
+            if img.any():
+                return img
+            time.sleep(0.5)
+        return img
 
     def save(self, name: str) -> pathlib.Path:
         path = _artefacts() / name
