@@ -32,7 +32,8 @@ Vector3d contact_point(const Vector3d& c, const Vector3d& n, double r, const Vec
 // The columns visual.contact.<name>.fx, .fy (, .fz) of contact c's Coulomb friction at a
 // contact point (VisualContact::axes), at the samples of traj: f_W = Σ f_i t_i with, in the
 // contact's tangent axes, f = the stick constraint's multipliers while it holds (at a sliding
-// speed |v| = |T q'| within the located stop speed 100 eps), else the sliding law
+// speed |v| = |T q'| within the located stop speed 100 eps, or within 1e-6 of the run's fastest
+// slip), else the sliding law
 // f = −mu N v / sqrt(|v|² + eps²) with N = |lambda_total.<name>| (a contact's gap has a unit
 // normal: its multiplier is the normal force). Cost O(samples · cost of the kinematics).
 void add_friction_columns(const Model& model, const Trajectory& traj, const VisualContact& c,
@@ -63,14 +64,27 @@ void add_friction_columns(const Model& model, const Trajectory& traj, const Visu
     cols.push_back(
         {"visual.contact." + c.name + "." + kParts[k], std::vector<double>(std::size_t(N))});
   Matrix3d axes;
+  // the sliding velocity (in the tangent axes) at sample i
+  const auto sliding_velocity = [&](Index i) {
+    const Eigen::Map<const VectorXd> q(traj.q.data() + i * n, n), qd(traj.qd.data() + i * n, n);
+    fc->kinematics.evaluate(q, qd, traj.t[std::size_t(i)], scratch.get(), J, bias);
+    for (std::size_t j = 0; j < columns.size(); ++j) qd_c[Index(j)] = qd[columns[j]];
+    Vector3d v = Vector3d::Zero();
+    for (Index a = 0; a < d; ++a) v[a] = J.row(1 + a).dot(qd_c);
+    return v;
+  };
+  // held: within the located stop speed 100 eps, or within 1e-6 of the run's fastest slip (a
+  // stuck contact drifts at the integrator's tolerance, 1e-7 mm/s in a model in mm: above
+  // 100 eps there)
+  double fastest = 0.0;
+  for (Index i = 0; i < N; ++i) fastest = std::max(fastest, sliding_velocity(i).norm());
+  const double held_below = std::max(100.0 * fc->eps, 1e-6 * fastest);
   for (Index i = 0; i < N; ++i) {
     const Eigen::Map<const VectorXd> q(traj.q.data() + i * n, n), qd(traj.qd.data() + i * n, n);
     const double t = traj.t[std::size_t(i)];
-    fc->kinematics.evaluate(q, qd, t, scratch.get(), J, bias);
-    for (std::size_t j = 0; j < columns.size(); ++j) qd_c[Index(j)] = qd[columns[j]];
-    Vector3d v = Vector3d::Zero(), f = Vector3d::Zero();  // in the tangent axes
-    for (Index a = 0; a < d; ++a) v[a] = J.row(1 + a).dot(qd_c);
-    if (v.norm() <= 100.0 * fc->eps) {
+    const Vector3d v = sliding_velocity(i);  // (J at sample i)
+    Vector3d f = Vector3d::Zero();           // in the tangent axes
+    if (v.norm() <= held_below) {
       for (Index a = 0; a < d; ++a) f[a] = traj.lambda[std::size_t(i * traj.m + stick + a)];
       stick_rows.acceleration_form_local(q, qd, t, stick_scratch.get(), A_stick, b_stick);
       const double row = J.row(1).norm();

@@ -212,6 +212,28 @@ TEST(VisualContacts, FrictionAtAContactPointIsItsWorldForceSlidingAndHeld) {
     EXPECT_GT(rolling, 20);
   }
   {
+    // the same ball in mm, g, s (a new user's: its stuck contact drifts at ~1e-7 mm/s, above
+    // 100 eps = 1e-7, and the column read the full sliding friction while it rolled)
+    const std::string text = text_of(kExamples + "/ball_rolls_after_sliding.yaml");
+    const std::string si = "parameters: {m: 6, r: 0.11, g: 9.81, v0: 4, mu: 0.2}";
+    ASSERT_NE(text.find(si), std::string::npos);
+    std::string mm = text;
+    mm.replace(mm.find(si), si.size(), "parameters: {m: 6000, r: 110, g: 9810, v0: 4000, mu: 0.2}");
+    const Model m = parse_model(mm, kExamples + "/ball_rolls_after_sliding.yaml");
+    const ModelRun run = run_model(m);
+    ASSERT_EQ(run.trajectory.stats.status, Status::kOk) << run.trajectory.stats.message;
+    const double t_star = 2.0 * 4.0 / (7.0 * 0.2 * g), full = 0.2 * 6000.0 * 9810.0;
+    int rolling = 0;
+    for (std::size_t i = 0; i < run.trajectory.t.size(); ++i) {
+      const double t = run.trajectory.t[i];
+      if (std::abs(t - t_star) < 1e-3) continue;
+      rolling += t > t_star;
+      EXPECT_NEAR(friction_column(run, "floor", "x", i), t < t_star ? -full : 0.0, 1e-9 * full)
+          << "t = " << t;
+    }
+    EXPECT_GT(rolling, 20);
+  }
+  {
     // a solid sphere (m = 1, r = 0.1) at rest, pushed at its centre by F = 2: it rolls, held
     // by the stick constraint, x'' = 5 F / (7 m), and the floor's friction is −2 F / 7 — in
     // metres and in millimetres (L = 1000: the stick rows' unit kappa is not 1 there)
