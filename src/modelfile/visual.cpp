@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <Eigen/QR>
@@ -79,6 +80,13 @@ nlohmann::json contact_friction(const Model& model, const VisualContact& c) {
   if (!fc) return nullptr;
   const std::string stick = sys.constraint(fc->stick_constraint).name();
   static const char* axes[] = {"x", "y", "z"};
+  // the scene's entry: the columns summed per sliding component, and their map to the axes
+  const auto entry = [&](nlohmann::json columns, nlohmann::json map) -> nlohmann::json {
+    return {{"name", stick.substr(std::string("stick.").size())},
+            {"mu", fc->mu},
+            {"columns", std::move(columns)},
+            {"map", std::move(map)}};
+  };
   if (fc->kinematics) {
     // a contact point's friction (ContactKinematics): its force J_Pᵀ f on the coordinates does
     // not map back from them; run_model writes f itself, visual.contact.<name>.fx, ... (the
@@ -91,10 +99,7 @@ nlohmann::json contact_friction(const Model& model, const VisualContact& c) {
       map.push_back(row);
       columns.push_back({"visual.contact." + c.name + ".f" + axes[a]});
     }
-    return {{"name", stick.substr(std::string("stick.").size())},
-            {"mu", fc->mu},
-            {"columns", columns},
-            {"map", map}};
+    return entry(std::move(columns), std::move(map));
   }
   const std::size_t nc = fc->coordinates.size();
   // the outputs of the contact point's axes
@@ -142,10 +147,7 @@ nlohmann::json contact_friction(const Model& model, const VisualContact& c) {
     columns.push_back({"Qc_nonideal." + coordinate,
                        "lambda." + stick + (nc == 1 ? "" : "." + std::to_string(j))});
   }
-  return {{"name", stick.substr(std::string("stick.").size())},
-          {"mu", fc->mu},
-          {"columns", columns},
-          {"map", map}};
+  return entry(std::move(columns), std::move(map));
 }
 
 }  // namespace
