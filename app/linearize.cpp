@@ -90,6 +90,7 @@ nlohmann::json model_json(const LinearModel& lm) {
   j["C_error"] = matrix_json(lm.C_error);
   j["D_error"] = matrix_json(lm.D_error);
   j["chart_condition"] = lm.chart_condition;
+  j["open_contacts"] = lm.open_contacts;
   nlohmann::json modes = nlohmann::json::array();
   for (Index k = 0; k < lm.eigenvalues.size(); ++k) {
     nlohmann::json mode;
@@ -169,6 +170,12 @@ int linearize_command(const LinearizeArguments& args) {
   std::vector<std::string> derivative_names;
   for (const auto& s : lm.state_names) derivative_names.push_back(s + "'");
 
+  // (said on stderr too: the model is that of the point's contact mode)
+  for (const auto& c : lm.open_contacts)
+    std::fprintf(stderr,
+                 "note: contact '%s' is open at the point: it is left out of the linear model "
+                 "(docs/linearize.md, \"Contacts\")\n",
+                 c.c_str());
   if (args.format == "csv") {
     print_csv_matrix("A", lm.A, derivative_names, lm.state_names);
     print_csv_matrix("B", lm.B, derivative_names, lm.input_names);
@@ -178,6 +185,10 @@ int linearize_command(const LinearizeArguments& args) {
     std::printf("# eigenvalues\nre,im\n");
     for (Index k = 0; k < lm.eigenvalues.size(); ++k)
       std::printf("%.17g,%.17g\n", lm.eigenvalues(k).real(), lm.eigenvalues(k).imag());
+    if (!lm.open_contacts.empty()) {
+      std::printf("# open contacts (left out)\n");
+      for (const auto& c : lm.open_contacts) std::printf("%s\n", c.c_str());
+    }
     return kExitOk;
   }
   nlohmann::json j = model_json(lm);

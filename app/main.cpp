@@ -310,6 +310,9 @@ int main(int argc, char** argv) {
       ->delimiter(',');
   lin_cmd->add_flag("--along", lin.along,
                     "linearize along the model's own run, at every output sample (JSON)");
+  lin_cmd->add_flag("--project", lin.project,
+                    "first move the state onto the constraints (least M-weighted correction; "
+                    "an open contact keeps its gap)");
   lin_cmd->add_flag("--equilibrium", lin.equilibrium,
                     "first find an equilibrium (or steady motion) from the --at state");
   lin_cmd

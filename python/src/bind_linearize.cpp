@@ -60,6 +60,7 @@ py::dict model_dict(const LinearModel& lm) {
   d["x0"] = copy_vector(lm.x0);
   d["f0"] = copy_vector(lm.f0);
   d["chart_condition"] = lm.chart_condition;
+  d["open_contacts"] = lm.open_contacts;
   // eigenvalues (s) and eigenvectors (s × s) as complex arrays
   const Index s = lm.eigenvalues.size();
   py::array_t<std::complex<double>> ev(s);

@@ -68,6 +68,20 @@ def test_a_state_off_the_constraints_is_refused_or_projected(examples_dir):
     np.testing.assert_allclose(np.hypot(*lm.q), model.parameters["L"], rtol=1e-12)
 
 
+def test_an_open_contact_is_left_out_and_projection_keeps_its_gap(examples_dir):
+    # the bouncing ball 1 m above its floor: the free ball, x = (y, y'), f0 = (0, -g)
+    model = ukdyn.load(examples_dir / "bouncing_ball.yaml")
+    lm = model.linearize()
+    assert lm.open_contacts == ["floor"]
+    np.testing.assert_allclose(lm.A, [[0, 1], [0, 0]], rtol=0, atol=1e-8)
+    np.testing.assert_allclose(lm.f0, [0, -9.81], rtol=0, atol=1e-12)
+    # project=True keeps an open gap (the same model), moves a penetrating ball onto the floor
+    assert model.linearize(q=[0.3], q_dot=[-1.0], project=True).states == ["y", "y_dot"]
+    held = model.linearize(q=[-0.01], q_dot=[0.0], project=True)
+    assert held.states == [] and held.open_contacts == []
+    assert abs(held.q[0]) <= 1e-12
+
+
 def test_errors_name_what_is_wrong():
     model = ukdyn.parse(CART)
     with pytest.raises(ValueError, match="neither a coordinate"):

@@ -41,6 +41,8 @@ class LinearModel:
     q_dot: np.ndarray
     t: float
     chart_condition: float
+    #: the unilateral contacts open at the point, left out of the model (closed ones are held)
+    open_contacts: List[str]
     eigenvalues: np.ndarray
     eigenvectors: np.ndarray
 

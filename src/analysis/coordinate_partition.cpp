@@ -167,6 +167,8 @@ Partition choose_coordinates(const System& sys, Workspace& ws, const OperatingPo
                                 "singular_threshold in [rank_threshold, 1), initial_step > 0, "
                                 "table_size >= 2, step_ratio > 1, manifold_tolerance > 0)");
 
+  // the contact mode of the point: an open unilateral contact takes no rows
+  hold_contact_mode(sys, ws, at);
   // A at the point, and the rows of each kind
   assemble_constraints(sys, ws, at.q, at.qd, at.t);
   if (ws.status != Status::kOk) throw_if_failed(sys, ws);

@@ -31,6 +31,13 @@ struct Partition {
   double condition = 1.0;  ///< σ_min/σ_max estimate of J_v's dependent columns (1 if none)
 };
 
+/// The contact mode of a point, held by every evaluation with `ws`: the unilateral constraints
+/// whose gap is open at `at` are released (ws.activity_override 0: no rows, no force); the
+/// closed ones act as bilateral constraints (docs/linearize.md, "Contacts"). Returns the open
+/// ones' names. O(contacts).
+std::vector<std::string> hold_contact_mode(const System& sys, Workspace& ws,
+                                           const OperatingPoint& at);
+
 /// The workspace options linearize uses: `solver` with the dense engine (M and A are read).
 SolverOptions dense_options(const SolverOptions& solver);
 

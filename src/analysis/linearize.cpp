@@ -106,6 +106,7 @@ LinearModel linearize(const System& sys, const OperatingPoint& at,
   const Index s = rd.state_size(), ny = Index(outputs.size()), nu = Index(inputs.size());
 
   LinearModel lm;
+  lm.open_contacts = analysis::hold_contact_mode(sys, ws, at);
   lm.independent_positions = part.ip;
   lm.independent_velocities = part.iv;
   lm.chart_condition = part.condition;

@@ -29,7 +29,9 @@ ReducedDynamics::ReducedDynamics(const System& sys, const Partition& p, const Op
       base_(base),
       ws_(sys, dense_options(options.solver)),
       q_(base.q),
-      qd_(base.qd) {}
+      qd_(base.qd) {
+  hold_contact_mode(sys, ws_, base);  // (the base point's contact mode in every evaluation)
+}
 
 VectorXd ReducedDynamics::base_state() const {
   VectorXd x(state_size());

@@ -240,6 +240,56 @@ TEST(Linearize, AStateProjectedOntoTheManifoldLinearizes) {
   EXPECT_EQ(linearize(sys, p).state_names.size(), 2u);
 }
 
+// a ball on a horizontal spring (k, along x) over a floor y >= 0 (unilateral): the contact mode
+// of the point decides the model
+constexpr const char* kBallOverFloor = R"(
+name: ball over a floor
+parameters: {m: 2, g: 9.81, k: 50}
+coordinates: [x, y]
+kinetic_energy: 0.5*m*(x_dot^2 + y_dot^2)
+potential_energy: m*g*y + 0.5*k*x^2
+constraints:
+  - {name: floor, holonomic: y, unilateral: true, restitution: 0.5}
+initial:
+  q: {x: 0.1, y: 1}
+)";
+
+TEST(Linearize, AnOpenContactIsLeftOutAndAClosedOneHeld) {
+  const Model model = parse_model(kBallOverFloor);
+  const System& sys = model.system;
+  const double m = 2, g = 9.81, k = 50;
+  // open (y = 1): the free ball, x = (x, y, x', y'), f0 = (0, 0, −k x/m, −g)
+  OperatingPoint op{VectorXd::Zero(2), VectorXd::Zero(2), 0.0};
+  op.q << 0.1, 1.0;
+  const LinearModel open = linearize(sys, op);
+  ASSERT_EQ(open.state_names, (std::vector<std::string>{"x", "y", "x_dot", "y_dot"}));
+  MatrixXd A_open = MatrixXd::Zero(4, 4);
+  A_open(0, 2) = A_open(1, 3) = 1.0;
+  A_open(2, 0) = -k / m;
+  expect_matrix_near(open.A, A_open, 1e-7, "A (open)");
+  EXPECT_NEAR(open.f0(2), -k * 0.1 / m, 1e-12);
+  EXPECT_NEAR(open.f0(3), -g, 1e-12);
+  EXPECT_EQ(open.open_contacts, std::vector<std::string>{"floor"});
+  // closed (y = 0): held, the oscillator in x alone, eigenvalues ±i sqrt(k/m)
+  op.q << 0.1, 0.0;
+  const LinearModel held = linearize(sys, op);
+  ASSERT_EQ(held.state_names, (std::vector<std::string>{"x", "x_dot"}));
+  EXPECT_TRUE(held.open_contacts.empty());
+  EXPECT_NEAR(std::abs(held.eigenvalues(0).imag()), std::sqrt(k / m), 1e-7);
+  EXPECT_NEAR(held.eigenvalues(0).real(), 0.0, 1e-7);
+  // projection: an open gap is kept (no violation), a penetrating state moved onto the floor
+  op.q << 0.1, 0.3;
+  op.qd << 0.0, -1.0;
+  const OperatingPoint kept = project_onto_manifold(sys, op);
+  EXPECT_EQ(kept.q(1), 0.3);
+  EXPECT_EQ(kept.qd(1), -1.0);
+  op.q << 0.1, -0.01;
+  const OperatingPoint moved = project_onto_manifold(sys, op);
+  EXPECT_NEAR(moved.q(1), 0.0, 1e-12);
+  EXPECT_NEAR(moved.qd(1), 0.0, 1e-12);
+  EXPECT_NEAR(moved.q(0), 0.1, 1e-15);
+}
+
 std::vector<std::complex<double>> sorted_eigenvalues(const LinearModel& lm) {
   std::vector<std::complex<double>> ev(lm.eigenvalues.data(),
                                        lm.eigenvalues.data() + lm.eigenvalues.size());

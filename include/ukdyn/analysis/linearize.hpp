@@ -163,6 +163,11 @@ struct LinearModel {
   /// σ_min / σ_max estimate of the dependent columns of J_v (1 without constraints): how far
   /// the chosen coordinates are from a singular configuration.
   double chart_condition = 1.0;
+  /// The unilateral contacts open at the point, left out of the model (no rows, no force); the
+  /// closed ones are held as bilateral constraints: the model is that of the point's contact
+  /// mode, valid while no gap closes and no held contact would pull (docs/linearize.md,
+  /// "Contacts").
+  std::vector<std::string> open_contacts;
   Eigen::VectorXcd eigenvalues;   ///< of A (s), in the order of Eigen's EigenSolver
   Eigen::MatrixXcd eigenvectors;  ///< column k: the mode of eigenvalue k; rows: state_names
   /// The mode of eigenvalue k as (state name, component) pairs, largest magnitude first.
