@@ -115,6 +115,10 @@ class ContactDynamics {
   const VectorXd& v_after() const { return v_after_; }  // (k) g' after an impact
   // (k) |friction impulse| of each contact in the last impact
   const VectorXd& friction_impulse() const { return friction_impulse_; }
+  // (k) the contacts' free gap accelerations A_c q''_free − b_c of the last accelerations(): the
+  // scale against which a slack w_i is roundoff (a contact left unloaded at a vertex of redundant
+  // contacts, w_i = 0 up to it) or a separation
+  const VectorXd& free_gap_acceleration() const { return r_; }
 
  private:
   // P f (f an n-vector of generalized force): the acceleration it causes with the bilateral rows
@@ -147,7 +151,7 @@ class ContactDynamics {
   Index n_ = 0, rows_b_ = 0;
   MatrixXd M_, A_, A_c_, A_b_, X_, W_, Y_, F_, D_, PD_;  // PD_ = P D (n × directions)
   MatrixXd M_augmented_;  // M + s NᵀN (n × n) when M is singular (quaternions), by prepare()
-  VectorXd b_, b_c_, lambda_, w_, v_after_, mu_, vt_minus_, friction_impulse_;
+  VectorXd b_, b_c_, r_, lambda_, w_, v_after_, mu_, vt_minus_, friction_impulse_;
   VectorXd beta_;  // (directions) the friction impulses of the last impact, both phases
   std::vector<Index> direction_cone_;  // (directions) the cone of each friction direction
   std::vector<Index> cone_contact_;    // (cones) the contact (position in the set) of each cone

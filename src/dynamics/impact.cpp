@@ -165,14 +165,14 @@ bool ContactDynamics::accelerations(const System& sys, Workspace& ws,
   }
   if (s != Status::kOk) return false;
   // w = (W + F) lambda + (A_c q''_free − b_c)
-  const VectorXd r = A_c_ * ws.qdd - b_c_;
-  failure_ = non_finite(sys, r);
+  r_ = A_c_ * ws.qdd - b_c_;
+  failure_ = non_finite(sys, r_);
   if (!failure_.empty()) return false;
   if (sliding_friction(sys, ws, q, qd, t)) {
     const MatrixXd Mlcp = W_ + F_;
     failure_ = painleve(sys, Mlcp);
-    if (!failure_.empty() || !lcp_.solve(Mlcp, r)) return false;
-  } else if (!lcp_.solve(W_, r)) {
+    if (!failure_.empty() || !lcp_.solve(Mlcp, r_)) return false;
+  } else if (!lcp_.solve(W_, r_)) {
     return false;
   }
   lambda_ = lcp_.z();

@@ -83,6 +83,28 @@ double ContactEvents::multiplier(Index k) const {
   return ws_.lambda[row] + ws_.lambda_nonideal[row];
 }
 
+double ContactEvents::largest_load() const {
+  double largest = 0.0;
+  for (std::size_t i = 0; i < closed_.size(); ++i) {
+    if (closed_[i]) largest = std::max(largest, std::abs(multiplier(dyn_.contacts()[i])));
+  }
+  return largest;
+}
+
+double ContactEvents::impact_level(Index k, double g, double gd) const {
+  // 0, or −kTouchGap when the step starts at a gap within roundoff below 0 (after a release) or
+  // touching at a rate of roundoff (an unloaded contact: its gap and rate, combinations of the
+  // closed contacts' at the roundoff of the drift control, cross 0 either way in every step —
+  // they were taken for impacts at 1e-16 m/s, "separating" ones included); below where it
+  // started when that gap opens, g' > 0, after an impact: else each flight of an accumulation
+  // of impacts would fall up to kTouchGap further than it rose, and never come to rest — a
+  // sphere's gap z − r has the roundoff of z
+  const double touch = kTouchGap * gap_scale(sys_, ws_, k);
+  const bool still = std::abs(gd) <= kStillRate * gap_rate_scale(sys_, ws_, k);
+  if (!(g < 0.0) && !(still && g <= touch)) return 0.0;
+  return gd > 0.0 && !still ? std::max(g, -touch) : -touch;
+}
+
 double ContactEvents::locate(double t0, double t1, const SegmentHooks::Dense& dense, Index i,
                              bool gap, double level) {
   // bisection to a bracket of 1e-14 |t|: lo on the old side (f >= level), hi across
@@ -119,18 +141,10 @@ double ContactEvents::find(double t0, const double* x0, double t1, const double*
     double te = kNaN;
     nonfinite.clear();
     if (!closed_[i]) {
-      // an impact: the gap falls below 0 (below −kTouchGap when the step starts at a gap
-      // within roundoff below 0, after a release; below where it started when that gap opens,
-      // g' > 0, after an impact: else each flight of an accumulation of impacts would fall up
-      // to kTouchGap further than it rose, and never come to rest — a sphere's gap z − r has
-      // the roundoff of z)
+      // an impact: the gap falls below impact_level
       double g0 = 0.0, gd0 = 0.0, g1 = 0.0, gd1 = 0.0;
       finite_gap(Index(i), t0, x0, g0, gd0);
-      double level = 0.0;
-      if (g0 < 0.0) {
-        const double touch = kTouchGap * gap_scale(sys_, ws_, dyn_.contacts()[i]);
-        level = gd0 > 0.0 ? std::max(g0, -touch) : -touch;
-      }
+      const double level = impact_level(dyn_.contacts()[i], g0, gd0);
       // (an open gap or rate that turns non-finite — its expression out of its domain — is no
       // row of the evaluation, so nothing else sees it: the impacts up to the last finite time
       // are located, else the run stops there)
@@ -152,9 +166,11 @@ double ContactEvents::find(double t0, const double* x0, double t1, const double*
       }
     } else {
       // a release: the multiplier turns negative. The step's last evaluation screens (no
-      // evaluation while it pushes); then the state at t1 decides, and bisection locates it.
+      // evaluation while it pushes); then the state at t1 decides — beyond roundoff of zero
+      // (kUnloaded: a corner of a box on four corners at rest carries 0 N, 7e-16 N below it) —
+      // and bisection locates where it crossed zero.
       if (pushes_[i]) continue;
-      if (!(value(Index(i), false, t1, x1) < 0.0)) continue;
+      if (!(value(Index(i), false, t1, x1) < -kUnloaded * largest_load())) continue;
       te = value(Index(i), false, t0, x0) < 0.0 ? t0 : locate(t0, t1, dense, Index(i), false, 0.0);
     }
     if (std::isnan(first) || te < first) {
@@ -309,7 +325,8 @@ bool ContactEvents::resolve(double t, double* x, Index event, RunStatistics& sta
     which.push_back(i);
     set.push_back(k);
     v_minus.push_back(gd);
-    approaching = approaching || (gd < 0.0 && !closed_[i]);
+    // (an approach at a rate of roundoff is none: no impact, the LCP below decides the mode)
+    approaching = approaching || (!closed_[i] && gd < -kStillRate * gap_rate_scale(sys_, ws_, k));
   }
   const Index m = Index(set.size());
   if (m == 0) {
@@ -406,6 +423,8 @@ bool ContactEvents::resolve(double t, double* x, Index event, RunStatistics& sta
   std::vector<Index> candidates;
   std::vector<std::size_t> cand_which;
   const std::vector<unsigned char> was_closed = closed_;
+  // (K) 1 unless the LCP leaves the contact unloaded without separating (λ = 0, g'' ≈ 0)
+  std::vector<unsigned char> separates(K, 1);
   for (Index j = 0; j < m; ++j) {
     const std::size_t i = which[std::size_t(j)];
     closed_[i] = 0;
@@ -424,18 +443,26 @@ bool ContactEvents::resolve(double t, double* x, Index event, RunStatistics& sta
                                          : dyn_.failure());
       return false;
     }
+    // (g'' = w of a contact left open: roundoff of its free acceleration at a vertex of
+    // redundant contacts — the contact stays touching, unloaded)
+    const double roundoff = kUnloaded * dyn_.free_gap_acceleration().cwiseAbs().maxCoeff();
     for (std::size_t j = 0; j < candidates.size(); ++j) {
       closed_[cand_which[j]] = dyn_.lambda()[Index(j)] > 0.0 ? 1 : 0;
+      separates[cand_which[j]] = dyn_.slack()[Index(j)] > roundoff ? 1 : 0;
     }
     if (release && closed_[std::size_t(event)] &&
         !hold_pushes(t, q, qd, candidates, dyn_.contacts()[std::size_t(event)])) {
       return false;
     }
   }
-  // a closed contact that opens: a release
+  // a closed contact that opens: a release, when it separates — the located release's own
+  // contact (its multiplier turned negative), one that leaves at g' > 0 (after an impact) or
+  // whose g'' the LCP makes positive; one merely left unloaded at a vertex of redundant
+  // contacts, still touching, is no event (docs/contact.md, "Redundant contacts")
   for (Index j = 0; j < m; ++j) {
     const std::size_t i = which[std::size_t(j)];
     if (!was_closed[i] || closed_[i]) continue;
+    if (!(release && Index(i) == event) && !separates[i]) continue;
     ContactEvent ev;
     ev.t = t;
     ev.constraint = set[std::size_t(j)];
@@ -458,7 +485,7 @@ bool ContactEvents::hold_pushes(double t, const Eigen::Ref<const VectorXd>& q,
   apply();
   if (forward_dynamics(sys_, ws_, q, qd, t) != Status::kOk) return true;
   const double held = multiplier(k);
-  if (!(held < 0.0)) return true;
+  if (!(held < -kUnloaded * largest_load())) return true;
   double lcp = 0.0;
   for (std::size_t j = 0; j < candidates.size(); ++j) {
     if (candidates[j] == k) lcp = dyn_.lambda()[Index(j)];

@@ -23,6 +23,17 @@ class ContactEvents {
   static constexpr double kRestFraction = 1e-6;
   // an open gap at most this far from zero takes part in an impact (simultaneous contacts)
   static constexpr double kTouchGap = 1e-9;
+  // a gap rate at most this large is roundoff, not motion: an open contact closes by an impact
+  // only when it approaches faster, and a touching open contact that moves slower (an unloaded
+  // corner of a box on four corners: W singular, the LCP's vertex) must penetrate by kTouchGap
+  // before it is hit. Both relative to the contact's speed unit, as kTouchGap to its length unit
+  // (the classes of ‖a‖ v and ‖a‖ ℓ of its row / 10: 1 in SI units, docs/simulation.md)
+  static constexpr double kStillRate = 1e-9;
+  // a closed contact's multiplier above −kUnloaded times the largest load of the closed contacts
+  // is roundoff of zero (the unloaded corner again), not a release; an opened contact whose gap
+  // acceleration after the LCP is at most kUnloaded times the contacts' free ones stays touching
+  // unloaded and is no release event either
+  static constexpr double kUnloaded = 1e-9;
   // a run is declared chattering when kChatterEvents impacts and releases fall within
   // kChatterSpan of its time span (a rate, not a count: an elastic ball bouncing every 0.09 s
   // for 10⁴ s makes 110 700 regular impacts)
@@ -90,6 +101,11 @@ class ContactEvents {
   // the whole multiplier lambda + lambda_nonideal of the unilateral constraint k (a System index)
   // in the last evaluation (pushes when > 0)
   double multiplier(Index k) const;
+  // the largest |multiplier| of the closed contacts in the last evaluation (O(contacts))
+  double largest_load() const;
+  // an open contact at (g, g') on the old side of a step: the level its gap must fall below for
+  // an impact (0, or −kTouchGap for a touching contact at rest or just penetrated)
+  double impact_level(Index k, double g, double gd) const;
 
   const System& sys_;
   Workspace& ws_;
