@@ -14,6 +14,7 @@
 #include <nlohmann/json.hpp>
 
 #include <ukdyn/core/format.hpp>
+#include <ukdyn/modelfile/run.hpp>
 #include <ukdyn/simulation/options.hpp>
 
 #include "commands.hpp"
@@ -138,6 +139,8 @@ RunProvenance provenance_of(const ModelSource& source, const Model& model,
       p.units.emplace_back(model.output_names[i], model.output_units[i]);
     }
   }
+  // the gaps of the contacts: entries (a distance: the length unit; contact_gap_units)
+  for (auto& gap : contact_gap_units(model)) p.units.push_back(std::move(gap));
   const UnitSystem& u = model.unit_system;
   p.unit_system = {{"length", u.length},       {"mass", u.mass},     {"time", u.time},
                    {"velocity", u.velocity()}, {"force", u.force()}, {"energy", u.energy()},

@@ -296,8 +296,13 @@ int sweep_command(const SweepArguments& args) {
   summary["latin_hypercube"] = args.lhs;
   summary["at"] = options.at;
   summary["samples"] = samples.size();
+  // (ok + failed + samples_interrupted + not_run = samples: a sample stopped by a signal, or
+  // never started, is not a failure)
+  summary["ok"] = result.ok();
   summary["failed"] = result.failed();
   summary["interrupted"] = result.interrupted;
+  summary["samples_interrupted"] = result.interrupted_samples();
+  summary["not_run"] = result.not_run();
   summary["threads"] = threads;
   summary["wall_time"] = wall;
   const fs::path csv_path = dir / "ensemble.csv";
@@ -362,8 +367,14 @@ int sweep_command(const SweepArguments& args) {
     }
   }
 
-  std::printf("  %zu samples: %zu ok, %zu failed; %.3g s (%.3g samples/s)\n", samples.size(),
-              samples.size() - result.failed(), result.failed(), wall,
+  // (an interrupted sweep's samples: those stopped and those never started apart)
+  std::string stopped;
+  if (const std::size_t k = result.interrupted_samples(); k > 0)
+    stopped += ", " + format_number(k) + " interrupted";
+  if (const std::size_t k = result.not_run(); k > 0)
+    stopped += ", " + format_number(k) + " not run";
+  std::printf("  %zu samples: %zu ok, %zu failed%s; %.3g s (%.3g samples/s)\n", samples.size(),
+              result.ok(), result.failed(), stopped.c_str(), wall,
               double(samples.size()) / std::max(wall, 1e-9));
   for (std::size_t i = 0, shown = 0; i < t.status.size() && shown < 3; ++i) {
     if (!result.samples[i].ok() && result.samples[i].outcome != SampleOutcome::kNotRun) {
@@ -378,7 +389,7 @@ int sweep_command(const SweepArguments& args) {
                  StopSignals::name(StopSignals::received()));
     return kExitInterruptedBase + StopSignals::received();
   }
-  return result.failed() > 0 || output_failed ? kExitRunFailed : kExitOk;
+  return result.ok() < samples.size() || output_failed ? kExitRunFailed : kExitOk;
 }
 
 }  // namespace ukdyn::cli

@@ -116,11 +116,13 @@ ukdyn.parse() or ukdyn.from_sympy(). Model.simulate() runs it exactly as `ukdyn 
                 out[name] = i < md.output_units.size() ? md.output_units[i] : std::string();
               }
             }
+            for (const auto& [name, unit] : contact_gap_units(md)) out[py::str(name)] = unit;
             return out;
           },
           "Each coordinate's and output expression's unit, as a new dict name -> unit: the "
           "file's `units:`, else the length unit (m), rad and 1 (quaternion components) for the "
-          "bodies' coordinates, else \"\" (not known).")
+          "bodies' coordinates, else \"\" (not known); and the length unit of the gap column "
+          "gap.<name> of each contacts: entry of a bodies or robot model (a distance).")
       .def_property_readonly(
           "unit_system",
           [](const Model& md) {

@@ -427,6 +427,37 @@ def test_viewer_data_of_the_friction_at_a_contact_point(rolling_ball):
     assert data["joints"] == []
 
 
+def test_contacts_plot_has_units_and_a_friction_panel(rolling_ball):
+    """contacts.png's axes carry units (repro u13/08): a body's contact's gap is a distance, in
+    the length unit, its normal force in the force unit; with Coulomb friction at the contact a
+    third panel draws the friction force (the run's visual.contact.floor.f* columns: -mu m g
+    along x while it slides). In mm, g, ms the labels are those units'; a generalized model's
+    gap (bouncing_ball: y, no units: given) is drawn without a unit."""
+    pytest.importorskip("matplotlib")
+    import matplotlib
+    matplotlib.use("Agg")
+    assert rolling_ball.units["gap.floor"] == "m"
+    fig = rolling_ball.figures()["contacts"]
+    labels = [ax.get_ylabel() for ax in fig.axes]
+    assert labels == ["normal force λ [N]", "gap g [m]", "friction force [N]"]
+    lines = {line.get_gid(): line for ax in fig.axes for line in ax.get_lines()}
+    fx = lines["friction.floor.fx"].get_ydata()
+    np.testing.assert_array_equal(fx, rolling_ball["visual.contact.floor.fx"])
+    sliding = rolling_ball["t"] < ROLL_T - 0.01
+    np.testing.assert_allclose(fx[sliding], -0.2 * 6 * G, rtol=1e-9)
+    matplotlib.pyplot.close(fig)
+    text = ukdyn.example_text("ball_rolls_after_sliding")
+    mm = ukdyn.parse(text + "units: {length: mm, mass: g, time: ms}\n", "mm.yaml")
+    assert mm.units["gap.floor"] == "mm"
+    fig = mm.simulate(t_end=0.1).figures()["contacts"]
+    assert [ax.get_ylabel() for ax in fig.axes] == [
+        "normal force λ [g·mm/ms²]", "gap g [mm]", "friction force [g·mm/ms²]"]
+    matplotlib.pyplot.close(fig)
+    fig = ukdyn.load("bouncing_ball").simulate(t_end=0.1).figures()["contacts"]
+    assert [ax.get_ylabel() for ax in fig.axes] == ["normal force λ", "gap g"]
+    matplotlib.pyplot.close(fig)
+
+
 def test_the_viewer_draws_the_friction_at_a_contact_point(browser, rolling_ball,  # noqa: F811
                                                            tmp_path):
     """The purple friction arrow at the ball's contact point while it slides, none once it

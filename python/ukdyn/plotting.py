@@ -596,12 +596,25 @@ def _contact_force(table, c):
     return table[total] if total in table else table["lambda." + c]
 
 
+def _contact_friction(table, c):
+    """Contact c's friction force in the world, the columns ``visual.contact.<c>.fx``, ``.fy``
+    (and ``.fz``) that a run writes for Coulomb friction at a contact point: [(axis, values)], empty
+    when it has none."""
+    return [(a, table["visual.contact.%s.f%s" % (c, a)]) for a in "xyz"
+            if "visual.contact.%s.f%s" % (c, a) in table]
+
+
 def contacts_figure(table, meta=None):
     """The unilateral contacts (docs/contact.md): each contact's normal force (its whole
     multiplier ``lambda_total.<name>``, which pushes when positive: the force itself when the gap
     is a distance) and its gap ``gap.<name>`` over time, the impacts marked (the ``contact_events``
     of summary.json or of Result.stats: a dotted line across both panels and a triangle on the
-    gap's zero at each). None for a run without contacts."""
+    gap's zero at each); below them, when the run has Coulomb friction at a contact point, each
+    such contact's friction force in the world (``visual.contact.<name>.fx``, ``.fy``, ``.fz``).
+    The gap of a contacts: entry is a distance, in the length unit (summary.json's ``units``
+    give ``gap.<name>`` its unit), and its force then in the force unit; a gap without a unit
+    (a generalized model's constraint, unless ``units:`` gives one) is drawn without one. None
+    for a run without contacts."""
     contacts = _contacts(table)
     if not contacts:
         return None
@@ -611,7 +624,10 @@ def contacts_figure(table, meta=None):
     for e in meta.get("contact_events") or []:
         if e.get("kind") in IMPACT_KINDS and e.get("contact") in impacts and e.get("t") is not None:
             impacts[e["contact"]].append(float(e["t"]))
-    fig, axes = _figure("contacts: normal forces and gaps", meta, 2)
+    friction = {c: _contact_friction(table, c) for c in contacts}
+    rubbing = [c for c in contacts if friction[c]]
+    fig, axes = _figure("contacts: normal forces and gaps" +
+                        (" and friction" if rubbing else ""), meta, 3 if rubbing else 2)
     for i, c in enumerate(contacts):
         style = line_style(i)
         axes[0].plot(t, _contact_force(table, c), label=c, gid="force." + c, **style)
@@ -623,8 +639,21 @@ def contacts_figure(table, meta=None):
             for ax in axes:
                 ax.vlines(times, 0, 1, transform=ax.get_xaxis_transform(), colors=style["color"],
                           linestyles=":", lw=0.7, label="_")
-    axes[0].set_ylabel("normal force λ")
-    axes[1].set_ylabel("gap g")
+    k = 0
+    for c in rubbing:
+        for a, values in friction[c]:
+            axes[2].plot(t, values, label="%s f%s" % (c, a), gid="friction.%s.f%s" % (c, a),
+                         **line_style(k))
+            k += 1
+    # units: the gaps' (one unit when all agree), the forces' from it (force_unit)
+    gap_units = {column_unit(meta, "gap." + c) for c in contacts}
+    gap_unit = gap_units.pop() if len(gap_units) == 1 else ""
+    force = force_unit(gap_unit, meta) if gap_unit else ""
+    axes[0].set_ylabel(_label("normal force λ", force))
+    axes[1].set_ylabel(_label("gap g", gap_unit))
+    if rubbing:
+        # (the friction columns are forces in the world, whatever the gaps' units)
+        axes[2].set_ylabel(_label("friction force", _data.system_unit(meta, "force")))
     _finish(axes, meta)
     return fig
 

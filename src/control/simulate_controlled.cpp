@@ -683,7 +683,7 @@ ControlledTrajectory simulate_controlled(
   tr.stats = full.stats;
   diagnose_requirements(*st, w, q0, qd0, options.t_start, tr.stats);
   run.control = w.stats;
-  balance.finish(tr.stats, tolerance);
+  balance.finish(tr.stats, tolerance, options.units);
   if (!w.failure.empty() && tr.stats.status != Status::kOk &&
       tr.stats.status != Status::kEnergyBalance && tr.stats.status != Status::kInterrupted) {
     tr.stats.message = "the controller failed: " + w.failure;

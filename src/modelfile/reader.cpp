@@ -57,6 +57,17 @@ const std::string* velocity_in(const ExpressionSet& set, Expr e,
   return nullptr;
 }
 
+namespace {
+// YAML's spellings of a non-finite float (.nan, .NaN, .NAN, .inf, -.Inf, +.INF, …; YAML 1.2's
+// core schema): a value the expression parser would only call an unexpected '.'
+bool yaml_non_finite(const YAML::Node& node) {
+  if (!node.IsScalar() || node.Tag() == "!") return false;  // (a quoted scalar is text)
+  std::string s = node.Scalar();
+  if (!s.empty() && (s[0] == '+' || s[0] == '-')) s.erase(0, 1);
+  return s == ".nan" || s == ".NaN" || s == ".NAN" || s == ".inf" || s == ".Inf" || s == ".INF";
+}
+}  // namespace
+
 // When YAML has split an expression of the flow list `list` (`key: [if(t - 0.5, F, 0), 0]`) at
 // the commas inside its parentheses: the hint to quote it, with the list as it should be written
 // (`forces: ["if(t - 0.5, F, 0)", 0]`); else "". An unquoted entry with more '(' than ')' is
@@ -123,6 +134,13 @@ Expr Reader::expression(const YAML::Node& node, const std::string& what, bool in
   if (!node.IsScalar()) {
     fail(node, what + " must be an expression (a number or a formula)",
          "write it as a single value, e.g. 0.5*m*x_dot^2");
+  }
+  if (yaml_non_finite(node)) {
+    fail(node,
+         what + " must be a finite number, got '" + node.Scalar() + "' (YAML's " +
+             (node.Scalar().find_first_of("aA") != std::string::npos ? "not-a-number)"
+                                                                     : "infinity)"),
+         "write a finite number or an expression of the parameters");
   }
   Expr e = 0;
   try {
@@ -229,6 +247,8 @@ void Reader::read_parameters(const YAML::Node& root) {
              "of the parameters written before it, e.g. I: m*L^2/12");
       }
       const std::string& text = kv.second.Scalar();
+      if (yaml_non_finite(kv.second))
+        fail(kv.second, "parameter '" + name + "' must be a finite number, got '" + text + "'");
       double v = 0.0;
       bool is_number = false;
       try {

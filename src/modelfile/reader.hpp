@@ -380,6 +380,9 @@ class Reader {
   }
 
   double number(const YAML::Node& node, const std::string& what);
+  // a coefficient of friction (mu, mu_static): a number in [0, kMaxFrictionCoefficient], else a
+  // located error that says the range (reader_nonideal.cpp)
+  double friction_coefficient(const YAML::Node& node, const std::string& what);
   Expr expression(const YAML::Node& node, const std::string& what, bool in_C = false);
   Program compile(const std::vector<Expr>& exprs, const YAML::Node& where,
                   const std::string& what) const;

@@ -294,7 +294,7 @@ mb::JointFriction MultibodyReader::friction(const YAML::Node& node, const std::s
   check_map(node, what + " friction", example);
   check_keys(node, {"mu", "radius", "viscous", "regularization"}, what + " friction");
   mb::JointFriction fr;
-  if (node["mu"]) fr.mu = non_negative(node["mu"], what + " friction mu");
+  if (node["mu"]) fr.mu = r_.friction_coefficient(node["mu"], what + " friction mu");
   if (node["radius"]) fr.radius = non_negative(node["radius"], what + " friction radius");
   if (node["viscous"]) fr.viscous = non_negative(node["viscous"], what + " friction viscous");
   if (node["regularization"])

@@ -29,6 +29,26 @@
 
 namespace ukdyn::model_reader {
 
+namespace {
+// the largest coefficient of friction a model may give: far above any material's (a few at
+// most), so that a contact meant never to slip can be written as one, and far below the
+// magnitudes at which mu N overflows or swamps the other forces (mu = 1e150 made Q non-finite at
+// t = 0, which named no friction)
+constexpr double kMaxFrictionCoefficient = 1e6;
+}  // namespace
+
+double Reader::friction_coefficient(const YAML::Node& node, const std::string& what) {
+  const double v = number(node, what);
+  if (!(v >= 0.0)) fail(node, what + " must be >= 0, got " + brief(v));
+  if (!(v <= kMaxFrictionCoefficient)) {
+    fail(node,
+         what + " must be in [0, " + brief(kMaxFrictionCoefficient) + "] (a coefficient of " +
+             "friction), got " + brief(v),
+         "dry friction between materials has mu between about 0.05 and 1.5 (docs/friction.md)");
+  }
+  return v;
+}
+
 SurfaceVelocityFn Reader::surface_velocity(const YAML::Node& node, std::size_t count) {
   const std::string what = "surface_velocity";
   const auto rows = rows_of(node, what);
@@ -114,7 +134,7 @@ void Reader::read_nonideal(const YAML::Node& root, SystemBuilder& builder) {
         if (!f["mu"]) fail(f, "coulomb friction needs mu");
         CoulombFriction spec;
         spec.constraint = on;
-        spec.mu = number(f["mu"], "mu");
+        spec.mu = friction_coefficient(f["mu"], "mu");
         spec.coordinates = coords;
         if (const auto pc = point_contacts_.find(on); pc != point_contacts_.end()) {
           // a robot's contact: the friction slides the contact point (ContactKinematics)
@@ -145,7 +165,7 @@ void Reader::read_nonideal(const YAML::Node& root, SystemBuilder& builder) {
         }
         if (spec.mu < 0) fail(f["mu"], "mu must be >= 0");
         if (const YAML::Node ms = f["mu_static"]) {
-          spec.mu_static = number(ms, "mu_static");
+          spec.mu_static = friction_coefficient(ms, "mu_static");
           if (!(*spec.mu_static >= spec.mu)) {
             fail(ms, "mu_static must be >= mu (the kinetic coefficient)");
           }

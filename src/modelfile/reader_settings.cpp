@@ -398,7 +398,19 @@ void Reader::read_units(const YAML::Node& root, Model& model) {
            "any number)");
     }
     if (is_coordinate) {
-      model.coordinate_units[std::size_t(coordinate(kv.first))] = text;
+      // a body's position coordinate is in the model's length unit: one body's coordinates in
+      // two length units would make the labels wrong (an angle may be relabelled)
+      const std::size_t k = std::size_t(coordinate(kv.first));
+      const std::string& own = model.coordinate_units[k];
+      if (model.multibody && own == model.unit_system.length && text != own) {
+        fail(value,
+             "units: '" + name + "' is a body's coordinate, in " + own +
+                 " (the model's length unit); it cannot be given '" + text + "'",
+             "a body's positions are all in the length unit: change units: {length: " + text +
+                 "} (and the model's numbers) or leave '" + name +
+                 "' out of units: (docs/model-format.md, \"Units\")");
+      }
+      model.coordinate_units[k] = text;
     } else {
       model.output_units[std::size_t(output - model.output_names.begin())] = text;
     }

@@ -44,7 +44,8 @@ const std::vector<std::string> kOtherPlantKeys = {
     "coordinates", "kinetic_energy", "potential_energy", "mass_matrix", "bodies",
     "joints",      "forces"};
 
-const std::vector<std::string> kRobotKeys = {"urdf", "gravity", "torques", "loops"};
+const std::vector<std::string> kRobotKeys = {"urdf", "gravity", "torques", "loops",
+                                             "friction_regularization"};
 const std::vector<std::string> kLoopKeys = {"name",  "type",   "link_a", "point_a",
                                             "rpy_a", "axis_a", "link_b", "point_b",
                                             "rpy_b", "axis_b", "length"};
@@ -58,6 +59,24 @@ std::string identifier_for(const std::string& name) {
   }
   if (s.empty() || std::isdigit(static_cast<unsigned char>(s[0]))) s.insert(0, "_");
   return s;
+}
+
+// one of the model's base units in SI: seconds per time unit, metres per length unit
+// (UnitSystem's lists)
+double seconds_per(const std::string& time) {
+  return time == "ms"    ? 1e-3
+         : time == "us"  ? 1e-6
+         : time == "min" ? 60.0
+         : time == "h"   ? 3600.0
+                         : 1.0;
+}
+double metres_per(const std::string& length) {
+  return length == "mm"   ? 1e-3
+         : length == "cm" ? 1e-2
+         : length == "km" ? 1e3
+         : length == "um" ? 1e-6
+         : length == "nm" ? 1e-9
+                          : 1.0;
 }
 
 // load_urdf's message without its function's name (the reader says where instead)
@@ -87,7 +106,9 @@ std::string urdf_model_text(const std::string& path) {
 Model Reader::read_robot(const YAML::Node& root) {
   const YAML::Node r = root["robot"];
   if (!r.IsMap()) {
-    fail(r, "robot must be a mapping with urdf: and optionally gravity, torques, loops",
+    fail(r,
+         "robot must be a mapping with urdf: and optionally gravity, torques, loops, "
+         "friction_regularization",
          "robot: {urdf: arm.urdf}");
   }
   for (const auto& kv : r) {
@@ -168,7 +189,25 @@ Model Reader::read_robot(const YAML::Node& root) {
           });
     };
   }
-  SystemBuilder builder = tree::system_builder(robot, tau);
+  // URDF's joint friction: regularized at 1e-6 rad/s (m/s) in the model's units (units:, so
+  // that a model in mm, g, ms moves as in SI), or at robot: friction_regularization: eps (in
+  // rad, or length, per time unit) for every joint
+  tree::FrictionRegularization eps;
+  if (const YAML::Node uu = root["units"]; uu && uu.IsMap()) {
+    UnitSystem units;
+    read_unit_system(uu, units);
+    eps.angular = tree::kJointFrictionRegularization * seconds_per(units.time);
+    eps.linear = eps.angular / metres_per(units.length);
+  }
+  if (const YAML::Node fr = r["friction_regularization"]) {
+    const double e = number(fr, "robot friction_regularization");
+    if (!(std::isfinite(e) && e > 0.0))
+      fail(fr, "robot friction_regularization must be a finite number > 0, got " + fr.Scalar(),
+           "the joint rate (rad or length per time unit) below which URDF's joint friction is "
+           "scaled down, e.g. 1e-6 in SI units (docs/robots.md)");
+    eps.angular = eps.linear = e;
+  }
+  SystemBuilder builder = tree::system_builder(robot, tau, eps);
   // loops: closures between link points (each kept for the viewer too)
   std::set<std::string> loop_names;
   std::vector<VisualLoop> drawn_loops;

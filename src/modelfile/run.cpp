@@ -83,6 +83,25 @@ void add_gap_columns(const Model& model, const Trajectory& traj, std::vector<Csv
   }
 }
 
+}  // namespace
+
+std::vector<std::pair<std::string, std::string>> contact_gap_units(const Model& model) {
+  std::vector<std::pair<std::string, std::string>> out;
+  if (!model.multibody && !model.robot) return out;
+  const System& sys = model.system;
+  for (Index k = 0; k < sys.constraint_count(); ++k) {
+    const Constraint& c = sys.constraint(k);
+    if (!c.is_unilateral()) continue;
+    const std::string name = "gap." + c.name();
+    if (std::find(model.output_names.begin(), model.output_names.end(), name) ==
+        model.output_names.end())
+      out.emplace_back(name, model.unit_system.length);
+  }
+  return out;
+}
+
+namespace {
+
 // the model's columns after the standard ones, for the samples of traj: the bodies' poses
 // (multibody models), the contacts' gaps, the output expressions (not the control's), then the
 // points and normals of the contacts: entries drawn (modelfile/visual_contacts.hpp)
@@ -99,9 +118,11 @@ void add_model_columns(const Model& model, const Trajectory& traj, std::vector<C
 }
 
 // a robot's joint and effort limits that the run left, as notes (tree::LimitWatch)
-void note_limits(const std::optional<tree::LimitWatch>& watch, RunStatistics& stats) {
+void note_limits(const std::optional<tree::LimitWatch>& watch, const UnitSystem& units,
+                 RunStatistics& stats) {
   if (!watch) return;
-  for (const tree::LimitExcess& e : watch->excesses()) stats.notes.push_back(tree::describe(e));
+  for (const tree::LimitExcess& e : watch->excesses())
+    stats.notes.push_back(tree::describe(e, units));
 }
 
 // A failed run whose model met a table column outside its range (the value NaN there,
@@ -116,10 +137,13 @@ void note_table_range(RunStatistics& stats) {
 
 }  // namespace
 
-ModelRun run_model(const Model& model, const SimulationOptions& options,
+ModelRun run_model(const Model& model, const SimulationOptions& options_in,
                    const std::function<void(const ModelRun& chunk)>& chunk,
                    std::size_t chunk_samples) {
   expr::clear_table_range_error();
+  // (the run's messages in the model's units)
+  SimulationOptions options = options_in;
+  options.units = model.unit_system;
   // the samples gather in `gathered` (plant and control; its capacity kept), passed on as a
   // ModelRun every chunk_samples; `last` holds the last sample
   const bool controlled = bool(model.controller);
@@ -181,7 +205,7 @@ ModelRun run_model(const Model& model, const SimulationOptions& options,
     run.trajectory = simulate(model.system, model.q0, model.qd0, o);
   }
   pass_on();
-  note_limits(watch, run.trajectory.stats);
+  note_limits(watch, model.unit_system, run.trajectory.stats);
   note_table_range(run.trajectory.stats);
 
   // the statistics, the names and the last sample with its columns
@@ -199,8 +223,10 @@ ModelRun run_model(const Model& model, const SimulationOptions& options,
   return run;
 }
 
-ModelRun run_model(const Model& model, const SimulationOptions& options) {
+ModelRun run_model(const Model& model, const SimulationOptions& options_in) {
   expr::clear_table_range_error();
+  SimulationOptions options = options_in;
+  options.units = model.unit_system;  // (the run's messages in the model's units)
   ModelRun run;
   std::optional<tree::LimitWatch> watch;
   if (model.robot) watch.emplace(*model.robot);
@@ -216,7 +242,7 @@ ModelRun run_model(const Model& model, const SimulationOptions& options) {
     run.trajectory = simulate(model.system, model.q0, model.qd0, options);
     if (watch) watch->observe(run.trajectory.t, run.trajectory.q, {});
   }
-  note_limits(watch, run.trajectory.stats);
+  note_limits(watch, model.unit_system, run.trajectory.stats);
   note_table_range(run.trajectory.stats);
   add_model_columns(model, run.trajectory, run.extra_columns);
   return run;

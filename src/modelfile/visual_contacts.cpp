@@ -34,8 +34,10 @@ Vector3d contact_point(const Vector3d& c, const Vector3d& n, double r, const Vec
 // contact's tangent axes, f = the stick constraint's multipliers while it holds (at a sliding
 // speed |v| = |T q'| within the located stop speed 100 eps, or within 1e-6 of the run's fastest
 // slip), else the sliding law
-// f = −mu N v / sqrt(|v|² + eps²) with N = |lambda_total.<name>| (a contact's gap has a unit
-// normal: its multiplier is the normal force). Cost O(samples · cost of the kinematics).
+// f = −mu N v / sqrt(|v|² + eps²); at rest with the stick constraint off (it slides from rest
+// along its slip hint) −mu N a_rel / |a_rel|, a_rel the impending motion T q'' + T' q'; with N =
+// |lambda_total.<name>| (a contact's gap has a unit normal: its multiplier is the normal force).
+// Cost O(samples · cost of the kinematics).
 void add_friction_columns(const Model& model, const Trajectory& traj, const VisualContact& c,
                           std::vector<CsvColumn>& out) {
   if (!c.axes) return;
@@ -57,7 +59,7 @@ void add_friction_columns(const Model& model, const Trajectory& traj, const Visu
   const ConstraintModel& stick_rows = sys.constraint(fc->stick_constraint).model();
   const std::unique_ptr<ConstraintScratch> stick_scratch = stick_rows.make_scratch(n);
   MatrixXd J(1 + d, Index(columns.size())), A_stick(d, Index(stick_rows.columns().size()));
-  VectorXd bias(1 + d), b_stick(d), qd_c(Index(columns.size()));
+  VectorXd bias(1 + d), b_stick(d), qd_c(Index(columns.size())), qdd_c(qd_c.size()), a_rel(d);
   static const char* const kParts[] = {"fx", "fy", "fz"};
   std::vector<CsvColumn> cols;
   for (int k = 0; k < c.dimensions; ++k)
@@ -84,8 +86,21 @@ void add_friction_columns(const Model& model, const Trajectory& traj, const Visu
     const double t = traj.t[std::size_t(i)];
     const Vector3d v = sliding_velocity(i);  // (J at sample i)
     Vector3d f = Vector3d::Zero();           // in the tangent axes
-    if (v.norm() <= held_below) {
-      for (Index a = 0; a < d; ++a) f[a] = traj.lambda[std::size_t(i * traj.m + stick + a)];
+    for (Index a = 0; a < d; ++a) f[a] = traj.lambda[std::size_t(i * traj.m + stick + a)];
+    if (v.norm() <= 100.0 * fc->eps && f.isZero(0.0)) {
+      // at rest (|v| <= 100 eps, where the law's slip hint acts) with its stick constraint off
+      // (exactly zero multipliers): it slides from rest along its slip hint, against the impending
+      // motion a_rel = T q'' + T' q' (the run's Run::start_sliding), at the full magnitude, unless
+      // a_rel is roundoff of its terms (held without load: no friction)
+      const Eigen::Map<const VectorXd> qdd(traj.qdd.data() + i * n, n);
+      for (std::size_t j = 0; j < columns.size(); ++j) qdd_c[Index(j)] = qdd[columns[j]];
+      a_rel = bias.tail(d) + J.bottomRows(d) * qdd_c;
+      const double terms = bias.tail(d).norm() + J.bottomRows(d).norm() * qdd_c.norm();
+      if (a_rel.norm() > 1e-8 * terms) {
+        const double normal = std::abs(traj.lambda_total[std::size_t(i) * un + ui]);
+        f.head(d) = -fc->mu * normal / a_rel.norm() * a_rel;
+      }
+    } else if (v.norm() <= held_below) {
       stick_rows.acceleration_form_local(q, qd, t, stick_scratch.get(), A_stick, b_stick);
       const double row = J.row(1).norm();
       f *= row > 0.0 ? A_stick.row(0).norm() / row : 1.0;

@@ -27,10 +27,12 @@ constexpr double kFloor = 1e-10;
 std::string format3(double v) { return format_number(v, 3); }
 
 // the warning of a run whose balance fails: the worst sample and what may cause it
-std::string warning(double worst_r, double worst_t, double balance, double tolerance) {
-  return "energy balance: E(t) - E(0) - (sum of the works) = " + format3(worst_r) +
-         " J at t = " + format3(worst_t) + " s, " + format3(balance) +
-         " of the energy exchanged, above the tolerance " + format3(tolerance) +
+// (in the run's units: J and s in SI units)
+std::string warning(double worst_r, double worst_t, double balance, double tolerance,
+                    const UnitSystem& units) {
+  return "energy balance: E(t) - E(0) - (sum of the works) = " + format3(worst_r) + " " +
+         units.energy() + " at t = " + format3(worst_t) + " " + units.time + ", " +
+         format3(balance) + " of the energy exchanged, above the tolerance " + format3(tolerance) +
          " (energy_balance_tolerance): energy was gained or lost that no work channel accounts "
          "for (integration error, a jump of the state, or forces in Q that neither the potential "
          "nor an external power describes)";
@@ -62,7 +64,7 @@ double EnergyBalance::add(double t, double T, double V, double E, const double (
   return r;
 }
 
-void EnergyBalance::finish(RunStatistics& s, double tolerance) const {
+void EnergyBalance::finish(RunStatistics& s, double tolerance, const UnitSystem& units) const {
   s.energy_balance = s.energy_exchanged = s.energy_drift = 0.0;
   s.energy_balance_checked = std::isfinite(tolerance);
   if (count_ == 0) return;
@@ -84,13 +86,13 @@ void EnergyBalance::finish(RunStatistics& s, double tolerance) const {
   // a run that ended well but whose balance fails: the warning status
   if (s.status == Status::kOk && std::isfinite(tolerance) && !(s.energy_balance <= tolerance)) {
     s.status = Status::kEnergyBalance;
-    s.message = warning(worst_r_, worst_t_, s.energy_balance, tolerance);
+    s.message = warning(worst_r_, worst_t_, s.energy_balance, tolerance, units);
   }
 }
 
 }  // namespace detail
 
-void compute_energy_balance(Trajectory& traj, double tolerance) {
+void compute_energy_balance(Trajectory& traj, double tolerance, const UnitSystem& units) {
   const std::size_t N = traj.t.size();
   traj.energy_balance_residual.resize(N);
   traj.check_consistent("ukdyn::compute_energy_balance");
@@ -103,7 +105,7 @@ void compute_energy_balance(Trajectory& traj, double tolerance) {
     traj.energy_balance_residual[i] = balance.add(traj.t[i], traj.kinetic_energy[i],
                                                   traj.potential_energy[i], traj.energy[i], works);
   }
-  balance.finish(traj.stats, tolerance);
+  balance.finish(traj.stats, tolerance, units);
 }
 
 }  // namespace ukdyn

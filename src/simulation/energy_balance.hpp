@@ -19,7 +19,7 @@ class EnergyBalance {
   // the balance's figures into s (energy_balance, energy_exchanged, energy_drift,
   // energy_balance_checked = tolerance finite) and, when s.status is kOk and the balance
   // exceeds the tolerance (or is NaN), Status::kEnergyBalance with its warning
-  void finish(RunStatistics& s, double tolerance) const;
+  void finish(RunStatistics& s, double tolerance, const UnitSystem& units = {}) const;
 
  private:
   std::size_t count_ = 0;

@@ -307,9 +307,31 @@ void append_text(std::string& out, const std::string& s) {
 
 }  // namespace
 
+namespace {
+bool sample_interrupted(const SampleResult& s) {
+  return s.outcome == SampleOutcome::kRun && s.stats.status == Status::kInterrupted;
+}
+}  // namespace
+
 std::size_t EnsembleResult::failed() const {
+  return std::size_t(std::count_if(samples.begin(), samples.end(), [](const SampleResult& s) {
+    return !s.ok() && !sample_interrupted(s) && s.outcome != SampleOutcome::kNotRun;
+  }));
+}
+
+std::size_t EnsembleResult::interrupted_samples() const {
+  return std::size_t(std::count_if(samples.begin(), samples.end(), sample_interrupted));
+}
+
+std::size_t EnsembleResult::not_run() const {
+  return std::size_t(std::count_if(samples.begin(), samples.end(), [](const SampleResult& s) {
+    return s.outcome == SampleOutcome::kNotRun;
+  }));
+}
+
+std::size_t EnsembleResult::ok() const {
   return std::size_t(
-      std::count_if(samples.begin(), samples.end(), [](const SampleResult& s) { return !s.ok(); }));
+      std::count_if(samples.begin(), samples.end(), [](const SampleResult& s) { return s.ok(); }));
 }
 
 EnsembleResult run_ensemble(const EnsembleModel& model, const std::vector<EnsembleSample>& samples,

@@ -318,9 +318,9 @@ Trajectory detail::simulate_observed(const System& sys, const Eigen::Ref<const V
     const double tolerance = sys.accounts_for_energy() ? checked_energy_balance_tolerance(o)
                                                        : std::numeric_limits<double>::infinity();
     if (o.sample_sink) {
-      run.balance().finish(traj.stats, tolerance);
+      run.balance().finish(traj.stats, tolerance, o.units);
     } else {
-      compute_energy_balance(traj, tolerance);
+      compute_energy_balance(traj, tolerance, o.units);
     }
     traj.stats.wall_time =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();

@@ -74,7 +74,9 @@ std::string diagnose_collapse(const System& sys, Workspace& ws, const Simulation
   const long steps = stats.steps, rejected = stats.rejected_steps;
   const double rejected_share =
       steps + rejected > 0 ? double(rejected) / double(steps + rejected) : 0.0;
-  const std::string where = "at t = " + format_short(r.t_reached) + " s";
+  // (times in the run's unit: s in SI units)
+  const std::string tu = " " + o.units.time;
+  const std::string where = "at t = " + format_short(r.t_reached) + tu;
   // a singular configuration: the rank drops, or the gap of the rank-th singular value closes
   if (sys.constraint_count() > 0) {
     const ConstraintRank start = constraint_rank(sys, ws, x0, t0, -1);
@@ -89,10 +91,10 @@ std::string diagnose_collapse(const System& sys, Workspace& ws, const Simulation
       return "Likely cause: a singular configuration " + where + ": the constraints " +
              (lost ? "lost rank (rank of A " + format_number(now.rank) + " of " +
                          format_number(now.rows) + " active rows, " + format_number(start.rank) +
-                         " at t = " + format_short(t0) + " s)"
+                         " at t = " + format_short(t0) + tu + ")"
                    : "are about to lose rank (sigma_" + format_number(start.rank) +
                          " / sigma_1 = " + format_short(now.gap) + ", " + format_short(from.gap) +
-                         " at t = " + format_short(t0) + " s)") +
+                         " at t = " + format_short(t0) + tu + ")") +
              ", so the constraint forces grow without bound (a dead centre, a stretched or "
              "folded linkage, a branch point). Try: check the geometry and the initial state "
              "(ukdyn check), start away from that position, or pass through it with a fixed step "
@@ -107,8 +109,8 @@ std::string diagnose_collapse(const System& sys, Workspace& ws, const Simulation
     if (r.stiffness > 0)
       text += "h·rho up to " + format_short(r.stiffness) + " in the last steps, ";
     text += format_short(100.0 * rejected_share) + "% of the steps rejected, last step " +
-            format_short(r.last_step) +
-            " s): the step size is held by stability, not accuracy (fast "
+            format_short(r.last_step) + tu +
+            "): the step size is held by stability, not accuracy (fast "
             "modes: stiff springs, regularized friction near rest, large damping). Try: "
             "integrator: bdf (--integrator bdf)";
     if (method == Integrator::kDopri5 && !o.stiff_switch) {

@@ -118,6 +118,52 @@ TEST(ModelFuzzRegressions, ParameterThatIsNotFinite) {
   }
 }
 
+// YAML's non-finite floats (.nan, .inf, -.Inf, …) as a value (repro u14/06 a): they read as "mu:
+// unexpected character '.'" with a hint about coordinates; now "not a finite number", located.
+// A coefficient of friction far beyond any material's (mu: 1e150) is refused where it is written
+// (repro u14/06 b: the run died at t = 0 with a non-finite Q naming no friction).
+TEST(ModelFuzzRegressions, NonFiniteYamlFloatsAndAbsurdFrictionAreRefusedWhereWritten) {
+  for (const std::string v : {".nan", ".NaN", ".inf", "-.inf", "+.Inf", ".INF"}) {
+    const ModelError p =
+        error_of("parameters: {m: " + v + "}\ncoordinates: [x]\nmass_matrix: [[m]]\n");
+    EXPECT_TRUE(contains(
+        p.what(), "f.yaml:1:17: error: parameter 'm' must be a finite number, got '" + v + "'"))
+        << p.what();
+    const ModelError e = error_of("coordinates: [x]\nmass_matrix: [[" + v + "]]\n");
+    const std::string kind =
+        v.find_first_of("aA") != std::string::npos ? "not-a-number" : "infinity";
+    EXPECT_TRUE(contains(e.what(), "f.yaml:2:16: error: ")) << e.what();
+    EXPECT_TRUE(
+        contains(e.what(), " must be a finite number, got '" + v + "' (YAML's " + kind + ")"))
+        << e.what();
+    EXPECT_FALSE(contains(e.what(), "unexpected character")) << e.what();
+  }
+  // a quoted '.nan' is text: an expression that does not parse
+  EXPECT_TRUE(contains(error_of("coordinates: [x]\nmass_matrix: [['.nan']]\n").what(),
+                       "unexpected character '.'"));
+  const std::string ball = R"(bodies:
+  - {name: ball, type: rigid, mass: 1, inertia: [1, 1, 1], position: [0, 0, 0.1]}
+forces:
+  - {type: gravity, g: [0, 0, -9.81]}
+contacts:
+  - {name: floor, body: ball, shape: sphere, radius: 0.1}
+nonideal:
+)";
+  const ModelError nan = error_of(ball + "  - {friction: coulomb, constraint: floor, mu: .nan}\n");
+  EXPECT_TRUE(contains(nan.what(),
+                       "f.yaml:8:48: error: the friction at contact 'floor' mu must "
+                       "be a finite number, got '.nan' (YAML's not-a-number)"))
+      << nan.what();
+  const ModelError huge =
+      error_of(ball + "  - {friction: coulomb, constraint: floor, mu: 1e150}\n");
+  EXPECT_TRUE(contains(huge.what(),
+                       "f.yaml:8:48: error: the friction at contact 'floor' mu must "
+                       "be in [0, 1e+06] (a coefficient of friction), got 1e+150"))
+      << huge.what();
+  EXPECT_NO_THROW(
+      parse_model(ball + "  - {friction: coulomb, constraint: floor, mu: 1e6}\n", "f.yaml"));
+}
+
 // Parameter names that are a function of the language or an input (a velocity, a constraint's
 // N_ or lambda_): set_constant's std::invalid_argument escaped.
 TEST(ModelFuzzRegressions, ParameterNamedLikeAFunctionOrAnInput) {

@@ -164,6 +164,18 @@ TEST(ModelRobot, ARunNotesTheJointAndEffortLimitsItLeaves) {
   EXPECT_EQ(first.rfind("joint 'panda_joint4' exceeds its upper limit -0.0698 by ", 0), 0u)
       << first;
   EXPECT_NE(first.find("(first at t = 0 s"), std::string::npos) << first;
+  EXPECT_NE(first.find(" rad (first"), std::string::npos) << first;
+  {
+    // in the model's units (units: {time: ms}): its times in ms
+    const Model ms = robot_model("robot: {urdf: panda_arm.urdf}\nunits: {time: ms}\n");
+    SimulationOptions o = ms.options;
+    o.t_end = 0.2;
+    const ModelRun r = run_model(ms, o);
+    ASSERT_FALSE(r.trajectory.stats.notes.empty());
+    const std::string& note = r.trajectory.stats.notes[0];
+    EXPECT_NE(note.find("(first at t = 0 ms, worst at t = "), std::string::npos) << note;
+    EXPECT_EQ(note.find(" s)"), std::string::npos) << note;
+  }
   const ModelRun streamed = run_model(
       m, options, [](const ModelRun&) {}, 7);
   EXPECT_EQ(streamed.trajectory.stats.notes, run.trajectory.stats.notes);
@@ -573,6 +585,68 @@ TEST(ModelRobot, ErrorsNameTheFileTheLineAndTheLinkOrJoint) {
     FAIL() << "no error";
   } catch (const ModelError& e) {
     EXPECT_NE(e.message().find("not a valid URDF"), std::string::npos) << e.message();
+  }
+}
+
+// URDF joint friction is regularized at 1e-6 rad/s in the model's units (repro u13/04: it was
+// 1e-6 per model time unit, 1e-3 rad/s in ms, and the arm in mm, g, ms hit the table 6.7e-7 later
+// than in SI). A two-link arm (elbow friction 0.02 N m, shoulder damping 0.05 N m s) released
+// horizontal hits a table with its tip sphere: first impact at 0.2650392564974 s by an
+// independent integration (scipy Radau, eps = 1e-6 rad/s); the same arm in mm, g, ms with
+// units: {length: mm, mass: g, time: ms} hits at the same time to 1e-9 relative, and
+// robot: friction_regularization: sets eps (the SI arm at 1e-3 rad/s is the mm arm without
+// units:, whose eps is 1e-6 rad/ms).
+TEST(ModelRobot, UrdfFrictionRegularizationIsInTheModelsUnits) {
+  const auto first_impact = [](const std::string& text) {
+    const Model m = robot_model(text);
+    const ModelRun run = run_model(m);
+    EXPECT_EQ(run.trajectory.stats.status, Status::kOk) << run.trajectory.stats.message;
+    const auto& events = run.trajectory.stats.contact_events;
+    EXPECT_FALSE(events.empty());
+    return events.empty() ? std::pair(0.0, 0.0) : std::pair(events[0].t, events[0].speed_before);
+  };
+  const std::string si = R"(
+robot: {urdf: arm2_friction.urdf}
+contacts:
+  - {name: tip, link: fore, point: [0.35, 0, 0], shape: sphere, radius: 0.02, restitution: 0.5,
+     plane: {body: ground, point: [0, 0, 0.2], normal: [0, 0, 1]}}
+simulate: {t_end: 0.3, rtol: 1e-10, atol: 1e-12}
+output: {every: 0.01}
+)";
+  const std::string mm = R"(
+robot: {urdf: arm2_friction_mm.urdf, gravity: [0, 0, -9.81e-3]}
+contacts:
+  - {name: tip, link: fore, point: [350, 0, 0], shape: sphere, radius: 20, restitution: 0.5,
+     plane: {body: ground, point: [0, 0, 200], normal: [0, 0, 1]}}
+simulate: {t_end: 300, rtol: 1e-10, atol: 1e-12}
+output: {every: 10}
+)";
+  const auto [t_si, v_si] = first_impact(si);
+  const auto [t_mm, v_mm] = first_impact(mm + "units: {length: mm, mass: g, time: ms}\n");
+  EXPECT_NEAR(t_si, 0.2650392564974, 1e-11);
+  EXPECT_NEAR(t_mm * 1e-3, t_si, 1e-9 * t_si);
+  // (mm/ms is m/s; the speed at the impact to 5e-9, the runs' error at rtol 1e-10: it was 2.8e-6
+  // off)
+  EXPECT_NEAR(v_mm, v_si, 5e-9 * std::abs(v_si));
+  // the mm arm without units: (eps = 1e-6 rad/ms = 1e-3 rad/s) is the SI arm at 1e-3 rad/s
+  const auto [t_mm3, v_mm3] = first_impact(mm);
+  std::string si3 = si;
+  si3.replace(si3.find("urdf: arm2_friction.urdf"), 24,
+              "urdf: arm2_friction.urdf, friction_regularization: 1e-3");
+  const auto [t_si3, v_si3] = first_impact(si3);
+  EXPECT_NEAR(t_mm3 * 1e-3, t_si3, 1e-9 * t_si3);
+  EXPECT_NEAR(std::abs(t_si3 - t_si), 6.7e-7 * t_si, 1e-7 * t_si);  // (the repro's difference)
+  (void)v_mm3;
+  (void)v_si3;
+  // a regularization that is not a finite number > 0 is refused where it is written
+  try {
+    robot_model("robot: {urdf: arm2_friction.urdf, friction_regularization: 0}\n");
+    FAIL() << "no error";
+  } catch (const ModelError& e) {
+    EXPECT_EQ(e.line(), 1);
+    EXPECT_NE(e.message().find("friction_regularization must be a finite number > 0, got 0"),
+              std::string::npos)
+        << e.message();
   }
 }
 

@@ -56,13 +56,14 @@ bodies:
 )");
   EXPECT_EQ(planar.coordinate_units,
             (std::vector<std::string>{"m", "m", "deg", "m", "m", "rad"}));  // crank_theta given
-  const Model spatial = parse_model(R"(units: {top.z: mm}
+  // (a body's position takes the length unit: units: {length: mm}, not one coordinate's)
+  const Model spatial = parse_model(R"(units: {length: mm}
 bodies:
   - {name: top, type: rigid, mass: 1, inertia: [1, 1, 1]}
   - {name: bead, type: particle, mass: 1, position: [1, 0, 0]}
 )");
   EXPECT_EQ(spatial.coordinate_units,
-            (std::vector<std::string>{"m", "m", "mm", "1", "1", "1", "1", "m", "m", "m"}));
+            (std::vector<std::string>{"mm", "mm", "mm", "1", "1", "1", "1", "mm", "mm", "mm"}));
 }
 
 TEST(ModelUnits, ErrorsNameTheEntryAndWhereItIs) {
@@ -185,6 +186,30 @@ TEST(ModelUnits, UnknownBaseUnitsAreRefusedWithTheAcceptedList) {
   expect_error("coordinates: [time]\nkinetic_energy: time_dot^2\nunits: {time: s}\n", 3, 15,
                "units: 'time' is the unit of time of the model, but a coordinate is also named "
                "'time' (hint: rename the coordinate");
+}
+
+// One body's coordinates are in one length unit: units: may not give one of them another
+// (repro u14/06 c: {length: mm, time: ms, ball_x: m} labelled ball.x m and ball.y mm); the same
+// unit again is accepted.
+TEST(ModelUnits, ABodysCoordinateKeepsTheModelsLengthUnit) {
+  const std::string body = R"(bodies:
+  - {name: ball, type: rigid, mass: 1, inertia: [1, 1, 1], position: [0, 0, 1]}
+)";
+  const Failure f = failure_of("units: {length: mm, time: ms, ball_x: m}\n" + body);
+  EXPECT_EQ(f.line, 1);
+  EXPECT_EQ(f.column, 39);
+  EXPECT_NE(f.what.find("units: 'ball_x' is a body's coordinate, in mm (the model's length "
+                        "unit); it cannot be given 'm'"),
+            std::string::npos)
+      << f.what;
+  EXPECT_NE(f.what.find("change units: {length: m}"), std::string::npos) << f.what;
+  const Failure si = failure_of("units: {ball.z: mm}\n" + body);
+  EXPECT_NE(si.what.find("units: 'ball.z' is a body's coordinate, in m (the model's length "
+                         "unit); it cannot be given 'mm'"),
+            std::string::npos)
+      << si.what;
+  const Model same = parse_model("units: {length: mm, ball_x: mm}\n" + body, "units.yaml");
+  EXPECT_EQ(same.coordinate_units[0], "mm");
 }
 
 }  // namespace UKDYN_TEST_FILE

@@ -440,5 +440,70 @@ output: {every: 0.01}
   }
 }
 
+// A contact at rest at t = 0 that cannot stick slides from the start along its slip hint: its
+// friction acts at the full magnitude in the t = 0 sample too (repro u14/03: that sample read 0,
+// the stick constraint's multipliers, which are off). A ball (m = 2, mu = 0.2) at rest on a deck
+// accelerating at A = 14 > 7/2 mu_s g: f = mu m g = 3.924 along +x at every sample; a box (m = 3)
+// on two corners on a belt accelerating at A = 6 > mu_s g: the corners' frictions sum to
+// mu m g = 8.829 along +x.
+TEST(VisualContacts, FrictionOfAContactSlidingFromRestActsAtTheFirstSample) {
+  constexpr double g = 9.81;
+  {
+    const Model m = parse_model(R"(
+parameters: {m: 2, r: 0.1, M: 20, g: 9.81, A: 14, mu: 0.2, mus: 0.3}
+bodies:
+  - {name: deck, type: rigid, mass: M, inertia: [1, 1, 1], position: [0, 0, 0]}
+  - {name: ball, type: rigid, mass: m, inertia: 0.4*m*r^2, position: [0, 0, r]}
+joints:
+  - {name: slide, type: prismatic, parent: ground, child: deck, parent_axis: [1, 0, 0], child_axis: [1, 0, 0], drive: 0.5*A*t^2}
+forces:
+  - {type: gravity, g: [0, 0, -g]}
+contacts:
+  - {name: c, body: ball, shape: sphere, radius: r, plane: {body: deck, point: [0, 0, 0], normal: [0, 0, 1]}}
+nonideal:
+  - {friction: coulomb, constraint: c, mu: mu, mu_static: mus}
+simulate: {t_end: 0.2}
+output: {every: 0.01}
+)");
+    const ModelRun run = run_model(m);
+    ASSERT_EQ(run.trajectory.stats.status, Status::kOk) << run.trajectory.stats.message;
+    ASSERT_GT(run.trajectory.t.size(), 10u);
+    EXPECT_EQ(run.trajectory.t[0], 0.0);
+    for (std::size_t i = 0; i < run.trajectory.t.size(); ++i) {
+      EXPECT_NEAR(friction_column(run, "c", "x", i), 0.2 * 2.0 * g, 1e-9) << "sample " << i;
+      EXPECT_NEAR(friction_column(run, "c", "y", i), 0.0, 1e-12) << "sample " << i;
+      EXPECT_NEAR(friction_column(run, "c", "z", i), 0.0, 1e-12) << "sample " << i;
+    }
+  }
+  {
+    const Model m = parse_model(R"(
+parameters: {m: 3, M: 10, a: 0.2, c: 0.05, g: 9.81, A: 6, mu: 0.3, mus: 0.5}
+bodies:
+  - {name: belt, type: planar, mass: M, inertia: 1, position: [0, 0]}
+  - {name: box, type: planar, mass: m, inertia: m*(4*a^2+4*c^2)/12, position: [0, c]}
+joints:
+  - {name: drive, type: prismatic, parent: ground, child: belt, drive: 0.5*A*t^2}
+forces:
+  - {type: gravity, g: [0, -g]}
+contacts:
+  - {name: cl, body: box, point: [-a, -c], plane: {body: belt, point: [0, 0], normal: [0, 1]}}
+  - {name: cr, body: box, point: [a, -c], plane: {body: belt, point: [0, 0], normal: [0, 1]}}
+nonideal:
+  - {friction: coulomb, constraint: cl, mu: mu, mu_static: mus}
+  - {friction: coulomb, constraint: cr, mu: mu, mu_static: mus}
+simulate: {t_end: 0.2}
+output: {every: 0.01}
+)");
+    const ModelRun run = run_model(m);
+    ASSERT_EQ(run.trajectory.stats.status, Status::kOk) << run.trajectory.stats.message;
+    ASSERT_GT(run.trajectory.t.size(), 10u);
+    for (std::size_t i = 0; i < run.trajectory.t.size(); ++i) {
+      const double sum = friction_column(run, "cl", "x", i) + friction_column(run, "cr", "x", i);
+      EXPECT_NEAR(sum, 0.3 * 3.0 * g, 1e-9) << "sample " << i;
+      EXPECT_NEAR(friction_column(run, "cl", "y", i), 0.0, 1e-12) << "sample " << i;
+    }
+  }
+}
+
 }  // namespace UKDYN_TEST_FILE
 }  // namespace ukdyn

@@ -347,6 +347,10 @@ nonideal:
   expect("  - {friction: coulomb, constraint: side, mu: 0.3}\n", "7:37",
          "friction on a plane of a link is not supported yet");
   expect("  - {friction: coulomb, constraint: floor, mu: -1}\n", "7:48", "mu must be >= 0");
+  expect("  - {friction: coulomb, constraint: floor, mu: 1e150}\n", "7:48",
+         "mu must be in [0, 1e+06] (a coefficient of friction), got 1e+150");
+  expect("  - {friction: coulomb, constraint: floor, mu: 0.3, mu_static: 2e6}\n", "7:64",
+         "mu_static must be in [0, 1e+06] (a coefficient of friction), got 2e+06");
 }
 
 // ---- a plane of a moving body ------------------------------------------------------------------

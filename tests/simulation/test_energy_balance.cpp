@@ -275,6 +275,18 @@ TEST(EnergyBalance, ForcesInconsistentWithThePotentialEndWithTheWarning) {
             std::string::npos)
       << tr.stats.message;
   EXPECT_NE(tr.stats.message.find("above the tolerance 1e-06"), std::string::npos);
+  EXPECT_NE(tr.stats.message.find(" J at t = "), std::string::npos) << tr.stats.message;
+  {
+    // in a model's units (SimulationOptions::units), its energy and time: g·mm²/ms², ms
+    SimulationOptions mm = o;
+    mm.units = UnitSystem{"mm", "g", "ms"};
+    const Trajectory t2 =
+        simulate(inconsistent_pendulum(false), vec({1.0, 0.0}), vec({0.0, 0.0}), mm);
+    EXPECT_NE(t2.stats.message.find(" g·mm²/ms² at t = "), std::string::npos) << t2.stats.message;
+    EXPECT_NE(t2.stats.message.find(" ms, "), std::string::npos) << t2.stats.message;
+    EXPECT_EQ(t2.stats.message.find(" J "), std::string::npos) << t2.stats.message;
+    EXPECT_EQ(t2.stats.energy_balance, tr.stats.energy_balance);  // (labels only)
+  }
   EXPECT_DOUBLE_EQ(tr.t.back(), 2.0);  // a warning: the run is complete
   // E − E0 = m g (y − y0) with nothing exchanged: relative to T_max = m g L
   EXPECT_NEAR(tr.stats.energy_balance, 1.0, 1e-6);

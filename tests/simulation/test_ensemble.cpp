@@ -197,6 +197,8 @@ TEST(Ensemble, FailingSamplesAreRecordedAndTheOthersRun) {
   EXPECT_EQ(r.samples[3].outcome, SampleOutcome::kRefused);
   EXPECT_NE(r.samples[3].message.find("output_at"), std::string::npos) << r.samples[3].message;
   EXPECT_EQ(r.failed(), 3u);
+  EXPECT_EQ(r.ok(), 2u);
+  EXPECT_EQ(r.interrupted_samples() + r.not_run(), 0u);
   // one progress report per sample, the last one complete
   ASSERT_EQ(seen.size(), 5u);
   EXPECT_EQ(seen.back().done, 5u);
@@ -235,6 +237,11 @@ TEST(Ensemble, StopKeepsTheFinishedSamples) {
     EXPECT_EQ(part.samples[i].outcome, SampleOutcome::kNotRun);
     EXPECT_EQ(ensemble_table(part, samples).status[i], "not run");
   }
+  // (repro u14/11: the samples never started counted as failed)
+  EXPECT_EQ(part.ok(), 2u);
+  EXPECT_EQ(part.failed(), 0u);
+  EXPECT_EQ(part.interrupted_samples(), 0u);
+  EXPECT_EQ(part.not_run(), 4u);
 
   // stopped inside a run: that run ends interrupted, with its samples up to there
   std::atomic<long> asked{0};
@@ -246,6 +253,11 @@ TEST(Ensemble, StopKeepsTheFinishedSamples) {
   EXPECT_EQ(inside.samples[0].stats.status, Status::kInterrupted);
   EXPECT_LT(inside.samples[0].stats.t_reached, 1.0);
   EXPECT_EQ(inside.samples[5].outcome, SampleOutcome::kNotRun);
+  // one interrupted, five not run, none failed
+  EXPECT_EQ(inside.ok(), 0u);
+  EXPECT_EQ(inside.failed(), 0u);
+  EXPECT_EQ(inside.interrupted_samples(), 1u);
+  EXPECT_EQ(inside.not_run(), 5u);
 }
 
 // A progress callback that throws (reproducers 2026-11-28, cpp_ensemble_progress_throws.cpp:

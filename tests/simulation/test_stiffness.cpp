@@ -173,6 +173,13 @@ TEST(Stiffness, ACollapsedStepSizeSaysStiffnessAndWhatToTry) {
   EXPECT_TRUE(contains(m, "Likely cause: stiffness")) << m;
   EXPECT_TRUE(contains(m, "integrator: bdf")) << m;
   EXPECT_TRUE(contains(m, "leave stiff_switch on")) << m;
+  EXPECT_TRUE(contains(m, " s): the step size is held by stability")) << m;
+  // in a model's units (SimulationOptions::units: the times in ms), the same run says ms
+  o.units = UnitSystem{"mm", "g", "ms"};
+  const std::string ms = simulate(stiff_oscillator(), one(1.0), one(0.0), o).stats.message;
+  EXPECT_TRUE(contains(ms, " ms): the step size is held by stability")) << ms;
+  EXPECT_TRUE(contains(ms, "Likely cause: stiffness at t = ")) << ms;
+  EXPECT_FALSE(contains(ms, " s)")) << ms;
 }
 
 // The arm of issue #12 asked to follow a circle partly outside its reach: the tip requirement

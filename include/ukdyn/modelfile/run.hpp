@@ -9,6 +9,7 @@
 #include <functional>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "ukdyn/control/control.hpp"
@@ -38,7 +39,8 @@ struct ModelRun {
 
 /// Simulates the model with `options` (usually model.options, perhaps with another t_end):
 /// simulate(), or simulate_controlled() with the model's controller. A failure during the run
-/// is reported in trajectory.stats (status, message) with the samples computed before it.
+/// is reported in trajectory.stats (status, message) with the samples computed before it, its
+/// numbers labelled in the model's units (options.units is set to model.unit_system).
 /// @throws std::invalid_argument when the run cannot start (an inconsistent initial state,
 /// bad settings), as simulate() does.
 ModelRun run_model(const Model& model, const SimulationOptions& options);
@@ -60,6 +62,14 @@ ModelRun run_model(const Model& model, const SimulationOptions& options,
 
 /// run_model(model, model.options).
 ModelRun run_model(const Model& model);
+
+/// The units of the gap columns `gap.<name>` that are no output expression: those of the
+/// contacts: entries of a bodies or robot model, whose gap is a distance (docs/contact.md), in
+/// the model's length unit; (column, unit) in constraint order, empty for a generalized model
+/// (its gaps are output expressions, with the units `units:` gives them). The front ends add
+/// them to the coordinates' and outputs' units (summary.json, Model.units), so that the plots
+/// label a contact's gap in the length unit and its force in the force unit. Cost O(constraints).
+std::vector<std::pair<std::string, std::string>> contact_gap_units(const Model& model);
 
 /// Checks the settings of a run of `model` with `options` (model.options, or a front end's
 /// changes of them) as `ukdyn run` runs it: check_settings() of a streamed run (its sample

@@ -36,6 +36,7 @@
 #include "ukdyn/core/constraint.hpp"
 #include "ukdyn/core/system.hpp"
 #include "ukdyn/core/types.hpp"
+#include "ukdyn/core/units.hpp"
 
 /// Kinematic trees in joint coordinates (URDF robots): Featherstone's recursions (this file).
 namespace ukdyn::tree {
@@ -213,24 +214,38 @@ using JointTorqueFn =
                        double t, Eigen::Ref<VectorXd> tau)>;
 
 /// The regularization eps (rad/s or m/s) of URDF's joint friction in make_system, as the bodies'
-/// joint friction's default (mb::JointFriction::regularization).
+/// joint friction's default (mb::JointFriction::regularization), in SI units; a model in other
+/// units takes it in its own (FrictionRegularization, docs/robots.md).
 inline constexpr double kJointFrictionRegularization = 1e-6;
+
+/// The regularization eps of URDF's joint friction, in the model's units: `angular` for a
+/// revolute or continuous joint (rad per time unit), `linear` for a prismatic one (length per
+/// time unit). The default is kJointFrictionRegularization in SI units; a model in ms takes
+/// angular = 1e-9 rad/ms, the same 1e-6 rad/s, so that its motion is the SI model's.
+struct FrictionRegularization {
+  double angular = kJointFrictionRegularization;  ///< eps > 0 of a rotating joint (rad/time)
+  double linear = kJointFrictionRegularization;   ///< eps > 0 of a prismatic joint (length/time)
+};
 
 /// The unconstrained system of a tree: M(q) from mass_matrix, Q = τ(q, q', t) − D q' − h(q, q')
 /// (D the joints' viscous damping), the potential energy of gravity, the power of τ and of the
 /// dampers (so a run's energy balance is checked), one non-ideal force "<joint>.friction" per
 /// one-coordinate joint with URDF friction F > 0, C_j = −F q'_j / sqrt(q'_j² + eps²) (Coulomb
-/// friction of magnitude F, eps = kJointFrictionRegularization; its work is accounted as the
+/// friction of magnitude F, eps = `friction`'s angular or linear; its work is accounted as the
 /// non-ideal forces'), and one unit-norm constraint "<link>.unit" per floating joint. Constraints,
 /// friction, control and simulate() then apply as to any System. The tree is copied into the
-/// system's callables. @param tree the tree; @param tau the input "tau", or empty for none.
+/// system's callables. @param tree the tree; @param tau the input "tau", or empty for none;
+/// @param friction the joint friction's regularization (both > 0).
+/// @throws std::invalid_argument when an eps of `friction` is not a finite number > 0.
 /// Cost O(links) to build.
-System make_system(const Tree& tree, JointTorqueFn tau = {});
+System make_system(const Tree& tree, JointTorqueFn tau = {}, FrictionRegularization friction = {});
 
 /// The SystemBuilder behind make_system, with all of the above already given: add constraints
 /// on the tree (built with frame_jacobian and frame_bias_acceleration), non-ideal forces or
-/// switching functions, then build(). make_system(tree, tau) is system_builder(tree, tau).build().
-SystemBuilder system_builder(const Tree& tree, JointTorqueFn tau = {});
+/// switching functions, then build(). make_system(tree, tau, friction) is
+/// system_builder(tree, tau, friction).build().
+SystemBuilder system_builder(const Tree& tree, JointTorqueFn tau = {},
+                             FrictionRegularization friction = {});
 
 // ---- centre of mass and momentum (src/multibody/tree/momentum.cpp) -------------------------
 
@@ -312,6 +327,7 @@ struct LimitExcess {
   double first_time = 0.0;  ///< the first sample beyond it
   double worst_time = 0.0;  ///< the sample of the largest excess
   double excess = 0.0;      ///< the largest excess (rad, m, N·m or N), > 0
+  bool prismatic = false;   ///< a prismatic joint's (a length, a force), else a rotating one's
 };
 
 /// The samples at which joint positions leave URDF's [lower, upper] (revolute and prismatic
@@ -349,8 +365,10 @@ class LimitWatch {
 };
 
 /// One line of text per excess: "joint 'j' exceeds its upper limit 2.9 by 0.03 rad (first at
-/// t = 0.41 s, worst at t = 0.52 s)". Cost O(excesses).
-std::string describe(const LimitExcess& e);
+/// t = 0.41 s, worst at t = 0.52 s)", in `units` (the model's: a prismatic joint's excess in its
+/// length or force unit, a rotating one's in rad or its torque unit, the times in its time
+/// unit; SI by default). Cost O(excesses).
+std::string describe(const LimitExcess& e, const UnitSystem& units = {});
 
 /// Reads a URDF file (through urdfdom) into a Tree: links in depth-first order from the root;
 /// URDF's world link, if any, is the world. Joint limits, damping, friction, effort and velocity

@@ -119,8 +119,16 @@ struct EnsembleResult {
   std::vector<double> at;             ///< the recording times (empty: the last sample)
   std::vector<SampleResult> samples;  ///< one per sample, in order
   bool interrupted = false;           ///< should_stop asked the ensemble to stop
-  /// samples that are not ok (SampleResult::ok)
+  /// samples that failed: not ok (SampleResult::ok), neither interrupted nor not run — a run
+  /// that ended in a failure, or a sample refused. Cost O(samples).
   std::size_t failed() const;
+  /// samples that ran and were stopped by should_stop (status kInterrupted). Cost O(samples).
+  std::size_t interrupted_samples() const;
+  /// samples the ensemble was stopped before (SampleOutcome::kNotRun). Cost O(samples).
+  std::size_t not_run() const;
+  /// samples that are ok (SampleResult::ok); ok + failed + interrupted_samples + not_run is the
+  /// number of samples. Cost O(samples).
+  std::size_t ok() const;
 };
 
 /// Runs every sample of `model` on a pool of options.threads threads (std::thread; a sample is

@@ -27,6 +27,7 @@
 
 #include "ukdyn/core/status.hpp"
 #include "ukdyn/core/system.hpp"
+#include "ukdyn/core/units.hpp"
 #include "ukdyn/dynamics/contact.hpp"
 #include "ukdyn/dynamics/projection.hpp"
 #include "ukdyn/dynamics/workspace.hpp"
@@ -178,6 +179,12 @@ struct SimulationOptions {
   /// step) and must not throw; the command line sets it from SIGINT and SIGTERM, the Python
   /// module from Python's signal handlers.
   std::function<bool()> should_stop;
+
+  /// The units the run's messages label their numbers with (RunStatistics::message and notes:
+  /// the time of a collapsed step, the energy balance's residual): the model's, which run_model
+  /// sets from a model file's `units:` (docs/model-format.md, "Units"); SI (s, J) by default.
+  /// Labels only: no number depends on them.
+  UnitSystem units;
 };
 
 /// The most samples a run's grid (t_start, every output_every, output_at, t_end) may have when
@@ -387,11 +394,13 @@ Trajectory simulate(const System& sys, const Eigen::Ref<const VectorXd>& q0,
 /// energy_drift and energy_balance_checked (= tolerance is finite) (see RunStatistics); then,
 /// when the status is kOk and energy_balance exceeds
 /// `tolerance` (or is NaN), sets Status::kEnergyBalance and a message saying by how much, when
-/// and why it may be. simulate() calls it; call it again after changing a work column
+/// and why it may be (in `units`' energy and time). simulate() calls it; call it again after
+/// changing a work column
 /// (simulate_controlled does, with work_control). @throws std::invalid_argument when traj is
 /// not consistent. Cost O(N).
 void compute_energy_balance(Trajectory& traj,
-                            double tolerance = std::numeric_limits<double>::infinity());
+                            double tolerance = std::numeric_limits<double>::infinity(),
+                            const UnitSystem& units = {});
 
 /// Consistency of a state with each constraint: one line per violated constraint, naming it
 /// and giving the position and velocity violation; empty when every row i meets

@@ -41,11 +41,12 @@ LimitWatch::LimitWatch(const Tree& tree) : n_(tree.coordinate_count()) {
     const Joint& j = tree.link(i).joint;
     if (tree.dofs(i) != 1) continue;
     offset_.push_back(tree.offset(i));
-    lower_.push_back({j.name, "lower", j.lower});
-    upper_.push_back({j.name, "upper", j.upper});
+    const bool prismatic = j.kind == JointKind::kPrismatic;
+    lower_.push_back({j.name, "lower", j.lower, 0.0, 0.0, 0.0, prismatic});
+    upper_.push_back({j.name, "upper", j.upper, 0.0, 0.0, 0.0, prismatic});
     // URDF's effort 0 is "not given" in many files (urdfdom's default): no limit then
     const bool limited = j.effort > 0.0 && !std::isinf(j.effort);
-    effort_.push_back({j.name, "effort", limited ? j.effort : INFINITY});
+    effort_.push_back({j.name, "effort", limited ? j.effort : INFINITY, 0.0, 0.0, 0.0, prismatic});
   }
 }
 
@@ -98,12 +99,15 @@ std::vector<LimitExcess> check_effort_limits(const Tree& tree, const std::vector
   return out;
 }
 
-std::string describe(const LimitExcess& e) {
+std::string describe(const LimitExcess& e, const UnitSystem& units) {
+  // the excess's unit: a force or torque for an effort, a length or angle for a position
   const bool effort = e.limit == "effort";
+  const std::string unit = effort ? (e.prismatic ? units.force() : units.torque())
+                                  : (e.prismatic ? units.length : std::string("rad"));
   return "joint '" + e.joint + "' exceeds its " + e.limit + " limit " + format_number(e.bound) +
-         " by " + format_number(e.excess, 4) + (effort ? " N·m (or N)" : " rad (or m)") +
-         " (first at t = " + format_number(e.first_time, 6) +
-         " s, worst at t = " + format_number(e.worst_time, 6) + " s)";
+         " by " + format_number(e.excess, 4) + " " + unit +
+         " (first at t = " + format_number(e.first_time, 6) + " " + units.time +
+         ", worst at t = " + format_number(e.worst_time, 6) + " " + units.time + ")";
 }
 
 }  // namespace ukdyn::tree

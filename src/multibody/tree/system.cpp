@@ -4,12 +4,15 @@
 #include <cstdint>
 #include <cstring>
 #include <memory>
+#include <stdexcept>
+#include <string>
 #include <utility>
 #include <vector>
 
 #include "multibody/internal.hpp"
 #include "multibody/tree/kinematics_cache.hpp"
 #include "multibody/tree/spatial.hpp"
+#include "ukdyn/core/format.hpp"
 #include "ukdyn/multibody/tree.hpp"
 
 namespace ukdyn::tree {
@@ -78,11 +81,20 @@ std::vector<Index> coordinate_parents(const Tree& tree) {
 
 }  // namespace
 
-System make_system(const Tree& tree, JointTorqueFn tau) {
-  return system_builder(tree, std::move(tau)).build();
+System make_system(const Tree& tree, JointTorqueFn tau, FrictionRegularization friction) {
+  return system_builder(tree, std::move(tau), friction).build();
 }
 
-SystemBuilder system_builder(const Tree& tree_in, JointTorqueFn tau) {
+SystemBuilder system_builder(const Tree& tree_in, JointTorqueFn tau,
+                             FrictionRegularization friction) {
+  for (const double eps : {friction.angular, friction.linear}) {
+    if (!(std::isfinite(eps) && eps > 0.0)) {
+      throw std::invalid_argument(
+          "ukdyn::tree::system_builder: the joint friction's regularization must be a finite "
+          "number > 0, got " +
+          format_number(eps) + " (FrictionRegularization: angular, linear)");
+    }
+  }
   const auto tree = std::make_shared<const Tree>(tree_in);
   const Index n = tree->coordinate_count();
   // D, the joints' viscous damping (n)
@@ -208,16 +220,18 @@ SystemBuilder system_builder(const Tree& tree_in, JointTorqueFn tau) {
   }
   // URDF's friction: a Coulomb torque (force) of that magnitude against the joint's rate,
   // regularized as the bodies' joint friction is (mb::JointFriction): C_j = −F q'_j / sqrt(q'_j² +
-  // eps²), eps = kJointFrictionRegularization
+  // eps²), eps = friction.linear on a prismatic joint, friction.angular on a rotating one
   for (Index i = 0; i < tree->link_count(); ++i) {
     const double F = tree->link(i).joint.friction;
     if (tree->dofs(i) != 1 || !(F > 0.0)) continue;
     const Index j = tree->offset(i);
+    const double eps =
+        tree->link(i).joint.kind == JointKind::kPrismatic ? friction.linear : friction.angular;
     sb.add(NonIdealForce(
         tree->link(i).joint.name + ".friction",
-        [F, j](const Eigen::Ref<const VectorXd>&, const Eigen::Ref<const VectorXd>& qd, double,
-               const IdealForceInfo&, Eigen::Ref<VectorXd> C) {
-          const double w = qd[j], eps = kJointFrictionRegularization;
+        [F, j, eps](const Eigen::Ref<const VectorXd>&, const Eigen::Ref<const VectorXd>& qd, double,
+                    const IdealForceInfo&, Eigen::Ref<VectorXd> C) {
+          const double w = qd[j];
           C[j] = -F * w / std::sqrt(w * w + eps * eps);
         }));
   }

@@ -1,0 +1,56 @@
+// SPDX-License-Identifier: BSD-3-Clause
+/// @file core/units.hpp
+/// The units a model declares for its numbers (docs/model-format.md, "Units"): length, mass
+/// and time, SI by default, and the labels of the quantities derived from them. Labels only:
+/// nothing computes with them, and a unit changes no number. A model file's `units:` fills one
+/// (Model::unit_system); a run's messages take theirs from SimulationOptions::units.
+#pragma once
+
+#include <array>
+#include <string>
+#include <string_view>
+
+namespace ukdyn {
+
+/// The base units of a model (`units: {length: mm, mass: g, time: ms}`) and the labels derived
+/// from them, for every printed or plotted unit (the console, summary.json's `unit_system`, the
+/// plots). A derived unit is the product of the base units — force mass·length/time², energy
+/// mass·length²/time², power mass·length²/time³ — named N, J and W only when all three are SI
+/// (m, kg, s), so that a label is never wrong: 4.41e3 in g, mm and ms is "4.41e3 g·mm²/ms²", not
+/// "J". Angles are in rad whatever the system (a body's angle, a revolute joint's). Cost of each
+/// label: a few string concatenations.
+struct UnitSystem {
+  std::string length = "m";  ///< unit of length (kLengths)
+  std::string mass = "kg";   ///< unit of mass (kMasses)
+  std::string time = "s";    ///< unit of time (kTimes)
+
+  /// The accepted units of length (`units:` refuses others, naming these).
+  static constexpr std::array<std::string_view, 6> kLengths{"m", "mm", "cm", "km", "um", "nm"};
+  /// The accepted units of mass.
+  static constexpr std::array<std::string_view, 3> kMasses{"kg", "g", "mg"};
+  /// The accepted units of time.
+  static constexpr std::array<std::string_view, 5> kTimes{"s", "ms", "us", "min", "h"};
+
+  /// True when length, mass and time are m, kg and s.
+  bool is_si() const { return length == "m" && mass == "kg" && time == "s"; }
+  /// `unit`/time ("1/time" for unit "1" or "", a number without unit): the rate of a quantity
+  /// in `unit`; per time² with order 2.
+  std::string rate(const std::string& unit, int order = 1) const {
+    const std::string per = order == 2 ? time + "²" : time;
+    return unit.empty() || unit == "1" ? "1/" + per : unit + "/" + per;
+  }
+  /// length/time.
+  std::string velocity() const { return rate(length); }
+  /// length/time².
+  std::string acceleration() const { return rate(length, 2); }
+  /// N in SI units, else mass·length/time².
+  std::string force() const { return is_si() ? "N" : mass + "·" + length + "/" + time + "²"; }
+  /// J in SI units, else mass·length²/time² (also a torque's: N·m in SI units, torque()).
+  std::string energy() const { return is_si() ? "J" : mass + "·" + length + "²/" + time + "²"; }
+  /// N·m in SI units, else mass·length²/time² (a torque about an axis).
+  std::string torque() const { return is_si() ? "N·m" : energy(); }
+  /// W in SI units, else mass·length²/time³.
+  std::string power() const { return is_si() ? "W" : mass + "·" + length + "²/" + time + "³"; }
+};
+
+}  // namespace ukdyn
