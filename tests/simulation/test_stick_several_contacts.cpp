@@ -62,6 +62,19 @@ Trajectory run_at(const std::string& text, std::vector<double> times) {
   return tr;
 }
 
+// the contacts: and nonideal: entries of point contacts (name, point in the body frame) of
+// `body`, each with Coulomb friction mu, mu_static mus
+std::string rough_contacts(const std::string& body,
+                           const std::vector<std::pair<std::string, std::string>>& points) {
+  std::string text = "contacts:\n";
+  for (const auto& [name, point] : points)
+    text += "  - {name: " + name + ", body: " + body + ", point: " + point + "}\n";
+  text += "nonideal:\n";
+  for (const auto& [name, point] : points)
+    text += "  - {friction: coulomb, constraint: " + name + ", mu: mu, mu_static: mus}\n";
+  return text;
+}
+
 // planar box (half-length a = 0.2, half-height c = 0.05) on its two bottom corners, pushed by
 // `force` at the point `point` (body frame), launched at x' = v0
 std::string planar_box(const std::string& force, const std::string& point, double v0,
@@ -99,16 +112,11 @@ std::string spatial_box(const std::string& force, const std::string& point, doub
       "forces:\n"
       "  - {type: gravity, g: [0, 0, -g]}\n"
       "  - {name: push, type: applied, body: box, point: " +
-      point + ", force: [" + force +
-      ", 0, 0], torque: [0, 0, 0]}\n"
-      "contacts:\n"
-      "  - {name: c1, body: box, point: [a, b, -c]}\n"
-      "  - {name: c2, body: box, point: [-a, b, -c]}\n"
-      "  - {name: c3, body: box, point: [a, -b, -c]}\n"
-      "  - {name: c4, body: box, point: [-a, -b, -c]}\n"
-      "nonideal:\n";
-  for (const char* c : {"c1", "c2", "c3", "c4"})
-    text += std::string("  - {friction: coulomb, constraint: ") + c + ", mu: mu, mu_static: mus}\n";
+      point + ", force: [" + force + ", 0, 0], torque: [0, 0, 0]}\n" +
+      rough_contacts("box", {{"c1", "[a, b, -c]"},
+                             {"c2", "[-a, b, -c]"},
+                             {"c3", "[a, -b, -c]"},
+                             {"c4", "[-a, -b, -c]"}});
   return text + "simulate: {t_end: " + std::to_string(t_end) +
          ", rtol: 1e-10, atol: 1e-12}\noutput: {every: 0}\n";
 }
@@ -368,15 +376,11 @@ std::string table(const std::string& units, double lf, double mf, double tf, dou
       "forces:\n"
       "  - {type: gravity, g: [0, 0, -g]}\n"
       "  - {name: push, type: applied, body: table, point: [0, 0, 0.1*L],"
-      " force: [F, 0, 0], torque: [0, 0, 0]}\n"
-      "contacts:\n"
-      "  - {name: l1, body: table, point: [-0.5*L, -0.3*L, -0.4*L]}\n"
-      "  - {name: l2, body: table, point: [-0.5*L, 0.3*L, -0.4*L]}\n"
-      "  - {name: l3, body: table, point: [0.3*L, -0.3*L, -0.4*L]}\n"
-      "  - {name: l4, body: table, point: [0.3*L, 0.3*L, -0.4*L]}\n"
-      "nonideal:\n";
-  for (const char* c : {"l1", "l2", "l3", "l4"})
-    text += std::string("  - {friction: coulomb, constraint: ") + c + ", mu: mu, mu_static: mus}\n";
+      " force: [F, 0, 0], torque: [0, 0, 0]}\n" +
+      rough_contacts("table", {{"l1", "[-0.5*L, -0.3*L, -0.4*L]"},
+                               {"l2", "[-0.5*L, 0.3*L, -0.4*L]"},
+                               {"l3", "[0.3*L, -0.3*L, -0.4*L]"},
+                               {"l4", "[0.3*L, 0.3*L, -0.4*L]"}});
   return text + "simulate: {t_end: " + num(1.5 * tf) +
          ", rtol: 1e-10, atol: 1e-12}\noutput: {every: 0}\n";
 }
