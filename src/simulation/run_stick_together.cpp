@@ -200,8 +200,9 @@ void Run::slide_together(double t) {
 // The multipliers Λ = lambda + lambda_nonideal of the active rows are unique only up to the null
 // space Z of Aᵀ (redundant rows: the stick rows of contacts on one rigid body); Λ + Z y leaves
 // Qc and the motion unchanged. Each sticking contact's holding force f_i and normal force N_i
-// are linear in Λ (as stick_margin splits them); the split sought is the y of least norm with
-// |f_i| <= mu_static N_i for all i: a small second-order cone programme, solved by outer
+// are linear in Λ (as stick_margin splits them); the split sought is the y whose change of the
+// contact forces (f_i, N_i) has least norm (the metric of the multipliers depends on the units)
+// with |f_i| <= mu_static N_i for all i: a small second-order cone programme, solved by outer
 // cutting planes — for one tangent the two faces ±f_i <= mu_s N_i (exact), for two the tangent
 // planes u·f_i <= mu_s N_i at the directions u of the violating f_i, added until every cone
 // holds to 1e-7 of the forces (at most kSplitRounds rounds) — each a quadratic programme
@@ -212,9 +213,10 @@ void Run::slide_together(double t) {
 // minimum-norm split holds (y = 0), 0 when another does (its change of the multipliers into split_,
 // m), −1 when none does (and when a sticking contact on the coordinate path has a normal constraint
 // of several rows, whose N is not linear in Λ: the minimum-norm test then). The lowest minimum-norm
-// margin into split_lowest_, its contact into *worst. Cost: an SVD of the active rows (m_a × n) and
-// a few LCPs of 2 to 3 rows per contact; allocates (at stops, releases and the samples of runs with
-// several contacts sticking where the minimum-norm split fails).
+// margin into split_lowest_, its contact into *worst. Cost: an SVD of the active rows (m_a × n),
+// one of the contact forces' map, and a few LCPs of 2 to 3 rows per contact; allocates (at stops,
+// releases and the samples of runs with several contacts sticking where the minimum-norm split
+// fails).
 int Run::holding_split(double t, std::size_t* worst) {
   const auto& contacts = sys_.friction_contacts();
   split_lowest_ = std::numeric_limits<double>::infinity();
@@ -425,7 +427,7 @@ int Run::holding_split(double t, std::size_t* worst) {
       split_h_[i] = offsets[std::size_t(i)];
     }
     // (W = G Gᵀ is singular where the planes outnumber y: Lemke then failed on feasible sets;
-    // W + δ I, δ = 1e-12 of its diagonal, is positive definite, and G y <= h + δ z: a plane
+    // W + δ I, δ = 1e-8 of its largest diagonal, is positive definite, and G y <= h + δ z: a plane
     // violated by more than the tolerance means an empty polyhedron)
     ContactLcp lcp(rows);
     MatrixXd W = split_G_ * split_G_.transpose();
