@@ -358,8 +358,20 @@ class Run {
   // minimum-norm split holds in every cone; else positive while some split does, negative when
   // none does
   double group_margin(std::size_t c, double t, const double* x);
-  // after a release at (t, x): the contacts still sticking that no split can hold slip too
-  void release_unheld(double t, double* x);
+  // after a release at (t, x) (of `first`): the contacts still sticking that no split can hold
+  // slip too (each counted as an event when `events`), those released into released_
+  void release_unheld(double t, double* x, bool events = true,
+                      std::size_t first = std::numeric_limits<std::size_t>::max());
+  // the contacts released_ slide from rest together: friction against their joint impending
+  // motion (at q_, qd_, t)
+  void slide_together(double t);
+  // the contacts `rest` at rest at (t, x) (at the start, after an impact) stick together with
+  // the sticking ones, less those no split holds; one at a time when that is not admissible
+  void stick_at_rest(double t, double* x, const std::vector<std::size_t>& rest);
+  // the contacts sticking in mode_ and not in modes_before_ stick jointly at (t, x) when
+  // admissible, with a split inside every cone (`split`) or releasing those none holds; else
+  // mode_ = modes_before_ and false
+  bool stick_jointly(double t, double* x, bool split);
   // the sticking contacts, at the evaluation just made: 1 when every one's minimum-norm margin
   // is >= 0, 0 when a split of the holding forces inside every cone exists (the correction of
   // the multipliers into split_), -1 when none does; the most negative margin's contact into
@@ -398,6 +410,8 @@ class Run {
   bool start_sliding(std::size_t c, double t, const double* x);
   // a_rel = P (q''_c − u') of contact c from the last evaluation into velocity_
   void relative_acceleration(std::size_t c, double t);
+  // contact c's slip hint against the a_rel that relative_acceleration left in velocity_
+  void hint_against_acceleration(std::size_t c);
   // the direction of the friction at |v_rel| <= eps (the contact's slip hint)
   void set_slip_hint(std::size_t c, const Eigen::Ref<const VectorXd>& along);
 
@@ -446,6 +460,8 @@ class Run {
   VectorXd normal_ = VectorXd::Zero(n_);         // (n) scratch of stick_margin: R_N
   MatrixXd normals_;                             // (rows × n) the normal constraint's rows of A
   std::vector<std::size_t> stuck_;               // (sticking_contacts) the sticking contacts
+  std::vector<std::size_t> rest_;                // (contacts) the contacts at rest to decide
+  std::vector<std::size_t> released_;            // (contacts) released by release_unheld
   std::vector<ContactMode> modes_before_;        // (contacts) modes before a joint stick
   VectorXd split_;  // (m) holding_split: the change of the multipliers to the feasible split
   MatrixXd split_rows_, split_null_, split_G_;  // (holding_split scratch, sized at its calls)

@@ -30,19 +30,19 @@ void Run::apply_contact_modes() {
   }
 }
 
-// initial modes: a contact at rest (|v_rel| <= eps) sticks when sticking is admissible, else it
-// starts to slide with friction against its impending motion
+// initial modes: the contacts at rest (|v_rel| <= eps) stick together, less those no split of
+// the holding forces holds (stick_at_rest); the others slide
 void Run::initial_contact_modes(double t, double* x) {
   const auto& contacts = sys_.friction_contacts();
   mode_.assign(contacts.size(), ContactMode::kSliding);
   apply_contact_modes();
+  rest_.clear();
   for (std::size_t c = 0; c < contacts.size(); ++c) {
     if (frictionless(c) || separated(c)) continue;
     const Index k = relative_velocity(c, t, x, velocity_);
-    if (velocity_.head(k).norm() <= contacts[c].eps && !try_stick(c, t, x)) {
-      start_sliding(c, t, x);
-    }
+    if (velocity_.head(k).norm() <= contacts[c].eps) rest_.push_back(c);
   }
+  stick_at_rest(t, x, rest_);
   apply_contact_modes();
   separated_before_.assign(contacts.size(), 0);
   for (std::size_t c = 0; c < contacts.size(); ++c) separated_before_[c] = separated(c) ? 1 : 0;
@@ -51,9 +51,9 @@ void Run::initial_contact_modes(double t, double* x) {
 // after an impact or release of unilateral contacts at (t, x): a Coulomb contact whose contact
 // is open slides (its friction is zero while open: a stick constraint would hold it in the
 // air); a closed one that an impact set sliding (|v_rel| > eps while it stuck) slides against
-// its motion; a closed one at rest (|v_rel| <= eps: it closed, or an impact's friction stopped
-// it) sticks when that is admissible, else starts to slide against its impending motion, as at
-// the start of a run
+// its motion; the closed ones at rest (|v_rel| <= eps: they closed, or an impact's friction
+// stopped them) are decided together with those still sticking, as at the start of a run
+// (stick_at_rest)
 void Run::contacts_changed(double t, double* x) {
   const auto& contacts = sys_.friction_contacts();
   separated_before_.resize(contacts.size(), 0);
@@ -71,6 +71,7 @@ void Run::contacts_changed(double t, double* x) {
     ws_.slip_hint_held[std::size_t(contacts[c].force)] = 0;
   }
   apply_contact_modes();
+  rest_.clear();
   for (std::size_t c = 0; c < contacts.size(); ++c) {
     if (!sys_.constraint(contacts[c].normal_constraint).is_unilateral() || separated(c) ||
         frictionless(c))
@@ -85,10 +86,9 @@ void Run::contacts_changed(double t, double* x) {
       apply_contact_modes();
       continue;
     }
-    if (at_rest && (was_open[c] || mode_[c] == ContactMode::kSliding) && !try_stick(c, t, x)) {
-      start_sliding(c, t, x);
-    }
+    if (at_rest && (was_open[c] || mode_[c] == ContactMode::kSliding)) rest_.push_back(c);
   }
+  if (!rest_.empty()) stick_at_rest(t, x, rest_);
   apply_contact_modes();
 }
 
@@ -104,7 +104,7 @@ Status Run::switch_contact(double t, double* x) {
       set_slip_hint(c, holding_);
       apply_contact_modes();
       // (the contacts still sticking that no split of the holding forces can hold slip too)
-      if (sticking_contacts() > 0) release_unheld(t, x);
+      if (sticking_contacts() > 0) release_unheld(t, x, true, c);
       bool changed = false;
       ProjectionOptions all = o_.projection;
       return project(t, x, all, changed);
@@ -389,15 +389,7 @@ bool Run::start_sliding(std::size_t c, double t, const double* x) {
   // a_rel = P (q''_c − u') without this friction: the impending motion
   relative_acceleration(c, t);
   const Index k = contact.size();
-  if (contact.kinematics) {
-    holding_.setZero(std::max(n_, k));
-    holding_.head(k) = -velocity_.head(k);
-  } else {
-    holding_.setZero();
-    const auto& coords = contact.coordinates;
-    for (std::size_t r = 0; r < coords.size(); ++r) holding_[coords[r]] = -velocity_[Index(r)];
-  }
-  set_slip_hint(c, holding_);
+  hint_against_acceleration(c);
   // with the friction at its full magnitude against it, does the contact still move that way?
   // If not, friction could hold it although the stick was not admissible (a stick constraint
   // that the model cannot express): no hint then, the regularized law holds it near rest
@@ -428,6 +420,22 @@ void Run::relative_acceleration(std::size_t c, double t) {
   const Index basis = detail::sliding_velocity(sys_, ws_, Index(c), q_, qd_, t, false);
   if (contact.surface_velocity) velocity_.head(k) -= ws_.surface_u_dot.head(k);
   detail::remove_normals(ws_, basis, velocity_.head(k));
+}
+
+// contact c's slip hint against a_rel (the head of velocity_, from relative_acceleration),
+// through holding_
+void Run::hint_against_acceleration(std::size_t c) {
+  const FrictionContact& contact = sys_.friction_contacts()[c];
+  const Index k = contact.size();
+  if (contact.kinematics) {
+    holding_.setZero(std::max(n_, k));
+    holding_.head(k) = -velocity_.head(k);
+  } else {
+    holding_.setZero();
+    const auto& coords = contact.coordinates;
+    for (std::size_t r = 0; r < coords.size(); ++r) holding_[coords[r]] = -velocity_[Index(r)];
+  }
+  set_slip_hint(c, holding_);
 }
 
 // the direction of the friction at |v_rel| <= eps: along `along` (n) on the contact's

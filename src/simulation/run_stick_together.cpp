@@ -33,11 +33,8 @@ std::size_t Run::sticking_contacts() {
 // Contact c stops at (t, x) (its sliding speed fell to v_stop): every other closed contact whose
 // sliding speed there is within 2 v_stop of rest (a contact of the same body, whose stick rows
 // are redundant with c's, slides at c's speed and has no stop event of its own) sticks with it
-// when that is admissible jointly, by try_stick's three rules on all of them: the velocity
-// projection onto all their stick rows removes at most the largest of their allowances, the
-// constraints with all the stick rows have a solution, and some split of the holding forces
-// lies inside every sticking contact's cone (holding_split). Else, or when none stopped with
-// it, try_stick(c) alone. Cost: one projection and two evaluations, and holding_split's.
+// when that is admissible jointly (stick_jointly, with a split inside every cone required).
+// Else, or when none stopped with it, try_stick(c) alone. Cost: stick_jointly's.
 bool Run::try_stick_together(std::size_t c, double t, double* x, bool report) {
   const auto& contacts = sys_.friction_contacts();
   modes_before_ = mode_;
@@ -52,6 +49,40 @@ bool Run::try_stick_together(std::size_t c, double t, double* x, bool report) {
   }
   if (!others) return try_stick(c, t, x, report);
   mode_[c] = ContactMode::kSticking;
+  return stick_jointly(t, x, true) || try_stick(c, t, x, report);
+}
+
+// The contacts `rest` at (t, x), closed, rough and at rest (|v_rel| <= eps: at the start of a
+// run, or after an impact or release), decided together with the contacts sticking already:
+// all of them stick (stick_jointly), and while no split of the holding forces lies inside
+// every cone, the one with the lowest minimum-norm margin slips, along its holding force
+// (release_unheld) — the largest set that holds, found as a release finds it: a box on two
+// corners on a belt accelerating at mu g < A < mu_s g rides with it, though neither corner
+// alone holds m A. With fewer than two contacts sticking, or where the joint stick is not
+// admissible (try_stick's rules 1, 2), each contact of `rest` in turn sticks when it can alone
+// (try_stick), else starts to slide against its impending motion (start_sliding). Cost:
+// stick_jointly's, and holding_split's once per contact released.
+void Run::stick_at_rest(double t, double* x, const std::vector<std::size_t>& rest) {
+  modes_before_ = mode_;
+  for (std::size_t c : rest) mode_[c] = ContactMode::kSticking;
+  if (sticking_contacts() >= 2 && stick_jointly(t, x, false)) return;
+  mode_ = modes_before_;
+  apply_contact_modes();
+  for (std::size_t c : rest) {
+    if (!try_stick(c, t, x)) start_sliding(c, t, x);
+  }
+}
+
+// The contacts sticking in mode_ and not in modes_before_ stick at (t, x) together with those
+// sticking already, when try_stick's rules hold for all of them jointly: the velocity
+// projection onto all their stick rows removes at most the largest of their allowances (1),
+// and the constraints with all the stick rows have a solution (2); then, with `split`, some
+// split of the holding forces lies inside every sticking contact's cone (holding_split, (3));
+// without, the contacts that no split holds slip (release_unheld). x then takes the projected
+// velocities; else mode_ is modes_before_ again, x unchanged, and false. Cost: one projection
+// and two evaluations, and holding_split's.
+bool Run::stick_jointly(double t, double* x, bool split) {
+  const auto& contacts = sys_.friction_contacts();
   // the kinetic energy the projection onto all the stick rows removes (rule 1)
   q_ = Eigen::Map<const VectorXd>(x, n_);
   qd_ = Eigen::Map<const VectorXd>(x + n_, n_);
@@ -76,12 +107,12 @@ bool Run::try_stick_together(std::size_t c, double t, double* x, bool report) {
     Eigen::Map<VectorXd>(trial_.data() + n_, n_) = qd_;
     q_ = Eigen::Map<const VectorXd>(trial_.data(), n_);
     admissible = forward_dynamics(sys_, ws_, q_, qd_, t) == Status::kOk &&
-                 sticking_contacts() > 0 && holding_split(t) >= 0;
+                 sticking_contacts() > 0 && (!split || holding_split(t) >= 0);
   }
   if (!admissible) {
     mode_ = modes_before_;
     apply_contact_modes();
-    return try_stick(c, t, x, report);
+    return false;
   }
   if (rv.iterations > 0) ++traj_.stats.projections;
   note_violation(0.0, rv.violation);
@@ -91,6 +122,7 @@ bool Run::try_stick_together(std::size_t c, double t, double* x, bool report) {
     set_slip_hint(o, VectorXd());
     ws_.slip_hint_held[std::size_t(contacts[o].force)] = 0;
   }
+  if (!split) release_unheld(t, x, false);
   return true;
 }
 
@@ -119,21 +151,48 @@ double Run::group_margin(std::size_t c, double t, const double* x) {
   return group_margin_;
 }
 
-// After contact c's release at (t, x): while the contacts still sticking cannot be held by any
-// split of their holding forces (with the released ones' friction now acting), the one with the
-// lowest minimum-norm margin slips too, along its holding force (as a release).
-void Run::release_unheld(double t, double* x) {
+// After a release at (t, x) (of contact `first`, or none): while the contacts still sticking
+// cannot be held by any split of their holding forces (with the released ones' friction now
+// acting), the one with the lowest minimum-norm margin slips too, along its holding force (as a
+// release; counted as an event when `events`). When two or more were released and none sticks
+// any more (a body breaking away from all its contacts), their friction turns against the
+// motion they take together (slide_together).
+void Run::release_unheld(double t, double* x, bool events, std::size_t first) {
   q_ = Eigen::Map<const VectorXd>(x, n_);
   qd_ = Eigen::Map<const VectorXd>(x + n_, n_);
+  released_.clear();
+  if (first < mode_.size()) released_.push_back(first);
   while (sticking_contacts() > 0) {
     if (forward_dynamics(sys_, ws_, q_, qd_, t) != Status::kOk) return;
     std::size_t worst = 0;
     if (holding_split(t, &worst) >= 0) return;
     stick_margin_here(worst, t);
-    ++traj_.stats.events;
+    if (events) ++traj_.stats.events;
     mode_[worst] = ContactMode::kSliding;
     set_slip_hint(worst, holding_);
     apply_contact_modes();
+    released_.push_back(worst);
+  }
+  if (released_.size() >= 2) slide_together(t);
+}
+
+// The contacts released_ slide from rest together at (q_, qd_, t): each one's friction, at its
+// full magnitude, against its relative acceleration a_rel without their friction (their
+// impending motion, start_sliding's rule taken for all of them at once), not along their
+// holding forces: those of the minimum-norm multipliers, whose split depends on how the rows are
+// scaled (the units), and along which the table broken away from its legs in mm, g, ms set off
+// sideways. (Not iterated to a fixed point hint = −a_rel/|a_rel| with the friction on: on the
+// table that iteration oscillates, the friction's sideways part outweighing the push's surplus.)
+// Cost: one evaluation.
+void Run::slide_together(double t) {
+  const auto& contacts = sys_.friction_contacts();
+  for (std::size_t c : released_) ws_.nonideal_enabled[std::size_t(contacts[c].force)] = 0;
+  const bool evaluated = forward_dynamics(sys_, ws_, q_, qd_, t) == Status::kOk;
+  apply_contact_modes();
+  if (!evaluated) return;
+  for (std::size_t c : released_) {
+    relative_acceleration(c, t);
+    if (velocity_.head(contacts[c].size()).norm() > 0.0) hint_against_acceleration(c);
   }
 }
 
@@ -141,8 +200,9 @@ void Run::release_unheld(double t, double* x) {
 // The multipliers Λ = lambda + lambda_nonideal of the active rows are unique only up to the null
 // space Z of Aᵀ (redundant rows: the stick rows of contacts on one rigid body); Λ + Z y leaves
 // Qc and the motion unchanged. Each sticking contact's holding force f_i and normal force N_i
-// are linear in Λ (as stick_margin splits them); the split sought is the y of least norm with
-// |f_i| <= mu_static N_i for all i: a small second-order cone programme, solved by outer
+// are linear in Λ (as stick_margin splits them); the split sought is the y whose change of the
+// contact forces (f_i, N_i) has least norm (the metric of the multipliers depends on the units)
+// with |f_i| <= mu_static N_i for all i: a small second-order cone programme, solved by outer
 // cutting planes — for one tangent the two faces ±f_i <= mu_s N_i (exact), for two the tangent
 // planes u·f_i <= mu_s N_i at the directions u of the violating f_i, added until every cone
 // holds to 1e-7 of the forces (at most kSplitRounds rounds) — each a quadratic programme
@@ -153,9 +213,10 @@ void Run::release_unheld(double t, double* x) {
 // minimum-norm split holds (y = 0), 0 when another does (its change of the multipliers into split_,
 // m), −1 when none does (and when a sticking contact on the coordinate path has a normal constraint
 // of several rows, whose N is not linear in Λ: the minimum-norm test then). The lowest minimum-norm
-// margin into split_lowest_, its contact into *worst. Cost: an SVD of the active rows (m_a × n) and
-// a few LCPs of 2 to 3 rows per contact; allocates (at stops, releases and the samples of runs with
-// several contacts sticking where the minimum-norm split fails).
+// margin into split_lowest_, its contact into *worst. Cost: an SVD of the active rows (m_a × n),
+// one of the contact forces' map, and a few LCPs of 2 to 3 rows per contact; allocates (at stops,
+// releases and the samples of runs with several contacts sticking where the minimum-norm split
+// fails).
 int Run::holding_split(double t, std::size_t* worst) {
   const auto& contacts = sys_.friction_contacts();
   split_lowest_ = std::numeric_limits<double>::infinity();
@@ -257,7 +318,6 @@ int Run::holding_split(double t, std::size_t* worst) {
       split_null_ = (split_null_ * keep.matrixV().rightCols(E.cols() - used)).eval();
     }
   }
-  const Index nz = split_null_.cols();
   // each contact's f_i = F_i Λ (d_i) and N_i = g_i·Λ on the compact rows, then on y
   struct Cone {
     MatrixXd F;  // (d × nz) F_i Z
@@ -298,11 +358,39 @@ int Run::holding_split(double t, std::size_t* worst) {
     Cone cone;
     cone.N0 = g.dot(lambda0);
     cone.f0 = F * lambda0;
-    cone.F = F * split_null_;
+    cone.F = F * split_null_;  // (then on ỹ, below)
     cone.g = split_null_.transpose() * g;
     cone.mu = contact.mu_static;
     scale = std::max({scale, cone.mu * cone.N0, cone.f0.norm()});
     cones.push_back(std::move(cone));
+  }
+  // the split sought in the contact forces, not in the multipliers: y = V S⁻¹ ỹ with
+  // [F_i Z; g_iᵀ Z]_i = U S Vᵀ, so that every f_i and N_i moves by the orthonormal U ỹ. The
+  // multipliers' own units depend on how each row is scaled (the stick rows are κ T, κ the
+  // class of the normal rows: 100 in mm, g, ms, where the quaternion's rows carry lever arms of
+  // 500 mm), and y's least norm there was no physical one: the tangent planes of three legs of a
+  // table, nearly dependent in that metric, made the LCP's δ regularization miss the split (no
+  // split found in mm, g, ms where SI finds one)
+  Index rows_P = 0;
+  for (const Cone& cone : cones) rows_P += cone.F.rows() + 1;
+  split_rows_.resize(rows_P, split_null_.cols());
+  for (Index i = 0; const Cone& cone : cones) {
+    split_rows_.middleRows(i, cone.F.rows()) = cone.F;
+    split_rows_.row(i + cone.F.rows()) = cone.g.transpose();
+    i += cone.F.rows() + 1;
+  }
+  const Eigen::JacobiSVD<MatrixXd> forces(split_rows_, Eigen::ComputeThinU | Eigen::ComputeThinV);
+  const auto& sf = forces.singularValues();
+  Index nz = 0;
+  while (nz < sf.size() && sf[nz] > 1e-10 * sf[0]) ++nz;
+  if (nz == 0) return -1;
+  split_null_ =
+      (split_null_ * forces.matrixV().leftCols(nz) * sf.head(nz).cwiseInverse().asDiagonal())
+          .eval();
+  for (Index i = 0; Cone & cone : cones) {
+    cone.F = forces.matrixU().block(i, 0, cone.F.rows(), nz);
+    cone.g = forces.matrixU().row(i + cone.F.rows()).head(nz).transpose();
+    i += cone.F.rows() + 1;
   }
   // the planes G y <= h: N_i >= 0, and faces or tangent planes of the cones
   std::vector<VectorXd> planes;
@@ -339,7 +427,7 @@ int Run::holding_split(double t, std::size_t* worst) {
       split_h_[i] = offsets[std::size_t(i)];
     }
     // (W = G Gᵀ is singular where the planes outnumber y: Lemke then failed on feasible sets;
-    // W + δ I, δ = 1e-12 of its diagonal, is positive definite, and G y <= h + δ z: a plane
+    // W + δ I, δ = 1e-8 of its largest diagonal, is positive definite, and G y <= h + δ z: a plane
     // violated by more than the tolerance means an empty polyhedron)
     ContactLcp lcp(rows);
     MatrixXd W = split_G_ * split_G_.transpose();

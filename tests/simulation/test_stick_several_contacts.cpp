@@ -12,6 +12,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <string>
 #include <utility>
 #include <vector>
@@ -61,6 +62,19 @@ Trajectory run_at(const std::string& text, std::vector<double> times) {
   return tr;
 }
 
+// the contacts: and nonideal: entries of point contacts (name, point in the body frame) of
+// `body`, each with Coulomb friction mu, mu_static mus
+std::string rough_contacts(const std::string& body,
+                           const std::vector<std::pair<std::string, std::string>>& points) {
+  std::string text = "contacts:\n";
+  for (const auto& [name, point] : points)
+    text += "  - {name: " + name + ", body: " + body + ", point: " + point + "}\n";
+  text += "nonideal:\n";
+  for (const auto& [name, point] : points)
+    text += "  - {friction: coulomb, constraint: " + name + ", mu: mu, mu_static: mus}\n";
+  return text;
+}
+
 // planar box (half-length a = 0.2, half-height c = 0.05) on its two bottom corners, pushed by
 // `force` at the point `point` (body frame), launched at x' = v0
 std::string planar_box(const std::string& force, const std::string& point, double v0,
@@ -98,16 +112,11 @@ std::string spatial_box(const std::string& force, const std::string& point, doub
       "forces:\n"
       "  - {type: gravity, g: [0, 0, -g]}\n"
       "  - {name: push, type: applied, body: box, point: " +
-      point + ", force: [" + force +
-      ", 0, 0], torque: [0, 0, 0]}\n"
-      "contacts:\n"
-      "  - {name: c1, body: box, point: [a, b, -c]}\n"
-      "  - {name: c2, body: box, point: [-a, b, -c]}\n"
-      "  - {name: c3, body: box, point: [a, -b, -c]}\n"
-      "  - {name: c4, body: box, point: [-a, -b, -c]}\n"
-      "nonideal:\n";
-  for (const char* c : {"c1", "c2", "c3", "c4"})
-    text += std::string("  - {friction: coulomb, constraint: ") + c + ", mu: mu, mu_static: mus}\n";
+      point + ", force: [" + force + ", 0, 0], torque: [0, 0, 0]}\n" +
+      rough_contacts("box", {{"c1", "[a, b, -c]"},
+                             {"c2", "[-a, b, -c]"},
+                             {"c3", "[a, -b, -c]"},
+                             {"c4", "[-a, -b, -c]"}});
   return text + "simulate: {t_end: " + std::to_string(t_end) +
          ", rtol: 1e-10, atol: 1e-12}\noutput: {every: 0}\n";
 }
@@ -281,6 +290,226 @@ TEST(StickSeveralContacts, CoordinatePathBarStopsAgainstAPushAndBreaksAwayUnderA
         EXPECT_GT(v, 1e-7) << "t = " << t;
       }
     }
+  }
+}
+
+// ---- contacts at rest at the start, decided together (docs/friction.md, "Several contacts") ----
+
+// every contact's holding force inside its cone (|f| <= mu_s N, N > 0 or an open contact
+// holding nothing; to the split search's 1e-7 of the forces, 5e-6 N on the table); returns the
+// sums of the first tangential components and of N
+std::pair<double, double> held_sums(const Trajectory& tr, const std::vector<std::string>& contacts,
+                                    std::size_t i) {
+  double total = 0.0, normal = 0.0;
+  for (const std::string& c : contacts) {
+    const std::vector<double> f = multipliers(tr, "stick.coulomb." + c, i);
+    const double N = multipliers(tr, c, i)[0];
+    EXPECT_GE(N, 0.0) << c << " at t = " << tr.t[i];
+    EXPECT_LE(norm(f), kMuS * N + 1e-5) << c << " at t = " << tr.t[i];
+    total += f.empty() ? 0.0 : f[0];
+    normal += N;
+  }
+  return {total, normal};
+}
+
+// A planar box (m = 3, on its two bottom corners) put at rest on a belt that accelerates at A
+// from rest (a planar body driven along x by ½ A t²): it rides with the belt, x' = A t, while
+// m A <= mu_s m g (4.905) — neither corner alone can hold m A = 12 N at A = 4 (mu_s N = 7.9 and
+// 6.8 N), the pair can — and above it slides at x'' = mu g (main slid at mu g for A = 4)
+TEST(StickSeveralContacts, BoxAtRestOnAnAcceleratingBeltRidesBelowMuStaticG) {
+  for (double A : {2.0, 4.0, 6.0}) {
+    SCOPED_TRACE("A = " + std::to_string(A));
+    const Trajectory tr = run_at(
+        "parameters: {m: 3, M: 10, a: 0.2, c: 0.05, g: 9.81, mu: 0.3, mus: 0.5, A: " +
+            std::to_string(A) +
+            "}\n"
+            "bodies:\n"
+            "  - {name: belt, type: planar, mass: M, inertia: 1, position: [0, 0]}\n"
+            "  - {name: box, type: planar, mass: m, inertia: m*(4*a^2+4*c^2)/12,"
+            " position: [0, c]}\n"
+            "joints:\n"
+            "  - {name: drive, type: prismatic, parent: ground, child: belt, drive: 0.5*A*t^2}\n"
+            "forces:\n"
+            "  - {type: gravity, g: [0, -g]}\n"
+            "contacts:\n"
+            "  - {name: cl, body: box, point: [-a, -c], plane: {body: belt, point: [0, 0],"
+            " normal: [0, 1]}}\n"
+            "  - {name: cr, body: box, point: [a, -c], plane: {body: belt, point: [0, 0],"
+            " normal: [0, 1]}}\n"
+            "nonideal:\n"
+            "  - {friction: coulomb, constraint: cl, mu: mu, mu_static: mus}\n"
+            "  - {friction: coulomb, constraint: cr, mu: mu, mu_static: mus}\n"
+            "simulate: {t_end: 1, rtol: 1e-10, atol: 1e-12}\noutput: {every: 0}\n",
+        {0.25, 0.5, 1.0});
+    const bool rides = A <= kMuS * kG;
+    for (std::size_t i = 0; i < tr.t.size(); ++i) {
+      const double t = tr.t[i];
+      EXPECT_NEAR(at(tr, tr.qd, "box.x", i), (rides ? A : kMu * kG) * t, 1e-8) << "t = " << t;
+      EXPECT_NEAR(at(tr, tr.q, "box.x", i), 0.5 * (rides ? A : kMu * kG) * t * t, 1e-8)
+          << "t = " << t;
+      if (!rides) continue;
+      const auto [total, normal] = held_sums(tr, {"cl", "cr"}, i);
+      EXPECT_NEAR(std::abs(total), kMass * A, 1e-7) << "t = " << t;
+      EXPECT_NEAR(normal, kMass * kG, 1e-7) << "t = " << t;
+    }
+  }
+}
+
+// The table of the u14 reproducers (rigid body m = 10, COM 0.4 above the floor, legs at
+// x = −0.5 / 0.3, y = ±0.3, mu = 0.3, mu_s = 0.5 at each), pushed along x at 0.5 height by F, in
+// the unit system of `units` with the factors of length, mass and time from SI (lf, mf, tf)
+std::string table(const std::string& units, double lf, double mf, double tf, double F, double v0) {
+  const double force = mf * lf / (tf * tf);
+  auto num = [](double v) {
+    char b[40];
+    std::snprintf(b, sizeof b, "%.17g", v);
+    return std::string(b);
+  };
+  std::string text =
+      units + "parameters: {m: " + num(10 * mf) + ", g: " + num(9.81 * lf / (tf * tf)) +
+      ", F: " + num(F * force) + ", v0: " + num(v0 * lf / tf) + ", L: " + num(lf) +
+      ", mu: 0.3, mus: 0.5}\n"
+      "bodies:\n"
+      "  - {name: table, type: rigid, mass: m, inertia: [" +
+      num(1.2 * mf * lf * lf) + ", " + num(1.5 * mf * lf * lf) + ", " + num(2.0 * mf * lf * lf) +
+      "], position: [0, 0, 0.4*L], velocity: [v0, 0, 0]}\n"
+      "forces:\n"
+      "  - {type: gravity, g: [0, 0, -g]}\n"
+      "  - {name: push, type: applied, body: table, point: [0, 0, 0.1*L],"
+      " force: [F, 0, 0], torque: [0, 0, 0]}\n" +
+      rough_contacts("table", {{"l1", "[-0.5*L, -0.3*L, -0.4*L]"},
+                               {"l2", "[-0.5*L, 0.3*L, -0.4*L]"},
+                               {"l3", "[0.3*L, -0.3*L, -0.4*L]"},
+                               {"l4", "[0.3*L, 0.3*L, -0.4*L]"}});
+  return text + "simulate: {t_end: " + num(1.5 * tf) +
+         ", rtol: 1e-10, atol: 1e-12}\noutput: {every: 0}\n";
+}
+const std::vector<std::string> kLegs = {"l1", "l2", "l3", "l4"};
+constexpr double kTableMass = 10.0;
+
+// at rest pushed by F = 40 < mu_s m g = 49.05 N: it stays, its legs holding 40 N together inside
+// their cones (main slid at (F − mu m g)/m: the most loaded leg alone holds 24.5 N); at
+// F = 50 > mu_s m g it slides, x'' = (F − mu m g)/m, straight along x
+TEST(StickSeveralContacts, TableAtRestHoldsAPushBelowMuStaticMgAndSlidesAbove) {
+  const Trajectory stays = run_at(table("", 1, 1, 1, 40.0, 0.0), {0.5, 1.0, 1.5});
+  for (std::size_t i = 0; i < stays.t.size(); ++i) {
+    EXPECT_NEAR(at(stays, stays.q, "table.x", i), 0.0, 1e-12) << "t = " << stays.t[i];
+    EXPECT_NEAR(at(stays, stays.qd, "table.x", i), 0.0, 1e-12) << "t = " << stays.t[i];
+    const auto [total, normal] = held_sums(stays, kLegs, i);
+    EXPECT_NEAR(total, -40.0, 1e-7) << "t = " << stays.t[i];
+    EXPECT_NEAR(normal, kTableMass * kG, 1e-7) << "t = " << stays.t[i];
+  }
+  const double a = (50.0 - kMu * kTableMass * kG) / kTableMass;
+  const Trajectory slides = run_at(table("", 1, 1, 1, 50.0, 0.0), {0.5, 1.0, 1.5});
+  for (std::size_t i = 0; i < slides.t.size(); ++i) {
+    const double t = slides.t[i];
+    EXPECT_NEAR(at(slides, slides.qd, "table.x", i), a * t, 1e-9) << "t = " << t;
+    EXPECT_NEAR(at(slides, slides.q, "table.x", i), 0.5 * a * t * t, 1e-9) << "t = " << t;
+    EXPECT_NEAR(at(slides, slides.qd, "table.y", i), 0.0, 1e-9) << "t = " << t;
+  }
+}
+
+// launched at −1 m/s against F = 20 or 40: stops at t_s = m v0/(F + mu m g), x_s = v0 t_s / 2,
+// and stays — the same motion in SI, in mm, g, ms and in mm, kg, s (main hung after the stop in
+// mm, creeping at 3e-8 mm/ms with one leg holding 15.3 N of 20, or slid off at F = 40: the split
+// search, in the multipliers' own metric, found no split there)
+TEST(StickSeveralContacts, TableStopAgainstAPushIsTheSameInMmGMsAndMmKgS) {
+  struct Units {
+    std::string line;
+    double lf, mf, tf;
+  };
+  const std::vector<Units> systems = {{"", 1, 1, 1},
+                                      {"units: {length: mm, mass: g, time: ms}\n", 1e3, 1e3, 1e3},
+                                      {"units: {length: mm, mass: kg, time: s}\n", 1e3, 1, 1}};
+  for (double F : {20.0, 40.0}) {
+    const double a = (F + kMu * kTableMass * kG) / kTableMass, t_s = 1.0 / a;
+    const double x_s = -0.5 * t_s;
+    const std::vector<double> times = {0.05, t_s - 1e-4, t_s + 1e-4, 0.5, 1.5};
+    std::vector<double> si_x, si_v;
+    for (const Units& u : systems) {
+      SCOPED_TRACE("F = " + std::to_string(F) + ", length x" + std::to_string(u.lf) + ", mass x" +
+                   std::to_string(u.mf) + ", time x" + std::to_string(u.tf));
+      std::vector<double> scaled;
+      for (double t : times) scaled.push_back(t * u.tf);
+      const Trajectory tr = run_at(table(u.line, u.lf, u.mf, u.tf, F, -1.0), scaled);
+      if (u.lf != 1.0) ASSERT_EQ(tr.t.size(), si_x.size());
+      for (std::size_t i = 0; i < tr.t.size(); ++i) {
+        const double t = tr.t[i] / u.tf, x = at(tr, tr.q, "table.x", i) / u.lf,
+                     v = at(tr, tr.qd, "table.x", i) * u.tf / u.lf;
+        EXPECT_NEAR(v, t < t_s ? -1.0 + a * t : 0.0, 1e-9) << "t = " << t;
+        EXPECT_NEAR(x, t < t_s ? -t + 0.5 * a * t * t : x_s, 1e-9) << "t = " << t;
+        if (u.lf == 1.0) {
+          si_x.push_back(x);
+          si_v.push_back(v);
+          continue;
+        }
+        // the same motion as in SI
+        EXPECT_NEAR(x, si_x[i], 1e-9 * std::abs(x_s)) << "t = " << t;
+        EXPECT_NEAR(v, si_v[i], 1e-12) << "t = " << t;
+      }
+      // at rest the legs hold F together (in SI: elsewhere the multipliers are those of rows
+      // scaled by the units' class, κ)
+      if (u.lf != 1.0) continue;
+      const auto [total, normal] = held_sums(tr, kLegs, tr.t.size() - 1);
+      EXPECT_NEAR(total, -F, 1e-7);
+      EXPECT_NEAR(normal, kTableMass * kG, 1e-7);
+    }
+  }
+}
+
+// A planar box put at rest on its two corners on a rough incline (al = 0.35, tan al = 0.365 <
+// mu_s): it stays, each corner's holding force inside its cone and together m g sin al (main:
+// the right corner alone held all of it at |f|/N = 0.80 > mu_s, the left one slid at zero
+// speed); pushed down the slope by k t it breaks away at t_b = (mu_s cos al − sin al) m g / k
+// (main: at 0.14 s instead of 0.746 s), then slides, s' = ((g sin al − mu g cos al)(t − t_b) +
+// k (t² − t_b²) / (2 m))
+TEST(StickSeveralContacts, BoxAtRestOnAnInclineStaysAndBreaksAwayAtMuStatic) {
+  const double al = 0.35, k = 5.0;
+  auto model = [&](const std::string& push) {
+    return "parameters: {m: 3, a: 0.2, c: 0.05, g: 9.81, al: 0.35, mu: 0.3, mus: 0.5, k: 5}\n"
+           "bodies:\n"
+           "  - {name: box, type: planar, mass: m, inertia: m*(4*a^2+4*c^2)/12,"
+           " position: [-c*sin(al), c*cos(al)], angle: al}\n"
+           "forces:\n"
+           "  - {type: gravity, g: [0, -g]}\n"
+           "  - {name: push, type: applied, body: box, point: [0, -c], force: [" +
+           push + "*cos(al), " + push +
+           "*sin(al)], torque: 0}\n"
+           "contacts:\n"
+           "  - {name: cl, body: box, point: [-a, -c], plane: {normal: [-sin(al), cos(al)]}}\n"
+           "  - {name: cr, body: box, point: [a, -c], plane: {normal: [-sin(al), cos(al)]}}\n"
+           "nonideal:\n"
+           "  - {friction: coulomb, constraint: cl, mu: mu, mu_static: mus}\n"
+           "  - {friction: coulomb, constraint: cr, mu: mu, mu_static: mus}\n"
+           "simulate: {t_end: 1.2, rtol: 1e-10, atol: 1e-12}\noutput: {every: 0}\n";
+  };
+  const Trajectory rest = run_at(model("0"), {0.5, 1.0});
+  for (std::size_t i = 0; i < rest.t.size(); ++i) {
+    EXPECT_NEAR(at(rest, rest.qd, "box.x", i), 0.0, 1e-12);
+    EXPECT_NEAR(at(rest, rest.qd, "box.y", i), 0.0, 1e-12);
+    const auto [total, normal] = held_sums(rest, {"cl", "cr"}, i);
+    EXPECT_NEAR(std::abs(total), kMass * kG * std::sin(al), 1e-7);
+    EXPECT_NEAR(normal, kMass * kG * std::cos(al), 1e-7);
+  }
+  const double t_b = (kMuS * std::cos(al) - std::sin(al)) * kMass * kG / k;
+  const Trajectory pushed = run_at(model("-k*t"), {0.5, t_b - 1e-6, t_b + 1e-6, 1.0, 1.2});
+  for (std::size_t i = 0; i < pushed.t.size(); ++i) {
+    const double t = pushed.t[i];
+    const double s =
+        std::hypot(at(pushed, pushed.qd, "box.x", i), at(pushed, pushed.qd, "box.y", i));
+    if (t < t_b) {
+      EXPECT_LT(s, 1e-9) << "t = " << t;
+      continue;
+    }
+    const double closed = kG * (std::sin(al) - kMu * std::cos(al)) * (t - t_b) +
+                          k * (t * t - t_b * t_b) / (2 * kMass);
+    if (t < t_b + 1e-5) {
+      EXPECT_GT(s, 1e-7) << "t = " << t;
+    } else {
+      EXPECT_NEAR(s, closed, 1e-6 + 1e-6 * closed) << "t = " << t;
+    }
+    // down the slope
+    EXPECT_LT(at(pushed, pushed.qd, "box.x", i), 0.0) << "t = " << t;
   }
 }
 
