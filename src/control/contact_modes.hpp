@@ -48,7 +48,8 @@ class ContactModes {
   // keeps them). A stuck contact is then a physical constraint of the model, whose control is
   // computed with it held (a rolling sphere pushed at its centre: F = 7/5 m a), not against the
   // sliding law's regularized friction at v_rel ~ 0, whose slope mu N / eps made the controlled
-  // run stiff. A null run leaves them as they are. O(contacts + n · frictions).
+  // run stiff; a requirement that needs it to slide breaks it (slip, below). A null run leaves
+  // them as they are. O(contacts + n · frictions).
   void mirror(const Workspace* run, ControlWorkspace& cws) const;
   // the contacts' part of mirror: run_modes (K entries, the run's activity_override) into the
   // model's overrides for each contact (null: nothing). O(contacts).
