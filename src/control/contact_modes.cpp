@@ -6,10 +6,14 @@
 // docs/contact.md, "Contacts under control").
 #include "control/contact_modes.hpp"
 
+#include <Eigen/QR>
+
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "control/internal.hpp"
+#include "dynamics/internal.hpp"
 
 namespace ukdyn::control_detail {
 
@@ -48,6 +52,14 @@ ContactModes::ContactModes(const Controller& ctrl) : lcp_(0) {
   minv_Kf_ = VectorXd::Zero(n);
   scratch_n_ = VectorXd::Zero(n);
   lcp_ = ContactLcp(K);
+  stuck_.reserve(frictions_.size());
+  released_.reserve(frictions_.size());
+  held_.assign(frictions_.size(), 0);
+  F_s_ = VectorXd::Zero(n);
+  lam_ = VectorXd::Zero(model.constraint_rows());
+  accel_ = VectorXd::Zero(std::max<Index>(n, 2));
+  reaction_ = VectorXd::Zero(n);
+  part_ = VectorXd::Zero(n);
 }
 
 void ContactModes::mirror(const std::vector<signed char>* run_modes, ControlWorkspace& cws) const {
@@ -121,7 +133,19 @@ void ContactModes::controlled_delassus(const Controller& ctrl, ControlWorkspace&
 bool ContactModes::settle(const Controller& ctrl, ControlWorkspace& cws,
                           const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd,
                           double t, ControlStatus& s, std::string& failure) {
-  if (contacts_.empty() || s != ControlStatus::kRequirementsNotMet) return true;
+  slipped_ = 0;
+  if (s != ControlStatus::kRequirementsNotMet) return true;
+  // the unilateral contacts' LCP, then the stuck Coulomb contacts
+  if (!settle_contacts(ctrl, cws, q, qd, t, s, failure)) return false;
+  slip(ctrl, cws, q, qd, t, s);
+  return true;
+}
+
+bool ContactModes::settle_contacts(const Controller& ctrl, ControlWorkspace& cws,
+                                   const Eigen::Ref<const VectorXd>& q,
+                                   const Eigen::Ref<const VectorXd>& qd, double t, ControlStatus& s,
+                                   std::string& failure) {
+  if (contacts_.empty()) return true;
   decided_.clear();
   // the closed contacts, and the first requirement row not met with them held
   std::vector<signed char>& modes = cws.model.activity_override;
@@ -304,6 +328,200 @@ void ContactModes::held_reactions(const Controller& ctrl, ControlWorkspace& cws,
     modes[std::size_t(contacts_[i])] = saved_[i];
   }
   compute_control(ctrl, cws, q, qd, t);
+}
+
+void ContactModes::slip(const Controller& ctrl, ControlWorkspace& cws,
+                        const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd,
+                        double t, ControlStatus& s) {
+  if (frictions_.empty() || s != ControlStatus::kRequirementsNotMet) return;
+  Workspace& model = cws.model;
+  // the contacts that stick in the model (the run's stuck ones, mirrored)
+  stuck_.clear();
+  for (std::size_t j = 0; j < frictions_.size(); ++j) {
+    if (model.activity_override[std::size_t(frictions_[j].stick_constraint)] > 0) {
+      stuck_.push_back(j);
+    }
+  }
+  if (stuck_.empty()) return;
+  if (hints_.rows() != model.slip_hint.rows()) {  // (once: the workspace's hint size)
+    hints_.setZero(model.slip_hint.rows(), Index(frictions_.size()));
+    held_hints_.setZero(model.slip_hint.rows(), Index(frictions_.size()));
+  }
+  for (std::size_t j : stuck_) {
+    const FrictionContact& c = frictions_[j];
+    held_[j] = model.slip_hint_held[std::size_t(c.force)];
+    held_hints_.col(Index(j)) = model.slip_hint.col(c.force);
+  }
+  // the first requirement row not met with them stuck (the note's)
+  Index row = 0;
+  while (row + 1 < Index(cws.met.size()) && cws.met[std::size_t(row)]) ++row;
+  // q''₀: the control with them sliding without friction; not met either: not theirs
+  slide_stuck(model, false);
+  if (compute_control(ctrl, cws, q, qd, t) != ControlStatus::kOk) {
+    hold_stuck(model);
+    s = compute_control(ctrl, cws, q, qd, t);
+    return;
+  }
+  // the friction against the relative acceleration it imposes (none where it is roundoff of
+  // its terms: no direction to slide in), and F_s, the control with that friction
+  for (std::size_t j : stuck_) {
+    double scale = 0.0;
+    const Index k = relative_acceleration(ctrl, cws, j, q, qd, t, scale);
+    auto hint = hints_.col(Index(j));
+    hint.setZero();
+    if (!(accel_.head(k).norm() > kSignificant * scale)) continue;
+    const FrictionContact& c = frictions_[j];
+    if (c.kinematics) {
+      hint.head(k) = -accel_.head(k).normalized();
+    } else {
+      const double a = accel_.head(k).norm();
+      for (Index r = 0; r < k; ++r) hint[c.coordinates[std::size_t(r)]] = -accel_[r] / a;
+    }
+  }
+  slide_stuck(model, true);
+  const bool met = compute_control(ctrl, cws, q, qd, t) == ControlStatus::kOk;
+  F_s_ = cws.Qc_control;
+  // the control with them stuck again: the held one, and the stuck model's reaction under F_s,
+  // λ + λ_nonideal − G_p⁺ A_p M⁻¹ F_s
+  hold_stuck(model);
+  s = compute_control(ctrl, cws, q, qd, t);
+  if (!met || s != ControlStatus::kRequirementsNotMet) return;
+  model.decomposition.project_nonideal(F_s_, cws.tmp_n, cws.tmp_n2, lam_);
+  lam_ += model.lambda + model.lambda_nonideal;
+  // each contact's margin mu_static N − |H|: the stick breaks where one is < 0
+  note_t_ = t;
+  note_row_ = row;
+  note_margin_ = std::numeric_limits<double>::infinity();
+  released_.clear();
+  for (std::size_t j : stuck_) {
+    const double margin = stick_margin(ctrl, cws, j, q, qd, t);
+    if (margin < 0.0) released_.push_back(j);
+    if (margin < note_margin_) {
+      note_margin_ = margin;
+      note_N_ = normal_force_;
+      note_H_ = holding_force_;
+    }
+  }
+  if (released_.empty()) {
+    // static friction holds them: the held control stands, not met
+    slipped_ = -1;
+    return;
+  }
+  // F_s: the plant's stick then needs more than mu_static N, and the run releases it
+  slide_stuck(model, true);
+  s = compute_control(ctrl, cws, q, qd, t);
+  hold_stuck(model);
+  slipped_ = 1;
+}
+
+std::string ContactModes::stick_note(const Controller& ctrl) const {
+  if (slipped_ == 0) return "";
+  const std::string numbers = format(note_H_) + (slipped_ > 0 ? " > " : " <= ") +
+                              "mu_static N = " + format(note_H_ + note_margin_) +
+                              " (N = " + format(note_N_) + ")";
+  const std::string row = "the requirement row '" + ctrl.row_names()[std::size_t(note_row_)] + "'";
+  if (slipped_ < 0) {
+    return row +
+           " needs a stuck contact to slide, but static friction holds it: the control "
+           "that meets it with the contact sliding would need a holding force of only " +
+           numbers + " with it stuck (docs/contact.md, \"Contacts under control\")";
+  }
+  std::string names;
+  for (std::size_t j : released_) {
+    names += (names.empty() ? "'" : ", '") + ctrl.model().nonideal_name(frictions_[j].force) + "'";
+  }
+  return "t = " + format(note_t_) + ": " + row + " needs the stuck contact " + names +
+         " to slide: the control that meets it with the contact sliding (friction mu N against "
+         "the motion it imposes) would need a holding force of " +
+         numbers + " to keep it stuck, so it slips (docs/contact.md, \"Contacts under control\")";
+}
+
+void ContactModes::slide_stuck(Workspace& model, bool friction) {
+  for (std::size_t j : stuck_) {
+    const FrictionContact& c = frictions_[j];
+    model.activity_override[std::size_t(c.stick_constraint)] = 0;
+    model.nonideal_enabled[std::size_t(c.force)] = friction ? 1 : 0;
+    model.slip_hint.col(c.force) = hints_.col(Index(j));
+    model.slip_hint_held[std::size_t(c.force)] = 0;
+  }
+}
+
+void ContactModes::hold_stuck(Workspace& model) const {
+  for (std::size_t j : stuck_) {
+    const FrictionContact& c = frictions_[j];
+    model.activity_override[std::size_t(c.stick_constraint)] = 1;
+    model.nonideal_enabled[std::size_t(c.force)] = 0;
+    model.slip_hint.col(c.force) = held_hints_.col(Index(j));
+    model.slip_hint_held[std::size_t(c.force)] = held_[j];
+  }
+}
+
+Index ContactModes::relative_acceleration(const Controller& ctrl, ControlWorkspace& cws,
+                                          std::size_t j, const Eigen::Ref<const VectorXd>& q,
+                                          const Eigen::Ref<const VectorXd>& qd, double t,
+                                          double& scale) {
+  const System& sys = ctrl.model();
+  Workspace& model = cws.model;
+  const FrictionContact& c = frictions_[j];
+  const Index basis = detail::sliding_velocity(sys, model, Index(j), q, qd, t, false);
+  if (const ContactKinematics& kin = c.kinematics) {
+    // a_rel = T q'' + T' q'
+    const Index d = kin.tangents;
+    const auto& J = model.contact_jacobian[j];
+    accel_.head(d) = model.contact_bias.col(Index(j)).segment(1, d);
+    scale = accel_.head(d).norm();
+    for (std::size_t i = 0; i < kin.columns.size(); ++i) {
+      const double qdd = cws.qdd[kin.columns[i]];
+      accel_.head(d) += J.col(Index(i)).tail(d) * qdd;
+      scale += J.col(Index(i)).tail(d).norm() * std::abs(qdd);
+    }
+    return d;
+  }
+  // a_rel = P (q''_c − u')
+  const Index k = Index(c.coordinates.size());
+  for (Index r = 0; r < k; ++r) accel_[r] = cws.qdd[c.coordinates[std::size_t(r)]];
+  scale = accel_.head(k).norm();
+  if (c.surface_velocity) {
+    accel_.head(k) -= model.surface_u_dot.head(k);
+    scale += model.surface_u_dot.head(k).norm();
+  }
+  detail::remove_normals(model, basis, accel_.head(k));
+  return k;
+}
+
+double ContactModes::stick_margin(const Controller& ctrl, ControlWorkspace& cws, std::size_t j,
+                                  const Eigen::Ref<const VectorXd>& q,
+                                  const Eigen::Ref<const VectorXd>& qd, double t) {
+  const System& sys = ctrl.model();
+  Workspace& model = cws.model;
+  const FrictionContact& c = frictions_[j];
+  const Index k = c.normal_constraint, rows = sys.constraint(k).rows();
+  if (normals_.rows() != rows) normals_.resize(rows, sys.coordinate_count());  // (once a size)
+  detail::copy_constraint_rows(sys, model, k, normals_);
+  // the normal constraint's reaction R_n = A_nᵀ lam_n
+  detail::constraint_share(sys, model, k, lam_, reaction_);
+  if (const ContactKinematics& kin = c.kinematics) {
+    // contact point: N from R_n along the contact normal, H = kappa lam_stick (its rows are
+    // kappa T)
+    detail::sliding_velocity(sys, model, Index(j), q, qd, t, false);
+    normal_force_ = detail::contact_normal_force(sys, model, Index(j), reaction_);
+    const double kappa = detail::normal_row_unit(normals_, rows, part_);
+    holding_force_ = kappa * lam_.segment(sys.row_offset(c.stick_constraint), kin.tangents).norm();
+    return c.mu_static * normal_force_ - holding_force_;
+  }
+  // coordinates: R = A_nᵀ lam_n + A_sᵀ lam_s, N its projection onto the normal rows, H the rest
+  detail::constraint_share(sys, model, c.stick_constraint, lam_, part_);
+  reaction_ += part_;
+  if (rows == 1) {
+    const double aa = normals_.row(0).squaredNorm();
+    part_ = normals_.row(0).transpose() * (aa > 0.0 ? normals_.row(0).dot(reaction_) / aa : 0.0);
+  } else {
+    const MatrixXd Nt = normals_.transpose();
+    part_ = Nt * Nt.completeOrthogonalDecomposition().solve(reaction_);
+  }
+  normal_force_ = part_.norm();
+  holding_force_ = (reaction_ - part_).norm();
+  return c.mu_static * normal_force_ - holding_force_;
 }
 
 std::string ContactModes::pull_message(const Controller& ctrl, double t, Index row,

@@ -48,7 +48,8 @@ class ContactModes {
   // keeps them). A stuck contact is then a physical constraint of the model, whose control is
   // computed with it held (a rolling sphere pushed at its centre: F = 7/5 m a), not against the
   // sliding law's regularized friction at v_rel ~ 0, whose slope mu N / eps made the controlled
-  // run stiff. A null run leaves them as they are. O(contacts + n · frictions).
+  // run stiff; a requirement that needs it to slide breaks it (slip, below). A null run leaves
+  // them as they are. O(contacts + n · frictions).
   void mirror(const Workspace* run, ControlWorkspace& cws) const;
   // the contacts' part of mirror: run_modes (K entries, the run's activity_override) into the
   // model's overrides for each contact (null: nothing). O(contacts).
@@ -65,9 +66,33 @@ class ContactModes {
   // compute_control, k solves with P and with the law (O(k n² + k² n)) and, when a gap is driven
   // shut, one LCP solve (Lemke, O(k³), or where it misses, the enumeration, O(2^k k³); Siconos
   // allocates its tableau then).
+  // Then, when the requirements are still not met, slip() below.
   bool settle(const Controller& ctrl, ControlWorkspace& cws, const Eigen::Ref<const VectorXd>& q,
               const Eigen::Ref<const VectorXd>& qd, double t, ControlStatus& s,
               std::string& failure);
+
+  // A requirement that needs a stuck contact to slide breaks its stick (docs/contact.md,
+  // "Contacts under control"). After settle, when the requirements are not met and Coulomb
+  // contacts stick in the model: the control is recomputed with them sliding, first without
+  // friction (q''₀: the relative acceleration a_rel the requirements impose on each contact),
+  // then with the friction mu N against it (slip_hint = −a_rel/|a_rel|), giving F_s. If F_s
+  // meets the requirements, the reaction it would need with the contacts stuck is
+  // λ + λ_nonideal + Δλ, Δλ = −G_p⁺ A_p M⁻¹ F_s (the stuck model's project_nonideal), split into
+  // each contact's normal force N and holding force H as the run's stick margin splits it. When
+  // some |H| exceeds mu_static N, F_s is the control (cws holds it, s = kOk): the plant, which
+  // still holds the stick, then sees its holding force beyond mu_static N, and the run releases
+  // the contact (at the start, or at a located event) and slides with the friction F_s assumed.
+  // Otherwise static friction holds: the held control stands, not met, and stick_note() says
+  // why (no allocation: the note is written when asked for). The model's modes are the mirrored
+  // ones afterwards. Cost: nothing while the requirements are met or no contact sticks; else 3 or 4
+  // evaluations of compute_control and one project_nonideal (O(n² + n m)).
+  void slip(const Controller& ctrl, ControlWorkspace& cws, const Eigen::Ref<const VectorXd>& q,
+            const Eigen::Ref<const VectorXd>& qd, double t, ControlStatus& s);
+  // what the last slip() decided: 1 the control slides stuck contacts (F_s), −1 static friction
+  // holds them (the requirements not met), 0 nothing to decide; stick_note() says it in words
+  // (the row, the contacts, |H| against mu_static N; "" for 0)
+  int slipped() const { return slipped_; }
+  std::string stick_note(const Controller& ctrl) const;
 
   // The run's LCP of the accelerations at an event (docs/contact.md, "In a run") evaluates its
   // q''_free with every contact released and treats the control in it as a given force. Its
@@ -110,6 +135,26 @@ class ContactModes {
                       double t, Index k);
   // the failure text: `names` pull, the requirement `row` missed by `missed` with them held
   std::string pull_message(const Controller& ctrl, double t, Index row, double missed) const;
+  // settle's LCP of the unilateral contacts (settle is it, then slip)
+  bool settle_contacts(const Controller& ctrl, ControlWorkspace& cws,
+                       const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd,
+                       double t, ControlStatus& s, std::string& failure);
+  // slip's modes of the stuck contacts stuck_: sliding (friction on with the hint in hints_,
+  // or off), or the mirrored ones back (saved in held_)
+  void slide_stuck(Workspace& model, bool friction);
+  void hold_stuck(Workspace& model) const;
+  // contact j's a_rel = P (q''_c − u') (coordinate path) or T q'' + T' q' (contact point) for
+  // the control's q'' in cws, into accel_ (its size returned); its scale (the terms' sum) in
+  // `scale`. Evaluates the contact's kinematics (sliding_velocity).
+  Index relative_acceleration(const Controller& ctrl, ControlWorkspace& cws, std::size_t j,
+                              const Eigen::Ref<const VectorXd>& q,
+                              const Eigen::Ref<const VectorXd>& qd, double t, double& scale);
+  // contact j's mu_static N − |H| with the multipliers lam_ of the stuck model (its rows as the
+  // last evaluation assembled them), split as Run::stick_margin splits the reaction; N into
+  // normal_force_, |H| into holding_force_
+  double stick_margin(const Controller& ctrl, ControlWorkspace& cws, std::size_t j,
+                      const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd,
+                      double t);
 
   // the model's Coulomb contacts (System::friction_contacts)
   std::vector<FrictionContact> frictions_;
@@ -130,6 +175,22 @@ class ContactModes {
   VectorXd req_, Kf_, minv_Kf_, u_;  // (m_r), (n), (n), (actuators) the law's response
   VectorXd scratch_n_;               // (n)
   ContactLcp lcp_;                   // Siconos's Lemke (docs/contact.md, "The LCP solver")
+  // slip()'s
+  std::vector<std::size_t> stuck_;    // (≤ frictions) positions in frictions_ of the stuck ones
+  std::vector<signed char> held_;     // (frictions) their mirrored slip_hint_held
+  MatrixXd hints_;                    // (slip_hint rows × frictions) their sliding hints
+  MatrixXd held_hints_;               // (slip_hint rows × frictions) their mirrored hints
+  VectorXd F_s_;                      // (n) the control with them sliding
+  VectorXd lam_;                      // (m) the stuck model's multipliers under F_s
+  VectorXd accel_, reaction_, part_;  // (max(n, 2)), (n), (n)
+  MatrixXd normals_;                  // (rows of a normal constraint × n)
+  double normal_force_ = 0.0, holding_force_ = 0.0;  // of the last stick_margin
+  int slipped_ = 0;                                  // see slipped()
+  // stick_note()'s: the time, the row not met, the least margin mu_static N − |H| and its N
+  // and |H|, the contacts released (positions in frictions_)
+  double note_t_ = 0.0, note_margin_ = 0.0, note_N_ = 0.0, note_H_ = 0.0;
+  Index note_row_ = 0;
+  std::vector<std::size_t> released_;
 };
 
 }  // namespace ukdyn::control_detail

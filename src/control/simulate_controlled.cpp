@@ -164,6 +164,9 @@ struct ControlledScratch final : CallableScratch {
   ControlStatistics stats;
   std::string failure;       // describe_control_status() of the first failure
   std::string pull_failure;  // (ContactModes::settle) a requirement that needs a contact to pull
+  std::string slip_note;     // (ContactModes::slip) the first stick a requirement broke,
+  double slip_t = 0.0;       // at this time
+  bool stick_noted = false;  // stats.not_met_message says why a stick held
 };
 
 // Whether the last assembly of the requirements in c evaluated every violation the samples
@@ -216,6 +219,11 @@ void ControlledPlant::force(ControlledScratch& w, const Eigen::Ref<const VectorX
     Q.setConstant(std::numeric_limits<double>::quiet_NaN());
     return;
   }
+  // (the earliest evaluation that broke a stick: a located release's, not its step's end)
+  if (w.contacts.slipped() > 0 && (w.slip_note.empty() || t < w.slip_t)) {
+    w.slip_note = w.contacts.stick_note(ctrl);
+    w.slip_t = t;
+  }
   // an event's q''_free (contacts the run held, released for its LCP): the control answers
   // their forces
   w.contacts.anticipate(ctrl, cws, w.run_modes, q, qd, t, s);
@@ -259,6 +267,11 @@ void ControlledPlant::note_not_met(ControlledScratch& w, double t) const {
   if (stats.not_met == 1) {
     stats.first_not_met = t;
     stats.not_met_message = describe_control_status(ctrl, w.cws);  // once
+  }
+  // (a stuck contact that a requirement needs to slide, held by static friction: why, once)
+  if (w.contacts.slipped() < 0 && !w.stick_noted) {
+    w.stick_noted = true;
+    stats.not_met_message += "; " + w.contacts.stick_note(ctrl);
   }
 }
 
@@ -653,6 +666,7 @@ ControlledTrajectory simulate_controlled(
         w.run_ws = nullptr;
         after->stats = w.stats;
         after->failure = w.failure;
+        after->slip_note = w.slip_note;
         after->q_last = w.q_last;
         after->qd_last = w.qd_last;
         after->t_last = w.t_last;
@@ -681,6 +695,7 @@ ControlledTrajectory simulate_controlled(
   tr.n = n;
   tr.m = full.m;
   tr.stats = full.stats;
+  if (!w.slip_note.empty()) tr.stats.notes.push_back(w.slip_note);
   diagnose_requirements(*st, w, q0, qd0, options.t_start, tr.stats);
   run.control = w.stats;
   balance.finish(tr.stats, tolerance, options.units);

@@ -18,6 +18,7 @@
 #include <utility>
 #include <vector>
 
+#include "support/contact_runs.hpp"
 #include "ukdyn/control/control.hpp"
 #include "ukdyn/dynamics/contact.hpp"
 #include "ukdyn/modelfile/model.hpp"
@@ -32,13 +33,7 @@ using Eigen::Matrix3d;
 using Eigen::Vector3d;
 
 // column `name` of field f (width n) at sample i
-double at(const Trajectory& tr, const std::vector<double>& f, const std::string& name,
-          std::size_t i) {
-  const auto& names = tr.coordinate_names;
-  const auto c = std::size_t(std::find(names.begin(), names.end(), name) - names.begin());
-  EXPECT_LT(c, names.size()) << name;
-  return f[i * std::size_t(tr.n) + c];
-}
+constexpr auto* at = &testing::coordinate_at;
 // the multiplier of constraint `name`'s first row at sample i
 double lambda_of(const Trajectory& tr, const std::string& name, std::size_t i) {
   Index row = 0;

@@ -17,6 +17,7 @@
 #include <utility>
 #include <vector>
 
+#include "support/contact_runs.hpp"
 #include "ukdyn/modelfile/model.hpp"
 #include "ukdyn/simulation/simulate.hpp"
 
@@ -26,13 +27,7 @@ namespace UKDYN_TEST_FILE {
 constexpr double kG = 9.81, kMass = 3.0, kMu = 0.3, kMuS = 0.5;
 
 // column `name` of field f (width n) at sample i
-double at(const Trajectory& tr, const std::vector<double>& f, const std::string& name,
-          std::size_t i) {
-  const auto& names = tr.coordinate_names;
-  const auto c = std::size_t(std::find(names.begin(), names.end(), name) - names.begin());
-  EXPECT_LT(c, names.size()) << name;
-  return f[i * std::size_t(tr.n) + c];
-}
+constexpr auto* at = &testing::coordinate_at;
 // the multipliers of constraint `name` at sample i (its rows; from lambda, or lambda_total's
 // unilateral entries when `total`)
 std::vector<double> multipliers(const Trajectory& tr, const std::string& name, std::size_t i) {

@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <string>
 #include <utility>
 #include <vector>
 
@@ -16,6 +17,16 @@
 #include "ukdyn/simulation/simulate.hpp"
 
 namespace ukdyn::testing {
+
+// column `name` of a per-coordinate field f of tr (width n: q, q', Qc_ideal, a controlled run's
+// Qc_control, …) at sample i
+inline double coordinate_at(const Trajectory& tr, const std::vector<double>& f,
+                            const std::string& name, std::size_t i) {
+  const auto& names = tr.coordinate_names;
+  const auto c = std::size_t(std::find(names.begin(), names.end(), name) - names.begin());
+  EXPECT_LT(c, names.size()) << name;
+  return f[i * std::size_t(tr.n) + c];
+}
 
 // the events of kind `kind` at constraint k
 inline std::vector<ContactEvent> events_of(const Trajectory& tr, Index k, ContactEvent::Kind kind) {

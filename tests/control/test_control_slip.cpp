@@ -1,0 +1,240 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// A requirement that needs a stuck Coulomb contact to slide breaks its stick (ContactModes::slip;
+// docs/contact.md, "Contacts under control"): a particle on a rough floor whose x must follow
+// x_d = A (1 − cos w t), actuated along x. Against closed forms: sliding from the start with
+// F = m x_d'' + mu m g, the stick held until the stabilized requirement's force breaks it at t*,
+// and static friction holding it (the requirement reported as not met, with the reason).
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+#include <vector>
+
+#include "support/contact_runs.hpp"
+#include "ukdyn/control/control.hpp"
+#include "ukdyn/modelfile/model.hpp"
+#include "ukdyn/ukdyn.hpp"
+
+namespace ukdyn {
+namespace UKDYN_TEST_FILE {
+
+constexpr double kM = 2.0, kG = 9.81, kMu = 0.2, kW = 5.0, kOmega = 20.0;
+
+// the particle p (m = 2) at rest on the floor z >= 0 (mu = 0.2, mu_static), x required to follow
+// A (1 − cos 5t) under the error dynamics e'' + 2 omega e' + omega² e = 0 (omega = 20), the
+// control along x alone
+std::string pushed_particle(double A, double mu_static, double t_end) {
+  return "parameters: {m: 2, g: 9.81, A: " + std::to_string(A) +
+         ", w: 5, mu: 0.2, mus: " + std::to_string(mu_static) + R"(}
+bodies:
+  - {name: p, type: particle, mass: m, position: [0, 0, 0]}
+forces:
+  - {type: gravity, g: [0, 0, -g]}
+contacts:
+  - {name: floor, body: p}
+nonideal:
+  - {friction: coulomb, constraint: floor, mu: mu, mu_static: mus}
+control:
+  requirements:
+    - {name: pace, holonomic: p_x - A*(1 - cos(w*t)), dynamics: {omega: 20, zeta: 1}}
+  actuated: [p_x]
+simulate: {t_end: )" +
+         std::to_string(t_end) +
+         R"(, integrator: dopri5, rtol: 1e-11, atol: 1e-13}
+output: {every: 0.05}
+)";
+}
+
+ControlledTrajectory run(const std::string& text) {
+  const Model m = parse_model(text);
+  return simulate_controlled(*m.controller, m.system, m.q0, m.qd0, m.options);
+}
+
+// field f of coordinate `name` at sample i
+constexpr auto* at = &testing::coordinate_at;
+
+// x_d and its derivatives
+double x_d(double A, double t) { return A * (1.0 - std::cos(kW * t)); }
+double x_d1(double A, double t) { return A * kW * std::sin(kW * t); }
+double x_d2(double A, double t) { return A * kW * kW * std::cos(kW * t); }
+
+TEST(ControlSlip, ParticlePushedFromRestSlidesWithTheClosedFormForce) {
+  // F(0) = m A w² + mu m g = 8.924 N > mu_static m g = 5.886 N: it slides from t = 0, x = x_d,
+  // F = m x_d'' + mu m g while x_d' > 0 (t < pi/5), the friction −mu m g
+  const double A = 0.1;
+  const ControlledTrajectory r = run(pushed_particle(A, 0.3, 0.6));
+  const Trajectory& tr = r.plant;
+  ASSERT_EQ(tr.stats.status, Status::kOk) << tr.stats.message;
+  EXPECT_EQ(r.control.not_met, 0) << r.control.not_met_message;
+  EXPECT_EQ(tr.stats.events, 0);  // (the stick refused at the start: no event)
+  // the note of the broken stick, with its numbers at t = 0
+  ASSERT_FALSE(tr.stats.notes.empty());
+  const std::string& note = tr.stats.notes.back();
+  EXPECT_NE(note.find("t = 0: the requirement row 'pace' needs the stuck contact"),
+            std::string::npos)
+      << note;
+  EXPECT_NE(note.find("holding force of 8.924 > mu_static N = 5.886"), std::string::npos) << note;
+  ASSERT_EQ(tr.samples(), 13);
+  for (std::size_t i = 0; i < std::size_t(tr.samples()); ++i) {
+    const double t = tr.t[i];
+    EXPECT_NEAR(at(tr, tr.q, "p.x", i), x_d(A, t), 1e-8) << "t = " << t;
+    EXPECT_NEAR(at(tr, tr.qd, "p.x", i), x_d1(A, t), 1e-8) << "t = " << t;
+    EXPECT_NEAR(at(tr, r.Qc_control, "p.x", i), kM * x_d2(A, t) + kMu * kM * kG, 1e-6)
+        << "t = " << t;
+    EXPECT_NEAR(at(tr, tr.Qc_nonideal, "p.x", i) + at(tr, tr.Qc_ideal, "p.x", i), -kMu * kM * kG,
+                1e-6)
+        << "t = " << t;
+    EXPECT_NEAR(r.error[i], 0.0, 1e-8) << "t = " << t;
+  }
+}
+
+// the stabilized requirement's acceleration while the particle stays at x = 0, x' = 0:
+// x_d'' + 2 omega x_d' + omega² x_d
+double a_stuck(double A, double t) {
+  return x_d2(A, t) + 2.0 * kOmega * x_d1(A, t) + kOmega * kOmega * x_d(A, t);
+}
+
+TEST(ControlSlip, ParticleHeldByStaticFrictionSlipsWhenTheRequirementsForceReachesMuStaticN) {
+  // A = 0.02: F(0) = m A w² + mu m g = 4.924 N < mu_static m g = 5.886 N, so the stick holds
+  // (x = 0, F = 0, the requirement not met, with the reason) while the error grows, until the
+  // force that the stabilized requirement needs sliding, m a_stuck(t) + mu m g, reaches
+  // mu_static m g at t* (a_stuck(t*) = (mu_static − mu) g, 0.021856 s); from there it slides,
+  // x = x_d + e with the error dynamics e'' + 40 e' + 400 e = 0 from e(t*) = −x_d(t*),
+  // e'(t*) = −x_d'(t*)
+  const double A = 0.02, mus = 0.3;
+  double lo = 0.0, hi = 0.1;  // (a_stuck rises on [0, 0.1])
+  for (int i = 0; i < 200; ++i) {
+    const double mid = 0.5 * (lo + hi);
+    (a_stuck(A, mid) < (mus - kMu) * kG ? lo : hi) = mid;
+  }
+  const double ts = 0.5 * (lo + hi);
+  EXPECT_NEAR(ts, 0.021856, 1e-6);
+  const double c1 = -x_d(A, ts), c2 = -x_d1(A, ts) + kOmega * c1;
+  Model m = parse_model(pushed_particle(A, mus, 0.5));
+  m.options.output_at = {0.01, 0.02, ts - 1e-6, ts + 1e-6, 0.05, 0.1, 0.2, 0.3, 0.4, 0.5};
+  const ControlledTrajectory r =
+      simulate_controlled(*m.controller, m.system, m.q0, m.qd0, m.options);
+  const Trajectory& tr = r.plant;
+  ASSERT_EQ(tr.stats.status, Status::kOk) << tr.stats.message;
+  EXPECT_EQ(tr.stats.events, 1);  // the release at t*
+  // not met while stuck, and why
+  EXPECT_GT(r.control.not_met, 0);
+  EXPECT_EQ(r.control.first_not_met, 0.0);
+  EXPECT_NE(r.control.not_met_message.find(
+                "the requirement row 'pace' needs a stuck contact to slide, but static friction "
+                "holds it: the control that meets it with the contact sliding would need a "
+                "holding force of only 4.924 <= mu_static N = 5.886 (N = 19.62) with it stuck"),
+            std::string::npos)
+      << r.control.not_met_message;
+  ASSERT_FALSE(tr.stats.notes.empty());
+  // (located: the holding force at mu_static N, to its roundoff)
+  EXPECT_NE(tr.stats.notes.back().find("t = 0.0218565: the requirement row 'pace' needs the stuck "
+                                       "contact 'coulomb.floor' to slide"),
+            std::string::npos)
+      << tr.stats.notes.back();
+  EXPECT_NE(tr.stats.notes.back().find("holding force of 5.886 > mu_static N = 5.886"),
+            std::string::npos)
+      << tr.stats.notes.back();
+  ASSERT_GE(tr.samples(), 12);
+  for (std::size_t i = 0; i < std::size_t(tr.samples()); ++i) {
+    const double t = tr.t[i];
+    if (t < ts) {
+      EXPECT_NEAR(at(tr, tr.q, "p.x", i), 0.0, 1e-15) << "t = " << t;
+      EXPECT_NEAR(at(tr, r.Qc_control, "p.x", i), 0.0, 1e-12) << "t = " << t;
+      // the floor holds it: the stick's reaction is the (zero) push, within mu_static N
+      EXPECT_NEAR(r.error[i], -x_d(A, t), 1e-12) << "t = " << t;
+      continue;
+    }
+    const double tau = t - ts, E = std::exp(-kOmega * tau);
+    const double e = (c1 + c2 * tau) * E, e1 = (c2 - kOmega * (c1 + c2 * tau)) * E;
+    const double e2 = (-2.0 * kOmega * c2 + kOmega * kOmega * (c1 + c2 * tau)) * E;
+    EXPECT_NEAR(at(tr, tr.q, "p.x", i), x_d(A, t) + e, 1e-8) << "t = " << t;
+    EXPECT_NEAR(at(tr, tr.qd, "p.x", i), x_d1(A, t) + e1, 1e-8) << "t = " << t;
+    // F = m x'' − friction: the friction mu N (2e-6 N less at 1e-6 s after t*, where v_rel =
+    // 1e-6 m/s: the sliding law's regularization at eps = 1e-9 m/s, which the control answers)
+    const double friction = at(tr, tr.Qc_nonideal, "p.x", i);
+    EXPECT_NEAR(friction, -kMu * kM * kG, 3e-6) << "t = " << t;
+    EXPECT_NEAR(at(tr, r.Qc_control, "p.x", i), kM * (x_d2(A, t) + e2) - friction, 1e-7)
+        << "t = " << t;
+    EXPECT_NEAR(r.error[i], e, 1e-8) << "t = " << t;
+  }
+}
+
+TEST(ControlSlip, ParticleThatStaticFrictionHoldsIsReportedNotMetWithBothForces) {
+  // mu_static = 1: the sliding control's 4.924 N … 7.4 N stays below mu_static m g = 19.62 N
+  // over the run: stuck throughout, the requirement not met at every evaluation, and said why
+  const double A = 0.02;
+  const ControlledTrajectory r = run(pushed_particle(A, 1.0, 0.05));
+  const Trajectory& tr = r.plant;
+  ASSERT_EQ(tr.stats.status, Status::kOk) << tr.stats.message;
+  EXPECT_EQ(tr.stats.events, 0);
+  // (all but the start's evaluations with the contact sliding, before its stick)
+  EXPECT_GE(r.control.not_met, r.control.evaluations - 3);
+  EXPECT_NE(r.control.not_met_message.find(
+                "holding force of only 4.924 <= mu_static N = 19.62 (N = 19.62) with it stuck"),
+            std::string::npos)
+      << r.control.not_met_message;
+  EXPECT_TRUE(tr.stats.notes.empty());
+  ASSERT_EQ(tr.samples(), 2);
+  EXPECT_NEAR(at(tr, tr.q, "p.x", 1), 0.0, 1e-15);
+  EXPECT_NEAR(at(tr, r.Qc_control, "p.x", 1), 0.0, 1e-12);
+  EXPECT_NEAR(r.error[1], -x_d(A, 0.05), 1e-12);
+}
+
+TEST(ControlSlip, ArmTipDrawnAlongARoughTableSlidesFromRest) {
+  // a 2-link arm (tests/data/arm2_drawn.urdf) resting its tip (sphere, r = 0.02) on a table
+  // (mu = 0.3) where static friction holds it against gravity; its tip's abscissa must follow
+  // x0 − 0.05 (1 − cos 2t) and its height stay on the table (a row that duplicates the
+  // contact's). Held, the stuck tip leaves the arm no freedom (rank 0: the run stopped or the
+  // arm never moved); the requirement breaks the stick at t = 0 and the tip slides, the contact
+  // closed, both rows met to roundoff, through the reversal at t = pi/2
+  const std::string text = R"(
+parameters: {mu: 0.3, x0: 0.6461085205282122}
+robot: {urdf: arm2_drawn.urdf}
+contacts:
+  - {name: tip, link: fore, point: [0.35, 0, 0], shape: sphere, radius: 0.02,
+     plane: {body: ground, point: [0, 0, 0.2], normal: [0, 0, 1]}}
+nonideal:
+  - {friction: coulomb, constraint: tip, mu: mu}
+initial:
+  q: {shoulder: 0.5, elbow: asin((0.38 - 0.4*sin(0.5))/0.35) - 0.5}
+control:
+  requirements:
+    - {name: draw, holonomic: 0.4*cos(shoulder) + 0.35*cos(shoulder + elbow) - (x0 - 0.05*(1 - cos(2*t))),
+       dynamics: {omega: 20, zeta: 1}}
+    - {name: stay, holonomic: 0.6 - 0.4*sin(shoulder) - 0.35*sin(shoulder + elbow) - 0.22,
+       dynamics: {omega: 20, zeta: 1}}
+simulate: {t_end: 2}
+output: {every: 0.05}
+)";
+  const Model m = parse_model(text, std::string(UKDYN_TEST_DATA_DIR) + "/arm2_drawn.yaml");
+  const ControlledTrajectory r =
+      simulate_controlled(*m.controller, m.system, m.q0, m.qd0, m.options);
+  const Trajectory& tr = r.plant;
+  ASSERT_EQ(tr.stats.status, Status::kOk) << tr.stats.message;
+  EXPECT_EQ(r.control.not_met, 0) << r.control.not_met_message;
+  ASSERT_FALSE(tr.stats.notes.empty());
+  EXPECT_NE(tr.stats.notes.back().find(
+                "t = 0: the requirement row 'draw' needs the stuck contact 'coulomb.tip' to slide"),
+            std::string::npos)
+      << tr.stats.notes.back();
+  ASSERT_EQ(tr.samples(), 41);
+  const std::size_t m_rows = std::size_t(tr.m);
+  for (std::size_t i = 0; i < 41; ++i) {
+    const double t = tr.t[i];
+    EXPECT_NEAR(r.error[2 * i], 0.0, 1e-9) << "t = " << t;
+    EXPECT_NEAR(r.error[2 * i + 1], 0.0, 1e-9) << "t = " << t;
+    // the tip's abscissa, from the joint angles
+    const double s = tr.q[2 * i], e = tr.q[2 * i + 1];
+    EXPECT_NEAR(0.4 * std::cos(s) + 0.35 * std::cos(s + e),
+                0.6461085205282122 - 0.05 * (1.0 - std::cos(2.0 * t)), 1e-9)
+        << "t = " << t;
+    // sliding, pressed on the table: the stick rows carry nothing, the contact pushes
+    for (std::size_t k = 1; k < m_rows; ++k) EXPECT_EQ(tr.lambda[m_rows * i + k], 0.0);
+    EXPECT_GT(tr.lambda[m_rows * i], 1.0) << "t = " << t;
+  }
+}
+
+}  // namespace UKDYN_TEST_FILE
+}  // namespace ukdyn
