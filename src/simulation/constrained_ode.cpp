@@ -108,12 +108,14 @@ void ConstrainedOde::set_window(double a, double b) {
   hi_ = std::isfinite(b) ? b - delta(b) : b;
 }
 
-// (out of line: a run without drives and quadratures, the common one, pays only for the test)
+// (out of line: a run without drives, quadratures and contacts, the common one, pays only for
+// the test)
 void ConstrainedOde::rare_channels(const double* x, double* dxdt, double t, double drive) const {
   double* w = dxdt + 2 * n_;
   if (works_.drive >= 0) w[works_.drive] = works_.scale(works_.drive, ws_.energy_unit) * drive;
   // z' = g(q, q', t, z), after the evaluation that g reads
   if (quad_ != nullptr) quad_->rate(ws_, t, x + 2 * n_ + works_.quadrature, w + works_.quadrature);
+  if (screen_) screen_(t, x);
 }
 
 bool ConstrainedOde::operator()(const double* x, double* dxdt, double t_in) {
@@ -157,7 +159,8 @@ bool ConstrainedOde::operator()(const double* x, double* dxdt, double t_in) {
     w[works_.external] =
         works_.scale(works_.external, unit) * sys_.external_power(q, qd, t, ws_.callables.get());
   }
-  // P_drive and the quadratures z' = g(q, q', t, z) (one test for both: most runs have neither)
+  // P_drive, the quadratures z' = g(q, q', t, z) and the contacts' screen (one test for all:
+  // most runs have none)
   if (rare_) [[unlikely]]
     rare_channels(x, dxdt, t, drive);
   return true;

@@ -51,6 +51,8 @@ ContactEvents::ContactEvents(const System& sys, Workspace& ws, std::size_t x_siz
       pushes_(dyn_.contacts().size(), 0),
       fastest_(dyn_.contacts().size(), 0.0),
       impacts_(dyn_.contacts().size(), 0),
+      pulled_(dyn_.contacts().size(), kNaN),
+      moving_(dyn_.contacts().size(), 0),
       q_(n_),
       qd_(n_),
       xs_(Index(x_size)),
@@ -154,9 +156,19 @@ double ContactEvents::find(double t0, const double* x0, double t1, const double*
       }
       if (g1 < level) {
         te = g0 < level ? t0 : locate(t0, tf, dense, Index(i), true, level);
+        // (a moving surface may have crossed before: the first crossing)
+        if (te > t0 && moving(Index(i), t1, x0)) {
+          if (const double ts = sweep(t0, gd0, te, dense, Index(i), level); ts < te) te = ts;
+        }
         nonfinite.clear();
       } else if (!nonfinite.empty()) {
         te = tf;
+      } else if (const double ts = moving(Index(i), t1, x0) && !(g0 < level)
+                                       ? sweep(t0, gd0, t1, dense, Index(i), level)
+                                       : kNaN;
+                 !std::isnan(ts)) {
+        // a moving surface that sweeps through the body within the step
+        te = ts;
       } else if (const double tm = dip(t0, gd0, t1, gd1, dense, Index(i), level); !std::isnan(tm)) {
         // a gap that closes and opens again within the step (two spheres passing through each
         // other in free flight, where one smooth step spans the whole overlap)
@@ -165,13 +177,8 @@ double ContactEvents::find(double t0, const double* x0, double t1, const double*
         continue;
       }
     } else {
-      // a release: the multiplier turns negative. The step's last evaluation screens (no
-      // evaluation while it pushes); then the state at t1 decides — beyond roundoff of zero
-      // (kUnloaded: a corner of a box on four corners at rest carries 0 N, 7e-16 N below it) —
-      // and bisection locates where it crossed zero.
-      if (pushes_[i]) continue;
-      if (!(value(Index(i), false, t1, x1) < -kUnloaded * largest_load())) continue;
-      te = value(Index(i), false, t0, x0) < 0.0 ? t0 : locate(t0, t1, dense, Index(i), false, 0.0);
+      te = release(t0, x0, t1, x1, dense, Index(i));
+      if (std::isnan(te)) continue;
     }
     if (std::isnan(first) || te < first) {
       first = te;
@@ -179,7 +186,81 @@ double ContactEvents::find(double t0, const double* x0, double t1, const double*
       nonfinite_event_ = nonfinite;
     }
   }
+  // (the stages up to t1 are screened; a later one — of a rejected longer step — waits for the
+  // step that reaches it)
+  for (double& p : pulled_) {
+    if (!(p > t1)) p = kNaN;
+  }
   return first;
+}
+
+void ContactEvents::screen(double t) {
+  double largest = -1.0;  // (the largest load, once a multiplier is negative)
+  for (std::size_t i = 0; i < closed_.size(); ++i) {
+    if (!closed_[i]) continue;
+    const double lambda = multiplier(dyn_.contacts()[i]);
+    if (!(lambda < 0.0)) continue;
+    if (largest < 0.0) largest = largest_load();
+    if (lambda < -kUnloaded * largest && !(pulled_[i] <= t)) pulled_[i] = t;
+  }
+}
+
+bool ContactEvents::pulls(Index i, double t, const double* x) {
+  // (the evaluation first, then the largest load of that same evaluation)
+  const double lambda = value(i, false, t, x);
+  return lambda < -kUnloaded * largest_load();
+}
+
+double ContactEvents::release(double t0, const double* x0, double t1, const double* x1,
+                              const SegmentHooks::Dense& dense, Index i) {
+  // a release: the multiplier turns negative, beyond roundoff of zero (kUnloaded: a corner of a
+  // box on four corners at rest carries 0 N, 7e-16 N below it). The step's evaluations screen
+  // it: its last one and its stages (screen: a force pulse within one long step of a body at
+  // rest, whose state and so whose step size does not see the pulse); no evaluation while it
+  // pushes at all of them. The state at t1 decides, else a stage that pulled, confirmed on the
+  // dense output at its time (a stage state is not the solution: one of a rejected step, or
+  // CVODE's Newton iterates). Bisection then locates where it crossed zero.
+  // (the step's end first: where it pulls, the release is located as before the stages were
+  // screened, bit for bit)
+  const std::size_t c = std::size_t(i);
+  double tp = !pushes_[c] && pulls(i, t1, x1) ? t1 : kNaN;
+  if (const double ts = pulled_[c]; std::isnan(tp) && ts >= t0 && ts <= t1) {
+    dense(ts, xs_.data());
+    if (pulls(i, ts, xs_.data())) tp = ts;
+  }
+  if (std::isnan(tp)) return kNaN;
+  return value(i, false, t0, x0) < 0.0 ? t0 : locate(t0, tp, dense, i, false, 0.0);
+}
+
+bool ContactEvents::moving(Index i, double t, const double* x) {
+  if (moving_[std::size_t(i)]) return true;
+  // ∂g/∂t: the gap rate at (q, q' = 0, t)
+  q_ = Eigen::Map<const VectorXd>(x, n_);
+  qd_.setZero();
+  double g = 0.0, gd = 0.0;
+  dyn_.gap(sys_, ws_, dyn_.contacts()[std::size_t(i)], q_, qd_, t, g, gd);
+  moving_[std::size_t(i)] = std::isfinite(gd) && gd != 0.0 ? 1 : 0;
+  return moving_[std::size_t(i)];
+}
+
+double ContactEvents::sweep(double t0, double gd0, double t1, const SegmentHooks::Dense& dense,
+                            Index i, double level) {
+  // the gap at kSweepPoints equally spaced interior points (t0's gap >= level): the first below
+  // level is located from the point before it; a rate that falls at one point and rises at the
+  // next brackets a dip (dip)
+  double lo = t0, gd_lo = gd0, g = 0.0, gd = 0.0;
+  for (int j = 1; j <= kSweepPoints; ++j) {
+    const double s = t0 + (t1 - t0) * double(j) / double(kSweepPoints + 1);
+    dense(s, xs_.data());
+    if (!finite_gap(i, s, xs_.data(), g, gd)) return kNaN;  // (the step's end test sees it)
+    if (g < level) return locate(lo, s, dense, i, true, level);
+    if (const double tm = dip(lo, gd_lo, s, gd, dense, i, level); !std::isnan(tm)) {
+      return locate(lo, tm, dense, i, true, level);
+    }
+    lo = s;
+    gd_lo = gd;
+  }
+  return kNaN;
 }
 
 double ContactEvents::dip(double t0, double gd0, double t1, double gd1,
@@ -302,6 +383,12 @@ bool ContactEvents::start(double t, VectorXd& q, VectorXd& qd, double tolerance,
     throw std::invalid_argument("ukdyn::simulate: the initial state's contacts: " + failure_);
   }
   qd = xs_.segment(n_, n_);
+  // the gaps that depend explicitly on t (moving surfaces: sweep), seen at the initial positions
+  // at 65 times over the run's span (a step's end finds the others)
+  for (std::size_t i = 0; i < closed_.size(); ++i) {
+    for (int j = 0; j <= 64 && !moving(Index(i), t + span_ * double(j) / 64.0, q.data()); ++j) {
+    }
+  }
   // an impact at the start changes the initial state itself: the energy balance starts from the
   // state after it (the event keeps its energy_change), with no impact work before the first
   // sample — else E(0) after the impact and W = ΔT leave a residual −ΔT for the whole run
@@ -469,6 +556,9 @@ bool ContactEvents::resolve(double t, double* x, Index event, RunStatistics& sta
     ev.kind = ContactEvent::Kind::kRelease;
     ev.speed_before = ev.speed_after = v_minus[std::size_t(j)];
     stats.contact_events.push_back(ev);
+    // (its next impacts are a new sequence: the rest criterion compares with their fastest)
+    fastest_[i] = 0.0;
+    impacts_[i] = 0;
   }
   apply();
   return true;

@@ -4,7 +4,8 @@
 // open gap closing) or release (a closed contact's multiplier turning to pull); handle() then
 // applies it: the velocity jump of the impact, and the set of contacts that stay closed (the
 // LCP). Nothing here runs in a step of a run without unilateral constraints, and a step of a run
-// with them costs one evaluation of each open gap (no LCP while nothing changes sign).
+// with them costs one or two evaluations of each open gap (no LCP while nothing changes sign),
+// kSweepPoints more for a moving one, and a sign test per closed contact at each stage (screen).
 #pragma once
 
 #include <string>
@@ -39,6 +40,10 @@ class ContactEvents {
   // for 10⁴ s makes 110 700 regular impacts)
   static constexpr long kChatterEvents = 10000;
   static constexpr double kChatterSpan = 1e-4;
+  // the gap of an open contact that depends explicitly on t (a moving surface: the vibrating
+  // table, a cam) is screened at this many equally spaced interior points of each step's dense
+  // output (sweep): the step size knows nothing of the surface's motion
+  static constexpr int kSweepPoints = 16;
 
   // x_size: the size of the run's state x = [q; q'; W]; span: the run's t_end − t_start
   ContactEvents(const System& sys, Workspace& ws, std::size_t x_size, double span);
@@ -57,6 +62,11 @@ class ContactEvents {
   // expression left its domain), where handle() then stops the run
   double find(double t0, const double* x0, double t1, const double* x1,
               const SegmentHooks::Dense& dense);
+  // at each evaluation of the integrator's stages (ConstrainedOde::set_screen), after its forward
+  // dynamics at time t: the earliest such t at which a closed contact's multiplier pulls (below
+  // −kUnloaded of the largest load), per contact, for find()'s release test. O(contacts), no
+  // evaluation, no allocation
+  void screen(double t);
   // applies the event find() located, at (t, x) (x's velocities may jump); false with
   // failure() set when the contacts' dynamics cannot be solved there, or the event is a
   // non-finite gap
@@ -85,6 +95,23 @@ class ContactEvents {
                 double level);
   // f of contact k at (t, x): its gap, or its multiplier in the run's evaluation
   double value(Index k, bool gap, double t, const double* x);
+  // closed contact k's multiplier at (t, x) pulls beyond roundoff of zero (below −kUnloaded of
+  // the largest load of the closed contacts in that evaluation). One evaluation
+  bool pulls(Index k, double t, const double* x);
+  // the release of closed contact k in (t0, t1]: where its multiplier turns negative, when the
+  // step's stages (screen) or its end see it pull; NaN for none. No evaluation while it pushes
+  // at every stage and at t1; else ≤ 2 evaluations and a bisection (one per halving)
+  double release(double t0, const double* x0, double t1, const double* x1,
+                 const SegmentHooks::Dense& dense, Index k);
+  // open contact k's gap depends explicitly on t at state x (its rate at q' = 0, ∂g/∂t, is not
+  // zero at t): remembered for the run in moving_. One gap evaluation until it is found
+  bool moving(Index k, double t, const double* x);
+  // an impact of open contact k (moving) inside the step that the step's ends do not show: the
+  // gap below level, or a dip of it, between kSweepPoints equally spaced points of the dense
+  // output (from g0' = gd0 at t0); the located impact time, or NaN. Cost kSweepPoints gap
+  // evaluations per step (and a bisection when it finds one)
+  double sweep(double t0, double gd0, double t1, const SegmentHooks::Dense& dense, Index k,
+               double level);
   // a dip of open contact k's gap within a step that ends open: when its rate falls at t0
   // (gd0 < 0) and rises at t1 (gd1 > 0), the time of the gap's minimum in between (bisection
   // on the rate's sign along the dense output) if the gap there is below level, else NaN.
@@ -113,8 +140,10 @@ class ContactEvents {
   Index n_;
   std::vector<unsigned char> closed_;  // (contacts) 1 while closed
   std::vector<unsigned char> pushes_;  // (contacts) closed and pushing at the step's end (find)
-  std::vector<double> fastest_;        // (contacts) fastest impact speed so far
-  std::vector<long> impacts_;          // (contacts) impacts so far
+  std::vector<double> fastest_;        // (contacts) fastest impact speed of the current sequence
+  std::vector<long> impacts_;   // (contacts) impacts of the current sequence (since a release)
+  std::vector<double> pulled_;  // (contacts) earliest stage time it pulled (screen), or NaN
+  std::vector<unsigned char> moving_;  // (contacts) 1 once its gap was seen to depend on t
   Index event_ = -1;                   // the contact of the event find() located
   bool nonfinite_ = false;             // failure_ is a non-finite gap
   std::string nonfinite_event_;        // the message when that event is a non-finite gap

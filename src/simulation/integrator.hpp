@@ -9,6 +9,7 @@
 #include <functional>
 #include <limits>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "simulation/observed_run.hpp"
@@ -114,6 +115,15 @@ class ConstrainedOde {
   // that the user's callables make at a breakpoint. Infinite ends: no clamping.
   void set_window(double a, double b);
 
+  // screen(t, x) is called after each successful evaluation at (t, x), with the workspace that
+  // evaluation filled (ws.lambda): the contacts' release and slip screening at the integrator's
+  // stages (ContactEvents::screen, Run::screen_sticking). Runs without contacts set none and pay
+  // nothing (the rare_ test)
+  void set_screen(std::function<void(double t, const double* x)> screen) {
+    screen_ = std::move(screen);
+    rare_ = rare_ || static_cast<bool>(screen_);
+  }
+
   const System& system() const { return sys_; }
   Workspace& workspace() { return ws_; }
 
@@ -135,8 +145,9 @@ class ConstrainedOde {
   Index n_;
   WorkLayout works_;
   const Quadratures* quad_ = nullptr;
-  bool rare_ = false;                          // drives or quadratures: rare_channels
-  VectorXd share_;                             // (n) scratch: A_kᵀ lambda_k
+  bool rare_ = false;  // drives, quadratures or a screen: rare_channels
+  std::function<void(double t, const double* x)> screen_;  // see set_screen, or empty
+  VectorXd share_;                                         // (n) scratch: A_kᵀ lambda_k
   std::vector<unsigned char> violation_rows_;  // (m) row i has a violation (not acceleration form)
   double off_manifold_tolerance_ = 0.0;
   long evaluations_ = 0;

@@ -145,6 +145,11 @@ class Run {
   // SegmentHooks::find_event), or NaN
   double find_event(double t0, const double* x0, double t1, const double* x1,
                     const detail::SegmentHooks::Dense& dense);
+  // at each evaluation of the integrator's stages at (t, x) (ConstrainedOde::set_screen), after
+  // its forward dynamics: the earliest such t at which a sticking contact's (minimum-norm) stick
+  // margin is negative, per contact, for find_event's slip test (a force pulse within one long
+  // step of a body at rest). O(sticking contacts · n), no evaluation of the dynamics
+  void screen_sticking(double t, const double* x);
 
   // The last event found by find_event is no switch but rkf78 handing the run to dopri5 at the
   // start of the step just taken, which it discards: in that step a Coulomb contact slides into
@@ -477,6 +482,14 @@ class Run {
   VectorXd velocity_ = VectorXd::Zero(sliding_width(sys_, n_));        // (width) sliding velocities
   VectorXd direction_ = VectorXd::Zero(sliding_width(sys_, n_));       // (width) the step's start's
   std::vector<double> event_x_ = std::vector<double>(sample_.size());  // dense state
+  // (contacts) the earliest stage time in the step at which sticking contact c's margin was
+  // negative (screen_sticking), or NaN
+  std::vector<double> stick_screened_ = std::vector<double>(
+      sys_.friction_contacts().size(), std::numeric_limits<double>::quiet_NaN());
+  // sticking contact c's slip inside [t0, t1] (from x0 at t0) that the stages saw
+  // (screen_sticking), confirmed on the dense output and located, or NaN (run_events.cpp)
+  double screened_slip(std::size_t c, double t0, const double* x0, double t1,
+                       const detail::SegmentHooks::Dense& dense);
   Index switching_ = -1;  // the contact of the last event found
   // the switching functions (System::switch_count, none unless SimulationOptions::switch_events):
   // their values (g_ scratch, g1_ at the end of the step), the side each is on (sign of g,

@@ -13,6 +13,32 @@
 
 namespace ukdyn::detail {
 
+void Run::screen_sticking(double t, const double* x) {
+  const auto& contacts = sys_.friction_contacts();
+  if (mode_.size() != contacts.size()) return;  // (before the initial modes)
+  for (std::size_t c = 0; c < contacts.size(); ++c) {
+    if (mode_[c] != ContactMode::kSticking || frictionless(c) || separated(c)) continue;
+    // (stick_margin_here reads the evaluation just made, and the stage's q, q')
+    q_ = Eigen::Map<const VectorXd>(x, n_);
+    qd_ = Eigen::Map<const VectorXd>(x + n_, n_);
+    if (stick_margin_here(c, t) < 0.0 && !(stick_screened_[c] <= t)) stick_screened_[c] = t;
+  }
+}
+
+double Run::screened_slip(std::size_t c, double t0, const double* x0, double t1,
+                          const detail::SegmentHooks::Dense& dense) {
+  // a stage of the step saw the holding force leave the cone (a force pulse within one long
+  // step of a body at rest, which the state and so the step size does not see): confirmed at
+  // its time on the dense output (a stage state is not the solution), with every contact
+  // sticking together (group_margin), and located from t0
+  const double ts = stick_screened_[c];
+  if (!(ts >= t0 && ts <= t1)) return std::numeric_limits<double>::quiet_NaN();
+  auto margin = [&](double t, const double* x) { return group_margin(c, t, x); };
+  dense(ts, trial_.data());
+  if (margin(ts, trial_.data()) > 0.0) return std::numeric_limits<double>::quiet_NaN();
+  return margin(t0, x0) > 0.0 ? locate(t0, ts, trial_.data(), dense, margin) : t0;
+}
+
 // the first switch of a contact inside [t0, t1] (see SegmentHooks::find_event)
 double Run::find_event(double t0, const double* x0, double t1, const double* x1,
                        const detail::SegmentHooks::Dense& dense) {
@@ -30,8 +56,10 @@ double Run::find_event(double t0, const double* x0, double t1, const double* x1,
       case ContactMode::kSticking:
         // the holding force reaches mu_static N: mu_static N − |holding force| falls to zero
         // (with other contacts sticking: no split of the holding forces fits every cone)
+        // (at the step's end as before; else what the stages saw: screened_slip)
         te = locate(t0, t1, x1, dense,
                     [&](double t, const double* x) { return group_margin(c, t, x); });
+        if (std::isnan(te)) te = screened_slip(c, t0, x0, t1, dense);
         break;
       case ContactMode::kSliding: {
         // the sliding speed along the step's initial direction falls to v_stop = 100 eps: the
@@ -102,6 +130,10 @@ double Run::find_event(double t0, const double* x0, double t1, const double* x1,
       first = te;
       switching_ = Index(c);
     }
+  }
+  // (the stages up to t1 are screened; a later one — of a rejected longer step — waits)
+  for (double& s : stick_screened_) {
+    if (!(s > t1)) s = std::numeric_limits<double>::quiet_NaN();
   }
   hands_over_ = handover >= 0 && switching_ == handover;
   // the first sign change of a switching function, when it comes before the contacts' event

@@ -241,6 +241,15 @@ Trajectory detail::simulate_observed(const System& sys, const Eigen::Ref<const V
   // projection tolerance may take the least-squares q'')
   detail::ConstrainedOde ode(sys, ws, o.integrator != Integrator::kBDF, o.projection.tolerance,
                              quad);
+  // the contacts' release and slip screening at every stage (docs/contact.md, "In a run")
+  const bool sticks = std::any_of(sys.friction_contacts().begin(), sys.friction_contacts().end(),
+                                  [](const auto& c) { return c.mu_static > 0.0; });
+  if (contacts.any() || sticks) {
+    ode.set_screen([&contacts, &run, sticks](double t, const double* xs) {
+      if (contacts.any()) contacts.screen(t);
+      if (sticks) run.screen_sticking(t, xs);
+    });
+  }
   detail::SegmentHooks hooks;
   hooks.after_step = [&](double t, double* xs, bool& changed) {
     return run.after_step(t, xs, changed);
