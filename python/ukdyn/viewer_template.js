@@ -373,7 +373,9 @@ const robotContactObjects = ROBOT_CONTACTS.map((c) => {
                                        new T.MeshLambertMaterial({ color: ROBOT_LINK })) : null;
   const n = new T.Vector3(...c.plane_normal);
   let patch = null, foot = null;
-  if (n.lengthSq() > 0 && robotAt.length) {
+  // (the world's z = 0 plane, a floor, is the ground grid already)
+  const floor = c.plane_link < 0 && n.x === 0 && n.y === 0 && n.z > 0 && c.plane_point[2] === 0;
+  if (n.lengthSq() > 0 && robotAt.length && !floor) {
     n.normalize();
     patch = new T.Mesh(new T.PlaneBufferGeometry(size, size),
                        new T.MeshLambertMaterial({ color: PLANE_COLOUR, transparent: true, opacity: 0.35,
