@@ -22,7 +22,7 @@ namespace ukdyn {
 /// A model's run: the plant's trajectory and the columns that follow the standard ones.
 struct ModelRun {
   /// The plant's motion, as simulate() records it (for a controlled model: its `plant`), but
-  /// with each Coulomb friction's stick multipliers (lambda.stick.<friction>[.i]) made the
+  /// with each Coulomb friction's stick multipliers (`lambda.stick.<friction>[.i]`) made the
   /// holding force in the model's force unit: × kappa, the unit of the contact's normal rows in
   /// which the stick rows are stated (docs/friction.md §2; 1 for a unit normal in SI units).
   Trajectory trajectory;
@@ -68,7 +68,7 @@ ModelRun run_model(const Model& model);
 
 /// The units of the gap columns `gap.<name>` that are no output expression: those of the
 /// contacts: entries of a bodies or robot model, whose gap is a distance (docs/contact.md), in
-/// the model's length unit; then those of the holding-force columns lambda.stick.<friction>[.i]
+/// the model's length unit; then those of the holding-force columns `lambda.stick.<friction>.i`
 /// of their frictions (the force unit at a contact point; on the coordinate path the
 /// generalized force of the sliding coordinate: the force unit for a length, the torque's for
 /// rad); (column, unit) in constraint order, empty for a generalized model
