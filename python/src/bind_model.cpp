@@ -55,9 +55,12 @@ py::tuple run(const Model& model, const py::dict& settings, py::object q0, py::o
     m = &*changed;
   }
   ModelRun r;
-  {
+  try {
     ReleasedGil release;  // the run is C++ only (model files hold no Python code)
     r = run_model(*m, o);
+  } catch (const InconsistentInitialState& e) {
+    if (contacts_penetrated(*m, e)) throw PenetratedInitialState(e);
+    throw;
   }
   return run_tuple(std::move(r), interrupt.exception());
 }
@@ -121,8 +124,10 @@ ukdyn.parse() or ukdyn.from_sympy(). Model.simulate() runs it exactly as `ukdyn 
           },
           "Each coordinate's and output expression's unit, as a new dict name -> unit: the "
           "file's `units:`, else the length unit (m), rad and 1 (quaternion components) for the "
-          "bodies' coordinates, else \"\" (not known); and the length unit of the gap column "
-          "gap.<name> of each contacts: entry of a bodies or robot model (a distance).")
+          "bodies' coordinates and a robot's joints (by the joint's kind), else \"\" (not "
+          "known); the length unit of the gap column gap.<name> of each contacts: entry of a "
+          "bodies or robot model (a distance), and the force unit of its friction's holding "
+          "force lambda.stick.<friction>.i.")
       .def_property_readonly(
           "unit_system",
           [](const Model& md) {

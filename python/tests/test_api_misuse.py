@@ -119,6 +119,19 @@ def test_body_coordinates_are_found_by_both_spellings(slider_crank):
 
 # --- typed errors ----------------------------------------------------------------------------
 
+def test_a_penetrated_contact_is_its_own_cause():
+    # (u15 10) a ball 0.05 into its floor: "penetrated", not "not_projected" (which says that
+    # project_initial=True may help: it cannot, projection does not act on a gap)
+    text = ("bodies:\n  - {name: ball, type: rigid, mass: 1, inertia: [1, 1, 1], "
+            "position: [0, 0, 0.05]}\ncontacts:\n  - {name: floor, body: ball, shape: sphere, "
+            "radius: 0.1}\nsimulate: {t_end: 0.01}\n")
+    for project in (False, True):
+        with pytest.raises(ukdyn.InconsistentInitialState) as info:
+            ukdyn.parse(text, "sunk.yaml").simulate(project_initial=project)
+        assert info.value.cause == "penetrated"
+        assert "the unilateral constraint 'floor' is penetrated" in str(info.value)
+
+
 def test_inconsistent_initial_state_is_a_value_error_typed_by_its_cause():
     text = ("coordinates: [x, y]\nmass_matrix: [[1, 0], [0, 1]]\nforces: [0, -9.81]\n"
             "constraints:\n  - {name: rod, holonomic: x^2 + y^2 - 1}\n"

@@ -6,6 +6,8 @@ against the library's own forward kinematics: the foot of leg_four_bar_knee is w
 requirement's actual value (desired + error, computed by the tree in C++) says, at every frame
 shown, to the rounding of the angles (1e-4 rad)."""
 
+import pathlib
+
 import numpy as np
 import pytest
 
@@ -60,3 +62,50 @@ def test_the_pages_forward_kinematics_is_the_trees(browser, leg, tmp_path):  # n
     assert _mask(img, "#ff7f0e", tolerance=0.08).sum() > 20  # joint axes, the foot's path
     assert page.errors() == []
     page.save("leg_four_bar_knee.png")
+
+
+ARM_ON_TABLE = """
+parameters: {L1: 0.45, L2: 0.35}
+robot: {urdf: %s}
+contacts:
+  - {name: tip, link: l2, point: [L2, 0, 0], shape: sphere, radius: 0.025,
+     plane: {body: ground, point: [0, 0, 0.3], normal: [0, 0, 1]}}
+initial:
+  q: {j1: 0.6, j2: asin((0.6 - 0.325 - L1*sin(0.6))/L2) - 0.6}
+simulate: {t_end: 0.2}
+output: {every: 0.05}
+"""
+
+
+def test_a_robots_last_link_and_its_contacts_plane_are_drawn(browser, tmp_path):  # noqa: F811
+    # tests/data/arm2_table.urdf: its last link l2 has no child joint and no <visual>; its tip
+    # (0.35 m along l2) rests on a table at z = 0.3 (u15 09: the arm ended at the elbow and the
+    # table was not drawn). The rod runs from l2's frame to the tip, the patch lies in the plane.
+    data_dir = pathlib.Path(__file__).resolve().parents[2] / "tests" / "data"
+    model = tmp_path / "arm.yaml"
+    model.write_text(ARM_ON_TABLE % (data_dir / "arm2_table.urdf"))
+    run = ukdyn.load(str(model)).simulate()
+    scene = viewer.scene_data(run.scene, run.names, run._columns)
+    (c,) = scene["robot"]["contacts"]
+    assert c["name"] == "tip" and c["point"] == [0.35, 0, 0] and c["plane_link"] == -1
+    assert c["plane_point"] == [0, 0, 0.3] and c["plane_normal"] == [0, 0, 1]
+    path = tmp_path / "arm.html"
+    run.save_animation(path)
+    page = Page(browser, path)
+    assert page.errors() == []
+    n = page.js("return ukdyn.frames")
+    for i in (0, n - 1):
+        page.js("ukdyn.setFrame(arguments[0])", i)
+        (drawn,) = page.js("return ukdyn.robotContacts()")
+        l2 = page.js("return ukdyn.robotFrame(arguments[0], 'l2')", i)
+        # the rod: from l2's origin 0.35 m along its x axis (rotated by its quaternion)
+        w, x, y, z = l2[3:]
+        axis = np.array([1 - 2 * (y * y + z * z), 2 * (x * y + w * z), 2 * (x * z - w * y)])
+        np.testing.assert_allclose(drawn["rod"][0], l2[:3], atol=1e-5)
+        np.testing.assert_allclose(drawn["rod"][1], np.array(l2[:3]) + 0.35 * axis, atol=1e-5)
+        # the tip (sphere centre) starts r above the table (to the page's angles, rounded to
+        # 1e-4 rad on links of 0.8 m); the patch is at z = 0.3 under it
+        if i == 0:
+            assert abs(drawn["rod"][1][2] - 0.325) < 1e-4
+        np.testing.assert_allclose(drawn["plane"]["normal"], [0, 0, 1], atol=1e-12)
+        assert abs(drawn["plane"]["centre"][2] - 0.3) < 1e-12

@@ -275,6 +275,17 @@ window.ukdyn = {
              position: r.object.getWorldPosition(new T.Vector3()).toArray(), geometries: geometries,
              vertices: vertices, placeholder: r.placeholder, axis: axis };
   }),
+  // a robot's contacts as drawn in the frame shown: the rod from the link's frame to the
+  // contact's point (its ends, null without one) and the plane's patch (centre, normal, null)
+  robotContacts: () => robotContactObjects.map((o, k) => {
+    if (o.rod) o.rod.updateMatrixWorld(true);
+    const rod = o.rod && o.rod.visible ? [-0.5, 0.5].map((s) => new T.Vector3(0, s, 0)
+      .applyMatrix4(o.rod.matrixWorld).toArray()) : null;
+    const plane = o.patch && o.patch.visible ? {
+      centre: o.patch.position.toArray(),
+      normal: new T.Vector3(0, 0, 1).applyQuaternion(o.patch.quaternion).toArray() } : null;
+    return { name: ROBOT_CONTACTS[k].name, rod: rod, plane: plane };
+  }),
   // the loops' polylines in the frame shown: link_a's frame, point a, point b, link_b's frame
   loops: () => loopObjects.map((o) => o.points.map((p) => p.toArray())),
   notes: () => notes.slice(),

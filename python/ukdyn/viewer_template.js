@@ -359,6 +359,47 @@ const robotObjects = ROBOT.map((l) => {
   if (axis) scene.add(axis);
   return { rod: rod, joint: joint, axis: axis };
 });
+// link k's frame in the frames of a sample (-1: the world's)
+const WORLD = { pos: new T.Vector3(), quat: new T.Quaternion() };
+const linkFrame = (frames, k) => (k >= 0 ? frames[k] : WORLD);
+// a robot's contacts: a rod from the link's frame to the contact's point (a last link has no
+// child frame to end at; its <visual>, if any, is drawn as well) and the contact's plane, a
+// translucent square of the scene's size about the foot of the point at the first sample, fixed
+// in the plane's link (the world's: a table)
+const ROBOT_CONTACTS = data.robot && data.robot.contacts ? data.robot.contacts : [];
+const PLANE_COLOUR = 0xb5a27a;
+const robotContactObjects = ROBOT_CONTACTS.map((c) => {
+  const rod = c.link >= 0 ? new T.Mesh(new T.CylinderBufferGeometry(0.008 * size, 0.008 * size, 1, 12),
+                                       new T.MeshLambertMaterial({ color: ROBOT_LINK })) : null;
+  const n = new T.Vector3(...c.plane_normal);
+  let patch = null, foot = null;
+  // (the world's z = 0 plane, a floor, is the ground grid already)
+  const floor = c.plane_link < 0 && n.x === 0 && n.y === 0 && n.z > 0 && c.plane_point[2] === 0;
+  if (n.lengthSq() > 0 && robotAt.length && !floor) {
+    n.normalize();
+    patch = new T.Mesh(new T.PlaneBufferGeometry(size, size),
+                       new T.MeshLambertMaterial({ color: PLANE_COLOUR, transparent: true, opacity: 0.35,
+                                                   side: T.DoubleSide, depthWrite: false }));
+    patch.name = "plane of " + c.name;
+    // the foot of the point at the first sample on the plane, in the plane's link's frame
+    const f0 = linkFrame(robotAt[0], c.link), p0 = linkFrame(robotAt[0], c.plane_link);
+    const w = new T.Vector3(...c.point).applyQuaternion(f0.quat).add(f0.pos);
+    const local = w.sub(p0.pos).applyQuaternion(p0.quat.clone().conjugate());
+    foot = local.sub(n.clone().multiplyScalar(local.clone().sub(new T.Vector3(...c.plane_point)).dot(n)));
+  }
+  if (rod) scene.add(rod);
+  if (patch) scene.add(patch);
+  return { rod: rod, patch: patch, foot: foot, tilt: new T.Quaternion().setFromUnitVectors(new T.Vector3(0, 0, 1), n) };
+});
+// a rod (a unit cylinder along y) from `from` to `to`; hidden when they coincide
+function placeRod(rod, from, to) {
+  const d = new T.Vector3().subVectors(to, from), len = d.length();
+  rod.visible = len > 1e-9;
+  if (!rod.visible) return;
+  rod.position.addVectors(from, to).multiplyScalar(0.5);
+  rod.quaternion.setFromUnitVectors(new T.Vector3(0, 1, 0), d.divideScalar(len));
+  rod.scale.set(1, len, 1);
+}
 // the visuals, and each loop closure as a dashed line from link_a's frame through its point and
 // link_b's point to link_b's frame (not from the world's origin), with a marker at each point:
 // a closed chain looks closed
@@ -380,9 +421,6 @@ const loopObjects = LOOPS.map(() => {
   scene.add(line, ...ends);
   return { line: line, ends: ends, points: [] };
 });
-// link k's frame in the frames of a sample (-1: the world's)
-const WORLD = { pos: new T.Vector3(), quat: new T.Quaternion() };
-const linkFrame = (frames, k) => (k >= 0 ? frames[k] : WORLD);
 function drawRobot() {
   const frames = robotAt[frame];
   VISUALS.forEach((v, k) => {
@@ -420,13 +458,22 @@ function drawRobot() {
       o.axis.position.copy(f.pos);
       o.axis.setDirection(new T.Vector3(...l.axis).normalize().applyQuaternion(f.quat));
     }
-    const from = l.parent >= 0 ? frames[l.parent].pos : new T.Vector3();
-    const d = new T.Vector3().subVectors(f.pos, from), len = d.length();
-    o.rod.visible = len > 1e-9;
-    if (!o.rod.visible) return;
-    o.rod.position.addVectors(from, f.pos).multiplyScalar(0.5);
-    o.rod.quaternion.setFromUnitVectors(new T.Vector3(0, 1, 0), d.divideScalar(len));
-    o.rod.scale.set(1, len, 1);
+    placeRod(o.rod, l.parent >= 0 ? frames[l.parent].pos : new T.Vector3(), f.pos);
+  });
+  ROBOT_CONTACTS.forEach((c, k) => {
+    const o = robotContactObjects[k];
+    if (o.rod) o.rod.visible = !!frames;
+    if (o.patch) o.patch.visible = !!frames;
+    if (!frames) return;
+    if (o.rod) {
+      const f = linkFrame(frames, c.link);
+      placeRod(o.rod, f.pos, new T.Vector3(...c.point).applyQuaternion(f.quat).add(f.pos));
+    }
+    if (o.patch) {
+      const p = linkFrame(frames, c.plane_link);
+      o.patch.position.copy(o.foot).applyQuaternion(p.quat).add(p.pos);
+      o.patch.quaternion.copy(p.quat).multiply(o.tilt);
+    }
   });
 }
 

@@ -121,7 +121,10 @@ void Reader::read_nonideal(const YAML::Node& root, SystemBuilder& builder) {
         if (std::find(constraint_names_.begin(), constraint_names_.end(), on) ==
             constraint_names_.end()) {
           fail(f["constraint"], "no constraint named '" + on + "'",
-               "the constraints are " + join(constraint_names_));
+               constraint_names_.empty()
+                   ? "the model has no constraint: Coulomb friction needs the contact or "
+                     "constraint that gives its normal force N (an empty contacts: list gives none)"
+                   : "the constraints are " + join(constraint_names_));
         }
         // (one contact, one friction law: its stick state is the constraint's)
         if (const auto [it, first] = coulomb_on.emplace(on, index); !first) {

@@ -37,9 +37,9 @@ namespace ukdyn::model_reader {
 
 namespace {
 
+// (the keys a robot's contact takes; `body` is read only to say that it names a link instead)
 const std::vector<std::string> kRobotContactKeys = {
-    "name", "link",  "point",       "shape",           "radius",
-    "axis", "plane", "restitution", "restitution_law", "body"};
+    "name", "link", "point", "shape", "radius", "axis", "plane", "restitution", "restitution_law"};
 const std::vector<std::string> kRobotPlaneKeys = {"link", "body", "point", "normal"};
 
 constexpr const char* kRobotContactExample =
@@ -119,8 +119,8 @@ void Reader::read_robot_contacts(const YAML::Node& root, const tree::Tree& robot
     const std::string name = nm.Scalar(), what = "contact '" + name + "'";
     for (const auto& kv : c) {
       const std::string key = kv.first.Scalar();
-      if (std::find(kRobotContactKeys.begin(), kRobotContactKeys.end(), key) ==
-          kRobotContactKeys.end())
+      if (key != "body" && std::find(kRobotContactKeys.begin(), kRobotContactKeys.end(), key) ==
+                               kRobotContactKeys.end())
         fail(kv.first, "unknown key '" + key + "' in " + what,
              robot_contact_key_hint(key, kRobotContactKeys) + "the keys are " +
                  join(kRobotContactKeys));

@@ -18,6 +18,7 @@
 #include "ukdyn/dynamics/forward.hpp"
 #include "ukdyn/modelfile/model.hpp"
 #include "ukdyn/modelfile/run.hpp"
+#include "ukdyn/multibody/tree.hpp"
 #include "ukdyn/simulation/options.hpp"
 
 #include "modelfile/initial_keep.hpp"
@@ -364,6 +365,28 @@ void Reader::read_units(const YAML::Node& root, Model& model) {
       }
     }
   }
+  // a robot's joints (docs/robots.md): a revolute or continuous joint's angle in rad, a
+  // prismatic joint's displacement in the length unit, a floating base's position in the length
+  // unit and its quaternion's components without unit
+  if (model.robot) {
+    // (the system's coordinates are the tree's, in its order: tree::system_builder)
+    const tree::Tree& robot = *model.robot;
+    for (Index i = 0; i < robot.link_count(); ++i) {
+      const tree::JointKind kind = robot.link(i).joint.kind;
+      for (int k = 0; k < robot.dofs(i); ++k) {
+        const std::size_t j = std::size_t(robot.offset(i) + k);
+        if (j >= names.size()) continue;
+        std::string& unit = model.coordinate_units[j];
+        if (kind == tree::JointKind::kRevolute || kind == tree::JointKind::kContinuous)
+          unit = "rad";
+        else if (kind == tree::JointKind::kPrismatic ||
+                 (kind == tree::JointKind::kFloating && k < 3))
+          unit = model.unit_system.length;
+        else if (kind == tree::JointKind::kFloating)
+          unit = "1";
+      }
+    }
+  }
   // units: {x: m, theta: rad, s: m}: each named coordinate's or output expression's unit, a
   // short text
   if (!u) return;
@@ -391,7 +414,13 @@ void Reader::read_units(const YAML::Node& root, Model& model) {
            "give its unit (units: {x: m, theta: rad}; 1 for a number without a unit), or leave '" +
                kv.first.Scalar() + "' out of units:");
     }
-    if (!value.IsScalar() || text.size() > 32 || !printable) {
+    if (value.IsScalar() && !printable) {
+      fail(value,
+           "the unit of '" + kv.first.Scalar() +
+               "' contains a control character (a tab, a newline or an escape sequence)",
+           "write the unit as plain text: units: {x: m, theta: rad, s: mm}");
+    }
+    if (!value.IsScalar() || text.size() > 32) {
       fail(value,
            "the unit of '" + kv.first.Scalar() + "' must be a short text (at most 32 characters)",
            "units: {x: m, theta: rad, s: mm} (the unit labels the plots' axes; it does not change "

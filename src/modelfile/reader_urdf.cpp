@@ -130,6 +130,9 @@ Model Reader::read_robot(const YAML::Node& root) {
   // the URDF, relative to this file's directory
   const std::filesystem::path path = model_relative_path(file_, u.Scalar());
   const bool alone = std::filesystem::path(file_) == path;  // `ukdyn run arm.urdf`
+  if (std::error_code ec; std::filesystem::is_directory(path, ec))
+    fail(u, "urdf: " + u.Scalar() + " is a directory, not a URDF file",
+         "name the robot's .urdf file (relative to the model file): robot: {urdf: arm.urdf}");
   tree::Tree robot = [&] {
     try {
       return tree::load_urdf(path.string());

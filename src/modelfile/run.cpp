@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <optional>
 
+#include "ukdyn/core/format.hpp"
 #include "ukdyn/modelfile/table.hpp"
 #include "ukdyn/multibody/multibody.hpp"
 #include "ukdyn/multibody/tree.hpp"
@@ -97,6 +98,27 @@ std::vector<std::pair<std::string, std::string>> contact_gap_units(const Model& 
         model.output_names.end())
       out.emplace_back(name, model.unit_system.length);
   }
+  // the holding forces lambda.stick.<friction>[.i] (run_model scales them to forces)
+  const UnitSystem& u = model.unit_system;
+  for (const FrictionContact& f : sys.friction_contacts()) {
+    if (f.stick_constraint < 0) continue;
+    const Constraint& stick = sys.constraint(f.stick_constraint);
+    for (Index r = 0; r < stick.rows(); ++r) {
+      std::string unit = u.force();
+      if (!f.kinematics) {
+        // the generalized force of sliding coordinate r: a force on a length, a torque on rad
+        const Index j = r < Index(f.coordinates.size()) ? f.coordinates[std::size_t(r)] : r;
+        const std::string& of = std::size_t(j) < model.coordinate_units.size()
+                                    ? model.coordinate_units[std::size_t(j)]
+                                    : std::string();
+        unit = of == u.length ? u.force() : of == "rad" ? u.torque() : std::string();
+      }
+      if (unit.empty()) continue;
+      out.emplace_back(
+          "lambda." + stick.name() + (stick.rows() == 1 ? std::string() : "." + format_number(r)),
+          unit);
+    }
+  }
   return out;
 }
 
@@ -162,6 +184,7 @@ ModelRun run_model(const Model& model, const SimulationOptions& options_in,
   auto pass_on = [&] {
     if (gathered.samples() == 0) return;
     if (watch) watch->observe(gathered.plant.t, gathered.plant.q, gathered.Qc_control);
+    detail::scale_stick_multipliers(model, gathered.plant);
     piece.extra_columns = columns_of(gathered);
     std::swap(piece.trajectory, gathered.plant);
     chunk(piece);
@@ -212,6 +235,7 @@ ModelRun run_model(const Model& model, const SimulationOptions& options_in,
   if (last.samples() > 0) {
     auto to = fields(run.trajectory), from = fields(last.plant);
     for (std::size_t f = 0; f < to.size(); ++f) *to[f] = *from[f];
+    detail::scale_stick_multipliers(model, run.trajectory);
   }
   // (the names of the columns also when no sample was recorded: a header-only CSV)
   last.plant = run.trajectory;
@@ -244,6 +268,7 @@ ModelRun run_model(const Model& model, const SimulationOptions& options_in) {
   }
   note_limits(watch, model.unit_system, run.trajectory.stats);
   note_table_range(run.trajectory.stats);
+  detail::scale_stick_multipliers(model, run.trajectory);
   add_model_columns(model, run.trajectory, run.extra_columns);
   return run;
 }
@@ -302,19 +327,25 @@ ModelError locate_run_error(const Model& model, const SettingError& e) {
   return error_at(model, at, user_message(e));
 }
 
-ModelError locate_run_error(const Model& model, const InconsistentInitialState& e) {
-  using Cause = InconsistentInitialState::Cause;
-  const FilePosition constraint =
-      e.constraints().empty() ? FilePosition{} : constraint_position(model, e.constraints()[0]);
-  // penetrated contacts (unilateral constraints with a gap < 0 at the start): projection does
-  // not act on a unilateral gap, so the hint is to move the state, at the first contact's entry
-  bool penetrated = e.cause() == Cause::kNotProjected && !e.constraints().empty();
+bool contacts_penetrated(const Model& model, const InconsistentInitialState& e) {
+  bool penetrated =
+      e.cause() == InconsistentInitialState::Cause::kNotProjected && !e.constraints().empty();
   for (const std::string& name : e.constraints()) {
     const auto& cs = model.system.constraints();
     penetrated = penetrated && std::any_of(cs.begin(), cs.end(), [&](const Constraint& c) {
                    return c.name() == name && c.is_unilateral();
                  });
   }
+  return penetrated;
+}
+
+ModelError locate_run_error(const Model& model, const InconsistentInitialState& e) {
+  using Cause = InconsistentInitialState::Cause;
+  const FilePosition constraint =
+      e.constraints().empty() ? FilePosition{} : constraint_position(model, e.constraints()[0]);
+  // penetrated contacts (unilateral constraints with a gap < 0 at the start): projection does
+  // not act on a unilateral gap, so the hint is to move the state, at the first contact's entry
+  const bool penetrated = contacts_penetrated(model, e);
   FilePosition at;
   if (e.cause() == Cause::kContradictory || penetrated) {
     at = constraint.known() ? constraint : model.positions.initial;

@@ -11,6 +11,7 @@
 #include <string>
 #include <utility>
 
+#include "dynamics/internal.hpp"
 #include "ukdyn/core/system.hpp"
 #include "ukdyn/modelfile/model.hpp"
 
@@ -31,13 +32,12 @@ Vector3d contact_point(const Vector3d& c, const Vector3d& n, double r, const Vec
 
 // The columns visual.contact.<name>.fx, .fy (, .fz) of contact c's Coulomb friction at a
 // contact point (VisualContact::axes), at the samples of traj: f_W = Σ f_i t_i with, in the
-// contact's tangent axes, f = the stick constraint's multipliers while it holds (at a sliding
-// speed |v| = |T q'| within the located stop speed 100 eps, or within 1e-6 of the run's fastest
-// slip), else the sliding law
-// f = −mu N v / sqrt(|v|² + eps²); at rest with the stick constraint off (it slides from rest
-// along its slip hint) −mu N a_rel / |a_rel|, a_rel the impending motion T q'' + T' q'; with N =
-// |lambda_total.<name>| (a contact's gap has a unit normal: its multiplier is the normal force).
-// Cost O(samples · cost of the kinematics).
+// contact's tangent axes, f = the holding force lambda.stick (scale_stick_multipliers) while it
+// holds (at a sliding speed |v| = |T q'| within the located stop speed 100 eps, or within 1e-6 of
+// the run's fastest slip), else the sliding law f = −mu N v / sqrt(|v|² + eps²); at rest with the
+// stick constraint off (it slides from rest along its slip hint) −mu N a_rel / |a_rel|, a_rel the
+// impending motion T q'' + T' q'; with N = |lambda_total.<name>| (a contact's gap has a unit
+// normal: its multiplier is the normal force). Cost O(samples · cost of the kinematics).
 void add_friction_columns(const Model& model, const Trajectory& traj, const VisualContact& c,
                           std::vector<CsvColumn>& out) {
   if (!c.axes) return;
@@ -54,12 +54,9 @@ void add_friction_columns(const Model& model, const Trajectory& traj, const Visu
   const std::vector<Index>& columns = fc->kinematics.columns;
   std::unique_ptr<ConstraintScratch> scratch;
   if (fc->kinematics.make_scratch) scratch = fc->kinematics.make_scratch(n);
-  // the stick rows are kappa T (the unit of the contact's gap row: 1 in SI units), so the
-  // holding force is kappa lambda.stick: kappa from the stick constraint's own rows
-  const ConstraintModel& stick_rows = sys.constraint(fc->stick_constraint).model();
-  const std::unique_ptr<ConstraintScratch> stick_scratch = stick_rows.make_scratch(n);
-  MatrixXd J(1 + d, Index(columns.size())), A_stick(d, Index(stick_rows.columns().size()));
-  VectorXd bias(1 + d), b_stick(d), qd_c(Index(columns.size())), qdd_c(qd_c.size()), a_rel(d);
+  // (the samples' lambda.stick are the holding force already: scale_stick_multipliers)
+  MatrixXd J(1 + d, Index(columns.size()));
+  VectorXd bias(1 + d), qd_c(Index(columns.size())), qdd_c(qd_c.size()), a_rel(d);
   static const char* const kParts[] = {"fx", "fy", "fz"};
   std::vector<CsvColumn> cols;
   for (int k = 0; k < c.dimensions; ++k)
@@ -101,9 +98,7 @@ void add_friction_columns(const Model& model, const Trajectory& traj, const Visu
         f.head(d) = -fc->mu * normal / a_rel.norm() * a_rel;
       }
     } else if (v.norm() <= held_below) {
-      stick_rows.acceleration_form_local(q, qd, t, stick_scratch.get(), A_stick, b_stick);
-      const double row = J.row(1).norm();
-      f *= row > 0.0 ? A_stick.row(0).norm() / row : 1.0;
+      // held: f = the holding force lambda.stick (in force units)
     } else {
       const double normal = std::abs(traj.lambda_total[std::size_t(i) * un + ui]);
       f = -fc->mu * normal / std::sqrt(v.squaredNorm() + fc->eps * fc->eps) * v;
@@ -123,6 +118,12 @@ VisualContact robot_visual_contact(std::string name, std::shared_ptr<const tree:
   VisualContact c;
   c.name = std::move(name);
   c.dimensions = 3;
+  // (for the robot's scene: the point's link and the plane, drawn with the links)
+  c.link = int(at.link);
+  c.link_point = at.p;
+  c.plane_link = int(plane.link);
+  c.plane_point = plane.p;
+  c.plane_normal = plane.R.col(2);
   const bool disk = axis != nullptr;
   const Vector3d a_L = disk ? axis->normalized() : Vector3d::Zero();
   c.geometry = [tree, at, disk, a_L, radius, plane](const Eigen::Ref<const VectorXd>& q,
@@ -217,6 +218,29 @@ VisualContact bodies_visual_contact(std::shared_ptr<const mb::MultibodyModel> mo
     }
   };
   return c;
+}
+
+void scale_stick_multipliers(const Model& model, Trajectory& traj) {
+  const System& sys = model.system;
+  const Index N = traj.samples(), n = traj.n;
+  if (N == 0 || n != sys.coordinate_count() || traj.m != sys.constraint_rows()) return;
+  for (const FrictionContact& fc : sys.friction_contacts()) {
+    if (fc.normal_constraint < 0 || fc.stick_constraint < 0) continue;
+    const Constraint& normal = sys.constraint(fc.normal_constraint);
+    const Index rows = normal.rows(), stick = sys.row_offset(fc.stick_constraint),
+                d = sys.constraint(fc.stick_constraint).rows();
+    const std::unique_ptr<ConstraintScratch> scratch = normal.model().make_scratch(n);
+    MatrixXd A(rows, n);
+    VectorXd b(rows), row(n);
+    for (Index i = 0; i < N; ++i) {
+      // (a contact that does not stick: its multipliers are 0, nothing to scale)
+      double* lambda = traj.lambda.data() + i * traj.m + stick;
+      if (Eigen::Map<const VectorXd>(lambda, d).isZero(0.0)) continue;
+      const Eigen::Map<const VectorXd> q(traj.q.data() + i * n, n), qd(traj.qd.data() + i * n, n);
+      normal.model().acceleration_form(q, qd, traj.t[std::size_t(i)], scratch.get(), A, b);
+      Eigen::Map<VectorXd>(lambda, d) *= detail::normal_row_unit(A, rows, row);
+    }
+  }
 }
 
 void add_contact_columns(const Model& model, const Trajectory& traj, std::vector<CsvColumn>& out) {

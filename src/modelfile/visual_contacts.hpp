@@ -37,6 +37,17 @@ VisualContact robot_visual_contact(std::string name, std::shared_ptr<const tree:
 VisualContact bodies_visual_contact(std::shared_ptr<const mb::MultibodyModel> model,
                                     const mb::JointInfo& joint, double radius);
 
+/// Writes the holding force of each Coulomb friction's stick constraint into its multipliers
+/// in traj.lambda (the columns lambda.stick.<friction>[.i]): the stick rows are kappa T (kappa
+/// P on the coordinate path), kappa = class(max_i |n_i|) / 10 the unit of the contact's normal
+/// rows n_i at the sample (core/coulomb_contact.cpp, normal_row_unit; 1 for a unit normal in SI
+/// units, but 1000 for a ball in mm), so the multipliers are the holding force / kappa; × kappa
+/// they are the force in the model's force unit along t_1 (t_2) — on the coordinate path the
+/// generalized holding force on the sliding coordinates. Applied once to the samples a model
+/// run writes (run_model); Qc_ideal = Aᵀ lambda holds with the unscaled ones. Cost
+/// O(samples · contacts · one evaluation of the normal constraint's rows).
+void scale_stick_multipliers(const Model& model, Trajectory& traj);
+
 /// The columns visual.contact.<name>.x, .y (, .z), .nx, .ny (, .nz) of every drawn contact with
 /// a geometry, at the samples of `traj`, appended to `out` in the order of model.visual.contacts.
 /// Cost O(samples · contacts · links).

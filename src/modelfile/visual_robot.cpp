@@ -154,6 +154,20 @@ nlohmann::json robot_scene(const Model& model) {
                      {"point_b", vector3(l.point_b)}});
   }
   if (!loops.empty()) robot["loops"] = loops;
+  // the contacts: a rod from the link's frame to each contact's point (a last link has no child
+  // frame to end at) and each contact's plane (its point and normal in its link's frame, -1 the
+  // world), which the page draws as a patch
+  nlohmann::json contacts = nlohmann::json::array();
+  for (const VisualContact& c : model.visual.contacts) {
+    if (c.link < 0 && c.plane_normal.isZero(0.0)) continue;
+    contacts.push_back({{"name", c.name},
+                        {"link", c.link},
+                        {"point", vector3(c.link_point)},
+                        {"plane_link", c.plane_link},
+                        {"plane_point", vector3(c.plane_point)},
+                        {"plane_normal", vector3(c.plane_normal)}});
+  }
+  if (!contacts.empty()) robot["contacts"] = contacts;
   return robot;
 }
 

@@ -109,11 +109,12 @@ OptionInfo with(OptionInfo i, OptionValue (*get)(const SimulationOptions&),
 std::vector<OptionInfo> make_table() {
   std::vector<OptionInfo> t;
   // the run's interval and integrator
-  t.push_back(with(number("t_start", -kInf, false, kInf, false, "-0.5", "initial time (s)"),
+  t.push_back(with(number("t_start", -kInf, false, kInf, false, "-0.5",
+                          "initial time (in the model's time unit: s in SI units)"),
                    UKDYN_FIELD(t_start, double)));
-  t.push_back(
-      with(number("t_end", -kInf, false, kInf, false, "2.5", "final time (s), after t_start"),
-           UKDYN_FIELD(t_end, double)));
+  t.push_back(with(number("t_end", -kInf, false, kInf, false, "2.5",
+                          "final time (in the model's time unit), after t_start"),
+                   UKDYN_FIELD(t_end, double)));
   t.push_back(with(
       choice("integrator", "integrator", {"rk4", "rk5", "dopri5", "rkf78", "bdf"}, "rkf78",
              "integration method (docs/simulation.md, \"Integrators\")"),
@@ -169,10 +170,10 @@ std::vector<OptionInfo> make_table() {
         o.drift = drift_from_string(std::get<std::string>(v));
       }));
   t.push_back(with(number("baumgarte_alpha", 0.0, false, kInf, true, "5",
-                          "Baumgarte gain alpha (1/s) of drift: baumgarte"),
+                          "Baumgarte gain alpha (per time unit) of drift: baumgarte"),
                    UKDYN_FIELD(baumgarte_alpha, double)));
   t.push_back(with(number("baumgarte_beta", 0.0, false, kInf, true, "5",
-                          "Baumgarte gain beta (1/s) of drift: baumgarte"),
+                          "Baumgarte gain beta (per time unit) of drift: baumgarte"),
                    UKDYN_FIELD(baumgarte_beta, double)));
   t.push_back(
       with(number("projection_tolerance", 0.0, true, kInf, true, "1e-11",

@@ -225,6 +225,15 @@ TEST(ModelRobotContacts, ErrorsNameTheContactAndTheKey) {
   expect("{name: tip, link: rod, plane: {normals: [0, 0, 1]}}",
          "unknown key 'normals' in the plane of contact 'tip' | did you mean 'normal'?");
   expect("{name: tip, body: rod}", "names its link, not a body | link: rod");
+  // the keys listed are those a robot's contact takes: `body` is not one (u15 10)
+  {
+    const Failure f = failure_of("{name: tip, link: rod, stiffness: 1e5}");
+    EXPECT_NE(f.text.find("the keys are name, link, point, shape, radius, axis, plane, "
+                          "restitution, restitution_law"),
+              std::string::npos)
+        << f.text;
+    EXPECT_EQ(f.text.find("body"), std::string::npos) << f.text;
+  }
   // the hints name this robot's links (its last), not an example's
   expect("{name: tip}", "contact 'tip' needs link: the link its point is fixed on | link: rod");
   // a contact on a link welded to the world against a plane of the world: its gap never changes
@@ -288,6 +297,28 @@ TEST(ModelRobotContacts, ErrorsNameTheContactAndTheKey) {
         << e.what();
     ASSERT_EQ(e.constraints().size(), 1u);
     EXPECT_EQ(e.constraints()[0], "tip");
+    // said to be a penetration (Python's cause "penetrated"): projection does not act on a gap,
+    // project_initial cannot help (u15 10)
+    EXPECT_TRUE(contacts_penetrated(m, e));
+  }
+  // a Coulomb friction on a constraint of a model with none (contacts: []): no empty list in
+  // the hint (u15 10)
+  try {
+    robot_model(
+        "robot: {urdf: contact_pendulum.urdf}\ncontacts: []\nnonideal:\n"
+        "  - {friction: coulomb, constraint: tip, mu: 0.3}\n");
+    ADD_FAILURE() << "no error";
+  } catch (const ModelError& e) {
+    EXPECT_EQ(e.message(), "no constraint named 'tip'");
+    EXPECT_NE(e.hint().find("the model has no constraint"), std::string::npos) << e.hint();
+  }
+  // urdf: . is a directory, not a missing file (u15 10)
+  try {
+    robot_model("robot: {urdf: .}\n");
+    ADD_FAILURE() << "no error";
+  } catch (const ModelError& e) {
+    EXPECT_NE(e.message().find("is a directory, not a URDF file"), std::string::npos)
+        << e.message();
   }
 }
 

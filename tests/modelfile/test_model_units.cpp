@@ -66,6 +66,42 @@ bodies:
             (std::vector<std::string>{"mm", "mm", "mm", "1", "1", "1", "1", "mm", "mm", "mm"}));
 }
 
+// A robot's joints (u15 05): a revolute or continuous joint's angle in rad, a prismatic joint's
+// displacement in the length unit, a floating base's x, y, z in the length unit and its
+// quaternion's u0..u3 without unit; units: still relabels one (the joint's kind is the URDF's)
+TEST(ModelUnits, RobotJointsHaveTheirKindsUnits) {
+  const std::string data = UKDYN_TEST_DATA_DIR, robots = UKDYN_EXAMPLES_DIR "/../robots";
+  // tests/data/rolling_wheel.urdf: prismatic x, prismatic z, continuous pitch
+  const Model wheel = parse_model(
+      "units: {length: mm, mass: g, time: ms}\n"
+      "robot: {urdf: rolling_wheel.urdf}\n",
+      data + "/wheel.yaml");
+  const auto unit_of = [](const Model& m, const std::string& name) {
+    const auto& names = m.system.coordinate_names();
+    for (std::size_t i = 0; i < names.size(); ++i)
+      if (names[i] == name) return m.coordinate_units[i];
+    return std::string("(no coordinate ") + name + ")";
+  };
+  EXPECT_EQ(unit_of(wheel, "x"), "mm");
+  EXPECT_EQ(unit_of(wheel, "z"), "mm");
+  EXPECT_EQ(unit_of(wheel, "pitch"), "rad");
+  const Model relabelled =
+      parse_model("units: {pitch: deg}\nrobot: {urdf: rolling_wheel.urdf}\n", data + "/wheel.yaml");
+  EXPECT_EQ(unit_of(relabelled, "x"), "m");
+  EXPECT_EQ(unit_of(relabelled, "pitch"), "deg");
+  // examples/robots/humanoid.urdf: a floating pelvis and 26 revolute joints, no unit left ''
+  const Model humanoid = parse_model("robot: {urdf: humanoid.urdf}\n", robots + "/h.yaml");
+  for (const char* c : {"pelvis.x", "pelvis.y", "pelvis.z"}) EXPECT_EQ(unit_of(humanoid, c), "m");
+  for (const char* c : {"pelvis.u0", "pelvis.u1", "pelvis.u2", "pelvis.u3"})
+    EXPECT_EQ(unit_of(humanoid, c), "1");
+  int rad = 0;
+  for (const std::string& u : humanoid.coordinate_units) {
+    EXPECT_FALSE(u.empty());
+    rad += u == "rad";
+  }
+  EXPECT_EQ(rad, 26);
+}
+
 TEST(ModelUnits, ErrorsNameTheEntryAndWhereItIs) {
   Failure f = failure_of(kSlider + "units: {q: m}\n");
   EXPECT_EQ(f.line, 4);
@@ -79,6 +115,11 @@ TEST(ModelUnits, ErrorsNameTheEntryAndWhereItIs) {
   EXPECT_EQ(f.column, 12);
   EXPECT_NE(f.what.find("the unit of 's' must be a short text (at most 32 characters)"),
             std::string::npos)
+      << f.what;
+  // a control character is said to be one, not a length (u15 10)
+  f = failure_of(kSlider + "units: {s: \"\\x1b[31m\"}\n");
+  EXPECT_EQ(f.line, 4);
+  EXPECT_NE(f.what.find("the unit of 's' contains a control character"), std::string::npos)
       << f.what;
   f = failure_of(kSlider + "units: {s: " + std::string(33, 'm') + "}\n");
   EXPECT_NE(f.what.find("the unit of 's' must be a short text"), std::string::npos) << f.what;

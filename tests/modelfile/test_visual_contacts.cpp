@@ -16,6 +16,7 @@
 #include <sstream>
 #include <string>
 
+#include "ukdyn/core/format.hpp"
 #include "ukdyn/modelfile/model.hpp"
 #include "ukdyn/modelfile/run.hpp"
 #include "ukdyn/modelfile/visual.hpp"
@@ -502,6 +503,70 @@ output: {every: 0.01}
       EXPECT_NEAR(sum, 0.3 * 3.0 * g, 1e-9) << "sample " << i;
       EXPECT_NEAR(friction_column(run, "cl", "y", i), 0.0, 1e-12) << "sample " << i;
     }
+  }
+}
+
+// The stick columns lambda.stick.coulomb.<c>.0/.1 of a contact-point friction are the holding
+// force in the model's force unit (u15 03): a ball (m, r, I = 2/5 m r²) put at rest on a
+// turntable turning at Om, r0 from the axis, rolls, and the table holds it with
+// (2/7) m Om² r0 at all times — in SI (kappa = 1), in mm/g/ms (kappa = 1000: the force unit
+// g·mm/ms² is N) and in SI for the same model 1000 times larger (kappa = 1000 again, from the
+// quaternion's columns). Before: the columns were the force / kappa, 1e-3 of it in the last two.
+TEST(VisualContacts, StickColumnsAreTheHoldingForceInForceUnits) {
+  struct Case {
+    const char* parameters;
+    const char* units;
+    double t_end, force;
+    const char* force_unit;
+  };
+  const Case cases[] = {
+      {"{m: 0.5, r: 0.05, g: 9.81, Om: 2, r0: 0.1, M: 10, R: 1, h: 0.05, mu: 0.5}", "", 2.0,
+       2.0 / 7.0 * 0.5 * 4.0 * 0.1, "N"},
+      {"{m: 500, r: 50, g: 9.81e-3, Om: 0.002, r0: 100, M: 10000, R: 1000, h: 50, mu: 0.5}",
+       "units: {length: mm, mass: g, time: ms}", 2000.0, 2.0 / 7.0 * 0.5 * 4.0 * 0.1, "g·mm/ms²"},
+      {"{m: 0.5, r: 50, g: 9.81, Om: 0.002, r0: 100, M: 10, R: 1000, h: 50, mu: 0.5}", "", 2000.0,
+       2.0 / 7.0 * 0.5 * 4e-6 * 100.0, "N"},
+  };
+  for (const Case& k : cases) {
+    const Model m = parse_model(std::string("parameters: ") + k.parameters + "\n" + k.units + R"(
+bodies:
+  - {name: table, type: rigid, mass: M, inertia: [M*(3*R^2 + 4*h^2)/12, M*(3*R^2 + 4*h^2)/12, M*R^2/2],
+     position: [0, 0, -h], angular_velocity: [0, 0, Om]}
+  - {name: ball, type: rigid, mass: m, inertia: 0.4*m*r^2, position: [r0, 0, r], velocity: [0, Om*r0, 0]}
+joints:
+  - {name: spin, type: revolute, parent: ground, child: table, parent_point: [0, 0, -h], drive: Om*t}
+forces:
+  - {type: gravity, g: [0, 0, -g]}
+contacts:
+  - {name: c, body: ball, shape: sphere, radius: r, plane: {body: table, point: [0, 0, h], normal: [0, 0, 1]}}
+nonideal:
+  - {friction: coulomb, constraint: c, mu: mu}
+simulate: {t_end: )" + format_number(k.t_end) +
+                                R"(, rtol: 1e-10, atol: 1e-12}
+output: {every: )" + format_number(k.t_end / 20) +
+                                "}\n");
+    const ModelRun run = run_model(m);
+    ASSERT_EQ(run.trajectory.stats.status, Status::kOk) << run.trajectory.stats.message;
+    const std::vector<CsvColumn> all = run.columns();
+    const auto values = [&](const std::string& name) -> const std::vector<double>& {
+      for (const CsvColumn& c : all)
+        if (c.name == name) return c.values;
+      throw std::invalid_argument("no column " + name);
+    };
+    const auto &f0 = values("lambda.stick.coulomb.c.0"), &f1 = values("lambda.stick.coulomb.c.1");
+    ASSERT_GT(f0.size(), 10u);
+    for (std::size_t i = 0; i < f0.size(); ++i) {
+      EXPECT_NEAR(std::hypot(f0[i], f1[i]), k.force, 1e-6 * k.force) << k.parameters << ", " << i;
+      // the world's friction column is the same force
+      EXPECT_NEAR(std::hypot(friction_column(run, "c", "x", i), friction_column(run, "c", "y", i)),
+                  k.force, 1e-6 * k.force)
+          << k.parameters << ", " << i;
+    }
+    // labelled with the force unit (summary.json's units, Model.units)
+    std::map<std::string, std::string> units;
+    for (const auto& [name, unit] : contact_gap_units(m)) units[name] = unit;
+    EXPECT_EQ(units["lambda.stick.coulomb.c.0"], k.force_unit);
+    EXPECT_EQ(units["lambda.stick.coulomb.c.1"], k.force_unit);
   }
 }
 

@@ -211,5 +211,28 @@ TEST(UrdfVisuals, ARobotWithoutVisualsHasNoVisualsInItsScene) {
   EXPECT_EQ(scene["robot"]["links"].size(), std::size_t(model.robot->link_count()));
 }
 
+// A robot's contact in its scene (u15 09): its link and point (the page draws a rod from the
+// link's frame to it: a last link without a child or a <visual> ends there) and its plane, a
+// point and the unit normal in the plane's link's frame (-1: the world), drawn as a patch
+TEST(UrdfVisuals, ARobotsContactsHaveTheirLinkPointAndPlaneInTheScene) {
+  const Model model = parse_model(R"(
+robot: {urdf: arm2_table.urdf}
+contacts:
+  - {name: tip, link: l2, point: [0.35, 0, 0], shape: sphere, radius: 0.025,
+     plane: {body: ground, point: [0, 0, 0.3], normal: [0, 0, 2]}}
+initial: {q: {j1: 0.6, j2: -0.9}}
+)",
+                                  std::string(UKDYN_TEST_DATA_DIR) + "/arm.yaml");
+  const auto robot = nlohmann::json::parse(viewer_scene_json(model))["robot"];
+  ASSERT_EQ(robot["contacts"].size(), 1u);
+  const nlohmann::json& c = robot["contacts"][0];
+  EXPECT_EQ(c["name"], "tip");
+  EXPECT_EQ(robot["links"][c["link"].get<std::size_t>()]["name"], "l2");
+  expect_vector(json_vector(c["point"]), 0.35, 0, 0);
+  EXPECT_EQ(c["plane_link"], -1);
+  expect_vector(json_vector(c["plane_point"]), 0, 0, 0.3);
+  expect_vector(json_vector(c["plane_normal"]), 0, 0, 1);  // (unit)
+}
+
 }  // namespace UKDYN_TEST_FILE
 }  // namespace ukdyn

@@ -21,7 +21,10 @@ namespace ukdyn {
 
 /// A model's run: the plant's trajectory and the columns that follow the standard ones.
 struct ModelRun {
-  /// The plant's motion, as simulate() records it (for a controlled model: its `plant`).
+  /// The plant's motion, as simulate() records it (for a controlled model: its `plant`), but
+  /// with each Coulomb friction's stick multipliers (`lambda.stick.<friction>[.i]`) made the
+  /// holding force in the model's force unit: × kappa, the unit of the contact's normal rows in
+  /// which the stick rows are stated (docs/friction.md §2; 1 for a unit normal in SI units).
   Trajectory trajectory;
   /// Whether the model ran under its controller (a `control:` section).
   bool controlled = false;
@@ -65,7 +68,10 @@ ModelRun run_model(const Model& model);
 
 /// The units of the gap columns `gap.<name>` that are no output expression: those of the
 /// contacts: entries of a bodies or robot model, whose gap is a distance (docs/contact.md), in
-/// the model's length unit; (column, unit) in constraint order, empty for a generalized model
+/// the model's length unit; then those of the holding-force columns `lambda.stick.<friction>.i`
+/// of their frictions (the force unit at a contact point; on the coordinate path the
+/// generalized force of the sliding coordinate: the force unit for a length, the torque's for
+/// rad); (column, unit) in constraint order, empty for a generalized model
 /// (its gaps are output expressions, with the units `units:` gives them). The front ends add
 /// them to the coordinates' and outputs' units (summary.json, Model.units), so that the plots
 /// label a contact's gap in the length unit and its force in the force unit. Cost O(constraints).
@@ -91,6 +97,12 @@ ModelError locate_run_error(const Model& model, const SettingError& e);
 /// add `project: true` under `initial:` where projecting may help (Cause::kNotProjected), and
 /// for a penetrated contact, which no projection opens, change the initial state.
 ModelError locate_run_error(const Model& model, const InconsistentInitialState& e);
+
+/// Whether `e` (of a run of `model`) says that contacts are penetrated at the start: not
+/// projected, naming only unilateral constraints (a gap < 0). Projection does not act on a gap,
+/// so project_initial cannot help: the front ends say so (the hint above; Python's cause
+/// "penetrated"). Cost O(named constraints × constraints).
+bool contacts_penetrated(const Model& model, const InconsistentInitialState& e);
 
 /// Writes trajectory.csv: the standard columns then run.extra_columns (write_csv of
 /// io/trajectory_files.hpp).

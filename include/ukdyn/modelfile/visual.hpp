@@ -79,6 +79,16 @@ struct VisualContact {
   using Axes =
       std::function<void(const Eigen::Ref<const Eigen::VectorXd>& q, Eigen::Matrix3d& axes)>;
   Axes axes;  ///< the friction's world axes at q (see Axes); null: no friction arrow
+  /// A robot's contact (robot_visual_contact), which the viewer's scene draws with the robot:
+  /// the link its point (a sphere's or disk's centre) is on (-1: none, not a robot's contact)
+  /// and the point in the link's frame — a rod from the link's frame to it, so that a last link
+  /// without `<visual>` is drawn up to its contact — and its plane: the plane's link (-1: the
+  /// world), a point of it and its unit normal in that link's frame, drawn as a patch.
+  int link = -1;
+  Eigen::Vector3d link_point = Eigen::Vector3d::Zero();    ///< the point, in link's frame
+  int plane_link = -1;                                     ///< the plane's link (-1: the world)
+  Eigen::Vector3d plane_point = Eigen::Vector3d::Zero();   ///< in plane_link's frame
+  Eigen::Vector3d plane_normal = Eigen::Vector3d::Zero();  ///< unit, in plane_link's frame; 0: none
 };
 
 /// A loop closure of a robot (`robot: loops:`), drawn by the viewer as a dashed line from

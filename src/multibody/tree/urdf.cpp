@@ -41,7 +41,12 @@ Vector3d to_eigen(const urdf::Vector3& v) { return {v.x, v.y, v.z}; }
 urdf::ModelInterfaceSharedPtr detail::parse_urdf_file(const std::string& path,
                                                       const std::string& who) {
   if (!std::filesystem::is_regular_file(path)) {
-    throw std::invalid_argument(who + "no such file");
+    // (a directory, e.g. `urdf: .`, or a device exists: say what it is)
+    std::error_code ec;
+    throw std::invalid_argument(
+        who + (std::filesystem::is_directory(path, ec) ? "is a directory, not a URDF file"
+               : std::filesystem::exists(path, ec)     ? "is not a regular file (a URDF file is)"
+                                                       : "no such file"));
   }
   // parse, with urdfdom's messages captured (console_bridge's handler is process-wide)
   static std::mutex handler_mutex;
