@@ -6,8 +6,6 @@
 // docs/contact.md, "Contacts under control").
 #include "control/contact_modes.hpp"
 
-#include <Eigen/QR>
-
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -512,13 +510,7 @@ double ContactModes::stick_margin(const Controller& ctrl, ControlWorkspace& cws,
   // coordinates: R = A_nᵀ lam_n + A_sᵀ lam_s, N its projection onto the normal rows, H the rest
   detail::constraint_share(sys, model, c.stick_constraint, lam_, part_);
   reaction_ += part_;
-  if (rows == 1) {
-    const double aa = normals_.row(0).squaredNorm();
-    part_ = normals_.row(0).transpose() * (aa > 0.0 ? normals_.row(0).dot(reaction_) / aa : 0.0);
-  } else {
-    const MatrixXd Nt = normals_.transpose();
-    part_ = Nt * Nt.completeOrthogonalDecomposition().solve(reaction_);
-  }
+  detail::normal_part(normals_, reaction_, part_);
   normal_force_ = part_.norm();
   holding_force_ = (reaction_ - part_).norm();
   return c.mu_static * normal_force_ - holding_force_;

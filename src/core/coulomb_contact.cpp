@@ -2,6 +2,8 @@
 // Coulomb contacts: the sliding velocity relative to the constraint (docs/friction.md),
 //   v_rel = P (v − u),  P = I − N_k⁺ N_k,
 // and the stick constraint P (v − u) = 0 that the simulation switches on while a contact sticks.
+#include <Eigen/QR>
+
 #include <algorithm>
 #include <cmath>
 #include <memory>
@@ -27,6 +29,17 @@ double normal_row_unit(const Eigen::Ref<const MatrixXd>& rows_n, Index rows, Vec
     if (std::isfinite(a)) largest = std::max(largest, a);
   }
   return detail::scale_class(largest) / 10.0;
+}
+
+void normal_part(const Eigen::Ref<const MatrixXd>& normals, const Eigen::Ref<const VectorXd>& R,
+                 VectorXd& out) {
+  if (normals.rows() == 1) {
+    const double aa = normals.row(0).squaredNorm();
+    out = normals.row(0).transpose() * (aa > 0.0 ? normals.row(0).dot(R) / aa : 0.0);
+    return;
+  }
+  const MatrixXd Nt = normals.transpose();
+  out = Nt * Nt.completeOrthogonalDecomposition().solve(R);
 }
 
 namespace {

@@ -154,6 +154,11 @@ Constraint point_stick_constraint(const std::string& name, const ContactKinemati
 // kappa = class(max_i ‖n_i‖) / 10 over the first `rows` rows n_i of rows_n (the unit of a
 // contact's normal rows, in which its stick rows are stated; `row` (n) a buffer): 1 in SI units.
 double normal_row_unit(const Eigen::Ref<const MatrixXd>& rows_n, Index rows, VectorXd& row);
+// R_N = the part of a reaction R (n) along the normal rows (rows × n) of a contact on the
+// coordinate path, into out (n): a (a·R)/(a·a) for one row a, the least-squares projection onto
+// their span for several (allocates then). The holding force is R − R_N. O(rows · n).
+void normal_part(const Eigen::Ref<const MatrixXd>& normals, const Eigen::Ref<const VectorXd>& R,
+                 VectorXd& out);
 // Contact c's physical normal force on the contact-point path from a reaction R (n) of its
 // normal constraint: N = |w·R| / |w|², w = J_Pᵀ n_W the row 0 of ws.contact_jacobian[c] (as
 // sliding_velocity last evaluated it). O(|columns|), no allocation.

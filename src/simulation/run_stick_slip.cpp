@@ -5,8 +5,6 @@
 // tests that decide a stick, the release at mu_static N, and the carrying of a sliding contact
 // through a dead centre. The events themselves are located in run_events.cpp. The class:
 // simulation/run.hpp.
-#include <Eigen/QR>
-
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -183,15 +181,7 @@ double Run::stick_margin_here(std::size_t c, double t) {
   const Index k = contact.normal_constraint, rows = sys_.constraint(k).rows();
   if (normals_.rows() != rows) normals_.resize(rows, n_);  // (once per contact size)
   detail::copy_constraint_rows(sys_, ws_, k, normals_);
-  const auto& normals = normals_;
-  // R_N = projection of R onto the normal rows: a (a·R)/(a·a) for one row
-  if (rows == 1) {
-    const double aa = normals.row(0).squaredNorm();
-    normal_ = normals.row(0).transpose() * (aa > 0.0 ? normals.row(0).dot(reaction_) / aa : 0.0);
-  } else {
-    const MatrixXd Nt = normals.transpose();
-    normal_ = Nt * Nt.completeOrthogonalDecomposition().solve(reaction_);
-  }
+  detail::normal_part(normals_, reaction_, normal_);  // R_N
   holding_ = reaction_ - normal_;
   return contact.mu_static * normal_.norm() - holding_.norm();
 }
