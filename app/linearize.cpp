@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <map>
 #include <sstream>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -163,6 +164,14 @@ int linearize_command(const LinearizeArguments& args) {
         "ukdyn linearize");
   } catch (const LinearizeNameError& e) {
     throw UsageError(e.what());
+  } catch (const std::invalid_argument& e) {
+    // (a point off the constraints: the command's own remedy, not the C++ functions' names)
+    const std::string what = e.what(), cpp = "project the state first (ukdyn::project_positions";
+    const std::size_t at = what.find(cpp);
+    if (at == std::string::npos || args.project) throw;
+    throw UsageError(what.substr(0, at) +
+                     "add --project to project the point onto the constraints first (its "
+                     "positions, then its velocities)");
   }
   const OperatingPoint& op = result.point;
   const LinearModel& lm = result.linear;

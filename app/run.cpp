@@ -431,9 +431,9 @@ int run_command(const RunArguments& given) {
     if (c.not_met > 0) {
       std::fprintf(stderr,
                    "warning: the control could not meet every requirement in %ld of %ld "
-                   "evaluations (first at t = %g: %s); largest residual %.3g. It applied the "
+                   "evaluations (first at t = %g %s: %s); largest residual %.3g. It applied the "
                    "least-squares force: see the error.* columns for what was not met\n",
-                   c.not_met, c.evaluations, c.first_not_met,
+                   c.not_met, c.evaluations, c.first_not_met, tu,
                    terminal_text(c.not_met_message).c_str(), c.max_residual);
     }
   }

@@ -84,6 +84,23 @@ def test_the_command_linearizes_along_the_models_run(cli, tmp_path):
     assert bad.returncode == 2 and "output nosuch: neither a coordinate" in bad.stderr
 
 
+def test_the_command_names_its_own_remedy_for_a_point_off_the_constraints(cli, examples_dir):
+    # u16 04: the hint named the C++ functions (ukdyn::project_positions); the command's own
+    # --project then linearizes the hanging pendulum, eigenvalues +-i sqrt(g/L)
+    path = examples_dir / "pendulum.yaml"
+    L = ukdyn.load(path).parameters["L"]
+    at = f"x=0,y={-1.1 * L}"
+    bad = subprocess.run([cli, "linearize", str(path), "--at", at], capture_output=True, text=True)
+    assert bad.returncode == 2, bad.stderr
+    assert "not on the constraint manifold" in bad.stderr
+    assert "add --project to project the point onto the constraints first" in bad.stderr
+    assert "ukdyn::project_positions" not in bad.stderr
+    ok = subprocess.run([cli, "linearize", str(path), "--at", at, "--project"],
+                        capture_output=True, text=True, check=True)
+    im = sorted(m["eigenvalue"][1] for m in json.loads(ok.stdout)["modes"])
+    np.testing.assert_allclose(im, [-math.sqrt(9.81 / L), math.sqrt(9.81 / L)], rtol=1e-7)
+
+
 CART_FREE = """
 name: a free cart beside a pendulum
 parameters: {m: 2, L: 0.7, g: 9.81}

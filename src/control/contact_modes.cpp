@@ -414,9 +414,10 @@ void ContactModes::slip(const Controller& ctrl, ControlWorkspace& cws,
 
 std::string ContactModes::stick_note(const Controller& ctrl) const {
   if (slipped_ == 0) return "";
-  const std::string numbers = format(note_H_) + (slipped_ > 0 ? " > " : " <= ") +
-                              "mu_static N = " + format(note_H_ + note_margin_) +
-                              " (N = " + format(note_N_) + ")";
+  const std::string f = " " + units_.force();
+  const std::string numbers = format(note_H_) + f + (slipped_ > 0 ? " > " : " <= ") +
+                              "mu_static N = " + format(note_H_ + note_margin_) + f +
+                              " (N = " + format(note_N_) + f + ")";
   const std::string row = "the requirement row '" + ctrl.row_names()[std::size_t(note_row_)] + "'";
   if (slipped_ < 0) {
     return row +
@@ -428,7 +429,8 @@ std::string ContactModes::stick_note(const Controller& ctrl) const {
   for (std::size_t j : released_) {
     names += (names.empty() ? "'" : ", '") + ctrl.model().nonideal_name(frictions_[j].force) + "'";
   }
-  return "t = " + format(note_t_) + ": " + row + " needs the stuck contact " + names +
+  return "t = " + format(note_t_) + " " + units_.time + ": " + row + " needs the stuck contact " +
+         names +
          " to slide: the control that meets it with the contact sliding (friction mu N against "
          "the motion it imposes) would need a holding force of " +
          numbers + " to keep it stuck, so it slips (docs/contact.md, \"Contacts under control\")";
@@ -471,14 +473,20 @@ Index ContactModes::relative_acceleration(const Controller& ctrl, ControlWorkspa
     for (std::size_t i = 0; i < kin.columns.size(); ++i) {
       const double qdd = cws.qdd[kin.columns[i]];
       accel_.head(d) += J.col(Index(i)).tail(d) * qdd;
-      scale += J.col(Index(i)).tail(d).norm() * std::abs(qdd);
+      scale += J.col(Index(i)).tail(d).norm() * (std::abs(qdd) + std::abs(model.a[kin.columns[i]]));
     }
     return d;
   }
   // a_rel = P (q''_c − u')
   const Index k = Index(c.coordinates.size());
-  for (Index r = 0; r < k; ++r) accel_[r] = cws.qdd[c.coordinates[std::size_t(r)]];
-  scale = accel_.head(k).norm();
+  // (the scale of its terms: q''_c is what the forces leave of a = M⁻¹ Q — a particle pushed and
+  // held at rest has q''_c at roundoff of F/m, no direction to slide in; u16 02)
+  scale = 0.0;
+  for (Index r = 0; r < k; ++r) {
+    const Index i = c.coordinates[std::size_t(r)];
+    accel_[r] = cws.qdd[i];
+    scale += std::abs(cws.qdd[i]) + std::abs(model.a[i]);
+  }
   if (c.surface_velocity) {
     accel_.head(k) -= model.surface_u_dot.head(k);
     scale += model.surface_u_dot.head(k).norm();
@@ -525,8 +533,8 @@ std::string ContactModes::pull_message(const Controller& ctrl, double t, Index r
     const Index k = contacts_[std::size_t(closed_[j])];
     names += (names.empty() ? "'" : ", '") + ctrl.model().constraint(k).name() + "'";
   }
-  return "at t = " + format(t) + " the requirement row '" + ctrl.row_names()[std::size_t(row)] +
-         "' can be met only if the contact " + names +
+  return "at t = " + format(t) + " " + units_.time + " the requirement row '" +
+         ctrl.row_names()[std::size_t(row)] + "' can be met only if the contact " + names +
          " pulls: with the contact open the control that meets it drives the gap shut "
          "(g'' < 0), no pushing contact force lets it be met (the LCP of the closed contacts "
          "with the requirements as equalities has no solution), and with the contacts closed the "

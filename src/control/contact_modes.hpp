@@ -27,6 +27,7 @@
 #include <vector>
 
 #include "ukdyn/control/control.hpp"
+#include "ukdyn/core/units.hpp"
 #include "ukdyn/dynamics/contact.hpp"
 
 namespace ukdyn::control_detail {
@@ -93,6 +94,8 @@ class ContactModes {
   // (the row, the contacts, |H| against mu_static N; "" for 0)
   int slipped() const { return slipped_; }
   std::string stick_note(const Controller& ctrl) const;
+  // the run's units (SimulationOptions::units), for the notes' times and forces
+  void set_units(const UnitSystem& units) { units_ = units; }
 
   // The run's LCP of the accelerations at an event (docs/contact.md, "In a run") evaluates its
   // q''_free with every contact released and treats the control in it as a given force. Its
@@ -191,6 +194,7 @@ class ContactModes {
   double note_t_ = 0.0, note_margin_ = 0.0, note_N_ = 0.0, note_H_ = 0.0;
   Index note_row_ = 0;
   std::vector<std::size_t> released_;
+  UnitSystem units_;  // see set_units
 };
 
 }  // namespace ukdyn::control_detail

@@ -130,6 +130,7 @@ struct ControlledPlant {
   Controller ctrl;
   System plant;
   Index n, aux;
+  UnitSystem units;  // the run's (SimulationOptions::units), for its notes
 };
 
 // The controlled system's per-workspace scratch (its CallableScratch): the control workspace,
@@ -146,6 +147,7 @@ struct ControlledScratch final : CallableScratch {
         q_last(p.n),
         qd_last(p.n) {
     stats.first_not_met = std::numeric_limits<double>::quiet_NaN();
+    contacts.set_units(p.units);
   }
   ControlWorkspace cws;
   std::unique_ptr<CallableScratch> own_plant;  // the plant's callables' scratch (may be null)
@@ -474,7 +476,11 @@ ControlledTrajectory simulate_controlled(
   }
   const bool robust = ctrl.robust().has_value();
   const Index aux = kBounds + (robust ? m_r : 0);
-  const auto st = std::make_shared<const ControlledPlant>(ctrl, plant, aux);
+  const auto st = [&] {
+    auto p = std::make_shared<ControlledPlant>(ctrl, plant, aux);
+    p->units = options.units;
+    return std::shared_ptr<const ControlledPlant>(std::move(p));
+  }();
   const System sys = build_controlled(st, true);
 
   // the quadratures z (work, effort, absolute work, bounds), from (0, 0, 0, V_i(0)), their

@@ -8,6 +8,7 @@
 #include "ukdyn/modelfile/model.hpp"
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -112,6 +113,17 @@ std::string cut_flow_list_hint(const YAML::Node& list, const std::string& key) {
 
 double Reader::number(const YAML::Node& node, const std::string& what) {
   if (!node.IsScalar()) fail(node, what + " must be a number");
+  // nan, inf written bare (YAML's .nan and .inf are refused where the expression is read): not
+  // names of the model (u16 04: "unknown name 'nan'", listing the coordinates)
+  {
+    std::string word;
+    for (char ch : node.Scalar())
+      if (!std::isspace(static_cast<unsigned char>(ch)) && ch != '+' && ch != '-')
+        word += char(std::tolower(static_cast<unsigned char>(ch)));
+    if (word == "nan" || word == "inf" || word == "infinity")
+      fail(node, what + " must be a finite number, but is '" + node.Scalar() + "'",
+           "use a number or a formula of the parameters");
+  }
   // a number, or an expression of the parameters only
   const Expr e = expression(node, what);
   if (const auto inputs = set_->inputs_of(e); !inputs.empty()) {

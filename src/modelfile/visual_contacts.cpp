@@ -30,6 +30,32 @@ Vector3d contact_point(const Vector3d& c, const Vector3d& n, double r, const Vec
   return h > 0.0 ? Vector3d(c - (r / h) * down) : c;
 }
 
+// The friction f (tangent axes, into f) that sample i's Qc_nonideal holds when it is this
+// contact's alone: Qc_nonideal on the contact's columns = J_nᵀ λ + J_tᵀ f (its friction and the
+// normal row's share of it), by least squares, accepted when that fits to 1e-6 of ‖Qc_nonideal‖
+// and ‖f‖ is within 1e-6 of its full magnitude `full`. It reads a contact sliding from rest
+// whose impending motion a_rel is roundoff (a control holds the body where it is: the run's
+// friction takes the holding force's direction, Run::start_sliding), whose direction a_rel
+// cannot give. False otherwise (another friction or constraint shares the columns: a_rel
+// decides). Cost O(columns · rows²).
+bool applied_friction(const Trajectory& traj, Index i, const MatrixXd& J,
+                      const std::vector<Index>& columns, double full, Vector3d& f) {
+  const Index n = traj.n, d = J.rows() - 1;
+  if (traj.Qc_nonideal.size() < std::size_t((i + 1) * n) || !(full > 0.0)) return false;
+  VectorXd Q(Index(columns.size()));
+  for (std::size_t j = 0; j < columns.size(); ++j)
+    Q[Index(j)] = traj.Qc_nonideal[std::size_t(i * n + columns[j])];
+  const double size = Q.norm();
+  if (!(size > 0.0)) return false;
+  const Eigen::ColPivHouseholderQR<MatrixXd> qr(J.transpose());
+  const VectorXd x = qr.solve(Q);
+  if (!((J.transpose() * x - Q).norm() <= 1e-6 * size)) return false;
+  if (!(std::abs(x.tail(d).norm() - full) <= 1e-6 * full)) return false;
+  f.setZero();
+  f.head(d) = x.tail(d);
+  return true;
+}
+
 // The columns visual.contact.<name>.fx, .fy (, .fz) of contact c's Coulomb friction at a
 // contact point (VisualContact::axes), at the samples of traj: f_W = Σ f_i t_i with, in the
 // contact's tangent axes, f = the holding force lambda.stick (scale_stick_multipliers) while it
@@ -93,8 +119,9 @@ void add_friction_columns(const Model& model, const Trajectory& traj, const Visu
       for (std::size_t j = 0; j < columns.size(); ++j) qdd_c[Index(j)] = qdd[columns[j]];
       a_rel = bias.tail(d) + J.bottomRows(d) * qdd_c;
       const double terms = bias.tail(d).norm() + J.bottomRows(d).norm() * qdd_c.norm();
-      if (a_rel.norm() > 1e-8 * terms) {
-        const double normal = std::abs(traj.lambda_total[std::size_t(i) * un + ui]);
+      const double normal = std::abs(traj.lambda_total[std::size_t(i) * un + ui]);
+      if (!applied_friction(traj, i, J, columns, fc->mu * normal, f) &&
+          a_rel.norm() > 1e-8 * terms) {
         f.head(d) = -fc->mu * normal / a_rel.norm() * a_rel;
       }
     } else if (v.norm() <= held_below) {

@@ -54,6 +54,9 @@ inline constexpr int kDivergentSteps = 3;
 // a contact carried through a dead centre restarts past it where the rank margin is back to
 // this (Run::carried_past)
 inline constexpr double kCarriedMargin = 3e-5;
+// a relative acceleration below this fraction of the run's class of accelerations is no impending
+// motion (Run::start_sliding; Run::acceleration_scale)
+inline constexpr double kStillAcceleration = 1e-9;
 // a switch located where the rank margin is below this (and above kCarriedMargin) under dopri5,
 // rkf78 or BDF restarts there, bridged past the pose (Run::entered_dead_centre)
 inline constexpr double kBridgedSwitchMargin = 1e-3;
@@ -415,6 +418,8 @@ class Run {
   bool start_sliding(std::size_t c, double t, const double* x);
   // a_rel = P (q''_c − u') of contact c from the last evaluation into velocity_
   void relative_acceleration(std::size_t c, double t);
+  // the run's class of accelerations, v² / ℓ (set_run_scales), 0 before the scales are set
+  double acceleration_scale() const;
   // contact c's slip hint against the a_rel that relative_acceleration left in velocity_
   void hint_against_acceleration(std::size_t c);
   // the direction of the friction at |v_rel| <= eps (the contact's slip hint)

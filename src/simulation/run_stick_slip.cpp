@@ -379,6 +379,23 @@ bool Run::start_sliding(std::size_t c, double t, const double* x) {
   // a_rel = P (q''_c − u') without this friction: the impending motion
   relative_acceleration(c, t);
   const Index k = contact.size();
+  if (!(velocity_.head(k).norm() > kStillAcceleration * acceleration_scale())) {
+    // none (to roundoff of the run's acceleration class): a control that holds the body where
+    // it is cancels the motion that friction could not hold (u16 02: a particle pushed by
+    // F > mu_static N and required to stay put). The friction then takes the holding force's
+    // direction at its full magnitude, as at a release (switch_contact), and the control pays
+    // the rest: the same in any units, not a roundoff direction
+    mode_[c] = ContactMode::kSticking;
+    apply_contact_modes();
+    const double margin = stick_margin(c, t, x);
+    mode_[c] = ContactMode::kSliding;
+    apply_contact_modes();
+    if (margin < 0.0) {
+      set_slip_hint(c, holding_);
+      return true;
+    }
+    // (friction could hold it: the regularized law, below)
+  }
   hint_against_acceleration(c);
   // with the friction at its full magnitude against it, does the contact still move that way?
   // If not, friction could hold it although the stick was not admissible (a stick constraint
@@ -389,6 +406,12 @@ bool Run::start_sliding(std::size_t c, double t, const double* x) {
   if (velocity_.head(k).dot(direction_.head(k)) > 0.0) return true;
   set_slip_hint(c, VectorXd());
   return false;
+}
+
+// the run's class of accelerations, v² / ℓ from set_run_scales (0 before them: every a_rel
+// counts)
+double Run::acceleration_scale() const {
+  return ws_.length_scale > 0.0 ? ws_.speed_scale * ws_.speed_scale / ws_.length_scale : 0.0;
 }
 
 // a_rel = P (q''_c − u') of contact c from the last evaluation (at q_, qd_, t) into the head of

@@ -383,7 +383,7 @@ TEST(ControlContacts, BarPushedIntoTheFloorNamesBothEndsThatWouldPull) {
   ASSERT_EQ(s, ControlStatus::kRequirementsNotMet);
   std::string failure;
   EXPECT_FALSE(bar.modes.settle(bar.ctrl, bar.cws, bar.q, bar.qd, 0.0, s, failure));
-  EXPECT_NE(failure.find("at t = 0 the requirement row 'sink'"), std::string::npos) << failure;
+  EXPECT_NE(failure.find("at t = 0 s the requirement row 'sink'"), std::string::npos) << failure;
   EXPECT_NE(failure.find("contact 'left', 'right' pulls"), std::string::npos) << failure;
   EXPECT_NE(failure.find("missed by 1 "), std::string::npos) << failure;
   EXPECT_EQ(bar.cws.model.activity_override[0], 1);
@@ -439,7 +439,7 @@ TEST(ControlContacts, WeightedLawsNonSymmetricLcpHoldsThePivotOrNamesBothEnds) {
     ASSERT_EQ(s, ControlStatus::kRequirementsNotMet);
     std::string failure;
     EXPECT_FALSE(bar.modes.settle(bar.ctrl, bar.cws, bar.q, bar.qd, 0.0, s, failure));
-    EXPECT_NE(failure.find("at t = 0 the requirement row 'tilt'"), std::string::npos) << failure;
+    EXPECT_NE(failure.find("at t = 0 s the requirement row 'tilt'"), std::string::npos) << failure;
     EXPECT_NE(failure.find("contact 'left', 'right' pulls"), std::string::npos) << failure;
     EXPECT_EQ(bar.cws.model.activity_override[0], 1);
     EXPECT_EQ(bar.cws.model.activity_override[1], 1);

@@ -71,10 +71,11 @@ TEST(ControlSlip, ParticlePushedFromRestSlidesWithTheClosedFormForce) {
   // the note of the broken stick, with its numbers at t = 0
   ASSERT_FALSE(tr.stats.notes.empty());
   const std::string& note = tr.stats.notes.back();
-  EXPECT_NE(note.find("t = 0: the requirement row 'pace' needs the stuck contact"),
+  EXPECT_NE(note.find("t = 0 s: the requirement row 'pace' needs the stuck contact"),
             std::string::npos)
       << note;
-  EXPECT_NE(note.find("holding force of 8.924 > mu_static N = 5.886"), std::string::npos) << note;
+  EXPECT_NE(note.find("holding force of 8.924 N > mu_static N = 5.886 N"), std::string::npos)
+      << note;
   ASSERT_EQ(tr.samples(), 13);
   for (std::size_t i = 0; i < std::size_t(tr.samples()); ++i) {
     const double t = tr.t[i];
@@ -121,19 +122,21 @@ TEST(ControlSlip, ParticleHeldByStaticFrictionSlipsWhenTheRequirementsForceReach
   // not met while stuck, and why
   EXPECT_GT(r.control.not_met, 0);
   EXPECT_EQ(r.control.first_not_met, 0.0);
-  EXPECT_NE(r.control.not_met_message.find(
-                "the requirement row 'pace' needs a stuck contact to slide, but static friction "
-                "holds it: the control that meets it with the contact sliding would need a "
-                "holding force of only 4.924 <= mu_static N = 5.886 (N = 19.62) with it stuck"),
-            std::string::npos)
+  EXPECT_NE(
+      r.control.not_met_message.find(
+          "the requirement row 'pace' needs a stuck contact to slide, but static friction "
+          "holds it: the control that meets it with the contact sliding would need a "
+          "holding force of only 4.924 N <= mu_static N = 5.886 N (N = 19.62 N) with it stuck"),
+      std::string::npos)
       << r.control.not_met_message;
   ASSERT_FALSE(tr.stats.notes.empty());
   // (located: the holding force at mu_static N, to its roundoff)
-  EXPECT_NE(tr.stats.notes.back().find("t = 0.0218565: the requirement row 'pace' needs the stuck "
-                                       "contact 'coulomb.floor' to slide"),
-            std::string::npos)
+  EXPECT_NE(
+      tr.stats.notes.back().find("t = 0.0218565 s: the requirement row 'pace' needs the stuck "
+                                 "contact 'coulomb.floor' to slide"),
+      std::string::npos)
       << tr.stats.notes.back();
-  EXPECT_NE(tr.stats.notes.back().find("holding force of 5.886 > mu_static N = 5.886"),
+  EXPECT_NE(tr.stats.notes.back().find("holding force of 5.886 N > mu_static N = 5.886 N"),
             std::string::npos)
       << tr.stats.notes.back();
   ASSERT_GE(tr.samples(), 12);
@@ -171,9 +174,10 @@ TEST(ControlSlip, ParticleThatStaticFrictionHoldsIsReportedNotMetWithBothForces)
   EXPECT_EQ(tr.stats.events, 0);
   // (all but the start's evaluations with the contact sliding, before its stick)
   EXPECT_GE(r.control.not_met, r.control.evaluations - 3);
-  EXPECT_NE(r.control.not_met_message.find(
-                "holding force of only 4.924 <= mu_static N = 19.62 (N = 19.62) with it stuck"),
-            std::string::npos)
+  EXPECT_NE(
+      r.control.not_met_message.find(
+          "holding force of only 4.924 N <= mu_static N = 19.62 N (N = 19.62 N) with it stuck"),
+      std::string::npos)
       << r.control.not_met_message;
   EXPECT_TRUE(tr.stats.notes.empty());
   ASSERT_EQ(tr.samples(), 2);
@@ -215,9 +219,10 @@ output: {every: 0.05}
   ASSERT_EQ(tr.stats.status, Status::kOk) << tr.stats.message;
   EXPECT_EQ(r.control.not_met, 0) << r.control.not_met_message;
   ASSERT_FALSE(tr.stats.notes.empty());
-  EXPECT_NE(tr.stats.notes.back().find(
-                "t = 0: the requirement row 'draw' needs the stuck contact 'coulomb.tip' to slide"),
-            std::string::npos)
+  EXPECT_NE(
+      tr.stats.notes.back().find(
+          "t = 0 s: the requirement row 'draw' needs the stuck contact 'coulomb.tip' to slide"),
+      std::string::npos)
       << tr.stats.notes.back();
   ASSERT_EQ(tr.samples(), 41);
   const std::size_t m_rows = std::size_t(tr.m);
@@ -233,6 +238,107 @@ output: {every: 0.05}
     // sliding, pressed on the table: the stick rows carry nothing, the contact pushes
     for (std::size_t k = 1; k < m_rows; ++k) EXPECT_EQ(tr.lambda[m_rows * i + k], 0.0);
     EXPECT_GT(tr.lambda[m_rows * i], 1.0) << "t = " << t;
+  }
+}
+
+// u16 02: a particle (m = 2, mu = mu_static = 0.2) on a rough floor, pushed along x by a constant
+// F, and a requirement that holds it where it is (x = 0: its row duplicates the stuck contact's),
+// written in generalized coordinates (the friction on the coordinate path) in SI or in mm, g, ms
+// (where a force is g mm/ms² = 1 N: the same numbers)
+std::string held_particle(double F, bool mm) {
+  return std::string("parameters: {m: ") + (mm ? "2000, g: 9.81e-3" : "2, g: 9.81") +
+         ", mu: 0.2, F: " + std::to_string(F) + "}\nunits: " +
+         (mm ? "{length: mm, mass: g, time: ms}" : "{length: m, mass: kg, time: s}") + R"(
+coordinates: [x, y]
+kinetic_energy: 0.5*m*(x_dot^2 + y_dot^2)
+potential_energy: m*g*y - F*x
+constraints:
+  - {name: floor, holonomic: y, unilateral: true}
+nonideal:
+  - {friction: coulomb, constraint: floor, coordinates: [x], mu: mu}
+control:
+  requirements:
+    - {name: hold, holonomic: x, dynamics: {omega: )" +
+         (mm ? "0.02" : "20") + R"(, zeta: 1}}
+  law: gauss
+simulate: {t_end: )" +
+         (mm ? "1000" : "1") + R"(, integrator: dopri5, rtol: 1e-10, atol: 1e-12}
+output: {every: )" +
+         (mm ? "100" : "0.1") + "}\n";
+}
+
+TEST(ControlSlip, ParticleHeldInPlaceSharesThePushWithStaticFrictionInAnyUnits) {
+  // |F| = 10 > mu m g = 3.924: static friction cannot hold it, so the friction acts at its full
+  // magnitude against the push and the control pays the rest, F_c = −(F − mu m g sign F); it was
+  // F_c = −10 with no friction in SI and −13.924 with the friction along the push in mm (a
+  // roundoff direction). F = 2: the stick holds it alone, the control 0, every evaluation met
+  // (it was "not met" at a residual of 7e-16, then slipped on a tie, 3.924 > 3.924, at a time
+  // that depended on the units)
+  const double muN = 0.2 * 2.0 * 9.81;
+  for (const bool mm : {false, true}) {
+    for (const double F : {10.0, -10.0, 2.0}) {
+      SCOPED_TRACE(std::string(mm ? "mm, g, ms" : "SI") + ", F = " + std::to_string(F));
+      const ControlledTrajectory r = run(held_particle(F, mm));
+      const Trajectory& tr = r.plant;
+      ASSERT_EQ(tr.stats.status, Status::kOk) << tr.stats.message;
+      EXPECT_EQ(r.control.not_met, 0) << r.control.not_met_message;
+      EXPECT_EQ(tr.stats.events, 0);
+      EXPECT_TRUE(tr.stats.contact_events.empty());
+      EXPECT_TRUE(tr.stats.notes.empty()) << tr.stats.notes.front();
+      ASSERT_EQ(tr.samples(), 11);
+      const bool slides = std::abs(F) > muN;
+      for (std::size_t i = 0; i < 11; ++i) {
+        EXPECT_NEAR(at(tr, tr.q, "x", i), 0.0, mm ? 1e-9 : 1e-12) << "t = " << tr.t[i];
+        const double friction = at(tr, tr.Qc_nonideal, "x", i);
+        const double control = at(tr, r.Qc_control, "x", i);
+        if (slides) {
+          EXPECT_NEAR(friction, -muN * (F > 0 ? 1.0 : -1.0), 1e-9) << "t = " << tr.t[i];
+          EXPECT_NEAR(control, -(F + friction), 1e-9) << "t = " << tr.t[i];
+        } else {
+          EXPECT_NEAR(control, 0.0, 1e-9) << "t = " << tr.t[i];
+          // the stick's reaction holds the push
+          EXPECT_NEAR(at(tr, tr.Qc_ideal, "x", i) + friction, -F, 1e-9) << "t = " << tr.t[i];
+        }
+      }
+    }
+  }
+}
+
+TEST(ControlSlip, ContactPointHeldInPlaceSharesThePushWithStaticFriction) {
+  // the same on a contact point's path (a particle's contacts: entry; the push is gravity tilted
+  // along x, m g_x = F)
+  for (const double F : {10.0, 2.0}) {
+    SCOPED_TRACE("F = " + std::to_string(F));
+    const std::string text = "parameters: {m: 2, g: 9.81, gx: " + std::to_string(F / 2.0) + R"(}
+bodies:
+  - {name: p, type: particle, mass: m, position: [0, 0, 0]}
+forces:
+  - {type: gravity, g: [gx, 0, -g]}
+contacts:
+  - {name: floor, body: p}
+nonideal:
+  - {friction: coulomb, constraint: floor, mu: 0.2}
+control:
+  requirements:
+    - {name: hold, holonomic: p_x, dynamics: {omega: 20, zeta: 1}}
+  actuated: [p_x]
+simulate: {t_end: 1, integrator: dopri5, rtol: 1e-10, atol: 1e-12}
+output: {every: 0.25}
+)";
+    const ControlledTrajectory r = run(text);
+    const Trajectory& tr = r.plant;
+    ASSERT_EQ(tr.stats.status, Status::kOk) << tr.stats.message;
+    EXPECT_EQ(r.control.not_met, 0) << r.control.not_met_message;
+    EXPECT_EQ(tr.stats.events, 0);
+    ASSERT_EQ(tr.samples(), 5);
+    const double muN = 0.2 * 2.0 * 9.81;
+    for (std::size_t i = 0; i < 5; ++i) {
+      EXPECT_NEAR(at(tr, tr.q, "p.x", i), 0.0, 1e-12) << "t = " << tr.t[i];
+      const double control = at(tr, r.Qc_control, "p.x", i);
+      const double friction = at(tr, tr.Qc_nonideal, "p.x", i) + at(tr, tr.Qc_ideal, "p.x", i);
+      EXPECT_NEAR(control, F > muN ? -(F - muN) : 0.0, 1e-9) << "t = " << tr.t[i];
+      EXPECT_NEAR(friction, F > muN ? -muN : -F, 1e-9) << "t = " << tr.t[i];
+    }
   }
 }
 

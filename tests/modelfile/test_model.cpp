@@ -504,6 +504,23 @@ TEST(ModelErrors, MassMatrixNotPositiveDefiniteAtTheInitialState) {
   EXPECT_TRUE(contains(e, "the coordinates 'th' are not determined")) << e;
   EXPECT_TRUE(contains(e, "no inertia for th: the kinetic energy must involve every velocity"))
       << e;
+  // u16 04: a coordinate without inertia that only a unilateral contact determines (open at
+  // the start, and free whenever it opens): refused at the start as well, the contact named
+  e = error_of(
+      "coordinates: [x, y]\nkinetic_energy: 0.5*x_dot^2\ninitial: {q: {y: 1}}\n"
+      "constraints:\n  - {name: floor, holonomic: y, unilateral: true}\n");
+  EXPECT_TRUE(contains(e,
+                       "m.yaml:2:17: error: the mass matrix is singular at the initial state "
+                       "(t = 0) and the constraints do not determine every coordinate"))
+      << e;
+  EXPECT_TRUE(contains(e, "the coordinates 'y' are not determined")) << e;
+  EXPECT_TRUE(contains(e, "(a unilateral contact does not: it may open)")) << e;
+  // (and nan written bare where a constant is read: not a name of the model)
+  e = error_of(
+      "coordinates: [x, y]\nmass_matrix: [[1, 0], [0, 1]]\ninitial: {q: {y: 1}}\n"
+      "constraints:\n  - {name: floor, holonomic: y, unilateral: true, restitution: nan}\n");
+  EXPECT_TRUE(contains(e, "m.yaml:5:64: error: restitution must be a finite number, but is 'nan'"))
+      << e;
   // positive diagonal, indefinite: [[1, 2], [2, 1]]
   e = error_of("coordinates: [x, y]\nmass_matrix: [[1, 2], [2, 1]]\n");
   EXPECT_TRUE(contains(e,
