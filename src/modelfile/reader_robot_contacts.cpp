@@ -219,12 +219,11 @@ void Reader::read_robot_contacts(const YAML::Node& root, const tree::Tree& robot
                          ? tree::disk_contact_constraint(robot, name, {at.link, at.p, axis, radius},
                                                          plane, initial_q(), e)
                          : tree::contact_constraint(robot, name, at, radius, plane, e);
-      // (Coulomb friction there slides the contact point: read_nonideal; not yet at a disk)
+      // (Coulomb friction there slides the contact point: read_nonideal)
       if (shape == "disk") {
-        point_contacts_[name] = []() -> ContactKinematics {
-          throw std::invalid_argument(
-              "x: friction at a disk contact is not supported yet (a point or sphere contact "
-              "takes it)");
+        point_contacts_[name] = [robot_copy = robot, name, at, axis, radius, plane]() {
+          return tree::disk_contact_kinematics(robot_copy, name, {at.link, at.p, axis, radius},
+                                               plane);
         };
       } else {
         point_contacts_[name] = [robot_copy = robot, name, at, radius, plane]() {

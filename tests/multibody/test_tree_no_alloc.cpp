@@ -113,37 +113,47 @@ TEST(Tree, FrameConstraintsAndTaskControlDoNotAllocate) {
   EXPECT_GT(cs.qdd.norm(), 0.1);
 }
 
-// Coulomb friction at a link's contact point (tree::contact_kinematics): the friction's
-// evaluation and its stick constraint's rows allocate nothing
+// Coulomb friction at a link's contact point (tree::contact_kinematics,
+// tree::disk_contact_kinematics): the friction's evaluation and its stick constraint's rows
+// allocate nothing — a sphere on the floor, a sphere and a disk on a tilted plane of link 3
 TEST(Tree, ContactPointFrictionDoesNotAllocate) {
   const Tree tree = load_urdf(kPanda);
-  const Index tool = tree.link_index("panda_tool");
+  const Index tool = tree.link_index("panda_tool"), l3 = tree.link_index("panda_link3");
   VectorXd q(7), qd(7);
   q << 0.3, -0.5, 0.8, -1.9, 0.4, 1.7, -0.6;
   qd << 0.5, -1.0, 0.7, 0.2, -0.9, 1.1, 0.3;
-  SystemBuilder sb = system_builder(tree);
-  const LinkFrame floor{-1, Vector3d::Zero(), Matrix3d::Identity()};
-  sb.add(contact_constraint(tree, "floor", {tool, Vector3d::Zero()}, 0.02, floor));
-  CoulombFriction spec;
-  spec.constraint = "floor";
-  spec.mu = 0.3;
-  spec.kinematics = contact_kinematics(tree, "floor", {tool, Vector3d::Zero()}, 0.02, floor);
-  sb.add(coulomb_friction(spec));
-  const System sys = sb.build();
-  Workspace ws(sys);
-  forward_dynamics(sys, ws, q, qd, 0.0);
-  const Index stick = sys.constraint_index("stick.coulomb.floor");
-  MatrixXd A = MatrixXd::Zero(2, 7);
-  VectorXd b = VectorXd::Zero(2);
-  testing::start_counting_allocations();
-  for (int i = 0; i < 5; ++i) {
-    forward_dynamics(sys, ws, q, qd, 0.01 * i);
-    sys.constraint(stick).model().acceleration_form(q, qd, 0.0,
-                                                    ws.scratch[std::size_t(stick)].get(), A, b);
+  LinkFrame tilted{l3, Vector3d(0.05, 0.1, -0.02), Matrix3d::Identity()};
+  tilted.R = Eigen::AngleAxisd(0.4, Vector3d(1, 2, 0).normalized()).toRotationMatrix();
+  const LinkDisk disk{tool, Vector3d(0.01, 0.02, 0.05), Vector3d(0.3, -0.2, 1.0), 0.04};
+  for (int shape = 0; shape < 3; ++shape) {
+    const LinkFrame plane =
+        shape == 0 ? LinkFrame{-1, Vector3d::Zero(), Matrix3d::Identity()} : tilted;
+    SystemBuilder sb = system_builder(tree);
+    sb.add(shape == 2 ? disk_contact_constraint(tree, "c", disk, plane, q)
+                      : contact_constraint(tree, "c", {tool, Vector3d::Zero()}, 0.02, plane));
+    CoulombFriction spec;
+    spec.constraint = "c";
+    spec.mu = 0.3;
+    spec.kinematics = shape == 2
+                          ? disk_contact_kinematics(tree, "c", disk, plane)
+                          : contact_kinematics(tree, "c", {tool, Vector3d::Zero()}, 0.02, plane);
+    sb.add(coulomb_friction(spec));
+    const System sys = sb.build();
+    Workspace ws(sys);
+    forward_dynamics(sys, ws, q, qd, 0.0);
+    const Index stick = sys.constraint_index("stick.coulomb.c");
+    MatrixXd A = MatrixXd::Zero(2, 7);
+    VectorXd b = VectorXd::Zero(2);
+    testing::start_counting_allocations();
+    for (int i = 0; i < 5; ++i) {
+      forward_dynamics(sys, ws, q, qd, 0.01 * i);
+      sys.constraint(stick).model().acceleration_form(q, qd, 0.0,
+                                                      ws.scratch[std::size_t(stick)].get(), A, b);
+    }
+    EXPECT_EQ(testing::stop_counting_allocations(), 0) << "shape " << shape;
+    EXPECT_EQ(ws.status, Status::kOk) << "shape " << shape;
+    EXPECT_GT(A.norm(), 0.0) << "shape " << shape;
   }
-  EXPECT_EQ(testing::stop_counting_allocations(), 0);
-  EXPECT_EQ(ws.status, Status::kOk);
-  EXPECT_GT(A.norm(), 0.0);
 }
 
 }  // namespace UKDYN_TEST_FILE

@@ -4,7 +4,7 @@
 // each case against its closed form — a sphere launched without spin on a rough floor (slides,
 // then rolls from t* = 2 v0 / (7 mu g) at 5/7 v0), a planar rod sliding flat on two point contacts
 // (stops at v0² / (2 mu g) and sticks, each end carrying m g / 2), Painlevé's rod on its end, an
-// oblique impact that sticks or slides, a robot wheel in joint coordinates, a sphere pushed at a
+// oblique impact that sticks or slides, a robot contact's refusals, a sphere pushed at a
 // required pace (rolling, sliding then sticking: the controller follows the contact's stick and
 // slip; its steps against the same motion uncontrolled), the errors.
 #include <gtest/gtest.h>
@@ -35,15 +35,7 @@ using Eigen::Vector3d;
 // column `name` of field f (width n) at sample i
 constexpr auto* at = &testing::coordinate_at;
 // the multiplier of constraint `name`'s first row at sample i
-double lambda_of(const Trajectory& tr, const std::string& name, std::size_t i) {
-  Index row = 0;
-  for (std::size_t k = 0; k < tr.constraint_names.size(); ++k) {
-    if (tr.constraint_names[k] == name) return tr.lambda[i * std::size_t(tr.m) + std::size_t(row)];
-    row += tr.constraint_rows[k];
-  }
-  ADD_FAILURE() << "no constraint " << name;
-  return 0.0;
-}
+constexpr auto* lambda_of = &testing::first_multiplier;
 
 // the run of m sampled at `times` (and its ends); it must end ok, refusing no stick
 Trajectory run_at(Model& m, std::vector<double> times) {
@@ -277,55 +269,9 @@ TEST(ContactBodiesFriction, PainleveRodOnItsEndMeetsTheCriticalMu) {
 // ---- a wheel on a robot in joint coordinates
 // -----------------------------------------------------
 
-// tests/data/rolling_wheel.urdf: prismatic x (carriage 1 kg), prismatic z (carriage 1 kg), pitch
-// about y of a wheel (2 kg, r = 0.1, I = ½ m r² = 0.01), a sphere contact of radius r at the
-// wheel's centre on the floor. Launched along x at v0 without spin: N = (m_z + m_w) g = 3 g (the
-// x carriage does not move in z), the carriages and the wheel decelerate at a = mu N / 4, the
-// wheel spins up at phi'' = r mu N / I, and the contact point's speed v − r phi' vanishes at
-// t* = v0 / (a + r² mu N / I) = v0 / (3.75 mu g), v* = 0.8 v0; then it rolls (stuck, no friction).
-constexpr const char* kWheel = R"(
-robot: {urdf: rolling_wheel.urdf}
-parameters: {v0: 1.2, mu: 0.25}
-contacts:
-  - {name: floor, link: wheel, shape: sphere, radius: 0.1}
-nonideal:
-  - {friction: coulomb, constraint: floor, mu: mu}
-initial:
-  q_dot: {x: v0}
-simulate: {t_end: 0.5, integrator: dopri5, rtol: 1e-11, atol: 1e-13}
-output: {every: 0}
-)";
+// (the wheel in joint coordinates: tests/multibody/test_tree_contact_friction.cpp)
 
-TEST(ContactBodiesFriction, RobotWheelInJointCoordinatesRollsFromTheClosedFormInstant) {
-  Model m = parse_model(kWheel, std::string(UKDYN_TEST_DATA_DIR) + "/robot.yaml");
-  const double v0 = 1.2, mu = 0.25, r = 0.1, I = 0.01, N = 3.0 * kG, M = 4.0;
-  const double a = mu * N / M, alpha = r * mu * N / I;
-  const double t_star = v0 / (a + r * alpha), v_star = v0 - a * t_star;
-  EXPECT_NEAR(t_star, v0 / (3.75 * mu * kG), 1e-15);
-  const Trajectory tr = run_at(m, {0.02, 0.08, t_star - 1e-4, t_star + 1e-4, 0.3, 0.5});
-  EXPECT_EQ(tr.stats.events, 1);
-  for (std::size_t i = 0; i < tr.t.size(); ++i) {
-    const double t = tr.t[i];
-    const bool sliding = t < t_star;
-    const double v = sliding ? v0 - a * t : v_star;
-    const double w = sliding ? alpha * t : v_star / r;
-    EXPECT_NEAR(at(tr, tr.qd, "x", i), v, 1e-8) << "t = " << t;
-    EXPECT_NEAR(at(tr, tr.qd, "pitch", i), w, 1e-7) << "t = " << t;
-    EXPECT_NEAR(at(tr, tr.q, "z", i), 0.0, 1e-9) << "t = " << t;
-    // the physical normal force N = 3 g; the gap row's A is e_z on z: lambda = N
-    EXPECT_NEAR(lambda_of(tr, "floor", i), N, 1e-7) << "t = " << t;
-    // the friction: −mu N on x and its moment r mu N on the pitch while sliding; none after
-    EXPECT_NEAR(at(tr, tr.Qc_nonideal, "x", i), sliding ? -mu * N : 0.0, 1e-7) << "t = " << t;
-    EXPECT_NEAR(at(tr, tr.Qc_nonideal, "pitch", i), sliding ? r * mu * N : 0.0, 1e-8)
-        << "t = " << t;
-  }
-  // the friction's work: ½ M v0² − ½ M v*² − ½ I (v*/r)²
-  const double loss =
-      0.5 * M * v0 * v0 - 0.5 * M * v_star * v_star - 0.5 * I * (v_star / r) * (v_star / r);
-  expect_friction_work(tr, -loss);
-}
-
-TEST(ContactBodiesFriction, RobotContactFrictionRefusesCoordinatesAndALinksPlane) {
+TEST(ContactBodiesFriction, RobotContactFrictionRefusesCoordinatesAndBadCoefficients) {
   const std::string head = R"(
 robot: {urdf: rolling_wheel.urdf}
 contacts:
@@ -339,8 +285,6 @@ nonideal:
 
   expect("  - {friction: coulomb, constraint: floor, mu: 0.3, coordinates: [x]}\n", "7:66",
          "it takes no coordinates");
-  expect("  - {friction: coulomb, constraint: side, mu: 0.3}\n", "7:37",
-         "friction on a plane of a link is not supported yet");
   expect("  - {friction: coulomb, constraint: floor, mu: -1}\n", "7:48", "mu must be >= 0");
   expect("  - {friction: coulomb, constraint: floor, mu: 1e150}\n", "7:48",
          "mu must be in [0, 1e+06] (a coefficient of friction), got 1e+150");

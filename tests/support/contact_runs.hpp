@@ -28,6 +28,17 @@ inline double coordinate_at(const Trajectory& tr, const std::vector<double>& f,
   return f[i * std::size_t(tr.n) + c];
 }
 
+// the multiplier of constraint `name`'s first row at sample i (failing when there is none)
+inline double first_multiplier(const Trajectory& tr, const std::string& name, std::size_t i) {
+  Index row = 0;
+  for (std::size_t k = 0; k < tr.constraint_names.size(); ++k) {
+    if (tr.constraint_names[k] == name) return tr.lambda[i * std::size_t(tr.m) + std::size_t(row)];
+    row += tr.constraint_rows[k];
+  }
+  ADD_FAILURE() << "no constraint " << name;
+  return 0.0;
+}
+
 // the events of kind `kind` at constraint k
 inline std::vector<ContactEvent> events_of(const Trajectory& tr, Index k, ContactEvent::Kind kind) {
   std::vector<ContactEvent> out;

@@ -59,12 +59,19 @@ Constraint contact_constraint(const Tree& tree, std::string name, LinkPoint at, 
                               const LinkFrame& plane, double restitution = 0.0);
 
 /// The contact-point kinematics of that contact (sphere of radius r centred at `at`, or a point),
-/// for Coulomb friction there (CoulombFriction::kinematics; docs/contact.md, "Friction at a
-/// robot's contact"): rows n_Wᵀ J_P, t_1ᵀ J_P, t_2ᵀ J_P (t_1, t_2 = plane.R's x and y axes) of
-/// the Jacobian of the link's material point at the contact, v_P = v(at) + ω × (−r n_W),
-///   J_P = J_v(at) − [−r n_W]× J_ω,   J_P' q' = β_v(at) + β_ω × (−r n_W),
-/// on all n coordinates. @throws std::invalid_argument naming `name` on a link out of range or
-/// a plane on a link (not supported yet: its normal turns). Cost per evaluation O(n · depth).
+/// for Coulomb friction there (CoulombFriction::kinematics; docs/contact.md, "Contacts on
+/// robots"): rows n_Wᵀ J_rel, t_1ᵀ J_rel, t_2ᵀ J_rel (n_W, t_1, t_2 = plane.R's z, x and y axes
+/// in the world, turning with the plane's link) of the Jacobian of the relative velocity of the
+/// two links' material points at the contact point x = c − r n_W (c = p_W(at), o the plane's
+/// point, d = c − o, ρ = −r n_W, ω_C, ω_P the links' angular velocities; zero for the world):
+///   v_rel = v(c) + ω_C × ρ − v(o) − ω_P × (d + ρ),
+///   J_rel = J_v(c) − J_v(o) − [ρ]× J_ω(C) + [d + ρ]× J_ω(P),
+///   bias_i = (ω_P × r_i) · v_rel + r_i · (β_v(c) − β_v(o) + β_ω(C) × ρ + ω_C × ρ'
+///            − β_ω(P) × (d + ρ) − ω_P × (d' + ρ')),   ρ' = −r ω_P × n_W,
+/// on all n coordinates (β = J' q'; on a plane of the world J_P = J_v(at) − [ρ]× J_ω, bias
+/// r_i · (β_v(at) + β_ω × ρ)). Row 0 is the contact row's A. @throws std::invalid_argument
+/// naming `name` on a link out of range, both on the world, a point not finite or plane.R not a
+/// rotation. Cost per evaluation O(n · depth).
 ContactKinematics contact_kinematics(const Tree& tree, const std::string& name, LinkPoint at,
                                      double radius, const LinkFrame& plane);
 
@@ -96,5 +103,18 @@ struct LinkDisk {
 Constraint disk_contact_constraint(const Tree& tree, std::string name, const LinkDisk& disk,
                                    const LinkFrame& plane, const Eigen::Ref<const VectorXd>& q0,
                                    double restitution = 0.0);
+
+/// The contact-point kinematics of that disk contact, for Coulomb friction there (as
+/// contact_kinematics): the contact point is the rim's point most opposed to n_W,
+/// x = c + ρ, ρ = −r m/|m|, m = n_W − s a_W, s = n_W · a_W, which moves on the disk as it rolls,
+/// so the material velocity there is v(c) + ω_C × ρ and the bias has ω_C × ρ' with
+/// ρ' = −r (m' − (e·m') e)/|m|, e = m/|m|, m' = n_W' − s' a_W − s a_W', a_W' = ω_C × a_W,
+/// n_W' = ω_P × n_W (not ω_C × (ω_C × ρ): ρ is not a material vector). Row 0 is the disk
+/// row's A. A disk flat on its plane (m = 0) has no contact point: disk_contact_constraint
+/// refuses it at q0 and the run stops on it. @throws std::invalid_argument naming `name` as
+/// contact_kinematics, and on a radius not > 0 or an axis zero or not finite. Cost per
+/// evaluation O(n · depth).
+ContactKinematics disk_contact_kinematics(const Tree& tree, const std::string& name,
+                                          const LinkDisk& disk, const LinkFrame& plane);
 
 }  // namespace ukdyn::tree

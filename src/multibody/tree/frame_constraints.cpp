@@ -2,7 +2,8 @@
 // Constraints and requirements between tree frames, built on frame_jacobian and
 // frame_bias_acceleration: a point loop closure (3 rows), a distance loop closure (1 row), a weld
 // (6 rows) and a revolute closure (5 rows), a unilateral contact of a point, sphere or disk with
-// a plane (1 row), and a task-space pose requirement (6 rows) for exact tracking control.
+// a plane (1 row), and a task-space pose requirement (6 rows) for exact tracking control. (The
+// contact point's kinematics for friction there: contact_kinematics.cpp.)
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -12,6 +13,7 @@
 #include <string>
 #include <utility>
 
+#include "multibody/tree/frame_scratch.hpp"
 #include "multibody/tree/kinematics_cache.hpp"
 #include "multibody/tree/spatial.hpp"
 #include "ukdyn/core/format.hpp"
@@ -22,37 +24,13 @@ namespace ukdyn::tree {
 
 namespace {
 
-using Jacobian = Eigen::Matrix<double, 6, Eigen::Dynamic>;
-
-// per workspace: the forward kinematics (its own, or those of the tree system's workspace it is
-// evaluated with: detail::shared_kinematics) and the two points' Jacobians
-struct FrameScratch final : ConstraintScratch {
-  // shared: the kinematics cache of a tree system's scratch (same kinematics), or null
-  FrameScratch(const Tree& tree, detail::KinematicsCache* shared)
-      : own(shared != nullptr ? nullptr : std::make_unique<detail::KinematicsCache>(tree)),
-        kinematics(shared != nullptr ? *shared : *own),
-        data(kinematics.data),
-        Ja(6, tree.coordinate_count()),
-        Jb(6, tree.coordinate_count()),
-        qd_omega(tree.coordinate_count()) {
-    // (the RNEA of the system sharing it keeps the velocity products for the J' q' pass)
-    kinematics.keep_c = true;
-  }
-  std::unique_ptr<detail::KinematicsCache> own;  // (null when shared)
-  detail::KinematicsCache& kinematics;           // *own or the shared one
-  TreeData& data;                                // kinematics.data
-  Jacobian Ja, Jb;                               // (6 × n) frame Jacobians of the points a and b
-  std::uint64_t version = 0;                     // kinematics.version of Ja and Jb
-  bool Ja_valid = false, Jb_valid = false;       // Ja, Jb are those of data's kinematics
-  PoseSample desired;                            // a pose requirement's path at t_desired
-  double t_desired = 0.0;
-  bool desired_valid = false;  // desired holds the path at t_desired
-  // a pose requirement's ω = J_ω q' (Ja's) at q' = qd_omega: the acceleration form's, read
-  // again by the violation at the same state
-  Vector3d omega = Vector3d::Zero();
-  VectorXd qd_omega;         // (n)
-  bool omega_valid = false;  // omega is that of the Ja kept and qd_omega
-};
+// (frame_scratch.hpp: the buffers and point kinematics shared with contact_kinematics.cpp)
+using detail::FrameScratch;
+using detail::Jacobian;
+using detail::kinematics_at;
+using detail::point_state;
+using detail::PointState;
+using detail::world_rotation;
 
 // L −= ½ [x]× [y]× = ½ (y xᵀ − (x · y) I), entry by entry: the products and sums of the 3 × 3
 // product of the two cross-product matrices without its terms that are zero (at most two terms
@@ -79,60 +57,6 @@ const PoseSample& desired_at(const PosePathFn& path, double t, FrameScratch& w) 
     w.desired_valid = true;
   }
   return w.desired;
-}
-
-// forward kinematics at q once per state: both points of a closure, and the acceleration form
-// and the violation of one evaluation, share it (the same q, bit for bit, gives the same
-// kinematics); the Jacobians kept are dropped when the kinematics changed
-void kinematics_at(const Tree& tree, const Eigen::Ref<const VectorXd>& q, FrameScratch& w) {
-  w.kinematics.at(tree, q);
-  if (w.version != w.kinematics.version) {
-    w.Ja_valid = w.Jb_valid = w.omega_valid = false;
-    w.version = w.kinematics.version;
-  }
-}
-
-// the kinematics of one point at (q, q'): position, Jacobian and J' q' (zero for the world)
-struct PointState {
-  Vector3d p_W;
-  Vector6d bias;  // [ω'; a] at q'' = 0
-};
-PointState point_state(const Tree& tree, const LinkPoint& pt, const Eigen::Ref<const VectorXd>& q,
-                       const Eigen::Ref<const VectorXd>& qd, FrameScratch& w, Jacobian& J,
-                       bool with_bias) {
-  if (pt.link < 0) {
-    J.setZero();
-    return {pt.p, Vector6d::Zero()};
-  }
-  TreeData& d = w.data;
-  kinematics_at(tree, q, w);
-  if (qd.size() != tree.coordinate_count()) {
-    throw std::invalid_argument("ukdyn::tree: a constraint between tree frames got " +
-                                std::to_string(qd.size()) + " velocities, expected " +
-                                std::to_string(tree.coordinate_count()));
-  }
-  PointState s;
-  if (with_bias) {
-    // the link velocities and velocity products of the RNEA at this state, when it ran on
-    // these kinematics (the controller's model or the plant evaluated with the scratch this one
-    // shares); v known without c (an RNEA before this scratch set keep_c): v is written again,
-    // the same bits, and stays marked
-    const bool v_known = w.kinematics.velocities_at(qd);
-    s.bias = detail::frame_bias_from_kinematics(
-        tree, qd, d, pt.link, pt.p, v_known && w.kinematics.c_valid ? &w.kinematics.c : nullptr);
-    if (!v_known) w.kinematics.clear_velocities();  // (written on links 0 … pt.link only)
-  } else {
-    s.bias.setZero();
-  }
-  // (the acceleration form and the violation at one state need the Jacobian once)
-  bool& J_valid = &J == &w.Ja ? w.Ja_valid : w.Jb_valid;
-  if (!J_valid) {
-    frame_jacobian(tree, d, pt.link, pt.p, J);
-    if (&J == &w.Ja) w.omega_valid = false;
-  }
-  J_valid = true;
-  s.p_W = world_point(d, pt.link, pt.p);
-  return s;
 }
 
 void check_point(const Tree& tree, const std::string& who, const std::string& name,
@@ -257,12 +181,6 @@ class DistanceModel final : public FrameModel {
   LinkPoint a_, b_;
   double length_;
 };
-
-// the world orientation of a link's frame (the world's own for link −1), after
-// forward_kinematics
-Matrix3d world_rotation(const TreeData& d, Index link, const Matrix3d& R_L) {
-  return link < 0 ? R_L : Matrix3d(d.R_WL[std::size_t(link)] * R_L);
-}
 
 // e = [p_W(a) − p_W(b); ½ Σ r_b,k × r_a,k]; e'' = 0 is A q'' = b (see weld_constraint)
 class WeldModel final : public FrameModel {
@@ -590,6 +508,12 @@ void check_plane(const std::string& who, const std::string& name, const LinkFram
 
 }  // namespace
 
+void detail::check_contact(const Tree& tree, const std::string& who, const std::string& name,
+                           const LinkPoint& at, const LinkFrame& plane) {
+  check_points(tree, who, name, at, {plane.link, plane.p});
+  check_plane(who, name, plane);
+}
+
 Constraint contact_constraint(const Tree& tree, std::string name, LinkPoint at, double radius,
                               const LinkFrame& plane, double restitution) {
   const std::string who = "ukdyn::tree::contact_constraint";
@@ -648,44 +572,6 @@ Constraint disk_contact_constraint(const Tree& tree, std::string name, const Lin
   Constraint c(std::move(name), ConstraintKind::kHolonomic, 1, std::move(model));
   c.unilateral(restitution);
   return c;
-}
-
-ContactKinematics contact_kinematics(const Tree& tree, const std::string& name, LinkPoint at,
-                                     double radius, const LinkFrame& plane) {
-  const std::string who = "ukdyn::tree::contact_kinematics";
-  check_points(tree, who, name, at, {plane.link, plane.p});
-  if (plane.link >= 0) {
-    throw std::invalid_argument(who + ": contact '" + name +
-                                "': friction on a plane of a link is not supported yet (a plane "
-                                "of the world takes it)");
-  }
-  auto shared = std::make_shared<const Tree>(tree);
-  const Vector3d n = plane.R.col(2), t1 = plane.R.col(0), t2 = plane.R.col(1);
-  const Vector3d a = -radius * n;  // from the sphere's centre to the contact point
-  ContactKinematics kin;
-  kin.tangents = 2;
-  for (Index i = 0; i < tree.coordinate_count(); ++i) kin.columns.push_back(i);
-  kin.make_scratch = [shared](Index) -> std::unique_ptr<ConstraintScratch> {
-    return std::make_unique<FrameScratch>(*shared, nullptr);
-  };
-  // v_P = v(centre) + ω × a: J_P = J_v − [a]× J_ω, J_P' q' = β_v + β_ω × a (a fixed: a plane of
-  // the world)
-  kin.evaluate = [shared, at, n, t1, t2, a](const Eigen::Ref<const VectorXd>& q,
-                                            const Eigen::Ref<const VectorXd>& qd, double,
-                                            ConstraintScratch* s, Eigen::Ref<MatrixXd> J,
-                                            Eigen::Ref<VectorXd> bias) {
-    auto& w = *static_cast<FrameScratch*>(s);
-    const PointState pc = point_state(*shared, at, q, qd, w, w.Ja, true);
-    const Vector3d g = pc.bias.tail<3>() + pc.bias.head<3>().cross(a);
-    const Vector3d rows[3] = {n, t1, t2};
-    for (int i = 0; i < 3; ++i) {
-      // rᵀ (J_v − [a]× J_ω) = rᵀ J_v + (a × r)ᵀ J_ω   (−rᵀ [a]× = (a × r)ᵀ)
-      J.row(i).noalias() = rows[i].transpose() * w.Ja.bottomRows<3>();
-      J.row(i).noalias() += a.cross(rows[i]).transpose() * w.Ja.topRows<3>();
-      bias[i] = rows[i].dot(g);
-    }
-  };
-  return kin;
 }
 
 Constraint pose_requirement(const Tree& tree, std::string name, LinkPoint at, PosePathFn path,
