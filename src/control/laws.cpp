@@ -23,6 +23,16 @@ namespace {
 constexpr double kUnmoved = 1e-10;
 // the roundoff of a held requirement row's e_i relative to ‖A_r,i‖ ‖a‖ (see compute_control)
 constexpr double kHeldRoundoff = 1e-12;
+
+// Whether a row of X (or X M) is roundoff of a direction the physical constraints remove, to be
+// zeroed: ‖M P A_r,iᵀ‖ (mp: the non-ideal projection L Π L⁻¹ A_r,iᵀ, dimensionless against
+// ‖A_r,i‖ and unchanged when M is scaled) within kUnmoved of ‖A_r,i‖ (a). A requirement on a
+// held contact's gap, or on a combination parallel to its row, tilted against the coordinates,
+// leaves ‖X_i‖ ~ 1e-17, not 0, and the decomposition's rank threshold is relative to the largest
+// row: a lone such row counted as rank 1 and the law answered e_i / 1e-17 (a lift off an incline
+// diverged at t = 5e-7 s; docs/contact.md, "Contacts under control"). Zeroed, it is a row the
+// control cannot move, decided by the contacts (the feasibility test below). O(n).
+bool removed(const VectorXd& mp, const VectorXd& a) { return mp.norm() <= kUnmoved * a.norm(); }
 }  // namespace
 
 namespace control_detail {
@@ -84,6 +94,7 @@ ControlStatus control_detail::solve_law_on(const Controller& ctrl, ControlWorksp
         ws.tmp_n = A.row(i).transpose();
         dp.project_nonideal(ws.tmp_n, ws.tmp_n2, ws.tmp_n3, ws.lambda_p);
         ws.X.row(i) = ws.tmp_n3.transpose();
+        if (removed(ws.tmp_n3, ws.tmp_n)) ws.X.row(i).setZero();
       }
     }
     ws.decomposition.compute_constraints(ws.X);
@@ -104,6 +115,7 @@ ControlStatus control_detail::solve_law_on(const Controller& ctrl, ControlWorksp
         dp.solve_mass(ws.tmp_n, ws.tmp_n2);
       }
       ws.X.row(i) = ws.tmp_n2.transpose();
+      if (physical && removed(ws.tmp_n3, ws.tmp_n)) ws.X.row(i).setZero();
     }
     // cost matrix Nu and its Cholesky factor (a constant one once)
     const bool constant = ctrl.law() == ControlLaw::kWeighted ? ctrl.weight_is_constant()

@@ -1,0 +1,200 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// A requirement that lifts a body off a tilted contact (issue #31; defect 01 of session 16;
+// docs/contact.md "Contacts under control"): the requirement row duplicates the closed contact's
+// row but for roundoff — a gap n·(x, y) with n tilted against the coordinates, or a two-link arm's
+// tip height — so with the contact held its row of X = A_r P is ~1e-17, not 0. The law's rank
+// decision is relative to the largest row, and a lone such row counted as rank 1: the control
+// answered e / 1e-17 and the run diverged at t = 5e-7 s (from t1 = 0.5: a step size underflow;
+// the arm: a hang at 1e-9 s). Against the closed form: the release at the start of the lift, then
+// the gap = c (t − t1)³ exactly, the particle sliding down the slope with s'' = g sin a, the
+// control along the normal, F_n = m (6 c (t − t1) + g cos a), the contact force 0.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <string>
+
+#include "ukdyn/control/control.hpp"
+#include "ukdyn/dynamics/contact.hpp"
+#include "ukdyn/modelfile/model.hpp"
+#include "ukdyn/ukdyn.hpp"
+
+namespace ukdyn {
+namespace UKDYN_TEST_FILE {
+
+constexpr double kG = 9.81, kM = 2.0, kC = 2.0;
+// ControlOptions::feasibility_tolerance (default)
+constexpr double kTol = 1e-8;
+
+// A particle (m = 2) resting on the incline n·(x, y) >= 0, n = (sin a, cos a), its gap required
+// to open as c (t − t1)³ from t1 (an active: interval when t1 > 0).
+std::string incline(double al, double t1) {
+  const std::string lift = t1 > 0.0 ? "c*(t - t1)^3, active: [t1, 2]" : "c*t^3";
+  return "parameters: {m: 2, g: 9.81, c: 2, al: " + std::to_string(al) +
+         ", t1: " + std::to_string(t1) +
+         "}\n"
+         "coordinates: [x, y]\n"
+         "kinetic_energy: 0.5*m*(x_dot^2 + y_dot^2)\n"
+         "potential_energy: m*g*y\n"
+         "constraints:\n"
+         "  - {name: floor, holonomic: x*sin(al) + y*cos(al), unilateral: true}\n"
+         "control:\n"
+         "  requirements:\n"
+         "    - {name: pz, holonomic: x*sin(al) + y*cos(al) - " +
+         lift +
+         ", dynamics: {omega: 20, zeta: 1}}\n"
+         "  law: gauss\n"
+         "simulate: {t_end: 1, integrator: dopri5, rtol: 1e-10, atol: 1e-12}\n"
+         "output: {every: 0.05}\n";
+}
+
+ControlledTrajectory run(const Model& m) {
+  return simulate_controlled(*m.controller, m.system, m.q0, m.qd0, m.options);
+}
+
+// The run ends ok with its requirements met and one contact event, a release: its time (NaN
+// otherwise).
+double the_release(const ControlledTrajectory& r) {
+  const Trajectory& p = r.plant;
+  EXPECT_EQ(p.stats.status, Status::kOk) << p.stats.message;
+  EXPECT_EQ(r.control.not_met, 0);
+  EXPECT_EQ(p.stats.contact_events.size(), 1u);
+  if (p.stats.status != Status::kOk || p.stats.contact_events.size() != 1u) return std::nan("");
+  EXPECT_EQ(p.stats.contact_events[0].kind, ContactEvent::Kind::kRelease);
+  return p.stats.contact_events[0].t;
+}
+
+// The arms below (L1 = 0.5, L2 = 0.4, pivot at H = 0.5): the tip's height H − L1 sin j1 −
+// L2 sin(j1 + j2) is c (t − t1)³ from t1 on (0 before), and the contact carries a load before
+// t1, none after.
+void expect_tip_lifted(const Trajectory& p, double t1) {
+  const double H = 0.5, L1 = 0.5, L2 = 0.4;
+  for (Index j = 0; j < p.samples(); ++j) {
+    const double t = p.t[std::size_t(j)], tau = std::max(0.0, t - t1);
+    const double j1 = p.q[std::size_t(2 * j)], j2 = p.q[std::size_t(2 * j + 1)];
+    EXPECT_NEAR(H - L1 * std::sin(j1) - L2 * std::sin(j1 + j2), kC * tau * tau * tau, 1e-9)
+        << "t = " << t;
+    if (tau > 0.0) {
+      EXPECT_NEAR(p.lambda[std::size_t(j)], 0.0, 1e-12) << "t = " << t;
+    } else {
+      EXPECT_GT(p.lambda[std::size_t(j)], 0.0) << "t = " << t;
+    }
+  }
+}
+
+void expect_incline_closed_form(double al, double t1) {
+  SCOPED_TRACE("a = " + std::to_string(al) + ", t1 = " + std::to_string(t1));
+  const Model m = parse_model(incline(al, t1));
+  const ControlledTrajectory r = run(m);
+  const Trajectory& p = r.plant;
+  // the release at the start of the lift: the requirement row, which the held contact decides,
+  // counts as met while its e = 6 c (t − t1) is within 100 tol of its terms ‖A_r‖ ‖a_p‖ (a_p =
+  // g sin a down the slope: the drift allowance of a row a contact holds, solve_law_on), i.e.
+  // t − t1 = 100 tol g sin a / (6 c (1 − 101 tol)) — 3.9e-7 s at a = 0.5, 8.2e-13 s at 1e-6
+  const double t_release = the_release(r);
+  ASSERT_FALSE(std::isnan(t_release));
+  const double delay = 100.0 * kTol * kG * std::sin(al) / (6.0 * kC * (1.0 - 101.0 * kTol));
+  EXPECT_NEAR(t_release - t1, delay, 1e-3 * delay + 1e-14);
+  ASSERT_EQ(p.samples(), 21);
+  const double s = std::sin(al), c = std::cos(al);
+  for (Index j = 0; j < p.samples(); ++j) {
+    const double t = p.t[std::size_t(j)], tau = std::max(0.0, t - t1);
+    const std::size_t i = std::size_t(2 * j);
+    const double x = p.q[i], y = p.q[i + 1];
+    // the gap c τ³; down the slope g sin a t²/2 (nothing resists the slide)
+    EXPECT_NEAR(s * x + c * y, kC * tau * tau * tau, 1e-10) << "t = " << t;
+    EXPECT_NEAR(c * x - s * y, 0.5 * kG * s * t * t, 1e-10) << "t = " << t;
+    const double Fx = r.Qc_control[i], Fy = r.Qc_control[i + 1];
+    if (tau > 0.0) {
+      // lifted: F_n = m (6 c τ + g cos a), none along the slope, the contact open
+      EXPECT_NEAR(s * Fx + c * Fy, kM * (6.0 * kC * tau + kG * c), 1e-7) << "t = " << t;
+      EXPECT_NEAR(c * Fx - s * Fy, 0.0, 1e-7) << "t = " << t;
+      EXPECT_NEAR(p.lambda[std::size_t(j)], 0.0, 1e-12) << "t = " << t;
+    } else {
+      // on the incline: no control, the contact carries m g cos a
+      EXPECT_NEAR(std::hypot(Fx, Fy), 0.0, 1e-9) << "t = " << t;
+      EXPECT_NEAR(p.lambda[std::size_t(j)], kM * kG * c, 1e-9) << "t = " << t;
+    }
+  }
+}
+
+TEST(ControlLift, RequirementLiftsAParticleOffAnInclineFromTheStart) {
+  expect_incline_closed_form(0.5, 0.0);
+}
+
+TEST(ControlLift, RequirementLiftsAParticleOffANearlyLevelInclineFromTheStart) {
+  expect_incline_closed_form(1e-6, 0.0);
+}
+
+TEST(ControlLift, RequirementActiveFromHalfASecondLiftsAParticleOffAnIncline) {
+  expect_incline_closed_form(0.5, 0.5);
+}
+
+// A two-link arm (generalized coordinates j1, j2; links L1 = 0.5, L2 = 0.4 of masses 2 and 1,
+// uniform rods) hanging from a pivot at height H = 0.5 above a table, its tip resting on it
+// (j1 = 1), the tip's height required to rise as c t³. The tip leaves the table at the start and
+// follows c t³ (to t = 0.6: 0.43 m, within the arm's reach H + L1 + L2 = 1.4 m).
+constexpr const char* kArm = R"(
+parameters: {L1: 0.5, L2: 0.4, H: 0.5, q10: 1.0, g: 9.81, c: 2, m1: 2, m2: 1}
+coordinates: [j1, j2]
+kinetic_energy: >-
+  0.5*(m1*L1^2/3 + m2*L2^2/12 + m2*(L1^2 + L2^2/4 + L1*L2*cos(j2)))*j1_dot^2
+  + (m2*L2^2/12 + m2*(L2^2/4 + L1*L2/2*cos(j2)))*j1_dot*j2_dot
+  + 0.5*(m2*L2^2/3)*j2_dot^2
+potential_energy: g*(m1*(H - L1/2*sin(j1)) + m2*(H - L1*sin(j1) - L2/2*sin(j1 + j2)))
+constraints:
+  - {name: tip, holonomic: H - L1*sin(j1) - L2*sin(j1 + j2), unilateral: true}
+initial:
+  q: {j1: q10, j2: asin((H - L1*sin(q10))/L2) - q10}
+control:
+  requirements:
+    - {name: pz, holonomic: H - L1*sin(j1) - L2*sin(j1 + j2) - c*t^3, dynamics: {omega: 20, zeta: 1}}
+  law: gauss
+simulate: {t_end: 0.6, integrator: dopri5, rtol: 1e-10, atol: 1e-12}
+output: {every: 0.05}
+)";
+
+TEST(ControlLift, RequirementLiftsATwoLinkArmsTipOffTheTable) {
+  const ControlledTrajectory r = run(parse_model(kArm));
+  // the release at the start (the drift allowance 100 tol ‖A_r‖ ‖a_p‖ / (6 c): 1.4e-6 s)
+  const double t_release = the_release(r);
+  EXPECT_GT(t_release, 0.0);
+  EXPECT_LT(t_release, 3e-6);
+  ASSERT_EQ(r.plant.samples(), 13);
+  expect_tip_lifted(r.plant, 0.0);
+}
+
+// The same arm as a URDF robot (tests/data/arm_lift.urdf: the links above as rods, the pivot at
+// z = H) whose tip point rests on the ground plane z = 0 (contacts:), its height required to rise
+// as c (t − t1)³ from t1 = 0.5 (active:): the tip slides on the ground until t1, then is lifted
+// (the robot's tree engine and the contact's point kinematics; was: "non-finite input … in Q" at
+// t = 0.507 while the run stopped at 0.5).
+constexpr const char* kRobotArm = R"(
+parameters: {L1: 0.5, L2: 0.4, H: 0.5, q10: 1.0, g: 9.81, c: 2, t1: 0.5}
+robot: {urdf: arm_lift.urdf, gravity: [0, 0, -g]}
+contacts:
+  - {name: tip, link: fore, point: [L2, 0, 0]}
+initial:
+  q: {j1: q10, j2: asin((H - L1*sin(q10))/L2) - q10}
+control:
+  requirements:
+    - {name: pz, holonomic: H - L1*sin(j1) - L2*sin(j1 + j2) - c*(t - t1)^3, active: [t1, 2],
+       dynamics: {omega: 20, zeta: 1}}
+  law: gauss
+simulate: {t_end: 1, integrator: dopri5, rtol: 1e-10, atol: 1e-12}
+output: {every: 0.05}
+)";
+
+TEST(ControlLift, RequirementActiveFromHalfASecondLiftsARobotsTipOffTheGround) {
+  const ControlledTrajectory r =
+      run(parse_model(kRobotArm, std::string(UKDYN_TEST_DATA_DIR) + "/arm_lift.yaml"));
+  // the release just after t1 (the drift allowance, as above); the tip slides on the ground
+  // (which carries a load) until then
+  const double t_release = the_release(r);
+  EXPECT_GT(t_release, 0.5);
+  EXPECT_LT(t_release, 0.5 + 3e-6);
+  ASSERT_EQ(r.plant.samples(), 21);
+  expect_tip_lifted(r.plant, 0.5);
+}
+
+}  // namespace UKDYN_TEST_FILE
+}  // namespace ukdyn
