@@ -128,7 +128,10 @@ enum class JointType {
 
 /// Which side of the other sphere a kContactSpheres contact keeps its sphere on: outside it (two
 /// balls) or inside it (a ball in a spherical bowl or shell, a bead inside a ring).
-enum class SphereSide { kOutside, kInside };
+enum class SphereSide {
+  kOutside,  ///< outside it: g = |c_C − c_P| − (radius + other_radius) (two balls)
+  kInside,   ///< inside it: g = (other_radius − radius) − |c_C − c_P| (a ball in a bowl)
+};
 
 /// Short name of a joint type ("revolute", …). Cost O(1).
 const char* to_string(JointType type);
