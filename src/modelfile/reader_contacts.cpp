@@ -2,7 +2,8 @@
 // The contacts: section of a multibody model (docs/model-format.md, "Contacts"; docs/contact.md,
 // "Contacts on bodies"): each entry is one unilateral gap of a point, sphere or disk of a body
 // with a plane fixed on the ground or on another body, added as mb::contact / mb::contact_disk,
-// or of a point or sphere outside a sphere of another body or of the ground (mb::contact_spheres).
+// or of a point or sphere outside (or, inside: true, inside) a sphere of another body or of the
+// ground (mb::contact_spheres).
 // Every error names the contact and the key (file:line:column) and gives a hint.
 #include <algorithm>
 #include <cmath>
@@ -32,19 +33,20 @@ void MultibodyReader::read_contacts() {
     const YAML::Node nn = require(c, "name", "a contact", "name: floor");
     const std::string name = name_of(c, "a contact", "");
     const std::string what = "contact '" + name + "'";
-    // unique among the constraints: the joints' names and the other contacts'
+    // unique among the constraints: the joints' names and the other contacts' (and the boxes':
+    // a box's corners are <name>.<k>, which no identifier is, and its friction names the box)
     for (const auto& j : joints_) {
       if (j.name == name)
         r_.fail(nn, what + ": a joint has this name",
                 "a contact names its constraint: choose a name no joint or contact has");
     }
     for (const auto& o : contacts_) {
-      if (o.name == name)
+      if (o.name == name || o.box == name)
         r_.fail(nn, what + " is declared twice",
                 "a contact names its constraint: make the names unique");
     }
     check_keys(c,
-               {"name", "body", "point", "shape", "radius", "axis", "plane", "sphere",
+               {"name", "body", "point", "shape", "radius", "size", "axis", "plane", "sphere",
                 "restitution", "restitution_law"},
                what);
     // the body, its point and its shape
@@ -57,15 +59,17 @@ void MultibodyReader::read_contacts() {
     std::string shape = "point";
     if (const YAML::Node sn = c["shape"]) {
       shape = sn.IsScalar() ? sn.Scalar() : std::string();
-      if (shape != "point" && shape != "sphere" && shape != "disk")
-        r_.fail(sn, what + ": unknown shape '" + shape + "'", "point, sphere or disk");
+      if (shape != "point" && shape != "sphere" && shape != "disk" && shape != "box")
+        r_.fail(sn, what + ": unknown shape '" + shape + "'", "point, sphere, disk or box");
     }
     double radius = 0.0;
     const YAML::Node rn = c["radius"];
-    if (shape == "point" && rn)
-      r_.fail(rn, what + ": a point has no radius",
-              "shape: sphere (or disk) with radius:, or leave radius out");
-    if (shape != "point")
+    if ((shape == "point" || shape == "box") && rn)
+      r_.fail(rn, what + ": a " + shape + " has no radius",
+              shape == "box" ? "a box has size: [hx, hy, hz], its half-extents"
+                             : "shape: sphere (or disk) with radius:, or leave radius out");
+    const std::vector<Vector3d> corners = box_corners(c, what, shape, p, kind, dims);
+    if (shape != "point" && shape != "box")
       radius = positive(require(c, "radius", what + " (a " + shape + ")", "radius: 0.1"),
                         what + " radius");
     const YAML::Node an = c["axis"];
@@ -89,16 +93,17 @@ void MultibodyReader::read_contacts() {
     if (sp && c["plane"])
       r_.fail(sp, what + ": a contact is with a plane or with a sphere, not both",
               "leave out plane: or sphere:");
-    if (sp && disk)
-      r_.fail(sp, what + ": a disk against a sphere is not supported",
+    if (sp && (disk || shape == "box"))
+      r_.fail(sp, what + ": a " + shape + " against a sphere is not supported",
               "shape: sphere (or point) for a contact with a sphere");
     BodyId other = kGround;
     Vector3d o_sphere = Vector3d::Zero();
     double other_radius = 0.0;
+    mb::SphereSide side = mb::SphereSide::kOutside;
     if (sp) {
       const std::string sw = what + " sphere";
       check_map(sp, sw, "{body: ball2, point: [0, 0, 0], radius: 0.1}");
-      check_keys(sp, {"body", "point", "radius"}, sw);
+      check_keys(sp, {"body", "point", "radius", "inside"}, sw);
       if (sp["body"]) other = body(sp["body"], sw + " body");
       if (other == b)
         r_.fail(sp["body"], sw + ": the sphere is on the contact's own body",
@@ -109,6 +114,18 @@ void MultibodyReader::read_contacts() {
                                 "planar or both spatial");
       if (sp["point"]) o_sphere = vec(sp["point"], sw + " point", dims, dims);
       other_radius = positive(require(sp, "radius", sw, "radius: 0.1"), sw + " radius");
+      if (const YAML::Node in = sp["inside"]) {
+        // inside: true keeps the contact's point or sphere inside this one (a ball in a bowl)
+        const std::string t = in.IsScalar() && in.Tag() != "!" ? in.Scalar() : std::string();
+        if (t != "true" && t != "false")
+          r_.fail(in, sw + ": inside must be true or false", "inside: true   (unquoted)");
+        if (t == "true") side = mb::SphereSide::kInside;
+        if (t == "true" && !(radius < other_radius))
+          r_.fail(sp["radius"],
+                  what + ": a " + shape + " of radius " + brief(radius) +
+                      " does not fit inside a sphere of radius " + brief(other_radius),
+                  "inside: true needs the sphere's radius larger than the contact's");
+      }
     }
     // or the plane: a point and a normal on a body (default the ground through the origin)
     BodyId plane_body = kGround;
@@ -154,14 +171,62 @@ void MultibodyReader::read_contacts() {
                 "restitution_law: poisson   (Poisson's: the restitution impulse is e times the "
                 "compression's)");
     }
-    mb::Joint j = sp     ? mb::contact_spheres(name, other, o_sphere, other_radius, b, p, radius, e)
-                  : disk ? mb::contact_disk(name, plane_body, plane, b, disk_frame, radius, e)
-                         : mb::contact(name, plane_body, plane, b, p, radius, e);
+    if (!corners.empty()) {
+      // a box: one point contact per corner, <name>.<k>, each with the entry's restitution
+      for (std::size_t k = 0; k < corners.size(); ++k) {
+        const std::string corner = name + "." + std::to_string(k);
+        mb::Joint j = mb::contact(corner, plane_body, plane, b, corners[k], 0.0, e);
+        j.restitution_law = law;
+        contacts_.push_back({corner, j.type, c, 0.0, name});
+        builder_.add_joint(std::move(j));
+        r_.positions_.constraints[corner] = Reader::position(c);
+      }
+      continue;
+    }
+    mb::Joint j =
+        sp     ? mb::contact_spheres(name, other, o_sphere, other_radius, b, p, radius, e, side)
+        : disk ? mb::contact_disk(name, plane_body, plane, b, disk_frame, radius, e)
+               : mb::contact(name, plane_body, plane, b, p, radius, e);
     j.restitution_law = law;
     contacts_.push_back({name, j.type, c, radius});
     builder_.add_joint(std::move(j));
     r_.positions_.constraints[name] = Reader::position(c);
   }
+}
+
+// shape: box, size: [hx, hy, hz] (planar [hx, hy]): its half-extents along the body's axes,
+// centred at the contact's point p; its corners p + (±hx, ±hy, ±hz), corner k taking + on x if
+// bit 0 of k is set, on y if bit 1, on z if bit 2 (planar: 4 corners, bits 0 and 1). None for
+// another shape, which may not give size:.
+std::vector<Vector3d> MultibodyReader::box_corners(const YAML::Node& c, const std::string& what,
+                                                   const std::string& shape, const Vector3d& p,
+                                                   BodyKind kind, int dims) {
+  const YAML::Node sz = c["size"];
+  if (shape != "box") {
+    if (sz)
+      r_.fail(sz, what + ": size is for a box, not a " + shape,
+              "shape: box, size: [hx, hy, hz] (half-extents), or leave size out");
+    return {};
+  }
+  if (kind == BodyKind::kParticle)
+    r_.fail(c["shape"], what + ": a particle has no orientation, so it cannot carry a box",
+            "declare the body with type: rigid, or use shape: point");
+  const YAML::Node req = require(c, "size", what + " (a box)",
+                                 dims == 2 ? "size: [0.2, 0.1]" : "size: [0.2, 0.1, 0.05]");
+  const Vector3d half = vec(req, what + " size", dims, dims);
+  for (int i = 0; i < dims; ++i) {
+    if (!(half[i] > 0.0))
+      r_.fail(req[std::size_t(i)],
+              what + ": the box's half-extents must be > 0, got " + brief(half[i]),
+              dims == 2 ? "size: [hx, hy]" : "size: [hx, hy, hz]");
+  }
+  std::vector<Vector3d> corners;
+  for (int k = 0; k < (1 << dims); ++k) {
+    Vector3d s = Vector3d::Zero();
+    for (int i = 0; i < dims; ++i) s[i] = (k >> i) & 1 ? half[i] : -half[i];
+    corners.push_back(p + s);
+  }
+  return corners;
 }
 
 // nonideal: of a bodies model — Coulomb friction at its contacts (docs/contact.md, "Friction at a
@@ -201,14 +266,20 @@ void MultibodyReader::read_contact_frictions() {
                "a contact's friction");
     const YAML::Node cn = require(f, "constraint", "a contact's friction", "constraint: floor");
     const std::string name = cn.IsScalar() ? cn.Scalar() : std::string();
-    const auto c = std::find_if(contacts_.begin(), contacts_.end(),
-                                [&](const JointDecl& d) { return d.name == name; });
-    if (c == contacts_.end())
+    // the contact, or every corner of the box of that name
+    std::vector<std::string> targets;
+    for (const JointDecl& d : contacts_) {
+      if (d.name == name || d.box == name) targets.push_back(d.name);
+    }
+    if (targets.empty())
       r_.fail(cn, "Coulomb friction on '" + name + "', which is no contact",
               "constraint: the name of an entry of contacts:");
     const std::string what = "the friction at contact '" + name + "'";
-    if (!seen.insert(name).second)
-      r_.fail(cn, what + " is declared twice", "one coulomb friction per contact");
+    for (const std::string& t : targets) {
+      if (!seen.insert(t).second)
+        r_.fail(cn, what + " is declared twice" + (t == name ? "" : " (at '" + t + "')"),
+                "one coulomb friction per contact (one on a box gives each of its corners one)");
+    }
     const double mu = r_.friction_coefficient(require(f, "mu", what, "mu: 0.3"), what + " mu");
     std::optional<double> mu_static;
     if (const YAML::Node ms = f["mu_static"]) {
@@ -221,7 +292,7 @@ void MultibodyReader::read_contact_frictions() {
     double eps = 1e-9;
     if (const YAML::Node en = f["regularization_velocity"])
       eps = positive(en, what + " regularization_velocity");
-    builder_.add_contact_friction(name, mu, mu_static, eps);
+    for (const std::string& t : targets) builder_.add_contact_friction(t, mu, mu_static, eps);
   }
 }
 

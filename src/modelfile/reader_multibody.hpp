@@ -39,6 +39,7 @@ class MultibodyReader {
     mb::JointType type;
     YAML::Node node;
     double radius = 0.0;  // a contact's (its drawn point: modelfile/visual_contacts.cpp)
+    std::string box;      // a box's corner: the box entry's name (friction names the box)
   };
 
   // the file's structure
@@ -50,6 +51,10 @@ class MultibodyReader {
   void read_forces();
   void read_contacts();           // reader_contacts.cpp
   void read_contact_frictions();  // reader_contacts.cpp: nonideal: at the contacts
+  // a box contact's corners in the body frame (none for another shape; reader_contacts.cpp)
+  std::vector<Vector3d> box_corners(const YAML::Node& c, const std::string& what,
+                                    const std::string& shape, const Vector3d& p, BodyKind kind,
+                                    int dims);
 
   // pieces
   const YAML::Node& check_map(const YAML::Node& node, const std::string& what,

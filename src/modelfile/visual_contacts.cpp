@@ -190,13 +190,14 @@ VisualContact bodies_visual_contact(std::shared_ptr<const mb::MultibodyModel> mo
   const mb::Frame fp = joint.frame_parent, fc = joint.frame_child;
   const Vector3d n_P = fp.R.col(joint.planar ? 1 : 2), a_C = fc.R.col(2);
   if (joint.type == mb::JointType::kContactSpheres) {
-    // two spheres: the normal is the line of the centres o → c, the point the contact sphere's
-    // nearest to the other, c − r n
-    c.geometry = [model, P, C, fp, fc, radius](const Eigen::Ref<const VectorXd>& q, Vector3d& point,
-                                               Vector3d& normal) {
+    // two spheres: the normal is the line of the centres o → c (inside the other: c → o), the
+    // point the contact sphere's nearest to the other's surface, c − r n
+    const double side = joint.side == mb::SphereSide::kInside ? -1.0 : 1.0;
+    c.geometry = [model, P, C, fp, fc, radius, side](const Eigen::Ref<const VectorXd>& q,
+                                                     Vector3d& point, Vector3d& normal) {
       const Vector3d o = mb::world_point(*model, q, P, fp.p),
                      centre = mb::world_point(*model, q, C, fc.p);
-      normal = (centre - o).normalized();
+      normal = side * (centre - o).normalized();
       point = centre - radius * normal;
     };
     // the friction's axes (mb::detail::relative_contact_kinematics): n, t_1 = e × n/|e × n|,
@@ -211,8 +212,10 @@ VisualContact bodies_visual_contact(std::shared_ptr<const mb::MultibodyModel> mo
       d0.cwiseAbs().minCoeff(&axis);
       e = Vector3d::Unit(axis);
     }
-    c.axes = [model, P, C, fp, fc, e, planar](const Eigen::Ref<const VectorXd>& q, Matrix3d& axes) {
+    c.axes = [model, P, C, fp, fc, e, planar, side](const Eigen::Ref<const VectorXd>& q,
+                                                    Matrix3d& axes) {
       const Vector3d n =
+          side *
           (mb::world_point(*model, q, C, fc.p) - mb::world_point(*model, q, P, fp.p)).normalized();
       const Vector3d t1 = planar ? Vector3d(n.cross(Vector3d::UnitZ())) : e.cross(n).normalized();
       axes << n, t1, planar ? Vector3d::Zero() : Vector3d(n.cross(t1));

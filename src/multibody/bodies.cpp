@@ -156,11 +156,12 @@ Joint contact_disk(std::string n, BodyId plane_body, const Frame& plane, BodyId 
 }
 Joint contact_spheres(std::string n, BodyId other_body, const Vector3d& p_other,
                       double other_radius, BodyId body, const Vector3d& p_body, double radius,
-                      double restitution) {
+                      double restitution, SphereSide side) {
   Joint j = make_joint(std::move(n), JointType::kContactSpheres, other_body, Frame::at(p_other),
                        body, Frame::at(p_body));
   j.radius = radius;
   j.other_radius = other_radius;
+  j.side = side;
   j.restitution = restitution;
   return j;
 }
@@ -415,6 +416,7 @@ MultibodyModel Multibody::build() const {
     info.child = j.child;
     info.frame_parent = j.frame_parent;
     info.frame_child = j.frame_child;
+    info.side = j.side;
     info.friction_law = j.friction;
     if (j.type == JointType::kGear) {
       const auto find = [&](const std::string& name) {

@@ -2,7 +2,8 @@
 // Unilateral contacts of bodies with a plane or a sphere (docs/contact.md, "Contacts on
 // bodies"): the gap row of a point or sphere on a plane (the point_on_plane / point_on_line row
 // with the offset c0 = radius), of a thin disk on a plane (a row of its own, Row::kDisk), of a
-// sphere outside a sphere (Row::kNorm, |c − o| − (r1 + r2)) — both in closed form in
+// sphere outside a sphere (Row::kNorm, |c − o| − (r1 + r2)) or inside one (the same row with the
+// sign −1 and the length R − r: (R − r) − |c − o|) — all in closed form in
 // kinematics.cpp — and the checks build() makes before it adds them as unilateral constraints
 // (the factories mb::contact, mb::contact_disk and mb::contact_spheres: bodies.cpp, with the
 // other joints'); and the contact point's kinematics for Coulomb friction there
@@ -19,11 +20,13 @@ namespace ukdyn::mb::detail {
 
 Row contact_row(const Joint& j, bool planar) {
   if (j.type == JointType::kContactSpheres) {
-    // g = |c − o| − (r_C + r_P), c and o the spheres' centres
+    // g = |c − o| − (r_C + r_P), c and o the spheres' centres; inside: g = (r_P − r_C) − |c − o|
     Row r;
     r.kind = Row::kNorm;
     r.a = VecExpr::diff(0, j.frame_parent.p, 1, j.frame_child.p);
-    r.length = j.radius + j.other_radius;
+    const bool inside = j.side == SphereSide::kInside;
+    r.length = inside ? j.other_radius - j.radius : j.radius + j.other_radius;
+    r.sign = inside ? -1.0 : 1.0;
     return r;
   }
   // d = c − o (the contact's point, or the disk's centre, relative to the plane's point) and the
@@ -64,6 +67,12 @@ Constraint contact_constraint(const Joint& j, const BodyRef& P, const BodyRef& C
     throw std::invalid_argument(who + ": the other sphere's radius must be >= 0, got " +
                                 format_number(j.other_radius, 3));
   }
+  if (spheres && j.side == SphereSide::kInside && !(j.radius < j.other_radius)) {
+    throw std::invalid_argument(who + ": a sphere of radius " + format_number(j.radius, 3) +
+                                " does not fit inside one of radius " +
+                                format_number(j.other_radius, 3) +
+                                " (inside: the other sphere's radius must be the larger)");
+  }
   if (spheres && P.id == C.id) {
     throw std::invalid_argument(who + ": both spheres are on one body (a contact is between two)");
   }
@@ -95,14 +104,24 @@ Constraint contact_constraint(const Joint& j, const BodyRef& P, const BodyRef& C
     }
   }
   if (row.kind == Row::kNorm) {
-    // coincident centres have no normal: refused at the start
+    // coincident centres have no normal: refused at the start; inside, so is a centre outside
+    // the other sphere (|c − o| > R: on its far side, not a small penetration)
     const Vector3d d = body_vector_generic<double>(C, q0, j.frame_child.p, true) -
                        body_vector_generic<double>(P, q0, j.frame_parent.p, true);
-    if (!(d.norm() > 1e-12 * std::max(row.length, 1e-300))) {
+    const bool inside = row.sign < 0.0;
+    if (!(d.norm() > 1e-12 * std::max(j.radius + j.other_radius, 1e-300))) {
       throw std::invalid_argument(
-          who +
-          ": the spheres' centres coincide at the start: the contact has no normal there; "
-          "place the spheres apart (their gap |c − o| − (r1 + r2) must be >= 0)");
+          who + ": the spheres' centres coincide at the start: the contact has no normal there; " +
+          (inside ? "move the inner sphere off the other's centre (its gap (R − r) − |c − o| "
+                    "must be >= 0)"
+                  : "place the spheres apart (their gap |c − o| − (r1 + r2) must be >= 0)"));
+    }
+    if (inside && d.norm() > j.other_radius) {
+      throw std::invalid_argument(
+          who + ": the inner sphere's centre starts outside the other sphere (|c − o| = " +
+          format_number(d.norm(), 6) + " > R = " + format_number(j.other_radius, 6) +
+          "); place it inside (|c − o| <= R − r), or leave inside out for a sphere that stays "
+          "outside");
     }
   }
   Constraint c(j.name, ConstraintKind::kHolonomic, 1,
@@ -203,8 +222,9 @@ ContactKinematics relative_contact_kinematics(const Joint& j, const BodyRef& P, 
   const Vector3d pP = j.frame_parent.p, pC = j.frame_child.p, kC = j.frame_child.R.col(2);
   const bool disk = j.type == JointType::kContactDisk && !planar;
   const bool spheres = j.type == JointType::kContactSpheres;
-  const double r = j.radius;
-  // two spheres: n = d/|d| and t_1 = e × n/|e × n|, t_2 = n × t_1 from the world axis e least
+  // (a sphere inside the other: n = −d/|d|, towards the centre o)
+  const double r = j.radius, side = j.side == SphereSide::kInside ? -1.0 : 1.0;
+  // two spheres: n = ±d/|d| and t_1 = e × n/|e × n|, t_2 = n × t_1 from the world axis e least
   // aligned with n at the start (planar: t_1 = n × e_z); singular only where n passes along e
   Vector3d e = Vector3d::UnitZ();
   if (spheres && !planar) {
@@ -223,7 +243,7 @@ ContactKinematics relative_contact_kinematics(const Joint& j, const BodyRef& P, 
   BodyRef Pl = P, Cl = C;
   Pl.local = p_first ? 0 : C.size();
   Cl.local = p_first ? P.size() : 0;
-  kin.evaluate = [Pl, Cl, nP, t1P, t2P, pP, pC, kC, e, r, planar, disk, spheres](
+  kin.evaluate = [Pl, Cl, nP, t1P, t2P, pP, pC, kC, e, r, side, planar, disk, spheres](
                      const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd,
                      double, ConstraintScratch*, Eigen::Ref<MatrixXd> J,
                      Eigen::Ref<VectorXd> bias) {
@@ -234,11 +254,12 @@ ContactKinematics relative_contact_kinematics(const Joint& j, const BodyRef& P, 
     add_body_vector(Cl, q, qd, pC, true, 1.0, c);
     if (disk) add_body_vector(Cl, q, qd, kC, false, 1.0, k);
     if (spheres) {
-      // n = d/|d| and its rate; t_i from e (values and rates; their J and g are not needed)
+      // n = ±d/|d| and its rate; t_i from e (values and rates; their J and g are not needed)
       const Vector3d d = c.x - p.x, dd = c.v - p.v;
       const double len = d.norm();
-      n.x = d / len;
-      n.v = (dd - n.x.dot(dd) * n.x) / len;
+      const Vector3d u = d / len;
+      n.x = side * u;
+      n.v = side * (dd - u.dot(dd) * u) / len;
       if (planar) {
         t1.x = n.x.cross(Vector3d::UnitZ());
         t1.v = n.v.cross(Vector3d::UnitZ());
@@ -288,8 +309,9 @@ ContactKinematics relative_contact_kinematics(const Joint& j, const BodyRef& P, 
     Arm << 0, -arm.z(), arm.y(), arm.z(), 0, -arm.x(), -arm.y(), arm.x(), 0;
     const JacobianRow Jrel = c.J - p.J - Ac * JwC + Arm * JwP;
     const Vector3d a_rel = c.g - p.g + wC.cross(ad) - wP.cross(dd + ad);
-    // row 0: the gap's gradient, g = n·d − r (point, sphere), n·d − r sqrt(1 − s²) (disk) or
-    // |d| − (r + r_P) (two spheres: n = d/|d|, ∂n/∂q d = 0), and its bias g'' at q'' = 0
+    // row 0: the gap's gradient, g = n·d − r (point, sphere), n·d − r sqrt(1 − s²) (disk),
+    // |d| − (r + r_P) (two spheres: n = d/|d|, ∂n/∂q d = 0) or (r_P − r) − |d| (inside:
+    // n = −d/|d|), and its bias g'' at q'' = 0
     const Index cols = J.cols();
     Eigen::Matrix<double, 1, kMaxCols> g_q = n.x.transpose() * (c.J - p.J);
     bias[0] = n.x.dot(c.g - p.g) + n.v.dot(dd);

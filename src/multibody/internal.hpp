@@ -199,14 +199,17 @@ struct Offset {
 ///  kLinear    phi = Σ coef_i q[column_i] − c(t)   (global coordinates, local columns)
 ///  kDisk      phi = a · b − L sqrt(1 − (b · axis)²): a thin disk's gap (a = centre − plane
 ///             point, b = the plane's normal, axis = the disk's axis, L = its radius)
-///  kNorm      phi = |a| − L: the gap of two spheres (a = the difference of their centres, L =
-///             the sum of their radii), a true distance (unlike kDistance's), so that the gap
-///             and its rate are in length and speed units wherever the spheres are
+///  kNorm      phi = sign (|a| − L): the gap of two spheres (a = the difference of their
+///             centres; sign = +1, L = the sum of their radii: one outside the other; sign = −1,
+///             L = R − r: a sphere of radius r inside one of radius R), a true distance (unlike
+///             kDistance's), so that the gap and its rate are in length and speed units wherever
+///             the spheres are
 struct Row {
   enum Kind { kDot, kDistance, kLinear, kDisk, kNorm } kind = kDot;
   VecExpr a, b;
   VecExpr axis;  // kDisk: the disk's axis (a body vector)
   double length = 0.0;
+  double sign = 1.0;                            // kNorm: +1 (outside) or −1 (inside)
   std::vector<std::pair<Index, double>> terms;  // kLinear: (global coordinate, coefficient)
   std::vector<Index> local;                     // kLinear: local column of each term
   Offset c;
@@ -449,7 +452,7 @@ void joint_phi_generic(const JointModel& jm, const V& q, const S& t, double t0, 
       case Row::kNorm: {
         using std::sqrt;
         const Vec3<S> a = vec_expr_generic<S>(jm.slots(), row.a, q);
-        out = sqrt(a.dot(a)) - row.length;
+        out = row.sign * (sqrt(a.dot(a)) - row.length);
         break;
       }
       case Row::kDisk: {

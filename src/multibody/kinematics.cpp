@@ -326,14 +326,15 @@ void JointModel::general_form(const Eigen::Ref<const VectorXd>& q,
         break;
       }
       case Row::kNorm: {
-        // phi = |a| − L, u = a/|a|:  A = uᵀ J_a,  b = −(u·g_a + (|v_a|² − (u·v_a)²) / |a|)
-        // (|a| = 0, coincident centres: non-finite entries, which stop the run)
+        // phi = σ (|a| − L), u = a/|a|:  A = σ uᵀ J_a,  b = −σ (u·g_a + (|v_a|² − (u·v_a)²) / |a|)
+        // (σ = −1: a sphere inside another; |a| = 0, coincident centres: non-finite entries,
+        // which stop the run)
         if (!reuses_a_[r]) eval(row.a, q, qd, cache, ka);
         const double len = ka.x.norm();
         const Vector3d u = ka.x / len;
         const double un = u.dot(ka.v);
-        A.row(i) = u.transpose() * ka.J.leftCols(k);
-        b[i] = -(u.dot(ka.g) + (ka.v.squaredNorm() - un * un) / len);
+        A.row(i) = row.sign * (u.transpose() * ka.J.leftCols(k));
+        b[i] = -row.sign * (u.dot(ka.g) + (ka.v.squaredNorm() - un * un) / len);
         break;
       }
       case Row::kLinear: {
@@ -431,11 +432,11 @@ void JointModel::general_violation(const Eigen::Ref<const VectorXd>& q,
         velocity[i] = ka.x.dot(ka.v) / row.length;
         break;
       case Row::kNorm: {
-        // phi = |a| − L,  phi' = a·v_a / |a|
+        // phi = σ (|a| − L),  phi' = σ a·v_a / |a|
         if (!reuses_a_[r]) eval(row.a, q, qd, cache, ka, false);
         const double len = ka.x.norm();
-        position[i] = len - row.length;
-        velocity[i] = ka.x.dot(ka.v) / len;
+        position[i] = row.sign * (len - row.length);
+        velocity[i] = row.sign * ka.x.dot(ka.v) / len;
         break;
       }
       case Row::kLinear:

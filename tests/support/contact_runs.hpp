@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // Test support: reading a run with unilateral contacts — its contact events of one kind at one
 // constraint, and the sample at a time the run was asked to output; a gap row's g, g', A and b,
-// and A and b checked by finite differences of g.
+// and A and b checked by finite differences of g; a model file's error with its place.
 #pragma once
 
 #include <gtest/gtest.h>
@@ -14,6 +14,7 @@
 
 #include "ukdyn/core/system.hpp"
 #include "ukdyn/dynamics/contact.hpp"
+#include "ukdyn/modelfile/model.hpp"
 #include "ukdyn/simulation/simulate.hpp"
 
 namespace ukdyn::testing {
@@ -140,6 +141,27 @@ inline void check_form_by_differences(const System& sys, Index k, const VectorXd
   };
   const double gdd = (gd(ht) - gd(-ht)) / (2 * ht);
   EXPECT_NEAR(A.dot(qdd) - b, gdd, tol_b);
+}
+
+// "line:column message | hint" of the ModelError that reading `text` raises, or "no error"
+inline std::string model_error_text(const std::string& text) {
+  try {
+    parse_model(text);
+  } catch (const ModelError& e) {
+    return std::to_string(e.line()) + ":" + std::to_string(e.column()) + " " + e.message() + " | " +
+           e.hint();
+  } catch (const std::exception& e) {
+    return std::string("not a ModelError: ") + e.what();
+  }
+  return "no error";
+}
+
+// expects reading `text` to fail at `where` ("line:column") with a message containing `what`
+inline void expect_model_error(const std::string& text, const std::string& where,
+                               const std::string& what) {
+  const std::string got = model_error_text(text);
+  EXPECT_EQ(got.rfind(where + " ", 0), 0u) << got;
+  EXPECT_NE(got.find(what), std::string::npos) << got;
 }
 
 }  // namespace ukdyn::testing

@@ -121,8 +121,16 @@ enum class JointType {
   kContactDisk,     ///< unilateral: a thin disk (child) above a plane of the parent,
                     ///< g = n·d − radius sqrt(1 − (n·a)²) >= 0 (1 row; see contact_disk())
   kContactSpheres,  ///< unilateral: a sphere or point (child) outside a sphere of the parent,
-                    ///< g = |c_C − c_P| − (radius + other_radius) >= 0 (1 row; see
-                    ///< contact_spheres())
+                    ///< g = |c_C − c_P| − (radius + other_radius) >= 0, or inside it
+                    ///< (SphereSide::kInside), g = (other_radius − radius) − |c_C − c_P| >= 0
+                    ///< (1 row; see contact_spheres())
+};
+
+/// Which side of the other sphere a kContactSpheres contact keeps its sphere on: outside it (two
+/// balls) or inside it (a ball in a spherical bowl or shell, a bead inside a ring).
+enum class SphereSide {
+  kOutside,  ///< outside it: g = |c_C − c_P| − (radius + other_radius) (two balls)
+  kInside,   ///< inside it: g = (other_radius − radius) − |c_C − c_P| (a ball in a bowl)
 };
 
 /// Short name of a joint type ("revolute", …). Cost O(1).
@@ -130,18 +138,19 @@ const char* to_string(JointType type);
 
 /// A joint between a parent and a child body. Use the factory functions below.
 struct Joint {
-  std::string name;                       ///< unique; names its constraints
-  JointType type = JointType::kRevolute;  ///< what it constrains (its rows: JointType)
-  BodyId parent = kGround;                ///< the parent body P (kGround: the world)
-  BodyId child = kGround;                 ///< the child body C (kGround: the world)
-  Frame frame_parent;                     ///< F_P on the parent (body coordinates)
-  Frame frame_child;                      ///< F_C on the child (body coordinates)
-  double length = 0.0;                    ///< kDistance: the distance (m), > 0
-  double radius = 0.0;                    ///< rolling: the radius (m), > 0
-  double other_radius = 0.0;              ///< kContactSpheres: the parent's sphere's radius
-  std::string gear_a;                     ///< kGear: name of the first revolute joint (a)
-  std::string gear_b;                     ///< kGear: name of the second revolute joint (b)
-  double ratio = 1.0;                     ///< kGear: angle_a − ratio · angle_b = const
+  std::string name;                        ///< unique; names its constraints
+  JointType type = JointType::kRevolute;   ///< what it constrains (its rows: JointType)
+  BodyId parent = kGround;                 ///< the parent body P (kGround: the world)
+  BodyId child = kGround;                  ///< the child body C (kGround: the world)
+  Frame frame_parent;                      ///< F_P on the parent (body coordinates)
+  Frame frame_child;                       ///< F_C on the child (body coordinates)
+  double length = 0.0;                     ///< kDistance: the distance (m), > 0
+  double radius = 0.0;                     ///< rolling: the radius (m), > 0
+  double other_radius = 0.0;               ///< kContactSpheres: the parent's sphere's radius
+  SphereSide side = SphereSide::kOutside;  ///< kContactSpheres: outside or inside that sphere
+  std::string gear_a;                      ///< kGear: name of the first revolute joint (a)
+  std::string gear_b;                      ///< kGear: name of the second revolute joint (b)
+  double ratio = 1.0;                      ///< kGear: angle_a − ratio · angle_b = const
   /// Prescribed motion of the joint's relative coordinate: revolute: the angle of F_C's x axis
   /// from F_P's x axis about the axis (planar: a linear row; spatial: the angle error by
   /// automatic differentiation); prismatic, cylindrical: the slide of F_C's origin along the
@@ -234,12 +243,18 @@ Joint contact_disk(std::string name, BodyId plane_body, const Frame& plane, Body
 /// c_W, o_W the world positions of the centres, with u = (c_W − o_W)/|c_W − o_W|:
 ///   A = uᵀ (J_c − J_o),  b = −(u·(J'q')_(c−o) + (|v|² − (u·v)²) / |c_W − o_W|),
 /// v = c_W' − o_W' (the normal is the line of centres; the second term is its turning).
+/// With side = SphereSide::kInside the sphere stays inside the other (a ball in a spherical
+/// bowl or shell, a bead inside a ring; other_radius > radius):
+///   g = (other_radius − radius) − |c_W − o_W| >= 0,   A and b the above with their sign flipped
+/// (the same row with the sign −1 and the length other_radius − radius: the same cost).
 /// O(columns) for A and b, about the point contact's. Planar models: circles in the plane.
-/// Coincident centres (no normal) are refused by build() at the initial pose; in a run the
-/// row's entries become non-finite there, which stops the run (never a wrong number).
+/// Coincident centres (no normal) are refused by build() at the initial pose, and so are, for
+/// kInside, radius >= other_radius and a centre outside the other sphere at the start; in a run
+/// the row's entries become non-finite at coincident centres, which stops the run (never a
+/// wrong number).
 Joint contact_spheres(std::string name, BodyId other_body, const Vector3d& p_other,
                       double other_radius, BodyId body, const Vector3d& p_body, double radius,
-                      double restitution = 0.0);
+                      double restitution = 0.0, SphereSide side = SphereSide::kOutside);
 /// @}
 
 /// Applied force at a body point and torque (world frame W), from (q, q', t).
@@ -298,17 +313,18 @@ struct BodyInfo {
 
 /// Metadata of a joint in a built model.
 struct JointInfo {
-  std::string name;                       ///< as given to the factory
-  JointType type = JointType::kRevolute;  ///< the joint's kind
-  BodyId parent = kGround;                ///< the parent body P (kGround: the world)
-  BodyId child = kGround;                 ///< the child body C (kGround: the world)
-  Frame frame_parent;                     ///< F_P on the parent (body coordinates)
-  Frame frame_child;                      ///< F_C on the child (body coordinates)
-  bool planar = false;                    ///< between planar bodies
-  std::vector<Index> constraints;         ///< indices in System of its constraints (joint, drive)
-  Index drive = -1;                       ///< index of the "<name>.drive" constraint, or −1
-  Index friction = -1;                    ///< index of its non-ideal force, or −1
-  JointFriction friction_law;             ///< its friction parameters (for the reports)
+  std::string name;                        ///< as given to the factory
+  JointType type = JointType::kRevolute;   ///< the joint's kind
+  BodyId parent = kGround;                 ///< the parent body P (kGround: the world)
+  BodyId child = kGround;                  ///< the child body C (kGround: the world)
+  Frame frame_parent;                      ///< F_P on the parent (body coordinates)
+  Frame frame_child;                       ///< F_C on the child (body coordinates)
+  bool planar = false;                     ///< between planar bodies
+  SphereSide side = SphereSide::kOutside;  ///< kContactSpheres: outside or inside the other
+  std::vector<Index> constraints;          ///< indices in System of its constraints (joint, drive)
+  Index drive = -1;                        ///< index of the "<name>.drive" constraint, or −1
+  Index friction = -1;                     ///< index of its non-ideal force, or −1
+  JointFriction friction_law;              ///< its friction parameters (for the reports)
 };
 
 /// The result of Multibody::build(): the System, a consistent initial state and metadata.
