@@ -410,9 +410,18 @@ int run_command(const RunArguments& given) {
     std::printf("  energy balance %.3g relative (energy exchanged %.3g %s; not checked)\n",
                 s.energy_balance, s.energy_exchanged, units.energy().c_str());
   }
+  // the contact events by kind (summary.json's contact_events lists each)
+  long kinds[5] = {0, 0, 0, 0, 0};  // impact, release, rest, stick, slip
+  for (const ContactEvent& e : s.contact_events) ++kinds[int(e.kind)];
+  if (kinds[0] + kinds[1] + kinds[2] > 0) {
+    std::printf("  contacts: %ld impacts, %ld rests, %ld releases (summary.json: contact_events)\n",
+                kinds[0], kinds[2], kinds[1]);
+  }
   if (s.events > 0 || s.stick_refusals > 0) {
-    std::printf("  friction: %ld stick/slip events, %ld stops where sticking was refused\n",
-                s.events, s.stick_refusals);
+    std::printf(
+        "  friction: %ld sticks, %ld slips (summary.json: contact_events), %ld located "
+        "events, %ld stops where sticking was refused\n",
+        kinds[3], kinds[4], s.events, s.stick_refusals);
   }
   if (s.switch_events > 0) {
     std::printf("  switches: %ld sign changes of non-smooth functions located\n", s.switch_events);

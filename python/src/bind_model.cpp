@@ -55,12 +55,9 @@ py::tuple run(const Model& model, const py::dict& settings, py::object q0, py::o
     m = &*changed;
   }
   ModelRun r;
-  try {
+  {
     ReleasedGil release;  // the run is C++ only (model files hold no Python code)
     r = run_model(*m, o);
-  } catch (const InconsistentInitialState& e) {
-    if (contacts_penetrated(*m, e)) throw PenetratedInitialState(e);
-    throw;
   }
   return run_tuple(std::move(r), interrupt.exception());
 }

@@ -20,15 +20,6 @@
 namespace ukdyn::python {
 namespace py = pybind11;
 
-/// An InconsistentInitialState of a model's run that penetrated contacts (contacts_penetrated,
-/// modelfile/run.hpp): Python's InconsistentInitialState with the cause "penetrated"
-/// (project_initial=True cannot help; the C++ cause stays kNotProjected).
-class PenetratedInitialState : public InconsistentInitialState {
- public:
-  explicit PenetratedInitialState(const InconsistentInitialState& e)
-      : InconsistentInitialState(e) {}
-};
-
 // --- NumPy <-> Eigen -----------------------------------------------------------------------------
 
 /// A 1-D NumPy array that takes over `v` (no copy: the array owns the vector through a capsule).

@@ -366,7 +366,8 @@ py::dict statistics_dict(const RunStatistics& s) {
   d["events"] = s.events;
   d["switch_events"] = s.switch_events;
   d["stick_refusals"] = s.stick_refusals;
-  // the impacts and releases of unilateral contacts (docs/contact.md), one dict each
+  // the impacts, releases and rests of unilateral contacts and the sticks and slips of Coulomb
+  // friction (docs/contact.md), one dict each, with summary.json's keys (NaN stays NaN)
   py::list contacts;
   for (const ContactEvent& e : s.contact_events) {
     py::dict c;
@@ -377,6 +378,12 @@ py::dict statistics_dict(const RunStatistics& s) {
     c["speed_after"] = e.speed_after;
     c["impulse"] = e.impulse;
     c["energy_change"] = e.energy_change;
+    if (e.kind == ContactEvent::Kind::kRelease) c["force_before"] = e.force_before;
+    if (e.kind == ContactEvent::Kind::kStick || e.kind == ContactEvent::Kind::kSlip) {
+      c["friction"] = e.friction;
+      c["holding_force"] = e.holding_force;
+      c["friction_limit"] = e.friction_limit;
+    }
     contacts.append(c);
   }
   d["contact_events"] = contacts;

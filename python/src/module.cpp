@@ -27,14 +27,12 @@ void translate(std::exception_ptr p) {
     py::object err = cls(e.what(), e.file(), e.line(), e.column(), e.message(), e.hint());
     PyErr_SetObject(cls.ptr(), err.ptr());
   } catch (const InconsistentInitialState& e) {
-    // a ValueError, as every std::invalid_argument, typed with its cause
-    // (a penetrated contact, PenetratedInitialState, is "penetrated": no projection helps)
-    static const char* const causes[] = {"not_projected", "contradictory", "projection_failed"};
+    // a ValueError, as every std::invalid_argument, typed with its cause (in the order of
+    // InconsistentInitialState::Cause)
+    static const char* const causes[] = {"not_projected", "contradictory", "projection_failed",
+                                         "penetrated"};
     py::object cls = error_class("InconsistentInitialState");
-    py::object err =
-        cls(valid_utf8(user_message(e)), dynamic_cast<const PenetratedInitialState*>(&e) != nullptr
-                                             ? "penetrated"
-                                             : causes[int(e.cause())]);
+    py::object err = cls(valid_utf8(user_message(e)), causes[int(e.cause())]);
     PyErr_SetObject(cls.ptr(), err.ptr());
   } catch (const SettingError& e) {
     // a ValueError naming the setting, without the C++ function's name

@@ -130,6 +130,12 @@ def test_a_penetrated_contact_is_its_own_cause():
             ukdyn.parse(text, "sunk.yaml").simulate(project_initial=project)
         assert info.value.cause == "penetrated"
         assert "the unilateral constraint 'floor' is penetrated" in str(info.value)
+    # the model's System simulated directly: the C++ cause itself (Cause::kPenetrated), which
+    # this path reported as "not_projected" before
+    model = ukdyn.parse(text, "sunk.yaml")
+    with pytest.raises(ukdyn.InconsistentInitialState) as info:
+        ukdyn.simulate(model.system, model.q0, model.qd0, t_end=0.01)
+    assert info.value.cause == "penetrated"
 
 
 def test_inconsistent_initial_state_is_a_value_error_typed_by_its_cause():

@@ -42,6 +42,34 @@ def test_conveyor_belt_from_the_gallery_file():
     check_belt(ukdyn.load("conveyor_stick_slip").simulate())
 
 
+def test_conveyor_belt_lists_each_stick_and_slip_at_its_closed_form_time():
+    """Result.contact_events lists the six events of check_belt: each slip where k x = mu_s m g
+    (at t_1 = x_s / V, then every period t_slip + t_stick), its holding force mu_s m g = mu_s N,
+    each stick t_slip later, when the block moves with the belt again (early by v_stop / a)."""
+    r = ukdyn.load("conveyor_stick_slip").simulate()
+    events = r.contact_events
+    assert [e["kind"] for e in events] == ["slip", "stick"] * 3
+    w = math.sqrt(K / M_)
+    x_s, x_eq = MU_S * M_ * G / K, MU_K * M_ * G / K
+    phi = math.atan2(x_s - x_eq, V / w)
+    t_slip, t_stick = (2 * math.pi - 2 * phi) / w, 2 * (x_s - x_eq) / V
+    for k in range(3):
+        slip, stick = events[2 * k], events[2 * k + 1]
+        t1 = x_s / V + k * (t_slip + t_stick)
+        assert slip["t"] == pytest.approx(t1, abs=1e-6)
+        assert stick["t"] == pytest.approx(t1 + t_slip, abs=1e-4)
+        for e in (slip, stick):
+            assert e["contact"] == "floor"
+            assert e["friction"] == events[0]["friction"] != ""
+        assert slip["holding_force"] == pytest.approx(MU_S * M_ * G, rel=1e-6)
+        assert slip["friction_limit"] == pytest.approx(MU_S * M_ * G, rel=1e-6)
+        assert slip["speed_before"] == pytest.approx(0.0, abs=1e-9)
+        assert stick["speed_after"] == pytest.approx(0.0, abs=1e-9)
+        assert stick["holding_force"] is None
+    # summary.json's list is the same (ukdyn run writes it from the same statistics)
+    assert r.stats["events"] == 6
+
+
 def test_conveyor_belt_from_sympy_with_mu_static_and_surface_velocity():
     x, y = sp.symbols("x y")
     xd, yd = sp.symbols("x_dot y_dot")

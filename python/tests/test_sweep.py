@@ -130,6 +130,34 @@ def test_command_line_writes_the_same_table(cli, out_dir):
                               from_python[name].to_numpy(dtype=float)), name
 
 
+def test_a_contact_model_sweep_counts_its_events_and_rest_time(cli, out_dir):
+    """The bouncing ball over e: K + 1 impacts (K the first with e^K < 1e-6, the rest
+    criterion's, the last impact a rest) and the rest at t0 + 2 t0 e (1 - e^K)/(1 - e), the same
+    on 1 and 2 threads and in ukdyn sweep's ensemble.csv; a model without contacts has no such
+    columns."""
+    kw = dict(grid={"e": [0.3, 0.5, 0.7]}, t_end=4.0)
+    one = ukdyn.sweep("bouncing_ball", workers=1, **kw)
+    two = ukdyn.sweep("bouncing_ball", workers=2, **kw)
+    assert_same_frames(one, two)
+    t0 = math.sqrt(2 / 9.81)
+    for _, row in one.iterrows():
+        e = row["e"]
+        K = next(k for k in range(100) if e ** k < 1e-6)
+        assert row["impacts"] == K + 1
+        assert (row["releases"], row["sticks"], row["slips"]) == (0, 0, 0)
+        assert row["rest_time"] == pytest.approx(t0 + 2 * t0 * e * (1 - e ** K) / (1 - e),
+                                                 abs=1e-8)
+    subprocess.run([cli, "sweep", "--example", "bouncing_ball", "--grid", "e=0.3:0.7:3",
+                    "--t-end", "4", "--jobs", "2", "-o", str(out_dir), "--no-plots"],
+                   check=True, capture_output=True)
+    from_cli = pd.read_csv(out_dir / "ensemble.csv", keep_default_na=False,
+                           na_values=["nan"], float_precision="round_trip")
+    for name in ("impacts", "releases", "sticks", "slips", "rest_time"):
+        assert np.array_equal(from_cli[name].to_numpy(dtype=float),
+                              one[name].to_numpy(dtype=float)), name
+    assert "impacts" not in ukdyn.sweep(PENDULUM, grid={"L": [1.0]}, t_end=0.1).columns
+
+
 def test_command_line_sigint_keeps_the_finished_samples(cli, out_dir):
     # two short samples, then two long ones (the interrupt tests' pendulum over 5e4 s) on one
     # thread: SIGINT stops the third at its next step; the fourth is not run

@@ -195,7 +195,9 @@ def sweep(model: Any, *, grid: Optional[GridSpec] = None, random: Optional[Rando
 
     Each row: the sample's values, ``status`` (``"ok"``, a failure's name, ``"refused"`` when
     the sample could not start, ``"not run"``), ``ok``, ``message``, the run's figures (steps,
-    evaluations, t_reached, largest violations, energy balance, control statistics) and each
+    evaluations, t_reached, largest violations, energy balance, control statistics; for a model
+    with unilateral contacts or Coulomb friction the counts ``impacts``, ``releases``,
+    ``sticks``, ``slips`` of its contact events and ``rest_time``, NaN when none) and each
     coordinate, velocity and output (``outputs``; default the model's output expressions) at
     each time of ``at`` (columns ``x@5``; without ``at``, at the run's end: ``x@end``). A sample
     that fails is recorded and does not stop the others. ``trajectories=True`` also keeps every

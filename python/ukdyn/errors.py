@@ -79,8 +79,9 @@ class InconsistentInitialState(ValueError):
         cause: ``"not_projected"`` (``project_initial=True`` may help), ``"contradictory"``
             (constraints no state satisfies together: no projection helps) or
             ``"projection_failed"`` (projection found no consistent state nearby) or
-            ``"penetrated"`` (a contact's gap is < 0 at the start: projection does not act on a
-            unilateral gap, so ``project_initial=True`` cannot help; move the initial state).
+            ``"penetrated"`` (the C++ ``Cause::kPenetrated``: a contact's gap is < 0 at the
+            start; projection does not act on a unilateral gap, so ``project_initial=True``
+            cannot help: move the initial state).
     """
 
     def __init__(self, what: str, cause: str = "") -> None:

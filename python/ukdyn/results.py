@@ -395,10 +395,16 @@ class Result:
     # --- plots (ukdyn/plotting.py, the plots of `ukdyn run` too) ------------------------------
     @property
     def contact_events(self) -> List[Dict[str, Any]]:
-        """The impacts, releases and rests of the run's unilateral contacts (docs/contact.md)
-        as summary.json's ``contact_events`` lists them: dicts with ``t``, ``contact`` (the
-        constraint's name), ``kind`` (``impact``, ``release``, ``rest``), ``speed_before``,
-        ``speed_after``, ``impulse``, ``energy_change``; empty without contacts."""
+        """The impacts, releases and rests of the run's unilateral contacts and the sticks and
+        slips of its Coulomb friction (docs/contact.md, "In a run"), in time order, as
+        summary.json's ``contact_events`` lists them: dicts with ``t``, ``contact`` (the
+        constraint's name: a stick's or slip's is the constraint that gives its N), ``kind``
+        (``impact``, ``release``, ``rest``, ``stick``, ``slip``), ``speed_before``,
+        ``speed_after`` (g' of the contact; |v_rel| for a stick or slip), ``impulse``,
+        ``energy_change``; a release also ``force_before`` (the multiplier it carried just
+        before), a stick or slip ``friction`` (its name), ``holding_force`` and
+        ``friction_limit`` (mu_s N) of a slip at the limit (None when not known, as summary.json's
+        null); empty without contacts and friction."""
         # the constraints in order: one violation.<name> column each
         constraints = [h[len("violation."):] for h in self.names if h.startswith("violation.")]
         out = []
@@ -408,6 +414,10 @@ class Result:
             event = {"t": event.pop("t", None),
                      "contact": constraints[k] if isinstance(k, int) and 0 <= k < len(
                          constraints) else None, **event}
+            # (NaN of the C++ event: None, as summary.json's null and read_hdf5 have it)
+            for key in ("force_before", "holding_force", "friction_limit"):
+                if isinstance(event.get(key), float) and event[key] != event[key]:
+                    event[key] = None
             out.append(event)
         return out
 

@@ -69,6 +69,10 @@ const char* to_string(ContactEvent::Kind kind) {
       return "release";
     case ContactEvent::Kind::kRest:
       return "rest";
+    case ContactEvent::Kind::kStick:
+      return "stick";
+    case ContactEvent::Kind::kSlip:
+      return "slip";
   }
   return "unknown";
 }

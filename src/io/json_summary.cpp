@@ -48,21 +48,30 @@ std::string summary_json(const Trajectory& traj, const SimulationOptions& option
   j["switch_events"] = s.switch_events;
   j["stick_refusals"] = s.stick_refusals;
   j["notes"] = s.notes;
-  // the unilateral contacts' events (docs/contact.md), by constraint name: the plots and the
-  // viewer mark the impacts (present when the system has contacts: work_impact is then kept)
-  if (!traj.work_impact.empty()) {
+  // the contacts' events (docs/contact.md, "In a run"), by constraint name: the plots and the
+  // viewer mark the impacts (present when the system has unilateral contacts: work_impact is
+  // then kept, or when the run listed a stick or slip of Coulomb friction); the keys of a
+  // release, a stick and a slip besides (NaN, which JSON lacks, as null)
+  if (!traj.work_impact.empty() || !s.contact_events.empty()) {
+    auto number = [](double v) { return std::isfinite(v) ? json(v) : json(nullptr); };
     json contacts = json::array();
     for (const ContactEvent& e : s.contact_events) {
       const auto k = std::size_t(e.constraint);
-      contacts.push_back(
-          {{"t", e.t},
-           {"contact",
-            k < traj.constraint_names.size() ? json(traj.constraint_names[k]) : json(nullptr)},
-           {"kind", to_string(e.kind)},
-           {"speed_before", e.speed_before},
-           {"speed_after", e.speed_after},
-           {"impulse", e.impulse},
-           {"energy_change", e.energy_change}});
+      json entry = {{"t", e.t},
+                    {"contact", k < traj.constraint_names.size() ? json(traj.constraint_names[k])
+                                                                 : json(nullptr)},
+                    {"kind", to_string(e.kind)},
+                    {"speed_before", e.speed_before},
+                    {"speed_after", e.speed_after},
+                    {"impulse", e.impulse},
+                    {"energy_change", e.energy_change}};
+      if (e.kind == ContactEvent::Kind::kRelease) entry["force_before"] = number(e.force_before);
+      if (e.kind == ContactEvent::Kind::kStick || e.kind == ContactEvent::Kind::kSlip) {
+        entry["friction"] = e.friction;
+        entry["holding_force"] = number(e.holding_force);
+        entry["friction_limit"] = number(e.friction_limit);
+      }
+      contacts.push_back(std::move(entry));
     }
     j["contact_events"] = std::move(contacts);
   }

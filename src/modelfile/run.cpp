@@ -328,15 +328,8 @@ ModelError locate_run_error(const Model& model, const SettingError& e) {
 }
 
 bool contacts_penetrated(const Model& model, const InconsistentInitialState& e) {
-  bool penetrated =
-      e.cause() == InconsistentInitialState::Cause::kNotProjected && !e.constraints().empty();
-  for (const std::string& name : e.constraints()) {
-    const auto& cs = model.system.constraints();
-    penetrated = penetrated && std::any_of(cs.begin(), cs.end(), [&](const Constraint& c) {
-                   return c.name() == name && c.is_unilateral();
-                 });
-  }
-  return penetrated;
+  (void)model;  // (the cause says it: simulate names the penetrated contacts)
+  return e.cause() == InconsistentInitialState::Cause::kPenetrated;
 }
 
 ModelError locate_run_error(const Model& model, const InconsistentInitialState& e) {
@@ -345,7 +338,7 @@ ModelError locate_run_error(const Model& model, const InconsistentInitialState& 
       e.constraints().empty() ? FilePosition{} : constraint_position(model, e.constraints()[0]);
   // penetrated contacts (unilateral constraints with a gap < 0 at the start): projection does
   // not act on a unilateral gap, so the hint is to move the state, at the first contact's entry
-  const bool penetrated = contacts_penetrated(model, e);
+  const bool penetrated = e.cause() == Cause::kPenetrated;
   FilePosition at;
   if (e.cause() == Cause::kContradictory || penetrated) {
     at = constraint.known() ? constraint : model.positions.initial;

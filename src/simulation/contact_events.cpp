@@ -56,6 +56,8 @@ ContactEvents::ContactEvents(const System& sys, Workspace& ws, std::size_t x_siz
       q_(n_),
       qd_(n_),
       xs_(Index(x_size)),
+      qd_before_(n_),
+      recent_(dyn_.contacts().empty() ? 0 : std::size_t(kChatterEvents), 0.0),
       span_(span) {}
 
 void ContactEvents::apply() const {
@@ -329,10 +331,10 @@ bool ContactEvents::handle(double t, double* x, RunStatistics& stats) {
     nonfinite_ = true;
     return false;
   }
-  // chattering: the last kChatterEvents events within kChatterSpan of the run's span
-  const std::size_t count = stats.contact_events.size();
-  if (count >= std::size_t(kChatterEvents)) {
-    const double since = stats.contact_events[count - std::size_t(kChatterEvents)].t;
+  // chattering: the last kChatterEvents impacts and releases within kChatterSpan of the run's
+  // span (the sticks and slips listed beside them are not counted)
+  if (listed_ >= std::size_t(kChatterEvents)) {
+    const double since = recent_[listed_ % std::size_t(kChatterEvents)];
     if (t - since <= kChatterSpan * span_) {
       failure_ = "contacts: " + format_number(kChatterEvents) +
                  " impacts and releases between t = " + format_t(since) + " and " + format_t(t) +
@@ -371,7 +373,7 @@ bool ContactEvents::start(double t, VectorXd& q, VectorXd& qd, double tolerance,
   }
   if (!penetrated.empty()) {
     throw InconsistentInitialState(
-        InconsistentInitialState::Cause::kNotProjected,
+        InconsistentInitialState::Cause::kPenetrated,
         "ukdyn::simulate: inconsistent initial conditions at t = " + format_t(t) + ": " + lines +
             " (a unilateral constraint needs a gap >= 0)",
         penetrated);
@@ -399,6 +401,7 @@ bool ContactEvents::start(double t, VectorXd& q, VectorXd& qd, double tolerance,
 bool ContactEvents::resolve(double t, double* x, Index event, RunStatistics& stats) {
   Eigen::Map<VectorXd> q(x, n_), qd(x + n_, n_);
   const std::size_t K = closed_.size();
+  qd_before_ = qd;
   // the touching contacts (closed, the event's, or an open gap within kTouchGap) and their g'
   std::vector<Index> touching, set;
   std::vector<std::size_t> which;
@@ -492,7 +495,7 @@ bool ContactEvents::resolve(double t, double* x, Index event, RunStatistics& sta
       ev.impulse = dyn_.lambda()[j];
       ev.energy_change = first ? dT : 0.0;
       first = false;
-      stats.contact_events.push_back(ev);
+      list(ev, stats);
       ++impacts_[i];
       if (rests[std::size_t(j)] && stats.notes.size() < 20) {
         stats.notes.push_back("t = " + format_t(t) + ": contact '" +
@@ -546,22 +549,53 @@ bool ContactEvents::resolve(double t, double* x, Index event, RunStatistics& sta
   // contact (its multiplier turned negative), one that leaves at g' > 0 (after an impact) or
   // whose g'' the LCP makes positive; one merely left unloaded at a vertex of redundant
   // contacts, still touching, is no event (docs/contact.md, "Redundant contacts")
+  // (every contact that opens at this instant is listed, with the force it carried before)
+  std::vector<Index> opened;
+  std::vector<std::size_t> opened_which;
   for (Index j = 0; j < m; ++j) {
     const std::size_t i = which[std::size_t(j)];
     if (!was_closed[i] || closed_[i]) continue;
     if (!(release && Index(i) == event) && !separates[i]) continue;
+    opened.push_back(set[std::size_t(j)]);
+    opened_which.push_back(std::size_t(j));
+  }
+  std::vector<double> force;
+  if (!opened.empty()) forces_before(t, q, was_closed, opened, force);
+  for (std::size_t r = 0; r < opened.size(); ++r) {
+    const std::size_t j = opened_which[r], i = which[j];
     ContactEvent ev;
     ev.t = t;
-    ev.constraint = set[std::size_t(j)];
+    ev.constraint = opened[r];
     ev.kind = ContactEvent::Kind::kRelease;
-    ev.speed_before = ev.speed_after = v_minus[std::size_t(j)];
-    stats.contact_events.push_back(ev);
+    ev.speed_before = ev.speed_after = v_minus[j];
+    ev.force_before = force[r];
+    list(ev, stats);
     // (its next impacts are a new sequence: the rest criterion compares with their fastest)
     fastest_[i] = 0.0;
     impacts_[i] = 0;
   }
   apply();
   return true;
+}
+
+void ContactEvents::list(const ContactEvent& ev, RunStatistics& stats) {
+  stats.contact_events.push_back(ev);
+  if (recent_.empty()) return;
+  recent_[listed_ % recent_.size()] = ev.t;
+  ++listed_;
+}
+
+void ContactEvents::forces_before(double t, const Eigen::Ref<const VectorXd>& q,
+                                  const std::vector<unsigned char>& was_closed,
+                                  const std::vector<Index>& opened, std::vector<double>& force) {
+  // the run's evaluation with the modes before the event: the multiplier each opened contact
+  // had (the release criterion's own quantity)
+  for (std::size_t i = 0; i < was_closed.size(); ++i) {
+    ws_.activity_override[std::size_t(dyn_.contacts()[i])] = was_closed[i] ? 1 : 0;
+  }
+  const bool ok = forward_dynamics(sys_, ws_, q, qd_before_, t) == Status::kOk;
+  force.assign(opened.size(), kNaN);
+  for (std::size_t r = 0; r < opened.size() && ok; ++r) force[r] = multiplier(opened[r]);
 }
 
 bool ContactEvents::hold_pushes(double t, const Eigen::Ref<const VectorXd>& q,

@@ -83,6 +83,14 @@ class ContactEvents {
   // resolves the contacts at (t, x): the impact of the touching ones when `event` (a contact
   // index, or −1) or any touching one approaches, then the closed set
   bool resolve(double t, double* x, Index event, RunStatistics& stats);
+  // the event ev into stats.contact_events, its time into recent_ (the chattering test)
+  void list(const ContactEvent& ev, RunStatistics& stats);
+  // each contact of `opened` (System indices, closed before the event at t): its whole
+  // multiplier with the contacts closed as they were (was_closed, per contact), at q and the
+  // velocities before the event (qd_before_), into force (one evaluation; NaN when it fails)
+  void forces_before(double t, const Eigen::Ref<const VectorXd>& q,
+                     const std::vector<unsigned char>& was_closed, const std::vector<Index>& opened,
+                     std::vector<double>& force);
   // after the LCP of a release event at t kept the event's contact k (a System index) closed
   // (candidates: the LCP's contacts): true when k's multiplier with the decided modes pushes
   // (one evaluation); else false with failure_ naming the contact, t, and both signs
@@ -148,7 +156,12 @@ class ContactEvents {
   bool nonfinite_ = false;             // failure_ is a non-finite gap
   std::string nonfinite_event_;        // the message when that event is a non-finite gap
   VectorXd q_, qd_, xs_;               // (n, n, size of x) scratch
-  double span_;                        // the run's t_end − t_start
+  VectorXd qd_before_;                 // (n) resolve: the velocities before the event
+  // (kChatterEvents when the system has contacts) the times of the last impacts, rests and
+  // releases, a ring: the one listed_ % kChatterEvents is the oldest
+  std::vector<double> recent_;
+  std::size_t listed_ = 0;  // impacts, rests and releases listed so far
+  double span_;             // the run's t_end − t_start
   double impact_work_ = 0.0;
   std::string failure_;
 };

@@ -275,6 +275,36 @@ void run_sample(Pool& pool, std::size_t i) {
   }
 }
 
+// the counts of a sample's contact events by kind (impacts with the rests), and the time of its
+// last rest (NaN when none), as columns through `column` (ensemble_table's)
+template <class Column>
+void add_event_columns(const EnsembleResult& result, Column&& column) {
+  using Kind = ContactEvent::Kind;
+  auto count = [](const SampleResult& r, Kind a, Kind b) {
+    return double(std::count_if(r.stats.contact_events.begin(), r.stats.contact_events.end(),
+                                [&](const ContactEvent& e) { return e.kind == a || e.kind == b; }));
+  };
+  const std::pair<const char*, std::pair<Kind, Kind>> counts[] = {
+      {"impacts", {Kind::kImpact, Kind::kRest}},
+      {"releases", {Kind::kRelease, Kind::kRelease}},
+      {"sticks", {Kind::kStick, Kind::kStick}},
+      {"slips", {Kind::kSlip, Kind::kSlip}}};
+  for (const auto& kinds : counts) {
+    auto& c = column(kinds.first);
+    for (const SampleResult& r : result.samples) {
+      c.push_back(count(r, kinds.second.first, kinds.second.second));
+    }
+  }
+  auto& rest = column("rest_time");
+  for (const SampleResult& r : result.samples) {
+    double t = kNaN;
+    for (const ContactEvent& e : r.stats.contact_events) {
+      if (e.kind == Kind::kRest) t = e.t;
+    }
+    rest.push_back(t);
+  }
+}
+
 // "x@5", "theta@end"
 std::string at_name(const std::string& column, const std::vector<double>& at, std::size_t k) {
   return column + "@" + (at.empty() ? std::string("end") : format_number(at[k]));
@@ -351,6 +381,12 @@ EnsembleResult run_ensemble(const EnsembleModel& model, const std::vector<Ensemb
 
   EnsembleResult result;
   result.at = options.at;
+  // (the columns of the contacts' events: decided by the model, so that every chunk of a
+  // distributed sweep has them)
+  const auto& cs = base->system.constraints();
+  result.contacts =
+      !base->system.friction_contacts().empty() ||
+      std::any_of(cs.begin(), cs.end(), [](const Constraint& c) { return c.is_unilateral(); });
   for (const auto& c : base->system.coordinate_names()) result.recorded.push_back(c);
   for (const auto& c : base->system.coordinate_names()) result.recorded.push_back(c + "_dot");
   const std::vector<std::string>& outputs =
@@ -529,6 +565,7 @@ EnsembleTable ensemble_table(const EnsembleResult& result,
     auto& c = column(name);
     for (const SampleResult& r : result.samples) c.push_back(get(r));
   }
+  if (result.contacts) add_event_columns(result, column);
   // the recorded values, time-major
   const std::size_t n_at = std::max<std::size_t>(result.at.size(), 1);
   const std::size_t n_rec = result.recorded.size();

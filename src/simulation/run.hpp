@@ -267,6 +267,13 @@ class Run {
   bool frictionless(std::size_t c) const { return sys_.friction_contacts()[c].mu_static == 0.0; }
   // switches the contact found by the last find_event at (t, x)
   Status switch_contact(double t, double* x);
+  // --- the sticks and slips listed (run_events.cpp; RunStatistics::contact_events) ---
+  // before the driver hands an event at state x to the Coulomb contacts (a stop, a release, an
+  // impact's aftermath): their modes and the state then; no slip noted yet
+  void before_mode_change(const double* x);
+  // after it: each contact that stuck or slipped since before_mode_change, listed in time order
+  // (its sliding speed before and at x after; a slip's holding force and mu_s N when noted)
+  void list_mode_changes(double t, const double* x);
 
   // --- samples and progress (run_output.cpp) ---------------------------------------------------
   // SimulationOptions::should_stop, asked once a step until it says yes (then remembered)
@@ -399,6 +406,13 @@ class Run {
     change_.setConstant(10.0 * 100.0 * sys_.friction_contacts()[c].eps);
     const double stop = detail::kinetic_energy(ws_, change_) / double(n_);
     return std::max(std::max(o_.rtol, 1e-14) * std::max(peak_kinetic_, T_before), stop);
+  }
+  // the holding force of sticking contact c and mu_s N, where stick_margin (or _here) just gave
+  // `margin` (holding_ the force that held it), for the slip about to be listed
+  void note_slip(std::size_t c, double margin) {
+    if (c >= slip_holding_.size()) return;
+    slip_holding_[c] = holding_.norm();
+    slip_limit_[c] = margin + slip_holding_[c];
   }
   // contact c's stop at te is a kinematic passage at a rank drop (no restart there)
   bool passes_at_rank_drop(std::size_t c, double te, const detail::SegmentHooks::Dense& dense);
@@ -555,6 +569,10 @@ class Run {
   std::vector<double> entry_x0_ = std::vector<double>(sample_.size());
   std::string failure_;
   const detail::ContactEvents* contacts_ = nullptr;  // (see set_contacts)
+  // (contacts) the modes at before_mode_change, and a slip's holding force and mu_s N noted
+  // since (NaN: none); (size of x) the state at before_mode_change
+  std::vector<ContactMode> listed_modes_;
+  std::vector<double> slip_holding_, slip_limit_, listed_x_;
   std::string refusal_;      // why the last refused stick was refused (empty: friction cannot hold)
   ProgressReport progress_;  // what the last progress report said
   // a requested stop (SimulationOptions::should_stop): asked for; accepted steps since, waiting

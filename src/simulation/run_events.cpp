@@ -595,4 +595,39 @@ void Run::bridged_state(double s, double* out) const {
   }
 }
 
+// ---- The sticks and slips listed (RunStatistics::contact_events) ------------------------------
+
+void Run::before_mode_change(const double* x) {
+  listed_modes_ = mode_;
+  listed_x_.assign(x, x + 2 * n_);
+  slip_holding_.assign(mode_.size(), std::numeric_limits<double>::quiet_NaN());
+  slip_limit_.assign(mode_.size(), std::numeric_limits<double>::quiet_NaN());
+}
+
+void Run::list_mode_changes(double t, const double* x) {
+  const auto& contacts = sys_.friction_contacts();
+  if (listed_modes_.size() != mode_.size()) return;
+  for (std::size_t c = 0; c < mode_.size(); ++c) {
+    // stick: into sticking from sliding or passing; slip: out of sticking
+    const bool was = listed_modes_[c] == ContactMode::kSticking;
+    const bool now = mode_[c] == ContactMode::kSticking;
+    if (was == now) continue;
+    ContactEvent ev;
+    ev.t = t;
+    ev.constraint = contacts[c].normal_constraint;
+    ev.kind = now ? ContactEvent::Kind::kStick : ContactEvent::Kind::kSlip;
+    ev.friction = sys_.nonideal_name(contacts[c].force);
+    // |v_rel| before (the state handed to the event) and after
+    Index k = relative_velocity(c, t, listed_x_.data(), velocity_);
+    ev.speed_before = velocity_.head(k).norm();
+    k = relative_velocity(c, t, x, velocity_);
+    ev.speed_after = velocity_.head(k).norm();
+    if (!now) {
+      ev.holding_force = slip_holding_[c];
+      ev.friction_limit = slip_limit_[c];
+    }
+    traj_.stats.contact_events.push_back(std::move(ev));
+  }
+}
+
 }  // namespace ukdyn::detail

@@ -97,7 +97,7 @@ Status Run::switch_contact(double t, double* x) {
   switch (mode_[c]) {
     case ContactMode::kSticking: {
       // release: friction from its full magnitude along the force that held the contact
-      stick_margin(c, t, x);
+      note_slip(c, stick_margin(c, t, x));
       mode_[c] = ContactMode::kSliding;
       set_slip_hint(c, holding_);
       apply_contact_modes();

@@ -166,7 +166,7 @@ void Run::release_unheld(double t, double* x, bool events, std::size_t first) {
     if (forward_dynamics(sys_, ws_, q_, qd_, t) != Status::kOk) return;
     std::size_t worst = 0;
     if (holding_split(t, &worst) >= 0) return;
-    stick_margin_here(worst, t);
+    note_slip(worst, stick_margin_here(worst, t));
     if (events) ++traj_.stats.events;
     mode_[worst] = ContactMode::kSliding;
     set_slip_hint(worst, holding_);

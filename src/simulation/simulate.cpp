@@ -573,11 +573,14 @@ Trajectory detail::simulate_observed(const System& sys, const Eigen::Ref<const V
       method = base_method;
       after_event = true;
       if (contact_event) {
-        // a unilateral contact's impact or release: the velocity jump and the closed set
+        // a unilateral contact's impact or release: the velocity jump and the closed set (then
+        // the Coulomb contacts' modes; their sticks and slips listed after it)
+        run.before_mode_change(x.data());
         if (!contacts.handle(r.t_reached, x.data(), traj.stats)) {
           return finish(contacts.failure_status(), contacts.failure(), r.t_reached);
         }
         run.contacts_changed(r.t_reached, x.data());
+        run.list_mode_changes(r.t_reached, x.data());
         if (const Status s = run.project_drift(r.t_reached, x.data()); s != Status::kOk) {
           return finish(s, run.failure().empty() ? describe_status(sys, ws) : run.failure(),
                         r.t_reached);
@@ -688,10 +691,12 @@ Trajectory detail::simulate_observed(const System& sys, const Eigen::Ref<const V
                           " transitions (chattering) by t = " + format(r.t_reached),
                       r.t_reached);
       }
+      run.before_mode_change(x.data());
       if (const Status s = run.switch_contact(r.t_reached, x.data()); s != Status::kOk) {
         return finish(s, run.failure().empty() ? describe_status(sys, ws) : run.failure(),
                       r.t_reached);
       }
+      run.list_mode_changes(r.t_reached, x.data());
       a = r.t_reached;
       if (!(a < b)) break;
     }

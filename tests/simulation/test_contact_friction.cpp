@@ -116,9 +116,16 @@ TEST(ContactFriction, BlockSticksThenSlipsThenLiftsOff) {
   m.options.output_at = {0.3, 2.0, 5.0};
   const Trajectory tr = simulate(m.system, m.q0, m.qd0, m.options);
   ASSERT_EQ(tr.stats.status, Status::kOk) << tr.stats.message;
-  ASSERT_EQ(tr.stats.contact_events.size(), 1u);
-  EXPECT_EQ(tr.stats.contact_events[0].kind, ContactEvent::Kind::kRelease);
-  EXPECT_NEAR(tr.stats.contact_events[0].t, t_star, 1e-9);
+  // the slip at t_s, where the holding force m g sin alpha reaches mu_s N (listed with it),
+  // then the release at t*
+  ASSERT_EQ(tr.stats.contact_events.size(), 2u);
+  const ContactEvent& slip = tr.stats.contact_events[0];
+  EXPECT_EQ(slip.kind, ContactEvent::Kind::kSlip);
+  EXPECT_NEAR(slip.t, ts, 1e-9);
+  EXPECT_NEAR(slip.holding_force, c.m * kG * std::sin(c.alpha), 1e-8 * c.m * kG);
+  EXPECT_NEAR(slip.friction_limit, c.m * kG * std::sin(c.alpha), 1e-8 * c.m * kG);
+  EXPECT_EQ(tr.stats.contact_events[1].kind, ContactEvent::Kind::kRelease);
+  EXPECT_NEAR(tr.stats.contact_events[1].t, t_star, 1e-9);
   EXPECT_EQ(tr.stats.events, 1);  // the slip (a located stick/slip event)
   const std::size_t i0 = sample_at(tr, 0.3);
   EXPECT_NEAR(along(tr, i0, c.alpha), 0.0, 1e-12);

@@ -69,6 +69,9 @@ class InconsistentInitialState : public std::invalid_argument {
     kNotProjected,      ///< violated, and project_initial is off: projecting may help
     kContradictory,     ///< constraints that no state satisfies together: no projection helps
     kProjectionFailed,  ///< project_initial was on, and no consistent state was found nearby
+    /// a unilateral contact's gap is < 0 at the start: projection does not act on a gap, so
+    /// project_initial cannot help; the initial state must change
+    kPenetrated,
   };
   /// @param cause why; @param what the full message; @param constraints the constraints at
   /// fault, in declaration order (those that contradict each other, or those violated).
@@ -78,7 +81,8 @@ class InconsistentInitialState : public std::invalid_argument {
   /// Why no consistent initial state was used.
   Cause cause() const { return cause_; }
   /// The names of the constraints at fault (front ends point at their declarations): for
-  /// kContradictory those that contradict each other, else those the state violates. May be
+  /// kContradictory those that contradict each other, for kPenetrated the penetrated contacts,
+  /// else those the state violates. May be
   /// empty (the projection did not converge, with no constraint left violated).
   const std::vector<std::string>& constraints() const { return constraints_; }
 

@@ -8,6 +8,7 @@
 /// inverse mass with the bilateral rows eliminated, W = A_c P A_cᵀ the Delassus matrix.
 #pragma once
 
+#include <limits>
 #include <memory>
 #include <string>
 #include <vector>
@@ -89,25 +90,47 @@ class ContactLcp {
   Solver solver_ = Solver::kLemke;
 };
 
-/// What happened at a unilateral contact during a run (RunStatistics::contact_events).
+/// What happened at a contact during a run (RunStatistics::contact_events): an impact, release
+/// or rest of a unilateral contact, or a stick or slip of a Coulomb contact (docs/contact.md,
+/// "In a run"; docs/friction.md, "Stick and slip, as events").
 struct ContactEvent {
   /// The kind of event.
   enum class Kind : unsigned char {
     kImpact,   ///< the gap closed with approaching speed: a velocity jump
     kRelease,  ///< a closed contact's multiplier would pull: it opens
     kRest,     ///< an impact below the rest speed closed the contact (an accumulation point)
+    kStick,    ///< a sliding Coulomb contact stopped, and friction holds it: it sticks
+    kSlip,     ///< a sticking Coulomb contact starts to slide (its holding force reached
+               ///< mu_s N, an impact set it sliding, or its contact opened)
   };
-  double t = 0.0;             ///< time of the event
-  Index constraint = -1;      ///< the unilateral constraint (System::constraint index)
-  Kind kind = Kind::kImpact;  ///< impact, release or rest
-  double speed_before = 0.0;  ///< g' just before (impacts: < 0, approaching)
-  double speed_after = 0.0;   ///< g' just after
-  double impulse = 0.0;       ///< the contact's impulse Λ >= 0 (impacts)
+  double t = 0.0;  ///< time of the event
+  /// the unilateral constraint (System::constraint index); for a stick or slip, the constraint
+  /// whose reaction gives the Coulomb contact's N (its normal constraint)
+  Index constraint = -1;
+  Kind kind = Kind::kImpact;  ///< impact, release, rest, stick or slip
+  /// g' just before (impacts: < 0, approaching); stick, slip: the sliding speed |v_rel| just
+  /// before (a stick: the stop's v_stop = 100 eps)
+  double speed_before = 0.0;
+  double speed_after = 0.0;  ///< g' just after; stick, slip: |v_rel| just after
+  double impulse = 0.0;      ///< the contact's impulse Λ >= 0 (impacts)
   /// the kinetic energy the event changed, T⁺ − T⁻ (<= 0: an impact never creates energy)
   double energy_change = 0.0;
+  /// release: the contact's whole multiplier lambda + lambda_nonideal just before, with the
+  /// contacts closed as they were (about 0 at a located release, whose criterion it is; the
+  /// force it carried when an impact elsewhere lifts it off); NaN for the other kinds
+  double force_before = std::numeric_limits<double>::quiet_NaN();
+  /// stick, slip: the Coulomb contact's name (its friction force's, System::nonideal_name);
+  /// empty for the other kinds
+  std::string friction;
+  /// slip: |the force that held the contact| just before, which reached friction_limit (its
+  /// split of the reaction, docs/friction.md); NaN for a slip an impact or the contact's opening
+  /// caused, and for the other kinds
+  double holding_force = std::numeric_limits<double>::quiet_NaN();
+  /// slip: mu_s N just before (NaN as holding_force)
+  double friction_limit = std::numeric_limits<double>::quiet_NaN();
 };
 
-/// "impact", "release" or "rest". Cost O(1).
+/// "impact", "release", "rest", "stick" or "slip". Cost O(1).
 const char* to_string(ContactEvent::Kind kind);
 
 }  // namespace ukdyn

@@ -98,10 +98,10 @@ ModelError locate_run_error(const Model& model, const SettingError& e);
 /// for a penetrated contact, which no projection opens, change the initial state.
 ModelError locate_run_error(const Model& model, const InconsistentInitialState& e);
 
-/// Whether `e` (of a run of `model`) says that contacts are penetrated at the start: not
-/// projected, naming only unilateral constraints (a gap < 0). Projection does not act on a gap,
-/// so project_initial cannot help: the front ends say so (the hint above; Python's cause
-/// "penetrated"). Cost O(named constraints × constraints).
+/// Whether `e` (of a run of `model`) says that contacts are penetrated at the start (a gap < 0:
+/// InconsistentInitialState::Cause::kPenetrated, which simulate() gives them). Projection does
+/// not act on a gap, so project_initial cannot help: the front ends say so (the hint above;
+/// Python's cause "penetrated"). Cost O(1).
 bool contacts_penetrated(const Model& model, const InconsistentInitialState& e);
 
 /// Writes trajectory.csv: the standard columns then run.extra_columns (write_csv of

@@ -119,6 +119,9 @@ struct EnsembleResult {
   std::vector<double> at;             ///< the recording times (empty: the last sample)
   std::vector<SampleResult> samples;  ///< one per sample, in order
   bool interrupted = false;           ///< should_stop asked the ensemble to stop
+  /// the model has unilateral contacts or Coulomb friction: the table then has the counts of
+  /// their events per sample (ensemble_table)
+  bool contacts = false;
   /// samples that failed: not ok (SampleResult::ok), neither interrupted nor not run — a run
   /// that ended in a failure, or a sample refused. Cost O(samples).
   std::size_t failed() const;
@@ -165,9 +168,13 @@ std::vector<EnsembleSample> samples_of_design(const EnsembleModel& model,
 /// (int(Status) for a run, −1 refused, −2 not run), `ok` (1 or 0), `steps`, `rejected_steps`,
 /// `evaluations`, `t_reached`, `max_position_violation`, `max_velocity_violation`,
 /// `energy_balance`, `energy_exchanged`, `control_evaluations`, `control_not_met`,
-/// `control_max_residual`, `control_max_kappa`, then each recorded column at each time
-/// (`x@5`, `theta@10`; `x@end` for the last sample). Text columns: `status` (the status's name,
-/// "refused" or "not run") and `message`. No wall time: the table is reproducible bit for bit.
+/// `control_max_residual`, `control_max_kappa`; when the model has unilateral contacts or
+/// Coulomb friction (EnsembleResult::contacts) the counts of the run's contact events
+/// (RunStatistics::contact_events) `impacts` (impacts and rests: a rest is the impact that ends
+/// an accumulation), `releases`, `sticks`, `slips` and `rest_time` (the time of its last rest
+/// event, NaN when none); then each recorded column at each time (`x@5`, `theta@10`; `x@end`
+/// for the last sample). Text columns: `status` (the status's name, "refused" or "not run")
+/// and `message`. No wall time: the table is reproducible bit for bit.
 struct EnsembleTable {
   std::vector<CsvColumn> numbers;    ///< the numeric columns, in order
   std::vector<std::string> status;   ///< per sample: the status's name

@@ -262,14 +262,18 @@ struct RunStatistics {
   long projected_stage_steps = 0;
   long projections = 0;  ///< projections that moved the state (with BDF, CVODE
                          ///< projects before its error test, so rejected attempts count)
-  long events = 0;       ///< stick/slip events of Coulomb contacts
+  /// located events of Coulomb contacts (stops, whether they stick or slide on through
+  /// v_rel = 0, slips, the turns after such a pass) and the slips an impact or release causes;
+  /// kMaxEvents of them end the run as chattering. contact_events lists each stick and slip
+  long events = 0;
   /// sign changes of switching functions located as events (SimulationOptions::switch_events)
   long switch_events = 0;
   /// stops of a Coulomb contact where sticking was refused as not admissible (it would have
   /// removed kinetic energy, or left the constraints without solution): the contact slid on
   long stick_refusals = 0;
-  /// impacts and releases of unilateral constraints (Constraint::unilateral, docs/contact.md),
-  /// in time order
+  /// impacts, releases and rests of unilateral constraints (Constraint::unilateral,
+  /// docs/contact.md), and sticks and slips of Coulomb contacts, in time order (those of one
+  /// instant: impacts, releases, then sticks and slips)
   std::vector<ContactEvent> contact_events;
   /// what the run decided on its own, one line each with its time (at most 20): a refused stick
   std::vector<std::string> notes;
