@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "simulation/run.hpp"
+#include "simulation/split_margin.hpp"
 #include "ukdyn/dynamics/contact.hpp"
 
 namespace ukdyn::detail {
@@ -142,12 +143,13 @@ double Run::group_margin(std::size_t c, double t, const double* x) {
   if (forward_dynamics(sys_, ws_, q_, qd_, t) != Status::kOk) {
     return std::numeric_limits<double>::quiet_NaN();
   }
-  const int split = holding_split(t);
+  // (whether a split holds is all the sign needs: no search for the least change)
+  const int split = holding_split(t, nullptr, false);
   if (split > 0) return stick_margin_here(c, t);
-  const double lowest = std::abs(split_lowest_);
+  const double lowest = std::max(std::abs(split_lowest_), std::numeric_limits<double>::min());
   group_t_ = t;
   group_x_.assign(x, x + 2 * n_);
-  group_margin_ = split == 0 ? std::max(lowest, std::numeric_limits<double>::min()) : -lowest;
+  group_margin_ = split == 0 ? lowest : -lowest;
   return group_margin_;
 }
 
@@ -166,7 +168,12 @@ void Run::release_unheld(double t, double* x, bool events, std::size_t first) {
     if (forward_dynamics(sys_, ws_, q_, qd_, t) != Status::kOk) return;
     std::size_t worst = 0;
     if (holding_split(t, &worst) >= 0) return;
-    stick_margin_here(worst, t);
+    // (along its holding force at the split of largest margin, which the units do not change;
+    // the minimum-norm split's where that was not solved)
+    if (split_exact_)
+      split_holding(split_worst_);
+    else
+      stick_margin_here(worst, t);
     if (events) ++traj_.stats.events;
     mode_[worst] = ContactMode::kSliding;
     set_slip_hint(worst, holding_);
@@ -174,6 +181,16 @@ void Run::release_unheld(double t, double* x, bool events, std::size_t first) {
     released_.push_back(worst);
   }
   if (released_.size() >= 2) slide_together(t);
+}
+
+// the holding force f = f0 + F y* of sticking contact stuck_[i] at the split of largest margin
+// (holding_split's y*), mapped by its cone's basis into holding_: the tangent-basis components
+// at a contact point (d), the generalized force on the coordinate path (n)
+const VectorXd& Run::split_holding(std::size_t i) {
+  const SplitCone& cone = split_cones_[i];
+  holding_.setZero(std::max(n_, cone.basis.rows()));
+  holding_.head(cone.basis.rows()) = cone.basis * (cone.f0 + cone.F * split_y_);
+  return holding_;
 }
 
 // The contacts released_ slide from rest together at (q_, qd_, t): each one's friction, at its
@@ -217,8 +234,9 @@ void Run::slide_together(double t) {
 // one of the contact forces' map, and a few LCPs of 2 to 3 rows per contact; allocates (at stops,
 // releases and the samples of runs with several contacts sticking where the minimum-norm split
 // fails).
-int Run::holding_split(double t, std::size_t* worst) {
+int Run::holding_split(double t, std::size_t* worst, bool search) {
   const auto& contacts = sys_.friction_contacts();
+  split_exact_ = false;
   split_lowest_ = std::numeric_limits<double>::infinity();
   for (std::size_t c : stuck_) {
     const double margin = stick_margin_here(c, t);
@@ -319,13 +337,8 @@ int Run::holding_split(double t, std::size_t* worst) {
     }
   }
   // each contact's f_i = F_i Λ (d_i) and N_i = g_i·Λ on the compact rows, then on y
-  struct Cone {
-    MatrixXd F;  // (d × nz) F_i Z
-    VectorXd g;  // (nz) Zᵀ g_i
-    VectorXd f0;
-    double N0 = 0.0, mu = 0.0;
-  };
-  std::vector<Cone> cones;
+  std::vector<SplitCone>& cones = split_cones_;
+  cones.clear();
   double scale = 0.0;
   for (std::size_t c : stuck_) {
     const FrictionContact& contact = contacts[c];
@@ -333,7 +346,7 @@ int Run::holding_split(double t, std::size_t* worst) {
     const Index rows_k = sys_.constraint(k).rows(), rows_s = sys_.constraint(s).rows();
     const Index ok = compact[std::size_t(sys_.row_offset(k))];
     const Index os = compact[std::size_t(sys_.row_offset(s))];
-    MatrixXd F = MatrixXd::Zero(0, ma);
+    MatrixXd F = MatrixXd::Zero(0, ma), basis;
     VectorXd g;
     if (!normal_form(c, g)) return -1;
     if (const ContactKinematics& kin = contact.kinematics) {
@@ -343,6 +356,7 @@ int Run::holding_split(double t, std::size_t* worst) {
       const double kappa = detail::normal_row_unit(normals_, rows_k, reaction_part_);
       F.setZero(kin.tangents, ma);
       for (Index j = 0; j < kin.tangents; ++j) F(j, os + j) = kappa;
+      basis = MatrixXd::Identity(kin.tangents, kin.tangents);
     } else {
       // f = P R in an orthonormal basis of its range, P = I − a aᵀ / |a|²
       const VectorXd a = split_rows_.row(ok).transpose();
@@ -354,8 +368,10 @@ int Run::holding_split(double t, std::size_t* worst) {
       while (d < range.singularValues().size() && range.singularValues()[d] > 1e-10 * top) ++d;
       F.setZero(d, ma);
       F.middleCols(os, rows_s) = range.matrixU().leftCols(d).transpose() * H;
+      basis = range.matrixU().leftCols(d);
     }
-    Cone cone;
+    SplitCone cone;
+    cone.basis = std::move(basis);
     cone.N0 = g.dot(lambda0);
     cone.f0 = F * lambda0;
     cone.F = F * split_null_;  // (then on ỹ, below)
@@ -372,9 +388,9 @@ int Run::holding_split(double t, std::size_t* worst) {
   // table, nearly dependent in that metric, made the LCP's δ regularization miss the split (no
   // split found in mm, g, ms where SI finds one)
   Index rows_P = 0;
-  for (const Cone& cone : cones) rows_P += cone.F.rows() + 1;
+  for (const SplitCone& cone : cones) rows_P += cone.F.rows() + 1;
   split_rows_.resize(rows_P, split_null_.cols());
-  for (Index i = 0; const Cone& cone : cones) {
+  for (Index i = 0; const SplitCone& cone : cones) {
     split_rows_.middleRows(i, cone.F.rows()) = cone.F;
     split_rows_.row(i + cone.F.rows()) = cone.g.transpose();
     i += cone.F.rows() + 1;
@@ -387,19 +403,41 @@ int Run::holding_split(double t, std::size_t* worst) {
   split_null_ =
       (split_null_ * forces.matrixV().leftCols(nz) * sf.head(nz).cwiseInverse().asDiagonal())
           .eval();
-  for (Index i = 0; Cone & cone : cones) {
+  for (Index i = 0; SplitCone & cone : cones) {
     cone.F = forces.matrixU().block(i, 0, cone.F.rows(), nz);
     cone.g = forces.matrixU().row(i + cone.F.rows()).head(nz).transpose();
     i += cone.F.rows() + 1;
   }
+  // whether any split holds: the largest margin s* of a split inside every cone, to roundoff
+  // (max_split_margin); where none holds, the contact least held at its maximizer y* is the
+  // worst (every margin there is >= s*; the contacts bound to s* are those no split can relieve)
+  split_margin_ = max_split_margin(cones, nz, scale, &split_y_);
+  if (!std::isnan(split_margin_)) {
+    split_exact_ = true;
+    if (split_margin_ <= -kSplitTolerance) {
+      double lowest = std::numeric_limits<double>::infinity();
+      for (std::size_t i = 0; i < cones.size(); ++i) {
+        const SplitCone& cone = cones[i];
+        const double margin =
+            cone.mu * (cone.N0 + cone.g.dot(split_y_)) - (cone.f0 + cone.F * split_y_).norm();
+        if (margin < lowest) {
+          lowest = margin;
+          split_worst_ = i;
+          if (worst) *worst = stuck_[i];
+        }
+      }
+      return -1;
+    }
+    if (!search) return 0;
+  }
   // the planes G y <= h: N_i >= 0, and faces or tangent planes of the cones
   std::vector<VectorXd> planes;
   std::vector<double> offsets;
-  auto add_face = [&](const Cone& cone, const VectorXd& u) {
+  auto add_face = [&](const SplitCone& cone, const VectorXd& u) {
     planes.push_back(cone.F.transpose() * u - cone.mu * cone.g);
     offsets.push_back(cone.mu * cone.N0 - u.dot(cone.f0));
   };
-  for (const Cone& cone : cones) {
+  for (const SplitCone& cone : cones) {
     planes.push_back(-cone.g);
     offsets.push_back(cone.N0);
     const Index d = cone.f0.size();
@@ -432,7 +470,7 @@ int Run::holding_split(double t, std::size_t* worst) {
     ContactLcp lcp(rows);
     MatrixXd W = split_G_ * split_G_.transpose();
     W.diagonal().array() += 1e-8 * W.diagonal().maxCoeff();
-    if (!lcp.solve(W, split_h_, 1e-9)) return -1;
+    if (!lcp.solve(W, split_h_, 1e-9)) break;
     y = -split_G_.transpose() * lcp.z();
     // (polished on its active planes: the least-norm y with G_a y = h_a, free of δ)
     {
@@ -450,9 +488,9 @@ int Run::holding_split(double t, std::size_t* worst) {
         if ((split_G_ * polished - split_h_).maxCoeff() <= tolerance) y = polished;
       }
     }
-    if ((split_G_ * y - split_h_).maxCoeff() > 1e-6 * scale) return -1;
+    if ((split_G_ * y - split_h_).maxCoeff() > 1e-6 * scale) break;
     bool held = true;
-    for (const Cone& cone : cones) {
+    for (const SplitCone& cone : cones) {
       const VectorXd f = cone.f0 + cone.F * y;
       const double N = cone.N0 + cone.g.dot(y);
       if (f.norm() <= cone.mu * N + tolerance) continue;
@@ -465,7 +503,11 @@ int Run::holding_split(double t, std::size_t* worst) {
       return 0;
     }
   }
-  return -1;
+  // (no least change found, where a split holds: the one of largest margin)
+  if (!split_exact_) return -1;
+  const VectorXd change = split_null_ * split_y_;
+  for (Index i = 0; i < ma; ++i) split_[row_of[std::size_t(i)]] = change[i];
+  return 0;
 }
 
 }  // namespace ukdyn::detail
