@@ -481,7 +481,10 @@ class Run {
   // the largest margin of a split inside every cone (relative to the forces; NaN where not
   // solved) and its split (nz), whether that decided (split_exact_), and the index into stuck_
   // of the contact least held there when none holds
-  std::vector<SplitCone> split_cones_;
+  SplitSpace space_;
+  std::vector<SplitCone>& split_cones_ = space_.cones;
+  VectorXd lambda_total_;             // (m) holding_split: Λ = λ + λ_nonideal
+  std::vector<std::size_t> sliding_;  // (contacts) holding_split: the closed ones sliding
   double split_margin_ = 0.0;
   VectorXd split_y_;
   bool split_exact_ = false;

@@ -249,165 +249,20 @@ int Run::holding_split(double t, std::size_t* worst, bool search) {
   split_.setZero(m);
   if (split_lowest_ >= 0.0) return 1;
   if (stuck_.size() < 2 || std::isnan(split_lowest_)) return -1;
-  // the active rows, compact: their rows of A, and Λ there
-  std::vector<Index> row_of, compact(std::size_t(m), -1);
-  for (Index k = 0; k < sys_.constraint_count(); ++k) {
-    if (!ws_.active[std::size_t(k)]) continue;
-    for (Index r = 0; r < sys_.constraint(k).rows(); ++r) {
-      compact[std::size_t(sys_.row_offset(k) + r)] = Index(row_of.size());
-      row_of.push_back(sys_.row_offset(k) + r);
-    }
+  // Λ = λ + λ_nonideal; the contacts sliding closed keep their N (their friction is μ N of it)
+  lambda_total_ = ws_.lambda;
+  if (ws_.lambda_nonideal.size() == m) lambda_total_ += ws_.lambda_nonideal;
+  sliding_.clear();
+  for (std::size_t c = 0; c < contacts.size(); ++c) {
+    if (mode_[c] != ContactMode::kSticking && !separated(c) && !frictionless(c))
+      sliding_.push_back(c);
   }
-  const Index ma = Index(row_of.size());
-  split_rows_.setZero(ma, n_);
-  for (Index k = 0; k < sys_.constraint_count(); ++k) {
-    if (!ws_.active[std::size_t(k)] || sys_.constraint(k).rows() == 0) continue;
-    detail::copy_constraint_rows(sys_, ws_, k,
-                                 split_rows_.middleRows(compact[std::size_t(sys_.row_offset(k))],
-                                                        sys_.constraint(k).rows()));
-  }
-  VectorXd lambda0(ma);
-  const bool nonideal = ws_.lambda_nonideal.size() == m;
-  for (Index i = 0; i < ma; ++i) {
-    const Index r = row_of[std::size_t(i)];
-    lambda0[i] = ws_.lambda[r] + (nonideal ? ws_.lambda_nonideal[r] : 0.0);
-  }
-  // Z: the left null space of the active rows
-  const Eigen::JacobiSVD<MatrixXd> svd(split_rows_, Eigen::ComputeFullU);
-  const auto& sigma = svd.singularValues();
-  Index rank = 0;
-  while (rank < sigma.size() && sigma[rank] > 1e-10 * sigma[0]) ++rank;
-  if (rank == ma) return -1;
-  split_null_ = svd.matrixU().rightCols(ma - rank);
-  // N_i = g·Λ of contact c (the sign of Λ at the evaluation: N is |·|) into g; false where N is
-  // not linear in Λ (a coordinate-path normal constraint of several rows)
-  auto normal_form = [&](std::size_t c, VectorXd& g) {
-    const FrictionContact& contact = contacts[c];
-    const Index k = contact.normal_constraint, s = contact.stick_constraint;
-    const Index rows_k = sys_.constraint(k).rows(), rows_s = sys_.constraint(s).rows();
-    const Index ok = compact[std::size_t(sys_.row_offset(k))];
-    g.setZero(ma);
-    if (const ContactKinematics& kin = contact.kinematics) {
-      // N = |w·A_kᵀ Λ_k| / |w|², w = J_Pᵀ n_W (contact_normal_force)
-      detail::sliding_velocity(sys_, ws_, Index(c), q_, qd_, t, false);
-      const auto& J = ws_.contact_jacobian[c];
-      const double ww = J.row(0).squaredNorm();
-      for (Index r = 0; r < rows_k && ww > 0.0; ++r) {
-        double wa = 0.0;
-        for (std::size_t j = 0; j < kin.columns.size(); ++j)
-          wa += J(0, Index(j)) * split_rows_(ok + r, kin.columns[j]);
-        g[ok + r] = wa / ww;
-      }
-    } else {
-      // R = A_kᵀ Λ_k + A_sᵀ Λ_s (its rows while it sticks); N = |a·R| / |a| (one normal row)
-      if (rows_k != 1) return false;
-      const double aa = split_rows_.row(ok).squaredNorm();
-      if (!(aa > 0.0)) return false;
-      const Index os = compact[std::size_t(sys_.row_offset(s))];
-      const bool sticks = os >= 0 && ws_.active[std::size_t(s)];
-      for (Index r = 0; r < rows_k + (sticks ? rows_s : 0); ++r) {
-        const Index i = r < rows_k ? ok + r : os + r - rows_k;
-        g[i] = split_rows_.row(ok).dot(split_rows_.row(i)) / std::sqrt(aa);
-      }
-    }
-    if (g.dot(lambda0) < 0.0) g = -g;
-    return true;
-  };
-  // the sliding contacts' normal forces stay (their friction is μ N at the evaluation's N): Z
-  // restricted to the y that leave each one's N unchanged
-  {
-    std::vector<VectorXd> fixed;
-    VectorXd g;
-    for (std::size_t c = 0; c < contacts.size(); ++c) {
-      if (mode_[c] == ContactMode::kSticking || separated(c) || frictionless(c)) continue;
-      if (compact[std::size_t(sys_.row_offset(contacts[c].normal_constraint))] < 0) continue;
-      if (!normal_form(c, g)) return -1;
-      fixed.push_back(split_null_.transpose() * g);
-    }
-    if (!fixed.empty()) {
-      MatrixXd E(Index(fixed.size()), split_null_.cols());
-      for (std::size_t i = 0; i < fixed.size(); ++i) E.row(Index(i)) = fixed[i].transpose();
-      const Eigen::JacobiSVD<MatrixXd> keep(E, Eigen::ComputeFullV);
-      const auto& sv = keep.singularValues();
-      const double top = sv.size() > 0 ? sv[0] : 0.0;
-      Index used = 0;
-      while (used < sv.size() && sv[used] > 1e-10 * std::max(top, 1e-300)) ++used;
-      if (used == E.cols()) return -1;
-      split_null_ = (split_null_ * keep.matrixV().rightCols(E.cols() - used)).eval();
-    }
-  }
-  // each contact's f_i = F_i Λ (d_i) and N_i = g_i·Λ on the compact rows, then on y
-  std::vector<SplitCone>& cones = split_cones_;
-  cones.clear();
-  double scale = 0.0;
-  for (std::size_t c : stuck_) {
-    const FrictionContact& contact = contacts[c];
-    const Index k = contact.normal_constraint, s = contact.stick_constraint;
-    const Index rows_k = sys_.constraint(k).rows(), rows_s = sys_.constraint(s).rows();
-    const Index ok = compact[std::size_t(sys_.row_offset(k))];
-    const Index os = compact[std::size_t(sys_.row_offset(s))];
-    MatrixXd F = MatrixXd::Zero(0, ma), basis;
-    VectorXd g;
-    if (!normal_form(c, g)) return -1;
-    if (const ContactKinematics& kin = contact.kinematics) {
-      // f = kappa Λ_s
-      if (normals_.rows() != rows_k) normals_.resize(rows_k, n_);
-      detail::copy_constraint_rows(sys_, ws_, k, normals_);
-      const double kappa = detail::normal_row_unit(normals_, rows_k, reaction_part_);
-      F.setZero(kin.tangents, ma);
-      for (Index j = 0; j < kin.tangents; ++j) F(j, os + j) = kappa;
-      basis = MatrixXd::Identity(kin.tangents, kin.tangents);
-    } else {
-      // f = P R in an orthonormal basis of its range, P = I − a aᵀ / |a|²
-      const VectorXd a = split_rows_.row(ok).transpose();
-      MatrixXd H = split_rows_.middleRows(os, rows_s).transpose();  // (n × rows_s)
-      H -= a * (a.transpose() * H) / a.squaredNorm();
-      const Eigen::JacobiSVD<MatrixXd> range(H, Eigen::ComputeThinU);
-      Index d = 0;
-      const double top = range.singularValues().size() ? range.singularValues()[0] : 0.0;
-      while (d < range.singularValues().size() && range.singularValues()[d] > 1e-10 * top) ++d;
-      F.setZero(d, ma);
-      F.middleCols(os, rows_s) = range.matrixU().leftCols(d).transpose() * H;
-      basis = range.matrixU().leftCols(d);
-    }
-    SplitCone cone;
-    cone.basis = std::move(basis);
-    cone.N0 = g.dot(lambda0);
-    cone.f0 = F * lambda0;
-    cone.F = F * split_null_;  // (then on ỹ, below)
-    cone.g = split_null_.transpose() * g;
-    cone.mu = contact.mu_static;
-    scale = std::max({scale, cone.mu * cone.N0, cone.f0.norm()});
-    cones.push_back(std::move(cone));
-  }
-  // the split sought in the contact forces, not in the multipliers: y = V S⁻¹ ỹ with
-  // [F_i Z; g_iᵀ Z]_i = U S Vᵀ, so that every f_i and N_i moves by the orthonormal U ỹ. The
-  // multipliers' own units depend on how each row is scaled (the stick rows are κ T, κ the
-  // class of the normal rows: 100 in mm, g, ms, where the quaternion's rows carry lever arms of
-  // 500 mm), and y's least norm there was no physical one: the tangent planes of three legs of a
-  // table, nearly dependent in that metric, made the LCP's δ regularization miss the split (no
-  // split found in mm, g, ms where SI finds one)
-  Index rows_P = 0;
-  for (const SplitCone& cone : cones) rows_P += cone.F.rows() + 1;
-  split_rows_.resize(rows_P, split_null_.cols());
-  for (Index i = 0; const SplitCone& cone : cones) {
-    split_rows_.middleRows(i, cone.F.rows()) = cone.F;
-    split_rows_.row(i + cone.F.rows()) = cone.g.transpose();
-    i += cone.F.rows() + 1;
-  }
-  const Eigen::JacobiSVD<MatrixXd> forces(split_rows_, Eigen::ComputeThinU | Eigen::ComputeThinV);
-  const auto& sf = forces.singularValues();
-  Index nz = 0;
-  while (nz < sf.size() && sf[nz] > 1e-10 * sf[0]) ++nz;
-  if (nz == 0) return -1;
-  split_null_ =
-      (split_null_ * forces.matrixV().leftCols(nz) * sf.head(nz).cwiseInverse().asDiagonal())
-          .eval();
-  for (Index i = 0; SplitCone & cone : cones) {
-    cone.F = forces.matrixU().block(i, 0, cone.F.rows(), nz);
-    cone.g = forces.matrixU().row(i + cone.F.rows()).head(nz).transpose();
-    i += cone.F.rows() + 1;
-  }
+  if (!split_space(sys_, ws_, lambda_total_, stuck_, sliding_, q_, qd_, t, space_)) return -1;
+  std::vector<SplitCone>& cones = space_.cones;
+  const std::vector<Index>& row_of = space_.row_of;
+  const Index ma = Index(row_of.size()), nz = space_.nz;
+  const double scale = space_.scale;
+  split_null_ = space_.null;
   // whether any split holds: the largest margin s* of a split inside every cone, to roundoff
   // (max_split_margin); where none holds, the contact least held at its maximizer y* is the
   // worst (every margin there is >= s*; the contacts bound to s* are those no split can relieve)

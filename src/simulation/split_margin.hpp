@@ -7,7 +7,9 @@
 #include <Eigen/Core>
 #include <vector>
 
+#include "ukdyn/core/system.hpp"
 #include "ukdyn/core/types.hpp"
+#include "ukdyn/dynamics/workspace.hpp"
 
 namespace ukdyn::detail {
 
@@ -22,6 +24,33 @@ struct SplitCone {
   Eigen::MatrixXd basis;  // (n × d on the coordinate path; d × d at a contact point: I)
   double N0 = 0.0, mu = 0.0;
 };
+
+/// The split space of several sticking contacts of a system at an evaluation: their cones on
+/// the coordinates ỹ (nz) of the change of their forces (orthonormal: |ỹ| is the change of
+/// the forces (f_i, N_i) in force units), the map from ỹ to the change of the active rows'
+/// multipliers, and the forces' scale.
+struct SplitSpace {
+  std::vector<SplitCone> cones;  // (sticking contacts, in their order)
+  Eigen::MatrixXd null;          // (m_a × nz) the change of Λ on the active rows per ỹ
+  std::vector<Index> row_of;     // (m_a) the active rows' indices in Λ
+  Eigen::MatrixXd rows;          // (scratch: the active rows of A, then the forces' map)
+  Index nz = 0;
+  double scale = 0.0;  // the largest mu_s N_i and |f_i| at Λ
+};
+
+/// The split space of the sticking contacts `stuck` (indices into sys.friction_contacts()) at
+/// the evaluation ws made at (q, qd, t), with multipliers Λ (m, λ + λ_nonideal): Λ + Z y leaves
+/// the motion unchanged (Z the left null space of the active rows of A), each f_i and N_i is
+/// linear in y (N_i from the normal constraint's reaction, f_i the stick multipliers × κ at a
+/// contact point, the rest of the reaction on the coordinate path), the y that change the
+/// normal force of a contact of `fixed` (closed, sliding: its friction is μ N of it) are left
+/// out, and y is taken in the forces' orthonormal coordinates. False when no y exists, or an
+/// N_i is not linear in Λ (a coordinate-path normal constraint of several rows). Cost: an SVD
+/// of the active rows (m_a × n) and one of the forces' map; allocates.
+bool split_space(const System& sys, Workspace& ws, const Eigen::VectorXd& Lambda,
+                 const std::vector<std::size_t>& stuck, const std::vector<std::size_t>& fixed,
+                 const Eigen::Ref<const Eigen::VectorXd>& q,
+                 const Eigen::Ref<const Eigen::VectorXd>& qd, double t, SplitSpace& out);
 
 /// The margin, relative to the forces' scale, above which a split holds (max_split_margin).
 inline constexpr double kSplitTolerance = 1e-12;

@@ -288,6 +288,64 @@ TEST(StickSeveralContacts, CoordinatePathBarStopsAgainstAPushAndBreaksAwayUnderA
   }
 }
 
+// ---- several contacts at rest after an impact, decided together ----------------------------
+
+// The planar box (m = 3, a = 0.2, c = 0.05) dropped flat on its two corners from h = 0.2 above
+// the floor (restitution 0), moving along x at v0 and pushed along x by F at its centre: it
+// lands at t1 = √(2 h / g) with v_z⁻ = g t1 and v_x⁻ = v0 + F t1 / m; the impact's normal
+// impulse is m v_z⁻ (both corners stay: ω⁺ = 0, the corners' impulses m v_z⁻ / 2 ∓ ... > 0), and
+// its friction stops the slide when m |v_x⁻| <= mu m v_z⁻, else v_x⁺ = v_x⁻ − mu v_z⁻ (mu = 0.3)
+std::string dropped_box(double v0, double F) {
+  std::string text = planar_box(std::to_string(F), "[0, 0]", v0, 1.0);
+  const std::string at_rest = "position: [0, c]";
+  text.replace(text.find(at_rest), at_rest.size(), "position: [0, c + 0.2]");
+  for (const char* corner : {"point: [-a, -c]}", "point: [a, -c]}"}) {
+    const std::string with =
+        std::string(corner).substr(0, std::string(corner).size() - 1) + ", restitution: 0}";
+    text.replace(text.find(corner), std::string(corner).size(), with);
+  }
+  return text;
+}
+
+TEST(StickSeveralContacts, BoxDroppedFlatStopsAtTheImpactAndBothCornersHoldThePush) {
+  // v0 = −0.5 against F = 10: v_x⁻ = 0.173 <= mu v_z⁻ = 0.594, so the impact stops it; at rest
+  // the push (mu m g = 8.83 < F < mu_s m g = 14.7; neither corner alone holds it, mu_s N_i <= 8)
+  // is held by both corners together, decided jointly right after the impact
+  const double F = 10.0, t1 = std::sqrt(2.0 * 0.2 / kG), x1 = -0.5 * t1 + 0.5 * F / kMass * t1 * t1;
+  const Trajectory tr = run_at(dropped_box(-0.5, F), {0.5 * t1, t1 + 1e-3, 0.5, 1.0});
+  ASSERT_FALSE(tr.stats.contact_events.empty());
+  EXPECT_NEAR(tr.stats.contact_events.front().t, t1, 1e-9);
+  for (std::size_t i = 1; i < tr.t.size(); ++i) {
+    const double t = tr.t[i];
+    if (t < t1) {
+      EXPECT_NEAR(at(tr, tr.qd, "box.x", i), -0.5 + F / kMass * t, 1e-9) << "t = " << t;
+      continue;
+    }
+    EXPECT_NEAR(at(tr, tr.q, "box.x", i), x1, 1e-9) << "t = " << t;
+    EXPECT_NEAR(at(tr, tr.qd, "box.x", i), 0.0, 1e-12) << "t = " << t;
+    EXPECT_NEAR(at(tr, tr.qd, "box.y", i), 0.0, 1e-12) << "t = " << t;
+    expect_held(tr, {"left", "right"}, -F, i);
+  }
+}
+
+TEST(StickSeveralContacts, BoxDroppedFlatSlidesThroughTheImpactThenStopsAndSticks) {
+  // v0 = 1, no push: v_x⁺ = 1 − mu v_z⁻ = 0.406, then x'' = −mu g until it stops at
+  // t1 + v_x⁺ / (mu g), both corners together, and stays
+  const double t1 = std::sqrt(2.0 * 0.2 / kG), vz = kG * t1, v1 = 1.0 - kMu * vz;
+  const double ts = t1 + v1 / (kMu * kG), xs = t1 + v1 * v1 / (2.0 * kMu * kG);
+  const Trajectory tr = run_at(dropped_box(1.0, 0.0), {0.5 * t1, t1 + 1e-3, ts - 1e-3, 0.5, 1.0});
+  for (std::size_t i = 1; i < tr.t.size(); ++i) {
+    const double t = tr.t[i];
+    const double v = t < t1 ? 1.0 : t < ts ? v1 - kMu * kG * (t - t1) : 0.0;
+    const double x = t < t1   ? t
+                     : t < ts ? t1 + v1 * (t - t1) - 0.5 * kMu * kG * (t - t1) * (t - t1)
+                              : xs;
+    EXPECT_NEAR(at(tr, tr.qd, "box.x", i), v, 1e-7) << "t = " << t;
+    EXPECT_NEAR(at(tr, tr.q, "box.x", i), x, 1e-7) << "t = " << t;
+    if (t > ts) expect_held(tr, {"left", "right"}, 0.0, i);
+  }
+}
+
 // ---- contacts at rest at the start, decided together (docs/friction.md, "Several contacts") ----
 
 // every contact's holding force inside its cone (|f| <= mu_s N, N > 0 or an open contact
