@@ -59,6 +59,24 @@ double x_d(double A, double t) { return A * (1.0 - std::cos(kW * t)); }
 double x_d1(double A, double t) { return A * kW * std::sin(kW * t); }
 double x_d2(double A, double t) { return A * kW * kW * std::cos(kW * t); }
 
+// sliding from t = 0 on pace over 13 samples: x (coordinate `x`) = x_d, F = m x_d'' + mu m g,
+// the friction (with the contacts' reaction along x) −mu m g, no error
+void expect_slides_on_pace(const ControlledTrajectory& r, const std::string& x, double A,
+                           double mass, double mu) {
+  const Trajectory& tr = r.plant;
+  ASSERT_EQ(tr.samples(), 13);
+  for (std::size_t i = 0; i < std::size_t(tr.samples()); ++i) {
+    const double t = tr.t[i];
+    EXPECT_NEAR(at(tr, tr.q, x, i), x_d(A, t), 1e-8) << "t = " << t;
+    EXPECT_NEAR(at(tr, tr.qd, x, i), x_d1(A, t), 1e-8) << "t = " << t;
+    EXPECT_NEAR(at(tr, r.Qc_control, x, i), mass * x_d2(A, t) + mu * mass * kG, 1e-6)
+        << "t = " << t;
+    EXPECT_NEAR(at(tr, tr.Qc_nonideal, x, i) + at(tr, tr.Qc_ideal, x, i), -mu * mass * kG, 1e-6)
+        << "t = " << t;
+    EXPECT_NEAR(r.error[i], 0.0, 1e-8) << "t = " << t;
+  }
+}
+
 TEST(ControlSlip, ParticlePushedFromRestSlidesWithTheClosedFormForce) {
   // F(0) = m A w² + mu m g = 8.924 N > mu_static m g = 5.886 N: it slides from t = 0, x = x_d,
   // F = m x_d'' + mu m g while x_d' > 0 (t < pi/5), the friction −mu m g
@@ -75,18 +93,7 @@ TEST(ControlSlip, ParticlePushedFromRestSlidesWithTheClosedFormForce) {
             std::string::npos)
       << note;
   EXPECT_NE(note.find("holding force of 8.924 > mu_static N = 5.886"), std::string::npos) << note;
-  ASSERT_EQ(tr.samples(), 13);
-  for (std::size_t i = 0; i < std::size_t(tr.samples()); ++i) {
-    const double t = tr.t[i];
-    EXPECT_NEAR(at(tr, tr.q, "p.x", i), x_d(A, t), 1e-8) << "t = " << t;
-    EXPECT_NEAR(at(tr, tr.qd, "p.x", i), x_d1(A, t), 1e-8) << "t = " << t;
-    EXPECT_NEAR(at(tr, r.Qc_control, "p.x", i), kM * x_d2(A, t) + kMu * kM * kG, 1e-6)
-        << "t = " << t;
-    EXPECT_NEAR(at(tr, tr.Qc_nonideal, "p.x", i) + at(tr, tr.Qc_ideal, "p.x", i), -kMu * kM * kG,
-                1e-6)
-        << "t = " << t;
-    EXPECT_NEAR(r.error[i], 0.0, 1e-8) << "t = " << t;
-  }
+  expect_slides_on_pace(r, "p.x", A, kM, kMu);
 }
 
 // the stabilized requirement's acceleration while the particle stays at x = 0, x' = 0:
@@ -279,19 +286,7 @@ TEST(ControlSlip, BoxOnTwoCornersPushedFromRestSlidesWithTheClosedFormForce) {
   const Trajectory& tr = r.plant;
   ASSERT_EQ(tr.stats.status, Status::kOk) << tr.stats.message;
   EXPECT_EQ(r.control.not_met, 0) << r.control.not_met_message;
-  ASSERT_EQ(tr.samples(), 13);
-  for (std::size_t i = 0; i < std::size_t(tr.samples()); ++i) {
-    const double t = tr.t[i];
-    EXPECT_NEAR(at(tr, tr.q, "box.x", i), x_d(A, t), 1e-8) << "t = " << t;
-    EXPECT_NEAR(at(tr, tr.qd, "box.x", i), x_d1(A, t), 1e-8) << "t = " << t;
-    EXPECT_NEAR(at(tr, r.Qc_control, "box.x", i), kBoxMass * x_d2(A, t) + kBoxMu * kBoxMass * kG,
-                1e-6)
-        << "t = " << t;
-    EXPECT_NEAR(at(tr, tr.Qc_nonideal, "box.x", i) + at(tr, tr.Qc_ideal, "box.x", i),
-                -kBoxMu * kBoxMass * kG, 1e-6)
-        << "t = " << t;
-    EXPECT_NEAR(r.error[i], 0.0, 1e-8) << "t = " << t;
-  }
+  expect_slides_on_pace(r, "box.x", A, kBoxMass, kBoxMu);
 }
 
 }  // namespace UKDYN_TEST_FILE
