@@ -213,7 +213,9 @@ void Run::slide_together(double t) {
   }
 }
 
-// Whether the sticking contacts stuck_ (at the evaluation just made, at q_, qd_, t) can hold.
+// Whether the sticking contacts stuck_ (at the evaluation just made, at q_, qd_, t) can hold,
+// decided by the largest margin s* of a split inside every cone (max_split_margin, to 1e-12 of
+// the forces, on the split space of detail::split_space), and which split then.
 // The multipliers Λ = lambda + lambda_nonideal of the active rows are unique only up to the null
 // space Z of Aᵀ (redundant rows: the stick rows of contacts on one rigid body); Λ + Z y leaves
 // Qc and the motion unchanged. Each sticking contact's holding force f_i and normal force N_i
@@ -225,15 +227,18 @@ void Run::slide_together(double t) {
 // holds to 1e-7 of the forces (at most kSplitRounds rounds) — each a quadratic programme
 // min ½|y|², G y <= h, solved as the LCP w = (G Gᵀ + δ I) z + h (y = −Gᵀ z) by Siconos
 // Numerics (ContactLcp) and polished on its active planes; a plane still violated then means
-// an empty polyhedron (no split exists: the outer planes contain the cones). The sliding
+// an empty polyhedron (no split exists: the outer planes contain the cones); where they find
+// none although s* says one exists, the split of largest margin is taken. The sliding
 // contacts' normal forces stay as evaluated (their friction is mu N of those). Returns 1 when the
 // minimum-norm split holds (y = 0), 0 when another does (its change of the multipliers into split_,
 // m), −1 when none does (and when a sticking contact on the coordinate path has a normal constraint
 // of several rows, whose N is not linear in Λ: the minimum-norm test then). The lowest minimum-norm
-// margin into split_lowest_, its contact into *worst. Cost: an SVD of the active rows (m_a × n),
-// one of the contact forces' map, and a few LCPs of 2 to 3 rows per contact; allocates (at stops,
-// releases and the samples of runs with several contacts sticking where the minimum-norm split
-// fails).
+// margin into split_lowest_, its contact into *worst (where s* decided none: the contact least
+// held at its maximizer, into split_worst_ too). Without `search`, 0 only says that a split
+// exists (split_ stays zero). Cost: the barrier method's Newton steps, an SVD of the active rows
+// (m_a × n), one of the contact forces' map, and a few LCPs of 2 to 3 rows per contact; allocates
+// (at stops, releases and the samples of runs with several contacts sticking where the minimum-norm
+// split fails).
 int Run::holding_split(double t, std::size_t* worst, bool search) {
   const auto& contacts = sys_.friction_contacts();
   split_exact_ = false;
