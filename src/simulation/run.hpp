@@ -28,6 +28,7 @@
 #include "simulation/energy_balance.hpp"
 #include "simulation/integrator.hpp"
 #include "simulation/sample_grid.hpp"
+#include "simulation/split_margin.hpp"
 #include "ukdyn/core/format.hpp"
 #include "ukdyn/dynamics/forward.hpp"
 #include "ukdyn/dynamics/projection.hpp"
@@ -391,7 +392,11 @@ class Run {
   // is >= 0, 0 when a split of the holding forces inside every cone exists (the correction of
   // the multipliers into split_), -1 when none does; the most negative margin's contact into
   // *worst when given
-  int holding_split(double t, std::size_t* worst = nullptr);
+  // (without `search`, 0 means only that one exists: split_ is left zero)
+  int holding_split(double t, std::size_t* worst = nullptr, bool search = true);
+  // the holding force of sticking contact stuck_[i] at holding_split's split of largest margin,
+  // into holding_ (as stick_margin_here leaves it)
+  const VectorXd& split_holding(std::size_t i);
   // the sticking contacts (not separated) into stuck_; returns their count
   std::size_t sticking_contacts();
   // the kinetic energy that projecting the velocities of x onto contact c's stick rows removes
@@ -491,6 +496,18 @@ class Run {
   MatrixXd split_rows_, split_null_, split_G_;  // (holding_split scratch, sized at its calls)
   VectorXd split_h_;                            // (holding_split scratch)
   double split_lowest_ = 0.0;                   // holding_split: the lowest minimum-norm margin
+  // holding_split: the sticking contacts' forces on the split's coordinates (stuck_'s order),
+  // the largest margin of a split inside every cone (relative to the forces; NaN where not
+  // solved) and its split (nz), whether that decided (split_exact_), and the index into stuck_
+  // of the contact least held there when none holds
+  SplitSpace space_;
+  std::vector<SplitCone>& split_cones_ = space_.cones;
+  VectorXd lambda_total_;             // (m) holding_split: Λ = λ + λ_nonideal
+  std::vector<std::size_t> sliding_;  // (contacts) holding_split: the closed ones sliding
+  double split_margin_ = 0.0;
+  VectorXd split_y_;
+  bool split_exact_ = false;
+  std::size_t split_worst_ = 0;
   // group_margin's last split search (not the minimum-norm case): its t, x (2n) and answer; t NaN
   // when the modes changed since
   double group_t_ = std::numeric_limits<double>::quiet_NaN(), group_margin_ = 0.0;

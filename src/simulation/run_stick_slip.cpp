@@ -96,6 +96,18 @@ Status Run::switch_contact(double t, double* x) {
   ++traj_.stats.events;
   switch (mode_[c]) {
     case ContactMode::kSticking: {
+      // with others sticking: the contacts that no split of the holding forces holds slip, the
+      // least held first (release_unheld, which counts them), whichever found the event
+      if (sticking_contacts() >= 2) {
+        --traj_.stats.events;
+        release_unheld(t, x, true);
+        if (!released_.empty()) {
+          bool changed = false;
+          ProjectionOptions all = o_.projection;
+          return project(t, x, all, changed);
+        }
+        ++traj_.stats.events;
+      }
       // release: friction from its full magnitude along the force that held the contact
       note_slip(c, stick_margin(c, t, x));
       mode_[c] = ContactMode::kSliding;

@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "simulation/run.hpp"
+#include "simulation/split_margin.hpp"
 #include "ukdyn/dynamics/contact.hpp"
 
 namespace ukdyn::detail {
@@ -142,12 +143,13 @@ double Run::group_margin(std::size_t c, double t, const double* x) {
   if (forward_dynamics(sys_, ws_, q_, qd_, t) != Status::kOk) {
     return std::numeric_limits<double>::quiet_NaN();
   }
-  const int split = holding_split(t);
+  // (whether a split holds is all the sign needs: no search for the least change)
+  const int split = holding_split(t, nullptr, false);
   if (split > 0) return stick_margin_here(c, t);
-  const double lowest = std::abs(split_lowest_);
+  const double lowest = std::max(std::abs(split_lowest_), std::numeric_limits<double>::min());
   group_t_ = t;
   group_x_.assign(x, x + 2 * n_);
-  group_margin_ = split == 0 ? std::max(lowest, std::numeric_limits<double>::min()) : -lowest;
+  group_margin_ = split == 0 ? lowest : -lowest;
   return group_margin_;
 }
 
@@ -166,7 +168,12 @@ void Run::release_unheld(double t, double* x, bool events, std::size_t first) {
     if (forward_dynamics(sys_, ws_, q_, qd_, t) != Status::kOk) return;
     std::size_t worst = 0;
     if (holding_split(t, &worst) >= 0) return;
-    note_slip(worst, stick_margin_here(worst, t));
+    // (along its holding force at the split of largest margin, which the units do not change;
+    // the minimum-norm split's where that was not solved; listed with mu_s N of the latter)
+    const double margin = stick_margin_here(worst, t);
+    const double limit = margin + holding_.norm();
+    if (split_exact_) split_holding(split_worst_);
+    note_slip(worst, limit - holding_.norm());
     if (events) ++traj_.stats.events;
     mode_[worst] = ContactMode::kSliding;
     set_slip_hint(worst, holding_);
@@ -174,6 +181,16 @@ void Run::release_unheld(double t, double* x, bool events, std::size_t first) {
     released_.push_back(worst);
   }
   if (released_.size() >= 2) slide_together(t);
+}
+
+// the holding force f = f0 + F y* of sticking contact stuck_[i] at the split of largest margin
+// (holding_split's y*), mapped by its cone's basis into holding_: the tangent-basis components
+// at a contact point (d), the generalized force on the coordinate path (n)
+const VectorXd& Run::split_holding(std::size_t i) {
+  const SplitCone& cone = split_cones_[i];
+  holding_.setZero(std::max(n_, cone.basis.rows()));
+  holding_.head(cone.basis.rows()) = cone.basis * (cone.f0 + cone.F * split_y_);
+  return holding_;
 }
 
 // The contacts released_ slide from rest together at (q_, qd_, t): each one's friction, at its
@@ -196,7 +213,9 @@ void Run::slide_together(double t) {
   }
 }
 
-// Whether the sticking contacts stuck_ (at the evaluation just made, at q_, qd_, t) can hold.
+// Whether the sticking contacts stuck_ (at the evaluation just made, at q_, qd_, t) can hold,
+// decided by the largest margin s* of a split inside every cone (max_split_margin, to 1e-12 of
+// the forces, on the split space of detail::split_space), and which split then.
 // The multipliers Λ = lambda + lambda_nonideal of the active rows are unique only up to the null
 // space Z of Aᵀ (redundant rows: the stick rows of contacts on one rigid body); Λ + Z y leaves
 // Qc and the motion unchanged. Each sticking contact's holding force f_i and normal force N_i
@@ -208,17 +227,21 @@ void Run::slide_together(double t) {
 // holds to 1e-7 of the forces (at most kSplitRounds rounds) — each a quadratic programme
 // min ½|y|², G y <= h, solved as the LCP w = (G Gᵀ + δ I) z + h (y = −Gᵀ z) by Siconos
 // Numerics (ContactLcp) and polished on its active planes; a plane still violated then means
-// an empty polyhedron (no split exists: the outer planes contain the cones). The sliding
+// an empty polyhedron (no split exists: the outer planes contain the cones); where they find
+// none although s* says one exists, the split of largest margin is taken. The sliding
 // contacts' normal forces stay as evaluated (their friction is mu N of those). Returns 1 when the
 // minimum-norm split holds (y = 0), 0 when another does (its change of the multipliers into split_,
 // m), −1 when none does (and when a sticking contact on the coordinate path has a normal constraint
 // of several rows, whose N is not linear in Λ: the minimum-norm test then). The lowest minimum-norm
-// margin into split_lowest_, its contact into *worst. Cost: an SVD of the active rows (m_a × n),
-// one of the contact forces' map, and a few LCPs of 2 to 3 rows per contact; allocates (at stops,
-// releases and the samples of runs with several contacts sticking where the minimum-norm split
-// fails).
-int Run::holding_split(double t, std::size_t* worst) {
+// margin into split_lowest_, its contact into *worst (where s* decided none: the contact least
+// held at its maximizer, into split_worst_ too). Without `search`, 0 only says that a split
+// exists (split_ stays zero). Cost: the barrier method's Newton steps, an SVD of the active rows
+// (m_a × n), one of the contact forces' map, and a few LCPs of 2 to 3 rows per contact; allocates
+// (at stops, releases and the samples of runs with several contacts sticking where the minimum-norm
+// split fails).
+int Run::holding_split(double t, std::size_t* worst, bool search) {
   const auto& contacts = sys_.friction_contacts();
+  split_exact_ = false;
   split_lowest_ = std::numeric_limits<double>::infinity();
   for (std::size_t c : stuck_) {
     const double margin = stick_margin_here(c, t);
@@ -231,175 +254,50 @@ int Run::holding_split(double t, std::size_t* worst) {
   split_.setZero(m);
   if (split_lowest_ >= 0.0) return 1;
   if (stuck_.size() < 2 || std::isnan(split_lowest_)) return -1;
-  // the active rows, compact: their rows of A, and Λ there
-  std::vector<Index> row_of, compact(std::size_t(m), -1);
-  for (Index k = 0; k < sys_.constraint_count(); ++k) {
-    if (!ws_.active[std::size_t(k)]) continue;
-    for (Index r = 0; r < sys_.constraint(k).rows(); ++r) {
-      compact[std::size_t(sys_.row_offset(k) + r)] = Index(row_of.size());
-      row_of.push_back(sys_.row_offset(k) + r);
-    }
+  // Λ = λ + λ_nonideal; the contacts sliding closed keep their N (their friction is μ N of it)
+  lambda_total_ = ws_.lambda;
+  if (ws_.lambda_nonideal.size() == m) lambda_total_ += ws_.lambda_nonideal;
+  sliding_.clear();
+  for (std::size_t c = 0; c < contacts.size(); ++c) {
+    if (mode_[c] != ContactMode::kSticking && !separated(c) && !frictionless(c))
+      sliding_.push_back(c);
   }
-  const Index ma = Index(row_of.size());
-  split_rows_.setZero(ma, n_);
-  for (Index k = 0; k < sys_.constraint_count(); ++k) {
-    if (!ws_.active[std::size_t(k)] || sys_.constraint(k).rows() == 0) continue;
-    detail::copy_constraint_rows(sys_, ws_, k,
-                                 split_rows_.middleRows(compact[std::size_t(sys_.row_offset(k))],
-                                                        sys_.constraint(k).rows()));
-  }
-  VectorXd lambda0(ma);
-  const bool nonideal = ws_.lambda_nonideal.size() == m;
-  for (Index i = 0; i < ma; ++i) {
-    const Index r = row_of[std::size_t(i)];
-    lambda0[i] = ws_.lambda[r] + (nonideal ? ws_.lambda_nonideal[r] : 0.0);
-  }
-  // Z: the left null space of the active rows
-  const Eigen::JacobiSVD<MatrixXd> svd(split_rows_, Eigen::ComputeFullU);
-  const auto& sigma = svd.singularValues();
-  Index rank = 0;
-  while (rank < sigma.size() && sigma[rank] > 1e-10 * sigma[0]) ++rank;
-  if (rank == ma) return -1;
-  split_null_ = svd.matrixU().rightCols(ma - rank);
-  // N_i = g·Λ of contact c (the sign of Λ at the evaluation: N is |·|) into g; false where N is
-  // not linear in Λ (a coordinate-path normal constraint of several rows)
-  auto normal_form = [&](std::size_t c, VectorXd& g) {
-    const FrictionContact& contact = contacts[c];
-    const Index k = contact.normal_constraint, s = contact.stick_constraint;
-    const Index rows_k = sys_.constraint(k).rows(), rows_s = sys_.constraint(s).rows();
-    const Index ok = compact[std::size_t(sys_.row_offset(k))];
-    g.setZero(ma);
-    if (const ContactKinematics& kin = contact.kinematics) {
-      // N = |w·A_kᵀ Λ_k| / |w|², w = J_Pᵀ n_W (contact_normal_force)
-      detail::sliding_velocity(sys_, ws_, Index(c), q_, qd_, t, false);
-      const auto& J = ws_.contact_jacobian[c];
-      const double ww = J.row(0).squaredNorm();
-      for (Index r = 0; r < rows_k && ww > 0.0; ++r) {
-        double wa = 0.0;
-        for (std::size_t j = 0; j < kin.columns.size(); ++j)
-          wa += J(0, Index(j)) * split_rows_(ok + r, kin.columns[j]);
-        g[ok + r] = wa / ww;
+  if (!split_space(sys_, ws_, lambda_total_, stuck_, sliding_, q_, qd_, t, space_)) return -1;
+  std::vector<SplitCone>& cones = space_.cones;
+  const std::vector<Index>& row_of = space_.row_of;
+  const Index ma = Index(row_of.size()), nz = space_.nz;
+  const double scale = space_.scale;
+  split_null_ = space_.null;
+  // whether any split holds: the largest margin s* of a split inside every cone, to roundoff
+  // (max_split_margin); where none holds, the contact least held at its maximizer y* is the
+  // worst (every margin there is >= s*; the contacts bound to s* are those no split can relieve)
+  split_margin_ = max_split_margin(cones, nz, scale, &split_y_);
+  if (!std::isnan(split_margin_)) {
+    split_exact_ = true;
+    if (split_margin_ <= -kSplitTolerance) {
+      double lowest = std::numeric_limits<double>::infinity();
+      for (std::size_t i = 0; i < cones.size(); ++i) {
+        const SplitCone& cone = cones[i];
+        const double margin =
+            cone.mu * (cone.N0 + cone.g.dot(split_y_)) - (cone.f0 + cone.F * split_y_).norm();
+        if (margin < lowest) {
+          lowest = margin;
+          split_worst_ = i;
+          if (worst) *worst = stuck_[i];
+        }
       }
-    } else {
-      // R = A_kᵀ Λ_k + A_sᵀ Λ_s (its rows while it sticks); N = |a·R| / |a| (one normal row)
-      if (rows_k != 1) return false;
-      const double aa = split_rows_.row(ok).squaredNorm();
-      if (!(aa > 0.0)) return false;
-      const Index os = compact[std::size_t(sys_.row_offset(s))];
-      const bool sticks = os >= 0 && ws_.active[std::size_t(s)];
-      for (Index r = 0; r < rows_k + (sticks ? rows_s : 0); ++r) {
-        const Index i = r < rows_k ? ok + r : os + r - rows_k;
-        g[i] = split_rows_.row(ok).dot(split_rows_.row(i)) / std::sqrt(aa);
-      }
+      return -1;
     }
-    if (g.dot(lambda0) < 0.0) g = -g;
-    return true;
-  };
-  // the sliding contacts' normal forces stay (their friction is μ N at the evaluation's N): Z
-  // restricted to the y that leave each one's N unchanged
-  {
-    std::vector<VectorXd> fixed;
-    VectorXd g;
-    for (std::size_t c = 0; c < contacts.size(); ++c) {
-      if (mode_[c] == ContactMode::kSticking || separated(c) || frictionless(c)) continue;
-      if (compact[std::size_t(sys_.row_offset(contacts[c].normal_constraint))] < 0) continue;
-      if (!normal_form(c, g)) return -1;
-      fixed.push_back(split_null_.transpose() * g);
-    }
-    if (!fixed.empty()) {
-      MatrixXd E(Index(fixed.size()), split_null_.cols());
-      for (std::size_t i = 0; i < fixed.size(); ++i) E.row(Index(i)) = fixed[i].transpose();
-      const Eigen::JacobiSVD<MatrixXd> keep(E, Eigen::ComputeFullV);
-      const auto& sv = keep.singularValues();
-      const double top = sv.size() > 0 ? sv[0] : 0.0;
-      Index used = 0;
-      while (used < sv.size() && sv[used] > 1e-10 * std::max(top, 1e-300)) ++used;
-      if (used == E.cols()) return -1;
-      split_null_ = (split_null_ * keep.matrixV().rightCols(E.cols() - used)).eval();
-    }
-  }
-  // each contact's f_i = F_i Λ (d_i) and N_i = g_i·Λ on the compact rows, then on y
-  struct Cone {
-    MatrixXd F;  // (d × nz) F_i Z
-    VectorXd g;  // (nz) Zᵀ g_i
-    VectorXd f0;
-    double N0 = 0.0, mu = 0.0;
-  };
-  std::vector<Cone> cones;
-  double scale = 0.0;
-  for (std::size_t c : stuck_) {
-    const FrictionContact& contact = contacts[c];
-    const Index k = contact.normal_constraint, s = contact.stick_constraint;
-    const Index rows_k = sys_.constraint(k).rows(), rows_s = sys_.constraint(s).rows();
-    const Index ok = compact[std::size_t(sys_.row_offset(k))];
-    const Index os = compact[std::size_t(sys_.row_offset(s))];
-    MatrixXd F = MatrixXd::Zero(0, ma);
-    VectorXd g;
-    if (!normal_form(c, g)) return -1;
-    if (const ContactKinematics& kin = contact.kinematics) {
-      // f = kappa Λ_s
-      if (normals_.rows() != rows_k) normals_.resize(rows_k, n_);
-      detail::copy_constraint_rows(sys_, ws_, k, normals_);
-      const double kappa = detail::normal_row_unit(normals_, rows_k, reaction_part_);
-      F.setZero(kin.tangents, ma);
-      for (Index j = 0; j < kin.tangents; ++j) F(j, os + j) = kappa;
-    } else {
-      // f = P R in an orthonormal basis of its range, P = I − a aᵀ / |a|²
-      const VectorXd a = split_rows_.row(ok).transpose();
-      MatrixXd H = split_rows_.middleRows(os, rows_s).transpose();  // (n × rows_s)
-      H -= a * (a.transpose() * H) / a.squaredNorm();
-      const Eigen::JacobiSVD<MatrixXd> range(H, Eigen::ComputeThinU);
-      Index d = 0;
-      const double top = range.singularValues().size() ? range.singularValues()[0] : 0.0;
-      while (d < range.singularValues().size() && range.singularValues()[d] > 1e-10 * top) ++d;
-      F.setZero(d, ma);
-      F.middleCols(os, rows_s) = range.matrixU().leftCols(d).transpose() * H;
-    }
-    Cone cone;
-    cone.N0 = g.dot(lambda0);
-    cone.f0 = F * lambda0;
-    cone.F = F * split_null_;  // (then on ỹ, below)
-    cone.g = split_null_.transpose() * g;
-    cone.mu = contact.mu_static;
-    scale = std::max({scale, cone.mu * cone.N0, cone.f0.norm()});
-    cones.push_back(std::move(cone));
-  }
-  // the split sought in the contact forces, not in the multipliers: y = V S⁻¹ ỹ with
-  // [F_i Z; g_iᵀ Z]_i = U S Vᵀ, so that every f_i and N_i moves by the orthonormal U ỹ. The
-  // multipliers' own units depend on how each row is scaled (the stick rows are κ T, κ the
-  // class of the normal rows: 100 in mm, g, ms, where the quaternion's rows carry lever arms of
-  // 500 mm), and y's least norm there was no physical one: the tangent planes of three legs of a
-  // table, nearly dependent in that metric, made the LCP's δ regularization miss the split (no
-  // split found in mm, g, ms where SI finds one)
-  Index rows_P = 0;
-  for (const Cone& cone : cones) rows_P += cone.F.rows() + 1;
-  split_rows_.resize(rows_P, split_null_.cols());
-  for (Index i = 0; const Cone& cone : cones) {
-    split_rows_.middleRows(i, cone.F.rows()) = cone.F;
-    split_rows_.row(i + cone.F.rows()) = cone.g.transpose();
-    i += cone.F.rows() + 1;
-  }
-  const Eigen::JacobiSVD<MatrixXd> forces(split_rows_, Eigen::ComputeThinU | Eigen::ComputeThinV);
-  const auto& sf = forces.singularValues();
-  Index nz = 0;
-  while (nz < sf.size() && sf[nz] > 1e-10 * sf[0]) ++nz;
-  if (nz == 0) return -1;
-  split_null_ =
-      (split_null_ * forces.matrixV().leftCols(nz) * sf.head(nz).cwiseInverse().asDiagonal())
-          .eval();
-  for (Index i = 0; Cone & cone : cones) {
-    cone.F = forces.matrixU().block(i, 0, cone.F.rows(), nz);
-    cone.g = forces.matrixU().row(i + cone.F.rows()).head(nz).transpose();
-    i += cone.F.rows() + 1;
+    if (!search) return 0;
   }
   // the planes G y <= h: N_i >= 0, and faces or tangent planes of the cones
   std::vector<VectorXd> planes;
   std::vector<double> offsets;
-  auto add_face = [&](const Cone& cone, const VectorXd& u) {
+  auto add_face = [&](const SplitCone& cone, const VectorXd& u) {
     planes.push_back(cone.F.transpose() * u - cone.mu * cone.g);
     offsets.push_back(cone.mu * cone.N0 - u.dot(cone.f0));
   };
-  for (const Cone& cone : cones) {
+  for (const SplitCone& cone : cones) {
     planes.push_back(-cone.g);
     offsets.push_back(cone.N0);
     const Index d = cone.f0.size();
@@ -432,7 +330,7 @@ int Run::holding_split(double t, std::size_t* worst) {
     ContactLcp lcp(rows);
     MatrixXd W = split_G_ * split_G_.transpose();
     W.diagonal().array() += 1e-8 * W.diagonal().maxCoeff();
-    if (!lcp.solve(W, split_h_, 1e-9)) return -1;
+    if (!lcp.solve(W, split_h_, 1e-9)) break;
     y = -split_G_.transpose() * lcp.z();
     // (polished on its active planes: the least-norm y with G_a y = h_a, free of δ)
     {
@@ -450,9 +348,9 @@ int Run::holding_split(double t, std::size_t* worst) {
         if ((split_G_ * polished - split_h_).maxCoeff() <= tolerance) y = polished;
       }
     }
-    if ((split_G_ * y - split_h_).maxCoeff() > 1e-6 * scale) return -1;
+    if ((split_G_ * y - split_h_).maxCoeff() > 1e-6 * scale) break;
     bool held = true;
-    for (const Cone& cone : cones) {
+    for (const SplitCone& cone : cones) {
       const VectorXd f = cone.f0 + cone.F * y;
       const double N = cone.N0 + cone.g.dot(y);
       if (f.norm() <= cone.mu * N + tolerance) continue;
@@ -465,7 +363,11 @@ int Run::holding_split(double t, std::size_t* worst) {
       return 0;
     }
   }
-  return -1;
+  // (no least change found, where a split holds: the one of largest margin)
+  if (!split_exact_) return -1;
+  const VectorXd change = split_null_ * split_y_;
+  for (Index i = 0; i < ma; ++i) split_[row_of[std::size_t(i)]] = change[i];
+  return 0;
 }
 
 }  // namespace ukdyn::detail

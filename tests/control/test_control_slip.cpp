@@ -59,6 +59,24 @@ double x_d(double A, double t) { return A * (1.0 - std::cos(kW * t)); }
 double x_d1(double A, double t) { return A * kW * std::sin(kW * t); }
 double x_d2(double A, double t) { return A * kW * kW * std::cos(kW * t); }
 
+// sliding from t = 0 on pace over 13 samples: x (coordinate `x`) = x_d, F = m x_d'' + mu m g,
+// the friction (with the contacts' reaction along x) −mu m g, no error
+void expect_slides_on_pace(const ControlledTrajectory& r, const std::string& x, double A,
+                           double mass, double mu) {
+  const Trajectory& tr = r.plant;
+  ASSERT_EQ(tr.samples(), 13);
+  for (std::size_t i = 0; i < std::size_t(tr.samples()); ++i) {
+    const double t = tr.t[i];
+    EXPECT_NEAR(at(tr, tr.q, x, i), x_d(A, t), 1e-8) << "t = " << t;
+    EXPECT_NEAR(at(tr, tr.qd, x, i), x_d1(A, t), 1e-8) << "t = " << t;
+    EXPECT_NEAR(at(tr, r.Qc_control, x, i), mass * x_d2(A, t) + mu * mass * kG, 1e-6)
+        << "t = " << t;
+    EXPECT_NEAR(at(tr, tr.Qc_nonideal, x, i) + at(tr, tr.Qc_ideal, x, i), -mu * mass * kG, 1e-6)
+        << "t = " << t;
+    EXPECT_NEAR(r.error[i], 0.0, 1e-8) << "t = " << t;
+  }
+}
+
 TEST(ControlSlip, ParticlePushedFromRestSlidesWithTheClosedFormForce) {
   // F(0) = m A w² + mu m g = 8.924 N > mu_static m g = 5.886 N: it slides from t = 0, x = x_d,
   // F = m x_d'' + mu m g while x_d' > 0 (t < pi/5), the friction −mu m g
@@ -76,18 +94,7 @@ TEST(ControlSlip, ParticlePushedFromRestSlidesWithTheClosedFormForce) {
       << note;
   EXPECT_NE(note.find("holding force of 8.924 N > mu_static N = 5.886 N"), std::string::npos)
       << note;
-  ASSERT_EQ(tr.samples(), 13);
-  for (std::size_t i = 0; i < std::size_t(tr.samples()); ++i) {
-    const double t = tr.t[i];
-    EXPECT_NEAR(at(tr, tr.q, "p.x", i), x_d(A, t), 1e-8) << "t = " << t;
-    EXPECT_NEAR(at(tr, tr.qd, "p.x", i), x_d1(A, t), 1e-8) << "t = " << t;
-    EXPECT_NEAR(at(tr, r.Qc_control, "p.x", i), kM * x_d2(A, t) + kMu * kM * kG, 1e-6)
-        << "t = " << t;
-    EXPECT_NEAR(at(tr, tr.Qc_nonideal, "p.x", i) + at(tr, tr.Qc_ideal, "p.x", i), -kMu * kM * kG,
-                1e-6)
-        << "t = " << t;
-    EXPECT_NEAR(r.error[i], 0.0, 1e-8) << "t = " << t;
-  }
+  expect_slides_on_pace(r, "p.x", A, kM, kMu);
 }
 
 // the stabilized requirement's acceleration while the particle stays at x = 0, x' = 0:
@@ -340,6 +347,50 @@ output: {every: 0.25}
       EXPECT_NEAR(friction, F > muN ? -muN : -F, 1e-9) << "t = " << tr.t[i];
     }
   }
+// ---- several stuck contacts under control: a box on two corners ------------------------------
+
+// a tall planar box (m = 3, half-width a = 0.2, half-height c = 0.2) at rest on its two bottom
+// corners (mu = 0.3, mu_s at each), its x required to follow A (1 − cos 5t) as the particle's,
+// actuated along x at its centre: the corners carry N = m g / 2 ∓ F c / (2 a) (their sum m g),
+// so the minimum-norm split (F / 2 each) leaves the lighter corner's cone from
+// F = mu_s m g / (1 + mu_s c / a) on, while a split inside both cones exists up to mu_s m g;
+// sliding, the friction is mu m g. (Held with mu_s m g / (1 + mu_s c / a) < F < mu_s m g, it
+// slid from t = 0: the plant's joint stick at the start found no split, s* = −0.13 of the
+// forces, under the control it then saw; not pinned yet: docs/contact.md, "Not done yet")
+constexpr double kBoxMass = 3.0, kBoxMu = 0.3;
+std::string pushed_box(double A, double mu_static, double t_end) {
+  return "parameters: {m: 3, g: 9.81, a: 0.2, c: 0.2, A: " + std::to_string(A) +
+         ", w: 5, mu: 0.3, mus: " + std::to_string(mu_static) + R"(}
+bodies:
+  - {name: box, type: planar, mass: m, inertia: m*(4*a^2+4*c^2)/12, position: [0, c]}
+forces:
+  - {type: gravity, g: [0, -g]}
+contacts:
+  - {name: left, body: box, point: [-a, -c]}
+  - {name: right, body: box, point: [a, -c]}
+nonideal:
+  - {friction: coulomb, constraint: left, mu: mu, mu_static: mus}
+  - {friction: coulomb, constraint: right, mu: mu, mu_static: mus}
+control:
+  requirements:
+    - {name: pace, holonomic: box_x - A*(1 - cos(w*t)), dynamics: {omega: 20, zeta: 1}}
+  actuated: [box_x]
+simulate: {t_end: )" +
+         std::to_string(t_end) + R"(, integrator: dopri5, rtol: 1e-11, atol: 1e-13}
+output: {every: 0.05}
+)";
+}
+
+TEST(ControlSlip, BoxOnTwoCornersPushedFromRestSlidesWithTheClosedFormForce) {
+  // A = 0.1: the sliding control F(0) = m A w² + mu m g = 16.33 N > mu_s m g = 14.7 N, so no
+  // split of the two corners' holding forces holds it: both slide from t = 0, x = x_d,
+  // F = m x_d'' + mu m g while x_d' > 0 (t < pi/5), the corners' friction −mu m g together
+  const double A = 0.1;
+  const ControlledTrajectory r = run(pushed_box(A, 0.5, 0.6));
+  const Trajectory& tr = r.plant;
+  ASSERT_EQ(tr.stats.status, Status::kOk) << tr.stats.message;
+  EXPECT_EQ(r.control.not_met, 0) << r.control.not_met_message;
+  expect_slides_on_pace(r, "box.x", A, kBoxMass, kBoxMu);
 }
 
 }  // namespace UKDYN_TEST_FILE
