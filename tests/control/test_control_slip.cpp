@@ -347,6 +347,8 @@ output: {every: 0.25}
       EXPECT_NEAR(friction, F > muN ? -muN : -F, 1e-9) << "t = " << tr.t[i];
     }
   }
+}
+
 // ---- several stuck contacts under control: a box on two corners ------------------------------
 
 // a tall planar box (m = 3, half-width a = 0.2, half-height c = 0.2) at rest on its two bottom
