@@ -498,12 +498,13 @@ bool ContactEvents::resolve(double t, double* x, Index event, RunStatistics& sta
       list(ev, stats);
       ++impacts_[i];
       if (rests[std::size_t(j)] && stats.notes.size() < 20) {
-        stats.notes.push_back("t = " + format_t(t) + ": contact '" +
+        stats.notes.push_back("t = " + format_t(t) + " " + units_.time + ": contact '" +
                               sys_.constraint(ev.constraint).name() + "' came to rest after " +
                               format_number(impacts_[i]) +
                               " impacts (an accumulation point: impact speed " + format_t(-vm[j]) +
                               " below " + format_t(kRestFraction) + " of its fastest, " +
-                              format_t(fastest_[i]) + "; docs/contact.md, \"Rest\")");
+                              format_t(fastest_[i]) + " (the gap's unit per " + units_.time +
+                              "); docs/contact.md, \"Rest\")");
       }
     }
     for (Index j = 0; j < m; ++j) v_minus[std::size_t(j)] = dyn_.v_after()[j];

@@ -48,6 +48,8 @@ class ContactEvents {
   // x_size: the size of the run's state x = [q; q'; W]; span: the run's t_end − t_start
   ContactEvents(const System& sys, Workspace& ws, std::size_t x_size, double span);
 
+  // the run's units (SimulationOptions::units), for the notes' times
+  void set_units(const UnitSystem& units) { units_ = units; }
   // true when the system has unilateral constraints
   bool any() const { return !dyn_.contacts().empty(); }
   // each contact's mode into ws.activity_override (closed 1, open 0)
@@ -164,6 +166,7 @@ class ContactEvents {
   double span_;             // the run's t_end − t_start
   double impact_work_ = 0.0;
   std::string failure_;
+  UnitSystem units_;  // see set_units
 };
 
 }  // namespace ukdyn::detail

@@ -193,6 +193,7 @@ Trajectory detail::simulate_observed(const System& sys, const Eigen::Ref<const V
   // (x = [q; q'; W; z], WorkLayout)
   const detail::WorkLayout layout(sys, true, quad);
   detail::ContactEvents contacts(sys, ws, std::size_t(2 * n + layout.count), o.t_end - o.t_start);
+  contacts.set_units(o.units);
   // (false: a gap not finite at the start, reported below as the run's status)
   bool contacts_started = true;
   if (contacts.any()) {
@@ -316,7 +317,7 @@ Trajectory detail::simulate_observed(const System& sys, const Eigen::Ref<const V
     traj.stats.status = status;
     traj.stats.message = message;
     if (status == Status::kInterrupted && message.empty()) {
-      traj.stats.message = "interrupted at t = " + format(t_reached) +
+      traj.stats.message = "interrupted at t = " + format(t_reached) + " " + o.units.time +
                            ": the run was stopped on request; the samples up to there are kept";
     }
     traj.stats.t_reached = t_reached;

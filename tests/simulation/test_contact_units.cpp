@@ -108,6 +108,21 @@ TEST(ContactUnits, TheBouncingBallsImpactsAreTheSameInEveryUnitSystem) {
   }
 }
 
+TEST(ContactUnits, TheRestNoteSaysTheRunsTimeUnit) {
+  // u16 03: the notes printed bare numbers in a model in mm, g, ms (SimulationOptions::units,
+  // which a model file's units: fills)
+  Model model = load_model(kBall, {{"e", 0.5}});
+  model.unit_system.time = "ms";
+  model.options.units.time = "ms";
+  const Trajectory tr = run_model(model).trajectory;
+  ASSERT_EQ(tr.stats.status, Status::kOk) << tr.stats.message;
+  bool said = false;
+  for (const std::string& note : tr.stats.notes)
+    said = said || (note.find(" ms: contact 'floor' came to rest after ") != std::string::npos &&
+                    note.find("(the gap's unit per ms)") != std::string::npos);
+  EXPECT_TRUE(said) << (tr.stats.notes.empty() ? "" : tr.stats.notes.front());
+}
+
 // A block (m = 2) released sliding down a rough incline (α = 0.3, μ = 0.35 > tan α, μ_s = 0.6,
 // a unilateral slope with Coulomb friction) at v0; from t = 6 s a force k (t − 6), k = 10 N/s,
 // pushes it down the slope. Closed form: it decelerates at d = g (μ cos α − sin α) = 0.3811 m/s²,
