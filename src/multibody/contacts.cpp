@@ -13,6 +13,7 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "multibody/disk_point.hpp"
 #include "multibody/internal.hpp"
 #include "ukdyn/core/format.hpp"
 
@@ -290,15 +291,11 @@ ContactKinematics relative_contact_kinematics(const Joint& j, const BodyRef& P, 
     // s = n·k (a disk's rim point most opposed to n), and its rate a' along q'
     const Vector3d d = c.x - p.x, dd = c.v - p.v;
     Vector3d a = -r * n.x, ad = -r * n.v;
-    double s = 0.0, sd = 0.0;
+    double s = 0.0, sd = 0.0;  // n·k and its rate (the disk's row below)
     if (disk) {
       s = n.x.dot(k.x);
       sd = n.v.dot(k.x) + n.x.dot(k.v);
-      const Vector3d m = n.x - s * k.x, md = n.v - sd * k.x - s * k.v;
-      const double len = m.norm();
-      const Vector3d m_hat = m / len;
-      a = -r * m_hat;
-      ad = -r * (md - m_hat.dot(md) * m_hat) / len;
+      disk_lowest_point(n.x, n.v, k.x, k.v, r, a, ad);
     }
     // v_rel = c' + ω_C × a − p' − ω_P × (d + a), its Jacobian and its rate at q'' = 0 (ω' = 0
     // there: planar θ'' = 0, rigid 2 G_v(u') u' = 0)

@@ -11,6 +11,7 @@
 #include <string>
 #include <utility>
 
+#include "multibody/disk_point.hpp"
 #include "multibody/tree/frame_scratch.hpp"
 #include "ukdyn/multibody/tree.hpp"
 #include "ukdyn/multibody/tree_closures.hpp"
@@ -67,13 +68,7 @@ class Evaluator {
     Vector3d rho = -radius_ * n, rho1 = -radius_ * n1;
     if (disk_) {
       const Vector3d a = world_rotation(w.data, at_.link, Matrix3d::Identity()) * a_L_;
-      const Vector3d a1 = wC.cross(a);
-      const double sn = n.dot(a), sn1 = n1.dot(a) + n.dot(a1);
-      const Vector3d m = n - sn * a, m1 = n1 - sn1 * a - sn * a1;
-      const double len = m.norm();
-      const Vector3d e = m / len;
-      rho = -radius_ * e;
-      rho1 = -radius_ * (m1 - e.dot(m1) * e) / len;
+      mb::detail::disk_lowest_point(n, n1, a, wC.cross(a), radius_, rho, rho1);
     }
     // v_rel and J_rel' q'
     const Vector3d arm = d + rho;
