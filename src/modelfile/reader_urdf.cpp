@@ -163,9 +163,10 @@ Model Reader::read_robot(const YAML::Node& root) {
       fail(g, "robot gravity must be a list of 3 numbers (m/s²)", "gravity: [0, 0, -9.81]");
     const tree::Vector3d gv(number(g[0], "gravity"), number(g[1], "gravity"),
                             number(g[2], "gravity"));
-    std::vector<tree::Link> links;
-    for (Index i = 0; i < robot.link_count(); ++i) links.push_back(robot.link(i));
-    robot = tree::Tree(robot.name(), std::move(links), gv);
+    // (loaded again with it: rebuilding the tree from its links reversed the order of a link's
+    // children, so that the coordinates named above, and initial: by those names, went to
+    // other joints — u17 04, a wheel beside a belt on one base)
+    robot = tree::load_urdf(path.string(), gv);
   }
   // torques: {joint: expression}, one generalized force per named coordinate
   const Index n = robot.coordinate_count();

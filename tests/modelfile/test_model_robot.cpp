@@ -13,6 +13,8 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+
 #include <Eigen/Dense>
 
 #include "ukdyn/control/control.hpp"
@@ -77,6 +79,33 @@ TEST(ModelRobot, AUrdfAloneIsARobotWithGravityAndNoTorque) {
   EXPECT_NEAR((Q_of(m.system, q, qd, 0.0) - Q_of(direct, q, qd, 0.0)).norm(), 0.0, 0.0);
   // gravity acts: with the arm at rest Q = −g(q), nonzero on the shoulder
   EXPECT_GT(std::abs(Q_of(m.system, q, VectorXd::Zero(7), 0.0)[1]), 1.0);
+}
+
+TEST(ModelRobot, GravityKeepsTheJointsOrderSoInitialGoesToTheNamedJoint) {
+  // u17 04: a base with two children (a platform on px; a carriage on bx carrying bz): with
+  // gravity: the tree was rebuilt from its links, which reversed the children's order, and the
+  // initial state named bx landed on px
+  for (const char* gravity : {"", ", gravity: [0, 0, -1.62]"}) {
+    SCOPED_TRACE(gravity);
+    const Model m = robot_model(std::string("robot: {urdf: block_platform.urdf") + gravity +
+                                "}\ninitial: {q: {bx: 0.25}, q_dot: {bx: 2, px: -1}}\n");
+    const std::vector<std::string> names = m.system.coordinate_names();
+    ASSERT_EQ(names.size(), 3u);
+    const auto at = [&](const char* name) {
+      return Index(std::find(names.begin(), names.end(), name) - names.begin());
+    };
+    ASSERT_LT(at("bx"), 3);
+    ASSERT_LT(at("px"), 3);
+    EXPECT_EQ(m.q0[at("bx")], 0.25);
+    EXPECT_EQ(m.qd0[at("bx")], 2.0);
+    EXPECT_EQ(m.qd0[at("px")], -1.0);
+    EXPECT_EQ(m.q0[at("px")], 0.0);
+    EXPECT_EQ(m.qd0[at("bz")], 0.0);
+  }
+  // and the same order as without gravity (the URDF's)
+  EXPECT_EQ(robot_model("robot: {urdf: block_platform.urdf, gravity: [0, 0, -1.62]}\n")
+                .system.coordinate_names(),
+            robot_model("robot: {urdf: block_platform.urdf}\n").system.coordinate_names());
 }
 
 TEST(ModelRobot, AModelFileAddsTorquesALoopInitialStateAndParameters) {
