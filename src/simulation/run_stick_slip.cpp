@@ -404,7 +404,22 @@ bool Run::start_sliding(std::size_t c, double t, const double* x) {
     apply_contact_modes();
     if (margin < 0.0) {
       set_slip_hint(c, holding_);
-      return true;
+      // (unless that friction moves the contact along itself: the control holds a point that
+      // is not the contact's — a body held at its centre, its contact below it, turns under the
+      // friction, and sticks with no holding force instead; u17 02)
+      if (forward_dynamics(sys_, ws_, q_, qd_, t) != Status::kOk) return true;
+      relative_acceleration(c, t);
+      const auto hint = ws_.slip_hint.col(contact.force);
+      double along = 0.0;
+      if (contact.kinematics) {
+        along = velocity_.head(k).dot(hint.head(k));
+      } else {
+        for (Index r = 0; r < k; ++r)
+          along += velocity_[r] * hint[contact.coordinates[std::size_t(r)]];
+      }
+      if (!(along > kStillAcceleration * acceleration_scale())) return true;
+      set_slip_hint(c, VectorXd());
+      return false;
     }
     // (friction could hold it: the regularized law, below)
   }

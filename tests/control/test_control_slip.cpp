@@ -349,6 +349,59 @@ output: {every: 0.25}
   }
 }
 
+// u17 02: a planar body (m = 2, mu = 0.3, mu_s = 0.4) pushed at its centre by F = 10 N and held
+// there (box_x = 0), in SI or in mm, g, ms: on two bottom corners (shape: box) the corners cannot
+// hold it (F > mu_s m g), so their friction is mu m g against the push and the control the rest,
+// −4.114 N (in mm it was +5.886 along the push, −15.886); on one contact point below its centre
+// the stick holds with no holding force (the held body cannot turn: a contact point sliding
+// would need it to), the control all of −F (it slid at t = 0 under a friction that then lapsed,
+// and in mm the run did not end)
+std::string held_body(bool mm, bool box) {
+  return std::string("parameters: {m: ") +
+         (mm ? "2000, g: 9.81e-3, hx: 200, hy: 50" : "2, g: 9.81, hx: 0.2, hy: 0.05") +
+         ", F: 10}\nunits: " +
+         (mm ? "{length: mm, mass: g, time: ms}" : "{length: m, mass: kg, time: s}") + R"(
+bodies:
+  - {name: box, type: planar, mass: m, inertia: m*(hx^2+hy^2)/3, position: [0, hy]}
+forces:
+  - {type: gravity, g: [0, -g]}
+  - {name: push, type: applied, body: box, force: [F, 0]}
+contacts:
+  - )" +
+         (box ? "{name: lid, body: box, shape: box, size: [hx, hy]}"
+              : "{name: lid, body: box, point: [0, -hy]}") +
+         R"(
+nonideal:
+  - {friction: coulomb, constraint: lid, mu: 0.3, mu_static: 0.4}
+control:
+  requirements:
+    - {name: stay, holonomic: box_x, dynamics: {omega: )" +
+         (mm ? "0.01" : "10") + R"(, zeta: 1}}
+simulate: {t_end: )" +
+         (mm ? "500, rtol: 1e-10, atol: 1e-9}" : "0.5, rtol: 1e-10, atol: 1e-12}") +
+         "\noutput: {every: " + (mm ? "50" : "0.05") + "}\n";
+}
+
+TEST(ControlSlip, BodyHeldAtItsCentreOnCornersOrAPointBelowInAnyUnits) {
+  const double muN = 0.3 * 2.0 * 9.81;
+  for (const bool mm : {false, true}) {
+    for (const bool box : {true, false}) {
+      SCOPED_TRACE(std::string(mm ? "mm, g, ms" : "SI") + (box ? ", box" : ", point"));
+      const ControlledTrajectory r = run(held_body(mm, box));
+      const Trajectory& tr = r.plant;
+      ASSERT_EQ(tr.stats.status, Status::kOk) << tr.stats.message;
+      ASSERT_EQ(tr.samples(), 11);
+      for (std::size_t i = 0; i < 11; ++i) {
+        EXPECT_NEAR(at(tr, tr.q, "box.x", i), 0.0, 1e-12) << "t = " << tr.t[i];
+        const double friction = at(tr, tr.Qc_nonideal, "box.x", i);
+        EXPECT_NEAR(friction, box ? -muN : 0.0, 1e-9) << "t = " << tr.t[i];
+        EXPECT_NEAR(at(tr, r.Qc_control, "box.x", i), box ? -(10.0 - muN) : -10.0, 1e-9)
+            << "t = " << tr.t[i];
+      }
+    }
+  }
+}
+
 // ---- several stuck contacts under control: a box on two corners ------------------------------
 
 // a tall planar box (m = 3, half-width a = 0.2, half-height c = 0.2) at rest on its two bottom
