@@ -106,7 +106,6 @@ void add_friction_columns(const Model& model, const Trajectory& traj, const Visu
   const double held_below = std::max(100.0 * fc->eps, 1e-6 * fastest);
   for (Index i = 0; i < N; ++i) {
     const Eigen::Map<const VectorXd> q(traj.q.data() + i * n, n), qd(traj.qd.data() + i * n, n);
-    const double t = traj.t[std::size_t(i)];
     const Vector3d v = sliding_velocity(i);  // (J at sample i)
     Vector3d f = Vector3d::Zero();           // in the tangent axes
     for (Index a = 0; a < d; ++a) f[a] = traj.lambda[std::size_t(i * traj.m + stick + a)];
