@@ -340,21 +340,13 @@ TEST(ContactSphereInside, BadInsideContactsGetAClearErrorWithItsPlace) {
     EXPECT_NEAR(testing::gap_of(m.system, 0, m.q0, m.qd0)[0], 0.9, 1e-15);
   }
   // a centre between R − r and R penetrates the wall: the run's inconsistent initial state
-  Model m = parse_model(
+  testing::expect_penetrated(
       "bodies:\n"
       "  - {name: a, type: particle, mass: 1, position: [0, 0, -0.95]}\n"
       "contacts:\n"
       "  - {name: c, body: a, shape: sphere, radius: 0.1, sphere: {radius: 1, inside: true}}\n"
-      "simulate: {t_end: 0.1}\n");
-  try {
-    simulate(m.system, m.q0, m.qd0, m.options);
-    ADD_FAILURE() << "no error";
-  } catch (const InconsistentInitialState& e) {
-    EXPECT_NE(
-        std::string(e.what()).find("the unilateral constraint 'c' is penetrated: its gap is -0.05"),
-        std::string::npos)
-        << e.what();
-  }
+      "simulate: {t_end: 0.1}\n",
+      "the unilateral constraint 'c' is penetrated: its gap is -0.05");
 }
 
 }  // namespace UKDYN_TEST_FILE

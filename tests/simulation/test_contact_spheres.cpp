@@ -393,22 +393,14 @@ TEST(ContactSpheres, BadSphereContactsGetAClearErrorWithItsPlace) {
     EXPECT_EQ(stick.model().columns().size(), 14u);
   }
   // the spheres overlap at the start: the run's inconsistent initial state names the contact
-  Model m = parse_model(
+  testing::expect_penetrated(
       "bodies:\n"
       "  - {name: a, type: particle, mass: 1, position: [0, 0, 0]}\n"
       "  - {name: b, type: particle, mass: 1, position: [0, 0, 0.15]}\n"
       "contacts:\n"
       "  - {name: c, body: b, shape: sphere, radius: 0.1, sphere: {body: a, radius: 0.1}}\n"
-      "simulate: {t_end: 0.1}\n");
-  try {
-    simulate(m.system, m.q0, m.qd0, m.options);
-    ADD_FAILURE() << "no error";
-  } catch (const InconsistentInitialState& e) {
-    EXPECT_NE(
-        std::string(e.what()).find("the unilateral constraint 'c' is penetrated: its gap is -0.05"),
-        std::string::npos)
-        << e.what();
-  }
+      "simulate: {t_end: 0.1}\n",
+      "the unilateral constraint 'c' is penetrated: its gap is -0.05");
 }
 
 }  // namespace UKDYN_TEST_FILE

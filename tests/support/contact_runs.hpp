@@ -164,4 +164,16 @@ inline void expect_model_error(const std::string& text, const std::string& where
   EXPECT_NE(got.find(what), std::string::npos) << got;
 }
 
+// A model (text) whose initial state penetrates a contact: simulate throws
+// InconsistentInitialState, and its message holds `what`
+inline void expect_penetrated(const std::string& text, const std::string& what) {
+  const Model m = parse_model(text);
+  try {
+    simulate(m.system, m.q0, m.qd0, m.options);
+    ADD_FAILURE() << "no error";
+  } catch (const InconsistentInitialState& e) {
+    EXPECT_NE(std::string(e.what()).find(what), std::string::npos) << e.what();
+  }
+}
+
 }  // namespace ukdyn::testing
