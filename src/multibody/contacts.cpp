@@ -107,10 +107,13 @@ Constraint contact_constraint(const Joint& j, const BodyRef& P, const BodyRef& C
   if (row.kind == Row::kNorm) {
     // coincident centres have no normal: refused at the start; inside, so is a centre outside
     // the other sphere (|c − o| > R: on its far side, not a small penetration)
-    const Vector3d d = body_vector_generic<double>(C, q0, j.frame_child.p, true) -
-                       body_vector_generic<double>(P, q0, j.frame_parent.p, true);
+    // (coincident to the roundoff of the centres' positions, whatever the radii: a bowl of
+    // R = 1e12 around a ball 0.3 from its centre has a normal)
+    const Vector3d c = body_vector_generic<double>(C, q0, j.frame_child.p, true);
+    const Vector3d o = body_vector_generic<double>(P, q0, j.frame_parent.p, true);
+    const Vector3d d = c - o;
     const bool inside = row.sign < 0.0;
-    if (!(d.norm() > 1e-12 * std::max(j.radius + j.other_radius, 1e-300))) {
+    if (!(d.norm() > 1e-12 * std::max({c.norm(), o.norm(), 1e-300}))) {
       throw std::invalid_argument(
           who + ": the spheres' centres coincide at the start: the contact has no normal there; " +
           (inside ? "move the inner sphere off the other's centre (its gap (R − r) − |c − o| "

@@ -276,7 +276,9 @@ void run_sample(Pool& pool, std::size_t i) {
 }
 
 // the counts of a sample's contact events by kind (impacts with the rests), and the time of its
-// last rest (NaN when none), as columns through `column` (ensemble_table's)
+// last rest or plastic impact (an impact that left its contact closed, g'⁺ ≈ 0: e = 0 ends the
+// bouncing at once, the limit of the accumulation's t₀ (1 + 2e/(1 − e)) as e → 0; NaN when
+// none), as columns through `column` (ensemble_table's)
 template <class Column>
 void add_event_columns(const EnsembleResult& result, Column&& column) {
   using Kind = ContactEvent::Kind;
@@ -299,7 +301,9 @@ void add_event_columns(const EnsembleResult& result, Column&& column) {
   for (const SampleResult& r : result.samples) {
     double t = kNaN;
     for (const ContactEvent& e : r.stats.contact_events) {
-      if (e.kind == Kind::kRest) t = e.t;
+      const bool plastic =
+          e.kind == Kind::kImpact && std::abs(e.speed_after) <= 1e-9 * std::abs(e.speed_before);
+      if (e.kind == Kind::kRest || plastic) t = e.t;
     }
     rest.push_back(t);
   }

@@ -339,6 +339,26 @@ TEST(ContactSphereInside, BadInsideContactsGetAClearErrorWithItsPlace) {
         "  - {name: c, body: a, shape: sphere, radius: 0.1, sphere: {radius: 1, inside: false}}\n");
     EXPECT_NEAR(testing::gap_of(m.system, 0, m.q0, m.qd0)[0], 0.9, 1e-15);
   }
+  // a bowl of R = 1e12 around a particle 0.3 from its centre: the normal is resolved (the
+  // centres' test is relative to their positions, not to the radii), the particle falls freely
+  // (u17 06: it was refused as "centres coincide")
+  {
+    Model m = parse_model(
+        "bodies:\n"
+        "  - {name: a, type: particle, mass: 1, position: [0.1, 0, -0.3]}\n"
+        "forces:\n"
+        "  - {type: gravity, g: [0, 0, -9.81]}\n"
+        "contacts:\n"
+        "  - {name: c, body: a, shape: sphere, radius: 0.1, sphere: {radius: 1e12, inside: "
+        "true}}\n"
+        "simulate: {t_end: 0.1}\n");
+    const ModelRun run = run_model(m);
+    const Trajectory& tr = run.trajectory;
+    ASSERT_EQ(tr.stats.status, Status::kOk) << tr.stats.message;
+    EXPECT_TRUE(tr.stats.contact_events.empty());
+    EXPECT_NEAR(tr.q[tr.q.size() - 1], -0.3 - 0.5 * kG * 0.01, 1e-9);
+    EXPECT_NEAR(tr.q[tr.q.size() - 3], 0.1, 1e-12);
+  }
   // a centre between R − r and R penetrates the wall: the run's inconsistent initial state
   testing::expect_penetrated(
       "bodies:\n"
