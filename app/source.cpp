@@ -24,7 +24,8 @@
 namespace ukdyn::cli {
 namespace {
 
-// the example's description: its first comment line ("# …"), or its name
+// the example's description: its first comment line ("# …") that is not a licence tag
+// ("# SPDX-License-Identifier: …"), or its name
 std::string describe(const char* text) {
   std::string_view s(text);
   while (!s.empty()) {
@@ -33,7 +34,7 @@ std::string describe(const char* text) {
     if (line.starts_with("#")) {
       line.remove_prefix(1);
       while (line.starts_with(" ")) line.remove_prefix(1);
-      return std::string(line);
+      if (!line.starts_with("SPDX-")) return std::string(line);
     }
     if (end == std::string_view::npos) break;
     s.remove_prefix(end + 1);

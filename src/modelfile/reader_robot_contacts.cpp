@@ -117,6 +117,14 @@ void Reader::read_robot_contacts(const YAML::Node& root, const tree::Tree& robot
     if (!nm || !nm.IsScalar() || !is_identifier(nm.Scalar()))
       fail(nm ? nm : c, "a contact needs a name (an identifier)", "name: tip");
     const std::string name = nm.Scalar(), what = "contact '" + name + "'";
+    // the shape first: a bodies model's shape (box, with its size:) is named as the shape
+    // that a robot lacks, not as an unknown key
+    const std::string shape = c["shape"] ? c["shape"].Scalar() : "point";
+    if (shape != "point" && shape != "sphere" && shape != "disk")
+      fail(c["shape"], what + ": shape must be point, sphere or disk, got '" + shape + "'",
+           shape == "box" ? "a robot's contacts are points, spheres and disks on links: a box "
+                            "link touches at its corners, one point contact each"
+                          : "shape: sphere, radius: 0.05");
     for (const auto& kv : c) {
       const std::string key = kv.first.Scalar();
       if (key != "body" && std::find(kRobotContactKeys.begin(), kRobotContactKeys.end(), key) ==
@@ -147,10 +155,6 @@ void Reader::read_robot_contacts(const YAML::Node& root, const tree::Tree& robot
            link_hint + " (the plane may be on the world: plane: {body: ground})");
     if (const YAML::Node p = c["point"])
       at.p = vector3(p, "point", "[x, y, z] in the link's frame");
-    const std::string shape = c["shape"] ? c["shape"].Scalar() : "point";
-    if (shape != "point" && shape != "sphere" && shape != "disk")
-      fail(c["shape"], what + ": shape must be point, sphere or disk, got '" + shape + "'",
-           "shape: sphere, radius: 0.05");
     tree::Vector3d axis = tree::Vector3d::UnitZ();
     if (const YAML::Node a = c["axis"]) {
       if (shape != "disk")

@@ -122,7 +122,20 @@ void Reader::apply_keep(Model& model) {
 
 void Reader::read_simulate(const YAML::Node& root, Model& model) {
   SimulationOptions& o = model.options;
-  o.t_end = 1.0;
+  // the defaults with a time dimension are SimulationOptions' in seconds, converted into the
+  // model's time unit (units: {time: ms}: t_end 1000, output_every 10, step 1, Baumgarte's gains
+  // 0.01 per ms), so that a model in ms runs on its defaults as the same model in s
+  {
+    UnitSystem units;
+    if (const YAML::Node u = root["units"]; u && u.IsMap()) read_unit_system(u, units);
+    const SimulationOptions d;
+    const double per_s = units.per_second();
+    o.t_end = 1.0 * per_s;
+    o.output_every = d.output_every * per_s;
+    o.step = d.step * per_s;
+    o.baumgarte_alpha = d.baumgarte_alpha / per_s;
+    o.baumgarte_beta = d.baumgarte_beta / per_s;
+  }
   const YAML::Node s = root["simulate"];
   if (!s) return;
   if (!s.IsMap()) fail(s, "simulate must be a mapping", "{t_end: 2, integrator: dopri5}");

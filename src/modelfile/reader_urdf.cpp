@@ -61,24 +61,6 @@ std::string identifier_for(const std::string& name) {
   return s;
 }
 
-// one of the model's base units in SI: seconds per time unit, metres per length unit
-// (UnitSystem's lists)
-double seconds_per(const std::string& time) {
-  return time == "ms"    ? 1e-3
-         : time == "us"  ? 1e-6
-         : time == "min" ? 60.0
-         : time == "h"   ? 3600.0
-                         : 1.0;
-}
-double metres_per(const std::string& length) {
-  return length == "mm"   ? 1e-3
-         : length == "cm" ? 1e-2
-         : length == "km" ? 1e3
-         : length == "um" ? 1e-6
-         : length == "nm" ? 1e-9
-                          : 1.0;
-}
-
 // load_urdf's message without its function's name (the reader says where instead)
 std::string urdf_message(const std::invalid_argument& e) {
   std::string m = e.what();
@@ -200,8 +182,8 @@ Model Reader::read_robot(const YAML::Node& root) {
   if (const YAML::Node uu = root["units"]; uu && uu.IsMap()) {
     UnitSystem units;
     read_unit_system(uu, units);
-    eps.angular = tree::kJointFrictionRegularization * seconds_per(units.time);
-    eps.linear = eps.angular / metres_per(units.length);
+    eps.angular = tree::kJointFrictionRegularization * units.seconds();
+    eps.linear = eps.angular / units.metres();
   }
   if (const YAML::Node fr = r["friction_regularization"]) {
     const double e = number(fr, "robot friction_regularization");

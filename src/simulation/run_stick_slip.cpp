@@ -243,7 +243,7 @@ bool Run::try_stick(std::size_t c, double t, double* x, bool report) {
     if (report && !why.empty()) {
       ++traj_.stats.stick_refusals;
       if (traj_.stats.notes.size() < kMaxNotes) {
-        traj_.stats.notes.push_back("t = " + format(t) + ": contact '" +
+        traj_.stats.notes.push_back("t = " + format(t) + " " + o_.units.time + ": contact '" +
                                     sys_.nonideal_name(sys_.friction_contacts()[c].force) +
                                     "' did not stick: " + why + "; it slides on through v = 0");
       }
@@ -256,7 +256,7 @@ bool Run::try_stick(std::size_t c, double t, double* x, bool report) {
         "fixed by the other constraints?)");
   }
   if (removed > stick_allowance(c, T_before)) {
-    return refuse("sticking would remove " + format(removed) +
+    return refuse("sticking would remove " + format(removed) + " " + o_.units.energy() +
                   " of kinetic energy (a zero of the sliding velocity that the mechanism passes "
                   "through)");
   }

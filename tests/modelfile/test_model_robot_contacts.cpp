@@ -251,6 +251,10 @@ TEST(ModelRobotContacts, ErrorsNameTheContactAndTheKey) {
   expect("{name: tip, link: rod, shape: disk, radius: 0.1, axis: [1, 0]}",
          "contact 'tip': axis must be a list of 3 numbers");
   expect("{name: tip, link: rod, shape: cube}", "shape must be point, sphere or disk, got 'cube'");
+  // a bodies model's box, with its size: named as the shape a robot lacks (u18 06d: it was
+  // "unknown key 'size'")
+  expect("{name: tip, link: rod, shape: box, size: [0.1, 0.1, 0.1]}",
+         "shape must be point, sphere or disk, got 'box' | a robot's contacts are points");
   expect("{name: tip, link: rod, shape: sphere, radius: 0.1, axis: [0, 0, 1]}",
          "axis is for disks only");
   expect("{name: tip, link: rod, plane: {normal: [0, 0, 0]}}", "the plane's normal is zero");

@@ -253,5 +253,50 @@ TEST(ModelUnits, ABodysCoordinateKeepsTheModelsLengthUnit) {
   EXPECT_EQ(same.coordinate_units[0], "mm");
 }
 
+// The defaults with a time dimension follow the model's time unit (u18 04: output every 0.01 ms
+// wrote 1e6 samples of a 1e4 ms run): t_end 1 s, output_every 0.01 s, step 1e-3 s and Baumgarte's
+// gains 10 per s, each in that unit; what the file gives is kept as written. A pendulum in ms
+// run on its defaults samples as the same pendulum in s: 101 samples, at the same instants.
+TEST(ModelUnits, TheTimeDefaultsFollowTheTimeUnit) {
+  const std::string pendulum = R"(coordinates: [th]
+kinetic_energy: 0.5*th_dot^2
+potential_energy: -9.81e-6*cos(th)
+initial: {q: {th: 0.5}}
+)";
+  const Model si = parse_model(kSlider);
+  EXPECT_EQ(si.options.t_end, 1.0);
+  EXPECT_EQ(si.options.output_every, 0.01);
+  EXPECT_EQ(si.options.step, 1e-3);
+  EXPECT_EQ(si.options.baumgarte_alpha, 10.0);
+  const Model ms = parse_model(pendulum + "units: {time: ms}\n");
+  EXPECT_EQ(ms.options.t_end, 1000.0);
+  EXPECT_EQ(ms.options.output_every, 10.0);
+  EXPECT_EQ(ms.options.step, 1.0);
+  EXPECT_EQ(ms.options.baumgarte_alpha, 0.01);
+  EXPECT_EQ(ms.options.baumgarte_beta, 0.01);
+  const Model h = parse_model(kSlider + "units: {time: h}\n");
+  EXPECT_DOUBLE_EQ(h.options.t_end, 1.0 / 3600.0);
+  EXPECT_DOUBLE_EQ(h.options.output_every, 0.01 / 3600.0);
+  EXPECT_DOUBLE_EQ(h.options.baumgarte_alpha, 36000.0);
+  // given values are kept
+  const Model given = parse_model(pendulum +
+                                  "units: {time: ms}\nsimulate: {t_end: 50, step: 0.5}\noutput: "
+                                  "{every: 5}\n");
+  EXPECT_EQ(given.options.t_end, 50.0);
+  EXPECT_EQ(given.options.step, 0.5);
+  EXPECT_EQ(given.options.output_every, 5.0);
+  // the run: θ'' = −(g/l) sin θ with g/l = 9.81 /s² = 9.81e-6 /ms², 101 samples 10 ms apart,
+  // θ at 1000 ms as the SI pendulum's at 1 s (1e-8)
+  const ModelRun run_ms = run_model(ms);
+  const Model s_model = parse_model(
+      "coordinates: [th]\nkinetic_energy: 0.5*th_dot^2\npotential_energy: -9.81*cos(th)\n"
+      "initial: {q: {th: 0.5}}\n");
+  const ModelRun run_s = run_model(s_model);
+  ASSERT_EQ(run_ms.trajectory.samples(), 101);
+  ASSERT_EQ(run_s.trajectory.samples(), 101);
+  EXPECT_NEAR(run_ms.trajectory.t[50], 500.0, 1e-9);
+  EXPECT_NEAR(run_ms.trajectory.q.back(), run_s.trajectory.q.back(), 1e-8);
+}
+
 }  // namespace UKDYN_TEST_FILE
 }  // namespace ukdyn

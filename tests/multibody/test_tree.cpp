@@ -392,6 +392,37 @@ TEST(Urdf, ErrorsNameTheLinkOrJoint) {
   // (urdfdom sees two roots, 'base' and 'other', and says so)
   EXPECT_NE(e.find("not a valid URDF"), std::string::npos) << e;
   EXPECT_NE(e.find("[other]"), std::string::npos) << e;
+  // a <limit> with lower > upper (u18 06c: accepted, and every pose then exceeded a limit)
+  std::string inverted = with(joint, "revolute");
+  inverted.replace(inverted.find("lower=\"-1\" upper=\"1\""), 20, "lower=\"1\" upper=\"-1\"");
+  e = error_of(write_urdf("inverted_limit", "<link name=\"base\"/><link name=\"arm\">" + kInertial +
+                                                "</link>" + inverted));
+  EXPECT_NE(e.find("joint 'j1' (child link 'arm'): its <limit> has lower = 1 > upper = -1"),
+            std::string::npos)
+      << e;
+  // not a tree: a cycle below the root, base → a → b → a (urdfdom accepts it and links a's
+  // children into a cycle, which a walk never left: u18 01)
+  const auto joint_of = [](const std::string& name, const std::string& parent,
+                           const std::string& child) {
+    return "<joint name=\"" + name + "\" type=\"continuous\"><parent link=\"" + parent +
+           "\"/><child link=\"" + child + "\"/><axis xyz=\"0 1 0\"/></joint>";
+  };
+  const std::string links = "<link name=\"base\"/><link name=\"a\">" + kInertial +
+                            "</link><link name=\"b\">" + kInertial + "</link>";
+  e = error_of(write_urdf("cycle", links + joint_of("j1", "base", "a") + joint_of("j2", "a", "b") +
+                                       joint_of("j3", "b", "a")));
+  EXPECT_NE(e.find("not a tree: link 'a' is the child of two joints, 'j1' and 'j3'"),
+            std::string::npos)
+      << e;
+  // … and a cycle apart from the tree, c → d → c: its links are not reached from the root
+  e = error_of(
+      write_urdf("detached_cycle", links + "<link name=\"c\">" + kInertial +
+                                       "</link><link name=\"d\">" + kInertial + "</link>" +
+                                       joint_of("j1", "base", "a") + joint_of("j2", "a", "b") +
+                                       joint_of("j3", "c", "d") + joint_of("j4", "d", "c")));
+  EXPECT_NE(e.find("not a tree: link 'c' is not reached from the root link 'base'"),
+            std::string::npos)
+      << e;
   // no file
   EXPECT_NE(error_of("/nonexistent/robot.urdf").find("no such file"), std::string::npos);
 }

@@ -31,6 +31,25 @@ struct UnitSystem {
   /// The accepted units of time.
   static constexpr std::array<std::string_view, 5> kTimes{"s", "ms", "us", "min", "h"};
 
+  /// Seconds per time unit (1e-3 for ms, 3600 for h). Cost O(1).
+  double seconds() const {
+    return time == "ms"    ? 1e-3
+           : time == "us"  ? 1e-6
+           : time == "min" ? 60.0
+           : time == "h"   ? 3600.0
+                           : 1.0;
+  }
+  /// Time units per second, 1/seconds() (1000 for ms, exact for ms and us). Cost O(1).
+  double per_second() const { return time == "ms" ? 1e3 : time == "us" ? 1e6 : 1.0 / seconds(); }
+  /// Metres per length unit (1e-3 for mm). Cost O(1).
+  double metres() const {
+    return length == "mm"   ? 1e-3
+           : length == "cm" ? 1e-2
+           : length == "km" ? 1e3
+           : length == "um" ? 1e-6
+           : length == "nm" ? 1e-9
+                            : 1.0;
+  }
   /// True when length, mass and time are m, kg and s.
   bool is_si() const { return length == "m" && mass == "kg" && time == "s"; }
   /// `unit`/time ("1/time" for unit "1" or "", a number without unit): the rate of a quantity

@@ -1,7 +1,9 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // URDF import through urdfdom (Debian's liburdfdom-dev): the file's links and joints as a Tree.
 #include <filesystem>
+#include <map>
 #include <mutex>
+#include <set>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -11,6 +13,7 @@
 
 #include <Eigen/Eigenvalues>
 
+#include "ukdyn/core/format.hpp"
 #include "ukdyn/multibody/tree.hpp"
 
 #include "urdf_parse.hpp"
@@ -32,6 +35,42 @@ class MessageCapture final : public console_bridge::OutputHandler {
  private:
   std::string text_;
 };
+
+// urdfdom accepts a link that is the child of two joints (a cycle, base → a → b → a, or two
+// parents) and links its children into a cycle, which a walk from the root never leaves: refused
+// here, naming the link and both joints, as is a link the root does not reach. Cost O(links +
+// joints), at load.
+void check_tree(const urdf::ModelInterface& model, const std::string& who) {
+  std::map<std::string, std::string> parent_joint;  // child link → the first joint naming it
+  for (const auto& [name, j] : model.joints_) {
+    if (!j) continue;
+    const auto [it, fresh] = parent_joint.emplace(j->child_link_name, name);
+    if (!fresh) {
+      throw std::invalid_argument(
+          who + "not a tree: link '" + j->child_link_name + "' is the child of two joints, '" +
+          it->second + "' and '" + name +
+          "' (a cycle, or two parents); a kinematic loop is closed with `loops:` of a robot "
+          "model (docs/robots.md), not in the URDF");
+    }
+  }
+  const urdf::LinkConstSharedPtr root = model.getRoot();
+  if (!root) return;
+  std::set<std::string> reached;
+  std::vector<urdf::LinkConstSharedPtr> stack{root};
+  while (!stack.empty()) {
+    const urdf::LinkConstSharedPtr l = stack.back();
+    stack.pop_back();
+    if (!l || !reached.insert(l->name).second) continue;
+    for (const auto& c : l->child_links) stack.push_back(c);
+  }
+  for (const auto& [name, l] : model.links_) {
+    if (!reached.count(name)) {
+      throw std::invalid_argument(who + "not a tree: link '" + name +
+                                  "' is not reached from the root link '" + root->name +
+                                  "' (its joints form a cycle apart from the tree)");
+    }
+  }
+}
 
 Eigen::Quaterniond rotation(const urdf::Rotation& r) { return {r.w, r.x, r.y, r.z}; }
 Vector3d to_eigen(const urdf::Vector3& v) { return {v.x, v.y, v.z}; }
@@ -67,6 +106,7 @@ urdf::ModelInterfaceSharedPtr detail::parse_urdf_file(const std::string& path,
     throw std::invalid_argument(who + "not a valid URDF: " +
                                 (capture.text().empty() ? "urdfdom refused it" : capture.text()));
   }
+  check_tree(*model, who);
   return model;
 }
 
@@ -129,6 +169,11 @@ Tree load_urdf(const std::string& path, Vector3d gravity) {
         if (out.joint.kind != JointKind::kContinuous) {
           out.joint.lower = j->limits->lower;
           out.joint.upper = j->limits->upper;
+          if (out.joint.lower > out.joint.upper) {
+            throw std::invalid_argument(
+                where + "its <limit> has lower = " + format_number(out.joint.lower) +
+                " > upper = " + format_number(out.joint.upper) + " (swap them: lower <= upper)");
+          }
         }
         out.joint.effort = j->limits->effort;
         out.joint.velocity = j->limits->velocity;
