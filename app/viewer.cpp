@@ -24,7 +24,7 @@ namespace fs = std::filesystem;
 
 bool viewer_by_default(const Model& model) {
   return model.multibody || model.robot || !model.visual.points.empty() ||
-         !model.visual.contacts.empty();
+         !model.visual.frames.empty() || !model.visual.contacts.empty();
 }
 
 std::string viewer_three_text(const nlohmann::ordered_json& scene) {

@@ -78,6 +78,9 @@ def test_max_steps_from_a_model_file_holds_for_dopri5_and_rk4():
     assert not r.ok
     assert r.stats["steps"] == 25
     assert "raise it: simulate: max_steps in a model file" in r.stats["message"]
+    # the limit is no collapse (u19 01): the mean step is said, not "the step size collapsed"
+    assert "a mean step of " in r.stats["message"]
+    assert "collapsed" not in r.stats["message"]
     with pytest.raises(ukdyn.ModelError) as e:
         ukdyn.parse(OSCILLATOR + "simulate: {t_end: 1, integrator: rk4, step: 1e-3, "
                                  "max_steps: 999}\n")

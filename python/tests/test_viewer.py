@@ -805,3 +805,28 @@ def json_string(text: str) -> str:
     """text as a double-quoted YAML (JSON) string."""
     import json
     return json.dumps(text)
+
+
+def test_a_visual_section_of_frames_only_gets_its_page_by_default(cli, tmp_path):
+    """`ukdyn run` writes animation.html for a model whose visual: holds only frames (u19 08: it
+    wrote none, and said nothing), as for points; a model without visual: gets none."""
+    model = tmp_path / "frame_only.yaml"
+    model.write_text(
+        "coordinates: [th]\nkinetic_energy: th_dot^2/2\ninitial: {q_dot: {th: 1}}\n"
+        "simulate: {t_end: 0.5}\n"
+        "visual: {frames: {f: {at: [0, 0], angle: th, size: 1}}}\n", encoding="utf-8")
+    out = tmp_path / "out"
+    done = subprocess.run([cli, "run", str(model), "-o", str(out), "--no-plots"],
+                          capture_output=True, text=True, check=False)
+    assert done.returncode == 0, done.stderr
+    page = out / "animation.html"
+    assert page.exists(), done.stdout + done.stderr
+    assert 100_000 < page.stat().st_size < 2_000_000
+    bare = tmp_path / "bare.yaml"
+    bare.write_text("coordinates: [th]\nkinetic_energy: th_dot^2/2\nsimulate: {t_end: 0.5}\n",
+                    encoding="utf-8")
+    out2 = tmp_path / "out2"
+    done = subprocess.run([cli, "run", str(bare), "-o", str(out2), "--no-plots"],
+                          capture_output=True, text=True, check=False)
+    assert done.returncode == 0, done.stderr
+    assert not (out2 / "animation.html").exists()
