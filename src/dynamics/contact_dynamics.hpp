@@ -140,6 +140,16 @@ class ContactDynamics {
   // (D_, their cones, v_rel⁻ along them); false when none has friction
   bool impact_friction(const System& sys, Workspace& ws, const Eigen::Ref<const VectorXd>& q,
                        const Eigen::Ref<const VectorXd>& qd, double t);
+  // The LCP w = Mlcp z + r (its first k variables the contacts' multipliers or impulses, any
+  // others the friction's) by lcp (Siconos: Lemke, else the enumeration), into z and w. Where
+  // the contacts' forces are indeterminate (redundant rows, W singular: four coplanar corners of
+  // a box) and Lemke leaves some unloaded at zero slack — a vertex, the load on two diagonal
+  // corners, about which the box then tips — the least-norm split on the contacts that push
+  // and those (the fundamental equation's with all of them active; the friction's variables
+  // zero) when it solves the LCP; where Siconos finds no solution, the least-norm split of all
+  // k contacts pushing when it solves the LCP. False when none does. O(Lemke + k³).
+  static bool solve_contacts(ContactLcp& lcp, const MatrixXd& Mlcp, const VectorXd& r, Index k,
+                             VectorXd& z, VectorXd& w);
   // "" when every principal minor of Mlcp is >= 0 (to roundoff), else the Painlevé message
   std::string painleve(const System& sys, const MatrixXd& Mlcp) const;
   // "" when W and r are finite, else the message naming the set's contacts (a gap row that is

@@ -40,7 +40,81 @@ Index friction_variables(const System& sys) {
   }
   return count;
 }
+// the contacts' rows are redundant where W restricted to them has a pivot below this fraction
+// of its largest (its complete orthogonal decomposition): four coplanar corners of a box
+constexpr double kRedundantPivot = 1e-10;
+// a contact's slack w_i within this fraction of the largest |r_i| is zero (ContactEvents'
+// kUnloaded): it touches without separating
+constexpr double kZeroSlack = 1e-9;
+
+// The least-norm solution of the LCP w = M z + r, 0 <= z ⊥ w >= 0 (size s) with the rows `on`
+// at w = 0 and every other z zero: z_on = −M_on,on⁺ r_on, the least-norm multipliers of those
+// rows — for M = W the fundamental equation's with those contacts active (the reaction P A_cᵀ z
+// is unique, its split among redundant rows is not, and the least-norm split is the symmetric
+// one where Lemke's pivots give a vertex). Into z and w (s each; z within roundoff of 0 made 0,
+// w_on = 0) when it solves the LCP to tol = tolerance (‖M‖ ‖z‖ + ‖r‖), else z and w left alone
+// and false. `redundant`: false when M_on,on has full rank (its solution then unique: Lemke's).
+// O(|on|³ + s²); allocates (events only).
+bool least_norm_lcp(const MatrixXd& M, const VectorXd& r, const std::vector<Index>& on, VectorXd& z,
+                    VectorXd& w, bool* redundant = nullptr, double tolerance = 1e-9) {
+  const Index s = r.size(), a = Index(on.size());
+  if (a == 0) return false;
+  MatrixXd Ma(a, a);
+  VectorXd ra(a);
+  for (Index i = 0; i < a; ++i) {
+    ra[i] = r[on[std::size_t(i)]];
+    for (Index j = 0; j < a; ++j) Ma(i, j) = M(on[std::size_t(i)], on[std::size_t(j)]);
+  }
+  Eigen::CompleteOrthogonalDecomposition<MatrixXd> cod;
+  cod.setThreshold(kRedundantPivot);
+  cod.compute(Ma);
+  if (redundant) *redundant = cod.rank() < a;
+  const VectorXd za = -cod.solve(ra);
+  VectorXd zc = VectorXd::Zero(s);
+  for (Index i = 0; i < a; ++i) zc[on[std::size_t(i)]] = za[i];
+  const VectorXd wc = M * zc + r;
+  const double tol = tolerance * std::max(M.norm() * zc.norm() + r.norm(), 1e-300);
+  if (!zc.allFinite() || zc.minCoeff() < -tol || wc.minCoeff() < -tol) return false;
+  for (Index i : on) {
+    if (std::abs(wc[i]) > tol) return false;
+  }
+  z = zc.unaryExpr([tol](double v) { return v > tol ? v : 0.0; });
+  w = wc.cwiseMax(0.0);
+  for (Index i : on) w[i] = 0.0;
+  return true;
+}
 }  // namespace
+
+bool ContactDynamics::solve_contacts(ContactLcp& lcp, const MatrixXd& Mlcp, const VectorXd& r,
+                                     Index k, VectorXd& z, VectorXd& w) {
+  std::vector<Index> on;
+  if (!lcp.solve(Mlcp, r)) {
+    // (Lemke and the enumeration found none: the least-norm split of all the contacts pushing,
+    // where it solves the LCP)
+    for (Index i = 0; i < k; ++i) on.push_back(i);
+    return least_norm_lcp(Mlcp, r, on, z, w);
+  }
+  z = lcp.z();
+  w = lcp.w();
+  // a contact left unloaded at zero slack (z_i = 0, w_i ≈ 0) may be a vertex of redundant
+  // contacts: the least-norm split on those and the contacts that push, where their rows are
+  // redundant (else the solution on them is unique, Lemke's, and stays bit for bit)
+  const double roundoff = kZeroSlack * r.head(k).cwiseAbs().maxCoeff();
+  bool unloaded = false;
+  for (Index i = 0; i < k; ++i) {
+    const bool pushes = z[i] > 0.0, touches = w[i] <= roundoff;
+    if (pushes || touches) on.push_back(i);
+    unloaded = unloaded || (!pushes && touches);
+  }
+  if (!unloaded) return true;
+  VectorXd z_split, w_split;
+  bool redundant = false;
+  if (least_norm_lcp(Mlcp, r, on, z_split, w_split, &redundant) && redundant) {
+    z = z_split;
+    w = w_split;
+  }
+  return true;
+}
 
 Index release_open_contacts(const System& sys, Workspace& ws, const Eigen::Ref<const VectorXd>& q,
                             const Eigen::Ref<const VectorXd>& qd, double t) {
@@ -171,13 +245,9 @@ bool ContactDynamics::accelerations(const System& sys, Workspace& ws,
   if (sliding_friction(sys, ws, q, qd, t)) {
     const MatrixXd Mlcp = W_ + F_;
     failure_ = painleve(sys, Mlcp);
-    if (!failure_.empty() || !lcp_.solve(Mlcp, r_)) return false;
-  } else if (!lcp_.solve(W_, r_)) {
-    return false;
+    return failure_.empty() && solve_contacts(lcp_, Mlcp, r_, W_.rows(), lambda_, w_);
   }
-  lambda_ = lcp_.z();
-  w_ = lcp_.w();
-  return true;
+  return solve_contacts(lcp_, W_, r_, W_.rows(), lambda_, w_);
 }
 
 VectorXd ContactDynamics::apply_p(const VectorXd& f) const {
@@ -385,13 +455,13 @@ bool ContactDynamics::impulse(Eigen::Ref<VectorXd> qd, const VectorXd& r, const 
   if (vt.size() == 0) {
     // frictionless: w = W Λ + r, 0 <= Λ ⊥ w >= 0;  q' += P A_cᵀ Λ
     if (scaled) {
-      if (!lcp_.solve(d.asDiagonal() * W_ * d.asDiagonal(), d.cwiseProduct(r))) return false;
-      lambda_ = d.cwiseProduct(lcp_.z());
-      w_ = lcp_.w().cwiseQuotient(d);
-    } else {
-      if (!lcp_.solve(W_, r)) return false;
-      lambda_ = lcp_.z();
-      w_ = lcp_.w();
+      if (!solve_contacts(lcp_, d.asDiagonal() * W_ * d.asDiagonal(), d.cwiseProduct(r), k, lambda_,
+                          w_))
+        return false;
+      lambda_ = d.cwiseProduct(lambda_);
+      w_ = w_.cwiseQuotient(d);
+    } else if (!solve_contacts(lcp_, W_, r, k, lambda_, w_)) {
+      return false;
     }
     qd += X_ * lambda_;
     return true;
@@ -425,15 +495,15 @@ bool ContactDynamics::impulse(Eigen::Ref<VectorXd> qd, const VectorXd& r, const 
     Mlcp.leftCols(k) = Mlcp.leftCols(k) * d.asDiagonal();
     rr.head(k) = d.cwiseProduct(rr.head(k));
   }
-  if (!friction_lcp_.solve(Mlcp, rr)) return false;
-  lambda_ = friction_lcp_.z().head(k);
-  w_ = friction_lcp_.w().head(k);
+  VectorXd z, w;
+  if (!solve_contacts(friction_lcp_, Mlcp, rr, k, z, w)) return false;
+  lambda_ = z.head(k);
+  w_ = w.head(k);
   if (scaled) {
     lambda_ = d.cwiseProduct(lambda_);
     w_ = w_.cwiseQuotient(d);
   }
-  // (a copy: z() is a Ref made for this expression, which a Block of it would outlive)
-  const VectorXd beta = friction_lcp_.z().segment(k, nb);
+  const VectorXd beta = z.segment(k, nb);
   beta_ += beta;
   qd += X_ * lambda_ + PD_ * beta;
   return true;
