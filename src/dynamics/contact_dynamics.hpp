@@ -150,6 +150,13 @@ class ContactDynamics {
   // k contacts pushing when it solves the LCP. False when none does. O(Lemke + k³).
   static bool solve_contacts(ContactLcp& lcp, const MatrixXd& Mlcp, const VectorXd& r, Index k,
                              VectorXd& z, VectorXd& w);
+  // The friction impact's LCP (Mlcp, rr of impulse()) where every contact slides through the
+  // impact, for when Siconos finds no solution (a box landing flat while it slides: W singular,
+  // the friction directions redundant, Lemke ends on a ray): each cone's impulse at its limit
+  // along its direction most against v_rel⁻, the least-norm normal impulses with that
+  // friction, the sliding speeds after from the zero slack of those directions. Into z and w
+  // when that solves the LCP (to 1e-9), else false. O(k³ + size²); allocates (events only).
+  bool sliding_split(const MatrixXd& Mlcp, const VectorXd& rr, VectorXd& z, VectorXd& w) const;
   // "" when every principal minor of Mlcp is >= 0 (to roundoff), else the Painlevé message
   std::string painleve(const System& sys, const MatrixXd& Mlcp) const;
   // "" when W and r are finite, else the message naming the set's contacts (a gap row that is

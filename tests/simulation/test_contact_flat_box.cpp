@@ -10,7 +10,9 @@
 // m g / 4 + F hz / (4 hx) each and the back ones m g / 4 − F hz / (4 hx) (the moment of the
 // friction at the floor; the least-norm split is even across y); above, it slides from t = 0
 // with x'' = (F − μ m g) / m. And the box dropped flat with e = 0.3, μ = 0.5 (u17 05): 13
-// impacts, at rest at t0 (1 + 2e / (1 − e)) = 592.940 ms, in mm as in SI.
+// impacts, at rest at t0 (1 + 2e / (1 − e)) = 592.940 ms, in mm as in SI; dropped flat while it
+// slides at 5 m/s, each impact sliding through (the vertex's friction on three corners gave it a
+// yaw, and its second landing's LCP had no solution), to its stop at μ g.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -130,30 +132,37 @@ TEST(ContactFlatBox, PushedAboveMuStaticMgSlidesFromTheStartWithMuMg) {
   }
 }
 
-// dropped flat from h0 = 0.5 m, e = 0.3, μ = 0.5: the impacts at t0 (1 + 2e (1 − eʲ)/(1 − e))
-// until the rest criterion (13 impacts: 0.3¹² < 1e-6), at rest at t0 (1 + 2e / (1 − e))
+// the box dropped flat from h0 = 0.5 m at x' = vx (m/s), e = 0.3, μ = 0.5, in units u, sampled
+// every 5 ms to t_end (s)
+Trajectory dropped_box(const Units& u, double vx, double t_end) {
+  const double L = 1.0 / u.L, M = 1.0 / u.M, T = 1.0 / u.T;
+  const Model m = parse_model(
+      "parameters: {m: " + std::to_string(kMass * M) + ", g: " + std::to_string(kG * L / (T * T)) +
+      ", hx: " + std::to_string(kHx * L) + ", hy: " + std::to_string(0.1 * L) +
+      ", hz: " + std::to_string(kHz * L) + ", h0: " + std::to_string(0.5 * L) + ", e: 0.3}\n" +
+      (u.L == 1.0 ? "" : "units: {length: mm, mass: g, time: ms}\n") +
+      "bodies:\n"
+      "  - {name: box, type: rigid, mass: m, inertia: [m*(hy^2+hz^2)/3, m*(hx^2+hz^2)/3, "
+      "m*(hx^2+hy^2)/3], position: [0, 0, h0 + hz], velocity: [" +
+      std::to_string(vx * L / T) +
+      ", 0, 0]}\n"
+      "forces:\n  - {type: gravity, g: [0, 0, -g]}\n"
+      "contacts:\n  - {name: lid, body: box, shape: box, size: [hx, hy, hz], restitution: e}\n"
+      "nonideal:\n  - {friction: coulomb, constraint: lid, mu: 0.5}\n"
+      "simulate: {t_end: " +
+      std::to_string(t_end * T) +
+      ", rtol: 1e-10, atol: 1e-12}\noutput: {every: " + std::to_string(0.005 * T) + "}\n");
+  return simulate(m.system, m.q0, m.qd0, m.options);
+}
+
+// dropped flat: the impacts at t0 (1 + 2e (1 − eʲ)/(1 − e)) until the rest criterion (13
+// impacts: 0.3¹² < 1e-6), at rest at t0 (1 + 2e / (1 − e))
 TEST(ContactFlatBox, DroppedFlatWithFrictionRestsAtTheAccumulationPointInAnyUnits) {
-  const double e = 0.3, h0 = 0.5, t0 = std::sqrt(2.0 * h0 / kG);
+  const double e = 0.3, t0 = std::sqrt(2.0 * 0.5 / kG);
   const double t_rest = t0 * (1.0 + 2.0 * e / (1.0 - e));
   for (const Units& u : {kSI, kMm}) {
     SCOPED_TRACE(u.name);
-    const double L = 1.0 / u.L, M = 1.0 / u.M, T = 1.0 / u.T;
-    const Model m = parse_model(
-        "parameters: {m: " + std::to_string(kMass * M) +
-        ", g: " + std::to_string(kG * L / (T * T)) + ", hx: " + std::to_string(kHx * L) +
-        ", hy: " + std::to_string(0.1 * L) + ", hz: " + std::to_string(kHz * L) +
-        ", h0: " + std::to_string(h0 * L) + ", e: 0.3}\n" +
-        (u.L == 1.0 ? "" : "units: {length: mm, mass: g, time: ms}\n") +
-        "bodies:\n"
-        "  - {name: box, type: rigid, mass: m, inertia: [m*(hy^2+hz^2)/3, m*(hx^2+hz^2)/3, "
-        "m*(hx^2+hy^2)/3], position: [0, 0, h0 + hz]}\n"
-        "forces:\n  - {type: gravity, g: [0, 0, -g]}\n"
-        "contacts:\n  - {name: lid, body: box, shape: box, size: [hx, hy, hz], restitution: e}\n"
-        "nonideal:\n  - {friction: coulomb, constraint: lid, mu: 0.5}\n"
-        "simulate: {t_end: " +
-        std::to_string(T) +
-        ", rtol: 1e-10, atol: 1e-12}\noutput: {every: " + std::to_string(0.005 * T) + "}\n");
-    const Trajectory tr = simulate(m.system, m.q0, m.qd0, m.options);
+    const Trajectory tr = dropped_box(u, 0.0, 1.0);
     ASSERT_EQ(tr.stats.status, Status::kOk) << tr.stats.message;
     std::set<double> impacts, rests;
     for (const ContactEvent& ev : tr.stats.contact_events) {
@@ -173,6 +182,39 @@ TEST(ContactFlatBox, DroppedFlatWithFrictionRestsAtTheAccumulationPointInAnyUnit
     const std::size_t last = tr.t.size() - 1;
     EXPECT_NEAR(testing::coordinate_at(tr, tr.q, "box.z", last) * u.L, kHz, 1e-9);
     EXPECT_NEAR(testing::coordinate_at(tr, tr.q, "box.x", last) * u.L, 0.0, 1e-12);
+  }
+}
+
+// dropped flat while sliding at vx = 5 m/s: every impact slides through (its friction impulse
+// μ (1 + e) m |g'⁻| takes μ (1 + e) |g'⁻| off x'), the 13th plastic (the rest: μ |g'⁻|); then it
+// slides to a stop at μ g. x: vx t0, then each flight at its x', then the slide.
+TEST(ContactFlatBox, DroppedFlatWhileSlidingSlidesThroughItsImpactsAndStops) {
+  const double e = 0.3, mu = 0.5, t0 = std::sqrt(2.0 * 0.5 / kG), v0 = kG * t0;
+  double t = t0, x = 5.0 * t0, v = 5.0, approach = v0;
+  for (int j = 1; j < 13; ++j) {
+    v -= mu * (1.0 + e) * approach;
+    approach *= e;
+    x += v * 2.0 * approach / kG;
+    t += 2.0 * approach / kG;
+  }
+  v -= mu * approach;  // (the rest: still sliding, at 2.09 m/s)
+  const double t_stop = t + v / (mu * kG);
+  x += v * v / (2.0 * mu * kG);
+  for (const Units& u : {kSI, kMm}) {
+    SCOPED_TRACE(u.name);
+    const Trajectory tr = dropped_box(u, 5.0, 1.2);
+    ASSERT_EQ(tr.stats.status, Status::kOk) << tr.stats.message;
+    const std::size_t last = tr.t.size() - 1;
+    EXPECT_NEAR(testing::coordinate_at(tr, tr.q, "box.x", last) * u.L, x, 1e-6);
+    EXPECT_NEAR(testing::coordinate_at(tr, tr.qd, "box.x", last) * u.L / u.T, 0.0, 1e-9);
+    EXPECT_NEAR(testing::coordinate_at(tr, tr.q, "box.y", last) * u.L, 0.0, 1e-9);
+    EXPECT_NEAR(testing::coordinate_at(tr, tr.q, "box.z", last) * u.L, kHz, 1e-9);
+    // the stop: the last slip-to-stick event
+    double stuck = 0.0;
+    for (const ContactEvent& ev : tr.stats.contact_events) {
+      if (ev.kind == ContactEvent::Kind::kStick) stuck = ev.t * u.T;
+    }
+    EXPECT_NEAR(stuck, t_stop, 1e-6);
   }
 }
 
