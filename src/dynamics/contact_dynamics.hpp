@@ -140,6 +140,23 @@ class ContactDynamics {
   // (D_, their cones, v_rel⁻ along them); false when none has friction
   bool impact_friction(const System& sys, Workspace& ws, const Eigen::Ref<const VectorXd>& q,
                        const Eigen::Ref<const VectorXd>& qd, double t);
+  // The LCP w = Mlcp z + r (its first k variables the contacts' multipliers or impulses, any
+  // others the friction's) by lcp (Siconos: Lemke, else the enumeration), into z and w. Where
+  // the contacts' forces are indeterminate (redundant rows, W singular: four coplanar corners of
+  // a box) and Lemke leaves some unloaded at zero slack — a vertex, the load on two diagonal
+  // corners, about which the box then tips — the least-norm split on the contacts that push
+  // and those (the fundamental equation's with all of them active; the friction's variables
+  // zero) when it solves the LCP; where Siconos finds no solution, the least-norm split of all
+  // k contacts pushing when it solves the LCP. False when none does. O(Lemke + k³).
+  static bool solve_contacts(ContactLcp& lcp, const MatrixXd& Mlcp, const VectorXd& r, Index k,
+                             VectorXd& z, VectorXd& w);
+  // The friction impact's LCP (Mlcp, rr of impulse()) where every contact slides through the
+  // impact, for when Siconos finds no solution (a box landing flat while it slides: W singular,
+  // the friction directions redundant, Lemke ends on a ray): each cone's impulse at its limit
+  // along its direction most against v_rel⁻, the least-norm normal impulses with that
+  // friction, the sliding speeds after from the zero slack of those directions. Into z and w
+  // when that solves the LCP (to 1e-9), else false. O(k³ + size²); allocates (events only).
+  bool sliding_split(const MatrixXd& Mlcp, const VectorXd& rr, VectorXd& z, VectorXd& w) const;
   // "" when every principal minor of Mlcp is >= 0 (to roundoff), else the Painlevé message
   std::string painleve(const System& sys, const MatrixXd& Mlcp) const;
   // "" when W and r are finite, else the message naming the set's contacts (a gap row that is

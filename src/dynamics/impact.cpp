@@ -40,7 +40,98 @@ Index friction_variables(const System& sys) {
   }
   return count;
 }
+// the contacts' rows are redundant where W restricted to them has a pivot below this fraction
+// of its largest (its complete orthogonal decomposition): four coplanar corners of a box
+constexpr double kRedundantPivot = 1e-10;
+// a contact's slack w_i within this fraction of the largest |r_i| is zero (ContactEvents'
+// kUnloaded): it touches without separating
+constexpr double kZeroSlack = 1e-9;
+
+// The least-norm solution of the LCP w = M z + r, 0 <= z ⊥ w >= 0 (size s) with the rows `on`
+// at w = 0 and every other z zero: z_on = −M_on,on⁺ r_on, the least-norm multipliers of those
+// rows — for M = W the fundamental equation's with those contacts active (the reaction P A_cᵀ z
+// is unique, its split among redundant rows is not, and the least-norm split is the symmetric
+// one where Lemke's pivots give a vertex). Into z and w (s each; z within roundoff of 0 made 0,
+// w_on = 0) when it solves the LCP to tol = tolerance (‖M‖ ‖z‖ + ‖r‖), else z and w left alone
+// and false. O(|on|³ + s²); allocates (events only).
+bool least_norm_lcp(const MatrixXd& M, const VectorXd& r, const std::vector<Index>& on, VectorXd& z,
+                    VectorXd& w, double tolerance = 1e-9) {
+  const Index s = r.size(), a = Index(on.size());
+  if (a == 0) return false;
+  MatrixXd Ma(a, a);
+  VectorXd ra(a);
+  for (Index i = 0; i < a; ++i) {
+    ra[i] = r[on[std::size_t(i)]];
+    for (Index j = 0; j < a; ++j) Ma(i, j) = M(on[std::size_t(i)], on[std::size_t(j)]);
+  }
+  Eigen::CompleteOrthogonalDecomposition<MatrixXd> cod;
+  cod.setThreshold(kRedundantPivot);
+  cod.compute(Ma);
+  const VectorXd za = -cod.solve(ra);
+  VectorXd zc = VectorXd::Zero(s);
+  for (Index i = 0; i < a; ++i) zc[on[std::size_t(i)]] = za[i];
+  const VectorXd wc = M * zc + r;
+  const double tol = tolerance * std::max(M.norm() * zc.norm() + r.norm(), 1e-300);
+  if (!zc.allFinite() || zc.minCoeff() < -tol || wc.minCoeff() < -tol) return false;
+  for (Index i : on) {
+    if (std::abs(wc[i]) > tol) return false;
+  }
+  z = zc.unaryExpr([tol](double v) { return v > tol ? v : 0.0; });
+  w = wc.cwiseMax(0.0);
+  for (Index i : on) w[i] = 0.0;
+  return true;
+}
+
+// true when the LCP answer z, w (k) of W, r leaves a contact unloaded at zero slack (z_i = 0, w_i
+// within kZeroSlack of the largest |r_i|) and W on those and the pushing contacts is singular
+// (redundant rows): a vertex of the solutions, not their least-norm split; those contacts into
+// `on`. O(k³).
+bool vertex_of_redundant(const Eigen::Ref<const MatrixXd>& W, const Eigen::Ref<const VectorXd>& r,
+                         const Eigen::Ref<const VectorXd>& z, const Eigen::Ref<const VectorXd>& w,
+                         std::vector<Index>& on) {
+  const Index k = r.size();
+  const double roundoff = kZeroSlack * r.cwiseAbs().maxCoeff();
+  on.clear();
+  bool unloaded = false;
+  for (Index i = 0; i < k; ++i) {
+    const bool pushes = z[i] > 0.0, touches = w[i] <= roundoff;
+    if (pushes || touches) on.push_back(i);
+    unloaded = unloaded || (!pushes && touches);
+  }
+  if (!unloaded) return false;
+  MatrixXd Wa(Index(on.size()), Index(on.size()));
+  for (std::size_t i = 0; i < on.size(); ++i)
+    for (std::size_t j = 0; j < on.size(); ++j) Wa(Index(i), Index(j)) = W(on[i], on[j]);
+  Eigen::CompleteOrthogonalDecomposition<MatrixXd> cod;
+  cod.setThreshold(kRedundantPivot);
+  cod.compute(Wa);
+  return cod.rank() < Wa.rows();
+}
 }  // namespace
+
+bool ContactDynamics::solve_contacts(ContactLcp& lcp, const MatrixXd& Mlcp, const VectorXd& r,
+                                     Index k, VectorXd& z, VectorXd& w) {
+  std::vector<Index> on;
+  if (!lcp.solve(Mlcp, r)) {
+    // (Lemke and the enumeration found none: the least-norm split of all the contacts pushing,
+    // where it solves the LCP)
+    for (Index i = 0; i < k; ++i) on.push_back(i);
+    return least_norm_lcp(Mlcp, r, on, z, w);
+  }
+  z = lcp.z();
+  w = lcp.w();
+  // a contact left unloaded at zero slack at a vertex of redundant contacts: the least-norm split
+  // on those and the contacts that push (where the rows are not redundant the solution on them
+  // is unique, Lemke's, and stays bit for bit)
+  if (!vertex_of_redundant(Mlcp.topLeftCorner(k, k), r.head(k), z.head(k), w.head(k), on))
+    return true;
+  VectorXd z_split, w_split;
+  if (least_norm_lcp(Mlcp, r, on, z_split, w_split)) {
+    z = z_split;
+    w = w_split;
+  }
+  return true;
+}
 
 Index release_open_contacts(const System& sys, Workspace& ws, const Eigen::Ref<const VectorXd>& q,
                             const Eigen::Ref<const VectorXd>& qd, double t) {
@@ -171,13 +262,9 @@ bool ContactDynamics::accelerations(const System& sys, Workspace& ws,
   if (sliding_friction(sys, ws, q, qd, t)) {
     const MatrixXd Mlcp = W_ + F_;
     failure_ = painleve(sys, Mlcp);
-    if (!failure_.empty() || !lcp_.solve(Mlcp, r_)) return false;
-  } else if (!lcp_.solve(W_, r_)) {
-    return false;
+    return failure_.empty() && solve_contacts(lcp_, Mlcp, r_, W_.rows(), lambda_, w_);
   }
-  lambda_ = lcp_.z();
-  w_ = lcp_.w();
-  return true;
+  return solve_contacts(lcp_, W_, r_, W_.rows(), lambda_, w_);
 }
 
 VectorXd ContactDynamics::apply_p(const VectorXd& f) const {
@@ -385,13 +472,13 @@ bool ContactDynamics::impulse(Eigen::Ref<VectorXd> qd, const VectorXd& r, const 
   if (vt.size() == 0) {
     // frictionless: w = W Λ + r, 0 <= Λ ⊥ w >= 0;  q' += P A_cᵀ Λ
     if (scaled) {
-      if (!lcp_.solve(d.asDiagonal() * W_ * d.asDiagonal(), d.cwiseProduct(r))) return false;
-      lambda_ = d.cwiseProduct(lcp_.z());
-      w_ = lcp_.w().cwiseQuotient(d);
-    } else {
-      if (!lcp_.solve(W_, r)) return false;
-      lambda_ = lcp_.z();
-      w_ = lcp_.w();
+      if (!solve_contacts(lcp_, d.asDiagonal() * W_ * d.asDiagonal(), d.cwiseProduct(r), k, lambda_,
+                          w_))
+        return false;
+      lambda_ = d.cwiseProduct(lambda_);
+      w_ = w_.cwiseQuotient(d);
+    } else if (!solve_contacts(lcp_, W_, r, k, lambda_, w_)) {
+      return false;
     }
     qd += X_ * lambda_;
     return true;
@@ -425,17 +512,72 @@ bool ContactDynamics::impulse(Eigen::Ref<VectorXd> qd, const VectorXd& r, const 
     Mlcp.leftCols(k) = Mlcp.leftCols(k) * d.asDiagonal();
     rr.head(k) = d.cwiseProduct(rr.head(k));
   }
-  if (!friction_lcp_.solve(Mlcp, rr)) return false;
-  lambda_ = friction_lcp_.z().head(k);
-  w_ = friction_lcp_.w().head(k);
+  VectorXd z, w;
+  if (!solve_contacts(friction_lcp_, Mlcp, rr, k, z, w)) {
+    if (!sliding_split(Mlcp, rr, z, w)) return false;
+  } else if (std::vector<Index> on;
+             vertex_of_redundant(Mlcp.topLeftCorner(k, k), rr.head(k), z.head(k), w.head(k), on)) {
+    // (a vertex of redundant contacts that slide: its friction impulses, on some corners only,
+    // turn the body — a box landing flat while it slides took up a yaw; the least-norm split
+    // with every contact sliding, where that solves the LCP)
+    VectorXd z_split, w_split;
+    if (sliding_split(Mlcp, rr, z_split, w_split)) {
+      z = z_split;
+      w = w_split;
+    }
+  }
+  lambda_ = z.head(k);
+  w_ = w.head(k);
   if (scaled) {
     lambda_ = d.cwiseProduct(lambda_);
     w_ = w_.cwiseQuotient(d);
   }
-  // (a copy: z() is a Ref made for this expression, which a Block of it would outlive)
-  const VectorXd beta = friction_lcp_.z().segment(k, nb);
+  const VectorXd beta = z.segment(k, nb);
   beta_ += beta;
   qd += X_ * lambda_ + PD_ * beta;
+  return true;
+}
+
+bool ContactDynamics::sliding_split(const MatrixXd& Mlcp, const VectorXd& rr, VectorXd& z,
+                                    VectorXd& w) const {
+  const Index k = Index(set_.size()), nb = Index(direction_cone_.size());
+  const Index nf = Index(cone_mu_.size()), size = k + nb + nf;
+  // each cone's direction most against the sliding velocity before (−1: none against it)
+  std::vector<Index> against(std::size_t(nf), -1);
+  for (Index b = 0; b < nb; ++b) {
+    Index& a = against[std::size_t(direction_cone_[std::size_t(b)])];
+    if (rr[k + b] < 0.0 && (a < 0 || rr[k + b] < rr[k + a])) a = b;
+  }
+  // β = B Λ + β0 at each cone's limit (its row w_γ = μ̃ (Λ_i + offset_i) − Σ β = 0)
+  MatrixXd B = MatrixXd::Zero(nb, k);
+  VectorXd beta0 = VectorXd::Zero(nb);
+  for (Index f = 0; f < nf; ++f) {
+    const Index b = against[std::size_t(f)], i = cone_contact_[std::size_t(f)];
+    if (b < 0) continue;
+    B(b, i) = Mlcp(k + nb + f, i);
+    beta0[b] = rr[k + nb + f];
+  }
+  // the normal rows at w = 0 with that friction: (W + A_c P D B) Λ = −(r + A_c P D β0), least-norm
+  const MatrixXd Wf = Mlcp.topLeftCorner(k, k) + Mlcp.block(0, k, k, nb) * B;
+  Eigen::CompleteOrthogonalDecomposition<MatrixXd> cod;
+  cod.setThreshold(kRedundantPivot);
+  cod.compute(Wf);
+  VectorXd zc = VectorXd::Zero(size);
+  zc.head(k) = -cod.solve(rr.head(k) + Mlcp.block(0, k, k, nb) * beta0);
+  zc.segment(k, nb) = B * zc.head(k) + beta0;
+  // γ: each sliding cone's speed after, the slack of its direction zero
+  const VectorXd slip = Mlcp.middleRows(k, nb) * zc + rr.segment(k, nb);
+  for (Index f = 0; f < nf; ++f) {
+    if (const Index b = against[std::size_t(f)]; b >= 0) zc[k + nb + f] = -slip[b];
+  }
+  const VectorXd wc = Mlcp * zc + rr;
+  const double tol = 1e-9 * std::max(Mlcp.norm() * zc.norm() + rr.norm(), 1e-300);
+  if (!zc.allFinite() || zc.minCoeff() < -tol || wc.minCoeff() < -tol) return false;
+  for (Index j = 0; j < size; ++j) {
+    if (std::min(zc[j], wc[j]) > tol) return false;
+  }
+  z = zc.unaryExpr([tol](double v) { return v > tol ? v : 0.0; });
+  w = wc.unaryExpr([tol](double v) { return v > tol ? v : 0.0; });
   return true;
 }
 
