@@ -74,8 +74,10 @@ Equilibrium find_equilibrium(const System& sys, const OperatingPoint& guess,
     return true;
   };
   VectorXd z(nz), r(sv), r_new(sv), z_new(nz), h(nz);
+  VectorXd scale;  // the chart base's state scales (ReducedDynamics::state_scales)
   auto start_chart = [&] {
     x = rd->base_state();
+    scale = rd->state_scales();
     F.resize(x.size());
     for (Index k = 0; k < nz; ++k) z(k) = x(unknown[std::size_t(k)]);
   };
@@ -103,7 +105,8 @@ Equilibrium find_equilibrium(const System& sys, const OperatingPoint& guess,
     }
     ++it;
     // the Jacobian ∂r/∂z, then the Gauss–Newton step Δ = −J⁺ r
-    for (Index k = 0; k < nz; ++k) h(k) = o.linearize.initial_step * std::max(1.0, std::abs(z(k)));
+    for (Index k = 0; k < nz; ++k)
+      h(k) = o.linearize.initial_step * std::max(scale(unknown[std::size_t(k)]), std::abs(z(k)));
     std::string why;
     if (!analysis::ridders_jacobian(residual, z, h, sv, ro, J, E, why)) {
       stuck = why + ": " + rd->why();

@@ -65,6 +65,13 @@ class ReducedDynamics {
                 Eigen::Ref<VectorXd> F);
   /// x of the base point.
   VectorXd base_state() const;
+  /// The scale σ_k of each entry of x for Ridders' first step h_k = initial_step · σ_k: its own
+  /// magnitude, or the model's where it is below 1e-3 of that (docs/linearize.md, "Steps in the
+  /// model's own scale"): a position q_j takes |q_j|, or ℓ = ‖q‖∞ of the base point (1 when q =
+  /// 0); a velocity q'_j takes |q'_j|, or v σ_qj / ℓ, v the speed a run from the base point
+  /// takes (detail::run_length_speed: ‖q'‖∞ or √(2E / m)) and σ_qj its position's scale: its
+  /// coordinate's at the run's rate v / ℓ. Cost: one unconstrained evaluation, O(n³).
+  VectorXd state_scales();
   const VectorXd& q() const { return q_; }         ///< after complete(): positions (n)
   const VectorXd& qd() const { return qd_; }       ///< after complete(): velocities (n)
   Workspace& workspace() { return ws_; }           ///< after evaluate(): the forward dynamics

@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -15,6 +16,7 @@
 #include <Eigen/SVD>
 
 #include "analysis/internal.hpp"
+#include "ukdyn/core/format.hpp"
 #include "ukdyn/core/status.hpp"
 
 namespace ukdyn {
@@ -41,6 +43,37 @@ MatrixXd force_response(const Workspace& ws, double rank_threshold) {
                          ": the mass matrix is not positive definite on the constraints' null "
                          "space at the operating point; the force inputs' B is not defined");
   return N * llt.solve(N.transpose());
+}
+
+// Ridders' table settled in every entry of J (rows: the entries of F, `rows`; a column per
+// input z_c of scale σ_c, `columns`): err <= |J| / 10, or err is small beside the size r_e =
+// |F₀(e)| + s_e of its row, s_e = max over the states k of |A(e, k)| σ_k (`row_scale`: how
+// much entry e changes over the states' scales): err <= 1e-3 r_e / σ_c, or err <= 1e-6 max_e
+// r_e / σ_c (a row that is 0 but for roundoff, a wheel's rate along the lean: 2.5e-13 ± 2.2e-13).
+// Otherwise the steps straddle a kink or a pole (an input that is not differentiable there, or
+// a first step that leaves the function's smooth part): an error, never a table that did not
+// settle returned as the derivative (a parameter of 1 mm stepped by 0.1 gave B = −858 for
+// 2.9e6, B_error 568). Cost O(rows · columns).
+void require_settled(const MatrixXd& J, const MatrixXd& err, const VectorXd& F0,
+                     const VectorXd& row_scale, const VectorXd& sigma, double initial_step,
+                     const std::vector<std::string>& columns,
+                     const std::vector<std::string>& rows) {
+  const VectorXd r = F0.cwiseAbs() + row_scale;
+  const double largest = r.size() > 0 ? r.maxCoeff() : 0.0;
+  for (Index c = 0; c < J.cols(); ++c)
+    for (Index e = 0; e < J.rows(); ++e) {
+      const double e_ = err(e, c);
+      if (e_ <= 0.1 * std::abs(J(e, c)) || e_ <= 1e-3 * r(e) / sigma(c) ||
+          e_ <= 1e-6 * largest / sigma(c))
+        continue;
+      throw SolveError(Status::kNonFiniteResult,
+                       std::string(kWho) + ": the derivative of " + rows[std::size_t(e)] +
+                           " along " + columns[std::size_t(c)] + " did not settle (" +
+                           format_number(J(e, c), 4) + " ± " + format_number(e_, 2) +
+                           "): it is not differentiable there, or not smooth over steps of " +
+                           format_number(initial_step * sigma(c), 3) +
+                           " (LinearizeOptions::initial_step scales them; docs/linearize.md)");
+    }
 }
 
 }  // namespace
@@ -127,7 +160,8 @@ LinearModel linearize(const System& sys, const OperatingPoint& at,
   const analysis::RiddersOptions ro{options.table_size, options.step_ratio, 2.0};
   std::string why;
   VectorXd h(s);
-  for (Index k = 0; k < s; ++k) h(k) = options.initial_step * std::max(1.0, std::abs(lm.x0(k)));
+  // (relative to each state's own scale, never to a unit: ReducedDynamics::state_scales)
+  h = options.initial_step * rd.state_scales();
   MatrixXd J, E;
   const analysis::VectorFunction F = [&](const Eigen::Ref<const VectorXd>& x,
                                          Eigen::Ref<VectorXd> out) {
@@ -135,6 +169,13 @@ LinearModel linearize(const System& sys, const OperatingPoint& at,
   };
   if (!analysis::ridders_jacobian(F, lm.x0, h, s + ny, ro, J, E, why))
     throw SolveError(Status::kProjectionFailed, std::string(kWho) + ": " + why + ": " + rd.why());
+  std::vector<std::string> rows;  // (F's entries: f of the states, then the outputs)
+  for (const auto& x : lm.state_names) rows.push_back(x + "'");
+  for (const auto& y : lm.output_names) rows.push_back("output '" + y + "'");
+  const VectorXd sigma = h / options.initial_step;
+  VectorXd row_scale = VectorXd::Zero(s + ny);
+  for (Index k = 0; k < s; ++k) row_scale = row_scale.cwiseMax(J.col(k).cwiseAbs() * sigma(k));
+  require_settled(J, E, F0, row_scale, sigma, options.initial_step, lm.state_names, rows);
   lm.A = J.topRows(s);
   lm.A_error = E.topRows(s);
   lm.C = J.bottomRows(ny);
@@ -158,7 +199,17 @@ LinearModel linearize(const System& sys, const OperatingPoint& at,
     }
     const analysis::VectorFunction Fp = [&](const Eigen::Ref<const VectorXd>& u,
                                             Eigen::Ref<VectorXd> out) {
-      const System sp = in.family(in.nominal + u(0));
+      // (a family that refuses the value — a model file whose expressions cannot be evaluated
+      // there — is a point the function cannot be evaluated at, as a failed chart is)
+      std::optional<System> family;
+      try {
+        family.emplace(in.family(in.nominal + u(0)));
+      } catch (const std::exception& e) {
+        why =
+            "the system at " + in.name + " = " + format_number(in.nominal + u(0)) + ": " + e.what();
+        return false;
+      }
+      const System& sp = *family;
       if (sp.coordinate_count() != n || sp.constraint_rows() != sys.constraint_rows()) {
         why = "the system at " + in.name + " = " + std::to_string(in.nominal + u(0)) +
               " has other coordinates or constraints";
@@ -169,13 +220,17 @@ LinearModel linearize(const System& sys, const OperatingPoint& at,
       if (!ok) why = rp.why();
       return ok;
     };
+    // (relative to p₀: a parameter of 1 mm in SI units stepped by 0.1 crossed 0; a parameter
+    // at 0, a force's magnitude, has no scale but its unit's)
+    const double p_scale = in.nominal != 0.0 ? std::abs(in.nominal) : 1.0;
     const VectorXd u0 = VectorXd::Zero(1);
-    const VectorXd hu =
-        VectorXd::Constant(1, options.initial_step * std::max(1.0, std::abs(in.nominal)));
+    const VectorXd hu = VectorXd::Constant(1, options.initial_step * p_scale);
     std::string why_p;
     if (!analysis::ridders_jacobian(Fp, u0, hu, s + ny, ro, J, E, why_p))
       throw SolveError(Status::kProjectionFailed,
                        std::string(kWho) + ": parameter '" + in.name + "': " + why_p + ": " + why);
+    require_settled(J, E, F0, row_scale, VectorXd::Constant(1, p_scale), options.initial_step,
+                    {"parameter '" + in.name + "'"}, rows);
     lm.B.col(c) = J.col(0).head(s);
     lm.B_error.col(c) = E.col(0).head(s);
     lm.D.col(c) = J.col(0).tail(ny);

@@ -11,6 +11,7 @@
 #include <Eigen/QR>
 
 #include "analysis/internal.hpp"
+#include "dynamics/run_scales.hpp"
 #include "ukdyn/dynamics/forward.hpp"
 #include "ukdyn/dynamics/projection.hpp"
 
@@ -39,6 +40,24 @@ VectorXd ReducedDynamics::base_state() const {
   for (Index j : p_.ip) x(k++) = base_.q(j);
   for (Index j : p_.iv) x(k++) = base_.qd(j);
   return x;
+}
+
+VectorXd ReducedDynamics::state_scales() {
+  const detail::RunLengthSpeed run =
+      detail::run_length_speed(sys_, ws_, base_.q, base_.qd, base_.t, 0.0);
+  // its own magnitude; the model's scale for an entry below 1e-3 of that (a coordinate at 0, or
+  // at the roundoff of 0: a step of 1e-4 ℓ there left the projection's roundoff above the
+  // estimate)
+  constexpr double kZero = 1e-3;
+  const auto own = [](double x, double model) {
+    return std::abs(x) >= kZero * model ? std::abs(x) : model;
+  };
+  VectorXd s(state_size());
+  Index k = 0;
+  for (Index j : p_.ip) s(k++) = own(base_.q(j), run.length);
+  for (Index j : p_.iv)
+    s(k++) = own(base_.qd(j), run.speed * own(base_.q(j), run.length) / run.length);
+  return s;
 }
 
 bool ReducedDynamics::newton(bool velocity) {

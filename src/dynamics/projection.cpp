@@ -11,6 +11,7 @@
 #include <cstdlib>
 #include "dynamics/engine.hpp"
 #include "dynamics/internal.hpp"
+#include "dynamics/run_scales.hpp"
 #include "linalg/safe_norm.hpp"
 #include "linalg/scale_class.hpp"
 #include "ukdyn/core/format.hpp"
@@ -261,20 +262,19 @@ Violations measure_violations(const System& sys, Workspace& ws, const Eigen::Ref
   return v;
 }
 
-void set_run_scales(const System& sys, Workspace& ws, const Eigen::Ref<const VectorXd>& q,
-                    const Eigen::Ref<const VectorXd>& qd, double t, double duration) {
-  detail::require_same_system(sys, ws, "ukdyn::set_run_scales");
-  detail::require_state_size(sys, q, &qd, "ukdyn::set_run_scales");
+detail::RunLengthSpeed detail::run_length_speed(const System& sys, Workspace& ws,
+                                                const Eigen::Ref<const VectorXd>& q,
+                                                const Eigen::Ref<const VectorXd>& qd, double t,
+                                                double duration) {
   const Index n = sys.coordinate_count();
+  RunLengthSpeed s;
   // ℓ = ‖q‖∞ (1 when every coordinate is 0: the model gives no length)
   double length = q.size() > 0 ? q.cwiseAbs().maxCoeff() : 0.0;
-  const bool has_length = length > 0.0 && std::isfinite(length);
-  if (!has_length) length = 1.0;
-  ws.phi_scale.setConstant(10.0);  // (rows of acceleration constraints: never compared)
-  ws.phi_dot_scale.setConstant(10.0);
+  s.has_length = length > 0.0 && std::isfinite(length);
+  if (!s.has_length) length = 1.0;
+  s.length = length;
   // E = max(T + |V|, ‖Q‖∞ ℓ) at the state: the energy the run's forces exchange over its
-  // lengths (a pendulum released at rest at V = 0 has T + |V| = 0 but m g ℓ); the unit of the
-  // work channels is its unit as a power of two (1 when there is none). The mass scale m =
+  // lengths (a pendulum released at rest at V = 0 has T + |V| = 0 but m g ℓ). The mass scale m =
   // 1ᵀ M 1 / n, a Rayleigh quotient of M (between its least and largest eigenvalue)
   double energy = 0.0, mass = 0.0;
   if (evaluate_unconstrained(sys, ws, q, qd, t) == Status::kOk) {
@@ -289,9 +289,7 @@ void set_run_scales(const System& sys, Workspace& ws, const Eigen::Ref<const Vec
   }
   ws.status = Status::kOk;
   if (!std::isfinite(energy)) energy = 0.0;
-  // (the power of two nearest to its unit, detail::energy_class_unit, so that W / unit · unit
-  // is W bit for bit; 1 for a model in SI units)
-  ws.energy_unit = std::exp2(std::round(std::log2(detail::energy_class_unit(energy))));
+  s.energy = energy;
   // v = the largest of ‖q'‖∞, the speed √(2E/m) the run's energy gives its mass scale, and
   // ℓ / duration (a run from rest covers its lengths in its duration); ℓ per unit time when
   // none of them is > 0
@@ -302,6 +300,27 @@ void set_run_scales(const System& sys, Workspace& ws, const Eigen::Ref<const Vec
   }
   if (duration > 0.0 && std::isfinite(duration)) speed = std::max(speed, length / duration);
   if (!(speed > 0.0)) speed = length;
+  s.speed = speed;
+  return s;
+}
+
+void set_run_scales(const System& sys, Workspace& ws, const Eigen::Ref<const VectorXd>& q,
+                    const Eigen::Ref<const VectorXd>& qd, double t, double duration) {
+  detail::require_same_system(sys, ws, "ukdyn::set_run_scales");
+  detail::require_state_size(sys, q, &qd, "ukdyn::set_run_scales");
+  const Index n = sys.coordinate_count();
+  ws.phi_scale.setConstant(10.0);  // (rows of acceleration constraints: never compared)
+  ws.phi_dot_scale.setConstant(10.0);
+  // ℓ, E and v (detail::run_length_speed)
+  const detail::RunLengthSpeed run = detail::run_length_speed(sys, ws, q, qd, t, duration);
+  const bool has_length = run.has_length;
+  const double length = run.length, speed = run.speed;
+  // the unit of the work channels is E's unit, the power of 1000 nearest to E / 10
+  // (detail::energy_class_unit; 1 when there is none, and for a model in SI units), itself
+  // rather than the power of two nearest to it: 1024 for a model in mm, g and ms weighed its
+  // work channels 2.4 % apart from the same model's in SI units in the step-size control, which
+  // then took other steps (268 against 267 for a robot arm with joint friction; u18 03)
+  ws.energy_unit = detail::energy_class_unit(run.energy);
   // (every scale kept is a class, detail::scale_class: 10 for a model in SI units, which so
   // keeps the tolerances in its own units, and a change of units by powers of 1000 moves each
   // by exactly its factor)

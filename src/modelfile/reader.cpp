@@ -456,6 +456,7 @@ Model Reader::read_plant(const YAML::Node& root) {
   check_mass_matrix(root, model);
   read_output(root, model);
   read_units(root, model);
+  apply_time_unit(model);
   // initial: project: true, or simulate: project_initial: true
   model.project_initial = model.project_initial || model.options.project_initial;
   model.options.project_initial = model.project_initial;
@@ -463,6 +464,12 @@ Model Reader::read_plant(const YAML::Node& root) {
   apply_keep(model);
   return model;
 }
+
+// The run's units (SimulationOptions::units) from the model's, as run_model sets them, so that
+// simulate(model.system, …, model.options) runs as run_model does: the rate unit of a state
+// without length follows them (docs/simulation.md, "The integrators' atol"). (The defaults with a
+// time dimension are in the time unit already: read_simulate.)
+void Reader::apply_time_unit(Model& model) const { model.options.units = model.unit_system; }
 
 void Reader::make_expression_set(const YAML::Node& root, const std::vector<std::string>& cnames) {
   std::vector<std::string> inputs = coordinates_;

@@ -421,6 +421,8 @@ class Reader {
   void read_units(const YAML::Node& root, Model& model);
   // units: {length: mm, mass: g, time: ms} (the base units, from their accepted lists)
   void read_unit_system(const YAML::Node& units_node, UnitSystem& units);
+  // the run's units (SimulationOptions::units) from units: (reader.cpp)
+  void apply_time_unit(Model& model) const;
   void check_mass_matrix(const YAML::Node& root, const Model& model);
   void check_settings(const YAML::Node& root, Model& model);
   Index coordinate(const YAML::Node& node);

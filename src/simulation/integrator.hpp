@@ -28,15 +28,15 @@ namespace ukdyn::detail {
 //   drive     W_drive'    = Σ over drives k of q'ᵀ A_kᵀ lambda_k      (a constraint is_drive())
 //   external  W_external' = P_ext(q, q', t)                          (System::has_external_power)
 //
-// Every channel is stored in the run's energy unit (a power of two near its energy scale,
-// Workspace::energy_unit). The channels after W_nonideal are stored scaled by kQuietScale = 2⁻³²
-// as well (x holds W · 2⁻³² / unit), so
-// that the step-size control, which weighs every component of x, follows the motion (and
-// W_nonideal, as it always has) alone: a power that carries noise — q'ᵀ Qc_ideal of scleronomic
-// constraints near a singular configuration, where the multipliers are large and A q' is
-// roundoff — must not shrink the steps (it switched the double four-bar's branch). The
-// quadrature itself is unchanged: the same stages, and scaling by a power of two commutes with
-// rounding, so W · 2⁻³² · 2³² is bit for bit the unscaled sum.
+// Every channel is stored in the run's energy unit (the power of 1000 nearest to its energy
+// scale / 10, Workspace::energy_unit: 1 for a model in SI units). The channels after W_nonideal are
+// stored scaled by kQuietScale = 2⁻³² as well (x holds W · 2⁻³² / unit), so that the step-size
+// control, which weighs every component of x, follows the motion (and W_nonideal, as it always has)
+// alone: a power that carries noise — q'ᵀ Qc_ideal of scleronomic constraints near a singular
+// configuration, where the multipliers are large and A q' is roundoff — must not shrink the steps
+// (it switched the double four-bar's branch). The quadrature itself is unchanged: the same stages,
+// and scaling by a power of two commutes with rounding, so W · 2⁻³² · 2³² is bit for bit the
+// unscaled sum.
 //
 // With BDF the channels are not scaled: CVODE's error test is a root-mean-square over the
 // components, which a component of negligible error would loosen (by √((N+1)/N)).
@@ -46,7 +46,7 @@ struct WorkLayout {
   // after the work channels (channels quadrature … count − 1), or null
   explicit WorkLayout(const System& sys, bool quiet = true, const Quadratures* quad = nullptr);
   // the scale of channel c in x: 1 / unit for W_nonideal, and for every channel when not
-  // quiet, kQuietScale / unit for the others; unit the run's energy unit (a power of two,
+  // quiet, kQuietScale / unit for the others; unit the run's energy unit (a power of 1000,
   // Workspace::energy_unit from set_run_scales), so that the step-size control weighs the
   // work channels relative to the run's energies (a pendulum of 1e20 kg took 726,143 steps
   // instead of 205 under atol in joules)

@@ -189,7 +189,14 @@ Trajectory detail::simulate_observed(const System& sys, const Eigen::Ref<const V
   // the scales of the tolerances on the constraints' violations and of the work channels
   // (relative, unit-free)
   set_run_scales(sys, ws, q, qd, o.t_start, o.t_end - o.t_start);
-  if (rate_unit > 0.0) ws.rate_unit = rate_unit;  // (a controlled plant's: observed_run.hpp)
+  if (rate_unit > 0.0) {
+    ws.rate_unit = rate_unit;  // (a controlled plant's: observed_run.hpp)
+  } else if (q.size() == 0 || !(q.cwiseAbs().maxCoeff() > 0.0)) {
+    // a state without length (a robot at its neutral pose): the rate unit of the model's time
+    // unit, 1/s, in it (at most 1: 1e-3 per ms), so that the same model in ms runs the steps it
+    // runs in s (docs/simulation.md, "The integrators' atol")
+    ws.rate_unit = std::min(1.0, o.units.seconds());
+  }
   // (x = [q; q'; W; z], WorkLayout)
   const detail::WorkLayout layout(sys, true, quad);
   detail::ContactEvents contacts(sys, ws, std::size_t(2 * n + layout.count), o.t_end - o.t_start);

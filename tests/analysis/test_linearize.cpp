@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <complex>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -14,6 +15,7 @@
 
 #include "analysis/models.hpp"
 #include "ukdyn/analysis/linearize.hpp"
+#include "ukdyn/core/status.hpp"
 #include "ukdyn/modelfile/model.hpp"
 
 namespace ukdyn {
@@ -402,6 +404,112 @@ TEST(Linearize, MisuseNamesWhatIsWrong) {
   LinearizeOptions o;
   o.table_size = 1;
   EXPECT_THROW(linearize(sys, at_rest(sys), {}, {}, o), std::invalid_argument);
+}
+
+// A pendulum in its angle, l as an input: th'' = −(g/l) sin th, so A₂₁ = −(g/l) cos th and B (the
+// column of l) = g sin th / l², in any units. Ridders' first step on l is 0.1 |l| (it was 0.1 ·
+// max(1, |l|): for l = 1 mm, a step of 100 l that crossed l = 0 and gave B = −858 for 2.9e6,
+// B_error 568, as the answer; u18 02)
+constexpr const char* kAnglePendulum = R"(name: gp
+parameters: {m: 1, l: 1, g: 9.81}
+coordinates: [th]
+kinetic_energy: 0.5*m*l^2*th_dot^2
+potential_energy: -m*g*l*cos(th)
+)";
+
+TEST(LinearizeUnits, ParameterColumnIsRightForAnyLengthAndInKilometresAndHours) {
+  const double th = 0.3;
+  // (l in m with g in m/s², and the same pendulums in km and h: g = 9.81 · 3600² / 1000)
+  for (const double g : {9.81, 127137.6}) {
+    const double metre = g == 9.81 ? 1.0 : 1e-3;
+    for (const double l : {1e-3, 1.0, 1e3}) {
+      const std::map<std::string, double> p{{"l", l * metre}, {"g", g}};
+      const Model model = parse_model(kAnglePendulum, "gp", p);
+      const OperatingPoint at{VectorXd::Constant(1, th), VectorXd::Zero(1), 0.0};
+      const LinearModel lm =
+          linearize(model.system, at, {model_parameter_input(kAnglePendulum, "gp", p, "l")});
+      const double L = l * metre, A21 = -g / L * std::cos(th), B = g * std::sin(th) / (L * L);
+      EXPECT_NEAR(lm.A(1, 0), A21, 1e-9 * std::abs(A21)) << "g " << g << ", l " << L;
+      EXPECT_NEAR(lm.B(1, 0), B, 1e-9 * B) << "g " << g << ", l " << L;
+      // the estimate bounds the error and is small
+      EXPECT_LE(lm.B_error(1, 0), 1e-9 * B) << "g " << g << ", l " << L;
+      EXPECT_GE(lm.B_error(1, 0), std::abs(lm.B(1, 0) - B) - 1e-14 * B);
+    }
+  }
+}
+
+// A Cartesian pendulum (x, y; the row (x² + y² − L²) / (2L)): A₂₁ = ∂x''/∂x = −g cos 2θ /
+// (L cos θ) at rest at angle θ from the vertical (−g/L hanging), and ∂x''/∂x' = 0, in any units.
+// The first steps are relative to each state's scale (0.1 |x|, 0.1 ℓ for x = 0): 0.1 · max(1,
+// |x|) left Newton's basin for L <= 1.5 mm in SI units and for L = 1 m in km ("Newton on the
+// holonomic constraints did not converge"), and in nm its step of 0.1 nm/s on x' hit the roundoff
+// floor (A_error 3.4e-5 /s; u18 05)
+TEST(LinearizeUnits, CartesianPendulumIsRightForAnyLengthAndInOtherUnits) {
+  const std::string text = R"(name: pend
+parameters: {m: 1, L: 1, g: 9.81}
+coordinates: [x, y]
+kinetic_energy: 0.5*m*(x_dot^2 + y_dot^2)
+potential_energy: m*g*y
+constraints:
+  - {name: rod, holonomic: (x^2 + y^2 - L^2)/(2*L)}
+)";
+  struct Units {
+    double L, g, m;
+  };
+  // SI with L = 1 mm, 1 m, 1 km; L = 1 m in km and h; in nm, mg and s
+  const std::vector<Units> cases{
+      {1e-3, 9.81, 1}, {1.0, 9.81, 1}, {1e3, 9.81, 1}, {1e-3, 127137.6, 1}, {1e9, 9.81e9, 1e6}};
+  for (const Units& u : cases) {
+    const Model model = parse_model(text, "pend", {{"L", u.L}, {"g", u.g}, {"m", u.m}});
+    for (const double th : {0.0, 0.3}) {
+      const OperatingPoint at{Eigen::Vector2d(u.L * std::sin(th), -u.L * std::cos(th)),
+                              VectorXd::Zero(2), 0.0};
+      const LinearModel lm = linearize(model.system, at);
+      ASSERT_EQ(lm.state_names.front(), "x");
+      const double A21 = -u.g * std::cos(2 * th) / (u.L * std::cos(th));
+      const double rate = std::sqrt(u.g / u.L);
+      EXPECT_NEAR(lm.A(1, 0), A21, 1e-9 * std::abs(A21)) << "L " << u.L << ", th " << th;
+      EXPECT_LE(lm.A_error(1, 0), 1e-8 * std::abs(A21)) << "L " << u.L << ", th " << th;
+      EXPECT_NEAR(lm.A(1, 1), 0.0, 1e-8 * rate) << "L " << u.L << ", th " << th;
+      EXPECT_LE(lm.A_error(1, 1), 1e-8 * rate) << "L " << u.L << ", th " << th;
+      EXPECT_NEAR(lm.eigenvalues[0].imag() * lm.eigenvalues[0].imag(), -A21, 1e-9 * -A21);
+    }
+  }
+}
+
+// A parameter at 0 has no scale but its unit's: the first step is 0.1 (a force's magnitude,
+// where any step is exact: ParameterInputAgreesWithTheExactForceColumn). When that step leaves
+// the function's smooth part — here a pole at l = −1 mm, which 0.1 crosses — the table does not
+// settle, and linearize says so rather than return it (u18 02's mechanism)
+TEST(LinearizeUnits, ATableThatDoesNotSettleIsAnErrorNamingTheInput) {
+  const std::string text = R"(name: gp
+parameters: {m: 1, l: 0, g: 9.81}
+coordinates: [th]
+kinetic_energy: 0.5*m*(l + 0.001)^2*th_dot^2
+potential_energy: -m*g*(l + 0.001)*cos(th)
+)";
+  const Model model = parse_model(text, "gp");
+  const OperatingPoint at{VectorXd::Constant(1, 0.3), VectorXd::Zero(1), 0.0};
+  try {
+    linearize(model.system, at, {model_parameter_input(text, "gp", {}, "l")});
+    ADD_FAILURE() << "no error";
+  } catch (const SolveError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("the derivative of th_dot' along parameter 'l' did not settle"),
+              std::string::npos)
+        << what;
+    EXPECT_NE(what.find("not smooth over steps of 0.1"), std::string::npos) << what;
+  }
+  // a parameter whose family cannot be evaluated on either side (sqrt of l < 0) is an error too
+  const std::string root = R"(name: gp
+parameters: {m: 1, l: 0, g: 9.81}
+coordinates: [th]
+kinetic_energy: 0.5*m*th_dot^2
+potential_energy: -m*g*sqrt(l)*cos(th)
+)";
+  const Model rooted = parse_model(root, "gp");
+  EXPECT_THROW(linearize(rooted.system, at, {model_parameter_input(root, "gp", {}, "l")}),
+               SolveError);
 }
 
 }  // namespace UKDYN_TEST_FILE

@@ -177,9 +177,9 @@ TEST(Scales, SpeedScaleIsThatOfTheRunsEnergy) {
       // the rod x² + y² − L², ‖a‖ = 2 L at (L, 0): the classes of 2 L² and 8.86 L² (10, 1e7)
       EXPECT_EQ(ws.phi_scale[0], 10.0 * L * L);
       EXPECT_EQ(ws.phi_dot_scale[0], 10.0 * L * L);
-      // the work channels' unit: E = m g L = 9.81 m L² J, the power of two nearest to the power
-      // of 1000 nearest to E / 10 (1 or 1e6)
-      EXPECT_EQ(ws.energy_unit, m * L * L == 1.0 ? 1.0 : 0x1p20);
+      // the work channels' unit: E = m g L = 9.81 m L² J, the power of 1000 nearest to E / 10
+      // (1 or 1e6)
+      EXPECT_EQ(ws.energy_unit, m * L * L == 1.0 ? 1.0 : 1e6);
       // the rate decade of v / ℓ = 4.43 per second (the integrators' atol on q')
       EXPECT_EQ(ws.rate_unit, 1.0);
     }

@@ -679,5 +679,62 @@ output: {every: 10}
   }
 }
 
+// The same robot in SI units and in mm, g, ms runs the same steps on default settings (u18 03):
+// a two-link arm (tests/data/arm2_hit*.urdf: joint damping 0.05 / 0.02 N m s and Coulomb joint
+// friction 0.1 / 0.05 N m, or neither) released horizontal at its neutral pose q = 0 hits a
+// table at z = 0.6 m with its tip sphere, e = 0.5. A state at q = 0 gives no length, so the
+// integrators' rate unit on q' comes from the model's time unit (1 in s, 1e-3 in ms: it was 1 in
+// both, 1000 times looser in ms), the first step tried is 1e-3 s in it (it was 1e-3 ms), and
+// the work channels' energy unit is the power of 1000 itself (it was 1024 for 1000): the mm
+// arm took 206 steps against 268 and hit 1.2e-6 ms off, against 8.3e-9 ms. First impact by an
+// independent integration (SymPy Lagrangian, DOP853 at rtol 1e-12, the friction regularized as
+// documented): t₁ = 264.5106362701 ms; the frictionless arm's is compared between the units.
+TEST(ModelRobot, AnArmInMillimetresGramsAndMillisecondsRunsTheStepsOfSI) {
+  const std::string table = R"(
+contacts:
+  - {name: tip, link: fore, point: [L, 0, 0], shape: sphere, radius: R, restitution: 0.5,
+     plane: {body: ground, point: [0, 0, H], normal: [0, 0, 1]}}
+initial:
+  q: {shoulder: 0, elbow: 0}
+)";
+  const auto text = [&](bool mm, bool friction) {
+    std::string t = std::string("robot: {urdf: arm2_hit") + (friction ? "" : "_free") +
+                    (mm ? "_mm.urdf, gravity: [0, 0, -9.81e-3]}" : ".urdf}") + table +
+                    (mm ? "simulate: {t_end: 1500}\noutput: {every: 10}\n"
+                          "units: {length: mm, mass: g, time: ms}\n"
+                        : "simulate: {t_end: 1.5}\n");
+    const auto put = [&](const std::string& key, const char* si, const char* in_mm) {
+      const std::size_t at = t.find(key);
+      t.replace(at, key.size(), mm ? in_mm : si);
+    };
+    put("L,", "0.5,", "500,");
+    put("R,", "0.02,", "20,");
+    put("H]", "0.6]", "600]");
+    return t;
+  };
+  for (const bool friction : {true, false}) {
+    SCOPED_TRACE(friction ? "with joint friction" : "without");
+    const ModelRun si = run_model(robot_model(text(false, friction)));
+    const ModelRun mm = run_model(robot_model(text(true, friction)));
+    ASSERT_EQ(si.trajectory.stats.status, Status::kOk) << si.trajectory.stats.message;
+    ASSERT_EQ(mm.trajectory.stats.status, Status::kOk) << mm.trajectory.stats.message;
+    // (the accepted steps: the same count; the rejected ones may differ by roundoff after the
+    // arm comes to rest on the table at 0.548 s, where its joint friction's regularized sign
+    // decides them: 62 against 60 with joint friction)
+    EXPECT_EQ(mm.trajectory.stats.steps, si.trajectory.stats.steps);
+    EXPECT_NEAR(double(mm.trajectory.stats.rejected_steps),
+                double(si.trajectory.stats.rejected_steps), 3.0);
+    const auto& e_si = si.trajectory.stats.contact_events;
+    const auto& e_mm = mm.trajectory.stats.contact_events;
+    ASSERT_FALSE(e_si.empty());
+    ASSERT_EQ(e_mm.size(), e_si.size());
+    const double t1 = e_si[0].t;
+    EXPECT_NEAR(e_mm[0].t * 1e-3, t1, 1e-9 * t1);
+    if (friction) EXPECT_NEAR(t1, 0.2645106362701, 1e-10 * t1);  // (the SI run as before)
+    for (std::size_t k = 0; k < e_si.size(); ++k)
+      EXPECT_NEAR(e_mm[k].t * 1e-3, e_si[k].t, 1e-9 * e_si[k].t) << "event " << k;
+  }
+}
+
 }  // namespace UKDYN_TEST_FILE
 }  // namespace ukdyn

@@ -118,8 +118,10 @@ struct LinearizeOptions {
   /// Jacobian has σ_min / σ_max below it) is a singular configuration: linearize throws
   /// rather than return a matrix that depends on roundoff. Must lie in [rank_threshold, 1).
   double singular_threshold = 1e-6;
-  /// Ridders' first step for state entry k: initial_step · max(1, |x_k|) (the same for a
-  /// parameter input with its p₀). Must be > 0.
+  /// Ridders' first step for state entry k: initial_step · σ_k, σ_k its own scale — |q_j| (or
+  /// ‖q‖∞ where |q_j| is below 1e-3 of that) for a position, |q'_j| (or the coordinate's scale
+  /// at the run's rate) for a velocity, |p₀| (1 when p₀ = 0) for a parameter input — never an
+  /// absolute number (docs/linearize.md, "Steps in the model's own scale"). Must be > 0.
   double initial_step = 0.1;
   /// Ridders' table size (levels of step shrinking by `step_ratio`). Must be >= 2.
   int table_size = 10;

@@ -1,9 +1,10 @@
 // SPDX-License-Identifier: BSD-3-Clause
 /// @file core/units.hpp
 /// The units a model declares for its numbers (docs/model-format.md, "Units"): length, mass
-/// and time, SI by default, and the labels of the quantities derived from them. Labels only:
-/// nothing computes with them, and a unit changes no number. A model file's `units:` fills one
-/// (Model::unit_system); a run's messages take theirs from SimulationOptions::units.
+/// and time, SI by default, and the labels of the quantities derived from them. Labels, but
+/// for the defaults that are times (docs/model-format.md, "Units"): a unit changes no number. A
+/// model file's `units:` fills one (Model::unit_system); a run's messages take theirs from
+/// SimulationOptions::units.
 #pragma once
 
 #include <array>

@@ -212,12 +212,13 @@ class Workspace {
   double length_scale = 0.0;  ///< class of ℓ (set_run_scales), 0 until then (no state factor)
   double speed_scale = 0.0;   ///< class of v (set_run_scales), 0 until then
   /// the decade of the run's rate v / ℓ, min(1, 10^⌊log10(v / ℓ)⌋) (set_run_scales; 1 until
-  /// then, for rates of 1 per unit time and above, and when q = 0): the adaptive integrators'
-  /// atol on q' is atol times this, so that their velocity tolerance follows a slow run's time
-  /// scale (docs/simulation.md, "Scales and tolerances")
+  /// then, for rates of 1 per unit time and above, and when q = 0: simulate then takes the
+  /// time unit's, SimulationOptions::units): the adaptive integrators' atol on q' is atol times
+  /// this, so that their velocity tolerance follows a slow run's time scale (docs/simulation.md,
+  /// "Scales and tolerances")
   double rate_unit = 1.0;
-  /// the power of two nearest to the unit of the run's energy (set_run_scales), 1 until then: the
-  /// simulation integrates the work channels in this unit
+  /// the unit of the run's energy, the power of 1000 nearest to E / 10 (set_run_scales), 1 until
+  /// then: the simulation integrates the work channels in this unit
   double energy_unit = 1.0;
   // --- stage 3, solve_ideal ---------------------------------------------------------------
   FundamentalDecomposition decomposition;  ///< Cholesky of M, COD of A L⁻ᵀ (dense engine; sized

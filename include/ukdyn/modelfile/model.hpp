@@ -104,8 +104,9 @@ struct Model {
   /// components) for the bodies' coordinates of a multibody model, else "" (not known).
   std::vector<std::string> coordinate_units;
   /// The base units (`units: {length: mm, mass: g, time: ms}`; SI when not given) and the
-  /// labels derived from them: the console's, summary.json's `unit_system`, the plots'. Labels
-  /// only: the model's numbers are in these units, nothing converts them.
+  /// labels derived from them: the console's, summary.json's `unit_system`, the plots'. The
+  /// model's numbers are in these units, nothing converts them; the time unit sets the defaults
+  /// that are times (options.units and options.step; docs/model-format.md, "Units").
   UnitSystem unit_system;
   /// Each output expression's unit (output_names order): `units:` of the file, else "".
   std::vector<std::string> output_units;

@@ -181,9 +181,11 @@ struct SimulationOptions {
   std::function<bool()> should_stop;
 
   /// The units the run's messages label their numbers with (RunStatistics::message and notes:
-  /// the time of a collapsed step, the energy balance's residual): the model's, which run_model
-  /// sets from a model file's `units:` (docs/model-format.md, "Units"); SI (s, J) by default.
-  /// Labels only: no number depends on them.
+  /// the time of a collapsed step, the energy balance's residual): the model's, which a model
+  /// file's `units:` sets (Model::options, run_model; docs/model-format.md, "Units"); SI (s, J)
+  /// by default. Labels, and one number: the time unit sets the integrators' rate unit on q'
+  /// of a run that starts at q = 0 (1 per second in it, at most 1: docs/simulation.md, "The
+  /// integrators' atol").
   UnitSystem units;
 };
 
