@@ -104,6 +104,16 @@ double a_stuck(double A, double t) {
   return x_d2(A, t) + 2.0 * kOmega * x_d1(A, t) + kOmega * kOmega * x_d(A, t);
 }
 
+// t* where a_stuck(t*) = (mu_s − mu) g, by bisection on [0, 0.1] (where a_stuck rises)
+double stick_break(double A, double mu_static, double mu) {
+  double lo = 0.0, hi = 0.1;
+  for (int i = 0; i < 200; ++i) {
+    const double mid = 0.5 * (lo + hi);
+    (a_stuck(A, mid) < (mu_static - mu) * kG ? lo : hi) = mid;
+  }
+  return 0.5 * (lo + hi);
+}
+
 TEST(ControlSlip, ParticleHeldByStaticFrictionSlipsWhenTheRequirementsForceReachesMuStaticN) {
   // A = 0.02: F(0) = m A w² + mu m g = 4.924 N < mu_static m g = 5.886 N, so the stick holds
   // (x = 0, F = 0, the requirement not met, with the reason) while the error grows, until the
@@ -112,12 +122,7 @@ TEST(ControlSlip, ParticleHeldByStaticFrictionSlipsWhenTheRequirementsForceReach
   // x = x_d + e with the error dynamics e'' + 40 e' + 400 e = 0 from e(t*) = −x_d(t*),
   // e'(t*) = −x_d'(t*)
   const double A = 0.02, mus = 0.3;
-  double lo = 0.0, hi = 0.1;  // (a_stuck rises on [0, 0.1])
-  for (int i = 0; i < 200; ++i) {
-    const double mid = 0.5 * (lo + hi);
-    (a_stuck(A, mid) < (mus - kMu) * kG ? lo : hi) = mid;
-  }
-  const double ts = 0.5 * (lo + hi);
+  const double ts = stick_break(A, mus, kMu);
   EXPECT_NEAR(ts, 0.021856, 1e-6);
   const double c1 = -x_d(A, ts), c2 = -x_d1(A, ts) + kOmega * c1;
   Model m = parse_model(pushed_particle(A, mus, 0.5));
@@ -468,12 +473,7 @@ TEST(ControlSlip, DISABLED_BoxOnTwoCornersHeldBySomeSplitSlipsAtMuStaticMgInAnyU
   // (a_stuck(t*) = (mu_s − mu) g, as for the particle: the split limit is the total mu_s N),
   // then x = x_d + e under the error dynamics, F = m x'' + mu m g. The same in mm, g, ms.
   const double A = 0.05, mus = 0.6;
-  double lo = 0.0, hi = 0.1;  // (a_stuck rises on [0, 0.1])
-  for (int i = 0; i < 200; ++i) {
-    const double mid = 0.5 * (lo + hi);
-    (a_stuck(A, mid) < (mus - kBoxMu) * kG ? lo : hi) = mid;
-  }
-  const double ts = 0.5 * (lo + hi);
+  const double ts = stick_break(A, mus, kBoxMu);
   const double c1 = -x_d(A, ts), c2 = -x_d1(A, ts) + kOmega * c1;
   double si_stop = 0.0;
   for (const bool mm : {false, true}) {
