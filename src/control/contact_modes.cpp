@@ -12,6 +12,7 @@
 
 #include "control/internal.hpp"
 #include "dynamics/internal.hpp"
+#include "simulation/split_margin.hpp"
 
 namespace ukdyn::control_detail {
 
@@ -51,6 +52,7 @@ ContactModes::ContactModes(const Controller& ctrl) : lcp_(0) {
   scratch_n_ = VectorXd::Zero(n);
   lcp_ = ContactLcp(K);
   stuck_.reserve(frictions_.size());
+  sliding_.reserve(frictions_.size());
   released_.reserve(frictions_.size());
   held_.assign(frictions_.size(), 0);
   F_s_ = VectorXd::Zero(n);
@@ -400,6 +402,9 @@ void ContactModes::slip(const Controller& ctrl, ControlWorkspace& cws,
       note_H_ = holding_force_;
     }
   }
+  // several stuck: held when some split of their holding forces lies inside every cone, as in the
+  // run (Run::holding_split), not only the minimum-norm one
+  if (!released_.empty() && stuck_.size() >= 2) hold_by_split(ctrl, cws, q, qd, t);
   if (released_.empty()) {
     // static friction holds them: the held control stands, not met
     slipped_ = -1;
@@ -410,6 +415,39 @@ void ContactModes::slip(const Controller& ctrl, ControlWorkspace& cws,
   s = compute_control(ctrl, cws, q, qd, t);
   hold_stuck(model);
   slipped_ = 1;
+}
+
+void ContactModes::hold_by_split(const Controller& ctrl, ControlWorkspace& cws,
+                                 const Eigen::Ref<const VectorXd>& q,
+                                 const Eigen::Ref<const VectorXd>& qd, double t) {
+  const System& sys = ctrl.model();
+  Workspace& model = cws.model;
+  // the closed contacts sliding keep their N (their friction is mu N of it), as in the run
+  sliding_.clear();
+  for (std::size_t j = 0; j < frictions_.size(); ++j) {
+    const FrictionContact& c = frictions_[j];
+    const auto k = std::size_t(c.normal_constraint);
+    const bool separated = sys.constraint(Index(k)).is_unilateral() && !model.active[k];
+    if (model.activity_override[std::size_t(c.stick_constraint)] <= 0 && !separated &&
+        c.mu_static != 0.0) {
+      sliding_.push_back(j);
+    }
+  }
+  if (!detail::split_space(sys, model, lam_, stuck_, sliding_, q, qd, t, space_)) return;
+  const double margin = detail::max_split_margin(space_, &split_y_);
+  if (!(margin > -detail::kSplitTolerance)) return;
+  released_.clear();
+  // the note's numbers: the contact least held at the split of largest margin
+  note_margin_ = std::numeric_limits<double>::infinity();
+  for (const detail::SplitCone& cone : space_.cones) {
+    const double N = cone.N0 + cone.g.dot(split_y_);
+    const double H = (cone.f0 + cone.F * split_y_).norm();
+    if (cone.mu * N - H < note_margin_) {
+      note_margin_ = cone.mu * N - H;
+      note_N_ = N;
+      note_H_ = H;
+    }
+  }
 }
 
 std::string ContactModes::stick_note(const Controller& ctrl) const {

@@ -26,6 +26,7 @@
 #include <string>
 #include <vector>
 
+#include "simulation/split_margin.hpp"
 #include "ukdyn/control/control.hpp"
 #include "ukdyn/core/units.hpp"
 #include "ukdyn/dynamics/contact.hpp"
@@ -80,13 +81,16 @@ class ContactModes {
   // meets the requirements, the reaction it would need with the contacts stuck is
   // λ + λ_nonideal + Δλ, Δλ = −G_p⁺ A_p M⁻¹ F_s (the stuck model's project_nonideal), split into
   // each contact's normal force N and holding force H as the run's stick margin splits it. When
-  // some |H| exceeds mu_static N, F_s is the control (cws holds it, s = kOk): the plant, which
+  // some |H| exceeds mu_static N — and, with several stuck, no split of their holding forces
+  // lies inside every cone either (hold_by_split: the run's test, the minimum-norm split being
+  // only one of them) — F_s is the control (cws holds it, s = kOk): the plant, which
   // still holds the stick, then sees its holding force beyond mu_static N, and the run releases
   // the contact (at the start, or at a located event) and slides with the friction F_s assumed.
   // Otherwise static friction holds: the held control stands, not met, and stick_note() says
   // why (no allocation: the note is written when asked for). The model's modes are the mirrored
   // ones afterwards. Cost: nothing while the requirements are met or no contact sticks; else 3 or 4
-  // evaluations of compute_control and one project_nonideal (O(n² + n m)).
+  // evaluations of compute_control and one project_nonideal (O(n² + n m)), and hold_by_split's
+  // where several stick and the minimum-norm split fails (it allocates).
   void slip(const Controller& ctrl, ControlWorkspace& cws, const Eigen::Ref<const VectorXd>& q,
             const Eigen::Ref<const VectorXd>& qd, double t, ControlStatus& s);
   // what the last slip() decided: 1 the control slides stuck contacts (F_s), −1 static friction
@@ -159,6 +163,16 @@ class ContactModes {
                       const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd,
                       double t);
 
+  // slip()'s test of several stuck contacts whose minimum-norm split fails (released_ not
+  // empty): the run's, some split of their holding forces inside every cone under F_s
+  // (detail::split_space and detail::max_split_margin on lam_, the closed sliding contacts'
+  // N kept); where one holds, released_ is cleared and the note's numbers are those of the
+  // contact least held at the split of largest margin. Cost: an SVD of the active rows, one of
+  // the forces' map, and the barrier method's Newton steps; allocates (split_space).
+  void hold_by_split(const Controller& ctrl, ControlWorkspace& cws,
+                     const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd,
+                     double t);
+
   // the model's Coulomb contacts (System::friction_contacts)
   std::vector<FrictionContact> frictions_;
   std::vector<Index> contacts_;      // (contacts) System indices of the unilateral constraints
@@ -187,6 +201,9 @@ class ContactModes {
   VectorXd lam_;                      // (m) the stuck model's multipliers under F_s
   VectorXd accel_, reaction_, part_;  // (max(n, 2)), (n), (n)
   MatrixXd normals_;                  // (rows of a normal constraint × n)
+  std::vector<std::size_t> sliding_;  // (≤ frictions) hold_by_split: the closed ones sliding
+  detail::SplitSpace space_;          // hold_by_split: the split space of stuck_
+  VectorXd split_y_;                  // (nz) hold_by_split: the split of largest margin
   double normal_force_ = 0.0, holding_force_ = 0.0;  // of the last stick_margin
   int slipped_ = 0;                                  // see slipped()
   // stick_note()'s: the time, the row not met, the least margin mu_static N − |H| and its N

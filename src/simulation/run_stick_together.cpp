@@ -275,7 +275,8 @@ int Run::holding_split(double t, std::size_t* worst, bool search) {
   // whether any split holds: the largest margin s* of a split inside every cone, to roundoff
   // (max_split_margin); where none holds, the contact least held at its maximizer y* is the
   // worst (every margin there is >= s*; the contacts bound to s* are those no split can relieve)
-  split_margin_ = max_split_margin(cones, nz, scale, &split_y_);
+  // (the sign only where nothing else is read: no search, no worst contact)
+  split_margin_ = max_split_margin(space_, &split_y_, !search && worst == nullptr);
   if (!std::isnan(split_margin_)) {
     split_exact_ = true;
     if (split_margin_ <= -kSplitTolerance) {

@@ -3,7 +3,6 @@
 // second-order cone programme), by a barrier method. See split_margin.hpp.
 #include "simulation/split_margin.hpp"
 
-#include <Eigen/Cholesky>
 #include <Eigen/SVD>
 
 #include <algorithm>
@@ -23,10 +22,11 @@ namespace {
 constexpr double kRadius = 1e3;
 
 // the barrier of the margin problem at z = (y, s) (scale units): its value's finiteness (false
-// outside the domain), gradient and Hessian into G, H
-bool barrier(const std::vector<SplitCone>& cones, const Eigen::VectorXd& f0s,
-             const Eigen::VectorXd& N0s, const Eigen::VectorXd& z, Eigen::VectorXd& G,
-             Eigen::MatrixXd& H, Eigen::VectorXd& alpha, Eigen::VectorXd& grad) {
+// outside the domain), gradient and Hessian into w.G, w.H (w's other vectors: scratch)
+bool barrier(const std::vector<SplitCone>& cones, SplitBarrier& w) {
+  const Eigen::VectorXd& z = w.z;
+  Eigen::VectorXd &G = w.G, &alpha = w.alpha, &grad = w.grad;
+  Eigen::MatrixXd& H = w.H;
   const Index p = z.size(), nz = p - 1;
   const auto y = z.head(nz);
   const double s = z[nz];
@@ -43,7 +43,7 @@ bool barrier(const std::vector<SplitCone>& cones, const Eigen::VectorXd& f0s,
   for (std::size_t i = 0; i < cones.size(); ++i) {
     const SplitCone& cone = cones[i];
     const Index d = cone.F.rows();
-    const double N = N0s[Index(i)] + cone.g.dot(y);
+    const double N = w.N0s[Index(i)] + cone.g.dot(y);
     // N >= s
     alpha.head(nz) = cone.g;
     alpha[nz] = -1.0;
@@ -55,16 +55,24 @@ bool barrier(const std::vector<SplitCone>& cones, const Eigen::VectorXd& f0s,
       if (!linear(a)) return false;
       continue;
     }
-    const auto b = f0s.segment(at, d) + cone.F * y;
+    // (b summed as f0 + (F y) for |b|², and F y accumulated onto f0 for Fᵀ b: the two ways
+    // Eigen evaluated the expression f0 + F y there before it was kept in w, bit for bit)
+    w.Fy.resize(d);
+    w.Fy.noalias() = cone.F * y;
+    w.b_sum.resize(d);
+    w.b_sum = w.f0s.segment(at, d) + w.Fy;
+    w.b = w.f0s.segment(at, d);
+    w.b.noalias() += cone.F * y;
     at += d;
-    const double D = a * a - b.squaredNorm();
+    const double D = a * a - w.b_sum.squaredNorm();
     if (!(a > 0.0) || !(D > 0.0)) return false;
     // ∇D = 2 a α − 2 Bᵀ b, ∇²D = 2 α αᵀ − 2 Bᵀ B (B = [F 0])
     grad = 2.0 * a * alpha;
-    grad.head(nz).noalias() -= 2.0 * cone.F.transpose() * b;
+    grad.head(nz).noalias() -= 2.0 * cone.F.transpose() * w.b;
     G -= grad / D;
     H.noalias() += grad * grad.transpose() / (D * D) - 2.0 * alpha * alpha.transpose() / D;
-    H.topLeftCorner(nz, nz).noalias() += 2.0 * cone.F.transpose() * cone.F / D;
+    w.FtF.noalias() = 2.0 * cone.F.transpose() * cone.F;
+    H.topLeftCorner(nz, nz) += w.FtF / D;
   }
   // s <= 1, |y| <= kRadius
   alpha.setZero();
@@ -251,46 +259,59 @@ bool split_space(const System& sys, Workspace& ws, const Eigen::VectorXd& Lambda
   return true;
 }
 
-double max_split_margin(const std::vector<SplitCone>& cones, Index nz, double scale,
-                        Eigen::VectorXd* y_out) {
+double max_split_margin(SplitSpace& space, Eigen::VectorXd* y_out, bool sign_only) {
   const double nan = std::numeric_limits<double>::quiet_NaN();
+  const std::vector<SplitCone>& cones = space.cones;
+  const Index nz = space.nz;
+  const double scale = space.scale;
   if (!(scale > 0.0) || cones.empty()) return nan;
+  SplitBarrier& w = space.barrier;
   // the data in units of the scale; the start y = 0, s below every margin there
   Index rows = 0;
   for (const SplitCone& cone : cones) rows += cone.f0.size();
-  Eigen::VectorXd f0s(rows), N0s(Index(cones.size()));
+  w.f0s.resize(rows);
+  w.N0s.resize(Index(cones.size()));
   double s0 = 0.0;
   for (Index i = 0, at = 0; const SplitCone& cone : cones) {
     const Index d = cone.f0.size();
-    f0s.segment(at, d) = cone.f0 / scale;
+    w.f0s.segment(at, d) = cone.f0 / scale;
     at += d;
-    N0s[i] = cone.N0 / scale;
-    s0 = std::min({s0, N0s[i], cone.mu * N0s[i] - f0s.segment(at - d, d).norm()});
+    w.N0s[i] = cone.N0 / scale;
+    s0 = std::min({s0, w.N0s[i], cone.mu * w.N0s[i] - w.f0s.segment(at - d, d).norm()});
     ++i;
   }
   const Index p = nz + 1;
-  Eigen::VectorXd z = Eigen::VectorXd::Zero(p), G(p), step(p), alpha(p), grad(p);
-  Eigen::MatrixXd H(p, p);
+  Eigen::VectorXd& z = w.z;
+  z.setZero(p);
+  for (Eigen::VectorXd* v : {&w.G, &w.step, &w.alpha, &w.grad}) v->resize(p);
+  w.H.resize(p, p);
   z[nz] = s0 - 1.0;
   // the barrier's parameter (2 per cone, 1 per linear term): the gap s* − s on the central path
   // is at most it over the weight τ
   const double theta = 3.0 * double(cones.size()) + 2.0;
-  Eigen::LDLT<Eigen::MatrixXd> ldlt(p);
-  for (double tau = 1.0; tau <= 1e16; tau *= 10.0) {
+  // (centred to λ² <= 1e-12 — or to λ <= 1/9 for the sign only, the gap bound's condition)
+  const double centred = sign_only ? 1.0 / 81.0 : 1e-12, raise = sign_only ? 100.0 : 10.0;
+  for (double tau = 1.0; tau <= 1e16; tau *= raise) {
     double decrement = std::numeric_limits<double>::infinity();
-    for (int newton = 0; newton < 60 && decrement > 1e-12; ++newton) {
-      if (!barrier(cones, f0s, N0s, z, G, H, alpha, grad)) return nan;
-      G[nz] -= tau;  // (the objective −τ s)
-      ldlt.compute(H);
-      if (ldlt.info() != Eigen::Success) return nan;
-      step = -ldlt.solve(G);
-      decrement = -G.dot(step);  // λ², in the Hessian's norm
+    for (int newton = 0; newton < 60 && decrement > centred; ++newton) {
+      if (!barrier(cones, w)) return nan;
+      w.G[nz] -= tau;  // (the objective −τ s)
+      w.ldlt.compute(w.H);
+      if (w.ldlt.info() != Eigen::Success) return nan;
+      w.step = -w.ldlt.solve(w.G);
+      decrement = -w.G.dot(w.step);  // λ², in the Hessian's norm
       if (!(decrement >= 0.0)) return nan;
       // (damped Newton: a step of 1/(1 + λ) stays inside a self-concordant barrier's domain)
       const double lambda = std::sqrt(decrement);
-      z += (lambda > 0.25 ? 1.0 / (1.0 + lambda) : 1.0) * step;
+      z += (lambda > 0.25 ? 1.0 / (1.0 + lambda) : 1.0) * w.step;
+      // (a point of the domain: its s is a lower bound of s*)
+      if (sign_only && z[nz] > -kSplitTolerance) {
+        if (!barrier(cones, w)) return nan;
+        if (y_out) *y_out = z.head(nz) * scale;
+        return z[nz];
+      }
     }
-    if (!barrier(cones, f0s, N0s, z, G, H, alpha, grad)) return nan;
+    if (!barrier(cones, w)) return nan;
     // decided: a split with a margin above −kSplitTolerance (s <= s*), or none within the gap's
     // bound
     const double s = z[nz], gap = 2.0 * theta / tau;
