@@ -118,6 +118,14 @@ std::string describe_control_status(const Controller& ctrl, const ControlWorkspa
              (kept.empty() ? "; none met" : "; met: " + kept);
     }
     case ControlStatus::kModelFailed:
+      // (the model's evaluation succeeded, singular M and all, when the law's own factorization
+      // of M failed: say that, not "failed: ok")
+      if (ws.model.status == Status::kOk) {
+        return when +
+               "the mass matrix M of the nominal model is not positive definite (the control "
+               "law's Cholesky factorization M = L Lᵀ failed), and control needs a positive "
+               "definite M (docs/singular-mass.md, \"Limits\")";
+      }
       return when + "the nominal model failed: " + describe_status(ctrl.model(), ws.model);
     case ControlStatus::kNonFiniteInput: {
       const std::string q = ws.failed_quantity;

@@ -16,6 +16,7 @@
 #include <Eigen/Geometry>
 
 #include <ukdyn/control/control.hpp>
+#include <ukdyn/modelfile/model.hpp>
 #include <ukdyn/reference/reference.hpp>
 #include <ukdyn/ukdyn.hpp>
 
@@ -447,6 +448,34 @@ TEST(ControlIntegrals, EffortAndWorkAreTheClosedFormsUnderEveryIntegrator) {
     EXPECT_NEAR(run.plant.kinetic_energy[last], 0.5 * 16 * T * T * decay, tol * effort);
     EXPECT_NEAR(run.plant.kinetic_energy[last], run.control_work[last], tol * effort);
   }
+}
+
+// ---------------------------------------------------------------------------------------------
+// a mass matrix that is not positive definite (defect 03 of session 17): control factorizes M
+
+TEST(ControlSingularMass, AModelWhoseMIsSingularAtRunTimeSaysSoNotFailedOk) {
+  // M = diag(m, 0), y tied to x: the plant's motion is determined ([M; A] has full rank), the
+  // control's factorization of M fails at its first evaluation (tier 3: the run's status)
+  const Model m = parse_model(
+      "parameters: {m: 2}\n"
+      "coordinates: [x, y]\n"
+      "kinetic_energy: 0.5*m*x_dot^2\n"
+      "potential_energy: 0\n"
+      "constraints:\n"
+      "  - {name: tie, holonomic: y - x}\n"
+      "control:\n"
+      "  requirements:\n"
+      "    - {name: track, holonomic: x - sin(t), dynamics: {omega: 10, zeta: 1}}\n"
+      "simulate: {t_end: 0.5}\n");
+  const ControlledTrajectory r =
+      simulate_controlled(*m.controller, m.system, m.q0, m.qd0, m.options);
+  EXPECT_NE(r.plant.stats.status, Status::kOk);
+  EXPECT_DOUBLE_EQ(r.plant.stats.t_reached, 0.0);
+  const std::string& message = r.plant.stats.message;
+  EXPECT_EQ(message.find("failed: ok"), std::string::npos) << message;
+  EXPECT_NE(message.find("the mass matrix M of the nominal model is not positive definite"),
+            std::string::npos)
+      << message;
 }
 
 }  // namespace UKDYN_TEST_FILE
