@@ -294,10 +294,11 @@ double requirement_gap(const Controller& ctrl, ControlWorkspace& cws,
 
 // A controlled run whose step size collapsed: when the requirement rows have (nearly) lost
 // rank where the control was last evaluated, that is the likely cause, and it replaces the
-// driver's general diagnosis.
+// driver's general diagnosis (its time in the run's unit, time_unit).
 void diagnose_requirements(const ControlledPlant& st, const ControlledScratch& w,
                            const Eigen::Ref<const VectorXd>& q0,
-                           const Eigen::Ref<const VectorXd>& qd0, double t0, RunStatistics& stats) {
+                           const Eigen::Ref<const VectorXd>& qd0, double t0,
+                           const std::string& time_unit, RunStatistics& stats) {
   if (stats.status != Status::kIntegratorFailure || w.stats.evaluations == 0) return;
   ControlWorkspace cws(st.ctrl);
   const double start = requirement_gap(st.ctrl, cws, q0, qd0, t0);
@@ -309,9 +310,9 @@ void diagnose_requirements(const ControlledPlant& st, const ControlledScratch& w
   }
   char gaps[160];
   std::snprintf(gaps, sizeof gaps,
-                "sigma_min / sigma_max of the requirement rows %.3g at t = %g "
-                "s, %.3g at the start",
-                now, w.t_last, start);
+                "sigma_min / sigma_max of the requirement rows %.3g at t = %g %s, %.3g at the "
+                "start",
+                now, w.t_last, time_unit.c_str(), start);
   m += std::string(". Likely cause: the requirements lost rank (") + gaps +
        "): they cannot all be met there — a path that leaves the reachable set, or passes a "
        "singular configuration of the mechanism (an arm stretched out). Try: a requirement that "
@@ -702,7 +703,7 @@ ControlledTrajectory simulate_controlled(
   tr.m = full.m;
   tr.stats = full.stats;
   if (!w.slip_note.empty()) tr.stats.notes.push_back(w.slip_note);
-  diagnose_requirements(*st, w, q0, qd0, options.t_start, tr.stats);
+  diagnose_requirements(*st, w, q0, qd0, options.t_start, options.units.time, tr.stats);
   run.control = w.stats;
   balance.finish(tr.stats, tolerance, options.units);
   if (!w.failure.empty() && tr.stats.status != Status::kOk &&

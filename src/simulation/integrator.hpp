@@ -294,9 +294,11 @@ std::string format_short(double v);
 bool step_collapsed(const SegmentResult& r);
 // The likely cause of the collapse that r reports, and what to try (one or two sentences):
 // x is the state where the method gave up (r.t_reached), x0 the one where it started (t0).
+// At the step limit (step_limit) only a singular configuration or stiffness is a cause worth
+// saying: with neither, "" (a steady step that ran out of steps did not collapse).
 std::string diagnose_collapse(const System& sys, Workspace& ws, const SimulationOptions& o,
                               Integrator method, const SegmentResult& r,
                               const std::vector<double>& x, const std::vector<double>& x0,
-                              double t0, const RunStatistics& stats);
+                              double t0, const RunStatistics& stats, bool step_limit = false);
 
 }  // namespace ukdyn::detail

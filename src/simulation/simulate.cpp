@@ -534,12 +534,14 @@ Trajectory detail::simulate_observed(const System& sys, const Eigen::Ref<const V
                      format((r.t_reached - o.t_start) / double(std::max(1L, traj.stats.steps))) +
                      " " + o.units.time + "; raise it: " + kRaiseMaxSteps + ")";
         }
-        if (r.status == Status::kIntegratorFailure && !step_limit && detail::step_collapsed(r)) {
+        if (r.status == Status::kIntegratorFailure && detail::step_collapsed(r)) {
           std::string divergence;
-          message += run.diverged(r.t_reached, x.data(), divergence)
-                         ? ". Likely cause: " + divergence
-                         : ". " + detail::diagnose_collapse(sys, ws, o, method, r, x, x_start,
-                                                            a_start, traj.stats);
+          const std::string cause =
+              run.diverged(r.t_reached, x.data(), divergence)
+                  ? "Likely cause: " + divergence
+                  : detail::diagnose_collapse(sys, ws, o, method, r, x, x_start, a_start,
+                                              traj.stats, step_limit);
+          if (!cause.empty()) message += ". " + cause;
         }
         return finish(r.status, message, r.t_reached);
       }

@@ -70,7 +70,7 @@ bool step_collapsed(const SegmentResult& r) {
 std::string diagnose_collapse(const System& sys, Workspace& ws, const SimulationOptions& o,
                               Integrator method, const SegmentResult& r,
                               const std::vector<double>& x, const std::vector<double>& x0,
-                              double t0, const RunStatistics& stats) {
+                              double t0, const RunStatistics& stats, bool step_limit) {
   const long steps = stats.steps, rejected = stats.rejected_steps;
   const double rejected_share =
       steps + rejected > 0 ? double(rejected) / double(steps + rejected) : 0.0;
@@ -118,6 +118,7 @@ std::string diagnose_collapse(const System& sys, Workspace& ws, const Simulation
     }
     return text;
   }
+  if (step_limit) return "";
   return "The step size collapsed " + where + " (" + format_number(rejected) + " of " +
          format_number(steps + rejected) +
          " steps rejected) with no sign of stiffness or of a singular configuration. Likely "
