@@ -179,6 +179,11 @@ int linearize_command(const LinearizeArguments& args) {
   std::vector<std::string> derivative_names;
   for (const auto& s : lm.state_names) derivative_names.push_back(s + "'");
 
+  // (a model with control: the linear model is the plant's, open loop: said, u19 05)
+  if (model.controller)
+    std::fprintf(stderr,
+                 "note: the model's control: section is left out: this is the plant's open-loop "
+                 "linear model, without the tracking control (docs/linearize.md, \"Control\")\n");
   // (said on stderr too: the model is that of the point's contact mode)
   for (const auto& c : lm.open_contacts)
     std::fprintf(stderr,

@@ -126,3 +126,23 @@ def test_kept_states_refuse_an_output_of_a_dropped_state():
     with pytest.raises(ValueError, match="the output 'position' depends on the dropped state 'x'"):
         model.linearize(q=[0.0, 0.3], q_dot=[1.0, 0.0], outputs=["position"],
                         states=["th", "th_dot"])
+
+
+def test_the_command_says_that_control_is_left_out(cli, tmp_path):
+    # u19 05: a free mass held at x = 0 by a requirement (closed loop: poles -2, -2) was
+    # linearized to the open loop A = [[0, 1], [0, 0]] without a word; the plant's open-loop model
+    # is what the command gives, and it says so
+    path = tmp_path / "held.yaml"
+    path.write_text("coordinates: [x]\nkinetic_energy: 0.5*x_dot^2\ninitial: {q: {x: 0.1}}\n"
+                    "control:\n  requirements:\n"
+                    "    - {name: hold, holonomic: x, dynamics: {omega: 2, zeta: 1}}\n")
+    out = subprocess.run([cli, "linearize", str(path)], capture_output=True, text=True,
+                         check=True)
+    np.testing.assert_allclose(json.loads(out.stdout)["A"], [[0, 1], [0, 0]], atol=1e-12)
+    assert "the model's control: section is left out" in out.stderr
+    assert "open-loop linear model" in out.stderr
+    plain = tmp_path / "plain.yaml"
+    plain.write_text("coordinates: [x]\nkinetic_energy: 0.5*x_dot^2\n")
+    out = subprocess.run([cli, "linearize", str(plain)], capture_output=True, text=True,
+                         check=True)
+    assert "control" not in out.stderr
