@@ -146,3 +146,13 @@ def test_the_command_says_that_control_is_left_out(cli, tmp_path):
     out = subprocess.run([cli, "linearize", str(plain)], capture_output=True, text=True,
                          check=True)
     assert "control" not in out.stderr
+
+
+def test_python_says_that_control_is_left_out(tmp_path):
+    # the same in Python: a UserWarning, and the open-loop A (eigenvalues 0, 0)
+    held = ukdyn.parse("coordinates: [x]\nkinetic_energy: 0.5*x_dot^2\ninitial: {q: {x: 0.1}}\n"
+                       "control:\n  requirements:\n"
+                       "    - {name: hold, holonomic: x, dynamics: {omega: 2, zeta: 1}}\n")
+    with pytest.warns(UserWarning, match="control: section is left out"):
+        lm = held.linearize()
+    np.testing.assert_allclose(lm.A, [[0, 1], [0, 0]], atol=1e-12)

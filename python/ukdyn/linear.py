@@ -5,6 +5,7 @@ The reduction to minimal coordinates of the constraint manifold, the choice of i
 coordinates and the error estimates are explained in docs/linearize.md.
 """
 
+import warnings
 from dataclasses import dataclass
 from typing import Any, Dict, List, Optional, Sequence, Tuple
 
@@ -81,6 +82,11 @@ def linearize(model: "_ukdyn.Model", q: Any = None, q_dot: Any = None, t: Option
     Raises ValueError on misuse, off the constraint manifold, or at a singular configuration;
     :class:`SolveError` when the dynamics cannot be evaluated near the point.
     """
+    if getattr(model, "controller", None) is not None:
+        # (the plant's open-loop model: said, as `ukdyn linearize` says it; u19 05)
+        warnings.warn("the model's control: section is left out: this is the plant's open-loop "
+                      "linear model, without the tracking control (docs/linearize.md, "
+                      "\"Control\")", UserWarning, stacklevel=2)
     d = _ukdyn._linearize(model, q, q_dot, t, _names(inputs), _names(outputs),
                           _names(independent), _names(independent_velocities), _names(states),
                           bool(equilibrium), _names(unknowns), bool(project))
