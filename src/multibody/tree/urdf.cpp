@@ -40,17 +40,26 @@ class MessageCapture final : public console_bridge::OutputHandler {
 // parents) and links its children into a cycle, which a walk from the root never leaves: refused
 // here, naming the link and both joints, as is a link the root does not reach. Cost O(links +
 // joints), at load.
-void check_tree(const urdf::ModelInterface& model, const std::string& who) {
+// (a cycle of links holds itself through their child_links' shared pointers: they are cleared
+// before the model is refused, else its links would never be freed)
+void check_tree(urdf::ModelInterface& model, const std::string& who) {
+  const auto refuse = [&](const std::string& what) {
+    for (auto& [name, l] : model.links_) {
+      if (!l) continue;
+      l->child_links.clear();
+      l->child_joints.clear();
+    }
+    throw std::invalid_argument(what);
+  };
   std::map<std::string, std::string> parent_joint;  // child link → the first joint naming it
   for (const auto& [name, j] : model.joints_) {
     if (!j) continue;
     const auto [it, fresh] = parent_joint.emplace(j->child_link_name, name);
     if (!fresh) {
-      throw std::invalid_argument(
-          who + "not a tree: link '" + j->child_link_name + "' is the child of two joints, '" +
-          it->second + "' and '" + name +
-          "' (a cycle, or two parents); a kinematic loop is closed with `loops:` of a robot "
-          "model (docs/robots.md), not in the URDF");
+      refuse(who + "not a tree: link '" + j->child_link_name + "' is the child of two joints, '" +
+             it->second + "' and '" + name +
+             "' (a cycle, or two parents); a kinematic loop is closed with `loops:` of a robot "
+             "model (docs/robots.md), not in the URDF");
     }
   }
   const urdf::LinkConstSharedPtr root = model.getRoot();
@@ -65,9 +74,8 @@ void check_tree(const urdf::ModelInterface& model, const std::string& who) {
   }
   for (const auto& [name, l] : model.links_) {
     if (!reached.count(name)) {
-      throw std::invalid_argument(who + "not a tree: link '" + name +
-                                  "' is not reached from the root link '" + root->name +
-                                  "' (its joints form a cycle apart from the tree)");
+      refuse(who + "not a tree: link '" + name + "' is not reached from the root link '" +
+             root->name + "' (its joints form a cycle apart from the tree)");
     }
   }
 }
