@@ -3,7 +3,7 @@
 // "Contacts on bodies"): each entry is one unilateral gap of a point, sphere or disk of a body
 // with a plane fixed on the ground or on another body, added as mb::contact / mb::contact_disk,
 // or of a point or sphere outside (or, inside: true, inside) a sphere of another body or of the
-// ground (mb::contact_spheres).
+// ground (mb::contact_spheres), or of a disk outside such a sphere (mb::contact_disk_sphere).
 // Every error names the contact and the key (file:line:column) and gives a hint.
 #include <algorithm>
 #include <cmath>
@@ -93,9 +93,9 @@ void MultibodyReader::read_contacts() {
     if (sp && c["plane"])
       r_.fail(sp, what + ": a contact is with a plane or with a sphere, not both",
               "leave out plane: or sphere:");
-    if (sp && (disk || shape == "box"))
-      r_.fail(sp, what + ": a " + shape + " against a sphere is not supported",
-              "shape: sphere (or point) for a contact with a sphere");
+    if (sp && shape == "box")
+      r_.fail(sp, what + ": a box against a sphere is not supported",
+              "shape: sphere (or point, or disk) for a contact with a sphere");
     BodyId other = kGround;
     Vector3d o_sphere = Vector3d::Zero();
     double other_radius = 0.0;
@@ -119,6 +119,10 @@ void MultibodyReader::read_contacts() {
         const std::string t = in.IsScalar() && in.Tag() != "!" ? in.Scalar() : std::string();
         if (t != "true" && t != "false")
           r_.fail(in, sw + ": inside must be true or false", "inside: true   (unquoted)");
+        if (t == "true" && disk)
+          r_.fail(in, what + ": a disk inside a sphere is not supported",
+                  "shape: sphere (a ball in a bowl), or leave inside out for a disk outside the "
+                  "sphere");
         if (t == "true") side = mb::SphereSide::kInside;
         if (t == "true" && !(radius < other_radius))
           r_.fail(sp["radius"],
@@ -184,7 +188,9 @@ void MultibodyReader::read_contacts() {
       continue;
     }
     mb::Joint j =
-        sp     ? mb::contact_spheres(name, other, o_sphere, other_radius, b, p, radius, e, side)
+        sp && disk
+            ? mb::contact_disk_sphere(name, other, o_sphere, other_radius, b, disk_frame, radius, e)
+        : sp   ? mb::contact_spheres(name, other, o_sphere, other_radius, b, p, radius, e, side)
         : disk ? mb::contact_disk(name, plane_body, plane, b, disk_frame, radius, e)
                : mb::contact(name, plane_body, plane, b, p, radius, e);
     j.restitution_law = law;

@@ -188,9 +188,7 @@ std::string viewer_scene_json(const Model& model) {
     for (const mb::JointInfo& j : m.joints) {
       // (a contact is drawn as a contact, with its whole normal force lambda_total and its
       // friction, not as a joint with its ideal share reaction.<contact>.*)
-      if (j.type == mb::JointType::kContact || j.type == mb::JointType::kContactDisk ||
-          j.type == mb::JointType::kContactSpheres)
-        continue;
+      if (mb::is_contact(j.type)) continue;
       joints.push_back({{"name", j.name},
                         {"type", mb::to_string(j.type)},
                         {"parent", body_name(j.parent)},

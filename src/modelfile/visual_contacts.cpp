@@ -188,34 +188,47 @@ VisualContact bodies_visual_contact(std::shared_ptr<const mb::MultibodyModel> mo
   const mb::BodyId P = joint.parent, C = joint.child;
   const mb::Frame fp = joint.frame_parent, fc = joint.frame_child;
   const Vector3d n_P = fp.R.col(joint.planar ? 1 : 2), a_C = fc.R.col(2);
-  if (joint.type == mb::JointType::kContactSpheres) {
+  if (joint.type == mb::JointType::kContactSpheres ||
+      joint.type == mb::JointType::kContactDiskSphere) {
     // two spheres: the normal is the line of the centres o → c (inside the other: c → o), the
-    // point the contact sphere's nearest to the other's surface, c − r n
+    // point the contact sphere's nearest to the other's surface, c − r n; a disk and a sphere
+    // (mb::contact_disk_sphere): the point the disk's nearest to the sphere's centre o,
+    // c + a with a = −r w/|w| beyond the rim or −w on the face (w = d − (k·d) k, d = c − o, k
+    // the disk's axis), the normal from o to it
     const double side = joint.side == mb::SphereSide::kInside ? -1.0 : 1.0;
-    c.geometry = [model, P, C, fp, fc, radius, side](const Eigen::Ref<const VectorXd>& q,
-                                                     Vector3d& point, Vector3d& normal) {
+    const bool on_disk = joint.type == mb::JointType::kContactDiskSphere;
+    const auto touch = [model, P, C, fp, fc, a_C, radius, side, on_disk](
+                           const Eigen::Ref<const VectorXd>& q, Vector3d& point, Vector3d& normal) {
       const Vector3d o = mb::world_point(*model, q, P, fp.p),
                      centre = mb::world_point(*model, q, C, fc.p);
+      if (on_disk) {
+        const Vector3d k = mb::body_pose(*model, q, C).R_WB.toRotationMatrix() * a_C;
+        const Vector3d d = centre - o, w = d - k.dot(d) * k;
+        const double rho = w.norm();
+        const Vector3d a = rho > radius ? Vector3d(-radius * w / rho) : Vector3d(-w);
+        point = centre + a;
+        normal = (d + a).normalized();
+        return;
+      }
       normal = side * (centre - o).normalized();
       point = centre - radius * normal;
     };
+    c.geometry = touch;
     // the friction's axes (mb::detail::relative_contact_kinematics): n, t_1 = e × n/|e × n|,
     // t_2 = n × t_1 with e the world axis least aligned with n at the start (planar:
     // t_1 = n × e_z)
     const bool planar = joint.planar;
     Vector3d e = Vector3d::UnitZ();
     if (!planar) {
-      const Vector3d d0 =
-          mb::world_point(*model, model->q0, C, fc.p) - mb::world_point(*model, model->q0, P, fp.p);
+      Vector3d point0, n0;
+      touch(model->q0, point0, n0);
       Eigen::Index axis = 0;
-      d0.cwiseAbs().minCoeff(&axis);
+      n0.cwiseAbs().minCoeff(&axis);
       e = Vector3d::Unit(axis);
     }
-    c.axes = [model, P, C, fp, fc, e, planar, side](const Eigen::Ref<const VectorXd>& q,
-                                                    Matrix3d& axes) {
-      const Vector3d n =
-          side *
-          (mb::world_point(*model, q, C, fc.p) - mb::world_point(*model, q, P, fp.p)).normalized();
+    c.axes = [touch, e, planar](const Eigen::Ref<const VectorXd>& q, Matrix3d& axes) {
+      Vector3d point, n;
+      touch(q, point, n);
       const Vector3d t1 = planar ? Vector3d(n.cross(Vector3d::UnitZ())) : e.cross(n).normalized();
       axes << n, t1, planar ? Vector3d::Zero() : Vector3d(n.cross(t1));
     };

@@ -68,6 +68,8 @@ const char* to_string(JointType type) {
       return "contact_disk";
     case JointType::kContactSpheres:
       return "contact_spheres";
+    case JointType::kContactDiskSphere:
+      return "contact_disk_sphere";
   }
   return "unknown";
 }
@@ -162,6 +164,16 @@ Joint contact_spheres(std::string n, BodyId other_body, const Vector3d& p_other,
   j.radius = radius;
   j.other_radius = other_radius;
   j.side = side;
+  j.restitution = restitution;
+  return j;
+}
+Joint contact_disk_sphere(std::string n, BodyId other_body, const Vector3d& p_other,
+                          double other_radius, BodyId body, const Frame& disk, double radius,
+                          double restitution) {
+  Joint j = make_joint(std::move(n), JointType::kContactDiskSphere, other_body, Frame::at(p_other),
+                       body, disk);
+  j.radius = radius;
+  j.other_radius = other_radius;
   j.restitution = restitution;
   return j;
 }
@@ -507,8 +519,7 @@ MultibodyModel Multibody::build() const {
                                   "' joins a planar body to a spatial one");
     }
     info.planar = p_planar || c_planar;
-    if (j.type == JointType::kContact || j.type == JointType::kContactDisk ||
-        j.type == JointType::kContactSpheres) {
+    if (is_contact(j.type)) {
       sb.add(detail::contact_constraint(j, P, C, info.planar, out.q0));
       info.constraints.push_back(k++);
       out.joints.push_back(std::move(info));
@@ -590,9 +601,7 @@ MultibodyModel Multibody::build() const {
     const std::string what = who + "friction at contact '" + cf.contact + "'";
     const auto j = std::find_if(d.joints.begin(), d.joints.end(),
                                 [&](const Joint& x) { return x.name == cf.contact; });
-    if (j == d.joints.end() ||
-        (j->type != JointType::kContact && j->type != JointType::kContactDisk &&
-         j->type != JointType::kContactSpheres))
+    if (j == d.joints.end() || !is_contact(j->type))
       throw std::invalid_argument(what + ": there is no contact of that name");
     const BodyRef P = detail::body_ref(out.bodies, j->parent);
     const BodyRef C = detail::body_ref(out.bodies, j->child);
@@ -605,8 +614,8 @@ MultibodyModel Multibody::build() const {
     // a point or sphere (or a planar model's disk, a circle) on a plane of the ground: the
     // contact point's own velocity; on a plane of a moving body, a spatial disk's rim point,
     // two spheres: the relative velocity of the material points there
-    const bool ground_plane = P.ground() && j->type != JointType::kContactSpheres &&
-                              (j->type == JointType::kContact || planar);
+    const bool ground_plane = P.ground() && (j->type == JointType::kContact ||
+                                             (planar && j->type == JointType::kContactDisk));
     spec.kinematics = ground_plane ? detail::contact_kinematics(*j, C, planar)
                                    : detail::relative_contact_kinematics(*j, P, C, planar, out.q0);
     sb.add(coulomb_friction(spec));

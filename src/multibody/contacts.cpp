@@ -30,6 +30,16 @@ Row contact_row(const Joint& j, bool planar) {
     r.sign = inside ? -1.0 : 1.0;
     return r;
   }
+  if (j.type == JointType::kContactDiskSphere) {
+    // g = sqrt(s² + m²) − r_P: a = c − o (the disk's centre from the sphere's), its axis on C
+    Row r;
+    r.kind = Row::kDiskSphere;
+    r.a = VecExpr::diff(0, j.frame_parent.p, 1, j.frame_child.p);
+    r.axis = VecExpr::body_vector(1, j.frame_child.R.col(2));
+    r.length = j.radius;
+    r.sphere = j.other_radius;
+    return r;
+  }
   // d = c − o (the contact's point, or the disk's centre, relative to the plane's point) and the
   // plane's normal n: F_P's z axis (spatial) or y axis (planar)
   Row r;
@@ -55,8 +65,9 @@ namespace ukdyn::mb::detail {
 Constraint contact_constraint(const Joint& j, const BodyRef& P, const BodyRef& C, bool planar,
                               const VectorXd& q0) {
   const std::string who = "ukdyn::mb::Multibody::build: contact '" + j.name + "'";
-  const bool disk = j.type == JointType::kContactDisk;
-  const bool spheres = j.type == JointType::kContactSpheres;
+  const bool disk_sphere = j.type == JointType::kContactDiskSphere;
+  const bool disk = j.type == JointType::kContactDisk || disk_sphere;
+  const bool spheres = j.type == JointType::kContactSpheres || disk_sphere;
   if (C.ground()) {
     throw std::invalid_argument(who + ": its body is the ground (a contact holds a body)");
   }
@@ -75,7 +86,14 @@ Constraint contact_constraint(const Joint& j, const BodyRef& P, const BodyRef& C
                                 " (inside: the other sphere's radius must be the larger)");
   }
   if (spheres && P.id == C.id) {
-    throw std::invalid_argument(who + ": both spheres are on one body (a contact is between two)");
+    throw std::invalid_argument(who + ": both " +
+                                (disk_sphere ? "the disk and the sphere" : "spheres") +
+                                " are on one body (a contact is between two)");
+  }
+  if (disk_sphere && planar) {
+    throw std::invalid_argument(who +
+                                ": a disk in a planar model is a circle: use a sphere contact "
+                                "(contact_spheres) with its radius");
   }
   if (!(j.restitution >= 0.0 && j.restitution <= 1.0)) {
     throw std::invalid_argument(who + ": the restitution must lie in [0, 1], got " +
@@ -126,6 +144,22 @@ Constraint contact_constraint(const Joint& j, const BodyRef& P, const BodyRef& C
           format_number(d.norm(), 6) + " > R = " + format_number(j.other_radius, 6) +
           "); place it inside (|c − o| <= R − r), or leave inside out for a sphere that stays "
           "outside");
+    }
+  }
+  if (row.kind == Row::kDiskSphere) {
+    // the sphere's centre on the disk's rim has no normal: refused at the start
+    const VectorXd v0 = VectorXd::Zero(q0.size());
+    VecKin e, k;
+    add_body_vector(C, q0, v0, j.frame_child.p, true, 1.0, e, nullptr, false);
+    add_body_vector(P, q0, v0, j.frame_parent.p, true, -1.0, e, nullptr, false);
+    add_body_vector(C, q0, v0, j.frame_child.R.col(2), false, 1.0, k, nullptr, false);
+    const DiskSphereGap d = disk_sphere_gap(e, k, j.radius, j.other_radius, false);
+    if (!(d.g + j.other_radius > 1e-12 * std::max({j.radius, e.x.norm(), 1e-300}))) {
+      throw std::invalid_argument(
+          who +
+          ": the sphere's centre lies on the disk's rim at the start: the contact has no "
+          "normal there; place the sphere apart (its gap, the distance from its centre to "
+          "the disk minus its radius, must be >= 0)");
     }
   }
   Constraint c(j.name, ConstraintKind::kHolonomic, 1,
@@ -225,17 +259,24 @@ ContactKinematics relative_contact_kinematics(const Joint& j, const BodyRef& P, 
                  t2P = planar ? Vector3d::Zero() : R.col(1).normalized();
   const Vector3d pP = j.frame_parent.p, pC = j.frame_child.p, kC = j.frame_child.R.col(2);
   const bool disk = j.type == JointType::kContactDisk && !planar;
+  const bool disk_sphere = j.type == JointType::kContactDiskSphere;
   const bool spheres = j.type == JointType::kContactSpheres;
   // (a sphere inside the other: n = −d/|d|, towards the centre o)
-  const double r = j.radius, side = j.side == SphereSide::kInside ? -1.0 : 1.0;
+  const double r = j.radius, r_P = j.other_radius;
+  const double side = j.side == SphereSide::kInside ? -1.0 : 1.0;
   // two spheres: n = ±d/|d| and t_1 = e × n/|e × n|, t_2 = n × t_1 from the world axis e least
   // aligned with n at the start (planar: t_1 = n × e_z); singular only where n passes along e
+  // (a disk and a sphere: n from disk_sphere_gap, the same tangents)
   Vector3d e = Vector3d::UnitZ();
-  if (spheres && !planar) {
-    const Vector3d d0 =
-        body_vector_generic<double>(C, q0, pC, true) - body_vector_generic<double>(P, q0, pP, true);
+  if ((spheres || disk_sphere) && !planar) {
+    VecKin d0, k0;
+    const VectorXd v0 = VectorXd::Zero(q0.size());
+    add_body_vector(C, q0, v0, pC, true, 1.0, d0, nullptr, false);
+    add_body_vector(P, q0, v0, pP, true, -1.0, d0, nullptr, false);
+    add_body_vector(C, q0, v0, kC, false, 1.0, k0, nullptr, false);
+    const Vector3d n0 = disk_sphere ? disk_sphere_gap(d0, k0, r, r_P, false).n : d0.x;
     Index axis = 0;
-    d0.cwiseAbs().minCoeff(&axis);
+    n0.cwiseAbs().minCoeff(&axis);
     e = Vector3d::Unit(axis);
   }
   // columns: the two bodies' coordinates, increasing; each body's first local column
@@ -247,23 +288,38 @@ ContactKinematics relative_contact_kinematics(const Joint& j, const BodyRef& P, 
   BodyRef Pl = P, Cl = C;
   Pl.local = p_first ? 0 : C.size();
   Cl.local = p_first ? P.size() : 0;
-  kin.evaluate = [Pl, Cl, nP, t1P, t2P, pP, pC, kC, e, r, side, planar, disk, spheres](
-                     const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd,
-                     double, ConstraintScratch*, Eigen::Ref<MatrixXd> J,
-                     Eigen::Ref<VectorXd> bias) {
+  kin.evaluate = [Pl, Cl, nP, t1P, t2P, pP, pC, kC, e, r, r_P, side, planar, disk, disk_sphere,
+                  spheres](const Eigen::Ref<const VectorXd>& q,
+                           const Eigen::Ref<const VectorXd>& qd, double, ConstraintScratch*,
+                           Eigen::Ref<MatrixXd> J, Eigen::Ref<VectorXd> bias) {
     // n, t_i (vectors of P), p (P's point), c (C's centre), k (the disk's axis): value, rate,
     // Jacobian and bias
     VecKin n, t1, t2, p, c, k;
     add_body_vector(Pl, q, qd, pP, true, 1.0, p);
     add_body_vector(Cl, q, qd, pC, true, 1.0, c);
-    if (disk) add_body_vector(Cl, q, qd, kC, false, 1.0, k);
-    if (spheres) {
-      // n = ±d/|d| and its rate; t_i from e (values and rates; their J and g are not needed)
-      const Vector3d d = c.x - p.x, dd = c.v - p.v;
-      const double len = d.norm();
-      const Vector3d u = d / len;
-      n.x = side * u;
-      n.v = side * (dd - u.dot(dd) * u) / len;
+    if (disk || disk_sphere) add_body_vector(Cl, q, qd, kC, false, 1.0, k);
+    DiskSphereGap ds;
+    if (disk_sphere) {
+      VecKin dk;  // d = c − p with its Jacobian and bias
+      dk.x = c.x - p.x;
+      dk.v = c.v - p.v;
+      dk.J = c.J - p.J;
+      dk.g = c.g - p.g;
+      ds = disk_sphere_gap(dk, k, r, r_P, true);
+    }
+    if (spheres || disk_sphere) {
+      // n = ±d/|d| (a disk: disk_sphere_gap's) and its rate; t_i from e (values and rates;
+      // their J and g are not needed)
+      if (disk_sphere) {
+        n.x = ds.n;
+        n.v = ds.n_rate;
+      } else {
+        const Vector3d d = c.x - p.x, dd = c.v - p.v;
+        const double len = d.norm();
+        const Vector3d u = d / len;
+        n.x = side * u;
+        n.v = side * (dd - u.dot(dd) * u) / len;
+      }
       if (planar) {
         t1.x = n.x.cross(Vector3d::UnitZ());
         t1.v = n.v.cross(Vector3d::UnitZ());
@@ -300,6 +356,11 @@ ContactKinematics relative_contact_kinematics(const Joint& j, const BodyRef& P, 
       sd = n.v.dot(k.x) + n.x.dot(k.v);
       disk_lowest_point(n.x, n.v, k.x, k.v, r, a, ad);
     }
+    if (disk_sphere) {
+      // the disk's point nearest the sphere's centre
+      a = ds.a;
+      ad = ds.a_rate;
+    }
     // v_rel = c' + ω_C × a − p' − ω_P × (d + a), its Jacobian and its rate at q'' = 0 (ω' = 0
     // there: planar θ'' = 0, rigid 2 G_v(u') u' = 0)
     const Vector3d arm = d + a;
@@ -315,7 +376,11 @@ ContactKinematics relative_contact_kinematics(const Joint& j, const BodyRef& P, 
     const Index cols = J.cols();
     Eigen::Matrix<double, 1, kMaxCols> g_q = n.x.transpose() * (c.J - p.J);
     bias[0] = n.x.dot(c.g - p.g) + n.v.dot(dd);
-    if (!spheres) {
+    if (disk_sphere) {
+      // g = sqrt(s² + m²) − r_P (disk_sphere_gap: g'' = A q'' − b)
+      g_q = ds.A;
+      bias[0] = -ds.b;
+    } else if (!spheres) {
       g_q += d.transpose() * n.J;
       bias[0] += n.g.dot(d) + n.v.dot(dd);
     }

@@ -204,16 +204,41 @@ struct Offset {
 ///             L = R − r: a sphere of radius r inside one of radius R), a true distance (unlike
 ///             kDistance's), so that the gap and its rate are in length and speed units wherever
 ///             the spheres are
+///  kDiskSphere  phi = sqrt(s² + m²) − sphere: a thin disk's gap to a sphere (a = the disk's
+///             centre − the sphere's, axis = the disk's axis, L = its radius, s = axis·a,
+///             m = max(|a − s axis| − L, 0); disk_sphere_gap())
 struct Row {
-  enum Kind { kDot, kDistance, kLinear, kDisk, kNorm } kind = kDot;
+  enum Kind { kDot, kDistance, kLinear, kDisk, kNorm, kDiskSphere } kind = kDot;
   VecExpr a, b;
-  VecExpr axis;  // kDisk: the disk's axis (a body vector)
+  VecExpr axis;  // kDisk, kDiskSphere: the disk's axis (a body vector)
   double length = 0.0;
   double sign = 1.0;                            // kNorm: +1 (outside) or −1 (inside)
+  double sphere = 0.0;                          // kDiskSphere: the sphere's radius
   std::vector<std::pair<Index, double>> terms;  // kLinear: (global coordinate, coefficient)
   std::vector<Index> local;                     // kLinear: local column of each term
   Offset c;
 };
+
+/// The gap of a thin disk and a sphere (Row::kDiskSphere, mb::contact_disk_sphere()) from
+/// e = c − o (the disk's centre from the sphere's) and the disk's unit axis k (values, rates,
+/// and, when second_order, Jacobians on the local columns and biases e'' = J q'' + g):
+/// s = k·e, w = e − s k, ρ = |w|, m = max(ρ − radius, 0), E = sqrt(s² + m²);
+///   g = E − sphere,  g' = (s s' + m m')/E,
+///   g'' = (s s'' + m m'')/E + (m s' − s m')²/E³ = A q'' − b,
+/// with m' = ŵ·w', m'' = ŵ·w'' + (|w'|² − m'²)/ρ on the rim (ŵ = w/ρ), 0 on the face. Also the
+/// contact point's offset from the disk's centre, a = −radius ŵ (rim) or −w (face), the normal
+/// n = (e + a)/E (from the sphere to the disk) and their rates. Non-finite where E = 0 (the
+/// sphere's centre on the rim). Cost O(columns).
+struct DiskSphereGap {
+  double g = 0.0, rate = 0.0;  ///< g, g'
+  Eigen::Matrix<double, 1, kMaxCols> A =
+      Eigen::Matrix<double, 1, kMaxCols>::Zero();            ///< (second_order only)
+  double b = 0.0;                                            ///< (second_order only)
+  Vector3d a = Vector3d::Zero(), a_rate = Vector3d::Zero();  ///< the contact point's offset
+  Vector3d n = Vector3d::Zero(), n_rate = Vector3d::Zero();  ///< the unit normal
+};
+DiskSphereGap disk_sphere_gap(const VecKin& e, const VecKin& k, double radius, double sphere,
+                              bool second_order);
 
 /// Largest number of rows of a joint model (a spatial weld: 6).
 inline constexpr int kMaxRows = 6;
@@ -462,6 +487,18 @@ void joint_phi_generic(const JointModel& jm, const V& q, const S& t, double t0, 
         const Vec3<S> ax = vec_expr_generic<S>(jm.slots(), row.axis, q);
         const S s = n.dot(ax);
         out = a.dot(n) - row.length * sqrt(1.0 - s * s);
+        break;
+      }
+      case Row::kDiskSphere: {
+        // sqrt(s² + m²) − sphere, m = max(|a − s axis| − L, 0)
+        using std::sqrt;
+        const Vec3<S> a = vec_expr_generic<S>(jm.slots(), row.a, q);
+        const Vec3<S> ax = vec_expr_generic<S>(jm.slots(), row.axis, q);
+        const S s = a.dot(ax);
+        const Vec3<S> w = a - s * ax;
+        const S rho = sqrt(w.dot(w));
+        const S m = value_of(rho) > row.length ? S(rho - row.length) : S(0.0);
+        out = sqrt(s * s + m * m) - row.sphere;
         break;
       }
     }

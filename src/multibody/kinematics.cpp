@@ -349,6 +349,14 @@ void JointModel::general_form(const Eigen::Ref<const VectorXd>& q,
       case Row::kDisk:
         disk_form(row, i, q, qd, cache, ka, kb, A, b);
         break;
+      case Row::kDiskSphere: {
+        eval(row.a, q, qd, cache, ka);
+        eval(row.axis, q, qd, cache, kb);
+        const DiskSphereGap d = disk_sphere_gap(ka, kb, row.length, row.sphere, true);
+        A.row(i) = d.A.leftCols(k);
+        b[i] = d.b;
+        break;
+      }
     }
   }
 }
@@ -375,6 +383,48 @@ void JointModel::disk_form(const Row& row, Index i, const Eigen::Ref<const Vecto
              f * (ku.x.transpose() * kn.J.leftCols(k) + kn.x.transpose() * ku.J.leftCols(k));
   b[i] = -(kd.g.dot(kn.x) + 2.0 * kd.v.dot(kn.v) + kd.x.dot(kn.g)) -
          f * (kn.g.dot(ku.x) + 2.0 * kn.v.dot(ku.v) + kn.x.dot(ku.g)) - r * sd * sd / (h * h * h);
+}
+
+DiskSphereGap disk_sphere_gap(const VecKin& e, const VecKin& k, double radius, double sphere,
+                              bool second_order) {
+  DiskSphereGap out;
+  const double s = k.x.dot(e.x), sd = k.v.dot(e.x) + k.x.dot(e.v);
+  const Vector3d w = e.x - s * k.x, wd = e.v - sd * k.x - s * k.v;
+  const double rho = w.norm();
+  const bool rim = rho > radius;
+  // ŵ, m = ρ − radius and m' = ŵ·w' on the rim; m = m' = 0 on the face
+  const Vector3d u = rim ? Vector3d(w / rho) : Vector3d::Zero();
+  const double m = rim ? rho - radius : 0.0, md = rim ? u.dot(wd) : 0.0;
+  const double E = std::sqrt(s * s + m * m);
+  out.g = E - sphere;
+  out.rate = (s * sd + m * md) / E;
+  out.a = rim ? Vector3d(-radius * u) : Vector3d(-w);
+  out.a_rate = rim ? Vector3d(-radius * (wd - md * u) / rho) : Vector3d(-wd);
+  const Vector3d f = e.x + out.a, fd = e.v + out.a_rate;
+  out.n = f / E;
+  out.n_rate = (fd - out.n.dot(fd) * out.n) / E;
+  if (!second_order) return out;
+  // s'' = A_s q'' − b_s (the dot row of k·e)
+  const Eigen::Matrix<double, 1, kMaxCols> As = k.x.transpose() * e.J + e.x.transpose() * k.J;
+  const double bs = -(e.g.dot(k.x) + 2.0 * e.v.dot(k.v) + e.x.dot(k.g));
+  out.A = s * As;
+  out.b = s * bs;
+  if (rim) {
+    // m'' = ŵ·w'' + (|w'|² − m'²)/ρ, w'' = e'' − s'' k − 2 s' k' − s k'':
+    //   A_m = ŵᵀ (J_e − s J_k) − (ŵ·k) A_s,
+    //   b_m = −(ŵ·(g_e − 2 s' k' − s g_k) + (ŵ·k) b_s + (|w'|² − m'²)/ρ)
+    // (ŵ·k = 0 for a unit axis; kept, so that A and b are the derivatives of g for any q)
+    const double uk = u.dot(k.x);
+    const Eigen::Matrix<double, 1, kMaxCols> Am = u.transpose() * (e.J - s * k.J) - uk * As;
+    const double bm =
+        -(u.dot(e.g - 2.0 * sd * k.v - s * k.g) + uk * bs + (wd.squaredNorm() - md * md) / rho);
+    out.A += m * Am;
+    out.b += m * bm;
+  }
+  const double c = m * sd - s * md;
+  out.A /= E;
+  out.b = out.b / E - c * c / (E * E * E);
+  return out;
 }
 
 void JointModel::violation(const Eigen::Ref<const VectorXd>& q,
@@ -458,6 +508,14 @@ void JointModel::general_violation(const Eigen::Ref<const VectorXd>& q,
         position[i] = ka.x.dot(kb.x) - row.length * h;
         velocity[i] = ka.v.dot(kb.x) + ka.x.dot(kb.v) +
                       row.length * s * (kb.v.dot(ku.x) + kb.x.dot(ku.v)) / h;
+        break;
+      }
+      case Row::kDiskSphere: {
+        eval(row.a, q, qd, cache, ka, false);
+        eval(row.axis, q, qd, cache, kb, false);
+        const DiskSphereGap d = disk_sphere_gap(ka, kb, row.length, row.sphere, false);
+        position[i] = d.g;
+        velocity[i] = d.rate;
         break;
       }
     }

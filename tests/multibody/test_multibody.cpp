@@ -109,11 +109,14 @@ TEST(MultibodyJoints, SpatialJointsMatchAutomaticDifferentiation) {
   b.add_joint(mb::spherical("sph_ground", kGround, {0.5, 0.5, 0.5}, B, {0.1, 0.2, 0.3}));
   b.add_joint(mb::spherical("sph_particle", A, {0.1, 0.0, 0.0}, P, {0, 0, 0}));
   b.add_joint(mb::point_on_plane("pop_particle", kGround, fa, P, {0, 0, 0}));
+  // a disk's contact with a sphere, beyond the disk's rim (radius 0.05) and over its face (5)
+  b.add_joint(mb::contact_disk_sphere("dsr", A, {0.1, 0.1, 0.1}, 0.02, B, fb, 0.05));
+  b.add_joint(mb::contact_disk_sphere("dsf", A, {0.1, 0.1, 0.1}, 0.02, B, fb, 5.0));
   const MultibodyModel m = b.build();
   VectorXd q = m.q0, qd = m.qd0;
   q.segment<4>(3) *= 1.01;
   q.segment<4>(10) *= 0.98;
-  expect_joints_match_autodiff(m, q, qd, 0.37, 14);  // 13 joints + 1 drive
+  expect_joints_match_autodiff(m, q, qd, 0.37, 16);  // 13 joints + 1 drive + 2 contacts
 }
 
 TEST(MultibodyJoints, PlanarJointsAndGearMatchAutomaticDifferentiation) {

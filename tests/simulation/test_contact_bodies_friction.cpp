@@ -412,8 +412,9 @@ TEST(ContactBodiesFriction, BallOnADrivenPlatformRollsFromTheClosedFormInstant) 
 // −T' q' (central differences of T along q'), at a generic state of two free bodies.
 TEST(ContactBodiesFriction, StickRowsOnAMovingPlaneAreTheRelativeVelocityAndTheirBiasItsRate) {
   const Vector3d kC = Vector3d(0.2, 1.0, -0.3).normalized();
-  for (const int shape : {0, 1, 2}) {  // sphere, disk (on the plane), sphere on a sphere
-    const bool disk = shape == 1, spheres = shape == 2;
+  // sphere, disk (on the plane), sphere on a sphere, disk on a sphere
+  for (const int shape : {0, 1, 2, 3}) {
+    const bool disk = shape == 1, spheres = shape == 2, disk_sphere = shape == 3;
     const Model m = parse_model(
         std::string(R"(
 bodies:
@@ -422,10 +423,12 @@ bodies:
 contacts:
   - {name: c, body: ball, radius: 0.1, point: [0.02, -0.01, 0.03],
      )") +
-        (spheres ? "shape: sphere, sphere: {body: deck, point: [0.1, 0.2, 0.05], radius: 0.3}}"
-                 : std::string("plane: {body: deck, point: [0.1, 0.2, 0.05], normal: [0.3, "
-                               "-0.2, 1]}, ") +
-                       (disk ? "shape: disk, axis: [0.2, 1, -0.3]}" : "shape: sphere}")) +
+        (disk_sphere ? "shape: disk, axis: [0.2, 1, -0.3], sphere: {body: deck, point: [0.1, "
+                       "0.2, 0.05], radius: 0.3}}"
+         : spheres   ? "shape: sphere, sphere: {body: deck, point: [0.1, 0.2, 0.05], radius: 0.3}}"
+                     : std::string("plane: {body: deck, point: [0.1, 0.2, 0.05], normal: [0.3, "
+                                     "-0.2, 1]}, ") +
+                         (disk ? "shape: disk, axis: [0.2, 1, -0.3]}" : "shape: sphere}")) +
         R"(
 nonideal:
   - {friction: coulomb, constraint: c, mu: 0.3}
@@ -455,10 +458,16 @@ nonideal:
     const Matrix3d RP = uP.toRotationMatrix(), RC = uC.toRotationMatrix();
     const Vector3d c = xC + RC * Vector3d(0.02, -0.01, 0.03), k = RC * kC;
     const Vector3d o = xP + RP * Vector3d(0.1, 0.2, 0.05);
-    const Vector3d nW = spheres ? Vector3d((c - o).normalized())
-                                : Vector3d(RP * Vector3d(0.3, -0.2, 1.0).normalized());
-    const Vector3d a =
-        disk ? Vector3d(-0.1 * (nW - nW.dot(k) * k).normalized()) : Vector3d(-0.1 * nW);
+    Vector3d nW = spheres ? Vector3d((c - o).normalized())
+                          : Vector3d(RP * Vector3d(0.3, -0.2, 1.0).normalized());
+    Vector3d a = disk ? Vector3d(-0.1 * (nW - nW.dot(k) * k).normalized()) : Vector3d(-0.1 * nW);
+    if (disk_sphere) {
+      // the disk's point nearest o: −0.1 w/|w| beyond the rim, −w on the face
+      // (w = d − (k·d) k, d = c − o), the normal from o to it
+      const Vector3d d = c - o, w = d - k.dot(d) * k;
+      a = w.norm() > 0.1 ? Vector3d(-0.1 * w.normalized()) : Vector3d(-w);
+      nW = (d + a).normalized();
+    }
     const Vector3d x = c + a;
     const Vector3d v_rel = (vC + wC.cross(x - xC)) - (vP + wP.cross(x - xP));
     // the tangents t_i: minus the rows on the deck's translation, unit, orthogonal to n

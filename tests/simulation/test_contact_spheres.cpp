@@ -213,26 +213,7 @@ TEST(ContactSpheres, ParticleSlidingOffAFixedSphereLeavesAtTwoThirdsOfTheStartsC
   // the release angle and time by the test's own RK4 of θ'' = (g/ρ) sin θ (step 1e-5 s), the
   // crossing of 3 cos θ − 2 cos θ₀ = 0 interpolated linearly within the step
   const double c_star = 2.0 / 3.0 * std::cos(th0);
-  double th = th0, w = 0.0, t = 0.0;
-  const double h = 1e-5;
-  const auto f = [&](double x) { return kG / rho * std::sin(x); };
-  double t_star = -1.0;
-  while (t < 2.0) {
-    const double k1 = f(th), l1 = w;
-    const double k2 = f(th + 0.5 * h * l1), l2 = w + 0.5 * h * k1;
-    const double k3 = f(th + 0.5 * h * l2), l3 = w + 0.5 * h * k2;
-    const double k4 = f(th + h * l3), l4 = w + h * k3;
-    const double th1 = th + h / 6 * (l1 + 2 * l2 + 2 * l3 + l4);
-    const double w1 = w + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4);
-    const double s0 = std::cos(th) - c_star, s1 = std::cos(th1) - c_star;
-    if (s0 > 0 && s1 <= 0) {
-      t_star = t + h * s0 / (s0 - s1);
-      break;
-    }
-    th = th1;
-    w = w1;
-    t += h;
-  }
+  const double t_star = testing::pendulum_time_to_cos(kG / rho, th0, c_star, 2.0, 1e-5);
   ASSERT_GT(t_star, 0.0);
   EXPECT_NEAR(releases[0].t, t_star, 1e-8);
   // after the release: free flight from the release point with the release velocity
@@ -361,8 +342,8 @@ TEST(ContactSpheres, BadSphereContactsGetAClearErrorWithItsPlace) {
   expect(
       "{name: c, body: a, shape: sphere, radius: 0.1, sphere: {body: b, radius: 0.1}, plane: {}}",
       "5:60", "contact 'c': a contact is with a plane or with a sphere, not both");
-  expect("{name: c, body: a, shape: disk, radius: 0.1, sphere: {body: b, radius: 0.1}}", "5:58",
-         "contact 'c': a disk against a sphere is not supported");
+  expect("{name: c, body: a, shape: box, size: [0.1, 0.1, 0.1], sphere: {body: b, radius: 0.1}}",
+         "5:67", "contact 'c': a box against a sphere is not supported");
   expect("{name: c, body: a, shape: sphere, radius: 0.1, sphere: {body: a, radius: 0.1}}", "5:67",
          "contact 'c' sphere: the sphere is on the contact's own body");
   expect("{name: c, body: a, shape: sphere, radius: 0.1, sphere: {body: b}}", "5:60",

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // Test support: reading a run with unilateral contacts — its contact events of one kind at one
-// constraint, and the sample at a time the run was asked to output; a gap row's g, g', A and b,
+// constraint, and the sample at a time the run was asked to output; a pendulum's time to an
+// angle by RK4; a gap row's g, g', A and b,
 // and A and b checked by finite differences of g; a model file's error with its place.
 #pragma once
 
@@ -89,6 +90,27 @@ inline void expect_bounces(const std::vector<ContactEvent>& impacts, double e, d
         << "impact " << k;
     tk += 2.0 * e * ek * v0 / g;
   }
+}
+
+// The time at which θ'' = k sin θ, from rest at θ₀, brings cos θ down to c: the test's own RK4
+// (step h), the crossing interpolated linearly within the step; −1 when not before t_max
+inline double pendulum_time_to_cos(double k, double th0, double c, double t_max, double h) {
+  double th = th0, w = 0.0, t = 0.0;
+  const auto f = [k](double x) { return k * std::sin(x); };
+  while (t < t_max) {
+    const double k1 = f(th), l1 = w;
+    const double k2 = f(th + 0.5 * h * l1), l2 = w + 0.5 * h * k1;
+    const double k3 = f(th + 0.5 * h * l2), l3 = w + 0.5 * h * k2;
+    const double k4 = f(th + h * l3), l4 = w + h * k3;
+    const double th1 = th + h / 6 * (l1 + 2 * l2 + 2 * l3 + l4);
+    const double w1 = w + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4);
+    const double s0 = std::cos(th) - c, s1 = std::cos(th1) - c;
+    if (s0 > 0 && s1 <= 0) return t + h * s0 / (s0 - s1);
+    th = th1;
+    w = w1;
+    t += h;
+  }
+  return -1.0;
 }
 
 // g and g' of constraint k at (q, q')

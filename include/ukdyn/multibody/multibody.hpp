@@ -124,7 +124,18 @@ enum class JointType {
                     ///< g = |c_C − c_P| − (radius + other_radius) >= 0, or inside it
                     ///< (SphereSide::kInside), g = (other_radius − radius) − |c_C − c_P| >= 0
                     ///< (1 row; see contact_spheres())
+  kContactDiskSphere,  ///< unilateral: a thin disk (child) outside a sphere of the parent,
+                       ///< g = sqrt(s² + m²) − other_radius >= 0, s and m the sphere's centre's
+                       ///< offsets from the disk along its axis and beyond its rim
+                       ///< (1 row; see contact_disk_sphere())
 };
+
+/// True for the unilateral contacts (kContact, kContactDisk, kContactSpheres,
+/// kContactDiskSphere). Cost O(1).
+inline bool is_contact(JointType type) {
+  return type == JointType::kContact || type == JointType::kContactDisk ||
+         type == JointType::kContactSpheres || type == JointType::kContactDiskSphere;
+}
 
 /// Which side of the other sphere a kContactSpheres contact keeps its sphere on: outside it (two
 /// balls) or inside it (a ball in a spherical bowl or shell, a bead inside a ring).
@@ -138,15 +149,15 @@ const char* to_string(JointType type);
 
 /// A joint between a parent and a child body. Use the factory functions below.
 struct Joint {
-  std::string name;                        ///< unique; names its constraints
-  JointType type = JointType::kRevolute;   ///< what it constrains (its rows: JointType)
-  BodyId parent = kGround;                 ///< the parent body P (kGround: the world)
-  BodyId child = kGround;                  ///< the child body C (kGround: the world)
-  Frame frame_parent;                      ///< F_P on the parent (body coordinates)
-  Frame frame_child;                       ///< F_C on the child (body coordinates)
-  double length = 0.0;                     ///< kDistance: the distance (m), > 0
-  double radius = 0.0;                     ///< rolling: the radius (m), > 0
-  double other_radius = 0.0;               ///< kContactSpheres: the parent's sphere's radius
+  std::string name;                       ///< unique; names its constraints
+  JointType type = JointType::kRevolute;  ///< what it constrains (its rows: JointType)
+  BodyId parent = kGround;                ///< the parent body P (kGround: the world)
+  BodyId child = kGround;                 ///< the child body C (kGround: the world)
+  Frame frame_parent;                     ///< F_P on the parent (body coordinates)
+  Frame frame_child;                      ///< F_C on the child (body coordinates)
+  double length = 0.0;                    ///< kDistance: the distance (m), > 0
+  double radius = 0.0;                    ///< rolling: the radius (m), > 0
+  double other_radius = 0.0;  ///< kContactSpheres, kContactDiskSphere: the parent's sphere's radius
   SphereSide side = SphereSide::kOutside;  ///< kContactSpheres: outside or inside that sphere
   std::string gear_a;                      ///< kGear: name of the first revolute joint (a)
   std::string gear_b;                      ///< kGear: name of the second revolute joint (b)
@@ -158,10 +169,10 @@ struct Joint {
   /// torque or force (drive_effort).
   MotionFn drive;
   JointFriction friction;  ///< adds a non-ideal force "<name>.friction"
-  /// kContact, kContactDisk, kContactSpheres: Newton's (or Poisson's) coefficient of
-  /// restitution e in [0, 1].
+  /// The contacts (is_contact()): Newton's (or Poisson's) coefficient of restitution e in
+  /// [0, 1].
   double restitution = 0.0;
-  /// kContact, kContactDisk, kContactSpheres: the law of the impacts (contact_restitution.hpp).
+  /// The contacts (is_contact()): the law of the impacts (contact_restitution.hpp).
   RestitutionLaw restitution_law = RestitutionLaw::kNewton;
 };
 
@@ -255,6 +266,29 @@ Joint contact_disk(std::string name, BodyId plane_body, const Frame& plane, Body
 Joint contact_spheres(std::string name, BodyId other_body, const Vector3d& p_other,
                       double other_radius, BodyId body, const Vector3d& p_body, double radius,
                       double restitution = 0.0, SphereSide side = SphereSide::kOutside);
+/// A unilateral contact of a thin disk with a sphere (JointType::kContactDiskSphere; spatial
+/// models; docs/contact.md, "Contacts on bodies"): the disk of `radius` centred at disk.p on
+/// `body`, axis k = disk's z axis (body coordinates), stays outside the sphere of
+/// `other_radius` (>= 0: 0 is a point) centred at p_other on `other_body` (kGround: a fixed
+/// sphere). With e = c_W − o_W (the disk's centre from the sphere's), its offset along the axis
+/// s = k_W·e, the in-plane part w = e − s k_W, ρ = |w| and m = max(ρ − radius, 0), the
+/// distance from the sphere's centre to the disk (its face where m = 0, its rim beyond) is
+/// sqrt(s² + m²), so the gap row is
+///   g = sqrt(s² + m²) − other_radius >= 0,
+/// the normal n = (s k_W + m w/ρ)/sqrt(s² + m²) (from the sphere to the disk), the contact
+/// point the disk's point nearest the sphere's centre. In closed form:
+///   A = (s A_s + m A_ρ)/E,  b = (s b_s + m b_ρ)/E − (m s' − s m')²/E³,  E = sqrt(s² + m²),
+/// with A_s, b_s the dot row of s = k·e and A_ρ = ŵᵀ (J_e − s J_k),
+/// b_ρ = −(ŵ·(g_e − 2 s' k' − s g_k) + (|w'|² − ρ'²)/ρ) (ŵ = w/ρ; zero on the face; the terms
+/// in ŵ·k, zero for a unit axis, are kept in the code). The row is
+/// C¹ across the rim (m = 0 there on both sides). O(columns) for A and b, about twice the two
+/// spheres' row. Needs a rigid disk body; build() refuses a sphere's centre on the rim
+/// (E = 0: no normal) at the initial pose, and in a run the row's entries become non-finite
+/// there, which stops the run (never a wrong number). A planar model's disk is a circle: use
+/// contact_spheres() with its radius.
+Joint contact_disk_sphere(std::string name, BodyId other_body, const Vector3d& p_other,
+                          double other_radius, BodyId body, const Frame& disk, double radius,
+                          double restitution = 0.0);
 /// @}
 
 /// Applied force at a body point and torque (world frame W), from (q, q', t).
