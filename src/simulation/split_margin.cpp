@@ -121,13 +121,25 @@ bool split_space(const System& sys, Workspace& ws, const Eigen::VectorXd& Lambda
   }
   Eigen::VectorXd lambda0(ma);
   for (Index i = 0; i < ma; ++i) lambda0[i] = Lambda[row_of[std::size_t(i)]];
-  // Z: the left null space of the active rows
-  const Eigen::JacobiSVD<Eigen::MatrixXd> svd(rows_A, Eigen::ComputeFullU);
+  // Z: the left null space of the active rows, Z = D Z̃ with Z̃ that of D A C, the rows and then
+  // the columns scaled to norms in [1, 2) by powers of two (exact): a model's rows in mm, g, ms
+  // span 1 (a normal row's translation) to 1e6 (a stick row's κ times its lever arm in a
+  // quaternion's column), and the null space of A itself carried ~1e-10 of roundoff (the
+  // breakaway of a table on four legs located 1.8e-10 s late; 2e-12 in SI units)
+  Eigen::VectorXd row_unit = Eigen::VectorXd::Ones(ma);
+  Eigen::MatrixXd scaled = rows_A;
+  auto unit = [](double norm) { return norm > 0.0 ? std::ldexp(1.0, -std::ilogb(norm)) : 1.0; };
+  for (Index i = 0; i < ma; ++i) {
+    row_unit[i] = unit(scaled.row(i).norm());
+    scaled.row(i) *= row_unit[i];
+  }
+  for (Index j = 0; j < n; ++j) scaled.col(j) *= unit(scaled.col(j).norm());
+  const Eigen::JacobiSVD<Eigen::MatrixXd> svd(scaled, Eigen::ComputeFullU);
   const auto& sigma = svd.singularValues();
   Index rank = 0;
   while (rank < sigma.size() && sigma[rank] > 1e-10 * sigma[0]) ++rank;
   if (rank == ma) return false;
-  null = svd.matrixU().rightCols(ma - rank);
+  null = row_unit.asDiagonal() * svd.matrixU().rightCols(ma - rank);
   // N_i = g·Λ of contact c (the sign of Λ at the evaluation: N is |·|) into g; false where N is
   // not linear in Λ (a coordinate-path normal constraint of several rows)
   auto normal_form = [&](std::size_t c, Eigen::VectorXd& g) {

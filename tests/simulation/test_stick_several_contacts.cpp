@@ -490,35 +490,37 @@ TEST(StickSeveralContacts, TableUnderARampBreaksAwayAtMuStaticMgInAnyUnits) {
     std::vector<double> scaled;
     for (double t : times) scaled.push_back(t * u.tf);
     const Trajectory tr = run_at(table(u.line, u.lf, u.mf, u.tf, 0.0, 0.0, k, -0.4), scaled);
-    // (the breakaway's resolution: 1e-9 s in SI, 1e-8 s in mm, g, ms — since h16/flatbox all
-    // four legs are closed at the start, the least-norm split of m g instead of the LCP's vertex
-    // on three, and the split search's multipliers of their 4 normal and 8 stick rows, rows of
-    // κ = 100 with lever arms of 500 mm, carry ~1e-8 of roundoff there: t_b 6e-9 s early)
-    const bool si = u.lf == 1.0;
-    const double resolution = si ? 1e-9 : 1e-8;
+    // the breakaway: all four legs slip at t_b (measured: 2.0e-12 s late in SI, 2.2e-12 in mm,
+    // g, ms, where the split space's null space of the rows taken unscaled put it 1.8e-10 s late
+    // — 6e-9 s early with h16's steps; main before h15: 1.4e-7 and 5.3e-7 early)
+    int slips = 0;
+    for (const ContactEvent& ev : tr.stats.contact_events) {
+      if (ev.kind != ContactEvent::Kind::kSlip) continue;
+      EXPECT_NEAR(ev.t / u.tf, t_b, 1e-11) << ev.friction;
+      ++slips;
+    }
+    EXPECT_EQ(slips, 4);
     for (std::size_t i = 0; i < tr.t.size(); ++i) {
       const double t = tr.t[i] / u.tf, x = at(tr, tr.q, "table.x", i) / u.lf,
                    v = at(tr, tr.qd, "table.x", i) * u.tf / u.lf;
-      EXPECT_NEAR(at(tr, tr.qd, "table.y", i) * u.tf / u.lf, 0.0, si ? 1e-12 : 1e-10)
-          << "t = " << t;
-      if (si) {
+      EXPECT_NEAR(at(tr, tr.qd, "table.y", i) * u.tf / u.lf, 0.0, 1e-12) << "t = " << t;
+      if (u.lf == 1.0) {
         si_x.push_back(x);
         si_v.push_back(v);
-      } else if (i < si_x.size() && std::abs(t - t_b) > resolution) {
-        // the same motion as in SI (to 1e-9 of its size at 1.5 s: 1.7 m/s, 0.5 m; 5e-8 in mm)
-        EXPECT_NEAR(x, si_x[i], 5e-8 * 0.5) << "t = " << t;
-        EXPECT_NEAR(v, si_v[i], 5e-8 * 1.7) << "t = " << t;
+      } else if (i < si_x.size()) {
+        // the same motion as in SI (to 1e-9 of its size at 1.5 s: 1.7 m/s, 0.5 m)
+        EXPECT_NEAR(x, si_x[i], 1e-9 * 0.5) << "t = " << t;
+        EXPECT_NEAR(v, si_v[i], 1e-9 * 1.7) << "t = " << t;
       }
-      if (std::abs(t - t_b) <= resolution && !si) continue;
       if (t < t_b) {
         EXPECT_NEAR(v, 0.0, 1e-12) << "t = " << t;
       } else if (t < t_b + 1e-6) {
         EXPECT_GT(v, 0.5 * b * (t - t_b)) << "t = " << t;
         EXPECT_LT(v, 1.5 * b * (t - t_b)) << "t = " << t;
       } else {
-        // t_b from x' (measured: 2e-12 in SI, 6e-9 in mm, g, ms; main 1.4e-7 and 5.3e-7 early)
+        // t_b from x' as well (to the integration's accuracy)
         const double tau = 2 * v / (b + std::sqrt(b * b + 4 * c * v));
-        EXPECT_NEAR(t - tau, t_b, resolution * t_b) << "t = " << t;
+        EXPECT_NEAR(t - tau, t_b, 1e-9 * t_b) << "t = " << t;
       }
     }
   }
