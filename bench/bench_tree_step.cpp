@@ -23,6 +23,7 @@
 //                                          6-D pose and a posture row) per "step"
 //       panda_control_rk4                  simulate_controlled(), RK4, default settings
 //       load_urdf100                       STEPS loads of a generated 100-link URDF
+//       load_chain4000                     STEPS loads of a 4000-link chain (linear: u20 03)
 //   bench_tree_step --check            the accuracy of each comparison (the same motion?)
 #include <chrono>
 #include <cmath>
@@ -359,8 +360,27 @@ Case controlled_rk4_case() {
           [last] { return std::to_string(*last); }};
 }
 
-Case load_case() {
-  const std::string path = write_urdf100();
+// a chain of n links hanging from a fixed base (u20 03: its load was O(n³) in the subtree-mass
+// check, 50 s for 4000 links)
+std::string write_chain(int n) {
+  std::ostringstream x;
+  x << "<?xml version=\"1.0\"?>\n<robot name=\"chain\">\n<link name=\"l0\"/>\n";
+  for (int i = 1; i <= n; ++i) {
+    x << "<link name=\"l" << i << "\"><inertial><origin xyz=\"0 0 -0.05\"/><mass value=\"0.01\"/>"
+      << "<inertia ixx=\"1e-5\" ixy=\"0\" ixz=\"0\" iyy=\"1e-5\" iyz=\"0\" izz=\"1e-5\"/>"
+      << "</inertial></link>\n<joint name=\"j" << i << "\" type=\"continuous\"><parent link=\"l"
+      << i - 1 << "\"/><child link=\"l" << i << "\"/><origin xyz=\"0 0 -0.1\"/>"
+      << "<axis xyz=\"0 1 0\"/></joint>\n";
+  }
+  x << "</robot>\n";
+  const auto path =
+      std::filesystem::temp_directory_path() / ("ukdyn_bench_chain" + std::to_string(n) + ".urdf");
+  std::ofstream(path) << x.str();
+  return path.string();
+}
+
+Case load_case(bool chain = false) {
+  const std::string path = chain ? write_chain(4000) : write_urdf100();
   auto links = std::make_shared<Index>(0);
   return {[path, links](long loads) {
             for (long i = 0; i < loads; ++i) *links = load_urdf(path).link_count();
@@ -433,6 +453,7 @@ std::map<std::string, std::function<Case()>> cases() {
       {"panda_control", [] { return control_case(true); }},
       {"panda_control_rk4", [] { return controlled_rk4_case(); }},
       {"load_urdf100", [] { return load_case(); }},
+      {"load_chain4000", [] { return load_case(true); }},
   };
 #ifdef UKDYN_BENCH_MUJOCO
   c["panda_mujoco"] = [] { return mujoco_case(panda()); };
@@ -495,7 +516,8 @@ namespace {
 
 void register_benchmarks() {
   for (const auto& [name, make] : ukdyn::tree::cases()) {
-    const bool one = name == "load_urdf100" || name == "panda_fd" || name == "panda_control";
+    const bool one = name == "load_urdf100" || name == "load_chain4000" || name == "panda_fd" ||
+                     name == "panda_control";
     const long steps = one ? 1 : 100;
     benchmark::RegisterBenchmark(name.c_str(), [factory = make, steps](benchmark::State& state) {
       const ukdyn::tree::Case c = factory();

@@ -154,6 +154,7 @@ Expr Reader::expression(const YAML::Node& node, const std::string& what, bool in
                                                                      : "infinity)"),
          "write a finite number or an expression of the parameters");
   }
+  if (!renamed_.empty()) refuse_renamed(node, what);
   Expr e = 0;
   try {
     e = set_->parse(node.Scalar());

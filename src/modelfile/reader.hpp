@@ -470,6 +470,11 @@ class Reader {
   const GivenTables* given_tables_ = nullptr;  // the caller's tables (or none)
   std::map<std::string, double> parameters_;
   std::vector<std::string> coordinates_, velocities_;
+  // a robot's joints whose URDF names are not identifiers, (name, identifier): "hip-1" is
+  // written hip_1 in expressions (read_robot); an expression that holds the name as written
+  // is refused (refuse_renamed), as it would read "hip - 1"
+  std::vector<std::pair<std::string, std::string>> renamed_;
+  void refuse_renamed(const YAML::Node& node, const std::string& what);
   ModelPositions positions_;  // where the file gives what a run may refuse (Model::positions)
   // initial: project: {keep: [...]}: the node, and per coordinate whether its position and its
   // velocity are kept (empty without keep)

@@ -20,6 +20,7 @@
 #include <algorithm>
 #include <cctype>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <set>
 #include <stdexcept>
@@ -119,9 +120,34 @@ Model Reader::read_robot(const YAML::Node& root) {
     try {
       return tree::load_urdf(path.string());
     } catch (const std::invalid_argument& e) {
-      // a URDF given alone has no line of ours to point at; urdfdom gives none
-      if (alone) throw ModelError(path.string(), 0, 0, urdf_message(e));
-      fail(u, urdf_message(e), "URDF errors name the link or joint (urdfdom reports no lines)");
+      const std::string m = urdf_message(e);  // "<path>[:line:column]: what"
+      if (alone) {
+        // a URDF given alone: the error is the file's own, at the element when it was found
+        // (named once: "arm.urdf:12:3: error: not a valid URDF: …")
+        int line = 0, column = 0;
+        std::string what = m;
+        const std::string p = path.string();
+        if (m.rfind(p + ":", 0) == 0) {
+          what = m.substr(p.size() + 1);
+          int used = 0;
+          if (std::sscanf(what.c_str(), "%d:%d: %n", &line, &column, &used) == 2 && used > 0) {
+            what.erase(0, std::size_t(used));
+          } else {
+            line = column = 0;
+            if (what.rfind(' ', 0) == 0) what.erase(0, 1);
+          }
+        }
+        throw ModelError(p, line, column, what);
+      }
+      fail(u, m,
+           m.find("no such file") != std::string::npos
+               ? "urdf: is relative to the model file's directory (" +
+                     (std::filesystem::path(file_).parent_path().empty()
+                          ? std::string(".")
+                          : std::filesystem::path(file_).parent_path().string()) +
+                     "); check the name and its directory"
+               : "URDF errors name the link or joint (with the line when urdfdom's message "
+                 "names one)");
     }
   }();
   // coordinates: the joints' names as identifiers
@@ -133,6 +159,7 @@ Model Reader::read_robot(const YAML::Node& root) {
            "coordinate '" + id + "' (joint '" + name + "' of " + path.string() +
                ") clashes with time, a parameter or another joint",
            "rename the parameter or the joint");
+    if (id != name) renamed_.emplace_back(name, id);
     coordinates_.push_back(id);
     velocities_.push_back(id + "_dot");
     chain_.emplace_back(id, id + "_dot");
@@ -141,8 +168,17 @@ Model Reader::read_robot(const YAML::Node& root) {
   make_expression_set(root, constraint_names(root));
   // gravity: the URDF's world says nothing of it
   if (const YAML::Node g = r["gravity"]) {
-    if (!g.IsSequence() || g.size() != 3)
-      fail(g, "robot gravity must be a list of 3 numbers (m/s²)", "gravity: [0, 0, -9.81]");
+    if (!g.IsSequence() || g.size() != 3) {
+      // (in the model's units: 9.81 m/s² is 0.00981 mm/ms²)
+      UnitSystem units;
+      if (const YAML::Node uu = root["units"]; uu && uu.IsMap()) read_unit_system(uu, units);
+      const double g0 = 9.81 * units.seconds() * units.seconds() / units.metres();
+      fail(g,
+           "robot gravity must be a list of 3 numbers (" + units.acceleration() + ")" +
+               (g.IsSequence() ? ", got " + format_number(g.size()) + " items" : ""),
+           "gravity: [0, 0, " + format_number(-g0, 6) + "]" +
+               (units.is_si() ? "" : " (9.81 m/s² in " + units.acceleration() + ")"));
+    }
     const tree::Vector3d gv(number(g[0], "gravity"), number(g[1], "gravity"),
                             number(g[2], "gravity"));
     // (loaded again with it: rebuilding the tree from its links reversed the order of a link's
@@ -280,7 +316,19 @@ Model Reader::read_robot(const YAML::Node& root) {
           builder.add(tree::point_constraint(robot, name, a, b));
         } else if (type == "distance") {
           if (!c["length"]) fail(c, "loop '" + name + "' needs length", "length: 0.3");
-          builder.add(tree::distance_constraint(robot, name, a, b, number(c["length"], "length")));
+          const double length = number(c["length"], "length");
+          if (length == 0.0)
+            fail(c["length"],
+                 "loop '" + name +
+                     "': a distance loop of length 0 holds the two "
+                     "points together, which its row cannot (its direction is undefined there)",
+                 "use type: point for two points held together (3 rows)");
+          if (!(std::isfinite(length) && length > 0.0))
+            fail(c["length"],
+                 "loop '" + name + "': length must be a finite number > 0, got " +
+                     format_number(length),
+                 "the distance at which the two points are kept, e.g. length: 0.3");
+          builder.add(tree::distance_constraint(robot, name, a, b, length));
         } else if (type == "weld") {
           builder.add(tree::weld_constraint(robot, name, frame(a, "rpy_a"), frame(b, "rpy_b")));
         } else {
@@ -330,11 +378,36 @@ Model Reader::read_robot(const YAML::Node& root) {
   model.q0 = robot.neutral();
   model.qd0 = VectorXd::Zero(n);
   model.robot = robot_;
+  model.robot_torques = tau;
   // what the viewer draws: the URDF's visual geometry and the loops
   model.visual.robot = tree::load_urdf_visuals(path.string());
   model.visual.loops = std::move(drawn_loops);
   model.visual.contacts = std::move(drawn_contacts);
   return model;
+}
+
+void Reader::refuse_renamed(const YAML::Node& node, const std::string& what) {
+  // the URDF name as written, between characters that no identifier holds: "hip-1" in
+  // "2*hip-1" but not in "ship-1" or "hip-10"; O(renamed · length)
+  const std::string& text = node.Scalar();
+  const auto word = [](char c) {
+    return std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '.';
+  };
+  for (const auto& [name, id] : renamed_) {
+    for (std::size_t k = text.find(name); k != std::string::npos; k = text.find(name, k + 1)) {
+      const std::size_t end = k + name.size();
+      if ((k > 0 && word(text[k - 1])) || (end < text.size() && word(text[end]))) continue;
+      YAML::Mark m = node.Mark();
+      m.column += int(k) + (node.Tag() == "!" ? 1 : 0);
+      fail_at(m,
+              "in " + what + ": '" + name + "' is the robot's coordinate '" + name +
+                  "' (a URDF name), which expressions write " + id +
+                  " (as written it would read as arithmetic on other names)",
+              "write " + id +
+                  " for the joint, or put spaces around the operator if you mean "
+                  "the arithmetic");
+    }
+  }
 }
 
 Constraint Reader::read_pose_requirement(const YAML::Node& r, const std::string& name,
@@ -373,9 +446,23 @@ Constraint Reader::read_pose_requirement(const YAML::Node& r, const std::string&
   std::vector<Expr> value;
   auto read_list = [&](const char* key, std::size_t size, const char* hint) {
     const YAML::Node l = pose[key];
-    if (!l.IsSequence() || l.size() != size)
-      fail(l, what + ": " + key + " must be a list of " + format_number(size) + " expressions",
-           hint);
+    if (!l.IsSequence() || l.size() != size) {
+      // a comma inside an expression of a flow list [… if(c, a, b)] splits it in YAML
+      bool cut = false;
+      if (l.IsSequence()) {
+        for (const auto& e : l) {
+          const std::string& x = e.IsScalar() ? e.Scalar() : std::string();
+          cut = cut || std::count(x.begin(), x.end(), '(') != std::count(x.begin(), x.end(), ')');
+        }
+      }
+      fail(l,
+           what + ": " + key + " must be a list of " + format_number(size) + " expressions" +
+               (l.IsSequence() ? ", got " + format_number(l.size()) + " items" : ""),
+           cut ? "YAML splits a flow list […] at every comma, also inside if(c, a, b) or "
+                 "atan2(y, x): quote an expression that holds commas (\"if(t - 1, (t - 1)^3, "
+                 "0)\") or write the list in block style"
+               : hint);
+    }
     for (const auto& e : l) {
       const Expr x = expression(e, what + " " + key);
       for (const Index in : set_->inputs_of(x)) {

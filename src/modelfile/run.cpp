@@ -139,6 +139,31 @@ void add_model_columns(const Model& model, const Trajectory& traj, std::vector<C
   detail::add_contact_columns(model, traj, out);
 }
 
+// the efforts on a robot's joints at samples (t, q, q'): its torques: τ(q, q', t) plus the
+// control's Qc_control (each may be absent; both absent: empty, efforts not checked)
+std::vector<double> robot_efforts(const Model& model, const std::vector<double>& t,
+                                  const std::vector<double>& q, const std::vector<double>& qd,
+                                  const std::vector<double>& Qc_control) {
+  if (!model.robot_torques || !model.robot || qd.size() != q.size()) return Qc_control;
+  const Index n = model.robot->coordinate_count();
+  std::vector<double> tau(t.size() * std::size_t(n), 0.0);
+  for (std::size_t s = 0; s < t.size(); ++s) {
+    const std::size_t at = s * std::size_t(n);
+    Eigen::Map<VectorXd> out(tau.data() + at, n);
+    model.robot_torques(Eigen::Map<const VectorXd>(q.data() + at, n),
+                        Eigen::Map<const VectorXd>(qd.data() + at, n), t[s], out);
+    if (!Qc_control.empty()) out += Eigen::Map<const VectorXd>(Qc_control.data() + at, n);
+  }
+  return tau;
+}
+
+// the velocities to watch: q' of every sample (none when the run kept no velocities)
+const std::vector<double>& watched_velocities(const std::vector<double>& q,
+                                              const std::vector<double>& qd) {
+  static const std::vector<double> none;
+  return qd.size() == q.size() ? qd : none;
+}
+
 // a robot's joint and effort limits that the run left, as notes (tree::LimitWatch)
 void note_limits(const std::optional<tree::LimitWatch>& watch, const UnitSystem& units,
                  RunStatistics& stats) {
@@ -183,7 +208,12 @@ ModelRun run_model(const Model& model, const SimulationOptions& options_in,
   if (model.robot) watch.emplace(*model.robot);
   auto pass_on = [&] {
     if (gathered.samples() == 0) return;
-    if (watch) watch->observe(gathered.plant.t, gathered.plant.q, gathered.Qc_control);
+    if (watch) {
+      watch->observe(gathered.plant.t, gathered.plant.q,
+                     robot_efforts(model, gathered.plant.t, gathered.plant.q, gathered.plant.qd,
+                                   gathered.Qc_control),
+                     watched_velocities(gathered.plant.q, gathered.plant.qd));
+    }
     detail::scale_stick_multipliers(model, gathered.plant);
     piece.extra_columns = columns_of(gathered);
     std::swap(piece.trajectory, gathered.plant);
@@ -257,14 +287,22 @@ ModelRun run_model(const Model& model, const SimulationOptions& options_in) {
   if (model.controller) {
     ControlledTrajectory c =
         simulate_controlled(*model.controller, model.system, model.q0, model.qd0, options);
-    if (watch) watch->observe(c.plant.t, c.plant.q, c.Qc_control);
+    if (watch) {
+      watch->observe(c.plant.t, c.plant.q,
+                     robot_efforts(model, c.plant.t, c.plant.q, c.plant.qd, c.Qc_control),
+                     watched_velocities(c.plant.q, c.plant.qd));
+    }
     run.extra_columns = control_csv_columns(c);
     run.trajectory = std::move(c.plant);
     run.control = std::move(c.control);
     run.controlled = true;
   } else {
     run.trajectory = simulate(model.system, model.q0, model.qd0, options);
-    if (watch) watch->observe(run.trajectory.t, run.trajectory.q, {});
+    if (watch) {
+      const Trajectory& tr = run.trajectory;
+      watch->observe(tr.t, tr.q, robot_efforts(model, tr.t, tr.q, tr.qd, {}),
+                     watched_velocities(tr.q, tr.qd));
+    }
   }
   note_limits(watch, model.unit_system, run.trajectory.stats);
   note_table_range(run.trajectory.stats);

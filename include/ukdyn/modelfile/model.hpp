@@ -5,6 +5,7 @@
 #pragma once
 
 #include <cstddef>
+#include <functional>
 #include <map>
 #include <memory>
 #include <stdexcept>
@@ -120,6 +121,11 @@ struct Model {
   /// `robot:` (or a .urdf file read alone) — the kinematic tree that `system` was built from
   /// (multibody/tree.hpp); null for other models.
   std::shared_ptr<const tree::Tree> robot;
+  /// `robot: torques:` — the joint torques τ(q, q', t) (n) the robot's system applies, for the
+  /// run's effort notes (tree::LimitWatch); empty without torques:.
+  std::function<void(const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd,
+                     double t, Eigen::Ref<VectorXd> tau)>
+      robot_torques;
   /// `visual:` — how the browser viewer draws the model (modelfile/visual.hpp).
   ModelVisual visual;
   /// Where the file gave the settings, the initial state and the constraints (all unknown for

@@ -65,7 +65,8 @@ int joint_coordinates(JointKind k);
 /// The joint that attaches a link to its parent: its fixed origin in the parent's frame, its
 /// kind and axis (unit, in the joint frame) and what URDF says of it. Damping (viscous,
 /// −damping · q') and friction (Coulomb, make_system) act; limits and effort are checked
-/// (check_joint_limits, check_effort_limits), velocity is kept.
+/// (check_joint_limits, check_effort_limits), velocity is kept. URDF's `<mimic>` is a holonomic
+/// constraint "<joint>.mimic" of make_system: q_j = mimic_multiplier · q_ref + mimic_offset.
 struct Joint {
   std::string name;                                          ///< unique in the tree
   JointKind kind = JointKind::kFixed;                        ///< what moves
@@ -78,6 +79,21 @@ struct Joint {
   double upper = std::numeric_limits<double>::infinity();     ///< position limit
   double effort = std::numeric_limits<double>::infinity();    ///< effort limit (kept)
   double velocity = std::numeric_limits<double>::infinity();  ///< velocity limit (kept)
+  /// URDF's `<mimic joint=…>`: the joint whose coordinate this one follows (empty: none); both
+  /// must have one coordinate (revolute, continuous, prismatic)
+  std::string mimic;
+  double mimic_multiplier = 1.0;  ///< q_j = mimic_multiplier · q_ref + mimic_offset (finite)
+  double mimic_offset = 0.0;      ///< (rad or m, the unit of q_j; finite)
+};
+
+/// A mimic relation of the tree (Joint::mimic) by coordinates: q[coordinate] = multiplier ·
+/// q[reference] + offset.
+struct Mimic {
+  Index link = -1;          ///< the following joint's link
+  Index coordinate = -1;    ///< its coordinate
+  Index reference = -1;     ///< the coordinate it follows
+  double multiplier = 1.0;  ///< the factor
+  double offset = 0.0;      ///< the offset
 };
 
 /// Mass properties of a link: mass, centre of mass and the 3 × 3 inertia about the centre of
@@ -104,7 +120,9 @@ class Tree {
   /// @throws std::invalid_argument naming the link or joint: duplicate or empty names, an
   /// unknown parent, a cycle, a floating joint that is not a root's, a zero or non-finite
   /// axis, negative mass or damping, an inertia that is not symmetric positive semi-definite
-  /// or not finite, a moving subtree without mass (M would be singular). Cost O(links²).
+  /// or not finite, a moving subtree without mass (M would be singular); a mimic of an unknown
+  /// joint, of itself, of or by a joint without exactly one coordinate, with a non-finite
+  /// multiplier or offset, or on a cycle of mimics. Cost O(links) (hashing the names).
   Tree(std::string name, std::vector<Link> links, Vector3d gravity = Vector3d(0, 0, -9.81));
 
   const std::string& name() const { return name_; }                      ///< the robot's name
@@ -124,10 +142,16 @@ class Tree {
   /// Coordinate names: "<joint>" for one coordinate, "<link>.x" … "<link>.u3" for a floating
   /// base (the names multibody.hpp gives a rigid body).
   const std::vector<std::string>& coordinate_names() const { return names_; }
-  /// The zero configuration: zero angles and displacements, identity quaternions (n).
+  /// The zero configuration: zero angles and displacements, identity quaternions (n) — except
+  /// that a mimic joint sits at multiplier · q_ref + offset (so the pose meets the mimics).
   VectorXd neutral() const;
   /// The links whose joint is floating (each gets a unit-norm constraint in make_system).
   const std::vector<Index>& floating_links() const { return floating_; }
+  /// The mass of link i and of every link below it (kg), accumulated once at construction.
+  double subtree_mass(Index i) const { return subtree_mass_[std::size_t(i)]; }
+  /// The mimic relations (Joint::mimic), in link order of the following joints; make_system
+  /// adds one constraint "<joint>.mimic" for each.
+  const std::vector<Mimic>& mimics() const { return mimics_; }
 
  private:
   std::string name_;
@@ -137,6 +161,8 @@ class Tree {
   std::vector<Matrix6d, Eigen::aligned_allocator<Matrix6d>> inertia_;
   std::vector<Matrix3d, Eigen::aligned_allocator<Matrix3d>> R_PJ_;
   std::vector<std::string> names_;
+  std::vector<double> subtree_mass_;
+  std::vector<Mimic> mimics_;
   Vector3d gravity_;
   Index n_ = 0;
 };
@@ -232,9 +258,12 @@ struct FrictionRegularization {
 /// dampers (so a run's energy balance is checked), one non-ideal force "<joint>.friction" per
 /// one-coordinate joint with URDF friction F > 0, C_j = −F q'_j / sqrt(q'_j² + eps²) (Coulomb
 /// friction of magnitude F, eps = `friction`'s angular or linear; its work is accounted as the
-/// non-ideal forces'), and one unit-norm constraint "<link>.unit" per floating joint. Constraints,
-/// friction, control and simulate() then apply as to any System. The tree is copied into the
-/// system's callables. @param tree the tree; @param tau the input "tau", or empty for none;
+/// non-ideal forces'), one unit-norm constraint "<link>.unit" per floating joint and one
+/// holonomic row "<joint>.mimic" per mimic, q_j − multiplier · q_ref − offset = 0 (its
+/// multiplier λ is the coupling torque or force on joint j; −multiplier · λ acts on ref).
+/// Constraints, friction, control and simulate() then apply as to any System. The tree is copied
+/// into the system's callables. @param tree the tree; @param tau the input "tau", or empty for
+/// none;
 /// @param friction the joint friction's regularization (both > 0).
 /// @throws std::invalid_argument when an eps of `friction` is not a finite number > 0.
 /// Cost O(links) to build.
@@ -322,7 +351,7 @@ Constraint pose_requirement(const Tree& tree, std::string name, LinkPoint at, Po
 /// beyond the limit, > 0) and when.
 struct LimitExcess {
   std::string joint;        ///< the joint's name
-  std::string limit;        ///< "lower", "upper" (position limits) or "effort"
+  std::string limit;        ///< "lower", "upper" (position limits), "velocity" or "effort"
   double bound = 0.0;       ///< the limit's value
   double first_time = 0.0;  ///< the first sample beyond it
   double worst_time = 0.0;  ///< the sample of the largest excess
@@ -345,22 +374,24 @@ std::vector<LimitExcess> check_effort_limits(const Tree& tree, const std::vector
 
 /// The two checks above over samples that come in pieces (a streamed run): observe() each
 /// piece in time order, then excesses() lists what check_joint_limits and check_effort_limits
-/// would for all samples at once (position limits first, then efforts; per joint in link
-/// order). Cost O(n) per sample.
+/// would for all samples at once (position limits first, then velocities — |q'_j| above URDF's
+/// `velocity`, 0 or absent meaning none — then efforts; per joint in link order). Cost O(n)
+/// per sample.
 class LimitWatch {
  public:
   /// Watches the limits of `tree` (copied: the watch may outlive it).
   explicit LimitWatch(const Tree& tree);
-  /// N samples: times t, positions q (N × n), and generalized forces tau (N × n, or empty:
-  /// efforts are not checked for these samples). @throws std::invalid_argument on sizes.
+  /// N samples: times t, positions q (N × n), generalized forces tau (N × n, or empty:
+  /// efforts are not checked for these samples) and velocities qd (N × n, or empty: not
+  /// checked). @throws std::invalid_argument on sizes.
   void observe(const std::vector<double>& t, const std::vector<double>& q,
-               const std::vector<double>& tau);
+               const std::vector<double>& tau, const std::vector<double>& qd = {});
   /// The limits left so far.
   std::vector<LimitExcess> excesses() const;
 
  private:
-  std::vector<Index> offset_;                        // coordinate of each one-coordinate joint
-  std::vector<LimitExcess> lower_, upper_, effort_;  // per such joint
+  std::vector<Index> offset_;  // coordinate of each one-coordinate joint
+  std::vector<LimitExcess> lower_, upper_, velocity_, effort_;  // per such joint
   Index n_ = 0;
 };
 
@@ -372,10 +403,10 @@ std::string describe(const LimitExcess& e, const UnitSystem& units = {});
 
 /// Reads a URDF file (through urdfdom) into a Tree: links in depth-first order from the root;
 /// URDF's world link, if any, is the world. Joint limits, damping, friction, effort and velocity
-/// are kept. @throws std::invalid_argument naming the file and the link or joint: a malformed
-/// file (with urdfdom's message), a joint type ukdyn does not know (planar), a moving link
-/// without `<inertial>`, an inertia that is not positive definite, a graph that is not a tree.
-/// Cost O(links) plus the XML parse.
+/// are kept, and `<mimic>` (Joint::mimic). @throws std::invalid_argument naming the file and the
+/// link or joint: a malformed file (with urdfdom's message), a joint type ukdyn does not know
+/// (planar), a moving link without `<inertial>`, an inertia that is not positive definite, a graph
+/// that is not a tree. Cost O(links) plus the XML parse.
 Tree load_urdf(const std::string& path, Vector3d gravity = Vector3d(0, 0, -9.81));
 
 }  // namespace ukdyn::tree

@@ -6,7 +6,9 @@
 
 #include <Eigen/Eigenvalues>
 
+#include "multibody/tree/mimic.hpp"
 #include "multibody/tree/spatial.hpp"
+#include "ukdyn/core/format.hpp"
 #include "ukdyn/multibody/tree.hpp"
 
 namespace ukdyn::tree {
@@ -54,15 +56,15 @@ void check_link(const Link& l) {
     throw std::invalid_argument(where + "the joint origin is not finite");
   }
   if (!(j.friction >= 0.0)) {
-    throw std::invalid_argument(where + "friction must be >= 0, got " + std::to_string(j.friction));
+    throw std::invalid_argument(where + "friction must be >= 0, got " + format_number(j.friction));
   }
   if (!(j.damping >= 0.0)) {
-    throw std::invalid_argument(where + "damping must be >= 0, got " + std::to_string(j.damping));
+    throw std::invalid_argument(where + "damping must be >= 0, got " + format_number(j.damping));
   }
   const Inertial& in = l.inertial;
   if (!(in.mass >= 0.0) || !std::isfinite(in.mass)) {
     throw std::invalid_argument(where + "mass must be finite and >= 0, got " +
-                                std::to_string(in.mass));
+                                format_number(in.mass));
   }
   if (!in.com.allFinite() || !in.I_com.allFinite()) {
     throw std::invalid_argument(where + "the inertial is not finite");
@@ -78,8 +80,8 @@ void check_link(const Link& l) {
     throw std::invalid_argument(where +
                                 "the inertia tensor is not positive semi-definite or violates "
                                 "the triangle inequality (principal moments " +
-                                std::to_string(e[0]) + ", " + std::to_string(e[1]) + ", " +
-                                std::to_string(e[2]) + ")");
+                                format_number(e[0]) + ", " + format_number(e[1]) + ", " +
+                                format_number(e[2]) + ")");
   }
 }
 
@@ -174,24 +176,26 @@ Tree::Tree(std::string name, std::vector<Link> links, Vector3d gravity)
     links_.push_back(std::move(l));
   }
   if (n_ == 0) throw std::invalid_argument(kWho + "'" + name_ + "' has no moving joint");
-  // every moving joint must carry mass (and, for a rotation, inertia) in its subtree
+  // every moving joint must carry mass (and, for a rotation, inertia) in its subtree: the
+  // subtree masses in one reverse pass (children follow their parents), O(links)
+  // (the subtree's mass only: a subtree with mass can still leave M singular, a point mass on a
+  // revolute axis; the engines then report M not positive definite)
+  subtree_mass_.assign(links_.size(), 0.0);
   for (Index i = link_count(); i-- > 0;) {
-    Matrix6d sub = inertia_[std::size_t(i)];
-    for (Index c = i + 1; c < link_count(); ++c) {
-      Index a = c;
-      while (a > i) a = parent_[std::size_t(a)];
-      if (a != i) continue;
-      // (the subtree's mass only: a subtree with mass can still leave M singular, a point
-      // mass on a revolute axis; the engines then report M not positive definite)
-      sub(3, 3) += inertia_[std::size_t(c)](3, 3);
+    subtree_mass_[std::size_t(i)] += links_[std::size_t(i)].inertial.mass;
+    if (parent_[std::size_t(i)] >= 0) {
+      subtree_mass_[std::size_t(parent_[std::size_t(i)])] += subtree_mass_[std::size_t(i)];
     }
+  }
+  for (Index i = link_count(); i-- > 0;) {
     const JointKind k = links_[std::size_t(i)].joint.kind;
-    if (k != JointKind::kFixed && !(sub(3, 3) > 0.0)) {
+    if (k != JointKind::kFixed && !(subtree_mass_[std::size_t(i)] > 0.0)) {
       throw std::invalid_argument(kWho + "joint '" + links_[std::size_t(i)].joint.name +
                                   "' moves no mass (link '" + links_[std::size_t(i)].name +
                                   "' and its subtree are massless): M would be singular");
     }
   }
+  mimics_ = detail::mimic_relations(*this);
 }
 
 Index Tree::link_index(std::string_view name) const {
@@ -205,6 +209,7 @@ Index Tree::link_index(std::string_view name) const {
 VectorXd Tree::neutral() const {
   VectorXd q = VectorXd::Zero(n_);
   for (Index i : floating_) q[offset(i) + 3] = 1.0;
+  detail::meet_mimics(*this, q);
   return q;
 }
 

@@ -47,14 +47,19 @@ LimitWatch::LimitWatch(const Tree& tree) : n_(tree.coordinate_count()) {
     // URDF's effort 0 is "not given" in many files (urdfdom's default): no limit then
     const bool limited = j.effort > 0.0 && !std::isinf(j.effort);
     effort_.push_back({j.name, "effort", limited ? j.effort : INFINITY, 0.0, 0.0, 0.0, prismatic});
+    // (likewise a velocity of 0)
+    const bool fast = j.velocity > 0.0 && !std::isinf(j.velocity);
+    velocity_.push_back(
+        {j.name, "velocity", fast ? j.velocity : INFINITY, 0.0, 0.0, 0.0, prismatic});
   }
 }
 
 void LimitWatch::observe(const std::vector<double>& t, const std::vector<double>& q,
-                         const std::vector<double>& tau) {
+                         const std::vector<double>& tau, const std::vector<double>& qd) {
   const char* who = "ukdyn::tree::LimitWatch::observe";
   check_samples(who, n_, t, q);
   if (!tau.empty()) check_samples(who, n_, t, tau);
+  if (!qd.empty()) check_samples(who, n_, t, qd);
   const std::size_t n = std::size_t(n_);
   for (std::size_t k = 0; k < offset_.size(); ++k) {
     const std::size_t o = std::size_t(offset_[k]);
@@ -64,6 +69,7 @@ void LimitWatch::observe(const std::vector<double>& t, const std::vector<double>
       note(lower_[k], lower_[k].bound - q[s * n + o], t[s]);
       note(upper_[k], q[s * n + o] - upper_[k].bound, t[s]);
       if (!tau.empty()) note(effort_[k], std::abs(tau[s * n + o]) - effort_[k].bound, t[s]);
+      if (!qd.empty()) note(velocity_[k], std::abs(qd[s * n + o]) - velocity_[k].bound, t[s]);
     }
   }
 }
@@ -74,8 +80,10 @@ std::vector<LimitExcess> LimitWatch::excesses() const {
     if (lower_[k].excess > 0.0) out.push_back(lower_[k]);
     if (upper_[k].excess > 0.0) out.push_back(upper_[k]);
   }
-  for (const LimitExcess& e : effort_) {
-    if (e.excess > 0.0) out.push_back(e);
+  for (const auto* list : {&velocity_, &effort_}) {
+    for (const LimitExcess& e : *list) {
+      if (e.excess > 0.0) out.push_back(e);
+    }
   }
   return out;
 }
@@ -100,10 +108,13 @@ std::vector<LimitExcess> check_effort_limits(const Tree& tree, const std::vector
 }
 
 std::string describe(const LimitExcess& e, const UnitSystem& units) {
-  // the excess's unit: a force or torque for an effort, a length or angle for a position
+  // the excess's unit: a force or torque for an effort, a rate for a velocity, a length or
+  // angle for a position
   const bool effort = e.limit == "effort";
   const std::string unit = effort ? (e.prismatic ? units.force() : units.torque())
-                                  : (e.prismatic ? units.length : std::string("rad"));
+                           : e.limit == "velocity"
+                               ? units.rate(e.prismatic ? units.length : "rad")
+                               : (e.prismatic ? units.length : std::string("rad"));
   return "joint '" + e.joint + "' exceeds its " + e.limit + " limit " + format_number(e.bound) +
          " by " + format_number(e.excess, 4) + " " + unit +
          " (first at t = " + format_number(e.first_time, 6) + " " + units.time +

@@ -11,6 +11,7 @@
 
 #include "multibody/internal.hpp"
 #include "multibody/tree/kinematics_cache.hpp"
+#include "multibody/tree/mimic.hpp"
 #include "multibody/tree/spatial.hpp"
 #include "ukdyn/core/format.hpp"
 #include "ukdyn/multibody/tree.hpp"
@@ -240,6 +241,8 @@ SystemBuilder system_builder(const Tree& tree_in, JointTorqueFn tau,
     sb.add(Constraint(tree->link(i).name + ".unit", ConstraintKind::kHolonomic, 1,
                       std::make_shared<mb::detail::UnitQuaternionModel>(tree->offset(i) + 3)));
   }
+  // URDF's mimics: q_j = m q_ref + o, one row each
+  detail::add_mimic_constraints(*tree, sb);
   return sb;
 }
 

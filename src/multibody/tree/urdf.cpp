@@ -1,9 +1,14 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // URDF import through urdfdom (Debian's liburdfdom-dev): the file's links and joints as a Tree.
+#include <algorithm>
+#include <cctype>
 #include <filesystem>
+#include <fstream>
 #include <map>
 #include <mutex>
+#include <regex>
 #include <set>
+#include <sstream>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -27,14 +32,71 @@ class MessageCapture final : public console_bridge::OutputHandler {
  public:
   void log(const std::string& text, console_bridge::LogLevel level, const char*, int) override {
     if (level < console_bridge::CONSOLE_BRIDGE_LOG_WARN) return;
+    if (level >= console_bridge::CONSOLE_BRIDGE_LOG_ERROR) error_ = true;
     if (!text_.empty()) text_ += "; ";
     text_ += text;
   }
   const std::string& text() const { return text_; }
+  // urdfdom logged an error: it may still return a model, with the element it could not read
+  // dropped or zeroed (an <inertial> whose mass is "heavy" comes back as mass 0, u20 02)
+  bool error() const { return error_; }
 
  private:
   std::string text_;
+  bool error_ = false;
 };
+
+// drops the links' pointers to each other (a cycle of links holds itself through their
+// child_links' shared pointers: cleared before a model is refused, else never freed)
+void unlink(urdf::ModelInterface& model) {
+  for (auto& [name, l] : model.links_) {
+    if (!l) continue;
+    l->child_links.clear();
+    l->child_joints.clear();
+  }
+}
+
+// "<line>:<column>: " of the element that urdfdom's message names ("... for Link [l1]", "Joint
+// [j1] ..."), found in the file's text; "" when the message names none or it is not found.
+// Only on the error path: reads the file once more.
+std::string element_position(const std::string& path, const std::string& message) {
+  static const std::regex named(R"((Link|Joint|link|joint)\s*\[([^\]]+)\])");
+  std::smatch m;
+  if (!std::regex_search(message, m, named)) return "";
+  const std::string tag = m[1].str() == "Link" || m[1].str() == "link" ? "link" : "joint";
+  std::ifstream in(path, std::ios::binary);
+  std::stringstream buffer;
+  buffer << in.rdbuf();
+  const std::string text = buffer.str();
+  // the first <tag …> whose name attribute is the name (a plain scan: a regex over a large file
+  // overflows libstdc++'s recursion)
+  const std::string open = "<" + tag, name = m[2].str();
+  std::size_t at = std::string::npos;
+  for (std::size_t p = text.find(open); p != std::string::npos; p = text.find(open, p + 1)) {
+    const std::size_t after = p + open.size();
+    if (after >= text.size() || !std::isspace(static_cast<unsigned char>(text[after]))) continue;
+    const std::size_t end = std::min(text.find('>', p), text.size());
+    for (std::size_t k = text.find("name", after); k < end; k = text.find("name", k + 1)) {
+      std::size_t v = k + 4;
+      while (v < end && std::isspace(static_cast<unsigned char>(text[v]))) ++v;
+      if (v >= end || text[v] != '=') continue;
+      ++v;
+      while (v < end && std::isspace(static_cast<unsigned char>(text[v]))) ++v;
+      if (v >= end || (text[v] != '"' && text[v] != '\'')) continue;
+      if (text.compare(v + 1, name.size(), name) == 0 && v + 1 + name.size() < end &&
+          text[v + 1 + name.size()] == text[v]) {
+        at = p;
+        break;
+      }
+    }
+    if (at != std::string::npos) break;
+  }
+  if (at == std::string::npos) return "";
+  const std::size_t line = 1 + std::size_t(std::count(text.begin(), text.begin() + long(at), '\n'));
+  const std::size_t start = text.rfind('\n', at);
+  const std::size_t column = at - (start == std::string::npos ? 0 : start + 1) + 1;
+  return std::to_string(line) + ":" + std::to_string(column) + ": ";
+}
 
 // urdfdom accepts a link that is the child of two joints (a cycle, base → a → b → a, or two
 // parents) and links its children into a cycle, which a walk from the root never leaves: refused
@@ -44,11 +106,7 @@ class MessageCapture final : public console_bridge::OutputHandler {
 // before the model is refused, else its links would never be freed)
 void check_tree(urdf::ModelInterface& model, const std::string& who) {
   const auto refuse = [&](const std::string& what) {
-    for (auto& [name, l] : model.links_) {
-      if (!l) continue;
-      l->child_links.clear();
-      l->child_joints.clear();
-    }
+    unlink(model);
     throw std::invalid_argument(what);
   };
   std::map<std::string, std::string> parent_joint;  // child link → the first joint naming it
@@ -110,8 +168,17 @@ urdf::ModelInterfaceSharedPtr detail::parse_urdf_file(const std::string& path,
     }
     console_bridge::restorePreviousOutputHandler();
   }
-  if (!model) {
-    throw std::invalid_argument(who + "not a valid URDF: " +
+  // refused, or read with an error (an element dropped): urdfdom's message, located at the
+  // link or joint it names when the file says where ("<who> <line>:<column>: …", who ending
+  // in "<path>: ")
+  if (!model || capture.error()) {
+    if (model) unlink(*model);
+    std::string located = who;
+    const std::string at = element_position(path, capture.text());
+    if (!at.empty() && located.size() >= 2 && located.compare(located.size() - 2, 2, ": ") == 0) {
+      located.replace(located.size() - 2, 2, ":" + at);
+    }
+    throw std::invalid_argument(located + "not a valid URDF: " +
                                 (capture.text().empty() ? "urdfdom refused it" : capture.text()));
   }
   check_tree(*model, who);
@@ -190,6 +257,16 @@ Tree load_urdf(const std::string& path, Vector3d gravity) {
         out.joint.damping = j->dynamics->damping;
         out.joint.friction = j->dynamics->friction;
       }
+      // <mimic joint="ref" multiplier="m" offset="o"/>: checked by the tree, a constraint of its
+      // system (urdfdom's defaults: m = 1, o = 0)
+      if (j->mimic) {
+        out.joint.mimic = j->mimic->joint_name;
+        out.joint.mimic_multiplier = j->mimic->multiplier;
+        out.joint.mimic_offset = j->mimic->offset;
+        if (out.joint.mimic.empty()) {
+          throw std::invalid_argument(where + "its <mimic> names no joint (joint=\"…\")");
+        }
+      }
     }
     const bool moving = out.joint.kind != JointKind::kFixed;
     if (l->inertial) {
@@ -205,9 +282,9 @@ Tree load_urdf(const std::string& path, Vector3d gravity) {
         if (!(in.mass > 0.0) || !(eig.eigenvalues()[0] > 0.0)) {
           throw std::invalid_argument(
               who + "link '" + l->name + "': the inertia of a moving link must be positive " +
-              "definite (mass " + std::to_string(in.mass) + ", principal moments " +
-              std::to_string(eig.eigenvalues()[0]) + ", " + std::to_string(eig.eigenvalues()[1]) +
-              ", " + std::to_string(eig.eigenvalues()[2]) + ")");
+              "definite (mass " + format_number(in.mass) + ", principal moments " +
+              format_number(eig.eigenvalues()[0]) + ", " + format_number(eig.eigenvalues()[1]) +
+              ", " + format_number(eig.eigenvalues()[2]) + ")");
         }
       }
     } else if (moving) {
@@ -219,7 +296,11 @@ Tree load_urdf(const std::string& path, Vector3d gravity) {
   try {
     return Tree(model->getName(), std::move(links), gravity);
   } catch (const std::invalid_argument& e) {
-    throw std::invalid_argument(who + e.what());
+    // (the file named once, without the tree's class: "<path>: link 'l1' (joint 'j1'): …")
+    std::string m = e.what();
+    const std::string tree_who = "ukdyn::tree::Tree: ";
+    if (m.rfind(tree_who, 0) == 0) m.erase(0, tree_who.size());
+    throw std::invalid_argument(who + m);
   }
 }
 
