@@ -13,6 +13,7 @@
 #include "control/internal.hpp"
 #include "dynamics/internal.hpp"
 #include "simulation/split_margin.hpp"
+#include "ukdyn/dynamics/forward.hpp"
 
 namespace ukdyn::control_detail {
 
@@ -53,6 +54,9 @@ ContactModes::ContactModes(const Controller& ctrl) : lcp_(0) {
   lcp_ = ContactLcp(K);
   stuck_.reserve(frictions_.size());
   sliding_.reserve(frictions_.size());
+  lifted_.reserve(frictions_.size());
+  lifted_modes_.assign(frictions_.size(), 0);
+  lifted_enabled_.assign(frictions_.size(), 0);
   released_.reserve(frictions_.size());
   held_.assign(frictions_.size(), 0);
   F_s_ = VectorXd::Zero(n);
@@ -199,19 +203,129 @@ bool ContactModes::settle_contacts(const Controller& ctrl, ControlWorkspace& cws
     return false;
   }
   lambda_.head(k) = lcp_.z();
-  // hold the contacts that push (λ > 0), open the others, and compute that control
+  // hold the contacts that push (λ > 0), open the others (and the stick of a stuck Coulomb
+  // contact whose normal opens: a contact that lifts off does not stick), and compute that
+  // control
   for (Index j = 0; j < k; ++j) {
     const std::size_t i = std::size_t(closed_[std::size_t(j)]);
     modes[std::size_t(contacts_[i])] = lambda_[j] > 0.0 ? saved_[i] : 0;
   }
+  open_lifted_sticks(cws.model, k);
   s = compute_control(ctrl, cws, q, qd, t);
+  // the Coulomb contacts still stuck must hold under it (some split of their holding forces
+  // inside every cone): a control that tips a box onto a corner that cannot hold it is no
+  // control of the plant, which slides instead (the box on two corners; docs/contact.md,
+  // "Contacts under control"). Then the held control stands, and slip() decides
+  if (s == ControlStatus::kOk && !stuck_hold(ctrl, cws, q, qd, t)) {
+    s = ControlStatus::kRequirementsNotMet;
+  }
   restore();
+  close_lifted_sticks(cws.model);
   if (s != ControlStatus::kOk) {
     // (a law whose answer to the contact forces is not the requirements' exact elimination —
-    // never the Gauss law): the held control stands
+    // never the Gauss law — or stuck contacts that would slip): the held control stands
     s = compute_control(ctrl, cws, q, qd, t);
   }
   return true;
+}
+
+void ContactModes::open_lifted_sticks(Workspace& model, Index k) {
+  lifted_.clear();
+  for (Index j = 0; j < k; ++j) {
+    if (lambda_[j] > 0.0) continue;
+    const Index normal = contacts_[std::size_t(closed_[std::size_t(j)])];
+    for (std::size_t f = 0; f < frictions_.size(); ++f) {
+      const FrictionContact& c = frictions_[f];
+      const auto stick = std::size_t(c.stick_constraint), force = std::size_t(c.force);
+      if (c.normal_constraint != normal || model.activity_override[stick] <= 0) continue;
+      lifted_.push_back(f);
+      lifted_modes_[f] = model.activity_override[stick];
+      lifted_enabled_[f] = model.nonideal_enabled[force];
+      // (its friction off: mu N of a zero N)
+      model.activity_override[stick] = 0;
+      model.nonideal_enabled[force] = 0;
+    }
+  }
+}
+
+void ContactModes::close_lifted_sticks(Workspace& model) const {
+  for (std::size_t f : lifted_) {
+    const FrictionContact& c = frictions_[f];
+    model.activity_override[std::size_t(c.stick_constraint)] = lifted_modes_[f];
+    model.nonideal_enabled[std::size_t(c.force)] = lifted_enabled_[f];
+  }
+}
+
+bool ContactModes::stuck_hold(const Controller& ctrl, ControlWorkspace& cws,
+                              const Eigen::Ref<const VectorXd>& q,
+                              const Eigen::Ref<const VectorXd>& qd, double t) {
+  Workspace& model = cws.model;
+  stuck_.clear();
+  for (std::size_t j = 0; j < frictions_.size(); ++j) {
+    if (model.activity_override[std::size_t(frictions_[j].stick_constraint)] > 0) {
+      stuck_.push_back(j);
+    }
+  }
+  if (stuck_.empty()) return true;
+  // the model's reaction under the control
+  F_s_ = cws.Qc_control;
+  const bool evaluated = reaction_under(ctrl, cws, F_s_, q, qd, t);
+  if (!stuck_margins(ctrl, cws, q, qd, t)) return false;
+  // (held: the control evaluated again, where reaction_under evaluated the model under it)
+  if (evaluated) compute_control(ctrl, cws, q, qd, t);
+  return true;
+}
+
+bool ContactModes::reaction_under(const Controller& ctrl, ControlWorkspace& cws,
+                                  const Eigen::Ref<const VectorXd>& F,
+                                  const Eigen::Ref<const VectorXd>& q,
+                                  const Eigen::Ref<const VectorXd>& qd, double t) {
+  Workspace& model = cws.model;
+  // a Coulomb contact sliding in the model (its friction on)?
+  bool sliding = false;
+  for (const FrictionContact& c : frictions_) {
+    sliding = sliding || model.nonideal_enabled[std::size_t(c.force)] != 0;
+  }
+  if (!sliding) {
+    // λ + λ_nonideal − G_p⁺ A_p M⁻¹ F (the model's evaluation left as it is)
+    model.decomposition.project_nonideal(F, cws.tmp_n, cws.tmp_n2, lam_);
+    lam_ += model.lambda + model.lambda_nonideal;
+    return false;
+  }
+  // the sliding contacts' friction mu N follows the N that F changes (a corner sliding beside
+  // a stuck one: its friction is mu N of the N under F, not of the model's without it), so
+  // stages 3 and 4 again with F among the forces: Q += F, a += M⁻¹ F (its factor as it is)
+  model.Q += F;
+  model.decomposition.solve_mass(F, cws.tmp_n);
+  model.a += cws.tmp_n;
+  if (solve_ideal(ctrl.model(), model) == Status::kOk) {
+    apply_nonideal(ctrl.model(), model, q, qd, t);
+  }
+  lam_ = model.lambda + model.lambda_nonideal;
+  return true;
+}
+
+bool ContactModes::stuck_margins(const Controller& ctrl, ControlWorkspace& cws,
+                                 const Eigen::Ref<const VectorXd>& q,
+                                 const Eigen::Ref<const VectorXd>& qd, double t) {
+  // each contact's margin mu_static N − |H| (split as the run's stick margin splits it): the
+  // stick breaks where one is < 0
+  note_margin_ = std::numeric_limits<double>::infinity();
+  note_split_ = false;
+  released_.clear();
+  for (std::size_t j : stuck_) {
+    const double margin = stick_margin(ctrl, cws, j, q, qd, t);
+    if (margin < 0.0) released_.push_back(j);
+    if (margin < note_margin_) {
+      note_margin_ = margin;
+      note_N_ = normal_force_;
+      note_H_ = holding_force_;
+    }
+  }
+  // several stuck: held when some split of their holding forces lies inside every cone, as in the
+  // run (Run::holding_split), not only the minimum-norm one
+  if (!released_.empty() && stuck_.size() >= 2) hold_by_split(ctrl, cws, q, qd, t);
+  return released_.empty();
 }
 
 void ContactModes::anticipate(const Controller& ctrl, ControlWorkspace& cws,
@@ -386,28 +500,15 @@ void ContactModes::slip(const Controller& ctrl, ControlWorkspace& cws,
   hold_stuck(model);
   s = compute_control(ctrl, cws, q, qd, t);
   if (!met || s != ControlStatus::kRequirementsNotMet) return;
-  model.decomposition.project_nonideal(F_s_, cws.tmp_n, cws.tmp_n2, lam_);
-  lam_ += model.lambda + model.lambda_nonideal;
-  // each contact's margin mu_static N − |H|: the stick breaks where one is < 0
+  const bool evaluated = reaction_under(ctrl, cws, F_s_, q, qd, t);
+  // held when each margin, or some split of several contacts' holding forces, is inside its cone
   note_t_ = t;
   note_row_ = row;
-  note_margin_ = std::numeric_limits<double>::infinity();
-  released_.clear();
-  for (std::size_t j : stuck_) {
-    const double margin = stick_margin(ctrl, cws, j, q, qd, t);
-    if (margin < 0.0) released_.push_back(j);
-    if (margin < note_margin_) {
-      note_margin_ = margin;
-      note_N_ = normal_force_;
-      note_H_ = holding_force_;
-    }
-  }
-  // several stuck: held when some split of their holding forces lies inside every cone, as in the
-  // run (Run::holding_split), not only the minimum-norm one
-  if (!released_.empty() && stuck_.size() >= 2) hold_by_split(ctrl, cws, q, qd, t);
-  if (released_.empty()) {
-    // static friction holds them: the held control stands, not met
+  if (stuck_margins(ctrl, cws, q, qd, t)) {
+    // static friction holds them: the held control stands, not met (evaluated again where
+    // reaction_under evaluated the model under F_s)
     slipped_ = -1;
+    if (evaluated) s = compute_control(ctrl, cws, q, qd, t);
     return;
   }
   // F_s: the plant's stick then needs more than mu_static N, and the run releases it
@@ -434,24 +535,37 @@ void ContactModes::hold_by_split(const Controller& ctrl, ControlWorkspace& cws,
     }
   }
   if (!detail::split_space(sys, model, lam_, stuck_, sliding_, q, qd, t, space_)) return;
-  const double margin = detail::max_split_margin(space_, &split_y_);
+  const double margin = detail::max_split_margin(space_, &split_y_, true);
   if (!(margin > -detail::kSplitTolerance)) return;
   released_.clear();
-  // the note's numbers: the contact least held at the split of largest margin
+  // (the note's numbers, at the split of largest margin, when the note is asked for)
+  note_split_ = true;
+}
+
+void ContactModes::split_note_numbers() {
+  note_split_ = false;
+  if (!(detail::max_split_margin(space_, &split_y_, false, true) > -detail::kSplitTolerance)) {
+    return;
+  }
+  // the contact least held at the split of largest margin (the lower N of a tie: the one
+  // nearer to letting go)
   note_margin_ = std::numeric_limits<double>::infinity();
   for (const detail::SplitCone& cone : space_.cones) {
     const double N = cone.N0 + cone.g.dot(split_y_);
     const double H = (cone.f0 + cone.F * split_y_).norm();
-    if (cone.mu * N - H < note_margin_) {
-      note_margin_ = cone.mu * N - H;
+    const double m = cone.mu * N - H;
+    if (m < note_margin_ - 1e-12 * space_.scale ||
+        (m <= note_margin_ + 1e-12 * space_.scale && N < note_N_)) {
+      note_margin_ = m;
       note_N_ = N;
       note_H_ = H;
     }
   }
 }
 
-std::string ContactModes::stick_note(const Controller& ctrl) const {
+std::string ContactModes::stick_note(const Controller& ctrl) {
   if (slipped_ == 0) return "";
+  if (slipped_ < 0 && note_split_) split_note_numbers();
   const std::string f = " " + units_.force();
   const std::string numbers = format(note_H_) + f + (slipped_ > 0 ? " > " : " <= ") +
                               "mu_static N = " + format(note_H_ + note_margin_) + f +

@@ -97,7 +97,10 @@ class ContactModes {
   // holds them (the requirements not met), 0 nothing to decide; stick_note() says it in words
   // (the row, the contacts, |H| against mu_static N; "" for 0)
   int slipped() const { return slipped_; }
-  std::string stick_note(const Controller& ctrl) const;
+  // (where several stuck contacts are held by some split, the note's numbers are those of the
+  // split of largest margin, computed when the note is first asked for: max_split_margin to its
+  // optimum, about 140 Newton steps)
+  std::string stick_note(const Controller& ctrl);
   // the run's units (SimulationOptions::units), for the notes' times and forces
   void set_units(const UnitSystem& units) { units_ = units; }
 
@@ -142,10 +145,39 @@ class ContactModes {
                       double t, Index k);
   // the failure text: `names` pull, the requirement `row` missed by `missed` with them held
   std::string pull_message(const Controller& ctrl, double t, Index row, double missed) const;
-  // settle's LCP of the unilateral contacts (settle is it, then slip)
+  // settle's LCP of the unilateral contacts (settle is it, then slip). The Coulomb contacts
+  // still stuck under its control must hold (stuck_hold), else the held control stands and
+  // slip() decides
   bool settle_contacts(const Controller& ctrl, ControlWorkspace& cws,
                        const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd,
                        double t, ControlStatus& s, std::string& failure);
+  // settle_contacts' modes: the stick of each stuck Coulomb contact whose normal the LCP opens
+  // (of the k closed_ ones, λ_j = 0) opened too, its friction off (lifted_); and back
+  void open_lifted_sticks(Workspace& model, Index k);
+  void close_lifted_sticks(Workspace& model) const;
+  // whether the Coulomb contacts that stick in the model's modes (into stuck_) hold under the
+  // control in cws (its evaluation's modes): their reaction λ + λ_nonideal − G_p⁺ A_p M⁻¹ Qc
+  // into lam_, then stuck_margins. Cost: nothing without stuck contacts; else one
+  // project_nonideal (O(n² + n m)) and stuck_margins'
+  bool stuck_hold(const Controller& ctrl, ControlWorkspace& cws,
+                  const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd,
+                  double t);
+  // the model's multipliers λ + λ_nonideal under the force F (n, not in cws) into lam_, at the
+  // model's evaluation: without sliding friction in the model, λ + λ_nonideal − G_p⁺ A_p M⁻¹ F
+  // (false: the evaluation untouched); with it, stages 3 and 4 of the model evaluated again with
+  // Q + F, the friction mu N of the N under F (true: the model's evaluation is then that one,
+  // to be evaluated again). Cost O(n² + n m), or the model's stages 3 and 4
+  bool reaction_under(const Controller& ctrl, ControlWorkspace& cws,
+                      const Eigen::Ref<const VectorXd>& F, const Eigen::Ref<const VectorXd>& q,
+                      const Eigen::Ref<const VectorXd>& qd, double t);
+  // whether the stuck_ contacts hold under the multipliers lam_: each margin mu_static N − |H|
+  // >= 0 (stick_margin), or, with several stuck, some split of their holding forces inside
+  // every cone (hold_by_split). The ones that do not into released_ (empty when they hold); the
+  // least margin and its N and |H| into the note's. Cost O(stuck (n + m)), and hold_by_split's
+  // where several stick and the minimum-norm split fails (it allocates)
+  bool stuck_margins(const Controller& ctrl, ControlWorkspace& cws,
+                     const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd,
+                     double t);
   // slip's modes of the stuck contacts stuck_: sliding (friction on with the hint in hints_,
   // or off), or the mirrored ones back (saved in held_)
   void slide_stuck(Workspace& model, bool friction);
@@ -165,13 +197,17 @@ class ContactModes {
 
   // slip()'s test of several stuck contacts whose minimum-norm split fails (released_ not
   // empty): the run's, some split of their holding forces inside every cone under F_s
-  // (detail::split_space and detail::max_split_margin on lam_, the closed sliding contacts'
-  // N kept); where one holds, released_ is cleared and the note's numbers are those of the
-  // contact least held at the split of largest margin. Cost: an SVD of the active rows, one of
-  // the forces' map, and the barrier method's Newton steps; allocates (split_space).
+  // (detail::split_space and detail::max_split_margin, its sign only, on lam_, the closed
+  // sliding contacts' N kept); where one holds, released_ is cleared and the note's numbers are
+  // left to split_note_numbers (note_split_). Cost: an SVD of the active rows, one of the
+  // forces' map, and the barrier method's Newton steps (50 to 65); allocates (split_space).
   void hold_by_split(const Controller& ctrl, ControlWorkspace& cws,
                      const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd,
                      double t);
+  // the note's numbers of the last hold_by_split that held: those of the contact least held at
+  // the split of largest margin (the lower N of a tie), on space_. Cost: max_split_margin to its
+  // optimum
+  void split_note_numbers();
 
   // the model's Coulomb contacts (System::friction_contacts)
   std::vector<FrictionContact> frictions_;
@@ -202,10 +238,14 @@ class ContactModes {
   VectorXd accel_, reaction_, part_;  // (max(n, 2)), (n), (n)
   MatrixXd normals_;                  // (rows of a normal constraint × n)
   std::vector<std::size_t> sliding_;  // (≤ frictions) hold_by_split: the closed ones sliding
-  detail::SplitSpace space_;          // hold_by_split: the split space of stuck_
-  VectorXd split_y_;                  // (nz) hold_by_split: the split of largest margin
+  std::vector<std::size_t> lifted_;   // (≤ frictions) open_lifted_sticks: the sticks it opened
+  std::vector<signed char> lifted_modes_;      // (frictions) their stick's override before
+  std::vector<unsigned char> lifted_enabled_;  // (frictions) their nonideal_enabled before
+  detail::SplitSpace space_;                   // hold_by_split: the split space of stuck_
+  VectorXd split_y_;                           // (nz) hold_by_split: the split of largest margin
   double normal_force_ = 0.0, holding_force_ = 0.0;  // of the last stick_margin
   int slipped_ = 0;                                  // see slipped()
+  bool note_split_ = false;  // the note's numbers are split_note_numbers' (not yet computed)
   // stick_note()'s: the time, the row not met, the least margin mu_static N − |H| and its N
   // and |H|, the contacts released (positions in frictions_)
   double note_t_ = 0.0, note_margin_ = 0.0, note_N_ = 0.0, note_H_ = 0.0;

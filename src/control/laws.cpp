@@ -78,9 +78,16 @@ ControlStatus control_detail::solve_law_on(const Controller& ctrl, ControlWorksp
   const MatrixXd& A = ws.req.A;
   double solution_norm = 0.0;  // ‖M⁻¹ Q_c‖ resp. ‖u‖, for the feasibility test
   if (control_detail::gauss_direct(ctrl)) {
-    // mass M (a constant M is factorized once; the fused stage 1 factorized it already)
-    if (!mass_factorized && !(ctrl.model().mass_is_constant() && ws.cost_factorized)) {
-      ws.decomposition.compute_mass(ws.model.M);
+    // mass M (a constant M is factorized once; the fused stage 1 factorized it already). A
+    // singular M (a rigid body's quaternion block; docs/singular-mass.md) takes the model's
+    // completion M_A = M + A_pᵀ G A_p, positive definite where [M; A_p] has full column rank:
+    // the compliance P of the model is the same (it is M_A's, the model's decomposition), the
+    // law min Fᵀ M_A⁻¹ F over X F = e meets the requirements as M's would, and F differs from
+    // an M-minimal one only by forces A_pᵀ μ that the physical constraints take (the
+    // quaternion's unit norm: no motion, no work)
+    const bool singular = ws.model.mass_singular;
+    if (!mass_factorized && !(ctrl.model().mass_is_constant() && !singular && ws.cost_factorized)) {
+      ws.decomposition.compute_mass(singular ? ws.model.M_aux : ws.model.M);
       if (ws.decomposition.info() != Eigen::Success) {
         return control_detail::fail(ws, ControlStatus::kModelFailed, "M", -1, t);
       }

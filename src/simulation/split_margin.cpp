@@ -271,7 +271,7 @@ bool split_space(const System& sys, Workspace& ws, const Eigen::VectorXd& Lambda
   return true;
 }
 
-double max_split_margin(SplitSpace& space, Eigen::VectorXd* y_out, bool sign_only) {
+double max_split_margin(SplitSpace& space, Eigen::VectorXd* y_out, bool sign_only, bool optimum) {
   const double nan = std::numeric_limits<double>::quiet_NaN();
   const std::vector<SplitCone>& cones = space.cones;
   const Index nz = space.nz;
@@ -327,7 +327,8 @@ double max_split_margin(SplitSpace& space, Eigen::VectorXd* y_out, bool sign_onl
     // decided: a split with a margin above −kSplitTolerance (s <= s*), or none within the gap's
     // bound
     const double s = z[nz], gap = 2.0 * theta / tau;
-    if (s > -kSplitTolerance || s + gap < -kSplitTolerance || gap < 1e-14) break;
+    // (or, for the optimum, only the gap's bound)
+    if ((!optimum && (s > -kSplitTolerance || s + gap < -kSplitTolerance)) || gap < 1e-14) break;
   }
   if (y_out) *y_out = z.head(nz) * scale;
   return z[nz];

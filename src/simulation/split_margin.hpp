@@ -84,7 +84,10 @@ inline constexpr double kSplitTolerance = 1e-12;
 /// and the weight is raised a hundredfold (the same last weight, 1e16). The same decisions (to
 /// the roundoff of s* at −kSplitTolerance), in about 2.5 times fewer Newton steps. Returns
 /// s / scale; NaN when Newton fails. Cost: about 140 Newton steps (sign_only: 50 to 65) of
-/// O(nz³ + Σ d nz²); no allocation once space.barrier is sized.
-double max_split_margin(SplitSpace& space, Eigen::VectorXd* y, bool sign_only = false);
+/// O(nz³ + Σ d nz²); no allocation once space.barrier is sized. With `optimum` (not with
+/// sign_only) the sign does not end the search: s* and its maximizer to the gap's bound, 1e-14
+/// of the scale (the numbers of the split of largest margin, for a note; about 140 Newton steps).
+double max_split_margin(SplitSpace& space, Eigen::VectorXd* y, bool sign_only = false,
+                        bool optimum = false);
 
 }  // namespace ukdyn::detail
