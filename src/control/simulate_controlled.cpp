@@ -33,6 +33,7 @@
 #include "control/contact_modes.hpp"
 #include "control/internal.hpp"
 #include "dynamics/internal.hpp"
+#include "linalg/scale_class.hpp"
 #include "simulation/energy_balance.hpp"
 #include "simulation/observed_run.hpp"
 #include "simulation/sample_grid.hpp"
@@ -445,6 +446,33 @@ System build_controlled(const std::shared_ptr<const ControlledPlant>& st, bool s
   return b.build();
 }
 
+// The unit of each quadrature of a controlled run (z, then y = ∫ z dt; see simulate_controlled)
+// in the explicit methods' step-size control. The effort ∫ |Qc|² dt is weighed in a unit of its
+// own, from the plant's run scales (set_run_scales) and the run's duration T:
+//   effort  (E_u / ℓ_u)² τ r²,   its integral  (E_u / ℓ_u)² τ² r²,
+// E_u the energy unit (Workspace::energy_unit), ℓ_u the length (the class length_scale over 10),
+// E_u / ℓ_u a generalized force, τ = class(T) / 10 a time (detail::scale_class) and r the rate
+// decade (Workspace::rate_unit): 1 for a model in SI units whose E lies in [0.316, 316] J, ℓ and
+// T in [0.0316, 31.6] and v / ℓ in [1, 10) per second. Weighed as q' (atol · r), the effort, 10⁹
+// times its SI number in g, mm, ms, asked at the jump of a contact's release under control for
+// steps below the roundoff of t (docs/contact.md, "Contacts under control"). The factor r² is
+// measured, not derived: (E_u / ℓ_u)² τ alone (the effort's SI-consistent unit) runs the lift but
+// loosens the steps of a body the control holds in place in mm, after its stiffness switch to
+// BDF, until the friction its stick carries is 7.5e-7 N instead of 0 (ControlSlip.
+// BodyHeldAtItsCentre…, which passes from r² = 1e-8 of it down; the lift runs up to 1e-8 of it).
+// The others keep the weights they had as auxiliary coordinates, z as q' (r) and y as q (1): the
+// work's integrand q'ᵀ Qc is continuous where q' is. (τ is not the class of ℓ / v: v's mass
+// scale 1ᵀ M 1 / n mixes a body's mass and its inertia, whose units differ.) O(aux).
+std::vector<double> quadrature_units(const Workspace& scales, double duration, Index aux) {
+  const double force = scales.energy_unit / (scales.length_scale / 10.0),
+               time = detail::scale_class(duration) / 10.0, rate = scales.rate_unit;
+  std::vector<double> unit(std::size_t(2 * aux), 1.0);
+  for (Index i = 0; i < aux; ++i) unit[std::size_t(i)] = rate;
+  unit[std::size_t(kEffort)] = force * force * time * rate * rate;
+  unit[std::size_t(aux + kEffort)] = unit[std::size_t(kEffort)] * time;
+  return unit;
+}
+
 }  // namespace
 
 System controlled_system(const Controller& ctrl, const System& plant) {
@@ -486,8 +514,9 @@ ControlledTrajectory simulate_controlled(
 
   // the quadratures z (work, effort, absolute work, bounds), from (0, 0, 0, V_i(0)), their
   // rates from the control of the run's evaluation at each stage; then their integrals y from
-  // 0 (weighed as positions by the error control, z as velocities: as when they were
-  // coordinates; a run's steps then stay what they were where its scales did not count them)
+  // 0 (as when they were coordinates: a run's steps then stay what they were where its scales
+  // did not count them); each weighed by the error control in its unit (quadrature_units,
+  // below)
   detail::Quadratures quad;
   quad.count = 2 * aux;
   quad.velocities = aux;
@@ -664,6 +693,7 @@ ControlledTrajectory simulate_controlled(
     Workspace scales(plant);
     set_run_scales(plant, scales, q0, qd0, o.t_start, o.t_end - o.t_start);
     plant_rate = scales.rate_unit;
+    quad.unit = quadrature_units(scales, o.t_end - o.t_start, aux);
   }
   const Trajectory full = detail::simulate_observed(
       sys, q0, qd0, o,

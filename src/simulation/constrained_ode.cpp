@@ -28,6 +28,12 @@ WorkLayout::WorkLayout(const System& sys, bool quiet_channels, const Quadratures
     quadrature = count;
     quadrature_velocities = quad->velocities;
     count += quad->count;
+    quadrature_units.assign(std::size_t(quad->count), 1.0);
+    if (!quad->unit.empty()) {
+      UKDYN_CHECK(Index(quad->unit.size()) == quad->count,
+                  "WorkLayout: Quadratures::unit must have count entries (or none)");
+      quadrature_units = quad->unit;
+    }
   }
 }
 

@@ -55,9 +55,13 @@ struct WorkLayout {
   }
   bool quiet = true;
   Index nonideal = 0, ideal = -1, drive = -1, external = -1;
-  Index quadrature = -1;            // the first of the quadratures' channels (Quadratures), or −1
-  Index quadrature_velocities = 0;  // how many of them the error control weighs as q'
-  Index count = 1;                  // number of channels (the quadratures' included)
+  Index quadrature = -1;  // the first of the quadratures' channels (Quadratures), or −1
+  Index count = 1;        // number of channels (the quadratures' included)
+  // (count − quadrature) the unit of each quadrature (Quadratures::unit): the explicit methods'
+  // step-size control takes atol · unit_i as its atol, and dopri5's stiffness probe compares it
+  // in this unit
+  std::vector<double> quadrature_units;
+  Index quadrature_velocities = 0;  // how many of them BDF weighs as q' (Quadratures::velocities)
   std::vector<Index> drives;        // indices of the drive constraints
 };
 

@@ -37,17 +37,24 @@ struct StageProbe {
   // zero) that adds no stiffness, but its smooth change can swamp y7 − y6 (a damper written
   // as a non-ideal force C: W' = −c q'² is large while the stiff part of y7 − y6 is tiny).
   // (In fact over every component but the last work channel, `skip`; a caller's quadratures,
-  // after it, count as the coordinates they were once: a controlled run's integrals)
+  // after it, count as the coordinates they were once, a controlled run's integrals, each in
+  // its unit (WorkLayout::quadrature_units): in its model's units the control's effort, 10⁹
+  // times its SI number in g, mm, ms, would make h·ρ that of the effort's jumps alone)
   double h_rho(double h) const {
     double num = 0.0, den = 0.0;
     for (std::size_t i = 0; i < x_last.size(); ++i) {
       if (i == skip) continue;
-      num += (f_last[i] - f_prev[i]) * (f_last[i] - f_prev[i]);
-      den += (x_last[i] - x_prev[i]) * (x_last[i] - x_prev[i]);
+      const double w = i < quadrature ? 1.0 : 1.0 / units[i - quadrature];
+      const double df = (f_last[i] - f_prev[i]) * w, dx = (x_last[i] - x_prev[i]) * w;
+      num += df * df;
+      den += dx * dx;
     }
     return den > 0.0 ? std::abs(h) * std::sqrt(num / den) : 0.0;
   }
   std::size_t skip = 0;  // the last work channel's index in x
+  // the first quadrature's index in x (x.size() without) and the quadratures' units
+  std::size_t quadrature = 0;
+  std::vector<double> units;
 };
 
 // Projected stages near a singular configuration. Off the constraints, q'' carries a stage
@@ -166,9 +173,8 @@ SegmentResult& stop(SegmentResult& r, Status s, double t, std::string message = 
 class StepControl {
  public:
   // x = [q; q'; W; z] with n coordinates; rate: the run's rate decade (Workspace::rate_unit),
-  // the atol on q' and on the quadratures weighed as q' being o.atol · rate (docs/simulation.md,
-  // "Scales and tolerances"; a controlled run's integrals, which were q' of auxiliary
-  // coordinates once)
+  // the atol on q' being o.atol · rate, and on the quadrature z_i o.atol · unit_i
+  // (WorkLayout::quadrature_units; docs/simulation.md, "Scales and tolerances")
   StepControl(const SimulationOptions& o, SegmentHooks& hooks, std::size_t size, Index n,
               double rate, const WorkLayout& works)
       : rtol_(o.rtol),
@@ -179,9 +185,9 @@ class StepControl {
         err_normal_(size) {
     for (Index i = n; i < 2 * n; ++i) atol_[std::size_t(i)] = o.atol * rate;
     if (works.quadrature >= 0) {
-      const Index z = 2 * n + works.quadrature;
-      for (Index i = z; i < z + works.quadrature_velocities; ++i) {
-        atol_[std::size_t(i)] = o.atol * rate;
+      const std::size_t z = std::size_t(2 * n + works.quadrature);
+      for (std::size_t i = 0; i < works.quadrature_units.size(); ++i) {
+        atol_[z + i] = o.atol * works.quadrature_units[i];
       }
     }
   }
@@ -367,6 +373,8 @@ SegmentResult dopri5(ConstrainedOde& ode, State& x, double t0, double t1,
     const WorkLayout& w = ode.works();
     probe.skip =
         std::size_t(2 * ode.coordinate_count() + (w.quadrature >= 0 ? w.quadrature : w.count) - 1);
+    probe.quadrature = w.quadrature >= 0 ? probe.skip + 1 : x.size();
+    probe.units = w.quadrature_units;
   }
   StiffnessTest stiffness;
   StageProjection projection(hooks, x.size());

@@ -14,6 +14,7 @@
 #include <string>
 
 #include "ukdyn/control/control.hpp"
+#include "ukdyn/core/format.hpp"
 #include "ukdyn/dynamics/contact.hpp"
 #include "ukdyn/modelfile/model.hpp"
 #include "ukdyn/ukdyn.hpp"
@@ -194,6 +195,78 @@ TEST(ControlLift, RequirementActiveFromHalfASecondLiftsARobotsTipOffTheGround) {
   EXPECT_LT(t_release, 0.5 + 3e-6);
   ASSERT_EQ(r.plant.samples(), 21);
   expect_tip_lifted(r.plant, 0.5);
+}
+
+// The robot arm above with joint damping and friction (0.1 N m s, 0.05 N m) and a Coulomb tip
+// (mu = 1) resting on the ground, lifted from t1 = 0.5 s, in SI (tests/data/arm_lift_jf.urdf)
+// and in mm, g, ms (arm_lift_jf_mm.urdf: the same arm, its numbers scaled; u16's reproducer). The
+// control's effort ∫ |Qc|² dt is 10⁹ times its SI number in mm, g, ms; weighed with the
+// velocities' atol, its jump at the release asked for steps below the roundoff of t ("dopri5:
+// step size underflow at t = 500.0003174869367"). Each of the control's integrals is now weighed
+// in a unit of its own (simulate_controlled's quadrature_units).
+std::string lifted_arm(bool mm, double atol) {
+  const std::string units = mm ? "1000" : "1";  // mm per length unit (also ms per time unit)
+  return std::string("parameters: {") +
+         (mm ? "L1: 500, L2: 400, H: 500, g: 9.81e-3, c: 2e-6, t1: 500"
+             : "L1: 0.5, L2: 0.4, H: 0.5, g: 9.81, c: 2, t1: 0.5") +
+         ", q10: 1.0, mu: 1}\nunits: " +
+         (mm ? "{length: mm, mass: g, time: ms}" : "{length: m, mass: kg, time: s}") +
+         "\nrobot: {urdf: " + (mm ? "arm_lift_jf_mm.urdf" : "arm_lift_jf.urdf") +
+         R"(, gravity: [0, 0, -g]}
+contacts:
+  - {name: tip, link: fore, point: [L2, 0, 0], restitution: 0}
+nonideal:
+  - {friction: coulomb, constraint: tip, mu: mu}
+initial:
+  q: {j1: q10, j2: asin((H - L1*sin(q10))/L2) - q10}
+control:
+  requirements:
+    - {name: pz, holonomic: H - L1*sin(j1) - L2*sin(j1 + j2) - c*(t - t1)^3, active: [t1, )" +
+         (mm ? "2000], dynamics: {omega: 0.02" : "2], dynamics: {omega: 20") + R"(, zeta: 1}}
+  law: gauss
+simulate: {t_end: )" +
+         (mm ? "1000" : "1") + ", integrator: dopri5, rtol: 1e-10, atol: " + format_number(atol) +
+         "}\noutput: {every: " + (mm ? "50" : "0.05") + "}\n";
+}
+
+ControlledTrajectory lifted_arm_run(bool mm, double atol) {
+  return run(parse_model(lifted_arm(mm, atol), std::string(UKDYN_TEST_DATA_DIR) + "/arm.yaml"));
+}
+
+// the mm run `b` is the SI run `a` scaled, to `tol` relative to each quantity's largest value:
+// the release's time, the angles, the control's effort (× 10⁹ in g² mm⁴ ms⁻³) and work (× 10³)
+// at every sample
+void expect_scaled(const ControlledTrajectory& a, const ControlledTrajectory& b, double tol) {
+  const double t_a = the_release(a), t_b = the_release(b);
+  EXPECT_NEAR(t_b / 1e3, t_a, tol * t_a);
+  EXPECT_GT(t_a, 0.5);  // (the drift allowance, as above)
+  EXPECT_LT(t_a, 0.5 + 3e-6);
+  ASSERT_EQ(a.plant.samples(), 21);
+  ASSERT_EQ(b.plant.samples(), 21);
+  const double effort = a.control_effort.back(), work = a.control_work.back();
+  // (the lift's effort and work, about 6.7 N² m² s and 1.9 J)
+  EXPECT_NEAR(effort, 6.68, 0.05);
+  EXPECT_NEAR(work, 1.90, 0.05);
+  for (std::size_t j = 0; j < 21; ++j) {
+    EXPECT_NEAR(b.plant.t[j] / 1e3, a.plant.t[j], 1e-15) << j;
+    EXPECT_NEAR(b.plant.q[2 * j], a.plant.q[2 * j], tol * 2.0) << "t = " << a.plant.t[j];
+    EXPECT_NEAR(b.plant.q[2 * j + 1], a.plant.q[2 * j + 1], tol * 3.0) << "t = " << a.plant.t[j];
+    EXPECT_NEAR(b.control_effort[j] / 1e9, a.control_effort[j], tol * effort)
+        << "t = " << a.plant.t[j];
+    EXPECT_NEAR(b.control_work[j] / 1e3, a.control_work[j], tol * work) << "t = " << a.plant.t[j];
+    EXPECT_NEAR(b.plant.work_control[j] / 1e3, a.plant.work_control[j], tol * work)
+        << "t = " << a.plant.t[j];
+  }
+}
+
+TEST(ControlLift, RobotArmLiftedOffAFrictionalGroundRunsAsInSIInMillimetresGramsMilliseconds) {
+  // the reproducer's atol: 1e-12 in SI, 1e-9 in mm (1e-12 m; on the angles 1000 times the SI
+  // run's), so the mm run is the SI one to what that tolerance allows (measured: 4.6e-11 of the
+  // release's time, 1.6e-9 of the angles, 7.3e-9 of the effort, 8.7e-9 of the work)
+  const ControlledTrajectory si = lifted_arm_run(false, 1e-12);
+  const ControlledTrajectory mm = lifted_arm_run(true, 1e-9);
+  ASSERT_EQ(mm.plant.stats.status, Status::kOk) << mm.plant.stats.message;
+  expect_scaled(si, mm, 3e-8);
 }
 
 }  // namespace UKDYN_TEST_FILE
