@@ -182,8 +182,9 @@ int main(int argc, char** argv) {
       ->type_name("LIST");
   run_cmd
       ->add_option("--from-summary", run.from_summary,
-                   "make an earlier run again from its summary.json: the same model (checked "
-                   "unchanged), parameter overrides and settings; --set and flags apply on top")
+                   "make an earlier run again from its summary.json (or its trajectory.h5, or "
+                   "Python's Result.to_hdf5 file): the same model (checked unchanged), parameter "
+                   "overrides, settings and --format; --set and flags apply on top")
       ->type_name("FILE");
   run_cmd
       ->add_option("--plot-format", run.plot_formats,
