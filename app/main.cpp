@@ -277,7 +277,8 @@ int main(int argc, char** argv) {
   CLI::App* check_cmd =
       app.add_subcommand("check",
                          "report coordinates, constraint rank, degrees of freedom, redundant "
-                         "constraints, initial consistency and M at the initial state");
+                         "constraints, initial consistency, M and the control (requirements "
+                         "that cannot be met) at the initial state");
   add_source_options(check_cmd, check);
 
   LinearizeArguments lin;
