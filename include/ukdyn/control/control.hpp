@@ -499,9 +499,10 @@ struct ControlStatistics {
   /// uncertainty model of RobustControl, and the bound guarantees nothing (NaN if never).
   double bound_exceeded_at = std::numeric_limits<double>::quiet_NaN();
   /// The largest |error_i| / error_bound_i over the samples where the bound was exceeded
-  /// (0 if never), its row's name and its time.
+  /// (0 if never).
   double bound_worst_ratio = 0.0;
-  std::string bound_worst_row;
+  std::string bound_worst_row;  ///< the row of bound_worst_ratio ("" if never)
+  /// the sample time of bound_worst_ratio (NaN if never)
   double bound_worst_time = std::numeric_limits<double>::quiet_NaN();
   /// The relative margin of that check: exceeded when |e| > (1 + kBoundMargin) bound + the
   /// rounding floor (1e-9 of the run's largest bound).
