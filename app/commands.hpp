@@ -100,10 +100,11 @@ struct RunArguments {
   std::vector<std::string> arguments;  ///< the command line, for summary.json's provenance
 };
 
-/// Fills args from an earlier run's summary.json (args.from_summary): the model file (checked
-/// unchanged by its SHA-256) or example, the overridden parameters as --set, every setting as a
-/// flag; what args already has applies after them. @throws UsageError naming the file and what
-/// is wrong with it.
+/// Fills args from an earlier run's summary.json, or the `summary` attribute of an HDF5 file
+/// (args.from_summary): the model file (checked unchanged by its SHA-256) or example, the
+/// overridden parameters as --set, every setting as a flag, the run's --format unless
+/// args.arguments gives one; what args already has applies after them. @throws UsageError naming
+/// the file and what is wrong with it.
 void apply_summary(RunArguments& args);
 
 /// The text of the model `source` names (the file's bytes, or the example's text).

@@ -182,8 +182,9 @@ int main(int argc, char** argv) {
       ->type_name("LIST");
   run_cmd
       ->add_option("--from-summary", run.from_summary,
-                   "make an earlier run again from its summary.json: the same model (checked "
-                   "unchanged), parameter overrides and settings; --set and flags apply on top")
+                   "make an earlier run again from its summary.json (or its trajectory.h5, or "
+                   "Python's Result.to_hdf5 file): the same model (checked unchanged), parameter "
+                   "overrides, settings and --format; --set and flags apply on top")
       ->type_name("FILE");
   run_cmd
       ->add_option("--plot-format", run.plot_formats,
@@ -276,7 +277,8 @@ int main(int argc, char** argv) {
   CLI::App* check_cmd =
       app.add_subcommand("check",
                          "report coordinates, constraint rank, degrees of freedom, redundant "
-                         "constraints, initial consistency and M at the initial state");
+                         "constraints, initial consistency, M and the control (requirements "
+                         "that cannot be met) at the initial state");
   add_source_options(check_cmd, check);
 
   LinearizeArguments lin;

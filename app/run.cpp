@@ -437,13 +437,8 @@ int run_command(const RunArguments& given) {
     std::printf("  control: %ld evaluations", c.evaluations);
     if (c.max_kappa > 0) std::printf(", largest robust gain %.3g", c.max_kappa);
     std::printf("\n");
-    if (c.not_met > 0) {
-      std::fprintf(stderr,
-                   "warning: the control could not meet every requirement in %ld of %ld "
-                   "evaluations (first at t = %g %s: %s); largest residual %.3g. It applied the "
-                   "least-squares force: see the error.* columns for what was not met\n",
-                   c.not_met, c.evaluations, c.first_not_met, tu,
-                   terminal_text(c.not_met_message).c_str(), c.max_residual);
+    for (const std::string& w : control_warnings(c, tu)) {
+      std::fprintf(stderr, "warning: %s\n", terminal_text(w).c_str());
     }
   }
   for (const auto& f : files) std::printf("  wrote %s\n", terminal_text(f.string(), false).c_str());

@@ -6,12 +6,15 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <optional>
 #include <sstream>
 #include <string>
 #include <string_view>
 #include <system_error>
 
 #include <nlohmann/json.hpp>
+
+#include <ukdyn/io/trajectory_files.hpp>
 
 #include <ukdyn/core/format.hpp>
 #include <ukdyn/modelfile/run.hpp>
@@ -114,42 +117,53 @@ std::string source_text(const ModelSource& source) {
 
 RunProvenance provenance_of(const ModelSource& source, const Model& model,
                             const std::vector<std::string>& arguments) {
-  RunProvenance p;
-  p.model_name = model.name;
+  std::string file;
   if (!source.path.empty()) {
     std::error_code ec;
     const auto absolute = std::filesystem::absolute(source.path, ec);
-    p.model_file = ec ? source.path : absolute.lexically_normal().string();
+    file = ec ? source.path : absolute.lexically_normal().string();
   }
-  p.example = source.example;
-  p.model_sha256 = sha256_hex(source_text(source));
-  const auto overrides = parse_overrides(source.set);
-  for (const auto& [name, value] : model.parameters) {
-    p.parameters.push_back({name, value, overrides.count(name) > 0});
-  }
-  p.arguments = arguments;
-  const auto& names = model.system.coordinate_names();
-  // the time's (column t), then the coordinates'
-  p.units.emplace_back("t", model.unit_system.time);
-  for (std::size_t i = 0; i < names.size() && i < model.coordinate_units.size(); ++i) {
-    p.units.emplace_back(names[i], model.coordinate_units[i]);
-  }
-  // the output expressions' (one named like a coordinate keeps the coordinate's)
-  for (std::size_t i = 0; i < model.output_names.size() && i < model.output_units.size(); ++i) {
-    if (std::find(names.begin(), names.end(), model.output_names[i]) == names.end()) {
-      p.units.emplace_back(model.output_names[i], model.output_units[i]);
-    }
-  }
-  // the gaps of the contacts: entries (a distance: the length unit; contact_gap_units)
-  for (auto& gap : contact_gap_units(model)) p.units.push_back(std::move(gap));
-  const UnitSystem& u = model.unit_system;
-  p.unit_system = {{"length", u.length},       {"mass", u.mass},     {"time", u.time},
-                   {"velocity", u.velocity()}, {"force", u.force()}, {"energy", u.energy()},
-                   {"power", u.power()}};
-  return p;
+  std::vector<std::string> overridden;
+  for (const auto& given : parse_overrides(source.set)) overridden.push_back(given.first);
+  return model_provenance(model, file, source.example, source_text(source), overridden, arguments);
 }
 
 namespace {
+// the --format list of a command line (argv), if it gives one: "--format csv,hdf5" or
+// "--format=hdf5"
+std::optional<std::vector<std::string>> format_of(const std::vector<std::string>& argv) {
+  std::optional<std::string> text;
+  for (std::size_t i = 0; i < argv.size(); ++i) {
+    if (argv[i] == "--format" && i + 1 < argv.size()) text = argv[i + 1];
+    if (argv[i].rfind("--format=", 0) == 0) text = argv[i].substr(9);
+  }
+  if (!text) return std::nullopt;
+  std::vector<std::string> out;
+  std::stringstream in(*text);
+  for (std::string item; std::getline(in, item, ',');) out.push_back(item);
+  return out;
+}
+
+// the summary of an earlier run: summary.json, or the `summary` attribute of its trajectory.h5
+// (`ukdyn run --format hdf5`, Python's Result.to_hdf5)
+std::string summary_text(const std::string& file) {
+  std::ifstream in(file, std::ios::binary);
+  if (!in) throw UsageError("--from-summary: cannot read '" + file + "'");
+  char magic[8] = {};
+  in.read(magic, sizeof magic);
+  if (in.gcount() == 8 && std::string_view(magic, 8) == std::string_view("\x89HDF\r\n\x1a\n", 8)) {
+    try {
+      return read_hdf5_string_attribute(file, "summary");
+    } catch (const std::exception& e) {
+      throw UsageError("--from-summary " + file + ": an HDF5 file without a run's summary (" +
+                       e.what() + ")");
+    }
+  }
+  in.clear();
+  in.seekg(0);
+  return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+}
+
 // the text of a setting's value as its flag would take it
 std::string setting_text(const nlohmann::json& v) {
   if (v.is_boolean()) return v.get<bool>() ? "true" : "false";
@@ -168,9 +182,7 @@ void apply_summary(RunArguments& args) {
     throw UsageError("--from-summary " + file +
                      " names the model itself: give no model file or --example with it");
   }
-  std::ifstream in(file);
-  if (!in) throw UsageError("--from-summary: cannot read '" + file + "'");
-  const nlohmann::json j = nlohmann::json::parse(in, nullptr, false);
+  const nlohmann::json j = nlohmann::json::parse(summary_text(file), nullptr, false);
   const auto bad = [&](const std::string& what) {
     return UsageError("--from-summary " + file + ": " + what);
   };
@@ -211,6 +223,12 @@ void apply_summary(RunArguments& args) {
     }
     settings.insert(settings.end(), args.settings.begin(), args.settings.end());
     args.settings = std::move(settings);
+    // the table formats of that run (its --format), unless given now
+    if (!format_of(args.arguments) && p.contains("arguments") && p["arguments"].is_array()) {
+      if (auto earlier = format_of(p["arguments"].get<std::vector<std::string>>())) {
+        args.formats = std::move(*earlier);
+      }
+    }
     args.source = std::move(source);
   } catch (const nlohmann::json::exception& e) {
     throw bad(std::string("malformed provenance or options (") + e.what() + ")");

@@ -302,7 +302,7 @@ py::tuple simulate_system(const SystemHandle& h, py::handle q0, py::handle qd0,
   }
   h.raise_pending();
   if (ctrl) ctrl->raise_pending();
-  return run_tuple(std::move(run), interrupt.exception());
+  return run_tuple(std::move(run), interrupt.exception(), o, nullptr);
 }
 
 }  // namespace

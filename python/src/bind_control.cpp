@@ -214,6 +214,30 @@ definite" for a weight N that is not) when the evaluation fails. Cost: one forwa
 O(n² m_r + n m_r²).)doc")
       .def_property_readonly(
           "controller", [](const ControlSolver& s) { return s.handle(); }, "The controller.");
+  // the warnings of a run's control statistics (the dict of Result.control), as `ukdyn run`
+  // prints them: ukdyn.simulate raises them as UserWarning
+  m.def(
+      "_control_warnings",
+      [](const py::dict& c, const std::string& time_unit) {
+        ControlStatistics s;
+        auto number = [&](const char* key, double fallback) {
+          return c.contains(key) && !c[key].is_none() ? c[key].cast<double>() : fallback;
+        };
+        s.evaluations = long(number("evaluations", 0.0));
+        s.not_met = long(number("not_met", 0.0));
+        s.max_residual = number("max_residual", 0.0);
+        s.first_not_met = number("first_not_met", 0.0);
+        if (c.contains("not_met_message"))
+          s.not_met_message = c["not_met_message"].cast<std::string>();
+        s.bound_exceeded_at = number("bound_exceeded_at", s.bound_exceeded_at);
+        s.bound_worst_ratio = number("bound_worst_ratio", 0.0);
+        s.bound_worst_time = number("bound_worst_time", s.bound_worst_time);
+        if (c.contains("bound_worst_row"))
+          s.bound_worst_row = c["bound_worst_row"].cast<std::string>();
+        return control_warnings(s, time_unit);
+      },
+      py::arg("control"), py::arg("time_unit"),
+      "control_warnings (control/control.hpp) of a Result.control dict: one line per warning.");
 }
 
 }  // namespace ukdyn::python

@@ -2,13 +2,17 @@
 // ukdyn.Model: model files and the built-in examples (modelfile/model.hpp), run as `ukdyn run` runs
 // them (modelfile/run.hpp), and check_model.
 #include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <map>
 
 #include "common.hpp"
 #include "embedded.hpp"  // app/embedded.hpp: the example models, embedded at build time
 #include "suggest.hpp"   // app/suggest.hpp: did-you-mean, as the command's
 #include "ukdyn/core/format.hpp"
+#include "ukdyn/io/provenance.hpp"
 #include "ukdyn/io/trajectory_files.hpp"
+#include "ukdyn/modelfile/run.hpp"
 #include "ukdyn/modelfile/visual.hpp"
 
 namespace ukdyn::python {
@@ -39,7 +43,7 @@ const cli::EmbeddedFile* find_example(const std::string& name) {
 // the model run with settings; q0 / qd0 replace the initial state when given; `stop` is asked
 // every InterruptCheck::kInterval whether to stop (after Python's signal handlers ran)
 py::tuple run(const Model& model, const py::dict& settings, py::object q0, py::object qd0,
-              py::object stop) {
+              py::object stop, py::object source) {
   SimulationOptions o = model.options;
   apply_simulation_options(o, settings, "Model.simulate");
   const InterruptCheck interrupt(stop);
@@ -59,7 +63,39 @@ py::tuple run(const Model& model, const py::dict& settings, py::object q0, py::o
     ReleasedGil release;  // the run is C++ only (model files hold no Python code)
     r = run_model(*m, o);
   }
-  return run_tuple(std::move(r), interrupt.exception());
+  // what the run was made from, as `ukdyn run` records it (model_provenance): the source that
+  // ukdyn.load kept (file or example, SHA-256 of its text, the overridden parameters)
+  RunProvenance provenance;
+  if (!source.is_none()) {
+    const py::dict d = source.cast<py::dict>();
+    provenance =
+        model_provenance(*m, d["file"].cast<std::string>(), d["example"].cast<std::string>(), "",
+                         d["overridden"].cast<std::vector<std::string>>(), {});
+    provenance.model_sha256 = d["sha256"].cast<std::string>();
+  } else {
+    provenance = model_provenance(*m, model.file, "", "", {}, {});
+    provenance.model_sha256.clear();  // (not known: a model parsed from text, or from_sympy)
+  }
+  return run_tuple(std::move(r), interrupt.exception(), o, &provenance);
+}
+
+// the model with what it was loaded from, for its runs' provenance (Model._source)
+py::object with_source(std::shared_ptr<Model> md, const std::string& file,
+                       const std::string& example, std::string_view text,
+                       const Overrides& overrides) {
+  py::object obj = py::cast(std::move(md));
+  py::dict d;
+  std::error_code ec;
+  const auto absolute =
+      file.empty() ? std::filesystem::path() : std::filesystem::absolute(file, ec);
+  d["file"] = file.empty() || ec ? file : absolute.lexically_normal().string();
+  d["example"] = example;
+  d["sha256"] = sha256_hex(text);
+  std::vector<std::string> names;
+  for (const auto& given : overrides) names.push_back(given.first);
+  d["overridden"] = names;
+  obj.attr("_source") = d;
+  return obj;
 }
 
 py::dict check(const Model& model) {
@@ -85,7 +121,7 @@ py::dict check(const Model& model) {
 }  // namespace
 
 void bind_model(py::module_& m) {
-  py::class_<Model, std::shared_ptr<Model>>(m, "Model", R"doc(
+  py::class_<Model, std::shared_ptr<Model>>(m, "Model", py::dynamic_attr(), R"doc(
 A model read from a model file, an example or SymPy expressions (the C++ ukdyn::Model): the
 system, its parameters, initial state and simulation settings, output expressions and, when
 the file has a `control:` section, its controller. Immutable; load one with ukdyn.load(),
@@ -185,10 +221,13 @@ ukdyn.parse() or ukdyn.from_sympy(). Model.simulate() runs it exactly as `ukdyn 
           "True for a model written with bodies:/joints:/forces:.")
       .def("_run", &run, py::arg("settings"), py::arg("q0") = py::none(),
            py::arg("qd0") = py::none(), py::arg("stop") = py::none(),
+           py::arg("source") = py::none(),
            "Runs the model (run_model, modelfile/run.hpp) with the GIL released; returns (names, "
            "columns, "
            "statistics, control statistics or None, the exception a signal handler raised or "
-           "None). stop() is called every 20 ms of the run, after Python's signal handlers; "
+           "None, the summary.json text). source: Model._source (ukdyn.load's), for the "
+           "summary's provenance. stop() is called every 20 ms of the run, after Python's signal "
+           "handlers; "
            "true stops the run. Use Model.simulate().")
       .def("check", &check,
            R"doc(What `ukdyn check` reports (check_model, modelfile/model.hpp), as a dict:
@@ -210,8 +249,15 @@ initial_violations, mass_positive_definite, mass_singular, problems, ok.)doc")
   m.def(
       "_load_file",
       [](const std::string& path, const Overrides& overrides, const GivenTables& tables) {
-        ReleasedGil release;
-        return std::make_shared<Model>(load_model(path, overrides, tables));
+        std::shared_ptr<Model> md;
+        std::string text;
+        {
+          ReleasedGil release;
+          md = std::make_shared<Model>(load_model(path, overrides, tables));
+          std::ifstream in(path, std::ios::binary);
+          text.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+        }
+        return with_source(std::move(md), path, "", text, overrides);
       },
       py::arg("path"), py::arg("overrides"), py::arg("tables") = GivenTables{},
       "load_model(path, overrides, tables). Raises ModelError.");
@@ -229,9 +275,13 @@ initial_violations, mass_positive_definite, mass_singular, problems, ok.)doc")
       [](const std::string& name, const Overrides& overrides, const GivenTables& tables) {
         const cli::EmbeddedFile* f = find_example(name);
         if (!f) throw unknown_example("no model file or example", name);
-        ReleasedGil release;
-        return std::make_shared<Model>(
-            parse_model(f->text, "examples/models/" + name + ".yaml", overrides, tables));
+        std::shared_ptr<Model> md;
+        {
+          ReleasedGil release;
+          md = std::make_shared<Model>(
+              parse_model(f->text, "examples/models/" + name + ".yaml", overrides, tables));
+        }
+        return with_source(std::move(md), "", name, f->text, overrides);
       },
       py::arg("name"), py::arg("overrides"), py::arg("tables") = GivenTables{},
       "The built-in example `name`. Raises ValueError listing the examples for another name.");

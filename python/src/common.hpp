@@ -71,9 +71,12 @@ py::list options_list();
 py::dict statistics_dict(const RunStatistics& s);
 
 /// A model run as the tuple (names, columns, statistics, control statistics or None,
-/// interrupt) that the Python Result class wraps; the columns are NumPy arrays taking over
-/// run.columns(); interrupt is InterruptCheck::exception() (None unless a signal handler raised).
-py::tuple run_tuple(ModelRun&& run, py::object interrupt = py::none());
+/// interrupt, summary) that the Python Result class wraps; the columns are NumPy arrays taking
+/// over run.columns(); interrupt is InterruptCheck::exception() (None unless a signal handler
+/// raised); summary is the run's summary.json text (summary_json of io/trajectory_files.hpp with
+/// `options` and `provenance`, null for none), which Result.to_hdf5 writes as `ukdyn run` does.
+py::tuple run_tuple(ModelRun&& run, py::object interrupt, const SimulationOptions& options,
+                    const RunProvenance* provenance);
 
 /// Ctrl-C during a run with the GIL released (docs/python.md, "Interrupts"). attach() sets
 /// SimulationOptions::should_stop to a check that, at most every kInterval of the run, takes the

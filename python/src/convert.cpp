@@ -451,7 +451,11 @@ py::object InterruptCheck::exception() const {
   return state_->error->value();
 }
 
-py::tuple run_tuple(ModelRun&& run, py::object interrupt) {
+py::tuple run_tuple(ModelRun&& run, py::object interrupt, const SimulationOptions& options,
+                    const RunProvenance* provenance) {
+  // the summary first (its final state reads the trajectory, whose columns move out below)
+  std::string summary =
+      summary_json(run.trajectory, options, provenance, run.controlled ? &run.control : nullptr);
   std::vector<CsvColumn> columns = run.columns();
   py::list names, values;
   for (CsvColumn& c : columns) {
@@ -467,10 +471,14 @@ py::tuple run_tuple(ModelRun&& run, py::object interrupt) {
     c["first_not_met"] = run.control.first_not_met;
     c["not_met_message"] = run.control.not_met_message;
     c["max_kappa"] = run.control.max_kappa;
+    c["bound_exceeded_at"] = run.control.bound_exceeded_at;
+    c["bound_worst_ratio"] = run.control.bound_worst_ratio;
+    c["bound_worst_row"] = run.control.bound_worst_row;
+    c["bound_worst_time"] = run.control.bound_worst_time;
     control = c;
   }
   return py::make_tuple(names, values, statistics_dict(run.trajectory.stats), control,
-                        std::move(interrupt));
+                        std::move(interrupt), std::move(summary));
 }
 
 }  // namespace ukdyn::python

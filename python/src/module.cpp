@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // The Python module ukdyn._ukdyn: exception translation and the module's entry point. The
 // classes and functions are bound in bind_*.cpp; the package ukdyn (python/ukdyn/) wraps them.
+#include <string_view>
+
 #include "common.hpp"
 
 #include <ukdyn/core/format.hpp>
@@ -15,10 +17,10 @@ py::object error_class(const char* name) { return py::module_::import("ukdyn.err
 
 // C++ exceptions -> Python: ModelError -> ukdyn.ModelError (file, line, column, message, hint),
 // SolveError -> ukdyn.SolveError (status), InconsistentInitialState ->
-// ukdyn.InconsistentInitialState and SettingError -> ValueError (their text without
-// "ukdyn::simulate: "); the rest follow pybind11's defaults (std::invalid_argument -> ValueError,
-// other std::exception -> RuntimeError), with any byte of a message that is not UTF-8 shown as
-// U+FFFD
+// ukdyn.InconsistentInitialState, SettingError and simulate's other misuse -> ValueError (their
+// text without "ukdyn::simulate: "); the rest follow pybind11's defaults (std::invalid_argument ->
+// ValueError, other std::exception -> RuntimeError), with any byte of a message that is not UTF-8
+// shown as U+FFFD
 void translate(std::exception_ptr p) {
   try {
     if (p) std::rethrow_exception(p);
@@ -45,6 +47,17 @@ void translate(std::exception_ptr p) {
     throw;  // pybind11's own (py::value_error, …): its default translation
   } catch (const py::error_already_set&) {
     throw;
+  } catch (const std::invalid_argument& e) {
+    // misuse of a run (a non-finite q0, sizes that differ): a ValueError without the C++
+    // function's name "ukdyn::simulate: ", as for SettingError (docs/python.md, "Errors")
+    std::string text = valid_utf8(e.what());
+    static constexpr std::string_view kSimulate = "ukdyn::simulate: ";
+    if (text.rfind(kSimulate, 0) == 0) {
+      text.erase(0, kSimulate.size());
+    } else if (text == e.what()) {
+      throw;
+    }
+    PyErr_SetString(PyExc_ValueError, text.c_str());
   } catch (const std::exception& e) {
     // a message that is not valid UTF-8 (pybind11's default would raise UnicodeDecodeError
     // in its place): the same Python class, with U+FFFD for each bad byte; otherwise the default

@@ -208,7 +208,7 @@ def test_the_gil_is_released_during_a_run():
     worker.start()
     try:
         # a run far longer than ten intervals: stop() ends it
-        _, _, stats, _, raised = model._run(
+        _, _, stats, _, raised, _ = model._run(
             {"t_end": 50.0, "integrator": "rk4", "step": 1e-5, "output_every": 1.0}, None, None,
             stop)
     finally:

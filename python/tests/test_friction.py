@@ -35,7 +35,8 @@ def check_belt(r):
     np.testing.assert_allclose(r.x, exact, rtol=0, atol=2e-7)
     assert r.stats["events"] == 6  # slip, stick, slip, stick, slip, stick in 10 s
     assert r.stats["stick_refusals"] == 0
-    assert r.stats["notes"] == []
+    # (a floor from callables is in acceleration form: its violation is unknown, and noted)
+    assert [n for n in r.stats["notes"] if "given in acceleration form only" not in n] == []
 
 
 def test_conveyor_belt_from_the_gallery_file():

@@ -174,9 +174,11 @@ def _model_simulate(self: Model, *, t_end: Optional[float] = None, q0: Any = Non
         settings["t_end"] = t_end
     from .callables import _finish
     with _interrupt.guard() as interrupt:
-        names, columns, stats, control, raised = self._run(settings, q0, qd0, interrupt.stop)
+        names, columns, stats, control, raised, summary = self._run(
+            settings, q0, qd0, interrupt.stop, getattr(self, "_source", None))
     result = Result(names, columns, stats, control, self.coordinates, self.units, self.name,
                     self.unit_system)
+    result._summary = summary
     result.scene = _json.loads(self._scene_json)  # what Result.show() draws
     interrupt.raise_if_interrupted(result, raised)
     return _finish(result, check)

@@ -211,14 +211,20 @@ def simulate(system: Any, q0: Any = None, qd0: Any = None, *, controller: Any = 
     if q0 is None or qd0 is None:
         raise ValueError("simulate: a System needs q0 and qd0")
     with _interrupt.guard() as interrupt:
-        names, columns, stats, control, raised = _ukdyn._simulate_system(
+        names, columns, stats, control, raised, summary = _ukdyn._simulate_system(
             system, q0, qd0, settings, controller, interrupt.stop)
     result = Result(names, columns, stats, control, system.coordinates)
+    result._summary = summary
     interrupt.raise_if_interrupted(result, raised)
     return _finish(result, check)
 
 
 def _finish(result: Result, check: bool) -> Result:
+    # the control's warnings, as `ukdyn run` prints them (requirements not met, the robust bound
+    # left): UserWarning
+    if result.control:
+        for line in _ukdyn._control_warnings(result.control, result.unit_system["time"]):
+            warnings.warn(line, UserWarning, stacklevel=3)
     if result.status == "energy_balance":
         # the run is complete: a warning, not an error (warnings.simplefilter("error") makes it one)
         warnings.warn(EnergyBalanceWarning(result.message), stacklevel=3)

@@ -77,6 +77,9 @@ class Result:
         self._alias: Dict[str, int] = self._spellings()
         #: the scene the browser viewer draws (Model.simulate sets it; None otherwise)
         self.scene: Optional[Dict[str, Any]] = None
+        # the run's summary.json text (summary_json, as `ukdyn run` writes it: options,
+        # provenance, final_state ...), set by the simulate functions; to_hdf5 writes it
+        self._summary: Optional[str] = None
 
     def _spellings(self) -> Dict[str, int]:
         """The other spelling of the columns of a body's coordinates: ``crank_x``, ``crank_x_dot``,
@@ -310,9 +313,13 @@ class Result:
         """Writes the columns to HDF5 as ``ukdyn run --format hdf5`` writes ``trajectory.h5``:
         one 1-D float64 dataset per column, named as in the CSV (a ``/`` written ``|``, a name
         met twice suffixed ``#2``), the names in order as the root attribute ``columns``, and the
-        statistics (with ``control`` for a controlled run) as the JSON attribute ``summary`` and
-        one attribute per number or string. Whole or not at all, like ``to_csv``. Read it back
-        with :func:`ukdyn.read_hdf5`."""
+        run's summary — the same summary.json text the command writes (the C++ summary_json:
+        statistics, ``options``, ``provenance`` with the parameters and which were overridden,
+        the model file and its SHA-256 when the model was loaded from a file or an example,
+        ``final_state``, ``control`` for a controlled run, units) — as the JSON attribute
+        ``summary`` and one attribute per number or string. Whole or not at all, like
+        ``to_csv``. Read it back with :func:`ukdyn.read_hdf5`; ``ukdyn run --from-summary
+        FILE.h5`` makes the run again (a model loaded from a file or an example)."""
         from . import _ukdyn, __version__
 
         def plain(v: Any) -> Any:
@@ -324,16 +331,21 @@ class Result:
                 return [plain(x) for x in v]
             return v
 
-        summary = dict(plain(self.stats))
-        if self.control is not None:
-            summary["control"] = plain(self.control)
-        summary["provenance"] = {"ukdyn_version": __version__, "written_by": "Result.to_hdf5",
-                                 "model_name": self.model_name}
-        summary["units"] = dict(self.units)
-        summary["unit_system"] = dict(self.unit_system)
+        if self._summary:
+            summary = json.loads(self._summary)
+        else:  # (a Result made by hand)
+            summary = dict(plain(self.stats))
+            if self.control is not None:
+                summary["control"] = plain(self.control)
+            summary["provenance"] = {"ukdyn_version": __version__, "model_name": self.model_name}
+        summary.setdefault("provenance", {"ukdyn_version": __version__,
+                                          "model_name": self.model_name})
+        summary["provenance"]["written_by"] = "Result.to_hdf5"
+        summary.setdefault("units", dict(self.units))
+        summary.setdefault("unit_system", dict(self.unit_system))
         _ukdyn._write_table_hdf5(os.fspath(path), self.names,
                                  [np.asarray(c, dtype=np.float64) for c in self._columns],
-                                 json.dumps(summary))
+                                 json.dumps(summary, indent=2))
 
     # --- the browser viewer (docs/viewer.md) --------------------------------------------------
     def animation_html(self, fps: float = 30.0) -> str:
@@ -342,16 +354,21 @@ class Result:
         simulated second. Raises ValueError when there is nothing to draw (a run not made by
         Model.simulate, or a model in coordinates without a ``visual:`` section or a control
         whose requirements' errors it could chart)."""
+        return self._page(fps, "Result.animation_html")
+
+    def _page(self, fps: float, who: str) -> str:
+        # the page; `who` names the method the user called in a refusal
         from . import viewer
         scene = self.scene
         if scene is None or not any(scene.get(k) for k in ("bodies", "points", "frames",
                                                             "contacts", "robot",
                                                             "controlled")):
             raise ValueError(
-                "Result.show: nothing to draw: the model has no bodies and no visual: section "
-                "(add visual: {points: {...}, links: [...]}; docs/viewer.md)"
+                who + ": nothing to draw: the model has no bodies and no visual: section "
+                "(add visual: {points: {...}, links: [...]}, or from_sympy(..., visual=...); "
+                "docs/viewer.md)"
                 if scene is not None else
-                "Result.show: this result has no scene (only Model.simulate() records one)")
+                who + ": this result has no scene (only Model.simulate() records one)")
         # a visual point that is not finite (NaN, ±inf) is hidden while so: say where it starts
         first = {}
         for c in viewer._point_columns(scene):
@@ -361,7 +378,7 @@ class Result:
                 if k is not None:
                     first[c] = float(self.t[k])
         for line in viewer.nonfinite_warnings(scene, first):
-            warnings.warn(line[len("warning: "):], RuntimeWarning, stacklevel=2)
+            warnings.warn(line[len("warning: "):], RuntimeWarning, stacklevel=3)
         return viewer.build_page(scene, self.names, self._columns, fps=fps,
                                  contact_events=self.contact_events,
                                  unit_system=self.unit_system)
@@ -369,14 +386,14 @@ class Result:
     def save_animation(self, path: "str | os.PathLike[str]", fps: float = 30.0) -> None:
         """Writes the viewer page (:meth:`animation_html`) to ``path``; it opens from disk."""
         from . import viewer
-        viewer.write_page(os.fspath(path), self.animation_html(fps=fps))
+        viewer.write_page(os.fspath(path), self._page(fps, "Result.save_animation"))
 
     def show(self, height: int = 480, fps: float = 30.0) -> Any:
         """The viewer, inline in a Jupyter notebook (an IPython HTML object holding the page in
         an iframe ``height`` pixels tall); outside IPython the same object's ``.data`` is the
         HTML text."""
         import html
-        srcdoc = html.escape(self.animation_html(fps=fps), quote=True)
+        srcdoc = html.escape(self._page(fps, "Result.show"), quote=True)
         # (the iframe inside a div: IPython's HTML warns "Consider using IPython.display.IFrame
         # instead" for text that starts with <iframe and ends with </iframe>, a red box in a
         # notebook; IFrame cannot hold the page itself, it loads a URL)

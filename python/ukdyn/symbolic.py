@@ -297,7 +297,10 @@ def sympy_to_yaml(coordinates: Sequence[Any], *, T: Any = None, V: Any = None, M
                   simulate: Optional[Mapping[str, Any]] = None,
                   output: Optional[Mapping[str, Any]] = None,
                   requirements: Any = None, control: Optional[Mapping[str, Any]] = None,
-                  name: Optional[str] = None, t: Any = None) -> str:
+                  name: Optional[str] = None, t: Any = None,
+                  units: Optional[Mapping[Any, str]] = None,
+                  visual: Optional[Mapping[str, Any]] = None,
+                  tables: Optional[Mapping[str, Any]] = None) -> str:
     """The model-file text of a model given by SymPy expressions (arguments as
     :func:`from_sympy`)."""
     sp = _sympy()
@@ -426,6 +429,14 @@ def sympy_to_yaml(coordinates: Sequence[Any], *, T: Any = None, V: Any = None, M
             return number if number is not None else ex(v)
         return v
 
+    # units: (base units and each coordinate's or output's unit), visual: (points, links,
+    # frames: expressions in the coordinates) and tables: (measured data), as in the model file
+    if units:
+        doc["units"] = {_key(k): str(v) for k, v in units.items()}
+    if visual:
+        doc["visual"] = dict(visual)
+    if tables:
+        doc["tables"] = {str(k): v for k, v in tables.items()}
     doc = settle(doc)
     return "# written by ukdyn.sympy_to_yaml\n" + "\n".join(_block(doc)) + "\n"
 
@@ -437,7 +448,9 @@ def from_sympy(coordinates: Sequence[Any], *, T: Any = None, V: Any = None, M: A
                simulate: Optional[Mapping[str, Any]] = None,
                output: Optional[Mapping[str, Any]] = None, requirements: Any = None,
                control: Optional[Mapping[str, Any]] = None, name: Optional[str] = None,
-               t: Any = None, **overrides: float) -> Any:
+               t: Any = None, units: Optional[Mapping[Any, str]] = None,
+               visual: Optional[Mapping[str, Any]] = None,
+               tables: Optional[Mapping[str, Any]] = None, **overrides: float) -> Any:
     """A :class:`ukdyn.Model` from SymPy expressions (the keys of docs/model-format.md).
 
     Args:
@@ -466,6 +479,14 @@ def from_sympy(coordinates: Sequence[Any], *, T: Any = None, V: Any = None, M: A
             ``robust`` ({bound, boundary_layer, ...}).
         name: the model's name.
         t: the time symbol, when it is not ``sympy.Symbol("t")``.
+        units: the ``units:`` section: base units ``{"length": "mm", "mass": "g", "time":
+            "ms"}`` (the model's numbers are then in them) and labels of coordinates or outputs
+            ``{x: "mm"}`` (docs/model-format.md, "Units").
+        visual: the ``visual:`` section, its expressions SymPy ones: ``{"points": {"p": [x,
+            0]}, "links": [["o", "p"]]}`` — what :meth:`Result.save_animation` draws
+            (docs/viewer.md).
+        tables: the ``tables:`` section (measured data: ``{name: {"x": ..., "data": ...}}``,
+            docs/model-format.md, "Tables").
         overrides: parameter overrides, as :func:`ukdyn.load`.
 
     Returns the Model, read by the C++ model reader from :func:`sympy_to_yaml`'s text (its
@@ -477,5 +498,6 @@ def from_sympy(coordinates: Sequence[Any], *, T: Any = None, V: Any = None, M: A
     text = sympy_to_yaml(coordinates, T=T, V=V, M=M, Q=Q, constraints=constraints,
                          nonideal=nonideal, parameters=parameters, initial=initial,
                          simulate=simulate, output=output, requirements=requirements,
-                         control=control, name=name, t=t)
+                         control=control, name=name, t=t, units=units, visual=visual,
+                         tables=tables)
     return parse(text, "<sympy>", **overrides)

@@ -2,6 +2,7 @@
 // Internal helpers shared by the control stages (not installed).
 #pragma once
 
+#include <limits>
 #include <sstream>
 #include <stdexcept>
 #include <string>
@@ -95,5 +96,29 @@ ControlStatus compute_control_in(const Controller& ctrl, ControlWorkspace& ws,
 inline bool gauss_direct(const Controller& ctrl) {
   return ctrl.law() == ControlLaw::kGauss && ctrl.fully_actuated();
 }
+
+// The robust bound's check over a run's samples (robust_term.cpp): each active row's |error|
+// against its guaranteed bound (ControlledTrajectory::error_bound); the first time and the worst
+// ratio where it is exceeded by more than ControlStatistics::kBoundMargin go into the control's
+// statistics and a note of the run. The bound holds only for requirements active from the start
+// (docs/control.md, section 4): the others are not checked.
+class BoundWatch {
+ public:
+  BoundWatch(const Controller& ctrl, double t_start);
+  // one sample's row i: its error e and its bound. Cost O(1), no allocation.
+  void add(double t, Index i, double e, double bound);
+  // the statistics and the note (in the model's time unit); nothing if the bound held
+  void finish(ControlStatistics& stats, RunStatistics& run, const std::string& time_unit) const;
+
+ private:
+  const Controller* ctrl_;
+  double t_start_;
+  double largest_ = 0.0;  // largest bound so far (the rounding floor's scale)
+  double first_ = std::numeric_limits<double>::quiet_NaN();
+  Index first_row_ = -1;
+  long exceeded_ = 0, checked_ = 0;  // samples × rows outside the bound, and checked
+  double worst_ = 0.0, worst_time_ = 0.0;
+  Index worst_row_ = -1;
+};
 
 }  // namespace ukdyn::control_detail

@@ -66,4 +66,53 @@ ControlStatus apply_robust(const Controller& ctrl, ControlWorkspace& ws) {
   return ws.status;
 }
 
+namespace control_detail {
+
+BoundWatch::BoundWatch(const Controller& ctrl, double t_start) : ctrl_(&ctrl), t_start_(t_start) {}
+
+void BoundWatch::add(double t, Index i, double e, double bound) {
+  const Constraint& c = ctrl_->requirement(ctrl_->row_requirement(i));
+  if (!c.is_active(t_start_) || !c.is_active(t)) return;
+  largest_ = std::max(largest_, bound);
+  ++checked_;
+  // |e| > (1 + margin) bound + 1e-9 of the largest bound (a bound of 0 with an error of 0 holds)
+  const double a = std::abs(e);
+  if (!(a > (1.0 + ControlStatistics::kBoundMargin) * bound + 1e-9 * largest_)) return;
+  ++exceeded_;
+  if (first_row_ < 0) {
+    first_ = t;
+    first_row_ = i;
+  }
+  const double ratio = bound > 0.0 ? a / bound : std::numeric_limits<double>::infinity();
+  if (ratio > worst_) {
+    worst_ = ratio;
+    worst_time_ = t;
+    worst_row_ = i;
+  }
+}
+
+void BoundWatch::finish(ControlStatistics& stats, RunStatistics& run,
+                        const std::string& time_unit) const {
+  if (first_row_ < 0) return;
+  const auto& rows = ctrl_->row_names();
+  stats.bound_exceeded_at = first_;
+  stats.bound_worst_ratio = worst_;
+  stats.bound_worst_row = rows[std::size_t(worst_row_)];
+  stats.bound_worst_time = worst_time_;
+  // the note says when, by how much, and what does not hold
+  run.notes.push_back(
+      "t = " + format(first_) + " " + time_unit + ": the error of requirement row '" +
+      rows[std::size_t(first_row_)] + "' left its guaranteed bound (error_bound." +
+      rows[std::size_t(first_row_)] + "), at " + format_number(exceeded_) + " of " +
+      format_number(checked_) + " checked samples and rows, by up to " + format_number(worst_, 3) +
+      " times the bound (row '" + stats.bound_worst_row + "', t = " + format(worst_time_) + " " +
+      time_unit +
+      "): the plant lies outside the controller's uncertainty model (robust: bound, "
+      "relative_bound, gain_uncertainty), or the actuators cannot produce the robust term, so "
+      "the bound guarantees nothing here. Widen the uncertainty model to cover the plant "
+      "(docs/control.md, section 4)");
+}
+
+}  // namespace control_detail
+
 }  // namespace ukdyn

@@ -576,6 +576,7 @@ ControlledTrajectory simulate_controlled(
   const Workspace* run_ws = nullptr;               // the run's (its modes), once it starts
   const ControlledScratch* run_scratch = nullptr;  // the run's control, once it starts
   std::string pull;
+  control_detail::BoundWatch bounds(ctrl, options.t_start);  // |error| against error_bound
   VectorXd q(n), qd(n), qdd(n);
   o.sample_sink = [&](const Trajectory& s) {
     // the plant's sample, and the quadratures z at it
@@ -680,6 +681,7 @@ ControlledTrajectory simulate_controlled(
     out.control_work_abs.push_back(z[kWorkAbs]);
     for (Index i = 0; robust && i < m_r; ++i) {
       out.error_bound.push_back(std::sqrt(std::max(z[kBounds + i], 0.0) / ctrl.robust_scale(i)));
+      bounds.add(t, i, out.error[out.error.size() - std::size_t(m_r - i)], out.error_bound.back());
     }
     if (streamed) sample_sink(one);
   };
@@ -735,6 +737,7 @@ ControlledTrajectory simulate_controlled(
   if (!w.slip_note.empty()) tr.stats.notes.push_back(w.slip_note);
   diagnose_requirements(*st, w, q0, qd0, options.t_start, options.units.time, tr.stats);
   run.control = w.stats;
+  bounds.finish(run.control, tr.stats, options.units.time);
   balance.finish(tr.stats, tolerance, options.units);
   if (!w.failure.empty() && tr.stats.status != Status::kOk &&
       tr.stats.status != Status::kEnergyBalance && tr.stats.status != Status::kInterrupted) {

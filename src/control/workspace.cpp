@@ -112,9 +112,11 @@ std::string describe_control_status(const Controller& ctrl, const ControlWorkspa
                     "' (residual " + format(ws.residual[i]) + ")";
         }
       }
+      // (why, when a cause is found: a physical constraint, the actuators, a conflict)
+      const std::string why = explain_requirements_not_met(ctrl, ws);
       return when + "the requirements cannot all be met " + actuators +
-             " (rank of the requirement rows " + format_number(ws.rank) +
-             "); least squares applied. Not met: " + missed +
+             (why.empty() ? "" : ": " + why) + " (rank of the requirement rows " +
+             format_number(ws.rank) + "); least squares applied. Not met: " + missed +
              (kept.empty() ? "; none met" : "; met: " + kept);
     }
     case ControlStatus::kModelFailed:

@@ -138,7 +138,15 @@ std::string summary_json(const Trajectory& traj, const SimulationOptions& option
         {"first_not_met",
          std::isfinite(control->first_not_met) ? json(control->first_not_met) : json(nullptr)},
         {"not_met_message", control->not_met_message},
-        {"max_kappa", control->max_kappa}};
+        {"max_kappa", control->max_kappa},
+        {"bound_exceeded_at", std::isfinite(control->bound_exceeded_at)
+                                  ? json(control->bound_exceeded_at)
+                                  : json(nullptr)},
+        {"bound_worst_ratio", control->bound_worst_ratio},
+        {"bound_worst_row", control->bound_worst_row},
+        {"bound_worst_time", std::isfinite(control->bound_worst_time)
+                                 ? json(control->bound_worst_time)
+                                 : json(nullptr)}};
   }
   // what the run was made from (io/provenance.hpp)
   json made = {{"ukdyn_version", version()}, {"ukdyn_commit", commit()}};

@@ -15,6 +15,7 @@
 #include "dynamics/contact_dynamics.hpp"
 #include "dynamics/internal.hpp"
 #include "simulation/initial_check.hpp"
+#include "ukdyn/control/control.hpp"
 #include "ukdyn/core/format.hpp"
 #include "ukdyn/dynamics/forward.hpp"
 #include "ukdyn/dynamics/projection.hpp"
@@ -36,6 +37,42 @@ Index rank_of_rows(const MatrixXd& S, double threshold) {
 
 // a number for messages, 3 significant digits
 std::string format(double x) { return format_number(x, 3); }
+
+// the control at the initial state, as the run's first evaluation: requirements that cannot all
+// be met (contradicting each other or a physical constraint, or not actuated) or a controller
+// that fails there are problems (the run would warn, or stop). A model with contacts is not
+// evaluated: its run holds only the contacts that touch, and lets go of those a requirement lifts.
+void check_control(const Model& model, CheckReport& report) {
+  if (!model.controller || !report.mass_positive_definite || report.mass_singular) return;
+  const System& sys = model.system;
+  for (const Constraint& c : sys.constraints()) {
+    if (c.is_unilateral()) return;
+  }
+  const Controller& ctrl = *model.controller;
+  try {
+    ControlWorkspace cws(ctrl);
+    const ControlStatus s = compute_control(ctrl, cws, model.q0, model.qd0, model.options.t_start);
+    if (s == ControlStatus::kRequirementsNotMet) {
+      report.problems.push_back(
+          "the control cannot meet its requirements at the initial state (a run warns and "
+          "applies the least-squares force): " +
+          describe_control_status(ctrl, cws));
+    } else if (const std::string why = explain_unactuated_requirements(ctrl, cws);
+               s == ControlStatus::kOk && !why.empty()) {
+      report.problems.push_back(
+          "the control meets its requirements at the initial state only because they ask for "
+          "no force there: " +
+          why);
+    } else if (s != ControlStatus::kOk) {
+      report.problems.push_back("the control fails at the initial state: " +
+                                describe_control_status(ctrl, cws));
+    }
+  } catch (const std::exception& e) {
+    report.problems.push_back(std::string("the control cannot be evaluated at the initial "
+                                          "state: ") +
+                              e.what());
+  }
+}
 
 }  // namespace
 
@@ -205,6 +242,7 @@ CheckReport check_model(const Model& model) {
   if (sys.has_potential() && !std::isfinite(sys.potential_energy(model.q0, t))) {
     report.problems.push_back("the potential energy is not finite at the initial state");
   }
+  check_control(model, report);
   return report;
 }
 

@@ -398,4 +398,52 @@ void write_csv(const ModelRun& run, const std::string& path) {
   write_csv(run.trajectory, path, run.extra_columns);
 }
 
+RunProvenance model_provenance(const Model& model, const std::string& model_file,
+                               const std::string& example, std::string_view model_text,
+                               const std::vector<std::string>& overridden,
+                               const std::vector<std::string>& arguments) {
+  RunProvenance p;
+  p.model_name = model.name;
+  p.model_file = model_file;
+  p.example = example;
+  p.model_sha256 = sha256_hex(model_text);
+  for (const auto& [name, value] : model.parameters) {
+    const bool given = std::find(overridden.begin(), overridden.end(), name) != overridden.end();
+    p.parameters.push_back({name, value, given});
+  }
+  p.arguments = arguments;
+  const auto& names = model.system.coordinate_names();
+  // the time's (column t), then the coordinates'
+  p.units.emplace_back("t", model.unit_system.time);
+  for (std::size_t i = 0; i < names.size() && i < model.coordinate_units.size(); ++i) {
+    p.units.emplace_back(names[i], model.coordinate_units[i]);
+  }
+  // the output expressions' (one named like a coordinate keeps the coordinate's)
+  for (std::size_t i = 0; i < model.output_names.size() && i < model.output_units.size(); ++i) {
+    if (std::find(names.begin(), names.end(), model.output_names[i]) == names.end()) {
+      p.units.emplace_back(model.output_names[i], model.output_units[i]);
+    }
+  }
+  // the gaps of the contacts: entries (a distance: the length unit; contact_gap_units)
+  for (auto& gap : contact_gap_units(model)) p.units.push_back(std::move(gap));
+  // a requirement row's error (error.<row>) in the unit of its desired value (desired_<row>,
+  // an output expression: `units: {desired_tip_0: m}`), when the file gives it
+  if (model.controller) {
+    for (const std::string& row : model.controller->row_names()) {
+      std::string desired = "desired_" + row;
+      std::replace(desired.begin(), desired.end(), '.', '_');
+      for (std::size_t i = 0; i < model.output_names.size() && i < model.output_units.size(); ++i) {
+        if (model.output_names[i] == desired && !model.output_units[i].empty()) {
+          p.units.emplace_back("error." + row, model.output_units[i]);
+        }
+      }
+    }
+  }
+  const UnitSystem& u = model.unit_system;
+  p.unit_system = {{"length", u.length},       {"mass", u.mass},     {"time", u.time},
+                   {"velocity", u.velocity()}, {"force", u.force()}, {"energy", u.energy()},
+                   {"power", u.power()}};
+  return p;
+}
+
 }  // namespace ukdyn

@@ -96,6 +96,11 @@ void validate(const System& sys, const Eigen::Ref<const VectorXd>& q0,
 detail::SampleGrid sample_grid(const System& sys, const SimulationOptions& o);
 std::vector<double> segment_ends(const System& sys, const SimulationOptions& o);
 
+// A run of a system with constraints given in acceleration form only (ConstraintKind::
+// kAcceleration): their violations are unknown — stats' largest violations NaN, and a note
+// (run_output.cpp). Nothing for other systems. Cost O(K).
+void unmeasured_violations(const System& sys, RunStatistics& stats);
+
 // Everything a run shares between the integrator's callbacks.
 class Run {
  public:

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <exception>
+#include <limits>
 #include <string>
 
 #include "simulation/run.hpp"
@@ -108,6 +109,13 @@ Status Run::record(double t, const double* x, bool last) {
   // violations of each constraint
   evaluate_violations(sys_, ws_, q_, qd_, t);
   for (Index k = 0; k < sys_.constraint_count(); ++k) {
+    // (a constraint given in acceleration form only, A q'' = b, has no position or velocity
+    // function: its violations are unknown, NaN, never 0; unmeasured_violations notes it)
+    if (sys_.constraint(k).kind() == ConstraintKind::kAcceleration && ws_.active[std::size_t(k)]) {
+      out.position_violation.push_back(std::numeric_limits<double>::quiet_NaN());
+      out.velocity_violation.push_back(std::numeric_limits<double>::quiet_NaN());
+      continue;
+    }
     const double p = position_violation(sys_, ws_, k), v = velocity_violation(sys_, ws_, k);
     out.position_violation.push_back(p);
     out.velocity_violation.push_back(v);
@@ -143,6 +151,31 @@ void Run::report_progress(double t) {
   progress_.t = t;
   ++progress_.steps;
   o_.progress(progress_);
+}
+
+void unmeasured_violations(const System& sys, RunStatistics& stats) {
+  std::string names;
+  for (const Constraint& c : sys.constraints()) {
+    if (c.kind() == ConstraintKind::kAcceleration)
+      names += (names.empty() ? "'" : ", '") + c.name() + "'";
+  }
+  if (names.empty()) return;
+  stats.max_position_violation = std::numeric_limits<double>::quiet_NaN();
+  stats.max_velocity_violation = std::numeric_limits<double>::quiet_NaN();
+  if (stats.notes.size() < kMaxNotes) {
+    const bool one = names.find(',') == std::string::npos;
+    stats.notes.push_back(
+        std::string(one ? "the constraint " : "the constraints ") + names +
+        " given in acceleration form only (A q'' = b) " + (one ? "has" : "have") +
+        " no position or velocity function: " +
+        (one ? "its violation is" : "their violations are") +
+        " unknown (NaN in the violation.* column" + (one ? "" : "s") +
+        " and in max_position_violation, max_velocity_violation), and drift control cannot "
+        "correct " +
+        (one ? "it" : "them") +
+        ". Give the position-level function (a holonomic: constraint, or ukdyn.from_sympy) "
+        "to measure and correct the drift");
+  }
 }
 
 }  // namespace ukdyn::detail

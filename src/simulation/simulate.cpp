@@ -328,6 +328,7 @@ Trajectory detail::simulate_observed(const System& sys, const Eigen::Ref<const V
                            ": the run was stopped on request; the samples up to there are kept";
     }
     traj.stats.t_reached = t_reached;
+    unmeasured_violations(sys, traj.stats);
     traj.stats.evaluations = ode.evaluations();
     traj.stats.least_squares = ode.least_squares();
     // the energy balance certifies a run that reached its end

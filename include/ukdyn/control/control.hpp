@@ -56,6 +56,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <limits>
 #include <optional>
 #include <string>
 #include <utility>
@@ -450,6 +451,22 @@ ControlStatus check_control(const Controller& ctrl, ControlWorkspace& ws,
 /// when. Allocates (meant for reports and error paths).
 std::string describe_control_status(const Controller& ctrl, const ControlWorkspace& ws);
 
+/// Why the rows that the last evaluation missed (ws.status == kRequirementsNotMet) cannot be
+/// met, one clause per cause, joined by "; ": rows that physical constraints fix (naming
+/// them: the requirement's row is a combination of theirs), rows that the actuated coordinates
+/// do not move, rows that contradict each other (dependent rows of X S with different targets,
+/// naming them). "" when every row was met or no cause is found. Allocates (reports and error
+/// paths). Cost O(m_r² (n + k) + n m_p²): a least-squares solve and an SVD.
+std::string explain_requirements_not_met(const Controller& ctrl, const ControlWorkspace& ws);
+
+/// With actuation (not every coordinate actuated): the requirement rows active at the last
+/// evaluation that the actuated coordinates do not move, or cannot meet together, whether or not
+/// they were met there (a row asking for no force is met by none): what `ukdyn check` reports of
+/// a model whose requirements are met at its initial state only because they ask for nothing
+/// there. Rows that the physical constraints fix, or that depend on each other whatever the
+/// actuators, are left to explain_requirements_not_met. "" if none. Allocates; cost as above.
+std::string explain_unactuated_requirements(const Controller& ctrl, const ControlWorkspace& ws);
+
 // ---------------------------------------------------------------------------------------------
 // controlled simulation
 
@@ -477,6 +494,19 @@ struct ControlStatistics {
   double first_not_met = 0.0;   ///< time of the first evaluation not met (NaN if none)
   std::string not_met_message;  ///< describe_control_status() of that evaluation ("" if none)
   double max_kappa = 0.0;       ///< largest robust gain seen
+  /// Robust settings only: the first sample time at which a row's |error| exceeded its
+  /// guaranteed bound (error_bound) by more than kBoundMargin — the plant then lies outside the
+  /// uncertainty model of RobustControl, and the bound guarantees nothing (NaN if never).
+  double bound_exceeded_at = std::numeric_limits<double>::quiet_NaN();
+  /// The largest |error_i| / error_bound_i over the samples where the bound was exceeded
+  /// (0 if never).
+  double bound_worst_ratio = 0.0;
+  std::string bound_worst_row;  ///< the row of bound_worst_ratio ("" if never)
+  /// the sample time of bound_worst_ratio (NaN if never)
+  double bound_worst_time = std::numeric_limits<double>::quiet_NaN();
+  /// The relative margin of that check: exceeded when |e| > (1 + kBoundMargin) bound + the
+  /// rounding floor (1e-9 of the run's largest bound).
+  static constexpr double kBoundMargin = 1e-3;
 };
 
 /// A controlled run: the plant's trajectory (as simulate() records it: q, q', q'', physical
@@ -506,6 +536,13 @@ struct ControlledTrajectory {
   /// Number of samples.
   Index samples() const { return plant.samples(); }
 };
+
+/// The warnings a front end gives for a controlled run's statistics, one line each without a
+/// "warning: " prefix (`ukdyn run` prints them on stderr, Python raises UserWarning): the
+/// requirements not met (stats.not_met > 0), and the robust bound left (bound_exceeded_at
+/// finite). Times in `time_unit`. Empty when neither happened. Cost O(message length).
+std::vector<std::string> control_warnings(const ControlStatistics& stats,
+                                          const std::string& time_unit);
 
 /// Simulates `plant` (a System, possibly different from the controller's nominal model)
 /// under the control force of `ctrl`, with simulate() and every option it has (integrators,

@@ -103,8 +103,9 @@ void write_summary_json(const Trajectory& traj, const SimulationOptions& options
 /// As above, with what the run was made from under `provenance` (the model's name, file and
 /// SHA-256, every parameter with `overridden` marked, the command line, ukdyn's version and
 /// commit; io/provenance.hpp) and, for a controlled run, its statistics under `control`
-/// (evaluations, not_met, max_residual, first_not_met, not_met_message, max_kappa; null for
-/// none). @throws std::runtime_error naming the path.
+/// (evaluations, not_met, max_residual, first_not_met, not_met_message, max_kappa,
+/// bound_exceeded_at, bound_worst_ratio, bound_worst_row; null for none). @throws
+/// std::runtime_error naming the path.
 void write_summary_json(const Trajectory& traj, const SimulationOptions& options,
                         const std::string& path, const RunProvenance& provenance,
                         const ControlStatistics* control = nullptr);

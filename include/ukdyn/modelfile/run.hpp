@@ -9,10 +9,12 @@
 #include <functional>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <utility>
 #include <vector>
 
 #include "ukdyn/control/control.hpp"
+#include "ukdyn/io/provenance.hpp"
 #include "ukdyn/io/trajectory_files.hpp"
 #include "ukdyn/modelfile/model.hpp"
 #include "ukdyn/simulation/simulate.hpp"
@@ -76,6 +78,17 @@ ModelRun run_model(const Model& model);
 /// them to the coordinates' and outputs' units (summary.json, Model.units), so that the plots
 /// label a contact's gap in the length unit and its force in the force unit. Cost O(constraints).
 std::vector<std::pair<std::string, std::string>> contact_gap_units(const Model& model);
+
+/// What a run of `model` was made from (summary.json's `provenance`, io/provenance.hpp), as
+/// `ukdyn run` and Python's Model.simulate record it: the model's name, `model_file` (as given;
+/// "" for an example) or `example`, sha256_hex(`model_text`), every parameter with those named
+/// in `overridden` marked, `arguments` (the command line; Python: none), and the units of the
+/// time, the coordinates, the output expressions and the contacts' gaps, and the unit system.
+/// Cost O(text + n + parameters).
+RunProvenance model_provenance(const Model& model, const std::string& model_file,
+                               const std::string& example, std::string_view model_text,
+                               const std::vector<std::string>& overridden,
+                               const std::vector<std::string>& arguments);
 
 /// Checks the settings of a run of `model` with `options` (model.options, or a front end's
 /// changes of them) as `ukdyn run` runs it: check_settings() of a streamed run (its sample
