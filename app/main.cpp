@@ -313,6 +313,11 @@ int main(int argc, char** argv) {
   lin_cmd->add_flag("--project", lin.project,
                     "first move the state onto the constraints (least M-weighted correction; "
                     "an open contact keeps its gap)");
+  lin_cmd
+      ->add_option("--initial-step", lin.initial_step,
+                   "Ridders' first step, relative to each variable's scale (default 0.1; "
+                   "docs/linearize.md, \"Steps in the model's own scale\")")
+      ->check(CLI::PositiveNumber);
   lin_cmd->add_flag("--equilibrium", lin.equilibrium,
                     "first find an equilibrium (or steady motion) from the --at state");
   lin_cmd
