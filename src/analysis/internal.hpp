@@ -69,7 +69,7 @@ class ReducedDynamics {
   /// (docs/linearize.md, "Steps in the model's own scale"). A position q_j takes |q_j|, or the
   /// model's ℓ̃ where |q_j| is below 1e-3 of that, and never more than its natural scale λ_j
   /// (natural_scale: an angle at 0 beside lengths of 500 mm is not stepped by 50 rad); ℓ̃ =
-  /// ‖q‖∞ over the coordinates not at the roundoff of 0 (|q_j| >= 1e-8 λ_j), 1 when every one is
+  /// ‖q‖∞ over the coordinates not at 0 or its roundoff (|q_j| >= 1e-3 λ_j), 1 when every one is
   /// (an equilibrium's q = 1e-14 rad is q = 0, not a length of 1e-14). A velocity q'_j takes
   /// |q'_j|, or σ_qj v / ℓ̃ where |q'_j| is below 1e-3 of that, v the speed a run from the base
   /// point takes (detail::run_length_speed: ‖q'‖∞ or √(2E / m)). Sets rate() = v / ℓ̃. Cost: one

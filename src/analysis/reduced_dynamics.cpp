@@ -23,8 +23,9 @@ constexpr int kMaxNewton = 40;
 // at roundoff, some 1e-16
 constexpr double kResidualTolerance = 1e-10;
 constexpr double kInfinity = std::numeric_limits<double>::infinity();
-// a coordinate below this fraction of its natural scale is at the roundoff of 0
-constexpr double kRoundoff = 1e-8;
+// a coordinate below this fraction of its natural scale is at 0, or at its roundoff: it gives
+// the model no length (it is stepped by its natural scale, not by its own size)
+constexpr double kRoundoff = 1e-3;
 }  // namespace
 
 ReducedDynamics::ReducedDynamics(const System& sys, const Partition& p, const OperatingPoint& base,
@@ -102,11 +103,12 @@ double ReducedDynamics::natural_scale(Index j, double start) {
   int k = 0;
   while (k < kProbes && model_change(j, p) < kChange) p *= kFactor, ++k;
   if (k == kProbes) return kInfinity;  // (M and A do not change along q_j: no scale of its own)
-  for (k = 0; k < kProbes; ++k) {
-    if (model_change(j, p / kFactor) < kChange &&
-        model_change(j, p / (kFactor * kFactor)) < kChange)
-      break;
+  // (each probe once: the next shorter two, moved along as p shrinks)
+  double next = model_change(j, p / kFactor), after = model_change(j, p / (kFactor * kFactor));
+  for (k = 0; k < kProbes && !(next < kChange && after < kChange); ++k) {
     p /= kFactor;
+    next = after;
+    after = model_change(j, p / (kFactor * kFactor));
   }
   return 10 * p;
 }
@@ -118,9 +120,10 @@ VectorXd ReducedDynamics::state_scales() {
   // λ_j, the scale of the model's own change along each independent position (natural_scale)
   VectorXd lambda(n);
   for (Index j = 0; j < n; ++j) lambda(j) = natural_scale(j, run.length);
-  // ℓ̃ = ‖q‖∞ without the coordinates at the roundoff of 0 (below 1e-8 λ_j: what an
-  // equilibrium search leaves, 1e-14 rad), 1 (the unit, as at q = 0) when every one is: a
-  // length made of roundoff gave steps of 1e-15 rad, below the chart's own roundoff
+  // ℓ̃ = ‖q‖∞ without the coordinates at 0 or its roundoff (below 1e-3 λ_j: what an
+  // equilibrium search leaves, 1e-14 rad, or a damped run 2.6e-9 rad), 1 (the unit, as at q =
+  // 0) when every one is: a length made of roundoff gave steps of 1e-15 rad, below the chart's
+  // own roundoff (and steps of 2.6e-10 rad an error of 3e-6)
   double length = 0.0;
   for (Index j = 0; j < n; ++j)
     if (lambda(j) == kInfinity || std::abs(base_.q(j)) >= kRoundoff * lambda(j))

@@ -120,7 +120,7 @@ struct LinearizeOptions {
   double singular_threshold = 1e-6;
   /// Ridders' first step for state entry k: initial_step · σ_k, σ_k its own scale — |q_j| (or
   /// the model's scale min(ℓ̃, λ_j) where |q_j| is below 1e-3 of that; never above the
-  /// coordinate's natural scale λ_j; ℓ̃ = ‖q‖∞ without coordinates at the roundoff of 0) for a
+  /// coordinate's natural scale λ_j; ℓ̃ = ‖q‖∞ without coordinates below 1e-3 λ_j) for a
   /// position, |q'_j| (or the coordinate's scale at the run's rate) for a velocity, |p₀| (1 when
   /// p₀ = 0) for a parameter input — never an absolute number (docs/linearize.md, "Steps in the
   /// model's own scale"; `ukdyn linearize --initial-step`, `initial_step=` in Python). Must be
