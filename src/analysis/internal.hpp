@@ -73,7 +73,8 @@ class ReducedDynamics {
   /// (an equilibrium's q = 1e-14 rad is q = 0, not a length of 1e-14). A velocity q'_j takes
   /// |q'_j|, or σ_qj v / ℓ̃ where |q'_j| is below 1e-3 of that, v the speed a run from the base
   /// point takes (detail::run_length_speed: ‖q'‖∞ or √(2E / m)). Sets rate() = v / ℓ̃. Cost: one
-  /// unconstrained evaluation, and some 5 to 40 evaluations of M and A per coordinate, O(n⁴).
+  /// unconstrained evaluation, and a few evaluations of M and A per coordinate (natural_scale),
+  /// O(n⁴).
   VectorXd state_scales();
   /// The run's rate v / ℓ̃ (1 / time) after state_scales(): the acceleration scale of a
   /// velocity state of scale σ is σ · rate().
@@ -84,7 +85,8 @@ class ReducedDynamics {
   /// The model's scale of each state after state_scales(): model_scales() of a position,
   /// model_scales() · rate() of a velocity (s).
   VectorXd model_state_scales() const;
-  /// λ_j: ten times the least step p (found by factors of 4 from `start`) along q_j that
+  /// λ_j: ten times the least step p (found by factors of 4 from `start`; of 1024 while the
+  /// change is below 1e-6, up to 1e24 start) along q_j that
   /// changes the model by 1 %: M's entries relative to √(M_aa M_bb), or a row a_i of the
   /// constraint Jacobian as ‖Δa_i D‖ over its constraint's largest ‖a_i D‖ at the base (all
   /// rows' largest where the constraint vanishes there: a fold), D = diag(M)^(-1/2) (both

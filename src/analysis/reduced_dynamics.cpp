@@ -5,6 +5,7 @@
 /// the fundamental equation (docs/linearize.md, "The reduction").
 #include <algorithm>
 #include <cmath>
+#include <exception>
 #include <limits>
 #include <sstream>
 #include <string>
@@ -74,8 +75,13 @@ double ReducedDynamics::model_change(Index j, double p) {
   }
   q_ = base_.q;
   q_(j) += p;
-  const bool ok = evaluate_unconstrained(sys_, ws_, q_, base_.qd, base_.t) == Status::kOk &&
-                  assemble_constraints(sys_, ws_, q_, base_.qd, base_.t) == Status::kOk;
+  bool ok = false;
+  try {  // (a callable that refuses a point far away: as a change too large)
+    ok = evaluate_unconstrained(sys_, ws_, q_, base_.qd, base_.t) == Status::kOk &&
+         assemble_constraints(sys_, ws_, q_, base_.qd, base_.t) == Status::kOk;
+  } catch (const std::exception&) {
+    ok = false;
+  }
   ws_.status = Status::kOk;
   if (!ok || !ws_.M.allFinite() || !ws_.A.allFinite()) return kInfinity;
   // |ΔM_ab| D_a D_b (<= 1 at the base by Cauchy–Schwarz), ‖Δa_i D‖ / row_size_(i)
@@ -101,8 +107,17 @@ double ReducedDynamics::natural_scale(Index j, double start) {
   constexpr int kProbes = 40;
   double p = start;
   int k = 0;
-  while (k < kProbes && model_change(j, p) < kChange) p *= kFactor, ++k;
-  if (k == kProbes) return kInfinity;  // (M and A do not change along q_j: no scale of its own)
+  // (by 1024 while the change is below 1e-4 of the target: a cyclic coordinate, whose model
+  // never changes, is known in a few probes; the downward search then finds the least step)
+  // (M and A that do not change over 1e24 times the start: no scale of its own)
+  const double top = 1e24 * start;
+  double change = model_change(j, p);
+  for (; k < kProbes && change < kChange; ++k) {
+    p *= change < 1e-4 * kChange ? 1024.0 : kFactor;
+    if (!(p <= top)) return kInfinity;
+    change = model_change(j, p);
+  }
+  if (change < kChange) return kInfinity;
   // (each probe once: the next shorter two, moved along as p shrinks)
   double next = model_change(j, p / kFactor), after = model_change(j, p / (kFactor * kFactor));
   for (k = 0; k < kProbes && !(next < kChange && after < kChange); ++k) {
