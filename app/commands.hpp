@@ -159,6 +159,7 @@ struct LinearizeArguments {
   bool equilibrium = false;           ///< --equilibrium: find one from the --at state first
   bool project = false;               ///< --project: project the state onto the constraints first
   std::vector<std::string> unknowns;  ///< --unknowns of the equilibrium (default: positions)
+  double initial_step = 0.1;          ///< --initial-step: LinearizeOptions::initial_step
   std::string format = "json";        ///< --format json|csv
 };
 

@@ -147,6 +147,7 @@ int linearize_command(const LinearizeArguments& args) {
   request.options.independent_positions = args.independent;
   request.options.independent_velocities = args.independent_velocities;
   request.options.states = args.states;
+  request.options.initial_step = args.initial_step;
   request.equilibrium = args.equilibrium;
   request.unknowns = args.unknowns;
   request.project = args.project || (model.project_initial && args.at.empty());

@@ -2,8 +2,10 @@
 // ukdyn: the command-line front end. Argument parsing and dispatch only; the subcommands live in
 // run.cpp, check.cpp and source.cpp, the physics in the library.
 #include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <cstdio>
+#include <cstdlib>
 #include <exception>
 #include <limits>
 #include <map>
@@ -315,6 +317,20 @@ int main(int argc, char** argv) {
   lin_cmd->add_flag("--project", lin.project,
                     "first move the state onto the constraints (least M-weighted correction; "
                     "an open contact keeps its gap)");
+  lin_cmd
+      ->add_option("--initial-step", lin.initial_step,
+                   "Ridders' first step, relative to each variable's scale (default 0.1; "
+                   "docs/linearize.md, \"Steps in the model's own scale\")")
+      ->check(
+          [](const std::string& text) {
+            char* end = nullptr;
+            const double v = std::strtod(text.c_str(), &end);
+            return end != text.c_str() && *end == '\0' && v > 0 && std::isfinite(v)
+                       ? std::string()
+                       : "must be a number > 0 (Ridders' first step relative to each "
+                         "variable's scale; default 0.1)";
+          },
+          "> 0");
   lin_cmd->add_flag("--equilibrium", lin.equilibrium,
                     "first find an equilibrium (or steady motion) from the --at state");
   lin_cmd

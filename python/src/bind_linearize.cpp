@@ -2,11 +2,13 @@
 // ukdyn._linearize and ukdyn._equilibrium: Model.linearize() and Model.equilibrium() of the
 // package (python/ukdyn/linear.py); the physics is analysis/linearize.hpp.
 #include <algorithm>
+#include <cmath>
 #include <complex>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
 #include <map>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -79,8 +81,13 @@ ModelLinearizeRequest request_of(const std::vector<std::string>& inputs,
                                  const std::vector<std::string>& outputs,
                                  const std::vector<std::string>& independent,
                                  const std::vector<std::string>& independent_velocities,
-                                 const std::vector<std::string>& states) {
+                                 const std::vector<std::string>& states, double initial_step) {
   ModelLinearizeRequest r;
+  if (!(initial_step > 0) || !std::isfinite(initial_step))
+    throw std::invalid_argument("Model.linearize: initial_step = " + std::to_string(initial_step) +
+                                " must be > 0 (Ridders' first step relative to each variable's "
+                                "scale; default 0.1)");
+  r.options.initial_step = initial_step;
   r.inputs = inputs;
   r.outputs = outputs;
   r.options.independent_positions = independent;
@@ -95,9 +102,10 @@ py::dict linearize_model_py(const Model& model, py::object q, py::object qd, py:
                             const std::vector<std::string>& independent,
                             const std::vector<std::string>& independent_velocities,
                             const std::vector<std::string>& states, bool equilibrium,
-                            const std::vector<std::string>& unknowns, bool project) {
+                            const std::vector<std::string>& unknowns, bool project,
+                            double initial_step) {
   ModelLinearizeRequest r =
-      request_of(inputs, outputs, independent, independent_velocities, states);
+      request_of(inputs, outputs, independent, independent_velocities, states, initial_step);
   r.equilibrium = equilibrium;
   r.unknowns = unknowns;
   r.project = project;
@@ -117,7 +125,7 @@ py::list linearize_along_py(const Model& model, py::object t, py::object q, py::
                             const std::vector<std::string>& outputs,
                             const std::vector<std::string>& independent,
                             const std::vector<std::string>& independent_velocities,
-                            const std::vector<std::string>& states) {
+                            const std::vector<std::string>& states, double initial_step) {
   const char* who = "Model.linearize_along";
   const Index n = model.system.coordinate_count();
   const auto ts = t.cast<std::vector<double>>();
@@ -138,7 +146,8 @@ py::list linearize_along_py(const Model& model, py::object t, py::object q, py::
                     Eigen::Map<const VectorXd>(qds[k].data(), n), ts[k]});
   }
   const auto models = linearize_model_along(
-      model, path, request_of(inputs, outputs, independent, independent_velocities, states),
+      model, path,
+      request_of(inputs, outputs, independent, independent_velocities, states, initial_step),
       [&] { return model_text(model); }, who);
   py::list out;
   for (std::size_t k = 0; k < models.size(); ++k) {
@@ -170,11 +179,11 @@ void bind_linearize(py::module_& m) {
   m.def("_linearize", &linearize_model_py, py::arg("model"), py::arg("q"), py::arg("q_dot"),
         py::arg("t"), py::arg("inputs"), py::arg("outputs"), py::arg("independent"),
         py::arg("independent_velocities"), py::arg("states"), py::arg("equilibrium"),
-        py::arg("unknowns"), py::arg("project"),
+        py::arg("unknowns"), py::arg("project"), py::arg("initial_step") = 0.1,
         "The linear model of a Model as a dict of NumPy arrays and names (Model.linearize).");
   m.def("_linearize_along", &linearize_along_py, py::arg("model"), py::arg("t"), py::arg("q"),
         py::arg("q_dot"), py::arg("inputs"), py::arg("outputs"), py::arg("independent"),
-        py::arg("independent_velocities"), py::arg("states"),
+        py::arg("independent_velocities"), py::arg("states"), py::arg("initial_step") = 0.1,
         "The linear models along a motion, one dict per point (Model.linearize_along).");
   m.def("_equilibrium", &equilibrium_of, py::arg("model"), py::arg("q"), py::arg("q_dot"),
         py::arg("t"), py::arg("unknowns"), py::arg("tolerance"), py::arg("independent"),

@@ -91,3 +91,38 @@ def test_errors_name_what_is_wrong():
     pushed = ukdyn.parse(CART, F0=1.0)
     with pytest.raises(RuntimeError, match="no equilibrium found"):
         pushed.equilibrium(q=[0, 0.1], q_dot=[0, 0], unknowns=["x"])
+
+
+FOUR_BAR_URDF = """<?xml version="1.0"?>
+<robot name="fourbar">
+  <link name="base"/>
+  <link name="crank1"><inertial><origin xyz="0 0 -0.25"/><mass value="1.2"/><inertia ixx="0.025" ixy="0" ixz="0" iyy="0.025" iyz="0" izz="1e-06"/></inertial></link>
+  <link name="coupler"><inertial><origin xyz="0.4 0 0"/><mass value="0.7"/><inertia ixx="1e-06" ixy="0" ixz="0" iyy="0.037333333333333333" iyz="0" izz="0.037333333333333333"/></inertial></link>
+  <link name="crank2"><inertial><origin xyz="0 0 0.25"/><mass value="1.2"/><inertia ixx="0.025" ixy="0" ixz="0" iyy="0.025" iyz="0" izz="1e-06"/></inertial></link>
+  <joint name="a" type="continuous"><parent link="base"/><child link="crank1"/><origin xyz="0 0 2"/><axis xyz="0 1 0"/></joint>
+  <joint name="b" type="continuous"><parent link="crank1"/><child link="coupler"/><origin xyz="0 0 -0.5"/><axis xyz="0 1 0"/></joint>
+  <joint name="c" type="continuous"><parent link="coupler"/><child link="crank2"/><origin xyz="0.8 0 0"/><axis xyz="0 1 0"/></joint>
+</robot>
+"""
+
+
+def test_a_urdf_four_bar_at_its_equilibrium_swings_at_the_closed_form(tmp_path):
+    # u20 05: a URDF tree closed by a point loop, linearized where the equilibrium search leaves
+    # it (q at the roundoff of 0): omega^2 = g (mc + mk) / (L (2 mc/3 + mk)) = 24.852 /s^2 (it
+    # came out 4.43 or 4.61 rad/s for 4.985, unstable with an independent crank)
+    (tmp_path / "fb.urdf").write_text(FOUR_BAR_URDF)
+    (tmp_path / "fb.yaml").write_text(
+        "name: four-bar\nrobot:\n  urdf: fb.urdf\n  loops:\n"
+        "    - {name: close, type: point, link_a: crank2, point_a: [0, 0, 0.5], link_b: world,"
+        " point_b: [0.8, 0, 2]}\n")
+    model = ukdyn.load(str(tmp_path / "fb.yaml"))
+    w = math.sqrt(9.81 * 1.9 / (0.5 * (0.8 + 0.7)))
+    q, q_dot = model.equilibrium(q=[0.3, -0.3, 0.3], q_dot=[0, 0, 0])
+    assert np.max(np.abs(q)) == pytest.approx(0.0, abs=1e-10)
+    for independent in ([], ["a"]):
+        for step in (0.1, 0.01):
+            lm = model.linearize(q=q, q_dot=q_dot, independent=independent, initial_step=step)
+            assert np.abs(lm.eigenvalues.real).max() == pytest.approx(0.0, abs=1e-9 * w)
+            assert np.abs(lm.eigenvalues.imag).max() == pytest.approx(w, rel=1e-9)
+    with pytest.raises(ValueError, match="initial_step"):
+        model.linearize(q=q, q_dot=q_dot, initial_step=0.0)

@@ -66,7 +66,8 @@ def linearize(model: "_ukdyn.Model", q: Any = None, q_dot: Any = None, t: Option
               *, inputs: Sequence[str] = (), outputs: Sequence[str] = (),
               independent: Sequence[str] = (), independent_velocities: Sequence[str] = (),
               states: Sequence[str] = (), equilibrium: bool = False,
-              unknowns: Sequence[str] = (), project: bool = False) -> LinearModel:
+              unknowns: Sequence[str] = (), project: bool = False,
+              initial_step: float = 0.1) -> LinearModel:
     """The linear model of ``model`` about (q, q_dot, t) (default: its initial state), in
     minimal coordinates of the constraint manifold.
 
@@ -79,6 +80,8 @@ def linearize(model: "_ukdyn.Model", q: Any = None, q_dot: Any = None, t: Option
     dropped state that acts on a kept one otherwise). With ``equilibrium=True`` an equilibrium or steady
     motion is first found from the state (``unknowns`` as in :meth:`Model.equilibrium`).
     ``project=True`` first moves the state onto the constraints (least M-weighted correction).
+    ``initial_step``: Ridders' first step relative to each variable's scale (docs/linearize.md,
+    "Steps in the model's own scale").
     Raises ValueError on misuse, off the constraint manifold, or at a singular configuration;
     :class:`SolveError` when the dynamics cannot be evaluated near the point.
     """
@@ -89,14 +92,15 @@ def linearize(model: "_ukdyn.Model", q: Any = None, q_dot: Any = None, t: Option
                       "\"Control\")", UserWarning, stacklevel=2)
     d = _ukdyn._linearize(model, q, q_dot, t, _names(inputs), _names(outputs),
                           _names(independent), _names(independent_velocities), _names(states),
-                          bool(equilibrium), _names(unknowns), bool(project))
+                          bool(equilibrium), _names(unknowns), bool(project),
+                          float(initial_step))
     return LinearModel(**d)
 
 
 def linearize_along(model: "_ukdyn.Model", motion: Any = None, *, t: Any = None, q: Any = None,
                     q_dot: Any = None, inputs: Sequence[str] = (), outputs: Sequence[str] = (),
                     independent: Sequence[str] = (), independent_velocities: Sequence[str] = (),
-                    states: Sequence[str] = ()) -> List[LinearModel]:
+                    states: Sequence[str] = (), initial_step: float = 0.1) -> List[LinearModel]:
     """The time-varying linearization along a motion: one :class:`LinearModel` per point, all in
     one chart (the independent coordinates named, or those chosen at the first point), so that
     dx' = A(t) dx + B(t) u is the variational equation of the motion (``f0`` is the motion's own
@@ -118,7 +122,8 @@ def linearize_along(model: "_ukdyn.Model", motion: Any = None, *, t: Any = None,
     q_dot = np.atleast_2d(np.asarray(q_dot, dtype=float))
     ds = _ukdyn._linearize_along(model, t.tolist(), q.tolist(), q_dot.tolist(), _names(inputs),
                                  _names(outputs), _names(independent),
-                                 _names(independent_velocities), _names(states))
+                                 _names(independent_velocities), _names(states),
+                                 float(initial_step))
     return [LinearModel(**d) for d in ds]
 
 

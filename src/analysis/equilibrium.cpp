@@ -64,13 +64,18 @@ Equilibrium find_equilibrium(const System& sys, const OperatingPoint& guess,
   chart_at(current);
   const Index nz = Index(unknown.size());
 
-  // r(z) = q''_Iv at x = x₀ (the chart's base) with the unknowns replaced by z
+  // r(z) = q''_Iv at x = x₀ (the chart's base) with the unknowns replaced by z, each entry in
+  // its coordinate's acceleration unit (accel, from the guess: the search and its stopping test
+  // are then the same in any units; u20 09: absolute in the model's units, an equilibrium in
+  // mm, g and ms stopped 1e-9 rad from where SI's did)
   VectorXd x, F;
+  VectorXd accel = VectorXd::Ones(sys.coordinate_count());
   auto residual = [&](const Eigen::Ref<const VectorXd>& z, Eigen::Ref<VectorXd> r) {
     VectorXd xz = x;
     for (Index k = 0; k < nz; ++k) xz(unknown[std::size_t(k)]) = z(k);
     if (!rd->evaluate(xz, {}, F)) return false;
     r = F.tail(sv);
+    for (Index k = 0; k < sv; ++k) r(k) /= accel(part->iv[std::size_t(k)]);
     return true;
   };
   VectorXd z(nz), r(sv), r_new(sv), z_new(nz), h(nz);
@@ -92,8 +97,13 @@ Equilibrium find_equilibrium(const System& sys, const OperatingPoint& guess,
   if (o.unknowns.empty()) {
     chart_at(current);
     start_chart();
-    residual(z, r);
   }
+  // the acceleration unit of each coordinate: its model scale (ReducedDynamics::model_scales)
+  // at the guess's rate², (v / ℓ̃)²
+  accel = rd->model_scales() * (rd->rate() * rd->rate());
+  for (Index j = 0; j < accel.size(); ++j)
+    if (!(accel(j) > 0) || !std::isfinite(accel(j))) accel(j) = 1.0;
+  residual(z, r);
   const analysis::RiddersOptions ro{o.linearize.table_size, o.linearize.step_ratio, 2.0};
   int it = 0;
   std::string stuck;
@@ -143,15 +153,17 @@ Equilibrium find_equilibrium(const System& sys, const OperatingPoint& guess,
   // the state at z, on the manifold
   VectorXd r_final(sv);
   residual(z, r_final);
+  VectorXd r_model = r_final;  // (in the model's units)
+  for (Index k = 0; k < sv; ++k) r_model(k) *= accel(part->iv[std::size_t(k)]);
   if (!stuck.empty()) {
     Index worst = 0;
     r_final.cwiseAbs().maxCoeff(&worst);
     std::ostringstream msg;
     msg << kEquilibriumWho << ": no equilibrium found from the guess after " << it
-        << " Newton steps: " << stuck << "; the reduced accelerations have norm " << r_final.norm()
-        << " (tolerance " << o.tolerance << "), the largest "
-        << sys.coordinate_names()[std::size_t(part->iv[std::size_t(worst)])]
-        << "'' = " << r_final(worst) << ", at q = (";
+        << " Newton steps: " << stuck << "; the reduced accelerations have norm " << r_model.norm()
+        << " (" << r_final.norm() << " of their scale; tolerance " << o.tolerance
+        << "), the largest " << sys.coordinate_names()[std::size_t(part->iv[std::size_t(worst)])]
+        << "'' = " << r_model(worst) << ", at q = (";
     for (Index j = 0; j < sys.coordinate_count(); ++j)
       msg << (j ? ", " : "") << sys.coordinate_names()[std::size_t(j)] << " = " << rd->q()(j);
     msg << ")";
@@ -161,7 +173,7 @@ Equilibrium find_equilibrium(const System& sys, const OperatingPoint& guess,
   eq.point.q = rd->q();
   eq.point.qd = rd->qd();
   eq.point.t = guess.t;
-  eq.residual = r_final.norm();
+  eq.residual = r_model.norm();
   eq.iterations = it;
   return eq;
 }

@@ -65,13 +65,34 @@ class ReducedDynamics {
                 Eigen::Ref<VectorXd> F);
   /// x of the base point.
   VectorXd base_state() const;
-  /// The scale σ_k of each entry of x for Ridders' first step h_k = initial_step · σ_k: its own
-  /// magnitude, or the model's where it is below 1e-3 of that (docs/linearize.md, "Steps in the
-  /// model's own scale"): a position q_j takes |q_j|, or ℓ = ‖q‖∞ of the base point (1 when q =
-  /// 0); a velocity q'_j takes |q'_j|, or v σ_qj / ℓ, v the speed a run from the base point
-  /// takes (detail::run_length_speed: ‖q'‖∞ or √(2E / m)) and σ_qj its position's scale: its
-  /// coordinate's at the run's rate v / ℓ. Cost: one unconstrained evaluation, O(n³).
+  /// The scale σ_k of each entry of x for Ridders' first step h_k = initial_step · σ_k
+  /// (docs/linearize.md, "Steps in the model's own scale"). A position q_j takes |q_j|, or the
+  /// model's ℓ̃ where |q_j| is below 1e-3 of that, and never more than its natural scale λ_j
+  /// (natural_scale: an angle at 0 beside lengths of 500 mm is not stepped by 50 rad); ℓ̃ =
+  /// ‖q‖∞ over the coordinates not at 0 or its roundoff (|q_j| >= 1e-3 λ_j), 1 when every one is
+  /// (an equilibrium's q = 1e-14 rad is q = 0, not a length of 1e-14). A velocity q'_j takes
+  /// |q'_j|, or σ_qj v / ℓ̃ where |q'_j| is below 1e-3 of that, v the speed a run from the base
+  /// point takes (detail::run_length_speed: ‖q'‖∞ or √(2E / m)). Sets rate() = v / ℓ̃. Cost: one
+  /// unconstrained evaluation, and a few evaluations of M and A per coordinate (natural_scale),
+  /// O(n⁴).
   VectorXd state_scales();
+  /// The run's rate v / ℓ̃ (1 / time) after state_scales(): the acceleration scale of a
+  /// velocity state of scale σ is σ · rate().
+  double rate() const { return rate_; }
+  /// The model's scale of each coordinate (n) after state_scales(): min(ℓ̃, λ_j), what a
+  /// coordinate at 0 is stepped by; its acceleration unit is model_scales() · rate()².
+  const VectorXd& model_scales() const { return model_scales_; }
+  /// The model's scale of each state after state_scales(): model_scales() of a position,
+  /// model_scales() · rate() of a velocity (s).
+  VectorXd model_state_scales() const;
+  /// λ_j: ten times the least step p (found by factors of 4 from `start`; of 1024 while the
+  /// change is below 1e-6, up to 1e24 start) along q_j that
+  /// changes the model by 1 %: M's entries relative to √(M_aa M_bb), or a row a_i of the
+  /// constraint Jacobian as ‖Δa_i D‖ over its constraint's largest ‖a_i D‖ at the base (all
+  /// rows' largest where the constraint vanishes there: a fold), D = diag(M)^(-1/2) (both
+  /// independent of the coordinates' units); infinite when neither changes (a cyclic
+  /// coordinate). A Cartesian pendulum's x: 0.1 L; an angle of a loop: about 0.1 rad.
+  double natural_scale(Index j, double start);
   const VectorXd& q() const { return q_; }         ///< after complete(): positions (n)
   const VectorXd& qd() const { return qd_; }       ///< after complete(): velocities (n)
   Workspace& workspace() { return ws_; }           ///< after evaluate(): the forward dynamics
@@ -80,6 +101,9 @@ class ReducedDynamics {
 
  private:
   bool newton(bool velocity);
+  // the model's change along q_j over a step p (natural_scale), infinite where M or A cannot
+  // be evaluated
+  double model_change(Index j, double p);
 
   const System& sys_;
   const Partition& p_;
@@ -87,6 +111,11 @@ class ReducedDynamics {
   Workspace ws_;
   VectorXd q_, qd_;
   std::string why_;
+  double rate_ = 1.0;
+  VectorXd model_scales_;     // (n) state_scales()
+  MatrixXd base_M_, base_A_;  // M and A at the base point (model_change)
+  VectorXd D_;                // diag(M)^(-1/2) at the base point, 0 where M_jj <= 0
+  VectorXd row_size_;         // (rows of A) what a row's change is measured against
 };
 
 /// Settings of ridders_jacobian (from LinearizeOptions).

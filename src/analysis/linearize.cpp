@@ -46,18 +46,19 @@ MatrixXd force_response(const Workspace& ws, double rank_threshold) {
 }
 
 // Ridders' table settled in every entry of J (rows: the entries of F, `rows`; a column per
-// input z_c of scale σ_c, `columns`): err <= |J| / 10, or err is small beside the size r_e =
-// |F₀(e)| + s_e of its row, s_e = max over the states k of |A(e, k)| σ_k (`row_scale`: how
-// much entry e changes over the states' scales): err <= 1e-3 r_e / σ_c, or err <= 1e-6 max_e
-// r_e / σ_c (a row that is 0 but for roundoff, a wheel's rate along the lean: 2.5e-13 ± 2.2e-13).
-// Otherwise the steps straddle a kink or a pole (an input that is not differentiable there, or
-// a first step that leaves the function's smooth part): an error, never a table that did not
-// settle returned as the derivative (a parameter of 1 mm stepped by 0.1 gave B = −858 for
-// 2.9e6, B_error 568). Cost O(rows · columns).
+// input z_c of scale σ_c, `columns`, the larger of its steps' scale and the model's, so that a
+// step scale of roundoff cannot make every error look small: 6.1 ± 46 for −24.85, u20 05): err <=
+// |J| / 10, or err is small beside the size r_e = |F₀(e)| + s_e of its row, s_e = max over the
+// states k of |A(e, k)| σ_k (`row_scale`: how much entry e changes over the states' scales): err <=
+// 1e-3 r_e / σ_c, or err <= 1e-6 max_e r_e / σ_c (a row that is 0 but for roundoff, a wheel's rate
+// along the lean: 2.5e-13 ± 2.2e-13). Otherwise the steps straddle a kink or a pole (an input that
+// is not differentiable there, or a first step that leaves the function's smooth part): an error,
+// never a table that did not settle returned as the derivative (a parameter of 1 mm stepped by 0.1
+// gave B = −858 for 2.9e6, B_error 568). Cost O(rows · columns).
 void require_settled(const MatrixXd& J, const MatrixXd& err, const VectorXd& F0,
-                     const VectorXd& row_scale, const VectorXd& sigma, double initial_step,
-                     const std::vector<std::string>& columns,
-                     const std::vector<std::string>& rows) {
+                     const VectorXd& row_scale, const VectorXd& sigma, const VectorXd& steps,
+                     const std::vector<std::string>& columns, const std::vector<std::string>& rows,
+                     const std::vector<std::string>& notes = {}) {
   const VectorXd r = F0.cwiseAbs() + row_scale;
   const double largest = r.size() > 0 ? r.maxCoeff() : 0.0;
   for (Index c = 0; c < J.cols(); ++c)
@@ -71,9 +72,55 @@ void require_settled(const MatrixXd& J, const MatrixXd& err, const VectorXd& F0,
                            " along " + columns[std::size_t(c)] + " did not settle (" +
                            format_number(J(e, c), 4) + " ± " + format_number(e_, 2) +
                            "): it is not differentiable there, or not smooth over steps of " +
-                           format_number(initial_step * sigma(c), 3) +
-                           " (LinearizeOptions::initial_step scales them; docs/linearize.md)");
+                           format_number(steps(c), 3) +
+                           " (LinearizeOptions::initial_step scales them; docs/linearize.md)" +
+                           (std::size_t(c) < notes.size() ? notes[std::size_t(c)] : ""));
     }
+}
+
+// Force inputs enter B exactly (force_response) unless a non-ideal force can see them: with
+// constraint rows acting, a friction that reads the reactions (a contact's, a joint's under
+// load) changes with the force input, and ∂q''/∂u is not N (Nᵀ M N)⁻¹ Nᵀ. Where no row acts,
+// every reaction is 0 whatever u is — a robot tree with URDF joint friction (u20 06: its joint
+// torques were refused though the friction reads nothing): the non-ideal forces depend on the
+// state only, and the column is exact. @throws std::invalid_argument naming the input.
+void require_exact_force_inputs(const System& sys, const analysis::Partition& part,
+                                const std::vector<LinearInput>& inputs) {
+  if (sys.nonideal_count() == 0 || part.velocity_rows.empty()) return;
+  for (const auto& in : inputs)
+    if (in.kind == InputKind::kForce)
+      throw std::invalid_argument(
+          std::string(kWho) + ": force input '" + in.name +
+          "': the system has non-ideal forces ('" + sys.nonideal_name(0) + "'" +
+          (sys.nonideal_count() > 1 ? ", …" : "") +
+          ") and constraints acting at the point: the forces may read the reactions an input "
+          "changes, so its column of B is not exact; force inputs are supported where no "
+          "constraint acts or with ideal constraints (a parameter input works: docs/linearize.md)");
+}
+
+// What a column at rest along a non-ideal force says: Coulomb friction (a URDF joint's
+// <dynamics friction>, a contact's mu) has a kink at a rate of 0 (regularized over 1e-6), so the
+// table along that rate does not settle and no linear model exists there. One note per state
+// (empty for positions and for rates that are not at rest). O(s · forces).
+std::vector<std::string> friction_notes(const System& sys, const analysis::Partition& part,
+                                        const OperatingPoint& at, const VectorXd& sigma) {
+  std::vector<std::string> notes(part.ip.size() + part.iv.size());
+  if (sys.nonideal_count() == 0) return notes;
+  std::string names;
+  for (Index i = 0; i < sys.nonideal_count(); ++i)
+    names += (i ? ", '" : "'") + sys.nonideal_name(i) + "'";
+  for (std::size_t k = 0; k < part.iv.size(); ++k) {
+    const Index j = part.iv[k];
+    const std::size_t c = part.ip.size() + k;
+    if (std::abs(at.qd(j)) >= 1e-3 * sigma(Index(c))) continue;
+    const std::string rate = sys.coordinate_names()[std::size_t(j)] + "_dot";
+    notes[c] = "; at " + rate + " = 0 the system's non-ideal forces (" + names +
+               ") are not differentiable when they are Coulomb friction (a URDF joint's "
+               "<dynamics friction>, a contact's mu: a kink at rest), and no linear model "
+               "exists there: linearize at a state where " +
+               rate + " is not 0, or a model without that friction";
+  }
+  return notes;
 }
 
 }  // namespace
@@ -117,11 +164,6 @@ LinearModel linearize(const System& sys, const OperatingPoint& at,
                                   in.name + "') is a force along coordinate " +
                                   std::to_string(in.coordinate) + ", not in [0, " +
                                   std::to_string(n) + ")");
-    if (in.kind == InputKind::kForce && sys.nonideal_count() > 0)
-      throw std::invalid_argument(
-          std::string(kWho) + ": force input '" + in.name +
-          "': the system has non-ideal forces (which may read the reactions a force changes); "
-          "force inputs are supported for ideal constraints only");
     if (in.kind == InputKind::kParameter && !in.family)
       throw std::invalid_argument(std::string(kWho) + ": parameter input '" + in.name +
                                   "' has no family of systems");
@@ -135,6 +177,7 @@ LinearModel linearize(const System& sys, const OperatingPoint& at,
   // stage 1: the coordinates
   Workspace ws(sys, analysis::dense_options(options.solver));
   const analysis::Partition part = analysis::choose_coordinates(sys, ws, at, options, kWho);
+  require_exact_force_inputs(sys, part, inputs);
   analysis::ReducedDynamics rd(sys, part, at, options);
   const Index s = rd.state_size(), ny = Index(outputs.size()), nu = Index(inputs.size());
 
@@ -172,10 +215,11 @@ LinearModel linearize(const System& sys, const OperatingPoint& at,
   std::vector<std::string> rows;  // (F's entries: f of the states, then the outputs)
   for (const auto& x : lm.state_names) rows.push_back(x + "'");
   for (const auto& y : lm.output_names) rows.push_back("output '" + y + "'");
-  const VectorXd sigma = h / options.initial_step;
+  const VectorXd sigma = (h / options.initial_step).cwiseMax(rd.model_state_scales());
   VectorXd row_scale = VectorXd::Zero(s + ny);
   for (Index k = 0; k < s; ++k) row_scale = row_scale.cwiseMax(J.col(k).cwiseAbs() * sigma(k));
-  require_settled(J, E, F0, row_scale, sigma, options.initial_step, lm.state_names, rows);
+  require_settled(J, E, F0, row_scale, sigma, h, lm.state_names, rows,
+                  friction_notes(sys, part, at, sigma));
   lm.A = J.topRows(s);
   lm.A_error = E.topRows(s);
   lm.C = J.bottomRows(ny);
@@ -229,7 +273,7 @@ LinearModel linearize(const System& sys, const OperatingPoint& at,
     if (!analysis::ridders_jacobian(Fp, u0, hu, s + ny, ro, J, E, why_p))
       throw SolveError(Status::kProjectionFailed,
                        std::string(kWho) + ": parameter '" + in.name + "': " + why_p + ": " + why);
-    require_settled(J, E, F0, row_scale, VectorXd::Constant(1, p_scale), options.initial_step,
+    require_settled(J, E, F0, row_scale, VectorXd::Constant(1, p_scale), hu,
                     {"parameter '" + in.name + "'"}, rows);
     lm.B.col(c) = J.col(0).head(s);
     lm.B_error.col(c) = E.col(0).head(s);

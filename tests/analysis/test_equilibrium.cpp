@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <map>
 #include <string>
 
 #include <Eigen/Core>
@@ -102,6 +103,47 @@ TEST(Equilibrium, NoneUnderAConstantPushIsAClearError) {
   }
   o.unknowns = {"y"};
   EXPECT_THROW(find_equilibrium(model.system, guess, o), std::invalid_argument);
+}
+
+// The stopping test is relative to the run's acceleration scale (the coordinates' scales at the
+// rate² of the guess), not absolute in the model's units: a double pendulum (URDF-like, angles)
+// in SI units and in mm, g and ms, identical after conversion, stops at the same iterate — to
+// roundoff of 0 — rather than 1e-9 rad off in mm (u20 09: SI 1e-25, mm 4e-10 and 1.05e-9), and
+// a four-bar's equilibrium in mm is as exact as in SI (it was 2.6e-7 rad off)
+TEST(Equilibrium, TheSameEquilibriumInAnyUnits) {
+  const std::string pendulum = R"(name: double pendulum
+parameters: {m1: 1, m2: 0.5, l1: 0.5, l2: 0.4, g: 9.81}
+coordinates: [q1, q2]
+kinetic_energy: >-
+  0.5*(m1 + m2)*l1^2*q1_dot^2 + 0.5*m2*l2^2*q2_dot^2 + m2*l1*l2*cos(q1 - q2)*q1_dot*q2_dot
+potential_energy: -(m1 + m2)*g*l1*cos(q1) - m2*g*l2*cos(q2)
+)";
+  const std::map<std::string, double> mm{
+      {"m1", 1000}, {"m2", 500}, {"l1", 500}, {"l2", 400}, {"g", 9.81e-3}};
+  OperatingPoint guess{Eigen::Vector2d(0.5, 0.2), VectorXd::Zero(2), 0.0};
+  const Equilibrium si = find_equilibrium(parse_model(pendulum, "dp").system, guess);
+  const Equilibrium in_mm = find_equilibrium(parse_model(pendulum, "dp", mm).system, guess);
+  EXPECT_EQ(si.iterations, in_mm.iterations);
+  for (Index j = 0; j < 2; ++j) {
+    EXPECT_NEAR(si.point.q(j), 0.0, 1e-12) << j;
+    EXPECT_NEAR(in_mm.point.q(j), 0.0, 1e-12) << j;
+    EXPECT_NEAR(in_mm.point.q(j), si.point.q(j), 1e-14) << j;
+  }
+  // the residual is in the model's units: 1e-6 of SI's per ms² (both at roundoff here)
+  EXPECT_NEAR(si.residual, 0.0, 1e-10);
+  EXPECT_NEAR(in_mm.residual, 0.0, 1e-16);
+
+  // the four-bar (two loop rows) from a = 0.3 off the manifold
+  const Model fb = parse_model(test::kParallelogram, "fb");
+  const Model fb_mm =
+      parse_model(test::kParallelogram, "fb",
+                  {{"mc", 1000}, {"mk", 2000}, {"L", 500}, {"d", 1000}, {"g", 9.81e-3}});
+  OperatingPoint from{Eigen::Vector3d(0.3, 0.0, 0.0), VectorXd::Zero(3), 0.0};
+  const Equilibrium a = find_equilibrium(fb.system, from), b = find_equilibrium(fb_mm.system, from);
+  for (Index j = 0; j < 3; ++j) {
+    EXPECT_NEAR(a.point.q(j), 0.0, 1e-12) << j;
+    EXPECT_NEAR(b.point.q(j), 0.0, 1e-12) << j;
+  }
 }
 
 }  // namespace UKDYN_TEST_FILE

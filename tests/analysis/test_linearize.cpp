@@ -7,7 +7,9 @@
 #include <cmath>
 #include <complex>
 #include <map>
+#include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Core>
@@ -510,6 +512,152 @@ potential_energy: -m*g*sqrt(l)*cos(th)
   const Model rooted = parse_model(root, "gp");
   EXPECT_THROW(linearize(rooted.system, at, {model_parameter_input(root, "gp", {}, "l")}),
                SolveError);
+}
+
+// The parallelogram four-bar of u20 05 in angles (cranks th1, th2 of L, mc uniform; coupler ph
+// of d, mk): hanging at rest its one-DOF motion is θ'' = −ω² θ with ω² = g (mc + mk) / (L (2 mc/3
+// + mk)) = 24.852 /s², in SI units and in mm, g and ms (ω 1000 times smaller)
+const char* kFourBarAngles = R"(name: parallelogram in angles
+parameters: {L: 0.5, d: 0.8, mc: 1.2, mk: 0.7, g: 9.81}
+coordinates: [th1, th2, ph]
+kinetic_energy: >-
+  0.5*(mc*L^2/3)*(th1_dot^2 + th2_dot^2)
+  + 0.5*mk*((L*cos(th1)*th1_dot - d/2*sin(ph)*ph_dot)^2 + (L*sin(th1)*th1_dot + d/2*cos(ph)*ph_dot)^2)
+  + 0.5*(mk*d^2/12)*ph_dot^2
+potential_energy: g*(-mc*L/2*cos(th1) - mc*L/2*cos(th2) + mk*(-L*cos(th1) + d/2*sin(ph)))
+constraints:
+  - {name: lx, holonomic: L*sin(th1) + d*cos(ph) - d - L*sin(th2)}
+  - {name: lz, holonomic: -L*cos(th1) + d*sin(ph) + L*cos(th2)}
+)";
+
+struct FourBarUnits {
+  const char* name;
+  std::map<std::string, double> parameters;
+  double second;  // the model's time unit in s
+};
+const std::vector<FourBarUnits> kFourBarUnits{
+    {"SI", {}, 1.0},
+    {"mm g ms", {{"L", 500}, {"d", 800}, {"mc", 1200}, {"mk", 700}, {"g", 9.81e-3}}, 1e-3}};
+
+// A of a hanging four-bar: [[0, 1], [−ω², 0]] in the state (crank, crank'), to its estimate
+void expect_hanging_four_bar(const LinearModel& lm, double second, const std::string& what) {
+  const double w = std::sqrt(9.81 * 1.9 / (0.5 * (0.8 + 0.7))) * second;  // 4.98517803092327 /s
+  ASSERT_EQ(lm.A.rows(), 2) << what;
+  MatrixXd A(2, 2);
+  A << 0, 1, -w * w, 0;
+  for (Index i = 0; i < 2; ++i)
+    for (Index j = 0; j < 2; ++j) {
+      EXPECT_NEAR(lm.A(i, j), A(i, j), 1e-9 * w * w + lm.A_error(i, j)) << what << i << j;
+      EXPECT_LE(lm.A_error(i, j), 1e-8 * w * w) << what << i << j;
+      EXPECT_GE(lm.A_error(i, j), 0.0) << what << i << j;
+    }
+  EXPECT_NEAR(std::abs(lm.eigenvalues(0).imag()), w, 1e-9 * w) << what;
+  EXPECT_NEAR(lm.eigenvalues(0).real(), 0.0, 1e-9 * w) << what;
+}
+
+// At q = 0 to roundoff (what an equilibrium search returns, 1e-14 rad) the steps are those of q
+// = 0, 0.1 of the loop's natural scale, not 0.1 ‖q‖∞ = 1e-15 rad, where the loop's Newton
+// roundoff gave ω = 4.43 or 4.61 for 4.985, or an unstable four-bar with --independent (u20 05)
+TEST(LinearizeRoundoff, AClosedChainAtTheRoundoffOfZeroIsLinearizedAsAtZero) {
+  for (const auto& u : kFourBarUnits) {
+    const Model model = parse_model(kFourBarAngles, "fb", u.parameters);
+    const System& sys = model.system;
+    OperatingPoint guess{Eigen::Vector3d(0.3, 0.3, 0.0), VectorXd::Zero(3), 0.0};
+    const OperatingPoint found = find_equilibrium(sys, guess).point;
+    EXPECT_LE(found.q.lpNorm<Eigen::Infinity>(), 1e-10) << u.name;
+    std::vector<std::pair<std::string, OperatingPoint>> points{
+        {"at 0", {VectorXd::Zero(3), VectorXd::Zero(3), 0.0}},
+        {"at 1e-14", {Eigen::Vector3d(1e-14, 1e-14, 1e-14), VectorXd::Zero(3), 0.0}},
+        {"at 1e-14, -1e-14", {Eigen::Vector3d(1e-14, -1e-14, 1e-14), VectorXd::Zero(3), 0.0}},
+        {"at the equilibrium found", found}};
+    for (const auto& [where, at] : points)
+      for (const char* independent : {"", "th1", "th2"}) {
+        LinearizeOptions o;
+        if (*independent) o.independent_positions = {independent};
+        const std::string what = std::string(u.name) + " " + where + " " + independent + ": ";
+        try {
+          expect_hanging_four_bar(linearize(sys, at, {}, {}, o), u.second, what);
+        } catch (const std::exception& e) {
+          ADD_FAILURE() << what << e.what();
+        }
+      }
+    // at rest after a run (q and q' at roundoff, or in a damped run's tail: 2.6e-9 rad stepped by
+    // 2.6e-10 had an error of 3e-6 that its estimate did not bound), along a path: the same A
+    std::vector<OperatingPoint> path;
+    for (double r : {1e-13, -3e-14, 1e-14, 0.0, -2.6e-9, 4e-7}) {
+      path.push_back({Eigen::Vector3d(r, r, 0.0), Eigen::Vector3d(r, r, 0.0) / u.second, 0.0});
+    }
+    const auto models = linearize_along(sys, path);
+    for (std::size_t k = 0; k < models.size(); ++k)
+      expect_hanging_four_bar(models[k], u.second,
+                              std::string(u.name) + " along, point " + std::to_string(k) + ": ");
+  }
+}
+
+// A cart pole (cart x, pole th from the upright; M = 1 kg, m = 0.1 kg, l = 0.5 m) in mm, g and ms:
+// x is cyclic, so A at x = 500 mm is A at x = 0 — the angle at 0 steps in its own scale (about
+// 1 rad), not by 0.1 ‖q‖∞ = 50 rad ("did not settle ... steps of 50"; u20 06)
+TEST(LinearizeRoundoff, AnAngleAtZeroBesideALengthStepsInItsOwnScale) {
+  const std::string text = R"(name: cart pole
+parameters: {M: 1000, m: 100, l: 500, g: 9.81e-3}
+coordinates: [x, th]
+kinetic_energy: 0.5*(M + m)*x_dot^2 + m*l*x_dot*th_dot*cos(th) + 0.5*m*l^2*th_dot^2
+potential_energy: m*g*l*cos(th)
+)";
+  const Model model = parse_model(text, "cp");
+  const double M = 1000, m = 100, l = 500, g = 9.81e-3;
+  MatrixXd A = MatrixXd::Zero(4, 4);
+  A(0, 2) = A(1, 3) = 1;
+  A(2, 1) = -m * g / M;
+  A(3, 1) = (M + m) * g / (M * l);
+  for (const double x : {0.0, 500.0, -2e4}) {
+    const OperatingPoint at{Eigen::Vector2d(x, 0.0), VectorXd::Zero(2), 0.0};
+    const LinearModel lm = linearize(model.system, at);
+    for (Index i = 0; i < 4; ++i)
+      for (Index j = 0; j < 4; ++j)
+        EXPECT_NEAR(lm.A(i, j), A(i, j), 1e-9 * A(3, 1) + lm.A_error(i, j))
+            << "x " << x << ": " << i << j;
+    EXPECT_LE(lm.A_error.maxCoeff(), 1e-9 * A(3, 1)) << "x " << x;
+    // a program can still choose its first step (`--initial-step`, initial_step=)
+    LinearizeOptions o;
+    o.initial_step = 0.01;
+    EXPECT_NEAR(linearize(model.system, at, {}, {}, o).A(3, 1), A(3, 1), 1e-9 * A(3, 1));
+  }
+}
+
+// Joint friction that reads no reaction (C(q')) on an unconstrained pendulum: a force input's
+// column of B is exact (1 / (m l²)), as without the friction (u20 06 a: every joint torque of a
+// URDF robot with <dynamics friction> was refused); at rest the friction's kink has no linear
+// model, and the error says so (06 b), not only that the table did not settle
+TEST(LinearizeRoundoff, JointFrictionWithoutReactionsKeepsExactForceInputs) {
+  const std::string text = R"(name: pendulum with joint friction
+parameters: {m: 2, l: 0.5, g: 9.81, mu: 0.2, c: 0.1}
+coordinates: [th]
+kinetic_energy: 0.5*m*l^2*th_dot^2
+potential_energy: -m*g*l*cos(th)
+nonideal:
+  - {C: [-mu*th_dot/sqrt(th_dot^2 + 1e-12) - c*th_dot]}
+)";
+  const Model model = parse_model(text, "pf");
+  const System& sys = model.system;
+  const double I = 2 * 0.25;
+  const OperatingPoint moving{VectorXd::Constant(1, 0.3), VectorXd::Constant(1, 1.0), 0.0};
+  const LinearModel lm = linearize(sys, moving, {force_input(sys, "th")});
+  EXPECT_EQ(lm.B_error(1, 0), 0.0);
+  EXPECT_NEAR(lm.B(1, 0), 1 / I, 1e-15 / I);
+  EXPECT_NEAR(lm.B(0, 0), 0.0, 1e-300);
+  const double A21 = -9.81 / 0.5 * std::cos(0.3), A22 = -0.1 / I;  // (μ ε² / |ω|³ ≈ 2e-13)
+  EXPECT_NEAR(lm.A(1, 0), A21, 1e-9 * std::abs(A21));
+  EXPECT_NEAR(lm.A(1, 1), A22, 1e-9);
+  try {
+    linearize(sys, {VectorXd::Constant(1, 0.3), VectorXd::Zero(1), 0.0}, {force_input(sys, "th")});
+    ADD_FAILURE() << "no error at rest";
+  } catch (const SolveError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("at th_dot = 0 the system's non-ideal forces"), std::string::npos) << what;
+    EXPECT_NE(what.find("not differentiable"), std::string::npos) << what;
+    EXPECT_NE(what.find("no linear model exists there"), std::string::npos) << what;
+  }
 }
 
 }  // namespace UKDYN_TEST_FILE

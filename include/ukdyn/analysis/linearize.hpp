@@ -119,9 +119,12 @@ struct LinearizeOptions {
   /// rather than return a matrix that depends on roundoff. Must lie in [rank_threshold, 1).
   double singular_threshold = 1e-6;
   /// Ridders' first step for state entry k: initial_step · σ_k, σ_k its own scale — |q_j| (or
-  /// ‖q‖∞ where |q_j| is below 1e-3 of that) for a position, |q'_j| (or the coordinate's scale
-  /// at the run's rate) for a velocity, |p₀| (1 when p₀ = 0) for a parameter input — never an
-  /// absolute number (docs/linearize.md, "Steps in the model's own scale"). Must be > 0.
+  /// the model's scale min(ℓ̃, λ_j) where |q_j| is below 1e-3 of that; never above the
+  /// coordinate's natural scale λ_j; ℓ̃ = ‖q‖∞ without coordinates below 1e-3 λ_j) for a
+  /// position, |q'_j| (or the coordinate's scale at the run's rate) for a velocity, |p₀| (1 when
+  /// p₀ = 0) for a parameter input — never an absolute number (docs/linearize.md, "Steps in the
+  /// model's own scale"; `ukdyn linearize --initial-step`, `initial_step=` in Python). Must be
+  /// > 0.
   double initial_step = 0.1;
   /// Ridders' table size (levels of step shrinking by `step_ratio`). Must be >= 2.
   int table_size = 10;
@@ -183,10 +186,12 @@ struct LinearModel {
 /// force columns of B exact (q'' is affine in Q: ∂q''/∂Q = N (Nᵀ M N)⁻¹ Nᵀ, N a basis of
 /// null(A)).
 /// @throws std::invalid_argument on misuse (sizes, names, options, a point off the manifold,
-/// an acceleration-form constraint, force inputs with non-ideal forces, at a singular
-/// configuration — the message names the constraint rows or coordinates).
-/// @throws SolveError when the dynamics cannot be evaluated near the point.
-/// Cost: O(s · table_size) evaluations of the forward dynamics and the chart (each O(n³)).
+/// an acceleration-form constraint, force inputs with non-ideal forces where constraints act,
+/// at a singular configuration — the message names the constraint rows or coordinates).
+/// @throws SolveError when the dynamics cannot be evaluated near the point, or an entry's
+/// Ridders table does not settle (a kink: friction at rest is named).
+/// Cost: O(s · table_size) evaluations of the forward dynamics and the chart (each O(n³)), and
+/// O(n) probes of M and A per coordinate for the steps' scales.
 LinearModel linearize(const System& sys, const OperatingPoint& at,
                       const std::vector<LinearInput>& inputs = {},
                       const std::vector<LinearOutput>& outputs = {},
@@ -210,8 +215,10 @@ struct EquilibriumOptions {
   /// every independent position (a static equilibrium when the guess is at rest, a relative
   /// equilibrium with the guess's velocities kept otherwise).
   std::vector<std::string> unknowns;
-  /// Converged when ‖q''_Iv‖ <= tolerance (the reduced accelerations, in the coordinates'
-  /// units per s²). Must be > 0.
+  /// Converged when every reduced acceleration q''_j (j in I_v) is <= tolerance times its
+  /// coordinate's acceleration unit: its model scale min(ℓ̃, λ_j) at the guess's rate² (v / ℓ̃)²
+  /// (docs/linearize.md, "Equilibria and steady motions") — relative, so that a model gives
+  /// the same equilibrium in any units. Must be > 0.
   double tolerance = 1e-10;
   int max_iterations = 50;  ///< Newton steps; must be >= 1
   /// Chart and derivative settings (independent coordinates, thresholds).
@@ -221,7 +228,7 @@ struct EquilibriumOptions {
 /// An equilibrium or steady motion found by find_equilibrium().
 struct Equilibrium {
   OperatingPoint point;  ///< on the manifold
-  double residual = 0;   ///< ‖q''_Iv‖ there
+  double residual = 0;   ///< ‖q''_Iv‖ there, in the model's units
   int iterations = 0;    ///< Newton steps taken
 };
 
