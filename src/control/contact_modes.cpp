@@ -690,8 +690,9 @@ std::string ContactModes::pull_message(const Controller& ctrl, double t, Index r
          " pulls: with the contact open the control that meets it drives the gap shut "
          "(g'' < 0), no pushing contact force lets it be met (the LCP of the closed contacts "
          "with the requirements as equalities has no solution), and with the contacts closed the "
-         "requirement is missed by " +
-         format(missed) +
+         "requirement's acceleration is missed by " +
+         format(missed) + " (" + units_.rate(units_.length, 2) + " for a position row, rad/" +
+         units_.time + "² for an angle)" +
          " (docs/contact.md, \"Contacts under control\"). Try: a requirement that stays on "
          "the open side of the contact, or the contact written as a two-sided constraint";
 }

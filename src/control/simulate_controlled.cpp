@@ -165,7 +165,8 @@ struct ControlledScratch final : CallableScratch {
   double t_last = 0.0;
   bool evaluated = false;  // q_last, qd_last, t_last and cws hold an evaluation
   ControlStatistics stats;
-  std::string failure;       // describe_control_status() of the first failure
+  std::string failure;       // describe_control_status() of the latest failing evaluation,
+  double failure_t = 0.0;    // at this time (a failed run reports it only from its last step)
   std::string pull_failure;  // (ContactModes::settle) a requirement that needs a contact to pull
   std::string slip_note;     // (ContactModes::slip) the first stick a requirement broke,
   double slip_t = 0.0;       // at this time
@@ -218,7 +219,10 @@ void ControlledPlant::force(ControlledScratch& w, const Eigen::Ref<const VectorX
   w.t_last = t;
   // a requirement that lifts a contact opens it; one that needs it to pull stops the run
   if (!w.contacts.settle(ctrl, cws, q, qd, t, s, w.pull_failure)) {
-    if (w.failure.empty()) w.failure = w.pull_failure;
+    // (the latest: a failing trial evaluation that a smaller step avoided is no diagnosis of
+    // a failure later in the run)
+    w.failure = w.pull_failure;
+    w.failure_t = t;
     Q.setConstant(std::numeric_limits<double>::quiet_NaN());
     return;
   }
@@ -231,7 +235,8 @@ void ControlledPlant::force(ControlledScratch& w, const Eigen::Ref<const VectorX
   // their forces
   w.contacts.anticipate(ctrl, cws, w.run_modes, q, qd, t, s);
   if (s != ControlStatus::kOk && s != ControlStatus::kRequirementsNotMet) {
-    if (w.failure.empty()) w.failure = describe_control_status(ctrl, cws);
+    w.failure = describe_control_status(ctrl, cws);
+    w.failure_t = t;
     Q.setConstant(std::numeric_limits<double>::quiet_NaN());
     return;
   }
@@ -705,6 +710,7 @@ ControlledTrajectory simulate_controlled(
         w.run_ws = nullptr;
         after->stats = w.stats;
         after->failure = w.failure;
+        after->failure_t = w.failure_t;
         after->slip_note = w.slip_note;
         after->q_last = w.q_last;
         after->qd_last = w.qd_last;
@@ -739,8 +745,12 @@ ControlledTrajectory simulate_controlled(
   run.control = w.stats;
   bounds.finish(run.control, tr.stats, options.units.time);
   balance.finish(tr.stats, tolerance, options.units);
+  // the controller's failure, where it failed in the run's last step (evaluations there lie at
+  // or after the last sample; one before it was avoided by a smaller step, and the run failed
+  // for its own reason, said by its own message)
   if (!w.failure.empty() && tr.stats.status != Status::kOk &&
-      tr.stats.status != Status::kEnergyBalance && tr.stats.status != Status::kInterrupted) {
+      tr.stats.status != Status::kEnergyBalance && tr.stats.status != Status::kInterrupted &&
+      w.failure_t >= tr.stats.t_reached) {
     tr.stats.message = "the controller failed: " + w.failure;
   }
   return run;

@@ -11,6 +11,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <numbers>
 #include <string>
 
 #include "ukdyn/control/control.hpp"
@@ -267,6 +268,68 @@ TEST(ControlLift, RobotArmLiftedOffAFrictionalGroundRunsAsInSIInMillimetresGrams
   const ControlledTrajectory mm = lifted_arm_run(true, 1e-9);
   ASSERT_EQ(mm.plant.stats.status, Status::kOk) << mm.plant.stats.message;
   expect_scaled(si, mm, 3e-8);
+}
+
+// ---- a failed run names the failure of its last step
+// ---------------------------------------------
+
+// A two-link arm (tests/data/arm2_circle.urdf, a new user's, u20 04) whose tip (a sphere of
+// r = 0.02) is made to trace the circle x = 0.6 + 0.15 cos 2t, z = 0.62 + 0.15 sin 2t, which dips
+// below a table at z = 0.55: the tip's centre reaches 0.57 where sin 2t = −1/3, at
+// t* = (π + asin(1/3))/2 = 1.7407148 s, and the requirement then needs the table to pull: the
+// run stops there and says so, at that time. (A trial evaluation at t = 0 had failed the same
+// way, and its time was the one said.) The same arm lifted off the table and then driven out
+// of reach diverges at 2.06 s: the run says that, not a pulling contact of an earlier trial
+// evaluation (it named 'tip' at 0.84 s, where the contact was still closed).
+TEST(ControlLift, AFailedRunSaysTheFailureOfItsLastStepNotOfAnEarlierTrial) {
+  const std::string head = R"(
+robot: {urdf: arm2_circle.urdf}
+simulate: {t_end: 4}
+)";
+  const Model dip = parse_model(head + R"(
+parameters: {cx: 0.6, cz: 0.62, R: 0.15, W: 2}
+initial:
+  q: {shoulder: -0.28496459, elbow: 1.49990363}
+control:
+  requirements:
+    - name: tip
+      pose: {link: fore, point: [0.5, 0, 0], position: [cx + R*cos(W*t), 0, cz + R*sin(W*t)]}
+      dynamics: {omega: 10, zeta: 1}
+contacts:
+  - {name: pad, link: fore, point: [0.5, 0, 0], shape: sphere, radius: 0.02,
+     plane: {body: ground, point: [0, 0, 0.55], normal: [0, 0, 1]}}
+)",
+                                std::string(UKDYN_TEST_DATA_DIR) + "/arm2_circle.yaml");
+  const ControlledTrajectory r = run(dip);
+  const double t_star = (std::numbers::pi + std::asin(1.0 / 3.0)) / 2.0;
+  EXPECT_NEAR(r.plant.stats.t_reached, t_star, 1e-6);
+  const std::string& msg = r.plant.stats.message;
+  EXPECT_NE(msg.find("the controller failed: at t = " + format_number(r.plant.stats.t_reached, 6) +
+                     " s the requirement row 'tip.2' can be met only if the contact 'pad' pulls"),
+            std::string::npos)
+      << msg;
+  EXPECT_EQ(msg.find("at t = 0 s"), std::string::npos) << msg;
+  const Model lift = parse_model(head + R"y(
+parameters: {x0: 0.8, A: 0.1, W: 3}
+initial:
+  q: {shoulder: -0.046637383911816946, elbow: 1.2044927781043431}
+control:
+  requirements:
+    - name: tip2
+      pose: {link: fore, point: [0.5, 0, 0], position: [x0 + A*sin(W*t), 0, "0.57 + if(t - 1, (t - 1)^3, 0)"]}
+      dynamics: {omega: 10, zeta: 1}
+contacts:
+  - {name: tip, link: fore, point: [0.5, 0, 0], shape: sphere, radius: 0.02,
+     plane: {body: ground, point: [0, 0, 0.55], normal: [0, 0, 1]}}
+)y",
+                                 std::string(UKDYN_TEST_DATA_DIR) + "/arm2_circle.yaml");
+  const ControlledTrajectory l = run(lift);
+  EXPECT_EQ(l.plant.stats.status, Status::kIntegratorFailure) << l.plant.stats.message;
+  // out of reach: x = 0.8 + 0.1 sin 3t, z = 0.57 + (t − 1)³ leaves the shoulder's 1.1 m near 2 s
+  EXPECT_GT(l.plant.stats.t_reached, 1.9);
+  EXPECT_LT(l.plant.stats.t_reached, 2.2);
+  EXPECT_EQ(l.plant.stats.message.find("pulls"), std::string::npos) << l.plant.stats.message;
+  EXPECT_NE(l.plant.stats.message.find("diverges"), std::string::npos) << l.plant.stats.message;
 }
 
 }  // namespace UKDYN_TEST_FILE

@@ -771,7 +771,11 @@ TEST(ContactBodiesFriction, SpherePushedAtAPaceTakesTheStepsOfItsMotionAndOfItsE
   EXPECT_NEAR(r.control_effort.back(), F0 * F0 * (t_end / 2 + std::sin(2 * w * t_end) / (4 * w)),
               1e-8);
   const double s = std::sin(w * t_end);
-  EXPECT_NEAR(r.control_work_abs.back(), 0.7 * mass * A * A * w * w * (4.0 - s * s), 1e-7);
+  // (|work|'s integrand |Q·v| has kinks where the power changes sign, at wt = π/2, π, 3π/2,
+  // which the steps straddle wherever the error control of the other channels puts them: its
+  // error, 1.5e-7 of 1.48 since the effort has a tolerance of its own (h17/quadtol), is the
+  // kinks', not the run's accuracy)
+  EXPECT_NEAR(r.control_work_abs.back(), 0.7 * mass * A * A * w * w * (4.0 - s * s), 3e-7);
   // omega 10: the error dynamics, not the motion, set the steps (625 here, 2.98 times as many)
   const ControlledTrajectory fast =
       run_controlled(paced_sphere(params, "A*(1 - cos(w*t))", "0", true), {});

@@ -25,8 +25,8 @@
 namespace ukdyn {
 namespace UKDYN_TEST_FILE {
 
-using mb::Vector3d;
 using Eigen::Matrix3d;
+using mb::Vector3d;
 constexpr double kG = 9.81;
 
 using testing::events_of;
@@ -41,10 +41,11 @@ TEST(ContactDiskSphere, GapRowMatchesTheGeometryAndFiniteDifferences) {
   const double R = 0.3, r = 0.1;
   for (const bool rim : {false, true}) {
     mb::Multibody b;
-    const mb::BodyId p = b.add_rigid_body(
-        "p", 2.0, Vector3d(0.1, 0.2, 0.3), rim ? Vector3d(0.6, 0.1, 0.3) : Vector3d(0.05, 0.02, 0.3),
-        Eigen::Quaterniond(Eigen::AngleAxisd(0.4, Vector3d(1, 2, 3).normalized())),
-        Vector3d(0.3, -0.2, 0.1), Vector3d(1.0, 0.5, -2.0));
+    const mb::BodyId p =
+        b.add_rigid_body("p", 2.0, Vector3d(0.1, 0.2, 0.3),
+                         rim ? Vector3d(0.6, 0.1, 0.3) : Vector3d(0.05, 0.02, 0.3),
+                         Eigen::Quaterniond(Eigen::AngleAxisd(0.4, Vector3d(1, 2, 3).normalized())),
+                         Vector3d(0.3, -0.2, 0.1), Vector3d(1.0, 0.5, -2.0));
     const mb::BodyId c = b.add_rigid_body(
         "c", 1.0, Vector3d(0.2, 0.1, 0.3), Vector3d(0.0, 0.0, 0.0),
         Eigen::Quaterniond(Eigen::AngleAxisd(-0.2, Vector3d(-1, 0, 2).normalized())),
@@ -173,7 +174,8 @@ forces:
   - {type: gravity, g: [0, 0, -9.81]}
 contacts:
   - {name: hit, body: coin, shape: disk, radius: R, axis: [0, 0, 1],
-     sphere: {body: ground, point: [)" + std::to_string(ox) +
+     sphere: {body: ground, point: [)" +
+                                std::to_string(ox) +
                                 R"(, 0, 0], radius: 0.05}, restitution: e}
 simulate: {t_end: 0.25, integrator: dopri5, rtol: 1e-12, atol: 1e-14}
 output: {every: 0}
@@ -276,20 +278,22 @@ TEST(ContactDiskSphere, BadDiskSphereContactsGetAClearErrorWithItsPlace) {
       "contacts:\n"
       "  - ";
   testing::expect_model_error(
-      head + "{name: c, body: a, shape: disk, radius: 0.1, sphere: {body: b, radius: 3, "
-             "inside: true}}\n",
+      head +
+          "{name: c, body: a, shape: disk, radius: 0.1, sphere: {body: b, radius: 3, "
+          "inside: true}}\n",
       "6:87", "contact 'c': a disk inside a sphere is not supported");
   testing::expect_model_error(
-      head + "{name: c, body: a, shape: box, size: [0.1, 0.1, 0.1], sphere: {body: b, radius: "
-             "1}}\n",
+      head +
+          "{name: c, body: a, shape: box, size: [0.1, 0.1, 0.1], sphere: {body: b, radius: "
+          "1}}\n",
       "6:67", "contact 'c': a box against a sphere is not supported");
   testing::expect_model_error(
-      head + "{name: c, body: p, shape: disk, radius: 0.1, sphere: {body: b, radius: 1}}\n",
-      "6:31", "a particle has no orientation, so it cannot carry a disk");
+      head + "{name: c, body: p, shape: disk, radius: 0.1, sphere: {body: b, radius: 1}}\n", "6:31",
+      "a particle has no orientation, so it cannot carry a disk");
   // the sphere's centre on the disk's rim at the start: no normal, refused at the build
   mb::Multibody rimmed;
   const mb::BodyId d = rimmed.add_rigid_body("d", 1.0, Vector3d(1, 1, 1), Vector3d::Zero(),
-                                                  Eigen::Quaterniond::Identity());
+                                             Eigen::Quaterniond::Identity());
   rimmed.add_joint(mb::contact_disk_sphere("touch", mb::kGround, Vector3d(0.1, 0, 0), 0.0, d,
                                            mb::Frame::at(Vector3d::Zero()), 0.1));
   try {
