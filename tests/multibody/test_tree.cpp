@@ -17,6 +17,8 @@
 #include "ukdyn/multibody/tree.hpp"
 #include "ukdyn/simulation/simulate.hpp"
 
+#include "support/urdf_errors.hpp"
+
 namespace ukdyn::tree {
 namespace UKDYN_TEST_FILE {
 
@@ -339,14 +341,8 @@ const std::string kInertial =
     "<inertial><mass value=\"1\"/><inertia ixx=\"0.1\" ixy=\"0\" ixz=\"0\" iyy=\"0.1\" "
     "iyz=\"0\" izz=\"0.1\"/></inertial>";
 
-std::string error_of(const std::string& path) {
-  try {
-    load_urdf(path);
-  } catch (const std::invalid_argument& e) {
-    return e.what();
-  }
-  return "(no error)";
-}
+// the message of loading a refused URDF file
+constexpr auto* error_of = &ukdyn::testing::urdf_load_error;
 
 TEST(Urdf, ErrorsNameTheLinkOrJoint) {
   const std::string joint =

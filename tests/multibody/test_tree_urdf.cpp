@@ -19,6 +19,8 @@
 #include "ukdyn/multibody/tree.hpp"
 #include "ukdyn/simulation/simulate.hpp"
 
+#include "support/urdf_errors.hpp"
+
 using namespace ukdyn;
 using namespace ukdyn::tree;
 
@@ -34,14 +36,8 @@ std::string urdf(const std::string& body) {
   return "<?xml version=\"1.0\"?>\n<robot name=\"r\">\n" + body + "</robot>\n";
 }
 
-std::string load_error(const std::string& path) {
-  try {
-    load_urdf(path);
-  } catch (const std::invalid_argument& e) {
-    return e.what();
-  }
-  return "(no error)";
-}
+// the message of loading a refused URDF file
+constexpr auto* load_error = &ukdyn::testing::urdf_load_error;
 
 // ---- <mimic> ----
 
