@@ -62,6 +62,19 @@ Row contact_row(const Joint& j, bool planar) {
 
 namespace ukdyn::mb::detail {
 
+namespace {
+// At q: d = c − o, the contact's point (a disk's centre) on C less the plane's point or the
+// sphere's centre on P, and k, C's frame_child z axis (a disk's axis), in the world (values
+// only). Cost O(1).
+void centres_at(const Joint& j, const BodyRef& P, const BodyRef& C, const VectorXd& q, VecKin& d,
+                VecKin& k) {
+  const VectorXd v = VectorXd::Zero(q.size());
+  add_body_vector(C, q, v, j.frame_child.p, true, 1.0, d, nullptr, false);
+  add_body_vector(P, q, v, j.frame_parent.p, true, -1.0, d, nullptr, false);
+  add_body_vector(C, q, v, j.frame_child.R.col(2), false, 1.0, k, nullptr, false);
+}
+}  // namespace
+
 Constraint contact_constraint(const Joint& j, const BodyRef& P, const BodyRef& C, bool planar,
                               const VectorXd& q0) {
   const std::string who = "ukdyn::mb::Multibody::build: contact '" + j.name + "'";
@@ -148,11 +161,8 @@ Constraint contact_constraint(const Joint& j, const BodyRef& P, const BodyRef& C
   }
   if (row.kind == Row::kDiskSphere) {
     // the sphere's centre on the disk's rim has no normal: refused at the start
-    const VectorXd v0 = VectorXd::Zero(q0.size());
     VecKin e, k;
-    add_body_vector(C, q0, v0, j.frame_child.p, true, 1.0, e, nullptr, false);
-    add_body_vector(P, q0, v0, j.frame_parent.p, true, -1.0, e, nullptr, false);
-    add_body_vector(C, q0, v0, j.frame_child.R.col(2), false, 1.0, k, nullptr, false);
+    centres_at(j, P, C, q0, e, k);
     const DiskSphereGap d = disk_sphere_gap(e, k, j.radius, j.other_radius, false);
     if (!(d.g + j.other_radius > 1e-12 * std::max({j.radius, e.x.norm(), 1e-300}))) {
       throw std::invalid_argument(
@@ -270,10 +280,7 @@ ContactKinematics relative_contact_kinematics(const Joint& j, const BodyRef& P, 
   Vector3d e = Vector3d::UnitZ();
   if ((spheres || disk_sphere) && !planar) {
     VecKin d0, k0;
-    const VectorXd v0 = VectorXd::Zero(q0.size());
-    add_body_vector(C, q0, v0, pC, true, 1.0, d0, nullptr, false);
-    add_body_vector(P, q0, v0, pP, true, -1.0, d0, nullptr, false);
-    add_body_vector(C, q0, v0, kC, false, 1.0, k0, nullptr, false);
+    centres_at(j, P, C, q0, d0, k0);
     const Vector3d n0 = disk_sphere ? disk_sphere_gap(d0, k0, r, r_P, false).n : d0.x;
     Index axis = 0;
     n0.cwiseAbs().minCoeff(&axis);
