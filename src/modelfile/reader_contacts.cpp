@@ -3,7 +3,8 @@
 // "Contacts on bodies"): each entry is one unilateral gap of a point, sphere or disk of a body
 // with a plane fixed on the ground or on another body, added as mb::contact / mb::contact_disk,
 // or of a point or sphere outside (or, inside: true, inside) a sphere of another body or of the
-// ground (mb::contact_spheres), or of a disk outside such a sphere (mb::contact_disk_sphere).
+// ground (mb::contact_spheres), or of a disk outside such a sphere (mb::contact_disk_sphere), or
+// of a point or sphere outside a box of another body or of the ground (mb::contact_sphere_box).
 // Every error names the contact and the key (file:line:column) and gives a hint.
 #include <algorithm>
 #include <cmath>
@@ -47,7 +48,7 @@ void MultibodyReader::read_contacts() {
     }
     check_keys(c,
                {"name", "body", "point", "shape", "radius", "size", "axis", "plane", "sphere",
-                "restitution", "restitution_law"},
+                "box", "restitution", "restitution_law"},
                what);
     // the body, its point and its shape
     const YAML::Node bn = require(c, "body", what, "body: ball");
@@ -87,6 +88,50 @@ void MultibodyReader::read_contacts() {
       const Vector3d a = vec(an, what + " axis", 3, 3);
       if (!(a.norm() > 0.0)) r_.fail(an, what + ": the axis is zero", "axis: [0, 0, 1]");
       disk_frame = Frame::with_z(p, a);
+    }
+    // the other surface: a sphere or a box of another body (or of the ground), or a plane
+    const YAML::Node bx = c["box"];
+    if (bx && (c["plane"] || c["sphere"]))
+      r_.fail(bx, what + ": a contact is with a plane, a sphere or a box, not several",
+              "keep one of plane:, sphere: and box:");
+    if (bx && shape != "point" && shape != "sphere")
+      r_.fail(bx, what + ": a " + shape + " against a box is not supported",
+              "shape: sphere (or point) for a contact with a box");
+    BodyId box_body = kGround;
+    Frame box_frame;
+    Vector3d box_half = Vector3d::Zero();
+    if (bx) {
+      const std::string bw = what + " box";
+      check_map(bx, bw, "{body: crate, point: [0, 0, 0], size: [0.2, 0.1, 0.05]}");
+      check_keys(bx, {"body", "point", "size", "orientation"}, bw);
+      if (bx["body"]) box_body = body(bx["body"], bw + " body");
+      if (box_body == b)
+        r_.fail(bx["body"], bw + ": the box is on the contact's own body",
+                "a box of another body, or of the ground");
+      if (box_body != kGround && planar(box_body) != planar(b))
+        r_.fail(bx["body"], what +
+                                ": the box's body and the contact's body are not both planar or "
+                                "both spatial");
+      const Vector3d centre =
+          bx["point"] ? vec(bx["point"], bw + " point", dims, dims) : Vector3d::Zero();
+      const YAML::Node hn =
+          require(bx, "size", bw, planar_model ? "size: [0.2, 0.1]" : "size: [0.2, 0.1, 0.05]");
+      box_half = vec(hn, bw + " size", dims, dims);
+      for (int i = 0; i < dims; ++i) {
+        if (!(box_half[i] > 0.0))
+          r_.fail(hn, bw + ": the half-extents must be > 0, got " + brief(box_half[i]),
+                  "size: the box's half-extents along its axes");
+      }
+      if (const YAML::Node on = bx["orientation"]) {
+        if (planar_model) {
+          box_frame = Frame::planar(centre.x(), centre.y(), r_.number(on, bw + " orientation"));
+        } else {
+          box_frame = Frame::at(centre);
+          box_frame.R = orientation(on, bw + " orientation").toRotationMatrix();
+        }
+      } else {
+        box_frame = Frame::at(centre);
+      }
     }
     // the other surface: a sphere of another body (or of the ground), or a plane
     const YAML::Node sp = c["sphere"];
@@ -188,7 +233,8 @@ void MultibodyReader::read_contacts() {
       continue;
     }
     mb::Joint j =
-        sp && disk
+        bx ? mb::contact_sphere_box(name, box_body, box_frame, box_half, b, p, radius, e)
+        : sp && disk
             ? mb::contact_disk_sphere(name, other, o_sphere, other_radius, b, disk_frame, radius, e)
         : sp   ? mb::contact_spheres(name, other, o_sphere, other_radius, b, p, radius, e, side)
         : disk ? mb::contact_disk(name, plane_body, plane, b, disk_frame, radius, e)

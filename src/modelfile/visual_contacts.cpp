@@ -189,18 +189,41 @@ VisualContact bodies_visual_contact(std::shared_ptr<const mb::MultibodyModel> mo
   const mb::Frame fp = joint.frame_parent, fc = joint.frame_child;
   const Vector3d n_P = fp.R.col(joint.planar ? 1 : 2), a_C = fc.R.col(2);
   if (joint.type == mb::JointType::kContactSpheres ||
-      joint.type == mb::JointType::kContactDiskSphere) {
+      joint.type == mb::JointType::kContactDiskSphere ||
+      joint.type == mb::JointType::kContactSphereBox) {
     // two spheres: the normal is the line of the centres o → c (inside the other: c → o), the
     // point the contact sphere's nearest to the other's surface, c − r n; a disk and a sphere
     // (mb::contact_disk_sphere): the point the disk's nearest to the sphere's centre o,
     // c + a with a = −r w/|w| beyond the rim or −w on the face (w = d − (k·d) k, d = c − o, k
     // the disk's axis), the normal from o to it
     const double side = joint.side == mb::SphereSide::kInside ? -1.0 : 1.0;
+    // a sphere and a box (mb::contact_sphere_box): the normal from the box's nearest point to
+    // the centre (inside it: the nearest face's), the point c − r n
     const bool on_disk = joint.type == mb::JointType::kContactDiskSphere;
-    const auto touch = [model, P, C, fp, fc, a_C, radius, side, on_disk](
+    const bool on_box = joint.type == mb::JointType::kContactSphereBox;
+    const Vector3d half = joint.box_half;
+    const int box_axes = joint.planar ? 2 : 3;
+    const auto touch = [model, P, C, fp, fc, a_C, radius, side, on_disk, on_box, half, box_axes](
                            const Eigen::Ref<const VectorXd>& q, Vector3d& point, Vector3d& normal) {
       const Vector3d o = mb::world_point(*model, q, P, fp.p),
                      centre = mb::world_point(*model, q, C, fc.p);
+      if (on_box) {
+        const Matrix3d R =
+            (P == mb::kGround ? Matrix3d::Identity()
+                              : Matrix3d(mb::body_pose(*model, q, P).R_WB.toRotationMatrix())) *
+            fp.R;
+        Vector3d u = R.transpose() * (centre - o), m = Vector3d::Zero();
+        Eigen::Index face = 0;
+        (u.head(box_axes).cwiseAbs() - half.head(box_axes)).maxCoeff(&face);
+        for (int i = 0; i < box_axes; ++i) {
+          const double excess = std::abs(u[i]) - half[i];
+          if (excess > 0.0) m[i] = std::copysign(excess, u[i]);
+        }
+        if (m.isZero()) m[face] = u[face] < 0.0 ? -1.0 : 1.0;
+        normal = (R * m).normalized();
+        point = centre - radius * normal;
+        return;
+      }
       if (on_disk) {
         const Vector3d k = mb::body_pose(*model, q, C).R_WB.toRotationMatrix() * a_C;
         const Vector3d d = centre - o, w = d - k.dot(d) * k;

@@ -70,6 +70,8 @@ const char* to_string(JointType type) {
       return "contact_spheres";
     case JointType::kContactDiskSphere:
       return "contact_disk_sphere";
+    case JointType::kContactSphereBox:
+      return "contact_sphere_box";
   }
   return "unknown";
 }
@@ -174,6 +176,15 @@ Joint contact_disk_sphere(std::string n, BodyId other_body, const Vector3d& p_ot
                        body, disk);
   j.radius = radius;
   j.other_radius = other_radius;
+  j.restitution = restitution;
+  return j;
+}
+Joint contact_sphere_box(std::string n, BodyId other_body, const Frame& box, const Vector3d& half,
+                         BodyId body, const Vector3d& p_body, double radius, double restitution) {
+  Joint j = make_joint(std::move(n), JointType::kContactSphereBox, other_body, box, body,
+                       Frame::at(p_body));
+  j.radius = radius;
+  j.box_half = half;
   j.restitution = restitution;
   return j;
 }
@@ -429,6 +440,7 @@ MultibodyModel Multibody::build() const {
     info.frame_parent = j.frame_parent;
     info.frame_child = j.frame_child;
     info.side = j.side;
+    info.box_half = j.box_half;
     info.friction_law = j.friction;
     if (j.type == JointType::kGear) {
       const auto find = [&](const std::string& name) {

@@ -3,7 +3,8 @@
 // bodies"): the gap row of a point or sphere on a plane (the point_on_plane / point_on_line row
 // with the offset c0 = radius), of a thin disk on a plane (a row of its own, Row::kDisk), of a
 // sphere outside a sphere (Row::kNorm, |c − o| − (r1 + r2)) or inside one (the same row with the
-// sign −1 and the length R − r: (R − r) − |c − o|) — all in closed form in
+// sign −1 and the length R − r: (R − r) − |c − o|), of a sphere outside a box (Row::kSphereBox,
+// the distance to the box less the radius) — all in closed form in
 // kinematics.cpp — and the checks build() makes before it adds them as unilateral constraints
 // (the factories mb::contact, mb::contact_disk and mb::contact_spheres: bodies.cpp, with the
 // other joints'); and the contact point's kinematics for Coulomb friction there
@@ -40,6 +41,18 @@ Row contact_row(const Joint& j, bool planar) {
     r.sphere = j.other_radius;
     return r;
   }
+  if (j.type == JointType::kContactSphereBox) {
+    // g = sqrt(Σ m_i²) − r: a = c − o (the sphere's centre from the box's), the box's axes on P
+    Row r;
+    r.kind = Row::kSphereBox;
+    r.a = VecExpr::diff(0, j.frame_parent.p, 1, j.frame_child.p);
+    r.box_axes = planar ? 2 : 3;
+    for (int i = 0; i < r.box_axes; ++i)
+      r.box[i] = VecExpr::body_vector(0, j.frame_parent.R.col(i));
+    r.half = j.box_half;
+    r.length = j.radius;
+    return r;
+  }
   // d = c − o (the contact's point, or the disk's centre, relative to the plane's point) and the
   // plane's normal n: F_P's z axis (spatial) or y axis (planar)
   Row r;
@@ -72,6 +85,19 @@ void centres_at(const Joint& j, const BodyRef& P, const BodyRef& C, const Vector
   add_body_vector(C, q, v, j.frame_child.p, true, 1.0, d, nullptr, false);
   add_body_vector(P, q, v, j.frame_parent.p, true, -1.0, d, nullptr, false);
   add_body_vector(C, q, v, j.frame_child.R.col(2), false, 1.0, k, nullptr, false);
+}
+
+// At q: the gap of a sphere against a box (values only): d = c − o as centres_at's, the box's
+// axes on P. Cost O(1).
+SphereBoxGap sphere_box_at(const Joint& j, const BodyRef& P, const BodyRef& C, const VectorXd& q,
+                           bool planar) {
+  const VectorXd v = VectorXd::Zero(q.size());
+  VecKin d, unused, axes[3];
+  centres_at(j, P, C, q, d, unused);
+  const int n = planar ? 2 : 3;
+  for (int i = 0; i < n; ++i)
+    add_body_vector(P, q, v, j.frame_parent.R.col(i), false, 1.0, axes[i], nullptr, false);
+  return sphere_box_gap(d, axes, n, j.box_half, j.radius, false);
 }
 }  // namespace
 
@@ -107,6 +133,27 @@ Constraint contact_constraint(const Joint& j, const BodyRef& P, const BodyRef& C
     throw std::invalid_argument(who +
                                 ": a disk in a planar model is a circle: use a sphere contact "
                                 "(contact_spheres) with its radius");
+  }
+  if (j.type == JointType::kContactSphereBox) {
+    const Vector3d& h = j.box_half;
+    if (!(h.head(planar ? 2 : 3).minCoeff() > 0.0) || !h.head(planar ? 2 : 3).allFinite()) {
+      throw std::invalid_argument(who + ": the box's half-extents must be finite and > 0, got [" +
+                                  format_number(h.x(), 3) + ", " + format_number(h.y(), 3) +
+                                  (planar ? "" : ", " + format_number(h.z(), 3)) + "]");
+    }
+    if (P.id == C.id) {
+      throw std::invalid_argument(who +
+                                  ": the sphere and the box are on one body (a contact is "
+                                  "between two)");
+    }
+    // the sphere's centre in (or on) the box has no normal: refused at the start
+    if (sphere_box_at(j, P, C, q0, planar).inside) {
+      throw std::invalid_argument(
+          who +
+          ": the sphere's centre lies inside the box at the start: the contact has no normal "
+          "there; place the sphere apart (its gap, the distance from its centre to the box "
+          "minus its radius, must be >= 0)");
+    }
   }
   if (!(j.restitution >= 0.0 && j.restitution <= 1.0)) {
     throw std::invalid_argument(who + ": the restitution must lie in [0, 1], got " +
@@ -271,6 +318,10 @@ ContactKinematics relative_contact_kinematics(const Joint& j, const BodyRef& P, 
   const bool disk = j.type == JointType::kContactDisk && !planar;
   const bool disk_sphere = j.type == JointType::kContactDiskSphere;
   const bool spheres = j.type == JointType::kContactSpheres;
+  const bool sphere_box = j.type == JointType::kContactSphereBox;
+  const int box_axes = planar ? 2 : 3;
+  const Matrix3d box_R = j.frame_parent.R;
+  const Vector3d box_half = j.box_half;
   // (a sphere inside the other: n = −d/|d|, towards the centre o)
   const double r = j.radius, r_P = j.other_radius;
   const double side = j.side == SphereSide::kInside ? -1.0 : 1.0;
@@ -278,10 +329,12 @@ ContactKinematics relative_contact_kinematics(const Joint& j, const BodyRef& P, 
   // aligned with n at the start (planar: t_1 = n × e_z); singular only where n passes along e
   // (a disk and a sphere: n from disk_sphere_gap, the same tangents)
   Vector3d e = Vector3d::UnitZ();
-  if ((spheres || disk_sphere) && !planar) {
+  if ((spheres || disk_sphere || sphere_box) && !planar) {
     VecKin d0, k0;
     centres_at(j, P, C, q0, d0, k0);
-    const Vector3d n0 = disk_sphere ? disk_sphere_gap(d0, k0, r, r_P, false).n : d0.x;
+    const Vector3d n0 = disk_sphere  ? disk_sphere_gap(d0, k0, r, r_P, false).n
+                        : sphere_box ? sphere_box_at(j, P, C, q0, planar).n
+                                     : d0.x;
     Index axis = 0;
     n0.cwiseAbs().minCoeff(&axis);
     e = Vector3d::Unit(axis);
@@ -296,9 +349,10 @@ ContactKinematics relative_contact_kinematics(const Joint& j, const BodyRef& P, 
   Pl.local = p_first ? 0 : C.size();
   Cl.local = p_first ? P.size() : 0;
   kin.evaluate = [Pl, Cl, nP, t1P, t2P, pP, pC, kC, e, r, r_P, side, planar, disk, disk_sphere,
-                  spheres](const Eigen::Ref<const VectorXd>& q,
-                           const Eigen::Ref<const VectorXd>& qd, double, ConstraintScratch*,
-                           Eigen::Ref<MatrixXd> J, Eigen::Ref<VectorXd> bias) {
+                  spheres, sphere_box, box_axes, box_R,
+                  box_half](const Eigen::Ref<const VectorXd>& q,
+                            const Eigen::Ref<const VectorXd>& qd, double, ConstraintScratch*,
+                            Eigen::Ref<MatrixXd> J, Eigen::Ref<VectorXd> bias) {
     // n, t_i (vectors of P), p (P's point), c (C's centre), k (the disk's axis): value, rate,
     // Jacobian and bias
     VecKin n, t1, t2, p, c, k;
@@ -314,12 +368,26 @@ ContactKinematics relative_contact_kinematics(const Joint& j, const BodyRef& P, 
       dk.g = c.g - p.g;
       ds = disk_sphere_gap(dk, k, r, r_P, true);
     }
-    if (spheres || disk_sphere) {
+    SphereBoxGap sb;
+    if (sphere_box) {
+      VecKin dk, axes[3];  // d = c − p with its Jacobian and bias; the box's axes on P
+      dk.x = c.x - p.x;
+      dk.v = c.v - p.v;
+      dk.J = c.J - p.J;
+      dk.g = c.g - p.g;
+      for (int i = 0; i < box_axes; ++i)
+        add_body_vector(Pl, q, qd, box_R.col(i), false, 1.0, axes[i]);
+      sb = sphere_box_gap(dk, axes, box_axes, box_half, r, true);
+    }
+    if (spheres || disk_sphere || sphere_box) {
       // n = ±d/|d| (a disk: disk_sphere_gap's) and its rate; t_i from e (values and rates;
       // their J and g are not needed)
       if (disk_sphere) {
         n.x = ds.n;
         n.v = ds.n_rate;
+      } else if (sphere_box) {
+        n.x = sb.n;
+        n.v = sb.n_rate;
       } else {
         const Vector3d d = c.x - p.x, dd = c.v - p.v;
         const double len = d.norm();
@@ -387,6 +455,10 @@ ContactKinematics relative_contact_kinematics(const Joint& j, const BodyRef& P, 
       // g = sqrt(s² + m²) − r_P (disk_sphere_gap: g'' = A q'' − b)
       g_q = ds.A;
       bias[0] = -ds.b;
+    } else if (sphere_box) {
+      // g = sqrt(Σ m_i²) − r (sphere_box_gap: g'' = A q'' − b)
+      g_q = sb.A;
+      bias[0] = -sb.b;
     } else if (!spheres) {
       g_q += d.transpose() * n.J;
       bias[0] += n.g.dot(d) + n.v.dot(dd);

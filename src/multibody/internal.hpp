@@ -207,10 +207,16 @@ struct Offset {
 ///  kDiskSphere  phi = sqrt(s² + m²) − sphere: a thin disk's gap to a sphere (a = the disk's
 ///             centre − the sphere's, axis = the disk's axis, L = its radius, s = axis·a,
 ///             m = max(|a − s axis| − L, 0); disk_sphere_gap())
+///  kSphereBox phi = sqrt(Σ m_i²) − L: a sphere's gap to a box (a = the sphere's centre − the
+///             box's, box[i] = the box's unit axes, half = its half-extents, L = the sphere's
+///             radius, m_i = max(|box[i]·a| − half_i, 0); sphere_box_gap())
 struct Row {
-  enum Kind { kDot, kDistance, kLinear, kDisk, kNorm, kDiskSphere } kind = kDot;
+  enum Kind { kDot, kDistance, kLinear, kDisk, kNorm, kDiskSphere, kSphereBox } kind = kDot;
   VecExpr a, b;
-  VecExpr axis;  // kDisk, kDiskSphere: the disk's axis (a body vector)
+  VecExpr axis;                      // kDisk, kDiskSphere: the disk's axis (a body vector)
+  VecExpr box[3];                    // kSphereBox: the box's axes (body vectors; planar: two)
+  Vector3d half = Vector3d::Zero();  // kSphereBox: the box's half-extents
+  int box_axes = 3;                  // kSphereBox: 3 (spatial) or 2 (planar: a rectangle)
   double length = 0.0;
   double sign = 1.0;                            // kNorm: +1 (outside) or −1 (inside)
   double sphere = 0.0;                          // kDiskSphere: the sphere's radius
@@ -239,6 +245,26 @@ struct DiskSphereGap {
 };
 DiskSphereGap disk_sphere_gap(const VecKin& e, const VecKin& k, double radius, double sphere,
                               bool second_order);
+
+/// The gap of a sphere and a box (Row::kSphereBox, mb::contact_sphere_box()) from e = c − o (the
+/// sphere's centre from the box's) and the box's unit axes k[0..axes) (values, rates and, when
+/// second_order, Jacobians on the local columns and biases e'' = J q'' + g):
+/// u_i = k_i·e, σ_i = sign(u_i), m_i = max(σ_i u_i − half_i, 0), E = sqrt(Σ m_i²);
+///   g = E − radius,  g' = Σ σ_i m_i u_i' / E,
+///   g'' = Σ σ_i m_i u_i'' / E + (Σ_{m_i>0} u_i'² − g'²)/E = A q'' − b;
+/// inside the box (every m_i = 0) the nearest face's: g = σ_j u_j − half_j − radius. Also the
+/// unit normal n = Σ σ_i m_i k_i / E (from the box to the sphere; inside: σ_j k_j) and its rate.
+/// Non-finite where E = 0 outside (the centre on the box's surface). Cost O(columns).
+struct SphereBoxGap {
+  double g = 0.0, rate = 0.0;  ///< g, g'
+  Eigen::Matrix<double, 1, kMaxCols> A =
+      Eigen::Matrix<double, 1, kMaxCols>::Zero();            ///< (second_order only)
+  double b = 0.0;                                            ///< (second_order only)
+  Vector3d n = Vector3d::Zero(), n_rate = Vector3d::Zero();  ///< the unit normal
+  bool inside = false;                                       ///< the centre is in the box
+};
+SphereBoxGap sphere_box_gap(const VecKin& e, const VecKin* k, int axes, const Vector3d& half,
+                            double radius, bool second_order);
 
 /// Largest number of rows of a joint model (a spatial weld: 6).
 inline constexpr int kMaxRows = 6;
@@ -487,6 +513,25 @@ void joint_phi_generic(const JointModel& jm, const V& q, const S& t, double t0, 
         const Vec3<S> ax = vec_expr_generic<S>(jm.slots(), row.axis, q);
         const S s = n.dot(ax);
         out = a.dot(n) - row.length * sqrt(1.0 - s * s);
+        break;
+      }
+      case Row::kSphereBox: {
+        // sqrt(Σ m_i²) − L, m_i = max(|k_i·a| − half_i, 0); inside: max_i(|k_i·a| − half_i) − L
+        using std::sqrt;
+        const Vec3<S> a = vec_expr_generic<S>(jm.slots(), row.a, q);
+        S sum(0.0), deepest(0.0);
+        bool outside = false, first = true;
+        for (int i = 0; i < row.box_axes; ++i) {
+          const S u = a.dot(vec_expr_generic<S>(jm.slots(), row.box[i], q));
+          const S excess = (value_of(u) < 0.0 ? S(-u) : u) - row.half[i];
+          if (value_of(excess) > 0.0) {
+            sum += excess * excess;
+            outside = true;
+          }
+          if (first || value_of(excess) > value_of(deepest)) deepest = excess;
+          first = false;
+        }
+        out = (outside ? S(sqrt(sum)) : deepest) - row.length;
         break;
       }
       case Row::kDiskSphere: {

@@ -357,6 +357,16 @@ void JointModel::general_form(const Eigen::Ref<const VectorXd>& q,
         b[i] = d.b;
         break;
       }
+      case Row::kSphereBox: {
+        VecKin axes[3] = {VecKin{VecKin::Unset{}}, VecKin{VecKin::Unset{}},
+                          VecKin{VecKin::Unset{}}};
+        eval(row.a, q, qd, cache, ka);
+        for (int z = 0; z < row.box_axes; ++z) eval(row.box[z], q, qd, cache, axes[z]);
+        const SphereBoxGap d = sphere_box_gap(ka, axes, row.box_axes, row.half, row.length, true);
+        A.row(i) = d.A.leftCols(k);
+        b[i] = d.b;
+        break;
+      }
     }
   }
 }
@@ -424,6 +434,67 @@ DiskSphereGap disk_sphere_gap(const VecKin& e, const VecKin& k, double radius, d
   const double c = m * sd - s * md;
   out.A /= E;
   out.b = out.b / E - c * c / (E * E * E);
+  return out;
+}
+
+SphereBoxGap sphere_box_gap(const VecKin& e, const VecKin* k, int axes, const Vector3d& half,
+                            double radius, bool second_order) {
+  SphereBoxGap out;
+  // u_i = k_i·e and u_i', σ_i, the excesses m_i (> 0: a face's region along axis i) and the
+  // deepest face (inside)
+  double u[3] = {0, 0, 0}, ud[3] = {0, 0, 0}, sigma[3] = {1, 1, 1}, m[3] = {0, 0, 0};
+  double sum = 0.0, deepest = 0.0;
+  int face = 0;
+  for (int i = 0; i < axes; ++i) {
+    u[i] = k[i].x.dot(e.x);
+    ud[i] = k[i].v.dot(e.x) + k[i].x.dot(e.v);
+    sigma[i] = u[i] < 0.0 ? -1.0 : 1.0;
+    const double excess = sigma[i] * u[i] - half[i];
+    if (excess > 0.0) {
+      m[i] = excess;
+      sum += excess * excess;
+    }
+    if (i == 0 || excess > deepest) {
+      deepest = excess;
+      face = i;
+    }
+  }
+  out.inside = !(sum > 0.0);
+  // w_i: the weight of u_i in g (σ_i m_i / E outside, σ_j on the nearest face inside)
+  double w[3] = {0, 0, 0};
+  double E = 0.0;
+  if (out.inside) {
+    w[face] = sigma[face];
+    out.g = deepest - radius;
+  } else {
+    E = std::sqrt(sum);
+    for (int i = 0; i < axes; ++i) w[i] = sigma[i] * m[i] / E;
+    out.g = E - radius;
+  }
+  Vector3d nd_part = Vector3d::Zero();
+  for (int i = 0; i < axes; ++i) {
+    out.rate += w[i] * ud[i];
+    out.n += w[i] * k[i].x;
+    nd_part += w[i] * k[i].v;
+  }
+  // n' = Σ (w_i' k_i + w_i k_i'), w_i' = σ_i (m_i' − m_i g'/E)/E outside (0 inside)
+  out.n_rate = nd_part;
+  if (!out.inside) {
+    for (int i = 0; i < axes; ++i) {
+      if (m[i] > 0.0)
+        out.n_rate += sigma[i] * (sigma[i] * ud[i] - m[i] * out.rate / E) / E * k[i].x;
+    }
+  }
+  if (!second_order) return out;
+  // u_i'' = A_ui q'' − b_ui (the dot rows of k_i·e); g'' = Σ w_i u_i'' + (Σ_{m_i>0} u_i'² − g'²)/E
+  double turning = 0.0;
+  for (int i = 0; i < axes; ++i) {
+    if (w[i] == 0.0) continue;
+    out.A += w[i] * (k[i].x.transpose() * e.J + e.x.transpose() * k[i].J);
+    out.b -= w[i] * (e.g.dot(k[i].x) + 2.0 * e.v.dot(k[i].v) + e.x.dot(k[i].g));
+    if (m[i] > 0.0) turning += ud[i] * ud[i];
+  }
+  if (!out.inside) out.b -= (turning - out.rate * out.rate) / E;
   return out;
 }
 
@@ -514,6 +585,16 @@ void JointModel::general_violation(const Eigen::Ref<const VectorXd>& q,
         eval(row.a, q, qd, cache, ka, false);
         eval(row.axis, q, qd, cache, kb, false);
         const DiskSphereGap d = disk_sphere_gap(ka, kb, row.length, row.sphere, false);
+        position[i] = d.g;
+        velocity[i] = d.rate;
+        break;
+      }
+      case Row::kSphereBox: {
+        VecKin axes[3] = {VecKin{VecKin::Unset{}}, VecKin{VecKin::Unset{}},
+                          VecKin{VecKin::Unset{}}};
+        eval(row.a, q, qd, cache, ka, false);
+        for (int z = 0; z < row.box_axes; ++z) eval(row.box[z], q, qd, cache, axes[z], false);
+        const SphereBoxGap d = sphere_box_gap(ka, axes, row.box_axes, row.half, row.length, false);
         position[i] = d.g;
         velocity[i] = d.rate;
         break;

@@ -112,11 +112,15 @@ TEST(MultibodyJoints, SpatialJointsMatchAutomaticDifferentiation) {
   // a disk's contact with a sphere, beyond the disk's rim (radius 0.05) and over its face (5)
   b.add_joint(mb::contact_disk_sphere("dsr", A, {0.1, 0.1, 0.1}, 0.02, B, fb, 0.05));
   b.add_joint(mb::contact_disk_sphere("dsf", A, {0.1, 0.1, 0.1}, 0.02, B, fb, 5.0));
+  // a sphere's contact with a box of A, over a face, an edge and a corner
+  b.add_joint(mb::contact_sphere_box("sbf", A, fa, {5.0, 5.0, 0.01}, B, {0.1, 0.1, 0.1}, 0.02));
+  b.add_joint(mb::contact_sphere_box("sbe", A, fa, {5.0, 0.01, 0.01}, B, {0.1, 0.1, 0.1}, 0.02));
+  b.add_joint(mb::contact_sphere_box("sbc", A, fa, {0.01, 0.01, 0.01}, B, {0.1, 0.1, 0.1}, 0.02));
   const MultibodyModel m = b.build();
   VectorXd q = m.q0, qd = m.qd0;
   q.segment<4>(3) *= 1.01;
   q.segment<4>(10) *= 0.98;
-  expect_joints_match_autodiff(m, q, qd, 0.37, 16);  // 13 joints + 1 drive + 2 contacts
+  expect_joints_match_autodiff(m, q, qd, 0.37, 19);  // 13 joints + 1 drive + 5 contacts
 }
 
 TEST(MultibodyJoints, PlanarJointsAndGearMatchAutomaticDifferentiation) {

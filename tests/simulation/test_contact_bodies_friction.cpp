@@ -412,9 +412,10 @@ TEST(ContactBodiesFriction, BallOnADrivenPlatformRollsFromTheClosedFormInstant) 
 // −T' q' (central differences of T along q'), at a generic state of two free bodies.
 TEST(ContactBodiesFriction, StickRowsOnAMovingPlaneAreTheRelativeVelocityAndTheirBiasItsRate) {
   const Vector3d kC = Vector3d(0.2, 1.0, -0.3).normalized();
-  // sphere, disk (on the plane), sphere on a sphere, disk on a sphere
-  for (const int shape : {0, 1, 2, 3}) {
-    const bool disk = shape == 1, spheres = shape == 2, disk_sphere = shape == 3;
+  // sphere, disk (on the plane), sphere on a sphere, disk on a sphere, sphere on a box
+  for (const int shape : {0, 1, 2, 3, 4}) {
+    const bool disk = shape == 1, spheres = shape == 2, disk_sphere = shape == 3,
+               sphere_box = shape == 4;
     const Model m = parse_model(
         std::string(R"(
 bodies:
@@ -423,11 +424,13 @@ bodies:
 contacts:
   - {name: c, body: ball, radius: 0.1, point: [0.02, -0.01, 0.03],
      )") +
-        (disk_sphere ? "shape: disk, axis: [0.2, 1, -0.3], sphere: {body: deck, point: [0.1, "
-                       "0.2, 0.05], radius: 0.3}}"
-         : spheres   ? "shape: sphere, sphere: {body: deck, point: [0.1, 0.2, 0.05], radius: 0.3}}"
-                     : std::string("plane: {body: deck, point: [0.1, 0.2, 0.05], normal: [0.3, "
-                                     "-0.2, 1]}, ") +
+        (sphere_box    ? "shape: sphere, box: {body: deck, point: [0.1, 0.2, 0.05], size: [0.05, "
+                         "0.08, 0.06]}}"
+         : disk_sphere ? "shape: disk, axis: [0.2, 1, -0.3], sphere: {body: deck, point: [0.1, "
+                         "0.2, 0.05], radius: 0.3}}"
+         : spheres ? "shape: sphere, sphere: {body: deck, point: [0.1, 0.2, 0.05], radius: 0.3}}"
+                   : std::string("plane: {body: deck, point: [0.1, 0.2, 0.05], normal: [0.3, "
+                                 "-0.2, 1]}, ") +
                          (disk ? "shape: disk, axis: [0.2, 1, -0.3]}" : "shape: sphere}")) +
         R"(
 nonideal:
@@ -467,6 +470,14 @@ nonideal:
       const Vector3d d = c - o, w = d - k.dot(d) * k;
       a = w.norm() > 0.1 ? Vector3d(-0.1 * w.normalized()) : Vector3d(-w);
       nW = (d + a).normalized();
+    }
+    if (sphere_box) {
+      // from the box's point nearest c: its excesses beyond the faces in the deck's axes
+      const Vector3d u = RP.transpose() * (c - o);
+      const Vector3d ex = (u.cwiseAbs() - Vector3d(0.05, 0.08, 0.06)).cwiseMax(0.0);
+      ASSERT_GT(ex.minCoeff(), 0.0);  // (beyond a corner)
+      nW = (RP * ex.cwiseProduct(u.cwiseSign())).normalized();
+      a = -0.1 * nW;
     }
     const Vector3d x = c + a;
     const Vector3d v_rel = (vC + wC.cross(x - xC)) - (vP + wP.cross(x - xP));

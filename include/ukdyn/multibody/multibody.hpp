@@ -128,13 +128,17 @@ enum class JointType {
                        ///< g = sqrt(s² + m²) − other_radius >= 0, s and m the sphere's centre's
                        ///< offsets from the disk along its axis and beyond its rim
                        ///< (1 row; see contact_disk_sphere())
+  kContactSphereBox,   ///< unilateral: a sphere or point (child) outside a box of the parent,
+                       ///< g = |u − clamp(u, −h, h)| − radius >= 0, u the sphere's centre in
+                       ///< the box's frame, h its half-extents (1 row; see contact_sphere_box())
 };
 
 /// True for the unilateral contacts (kContact, kContactDisk, kContactSpheres,
-/// kContactDiskSphere). Cost O(1).
+/// kContactDiskSphere, kContactSphereBox). Cost O(1).
 inline bool is_contact(JointType type) {
   return type == JointType::kContact || type == JointType::kContactDisk ||
-         type == JointType::kContactSpheres || type == JointType::kContactDiskSphere;
+         type == JointType::kContactSpheres || type == JointType::kContactDiskSphere ||
+         type == JointType::kContactSphereBox;
 }
 
 /// Which side of the other sphere a kContactSpheres contact keeps its sphere on: outside it (two
@@ -159,9 +163,11 @@ struct Joint {
   double radius = 0.0;                    ///< rolling: the radius (m), > 0
   double other_radius = 0.0;  ///< kContactSpheres, kContactDiskSphere: the parent's sphere's radius
   SphereSide side = SphereSide::kOutside;  ///< kContactSpheres: outside or inside that sphere
-  std::string gear_a;                      ///< kGear: name of the first revolute joint (a)
-  std::string gear_b;                      ///< kGear: name of the second revolute joint (b)
-  double ratio = 1.0;                      ///< kGear: angle_a − ratio · angle_b = const
+  /// kContactSphereBox: the box's half-extents along frame_parent's axes (planar: z unused), > 0
+  Vector3d box_half = Vector3d::Zero();
+  std::string gear_a;  ///< kGear: name of the first revolute joint (a)
+  std::string gear_b;  ///< kGear: name of the second revolute joint (b)
+  double ratio = 1.0;  ///< kGear: angle_a − ratio · angle_b = const
   /// Prescribed motion of the joint's relative coordinate: revolute: the angle of F_C's x axis
   /// from F_P's x axis about the axis (planar: a linear row; spatial: the angle error by
   /// automatic differentiation); prismatic, cylindrical: the slide of F_C's origin along the
@@ -289,6 +295,25 @@ Joint contact_spheres(std::string name, BodyId other_body, const Vector3d& p_oth
 Joint contact_disk_sphere(std::string name, BodyId other_body, const Vector3d& p_other,
                           double other_radius, BodyId body, const Frame& disk, double radius,
                           double restitution = 0.0);
+/// A unilateral contact of a sphere (or point: radius 0) with a box (JointType::kContactSphereBox;
+/// docs/contact.md, "A sphere against a box"): the sphere of `radius` centred at p_body on `body`
+/// stays outside the box of half-extents `half` whose centre and axes are the frame `box` on
+/// `other_body` (kGround: a fixed box; planar models: a rectangle, half.z() unused). With
+/// u_i = k_i·e the components of e = c_W − o_W (the sphere's centre from the box's) along the
+/// box's unit axes k_i, σ_i = sign(u_i) and the excesses m_i = max(σ_i u_i − h_i, 0), the
+/// distance from the centre to the box (a face where one m_i > 0, an edge where two, a corner
+/// where three) is E = sqrt(Σ m_i²), so the gap row is
+///   g = E − radius >= 0,  n = Σ σ_i m_i k_i / E (from the box to the sphere),
+///   A = Σ (σ_i m_i / E) A_ui,  b = Σ (σ_i m_i / E) b_ui − (Σ_{m_i>0} u_i'² − E'²)/E,
+/// with u_i'' = A_ui q'' − b_ui the dot rows of k_i·e (the last term, the normal's turning, is
+/// zero on a face). The row is C¹ where the face, edge and corner regions meet (m_i = 0 there on
+/// both sides). With the centre inside the box (every m_i = 0; a penetration deeper than the
+/// radius) g = max_i(σ_i u_i − h_i) − radius, the nearest face's row. O(columns) for A and b,
+/// about three dot rows. build() refuses a centre inside or on the box at the initial pose (no
+/// normal: E = 0), half-extents that are not > 0 and a box and sphere on one body.
+Joint contact_sphere_box(std::string name, BodyId other_body, const Frame& box,
+                         const Vector3d& half, BodyId body, const Vector3d& p_body, double radius,
+                         double restitution = 0.0);
 /// @}
 
 /// Applied force at a body point and torque (world frame W), from (q, q', t).
@@ -355,6 +380,7 @@ struct JointInfo {
   Frame frame_child;                       ///< F_C on the child (body coordinates)
   bool planar = false;                     ///< between planar bodies
   SphereSide side = SphereSide::kOutside;  ///< kContactSpheres: outside or inside the other
+  Vector3d box_half = Vector3d::Zero();    ///< kContactSphereBox: the box's half-extents
   std::vector<Index> constraints;          ///< indices in System of its constraints (joint, drive)
   Index drive = -1;                        ///< index of the "<name>.drive" constraint, or −1
   Index friction = -1;                     ///< index of its non-ideal force, or −1
