@@ -451,17 +451,33 @@ void Reader::read_units(const YAML::Node& root, Model& model) {
            "any number)");
     }
     if (is_coordinate) {
-      // a body's position coordinate is in the model's length unit: one body's coordinates in
-      // two length units would make the labels wrong (an angle may be relabelled)
+      // a body's or a joint's coordinate has its unit by construction: its position in the
+      // model's length unit, its angle in rad, a quaternion's component without one; a label
+      // converts no number, so another would be wrong (u21 07: 'deg' on radians)
       const std::size_t k = std::size_t(coordinate(kv.first));
       const std::string& own = model.coordinate_units[k];
-      if (model.multibody && own == model.unit_system.length && text != own) {
+      const bool built = model.multibody || model.robot;
+      if (built && own == model.unit_system.length && text != own) {
         fail(value,
-             "units: '" + name + "' is a body's coordinate, in " + own +
-                 " (the model's length unit); it cannot be given '" + text + "'",
-             "a body's positions are all in the length unit: change units: {length: " + text +
+             "units: '" + name + "' is a " + (model.robot ? "joint's" : "body's") +
+                 " coordinate, in " + own + " (the model's length unit); it cannot be given '" +
+                 text + "'",
+             "its positions are all in the length unit: change units: {length: " + text +
                  "} (and the model's numbers) or leave '" + name +
                  "' out of units: (docs/model-format.md, \"Units\")");
+      }
+      if (built && (own == "rad" || own == "1") && text != own) {
+        fail(value,
+             "units: '" + name + "' is " +
+                 (own == "rad" ? std::string("an angle, in rad")
+                               : std::string("a quaternion's component, without unit")) +
+                 "; it cannot be given '" + text + "' (a unit labels the values, it converts none)",
+             own == "rad" ? "leave '" + name +
+                                "' out of units: (its values and the plots are "
+                                "radians; an angle in degrees is an expression: initial: {q: "
+                                "{" +
+                                name + ": 90*pi/180}})"
+                          : "leave '" + name + "' out of units:");
       }
       model.coordinate_units[k] = text;
     } else {

@@ -45,8 +45,8 @@ const std::vector<std::string> kOtherPlantKeys = {
     "coordinates", "kinetic_energy", "potential_energy", "mass_matrix", "bodies",
     "joints",      "forces"};
 
-const std::vector<std::string> kRobotKeys = {"urdf", "gravity", "torques", "loops",
-                                             "friction_regularization"};
+const std::vector<std::string> kRobotKeys = {
+    "urdf", "gravity", "torques", "loops", "friction_regularization", "urdf_units"};
 const std::vector<std::string> kLoopKeys = {"name",  "type",   "link_a", "point_a",
                                             "rpy_a", "axis_a", "link_b", "point_b",
                                             "rpy_b", "axis_b", "length"};
@@ -116,9 +116,30 @@ Model Reader::read_robot(const YAML::Node& root) {
   if (std::error_code ec; std::filesystem::is_directory(path, ec))
     fail(u, "urdf: " + u.Scalar() + " is a directory, not a URDF file",
          "name the robot's .urdf file (relative to the model file): robot: {urdf: arm.urdf}");
+  // URDF is SI (metres, kilograms, seconds): its numbers are converted into the model's units
+  // (units:), unless urdf_units: model says the file is written in them already
+  UnitSystem model_units;
+  if (const YAML::Node uu = root["units"]; uu && uu.IsMap()) read_unit_system(uu, model_units);
+  tree::UnitScale scale;
+  bool convert = true;
+  if (const YAML::Node uu = r["urdf_units"]) {
+    const std::string v = uu.IsScalar() ? uu.Scalar() : std::string();
+    if (v != "si" && v != "model")
+      fail(uu, "robot urdf_units must be si or model, got '" + v + "'",
+           "si (the default: URDF's metres, kilograms, seconds, converted into the model's "
+           "units:) or model (the file is written in the model's units already)");
+    convert = v == "si";
+  }
+  if (convert) {
+    scale.length = 1.0 / model_units.metres();
+    scale.mass = 1.0 / model_units.kilograms();
+    scale.time = model_units.per_second();
+  }
+  // URDF's world says nothing of gravity: 9.81 m/s² down, in the model's units
+  const tree::Vector3d g_default(0.0, 0.0, -9.81 * scale.length / (scale.time * scale.time));
   tree::Tree robot = [&] {
     try {
-      return tree::load_urdf(path.string());
+      return tree::load_urdf(path.string(), g_default, scale);
     } catch (const std::invalid_argument& e) {
       const std::string m = urdf_message(e);  // "<path>[:line:column]: what"
       if (alone) {
@@ -184,7 +205,7 @@ Model Reader::read_robot(const YAML::Node& root) {
     // (loaded again with it: rebuilding the tree from its links reversed the order of a link's
     // children, so that the coordinates named above, and initial: by those names, went to
     // other joints — u17 04, a wheel beside a belt on one base)
-    robot = tree::load_urdf(path.string(), gv);
+    robot = tree::load_urdf(path.string(), gv, scale);
   }
   // torques: {joint: expression}, one generalized force per named coordinate
   const Index n = robot.coordinate_count();
@@ -380,7 +401,7 @@ Model Reader::read_robot(const YAML::Node& root) {
   model.robot = robot_;
   model.robot_torques = tau;
   // what the viewer draws: the URDF's visual geometry and the loops
-  model.visual.robot = tree::load_urdf_visuals(path.string());
+  model.visual.robot = tree::load_urdf_visuals(path.string(), scale.length);
   model.visual.loops = std::move(drawn_loops);
   model.visual.contacts = std::move(drawn_contacts);
   return model;

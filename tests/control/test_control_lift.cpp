@@ -212,7 +212,7 @@ std::string lifted_arm(bool mm, double atol) {
              : "L1: 0.5, L2: 0.4, H: 0.5, g: 9.81, c: 2, t1: 0.5") +
          ", q10: 1.0, mu: 1}\nunits: " +
          (mm ? "{length: mm, mass: g, time: ms}" : "{length: m, mass: kg, time: s}") +
-         "\nrobot: {urdf: " + (mm ? "arm_lift_jf_mm.urdf" : "arm_lift_jf.urdf") +
+         "\nrobot: {urdf: " + (mm ? "arm_lift_jf_mm.urdf, urdf_units: model" : "arm_lift_jf.urdf") +
          R"(, gravity: [0, 0, -g]}
 contacts:
   - {name: tip, link: fore, point: [L2, 0, 0], restitution: 0}

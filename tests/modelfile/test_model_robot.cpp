@@ -11,6 +11,8 @@
 #include <sstream>
 #include <string>
 
+#include <unistd.h>
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -643,7 +645,7 @@ simulate: {t_end: 0.3, rtol: 1e-10, atol: 1e-12}
 output: {every: 0.01}
 )";
   const std::string mm = R"(
-robot: {urdf: arm2_friction_mm.urdf, gravity: [0, 0, -9.81e-3]}
+robot: {urdf: arm2_friction_mm.urdf, urdf_units: model, gravity: [0, 0, -9.81e-3]}
 contacts:
   - {name: tip, link: fore, point: [350, 0, 0], shape: sphere, radius: 20, restitution: 0.5,
      plane: {body: ground, point: [0, 0, 200], normal: [0, 0, 1]}}
@@ -699,7 +701,8 @@ initial:
 )";
   const auto text = [&](bool mm, bool friction) {
     std::string t = std::string("robot: {urdf: arm2_hit") + (friction ? "" : "_free") +
-                    (mm ? "_mm.urdf, gravity: [0, 0, -9.81e-3]}" : ".urdf}") + table +
+                    (mm ? "_mm.urdf, urdf_units: model, gravity: [0, 0, -9.81e-3]}" : ".urdf}") +
+                    table +
                     (mm ? "simulate: {t_end: 1500}\noutput: {every: 10}\n"
                           "units: {length: mm, mass: g, time: ms}\n"
                         : "simulate: {t_end: 1.5}\n");
@@ -733,6 +736,96 @@ initial:
     if (friction) EXPECT_NEAR(t1, 0.2645106362701, 1e-10 * t1);  // (the SI run as before)
     for (std::size_t k = 0; k < e_si.size(); ++k)
       EXPECT_NEAR(e_mm[k].t * 1e-3, e_si[k].t, 1e-9 * e_si[k].t) << "event " << k;
+  }
+}
+
+// A URDF is SI by its specification (u21 03): in a model with units: its numbers are converted
+// into the model's, so the same file runs the same motion in any units. tests/data/arm2_friction
+// .urdf (joint damping 0.05 N m s, Coulomb joint friction 0.02 N m) released from rest: in mm, g,
+// ms (gravity left to its default) and in km, t, h its shoulder and elbow follow the SI run
+// (1e-9 relative, at rtol 1e-11); the tree read in mm, g, ms is the hand-scaled
+// arm2_friction_mm.urdf read as it is (urdf_units: model): masses x1e3, centres and origins
+// x1e3, inertias x1e9, damping x1e6, friction x1e3 (1e-12 relative); a visual's size and origin
+// x1e3. Before, the mm arm was 1000 times smaller and heavier-pulled: 1.717 rad at 300 ms
+// against SI's 1.000 rad at 0.3 s.
+TEST(ModelRobot, AnSIUrdfRunsTheSameMotionInAnyUnits) {
+  const auto final_q = [](const std::string& text, double t_end) {
+    Model m = robot_model(text);
+    m.options.t_end = t_end;
+    m.options.rtol = 1e-11;
+    m.options.atol = 1e-13;
+    const Trajectory tr = simulate(m.system, m.q0, m.qd0, m.options);
+    EXPECT_EQ(tr.stats.status, Status::kOk) << tr.stats.message;
+    const std::size_t n = std::size_t(m.system.coordinate_count()), last = tr.t.size() - 1;
+    return Eigen::Vector2d(tr.q[n * last], tr.q[n * last + 1]);
+  };
+  const std::string initial = "initial:\n  q: {shoulder: 0.2, elbow: -0.4}\n";
+  const Eigen::Vector2d si = final_q("robot: {urdf: arm2_friction.urdf}\n" + initial, 0.3);
+  const Eigen::Vector2d mm = final_q(
+      "robot: {urdf: arm2_friction.urdf}\n" + initial + "units: {length: mm, mass: g, time: ms}\n",
+      300.0);
+  const Eigen::Vector2d km = final_q(
+      "robot: {urdf: arm2_friction.urdf}\n" + initial + "units: {length: km, mass: t, time: h}\n",
+      0.3 / 3600.0);
+  EXPECT_GT(std::abs(si[0] - 0.2), 0.3);  // (it swings)
+  for (int i = 0; i < 2; ++i) {
+    EXPECT_NEAR(mm[i], si[i], 1e-9 * std::abs(si[i])) << "joint " << i;
+    EXPECT_NEAR(km[i], si[i], 1e-9 * std::abs(si[i])) << "joint " << i;
+  }
+  // the tree in mm, g, ms against the hand-scaled file read as it is
+  const Model a =
+      robot_model("robot: {urdf: arm2_friction.urdf}\nunits: {length: mm, mass: g, time: ms}\n");
+  const Model b = robot_model(
+      "robot: {urdf: arm2_friction_mm.urdf, urdf_units: model}\n"
+      "units: {length: mm, mass: g, time: ms}\n");
+  ASSERT_EQ(a.robot->link_count(), b.robot->link_count());
+  const auto close = [](double x, double y) { return std::abs(x - y) <= 1e-12 * std::abs(y); };
+  for (Index i = 0; i < a.robot->link_count(); ++i) {
+    const tree::Link& la = a.robot->link(i);
+    const tree::Link& lb = b.robot->link(i);
+    EXPECT_TRUE(close(la.inertial.mass, lb.inertial.mass)) << la.name;
+    EXPECT_LE((la.inertial.com - lb.inertial.com).norm(), 1e-12 * (1.0 + lb.inertial.com.norm()));
+    EXPECT_LE((la.inertial.I_com - lb.inertial.I_com).norm(), 1e-12 * lb.inertial.I_com.norm())
+        << la.name;
+    EXPECT_LE((la.joint.p_PJ - lb.joint.p_PJ).norm(), 1e-12 * (1.0 + lb.joint.p_PJ.norm()));
+    EXPECT_TRUE(close(la.joint.damping, lb.joint.damping)) << la.name;
+    EXPECT_TRUE(close(la.joint.friction, lb.joint.friction)) << la.name;
+  }
+  EXPECT_NEAR(a.robot->gravity().z(), -9.81e-3, 1e-15);
+  // a visual's origin and size in the model's length unit
+  const std::filesystem::path dir =
+      std::filesystem::temp_directory_path() / ("ukdyn_urdf_units_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  std::ofstream(dir / "boxed.urdf") << R"(<?xml version="1.0"?>
+<robot name="boxed">
+  <link name="base"/>
+  <link name="arm">
+    <inertial><mass value="1"/><inertia ixx="0.01" ixy="0" ixz="0" iyy="0.01" iyz="0" izz="0.01"/></inertial>
+    <visual><origin xyz="0.1 0 0.05"/><geometry><box size="0.2 0.04 0.03"/></geometry></visual>
+  </link>
+  <joint name="hinge" type="revolute"><parent link="base"/><child link="arm"/>
+    <axis xyz="0 1 0"/><limit lower="-1" upper="1" effort="30" velocity="2"/></joint>
+</robot>
+)";
+  const Model v = parse_model("robot: {urdf: boxed.urdf}\nunits: {length: mm, mass: g, time: ms}\n",
+                              (dir / "m.yaml").string());
+  ASSERT_EQ(v.visual.robot.size(), 1u);
+  EXPECT_NEAR(v.visual.robot[0].size.x(), 200.0, 1e-12);
+  EXPECT_NEAR(v.visual.robot[0].size.z(), 30.0, 1e-12);
+  EXPECT_NEAR(v.visual.robot[0].p_LV.x(), 100.0, 1e-12);
+  // a revolute joint's effort (N m: x1e3 in g mm²/ms²) and velocity limit (rad/s: x1e-3)
+  EXPECT_NEAR(v.robot->link(1).joint.effort, 30.0 * 1e3, 1e-9);
+  EXPECT_NEAR(v.robot->link(1).joint.velocity, 2e-3, 1e-15);
+  EXPECT_NEAR(v.robot->link(1).joint.upper, 1.0, 0.0);
+  std::filesystem::remove_all(dir);
+  // urdf_units: neither si nor model is refused where it is written
+  try {
+    robot_model("robot: {urdf: arm2_friction.urdf, urdf_units: mm}\n");
+    FAIL() << "no error";
+  } catch (const ModelError& e) {
+    EXPECT_EQ(e.line(), 1);
+    EXPECT_NE(e.message().find("robot urdf_units must be si or model, got 'mm'"), std::string::npos)
+        << e.message();
   }
 }
 

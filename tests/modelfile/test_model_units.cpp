@@ -49,13 +49,26 @@ TEST(ModelUnits, TheFileGivesCoordinatesAndOutputsTheirs) {
 }
 
 TEST(ModelUnits, BodiesHaveMetresRadiansAndUnitlessQuaternions) {
-  const Model planar = parse_model(R"(units: {crank_theta: deg}
+  const std::string bodies = R"(
 bodies:
   - {name: crank, type: planar, mass: 1, inertia: 0.1}
   - {name: rod, type: planar, mass: 1, inertia: 0.1, position: [1, 0]}
-)");
-  EXPECT_EQ(planar.coordinate_units,
-            (std::vector<std::string>{"m", "m", "deg", "m", "m", "rad"}));  // crank_theta given
+)";
+  const Model planar = parse_model("units: {crank_theta: rad}" + bodies);
+  EXPECT_EQ(planar.coordinate_units, (std::vector<std::string>{"m", "m", "rad", "m", "m", "rad"}));
+  // an angle's values are radians: a label 'deg' would be wrong (u21 07), it is refused there
+  try {
+    parse_model("units: {crank_theta: deg}" + bodies);
+    ADD_FAILURE() << "no error";
+  } catch (const ModelError& e) {
+    EXPECT_EQ(e.line(), 1);
+    EXPECT_EQ(e.column(), 22);
+    EXPECT_NE(e.message().find("units: 'crank_theta' is an angle, in rad; it cannot be given "
+                               "'deg' (a unit labels the values, it converts none)"),
+              std::string::npos)
+        << e.message();
+    EXPECT_NE(e.hint().find("crank_theta: 90*pi/180"), std::string::npos) << e.hint();
+  }
   // (a body's position takes the length unit: units: {length: mm}, not one coordinate's)
   const Model spatial = parse_model(R"(units: {length: mm}
 bodies:
@@ -85,10 +98,26 @@ TEST(ModelUnits, RobotJointsHaveTheirKindsUnits) {
   EXPECT_EQ(unit_of(wheel, "x"), "mm");
   EXPECT_EQ(unit_of(wheel, "z"), "mm");
   EXPECT_EQ(unit_of(wheel, "pitch"), "rad");
+  // a joint's angle is in rad: 'deg' is refused (u21 07), 'rad' taken
   const Model relabelled =
-      parse_model("units: {pitch: deg}\nrobot: {urdf: rolling_wheel.urdf}\n", data + "/wheel.yaml");
+      parse_model("units: {pitch: rad}\nrobot: {urdf: rolling_wheel.urdf}\n", data + "/wheel.yaml");
   EXPECT_EQ(unit_of(relabelled, "x"), "m");
-  EXPECT_EQ(unit_of(relabelled, "pitch"), "deg");
+  EXPECT_EQ(unit_of(relabelled, "pitch"), "rad");
+  try {
+    parse_model("units: {pitch: deg}\nrobot: {urdf: rolling_wheel.urdf}\n", data + "/wheel.yaml");
+    ADD_FAILURE() << "no error";
+  } catch (const ModelError& e) {
+    EXPECT_NE(e.message().find("units: 'pitch' is an angle, in rad; it cannot be given 'deg'"),
+              std::string::npos)
+        << e.message();
+  }
+  try {
+    parse_model("units: {x: cm}\nrobot: {urdf: rolling_wheel.urdf}\n", data + "/wheel.yaml");
+    ADD_FAILURE() << "no error";
+  } catch (const ModelError& e) {
+    EXPECT_NE(e.message().find("units: 'x' is a joint's coordinate, in m"), std::string::npos)
+        << e.message();
+  }
   // examples/robots/humanoid.urdf: a floating pelvis and 26 revolute joints, no unit left ''
   const Model humanoid = parse_model("robot: {urdf: humanoid.urdf}\n", robots + "/h.yaml");
   for (const char* c : {"pelvis.x", "pelvis.y", "pelvis.z"}) EXPECT_EQ(unit_of(humanoid, c), "m");
@@ -222,7 +251,7 @@ TEST(ModelUnits, UnknownBaseUnitsAreRefusedWithTheAcceptedList) {
   expect_error(kSlider + "units: {s: m, length: inch}\n", 4, 23,
                "unknown unit of length 'inch' (accepted: m, mm, cm, km, um, nm)");
   expect_error(kSlider + "units: {mass: [g]}\n", 4, 15,
-               "unknown unit of mass '' (accepted: kg, g, mg)");
+               "unknown unit of mass '' (accepted: kg, g, mg, t)");
   // a coordinate named like a base unit: the key is the base unit's, said so
   expect_error("coordinates: [time]\nkinetic_energy: time_dot^2\nunits: {time: s}\n", 3, 15,
                "units: 'time' is the unit of time of the model, but a coordinate is also named "

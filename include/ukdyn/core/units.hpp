@@ -28,7 +28,7 @@ struct UnitSystem {
   /// The accepted units of length (`units:` refuses others, naming these).
   static constexpr std::array<std::string_view, 6> kLengths{"m", "mm", "cm", "km", "um", "nm"};
   /// The accepted units of mass.
-  static constexpr std::array<std::string_view, 3> kMasses{"kg", "g", "mg"};
+  static constexpr std::array<std::string_view, 4> kMasses{"kg", "g", "mg", "t"};
   /// The accepted units of time.
   static constexpr std::array<std::string_view, 5> kTimes{"s", "ms", "us", "min", "h"};
 
@@ -50,6 +50,10 @@ struct UnitSystem {
            : length == "um" ? 1e-6
            : length == "nm" ? 1e-9
                             : 1.0;
+  }
+  /// Kilograms per mass unit (1e-3 for g, 1e3 for t, the tonne). Cost O(1).
+  double kilograms() const {
+    return mass == "g" ? 1e-3 : mass == "mg" ? 1e-6 : mass == "t" ? 1e3 : 1.0;
   }
   /// True when length, mass and time are m, kg and s.
   bool is_si() const { return length == "m" && mass == "kg" && time == "s"; }

@@ -401,12 +401,29 @@ class LimitWatch {
 /// unit; SI by default). Cost O(excesses).
 std::string describe(const LimitExcess& e, const UnitSystem& units = {});
 
+/// The units a URDF's SI numbers (metres, kilograms, seconds: URDF's own) are converted into:
+/// how many of the model's length, mass and time units make a metre, a kilogram and a second
+/// (1000, 1000, 1000 for mm, g, ms). A quantity of dimension kg^a m^b s^c is multiplied by
+/// mass^a length^b time^c. The default converts nothing.
+struct UnitScale {
+  double length = 1.0;  ///< length units per metre
+  double mass = 1.0;    ///< mass units per kilogram
+  double time = 1.0;    ///< time units per second
+};
+
 /// Reads a URDF file (through urdfdom) into a Tree: links in depth-first order from the root;
 /// URDF's world link, if any, is the world. Joint limits, damping, friction, effort and velocity
-/// are kept, and `<mimic>` (Joint::mimic). @throws std::invalid_argument naming the file and the
-/// link or joint: a malformed file (with urdfdom's message), a joint type ukdyn does not know
-/// (planar), a moving link without `<inertial>`, an inertia that is not positive definite, a graph
-/// that is not a tree. Cost O(links) plus the XML parse.
-Tree load_urdf(const std::string& path, Vector3d gravity = Vector3d(0, 0, -9.81));
+/// are kept, and `<mimic>` (Joint::mimic). Every number is converted by `scale` from SI into the
+/// model's units: origins, centres of mass and a prismatic joint's limits and mimic offset by
+/// length; masses by mass; inertias by mass·length²; a revolute joint's effort and friction by
+/// mass·length²/time², damping by mass·length²/time, velocity limit by 1/time (a prismatic
+/// joint's by mass·length/time², mass/time and length/time); a mimic's multiplier by the ratio of
+/// the two joints' units. `gravity` is in the model's units already. @throws
+/// std::invalid_argument naming the file and the link or joint: a malformed file (with urdfdom's
+/// message), a joint type ukdyn does not know (planar), a moving link without `<inertial>`, an
+/// inertia that is not positive definite, a graph that is not a tree. Cost O(links) plus the XML
+/// parse.
+Tree load_urdf(const std::string& path, Vector3d gravity = Vector3d(0, 0, -9.81),
+               const UnitScale& scale = {});
 
 }  // namespace ukdyn::tree

@@ -41,8 +41,10 @@ struct LinkVisual {
 /// file is looked for by find_mesh_file. A material given by name is the robot's `<material>` of
 /// that name (urdfdom resolves it).
 /// @throws std::invalid_argument naming the file when it cannot be read or is not a URDF
-/// (as load_urdf). Cost: one parse of the file and one look-up per mesh.
-std::vector<LinkVisual> load_urdf_visuals(const std::string& path);
+/// (as load_urdf). `length`: the model's length units per metre (UnitScale::length), by which
+/// origins and sizes are converted from URDF's metres (a mesh's scale too: its vertices are
+/// metres). Cost: one parse of the file and one look-up per mesh.
+std::vector<LinkVisual> load_urdf_visuals(const std::string& path, double length = 1.0);
 
 /// The file of a URDF mesh named `name` by the URDF file `urdf`, looked for only beside the
 /// URDF (so that a model file can never make the viewer read a file elsewhere):

@@ -185,7 +185,7 @@ urdf::ModelInterfaceSharedPtr detail::parse_urdf_file(const std::string& path,
   return model;
 }
 
-Tree load_urdf(const std::string& path, Vector3d gravity) {
+Tree load_urdf(const std::string& path, Vector3d gravity, const UnitScale& scale) {
   const std::string who = "ukdyn::tree::load_urdf: " + path + ": ";
   const urdf::ModelInterfaceSharedPtr model = detail::parse_urdf_file(path, who);
   const urdf::LinkConstSharedPtr root = model->getRoot();
@@ -259,10 +259,25 @@ Tree load_urdf(const std::string& path, Vector3d gravity) {
       }
       // <mimic joint="ref" multiplier="m" offset="o"/>: checked by the tree, a constraint of its
       // system (urdfdom's defaults: m = 1, o = 0)
+      // SI to the model's units (UnitScale): a joint's coordinate is a length (prismatic) or an
+      // angle; its effort a force or a torque
+      const double L = scale.length, M = scale.mass, T = scale.time;
+      const bool sliding = out.joint.kind == JointKind::kPrismatic;
+      const double q_unit = sliding ? L : 1.0, lever = sliding ? 1.0 : L;
+      out.joint.p_PJ *= L;
+      out.joint.lower *= q_unit;
+      out.joint.upper *= q_unit;
+      out.joint.effort *= M * L * lever / (T * T);
+      out.joint.friction *= M * L * lever / (T * T);
+      out.joint.damping *= M * lever * lever / T;
+      out.joint.velocity *= q_unit / T;
       if (j->mimic) {
         out.joint.mimic = j->mimic->joint_name;
-        out.joint.mimic_multiplier = j->mimic->multiplier;
-        out.joint.mimic_offset = j->mimic->offset;
+        // q_j = m q_ref + o: m in (j's unit)/(ref's unit), o in j's unit
+        const urdf::JointConstSharedPtr ref = model->getJoint(j->mimic->joint_name);
+        const double ref_unit = ref && ref->type == urdf::Joint::PRISMATIC ? L : 1.0;
+        out.joint.mimic_multiplier = j->mimic->multiplier * q_unit / ref_unit;
+        out.joint.mimic_offset = j->mimic->offset * q_unit;
         if (out.joint.mimic.empty()) {
           throw std::invalid_argument(where + "its <mimic> names no joint (joint=\"…\")");
         }
@@ -274,9 +289,9 @@ Tree load_urdf(const std::string& path, Vector3d gravity) {
       const Eigen::Matrix3d R = rotation(in.origin.rotation).normalized().toRotationMatrix();
       Eigen::Matrix3d I;
       I << in.ixx, in.ixy, in.ixz, in.ixy, in.iyy, in.iyz, in.ixz, in.iyz, in.izz;
-      out.inertial.mass = in.mass;
-      out.inertial.com = to_eigen(in.origin.position);
-      out.inertial.I_com = R * I * R.transpose();
+      out.inertial.mass = in.mass * scale.mass;
+      out.inertial.com = to_eigen(in.origin.position) * scale.length;
+      out.inertial.I_com = R * I * R.transpose() * (scale.mass * scale.length * scale.length);
       if (moving) {
         const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(I);
         if (!(in.mass > 0.0) || !(eig.eigenvalues()[0] > 0.0)) {

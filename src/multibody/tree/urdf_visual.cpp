@@ -36,7 +36,8 @@ std::string hex_color(double r, double g, double b) {
   return text;
 }
 
-LinkVisual link_visual(const std::string& link, const urdf::Visual& v, const fs::path& urdf) {
+LinkVisual link_visual(const std::string& link, const urdf::Visual& v, const fs::path& urdf,
+                       double length) {
   LinkVisual out;
   out.link = link;
   out.name = v.name;
@@ -71,6 +72,10 @@ LinkVisual link_visual(const std::string& link, const urdf::Visual& v, const fs:
     }
   }
   // the material's colour (urdfdom resolves a material given by name to the robot's)
+  // SI to the model's length unit: the origin and the sizes (a mesh's scale too: its file is in
+  // metres, as URDF's)
+  out.p_LV *= length;
+  out.size *= length;
   if (v.material) {
     const urdf::Color& c = v.material->color;
     out.color = hex_color(c.r, c.g, c.b);
@@ -136,7 +141,7 @@ fs::path find_mesh_file(const fs::path& urdf, const std::string& name, std::stri
   return {};
 }
 
-std::vector<LinkVisual> load_urdf_visuals(const std::string& path) {
+std::vector<LinkVisual> load_urdf_visuals(const std::string& path, double length) {
   const urdf::ModelInterfaceSharedPtr model =
       detail::parse_urdf_file(path, "ukdyn::tree::load_urdf_visuals: " + path + ": ");
   std::vector<LinkVisual> out;
@@ -148,7 +153,7 @@ std::vector<LinkVisual> load_urdf_visuals(const std::string& path) {
     stack.pop_back();
     for (auto c = l->child_links.rbegin(); c != l->child_links.rend(); ++c) stack.push_back(*c);
     for (const urdf::VisualSharedPtr& v : l->visual_array) {
-      if (v && v->geometry) out.push_back(link_visual(l->name, *v, path));
+      if (v && v->geometry) out.push_back(link_visual(l->name, *v, path, length));
     }
   }
   return out;
