@@ -747,10 +747,12 @@ ControlledTrajectory simulate_controlled(
   balance.finish(tr.stats, tolerance, options.units);
   // the controller's failure, where it failed in the run's last step (evaluations there lie at
   // or after the last sample; one before it was avoided by a smaller step, and the run failed
-  // for its own reason, said by its own message)
+  // for its own reason, said by its own message): the run's status is then the controller's
+  // (its NaN force made the run's evaluation report a non-finite Q, which the user never gave)
   if (!w.failure.empty() && tr.stats.status != Status::kOk &&
       tr.stats.status != Status::kEnergyBalance && tr.stats.status != Status::kInterrupted &&
       w.failure_t >= tr.stats.t_reached) {
+    tr.stats.status = Status::kControlFailed;
     tr.stats.message = "the controller failed: " + w.failure;
   }
   return run;
