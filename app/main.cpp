@@ -281,7 +281,10 @@ int main(int argc, char** argv) {
       app.add_subcommand("check",
                          "report coordinates, constraint rank, degrees of freedom, redundant "
                          "constraints, initial consistency, M and the control (requirements "
-                         "that cannot be met) at the initial state");
+                         "that cannot be met, a controller that fails) at the initial state "
+                         "only: the control as the run's first sample evaluates it, with the "
+                         "contacts the run closes there; what happens later in the run is not "
+                         "checked");
   add_source_options(check_cmd, check);
 
   LinearizeArguments lin;
