@@ -32,8 +32,9 @@ constexpr const char* kExitCodes = R"(Exit codes:
   0  ok; also when a plot or the viewer cannot be made on this machine (no python, a python
      without matplotlib or NumPy, a program built without three.js): one warning line on
      stderr, and every other file written (--no-plots, --no-viewer: no warning)
-  1  the run failed numerically (status not ok); the trajectory up to the failure is still
-     written (also: the output files could not be written)
+  1  the run failed numerically (status not ok; "control failed" when a controlled run's
+     controller failed); the trajectory up to the failure is still written (also: the output
+     files could not be written)
   2  bad command line (also --set of a parameter the model does not declare, an unknown
      --example)
   3  bad model file (printed as FILE:LINE:COLUMN: error: MESSAGE (hint: ...)), including a
@@ -280,7 +281,10 @@ int main(int argc, char** argv) {
       app.add_subcommand("check",
                          "report coordinates, constraint rank, degrees of freedom, redundant "
                          "constraints, initial consistency, M and the control (requirements "
-                         "that cannot be met) at the initial state");
+                         "that cannot be met, a controller that fails) at the initial state "
+                         "only: the control as the run's first sample evaluates it, with the "
+                         "contacts the run closes there; what happens later in the run is not "
+                         "checked");
   add_source_options(check_cmd, check);
 
   LinearizeArguments lin;

@@ -31,6 +31,7 @@
 #include <vector>
 
 #include "control/contact_modes.hpp"
+#include "control/control_at_start.hpp"
 #include "control/internal.hpp"
 #include "dynamics/internal.hpp"
 #include "linalg/scale_class.hpp"
@@ -500,6 +501,28 @@ ControlledTrajectory simulate_controlled(
     const Controller& ctrl, const System& plant, const Eigen::Ref<const VectorXd>& q0,
     const Eigen::Ref<const VectorXd>& qd0, const SimulationOptions& options,
     const std::function<void(const ControlledTrajectory& sample)>& sample_sink) {
+  return control_detail::run_controlled(ctrl, plant, q0, qd0, options, sample_sink, nullptr);
+}
+
+control_detail::ControlAtStart control_detail::control_at_start(
+    const Controller& ctrl, const System& plant, const Eigen::Ref<const VectorXd>& q0,
+    const Eigen::Ref<const VectorXd>& qd0, const SimulationOptions& options) {
+  ControlAtStart start;
+  // stopped once the first sample is recorded; nothing kept, nothing reported on the way
+  SimulationOptions o = options;
+  o.should_stop = [] { return true; };
+  o.sample_sink = nullptr;
+  o.progress = nullptr;
+  run_controlled(
+      ctrl, plant, q0, qd0, o, [](const ControlledTrajectory&) {}, &start);
+  return start;
+}
+
+ControlledTrajectory control_detail::run_controlled(
+    const Controller& ctrl, const System& plant, const Eigen::Ref<const VectorXd>& q0,
+    const Eigen::Ref<const VectorXd>& qd0, const SimulationOptions& options,
+    const std::function<void(const ControlledTrajectory& sample)>& sample_sink,
+    ControlAtStart* start) {
   const char* who = "ukdyn::simulate_controlled";
   require_same_plant(ctrl, plant, who);
   const Index n = plant.coordinate_count(), m_r = ctrl.requirement_rows();
@@ -624,6 +647,24 @@ ControlledTrajectory simulate_controlled(
     q = Eigen::Map<const VectorXd>(s.q.data(), n);
     qd = Eigen::Map<const VectorXd>(s.qd.data(), n);
     qdd = Eigen::Map<const VectorXd>(s.qdd.data(), n);
+    // (the control at the run's first sample with the run's modes, settled as the run's own
+    // evaluations settle them: control_at_start's)
+    if (start != nullptr && !start->evaluated && run_ws != nullptr) {
+      start->evaluated = true;
+      ControlWorkspace c0(ctrl);
+      control_detail::ContactModes modes(ctrl);
+      modes.set_units(options.units);
+      modes.mirror(run_ws, c0);
+      ControlStatus s0 = compute_control(ctrl, c0, q, qd, t);
+      start->status = s0;
+      // (a requirement that needs a contact to pull: the run stops, saying pull_failure)
+      if (modes.settle(ctrl, c0, q, qd, t, s0, start->pull_failure)) {
+        start->status = s0;
+        if (s0 != ControlStatus::kOk) start->description = describe_control_status(ctrl, c0);
+        start->unactuated = explain_unactuated_requirements(ctrl, c0);
+        if (modes.slipped() < 0) start->stick_note = modes.stick_note(ctrl);
+      }
+    }
     // the control at the sample (evaluated afresh at the sample's state)
     // (with the run's contact modes, as in the run's evaluations). The run evaluated the
     // control at the sample's state just before (the sample's q''): without contacts, whose
@@ -747,10 +788,12 @@ ControlledTrajectory simulate_controlled(
   balance.finish(tr.stats, tolerance, options.units);
   // the controller's failure, where it failed in the run's last step (evaluations there lie at
   // or after the last sample; one before it was avoided by a smaller step, and the run failed
-  // for its own reason, said by its own message)
+  // for its own reason, said by its own message): the run's status is then the controller's
+  // (its NaN force made the run's evaluation report a non-finite Q, which the user never gave)
   if (!w.failure.empty() && tr.stats.status != Status::kOk &&
       tr.stats.status != Status::kEnergyBalance && tr.stats.status != Status::kInterrupted &&
       w.failure_t >= tr.stats.t_reached) {
+    tr.stats.status = Status::kControlFailed;
     tr.stats.message = "the controller failed: " + w.failure;
   }
   return run;

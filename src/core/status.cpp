@@ -31,6 +31,8 @@ const char* to_string(Status s) {
       return "motion not determined";
     case Status::kInterrupted:
       return "interrupted";
+    case Status::kControlFailed:
+      return "control failed";
   }
   return "unknown status";
 }

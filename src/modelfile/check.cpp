@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // check_model: what `ukdyn check` reports about a model at its initial state — sizes, rank and
-// redundancy of the constraints, consistency of the initial state, and M.
+// redundancy of the constraints, consistency of the initial state, M, and the control there.
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -12,6 +12,8 @@
 
 #include <Eigen/QR>
 
+#include "control/contact_modes.hpp"
+#include "control/control_at_start.hpp"
 #include "dynamics/contact_dynamics.hpp"
 #include "dynamics/internal.hpp"
 #include "simulation/initial_check.hpp"
@@ -40,33 +42,57 @@ std::string format(double x) { return format_number(x, 3); }
 
 // the control at the initial state, as the run's first evaluation: requirements that cannot all
 // be met (contradicting each other or a physical constraint, or not actuated) or a controller
-// that fails there are problems (the run would warn, or stop). A model with contacts is not
-// evaluated: its run holds only the contacts that touch, and lets go of those a requirement lifts.
+// that fails there are problems (the run would warn, or stop). A singular M (a rigid body's
+// quaternion) is controlled on the model's completion M_A, as in the run (compute_control). A
+// model with contacts (unilateral, or Coulomb) is evaluated by the run's own start, stopped at
+// its first sample (control_at_start): the contacts it closes there (the touching ones at rest
+// that the LCP of the accelerations loads) and the Coulomb contacts it sticks are held, and
+// those a requirement lifts are let go of, as in every evaluation of the run.
 void check_control(const Model& model, CheckReport& report) {
-  if (!model.controller || !report.mass_positive_definite || report.mass_singular) return;
-  const System& sys = model.system;
-  for (const Constraint& c : sys.constraints()) {
-    if (c.is_unilateral()) return;
-  }
+  if (!model.controller || !report.mass_positive_definite) return;
   const Controller& ctrl = *model.controller;
-  try {
-    ControlWorkspace cws(ctrl);
-    const ControlStatus s = compute_control(ctrl, cws, model.q0, model.qd0, model.options.t_start);
+  auto report_status = [&](ControlStatus s, const std::string& description,
+                           const std::string& unactuated) {
     if (s == ControlStatus::kRequirementsNotMet) {
       report.problems.push_back(
           "the control cannot meet its requirements at the initial state (a run warns and "
           "applies the least-squares force): " +
-          describe_control_status(ctrl, cws));
-    } else if (const std::string why = explain_unactuated_requirements(ctrl, cws);
-               s == ControlStatus::kOk && !why.empty()) {
+          description);
+    } else if (s == ControlStatus::kOk && !unactuated.empty()) {
       report.problems.push_back(
           "the control meets its requirements at the initial state only because they ask for "
           "no force there: " +
-          why);
+          unactuated);
     } else if (s != ControlStatus::kOk) {
-      report.problems.push_back("the control fails at the initial state: " +
-                                describe_control_status(ctrl, cws));
+      report.problems.push_back("the control fails at the initial state: " + description);
     }
+  };
+  try {
+    if (!control_detail::ContactModes(ctrl).any()) {
+      ControlWorkspace cws(ctrl);
+      const ControlStatus s =
+          compute_control(ctrl, cws, model.q0, model.qd0, model.options.t_start);
+      report_status(s, s == ControlStatus::kOk ? "" : describe_control_status(ctrl, cws),
+                    explain_unactuated_requirements(ctrl, cws));
+      return;
+    }
+    // the run's start, in the model's units (its messages'), from the state the run starts at
+    SimulationOptions o = model.options;
+    o.units = model.unit_system;
+    o.project_initial = model.project_initial || o.project_initial;
+    const control_detail::ControlAtStart c =
+        control_detail::control_at_start(ctrl, model.system, model.q0, model.qd0, o);
+    if (!c.evaluated) return;  // (the run stops before its first sample: said above)
+    if (!c.pull_failure.empty()) {
+      // (the run stops there: "the controller failed: " and the same text)
+      report.problems.push_back("the control fails at the initial state: " + c.pull_failure);
+      return;
+    }
+    report_status(c.status,
+                  c.stick_note.empty() ? c.description : c.description + "; " + c.stick_note,
+                  c.unactuated);
+  } catch (const InconsistentInitialState&) {
+    // (the initial state's violations, reported above: the run does not start)
   } catch (const std::exception& e) {
     report.problems.push_back(std::string("the control cannot be evaluated at the initial "
                                           "state: ") +

@@ -304,6 +304,13 @@ contacts:
   const double t_star = (std::numbers::pi + std::asin(1.0 / 3.0)) / 2.0;
   EXPECT_NEAR(r.plant.stats.t_reached, t_star, 1e-6);
   const std::string& msg = r.plant.stats.message;
+  // the controller failed, not the inputs (it was "non-finite input": its NaN force in Q), and
+  // summary.json (so `ukdyn run` and Python's Result.status, which read the same name) says so
+  EXPECT_EQ(r.plant.stats.status, Status::kControlFailed) << msg;
+  EXPECT_STREQ(to_string(r.plant.stats.status), "control failed");
+  const std::string summary = summary_json(r.plant, dip.options);
+  EXPECT_NE(summary.find("\"status\": \"control failed\""), std::string::npos) << summary;
+  EXPECT_EQ(summary.find("non-finite"), std::string::npos) << summary;
   EXPECT_NE(msg.find("the controller failed: at t = " + format_number(r.plant.stats.t_reached, 6) +
                      " s the requirement row 'tip.2' can be met only if the contact 'pad' pulls"),
             std::string::npos)

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "ukdyn/control/control.hpp"
+#include "ukdyn/core/format.hpp"
 #include "ukdyn/modelfile/model.hpp"
 #include "ukdyn/modelfile/run.hpp"
 #include "ukdyn/ukdyn.hpp"
@@ -172,6 +173,110 @@ TEST(ControlReports, ARequirementOnAnUnactuatedCoordinateSaysSo) {
       "control: {requirements: [{name: r, holonomic: x - sin(t), dynamics: {omega: 2}}], "
       "actuated: [x]}\n");
   EXPECT_TRUE(check_model(fine).ok()) << check_model(fine).problems.front();
+}
+
+// ---- check evaluates the control as the run's first sample does: with the contacts the run
+// closes at the start, and on M_A for a singular M (issue #31: it skipped both)
+
+// the text after `prefix` in `text` ("" when text does not start with it)
+std::string after(const std::string& text, const std::string& prefix) {
+  return text.rfind(prefix, 0) == 0 ? text.substr(prefix.size()) : std::string();
+}
+
+TEST(ControlReports, ARequirementIntoAFloorIsACheckProblemNamingTheContactAsTheRunDoes) {
+  // a ball resting on its floor required to go down, y = −t²: y'' = −2 asked, 0 with the floor
+  // held (missed by 2), and with it open the gap is driven shut — no pushing force meets it
+  const Model m = testdata("requirement_into_floor.yaml");
+  const CheckReport c = check_model(m);
+  ASSERT_EQ(c.problems.size(), 1u);
+  const std::string why = after(c.problems[0], "the control fails at the initial state: ");
+  EXPECT_TRUE(contains(why,
+                       "at t = 0 s the requirement row 'press' can be met only if the "
+                       "contact 'floor' pulls"))
+      << c.problems[0];
+  EXPECT_TRUE(contains(why, "missed by 2 (")) << why;
+  // the run stops there, at its first evaluation, saying the same
+  const ModelRun r = run_model(m, m.options);
+  EXPECT_EQ(r.trajectory.stats.status, Status::kControlFailed) << r.trajectory.stats.message;
+  EXPECT_EQ(r.trajectory.stats.t_reached, 0.0);
+  EXPECT_EQ(r.trajectory.stats.message, "the controller failed: " + why);
+  // a target below the floor asks the same: y = −0.01 (y'' = −100 · 0.01 = −1 asked)
+  const Model below = parse_model(
+      "coordinates: [x, y]\nkinetic_energy: 0.5*(x_dot^2 + y_dot^2)\npotential_energy: 9.81*y\n"
+      "constraints: [{name: floor, holonomic: y, unilateral: true}]\n"
+      "control: {requirements: [{name: under, holonomic: y + 0.01, dynamics: {omega: 10}}]}\n"
+      "initial: {q: {x: 0, y: 0}}\nsimulate: {t_end: 1}\n");
+  const CheckReport b = check_model(below);
+  ASSERT_EQ(b.problems.size(), 1u);
+  EXPECT_TRUE(contains(b.problems[0],
+                       "the requirement row 'under' can be met only if the "
+                       "contact 'floor' pulls"))
+      << b.problems[0];
+  EXPECT_TRUE(contains(b.problems[0], "missed by 1 (")) << b.problems[0];
+}
+
+TEST(ControlReports, ARequirementThatLiftsOffAFloorIsNoCheckProblem) {
+  // y = t², x = sin t from y = 0 on the floor, y' = 0, x' = 1: e ≡ 0 for both rows, the floor
+  // let go of at the start
+  const Model m = testdata("requirement_off_floor.yaml");
+  const CheckReport c = check_model(m);
+  EXPECT_TRUE(c.ok()) << c.problems.front();
+  const ModelRun r = run_model(m, m.options);
+  ASSERT_EQ(r.trajectory.stats.status, Status::kOk) << r.trajectory.stats.message;
+  EXPECT_EQ(r.control.not_met, 0) << r.control.not_met_message;
+  const Trajectory& tr = r.trajectory;
+  const std::size_t last = tr.t.size() - 1;
+  EXPECT_NEAR(tr.t[last], 1.0, 1e-12);
+  EXPECT_NEAR(tr.q[2 * last], std::sin(1.0), 1e-6);
+  EXPECT_NEAR(tr.q[2 * last + 1], 1.0, 1e-6);
+}
+
+// a rigid ball (m = 2, r = 0.1: its M singular along the quaternion) at height z0, `contact` its
+// floor's lines (or none), `require` its requirements
+Model rigid_ball(double z0, const std::string& contact, const std::string& require) {
+  return parse_model(
+      "parameters: {m: 2, g: 9.81, r: 0.1, A: 0.1, w: 3}\nbodies:\n"
+      "  - {name: ball, type: rigid, mass: m, inertia: [0.4*m*r^2, 0.4*m*r^2, 0.4*m*r^2],\n"
+      "     position: [0, 0, " +
+      format_number(z0) + "]}\nforces:\n  - {type: gravity, g: [0, 0, -g]}\n" + contact +
+      "control:\n  requirements:\n" + require + "simulate: {t_end: 0.3}\n");
+}
+
+TEST(ControlReports, ARigidBodysControlIsCheckedOnItsCompletedMass) {
+  const std::string pace =
+      "    - {name: pace, holonomic: ball_x - A*(1 - cos(w*t)), dynamics: {omega: 10}}\n";
+  // above the floor: x = A (1 − cos 3t) can be met (F_x = m x''); x = 0.5 + … with it cannot
+  const Model free = rigid_ball(1.0, "", pace);
+  ASSERT_TRUE(check_model(free).mass_singular);
+  EXPECT_TRUE(check_model(free).ok()) << check_model(free).problems.front();
+  const Model both = rigid_ball(
+      1.0, "",
+      pace +
+          "    - {name: apart, holonomic: ball_x - 0.5 - A*(1 - cos(w*t)), dynamics: {omega: "
+          "10}}\n");
+  const CheckReport c = check_model(both);
+  ASSERT_EQ(c.problems.size(), 1u);
+  EXPECT_TRUE(contains(c.problems[0], "the control cannot meet its requirements at the initial"))
+      << c.problems[0];
+  EXPECT_TRUE(contains(c.problems[0], "requirement rows 'pace' and 'apart' contradict each other"))
+      << c.problems[0];
+  // on the floor (z = r): paced along it, fine; pressed into it, z = r − t², the floor would pull
+  const std::string floor = "contacts:\n  - {name: floor, body: ball, shape: sphere, radius: r}\n";
+  const Model on = rigid_ball(0.1, floor, pace);
+  EXPECT_TRUE(check_model(on).ok()) << check_model(on).problems.front();
+  const Model pressed = rigid_ball(
+      0.1, floor, "    - {name: press, holonomic: ball_z - r + t^2, dynamics: {omega: 10}}\n");
+  const CheckReport p = check_model(pressed);
+  ASSERT_EQ(p.problems.size(), 1u);
+  const std::string why = after(p.problems[0], "the control fails at the initial state: ");
+  EXPECT_TRUE(contains(why,
+                       "at t = 0 s the requirement row 'press' can be met only if the "
+                       "contact 'floor' pulls"))
+      << p.problems[0];
+  EXPECT_TRUE(contains(why, "missed by 2 (")) << why;
+  const ModelRun r = run_model(pressed, pressed.options);
+  EXPECT_EQ(r.trajectory.stats.status, Status::kControlFailed) << r.trajectory.stats.message;
+  EXPECT_EQ(r.trajectory.stats.message, "the controller failed: " + why);
 }
 
 TEST(ControlReports, AnAccelerationFormConstraintsViolationIsUnknownNotZero) {

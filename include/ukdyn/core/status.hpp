@@ -42,6 +42,12 @@ enum class Status {
   /// `ukdyn run` and in Python) before t_end. The samples up to RunStatistics::t_reached are
   /// kept, the last one at t_reached. Its name is "interrupted".
   kInterrupted,
+  /// A controlled run (simulate_controlled, `ukdyn run` of a model with `control:`) stopped
+  /// because its controller failed in the run's last step: its inputs and the plant were fine,
+  /// the control could not be computed (a requirement that needs a contact to pull, the nominal
+  /// model or the law failing: ControlStatus, describe_control_status). RunStatistics::message
+  /// says why, after "the controller failed: ". Its name is "control failed".
+  kControlFailed,
 };
 
 /// Short English name of a status ("ok", "mass matrix not positive definite", …). Cost O(1).
