@@ -20,6 +20,7 @@
 #include <vector>
 
 #include "control/internal.hpp"
+#include "simulation/initial_check.hpp"
 
 namespace ukdyn {
 namespace {
@@ -209,6 +210,35 @@ std::vector<std::string> control_warnings(const ControlStatistics& c,
     out.push_back(w + line);
   }
   return out;
+}
+
+std::string explain_uncorrected_requirements(const Controller& ctrl,
+                                             const Eigen::Ref<const VectorXd>& q,
+                                             const Eigen::Ref<const VectorXd>& qd, double t,
+                                             double tolerance, double duration) {
+  const System& req = ctrl.requirements();
+  // "constraint 'a' (holonomic): position violation 1, velocity violation 0", one per violated
+  // requirement, in the scales of the run (the initial check's)
+  const std::vector<std::string> lines =
+      detail::check_initial_conditions(req, q, qd, t, tolerance, duration);
+  std::string out;
+  for (const std::string& line : lines) {
+    const std::size_t a = line.find('\''), b = line.find('\'', a + 1);
+    if (a == std::string::npos || b == std::string::npos) continue;
+    const std::string name = line.substr(a + 1, b - a - 1);
+    const Constraint& c = req.constraint(req.constraint_index(name));
+    if (c.stabilization().enabled() || !c.is_active(t)) continue;
+    const std::size_t colon = line.find(": ", b);
+    const std::string violation = colon == std::string::npos ? "" : line.substr(colon + 2);
+    out += (out.empty() ? "" : "; ") + std::string("requirement '") + name + "' starts unmet (" +
+           violation + ") and has no dynamics";
+  }
+  if (out.empty()) return out;
+  return out + ": the control keeps the error's " +
+         "acceleration (its rate, nonholonomic) at zero, so it is never corrected — it stays, or "
+         "grows at its rate. Give the requirement dynamics: {omega: 10, zeta: 1} "
+         "(docs/control.md), "
+         "or start on it";
 }
 
 }  // namespace ukdyn

@@ -782,6 +782,12 @@ ControlledTrajectory control_detail::run_controlled(
   tr.m = full.m;
   tr.stats = full.stats;
   if (!w.slip_note.empty()) tr.stats.notes.push_back(w.slip_note);
+  // requirements without dynamics that start unmet stay unmet (u21 05)
+  if (const std::string why = explain_uncorrected_requirements(ctrl, q0, qd0, options.t_start,
+                                                               options.initial_tolerance,
+                                                               options.t_end - options.t_start);
+      !why.empty())
+    tr.stats.notes.push_back(why);
   diagnose_requirements(*st, w, q0, qd0, options.t_start, options.units.time, tr.stats);
   run.control = w.stats;
   bounds.finish(run.control, tr.stats, options.units.time);

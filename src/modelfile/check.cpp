@@ -51,6 +51,16 @@ std::string format(double x) { return format_number(x, 3); }
 void check_control(const Model& model, CheckReport& report) {
   if (!model.controller || !report.mass_positive_definite) return;
   const Controller& ctrl = *model.controller;
+  // requirements without dynamics that start unmet: never corrected (u21 05)
+  try {
+    if (const std::string why = explain_uncorrected_requirements(
+            ctrl, model.q0, model.qd0, model.options.t_start, model.options.initial_tolerance,
+            model.options.t_end - model.options.t_start);
+        !why.empty())
+      report.problems.push_back(why);
+  } catch (const std::exception&) {
+    // (an evaluation that fails is reported by the control's check below)
+  }
   auto report_status = [&](ControlStatus s, const std::string& description,
                            const std::string& unactuated) {
     if (s == ControlStatus::kRequirementsNotMet) {

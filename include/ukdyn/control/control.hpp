@@ -467,6 +467,20 @@ std::string explain_requirements_not_met(const Controller& ctrl, const ControlWo
 /// actuators, are left to explain_requirements_not_met. "" if none. Allocates; cost as above.
 std::string explain_unactuated_requirements(const Controller& ctrl, const ControlWorkspace& ws);
 
+/// The requirements without error dynamics (no `dynamics:`, Constraint::stabilization() off)
+/// that are active at t and that (q, q') violates beyond `tolerance` times the row's scale of a
+/// run of length `duration` (the initial check's scales, check_initial_conditions): the control
+/// keeps their error's second (holonomic) or first (nonholonomic) derivative at zero, so such an
+/// error is never corrected — it stays, or grows at its rate. One clause per requirement
+/// ("requirement 'a' starts unmet (position violation 1, velocity violation 0) and has no
+/// dynamics"), joined by "; ", and what to do; "" if none. What `ukdyn check` reports as a
+/// problem and a controlled run as a note (u21 05: x = 1 and x = 2 at once, no dynamics, ran
+/// "ok"). Allocates; cost one evaluation of the requirements.
+std::string explain_uncorrected_requirements(const Controller& ctrl,
+                                             const Eigen::Ref<const VectorXd>& q,
+                                             const Eigen::Ref<const VectorXd>& qd, double t,
+                                             double tolerance, double duration);
+
 // ---------------------------------------------------------------------------------------------
 // controlled simulation
 
