@@ -250,5 +250,77 @@ TEST(ControlRigid, CubeFullyActuatedSlidesBelowThreeFifthsAndTipsAboveAsThePlana
   EXPECT_NEAR(-at(rp.plant, rp.plant.q, "box.theta", 10), 1.3876, 1e-4);
 }
 
+// #31 item 2: M = diag(m, 0) with y fixed by a requirement alone. The requirement is met by a
+// force, and the row y of M q'' = Q + F reads 0 = Q_y + F_y whatever y'' is: no force determines
+// y'', so the controlled motion is not determined by the plant under its control (the Gauss
+// function with M_A = M + A_rᵀ G A_r would pick one, but only by making the requirement a
+// constraint of the plant, which a control force is not). A model file says so at load, naming
+// the requirement and what to write; the C++ run stops at the control's first evaluation with the
+// model's "motion not determined" naming y
+std::string massless_y(bool hold_in_control) {
+  return std::string(
+             "parameters: {m: 2}\ncoordinates: [x, y]\nkinetic_energy: 0.5*m*x_dot^2\n"
+             "potential_energy: 0\n") +
+         (hold_in_control ? "" : "constraints:\n  - {name: hold, holonomic: y - x}\n") +
+         "control:\n  requirements:\n"
+         "    - {name: track, holonomic: x - sin(t), dynamics: {omega: 10, zeta: 1}}\n" +
+         (hold_in_control ? "    - {name: hold, holonomic: y - x, dynamics: {omega: 10, zeta: 1}}\n"
+                          : "") +
+         "simulate: {t_end: 0.5, integrator: dopri5, rtol: 1e-11, atol: 1e-13}\n"
+         "output: {every: 0.1}\n";
+}
+
+TEST(ControlSingularMass, ACoordinateThatOnlyARequirementFixesIsRefusedWithWhatToWrite) {
+  // the model file: refused at load, the requirement named, with the way out
+  const std::string got = testing::model_error_text(massless_y(true));
+  EXPECT_NE(got.find("the accelerations of the coordinates 'y' are not determined"),
+            std::string::npos)
+      << got;
+  EXPECT_NE(got.find("the control requirement 'hold' does not fix them: a requirement is met by "
+                     "a force, and a force does not determine the acceleration of a coordinate "
+                     "without inertia"),
+            std::string::npos)
+      << got;
+  EXPECT_NE(got.find("write it under constraints:, else give the coordinate inertia"),
+            std::string::npos)
+      << got;
+  // (a requirement on x alone is not named)
+  EXPECT_EQ(got.find("'track'"), std::string::npos) << got;
+  // written as the model's constraint (the way out), it runs: x = sin t − t exp(−10 t) = y
+  const Model m = parse_model(massless_y(false));
+  const ControlledTrajectory r =
+      simulate_controlled(*m.controller, m.system, m.q0, m.qd0, m.options);
+  ASSERT_EQ(r.plant.stats.status, Status::kOk) << r.plant.stats.message;
+  ASSERT_EQ(r.plant.samples(), 6);
+  for (std::size_t i = 0; i < 6; ++i) {
+    const double t = r.plant.t[i], x = std::sin(t) - t * std::exp(-10.0 * t);
+    EXPECT_NEAR(r.plant.q[2 * i], x, 1e-9) << "t = " << t;
+    EXPECT_NEAR(r.plant.q[2 * i + 1], x, 1e-9) << "t = " << t;
+  }
+  // in C++: the run stops at t = 0 with the model's "motion not determined" naming y
+  const System plant =
+      SystemBuilder({"x", "y"})
+          .mass_matrix((MatrixXd(2, 2) << 2.0, 0.0, 0.0, 0.0).finished())
+          .forces([](const Eigen::Ref<const VectorXd>&, const Eigen::Ref<const VectorXd>&, double,
+                     Eigen::Ref<VectorXd> Q) { Q.setZero(); })
+          .build();
+  const Controller ctrl =
+      ControllerBuilder(plant)
+          .require(holonomic("track", 1, [](const auto& q, const auto&, auto& e) { e[0] = q[0]; }),
+                   ErrorDynamics::second_order(10.0, 1.0))
+          .require(
+              holonomic("hold", 1, [](const auto& q, const auto&, auto& e) { e[0] = q[1] - q[0]; }),
+              ErrorDynamics::second_order(10.0, 1.0))
+          .build();
+  SimulationOptions o;
+  o.t_end = 0.5;
+  const ControlledTrajectory c =
+      simulate_controlled(ctrl, plant, Eigen::Vector2d(0.0, 0.0), Eigen::Vector2d(1.0, 1.0), o);
+  EXPECT_NE(c.plant.stats.status, Status::kOk);
+  EXPECT_NE(c.plant.stats.message.find("motion not determined"), std::string::npos)
+      << c.plant.stats.message;
+  EXPECT_NE(c.plant.stats.message.find("'y'"), std::string::npos) << c.plant.stats.message;
+}
+
 }  // namespace UKDYN_TEST_FILE
 }  // namespace ukdyn
