@@ -5,6 +5,7 @@
 // coordinates, dynamics, constraints, non-ideal forces), reader_multibody.cpp, reader_control.cpp
 // and reader_visual.cpp.
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <limits>
 #include <set>
@@ -261,6 +262,61 @@ void Reader::check_mass_matrix(const YAML::Node& root, const Model& model) {
     status = forward_dynamics(model.system, ws, model.q0, model.qd0, model.options.t_start);
   if (status == Status::kMotionUndetermined) {
     const std::string lacking = coordinates_where([&](Index i) { return !(M(i, i) > 0); });
+    // a control requirement on such a coordinate does not determine it either: it is met by a
+    // force, and no force determines the acceleration of a coordinate without inertia (its row
+    // of M q'' = Q + F reads 0 = Q_i + F_i whatever q''_i is: docs/singular-mass.md, "Limits").
+    // (the controller is read after the plant: the requirements' expressions are scanned for
+    // the names of those coordinates, x, x_dot or x_ddot, with '.' written '_')
+    std::string required;
+    const YAML::Node reqs = root["control"] ? root["control"]["requirements"] : YAML::Node();
+    if (reqs && reqs.IsSequence()) {
+      const auto names_lacking = [&](const std::string& expr) {
+        for (std::size_t p = 0; p < expr.size();) {
+          const auto c = static_cast<unsigned char>(expr[p]);
+          if (!(std::isalpha(c) || c == '_')) {
+            ++p;
+            continue;
+          }
+          std::size_t e = p;
+          while (e < expr.size() && (std::isalnum(static_cast<unsigned char>(expr[e])) ||
+                                     expr[e] == '_' || expr[e] == '.')) {
+            ++e;
+          }
+          std::string id = expr.substr(p, e - p);
+          for (const char* suffix : {"_ddot", "_dot"}) {
+            const std::string sfx = suffix;
+            if (id.size() > sfx.size() &&
+                id.compare(id.size() - sfx.size(), sfx.size(), sfx) == 0) {
+              id.resize(id.size() - sfx.size());
+              break;
+            }
+          }
+          for (Index i = 0; i < n; ++i) {
+            std::string name = coordinates_[std::size_t(i)];
+            std::replace(name.begin(), name.end(), '.', '_');
+            if (!(M(i, i) > 0) && (id == name || id == coordinates_[std::size_t(i)])) return true;
+          }
+          p = e;
+        }
+        return false;
+      };
+      for (const auto& r : reqs) {
+        if (!r.IsMap() || !r["name"]) continue;
+        bool touches = false;
+        for (const char* kind : {"holonomic", "nonholonomic", "acceleration"}) {
+          if (r[kind] && r[kind].IsScalar()) touches = touches || names_lacking(r[kind].Scalar());
+        }
+        if (touches) required += (required.empty() ? "'" : ", '") + r["name"].Scalar() + "'";
+      }
+    }
+    const std::string control_hint =
+        required.empty()
+            ? std::string()
+            : "; the control requirement " + required +
+                  " does not fix them: a requirement is met by a force, and a force does not "
+                  "determine the acceleration of a coordinate without inertia (0 = Q + F on its "
+                  "row, whatever the acceleration) — if its motion is prescribed, write it under "
+                  "constraints:, else give the coordinate inertia";
     fail(at,
          "the mass matrix is singular" + where +
              " and the constraints do not determine "
@@ -270,7 +326,7 @@ void Reader::check_mass_matrix(const YAML::Node& root, const Model& model) {
                           : "no inertia for " + lacking) +
              (from_T ? ": the kinetic energy must involve every velocity that no constraint fixes"
                      : ": a zero row of M needs constraints that fix its coordinate") +
-             (contacts ? " (a unilateral contact does not: it may open)" : ""));
+             (contacts ? " (a unilateral contact does not: it may open)" : "") + control_hint);
   }
 }
 
