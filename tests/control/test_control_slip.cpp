@@ -557,7 +557,7 @@ nonideal:
 control:
   requirements:
     - {name: pull, holonomic: box_x - A*(1 - cos(5*t)), dynamics: {omega: 20, zeta: 1}}
-simulate: {t_end: 1}
+simulate: {t_end: 1, integrator: dopri5, rtol: 1e-11, atol: 1e-13}
 output: {every: 0.05}
 )");
   const double A = 0.2, ts = std::acos(-1.0) / kW, d = 1e-6;
@@ -575,11 +575,13 @@ output: {every: 0.05}
       EXPECT_NEAR(at(tr, tr.q, u, i), 0.0, 1e-9) << u << ", t = " << t;
     EXPECT_NEAR(at(tr, r.Qc_control, "box.y", i), 0.0, 1e-9) << "t = " << t;
     if (t == 0.0) continue;
-    // on pace, the friction mu m g against x_d' (forward before pi/5, back after)
+    // on pace, the friction mu m g against x_d' (forward before pi/5, back after); the stop
+    // projects away its v_stop (x' -1e-7 at pi/5 + 1e-6), which the error dynamics then remove:
+    // m 2 omega 1e-7 = 8e-6 N at most in F
     EXPECT_NEAR(at(tr, tr.q, "box.x", i), x_d(A, t), 1e-8) << "t = " << t;
-    EXPECT_NEAR(at(tr, tr.qd, "box.x", i), x_d1(A, t), 1e-8) << "t = " << t;
+    EXPECT_NEAR(at(tr, tr.qd, "box.x", i), x_d1(A, t), 2e-7) << "t = " << t;
     const double sliding = t < ts ? 1.0 : -1.0;
-    EXPECT_NEAR(at(tr, r.Qc_control, "box.x", i), kM * x_d2(A, t) + sliding * kMu * kM * kG, 1e-6)
+    EXPECT_NEAR(at(tr, r.Qc_control, "box.x", i), kM * x_d2(A, t) + sliding * kMu * kM * kG, 2e-5)
         << "t = " << t;
   }
 }
