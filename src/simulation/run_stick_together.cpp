@@ -35,7 +35,10 @@ std::size_t Run::sticking_contacts() {
 // sliding speed there is within 2 v_stop of rest (a contact of the same body, whose stick rows
 // are redundant with c's, slides at c's speed and has no stop event of its own) sticks with it
 // when that is admissible jointly (stick_jointly, with a split inside every cone required).
-// Else, or when none stopped with it, try_stick(c) alone. Cost: stick_jointly's.
+// Where no split holds them all, they are decided together as at rest: the least held slips
+// while no split holds the rest (stick_jointly without the split, release_unheld), true then
+// whether c sticks or slides. Else (rules 1, 2 refused it), or when none stopped with it,
+// try_stick(c) alone. Cost: stick_jointly's, twice.
 bool Run::try_stick_together(std::size_t c, double t, double* x, bool report) {
   const auto& contacts = sys_.friction_contacts();
   modes_before_ = mode_;
@@ -50,7 +53,16 @@ bool Run::try_stick_together(std::size_t c, double t, double* x, bool report) {
   }
   if (!others) return try_stick(c, t, x, report);
   mode_[c] = ContactMode::kSticking;
-  return stick_jointly(t, x, true) || try_stick(c, t, x, report);
+  const std::vector<ContactMode> together = mode_;  // (at a stop: allocates, as the split does)
+  if (stick_jointly(t, x, true)) return true;
+  // no split holds them all: the stop is decided for all of them at once, as at rest
+  // (stick_at_rest: they stick, and the least held slips while no split holds the rest), not by
+  // c alone, which held a cube stopping on its four corners alone while it turned about it
+  // under a control computed with it stuck (u21 01). (true: the stop is resolved, whether c
+  // sticks or slides from rest with the others)
+  mode_ = together;
+  if (stick_jointly(t, x, false)) return true;
+  return try_stick(c, t, x, report);
 }
 
 // The contacts `rest` at (t, x), closed, rough and at rest (|v_rel| <= eps: at the start of a

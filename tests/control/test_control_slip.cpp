@@ -534,5 +534,57 @@ TEST(ControlSlip, BoxOnTwoCornersHeldBySomeSplitSlipsAtMuStaticMgInAnyUnits) {
   }
 }
 
+// ---- several contacts stopping together under control: a cube on its corners (u21 01) -------
+
+// a cube (m = 2, half side h = 0.05, a rigid body in quaternions) on a rough floor with its box
+// contact (mu = 0.2, mu_s = 0.3), every coordinate actuated, its x required to follow
+// A (1 − cos 5t), A = 0.2: x_d''(0) = 5 > mu_s g, so it slides from t = 0 with
+// F_x = m x_d'' + mu m g. At t = pi/5, where x_d' reverses, its four bottom corners stop at once;
+// holding them would take m |x_d''| = 10 N > mu_s m g = 5.886 N, so all of them slip back at
+// once, F_x = m x_d'' − mu m g, and by symmetry the cube stays on y = 0 without turning. (The stop
+// was decided for the corner whose event came first alone: it stuck, the control turned the cube
+// about it, 0.22 rad by t = 1, y = 0.0164.)
+TEST(ControlSlip, CubeWhoseCornersStopTogetherSlipsBackTogetherWithoutTurning) {
+  Model m = parse_model(R"(parameters: {m: 2, h: 0.05, g: 9.81, mu: 0.2, mus: 0.3, A: 0.2}
+bodies:
+  - {name: box, type: rigid, mass: m, inertia: m*(2*h)^2/6, position: [0, 0, h]}
+forces:
+  - {type: gravity, g: [0, 0, -g]}
+contacts:
+  - {name: base, body: box, shape: box, size: [h, h, h]}
+nonideal:
+  - {friction: coulomb, constraint: base, mu: mu, mu_static: mus}
+control:
+  requirements:
+    - {name: pull, holonomic: box_x - A*(1 - cos(5*t)), dynamics: {omega: 20, zeta: 1}}
+simulate: {t_end: 1, integrator: dopri5, rtol: 1e-11, atol: 1e-13}
+output: {every: 0.05}
+)");
+  const double A = 0.2, ts = std::acos(-1.0) / kW, d = 1e-6;
+  for (double t : {ts - d, ts + d}) m.options.output_at.push_back(t);
+  const ControlledTrajectory r =
+      simulate_controlled(*m.controller, m.system, m.q0, m.qd0, m.options);
+  const Trajectory& tr = r.plant;
+  ASSERT_EQ(tr.stats.status, Status::kOk) << tr.stats.message;
+  ASSERT_EQ(tr.samples(), 23);
+  for (std::size_t i = 0; i < std::size_t(tr.samples()); ++i) {
+    const double t = tr.t[i];
+    // on y = 0, level, not turned (the quaternion's vector part 0)
+    EXPECT_NEAR(at(tr, tr.q, "box.y", i), 0.0, 1e-9) << "t = " << t;
+    for (const char* u : {"box.u1", "box.u2", "box.u3"})
+      EXPECT_NEAR(at(tr, tr.q, u, i), 0.0, 1e-9) << u << ", t = " << t;
+    EXPECT_NEAR(at(tr, r.Qc_control, "box.y", i), 0.0, 1e-9) << "t = " << t;
+    if (t == 0.0) continue;
+    // on pace, the friction mu m g against x_d' (forward before pi/5, back after); the stop
+    // projects away its v_stop (x' -1e-7 at pi/5 + 1e-6), which the error dynamics then remove:
+    // m 2 omega 1e-7 = 8e-6 N at most in F
+    EXPECT_NEAR(at(tr, tr.q, "box.x", i), x_d(A, t), 1e-8) << "t = " << t;
+    EXPECT_NEAR(at(tr, tr.qd, "box.x", i), x_d1(A, t), 2e-7) << "t = " << t;
+    const double sliding = t < ts ? 1.0 : -1.0;
+    EXPECT_NEAR(at(tr, r.Qc_control, "box.x", i), kM * x_d2(A, t) + sliding * kMu * kM * kG, 2e-5)
+        << "t = " << t;
+  }
+}
+
 }  // namespace UKDYN_TEST_FILE
 }  // namespace ukdyn
