@@ -505,29 +505,30 @@ bool ContactDynamics::impulse(const System& sys, Eigen::Ref<VectorXd> qd, const 
   }
   rr.head(k) = r;
   rr.segment(k, nb) = vt;
-  // the LCP in z = S z', w' = R w with blocks of the same size in any units: every row of w' a
-  // speed, every entry of R M S a number. Λ_i = c_i Λ'_i, c_i = 10 / class(W_ii) (W'_ii within
-  // [0.03, 32]), β_b = c_f β'_b, c_f = 10 / class(max (Dᵀ P D)_bb of cone f), γ a speed as it is,
-  // the cone rows × 1/c_f (their β entries −1, their Λ entry μ̃ c_i / c_f). A change of units by
-  // powers of 1000 moves each c by exactly the unit's power: the same LCP, the same pivots (in
-  // mm, g, ms the normal rows were ~1e-6 of the friction blocks). c = 1 where the blocks are
-  // of order 1, as in SI units: then nothing is scaled
-  VectorXd c(size);
-  for (Index i = 0; i < k; ++i) c[i] = 10.0 / scale_class(W_(i, i));
-  VectorXd cone_c = VectorXd::Zero(nf);
+  // the LCP in z = S z', w' = S w, M' = S M S (a congruence: the same LCP, its blocks of order one
+  // in any units and under any factor of the rows):
+  //   Λ_i = d_i Λ'_i, row i × d_i,   d_i = √(10 / class(W_ii))
+  //   β_b = f_c β'_b, row b × f_c,   f_c = √(10 / class(max (Dᵀ P D)_bb of b's cone c))
+  //   γ_c = γ'_c / f_c, cone row c × 1 / f_c   (E and −Eᵀ stay ±1, μ̃ becomes μ̃ d_i / f_c)
+  // every w' and z' then a √(mass) × speed. A row's factor ρ (a row written in other units, the
+  // metamorphic suite's rows × 1e±8) is a congruence of the same kind (W_ii × ρ², its coupling
+  // to β, its μ̃ and r × ρ, Λ / ρ), which d_i undoes to within a class; Λ scaled alone (its row
+  // not: Λ_i = c_i Λ'_i, c_i = 10 / class(W_ii)) left each normal row of w' ρ times the rest
+  // and Λ' ρ times β'. d = f = 1 where the blocks are of order 1, as in SI units: then nothing is
+  // scaled
+  VectorXd S = VectorXd::Ones(size);
+  for (Index i = 0; i < k; ++i) S[i] = std::sqrt(10.0 / scale_class(W_(i, i)));
+  VectorXd cone_top = VectorXd::Zero(nf);
   for (Index b = 0; b < nb; ++b) {
-    double& top = cone_c[direction_cone_[std::size_t(b)]];
+    double& top = cone_top[direction_cone_[std::size_t(b)]];
     top = std::max(top, Mlcp(k + b, k + b));
   }
-  for (Index f = 0; f < nf; ++f) cone_c[f] = 10.0 / scale_class(cone_c[f]);
-  for (Index b = 0; b < nb; ++b) c[k + b] = cone_c[direction_cone_[std::size_t(b)]];
-  c.tail(nf).setOnes();
-  VectorXd row = VectorXd::Ones(size);
-  row.tail(nf) = cone_c.cwiseInverse();
-  const bool equilibrated = (c.array() != 1.0).any() || (row.array() != 1.0).any();
+  for (Index f = 0; f < nf; ++f) S[k + nb + f] = 1.0 / std::sqrt(10.0 / scale_class(cone_top[f]));
+  for (Index b = 0; b < nb; ++b) S[k + b] = 1.0 / S[k + nb + direction_cone_[std::size_t(b)]];
+  const bool equilibrated = (S.array() != 1.0).any();
   if (equilibrated) {
-    Mlcp = row.asDiagonal() * Mlcp * c.asDiagonal();
-    rr = row.cwiseProduct(rr);
+    Mlcp = S.asDiagonal() * Mlcp * S.asDiagonal();
+    rr = S.cwiseProduct(rr);
   }
   VectorXd z, w;
   std::vector<Index> on;
@@ -551,8 +552,8 @@ bool ContactDynamics::impulse(const System& sys, Eigen::Ref<VectorXd> qd, const 
     }
   }
   if (equilibrated) {
-    z = c.cwiseProduct(z);
-    w = w.cwiseQuotient(row);
+    z = S.cwiseProduct(z);
+    w = w.cwiseQuotient(S);
   }
   lambda_ = z.head(k);
   w_ = w.head(k);
