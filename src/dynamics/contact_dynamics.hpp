@@ -130,9 +130,10 @@ class ContactDynamics {
                         const Eigen::Ref<const VectorXd>& qd, double t);
   // one impulsive LCP at the contacts of the last prepare(), from qd (qd += X Λ + P D β): the
   // normal rows w = W Λ + A_c P D β + r (r k); with friction (vt: v_rel along D, else empty) the
-  // tangents and the cones Σ β <= mu |A_i| (Λ_i + offset_i). Λ into lambda_ and w_, β added into
-  // beta_. False when the LCP fails.
-  bool impulse(Eigen::Ref<VectorXd> qd, const VectorXd& r, const VectorXd& vt,
+  // tangents and the cones Σ β <= mu |A_i| (Λ_i + offset_i), scaled so that its blocks do not
+  // depend on the units. Λ into lambda_ and w_, β added into beta_. False when the LCP fails
+  // (failure() saying why, with friction).
+  bool impulse(const System& sys, Eigen::Ref<VectorXd> qd, const VectorXd& r, const VectorXd& vt,
                const VectorXd& offset);
   // true when constraint c is the stick constraint of a Coulomb contact on a contact of the set
   bool stick_of_set(const System& sys, Index c) const;
@@ -150,13 +151,21 @@ class ContactDynamics {
   // k contacts pushing when it solves the LCP. False when none does. O(Lemke + k³).
   static bool solve_contacts(ContactLcp& lcp, const MatrixXd& Mlcp, const VectorXd& r, Index k,
                              VectorXd& z, VectorXd& w);
-  // The friction impact's LCP (Mlcp, rr of impulse()) where every contact slides through the
-  // impact, for when Siconos finds no solution (a box landing flat while it slides: W singular,
-  // the friction directions redundant, Lemke ends on a ray): each cone's impulse at its limit
-  // along its direction most against v_rel⁻, the least-norm normal impulses with that
-  // friction, the sliding speeds after from the zero slack of those directions. Into z and w
-  // when that solves the LCP (to 1e-9), else false. O(k³ + size²); allocates (events only).
-  bool sliding_split(const MatrixXd& Mlcp, const VectorXd& rr, VectorXd& z, VectorXd& w) const;
+  // The friction impact's LCP (Mlcp, rr of impulse(), k + directions + cones) of redundant
+  // contacts where Siconos finds no solution or leaves a vertex (a box landing flat while it
+  // slides: its friction on some corners only turns it): the least-norm solution where the
+  // contacts `pushing` are closed and each cone slides along its pyramid direction most against
+  // v_rel⁻, or along the edge of its two directions against it, or sticks (v_t⁺ = 0) — every
+  // cone the same first (the symmetric split), then each mixture (3^cones, up to kMixedCones
+  // cones). Into z and w when one solves the LCP (to 1e-9), else false. O(3^cones size³) at
+  // most; allocates (events only).
+  bool friction_split(const MatrixXd& Mlcp, const VectorXd& rr, const std::vector<Index>& pushing,
+                      VectorXd& z, VectorXd& w) const;
+  // cones up to which friction_split tries every mixture of sticking and sliding
+  static constexpr Index kMixedCones = 6;
+  // why the friction impact's LCP of the set (its W scaled as solved) was not solved: the
+  // contacts, the variables, whether their rows are redundant
+  std::string unsolved_impact(const System& sys, const MatrixXd& W) const;
   // "" when every principal minor of Mlcp is >= 0 (to roundoff), else the Painlevé message
   std::string painleve(const System& sys, const MatrixXd& Mlcp) const;
   // "" when W and r are finite, else the message naming the set's contacts (a gap row that is

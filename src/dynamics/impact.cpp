@@ -82,23 +82,23 @@ bool least_norm_lcp(const MatrixXd& M, const VectorXd& r, const std::vector<Inde
   return true;
 }
 
-// true when the LCP answer z, w (k) of W, r leaves a contact unloaded at zero slack (z_i = 0, w_i
-// within kZeroSlack of the largest |r_i|) and W on those and the pushing contacts is singular
-// (redundant rows): a vertex of the solutions, not their least-norm split; those contacts into
-// `on`. O(k³).
-bool vertex_of_redundant(const Eigen::Ref<const MatrixXd>& W, const Eigen::Ref<const VectorXd>& r,
-                         const Eigen::Ref<const VectorXd>& z, const Eigen::Ref<const VectorXd>& w,
-                         std::vector<Index>& on) {
+// The contacts of the LCP answer z, w (k) of W, r that push or touch (z_i > 0, or w_i within
+// kZeroSlack of the largest |r_i|) into `on`; true when W on them is singular (redundant rows:
+// their split is not unique) and, with `unloaded`, one of them touches without pushing (a vertex
+// of the solutions, not their least-norm split). O(k³).
+bool redundant_contacts(const Eigen::Ref<const MatrixXd>& W, const Eigen::Ref<const VectorXd>& r,
+                        const Eigen::Ref<const VectorXd>& z, const Eigen::Ref<const VectorXd>& w,
+                        std::vector<Index>& on, bool unloaded) {
   const Index k = r.size();
   const double roundoff = kZeroSlack * r.cwiseAbs().maxCoeff();
   on.clear();
-  bool unloaded = false;
+  bool touches_only = false;
   for (Index i = 0; i < k; ++i) {
     const bool pushes = z[i] > 0.0, touches = w[i] <= roundoff;
     if (pushes || touches) on.push_back(i);
-    unloaded = unloaded || (!pushes && touches);
+    touches_only = touches_only || (!pushes && touches);
   }
-  if (!unloaded) return false;
+  if (on.size() < 2 || (unloaded && !touches_only)) return false;
   MatrixXd Wa(Index(on.size()), Index(on.size()));
   for (std::size_t i = 0; i < on.size(); ++i)
     for (std::size_t j = 0; j < on.size(); ++j) Wa(Index(i), Index(j)) = W(on[i], on[j]);
@@ -123,7 +123,7 @@ bool ContactDynamics::solve_contacts(ContactLcp& lcp, const MatrixXd& Mlcp, cons
   // a contact left unloaded at zero slack at a vertex of redundant contacts: the least-norm split
   // on those and the contacts that push (where the rows are not redundant the solution on them
   // is unique, Lemke's, and stays bit for bit)
-  if (!vertex_of_redundant(Mlcp.topLeftCorner(k, k), r.head(k), z.head(k), w.head(k), on))
+  if (!redundant_contacts(Mlcp.topLeftCorner(k, k), r.head(k), z.head(k), w.head(k), on, true))
     return true;
   VectorXd z_split, w_split;
   if (least_norm_lcp(Mlcp, r, on, z_split, w_split)) {
@@ -427,7 +427,8 @@ bool ContactDynamics::impact(const System& sys, Workspace& ws, const Eigen::Ref<
   VectorXd r = (VectorXd::Ones(k) + e_newton).cwiseProduct(v_minus);
   failure_ = non_finite(sys, r);
   if (!failure_.empty()) return false;
-  if (!impulse(qd, r, friction ? VectorXd(vt_minus_) : VectorXd(), VectorXd::Zero(k))) return false;
+  if (!impulse(sys, qd, r, friction ? VectorXd(vt_minus_) : VectorXd(), VectorXd::Zero(k)))
+    return false;
   if (!e_poisson.isZero()) {
     // restitution (Poisson): each Poisson contact's impulse e Λ_c (Λ_c its compression impulse),
     // and more where a gap would still close or a Newton contact's law asks for it:
@@ -439,7 +440,7 @@ bool ContactDynamics::impact(const System& sys, Workspace& ws, const Eigen::Ref<
     r = v_minus + A_c_ * (qd - qd_minus) + e_newton.cwiseProduct(v_minus);
     VectorXd vt;
     if (friction) vt = vt_minus_ + D_.transpose() * (qd - qd_minus);
-    if (!impulse(qd, r, vt, extra)) return false;
+    if (!impulse(sys, qd, r, vt, extra)) return false;
     lambda_ += lambda_c + extra;
   }
   // g'⁺ = g'⁻ + A_c (q'⁺ − q'⁻) (one phase: g'⁻ + W Λ + A_c P D β, as ever)
@@ -459,19 +460,16 @@ bool ContactDynamics::impact(const System& sys, Workspace& ws, const Eigen::Ref<
   return true;
 }
 
-bool ContactDynamics::impulse(Eigen::Ref<VectorXd> qd, const VectorXd& r, const VectorXd& vt,
-                              const VectorXd& offset) {
+bool ContactDynamics::impulse(const System& sys, Eigen::Ref<VectorXd> qd, const VectorXd& r,
+                              const VectorXd& vt, const VectorXd& offset) {
   const Index k = Index(set_.size());
-  // each contact's impulse in the unit of its row, Λ_i = d_i Λ'_i, d_i = 10 / class(‖A_c,i‖): the
-  // LCP in Λ' (S M S, S r with S = diag(d, 1…), w = S⁻¹ w') has blocks of comparable size
-  // whatever the rows' factor (a gap row × 1e8 gave W of 1e16 beside the unit friction
-  // directions, where Lemke found no solution); d = 1 in SI units, and then nothing is scaled
-  VectorXd d = VectorXd::Ones(k);
-  for (Index i = 0; i < k; ++i) d[i] = 10.0 / scale_class(A_c_.row(i).norm());
-  const bool scaled = (d.array() != 1.0).any();
   if (vt.size() == 0) {
-    // frictionless: w = W Λ + r, 0 <= Λ ⊥ w >= 0;  q' += P A_cᵀ Λ
-    if (scaled) {
+    // frictionless: w = W Λ + r, 0 <= Λ ⊥ w >= 0;  q' += P A_cᵀ Λ, each contact's impulse in the
+    // unit of its row, Λ_i = d_i Λ'_i, d_i = 10 / class(‖A_c,i‖) (S W S, S r, w = S⁻¹ w': a gap
+    // row × 1e8 gave W of 1e16); d = 1 in SI units, and then nothing is scaled
+    VectorXd d = VectorXd::Ones(k);
+    for (Index i = 0; i < k; ++i) d[i] = 10.0 / scale_class(A_c_.row(i).norm());
+    if ((d.array() != 1.0).any()) {
       if (!solve_contacts(lcp_, d.asDiagonal() * W_ * d.asDiagonal(), d.cwiseProduct(r), k, lambda_,
                           w_))
         return false;
@@ -507,78 +505,152 @@ bool ContactDynamics::impulse(Eigen::Ref<VectorXd> qd, const VectorXd& r, const 
   }
   rr.head(k) = r;
   rr.segment(k, nb) = vt;
-  if (scaled) {
-    Mlcp.topRows(k) = d.asDiagonal() * Mlcp.topRows(k);
-    Mlcp.leftCols(k) = Mlcp.leftCols(k) * d.asDiagonal();
-    rr.head(k) = d.cwiseProduct(rr.head(k));
+  // the LCP in z = S z', w' = S w, M' = S M S (a congruence: the same LCP, its blocks of order one
+  // in any units and under any factor of the rows):
+  //   Λ_i = d_i Λ'_i, row i × d_i,   d_i = √(10 / class(W_ii))
+  //   β_b = f_c β'_b, row b × f_c,   f_c = √(10 / class(max (Dᵀ P D)_bb of b's cone c))
+  //   γ_c = γ'_c / f_c, cone row c × 1 / f_c   (E and −Eᵀ stay ±1, μ̃ becomes μ̃ d_i / f_c)
+  // every w' and z' then a √(mass) × speed. A row's factor ρ (a row written in other units, the
+  // metamorphic suite's rows × 1e±8) is a congruence of the same kind (W_ii × ρ², its coupling
+  // to β, its μ̃ and r × ρ, Λ / ρ), which d_i undoes to within a class; Λ scaled alone (its row
+  // not: Λ_i = c_i Λ'_i, c_i = 10 / class(W_ii)) left each normal row of w' ρ times the rest
+  // and Λ' ρ times β'. d = f = 1 where the blocks are of order 1, as in SI units: then nothing is
+  // scaled
+  VectorXd S = VectorXd::Ones(size);
+  for (Index i = 0; i < k; ++i) S[i] = std::sqrt(10.0 / scale_class(W_(i, i)));
+  VectorXd cone_top = VectorXd::Zero(nf);
+  for (Index b = 0; b < nb; ++b) {
+    double& top = cone_top[direction_cone_[std::size_t(b)]];
+    top = std::max(top, Mlcp(k + b, k + b));
+  }
+  for (Index f = 0; f < nf; ++f) S[k + nb + f] = 1.0 / std::sqrt(10.0 / scale_class(cone_top[f]));
+  for (Index b = 0; b < nb; ++b) S[k + b] = 1.0 / S[k + nb + direction_cone_[std::size_t(b)]];
+  const bool equilibrated = (S.array() != 1.0).any();
+  if (equilibrated) {
+    Mlcp = S.asDiagonal() * Mlcp * S.asDiagonal();
+    rr = S.cwiseProduct(rr);
   }
   VectorXd z, w;
+  std::vector<Index> on;
   if (!solve_contacts(friction_lcp_, Mlcp, rr, k, z, w)) {
-    if (!sliding_split(Mlcp, rr, z, w)) return false;
-  } else if (std::vector<Index> on;
-             vertex_of_redundant(Mlcp.topLeftCorner(k, k), rr.head(k), z.head(k), w.head(k), on)) {
-    // (a vertex of redundant contacts that slide: its friction impulses, on some corners only,
-    // turn the body — a box landing flat while it slides took up a yaw; the least-norm split
-    // with every contact sliding, where that solves the LCP)
+    // (Siconos found none: each contact sticking or sliding, all of them pushing)
+    on.clear();
+    for (Index i = 0; i < k; ++i) on.push_back(i);
+    if (!friction_split(Mlcp, rr, on, z, w)) {
+      failure_ = unsolved_impact(sys, Mlcp.topLeftCorner(k, k));
+      return false;
+    }
+  } else if (redundant_contacts(Mlcp.topLeftCorner(k, k), rr.head(k), z.head(k), w.head(k), on,
+                                false)) {
+    // (redundant contacts, Lemke's answer one of many: its friction impulses, on some corners
+    // only, may turn the body — a box landing flat while it slides took up a yaw; the least-norm
+    // split where each contact sticks or slides, when one solves the LCP)
     VectorXd z_split, w_split;
-    if (sliding_split(Mlcp, rr, z_split, w_split)) {
+    if (friction_split(Mlcp, rr, on, z_split, w_split)) {
       z = z_split;
       w = w_split;
     }
   }
+  if (equilibrated) {
+    z = S.cwiseProduct(z);
+    w = w.cwiseQuotient(S);
+  }
   lambda_ = z.head(k);
   w_ = w.head(k);
-  if (scaled) {
-    lambda_ = d.cwiseProduct(lambda_);
-    w_ = w_.cwiseQuotient(d);
-  }
   const VectorXd beta = z.segment(k, nb);
   beta_ += beta;
   qd += X_ * lambda_ + PD_ * beta;
   return true;
 }
 
-bool ContactDynamics::sliding_split(const MatrixXd& Mlcp, const VectorXd& rr, VectorXd& z,
-                                    VectorXd& w) const {
+bool ContactDynamics::friction_split(const MatrixXd& Mlcp, const VectorXd& rr,
+                                     const std::vector<Index>& pushing, VectorXd& z,
+                                     VectorXd& w) const {
   const Index k = Index(set_.size()), nb = Index(direction_cone_.size());
-  const Index nf = Index(cone_mu_.size()), size = k + nb + nf;
-  // each cone's direction most against the sliding velocity before (−1: none against it)
-  std::vector<Index> against(std::size_t(nf), -1);
+  const Index nf = Index(cone_mu_.size());
+  // each cone's directions against the sliding velocity before (v_rel⁻ · d_b < 0), the most
+  // against first: one for a single tangent, up to two for a pyramid
+  std::vector<std::vector<Index>> against(static_cast<std::size_t>(nf));
   for (Index b = 0; b < nb; ++b) {
-    Index& a = against[std::size_t(direction_cone_[std::size_t(b)])];
-    if (rr[k + b] < 0.0 && (a < 0 || rr[k + b] < rr[k + a])) a = b;
+    if (!(rr[k + b] < 0.0)) continue;
+    auto& a = against[std::size_t(direction_cone_[std::size_t(b)])];
+    a.insert(std::find_if(a.begin(), a.end(), [&](Index o) { return rr[k + o] > rr[k + b]; }), b);
   }
-  // β = B Λ + β0 at each cone's limit (its row w_γ = μ̃ (Λ_i + offset_i) − Σ β = 0)
-  MatrixXd B = MatrixXd::Zero(nb, k);
-  VectorXd beta0 = VectorXd::Zero(nb);
+  // each cone's choices (a cone whose contact does not push, or that was at rest, has none: no
+  // friction impulse): slide along its most-against direction (that direction's slack and the
+  // cone's zero), slide along the edge of its two (both slacks zero), or stick (the slacks of
+  // its directions against zero and γ = 0: v_t⁺ = 0)
+  struct Choice {
+    std::size_t directions;
+    bool slides;
+  };
+  std::vector<std::vector<Choice>> choices(static_cast<std::size_t>(nf));
   for (Index f = 0; f < nf; ++f) {
-    const Index b = against[std::size_t(f)], i = cone_contact_[std::size_t(f)];
-    if (b < 0) continue;
-    B(b, i) = Mlcp(k + nb + f, i);
-    beta0[b] = rr[k + nb + f];
+    const std::size_t n = against[std::size_t(f)].size();
+    if (n == 0 ||
+        std::find(pushing.begin(), pushing.end(), cone_contact_[std::size_t(f)]) == pushing.end())
+      continue;
+    auto& c = choices[std::size_t(f)];
+    c.push_back({1, true});
+    if (n == 2) c.push_back({2, true});
+    c.push_back({n, false});
   }
-  // the normal rows at w = 0 with that friction: (W + A_c P D B) Λ = −(r + A_c P D β0), least-norm
-  const MatrixXd Wf = Mlcp.topLeftCorner(k, k) + Mlcp.block(0, k, k, nb) * B;
+  // the least-norm solution with those slacks zero, when it solves the LCP
+  std::vector<Index> on;
+  auto attempt = [&](const std::vector<std::size_t>& pick) {
+    on = pushing;
+    for (Index f = 0; f < nf; ++f) {
+      if (choices[std::size_t(f)].empty()) continue;
+      const Choice& c = choices[std::size_t(f)][pick[std::size_t(f)]];
+      for (std::size_t j = 0; j < c.directions; ++j) on.push_back(k + against[std::size_t(f)][j]);
+      if (c.slides) on.push_back(k + nb + f);
+    }
+    return least_norm_lcp(Mlcp, rr, on, z, w);
+  };
+  // the same choice for every cone first (a body landing flat on redundant contacts: the
+  // symmetric split; the edge where a cone has one direction against is its one direction),
+  // then every mixture (up to kMixedCones cones)
+  std::vector<std::size_t> pick(static_cast<std::size_t>(nf), 0);
+  for (const int uniform : {0, 1, 2}) {
+    for (std::size_t f = 0; f < pick.size(); ++f) {
+      const std::size_t n = choices[f].size();
+      if (n == 0)
+        pick[f] = 0;
+      else if (uniform == 2)
+        pick[f] = n - 1;  // (sticks)
+      else
+        pick[f] = uniform == 1 && n == 3 ? 1 : 0;  // (the edge, or the one direction)
+    }
+    if (attempt(pick)) return true;
+  }
+  if (nf > kMixedCones) return false;
+  std::fill(pick.begin(), pick.end(), 0);
+  for (;;) {
+    // (the next mixture, as the digits of a counter)
+    std::size_t f = 0;
+    while (f < pick.size() && ++pick[f] >= std::max<std::size_t>(choices[f].size(), 1))
+      pick[f++] = 0;
+    if (f == pick.size()) return false;
+    if (attempt(pick)) return true;
+  }
+}
+
+std::string ContactDynamics::unsolved_impact(const System& sys, const MatrixXd& W) const {
+  std::string names;
+  for (Index c : set_) names += (names.empty() ? "'" : ", '") + sys.constraint(c).name() + "'";
   Eigen::CompleteOrthogonalDecomposition<MatrixXd> cod;
   cod.setThreshold(kRedundantPivot);
-  cod.compute(Wf);
-  VectorXd zc = VectorXd::Zero(size);
-  zc.head(k) = -cod.solve(rr.head(k) + Mlcp.block(0, k, k, nb) * beta0);
-  zc.segment(k, nb) = B * zc.head(k) + beta0;
-  // γ: each sliding cone's speed after, the slack of its direction zero
-  const VectorXd slip = Mlcp.middleRows(k, nb) * zc + rr.segment(k, nb);
-  for (Index f = 0; f < nf; ++f) {
-    if (const Index b = against[std::size_t(f)]; b >= 0) zc[k + nb + f] = -slip[b];
-  }
-  const VectorXd wc = Mlcp * zc + rr;
-  const double tol = 1e-9 * std::max(Mlcp.norm() * zc.norm() + rr.norm(), 1e-300);
-  if (!zc.allFinite() || zc.minCoeff() < -tol || wc.minCoeff() < -tol) return false;
-  for (Index j = 0; j < size; ++j) {
-    if (std::min(zc[j], wc[j]) > tol) return false;
-  }
-  z = zc.unaryExpr([tol](double v) { return v > tol ? v : 0.0; });
-  w = wc.unaryExpr([tol](double v) { return v > tol ? v : 0.0; });
-  return true;
+  cod.compute(W);
+  const Index k = W.rows(), size = k + D_.cols() + Index(cone_mu_.size());
+  return "the impact's LCP with friction at the contacts " + names + " has no solution (" +
+         std::to_string(size) + " variables: Siconos lcp_lexicolemke" +
+         (size <= ContactLcp::kMaxEnumerated ? std::string(" and the enumeration") : "") + ")" +
+         (cod.rank() < k ? ", their rows redundant (rank " + std::to_string(cod.rank()) + " of " +
+                               std::to_string(k) + ")"
+                         : std::string()) +
+         ", nor does the least-norm split with each contact sticking or sliding along its "
+         "pyramid's directions against its tangential velocity (docs/contact.md, \"Not done "
+         "yet\")";
 }
 
 bool ContactDynamics::impact_friction(const System& sys, Workspace& ws,

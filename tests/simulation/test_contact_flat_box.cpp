@@ -15,7 +15,10 @@
 // yaw, and its second landing's LCP had no solution), to its stop at μ g.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <numbers>
 #include <set>
 #include <string>
 #include <vector>
@@ -28,7 +31,7 @@
 namespace ukdyn {
 namespace UKDYN_TEST_FILE {
 
-constexpr double kMass = 2.0, kG = 9.81, kMu = 0.3, kMuS = 0.4, kHx = 0.2, kHz = 0.05;
+constexpr double kMass = 2.0, kG = 9.81, kMu = 0.3, kMuS = 0.4, kHx = 0.2, kHy = 0.1, kHz = 0.05;
 
 // the units of a run: L metres, M kilograms and T seconds per model unit (forces: M L / T² N)
 struct Units {
@@ -132,10 +135,15 @@ TEST(ContactFlatBox, PushedAboveMuStaticMgSlidesFromTheStartWithMuMg) {
   }
 }
 
-// the box dropped flat from h0 = 0.5 m at x' = vx (m/s), e = 0.3, μ = 0.5, in units u, sampled
-// every 5 ms to t_end (s)
-Trajectory dropped_box(const Units& u, double vx, double t_end) {
+// the box dropped flat from h0 = 0.5 m at (x', y') = (vx, vy) (m/s), e = 0.3, μ = 0.5, in units u,
+// sampled every 5 ms to t_end (s)
+Trajectory dropped_box(const Units& u, double vx, double t_end, double vy = 0.0) {
   const double L = 1.0 / u.L, M = 1.0 / u.M, T = 1.0 / u.T;
+  const auto exact = [](double v) {
+    char b[40];
+    std::snprintf(b, sizeof b, "%.17g", v);
+    return std::string(b);
+  };
   const Model m = parse_model(
       "parameters: {m: " + std::to_string(kMass * M) + ", g: " + std::to_string(kG * L / (T * T)) +
       ", hx: " + std::to_string(kHx * L) + ", hy: " + std::to_string(0.1 * L) +
@@ -144,8 +152,8 @@ Trajectory dropped_box(const Units& u, double vx, double t_end) {
       "bodies:\n"
       "  - {name: box, type: rigid, mass: m, inertia: [m*(hy^2+hz^2)/3, m*(hx^2+hz^2)/3, "
       "m*(hx^2+hy^2)/3], position: [0, 0, h0 + hz], velocity: [" +
-      std::to_string(vx * L / T) +
-      ", 0, 0]}\n"
+      exact(vx * L / T) + ", " + exact(vy * L / T) +
+      ", 0]}\n"
       "forces:\n  - {type: gravity, g: [0, 0, -g]}\n"
       "contacts:\n  - {name: lid, body: box, shape: box, size: [hx, hy, hz], restitution: e}\n"
       "nonideal:\n  - {friction: coulomb, constraint: lid, mu: 0.5}\n"
@@ -215,6 +223,70 @@ TEST(ContactFlatBox, DroppedFlatWhileSlidingSlidesThroughItsImpactsAndStops) {
       if (ev.kind == ContactEvent::Kind::kStick) stuck = ev.t * u.T;
     }
     EXPECT_NEAR(stuck, t_stop, 1e-6);
+  }
+}
+
+// Dropped flat while sliding obliquely, at 30° to x (the pyramid's directions ±x, ±y at each
+// corner): by symmetry the four corners share the landing, and the box must not turn. Each
+// corner's friction impulse goes along the pyramid's directions most against its velocity after,
+// the four together at most μ (1 + e) m v0 =: m Δ, and the corners' normal impulses balance its
+// moment. At 10 m/s only −x opposes most throughout:
+// x'⁺ = x' − Δ, y'⁺ = y'; at 5 m/s x' − Δ would fall below y', so −x and −y share it and the box
+// leaves along the diagonal, x'⁺ = y'⁺ = (x' + y' − Δ) / 2; at 1 m/s x' + y' < Δ: it stops,
+// x'⁺ = y'⁺ = 0 (Lemke's vertex gave friction on some corners only: a yaw). In SI and in mm, g,
+// ms, the same impulses (the impact's LCP scaled so that its blocks do not depend on the units).
+TEST(ContactFlatBox, DroppedFlatWhileSlidingObliquelyLandsWithoutTurning) {
+  const double e = 0.3, mu = 0.5, t0 = std::sqrt(2.0 * 0.5 / kG), v0 = kG * t0;
+  const double delta = mu * (1.0 + e) * v0, c = std::cos(std::numbers::pi / 6.0),
+               s = std::sin(std::numbers::pi / 6.0);
+  for (double speed : {10.0, 5.0, 1.0}) {
+    const double vx = speed * c, vy = speed * s;
+    double ex = vx - delta, ey = vy;  // (−x alone)
+    if (ex < ey) ex = ey = std::max(0.5 * (vx + vy - delta), 0.0);
+    std::vector<double> si_impulses;
+    for (const Units& u : {kSI, kMm}) {
+      SCOPED_TRACE(std::string(u.name) + ", " + std::to_string(speed) + " m/s");
+      const Trajectory tr = dropped_box(u, vx, t0 + 0.01, vy);
+      ASSERT_EQ(tr.stats.status, Status::kOk) << tr.stats.message;
+      // the first landing: (1 + e) m v0 in all, split so that the friction impulse m (vx − ex,
+      // vy − ey) at the floor, hz below the centre, turns the box neither way (least-norm:
+      // linear in the corner's x and y) — the corner at (±hx, ±hy) takes
+      // (1 + e) m v0 / 4 ± hz m (vx − ex) / (4 hx) ± hz m (vy − ey) / (4 hy)
+      std::vector<double> impulses;
+      for (const ContactEvent& ev : tr.stats.contact_events) {
+        if (ev.kind != ContactEvent::Kind::kImpact) continue;
+        EXPECT_NEAR(ev.t * u.T, t0, 1e-9);
+        impulses.push_back(ev.impulse * u.force() * u.T);
+        // (`shape: box` numbers its bottom corners lid.0 … lid.3: x > 0 for 1, 3, y > 0 for 2, 3)
+        const std::string& name = tr.constraint_names[std::size_t(ev.constraint)];
+        const int corner = name.back() - '0';
+        const double sx = corner & 1 ? 1.0 : -1.0, sy = corner & 2 ? 1.0 : -1.0;
+        EXPECT_NEAR(impulses.back(),
+                    (1.0 + e) * kMass * v0 / 4.0 + sx * kHz * kMass * (vx - ex) / (4.0 * kHx) +
+                        sy * kHz * kMass * (vy - ey) / (4.0 * kHy),
+                    1e-9)
+            << name;
+      }
+      ASSERT_EQ(impulses.size(), 4u);
+      if (si_impulses.empty()) {
+        si_impulses = impulses;
+      } else {
+        for (std::size_t i = 0; i < 4; ++i)
+          EXPECT_NEAR(impulses[i], si_impulses[i], 1e-9 * si_impulses[i]) << i;
+      }
+      // in flight after it: (ex, ey, e v0 − g (t − t0)), not turning
+      const std::size_t last = tr.t.size() - 1;
+      const double t = tr.t[last] * u.T, speed_unit = u.L / u.T;
+      ASSERT_GT(t, t0);
+      EXPECT_NEAR(testing::coordinate_at(tr, tr.qd, "box.x", last) * speed_unit, ex, 1e-9);
+      EXPECT_NEAR(testing::coordinate_at(tr, tr.qd, "box.y", last) * speed_unit, ey, 1e-9);
+      EXPECT_NEAR(testing::coordinate_at(tr, tr.qd, "box.z", last) * speed_unit,
+                  e * v0 - kG * (t - t0), 1e-9);
+      for (std::size_t j = 3; j < tr.coordinate_names.size(); ++j) {
+        EXPECT_NEAR(tr.qd[last * std::size_t(tr.n) + j] / u.T, 0.0, 1e-12)
+            << tr.coordinate_names[j];
+      }
+    }
   }
 }
 

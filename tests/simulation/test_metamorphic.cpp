@@ -36,10 +36,12 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <iostream>
 #include <map>
 #include <memory>
+#include <numbers>
 #include <optional>
 #include <string>
 #include <vector>
@@ -529,6 +531,91 @@ TEST(MetamorphicExtremes, RowFactorsBeyondTheSquaresRange) {
       ASSERT_EQ(run.stats.status, Status::kOk) << run.stats.message;
       EXPECT_LE(motion_difference(base, run, 1.0), 1e-8);
       EXPECT_EQ(run.stats.steps, base.stats.steps);
+    }
+  }
+}
+
+// The box of test_contact_flat_box.cpp (2 kg, half-extents 0.2 × 0.1 × 0.05 m, e = 0.3, μ = 0.5)
+// dropped flat from 0.5 m while it slides at `speed` m/s, 30° to x, to 10 ms after its landing
+// (four redundant corners: ContactDynamics::friction_split), in SI units
+std::string oblique_box(double speed) {
+  const double angle = std::numbers::pi / 6.0;
+  char velocity[80];
+  std::snprintf(velocity, sizeof velocity, "[%.17g, %.17g, 0]", speed * std::cos(angle),
+                speed * std::sin(angle));
+  return "parameters: {m: 2, g: 9.81, hx: 0.2, hy: 0.1, hz: 0.05, h0: 0.5, e: 0.3}\n"
+         "bodies:\n"
+         "  - {name: box, type: rigid, mass: m, inertia: [m*(hy^2+hz^2)/3, m*(hx^2+hz^2)/3, "
+         "m*(hx^2+hy^2)/3], position: [0, 0, h0 + hz], velocity: " +
+         std::string(velocity) +
+         "}\n"
+         "forces:\n  - {type: gravity, g: [0, 0, -g]}\n"
+         "contacts:\n  - {name: lid, body: box, shape: box, size: [hx, hy, hz], restitution: e}\n"
+         "nonideal:\n  - {friction: coulomb, constraint: lid, mu: 0.5}\n"
+         "simulate: {t_end: " +
+         std::to_string(std::sqrt(2.0 * 0.5 / 9.81) + 0.01) +
+         ", rtol: 1e-10, atol: 1e-12}\noutput: {every: 0.005}\n";
+}
+
+// The oblique flat landing (its friction impact's LCP of four redundant corners, scaled so that
+// its blocks depend neither on the units nor on the rows' factors) gives the same impulses and the
+// same motion with every row × 1e±8 and in mm, g, ms, at 10, 5 and 1 m/s (−x alone opposes; −x
+// and −y share it; it stops): the velocities after against the closed forms of
+// test_contact_flat_box.cpp (x'⁺ = x' − Δ, or x'⁺ = y'⁺ = max((x' + y' − Δ) / 2, 0), Δ = μ (1 + e)
+// v0), each corner's impulse against the SI run's (Λ~ = mu tau / c Λ) to 1e-9 relative. Before the
+// rows' factor was undone (Λ scaled alone by 10 / class(W_ii), its row not), rows × 1e8 left each
+// normal row 1e8 against the friction rows.
+TEST(MetamorphicObliqueLanding, SameLandingWithRowsTimes1e8AndInMmGMs) {
+  const Scaling scalings[] = {
+      {"rows x1e8", 1, 1, 1, 1e8}, {"rows x1e-8", 1, 1, 1, 1e-8}, {"mm, g, ms", 1e3, 1e3, 1e3}};
+  const double e = 0.3, mu = 0.5, g = 9.81, t0 = std::sqrt(2.0 * 0.5 / g), v0 = g * t0;
+  const double delta = mu * (1.0 + e) * v0;
+  for (const double speed : {10.0, 5.0, 1.0}) {
+    const double vx = speed * std::cos(std::numbers::pi / 6.0),
+                 vy = speed * std::sin(std::numbers::pi / 6.0);
+    double ex = vx - delta, ey = vy;  // (−x alone)
+    if (ex < ey) ex = ey = std::max(0.5 * (vx + vy - delta), 0.0);
+    const Model model = parse_model(oblique_box(speed));
+    const SimulationOptions& o = model.options;
+    const Trajectory base = simulate(model.system, model.q0, model.qd0, o);
+    ASSERT_EQ(base.stats.status, Status::kOk) << speed << " m/s: " << base.stats.message;
+    const auto velocity = [](const Trajectory& tr, const char* name) {
+      const auto& names = tr.coordinate_names;
+      const auto c = std::size_t(std::find(names.begin(), names.end(), name) - names.begin());
+      EXPECT_LT(c, names.size()) << name;
+      return tr.qd[(tr.t.size() - 1) * std::size_t(tr.n) + c];
+    };
+    EXPECT_NEAR(velocity(base, "box.x"), ex, 1e-9) << speed << " m/s";
+    EXPECT_NEAR(velocity(base, "box.y"), ey, 1e-9) << speed << " m/s";
+    // each corner's impulse by its name (lid.0 … lid.3)
+    const auto impulses = [](const Trajectory& tr) {
+      std::map<std::string, double> by_corner;
+      for (const ContactEvent& ev : tr.stats.contact_events) {
+        if (ev.kind == ContactEvent::Kind::kImpact)
+          by_corner[tr.constraint_names[std::size_t(ev.constraint)]] += ev.impulse;
+      }
+      return by_corner;
+    };
+    const std::map<std::string, double> base_impulses = impulses(base);
+    ASSERT_EQ(base_impulses.size(), 4u) << speed << " m/s";
+    const auto original = std::make_shared<const System>(model.system);
+    for (const Scaling& f : scalings) {
+      SCOPED_TRACE(std::to_string(speed) + " m/s, " + f.label);
+      const System sys = rescaled(original, f, o.solver);
+      const Trajectory r = simulate(sys, model.q0 * f.s, model.qd0 * (f.s / f.tau), rescaled(o, f));
+      ASSERT_EQ(r.stats.status, Status::kOk) << r.stats.message;
+      ASSERT_EQ(r.t.size(), base.t.size());
+      EXPECT_LE(motion_difference(base, r, f.s), 1e-9);
+      EXPECT_NEAR(velocity(r, "box.x") * f.tau / f.s, ex, 1e-9);
+      EXPECT_NEAR(velocity(r, "box.y") * f.tau / f.s, ey, 1e-9);
+      const std::map<std::string, double> scaled = impulses(r);
+      ASSERT_EQ(scaled.size(), 4u);
+      for (const auto& [corner, impulse] : base_impulses) {
+        ASSERT_EQ(scaled.count(corner), 1u) << corner;
+        EXPECT_NEAR(scaled.at(corner) * f.c / (f.mu * f.tau), impulse, 1e-9 * impulse) << corner;
+      }
+      EXPECT_LE(r.stats.steps, 2 * base.stats.steps + 2);
+      EXPECT_GE(2 * r.stats.steps + 2, base.stats.steps);
     }
   }
 }
