@@ -9,6 +9,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
 #include <string>
 #include <utility>
 #include <vector>
@@ -16,6 +17,7 @@
 #include "ukdyn/core/system.hpp"
 #include "ukdyn/dynamics/contact.hpp"
 #include "ukdyn/modelfile/model.hpp"
+#include "ukdyn/modelfile/run.hpp"
 #include "ukdyn/simulation/simulate.hpp"
 
 namespace ukdyn::testing {
@@ -111,6 +113,64 @@ inline double pendulum_time_to_cos(double k, double th0, double c, double t_max,
     t += h;
   }
   return -1.0;
+}
+
+// A frictionless ball (a particle of `mass`, radius r, its x, y, z at coordinates at..at+2 of
+// model m's run) released from rest at θ₀ from the vertical about the straight edge through
+// `edge` along y (its centre at edge + r (sin θ, 0, cos θ)) on contact `name`: it pivots about
+// the edge, θ'' = (g/r) sin θ, and leaves where the normal force m g (3 cos θ − 2 cos θ₀)
+// vanishes, cos θ* = (2/3) cos θ₀, at the time pendulum_time_to_cos gives (1e-8), then flies the
+// parabola to t_end (1e-7); the contact carries m g cos θ₀ at the start and nothing at the end;
+// energy is kept; the viewer's contact (visual.contact.<name>.*) is the edge point, its normal
+// `normal_sign` (sin θ, 0, cos θ) (+1: from the edge to the ball), while it touches.
+inline void expect_tips_off_edge(const Model& m, const std::string& name, std::size_t at,
+                                 const Eigen::Vector3d& edge, double r, double th0, double mass,
+                                 double g, double t_end, double normal_sign) {
+  const Index k = m.system.constraint_index(name);
+  const Trajectory tr = simulate(m.system, m.q0, m.qd0, m.options);
+  ASSERT_EQ(tr.stats.status, Status::kOk) << tr.stats.message;
+  const auto releases = events_of(tr, k, ContactEvent::Kind::kRelease);
+  ASSERT_EQ(releases.size(), 1u);
+  EXPECT_TRUE(events_of(tr, k, ContactEvent::Kind::kImpact).empty());
+  const double c_star = 2.0 / 3.0 * std::cos(th0);
+  const double t_star = pendulum_time_to_cos(g / r, th0, c_star, t_end, 1e-6);
+  ASSERT_GT(t_star, 0.0);
+  EXPECT_NEAR(releases[0].t, t_star, 1e-8);
+  // free flight from the release point with the release velocity
+  const double th_s = std::acos(c_star), v_s = std::sqrt(g * r * c_star);
+  const Eigen::Vector3d p_s = edge + r * Eigen::Vector3d(std::sin(th_s), 0, std::cos(th_s));
+  const Eigen::Vector3d v_s3 = v_s * Eigen::Vector3d(std::cos(th_s), 0, -std::sin(th_s));
+  const double dt = t_end - releases[0].t;
+  const Eigen::Vector3d p_end = p_s + v_s3 * dt - 0.5 * g * dt * dt * Eigen::Vector3d::UnitZ();
+  const std::size_t last = tr.t.size() - 1, nq = std::size_t(m.system.coordinate_count());
+  ASSERT_NEAR(tr.t[last], t_end, 1e-12);
+  for (std::size_t i = 0; i < 3; ++i) EXPECT_NEAR(tr.q[nq * last + at + i], p_end[Index(i)], 1e-7);
+  const std::size_t m_rows = std::size_t(tr.m), row = std::size_t(m.system.row_offset(k));
+  EXPECT_NEAR(tr.lambda[row], mass * g * std::cos(th0), 1e-9);
+  EXPECT_NEAR(tr.lambda[m_rows * last + row], 0.0, 1e-12);
+  EXPECT_NEAR(tr.energy.back(), tr.energy.front(), 1e-8);
+  // the viewer's contact, sampled 20 times before the release
+  Model sampled = m;
+  for (int i = 1; i < 20; ++i) sampled.options.output_at.push_back(releases[0].t * i / 20.0);
+  const ModelRun run = run_model(sampled);
+  const auto column = [&](const std::string& c) -> const std::vector<double>& {
+    for (const CsvColumn& col : run.extra_columns)
+      if (col.name == "visual.contact." + name + "." + c) return col.values;
+    throw std::runtime_error("no column visual.contact." + name + "." + c);
+  };
+  int touching = 0;
+  for (std::size_t i = 0; i < run.trajectory.t.size(); ++i) {
+    if (run.trajectory.t[i] >= releases[0].t) break;
+    ++touching;
+    const double* b = &run.trajectory.q[nq * i + at];
+    const double sn = (b[0] - edge.x()) / r, cs = (b[2] - edge.z()) / r;
+    EXPECT_NEAR(column("x")[i], edge.x(), 1e-12);
+    EXPECT_NEAR(column("y")[i], edge.y(), 1e-12);
+    EXPECT_NEAR(column("z")[i], edge.z(), 1e-12);
+    EXPECT_NEAR(column("nx")[i], normal_sign * sn, 1e-9);
+    EXPECT_NEAR(column("nz")[i], normal_sign * cs, 1e-9);
+  }
+  EXPECT_GE(touching, 20);
 }
 
 // g and g' of constraint k at (q, q')
