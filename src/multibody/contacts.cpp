@@ -359,22 +359,19 @@ ContactKinematics relative_contact_kinematics(const Joint& j, const BodyRef& P, 
     add_body_vector(Pl, q, qd, pP, true, 1.0, p);
     add_body_vector(Cl, q, qd, pC, true, 1.0, c);
     if (disk || disk_sphere) add_body_vector(Cl, q, qd, kC, false, 1.0, k);
-    DiskSphereGap ds;
-    if (disk_sphere) {
-      VecKin dk;  // d = c − p with its Jacobian and bias
+    // (a disk and a sphere, a sphere and a box) d = c − p with its Jacobian and bias
+    VecKin dk{VecKin::Unset{}};
+    if (disk_sphere || sphere_box) {
       dk.x = c.x - p.x;
       dk.v = c.v - p.v;
       dk.J = c.J - p.J;
       dk.g = c.g - p.g;
-      ds = disk_sphere_gap(dk, k, r, r_P, true);
     }
+    DiskSphereGap ds;
+    if (disk_sphere) ds = disk_sphere_gap(dk, k, r, r_P, true);
     SphereBoxGap sb;
     if (sphere_box) {
-      VecKin dk, axes[3];  // d = c − p with its Jacobian and bias; the box's axes on P
-      dk.x = c.x - p.x;
-      dk.v = c.v - p.v;
-      dk.J = c.J - p.J;
-      dk.g = c.g - p.g;
+      VecKin axes[3];  // the box's axes on P
       for (int i = 0; i < box_axes; ++i)
         add_body_vector(Pl, q, qd, box_R.col(i), false, 1.0, axes[i]);
       sb = sphere_box_gap(dk, axes, box_axes, box_half, r, true);

@@ -196,28 +196,7 @@ nonideal:
 simulate: {t_end: 0.5, integrator: dopri5, rtol: 1e-11, atol: 1e-13}
 output: {every: 0}
 )");
-  const double mass = 0.5, r = 0.1, v0 = 2.0, mu = 0.2;
-  const double t_star = 2.0 * v0 / (7.0 * mu * kG), v_star = 5.0 / 7.0 * v0;
-  m.options.output_at = {0.05, t_star - 1e-4, t_star + 1e-4, 0.4};
-  const Trajectory tr = simulate(m.system, m.q0, m.qd0, m.options);
-  ASSERT_EQ(tr.stats.status, Status::kOk) << tr.stats.message;
-  EXPECT_EQ(tr.stats.stick_refusals, 0);
-  for (std::size_t i = 0; i < tr.t.size(); ++i) {
-    const double t = tr.t[i];
-    const bool sliding = t < t_star;
-    const double v = sliding ? v0 - mu * kG * t : v_star;
-    const double w = sliding ? 5.0 * mu * kG * t / (2.0 * r) : v_star / r;
-    const double* u = &tr.q[14 * i + 10];
-    const double* ud = &tr.qd[14 * i + 10];
-    const double wy = 2.0 * (u[0] * ud[2] - ud[0] * u[2] + u[3] * ud[1] - u[1] * ud[3]);
-    EXPECT_NEAR(tr.qd[14 * i + 7], v, 1e-8) << "t = " << t;
-    EXPECT_NEAR(wy, w, 1e-7) << "t = " << t;
-    EXPECT_NEAR(tr.q[14 * i + 9], r, 1e-9) << "t = " << t;
-    EXPECT_NEAR(testing::first_multiplier(tr, "face", i), mass * kG, 1e-7) << "t = " << t;
-  }
-  EXPECT_TRUE(tr.stats.energy_balance_checked);
-  EXPECT_NEAR(tr.work_nonideal.back(), -mass * v0 * v0 / 7.0, 1e-7);
-  EXPECT_NEAR(tr.energy.back() - tr.energy.front(), tr.work_nonideal.back(), 1e-8);
+  testing::expect_rolls_from_closed_form(m, "face", 7, 0.5, 0.1, 2.0, 0.2, kG);
 }
 
 // ---- errors -------------------------------------------------------------------------------------

@@ -173,6 +173,38 @@ inline void expect_tips_off_edge(const Model& m, const std::string& name, std::s
   EXPECT_GE(touching, 20);
 }
 
+// A ball (a rigid body of `mass`, radius r, its coordinates x, y, z, u0..u3 from `at` of model
+// m's run, I = 2/5 m r²) resting on a rough face (contact `name`, Coulomb μ) and launched along x
+// at v0 without spin: it slides with v = v0 − μ g t while ω_y = 5 μ g t/(2 r) grows, and rolls
+// from t* = 2 v0/(7 μ g) at 5/7 v0 (v 1e-8, ω 1e-7 at 0.05 s, t* ± 1e-4 s and 0.4 s; its height r
+// 1e-9, the face's multiplier m g 1e-7); the friction's work is −m v0²/7 (1e-7) and balances the
+// energy (1e-8).
+inline void expect_rolls_from_closed_form(Model m, const std::string& name, std::size_t at,
+                                          double mass, double r, double v0, double mu, double g) {
+  const double t_star = 2.0 * v0 / (7.0 * mu * g), v_star = 5.0 / 7.0 * v0;
+  m.options.output_at = {0.05, t_star - 1e-4, t_star + 1e-4, 0.4};
+  const Trajectory tr = simulate(m.system, m.q0, m.qd0, m.options);
+  ASSERT_EQ(tr.stats.status, Status::kOk) << tr.stats.message;
+  EXPECT_EQ(tr.stats.stick_refusals, 0);
+  const std::size_t nq = std::size_t(m.system.coordinate_count());
+  for (std::size_t i = 0; i < tr.t.size(); ++i) {
+    const double t = tr.t[i];
+    const bool sliding = t < t_star;
+    const double v = sliding ? v0 - mu * g * t : v_star;
+    const double w = sliding ? 5.0 * mu * g * t / (2.0 * r) : v_star / r;
+    const double* u = &tr.q[nq * i + at + 3];
+    const double* ud = &tr.qd[nq * i + at + 3];
+    const double wy = 2.0 * (u[0] * ud[2] - ud[0] * u[2] + u[3] * ud[1] - u[1] * ud[3]);
+    EXPECT_NEAR(tr.qd[nq * i + at], v, 1e-8) << "t = " << t;
+    EXPECT_NEAR(wy, w, 1e-7) << "t = " << t;
+    EXPECT_NEAR(tr.q[nq * i + at + 2], r, 1e-9) << "t = " << t;
+    EXPECT_NEAR(first_multiplier(tr, name, i), mass * g, 1e-7) << "t = " << t;
+  }
+  EXPECT_TRUE(tr.stats.energy_balance_checked);
+  EXPECT_NEAR(tr.work_nonideal.back(), -mass * v0 * v0 / 7.0, 1e-7);
+  EXPECT_NEAR(tr.energy.back() - tr.energy.front(), tr.work_nonideal.back(), 1e-8);
+}
+
 // g and g' of constraint k at (q, q')
 inline Eigen::Vector2d gap_of(const System& sys, Index k, const VectorXd& q, const VectorXd& qd) {
   const ConstraintModel& cm = sys.constraint(k).model();
