@@ -218,20 +218,18 @@ std::string explain_uncorrected_requirements(const Controller& ctrl,
                                              double tolerance, double duration) {
   const System& req = ctrl.requirements();
   // "constraint 'a' (holonomic): position violation 1, velocity violation 0", one per violated
-  // requirement, in the scales of the run (the initial check's)
+  // requirement with its name, in the scales of the run (the initial check's)
+  std::vector<std::string> names;
   const std::vector<std::string> lines =
-      detail::check_initial_conditions(req, q, qd, t, tolerance, duration);
+      detail::check_initial_conditions(req, q, qd, t, tolerance, duration, &names);
   std::string out;
-  for (const std::string& line : lines) {
-    const std::size_t a = line.find('\''), b = line.find('\'', a + 1);
-    if (a == std::string::npos || b == std::string::npos) continue;
-    const std::string name = line.substr(a + 1, b - a - 1);
-    const Constraint& c = req.constraint(req.constraint_index(name));
+  for (std::size_t i = 0; i < lines.size(); ++i) {
+    const Constraint& c = req.constraint(req.constraint_index(names[i]));
     if (c.stabilization().enabled() || !c.is_active(t)) continue;
-    const std::size_t colon = line.find(": ", b);
-    const std::string violation = colon == std::string::npos ? "" : line.substr(colon + 2);
-    out += (out.empty() ? "" : "; ") + std::string("requirement '") + name + "' starts unmet (" +
-           violation + ") and has no dynamics";
+    const std::size_t colon = lines[i].find("): ");
+    const std::string violation = colon == std::string::npos ? "" : lines[i].substr(colon + 3);
+    out += (out.empty() ? "" : "; ") + std::string("requirement '") + names[i] +
+           "' starts unmet (" + violation + ") and has no dynamics";
   }
   if (out.empty()) return out;
   return out + ": the control keeps the error's " +

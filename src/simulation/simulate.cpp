@@ -110,17 +110,15 @@ std::string user_message(const std::exception& e) {
   return message;
 }
 
-std::vector<std::string> detail::check_initial_conditions(const System& sys,
-                                                          const Eigen::Ref<const VectorXd>& q,
-                                                          const Eigen::Ref<const VectorXd>& qd,
-                                                          double t, double tolerance,
-                                                          double duration) {
+std::vector<std::string> detail::check_initial_conditions(
+    const System& sys, const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd,
+    double t, double tolerance, double duration, std::vector<std::string>* names) {
   Workspace ws(sys);
   // the scales a run from this state takes (simulate's own check compares against the same)
   set_run_scales(sys, ws, q, qd, t, duration);
   detail::release_open_contacts(sys, ws, q, qd, t);  // (an open gap is no violation)
   evaluate_violations(sys, ws, q, qd, t);
-  return detail::violated(sys, ws, tolerance);
+  return detail::violated(sys, ws, tolerance, names);
 }
 
 std::vector<std::string> check_initial_conditions(const System& sys,
