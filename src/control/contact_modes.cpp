@@ -59,6 +59,10 @@ ContactModes::ContactModes(const Controller& ctrl) : lcp_(0) {
   lifted_enabled_.assign(frictions_.size(), 0);
   released_.reserve(frictions_.size());
   held_.assign(frictions_.size(), 0);
+  slide_modes_.assign(frictions_.size(), 0);
+  slide_enabled_.assign(frictions_.size(), 0);
+  slide_residual_ = VectorXd::Zero(ctrl.requirement_rows());
+  slide_met_.assign(std::size_t(ctrl.requirement_rows()), 0);
   F_s_ = VectorXd::Zero(n);
   lam_ = VectorXd::Zero(model.constraint_rows());
   accel_ = VectorXd::Zero(std::max<Index>(n, 2));
@@ -138,10 +142,12 @@ bool ContactModes::settle(const Controller& ctrl, ControlWorkspace& cws,
                           const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd,
                           double t, ControlStatus& s, std::string& failure) {
   slipped_ = 0;
+  held_sliding_ = false;
   if (s != ControlStatus::kRequirementsNotMet) return true;
-  // the unilateral contacts' LCP, then the stuck Coulomb contacts
+  // the unilateral contacts' LCP, then the stuck Coulomb contacts, then the sliding ones
   if (!settle_contacts(ctrl, cws, q, qd, t, s, failure)) return false;
   slip(ctrl, cws, q, qd, t, s);
+  hold_sliding(ctrl, cws, q, qd, t, s);
   return true;
 }
 
@@ -331,7 +337,7 @@ bool ContactModes::stuck_margins(const Controller& ctrl, ControlWorkspace& cws,
 void ContactModes::anticipate(const Controller& ctrl, ControlWorkspace& cws,
                               const std::vector<signed char>* run_modes,
                               const Eigen::Ref<const VectorXd>& q,
-                              const Eigen::Ref<const VectorXd>& qd, double t, ControlStatus s) {
+                              const Eigen::Ref<const VectorXd>& qd, double t, ControlStatus& s) {
   if (run_modes == nullptr) return;
   // the contacts the run held at the previous evaluation (1, or −1: its time interval's, as
   // before the run's first modes) and releases in this one; first_ marks those seen open for the
@@ -344,7 +350,9 @@ void ContactModes::anticipate(const Controller& ctrl, ControlWorkspace& cws,
     last_[i] = now;
   }
   decided_.clear();
-  if (closed_.empty() || s != ControlStatus::kOk) return;
+  if (closed_.empty() || (s != ControlStatus::kOk && s != ControlStatus::kRequirementsNotMet)) {
+    return;
+  }
   for (Index i : closed_) {
     // (the model has them open: the run's modes are mirrored)
     if (cws.model.active[std::size_t(contacts_[std::size_t(i)])]) return;
@@ -374,6 +382,10 @@ void ContactModes::anticipate(const Controller& ctrl, ControlWorkspace& cws,
   }
   closed_.resize(std::size_t(k));
   if (k == 0) return;
+  if (s == ControlStatus::kRequirementsNotMet) {
+    probe_held(ctrl, cws, q, qd, t, s);
+    return;
+  }
   controlled_delassus(ctrl, cws);
   for (Index i : closed_) decided_.push_back(contacts_[std::size_t(i)]);
   if (!lcp_.solve(W_.topLeftCorner(k, k), r_.head(k), kLcpTolerance)) {
@@ -405,6 +417,47 @@ void ContactModes::anticipate(const Controller& ctrl, ControlWorkspace& cws,
   }
   cws.qdd -= scratch_n_;
   cws.power = cws.Qc_control.dot(qd);
+}
+
+void ContactModes::probe_held(const Controller& ctrl, ControlWorkspace& cws,
+                              const Eigen::Ref<const VectorXd>& q,
+                              const Eigen::Ref<const VectorXd>& qd, double t, ControlStatus& s) {
+  const System& sys = ctrl.model();
+  Workspace& model = cws.model;
+  std::vector<signed char>& modes = model.activity_override;
+  // the touching contacts closed_ held, and the sticks of their Coulomb contacts at rest
+  for (Index i : closed_) {
+    saved_[std::size_t(i)] = modes[std::size_t(contacts_[std::size_t(i)])];
+    modes[std::size_t(contacts_[std::size_t(i)])] = 1;
+  }
+  lifted_.clear();
+  for (std::size_t f = 0; f < frictions_.size(); ++f) {
+    const FrictionContact& c = frictions_[f];
+    if (c.mu_static == 0.0 || std::none_of(closed_.begin(), closed_.end(), [&](Index i) {
+          return contacts_[std::size_t(i)] == c.normal_constraint;
+        })) {
+      continue;
+    }
+    detail::sliding_velocity(sys, model, Index(f), q, qd, t, false);
+    if (!(model.sliding.col(Index(f)).head(c.size()).norm() <= c.eps)) continue;
+    const auto stick = std::size_t(c.stick_constraint), force = std::size_t(c.force);
+    lifted_.push_back(f);
+    lifted_modes_[f] = modes[stick];
+    lifted_enabled_[f] = model.nonideal_enabled[force];
+    modes[stick] = 1;
+    model.nonideal_enabled[force] = 0;
+  }
+  const ControlStatus held = compute_control(ctrl, cws, q, qd, t);
+  close_lifted_sticks(model);
+  for (Index i : closed_) {
+    modes[std::size_t(contacts_[std::size_t(i)])] = saved_[std::size_t(i)];
+  }
+  if (held == ControlStatus::kOk) {
+    s = held;
+    return;
+  }
+  // (not met held either: the control with them open stands)
+  compute_control(ctrl, cws, q, qd, t);
 }
 
 void ContactModes::held_reactions(const Controller& ctrl, ControlWorkspace& cws,
@@ -516,6 +569,123 @@ void ContactModes::slip(const Controller& ctrl, ControlWorkspace& cws,
   s = compute_control(ctrl, cws, q, qd, t);
   hold_stuck(model);
   slipped_ = 1;
+}
+
+void ContactModes::hold_sliding(const Controller& ctrl, ControlWorkspace& cws,
+                                const Eigen::Ref<const VectorXd>& q,
+                                const Eigen::Ref<const VectorXd>& qd, double t, ControlStatus& s) {
+  held_sliding_ = false;
+  if (frictions_.empty() || s != ControlStatus::kRequirementsNotMet || slipped_ != 0) return;
+  const System& sys = ctrl.model();
+  Workspace& model = cws.model;
+  // the Coulomb contacts that slide in the model on a closed contact (a frictionless one
+  // transmits nothing held or sliding)
+  stuck_.clear();
+  for (std::size_t j = 0; j < frictions_.size(); ++j) {
+    const FrictionContact& c = frictions_[j];
+    const auto k = std::size_t(c.normal_constraint);
+    const bool separated = sys.constraint(Index(k)).is_unilateral() && !model.active[k];
+    if (model.activity_override[std::size_t(c.stick_constraint)] > 0 || separated ||
+        c.mu_static == 0.0) {
+      continue;
+    }
+    stuck_.push_back(j);
+  }
+  if (stuck_.empty()) return;
+  // the sliding evaluation's verdict: the plant's while they slide (the note's row)
+  Index row = 0;
+  while (row + 1 < Index(cws.met.size()) && cws.met[std::size_t(row)]) ++row;
+  slide_residual_ = cws.residual;
+  std::copy(cws.met.begin(), cws.met.end(), slide_met_.begin());
+  slide_not_met_ = cws.rows_not_met;
+  // F_h: the control with them held; not met either: not theirs, the sliding control stands
+  hold_sliding_contacts(model);
+  if (compute_control(ctrl, cws, q, qd, t) != ControlStatus::kOk) {
+    release_sliding_contacts(model);
+    s = compute_control(ctrl, cws, q, qd, t);
+    return;
+  }
+  // the held model's reaction under F_h, each contact's margin mu_static N − |H|, and its
+  // sliding speed
+  F_s_ = cws.Qc_control;
+  const bool evaluated = reaction_under(ctrl, cws, F_s_, q, qd, t);
+  note_t_ = t;
+  note_row_ = row;
+  const bool hold = stuck_margins(ctrl, cws, q, qd, t);
+  bool rest = true;
+  held_speed_ = 0.0;
+  for (std::size_t j : stuck_) {
+    detail::sliding_velocity(sys, model, Index(j), q, qd, t, false);
+    const double v = model.sliding.col(Index(j)).head(frictions_[j].size()).norm();
+    rest = rest && v <= frictions_[j].eps;
+    held_speed_ = std::max(held_speed_, v);
+  }
+  // (the held model's evaluation under F_h again, where reaction_under evaluated it with F_h
+  // among its forces)
+  if (evaluated) compute_control(ctrl, cws, q, qd, t);
+  release_sliding_contacts(model);
+  if (hold && rest) {
+    // at rest and held by static friction: the run sticks them, and F_h meets the requirements
+    s = ControlStatus::kOk;
+    return;
+  }
+  // the plant slides on under F_h: the requirements not met, as the sliding evaluation says
+  if (hold) released_.assign(stuck_.begin(), stuck_.end());
+  s = ControlStatus::kRequirementsNotMet;
+  cws.status = s;
+  cws.residual = slide_residual_;
+  std::copy(slide_met_.begin(), slide_met_.end(), cws.met.begin());
+  cws.rows_not_met = slide_not_met_;
+  held_sliding_ = true;
+}
+
+void ContactModes::hold_sliding_contacts(Workspace& model) {
+  for (std::size_t j : stuck_) {
+    const FrictionContact& c = frictions_[j];
+    const auto stick = std::size_t(c.stick_constraint), force = std::size_t(c.force);
+    slide_modes_[j] = model.activity_override[stick];
+    slide_enabled_[j] = model.nonideal_enabled[force];
+    model.activity_override[stick] = 1;
+    model.nonideal_enabled[force] = 0;
+  }
+}
+
+void ContactModes::release_sliding_contacts(Workspace& model) const {
+  for (std::size_t j : stuck_) {
+    const FrictionContact& c = frictions_[j];
+    model.activity_override[std::size_t(c.stick_constraint)] = slide_modes_[j];
+    model.nonideal_enabled[std::size_t(c.force)] = slide_enabled_[j];
+  }
+}
+
+std::string ContactModes::held_note(const Controller& ctrl) {
+  if (!held_sliding_) return "";
+  if (note_split_) split_note_numbers();
+  const std::string f = " " + units_.force();
+  std::string names;
+  for (std::size_t j : released_) {
+    names += (names.empty() ? "'" : ", '") + ctrl.model().nonideal_name(frictions_[j].force) + "'";
+  }
+  const bool beyond = note_margin_ < 0.0;
+  const std::string numbers = format(note_H_) + f + (beyond ? " > " : " <= ") +
+                              "mu_static N = " + format(note_H_ + note_margin_) + f +
+                              " (N = " + format(note_N_) + f + ")";
+  const std::string head =
+      "t = " + format(note_t_) + " " + units_.time + ": the requirement row '" +
+      ctrl.row_names()[std::size_t(note_row_)] + "' can be met only with the contact " + names +
+      " held (stuck): with it sliding the actuated coordinates do not meet it, and the control "
+      "that meets it with it held needs a holding force of " +
+      numbers;
+  if (beyond) {
+    return head +
+           ", more than static friction gives: the control applies that force, the contact "
+           "slides under it with the friction mu N, and the requirement is not met "
+           "(docs/contact.md, \"Contacts under control\")";
+  }
+  return head + ", but the contact slides (|v_rel| = " + format(held_speed_) + " " +
+         units_.velocity() +
+         "): the control applies that force until it sticks, the requirement not met meanwhile "
+         "(docs/contact.md, \"Contacts under control\")";
 }
 
 void ContactModes::hold_by_split(const Controller& ctrl, ControlWorkspace& cws,

@@ -68,7 +68,7 @@ class ContactModes {
   // compute_control, k solves with P and with the law (O(k n² + k² n)) and, when a gap is driven
   // shut, one LCP solve (Lemke, O(k³), or where it misses, the enumeration, O(2^k k³); Siconos
   // allocates its tableau then).
-  // Then, when the requirements are still not met, slip() below.
+  // Then, when the requirements are still not met, slip() below, and then hold_sliding().
   bool settle(const Controller& ctrl, ControlWorkspace& cws, const Eigen::Ref<const VectorXd>& q,
               const Eigen::Ref<const VectorXd>& qd, double t, ControlStatus& s,
               std::string& failure);
@@ -93,6 +93,35 @@ class ContactModes {
   // where several stick and the minimum-norm split fails (it allocates).
   void slip(const Controller& ctrl, ControlWorkspace& cws, const Eigen::Ref<const VectorXd>& q,
             const Eigen::Ref<const VectorXd>& qd, double t, ControlStatus& s);
+  // A requirement that the actuators reach only through a held Coulomb contact (docs/contact.md,
+  // "Contacts under control"): a wheel driven by its axle torque alone, whose forward motion the
+  // axle moves only through the friction under it. With the contact sliding the actuated
+  // coordinates do not move that row (X S = 0 there), so the least-squares control is none and
+  // the wheel never turns (u21 02). After slip(), when the requirements are still not met, slip()
+  // decided nothing (slipped() == 0) and Coulomb contacts slide in the model on closed contacts
+  // (mu_static > 0, their friction on or off): the control is recomputed with them held (their
+  // stick constraints on, their friction off), F_h. If F_h meets the requirements it is the
+  // control — what the actuators do through those contacts (the rolling torque), which the
+  // sliding plant answers with its friction mu N — and the held model's reaction under it,
+  // λ + λ_nonideal − G_p⁺ A_p M⁻¹ F_h (reaction_under), is split into each contact's N and
+  // holding force H (stuck_margins). Where every one of them is at rest (|v_rel| <= eps) and
+  // holds (|H| <= mu_static N) the run sticks them: s = kOk. Otherwise the plant slides on under
+  // F_h (the run's stick test refuses a stick with |H| > mu_static N): s, and cws's status,
+  // residual, met and rows_not_met, are the sliding evaluation's (the requirement not met), and
+  // held_note() names the contacts and the forces. If F_h does not meet them either, the sliding
+  // control stands. The model's modes are the mirrored ones afterwards (cws then holds the held
+  // model's evaluation, as slip() leaves F_s's). Cost: nothing while the requirements are met or
+  // no contact slides; else 1 to 3 evaluations of compute_control, one project_nonideal
+  // (O(n² + n m)) and the contacts' sliding velocities (hold_by_split's where several slide).
+  void hold_sliding(const Controller& ctrl, ControlWorkspace& cws,
+                    const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd,
+                    double t, ControlStatus& s);
+  // whether the last settle() applied F_h to sliding contacts with the requirements not met
+  // (hold_sliding); held_note() then says why in words ("" otherwise): the row, the contacts,
+  // |H| against mu_static N and N, and the sliding speed where the stick would hold
+  bool held_sliding() const { return held_sliding_; }
+  std::string held_note(const Controller& ctrl);
+
   // what the last slip() decided: 1 the control slides stuck contacts (F_s), −1 static friction
   // holds them (the requirements not met), 0 nothing to decide; stick_note() says it in words
   // (the row, the contacts, |H| against mu_static N; "" for 0)
@@ -118,9 +147,13 @@ class ContactModes {
   // Where λ_j is free (a requirement row duplicates contact j's: W̃'s row and column zero, r̃_j
   // = 0), the contact takes its multiplier under the control computed with it held
   // (held_reactions): it carries what the uncontrolled constrained system carries.
+  // Where the requirements are not met with those contacts open (s == kRequirementsNotMet: a
+  // wheel in the air, whose x its axle torque moves only through the friction under it), the
+  // control is the one computed with them held instead (probe_held), when that meets them (s
+  // becomes kOk): the run's LCP then closes them under it, as it would under none.
   void anticipate(const Controller& ctrl, ControlWorkspace& cws,
                   const std::vector<signed char>* run_modes, const Eigen::Ref<const VectorXd>& q,
-                  const Eigen::Ref<const VectorXd>& qd, double t, ControlStatus s);
+                  const Eigen::Ref<const VectorXd>& qd, double t, ControlStatus& s);
 
   // The multipliers λ of the closed contacts (k, in the order of the model's unilateral
   // constraints that were closed) of the last LCP settle solved, and which contacts they are
@@ -143,6 +176,14 @@ class ContactModes {
   void held_reactions(const Controller& ctrl, ControlWorkspace& cws,
                       const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd,
                       double t, Index k);
+  // anticipate's where the requirements are not met with the k = closed_ touching contacts
+  // open: the control with them held (closed, and the sticks of their Coulomb contacts at rest,
+  // |v_rel| <= eps, on with the friction off; lifted_ lists those) into cws and s = kOk when it
+  // meets them; else the control with them open again, s unchanged. Cost: one or two
+  // evaluations of compute_control and the contacts' sliding velocities.
+  void probe_held(const Controller& ctrl, ControlWorkspace& cws,
+                  const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd,
+                  double t, ControlStatus& s);
   // the failure text: `names` pull, the requirement `row` missed by `missed` with them held
   std::string pull_message(const Controller& ctrl, double t, Index row, double missed) const;
   // settle's LCP of the unilateral contacts (settle is it, then slip). The Coulomb contacts
@@ -182,6 +223,10 @@ class ContactModes {
   // or off), or the mirrored ones back (saved in held_)
   void slide_stuck(Workspace& model, bool friction);
   void hold_stuck(Workspace& model) const;
+  // hold_sliding's modes of the sliding contacts stuck_: held (their stick constraint on, their
+  // friction off; the mirrored modes saved in slide_modes_, slide_enabled_), and back
+  void hold_sliding_contacts(Workspace& model);
+  void release_sliding_contacts(Workspace& model) const;
   // contact j's a_rel = P (q''_c − u') (coordinate path) or T q'' + T' q' (contact point) for
   // the control's q'' in cws, into accel_ (its size returned); its scale (the terms' sum) in
   // `scale`. Evaluates the contact's kinematics (sliding_velocity).
@@ -245,6 +290,16 @@ class ContactModes {
   VectorXd split_y_;                           // (nz) hold_by_split: the split of largest margin
   double normal_force_ = 0.0, holding_force_ = 0.0;  // of the last stick_margin
   int slipped_ = 0;                                  // see slipped()
+  // hold_sliding()'s: the contacts' mirrored stick overrides and friction switches (frictions),
+  // the sliding evaluation's residual, met and rows_not_met (m_r), the largest |v_rel| of the
+  // contacts held, and whether it applied F_h with the requirements not met
+  std::vector<signed char> slide_modes_;
+  std::vector<unsigned char> slide_enabled_;
+  VectorXd slide_residual_;
+  std::vector<unsigned char> slide_met_;
+  Index slide_not_met_ = 0;
+  double held_speed_ = 0.0;
+  bool held_sliding_ = false;
   bool note_split_ = false;  // the note's numbers are split_note_numbers' (not yet computed)
   // stick_note()'s: the time, the row not met, the least margin mu_static N − |H| and its N
   // and |H|, the contacts released (positions in frictions_)

@@ -25,7 +25,9 @@ struct ControlAtStart {
   std::string pull_failure;
   std::string description;  // describe_control_status() of the control there ("" when ok)
   std::string unactuated;   // explain_unactuated_requirements() of it
-  std::string stick_note;   // why static friction holds a contact a requirement needs to slide
+  // why static friction holds a contact a requirement needs to slide, or why a requirement met
+  // only with a sliding contact held is not met (ContactModes::held_note)
+  std::string stick_note;
 };
 
 // simulate_controlled (control/control.hpp) whose first sample, when `start` is not null, also

@@ -172,6 +172,12 @@ struct ControlledScratch final : CallableScratch {
   std::string slip_note;     // (ContactModes::slip) the first stick a requirement broke,
   double slip_t = 0.0;       // at this time
   bool stick_noted = false;  // stats.not_met_message says why a stick held
+  // (ContactModes::hold_sliding) the first requirement met only with a sliding contact held,
+  // whose control the run applied with the contact sliding, at this time; said in
+  // stats.not_met_message once (held_noted)
+  std::string held_note;
+  double held_t = 0.0;
+  bool held_noted = false;
 };
 
 // Whether the last assembly of the requirements in c evaluated every violation the samples
@@ -232,6 +238,10 @@ void ControlledPlant::force(ControlledScratch& w, const Eigen::Ref<const VectorX
     w.slip_note = w.contacts.stick_note(ctrl);
     w.slip_t = t;
   }
+  if (w.contacts.held_sliding() && (w.held_note.empty() || t < w.held_t)) {
+    w.held_note = w.contacts.held_note(ctrl);
+    w.held_t = t;
+  }
   // an event's q''_free (contacts the run held, released for its LCP): the control answers
   // their forces
   w.contacts.anticipate(ctrl, cws, w.run_modes, q, qd, t, s);
@@ -281,6 +291,11 @@ void ControlledPlant::note_not_met(ControlledScratch& w, double t) const {
   if (w.contacts.slipped() < 0 && !w.stick_noted) {
     w.stick_noted = true;
     stats.not_met_message += "; " + w.contacts.stick_note(ctrl);
+  }
+  // (a requirement met only with a sliding contact held: why, once)
+  if (w.contacts.held_sliding() && !w.held_noted) {
+    w.held_noted = true;
+    stats.not_met_message += "; " + w.contacts.held_note(ctrl);
   }
 }
 
@@ -663,6 +678,7 @@ ControlledTrajectory control_detail::run_controlled(
         if (s0 != ControlStatus::kOk) start->description = describe_control_status(ctrl, c0);
         start->unactuated = explain_unactuated_requirements(ctrl, c0);
         if (modes.slipped() < 0) start->stick_note = modes.stick_note(ctrl);
+        if (modes.held_sliding()) start->stick_note = modes.held_note(ctrl);
       }
     }
     // the control at the sample (evaluated afresh at the sample's state)
@@ -753,6 +769,7 @@ ControlledTrajectory control_detail::run_controlled(
         after->failure = w.failure;
         after->failure_t = w.failure_t;
         after->slip_note = w.slip_note;
+        after->held_note = w.held_note;
         after->q_last = w.q_last;
         after->qd_last = w.qd_last;
         after->t_last = w.t_last;
@@ -782,6 +799,7 @@ ControlledTrajectory control_detail::run_controlled(
   tr.m = full.m;
   tr.stats = full.stats;
   if (!w.slip_note.empty()) tr.stats.notes.push_back(w.slip_note);
+  if (!w.held_note.empty()) tr.stats.notes.push_back(w.held_note);
   // requirements without dynamics that start unmet stay unmet (u21 05)
   if (const std::string why = explain_uncorrected_requirements(ctrl, q0, qd0, options.t_start,
                                                                options.initial_tolerance,

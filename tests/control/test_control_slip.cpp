@@ -586,5 +586,108 @@ output: {every: 0.05}
   }
 }
 
+// ---- a requirement that the actuators reach only through a held contact (u21 02) ------------
+
+// tests/data/rolling_wheel.urdf (M = 4 kg moves in x, 3 kg in z, the wheel's I = 0.01, r = 0.1)
+// on a rough floor (mu = 0.2, mu_static = 0.3, N = 3 g = 29.43 N), only the axle (pitch)
+// actuated, x required to follow v0 t + c t²/2 under e'' + 20 e' + 100 e = 0. The axle moves x
+// only through the friction under the wheel: held (rolling), tau = (I/r + r M) x'' = 0.5 x''
+// and the friction M x''; sliding, the torque does not move x at all.
+std::string driven_wheel(double c, double v0) {
+  return "parameters: {c: " + format_number(c) + ", v0: " + format_number(v0) + R"(}
+robot: {urdf: rolling_wheel.urdf}
+contacts:
+  - {name: floor, link: wheel, shape: sphere, radius: 0.1}
+nonideal:
+  - {friction: coulomb, constraint: floor, mu: 0.2, mu_static: 0.3}
+initial:
+  q_dot: {x: v0, pitch: v0/0.1}
+control:
+  actuated: [pitch]
+  requirements:
+    - {name: go, holonomic: x - v0*t - c*t^2/2, dynamics: {omega: 10, zeta: 1}}
+simulate: {t_end: 1, integrator: dopri5, rtol: 1e-11, atol: 1e-13}
+output: {every: 0.1}
+)";
+}
+
+ControlledTrajectory run_wheel(double c, double v0) {
+  const Model m =
+      parse_model(driven_wheel(c, v0), std::string(UKDYN_TEST_DATA_DIR) + "/wheel_drive.yaml");
+  return simulate_controlled(*m.controller, m.system, m.q0, m.qd0, m.options);
+}
+
+constexpr double kWheelMass = 4.0, kWheelN = 3.0 * kG, kWheelR = 0.1, kWheelI = 0.01;
+
+// c <= mu_static N / M = 2.20725: it rolls on pace, tau = 0.5 c, the friction M c, and every
+// evaluation meets the requirement (the 3 evaluations of the start with the contact sliding
+// used to say the axle "does not move" x)
+TEST(ControlSlip, WheelDrivenByItsAxleRollsOnPaceWhereStaticFrictionTransmitsTheForce) {
+  for (const double v0 : {0.0, 1.0}) {
+    for (const double c : {1.5, 2.1}) {
+      SCOPED_TRACE("c = " + format_number(c) + ", v0 = " + format_number(v0));
+      const ControlledTrajectory r = run_wheel(c, v0);
+      const Trajectory& tr = r.plant;
+      ASSERT_EQ(tr.stats.status, Status::kOk) << tr.stats.message;
+      EXPECT_EQ(r.control.not_met, 0) << r.control.not_met_message;
+      EXPECT_EQ(r.control.not_met_message.find("not moved"), std::string::npos);
+      ASSERT_EQ(tr.samples(), 11);
+      for (std::size_t i = 0; i < 11; ++i) {
+        const double t = tr.t[i];
+        EXPECT_NEAR(at(tr, tr.q, "x", i), v0 * t + c * t * t / 2.0, 1e-9) << "t = " << t;
+        EXPECT_NEAR(at(tr, tr.qdd, "x", i), c, 1e-9) << "t = " << t;
+        EXPECT_NEAR(at(tr, tr.qdd, "pitch", i), c / kWheelR, 1e-8) << "t = " << t;
+        EXPECT_NEAR(at(tr, r.Qc_control, "pitch", i),
+                    (kWheelI / kWheelR + kWheelR * kWheelMass) * c, 1e-9)
+            << "t = " << t;
+        EXPECT_NEAR(r.error[i], 0.0, 1e-9) << "t = " << t;
+      }
+    }
+  }
+}
+
+// c = 2.5: rolling needs the friction M c = 10 N > mu_static N = 8.829 N. The control is the one
+// that meets the requirement with the contact held (the rolling torque 0.5 x''_req, x''_req =
+// c − 20 e' − 100 e), the run's stick test refuses the stick at t = 0, and the wheel spins and
+// slides, the friction mu N = 5.886 N pushing it at x'' = mu N / M = 1.4715 m/s² — so e =
+// (1.4715 − c) t²/2, and the wheel's pitch'' = (tau − r mu N) / I. The requirement is reported as
+// not met, naming the contact and the forces, never as "not moved by the actuated coordinates".
+// (Before: tau = 0 throughout, the wheel never turned, and the warning said the axle does not
+// move x.)
+TEST(ControlSlip, WheelDrivenBeyondWhatStaticFrictionTransmitsSpinsAndSlidesAtMuG) {
+  const double c = 2.5, a = 0.2 * kWheelN / kWheelMass;  // 1.4715
+  for (const double v0 : {0.0, 1.0}) {
+    SCOPED_TRACE("v0 = " + format_number(v0));
+    const ControlledTrajectory r = run_wheel(c, v0);
+    const Trajectory& tr = r.plant;
+    ASSERT_EQ(tr.stats.status, Status::kOk) << tr.stats.message;
+    EXPECT_GT(r.control.not_met, 0);
+    EXPECT_EQ(r.control.first_not_met, 0.0);
+    EXPECT_EQ(r.control.not_met_message.find("not moved"), std::string::npos)
+        << r.control.not_met_message;
+    const std::string said =
+        "t = 0 s: the requirement row 'go' can be met only with the contact 'coulomb.floor' held "
+        "(stuck): with it sliding the actuated coordinates do not meet it, and the control that "
+        "meets it with it held needs a holding force of 10 N > mu_static N = 8.829 N "
+        "(N = 29.43 N), more than static friction gives";
+    EXPECT_NE(r.control.not_met_message.find(said), std::string::npos) << r.control.not_met_message;
+    ASSERT_FALSE(tr.stats.notes.empty());
+    EXPECT_EQ(tr.stats.notes.back().find(said), 0u) << tr.stats.notes.back();
+    ASSERT_EQ(tr.samples(), 11);
+    for (std::size_t i = 0; i < 11; ++i) {
+      const double t = tr.t[i];
+      const double e = (a - c) * t * t / 2.0, e1 = (a - c) * t;
+      const double tau = (kWheelI / kWheelR + kWheelR * kWheelMass) * (c - 20.0 * e1 - 100.0 * e);
+      EXPECT_NEAR(at(tr, r.Qc_control, "pitch", i), tau, 1e-6) << "t = " << t;
+      EXPECT_NEAR(r.error[i], e, 1e-6) << "t = " << t;
+      EXPECT_NEAR(at(tr, tr.q, "x", i), v0 * t + a * t * t / 2.0, 1e-6) << "t = " << t;
+      if (t == 0.0) continue;  // (the first instant's sample: the stick's refusal decides it)
+      EXPECT_NEAR(at(tr, tr.qdd, "x", i), a, 1e-6) << "t = " << t;
+      EXPECT_NEAR(at(tr, tr.qdd, "pitch", i), (tau - kWheelR * 0.2 * kWheelN) / kWheelI, 1e-4)
+          << "t = " << t;
+    }
+  }
+}
+
 }  // namespace UKDYN_TEST_FILE
 }  // namespace ukdyn
