@@ -49,9 +49,12 @@ std::string ProgressBar::duration_text(double s) {
     std::snprintf(buf, sizeof buf, "%.0f s", s);
   } else if (s < 3600.0) {
     std::snprintf(buf, sizeof buf, "%d min %d s", int(s / 60.0), int(std::fmod(s, 60.0)));
-  } else {
+  } else if (s < 3600.0 * 1e5) {
     std::snprintf(buf, sizeof buf, "%d h %d min", int(s / 3600.0),
                   int(std::fmod(s, 3600.0) / 60.0));
+  } else {
+    // (beyond 100,000 h in hours to 2 digits: "ETA -2147483648 h" overflowed an int, u22 05)
+    std::snprintf(buf, sizeof buf, "%.2g h", s / 3600.0);
   }
   return buf;
 }

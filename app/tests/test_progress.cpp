@@ -98,6 +98,9 @@ TEST(Progress, DurationText) {
   EXPECT_EQ(ProgressBar::duration_text(200.0), "3 min 20 s");
   EXPECT_EQ(ProgressBar::duration_text(7500.0), "2 h 5 min");
   EXPECT_EQ(ProgressBar::duration_text(-1.0), "?");
+  // (an ETA of 7.7e12 s printed "-2147483648 h": an int's overflow)
+  EXPECT_EQ(ProgressBar::duration_text(3600.0 * 99999.5), "99999 h 30 min");
+  EXPECT_EQ(ProgressBar::duration_text(7.73e12), "2.1e+09 h");
 }
 
 }  // namespace

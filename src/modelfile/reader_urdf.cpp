@@ -135,8 +135,10 @@ Model Reader::read_robot(const YAML::Node& root) {
     scale.mass = 1.0 / model_units.kilograms();
     scale.time = model_units.per_second();
   }
-  // URDF's world says nothing of gravity: 9.81 m/s² down, in the model's units
-  const tree::Vector3d g_default(0.0, 0.0, -9.81 * scale.length / (scale.time * scale.time));
+  // URDF's world says nothing of gravity: 9.81 m/s² down, in the model's units, whichever units
+  // the file is written in (with urdf_units: model it was 9.81 of the model's: 1000 g in mm, ms)
+  const tree::Vector3d g_default(
+      0.0, 0.0, -9.81 * model_units.seconds() * model_units.seconds() / model_units.metres());
   tree::Tree robot = [&] {
     try {
       return tree::load_urdf(path.string(), g_default, scale);

@@ -306,6 +306,12 @@ Eigen::Matrix<double, 3, 7> omega_jacobian(const BodyRef& b, const Eigen::Ref<co
 }
 }  // namespace
 
+namespace {
+// |e·n| beyond which a sphere's tangents are taken from the world axis least aligned with n
+// instead of e (cos 25.8°: |e × n| >= 0.436, the rate of t_1 at most 2.3 |n'|)
+constexpr double kTangentSwitch = 0.9;
+}  // namespace
+
 ContactKinematics relative_contact_kinematics(const Joint& j, const BodyRef& P, const BodyRef& C,
                                               bool planar, const VectorXd& q0) {
   // the plane's normal and tangents on P, the plane's point on P, the centre (and a disk's axis)
@@ -326,8 +332,8 @@ ContactKinematics relative_contact_kinematics(const Joint& j, const BodyRef& P, 
   const double r = j.radius, r_P = j.other_radius;
   const double side = j.side == SphereSide::kInside ? -1.0 : 1.0;
   // two spheres: n = ±d/|d| and t_1 = e × n/|e × n|, t_2 = n × t_1 from the world axis e least
-  // aligned with n at the start (planar: t_1 = n × e_z); singular only where n passes along e
-  // (a disk and a sphere: n from disk_sphere_gap, the same tangents)
+  // aligned with n at the start (planar: t_1 = n × e_z); where n comes near e, the axis least
+  // aligned with n then (a disk and a sphere: n from disk_sphere_gap, the same tangents)
   Vector3d e = Vector3d::UnitZ();
   if ((spheres || disk_sphere || sphere_box) && !planar) {
     VecKin d0, k0;
@@ -396,7 +402,16 @@ ContactKinematics relative_contact_kinematics(const Joint& j, const BodyRef& P, 
         t1.x = n.x.cross(Vector3d::UnitZ());
         t1.v = n.v.cross(Vector3d::UnitZ());
       } else {
-        const Vector3d w = e.cross(n.x), wd = e.cross(n.v);
+        // (e, or where n comes within 25.8° of it — a ball rolling over a box's edge, from its top
+        // face, e = x, to its side face, n = x: NaN, u22 04 — the world axis least aligned
+        // with n now: the tangents turn by a step there, the friction and the stick rows do not)
+        Vector3d e_n = e;
+        if (std::abs(e.dot(n.x)) > kTangentSwitch) {
+          Index axis = 0;
+          n.x.cwiseAbs().minCoeff(&axis);
+          e_n = Vector3d::Unit(axis);
+        }
+        const Vector3d w = e_n.cross(n.x), wd = e_n.cross(n.v);
         const double wl = w.norm();
         t1.x = w / wl;
         t1.v = (wd - t1.x.dot(wd) * t1.x) / wl;

@@ -610,11 +610,12 @@ ContactKinematics contact_kinematics(const Joint& j, const BodyRef& C, bool plan
 /// the rim point most opposed to n, which moves on the disk as it rolls), rows t_iᵀ J_rel. On a
 /// plane n = R_P n_P, t_i = R_P t_i,P; on a sphere n = d/|d|, t_1 = e × n/|e × n|, t_2 = n × t_1
 /// with e the world axis least aligned with n at q0 (planar: t_1 = n × e_z), continuous in time
-/// but singular (NaN) where n passes along e. Row 0 is the gap's gradient ∂g/∂q, g = n·d − r,
-/// n·d − r sqrt(1 − (n·k)²) or |d| − (r + r_P) (equal to nᵀ J_rel on the motion: N is then
-/// exact). Bias: t_i'·v_rel + t_i·(v_rel)' at q'' = 0, (v_rel)' = c'' − p'' + ω_C × a' −
-/// ω_P × (d' + a') (ω' = 0 at q'' = 0), and g'' for row 0. Columns: both bodies'. Cost O(1), no
-/// allocation.
+/// while |e·n| <= 0.9; beyond, e is the world axis least aligned with n at that instant (the
+/// tangents turn by a step; the friction force and the stick rows' span do not). Row 0 is the gap's
+/// gradient ∂g/∂q, g = n·d − r, n·d − r sqrt(1 − (n·k)²) or |d| − (r + r_P) (equal to nᵀ J_rel on
+/// the motion: N is then exact). Bias: t_i'·v_rel + t_i·(v_rel)' at q'' = 0, (v_rel)' = c'' − p'' +
+/// ω_C × a' − ω_P × (d' + a') (ω' = 0 at q'' = 0), and g'' for row 0. Columns: both bodies'. Cost
+/// O(1), no allocation.
 ContactKinematics relative_contact_kinematics(const Joint& j, const BodyRef& P, const BodyRef& C,
                                               bool planar, const VectorXd& q0);
 /// The joint friction of a revolute or prismatic joint whose constraint is `constraint`.

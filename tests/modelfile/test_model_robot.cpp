@@ -792,6 +792,9 @@ TEST(ModelRobot, AnSIUrdfRunsTheSameMotionInAnyUnits) {
     EXPECT_TRUE(close(la.joint.friction, lb.joint.friction)) << la.name;
   }
   EXPECT_NEAR(a.robot->gravity().z(), -9.81e-3, 1e-15);
+  // and the file written in them (urdf_units: model): Earth's gravity in mm/ms² still, not
+  // 9.81 mm/ms² (u22 01: 1000 g, a pendulum √1000 times too fast)
+  EXPECT_NEAR(b.robot->gravity().z(), -9.81e-3, 1e-15);
   // a visual's origin and size in the model's length unit
   const std::filesystem::path dir =
       std::filesystem::temp_directory_path() / ("ukdyn_urdf_units_" + std::to_string(::getpid()));

@@ -269,6 +269,66 @@ output: {every: 0}
   testing::expect_rolls_from_closed_form(m, "top", 0, 0.5, 0.1, 2.0, 0.2, kG);
 }
 
+// ---- a ball rolls over a rough box's edge -------------------------------------------------------
+
+// A ball (m = 2, r = 0.1, I = 2/5 m r²) rolls at v0 = 0.5 along the top face z = 1 of a fixed box
+// (μ = 0.5) and over its edge x = 0.5 (reached at 0.04 s): it pivots rolling about the edge until
+// the friction it needs, 2/7 m g sin θ, exceeds μ N = μ (m g cos θ − m r θ'²), slips, and leaves
+// the edge where N = 0. The instants of an independent integration (scipy's solve_ivp at rtol
+// 1e-12 of the pivoting and sliding phases: u22's pA/ref.py), slip at 0.14570716583 s and leave
+// at 0.17003200588 s; then it flies, its centre crossing the level of the box's top face (where
+// the normal passes along the x axis of the contact's first tangents: it took steps of 2.8e-17 s
+// forever there, u22 04) to the end: x' and ω constant, z' falling at g.
+TEST(ContactSphereBox, BallRollingOverARoughBoxsEdgeSlipsLeavesAndFlies) {
+  const Model m = parse_model(R"(
+parameters: {m: 2, r: 0.1, h: 0.5, v0: 0.5, x0: 0.48, mu: 0.5}
+bodies:
+  - {name: ball, type: rigid, mass: m, inertia: 0.4*m*r^2,
+     position: [x0, 0, 2*h + r], velocity: [v0, 0, 0], angular_velocity: [0, v0/r, 0]}
+forces:
+  - {type: gravity, g: [0, 0, -9.81]}
+contacts:
+  - {name: edge, body: ball, shape: sphere, radius: r,
+     box: {body: ground, point: [0, 0, h], size: [h, h, h]}}
+nonideal:
+  - {friction: coulomb, constraint: edge, mu: mu}
+simulate: {t_end: 0.6, output_at: [0.3, 0.6]}
+)");
+  const Trajectory tr = simulate(m.system, m.q0, m.qd0, m.options);
+  ASSERT_EQ(tr.stats.status, Status::kOk) << tr.stats.message;
+  double slip = -1.0, leave = -1.0;
+  for (const ContactEvent& ev : tr.stats.contact_events) {
+    if (ev.kind == ContactEvent::Kind::kSlip && slip < 0.0) slip = ev.t;
+    if (ev.kind == ContactEvent::Kind::kRelease && leave < 0.0) leave = ev.t;
+  }
+  EXPECT_NEAR(slip, 0.14570716583, 1e-8);
+  EXPECT_NEAR(leave, 0.17003200588, 1e-8);
+  const auto sample = [&](double t) {
+    const auto at = std::find(tr.t.begin(), tr.t.end(), t);
+    EXPECT_NE(at, tr.t.end()) << t;
+    return std::size_t(at - tr.t.begin());
+  };
+  const std::size_t a = sample(0.3), b = sample(0.6);
+  const auto q = [&](const char* name, std::size_t i) {
+    return testing::coordinate_at(tr, tr.q, name, i);
+  };
+  const auto qd = [&](const char* name, std::size_t i) {
+    return testing::coordinate_at(tr, tr.qd, name, i);
+  };
+  EXPECT_LT(q("ball.z", b), 1.0);        // (below the top face's level)
+  EXPECT_GT(q("ball.x", b), 0.5 + 0.1);  // (beyond the edge by more than r: free)
+  EXPECT_NEAR(qd("ball.x", b), qd("ball.x", a), 1e-9);
+  EXPECT_NEAR(qd("ball.z", b) - qd("ball.z", a), -kG * 0.3, 1e-9);
+  EXPECT_NEAR(q("ball.x", b) - q("ball.x", a), 0.3 * qd("ball.x", a), 1e-9);
+  // the spin about y, 2 (u0 u2' − u0' u2 + u3 u1' − u1 u3'), constant in flight
+  const auto omega_y = [&](std::size_t i) {
+    return 2.0 * (q("ball.u0", i) * qd("ball.u2", i) - qd("ball.u0", i) * q("ball.u2", i) +
+                  q("ball.u3", i) * qd("ball.u1", i) - q("ball.u1", i) * qd("ball.u3", i));
+  };
+  EXPECT_NEAR(omega_y(b), omega_y(a), 1e-9);
+  EXPECT_GT(omega_y(a), 0.5 / 0.1);  // (spun up by the edge's rolling)
+}
+
 // ---- errors -------------------------------------------------------------------------------------
 
 TEST(ContactSphereBox, BadSphereBoxContactsGetAClearErrorWithItsPlace) {
