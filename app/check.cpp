@@ -101,7 +101,10 @@ int check_command(const ModelSource& source) {
   } else {
     std::printf("  initial state       violates %zu constraint%s%s:\n", r.initial_violations.size(),
                 r.initial_violations.size() == 1 ? "" : "s",
-                model.project_initial ? " (projected before a run: initial: project: true)" : "");
+                !model.project_initial ? ""
+                : r.penetrated.empty()
+                    ? " (projected before a run: initial: project: true)"
+                    : " (a penetrated contact is not projected: a run refuses to start)");
     for (const auto& v : r.initial_violations) std::printf("    %s\n", terminal_text(v).c_str());
   }
   std::printf("  mass matrix         %s\n",

@@ -123,6 +123,96 @@ std::vector<std::string> friction_notes(const System& sys, const analysis::Parti
   return notes;
 }
 
+// A kink at the point: f continuous, its one-sided derivatives different — a contact whose gap
+// switches from one region of its shape to another there (a sphere over a box's edge: the face's
+// row on one side, the edge's on the other; g is C¹, not C²). Ridders' central differences then
+// return the mean of the two slopes at every step, and the table settles on a number that
+// belongs to neither side (u22 03: g/(2r) for 0 and g/r, A_error 1e-12). The second difference
+// s(h) = (F(x + h) − 2 F(x) + F(x − h)) / h is the jump of the one-sided slopes at every h across
+// a kink, and shrinks with h where F is smooth (F'' h): entry e is kinked along state k when
+// |s(h₁)| exceeds the settling tolerance of require_settled (1e-3 r_e / σ_k, 1e-6 of the largest
+// row's size / σ_k) and half of |s(4 h₁)|, h₁ the table's smallest step (a kink within about
+// h₁ / 2 of the point). The contact to blame is a unilateral one held at the point whose row of
+// A has such a kink along k. @throws SolveError naming the contact (or the entry), both
+// one-sided derivatives and what to do. Cost: 4 evaluations per state, 1 at the point.
+void refuse_kinks(const System& sys, analysis::ReducedDynamics& rd, const LinearModel& lm,
+                  const std::vector<LinearOutput>& outputs, const VectorXd& h,
+                  const VectorXd& sigma, const VectorXd& row_scale,
+                  const std::vector<std::string>& rows, const LinearizeOptions& options) {
+  const Index s = lm.x0.size(), p = row_scale.size();
+  VectorXd F0(p), Fp(p), Fm(p), Fp4(p), Fm4(p), x(s);
+  if (!rd.evaluate(lm.x0, outputs, F0)) return;
+  const MatrixXd A0 = rd.workspace().A;
+  MatrixXd Ap, Am, Ap4, Am4;
+  const VectorXd r = F0.cwiseAbs() + row_scale;
+  const double largest = r.size() > 0 ? r.maxCoeff() : 0.0;
+  const double smallest = std::pow(options.step_ratio, options.table_size - 1);
+  for (Index k = 0; k < s; ++k) {
+    const double h1 = h(k) / smallest, h4 = 4 * h1;
+    const auto at = [&](double step, VectorXd& F, MatrixXd& A) {
+      x = lm.x0;
+      x(k) += step;
+      if (!rd.evaluate(x, outputs, F)) return false;
+      A = rd.workspace().A;
+      return true;
+    };
+    // (a step the chart cannot take: the table's own steps were taken, so leave it be)
+    if (!at(h1, Fp, Ap) || !at(-h1, Fm, Am) || !at(h4, Fp4, Ap4) || !at(-h4, Fm4, Am4)) continue;
+    for (Index e = 0; e < p; ++e) {
+      const double s1 = (Fp(e) - 2 * F0(e) + Fm(e)) / h1;
+      const double s4 = (Fp4(e) - 2 * F0(e) + Fm4(e)) / h4;
+      const double tol = std::max(1e-3 * r(e), 1e-6 * largest) / sigma(k);
+      if (!(std::abs(s1) > tol && std::abs(s1) > 0.5 * std::abs(s4))) continue;
+      // the one-sided derivatives, extrapolated to h → 0 (D(h) = D + c h: (4 D(h₁) − D(4h₁)) / 3)
+      const double below = (4 * (F0(e) - Fm(e)) / h1 - (F0(e) - Fm4(e)) / h4) / 3;
+      const double above = (4 * (Fp(e) - F0(e)) / h1 - (Fp4(e) - F0(e)) / h4) / 3;
+      // the contact whose row kinks along k
+      std::string contact;
+      for (Index c = 0; c < sys.constraint_count() && contact.empty(); ++c) {
+        if (!sys.constraint(c).is_unilateral() || !rd.workspace().active[std::size_t(c)]) continue;
+        const Index r0 = sys.row_offset(c);
+        for (Index i = r0; i < r0 + sys.constraint(c).rows() && contact.empty(); ++i)
+          for (Index j = 0; j < A0.cols(); ++j) {
+            const double size =
+                std::max({std::abs(A0(i, j)), std::abs(Ap(i, j)), std::abs(Am(i, j)),
+                          std::abs(Ap4(i, j)), std::abs(Am4(i, j))});
+            const double a1 = (Ap(i, j) - 2 * A0(i, j) + Am(i, j)) / h1;
+            const double a4 = (Ap4(i, j) - 2 * A0(i, j) + Am4(i, j)) / h4;
+            if (std::abs(a1) > 1e-6 * size / sigma(k) && std::abs(a1) > 0.5 * std::abs(a4)) {
+              contact = sys.constraint(c).name();
+              break;
+            }
+          }
+      }
+      const std::string& state = lm.state_names[std::size_t(k)];
+      const std::string x0 = format_number(lm.x0(k), 6);
+      const std::string slopes = "the derivative of " + rows[std::size_t(e)] + " along " + state +
+                                 " is " + format_number(below, 4) + " on the side " + state +
+                                 " < " + x0 + " and " + format_number(above, 4) + " on " + state +
+                                 " > " + x0 + " (a central difference returns their mean, " +
+                                 format_number(0.5 * (below + above), 4) + ")";
+      throw SolveError(
+          Status::kNonFiniteResult,
+          std::string(kWho) + ": " +
+              (contact.empty()
+                   ? "the model is not differentiable at the operating point: " + slopes +
+                         ": a switch there (abs, sign, min, max in an expression, a contact "
+                         "changing the region of its gap); no linear model exists at a switch: "
+                         "move the operating point off it (docs/linearize.md, \"Non-smooth "
+                         "forces\")"
+                   : "the contact '" + contact +
+                         "' switches there between two regions of its gap (its gap is not "
+                         "twice differentiable: a sphere's centre over a box's edge or corner, "
+                         "between a face's region and an edge's; a disk–sphere contact between "
+                         "the disk's rim and its face): " +
+                         slopes +
+                         "; no linear model exists at a switch: move the operating point off "
+                         "it, to one side of the switch (docs/linearize.md, \"Non-smooth "
+                         "forces\")"));
+    }
+  }
+}
+
 }  // namespace
 
 LinearInput force_input(const System& sys, const std::string& coordinate) {
@@ -220,6 +310,7 @@ LinearModel linearize(const System& sys, const OperatingPoint& at,
   for (Index k = 0; k < s; ++k) row_scale = row_scale.cwiseMax(J.col(k).cwiseAbs() * sigma(k));
   require_settled(J, E, F0, row_scale, sigma, h, lm.state_names, rows,
                   friction_notes(sys, part, at, sigma));
+  refuse_kinks(sys, rd, lm, outputs, h, sigma, row_scale, rows, options);
   lm.A = J.topRows(s);
   lm.A_error = E.topRows(s);
   lm.C = J.bottomRows(ny);

@@ -16,6 +16,7 @@
 #include "control/control_at_start.hpp"
 #include "dynamics/contact_dynamics.hpp"
 #include "dynamics/internal.hpp"
+#include "simulation/contact_events.hpp"
 #include "simulation/initial_check.hpp"
 #include "ukdyn/control/control.hpp"
 #include "ukdyn/core/format.hpp"
@@ -39,6 +40,40 @@ Index rank_of_rows(const MatrixXd& S, double threshold) {
 
 // a number for messages, 3 significant digits
 std::string format(double x) { return format_number(x, 3); }
+
+// The unilateral contacts a run refuses to start with (u22 07): penetrated at the initial state
+// beyond the run's own test (ContactEvents::start: a gap below −max(initial_tolerance,
+// kTouchGap) times the contact's gap unit 0.1 phi_scale after set_run_scales), each a problem
+// with the run's message and its hint (locate_run_error). The run tests them before any
+// projection: `project: true` does not act on a unilateral gap. Returns their names.
+// O(contacts) gap evaluations.
+std::vector<std::string> penetrated_contacts(const Model& model,
+                                             std::vector<std::string>& problems) {
+  const System& sys = model.system;
+  const SimulationOptions& o = model.options;
+  std::vector<std::string> names;
+  const detail::ContactDynamics contacts(sys);
+  if (contacts.contacts().empty()) return names;
+  try {
+    Workspace ws(sys, o.solver);
+    set_run_scales(sys, ws, model.q0, model.qd0, o.t_start, o.t_end - o.t_start);
+    const double tolerance = std::max(o.initial_tolerance, detail::ContactEvents::kTouchGap);
+    for (const Index k : contacts.contacts()) {
+      double g = 0.0, gd = 0.0;
+      contacts.gap(sys, ws, k, model.q0, model.qd0, o.t_start, g, gd);
+      if (!(g < -tolerance * 0.1 * ws.phi_scale(sys.row_offset(k)))) continue;
+      names.push_back(sys.constraint(k).name());
+      problems.push_back("the unilateral constraint '" + names.back() +
+                         "' is penetrated at the initial state: its gap is " + format_number(g, 6) +
+                         " (a unilateral constraint needs a gap >= 0; a run refuses to start): "
+                         "start with the contact open or touching: change the initial q so that "
+                         "its gap is >= 0 (`project: true` does not act on a unilateral gap)");
+    }
+  } catch (const std::exception&) {
+    // (a gap that cannot be evaluated: the run's start says so, and so do the checks below)
+  }
+  return names;
+}
 
 // the control at the initial state, as the run's first evaluation: requirements that cannot all
 // be met (contradicting each other or a physical constraint, or not actuated) or a controller
@@ -209,8 +244,17 @@ CheckReport check_model(const Model& model) {
   // (in the scales of the run from q0 that `ukdyn run` makes: set_run_scales, docs/simulation.md
   // "Scales and tolerances")
   const double duration = o.t_end - t;
-  report.initial_violations =
-      detail::check_initial_conditions(sys, model.q0, model.qd0, t, o.initial_tolerance, duration);
+  std::vector<std::string> violated;
+  report.initial_violations = detail::check_initial_conditions(
+      sys, model.q0, model.qd0, t, o.initial_tolerance, duration, &violated);
+  report.penetrated = penetrated_contacts(model, report.problems);
+  // (violations other than the penetrated contacts: what projection could mend)
+  const bool only_penetrated =
+      !report.penetrated.empty() &&
+      std::all_of(violated.begin(), violated.end(), [&](const std::string& name) {
+        return std::find(report.penetrated.begin(), report.penetrated.end(), name) !=
+               report.penetrated.end();
+      });
   // constraints that contradict each other (x = 0 and x = 1, 1 = 0): where the position
   // projection from q0 stalls, the violation no correction removes (find_constraint_conflict);
   // such constraints are not "redundant", and projecting cannot help
@@ -248,7 +292,7 @@ CheckReport check_model(const Model& model) {
       return std::find(report.contradictory.begin(), report.contradictory.end(), name) !=
              report.contradictory.end();
     });
-  } else if (!report.initial_violations.empty()) {
+  } else if (!report.initial_violations.empty() && !only_penetrated) {
     const bool project = model.project_initial || o.project_initial;
     if (!project) {
       report.problems.push_back(

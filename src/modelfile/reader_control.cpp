@@ -12,6 +12,7 @@
 // and handed to ControllerBuilder with its error dynamics.
 #include <algorithm>
 #include <cmath>
+#include <map>
 #include <set>
 
 #include <yaml-cpp/yaml.h>
@@ -343,7 +344,24 @@ void Reader::read_control(const YAML::Node& root, Model& model) {
     fail(rs ? rs : c, "control needs a list of requirements",
          "requirements: [{name: track, holonomic: x - sin(t), dynamics: {omega: 2, zeta: 1}}]");
   }
-  std::set<std::string> seen(constraint_names_.begin(), constraint_names_.end());
+  // the names taken, each with what holds it (u22 08: a requirement named like a bodies model's
+  // contact was accepted, like a robot's refused): `constraints:` and a robot's loops and
+  // contacts (constraint_names_), the plant's joints and contacts (its constraints; a box entry's
+  // corner contacts <name>.<k> take <name>), then each requirement read
+  std::map<std::string, std::string> taken;
+  for (const auto& name : constraint_names_) taken.emplace(name, "the constraint '" + name + "'");
+  for (const Constraint& k : model.system.constraints()) {
+    std::string name = k.name();
+    if (k.is_unilateral()) {
+      const auto dot = name.rfind('.');
+      if (dot != std::string::npos && dot + 1 < name.size() &&
+          name.find_first_not_of("0123456789", dot + 1) == std::string::npos)
+        name.resize(dot);
+      taken[name] = "the contact '" + name + "'";
+    } else {
+      taken.emplace(name, "the joint '" + name + "'");
+    }
+  }
   for (const auto& r : rs) {
     if (!r.IsMap() || !r["name"]) {
       fail(r, "a requirement is a mapping with a name and its expression",
@@ -351,8 +369,11 @@ void Reader::read_control(const YAML::Node& root, Model& model) {
     }
     const std::string name = r["name"].Scalar();
     if (!is_identifier(name)) fail(r["name"], "a requirement's name must be an identifier");
-    if (!seen.insert(name).second) {
-      fail(r["name"], "the name '" + name + "' is taken (by a constraint or a requirement)");
+    if (const auto [it, fresh] = taken.emplace(name, "another requirement"); !fresh) {
+      fail(r["name"], "the name '" + name + "' is taken by " + it->second,
+           "give the requirement a name of its own: a requirement's name is unique among the "
+           "model's constraints, joints, contacts and requirements (its columns error." +
+               name + " sit beside the constraints' lambda.<name>)");
     }
     only_keys(r, {"name", "holonomic", "nonholonomic", "A", "b", "active", "dynamics", "pose"},
               "requirement '" + name + "'", failer);

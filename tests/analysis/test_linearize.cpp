@@ -660,5 +660,79 @@ nonideal:
   }
 }
 
+// ---- a contact switching at the point (u22 03) ------------------------------------------------
+
+// a smooth ball (radius r) on a box of half-extents 0.5 whose top face is z = 1 and whose edge
+// along y is at x = 0.5: on the face (|x| < 0.5) its centre slides freely, x'' = 0; beyond the
+// edge it pivots about the edge as an inverted pendulum of length r, θ'' = (g/r) sin θ with
+// x = 0.5 + r sin θ, so that at rest x'' = g sin θ cos θ and ∂x''/∂x = (g/r) cos 2θ / cos θ
+// (g/r at θ = 0). Straight above the edge the gap is C¹, not C²: no linear model exists there.
+constexpr const char* kBallOnBox = R"(
+name: ball on a box
+parameters: {m: 1, r: 0.1, bx: 0.5, bz: 1.1}
+bodies:
+  - {name: ball, type: rigid, mass: m, inertia: 0.4*m*r^2, position: [bx, 0, bz]}
+forces:
+  - {type: gravity, g: [0, 0, -9.81]}
+contacts:
+  - {name: edge, body: ball, shape: sphere, radius: r,
+     box: {body: ground, point: [0, 0, 0.5], size: [0.5, 0.5, 0.5]}}
+)";
+
+// A[x_dot', x] of the ball at (x, z), at rest
+double ball_on_box_slope(double x, double z, LinearModel* out = nullptr) {
+  const Model model = parse_model(kBallOnBox, "ball", {{"bx", x}, {"bz", z}});
+  const LinearModel lm = linearize(model.system, {model.q0, model.qd0, 0.0});
+  const auto& names = lm.state_names;
+  const auto row = std::find(names.begin(), names.end(), "ball.x_dot") - names.begin();
+  const auto col = std::find(names.begin(), names.end(), "ball.x") - names.begin();
+  EXPECT_LT(row, Index(names.size()));
+  EXPECT_LT(col, Index(names.size()));
+  EXPECT_EQ(std::find(names.begin(), names.end(), "ball.z"), names.end());  // (held: dependent)
+  if (out) *out = lm;
+  return lm.A(row, col);
+}
+
+TEST(LinearizeContactSwitch, ABallOnABoxEdgeIsRefusedNamingTheContact) {
+  // straight above the edge, and 1e-9 beside it (within the smallest step): refused, the contact
+  // named with both one-sided slopes, 0 and g/r = 98.1
+  for (const double dx : {0.0, 1e-9, -1e-9}) {
+    try {
+      ball_on_box_slope(0.5 + dx, 1.1);
+      ADD_FAILURE() << "linearized at the edge, dx = " << dx;
+    } catch (const SolveError& e) {
+      const std::string what = e.what();
+      EXPECT_NE(what.find("the contact 'edge' switches there between two regions of its gap"),
+                std::string::npos)
+          << what;
+      EXPECT_NE(what.find("the derivative of ball.x_dot' along ball.x is "), std::string::npos)
+          << what;
+      EXPECT_NE(what.find(" and 98.1 on ball.x > 0.5"), std::string::npos) << what;
+      if (dx == 0.0) {
+        EXPECT_NE(what.find("is 0 on the side ball.x < 0.5 and 98.1 on ball.x > 0.5 (a central "
+                            "difference returns their mean, 49.05)"),
+                  std::string::npos)
+            << what;
+      }
+      EXPECT_NE(what.find("move the operating point off it"), std::string::npos) << what;
+    }
+  }
+}
+
+TEST(LinearizeContactSwitch, OnEitherSideOfTheEdgeTheBallLinearizesToItsClosedForm) {
+  const double g = 9.81, r = 0.1;
+  // on the face: x'' = 0 whatever x
+  LinearModel face;
+  EXPECT_NEAR(ball_on_box_slope(-0.1, 1.1, &face), 0.0, 1e-9);
+  EXPECT_NEAR(face.f0.cwiseAbs().maxCoeff(), 0.0, 1e-12);
+  // beyond the edge, pivoting: (g/r) cos 2θ / cos θ (measured: 4.5e-13 relative or better)
+  for (const double th : {0.05, 0.2, 0.5}) {
+    const double want = g / r * std::cos(2 * th) / std::cos(th);
+    EXPECT_NEAR(ball_on_box_slope(0.5 + r * std::sin(th), 1.0 + r * std::cos(th)), want,
+                1e-10 * want)
+        << "theta = " << th;
+  }
+}
+
 }  // namespace UKDYN_TEST_FILE
 }  // namespace ukdyn

@@ -462,6 +462,45 @@ void expect_error(const std::string& control, int line, int column, const std::s
   }
 }
 
+// A requirement's name is unique among the plant's constraints, joints and contacts and the
+// other requirements, in a bodies model as in a robot's (u22 08: a bodies model accepted a
+// requirement named like its contact; tests/modelfile/test_model_robot_contacts.cpp has the
+// robot's), refused at the requirement's name with what holds the name
+TEST(ModelControl, ARequirementNamedLikeAContactOrJointIsRefusedNamingIt) {
+  const std::string bodies = R"(bodies:
+  - {name: ball, type: rigid, mass: 1, inertia: 0.004, position: [0.5, 0, 0.1]}
+  - {name: arm, type: rigid, mass: 1, inertia: 0.004, position: [0, 0, 2]}
+joints:
+  - {name: pivot, type: spherical, parent: ground, child: arm, parent_point: [0, 0, 2]}
+contacts:
+  - {name: floor, body: ball, shape: sphere, radius: 0.1}
+  - {name: feet, body: arm, shape: box, size: [0.1, 0.1, 0.1]}
+control:
+  requirements:
+)";
+  const auto expect_taken = [&](const std::string& name, const std::string& holder) {
+    try {
+      parse_model(bodies + "    - {name: " + name + ", holonomic: ball_x - 0.5}\n", "b.yaml");
+      ADD_FAILURE() << "no error for " << name;
+    } catch (const ModelError& e) {
+      EXPECT_EQ(e.message(), "the name '" + name + "' is taken by " + holder) << e.what();
+      EXPECT_EQ(e.line(), 11) << e.what();
+      EXPECT_EQ(e.column(), 14) << e.what();
+      EXPECT_NE(e.hint().find("unique among the model's constraints, joints, contacts and "
+                              "requirements"),
+                std::string::npos)
+          << e.hint();
+    }
+  };
+  expect_taken("floor", "the contact 'floor'");
+  expect_taken("feet", "the contact 'feet'");  // (a box entry: its corners are feet.0 … feet.7)
+  expect_taken("pivot", "the joint 'pivot'");
+  // a name of its own is read
+  const Model m = parse_model(bodies + "    - {name: track, holonomic: ball_x - 0.5}\n", "b.yaml");
+  ASSERT_TRUE(m.controller);
+  EXPECT_EQ(m.controller->requirement_count(), 1);
+}
+
 TEST(ModelControl, BadControlSectionsAreLocatedErrors) {
   // (the control section starts on line 8)
   expect_error("  requirements: [{name: r, holonomic: x - t}]\n  gains: 3\n", 9, 3,

@@ -254,6 +254,50 @@ TEST(ModelDiagnoses, ContradictoryConstraintsAreNamedByCheckAndRun) {
   }
 }
 
+// A contact that starts penetrated: the run refuses to start, with `project: true` or without
+// (projection does not act on a unilateral gap), so check reports it as a problem with the run's
+// message and hint, and never advises `project: true` for it (u22 07: it said "ok" with project:
+// true, and advised it without)
+TEST(ModelDiagnoses, APenetratedContactIsAProblemOfCheckWithOrWithoutProjection) {
+  const std::string ball = R"(bodies:
+  - {name: ball, type: rigid, mass: 1, inertia: 0.004, position: [0, 0, 0.05]}
+forces:
+  - {type: gravity, g: [0, 0, -9.81]}
+contacts:
+  - {name: floor, body: ball, shape: sphere, radius: 0.1}
+)";
+  for (const bool project : {false, true}) {
+    const Model m = parse_model(ball + (project ? "initial: {project: true}\n" : ""), "p.yaml");
+    const CheckReport r = check_model(m);
+    EXPECT_EQ(r.penetrated, std::vector<std::string>{"floor"}) << project;
+    ASSERT_EQ(r.problems.size(), 1u) << project;
+    // the gap: 0.05 − 0.1
+    EXPECT_TRUE(contains(r.problems[0],
+                         "the unilateral constraint 'floor' is penetrated at the initial state: "
+                         "its gap is -0.05 (a unilateral constraint needs a gap >= 0"))
+        << r.problems[0];
+    EXPECT_TRUE(contains(r.problems[0], "`project: true` does not act on a unilateral gap"))
+        << r.problems[0];
+    EXPECT_FALSE(contains(r.problems[0], "`initial: project:` is not true")) << r.problems[0];
+    // the run agrees
+    try {
+      run_model(m);
+      ADD_FAILURE() << "ran, project " << project;
+    } catch (const InconsistentInitialState& e) {
+      EXPECT_EQ(e.cause(), InconsistentInitialState::Cause::kPenetrated);
+      EXPECT_TRUE(contains(e.what(), "its gap is -0.05")) << e.what();
+    }
+  }
+  // touching (gap 0) and open (gap 0.1): no problem
+  for (const char* z : {"0.1", "0.2"}) {
+    std::string text = ball;
+    text.replace(text.find("0.05]"), 4, z);
+    const CheckReport r = check_model(parse_model(text, "p.yaml"));
+    EXPECT_TRUE(r.penetrated.empty()) << z;
+    EXPECT_TRUE(r.ok()) << z << ": " << (r.problems.empty() ? "" : r.problems[0]);
+  }
+}
+
 // The causes are typed (front ends read cause(), not the message): a pendulum started off its
 // rod is kNotProjected without projection, and consistent after it
 TEST(ModelDiagnoses, InconsistentInitialStateIsTypedByItsCause) {

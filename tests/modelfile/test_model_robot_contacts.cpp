@@ -275,6 +275,18 @@ TEST(ModelRobotContacts, ErrorsNameTheContactAndTheKey) {
         << e.message();
     EXPECT_EQ(e.line(), 5);
   }
+  // a requirement named like a contact: refused, naming the contact, at the requirement's name
+  // (the same rule as a bodies model's: tests/modelfile/test_model_control.cpp; u22 08)
+  try {
+    robot_model(
+        "robot: {urdf: contact_pendulum.urdf}\ncontacts:\n  - {name: tip, link: rod}\ncontrol:\n"
+        "  requirements:\n    - {name: tip, holonomic: hinge - 0.1}\n");
+    ADD_FAILURE() << "no error";
+  } catch (const ModelError& e) {
+    EXPECT_EQ(e.message(), "the name 'tip' is taken by the contact 'tip'") << e.message();
+    EXPECT_EQ(e.line(), 6);
+    EXPECT_EQ(e.column(), 14);
+  }
   // Coulomb friction at a robot's contact slides the contact point: coordinates: refused there
   // (tests/simulation/test_contact_bodies_friction.cpp has the motion and the other errors)
   try {

@@ -179,6 +179,10 @@ struct CheckReport {
   std::vector<std::string> contradictory;
   /// One line per constraint the initial state violates (check_initial_conditions).
   std::vector<std::string> initial_violations;
+  /// Unilateral contacts penetrated at the initial state beyond the run's tolerance (a gap below
+  /// −max(initial_tolerance, 1e-9) of its gap unit): a run refuses to start, projected or not
+  /// (`project: true` does not act on a unilateral gap); each is also a problem.
+  std::vector<std::string> penetrated;
   /// M(q0, t_start) symmetric positive definite, or positive semi-definite (mass_singular)
   bool mass_positive_definite = false;
   /// M(q0, t_start) singular: positive semi-definite, completed by the constraints when [M; A]
