@@ -755,5 +755,62 @@ TEST(ControlSlip, BoxYawedOnFourCornersTurnsWithCoulombsTorqueForAnyYawAccelerat
   }
 }
 
+// ---- a ball driven round a circle by a torque beyond what friction transmits (u22 05) -------
+
+// a solid ball (m = 1, r = 0.1) rolling on a rough floor (mu = mu_s = 0.5), the control on its
+// quaternion only, its centre required to go round a circle of radius 0.5 at W = 4: the
+// centripetal 8 m/s² > mu g = 4.905. With the contact sliding the torque does not move the
+// centre, so the control is the one that meets the requirement with the contact held; the ball
+// slides under it, its centre accelerated by the friction mu m g alone. (Before: with the
+// contact sliding, the actuated columns of X were roundoff of its centre's, ~1e-17, taken as
+// rank: Qc ~ 1e16, the step size underflowed at t = 7.5e-10 s, and bdf hung.)
+TEST(ControlSlip, BallDrivenRoundACircleFasterThanFrictionAllowsSlidesAtMuG) {
+  const std::string text = R"(parameters: {m: 1, r: 0.1, R: 0.5, W: 4, mu: 0.5}
+bodies:
+  - {name: ball, type: rigid, mass: m, inertia: 0.4*m*r^2, position: [R, 0, r],
+     velocity: [0, R*W, 0], angular_velocity: [-R*W/r, 0, 0]}
+forces:
+  - {type: gravity, g: [0, 0, -9.81]}
+contacts:
+  - {name: floor, body: ball, shape: sphere, radius: r}
+nonideal:
+  - {friction: coulomb, constraint: floor, mu: mu}
+control:
+  actuated: [ball_u0, ball_u1, ball_u2, ball_u3]
+  requirements:
+    - {name: cx, holonomic: ball_x - R*cos(W*t)}
+    - {name: cy, holonomic: ball_y - R*sin(W*t)}
+simulate: {t_end: 1}
+output: {every: 0.05}
+)";
+  for (const Integrator integrator : {Integrator::kDopri5, Integrator::kBDF}) {
+    SCOPED_TRACE(to_string(integrator));
+    Model model = parse_model(text);
+    model.options.integrator = integrator;
+    const ControlledTrajectory r =
+        simulate_controlled(*model.controller, model.system, model.q0, model.qd0, model.options);
+    const Trajectory& tr = r.plant;
+    ASSERT_EQ(tr.stats.status, Status::kOk) << tr.stats.message;
+    ASSERT_EQ(tr.samples(), 21);
+    EXPECT_GT(r.control.not_met, 0);
+    EXPECT_TRUE(r.control.held_control);
+    EXPECT_NE(r.control.not_met_message.find(
+                  "the control that meets them with the sliding contact held applied (the "
+                  "contact slides under it). Not met: 'cx' (residual 8)"),
+              std::string::npos)
+        << r.control.not_met_message;
+    EXPECT_NE(r.control.not_met_message.find(
+                  "needs a holding force of 8 N > mu_static N = 4.905 N (N = 9.81 N), more than "
+                  "static friction gives"),
+              std::string::npos)
+        << r.control.not_met_message;
+    // the centre's horizontal acceleration is the friction's, mu g, throughout
+    for (std::size_t i = 0; i < 21; ++i) {
+      const double ax = at(tr, tr.qdd, "ball.x", i), ay = at(tr, tr.qdd, "ball.y", i);
+      EXPECT_NEAR(std::hypot(ax, ay), 0.5 * kG, 1e-9) << "t = " << tr.t[i];
+    }
+  }
+}
+
 }  // namespace UKDYN_TEST_FILE
 }  // namespace ukdyn
