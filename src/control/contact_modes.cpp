@@ -54,6 +54,8 @@ ContactModes::ContactModes(const Controller& ctrl) : lcp_(0) {
   lcp_ = ContactLcp(K);
   stuck_.reserve(frictions_.size());
   sliding_.reserve(frictions_.size());
+  resting_.reserve(frictions_.size());
+  resting_enabled_.assign(frictions_.size(), 0);
   lifted_.reserve(frictions_.size());
   lifted_modes_.assign(frictions_.size(), 0);
   lifted_enabled_.assign(frictions_.size(), 0);
@@ -514,7 +516,30 @@ void ContactModes::slip(const Controller& ctrl, ControlWorkspace& cws,
     hints_.setZero(model.slip_hint.rows(), Index(frictions_.size()));
     held_hints_.setZero(model.slip_hint.rows(), Index(frictions_.size()));
   }
+  // the closed ones that slide at rest (|v_rel| <= eps: the run released them, their friction
+  // along the run's hint, the holding force's direction they let go with) take their friction
+  // against the motion the requirements impose too: a box on four corners of which the run
+  // released one, whose friction along its hint pushed the frictionless motion of the three
+  // still stuck sideways, their hints then mostly along that push, and F_s 0.64 of the torque
+  // Coulomb's sliding needs (u22 02)
+  resting_.clear();
+  const System& sys = ctrl.model();
+  for (std::size_t j = 0; j < frictions_.size(); ++j) {
+    const FrictionContact& c = frictions_[j];
+    const auto k = std::size_t(c.normal_constraint);
+    const bool separated = sys.constraint(Index(k)).is_unilateral() && !model.active[k];
+    if (model.activity_override[std::size_t(c.stick_constraint)] > 0 || separated) continue;
+    detail::sliding_velocity(sys, model, Index(j), q, qd, t, false);
+    if (!(model.sliding.col(Index(j)).head(c.size()).norm() <= c.eps)) continue;
+    resting_.push_back(j);
+    resting_enabled_[j] = model.nonideal_enabled[std::size_t(c.force)];
+  }
   for (std::size_t j : stuck_) {
+    const FrictionContact& c = frictions_[j];
+    held_[j] = model.slip_hint_held[std::size_t(c.force)];
+    held_hints_.col(Index(j)) = model.slip_hint.col(c.force);
+  }
+  for (std::size_t j : resting_) {
     const FrictionContact& c = frictions_[j];
     held_[j] = model.slip_hint_held[std::size_t(c.force)];
     held_hints_.col(Index(j)) = model.slip_hint.col(c.force);
@@ -531,12 +556,12 @@ void ContactModes::slip(const Controller& ctrl, ControlWorkspace& cws,
   }
   // the friction against the relative acceleration it imposes (none where it is roundoff of
   // its terms: no direction to slide in), and F_s, the control with that friction
-  for (std::size_t j : stuck_) {
+  auto hint_against = [&](std::size_t j) {
     double scale = 0.0;
     const Index k = relative_acceleration(ctrl, cws, j, q, qd, t, scale);
     auto hint = hints_.col(Index(j));
     hint.setZero();
-    if (!(accel_.head(k).norm() > kSignificant * scale)) continue;
+    if (!(accel_.head(k).norm() > kSignificant * scale)) return;
     const FrictionContact& c = frictions_[j];
     if (c.kinematics) {
       hint.head(k) = -accel_.head(k).normalized();
@@ -544,7 +569,9 @@ void ContactModes::slip(const Controller& ctrl, ControlWorkspace& cws,
       const double a = accel_.head(k).norm();
       for (Index r = 0; r < k; ++r) hint[c.coordinates[std::size_t(r)]] = -accel_[r] / a;
     }
-  }
+  };
+  for (std::size_t j : stuck_) hint_against(j);
+  for (std::size_t j : resting_) hint_against(j);
   slide_stuck(model, true);
   const bool met = compute_control(ctrl, cws, q, qd, t) == ControlStatus::kOk;
   F_s_ = cws.Qc_control;
@@ -766,6 +793,12 @@ void ContactModes::slide_stuck(Workspace& model, bool friction) {
     model.slip_hint.col(c.force) = hints_.col(Index(j));
     model.slip_hint_held[std::size_t(c.force)] = 0;
   }
+  for (std::size_t j : resting_) {
+    const FrictionContact& c = frictions_[j];
+    model.nonideal_enabled[std::size_t(c.force)] = friction ? 1 : 0;
+    model.slip_hint.col(c.force) = hints_.col(Index(j));
+    model.slip_hint_held[std::size_t(c.force)] = 0;
+  }
 }
 
 void ContactModes::hold_stuck(Workspace& model) const {
@@ -773,6 +806,12 @@ void ContactModes::hold_stuck(Workspace& model) const {
     const FrictionContact& c = frictions_[j];
     model.activity_override[std::size_t(c.stick_constraint)] = 1;
     model.nonideal_enabled[std::size_t(c.force)] = 0;
+    model.slip_hint.col(c.force) = held_hints_.col(Index(j));
+    model.slip_hint_held[std::size_t(c.force)] = held_[j];
+  }
+  for (std::size_t j : resting_) {
+    const FrictionContact& c = frictions_[j];
+    model.nonideal_enabled[std::size_t(c.force)] = resting_enabled_[j];
     model.slip_hint.col(c.force) = held_hints_.col(Index(j));
     model.slip_hint_held[std::size_t(c.force)] = held_[j];
   }

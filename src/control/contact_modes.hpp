@@ -77,7 +77,9 @@ class ContactModes {
   // "Contacts under control"). After settle, when the requirements are not met and Coulomb
   // contacts stick in the model: the control is recomputed with them sliding, first without
   // friction (q''₀: the relative acceleration a_rel the requirements impose on each contact),
-  // then with the friction mu N against it (slip_hint = −a_rel/|a_rel|), giving F_s. If F_s
+  // then with the friction mu N against it (slip_hint = −a_rel/|a_rel|), giving F_s — the
+  // closed contacts that already slide at rest (|v_rel| <= eps: released by the run, one corner
+  // of a box) with them, their friction too turned against a_rel (u22 02). If F_s
   // meets the requirements, the reaction it would need with the contacts stuck is
   // λ + λ_nonideal + Δλ, Δλ = −G_p⁺ A_p M⁻¹ F_s (the stuck model's project_nonideal), split into
   // each contact's normal force N and holding force H as the run's stick margin splits it. When
@@ -220,7 +222,8 @@ class ContactModes {
                      const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd,
                      double t);
   // slip's modes of the stuck contacts stuck_: sliding (friction on with the hint in hints_,
-  // or off), or the mirrored ones back (saved in held_)
+  // or off), or the mirrored ones back (saved in held_); and of those sliding at rest, resting_:
+  // their friction on with the hint in hints_ (or off), or the mirrored friction and hint back
   void slide_stuck(Workspace& model, bool friction);
   void hold_stuck(Workspace& model) const;
   // hold_sliding's modes of the sliding contacts stuck_: held (their stick constraint on, their
@@ -283,7 +286,12 @@ class ContactModes {
   VectorXd accel_, reaction_, part_;  // (max(n, 2)), (n), (n)
   MatrixXd normals_;                  // (rows of a normal constraint × n)
   std::vector<std::size_t> sliding_;  // (≤ frictions) hold_by_split: the closed ones sliding
-  std::vector<std::size_t> lifted_;   // (≤ frictions) open_lifted_sticks: the sticks it opened
+  // (≤ frictions) slip(): the closed ones sliding at rest (|v_rel| <= eps), whose friction it
+  // turns against the relative acceleration too (slide_stuck), and their mirrored
+  // nonideal_enabled (frictions; their hints in held_hints_, held_)
+  std::vector<std::size_t> resting_;
+  std::vector<unsigned char> resting_enabled_;
+  std::vector<std::size_t> lifted_;  // (≤ frictions) open_lifted_sticks: the sticks it opened
   std::vector<signed char> lifted_modes_;      // (frictions) their stick's override before
   std::vector<unsigned char> lifted_enabled_;  // (frictions) their nonideal_enabled before
   detail::SplitSpace space_;                   // hold_by_split: the split space of stuck_

@@ -28,6 +28,9 @@ struct ControlAtStart {
   // why static friction holds a contact a requirement needs to slide, or why a requirement met
   // only with a sliding contact held is not met (ContactModes::held_note)
   std::string stick_note;
+  // the control there is the one that meets the requirements with a sliding contact held
+  // (ContactModes::hold_sliding), which the run applies with it sliding
+  bool held = false;
 };
 
 // simulate_controlled (control/control.hpp) whose first sample, when `start` is not null, also

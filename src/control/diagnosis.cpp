@@ -191,9 +191,12 @@ std::vector<std::string> control_warnings(const ControlStatistics& c,
                   c.not_met, c.evaluations, c.first_not_met, time_unit.c_str());
     std::string w = line + c.not_met_message;
     std::snprintf(line, sizeof line,
-                  "); largest residual %.3g. It applied the least-squares force: see the "
-                  "error.* columns for what was not met",
-                  c.max_residual);
+                  "); largest residual %.3g. It applied %s: see the error.* columns for what was "
+                  "not met",
+                  c.max_residual,
+                  c.held_control ? "the control that meets them with the contact held, the "
+                                   "contact sliding under it"
+                                 : "the least-squares force");
     out.push_back(w + line);
   }
   if (std::isfinite(c.bound_exceeded_at)) {

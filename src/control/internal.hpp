@@ -121,4 +121,10 @@ class BoundWatch {
   Index worst_row_ = -1;
 };
 
+// describe_control_status(ctrl, ws), whose kRequirementsNotMet text says what the control
+// applied: with `held`, the control that meets the requirements with the sliding Coulomb
+// contacts held (ContactModes::hold_sliding), under which they slide; else the least-squares
+// force. O(m_r n) (explain_requirements_not_met's)
+std::string describe_control_status(const Controller& ctrl, const ControlWorkspace& ws, bool held);
+
 }  // namespace ukdyn::control_detail

@@ -163,6 +163,19 @@ ControlStatus control_detail::solve_law_on(const Controller& ctrl, ControlWorksp
     } else {
       ws.XS.noalias() = ws.X * ctrl.actuation();
     }
+    // a row the actuators do not move (X_i S roundoff of X_i: a ball sliding on a rough floor,
+    // whose centre a torque moves only through the friction it does not change) zeroed, as
+    // removed() zeroes X_i: its entries in the quaternion's columns, ~1e-17 of the centre's,
+    // counted as rank and the law answered e_i / 1e-17 (Qc ~ 1e16, the step size underflowed
+    // at t = 7.5e-10 s; u22 05)
+    if (physical) {
+      const double s_max = ctrl.fully_actuated() || !ctrl.actuated_coordinates().empty()
+                               ? 1.0
+                               : ctrl.actuation().colwise().norm().maxCoeff();
+      for (Index i = 0; i < m_r; ++i) {
+        if (ws.XS.row(i).norm() <= kUnmoved * s_max * ws.X.row(i).norm()) ws.XS.row(i).setZero();
+      }
+    }
     ws.decomposition.compute_constraints(ws.XS);
     ws.rank = ws.decomposition.rank();
     // u = R⁻ᵀ (X S R⁻ᵀ)⁺ e,  Qc = S u

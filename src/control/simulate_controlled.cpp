@@ -285,7 +285,10 @@ void ControlledPlant::note_not_met(ControlledScratch& w, double t) const {
   }
   if (stats.not_met == 1) {
     stats.first_not_met = t;
-    stats.not_met_message = describe_control_status(ctrl, w.cws);  // once
+    // (once; saying what was applied: the held control where a sliding contact was held)
+    stats.held_control = w.contacts.held_sliding();
+    stats.not_met_message =
+        control_detail::describe_control_status(ctrl, w.cws, stats.held_control);
   }
   // (a stuck contact that a requirement needs to slide, held by static friction: why, once)
   if (w.contacts.slipped() < 0 && !w.stick_noted) {
@@ -675,7 +678,9 @@ ControlledTrajectory control_detail::run_controlled(
       // (a requirement that needs a contact to pull: the run stops, saying pull_failure)
       if (modes.settle(ctrl, c0, q, qd, t, s0, start->pull_failure)) {
         start->status = s0;
-        if (s0 != ControlStatus::kOk) start->description = describe_control_status(ctrl, c0);
+        start->held = modes.held_sliding();
+        if (s0 != ControlStatus::kOk)
+          start->description = control_detail::describe_control_status(ctrl, c0, start->held);
         start->unactuated = explain_unactuated_requirements(ctrl, c0);
         if (modes.slipped() < 0) start->stick_note = modes.stick_note(ctrl);
         if (modes.held_sliding()) start->stick_note = modes.held_note(ctrl);

@@ -86,6 +86,11 @@ ControlWorkspace::ControlWorkspace(const Controller& ctrl)
 }
 
 std::string describe_control_status(const Controller& ctrl, const ControlWorkspace& ws) {
+  return control_detail::describe_control_status(ctrl, ws, false);
+}
+
+std::string control_detail::describe_control_status(const Controller& ctrl,
+                                                    const ControlWorkspace& ws, bool held) {
   const std::string when = "ukdyn control at t = " + format(ws.failed_time) + ": ";
   switch (ws.status) {
     case ControlStatus::kOk:
@@ -116,8 +121,11 @@ std::string describe_control_status(const Controller& ctrl, const ControlWorkspa
       const std::string why = explain_requirements_not_met(ctrl, ws);
       return when + "the requirements cannot all be met " + actuators +
              (why.empty() ? "" : ": " + why) + " (rank of the requirement rows " +
-             format_number(ws.rank) + "); least squares applied. Not met: " + missed +
-             (kept.empty() ? "; none met" : "; met: " + kept);
+             format_number(ws.rank) + "); " +
+             (held ? "the control that meets them with the sliding contact held applied (the "
+                     "contact slides under it)"
+                   : "least squares applied") +
+             ". Not met: " + missed + (kept.empty() ? "; none met" : "; met: " + kept);
     }
     case ControlStatus::kModelFailed:
       // (the model's evaluation succeeded, singular M and all, when the law's own factorization

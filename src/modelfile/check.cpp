@@ -97,12 +97,15 @@ void check_control(const Model& model, CheckReport& report) {
     // (an evaluation that fails is reported by the control's check below)
   }
   auto report_status = [&](ControlStatus s, const std::string& description,
-                           const std::string& unactuated) {
+                           const std::string& unactuated, bool held = false) {
     if (s == ControlStatus::kRequirementsNotMet) {
       report.problems.push_back(
-          "the control cannot meet its requirements at the initial state (a run warns and "
-          "applies the least-squares force): " +
-          description);
+          std::string("the control cannot meet its requirements at the initial state (a run "
+                      "warns and applies ") +
+          (held ? "the control that meets them with the sliding contact held, the contact "
+                  "sliding under it"
+                : "the least-squares force") +
+          "): " + description);
     } else if (s == ControlStatus::kOk && !unactuated.empty()) {
       report.problems.push_back(
           "the control meets its requirements at the initial state only because they ask for "
@@ -135,7 +138,7 @@ void check_control(const Model& model, CheckReport& report) {
     }
     report_status(c.status,
                   c.stick_note.empty() ? c.description : c.description + "; " + c.stick_note,
-                  c.unactuated);
+                  c.unactuated, c.held);
   } catch (const InconsistentInitialState&) {
     // (the initial state's violations, reported above: the run does not start)
   } catch (const std::exception& e) {

@@ -689,5 +689,128 @@ TEST(ControlSlip, WheelDrivenBeyondWhatStaticFrictionTransmitsSpinsAndSlidesAtMu
   }
 }
 
+// ---- a box yawed on its four corners by a torque (u22 02) -----------------------------------
+
+// a box (m = 2, half-extents 0.2 x 0.1 x 0.05, a rigid body in quaternions) on its four bottom
+// corners on a rough floor (mu = mu_s = 0.3), the control acting on its quaternion only (a
+// torque), required to yaw psi = 2 k t² (u3 = sin(k t²) at u1 = u2 = 0). Each corner, at
+// rho = sqrt(0.05) from the centre, holds at most mu m g / 4, so any psi'' = 4 k > 0 needs the
+// torque I_z psi'' + mu m g rho beyond what static friction holds: the box turns from t = 0 and
+// follows psi exactly with that torque. (It stayed stuck up to psi'' = 4.11 — the run released one
+// corner, and the control with the other three sliding took their friction against a motion that
+// the released corner's friction pushed sideways, needing 0.64 of Coulomb's torque, which the
+// three then held.)
+std::string yawed_box(double k) {
+  return "parameters: {m: 2, a: 0.2, b: 0.1, c: 0.05, mu: 0.3, k: " + format_number(k) + R"(}
+bodies:
+  - {name: box, type: rigid, mass: m, inertia: [m*(b^2+c^2)/3, m*(a^2+c^2)/3, m*(a^2+b^2)/3],
+     position: [0, 0, c]}
+forces:
+  - {type: gravity, g: [0, 0, -9.81]}
+contacts:
+  - {name: floor, body: box, shape: box, size: [a, b, c]}
+nonideal:
+  - {friction: coulomb, constraint: floor, mu: mu}
+control:
+  actuated: [box_u0, box_u1, box_u2, box_u3]
+  requirements:
+    - {name: yaw, holonomic: box_u3 - sin(k*t^2)}
+simulate: {t_end: 0.5}
+output: {every: 0.05}
+)";
+}
+
+TEST(ControlSlip, BoxYawedOnFourCornersTurnsWithCoulombsTorqueForAnyYawAcceleration) {
+  const double m = 2.0, Iz = m * (0.04 + 0.01) / 3.0, rho = std::sqrt(0.05);
+  const double coulomb = 0.3 * m * kG * rho;  // 1.31615
+  EXPECT_NEAR(coulomb, 1.3161496116, 1e-9);
+  // psi'' = 0.1, 1, 4 (held before: up to 4.11), 8
+  for (const double k : {0.025, 0.25, 1.0, 2.0}) {
+    SCOPED_TRACE("psi'' = " + format_number(4.0 * k));
+    const ControlledTrajectory r = run(yawed_box(k));
+    const Trajectory& tr = r.plant;
+    ASSERT_EQ(tr.stats.status, Status::kOk) << tr.stats.message;
+    EXPECT_EQ(r.control.not_met, 0) << r.control.not_met_message;
+    ASSERT_EQ(tr.samples(), 11);
+    for (std::size_t i = 0; i < 11; ++i) {
+      const double t = tr.t[i];
+      const double u0 = at(tr, tr.q, "box.u0", i), u3 = at(tr, tr.q, "box.u3", i);
+      EXPECT_NEAR(2.0 * std::atan2(u3, u0), 2.0 * k * t * t, 1e-9) << "t = " << t;
+      // the torque about z of the generalized force on the quaternion (u1 = u2 = 0):
+      // tau_z = (u0 Q3 − u3 Q0) / 2
+      const double tau =
+          (u0 * at(tr, r.Qc_control, "box.u3", i) - u3 * at(tr, r.Qc_control, "box.u0", i)) / 2.0;
+      EXPECT_NEAR(tau, Iz * 4.0 * k + coulomb, 1e-8) << "t = " << t;
+      EXPECT_NEAR(at(tr, tr.q, "box.x", i), 0.0, 1e-9) << "t = " << t;
+      EXPECT_NEAR(at(tr, tr.q, "box.y", i), 0.0, 1e-9) << "t = " << t;
+    }
+  }
+  // psi'' = 0: nothing to do, it stays stuck with no torque
+  const ControlledTrajectory r = run(yawed_box(0.0));
+  ASSERT_EQ(r.plant.stats.status, Status::kOk) << r.plant.stats.message;
+  EXPECT_EQ(r.control.not_met, 0) << r.control.not_met_message;
+  for (std::size_t i = 0; i < std::size_t(r.plant.samples()); ++i) {
+    EXPECT_NEAR(at(r.plant, r.plant.q, "box.u3", i), 0.0, 1e-12);
+    EXPECT_NEAR(at(r.plant, r.Qc_control, "box.u3", i), 0.0, 1e-12);
+  }
+}
+
+// ---- a ball driven round a circle by a torque beyond what friction transmits (u22 05) -------
+
+// a solid ball (m = 1, r = 0.1) rolling on a rough floor (mu = mu_s = 0.5), the control on its
+// quaternion only, its centre required to go round a circle of radius 0.5 at W = 4: the
+// centripetal 8 m/s² > mu g = 4.905. With the contact sliding the torque does not move the
+// centre, so the control is the one that meets the requirement with the contact held; the ball
+// slides under it, its centre accelerated by the friction mu m g alone. (Before: with the
+// contact sliding, the actuated columns of X were roundoff of its centre's, ~1e-17, taken as
+// rank: Qc ~ 1e16, the step size underflowed at t = 7.5e-10 s, and bdf hung.)
+TEST(ControlSlip, BallDrivenRoundACircleFasterThanFrictionAllowsSlidesAtMuG) {
+  const std::string text = R"(parameters: {m: 1, r: 0.1, R: 0.5, W: 4, mu: 0.5}
+bodies:
+  - {name: ball, type: rigid, mass: m, inertia: 0.4*m*r^2, position: [R, 0, r],
+     velocity: [0, R*W, 0], angular_velocity: [-R*W/r, 0, 0]}
+forces:
+  - {type: gravity, g: [0, 0, -9.81]}
+contacts:
+  - {name: floor, body: ball, shape: sphere, radius: r}
+nonideal:
+  - {friction: coulomb, constraint: floor, mu: mu}
+control:
+  actuated: [ball_u0, ball_u1, ball_u2, ball_u3]
+  requirements:
+    - {name: cx, holonomic: ball_x - R*cos(W*t)}
+    - {name: cy, holonomic: ball_y - R*sin(W*t)}
+simulate: {t_end: 1}
+output: {every: 0.05}
+)";
+  for (const Integrator integrator : {Integrator::kDopri5, Integrator::kBDF}) {
+    SCOPED_TRACE(to_string(integrator));
+    Model model = parse_model(text);
+    model.options.integrator = integrator;
+    const ControlledTrajectory r =
+        simulate_controlled(*model.controller, model.system, model.q0, model.qd0, model.options);
+    const Trajectory& tr = r.plant;
+    ASSERT_EQ(tr.stats.status, Status::kOk) << tr.stats.message;
+    ASSERT_EQ(tr.samples(), 21);
+    EXPECT_GT(r.control.not_met, 0);
+    EXPECT_TRUE(r.control.held_control);
+    EXPECT_NE(r.control.not_met_message.find(
+                  "the control that meets them with the sliding contact held applied (the "
+                  "contact slides under it). Not met: 'cx' (residual 8)"),
+              std::string::npos)
+        << r.control.not_met_message;
+    EXPECT_NE(r.control.not_met_message.find(
+                  "needs a holding force of 8 N > mu_static N = 4.905 N (N = 9.81 N), more than "
+                  "static friction gives"),
+              std::string::npos)
+        << r.control.not_met_message;
+    // the centre's horizontal acceleration is the friction's, mu g, throughout
+    for (std::size_t i = 0; i < 21; ++i) {
+      const double ax = at(tr, tr.qdd, "ball.x", i), ay = at(tr, tr.qdd, "ball.y", i);
+      EXPECT_NEAR(std::hypot(ax, ay), 0.5 * kG, 1e-9) << "t = " << tr.t[i];
+    }
+  }
+}
+
 }  // namespace UKDYN_TEST_FILE
 }  // namespace ukdyn

@@ -507,7 +507,11 @@ struct ControlStatistics {
   double max_residual = 0.0;    ///< largest |residual| of a row not met (0 if always met)
   double first_not_met = 0.0;   ///< time of the first evaluation not met (NaN if none)
   std::string not_met_message;  ///< describe_control_status() of that evaluation ("" if none)
-  double max_kappa = 0.0;       ///< largest robust gain seen
+  /// the control applied at that evaluation was the one that meets the requirements with a
+  /// sliding Coulomb contact held (docs/contact.md, "Contacts under control"), not the
+  /// least-squares force
+  bool held_control = false;
+  double max_kappa = 0.0;  ///< largest robust gain seen
   /// Robust settings only: the first sample time at which a row's |error| exceeded its
   /// guaranteed bound (error_bound) by more than kBoundMargin — the plant then lies outside the
   /// uncertainty model of RobustControl, and the bound guarantees nothing (NaN if never).
