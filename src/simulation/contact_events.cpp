@@ -152,6 +152,11 @@ double ContactEvents::find(double t0, const double* x0, double t1, const double*
       // (an open gap or rate that turns non-finite — its expression out of its domain — is no
       // row of the evaluation, so nothing else sees it: the impacts up to the last finite time
       // are located, else the run stops there)
+      // (an opening gap: touching or within kTouchGap of it, and g' > 0, after a release or an
+      // impact)
+      const Index k = dyn_.contacts()[i];
+      const bool opening = g0 <= kTouchGap * gap_scale(sys_, ws_, k) &&
+                           gd0 > kStillRate * gap_rate_scale(sys_, ws_, k);
       double tf = t1;
       if (!finite_gap(Index(i), t1, x1, g1, gd1)) {
         tf = last_finite(t0, x0, t1, x1, dense, Index(i), g1, nonfinite);
@@ -176,6 +181,18 @@ double ContactEvents::find(double t0, const double* x0, double t1, const double*
         // other in free flight, where one smooth step spans the whole overlap)
         te = g0 < level ? t0 : locate(t0, tm, dense, Index(i), true, level);
       } else {
+        continue;
+      }
+      // an opening gap is hit again only once it turns back (it approaches at the crossing, or
+      // at the step's end across its level): a crossing of its level where it still opens is the
+      // step's error or its interpolant's at the scale of the opening (BDF's first-order steps: a
+      // chord whose gap dips by ~(Δθ)², and a position error of rtol, both far above the gap's rise
+      // of 1e-14 in a step after a release at g' ~ 1e-9, or after the last impacts of an
+      // accumulation at g' ~ 1e-5), and the restart there found it again in every step, ~1e-12 s
+      // apart (the ladder, the rocking block, the cam follower, the bouncing ball under BDF)
+      if (opening && nonfinite.empty() &&
+          !(g1 < level && gd1 < -kStillRate * gap_rate_scale(sys_, ws_, k)) &&
+          !approaches(Index(i), t0, x0, te, dense)) {
         continue;
       }
     } else {
@@ -280,6 +297,18 @@ double ContactEvents::dip(double t0, double gd0, double t1, double gd1,
   dense(lo, xs_.data());
   if (!finite_gap(i, lo, xs_.data(), g, gd)) return kNaN;
   return g < level ? lo : kNaN;
+}
+
+bool ContactEvents::approaches(Index i, double t0, const double* x0, double t,
+                               const SegmentHooks::Dense& dense) {
+  double g = 0.0, gd = 0.0;
+  if (t > t0) {
+    dense(t, xs_.data());
+    if (!finite_gap(i, t, xs_.data(), g, gd)) return true;  // (the step's end test sees it)
+  } else if (!finite_gap(i, t0, x0, g, gd)) {
+    return true;
+  }
+  return gd < -kStillRate * gap_rate_scale(sys_, ws_, dyn_.contacts()[std::size_t(i)]);
 }
 
 bool ContactEvents::finite_gap(Index i, double t, const double* x, double& g, double& gd) {

@@ -128,6 +128,10 @@ class ContactEvents {
   // Cost ≤ 41 gap evaluations, only for such steps
   double dip(double t0, double gd0, double t1, double gd1, const SegmentHooks::Dense& dense,
              Index k, double level);
+  // open contact k approaches at t in [t0, t1] (dense output; x0 at t0): its gap rate below
+  // −kStillRate (a non-finite gap counts as approaching: the caller's tests see it). One gap
+  // evaluation
+  bool approaches(Index k, double t0, const double* x0, double t, const SegmentHooks::Dense& dense);
   // contact k's gap g and gap rate gd at (t, x); true when both are finite
   bool finite_gap(Index k, double t, const double* x, double& g, double& gd);
   // the last time in [t0, t1] where open contact k's gap and rate are finite, by bisection on

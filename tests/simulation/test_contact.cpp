@@ -267,6 +267,70 @@ TEST(Contact, LadderLeavesTheWallAtTwoThirdsOfItsInitialHeight) {
   EXPECT_TRUE(tr.stats.energy_balance_checked);
 }
 
+// ---- BDF after a contact opens ------------------------------------------------------------------
+
+// BDF (CVODE) across releases, impacts and accumulations, against the closed form and dopri5:
+// after the ladder's release (the gap opens from a roundoff penetration at g' ~ 1e-9, far below
+// one step's error) and after a ball's last bounces (flights of 1e-6 s, shorter than the step
+// before them), a crossing of the gap's level where it still opened was taken for an impact and
+// restarted the run there in every step, ~1e-12 s apart: 7e5 steps without progress. The step
+// counts bound that (BDF takes a few hundred to a few thousand here).
+TEST(ContactBdf, RunsThroughReleasesImpactsAndAccumulationsAsDopri5Does) {
+  {
+    const double th0 = M_PI / 3.0;
+    Model m = parse_model(kLadder);
+    m.options.integrator = Integrator::kBDF;
+    const Trajectory tr = simulate(m.system, m.q0, m.qd0, m.options);
+    ASSERT_EQ(tr.stats.status, Status::kOk) << tr.stats.message;
+    const auto releases = events_of(tr, 0, ContactEvent::Kind::kRelease);
+    ASSERT_EQ(releases.size(), 1u);
+    EXPECT_TRUE(tr.stats.contact_events.size() == 1u);
+    EXPECT_LT(tr.stats.steps, 3000);
+    m.options.output_at = {releases[0].t};
+    const Trajectory at = simulate(m.system, m.q0, m.qd0, m.options);
+    ASSERT_EQ(at.stats.status, Status::kOk) << at.stats.message;
+    const double th = at.q[3 * sample_at(at, releases[0].t) + 2];
+    EXPECT_NEAR(std::sin(th), 2.0 / 3.0 * std::sin(th0), 1e-7);
+    // free of the wall after it: energy conserved, the gap open
+    EXPECT_NEAR(at.energy.back(), at.energy.front(), 1e-7 * 2.0 * kG);
+    EXPECT_GT(at.q[at.q.size() - 3] - std::cos(at.q.back()), 1e-3);
+  }
+  for (const char* name : {"bouncing_ball_bodies", "rocking_block", "cam_follower_jump"}) {
+    SCOPED_TRACE(name);
+    Model m = load_model(std::string(UKDYN_EXAMPLES_DIR) + "/" + name + ".yaml");
+    m.options.integrator = Integrator::kDopri5;
+    const Trajectory ref = simulate(m.system, m.q0, m.qd0, m.options);
+    m.options.integrator = Integrator::kBDF;
+    const Trajectory tr = simulate(m.system, m.q0, m.qd0, m.options);
+    ASSERT_EQ(ref.stats.status, Status::kOk) << ref.stats.message;
+    ASSERT_EQ(tr.stats.status, Status::kOk) << tr.stats.message;
+    EXPECT_LT(tr.stats.steps, 10000);
+    const auto& a = tr.stats.contact_events;
+    const auto& b = ref.stats.contact_events;
+    ASSERT_FALSE(a.empty());
+    if (std::string(name) == "bouncing_ball_bodies") {
+      // the accumulation: both come to rest within the rest criterion's 1e-6 of the first speed
+      // of t∞ = t0 (1 + e)/(1 − e), t0 = √(2 (h0 − r)/g), and at rest on the ground
+      const double t_inf = std::sqrt(2.0 * 0.9 / kG) * 1.7 / 0.3;
+      ASSERT_EQ(a.back().kind, ContactEvent::Kind::kRest);
+      EXPECT_NEAR(a.back().t, t_inf, 1e-4 * t_inf);
+      EXPECT_NEAR(b.back().t, t_inf, 1e-4 * t_inf);
+      const std::size_t n = m.system.coordinate_count();
+      EXPECT_NEAR(tr.q[tr.q.size() - n + 2], 0.1, 1e-9);
+      EXPECT_NEAR(tr.qd[tr.qd.size() - n + 2], 0.0, 1e-9);
+    } else {
+      // the same events at the same times (to the two methods' tolerances)
+      ASSERT_EQ(a.size(), b.size());
+      for (std::size_t k = 0; k < a.size(); ++k) {
+        EXPECT_EQ(a[k].kind, b[k].kind) << "event " << k;
+        EXPECT_NEAR(a[k].t, b[k].t, 1e-7) << "event " << k;
+      }
+    }
+    EXPECT_NEAR(tr.energy.back() - tr.energy.front(), ref.energy.back() - ref.energy.front(),
+                1e-6 * std::max(1.0, std::abs(ref.energy.front())));
+  }
+}
+
 // ---- Newton's cradle ---------------------------------------------------------------------------
 
 // N equal balls (diameter 1) on a line, gaps of 1e-3 between them; the first moves at v = 1
