@@ -53,12 +53,17 @@ ContactEvents::ContactEvents(const System& sys, Workspace& ws, std::size_t x_siz
       impacts_(dyn_.contacts().size(), 0),
       pulled_(dyn_.contacts().size(), kNaN),
       moving_(dyn_.contacts().size(), 0),
+      position_(std::size_t(sys.constraint_count()), dyn_.contacts().size()),
       q_(n_),
       qd_(n_),
       xs_(Index(x_size)),
       qd_before_(n_),
       recent_(dyn_.contacts().empty() ? 0 : std::size_t(kChatterEvents), 0.0),
-      span_(span) {}
+      span_(span) {
+  for (std::size_t i = 0; i < dyn_.contacts().size(); ++i) {
+    position_[std::size_t(dyn_.contacts()[i])] = i;
+  }
+}
 
 void ContactEvents::apply() const {
   for (std::size_t i = 0; i < closed_.size(); ++i) {
@@ -104,9 +109,22 @@ double ContactEvents::impact_level(Index k, double g, double gd) const {
   // of impacts would fall up to kTouchGap further than it rose, and never come to rest — a
   // sphere's gap z − r has the roundoff of z
   const double touch = kTouchGap * gap_scale(sys_, ws_, k);
-  const bool still = std::abs(gd) <= kStillRate * gap_rate_scale(sys_, ws_, k);
+  const bool still = std::abs(gd) <= still_rate(k);
   if (!(g < 0.0) && !(still && g <= touch)) return 0.0;
   return gd > 0.0 && !still ? std::max(g, -touch) : -touch;
+}
+
+double ContactEvents::still_rate(Index k) const {
+  // the class of ‖a‖ v of the row / 10 — or the speed of the contact's own impacts, the same
+  // number in any units: ‖a‖ adds the columns of lengths and of angles (mm and mm/rad in a
+  // plank's gap y + s sin θ), and the class of a plank in mm, g, ms was 1000 times its speeds
+  // (1000 mm/ms against 1 m/s in SI units), which took the 9.4e-7 mm/ms at which its supports
+  // left the 20th impact of an accumulation for roundoff, closed them while they separated
+  // and left it floating up at that rate (u23 3). The fastest impact of the current sequence
+  // when it is slower than the class, but not below 1e-6 of it (roundoff of the run's speeds)
+  const double unit = gap_rate_scale(sys_, ws_, k);
+  const double fastest = fastest_[position_[std::size_t(k)]];
+  return kStillRate * (fastest > 0.0 ? std::clamp(fastest, 1e-6 * unit, unit) : unit);
 }
 
 double ContactEvents::locate(double t0, double t1, const SegmentHooks::Dense& dense, Index i,
@@ -445,7 +463,7 @@ bool ContactEvents::resolve(double t, double* x, Index event, RunStatistics& sta
     set.push_back(k);
     v_minus.push_back(gd);
     // (an approach at a rate of roundoff is none: no impact, the LCP below decides the mode)
-    approaching = approaching || (!closed_[i] && gd < -kStillRate * gap_rate_scale(sys_, ws_, k));
+    approaching = approaching || (!closed_[i] && gd < -still_rate(k));
   }
   const Index m = Index(set.size());
   if (m == 0) {
@@ -548,8 +566,11 @@ bool ContactEvents::resolve(double t, double* x, Index event, RunStatistics& sta
   for (Index j = 0; j < m; ++j) {
     const std::size_t i = which[std::size_t(j)];
     closed_[i] = 0;
-    const double rate_scale = gap_rate_scale(sys_, ws_, set[std::size_t(j)]);
-    if (v_minus[std::size_t(j)] <= 1e-9 * std::max(rate_scale, v_scale)) {
+    // (g'⁺ still: roundoff of this instant's speeds, or of the contact's own — its sequence's
+    // fastest impact, not the row's class: a support that leaves the 20th impact of an
+    // accumulation at 1e-6 of the first is separating, in any units; still_rate)
+    if (v_minus[std::size_t(j)] <=
+        std::max(still_rate(set[std::size_t(j)]), kStillRate * v_scale)) {
       candidates.push_back(set[std::size_t(j)]);
       cand_which.push_back(i);
     }

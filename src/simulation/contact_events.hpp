@@ -25,10 +25,11 @@ class ContactEvents {
   // an open gap at most this far from zero takes part in an impact (simultaneous contacts)
   static constexpr double kTouchGap = 1e-9;
   // a gap rate at most this large is roundoff, not motion: an open contact closes by an impact
-  // only when it approaches faster, and a touching open contact that moves slower (an unloaded
-  // corner of a box on four corners: W singular, the LCP's vertex) must penetrate by kTouchGap
-  // before it is hit. Both relative to the contact's speed unit, as kTouchGap to its length unit
-  // (the classes of ‖a‖ v and ‖a‖ ℓ of its row / 10: 1 in SI units, docs/simulation.md)
+  // only when it approaches faster, a touching contact that leaves an impact slower stays
+  // closed, and a touching open contact that moves slower (an unloaded corner of a box on four
+  // corners: W singular, the LCP's vertex) must penetrate by kTouchGap before it is hit.
+  // Relative to the contact's speed unit (still_rate), as kTouchGap to its length unit (the
+  // class of ‖a‖ ℓ of its row / 10: 1 in SI units, docs/simulation.md)
   static constexpr double kStillRate = 1e-9;
   // a closed contact's multiplier above −kUnloaded times the largest load of the closed contacts
   // is roundoff of zero (the unloaded corner again), not a release; an opened contact whose gap
@@ -147,6 +148,11 @@ class ContactEvents {
   // an open contact at (g, g') on the old side of a step: the level its gap must fall below for
   // an impact (0, or −kTouchGap for a touching contact at rest or just penetrated)
   double impact_level(Index k, double g, double gd) const;
+  // the gap rate at most which contact k (a System index) is still: kStillRate times its speed
+  // unit, the class of ‖a‖ v of its row / 10 (1 in SI units) or, in a sequence of impacts,
+  // the sequence's fastest impact speed when that is slower (at least 1e-6 of the class).
+  // O(1)
+  double still_rate(Index k) const;
 
   const System& sys_;
   Workspace& ws_;
@@ -158,6 +164,7 @@ class ContactEvents {
   std::vector<long> impacts_;   // (contacts) impacts of the current sequence (since a release)
   std::vector<double> pulled_;  // (contacts) earliest stage time it pulled (screen), or NaN
   std::vector<unsigned char> moving_;  // (contacts) 1 once its gap was seen to depend on t
+  std::vector<std::size_t> position_;  // (constraints) k's position in contacts(), or K
   Index event_ = -1;                   // the contact of the event find() located
   bool nonfinite_ = false;             // failure_ is a non-finite gap
   std::string nonfinite_event_;        // the message when that event is a non-finite gap

@@ -239,5 +239,156 @@ output: {every: 0.01}
   }
 }
 
+// u23 3: a plank (x, y, θ; m = 0.5 kg, L = 1 m) dropped flat from h0 = 0.05 m onto three
+// asymmetric frictionless supports, gaps y + s_i sin θ at s = −0.4, 0.1, 0.45 m, e = 0.5, in SI
+// and in mm, g, ms. Closed form: the three hit together at t0 = √(2 h0 / g) (no rotation: the
+// impulse's moment vanishes), y' leaves at e v0, and the k-th simultaneous impact at
+// t0 (1 + 2 (e + … + e^(k−1))) arrives at e^(k−1) v0; the 21st (e^20 v0 < 1e-6 v0) rests, at
+// t0 (3 − 2 e^20) = 0.30289108 s (early on t∞ = 3 t0 by the flights left out, 2 e^20 t0). The
+// resting loads are the least-norm split of Σ λ = m g, Σ s λ = 0 (docs/contact.md "Redundant
+// contacts"): λ = Bᵀ (B Bᵀ)⁻¹ (m g, 0), B = [1 1 1; s1 s2 s3]. In mm the row norm
+// |(1, s cos θ)| ≈ 450 (mm and mm/rad) made the contacts' speed unit 1000 mm/ms: the supports
+// leaving the 20th impact at 9.4e-7 mm/ms were closed at once while separating ("60 impacts,
+// 0 rests"), on Lemke's vertex 2.5968 / 0 / 2.3082, and with no drift control the plank rose at
+// that rate while they pushed m g.
+TEST(ContactUnits, PlankOnThreeSupportsRestsAtTheSameTimeWithTheSameLoadsInMm) {
+  const std::string text = R"(
+parameters: {m: 0.5, L: 1, g: 9.81, h0: 0.05, e: 0.5, s1: -0.4, s2: 0.1, s3: 0.45, T: 0.4}
+coordinates: [x, y, th]
+kinetic_energy: 0.5*m*(x_dot^2 + y_dot^2) + 0.5*m*L^2/12*th_dot^2
+potential_energy: m*g*y
+constraints:
+  - {name: a, holonomic: y + s1*sin(th), unilateral: true, restitution: e}
+  - {name: b, holonomic: y + s2*sin(th), unilateral: true, restitution: e}
+  - {name: c, holonomic: y + s3*sin(th), unilateral: true, restitution: e}
+initial: {q: {x: 0, y: h0, th: 0}}
+simulate: {t_end: T}
+output: {every: 0, at: [T]}
+)";
+  const double e = 0.5, s_si[3] = {-0.4, 0.1, 0.45};
+  // the least-norm split (in N: a force in g mm/ms² is one in N)
+  const double mg = 0.5 * 9.81, Bs = s_si[0] + s_si[1] + s_si[2];
+  const double Bss = s_si[0] * s_si[0] + s_si[1] * s_si[1] + s_si[2] * s_si[2];
+  const double det = 3.0 * Bss - Bs * Bs, y1 = mg * Bss / det, y2 = -mg * Bs / det;
+  struct Case {
+    const char* what;
+    double L, M, T;  // metres, kilograms and seconds per unit
+    DriftControl drift;
+  };
+  for (const Case c :
+       {Case{"SI", 1.0, 1.0, 1.0, DriftControl::kProjection},
+        Case{"mm, g, ms", 1e-3, 1e-3, 1e-3, DriftControl::kProjection},
+        Case{"SI, no drift control", 1.0, 1.0, 1.0, DriftControl::kNone},
+        Case{"mm, g, ms, no drift control", 1e-3, 1e-3, 1e-3, DriftControl::kNone}}) {
+    SCOPED_TRACE(c.what);
+    const double g = 9.81 * c.T * c.T / c.L, h0 = 0.05 / c.L;
+    Model model = parse_model(text, "<string>",
+                              {{"m", 0.5 / c.M},
+                               {"L", 1.0 / c.L},
+                               {"g", g},
+                               {"h0", h0},
+                               {"s1", s_si[0] / c.L},
+                               {"s2", s_si[1] / c.L},
+                               {"s3", s_si[2] / c.L},
+                               {"T", 0.4 / c.T}});
+    model.options.drift = c.drift;
+    const Trajectory tr = simulate(model.system, model.q0, model.qd0, model.options);
+    ASSERT_EQ(tr.stats.status, Status::kOk) << tr.stats.message;
+    const double t0 = std::sqrt(2.0 * h0 / g), v0 = g * t0;
+    const double t20 = t0 * (3.0 - 2.0 * std::pow(e, 20));
+    // 20 impacts of each support, then each rests, all at the closed-form times
+    std::size_t impacts = 0, rests = 0;
+    for (const ContactEvent& ev : tr.stats.contact_events) {
+      if (ev.kind == ContactEvent::Kind::kImpact) {
+        const int k = int(impacts++ / 3);
+        double sum = 1.0, ek = 1.0;
+        for (int j = 1; j <= k; ++j) sum += 2.0 * (ek *= e);
+        EXPECT_NEAR(ev.t, t0 * sum, 1e-9 * t0 * sum) << "impact " << impacts;
+        EXPECT_NEAR(-ev.speed_before, v0 * std::pow(e, k), 1e-9 * v0) << "impact " << impacts;
+      } else if (ev.kind == ContactEvent::Kind::kRest) {
+        ++rests;
+        EXPECT_NEAR(ev.t, t20, 1e-9 * t20);
+        EXPECT_NEAR(ev.t, 3.0 * t0, 1e-6 * 3.0 * t0);
+      } else {
+        ADD_FAILURE() << "contact event of kind " << int(ev.kind) << " at t = " << ev.t;
+      }
+    }
+    EXPECT_EQ(impacts, 60u);
+    EXPECT_EQ(rests, 3u);
+    // at rest on the supports at t_end: y = 0, y' = 0 (it floated up at 9.4e-7 mm/ms), no turn,
+    // the loads the least-norm split
+    ASSERT_EQ(tr.t.size(), 2u);
+    EXPECT_NEAR(tr.q[3 + 1], 0.0, 1e-9 * h0);
+    EXPECT_NEAR(tr.qd[3 + 1], 0.0, 1e-12 * v0);
+    EXPECT_NEAR(tr.q[3 + 2], 0.0, 1e-12);
+    EXPECT_NEAR(tr.qd[3 + 2], 0.0, 1e-12 * v0 / h0);
+    ASSERT_EQ(tr.m, 3);
+    for (int i = 0; i < 3; ++i) {
+      const double split = y1 + s_si[i] * y2;  // 1.93736, 1.60140, 1.36623 N
+      EXPECT_NEAR(tr.lambda[3 + std::size_t(i)] * c.M * c.L / (c.T * c.T), split, 1e-9 * split)
+          << "support " << i;
+    }
+  }
+}
+
+// u23 3, spatial: a box (2 kg, 200 × 100 × 50 mm) of a rigid body with the `shape: box` contact
+// dropped flat from 50 mm, e = 0.5, frictionless, in mm, g, ms: four simultaneous corner impacts
+// per bounce, 20 bounces, then the four corners rest at t0 (3 − 2 e^20) = 302.89108 ms and carry
+// m g / 4 each (the least-norm split; Lemke's vertex loads two diagonal corners). It made 80
+// impacts and no rest, and with no drift control rose at 9.4e-7 mm/ms while the corners pushed.
+TEST(ContactUnits, BoxDroppedFlatInMmRestsOnItsFourCorners) {
+  Model model = parse_model(R"(
+units: {length: mm, mass: g, time: ms}
+parameters: {m: 2000, a: 200, b: 100, c: 50, g: 9.81e-3, h0: 50, e: 0.5}
+bodies:
+  - {name: box, type: rigid, mass: m, inertia: [m*(b^2 + c^2)/3, m*(a^2 + c^2)/3, m*(a^2 + b^2)/3], position: [0, 0, c + h0]}
+forces:
+  - {type: gravity, g: [0, 0, -g]}
+contacts:
+  - {name: floor, body: box, shape: box, size: [a, b, c], restitution: e}
+simulate: {t_end: 400}
+output: {every: 0, at: [400]}
+)",
+                            "<string>");
+  model.options.drift = DriftControl::kNone;
+  const Trajectory tr = simulate(model.system, model.q0, model.qd0, model.options);
+  ASSERT_EQ(tr.stats.status, Status::kOk) << tr.stats.message;
+  const double g = 9.81e-3, t0 = std::sqrt(2.0 * 50.0 / g), v0 = g * t0;
+  const double t20 = t0 * (3.0 - 2.0 * std::pow(0.5, 20));
+  std::size_t impacts = 0, rests = 0;
+  for (const ContactEvent& ev : tr.stats.contact_events) {
+    if (ev.kind == ContactEvent::Kind::kImpact) ++impacts;
+    if (ev.kind != ContactEvent::Kind::kRest) continue;
+    ++rests;
+    EXPECT_NEAR(ev.t, t20, 1e-9 * t20);
+  }
+  EXPECT_EQ(impacts, 80u);
+  EXPECT_EQ(rests, 4u);
+  // at rest at t_end: z = c = 50 mm, z' = 0, each corner m g / 4 = 4.905 g mm/ms²
+  ASSERT_EQ(tr.t.size(), 2u);
+  bool found = false;
+  for (std::size_t i = 0; i < tr.coordinate_names.size(); ++i) {
+    if (tr.coordinate_names[i] != "box.z") continue;
+    found = true;
+    EXPECT_NEAR(tr.q[std::size_t(tr.n) + i], 50.0, 1e-9 * 50.0);
+    EXPECT_NEAR(tr.qd[std::size_t(tr.n) + i], 0.0, 1e-12 * v0);
+  }
+  EXPECT_TRUE(found);
+  // (corners floor.0 … floor.3 at the bottom, floor.4 … floor.7 at the top, open)
+  const double quarter = 2000.0 * g / 4.0;
+  std::size_t row = 0, corners = 0;
+  for (std::size_t k = 0; k < tr.constraint_names.size(); ++k) {
+    const std::string& name = tr.constraint_names[k];
+    if (name.rfind("floor.", 0) == 0) {
+      const bool bottom = name.back() < '4';
+      corners += bottom ? 1 : 0;
+      EXPECT_NEAR(tr.lambda[std::size_t(tr.m) + row], bottom ? quarter : 0.0, 1e-9 * quarter)
+          << name;
+    }
+    row += std::size_t(tr.constraint_rows[k]);
+  }
+  EXPECT_EQ(corners, 4u);
+}
+
 }  // namespace UKDYN_TEST_FILE
 }  // namespace ukdyn
