@@ -406,7 +406,7 @@ bool ContactDynamics::impact(const System& sys, Workspace& ws, const Eigen::Ref<
                              const Eigen::Ref<const VectorXd>& e) {
   const Index k = Index(set_.size());
   friction_impulse_.setZero(k);
-  const bool friction = impact_friction(sys, ws, q, qd, t);
+  const bool friction = impact_friction(sys, ws, q, qd, t, v_minus);
   const Index nb = friction ? D_.cols() : 0;
   PD_.resize(n_, nb);
   for (Index b = 0; b < nb; ++b) PD_.col(b) = apply_p(D_.col(b));
@@ -655,7 +655,8 @@ std::string ContactDynamics::unsolved_impact(const System& sys, const MatrixXd& 
 
 bool ContactDynamics::impact_friction(const System& sys, Workspace& ws,
                                       const Eigen::Ref<const VectorXd>& q,
-                                      const Eigen::Ref<const VectorXd>& qd, double t) {
+                                      const Eigen::Ref<const VectorXd>& qd, double t,
+                                      const Eigen::Ref<const VectorXd>& v_minus) {
   const auto& fcs = sys.friction_contacts();
   std::vector<VectorXd> directions;
   std::vector<double> vt;
@@ -667,6 +668,7 @@ bool ContactDynamics::impact_friction(const System& sys, Workspace& ws,
     const FrictionContact& fc = fcs[c];
     const auto at = std::find(set_.begin(), set_.end(), fc.normal_constraint);
     if (at == set_.end() || !(fc.mu > 0.0)) continue;
+    const Index i = Index(at - set_.begin());
     // v_rel and the contact's normals on its sliding coordinates (it counts as closed here)
     signed char& override_k = ws.activity_override[std::size_t(fc.normal_constraint)];
     const signed char saved = override_k;
@@ -675,31 +677,24 @@ bool ContactDynamics::impact_friction(const System& sys, Workspace& ws,
     override_k = saved;
     const Index nc = fc.size();
     const VectorXd v = ws.sliding.col(Index(c)).head(nc);
-    if (fc.kinematics) {
-      // the contact point's: ±each tangent t_j of the contact plane, D = Tᵀ (±e_j) (a pyramid
-      // of 4 directions for a spatial contact), the cone's N per unit impulse |A_i·w| / |w|²
-      const Index f = Index(cone_mu_.size());
-      const Index i = Index(at - set_.begin());
-      cone_mu_.push_back(fc.mu);
-      cone_normal_.push_back(contact_normal_force(sys, ws, Index(c), A_c_.row(i).transpose()));
-      cone_contact_.push_back(i);
-      for (Index j = 0; j < nc; ++j) {
-        for (const double sign : {1.0, -1.0}) {
-          VectorXd d = VectorXd::Zero(n_);
-          add_contact_force(sys, ws, Index(c), sign, VectorXd::Unit(nc, j), d);
-          directions.push_back(std::move(d));
-          vt.push_back(sign * v[j]);
-          direction_cone_.push_back(f);
-        }
-      }
-      continue;
-    }
-    // an orthonormal basis of the tangent space (the sliding coordinates less the normals);
-    // ±each: the friction cone exactly for one tangent, a pyramid for two
+    // the cone's N per unit impulse: |A_i·w| / |w|² at the contact point (w = J_Pᵀ n_W), |A_i|
+    // on the coordinate path — g'⁻_i / N_i is then the approach speed in the unit of v_rel
+    const double per_unit = fc.kinematics
+                                ? contact_normal_force(sys, ws, Index(c), A_c_.row(i).transpose())
+                                : A_c_.row(i).norm();
+    // an orthonormal basis of the tangent space, ±each a direction of the friction impulse: the
+    // cone exactly for one tangent, a four-sided pyramid for two. On the contact-point path the
+    // tangents t_j of the contact plane (f ↦ Tᵀ f), on the coordinate path the sliding
+    // coordinates less the normals; the slip before first when it is more than rounding against
+    // the approach speed (a pyramid with an axis along the slip: exact for an impact that slides
+    // through, and inside the cone, so never creating energy, for any other)
     std::vector<VectorXd> tangents;
-    for (Index j = 0; j < nc; ++j) {
+    const double slip = v.norm();
+    if (nc > 1 && slip > kAlignedSlip * std::abs(v_minus[i]) / per_unit && slip > 0.0)
+      tangents.push_back(v / slip);
+    for (Index j = 0; j < nc && Index(tangents.size()) < nc; ++j) {
       VectorXd e = VectorXd::Unit(nc, j);
-      remove_normals(ws, normals, e);
+      if (!fc.kinematics) remove_normals(ws, normals, e);
       for (int pass = 0; pass < 2; ++pass)
         for (const auto& u : tangents) e -= e.dot(u) * u;
       if (e.norm() > 1e-10) tangents.push_back(e / e.norm());
@@ -707,12 +702,16 @@ bool ContactDynamics::impact_friction(const System& sys, Workspace& ws,
     if (tangents.empty()) continue;
     const Index f = Index(cone_mu_.size());
     cone_mu_.push_back(fc.mu);
-    cone_normal_.push_back(A_c_.row(Index(at - set_.begin())).norm());
-    cone_contact_.push_back(Index(at - set_.begin()));
+    cone_normal_.push_back(per_unit);
+    cone_contact_.push_back(i);
     for (const auto& u : tangents) {
       for (const double sign : {1.0, -1.0}) {
         VectorXd d = VectorXd::Zero(n_);
-        for (Index r = 0; r < nc; ++r) d[fc.coordinates[std::size_t(r)]] = sign * u[r];
+        if (fc.kinematics) {
+          add_contact_force(sys, ws, Index(c), sign, u, d);
+        } else {
+          for (Index r = 0; r < nc; ++r) d[fc.coordinates[std::size_t(r)]] = sign * u[r];
+        }
         directions.push_back(std::move(d));
         vt.push_back(sign * u.dot(v));
         direction_cone_.push_back(f);
