@@ -82,6 +82,28 @@ bool least_norm_lcp(const MatrixXd& M, const VectorXd& r, const std::vector<Inde
   return true;
 }
 
+// a row of an LCP answer within this fraction of its own terms Σ_j |M_ij z_j| + |r_i|, plus
+// kRowFloor of the largest |r_i| (a row whose terms all vanish: a contact that leaves), is zero
+constexpr double kRowResidual = 1e-6;
+constexpr double kRowFloor = 1e-9;
+
+// True when z solves the LCP w = M z + r, 0 <= z ⊥ w >= 0 row by row: w_i >= −tol_i and
+// min(s_i z_i, w_i) <= tol_i, tol_i = kRowResidual (Σ_j |M_ij| |z_j| + |r_i|) + kRowFloor
+// max_j |r_j|, s_i the row's largest |M_ij| (z_i in w's unit). ContactLcp::check's tolerance,
+// relative to ‖M‖ ‖z‖, takes any z when ‖z‖ is huge (a degenerate pivot's 1e17); a row's own
+// terms do not. O(s²); allocates w (events only).
+bool complementary_rows(const MatrixXd& M, const VectorXd& r, const VectorXd& z) {
+  const VectorXd w = M * z + r;
+  const double floor = kRowFloor * r.cwiseAbs().maxCoeff();
+  for (Index i = 0; i < r.size(); ++i) {
+    const double terms = M.row(i).cwiseAbs().dot(z.cwiseAbs()) + std::abs(r[i]);
+    const double tol = kRowResidual * terms + floor, s = M.row(i).cwiseAbs().maxCoeff();
+    if (!std::isfinite(w[i]) || !(z[i] >= -tol) || w[i] < -tol) return false;
+    if (std::min(s * z[i], w[i]) > tol) return false;
+  }
+  return true;
+}
+
 // The contacts of the LCP answer z, w (k) of W, r that push or touch (z_i > 0, or w_i within
 // kZeroSlack of the largest |r_i|) into `on`; true when W on them is singular (redundant rows:
 // their split is not unique) and, with `unloaded`, one of them touches without pushing (a vertex
@@ -549,6 +571,18 @@ bool ContactDynamics::impulse(const System& sys, Eigen::Ref<VectorXd> qd, const 
     if (friction_split(Mlcp, rr, on, z_split, w_split)) {
       z = z_split;
       w = w_split;
+    }
+  }
+  if (!complementary_rows(Mlcp, rr, z)) {
+    // (an answer that fails the LCP row by row, though the whole-vector test relative to ‖z‖
+    // took it: Lemke ended on a degenerate pivot — the perpendicular tangent's v_rel⁻ roundoff
+    // of 0 — with γ ~ 1e17 and a normal row both pushing and separating, the landing of rows
+    // × 1e8 with the pyramid along the slip; then each contact sticking or sliding, all pushing)
+    on.clear();
+    for (Index i = 0; i < k; ++i) on.push_back(i);
+    if (!friction_split(Mlcp, rr, on, z, w)) {
+      failure_ = unsolved_impact(sys, Mlcp.topLeftCorner(k, k));
+      return false;
     }
   }
   if (equilibrated) {
