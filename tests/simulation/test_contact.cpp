@@ -682,7 +682,6 @@ TEST(Contact, ElasticBallBouncesPastTheOldEventLimit) {
   EXPECT_NEAR(tr.energy.back(), tr.energy.front(), 1e-6 * 0.5 * kG * h0);
 }
 
-
 // ContactEvents::handle at one instant is bounded: the ball resting on the floor (y = 0, y' = 0:
 // the contact closes, λ = m g) handled again and again at t = 0.5 — what an integrator that
 // locates the same event for ever does — is resolved kSameInstantEvents times, and the next time
