@@ -138,9 +138,14 @@ class ContactDynamics {
   // true when constraint c is the stick constraint of a Coulomb contact on a contact of the set
   bool stick_of_set(const System& sys, Index c) const;
   // the tangent directions of the set's Coulomb contacts at (q, q', t) for the impact's friction
-  // (D_, their cones, v_rel⁻ along them); false when none has friction
+  // (D_, their cones, v_rel⁻ along them); false when none has friction. Each contact's first
+  // tangent is its slip before, v̂_rel⁻, when |v_rel⁻| > kAlignedSlip |g'⁻_i| / N_i (v_minus: the
+  // set's normal rows' velocities g'⁻, N_i their normal per unit: the approach speed), so that
+  // an impact that slides through takes Coulomb's μ N-impulse against the slip exactly, in any
+  // direction of the contact plane (the pyramid's axes, fixed, gave μ N / √2 on the diagonal)
   bool impact_friction(const System& sys, Workspace& ws, const Eigen::Ref<const VectorXd>& q,
-                       const Eigen::Ref<const VectorXd>& qd, double t);
+                       const Eigen::Ref<const VectorXd>& qd, double t,
+                       const Eigen::Ref<const VectorXd>& v_minus);
   // The LCP w = Mlcp z + r (its first k variables the contacts' multipliers or impulses, any
   // others the friction's) by lcp (Siconos: Lemke, else the enumeration), into z and w. Where
   // the contacts' forces are indeterminate (redundant rows, W singular: four coplanar corners of
@@ -163,6 +168,9 @@ class ContactDynamics {
                       VectorXd& z, VectorXd& w) const;
   // cones up to which friction_split tries every mixture of sticking and sliding
   static constexpr Index kMixedCones = 6;
+  // the slip before an impact, relative to the approach speed, above which a contact's pyramid
+  // of friction directions takes it as its first axis (below: rounding, the fixed axes)
+  static constexpr double kAlignedSlip = 1e-6;
   // why the friction impact's LCP of the set (its W scaled as solved) was not solved: the
   // contacts, the variables, whether their rows are redundant
   std::string unsolved_impact(const System& sys, const MatrixXd& W) const;

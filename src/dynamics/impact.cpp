@@ -82,6 +82,28 @@ bool least_norm_lcp(const MatrixXd& M, const VectorXd& r, const std::vector<Inde
   return true;
 }
 
+// a row of an LCP answer within this fraction of its own terms Σ_j |M_ij z_j| + |r_i|, plus
+// kRowFloor of the largest |r_i| (a row whose terms all vanish: a contact that leaves), is zero
+constexpr double kRowResidual = 1e-6;
+constexpr double kRowFloor = 1e-9;
+
+// True when z solves the LCP w = M z + r, 0 <= z ⊥ w >= 0 row by row: w_i >= −tol_i and
+// min(s_i z_i, w_i) <= tol_i, tol_i = kRowResidual (Σ_j |M_ij| |z_j| + |r_i|) + kRowFloor
+// max_j |r_j|, s_i the row's largest |M_ij| (z_i in w's unit). ContactLcp::check's tolerance,
+// relative to ‖M‖ ‖z‖, takes any z when ‖z‖ is huge (a degenerate pivot's 1e17); a row's own
+// terms do not. O(s²); allocates w (events only).
+bool complementary_rows(const MatrixXd& M, const VectorXd& r, const VectorXd& z) {
+  const VectorXd w = M * z + r;
+  const double floor = kRowFloor * r.cwiseAbs().maxCoeff();
+  for (Index i = 0; i < r.size(); ++i) {
+    const double terms = M.row(i).cwiseAbs().dot(z.cwiseAbs()) + std::abs(r[i]);
+    const double tol = kRowResidual * terms + floor, s = M.row(i).cwiseAbs().maxCoeff();
+    if (!std::isfinite(w[i]) || !(z[i] >= -tol) || w[i] < -tol) return false;
+    if (std::min(s * z[i], w[i]) > tol) return false;
+  }
+  return true;
+}
+
 // The contacts of the LCP answer z, w (k) of W, r that push or touch (z_i > 0, or w_i within
 // kZeroSlack of the largest |r_i|) into `on`; true when W on them is singular (redundant rows:
 // their split is not unique) and, with `unloaded`, one of them touches without pushing (a vertex
@@ -406,7 +428,7 @@ bool ContactDynamics::impact(const System& sys, Workspace& ws, const Eigen::Ref<
                              const Eigen::Ref<const VectorXd>& e) {
   const Index k = Index(set_.size());
   friction_impulse_.setZero(k);
-  const bool friction = impact_friction(sys, ws, q, qd, t);
+  const bool friction = impact_friction(sys, ws, q, qd, t, v_minus);
   const Index nb = friction ? D_.cols() : 0;
   PD_.resize(n_, nb);
   for (Index b = 0; b < nb; ++b) PD_.col(b) = apply_p(D_.col(b));
@@ -551,6 +573,18 @@ bool ContactDynamics::impulse(const System& sys, Eigen::Ref<VectorXd> qd, const 
       w = w_split;
     }
   }
+  if (!complementary_rows(Mlcp, rr, z)) {
+    // (an answer that fails the LCP row by row, though the whole-vector test relative to ‖z‖
+    // took it: Lemke ended on a degenerate pivot — the perpendicular tangent's v_rel⁻ roundoff
+    // of 0 — with γ ~ 1e17 and a normal row both pushing and separating, the landing of rows
+    // × 1e8 with the pyramid along the slip; then each contact sticking or sliding, all pushing)
+    on.clear();
+    for (Index i = 0; i < k; ++i) on.push_back(i);
+    if (!friction_split(Mlcp, rr, on, z, w)) {
+      failure_ = unsolved_impact(sys, Mlcp.topLeftCorner(k, k));
+      return false;
+    }
+  }
   if (equilibrated) {
     z = S.cwiseProduct(z);
     w = w.cwiseQuotient(S);
@@ -655,7 +689,8 @@ std::string ContactDynamics::unsolved_impact(const System& sys, const MatrixXd& 
 
 bool ContactDynamics::impact_friction(const System& sys, Workspace& ws,
                                       const Eigen::Ref<const VectorXd>& q,
-                                      const Eigen::Ref<const VectorXd>& qd, double t) {
+                                      const Eigen::Ref<const VectorXd>& qd, double t,
+                                      const Eigen::Ref<const VectorXd>& v_minus) {
   const auto& fcs = sys.friction_contacts();
   std::vector<VectorXd> directions;
   std::vector<double> vt;
@@ -667,6 +702,7 @@ bool ContactDynamics::impact_friction(const System& sys, Workspace& ws,
     const FrictionContact& fc = fcs[c];
     const auto at = std::find(set_.begin(), set_.end(), fc.normal_constraint);
     if (at == set_.end() || !(fc.mu > 0.0)) continue;
+    const Index i = Index(at - set_.begin());
     // v_rel and the contact's normals on its sliding coordinates (it counts as closed here)
     signed char& override_k = ws.activity_override[std::size_t(fc.normal_constraint)];
     const signed char saved = override_k;
@@ -675,31 +711,24 @@ bool ContactDynamics::impact_friction(const System& sys, Workspace& ws,
     override_k = saved;
     const Index nc = fc.size();
     const VectorXd v = ws.sliding.col(Index(c)).head(nc);
-    if (fc.kinematics) {
-      // the contact point's: ±each tangent t_j of the contact plane, D = Tᵀ (±e_j) (a pyramid
-      // of 4 directions for a spatial contact), the cone's N per unit impulse |A_i·w| / |w|²
-      const Index f = Index(cone_mu_.size());
-      const Index i = Index(at - set_.begin());
-      cone_mu_.push_back(fc.mu);
-      cone_normal_.push_back(contact_normal_force(sys, ws, Index(c), A_c_.row(i).transpose()));
-      cone_contact_.push_back(i);
-      for (Index j = 0; j < nc; ++j) {
-        for (const double sign : {1.0, -1.0}) {
-          VectorXd d = VectorXd::Zero(n_);
-          add_contact_force(sys, ws, Index(c), sign, VectorXd::Unit(nc, j), d);
-          directions.push_back(std::move(d));
-          vt.push_back(sign * v[j]);
-          direction_cone_.push_back(f);
-        }
-      }
-      continue;
-    }
-    // an orthonormal basis of the tangent space (the sliding coordinates less the normals);
-    // ±each: the friction cone exactly for one tangent, a pyramid for two
+    // the cone's N per unit impulse: |A_i·w| / |w|² at the contact point (w = J_Pᵀ n_W), |A_i|
+    // on the coordinate path — g'⁻_i / N_i is then the approach speed in the unit of v_rel
+    const double per_unit = fc.kinematics
+                                ? contact_normal_force(sys, ws, Index(c), A_c_.row(i).transpose())
+                                : A_c_.row(i).norm();
+    // an orthonormal basis of the tangent space, ±each a direction of the friction impulse: the
+    // cone exactly for one tangent, a four-sided pyramid for two. On the contact-point path the
+    // tangents t_j of the contact plane (f ↦ Tᵀ f), on the coordinate path the sliding
+    // coordinates less the normals; the slip before first when it is more than rounding against
+    // the approach speed (a pyramid with an axis along the slip: exact for an impact that slides
+    // through, and inside the cone, so never creating energy, for any other)
     std::vector<VectorXd> tangents;
-    for (Index j = 0; j < nc; ++j) {
+    const double slip = v.norm();
+    if (nc > 1 && slip > kAlignedSlip * std::abs(v_minus[i]) / per_unit && slip > 0.0)
+      tangents.push_back(v / slip);
+    for (Index j = 0; j < nc && Index(tangents.size()) < nc; ++j) {
       VectorXd e = VectorXd::Unit(nc, j);
-      remove_normals(ws, normals, e);
+      if (!fc.kinematics) remove_normals(ws, normals, e);
       for (int pass = 0; pass < 2; ++pass)
         for (const auto& u : tangents) e -= e.dot(u) * u;
       if (e.norm() > 1e-10) tangents.push_back(e / e.norm());
@@ -707,12 +736,16 @@ bool ContactDynamics::impact_friction(const System& sys, Workspace& ws,
     if (tangents.empty()) continue;
     const Index f = Index(cone_mu_.size());
     cone_mu_.push_back(fc.mu);
-    cone_normal_.push_back(A_c_.row(Index(at - set_.begin())).norm());
-    cone_contact_.push_back(Index(at - set_.begin()));
+    cone_normal_.push_back(per_unit);
+    cone_contact_.push_back(i);
     for (const auto& u : tangents) {
       for (const double sign : {1.0, -1.0}) {
         VectorXd d = VectorXd::Zero(n_);
-        for (Index r = 0; r < nc; ++r) d[fc.coordinates[std::size_t(r)]] = sign * u[r];
+        if (fc.kinematics) {
+          add_contact_force(sys, ws, Index(c), sign, u, d);
+        } else {
+          for (Index r = 0; r < nc; ++r) d[fc.coordinates[std::size_t(r)]] = sign * u[r];
+        }
         directions.push_back(std::move(d));
         vt.push_back(sign * u.dot(v));
         direction_cone_.push_back(f);

@@ -390,7 +390,35 @@ bool ContactEvents::handle(double t, double* x, RunStatistics& stats) {
       return false;
     }
   }
+  // the same instant again and again: the contacts touching there and the time
+  if (std::abs(t - instant_) <= 1e-14 * std::max(1.0, std::abs(t))) {
+    ++instant_events_;
+  } else {
+    instant_ = t;
+    instant_events_ = 1;
+  }
+  if (instant_events_ > kSameInstantEvents) {
+    failure_ = "contacts: " + format_number(kSameInstantEvents) +
+               " events handled at t = " + format_t(t) + " (at " + touching_names(t, x) +
+               ") without the run moving on: the contacts' answer leaves the same event there "
+               "(a contact penetrated and receding, or released and held again); "
+               "docs/contact.md, \"In a run\"";
+    return false;
+  }
   return resolve(t, x, event_, stats);
+}
+
+std::string ContactEvents::touching_names(double t, const double* x) {
+  std::string names;
+  for (std::size_t i = 0; i < closed_.size(); ++i) {
+    const Index k = dyn_.contacts()[i];
+    double g = 0.0, gd = 0.0;
+    finite_gap(Index(i), t, x, g, gd);
+    if (!closed_[i] && Index(i) != event_ && !(g <= kTouchGap * gap_scale(sys_, ws_, k))) continue;
+    names += (names.empty() ? "'" : ", '") + sys_.constraint(k).name() + "' (gap " + format_t(g) +
+             ", rate " + format_t(gd) + (closed_[i] ? ", closed)" : ", open)");
+  }
+  return names.empty() ? std::string("no touching contact") : "the contacts " + names;
 }
 
 bool ContactEvents::start(double t, VectorXd& q, VectorXd& qd, double tolerance,

@@ -8,6 +8,7 @@
 // kSweepPoints more for a moving one, and a sign test per closed contact at each stage (screen).
 #pragma once
 
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -41,6 +42,12 @@ class ContactEvents {
   // for 10⁴ s makes 110 700 regular impacts)
   static constexpr long kChatterEvents = 10000;
   static constexpr double kChatterSpan = 1e-4;
+  // handle() stops the run when more than this many events are located and handled at one
+  // instant (t within 1e-14 |t|, locate()'s bracket), listed or not: the integrator would locate
+  // the same event for ever (an impact whose answer leaves a contact penetrated and receding
+  // lists nothing, so the chattering test never counts it). A real sequence at one instant (a
+  // release then an impact elsewhere) is a few events per contact
+  static constexpr int kSameInstantEvents = 1000;
   // the gap of an open contact that depends explicitly on t (a moving surface: the vibrating
   // table, a cam) is screened at this many equally spaced interior points of each step's dense
   // output (sweep): the step size knows nothing of the surface's motion
@@ -86,6 +93,9 @@ class ContactEvents {
   // resolves the contacts at (t, x): the impact of the touching ones when `event` (a contact
   // index, or −1) or any touching one approaches, then the closed set
   bool resolve(double t, double* x, Index event, RunStatistics& stats);
+  // the touching contacts at (t, x) (closed, the located event's, or an open gap within
+  // kTouchGap), each with its gap, rate and mode, for a message. O(contacts)
+  std::string touching_names(double t, const double* x);
   // the event ev into stats.contact_events, its time into recent_ (the chattering test)
   void list(const ContactEvent& ev, RunStatistics& stats);
   // each contact of `opened` (System indices, closed before the event at t): its whole
@@ -174,6 +184,8 @@ class ContactEvents {
   // releases, a ring: the one listed_ % kChatterEvents is the oldest
   std::vector<double> recent_;
   std::size_t listed_ = 0;  // impacts, rests and releases listed so far
+  double instant_ = std::numeric_limits<double>::quiet_NaN();  // the t of the last handle()
+  int instant_events_ = 0;  // the events handled at instant_ (kSameInstantEvents)
   double span_;             // the run's t_end − t_start
   double impact_work_ = 0.0;
   std::string failure_;

@@ -14,6 +14,7 @@
 #include <Eigen/LU>
 
 #include "dynamics/internal.hpp"
+#include "simulation/contact_events.hpp"
 #include "ukdyn/core/autodiff.hpp"
 #include "ukdyn/core/format.hpp"
 #include "ukdyn/dynamics/contact.hpp"
@@ -743,6 +744,35 @@ TEST(Contact, ElasticBallBouncesPastTheOldEventLimit) {
   EXPECT_NEAR(impacts.back().t, (double(impacts.size()) - 0.5) * period, 1e-6 * 1e4);
   EXPECT_NEAR(impacts.back().speed_after, v0, 1e-6 * v0);
   EXPECT_NEAR(tr.energy.back(), tr.energy.front(), 1e-6 * 0.5 * kG * h0);
+}
+
+// ContactEvents::handle at one instant is bounded: the ball resting on the floor (y = 0, y' = 0:
+// the contact closes, λ = m g) handled again and again at t = 0.5 — what an integrator that
+// locates the same event for ever does — is resolved kSameInstantEvents times, and the next time
+// stops with an error that names the contact, its gap and mode, and the time. At another instant
+// the count starts over.
+TEST(Contact, EventsHandledAtOneInstantAreBoundedWithAnErrorNamingTheContacts) {
+  const Model m = parse_model(kBall, "<string>", {{"h0", 0.0}});
+  Workspace ws(m.system);
+  const Index n = m.system.coordinate_count();
+  detail::ContactEvents events(m.system, ws, std::size_t(2 * n), 2.0);
+  RunStatistics stats;
+  VectorXd x(2 * n);
+  x << 0.0, 0.0;
+  for (int pass = 0; pass < detail::ContactEvents::kSameInstantEvents; ++pass) {
+    ASSERT_TRUE(events.handle(0.5, x.data(), stats)) << pass << ": " << events.failure();
+  }
+  EXPECT_TRUE(stats.contact_events.empty());
+  EXPECT_NEAR(x[1], 0.0, 1e-300);
+  EXPECT_FALSE(events.handle(0.5, x.data(), stats));
+  EXPECT_EQ(events.failure(),
+            "contacts: 1000 events handled at t = 0.5 (at the contacts 'floor' (gap 0, rate 0, "
+            "closed)) without the run moving on: the contacts' answer leaves the same event "
+            "there (a contact penetrated and receding, or released and held again); "
+            "docs/contact.md, \"In a run\"");
+  EXPECT_EQ(events.failure_status(), Status::kIntegratorFailure);
+  // (a new instant: counted afresh)
+  EXPECT_TRUE(events.handle(0.5 + 1e-9, x.data(), stats)) << events.failure();
 }
 
 }  // namespace UKDYN_TEST_FILE

@@ -13,6 +13,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -93,6 +94,15 @@ double omega_y(const Trajectory& tr, std::size_t i, const std::string& body = "b
   }
   return 2.0 * (u[0] * d[2] - d[0] * u[2] + u[3] * d[1] - u[1] * d[3]);
 }
+// the same, about x
+double omega_x(const Trajectory& tr, std::size_t i, const std::string& body = "ball") {
+  double u[4], d[4];
+  for (int k = 0; k < 4; ++k) {
+    u[k] = at(tr, tr.q, body + ".u" + std::to_string(k), i);
+    d[k] = at(tr, tr.qd, body + ".u" + std::to_string(k), i);
+  }
+  return 2.0 * (u[0] * d[1] - d[0] * u[1] + u[2] * d[3] - u[3] * d[2]);
+}
 
 TEST(ContactBodiesFriction, SphereLaunchedWithoutSpinRollsFromTheClosedFormInstant) {
   Model m = parse_model(kBall);
@@ -168,48 +178,57 @@ TEST(ContactBodiesFriction, RodSlidingFlatStopsWhereTheClosedFormSaysAndSticks) 
 
 // ---- an oblique impact with friction -----------------------------------------------------------
 
-// The sphere of kBall dropped without spin from centre height h0 with horizontal speed u on a
-// floor of restitution e: at the impact v_z⁻ = −√(2 g (h0 − r)), the normal impulse is
-// P_n = m (1 + e) |v_z⁻| (the tangential impulse does not change the normal speed), and the
-// contact point's tangential speed u − r ω changes by −P_t (1/m + r²/I) = −7 P_t / (2 m). It
-// sticks when 2 m u / 7 <= mu P_n: then u⁺ = 5/7 u, ω⁺ = u⁺ / r; else it slides through the
-// impact with P_t = mu P_n: u⁺ = u − mu (1 + e) |v_z⁻|, ω⁺ = 5 mu (1 + e) |v_z⁻| / (2 r). It
-// then flies with these velocities (no friction in the air); the impact never creates energy.
+// The sphere of kBall dropped without spin from centre height h0 with horizontal speed u at the
+// heading a (from x) on a floor of restitution e: at the impact v_z⁻ = −√(2 g (h0 − r)), the
+// normal impulse is P_n = m (1 + e) |v_z⁻| (the tangential impulse does not change the normal
+// speed), and the contact point's tangential speed u − r ω changes by −P_t (1/m + r²/I) =
+// −7 P_t / (2 m), along the heading. It sticks when 2 m u / 7 <= mu P_n: then u⁺ = 5/7 u,
+// ω⁺ = u⁺ / r; else it slides through the impact with P_t = mu P_n (the whole cone against the
+// slip, at any heading: the pyramid of friction directions has its first axis along the slip,
+// where its fixed axes x, y gave mu P_n / √2 at a = 45°): u⁺ = u − mu (1 + e) |v_z⁻|,
+// ω⁺ = 5 mu (1 + e) |v_z⁻| / (2 r), ω about (−sin a, cos a, 0). It then flies with these
+// velocities (no friction in the air); the impact never creates energy.
 TEST(ContactBodiesFriction, ObliqueImpactSticksOrSlidesAsTheClosedFormSays) {
   const double mass = 0.5, r = 0.1, h0 = 0.5, u = 1.0, e = 0.5;
   const double vz = std::sqrt(2.0 * kG * (h0 - r)), Pn = mass * (1.0 + e) * vz;
-  for (const double mu : {1.0, 0.05}) {
-    std::string text = kBall;
-    text.replace(text.find("position: [0, 0, r], velocity: [v0, 0, 0]"),
-                 std::string("position: [0, 0, r], velocity: [v0, 0, 0]").size(),
-                 "position: [0, 0, 0.5], velocity: [1, 0, 0]");
-    text.replace(text.find("radius: r}"), std::string("radius: r}").size(),
-                 "radius: r, restitution: 0.5}");
-    text.replace(text.find("t_end: 0.6"), std::string("t_end: 0.6").size(), "t_end: 0.5");
-    Model m = parse_model(text, "<string>", {{"mu", mu}});
-    // the first impact at √(2 (h0 − r) / g), the apex of the first bounce e v_z / g later
-    const double t1 = std::sqrt(2.0 * (h0 - r) / kG);
-    const Trajectory tr = run_at(m, {t1 + 0.5 * e * vz / kG});
-    ASSERT_FALSE(tr.stats.contact_events.empty());
-    const ContactEvent& hit = tr.stats.contact_events.front();
-    EXPECT_EQ(hit.kind, ContactEvent::Kind::kImpact);
-    EXPECT_NEAR(hit.t, t1, 1e-9);
-    EXPECT_NEAR(hit.impulse, Pn, 1e-8);
-    const bool sticks = 2.0 * mass * u / 7.0 <= mu * Pn;
-    EXPECT_EQ(sticks, mu == 1.0);
-    const double u_after = sticks ? 5.0 / 7.0 * u : u - mu * (1.0 + e) * vz;
-    const double w_after = sticks ? u_after / r : 5.0 * mu * (1.0 + e) * vz / (2.0 * r);
-    const auto apex = std::find(tr.t.begin(), tr.t.end(), m.options.output_at[0]);
-    ASSERT_NE(apex, tr.t.end());
-    const std::size_t i = std::size_t(apex - tr.t.begin());
-    EXPECT_NEAR(at(tr, tr.qd, "ball.x", i), u_after, 1e-8) << "mu = " << mu;
-    EXPECT_NEAR(omega_y(tr, i), w_after, 1e-7) << "mu = " << mu;
-    // T⁺ − T⁻: the normal part −½ m (1 − e²) v_z² and the tangential part
-    const double I = 0.4 * mass * r * r;
-    const double dT = -0.5 * mass * (1.0 - e * e) * vz * vz +
-                      0.5 * mass * (u_after * u_after - u * u) + 0.5 * I * w_after * w_after;
-    EXPECT_LT(dT, 0.0);
-    EXPECT_NEAR(hit.energy_change, dT, 1e-8) << "mu = " << mu;
+  for (const double a : {0.0, std::numbers::pi / 4.0, std::numbers::pi / 6.0, 2.0}) {
+    for (const double mu : {1.0, 0.05}) {
+      SCOPED_TRACE("heading " + std::to_string(a) + ", mu = " + std::to_string(mu));
+      std::string text = kBall;
+      text.replace(text.find("mu: 0.2}"), std::string("mu: 0.2}").size(), "mu: 0.2, a: 0}");
+      text.replace(text.find("position: [0, 0, r], velocity: [v0, 0, 0]"),
+                   std::string("position: [0, 0, r], velocity: [v0, 0, 0]").size(),
+                   "position: [0, 0, 0.5], velocity: [cos(a), sin(a), 0]");
+      text.replace(text.find("radius: r}"), std::string("radius: r}").size(),
+                   "radius: r, restitution: 0.5}");
+      text.replace(text.find("t_end: 0.6"), std::string("t_end: 0.6").size(), "t_end: 0.5");
+      Model m = parse_model(text, "<string>", {{"mu", mu}, {"a", a}});
+      // the first impact at √(2 (h0 − r) / g), the apex of the first bounce e v_z / g later
+      const double t1 = std::sqrt(2.0 * (h0 - r) / kG);
+      const Trajectory tr = run_at(m, {t1 + 0.5 * e * vz / kG});
+      ASSERT_FALSE(tr.stats.contact_events.empty());
+      const ContactEvent& hit = tr.stats.contact_events.front();
+      EXPECT_EQ(hit.kind, ContactEvent::Kind::kImpact);
+      EXPECT_NEAR(hit.t, t1, 1e-9);
+      EXPECT_NEAR(hit.impulse, Pn, 1e-8);
+      const bool sticks = 2.0 * mass * u / 7.0 <= mu * Pn;
+      EXPECT_EQ(sticks, mu == 1.0);
+      const double u_after = sticks ? 5.0 / 7.0 * u : u - mu * (1.0 + e) * vz;
+      const double w_after = sticks ? u_after / r : 5.0 * mu * (1.0 + e) * vz / (2.0 * r);
+      const auto apex = std::find(tr.t.begin(), tr.t.end(), m.options.output_at[0]);
+      ASSERT_NE(apex, tr.t.end());
+      const std::size_t i = std::size_t(apex - tr.t.begin());
+      EXPECT_NEAR(at(tr, tr.qd, "ball.x", i), u_after * std::cos(a), 1e-8);
+      EXPECT_NEAR(at(tr, tr.qd, "ball.y", i), u_after * std::sin(a), 1e-8);
+      EXPECT_NEAR(omega_x(tr, i), -w_after * std::sin(a), 1e-7);
+      EXPECT_NEAR(omega_y(tr, i), w_after * std::cos(a), 1e-7);
+      // T⁺ − T⁻: the normal part −½ m (1 − e²) v_z² and the tangential part
+      const double I = 0.4 * mass * r * r;
+      const double dT = -0.5 * mass * (1.0 - e * e) * vz * vz +
+                        0.5 * mass * (u_after * u_after - u * u) + 0.5 * I * w_after * w_after;
+      EXPECT_LT(dT, 0.0);
+      EXPECT_NEAR(hit.energy_change, dT, 1e-8);
+    }
   }
 }
 

@@ -226,23 +226,22 @@ TEST(ContactFlatBox, DroppedFlatWhileSlidingSlidesThroughItsImpactsAndStops) {
   }
 }
 
-// Dropped flat while sliding obliquely, at 30° to x (the pyramid's directions ±x, ±y at each
-// corner): by symmetry the four corners share the landing, and the box must not turn. Each
-// corner's friction impulse goes along the pyramid's directions most against its velocity after,
-// the four together at most μ (1 + e) m v0 =: m Δ, and the corners' normal impulses balance its
-// moment. At 10 m/s only −x opposes most throughout:
-// x'⁺ = x' − Δ, y'⁺ = y'; at 5 m/s x' − Δ would fall below y', so −x and −y share it and the box
-// leaves along the diagonal, x'⁺ = y'⁺ = (x' + y' − Δ) / 2; at 1 m/s x' + y' < Δ: it stops,
-// x'⁺ = y'⁺ = 0 (Lemke's vertex gave friction on some corners only: a yaw). In SI and in mm, g,
-// ms, the same impulses (the impact's LCP scaled so that its blocks do not depend on the units).
+// Dropped flat while sliding obliquely, at 30° to x: by symmetry the four corners share the
+// landing, and the box must not turn. Each corner's friction impulse goes against its slip (the
+// pyramid of friction directions has its first axis along the slip before: the whole cone, where
+// the fixed axes ±x, ±y gave −x alone at 10 m/s and the diagonal at 5 m/s), the four together
+// μ (1 + e) m v0 =: m Δ while it slides through: v⁺ = (1 − Δ / |v|) v, at 10 and 5 m/s; at 1 m/s
+// |v| < Δ: it stops, v⁺ = 0 (Lemke's vertex gave friction on some corners only: a yaw). The
+// corners' normal impulses balance the friction's moment. In SI and in mm, g, ms, the same
+// impulses (the impact's LCP scaled so that its blocks do not depend on the units).
 TEST(ContactFlatBox, DroppedFlatWhileSlidingObliquelyLandsWithoutTurning) {
   const double e = 0.3, mu = 0.5, t0 = std::sqrt(2.0 * 0.5 / kG), v0 = kG * t0;
   const double delta = mu * (1.0 + e) * v0, c = std::cos(std::numbers::pi / 6.0),
                s = std::sin(std::numbers::pi / 6.0);
   for (double speed : {10.0, 5.0, 1.0}) {
     const double vx = speed * c, vy = speed * s;
-    double ex = vx - delta, ey = vy;  // (−x alone)
-    if (ex < ey) ex = ey = std::max(0.5 * (vx + vy - delta), 0.0);
+    const double keep = std::max(1.0 - delta / speed, 0.0);  // (Coulomb: Δ against the slip)
+    const double ex = keep * vx, ey = keep * vy;
     std::vector<double> si_impulses;
     for (const Units& u : {kSI, kMm}) {
       SCOPED_TRACE(std::string(u.name) + ", " + std::to_string(speed) + " m/s");
