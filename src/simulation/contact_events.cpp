@@ -173,8 +173,7 @@ double ContactEvents::find(double t0, const double* x0, double t1, const double*
       // (an opening gap: touching or within kTouchGap of it, and g' > 0, after a release or an
       // impact)
       const Index k = dyn_.contacts()[i];
-      const bool opening = g0 <= kTouchGap * gap_scale(sys_, ws_, k) &&
-                           gd0 > kStillRate * gap_rate_scale(sys_, ws_, k);
+      const bool opening = g0 <= kTouchGap * gap_scale(sys_, ws_, k) && gd0 > still_rate(k);
       double tf = t1;
       if (!finite_gap(Index(i), t1, x1, g1, gd1)) {
         tf = last_finite(t0, x0, t1, x1, dense, Index(i), g1, nonfinite);
@@ -208,8 +207,7 @@ double ContactEvents::find(double t0, const double* x0, double t1, const double*
       // of 1e-14 in a step after a release at g' ~ 1e-9, or after the last impacts of an
       // accumulation at g' ~ 1e-5), and the restart there found it again in every step, ~1e-12 s
       // apart (the ladder, the rocking block, the cam follower, the bouncing ball under BDF)
-      if (opening && nonfinite.empty() &&
-          !(g1 < level && gd1 < -kStillRate * gap_rate_scale(sys_, ws_, k)) &&
+      if (opening && nonfinite.empty() && !(g1 < level && gd1 < -still_rate(k)) &&
           !approaches(Index(i), t0, x0, te, dense)) {
         continue;
       }
@@ -326,7 +324,7 @@ bool ContactEvents::approaches(Index i, double t0, const double* x0, double t,
   } else if (!finite_gap(i, t0, x0, g, gd)) {
     return true;
   }
-  return gd < -kStillRate * gap_rate_scale(sys_, ws_, dyn_.contacts()[std::size_t(i)]);
+  return gd < -still_rate(dyn_.contacts()[std::size_t(i)]);
 }
 
 bool ContactEvents::finite_gap(Index i, double t, const double* x, double& g, double& gd) {
