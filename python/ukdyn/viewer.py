@@ -377,9 +377,10 @@ def _quaternion_torque(u, Q):
 
 def _friction_force(p, friction):
     """The friction force at a contact in the scene's axes, per frame shown: F = map Q_f, Q_f
-    each sliding coordinate's generalized friction force (the sum of its columns: the sliding
-    law's Qc_nonideal.<coordinate> and the stick constraint's multiplier; the scene's
-    ``friction``, src/modelfile/visual.cpp). The page draws its part across the normal."""
+    each sliding coordinate's generalized friction force (the sum of its columns, one each: the
+    run's visual.contact.<name>.Qf.<coordinate>, the stick constraint's whole multiplier while
+    the contact holds and Qc_nonideal.<coordinate> while it slides; the scene's ``friction``,
+    src/modelfile/visual.cpp). The page draws its part across the normal."""
     sums = []
     for columns in friction["columns"]:
         total = None

@@ -21,6 +21,11 @@
 //
 // Glossary: A_c (k × n), b_c (k) the closed contacts' rows; A_r the requirement rows; λ (k) the
 // contacts' multipliers (push when > 0); w (k) their gap accelerations g''.
+//
+// One class, its stages in files of their own: contact_modes.cpp (mirror, settle and the LCP of
+// the closed contacts), contact_modes_slip.cpp (the stick/slip trial), contact_modes_held.cpp
+// (the held-contact trials), contact_modes_margins.cpp (whether stuck contacts hold: margins and
+// several contacts' split), contact_modes_anticipate.cpp (the event's LCP anticipated).
 #pragma once
 
 #include <string>
@@ -32,6 +37,12 @@
 #include "ukdyn/dynamics/contact.hpp"
 
 namespace ukdyn::control_detail {
+
+// a g'' or a relative acceleration within this fraction of its scale is zero (the requirement
+// neither lifts nor presses; no direction to slide in)
+inline constexpr double kSignificant = 1e-9;
+// the LCP's solution is checked to this fraction of its scale (ContactLcp::solve)
+inline constexpr double kLcpTolerance = 1e-9;
 
 class ContactModes {
  public:
@@ -195,9 +206,9 @@ class ContactModes {
                        const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd,
                        double t, ControlStatus& s, std::string& failure);
   // settle_contacts' modes: the stick of each stuck Coulomb contact whose normal the LCP opens
-  // (of the k closed_ ones, λ_j = 0) opened too, its friction off (lifted_); and back
+  // (of the k closed_ ones, λ_j = 0) opened too, its friction off (saved in lifted_, which puts
+  // them back)
   void open_lifted_sticks(Workspace& model, Index k);
-  void close_lifted_sticks(Workspace& model) const;
   // whether the Coulomb contacts that stick in the model's modes (into stuck_) hold under the
   // control in cws (its evaluation's modes): their reaction λ + λ_nonideal − G_p⁺ A_p M⁻¹ Qc
   // into lam_, then stuck_margins. Cost: nothing without stuck contacts; else one
@@ -226,10 +237,6 @@ class ContactModes {
   // their friction on with the hint in hints_ (or off), or the mirrored friction and hint back
   void slide_stuck(Workspace& model, bool friction);
   void hold_stuck(Workspace& model) const;
-  // hold_sliding's modes of the sliding contacts stuck_: held (their stick constraint on, their
-  // friction off; the mirrored modes saved in slide_modes_, slide_enabled_), and back
-  void hold_sliding_contacts(Workspace& model);
-  void release_sliding_contacts(Workspace& model) const;
   // contact j's a_rel = P (q''_c − u') (coordinate path) or T q'' + T' q' (contact point) for
   // the control's q'' in cws, into accel_ (its size returned); its scale (the terms' sum) in
   // `scale`. Evaluates the contact's kinematics (sliding_velocity).
@@ -256,6 +263,23 @@ class ContactModes {
   // the split of largest margin (the lower N of a tie), on space_. Cost: max_split_margin to its
   // optimum
   void split_note_numbers();
+
+  // Some Coulomb contacts' stick overrides and friction switches, saved while a trial overrides
+  // them and put back after it: settle_contacts' lifted sticks and probe_held's held ones
+  // (lifted_), hold_sliding's held contacts (held_sticks_).
+  struct SavedSticks {
+    std::vector<std::size_t> which;      // (≤ frictions) positions in frictions_ overridden
+    std::vector<signed char> modes;      // (frictions) each one's stick override before
+    std::vector<unsigned char> enabled;  // (frictions) each one's nonideal_enabled before
+    // sized for `count` Coulomb contacts, none overridden (allocates: the constructor's)
+    void reserve(std::size_t count);
+    // contact f (`c`) overridden: its stick's override and friction switch saved into which,
+    // modes and enabled, then the stick set to `stick` and the friction off. O(1)
+    void override_stick(Workspace& model, std::size_t f, const FrictionContact& c,
+                        signed char stick);
+    // every contact in `which` back to its saved override and friction switch. O(which)
+    void restore(Workspace& model, const std::vector<FrictionContact>& frictions) const;
+  };
 
   // the model's Coulomb contacts (System::friction_contacts)
   std::vector<FrictionContact> frictions_;
@@ -291,18 +315,16 @@ class ContactModes {
   // nonideal_enabled (frictions; their hints in held_hints_, held_)
   std::vector<std::size_t> resting_;
   std::vector<unsigned char> resting_enabled_;
-  std::vector<std::size_t> lifted_;  // (≤ frictions) open_lifted_sticks: the sticks it opened
-  std::vector<signed char> lifted_modes_;      // (frictions) their stick's override before
-  std::vector<unsigned char> lifted_enabled_;  // (frictions) their nonideal_enabled before
-  detail::SplitSpace space_;                   // hold_by_split: the split space of stuck_
-  VectorXd split_y_;                           // (nz) hold_by_split: the split of largest margin
+  // open_lifted_sticks' sticks it opened, or probe_held's it held, and their modes before
+  SavedSticks lifted_;
+  detail::SplitSpace space_;  // hold_by_split: the split space of stuck_
+  VectorXd split_y_;          // (nz) hold_by_split: the split of largest margin
   double normal_force_ = 0.0, holding_force_ = 0.0;  // of the last stick_margin
   int slipped_ = 0;                                  // see slipped()
-  // hold_sliding()'s: the contacts' mirrored stick overrides and friction switches (frictions),
-  // the sliding evaluation's residual, met and rows_not_met (m_r), the largest |v_rel| of the
-  // contacts held, and whether it applied F_h with the requirements not met
-  std::vector<signed char> slide_modes_;
-  std::vector<unsigned char> slide_enabled_;
+  // hold_sliding()'s: the contacts it held and their mirrored stick overrides and friction
+  // switches, the sliding evaluation's residual, met and rows_not_met (m_r), the largest |v_rel|
+  // of the contacts held, and whether it applied F_h with the requirements not met
+  SavedSticks held_sticks_;
   VectorXd slide_residual_;
   std::vector<unsigned char> slide_met_;
   Index slide_not_met_ = 0;

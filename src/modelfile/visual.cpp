@@ -63,12 +63,13 @@ std::vector<double> outputs_at(const Model& model, const VectorXd& q, double t) 
 }
 
 // The friction drawn at visual contact c (docs/viewer.md, "`visual:` in a model file"): the
-// Coulomb contact on its constraint, the columns whose sums are the generalized friction force
-// Q_f on each sliding coordinate (Qc_nonideal.<coordinate> while it slides, the stick
-// constraint's multiplier while it sticks), and the map F = (J_cᵀ)⁺ Q_f to the contact point's
-// axes, J_c = ∂(at)/∂(sliding coordinates) by central differences at the initial state (constant
-// for the Cartesian sliding coordinates that docs/friction.md asks for) of the point's
-// expressions, or of its geometry (a contacts: entry's). Null when no Coulomb contact sits on c.
+// Coulomb contact on its constraint, the columns of the generalized friction force Q_f on each
+// sliding coordinate (visual.contact.<name>.Qf.<coordinate>, run_model's: Qc_nonideal.<coordinate>
+// while it slides, the stick constraint's whole multiplier while it sticks), and the map F =
+// (J_cᵀ)⁺ Q_f to the contact point's axes, J_c = ∂(at)/∂(sliding coordinates) by central
+// differences at the initial state (constant for the Cartesian sliding coordinates that
+// docs/friction.md asks for) of the point's expressions, or of its geometry (a contacts: entry's).
+// Null when no Coulomb contact sits on c.
 nlohmann::json contact_friction(const Model& model, const VisualContact& c) {
   const System& sys = model.system;
   Index constraint = -1;
@@ -144,8 +145,7 @@ nlohmann::json contact_friction(const Model& model, const VisualContact& c) {
   }
   for (std::size_t j = 0; j < nc; ++j) {
     const std::string coordinate = sys.coordinate_names()[std::size_t(fc->coordinates[j])];
-    columns.push_back({"Qc_nonideal." + coordinate,
-                       "lambda." + stick + (nc == 1 ? "" : "." + std::to_string(j))});
+    columns.push_back({"visual.contact." + c.name + ".Qf." + coordinate});
   }
   return entry(std::move(columns), std::move(map));
 }

@@ -136,6 +136,44 @@ void add_friction_columns(const Model& model, const Trajectory& traj, const Visu
   for (CsvColumn& col : cols) out.push_back(std::move(col));
 }
 
+// The columns visual.contact.<name>.Qf.<coordinate> of the Coulomb friction on the sliding
+// coordinates of visual contact c (the coordinate path): the generalized friction force on each,
+// lambda.stick.<friction>[.j] while the contact holds (its stick multipliers not all zero: the
+// whole holding force, scale_stick_multipliers), else Qc_nonideal.<coordinate> (the sliding
+// law). Not their sum: while the contact holds, Qc_nonideal on its coordinates has the stick
+// rows' non-ideal share already, which the holding force includes (another contact's sliding
+// friction carried: the ladder's floor). Cost O(samples · coordinates).
+void add_coordinate_friction_columns(const Model& model, const Trajectory& traj,
+                                     const VisualContact& c, std::vector<CsvColumn>& out) {
+  const System& sys = model.system;
+  const FrictionContact* fc = nullptr;
+  for (const FrictionContact& f : sys.friction_contacts()) {
+    if (!f.kinematics && f.mu > 0.0 && f.normal_constraint >= 0 && f.stick_constraint >= 0 &&
+        sys.constraint(f.normal_constraint).name() == c.name)
+      fc = &f;
+  }
+  if (fc == nullptr || traj.n != sys.coordinate_count() || traj.m != sys.constraint_rows()) return;
+  const Index N = traj.samples(), n = traj.n, stick = sys.row_offset(fc->stick_constraint),
+              d = sys.constraint(fc->stick_constraint).rows();
+  const std::size_t nc = fc->coordinates.size();
+  if (d != Index(nc)) return;
+  std::vector<CsvColumn> cols;
+  for (Index coordinate : fc->coordinates) {
+    cols.push_back(
+        {"visual.contact." + c.name + ".Qf." + sys.coordinate_names()[std::size_t(coordinate)],
+         std::vector<double>(std::size_t(N))});
+  }
+  for (Index i = 0; i < N; ++i) {
+    const double* lambda = traj.lambda.data() + i * traj.m + stick;
+    const bool held = !Eigen::Map<const VectorXd>(lambda, d).isZero(0.0);
+    for (std::size_t j = 0; j < nc; ++j) {
+      cols[j].values[std::size_t(i)] =
+          held ? lambda[j] : traj.Qc_nonideal[std::size_t(i * n + fc->coordinates[j])];
+    }
+  }
+  for (CsvColumn& col : cols) out.push_back(std::move(col));
+}
+
 }  // namespace
 
 VisualContact robot_visual_contact(std::string name, std::shared_ptr<const tree::Tree> tree,
@@ -313,6 +351,7 @@ void add_contact_columns(const Model& model, const Trajectory& traj, std::vector
   static const char* const kParts[] = {"x", "y", "z", "nx", "ny", "nz"};
   for (const VisualContact& c : model.visual.contacts) {
     add_friction_columns(model, traj, c, out);
+    add_coordinate_friction_columns(model, traj, c, out);
     if (!c.geometry) continue;
     // the point's components, then the normal's (as visual: contacts: orders them)
     const int dims = c.dimensions;

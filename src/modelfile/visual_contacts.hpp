@@ -44,13 +44,16 @@ VisualContact bodies_visual_contact(std::shared_ptr<const mb::MultibodyModel> mo
 /// units, but 1000 for a ball in mm), so the multipliers are the holding force / kappa; × kappa
 /// they are the force in the model's force unit along t_1 (t_2) — on the coordinate path the
 /// generalized holding force on the sliding coordinates. Applied once to the samples a model
-/// run writes (run_model); Qc_ideal = Aᵀ lambda holds with the unscaled ones. Cost
+/// run writes (run_model). The multipliers are the whole ones, lambda + lambda_nonideal
+/// (Trajectory::lambda), so this is the holding force the slip is decided by. Cost
 /// O(samples · contacts · one evaluation of the normal constraint's rows).
 void scale_stick_multipliers(const Model& model, Trajectory& traj);
 
 /// The columns visual.contact.<name>.x, .y (, .z), .nx, .ny (, .nz) of every drawn contact with
-/// a geometry, at the samples of `traj`, appended to `out` in the order of model.visual.contacts.
-/// Cost O(samples · contacts · links).
+/// a geometry, at the samples of `traj`, appended to `out` in the order of model.visual.contacts;
+/// before them a Coulomb contact's friction: at a contact point .fx, .fy (, .fz) in the world, on
+/// the coordinate path .Qf.<coordinate> (the generalized force: the whole stick multiplier while
+/// it holds, Qc_nonideal while it slides). Cost O(samples · contacts · links).
 void add_contact_columns(const Model& model, const Trajectory& traj, std::vector<CsvColumn>& out);
 
 }  // namespace detail

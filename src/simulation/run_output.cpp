@@ -64,8 +64,24 @@ Status Run::record(double t, const double* x, bool last) {
   push(out.Qc_ideal, ws_.Qc_ideal);
   push(out.Qc_nonideal, ws_.Qc_nonideal);
   push(out.lambda, ws_.lambda);
-  // the unilateral constraints' whole multipliers (their contact forces)
   const bool nonideal = ws_.lambda_nonideal.size() == ws_.lambda.size();
+  // the stick rows of each sticking contact: the whole multiplier lambda + lambda_nonideal, the
+  // holding force its slip is decided by (stick_margin_here, holding_split: Λ), not the ideal
+  // share alone, which misses the part of another contact's sliding friction this one carries
+  // (a rod turning about its held end A while B slides: −4.54 N for A's −6.73 N)
+  if (nonideal) {
+    const auto& contacts = sys_.friction_contacts();
+    double* first = out.lambda.data() + (out.lambda.size() - std::size_t(ws_.lambda.size()));
+    for (std::size_t c = 0; c < mode_.size(); ++c) {
+      const Index k = contacts[c].stick_constraint;
+      if (mode_[c] != ContactMode::kSticking || k < 0 || !ws_.active[std::size_t(k)]) continue;
+      const Index r = sys_.row_offset(k), rows = sys_.constraint(k).rows();
+      // (where it carries none, the ideal share as it was, bit for bit: −0 stays −0)
+      for (Index j = r; j < r + rows; ++j)
+        if (ws_.lambda_nonideal[j] != 0.0) first[j] += ws_.lambda_nonideal[j];
+    }
+  }
+  // the unilateral constraints' whole multipliers (their contact forces)
   for (Index k : traj_.unilateral) {
     const Index r = sys_.row_offset(k);
     out.lambda_total.push_back(ws_.lambda[r] + (nonideal ? ws_.lambda_nonideal[r] : 0.0));

@@ -8,7 +8,9 @@
 // centre too (the tipping moment moves N between the ends; a split of the holding force inside
 // both cones exists until then, although the minimum-norm one leaves the lighter end's cone at
 // 1.308 s). A rod on two ends of different mu_s stopping together where only one end can hold
-// alone turns about it (RK4 of the pivot, its slip time bisected), where none can slides on.
+// alone turns about it (RK4 of the pivot, its slip time bisected), where none can slides on;
+// the held end's reported holding force (lambda.stick, the viewer's) is the whole one, with the
+// part of the other end's sliding friction it carries (the rod; a ladder's floor, statics).
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -20,6 +22,8 @@
 
 #include "support/contact_runs.hpp"
 #include "ukdyn/modelfile/model.hpp"
+#include "ukdyn/modelfile/run.hpp"
+#include "ukdyn/modelfile/visual.hpp"
 #include "ukdyn/simulation/simulate.hpp"
 
 namespace ukdyn {
@@ -752,6 +756,20 @@ TEST(StickSeveralContacts, RodWhoseEndsStopTogetherTurnsAboutTheEndThatAloneCanH
   EXPECT_NEAR(A[1].holding_force, 0.8 * kMass * kG / 2.0, 1e-6);
   EXPECT_NEAR(A[1].friction_limit, 0.8 * kMass * kG / 2.0, 1e-9);
   const double x_s = -t_s + 0.5 * a * t_s * t_s;
+  // the viewer's contact forces visual.contact.<A, B>.fx, .fy (run_model) at the same samples
+  Model viewed = parse_model(rod(F, t_s + tau_A + 0.02));
+  viewed.options.output_at.assign(tr.t.begin(), tr.t.end());
+  const ModelRun run = run_model(viewed);
+  ASSERT_EQ(run.trajectory.t, tr.t);
+  auto viewer = [&](const std::string& name) -> const std::vector<double>& {
+    for (const CsvColumn& col : run.extra_columns)
+      if (col.name == "visual.contact." + name) return col.values;
+    ADD_FAILURE() << "no column visual.contact." << name;
+    static const std::vector<double> none(tr.t.size(), 0.0);
+    return none;
+  };
+  const std::vector<double>&Ax = viewer("A.fx"), &Ay = viewer("A.fy"), &Bx = viewer("B.fx"),
+        &By = viewer("B.fy");
   for (std::size_t i = 0; i < tr.t.size(); ++i) {
     const double t = tr.t[i];
     SCOPED_TRACE("t = " + std::to_string(t));
@@ -788,6 +806,21 @@ TEST(StickSeveralContacts, RodWhoseEndsStopTogetherTurnsAboutTheEndThatAloneCanH
     EXPECT_NEAR(Qx, p.fA[0] + p.fB[0], 1e-6);
     EXPECT_NEAR(Qy, p.fA[1] + p.fB[1], 1e-6);
     EXPECT_LE(std::hypot(p.fA[0], p.fA[1]), 0.8 * kMass * kG / 2.0);
+    // A's reported holding force lambda.stick.coulomb.A (κ = 1: the gap's gradient is ẑ; the
+    // tangents x̂, ŷ) is the whole f_A the slip decision reads, including the part of B's
+    // friction that A carries (the ideal multipliers alone gave −4.54 N for −6.73 N at
+    // t_s + 0.15); B slides: no holding force
+    const std::vector<double> hA = multipliers(tr, "stick.coulomb.A", i);
+    ASSERT_EQ(hA.size(), 2u);
+    EXPECT_NEAR(hA[0], p.fA[0], 1e-8);
+    EXPECT_NEAR(hA[1], p.fA[1], 1e-8);
+    EXPECT_EQ(norm(multipliers(tr, "stick.coulomb.B", i)), 0.0);
+    // the viewer draws the same forces (−4.54 N for A's x too, before): A's holding force, B's
+    // sliding friction mu m g / 2 against its velocity
+    EXPECT_NEAR(Ax[i], p.fA[0], 1e-8);
+    EXPECT_NEAR(Ay[i], p.fA[1], 1e-8);
+    EXPECT_NEAR(Bx[i], p.fB[0], 1e-6);
+    EXPECT_NEAR(By[i], p.fB[1], 1e-6);
   }
 }
 
@@ -826,6 +859,62 @@ TEST(StickSeveralContacts, RodWhoseEndsStopTogetherSlidesOnWhereNoSubsetHoldsAnd
       EXPECT_NEAR(multipliers(tr, "stick.coulomb.B", i)[0], -F / 2.0, 1e-7) << "t = " << t;
     }
   }
+}
+
+// The ladder of examples/models/ladder_coulomb.yaml (coordinate path: floor friction on xA,
+// wall friction on yB; m = 1, L = 2, mu_f = 0.2, mu_w = 0.3) at rest at θ0 = 1.169082, 6e-4 rad
+// above the angle where both frictions together just hold: the wall slides at its limit (its
+// friction mu_w N_w up, the force it holds with), the floor holds. Statics: N_w (sin θ +
+// mu_w cos θ) L = m g (L/2) cos θ, and the floor's holding force is −N_w along x. The ideal
+// stick multiplier alone is the floor's share without the wall's friction (−2.0837 for −1.8482):
+// lambda.stick.coulomb.floor is the whole one, and so is the viewer's friction on xA
+// (visual.contact.floor.Qf.xA, not Qc_nonideal.xA + the multiplier, which counted the wall's
+// friction carried twice)
+TEST(StickSeveralContacts, LadderFloorHoldsTheWholeForceWhileTheWallSlidesAtItsLimit) {
+  const double th0 = 1.169082, m = 1.0, mu_w = 0.3;
+  const double N_w = m * kG * std::cos(th0) / (2.0 * (std::sin(th0) + mu_w * std::cos(th0)));
+  const std::string text =
+      "parameters: {m: 1, L: 2, g: 9.81, mu_f: 0.2, mu_w: 0.3, th0: 1.169082}\n"
+      "coordinates: [xA, yA, xB, yB]\n"
+      "kinetic_energy: m/6*(xA_dot^2 + yA_dot^2 + xA_dot*xB_dot + yA_dot*yB_dot + xB_dot^2 +"
+      " yB_dot^2)\n"
+      "potential_energy: m*g*(yA + yB)/2\n"
+      "constraints:\n"
+      "  - {name: rod, holonomic: ((xA - xB)^2 + (yA - yB)^2 - L^2)/(2*L)}\n"
+      "  - {name: floor, holonomic: yA, unilateral: true}\n"
+      "  - {name: wall, holonomic: xB}\n"
+      "nonideal:\n"
+      "  - {friction: coulomb, constraint: floor, mu: mu_f, coordinates: [xA]}\n"
+      "  - {friction: coulomb, constraint: wall, mu: mu_w, coordinates: [yB]}\n"
+      "initial:\n"
+      "  q: {xA: L*cos(th0), yA: 0, xB: 0, yB: L*sin(th0)}\n"
+      "simulate: {t_end: 0.4}\n"
+      "output: {every: 0.05}\n"
+      "visual: {contacts: {floor: {at: [xA, yA], normal: [0, 1]}}}\n";
+  const Model model = parse_model(text);
+  const Trajectory tr = simulate(model.system, model.q0, model.qd0, model.options);
+  ASSERT_EQ(tr.stats.status, Status::kOk) << tr.stats.message;
+  const ModelRun run = run_model(model);
+  ASSERT_EQ(run.trajectory.t, tr.t);
+  const std::vector<double>* viewed = nullptr;
+  for (const CsvColumn& col : run.extra_columns)
+    if (col.name == "visual.contact.floor.Qf.xA") viewed = &col.values;
+  EXPECT_NE(viewed, nullptr);
+  ASSERT_GE(tr.t.size(), 8u);
+  for (std::size_t i = 0; i < tr.t.size(); ++i) {
+    SCOPED_TRACE("t = " + std::to_string(tr.t[i]));
+    // at rest
+    EXPECT_NEAR(at(tr, tr.q, "xA", i), 2.0 * std::cos(th0), 1e-12);
+    EXPECT_NEAR(at(tr, tr.qd, "xA", i), 0.0, 1e-12);
+    // the floor holds −N_w, the wall (sliding) holds nothing through its stick rows
+    EXPECT_NEAR(multipliers(tr, "stick.coulomb.floor", i)[0], -N_w, 1e-9);
+    EXPECT_EQ(multipliers(tr, "stick.coulomb.wall", i)[0], 0.0);
+    if (viewed) EXPECT_NEAR((*viewed)[i], -N_w, 1e-9);
+  }
+  // the scene draws the floor's friction from that column alone
+  const std::string scene = viewer_scene_json(model);
+  EXPECT_NE(scene.find("\"visual.contact.floor.Qf.xA\""), std::string::npos);
+  EXPECT_EQ(scene.find("\"Qc_nonideal.xA\""), std::string::npos);
 }
 
 }  // namespace UKDYN_TEST_FILE

@@ -339,7 +339,12 @@ struct Trajectory {
   std::vector<double> qdd;          ///< N × n: constrained accelerations q''
   std::vector<double> Qc_ideal;     ///< N × n: ideal constraint force Aᵀ lambda, eq. (11)
   std::vector<double> Qc_nonideal;  ///< N × n: non-ideal constraint force, eq. (12)
-  std::vector<double> lambda;       ///< N × m: minimum-norm multipliers of the ideal force
+  /// N × m: minimum-norm multipliers of the ideal force, except on the stick rows of a Coulomb
+  /// contact that sticks: there lambda + lambda_nonideal, the whole multiplier whose holding
+  /// force the slip is decided by (docs/friction.md §2) — while another contact of the body
+  /// slides, the part of its friction this one carries is in lambda_nonideal (so Qc_ideal =
+  /// Aᵀ lambda on every other row only)
+  std::vector<double> lambda;
   /// N × u (u = unilateral.size()): each unilateral constraint's whole multiplier
   /// lambda + lambda_nonideal — the force its contact pushes with along its gap's gradient (the
   /// normal force for a gap of unit gradient), which decides its release (docs/contact.md);
