@@ -21,7 +21,7 @@ namespace ukdyn::detail {
 
 // simulate(), with `finished` called with the run's workspace when the run ends (it returns or
 // throws): a caller reads there what the system's callables recorded in their per-workspace
-// scratch — the controlled plant's control statistics (control/simulate_controlled.cpp).
+// scratch — the controlled plant's control statistics (control/controlled_plant.hpp).
 Trajectory simulate_observed(const System& sys, const Eigen::Ref<const VectorXd>& q0,
                              const Eigen::Ref<const VectorXd>& qd0,
                              const SimulationOptions& options,

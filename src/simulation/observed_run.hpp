@@ -18,7 +18,7 @@ namespace ukdyn::detail {
 
 // A caller's integrals z' = g(q, q', t, z), integrated after the work channels in
 // x = [q; q'; W; z] with the plant's own stages and error control (a controlled run's work,
-// effort and bounds of the control: control/simulate_controlled.cpp). First-order: z is not a
+// effort and bounds of the control: control/controlled_quadratures.cpp). First-order: z is not a
 // coordinate, so M, the constraints and their factor stay the system's own. Stored unscaled;
 // the explicit methods' step-size control weighs z_i in a unit of its own: its atol is
 // atol · unit_i (docs/simulation.md, "Scales and tolerances"), so that an integral whose
