@@ -320,7 +320,7 @@ bool ContactDynamics::sliding_friction(const System& sys, Workspace& ws,
         const double scale = -fc.mu / std::sqrt(v2 + eps2);
         for (Index r = 0; r < nc; ++r) f[fc.coordinates[std::size_t(r)]] = scale * v[r];
       }
-      per_unit = A_c_.row(i).norm();
+      per_unit = coordinate_normal_force(fc, A_c_.row(i));  // |a_p|
     }
     if (!any) {
       F_.setZero(k, k);
@@ -707,7 +707,7 @@ bool ContactDynamics::impact_friction(const System& sys, Workspace& ws,
     if (tangents.empty()) continue;
     const Index f = Index(cone_mu_.size());
     cone_mu_.push_back(fc.mu);
-    cone_normal_.push_back(A_c_.row(Index(at - set_.begin())).norm());
+    cone_normal_.push_back(coordinate_normal_force(fc, A_c_.row(Index(at - set_.begin()))));
     cone_contact_.push_back(Index(at - set_.begin()));
     for (const auto& u : tangents) {
       for (const double sign : {1.0, -1.0}) {
