@@ -110,7 +110,7 @@ double ContactModes::stick_margin(const Controller& ctrl, ControlWorkspace& cws,
   detail::constraint_share(sys, model, c.stick_constraint, lam_, part_);
   reaction_ += part_;
   detail::normal_part(normals_, reaction_, part_);
-  normal_force_ = part_.norm();
+  normal_force_ = detail::coordinate_normal_force(c, part_);  // |R_N,p|
   holding_force_ = (reaction_ - part_).norm();
   return c.mu_static * normal_force_ - holding_force_;
 }

@@ -37,6 +37,13 @@ Eigen::Ref<const VectorXd> IdealForceInfo::sliding_velocity(Index c) const {
 Eigen::Ref<const MatrixXd> IdealForceInfo::contact_jacobian(Index c) const {
   return ws_.contact_jacobian[std::size_t(c)];
 }
+double IdealForceInfo::normal_force(Index k, const std::vector<Index>& on) const {
+  const auto R = reaction(k);
+  if (on.empty()) return R.norm();
+  double s = 0.0;
+  for (const Index i : on) s += R[i] * R[i];
+  return std::sqrt(s);
+}
 double IdealForceInfo::contact_normal_force(Index c, Index k) const {
   return detail::contact_normal_force(sys_, ws_, c, reaction(k));
 }
@@ -94,6 +101,10 @@ NonIdealFn contact_point_law(const CoulombFriction& spec, const System& sys, Ind
     throw std::invalid_argument(who +
                                 ": a friction at a contact point slides the point, not "
                                 "listed coordinates: leave coordinates empty");
+  if (!spec.normal_coordinates.empty())
+    throw std::invalid_argument(who +
+                                ": a friction at a contact point reads its normal force at the "
+                                "point (physical already): leave normal_coordinates empty");
   if (spec.surface_velocity)
     throw std::invalid_argument(who +
                                 ": a surface velocity under a contact point is not "
@@ -158,17 +169,22 @@ NonIdealForce coulomb_friction(CoulombFriction spec) {
         if (spec.kinematics) return contact_point_law(spec, sys, k, who);
         const std::vector<Index> coords =
             resolve_coordinates(spec.coordinates, sys.coordinate_count(), who);
+        // p, the coordinates N is read on (empty: all n); checked like the sliding ones
+        std::vector<Index> on;
+        if (!spec.normal_coordinates.empty())
+          on = resolve_coordinates(spec.normal_coordinates, sys.coordinate_count(),
+                                   who + " (normal_coordinates)");
         const double mu = spec.mu,
                      eps2 = spec.regularization_velocity * spec.regularization_velocity;
         const Index self = sys.nonideal_count();  // this force's index once bound
         const Index contact = Index(sys.friction_contacts().size());  // and its contact's
-        return [k, coords, mu, eps2, self, contact](
+        return [k, coords, on, mu, eps2, self, contact](
                    const Eigen::Ref<const VectorXd>&, const Eigen::Ref<const VectorXd>&, double,
                    const IdealForceInfo& ideal, Eigen::Ref<VectorXd> C) {
           // v_rel, the sliding velocity relative to the constraint (see CoulombFriction)
           const auto v = ideal.sliding_velocity(contact);
           const double v2 = v.squaredNorm();
-          const double N = ideal.normal_force(k);
+          const double N = ideal.normal_force(k, on);  // |R_p| (docs/friction.md §1)
           const auto hint = ideal.slip_hint(self);
           if (hint.squaredNorm() > 0.0) {
             // slipping from rest: mu N along the hint while |v_rel| <= 100 eps (the speed at which

@@ -388,6 +388,7 @@ System SystemBuilder::build() const {
       contact.normal_constraint = s.constraint_index(spec->constraint);
       contact.stick_constraint = s.constraint_index("stick." + f.name());
       contact.coordinates = spec->coordinates;
+      contact.normal_coordinates = spec->normal_coordinates;
       contact.kinematics = spec->kinematics;
       if (contact.coordinates.empty() && !contact.kinematics) {
         for (Index i = 0; i < n_; ++i) contact.coordinates.push_back(i);

@@ -342,7 +342,7 @@ bool ContactDynamics::sliding_friction(const System& sys, Workspace& ws,
         const double scale = -fc.mu / std::sqrt(v2 + eps2);
         for (Index r = 0; r < nc; ++r) f[fc.coordinates[std::size_t(r)]] = scale * v[r];
       }
-      per_unit = A_c_.row(i).norm();
+      per_unit = coordinate_normal_force(fc, A_c_.row(i));  // |a_p|
     }
     if (!any) {
       F_.setZero(k, k);
@@ -715,7 +715,7 @@ bool ContactDynamics::impact_friction(const System& sys, Workspace& ws,
     // on the coordinate path — g'⁻_i / N_i is then the approach speed in the unit of v_rel
     const double per_unit = fc.kinematics
                                 ? contact_normal_force(sys, ws, Index(c), A_c_.row(i).transpose())
-                                : A_c_.row(i).norm();
+                                : coordinate_normal_force(fc, A_c_.row(i));  // |a_p|
     // an orthonormal basis of the tangent space, ±each a direction of the friction impulse: the
     // cone exactly for one tangent, a four-sided pyramid for two. On the contact-point path the
     // tangents t_j of the contact plane (f ↦ Tᵀ f), on the coordinate path the sliding

@@ -164,6 +164,18 @@ void normal_part(const Eigen::Ref<const MatrixXd>& normals, const Eigen::Ref<con
 // sliding_velocity last evaluated it). O(|columns|), no allocation.
 double contact_normal_force(const System& sys, const Workspace& ws, Index c,
                             const Eigen::Ref<const VectorXd>& reaction);
+// Contact c's normal force on the coordinate path from a vector R (n) along its normal rows —
+// its normal constraint's reaction, or the normal part of a stuck contact's: N = |R_p| over the
+// contact's normal_coordinates p (all n when empty; docs/friction.md §1), = |lambda| |a_p| for
+// R = lambda a. With R a normal row a itself: N per unit multiplier, |a_p|. Any vector
+// expression (a row of a matrix too). O(|p|) (O(n) when p is all), no allocation.
+template <class Vector>
+double coordinate_normal_force(const FrictionContact& contact, const Vector& R) {
+  if (contact.normal_coordinates.empty()) return R.norm();
+  double s = 0.0;
+  for (const Index i : contact.normal_coordinates) s += R[i] * R[i];
+  return std::sqrt(s);
+}
 // C += scale · Tᵀ f on the contact-point path: f (d) the tangential force components, T the
 // tangential rows of ws.contact_jacobian[c]. O(d · |columns|), no allocation.
 void add_contact_force(const System& sys, const Workspace& ws, Index c, double scale,

@@ -584,11 +584,15 @@ Model Reader::read_generalized(const YAML::Node& root) {
   read_constraints(root, builder);
   read_nonideal(root, builder);
   add_switches(builder);
-  try {
-    return Model{.system = builder.build()};
-  } catch (const std::invalid_argument& e) {
-    throw ModelError(file_, 1, 1, e.what());
-  }
+  Model model = [&] {
+    try {
+      return Model{.system = builder.build()};
+    } catch (const std::invalid_argument& e) {
+      throw ModelError(file_, 1, 1, e.what());
+    }
+  }();
+  check_friction_normals(root, model.system);
+  return model;
 }
 
 }  // namespace model_reader

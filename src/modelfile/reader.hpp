@@ -406,6 +406,16 @@ class Reader {
   std::pair<double, RestitutionLaw> read_restitution(const YAML::Node& e, const YAML::Node& law,
                                                      const std::string& what);
   void read_nonideal(const YAML::Node& root, SystemBuilder& builder);
+  // a coordinate-path Coulomb friction's normal coordinates p (docs/friction.md §1):
+  // `normal_coordinates:` when given, else the coordinates whose unit (units: of the file) is
+  // the sliding coordinates' (or the model's length unit) or not known; empty when that is all
+  // of them. Refuses sliding coordinates of different units.
+  std::vector<Index> normal_coordinates(const YAML::Node& root, const YAML::Node& f,
+                                        const std::vector<Index>& sliding);
+  // after the build: refuses, at the friction's entry, a normal row with no coordinate in p, or
+  // one that mixes coordinates of unknown units (a length with an angle?) without
+  // normal_coordinates: (then N would mix a force and a torque)
+  void check_friction_normals(const YAML::Node& root, const System& sys);
   // a Coulomb friction's surface_velocity: `count` expressions of q and t, compiled with their
   // rates along the motion
   SurfaceVelocityFn surface_velocity(const YAML::Node& node, std::size_t count);
@@ -490,7 +500,9 @@ class Reader {
   std::vector<Expr> declared_kinematics(const YAML::Node& root);
   void note_desired_rows(const YAML::Node& holonomic, const std::string& name,
                          const std::string& what, const std::vector<Expr>& declared);
-  std::vector<std::string> constraint_names_;   // in declaration order
+  std::vector<std::string> constraint_names_;  // in declaration order
+  // the coordinate-path Coulomb frictions' entries (read_nonideal), for check_friction_normals
+  std::vector<YAML::Node> coulomb_entries_;
   std::vector<std::string> constraint_inputs_;  // N_c and lambda_c of each named constraint
   // the constraints whose N_c and lambda_c are inputs (those named by an identifier), in the
   // order of constraint_inputs_; a subset of constraint_names_

@@ -86,6 +86,127 @@ SurfaceVelocityFn Reader::surface_velocity(const YAML::Node& node, std::size_t c
   };
 }
 
+std::vector<Index> Reader::normal_coordinates(const YAML::Node& root, const YAML::Node& f,
+                                              const std::vector<Index>& sliding) {
+  const Index n = Index(coordinates_.size());
+  std::vector<Index> p;
+  if (const YAML::Node nn = f["normal_coordinates"]) {
+    if (!nn.IsSequence() || nn.size() == 0)
+      fail(nn, "normal_coordinates must be a non-empty list of coordinate names",
+           "the translation coordinates of the body at the contact, e.g. normal_coordinates: "
+           "[x, y] (docs/friction.md §1)");
+    for (const auto& c : nn) {
+      const Index i = coordinate(c);
+      if (std::find(p.begin(), p.end(), i) != p.end())
+        fail(c, "normal_coordinates: '" + c.Scalar() + "' is listed twice");
+      p.push_back(i);
+    }
+    return p;
+  }
+  // each coordinate's unit as units: gives it ("" when not given)
+  std::vector<std::string> unit(static_cast<std::size_t>(n));
+  std::string length = "m";
+  if (const YAML::Node u = root["units"]; u && u.IsMap()) {
+    for (const auto& kv : u) {
+      const std::string& key = kv.first.Scalar();
+      if (!kv.second.IsScalar()) continue;  // (read_units refuses it)
+      if (key == "length") length = kv.second.Scalar();
+      for (Index i = 0; i < n; ++i)
+        if (names_coordinate(key, coordinates_[std::size_t(i)]))
+          unit[std::size_t(i)] = kv.second.Scalar();
+    }
+  }
+  // the sliding coordinates' unit: one length, known or not
+  std::vector<Index> slides = sliding;
+  if (slides.empty())
+    for (Index i = 0; i < n; ++i) slides.push_back(i);
+  std::string of_sliding;
+  Index first = -1;
+  for (const Index i : slides) {
+    const std::string& u = unit[std::size_t(i)];
+    if (u.empty()) continue;
+    if (first < 0) {
+      of_sliding = u;
+      first = i;
+    } else if (u != of_sliding) {
+      fail(
+          f["coordinates"] ? f["coordinates"] : f,
+          "Coulomb friction's sliding coordinates must be lengths of one unit: '" +
+              coordinates_[std::size_t(first)] + "' is in " + of_sliding + ", '" +
+              coordinates_[std::size_t(i)] + "' in " + u,
+          "list only the Cartesian coordinates of the contact under coordinates: (docs/friction.md "
+          "§1)");
+    }
+  }
+  if (of_sliding.empty()) of_sliding = length;
+  for (Index i = 0; i < n; ++i) {
+    const std::string& u = unit[std::size_t(i)];
+    if (u.empty() || u == of_sliding) p.push_back(i);
+  }
+  if (Index(p.size()) == n) p.clear();  // all: N = |R|, as without units
+  return p;
+}
+
+void Reader::check_friction_normals(const YAML::Node& root, const System& sys) {
+  const Index n = sys.coordinate_count();
+  std::vector<std::string> unit(static_cast<std::size_t>(n));
+  if (const YAML::Node u = root["units"]; u && u.IsMap()) {
+    for (const auto& kv : u)
+      for (Index i = 0; i < n; ++i)
+        if (kv.second.IsScalar() &&
+            names_coordinate(kv.first.Scalar(), coordinates_[std::size_t(i)]))
+          unit[std::size_t(i)] = kv.second.Scalar();
+  }
+  std::size_t entry = 0;
+  for (const FrictionContact& contact : sys.friction_contacts()) {
+    if (contact.kinematics) continue;
+    if (entry >= coulomb_entries_.size()) break;
+    const YAML::Node& f = coulomb_entries_[entry++];
+    const std::string name = sys.constraint(contact.normal_constraint).name();
+    // the normal row's coordinates (all n for dense rows)
+    std::vector<Index> row = sys.constraint(contact.normal_constraint).model().columns();
+    if (row.empty())
+      for (Index i = 0; i < n; ++i) row.push_back(i);
+    const auto& p = contact.normal_coordinates;
+    auto in_p = [&](Index i) { return p.empty() || std::find(p.begin(), p.end(), i) != p.end(); };
+    std::vector<std::string> read, left;
+    for (const Index i : row) {
+      const std::string& c = coordinates_[std::size_t(i)];
+      const std::string& u = unit[std::size_t(i)];
+      (in_p(i) ? read : left).push_back(u.empty() ? c : c + " (" + u + ")");
+    }
+    if (read.empty()) {
+      fail(f["constraint"],
+           "the friction on '" + name + "' cannot read its normal force: its row involves " +
+               join(left) + ", none in the sliding coordinates' length unit",
+           "give the translation coordinates of the body at the contact as normal_coordinates: "
+           "[...] (docs/friction.md §1)");
+    }
+    if (f["normal_coordinates"] || read.size() < 2) continue;
+    // several coordinates of the row read: fine when each is a length (a sliding coordinate,
+    // or one in the length unit); one of unknown unit may be an angle (y + s*sin(th)), whose
+    // entry would add a torque to N
+    std::vector<std::string> unknown;
+    for (const Index i : row) {
+      if (!in_p(i) || !unit[std::size_t(i)].empty()) continue;
+      if (std::find(contact.coordinates.begin(), contact.coordinates.end(), i) !=
+          contact.coordinates.end())
+        continue;
+      unknown.push_back(coordinates_[std::size_t(i)]);
+    }
+    if (unknown.empty()) continue;
+    fail(f["constraint"],
+         "the friction on '" + name + "' reads its normal force N on " + join(read) +
+             ", of which " + join(unknown) +
+             " have no unit: if one is an angle, N would add a torque to the force "
+             "(N = |R_p|, docs/friction.md §1)",
+         "say which are angles under units: (units: {" + unknown.back() +
+             ": rad}; the others in the length unit or without a unit count as lengths), or "
+             "give the translation coordinates of the body at the contact as "
+             "normal_coordinates: [...]");
+  }
+}
+
 void Reader::read_nonideal(const YAML::Node& root, SystemBuilder& builder) {
   const YAML::Node ns = root["nonideal"];
   if (!ns) return;
@@ -97,13 +218,15 @@ void Reader::read_nonideal(const YAML::Node& root, SystemBuilder& builder) {
     if (!f.IsMap()) fail(f, "a non-ideal force must be a mapping");
     for (const auto& kv : f) {
       static const std::set<std::string> keys = {
-          "friction",         "constraint",  "mu",
-          "mu_static",        "coordinates", "regularization_velocity",
-          "surface_velocity", "c",           "C"};
+          "friction",          "constraint",  "mu",
+          "mu_static",         "coordinates", "regularization_velocity",
+          "surface_velocity",  "c",           "C",
+          "normal_coordinates"};
       if (!keys.count(kv.first.Scalar())) {
         fail(kv.first, "unknown key '" + kv.first.Scalar() + "' in a non-ideal force",
              "the keys are friction, constraint, mu, mu_static, coordinates, "
-             "regularization_velocity, surface_velocity (coulomb), c (viscous), C");
+             "normal_coordinates, regularization_velocity, surface_velocity (coulomb), c "
+             "(viscous), C");
       }
     }
     std::vector<Index> coords;
@@ -150,6 +273,12 @@ void Reader::read_nonideal(const YAML::Node& root, SystemBuilder& builder) {
           if (const YAML::Node un = f["surface_velocity"])
             fail(un, "a surface velocity under a robot's contact is not supported yet",
                  "leave surface_velocity out");
+          if (const YAML::Node nn = f["normal_coordinates"])
+            fail(nn,
+                 "the friction at contact '" + on +
+                     "' reads its normal force at the contact point: it takes no "
+                     "normal_coordinates",
+                 "leave normal_coordinates out");
           try {
             spec.kinematics = pc->second();
           } catch (const std::invalid_argument& e) {
@@ -177,8 +306,16 @@ void Reader::read_nonideal(const YAML::Node& root, SystemBuilder& builder) {
           spec.surface_velocity =
               surface_velocity(un, coords.empty() ? coordinates_.size() : coords.size());
         }
+        if (!spec.kinematics) {
+          spec.normal_coordinates = normal_coordinates(root, f, coords);
+          coulomb_entries_.push_back(f);
+        }
         builder.add(coulomb_friction(spec));
       } else if (law == "viscous") {
+        if (const YAML::Node nn = f["normal_coordinates"])
+          fail(nn,
+               "normal_coordinates belong to Coulomb friction (the coordinates its N is read on)",
+               "leave normal_coordinates out of a viscous friction");
         if (!f["c"])
           fail(f, "viscous friction needs its coefficient c", "{friction: viscous, c: 0.3}");
         ViscousFriction spec;

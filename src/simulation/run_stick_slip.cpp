@@ -195,7 +195,7 @@ double Run::stick_margin_here(std::size_t c, double t) {
   detail::copy_constraint_rows(sys_, ws_, k, normals_);
   detail::normal_part(normals_, reaction_, normal_);  // R_N
   holding_ = reaction_ - normal_;
-  return contact.mu_static * normal_.norm() - holding_.norm();
+  return contact.mu_static * detail::coordinate_normal_force(contact, normal_) - holding_.norm();
 }
 
 // stick_margin on the contact-point path, after the evaluation with the contact sticking:

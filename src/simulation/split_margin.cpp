@@ -160,15 +160,20 @@ bool split_space(const System& sys, Workspace& ws, const Eigen::VectorXd& Lambda
         g[ok + r] = wa / ww;
       }
     } else {
-      // R = A_kᵀ Λ_k + A_sᵀ Λ_s (its rows while it sticks); N = |a·R| / |a| (one normal row)
+      // R = A_kᵀ Λ_k + A_sᵀ Λ_s (its rows while it sticks); N = |a·R| |a_p| / |a|² (one
+      // normal row; p its normal coordinates, coordinate_normal_force)
       if (rowsk != 1) return false;
       const double aa = rows_A.row(ok).squaredNorm();
       if (!(aa > 0.0)) return false;
+      // (|a_p| / |a|² is 1/|a| when p is all: the old expression, bit for bit)
+      const bool all = contact.normal_coordinates.empty();
+      const double root = std::sqrt(aa),
+                   a_p = all ? root : detail::coordinate_normal_force(contact, rows_A.row(ok));
       const Index os = compact[std::size_t(sys.row_offset(s))];
       const bool sticks = os >= 0 && ws.active[std::size_t(s)];
       for (Index r = 0; r < rowsk + (sticks ? rowss : 0); ++r) {
         const Index i = r < rowsk ? ok + r : os + r - rowsk;
-        g[i] = rows_A.row(ok).dot(rows_A.row(i)) / std::sqrt(aa);
+        g[i] = rows_A.row(ok).dot(rows_A.row(i)) / root * (all ? 1.0 : a_p / root);
       }
     }
     if (g.dot(lambda0) < 0.0) g = -g;

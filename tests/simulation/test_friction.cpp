@@ -797,5 +797,118 @@ TEST(Friction, GovernorAtMuZeroIsTheGovernorWithoutFriction) {
   }
 }
 
+// ---------------------------------------------------------------------------------------------
+// the normal force on the coordinate path read on the translation coordinates (docs/friction.md
+// §1): a plank (x, y, th) on two rough supports at s = −0.4 and 0.45 m, gaps y + s sin(th),
+// pulled along x by F = k (t − 0.32). The contacts are at the centre's height, so the plank
+// does not turn: N_a = m g 0.45/0.85, N_c = m g 0.4/0.85; it slips when F = mu m g, at
+// t1 = 0.32 + mu m g / k = 0.34943 s, and then m x'' = k (t − t1): x(0.4) = k (t − t1)³/(6 m).
+// The generalized reaction of the row (1 along y, s cos th along th) would add the torque:
+// N = lambda sqrt(1 + s²) in SI (+8.6 % friction), ~400 × in mm/g/ms (it never slipped).
+
+// the plank in SI (scale 1) or mm/g/ms (scale 1000: lengths × 1e3, masses × 1e3, times × 1e3);
+// `row` multiplies the gaps, `extra` goes under units: (with the base units in mm), `normal`
+// after each friction's coordinates
+std::string plank_on_two_supports(double scale, const std::string& row, const std::string& units,
+                                  const std::string& normal) {
+  const bool mm = scale != 1.0;
+  std::ostringstream s;
+  s.precision(17);
+  const double L = scale, m = 0.5 * scale, g = 9.81 / scale, k = 50.0 / scale, t0 = 0.32 * scale;
+  s << "name: plank on two rough supports\n";
+  if (mm || !units.empty())
+    s << "units: {" << (mm ? "length: mm, mass: g, time: ms" : "")
+      << (mm && !units.empty() ? ", " : "") << units << "}\n";
+  s << "parameters: {m: " << m << ", L: " << L << ", g: " << g << ", k: " << k
+    << ", mu: 0.3, s1: " << -0.4 * scale << ", s3: " << 0.45 * scale << "}\n"
+    << "coordinates: [x, y, th]\n"
+    << "kinetic_energy: 0.5*m*(x_dot^2 + y_dot^2) + 0.5*m*L^2/12*th_dot^2\n"
+    << "potential_energy: m*g*y\n"
+    << "forces: [\"k*max(t - " << t0 << ", 0)\", 0, 0]\n"
+    << "constraints:\n"
+    << "  - {name: a, holonomic: " << row << "*(y + s1*sin(th)), unilateral: true}\n"
+    << "  - {name: c, holonomic: " << row << "*(y + s3*sin(th)), unilateral: true}\n"
+    << "nonideal:\n"
+    << "  - {friction: coulomb, constraint: a, mu: mu, coordinates: [x]" << normal << "}\n"
+    << "  - {friction: coulomb, constraint: c, mu: mu, coordinates: [x]" << normal << "}\n"
+    << "simulate: {t_end: " << 0.4 * scale << "}\n"
+    << "output: {every: " << 0.01 * scale << "}\n";
+  return s.str();
+}
+
+TEST(FrictionNormal, PlankOnTwoSupportsSlipsWithThePhysicalNormalForcesInAnyUnitsAndRowScale) {
+  const double mu = 0.3, mass = 0.5, g = 9.81, k = 50.0;
+  const double t1 = 0.32 + mu * mass * g / k;                   // 0.34943 s
+  const double x_end = k * std::pow(0.4 - t1, 3) / (6 * mass);  // 2.1554e-3 m
+  const double Na = mass * g * 0.45 / 0.85, Nc = mass * g * 0.4 / 0.85;
+  struct Case {
+    double scale;
+    std::string row, units, normal;
+  };
+  for (const Case& c : {Case{1.0, "1", "th: rad", ""}, Case{1000.0, "1", "th: rad", ""},
+                        Case{1.0, "2", "th: rad", ""}, Case{1000.0, "2", "th: rad", ""},
+                        Case{1000.0, "1", "", ", normal_coordinates: [x, y]"},
+                        Case{1.0, "2", "x: m, y: m, th: rad", ""}}) {
+    SCOPED_TRACE("scale " + std::to_string(c.scale) + ", row " + c.row + ", " + c.units + c.normal);
+    const Model m =
+        parse_model(plank_on_two_supports(c.scale, c.row, c.units, c.normal), "plank.yaml");
+    const Trajectory tr = run(m);
+    // (a force in g·mm/ms² is one in N: the same numbers in both systems)
+    // the slips: at t1, each where its holding force reached mu N of its own contact
+    std::vector<double> limits;
+    for (const ContactEvent& e : tr.stats.contact_events) {
+      if (e.kind != ContactEvent::Kind::kSlip) continue;
+      EXPECT_NEAR(e.t / c.scale, t1, 1e-6);
+      if (!std::isnan(e.friction_limit)) limits.push_back(e.friction_limit);
+    }
+    ASSERT_FALSE(limits.empty());
+    for (const double limit : limits) {
+      EXPECT_NEAR(std::min(std::abs(limit - mu * Na), std::abs(limit - mu * Nc)), 0.0, 1e-6)
+          << limit;
+    }
+    // sliding: friction −mu m g in all, x(0.4) = k (t − t1)³/(6 m)
+    const Index last = tr.samples() - 1;
+    EXPECT_NEAR(coord(m, tr, tr.q, "x", last) / c.scale, x_end, 1e-6 * x_end);
+    EXPECT_NEAR(coord(m, tr, tr.Qc_nonideal, "x", last) / (mass * g), -mu, 1e-8);
+    EXPECT_NEAR(coord(m, tr, tr.q, "th", last), 0.0, 1e-9);
+  }
+}
+
+TEST(FrictionNormal, RowMixingCoordinatesOfUnknownUnitsIsRefusedAtTheFriction) {
+  // without units the row y + s1 sin(th) may mix a length with an angle: N = |R| would add the
+  // torque; the model is refused where the friction names the contact, with the fixes
+  try {
+    parse_model(plank_on_two_supports(1.0, "1", "", ""), "plank.yaml");
+    FAIL() << "no error";
+  } catch (const ModelError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("plank.yaml:11:"), std::string::npos) << what;
+    EXPECT_NE(what.find("'a'"), std::string::npos) << what;
+    EXPECT_NE(what.find("y, th have no unit"), std::string::npos) << what;
+    EXPECT_NE(what.find("normal_coordinates"), std::string::npos) << what;
+  }
+  // a row with no coordinate in the length unit cannot give N
+  try {
+    parse_model(plank_on_two_supports(1.0, "1", "y: rad, th: rad", ""), "plank.yaml");
+    FAIL() << "no error";
+  } catch (const ModelError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("cannot read its normal force"), std::string::npos) << what;
+    EXPECT_NE(what.find("y (rad), th (rad)"), std::string::npos) << what;
+  }
+  // sliding coordinates of different units
+  try {
+    std::string text = plank_on_two_supports(1.0, "1", "x: m, th: rad", "");
+    for (std::size_t at = text.find("coordinates: [x]"); at != std::string::npos;
+         at = text.find("coordinates: [x]", at))
+      text.replace(at, 16, "coordinates: [x, th]");
+    parse_model(text, "plank.yaml");
+    FAIL() << "no error";
+  } catch (const ModelError& e) {
+    EXPECT_NE(std::string(e.what()).find("'x' is in m, 'th' in rad"), std::string::npos)
+        << e.what();
+  }
+}
+
 }  // namespace UKDYN_TEST_FILE
 }  // namespace ukdyn

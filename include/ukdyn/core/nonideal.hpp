@@ -80,6 +80,11 @@ class IdealForceInfo {
   /// Euclidean norm of reaction(k): the normal force of a contact constraint written in
   /// Cartesian coordinates. Cost O(n).
   double normal_force(Index k) const { return reaction(k).norm(); }
+  /// The normal force of a contact on the coordinate path from reaction(k), read on the
+  /// coordinates `on` (all n when empty): N = |R_p| = |lambda| |a_p| for one row a, the
+  /// physical normal force when `on` are the contact's translation coordinates, whatever the
+  /// row's scale and units (docs/friction.md §1). Cost O(|on|) (O(n) when empty).
+  double normal_force(Index k, const std::vector<Index>& on) const;
   /// The workspace's scratch of the system's callables (System::make_scratch; null when the
   /// system has no ScratchFactory): a non-ideal force's buffers for this evaluation.
   CallableScratch* scratch() const;
@@ -167,8 +172,11 @@ struct ContactKinematics {
 
 /// Coulomb friction on a constraint surface (docs/friction.md has the equations). While sliding:
 ///   C_i = −mu N v_rel,i / sqrt(|v_rel|² + eps²)  for i in `coordinates`, zero elsewhere,
-/// where N = |A_kᵀ (lambda_k + lambda_nonideal,k)| is the norm of constraint k's whole reaction
-/// (IdealForceInfo::normal_force) and v_rel the sliding velocity relative to the constraint:
+/// where N = |R_p| is the norm of constraint k's whole reaction R = A_kᵀ (lambda_k +
+/// lambda_nonideal,k) on the coordinates p = `normal_coordinates` (all n when empty): for one row
+/// a, N = |lambda| |a_p|, the physical normal force when p are the translation coordinates of the
+/// contact's body (IdealForceInfo::normal_force) and v_rel the sliding velocity relative to the
+/// constraint:
 ///   v_rel = P (v − u),   P = I − N_k⁺ N_k,
 /// v = q' restricted to `coordinates` (Cartesian, for N to be the physical normal force), N_k
 /// constraint k's rows of A restricted to those coordinates, u the surface velocity.
@@ -204,7 +212,13 @@ struct CoulombFriction {
   /// static friction coefficient (>= mu): a stick holds while |holding force| <= mu_static N;
   /// unset: equal to mu
   std::optional<double> mu_static;
-  std::vector<Index> coordinates;         ///< sliding coordinates (empty: all n), distinct
+  std::vector<Index> coordinates;  ///< sliding coordinates (empty: all n), distinct
+  /// p: the coordinates on which N is read, N = |R_p| (docs/friction.md §1): the translation
+  /// coordinates of the body at the contact (those in the sliding coordinates' length unit),
+  /// so that a gap row with an angle (y + s sin th) gives the force, not force and torque
+  /// mixed. Empty: all n (right only when every coordinate of the row is a length). Distinct,
+  /// in range; must be empty on the contact-point path (its N is physical already).
+  std::vector<Index> normal_coordinates;
   double regularization_velocity = 1e-9;  ///< eps above, > 0, in velocity units
   SurfaceVelocityFn surface_velocity;     ///< u above; empty: the surface has no tangential motion
   std::string name;                       ///< force name (default "coulomb.<constraint>")

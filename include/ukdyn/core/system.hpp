@@ -101,10 +101,12 @@ using SwitchScratchFn =
 
 /// A Coulomb friction contact, for the simulation's stick/slip switching (see CoulombFriction).
 struct FrictionContact {
-  Index force = -1;                    ///< index of the friction's non-ideal force
-  Index normal_constraint = -1;        ///< index of the constraint whose share gives N
-  Index stick_constraint = -1;         ///< index of the (normally inactive) stick constraint
-  std::vector<Index> coordinates;      ///< the sliding coordinates
+  Index force = -1;                ///< index of the friction's non-ideal force
+  Index normal_constraint = -1;    ///< index of the constraint whose share gives N
+  Index stick_constraint = -1;     ///< index of the (normally inactive) stick constraint
+  std::vector<Index> coordinates;  ///< the sliding coordinates
+  /// p, the coordinates N is read on (CoulombFriction::normal_coordinates; empty: all n)
+  std::vector<Index> normal_coordinates;
   double mu = 0.0;                     ///< kinetic friction coefficient
   double mu_static = 0.0;              ///< static friction coefficient (>= mu)
   double eps = 0.0;                    ///< regularization velocity: below it the contact is at rest
