@@ -406,13 +406,18 @@ bool ContactEvents::handle(double t, double* x, RunStatistics& stats) {
   return resolve(t, x, event_, stats);
 }
 
+bool ContactEvents::takes_part(std::size_t i, Index event, double g) const {
+  return closed_[i] || Index(i) == event ||
+         !(g > kTouchGap * gap_scale(sys_, ws_, dyn_.contacts()[i]));
+}
+
 std::string ContactEvents::touching_names(double t, const double* x) {
   std::string names;
   for (std::size_t i = 0; i < closed_.size(); ++i) {
     const Index k = dyn_.contacts()[i];
     double g = 0.0, gd = 0.0;
     finite_gap(Index(i), t, x, g, gd);
-    if (!closed_[i] && Index(i) != event_ && !(g <= kTouchGap * gap_scale(sys_, ws_, k))) continue;
+    if (!takes_part(i, event_, g)) continue;
     names += (names.empty() ? "'" : ", '") + sys_.constraint(k).name() + "' (gap " + format_t(g) +
              ", rate " + format_t(gd) + (closed_[i] ? ", closed)" : ", open)");
   }
@@ -484,7 +489,7 @@ bool ContactEvents::resolve(double t, double* x, Index event, RunStatistics& sta
     const Index k = dyn_.contacts()[i];
     double g = 0.0, gd = 0.0;
     dyn_.gap(sys_, ws_, k, q, qd, t, g, gd);
-    if (!closed_[i] && Index(i) != event && g > kTouchGap * gap_scale(sys_, ws_, k)) continue;
+    if (!takes_part(i, event, g)) continue;
     which.push_back(i);
     set.push_back(k);
     v_minus.push_back(gd);

@@ -93,6 +93,9 @@ class ContactEvents {
   // resolves the contacts at (t, x): the impact of the touching ones when `event` (a contact
   // index, or −1) or any touching one approaches, then the closed set
   bool resolve(double t, double* x, Index event, RunStatistics& stats);
+  // contact i (a position in contacts()) at gap g takes part in resolving `event`: closed, the
+  // event's, or an open gap within kTouchGap (NaN counts). O(1)
+  bool takes_part(std::size_t i, Index event, double g) const;
   // the touching contacts at (t, x) (closed, the located event's, or an open gap within
   // kTouchGap), each with its gap, rate and mode, for a message. O(contacts)
   std::string touching_names(double t, const double* x);
@@ -140,7 +143,7 @@ class ContactEvents {
   double dip(double t0, double gd0, double t1, double gd1, const SegmentHooks::Dense& dense,
              Index k, double level);
   // open contact k approaches at t in [t0, t1] (dense output; x0 at t0): its gap rate below
-  // −kStillRate (a non-finite gap counts as approaching: the caller's tests see it). One gap
+  // −still_rate (a non-finite gap counts as approaching: the caller's tests see it). One gap
   // evaluation
   bool approaches(Index k, double t0, const double* x0, double t, const SegmentHooks::Dense& dense);
   // contact k's gap g and gap rate gd at (t, x); true when both are finite
