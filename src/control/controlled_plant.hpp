@@ -114,7 +114,7 @@ System build_controlled(const std::shared_ptr<const ControlledPlant>& st, bool s
 // The quadratures of a controlled run (controlled_quadratures.cpp): z = (work, effort, absolute
 // work, each bound's V_i) from (0, 0, 0, V_i(0)) at (q0, q0', t0), z' from st.rates with the
 // control the run's evaluation has just computed (its ControlledScratch), then their integrals
-// y = ∫ z dt from 0; the first aux weighed as q'. Their units are quadrature_units'. Cost: with
+// y = ∫ z dt from 0; each weighed in its unit (quadrature_units). Cost: with
 // the robust term, the requirements' violations at the start (one evaluation).
 detail::Quadratures control_quadratures(const Controller& ctrl, const ControlledPlant& st,
                                         const Eigen::Ref<const VectorXd>& q0,

@@ -42,7 +42,6 @@ detail::Quadratures control_quadratures(const Controller& ctrl, const Controlled
   const bool robust = ctrl.robust().has_value();
   detail::Quadratures quad;
   quad.count = 2 * aux;
-  quad.velocities = aux;
   quad.z0.assign(std::size_t(2 * aux), 0.0);
   quad.rate = [&st](const Workspace& ws, double, const double* z, double* z_rate) {
     st.rates(static_cast<const ControlledScratch&>(*ws.callables), z, z_rate);

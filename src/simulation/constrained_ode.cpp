@@ -26,7 +26,6 @@ WorkLayout::WorkLayout(const System& sys, bool quiet_channels, const Quadratures
   if (sys.has_external_power()) external = count++;
   if (quad != nullptr && quad->count > 0) {
     quadrature = count;
-    quadrature_velocities = quad->velocities;
     count += quad->count;
     quadrature_units.assign(std::size_t(quad->count), 1.0);
     if (!quad->unit.empty()) {

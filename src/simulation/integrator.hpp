@@ -57,12 +57,11 @@ struct WorkLayout {
   Index nonideal = 0, ideal = -1, drive = -1, external = -1;
   Index quadrature = -1;  // the first of the quadratures' channels (Quadratures), or −1
   Index count = 1;        // number of channels (the quadratures' included)
-  // (count − quadrature) the unit of each quadrature (Quadratures::unit): the explicit methods'
-  // step-size control takes atol · unit_i as its atol, and dopri5's stiffness probe compares it
-  // in this unit
+  // (count − quadrature) the unit of each quadrature (Quadratures::unit): every method's
+  // step-size control (the explicit ones' and BDF's) takes atol · unit_i as its atol, and
+  // dopri5's stiffness probe compares it in this unit
   std::vector<double> quadrature_units;
-  Index quadrature_velocities = 0;  // how many of them BDF weighs as q' (Quadratures::velocities)
-  std::vector<Index> drives;        // indices of the drive constraints
+  std::vector<Index> drives;  // indices of the drive constraints
 };
 
 // The power of constraint k's share of the ideal force along q', q'ᵀ A_kᵀ lambda_k, after

@@ -261,19 +261,30 @@ SegmentResult integrate_bdf(ConstrainedOde& ode, std::vector<double>& x, double 
   require(CVodeSetErrHandlerFn(mem, record_error, &cb), "CVodeSetErrHandlerFn", cb);
   require(CVodeInit(mem, rhs, t0, y.get()), "CVodeInit", cb);
   require(CVodeSetUserData(mem, &cb), "CVodeSetUserData", cb);
-  // atol on q' (and a caller's quadratures) times the run's rate decade (Workspace::rate_unit;
-  // as the explicit methods' StepControl), a vector of tolerances only where that is not 1
+  // atol on q' times the run's rate decade (Workspace::rate_unit) and on a caller's quadrature
+  // z_i times its unit (WorkLayout::quadrature_units), as the explicit methods' StepControl: a
+  // vector of tolerances only where one of them is not 1. (The quadratures once took atol · rate
+  // for the integrals of velocity kind and atol for the others: a controlled arm in mm, g, ms
+  // lifted off a rough floor then stalled at its release, where the effort's integrand, ~0
+  // weighed at 1e-12, jumped by 1e7: CVODE asked for steps below the roundoff of t.)
+  const WorkLayout& works = ode.works();
+  const double rate = ode.workspace().rate_unit;
+  const bool units = std::any_of(works.quadrature_units.begin(), works.quadrature_units.end(),
+                                 [](double u) { return u != 1.0; });
   VectorPtr atol;
-  if (const double rate = ode.workspace().rate_unit; rate != 1.0) {
+  if (rate != 1.0 || units) {
     atol.reset(N_VNew_Serial(sunindextype(size), context.get()));
     UKDYN_CHECK(atol != nullptr, "integrate_bdf: N_VNew_Serial failed");
     double* a = N_VGetArrayPointer(atol.get());
     const Index n = ode.coordinate_count();
-    // (and on the quadratures z, as on q')
-    const Index z = ode.works().quadrature >= 0 ? 2 * n + ode.works().quadrature : size;
-    const Index z_end = z + ode.works().quadrature_velocities;
-    for (Index i = 0; i < size; ++i)
-      a[i] = (i >= n && i < 2 * n) || (i >= z && i < z_end) ? options.atol * rate : options.atol;
+    const Index z = works.quadrature >= 0 ? 2 * n + works.quadrature : size;
+    for (Index i = 0; i < size; ++i) {
+      const std::size_t j = std::size_t(i - z);
+      a[i] = i >= n && i < 2 * n ? options.atol * rate
+             : i >= z && j < works.quadrature_units.size()
+                 ? options.atol * works.quadrature_units[j]
+                 : options.atol;
+    }
     require(CVodeSVtolerances(mem, options.rtol, atol.get()), "CVodeSVtolerances", cb);
   } else {
     require(CVodeSStolerances(mem, options.rtol, options.atol), "CVodeSStolerances", cb);

@@ -20,21 +20,18 @@ namespace ukdyn::detail {
 // x = [q; q'; W; z] with the plant's own stages and error control (a controlled run's work,
 // effort and bounds of the control: control/controlled_quadratures.cpp). First-order: z is not a
 // coordinate, so M, the constraints and their factor stay the system's own. Stored unscaled;
-// the explicit methods' step-size control weighs z_i in a unit of its own: its atol is
-// atol · unit_i (docs/simulation.md, "Scales and tolerances"), so that an integral whose
-// integrand is 10⁹ times larger in the model's units (the control's effort ∫ |Qc|² dt in g, mm,
-// ms) does not ask for steps below the roundoff of t where that integrand jumps.
+// every method's error control (the explicit methods' and BDF's) weighs z_i in a unit of its own:
+// its atol is atol · unit_i (docs/simulation.md, "Scales and tolerances"), so that an integral
+// whose integrand is 10⁹ times larger in the model's units (the control's effort ∫ |Qc|² dt in g,
+// mm, ms) does not ask for steps below the roundoff of t where that integrand jumps.
 struct Quadratures {
   Index count = 0;
   // (count, or empty: 1 each) the unit of each z_i in the run (1 for a model in SI units): the
-  // explicit methods compare its error with atol · unit_i + rtol · (|z_i| + h |z_i'|)
+  // explicit methods compare its error with atol · unit_i + rtol · (|z_i| + h |z_i'|), BDF
+  // (CVODE) takes atol · unit_i as its absolute tolerance. (BDF once weighed them as q' or q, as
+  // before the units: the controlled arm in mm, g, ms stalled at its release, the effort's
+  // integrand jumping by ~1e7 at a weight of 1e-12; ControlLift.…UnderBdf…)
   std::vector<double> unit;
-  // BDF (CVODE) weighs the first `velocities` as q' (atol · Workspace::rate_unit), the others
-  // as q (atol), as before the units: it runs the lift in mm, g, ms at atol 1e-12 with them
-  // (396 steps), and its steps after a stiffness switch rely on them (a body the control holds
-  // in place in mm drifted by 7e-5 mm in BDF steps with the units; ControlSlip.
-  // BodyHeldAtItsCentre…)
-  Index velocities = 0;  // (<= count)
   // g after forward_dynamics evaluated ws at (q, q', t) (the callables' scratch holds that
   // evaluation): z (count) in, z' (count) out
   std::function<void(const Workspace& ws, double t, const double* z, double* z_rate)> rate;

@@ -205,7 +205,7 @@ TEST(ControlLift, RequirementActiveFromHalfASecondLiftsARobotsTipOffTheGround) {
 // velocities' atol, its jump at the release asked for steps below the roundoff of t ("dopri5:
 // step size underflow at t = 500.0003174869367"). Each of the control's integrals is now weighed
 // in a unit of its own (simulate_controlled's quadrature_units).
-std::string lifted_arm(bool mm, double atol) {
+std::string lifted_arm(bool mm, double atol, const std::string& integrator = "dopri5") {
   const std::string units = mm ? "1000" : "1";  // mm per length unit (also ms per time unit)
   return std::string("parameters: {") +
          (mm ? "L1: 500, L2: 400, H: 500, g: 9.81e-3, c: 2e-6, t1: 500"
@@ -226,12 +226,15 @@ control:
          (mm ? "2000], dynamics: {omega: 0.02" : "2], dynamics: {omega: 20") + R"(, zeta: 1}}
   law: gauss
 simulate: {t_end: )" +
-         (mm ? "1000" : "1") + ", integrator: dopri5, rtol: 1e-10, atol: " + format_number(atol) +
+         (mm ? "1000" : "1") + ", integrator: " + integrator +
+         ", rtol: 1e-10, atol: " + format_number(atol) +
          "}\noutput: {every: " + (mm ? "50" : "0.05") + "}\n";
 }
 
-ControlledTrajectory lifted_arm_run(bool mm, double atol) {
-  return run(parse_model(lifted_arm(mm, atol), std::string(UKDYN_TEST_DATA_DIR) + "/arm.yaml"));
+ControlledTrajectory lifted_arm_run(bool mm, double atol,
+                                    const std::string& integrator = "dopri5") {
+  return run(parse_model(lifted_arm(mm, atol, integrator),
+                         std::string(UKDYN_TEST_DATA_DIR) + "/arm.yaml"));
 }
 
 // the mm run `b` is the SI run `a` scaled, to `tol` relative to each quantity's largest value:
@@ -268,6 +271,24 @@ TEST(ControlLift, RobotArmLiftedOffAFrictionalGroundRunsAsInSIInMillimetresGrams
   const ControlledTrajectory mm = lifted_arm_run(true, 1e-9);
   ASSERT_EQ(mm.plant.stats.status, Status::kOk) << mm.plant.stats.message;
   expect_scaled(si, mm, 3e-8);
+}
+
+// The same lift under BDF (CVODE). Its quadratures were weighed as before their units (the
+// effort as q, atol): in mm, g, ms the effort's integrand, ~0 until the release and weighed at
+// atol, jumps by ~1e7 there, and CVODE's error test asked for steps below the roundoff of
+// t = 500.0003 ms: no progress (2.1e6 steps, half rejected, in 60 s). Now each quadrature is
+// weighed in its unit (quadrature_units) as the explicit methods do, and the mm run is the SI run
+// scaled (measured: 577 steps in mm, 686 in SI; the releases 500.0003174806 ms and
+// 0.5000003174891 s; angles, effort and work within 8e-9 of their largest values).
+TEST(ControlLift, RobotArmLiftedOffAFrictionalGroundUnderBdfRunsAsInSIInMillimetresGramsMs) {
+  const ControlledTrajectory si = lifted_arm_run(false, 1e-12, "bdf");
+  const ControlledTrajectory mm = lifted_arm_run(true, 1e-9, "bdf");
+  ASSERT_EQ(si.plant.stats.status, Status::kOk) << si.plant.stats.message;
+  ASSERT_EQ(mm.plant.stats.status, Status::kOk) << mm.plant.stats.message;
+  // (BDF's steps stop at the release as dopri5's do: the same instant to its event tolerance)
+  const ControlledTrajectory explicit_si = lifted_arm_run(false, 1e-12);
+  EXPECT_NEAR(the_release(si), the_release(explicit_si), 1e-9);
+  expect_scaled(si, mm, 1e-7);
 }
 
 // ---- a failed run names the failure of its last step
