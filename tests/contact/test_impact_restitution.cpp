@@ -2,9 +2,9 @@
 // Impacts with friction and the laws of restitution (issue #31 item 2, docs/contact.md "Friction
 // at impacts" and "Poisson's restitution"), each against a closed form: a rod whose lower end
 // strikes a rough floor, where Newton's law with e = 1 would create energy (the impact is redone
-// plastic, with its closed-form velocities and a note); Newton's and Poisson's laws on a smooth
-// floor (the same) and on a rough one (they differ by e W_nt v_t⁻ / W_tt); and the errors users
-// meet.
+// with the largest restitution that creates none, its closed-form velocities and a note); Newton's
+// and Poisson's laws on a smooth floor (the same) and on a rough one (they differ by e W_nt v_t⁻ /
+// W_tt); and the errors users meet.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -17,6 +17,7 @@
 
 #include "ukdyn/core/autodiff.hpp"
 #include "ukdyn/core/constraint.hpp"
+#include "ukdyn/core/format.hpp"
 #include "ukdyn/dynamics/contact.hpp"
 #include "ukdyn/dynamics/contact_restitution.hpp"
 #include "ukdyn/modelfile/model.hpp"
@@ -111,44 +112,62 @@ RodRun run_rod(const Rod& rod, const std::string& text) {
 // With A stuck after the impact, Newton's law (v_n⁺ = −e v_n⁻) gives T⁺ − T⁻ =
 // ½ [(e² − 1) K_nn v_n² − 2 K_nt v_n v_t − K_tt v_t²], positive for e = 1 and 0 < v_t <
 // −2 K_nt v_n / K_tt (1.2 v at phi = 45°): at u = 0.5, v = 1 it gains 0.109 with p =
-// K (2, −0.5) = (1.0625, 0.4375), inside the cone for mu = 2. The run redoes it plastic (e = 0):
-// p = −K v⁻ = (0.4375, 0.0625), A stuck, and the angular momentum about A kept:
-// (4/3) m l² phi'⁺ = −m l (c + s u), phi'⁺ = −3 (c + s u)/(4 l).
-TEST(ImpactRestitution, FrictionImpactThatWouldCreateEnergyIsRedonePlastic) {
+// K (2, −0.5) = (1.0625, 0.4375), inside the cone for mu = 2. The run redoes it with the largest
+// restitution that gains nothing: T⁺ = T⁻ at e*² = 1 − (2 K_nt v u − K_tt u²) / (K_nn v²) = 0.65
+// (K = [[0.625, 0.375], [0.375, 0.625]] at 45°), e* = 0.806226, A stuck, p = K ((1 + e*) v, −u).
+// Below e* Newton's impact stands; above, every e gives e*'s impact: the rebound is continuous in
+// e (it was once redone plastic at once, a drop to g'⁺ = 0 just above the threshold).
+TEST(ImpactRestitution,
+     FrictionImpactThatWouldCreateEnergyIsRedoneWithTheLargestRestitutionThatCreatesNone) {
   const Rod rod;
-  const double e = 1.0, mu = 2.0;
-  // the construction: Newton's stuck impulse is admissible and gains energy
-  const Eigen::Vector2d p_newton = rod.stuck_impulse(e * rod.v);
+  const double mu = 2.0;
+  const Eigen::Matrix2d K = rod.W().inverse();
+  const double e_star = std::sqrt(1.0 - (2.0 * K(0, 1) * rod.v * rod.u - K(1, 1) * rod.u * rod.u) /
+                                            (K(0, 0) * rod.v * rod.v));
+  EXPECT_NEAR(e_star, std::sqrt(0.65), 1e-12);
+  // the construction: Newton's stuck impulse at e = 1 is admissible and gains energy; at e* none
+  const Eigen::Vector2d p_newton = rod.stuck_impulse(rod.v);
   ASSERT_LT(std::abs(p_newton[1]), mu * p_newton[0]);
-  EXPECT_NEAR(rod.stuck_energy_change(e * rod.v), 0.109375, 1e-12);
-  // the plastic impact's closed form
-  const Eigen::Vector2d p = rod.stuck_impulse(0.0);
-  EXPECT_NEAR(p[0], 0.4375, 1e-12);
-  EXPECT_NEAR(p[1], 0.0625, 1e-12);
+  EXPECT_NEAR(rod.stuck_energy_change(rod.v), 0.109375, 1e-12);
+  EXPECT_NEAR(rod.stuck_energy_change(e_star * rod.v), 0.0, 1e-12);
+  const Eigen::Vector2d p = rod.stuck_impulse(e_star * rod.v);
   ASSERT_LT(std::abs(p[1]), mu * p[0]);
   const Eigen::Vector3d expected = rod.after(p);
-  EXPECT_NEAR(expected[2], -3.0 * (rod.c() + rod.s() * rod.u) / (4.0 * rod.l), 1e-12);
-
-  const RodRun r = run_rod(rod, rod.model(e, mu));
-  ASSERT_GE(r.tr.stats.contact_events.size(), 1u);
-  const ContactEvent& hit = r.tr.stats.contact_events[0];
-  EXPECT_EQ(hit.kind, ContactEvent::Kind::kImpact);
-  EXPECT_NEAR(hit.t, rod.h / rod.v, 1e-12);
-  EXPECT_NEAR(hit.speed_before, -rod.v, 1e-12);
-  EXPECT_NEAR(hit.speed_after, 0.0, 1e-12);
-  EXPECT_NEAR(hit.impulse, p[0], 1e-12);
-  EXPECT_NEAR(hit.energy_change, rod.stuck_energy_change(0.0), 1e-12);
-  EXPECT_NEAR(hit.energy_change, -0.203125, 1e-12);
-  for (int i = 0; i < 3; ++i) EXPECT_NEAR(r.after[i], expected[i], 1e-10) << i;
-  // the note says the retry happened, with friction
-  bool noted = false;
-  for (const auto& note : r.tr.stats.notes) {
-    noted = noted || note.find(
-                         "an impact with restitution and friction would have created "
-                         "energy; it was made plastic (e = 0)") != std::string::npos;
+  for (double e : {1.0, 0.9, 0.806227}) {
+    SCOPED_TRACE("e = " + std::to_string(e));
+    const RodRun r = run_rod(rod, rod.model(e, mu));
+    ASSERT_GE(r.tr.stats.contact_events.size(), 1u);
+    const ContactEvent& hit = r.tr.stats.contact_events[0];
+    EXPECT_EQ(hit.kind, ContactEvent::Kind::kImpact);
+    EXPECT_NEAR(hit.t, rod.h / rod.v, 1e-12);
+    EXPECT_NEAR(hit.speed_before, -rod.v, 1e-12);
+    EXPECT_NEAR(hit.speed_after, e_star * rod.v, 1e-9);
+    EXPECT_NEAR(hit.impulse, p[0], 1e-9);
+    EXPECT_NEAR(hit.energy_change, 0.0, 1e-9);
+    EXPECT_LE(hit.energy_change, 1e-12);
+    for (int i = 0; i < 3; ++i) EXPECT_NEAR(r.after[i], expected[i], 1e-9) << i;
+    // the note says the retry happened, with friction, and the fraction of e kept
+    bool noted = false;
+    for (const auto& note : r.tr.stats.notes) {
+      noted =
+          noted || note.find(
+                       "an impact with restitution and friction would have created "
+                       "energy; it was made with " +
+                       format_number(e_star / e, 6) + " of its restitution") != std::string::npos;
+    }
+    EXPECT_TRUE(noted);
+    EXPECT_TRUE(r.tr.stats.energy_balance_checked);
   }
-  EXPECT_TRUE(noted);
-  EXPECT_TRUE(r.tr.stats.energy_balance_checked);
+  // below e*: Newton's impact itself, no note
+  const double e = 0.8;
+  const RodRun below = run_rod(rod, rod.model(e, mu));
+  ASSERT_GE(below.tr.stats.contact_events.size(), 1u);
+  EXPECT_NEAR(below.tr.stats.contact_events[0].speed_after, e * rod.v, 1e-12);
+  EXPECT_NEAR(below.tr.stats.contact_events[0].energy_change, rod.stuck_energy_change(e * rod.v),
+              1e-12);
+  EXPECT_LT(below.tr.stats.contact_events[0].energy_change, -1e-3);
+  for (const auto& note : below.tr.stats.notes)
+    EXPECT_EQ(note.find("would have created energy"), std::string::npos) << note;
 }
 
 // ---- item 2: Poisson's restitution --------------------------------------------------------------
