@@ -138,6 +138,19 @@ std::vector<Index> Reader::normal_coordinates(const YAML::Node& root, const YAML
           "§1)");
     }
   }
+  for (const Index i : slides) {
+    const std::string& u = unit[std::size_t(i)];
+    // (an angle among them: the friction would slide along x', y' and θ' as one vector — the
+    // default sliding coordinates are all of them; a rod's impact on a rough floor in (x, y, th)
+    // with units {th: rad} took a normal impulse of 3.42 for 1.68 at its impact, silently)
+    if (u == "rad" || u == "deg")
+      fail(f["coordinates"] ? f["coordinates"] : f,
+           "Coulomb friction's sliding coordinates must be lengths: '" +
+               coordinates_[std::size_t(i)] + "' is an angle (in " + u + ")" +
+               (f["coordinates"] ? "" : ", and without coordinates: every coordinate slides"),
+           "list only the Cartesian coordinates of the contact under coordinates:, e.g. "
+           "coordinates: [x] for a point on a floor (docs/friction.md §1)");
+  }
   if (of_sliding.empty()) of_sliding = length;
   for (Index i = 0; i < n; ++i) {
     const std::string& u = unit[std::size_t(i)];
