@@ -131,6 +131,10 @@ void ContactModes::hold_by_split(const Controller& ctrl, ControlWorkspace& cws,
       sliding_.push_back(j);
     }
   }
+  // (N along Λ, not along a unilateral contact's push: under control a stuck contact that pulls
+  // is released by the contact modes' own LCP — a cube tipped about its front edge lifts its
+  // back corners, ControlRigid.CubeFullyActuated…; with N along the push no split held and a
+  // corner slid)
   if (!detail::split_space(sys, model, lam_, stuck_, sliding_, q, qd, t, space_)) return;
   const double margin = detail::max_split_margin(space_, &split_y_, true);
   if (!(margin > -detail::kSplitTolerance)) return;

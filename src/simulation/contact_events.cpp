@@ -264,6 +264,9 @@ double ContactEvents::release(double t0, const double* x0, double t1, const doub
     if (pulls(i, ts, xs_.data())) tp = ts;
   }
   if (std::isnan(tp)) return kNaN;
+  // (a multiplier of an indeterminate split that some split holds pushing: no release; x1 or
+  // the stage's dense state at tp)
+  if (held_ && held_(dyn_.contacts()[c], tp, tp == t1 ? x1 : xs_.data())) return kNaN;
   return value(i, false, t0, x0) < 0.0 ? t0 : locate(t0, tp, dense, i, false, 0.0);
 }
 

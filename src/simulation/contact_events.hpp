@@ -8,8 +8,10 @@
 // kSweepPoints more for a moving one, and a sign test per closed contact at each stage (screen).
 #pragma once
 
+#include <functional>
 #include <limits>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "dynamics/contact_dynamics.hpp"
@@ -58,6 +60,14 @@ class ContactEvents {
 
   // the run's units (SimulationOptions::units), for the notes' times
   void set_units(const UnitSystem& units) { units_ = units; }
+  // held(k, t, x): true when the closed contact k (a System index), whose multiplier at (t, x)
+  // pulls, is nevertheless held pushing: the normal of a Coulomb contact that sticks with others,
+  // whose holding forces some split holds inside every cone with k pushing (Run::holds_pushing).
+  // The multiplier of such a contact is the minimum-norm split's, which depends on the units
+  // and on how its rows are written: no release then (the friction's slip event decides).
+  void set_held(std::function<bool(Index k, double t, const double* x)> held) {
+    held_ = std::move(held);
+  }
   // true when the system has unilateral constraints
   bool any() const { return !dyn_.contacts().empty(); }
   // each contact's mode into ws.activity_override (closed 1, open 0)
@@ -173,9 +183,10 @@ class ContactEvents {
   Index n_;
   std::vector<unsigned char> closed_;  // (contacts) 1 while closed
   std::vector<unsigned char> pushes_;  // (contacts) closed and pushing at the step's end (find)
-  std::vector<double> fastest_;        // (contacts) fastest impact speed of the current sequence
-  std::vector<long> impacts_;   // (contacts) impacts of the current sequence (since a release)
-  std::vector<double> pulled_;  // (contacts) earliest stage time it pulled (screen), or NaN
+  std::function<bool(Index, double, const double*)> held_;  // (set_held; empty: none)
+  std::vector<double> fastest_;  // (contacts) fastest impact speed of the current sequence
+  std::vector<long> impacts_;    // (contacts) impacts of the current sequence (since a release)
+  std::vector<double> pulled_;   // (contacts) earliest stage time it pulled (screen), or NaN
   std::vector<unsigned char> moving_;  // (contacts) 1 once its gap was seen to depend on t
   std::vector<std::size_t> position_;  // (constraints) k's position in contacts(), or K
   Index event_ = -1;                   // the contact of the event find() located

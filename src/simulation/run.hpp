@@ -308,6 +308,12 @@ class Run {
   const std::string& failure() const { return failure_; }
   // the unilateral contacts, whose impacts' work record() writes (docs/contact.md)
   void set_contacts(const detail::ContactEvents* contacts) { contacts_ = contacts; }
+  // true when the unilateral constraint k is the normal of a Coulomb contact that sticks with
+  // others and some split of their holding forces lies inside every cone with k pushing
+  // (holding_split with N along the push only): its multiplier, the minimum-norm split's, may
+  // pull without a release (ContactEvents::set_held). Cost: one evaluation and a split search,
+  // only for a stuck contact whose multiplier pulls.
+  bool holds_pushing(Index k, double t, const double* x);
 
  private:
   // (run_drift.cpp)
@@ -501,6 +507,7 @@ class Run {
   MatrixXd split_rows_, split_null_, split_G_;  // (holding_split scratch, sized at its calls)
   VectorXd split_h_;                            // (holding_split scratch)
   double split_lowest_ = 0.0;                   // holding_split: the lowest minimum-norm margin
+  bool split_push_only_ = false;  // holding_split: unilateral N along the push only (holds_pushing)
   // holding_split: the sticking contacts' forces on the split's coordinates (stuck_'s order),
   // the largest margin of a split inside every cone (relative to the forces; NaN where not
   // solved) and its split (nz), whether that decided (split_exact_), and the index into stuck_

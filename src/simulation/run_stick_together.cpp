@@ -165,6 +165,28 @@ double Run::group_margin(std::size_t c, double t, const double* x) {
   return group_margin_;
 }
 
+// A unilateral contact of a rigid body held on several rough contacts is statically
+// indeterminate: the minimum-norm split of the holding forces, the evaluation's multipliers,
+// depends on how the rows are written and on the units (a ladder stopped on a rough wall and
+// floor: its wall pushed with 31 N in SI and pulled with −22.8 N in mm, g, ms, was released
+// there and bounced 158 times). Its release is the friction's: the instant no split holds.
+bool Run::holds_pushing(Index k, double t, const double* x) {
+  if (sticking_contacts() < 2) return false;
+  const auto& contacts = sys_.friction_contacts();
+  bool sticks = false;
+  for (std::size_t c = 0; c < contacts.size(); ++c)
+    sticks = sticks || (contacts[c].normal_constraint == k && mode_[c] == ContactMode::kSticking);
+  if (!sticks) return false;
+  q_ = Eigen::Map<const VectorXd>(x, n_);
+  qd_ = Eigen::Map<const VectorXd>(x + n_, n_);
+  if (forward_dynamics(sys_, ws_, q_, qd_, t) != Status::kOk) return false;
+  split_push_only_ = true;
+  const int split = holding_split(t, nullptr, false);
+  split_push_only_ = false;
+  group_t_ = std::numeric_limits<double>::quiet_NaN();  // (group_margin's answer is stale)
+  return split >= 0;
+}
+
 // After a release at (t, x) (of contact `first`, or none): while the contacts still sticking
 // cannot be held by any split of their holding forces (with the released ones' friction now
 // acting), the one with the lowest minimum-norm margin slips too, along its holding force (as a
@@ -278,17 +300,25 @@ int Run::holding_split(double t, std::size_t* worst, bool search) {
     if (mode_[c] != ContactMode::kSticking && !separated(c) && !frictionless(c))
       sliding_.push_back(c);
   }
-  if (!split_space(sys_, ws_, lambda_total_, stuck_, sliding_, q_, qd_, t, space_)) return -1;
+  // whether any split holds: the largest margin s* of a split inside every cone, to roundoff
+  // (max_split_margin), with a unilateral contact's N along its push, whatever its minimum-norm
+  // sign; where none holds so, with N along Λ (split_space): a stuck contact that pulls in every
+  // split is released by its own event, not slid (a cube tipped under control lifts its back
+  // corners) — unless only the pushing answer is asked for (holds_pushing). Where none holds,
+  // the contact least held at its maximizer y* is the worst (every margin there is >= s*; the
+  // contacts bound to s* are those no split can relieve) (the sign only where nothing else is
+  // read: no search, no worst contact)
+  for (const bool push : {true, false}) {
+    if (!split_space(sys_, ws_, lambda_total_, stuck_, sliding_, q_, qd_, t, space_, push))
+      return -1;
+    split_margin_ = max_split_margin(space_, &split_y_, !search && worst == nullptr);
+    if (split_push_only_ || !(split_margin_ <= -kSplitTolerance)) break;
+  }
   std::vector<SplitCone>& cones = space_.cones;
   const std::vector<Index>& row_of = space_.row_of;
   const Index ma = Index(row_of.size()), nz = space_.nz;
   const double scale = space_.scale;
   split_null_ = space_.null;
-  // whether any split holds: the largest margin s* of a split inside every cone, to roundoff
-  // (max_split_margin); where none holds, the contact least held at its maximizer y* is the
-  // worst (every margin there is >= s*; the contacts bound to s* are those no split can relieve)
-  // (the sign only where nothing else is read: no search, no worst contact)
-  split_margin_ = max_split_margin(space_, &split_y_, !search && worst == nullptr);
   if (!std::isnan(split_margin_)) {
     split_exact_ = true;
     if (split_margin_ <= -kSplitTolerance) {

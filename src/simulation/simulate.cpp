@@ -204,6 +204,8 @@ Trajectory detail::simulate_observed(const System& sys, const Eigen::Ref<const V
   if (contacts.any()) {
     contacts_started = contacts.start(o.t_start, q, qd, o.initial_tolerance, traj.stats);
     run.set_contacts(&contacts);
+    contacts.set_held(
+        [&run](Index k, double t, const double* x) { return run.holds_pushing(k, t, x); });
   }
   evaluate_violations(sys, ws, q, qd, o.t_start);
   std::vector<std::string> bad_names;

@@ -93,7 +93,8 @@ bool barrier(const std::vector<SplitCone>& cones, SplitBarrier& w) {
 bool split_space(const System& sys, Workspace& ws, const Eigen::VectorXd& Lambda,
                  const std::vector<std::size_t>& stuck, const std::vector<std::size_t>& fixed,
                  const Eigen::Ref<const Eigen::VectorXd>& q,
-                 const Eigen::Ref<const Eigen::VectorXd>& qd, double t, SplitSpace& out) {
+                 const Eigen::Ref<const Eigen::VectorXd>& qd, double t, SplitSpace& out,
+                 bool push) {
   const auto& contacts = sys.friction_contacts();
   const Index m = Lambda.size(), n = sys.coordinate_count();
   Eigen::MatrixXd& rows_A = out.rows;
@@ -140,8 +141,9 @@ bool split_space(const System& sys, Workspace& ws, const Eigen::VectorXd& Lambda
   while (rank < sigma.size() && sigma[rank] > 1e-10 * sigma[0]) ++rank;
   if (rank == ma) return false;
   null = row_unit.asDiagonal() * svd.matrixU().rightCols(ma - rank);
-  // N_i = g·Λ of contact c (the sign of Λ at the evaluation: N is |·|) into g; false where N is
-  // not linear in Λ (a coordinate-path normal constraint of several rows)
+  // N_i = g·Λ of contact c (signed along a unilateral contact's push with `push`, else along Λ
+  // at the evaluation: N is |·|) into g; false where N is not linear in Λ (a coordinate-path normal
+  // constraint of several rows)
   auto normal_form = [&](std::size_t c, Eigen::VectorXd& g) {
     const FrictionContact& contact = contacts[c];
     const Index k = contact.normal_constraint, s = contact.stick_constraint;
@@ -176,7 +178,14 @@ bool split_space(const System& sys, Workspace& ws, const Eigen::VectorXd& Lambda
         g[i] = rows_A.row(ok).dot(rows_A.row(i)) / root * (all ? 1.0 : a_p / root);
       }
     }
-    if (g.dot(lambda0) < 0.0) g = -g;
+    // N's sign: a unilateral contact's along its push (Λ_k > 0) with `push`, whatever Λ is at
+    // the minimum-norm split, which depends on the units and on how the rows are written (a
+    // ladder's wall bears nothing there, N ~ 1e-15 of either sign, and on a ladder stopped on a
+    // rough wall and floor it pulled with −22.8 N in mm, g, ms where it pushed with 31 N in SI:
+    // the cone taken from that sign pointed to a pull, and the wall slid or was released);
+    // else, and for a bilateral contact, along Λ at the evaluation
+    const bool along_push = push && sys.constraint(k).is_unilateral();
+    if (along_push ? g[ok] < 0.0 : g.dot(lambda0) < 0.0) g = -g;
     return true;
   };
   // the sliding contacts' normal forces stay (their friction is μ N at the evaluation's N): Z

@@ -57,12 +57,15 @@ struct SplitSpace {
 /// contact point, the rest of the reaction on the coordinate path), the y that change the
 /// normal force of a contact of `fixed` (closed, sliding: its friction is μ N of it) are left
 /// out, and y is taken in the forces' orthonormal coordinates. False when no y exists, or an
-/// N_i is not linear in Λ (a coordinate-path normal constraint of several rows). Cost: an SVD
-/// of the active rows (m_a × n) and one of the forces' map; allocates.
+/// N_i is not linear in Λ (a coordinate-path normal constraint of several rows). N_i is signed
+/// along Λ at the evaluation, or with `push` along a unilateral contact's push (the run's stick
+/// decisions: a unilateral contact only pushes; the minimum-norm Λ's sign depends on the units).
+/// Cost: an SVD of the active rows (m_a × n) and one of the forces' map; allocates.
 bool split_space(const System& sys, Workspace& ws, const Eigen::VectorXd& Lambda,
                  const std::vector<std::size_t>& stuck, const std::vector<std::size_t>& fixed,
                  const Eigen::Ref<const Eigen::VectorXd>& q,
-                 const Eigen::Ref<const Eigen::VectorXd>& qd, double t, SplitSpace& out);
+                 const Eigen::Ref<const Eigen::VectorXd>& qd, double t, SplitSpace& out,
+                 bool push = false);
 
 /// The margin, relative to the forces' scale, above which a split holds (max_split_margin).
 inline constexpr double kSplitTolerance = 1e-12;
