@@ -29,6 +29,7 @@ packages=(
   libgtest-dev libgmock-dev            # tests
   libbenchmark-dev                     # benchmarks
   liburdfdom-dev                       # URDF import of kinematic trees (src/multibody/tree/urdf.cpp)
+  libtinyxml-dev                       # the XML parser under urdfdom 3: located XML errors (src/multibody/tree/urdf_xml.cpp)
   libmujoco-dev                        # bench_mujoco: MuJoCo 2.2.2 on the shared problems (optional)
   clang libclang-rt-14-dev             # fuzz/: libFuzzer and the sanitizer runtimes of clang
   clang-format                         # scripts/format.sh: the house style, checked by CI

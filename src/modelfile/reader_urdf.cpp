@@ -169,8 +169,7 @@ Model Reader::read_robot(const YAML::Node& root) {
                           ? std::string(".")
                           : std::filesystem::path(file_).parent_path().string()) +
                      "); check the name and its directory"
-               : "URDF errors name the link or joint (with the line when urdfdom's message "
-                 "names one)");
+               : "the line:column after the URDF's name is the element at fault in the URDF");
     }
   }();
   // coordinates: the joints' names as identifiers

@@ -3,7 +3,7 @@
 // 08, 01): URDF names that are not identifiers written as such in an expression, the
 // messages of a distance loop of length 0, of gravity in other units, of a missing URDF and of
 // a comma inside a flow list; velocity and torques: effort limits noted by a run; <mimic> in a
-// model.
+// model; a URDF's errors at their place in it, alone and in a model file (u23 07).
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
@@ -180,6 +180,49 @@ TEST(RobotMessages, ARunNotesVelocityLimitsAndTorquesBeyondEffort) {
                   format_number(first, 6) + " s, worst at t = " + format_number(when, 6) + " s)"))
       << ::testing::PrintToString(tr.stats.notes);
   EXPECT_FALSE(has("joint 'elbow'")) << ::testing::PrintToString(tr.stats.notes);  // no limit
+}
+
+// u23 07: a URDF's errors at their place in the URDF — given alone (`ukdyn run arm.urdf`: the
+// error is the URDF's own, file:line:column) and in a model file (at its urdf: key, the URDF's
+// place in the message): an element never closed, and a <mimic> of no joint
+TEST(RobotMessages, UrdfErrorsAreLocatedInTheUrdf) {
+  // the fore link (line 6, column 3) without its </link>: the joints are read into it, and
+  // </robot> (line 13) comes first
+  std::string unclosed = arm_urdf("elbow", kLimit);
+  unclosed.erase(unclosed.find("</link>", unclosed.find("<link name=\"fore\">")), 7);
+  const std::string unclosed_what =
+      "not a valid URDF: <link name=\"fore\"> is not closed (no </link> before </robot> at 13:1)";
+  // the elbow's <mimic> at line 12, column 47
+  const std::string mimic = arm_urdf("elbow", kLimit, R"(<mimic joint="nosuch"/>)");
+  const std::string mimic_what = "joint 'elbow' mimics 'nosuch': no joint 'nosuch' in 'arm2'";
+  struct Case {
+    std::string urdf, what;
+    int line, column;
+  };
+  for (const Case& c : {Case{unclosed, unclosed_what, 6, 3}, Case{mimic, mimic_what, 12, 47}}) {
+    // alone
+    std::filesystem::create_directories(kDir);
+    const std::string alone = (kDir / "alone.urdf").string();
+    std::ofstream(alone) << c.urdf;
+    try {
+      load_model(alone);
+      ADD_FAILURE() << "no error: " << c.what;
+    } catch (const ModelError& e) {
+      EXPECT_EQ(e.file(), alone);
+      EXPECT_EQ(e.line(), c.line) << e.what();
+      EXPECT_EQ(e.column(), c.column) << e.what();
+      EXPECT_EQ(e.message(), c.what);
+      EXPECT_EQ(std::string(e.what()), alone + ":" + std::to_string(c.line) + ":" +
+                                           std::to_string(c.column) + ": error: " + c.what);
+    }
+    // in a model file: at urdf: (line 1, column 15), the URDF's place in the message
+    const Failure f = failure_of(c.urdf, "robot: {urdf: arm.urdf}\n");
+    EXPECT_EQ(f.line, 1);
+    EXPECT_EQ(f.column, 15);
+    EXPECT_EQ(f.message, (kDir / "arm.urdf").string() + ":" + std::to_string(c.line) + ":" +
+                             std::to_string(c.column) + ": " + c.what);
+    EXPECT_EQ(f.hint, "the line:column after the URDF's name is the element at fault in the URDF");
+  }
 }
 
 // u20 01: <mimic> in a model: the constraint "<joint>.mimic" holds over a run, its neutral pose

@@ -2,13 +2,16 @@
 // URDF import beyond the tree's passes (multibody/tree/urdf.cpp, mimic.cpp, description.cpp):
 // <mimic> as a holonomic constraint against the closed form of the reduced 1-DOF arm, hostile
 // mimics refused naming the joint, a 20 000-link chain loaded in linear time (its subtree masses
-// against n·m), and the errors of a bad <inertial> (urdfdom's own message, located).
+// against n·m), the errors of a bad <inertial> (urdfdom's own message, located), and every
+// error at its file:line:column: malformed XML, names that name nothing, bad values (u23 07).
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <initializer_list>
 #include <string>
 #include <utility>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -278,7 +281,7 @@ TEST(TreeSize, ALongChainLoadsWithItsSubtreeMasses) {
 
 // u20 02: urdfdom logs an error for an <inertial> it cannot read and returns the link with a
 // zero inertial, which read as "mass 0.000000"; its message is now the error, located at the
-// link, and numbers print as format_number's
+// link's <inertial> (u23 07: it was the link), and numbers print as format_number's
 TEST(UrdfInertial, BadInertialsGiveUrdfdomsMessageAtTheLink) {
   const std::string joint =
       "<joint name=\"j1\" type=\"continuous\"><parent link=\"base\"/><child link=\"l1\"/>"
@@ -308,9 +311,9 @@ TEST(UrdfInertial, BadInertialsGiveUrdfdomsMessageAtTheLink) {
   for (const Case& c : cases) {
     const std::string path = write_file(std::string("inertial_") + c.name, arm(c.inertial));
     const std::string e = load_error(path);
-    // "…: <path>:4:1: not a valid URDF: <urdfdom's message>; Could not parse inertial element
-    // for Link [l1]" (the link element on line 4, column 1)
-    EXPECT_NE(e.find(path + ":4:1: not a valid URDF: "), std::string::npos) << c.name << ": " << e;
+    // "…: <path>:5:3: not a valid URDF: <urdfdom's message>; Could not parse inertial element
+    // for Link [l1]" (the link's <inertial> on line 5, column 3)
+    EXPECT_NE(e.find(path + ":5:3: not a valid URDF: "), std::string::npos) << c.name << ": " << e;
     EXPECT_NE(e.find(c.message), std::string::npos) << c.name << ": " << e;
     EXPECT_NE(e.find("Link [l1]"), std::string::npos) << c.name << ": " << e;
     EXPECT_EQ(e.find("0.000000"), std::string::npos) << c.name << ": " << e;
@@ -333,6 +336,274 @@ TEST(UrdfInertial, BadInertialsGiveUrdfdomsMessageAtTheLink) {
   EXPECT_NE(e.find("link 'l1' (joint 'j1'): damping must be >= 0, got -1e-09"), std::string::npos)
       << e;
   EXPECT_EQ(e.find("ukdyn::tree::Tree"), std::string::npos) << e;
+}
+
+// ---- every error at its file:line:column (u23 07) ----
+
+// the full message of loading `text` as a URDF file: "ukdyn::tree::load_urdf: <path>:" is
+// replaced by "@" (the rest, "<line>:<column>: <what>", is what a test asserts)
+std::string located_error(const std::string& name, const std::string& text,
+                          const UnitScale& scale = {}) {
+  const std::string path = write_file("located_" + name, text);
+  std::string e;
+  try {
+    load_urdf(path, Vector3d(0, 0, -9.81), scale);
+    e = "(no error)";
+  } catch (const std::invalid_argument& x) {
+    e = x.what();
+  }
+  const std::string who = "ukdyn::tree::load_urdf: " + path + ":";
+  if (e.rfind(who, 0) == 0) e.replace(0, who.size(), "@");
+  return e;
+}
+
+// u23 07 (a): XML that TinyXML (under urdfdom) refused without a place, or read without a word
+// (text or a second element after the root, a stray end tag, a NUL byte), refused at its place;
+// an element never closed at its own start tag; columns count characters, a tab as one
+TEST(UrdfLocated, MalformedXmlIsRefusedAtItsPlace) {
+  const std::string form = " (a URDF is <robot name=\"…\"> … </robot>)";
+  struct Case {
+    const char* name;
+    std::string text, error;
+  };
+  const Case cases[] = {
+      {"unclosed", "<?xml version=\"1.0\"?>\n<robot name=\"r\">\n  <link name=\"a\">\n</robot>\n",
+       "@3:3: not a valid URDF: <link name=\"a\"> is not closed (no </link> before </robot> at "
+       "4:1)"},
+      {"unclosed_inner",
+       "<robot name=\"r\">\n\t<link name=\"a\">\n\t\t<visual>\n\t</link>\n</robot>\n",
+       "@3:3: not a valid URDF: <visual> is not closed (no </visual> before </link> at 4:2)"},
+      {"unclosed_at_end", "<robot name=\"r\">\n  <link name=\"a\"/>\n  <link name=\"b\">\n",
+       "@3:3: not a valid URDF: <link name=\"b\"> is not closed (no </link> before the end of the "
+       "file)"},
+      {"unclosed_utf8",
+       "<robot name=\"r\">\n  <link name=\"\xC3\xA9\"/><link name=\"a\">\n</robot>\n",
+       "@2:19: not a valid URDF: <link name=\"a\"> is not closed (no </link> before </robot> at "
+       "3:1)"},
+      {"unclosed_crlf", "<robot name=\"r\">\r\n  <link name=\"a\">\r\n</robot>\r\n",
+       "@2:3: not a valid URDF: <link name=\"a\"> is not closed (no </link> before </robot> at "
+       "3:1)"},
+      {"text_after_root", "<robot name=\"r\">\n  <link name=\"a\"/>\n</robot>\ngarbage here\n",
+       "@4:1: not a valid URDF: 'garbage here' after the root element <robot name=\"r\"> at 1:1 "
+       "(only comments may follow it)"},
+      {"second_root", "<robot name=\"r\"><link name=\"a\"/></robot>\n  <robot name=\"s\"/>\n",
+       "@2:3: not a valid URDF: a second root element <robot name=\"s\"> after <robot name=\"r\"> "
+       "at 1:1 (a URDF file holds one <robot>)"},
+      {"stray_end_tag", "<robot name=\"r\"><link name=\"a\"/></robot>\n</robot>\n",
+       "@2:1: not a valid URDF: an end tag </robot> with no element open"},
+      {"empty", "", "@1:1: not a valid URDF: the file is empty" + form},
+      {"blank", "\n  \n", "@1:1: not a valid URDF: the file is empty" + form},
+      {"binary_nul", std::string("\x89PNG\r\n\x1A\n\0\0\0\rIHDR", 16),
+       "@3:1: not a valid URDF: the file holds a NUL byte (binary data, not XML)"},
+      {"binary", "\x89PNG\x1A\xFF garbage",
+       "@1:1: not a valid URDF: no XML element: the file begins with '\\x89PNG\\x1A\\xFF garbage'" +
+           form},
+      {"text_before_root", "\n  some text\n<robot name=\"r\"/>\n",
+       "@2:3: not a valid URDF: no XML element: the file begins with 'some text'" + form},
+      {"declaration_only", "<?xml version=\"1.0\"?>\n",
+       "@1:1: not a valid URDF: no root element" + form},
+      {"not_robot", "<?xml version=\"1.0\"?>\n<robt name=\"r\"><link name=\"a\"/></robt>\n",
+       "@2:1: not a valid URDF: the root element is <robt name=\"r\">, not <robot>"},
+      {"open_comment", "<robot name=\"r\">\n  <link name=\"a\"/>\n  <!-- to do\n</robot>\n",
+       "@3:3: not a valid URDF: a comment <!-- is not closed (no --> before the end of the file)"},
+      {"repeated_attribute", "<robot name=\"r\">\n  <link name=\"a\" name=\"b\"/>\n</robot>\n",
+       "@2:18: not a valid URDF: the XML parser (TinyXML): \"Error parsing Element.\" at "
+       "'name=\"b\"/>'"},
+  };
+  for (const Case& c : cases) EXPECT_EQ(located_error(c.name, c.text), c.error) << c.name;
+  // a DOCTYPE and comments around the root are XML, and read
+  const std::string I =
+      "<inertial><mass value=\"1\"/><inertia ixx=\"0.1\" ixy=\"0\" ixz=\"0\" iyy=\"0.1\" iyz=\"0\" "
+      "izz=\"0.1\"/></inertial>";
+  EXPECT_EQ(located_error("doctype",
+                          "<?xml version=\"1.0\"?>\n<!DOCTYPE robot>\n<!-- before -->\n<robot "
+                          "name=\"r\"><link name=\"base\"/><link name=\"a\">" +
+                              I +
+                              "</link><joint name=\"j\" type=\"continuous\"><parent "
+                              "link=\"base\"/><child link=\"a\"/></joint></robot>\n<!-- after "
+                              "-->\n"),
+            "(no error)");
+}
+
+// the two-link arm of the located errors, one element a line (line numbers on the right);
+// `with` replaces a line's text
+std::string located_arm(std::initializer_list<std::pair<std::string, std::string>> with = {}) {
+  const std::string I =
+      "<inertial><mass value=\"1\"/><inertia ixx=\"0.1\" ixy=\"0\" ixz=\"0\" iyy=\"0.1\" iyz=\"0\" "
+      "izz=\"0.1\"/></inertial>";
+  std::string text =
+      "<?xml version=\"1.0\"?>\n"                    //  1
+      "<robot name=\"r\">\n"                         //  2
+      "  <link name=\"base\"/>\n"                    //  3
+      "  <link name=\"a\">\n"                        //  4
+      "    INERTIAL_A\n"                             //  5
+      "  </link>\n"                                  //  6
+      "  <link name=\"b\">\n"                        //  7
+      "    INERTIAL_B\n"                             //  8
+      "  </link>\n"                                  //  9
+      "  <joint name=\"j1\" type=\"continuous\">\n"  // 10
+      "    <parent link=\"base\"/>\n"                // 11
+      "    <child link=\"a\"/>\n"                    // 12
+      "    <axis xyz=\"0 1 0\"/>\n"                  // 13
+      "    EXTRA_1\n"                                // 14
+      "  </joint>\n"                                 // 15
+      "  <joint name=\"j2\" type=\"continuous\">\n"  // 16
+      "    <parent link=\"a\"/>\n"                   // 17
+      "    <child link=\"b\"/>\n"                    // 18
+      "    <origin xyz=\"0 0 -1\"/>\n"               // 19
+      "    <axis xyz=\"0 1 0\"/>\n"                  // 20
+      "    EXTRA_2\n"                                // 21
+      "  </joint>\n"                                 // 22
+      "</robot>\n";                                  // 23
+  std::vector<std::pair<std::string, std::string>> all(with);
+  all.emplace_back("INERTIAL_A", I);
+  all.emplace_back("INERTIAL_B", I);
+  all.emplace_back("EXTRA_1", "");
+  all.emplace_back("EXTRA_2", "");
+  for (const auto& [from, to] : all) {
+    const std::size_t at = text.find(from);
+    if (at != std::string::npos) text.replace(at, from.size(), to);
+  }
+  return text;
+}
+
+// u23 07 (b): a name that names nothing (a <mimic>'s joint, a joint's parent or child link), a
+// mimic of itself and a cycle of mimics, at the element that names it
+TEST(UrdfLocated, NamesAreLocatedWhereTheyAreUsed) {
+  struct Case {
+    const char* name;
+    std::string text, error;
+  };
+  const std::string fails = "not a valid URDF: ";
+  const Case cases[] = {
+      {"mimic_unknown", located_arm({{"EXTRA_2", "<mimic joint=\"nosuch\"/>"}}),
+       "@21:5: joint 'j2' mimics 'nosuch': no joint 'nosuch' in 'r'"},
+      {"mimic_self", located_arm({{"EXTRA_2", "<mimic joint=\"j2\"/>"}}),
+       "@21:5: joint 'j2' mimics 'j2': a joint cannot mimic itself"},
+      {"mimic_cycle",
+       located_arm({{"EXTRA_1", "<mimic joint=\"j2\" multiplier=\"0.5\"/>"},
+                    {"EXTRA_2", "<mimic joint=\"j1\"/>"}}),
+       "@14:5: joint 'j1': a cycle of mimics 'j1' → 'j2' → 'j1' (each joint follows the next; "
+       "one of them must follow none)"},
+      {"mimic_empty", located_arm({{"EXTRA_2", "<mimic joint=\"\"/>"}}),
+       "@21:5: joint 'j2' (child link 'b'): its <mimic> names no joint (joint=\"…\")"},
+      {"mimic_no_joint", located_arm({{"EXTRA_2", "<mimic multiplier=\"2\"/>"}}),
+       "@21:5: " + fails +
+           "joint mimic: no mimic joint specified; Could not parse mimic element for joint  [j2]; "
+           "joint xml is not initialized correctly"},
+      {"mimic_fixed",
+       located_arm(
+           {{"<joint name=\"j2\" type=\"continuous\">", "<joint name=\"j2\" type=\"fixed\">"},
+            {"EXTRA_2", "<mimic joint=\"j1\"/>"}}),
+       "@21:5: joint 'j2' mimics 'j1': joint 'j2' is fixed (a mimic relates two joints of one "
+       "coordinate: revolute, continuous, prismatic)"},
+      {"child_unknown", located_arm({{"<child link=\"b\"/>", "<child link=\"nosuch\"/>"}}),
+       "@18:5: " + fails + "Failed to build tree: child link [nosuch] of joint [j2] not found"},
+      {"duplicate_link", located_arm({{"<link name=\"b\">", "<link name=\"a\">"}}),
+       "@7:3: " + fails + "link 'a' is not unique."},
+  };
+  for (const Case& c : cases) EXPECT_EQ(located_error(c.name, c.text), c.error) << c.name;
+  // (urdfdom's message for an unknown parent goes on with advice: its start)
+  const std::string e = located_error(
+      "parent_unknown", located_arm({{"<parent link=\"a\"/>", "<parent link=\"nosuch\"/>"}}));
+  EXPECT_EQ(e.rfind("@17:5: " + fails +
+                        "Failed to build tree: parent link [nosuch] of joint [j2] not found.",
+                    0),
+            0u)
+      << e;
+}
+
+// u23 07 (c): a missing required attribute, a NaN, a negative mass, an inertia that is not
+// positive definite, limits the wrong way round, negative damping: at the element that holds it;
+// in mm/g/ms as in SI (the place does not depend on the units; the numbers said are the file's,
+// or the model's units for the tree's checks)
+TEST(UrdfLocated, BadValuesAreLocatedAtTheirElement) {
+  const std::string fails = "not a valid URDF: ";
+  const std::string I_b =
+      "<inertial><mass value=\"M\"/><inertia ixx=\"0.1\" ixy=\"XY\" ixz=\"0\" "
+      "iyy=\"0.1\" iyz=\"0\" izz=\"0.1\"/></inertial>";
+  const auto inertial_b = [&](const std::string& mass, const std::string& ixy) {
+    std::string s = I_b;
+    s.replace(s.find("\"M\""), 3, "\"" + mass + "\"");
+    s.replace(s.find("\"XY\""), 4, "\"" + ixy + "\"");
+    return s;
+  };
+  struct Case {
+    const char* name;
+    std::string text, error;
+  };
+  const Case cases[] = {
+      {"no_type", located_arm({{"<joint name=\"j2\" type=\"continuous\">", "<joint name=\"j2\">"}}),
+       "@16:3: " + fails +
+           "joint [j2] has no type, check to see if it's a reference.; joint xml is not "
+           "initialized correctly"},
+      {"no_ixy",
+       located_arm({{"INERTIAL_B",
+                     "<inertial><mass value=\"1\"/><inertia ixx=\"0.1\" iyy=\"0.1\" "
+                     "izz=\"0.1\"/></inertial>"}}),
+       "@8:5: " + fails +
+           "Inertial: inertia element missing ixy attribute; Could not parse inertial element "
+           "for Link [b]"},
+      {"no_limit",
+       located_arm(
+           {{"<joint name=\"j2\" type=\"continuous\">", "<joint name=\"j2\" type=\"revolute\">"}}),
+       "@16:3: " + fails +
+           "Joint [j2] is of type REVOLUTE but it does not specify limits; joint xml is not "
+           "initialized correctly"},
+      {"nan_origin", located_arm({{"<origin xyz=\"0 0 -1\"/>", "<origin xyz=\"0 nan -1\"/>"}}),
+       "@19:5: " + fails +
+           "Unable to parse component [nan] to a double (while parsing a vector value); "
+           "Malformed parent origin element for joint [j2]; joint xml is not initialized "
+           "correctly"},
+      {"nan_axis",
+       located_arm({{"<axis xyz=\"0 1 0\"/>\n    EXTRA_2", "<axis xyz=\"0 nan 0\"/>\n"}}),
+       "@20:5: " + fails +
+           "Malformed axis element for joint [j2]: Unable to parse component [nan] to a double "
+           "(while parsing a vector value); joint xml is not initialized correctly"},
+      {"nan_mimic", located_arm({{"EXTRA_2", "<mimic joint=\"j1\" multiplier=\"nan\"/>"}}),
+       "@21:5: " + fails +
+           "multiplier value (nan) is not a valid float; Could not parse mimic element for joint "
+           " [j2]; joint xml is not initialized correctly"},
+      {"negative_mass", located_arm({{"INERTIAL_B", inertial_b("-1", "0")}}),
+       "@8:5: link 'b': the inertia of a moving link must be positive definite (mass -1, "
+       "principal moments 0.1, 0.1, 0.1)"},
+      {"inverted_limit",
+       located_arm(
+           {{"<joint name=\"j2\" type=\"continuous\">", "<joint name=\"j2\" type=\"revolute\">"},
+            {"EXTRA_2", "<limit lower=\"1\" upper=\"-1\" effort=\"1\" velocity=\"1\"/>"}}),
+       "@21:5: joint 'j2' (child link 'b'): its <limit> has lower = 1 > upper = -1 (swap them: "
+       "lower <= upper)"},
+      {"zero_axis",
+       located_arm({{"<axis xyz=\"0 1 0\"/>\n    EXTRA_2", "<axis xyz=\"0 0 0\"/>\n"}}),
+       "@20:5: link 'b' (joint 'j2'): the joint axis is zero or not finite"},
+  };
+  const UnitScale mm_g_ms{1000, 1000, 1000};
+  for (const Case& c : cases) {
+    EXPECT_EQ(located_error(c.name, c.text), c.error) << c.name;
+    EXPECT_EQ(located_error(c.name, c.text, mm_g_ms), c.error) << c.name << " (mm, g, ms)";
+  }
+  // an inertia that is not positive definite: the principal moments of [[0.1, 0.2], [0.2, 0.1]]
+  // and 0.1 are 0.1 ∓ 0.2 and 0.1 (to roundoff)
+  std::string e = located_error("not_pd", located_arm({{"INERTIAL_B", inertial_b("1", "0.2")}}));
+  const std::string head =
+      "@8:5: link 'b': the inertia of a moving link must be positive definite (mass 1, principal "
+      "moments ";
+  ASSERT_EQ(e.rfind(head, 0), 0u) << e;
+  double moments[3] = {0, 0, 0};
+  ASSERT_EQ(
+      std::sscanf(e.c_str() + head.size(), "%lf, %lf, %lf)", &moments[0], &moments[1], &moments[2]),
+      3)
+      << e;
+  EXPECT_NEAR(moments[0], -0.1, 1e-15);
+  EXPECT_NEAR(moments[1], 0.1, 1e-15);
+  EXPECT_NEAR(moments[2], 0.3, 1e-15);
+  // the tree's checks say the model's units: damping -0.5 N m s is -5e5 g mm²/ms (1e3 g/kg,
+  // 1e6 mm²/m², 1e-3 s/ms)
+  const std::string damped = located_arm({{"EXTRA_2", "<dynamics damping=\"-0.5\"/>"}});
+  EXPECT_EQ(located_error("damping", damped),
+            "@21:5: link 'b' (joint 'j2'): damping must be >= 0, got -0.5");
+  EXPECT_EQ(located_error("damping", damped, mm_g_ms),
+            "@21:5: link 'b' (joint 'j2'): damping must be >= 0, got -5e+05");
 }
 
 }  // namespace UKDYN_TEST_FILE

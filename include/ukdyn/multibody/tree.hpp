@@ -419,10 +419,11 @@ struct UnitScale {
 /// mass·length²/time², damping by mass·length²/time, velocity limit by 1/time (a prismatic
 /// joint's by mass·length/time², mass/time and length/time); a mimic's multiplier by the ratio of
 /// the two joints' units. `gravity` is in the model's units already. @throws
-/// std::invalid_argument naming the file and the link or joint: a malformed file (with urdfdom's
-/// message), a joint type ukdyn does not know (planar), a moving link without `<inertial>`, an
-/// inertia that is not positive definite, a graph that is not a tree. Cost O(links) plus the XML
-/// parse.
+/// std::invalid_argument naming the file and the line:column of the element at fault
+/// ("<path>:12:5: …", docs/robots.md): malformed XML, urdfdom's message, a joint type ukdyn does
+/// not know (planar), a moving link without `<inertial>`, an inertia that is not positive
+/// definite, a graph that is not a tree, a mimic of no joint, of itself or on a cycle. Cost
+/// O(links) plus two XML parses (TinyXML's check, then urdfdom's).
 Tree load_urdf(const std::string& path, Vector3d gravity = Vector3d(0, 0, -9.81),
                const UnitScale& scale = {});
 

@@ -6,7 +6,6 @@
 #include <fstream>
 #include <map>
 #include <mutex>
-#include <regex>
 #include <set>
 #include <sstream>
 #include <stdexcept>
@@ -22,6 +21,7 @@
 #include "ukdyn/multibody/tree.hpp"
 
 #include "urdf_parse.hpp"
+#include "urdf_xml.hpp"
 
 namespace ukdyn::tree {
 
@@ -56,46 +56,10 @@ void unlink(urdf::ModelInterface& model) {
   }
 }
 
-// "<line>:<column>: " of the element that urdfdom's message names ("... for Link [l1]", "Joint
-// [j1] ..."), found in the file's text; "" when the message names none or it is not found.
-// Only on the error path: reads the file once more.
-std::string element_position(const std::string& path, const std::string& message) {
-  static const std::regex named(R"((Link|Joint|link|joint)\s*\[([^\]]+)\])");
-  std::smatch m;
-  if (!std::regex_search(message, m, named)) return "";
-  const std::string tag = m[1].str() == "Link" || m[1].str() == "link" ? "link" : "joint";
-  std::ifstream in(path, std::ios::binary);
-  std::stringstream buffer;
-  buffer << in.rdbuf();
-  const std::string text = buffer.str();
-  // the first <tag …> whose name attribute is the name (a plain scan: a regex over a large file
-  // overflows libstdc++'s recursion)
-  const std::string open = "<" + tag, name = m[2].str();
-  std::size_t at = std::string::npos;
-  for (std::size_t p = text.find(open); p != std::string::npos; p = text.find(open, p + 1)) {
-    const std::size_t after = p + open.size();
-    if (after >= text.size() || !std::isspace(static_cast<unsigned char>(text[after]))) continue;
-    const std::size_t end = std::min(text.find('>', p), text.size());
-    for (std::size_t k = text.find("name", after); k < end; k = text.find("name", k + 1)) {
-      std::size_t v = k + 4;
-      while (v < end && std::isspace(static_cast<unsigned char>(text[v]))) ++v;
-      if (v >= end || text[v] != '=') continue;
-      ++v;
-      while (v < end && std::isspace(static_cast<unsigned char>(text[v]))) ++v;
-      if (v >= end || (text[v] != '"' && text[v] != '\'')) continue;
-      if (text.compare(v + 1, name.size(), name) == 0 && v + 1 + name.size() < end &&
-          text[v + 1 + name.size()] == text[v]) {
-        at = p;
-        break;
-      }
-    }
-    if (at != std::string::npos) break;
-  }
-  if (at == std::string::npos) return "";
-  const std::size_t line = 1 + std::size_t(std::count(text.begin(), text.begin() + long(at), '\n'));
-  const std::size_t start = text.rfind('\n', at);
-  const std::size_t column = at - (start == std::string::npos ? 0 : start + 1) + 1;
-  return std::to_string(line) + ":" + std::to_string(column) + ": ";
+// "<who at the element's line:column><what>" (who ends in "<path>: "), thrown
+[[noreturn]] void refuse_at(const std::string& who, const std::string& text,
+                            const detail::UrdfElement& at, const std::string& what) {
+  throw std::invalid_argument(detail::located(who, detail::find_urdf_element(text, at)) + what);
 }
 
 // urdfdom accepts a link that is the child of two joints (a cycle, base → a → b → a, or two
@@ -104,20 +68,21 @@ std::string element_position(const std::string& path, const std::string& message
 // joints), at load.
 // (a cycle of links holds itself through their child_links' shared pointers: they are cleared
 // before the model is refused, else its links would never be freed)
-void check_tree(urdf::ModelInterface& model, const std::string& who) {
-  const auto refuse = [&](const std::string& what) {
+void check_tree(urdf::ModelInterface& model, const std::string& text, const std::string& who) {
+  const auto refuse = [&](const detail::UrdfElement& at, const std::string& what) {
     unlink(model);
-    throw std::invalid_argument(what);
+    refuse_at(who, text, at, what);
   };
   std::map<std::string, std::string> parent_joint;  // child link → the first joint naming it
   for (const auto& [name, j] : model.joints_) {
     if (!j) continue;
     const auto [it, fresh] = parent_joint.emplace(j->child_link_name, name);
     if (!fresh) {
-      refuse(who + "not a tree: link '" + j->child_link_name + "' is the child of two joints, '" +
-             it->second + "' and '" + name +
-             "' (a cycle, or two parents); a kinematic loop is closed with `loops:` of a robot "
-             "model (docs/robots.md), not in the URDF");
+      refuse({"joint", name, "child"},
+             "not a tree: link '" + j->child_link_name + "' is the child of two joints, '" +
+                 it->second + "' and '" + name +
+                 "' (a cycle, or two parents); a kinematic loop is closed with `loops:` of a robot "
+                 "model (docs/robots.md), not in the URDF");
     }
   }
   const urdf::LinkConstSharedPtr root = model.getRoot();
@@ -132,8 +97,9 @@ void check_tree(urdf::ModelInterface& model, const std::string& who) {
   }
   for (const auto& [name, l] : model.links_) {
     if (!reached.count(name)) {
-      refuse(who + "not a tree: link '" + name + "' is not reached from the root link '" +
-             root->name + "' (its joints form a cycle apart from the tree)");
+      refuse({"link", name, ""}, "not a tree: link '" + name +
+                                     "' is not reached from the root link '" + root->name +
+                                     "' (its joints form a cycle apart from the tree)");
     }
   }
 }
@@ -143,8 +109,7 @@ Vector3d to_eigen(const urdf::Vector3& v) { return {v.x, v.y, v.z}; }
 
 }  // namespace
 
-urdf::ModelInterfaceSharedPtr detail::parse_urdf_file(const std::string& path,
-                                                      const std::string& who) {
+detail::UrdfFile detail::parse_urdf_file(const std::string& path, const std::string& who) {
   if (!std::filesystem::is_regular_file(path)) {
     // (a directory, e.g. `urdf: .`, or a device exists: say what it is)
     std::error_code ec;
@@ -153,15 +118,24 @@ urdf::ModelInterfaceSharedPtr detail::parse_urdf_file(const std::string& path,
                : std::filesystem::exists(path, ec)     ? "is not a regular file (a URDF file is)"
                                                        : "no such file"));
   }
+  UrdfFile file;
+  {
+    std::ifstream in(path, std::ios::binary);
+    std::ostringstream bytes;
+    bytes << in.rdbuf();
+    file.text = std::move(bytes).str();
+  }
+  // XML that TinyXML (under urdfdom) would read without a word or without a place, refused here
+  // with its line:column
+  check_urdf_xml(file.text, who);
   // parse, with urdfdom's messages captured (console_bridge's handler is process-wide)
   static std::mutex handler_mutex;
-  urdf::ModelInterfaceSharedPtr model;
   MessageCapture capture;
   {
     const std::lock_guard<std::mutex> lock(handler_mutex);
     console_bridge::useOutputHandler(&capture);
     try {
-      model = urdf::parseURDFFile(path);
+      file.model = urdf::parseURDF(file.text);
     } catch (...) {
       console_bridge::restorePreviousOutputHandler();
       throw;
@@ -169,25 +143,25 @@ urdf::ModelInterfaceSharedPtr detail::parse_urdf_file(const std::string& path,
     console_bridge::restorePreviousOutputHandler();
   }
   // refused, or read with an error (an element dropped): urdfdom's message, located at the
-  // link or joint it names when the file says where ("<who> <line>:<column>: …", who ending
-  // in "<path>: ")
-  if (!model || capture.error()) {
-    if (model) unlink(*model);
-    std::string located = who;
-    const std::string at = element_position(path, capture.text());
-    if (!at.empty() && located.size() >= 2 && located.compare(located.size() - 2, 2, ": ") == 0) {
-      located.replace(located.size() - 2, 2, ":" + at);
-    }
-    throw std::invalid_argument(located + "not a valid URDF: " +
-                                (capture.text().empty() ? "urdfdom refused it" : capture.text()));
+  // element it names ("<who at line:column>not a valid URDF: …", who ending in "<path>: ")
+  if (!file.model || capture.error()) {
+    if (file.model) unlink(*file.model);
+    throw std::invalid_argument(
+        located(who, find_urdf_element(file.text, element_of_message(capture.text()))) +
+        "not a valid URDF: " + (capture.text().empty() ? "urdfdom refused it" : capture.text()));
   }
-  check_tree(*model, who);
-  return model;
+  check_tree(*file.model, file.text, who);
+  return file;
 }
 
 Tree load_urdf(const std::string& path, Vector3d gravity, const UnitScale& scale) {
   const std::string who = "ukdyn::tree::load_urdf: " + path + ": ";
-  const urdf::ModelInterfaceSharedPtr model = detail::parse_urdf_file(path, who);
+  const detail::UrdfFile file = detail::parse_urdf_file(path, who);
+  const urdf::ModelInterfaceSharedPtr& model = file.model;
+  // an error at an element of the file, "<who at its line:column><what>"
+  const auto refuse = [&](const detail::UrdfElement& at, const std::string& what) {
+    refuse_at(who, file.text, at, what);
+  };
   const urdf::LinkConstSharedPtr root = model->getRoot();
   if (!root) throw std::invalid_argument(who + "no root link");
   // URDF's "world" link without inertial is the world itself; any other root is welded to it
@@ -212,7 +186,7 @@ Tree load_urdf(const std::string& path, Vector3d gravity, const UnitScale& scale
       out.joint.name = l->name + ".root";  // the implied weld of a fixed base
       out.joint.kind = JointKind::kFixed;
     } else {
-      const std::string where = who + "joint '" + j->name + "' (child link '" + l->name + "'): ";
+      const std::string where = "joint '" + j->name + "' (child link '" + l->name + "'): ";
       out.joint.name = j->name;
       if (!(root_is_world && j->parent_link_name == root->name)) out.parent = j->parent_link_name;
       switch (j->type) {
@@ -232,10 +206,9 @@ Tree load_urdf(const std::string& path, Vector3d gravity, const UnitScale& scale
           out.joint.kind = JointKind::kFloating;
           break;
         default:
-          throw std::invalid_argument(where + "joint type " +
-                                      (j->type == urdf::Joint::PLANAR ? "'planar'" : "unknown") +
-                                      " is not supported (fixed, revolute, continuous, "
-                                      "prismatic, floating are)");
+          refuse({"joint", j->name, ""},
+                 where + "joint type " + (j->type == urdf::Joint::PLANAR ? "'planar'" : "unknown") +
+                     " is not supported (fixed, revolute, continuous, prismatic, floating are)");
       }
       out.joint.p_PJ = to_eigen(j->parent_to_joint_origin_transform.position);
       out.joint.R_PJ = rotation(j->parent_to_joint_origin_transform.rotation);
@@ -245,9 +218,10 @@ Tree load_urdf(const std::string& path, Vector3d gravity, const UnitScale& scale
           out.joint.lower = j->limits->lower;
           out.joint.upper = j->limits->upper;
           if (out.joint.lower > out.joint.upper) {
-            throw std::invalid_argument(
-                where + "its <limit> has lower = " + format_number(out.joint.lower) +
-                " > upper = " + format_number(out.joint.upper) + " (swap them: lower <= upper)");
+            refuse({"joint", j->name, "limit"},
+                   where + "its <limit> has lower = " + format_number(out.joint.lower) +
+                       " > upper = " + format_number(out.joint.upper) +
+                       " (swap them: lower <= upper)");
           }
         }
         out.joint.effort = j->limits->effort;
@@ -279,7 +253,7 @@ Tree load_urdf(const std::string& path, Vector3d gravity, const UnitScale& scale
         out.joint.mimic_multiplier = j->mimic->multiplier * q_unit / ref_unit;
         out.joint.mimic_offset = j->mimic->offset * q_unit;
         if (out.joint.mimic.empty()) {
-          throw std::invalid_argument(where + "its <mimic> names no joint (joint=\"…\")");
+          refuse({"joint", j->name, "mimic"}, where + "its <mimic> names no joint (joint=\"…\")");
         }
       }
     }
@@ -295,27 +269,29 @@ Tree load_urdf(const std::string& path, Vector3d gravity, const UnitScale& scale
       if (moving) {
         const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(I);
         if (!(in.mass > 0.0) || !(eig.eigenvalues()[0] > 0.0)) {
-          throw std::invalid_argument(
-              who + "link '" + l->name + "': the inertia of a moving link must be positive " +
-              "definite (mass " + format_number(in.mass) + ", principal moments " +
-              format_number(eig.eigenvalues()[0]) + ", " + format_number(eig.eigenvalues()[1]) +
-              ", " + format_number(eig.eigenvalues()[2]) + ")");
+          refuse({"link", l->name, "inertial"},
+                 "link '" + l->name + "': the inertia of a moving link must be positive " +
+                     "definite (mass " + format_number(in.mass) + ", principal moments " +
+                     format_number(eig.eigenvalues()[0]) + ", " +
+                     format_number(eig.eigenvalues()[1]) + ", " +
+                     format_number(eig.eigenvalues()[2]) + ")");
         }
       }
     } else if (moving) {
-      throw std::invalid_argument(who + "link '" + l->name + "' moves (joint '" + out.joint.name +
-                                  "') but has no <inertial>");
+      refuse({"link", l->name, ""},
+             "link '" + l->name + "' moves (joint '" + out.joint.name + "') but has no <inertial>");
     }
     links.push_back(std::move(out));
   }
   try {
     return Tree(model->getName(), std::move(links), gravity);
   } catch (const std::invalid_argument& e) {
-    // (the file named once, without the tree's class: "<path>: link 'l1' (joint 'j1'): …")
+    // (the file named once, without the tree's class, at the element the message is about:
+    // "<path>:7:5: joint 'j2' mimics 'j9': …")
     std::string m = e.what();
     const std::string tree_who = "ukdyn::tree::Tree: ";
     if (m.rfind(tree_who, 0) == 0) m.erase(0, tree_who.size());
-    throw std::invalid_argument(who + m);
+    refuse_at(who, file.text, detail::element_of_message(m), m);
   }
 }
 

@@ -143,7 +143,7 @@ fs::path find_mesh_file(const fs::path& urdf, const std::string& name, std::stri
 
 std::vector<LinkVisual> load_urdf_visuals(const std::string& path, double length) {
   const urdf::ModelInterfaceSharedPtr model =
-      detail::parse_urdf_file(path, "ukdyn::tree::load_urdf_visuals: " + path + ": ");
+      detail::parse_urdf_file(path, "ukdyn::tree::load_urdf_visuals: " + path + ": ").model;
   std::vector<LinkVisual> out;
   // depth first from the root, children in order (the tree's order)
   std::vector<urdf::LinkConstSharedPtr> stack;
