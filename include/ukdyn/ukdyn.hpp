@@ -16,6 +16,7 @@
 #include "ukdyn/dynamics/workspace.hpp"
 #include "ukdyn/gallery/gallery.hpp"
 #include "ukdyn/io/trajectory_files.hpp"
+#include "ukdyn/linalg/anderson.hpp"
 #include "ukdyn/linalg/decomposition.hpp"
 #include "ukdyn/linalg/sparse.hpp"
 #include "ukdyn/modelfile/model.hpp"

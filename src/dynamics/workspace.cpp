@@ -186,6 +186,8 @@ Workspace::Workspace(const System& sys, const SolverOptions& options)
   if (sys.nonideal_count() > 0) {
     reactions.setZero(n, K);
     reactions_next.setZero(n, K);
+    lambda_read.setZero(m);
+    reaction_acceleration.resize(m, AndersonAcceleration::kDefaultDepth);
   }
   C.setZero(n);
   Qc_nonideal.setZero(n);

@@ -101,6 +101,13 @@ std::vector<double> segment_ends(const System& sys, const SimulationOptions& o);
 // (run_output.cpp). Nothing for other systems. Cost O(K).
 void unmeasured_violations(const System& sys, RunStatistics& stats);
 
+// A run whose non-ideal forces did not settle on the reactions they cause in some evaluations
+// (Counters::nonideal_unsettled of ws, the run's workspace): a note with how many, when, the
+// worst residual and the constraint it names (Workspace::unsettled), in `units`' time. Nothing
+// for other runs. Cost O(1).
+void unsettled_reactions(const System& sys, const Workspace& ws, const UnitSystem& units,
+                         RunStatistics& stats);
+
 // Everything a run shares between the integrator's callbacks.
 class Run {
  public:

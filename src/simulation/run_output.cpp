@@ -4,6 +4,7 @@
 // "Interrupts and outputs", "Sample grid and streaming"). The class: simulation/run.hpp.
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <exception>
 #include <limits>
 #include <string>
@@ -192,6 +193,28 @@ void unmeasured_violations(const System& sys, RunStatistics& stats) {
         ". Give the position-level function (a holonomic: constraint, or ukdyn.from_sympy) "
         "to measure and correct the drift");
   }
+}
+
+void unsettled_reactions(const System& sys, const Workspace& ws, const UnitSystem& units,
+                         RunStatistics& stats) {
+  const std::int64_t count = ws.counters.nonideal_unsettled;
+  if (count == 0 || stats.notes.size() >= kMaxNotes) return;
+  const UnsettledReactions& u = ws.unsettled;
+  // t = first [to last] unit
+  std::string when = "t = " + format(u.first_t);
+  if (u.last_t != u.first_t) when += " to " + format(u.last_t);
+  when += " " + units.time;
+  const Index k = u.worst_constraint;
+  const std::string name =
+      k >= 0 && k < sys.constraint_count() ? "'" + sys.constraint(k).name() + "'" : "a constraint";
+  stats.notes.push_back(
+      when + ": the non-ideal forces did not settle on the reactions they cause in " +
+      format_number(count) + (count == 1 ? " evaluation" : " evaluations") +
+      " (their fixed point, docs/friction.md §1): the worst, at t = " + format(u.worst_t) + " " +
+      units.time + ", still moved the reaction of " + name + " by " + format(u.worst_residual) +
+      " of the largest reaction in its last round, and the motion there used that round's "
+      "forces (a Coulomb contact sliding at or past Painlevé's critical mu, or a force whose "
+      "feedback through the reactions has no consistent value)");
 }
 
 }  // namespace ukdyn::detail

@@ -329,6 +329,7 @@ Trajectory detail::simulate_observed(const System& sys, const Eigen::Ref<const V
     }
     traj.stats.t_reached = t_reached;
     unmeasured_violations(sys, traj.stats);
+    unsettled_reactions(sys, ws, o.units, traj.stats);
     traj.stats.evaluations = ode.evaluations();
     traj.stats.least_squares = ode.least_squares();
     // the energy balance certifies a run that reached its end

@@ -97,6 +97,43 @@ TEST(NoAllocation, AutomaticallyDifferentiatedConstraintsAndFriction) {
   EXPECT_EQ(allocations_of(sys, q_fixed, qd_fixed, 10), 0);
 }
 
+TEST(NoAllocation, FrictionFixedPointAcceleratedNearPainlevesCriticalMu) {
+  // Painlevé's rod (tests/simulation/test_contact_friction.cpp) at mu = 1.3 = 0.975 mu_c: the
+  // plain rounds contract slowly, so apply_nonideal extrapolates (Anderson) from its second round
+  const double m = 1.0, g = 9.81;
+  MatrixXd M(4, 4);
+  M << 2, 0, 1, 0, 0, 2, 0, 1, 1, 0, 2, 0, 0, 1, 0, 2;
+  M *= m / 6.0;
+  const System sys =
+      SystemBuilder({"xA", "yA", "xB", "yB"})
+          .mass_matrix(M)
+          .forces([m, g](const Eigen::Ref<const VectorXd>&, const Eigen::Ref<const VectorXd>&,
+                         double, Eigen::Ref<VectorXd> Q) {
+            Q.setZero();
+            Q[1] = Q[3] = -m * g / 2;
+          })
+          .add(holonomic("rod", 1,
+                         [](const auto& q, const auto&, auto& phi) {
+                           const auto dx = q[0] - q[2], dy = q[1] - q[3];
+                           phi[0] = (dx * dx + dy * dy - 4.0) / 4.0;
+                         }))
+          .add(holonomic("floor", 1, [](const auto& q, const auto&, auto& phi) { phi[0] = q[1]; }))
+          .add(coulomb_friction({.constraint = "floor", .mu = 1.3, .coordinates = {0}}))
+          .build();
+  const double th = std::atan(2.0);
+  VectorXd q(4), qd(4);
+  q << 0.0, 0.0, 2.0 * std::cos(th), 2.0 * std::sin(th);
+  qd << -1.0, 0.0, -1.0, 0.0;
+  EXPECT_EQ(allocations_of(sys, q, qd, 10), 0);
+  Workspace ws(sys);
+  ASSERT_EQ(forward_dynamics(sys, ws, q, qd, 0.0), Status::kOk);
+  EXPECT_EQ(ws.counters.nonideal_unsettled, 0);
+  EXPECT_GE(ws.counters.nonideal_rounds, 3);
+  EXPECT_LE(ws.counters.nonideal_rounds, 4);
+  const double N = m * g / (1.6 - 1.2 * 1.3);
+  EXPECT_NEAR(ws.lambda[1] + ws.lambda_nonideal[1], N, 1e-9 * N);
+}
+
 using testing::Case;
 class NoAllocationRandom : public ::testing::TestWithParam<Case> {};
 

@@ -6,6 +6,7 @@
 #pragma once
 
 #include <cstdint>
+#include <limits>
 #include <memory>
 #include <string>
 #include <vector>
@@ -15,6 +16,7 @@
 #include "ukdyn/core/constraint.hpp"
 #include "ukdyn/core/status.hpp"
 #include "ukdyn/core/types.hpp"
+#include "ukdyn/linalg/anderson.hpp"
 #include "ukdyn/linalg/decomposition.hpp"
 
 namespace ukdyn {
@@ -104,8 +106,24 @@ struct Counters {
   std::int64_t rank_deficient = 0;  ///< evaluations where rank A < active rows (redundancy)
   std::int64_t failures = 0;        ///< evaluations whose status was not kOk
   /// evaluations whose non-ideal forces, reading the reactions they cause themselves, did not
-  /// settle within the iteration limit of apply_nonideal (the last iterate was used)
+  /// settle within the iteration limit of apply_nonideal (the last iterate was used; where and
+  /// by how much: Workspace::unsettled)
   std::int64_t nonideal_unsettled = 0;
+  /// evaluations of the non-ideal forces' C by apply_nonideal: one per evaluation when no force
+  /// reads a reaction, else one per round of its fixed point (docs/friction.md §1)
+  std::int64_t nonideal_rounds = 0;
+};
+
+/// Where apply_nonideal's fixed point did not settle (Counters::nonideal_unsettled counts those
+/// evaluations; kept, as MuJoCo keeps a warning's last info, over the workspace's life). The
+/// residual of an evaluation is the largest move of a reaction in its last round relative to
+/// the largest reaction (|ΔR|∞ / |R|∞; the absolute move when every reaction is 0).
+struct UnsettledReactions {
+  double first_t = std::numeric_limits<double>::quiet_NaN();  ///< t of the first one
+  double last_t = std::numeric_limits<double>::quiet_NaN();   ///< t of the last one
+  double worst_t = std::numeric_limits<double>::quiet_NaN();  ///< t of the largest residual
+  double worst_residual = 0.0;  ///< the largest residual (NaN once one was not a number)
+  Index worst_constraint = -1;  ///< the constraint whose reaction moved most there
 };
 
 /// A value that a move hands over, leaving a value-initialized one (0) behind: the identity and
@@ -260,6 +278,13 @@ class Workspace {
   /// (IdealForceInfo::reaction) sees the whole reaction.
   MatrixXd reactions;
   MatrixXd reactions_next;  ///< (n × K) scratch of that iteration
+  /// (m, with non-ideal forces) the iterate of that fixed point: the lambda_nonideal whose
+  /// reactions shares + A_kᵀ lambda_nonideal,k the forces read in the current round
+  VectorXd lambda_read;
+  /// (dimension m, depth 5, with non-ideal forces) the fixed point's Anderson acceleration on
+  /// lambda_read, once the plain rounds converge slowly (apply_nonideal; docs/friction.md §1)
+  AndersonAcceleration reaction_acceleration;
+  UnsettledReactions unsettled;  ///< where the fixed point did not settle (apply_nonideal)
   /// Non-ideal work vector, sum of the system's forces (n). C, Qc_nonideal and lambda_nonideal
   /// of a system without non-ideal forces are zero from the workspace's construction on, and
   /// are not written again (not even with NaN on a failure).
