@@ -166,6 +166,28 @@ class Run {
   // margin is negative, per contact, for find_event's slip test (a force pulse within one long
   // step of a body at rest). O(sticking contacts · n), no evaluation of the dynamics
   void screen_sticking(double t, const double* x);
+  // Stops under rk4, rk5 and rkf78, whose dense output is a step of the method from the step's
+  // start (docs/friction.md, "Stops under every integrator"). A stage past a sliding contact's
+  // stop sees its friction reversed, and the step's end can then lie before the stop again: rk4
+  // with the stop in the first half of its step ends at the speed it started with, and never
+  // stops. So the stop is read from the stages too. arm_stops: at the start of an integration
+  // (after set_integrator), each sliding contact's direction of motion at (t, x); then at each
+  // evaluation of the stages (ConstrainedOde::set_screen, after its forward dynamics, which
+  // filled Workspace::sliding) screen_stops notes whether the speed along it fell to v_stop.
+  // O(sliding contacts · d) per evaluation, no evaluation of the dynamics; nothing under dopri5
+  // and BDF (their dense output is an interpolant, not a step of the method)
+  void arm_stops(double t, const double* x);
+  void screen_stops() {
+    if (!screens_stops_) return;
+    const auto& contacts = sys_.friction_contacts();
+    for (std::size_t c = 0; c < contacts.size(); ++c) {
+      if (!stop_armed_[c] || stop_seen_[c] || mode_[c] != ContactMode::kSliding) continue;
+      const Index k = contacts[c].size();
+      const double along =
+          ws_.sliding.col(Index(c)).head(k).dot(stop_direction_.col(Index(c)).head(k));
+      if (along <= 100.0 * contacts[c].eps) stop_seen_[c] = 1;
+    }
+  }
 
   // The last event found by find_event is no switch but rkf78 handing the run to dopri5 at the
   // start of the step just taken, which it discards: in that step a Coulomb contact slides into
@@ -306,8 +328,13 @@ class Run {
   // what the sample sink threw (null when nothing)
   const std::exception_ptr& sink_error() const { return sink_error_; }
 
-  // the method taking the steps from now on (for the progress report)
-  void set_integrator(Integrator method) { progress_.integrator = method; }
+  // the method taking the steps from now on (for the progress report; and whether stops are
+  // read from the stages too, see arm_stops)
+  void set_integrator(Integrator method) {
+    progress_.integrator = method;
+    screens_stops_ =
+        method == Integrator::kRK4 || method == Integrator::kRK5 || method == Integrator::kRKF78;
+  }
   // records a sample at t from the state x (projected first, when projecting); returns
   // kInterrupted after recording it when a stop was requested, unless it is the `last` one
   Status record(double t, const double* x, bool last = false);
@@ -358,12 +385,12 @@ class Run {
   }
 
   // the first s in (t0, t1] with g(s) <= 0, by bisection on the dense output (g(t0) > 0 is
-  // assumed), or NaN when g(t1) > 0
+  // assumed), or NaN when g(t1) > 0 (x1 null: g(t1) <= 0 is known)
   // (the last time found with g > 0 into *last_positive when given)
   template <class G>
   double locate(double t0, double t1, const double* x1, const detail::SegmentHooks::Dense& dense,
                 G&& g, double* last_positive = nullptr) {
-    if (g(t1, x1) > 0.0) return std::numeric_limits<double>::quiet_NaN();
+    if (x1 != nullptr && g(t1, x1) > 0.0) return std::numeric_limits<double>::quiet_NaN();
     double lo = t0, hi = t1;
     while (hi - lo > 1e-14 * std::max(1.0, std::abs(hi))) {
       const double mid = 0.5 * (lo + hi);
@@ -545,6 +572,24 @@ class Run {
   // (screen_sticking), confirmed on the dense output and located, or NaN (run_events.cpp)
   double screened_slip(std::size_t c, double t0, const double* x0, double t1,
                        const detail::SegmentHooks::Dense& dense);
+  // (see arm_stops) rk4, rk5, rkf78: stops are read from the stages too
+  bool screens_stops_ = false;
+  // (width × contacts) column c: sliding contact c's direction of motion that screen_stops reads
+  // the speed along, where stop_armed_[c]; stop_seen_[c]: an evaluation since it was last reset
+  // had that speed at or below v_stop
+  MatrixXd stop_direction_ =
+      MatrixXd::Zero(sliding_width(sys_, n_), Index(sys_.friction_contacts().size()));
+  std::vector<unsigned char> stop_armed_ =
+      std::vector<unsigned char>(sys_.friction_contacts().size(), 0);
+  std::vector<unsigned char> stop_seen_ =
+      std::vector<unsigned char>(sys_.friction_contacts().size(), 0);
+  // sliding contact c's direction of motion at (t, x) for screen_stops, if faster than v_stop
+  void arm_stop(std::size_t c, double t, const double* x, double v_stop);
+  // under rk4, rk5, rkf78: sliding contact c's stop inside [t0, t1] (its speed along direction_,
+  // the step's start's, of length k, falling to v_stop), from the step's end and its stages,
+  // located by bisection on steps of the method whose stages are read too; or NaN
+  double locate_stop(std::size_t c, Index k, double t0, double t1, const double* x1,
+                     const detail::SegmentHooks::Dense& dense, double v_stop);
   Index switching_ = -1;  // the contact of the last event found
   // the switching functions (System::switch_count, none unless SimulationOptions::switch_events):
   // their values (g_ scratch, g1_ at the end of the step), the side each is on (sign of g,

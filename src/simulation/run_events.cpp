@@ -39,6 +39,59 @@ double Run::screened_slip(std::size_t c, double t0, const double* x0, double t1,
   return margin(t0, x0) > 0.0 ? locate(t0, ts, trial_.data(), dense, margin) : t0;
 }
 
+void Run::arm_stops(double t, const double* x) {
+  const auto& contacts = sys_.friction_contacts();
+  if (mode_.size() != contacts.size()) return;  // (before the initial modes)
+  std::fill(stop_armed_.begin(), stop_armed_.end(), 0);
+  if (!screens_stops_) return;
+  for (std::size_t c = 0; c < contacts.size(); ++c) {
+    if (mode_[c] != ContactMode::kSliding || frictionless(c) || separated(c)) continue;
+    arm_stop(c, t, x, 100.0 * contacts[c].eps);
+  }
+}
+
+void Run::arm_stop(std::size_t c, double t, const double* x, double v_stop) {
+  stop_armed_[c] = 0;
+  stop_seen_[c] = 0;
+  const Index k = relative_velocity(c, t, x, velocity_);
+  const double speed = velocity_.head(k).norm();
+  if (!(speed > v_stop)) return;
+  stop_direction_.col(Index(c)).head(k) = velocity_.head(k) / speed;
+  stop_armed_[c] = 1;
+}
+
+double Run::locate_stop(std::size_t c, Index k, double t0, double t1, const double* x1,
+                        const detail::SegmentHooks::Dense& dense, double v_stop) {
+  // (a stage of the step, or of an attempt from t0 that was rejected, at the stop; then the
+  // bisection's steps screened along the step's start direction, the one its test reads)
+  const bool seen = stop_armed_[c] && stop_seen_[c];
+  stop_direction_.col(Index(c)).head(k) = direction_.head(k);
+  stop_armed_[c] = 1;
+  stop_seen_[c] = 0;
+  // the speed along the direction less v_stop at x, and at most 0 when a stage of the step to t
+  // (the dense output: a step of the method) had that speed at or below v_stop: a stage past
+  // the stop sees the friction reversed, and the step's end can lie before the stop again
+  auto ahead = [&](double t, const double* x) {
+    relative_velocity(c, t, x, velocity_);
+    const double g = velocity_.head(k).dot(direction_.head(k)) - v_stop;
+    const bool stage = stop_seen_[c] != 0;
+    stop_seen_[c] = 0;
+    return stage ? std::min(g, 0.0) : g;
+  };
+  double te = std::numeric_limits<double>::quiet_NaN();
+  if (!(ahead(t1, x1) > 0.0)) {
+    te = locate(t0, t1, nullptr, dense, ahead);
+  } else if (seen) {
+    // the end before the stop, a stage past it: confirmed by the step to t1 again (a rejected
+    // attempt's stage is not this step's), its stages screened
+    dense(t1, event_x_.data());
+    if (!(ahead(t1, event_x_.data()) > 0.0)) te = locate(t0, t1, nullptr, dense, ahead);
+  }
+  // no stop: the next step's stages are screened along the direction at its start
+  if (std::isnan(te)) arm_stop(c, t1, x1, v_stop);
+  return te;
+}
+
 // the first switch of a contact inside [t0, t1] (see SegmentHooks::find_event)
 double Run::find_event(double t0, const double* x0, double t1, const double* x1,
                        const detail::SegmentHooks::Dense& dense) {
@@ -84,10 +137,11 @@ double Run::find_event(double t0, const double* x0, double t1, const double* x1,
         if (margin < detail::kSingularMargin && carry_through(c, k, t1, x1, v_stop)) {
           continue;
         }
-        te = locate(t0, t1, x1, dense, [&](double t, const double* x) {
-          relative_velocity(c, t, x, velocity_);
-          return velocity_.head(k).dot(direction_.head(k)) - v_stop;
-        });
+        te = screens_stops_ ? locate_stop(c, k, t0, t1, x1, dense, v_stop)
+                            : locate(t0, t1, x1, dense, [&](double t, const double* x) {
+                                relative_velocity(c, t, x, velocity_);
+                                return velocity_.head(k).dot(direction_.head(k)) - v_stop;
+                              });
         // (a kinematic passage at a rank drop: no restart there)
         if (!std::isnan(te) && passes_at_rank_drop(c, te, dense)) {
           if (progress_.integrator == Integrator::kRKF78) {

@@ -255,7 +255,10 @@ Trajectory detail::simulate_observed(const System& sys, const Eigen::Ref<const V
   if (contacts.any() || sticks) {
     ode.set_screen([&contacts, &run, sticks](double t, const double* xs) {
       if (contacts.any()) contacts.screen(t);
-      if (sticks) run.screen_sticking(t, xs);
+      if (sticks) {
+        run.screen_sticking(t, xs);
+        run.screen_stops();
+      }
     });
   }
   detail::SegmentHooks hooks;
@@ -460,6 +463,7 @@ Trajectory detail::simulate_observed(const System& sys, const Eigen::Ref<const V
       }
       after_event = false;
       run.set_integrator(method);
+      run.arm_stops(a, x.data());
       hooks.cross_singular = crossing;
       hooks.max_steps = o.max_steps - traj.stats.steps;  // (> 0: checked after each segment)
       // (after a switch CVODE estimates its own first step: dopri5's last one is stability-bound)
