@@ -562,16 +562,19 @@ bool ContactEvents::resolve(double t, double* x, Index event, RunStatistics& sta
         W_c = dyn_.contact_work(vm, qd, qd_minus);
         return true;
       };
-      // W_c(s) is continuous where the impact's modes are; lo keeps none gained, hi gains
+      // W_c(s) is continuous where the impact's modes are; lo keeps none gained, hi gains;
+      // qd holds the impact of s = lo when the last one solved was (else it is solved again)
       double lo = 0.0, hi = 1.0;
+      bool at_lo = false;
       for (int i = 0; i < 60 && hi - lo > 1e-15; ++i) {
         const double s = 0.5 * (lo + hi);
-        if (redo(s) && !gains(W_c, dT))
+        at_lo = redo(s) && !gains(W_c, dT);
+        if (at_lo)
           lo = s;
         else
           hi = s;
       }
-      if (!redo(lo)) {
+      if (!at_lo && !redo(lo)) {
         failure_ = "contacts at t = " + format_t(t) + ": the " +
                    (lo > 0.0 ? "reduced restitution's" : "plastic") +
                    " impact's LCP has no solution (Siconos lcp_lexicolemke)";

@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <ranges>
 #include <string>
 #include <utility>
 #include <vector>
@@ -173,10 +174,11 @@ double Run::group_margin(std::size_t c, double t, const double* x) {
 bool Run::holds_pushing(Index k, double t, const double* x) {
   if (sticking_contacts() < 2) return false;
   const auto& contacts = sys_.friction_contacts();
-  bool sticks = false;
-  for (std::size_t c = 0; c < contacts.size(); ++c)
-    sticks = sticks || (contacts[c].normal_constraint == k && mode_[c] == ContactMode::kSticking);
-  if (!sticks) return false;
+  const auto stuck_on_k = [&](std::size_t c) {
+    return contacts[c].normal_constraint == k && mode_[c] == ContactMode::kSticking;
+  };
+  const auto all = std::views::iota(std::size_t{0}, contacts.size());
+  if (std::ranges::none_of(all, stuck_on_k)) return false;
   q_ = Eigen::Map<const VectorXd>(x, n_);
   qd_ = Eigen::Map<const VectorXd>(x + n_, n_);
   if (forward_dynamics(sys_, ws_, q_, qd_, t) != Status::kOk) return false;
