@@ -30,6 +30,7 @@
 
 #include "commands.hpp"
 #include "embedded.hpp"
+#include "modelfile/contact_start.hpp"
 #include "output_dir.hpp"
 #include "progress.hpp"
 #include "python_process.hpp"
@@ -310,6 +311,12 @@ int run_command(const RunArguments& given) {
       // (checked before the run: the file's settings when it was read, the flags' above)
       bar.finish();
       std::fprintf(stderr, "%s\n", terminal_text(locate_run_error(model, e).what()).c_str());
+      return kExitModel;
+    } catch (const ukdyn::detail::ContactStartError& e) {
+      // the contacts at the start cannot be solved (Painlevé): at the friction's or contact's entry
+      bar.finish();
+      std::fprintf(stderr, "%s\n",
+                   terminal_text(ukdyn::detail::locate_contact_start(model, e).what()).c_str());
       return kExitModel;
     } catch (const std::invalid_argument& e) {
       // the model cannot be started

@@ -60,6 +60,9 @@ class ContactDynamics {
                      const Eigen::Ref<const VectorXd>& qd, double t);
   // why the last accelerations() failed, when it was Painlevé's paradox (empty otherwise)
   const std::string& failure() const { return failure_; }
+  // the contacts failure() names (System indices): Painlevé's, the smallest set whose principal
+  // minor is negative; empty when there is no failure or it names none
+  const std::vector<Index>& failure_contacts() const { return failure_contacts_; }
   // contacts up to which every principal minor of W + F is checked (2^k minors)
   static constexpr Index kMinorsUpTo = 10;
 
@@ -175,7 +178,8 @@ class ContactDynamics {
   // contacts, the variables, whether their rows are redundant
   std::string unsolved_impact(const System& sys, const MatrixXd& W) const;
   // "" when every principal minor of Mlcp is >= 0 (to roundoff), else the Painlevé message
-  std::string painleve(const System& sys, const MatrixXd& Mlcp) const;
+  // naming the contacts of the smallest negative minor, which go into `at` (System indices)
+  std::string painleve(const System& sys, const MatrixXd& Mlcp, std::vector<Index>& at) const;
   // "" when W and r are finite, else the message naming the set's contacts (a gap row that is
   // not finite at this state: a disk lying flat on its plane is one)
   std::string non_finite(const System& sys, const VectorXd& r) const;
@@ -196,6 +200,7 @@ class ContactDynamics {
   Eigen::LLT<MatrixXd> llt_;
   Eigen::CompleteOrthogonalDecomposition<MatrixXd> cod_;  // of G_b = A_b M⁻¹ A_bᵀ
   std::string failure_;
+  std::vector<Index> failure_contacts_;  // the contacts failure_ names (failure_contacts())
   ContactLcp lcp_;
   ContactLcp friction_lcp_;  // (the impacts' LCP with friction)
 };

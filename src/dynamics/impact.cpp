@@ -199,6 +199,7 @@ bool ContactDynamics::prepare(const System& sys, Workspace& ws, const Eigen::Ref
                               const std::vector<Index>& set, bool for_impact) {
   set_ = set;
   failure_.clear();
+  failure_contacts_.clear();
   const Index k = Index(set.size());
   sys.mass_matrix(q, t, ws.callables.get(), M_);
   // the rows of the active bilateral constraints (A_b) and of the contacts in the set (A_c)
@@ -283,7 +284,7 @@ bool ContactDynamics::accelerations(const System& sys, Workspace& ws,
   if (!failure_.empty()) return false;
   if (sliding_friction(sys, ws, q, qd, t)) {
     const MatrixXd Mlcp = W_ + F_;
-    failure_ = painleve(sys, Mlcp);
+    failure_ = painleve(sys, Mlcp, failure_contacts_);
     return failure_.empty() && solve_contacts(lcp_, Mlcp, r_, W_.rows(), lambda_, w_);
   }
   return solve_contacts(lcp_, W_, r_, W_.rows(), lambda_, w_);
@@ -366,7 +367,8 @@ std::string ContactDynamics::non_finite(const System& sys, const VectorXd& r) co
          "contacts on its rim";
 }
 
-std::string ContactDynamics::painleve(const System& sys, const MatrixXd& Mlcp) const {
+std::string ContactDynamics::painleve(const System& sys, const MatrixXd& Mlcp,
+                                      std::vector<Index>& at) const {
   const Index k = Mlcp.rows();
   const double scale = std::max(W_.cwiseAbs().maxCoeff(), 1e-300);
   // the smallest set of contacts whose principal minor is negative (beyond roundoff)
@@ -390,9 +392,11 @@ std::string ContactDynamics::painleve(const System& sys, const MatrixXd& Mlcp) c
       if (mask & (Index(1) << i)) J.push_back(i);
     if (J.size() > 1) consider(J);
   }
+  at.clear();
   if (worst.empty()) return {};
   std::string names;
   for (Index i : worst) {
+    at.push_back(set_[std::size_t(i)]);
     names += (names.empty() ? "'" : ", '") + sys.constraint(set_[std::size_t(i)]).name() +
              "' (mu = " + format_number(mu_[i], 4) + ")";
   }

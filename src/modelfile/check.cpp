@@ -16,6 +16,7 @@
 #include "control/control_at_start.hpp"
 #include "dynamics/contact_dynamics.hpp"
 #include "dynamics/internal.hpp"
+#include "modelfile/contact_start.hpp"
 #include "simulation/contact_events.hpp"
 #include "simulation/initial_check.hpp"
 #include "ukdyn/control/control.hpp"
@@ -73,6 +74,30 @@ std::vector<std::string> penetrated_contacts(const Model& model,
     // (a gap that cannot be evaluated: the run's start says so, and so do the checks below)
   }
   return names;
+}
+
+// The contacts at the initial state as the run's start solves them (ContactEvents::start: the
+// touching contacts' impact, then the LCP of the accelerations with the sliding friction in it):
+// a start the run refuses (Painlevé's paradox past the critical mu) is a problem with the run's
+// located message (locate_contact_start). The run of model.options, streamed as `ukdyn run`'s,
+// stopped once its first sample is recorded; a start that fails otherwise (a penetrated contact,
+// a violated initial state, a setting) is left to the checks that say it. A controlled model's
+// start is its control's (check_control). Cost: the run's start and one evaluation.
+void check_contacts_at_start(const Model& model, CheckReport& report) {
+  if (model.controller || detail::ContactDynamics(model.system).contacts().empty()) return;
+  SimulationOptions o = model.options;
+  o.units = model.unit_system;
+  o.project_initial = model.project_initial || o.project_initial;
+  o.should_stop = [] { return true; };
+  o.sample_sink = [](const Trajectory&) {};
+  o.progress = nullptr;
+  try {
+    (void)simulate(model.system, model.q0, model.qd0, o);
+  } catch (const detail::ContactStartError& e) {
+    report.problems.push_back(detail::locate_contact_start(model, e).what());
+  } catch (const std::exception&) {
+    // (reported by the checks above, or by the run itself)
+  }
 }
 
 // the control at the initial state, as the run's first evaluation: requirements that cannot all
@@ -141,6 +166,9 @@ void check_control(const Model& model, CheckReport& report) {
                   c.unactuated, c.held);
   } catch (const InconsistentInitialState&) {
     // (the initial state's violations, reported above: the run does not start)
+  } catch (const detail::ContactStartError& e) {
+    // (the run refuses its contacts at the start: at the friction's or the contact's entry)
+    report.problems.push_back(detail::locate_contact_start(model, e).what());
   } catch (const std::exception& e) {
     report.problems.push_back(std::string("the control cannot be evaluated at the initial "
                                           "state: ") +
@@ -325,6 +353,7 @@ CheckReport check_model(const Model& model) {
   if (sys.has_potential() && !std::isfinite(sys.potential_energy(model.q0, t))) {
     report.problems.push_back("the potential energy is not finite at the initial state");
   }
+  check_contacts_at_start(model, report);
   check_control(model, report);
   return report;
 }

@@ -227,6 +227,48 @@ std::vector<YAML::Node> Reader::rows_of(const YAML::Node& node, const std::strin
   return rows;
 }
 
+namespace {
+
+// the identifiers of an expression's text, in order (a number's exponent, 1e5, is none)
+std::vector<std::string> identifiers_in(const std::string& text) {
+  std::vector<std::string> out;
+  const auto word = [](char c) { return std::isalnum(static_cast<unsigned char>(c)) || c == '_'; };
+  for (std::size_t i = 0; i < text.size();) {
+    const char c = text[i];
+    if (!word(c) && c != '.') {
+      ++i;
+      continue;
+    }
+    std::size_t j = i;
+    while (j < text.size() && (word(text[j]) || text[j] == '.')) ++j;
+    if (std::isalpha(static_cast<unsigned char>(c)) || c == '_')
+      out.push_back(text.substr(i, j - i));
+    i = j;
+  }
+  return out;
+}
+
+}  // namespace
+
+std::vector<std::string> Reader::overrides_read(const std::string& text) const {
+  std::vector<std::string> names;
+  for (const std::string& used : identifiers_in(text)) {
+    if (const auto b = set_by_.find(used); b != set_by_.end())
+      for (const std::string& given : b->second)
+        if (std::find(names.begin(), names.end(), given) == names.end()) names.push_back(given);
+  }
+  return names;
+}
+
+std::string Reader::overridden_in(const YAML::Node& at) const {
+  if (set_by_.empty() || !at.IsScalar()) return {};
+  const std::vector<std::string> names = overrides_read(at.Scalar());
+  std::string out;
+  for (const std::string& name : names)
+    out += (out.empty() ? "--set " : ", ") + name + "=" + format_number(overrides_.at(name));
+  return out.empty() ? out : out + ": ";
+}
+
 // Parameters are numbers or expressions of the parameters before them (`I: m*L^2/12`), read
 // in the order written, each evaluated once with the values before it: a name defined later
 // (or the parameter itself) is an error, so there are no cycles. An override (--set) replaces
@@ -278,7 +320,13 @@ void Reader::read_parameters(const YAML::Node& root) {
         fail(kv.second, "parameter '" + name + "' must be a finite number, got '" + text + "'");
       }
       if (!is_number) v = derived_parameter(kv.second, name, earlier, order, index - 1);
-      if (const auto o = overrides_.find(name); o != overrides_.end()) v = o->second;
+      if (const auto o = overrides_.find(name); o != overrides_.end()) {
+        v = o->second;
+        set_by_[name] = {name};
+      } else if (!is_number) {
+        // (a parameter derived from overridden ones is set by their overrides)
+        if (auto from = overrides_read(text); !from.empty()) set_by_[name] = std::move(from);
+      }
       parameters_[name] = v;
       try {
         earlier.set_constant(name, v);

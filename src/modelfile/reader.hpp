@@ -364,11 +364,19 @@ class Reader {
   std::filesystem::path table_path(const YAML::Node& where, const std::string& what);
   TableColumns read_data(const YAML::Node& data, const std::string& what);
   TableColumns given_data(const YAML::Node& table, const TableData& data, const std::string& what);
+  // (a value that depends on a --set override says so first: "--set e=1.5: …", overridden_in)
   [[noreturn]] void fail(const YAML::Node& at, const std::string& message,
                          const std::string& hint = "") const {
     const YAML::Mark m = at.Mark();
-    throw ModelError(file_, m.line + 1, m.column + 1, message, hint);
+    throw ModelError(file_, m.line + 1, m.column + 1, overridden_in(at) + message, hint);
   }
+  // "--set NAME=VALUE: " for each override (overrides_) the scalar `at` reads, directly or
+  // through the parameters derived from it (set_by_); "" for a node that reads none. Cost
+  // O(length of the scalar).
+  std::string overridden_in(const YAML::Node& at) const;
+  // the overrides an expression's text reads, directly or through derived parameters (set_by_),
+  // each once, in the order they are read. O(length of the text)
+  std::vector<std::string> overrides_read(const std::string& text) const;
   // where a node is in the file (1-based)
   static FilePosition position(const YAML::Node& at) {
     const YAML::Mark m = at.Mark();
@@ -479,6 +487,9 @@ class Reader {
   std::map<std::string, double> overrides_;
   const GivenTables* given_tables_ = nullptr;  // the caller's tables (or none)
   std::map<std::string, double> parameters_;
+  // each parameter whose value comes from overrides_: the overrides it reads (its own, or those
+  // of the parameters its expression reads), by name (read_parameters)
+  std::map<std::string, std::vector<std::string>> set_by_;
   std::vector<std::string> coordinates_, velocities_;
   // a robot's joints whose URDF names are not identifiers, (name, identifier): "hip-1" is
   // written hip_1 in expressions (read_robot); an expression that holds the name as written

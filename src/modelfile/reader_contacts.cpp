@@ -344,7 +344,12 @@ void MultibodyReader::read_contact_frictions() {
     double eps = 1e-9;
     if (const YAML::Node en = f["regularization_velocity"])
       eps = positive(en, what + " regularization_velocity");
-    for (const std::string& t : targets) builder_.add_contact_friction(t, mu, mu_static, eps);
+    for (const std::string& t : targets) {
+      builder_.add_contact_friction(t, mu, mu_static, eps);
+      // (the entry a run's refusal of the contact points at, by its stick constraint's name:
+      // "stick." and the friction's, coulomb.<contact> as coulomb_friction names it)
+      r_.positions_.constraints["stick.coulomb." + t] = Reader::position(f);
+    }
   }
 }
 

@@ -323,7 +323,10 @@ void Reader::read_nonideal(const YAML::Node& root, SystemBuilder& builder) {
           spec.normal_coordinates = normal_coordinates(root, f, coords);
           coulomb_entries_.push_back(f);
         }
-        builder.add(coulomb_friction(spec));
+        NonIdealForce force = coulomb_friction(spec);
+        // (the entry a run's refusal of the contact points at: its stick constraint's name)
+        positions_.constraints["stick." + force.name()] = position(f);
+        builder.add(std::move(force));
       } else if (law == "viscous") {
         if (const YAML::Node nn = f["normal_coordinates"])
           fail(nn,

@@ -11,6 +11,7 @@
 #include "ukdyn/multibody/multibody.hpp"
 #include "ukdyn/multibody/tree.hpp"
 
+#include "modelfile/contact_start.hpp"
 #include "modelfile/visual_contacts.hpp"
 
 namespace ukdyn {
@@ -392,6 +393,24 @@ ModelError locate_run_error(const Model& model, const InconsistentInitialState& 
     hint = "add `project: true` under `initial:` in the model file";
   }
   return error_at(model, at, user_message(e), hint);
+}
+
+ModelError detail::locate_contact_start(const Model& model, const ContactStartError& e) {
+  const System& sys = model.system;
+  FilePosition at;
+  for (const std::string& name : e.contacts()) {
+    // the friction's entry on the contact (its stick constraint's, Reader::read_nonideal)
+    const Index k = sys.constraint_index(name);
+    for (const FrictionContact& f : sys.friction_contacts()) {
+      if (f.normal_constraint != k || f.stick_constraint < 0) continue;
+      const auto& all = model.positions.constraints;
+      if (const auto it = all.find(sys.constraint(f.stick_constraint).name()); it != all.end())
+        at = it->second;
+    }
+    if (!at.known()) at = constraint_position(model, name);
+    if (at.known()) break;
+  }
+  return error_at(model, at, user_message(e));
 }
 
 void write_csv(const ModelRun& run, const std::string& path) {

@@ -463,7 +463,10 @@ bool ContactEvents::start(double t, VectorXd& q, VectorXd& qd, double tolerance,
   xs_.head(n_) = q;
   xs_.segment(n_, n_) = qd;
   if (!resolve(t, xs_.data(), -1, stats)) {
-    throw std::invalid_argument("ukdyn::simulate: the initial state's contacts: " + failure_);
+    std::vector<std::string> at;
+    for (const Index k : dyn_.failure_contacts()) at.push_back(sys_.constraint(k).name());
+    throw ContactStartError("ukdyn::simulate: the initial state's contacts: " + failure_,
+                            std::move(at));
   }
   qd = xs_.segment(n_, n_);
   // the gaps that depend explicitly on t (moving surfaces: sweep), seen at the initial positions

@@ -10,6 +10,7 @@
 
 #include <functional>
 #include <limits>
+#include <stdexcept>
 #include <string>
 #include <utility>
 #include <vector>
@@ -19,6 +20,22 @@
 #include "ukdyn/simulation/simulate.hpp"
 
 namespace ukdyn::detail {
+
+// The run cannot start because the contacts at its initial state cannot be solved (Painlevé's
+// paradox: a sliding Coulomb contact past its critical mu; an LCP with no solution): thrown by
+// ContactEvents::start, a std::invalid_argument as before, which also names the contacts at
+// fault so that the model's front ends point at their entries (locate_contact_start,
+// modelfile/contact_start.hpp).
+class ContactStartError : public std::invalid_argument {
+ public:
+  // what: the full message; contacts: the names of the contacts at fault (may be empty)
+  ContactStartError(const std::string& what, std::vector<std::string> contacts)
+      : std::invalid_argument(what), contacts_(std::move(contacts)) {}
+  const std::vector<std::string>& contacts() const { return contacts_; }
+
+ private:
+  std::vector<std::string> contacts_;
+};
 
 class ContactEvents {
  public:
@@ -74,8 +91,9 @@ class ContactEvents {
   void apply() const;
   // the initial modes at (t, x = [q; q'; …]): an open gap, a closed contact that pushes, or an
   // impact at the start (x's velocities jump). @throws InconsistentInitialState naming a
-  // penetrated contact (g < −tolerance). False, with failure() set and every contact open, when
-  // a gap or gap rate is not finite there (failure_status(): kNonFiniteInput)
+  // penetrated contact (g < −tolerance), ContactStartError when the contacts cannot be solved
+  // there (Painlevé's paradox: naming its contacts). False, with failure() set and every contact
+  // open, when a gap or gap rate is not finite there (failure_status(): kNonFiniteInput)
   bool start(double t, VectorXd& q, VectorXd& qd, double tolerance, RunStatistics& stats);
   // the first impact or release in (t0, t1] (see SegmentHooks::find_event), NaN for none; or
   // the last time before an open contact's gap or gap rate turns non-finite (NaN, Inf: its

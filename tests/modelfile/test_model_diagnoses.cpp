@@ -298,6 +298,94 @@ contacts:
   }
 }
 
+// ---- Painlevé's rod at the start (u24 06) ---------------------------------------------------
+
+// Painlevé's rod (tests/data/painleve_rod.yaml; docs/contact.md, "Painlevé"): a planar rod
+// (m, length 2l, I = m l²/3) on its end A at tan θ = 2, sliding away from itself on a rough
+// floor, whose critical mu is mu_c = (1 + 3c²)/(3 s c) = 4/3. Past it (mu = 1.4) the run's start
+// refuses the contact and `check` says the same, located at the friction's entry (where mu is
+// given: line 13, column 5), with the normalized principal minor 1 − mu/mu_c = −0.05; just below
+// (mu = 1.33) check passes and the run starts with N = m g/(1 + 3c² − 3 mu s c). The same in
+// mm, g, ms (painleve_rod_mm_g_ms.yaml: m = 1000 g, l = 1000 mm, g = 9.81e-3 mm/ms², whose
+// force unit g·mm/ms² is the newton: the same N).
+TEST(ModelDiagnoses, PainlevesRodPastItsCriticalMuIsRefusedByCheckAndRunAtTheFriction) {
+  const double th = std::atan(2.0), c = std::cos(th), s = std::sin(th);
+  const double mu_c = (1.0 + 3.0 * c * c) / (3.0 * s * c);
+  ASSERT_NEAR(mu_c, 4.0 / 3.0, 1e-14);
+  const std::string message =
+      ":13:5: error: the initial state's contacts: contacts at t = 0: Painlevé's paradox at the "
+      "contact 'floor' (mu = 1.4): with its sliding friction the contact problem (the LCP of the "
+      "normal forces) has no solution or several — the friction turns the contact's effective "
+      "normal compliance negative (principal minor -0.05 of the normalized W + F); for this "
+      "contact's angle the critical mu is 1.333. Rigid-body contact with Coulomb friction is "
+      "inconsistent or indeterminate here: lower mu, or model the contact as compliant "
+      "(docs/contact.md, \"Painlevé\")";
+  // (the minor the message names: 1 − mu/mu_c, to its 3 digits)
+  EXPECT_NEAR(1.0 - 1.4 / mu_c, -0.05, 1e-12);
+  for (const char* file : {"painleve_rod.yaml", "painleve_rod_mm_g_ms.yaml"}) {
+    const std::string path = std::string(UKDYN_TEST_DATA_DIR) + "/" + file;
+    const Model bad = load_model(path);
+    const CheckReport r = check_model(bad);
+    ASSERT_EQ(r.problems.size(), 1u) << file;
+    EXPECT_EQ(r.problems[0], path + message) << file;
+    try {
+      run_model(bad);
+      ADD_FAILURE() << "ran past the critical mu: " << file;
+    } catch (const std::invalid_argument& e) {
+      // (the run's own text; `ukdyn run` locates it as check does: cli.painleve_run*)
+      EXPECT_EQ(path + ":13:5: error: " + user_message(e), path + message) << file;
+    }
+    // just below mu_c: no problem, and the start's normal force is the closed form's
+    const double mu = 1.33;
+    const Model good = load_model(path, {{"mu", mu}});
+    const CheckReport ok = check_model(good);
+    EXPECT_TRUE(ok.ok()) << file << ": " << (ok.problems.empty() ? "" : ok.problems[0]);
+    const ModelRun run = run_model(good);
+    const Trajectory& tr = run.trajectory;
+    ASSERT_EQ(tr.stats.status, Status::kOk) << file << ": " << tr.stats.message;
+    ASSERT_FALSE(tr.t.empty());
+    const std::size_t y = std::size_t(good.system.coordinate_index("rod.y"));
+    const double N = 1.0 * 9.81 / (1.0 + 3.0 * c * c - 3.0 * mu * s * c);
+    EXPECT_NEAR(tr.Qc_ideal[y] + tr.Qc_nonideal[y], N, 1e-8 * N) << file;
+  }
+}
+
+// A value out of range that comes from `--set` (load_model's overrides) names the override before
+// the file's location of the value (u24 10), also through a parameter derived from it; without
+// the override, the file's message alone
+TEST(ModelDiagnoses, AnOverrideOutOfRangeIsNamedAtTheValueItReaches) {
+  const std::string path = std::string(UKDYN_TEST_DATA_DIR) + "/painleve_rod.yaml";
+  const std::string at = path + ":11:59: error: ";
+  const std::string rest =
+      "contact 'floor': the restitution must lie in [0, 1], got 1.5 "
+      "(hint: restitution: 0.5)";
+  try {
+    load_model(path, {{"e", 1.5}});
+    ADD_FAILURE() << "loaded with e = 1.5";
+  } catch (const ModelError& e) {
+    EXPECT_EQ(std::string(e.what()), at + "--set e=1.5: " + rest);
+  }
+  // the restitution reads a parameter derived from the override: e2 = e / 2
+  std::ifstream in(path);
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  text.replace(text.find("e: 0}"), 5, "e: 0, e2: e/2}");
+  text.replace(text.find("restitution: e}"), 15, "restitution: e2}");
+  try {
+    parse_model(text, "d.yaml", {{"e", 3.0}});
+    ADD_FAILURE() << "loaded with e2 = 1.5";
+  } catch (const ModelError& e) {
+    EXPECT_EQ(std::string(e.what()), "d.yaml:11:59: error: --set e=3: " + rest);
+  }
+  // no override: the file's message only
+  text.replace(text.find("e: 0,"), 5, "e: 3,");
+  try {
+    parse_model(text, "d.yaml");
+    ADD_FAILURE() << "loaded with e2 = 1.5";
+  } catch (const ModelError& e) {
+    EXPECT_EQ(std::string(e.what()), "d.yaml:11:59: error: " + rest);
+  }
+}
+
 // The causes are typed (front ends read cause(), not the message): a pendulum started off its
 // rod is kNotProjected without projection, and consistent after it
 TEST(ModelDiagnoses, InconsistentInitialStateIsTypedByItsCause) {
