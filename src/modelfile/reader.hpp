@@ -406,6 +406,11 @@ class Reader {
   std::pair<double, RestitutionLaw> read_restitution(const YAML::Node& e, const YAML::Node& law,
                                                      const std::string& what);
   void read_nonideal(const YAML::Node& root, SystemBuilder& builder);
+  // a Coulomb friction's regularization_velocity when its entry gives none: 1e-9 m/s
+  // (CoulombFriction's default) written in the model's units: (length per time unit), so that
+  // a model in km, t, min regularizes, and stops its slides, at the speed of the same model in SI
+  // (the stop speed is 100 of it: docs/friction.md)
+  double default_regularization_velocity(const YAML::Node& root);
   // a coordinate-path Coulomb friction's normal coordinates p (docs/friction.md §1):
   // `normal_coordinates:` when given, else the coordinates whose unit (units: of the file) is
   // the sliding coordinates' (or the model's length unit) or not known; empty when that is all
