@@ -159,7 +159,9 @@ ukdyn.parse() or ukdyn.from_sympy(). Model.simulate() runs it exactly as `ukdyn 
           "file's `units:`, else the length unit (m), rad and 1 (quaternion components) for the "
           "bodies' coordinates and a robot's joints (by the joint's kind), else \"\" (not "
           "known); the length unit of the gap column gap.<name> of each contacts: entry of a "
-          "bodies or robot model (a distance), and the force unit of its friction's holding "
+          "bodies or robot model (a distance), a generalized model's gap in the unit its "
+          "coordinates share; the force unit of each contact's lambda.<name> and "
+          "lambda_total.<name> (the torque's for a gap in rad), and of its friction's holding "
           "force lambda.stick.<friction>.i.")
       .def_property_readonly(
           "unit_system",

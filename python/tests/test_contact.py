@@ -432,7 +432,8 @@ def test_contacts_plot_has_units_and_a_friction_panel(rolling_ball):
     the length unit, its normal force in the force unit; with Coulomb friction at the contact a
     third panel draws the friction force (the run's visual.contact.floor.f* columns: -mu m g
     along x while it slides). In mm, g, ms the labels are those units'; a generalized model's
-    gap (bouncing_ball: y, no units: given) is drawn without a unit."""
+    gap has the unit its coordinates share (bouncing_ball: y in m, so m and N; u24), and one
+    whose coordinates have none is in the length unit."""
     pytest.importorskip("matplotlib")
     import matplotlib
     matplotlib.use("Agg")
@@ -453,8 +454,10 @@ def test_contacts_plot_has_units_and_a_friction_panel(rolling_ball):
     assert [ax.get_ylabel() for ax in fig.axes] == [
         "normal force λ [g·mm/ms²]", "gap g [mm]", "friction force [g·mm/ms²]"]
     matplotlib.pyplot.close(fig)
-    fig = ukdyn.load("bouncing_ball").simulate(t_end=0.1).figures()["contacts"]
-    assert [ax.get_ylabel() for ax in fig.axes] == ["normal force λ", "gap g"]
+    ball = ukdyn.load("bouncing_ball")
+    assert ball.units["gap.floor"] == "m" and ball.units["lambda_total.floor"] == "N"
+    fig = ball.simulate(t_end=0.1).figures()["contacts"]
+    assert [ax.get_ylabel() for ax in fig.axes] == ["normal force λ [N]", "gap g [m]"]
     matplotlib.pyplot.close(fig)
 
 

@@ -612,9 +612,10 @@ def contacts_figure(table, meta=None):
     gap's zero at each); below them, when the run has Coulomb friction at a contact point, each
     such contact's friction force in the world (``visual.contact.<name>.fx``, ``.fy``, ``.fz``).
     The gap of a contacts: entry is a distance, in the length unit (summary.json's ``units``
-    give ``gap.<name>`` its unit), and its force then in the force unit; a gap without a unit
-    (a generalized model's constraint, unless ``units:`` gives one) is drawn without one. None
-    for a run without contacts."""
+    give ``gap.<name>`` its unit), and its force then in the force unit; a generalized model's
+    gap has the unit its coordinates share (those without one counting in the length unit), or
+    the one ``units:`` gives it; a gap without a unit (coordinates of different units) is drawn
+    without one. None for a run without contacts."""
     contacts = _contacts(table)
     if not contacts:
         return None

@@ -307,6 +307,7 @@ ControlledTrajectory control_detail::run_controlled(
         after->failure = w.failure;
         after->failure_t = w.failure_t;
         after->slip_note = w.slip_note;
+        after->slip_t = w.slip_t;
         after->held_note = w.held_note;
         after->q_last = w.q_last;
         after->qd_last = w.qd_last;
@@ -336,7 +337,21 @@ ControlledTrajectory control_detail::run_controlled(
   tr.n = n;
   tr.m = full.m;
   tr.stats = full.stats;
-  if (!w.slip_note.empty()) tr.stats.notes.push_back(w.slip_note);
+  if (!w.slip_note.empty()) {
+    // a stick the control breaks at the start never held: the contact slides from the start,
+    // its initial mode, and the run locates no slip (as for any contact that cannot stick at
+    // the start); the note says so, where the event list shows none (u24)
+    std::string note = w.slip_note;
+    const bool listed =
+        std::any_of(tr.stats.contact_events.begin(), tr.stats.contact_events.end(),
+                    [](const ContactEvent& e) { return e.kind == ContactEvent::Kind::kSlip; });
+    if (w.slip_t <= o.t_start && !listed) {
+      note.insert(std::min(note.rfind(" (docs/contact.md"), note.size()),
+                  " from the start: it never stuck, so contact_events lists no slip (its "
+                  "initial mode is sliding)");
+    }
+    tr.stats.notes.push_back(note);
+  }
   if (!w.held_note.empty()) tr.stats.notes.push_back(w.held_note);
   // requirements without dynamics that start unmet stay unmet (u21 05)
   if (const std::string why = explain_uncorrected_requirements(ctrl, q0, qd0, options.t_start,

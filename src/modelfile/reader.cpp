@@ -505,6 +505,7 @@ Model Reader::read_plant(const YAML::Node& root) {
   check_mass_matrix(root, model);
   read_output(root, model);
   read_units(root, model);
+  label_gaps(model);
   apply_time_unit(model);
   // initial: project: true, or simulate: project_initial: true
   model.project_initial = model.project_initial || model.options.project_initial;

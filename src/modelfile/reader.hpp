@@ -414,6 +414,11 @@ class Reader {
   std::pair<double, RestitutionLaw> read_restitution(const YAML::Node& e, const YAML::Node& law,
                                                      const std::string& what);
   void read_nonideal(const YAML::Node& root, SystemBuilder& builder);
+  // a Coulomb friction's regularization_velocity when its entry gives none: 1e-9 m/s
+  // (CoulombFriction's default) written in the model's units: (length per time unit), so that
+  // a model in km, t, min regularizes, and stops its slides, at the speed of the same model in SI
+  // (the stop speed is 100 of it: docs/friction.md)
+  double default_regularization_velocity(const YAML::Node& root);
   // a coordinate-path Coulomb friction's normal coordinates p (docs/friction.md §1):
   // `normal_coordinates:` when given, else the coordinates whose unit (units: of the file) is
   // the sliding coordinates' (or the model's length unit) or not known; empty when that is all
@@ -433,8 +438,14 @@ class Reader {
   // visual: and the bodies' visual: entries (modelfile/reader_visual.cpp); the points'
   // expressions are appended to `outputs` (their columns follow the output expressions)
   void read_visual(const YAML::Node& root, Model& model, std::vector<Expr>& outputs);
-  // gap.<name>: the gap of each unilateral constraint, an output column (docs/contact.md)
+  // gap.<name>: the gap of each unilateral constraint, an output column (docs/contact.md); the
+  // coordinates each gap reads are kept for label_gaps
   void add_gap_outputs(const YAML::Node& root, Model& model, std::vector<Expr>& outputs);
+  // the unit of each gap.<name> that add_gap_outputs wrote and units: does not name: the one
+  // its coordinates share, a coordinate without a unit counting in the length unit (as a
+  // friction's normal coordinates do): mm for yA in mm (or unlabelled, in units: {length: mm}),
+  // rad for a joint limit th − th_min with th in rad; none when they differ or it reads none
+  void label_gaps(Model& model) const;
   // units: {x: m, theta: rad} (each coordinate's unit, for the plots' labels)
   void read_units(const YAML::Node& root, Model& model);
   // units: {length: mm, mass: g, time: ms} (the base units, from their accepted lists)
@@ -491,6 +502,8 @@ class Reader {
   // of the parameters its expression reads), by name (read_parameters)
   std::map<std::string, std::vector<std::string>> set_by_;
   std::vector<std::string> coordinates_, velocities_;
+  // (gap.<name>, the coordinates its expression reads) of add_gap_outputs, for label_gaps
+  std::vector<std::pair<std::string, std::vector<Index>>> gap_reads_;
   // a robot's joints whose URDF names are not identifiers, (name, identifier): "hip-1" is
   // written hip_1 in expressions (read_robot); an expression that holds the name as written
   // is refused (refuse_renamed), as it would read "hip - 1"

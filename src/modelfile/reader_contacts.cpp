@@ -341,7 +341,7 @@ void MultibodyReader::read_contact_frictions() {
                 what + ": mu_static must be >= mu = " + brief(mu) + ", got " + brief(*mu_static),
                 "the static coefficient is at least the kinetic one");
     }
-    double eps = 1e-9;
+    double eps = r_.default_regularization_velocity(root_);
     if (const YAML::Node en = f["regularization_velocity"])
       eps = positive(en, what + " regularization_velocity");
     for (const std::string& t : targets) {

@@ -220,6 +220,13 @@ void Reader::check_friction_normals(const YAML::Node& root, const System& sys) {
   }
 }
 
+double Reader::default_regularization_velocity(const YAML::Node& root) {
+  // eps [m/s] · (s per time unit / m per length unit): exactly eps when they are alike (mm, ms)
+  UnitSystem units;
+  if (const YAML::Node u = root["units"]; u && u.IsMap()) read_unit_system(u, units);
+  return CoulombFriction{}.regularization_velocity * (units.seconds() / units.metres());
+}
+
 void Reader::read_nonideal(const YAML::Node& root, SystemBuilder& builder) {
   const YAML::Node ns = root["nonideal"];
   if (!ns) return;
@@ -300,6 +307,7 @@ void Reader::read_nonideal(const YAML::Node& root, SystemBuilder& builder) {
             fail(f["constraint"], m);
           }
         }
+        spec.regularization_velocity = default_regularization_velocity(root);
         if (const YAML::Node rv = f["regularization_velocity"]) {
           spec.regularization_velocity = number(rv, "regularization_velocity");
           if (!(spec.regularization_velocity > 0)) {

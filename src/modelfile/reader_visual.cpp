@@ -57,6 +57,28 @@ void Reader::add_gap_outputs(const YAML::Node& root, Model& model, std::vector<E
       continue;  // (the file's own output of that name)
     model.output_names.push_back(column);
     outputs.push_back(expression(holonomic, "the gap of constraint '" + name + "'"));
+    std::vector<Index> reads;
+    for (const Index k : set_->inputs_of(outputs.back()))
+      if (k < Index(coordinates_.size())) reads.push_back(k);
+    gap_reads_.emplace_back(column, std::move(reads));
+  }
+}
+
+void Reader::label_gaps(Model& model) const {
+  for (const auto& [column, reads] : gap_reads_) {
+    const auto at = std::find(model.output_names.begin(), model.output_names.end(), column);
+    if (at == model.output_names.end()) continue;
+    std::string& unit = model.output_units[std::size_t(at - model.output_names.begin())];
+    if (!unit.empty() || reads.empty()) continue;  // (given by units:, or a constant gap)
+    // the unit the coordinates read share (none when they differ)
+    const auto unit_of = [&](Index k) {
+      const std::size_t j = std::size_t(k);
+      const bool given = j < model.coordinate_units.size() && !model.coordinate_units[j].empty();
+      return given ? model.coordinate_units[j] : model.unit_system.length;
+    };
+    const std::string first = unit_of(reads.front());
+    if (std::all_of(reads.begin(), reads.end(), [&](Index k) { return unit_of(k) == first; }))
+      unit = first;
   }
 }
 

@@ -89,30 +89,46 @@ void add_gap_columns(const Model& model, const Trajectory& traj, std::vector<Csv
 
 std::vector<std::pair<std::string, std::string>> contact_gap_units(const Model& model) {
   std::vector<std::pair<std::string, std::string>> out;
-  if (!model.multibody && !model.robot) return out;
   const System& sys = model.system;
+  const UnitSystem& u = model.unit_system;
+  const bool built = model.multibody || model.robot;
   for (Index k = 0; k < sys.constraint_count(); ++k) {
     const Constraint& c = sys.constraint(k);
     if (!c.is_unilateral()) continue;
     const std::string name = "gap." + c.name();
-    if (std::find(model.output_names.begin(), model.output_names.end(), name) ==
-        model.output_names.end())
-      out.emplace_back(name, model.unit_system.length);
+    const auto output = std::find(model.output_names.begin(), model.output_names.end(), name);
+    // the gap's unit: a contacts: entry's is a distance; a generalized model's gap is an output
+    // expression, with the unit units: or its coordinates give it (Reader::label_gaps)
+    std::string gap;
+    if (output == model.output_names.end()) {
+      if (built) out.emplace_back(name, gap = u.length);
+    } else if (const auto i = std::size_t(output - model.output_names.begin());
+               i < model.output_units.size()) {
+      gap = model.output_units[i];
+    }
+    // its multipliers lambda.<c>, lambda_total.<c>: the force along a gap in the length unit,
+    // the torque along one in rad (energy per gap unit)
+    const std::string force = gap == u.length ? u.force() : gap == "rad" ? u.torque() : "";
+    if (force.empty()) continue;
+    for (Index r = 0; r < c.rows(); ++r)
+      out.emplace_back("lambda." + c.name() + (c.rows() == 1 ? "" : "." + format_number(r)), force);
+    out.emplace_back("lambda_total." + c.name(), force);
   }
   // the holding forces lambda.stick.<friction>[.i] (run_model scales them to forces)
-  const UnitSystem& u = model.unit_system;
   for (const FrictionContact& f : sys.friction_contacts()) {
     if (f.stick_constraint < 0) continue;
     const Constraint& stick = sys.constraint(f.stick_constraint);
     for (Index r = 0; r < stick.rows(); ++r) {
       std::string unit = u.force();
       if (!f.kinematics) {
-        // the generalized force of sliding coordinate r: a force on a length, a torque on rad
+        // the generalized force of sliding coordinate r: a force on a length (a coordinate
+        // without a unit counts as one, as for the friction's normal coordinates), a torque on
+        // rad
         const Index j = r < Index(f.coordinates.size()) ? f.coordinates[std::size_t(r)] : r;
         const std::string& of = std::size_t(j) < model.coordinate_units.size()
                                     ? model.coordinate_units[std::size_t(j)]
                                     : std::string();
-        unit = of == u.length ? u.force() : of == "rad" ? u.torque() : std::string();
+        unit = of.empty() || of == u.length ? u.force() : of == "rad" ? u.torque() : "";
       }
       if (unit.empty()) continue;
       out.emplace_back(

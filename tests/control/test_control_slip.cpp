@@ -95,6 +95,13 @@ TEST(ControlSlip, ParticlePushedFromRestSlidesWithTheClosedFormForce) {
       << note;
   EXPECT_NE(note.find("holding force of 8.924 N > mu_static N = 5.886 N"), std::string::npos)
       << note;
+  // the note and the event list agree: the stick broken at the start never held, and the note
+  // says why no slip is listed (u24: "so it slips" beside "0 sticks, 0 slips")
+  EXPECT_TRUE(tr.stats.contact_events.empty());
+  EXPECT_NE(note.find("so it slips from the start: it never stuck, so contact_events lists no "
+                      "slip (its initial mode is sliding) (docs/contact.md"),
+            std::string::npos)
+      << note;
   expect_slides_on_pace(r, "p.x", A, kM, kMu);
 }
 
@@ -152,6 +159,17 @@ TEST(ControlSlip, ParticleHeldByStaticFrictionSlipsWhenTheRequirementsForceReach
   EXPECT_NE(tr.stats.notes.back().find("holding force of 5.886 N > mu_static N = 5.886 N"),
             std::string::npos)
       << tr.stats.notes.back();
+  // the slip the note names is the one listed: at t*, its holding force at mu_static m g, and
+  // the note says nothing of a start
+  const auto slips =
+      testing::events_of(tr, m.system.constraint_index("floor"), ContactEvent::Kind::kSlip);
+  ASSERT_EQ(tr.stats.contact_events.size(), 1u);
+  ASSERT_EQ(slips.size(), 1u);
+  EXPECT_NEAR(slips[0].t, ts, 1e-9);
+  EXPECT_EQ(slips[0].friction, "coulomb.floor");
+  EXPECT_NEAR(slips[0].friction_limit, 0.3 * kM * kG, 1e-12);
+  EXPECT_NEAR(slips[0].holding_force, 0.3 * kM * kG, 1e-9);
+  EXPECT_EQ(tr.stats.notes.back().find("from the start"), std::string::npos);
   ASSERT_GE(tr.samples(), 12);
   for (std::size_t i = 0; i < std::size_t(tr.samples()); ++i) {
     const double t = tr.t[i];

@@ -2,6 +2,7 @@
 // units: of a model file (modelfile/reader.cpp, read_units): each coordinate's and output
 // expression's unit for the plots' labels, the multibody defaults (m, rad, 1), the errors at
 // file:line:column, and summary.json's `units` (io/json_summary.cpp).
+#include <algorithm>
 #include <string>
 #include <vector>
 
@@ -325,6 +326,67 @@ initial: {q: {th: 0.5}}
   ASSERT_EQ(run_s.trajectory.samples(), 101);
   EXPECT_NEAR(run_ms.trajectory.t[50], 500.0, 1e-9);
   EXPECT_NEAR(run_ms.trajectory.q.back(), run_s.trajectory.q.back(), 1e-8);
+}
+
+// u24: a generalized model's contact columns had no unit in summary.json (gap.floor "", no
+// lambda.stick.*), where a bodies model's had theirs. A block (m = 2000 g, coordinates x, y
+// without a unit) in mm, g, s on a rough floor (yA >= 0, mu_s = 0.5), pushed along x by
+// F = 0.3 m g < mu_s m g: it sticks, the floor holding −F; and a wheel's angle th (rad) against
+// a stop (th >= 0.1): the floor's gap in mm and its forces in g·mm/s², the stop's gap in rad
+// and its multipliers in the torque unit g·mm²/s² — every contact column of trajectory.csv
+// labelled, each label a column.
+TEST(ModelUnits, AGeneralizedModelsContactColumnsHaveTheModelsUnits) {
+  const std::string text = R"(units: {length: mm, mass: g, time: s, th: rad}
+parameters: {m: 2000, g: 9810, J: 5, F: 0.3*2000*9810}
+coordinates: [x, y, th]
+kinetic_energy: m/2*(x_dot^2 + y_dot^2) + J/2*th_dot^2
+potential_energy: m*g*y
+forces: [F, 0, 0]
+constraints:
+  - {name: floor, holonomic: y, unilateral: true}
+  - {name: stop, holonomic: th - 0.1, unilateral: true}
+nonideal:
+  - {friction: coulomb, constraint: floor, mu: 0.4, mu_static: 0.5, coordinates: [x]}
+initial: {q: {th: 0.1}}
+simulate: {t_end: 0.1}
+output: {every: 0.05}
+)";
+  const Model m = parse_model(text);
+  const ModelRun run = run_model(m, m.options);
+  ASSERT_EQ(run.trajectory.stats.status, Status::kOk) << run.trajectory.stats.message;
+  const RunProvenance p = model_provenance(m, "block.yaml", "", text, {}, {});
+  const auto j = nlohmann::json::parse(summary_json(run.trajectory, m.options, &p));
+  const nlohmann::json& units = j.at("units");
+  const std::string force = "g·mm/s²", torque = "g·mm²/s²";
+  EXPECT_EQ(units.value("gap.floor", "?"), "mm");
+  EXPECT_EQ(units.value("lambda.floor", "?"), force);
+  EXPECT_EQ(units.value("lambda_total.floor", "?"), force);
+  EXPECT_EQ(units.value("lambda.stick.coulomb.floor", "?"), force);
+  EXPECT_EQ(units.value("gap.stop", "?"), "rad");
+  EXPECT_EQ(units.value("lambda.stop", "?"), torque);
+  EXPECT_EQ(units.value("lambda_total.stop", "?"), torque);
+  // every gap and multiplier column of the run has a label, and every label is a column
+  std::vector<std::string> names;
+  for (const CsvColumn& c : run.columns()) names.push_back(c.name);
+  for (const std::string& name : names) {
+    if (name.rfind("gap.", 0) == 0 || name.rfind("lambda", 0) == 0)
+      EXPECT_TRUE(units.contains(name)) << name;
+  }
+  for (const auto& [name, unit] : units.items())
+    EXPECT_NE(std::find(names.begin(), names.end(), name), names.end()) << name;
+  // (the labels name the physics: the floor holds the push, −F = −0.3 m g = −5.886e6 g·mm/s²,
+  // and bears m g = 1.962e7 g·mm/s²; the stop bears nothing)
+  const std::size_t last = run.trajectory.t.size() - 1;
+  const auto column = [&](const std::string& name) {
+    for (const CsvColumn& c : run.columns())
+      if (c.name == name) return c.values[last];
+    ADD_FAILURE() << "no column " << name;
+    return 0.0;
+  };
+  EXPECT_NEAR(column("lambda.stick.coulomb.floor"), -0.3 * 2000 * 9810, 1e-6 * 2000 * 9810);
+  EXPECT_NEAR(column("lambda_total.floor"), 2000 * 9810, 1e-6 * 2000 * 9810);
+  EXPECT_NEAR(column("lambda_total.stop"), 0.0, 1e-9);
+  EXPECT_NEAR(column("x"), 0.0, 1e-9);
 }
 
 }  // namespace UKDYN_TEST_FILE

@@ -40,23 +40,9 @@ std::string ladder(const Units& u) {
   const auto num = [](double v) { return format_number(v); };
   return "parameters: {m: " + num(kMass / u.mass) + ", L: " + num(kLength / u.length) +
          ", g: " + num(kG / u.length * u.time * u.time) + ", mu_f: " + num(kMuF) +
-         ", mu_w: " + num(kMuW) + ", th0: " + num(kTh0) +
-         "}\n"
-         "coordinates: [xA, yA, xB, yB]\n"
-         "kinetic_energy: m/6*(xA_dot^2 + yA_dot^2 + xA_dot*xB_dot + yA_dot*yB_dot + xB_dot^2 +"
-         " yB_dot^2)\n"
-         "potential_energy: m*g*(yA + yB)/2\n"
-         "constraints:\n"
-         "  - {name: rod, holonomic: ((xA - xB)^2 + (yA - yB)^2 - L^2)/(2*L)}\n"
-         "  - {name: floor, holonomic: yA, unilateral: true}\n"
-         "  - {name: wall, holonomic: xB, unilateral: true}\n"
-         "nonideal:\n"
-         "  - {friction: coulomb, constraint: floor, mu: mu_f, coordinates: [xA]}\n"
-         "  - {friction: coulomb, constraint: wall, mu: mu_w, coordinates: [yB]}\n"
-         "initial:\n"
-         "  q: {xA: L*cos(th0), yA: 0, xB: 0, yB: L*sin(th0)}\n"
-         "simulate: {t_end: " +
-         num(1.0 / u.time) + "}\noutput: {every: " + num(0.1 / u.time) + "}\n";
+         ", mu_w: " + num(kMuW) + ", th0: " + num(kTh0) + "}\n" +
+         testing::ladder_in_coordinates(true) + "simulate: {t_end: " + num(1.0 / u.time) +
+         "}\noutput: {every: " + num(0.1 / u.time) + "}\n";
 }
 
 void expect_at_rest_and_balanced(const Units& u) {
@@ -131,11 +117,15 @@ TEST(LadderAtRest, StaysAtRestWithTheSameForcesInMillimetresGramsMilliseconds) {
 // rest angle, N_f = m g − mu N_w. The minimum-norm split's wall multiplier pulled in mm, g, ms
 // (−22.8 N where SI's pushes with 31 N): the wall was released at the stop, bounced 158 times and
 // the run failed. Now the same rest in every unit system.
-std::string sliding_ladder(const Units& u) {
+// (the ladder of u24 02 and 03: the body at its centre, at angle pi − th0, turning at W (rad/s,
+// its fall: th0 decreases), its ends at ±l; mu at both contacts; t_end, every and an output time
+// `at` (none when 0) in seconds)
+std::string sliding_ladder(const Units& u, double mu, double W, double t_end, double every,
+                           double at = 0.0) {
   const auto num = [](double v) { return format_number(v); };
   return "parameters: {m: " + num(10.0 / u.mass) + ", l: " + num(1.5 / u.length) +
-         ", g: " + num(kG / u.length * u.time * u.time) +
-         ", mu: 0.9, th0: 0.8, W: " + num(1.5 * u.time) +
+         ", g: " + num(kG / u.length * u.time * u.time) + ", mu: " + num(mu) +
+         ", th0: 0.8, W: " + num(W * u.time) +
          "}\n"
          "bodies:\n"
          "  - {name: lad, type: planar, mass: m, inertia: m*l^2/3, position: [l*cos(th0), "
@@ -150,14 +140,15 @@ std::string sliding_ladder(const Units& u) {
          "forces:\n"
          "  - {type: gravity, g: [0, -g]}\n"
          "simulate: {t_end: " +
-         num(0.5 / u.time) + "}\noutput: {every: " + num(0.05 / u.time) + "}\n";
+         num(t_end / u.time) + "}\noutput: {every: " + num(every / u.time) +
+         (at > 0.0 ? ", at: [" + num(at / u.time) + "]" : std::string()) + "}\n";
 }
 
 TEST(LadderAtRest, SlidingLadderStopsAndRestsWithTheSameForcesInAnyUnits) {
   for (const Units& u : {Units{"SI", 1.0, 1.0, 1.0}, Units{"mm, g, ms", 1e-3, 1e-3, 1e-3},
                          Units{"cm, g, s", 0.01, 1e-3, 1.0}}) {
     SCOPED_TRACE(u.name);
-    const Model model = parse_model(sliding_ladder(u));
+    const Model model = parse_model(sliding_ladder(u, 0.9, 1.5, 0.5, 0.05));
     const Trajectory tr = simulate(model.system, model.q0, model.qd0, model.options);
     ASSERT_EQ(tr.stats.status, Status::kOk) << tr.stats.message;
     // both stop together and stick: two stick events, nothing else
@@ -182,6 +173,52 @@ TEST(LadderAtRest, SlidingLadderStopsAndRestsWithTheSameForcesInAnyUnits) {
       EXPECT_NEAR(tr.lambda_total[2 * i + 1 - wall], mg - mu * N_w, 1e-8 * mg);
     }
     EXPECT_EQ(rests, 6u);  // (t = 0.25, 0.3, …, 0.5 s)
+  }
+}
+
+// u24 03: the same ladder (m = 10 kg, its ends at ±l = ±1.5 m from its centre: 3 m long) at
+// th0 = 0.8 rad to the floor, falling at 2 rad/s with mu = 0.8 at both: both ends slide from the
+// start (the foot away from the wall, the top down), and the wall's normal force falls to 0: it
+// releases. Each evaluation's friction/normal fixed point contracts slowly there; before its
+// Anderson acceleration every integrator failed, "1000 events handled at t = 0.0383". The
+// reference: the sliding ladder's equations (three unknowns th'', N_f, N_w; th the angle to the
+// floor) integrated until N_w = 0 by tests/data/ladder_both_ends_slide_reference.py (scipy DOP853
+// at rtol 1e-13 and Radau at 1e-12 agree to 3e-13 s, 4e-13 rad, 1e-12 rad/s):
+//   t_r = 0.0383016607841 s, th = 0.7227208743929, th' = −2.0422005006514 rad/s,
+//   N_f = 37.89150684489 N (the tester's own solve_ivp: 0.0383017 s).
+TEST(LadderAtRest, LadderSlidingAtBothEndsLeavesTheWallWhenItsNormalForceVanishesInAnyUnits) {
+  constexpr double t_r = 0.0383016607841, th_r = 0.7227208743929, w_r = -2.0422005006514;
+  constexpr double N_f = 37.89150684489, l = 1.5;
+  for (const Units& u : {Units{"SI", 1.0, 1.0, 1.0}, Units{"mm, g, ms", 1e-3, 1e-3, 1e-3},
+                         Units{"cm, g, s", 0.01, 1e-3, 1.0}}) {
+    SCOPED_TRACE(u.name);
+    const Model model = parse_model(sliding_ladder(u, 0.8, 2.0, 0.1, 0.01, t_r));
+    const Trajectory tr = simulate(model.system, model.q0, model.qd0, model.options);
+    ASSERT_EQ(tr.stats.status, Status::kOk) << tr.stats.message;
+    // one event: the wall releases at t_r, bearing nothing just before
+    ASSERT_EQ(tr.stats.contact_events.size(), 1u);
+    const ContactEvent& ev = tr.stats.contact_events[0];
+    EXPECT_EQ(ev.kind, ContactEvent::Kind::kRelease);
+    EXPECT_EQ(tr.constraint_names[std::size_t(ev.constraint)], "wall");
+    EXPECT_NEAR(ev.t * u.time, t_r, 1e-9);
+    const double F = u.force();
+    EXPECT_NEAR(ev.force_before * F, 0.0, 1e-6 * 10.0 * kG);
+    // the state at t_r (continuous there: the release changes no velocity), centre at
+    // (l cos th, l sin th), body angle pi − th
+    const std::size_t i = testing::sample_at(tr, t_r / u.time);
+    const double c = std::cos(th_r), s = std::sin(th_r);
+    EXPECT_NEAR(testing::coordinate_at(tr, tr.q, "lad.theta", i), kPi - th_r, 1e-8);
+    EXPECT_NEAR(testing::coordinate_at(tr, tr.qd, "lad.theta", i) / u.time, -w_r, 1e-7);
+    EXPECT_NEAR(testing::coordinate_at(tr, tr.q, "lad.x", i) * u.length, l * c, 1e-8);
+    EXPECT_NEAR(testing::coordinate_at(tr, tr.q, "lad.y", i) * u.length, l * s, 1e-8);
+    EXPECT_NEAR(testing::coordinate_at(tr, tr.qd, "lad.x", i) * u.length / u.time, -l * s * w_r,
+                1e-7);
+    EXPECT_NEAR(testing::coordinate_at(tr, tr.qd, "lad.y", i) * u.length / u.time, l * c * w_r,
+                1e-7);
+    // the floor's normal force there (the contacts' whole multipliers: unit gap gradients)
+    ASSERT_EQ(tr.unilateral.size(), 2u);
+    const std::size_t floor = tr.constraint_names[std::size_t(tr.unilateral[0])] == "floor" ? 0 : 1;
+    EXPECT_NEAR(tr.lambda_total[2 * i + floor] * F, N_f, 1e-5);
   }
 }
 

@@ -35,6 +35,8 @@ struct Units {
 };
 const Units kSI{"SI", 1.0, 1.0, 1.0, ""};
 const Units kMm{"mm, g, ms", 1e-3, 1e-3, 1e-3, "units: {length: mm, mass: g, time: ms}\n"};
+const Units kKm{"km, t, min", 1e3, 1e3, 60.0, "units: {length: km, mass: t, time: min}\n"};
+const Units kCm{"cm, g, s", 1e-2, 1e-3, 1.0, "units: {length: cm, mass: g, time: s}\n"};
 
 const char* const kMethods[] = {"rk4", "rk5", "dopri5", "rkf78", "bdf"};
 
@@ -45,9 +47,10 @@ std::string number(double v) {
 }
 
 // the block in units u (every argument in SI): pushed towards −x by F + k t, launched at v0,
-// run to t_end under `method` (rk4, rk5: step 1 ms), sampled every 10 ms
-Model block(const Units& u, const std::string& method, double v0, double F, double k,
-            double t_end) {
+// run to t_end under `method` (rk4, rk5: step 1 ms), sampled every 10 ms; `friction` adds keys
+// to the friction's entry
+Model block(const Units& u, const std::string& method, double v0, double F, double k, double t_end,
+            const std::string& friction = "") {
   const double force = u.M * u.L / (u.T * u.T);
   const std::string text = std::string(u.line) + "parameters: {m: " + number(kMass / u.M) +
                            ", g: " + number(kG * u.T * u.T / u.L) + ", F: " + number(F / force) +
@@ -59,7 +62,7 @@ Model block(const Units& u, const std::string& method, double v0, double F, doub
                            "forces: [-F - k*t, 0]\n"
                            "constraints:\n  - {name: floor, holonomic: y}\n"
                            "nonideal:\n  - {friction: coulomb, constraint: floor, mu: " +
-                           number(kMu) + ", mu_static: " + number(kMuS) +
+                           number(kMu) + ", mu_static: " + number(kMuS) + friction +
                            "}\n"
                            "initial: {q: {x: 0, y: 0}, q_dot: {x: v0, y: 0}}\n"
                            "simulate: {t_end: " +
@@ -218,6 +221,63 @@ TEST(RunEventsStops, BlockAtRestPushedByARampSlipsAtMuStaticMgUnderEveryMethod) 
       EXPECT_NEAR(err, 0.0, 1e-9);
     }
   }
+}
+
+// u24: the same block in km, t, min stopped 5.7e-7 s before v0 / (mu g): eps, and so v_stop =
+// 100 eps, was 1e-9 in the model's velocity unit whatever it was (1 km/min = 16.7 m/s: v_stop
+// 1.67e-6 m/s, early by v_stop / (mu g)). Now a friction without regularization_velocity takes
+// 1e-9 m/s written in the model's units: (as a URDF's joint-friction regularization does), and
+// the block stops at the same (v0 − v_stop) / (mu g), v_stop = 1e-7 m/s, in SI, mm/g/ms, cm/g/s
+// and km/t/min — a coordinates model (reader_nonideal.cpp) and a bodies model's contact
+// (reader_contacts.cpp) alike.
+Model bodies_block(const Units& u, double v0, double t_end) {
+  const std::string text =
+      std::string(u.line) + "parameters: {m: " + number(kMass / u.M) +
+      ", g: " + number(kG * u.T * u.T / u.L) + ", v0: " + number(v0 * u.T / u.L) +
+      "}\n"
+      "bodies:\n  - {name: b, type: planar, mass: m, inertia: m, position: [0, 0], velocity: "
+      "[v0, 0]}\n"
+      "forces:\n  - {type: gravity, g: [0, -g]}\n"
+      "contacts:\n  - {name: floor, body: b, point: [0, 0]}\n"
+      "nonideal:\n  - {friction: coulomb, constraint: floor, mu: " +
+      number(kMu) +
+      "}\n"
+      "simulate: {t_end: " +
+      number(t_end / u.T) + ", rtol: 1e-10, atol: 1e-12}\noutput: {every: " + number(0.1 / u.T) +
+      "}\n";
+  return parse_model(text);
+}
+
+TEST(RunEventsStops, BlockStopsAtTheSameTimeInKilometresTonnesMinutesAsInSI) {
+  const double v0 = 2.0, t_s = (v0 - kVStop) / (kMu * kG);  // 0.679578593 s
+  for (const Units& u : {kSI, kMm, kCm, kKm}) {
+    for (const bool bodies : {false, true}) {
+      SCOPED_TRACE(std::string(u.name) + (bodies ? ", bodies" : ", coordinates"));
+      const Model m = bodies ? bodies_block(u, v0, 1.0) : block(u, "dopri5", v0, 0.0, 0.0, 1.0);
+      const Trajectory tr = simulate(m.system, m.q0, m.qd0, m.options);
+      ASSERT_EQ(tr.stats.status, Status::kOk) << tr.stats.message;
+      const auto sticks = of_kind(tr, ContactEvent::Kind::kStick);
+      ASSERT_EQ(sticks.size(), 1u);
+      // (was 0.6795780609 s in km, t, min: 5.66e-7 s early; 3.4e-8 s early in SI, which is
+      // v_stop / (mu g): the located stop, not the closed form's v0 / (mu g))
+      EXPECT_NEAR(sticks[0].t * u.T, t_s, 1e-10);
+      EXPECT_NEAR(sticks[0].t * u.T, v0 / (kMu * kG), 4e-8);
+      EXPECT_NEAR(sticks[0].speed_before * u.L / u.T, kVStop, 0.8 * kVStop);
+    }
+  }
+}
+
+// A regularization_velocity written in the file is the model's, as written: 1e-9 km/min stops
+// the block at v_stop = 1e-7 km/min = 1.67e-6 m/s, (v0 − v_stop) / (mu g) in those units.
+TEST(RunEventsStops, AWrittenRegularizationVelocityIsInTheModelsOwnUnits) {
+  const double v0 = 2.0;
+  const Model m = block(kKm, "dopri5", v0, 0.0, 0.0, 1.0, ", regularization_velocity: 1e-9");
+  const Trajectory tr = simulate(m.system, m.q0, m.qd0, m.options);
+  ASSERT_EQ(tr.stats.status, Status::kOk) << tr.stats.message;
+  const auto sticks = of_kind(tr, ContactEvent::Kind::kStick);
+  ASSERT_EQ(sticks.size(), 1u);
+  const double v_stop = kVStop * kKm.L / kKm.T;  // in m/s
+  EXPECT_NEAR(sticks[0].t * kKm.T, (v0 - v_stop) / (kMu * kG), 1e-10);
 }
 
 }  // namespace UKDYN_TEST_FILE

@@ -874,20 +874,8 @@ TEST(StickSeveralContacts, LadderFloorHoldsTheWholeForceWhileTheWallSlidesAtItsL
   const double th0 = 1.169082, m = 1.0, mu_w = 0.3;
   const double N_w = m * kG * std::cos(th0) / (2.0 * (std::sin(th0) + mu_w * std::cos(th0)));
   const std::string text =
-      "parameters: {m: 1, L: 2, g: 9.81, mu_f: 0.2, mu_w: 0.3, th0: 1.169082}\n"
-      "coordinates: [xA, yA, xB, yB]\n"
-      "kinetic_energy: m/6*(xA_dot^2 + yA_dot^2 + xA_dot*xB_dot + yA_dot*yB_dot + xB_dot^2 +"
-      " yB_dot^2)\n"
-      "potential_energy: m*g*(yA + yB)/2\n"
-      "constraints:\n"
-      "  - {name: rod, holonomic: ((xA - xB)^2 + (yA - yB)^2 - L^2)/(2*L)}\n"
-      "  - {name: floor, holonomic: yA, unilateral: true}\n"
-      "  - {name: wall, holonomic: xB}\n"
-      "nonideal:\n"
-      "  - {friction: coulomb, constraint: floor, mu: mu_f, coordinates: [xA]}\n"
-      "  - {friction: coulomb, constraint: wall, mu: mu_w, coordinates: [yB]}\n"
-      "initial:\n"
-      "  q: {xA: L*cos(th0), yA: 0, xB: 0, yB: L*sin(th0)}\n"
+      "parameters: {m: 1, L: 2, g: 9.81, mu_f: 0.2, mu_w: 0.3, th0: 1.169082}\n" +
+      testing::ladder_in_coordinates(false) +
       "simulate: {t_end: 0.4}\n"
       "output: {every: 0.05}\n"
       "visual: {contacts: {floor: {at: [xA, yA], normal: [0, 1]}}}\n";

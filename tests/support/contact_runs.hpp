@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // Test support: reading a run with unilateral contacts — its contact events of one kind at one
-// constraint, and the sample at a time the run was asked to output; a pendulum's time to an
+// constraint, and the sample at a time the run was asked to output; the ladder in natural
+// coordinates; a pendulum's time to an
 // angle by RK4; a gap row's g, g', A and b,
 // and A and b checked by finite differences of g; a model file's error with its place.
 #pragma once
@@ -41,6 +42,30 @@ inline double first_multiplier(const Trajectory& tr, const std::string& name, st
   }
   ADD_FAILURE() << "no constraint " << name;
   return 0.0;
+}
+
+// The ladder of examples/models/ladder_coulomb.yaml in natural coordinates: its ends A (foot, on
+// the floor yA = 0) and B (top, at the wall xB = 0) joined by a rod of length L, mass m uniform;
+// Coulomb friction mu_f on xA at the floor and mu_w on yB at the wall; at rest at angle th0 to
+// the floor. The model text from `coordinates:` to `initial: q:` (the caller declares m, L, g,
+// mu_f, mu_w and th0 under parameters:, and adds simulate: and output:); the floor is unilateral,
+// and so is the wall when `unilateral_wall`.
+inline std::string ladder_in_coordinates(bool unilateral_wall) {
+  return std::string(
+             "coordinates: [xA, yA, xB, yB]\n"
+             "kinetic_energy: m/6*(xA_dot^2 + yA_dot^2 + xA_dot*xB_dot + yA_dot*yB_dot + xB_dot^2 +"
+             " yB_dot^2)\n"
+             "potential_energy: m*g*(yA + yB)/2\n"
+             "constraints:\n"
+             "  - {name: rod, holonomic: ((xA - xB)^2 + (yA - yB)^2 - L^2)/(2*L)}\n"
+             "  - {name: floor, holonomic: yA, unilateral: true}\n") +
+         (unilateral_wall ? "  - {name: wall, holonomic: xB, unilateral: true}\n"
+                          : "  - {name: wall, holonomic: xB}\n") +
+         "nonideal:\n"
+         "  - {friction: coulomb, constraint: floor, mu: mu_f, coordinates: [xA]}\n"
+         "  - {friction: coulomb, constraint: wall, mu: mu_w, coordinates: [yB]}\n"
+         "initial:\n"
+         "  q: {xA: L*cos(th0), yA: 0, xB: 0, yB: L*sin(th0)}\n";
 }
 
 // the events of kind `kind` at constraint k

@@ -68,15 +68,18 @@ ModelRun run_model(const Model& model, const SimulationOptions& options,
 /// run_model(model, model.options).
 ModelRun run_model(const Model& model);
 
-/// The units of the gap columns `gap.<name>` that are no output expression: those of the
-/// contacts: entries of a bodies or robot model, whose gap is a distance (docs/contact.md), in
-/// the model's length unit; then those of the holding-force columns `lambda.stick.<friction>.i`
-/// of their frictions (the force unit at a contact point; on the coordinate path the
-/// generalized force of the sliding coordinate: the force unit for a length, the torque's for
-/// rad); (column, unit) in constraint order, empty for a generalized model
-/// (its gaps are output expressions, with the units `units:` gives them). The front ends add
-/// them to the coordinates' and outputs' units (summary.json, Model.units), so that the plots
-/// label a contact's gap in the length unit and its force in the force unit. Cost O(constraints).
+/// The units of the contact columns that are neither coordinates nor output expressions: the
+/// gap columns `gap.<name>` of the contacts: entries of a bodies or robot model, whose gap is a
+/// distance (docs/contact.md), in the model's length unit; every unilateral constraint's
+/// multipliers `lambda.<name>` and `lambda_total.<name>`, in the force unit when its gap is in
+/// the length unit (the torque's when in rad; a generalized model's gap is an output
+/// expression, with the unit `units:` or the coordinates it reads give it; none when it has
+/// none); then the holding-force columns `lambda.stick.<friction>.i` of the frictions (the force
+/// unit at a contact point; on the coordinate path the generalized force of the sliding
+/// coordinate: the force unit for a length or a coordinate without a unit, the torque's for
+/// rad); (column, unit) in constraint order. The front ends add them to the coordinates' and
+/// outputs' units (summary.json, Model.units), so that the plots label a contact's gap in the
+/// length unit and its force in the force unit. Cost O(constraints).
 std::vector<std::pair<std::string, std::string>> contact_gap_units(const Model& model);
 
 /// What a run of `model` was made from (summary.json's `provenance`, io/provenance.hpp), as
