@@ -433,7 +433,7 @@ def test_contacts_plot_has_units_and_a_friction_panel(rolling_ball):
     third panel draws the friction force (the run's visual.contact.floor.f* columns: -mu m g
     along x while it slides). In mm, g, ms the labels are those units'; a generalized model's
     gap has the unit its coordinates share (bouncing_ball: y in m, so m and N; u24), and one
-    whose coordinates have none is in the length unit."""
+    whose coordinates have none has none (never a guessed label)."""
     pytest.importorskip("matplotlib")
     import matplotlib
     matplotlib.use("Agg")

@@ -442,9 +442,8 @@ class Reader {
   // coordinates each gap reads are kept for label_gaps
   void add_gap_outputs(const YAML::Node& root, Model& model, std::vector<Expr>& outputs);
   // the unit of each gap.<name> that add_gap_outputs wrote and units: does not name: the one
-  // its coordinates share, a coordinate without a unit counting in the length unit (as a
-  // friction's normal coordinates do): mm for yA in mm (or unlabelled, in units: {length: mm}),
-  // rad for a joint limit th − th_min with th in rad; none when they differ or it reads none
+  // its coordinates share: mm for yA in mm, rad for a joint limit th − th_min with th in rad;
+  // none when they differ, when one of them has no unit, or when it reads none
   void label_gaps(Model& model) const;
   // units: {x: m, theta: rad} (each coordinate's unit, for the plots' labels)
   void read_units(const YAML::Node& root, Model& model);

@@ -70,11 +70,11 @@ void Reader::label_gaps(Model& model) const {
     if (at == model.output_names.end()) continue;
     std::string& unit = model.output_units[std::size_t(at - model.output_names.begin())];
     if (!unit.empty() || reads.empty()) continue;  // (given by units:, or a constant gap)
-    // the unit the coordinates read share (none when they differ)
+    // the unit the coordinates read share (none when they differ, or when one has none: a
+    // coordinate whose unit nobody gives is never guessed a length — it may be an angle)
     const auto unit_of = [&](Index k) {
       const std::size_t j = std::size_t(k);
-      const bool given = j < model.coordinate_units.size() && !model.coordinate_units[j].empty();
-      return given ? model.coordinate_units[j] : model.unit_system.length;
+      return j < model.coordinate_units.size() ? model.coordinate_units[j] : std::string();
     };
     const std::string first = unit_of(reads.front());
     if (std::all_of(reads.begin(), reads.end(), [&](Index k) { return unit_of(k) == first; }))

@@ -121,14 +121,13 @@ std::vector<std::pair<std::string, std::string>> contact_gap_units(const Model& 
     for (Index r = 0; r < stick.rows(); ++r) {
       std::string unit = u.force();
       if (!f.kinematics) {
-        // the generalized force of sliding coordinate r: a force on a length (a coordinate
-        // without a unit counts as one, as for the friction's normal coordinates), a torque on
-        // rad
+        // the generalized force of sliding coordinate r: a force on a length, a torque on rad,
+        // none on a coordinate without a unit (never a guessed label)
         const Index j = r < Index(f.coordinates.size()) ? f.coordinates[std::size_t(r)] : r;
         const std::string& of = std::size_t(j) < model.coordinate_units.size()
                                     ? model.coordinate_units[std::size_t(j)]
                                     : std::string();
-        unit = of.empty() || of == u.length ? u.force() : of == "rad" ? u.torque() : "";
+        unit = of == u.length ? u.force() : of == "rad" ? u.torque() : std::string();
       }
       if (unit.empty()) continue;
       out.emplace_back(

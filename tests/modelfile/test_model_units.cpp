@@ -336,7 +336,7 @@ initial: {q: {th: 0.5}}
 // and its multipliers in the torque unit g·mm²/s² — every contact column of trajectory.csv
 // labelled, each label a column.
 TEST(ModelUnits, AGeneralizedModelsContactColumnsHaveTheModelsUnits) {
-  const std::string text = R"(units: {length: mm, mass: g, time: s, th: rad}
+  const std::string text = R"(units: {length: mm, mass: g, time: s, x: mm, y: mm, th: rad}
 parameters: {m: 2000, g: 9810, J: 5, F: 0.3*2000*9810}
 coordinates: [x, y, th]
 kinetic_energy: m/2*(x_dot^2 + y_dot^2) + J/2*th_dot^2
