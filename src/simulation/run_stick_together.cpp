@@ -9,7 +9,6 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <ranges>
 #include <string>
 #include <utility>
 #include <vector>
@@ -177,8 +176,9 @@ bool Run::holds_pushing(Index k, double t, const double* x) {
   const auto stuck_on_k = [&](std::size_t c) {
     return contacts[c].normal_constraint == k && mode_[c] == ContactMode::kSticking;
   };
-  const auto all = std::views::iota(std::size_t{0}, contacts.size());
-  if (std::ranges::none_of(all, stuck_on_k)) return false;
+  std::size_t c = 0;
+  while (c < contacts.size() && !stuck_on_k(c)) ++c;
+  if (c == contacts.size()) return false;
   q_ = Eigen::Map<const VectorXd>(x, n_);
   qd_ = Eigen::Map<const VectorXd>(x + n_, n_);
   if (forward_dynamics(sys_, ws_, q_, qd_, t) != Status::kOk) return false;
