@@ -44,6 +44,37 @@ inline double first_multiplier(const Trajectory& tr, const std::string& name, st
   return 0.0;
 }
 
+// the multipliers of constraint `name` at sample i, one per row (failing when there is none)
+inline std::vector<double> constraint_multipliers(const Trajectory& tr, const std::string& name,
+                                                  std::size_t i) {
+  Index row = 0;
+  for (std::size_t k = 0; k < tr.constraint_names.size(); ++k) {
+    if (tr.constraint_names[k] == name) {
+      const auto* first = tr.lambda.data() + i * std::size_t(tr.m) + std::size_t(row);
+      return {first, first + tr.constraint_rows[k]};
+    }
+    row += tr.constraint_rows[k];
+  }
+  ADD_FAILURE() << "no constraint " << name;
+  return {};
+}
+
+// the Euclidean norm of v
+inline double vector_norm(const std::vector<double>& v) {
+  double s = 0.0;
+  for (double e : v) s += e * e;
+  return std::sqrt(s);
+}
+
+// the run of the model text `text` sampled at `times`; it must end ok
+inline Trajectory run_sampled_at(const std::string& text, std::vector<double> times) {
+  Model m = parse_model(text);
+  m.options.output_at = std::move(times);
+  Trajectory tr = simulate(m.system, m.q0, m.qd0, m.options);
+  EXPECT_EQ(tr.stats.status, Status::kOk) << tr.stats.message;
+  return tr;
+}
+
 // The ladder of examples/models/ladder_coulomb.yaml in natural coordinates: its ends A (foot, on
 // the floor yA = 0) and B (top, at the wall xB = 0) joined by a rod of length L, mass m uniform;
 // Coulomb friction mu_f on xA at the floor and mu_w on yB at the wall; at rest at angle th0 to
