@@ -84,6 +84,19 @@ class ContactDynamics {
               Eigen::Ref<VectorXd> qd, double t, const Eigen::Ref<const VectorXd>& v_minus,
               const Eigen::Ref<const VectorXd>& e);
 
+  // After impact() (q'⁻ = qd_minus): holds the contacts `rows` (positions in its set) at rest,
+  // the rest of an accumulation of impacts (ContactEvents, "group rest"): their normal rows at
+  // g' = 0 and, on those whose Coulomb cone sticks after the impact (every friction direction's
+  // |v_t⁺| <= still[j], the contact's speed of rest), the friction directions at v_t = 0. With J
+  // those rows and v their velocities, the impulse Λ' of least norm with
+  //   J P Jᵀ Λ' = −v  (COD: redundant rows allowed),  q'⁺ += P Jᵀ Λ',
+  // the M-orthogonal projection of q'⁺ onto the rows' tangent space (so T only falls on fixed
+  // surfaces); the normal shares are added to lambda() (one may pull: the tiny impulse that
+  // stops a corner lifting at 1e-6 of its sequence's speed), the friction's to
+  // friction_impulse(), and v_after() updated. O(n² (r + d) + (r + d)³), allocates (events only).
+  void hold(Eigen::Ref<VectorXd> qd, const Eigen::Ref<const VectorXd>& qd_minus,
+            const std::vector<Index>& rows, const VectorXd& still);
+
   // ½ q'ᵀ M q' with the M of the last prepare()
   double kinetic_energy(const Eigen::Ref<const VectorXd>& qd) const {
     return 0.5 * qd.dot(M_ * qd);

@@ -11,6 +11,7 @@
 // paradox, an error), the friction impulse D β in the impact's (Anitescu–Potra).
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -51,11 +52,14 @@ constexpr double kZeroSlack = 1e-9;
 // at w = 0 and every other z zero: z_on = −M_on,on⁺ r_on, the least-norm multipliers of those
 // rows — for M = W the fundamental equation's with those contacts active (the reaction P A_cᵀ z
 // is unique, its split among redundant rows is not, and the least-norm split is the symmetric
-// one where Lemke's pivots give a vertex). Into z and w (s each; z within roundoff of 0 made 0,
-// w_on = 0) when it solves the LCP to tol = tolerance (‖M‖ ‖z‖ + ‖r‖), else z and w left alone
-// and false. O(|on|³ + s²); allocates (events only).
+// one where Lemke's pivots give a vertex). `adjust`, when given, may change that z before it
+// is checked into another answer with the same rows `on` (friction_split: opposite friction
+// directions folded into one impulse, a leaving contact's sliding speed). Into z and w (s each;
+// z within roundoff of 0 made 0, w_on = 0) when it solves the LCP to tol = tolerance (‖M‖ ‖z‖ +
+// ‖r‖), else z and w left alone and false. O(|on|³ + s²); allocates (events only).
 bool least_norm_lcp(const MatrixXd& M, const VectorXd& r, const std::vector<Index>& on, VectorXd& z,
-                    VectorXd& w, double tolerance = 1e-9) {
+                    VectorXd& w, const std::function<void(VectorXd&)>& adjust = {},
+                    double tolerance = 1e-9) {
   const Index s = r.size(), a = Index(on.size());
   if (a == 0) return false;
   MatrixXd Ma(a, a);
@@ -70,6 +74,7 @@ bool least_norm_lcp(const MatrixXd& M, const VectorXd& r, const std::vector<Inde
   const VectorXd za = -cod.solve(ra);
   VectorXd zc = VectorXd::Zero(s);
   for (Index i = 0; i < a; ++i) zc[on[std::size_t(i)]] = za[i];
+  if (adjust) adjust(zc);
   const VectorXd wc = M * zc + r;
   const double tol = tolerance * std::max(M.norm() * zc.norm() + r.norm(), 1e-300);
   if (!zc.allFinite() || zc.minCoeff() < -tol || wc.minCoeff() < -tol) return false;
@@ -128,6 +133,24 @@ bool redundant_contacts(const Eigen::Ref<const MatrixXd>& W, const Eigen::Ref<co
   cod.setThreshold(kRedundantPivot);
   cod.compute(Wa);
   return cod.rank() < Wa.rows();
+}
+
+// the contacts 0 … k − 1
+std::vector<Index> every_contact(Index k) {
+  std::vector<Index> on;
+  for (Index i = 0; i < k; ++i) on.push_back(i);
+  return on;
+}
+
+// the contacts whose r_i = (1 + e_i) g'⁻_i is below −kRowResidual of the largest |r_j|: those
+// that approach (the others touch at rest, at the roundoff of the impact before — 5e-9 of its
+// speeds — or leave)
+std::vector<Index> approaching(const Eigen::Ref<const VectorXd>& r) {
+  const double roundoff = kRowResidual * r.cwiseAbs().maxCoeff();
+  std::vector<Index> on;
+  for (Index i = 0; i < r.size(); ++i)
+    if (r[i] < -roundoff) on.push_back(i);
+  return on;
 }
 }  // namespace
 
@@ -486,6 +509,59 @@ bool ContactDynamics::impact(const System& sys, Workspace& ws, const Eigen::Ref<
   return true;
 }
 
+void ContactDynamics::hold(Eigen::Ref<VectorXd> qd, const Eigen::Ref<const VectorXd>& qd_minus,
+                           const std::vector<Index>& rows, const VectorXd& still) {
+  if (rows.empty()) return;
+  // the held contacts' normal rows, then the friction directions of their cones that stick
+  // (every direction's |v_t⁺| <= the contact's still speed): a held group at rest, not sliding
+  // off at the speed its normal impulse gives (a rocking block's centre, h ω)
+  std::vector<Index> directions;
+  VectorXd vt;
+  const bool friction = beta_.size() > 0 && beta_.size() == D_.cols();
+  if (friction) {
+    vt = vt_minus_ + D_.transpose() * (qd - qd_minus);
+    for (Index f = 0; f < Index(cone_contact_.size()); ++f) {
+      const auto at = std::find(rows.begin(), rows.end(), cone_contact_[std::size_t(f)]);
+      if (at == rows.end()) continue;
+      std::vector<Index> own;
+      bool sticks = true;
+      for (Index b = 0; b < D_.cols(); ++b) {
+        if (direction_cone_[std::size_t(b)] != f) continue;
+        own.push_back(b);
+        sticks = sticks && std::abs(vt[b]) <= still[*at];
+      }
+      if (sticks) directions.insert(directions.end(), own.begin(), own.end());
+    }
+  }
+  const Index r = Index(rows.size()), d = Index(directions.size());
+  MatrixXd J(r + d, n_), PJ(n_, r + d);
+  VectorXd v(r + d);
+  for (Index a = 0; a < r; ++a) {
+    J.row(a) = A_c_.row(rows[std::size_t(a)]);
+    v[a] = v_after_[rows[std::size_t(a)]];
+  }
+  for (Index a = 0; a < d; ++a) {
+    J.row(r + a) = D_.col(directions[std::size_t(a)]).transpose();
+    v[r + a] = vt[directions[std::size_t(a)]];
+  }
+  for (Index c = 0; c < r + d; ++c) PJ.col(c) = apply_p(J.row(c).transpose());
+  MatrixXd W = J * PJ;
+  W = 0.5 * (W + W.transpose()).eval();
+  const VectorXd impulse = Eigen::CompleteOrthogonalDecomposition<MatrixXd>(W).solve(-v);
+  const VectorXd dqd = PJ * impulse;
+  qd += dqd;
+  v_after_ += A_c_ * dqd;
+  for (Index a = 0; a < r; ++a) lambda_[rows[std::size_t(a)]] += impulse[a];
+  // (the friction's share: each cone's |Σ β_b D_b| on its contact)
+  for (Index f = 0; f < Index(cone_contact_.size()) && d > 0; ++f) {
+    VectorXd sum = VectorXd::Zero(n_);
+    for (Index a = 0; a < d; ++a)
+      if (direction_cone_[std::size_t(directions[std::size_t(a)])] == f)
+        sum += impulse[r + a] * D_.col(directions[std::size_t(a)]);
+    friction_impulse_[cone_contact_[std::size_t(f)]] += sum.norm();
+  }
+}
+
 bool ContactDynamics::impulse(const System& sys, Eigen::Ref<VectorXd> qd, const VectorXd& r,
                               const VectorXd& vt, const VectorXd& offset) {
   const Index k = Index(set_.size());
@@ -559,10 +635,10 @@ bool ContactDynamics::impulse(const System& sys, Eigen::Ref<VectorXd> qd, const 
   VectorXd z, w;
   std::vector<Index> on;
   if (!solve_contacts(friction_lcp_, Mlcp, rr, k, z, w)) {
-    // (Siconos found none: each contact sticking or sliding, all of them pushing)
-    on.clear();
-    for (Index i = 0; i < k; ++i) on.push_back(i);
-    if (!friction_split(Mlcp, rr, on, z, w)) {
+    // (Siconos found none: each contact sticking or sliding, the approaching ones pushing — a
+    // rocking box's landing edge, its other edge leaving —, else all of them)
+    if (!friction_split(Mlcp, rr, approaching(rr.head(k)), z, w) &&
+        !friction_split(Mlcp, rr, every_contact(k), z, w)) {
       failure_ = unsolved_impact(sys, Mlcp.topLeftCorner(k, k));
       return false;
     }
@@ -582,9 +658,8 @@ bool ContactDynamics::impulse(const System& sys, Eigen::Ref<VectorXd> qd, const 
     // took it: Lemke ended on a degenerate pivot — the perpendicular tangent's v_rel⁻ roundoff
     // of 0 — with γ ~ 1e17 and a normal row both pushing and separating, the landing of rows
     // × 1e8 with the pyramid along the slip; then each contact sticking or sliding, all pushing)
-    on.clear();
-    for (Index i = 0; i < k; ++i) on.push_back(i);
-    if (!friction_split(Mlcp, rr, on, z, w)) {
+    if (!friction_split(Mlcp, rr, approaching(rr.head(k)), z, w) &&
+        !friction_split(Mlcp, rr, every_contact(k), z, w)) {
       failure_ = unsolved_impact(sys, Mlcp.topLeftCorner(k, k));
       return false;
     }
@@ -618,21 +693,51 @@ bool ContactDynamics::friction_split(const MatrixXd& Mlcp, const VectorXd& rr,
   // friction impulse): slide along its most-against direction (that direction's slack and the
   // cone's zero), slide along the edge of its two (both slacks zero), or stick (the slacks of
   // its directions against zero and γ = 0: v_t⁺ = 0)
+  // — and a cone that was at rest before (no direction against: a rocking box's landing corner,
+  // whose velocity is along its normal) may still need an impulse to stay at rest: it sticks
+  // with all its directions (`every`), each pair of opposite ones folded into one impulse
+  // (least_norm_lcp's `opposite`), as may a cone with a direction against, last
   struct Choice {
     std::size_t directions;
     bool slides;
+    bool every = false;
   };
+  std::vector<std::vector<Index>> all(static_cast<std::size_t>(nf));
+  for (Index b = 0; b < nb; ++b) all[std::size_t(direction_cone_[std::size_t(b)])].push_back(b);
   std::vector<std::vector<Choice>> choices(static_cast<std::size_t>(nf));
   for (Index f = 0; f < nf; ++f) {
     const std::size_t n = against[std::size_t(f)].size();
-    if (n == 0 ||
-        std::find(pushing.begin(), pushing.end(), cone_contact_[std::size_t(f)]) == pushing.end())
+    if (std::find(pushing.begin(), pushing.end(), cone_contact_[std::size_t(f)]) == pushing.end())
       continue;
     auto& c = choices[std::size_t(f)];
-    c.push_back({1, true});
-    if (n == 2) c.push_back({2, true});
-    c.push_back({n, false});
+    if (n > 0) {
+      c.push_back({1, true});
+      if (n == 2) c.push_back({2, true});
+      c.push_back({n, false});
+    }
+    c.push_back({all[std::size_t(f)].size(), false, true});
   }
+  // the answer's adjustments: a pair of opposite directions both on (a cone that sticks with
+  // every direction; they come in pairs, +u then −u: impact_friction) folded into one
+  // nonnegative impulse, the same impulse and the same w but the cone's Σ β (z_b − z_b' kept);
+  // the sliding speed γ of a cone whose contact leaves (Λ = 0, no friction impulse, its cone
+  // row w_γ = 0) the largest −w_b of its directions, so that w_b = D_bᵀ v⁺ + γ >= 0 — the
+  // tangential speed it leaves with
+  const auto adjust = [&](VectorXd& zc) {
+    for (Index b = 0; b < nb; ++b) {
+      if (zc[k + b] >= 0.0) continue;
+      zc[k + (b ^ 1)] -= zc[k + b];
+      zc[k + b] = 0.0;
+    }
+    VectorXd wc;
+    for (Index f = 0; f < nf; ++f) {
+      if (zc[cone_contact_[std::size_t(f)]] != 0.0 || zc[k + nb + f] != 0.0) continue;
+      if (wc.size() == 0) wc = Mlcp * zc + rr;
+      double speed = 0.0;
+      for (const Index b : all[std::size_t(f)]) speed = std::max(speed, -wc[k + b]);
+      zc[k + nb + f] = speed;
+    }
+  };
   // the least-norm solution with those slacks zero, when it solves the LCP
   std::vector<Index> on;
   auto attempt = [&](const std::vector<std::size_t>& pick) {
@@ -640,10 +745,11 @@ bool ContactDynamics::friction_split(const MatrixXd& Mlcp, const VectorXd& rr,
     for (Index f = 0; f < nf; ++f) {
       if (choices[std::size_t(f)].empty()) continue;
       const Choice& c = choices[std::size_t(f)][pick[std::size_t(f)]];
-      for (std::size_t j = 0; j < c.directions; ++j) on.push_back(k + against[std::size_t(f)][j]);
+      const auto& list = c.every ? all[std::size_t(f)] : against[std::size_t(f)];
+      for (std::size_t j = 0; j < c.directions; ++j) on.push_back(k + list[j]);
       if (c.slides) on.push_back(k + nb + f);
     }
-    return least_norm_lcp(Mlcp, rr, on, z, w);
+    return least_norm_lcp(Mlcp, rr, on, z, w, adjust);
   };
   // the same choice for every cone first (a body landing flat on redundant contacts: the
   // symmetric split; the edge where a cone has one direction against is its one direction),
@@ -655,9 +761,9 @@ bool ContactDynamics::friction_split(const MatrixXd& Mlcp, const VectorXd& rr,
       if (n == 0)
         pick[f] = 0;
       else if (uniform == 2)
-        pick[f] = n - 1;  // (sticks)
+        pick[f] = n == 1 ? 0 : n - 2;  // (sticks; a cone at rest before: with every direction)
       else
-        pick[f] = uniform == 1 && n == 3 ? 1 : 0;  // (the edge, or the one direction)
+        pick[f] = uniform == 1 && n == 4 ? 1 : 0;  // (the edge, or the one direction)
     }
     if (attempt(pick)) return true;
   }

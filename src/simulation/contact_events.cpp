@@ -59,6 +59,7 @@ ContactEvents::ContactEvents(const System& sys, Workspace& ws, std::size_t x_siz
       xs_(Index(x_size)),
       qd_before_(n_),
       recent_(dyn_.contacts().empty() ? 0 : std::size_t(kChatterEvents), 0.0),
+      recent_speed_(recent_.size(), kNaN),
       span_(span) {
   for (std::size_t i = 0; i < dyn_.contacts().size(); ++i) {
     position_[std::size_t(dyn_.contacts()[i])] = i;
@@ -383,7 +384,7 @@ bool ContactEvents::handle(double t, double* x, RunStatistics& stats) {
   // span (the sticks and slips listed beside them are not counted)
   if (listed_ >= std::size_t(kChatterEvents)) {
     const double since = recent_[listed_ % std::size_t(kChatterEvents)];
-    if (t - since <= kChatterSpan * span_) {
+    if (t - since <= kChatterSpan * span_ && !converging()) {
       failure_ = "contacts: " + format_number(kChatterEvents) +
                  " impacts and releases between t = " + format_t(since) + " and " + format_t(t) +
                  ", within " + format_t(kChatterSpan) +
@@ -518,16 +519,20 @@ bool ContactEvents::resolve(double t, double* x, Index event, RunStatistics& sta
   if (approaching && !release) {
     // the impact: Newton's restitution per contact; e = 0 below the rest speed
     VectorXd e(m);
-    std::vector<bool> rests(std::size_t(m), false);
+    std::vector<bool> rests(std::size_t(m), false), held(std::size_t(m), false);
+    std::vector<double> left_at(std::size_t(m), 0.0);  // (held) g'⁺ before it was held
+    double rest_fastest = 0.0;  // the fastest impact of the sequences that rest here (0: none)
     for (Index j = 0; j < m; ++j) {
       const std::size_t i = which[std::size_t(j)];
       const double speed = -v_minus[std::size_t(j)];
       e[j] = sys_.constraint(set[std::size_t(j)]).restitution();
       if (speed > 0.0 && !closed_[i]) {
         fastest_[i] = std::max(fastest_[i], speed);
-        if (e[j] > 0.0 && speed < kRestFraction * fastest_[i]) {
+        // (e = 0 too: a plastic corner of a rocking block rests, and its group with it)
+        if (speed < kRestFraction * fastest_[i]) {
           e[j] = 0.0;
           rests[std::size_t(j)] = true;
+          rest_fastest = std::max(rest_fastest, fastest_[i]);
         }
       }
     }
@@ -594,16 +599,45 @@ bool ContactEvents::resolve(double t, double* x, Index event, RunStatistics& sta
             ", docs/contact.md");
       }
     }
+    if (rest_fastest > 0.0) {
+      // group rest: the touching contacts that leave this impact slower than the rest criterion
+      // (kRestFraction of the sequence's fastest impact, theirs or the resting contact's) are
+      // held at g' = 0 with it — a rocking block's other corner, which every plastic impact
+      // lifts at r times the landing speed, so that no contact's own sequence ever ends (each
+      // is released at the other's impacts), and the impacts accumulate at t∞ (docs/contact.md,
+      // "Rest")
+      std::vector<Index> rows;
+      VectorXd still(m);
+      for (Index j = 0; j < m; ++j) {
+        const std::size_t i = which[std::size_t(j)];
+        const double v = dyn_.v_after()[j];
+        still[j] = kRestFraction * std::max(fastest_[i], rest_fastest);
+        if (v <= still[j]) {
+          rows.push_back(j);
+          held[std::size_t(j)] = v > still_rate(set[std::size_t(j)]);
+          left_at[std::size_t(j)] = v;
+        }
+      }
+      if (std::any_of(held.begin(), held.end(), [](bool h) { return h; })) {
+        dyn_.hold(qd, qd_minus, rows, still);
+        dT = dyn_.kinetic_energy_change(qd, qd_minus);
+      } else {
+        std::fill(held.begin(), held.end(), false);
+      }
+    }
     impact_work_ += dT;
     bool first = true;
     for (Index j = 0; j < m; ++j) {
       const std::size_t i = which[std::size_t(j)];
-      if (!(dyn_.lambda()[j] > 0.0)) continue;
+      if (!(dyn_.lambda()[j] > 0.0) && !held[std::size_t(j)]) continue;
       ContactEvent ev;
       ev.t = t;
       ev.constraint = set[std::size_t(j)];
-      ev.kind = rests[std::size_t(j)] ? ContactEvent::Kind::kRest : ContactEvent::Kind::kImpact;
-      ev.speed_before = vm[j];
+      ev.kind = rests[std::size_t(j)] || held[std::size_t(j)] ? ContactEvent::Kind::kRest
+                                                              : ContactEvent::Kind::kImpact;
+      // (a closed contact held at rest was still, g'⁻ = 0: its roundoff, either sign, would
+      // count it as a landing in a sweep's impacts)
+      ev.speed_before = held[std::size_t(j)] && closed_[i] ? 0.0 : vm[j];
       ev.speed_after = dyn_.v_after()[j];
       ev.impulse = dyn_.lambda()[j];
       ev.energy_change = first ? dT : 0.0;
@@ -617,6 +651,15 @@ bool ContactEvents::resolve(double t, double* x, Index event, RunStatistics& sta
                               " impacts (an accumulation point: impact speed " + format_t(-vm[j]) +
                               " below " + format_t(kRestFraction) + " of its fastest, " +
                               format_t(fastest_[i]) + " (the gap's unit per " + units_.time +
+                              "); docs/contact.md, \"Rest\")");
+      }
+      if (held[std::size_t(j)] && stats.notes.size() < 20) {
+        stats.notes.push_back("t = " + format_t(t) + " " + units_.time + ": contact '" +
+                              sys_.constraint(ev.constraint).name() +
+                              "' held at rest with the contacts that came "
+                              "to rest there (it would have left at " +
+                              format_t(left_at[std::size_t(j)]) + "; impulse " +
+                              format_t(ev.impulse) + (ev.impulse < 0.0 ? ", pulling" : "") +
                               "); docs/contact.md, \"Rest\")");
       }
     }
@@ -687,9 +730,13 @@ bool ContactEvents::resolve(double t, double* x, Index event, RunStatistics& sta
     ev.speed_before = ev.speed_after = v_minus[j];
     ev.force_before = force[r];
     list(ev, stats);
-    // (its next impacts are a new sequence: the rest criterion compares with their fastest)
-    fastest_[i] = 0.0;
-    impacts_[i] = 0;
+    // (its next impacts are a new sequence, the rest criterion comparing with their fastest —
+    // unless an impact at this instant sends it off, g' > 0: a rocking block's corner, lifted by
+    // the other's landing, whose impacts continue one sequence of the block's)
+    if (!(approaching && !release && v_minus[j] > still_rate(opened[r]))) {
+      fastest_[i] = 0.0;
+      impacts_[i] = 0;
+    }
   }
   apply();
   return true;
@@ -699,7 +746,20 @@ void ContactEvents::list(const ContactEvent& ev, RunStatistics& stats) {
   stats.contact_events.push_back(ev);
   if (recent_.empty()) return;
   recent_[listed_ % recent_.size()] = ev.t;
+  recent_speed_[listed_ % recent_.size()] =
+      ev.kind == ContactEvent::Kind::kRelease ? kNaN : -ev.speed_before;
   ++listed_;
+}
+
+bool ContactEvents::converging() const {
+  // the oldest and the newest impact of the ring (releases have no speed)
+  const std::size_t size = recent_speed_.size();
+  double oldest = kNaN, newest = kNaN;
+  for (std::size_t a = 0; a < size && std::isnan(oldest); ++a)
+    oldest = recent_speed_[(listed_ + a) % size];
+  for (std::size_t a = 1; a <= size && std::isnan(newest); ++a)
+    newest = recent_speed_[(listed_ + size - a) % size];
+  return newest < kConverging * oldest;
 }
 
 void ContactEvents::forces_before(double t, const Eigen::Ref<const VectorXd>& q,

@@ -283,8 +283,11 @@ template <class Column>
 void add_event_columns(const EnsembleResult& result, Column&& column) {
   using Kind = ContactEvent::Kind;
   auto count = [](const SampleResult& r, Kind a, Kind b) {
-    return double(std::count_if(r.stats.contact_events.begin(), r.stats.contact_events.end(),
-                                [&](const ContactEvent& e) { return e.kind == a || e.kind == b; }));
+    // (a rest that held a contact leaving the impact, g'⁻ >= 0, is no impact: group rest)
+    return double(std::count_if(
+        r.stats.contact_events.begin(), r.stats.contact_events.end(), [&](const ContactEvent& e) {
+          return e.kind == a || (e.kind == b && (b != Kind::kRest || e.speed_before < 0.0));
+        }));
   };
   const std::pair<const char*, std::pair<Kind, Kind>> counts[] = {
       {"impacts", {Kind::kImpact, Kind::kRest}},

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "contact/incline_model.hpp"
+#include "support/contact_runs.hpp"
 #include "ukdyn/dynamics/contact.hpp"
 #include "ukdyn/modelfile/model.hpp"
 #include "ukdyn/simulation/simulate.hpp"
@@ -224,26 +225,10 @@ TEST(ContactFriction, PainleveRodAboveTheCriticalMuIsAClearError) {
 // atan(b / h) (Housner 1963) — with L stuck and R leaving the floor. Natural coordinates: the
 // bottom corners L = (x1, y1), R = (x2, y2); the centre G = (L + R)/2 + (h/b) J (R − L)/2, J the
 // rotation by +90°.
-constexpr const char* kRocking = R"(
-parameters: {m: 1, b: 0.2, h: 0.5, g: 9.81, th0: 0.2, mu: 1}
-coordinates: [x1, y1, x2, y2]
-kinetic_energy: >-
-  0.5*m*(((x1_dot + x2_dot)/2 - h/(2*b)*(y2_dot - y1_dot))^2
-         + ((y1_dot + y2_dot)/2 + h/(2*b)*(x2_dot - x1_dot))^2)
-  + 0.5*m*(b^2 + h^2)/3*((x2_dot - x1_dot)^2 + (y2_dot - y1_dot)^2)/(4*b^2)
-potential_energy: m*g*((y1 + y2)/2 + h/(2*b)*(x2 - x1))
-constraints:
-  - {name: body, holonomic: ((x2 - x1)^2 + (y2 - y1)^2 - 4*b^2)/(4*b)}
-  - {name: left, holonomic: y1, unilateral: true}
-  - {name: right, holonomic: y2, unilateral: true}
-nonideal:
-  - {friction: coulomb, constraint: left, mu: mu, coordinates: [x1]}
-  - {friction: coulomb, constraint: right, mu: mu, coordinates: [x2]}
-initial:
-  q: {x1: -2*b*cos(th0), y1: 2*b*sin(th0), x2: 0, y2: 0}
-simulate: {t_end: 0.5, integrator: dopri5, rtol: 1e-11, atol: 1e-13}
-output: {every: 0}
-)";
+const std::string kRocking =
+    testing::rocking_block_in_coordinates("m", 0.2, 0.5, 9.81) +
+    "simulate: {t_end: 0.5, integrator: dopri5, rtol: 1e-11, atol: 1e-13}\n"
+    "output: {every: 0}\n";
 
 TEST(ContactFriction, RockingBlockLosesAngularVelocityByHousnersRatio) {
   const double m = 1.0, b = 0.2, h = 0.5, alpha = std::atan(b / h);

@@ -99,6 +99,36 @@ inline std::string ladder_in_coordinates(bool unilateral_wall) {
          "  q: {xA: L*cos(th0), yA: 0, xB: 0, yB: L*sin(th0)}\n";
 }
 
+// Housner's rocking block (examples/models/rocking_block.yaml: width 2b, height 2h, mass m = 1,
+// μ = 1 at both corners) in natural coordinates — its bottom corners L = (x1, y1), R = (x2, y2),
+// contacts `left` and `right` with Coulomb friction along x1, x2 — lengths in `unit` (b, h and g
+// given in it), tilted by th0 = 0.2 on R and released. The model text up to `initial:` (the
+// caller adds simulate: and output:).
+inline std::string rocking_block_in_coordinates(const std::string& unit, double b, double h,
+                                                double g) {
+  return "parameters: {m: 1, b: " + std::to_string(b) + ", h: " + std::to_string(h) +
+         ", g: " + std::to_string(g) +
+         ", th0: 0.2, mu: 1}\n"
+         "coordinates: [x1, y1, x2, y2]\n"
+         "units: {x1: " +
+         unit + ", y1: " + unit + ", x2: " + unit + ", y2: " + unit + "}\n" +
+         R"(kinetic_energy: >-
+  0.5*m*(((x1_dot + x2_dot)/2 - h/(2*b)*(y2_dot - y1_dot))^2
+         + ((y1_dot + y2_dot)/2 + h/(2*b)*(x2_dot - x1_dot))^2)
+  + 0.5*m*(b^2 + h^2)/3*((x2_dot - x1_dot)^2 + (y2_dot - y1_dot)^2)/(4*b^2)
+potential_energy: m*g*((y1 + y2)/2 + h/(2*b)*(x2 - x1))
+constraints:
+  - {name: body, holonomic: ((x2 - x1)^2 + (y2 - y1)^2 - 4*b^2)/(4*b)}
+  - {name: left, holonomic: y1, unilateral: true}
+  - {name: right, holonomic: y2, unilateral: true}
+nonideal:
+  - {friction: coulomb, constraint: left, mu: mu, coordinates: [x1]}
+  - {friction: coulomb, constraint: right, mu: mu, coordinates: [x2]}
+initial:
+  q: {x1: -2*b*cos(th0), y1: 2*b*sin(th0), x2: 0, y2: 0}
+)";
+}
+
 // the events of kind `kind` at constraint k
 inline std::vector<ContactEvent> events_of(const Trajectory& tr, Index k, ContactEvent::Kind kind) {
   std::vector<ContactEvent> out;

@@ -108,11 +108,15 @@ struct ContactEvent {
   /// whose reaction gives the Coulomb contact's N (its normal constraint)
   Index constraint = -1;
   Kind kind = Kind::kImpact;  ///< impact, release, rest, stick or slip
-  /// g' just before (impacts: < 0, approaching); stick, slip: the sliding speed |v_rel| just
-  /// before (a stick: the stop's v_stop = 100 eps)
+  /// g' just before (impacts: < 0, approaching; a rest that held a contact closed before it:
+  /// 0); stick, slip: the sliding speed |v_rel| just before (a stick: the stop's v_stop =
+  /// 100 eps)
   double speed_before = 0.0;
   double speed_after = 0.0;  ///< g' just after; stick, slip: |v_rel| just after
-  double impulse = 0.0;      ///< the contact's impulse Λ >= 0 (impacts)
+  /// the contact's impulse Λ >= 0 (impacts); a rest's may pull, Λ < 0, by 1e-6 of its
+  /// sequence's impulses: a contact held at rest with another that came to rest (a rocking
+  /// block's lifting corner, docs/contact.md "Rest")
+  double impulse = 0.0;
   /// the kinetic energy the event changed, T⁺ − T⁻ (<= 0: an impact never creates energy)
   double energy_change = 0.0;
   /// release: the contact's whole multiplier lambda + lambda_nonideal just before, with the
