@@ -332,10 +332,10 @@ void MultibodyReader::read_contact_frictions() {
         r_.fail(cn, what + " is declared twice" + (t == name ? "" : " (at '" + t + "')"),
                 "one coulomb friction per contact (one on a box gives each of its corners one)");
     }
-    const double mu = r_.friction_coefficient(require(f, "mu", what, "mu: 0.3"), what + " mu");
+    const double mu = r_.friction_coefficient(require(f, "mu", what, "mu: 0.3"), what + ": mu");
     std::optional<double> mu_static;
     if (const YAML::Node ms = f["mu_static"]) {
-      mu_static = r_.friction_coefficient(ms, what + " mu_static");
+      mu_static = r_.friction_coefficient(ms, what + ": mu_static");
       if (!(*mu_static >= mu))
         r_.fail(ms,
                 what + ": mu_static must be >= mu = " + brief(mu) + ", got " + brief(*mu_static),

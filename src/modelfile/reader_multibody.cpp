@@ -181,7 +181,9 @@ BodyId MultibodyReader::body(const YAML::Node& node, const std::string& what) {
   std::vector<std::string> names;
   for (const auto& b : bodies_) names.push_back(b.name);
   r_.fail(node, what + ": unknown body '" + name + "'",
-          "the bodies are " + join(names) + ", and ground");
+          names.empty()
+              ? std::string("the only body is ground")
+              : "the bodies are " + join(names) + (names.size() > 1 ? "," : "") + " and ground");
 }
 
 // the frame <side>_point with <side>_angle (planar) or <side>_axis | <side>_orientation

@@ -280,7 +280,7 @@ void Reader::read_nonideal(const YAML::Node& root, SystemBuilder& builder) {
         if (!f["mu"]) fail(f, "coulomb friction needs mu");
         CoulombFriction spec;
         spec.constraint = on;
-        spec.mu = friction_coefficient(f["mu"], "mu");
+        spec.mu = friction_coefficient(f["mu"], "coulomb friction on '" + on + "': mu");
         spec.coordinates = coords;
         if (const auto pc = point_contacts_.find(on); pc != point_contacts_.end()) {
           // a robot's contact: the friction slides the contact point (ContactKinematics)
@@ -318,7 +318,7 @@ void Reader::read_nonideal(const YAML::Node& root, SystemBuilder& builder) {
         }
         if (spec.mu < 0) fail(f["mu"], "mu must be >= 0");
         if (const YAML::Node ms = f["mu_static"]) {
-          spec.mu_static = friction_coefficient(ms, "mu_static");
+          spec.mu_static = friction_coefficient(ms, "coulomb friction on '" + on + "': mu_static");
           if (!(*spec.mu_static >= spec.mu)) {
             fail(ms, "mu_static must be >= mu (the kinetic coefficient)");
           }

@@ -151,13 +151,13 @@ nonideal:
 )";
   const ModelError nan = error_of(ball + "  - {friction: coulomb, constraint: floor, mu: .nan}\n");
   EXPECT_TRUE(contains(nan.what(),
-                       "f.yaml:8:48: error: the friction at contact 'floor' mu must "
+                       "f.yaml:8:48: error: the friction at contact 'floor': mu must "
                        "be a finite number, got '.nan' (YAML's not-a-number)"))
       << nan.what();
   const ModelError huge =
       error_of(ball + "  - {friction: coulomb, constraint: floor, mu: 1e150}\n");
   EXPECT_TRUE(contains(huge.what(),
-                       "f.yaml:8:48: error: the friction at contact 'floor' mu must "
+                       "f.yaml:8:48: error: the friction at contact 'floor': mu must "
                        "be in [0, 1e+06] (a coefficient of friction), got 1e+150"))
       << huge.what();
   EXPECT_NO_THROW(
