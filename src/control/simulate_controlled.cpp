@@ -293,7 +293,7 @@ ControlledTrajectory control_detail::run_controlled(
   double plant_rate = 1.0;
   {
     Workspace scales(plant);
-    set_run_scales(plant, scales, q0, qd0, o.t_start, o.t_end - o.t_start);
+    set_run_scales(plant, scales, q0, qd0, o.t_start, o.t_end - o.t_start, o.angle_coordinates);
     plant_rate = scales.rate_unit;
     quad.unit = quadrature_units(scales, o.t_end - o.t_start, aux);
   }

@@ -265,11 +265,20 @@ Violations measure_violations(const System& sys, Workspace& ws, const Eigen::Ref
 detail::RunLengthSpeed detail::run_length_speed(const System& sys, Workspace& ws,
                                                 const Eigen::Ref<const VectorXd>& q,
                                                 const Eigen::Ref<const VectorXd>& qd, double t,
-                                                double duration) {
+                                                double duration, const std::vector<bool>* angles) {
   const Index n = sys.coordinate_count();
   RunLengthSpeed s;
+  // (with angles: the largest |x_j| over the length coordinates, 0 when there is none)
+  auto largest = [&](const auto& x) {
+    if (angles == nullptr) return x.size() > 0 ? x.cwiseAbs().maxCoeff() : 0.0;
+    double m = 0.0;
+    for (Index j = 0; j < x.size(); ++j) {
+      if (!(*angles)[std::size_t(j)]) m = std::max(m, std::abs(x[j]));
+    }
+    return m;
+  };
   // ℓ = ‖q‖∞ (1 when every coordinate is 0: the model gives no length)
-  double length = q.size() > 0 ? q.cwiseAbs().maxCoeff() : 0.0;
+  double length = largest(q);
   s.has_length = length > 0.0 && std::isfinite(length);
   if (!s.has_length) length = 1.0;
   s.length = length;
@@ -280,11 +289,20 @@ detail::RunLengthSpeed detail::run_length_speed(const System& sys, Workspace& ws
   if (evaluate_unconstrained(sys, ws, q, qd, t) == Status::kOk) {
     const double T = ws.mass_singular ? 0.0 : detail::kinetic_energy(ws, qd);
     const double V = sys.potential_energy(q, t, ws.callables.get());
-    const double Q = ws.Q.size() > 0 ? ws.Q.cwiseAbs().maxCoeff() : 0.0;
+    const double Q = largest(ws.Q);
     energy = std::max(std::abs(T) + std::abs(V), Q * length);
     if (n > 0 && !ws.mass_singular) {
       ws.tmp_n.setOnes();
-      mass = 2.0 * detail::kinetic_energy(ws, ws.tmp_n) / double(n);
+      double counted = double(n);
+      if (angles != nullptr) {
+        // (1_L: the length coordinates only)
+        counted = 0.0;
+        for (Index j = 0; j < n; ++j) {
+          if ((*angles)[std::size_t(j)]) ws.tmp_n[j] = 0.0;
+          counted += ws.tmp_n[j];
+        }
+      }
+      if (counted > 0.0) mass = 2.0 * detail::kinetic_energy(ws, ws.tmp_n) / counted;
     }
   }
   ws.status = Status::kOk;
@@ -293,7 +311,7 @@ detail::RunLengthSpeed detail::run_length_speed(const System& sys, Workspace& ws
   // v = the largest of ‖q'‖∞, the speed √(2E/m) the run's energy gives its mass scale, and
   // ℓ / duration (a run from rest covers its lengths in its duration); ℓ per unit time when
   // none of them is > 0
-  double speed = qd.size() > 0 ? qd.cwiseAbs().maxCoeff() : 0.0;
+  double speed = largest(qd);
   if (!std::isfinite(speed)) speed = 0.0;
   if (const double v = std::sqrt(2.0 * energy / mass); mass > 0.0 && std::isfinite(v)) {
     speed = std::max(speed, v);
@@ -305,10 +323,18 @@ detail::RunLengthSpeed detail::run_length_speed(const System& sys, Workspace& ws
 }
 
 void set_run_scales(const System& sys, Workspace& ws, const Eigen::Ref<const VectorXd>& q,
-                    const Eigen::Ref<const VectorXd>& qd, double t, double duration) {
+                    const Eigen::Ref<const VectorXd>& qd, double t, double duration,
+                    const std::vector<bool>& angle_coordinates) {
   detail::require_same_system(sys, ws, "ukdyn::set_run_scales");
   detail::require_state_size(sys, q, &qd, "ukdyn::set_run_scales");
   const Index n = sys.coordinate_count();
+  if (!angle_coordinates.empty() && Index(angle_coordinates.size()) != n) {
+    throw std::invalid_argument("ukdyn::set_run_scales: angle_coordinates has " +
+                                std::to_string(angle_coordinates.size()) + " entries, expected " +
+                                std::to_string(n) +
+                                " (one per coordinate) or none (every coordinate a length); see "
+                                "SimulationOptions::angle_coordinates");
+  }
   ws.phi_scale.setConstant(10.0);  // (rows of acceleration constraints: never compared)
   ws.phi_dot_scale.setConstant(10.0);
   // ℓ, E and v (detail::run_length_speed)
@@ -330,6 +356,31 @@ void set_run_scales(const System& sys, Workspace& ws, const Eigen::Ref<const Vec
   // per unit time keeps it), and 1 when the state gives no length (ℓ = 1 is then a unit's, and
   // v / ℓ would move with the lengths' unit)
   ws.rate_unit = has_length ? std::min(1.0, detail::rate_decade(speed / length)) : 1.0;
+  // each column's own scale s_j (angle_coordinates): ℓ_q for a length, 1 for an angle, with ℓ_q
+  // and v_q the lengths' own ℓ and v (run_length_speed over the
+  // length coordinates: in the unit of length alone); without flags, or when no length
+  // coordinate is nonzero, every column is a length's and the rows' scales are class(‖a_i‖ ℓ)
+  // and class(‖a_i‖ v), bit for bit as before
+  bool weighed = false;
+  double lq = length, vq = speed;
+  VectorXd s;  // (once per run)
+  if (std::find(angle_coordinates.begin(), angle_coordinates.end(), true) !=
+      angle_coordinates.end()) {
+    const detail::RunLengthSpeed own =
+        detail::run_length_speed(sys, ws, q, qd, t, duration, &angle_coordinates);
+    weighed = own.has_length;
+    lq = own.length;
+    vq = own.speed;
+  }
+  if (weighed) {
+    s.resize(n);
+    for (Index j = 0; j < n; ++j) s[j] = angle_coordinates[std::size_t(j)] ? 1.0 : lq;
+  }
+  // ‖a_i ∘ s‖ (with flags) or ‖a_i‖
+  auto row_norm = [&](const MatrixXd& Ak, Index i) {
+    return weighed ? detail::safe_norm(Ak.row(i).cwiseProduct(s.transpose()).eval().data(), n)
+                   : detail::safe_norm(Ak.row(i).eval().data(), n);
+  };
   MatrixXd Ak;  // (once per run)
   for (Index k = 0; k < sys.constraint_count(); ++k) {
     const Constraint& c = sys.constraint(k);
@@ -340,19 +391,26 @@ void set_run_scales(const System& sys, Workspace& ws, const Eigen::Ref<const Vec
     detail::copy_constraint_rows(sys, ws, k, Ak);
     double largest = 0.0;
     for (Index i = 0; i < c.rows(); ++i) {
-      const double a = detail::safe_norm(Ak.row(i).eval().data(), n);
+      const double a = row_norm(Ak, i);
       if (std::isfinite(a)) largest = std::max(largest, a);
     }
     if (!(largest > 0.0)) largest = 1.0;
     for (Index i = 0; i < c.rows(); ++i) {
-      double a = detail::safe_norm(Ak.row(i).eval().data(), n);
+      double a = row_norm(Ak, i);
       // a row that vanishes here, or nearly — below kRowFloor of its constraint's largest (a
       // weld's rotation row about an axis its loop does not turn: ‖a_i‖ of roundoff, 1e-17) —
       // takes that largest (the unit when all vanish): its violation is the roundoff of terms of
       // its constraint's size, which a scale of its own ‖a_i‖ would ask a projection to go below
       if (!(a >= kRowFloor * largest) || !std::isfinite(a)) a = largest;
-      ws.phi_scale[sys.row_offset(k) + i] = detail::scale_class(a * length);
-      ws.phi_dot_scale[sys.row_offset(k) + i] = detail::scale_class(a * speed);
+      if (weighed) {
+        // class(‖a_i ∘ s‖) and class(‖a_i ∘ s‖ v_q / ℓ_q): a length's column times ℓ_q and
+        // v_q, an angle's times 1 and v_q / ℓ_q
+        ws.phi_scale[sys.row_offset(k) + i] = detail::scale_class(a);
+        ws.phi_dot_scale[sys.row_offset(k) + i] = detail::scale_class(a * (vq / lq));
+      } else {
+        ws.phi_scale[sys.row_offset(k) + i] = detail::scale_class(a * length);
+        ws.phi_dot_scale[sys.row_offset(k) + i] = detail::scale_class(a * speed);
+      }
     }
   }
 }

@@ -18,10 +18,14 @@ struct RunLengthSpeed {
 };
 
 /// ℓ, E and v = the largest of ‖q'‖∞, √(2E / m) (m = 1ᵀ M 1 / n, a Rayleigh quotient of M) and
-/// ℓ / duration (no such term for duration <= 0), ℓ when none of them is > 0. Evaluates M and
-/// Q at (q, q', t) in ws (ws.status is left kOk). Cost: one unconstrained evaluation, O(n³).
+/// ℓ / duration (no such term for duration <= 0), ℓ when none of them is > 0. With `angles`
+/// (n flags, SimulationOptions::angle_coordinates) the lengths' own: ‖q‖∞, ‖Q‖∞, ‖q'‖∞ and m =
+/// 1_Lᵀ M 1_L / n_L over the coordinates not flagged (1_L their indicator, n_L their number), so
+/// that ℓ, E and v move with the unit of length alone (T + |V| is the whole system's). Evaluates
+/// M and Q at (q, q', t) in ws (ws.status is left kOk). Cost: one unconstrained evaluation, O(n³).
 RunLengthSpeed run_length_speed(const System& sys, Workspace& ws,
                                 const Eigen::Ref<const VectorXd>& q,
-                                const Eigen::Ref<const VectorXd>& qd, double t, double duration);
+                                const Eigen::Ref<const VectorXd>& qd, double t, double duration,
+                                const std::vector<bool>* angles = nullptr);
 
 }  // namespace ukdyn::detail

@@ -16,6 +16,7 @@
 #include "control/control_at_start.hpp"
 #include "dynamics/contact_dynamics.hpp"
 #include "dynamics/internal.hpp"
+#include "modelfile/angle_flags.hpp"
 #include "modelfile/contact_start.hpp"
 #include "simulation/contact_events.hpp"
 #include "simulation/initial_check.hpp"
@@ -57,7 +58,8 @@ std::vector<std::string> penetrated_contacts(const Model& model,
   if (contacts.contacts().empty()) return names;
   try {
     Workspace ws(sys, o.solver);
-    set_run_scales(sys, ws, model.q0, model.qd0, o.t_start, o.t_end - o.t_start);
+    set_run_scales(sys, ws, model.q0, model.qd0, o.t_start, o.t_end - o.t_start,
+                   detail::model_angle_coordinates(model));
     const double tolerance = std::max(o.initial_tolerance, detail::ContactEvents::kTouchGap);
     for (const Index k : contacts.contacts()) {
       double g = 0.0, gd = 0.0;
@@ -276,8 +278,9 @@ CheckReport check_model(const Model& model) {
   // "Scales and tolerances")
   const double duration = o.t_end - t;
   std::vector<std::string> violated;
-  report.initial_violations = detail::check_initial_conditions(
-      sys, model.q0, model.qd0, t, o.initial_tolerance, duration, &violated);
+  report.initial_violations =
+      detail::check_initial_conditions(sys, model.q0, model.qd0, t, o.initial_tolerance, duration,
+                                       &violated, detail::model_angle_coordinates(model));
   report.penetrated = penetrated_contacts(model, report.problems);
   // (violations other than the penetrated contacts: what projection could mend)
   const bool only_penetrated =
@@ -293,7 +296,7 @@ CheckReport check_model(const Model& model) {
     try {
       VectorXd q = model.q0, qd = model.qd0;
       Workspace wc(sys, o.solver);
-      set_run_scales(sys, wc, q, qd, t, duration);
+      set_run_scales(sys, wc, q, qd, t, duration, detail::model_angle_coordinates(model));
       detail::release_open_contacts(sys, wc, q, qd, t);  // (an open gap is no violation)
       const ProjectionResult rp = project_positions(sys, wc, q, t, o.projection);
       ProjectionResult rv;
@@ -332,12 +335,13 @@ CheckReport check_model(const Model& model) {
       VectorXd q = model.q0, qd = model.qd0;
       Workspace wp(sys, o.solver);
       try {
-        set_run_scales(sys, wp, q, qd, t, duration);
+        set_run_scales(sys, wp, q, qd, t, duration, detail::model_angle_coordinates(model));
         detail::release_open_contacts(sys, wp, q, qd, t);  // (an open gap is no violation)
         const ProjectionResult rp = project_positions(sys, wp, q, t, o.projection);
         const ProjectionResult rv = project_velocities(sys, wp, q, qd, t, o.projection);
         const auto left =
-            detail::check_initial_conditions(sys, q, qd, t, o.initial_tolerance, duration);
+            detail::check_initial_conditions(sys, q, qd, t, o.initial_tolerance, duration, nullptr,
+                                             detail::model_angle_coordinates(model));
         if (!rp.converged || !rv.converged || !left.empty()) {
           report.problems.push_back(
               "no consistent initial state near the given one: projection left a violation of " +

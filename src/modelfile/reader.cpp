@@ -28,6 +28,7 @@
 #include "ukdyn/modelfile/run.hpp"
 #include "ukdyn/simulation/options.hpp"
 
+#include "modelfile/angle_flags.hpp"
 #include "modelfile/initial_keep.hpp"
 #include "modelfile/reader.hpp"
 
@@ -505,6 +506,11 @@ Model Reader::read_plant(const YAML::Node& root) {
   check_mass_matrix(root, model);
   read_output(root, model);
   read_units(root, model);
+  // the coordinates that are angles (rad, deg: a planar body's angle, a revolute joint's,
+  // units: {theta: rad}; not a quaternion's components), whose columns the run's
+  // violation scales weigh by 1 rather than by its length (SimulationOptions::angle_coordinates;
+  // left empty, every coordinate a length, when there is none)
+  model.options.angle_coordinates = detail::model_angle_coordinates(model);
   label_gaps(model);
   apply_time_unit(model);
   // initial: project: true, or simulate: project_initial: true

@@ -11,6 +11,7 @@
 #include "ukdyn/multibody/multibody.hpp"
 #include "ukdyn/multibody/tree.hpp"
 
+#include "modelfile/angle_flags.hpp"
 #include "modelfile/contact_start.hpp"
 #include "modelfile/visual_contacts.hpp"
 
@@ -207,6 +208,9 @@ ModelRun run_model(const Model& model, const SimulationOptions& options_in,
   // (the run's messages in the model's units)
   SimulationOptions options = options_in;
   options.units = model.unit_system;
+  // (the columns of its angles, from its units, as its units: options copied from another
+  // model carry that model's flags)
+  options.angle_coordinates = detail::model_angle_coordinates(model);
   // the samples gather in `gathered` (plant and control; its capacity kept), passed on as a
   // ModelRun every chunk_samples; `last` holds the last sample
   const bool controlled = bool(model.controller);
@@ -297,6 +301,9 @@ ModelRun run_model(const Model& model, const SimulationOptions& options_in) {
   expr::clear_table_range_error();
   SimulationOptions options = options_in;
   options.units = model.unit_system;  // (the run's messages in the model's units)
+  // (the columns of its angles, from its units, as its units: options copied from another
+  // model carry that model's flags)
+  options.angle_coordinates = detail::model_angle_coordinates(model);
   ModelRun run;
   std::optional<tree::LimitWatch> watch;
   if (model.robot) watch.emplace(*model.robot);

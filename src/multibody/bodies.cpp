@@ -339,6 +339,15 @@ Multibody& Multibody::set_switching_functions(std::vector<std::string> names, Sw
   return *this;
 }
 
+std::vector<bool> MultibodyModel::angle_coordinates() const {
+  std::vector<bool> angles(std::size_t(system.coordinate_count()), false);
+  for (const BodyInfo& b : bodies) {
+    // (x, y, theta): theta (a quaternion's components are weighed as lengths)
+    if (b.kind == BodyKind::kPlanar) angles[std::size_t(b.offset + 2)] = true;
+  }
+  return angles;
+}
+
 BodyId MultibodyModel::body(std::string_view name) const {
   std::string list;
   for (std::size_t i = 0; i < bodies.size(); ++i) {

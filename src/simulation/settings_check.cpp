@@ -93,6 +93,11 @@ void validate(const System& sys, const Eigen::Ref<const VectorXd>& q0,
     fail(std::string(in_q ? "q0" : "qd0") + " is not finite at coordinate '" +
          sys.coordinate_names()[std::size_t(i)] + "' (" + format(in_q ? q0[i] : qd0[i]) + ")");
   }
+  if (!o.angle_coordinates.empty() && Index(o.angle_coordinates.size()) != sys.coordinate_count()) {
+    fail("angle_coordinates needs n = " + format_number(sys.coordinate_count()) +
+         " entries (one per coordinate) or none (every coordinate a length), got " +
+         format_number(Index(o.angle_coordinates.size())));
+  }
   for (const auto& [name, d] : o.drift_per_constraint) {
     sys.constraint_index(name);  // throws naming the unknown constraint
     if (!(d.alpha >= 0.0 && d.beta >= 0.0 && std::isfinite(d.alpha) && std::isfinite(d.beta))) {

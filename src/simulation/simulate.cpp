@@ -112,10 +112,11 @@ std::string user_message(const std::exception& e) {
 
 std::vector<std::string> detail::check_initial_conditions(
     const System& sys, const Eigen::Ref<const VectorXd>& q, const Eigen::Ref<const VectorXd>& qd,
-    double t, double tolerance, double duration, std::vector<std::string>* names) {
+    double t, double tolerance, double duration, std::vector<std::string>* names,
+    const std::vector<bool>& angle_coordinates) {
   Workspace ws(sys);
   // the scales a run from this state takes (simulate's own check compares against the same)
-  set_run_scales(sys, ws, q, qd, t, duration);
+  set_run_scales(sys, ws, q, qd, t, duration, angle_coordinates);
   detail::release_open_contacts(sys, ws, q, qd, t);  // (an open gap is no violation)
   evaluate_violations(sys, ws, q, qd, t);
   return detail::violated(sys, ws, tolerance, names);
@@ -186,7 +187,7 @@ Trajectory detail::simulate_observed(const System& sys, const Eigen::Ref<const V
   VectorXd q = q0, qd = qd0;
   // the scales of the tolerances on the constraints' violations and of the work channels
   // (relative, unit-free)
-  set_run_scales(sys, ws, q, qd, o.t_start, o.t_end - o.t_start);
+  set_run_scales(sys, ws, q, qd, o.t_start, o.t_end - o.t_start, o.angle_coordinates);
   if (rate_unit > 0.0) {
     ws.rate_unit = rate_unit;  // (a controlled plant's: observed_run.hpp)
   } else if (q.size() == 0 || !(q.cwiseAbs().maxCoeff() > 0.0)) {

@@ -4,15 +4,21 @@
 // units, or a clear failure — never a dropped row with status ok. The reproducers of
 // ../shared/reproducers/2026-11-28 (constraint_underflow.sh, solve_overflow_rank0.py,
 // pendulum_in_mm.sh, mass_scale.sh) as tests, against closed forms and the SI runs.
+#include <algorithm>
 #include <cmath>
 #include <iomanip>
+#include <iostream>
 #include <sstream>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include <gtest/gtest.h>
 
 #include <ukdyn/dynamics/projection.hpp>
 #include <ukdyn/modelfile/model.hpp>
+#include <ukdyn/multibody/multibody.hpp>
+#include <ukdyn/multibody/tree.hpp>
 #include <ukdyn/ukdyn.hpp>
 
 #include "support/closed_chain.hpp"
@@ -267,6 +273,187 @@ TEST(Scales, LongRunFromRestKeepsAMeetableVelocityTolerance) {
   ASSERT_GE(tr.t.size(), 7u);
   for (std::size_t i = 0; i < tr.t.size(); ++i) {
     EXPECT_NEAR(std::hypot(tr.q[2 * i], tr.q[2 * i + 1]), 1.0, 1e-10) << "t = " << tr.t[i];
+  }
+}
+
+// the ladder of examples/models/ladder_leaves_wall.yaml (rod of mass m, length L) held to a
+// frictionless wall and floor by bilateral rows, its centre (x, y) in a length unit and its
+// angle th in rad: the rows (1, 0, L/2 sin th) and (0, 1, −L/2 cos th) mix a column of lengths
+// with one of lengths per radian. In metres (L = 2, g = 9.81) or millimetres (L = 2000, g =
+// 9810), the same kilograms and seconds
+std::string ladder_text(double L, double g, const std::string& length, double rtol) {
+  return "parameters: {m: 2, L: " + num(L) + ", g: " + num(g) +
+         ", th0: 1.0471975511965976}\ncoordinates: [x, y, th]\nunits: {x: " + length +
+         ", y: " + length +
+         ", th: rad}\nkinetic_energy: 0.5*m*(x_dot^2 + y_dot^2) + 0.5*m*L^2/12*th_dot^2\n"
+         "potential_energy: m*g*y\nconstraints:\n  - {name: wall, holonomic: x - L/2*cos(th)}\n"
+         "  - {name: floor, holonomic: y - L/2*sin(th)}\n"
+         "initial: {q: {x: L/2*cos(th0), y: L/2*sin(th0), th: th0}}\n"
+         "simulate: {t_end: 1, rtol: " +
+         num(rtol) + ", atol: 1e-12}\n";
+}
+
+// the largest |phi| (or |phi'|) of a run, at its samples and after its steps, over the ladder's
+// length L: its violation relative to the mechanism's size, the same number in any unit of length
+double relative_violation(const Trajectory& tr, double L, bool velocity = false) {
+  double worst = velocity ? tr.stats.max_velocity_violation : tr.stats.max_position_violation;
+  for (const double p : velocity ? tr.velocity_violation : tr.position_violation)
+    worst = std::max(worst, std::abs(p));
+  return worst / L;
+}
+
+// u24 07: a row that mixes length and angle columns was held 1000 times looser, relative, in
+// millimetres than in metres (the ladder: 8.7e-7 mm against 8.6e-13 m): its scale class(‖a_i‖ ℓ)
+// counted the angle's column, L/2 cos th in mm per rad, as a length, and took ‖a_i‖ × 1000 in
+// mm. Each column is now weighed by its coordinate's own scale (the model file's units: th in
+// rad, weighed by 1), and the two runs' relative violations agree (within a factor 10 either way;
+// they were 1000 apart). The runs agree to within the accuracy of either: d_ref, the SI run's
+// difference from a run at rtol / 100, measured here (about 1e-9 rad), which the rescaled run
+// may differ by 10 times (atol, 1e-12 in either unit, is 1000 times tighter on the lengths in mm,
+// so the runs take their own steps)
+TEST(Scales, AngleColumnsKeepTheLaddersViolationInMillimetres) {
+  const Model si = parse_model(ladder_text(2.0, 9.81, "m", 1e-10), "si.yaml");
+  const Model mm = parse_model(ladder_text(2000.0, 9810.0, "mm", 1e-10), "mm.yaml");
+  const Model ref = parse_model(ladder_text(2.0, 9.81, "m", 1e-12), "ref.yaml");
+  const Trajectory a = simulate(si.system, si.q0, si.qd0, si.options);
+  const Trajectory b = simulate(mm.system, mm.q0, mm.qd0, mm.options);
+  const Trajectory r = simulate(ref.system, ref.q0, ref.qd0, ref.options);
+  ASSERT_EQ(a.stats.status, Status::kOk) << a.stats.message;
+  ASSERT_EQ(b.stats.status, Status::kOk) << b.stats.message;
+  ASSERT_EQ(r.stats.status, Status::kOk) << r.stats.message;
+  ASSERT_EQ(a.t.size(), b.t.size());
+  ASSERT_EQ(a.t.size(), r.t.size());
+  // relative violations: within a factor 10 of each other, two-sided (1000 apart before)
+  const double va = relative_violation(a, 2.0), vb = relative_violation(b, 2000.0);
+  RecordProperty("violation_si", num(va));
+  RecordProperty("violation_mm", num(vb));
+  std::cout << "relative violation: SI " << va << ", mm " << vb << " (max |phi|: " << va * 2.0
+            << " m, " << vb * 2000.0 << " mm)\n";
+  ASSERT_GT(va, 0.0);
+  ASSERT_GT(vb, 0.0);
+  EXPECT_LE(vb, 10.0 * va);
+  EXPECT_GE(vb, 0.1 * va);
+  // both at most the projections' tolerance in the class of the SI row (1e-13 · 10 / L)
+  EXPECT_LE(va, 1e-12);
+  EXPECT_LE(vb, 1e-12);
+  // and the velocities' (|phi'| / L, per second in either), likewise
+  const double wa = relative_violation(a, 2.0, true), wb = relative_violation(b, 2000.0, true);
+  std::cout << "relative velocity violation: SI " << wa << ", mm " << wb << " (1/s)\n";
+  ASSERT_GT(wa, 0.0);
+  ASSERT_GT(wb, 0.0);
+  EXPECT_LE(wb, 10.0 * wa);
+  EXPECT_GE(wb, 0.1 * wa);
+  // the motion: th (rad) and the centre over L, sample by sample, to 10 d_ref
+  double d_ref = 0.0, d_units = 0.0;
+  for (std::size_t s = 0; s < a.t.size(); ++s) {
+    for (std::size_t j = 0; j < 3; ++j) {
+      const std::size_t i = 3 * s + j;
+      const double unit = j == 2 ? 1.0 : 2.0;  // (th in rad; x, y over L)
+      d_ref = std::max(d_ref, std::abs(a.q[i] - r.q[i]) / unit);
+      d_units = std::max(d_units, std::abs(b.q[i] / (j == 2 ? 1.0 : 1000.0) - a.q[i]) / unit);
+    }
+  }
+  std::cout << "d_ref " << d_ref << ", SI against mm " << d_units << "\n";
+  EXPECT_GT(d_ref, 1e-13);  // (the SI run's own error: a measure, not roundoff)
+  EXPECT_LE(d_ref, 1e-8);
+  EXPECT_LE(d_units, 10.0 * d_ref);
+  // (the 1-DOF motion itself: th'² = 3 g (sin th0 − sin th) / L, energy's closed form, at t_end)
+  const std::size_t last = 3 * (a.t.size() - 1);
+  const double th = a.q[last + 2], thd = a.qd[last + 2];
+  EXPECT_NEAR(thd * thd, 3.0 * 9.81 * (std::sin(1.0471975511965976) - std::sin(th)) / 2.0, 1e-7);
+}
+
+// The ladder's rows' classes (set_run_scales with SimulationOptions::angle_coordinates, which
+// the model file's units: {th: rad} sets): at th0 = 60°, ℓ_q = (L/2) sin th0 = 0.866 m, the
+// floor row (0, 1, −(L/2) cos th0) weighed as (0, ℓ_q, −0.5) has norm 1.0 m — class 10 — and in
+// millimetres (0, 866, −500), 1000 mm — class 1e4, exactly 1000 times; the wall's (1, 0, (L/2)
+// sin th0) 1.22 m and 1225 mm. Without the flags (a System built in C++, as before) th's column
+// counts as a length: 500 mm/rad × ℓ = 866 mm, class 1e7 — 1e6 times the SI class. The speed
+// scales likewise: v_q = √(2 E / m_q) = √(17 J / 1 kg) = 4.1 m/s over ℓ_q: class 10 and 1e4
+TEST(Scales, AngleColumnsAreWeighedByOne) {
+  const Model si = parse_model(ladder_text(2.0, 9.81, "m", 1e-10), "si.yaml");
+  const Model mm = parse_model(ladder_text(2000.0, 9810.0, "mm", 1e-10), "mm.yaml");
+  EXPECT_EQ(si.options.angle_coordinates, (std::vector<bool>{false, false, true}));
+  EXPECT_EQ(mm.options.angle_coordinates, (std::vector<bool>{false, false, true}));
+  for (const auto& [model, unit] : {std::pair{&si, 1.0}, std::pair{&mm, 1000.0}}) {
+    SCOPED_TRACE(unit);
+    Workspace ws(model->system);
+    set_run_scales(model->system, ws, model->q0, model->qd0, 0.0, 1.0,
+                   model->options.angle_coordinates);
+    for (Index i = 0; i < 2; ++i) {
+      EXPECT_EQ(ws.phi_scale[i], 10.0 * unit) << "row " << i;
+      EXPECT_EQ(ws.phi_dot_scale[i], 10.0 * unit) << "row " << i;
+    }
+    // (the run's own length, speed and rate are ‖q‖∞'s, unchanged by the flags)
+    Workspace plain(model->system);
+    set_run_scales(model->system, plain, model->q0, model->qd0, 0.0, 1.0);
+    EXPECT_EQ(plain.length_scale, ws.length_scale);
+    EXPECT_EQ(plain.speed_scale, ws.speed_scale);
+    EXPECT_EQ(plain.rate_unit, ws.rate_unit);
+    EXPECT_EQ(plain.energy_unit, ws.energy_unit);
+    // without flags: every column a length, the floor row 1e7 in mm
+    EXPECT_EQ(plain.phi_scale[1], unit == 1.0 ? 10.0 : 1e7);
+  }
+  // no length coordinate nonzero (ℓ_q = 0): every column weighed as a length, as without flags
+  {
+    Workspace a(mm.system), b(mm.system);
+    const VectorXd q = vec({0.0, 0.0, 1.0}), qd = vec({0.0, 0.0, 0.0});
+    set_run_scales(mm.system, a, q, qd, 0.0, 1.0, {false, false, true});
+    set_run_scales(mm.system, b, q, qd, 0.0, 1.0);
+    EXPECT_EQ(a.phi_scale, b.phi_scale);
+    EXPECT_EQ(a.phi_dot_scale, b.phi_dot_scale);
+  }
+  // misuse: flags of another size, named with the expected count
+  Workspace ws(si.system);
+  try {
+    set_run_scales(si.system, ws, si.q0, si.qd0, 0.0, 1.0, {true});
+    ADD_FAILURE() << "accepted 1 flag for 3 coordinates";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("angle_coordinates has 1 entries, expected 3"),
+              std::string::npos)
+        << e.what();
+  }
+  SimulationOptions o = si.options;
+  o.angle_coordinates = {true, false};
+  try {
+    simulate(si.system, si.q0, si.qd0, o);
+    ADD_FAILURE() << "accepted 2 flags for 3 coordinates";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("angle_coordinates needs n = 3 entries"),
+              std::string::npos)
+        << e.what();
+  }
+}
+
+// Bodies and robots: the model file's flags (from the coordinates' units) are those of the
+// C++ layers' own (mb::MultibodyModel::angle_coordinates, tree::Tree::angle_coordinates): a
+// planar body's theta and a revolute joint's angle; a quaternion's components are weighed as
+// lengths (the heavy top: no flags, its run as before)
+std::vector<bool> flags_of(const Model& m) {
+  return m.options.angle_coordinates.empty()
+             ? std::vector<bool>(std::size_t(m.system.coordinate_count()), false)
+             : m.options.angle_coordinates;
+}
+
+TEST(Scales, BodiesAndRobotsFlagTheirAngles) {
+  const Model bodies = load_model(std::string(UKDYN_EXAMPLES_DIR) + "/double_four_bar_bodies.yaml");
+  ASSERT_TRUE(bodies.multibody);
+  EXPECT_EQ(bodies.options.angle_coordinates, bodies.multibody->angle_coordinates());
+  EXPECT_EQ(std::count(bodies.options.angle_coordinates.begin(),
+                       bodies.options.angle_coordinates.end(), true),
+            std::count(bodies.coordinate_units.begin(), bodies.coordinate_units.end(), "rad"));
+  const Model top = load_model(std::string(UKDYN_EXAMPLES_DIR) + "/heavy_top.yaml");
+  ASSERT_TRUE(top.multibody);
+  EXPECT_TRUE(top.options.angle_coordinates.empty());
+  EXPECT_EQ(flags_of(top), top.multibody->angle_coordinates());
+  for (const char* name : {"mobile_manipulator.yaml", "humanoid_zero_gravity.yaml"}) {
+    SCOPED_TRACE(name);
+    const Model arm = load_model(std::string(UKDYN_EXAMPLES_DIR) + "/" + name);
+    ASSERT_TRUE(arm.robot);
+    EXPECT_EQ(flags_of(arm), arm.robot->angle_coordinates());
+    EXPECT_NE(
+        std::find(arm.options.angle_coordinates.begin(), arm.options.angle_coordinates.end(), true),
+        arm.options.angle_coordinates.end());
   }
 }
 

@@ -55,6 +55,14 @@ struct UnitSystem {
   double kilograms() const {
     return mass == "g" ? 1e-3 : mass == "mg" ? 1e-6 : mass == "t" ? 1e3 : 1.0;
   }
+  /// True when a coordinate in `unit` is an angle — "rad", "deg" or "°" — rather than a length:
+  /// its column of A is weighed by 1 in the run's violation scales, not by the run's length
+  /// (SimulationOptions::angle_coordinates; docs/simulation.md, "Scales and tolerances", angle
+  /// columns). Any other unit, none (""), and "1" (a quaternion's component, which that section
+  /// says why) count as a length. Cost O(1).
+  static bool is_angle(std::string_view unit) {
+    return unit == "rad" || unit == "deg" || unit == "°";
+  }
   /// True when length, mass and time are m, kg and s.
   bool is_si() const { return length == "m" && mass == "kg" && time == "s"; }
   /// `unit`/time ("1/time" for unit "1" or "", a number without unit): the rate of a quantity

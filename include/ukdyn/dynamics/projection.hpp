@@ -124,12 +124,21 @@ struct Violations {
 /// of the energy balance, so their step-size control is relative to the run's energies; and
 /// ws.rate_unit = min(1, 10^⌊log10(v / ℓ)⌋), the decade of the run's rate at most 1 (1 when
 /// q = 0), which the adaptive integrators' atol on q' is multiplied by.
-/// Overwrites M, Q, A and b. Allocates (once per run). Cost: one evaluation of M, Q, V and every
-/// non-acceleration constraint's rows, O(n³ + m n).
-/// @throws std::invalid_argument when q or q' does not have n entries or the workspace is of
-/// another system.
+/// With `angle_coordinates` (SimulationOptions::angle_coordinates: n flags, or empty for every
+/// coordinate a length) each column of a_i is weighed by its coordinate's own scale s_j: ℓ_q for
+/// a length, 1 for an angle, and phi_scale_i = class(‖a_i ∘ s‖),
+/// phi_dot_scale_i = class(‖a_i ∘ s‖ v_q / ℓ_q) (v_q / ℓ_q an angle's speed scale), where ℓ_q
+/// and v_q are ℓ and v taken over the length coordinates alone (their ‖q‖∞, ‖q'‖∞ and ‖Q‖∞, and
+/// m = 1_Lᵀ M 1_L / n_L; T + |V| the whole system's): the same relative tolerance in any unit of
+/// length for rows that mix lengths and angles. When no length coordinate is nonzero (ℓ_q = 0: a
+/// robot of revolute joints, a floating base at the origin) every column is weighed as a length, as
+/// without flags. Overwrites M, Q, A and b. Allocates (once per run). Cost: one evaluation of M, Q,
+/// V and every non-acceleration constraint's rows, O(n³ + m n).
+/// @throws std::invalid_argument when q or q' does not have n entries, angle_coordinates has
+/// neither 0 nor n entries, or the workspace is of another system.
 void set_run_scales(const System& sys, Workspace& ws, const Eigen::Ref<const VectorXd>& q,
-                    const Eigen::Ref<const VectorXd>& qd, double t, double duration);
+                    const Eigen::Ref<const VectorXd>& qd, double t, double duration,
+                    const std::vector<bool>& angle_coordinates = {});
 
 /// The violations that project_positions and project_velocities would measure first at
 /// (q, q', t) with these options, each constraint's violation() evaluated once for both

@@ -100,9 +100,11 @@ struct Model {
   /// The compiled outputs over (q, q_dot, t): output_names' expressions, then the `visual:`
   /// columns (see output_names).
   expr::Program output_program;
-  /// Each coordinate's unit (n, in coordinate order), for labels only (nothing computes with
-  /// it): `units:` of the file, else the length unit (`m`), `rad` and `1` (quaternion
-  /// components) for the bodies' coordinates of a multibody model, else "" (not known).
+  /// Each coordinate's unit (n, in coordinate order): `units:` of the file, else the length
+  /// unit (`m`), `rad` and `1` (quaternion components) for the bodies' coordinates of a
+  /// multibody model and a robot's joints, else "" (not known). A label, but for one use: the
+  /// angles among them (rad, deg: UnitSystem::is_angle) fill
+  /// options.angle_coordinates, the columns the run's violation scales weigh by 1.
   std::vector<std::string> coordinate_units;
   /// The base units (`units: {length: mm, mass: g, time: ms}`; SI when not given) and the
   /// labels derived from them: the console's, summary.json's `unit_system`, the plots'. The

@@ -45,7 +45,10 @@ struct ModelRun {
 /// Simulates the model with `options` (usually model.options, perhaps with another t_end):
 /// simulate(), or simulate_controlled() with the model's controller. A failure during the run
 /// is reported in trajectory.stats (status, message) with the samples computed before it, its
-/// numbers labelled in the model's units (options.units is set to model.unit_system).
+/// numbers labelled in the model's units (options.units is set to model.unit_system), its
+/// angles' columns weighed as the model's units say (options.angle_coordinates is set from
+/// model.coordinate_units, whatever `options` or model.options held: settings copied from
+/// another model carry that model's flags).
 /// @throws std::invalid_argument when the run cannot start (an inconsistent initial state,
 /// bad settings), as simulate() does.
 ModelRun run_model(const Model& model, const SimulationOptions& options);

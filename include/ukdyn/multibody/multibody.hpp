@@ -397,6 +397,13 @@ struct MultibodyModel {
   Vector3d gravity = Vector3d::Zero();  ///< g (m/s², world), as set by Multibody::set_gravity
   /// Index of a body by name. @throws std::invalid_argument listing the names.
   BodyId body(std::string_view name) const;
+  /// The flags SimulationOptions::angle_coordinates takes (n): true for a planar body's theta,
+  /// false for the positions (x, y, z) and a rigid body's quaternion u0 … u3 (docs/simulation.md,
+  /// "Scales and tolerances", says why), so that the run's
+  /// violation scales weigh a joint's columns of angles by 1 and not by the model's length
+  /// (docs/simulation.md, "Scales and tolerances"; a model file's bodies get them from their
+  /// units). Cost O(n).
+  std::vector<bool> angle_coordinates() const;
   /// Index of a joint by name. @throws std::invalid_argument listing the names.
   Index joint(std::string_view name) const;
 };

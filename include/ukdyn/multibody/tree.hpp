@@ -145,6 +145,14 @@ class Tree {
   /// The zero configuration: zero angles and displacements, identity quaternions (n) — except
   /// that a mimic joint sits at multiplier · q_ref + offset (so the pose meets the mimics).
   VectorXd neutral() const;
+  /// The flags SimulationOptions::angle_coordinates takes (n): true for a revolute or
+  /// continuous joint's angle, false for a prismatic joint's displacement and a floating base's
+  /// position and quaternion u0 … u3 (docs/simulation.md, "Scales and tolerances", says why), so
+  /// that the run's violation scales
+  /// weigh a loop closure's columns of angles by 1 and not by the robot's length
+  /// (docs/simulation.md, "Scales and tolerances"; a model file's robot gets them from its
+  /// joints' units). Cost O(links).
+  std::vector<bool> angle_coordinates() const;
   /// The links whose joint is floating (each gets a unit-norm constraint in make_system).
   const std::vector<Index>& floating_links() const { return floating_; }
   /// The mass of link i and of every link below it (kg), accumulated once at construction.

@@ -187,6 +187,22 @@ struct SimulationOptions {
   /// of a run that starts at q = 0 (1 per second in it, at most 1: docs/simulation.md, "The
   /// integrators' atol").
   UnitSystem units;
+
+  /// The coordinates that are angles (n entries, or empty: every
+  /// coordinate a length, as a System built in C++ has always been run). The run's violation
+  /// scales (set_run_scales) weigh column j of each constraint row a_i by the coordinate's own
+  /// scale s_j — ℓ_q = max |q_j| over the length coordinates for a length, 1 (rad) for these —
+  /// as phi_scale_i = class(‖a_i ∘ s‖) and phi_dot_scale_i = class(‖a_i ∘ s‖ v_q / ℓ_q), v_q the
+  /// lengths' speed scale (an angle's: v_q / ℓ_q), so that a row mixing both, as a ladder's floor
+  /// (0, 1, −(L/2) cos θ) in (x, y, θ), is held to the same relative violation in metres and
+  /// millimetres (as all lengths, the column of mm per rad was weighed by ℓ in mm: 1000 times
+  /// looser, u24 07; docs/simulation.md, "Scales and tolerances"). A model file sets it from its
+  /// coordinates' units (Model::coordinate_units: rad, deg — UnitSystem::is_angle —, a planar
+  /// body's angle, a revolute joint's; not a quaternion's components, "Scales and tolerances"
+  /// says why), and run_model always takes the model's (as its units). Cost: none per step (read
+  /// once, at the start of the run, O(m n)).
+  /// @throws std::invalid_argument from simulate() when neither empty nor of n entries.
+  std::vector<bool> angle_coordinates;
 };
 
 /// The most samples a run's grid (t_start, every output_every, output_at, t_end) may have when

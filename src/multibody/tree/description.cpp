@@ -206,6 +206,19 @@ Index Tree::link_index(std::string_view name) const {
                               "' in '" + name_ + "'");
 }
 
+std::vector<bool> Tree::angle_coordinates() const {
+  std::vector<bool> angles(std::size_t(n_), false);
+  for (Index i = 0; i < link_count(); ++i) {
+    const JointKind kind = link(i).joint.kind;
+    for (int k = 0; k < dofs(i); ++k) {
+      // (a floating base's quaternion components are weighed as lengths)
+      angles[std::size_t(offset(i) + k)] =
+          kind == JointKind::kRevolute || kind == JointKind::kContinuous;
+    }
+  }
+  return angles;
+}
+
 VectorXd Tree::neutral() const {
   VectorXd q = VectorXd::Zero(n_);
   for (Index i : floating_) q[offset(i) + 3] = 1.0;
