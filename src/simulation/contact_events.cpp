@@ -621,8 +621,6 @@ bool ContactEvents::resolve(double t, double* x, Index event, RunStatistics& sta
       if (std::any_of(held.begin(), held.end(), [](bool h) { return h; })) {
         dyn_.hold(qd, qd_minus, rows, still);
         dT = dyn_.kinetic_energy_change(qd, qd_minus);
-      } else {
-        std::fill(held.begin(), held.end(), false);
       }
     }
     impact_work_ += dT;
