@@ -8,7 +8,8 @@
 
 #include "common.hpp"
 #include "embedded.hpp"  // app/embedded.hpp: the example models, embedded at build time
-#include "suggest.hpp"   // app/suggest.hpp: did-you-mean, as the command's
+#include "modelfile/contact_start.hpp"  // src/: the run refused at its contacts' start
+#include "suggest.hpp"                  // app/suggest.hpp: did-you-mean, as the command's
 #include "ukdyn/core/format.hpp"
 #include "ukdyn/io/provenance.hpp"
 #include "ukdyn/io/trajectory_files.hpp"
@@ -61,7 +62,12 @@ py::tuple run(const Model& model, const py::dict& settings, py::object q0, py::o
   ModelRun r;
   {
     ReleasedGil release;  // the run is C++ only (model files hold no Python code)
-    r = run_model(*m, o);
+    try {
+      r = run_model(*m, o);
+    } catch (const detail::ContactStartError& e) {
+      // at the friction's or contact's entry, as `ukdyn run` says it (app/run.cpp)
+      throw ContactStartModelError(detail::locate_contact_start(*m, e));
+    }
   }
   // what the run was made from, as `ukdyn run` records it (model_provenance): the source that
   // ukdyn.load kept (file or example, SHA-256 of its text, the overridden parameters)

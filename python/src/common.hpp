@@ -20,6 +20,19 @@
 namespace ukdyn::python {
 namespace py = pybind11;
 
+// --- errors ------------------------------------------------------------------------------------
+
+/// A model whose run cannot start because its contacts at the initial state cannot be solved
+/// (Painlevé's paradox), located at the friction's or contact's entry of the file
+/// (detail::locate_contact_start, as `ukdyn run` prints it): raised as
+/// ukdyn.ContactStartError, a ukdyn.ModelError that is also a ValueError (the run's misuse, as
+/// before it was located).
+class ContactStartModelError : public ModelError {
+ public:
+  /// The located error (ModelError's file, line, column, message, hint).
+  explicit ContactStartModelError(const ModelError& located) : ModelError(located) {}
+};
+
 // --- NumPy <-> Eigen -----------------------------------------------------------------------------
 
 /// A 1-D NumPy array that takes over `v` (no copy: the array owns the vector through a capsule).

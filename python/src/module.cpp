@@ -15,7 +15,8 @@ namespace {
 // the exception classes of ukdyn/errors.py (imported when first needed)
 py::object error_class(const char* name) { return py::module_::import("ukdyn.errors").attr(name); }
 
-// C++ exceptions -> Python: ModelError -> ukdyn.ModelError (file, line, column, message, hint),
+// C++ exceptions -> Python: ModelError -> ukdyn.ModelError (file, line, column, message, hint;
+// ContactStartModelError -> ukdyn.ContactStartError),
 // SolveError -> ukdyn.SolveError (status), InconsistentInitialState ->
 // ukdyn.InconsistentInitialState, SettingError and simulate's other misuse -> ValueError (their
 // text without "ukdyn::simulate: "); the rest follow pybind11's defaults (std::invalid_argument ->
@@ -25,7 +26,10 @@ void translate(std::exception_ptr p) {
   try {
     if (p) std::rethrow_exception(p);
   } catch (const ModelError& e) {
-    py::object cls = error_class("ModelError");
+    // (a run refused at its contacts' start: ukdyn.ContactStartError, also a ValueError)
+    py::object cls =
+        error_class(dynamic_cast<const ContactStartModelError*>(&e) != nullptr ? "ContactStartError"
+                                                                               : "ModelError");
     py::object err = cls(e.what(), e.file(), e.line(), e.column(), e.message(), e.hint());
     PyErr_SetObject(cls.ptr(), err.ptr());
   } catch (const InconsistentInitialState& e) {

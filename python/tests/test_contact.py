@@ -596,3 +596,34 @@ def test_the_viewer_draws_a_resting_robots_contact_force(browser, tmp_path):  # 
     page.js("ukdyn.show('contact', false)")
     assert _mask(page.pixels(), "#0050ff").sum() == 0
     assert page.errors() == []
+
+
+def test_painleves_rod_past_its_critical_mu_is_refused_at_the_friction_entry(cli, tmp_path):
+    """Painlevé's rod (tests/data/painleve_rod.yaml: a planar rod, m = 1, length 2, I = m l²/3,
+    on its end at tan θ = 2, sliding away on a rough floor): its critical mu is
+    (1 + 3c²)/(3 s c) = 4/3. Past it (mu = 1.4) the run's start refuses the contact with the
+    text `ukdyn run` prints, located at the friction's entry (line 13, column 5) — a
+    ContactStartError, which is a ModelError and a ValueError; just below (mu = 1.33) it runs
+    and the floor's normal force at the start is N = m g / (1 + 3c² − 3 mu s c)."""
+    path = str(pathlib.Path(__file__).resolve().parents[2] / "tests" / "data" / "painleve_rod.yaml")
+    th = math.atan(2.0)
+    c, s = math.cos(th), math.sin(th)
+    assert (1 + 3 * c * c) / (3 * s * c) == pytest.approx(4 / 3, rel=1e-14)
+    with pytest.raises(ukdyn.ContactStartError) as info:
+        ukdyn.load(path).simulate()
+    err = info.value
+    assert isinstance(err, ukdyn.ModelError) and isinstance(err, ValueError)
+    assert (err.file, err.line, err.column) == (path, 13, 5)
+    assert str(err).startswith(path + ":13:5: error: the initial state's contacts: contacts at "
+                               "t = 0: Painlevé's paradox at the contact 'floor' (mu = 1.4)")
+    assert "the critical mu is 1.333" in err.message
+    # (the command's text, the same)
+    run = subprocess.run([cli, "run", path, "-o", str(tmp_path / "run"), "--no-viewer"],
+                         capture_output=True, text=True, timeout=180, check=False)
+    assert run.returncode == 3, run.stderr  # (a model error, exit code 3)
+    assert run.stderr.strip() == str(err)
+    mu = 1.33
+    good = ukdyn.load(path, mu=mu).simulate()
+    n = 9.81 / (1 + 3 * c * c - 3 * mu * s * c)
+    floor = good["Qc_ideal.rod.y"][0] + good["Qc_nonideal.rod.y"][0]
+    assert floor == pytest.approx(n, rel=1e-8)

@@ -17,7 +17,7 @@ The C++ library (README.md) behind a thin module (docs/python.md):
   Dask cluster (docs/ensembles.md).
 
 Errors: :class:`ModelError`, :class:`SolveError`, :class:`InconsistentInitialState` (a
-ValueError), ValueError, RuntimeError (:mod:`ukdyn.errors`);
+ValueError), :class:`ContactStartError` (a ModelError and a ValueError), ValueError, RuntimeError (:mod:`ukdyn.errors`);
 Ctrl-C during a run raises :class:`Interrupted` (a KeyboardInterrupt) with the partial result.
 """
 
@@ -36,8 +36,8 @@ from ._ukdyn import (ControlSolution, ControlSolver, Controller, Model, Solution
 from .callables import (coulomb, constraint, controller, from_callables, nonideal, simulate,
                         viscous)
 from .ensemble import sweep, to_dataset
-from .errors import (EnergyBalanceWarning, InconsistentInitialState, Interrupted, ModelError,
-                     SolveError)
+from .errors import (ContactStartError, EnergyBalanceWarning, InconsistentInitialState,
+                     Interrupted, ModelError, SolveError)
 from .results import Result
 from .symbolic import from_sympy, sympy_to_yaml, velocities
 
@@ -63,7 +63,7 @@ def read_hdf5(path: str) -> "tuple[Result, dict]":
 
 
 __all__ = [
-    "ControlSolution", "ControlSolver", "Controller", "EnergyBalanceWarning",
+    "ContactStartError", "ControlSolution", "ControlSolver", "Controller", "EnergyBalanceWarning",
     "InconsistentInitialState", "Interrupted", "LinearModel",
     "Model", "ModelError", "Result",
     "Solution", "SolveError", "Solver", "System", "constraint", "controller", "coulomb",

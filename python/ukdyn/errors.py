@@ -5,7 +5,8 @@ The C++ library's errors arrive in Python as:
 
 * :class:`ModelError` for a bad model file (the C++ ``ukdyn::ModelError``): ``str(err)`` is the
   C++ ``what()``, ``FILE:LINE:COLUMN: error: MESSAGE (hint: HINT)``, and the parts are
-  attributes;
+  attributes; :class:`ContactStartError`, a ModelError and a ValueError, for a model whose
+  contacts cannot be solved at its start (Painlevé's paradox), located at their entries;
 * :class:`SolveError` for an evaluation or a run that failed numerically (the C++
   ``ukdyn::SolveError``, or a run whose status is not ``ok``);
 * :class:`ValueError` for misuse (the C++ ``std::invalid_argument``: wrong sizes, unknown
@@ -24,8 +25,8 @@ from __future__ import annotations
 
 from typing import Any, Optional
 
-__all__ = ["EnergyBalanceWarning", "InconsistentInitialState", "Interrupted", "ModelError",
-           "SolveError"]
+__all__ = ["ContactStartError", "EnergyBalanceWarning", "InconsistentInitialState", "Interrupted",
+           "ModelError", "SolveError"]
 
 
 class ModelError(RuntimeError):
@@ -51,6 +52,17 @@ class ModelError(RuntimeError):
         self.column = column
         self.message = message or what
         self.hint = hint
+
+
+class ContactStartError(ModelError, ValueError):
+    """A model's run that cannot start because its contacts at the initial state cannot be
+    solved: Painlevé's paradox (a sliding Coulomb contact past its critical mu), or an LCP of the
+    contacts with no solution (docs/contact.md, "Painlevé").
+
+    A :class:`ModelError` located as ``ukdyn run`` prints it — at the Coulomb friction's entry
+    on the contact (where mu is given), else the contact's own — and a ``ValueError`` (the run's
+    misuse, as a run of a system of callables raises it, unlocated).
+    """
 
 
 class SolveError(RuntimeError):
