@@ -33,6 +33,7 @@ packages=(
   libtinyxml-dev                       # the XML parser under urdfdom 3: located XML errors (src/multibody/tree/urdf_xml.cpp)
   libmujoco-dev                        # bench_mujoco: MuJoCo 2.2.2 on the shared problems (optional)
   clang libclang-rt-14-dev             # fuzz/: libFuzzer and the sanitizer runtimes of clang
+  procps util-linux                    # .ci/run: pgrep (stopping its background builds), chrt (their priority)
   clang-format                         # scripts/format.sh: the house style, checked by CI
   libjs-three                          # three.js, embedded in animation.html (ukdyn run --viewer)
   help2man lintian                     # the man page from --help; Debian's checks of the .deb (tests/packaging)
