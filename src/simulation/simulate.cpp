@@ -200,6 +200,7 @@ Trajectory detail::simulate_observed(const System& sys, const Eigen::Ref<const V
   const detail::WorkLayout layout(sys, true, quad);
   detail::ContactEvents contacts(sys, ws, std::size_t(2 * n + layout.count), o.t_end - o.t_start);
   contacts.set_units(o.units);
+  if (o.integrator == Integrator::kBDF) contacts.set_flight_tolerance(o.rtol);
   // (false: a gap not finite at the start, reported below as the run's status)
   bool contacts_started = true;
   if (contacts.any()) {

@@ -275,5 +275,89 @@ TEST(ContactRest, HighRestitutionBallRestsAtTheSameTimeWhateverTheRunsSpan) {
   }
 }
 
+// Under BDF a flight far below the integrator's tolerance is not followed: CVODE restarts at
+// order 1 after every event, whose error on a flight at constant acceleration is h² a / 2 per
+// step (the Runge–Kutta methods integrate it exactly). The rocking block's 51st landing came 35
+// times faster than its 50th (1.8e-6 m/s) and it rested 2.7e-4 s after t∞; a ball on a table
+// vibrating at A sin ωt stalled at steps of 5e-16 s. A landing whose flight rose less than
+// 10 rtol of its gap's scale (apex ≈ speed × flight time / 4) now ends the sequence as the rest
+// criterion does, noted as such (ContactEvents::set_flight_tolerance): every landing before t∞,
+// at the quadrature's times while resolved, no landing faster than the one before; the rest
+// within the last resolved flights of t∞, m g / 2 per corner; the table's ball rests as under
+// dopri5, in steps of a normal size.
+TEST(ContactRest, UnderBdfAnAccumulationEndsWhereItsFlightsFallBelowTheTolerance) {
+  const Rocking housner(0.2, 0.5, 9.81);
+  const std::vector<double> landing = housner.landings(0.2, 60);
+  const double t_inf = landing.back();
+  for (const double l : {1.0, 1000.0}) {
+    SCOPED_TRACE(l == 1.0 ? "SI" : "mm");
+    Model model = parse_model(rocking_block(l == 1.0 ? "m" : "mm", 0.2 * l, 0.5 * l, 9.81 * l));
+    model.options.integrator = Integrator::kBDF;
+    const Trajectory tr = simulate(model.system, model.q0, model.qd0, model.options);
+    ASSERT_EQ(tr.stats.status, Status::kOk) << tr.stats.message;
+    // (BDF restarts at order 1 at each landing: 5656 steps in SI, 3538 in mm; dopri5 takes 442)
+    EXPECT_LT(tr.stats.steps, 8000);
+    std::vector<ContactEvent> landings;
+    for (const ContactEvent& e : tr.stats.contact_events) {
+      if (e.kind == ContactEvent::Kind::kImpact ||
+          (e.kind == ContactEvent::Kind::kRest && e.speed_before < 0.0)) {
+        landings.push_back(e);
+      }
+    }
+    ASSERT_GE(landings.size(), 30u);
+    ASSERT_LE(landings.size(), 61u);
+    for (std::size_t k = 0; k < landings.size(); ++k) {
+      const ContactEvent& e = landings[k];
+      EXPECT_EQ(e.constraint, k % 2 ? 2 : 1) << k;
+      EXPECT_LT(e.t, t_inf) << k;
+      if (k > 0) {
+        EXPECT_LT(-e.speed_before, -landings[k - 1].speed_before) << k;
+      }
+      // (the first 30 at the quadrature's times, to BDF's tolerance)
+      if (k < 30) {
+        EXPECT_NEAR(e.t, landing[k], 1e-6) << k;
+      }
+    }
+    const ContactEvent& rest = landings.back();
+    EXPECT_EQ(rest.kind, ContactEvent::Kind::kRest);
+    EXPECT_GT(t_inf - rest.t, 0.0);
+    EXPECT_LT(t_inf - rest.t, 2e-3);
+    for (const ContactEvent& e : tr.stats.contact_events) {
+      if (e.t > rest.t) ADD_FAILURE() << "an event after the rest at t = " << e.t;
+    }
+    bool noted = false;
+    for (const std::string& note : tr.stats.notes)
+      noted = noted || note.find("below what BDF follows at rtol 1e-10") != std::string::npos;
+    EXPECT_TRUE(noted);
+    const std::size_t last = tr.t.size() - 1;
+    EXPECT_NEAR(tr.lambda_total[2 * last], 0.5 * 9.81 * l, 1e-8 * 9.81 * l);
+    EXPECT_NEAR(tr.lambda_total[2 * last + 1], 0.5 * 9.81 * l, 1e-8 * 9.81 * l);
+  }
+  // the ball on the vibrating table (m = 0.1, dropped from 0.3 m, e = 0.5, A = 0.01 m, ω = 20
+  // rad/s, the file's default tolerances): dopri5 rests at its 21st landing, 0.7442064768277 s
+  // by an independent event-driven integration (scipy's DOP853 at rtol 1e-12 from impact to
+  // impact, the same rest rule); BDF now rests within 1e-4 s before it
+  const std::string table =
+      "parameters: {m: 0.1, g: 9.81, h0: 0.3, e: 0.5, A: 0.01, w: 20}\n"
+      "coordinates: [y]\nkinetic_energy: 0.5*m*y_dot^2\npotential_energy: m*g*y\n"
+      "constraints:\n"
+      "  - {name: table, holonomic: y - A*sin(w*t), unilateral: true, restitution: e}\n"
+      "initial: {q: {y: h0}}\nsimulate: {t_end: 1}\noutput: {every: 0}\n";
+  Model ball = parse_model(table);
+  const Trajectory ref = simulate(ball.system, ball.q0, ball.qd0, ball.options);
+  ball.options.integrator = Integrator::kBDF;
+  const Trajectory tr = simulate(ball.system, ball.q0, ball.qd0, ball.options);
+  ASSERT_EQ(ref.stats.status, Status::kOk) << ref.stats.message;
+  ASSERT_EQ(tr.stats.status, Status::kOk) << tr.stats.message;
+  EXPECT_LT(tr.stats.steps, 5000);
+  const auto rest_ref = events_of(ref, 0, ContactEvent::Kind::kRest);
+  const auto rest = events_of(tr, 0, ContactEvent::Kind::kRest);
+  ASSERT_EQ(rest_ref.size(), 1u);
+  ASSERT_EQ(rest.size(), 1u);
+  EXPECT_NEAR(rest_ref[0].t, 0.7442064768277, 1e-9);
+  EXPECT_LT(rest[0].t, rest_ref[0].t + 1e-9);
+  EXPECT_NEAR(rest[0].t, rest_ref[0].t, 1e-4);
+}
+
 }  // namespace UKDYN_TEST_FILE
 }  // namespace ukdyn
