@@ -775,5 +775,53 @@ TEST(Contact, EventsHandledAtOneInstantAreBoundedWithAnErrorNamingTheContacts) {
   EXPECT_TRUE(events.handle(0.5 + 1e-9, x.data(), stats)) << events.failure();
 }
 
+// ---- a contact that stays closed runs as the bilateral constraint it replaces (item 6) --------
+
+// bench/data/closed_contact/: the ladder on a frictionless wall and floor up to t = 0.45 s (it
+// leaves the wall at 0.4597 s) and a frictionless ball sliding and spinning on the ground, each
+// with unilateral contacts and as a twin with the same rows bilateral. Closed all the way, a
+// contact is an ordinary row of A: the same steps, evaluations and samples, bit for bit, as the
+// twin's (the cost is bench/RESULTS.md's, "A closed contact against the bilateral constraint",
+// callgrind); and the forces are the closed forms: the ladder's wall pushes with
+// N = (3/2) m g cos θ ((3/2) sin θ − sin θ0), the ground carries the ball's m g.
+TEST(Contact, AClosedContactRunsAsItsBilateralTwinStepForStep) {
+  const std::string dir = std::string(UKDYN_TESTS_DIR) + "/../bench/data/closed_contact/";
+  for (const char* name : {"ladder", "ball"}) {
+    const Model uni = load_model(dir + name + "_unilateral.yaml");
+    const Model bi = load_model(dir + name + "_bilateral.yaml");
+    for (const Integrator method : {Integrator::kDopri5, Integrator::kRK4}) {
+      SimulationOptions ou = uni.options, ob = bi.options;
+      ou.integrator = ob.integrator = method;
+      ou.step = ob.step = 1e-3;
+      ou.output_every = ob.output_every = 0.01;
+      const Trajectory tu = simulate(uni.system, uni.q0, uni.qd0, ou);
+      const Trajectory tb = simulate(bi.system, bi.q0, bi.qd0, ob);
+      ASSERT_EQ(tu.stats.status, Status::kOk) << name << ": " << tu.stats.message;
+      ASSERT_EQ(tb.stats.status, Status::kOk) << name << ": " << tb.stats.message;
+      EXPECT_TRUE(tu.stats.contact_events.empty()) << name;
+      EXPECT_EQ(tu.stats.steps, tb.stats.steps) << name;
+      EXPECT_EQ(tu.stats.evaluations, tb.stats.evaluations) << name;
+      ASSERT_EQ(tu.t, tb.t) << name;
+      EXPECT_EQ(tu.q, tb.q) << name;
+      EXPECT_EQ(tu.qd, tb.qd) << name;
+      EXPECT_EQ(tu.lambda, tb.lambda) << name;
+      EXPECT_GE(tu.samples(), 40) << name;
+      for (Index k = 0; k < tu.samples(); ++k) {
+        const std::size_t i = std::size_t(k);
+        if (std::string(name) == "ladder") {
+          // (q = x, y, th; the wall's multiplier is its force along +x: row 0)
+          const double m = 2.0, th0 = std::acos(0.5), th = tu.q[3 * i + 2];
+          const double N = 1.5 * m * kG * std::cos(th) * (1.5 * std::sin(th) - std::sin(th0));
+          EXPECT_NEAR(tu.lambda[std::size_t(tu.m) * i], N, 1e-8 * m * kG) << tu.t[i];
+        } else {
+          // (the ball's centre z, at column 2, carries m g; x moves at 0.5 m/s)
+          EXPECT_NEAR(tu.Qc_ideal[std::size_t(tu.n) * i + 2], 0.5 * kG, 1e-9) << tu.t[i];
+          EXPECT_NEAR(tu.q[std::size_t(tu.n) * i], 0.5 * tu.t[i], 1e-9) << tu.t[i];
+        }
+      }
+    }
+  }
+}
+
 }  // namespace UKDYN_TEST_FILE
 }  // namespace ukdyn
