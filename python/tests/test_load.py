@@ -109,6 +109,24 @@ def test_unknown_override_is_a_model_error_naming_the_parameters():
         ukdyn.load("pendulum", nosuch=1.0)
     assert "the model has no parameter 'nosuch'" in str(err.value)
     assert err.value.line == 0
+    # (named as the keyword argument, not as the command's --set)
+    assert err.value.message.startswith("load(nosuch): the model has no parameter 'nosuch'")
+    assert "--set" not in str(err.value)
+
+
+def test_an_override_out_of_range_is_named_as_the_keyword_argument():
+    """ukdyn.load(..., e=1.5) of a contact whose restitution is e: the ModelError is located at
+    the restitution's value and names the keyword argument (the command names ``--set e=1.5``)."""
+    text = ("parameters: {e: 0.5}\ncoordinates: [z]\nkinetic_energy: 0.5*z_dot^2\n"
+            "potential_energy: 9.81*z\nconstraints:\n"
+            "  - {name: floor, holonomic: z, unilateral: true, restitution: e}\n"
+            "initial: {q: {z: 1}}\n")
+    with pytest.raises(ukdyn.ModelError) as err:
+        ukdyn.parse(text, "ball.yaml", e=1.5)
+    assert (err.value.file, err.value.line) == ("ball.yaml", 6)
+    assert "parse(e=1.5): " in str(err.value) and "--set" not in str(err.value)
+    assert err.value.message.startswith("parse(e=1.5): ")
+    assert "got 1.5" in err.value.message
 
 
 def test_override_that_is_not_a_number_is_a_value_error():

@@ -135,11 +135,35 @@ def load(source: "str | os.PathLike[str]", /, *, tables: Optional[dict] = None,
     values = _overrides("load", overrides)
     given = _tables("load", tables)
     path = _os.fspath(source)
-    if (not isinstance(source, str) or _os.path.exists(path)
-            or path.endswith((".yaml", ".yml", ".urdf"))
-            or _os.sep in path):
-        return _ukdyn._load_file(path, values, given)
-    return _ukdyn._load_example(path, values, given)
+    with _as_keywords("load"):
+        if (not isinstance(source, str) or _os.path.exists(path)
+                or path.endswith((".yaml", ".yml", ".urdf"))
+                or _os.sep in path):
+            return _ukdyn._load_file(path, values, given)
+        return _ukdyn._load_example(path, values, given)
+
+
+class _as_keywords:
+    """A ModelError that names an override as the command gives it (``--set mu=-1: …``) names
+    it as the keyword argument of ``ukdyn.load`` or ``ukdyn.parse`` instead (``load(mu=-1):
+    …``): the same error, file, line, column and hint."""
+
+    def __init__(self, who: str) -> None:
+        self.who = who
+
+    def __enter__(self) -> None:
+        return None
+
+    def __exit__(self, kind: Any, err: Any, trace: Any) -> bool:
+        if not isinstance(err, ModelError) or "--set " not in str(err):
+            return False
+        import re
+        pattern = re.compile(r"--set ([^:]*)")
+
+        def keywords(text: str) -> str:
+            return pattern.sub(lambda m: f"{self.who}({m.group(1)})", text)
+        raise type(err)(keywords(str(err)), err.file, err.line, err.column,
+                        keywords(err.message), keywords(err.hint)) from None
 
 
 def parse(text: str, file: str = "<string>", *, tables: Optional[dict] = None,
@@ -149,7 +173,9 @@ def parse(text: str, file: str = "<string>", *, tables: Optional[dict] = None,
 
     Raises :class:`ModelError` as :func:`load`.
     """
-    return _ukdyn._parse(text, file, _overrides("parse", overrides), _tables("parse", tables))
+    values, given = _overrides("parse", overrides), _tables("parse", tables)
+    with _as_keywords("parse"):
+        return _ukdyn._parse(text, file, values, given)
 
 
 def _model_simulate(self: Model, *, t_end: Optional[float] = None, q0: Any = None,

@@ -435,6 +435,17 @@ class Parser {
     }
   }
 
+  // f(args) as written, for messages: GiNaC's value of the call may be a simplification of it
+  // (sqrt(-1) is I: the message said "(I) is complex (I)")
+  std::string written(const FunctionInfo& f, const GiNaC::exvector& args) const {
+    std::string text = std::string(f.name) + "(";
+    for (std::size_t a = 0; a < args.size(); ++a) {
+      const std::string arg = printed(args[a]);
+      text += (a ? ", " : "") + (arg.size() > 60 ? arg.substr(0, 57) + "..." : arg);
+    }
+    return text + ")";
+  }
+
   // f(args) with the constants' values: log(0) and tan(acos(0)) are undefined, and sqrt and abs
   // at 0, asin and acos at 1 or -1 and atan2 at (0, 0) have no derivative
   void check_call(const FunctionInfo& f, const GiNaC::exvector& args, std::size_t at) const {
@@ -444,7 +455,7 @@ class Parser {
                        [&](const GiNaC::ex& a) { return has_input(a); })) {
         check_pole(f, args, at);
         const GiNaC::ex value = build([&] { return call(f, args); }, at);
-        check_constant_value(value, brief(value), at);
+        check_constant_value(value, written(f, args), at);
       }
       return;
     }
@@ -458,7 +469,7 @@ class Parser {
     if (!inputs) {
       // a constant: finite and real, away from a pole; no derivative taken
       check_pole(f, args, at);
-      check_constant_value(value, brief(call(f, args)), at);
+      check_constant_value(value, written(f, args), at);
       return;
     }
     const std::string name = f.name;

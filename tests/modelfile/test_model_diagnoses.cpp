@@ -58,6 +58,12 @@ TEST(ModelDiagnoses, ComplexConstantsAreLocatedAtTheirFunction) {
   e = error_of(with_potential("(-8)^(1/3)*x"));
   EXPECT_TRUE(contains(e, "m.yaml:3:23: error:")) << e;
   EXPECT_TRUE(contains(e, "is complex")) << e;
+  // named as written, not by GiNaC's value (sqrt(-1) is I: the message said "(I) is complex (I)")
+  e = error_of(with_potential("sqrt(-1)*x"));
+  EXPECT_TRUE(contains(e,
+                       "m.yaml:3:19: error: in potential_energy: cannot evaluate: sqrt(-1) is "
+                       "complex (I)"))
+      << e;
 }
 
 TEST(ModelDiagnoses, OverflowingConstantsAreLocated) {

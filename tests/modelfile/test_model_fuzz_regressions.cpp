@@ -100,7 +100,7 @@ TEST(ModelFuzzRegressions, ParameterValueThatMakesAComplexConstant) {
   const ModelError e =
       error_of("parameters: {L: 1}\ncoordinates: [x]\nmass_matrix: [[sqrt(L - 2)]]\n");
   EXPECT_TRUE(contains(e.what(),
-                       "f.yaml:3:16: error: in mass_matrix: cannot evaluate: (sqrt(-2+L)) is "
+                       "f.yaml:3:16: error: in mass_matrix: cannot evaluate: sqrt(-2+L) is "
                        "complex (I)"))
       << e.what();
   EXPECT_FALSE(contains(e.what(), "ukdyn::expr")) << e.what();
