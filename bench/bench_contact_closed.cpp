@@ -47,9 +47,7 @@ void BM_ClosedContact(benchmark::State& state) {
   state.counters["per_step"] = benchmark::Counter(
       double(s.steps), benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
 }
-BENCHMARK(BM_ClosedContact)
-    ->ArgsProduct({{0, 1, 2, 3}, {0, 1}})
-    ->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_ClosedContact)->ArgsProduct({{0, 1, 2, 3}, {0, 1}})->Unit(benchmark::kMillisecond);
 
 }  // namespace
 
