@@ -531,8 +531,9 @@ bool ContactEvents::resolve(double t, double* x, Index event, RunStatistics& sta
       if (speed > 0.0 && !closed_[i]) {
         fastest_[i] = std::max(fastest_[i], speed);
         const double flight = t - left_[i];
+        // (an approach at a rate of roundoff is no landing to judge: still_rate)
         const bool unresolved =
-            flight_rtol_ > 0.0 && flight > 0.0 &&
+            flight_rtol_ > 0.0 && flight > 0.0 && speed > still_rate(set[std::size_t(j)]) &&
             0.25 * speed * flight <
                 kUnresolvedFlight * flight_rtol_ * gap_scale(sys_, ws_, set[std::size_t(j)]);
         // (e = 0 too: a plastic corner of a rocking block rests, and its group with it)
@@ -617,13 +618,16 @@ bool ContactEvents::resolve(double t, double* x, Index event, RunStatistics& sta
       // lifts at r times the landing speed, so that no contact's own sequence ever ends (each
       // is released at the other's impacts), and the impacts accumulate at t∞ (docs/contact.md,
       // "Rest")
+      // (an unresolved landing under BDF holds the normals leaving slower than it came; the
+      // slip it stops stays at the rest criterion's roundoff, still: the hold's impulse is not
+      // checked against the friction cone)
       std::vector<Index> rows;
       VectorXd still(m);
       for (Index j = 0; j < m; ++j) {
         const std::size_t i = which[std::size_t(j)];
         const double v = dyn_.v_after()[j];
-        still[j] = std::max(kRestFraction * std::max(fastest_[i], rest_fastest), unresolved_speed);
-        if (v <= still[j]) {
+        still[j] = kRestFraction * std::max(fastest_[i], rest_fastest);
+        if (v <= std::max(still[j], unresolved_speed)) {
           rows.push_back(j);
           held[std::size_t(j)] = v > still_rate(set[std::size_t(j)]);
           left_at[std::size_t(j)] = v;
@@ -753,11 +757,11 @@ bool ContactEvents::resolve(double t, double* x, Index event, RunStatistics& sta
       impacts_[i] = 0;
     }
   }
-  // (the flights that start here: a contact left open that leaves the impact, or was closed)
+  // (the flights that start here: a contact left open that separates — it leaves the impact,
+  // or the LCP gives it g'' > 0 from g' ≈ 0 after a plastic landing or a release)
   for (Index j = 0; j < m; ++j) {
     const std::size_t i = which[std::size_t(j)];
-    if (!closed_[i] && (was_closed[i] || v_minus[std::size_t(j)] > still_rate(set[std::size_t(j)])))
-      left_[i] = t;
+    if (!closed_[i] && (separates[i] || (release && Index(i) == event))) left_[i] = t;
   }
   apply();
   return true;
