@@ -315,9 +315,14 @@ class Parser {
   }
 
   // e as printed, shortened to about 60 characters (for messages)
-  static std::string brief(const GiNaC::ex& e) {
-    std::string s = printed(e);
+  // text longer than 60 characters cut to its first 57 and "..."
+  static std::string shortened(std::string s) {
     if (s.size() > 60) s = s.substr(0, 57) + "...";
+    return s;
+  }
+
+  static std::string brief(const GiNaC::ex& e) {
+    const std::string s = shortened(printed(e));
     const bool compound =
         !GiNaC::is_a<GiNaC::symbol>(e) && !GiNaC::is_a<GiNaC::function>(e) &&
         !(GiNaC::is_a<GiNaC::numeric>(e) && GiNaC::ex_to<GiNaC::numeric>(e).is_integer() &&
@@ -439,10 +444,8 @@ class Parser {
   // (sqrt(-1) is I: the message said "(I) is complex (I)")
   std::string written(const FunctionInfo& f, const GiNaC::exvector& args) const {
     std::string text = std::string(f.name) + "(";
-    for (std::size_t a = 0; a < args.size(); ++a) {
-      const std::string arg = printed(args[a]);
-      text += (a ? ", " : "") + (arg.size() > 60 ? arg.substr(0, 57) + "..." : arg);
-    }
+    for (std::size_t a = 0; a < args.size(); ++a)
+      text += (a ? ", " : "") + shortened(printed(args[a]));
     return text + ")";
   }
 

@@ -530,12 +530,12 @@ bool ContactEvents::resolve(double t, double* x, Index event, RunStatistics& sta
       e[j] = sys_.constraint(set[std::size_t(j)]).restitution();
       if (speed > 0.0 && !closed_[i]) {
         fastest_[i] = std::max(fastest_[i], speed);
-        const double flight = t - left_[i];
-        // (an approach at a rate of roundoff is no landing to judge: still_rate)
+        // (the flight since it last left, its apex ≈ speed × time / 4; an approach at a rate of
+        // roundoff is no landing to judge: still_rate)
+        const double flight = t - left_[i], height = 0.25 * speed * flight;
         const bool unresolved =
             flight_rtol_ > 0.0 && flight > 0.0 && speed > still_rate(set[std::size_t(j)]) &&
-            0.25 * speed * flight <
-                kUnresolvedFlight * flight_rtol_ * gap_scale(sys_, ws_, set[std::size_t(j)]);
+            height < kUnresolvedFlight * flight_rtol_ * gap_scale(sys_, ws_, set[std::size_t(j)]);
         // (e = 0 too: a plastic corner of a rocking block rests, and its group with it)
         if (speed < kRestFraction * fastest_[i] || unresolved) {
           e[j] = 0.0;
@@ -543,7 +543,7 @@ bool ContactEvents::resolve(double t, double* x, Index event, RunStatistics& sta
           rest_fastest = std::max(rest_fastest, fastest_[i]);
           if (unresolved) {
             unresolved_speed = std::max(unresolved_speed, speed);
-            apex[std::size_t(j)] = 0.25 * speed * flight;
+            apex[std::size_t(j)] = height;
           }
         }
       }
