@@ -9,6 +9,7 @@
 
 #include "dynamics/engine.hpp"
 #include "dynamics/internal.hpp"
+#include "simulation/contact_events.hpp"
 #include "simulation/integrator.hpp"
 #include "ukdyn/dynamics/forward.hpp"
 #include "ukdyn/dynamics/projection.hpp"
@@ -49,6 +50,7 @@ ConstrainedOde::ConstrainedOde(const System& sys, Workspace& ws, bool quiet,
       works_(sys, quiet, quad),
       quad_(works_.quadrature >= 0 ? quad : nullptr),
       rare_(works_.drive >= 0 || quad_ != nullptr),
+      channels_(rare_),
       share_(VectorXd::Zero(sys.coordinate_count())),
       violation_rows_(std::size_t(sys.constraint_rows()), 0),
       off_manifold_tolerance_(off_manifold_tolerance) {
@@ -164,10 +166,12 @@ bool ConstrainedOde::operator()(const double* x, double* dxdt, double t_in) {
     w[works_.external] =
         works_.scale(works_.external, unit) * sys_.external_power(q, qd, t, ws_.callables.get());
   }
-  // P_drive, the quadratures z' = g(q, q', t, z) and the contacts' screen (one test for all:
-  // most runs have none)
-  if (rare_) [[unlikely]]
-    rare_channels(x, dxdt, t, drive);
+  // the unilateral contacts' release screen, then P_drive, the quadratures z' = g(q, q', t, z)
+  // and the slip screen (one test for all: most runs have none)
+  if (rare_) [[unlikely]] {
+    if (contacts_ != nullptr) contacts_->screen(t);
+    if (channels_) rare_channels(x, dxdt, t, drive);
+  }
   return true;
 }
 

@@ -63,11 +63,15 @@ ContactEvents::ContactEvents(const System& sys, Workspace& ws, std::size_t x_siz
   for (std::size_t i = 0; i < dyn_.contacts().size(); ++i) {
     position_[std::size_t(dyn_.contacts()[i])] = i;
   }
+  closed_rows_.reserve(dyn_.contacts().size());
 }
 
-void ContactEvents::apply() const {
+void ContactEvents::apply() {
+  closed_rows_.clear();
   for (std::size_t i = 0; i < closed_.size(); ++i) {
-    ws_.activity_override[std::size_t(dyn_.contacts()[i])] = closed_[i] ? 1 : 0;
+    const Index k = dyn_.contacts()[i];
+    ws_.activity_override[std::size_t(k)] = closed_[i] ? 1 : 0;
+    if (closed_[i]) closed_rows_.push_back(sys_.row_offset(k));
   }
 }
 
@@ -147,8 +151,8 @@ double ContactEvents::locate(double t0, double t1, const SegmentHooks::Dense& de
   return gap ? (lo > t0 ? lo : hi) : hi;
 }
 
-double ContactEvents::find(double t0, const double* x0, double t1, const double* x1,
-                           const SegmentHooks::Dense& dense) {
+double ContactEvents::search(double t0, const double* x0, double t1, const double* x1,
+                             const SegmentHooks::Dense& dense) {
   double first = kNaN;
   event_ = -1;
   nonfinite_event_.clear();
@@ -223,20 +227,25 @@ double ContactEvents::find(double t0, const double* x0, double t1, const double*
   }
   // (the stages up to t1 are screened; a later one — of a rejected longer step — waits for the
   // step that reaches it)
+  any_pulled_ = false;
   for (double& p : pulled_) {
     if (!(p > t1)) p = kNaN;
+    any_pulled_ = any_pulled_ || !std::isnan(p);
   }
   return first;
 }
 
-void ContactEvents::screen(double t) {
+void ContactEvents::screen_pulls(double t) {
   double largest = -1.0;  // (the largest load, once a multiplier is negative)
   for (std::size_t i = 0; i < closed_.size(); ++i) {
     if (!closed_[i]) continue;
     const double lambda = multiplier(dyn_.contacts()[i]);
     if (!(lambda < 0.0)) continue;
     if (largest < 0.0) largest = largest_load();
-    if (lambda < -kUnloaded * largest && !(pulled_[i] <= t)) pulled_[i] = t;
+    if (lambda < -kUnloaded * largest && !(pulled_[i] <= t)) {
+      pulled_[i] = t;
+      any_pulled_ = true;
+    }
   }
 }
 

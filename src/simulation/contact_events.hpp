@@ -104,8 +104,9 @@ class ContactEvents {
   }
   // true when the system has unilateral constraints
   bool any() const { return !dyn_.contacts().empty(); }
-  // each contact's mode into ws.activity_override (closed 1, open 0)
-  void apply() const;
+  // each contact's mode into ws.activity_override (closed 1, open 0), and the rows of the closed
+  // ones for screen() and find()'s quiet step. O(contacts), no allocation
+  void apply();
   // the initial modes at (t, x = [q; q'; …]): an open gap, a closed contact that pushes, or an
   // impact at the start (x's velocities jump). @throws InconsistentInitialState naming a
   // penetrated contact (g < −tolerance), ContactStartError when the contacts cannot be solved
@@ -115,13 +116,35 @@ class ContactEvents {
   // the first impact or release in (t0, t1] (see SegmentHooks::find_event), NaN for none; or
   // the last time before an open contact's gap or gap rate turns non-finite (NaN, Inf: its
   // expression left its domain), where handle() then stops the run
+  // A step of a run whose contacts are all closed, none pulling at a stage (screen) or in the
+  // step's last evaluation, has none: one sign test per contact, inline (bench/RESULTS.md, "A
+  // closed contact against the bilateral constraint it replaces"); else search()
   double find(double t0, const double* x0, double t1, const double* x1,
-              const SegmentHooks::Dense& dense);
-  // at each evaluation of the integrator's stages (ConstrainedOde::set_screen), after its forward
-  // dynamics at time t: the earliest such t at which a closed contact's multiplier pulls (below
-  // −kUnloaded of the largest load), per contact, for find()'s release test. O(contacts), no
-  // evaluation, no allocation
-  void screen(double t);
+              const SegmentHooks::Dense& dense) {
+    if (closed_rows_.size() == closed_.size() && !any_pulled_ && ws_.status == Status::kOk) {
+      const double* lambda = ws_.lambda.data();
+      const double* extra = ws_.lambda_nonideal.data();
+      bool push = true;
+      for (const Index row : closed_rows_) push = push && lambda[row] + extra[row] > 0.0;
+      if (push) return std::numeric_limits<double>::quiet_NaN();
+    }
+    return search(t0, x0, t1, x1, dense);
+  }
+  // at each evaluation of the integrator's stages (ConstrainedOde::watch_releases), after its
+  // forward dynamics at time t: the earliest such t at which a closed contact's multiplier pulls
+  // (below −kUnloaded of the largest load), per contact, for find()'s release test. One sign
+  // test per closed contact while all push (inline: the common case of every evaluation of a
+  // run with contacts, ~4 instructions a contact); no evaluation, no allocation
+  void screen(double t) {
+    const double* lambda = ws_.lambda.data();
+    const double* extra = ws_.lambda_nonideal.data();
+    for (const Index row : closed_rows_) {
+      if (!(lambda[row] + extra[row] >= 0.0)) [[unlikely]] {
+        screen_pulls(t);
+        return;
+      }
+    }
+  }
   // applies the event find() located, at (t, x) (x's velocities may jump); false with
   // failure() set when the contacts' dynamics cannot be solved there, or the event is a
   // non-finite gap
@@ -168,6 +191,14 @@ class ContactEvents {
                 double level);
   // f of contact k at (t, x): its gap, or its multiplier in the run's evaluation
   double value(Index k, bool gap, double t, const double* x);
+  // find() for a step that may hold an event: every contact's impact or release test.
+  // O(contacts) without an event; an open contact's test is one or two gap evaluations
+  // (kSweepPoints more when it moves), a release's ≤ 2 evaluations and a bisection
+  double search(double t0, const double* x0, double t1, const double* x1,
+                const SegmentHooks::Dense& dense);
+  // screen()'s rest, once a closed contact's multiplier is negative or NaN: pulled_ and
+  // any_pulled_. O(contacts)
+  void screen_pulls(double t);
   // closed contact k's multiplier at (t, x) pulls beyond roundoff of zero (below −kUnloaded of
   // the largest load of the closed contacts in that evaluation). One evaluation
   bool pulls(Index k, double t, const double* x);
@@ -228,6 +259,9 @@ class ContactEvents {
   std::vector<double> left_;     // (contacts) when it last left an impact or a release, or NaN
   double flight_rtol_ = 0.0;     // see set_flight_tolerance (0: off)
   std::vector<double> pulled_;   // (contacts) earliest stage time it pulled (screen), or NaN
+  bool any_pulled_ = false;      // some pulled_ is not NaN
+  // (closed contacts) their rows, sys_.row_offset(k) (multiplier), as apply() set the modes
+  std::vector<Index> closed_rows_;
   std::vector<unsigned char> moving_;  // (contacts) 1 once its gap was seen to depend on t
   std::vector<std::size_t> position_;  // (constraints) k's position in contacts(), or K
   Index event_ = -1;                   // the contact of the event find() located

@@ -21,6 +21,8 @@
 
 namespace ukdyn::detail {
 
+class ContactEvents;  // (simulation/contact_events.hpp)
+
 // The work channels integrated after q and q' (docs/simulation.md, "Energy balance"): their
 // offsets in x after 2n, or −1 when the system does not need the channel.
 //   nonideal  W_nonideal' = q'ᵀ Qc_nonideal                         (always)
@@ -118,13 +120,22 @@ class ConstrainedOde {
   // that the user's callables make at a breakpoint. Infinite ends: no clamping.
   void set_window(double a, double b);
 
+  // contacts->screen(t) is called after each successful evaluation at t, with the workspace
+  // that evaluation filled (ws.lambda): the unilateral contacts' release screening at the
+  // integrator's stages, a direct call of its inline sign tests (one per closed contact). Null
+  // (the default): none, and nothing to pay but the rare_ test
+  void watch_releases(ContactEvents* contacts) {
+    contacts_ = contacts;
+    rare_ = rare_ || contacts_ != nullptr;
+  }
   // screen(t, x) is called after each successful evaluation at (t, x), with the workspace that
-  // evaluation filled (ws.lambda): the contacts' release and slip screening at the integrator's
-  // stages (ContactEvents::screen, Run::screen_sticking). Runs without contacts set none and pay
-  // nothing (the rare_ test)
+  // evaluation filled (ws.lambda): the Coulomb contacts' slip screening at the integrator's
+  // stages (Run::screen_sticking). Runs without sticking friction set none and pay nothing (the
+  // rare_ test)
   void set_screen(std::function<void(double t, const double* x)> screen) {
     screen_ = std::move(screen);
     rare_ = rare_ || static_cast<bool>(screen_);
+    channels_ = channels_ || static_cast<bool>(screen_);
   }
 
   const System& system() const { return sys_; }
@@ -148,8 +159,10 @@ class ConstrainedOde {
   Index n_;
   WorkLayout works_;
   const Quadratures* quad_ = nullptr;
-  bool rare_ = false;  // drives, quadratures or a screen: rare_channels
+  bool rare_ = false;      // drives, quadratures, a screen or contacts to watch
+  bool channels_ = false;  // drives, quadratures or a screen: rare_channels
   std::function<void(double t, const double* x)> screen_;  // see set_screen, or empty
+  ContactEvents* contacts_ = nullptr;                      // see watch_releases, or null
   VectorXd share_;                                         // (n) scratch: A_kᵀ lambda_k
   std::vector<unsigned char> violation_rows_;  // (m) row i has a violation (not acceleration form)
   double off_manifold_tolerance_ = 0.0;

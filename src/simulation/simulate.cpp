@@ -252,15 +252,12 @@ Trajectory detail::simulate_observed(const System& sys, const Eigen::Ref<const V
   detail::ConstrainedOde ode(sys, ws, o.integrator != Integrator::kBDF, o.projection.tolerance,
                              quad);
   // the contacts' release and slip screening at every stage (docs/contact.md, "In a run")
-  const bool sticks = std::any_of(sys.friction_contacts().begin(), sys.friction_contacts().end(),
-                                  [](const auto& c) { return c.mu_static > 0.0; });
-  if (contacts.any() || sticks) {
-    ode.set_screen([&contacts, &run, sticks](double t, const double* xs) {
-      if (contacts.any()) contacts.screen(t);
-      if (sticks) {
-        run.screen_sticking(t, xs);
-        run.screen_stops();
-      }
+  if (contacts.any()) ode.watch_releases(&contacts);
+  if (std::any_of(sys.friction_contacts().begin(), sys.friction_contacts().end(),
+                  [](const auto& c) { return c.mu_static > 0.0; })) {
+    ode.set_screen([&run](double t, const double* xs) {
+      run.screen_sticking(t, xs);
+      run.screen_stops();
     });
   }
   detail::SegmentHooks hooks;

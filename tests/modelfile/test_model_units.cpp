@@ -369,11 +369,13 @@ output: {every: 0.05}
   std::vector<std::string> names;
   for (const CsvColumn& c : run.columns()) names.push_back(c.name);
   for (const std::string& name : names) {
-    if (name.rfind("gap.", 0) == 0 || name.rfind("lambda", 0) == 0)
+    if (name.rfind("gap.", 0) == 0 || name.rfind("lambda", 0) == 0) {
       EXPECT_TRUE(units.contains(name)) << name;
+    }
   }
-  for (const auto& [name, unit] : units.items())
+  for (const auto& [name, unit] : units.items()) {
     EXPECT_NE(std::find(names.begin(), names.end(), name), names.end()) << name;
+  }
   // (the labels name the physics: the floor holds the push, −F = −0.3 m g = −5.886e6 g·mm/s²,
   // and bears m g = 1.962e7 g·mm/s²; the stop bears nothing)
   const std::size_t last = run.trajectory.t.size() - 1;
